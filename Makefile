@@ -1,0 +1,115 @@
+# nbep: N-Body Event Prediction. `make` builds bin/nbep; `make check` runs every test.
+
+# ---- switches ----------------------------------------------------------------------------
+OMP ?= 1
+MPI ?= auto
+TIMERS ?= 1
+VALGRIND ?= 1
+PREFIX ?= /usr/local
+CC ?= gcc
+WERROR ?=
+SAN ?=
+
+# ---- machinery ---------------------------------------------------------------------------
+VERSION := 0.1.0
+PKGS := gsl libconfig hdf5
+PKG_CFLAGS := $(shell pkg-config --cflags $(PKGS))
+PKG_LIBS := $(shell pkg-config --libs $(PKGS))
+
+CSTD := -std=c11 -D_POSIX_C_SOURCE=200809L
+WARN := -Wall -Wextra -Wpedantic -Wshadow -Wstrict-prototypes -Wmissing-prototypes $(WERROR)
+OPT := -O3 -g -ffp-contract=off
+CFLAGS_ALL := $(CSTD) $(OPT) $(WARN) -MMD -MP -Iinclude -Isrc -Ibuild $(PKG_CFLAGS) $(CFLAGS)
+LDLIBS_ALL := $(PKG_LIBS) -lm $(LDLIBS)
+
+ifeq ($(OMP),1)
+CFLAGS_ALL += -fopenmp
+LDLIBS_ALL += -fopenmp
+endif
+ifeq ($(TIMERS),1)
+CFLAGS_ALL += -DNBEP_TIMERS=1
+endif
+ifeq ($(MPI),auto)
+MPI := $(shell pkg-config --exists ompi-c && echo 1 || echo 0)
+endif
+ifeq ($(MPI),1)
+MPI_CFLAGS := $(shell pkg-config --cflags ompi-c) -DNBEP_HAVE_MPI=1
+LDLIBS_ALL += $(shell pkg-config --libs ompi-c)
+endif
+ifeq ($(SAN),address)
+CFLAGS_ALL += -fsanitize=address,undefined -fno-omit-frame-pointer
+LDLIBS_ALL += -fsanitize=address,undefined
+endif
+ifeq ($(SAN),thread)
+CFLAGS_ALL += -fsanitize=thread
+LDLIBS_ALL += -fsanitize=thread
+endif
+
+BUILD := build
+LIB_SRC := $(filter-out src/main.c,$(wildcard src/*.c))
+LIB_OBJ := $(LIB_SRC:src/%.c=$(BUILD)/%.o)
+TEST_SRC := $(wildcard tests/test_*.c)
+TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
+BENCH_SRC := $(wildcard tests/bench/bench_*.c)
+BENCH_BIN := $(BENCH_SRC:tests/bench/%.c=$(BUILD)/bench/%)
+BUILD_INFO := $(BUILD)/build_info.h
+
+.PHONY: all run check test valgrind bench install clean tsan asan
+all: bin/nbep
+
+$(BUILD) $(BUILD)/tests $(BUILD)/bench bin:
+	@mkdir -p $@
+
+# Regenerated only when its text changes, so objects do not rebuild needlessly.
+$(BUILD_INFO): FORCE | $(BUILD)
+	@printf '#define NBEP_VERSION "%s"\n#define NBEP_BUILD_FLAGS "%s"\n#define NBEP_BUILD_COMMIT "%s"\n' \
+	  '$(VERSION)' '$(CC) $(OPT) OMP=$(OMP) MPI=$(MPI) TIMERS=$(TIMERS)' \
+	  "$$(git rev-parse --short HEAD 2>/dev/null || echo unknown)" > $@.tmp
+	@cmp -s $@.tmp $@ && rm -f $@.tmp || mv $@.tmp $@
+FORCE:
+
+$(BUILD)/%.o: src/%.c $(BUILD_INFO) | $(BUILD)
+	$(CC) $(CFLAGS_ALL) -c $< -o $@
+$(BUILD)/sweep.o: CFLAGS_ALL += $(MPI_CFLAGS)
+
+$(BUILD)/libnbep.a: $(LIB_OBJ)
+	@rm -f $@
+	ar rcs $@ $^
+
+bin/nbep: $(BUILD)/main.o $(BUILD)/libnbep.a | bin
+	$(CC) $(CFLAGS_ALL) $^ -o $@ $(LDLIBS_ALL)
+
+$(BUILD)/tests/%: tests/%.c tests/nbep_test.h $(BUILD)/libnbep.a | $(BUILD)/tests
+	$(CC) $(CFLAGS_ALL) -Itests $< $(BUILD)/libnbep.a -o $@ $(LDLIBS_ALL) \
+	  $(shell pkg-config --libs cmocka) -lpthread
+
+$(BUILD)/bench/%: tests/bench/%.c $(BUILD)/libnbep.a | $(BUILD)/bench
+	$(CC) $(CFLAGS_ALL) -Itests $< $(BUILD)/libnbep.a -o $@ $(LDLIBS_ALL)
+
+run: bin/nbep
+	bin/nbep run inputs/paper-box.deck --summary -
+
+# Every test binary, then (VALGRIND=1) the unit tests again under memcheck.
+check: bin/nbep $(TEST_BIN)
+	@bash scripts/run-tests.sh $(TEST_BIN)
+ifeq ($(VALGRIND),1)
+	@bash scripts/run-tests.sh --valgrind $(TEST_BIN)
+endif
+test: check
+
+bench: bin/nbep $(BENCH_BIN)
+	bash scripts/bench.sh
+
+tsan:
+	$(MAKE) clean && $(MAKE) SAN=thread VALGRIND=0 check
+asan:
+	$(MAKE) clean && $(MAKE) SAN=address VALGRIND=0 check
+
+install: bin/nbep
+	install -d $(DESTDIR)$(PREFIX)/bin
+	install -m 755 bin/nbep $(DESTDIR)$(PREFIX)/bin/nbep
+
+clean:
+	rm -rf $(BUILD) bin
+
+-include $(LIB_OBJ:.o=.d) $(BUILD)/main.d

@@ -1,0 +1,28 @@
+/* Compiler-specific attributes and small portable helpers, kept in one place (STYLE 2). */
+#ifndef NBEP_COMPILER_H
+#define NBEP_COMPILER_H
+
+#include <stddef.h>
+
+#define NBEP_CACHELINE 64
+
+#if defined(__GNUC__)
+#define NBEP_MUST_CHECK __attribute__((warn_unused_result))
+#define NBEP_PRINTF(fmt, args) __attribute__((format(printf, fmt, args)))
+#define NBEP_UNLIKELY(x) __builtin_expect(!!(x), 0)
+#else
+#define NBEP_MUST_CHECK
+#define NBEP_PRINTF(fmt, args)
+#define NBEP_UNLIKELY(x) (x)
+#endif
+
+/* Allocates n * size bytes aligned to a cache line, zero-filled; NULL on failure or overflow.
+ * Free with nbep_free_aligned (NULL-safe). */
+void *nbep_alloc_aligned(size_t n, size_t size);
+void nbep_free_aligned(void *p);
+
+/* One step of a spin-wait: a CPU pause, and sched_yield() every 1024th call so that more
+ * threads than cores still make progress (STYLE 6). k counts the calls of one wait from 1. */
+void nbep_spin_pause(unsigned k);
+
+#endif

@@ -1,0 +1,58 @@
+/* The N-Body Future Event Queue (paper Sections 3.2 and 4.4): one slot per sphere holding its
+ * earliest known event (partner sphere or plane, absolute time, and the response counts of
+ * both objects when it was predicted, so that a stale event can be recognised). No locks: the
+ * slot of sphere i is written only by the thread owning i, and read by others only after a
+ * barrier. No OpenMP in here; callers pass their index range. */
+#ifndef NBEP_FEQ_H
+#define NBEP_FEQ_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "nbep/compiler.h"
+#include "nbep/status.h"
+
+typedef enum nbep_event_kind {
+    NBEP_EVENT_NONE = 0,    /* invalid slot: nothing known, the sphere must be re-predicted */
+    NBEP_EVENT_SPHERE = 1,  /* partner is a sphere index */
+    NBEP_EVENT_PLANE = 2,   /* partner is a plane index */
+} nbep_event_kind;
+
+typedef struct nbep_event {
+    double time;            /* absolute simulation time of contact; +inf: never */
+    uint32_t partner;       /* sphere or plane index, by kind */
+    uint32_t kind;          /* nbep_event_kind */
+    uint64_t ver_self;      /* response count of the slot's sphere at prediction */
+    uint64_t ver_partner;   /* response count of the partner sphere (0 for planes) */
+} nbep_event;
+
+typedef struct nbep_feq nbep_feq;
+
+/* A queue of n invalid slots. NBEP_ENOMEM with a message on failure. */
+NBEP_MUST_CHECK nbep_status nbep_feq_create(size_t n, nbep_feq **out, nbep_diag *d);
+/* NULL-safe; NULLs the pointer. */
+void nbep_feq_destroy(nbep_feq **q);
+
+/* Paper Procedure 10: stores e in sphere i's slot when the slot is invalid or e is earlier
+ * (supersedes). Equal times keep the event with the smaller (kind, partner), so that the
+ * result does not depend on the order of inserts. Returns true when e was stored. */
+bool nbep_feq_insert(nbep_feq *q, size_t i, nbep_event e);
+/* Paper Procedure 11: marks sphere i's slot invalid. */
+void nbep_feq_remove(nbep_feq *q, size_t i);
+/* The slot of sphere i (kind NBEP_EVENT_NONE when invalid). */
+const nbep_event *nbep_feq_slot(const nbep_feq *q, size_t i);
+
+/* Paper Procedure 13, for one thread's spheres [lo, hi): writes to out (room for hi - lo ids)
+ * the spheres whose valid event happens before t_end, in increasing index, and returns their
+ * count. The paper's `== current_time` becomes `< t_end`: events fall anywhere inside a step. */
+size_t nbep_feq_find(const nbep_feq *q, size_t lo, size_t hi, double t_end, uint32_t *out);
+/* Paper Procedure 12, for [lo, hi): writes the spheres with an invalid slot, returns count. */
+size_t nbep_feq_find_invalid(const nbep_feq *q, size_t lo, size_t hi, uint32_t *out);
+
+/* Invariant check for tests: every valid slot has a finite time >= t_now, a partner within
+ * range (n spheres, n_planes planes) and not itself. Returns the number of bad slots and
+ * describes the first in *d. */
+size_t nbep_feq_check(const nbep_feq *q, double t_now, size_t n_planes, nbep_diag *d);
+
+#endif

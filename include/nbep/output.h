@@ -1,0 +1,67 @@
+/* HDF5 output in layout "nbep-1" (SPEC) and the JSON summary. The only user of hdf5.h. One
+ * writing thread: call only from thread 0 between barriers, or outside parallel regions. */
+#ifndef NBEP_OUTPUT_H
+#define NBEP_OUTPUT_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "nbep/compiler.h"
+#include "nbep/scene.h"
+#include "nbep/state.h"
+#include "nbep/stats.h"
+#include "nbep/status.h"
+
+/* Everything the JSON summary holds (SPEC "JSON summary"). */
+typedef struct nbep_summary {
+    char algorithm[NBEP_ALGO_NAME_MAX];
+    int threads;
+    uint64_t spheres, planes;
+    uint64_t steps;                /* steps simulated (fewer than asked when interrupted) */
+    double dt;
+    double setup_seconds, wall_seconds, steps_per_second;
+    uint64_t checks, predictions, collisions, sphere_collisions, plane_collisions;
+    uint64_t quiet_steps;
+    double energy_initial, energy_final, energy_rel_drift;
+    double max_overlap, max_overlap_rel;
+    uint64_t peak_rss_bytes;
+} nbep_summary;
+
+/* Writes the summary as one JSON object (format "nbep-summary-1", numbers as %.17g, keys in
+ * SPEC order) followed by a newline. Returns bytes written or -1 on a stream error. */
+int nbep_summary_write_json(const nbep_summary *s, FILE *f);
+/* The same into a malloc'd string (caller frees); NULL on allocation failure. */
+char *nbep_summary_to_json(const nbep_summary *s);
+
+typedef struct nbep_output nbep_output;
+
+/* Creates (truncates) path and writes the root attributes (format "nbep-1", version,
+ * algorithm, steps, dt, threads, seed, restitution, gravity, deck, overrides, build flags),
+ * /spheres/{radius,mass,acceleration}, /planes/{normal,offset}, and empty extendable
+ * /frames/{step,time,position?,velocity?} and /stats/... (when sc->out_stats).
+ * threads is the resolved thread count. NBEP_EIO with HDF5's reason on failure, and then no
+ * file is left behind. */
+NBEP_MUST_CHECK nbep_status nbep_output_create(const char *path, const nbep_scene *sc,
+                                               int threads, nbep_output **out, nbep_diag *d);
+/* Appends one frame (step, step*dt, and the fields the deck asked for) and flushes the file. */
+NBEP_MUST_CHECK nbep_status nbep_output_frame(nbep_output *o, int64_t step, double dt,
+                                              const nbep_state *s, nbep_diag *d);
+/* Appends rows to /stats (buffered by the caller; flushed with the next frame or close). */
+NBEP_MUST_CHECK nbep_status nbep_output_stats(nbep_output *o, const nbep_step_stats *rows,
+                                              size_t count, nbep_diag *d);
+/* Writes the /summary json attribute (when s is not NULL), flushes and closes; NULL-safe,
+ * NULLs the pointer. Even on error the handle is released. */
+NBEP_MUST_CHECK nbep_status nbep_output_close(nbep_output **o, const nbep_summary *s,
+                                              nbep_diag *d);
+
+/* `nbep info RUN.h5`: prints the run's metadata (root attributes but the deck text, counts of
+ * spheres, planes, frames and stats rows, last frame's step) and its summary to f. Works on
+ * interrupted runs (no summary yet: says so). NBEP_EIO when the file is not an nbep-1 file. */
+NBEP_MUST_CHECK nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d);
+
+/* Disables HDF5's automatic error printing; call once in main before any thread starts. */
+void nbep_output_library_init(void);
+
+#endif

@@ -1,0 +1,49 @@
+/* The physics kernels every algorithm calls: free flight, sphere-sphere and sphere-plane
+ * response (paper Section 5, restitution e) and energy. Pure functions on values; no
+ * threads, no allocation. Contact times live in predict.h. */
+#ifndef NBEP_PHYSICS_H
+#define NBEP_PHYSICS_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "nbep/state.h"
+#include "nbep/vec3.h"
+
+/* Free flight for a time h under constant acceleration a:
+ * p += v h + a h^2/2, v += a h. */
+static inline void nbep_physics_drift(nbep_vec3 *p, nbep_vec3 *v, nbep_vec3 a, double h)
+{
+    double hh = 0.5 * h * h;
+    p->x += v->x * h + a.x * hh;
+    p->y += v->y * h + a.y * hh;
+    p->z += v->z * h + a.z * hh;
+    v->x += a.x * h;
+    v->y += a.y * h;
+    v->z += a.z * h;
+}
+
+/* Sphere-sphere response (paper Section 5): n is the unit vector from sphere 1 to sphere 2
+ * (p2 - p1 normalised), c = n.(v1 - v2); when c > 0 (approaching)
+ * v1 -= m2 c (1+e) n / (m1+m2), v2 += m1 c (1+e) n / (m1+m2) and true is returned; otherwise
+ * nothing changes and false is returned (also when p1 == p2, where n is undefined).
+ * The result is bitwise the same whichever sphere is called "1". */
+bool nbep_physics_respond_pair(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, nbep_vec3 *v2,
+                               double m1, double m2, double e);
+
+/* Sphere-plane response: n is the plane's unit normal (into the live side); when v.n < 0,
+ * v -= (1+e)(v.n) n and true is returned, else false. */
+bool nbep_physics_respond_plane(nbep_vec3 n, nbep_vec3 *v, double e);
+
+/* Signed gap between a sphere and a plane: n.p - offset - r (negative = overlapping). */
+static inline double nbep_physics_plane_gap(nbep_vec3 n, double offset, nbep_vec3 p, double r)
+{
+    return nbep_vec3_dot(n, p) - offset - r;
+}
+
+/* Kinetic (m v.v/2) and potential (-m a.p) energy of spheres [lo, hi), summed in index order
+ * (so the same range always gives the same bits). */
+void nbep_physics_energy(const nbep_state *s, size_t lo, size_t hi, double *kinetic,
+                         double *potential);
+
+#endif

@@ -1,0 +1,74 @@
+/* The input deck (libconfig) resolved into a scene: run settings, physics, output settings and
+ * the initial spheres and planes. The only user of libconfig. A schema table drives parsing,
+ * --set overrides and unknown-setting errors. */
+#ifndef NBEP_SCENE_H
+#define NBEP_SCENE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "nbep/compiler.h"
+#include "nbep/state.h"
+#include "nbep/status.h"
+#include "nbep/vec3.h"
+
+#define NBEP_ALGO_NAME_MAX 16
+
+/* One `vary` entry of the sweep group: a deck path and the values it takes, each kept as the
+ * libconfig text of the value so that it can be applied as "key=value" like --set. */
+typedef struct nbep_sweep_axis {
+    char *key;          /* owned, e.g. "physics.restitution" */
+    size_t n_values;
+    char **values;      /* owned, e.g. "0.9", "[0.0, 0.0, -1.0]", "\"naive\"" */
+} nbep_sweep_axis;
+
+typedef struct nbep_scene {
+    /* provenance */
+    char *deck_path;          /* owned: as given on the command line */
+    char *deck_text;          /* owned: the deck file's full text */
+    char *overrides;          /* owned: one "PATH=VALUE" per line, "" when none */
+    /* run */
+    char algorithm[NBEP_ALGO_NAME_MAX];   /* "naive" | "seminaive" | "predictive" */
+    uint64_t steps;
+    double dt;
+    int threads;              /* as given; 0 = OMP_NUM_THREADS or all cores */
+    uint64_t seed;
+    /* physics */
+    nbep_vec3 gravity;
+    double restitution;
+    /* box (optional) */
+    bool has_box;
+    nbep_vec3 box_min, box_max;
+    /* output */
+    char *output_file;        /* owned: resolved (default: deck name with .h5) */
+    uint64_t output_every;    /* >= 1 */
+    bool out_position, out_velocity;
+    bool out_stats;
+    /* the initial condition, planes included (box planes first, then `planes`) */
+    nbep_state state;
+    /* sweep (optional group, used by `nbep sweep`): replicas x cartesian product of axes */
+    uint64_t sweep_replicas;              /* >= 1; 1 when the deck has no sweep group */
+    size_t sweep_n_axes;
+    struct nbep_sweep_axis *sweep_axes;   /* owned */
+} nbep_scene;
+
+/* Reads and validates the deck at deck_path, applies the overrides (each "PATH=VALUE", as
+ * --set takes them; n_overrides may be 0), places generated groups and fills *out.
+ * Reports every problem it finds, one line each as "deck:line: message", then returns
+ * NBEP_EDECK (NBEP_ENOMEM for counts that cannot be allocated, NBEP_EIO when the deck cannot
+ * be read). *out is written only on success; release it with nbep_scene_fini. */
+NBEP_MUST_CHECK nbep_status nbep_scene_load(const char *deck_path,
+                                            const char *const *overrides, size_t n_overrides,
+                                            nbep_scene *out, nbep_diag *d);
+void nbep_scene_fini(nbep_scene *sc);
+
+/* Pairs of spheres whose accelerations are equal (quadratic contact time) and differ
+ * (quartic), counted in O(n log n) by grouping equal accelerations. */
+void nbep_scene_count_pairs(const nbep_state *s, uint64_t *quadratic, uint64_t *quartic);
+
+/* Writes the deck reference (every setting, type, default, meaning) generated from the schema
+ * table, as Markdown. Used by `nbep --help-deck` and to keep README in step. */
+void nbep_scene_print_reference(FILE *f);
+
+#endif

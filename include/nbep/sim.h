@@ -1,0 +1,59 @@
+/* One simulation run: the evolving state, the algorithm chosen by the scene, counters, frames
+ * and the summary. main.c and the tests drive runs through this interface only. */
+#ifndef NBEP_SIM_H
+#define NBEP_SIM_H
+
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "nbep/compiler.h"
+#include "nbep/output.h"
+#include "nbep/scene.h"
+#include "nbep/state.h"
+#include "nbep/status.h"
+
+typedef struct nbep_sim nbep_sim;
+
+/* Called by one thread (never concurrently) for every frame: step 0, every `every` steps and
+ * the last step simulated. The state is borrowed for the call only. A non-OK status stops the
+ * run with that status. */
+typedef nbep_status (*nbep_frame_fn)(void *ctx, int64_t step, const nbep_state *s,
+                                     nbep_diag *d);
+
+typedef struct nbep_sim_options {
+    int threads;                    /* resolved thread count >= 1 */
+    nbep_output *out;               /* borrowed, may be NULL: frames and stats go there */
+    nbep_frame_fn on_frame;         /* may be NULL: called after `out` got the frame */
+    void *on_frame_ctx;
+    const atomic_int *stop_signal;  /* borrowed, may be NULL: nonzero = SIGINT/SIGTERM number */
+    bool progress;                  /* progress lines on stderr */
+} nbep_sim_options;
+
+/* A run of sc (borrowed; must outlive the sim) from its initial state. Allocates everything
+ * the algorithm needs; nothing is allocated inside a step. NBEP_ENOMEM, NBEP_EDECK for an
+ * unknown algorithm. */
+NBEP_MUST_CHECK nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt,
+                                            nbep_sim **out, nbep_diag *d);
+void nbep_sim_destroy(nbep_sim **sim);
+
+/* Simulates sc->steps steps (frames and stats as the scene asks). Returns NBEP_OK, the I/O
+ * status of a failing write, NBEP_ENUMERIC when a non-finite value appears, or
+ * NBEP_ESIGINT/NBEP_ESIGTERM when *stop_signal was raised (the current step is finished and its
+ * frame written first). */
+NBEP_MUST_CHECK nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d);
+
+/* The run's summary so far (valid after create; complete after run). */
+void nbep_sim_summary(const nbep_sim *sim, nbep_summary *s);
+/* The current state (borrowed). */
+const nbep_state *nbep_sim_state(const nbep_sim *sim);
+
+/* Bytes a run of sc with `threads` threads needs: state, the algorithm's workspaces and one
+ * frame's output buffers (an estimate for `nbep check`; within a few percent). */
+size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads);
+
+/* The thread count a scene's `threads` setting resolves to: n > 0 as is; 0 ->
+ * OMP_NUM_THREADS if set, else the cores available. */
+int nbep_sim_resolve_threads(int requested);
+
+#endif

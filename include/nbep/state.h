@@ -1,0 +1,48 @@
+/* Spheres and planes as a struct of arrays: sphere i is index i everywhere (frames, event
+ * slots, BVH leaves). Only state.c allocates or frees these arrays; they never grow in a run. */
+#ifndef NBEP_STATE_H
+#define NBEP_STATE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "nbep/compiler.h"
+#include "nbep/status.h"
+#include "nbep/vec3.h"
+
+typedef struct nbep_state {
+    size_t n;                  /* spheres */
+    nbep_vec3 *pos, *vel;      /* owned, length n, at the current time */
+    nbep_vec3 *acc;            /* owned: own uniform acceleration (gravity unless overridden) */
+    double *radius, *mass;     /* owned, length n */
+    size_t n_planes;
+    nbep_vec3 *plane_normal;   /* owned, unit, pointing into the live region */
+    double *plane_offset;      /* owned: plane = {x : n.x = offset}, live where n.x > offset */
+} nbep_state;
+
+/* Allocates zeroed arrays for n spheres and n_planes planes (64-byte aligned). On failure the
+ * state is left empty (safe to fini) and NBEP_ENOMEM is returned with a message naming n. */
+NBEP_MUST_CHECK nbep_status nbep_state_init(nbep_state *s, size_t n, size_t n_planes,
+                                            nbep_diag *d);
+/* Frees the arrays; safe on a zeroed or already finalised state. */
+void nbep_state_fini(nbep_state *s);
+/* Deep copy of src into dst (dst uninitialised on entry). */
+NBEP_MUST_CHECK nbep_status nbep_state_copy(nbep_state *dst, const nbep_state *src,
+                                            nbep_diag *d);
+/* Bytes nbep_state_init would allocate, for memory estimates. */
+size_t nbep_state_bytes(size_t n, size_t n_planes);
+
+/* True when every position, velocity and acceleration is finite. */
+bool nbep_state_all_finite(const nbep_state *s);
+
+/* Largest overlap r_i + r_j - |p_i - p_j| over sphere pairs and r_i - (n.p_i - offset) over
+ * sphere-plane pairs, 0 when none overlap. rel_out (may be NULL) receives the largest overlap
+ * divided by the smaller radius involved. Uses a uniform cell grid: O(n) expected time, O(n)
+ * scratch memory allocated per call (not for use inside a step). i_out/j_out (may be NULL)
+ * receive the worst pair, j_out = n + p for plane p; both SIZE_MAX when nothing overlaps. */
+NBEP_MUST_CHECK nbep_status nbep_state_max_overlap(const nbep_state *s, double *max_out,
+                                                   double *rel_out, size_t *i_out,
+                                                   size_t *j_out, nbep_diag *d);
+
+#endif

@@ -1,0 +1,42 @@
+/* Counters (X-macro list: enum, /stats names and JSON keys from one place), per-thread
+ * counter slots padded to a cache line, and the per-step statistics row. */
+#ifndef NBEP_STATS_H
+#define NBEP_STATS_H
+
+#include <stdalign.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "nbep/compiler.h"
+
+/* checks: pair tests (naive/seminaive: overlap tests; predictive: queue slots examined by
+ * find plus check() calls); predictions: contact-time computations; collisions split by kind */
+#define NBEP_COUNTER_LIST(X)                                                                 \
+    X(CHECKS, "checks")                                                                      \
+    X(PREDICTIONS, "predictions")                                                            \
+    X(SPHERE_COLLISIONS, "sphere_collisions")                                                \
+    X(PLANE_COLLISIONS, "plane_collisions")
+
+enum nbep_counter {
+#define NBEP_X_ENUM(name, key) NBEP_COUNTER_##name,
+    NBEP_COUNTER_LIST(NBEP_X_ENUM)
+#undef NBEP_X_ENUM
+    NBEP_COUNTER_COUNT
+};
+
+extern const char *const nbep_counter_names[NBEP_COUNTER_COUNT];
+
+/* One thread's counters, alone on its cache lines. */
+typedef struct nbep_counters {
+    alignas(NBEP_CACHELINE) uint64_t c[NBEP_COUNTER_COUNT];
+} nbep_counters;
+
+/* One row of /stats: the counters of one step and the state at its end. */
+typedef struct nbep_step_stats {
+    int64_t step;
+    uint64_t checks, predictions, collisions;
+    double kinetic_energy, potential_energy;
+    double max_overlap;
+} nbep_step_stats;
+
+#endif

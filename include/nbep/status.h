@@ -1,0 +1,60 @@
+/* Status codes, their exit codes and texts (one X-macro list), and nbep_diag, the list of
+ * one-line messages a failing call leaves for main.c to print. */
+#ifndef NBEP_STATUS_H
+#define NBEP_STATUS_H
+
+#include <stddef.h>
+#include <stdio.h>
+
+#include "nbep/compiler.h"
+
+#define NBEP_STATUS_LIST(X)                                                                  \
+    X(OK, 0, "success")                                                                      \
+    X(EUSAGE, 2, "bad command line")                                                         \
+    X(EDECK, 2, "bad deck")                                                                  \
+    X(ENOMEM, 1, "out of memory")                                                            \
+    X(EIO, 1, "I/O error")                                                                   \
+    X(ENUMERIC, 1, "numerical failure")                                                      \
+    X(ESIGINT, 130, "interrupted")                                                           \
+    X(ESIGTERM, 143, "terminated")
+
+typedef enum nbep_status {
+#define NBEP_X_ENUM(name, code, text) NBEP_##name,
+    NBEP_STATUS_LIST(NBEP_X_ENUM)
+#undef NBEP_X_ENUM
+} nbep_status;
+
+/* The process exit code for a status (0, 1, 2, 130 or 143). */
+int nbep_status_exit_code(nbep_status s);
+/* A short human text for a status; never NULL. */
+const char *nbep_status_text(nbep_status s);
+
+/* Messages for the user, one line each, plus where in our source each was raised (shown only
+ * with NBEP_DEBUG set in the environment). Not thread-safe: one diag per thread. */
+typedef struct nbep_diag {
+    size_t n_errors;       /* messages added */
+    size_t cap;
+    char **msg;            /* owned, n_errors strings */
+    char **where;          /* owned, "file:line" of our source */
+} nbep_diag;
+
+void nbep_diag_init(nbep_diag *d);
+void nbep_diag_fini(nbep_diag *d);
+/* Appends one formatted line (no trailing newline needed). On allocation failure the message
+ * is dropped but n_errors still counts it, so callers still fail. */
+void nbep_diag_add(nbep_diag *d, const char *file, int line, const char *fmt, ...)
+    NBEP_PRINTF(4, 5);
+/* Prints every message verbatim, one per line; with NBEP_DEBUG set, each line is followed by
+ * the source location that raised it. Messages name their own place ("deck:line: ...") or
+ * start with "nbep: ". */
+void nbep_diag_print(const nbep_diag *d, FILE *f);
+/* Empties the list (keeps the memory). */
+void nbep_diag_clear(nbep_diag *d);
+
+#define NBEP_FAIL(diag, code, ...)                                                           \
+    do {                                                                                     \
+        nbep_diag_add((diag), __FILE__, __LINE__, __VA_ARGS__);                              \
+        return (code);                                                                       \
+    } while (0)
+
+#endif

@@ -1,0 +1,298 @@
+/* The detection algorithms: naive (paper Algorithm 1, Section 5.1) and seminaive (Section
+ * 2.2). Each step: update every sphere by dt, then test every sphere against every plane and
+ * every later sphere (seminaive: only the later spheres whose bounding boxes overlap in a
+ * bounding volume hierarchy), and respond to pairs that overlap while approaching.
+ *
+ * Departure from the paper, for threads: "run the outer loop in parallel" lets two threads
+ * respond to pairs that share a sphere at once (a race, and results that depend on timing).
+ * Here threads only *find* overlapping pairs, in parallel over contiguous rows (positions do
+ * not change while they look); then thread 0 responds to them in the serial order of the
+ * paper's loop (row i ascending, planes before spheres, partner ascending). Finding is the
+ * O(n^2) (naive) or O(n log n) (seminaive) part; responding is O(contacts). So the frames are
+ * bitwise the same for any thread count, and seminaive finds and answers exactly the pairs
+ * naive does.
+ *
+ * Layout: one parallel region over all steps, phases separated by nbep_barrier. */
+#include <math.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "nbep/barrier.h"
+#include "nbep/bvh.h"
+#include "nbep/physics.h"
+#include "sim_impl.h"
+
+/* A contact found by detection: sphere i with sphere j (j < n) or plane j - n. */
+typedef struct contact {
+    uint32_t i, j;
+} contact;
+
+typedef struct contact_list {
+    alignas(NBEP_CACHELINE) contact *c;   /* owned */
+    size_t len, cap;
+    size_t row_lo, row_hi;                /* detection rows of this thread */
+    /* seminaive: the row being queried and its hits, sorted before use */
+    uint32_t *hits;                       /* owned */
+    size_t n_hits, cap_hits;
+    bool overflow;                        /* an allocation failed: the run must stop */
+} contact_list;
+
+typedef struct detect_ctx {
+    bool use_bvh;
+    nbep_barrier bar;
+    contact_list *lists;   /* owned, one per thread */
+    nbep_bvh *bvh;         /* owned, seminaive only */
+} detect_ctx;
+
+static void detect_destroy(void *p)
+{
+    detect_ctx *ctx = p;
+    if (!ctx)
+        return;
+    if (ctx->lists) {
+        for (size_t t = 0; t < (size_t)ctx->bar.n; t++) {
+            free(ctx->lists[t].c);
+            free(ctx->lists[t].hits);
+        }
+        nbep_free_aligned(ctx->lists);
+    }
+    nbep_bvh_destroy(&ctx->bvh);
+    free(ctx);
+}
+
+/* Rows [lo, hi) per thread so that each thread makes about the same number of pair tests:
+ * row i costs n_planes + (n - 1 - i) tests (naive); seminaive rows cost about the same. */
+static void split_rows(detect_ctx *ctx, size_t n, size_t n_planes, int nt)
+{
+    double total = 0.0;
+    for (size_t i = 0; i < n; i++)
+        total += (double)(n_planes + (ctx->use_bvh ? 8 : n - 1 - i));
+    size_t i = 0;
+    double acc = 0.0;
+    for (int t = 0; t < nt; t++) {
+        ctx->lists[t].row_lo = i;
+        double goal = total * (double)(t + 1) / (double)nt;
+        while (i < n && (t == nt - 1 || acc < goal)) {
+            acc += (double)(n_planes + (ctx->use_bvh ? 8 : n - 1 - i));
+            i++;
+        }
+        ctx->lists[t].row_hi = i;
+    }
+}
+
+static nbep_status detect_create_common(nbep_sim *sim, void **out, bool use_bvh, nbep_diag *d)
+{
+    detect_ctx *ctx = calloc(1, sizeof *ctx);
+    if (!ctx)
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the %s algorithm", sim->algo->name);
+    ctx->use_bvh = use_bvh;
+    nbep_barrier_init(&ctx->bar, (unsigned)sim->nt);
+    ctx->lists = nbep_alloc_aligned((size_t)sim->nt, sizeof *ctx->lists);
+    if (!ctx->lists) {
+        detect_destroy(ctx);
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the %s algorithm", sim->algo->name);
+    }
+    size_t n = sim->st.n;
+    split_rows(ctx, n, sim->st.n_planes, sim->nt);
+    for (int t = 0; t < sim->nt; t++) {
+        contact_list *l = &ctx->lists[t];
+        /* Room for a few contacts per sphere; a denser pile grows the list (rare). */
+        l->cap = 4 * (l->row_hi - l->row_lo) + 64;
+        l->c = malloc(l->cap * sizeof *l->c);
+        l->cap_hits = use_bvh ? 256 : 0;
+        l->hits = use_bvh ? malloc(l->cap_hits * sizeof *l->hits) : NULL;
+        if (!l->c || (use_bvh && !l->hits)) {
+            detect_destroy(ctx);
+            NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for contact lists of %zu spheres", n);
+        }
+    }
+    if (use_bvh) {
+        nbep_status st = nbep_bvh_create(n, &ctx->bvh, d);
+        if (st != NBEP_OK) {
+            detect_destroy(ctx);
+            return st;
+        }
+    }
+    *out = ctx;
+    return NBEP_OK;
+}
+
+static nbep_status naive_create(nbep_sim *sim, void **out, nbep_diag *d)
+{
+    return detect_create_common(sim, out, false, d);
+}
+
+static nbep_status seminaive_create(nbep_sim *sim, void **out, nbep_diag *d)
+{
+    return detect_create_common(sim, out, true, d);
+}
+
+static void push_contact(contact_list *l, uint32_t i, uint32_t j)
+{
+    if (l->len == l->cap) {
+        contact *c = realloc(l->c, 2 * l->cap * sizeof *c);
+        if (!c) {
+            l->overflow = true;
+            return;
+        }
+        l->c = c;
+        l->cap *= 2;
+    }
+    l->c[l->len++] = (contact){i, j};
+}
+
+/* Exact overlap test of spheres i < j; records a contact and the overlap when they overlap
+ * (touching, distance == r_i + r_j, is not overlapping). */
+static void test_pair(const nbep_state *s, size_t i, size_t j, contact_list *l,
+                      nbep_thread_max *mx)
+{
+    nbep_vec3 dp = nbep_vec3_sub(s->pos[j], s->pos[i]);
+    double sigma = s->radius[i] + s->radius[j];
+    double d2 = nbep_vec3_norm2(dp);
+    if (d2 < sigma * sigma) {
+        push_contact(l, (uint32_t)i, (uint32_t)j);
+        double ov = sigma - sqrt(d2);
+        mx->overlap = fmax(mx->overlap, ov);
+        mx->overlap_rel = fmax(mx->overlap_rel, ov / fmin(s->radius[i], s->radius[j]));
+    }
+}
+
+static void collect_hit(void *p, uint32_t j)
+{
+    contact_list *l = p;
+    if (l->n_hits == l->cap_hits) {
+        uint32_t *h = realloc(l->hits, 2 * l->cap_hits * sizeof *h);
+        if (!h) {
+            l->overflow = true;
+            return;
+        }
+        l->hits = h;
+        l->cap_hits *= 2;
+    }
+    l->hits[l->n_hits++] = j;
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Finds this thread's contacts among rows [row_lo, row_hi); returns the tests made. */
+static uint64_t detect_rows(const detect_ctx *ctx, const nbep_state *s, contact_list *l,
+                            nbep_thread_max *mx)
+{
+    const size_t n = s->n, np = s->n_planes;
+    uint64_t checks = 0;
+    l->len = 0;
+    for (size_t i = l->row_lo; i < l->row_hi; i++) {
+        for (size_t p = 0; p < np; p++) {
+            double gap = nbep_physics_plane_gap(s->plane_normal[p], s->plane_offset[p],
+                                                s->pos[i], s->radius[i]);
+            if (gap < 0.0) {
+                push_contact(l, (uint32_t)i, (uint32_t)(n + p));
+                mx->overlap = fmax(mx->overlap, -gap);
+                mx->overlap_rel = fmax(mx->overlap_rel, -gap / s->radius[i]);
+            }
+        }
+        checks += np;
+        if (ctx->use_bvh) {
+            l->n_hits = 0;
+            nbep_bvh_query_later(ctx->bvh, s, i, collect_hit, l);
+            /* the paper's loop meets partners in index order; so do we */
+            qsort(l->hits, l->n_hits, sizeof *l->hits, cmp_u32);
+            for (size_t k = 0; k < l->n_hits; k++)
+                test_pair(s, i, l->hits[k], l, mx);
+            checks += l->n_hits;
+        } else {
+            for (size_t j = i + 1; j < n; j++)
+                test_pair(s, i, j, l, mx);
+            checks += n - 1 - i;
+        }
+    }
+    return checks;
+}
+
+/* Thread 0: responds to every contact in the paper's serial order; returns collisions by kind
+ * through the counters. A contact responds only while approaching (physics kernels). */
+static void respond_all(const detect_ctx *ctx, nbep_state *s, double e, int nt,
+                        nbep_counters *cnt)
+{
+    const size_t n = s->n;
+    for (int t = 0; t < nt; t++) {
+        const contact_list *l = &ctx->lists[t];
+        for (size_t k = 0; k < l->len; k++) {
+            uint32_t i = l->c[k].i, j = l->c[k].j;
+            if (j >= n) {
+                if (nbep_physics_respond_plane(s->plane_normal[j - n], &s->vel[i], e))
+                    cnt->c[NBEP_COUNTER_PLANE_COLLISIONS]++;
+            } else if (nbep_physics_respond_pair(s->pos[i], s->pos[j], &s->vel[i], &s->vel[j],
+                                                 s->mass[i], s->mass[j], e)) {
+                cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
+            }
+        }
+    }
+}
+
+static void detect_run(nbep_sim *sim, void *p)
+{
+    detect_ctx *ctx = p;
+#pragma omp parallel num_threads(sim->nt) default(none) shared(sim, ctx)
+    {
+#ifdef _OPENMP
+        const int tid = omp_get_thread_num();
+#else
+        const int tid = 0;
+#endif
+        const int nt = sim->nt;
+        nbep_state *s = &sim->st;
+        const nbep_range own = nbep__range_split(s->n, tid, nt);
+        contact_list *mine = &ctx->lists[tid];
+        for (uint64_t step = 1; step <= sim->step_end; step++) {
+            const int par = (int)(step & 1);
+            /* update: free flight of own spheres */
+            for (size_t i = own.lo; i < own.hi; i++)
+                nbep_physics_drift(&s->pos[i], &s->vel[i], s->acc[i], sim->dt);
+            nbep_barrier_wait(&ctx->bar);
+            if (ctx->use_bvh) {
+                if (tid == 0)
+                    nbep_bvh_build(ctx->bvh, s);
+                nbep_barrier_wait(&ctx->bar);
+            }
+            sim->counters[par][tid].c[NBEP_COUNTER_CHECKS] +=
+                detect_rows(ctx, s, mine, &sim->tmax[par][tid]);
+            nbep_barrier_wait(&ctx->bar);
+            if (tid == 0)
+                respond_all(ctx, s, sim->scene->restitution, nt, &sim->counters[par][0]);
+            nbep_barrier_wait(&ctx->bar);
+            nbep__sim_block_energy(sim, own);
+            nbep_barrier_wait(&ctx->bar);
+            if (tid == 0) {
+                bool failed = false;
+                for (int t = 0; t < nt; t++)
+                    failed |= ctx->lists[t].overflow;
+                if (failed && sim->status == NBEP_OK) {
+                    nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                                  "nbep: no memory for the contacts of step %llu",
+                                  (unsigned long long)step);
+                    sim->status = NBEP_ENOMEM;
+                    atomic_store_explicit(&sim->stop, 1, memory_order_relaxed);
+                }
+                nbep__sim_end_step(sim, step);
+            }
+            nbep_barrier_wait(&ctx->bar);
+            /* relaxed: the barrier above ordered thread 0's store before this load */
+            if (atomic_load_explicit(&sim->stop, memory_order_relaxed))
+                break;
+        }
+    }
+}
+
+const nbep_algo nbep__algo_naive = {"naive", true, naive_create, detect_run, detect_destroy};
+const nbep_algo nbep__algo_seminaive = {"seminaive", true, seminaive_create, detect_run,
+                                        detect_destroy};

@@ -1,0 +1,500 @@
+/* The predictive algorithm (paper Algorithm 2, Sections 3 and 4): every sphere's earliest
+ * future event sits in its slot of the future event queue (feq.c); a step only examines the
+ * slots, reacts to the events that fall inside it, and re-predicts the spheres whose future
+ * changed. Threads own spheres by index range (whole blocks); sub-phases are separated by
+ * nbep_barrier inside one parallel region over all steps.
+ *
+ * A step from T0 to T_end runs in rounds; each round has three sub-phases:
+ *   find    each thread re-predicts its invalid or stale spheres against every sphere and
+ *           plane (paper Procedure 9), then collects its spheres whose event falls before
+ *           T_end (Procedure 13) and publishes their earliest time;
+ *   claim   every thread takes the same global earliest time t_min; each event at t_min
+ *           claims both its spheres by compare-and-swap, keeping the smallest pair key;
+ *   react   an event whose key holds both claims reacts (Procedure 8): its spheres are
+ *           advanced to t_min, the response applied, their response counts bumped (which
+ *           makes every other event naming them stale) and their local time set to t_min.
+ * Rounds repeat until no event falls before T_end; then every sphere flies to T_end (the
+ * paper's update, Section 4.3.1).
+ *
+ * Departures from the paper's pseudocode, and why:
+ * - Time order inside a step. The paper reacts to every event found in a step at once. But an
+ *   event can be shadowed: a's slot names a later event than the one it will really have,
+ *   because its true partner only changed course in this step. Reacting only to the earliest
+ *   events of each round, and re-predicting in between, gives the sequence a serial event-
+ *   driven code would, so positions stay exact (pairs are advanced to contact, not detected
+ *   after they overlap).
+ * - Reacting twice. Procedure 8 tests-and-sets a flag of e.o1 only; when the slots of both
+ *   spheres name each other and the spheres belong to two threads, both react. Here the two
+ *   copies of one pair carry the same key, both see they won the claims, and a
+ *   compare-and-swap on the lower sphere's reacted tag lets exactly one of them react.
+ * - Simultaneous events sharing a sphere (a Newton's cradle) are ordered by pair key, the
+ *   same for any thread count, so frames are bitwise identical for 1..N threads.
+ * - The barrier is nbep_barrier, safe to reuse back to back (Procedure 4 is not).
+ * - Resting contact: a sphere whose bounce off a plane would last less than
+ *   NBEP_REST_FRACTION of a step is set to rest on it: its normal velocity is zeroed and the
+ *   plane carries its weight (its acceleration loses the component into the plane) until a
+ *   response moves it off; otherwise infinitely many ever-smaller bounces would come in finite
+ *   time (e < 1), and a sphere pressed on a plane at zero speed would react forever. */
+#include <math.h>
+#include <stdalign.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "nbep/barrier.h"
+#include "nbep/feq.h"
+#include "nbep/physics.h"
+#include "nbep/predict.h"
+#include "sim_impl.h"
+
+/* A bounce whose flight would last less than this fraction of a step ends in resting contact:
+ * with restitution e the remaining bounces take 2 v/|a| / (1 - e) in all, so below this the
+ * sphere is indistinguishable from resting at the step's resolution, and the kinetic energy
+ * removed, m (a t/2)^2 / 2 with t = 1e-9 dt, is far below round-off of the total. */
+#define NBEP_REST_FRACTION 1e-9
+#define NO_PLANE (-1)
+/* Rounds one step may take before the run is stopped as a numerical failure: every round
+ * reacts at least once, so more rounds than this means a cascade of zero-time events (a
+ * contact the model cannot resolve) rather than physics. */
+#define MAX_ROUNDS_PER_SPHERE 64
+#define KEY_FREE UINT64_MAX
+
+typedef struct thread_ws {
+    alignas(NBEP_CACHELINE) uint32_t *cand;  /* owned: own spheres with an event before T_end */
+    size_t n_cand;
+    uint32_t *fired;          /* owned: spheres that reacted in this thread's last react phase */
+    size_t n_fired;
+    uint32_t *claimed;        /* owned: claim words written in the last claim phase */
+    size_t n_claimed;
+    double t_min;             /* earliest candidate time this round, +inf if none */
+    nbep_predict_ws *pws;     /* owned: quartic workspace */
+} thread_ws;
+
+typedef struct pred_ctx {
+    nbep_barrier bar;
+    nbep_feq *q;                  /* owned */
+    uint64_t *ver;                /* owned: responses per sphere; older predictions are stale */
+    double *tau;                  /* owned: local time of each sphere inside the step */
+    int32_t *rest;                /* owned: plane a sphere rests on, or NO_PLANE */
+    uint8_t *in_cand;             /* owned: sphere is in its owner's candidate list */
+    _Atomic uint64_t *claim[2];   /* owned: smallest pair key claiming a sphere, by round parity */
+    _Atomic uint64_t *reacted;    /* owned: round stamp of a sphere's last reaction */
+    thread_ws *ws;                /* owned, one per thread */
+    int nt;
+} pred_ctx;
+
+static void pred_destroy(void *p)
+{
+    pred_ctx *c = p;
+    if (!c)
+        return;
+    nbep_feq_destroy(&c->q);
+    nbep_free_aligned(c->ver);
+    nbep_free_aligned(c->tau);
+    nbep_free_aligned(c->rest);
+    nbep_free_aligned(c->in_cand);
+    nbep_free_aligned((void *)c->claim[0]);
+    nbep_free_aligned((void *)c->claim[1]);
+    nbep_free_aligned((void *)c->reacted);
+    if (c->ws) {
+        for (int t = 0; t < c->nt; t++) {
+            free(c->ws[t].cand);
+            free(c->ws[t].fired);
+            free(c->ws[t].claimed);
+            nbep_predict_ws_destroy(&c->ws[t].pws);
+        }
+        nbep_free_aligned(c->ws);
+    }
+    free(c);
+}
+
+static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
+{
+    size_t n = sim->st.n;
+    pred_ctx *c = calloc(1, sizeof *c);
+    if (!c)
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm");
+    c->nt = sim->nt;
+    nbep_barrier_init(&c->bar, (unsigned)sim->nt);
+    nbep_status st = nbep_feq_create(n, &c->q, d);
+    if (st != NBEP_OK) {
+        pred_destroy(c);
+        return st;
+    }
+    c->ver = nbep_alloc_aligned(n, sizeof *c->ver);
+    c->tau = nbep_alloc_aligned(n, sizeof *c->tau);
+    c->rest = nbep_alloc_aligned(n, sizeof *c->rest);
+    c->in_cand = nbep_alloc_aligned(n, sizeof *c->in_cand);
+    c->claim[0] = nbep_alloc_aligned(n, sizeof *c->claim[0]);
+    c->claim[1] = nbep_alloc_aligned(n, sizeof *c->claim[1]);
+    c->reacted = nbep_alloc_aligned(n, sizeof *c->reacted);
+    c->ws = nbep_alloc_aligned((size_t)sim->nt, sizeof *c->ws);
+    if (!c->ver || !c->tau || !c->rest || !c->in_cand || !c->claim[0] || !c->claim[1] ||
+        !c->reacted || !c->ws) {
+        pred_destroy(c);
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm (%zu spheres)",
+                  n);
+    }
+    for (size_t i = 0; i < n; i++) {
+        c->rest[i] = NO_PLANE;
+        atomic_init(&c->claim[0][i], KEY_FREE);
+        atomic_init(&c->claim[1][i], KEY_FREE);
+        atomic_init(&c->reacted[i], 0);
+    }
+    for (int t = 0; t < sim->nt; t++) {
+        nbep_range r = nbep__range_split(n, t, sim->nt);
+        size_t own = r.hi - r.lo + 1;
+        thread_ws *w = &c->ws[t];
+        w->cand = malloc(own * sizeof *w->cand);
+        w->fired = malloc(2 * own * sizeof *w->fired);
+        w->claimed = malloc(2 * own * sizeof *w->claimed);
+        if (!w->cand || !w->fired || !w->claimed) {
+            pred_destroy(c);
+            NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm");
+        }
+        st = nbep_predict_ws_create(&w->pws, d);
+        if (st != NBEP_OK) {
+            pred_destroy(c);
+            return st;
+        }
+    }
+    *out = c;
+    return NBEP_OK;
+}
+
+/* The acceleration sphere i flies with: its own, less the part a resting plane carries. */
+static nbep_vec3 effective_acc(const pred_ctx *c, const nbep_state *s, size_t i)
+{
+    nbep_vec3 a = s->acc[i];
+    if (c->rest[i] != NO_PLANE) {
+        nbep_vec3 n = s->plane_normal[c->rest[i]];
+        double an = nbep_vec3_dot(a, n);
+        if (an < 0.0)
+            a = nbep_vec3_axpy(a, -an, n);
+    }
+    return a;
+}
+
+static bool is_fresh(const pred_ctx *c, size_t i, const nbep_event *ev)
+{
+    if (ev->kind == NBEP_EVENT_NONE || ev->ver_self != c->ver[i])
+        return false;
+    return ev->kind == NBEP_EVENT_PLANE || ev->ver_partner == c->ver[ev->partner];
+}
+
+/* Paper Procedure 9 for one sphere: drop its event, then predict it against every plane and
+ * every other sphere (each at its own local time; a pair is compared at the later of the
+ * two) and keep the earliest (insert supersedes). T0 is the step's start time. */
+static void repredict(pred_ctx *c, const nbep_state *s, size_t i, double T0, thread_ws *w,
+                      nbep_counters *cnt)
+{
+    nbep_feq_remove(c->q, i);
+    const double ti = c->tau[i];
+    const nbep_vec3 ai = effective_acc(c, s, i);
+    for (size_t p = 0; p < s->n_planes; p++) {
+        if ((int32_t)p == c->rest[i])
+            continue;
+        nbep_vec3 n = s->plane_normal[p];
+        double gap = nbep_physics_plane_gap(n, s->plane_offset[p], s->pos[i], s->radius[i]);
+        double dt = nbep_predict_plane(gap, nbep_vec3_dot(n, s->vel[i]), nbep_vec3_dot(n, ai));
+        if (dt < NBEP_NEVER)
+            nbep_feq_insert(c->q, i,
+                            (nbep_event){T0 + (ti + dt), (uint32_t)p, NBEP_EVENT_PLANE,
+                                         c->ver[i], 0});
+    }
+    for (size_t j = 0; j < s->n; j++) {
+        if (j == i)
+            continue;
+        const double tj = c->tau[j];
+        const double t0 = ti > tj ? ti : tj;
+        nbep_vec3 pi = s->pos[i], vi = s->vel[i], pj = s->pos[j], vj = s->vel[j];
+        const nbep_vec3 aj = effective_acc(c, s, j);
+        if (ti < t0)
+            nbep_physics_drift(&pi, &vi, ai, t0 - ti);
+        if (tj < t0)
+            nbep_physics_drift(&pj, &vj, aj, t0 - tj);
+        double dt = nbep_predict_pair(nbep_vec3_sub(pj, pi), nbep_vec3_sub(vj, vi),
+                                      nbep_vec3_sub(aj, ai), s->radius[i] + s->radius[j],
+                                      w->pws);
+        if (dt < NBEP_NEVER)
+            nbep_feq_insert(c->q, i,
+                            (nbep_event){T0 + (t0 + dt), (uint32_t)j, NBEP_EVENT_SPHERE,
+                                         c->ver[i], c->ver[j]});
+    }
+    cnt->c[NBEP_COUNTER_PREDICTIONS] += s->n - 1 + s->n_planes;
+}
+
+/* Re-predicts sphere i if its slot is invalid or stale (counting the check), and adds it to
+ * the candidates when its event falls before T_end. */
+static void examine(pred_ctx *c, const nbep_state *s, size_t i, double T0, double T_end,
+                    thread_ws *w, nbep_counters *cnt)
+{
+    cnt->c[NBEP_COUNTER_CHECKS]++;
+    const nbep_event *ev = nbep_feq_slot(c->q, i);
+    if (!is_fresh(c, i, ev)) {
+        repredict(c, s, i, T0, w, cnt);
+        ev = nbep_feq_slot(c->q, i);
+    }
+    if (ev->kind != NBEP_EVENT_NONE && ev->time < T_end) {
+        if (!c->in_cand[i]) {
+            c->in_cand[i] = 1;
+            w->cand[w->n_cand++] = (uint32_t)i;
+        }
+    } else if (c->in_cand[i]) {
+        c->in_cand[i] = 0; /* dropped by the compaction in find_phase */
+    }
+}
+
+/* The find sub-phase of one round: the first round of a step scans every own slot; later
+ * rounds only the own candidates and the own spheres that reacted in the last round. */
+static void find_phase(pred_ctx *c, const nbep_state *s, nbep_range own, bool first, double T0,
+                       double T_end, thread_ws *w, nbep_counters *cnt)
+{
+    if (first) {
+        w->n_cand = 0;
+        for (size_t i = own.lo; i < own.hi; i++)
+            examine(c, s, i, T0, T_end, w, cnt);
+    } else {
+        for (int t = 0; t < c->nt; t++) {
+            const thread_ws *o = &c->ws[t];
+            for (size_t k = 0; k < o->n_fired; k++) {
+                size_t i = o->fired[k];
+                if (i >= own.lo && i < own.hi && !c->in_cand[i]) {
+                    c->in_cand[i] = 1;
+                    w->cand[w->n_cand++] = (uint32_t)i;
+                }
+            }
+        }
+        size_t m = w->n_cand;
+        w->n_cand = 0;
+        for (size_t k = 0; k < m; k++) {
+            size_t i = w->cand[k];
+            c->in_cand[i] = 0;
+            examine(c, s, i, T0, T_end, w, cnt);
+        }
+    }
+    double t_min = INFINITY;
+    for (size_t k = 0; k < w->n_cand; k++)
+        t_min = fmin(t_min, nbep_feq_slot(c->q, w->cand[k])->time);
+    w->t_min = t_min;
+}
+
+/* The ordering key of an event: lower sphere in the high half, then the partner; planes
+ * (stored as UINT32_MAX - plane) after every sphere. Equal for both copies of one pair. */
+static uint64_t event_key(size_t i, const nbep_event *ev, uint32_t *lo, uint32_t *hi)
+{
+    if (ev->kind == NBEP_EVENT_PLANE) {
+        *lo = (uint32_t)i;
+        *hi = UINT32_MAX - ev->partner;
+    } else {
+        *lo = (uint32_t)(i < ev->partner ? i : ev->partner);
+        *hi = (uint32_t)(i < ev->partner ? ev->partner : i);
+    }
+    return (uint64_t)*lo << 32 | *hi;
+}
+
+/* Keeps the smaller key in a claim word. relaxed: claims are read only after the barrier that
+ * ends the claim phase, which orders every claim before every read. */
+static void claim_min(_Atomic uint64_t *word, uint64_t key)
+{
+    uint64_t cur = atomic_load_explicit(word, memory_order_relaxed);
+    while (key < cur &&
+           !atomic_compare_exchange_weak_explicit(word, &cur, key, memory_order_relaxed,
+                                                  memory_order_relaxed)) {
+    }
+}
+
+static void claim_phase(pred_ctx *c, int par, double t_min, thread_ws *w)
+{
+    w->n_claimed = 0;
+    for (size_t k = 0; k < w->n_cand; k++) {
+        size_t i = w->cand[k];
+        const nbep_event *ev = nbep_feq_slot(c->q, i);
+        if (ev->time != t_min)
+            continue;
+        uint32_t lo, hi;
+        uint64_t key = event_key(i, ev, &lo, &hi);
+        claim_min(&c->claim[par][lo], key);
+        w->claimed[w->n_claimed++] = lo;
+        if (ev->kind == NBEP_EVENT_SPHERE) {
+            claim_min(&c->claim[par][hi], key);
+            w->claimed[w->n_claimed++] = hi;
+        }
+    }
+}
+
+/* After a response, a resting sphere that now moves along the plane's normal leaves it. */
+static void update_rest(pred_ctx *c, const nbep_state *s, size_t i)
+{
+    if (c->rest[i] != NO_PLANE && nbep_vec3_dot(s->vel[i], s->plane_normal[c->rest[i]]) != 0.0)
+        c->rest[i] = NO_PLANE;
+}
+
+static void advance_to(pred_ctx *c, nbep_state *s, size_t i, double t_local)
+{
+    double h = t_local - c->tau[i];
+    if (h > 0.0)
+        nbep_physics_drift(&s->pos[i], &s->vel[i], effective_acc(c, s, i), h);
+    c->tau[i] = t_local;
+}
+
+static void react(pred_ctx *c, nbep_state *s, double e, double dt, double t_local,
+                  uint32_t lo, uint32_t hi, const nbep_event *ev, thread_ws *w,
+                  nbep_counters *cnt, nbep_thread_max *mx)
+{
+    advance_to(c, s, lo, t_local);
+    if (ev->kind == NBEP_EVENT_PLANE) {
+        uint32_t p = UINT32_MAX - hi;
+        nbep_vec3 n = s->plane_normal[p];
+        double gap = nbep_physics_plane_gap(n, s->plane_offset[p], s->pos[lo], s->radius[lo]);
+        if (-gap > mx->overlap)
+            mx->overlap = -gap;
+        if (-gap / s->radius[lo] > mx->overlap_rel)
+            mx->overlap_rel = -gap / s->radius[lo];
+        if (nbep_physics_respond_plane(n, &s->vel[lo], e))
+            cnt->c[NBEP_COUNTER_PLANE_COLLISIONS]++;
+        update_rest(c, s, lo);
+        double an = nbep_vec3_dot(s->acc[lo], n), vn = nbep_vec3_dot(s->vel[lo], n);
+        if (an < 0.0 && vn >= 0.0 && 2.0 * vn <= -an * NBEP_REST_FRACTION * dt) {
+            s->vel[lo] = nbep_vec3_axpy(s->vel[lo], -vn, n);
+            c->rest[lo] = (int32_t)p;
+        }
+        c->ver[lo]++;
+        w->fired[w->n_fired++] = lo;
+        return;
+    }
+    advance_to(c, s, hi, t_local);
+    double sigma = s->radius[lo] + s->radius[hi];
+    double ov = sigma - nbep_vec3_norm(nbep_vec3_sub(s->pos[hi], s->pos[lo]));
+    if (ov > mx->overlap)
+        mx->overlap = ov;
+    if (ov / fmin(s->radius[lo], s->radius[hi]) > mx->overlap_rel)
+        mx->overlap_rel = ov / fmin(s->radius[lo], s->radius[hi]);
+    if (nbep_physics_respond_pair(s->pos[lo], s->pos[hi], &s->vel[lo], &s->vel[hi],
+                                  s->mass[lo], s->mass[hi], e))
+        cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
+    update_rest(c, s, lo);
+    update_rest(c, s, hi);
+    c->ver[lo]++;
+    c->ver[hi]++;
+    w->fired[w->n_fired++] = lo;
+    w->fired[w->n_fired++] = hi;
+}
+
+static void react_phase(pred_ctx *c, nbep_state *s, const nbep_scene *sc, int par, double T0,
+                        double t_min, uint64_t stamp, thread_ws *w, nbep_counters *cnt,
+                        nbep_thread_max *mx)
+{
+    w->n_fired = 0;
+    for (size_t k = 0; k < w->n_cand; k++) {
+        size_t i = w->cand[k];
+        const nbep_event *ev = nbep_feq_slot(c->q, i);
+        if (ev->time != t_min)
+            continue;
+        cnt->c[NBEP_COUNTER_CHECKS]++; /* the paper's check() */
+        uint32_t lo, hi;
+        uint64_t key = event_key(i, ev, &lo, &hi);
+        if (atomic_load_explicit(&c->claim[par][lo], memory_order_relaxed) != key)
+            continue;
+        if (ev->kind == NBEP_EVENT_SPHERE &&
+            atomic_load_explicit(&c->claim[par][hi], memory_order_relaxed) != key)
+            continue;
+        /* Both copies of a pair hold the claims; one compare-and-swap lets one react.
+         * relaxed: the other copy only needs the outcome, and the barrier after this phase
+         * publishes the reaction's writes. */
+        uint64_t seen = atomic_load_explicit(&c->reacted[lo], memory_order_relaxed);
+        if (seen == stamp ||
+            !atomic_compare_exchange_strong_explicit(&c->reacted[lo], &seen, stamp,
+                                                     memory_order_relaxed,
+                                                     memory_order_relaxed))
+            continue;
+        double t_local = t_min - T0;
+        react(c, s, sc->restitution, sc->dt, t_local, lo, hi, ev, w, cnt, mx);
+    }
+}
+
+static void pred_run(nbep_sim *sim, void *p)
+{
+    pred_ctx *c = p;
+#pragma omp parallel num_threads(sim->nt) default(none) shared(sim, c)
+    {
+#ifdef _OPENMP
+        const int tid = omp_get_thread_num();
+#else
+        const int tid = 0;
+#endif
+        const int nt = sim->nt;
+        nbep_state *s = &sim->st;
+        const nbep_range own = nbep__range_split(s->n, tid, nt);
+        thread_ws *w = &c->ws[tid];
+        uint64_t round = 0;
+
+        /* initial predictions: every slot starts invalid (paper: "initialize events") */
+        for (size_t i = own.lo; i < own.hi; i++)
+            repredict(c, s, i, 0.0, w, &sim->counters[1][tid]);
+        nbep_barrier_wait(&c->bar);
+
+        for (uint64_t step = 1; step <= sim->step_end; step++) {
+            const int spar = (int)(step & 1);
+            nbep_counters *cnt = &sim->counters[spar][tid];
+            nbep_thread_max *mx = &sim->tmax[spar][tid];
+            const double T0 = (double)(step - 1) * sim->dt;
+            const double T_end = (double)step * sim->dt;
+            const uint64_t step_round0 = round;
+            for (bool first = true;; first = false, round++) {
+                const int par = (int)(round & 1);
+                /* the claim words of the previous round are reset while nobody reads them */
+                for (size_t k = 0; k < w->n_claimed; k++)
+                    atomic_store_explicit(&c->claim[par ^ 1][w->claimed[k]], KEY_FREE,
+                                          memory_order_relaxed);
+                w->n_claimed = 0;
+                find_phase(c, s, own, first, T0, T_end, w, cnt);
+                nbep_barrier_wait(&c->bar);
+                /* relaxed: the barrier above ordered thread 0's store of stop */
+                if (first && atomic_load_explicit(&sim->stop, memory_order_relaxed))
+                    goto done;
+                double t_min = INFINITY;
+                for (int t = 0; t < nt; t++)
+                    t_min = fmin(t_min, c->ws[t].t_min);
+                if (!(t_min < T_end))
+                    break;
+                if (round - step_round0 > MAX_ROUNDS_PER_SPHERE * (uint64_t)s->n + 1000) {
+                    if (tid == 0) {
+                        nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                                      "nbep: step %llu: events at t = %.17g do not resolve "
+                                      "(endless zero-time reactions); stopping",
+                                      (unsigned long long)step, t_min);
+                        sim->status = NBEP_ENUMERIC;
+                    }
+                    goto done;
+                }
+                claim_phase(c, par, t_min, w);
+                nbep_barrier_wait(&c->bar);
+                react_phase(c, s, sim->scene, par, T0, t_min, round + 1, w, cnt, mx);
+                nbep_barrier_wait(&c->bar);
+            }
+            /* update (paper Section 4.3.1): every own sphere flies to the step's end */
+            for (size_t i = own.lo; i < own.hi; i++) {
+                double h = sim->dt - c->tau[i];
+                if (h > 0.0)
+                    nbep_physics_drift(&s->pos[i], &s->vel[i], effective_acc(c, s, i), h);
+                c->tau[i] = 0.0;
+            }
+            nbep__sim_block_energy(sim, own);
+            nbep_barrier_wait(&c->bar);
+            if (tid == 0)
+                nbep__sim_end_step(sim, step);
+            /* no barrier: the next find phase only reads positions and writes queue slots,
+             * which the hook does not touch; its stop request is read after that phase's
+             * barrier */
+        }
+    done:;
+    }
+}
+
+const nbep_algo nbep__algo_predictive = {"predictive", false, pred_create, pred_run,
+                                         pred_destroy};

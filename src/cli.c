@@ -1,0 +1,192 @@
+/* Command-line parsing. Hand-written rather than getopt_long so that every mistake gets one
+ * line naming the option, and so that option overrides become deck overrides in order. */
+#include "nbep/cli.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char HELP[] =
+    "nbep - N-Body Event Prediction: colliding spheres and static planes\n"
+    "\n"
+    "usage:\n"
+    "  nbep run DECK [options]     run one simulation\n"
+    "  nbep check DECK [options]   validate the deck and print what the scene needs\n"
+    "  nbep info RUN.h5            print a run's metadata and summary\n"
+    "  nbep --help | --version\n"
+    "\n"
+    "options of run and check:\n"
+    "  -o, --output FILE      output file (overrides output.file)\n"
+    "  -a, --algorithm NAME   naive | seminaive | predictive (overrides run.algorithm)\n"
+    "  -t, --threads N        threads; 0 = OMP_NUM_THREADS or all cores (run.threads)\n"
+    "  -n, --steps N          time steps (run.steps)\n"
+    "      --dt X             time step (run.dt)\n"
+    "      --set PATH=VALUE   override any deck setting, repeatable, e.g.\n"
+    "                         --set physics.restitution=0.9 --set spheres.[0].count=8192\n"
+    "      --summary FILE     write the JSON summary there (- = stdout)\n"
+    "      --quiet            no progress output\n"
+    "\n"
+    "exit status: 0 done, 1 run-time failure (I/O, numerical), 2 bad usage or deck,\n"
+    "130/143 interrupted by SIGINT/SIGTERM after saving every frame so far.\n"
+    "The deck reference, output layout and algorithms are described in README.md.\n";
+
+void nbep_cli_print_help(FILE *f)
+{
+    fputs(HELP, f);
+}
+
+void nbep_cli_fini(nbep_cli *cli)
+{
+    for (size_t i = 0; i < cli->n_overrides; i++)
+        free(cli->overrides[i]);
+    free(cli->overrides);
+    cli->overrides = NULL;
+    cli->n_overrides = 0;
+}
+
+static nbep_status add_override(nbep_cli *cli, const char *path, const char *value, bool quote,
+                                nbep_diag *d)
+{
+    size_t len = strlen(path) + 1 + 2 * strlen(value) + 3;
+    char *s = malloc(len);
+    char **o = realloc(cli->overrides, (cli->n_overrides + 1) * sizeof *o);
+    if (!s || !o) {
+        free(s);
+        if (o)
+            cli->overrides = o;
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory reading the command line");
+    }
+    cli->overrides = o;
+    char *w = s + sprintf(s, "%s=", path);
+    if (quote) { /* a libconfig string: escape quotes and backslashes */
+        *w++ = '"';
+        for (const char *r = value; *r; r++) {
+            if (*r == '"' || *r == '\\')
+                *w++ = '\\';
+            *w++ = *r;
+        }
+        *w++ = '"';
+        *w = '\0';
+    } else {
+        strcpy(w, value);
+    }
+    cli->overrides[cli->n_overrides++] = s;
+    return NBEP_OK;
+}
+
+static nbep_status parse_command(const char *word, nbep_command *cmd, nbep_diag *d)
+{
+    static const struct {
+        const char *name;
+        nbep_command cmd;
+    } table[] = {{"run", NBEP_CMD_RUN},     {"check", NBEP_CMD_CHECK},
+                 {"info", NBEP_CMD_INFO},   {"sweep", NBEP_CMD_SWEEP},
+                 {"--help", NBEP_CMD_HELP}, {"-h", NBEP_CMD_HELP},
+                 {"help", NBEP_CMD_HELP},   {"--version", NBEP_CMD_VERSION}};
+    for (size_t i = 0; i < sizeof table / sizeof table[0]; i++)
+        if (strcmp(word, table[i].name) == 0) {
+            *cmd = table[i].cmd;
+            return NBEP_OK;
+        }
+    NBEP_FAIL(d, NBEP_EUSAGE, "nbep: unknown command '%s' (try nbep --help)", word);
+}
+
+nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
+{
+    memset(cli, 0, sizeof *cli);
+    if (argc < 2)
+        NBEP_FAIL(d, NBEP_EUSAGE, "nbep: no command given (try nbep --help)");
+    nbep_status st = parse_command(argv[1], &cli->cmd, d);
+    if (st != NBEP_OK || cli->cmd == NBEP_CMD_HELP || cli->cmd == NBEP_CMD_VERSION)
+        return st;
+    /* Options that take a value, and the deck path each overrides (NULL: not a deck path). */
+    static const struct {
+        const char *shrt, *lng, *path;
+        bool quote;
+    } opts[] = {
+        {"-o", "--output", "output.file", true},  {"-a", "--algorithm", "run.algorithm", true},
+        {"-t", "--threads", "run.threads", false}, {"-n", "--steps", "run.steps", false},
+        {NULL, "--dt", "run.dt", false},
+    };
+    for (int k = 2; k < argc; k++) {
+        const char *a = argv[k];
+        if (strcmp(a, "--quiet") == 0 || strcmp(a, "-q") == 0) {
+            cli->quiet = true;
+            continue;
+        }
+        if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+            cli->cmd = NBEP_CMD_HELP;
+            return NBEP_OK;
+        }
+        const char *name = a, *value = NULL;
+        char longname[32];
+        /* --name=value form */
+        const char *eq = strncmp(a, "--", 2) == 0 ? strchr(a, '=') : NULL;
+        if (eq && (size_t)(eq - a) < sizeof longname) {
+            memcpy(longname, a, (size_t)(eq - a));
+            longname[eq - a] = '\0';
+            name = longname;
+            value = eq + 1;
+        }
+        bool known = false;
+        for (size_t i = 0; i < sizeof opts / sizeof opts[0] && !known; i++) {
+            if ((opts[i].shrt && strcmp(name, opts[i].shrt) == 0) ||
+                strcmp(name, opts[i].lng) == 0) {
+                known = true;
+                if (!value) {
+                    if (k + 1 >= argc)
+                        NBEP_FAIL(d, NBEP_EUSAGE, "nbep: option %s needs a value", name);
+                    value = argv[++k];
+                }
+                st = add_override(cli, opts[i].path, value, opts[i].quote, d);
+                if (st != NBEP_OK)
+                    return st;
+            }
+        }
+        if (known)
+            continue;
+        const char **slot = strcmp(name, "--summary") == 0  ? &cli->summary
+                            : strcmp(name, "--resume") == 0 ? &cli->resume
+                            : strcmp(name, "--set") == 0    ? &value
+                                                            : NULL;
+        if (slot) {
+            if (!value) {
+                if (k + 1 >= argc)
+                    NBEP_FAIL(d, NBEP_EUSAGE, "nbep: option %s needs a value", name);
+                value = argv[++k];
+            }
+            if (strcmp(name, "--set") == 0) {
+                const char *e2 = strchr(value, '=');
+                if (!e2 || e2 == value)
+                    NBEP_FAIL(d, NBEP_EUSAGE,
+                              "nbep: --set takes PATH=VALUE, e.g. --set physics.restitution=0.9 "
+                              "(got '%s')",
+                              value);
+                char **o = realloc(cli->overrides, (cli->n_overrides + 1) * sizeof *o);
+                char *copy = o ? strdup(value) : NULL;
+                if (o)
+                    cli->overrides = o;
+                if (!copy)
+                    NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory reading the command line");
+                cli->overrides[cli->n_overrides++] = copy;
+            } else {
+                *slot = value;
+            }
+            continue;
+        }
+        if (a[0] == '-' && a[1] != '\0')
+            NBEP_FAIL(d, NBEP_EUSAGE, "nbep: unknown option '%s' (try nbep --help)", a);
+        if (cli->path)
+            NBEP_FAIL(d, NBEP_EUSAGE, "nbep: unexpected argument '%s' (one %s only)", a,
+                      cli->cmd == NBEP_CMD_INFO ? "run file" : "deck");
+        cli->path = a;
+    }
+    if (!cli->path)
+        NBEP_FAIL(d, NBEP_EUSAGE, "nbep: %s needs a %s (try nbep --help)", argv[1],
+                  cli->cmd == NBEP_CMD_INFO ? "run file (RUN.h5)" : "deck file");
+    if (cli->cmd == NBEP_CMD_INFO && (cli->n_overrides || cli->summary || cli->resume))
+        NBEP_FAIL(d, NBEP_EUSAGE, "nbep: info takes only a run file");
+    if (cli->resume && cli->cmd != NBEP_CMD_RUN)
+        NBEP_FAIL(d, NBEP_EUSAGE, "nbep: --resume goes with run only");
+    return NBEP_OK;
+}

@@ -1,0 +1,357 @@
+/* A run: set-up, the end-of-step hook shared by every algorithm (counters, energy, stats rows,
+ * frames, progress, stop requests) and the summary. The algorithms (algo_*.c) own the
+ * parallel region; this file holds no OpenMP pragmas. */
+#include "nbep/sim.h"
+
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <time.h>
+#include <unistd.h>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "nbep/physics.h"
+#include "sim_impl.h"
+
+/* Stats rows are written to the file in batches of this many (and at every frame). */
+#define ROWS_BATCH 4096
+/* Progress: a live line on a terminal this often, a plain line otherwise this often. */
+#define PROGRESS_TTY_SECONDS 0.25
+#define PROGRESS_LOG_SECONDS 10.0
+
+double nbep__now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int nbep_sim_resolve_threads(int requested)
+{
+    if (requested > 0)
+        return requested;
+#ifdef _OPENMP
+    /* omp_get_max_threads honours OMP_NUM_THREADS and defaults to the available cores. */
+    int n = omp_get_max_threads();
+    return n > 0 ? n : 1;
+#else
+    return 1;
+#endif
+}
+
+size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads)
+{
+    size_t n = sc->state.n, np = sc->state.n_planes;
+    size_t bytes = 2 * nbep_state_bytes(n, np); /* the scene's copy and the run's */
+    if (strcmp(sc->algorithm, "predictive") == 0)
+        /* slot 32, response count 8, local time 8, rest 4, flag 1, 2 claims 16, reacted 8,
+         * candidate 4, fired and claimed lists 16 */
+        bytes += n * 97;
+    else if (strcmp(sc->algorithm, "seminaive") == 0)
+        bytes += n * (4 * sizeof(uint64_t) + 2 * 64); /* contacts and tree nodes */
+    else
+        bytes += n * 4 * sizeof(uint64_t); /* contact lists */
+    bytes += (size_t)threads * 4 * NBEP_CACHELINE;
+    bytes += n * 2 * sizeof(nbep_vec3); /* one frame in flight in HDF5's buffers */
+    return bytes;
+}
+
+nbep_range nbep__range_split(size_t n, int tid, int nt)
+{
+    size_t blocks = (n + NBEP_BLOCK - 1) / NBEP_BLOCK;
+    size_t b_lo = blocks * (size_t)tid / (size_t)nt;
+    size_t b_hi = blocks * (size_t)(tid + 1) / (size_t)nt;
+    nbep_range r = {b_lo * NBEP_BLOCK, b_hi * NBEP_BLOCK};
+    if (r.lo > n)
+        r.lo = n;
+    if (r.hi > n)
+        r.hi = n;
+    return r;
+}
+
+void nbep__sim_block_energy(nbep_sim *sim, nbep_range own)
+{
+    for (size_t lo = own.lo; lo < own.hi; lo += NBEP_BLOCK) {
+        size_t hi = lo + NBEP_BLOCK < own.hi ? lo + NBEP_BLOCK : own.hi;
+        nbep_physics_energy(&sim->st, lo, hi, &sim->block_ke[lo / NBEP_BLOCK],
+                            &sim->block_pe[lo / NBEP_BLOCK]);
+    }
+}
+
+static void energy_total(const nbep_sim *sim, double *ke, double *pe)
+{
+    double k = 0.0, p = 0.0;
+    for (size_t b = 0; b < sim->n_blocks; b++) { /* fixed order: same bits for any nt */
+        k += sim->block_ke[b];
+        p += sim->block_pe[b];
+    }
+    *ke = k;
+    *pe = p;
+}
+
+static const nbep_algo *find_algo(const char *name)
+{
+    static const nbep_algo *const table[] = {&nbep__algo_naive, &nbep__algo_seminaive,
+                                             &nbep__algo_predictive};
+    for (size_t i = 0; i < sizeof table / sizeof table[0]; i++)
+        if (strcmp(table[i]->name, name) == 0)
+            return table[i];
+    return NULL;
+}
+
+nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, nbep_sim **out,
+                            nbep_diag *d)
+{
+    double t0 = nbep__now();
+    const nbep_algo *algo = find_algo(sc->algorithm);
+    if (!algo)
+        NBEP_FAIL(d, NBEP_EDECK, "nbep: unknown algorithm '%s'", sc->algorithm);
+    nbep_sim *sim = calloc(1, sizeof *sim);
+    if (!sim)
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for a run");
+    sim->scene = sc;
+    sim->opt = *opt;
+    sim->nt = opt->threads > 0 ? opt->threads : 1;
+    sim->step_end = sc->steps;
+    sim->dt = sc->dt;
+    sim->algo = algo;
+    atomic_init(&sim->stop, 0);
+    nbep_status st = nbep_state_copy(&sim->st, &sc->state, d);
+    if (st != NBEP_OK) {
+        free(sim);
+        return st;
+    }
+    size_t n = sim->st.n;
+    sim->n_blocks = (n + NBEP_BLOCK - 1) / NBEP_BLOCK;
+    for (int k = 0; k < 2; k++) {
+        sim->counters[k] = nbep_alloc_aligned((size_t)sim->nt, sizeof *sim->counters[k]);
+        sim->tmax[k] = nbep_alloc_aligned((size_t)sim->nt, sizeof *sim->tmax[k]);
+    }
+    sim->block_ke = nbep_alloc_aligned(sim->n_blocks, sizeof *sim->block_ke);
+    sim->block_pe = nbep_alloc_aligned(sim->n_blocks, sizeof *sim->block_pe);
+    sim->cap_rows = ROWS_BATCH;
+    sim->rows = malloc(sim->cap_rows * sizeof *sim->rows);
+    if (!sim->counters[0] || !sim->counters[1] || !sim->tmax[0] || !sim->tmax[1] ||
+        !sim->block_ke || !sim->block_pe || !sim->rows) {
+        nbep_sim_destroy(&sim);
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the run's counters");
+    }
+    st = algo->create(sim, &sim->algo_ctx, d);
+    if (st != NBEP_OK) {
+        nbep_sim_destroy(&sim);
+        return st;
+    }
+    nbep__sim_block_energy(sim, (nbep_range){0, n});
+    double ke, pe;
+    energy_total(sim, &ke, &pe);
+    sim->energy_initial = sim->energy_final = ke + pe;
+    sim->setup_seconds = nbep__now() - t0;
+    *out = sim;
+    return NBEP_OK;
+}
+
+void nbep_sim_destroy(nbep_sim **simp)
+{
+    if (!simp || !*simp)
+        return;
+    nbep_sim *sim = *simp;
+    if (sim->algo && sim->algo_ctx)
+        sim->algo->destroy(sim->algo_ctx);
+    for (int k = 0; k < 2; k++) {
+        nbep_free_aligned(sim->counters[k]);
+        nbep_free_aligned(sim->tmax[k]);
+    }
+    nbep_free_aligned(sim->block_ke);
+    nbep_free_aligned(sim->block_pe);
+    free(sim->rows);
+    nbep_state_fini(&sim->st);
+    free(sim);
+    *simp = NULL;
+}
+
+const nbep_state *nbep_sim_state(const nbep_sim *sim)
+{
+    return &sim->st;
+}
+
+static nbep_status flush_rows(nbep_sim *sim)
+{
+    if (sim->n_rows == 0)
+        return NBEP_OK;
+    nbep_status st = NBEP_OK;
+    if (sim->opt.out && sim->scene->out_stats)
+        st = nbep_output_stats(sim->opt.out, sim->rows, sim->n_rows, sim->diag);
+    sim->n_rows = 0;
+    return st;
+}
+
+static nbep_status emit_frame(nbep_sim *sim, uint64_t step)
+{
+    if (!nbep_state_all_finite(&sim->st))
+        NBEP_FAIL(sim->diag, NBEP_ENUMERIC,
+                  "nbep: a position or velocity became non-finite by step %llu; no frame "
+                  "written for it",
+                  (unsigned long long)step);
+    nbep_status st = flush_rows(sim);
+    if (st == NBEP_OK && sim->opt.out)
+        st = nbep_output_frame(sim->opt.out, (int64_t)step, sim->dt, &sim->st, sim->diag);
+    if (st == NBEP_OK && sim->opt.on_frame)
+        st = sim->opt.on_frame(sim->opt.on_frame_ctx, (int64_t)step, &sim->st, sim->diag);
+    return st;
+}
+
+static void progress(nbep_sim *sim, uint64_t step, bool last)
+{
+    if (!sim->opt.progress)
+        return;
+    double now = nbep__now();
+    bool tty = isatty(STDERR_FILENO);
+    double every = tty ? PROGRESS_TTY_SECONDS : PROGRESS_LOG_SECONDS;
+    if (!last && now - sim->t_last_progress < every)
+        return;
+    sim->t_last_progress = now;
+    double el = now - sim->t_start;
+    double rate = el > 0.0 ? (double)step / el : 0.0;
+    double pct = sim->step_end ? 100.0 * (double)step / (double)sim->step_end : 100.0;
+    double eta = rate > 0.0 ? (double)(sim->step_end - step) / rate : 0.0;
+    if (tty)
+        fprintf(stderr, "\rstep %llu/%llu  %5.1f%%  %.4g steps/s  ETA %.0f s   %s",
+                (unsigned long long)step, (unsigned long long)sim->step_end, pct, rate, eta,
+                last ? "\n" : "");
+    else
+        fprintf(stderr, "step %llu/%llu  %.1f%%  %.4g steps/s  ETA %.0f s\n",
+                (unsigned long long)step, (unsigned long long)sim->step_end, pct, rate, eta);
+}
+
+int nbep__sim_end_step(nbep_sim *sim, uint64_t step)
+{
+    const int par = (int)(step & 1);
+    nbep_step_stats row = {.step = (int64_t)step};
+    uint64_t c[NBEP_COUNTER_COUNT] = {0};
+    double ov = 0.0, ov_rel = 0.0;
+    for (int t = 0; t < sim->nt; t++) {
+        for (int k = 0; k < NBEP_COUNTER_COUNT; k++) {
+            c[k] += sim->counters[par][t].c[k];
+            sim->counters[par][t].c[k] = 0;
+        }
+        ov = fmax(ov, sim->tmax[par][t].overlap);
+        ov_rel = fmax(ov_rel, sim->tmax[par][t].overlap_rel);
+        sim->tmax[par][t].overlap = sim->tmax[par][t].overlap_rel = 0.0;
+    }
+    for (int k = 0; k < NBEP_COUNTER_COUNT; k++)
+        sim->totals[k] += c[k];
+    row.checks = c[NBEP_COUNTER_CHECKS];
+    row.predictions = c[NBEP_COUNTER_PREDICTIONS];
+    row.collisions = c[NBEP_COUNTER_SPHERE_COLLISIONS] + c[NBEP_COUNTER_PLANE_COLLISIONS];
+    if (row.collisions == 0)
+        sim->quiet_steps++;
+    energy_total(sim, &row.kinetic_energy, &row.potential_energy);
+    sim->energy_final = row.kinetic_energy + row.potential_energy;
+    sim->steps_done = step;
+
+    int stop = 0;
+    if (sim->opt.stop_signal) {
+        int sig = atomic_load_explicit(sim->opt.stop_signal, memory_order_relaxed);
+        if (sig) {
+            stop = 1;
+            sim->status = sig == SIGTERM ? NBEP_ESIGTERM : NBEP_ESIGINT;
+        }
+    }
+    bool frame = step % sim->scene->output_every == 0 || step == sim->step_end || stop;
+    if (frame && !sim->algo->exact_overlap) {
+        double m = 0.0, mr = 0.0;
+        if (nbep_state_max_overlap(&sim->st, &m, &mr, NULL, NULL, sim->diag) == NBEP_OK) {
+            ov = fmax(ov, m);
+            ov_rel = fmax(ov_rel, mr);
+        }
+    }
+    row.max_overlap = ov;
+    sim->max_overlap = fmax(sim->max_overlap, ov);
+    sim->max_overlap_rel = fmax(sim->max_overlap_rel, ov_rel);
+    if (!isfinite(sim->energy_final) && sim->status == NBEP_OK) {
+        nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                      "nbep: the energy became non-finite at step %llu (a position or "
+                      "velocity overflowed or is NaN)",
+                      (unsigned long long)step);
+        sim->status = NBEP_ENUMERIC;
+        stop = 1;
+        frame = false;
+    }
+    sim->rows[sim->n_rows++] = row;
+    if (sim->n_rows == sim->cap_rows) {
+        nbep_status st = flush_rows(sim);
+        if (st != NBEP_OK && sim->status == NBEP_OK)
+            sim->status = st, stop = 1;
+    }
+    if (frame) {
+        nbep_status st = emit_frame(sim, step);
+        if (st != NBEP_OK && (sim->status == NBEP_OK || sim->status == NBEP_ESIGINT ||
+                              sim->status == NBEP_ESIGTERM))
+            sim->status = st, stop = 1;
+    }
+    progress(sim, step, step == sim->step_end || stop);
+    if (stop)
+        atomic_store_explicit(&sim->stop, 1, memory_order_relaxed); /* next barrier orders it */
+    return stop;
+}
+
+nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
+{
+    sim->diag = d;
+    sim->status = NBEP_OK;
+    sim->t_start = sim->t_last_progress = nbep__now();
+    nbep_status st = emit_frame(sim, 0);
+    if (st != NBEP_OK)
+        return st;
+    if (sim->step_end > 0)
+        sim->algo->run(sim, sim->algo_ctx);
+    sim->wall_seconds = nbep__now() - sim->t_start;
+    st = flush_rows(sim);
+    if (sim->status == NBEP_OK)
+        sim->status = st;
+    return sim->status;
+}
+
+static uint64_t peak_rss(void)
+{
+    struct rusage ru;
+    if (getrusage(RUSAGE_SELF, &ru) != 0)
+        return 0;
+    return (uint64_t)ru.ru_maxrss * 1024u; /* Linux reports KiB */
+}
+
+void nbep_sim_summary(const nbep_sim *sim, nbep_summary *s)
+{
+    memset(s, 0, sizeof *s);
+    snprintf(s->algorithm, sizeof s->algorithm, "%s", sim->scene->algorithm);
+    s->threads = sim->nt;
+    s->spheres = sim->st.n;
+    s->planes = sim->st.n_planes;
+    s->steps = sim->steps_done;
+    s->dt = sim->dt;
+    s->setup_seconds = sim->setup_seconds;
+    s->wall_seconds = sim->wall_seconds;
+    s->steps_per_second = sim->wall_seconds > 0.0 ? (double)sim->steps_done / sim->wall_seconds
+                                                  : 0.0;
+    s->checks = sim->totals[NBEP_COUNTER_CHECKS];
+    s->predictions = sim->totals[NBEP_COUNTER_PREDICTIONS];
+    s->sphere_collisions = sim->totals[NBEP_COUNTER_SPHERE_COLLISIONS];
+    s->plane_collisions = sim->totals[NBEP_COUNTER_PLANE_COLLISIONS];
+    s->collisions = s->sphere_collisions + s->plane_collisions;
+    s->quiet_steps = sim->quiet_steps;
+    s->energy_initial = sim->energy_initial;
+    s->energy_final = sim->energy_final;
+    s->energy_rel_drift = sim->energy_initial != 0.0
+                              ? (sim->energy_final - sim->energy_initial) /
+                                    fabs(sim->energy_initial)
+                              : 0.0;
+    s->max_overlap = sim->max_overlap;
+    s->max_overlap_rel = sim->max_overlap_rel;
+    s->peak_rss_bytes = peak_rss();
+}

@@ -1,0 +1,94 @@
+/* Internals shared by sim.c and the algorithms (algo_*.c): the run object, thread ranges, and
+ * the end-of-step hook that thread 0 calls between barriers. */
+#ifndef NBEP_SIM_IMPL_H
+#define NBEP_SIM_IMPL_H
+
+#include <stdalign.h>
+#include <stdatomic.h>
+#include <stdint.h>
+
+#include "nbep/sim.h"
+#include "nbep/stats.h"
+
+/* Spheres are split among threads in whole blocks of this many, so that per-block partial
+ * sums (energy) are the same for any thread count: sums never group by thread. */
+#define NBEP_BLOCK 256
+
+typedef struct nbep_range {
+    size_t lo, hi;
+} nbep_range;
+
+/* Thread tid's share of n spheres, in whole blocks: contiguous, in thread order, the same
+ * every step. */
+nbep_range nbep__range_split(size_t n, int tid, int nt);
+
+/* Per-thread maximum of a step, padded to its own cache line. */
+typedef struct nbep_thread_max {
+    alignas(NBEP_CACHELINE) double overlap;
+    double overlap_rel;
+} nbep_thread_max;
+
+typedef struct nbep_algo nbep_algo;
+
+struct nbep_sim {
+    const nbep_scene *scene;         /* borrowed */
+    nbep_sim_options opt;
+    nbep_state st;                   /* owned: the evolving state */
+    int nt;                          /* threads */
+    uint64_t step_end;               /* steps to simulate: 1..step_end */
+    double dt;
+    const nbep_algo *algo;           /* borrowed: static table entry */
+    void *algo_ctx;                  /* owned by the algorithm */
+    /* counters double-buffered by step parity: the hook of step k reads and clears
+     * [k & 1] while other threads already count step k+1 in the other half */
+    nbep_counters *counters[2];      /* owned, nt each */
+    nbep_thread_max *tmax[2];        /* owned, nt each */
+    double *block_ke, *block_pe;     /* owned, one per NBEP_BLOCK spheres */
+    size_t n_blocks;
+    nbep_step_stats *rows;           /* owned: stats rows not yet written */
+    size_t n_rows, cap_rows;
+    /* totals and summary */
+    uint64_t totals[NBEP_COUNTER_COUNT];
+    uint64_t quiet_steps;
+    uint64_t steps_done;
+    double energy_initial, energy_final;
+    double max_overlap, max_overlap_rel;
+    double setup_seconds, wall_seconds;
+    double t_start, t_last_progress;
+    /* stop request: written by thread 0 in the hook, read by all after the next barrier */
+    atomic_int stop;
+    nbep_status status;              /* thread 0 only */
+    nbep_diag *diag;                 /* borrowed, thread 0 only */
+};
+
+/* The algorithm table entry. create: allocate per-run workspaces (before any parallel region);
+ * run: the one parallel region over all steps, calling nbep__sim_end_step on thread 0 after
+ * each step's state is final (all spheres at the step's end time); destroy: free. */
+struct nbep_algo {
+    const char *name;
+    /* true when the algorithm's detection examines every overlapping pair each step and fills
+     * tmax exactly; otherwise the hook measures overlaps with a cell grid at frame steps */
+    bool exact_overlap;
+    nbep_status (*create)(nbep_sim *sim, void **ctx, nbep_diag *d);
+    void (*run)(nbep_sim *sim, void *ctx);
+    void (*destroy)(void *ctx);
+};
+
+extern const nbep_algo nbep__algo_naive;
+extern const nbep_algo nbep__algo_seminaive;
+extern const nbep_algo nbep__algo_predictive;
+
+/* Kinetic and potential energy of the spheres of thread's range, per block, into the block
+ * arrays (call for the own range only; ranges are whole blocks). */
+void nbep__sim_block_energy(nbep_sim *sim, nbep_range own);
+
+/* Thread 0, between barriers, all spheres at the end of step `step` (1-based): merges the
+ * step's counters, sums block energies, records the stats row, writes a frame when due,
+ * prints progress, and sets sim->stop when the run must end (signal, error, last step).
+ * Returns the value of stop. */
+int nbep__sim_end_step(nbep_sim *sim, uint64_t step);
+
+/* Seconds on the monotonic clock. */
+double nbep__now(void);
+
+#endif

@@ -1,0 +1,185 @@
+/* Sphere and plane arrays (struct of arrays) and the invariant checks on them: finiteness and
+ * the largest overlap, the latter with a uniform cell grid so that it is O(n), not O(n^2). */
+#include "nbep/state.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+size_t nbep_state_bytes(size_t n, size_t n_planes)
+{
+    return n * (3 * sizeof(nbep_vec3) + 2 * sizeof(double)) +
+           n_planes * (sizeof(nbep_vec3) + sizeof(double));
+}
+
+nbep_status nbep_state_init(nbep_state *s, size_t n, size_t n_planes, nbep_diag *d)
+{
+    memset(s, 0, sizeof *s);
+    s->pos = nbep_alloc_aligned(n, sizeof *s->pos);
+    s->vel = nbep_alloc_aligned(n, sizeof *s->vel);
+    s->acc = nbep_alloc_aligned(n, sizeof *s->acc);
+    s->radius = nbep_alloc_aligned(n, sizeof *s->radius);
+    s->mass = nbep_alloc_aligned(n, sizeof *s->mass);
+    s->plane_normal = nbep_alloc_aligned(n_planes, sizeof *s->plane_normal);
+    s->plane_offset = nbep_alloc_aligned(n_planes, sizeof *s->plane_offset);
+    if (!s->pos || !s->vel || !s->acc || !s->radius || !s->mass || !s->plane_normal ||
+        !s->plane_offset) {
+        nbep_state_fini(s);
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for %zu spheres (%.3g GB)", n,
+                  (double)nbep_state_bytes(n, n_planes) / 1e9);
+    }
+    s->n = n;
+    s->n_planes = n_planes;
+    return NBEP_OK;
+}
+
+void nbep_state_fini(nbep_state *s)
+{
+    if (!s)
+        return;
+    nbep_free_aligned(s->pos);
+    nbep_free_aligned(s->vel);
+    nbep_free_aligned(s->acc);
+    nbep_free_aligned(s->radius);
+    nbep_free_aligned(s->mass);
+    nbep_free_aligned(s->plane_normal);
+    nbep_free_aligned(s->plane_offset);
+    memset(s, 0, sizeof *s);
+}
+
+nbep_status nbep_state_copy(nbep_state *dst, const nbep_state *src, nbep_diag *d)
+{
+    nbep_status st = nbep_state_init(dst, src->n, src->n_planes, d);
+    if (st != NBEP_OK)
+        return st;
+    size_t n = src->n, p = src->n_planes;
+    memcpy(dst->pos, src->pos, n * sizeof *dst->pos);
+    memcpy(dst->vel, src->vel, n * sizeof *dst->vel);
+    memcpy(dst->acc, src->acc, n * sizeof *dst->acc);
+    memcpy(dst->radius, src->radius, n * sizeof *dst->radius);
+    memcpy(dst->mass, src->mass, n * sizeof *dst->mass);
+    memcpy(dst->plane_normal, src->plane_normal, p * sizeof *dst->plane_normal);
+    memcpy(dst->plane_offset, src->plane_offset, p * sizeof *dst->plane_offset);
+    return NBEP_OK;
+}
+
+bool nbep_state_all_finite(const nbep_state *s)
+{
+    for (size_t i = 0; i < s->n; i++)
+        if (!nbep_vec3_isfinite(s->pos[i]) || !nbep_vec3_isfinite(s->vel[i]) ||
+            !nbep_vec3_isfinite(s->acc[i]))
+            return false;
+    return true;
+}
+
+/* Cell index of a coordinate along one axis, clamped to the grid. */
+static size_t cell_of(double x, double lo, double inv_h, size_t cells)
+{
+    double c = floor((x - lo) * inv_h);
+    if (!(c >= 0.0))
+        return 0;
+    if (c >= (double)cells)
+        return cells - 1;
+    return (size_t)c;
+}
+
+static void consider(double overlap, double rmin, size_t i, size_t j, double *best,
+                     double *best_rel, size_t *bi, size_t *bj)
+{
+    if (overlap > *best) {
+        *best = overlap;
+        *bi = i;
+        *bj = j;
+    }
+    if (overlap > 0.0 && overlap / rmin > *best_rel)
+        *best_rel = overlap / rmin;
+}
+
+nbep_status nbep_state_max_overlap(const nbep_state *s, double *max_out, double *rel_out,
+                                   size_t *i_out, size_t *j_out, nbep_diag *d)
+{
+    double best = 0.0, best_rel = 0.0;
+    size_t bi = SIZE_MAX, bj = SIZE_MAX;
+    const size_t n = s->n;
+
+    for (size_t i = 0; i < n; i++)
+        for (size_t p = 0; p < s->n_planes; p++) {
+            double gap = nbep_vec3_dot(s->plane_normal[p], s->pos[i]) - s->plane_offset[p] -
+                         s->radius[i];
+            consider(-gap, s->radius[i], i, n + p, &best, &best_rel, &bi, &bj);
+        }
+
+    if (n > 1) {
+        /* Grid with cells of the largest diameter, so overlapping pairs sit in neighbouring
+         * cells; at most about n cells so memory stays O(n) whatever the extent. */
+        nbep_vec3 lo = s->pos[0], hi = s->pos[0];
+        double rmax = 0.0;
+        for (size_t i = 0; i < n; i++) {
+            lo.x = fmin(lo.x, s->pos[i].x), hi.x = fmax(hi.x, s->pos[i].x);
+            lo.y = fmin(lo.y, s->pos[i].y), hi.y = fmax(hi.y, s->pos[i].y);
+            lo.z = fmin(lo.z, s->pos[i].z), hi.z = fmax(hi.z, s->pos[i].z);
+            rmax = fmax(rmax, s->radius[i]);
+        }
+        double h = 2.0 * rmax;
+        double ext = fmax(hi.x - lo.x, fmax(hi.y - lo.y, hi.z - lo.z));
+        double cube = cbrt((double)n);
+        if (!(h > 0.0) || ext / h > cube)
+            h = fmax(h, ext / cube);
+        if (!(h > 0.0) || !isfinite(h))
+            h = 1.0;
+        double inv_h = 1.0 / h;
+        size_t cx = (size_t)fmin(floor((hi.x - lo.x) * inv_h) + 1.0, cube + 1.0);
+        size_t cy = (size_t)fmin(floor((hi.y - lo.y) * inv_h) + 1.0, cube + 1.0);
+        size_t cz = (size_t)fmin(floor((hi.z - lo.z) * inv_h) + 1.0, cube + 1.0);
+        size_t cells = cx * cy * cz;
+        size_t *start = calloc(cells + 1, sizeof *start);
+        size_t *order = malloc(n * sizeof *order);
+        size_t *cell = malloc(n * sizeof *cell);
+        if (!start || !order || !cell) {
+            free(start), free(order), free(cell);
+            NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the overlap check of %zu spheres", n);
+        }
+        for (size_t i = 0; i < n; i++) {
+            cell[i] = (cell_of(s->pos[i].z, lo.z, inv_h, cz) * cy +
+                       cell_of(s->pos[i].y, lo.y, inv_h, cy)) * cx +
+                      cell_of(s->pos[i].x, lo.x, inv_h, cx);
+            start[cell[i] + 1]++;
+        }
+        for (size_t c = 0; c < cells; c++)
+            start[c + 1] += start[c];
+        for (size_t i = 0; i < n; i++)
+            order[start[cell[i]]++] = i;
+        for (size_t c = cells; c > 0; c--)
+            start[c] = start[c - 1];
+        start[0] = 0;
+
+        for (size_t i = 0; i < n; i++) {
+            size_t ix = cell[i] % cx, iy = cell[i] / cx % cy, iz = cell[i] / (cx * cy);
+            for (size_t z = iz ? iz - 1 : 0; z <= iz + 1 && z < cz; z++)
+                for (size_t y = iy ? iy - 1 : 0; y <= iy + 1 && y < cy; y++)
+                    for (size_t x = ix ? ix - 1 : 0; x <= ix + 1 && x < cx; x++) {
+                        size_t c = (z * cy + y) * cx + x;
+                        for (size_t k = start[c]; k < start[c + 1]; k++) {
+                            size_t j = order[k];
+                            if (j <= i)
+                                continue;
+                            double dist = nbep_vec3_norm(nbep_vec3_sub(s->pos[j], s->pos[i]));
+                            double ov = s->radius[i] + s->radius[j] - dist;
+                            consider(ov, fmin(s->radius[i], s->radius[j]), i, j, &best,
+                                     &best_rel, &bi, &bj);
+                        }
+                    }
+        }
+        free(start), free(order), free(cell);
+    }
+    *max_out = best;
+    if (rel_out)
+        *rel_out = best_rel;
+    if (i_out)
+        *i_out = bi;
+    if (j_out)
+        *j_out = bj;
+    return NBEP_OK;
+}

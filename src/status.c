@@ -1,0 +1,121 @@
+/* Status texts and exit codes from the one X-macro list, and the diag message list. */
+#include "nbep/status.h"
+
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+
+int nbep_status_exit_code(nbep_status s)
+{
+    switch (s) {
+#define NBEP_X_CODE(name, code, text) \
+    case NBEP_##name:                  \
+        return code;
+        NBEP_STATUS_LIST(NBEP_X_CODE)
+#undef NBEP_X_CODE
+    }
+    return 1;
+}
+
+const char *nbep_status_text(nbep_status s)
+{
+    switch (s) {
+#define NBEP_X_TEXT(name, code, text) \
+    case NBEP_##name:                  \
+        return text;
+        NBEP_STATUS_LIST(NBEP_X_TEXT)
+#undef NBEP_X_TEXT
+    }
+    return "unknown status";
+}
+
+void nbep_diag_init(nbep_diag *d)
+{
+    memset(d, 0, sizeof *d);
+}
+
+void nbep_diag_clear(nbep_diag *d)
+{
+    size_t stored = d->n_errors < d->cap ? d->n_errors : d->cap;
+    for (size_t i = 0; i < stored; i++) {
+        free(d->msg[i]);
+        free(d->where[i]);
+        d->msg[i] = d->where[i] = NULL;
+    }
+    d->n_errors = 0;
+}
+
+void nbep_diag_fini(nbep_diag *d)
+{
+    if (!d)
+        return;
+    nbep_diag_clear(d);
+    free(d->msg);
+    free(d->where);
+    memset(d, 0, sizeof *d);
+}
+
+static char *vformat(const char *fmt, va_list ap)
+{
+    va_list ap2;
+    va_copy(ap2, ap);
+    int len = vsnprintf(NULL, 0, fmt, ap2);
+    va_end(ap2);
+    if (len < 0)
+        return NULL;
+    char *s = malloc((size_t)len + 1);
+    if (s)
+        vsnprintf(s, (size_t)len + 1, fmt, ap);
+    return s;
+}
+
+static char *format(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    char *s = vformat(fmt, ap);
+    va_end(ap);
+    return s;
+}
+
+void nbep_diag_add(nbep_diag *d, const char *file, int line, const char *fmt, ...)
+{
+    if (!d)
+        return;
+    size_t i = d->n_errors++;
+    /* Messages are stored densely: once an allocation failed, later ones are only counted. */
+    if (i > d->cap)
+        return;
+    if (i == d->cap) {
+        size_t cap = d->cap ? 2 * d->cap : 8;
+        char **m = realloc(d->msg, cap * sizeof *m);
+        if (!m)
+            return;
+        d->msg = m;
+        char **w = realloc(d->where, cap * sizeof *w);
+        if (!w)
+            return;
+        d->where = w;
+        for (size_t k = d->cap; k < cap; k++)
+            d->msg[k] = d->where[k] = NULL;
+        d->cap = cap;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    d->msg[i] = vformat(fmt, ap);
+    va_end(ap);
+    d->where[i] = format("%s:%d", file, line);
+}
+
+void nbep_diag_print(const nbep_diag *d, FILE *f)
+{
+    size_t stored = d->n_errors < d->cap ? d->n_errors : d->cap;
+    int debug = getenv("NBEP_DEBUG") != NULL;
+    for (size_t i = 0; i < stored; i++) {
+        fprintf(f, "%s\n", d->msg[i] ? d->msg[i] : "nbep: (message lost: out of memory)");
+        if (debug && d->where[i])
+            fprintf(f, "    raised at %s\n", d->where[i]);
+    }
+    if (d->n_errors > stored)
+        fprintf(f, "nbep: %zu more messages lost (out of memory)\n", d->n_errors - stored);
+}

@@ -1,0 +1,370 @@
+/* End-to-end runs on scenes built in the test: analytic outcomes (a bounce, a head-on and an
+ * oblique collision), conservation laws, exactly-once reactions across threads, and frames
+ * bitwise identical for any thread count and between naive and seminaive. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "nbep/sim.h"
+#include "nbep_test.h"
+
+/* A scene with n spheres (zeroed) and np planes, no box, no output. */
+static nbep_scene *scene_new(size_t n, size_t np, const char *algo, uint64_t steps, double dt)
+{
+    nbep_scene *sc = calloc(1, sizeof *sc);
+    assert_non_null(sc);
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_state_init(&sc->state, n, np, &d), NBEP_OK);
+    nbep_diag_fini(&d);
+    snprintf(sc->algorithm, sizeof sc->algorithm, "%s", algo);
+    sc->steps = steps;
+    sc->dt = dt;
+    sc->threads = 1;
+    sc->restitution = 1.0;
+    sc->output_every = 1;
+    sc->out_position = sc->out_velocity = true;
+    sc->sweep_replicas = 1;
+    return sc;
+}
+
+static void scene_free(nbep_scene *sc)
+{
+    nbep_state_fini(&sc->state);
+    free(sc);
+}
+
+static void set_plane(nbep_scene *sc, size_t p, nbep_vec3 n, double offset)
+{
+    sc->state.plane_normal[p] = nbep_vec3_scale(n, 1.0 / nbep_vec3_norm(n));
+    sc->state.plane_offset[p] = offset;
+}
+
+static void set_sphere(nbep_scene *sc, size_t i, nbep_vec3 p, nbep_vec3 v, double r, double m,
+                       nbep_vec3 a)
+{
+    sc->state.pos[i] = p;
+    sc->state.vel[i] = v;
+    sc->state.radius[i] = r;
+    sc->state.mass[i] = m;
+    sc->state.acc[i] = a;
+}
+
+/* Every frame's positions and velocities, appended. */
+typedef struct frames {
+    size_t n_frames, n;
+    nbep_vec3 *data;
+} frames;
+
+static nbep_status keep_frame(void *ctx, int64_t step, const nbep_state *s, nbep_diag *d)
+{
+    (void)step, (void)d;
+    frames *f = ctx;
+    f->n = s->n;
+    f->data = realloc(f->data, (f->n_frames + 1) * 2 * s->n * sizeof *f->data);
+    assert_non_null(f->data);
+    memcpy(f->data + f->n_frames * 2 * s->n, s->pos, s->n * sizeof *s->pos);
+    memcpy(f->data + f->n_frames * 2 * s->n + s->n, s->vel, s->n * sizeof *s->vel);
+    f->n_frames++;
+    return NBEP_OK;
+}
+
+/* Runs sc with nt threads; returns its summary, final state in *final (caller finis) and
+ * frames in *fr (may be NULL). */
+static nbep_summary run(const nbep_scene *sc, int nt, nbep_state *final, frames *fr)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_sim_options opt = {.threads = nt, .on_frame = fr ? keep_frame : NULL, .on_frame_ctx = fr};
+    nbep_sim *sim = NULL;
+    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
+    nbep_status st = nbep_sim_run(sim, &d);
+    if (st != NBEP_OK)
+        nbep_diag_print(&d, stderr);
+    assert_int_equal(st, NBEP_OK);
+    nbep_summary sum;
+    nbep_sim_summary(sim, &sum);
+    if (final)
+        assert_int_equal(nbep_state_copy(final, nbep_sim_state(sim), &d), NBEP_OK);
+    nbep_sim_destroy(&sim);
+    nbep_diag_fini(&d);
+    return sum;
+}
+
+static const nbep_vec3 ZERO = {0.0, 0.0, 0.0};
+
+/* One sphere dropped from rest onto a floor under gravity g with restitution e: it lands at
+ * t1 = sqrt(2 h / g), leaves with speed e g t1 and lands again 2 e t1 later. At T between the
+ * landings its height is r + v1 (T - t1) - g (T - t1)^2 / 2 with v1 = e g t1. */
+static void test_predictive_bounce_matches_the_analytic_flight(void **state)
+{
+    (void)state;
+    const double g = 9.81, e = 0.83, r = 0.1, z0 = 2.37, dt = 1e-3;
+    nbep_scene *sc = scene_new(1, 1, "predictive", 1000, dt);
+    sc->restitution = e;
+    set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+    set_sphere(sc, 0, (nbep_vec3){0.3, -0.2, z0}, ZERO, r, 1.7, (nbep_vec3){0, 0, -g});
+    nbep_state fin;
+    nbep_summary sum = run(sc, 1, &fin, NULL);
+    double t1 = sqrt(2.0 * (z0 - r) / g), v1 = e * g * t1, T = 1000 * dt;
+    assert_true(T > t1 && T < t1 + 2.0 * v1 / g);
+    double z = r + v1 * (T - t1) - 0.5 * g * (T - t1) * (T - t1);
+    /* exact up to round-off of a few free flights: 1e-12 relative to the drop height */
+    assert_close(fin.pos[0].z, z, 0.0, 1e-12 * z0);
+    assert_close(fin.vel[0].z, v1 - g * (T - t1), 0.0, 1e-12 * g);
+    assert_int_equal(sum.plane_collisions, 1);
+    assert_int_equal(sum.sphere_collisions, 0);
+    nbep_state_fini(&fin);
+    scene_free(sc);
+}
+
+/* The naive algorithm detects the landing only after the sphere overlaps the floor, so its
+ * height after the bounce lags by at most one step of fall: |error| <= v dt + g dt^2. */
+static void test_naive_bounce_is_within_one_step_of_the_analytic_flight(void **state)
+{
+    (void)state;
+    const double g = 9.81, e = 0.83, r = 0.1, z0 = 2.37, dt = 1e-3;
+    nbep_scene *sc = scene_new(1, 1, "naive", 1000, dt);
+    sc->restitution = e;
+    set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+    set_sphere(sc, 0, (nbep_vec3){0.3, -0.2, z0}, ZERO, r, 1.7, (nbep_vec3){0, 0, -g});
+    nbep_state fin;
+    nbep_summary sum = run(sc, 1, &fin, NULL);
+    double t1 = sqrt(2.0 * (z0 - r) / g), v1 = e * g * t1, T = 1000 * dt;
+    double z = r + v1 * (T - t1) - 0.5 * g * (T - t1) * (T - t1);
+    double vland = g * t1;
+    assert_close(fin.pos[0].z, z, 0.0, 2.0 * (vland * dt + g * dt * dt));
+    assert_int_equal(sum.plane_collisions, 1);
+    nbep_state_fini(&fin);
+    scene_free(sc);
+}
+
+/* Head-on, equal masses, e = 1: the spheres exchange velocities at contact. Sphere 0 sits in
+ * thread 0's range, sphere 300 in thread 1's (blocks of 256), and both slots name each other:
+ * exactly one reaction must happen, on any number of threads. */
+static void test_head_on_pair_across_threads_reacts_exactly_once(void **state)
+{
+    (void)state;
+    const size_t n = 301;
+    for (int nt = 1; nt <= 4; nt *= 2) {
+        nbep_scene *sc = scene_new(n, 0, "predictive", 500, 1e-3);
+        /* idle spheres far away, at rest, spaced apart */
+        for (size_t i = 1; i < n - 1; i++)
+            set_sphere(sc, i, (nbep_vec3){100.0 + 3.0 * (double)i, 50.0, 0.0}, ZERO, 0.5, 1.0,
+                       ZERO);
+        set_sphere(sc, 0, (nbep_vec3){-1.31, 0, 0}, (nbep_vec3){2.9, 0, 0}, 0.25, 1.3, ZERO);
+        set_sphere(sc, n - 1, (nbep_vec3){1.17, 0, 0}, (nbep_vec3){-1.7, 0, 0}, 0.25, 1.3,
+                   ZERO);
+        nbep_state fin;
+        nbep_summary sum = run(sc, nt, &fin, NULL);
+        assert_int_equal(sum.sphere_collisions, 1);
+        /* contact when the gap 2.48 - 0.5 closes at 4.6: tc = 1.98 / 4.6 */
+        double tc = 1.98 / 4.6, T = 0.5;
+        assert_close(fin.vel[0].x, -1.7, 1e-14, 0.0);
+        assert_close(fin.vel[n - 1].x, 2.9, 1e-14, 0.0);
+        assert_close(fin.pos[0].x, -1.31 + 2.9 * tc - 1.7 * (T - tc), 0.0, 1e-13);
+        assert_close(fin.pos[n - 1].x, 1.17 - 1.7 * tc + 2.9 * (T - tc), 0.0, 1e-13);
+        nbep_state_fini(&fin);
+        scene_free(sc);
+    }
+}
+
+/* An oblique collision of unequal masses (e = 1): momentum and kinetic energy are conserved,
+ * and the light sphere, at rest before, leaves along the line of centres at contact. */
+static void test_oblique_unequal_masses_conserve_momentum_and_energy(void **state)
+{
+    (void)state;
+    nbep_scene *sc = scene_new(2, 0, "predictive", 2000, 1e-3);
+    set_sphere(sc, 0, ZERO, (nbep_vec3){2.0, 0, 0}, 0.3, 3.0, ZERO);
+    set_sphere(sc, 1, (nbep_vec3){2.0, 0.15, 0}, ZERO, 0.2, 1.0, ZERO);
+    nbep_state fin;
+    nbep_summary sum = run(sc, 1, &fin, NULL);
+    assert_int_equal(sum.sphere_collisions, 1);
+    nbep_vec3 p = nbep_vec3_add(nbep_vec3_scale(fin.vel[0], 3.0), fin.vel[1]);
+    assert_close(p.x, 6.0, 1e-14, 0.0);
+    assert_close(p.y, 0.0, 0.0, 1e-14);
+    double ke = 0.5 * 3.0 * nbep_vec3_norm2(fin.vel[0]) + 0.5 * nbep_vec3_norm2(fin.vel[1]);
+    assert_close(ke, 6.0, 1e-14, 0.0);
+    /* line of centres at contact: dy = 0.15, dx = sqrt(0.25 - 0.0225) */
+    double dx = sqrt(0.25 - 0.0225);
+    assert_close(fin.vel[1].y / fin.vel[1].x, 0.15 / dx, 1e-12, 0.0);
+    /* light sphere speed from 1-D elastic collision along the normal: 2 m1/(m1+m2) u_n */
+    double un = 2.0 * dx / 0.5;
+    assert_close(nbep_vec3_norm(fin.vel[1]), 2.0 * 3.0 / 4.0 * un, 1e-12, 0.0);
+    nbep_state_fini(&fin);
+    scene_free(sc);
+}
+
+/* A gas of n spheres in a closed box, random but fixed positions (a lattice jittered by a
+ * hash of the index) and velocities. */
+static nbep_scene *gas(const char *algo, size_t n, double g, uint64_t steps)
+{
+    nbep_scene *sc = scene_new(n, 6, algo, steps, 2e-3);
+    const double L = 4.0;
+    sc->has_box = true;
+    sc->box_max = (nbep_vec3){L, L, L};
+    set_plane(sc, 0, (nbep_vec3){1, 0, 0}, 0.0);
+    set_plane(sc, 1, (nbep_vec3){-1, 0, 0}, -L);
+    set_plane(sc, 2, (nbep_vec3){0, 1, 0}, 0.0);
+    set_plane(sc, 3, (nbep_vec3){0, -1, 0}, -L);
+    set_plane(sc, 4, (nbep_vec3){0, 0, 1}, 0.0);
+    set_plane(sc, 5, (nbep_vec3){0, 0, -1}, -L);
+    size_t side = (size_t)ceil(cbrt((double)n));
+    double h = L / (double)side;
+    uint64_t x = 88172645463325252u;
+    for (size_t i = 0; i < n; i++) {
+        double u[6];
+        for (int k = 0; k < 6; k++) { /* xorshift: any fixed sequence will do */
+            x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+            u[k] = (double)(x >> 11) / 9007199254740992.0;
+        }
+        nbep_vec3 p = {h * ((double)(i % side) + 0.3 + 0.4 * u[0]),
+                       h * ((double)(i / side % side) + 0.3 + 0.4 * u[1]),
+                       h * ((double)(i / side / side) + 0.3 + 0.4 * u[2])};
+        nbep_vec3 v = {6.0 * (u[3] - 0.5), 6.0 * (u[4] - 0.5), 6.0 * (u[5] - 0.5)};
+        set_sphere(sc, i, p, v, 0.1 * h * (1.0 + 0.5 * u[0]), 1.0 + u[1], (nbep_vec3){0, 0, -g});
+    }
+    return sc;
+}
+
+static size_t scaled(size_t big, size_t small)
+{
+    const char *s = getenv("NBEP_TEST_SCALE");
+    return s && strcmp(s, "small") == 0 ? small : big;
+}
+
+static void frames_equal(const frames *a, const frames *b)
+{
+    assert_int_equal(a->n_frames, b->n_frames);
+    assert_int_equal(a->n, b->n);
+    assert_memory_equal(a->data, b->data, a->n_frames * 2 * a->n * sizeof *a->data);
+}
+
+static void same_frames_for_threads(const char *algo, size_t n, double g, const int *nts,
+                                    size_t count)
+{
+    nbep_scene *sc = gas(algo, n, g, scaled(300, 40));
+    frames ref = {0};
+    nbep_summary s1 = run(sc, nts[0], NULL, &ref);
+    assert_true(s1.collisions > 0); /* otherwise the comparison proves little */
+    for (size_t k = 1; k < count; k++) {
+        frames f = {0};
+        nbep_summary sk = run(sc, nts[k], NULL, &f);
+        frames_equal(&ref, &f);
+        assert_int_equal(sk.collisions, s1.collisions);
+        assert_int_equal(sk.checks, s1.checks);
+        free(f.data);
+    }
+    free(ref.data);
+    scene_free(sc);
+}
+
+static void test_naive_frames_are_bitwise_equal_for_1_2_4_threads(void **state)
+{
+    (void)state;
+    const int nts[] = {1, 2, 4};
+    same_frames_for_threads("naive", scaled(700, 300), 9.81, nts, 3);
+}
+
+static void test_seminaive_frames_are_bitwise_equal_for_1_2_4_threads(void **state)
+{
+    (void)state;
+    const int nts[] = {1, 2, 4};
+    same_frames_for_threads("seminaive", scaled(700, 300), 9.81, nts, 3);
+}
+
+static void test_predictive_frames_are_bitwise_equal_for_1_2_4_8_threads(void **state)
+{
+    (void)state;
+    const int nts[] = {1, 2, 4, 8};
+    same_frames_for_threads("predictive", scaled(700, 300), 9.81, nts, 4);
+}
+
+/* Seminaive pre-filters naive's tests but must find, and answer, exactly the same pairs in
+ * the same order: the frames are bitwise the naive ones, with fewer checks. */
+static void test_seminaive_frames_equal_naive_frames_with_fewer_checks(void **state)
+{
+    (void)state;
+    size_t n = scaled(800, 300);
+    nbep_scene *a = gas("naive", n, 9.81, scaled(200, 30));
+    nbep_scene *b = gas("seminaive", n, 9.81, scaled(200, 30));
+    frames fa = {0}, fb = {0};
+    nbep_summary sa = run(a, 2, NULL, &fa), sb = run(b, 2, NULL, &fb);
+    frames_equal(&fa, &fb);
+    assert_int_equal(sa.collisions, sb.collisions);
+    assert_true(sb.checks < sa.checks);
+    free(fa.data), free(fb.data);
+    scene_free(a), scene_free(b);
+}
+
+/* Elastic responses conserve kinetic energy exactly whatever the positions, so a naive gas
+ * without gravity keeps its energy to round-off: each response changes it by a few ulps, so
+ * after C collisions the relative drift is about sqrt(C) * 1e-16; 1e-12 leaves room. */
+static void test_naive_gas_without_gravity_conserves_energy(void **state)
+{
+    (void)state;
+    nbep_scene *sc = gas("naive", scaled(500, 200), 0.0, scaled(400, 60));
+    nbep_summary s = run(sc, 2, NULL, NULL);
+    assert_true(s.collisions > 10);
+    assert_close(s.energy_final, s.energy_initial, 1e-12, 0.0);
+    scene_free(sc);
+}
+
+/* The predictive algorithm advances each pair to its contact time, so under gravity too the
+ * energy (kinetic + potential) is conserved to round-off: each event moves it by a few ulps of
+ * the largest term (the potential, m g L), so 1e-11 bounds the drift of thousands of events. */
+static void test_predictive_gas_under_gravity_conserves_energy(void **state)
+{
+    (void)state;
+    nbep_scene *sc = gas("predictive", scaled(500, 200), 9.81, scaled(1000, 100));
+    nbep_summary s = run(sc, 2, NULL, NULL);
+    assert_true(s.collisions > 100);
+    assert_close(s.energy_final, s.energy_initial, 1e-11, 0.0);
+    /* and nothing overlaps beyond round-off: 1e-9 of the smaller radius */
+    assert_true(s.max_overlap_rel < 1e-9);
+    scene_free(sc);
+}
+
+/* The predictive and the naive gas agree to within what naive's detection after the fact
+ * allows in a short run before chaos amplifies the differences: a few steps of motion. */
+static void test_predictive_and_naive_agree_on_a_short_gas_run(void **state)
+{
+    (void)state;
+    nbep_scene *a = gas("naive", 64, 9.81, 5);
+    nbep_scene *b = gas("predictive", 64, 9.81, 5);
+    a->dt = b->dt = 1e-4;
+    nbep_state fa, fb;
+    run(a, 1, &fa, NULL);
+    run(b, 1, &fb, NULL);
+    for (size_t i = 0; i < fa.n; i++) {
+        /* per sphere: at most one step's travel apart (speed < 6, plus gravity) */
+        double tol = 2.0 * (6.0 * 1e-4 + 9.81 * 1e-8);
+        assert_true(nbep_vec3_norm(nbep_vec3_sub(fa.pos[i], fb.pos[i])) <= tol);
+    }
+    nbep_state_fini(&fa), nbep_state_fini(&fb);
+    scene_free(a), scene_free(b);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_predictive_bounce_matches_the_analytic_flight),
+        cmocka_unit_test(test_naive_bounce_is_within_one_step_of_the_analytic_flight),
+        cmocka_unit_test(test_head_on_pair_across_threads_reacts_exactly_once),
+        cmocka_unit_test(test_oblique_unequal_masses_conserve_momentum_and_energy),
+        cmocka_unit_test(test_naive_frames_are_bitwise_equal_for_1_2_4_threads),
+        cmocka_unit_test(test_seminaive_frames_are_bitwise_equal_for_1_2_4_threads),
+        cmocka_unit_test(test_predictive_frames_are_bitwise_equal_for_1_2_4_8_threads),
+        cmocka_unit_test(test_seminaive_frames_equal_naive_frames_with_fewer_checks),
+        cmocka_unit_test(test_naive_gas_without_gravity_conserves_energy),
+        cmocka_unit_test(test_predictive_gas_under_gravity_conserves_energy),
+        cmocka_unit_test(test_predictive_and_naive_agree_on_a_short_gas_run),
+    };
+    return cmocka_run_group_tests_name("sim", tests, NULL, NULL);
+}
