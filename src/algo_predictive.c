@@ -412,6 +412,7 @@ static void react_phase(pred_ctx *c, nbep_state *s, const nbep_scene *sc, int pa
                                                      memory_order_relaxed,
                                                      memory_order_relaxed))
             continue;
+        cnt->c[NBEP_COUNTER_REACTIONS]++;
         double t_local = t_min - T0;
         react(c, s, sc->restitution, sc->dt, t_local, lo, hi, ev, w, cnt, mx);
     }

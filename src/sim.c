@@ -175,6 +175,11 @@ void nbep_sim_destroy(nbep_sim **simp)
     *simp = NULL;
 }
 
+uint64_t nbep_sim_counter(const nbep_sim *sim, int counter)
+{
+    return counter >= 0 && counter < NBEP_COUNTER_COUNT ? sim->totals[counter] : 0;
+}
+
 const nbep_state *nbep_sim_state(const nbep_sim *sim)
 {
     return &sim->st;

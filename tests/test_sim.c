@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "nbep/sim.h"
+#include "nbep/stats.h"
 #include "nbep_test.h"
 
 /* A scene with n spheres (zeroed) and np planes, no box, no output. */
@@ -77,6 +78,8 @@ static nbep_status keep_frame(void *ctx, int64_t step, const nbep_state *s, nbep
 
 /* Runs sc with nt threads; returns its summary, final state in *final (caller finis) and
  * frames in *fr (may be NULL). */
+static uint64_t last_reactions;
+
 static nbep_summary run(const nbep_scene *sc, int nt, nbep_state *final, frames *fr)
 {
     nbep_diag d;
@@ -92,6 +95,7 @@ static nbep_summary run(const nbep_scene *sc, int nt, nbep_state *final, frames 
     nbep_sim_summary(sim, &sum);
     if (final)
         assert_int_equal(nbep_state_copy(final, nbep_sim_state(sim), &d), NBEP_OK);
+    last_reactions = nbep_sim_counter(sim, NBEP_COUNTER_REACTIONS);
     nbep_sim_destroy(&sim);
     nbep_diag_fini(&d);
     return sum;
@@ -164,6 +168,7 @@ static void test_head_on_pair_across_threads_reacts_exactly_once(void **state)
         nbep_state fin;
         nbep_summary sum = run(sc, nt, &fin, NULL);
         assert_int_equal(sum.sphere_collisions, 1);
+        assert_int_equal(last_reactions, 1); /* both slots named the pair: one reaction */
         /* contact when the gap 2.48 - 0.5 closes at 4.6: tc = 1.98 / 4.6 */
         double tc = 1.98 / 4.6, T = 0.5;
         assert_close(fin.vel[0].x, -1.7, 1e-14, 0.0);

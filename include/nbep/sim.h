@@ -45,6 +45,8 @@ NBEP_MUST_CHECK nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d);
 
 /* The run's summary so far (valid after create; complete after run). */
 void nbep_sim_summary(const nbep_sim *sim, nbep_summary *s);
+/* A counter's total so far (enum nbep_counter from stats.h). */
+uint64_t nbep_sim_counter(const nbep_sim *sim, int counter);
 /* The current state (borrowed). */
 const nbep_state *nbep_sim_state(const nbep_sim *sim);
 

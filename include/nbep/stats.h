@@ -10,12 +10,15 @@
 #include "nbep/compiler.h"
 
 /* checks: pair tests (naive/seminaive: overlap tests; predictive: queue slots examined by
- * find plus check() calls); predictions: contact-time computations; collisions split by kind */
+ * find plus check() calls); predictions: contact-time computations; collisions split by kind
+ * (responses applied); reactions: events the predictive algorithm reacted to, whether or not
+ * a response was applied (internal: shows that a pair is reacted to exactly once) */
 #define NBEP_COUNTER_LIST(X)                                                                 \
     X(CHECKS, "checks")                                                                      \
     X(PREDICTIONS, "predictions")                                                            \
     X(SPHERE_COLLISIONS, "sphere_collisions")                                                \
-    X(PLANE_COLLISIONS, "plane_collisions")
+    X(PLANE_COLLISIONS, "plane_collisions")                                                  \
+    X(REACTIONS, "reactions")
 
 enum nbep_counter {
 #define NBEP_X_ENUM(name, key) NBEP_COUNTER_##name,
