@@ -1,0 +1,1267 @@
+/* The input deck (libconfig) -> nbep_scene. One schema table (SCENE_SCHEMA below) gives every
+ * setting's path, type, default and meaning; it drives the unknown-setting check (with "did
+ * you mean"), the typed getters and their range checks, --set (scene_override.c) and the
+ * reference printed by nbep_scene_print_reference.
+ *
+ * A load runs in one pass and reports every problem it finds, one line each, before failing:
+ *   read the file -> rewrite for libconfig 1.5 (scene_text.c) -> parse -> apply overrides ->
+ *   unknown settings -> typed values, ranges and cross-checks -> count and memory checks ->
+ *   planes, placement of generated groups (scene_place.c) -> overlap check.
+ * Placement needs valid geometry, so it runs only when the box, planes, spheres, physics and
+ * seed are valid; errors elsewhere (say run.algorithm) do not hide placement problems.
+ * Locations are "deck:line" from libconfig, or "--set PATH=VALUE" for a setting an override
+ * made: such settings carry the override text in their libconfig hook. */
+#include "nbep/scene.h"
+
+#include <assert.h>
+#include <errno.h>
+#include <inttypes.h>
+#include <limits.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "scene_impl.h"
+
+/* ---- the schema ----------------------------------------------------------------------------- */
+
+enum {
+    F_REQUIRED = 1 << 0,   /* must be given when its group is */
+    F_GT0 = 1 << 1,        /* > 0 */
+    F_GE0 = 1 << 2,        /* >= 0 */
+    F_GE1 = 1 << 3,        /* >= 1 */
+    F_IN01 = 1 << 4,       /* in [0, 1] */
+    F_ONE = 1 << 5,        /* only in a single-sphere entry (one with position) */
+    F_GROUP = 1 << 6       /* only in a generated group (one with count) */
+};
+
+/* X(id, path, kind, flags, default as libconfig text or NULL, default as shown when there is
+ * no literal one, meaning). "[]" in a path stands for any index of that list. */
+#define SCENE_SCHEMA(X)                                                                            \
+    X(RUN, "run", GROUP, 0, NULL, "-", "how to run")                                               \
+    X(RUN_ALGORITHM, "run.algorithm", STRING, 0, "\"predictive\"", NULL,                           \
+      "\"naive\", \"seminaive\" or \"predictive\"")                                                \
+    X(RUN_STEPS, "run.steps", INT, F_GE0, "1000", NULL,                                            \
+      "time steps after t0; frames t0..t_steps")                                                   \
+    X(RUN_DT, "run.dt", FLOAT, F_GT0, "1.0e-3", NULL, "the constant time step")                    \
+    X(RUN_THREADS, "run.threads", INT, F_GE0, "0", NULL,                                           \
+      "threads; 0: OMP_NUM_THREADS, else all cores")                                               \
+    X(RUN_SEED, "run.seed", INT, F_GE0, "1", NULL, "every random choice derives from it")          \
+    X(PHYSICS, "physics", GROUP, 0, NULL, "-", "physics")                                          \
+    X(PHYSICS_GRAVITY, "physics.gravity", VEC3, 0, "[0.0, 0.0, 0.0]", NULL,                        \
+      "uniform acceleration of every sphere without its own")                                      \
+    X(PHYSICS_RESTITUTION, "physics.restitution", FLOAT, F_IN01, "1.0", NULL,                      \
+      "coefficient of restitution e, sphere-sphere and sphere-plane")                              \
+    X(BOX, "box", GROUP, 0, NULL, "none", "optional: six inward planes bounding [min, max]")       \
+    X(BOX_MIN, "box.min", VEC3, F_REQUIRED, NULL, "required", "lower corner")                      \
+    X(BOX_MAX, "box.max", VEC3, F_REQUIRED, NULL, "required",                                      \
+      "upper corner, above min on every axis")                                                     \
+    X(PLANES, "planes", LIST, 0, NULL, "none", "extra static planes, after the box's six")         \
+    X(PLANE_NORMAL, "planes.[].normal", VEC3, F_REQUIRED, NULL, "required",                        \
+      "points to where spheres live; normalized; not zero")                                        \
+    X(PLANE_POINT, "planes.[].point", VEC3, F_REQUIRED, NULL, "required",                          \
+      "a point of the plane")                                                                      \
+    X(SPHERES, "spheres", LIST, 0, NULL, "none",                                                   \
+      "single spheres (with position) and generated groups (with count); ids in this order")       \
+    X(SPH_POSITION, "spheres.[].position", VEC3, F_ONE, NULL, "none",                              \
+      "a single sphere's centre")                                                                  \
+    X(SPH_VELOCITY, "spheres.[].velocity", VEC3, F_ONE, "[0.0, 0.0, 0.0]", NULL,                   \
+      "a single sphere's velocity")                                                                \
+    X(SPH_COUNT, "spheres.[].count", INT, F_GE0 | F_GROUP, NULL, "none",                           \
+      "a group's number of spheres")                                                               \
+    X(SPH_RADIUS, "spheres.[].radius", FLOAT, F_REQUIRED | F_GT0, NULL, "required", "radius")      \
+    X(SPH_MASS, "spheres.[].mass", FLOAT, F_REQUIRED | F_GT0, NULL, "required", "mass")            \
+    X(SPH_ACCELERATION, "spheres.[].acceleration", VEC3, 0, NULL, "physics.gravity",               \
+      "own uniform acceleration, replacing physics.gravity")                                       \
+    X(SPH_PLACE, "spheres.[].place", STRING, F_GROUP, "\"random\"", NULL,                          \
+      "\"random\" (uniform, non-overlapping) or \"lattice\" (simple cubic)")                       \
+    X(SPH_SPEED, "spheres.[].speed", FLOAT, F_GE0 | F_GROUP, "0.0", NULL,                          \
+      "each sphere of a group moves at this speed in a random direction")                          \
+    X(SPH_REGION, "spheres.[].region", GROUP, F_GROUP, NULL, "the box",                            \
+      "where a group is placed")                                                                   \
+    X(SPH_REGION_MIN, "spheres.[].region.min", VEC3, F_REQUIRED, NULL, "required",                 \
+      "lower corner")                                                                              \
+    X(SPH_REGION_MAX, "spheres.[].region.max", VEC3, F_REQUIRED, NULL, "required",                 \
+      "upper corner, above min on every axis")                                                     \
+    X(OUTPUT, "output", GROUP, 0, NULL, "-", "output")                                             \
+    X(OUTPUT_FILE, "output.file", STRING, 0, NULL, "the deck's name with .h5",                     \
+      "HDF5 file (nbep-1 format)")                                                                 \
+    X(OUTPUT_EVERY, "output.every", INT, F_GE1, "10", NULL,                                        \
+      "a frame at step 0, every `every` steps, and the last step")                                 \
+    X(OUTPUT_FIELDS, "output.fields", STRINGS, 0, "[\"position\", \"velocity\"]", NULL,            \
+      "per-sphere fields of each frame: \"position\", \"velocity\"")                               \
+    X(OUTPUT_STATS, "output.stats", BOOL, 0, "true", NULL, "per-step counters in /stats")          \
+    X(SWEEP, "sweep", GROUP, 0, NULL, "none",                                                      \
+      "parameter study for `nbep sweep`; run and check ignore it")                                 \
+    X(SWEEP_REPLICAS, "sweep.replicas", INT, F_GE1, "1", NULL,                                     \
+      "runs of every combination of values")                                                       \
+    X(SWEEP_VARY, "sweep.vary", LIST, 0, NULL, "none", "the axes of the study")                    \
+    X(SWEEP_KEY, "sweep.vary.[].key", STRING, F_REQUIRED, NULL, "required",                        \
+      "a deck path, as --set takes it")                                                            \
+    X(SWEEP_VALUES, "sweep.vary.[].values", VALUES, F_REQUIRED, NULL, "required",                  \
+      "the values it takes (array or list)")
+
+enum schema_id {
+#define X_ENUM(id, path, kind, flags, def, def_doc, meaning) S_##id,
+    SCENE_SCHEMA(X_ENUM)
+#undef X_ENUM
+    S_COUNT
+};
+
+typedef struct schema_entry {
+    const char *path;
+    nbep__scene_kind kind;
+    unsigned flags;
+    const char *def;       /* libconfig text of the default, NULL when none is literal */
+    const char *def_doc;   /* the default as documented when def is NULL */
+    const char *meaning;
+} schema_entry;
+
+static const schema_entry schema[S_COUNT] = {
+#define X_ROW(id, path, kind, flags, def, def_doc, meaning) \
+    {path, NBEP__K_##kind, flags, def, def_doc, meaning},
+    SCENE_SCHEMA(X_ROW)
+#undef X_ROW
+};
+
+static const char *const algorithm_names[] = {"naive", "seminaive", "predictive"};
+static const char *const place_names[] = {"random", "lattice"};
+static const char *const field_names[] = {"position", "velocity"};
+enum { N_ALGORITHMS = 3, N_PLACES = 2, N_FIELDS = 2 };
+
+/* Spheres' own arrays plus what the algorithms allocate per sphere (event slot, reacted tag,
+ * BVH leaf, frame buffers): a deliberately round upper estimate for the memory check. */
+enum { WORKSPACE_BYTES_PER_SPHERE = 200 };
+
+/* Concrete paths are short ("sweep.vary.[12].values"); longer user names are cut in messages. */
+enum { PATH_LEN = 256 };
+
+/* snprintf into a path buffer. Paths longer than PATH_LEN only come from long misspelt names
+ * and are cut; the format-truncation warning is therefore not wanted here. */
+static void cut_printf(char *out, size_t len, const char *fmt, ...) NBEP_PRINTF(3, 4);
+static void cut_printf(char *out, size_t len, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(out, len, fmt, ap);
+    va_end(ap);
+}
+
+static const char *leaf_of(const char *path)
+{
+    const char *dot = strrchr(path, '.');
+    return dot ? dot + 1 : path;
+}
+
+static int schema_find(const char *abstract)
+{
+    for (int id = 0; id < S_COUNT; id++)
+        if (strcmp(schema[id].path, abstract) == 0)
+            return id;
+    return -1;
+}
+
+/* The schema path of a concrete path: every "[N]" becomes "[]". False on bad syntax. */
+static bool abstract_of(const char *path, char *out, size_t len)
+{
+    size_t o = 0;
+    bool seg_start = true;
+    for (const char *p = path; *p; p++) {
+        if (o + 3 >= len)
+            return false;
+        if (seg_start && *p == '[') {
+            const char *q = p + 1;
+            while (*q >= '0' && *q <= '9')
+                q++;
+            if (q == p + 1 || *q != ']')
+                return false;
+            out[o++] = '[';
+            out[o++] = ']';
+            p = q;
+            seg_start = false;
+            continue;
+        }
+        if (*p == '.') {
+            if (seg_start)
+                return false;
+            seg_start = true;
+        } else {
+            seg_start = false;
+        }
+        out[o++] = *p;
+    }
+    out[o] = '\0';
+    return o > 0 && !seg_start;
+}
+
+static bool kind_is_container(nbep__scene_kind k)
+{
+    return k == NBEP__K_LIST || k == NBEP__K_VEC3 || k == NBEP__K_STRINGS || k == NBEP__K_VALUES;
+}
+
+static bool schema_kind_abstract(const char *abstract, nbep__scene_kind *kind, bool *element)
+{
+    int id = schema_find(abstract);
+    if (id >= 0) {
+        *kind = schema[id].kind;
+        *element = false;
+        return true;
+    }
+    size_t n = strlen(abstract);
+    if (n > 3 && strcmp(abstract + n - 3, ".[]") == 0) {
+        char parent[PATH_LEN];
+        memcpy(parent, abstract, n - 3);
+        parent[n - 3] = '\0';
+        id = schema_find(parent);
+        if (id >= 0 && kind_is_container(schema[id].kind)) {
+            *kind = schema[id].kind;
+            *element = true;
+            return true;
+        }
+    }
+    return false;
+}
+
+bool nbep__scene_schema_kind(const char *path, nbep__scene_kind *kind, bool *element)
+{
+    char abstract[PATH_LEN];
+    return abstract_of(path, abstract, sizeof abstract) &&
+           schema_kind_abstract(abstract, kind, element);
+}
+
+/* A close known path for an unknown one: the first unknown name is compared with its known
+ * siblings (a typo: physics.gravty -> physics.gravity), else, when it is the last name, with
+ * every setting of that exact name elsewhere (a misplaced one: run.gravity -> physics.gravity). */
+static bool suggest(const char *path, char *out, size_t len)
+{
+    char known_c[PATH_LEN] = "", known_a[PATH_LEN] = "";
+    const char *p = path;
+    while (*p) {
+        const char *dot = strchr(p, '.');
+        size_t seg_len = dot ? (size_t)(dot - p) : strlen(p);
+        if (seg_len == 0 || seg_len >= PATH_LEN)
+            return false;
+        char seg[PATH_LEN], cand_c[PATH_LEN], cand_a[PATH_LEN];
+        memcpy(seg, p, seg_len);
+        seg[seg_len] = '\0';
+        cut_printf(cand_c, sizeof cand_c, "%s%s%s", known_c, *known_c ? "." : "", seg);
+        nbep__scene_kind kind;
+        bool element;
+        if (abstract_of(cand_c, cand_a, sizeof cand_a) &&
+            schema_kind_abstract(cand_a, &kind, &element)) {
+            memcpy(known_c, cand_c, sizeof known_c);
+            memcpy(known_a, cand_a, sizeof known_a);
+            p += seg_len + (dot != NULL);
+            continue;
+        }
+        if (seg[0] == '[')
+            return false;
+        const char *rest = dot ? dot : "";
+        /* A typo: at most a third of the name's letters wrong (one for short names). */
+        size_t limit = seg_len / 3 > 1 ? seg_len / 3 : 1, best = SIZE_MAX;
+        int best_id = -1;
+        for (int id = 0; id < S_COUNT; id++) {
+            const char *leaf = leaf_of(schema[id].path);
+            size_t parent_len = (size_t)(leaf - schema[id].path);
+            parent_len -= parent_len > 0;
+            if (parent_len != strlen(known_a) || strncmp(schema[id].path, known_a, parent_len))
+                continue;
+            size_t dist = nbep__scene_edit_distance(seg, leaf);
+            /* A cut-short name (phys for physics) counts as a typo too. */
+            if (seg_len >= 3 && strncmp(leaf, seg, seg_len) == 0 && limit < dist)
+                dist = limit;
+            if (dist <= limit && dist < best) {
+                best = dist;
+                best_id = id;
+            }
+        }
+        if (best_id >= 0) {
+            cut_printf(out, len, "%s%s%s%s", known_c, *known_c ? "." : "",
+                     leaf_of(schema[best_id].path), rest);
+            return nbep__scene_schema_kind(out, &kind, &element);
+        }
+        if (*rest)
+            return false;
+        for (int id = 0; id < S_COUNT; id++)
+            if (strcmp(leaf_of(schema[id].path), seg) == 0 && !strstr(schema[id].path, "[]")) {
+                snprintf(out, len, "%s", schema[id].path);
+                return true;
+            }
+        return false;
+    }
+    return false;
+}
+
+void nbep__scene_unknown_text(const char *path, nbep__strbuf *b)
+{
+    char s[PATH_LEN];
+    nbep__strbuf_add(b, "unknown setting %s", path);
+    if (suggest(path, s, sizeof s))
+        nbep__strbuf_add(b, " (did you mean %s?)", s);
+}
+
+/* ---- messages ------------------------------------------------------------------------------- */
+
+void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char *file, int line,
+                       const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    char msg[1024];
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    const char *ov = NULL;
+    unsigned at = 0;
+    for (const config_setting_t *t = s; t && !ov && !at; t = config_setting_parent(t)) {
+        ov = config_setting_get_hook(t);
+        at = config_setting_source_line(t);
+    }
+    if (ov)
+        nbep_diag_add(c->d, file, line, "--set %s: %s", ov, msg);
+    else
+        nbep_diag_add(c->d, file, line, "%s:%u: %s", c->deck, at ? at : 1u, msg);
+}
+
+#define ERR(L, s, ...) NBEP__SCENE_ERR(&(L)->c, (s), __VA_ARGS__)
+
+/* ---- typed getters -------------------------------------------------------------------------- */
+
+typedef struct load {
+    nbep__scene_ctx c;
+    const config_setting_t *def[S_COUNT];   /* borrowed: parsed literal defaults */
+} load;
+
+typedef enum got { GOT, NONE, BAD } got;
+
+static void path_join(char *out, const char *prefix, const char *name)
+{
+    cut_printf(out, PATH_LEN, "%s%s%s", prefix, *prefix ? "." : "", name);
+}
+
+/* Entry id under parent (NULL: the group is absent): the deck's setting, else the literal
+ * default, else NONE, with "is missing" when it is required and its group exists. */
+static got find(load *L, const config_setting_t *parent, const char *prefix, int id,
+                const config_setting_t **out)
+{
+    const char *name = leaf_of(schema[id].path);
+    const config_setting_t *s = parent ? config_setting_get_member(parent, name) : NULL;
+    if (!s)
+        s = L->def[id];
+    if (s) {
+        *out = s;
+        return GOT;
+    }
+    if (parent && (schema[id].flags & F_REQUIRED)) {
+        char path[PATH_LEN];
+        path_join(path, prefix, name);
+        ERR(L, parent, "%s is missing", path);
+        return BAD;
+    }
+    return NONE;
+}
+
+static void type_error(load *L, const config_setting_t *s, const char *path, const char *what)
+{
+    nbep__strbuf b = {0};
+    nbep__scene_describe(s, &b);
+    ERR(L, s, "%s must be %s (got %s)", path, what, nbep__strbuf_str(&b));
+    L->c.oom = L->c.oom || b.oom;
+    nbep__strbuf_fini(&b);
+}
+
+static bool is_int(const config_setting_t *s)
+{
+    return config_setting_type(s) == CONFIG_TYPE_INT || config_setting_type(s) == CONFIG_TYPE_INT64;
+}
+
+static double number_of(const config_setting_t *s)
+{
+    return config_setting_type(s) == CONFIG_TYPE_FLOAT ? config_setting_get_float(s)
+                                                       : (double)config_setting_get_int64(s);
+}
+
+static got get_int(load *L, const config_setting_t *parent, const char *prefix, int id,
+                   int64_t *out, const config_setting_t **at)
+{
+    const config_setting_t *s;
+    got g = find(L, parent, prefix, id, &s);
+    if (g != GOT)
+        return g;
+    char path[PATH_LEN];
+    path_join(path, prefix, leaf_of(schema[id].path));
+    if (!is_int(s)) {
+        type_error(L, s, path, "an integer");
+        return BAD;
+    }
+    int64_t v = config_setting_get_int64(s);
+    unsigned f = schema[id].flags;
+    if (((f & F_GE0) && v < 0) || ((f & F_GE1) && v < 1)) {
+        ERR(L, s, "%s must be >= %d (got %" PRId64 ")", path, (f & F_GE1) ? 1 : 0, v);
+        return BAD;
+    }
+    *out = v;
+    if (at)
+        *at = s;
+    return GOT;
+}
+
+static got get_float(load *L, const config_setting_t *parent, const char *prefix, int id,
+                     double *out)
+{
+    const config_setting_t *s;
+    got g = find(L, parent, prefix, id, &s);
+    if (g != GOT)
+        return g;
+    char path[PATH_LEN];
+    path_join(path, prefix, leaf_of(schema[id].path));
+    if (!config_setting_is_number(s)) {
+        type_error(L, s, path, "a number");
+        return BAD;
+    }
+    double v = number_of(s);
+    unsigned f = schema[id].flags;
+    if (!isfinite(v)) {
+        ERR(L, s, "%s must be finite (got %g)", path, v);
+        return BAD;
+    }
+    if ((f & F_GT0) && !(v > 0.0)) {
+        ERR(L, s, "%s must be > 0 (got %g)", path, v);
+        return BAD;
+    }
+    if ((f & F_GE0) && !(v >= 0.0)) {
+        ERR(L, s, "%s must be >= 0 (got %g)", path, v);
+        return BAD;
+    }
+    if ((f & F_IN01) && !(v >= 0.0 && v <= 1.0)) {
+        ERR(L, s, "%s must be in [0, 1] (got %g)", path, v);
+        return BAD;
+    }
+    *out = v;
+    return GOT;
+}
+
+static got get_vec3(load *L, const config_setting_t *parent, const char *prefix, int id,
+                    nbep_vec3 *out, const config_setting_t **at)
+{
+    const config_setting_t *s;
+    got g = find(L, parent, prefix, id, &s);
+    if (g != GOT)
+        return g;
+    char path[PATH_LEN];
+    path_join(path, prefix, leaf_of(schema[id].path));
+    bool ok = (config_setting_is_array(s) || config_setting_is_list(s)) &&
+              config_setting_length(s) == 3;
+    for (unsigned k = 0; ok && k < 3; k++)
+        ok = config_setting_is_number(config_setting_get_elem(s, k));
+    if (!ok) {
+        type_error(L, s, path, "3 numbers [x, y, z]");
+        return BAD;
+    }
+    nbep_vec3 v = {number_of(config_setting_get_elem(s, 0)),
+                   number_of(config_setting_get_elem(s, 1)),
+                   number_of(config_setting_get_elem(s, 2))};
+    if (!nbep_vec3_isfinite(v)) {
+        ERR(L, s, "%s must be finite (got [%g, %g, %g])", path, v.x, v.y, v.z);
+        return BAD;
+    }
+    *out = v;
+    if (at)
+        *at = s;
+    return GOT;
+}
+
+static got get_string(load *L, const config_setting_t *parent, const char *prefix, int id,
+                      const char **out, const config_setting_t **at)
+{
+    const config_setting_t *s;
+    got g = find(L, parent, prefix, id, &s);
+    if (g != GOT)
+        return g;
+    if (config_setting_type(s) != CONFIG_TYPE_STRING) {
+        char path[PATH_LEN];
+        path_join(path, prefix, leaf_of(schema[id].path));
+        type_error(L, s, path, "a string");
+        return BAD;
+    }
+    *out = config_setting_get_string(s);
+    if (at)
+        *at = s;
+    return GOT;
+}
+
+static got get_bool(load *L, const config_setting_t *parent, const char *prefix, int id,
+                    bool *out)
+{
+    const config_setting_t *s;
+    got g = find(L, parent, prefix, id, &s);
+    if (g != GOT)
+        return g;
+    if (config_setting_type(s) != CONFIG_TYPE_BOOL) {
+        char path[PATH_LEN];
+        path_join(path, prefix, leaf_of(schema[id].path));
+        type_error(L, s, path, "true or false");
+        return BAD;
+    }
+    *out = config_setting_get_bool(s) != 0;
+    return GOT;
+}
+
+/* A group entry, or a list entry (an empty [] counts as an empty list). */
+static got get_aggregate(load *L, const config_setting_t *parent, const char *prefix, int id,
+                         const config_setting_t **out)
+{
+    const config_setting_t *s;
+    got g = find(L, parent, prefix, id, &s);
+    if (g != GOT)
+        return g;
+    bool ok = schema[id].kind == NBEP__K_GROUP
+                  ? config_setting_is_group(s)
+                  : config_setting_is_list(s) ||
+                        (config_setting_is_array(s) && config_setting_length(s) == 0);
+    if (!ok) {
+        char path[PATH_LEN];
+        path_join(path, prefix, leaf_of(schema[id].path));
+        type_error(L, s, path, schema[id].kind == NBEP__K_GROUP ? "a group { ... }"
+                                                                : "a list ( {...}, ... )");
+        return BAD;
+    }
+    *out = s;
+    return GOT;
+}
+
+/* Index of s among names, or -1 with an error listing the valid ones. */
+static int one_of(load *L, const config_setting_t *at, const char *path, const char *s,
+                  const char *const *names, int n)
+{
+    for (int k = 0; k < n; k++)
+        if (strcmp(s, names[k]) == 0)
+            return k;
+    nbep__strbuf b = {0};
+    for (int k = 0; k < n; k++)
+        nbep__strbuf_add(&b, "%s\"%s\"", k ? ", " : "", names[k]);
+    ERR(L, at, "%s must be one of %s (got \"%s\")", path, nbep__strbuf_str(&b), s);
+    L->c.oom = L->c.oom || b.oom;
+    nbep__strbuf_fini(&b);
+    return -1;
+}
+
+/* ---- unknown settings ----------------------------------------------------------------------- */
+
+static void check_known(load *L, const config_setting_t *group, const char *prefix_c,
+                        const char *prefix_a)
+{
+    int n = config_setting_length(group);
+    for (int i = 0; i < n; i++) {
+        const config_setting_t *m = config_setting_get_elem(group, (unsigned)i);
+        char path_c[PATH_LEN], path_a[PATH_LEN];
+        path_join(path_c, prefix_c, config_setting_name(m));
+        path_join(path_a, prefix_a, config_setting_name(m));
+        int id = schema_find(path_a);
+        if (id < 0) {
+            nbep__strbuf b = {0};
+            nbep__scene_unknown_text(path_c, &b);
+            ERR(L, m, "%s", nbep__strbuf_str(&b));
+            L->c.oom = L->c.oom || b.oom;
+            nbep__strbuf_fini(&b);
+            continue;
+        }
+        if (schema[id].kind == NBEP__K_GROUP && config_setting_is_group(m))
+            check_known(L, m, path_c, path_a);
+        if (schema[id].kind == NBEP__K_LIST && config_setting_is_list(m)) {
+            char elem_c[PATH_LEN], elem_a[PATH_LEN];
+            for (int k = 0; k < config_setting_length(m); k++) {
+                const config_setting_t *e = config_setting_get_elem(m, (unsigned)k);
+                cut_printf(elem_c, sizeof elem_c, "%s.[%d]", path_c, k);
+                cut_printf(elem_a, sizeof elem_a, "%s.[]", path_a);
+                if (config_setting_is_group(e))
+                    check_known(L, e, elem_c, elem_a);
+            }
+        }
+    }
+}
+
+/* ---- sections ------------------------------------------------------------------------------- */
+
+static void parse_run(load *L, const config_setting_t *root, nbep_scene *sc, bool *seed_ok)
+{
+    const config_setting_t *run = NULL, *at = NULL;
+    if (get_aggregate(L, root, "", S_RUN, &run) != GOT)
+        run = NULL;
+    const char *algorithm;
+    if (get_string(L, run, "run", S_RUN_ALGORITHM, &algorithm, &at) == GOT &&
+        one_of(L, at, "run.algorithm", algorithm, algorithm_names, N_ALGORITHMS) >= 0)
+        snprintf(sc->algorithm, sizeof sc->algorithm, "%s", algorithm);
+    int64_t v;
+    if (get_int(L, run, "run", S_RUN_STEPS, &v, NULL) == GOT)
+        sc->steps = (uint64_t)v;
+    (void)get_float(L, run, "run", S_RUN_DT, &sc->dt);
+    if (get_int(L, run, "run", S_RUN_THREADS, &v, &at) == GOT) {
+        if (v > INT_MAX)
+            ERR(L, at, "run.threads must be <= %d (got %" PRId64 ")", INT_MAX, v);
+        else
+            sc->threads = (int)v;
+    }
+    *seed_ok = get_int(L, run, "run", S_RUN_SEED, &v, NULL) == GOT;
+    if (*seed_ok)
+        sc->seed = (uint64_t)v;
+}
+
+static void parse_physics(load *L, const config_setting_t *root, nbep_scene *sc)
+{
+    const config_setting_t *physics = NULL;
+    if (get_aggregate(L, root, "", S_PHYSICS, &physics) != GOT)
+        physics = NULL;
+    (void)get_vec3(L, physics, "physics", S_PHYSICS_GRAVITY, &sc->gravity, NULL);
+    (void)get_float(L, physics, "physics", S_PHYSICS_RESTITUTION, &sc->restitution);
+}
+
+/* min < max on every axis, else one error at max naming each failing axis. */
+static bool check_corners(load *L, const config_setting_t *at, const char *prefix, nbep_vec3 lo,
+                          nbep_vec3 hi)
+{
+    const double l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};
+    char axes[160] = "";
+    size_t used = 0;
+    for (int k = 0; k < 3; k++)
+        if (!(l[k] < h[k]))
+            used += (size_t)snprintf(axes + used, sizeof axes - used, "%s%c: %g >= %g",
+                                     used ? ", " : "", "xyz"[k], l[k], h[k]);
+    if (!used)
+        return true;
+    ERR(L, at, "%s.min must be < %s.max on every axis (got %s)", prefix, prefix, axes);
+    return false;
+}
+
+static void parse_box(load *L, const config_setting_t *root, nbep_scene *sc)
+{
+    const config_setting_t *box = NULL, *at = NULL;
+    if (get_aggregate(L, root, "", S_BOX, &box) != GOT)
+        return;
+    got g_min = get_vec3(L, box, "box", S_BOX_MIN, &sc->box_min, NULL);
+    got g_max = get_vec3(L, box, "box", S_BOX_MAX, &sc->box_max, &at);
+    if (g_min == GOT && g_max == GOT && check_corners(L, at, "box", sc->box_min, sc->box_max))
+        sc->has_box = true;
+}
+
+typedef struct plane {
+    nbep_vec3 normal;   /* unit */
+    double offset;
+} plane;
+
+/* Parses `planes` into *out (owned, *n of them). */
+static void parse_planes(load *L, const config_setting_t *root, plane **out, size_t *n)
+{
+    const config_setting_t *list = NULL;
+    *out = NULL;
+    *n = 0;
+    if (get_aggregate(L, root, "", S_PLANES, &list) != GOT)
+        return;
+    size_t len = (size_t)config_setting_length(list);
+    plane *p = calloc(len ? len : 1, sizeof *p);
+    if (!p) {
+        L->c.oom = true;
+        return;
+    }
+    for (size_t k = 0; k < len; k++) {
+        const config_setting_t *e = config_setting_get_elem(list, (unsigned)k), *at = NULL;
+        char prefix[PATH_LEN];
+        snprintf(prefix, sizeof prefix, "planes.[%zu]", k);
+        if (!config_setting_is_group(e)) {
+            type_error(L, e, prefix, "a group { normal = [...]; point = [...]; }");
+            continue;
+        }
+        nbep_vec3 normal, point;
+        if (get_vec3(L, e, prefix, S_PLANE_NORMAL, &normal, &at) != GOT ||
+            get_vec3(L, e, prefix, S_PLANE_POINT, &point, NULL) != GOT)
+            continue;
+        /* Scaled by its largest component first, so that tiny or huge normals normalize
+         * without underflow or overflow. */
+        double scale = fmax(fabs(normal.x), fmax(fabs(normal.y), fabs(normal.z)));
+        if (!(scale > 0.0)) {
+            ERR(L, at, "%s.normal must not be zero (got [%g, %g, %g])", prefix, normal.x,
+                normal.y, normal.z);
+            continue;
+        }
+        normal = nbep_vec3_scale(normal, 1.0 / scale);
+        normal = nbep_vec3_scale(normal, 1.0 / nbep_vec3_norm(normal));
+        p[k] = (plane){normal, nbep_vec3_dot(normal, point)};
+    }
+    *out = p;
+    *n = len;
+}
+
+/* Every per-entry setting that belongs only to the other kind of entry is an error. */
+static bool check_entry_kind(load *L, const config_setting_t *e, const char *prefix, bool group)
+{
+    bool ok = true;
+    for (int id = 0; id < S_COUNT; id++) {
+        const char *path = schema[id].path;
+        unsigned wrong = group ? F_ONE : F_GROUP;
+        if (strncmp(path, "spheres.[].", 11) != 0 || strchr(path + 11, '.') ||
+            !(schema[id].flags & wrong))
+            continue;
+        const config_setting_t *m = config_setting_get_member(e, leaf_of(path));
+        if (!m)
+            continue;
+        ERR(L, m, "%s.%s is only for %s", prefix, leaf_of(path),
+            group ? "a single sphere (with position)" : "a generated group (with count)");
+        ok = false;
+    }
+    return ok;
+}
+
+static bool parse_entry(load *L, const config_setting_t *e, const char *prefix,
+                        const nbep_scene *sc, nbep__scene_entry *out)
+{
+    if (!config_setting_is_group(e)) {
+        type_error(L, e, prefix, "a group { ... }");
+        return false;
+    }
+    bool has_pos = config_setting_get_member(e, "position") != NULL;
+    bool has_count = config_setting_get_member(e, "count") != NULL;
+    if (has_pos && has_count) {
+        ERR(L, e, "%s has both position (one sphere) and count (a group)", prefix);
+        return false;
+    }
+    if (!has_pos && !has_count) {
+        ERR(L, e, "%s needs position (one sphere) or count (a group)", prefix);
+        return false;
+    }
+    bool ok = check_entry_kind(L, e, prefix, has_count);
+    out->setting = e;
+    ok = get_float(L, e, prefix, S_SPH_RADIUS, &out->radius) == GOT && ok;
+    ok = get_float(L, e, prefix, S_SPH_MASS, &out->mass) == GOT && ok;
+    got g = get_vec3(L, e, prefix, S_SPH_ACCELERATION, &out->acc, NULL);
+    if (g == NONE)
+        out->acc = sc->gravity;
+    ok = g != BAD && ok;
+    if (has_pos) {
+        out->place = NBEP__PLACE_ONE;
+        out->count = 1;
+        ok = get_vec3(L, e, prefix, S_SPH_POSITION, &out->position, NULL) == GOT && ok;
+        ok = get_vec3(L, e, prefix, S_SPH_VELOCITY, &out->velocity, NULL) == GOT && ok;
+        return ok;
+    }
+    int64_t count;
+    if (get_int(L, e, prefix, S_SPH_COUNT, &count, &out->count_at) == GOT)
+        out->count = (uint64_t)count;
+    else
+        ok = false;
+    const char *place;
+    const config_setting_t *at = NULL, *region = NULL;
+    char path[PATH_LEN];
+    path_join(path, prefix, "place");
+    int k = -1;
+    if (get_string(L, e, prefix, S_SPH_PLACE, &place, &at) == GOT)
+        k = one_of(L, at, path, place, place_names, N_PLACES);
+    out->place = k == 1 ? NBEP__PLACE_LATTICE : NBEP__PLACE_RANDOM;
+    ok = k >= 0 && ok;
+    ok = get_float(L, e, prefix, S_SPH_SPEED, &out->speed) == GOT && ok;
+    g = get_aggregate(L, e, prefix, S_SPH_REGION, &region);
+    if (g == GOT) {
+        path_join(path, prefix, "region");
+        got g_min = get_vec3(L, region, path, S_SPH_REGION_MIN, &out->lo, NULL);
+        got g_max = get_vec3(L, region, path, S_SPH_REGION_MAX, &out->hi, &at);
+        ok = g_min == GOT && g_max == GOT && check_corners(L, at, path, out->lo, out->hi) && ok;
+    } else if (g == NONE && sc->has_box) {
+        out->lo = sc->box_min;
+        out->hi = sc->box_max;
+    } else if (g == NONE) {
+        /* A box that is present but invalid was reported already. */
+        if (!config_setting_get_member(config_setting_parent(config_setting_parent(e)), "box"))
+            ERR(L, e, "%s has no region and the deck has no box", prefix);
+        ok = false;
+    } else {
+        ok = false;
+    }
+    return ok;
+}
+
+static void parse_spheres(load *L, const config_setting_t *root, const nbep_scene *sc,
+                          nbep__scene_entry **out, size_t *n)
+{
+    const config_setting_t *list = NULL;
+    *out = NULL;
+    *n = 0;
+    if (get_aggregate(L, root, "", S_SPHERES, &list) != GOT)
+        return;
+    size_t len = (size_t)config_setting_length(list);
+    nbep__scene_entry *e = calloc(len ? len : 1, sizeof *e);
+    if (!e) {
+        L->c.oom = true;
+        return;
+    }
+    for (size_t k = 0; k < len; k++) {
+        char prefix[PATH_LEN];
+        snprintf(prefix, sizeof prefix, "spheres.[%zu]", k);
+        (void)parse_entry(L, config_setting_get_elem(list, (unsigned)k), prefix, sc, &e[k]);
+    }
+    *out = e;
+    *n = len;
+}
+
+static char *dup_string(load *L, const char *s)
+{
+    char *p = malloc(strlen(s) + 1);
+    if (!p)
+        L->c.oom = true;
+    else
+        strcpy(p, s);
+    return p;
+}
+
+/* The deck's file name with its extension replaced by .h5, in the current directory. */
+static char *default_output(load *L, const char *deck)
+{
+    const char *base = strrchr(deck, '/');
+    base = base ? base + 1 : deck;
+    const char *dot = strrchr(base, '.');
+    size_t stem = dot && dot != base ? (size_t)(dot - base) : strlen(base);
+    char *p = malloc(stem + 4);
+    if (!p) {
+        L->c.oom = true;
+        return NULL;
+    }
+    memcpy(p, base, stem);
+    memcpy(p + stem, ".h5", 4);
+    return p;
+}
+
+static void parse_output(load *L, const config_setting_t *root, nbep_scene *sc)
+{
+    const config_setting_t *output = NULL, *at = NULL;
+    if (get_aggregate(L, root, "", S_OUTPUT, &output) != GOT)
+        output = NULL;
+    const char *file;
+    got g = get_string(L, output, "output", S_OUTPUT_FILE, &file, &at);
+    if (g == GOT && !*file)
+        ERR(L, at, "output.file must not be empty");
+    else if (g == GOT)
+        sc->output_file = dup_string(L, file);
+    else if (g == NONE)
+        sc->output_file = default_output(L, L->c.deck);
+    int64_t every;
+    if (get_int(L, output, "output", S_OUTPUT_EVERY, &every, NULL) == GOT)
+        sc->output_every = (uint64_t)every;
+    (void)get_bool(L, output, "output", S_OUTPUT_STATS, &sc->out_stats);
+
+    if (find(L, output, "output", S_OUTPUT_FIELDS, &at) != GOT)
+        return;
+    bool ok = config_setting_is_array(at) || config_setting_is_list(at);
+    for (int k = 0; ok && k < config_setting_length(at); k++)
+        ok = config_setting_type(config_setting_get_elem(at, (unsigned)k)) == CONFIG_TYPE_STRING;
+    if (!ok) {
+        type_error(L, at, "output.fields", "an array of strings");
+        return;
+    }
+    for (int k = 0; k < config_setting_length(at); k++) {
+        char path[PATH_LEN];
+        snprintf(path, sizeof path, "output.fields.[%d]", k);
+        const config_setting_t *f = config_setting_get_elem(at, (unsigned)k);
+        int which = one_of(L, f, path, config_setting_get_string(f), field_names, N_FIELDS);
+        sc->out_position = sc->out_position || which == 0;
+        sc->out_velocity = sc->out_velocity || which == 1;
+    }
+}
+
+static void parse_sweep(load *L, const config_setting_t *root, nbep_scene *sc)
+{
+    const config_setting_t *sweep = NULL, *vary = NULL;
+    sc->sweep_replicas = 1;
+    if (get_aggregate(L, root, "", S_SWEEP, &sweep) != GOT)
+        return;
+    int64_t replicas;
+    if (get_int(L, sweep, "sweep", S_SWEEP_REPLICAS, &replicas, NULL) == GOT)
+        sc->sweep_replicas = (uint64_t)replicas;
+    if (get_aggregate(L, sweep, "sweep", S_SWEEP_VARY, &vary) != GOT)
+        return;
+    size_t n = (size_t)config_setting_length(vary);
+    if (n == 0)
+        return;
+    if (!(sc->sweep_axes = calloc(n, sizeof *sc->sweep_axes))) {
+        L->c.oom = true;
+        return;
+    }
+    for (size_t k = 0; k < n; k++) {
+        const config_setting_t *e = config_setting_get_elem(vary, (unsigned)k), *at = NULL;
+        char prefix[PATH_LEN];
+        snprintf(prefix, sizeof prefix, "sweep.vary.[%zu]", k);
+        if (!config_setting_is_group(e)) {
+            type_error(L, e, prefix, "a group { key = \"...\"; values = [...]; }");
+            continue;
+        }
+        const char *key;
+        got g_key = get_string(L, e, prefix, S_SWEEP_KEY, &key, &at);
+        nbep__scene_kind kind;
+        bool element;
+        if (g_key == GOT && !nbep__scene_schema_kind(key, &kind, &element)) {
+            nbep__strbuf b = {0};
+            nbep__scene_unknown_text(key, &b);
+            ERR(L, at, "%s.key: %s", prefix, nbep__strbuf_str(&b));
+            L->c.oom = L->c.oom || b.oom;
+            nbep__strbuf_fini(&b);
+            g_key = BAD;
+        }
+        const config_setting_t *values;
+        got g_values = find(L, e, prefix, S_SWEEP_VALUES, &values);
+        if (g_values == GOT && !((config_setting_is_array(values) ||
+                                  config_setting_is_list(values)) &&
+                                 config_setting_length(values) > 0)) {
+            char path[PATH_LEN];
+            path_join(path, prefix, "values");
+            type_error(L, values, path, "a non-empty array or list of values");
+            g_values = BAD;
+        }
+        if (g_key != GOT || g_values != GOT)
+            continue;
+        nbep_sweep_axis *axis = &sc->sweep_axes[sc->sweep_n_axes++];
+        axis->key = dup_string(L, key);
+        size_t n_values = (size_t)config_setting_length(values);
+        if (!(axis->values = calloc(n_values, sizeof *axis->values))) {
+            L->c.oom = true;
+            continue;
+        }
+        for (size_t v = 0; v < n_values; v++) {
+            nbep__strbuf b = {0};
+            nbep__scene_value_text(config_setting_get_elem(values, (unsigned)v), &b);
+            L->c.oom = L->c.oom || b.oom;
+            axis->values[axis->n_values++] = b.p ? b.p : dup_string(L, "");
+        }
+    }
+}
+
+/* ---- counts, memory, and the state ---------------------------------------------------------- */
+
+static bool check_counts(load *L, nbep__scene_entry *e, size_t n_entries, size_t n_planes,
+                         size_t *total_out)
+{
+    uint64_t total = 0;
+    size_t largest = SIZE_MAX;
+    for (size_t k = 0; k < n_entries; k++) {
+        e[k].first = (size_t)total;
+        if (e[k].count > (uint64_t)UINT32_MAX - total) {
+            char what[PATH_LEN + 40];
+            if (e[k].place == NBEP__PLACE_ONE)
+                snprintf(what, sizeof what, "spheres.[%zu]", k);
+            else
+                snprintf(what, sizeof what, "spheres.[%zu].count = %" PRIu64, k, e[k].count);
+            ERR(L, e[k].count_at ? e[k].count_at : e[k].setting,
+                "%s brings the total to %" PRIu64 " spheres, more than %" PRIu32
+                " (sphere ids are 32-bit)",
+                what, e[k].count > UINT64_MAX - total ? UINT64_MAX : total + e[k].count,
+                UINT32_MAX);
+            return false;
+        }
+        total += e[k].count;
+        if (e[k].place != NBEP__PLACE_ONE && (largest == SIZE_MAX || e[k].count > e[largest].count))
+            largest = k;
+    }
+    /* Checked before allocating: an overcommitting kernel would otherwise accept the
+     * allocation and kill the run later, at first touch. */
+    long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+    double bytes = (double)nbep_state_bytes((size_t)total, n_planes) +
+                   (double)WORKSPACE_BYTES_PER_SPHERE * (double)total;
+    if (pages > 0 && page > 0 && largest != SIZE_MAX && bytes > (double)pages * (double)page) {
+        ERR(L, e[largest].count_at,
+            "spheres.[%zu].count = %" PRIu64 " needs %.1f GB, more than this machine's %.1f GB",
+            largest, e[largest].count, bytes / 1e9, (double)pages * (double)page / 1e9);
+        return false;
+    }
+    *total_out = (size_t)total;
+    return true;
+}
+
+/* Box planes first (inward: +x at min.x, -x at max.x, ...), then `planes`. */
+static void fill_planes(nbep_state *s, const nbep_scene *sc, const plane *p, size_t n_p)
+{
+    size_t k = 0;
+    if (sc->has_box) {
+        const double lo[3] = {sc->box_min.x, sc->box_min.y, sc->box_min.z};
+        const double hi[3] = {sc->box_max.x, sc->box_max.y, sc->box_max.z};
+        for (int axis = 0; axis < 3; axis++) {
+            double u[3] = {0.0, 0.0, 0.0};
+            u[axis] = 1.0;
+            s->plane_normal[k] = nbep_vec3_make(u[0], u[1], u[2]);
+            s->plane_offset[k++] = lo[axis];
+            s->plane_normal[k] = nbep_vec3_make(-u[0], -u[1], -u[2]);
+            s->plane_offset[k++] = -hi[axis];
+        }
+    }
+    for (size_t j = 0; j < n_p; j++, k++) {
+        s->plane_normal[k] = p[j].normal;
+        s->plane_offset[k] = p[j].offset;
+    }
+}
+
+/* ---- reading the deck ----------------------------------------------------------------------- */
+
+static nbep_status read_text(const char *path, char **out, nbep_diag *d)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        NBEP_FAIL(d, NBEP_EIO, "nbep: cannot read %s: %s", path, strerror(errno));
+    size_t len = 0, cap = 4096;
+    char *text = malloc(cap);
+    while (text) {
+        len += fread(text + len, 1, cap - 1 - len, f);
+        if (len < cap - 1)
+            break;
+        char *t = realloc(text, 2 * cap);
+        if (!t) {
+            free(text);
+            text = NULL;
+            break;
+        }
+        text = t;
+        cap *= 2;
+    }
+    int failed = ferror(f), err = errno;
+    fclose(f);
+    if (!text)
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory to read %s", path);
+    if (failed) {
+        free(text);
+        NBEP_FAIL(d, NBEP_EIO, "nbep: cannot read %s: %s", path, strerror(err));
+    }
+    text[len] = '\0';
+    *out = text;
+    return NBEP_OK;
+}
+
+static char *join_overrides(load *L, const char *const *ov, size_t n)
+{
+    nbep__strbuf b = {0};
+    nbep__strbuf_addn(&b, "", 0);
+    for (size_t k = 0; k < n; k++)
+        nbep__strbuf_add(&b, "%s%s", k ? "\n" : "", ov[k]);
+    if (b.oom || !b.p) {
+        L->c.oom = true;
+        nbep__strbuf_fini(&b);
+        return NULL;
+    }
+    return b.p;
+}
+
+/* Parses every literal default once; a schema default that does not parse is a bug. */
+static void load_defaults(load *L, config_t *defaults)
+{
+    nbep__strbuf b = {0};
+    for (int id = 0; id < S_COUNT; id++)
+        if (schema[id].def)
+            nbep__strbuf_add(&b, "d%d = %s;\n", id, schema[id].def);
+    if (b.oom) {
+        L->c.oom = true;
+    } else {
+        int parsed = config_read_string(defaults, nbep__strbuf_str(&b));
+        assert(parsed && "every schema default is valid libconfig");
+        for (int id = 0; parsed && id < S_COUNT; id++) {
+            char name[16];
+            snprintf(name, sizeof name, "d%d", id);
+            L->def[id] = schema[id].def ? config_lookup(defaults, name) : NULL;
+        }
+    }
+    nbep__strbuf_fini(&b);
+}
+
+nbep_status nbep_scene_load(const char *deck_path, const char *const *overrides,
+                            size_t n_overrides, nbep_scene *out, nbep_diag *d)
+{
+    load L = {.c = {deck_path, d, false}};
+    nbep_scene sc;
+    memset(&sc, 0, sizeof sc);
+    config_t cfg, defaults;
+    config_init(&cfg);
+    config_init(&defaults);
+    nbep__scene_entry *entries = NULL;
+    plane *planes = NULL;
+    size_t n_entries = 0, n_planes = 0;
+    char *text = NULL;
+    const size_t errors0 = d->n_errors;
+
+    nbep_status st = read_text(deck_path, &sc.deck_text, d);
+    if (st != NBEP_OK)
+        goto done;
+    sc.deck_path = dup_string(&L, deck_path);
+    sc.overrides = join_overrides(&L, overrides, n_overrides);
+    size_t n_bad;
+    if (!(text = nbep__scene_widen(sc.deck_text, deck_path, true, d, &n_bad))) {
+        L.c.oom = true;
+        goto finish;
+    }
+    if (!config_read_string(&cfg, text)) {
+        /* libconfig 1.5's most common text is just "syntax error": not said twice. */
+        const char *what = config_error_text(&cfg);
+        nbep_diag_add(d, __FILE__, __LINE__, "%s:%d: syntax error%s%s", deck_path,
+                      config_error_line(&cfg), strcmp(what, "syntax error") ? ": " : "",
+                      strcmp(what, "syntax error") ? what : "");
+        goto finish;
+    }
+    for (size_t k = 0; k < n_overrides; k++)
+        nbep__scene_apply_override(&L.c, &cfg, overrides[k]);
+    load_defaults(&L, &defaults);
+
+    const config_setting_t *root = config_root_setting(&cfg);
+    check_known(&L, root, "", "");
+    bool seed_ok;
+    parse_run(&L, root, &sc, &seed_ok);
+    const size_t geometry0 = d->n_errors;
+    parse_physics(&L, root, &sc);
+    parse_box(&L, root, &sc);
+    parse_planes(&L, root, &planes, &n_planes);
+    parse_spheres(&L, root, &sc, &entries, &n_entries);
+    const bool geometry_ok = seed_ok && d->n_errors == geometry0 && !L.c.oom;
+    parse_output(&L, root, &sc);
+    parse_sweep(&L, root, &sc);
+
+    size_t total, n_all_planes = n_planes + (sc.has_box ? 6 : 0);
+    if (geometry_ok && check_counts(&L, entries, n_entries, n_all_planes, &total)) {
+        st = nbep_state_init(&sc.state, total, n_all_planes, d);
+        if (st != NBEP_OK)
+            goto done;
+        fill_planes(&sc.state, &sc, planes, n_planes);
+        const size_t fill0 = d->n_errors;
+        st = nbep__scene_place(&L.c, &sc.state, entries, n_entries, sc.seed);
+        if (st == NBEP_OK && d->n_errors == fill0)
+            st = nbep__scene_check_overlaps(&L.c, &sc.state, entries, n_entries, sc.has_box);
+        if (st != NBEP_OK)
+            goto done;
+    }
+finish:
+    if (L.c.oom) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: out of memory while loading %s", deck_path);
+        st = NBEP_ENOMEM;
+    } else {
+        st = d->n_errors > errors0 ? NBEP_EDECK : NBEP_OK;
+    }
+done:
+    free(entries);
+    free(planes);
+    free(text);
+    config_destroy(&defaults);
+    config_destroy(&cfg);
+    if (st == NBEP_OK)
+        *out = sc;
+    else
+        nbep_scene_fini(&sc);
+    return st;
+}
+
+void nbep_scene_fini(nbep_scene *sc)
+{
+    if (!sc)
+        return;
+    free(sc->deck_path);
+    free(sc->deck_text);
+    free(sc->overrides);
+    free(sc->output_file);
+    nbep_state_fini(&sc->state);
+    for (size_t k = 0; sc->sweep_axes && k < sc->sweep_n_axes; k++) {
+        free(sc->sweep_axes[k].key);
+        for (size_t v = 0; v < sc->sweep_axes[k].n_values; v++)
+            free(sc->sweep_axes[k].values[v]);
+        free(sc->sweep_axes[k].values);
+    }
+    free(sc->sweep_axes);
+    memset(sc, 0, sizeof *sc);
+}
+
+/* ---- pair counting -------------------------------------------------------------------------- */
+
+static int cmp_vec3(const void *a, const void *b)
+{
+    const nbep_vec3 *u = a, *v = b;
+    if (u->x != v->x)
+        return u->x < v->x ? -1 : 1;
+    if (u->y != v->y)
+        return u->y < v->y ? -1 : 1;
+    if (u->z != v->z)
+        return u->z < v->z ? -1 : 1;
+    return 0;
+}
+
+void nbep_scene_count_pairs(const nbep_state *s, uint64_t *quadratic, uint64_t *quartic)
+{
+    const uint64_t n = s->n, all = n * (n ? n - 1 : 0) / 2;
+    uint64_t same = 0;
+    nbep_vec3 *a = n ? malloc(n * sizeof *a) : NULL;
+    if (a) {
+        /* Sorted, equal accelerations are runs; a run of c spheres holds c(c-1)/2 pairs. */
+        memcpy(a, s->acc, n * sizeof *a);
+        qsort(a, n, sizeof *a, cmp_vec3);
+        for (uint64_t i = 0, j; i < n; i = j) {
+            for (j = i + 1; j < n && nbep_vec3_equal(a[j], a[i]); j++)
+                ;
+            same += (j - i) * (j - i - 1) / 2;
+        }
+        free(a);
+    } else {
+        /* No memory to sort: the common case (every sphere under gravity alone) in O(n),
+         * else pair by pair. */
+        bool uniform = true;
+        for (uint64_t i = 1; uniform && i < n; i++)
+            uniform = nbep_vec3_equal(s->acc[i], s->acc[0]);
+        if (uniform)
+            same = all;
+        for (uint64_t i = 0; !uniform && i < n; i++)
+            for (uint64_t j = i + 1; j < n; j++)
+                same += nbep_vec3_equal(s->acc[i], s->acc[j]);
+    }
+    *quadratic = same;
+    *quartic = all - same;
+}
+
+/* ---- reference ------------------------------------------------------------------------------ */
+
+static const char *kind_name(nbep__scene_kind k)
+{
+    switch (k) {
+    case NBEP__K_GROUP: return "group";
+    case NBEP__K_LIST: return "list of groups";
+    case NBEP__K_STRING: return "string";
+    case NBEP__K_INT: return "integer";
+    case NBEP__K_FLOAT: return "number";
+    case NBEP__K_BOOL: return "true/false";
+    case NBEP__K_VEC3: return "[x, y, z]";
+    case NBEP__K_STRINGS: return "array of strings";
+    case NBEP__K_VALUES: return "array or list";
+    }
+    return "?";
+}
+
+void nbep_scene_print_reference(FILE *f)
+{
+    fprintf(f, "| path | type | default | meaning |\n| --- | --- | --- | --- |\n");
+    for (int id = 0; id < S_COUNT; id++) {
+        const schema_entry *e = &schema[id];
+        fprintf(f, "| `");
+        for (const char *p = e->path; *p; p++) {
+            if (p[0] == '[' && p[1] == ']') {
+                fputs("[i]", f);
+                p++;
+            } else {
+                fputc(*p, f);
+            }
+        }
+        fprintf(f, "` | %s | ", kind_name(e->kind));
+        if (e->def)
+            fprintf(f, "`%s`", e->def);
+        else
+            fprintf(f, "%s", e->def_doc);
+        fprintf(f, " | %s", e->meaning);
+        if (e->flags & F_GT0)
+            fprintf(f, "; > 0");
+        if (e->flags & F_GE0)
+            fprintf(f, "; >= 0");
+        if (e->flags & F_GE1)
+            fprintf(f, "; >= 1");
+        if (e->flags & F_IN01)
+            fprintf(f, "; in [0, 1]");
+        if (e->flags & F_ONE)
+            fprintf(f, "; single sphere only");
+        if (e->flags & F_GROUP)
+            fprintf(f, "; generated group only");
+        fprintf(f, " |\n");
+    }
+}

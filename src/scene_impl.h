@@ -1,0 +1,118 @@
+/* Internals shared by the scene module's files: scene.c (schema, parsing, validation),
+ * scene_text.c (text helpers around libconfig), scene_override.c (--set) and scene_place.c
+ * (generated groups and the overlap check). Nothing here is used outside the scene module. */
+#ifndef NBEP_SCENE_IMPL_H
+#define NBEP_SCENE_IMPL_H
+
+#include <libconfig.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "nbep/compiler.h"
+#include "nbep/state.h"
+#include "nbep/status.h"
+#include "nbep/vec3.h"
+
+/* ---- one load's context --------------------------------------------------------------------- */
+
+typedef struct nbep__scene_ctx {
+    const char *deck;   /* borrowed: the deck path as given, for "deck:line:" */
+    nbep_diag *d;       /* borrowed */
+    bool oom;           /* an allocation failed: the load ends with NBEP_ENOMEM */
+} nbep__scene_ctx;
+
+/* Adds "WHERE: message" for setting s, WHERE being "deck:line" or, for a setting an override
+ * made (its libconfig hook holds the override text), "--set PATH=VALUE". file/line are ours. */
+void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char *file, int line,
+                       const char *fmt, ...) NBEP_PRINTF(5, 6);
+#define NBEP__SCENE_ERR(c, s, ...) nbep__scene_error((c), (s), __FILE__, __LINE__, __VA_ARGS__)
+
+/* ---- growable strings ----------------------------------------------------------------------- */
+
+typedef struct nbep__strbuf {
+    char *p;       /* owned, NUL-terminated once anything was added */
+    size_t len, cap;
+    bool oom;      /* an append failed; p holds what fitted before */
+} nbep__strbuf;
+
+void nbep__strbuf_add(nbep__strbuf *b, const char *fmt, ...) NBEP_PRINTF(2, 3);
+void nbep__strbuf_addn(nbep__strbuf *b, const char *s, size_t n);
+/* The text so far, "" when empty; valid until the next append or fini. */
+const char *nbep__strbuf_str(const nbep__strbuf *b);
+void nbep__strbuf_fini(nbep__strbuf *b);
+
+/* ---- text (scene_text.c) -------------------------------------------------------------------- */
+
+/* Copy of libconfig text rewritten so that libconfig 1.5 reads what the user meant (see the
+ * definition). Integers beyond 64 bits are reported as "ORIGIN:LINE: ..." (with_line) or
+ * "ORIGIN: ..." and counted in *n_bad. NULL when out of memory. */
+char *nbep__scene_widen(const char *text, const char *origin, bool with_line, nbep_diag *d,
+                        size_t *n_bad);
+/* Appends the libconfig text of a value: 0.9, 8192, 5000000000L, "text", [0.0, 1.0], (...),
+ * { a = 1; }. Floats keep a '.' or an exponent so that they read back as floats. */
+void nbep__scene_value_text(const config_setting_t *s, nbep__strbuf *b);
+/* A short description of a value for "(got ...)": its text when short, else its kind. */
+void nbep__scene_describe(const config_setting_t *s, nbep__strbuf *b);
+/* Optimal-string-alignment edit distance (insert, delete, substitute, swap neighbours). */
+size_t nbep__scene_edit_distance(const char *a, const char *b);
+
+/* ---- schema queries (scene.c) --------------------------------------------------------------- */
+
+typedef enum nbep__scene_kind {
+    NBEP__K_GROUP,     /* { ... } */
+    NBEP__K_LIST,      /* ( {...}, {...} ) */
+    NBEP__K_STRING,
+    NBEP__K_INT,       /* int or int64; a float is an error */
+    NBEP__K_FLOAT,     /* float, int or int64; finite */
+    NBEP__K_BOOL,
+    NBEP__K_VEC3,      /* 3 finite numbers, array or list */
+    NBEP__K_STRINGS,   /* array or list of strings */
+    NBEP__K_VALUES     /* non-empty array or list of any values */
+} nbep__scene_kind;
+
+/* Schema kind of a concrete path such as "spheres.[2].count" ("[N]" segments index lists). A
+ * path that indexes into a list or array entry ("spheres.[0]", "physics.gravity.[2]") is
+ * known, with *element set. Returns false for a path outside the schema. */
+bool nbep__scene_schema_kind(const char *path, nbep__scene_kind *kind, bool *element);
+/* Writes "unknown setting PATH" plus " (did you mean P?)" when a close known path exists. */
+void nbep__scene_unknown_text(const char *path, nbep__strbuf *b);
+
+/* ---- overrides (scene_override.c) ----------------------------------------------------------- */
+
+/* Applies one "PATH=VALUE" override to the tree; problems go to the diag as
+ * "--set PATH=VALUE: ...". Settings it makes carry the override text as their hook. */
+void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *ov);
+
+/* ---- placement (scene_place.c) -------------------------------------------------------------- */
+
+typedef enum nbep__place { NBEP__PLACE_ONE, NBEP__PLACE_RANDOM, NBEP__PLACE_LATTICE } nbep__place;
+
+/* One validated `spheres` entry: a single sphere or a generated group. */
+typedef struct nbep__scene_entry {
+    const config_setting_t *setting;   /* borrowed: the entry's group, for messages */
+    const config_setting_t *count_at;  /* borrowed: its count (groups), for fill messages */
+    nbep__place place;
+    uint64_t count;                    /* 1 for a single sphere */
+    size_t first;                      /* id of its first sphere */
+    double radius, mass, speed;
+    nbep_vec3 position, velocity;      /* single sphere */
+    nbep_vec3 acc;                     /* its own, or physics.gravity */
+    nbep_vec3 lo, hi;                  /* group: the region */
+} nbep__scene_entry;
+
+/* Fills the spheres of s (allocated, planes set) from the entries in deck order: single
+ * spheres as given, groups by random or lattice placement (deterministic for seed). Reports
+ * each group that does not fit. Returns NBEP_ENOMEM on allocation failure, else NBEP_OK
+ * (fill failures are counted in the diag). */
+NBEP_MUST_CHECK nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s,
+                                              const nbep__scene_entry *e, size_t n_entries,
+                                              uint64_t seed);
+/* Reports every pair of spheres, and every sphere and plane, that overlap by more than
+ * round-off (the first few by name, then how many more). Planes are named "box x-min" ...
+ * for the first six when has_box, else "planes.[k]". O(n) expected time. */
+NBEP_MUST_CHECK nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
+                                                       const nbep__scene_entry *e,
+                                                       size_t n_entries, bool has_box);
+
+#endif

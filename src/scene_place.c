@@ -1,0 +1,609 @@
+/* Generated groups and the overlap check at t0, both O(n) through hashed uniform cell grids.
+ *
+ * Grid: spheres are split into levels by radius, radii within a factor 2 sharing one (a
+ * million small spheres and a few big ones must neither make the cells huge nor put a big
+ * sphere in thousands of cells). A level's cells have side h = 2 rmax, its largest radius,
+ * and hold each of its spheres in the cell of its centre; so a sphere of radius r that
+ * overlaps one of them has its centre within r + rmax of that centre on every axis, and only
+ * the cells over that reach are visited (3 per axis when r <= rmax). Cells are stored in
+ * blocks of 4 x 4 x 4 found through a hash of the block coordinates: memory follows the
+ * spheres, not the extent of the region, and the 27 cells around a sphere mostly lie in one
+ * to four blocks, i.e. a few cache misses rather than 27.
+ *
+ * Random numbers come from a counter-based hash of (seed, entry, sphere, purpose, attempt):
+ * no generator state is shared, so a sphere's numbers never depend on how many numbers
+ * another sphere drew, and the placement is the same for a seed whatever else changes. */
+#include "scene_impl.h"
+
+#include <float.h>
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum {
+    RANDOM_ATTEMPTS = 2000,    /* tries per sphere before a random fill gives up */
+    OVERLAP_REPORT_MAX = 20,   /* overlaps listed by name; the rest are counted */
+    LEVELS_MAX = 64,           /* radius ratios up to 2^63 get their own level */
+    BLOCK_SHIFT = 2,           /* blocks of 4 x 4 x 4 cells */
+    BLOCK_SIDE = 1 << BLOCK_SHIFT,
+    BLOCK_CELLS = BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE
+};
+
+/* Random-number purposes: one stream per use, so adding a use never shifts another. */
+enum { PURPOSE_X, PURPOSE_Y, PURPOSE_Z, PURPOSE_DIR_Z, PURPOSE_DIR_PHI };
+
+/* Spheres that touch are legal, and touching is decided in floating point: a centre carries
+ * up to an ulp of its coordinates from how it was made (lo + i s on a lattice, decimal text in
+ * a deck), and the distance adds a few ulps of the coordinates through the differences,
+ * squares, sum and square root. 8 ulps of everything involved, 8 eps (|p1| + |p2| + r1 + r2)
+ * with |p| the largest coordinate, bounds that with room and is still ~1e-15 relative: any
+ * overlap a deck means is far above it. The plane test uses |offset| in place of |p2|. */
+static const double TOUCH_ULPS = 8.0;
+
+/* Sites along an axis of length L at spacing s are floor(L / s) + 1; when L is a multiple of s
+ * mathematically, L / s may round to just below the integer and lose a site: 4 eps of slack. */
+static const double LATTICE_SLACK = 4.0 * DBL_EPSILON;
+
+/* Cell coordinates are clamped to [0, 2^30]: far cells merge, which costs time only, never
+ * correctness, since the clamped map stays monotone. */
+static const double CELL_MAX = 1073741824.0;
+
+static const double TWO_PI = 6.283185307179586477;
+
+static uint64_t mix64(uint64_t x)
+{
+    /* splitmix64's finaliser (Steele, Lea, Flood 2014). */
+    x += 0x9e3779b97f4a7c15u;
+    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9u;
+    x = (x ^ (x >> 27)) * 0x94d049bb133111ebu;
+    return x ^ (x >> 31);
+}
+
+/* A number in [0, 1) from (seed, entry, sphere, purpose, attempt). */
+static double uniform(uint64_t seed, uint64_t entry, uint64_t sphere, uint64_t purpose,
+                      uint64_t attempt)
+{
+    uint64_t h = mix64(seed);
+    h = mix64(h ^ entry);
+    h = mix64(h ^ sphere);
+    h = mix64(h ^ purpose);
+    h = mix64(h ^ attempt);
+    return (double)(h >> 11) * 0x1.0p-53;   /* 53 random bits: [0, 1) */
+}
+
+static double max_abs(nbep_vec3 p)
+{
+    return fmax(fabs(p.x), fmax(fabs(p.y), fabs(p.z)));
+}
+
+/* ---- the grid ------------------------------------------------------------------------------- */
+
+typedef struct slot {
+    uint32_t k[3];     /* block coordinates */
+    uint32_t block;    /* index into the level's heads, UINT32_MAX: empty slot */
+} slot;
+
+typedef struct level {
+    double rmax;       /* largest radius in it; 0: the level is unused */
+    double inv_h;      /* 1 / cell side, the side being 2 rmax */
+    slot *slots;       /* owned: hash of block coordinates, open addressing, cap slots */
+    size_t cap, n_blocks;
+    uint32_t *heads;   /* owned: BLOCK_CELLS first-sphere ids per block, UINT32_MAX: none */
+    size_t cap_blocks;
+} level;
+
+typedef struct grid {
+    const nbep_state *s;   /* borrowed: positions and radii of inserted spheres */
+    nbep_vec3 origin;      /* cell coordinates count from here */
+    double r_min;
+    level lv[LEVELS_MAX];
+    uint32_t *next;        /* owned, per sphere id: next in its cell, UINT32_MAX ends */
+} grid;
+
+static void grid_fini(grid *g)
+{
+    for (int l = 0; l < LEVELS_MAX; l++) {
+        free(g->lv[l].slots);
+        free(g->lv[l].heads);
+    }
+    free(g->next);
+    memset(g, 0, sizeof *g);
+}
+
+/* ceil(log2(r / r_min)): radii within a factor 2 share a level. */
+static int level_of(const grid *g, double r)
+{
+    int e;
+    double m = frexp(r / g->r_min, &e);
+    int l = e - (m == 0.5);
+    return l < 0 ? 0 : l >= LEVELS_MAX ? LEVELS_MAX - 1 : l;
+}
+
+/* Levels and origin from the entries (every sphere comes from one). */
+static bool grid_init(grid *g, const nbep_state *s, const nbep__scene_entry *e, size_t n)
+{
+    memset(g, 0, sizeof *g);
+    g->s = s;
+    g->r_min = INFINITY;
+    g->origin = nbep_vec3_make(INFINITY, INFINITY, INFINITY);
+    for (size_t k = 0; k < n; k++) {
+        if (e[k].count == 0)
+            continue;
+        g->r_min = fmin(g->r_min, e[k].radius);
+        nbep_vec3 lo = e[k].place == NBEP__PLACE_ONE
+                           ? nbep_vec3_sub(e[k].position,
+                                           nbep_vec3_make(e[k].radius, e[k].radius, e[k].radius))
+                           : e[k].lo;
+        g->origin = nbep_vec3_make(fmin(g->origin.x, lo.x), fmin(g->origin.y, lo.y),
+                                   fmin(g->origin.z, lo.z));
+    }
+    if (!isfinite(g->r_min)) {
+        g->r_min = 1.0;
+        g->origin = nbep_vec3_make(0.0, 0.0, 0.0);
+    }
+    for (size_t k = 0; k < n; k++)
+        if (e[k].count > 0) {
+            level *L = &g->lv[level_of(g, e[k].radius)];
+            L->rmax = fmax(L->rmax, e[k].radius);
+        }
+    for (int l = 0; l < LEVELS_MAX; l++)
+        if (g->lv[l].rmax > 0.0)
+            g->lv[l].inv_h = 1.0 / (2.0 * g->lv[l].rmax);
+    g->next = malloc((s->n ? s->n : 1) * sizeof *g->next);
+    return g->next != NULL;
+}
+
+static uint32_t cell_coord(double x, double origin, double inv_h)
+{
+    double c = floor((x - origin) * inv_h);
+    if (!(c > 0.0))
+        return 0;
+    if (c > CELL_MAX)
+        return (uint32_t)CELL_MAX;
+    return (uint32_t)c;
+}
+
+static size_t slot_hash(const uint32_t k[3], size_t cap)
+{
+    uint64_t h = mix64(((uint64_t)k[0] << 32 | k[1]) ^ mix64(k[2]));
+    return (size_t)(h & (cap - 1));
+}
+
+/* The slot of block k: its own, or the empty one where it would go. */
+static slot *find_slot(slot *slots, size_t cap, const uint32_t k[3])
+{
+    for (size_t i = slot_hash(k, cap);; i = (i + 1) & (cap - 1)) {
+        slot *t = &slots[i];
+        if (t->block == UINT32_MAX || (t->k[0] == k[0] && t->k[1] == k[1] && t->k[2] == k[2]))
+            return t;
+    }
+}
+
+static bool grow_slots(level *L)
+{
+    size_t cap = L->cap ? 2 * L->cap : 64;
+    slot *slots = malloc(cap * sizeof *slots);
+    if (!slots)
+        return false;
+    for (size_t i = 0; i < cap; i++)
+        slots[i].block = UINT32_MAX;
+    for (size_t i = 0; i < L->cap; i++)
+        if (L->slots[i].block != UINT32_MAX)
+            *find_slot(slots, cap, L->slots[i].k) = L->slots[i];
+    free(L->slots);
+    L->slots = slots;
+    L->cap = cap;
+    return true;
+}
+
+static uint32_t *cell_head(uint32_t *heads, uint32_t block, const uint32_t c[3])
+{
+    const uint32_t m = BLOCK_SIDE - 1;
+    return &heads[(size_t)block * BLOCK_CELLS +
+                  ((c[2] & m) * BLOCK_SIDE + (c[1] & m)) * BLOCK_SIDE + (c[0] & m)];
+}
+
+static bool grid_insert(grid *g, size_t id)
+{
+    level *L = &g->lv[level_of(g, g->s->radius[id])];
+    nbep_vec3 p = g->s->pos[id];
+    const uint32_t c[3] = {cell_coord(p.x, g->origin.x, L->inv_h),
+                           cell_coord(p.y, g->origin.y, L->inv_h),
+                           cell_coord(p.z, g->origin.z, L->inv_h)};
+    const uint32_t k[3] = {c[0] >> BLOCK_SHIFT, c[1] >> BLOCK_SHIFT, c[2] >> BLOCK_SHIFT};
+    if (2 * (L->n_blocks + 1) > L->cap && !grow_slots(L))   /* load factor <= 1/2 */
+        return false;
+    slot *t = find_slot(L->slots, L->cap, k);
+    if (t->block == UINT32_MAX) {
+        if (L->n_blocks == L->cap_blocks) {
+            size_t cap = L->cap_blocks ? 2 * L->cap_blocks : 16;
+            uint32_t *h = realloc(L->heads, cap * BLOCK_CELLS * sizeof *h);
+            if (!h)
+                return false;
+            L->heads = h;
+            L->cap_blocks = cap;
+        }
+        for (size_t i = 0; i < BLOCK_CELLS; i++)
+            L->heads[L->n_blocks * BLOCK_CELLS + i] = UINT32_MAX;
+        *t = (slot){{k[0], k[1], k[2]}, (uint32_t)L->n_blocks++};
+    }
+    uint32_t *head = cell_head(L->heads, t->block, c);
+    g->next[id] = *head;
+    *head = (uint32_t)id;
+    return true;
+}
+
+/* Calls visit(arg, id) for every sphere of level L whose centre may lie within reach of p on
+ * each axis (a superset of those overlapping a sphere of radius reach - L->rmax at p); stops
+ * when visit returns true, and then returns true. */
+typedef bool (*grid_visit)(void *arg, size_t id);
+
+static bool visit_chain(const grid *g, uint32_t id, grid_visit visit, void *arg)
+{
+    for (; id != UINT32_MAX; id = g->next[id])
+        if (visit(arg, id))
+            return true;
+    return false;
+}
+
+static bool level_near(const grid *g, const level *L, nbep_vec3 p, double reach,
+                       grid_visit visit, void *arg)
+{
+    if (L->n_blocks == 0)
+        return false;
+    reach *= 1.0 + 4.0 * DBL_EPSILON;   /* covers the rounding of reach itself */
+    const double o[3] = {g->origin.x, g->origin.y, g->origin.z}, q[3] = {p.x, p.y, p.z};
+    uint32_t lo[3], hi[3], blo[3], bhi[3];
+    double n_range = 1.0;
+    for (int a = 0; a < 3; a++) {
+        lo[a] = cell_coord(q[a] - reach, o[a], L->inv_h);
+        hi[a] = cell_coord(q[a] + reach, o[a], L->inv_h);
+        blo[a] = lo[a] >> BLOCK_SHIFT;
+        bhi[a] = hi[a] >> BLOCK_SHIFT;
+        n_range *= (double)(bhi[a] - blo[a]) + 1.0;
+    }
+    if (n_range > (double)L->n_blocks) {
+        /* A reach wider than the populated blocks (a big sphere against small ones). */
+        for (size_t i = 0; i < L->n_blocks * BLOCK_CELLS; i++)
+            if (visit_chain(g, L->heads[i], visit, arg))
+                return true;
+        return false;
+    }
+    for (uint32_t bz = blo[2]; bz <= bhi[2]; bz++)
+        for (uint32_t by = blo[1]; by <= bhi[1]; by++)
+            for (uint32_t bx = blo[0]; bx <= bhi[0]; bx++) {
+                const uint32_t k[3] = {bx, by, bz};
+                const slot *t = find_slot(L->slots, L->cap, k);
+                if (t->block == UINT32_MAX)
+                    continue;
+                uint32_t c[3], from[3], to[3];
+                for (int a = 0; a < 3; a++) {
+                    uint32_t first = k[a] << BLOCK_SHIFT, last = first + (BLOCK_SIDE - 1);
+                    from[a] = lo[a] > first ? lo[a] : first;
+                    to[a] = hi[a] < last ? hi[a] : last;
+                }
+                for (c[2] = from[2]; c[2] <= to[2]; c[2]++)
+                    for (c[1] = from[1]; c[1] <= to[1]; c[1]++)
+                        for (c[0] = from[0]; c[0] <= to[0]; c[0]++)
+                            if (visit_chain(g, *cell_head(L->heads, t->block, c), visit, arg))
+                                return true;
+            }
+    return false;
+}
+
+/* Every inserted sphere that may overlap a sphere of radius r at p, level by level. */
+static bool grid_near(const grid *g, nbep_vec3 p, double r, grid_visit visit, void *arg)
+{
+    for (int l = 0; l < LEVELS_MAX; l++)
+        if (g->lv[l].rmax > 0.0 && level_near(g, &g->lv[l], p, r + g->lv[l].rmax, visit, arg))
+            return true;
+    return false;
+}
+
+/* ---- placement ------------------------------------------------------------------------------ */
+
+typedef struct probe {
+    const nbep_state *s;
+    nbep_vec3 p;
+    double r;
+} probe;
+
+/* True when sphere id and the probe sphere overlap (touching is fine). */
+static bool probe_hits(void *arg, size_t id)
+{
+    const probe *q = arg;
+    double sigma = q->r + q->s->radius[id];
+    return nbep_vec3_norm2(nbep_vec3_sub(q->s->pos[id], q->p)) < sigma * sigma;
+}
+
+static bool clear_of_planes(const nbep_state *s, nbep_vec3 p, double r)
+{
+    for (size_t k = 0; k < s->n_planes; k++)
+        if (nbep_vec3_dot(s->plane_normal[k], p) - s->plane_offset[k] < r)
+            return false;
+    return true;
+}
+
+static nbep_vec3 random_velocity(uint64_t seed, size_t entry, uint64_t q, double speed)
+{
+    if (speed == 0.0)
+        return nbep_vec3_make(0.0, 0.0, 0.0);
+    /* Uniform on the sphere: z uniform in [-1, 1], azimuth uniform (Archimedes). */
+    double z = 2.0 * uniform(seed, entry, q, PURPOSE_DIR_Z, 0) - 1.0;
+    double phi = TWO_PI * uniform(seed, entry, q, PURPOSE_DIR_PHI, 0);
+    double rho = sqrt(fmax(0.0, 1.0 - z * z));
+    return nbep_vec3_make(speed * rho * cos(phi), speed * rho * sin(phi), speed * z);
+}
+
+static double ball_volume(double r)
+{
+    return 4.0 / 3.0 * (TWO_PI / 2.0) * r * r * r;
+}
+
+static double box_volume(nbep_vec3 lo, nbep_vec3 hi)
+{
+    return (hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
+}
+
+static void set_sphere(nbep_state *s, const nbep__scene_entry *e, size_t id, nbep_vec3 p,
+                       nbep_vec3 v)
+{
+    s->pos[id] = p;
+    s->vel[id] = v;
+    s->acc[id] = e->acc;
+    s->radius[id] = e->radius;
+    s->mass[id] = e->mass;
+}
+
+/* Uniform in the region shrunk by the radius, rejecting overlaps with every sphere placed so
+ * far and with the planes. Returns false when out of memory. */
+static bool place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep__scene_entry *e,
+                         size_t k, uint64_t seed)
+{
+    const double r = e->radius;
+    const nbep_vec3 lo = nbep_vec3_make(e->lo.x + r, e->lo.y + r, e->lo.z + r);
+    const nbep_vec3 hi = nbep_vec3_make(e->hi.x - r, e->hi.y - r, e->hi.z - r);
+    const bool room = lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z;
+    for (uint64_t q = 0; q < e->count; q++) {
+        probe pr = {s, {0.0, 0.0, 0.0}, r};
+        bool placed = false;
+        for (uint64_t a = 0; room && !placed && a < RANDOM_ATTEMPTS; a++) {
+            pr.p.x = lo.x + uniform(seed, k, q, PURPOSE_X, a) * (hi.x - lo.x);
+            pr.p.y = lo.y + uniform(seed, k, q, PURPOSE_Y, a) * (hi.y - lo.y);
+            pr.p.z = lo.z + uniform(seed, k, q, PURPOSE_Z, a) * (hi.z - lo.z);
+            placed = clear_of_planes(s, pr.p, r) && !grid_near(g, pr.p, r, probe_hits, &pr);
+        }
+        if (!placed) {
+            NBEP__SCENE_ERR(c, e->count_at,
+                            "spheres.[%zu]: could not place %" PRIu64
+                            " spheres of radius %g in the region: placed %" PRIu64
+                            " (packing fraction %.2f)",
+                            k, e->count, r, q,
+                            (double)q * ball_volume(r) / box_volume(e->lo, e->hi));
+            return true;
+        }
+        size_t id = e->first + (size_t)q;
+        set_sphere(s, e, id, pr.p, random_velocity(seed, k, q, e->speed));
+        if (!grid_insert(g, id))
+            return false;
+    }
+    return true;
+}
+
+static double lattice_sites(double len, double spacing)
+{
+    if (len < 0.0)
+        return 0.0;
+    if (isinf(spacing))
+        return 1.0;
+    return floor(len / spacing * (1.0 + LATTICE_SLACK)) + 1.0;
+}
+
+static double lattice_capacity(const double len[3], double spacing)
+{
+    return lattice_sites(len[0], spacing) * lattice_sites(len[1], spacing) *
+           lattice_sites(len[2], spacing);
+}
+
+/* The largest spacing s >= 2r at which count sites fit. The capacity only drops where s
+ * passes len[a] / k for an axis a and integer k, so the answer is one of those: per axis,
+ * the smallest k that still holds count, found by bisection; then the largest over axes.
+ * Returns 0 when even s = 2r holds too few, INFINITY for at most one sphere. */
+static double lattice_spacing(const double len[3], double r, uint64_t count)
+{
+    if (lattice_capacity(len, 2.0 * r) < (double)count)
+        return 0.0;
+    if (count <= 1)
+        return INFINITY;
+    double best = 2.0 * r;
+    for (int a = 0; a < 3; a++) {
+        double kmax = floor(len[a] / (2.0 * r) * (1.0 + LATTICE_SLACK));
+        if (!(kmax >= 1.0) || lattice_capacity(len, len[a] / kmax) < (double)count)
+            continue;
+        double lo = 1.0, hi = kmax;   /* integers, exact in a double */
+        while (lo < hi) {
+            double mid = floor((lo + hi) / 2.0);
+            if (lattice_capacity(len, len[a] / mid) >= (double)count)
+                hi = mid;
+            else
+                lo = mid + 1.0;
+        }
+        best = fmax(best, len[a] / lo);
+    }
+    return best;
+}
+
+static bool place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep__scene_entry *e,
+                          size_t k, uint64_t seed)
+{
+    const double r = e->radius;
+    const double lo[3] = {e->lo.x + r, e->lo.y + r, e->lo.z + r};
+    const double hi[3] = {e->hi.x - r, e->hi.y - r, e->hi.z - r};
+    const double len[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+    if (e->count == 0)
+        return true;
+    double spacing = lattice_spacing(len, r, e->count);
+    if (spacing == 0.0) {
+        double most = lattice_capacity(len, 2.0 * r);
+        NBEP__SCENE_ERR(c, e->count_at,
+                        "spheres.[%zu]: could not place %" PRIu64
+                        " spheres of radius %g in the region: a simple cubic lattice holds at "
+                        "most %.0f (packing fraction %.2f)",
+                        k, e->count, r, most, most * ball_volume(r) / box_volume(e->lo, e->hi));
+        return true;
+    }
+    const uint64_t nx = (uint64_t)lattice_sites(len[0], spacing);
+    const uint64_t ny = (uint64_t)lattice_sites(len[1], spacing);
+    for (uint64_t q = 0; q < e->count; q++) {
+        const uint64_t idx[3] = {q % nx, q / nx % ny, q / nx / ny};
+        double x[3];
+        for (int a = 0; a < 3; a++)   /* never past the far side by rounding */
+            x[a] = idx[a] == 0 ? lo[a] : fmin(lo[a] + (double)idx[a] * spacing, hi[a]);
+        size_t id = e->first + (size_t)q;
+        set_sphere(s, e, id, nbep_vec3_make(x[0], x[1], x[2]),
+                   random_velocity(seed, k, q, e->speed));
+        if (!grid_insert(g, id))
+            return false;
+    }
+    return true;
+}
+
+nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s, const nbep__scene_entry *e,
+                              size_t n_entries, uint64_t seed)
+{
+    grid g;
+    if (!grid_init(&g, s, e, n_entries)) {
+        grid_fini(&g);
+        NBEP_FAIL(c->d, NBEP_ENOMEM, "nbep: no memory to place %zu spheres", s->n);
+    }
+    bool ok = true;
+    /* Single spheres first, wherever they are in the deck, so that no group lands on one. */
+    for (size_t k = 0; ok && k < n_entries; k++)
+        if (e[k].place == NBEP__PLACE_ONE) {
+            set_sphere(s, &e[k], e[k].first, e[k].position, e[k].velocity);
+            ok = grid_insert(&g, e[k].first);
+        }
+    for (size_t k = 0; ok && k < n_entries; k++) {
+        if (e[k].place == NBEP__PLACE_RANDOM)
+            ok = place_random(c, &g, s, &e[k], k, seed);
+        else if (e[k].place == NBEP__PLACE_LATTICE)
+            ok = place_lattice(c, &g, s, &e[k], k, seed);
+    }
+    grid_fini(&g);
+    if (!ok)
+        NBEP_FAIL(c->d, NBEP_ENOMEM, "nbep: no memory to place %zu spheres", s->n);
+    return NBEP_OK;
+}
+
+/* ---- the overlap check ---------------------------------------------------------------------- */
+
+typedef struct overlaps {
+    nbep__scene_ctx *c;
+    const nbep_state *s;
+    const nbep__scene_entry *e;
+    size_t n_entries;
+    size_t i;             /* the sphere whose neighbours are visited */
+    bool same_level;      /* they are in its level: only smaller ids count */
+    uint64_t found;
+} overlaps;
+
+/* The entry holding sphere id: the last one starting at or before it. */
+static size_t entry_of(const nbep__scene_entry *e, size_t n, size_t id)
+{
+    size_t lo = 0, hi = n;
+    while (hi - lo > 1) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (e[mid].first <= id)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+static void report(overlaps *o, size_t a, const char *other, double by)
+{
+    if (++o->found > OVERLAP_REPORT_MAX)
+        return;
+    size_t ea = entry_of(o->e, o->n_entries, a);
+    NBEP__SCENE_ERR(o->c, o->e[ea].setting, "spheres.[%zu] (sphere %zu) overlaps %s by %g", ea,
+                    a, other, by);
+}
+
+static void check_pair(overlaps *o, size_t i, size_t j)
+{
+    const nbep_state *s = o->s;
+    double dist = nbep_vec3_norm(nbep_vec3_sub(s->pos[i], s->pos[j]));
+    double by = s->radius[i] + s->radius[j] - dist;
+    double tol = TOUCH_ULPS * DBL_EPSILON *
+                 (max_abs(s->pos[i]) + max_abs(s->pos[j]) + s->radius[i] + s->radius[j]);
+    if (by > tol) {
+        size_t a = i > j ? i : j, b = i > j ? j : i;
+        char other[96];
+        snprintf(other, sizeof other, "spheres.[%zu] (sphere %zu)",
+                 entry_of(o->e, o->n_entries, b), b);
+        report(o, a, other, by);
+    }
+}
+
+/* A grid neighbour of o->i; in its own level, only one with a smaller id. */
+static bool pair_visit(void *arg, size_t j)
+{
+    overlaps *o = arg;
+    if (j < o->i || (!o->same_level && j != o->i))
+        check_pair(o, o->i, j);
+    return false;
+}
+
+/* In the order fill_planes (scene.c) makes them. */
+static const char *const box_names[6] = {"box x-min", "box x-max", "box y-min",
+                                         "box y-max", "box z-min", "box z-max"};
+
+nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
+                                       const nbep__scene_entry *e, size_t n_entries,
+                                       bool has_box)
+{
+    overlaps o = {c, s, e, n_entries, 0, false, 0};
+    for (size_t i = 0; i < s->n; i++)
+        for (size_t p = 0; p < s->n_planes; p++) {
+            double by = s->radius[i] - (nbep_vec3_dot(s->plane_normal[p], s->pos[i]) -
+                                        s->plane_offset[p]);
+            double tol = TOUCH_ULPS * DBL_EPSILON *
+                         (max_abs(s->pos[i]) + fabs(s->plane_offset[p]) + s->radius[i]);
+            if (by > tol) {
+                char name[48];
+                if (has_box && p < 6)
+                    snprintf(name, sizeof name, "%s", box_names[p]);
+                else
+                    snprintf(name, sizeof name, "planes.[%zu]", p - (has_box ? 6 : 0));
+                report(&o, i, name, by);
+            }
+        }
+
+    grid g;
+    bool ok = grid_init(&g, s, e, n_entries);
+    for (size_t i = 0; ok && i < s->n; i++)
+        ok = grid_insert(&g, i);
+    /* Each pair once: a sphere looks at its own level (partners of smaller id) and at the
+     * levels of larger spheres (all partners), never at smaller spheres, whose cells would be
+     * many for its reach; those pairs are found from the smaller sphere's side. */
+    for (size_t i = 0; ok && i < s->n; i++) {
+        o.i = i;
+        int own = level_of(&g, s->radius[i]);
+        for (int l = own; l < LEVELS_MAX; l++) {
+            o.same_level = l == own;
+            if (g.lv[l].rmax > 0.0)
+                (void)level_near(&g, &g.lv[l], s->pos[i], s->radius[i] + g.lv[l].rmax,
+                                 pair_visit, &o);
+        }
+    }
+    grid_fini(&g);
+    if (!ok)
+        NBEP_FAIL(c->d, NBEP_ENOMEM, "nbep: no memory to check %zu spheres for overlaps", s->n);
+    if (o.found > OVERLAP_REPORT_MAX)
+        nbep_diag_add(c->d, __FILE__, __LINE__, "nbep: %s: %" PRIu64 " more overlaps not listed",
+                      c->deck, o.found - OVERLAP_REPORT_MAX);
+    return NBEP_OK;
+}

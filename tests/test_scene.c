@@ -1,0 +1,997 @@
+/* Tests of the deck -> scene module: resolved values and defaults, every deck error as a whole
+ * "deck:line: message" line, --set overrides, box planes, random and lattice placement, pair
+ * counting, sweep parsing, fill failures, overlaps and touching, and the reference table.
+ * Run from the repository root (decks in tests/data/, scratch decks in build/tests/tmp/). */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "nbep/scene.h"
+#include "nbep_test.h"
+
+#define DATA "tests/data/"
+static const double PI = 3.14159265358979323846;
+
+/* ---- fixture and helpers -------------------------------------------------------------------- */
+
+typedef struct fixture {
+    nbep_diag d;
+    nbep_scene sc;
+} fixture;
+
+static int setup(void **state)
+{
+    fixture *f = calloc(1, sizeof *f);
+    if (!f)
+        return -1;
+    nbep_diag_init(&f->d);
+    *state = f;
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    fixture *f = *state;
+    nbep_scene_fini(&f->sc);
+    nbep_diag_fini(&f->d);
+    free(f);
+    return 0;
+}
+
+static void print_diag(const nbep_diag *d)
+{
+    for (size_t i = 0; i < d->n_errors && i < d->cap; i++)
+        print_message("  [%zu] %s\n", i, d->msg[i]);
+}
+
+/* The diag holds exactly these lines, in this order. */
+static void assert_diag(const nbep_diag *d, const char *const *expected, size_t n)
+{
+    for (size_t i = 0; i < n && i < d->n_errors; i++)
+        if (strcmp(d->msg[i], expected[i]) != 0) {
+            print_diag(d);
+            fail_msg("message %zu is\n    %s\nexpected\n    %s", i, d->msg[i], expected[i]);
+        }
+    if (d->n_errors != n) {
+        print_diag(d);
+        fail_msg("%zu messages, expected %zu", d->n_errors, n);
+    }
+}
+
+#define ASSERT_DIAG(d, ...)                                                                   \
+    do {                                                                                      \
+        const char *const expected_[] = {__VA_ARGS__};                                        \
+        assert_diag((d), expected_, sizeof expected_ / sizeof *expected_);                   \
+    } while (0)
+
+static nbep_status load(fixture *f, const char *deck, const char *const *ov, size_t n)
+{
+    return nbep_scene_load(deck, ov, n, &f->sc, &f->d);
+}
+
+/* Loads a deck that must be good. */
+static void load_ok(fixture *f, const char *deck, const char *const *ov, size_t n)
+{
+    nbep_status st = load(f, deck, ov, n);
+    if (st != NBEP_OK) {
+        print_diag(&f->d);
+        fail_msg("loading %s failed with status %d", deck, (int)st);
+    }
+    assert_int_equal(f->d.n_errors, 0);
+}
+
+/* LOAD_OK(f, deck, override...) and LOAD_FAILS(f, status, deck, override...). */
+#define LOAD_OK(f, ...)                                                                       \
+    do {                                                                                      \
+        const char *const args_[] = {__VA_ARGS__};                                            \
+        load_ok((f), args_[0], args_ + 1, sizeof args_ / sizeof *args_ - 1);                  \
+    } while (0)
+
+#define LOAD_FAILS(f, code, ...)                                                              \
+    do {                                                                                      \
+        const char *const args_[] = {__VA_ARGS__};                                            \
+        assert_int_equal(load((f), args_[0], args_ + 1, sizeof args_ / sizeof *args_ - 1),    \
+                         (code));                                                             \
+    } while (0)
+
+static void assert_vec3(nbep_vec3 v, double x, double y, double z, double rtol)
+{
+    assert_close(v.x, x, rtol, rtol);
+    assert_close(v.y, y, rtol, rtol);
+    assert_close(v.z, z, rtol, rtol);
+}
+
+/* Writes text to build/tests/tmp/NAME (folders made as needed); returns the path. */
+static const char *write_deck(const char *name, const char *text, char *buf, size_t len)
+{
+    mkdir("build", 0777);
+    mkdir("build/tests", 0777);
+    mkdir("build/tests/tmp", 0777);
+    nbep_test_tmp(name, buf, len);
+    FILE *f = fopen(buf, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+    return buf;
+}
+
+static bool small_scale(void)
+{
+    const char *s = getenv("NBEP_TEST_SCALE");
+    return s && strcmp(s, "small") == 0;
+}
+
+/* ---- resolved values and defaults ----------------------------------------------------------- */
+
+static void test_good_deck_resolves_every_setting(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_good.deck");
+    const nbep_scene *sc = &f->sc;
+    assert_string_equal(sc->algorithm, "seminaive");
+    assert_int_equal(sc->steps, 250);
+    assert_close(sc->dt, 2.5e-3, 0.0, 0.0);
+    assert_int_equal(sc->threads, 3);
+    assert_int_equal(sc->seed, 42);
+    assert_vec3(sc->gravity, 0.0, 0.0, -9.81, 0.0);
+    assert_close(sc->restitution, 0.85, 0.0, 0.0);
+    assert_true(sc->has_box);
+    assert_vec3(sc->box_min, -1.0, -2.0, -3.0, 0.0);
+    assert_vec3(sc->box_max, 4.0, 5.0, 6.0, 0.0);
+    assert_string_equal(sc->output_file, "custom.h5");
+    assert_int_equal(sc->output_every, 7);
+    assert_false(sc->out_position);
+    assert_true(sc->out_velocity);
+    assert_false(sc->out_stats);
+    assert_string_equal(sc->deck_path, DATA "scene_good.deck");
+    assert_int_equal(sc->sweep_replicas, 1);
+    assert_int_equal(sc->sweep_n_axes, 0);
+
+    const nbep_state *s = &sc->state;
+    assert_int_equal(s->n, 41);
+    assert_int_equal(s->n_planes, 7);
+    for (size_t i = 0; i < 40; i++) {
+        assert_close(s->radius[i], 0.1, 0.0, 0.0);
+        assert_close(s->mass[i], 0.5, 0.0, 0.0);
+        assert_vec3(s->acc[i], 0.0, 0.0, -9.81, 0.0);
+    }
+    /* The single sphere: its velocity mixes integers and floats in one array. */
+    assert_vec3(s->pos[40], 2.0, 4.0, 5.0, 0.0);
+    assert_vec3(s->vel[40], 0.5, -0.25, 1.0, 0.0);
+    assert_vec3(s->acc[40], 0.0, 0.0, -1.0, 0.0);
+    assert_close(s->radius[40], 0.3, 0.0, 0.0);
+    assert_close(s->mass[40], 2.0, 0.0, 0.0);
+}
+
+static void test_absent_settings_take_their_defaults(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_defaults.deck");
+    const nbep_scene *sc = &f->sc;
+    assert_string_equal(sc->algorithm, "predictive");
+    assert_int_equal(sc->steps, 1000);
+    assert_close(sc->dt, 1e-3, 0.0, 0.0);
+    assert_int_equal(sc->threads, 0);
+    assert_int_equal(sc->seed, 1);
+    assert_vec3(sc->gravity, 0.0, 0.0, 0.0, 0.0);
+    assert_close(sc->restitution, 1.0, 0.0, 0.0);
+    assert_int_equal(sc->output_every, 10);
+    assert_true(sc->out_position);
+    assert_true(sc->out_velocity);
+    assert_true(sc->out_stats);
+    assert_string_equal(sc->output_file, "scene_defaults.h5");
+    assert_int_equal(sc->sweep_replicas, 1);
+    assert_int_equal(sc->sweep_n_axes, 0);
+    assert_string_equal(sc->overrides, "");
+    assert_int_equal(sc->state.n, 1);
+    assert_vec3(sc->state.vel[0], 0.0, 0.0, 0.0, 0.0);
+    assert_vec3(sc->state.acc[0], 0.0, 0.0, 0.0, 0.0);
+}
+
+static void test_output_file_defaults_to_the_deck_name_with_h5_here(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *text = "# a good deck\nbox: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n";
+    const struct {
+        const char *name, *output;
+    } cases[] = {{"scene_box.deck", "scene_box.h5"},
+                 {"scene_noext", "scene_noext.h5"},
+                 {"scene_a.b.deck", "scene_a.b.h5"}};
+    for (size_t k = 0; k < sizeof cases / sizeof *cases; k++) {
+        LOAD_OK(f, write_deck(cases[k].name, text, buf, sizeof buf));
+        assert_string_equal(f->sc.output_file, cases[k].output);
+        nbep_scene_fini(&f->sc);
+    }
+}
+
+static void test_box_gives_six_inward_planes_first_in_axis_order(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_good.deck");
+    const nbep_state *s = &f->sc.state;
+    /* x-min, x-max, y-min, y-max, z-min, z-max; offset = n . (a point of the wall). */
+    const double n[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    const double offset[6] = {-1.0, -4.0, -2.0, -5.0, -3.0, -6.0};
+    for (int p = 0; p < 6; p++) {
+        assert_vec3(s->plane_normal[p], n[p][0], n[p][1], n[p][2], 0.0);
+        assert_close(s->plane_offset[p], offset[p], 0.0, 0.0);
+    }
+}
+
+static void test_extra_plane_is_normalized_with_offset_n_dot_point(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_good.deck");
+    const nbep_state *s = &f->sc.state;
+    /* normal [0, 3, 4] / 5; point [0, -1.5, -1]: offset 0.6 * -1.5 + 0.8 * -1 = -1.7. */
+    assert_vec3(s->plane_normal[6], 0.0, 0.6, 0.8, 1e-15);
+    assert_close(s->plane_offset[6], -1.7, 1e-15, 0.0);
+}
+
+static char *read_all(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long len = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *t = calloc((size_t)len + 1, 1);
+    assert_non_null(t);
+    assert_int_equal(fread(t, 1, (size_t)len, f), (size_t)len);
+    fclose(f);
+    return t;
+}
+
+static void test_deck_text_is_kept_whole_and_overrides_one_per_line(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_good.deck", "run.steps=5", "physics.restitution=0.5");
+    char *text = read_all(DATA "scene_good.deck");
+    assert_string_equal(f->sc.deck_text, text);
+    free(text);
+    assert_string_equal(f->sc.overrides, "run.steps=5\nphysics.restitution=0.5");
+}
+
+/* ---- deck errors ---------------------------------------------------------------------------- */
+
+static void test_unreadable_deck_is_an_io_error(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EIO, DATA "scene_no_such.deck");
+    char expected[256];
+    snprintf(expected, sizeof expected, "nbep: cannot read " DATA "scene_no_such.deck: %s",
+             strerror(ENOENT));
+    ASSERT_DIAG(&f->d, expected);
+}
+
+static void test_syntax_error_names_the_deck_line(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_syntax.deck");
+    ASSERT_DIAG(&f->d, DATA "scene_syntax.deck:4: syntax error");
+}
+
+static void test_syntax_error_carries_libconfig_text(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_syntax_array.deck");
+    ASSERT_DIAG(&f->d, DATA "scene_syntax_array.deck:3: syntax error: mismatched element type "
+                            "in array");
+}
+
+static void test_unknown_settings_are_named_with_the_closest_known_one(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_unknown.deck");
+    ASSERT_DIAG(&f->d,
+                DATA "scene_unknown.deck:2: unknown setting physics.gravty "
+                     "(did you mean physics.gravity?)",
+                DATA "scene_unknown.deck:4: unknown setting spheres.[0].radus "
+                     "(did you mean spheres.[0].radius?)",
+                DATA "scene_unknown.deck:5: unknown setting dt (did you mean run.dt?)",
+                DATA "scene_unknown.deck:6: unknown setting colour",
+                DATA "scene_unknown.deck:7: unknown setting outptu (did you mean output?)");
+}
+
+static void test_wrong_types_are_errors_but_integers_pass_for_numbers(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_types.deck");
+    ASSERT_DIAG(&f->d, DATA "scene_types.deck:2: run.algorithm must be a string (got 1)",
+                DATA "scene_types.deck:2: run.steps must be an integer (got 10.0)",
+                DATA "scene_types.deck:2: run.dt must be a number (got \"fast\")",
+                DATA "scene_types.deck:3: physics.gravity must be 3 numbers [x, y, z] "
+                     "(got [0.0, 0.0])",
+                DATA "scene_types.deck:4: box.max must be 3 numbers [x, y, z] "
+                     "(got (1, 2, \"3\"))",
+                DATA "scene_types.deck:7: planes must be a list ( {...}, ... ) "
+                     "(got { normal = [0.0, 0.0, 1.0]; })",
+                DATA "scene_types.deck:5: spheres.[0].mass must be a number (got true)",
+                DATA "scene_types.deck:6: output.every must be an integer (got 2.5)",
+                DATA "scene_types.deck:6: output.stats must be true or false (got 1)",
+                DATA "scene_types.deck:6: output.fields must be an array of strings "
+                     "(got \"position\")");
+}
+
+static void test_numbers_beyond_double_range_are_not_finite(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_nonfinite.deck");
+    ASSERT_DIAG(&f->d, DATA "scene_nonfinite.deck:2: run.dt must be finite (got inf)",
+                DATA "scene_nonfinite.deck:3: physics.gravity must be finite (got [0, -inf, 0])");
+}
+
+static void test_values_out_of_range_are_all_reported_in_one_pass(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_ranges.deck");
+#define R DATA "scene_ranges.deck:"
+    ASSERT_DIAG(&f->d,
+                R "3: run.algorithm must be one of \"naive\", \"seminaive\", \"predictive\" "
+                  "(got \"fastest\")",
+                R "4: run.steps must be >= 0 (got -1)", R "5: run.dt must be > 0 (got 0)",
+                R "6: run.threads must be >= 0 (got -4)", R "7: run.seed must be >= 0 (got -7)",
+                R "9: physics.restitution must be in [0, 1] (got 1.25)",
+                R "10: box.min must be < box.max on every axis (got y: 0 >= 0, z: 5 >= 2)",
+                R "11: planes.[0].normal must not be zero (got [0, 0, 0])",
+                R "13: spheres.[0].radius must be > 0 (got -0.5)",
+                R "15: spheres.[1].mass must be > 0 (got 0)", R "17: output.file must not be empty",
+                R "17: output.every must be >= 1 (got 0)",
+                R "17: output.fields.[1] must be one of \"position\", \"velocity\" "
+                  "(got \"colour\")",
+                R "18: sweep.replicas must be >= 1 (got 0)");
+#undef R
+}
+
+static void test_sphere_entries_must_be_one_sphere_or_one_group(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_entries.deck");
+#define E DATA "scene_entries.deck:"
+    ASSERT_DIAG(&f->d, E "3: spheres.[0] has no region and the deck has no box",
+                E "4: spheres.[1] has both position (one sphere) and count (a group)",
+                E "5: spheres.[2] needs position (one sphere) or count (a group)",
+                E "6: spheres.[3].place is only for a generated group (with count)",
+                E "6: spheres.[3].speed is only for a generated group (with count)",
+                E "7: spheres.[4].velocity is only for a single sphere (with position)",
+                E "7: spheres.[4].place must be one of \"random\", \"lattice\" "
+                  "(got \"hexagonal\")",
+                E "8: spheres.[4].region.min must be < spheres.[4].region.max on every axis "
+                  "(got y: 0 >= -1)",
+                E "9: spheres.[5].radius is missing", E "9: spheres.[5].region.max is missing",
+                E "10: spheres.[6] must be a group { ... } (got 42)");
+#undef E
+}
+
+static void test_too_many_spheres_for_32_bit_ids_is_an_error(void **state)
+{
+    fixture *f = *state;
+    /* 3000000000 also shows that integers beyond 32 bits are read whole: libconfig 1.5 alone
+     * would wrap it to -1294967296. */
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_too_many.deck");
+    ASSERT_DIAG(&f->d, DATA "scene_too_many.deck:4: spheres.[1].count = 3000000000 brings the "
+                            "total to 6000000000 spheres, more than 4294967295 (sphere ids are "
+                            "32-bit)");
+}
+
+static void test_integer_beyond_64_bits_is_an_error(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_int64.deck");
+    ASSERT_DIAG(&f->d, DATA "scene_int64.deck:2: integer 99999999999999999999 does not fit in "
+                            "64 bits");
+}
+
+static void test_more_spheres_than_memory_holds_fail_before_allocating(void **state)
+{
+    fixture *f = *state;
+    const double n = 4e9;
+    double bytes = (double)nbep_state_bytes((size_t)n, 6) + 200.0 * n;
+    double phys = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGE_SIZE);
+    if (!(bytes > phys))
+        skip();
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_huge.deck");
+    char expected[256];
+    snprintf(expected, sizeof expected,
+             DATA "scene_huge.deck:3: spheres.[0].count = 4000000000 needs %.1f GB, more than "
+                  "this machine's %.1f GB",
+             bytes / 1e9, phys / 1e9);
+    ASSERT_DIAG(&f->d, expected);
+}
+
+static void test_deck_and_override_errors_come_in_one_pass(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_unknown.deck", "physics.gravty=[0,0,-1]");
+    assert_int_equal(f->d.n_errors, 6);
+    assert_string_equal(f->d.msg[0], "--set physics.gravty=[0,0,-1]: unknown setting "
+                                     "physics.gravty (did you mean physics.gravity?)");
+    assert_string_equal(f->d.msg[1], DATA "scene_unknown.deck:2: unknown setting physics.gravty "
+                                          "(did you mean physics.gravity?)");
+}
+
+/* ---- overrides ------------------------------------------------------------------------------ */
+
+static void test_overrides_replace_scalars_vectors_list_entries_and_strings(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_good.deck", "physics.restitution=0.25", "physics.gravity=[0,0,-1]",
+            "spheres.[0].count=12", "run.algorithm=naive", "output.file=/tmp/nbep out.h5",
+            "run.threads=4", "run.dt=0.5e-3", "run.steps=5000000000");
+    const nbep_scene *sc = &f->sc;
+    assert_close(sc->restitution, 0.25, 0.0, 0.0);
+    assert_vec3(sc->gravity, 0.0, 0.0, -1.0, 0.0);
+    assert_int_equal(sc->state.n, 13);
+    assert_vec3(sc->state.acc[0], 0.0, 0.0, -1.0, 0.0);    /* a group: the new gravity */
+    assert_string_equal(sc->algorithm, "naive");
+    assert_string_equal(sc->output_file, "/tmp/nbep out.h5");
+    assert_int_equal(sc->threads, 4);
+    assert_close(sc->dt, 0.5e-3, 0.0, 0.0);
+    assert_int_equal(sc->steps, 5000000000u);
+}
+
+static void test_override_strings_may_be_quoted_or_look_like_numbers(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_defaults.deck", "output.file=\"quoted name.h5\"",
+            "run.algorithm=\"seminaive\"");
+    assert_string_equal(f->sc.output_file, "quoted name.h5");
+    assert_string_equal(f->sc.algorithm, "seminaive");
+    nbep_scene_fini(&f->sc);
+    LOAD_OK(f, DATA "scene_defaults.deck", "output.file=2024");
+    assert_string_equal(f->sc.output_file, "2024");
+}
+
+static void test_override_mixing_integers_and_floats_in_a_vector_reads_floats(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_defaults.deck", "physics.gravity=[0, 0, -9.81]");
+    assert_vec3(f->sc.gravity, 0.0, 0.0, -9.81, 0.0);
+}
+
+static void test_override_of_a_missing_setting_creates_it_and_its_groups(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_defaults.deck", "run.seed=5", "planes.[0].normal=[0,0,1]",
+            "planes.[0].point=[0,0,0.1]", "output.fields.[0]=velocity");
+    assert_int_equal(f->sc.seed, 5);
+    assert_int_equal(f->sc.steps, 1000);
+    assert_int_equal(f->sc.state.n_planes, 7);
+    assert_vec3(f->sc.state.plane_normal[6], 0.0, 0.0, 1.0, 0.0);
+    assert_close(f->sc.state.plane_offset[6], 0.1, 0.0, 0.0);
+    assert_false(f->sc.out_position);
+    assert_true(f->sc.out_velocity);
+}
+
+static void test_override_can_replace_and_append_list_entries(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_defaults.deck",
+            "spheres.[0]={position=[0.3,0.3,0.3]; radius=0.1; mass=2.0;}",
+            "spheres.[1]={position=[0.7, 0.7, 0.7]; radius=0.15; mass=3;}");
+    const nbep_state *s = &f->sc.state;
+    assert_int_equal(s->n, 2);
+    assert_vec3(s->pos[0], 0.3, 0.3, 0.3, 0.0);
+    assert_close(s->radius[0], 0.1, 0.0, 0.0);
+    assert_vec3(s->pos[1], 0.7, 0.7, 0.7, 0.0);
+    assert_close(s->mass[1], 3.0, 0.0, 0.0);
+}
+
+static void test_unknown_override_path_is_an_error_with_a_suggestion(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_good.deck", "physics.gravty=1", "phys.gravity=[0,0,0]",
+               "spheres.[0].radus=1", "colour=1");
+    ASSERT_DIAG(&f->d,
+                "--set physics.gravty=1: unknown setting physics.gravty "
+                "(did you mean physics.gravity?)",
+                "--set phys.gravity=[0,0,0]: unknown setting phys.gravity "
+                "(did you mean physics.gravity?)",
+                "--set spheres.[0].radus=1: unknown setting spheres.[0].radus "
+                "(did you mean spheres.[0].radius?)",
+                "--set colour=1: unknown setting colour");
+}
+
+static void test_bad_override_value_is_reported_at_the_override(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_good.deck", "physics.restitution=1.5", "run.steps=many",
+               "spheres.[0].radius=-0.5");
+    /* In validation order: run, physics, ..., spheres. */
+    ASSERT_DIAG(&f->d, "--set run.steps=many: run.steps must be an integer (got \"many\")",
+                "--set physics.restitution=1.5: physics.restitution must be in [0, 1] (got 1.5)",
+                "--set spheres.[0].radius=-0.5: spheres.[0].radius must be > 0 (got -0.5)");
+}
+
+static void test_malformed_overrides_are_one_line_each(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_good.deck", "run.steps", "spheres..count=1",
+               "physics.gravity=[0,0", "spheres.[5].radius=1");
+    ASSERT_DIAG(&f->d, "--set run.steps: expected PATH=VALUE, e.g. physics.restitution=0.9",
+                "--set spheres..count=1: bad path \"spheres..count\": names and [N] indices "
+                "joined by dots, e.g. spheres.[0].count",
+                "--set physics.gravity=[0,0: bad value: syntax error",
+                "--set spheres.[5].radius=1: spheres has 2 entries: the index can be at most 2 "
+                "(to add one)");
+}
+
+static void test_override_making_half_a_box_reports_the_other_half_missing(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *deck = write_deck("scene_nobox.deck",
+                                  "# one sphere, no box\n"
+                                  "spheres = ( { position = [0.5, 0.5, 0.5]; radius = 0.25; "
+                                  "mass = 1.0; } );\n",
+                                  buf, sizeof buf);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.min=[0,0,0]");
+    ASSERT_DIAG(&f->d, "--set box.min=[0,0,0]: box.max is missing");
+}
+
+/* ---- placement ------------------------------------------------------------------------------ */
+
+static void test_random_placement_is_the_same_for_the_same_seed(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_random.deck");
+    nbep_scene first = f->sc;
+    memset(&f->sc, 0, sizeof f->sc);
+    LOAD_OK(f, DATA "scene_random.deck");
+    size_t n = first.state.n;
+    assert_int_equal(f->sc.state.n, n);
+    assert_memory_equal(first.state.pos, f->sc.state.pos, n * sizeof(nbep_vec3));
+    assert_memory_equal(first.state.vel, f->sc.state.vel, n * sizeof(nbep_vec3));
+    nbep_scene_fini(&first);
+}
+
+static void test_random_placement_differs_for_another_seed(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_random.deck");
+    nbep_scene first = f->sc;
+    memset(&f->sc, 0, sizeof f->sc);
+    LOAD_OK(f, DATA "scene_random.deck", "run.seed=12");
+    size_t same = 0;
+    for (size_t i = 0; i < first.state.n; i++)
+        same += nbep_vec3_equal(first.state.pos[i], f->sc.state.pos[i]);
+    assert_int_equal(same, 0);
+    nbep_scene_fini(&first);
+}
+
+static void test_random_sphere_does_not_depend_on_its_group_size(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_random.deck", "spheres.[1].count=0");
+    nbep_scene first = f->sc;
+    memset(&f->sc, 0, sizeof f->sc);
+    LOAD_OK(f, DATA "scene_random.deck", "spheres.[0].count=100", "spheres.[1].count=0");
+    assert_memory_equal(first.state.pos, f->sc.state.pos, 100 * sizeof(nbep_vec3));
+    nbep_scene_fini(&first);
+}
+
+static void test_random_spheres_lie_in_their_region_and_do_not_overlap(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_random.deck");
+    const nbep_state *s = &f->sc.state;
+    assert_int_equal(s->n, 350);
+    for (size_t i = 0; i < s->n; i++) {
+        /* group 0: region [1, 5] x [0.5, 4] x [2, 5.5]; group 1: the box [0, 6]^3 */
+        bool g0 = i < 300;
+        double r = s->radius[i];
+        assert_close(r, g0 ? 0.2 : 0.3, 0.0, 0.0);
+        assert_true(s->pos[i].x >= (g0 ? 1.0 : 0.0) + r && s->pos[i].x <= (g0 ? 5.0 : 6.0) - r);
+        assert_true(s->pos[i].y >= (g0 ? 0.5 : 0.0) + r && s->pos[i].y <= (g0 ? 4.0 : 6.0) - r);
+        assert_true(s->pos[i].z >= (g0 ? 2.0 : 0.0) + r && s->pos[i].z <= (g0 ? 5.5 : 6.0) - r);
+        for (size_t j = 0; j < i; j++) {
+            double dist = nbep_vec3_norm(nbep_vec3_sub(s->pos[i], s->pos[j]));
+            if (!(dist >= (r + s->radius[j]) * (1.0 - 1e-15)))
+                fail_msg("spheres %zu and %zu overlap: distance %.17g", i, j, dist);
+        }
+    }
+}
+
+static void test_speed_gives_every_sphere_that_speed_in_all_directions(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_random.deck");
+    const nbep_state *s = &f->sc.state;
+    int signs[3][2] = {{0}};
+    for (size_t i = 0; i < 300; i++) {
+        assert_close(nbep_vec3_norm(s->vel[i]), 1.5, 1e-14, 0.0);
+        signs[0][s->vel[i].x > 0]++, signs[1][s->vel[i].y > 0]++, signs[2][s->vel[i].z > 0]++;
+    }
+    for (int a = 0; a < 3; a++) /* 300 uniform directions: ~150 each way, never under 100 */
+        assert_true(signs[a][0] > 100 && signs[a][1] > 100);
+    for (size_t i = 300; i < 350; i++)
+        assert_vec3(s->vel[i], 0.0, 0.0, 0.0, 0.0);
+}
+
+static void test_group_acceleration_replaces_gravity(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_random.deck");
+    const nbep_state *s = &f->sc.state;
+    for (size_t i = 0; i < 300; i++)
+        assert_vec3(s->acc[i], 0.0, 0.0, -9.81, 0.0);
+    for (size_t i = 300; i < 350; i++)
+        assert_vec3(s->acc[i], 0.0, 0.0, 0.0, 0.0);
+}
+
+static void test_lattice_fills_x_fastest_at_the_largest_spacing(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_lattice.deck");
+    const nbep_state *s = &f->sc.state;
+    assert_int_equal(s->n, 10);
+    /* Region shrunk by r: [0.5, 9.5]^3, 9 wide. 2 sites per axis hold 8 < 10; 3 hold 27, at
+     * spacing 9 / 2 = 4.5. */
+    for (size_t q = 0; q < 10; q++)
+        assert_vec3(s->pos[q], 0.5 + 4.5 * (double)(q % 3), 0.5 + 4.5 * (double)(q / 3 % 3),
+                    0.5 + 4.5 * (double)(q / 9), 0.0);
+}
+
+static void test_lattice_in_a_long_region_takes_the_spacing_of_its_short_sides(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_lattice.deck", "box.max=[20.0, 10.0, 10.0]", "spheres.[0].count=4");
+    const nbep_state *s = &f->sc.state;
+    /* Shrunk widths 19, 9, 9. Spacing 9.5 (x: 19/2) gives 3 x 1 x 1 = 3 < 4 sites; spacing 9
+     * (y, z: 9/1) gives 3 x 2 x 2 = 12. */
+    assert_vec3(s->pos[0], 0.5, 0.5, 0.5, 0.0);
+    assert_vec3(s->pos[1], 9.5, 0.5, 0.5, 0.0);
+    assert_vec3(s->pos[2], 18.5, 0.5, 0.5, 0.0);
+    assert_vec3(s->pos[3], 0.5, 9.5, 0.5, 0.0);
+}
+
+static void test_touching_spheres_and_planes_are_legal(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_touching.deck");
+    const nbep_state *s = &f->sc.state;
+    assert_int_equal(s->n, 1004);
+    /* The lattice sits at spacing exactly 2r = 0.5 from 0.25 on. */
+    assert_vec3(s->pos[999], 4.75, 9.75, 9.75, 0.0);
+}
+
+/* ---- fill failures and overlaps ------------------------------------------------------------- */
+
+static void test_random_fill_that_cannot_fit_names_its_packing_fraction(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_fill_random.deck");
+    assert_int_equal(f->d.n_errors, 1);
+    const char *prefix = DATA "scene_fill_random.deck:3: spheres.[0]: could not place 5000 "
+                              "spheres of radius 0.5 in the region: placed ";
+    const char *msg = f->d.msg[0];
+    assert_int_equal(strncmp(msg, prefix, strlen(prefix)), 0);
+    unsigned long placed = strtoul(msg + strlen(prefix), NULL, 10);
+    assert_true(placed > 0 && placed < 5000);
+    char expected[256];
+    snprintf(expected, sizeof expected, "%s%lu (packing fraction %.2f)", prefix, placed,
+             (double)placed * 4.0 / 3.0 * PI * 0.125 / 1000.0);
+    assert_string_equal(msg, expected);
+}
+
+static void test_lattice_fill_that_cannot_fit_names_its_capacity(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_fill_lattice.deck");
+    /* 10 sites per axis (0.5, 1.5, ..., 9.5): 1000 balls of volume pi/6 in 1000 is 0.52. */
+    ASSERT_DIAG(&f->d, DATA "scene_fill_lattice.deck:3: spheres.[0]: could not place 1001 "
+                            "spheres of radius 0.5 in the region: a simple cubic lattice holds "
+                            "at most 1000 (packing fraction 0.52)");
+}
+
+static void test_overlaps_with_spheres_and_planes_are_named(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_overlap.deck");
+    ASSERT_DIAG(&f->d,
+                DATA "scene_overlap.deck:8: spheres.[3] (sphere 3) overlaps box x-max by 0.25",
+                DATA "scene_overlap.deck:9: spheres.[4] (sphere 4) overlaps planes.[0] by 0.25",
+                DATA "scene_overlap.deck:7: spheres.[2] (sphere 2) overlaps spheres.[0] "
+                     "(sphere 0) by 0.25");
+}
+
+static void test_overlap_names_entries_and_sphere_ids(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_overlap_group.deck");
+    /* Lattice of 8 at the corners (0.5 or 9.5); sphere 7 is (9.5, 9.5, 9.5), 0.5 away. */
+    ASSERT_DIAG(&f->d, DATA "scene_overlap_group.deck:5: spheres.[1] (sphere 8) overlaps "
+                            "spheres.[0] (sphere 7) by 0.5");
+}
+
+static void test_many_overlaps_list_twenty_then_count_the_rest(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_overlap_big.deck");
+    /* Brute force: lattice sites 0.1 + i 9.8/9 on each axis against the ball of radius 2 + 0.1
+     * around (5, 5, 5). */
+    size_t expected = 0;
+    for (int i = 0; i < 10; i++)
+        for (int j = 0; j < 10; j++)
+            for (int k = 0; k < 10; k++) {
+                double x = 0.1 + i * 9.8 / 9 - 5, y = 0.1 + j * 9.8 / 9 - 5,
+                       z = 0.1 + k * 9.8 / 9 - 5;
+                expected += sqrt(x * x + y * y + z * z) < 2.1 - 1e-9;
+            }
+    assert_true(expected > 20);
+    assert_int_equal(f->d.n_errors, 21);
+    for (size_t m = 0; m < 20; m++)
+        assert_non_null(strstr(f->d.msg[m], "overlaps spheres.[0] (sphere 0) by"));
+    char last[256];
+    snprintf(last, sizeof last, "nbep: " DATA "scene_overlap_big.deck: %zu more overlaps not "
+                                "listed", expected - 20);
+    assert_string_equal(f->d.msg[20], last);
+}
+
+static void test_overlaps_between_radius_levels_are_each_found_once(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *deck = write_deck(
+        "scene_levels.deck",
+        "# two lattices of very different radii in one box: small ones overlap big ones\n"
+        "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; };\n"
+        "spheres = ( { count = 1000; radius = 0.1; mass = 1.0; place = \"lattice\"; },\n"
+        "            { count = 27; radius = 0.75; mass = 1.0; place = \"lattice\"; } );\n",
+        buf, sizeof buf);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    /* Brute force over the sites: 0.1 + i 9.8/9 (10 per axis) and 0.75 + j 8.5/2 (3). */
+    size_t expected = 0;
+    for (int n = 0; n < 1000 * 27; n++) {
+        int a = n / 27, b = n % 27;
+        double dx = 0.1 + (a % 10) * 9.8 / 9 - (0.75 + (b % 3) * 4.25);
+        double dy = 0.1 + (a / 10 % 10) * 9.8 / 9 - (0.75 + (b / 3 % 3) * 4.25);
+        double dz = 0.1 + (a / 100) * 9.8 / 9 - (0.75 + (b / 9) * 4.25);
+        expected += sqrt(dx * dx + dy * dy + dz * dz) < 0.85;
+    }
+    assert_true(expected > 20);
+    assert_int_equal(f->d.n_errors, 21);
+    char last[256];
+    snprintf(last, sizeof last, "nbep: %s: %zu more overlaps not listed", deck, expected - 20);
+    assert_string_equal(f->d.msg[20], last);
+}
+
+static void test_large_random_group_is_placed_without_overlap(void **state)
+{
+    fixture *f = *state;
+    /* Packing fraction 0.2, far below jamming; a quadratic placement would not finish. */
+    const size_t n = small_scale() ? 20000 : 200000;
+    const double side = cbrt((double)n * 4.0 / 3.0 * PI * 0.125 / 0.2);
+    char text[512], buf[256];
+    snprintf(text, sizeof text,
+             "# %zu random spheres at packing fraction 0.2\n"
+             "box: { min = [0.0, 0.0, 0.0]; max = [%.17g, %.17g, %.17g]; };\n"
+             "spheres = ( { count = %zu; radius = 0.5; mass = 1.0; speed = 1.0; } );\n",
+             n, side, side, side, n);
+    LOAD_OK(f, write_deck("scene_large.deck", text, buf, sizeof buf));
+    double worst, rel;
+    assert_int_equal(nbep_state_max_overlap(&f->sc.state, &worst, &rel, NULL, NULL, &f->d),
+                     NBEP_OK);
+    assert_true(worst <= 1e-14);
+}
+
+static void test_random_spheres_avoid_a_big_single_sphere(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *deck = write_deck(
+        "scene_big_single.deck",
+        "# 5000 small random spheres around one big sphere listed after them\n"
+        "box: { min = [0.0, 0.0, 0.0]; max = [20.0, 20.0, 20.0]; };\n"
+        "spheres = ( { count = 5000; radius = 0.2; mass = 1.0; },\n"
+        "            { position = [10.0, 10.0, 10.0]; radius = 6.0; mass = 9.0; } );\n",
+        buf, sizeof buf);
+    LOAD_OK(f, deck);
+    const nbep_state *s = &f->sc.state;
+    for (size_t i = 0; i < 5000; i++)
+        assert_true(nbep_vec3_norm(nbep_vec3_sub(s->pos[i], s->pos[5000])) >= 6.2 * (1 - 1e-15));
+    double worst;
+    assert_int_equal(nbep_state_max_overlap(s, &worst, NULL, NULL, NULL, &f->d), NBEP_OK);
+    assert_true(worst <= 1e-14);
+}
+
+/* ---- pairs, sweep, reference, fini ---------------------------------------------------------- */
+
+static void test_count_pairs_splits_equal_and_different_accelerations(void **state)
+{
+    fixture *f = *state;
+    nbep_state s;
+    assert_int_equal(nbep_state_init(&s, 8, 0, &f->d), NBEP_OK);
+    const nbep_vec3 a = {0.0, 0.0, -9.81}, b = {0.0, 0.0, -1.0}, c = {0.5, 0.0, 0.0};
+    const nbep_vec3 zero = {0.0, 0.0, 0.0}, minus_zero = {-0.0, 0.0, 0.0};
+    const nbep_vec3 acc[8] = {a, b, a, c, zero, b, minus_zero, a};
+    memcpy(s.acc, acc, sizeof acc);
+    uint64_t quadratic, quartic;
+    nbep_scene_count_pairs(&s, &quadratic, &quartic);
+    /* Runs of 3 (a), 2 (b), 2 (0 and -0, equal), 1 (c): 3 + 1 + 1 equal pairs of 8 * 7 / 2. */
+    assert_int_equal(quadratic, 5);
+    assert_int_equal(quartic, 28 - 5);
+    nbep_state_fini(&s);
+    assert_int_equal(nbep_state_init(&s, 0, 0, &f->d), NBEP_OK);
+    nbep_scene_count_pairs(&s, &quadratic, &quartic);
+    assert_int_equal(quadratic, 0);
+    assert_int_equal(quartic, 0);
+    nbep_state_fini(&s);
+}
+
+static void test_count_pairs_of_a_deck_with_two_accelerations(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_random.deck");
+    uint64_t quadratic, quartic;
+    nbep_scene_count_pairs(&f->sc.state, &quadratic, &quartic);
+    assert_int_equal(quadratic, 300 * 299 / 2 + 50 * 49 / 2);
+    assert_int_equal(quartic, 300 * 50);
+}
+
+static void test_sweep_group_is_parsed_into_replicas_and_axes(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_sweep.deck");
+    const nbep_scene *sc = &f->sc;
+    assert_int_equal(sc->sweep_replicas, 4);
+    assert_int_equal(sc->sweep_n_axes, 3);
+    const char *keys[3] = {"physics.restitution", "physics.gravity", "run.algorithm"};
+    const char *values[3][2] = {{"1.0", "0.9"},
+                                {"[0.0, 0.0, -9.81]", "[0.0, 0.0, -1.0]"},
+                                {"\"naive\"", "\"predictive\""}};
+    for (size_t k = 0; k < 3; k++) {
+        assert_string_equal(sc->sweep_axes[k].key, keys[k]);
+        assert_int_equal(sc->sweep_axes[k].n_values, 2);
+        for (size_t v = 0; v < 2; v++)
+            assert_string_equal(sc->sweep_axes[k].values[v], values[k][v]);
+    }
+    /* The sweep changes nothing by itself. */
+    assert_close(sc->restitution, 1.0, 0.0, 0.0);
+}
+
+static void test_sweep_values_apply_as_overrides(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_sweep.deck");
+    char ov[3][128];
+    const char *ovp[3];
+    for (size_t k = 0; k < 3; k++) {
+        snprintf(ov[k], sizeof ov[k], "%s=%s", f->sc.sweep_axes[k].key,
+                 f->sc.sweep_axes[k].values[1]);
+        ovp[k] = ov[k];
+    }
+    nbep_scene_fini(&f->sc);
+    load_ok(f, DATA "scene_sweep.deck", ovp, 3);
+    assert_close(f->sc.restitution, 0.9, 0.0, 0.0);
+    assert_vec3(f->sc.gravity, 0.0, 0.0, -1.0, 0.0);
+    assert_string_equal(f->sc.algorithm, "predictive");
+}
+
+static void test_sweep_key_must_be_a_known_path(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *deck = write_deck("scene_sweep_bad.deck",
+                                  "# a sweep over a misspelt key\n"
+                                  "sweep: { vary = ( { key = \"physics.gravty\"; "
+                                  "values = [1]; } ); };\n",
+                                  buf, sizeof buf);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    char expected[256];
+    snprintf(expected, sizeof expected, "%s:2: sweep.vary.[0].key: unknown setting "
+                                        "physics.gravty (did you mean physics.gravity?)", deck);
+    ASSERT_DIAG(&f->d, expected);
+}
+
+static void test_reference_mentions_every_setting(void **state)
+{
+    (void)state;
+    char *text = NULL;
+    size_t len = 0;
+    FILE *m = open_memstream(&text, &len);
+    assert_non_null(m);
+    nbep_scene_print_reference(m);
+    fclose(m);
+    /* Every setting SPEC documents, plus the sweep group. */
+    const char *paths[] = {
+        "run", "run.algorithm", "run.steps", "run.dt", "run.threads", "run.seed", "physics",
+        "physics.gravity", "physics.restitution", "box", "box.min", "box.max", "planes",
+        "planes.[i].normal", "planes.[i].point", "spheres", "spheres.[i].count",
+        "spheres.[i].radius", "spheres.[i].mass", "spheres.[i].place", "spheres.[i].speed",
+        "spheres.[i].region", "spheres.[i].region.min", "spheres.[i].region.max",
+        "spheres.[i].position", "spheres.[i].velocity", "spheres.[i].acceleration", "output",
+        "output.file", "output.every", "output.fields", "output.stats", "sweep",
+        "sweep.replicas", "sweep.vary", "sweep.vary.[i].key", "sweep.vary.[i].values"};
+    assert_non_null(strstr(text, "| path | type | default | meaning |"));
+    for (size_t k = 0; k < sizeof paths / sizeof *paths; k++) {
+        char cell[64];
+        snprintf(cell, sizeof cell, "| `%s` |", paths[k]);
+        if (!strstr(text, cell))
+            fail_msg("the reference lacks %s", paths[k]);
+    }
+    free(text);
+}
+
+static void test_fini_is_safe_on_a_zeroed_scene_and_twice(void **state)
+{
+    fixture *f = *state;
+    nbep_scene zero;
+    memset(&zero, 0, sizeof zero);
+    nbep_scene_fini(&zero);
+    nbep_scene_fini(NULL);
+    LOAD_OK(f, DATA "scene_sweep.deck");
+    nbep_scene_fini(&f->sc);
+    nbep_scene_fini(&f->sc);
+}
+
+int main(void)
+{
+#define T(name) cmocka_unit_test_setup_teardown(name, setup, teardown)
+    const struct CMUnitTest tests[] = {
+        T(test_good_deck_resolves_every_setting),
+        T(test_absent_settings_take_their_defaults),
+        T(test_output_file_defaults_to_the_deck_name_with_h5_here),
+        T(test_box_gives_six_inward_planes_first_in_axis_order),
+        T(test_extra_plane_is_normalized_with_offset_n_dot_point),
+        T(test_deck_text_is_kept_whole_and_overrides_one_per_line),
+        T(test_unreadable_deck_is_an_io_error),
+        T(test_syntax_error_names_the_deck_line),
+        T(test_syntax_error_carries_libconfig_text),
+        T(test_unknown_settings_are_named_with_the_closest_known_one),
+        T(test_wrong_types_are_errors_but_integers_pass_for_numbers),
+        T(test_numbers_beyond_double_range_are_not_finite),
+        T(test_values_out_of_range_are_all_reported_in_one_pass),
+        T(test_sphere_entries_must_be_one_sphere_or_one_group),
+        T(test_too_many_spheres_for_32_bit_ids_is_an_error),
+        T(test_integer_beyond_64_bits_is_an_error),
+        T(test_more_spheres_than_memory_holds_fail_before_allocating),
+        T(test_deck_and_override_errors_come_in_one_pass),
+        T(test_overrides_replace_scalars_vectors_list_entries_and_strings),
+        T(test_override_strings_may_be_quoted_or_look_like_numbers),
+        T(test_override_mixing_integers_and_floats_in_a_vector_reads_floats),
+        T(test_override_of_a_missing_setting_creates_it_and_its_groups),
+        T(test_override_can_replace_and_append_list_entries),
+        T(test_unknown_override_path_is_an_error_with_a_suggestion),
+        T(test_bad_override_value_is_reported_at_the_override),
+        T(test_malformed_overrides_are_one_line_each),
+        T(test_override_making_half_a_box_reports_the_other_half_missing),
+        T(test_random_placement_is_the_same_for_the_same_seed),
+        T(test_random_placement_differs_for_another_seed),
+        T(test_random_sphere_does_not_depend_on_its_group_size),
+        T(test_random_spheres_lie_in_their_region_and_do_not_overlap),
+        T(test_speed_gives_every_sphere_that_speed_in_all_directions),
+        T(test_group_acceleration_replaces_gravity),
+        T(test_lattice_fills_x_fastest_at_the_largest_spacing),
+        T(test_lattice_in_a_long_region_takes_the_spacing_of_its_short_sides),
+        T(test_touching_spheres_and_planes_are_legal),
+        T(test_random_fill_that_cannot_fit_names_its_packing_fraction),
+        T(test_lattice_fill_that_cannot_fit_names_its_capacity),
+        T(test_overlaps_with_spheres_and_planes_are_named),
+        T(test_overlap_names_entries_and_sphere_ids),
+        T(test_many_overlaps_list_twenty_then_count_the_rest),
+        T(test_overlaps_between_radius_levels_are_each_found_once),
+        T(test_large_random_group_is_placed_without_overlap),
+        T(test_random_spheres_avoid_a_big_single_sphere),
+        T(test_count_pairs_splits_equal_and_different_accelerations),
+        T(test_count_pairs_of_a_deck_with_two_accelerations),
+        T(test_sweep_group_is_parsed_into_replicas_and_axes),
+        T(test_sweep_values_apply_as_overrides),
+        T(test_sweep_key_must_be_a_known_path),
+        T(test_reference_mentions_every_setting),
+        T(test_fini_is_safe_on_a_zeroed_scene_and_twice),
+    };
+#undef T
+    return cmocka_run_group_tests_name("scene", tests, NULL, NULL);
+}
