@@ -14,26 +14,48 @@
 /* "No contact ahead". */
 #define NBEP_NEVER INFINITY
 
-/* Per-thread workspace for the quartic (GSL's companion-matrix solver). Create before any
- * parallel region; one per thread; not shared. */
+/* Per-thread workspace for the quartic (GSL's companion-matrix solver and its coefficient and
+ * root arrays), so that no call allocates. Create before any parallel region; one per thread;
+ * not shared. create returns NBEP_OK or NBEP_ENOMEM (with a message in d) and writes *out only
+ * on success; destroy is NULL-safe and NULLs the pointer. */
 typedef struct nbep_predict_ws nbep_predict_ws;
 NBEP_MUST_CHECK nbep_status nbep_predict_ws_create(nbep_predict_ws **out, nbep_diag *d);
 void nbep_predict_ws_destroy(nbep_predict_ws **ws);
 
+/* All three return a time from now, t >= 0, finite or NBEP_NEVER, never NaN (inputs finite,
+ * sigma > 0; any units, as long as products such as |dp| |dv| stay below ~1e150). Pure
+ * functions: any number of threads may call them at once, the quartic each with its own
+ * workspace. The contact is the earliest t >= 0 at which the two touch or overlap while
+ * closing; for objects apart now, that is the first time the gap closes to zero. For
+ * objects touching or overlapping now it is 0 if they close now (to the first order that is
+ * not zero: a sphere at rest on a plane under gravity, or resting on a sphere under a
+ * different acceleration, is pressed in now and gives 0; callers handle resting contact), else
+ * the time at which they start closing again: the turn, if they are pulled back before they
+ * come apart, or the return contact if they come apart first. */
+
 /* Earliest t >= 0 at which |dp + dv t| = sigma while closing (d|dp|/dt < 0), for a pair with
  * equal accelerations; dp = p2 - p1, dv = v2 - v1, sigma = r1 + r2. NBEP_NEVER when they do
- * not meet. A pair already touching or overlapping (|dp| <= sigma) and closing returns 0. */
+ * not meet. A pair already touching or overlapping (|dp| <= sigma) and closing returns 0;
+ * receding or at rest, NBEP_NEVER (with equal accelerations it never turns back).
+ * |dp|^2 - sigma^2 is computed compensated: a gap of 1e-12 sigma still gives about 15 digits. */
 double nbep_predict_pair_quadratic(nbep_vec3 dp, nbep_vec3 dv, double sigma);
 
 /* The same for any relative acceleration da = a2 - a1: quadratic when da is exactly zero,
  * otherwise the smallest valid real root of the quartic |dp + dv t + da t^2/2|^2 = sigma^2,
- * polished by Newton. ws may be NULL only when da is zero. */
+ * polished by Newton (relative accuracy near 1e-15 except at grazing incidence, where the
+ * answer's own sensitivity to the inputs limits it). Whether a pair that passes within
+ * round-off of touching (about 1e-13 relative) meets is decided by the sign of the computed
+ * gap. When da is so small that it changes nothing before 2^240 time units (|dv|/|da| beyond
+ * ~1e72), the quadratic is used. ws is borrowed, written, and may be NULL only when da is zero. */
 double nbep_predict_pair(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double sigma,
                          nbep_predict_ws *ws);
 
 /* Earliest t >= 0 at which a sphere's gap to a plane, g(t) = gap + vn t + an t^2/2, reaches
  * zero while closing (g'(t) < 0). gap = n.p - offset - r, vn = n.v, an = n.a. NBEP_NEVER when
- * it never does. Touching or overlapping (gap <= 0) and closing (vn < 0) returns 0. */
+ * it never does. Touching or overlapping (gap <= 0) and closing (vn < 0) returns 0, and so
+ * does gap <= 0, vn = 0, an < 0: a sphere resting on the plane under gravity is pressed into
+ * it right now (callers handle resting contact). Overlapping and leaving (vn > 0, an < 0):
+ * the return contact, or the turn t = vn/-an if it is pulled back before it gets out. */
 double nbep_predict_plane(double gap, double vn, double an);
 
 #endif

@@ -1,0 +1,79 @@
+/* Collision response and energy (paper Section 5). Pure functions on values or index ranges:
+ * no threads, no allocation, no state between calls.
+ *
+ * Departure from the paper: the sphere-sphere response is computed with the pair in a
+ * canonical order (the sphere with the lexicographically smaller position plays "1"), so that
+ * the result does not depend on which of the two a caller names first. Algorithms visit a
+ * pair from either side depending on ownership and thread count, and frames must be bitwise
+ * identical across thread counts (SPEC "Algorithms"). The formula as written here happens to
+ * be symmetric in IEEE arithmetic already (swapping negates n and v1 - v2 exactly); the
+ * canonical order makes that hold by construction, whatever shape the arithmetic takes. */
+#include "nbep/physics.h"
+
+#include <assert.h>
+#include <math.h>
+
+/* True when a comes before b in (x, y, z) lexicographic order. */
+static bool vec3_lex_less(nbep_vec3 a, nbep_vec3 b)
+{
+    if (a.x != b.x)
+        return a.x < b.x;
+    if (a.y != b.y)
+        return a.y < b.y;
+    return a.z < b.z;
+}
+
+/* The paper's formula with sphere "1" fixed by the caller: n = (p2 - p1)/|p2 - p1|,
+ * c = n.(v1 - v2); when c > 0, v1 -= m2 c (1+e) n/(m1+m2), v2 += m1 c (1+e) n/(m1+m2). */
+static bool respond_ordered(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, nbep_vec3 *v2,
+                            double m1, double m2, double e)
+{
+    nbep_vec3 d = nbep_vec3_sub(p2, p1);
+    double len = nbep_vec3_norm(d);
+    if (!(len > 0.0))
+        return false;                       /* coincident centres: no normal */
+    /* Divide each component (not multiply by 1/len): one rounding instead of two. */
+    nbep_vec3 n = {d.x / len, d.y / len, d.z / len};
+    double c = nbep_vec3_dot(n, nbep_vec3_sub(*v1, *v2));
+    if (!(c > 0.0))
+        return false;                       /* receding or sliding: no impulse */
+    double k = c * (1.0 + e) / (m1 + m2);
+    *v1 = nbep_vec3_axpy(*v1, -m2 * k, n);
+    *v2 = nbep_vec3_axpy(*v2, m1 * k, n);
+    return true;
+}
+
+bool nbep_physics_respond_pair(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, nbep_vec3 *v2,
+                               double m1, double m2, double e)
+{
+    assert(nbep_vec3_isfinite(p1) && nbep_vec3_isfinite(p2));
+    assert(nbep_vec3_isfinite(*v1) && nbep_vec3_isfinite(*v2));
+    assert(m1 > 0.0 && m2 > 0.0 && e >= 0.0 && e <= 1.0);
+    if (vec3_lex_less(p2, p1))
+        return respond_ordered(p2, p1, v2, v1, m2, m1, e);
+    return respond_ordered(p1, p2, v1, v2, m1, m2, e);
+}
+
+bool nbep_physics_respond_plane(nbep_vec3 n, nbep_vec3 *v, double e)
+{
+    assert(nbep_vec3_isfinite(n) && nbep_vec3_isfinite(*v));
+    double vn = nbep_vec3_dot(*v, n);
+    if (!(vn < 0.0))
+        return false;                       /* moving along or away from the plane */
+    *v = nbep_vec3_axpy(*v, -(1.0 + e) * vn, n);
+    return true;
+}
+
+void nbep_physics_energy(const nbep_state *s, size_t lo, size_t hi, double *kinetic,
+                         double *potential)
+{
+    assert(lo <= hi && hi <= s->n);
+    double ke = 0.0, pe = 0.0;
+    for (size_t i = lo; i < hi; i++) {
+        double m = s->mass[i];
+        ke += 0.5 * m * nbep_vec3_dot(s->vel[i], s->vel[i]);
+        pe -= m * nbep_vec3_dot(s->acc[i], s->pos[i]);
+    }
+    *kinetic = ke;
+    *potential = pe;
+}

@@ -1,0 +1,270 @@
+/* Collision response and energy against independent formulas: the centre-of-mass reflection
+ * for the pair response, conservation laws, the (1 - e^2) loss of a partly elastic collision,
+ * and hand-summed energies. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <string.h>
+
+#include "nbep/physics.h"
+#include "nbep_test.h"
+
+static nbep_vec3 unit(nbep_vec3 a)
+{
+    return nbep_vec3_scale(a, 1.0 / nbep_vec3_norm(a));
+}
+
+static double kinetic(double m1, nbep_vec3 v1, double m2, nbep_vec3 v2)
+{
+    return 0.5 * m1 * nbep_vec3_dot(v1, v1) + 0.5 * m2 * nbep_vec3_dot(v2, v2);
+}
+
+static void assert_vec_close(nbep_vec3 a, nbep_vec3 b, double atol)
+{
+    assert_close(a.x, b.x, 0.0, atol);
+    assert_close(a.y, b.y, 0.0, atol);
+    assert_close(a.z, b.z, 0.0, atol);
+}
+
+/* In the centre-of-mass frame a collision reverses the normal component of each velocity,
+ * scaled by e: u' = u - (1+e)(u.n) n. A different route to the paper's formula. */
+static void com_reflection(nbep_vec3 n, nbep_vec3 v1, nbep_vec3 v2, double m1, double m2,
+                           double e, nbep_vec3 *w1, nbep_vec3 *w2)
+{
+    nbep_vec3 vcm = nbep_vec3_scale(nbep_vec3_add(nbep_vec3_scale(v1, m1),
+                                                  nbep_vec3_scale(v2, m2)), 1.0 / (m1 + m2));
+    nbep_vec3 u1 = nbep_vec3_sub(v1, vcm), u2 = nbep_vec3_sub(v2, vcm);
+    *w1 = nbep_vec3_add(vcm, nbep_vec3_axpy(u1, -(1.0 + e) * nbep_vec3_dot(u1, n), n));
+    *w2 = nbep_vec3_add(vcm, nbep_vec3_axpy(u2, -(1.0 + e) * nbep_vec3_dot(u2, n), n));
+}
+
+static void test_head_on_equal_masses_exchange_velocities_when_elastic(void **state)
+{
+    (void)state;
+    nbep_vec3 p1 = {1.37, -0.42, 2.11}, p2 = {2.21, -0.42, 2.11};    /* n = +x */
+    nbep_vec3 v1 = {1.93, 0.0, 0.0}, v2 = {-0.71, 0.0, 0.0};
+    assert_true(nbep_physics_respond_pair(p1, p2, &v1, &v2, 1.7, 1.7, 1.0));
+    assert_vec_close(v1, (nbep_vec3){-0.71, 0.0, 0.0}, 1e-15);
+    assert_vec_close(v2, (nbep_vec3){1.93, 0.0, 0.0}, 1e-15);
+}
+
+static void test_oblique_elastic_response_matches_the_centre_of_mass_reflection(void **state)
+{
+    (void)state;
+    nbep_vec3 p1 = {0.31, 1.27, -0.55}, p2 = {0.93, 1.61, -0.12};
+    nbep_vec3 v1 = {1.13, -0.27, 0.61}, v2 = {-0.48, 0.92, -0.33};
+    double m1 = 2.7, m2 = 0.83;
+    nbep_vec3 w1, w2;
+    com_reflection(unit(nbep_vec3_sub(p2, p1)), v1, v2, m1, m2, 1.0, &w1, &w2);
+    double ke0 = kinetic(m1, v1, m2, v2);
+    nbep_vec3 mom0 = nbep_vec3_add(nbep_vec3_scale(v1, m1), nbep_vec3_scale(v2, m2));
+
+    assert_true(nbep_physics_respond_pair(p1, p2, &v1, &v2, m1, m2, 1.0));
+    assert_vec_close(v1, w1, 1e-14);
+    assert_vec_close(v2, w2, 1e-14);
+    assert_close(kinetic(m1, v1, m2, v2), ke0, 1e-14, 0.0);
+    assert_vec_close(nbep_vec3_add(nbep_vec3_scale(v1, m1), nbep_vec3_scale(v2, m2)), mom0,
+                     1e-14);
+}
+
+/* The energy a collision removes is (1 - e^2) mu c^2 / 2, mu = m1 m2/(m1+m2), c the normal
+ * closing speed; momentum is kept whatever e. */
+static void test_partly_elastic_response_loses_one_minus_e_squared_of_normal_energy(void **state)
+{
+    (void)state;
+    nbep_vec3 p1 = {0.31, 1.27, -0.55}, p2 = {0.93, 1.61, -0.12};
+    double m1 = 2.7, m2 = 0.83;
+    const double es[] = {0.0, 0.37, 0.81};
+    for (size_t i = 0; i < sizeof es / sizeof es[0]; i++) {
+        nbep_vec3 v1 = {1.13, -0.27, 0.61}, v2 = {-0.48, 0.92, -0.33};
+        double c = nbep_vec3_dot(unit(nbep_vec3_sub(p2, p1)), nbep_vec3_sub(v1, v2));
+        double mu = m1 * m2 / (m1 + m2);
+        double ke0 = kinetic(m1, v1, m2, v2);
+        nbep_vec3 mom0 = nbep_vec3_add(nbep_vec3_scale(v1, m1), nbep_vec3_scale(v2, m2));
+        nbep_vec3 w1, w2;
+        com_reflection(unit(nbep_vec3_sub(p2, p1)), v1, v2, m1, m2, es[i], &w1, &w2);
+
+        assert_true(nbep_physics_respond_pair(p1, p2, &v1, &v2, m1, m2, es[i]));
+        double lost = ke0 - kinetic(m1, v1, m2, v2);
+        assert_close(lost, (1.0 - es[i] * es[i]) * 0.5 * mu * c * c, 1e-13, 0.0);
+        assert_vec_close(nbep_vec3_add(nbep_vec3_scale(v1, m1), nbep_vec3_scale(v2, m2)), mom0,
+                         1e-14);
+        assert_vec_close(v1, w1, 1e-14);
+        assert_vec_close(v2, w2, 1e-14);
+    }
+}
+
+static void test_receding_pair_is_left_unchanged(void **state)
+{
+    (void)state;
+    nbep_vec3 p1 = {0.31, 1.27, -0.55}, p2 = {0.93, 1.61, -0.12};
+    const nbep_vec3 v1_in = {-1.13, 0.27, -0.61}, v2_in = {0.48, -0.92, 0.33};
+    nbep_vec3 v1 = v1_in, v2 = v2_in;
+    assert_false(nbep_physics_respond_pair(p1, p2, &v1, &v2, 2.7, 0.83, 1.0));
+    assert_memory_equal(&v1, &v1_in, sizeof v1);
+    assert_memory_equal(&v2, &v2_in, sizeof v2);
+    /* Sliding past each other (no normal component) is not a collision either. */
+    nbep_vec3 s1 = {0.0, 0.0, 1.0}, s2 = {0.0, 0.0, -1.0};
+    nbep_vec3 q1 = {0.0, 0.0, 0.0}, q2 = {0.83, 0.0, 0.0};
+    assert_false(nbep_physics_respond_pair(q1, q2, &s1, &s2, 1.0, 1.0, 1.0));
+}
+
+static void test_coincident_centres_have_no_normal_and_no_response(void **state)
+{
+    (void)state;
+    nbep_vec3 p = {0.31, 1.27, -0.55};
+    nbep_vec3 v1 = {1.13, -0.27, 0.61}, v2 = {-0.48, 0.92, -0.33};
+    const nbep_vec3 v1_in = v1, v2_in = v2;
+    assert_false(nbep_physics_respond_pair(p, p, &v1, &v2, 2.7, 0.83, 1.0));
+    assert_memory_equal(&v1, &v1_in, sizeof v1);
+    assert_memory_equal(&v2, &v2_in, sizeof v2);
+}
+
+/* splitmix64 */
+static double uniform(uint64_t *s, double lo, double hi)
+{
+    uint64_t z = (*s += 0x9e3779b97f4a7c15u);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+    z ^= z >> 31;
+    return lo + (hi - lo) * (double)(z >> 11) * 0x1.0p-53;
+}
+
+/* Whichever sphere a caller names first, the same bits come out: frames must not depend on
+ * which thread visits a pair. Positions share coordinates in some cases so that the ordering's
+ * tie-breaks are exercised. */
+static void test_swapping_the_spheres_gives_bitwise_the_same_velocities(void **state)
+{
+    (void)state;
+    uint64_t s = 11;
+    int responded = 0;
+    for (int i = 0; i < 5000; i++) {
+        nbep_vec3 p1 = {uniform(&s, -2, 2), uniform(&s, -2, 2), uniform(&s, -2, 2)};
+        nbep_vec3 p2 = {uniform(&s, -2, 2), uniform(&s, -2, 2), uniform(&s, -2, 2)};
+        if (i % 3 != 0)
+            p2.x = p1.x;
+        if (i % 3 == 2)
+            p2.y = p1.y;
+        nbep_vec3 v1 = {uniform(&s, -3, 3), uniform(&s, -3, 3), uniform(&s, -3, 3)};
+        nbep_vec3 v2 = {uniform(&s, -3, 3), uniform(&s, -3, 3), uniform(&s, -3, 3)};
+        double m1 = uniform(&s, 0.1, 5), m2 = uniform(&s, 0.1, 5), e = uniform(&s, 0, 1);
+        nbep_vec3 a1 = v1, a2 = v2, b1 = v1, b2 = v2;
+        bool ra = nbep_physics_respond_pair(p1, p2, &a1, &a2, m1, m2, e);
+        bool rb = nbep_physics_respond_pair(p2, p1, &b2, &b1, m2, m1, e);
+        assert_true(ra == rb);
+        assert_memory_equal(&a1, &b1, sizeof a1);
+        assert_memory_equal(&a2, &b2, sizeof a2);
+        responded += ra;
+    }
+    assert_true(responded > 1000);
+}
+
+static void test_plane_response_reverses_the_normal_component_times_e(void **state)
+{
+    (void)state;
+    nbep_vec3 n = unit((nbep_vec3){0.3, -0.2, 0.93});
+    const double es[] = {1.0, 0.63, 0.0};
+    for (size_t i = 0; i < sizeof es / sizeof es[0]; i++) {
+        nbep_vec3 v = {1.1, -0.4, -2.3};
+        double vn = nbep_vec3_dot(v, n);
+        nbep_vec3 tangential = nbep_vec3_axpy(v, -vn, n);
+        assert_true(nbep_physics_respond_plane(n, &v, es[i]));
+        assert_close(nbep_vec3_dot(v, n), -es[i] * vn, 1e-14, 1e-15);
+        assert_vec_close(nbep_vec3_axpy(v, -nbep_vec3_dot(v, n), n), tangential, 1e-15);
+    }
+}
+
+static void test_plane_response_leaves_a_leaving_or_sliding_sphere_alone(void **state)
+{
+    (void)state;
+    nbep_vec3 n = {0.0, 0.0, 1.0};
+    const nbep_vec3 up = {0.3, -0.7, 1.2}, along = {0.3, -0.7, 0.0};
+    nbep_vec3 v = up;
+    assert_false(nbep_physics_respond_plane(n, &v, 0.8));
+    assert_memory_equal(&v, &up, sizeof v);
+    v = along;
+    assert_false(nbep_physics_respond_plane(n, &v, 0.8));
+    assert_memory_equal(&v, &along, sizeof v);
+}
+
+static void test_energy_of_a_known_configuration_is_summed_by_hand(void **state)
+{
+    (void)state;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_state s;
+    assert_int_equal(nbep_state_init(&s, 3, 0, &d), NBEP_OK);
+    const double m[3] = {1.3, 0.7, 2.1};
+    const nbep_vec3 p[3] = {{0.5, 1.5, 2.5}, {-1.0, 0.25, 4.0}, {3.0, -2.0, 0.75}};
+    const nbep_vec3 v[3] = {{1.0, -2.0, 0.5}, {0.0, 0.0, -3.0}, {0.25, 0.5, 1.5}};
+    const nbep_vec3 a[3] = {{0.0, 0.0, -9.81}, {0.0, 0.0, -9.81}, {0.0, -1.0, 0.0}};
+    for (int i = 0; i < 3; i++) {
+        s.mass[i] = m[i];
+        s.pos[i] = p[i];
+        s.vel[i] = v[i];
+        s.acc[i] = a[i];
+    }
+    /* m v.v/2: 1.3 * 5.25/2, 0.7 * 9/2, 2.1 * 2.5625/2; -m a.p: 1.3*9.81*2.5, 0.7*9.81*4,
+     * 2.1 * 1 * (-2). */
+    double ke = 1.3 * 5.25 / 2 + 0.7 * 9.0 / 2 + 2.1 * 2.5625 / 2;
+    double pe = 1.3 * 9.81 * 2.5 + 0.7 * 9.81 * 4.0 + 2.1 * -2.0;
+    double k = NAN, u = NAN;
+    nbep_physics_energy(&s, 0, 3, &k, &u);
+    assert_close(k, ke, 1e-14, 0.0);
+    assert_close(u, pe, 1e-14, 0.0);
+    nbep_physics_energy(&s, 1, 2, &k, &u);
+    assert_close(k, 0.7 * 9.0 / 2, 1e-15, 0.0);
+    assert_close(u, 0.7 * 9.81 * 4.0, 1e-15, 0.0);
+    nbep_physics_energy(&s, 2, 2, &k, &u);
+    assert_true(k == 0.0 && u == 0.0);
+    nbep_state_fini(&s);
+    nbep_diag_fini(&d);
+}
+
+/* Free flight under constant acceleration keeps E = m v.v/2 - m a.p exactly in exact
+ * arithmetic; with doubles, to round-off. */
+static void test_free_flight_follows_the_kinematic_formula_and_keeps_energy(void **state)
+{
+    (void)state;
+    nbep_vec3 p0 = {0.31, 1.27, -0.55}, v0 = {1.13, -0.27, 0.61}, a = {0.2, -0.1, -9.81};
+    nbep_vec3 p = p0, v = v0;
+    double h = 0.0137;
+    nbep_physics_drift(&p, &v, a, h);
+    nbep_vec3 pe = {p0.x + v0.x * h + 0.5 * a.x * h * h, p0.y + v0.y * h + 0.5 * a.y * h * h,
+                    p0.z + v0.z * h + 0.5 * a.z * h * h};
+    assert_vec_close(p, pe, 1e-15);
+    assert_vec_close(v, nbep_vec3_axpy(v0, h, a), 1e-15);
+    double e0 = 0.5 * nbep_vec3_dot(v0, v0) - nbep_vec3_dot(a, p0);
+    double e1 = 0.5 * nbep_vec3_dot(v, v) - nbep_vec3_dot(a, p);
+    assert_close(e1, e0, 1e-14, 0.0);
+}
+
+static void test_plane_gap_is_signed_distance_less_radius(void **state)
+{
+    (void)state;
+    nbep_vec3 n = {0.0, 0.6, 0.8}, p = {1.7, 2.0, 3.0};
+    assert_close(nbep_physics_plane_gap(n, 0.9, p, 0.35), 0.6 * 2.0 + 0.8 * 3.0 - 0.9 - 0.35,
+                 1e-15, 0.0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_head_on_equal_masses_exchange_velocities_when_elastic),
+        cmocka_unit_test(test_oblique_elastic_response_matches_the_centre_of_mass_reflection),
+        cmocka_unit_test(test_partly_elastic_response_loses_one_minus_e_squared_of_normal_energy),
+        cmocka_unit_test(test_receding_pair_is_left_unchanged),
+        cmocka_unit_test(test_coincident_centres_have_no_normal_and_no_response),
+        cmocka_unit_test(test_swapping_the_spheres_gives_bitwise_the_same_velocities),
+        cmocka_unit_test(test_plane_response_reverses_the_normal_component_times_e),
+        cmocka_unit_test(test_plane_response_leaves_a_leaving_or_sliding_sphere_alone),
+        cmocka_unit_test(test_energy_of_a_known_configuration_is_summed_by_hand),
+        cmocka_unit_test(test_free_flight_follows_the_kinematic_formula_and_keeps_energy),
+        cmocka_unit_test(test_plane_gap_is_signed_distance_less_radius),
+    };
+    return cmocka_run_group_tests_name("physics", tests, NULL, NULL);
+}

@@ -1,0 +1,484 @@
+/* Contact times against analytic answers. Expected values come from independent formulas
+ * written out here (geometry of the straight-line approach, 1-D kinematics, exact integer
+ * arithmetic), never from predict.c itself; where no closed form exists (a 3-D quartic) the
+ * answer is checked by its defining properties instead. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <float.h>
+#include <gsl/gsl_errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "nbep/predict.h"
+#include "nbep_test.h"
+#include "predict_impl.h"
+
+/* ---- helpers ------------------------------------------------------------------------- */
+
+static bool small_scale(void)
+{
+    const char *s = getenv("NBEP_TEST_SCALE");
+    return s && strcmp(s, "small") == 0;
+}
+
+static nbep_vec3 unit(nbep_vec3 a)
+{
+    return nbep_vec3_scale(a, 1.0 / nbep_vec3_norm(a));
+}
+
+/* r(t) = dp + dv t + da t^2/2, written out independently of predict.c. */
+static nbep_vec3 rel_pos(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double t)
+{
+    return (nbep_vec3){dp.x + dv.x * t + 0.5 * da.x * t * t, dp.y + dv.y * t + 0.5 * da.y * t * t,
+                       dp.z + dv.z * t + 0.5 * da.z * t * t};
+}
+
+static double rel_speed_along(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double t)
+{
+    nbep_vec3 r = rel_pos(dp, dv, da, t);
+    return nbep_vec3_dot(r, nbep_vec3_axpy(dv, t, da));
+}
+
+/* A straight-line approach built from its geometry: moving along dv, the pair is s ahead of
+ * closest approach, with impact parameter b (offset along a direction w perpendicular to dv).
+ * Contact then comes at t = (s - sqrt(sigma^2 - b^2)) / |dv|. */
+static nbep_vec3 approach(nbep_vec3 dv, nbep_vec3 w, double s, double b)
+{
+    nbep_vec3 u = unit(dv);
+    nbep_vec3 perp = unit(nbep_vec3_axpy(w, -nbep_vec3_dot(w, u), u));
+    return nbep_vec3_axpy(nbep_vec3_scale(perp, b), -s, u);
+}
+
+static const nbep_vec3 zero = {0.0, 0.0, 0.0};
+
+/* A fixture: the quartic's per-thread workspace. */
+static int ws_setup(void **state)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_predict_ws *ws = NULL;
+    nbep_status st = nbep_predict_ws_create(&ws, &d);
+    nbep_diag_fini(&d);
+    *state = ws;
+    return st == NBEP_OK ? 0 : -1;
+}
+
+static int ws_teardown(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    nbep_predict_ws_destroy(&ws);
+    assert_null(ws);
+    nbep_predict_ws_destroy(&ws);                 /* NULL-safe */
+    return 0;
+}
+
+/* ---- equal accelerations: the quadratic ---------------------------------------------- */
+
+static void test_head_on_pair_meets_when_gap_closes(void **state)
+{
+    (void)state;
+    nbep_vec3 dp = {3.17, 0.0, 0.0}, dv = {-1.43, 0.0, 0.0};
+    assert_close(nbep_predict_pair_quadratic(dp, dv, 0.61), (3.17 - 0.61) / 1.43, 1e-15, 0.0);
+}
+
+static void test_oblique_pair_hits_at_the_geometric_time(void **state)
+{
+    (void)state;
+    nbep_vec3 dv = {-1.43, 0.37, 0.52}, w = {0.29, 1.13, -0.61};
+    double sigma = 0.83, s = 2.93, b = 0.29;
+    nbep_vec3 dp = approach(dv, w, s, b);
+    double expected = (s - sqrt(sigma * sigma - b * b)) / nbep_vec3_norm(dv);
+    assert_close(nbep_predict_pair_quadratic(dp, dv, sigma), expected, 1e-13, 0.0);
+}
+
+static void test_pair_whose_impact_parameter_exceeds_sigma_misses(void **state)
+{
+    (void)state;
+    nbep_vec3 dv = {-1.43, 0.37, 0.52}, w = {0.29, 1.13, -0.61};
+    double sigma = 0.83;
+    nbep_vec3 dp = approach(dv, w, 2.93, 1.07 * sigma);
+    assert_true(isinf(nbep_predict_pair_quadratic(dp, dv, sigma)));
+}
+
+static void test_grazing_pair_still_hits_at_the_geometric_time(void **state)
+{
+    (void)state;
+    nbep_vec3 dv = {0.71, -1.27, 0.33}, w = {1.9, 0.4, 0.77};
+    double sigma = 0.57, s = 1.91, b = sigma * (1.0 - 1e-9);
+    nbep_vec3 dp = approach(dv, w, s, b);
+    /* sqrt(sigma^2 - b^2) written as sqrt((sigma - b)(sigma + b)) so the reference itself does
+     * not cancel; dp's rounding (1e-16 of |dp|) moves b, hence t, by about 1e-12 relative. */
+    double expected = (s - sqrt((sigma - b) * (sigma + b))) / nbep_vec3_norm(dv);
+    double t = nbep_predict_pair_quadratic(dp, dv, sigma);
+    assert_close(t, expected, 1e-10, 0.0);
+    assert_close(nbep_vec3_norm(nbep_vec3_axpy(dp, t, dv)), sigma, 1e-14, 0.0);
+}
+
+static void test_receding_pair_never_meets(void **state)
+{
+    (void)state;
+    nbep_vec3 dp = {2.21, -0.37, 1.05}, dv = {0.83, 0.11, 0.64};
+    assert_true(nbep_vec3_dot(dp, dv) > 0.0);
+    assert_true(isinf(nbep_predict_pair_quadratic(dp, dv, 0.74)));
+}
+
+static void test_pair_at_rest_or_moving_sideways_never_meets(void **state)
+{
+    (void)state;
+    nbep_vec3 dp = {2.21, -0.37, 1.05};
+    assert_true(isinf(nbep_predict_pair_quadratic(dp, zero, 0.74)));
+    nbep_vec3 sideways = {0.37, 2.21, 0.0};       /* dp.dv = 0 exactly */
+    assert_true(isinf(nbep_predict_pair_quadratic(dp, sideways, 0.74)));
+}
+
+static void test_touching_and_closing_pair_meets_now(void **state)
+{
+    (void)state;
+    nbep_vec3 dp = {0.83, 0.0, 0.0}, dv = {-0.51, 0.13, 0.0};
+    assert_true(nbep_predict_pair_quadratic(dp, dv, 0.83) == 0.0);
+    nbep_vec3 overlapping = {0.79, 0.05, -0.02};
+    assert_true(nbep_predict_pair_quadratic(overlapping, dv, 0.83) == 0.0);
+}
+
+static void test_touching_or_overlapping_but_receding_pair_never_meets(void **state)
+{
+    (void)state;
+    nbep_vec3 dp = {0.83, 0.0, 0.0}, dv = {0.51, 0.13, 0.0};
+    assert_true(isinf(nbep_predict_pair_quadratic(dp, dv, 0.83)));
+    nbep_vec3 overlapping = {0.79, 0.05, -0.02};
+    assert_true(isinf(nbep_predict_pair_quadratic(overlapping, dv, 0.83)));
+}
+
+/* dp's components are multiples of 2^-20 below 2^5, so |dp|^2 is exact in integers (and in a
+ * double); sigma sits 1e-12 below |dp|. The reference gap c = |dp|^2 - sigma^2 is formed
+ * exactly: sigma^2 = s2 + e2 exactly (fma), |dp|^2 - s2 is exact (the two are within a factor
+ * 2, Sterbenz), leaving one rounding. Plain |dp|^2 - sigma^2, or (|dp| - sigma)(|dp| + sigma),
+ * keeps about four digits here. */
+static double tiny_gap_case(nbep_vec3 *dp, nbep_vec3 *dv, double *c_exact)
+{
+    const int64_t k[3] = {3323986, -1499464, 2401239};  /* ~ (3.17, -1.43, 2.29) * 2^20 */
+    int64_t k2 = k[0] * k[0] + k[1] * k[1] + k[2] * k[2];
+    double dp2 = ldexp((double)k2, -40);
+    *dp = (nbep_vec3){ldexp((double)k[0], -20), ldexp((double)k[1], -20), ldexp((double)k[2], -20)};
+    *dv = (nbep_vec3){-1.21, 0.93, -0.88};
+    double sigma = sqrt(dp2) * (1.0 - 1e-12);
+    double s2 = sigma * sigma, e2 = fma(sigma, sigma, -s2);
+    *c_exact = (dp2 - s2) - e2;
+    return sigma;
+}
+
+static void test_tiny_gap_gives_an_accurate_contact_time(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    nbep_vec3 dp, dv;
+    double c;
+    double sigma = tiny_gap_case(&dp, &dv, &c);
+    assert_true(c > 0.0);
+    double b = nbep_vec3_dot(dp, dv);
+    double expected = c / (-b + sqrt(b * b - nbep_vec3_dot(dv, dv) * c));
+    /* The brief asks for 1e-6; the compensated gap gives nearly full precision. */
+    assert_close(nbep_predict_pair_quadratic(dp, dv, sigma), expected, 1e-13, 0.0);
+    /* With an acceleration the extra displacement da t^2/2 ~ 1e-24 is far below the gap. */
+    nbep_vec3 da = {0.3, -9.81, 0.2};
+    assert_close(nbep_predict_pair(dp, dv, da, sigma, ws), expected, 1e-10, 0.0);
+}
+
+/* ---- different accelerations: the quartic -------------------------------------------- */
+
+static void test_zero_relative_acceleration_gives_the_quadratic_bits(void **state)
+{
+    (void)state;
+    nbep_vec3 dv = {-1.43, 0.37, 0.52}, w = {0.29, 1.13, -0.61};
+    nbep_vec3 dp = approach(dv, w, 2.93, 0.29);
+    double tq = nbep_predict_pair_quadratic(dp, dv, 0.83);
+    double t = nbep_predict_pair(dp, dv, zero, 0.83, NULL);   /* ws unused when da = 0 */
+    assert_memory_equal(&t, &tq, sizeof t);
+}
+
+/* Sphere 1 held still, sphere 2 above it thrown up at 0.41 and falling under gravity: in 1-D
+ * the height z(t) = h + u t - g t^2/2 reaches sigma at t = (u + sqrt(u^2 + 2 g (h - sigma)))/g. */
+static void test_sphere_falling_onto_a_held_sphere_meets_at_the_1d_time(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    double h = 3.17, u = 0.41, g = 9.81, sigma = 0.53 + 0.29;
+    nbep_vec3 dp = {0.0, 0.0, h}, dv = {0.0, 0.0, u}, da = {0.0, 0.0, -g};
+    double expected = (u + sqrt(u * u + 2.0 * g * (h - sigma))) / g;
+    assert_close(nbep_predict_pair(dp, dv, da, sigma, ws), expected, 1e-14, 0.0);
+    /* The same fall along another axis, offset by nothing: the answer must not depend on it. */
+    nbep_vec3 dp_x = {h, 0.0, 0.0}, dv_x = {u, 0.0, 0.0}, da_x = {-g, 0.0, 0.0};
+    assert_close(nbep_predict_pair(dp_x, dv_x, da_x, sigma, ws), expected, 1e-14, 0.0);
+}
+
+/* Moving apart, pulled back: x(t) = x0 + u t - k t^2/2 comes back to sigma at
+ * t = (u + sqrt(u^2 + 2 k (x0 - sigma)))/k, where the equal-acceleration answer is never. */
+static void test_receding_pair_pulled_back_meets_on_its_return(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    double x0 = 2.3, u = 0.9, k = 1.7, sigma = 0.6;
+    nbep_vec3 dp = {x0, 0.0, 0.0}, dv = {u, 0.0, 0.0}, da = {-k, 0.0, 0.0};
+    assert_true(isinf(nbep_predict_pair_quadratic(dp, dv, sigma)));
+    double expected = (u + sqrt(u * u + 2.0 * k * (x0 - sigma))) / k;
+    assert_close(nbep_predict_pair(dp, dv, da, sigma, ws), expected, 1e-14, 0.0);
+}
+
+/* No closed form in 3-D: the answer must be a contact (|r(t)| = sigma), closing, and the first
+ * one (no earlier grid time has |r| <= sigma). Here the straight-line motion would miss (by
+ * about 2 sigma): only the acceleration brings the pair together. */
+static void test_quartic_contact_in_3d_is_the_first_closing_contact(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    nbep_vec3 dp = {2.71, -1.37, 0.93}, dv = {-1.19, 0.61, 0.27}, da = {-0.31, 0.17, -0.62};
+    double sigma = 0.77;
+    assert_true(isinf(nbep_predict_pair_quadratic(dp, dv, sigma)));
+    double t = nbep_predict_pair(dp, dv, da, sigma, ws);
+    assert_true(isfinite(t) && t > 0.0);
+    assert_close(nbep_vec3_norm(rel_pos(dp, dv, da, t)), sigma, 1e-10, 0.0);
+    assert_true(rel_speed_along(dp, dv, da, t) < 0.0);
+    const int n = small_scale() ? 2000 : 200000;
+    for (int i = 0; i < n; i++) {
+        double ti = t * (double)i / (double)n;
+        if (!(nbep_vec3_norm(rel_pos(dp, dv, da, ti)) > sigma))
+            fail_msg("contact at t = %.17g, before the returned %.17g", ti, t);
+    }
+}
+
+static void test_quartic_with_small_acceleration_tends_to_the_quadratic(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    nbep_vec3 dv = {-1.43, 0.37, 0.52}, w = {0.29, 1.13, -0.61};
+    double sigma = 0.83;
+    nbep_vec3 dp = approach(dv, w, 2.93, 0.29);
+    double tq = nbep_predict_pair_quadratic(dp, dv, sigma);
+    nbep_vec3 dir = {0.31, -0.72, 0.19};
+    /* The shift is about |da| t^2 / (2 closing speed), so relative ~ |da|; each tolerance
+     * is ten times that (and round-off at the smallest). */
+    const double scale[] = {1e-3, 1e-6, 1e-9, 1e-12, 1e-16, 1e-30, 1e-100};
+    for (size_t i = 0; i < sizeof scale / sizeof scale[0]; i++) {
+        double t = nbep_predict_pair(dp, dv, nbep_vec3_scale(dir, scale[i]), sigma, ws);
+        assert_close(t, tq, 10.0 * scale[i] + 1e-14, 0.0);
+    }
+}
+
+static void test_quartic_touching_and_closing_pair_meets_now(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    nbep_vec3 dp = {0.0, 0.0, 0.82}, dv = {0.1, 0.0, -0.3}, da = {0.0, 0.0, -9.81};
+    assert_true(nbep_predict_pair(dp, dv, da, 0.82, ws) == 0.0);
+}
+
+/* Resting on a held sphere under gravity: touching, at rest, and pressed together now. */
+static void test_sphere_resting_on_a_held_sphere_is_pressed_in_now(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    nbep_vec3 dp = {0.0, 0.0, 0.82}, da = {0.0, 0.0, -9.81};
+    assert_true(nbep_predict_pair(dp, zero, da, 0.82, ws) == 0.0);
+}
+
+/* Touching and leaving upwards at u, falling back under g: z = sigma + u t - g t^2/2 is
+ * sigma again at t = 2u/g. */
+static void test_touching_pair_leaving_and_falling_back_meets_on_return(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    double sigma = 0.82, u = 0.53, g = 9.81;
+    nbep_vec3 dp = {0.0, 0.0, sigma}, dv = {0.0, 0.0, u}, da = {0.0, 0.0, -g};
+    assert_close(nbep_predict_pair(dp, dv, da, sigma, ws), 2.0 * u / g, 1e-12, 0.0);
+}
+
+/* Overlapping by delta and leaving so slowly that gravity turns it back before it gets out
+ * (u^2 / 2g < delta): contact is when it starts closing again, at the turn t = u/g. */
+static void test_overlapping_pair_turned_back_before_separating_meets_at_the_turn(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    double sigma = 0.82, delta = 1e-3, u = 0.07, g = 9.81;
+    assert_true(u * u / (2.0 * g) < delta);
+    nbep_vec3 dp = {0.0, 0.0, sigma - delta}, dv = {0.0, 0.0, u}, da = {0.0, 0.0, -g};
+    assert_close(nbep_predict_pair(dp, dv, da, sigma, ws), u / g, 1e-12, 0.0);
+}
+
+static void test_quartic_pair_pushed_apart_or_missing_never_meets(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    nbep_vec3 dp = {2.21, -0.37, 1.05}, dv = {0.83, 0.11, 0.64};
+    assert_true(isinf(nbep_predict_pair(dp, dv, nbep_vec3_scale(dp, 0.7), 0.74, ws)));
+    /* Passing at 1.5 sigma with a small sideways push that widens the miss. */
+    nbep_vec3 dv2 = {-1.43, 0.37, 0.52}, w = {0.29, 1.13, -0.61};
+    nbep_vec3 dp2 = approach(dv2, w, 2.93, 1.5 * 0.83);
+    nbep_vec3 push = nbep_vec3_scale(unit(nbep_vec3_axpy(dp2, -nbep_vec3_dot(dp2, unit(dv2)),
+                                                         unit(dv2))), 0.05);
+    assert_true(isinf(nbep_predict_pair(dp2, dv2, push, 0.83, ws)));
+}
+
+/* splitmix64, for reproducible random pairs. */
+static double uniform(uint64_t *s, double lo, double hi)
+{
+    uint64_t z = (*s += 0x9e3779b97f4a7c15u);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+    z ^= z >> 31;
+    return lo + (hi - lo) * (double)(z >> 11) * 0x1.0p-53;
+}
+
+static nbep_vec3 uniform_vec(uint64_t *s, double half)
+{
+    return (nbep_vec3){uniform(s, -half, half), uniform(s, -half, half), uniform(s, -half, half)};
+}
+
+/* The GSL-free search that a GSL failure falls back on must give the same answers as the GSL
+ * path, over pairs of every kind: apart, aimed, overlapping, tiny and huge accelerations. */
+static void test_fallback_search_agrees_with_the_gsl_path(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    uint64_t seed = 7;
+    const int n = small_scale() ? 3000 : 100000;
+    int hits = 0;
+    for (int i = 0; i < n; i++) {
+        double sigma = uniform(&seed, 0.05, 1.0);
+        nbep_vec3 dp = uniform_vec(&seed, 3.0);
+        nbep_vec3 dv = uniform_vec(&seed, 2.0);
+        if (i % 2)
+            dv = nbep_vec3_axpy(uniform_vec(&seed, 0.3), -uniform(&seed, 0.3, 1.5), dp);
+        nbep_vec3 da = uniform_vec(&seed, pow(10.0, uniform(&seed, -12.0, 2.0)));
+        double t = nbep_predict_pair(dp, dv, da, sigma, ws);
+        double ts = nbep__predict_pair_bracket(dp, dv, da, sigma);
+        assert_false(isnan(t));
+        hits += isfinite(t);
+        if (!(t == ts || fabs(t - ts) <= 1e-9 * ts))
+            fail_msg("pair %d: GSL path %.17g, search %.17g", i, t, ts);
+    }
+    assert_true(hits > n / 5);                    /* the set did exercise contacts */
+}
+
+/* Zero vectors in every combination: never NaN, and never a negative time. */
+static void test_degenerate_inputs_give_a_time_or_never_but_not_nan(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    const nbep_vec3 some[3] = {{0.0, 0.0, 0.0}, {0.31, -1.7, 0.4}, {-2.1, 0.6, 1.3}};
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            for (int k = 0; k < 3; k++) {
+                double t = nbep_predict_pair(some[i], some[j], some[k], 0.9, ws);
+                assert_false(isnan(t));
+                assert_true(t >= 0.0);
+                double tq = nbep_predict_pair_quadratic(some[i], some[j], 0.9);
+                assert_false(isnan(tq));
+                assert_true(tq >= 0.0);
+            }
+    /* Coincident centres at rest: overlapping, not closing. */
+    assert_true(isinf(nbep_predict_pair_quadratic(zero, zero, 0.9)));
+    assert_true(isinf(nbep_predict_pair(zero, zero, some[1], 0.9, ws)));
+}
+
+/* ---- planes -------------------------------------------------------------------------- */
+
+static void test_plane_examples_match_the_falling_body_formula(void **state)
+{
+    (void)state;
+    assert_close(nbep_predict_plane(1.0, 0.0, -2.0), 1.0, 1e-15, 0.0);
+    /* 1 + t - t^2 = 0: up first, then down. */
+    assert_close(nbep_predict_plane(1.0, 1.0, -2.0), (1.0 + sqrt(5.0)) / 2.0, 1e-15, 0.0);
+    assert_true(isinf(nbep_predict_plane(1.0, 1.0, 0.0)));
+    assert_close(nbep_predict_plane(2.37, -1.19, 0.0), 2.37 / 1.19, 1e-15, 0.0);
+    /* Approaching against a push away: 1 - 2t + t^2/2 = 0 first at t = 2 - sqrt(2). */
+    assert_close(nbep_predict_plane(1.0, -2.0, 1.0), 2.0 - sqrt(2.0), 1e-15, 0.0);
+    /* ... or stopped before it arrives: 1 - t + 1.5 t^2 has no real root. */
+    assert_true(isinf(nbep_predict_plane(1.0, -1.0, 3.0)));
+    /* Thrown down under gravity: 3.17 - 1.43 t - 4.905 t^2 = 0. */
+    double g = 9.81, expected = (-1.43 + sqrt(1.43 * 1.43 + 2.0 * g * 3.17)) / g;
+    assert_close(nbep_predict_plane(3.17, -1.43, -g), expected, 1e-15, 0.0);
+}
+
+/* For a tiny gap, t = (gap/|vn|) (1 - |an| gap / (2 vn^2)) to first order in the gravity
+ * term (the next is ~1e-24 relative). */
+static void test_plane_tiny_gap_keeps_full_precision(void **state)
+{
+    (void)state;
+    double gap = 1e-12, vn = -1.7, g = 9.81;
+    assert_close(nbep_predict_plane(gap, vn, 0.0), gap / -vn, 1e-15, 0.0);
+    double expected = gap / -vn * (1.0 - g * gap / (2.0 * vn * vn));
+    assert_close(nbep_predict_plane(gap, vn, -g), expected, 1e-15, 0.0);
+}
+
+static void test_sphere_resting_on_a_plane_under_gravity_is_pressed_in_now(void **state)
+{
+    (void)state;
+    assert_true(nbep_predict_plane(0.0, 0.0, -9.81) == 0.0);
+    assert_true(nbep_predict_plane(-1e-15, 0.0, -9.81) == 0.0);
+    assert_true(isinf(nbep_predict_plane(0.0, 0.0, 0.0)));    /* at rest, no push */
+    assert_true(isinf(nbep_predict_plane(0.0, 0.0, 9.81)));   /* pulled away */
+}
+
+static void test_plane_touching_or_overlapping_and_closing_meets_now(void **state)
+{
+    (void)state;
+    assert_true(nbep_predict_plane(0.0, -0.3, 0.0) == 0.0);
+    assert_true(nbep_predict_plane(-0.2, -0.1, 5.0) == 0.0);
+}
+
+static void test_plane_leaving_sphere_meets_on_return_or_at_the_turn(void **state)
+{
+    (void)state;
+    double g = 9.81;
+    /* From touching: back at t = 2u/g. */
+    assert_close(nbep_predict_plane(0.0, 0.53, -g), 2.0 * 0.53 / g, 1e-15, 0.0);
+    /* Overlapping by 1e-3, leaving at 1: out, then back at the larger root of
+     * -1e-3 + t - g t^2/2. */
+    double expected = (1.0 + sqrt(1.0 - 2.0 * g * 1e-3)) / g;
+    assert_close(nbep_predict_plane(-1e-3, 1.0, -g), expected, 1e-14, 0.0);
+    /* Overlapping by 1e-2, leaving at 0.1: turned back inside (0.1^2/2g < 1e-2), at 0.1/g. */
+    assert_close(nbep_predict_plane(-1e-2, 0.1, -g), 0.1 / g, 1e-15, 0.0);
+    /* Leaving with nothing pulling back. */
+    assert_true(isinf(nbep_predict_plane(-1e-2, 0.1, 0.0)));
+}
+
+int main(void)
+{
+    /* As main.c does: GSL reports failures by status, never by abort. */
+    gsl_set_error_handler_off();
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_head_on_pair_meets_when_gap_closes),
+        cmocka_unit_test(test_oblique_pair_hits_at_the_geometric_time),
+        cmocka_unit_test(test_pair_whose_impact_parameter_exceeds_sigma_misses),
+        cmocka_unit_test(test_grazing_pair_still_hits_at_the_geometric_time),
+        cmocka_unit_test(test_receding_pair_never_meets),
+        cmocka_unit_test(test_pair_at_rest_or_moving_sideways_never_meets),
+        cmocka_unit_test(test_touching_and_closing_pair_meets_now),
+        cmocka_unit_test(test_touching_or_overlapping_but_receding_pair_never_meets),
+        cmocka_unit_test_setup_teardown(test_tiny_gap_gives_an_accurate_contact_time, ws_setup,
+                                        ws_teardown),
+        cmocka_unit_test(test_zero_relative_acceleration_gives_the_quadratic_bits),
+        cmocka_unit_test_setup_teardown(
+            test_sphere_falling_onto_a_held_sphere_meets_at_the_1d_time, ws_setup, ws_teardown),
+        cmocka_unit_test_setup_teardown(test_receding_pair_pulled_back_meets_on_its_return,
+                                        ws_setup, ws_teardown),
+        cmocka_unit_test_setup_teardown(test_quartic_contact_in_3d_is_the_first_closing_contact,
+                                        ws_setup, ws_teardown),
+        cmocka_unit_test_setup_teardown(
+            test_quartic_with_small_acceleration_tends_to_the_quadratic, ws_setup, ws_teardown),
+        cmocka_unit_test_setup_teardown(test_quartic_touching_and_closing_pair_meets_now,
+                                        ws_setup, ws_teardown),
+        cmocka_unit_test_setup_teardown(test_sphere_resting_on_a_held_sphere_is_pressed_in_now,
+                                        ws_setup, ws_teardown),
+        cmocka_unit_test_setup_teardown(
+            test_touching_pair_leaving_and_falling_back_meets_on_return, ws_setup, ws_teardown),
+        cmocka_unit_test_setup_teardown(
+            test_overlapping_pair_turned_back_before_separating_meets_at_the_turn, ws_setup,
+            ws_teardown),
+        cmocka_unit_test_setup_teardown(test_quartic_pair_pushed_apart_or_missing_never_meets,
+                                        ws_setup, ws_teardown),
+        cmocka_unit_test_setup_teardown(test_fallback_search_agrees_with_the_gsl_path, ws_setup,
+                                        ws_teardown),
+        cmocka_unit_test_setup_teardown(test_degenerate_inputs_give_a_time_or_never_but_not_nan,
+                                        ws_setup, ws_teardown),
+        cmocka_unit_test(test_plane_examples_match_the_falling_body_formula),
+        cmocka_unit_test(test_plane_tiny_gap_keeps_full_precision),
+        cmocka_unit_test(test_sphere_resting_on_a_plane_under_gravity_is_pressed_in_now),
+        cmocka_unit_test(test_plane_touching_or_overlapping_and_closing_meets_now),
+        cmocka_unit_test(test_plane_leaving_sphere_meets_on_return_or_at_the_turn),
+    };
+    return cmocka_run_group_tests_name("predict", tests, NULL, NULL);
+}
