@@ -1,0 +1,50 @@
+/* A reusable spinning barrier on C11 atomics (paper Section 4.1; STYLE 6).
+ *
+ * Departure from the paper's Procedure 4 (fetch_sub; spin while the count is above zero;
+ * fetch_add): its one counter serves both as "who has arrived" and "who has left", so a fast
+ * thread that leaves and re-enters the next wait before a slow one has seen the count reach
+ * zero decrements it again and either runs ahead into the next sub-phase or leaves the slow
+ * one spinning forever. Here the arrival counter `left` is rearmed by the last arrival alone,
+ * before it advances `round`, the number every waiter watches; a waiter leaves as soon as the
+ * round differs from the one it entered in, and by then `left` is already full again for the
+ * next wait. `left` and `round` sit on separate cache lines so that arrivals writing `left`
+ * do not keep invalidating the line the waiters spin on.
+ *
+ * Invariant between waits: left == n. The round number wraps; only its change is watched. */
+#include "nbep/barrier.h"
+
+#include <assert.h>
+
+void nbep_barrier_init(nbep_barrier *b, unsigned n)
+{
+    assert(b && n >= 1);
+    /* Not atomic itself: the barrier is made before the threads that use it start. */
+    atomic_init(&b->left, n);
+    atomic_init(&b->round, 0u);
+    b->n = n;
+}
+
+void nbep_barrier_wait(nbep_barrier *b)
+{
+    /* Relaxed: `round` cannot advance before we arrive (`left` cannot reach zero without our
+     * decrement), and we have already seen its current value: we either advanced it ourselves
+     * or read it with the acquire load that let us out of the previous wait; coherence forbids
+     * reading an older value after that. */
+    const unsigned r = atomic_load_explicit(&b->round, memory_order_relaxed);
+    /* acq_rel: the release half publishes this thread's writes before the barrier; the
+     * acquire half lets the last arrival see everyone's, since the fetch_subs of one round
+     * form a release sequence that its read of 1 completes. */
+    if (atomic_fetch_sub_explicit(&b->left, 1, memory_order_acq_rel) == 1) {
+        /* Relaxed: published by the release store below, which every waiter acquires before
+         * it can re-enter and decrement `left` again. */
+        atomic_store_explicit(&b->left, b->n, memory_order_relaxed);
+        /* Release: passes on everything the last arrival acquired (all threads' writes) and
+         * the rearmed `left`; pairs with the waiters' acquire loads. */
+        atomic_store_explicit(&b->round, r + 1u, memory_order_release);
+    } else {
+        /* Acquire: pairs with the release store of the new round, so writes before the
+         * barrier in any thread happen before our code after it. */
+        for (unsigned k = 1; atomic_load_explicit(&b->round, memory_order_acquire) == r; k++)
+            nbep_spin_pause(k);  /* cpu pause; sched_yield() every 1024th */
+    }
+}
