@@ -66,13 +66,25 @@
 typedef struct thread_ws {
     alignas(NBEP_CACHELINE) uint32_t *cand;  /* owned: own spheres with an event before T_end */
     size_t n_cand;
+    uint32_t *redo;           /* owned: own spheres to re-predict this round */
+    size_t n_redo;
     uint32_t *fired;          /* owned: spheres that reacted in this thread's last react phase */
     size_t n_fired;
     uint32_t *claimed;        /* owned: claim words written in the last claim phase */
     size_t n_claimed;
+    nbep_event *part;         /* owned: best event over this thread's partners, per chunk entry */
     double t_min;             /* earliest candidate time this round, +inf if none */
     nbep_predict_ws *pws;     /* owned: quartic workspace */
 } thread_ws;
+
+/* Re-predictions are shared out in chunks of this many spheres: each thread finds the best
+ * event of every sphere of the chunk among its own partners, then the owners merge. The
+ * chunk bounds the per-thread buffers (not O(n) per thread). */
+#define CHUNK 512
+
+/* Per-sphere flags, touched only by the sphere's owner. */
+#define IN_CAND 1u
+#define IN_REDO 2u
 
 typedef struct pred_ctx {
     nbep_barrier bar;
@@ -80,7 +92,7 @@ typedef struct pred_ctx {
     uint64_t *ver;                /* owned: responses per sphere; older predictions are stale */
     double *tau;                  /* owned: local time of each sphere inside the step */
     int32_t *rest;                /* owned: plane a sphere rests on, or NO_PLANE */
-    uint8_t *in_cand;             /* owned: sphere is in its owner's candidate list */
+    uint8_t *flags;               /* owned: IN_CAND | IN_REDO */
     _Atomic uint64_t *claim[2];   /* owned: smallest pair key claiming a sphere, by round parity */
     _Atomic uint64_t *reacted;    /* owned: round stamp of a sphere's last reaction */
     thread_ws *ws;                /* owned, one per thread */
@@ -96,15 +108,17 @@ static void pred_destroy(void *p)
     nbep_free_aligned(c->ver);
     nbep_free_aligned(c->tau);
     nbep_free_aligned(c->rest);
-    nbep_free_aligned(c->in_cand);
+    nbep_free_aligned(c->flags);
     nbep_free_aligned((void *)c->claim[0]);
     nbep_free_aligned((void *)c->claim[1]);
     nbep_free_aligned((void *)c->reacted);
     if (c->ws) {
         for (int t = 0; t < c->nt; t++) {
             free(c->ws[t].cand);
+            free(c->ws[t].redo);
             free(c->ws[t].fired);
             free(c->ws[t].claimed);
+            nbep_free_aligned(c->ws[t].part);
             nbep_predict_ws_destroy(&c->ws[t].pws);
         }
         nbep_free_aligned(c->ws);
@@ -128,12 +142,12 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     c->ver = nbep_alloc_aligned(n, sizeof *c->ver);
     c->tau = nbep_alloc_aligned(n, sizeof *c->tau);
     c->rest = nbep_alloc_aligned(n, sizeof *c->rest);
-    c->in_cand = nbep_alloc_aligned(n, sizeof *c->in_cand);
+    c->flags = nbep_alloc_aligned(n, sizeof *c->flags);
     c->claim[0] = nbep_alloc_aligned(n, sizeof *c->claim[0]);
     c->claim[1] = nbep_alloc_aligned(n, sizeof *c->claim[1]);
     c->reacted = nbep_alloc_aligned(n, sizeof *c->reacted);
     c->ws = nbep_alloc_aligned((size_t)sim->nt, sizeof *c->ws);
-    if (!c->ver || !c->tau || !c->rest || !c->in_cand || !c->claim[0] || !c->claim[1] ||
+    if (!c->ver || !c->tau || !c->rest || !c->flags || !c->claim[0] || !c->claim[1] ||
         !c->reacted || !c->ws) {
         pred_destroy(c);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm (%zu spheres)",
@@ -150,9 +164,11 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         size_t own = r.hi - r.lo + 1;
         thread_ws *w = &c->ws[t];
         w->cand = malloc(own * sizeof *w->cand);
+        w->redo = malloc(own * sizeof *w->redo);
         w->fired = malloc(2 * own * sizeof *w->fired);
         w->claimed = malloc(2 * own * sizeof *w->claimed);
-        if (!w->cand || !w->fired || !w->claimed) {
+        w->part = nbep_alloc_aligned(CHUNK, sizeof *w->part);
+        if (!w->cand || !w->redo || !w->fired || !w->claimed || !w->part) {
             pred_destroy(c);
             NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm");
         }
@@ -183,30 +199,39 @@ static bool is_fresh(const pred_ctx *c, size_t i, const nbep_event *ev)
 {
     if (ev->kind == NBEP_EVENT_NONE || ev->ver_self != c->ver[i])
         return false;
-    return ev->kind == NBEP_EVENT_PLANE || ev->ver_partner == c->ver[ev->partner];
+    return ev->kind != NBEP_EVENT_SPHERE || ev->ver_partner == c->ver[ev->partner];
 }
 
-/* Paper Procedure 9 for one sphere: drop its event, then predict it against every plane and
- * every other sphere (each at its own local time; a pair is compared at the later of the
- * two) and keep the earliest (insert supersedes). T0 is the step's start time. */
-static void repredict(pred_ctx *c, const nbep_state *s, size_t i, double T0, thread_ws *w,
-                      nbep_counters *cnt)
+static void keep_earlier(nbep_event *best, nbep_event e)
 {
-    nbep_feq_remove(c->q, i);
+    if (e.time < NBEP_NEVER && (best->kind == NBEP_EVENT_NONE || nbep_feq_event_before(&e, best)))
+        *best = e;
+}
+
+/* Paper Procedure 9, one thread's share: the earliest event of sphere i with the spheres
+ * [lo, hi) (each at its own local time; a pair is compared at the later of the two) and, when
+ * with_planes, with every plane. T0 is the step's start time. Returns kind NONE if none. */
+static nbep_event predict_some(const pred_ctx *c, const nbep_state *s, size_t i, size_t lo,
+                               size_t hi, bool with_planes, double T0, thread_ws *w,
+                               nbep_counters *cnt)
+{
+    nbep_event best = {.time = NBEP_NEVER, .kind = NBEP_EVENT_NONE};
     const double ti = c->tau[i];
     const nbep_vec3 ai = effective_acc(c, s, i);
-    for (size_t p = 0; p < s->n_planes; p++) {
-        if ((int32_t)p == c->rest[i])
-            continue;
-        nbep_vec3 n = s->plane_normal[p];
-        double gap = nbep_physics_plane_gap(n, s->plane_offset[p], s->pos[i], s->radius[i]);
-        double dt = nbep_predict_plane(gap, nbep_vec3_dot(n, s->vel[i]), nbep_vec3_dot(n, ai));
-        if (dt < NBEP_NEVER)
-            nbep_feq_insert(c->q, i,
-                            (nbep_event){T0 + (ti + dt), (uint32_t)p, NBEP_EVENT_PLANE,
-                                         c->ver[i], 0});
+    if (with_planes) {
+        for (size_t p = 0; p < s->n_planes; p++) {
+            if ((int32_t)p == c->rest[i])
+                continue;
+            nbep_vec3 n = s->plane_normal[p];
+            double gap = nbep_physics_plane_gap(n, s->plane_offset[p], s->pos[i], s->radius[i]);
+            double dt = nbep_predict_plane(gap, nbep_vec3_dot(n, s->vel[i]),
+                                           nbep_vec3_dot(n, ai));
+            keep_earlier(&best, (nbep_event){T0 + (ti + dt), (uint32_t)p, NBEP_EVENT_PLANE,
+                                             c->ver[i], 0});
+        }
+        cnt->c[NBEP_COUNTER_PREDICTIONS] += s->n_planes;
     }
-    for (size_t j = 0; j < s->n; j++) {
+    for (size_t j = lo; j < hi; j++) {
         if (j == i)
             continue;
         const double tj = c->tau[j];
@@ -220,67 +245,130 @@ static void repredict(pred_ctx *c, const nbep_state *s, size_t i, double T0, thr
         double dt = nbep_predict_pair(nbep_vec3_sub(pj, pi), nbep_vec3_sub(vj, vi),
                                       nbep_vec3_sub(aj, ai), s->radius[i] + s->radius[j],
                                       w->pws);
-        if (dt < NBEP_NEVER)
-            nbep_feq_insert(c->q, i,
-                            (nbep_event){T0 + (t0 + dt), (uint32_t)j, NBEP_EVENT_SPHERE,
+        keep_earlier(&best, (nbep_event){T0 + (t0 + dt), (uint32_t)j, NBEP_EVENT_SPHERE,
                                          c->ver[i], c->ver[j]});
     }
-    cnt->c[NBEP_COUNTER_PREDICTIONS] += s->n - 1 + s->n_planes;
+    cnt->c[NBEP_COUNTER_PREDICTIONS] += hi - lo - (i >= lo && i < hi);
+    return best;
 }
 
-/* Re-predicts sphere i if its slot is invalid or stale (counting the check), and adds it to
- * the candidates when its event falls before T_end. */
-static void examine(pred_ctx *c, const nbep_state *s, size_t i, double T0, double T_end,
-                    thread_ws *w, nbep_counters *cnt)
+static void add_cand(pred_ctx *c, thread_ws *w, size_t i)
 {
-    cnt->c[NBEP_COUNTER_CHECKS]++;
-    const nbep_event *ev = nbep_feq_slot(c->q, i);
-    if (!is_fresh(c, i, ev)) {
-        repredict(c, s, i, T0, w, cnt);
-        ev = nbep_feq_slot(c->q, i);
-    }
-    if (ev->kind != NBEP_EVENT_NONE && ev->time < T_end) {
-        if (!c->in_cand[i]) {
-            c->in_cand[i] = 1;
-            w->cand[w->n_cand++] = (uint32_t)i;
-        }
-    } else if (c->in_cand[i]) {
-        c->in_cand[i] = 0; /* dropped by the compaction in find_phase */
+    if (!(c->flags[i] & IN_CAND)) {
+        c->flags[i] |= IN_CAND;
+        w->cand[w->n_cand++] = (uint32_t)i;
     }
 }
 
-/* The find sub-phase of one round: the first round of a step scans every own slot; later
- * rounds only the own candidates and the own spheres that reacted in the last round. */
-static void find_phase(pred_ctx *c, const nbep_state *s, nbep_range own, bool first, double T0,
-                       double T_end, thread_ws *w, nbep_counters *cnt)
+static void add_redo(pred_ctx *c, thread_ws *w, size_t i)
 {
+    if (!(c->flags[i] & IN_REDO)) {
+        c->flags[i] |= IN_REDO;
+        w->redo[w->n_redo++] = (uint32_t)i;
+    }
+}
+
+/* The find sub-phase of one round (paper Procedures 12 and 13), own spheres only: the first
+ * round of a step examines every own slot (stale or invalid -> redo, event before T_end ->
+ * candidate); later rounds only the own candidates and the own spheres that reacted. */
+static void find_phase(pred_ctx *c, nbep_range own, bool first, double T_end, thread_ws *w,
+                       nbep_counters *cnt)
+{
+    w->n_redo = 0;
     if (first) {
         w->n_cand = 0;
-        for (size_t i = own.lo; i < own.hi; i++)
-            examine(c, s, i, T0, T_end, w, cnt);
+        for (size_t i = own.lo; i < own.hi; i++) {
+            const nbep_event *ev = nbep_feq_slot(c->q, i);
+            if (!is_fresh(c, i, ev))
+                add_redo(c, w, i);
+            else if (ev->time < T_end)
+                add_cand(c, w, i);
+        }
+        cnt->c[NBEP_COUNTER_CHECKS] += own.hi - own.lo;
     } else {
         for (int t = 0; t < c->nt; t++) {
             const thread_ws *o = &c->ws[t];
             for (size_t k = 0; k < o->n_fired; k++) {
                 size_t i = o->fired[k];
-                if (i >= own.lo && i < own.hi && !c->in_cand[i]) {
-                    c->in_cand[i] = 1;
-                    w->cand[w->n_cand++] = (uint32_t)i;
-                }
+                if (i >= own.lo && i < own.hi)
+                    add_redo(c, w, i);
             }
         }
-        size_t m = w->n_cand;
-        w->n_cand = 0;
-        for (size_t k = 0; k < m; k++) {
+        size_t m = 0;
+        for (size_t k = 0; k < w->n_cand; k++) {
             size_t i = w->cand[k];
-            c->in_cand[i] = 0;
-            examine(c, s, i, T0, T_end, w, cnt);
+            if (!(c->flags[i] & IN_REDO) && is_fresh(c, i, nbep_feq_slot(c->q, i))) {
+                w->cand[m++] = (uint32_t)i;
+                continue;
+            }
+            c->flags[i] &= (uint8_t)~IN_CAND;
+            add_redo(c, w, i);
         }
+        cnt->c[NBEP_COUNTER_CHECKS] += w->n_cand;
+        w->n_cand = m;
     }
+}
+
+static double cand_t_min(const pred_ctx *c, const thread_ws *w)
+{
     double t_min = INFINITY;
     for (size_t k = 0; k < w->n_cand; k++)
         t_min = fmin(t_min, nbep_feq_slot(c->q, w->cand[k])->time);
-    w->t_min = t_min;
+    return t_min;
+}
+
+/* Re-prediction of every thread's redo spheres, shared by all threads chunk by chunk: each
+ * thread finds each sphere's best event among its own partners (and thread 0 the planes);
+ * then each owner keeps the earliest of the partial bests (the order of nbep_feq_insert is
+ * strict, so the result is the same for any split) and adds it to its candidates. Every
+ * thread calls this with the same totals; it ends with a barrier. */
+static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid, double T0,
+                       double T_end, thread_ws *w, nbep_counters *cnt)
+{
+    size_t total = 0;
+    for (int t = 0; t < c->nt; t++)
+        total += c->ws[t].n_redo;
+    for (size_t off = 0; off < total; off += CHUNK) {
+        size_t end = off + CHUNK < total ? off + CHUNK : total;
+        /* this thread's partial best for every sphere of the chunk */
+        size_t base = 0;
+        for (int t = 0; t < c->nt; t++) {
+            const thread_ws *o = &c->ws[t];
+            size_t lo = off > base ? off - base : 0;
+            size_t hi = end - base < o->n_redo ? end - base : o->n_redo;
+            for (size_t k = lo; k < hi && base + k < end; k++)
+                w->part[base + k - off] = predict_some(c, s, o->redo[k], own.lo, own.hi,
+                                                       tid == 0, T0, w, cnt);
+            base += o->n_redo;
+            if (base >= end)
+                break;
+        }
+        nbep_barrier_wait(&c->bar);
+        /* owners merge their spheres of the chunk */
+        base = 0;
+        for (int t = 0; t < tid; t++)
+            base += c->ws[t].n_redo;
+        for (size_t k = 0; k < w->n_redo; k++) {
+            size_t g = base + k;
+            if (g < off || g >= end)
+                continue;
+            size_t i = w->redo[k];
+            nbep_event best = {.time = NBEP_NEVER, .kind = NBEP_EVENT_NONE};
+            for (int t = 0; t < c->nt; t++)
+                if (c->ws[t].part[g - off].kind != NBEP_EVENT_NONE)
+                    keep_earlier(&best, c->ws[t].part[g - off]);
+            if (best.kind == NBEP_EVENT_NONE) {
+                nbep_feq_set_never(c->q, i, c->ver[i]);
+            } else {
+                nbep_feq_remove(c->q, i);
+                nbep_feq_insert(c->q, i, best);
+            }
+            c->flags[i] &= (uint8_t)~IN_REDO;
+            if (best.time < T_end)
+                add_cand(c, w, i);
+        }
+        nbep_barrier_wait(&c->bar);
+    }
 }
 
 /* The ordering key of an event: lower sphere in the high half, then the partner; planes
@@ -342,6 +430,14 @@ static void advance_to(pred_ctx *c, nbep_state *s, size_t i, double t_local)
     c->tau[i] = t_local;
 }
 
+static void note_overlap(nbep_thread_max *mx, double ov, double r)
+{
+    if (ov > mx->overlap)
+        mx->overlap = ov;
+    if (ov / r > mx->overlap_rel)
+        mx->overlap_rel = ov / r;
+}
+
 static void react(pred_ctx *c, nbep_state *s, double e, double dt, double t_local,
                   uint32_t lo, uint32_t hi, const nbep_event *ev, thread_ws *w,
                   nbep_counters *cnt, nbep_thread_max *mx)
@@ -351,10 +447,7 @@ static void react(pred_ctx *c, nbep_state *s, double e, double dt, double t_loca
         uint32_t p = UINT32_MAX - hi;
         nbep_vec3 n = s->plane_normal[p];
         double gap = nbep_physics_plane_gap(n, s->plane_offset[p], s->pos[lo], s->radius[lo]);
-        if (-gap > mx->overlap)
-            mx->overlap = -gap;
-        if (-gap / s->radius[lo] > mx->overlap_rel)
-            mx->overlap_rel = -gap / s->radius[lo];
+        note_overlap(mx, -gap, s->radius[lo]);
         if (nbep_physics_respond_plane(n, &s->vel[lo], e))
             cnt->c[NBEP_COUNTER_PLANE_COLLISIONS]++;
         update_rest(c, s, lo);
@@ -369,11 +462,8 @@ static void react(pred_ctx *c, nbep_state *s, double e, double dt, double t_loca
     }
     advance_to(c, s, hi, t_local);
     double sigma = s->radius[lo] + s->radius[hi];
-    double ov = sigma - nbep_vec3_norm(nbep_vec3_sub(s->pos[hi], s->pos[lo]));
-    if (ov > mx->overlap)
-        mx->overlap = ov;
-    if (ov / fmin(s->radius[lo], s->radius[hi]) > mx->overlap_rel)
-        mx->overlap_rel = ov / fmin(s->radius[lo], s->radius[hi]);
+    note_overlap(mx, sigma - nbep_vec3_norm(nbep_vec3_sub(s->pos[hi], s->pos[lo])),
+                 fmin(s->radius[lo], s->radius[hi]));
     if (nbep_physics_respond_pair(s->pos[lo], s->pos[hi], &s->vel[lo], &s->vel[hi],
                                   s->mass[lo], s->mass[hi], e))
         cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
@@ -413,8 +503,7 @@ static void react_phase(pred_ctx *c, nbep_state *s, const nbep_scene *sc, int pa
                                                      memory_order_relaxed))
             continue;
         cnt->c[NBEP_COUNTER_REACTIONS]++;
-        double t_local = t_min - T0;
-        react(c, s, sc->restitution, sc->dt, t_local, lo, hi, ev, w, cnt, mx);
+        react(c, s, sc->restitution, sc->dt, t_min - T0, lo, hi, ev, w, cnt, mx);
     }
 }
 
@@ -435,9 +524,10 @@ static void pred_run(nbep_sim *sim, void *p)
         uint64_t round = 0;
 
         /* initial predictions: every slot starts invalid (paper: "initialize events") */
-        for (size_t i = own.lo; i < own.hi; i++)
-            repredict(c, s, i, 0.0, w, &sim->counters[1][tid]);
+        find_phase(c, own, true, 0.0, w, &sim->counters[1][tid]);
+        w->n_cand = 0;
         nbep_barrier_wait(&c->bar);
+        redo_phase(c, s, own, tid, 0.0, 0.0, w, &sim->counters[1][tid]);
         if (tid == 0) { /* SPEC: the first predictions belong to the set-up time */
             double now = nbep__now();
             sim->setup_seconds += now - sim->t_start;
@@ -458,11 +548,14 @@ static void pred_run(nbep_sim *sim, void *p)
                     atomic_store_explicit(&c->claim[par ^ 1][w->claimed[k]], KEY_FREE,
                                           memory_order_relaxed);
                 w->n_claimed = 0;
-                find_phase(c, s, own, first, T0, T_end, w, cnt);
+                find_phase(c, own, first, T_end, w, cnt);
                 nbep_barrier_wait(&c->bar);
                 /* relaxed: the barrier above ordered thread 0's store of stop */
                 if (first && atomic_load_explicit(&sim->stop, memory_order_relaxed))
                     goto done;
+                redo_phase(c, s, own, tid, T0, T_end, w, cnt);
+                w->t_min = cand_t_min(c, w);
+                nbep_barrier_wait(&c->bar);
                 double t_min = INFINITY;
                 for (int t = 0; t < nt; t++)
                     t_min = fmin(t_min, c->ws[t].t_min);

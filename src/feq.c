@@ -5,7 +5,8 @@
  * O(1); find and find_invalid are linear scans over one thread's index range.
  *
  * Invariants: an invalid slot has kind NBEP_EVENT_NONE; a valid slot has kind SPHERE or PLANE
- * and a finite time (+inf and NaN are never stored). nbep_feq_check adds what the queue cannot
+ * and a finite time (+inf and NaN are never inserted), or kind NEVER and time +inf (set only by
+ * nbep_feq_set_never: "nothing ahead", which find never reports). nbep_feq_check adds what the queue cannot
  * know by itself: times not in the past, partners within range and not the sphere itself.
  *
  * Why no locks, atomics or OpenMP: sphere i's slot is written only by the thread that owns i
@@ -74,7 +75,7 @@ void nbep_feq_destroy(nbep_feq **qp)
  * for the same time and partner the newer prediction (larger response counts), which is the
  * one made from the later state. A strict total order on everything but identical events, so
  * the winner of several inserts does not depend on their order. */
-static bool event_before(const nbep_event *a, const nbep_event *b)
+bool nbep_feq_event_before(const nbep_event *a, const nbep_event *b)
 {
     if (a->time != b->time)
         return a->time < b->time;
@@ -97,10 +98,16 @@ bool nbep_feq_insert(nbep_feq *q, size_t i, nbep_event e)
     if (!(e.time < INFINITY))
         return false;
     nbep_event *s = &q->slot[i];
-    if (s->kind != NBEP_EVENT_NONE && !event_before(&e, s))
+    if (s->kind != NBEP_EVENT_NONE && !nbep_feq_event_before(&e, s))
         return false;
     *s = e;
     return true;
+}
+
+void nbep_feq_set_never(nbep_feq *q, size_t i, uint64_t ver_self)
+{
+    assert(q && i < q->n);
+    q->slot[i] = (nbep_event){.time = INFINITY, .kind = NBEP_EVENT_NEVER, .ver_self = ver_self};
 }
 
 void nbep_feq_remove(nbep_feq *q, size_t i)
@@ -142,6 +149,8 @@ size_t nbep_feq_find_invalid(const nbep_feq *q, size_t lo, size_t hi, uint32_t *
 static const char *slot_problem(const nbep_event *s, size_t i, double t_now, size_t n,
                                 size_t n_planes)
 {
+    if (s->kind == NBEP_EVENT_NEVER)
+        return s->time == INFINITY ? NULL : "a 'never' slot with a finite time";
     if (s->kind != NBEP_EVENT_SPHERE && s->kind != NBEP_EVENT_PLANE)
         return "unknown event kind";
     if (!isfinite(s->time))

@@ -471,7 +471,14 @@ double nbep_predict_pair_quadratic(nbep_vec3 dp, nbep_vec3 dv, double sigma)
     double b = nbep_vec3_dot(dp, dv);
     if (!(b < 0.0))
         return NBEP_NEVER;                      /* receding or at rest */
-    double c = sq_diff(dp, sigma);              /* > 0 while apart */
+    /* |dp|^2 - sigma^2 > 0 while apart. Plainly computed it loses digits only when the two
+     * squares are close; when it exceeds half of |dp|^2 its relative error is below 4 ulps,
+     * which is all the root below needs, so the compensated form is kept for near contacts
+     * (most pairs of a dilute gas are far apart, and this is the innermost loop). */
+    double pp = nbep_vec3_dot(dp, dp);
+    double c = pp - sigma * sigma;
+    if (!(c > 0.5 * pp))
+        c = sq_diff(dp, sigma);
     if (c <= 0.0)
         return 0.0;                             /* touching or overlapping, and closing */
     double disc = b * b - nbep_vec3_dot(dv, dv) * c;

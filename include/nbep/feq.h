@@ -17,6 +17,9 @@ typedef enum nbep_event_kind {
     NBEP_EVENT_NONE = 0,    /* invalid slot: nothing known, the sphere must be re-predicted */
     NBEP_EVENT_SPHERE = 1,  /* partner is a sphere index */
     NBEP_EVENT_PLANE = 2,   /* partner is a plane index */
+    NBEP_EVENT_NEVER = 3,   /* valid: nothing ahead on the current course (time +inf); stays
+                             * true until the sphere's own course changes, because a partner
+                             * whose course changes re-predicts the pair itself */
 } nbep_event_kind;
 
 typedef struct nbep_event {
@@ -38,6 +41,13 @@ void nbep_feq_destroy(nbep_feq **q);
  * (supersedes). Equal times keep the event with the smaller (kind, partner), so that the
  * result does not depend on the order of inserts. Returns true when e was stored. */
 bool nbep_feq_insert(nbep_feq *q, size_t i, nbep_event e);
+/* True when event a is kept over b by insert: earlier time; at equal times the smaller
+ * (kind, partner), then the newer prediction. A strict order, so a minimum over any partition
+ * of the predictions equals the minimum of them all (threads may each find a partial best). */
+bool nbep_feq_event_before(const nbep_event *a, const nbep_event *b);
+/* Marks sphere i's slot valid with nothing ahead (kind NBEP_EVENT_NEVER) as of response count
+ * ver_self. */
+void nbep_feq_set_never(nbep_feq *q, size_t i, uint64_t ver_self);
 /* Paper Procedure 11: marks sphere i's slot invalid. */
 void nbep_feq_remove(nbep_feq *q, size_t i);
 /* The slot of sphere i (kind NBEP_EVENT_NONE when invalid). */
