@@ -13,7 +13,7 @@ static const char HELP[] =
     "  nbep run DECK [options]     run one simulation\n"
     "  nbep check DECK [options]   validate the deck and print what the scene needs\n"
     "  nbep info RUN.h5            print a run's metadata and summary\n"
-    "  nbep --help | --version\n"
+    "  nbep --help | --help-deck | --version\n"
     "\n"
     "options of run and check:\n"
     "  -o, --output FILE      output file (overrides output.file)\n"
@@ -28,7 +28,8 @@ static const char HELP[] =
     "\n"
     "exit status: 0 done, 1 run-time failure (I/O, numerical), 2 bad usage or deck,\n"
     "130/143 interrupted by SIGINT/SIGTERM after saving every frame so far.\n"
-    "The deck reference, output layout and algorithms are described in README.md.\n";
+    "nbep --help-deck prints every deck setting with its type, default and meaning;\n"
+    "README.md describes the output layout and the algorithms.\n";
 
 void nbep_cli_print_help(FILE *f)
 {
@@ -82,7 +83,8 @@ static nbep_status parse_command(const char *word, nbep_command *cmd, nbep_diag 
     } table[] = {{"run", NBEP_CMD_RUN},     {"check", NBEP_CMD_CHECK},
                  {"info", NBEP_CMD_INFO},   {"sweep", NBEP_CMD_SWEEP},
                  {"--help", NBEP_CMD_HELP}, {"-h", NBEP_CMD_HELP},
-                 {"help", NBEP_CMD_HELP},   {"--version", NBEP_CMD_VERSION}};
+                 {"help", NBEP_CMD_HELP},   {"--version", NBEP_CMD_VERSION},
+                 {"--help-deck", NBEP_CMD_HELP_DECK}};
     for (size_t i = 0; i < sizeof table / sizeof table[0]; i++)
         if (strcmp(word, table[i].name) == 0) {
             *cmd = table[i].cmd;
@@ -97,7 +99,8 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
     if (argc < 2)
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: no command given (try nbep --help)");
     nbep_status st = parse_command(argv[1], &cli->cmd, d);
-    if (st != NBEP_OK || cli->cmd == NBEP_CMD_HELP || cli->cmd == NBEP_CMD_VERSION)
+    if (st != NBEP_OK || cli->cmd == NBEP_CMD_HELP || cli->cmd == NBEP_CMD_VERSION ||
+        cli->cmd == NBEP_CMD_HELP_DECK)
         return st;
     /* Options that take a value, and the deck path each overrides (NULL: not a deck path). */
     static const struct {

@@ -169,6 +169,9 @@ int main(int argc, char **argv)
         case NBEP_CMD_HELP:
             nbep_cli_print_help(stdout);
             break;
+        case NBEP_CMD_HELP_DECK:
+            nbep_scene_print_reference(stdout);
+            break;
         case NBEP_CMD_VERSION:
             printf("nbep %s (%s, commit %s)\n", NBEP_VERSION, NBEP_BUILD_FLAGS,
                    NBEP_BUILD_COMMIT);

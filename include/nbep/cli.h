@@ -18,6 +18,7 @@ typedef enum nbep_command {
     NBEP_CMD_SWEEP,
     NBEP_CMD_HELP,
     NBEP_CMD_VERSION,
+    NBEP_CMD_HELP_DECK,
 } nbep_command;
 
 typedef struct nbep_cli {
