@@ -50,6 +50,7 @@ LIB_SRC := $(filter-out src/main.c,$(wildcard src/*.c))
 LIB_OBJ := $(LIB_SRC:src/%.c=$(BUILD)/%.o)
 TEST_SRC := $(wildcard tests/test_*.c)
 TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
+TEST_SH := $(wildcard tests/test_*.sh)
 BENCH_SRC := $(wildcard tests/bench/bench_*.c)
 BENCH_BIN := $(BENCH_SRC:tests/bench/%.c=$(BUILD)/bench/%)
 BUILD_INFO := $(BUILD)/build_info.h
@@ -89,9 +90,10 @@ $(BUILD)/bench/%: tests/bench/%.c $(BUILD)/libnbep.a | $(BUILD)/bench
 run: bin/nbep
 	bin/nbep run inputs/paper-box.deck --summary -
 
-# Every test binary, then (VALGRIND=1) the unit tests again under memcheck.
+# Every test binary and shell test (those drive bin/nbep as a user would), then (VALGRIND=1)
+# the test binaries again under memcheck.
 check: bin/nbep $(TEST_BIN)
-	@bash scripts/run-tests.sh $(TEST_BIN)
+	@bash scripts/run-tests.sh $(TEST_BIN) $(TEST_SH)
 ifeq ($(VALGRIND),1)
 	@bash scripts/run-tests.sh --valgrind $(TEST_BIN)
 endif

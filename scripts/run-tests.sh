@@ -20,7 +20,8 @@ for t in "$@"; do
             failed=$((failed + 1)); failures+=("valgrind $name"); echo "FAIL valgrind $name"; tail -n 30 "$log"
         fi
     else
-        if "$t"; then
+        case "$t" in *.sh) runner=(bash) ;; *) runner=() ;; esac
+        if "${runner[@]}" "$t"; then
             passed=$((passed + 1))
         else
             failed=$((failed + 1)); failures+=("$name")

@@ -126,7 +126,6 @@ static nbep_status cmd_run(const nbep_cli *cli, nbep_diag *d)
         }
     }
     if (st == NBEP_OK) {
-        install_signal_handlers();
         st = nbep_sim_run(sim, d);
         nbep_summary sum;
         nbep_sim_summary(sim, &sum);
@@ -135,6 +134,12 @@ static nbep_status cmd_run(const nbep_cli *cli, nbep_diag *d)
             st = cst;
         if (!cli->quiet)
             print_human_summary(&sum, sc.output_file, st);
+        if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: %s by SIG%s after step %llu; every frame up to it is in %s",
+                          st == NBEP_ESIGINT ? "interrupted" : "terminated",
+                          st == NBEP_ESIGINT ? "INT" : "TERM", (unsigned long long)sum.steps,
+                          sc.output_file);
         nbep_status sst = write_summary(&sum, cli->summary, d);
         if (st == NBEP_OK)
             st = sst;
@@ -160,6 +165,9 @@ int main(int argc, char **argv)
 {
     gsl_set_error_handler_off();
     nbep_output_library_init();
+    /* Before anything is read or written: a job's SIGTERM at any moment ends the run at the
+     * next step's end with every frame so far saved (or, before stepping, with nothing). */
+    install_signal_handlers();
     nbep_diag d;
     nbep_diag_init(&d);
     nbep_cli cli;
