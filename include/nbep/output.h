@@ -1,5 +1,11 @@
 /* HDF5 output in layout "nbep-1" (SPEC) and the JSON summary. The only user of hdf5.h. One
- * writing thread: call only from thread 0 between barriers, or outside parallel regions. */
+ * writing thread: call only from thread 0 between barriers, or outside parallel regions.
+ *
+ * Beyond SPEC's table the file holds root attributes build_flags, build_commit and deck_path,
+ * and a u64 attribute `count` on /frames and on /stats: the rows known complete on disk. A run
+ * killed while flushing a frame can leave one more row whose data did not reach the disk;
+ * readers of interrupted runs should take the first `count` rows. Files use the HDF5 1.8
+ * format so that HDF5 tools open them after a crash (see output.c). */
 #ifndef NBEP_OUTPUT_H
 #define NBEP_OUTPUT_H
 
@@ -37,28 +43,35 @@ char *nbep_summary_to_json(const nbep_summary *s);
 
 typedef struct nbep_output nbep_output;
 
-/* Creates (truncates) path and writes the root attributes (format "nbep-1", version,
- * algorithm, steps, dt, threads, seed, restitution, gravity, deck, overrides, build flags),
- * /spheres/{radius,mass,acceleration}, /planes/{normal,offset}, and empty extendable
- * /frames/{step,time,position?,velocity?} and /stats/... (when sc->out_stats).
- * threads is the resolved thread count. NBEP_EIO with HDF5's reason on failure, and then no
- * file is left behind. */
+/* Creates path (replacing a file there) and writes the root attributes (format "nbep-1",
+ * version, algorithm, steps, dt, threads, seed, restitution, gravity, deck, overrides, build
+ * flags), /spheres/{radius,mass,acceleration}, /planes/{normal,offset}, and empty extendable
+ * /frames/{step,time,position?,velocity?} and /stats/... (when sc->out_stats). sc is
+ * borrowed (only read here); threads is the resolved thread count. The file is built as
+ * "PATH.partial" and renamed to path when complete. NBEP_EIO with HDF5's reason on failure
+ * ("nbep: PATH: cannot ...: reason"), and then no new file is left behind; NBEP_ENOMEM. */
 NBEP_MUST_CHECK nbep_status nbep_output_create(const char *path, const nbep_scene *sc,
                                                int threads, nbep_output **out, nbep_diag *d);
-/* Appends one frame (step, step*dt, and the fields the deck asked for) and flushes the file. */
+/* Appends one frame (step, step*dt, and the fields the deck asked for) and flushes the file;
+ * on NBEP_OK the frame and every stats row appended before it survive a kill -9. s is
+ * borrowed and must have the scene's sphere count. NBEP_ENUMERIC (nothing written) when a
+ * position or velocity is not finite, NBEP_EIO on a write failure. */
 NBEP_MUST_CHECK nbep_status nbep_output_frame(nbep_output *o, int64_t step, double dt,
                                               const nbep_state *s, nbep_diag *d);
-/* Appends rows to /stats (buffered by the caller; flushed with the next frame or close). */
+/* Appends count rows (borrowed) to /stats; they reach the disk with the next frame or close.
+ * Only when the scene asked for stats. NBEP_EIO on failure. */
 NBEP_MUST_CHECK nbep_status nbep_output_stats(nbep_output *o, const nbep_step_stats *rows,
                                               size_t count, nbep_diag *d);
 /* Writes the /summary json attribute (when s is not NULL), flushes and closes; NULL-safe,
- * NULLs the pointer. Even on error the handle is released. */
+ * NULLs the pointer. Even on error (NBEP_EIO) the handle and all HDF5 ids are released. */
 NBEP_MUST_CHECK nbep_status nbep_output_close(nbep_output **o, const nbep_summary *s,
                                               nbep_diag *d);
 
 /* `nbep info RUN.h5`: prints the run's metadata (root attributes but the deck text, counts of
- * spheres, planes, frames and stats rows, last frame's step) and its summary to f. Works on
- * interrupted runs (no summary yet: says so). NBEP_EIO when the file is not an nbep-1 file. */
+ * spheres, planes, frames and stats rows, last frame's step and time) and its summary to f.
+ * Works on interrupted runs and runs still being written (no summary yet: says so); prints
+ * nothing on failure. NBEP_EIO with one line when the file cannot be read or is not an
+ * nbep-1 file. */
 NBEP_MUST_CHECK nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d);
 
 /* Disables HDF5's automatic error printing; call once in main before any thread starts. */

@@ -1,0 +1,1209 @@
+/* Tests of the HDF5 output (layout nbep-1) and the JSON summary. Files are read back with the
+ * HDF5 C API directly, never through output.c's own readers, and compared bitwise with the
+ * values the test put in. Scratch files live in build/tests/tmp/. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <errno.h>
+#include <float.h>
+#include <signal.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <hdf5.h>
+
+#include "build_info.h"
+#include "nbep/output.h"
+#include "nbep_test.h"
+
+#define N_SPHERES 5
+#define N_PLANES 2
+#define N_FRAMES 3
+#define N_STATS 20
+#define FRAME_EVERY 10
+#define DT 0.00125
+
+/* A deck text with what a string attribute must keep: newlines, quotes, a tab, UTF-8. */
+static const char deck_text[] = "# Überlauf: \"box\" test\nrun: {\tsteps = 20; dt = 0.00125; };\n"
+                                "physics: { restitution = 0.85; };\n";
+static const char overrides[] = "physics.restitution=0.85\nrun.steps=20";
+
+typedef struct fixture {
+    nbep_scene sc;
+    nbep_diag d;
+} fixture;
+
+/* Values without simple relations, distinct for every frame k, sphere i, component c and
+ * field (0 position, 1 velocity). */
+static double frame_value(int k, size_t i, int c, int field)
+{
+    return (field ? -1.0 : 1.0) * (1.25 + 0.37 * (double)i - 0.113 * c) * (k + 1) + 0.0071 * k;
+}
+
+static void fill_frame(nbep_state *s, int k)
+{
+    for (size_t i = 0; i < s->n; i++) {
+        s->pos[i] = nbep_vec3_make(frame_value(k, i, 0, 0), frame_value(k, i, 1, 0),
+                                   frame_value(k, i, 2, 0));
+        s->vel[i] = nbep_vec3_make(frame_value(k, i, 0, 1), frame_value(k, i, 1, 1),
+                                   frame_value(k, i, 2, 1));
+    }
+    if (k == 1 && s->n > 0) {
+        /* Values a text round trip or a conversion would not keep bit for bit. */
+        s->pos[0] = nbep_vec3_make(-0.0, 4.9406564584124654e-324, DBL_MAX);
+        s->vel[0] = nbep_vec3_make(0.1, -DBL_MIN, 1.0 / 3.0);
+    }
+}
+
+static nbep_step_stats stats_row(int r)
+{
+    return (nbep_step_stats){.step = r + 1,
+                             .checks = 1000u + 37u * (uint64_t)r,
+                             .predictions = 17u * (uint64_t)r,
+                             .collisions = (uint64_t)(r % 3),
+                             .kinetic_energy = 12.5 - 0.031 * r,
+                             .potential_energy = -3.75 + 0.029 * r,
+                             .max_overlap = r % 4 ? 1.0e-13 * r : 0.0};
+}
+
+static nbep_summary known_summary(void)
+{
+    nbep_summary s = {.algorithm = "predictive",
+                      .threads = 2,
+                      .spheres = 4096,
+                      .planes = 6,
+                      .steps = 1000,
+                      .dt = 0.001,
+                      .setup_seconds = 0.25,
+                      .wall_seconds = 1.5,
+                      .steps_per_second = 1000 / 1.5,
+                      .checks = 123456789012u,
+                      .predictions = 987654321u,
+                      .collisions = 4242,
+                      .sphere_collisions = 4000,
+                      .plane_collisions = 242,
+                      .quiet_steps = 950,
+                      .energy_initial = -1234.5,
+                      .energy_final = -1234.25,
+                      .energy_rel_drift = 0.25 / -1234.5,
+                      .max_overlap = 3.0e-14,
+                      .max_overlap_rel = 6.0e-13,
+                      .peak_rss_bytes = 52428800};
+    return s;
+}
+
+static int setup(void **state)
+{
+    fixture *fx = calloc(1, sizeof *fx);
+    assert_non_null(fx);
+    nbep_diag_init(&fx->d);
+    nbep_scene *sc = &fx->sc;
+    sc->deck_path = "tests/data/output.deck";
+    sc->deck_text = (char *)deck_text;
+    sc->overrides = (char *)overrides;
+    snprintf(sc->algorithm, sizeof sc->algorithm, "predictive");
+    sc->steps = N_STATS;
+    sc->dt = DT;
+    sc->threads = 0;
+    sc->seed = 424242;
+    sc->gravity = nbep_vec3_make(0.25, -1.5, -9.81);
+    sc->restitution = 0.85;
+    sc->output_every = FRAME_EVERY;
+    sc->out_position = sc->out_velocity = sc->out_stats = true;
+    sc->sweep_replicas = 1;
+    assert_int_equal(nbep_state_init(&sc->state, N_SPHERES, N_PLANES, &fx->d), NBEP_OK);
+    nbep_state *s = &sc->state;
+    for (size_t i = 0; i < s->n; i++) {
+        s->acc[i] = i == 3 ? nbep_vec3_make(0.0, 0.0, -1.0) : sc->gravity;
+        s->radius[i] = 0.05 + 0.013 * (double)i;
+        s->mass[i] = 1.0 + 0.3 * (double)i;
+    }
+    s->plane_normal[0] = nbep_vec3_make(0.0, 0.0, 1.0);
+    s->plane_offset[0] = 0.0;
+    s->plane_normal[1] = nbep_vec3_make(-0.6, 0.8, 0.0);
+    s->plane_offset[1] = -3.5;
+    fill_frame(s, 0);
+    *state = fx;
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    fixture *fx = *state;
+    nbep_state_fini(&fx->sc.state);
+    nbep_diag_fini(&fx->d);
+    free(fx);
+    return 0;
+}
+
+static void assert_ok(nbep_status st, nbep_diag *d)
+{
+    if (st != NBEP_OK) {
+        nbep_diag_print(d, stderr);
+        fail_msg("status %d (%s)", (int)st, nbep_status_text(st));
+    }
+}
+
+/* Creates path from fx's scene, writes N_FRAMES frames (steps 0, 10, 20) with N_STATS stats
+ * rows in two batches before them, and closes with summary (may be NULL). */
+static void write_run(fixture *fx, const char *path, const nbep_summary *summary)
+{
+    nbep_output *o = NULL;
+    assert_ok(nbep_output_create(path, &fx->sc, 3, &o, &fx->d), &fx->d);
+    assert_non_null(o);
+    nbep_state *s = &fx->sc.state;
+    nbep_step_stats rows[N_STATS];
+    for (int r = 0; r < N_STATS; r++)
+        rows[r] = stats_row(r);
+    for (int k = 0; k < N_FRAMES; k++) {
+        if (fx->sc.out_stats && k == 1)
+            assert_ok(nbep_output_stats(o, rows, 12, &fx->d), &fx->d);
+        if (fx->sc.out_stats && k == 2)
+            assert_ok(nbep_output_stats(o, rows + 12, N_STATS - 12, &fx->d), &fx->d);
+        fill_frame(s, k);
+        assert_ok(nbep_output_frame(o, (int64_t)k * FRAME_EVERY, DT, s, &fx->d), &fx->d);
+    }
+    assert_ok(nbep_output_close(&o, summary, &fx->d), &fx->d);
+    assert_null(o);
+}
+
+static hid_t open_ro(const char *path)
+{
+    hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (f < 0)
+        fail_msg("HDF5 cannot open %s", path);
+    return f;
+}
+
+static bool exists(hid_t f, const char *name)
+{
+    htri_t e = H5Lexists(f, name, H5P_DEFAULT);
+    assert_true(e >= 0);
+    return e > 0;
+}
+
+/* Asserts that dataset name has exactly the file type and the shape given. */
+static void assert_dataset(hid_t f, const char *name, hid_t type, int rank, hsize_t d0,
+                           hsize_t d1, hsize_t d2)
+{
+    if (!exists(f, name))
+        fail_msg("%s is missing", name);
+    hid_t ds = H5Dopen2(f, name, H5P_DEFAULT);
+    assert_true(ds >= 0);
+    hid_t t = H5Dget_type(ds), space = H5Dget_space(ds);
+    if (H5Tequal(t, type) <= 0)
+        fail_msg("%s has the wrong type (class %d, size %zu)", name, (int)H5Tget_class(t),
+                 H5Tget_size(t));
+    hsize_t dims[3] = {0}, want[3] = {d0, d1, d2};
+    assert_int_equal(H5Sget_simple_extent_ndims(space), rank);
+    H5Sget_simple_extent_dims(space, dims, NULL);
+    for (int k = 0; k < rank; k++)
+        if (dims[k] != want[k])
+            fail_msg("%s dimension %d is %llu, expected %llu", name, k,
+                     (unsigned long long)dims[k], (unsigned long long)want[k]);
+    H5Sclose(space);
+    H5Tclose(t);
+    H5Dclose(ds);
+}
+
+static void read_dataset(hid_t f, const char *name, hid_t mem_type, void *buf)
+{
+    hid_t ds = H5Dopen2(f, name, H5P_DEFAULT);
+    assert_true(ds >= 0);
+    assert_true(H5Dread(ds, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0);
+    H5Dclose(ds);
+}
+
+/* A scalar string attribute of object obj (a path), read as stored; caller frees. */
+static char *read_string_attr(hid_t f, const char *obj, const char *name)
+{
+    hid_t a = H5Aopen_by_name(f, obj, name, H5P_DEFAULT, H5P_DEFAULT);
+    if (a < 0)
+        fail_msg("attribute %s of %s is missing", name, obj);
+    hid_t t = H5Aget_type(a);
+    assert_int_equal(H5Tget_class(t), H5T_STRING);
+    assert_int_equal(H5Tget_cset(t), H5T_CSET_UTF8);
+    hid_t m = H5Tcopy(H5T_C_S1);
+    char *out;
+    if (H5Tis_variable_str(t) > 0) {
+        char *v = NULL;
+        H5Tset_size(m, H5T_VARIABLE);
+        H5Tset_cset(m, H5T_CSET_UTF8);
+        assert_true(H5Aread(a, m, &v) >= 0);
+        out = strdup(v);
+        H5free_memory(v);
+    } else {
+        size_t n = H5Tget_size(t);
+        out = calloc(n + 1, 1);
+        H5Tset_size(m, n + 1);
+        H5Tset_cset(m, H5T_CSET_UTF8);
+        assert_true(H5Aread(a, m, out) >= 0);
+    }
+    H5Tclose(m);
+    H5Tclose(t);
+    H5Aclose(a);
+    return out;
+}
+
+static void assert_string_attr(hid_t f, const char *obj, const char *name, const char *want)
+{
+    char *got = read_string_attr(f, obj, name);
+    if (strcmp(got, want) != 0)
+        fail_msg("attribute %s of %s is \"%s\", expected \"%s\"", name, obj, got, want);
+    free(got);
+}
+
+/* A numeric attribute of the root: checks its file type and element count, reads it. */
+static void read_root_attr(hid_t f, const char *name, hid_t type, hssize_t n, hid_t mem,
+                           void *buf)
+{
+    hid_t a = H5Aopen(f, name, H5P_DEFAULT);
+    if (a < 0)
+        fail_msg("root attribute %s is missing", name);
+    hid_t t = H5Aget_type(a), space = H5Aget_space(a);
+    if (H5Tequal(t, type) <= 0)
+        fail_msg("root attribute %s has the wrong type", name);
+    assert_int_equal(H5Sget_simple_extent_npoints(space), n);
+    assert_true(H5Aread(a, mem, buf) >= 0);
+    H5Sclose(space);
+    H5Tclose(t);
+    H5Aclose(a);
+}
+
+/* The `count` attribute of group (u64): its complete rows. */
+static uint64_t read_count(hid_t f, const char *group)
+{
+    hid_t a = H5Aopen_by_name(f, group, "count", H5P_DEFAULT, H5P_DEFAULT);
+    if (a < 0)
+        fail_msg("attribute count of %s is missing", group);
+    hid_t t = H5Aget_type(a);
+    assert_true(H5Tequal(t, H5T_STD_U64LE) > 0);
+    uint64_t c = 0;
+    assert_true(H5Aread(a, H5T_NATIVE_UINT64, &c) >= 0);
+    H5Tclose(t);
+    H5Aclose(a);
+    return c;
+}
+
+static void assert_bits_equal(const void *got, const void *want, size_t bytes, const char *what)
+{
+    if (memcmp(got, want, bytes) != 0)
+        fail_msg("%s differs from what was written", what);
+}
+
+/* Checks that path holds frames 0..n_frames-1 as write_run wrote them. */
+static void assert_frames(const char *path, size_t n, int n_frames, bool velocity)
+{
+    hid_t f = open_ro(path);
+    assert_dataset(f, "/frames/step", H5T_STD_I64LE, 1, (hsize_t)n_frames, 0, 0);
+    assert_dataset(f, "/frames/time", H5T_IEEE_F64LE, 1, (hsize_t)n_frames, 0, 0);
+    assert_dataset(f, "/frames/position", H5T_IEEE_F64LE, 3, (hsize_t)n_frames, n, 3);
+    int64_t steps[N_FRAMES];
+    double times[N_FRAMES];
+    read_dataset(f, "/frames/step", H5T_NATIVE_INT64, steps);
+    read_dataset(f, "/frames/time", H5T_NATIVE_DOUBLE, times);
+    nbep_vec3 *pos = calloc((size_t)n_frames * n, sizeof *pos);
+    nbep_vec3 *vel = calloc((size_t)n_frames * n, sizeof *vel);
+    read_dataset(f, "/frames/position", H5T_NATIVE_DOUBLE, pos);
+    if (velocity) {
+        assert_dataset(f, "/frames/velocity", H5T_IEEE_F64LE, 3, (hsize_t)n_frames, n, 3);
+        read_dataset(f, "/frames/velocity", H5T_NATIVE_DOUBLE, vel);
+    }
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_state want;
+    assert_int_equal(nbep_state_init(&want, n, 0, &d), NBEP_OK);
+    for (int k = 0; k < n_frames; k++) {
+        assert_int_equal(steps[k], (int64_t)k * FRAME_EVERY);
+        double t = (double)(k * FRAME_EVERY) * DT;
+        assert_bits_equal(&times[k], &t, sizeof t, "/frames/time");
+        fill_frame(&want, k);
+        assert_bits_equal(pos + (size_t)k * n, want.pos, n * sizeof *pos, "/frames/position");
+        if (velocity)
+            assert_bits_equal(vel + (size_t)k * n, want.vel, n * sizeof *vel,
+                              "/frames/velocity");
+    }
+    nbep_state_fini(&want);
+    nbep_diag_fini(&d);
+    free(pos);
+    free(vel);
+    H5Fclose(f);
+}
+
+/* ---- layout -------------------------------------------------------------------------------- */
+
+static void test_every_spec_path_exists_with_its_type_and_shape(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    nbep_summary sum = known_summary();
+    write_run(fx, nbep_test_tmp("output_layout.h5", path, sizeof path), &sum);
+    hid_t f = open_ro(path);
+    assert_dataset(f, "/spheres/radius", H5T_IEEE_F64LE, 1, N_SPHERES, 0, 0);
+    assert_dataset(f, "/spheres/mass", H5T_IEEE_F64LE, 1, N_SPHERES, 0, 0);
+    assert_dataset(f, "/spheres/acceleration", H5T_IEEE_F64LE, 2, N_SPHERES, 3, 0);
+    assert_dataset(f, "/planes/normal", H5T_IEEE_F64LE, 2, N_PLANES, 3, 0);
+    assert_dataset(f, "/planes/offset", H5T_IEEE_F64LE, 1, N_PLANES, 0, 0);
+    assert_dataset(f, "/frames/step", H5T_STD_I64LE, 1, N_FRAMES, 0, 0);
+    assert_dataset(f, "/frames/time", H5T_IEEE_F64LE, 1, N_FRAMES, 0, 0);
+    assert_dataset(f, "/frames/position", H5T_IEEE_F64LE, 3, N_FRAMES, N_SPHERES, 3);
+    assert_dataset(f, "/frames/velocity", H5T_IEEE_F64LE, 3, N_FRAMES, N_SPHERES, 3);
+    assert_dataset(f, "/stats/step", H5T_STD_I64LE, 1, N_STATS, 0, 0);
+    assert_dataset(f, "/stats/checks", H5T_STD_U64LE, 1, N_STATS, 0, 0);
+    assert_dataset(f, "/stats/predictions", H5T_STD_U64LE, 1, N_STATS, 0, 0);
+    assert_dataset(f, "/stats/collisions", H5T_STD_U64LE, 1, N_STATS, 0, 0);
+    assert_dataset(f, "/stats/kinetic_energy", H5T_IEEE_F64LE, 1, N_STATS, 0, 0);
+    assert_dataset(f, "/stats/potential_energy", H5T_IEEE_F64LE, 1, N_STATS, 0, 0);
+    assert_dataset(f, "/stats/max_overlap", H5T_IEEE_F64LE, 1, N_STATS, 0, 0);
+    assert_true(H5Aexists_by_name(f, "/summary", "json", H5P_DEFAULT) > 0);
+    assert_int_equal(read_count(f, "/frames"), N_FRAMES);
+    assert_int_equal(read_count(f, "/stats"), N_STATS);
+    H5Fclose(f);
+}
+
+static void test_sphere_and_plane_arrays_read_back_bit_for_bit(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    write_run(fx, nbep_test_tmp("output_bodies.h5", path, sizeof path), NULL);
+    const nbep_state *s = &fx->sc.state;
+    double radius[N_SPHERES], mass[N_SPHERES], offset[N_PLANES];
+    nbep_vec3 acc[N_SPHERES], normal[N_PLANES];
+    hid_t f = open_ro(path);
+    read_dataset(f, "/spheres/radius", H5T_NATIVE_DOUBLE, radius);
+    read_dataset(f, "/spheres/mass", H5T_NATIVE_DOUBLE, mass);
+    read_dataset(f, "/spheres/acceleration", H5T_NATIVE_DOUBLE, acc);
+    read_dataset(f, "/planes/normal", H5T_NATIVE_DOUBLE, normal);
+    read_dataset(f, "/planes/offset", H5T_NATIVE_DOUBLE, offset);
+    H5Fclose(f);
+    assert_bits_equal(radius, s->radius, sizeof radius, "/spheres/radius");
+    assert_bits_equal(mass, s->mass, sizeof mass, "/spheres/mass");
+    assert_bits_equal(acc, s->acc, sizeof acc, "/spheres/acceleration");
+    assert_bits_equal(normal, s->plane_normal, sizeof normal, "/planes/normal");
+    assert_bits_equal(offset, s->plane_offset, sizeof offset, "/planes/offset");
+}
+
+static void test_frames_read_back_bit_for_bit_with_their_steps_and_times(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    write_run(fx, nbep_test_tmp("output_frames.h5", path, sizeof path), NULL);
+    assert_frames(path, N_SPHERES, N_FRAMES, true);
+}
+
+/* Asserts chunked layout with chunk shape c, unlimited first dimension, fixed others. */
+static void assert_extendable(hid_t f, const char *name, int rank, const hsize_t *chunk)
+{
+    hid_t ds = H5Dopen2(f, name, H5P_DEFAULT);
+    assert_true(ds >= 0);
+    hid_t dcpl = H5Dget_create_plist(ds), space = H5Dget_space(ds);
+    assert_int_equal(H5Pget_layout(dcpl), H5D_CHUNKED);
+    hsize_t got[3] = {0}, dims[3], maxdims[3];
+    assert_int_equal(H5Pget_chunk(dcpl, 3, got), rank);
+    for (int k = 0; k < rank; k++)
+        if (got[k] != chunk[k])
+            fail_msg("%s chunk dimension %d is %llu, expected %llu", name, k,
+                     (unsigned long long)got[k], (unsigned long long)chunk[k]);
+    H5Sget_simple_extent_dims(space, dims, maxdims);
+    assert_true(maxdims[0] == H5S_UNLIMITED);
+    for (int k = 1; k < rank; k++)
+        assert_true(maxdims[k] == dims[k]);
+    H5Sclose(space);
+    H5Pclose(dcpl);
+    H5Dclose(ds);
+}
+
+static void test_frame_and_stats_datasets_are_chunked_and_extendable(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    write_run(fx, nbep_test_tmp("output_chunks.h5", path, sizeof path), NULL);
+    hid_t f = open_ro(path);
+    hsize_t frame_chunk[3] = {1, N_SPHERES, 3};
+    assert_extendable(f, "/frames/position", 3, frame_chunk);
+    assert_extendable(f, "/frames/velocity", 3, frame_chunk);
+    hsize_t series[1] = {512}, stats[1] = {4096};
+    assert_extendable(f, "/frames/step", 1, series);
+    assert_extendable(f, "/frames/time", 1, series);
+    assert_extendable(f, "/stats/step", 1, stats);
+    assert_extendable(f, "/stats/max_overlap", 1, stats);
+    H5Fclose(f);
+}
+
+static void test_a_huge_frame_is_split_into_chunks_of_at_most_4_mib(void **state)
+{
+    /* 4 MiB / (3 doubles) spheres per chunk: 174762; 200000 spheres need two chunks. */
+    const size_t n = 200000, per_chunk = (4u << 20) / 24;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    fixture *fx = *state;
+    nbep_scene sc = fx->sc;
+    assert_int_equal(nbep_state_init(&sc.state, n, 0, &d), NBEP_OK);
+    sc.out_velocity = sc.out_stats = false;
+    fill_frame(&sc.state, 2);
+    char path[256];
+    nbep_output *o = NULL;
+    nbep_test_tmp("output_huge.h5", path, sizeof path);
+    assert_ok(nbep_output_create(path, &sc, 1, &o, &d), &d);
+    assert_ok(nbep_output_frame(o, 0, DT, &sc.state, &d), &d);
+    assert_ok(nbep_output_close(&o, NULL, &d), &d);
+    hid_t f = open_ro(path);
+    hsize_t chunk[3] = {1, per_chunk, 3};
+    assert_extendable(f, "/frames/position", 3, chunk);
+    assert_dataset(f, "/frames/position", H5T_IEEE_F64LE, 3, 1, n, 3);
+    nbep_vec3 *pos = calloc(n, sizeof *pos);
+    read_dataset(f, "/frames/position", H5T_NATIVE_DOUBLE, pos);
+    assert_bits_equal(pos, sc.state.pos, n * sizeof *pos, "/frames/position");
+    free(pos);
+    H5Fclose(f);
+    nbep_state_fini(&sc.state);
+    nbep_diag_fini(&d);
+}
+
+static void test_stats_rows_read_back_in_order_across_batches(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    write_run(fx, nbep_test_tmp("output_stats.h5", path, sizeof path), NULL);
+    int64_t step[N_STATS];
+    uint64_t checks[N_STATS], predictions[N_STATS], collisions[N_STATS];
+    double ke[N_STATS], pe[N_STATS], overlap[N_STATS];
+    hid_t f = open_ro(path);
+    read_dataset(f, "/stats/step", H5T_NATIVE_INT64, step);
+    read_dataset(f, "/stats/checks", H5T_NATIVE_UINT64, checks);
+    read_dataset(f, "/stats/predictions", H5T_NATIVE_UINT64, predictions);
+    read_dataset(f, "/stats/collisions", H5T_NATIVE_UINT64, collisions);
+    read_dataset(f, "/stats/kinetic_energy", H5T_NATIVE_DOUBLE, ke);
+    read_dataset(f, "/stats/potential_energy", H5T_NATIVE_DOUBLE, pe);
+    read_dataset(f, "/stats/max_overlap", H5T_NATIVE_DOUBLE, overlap);
+    H5Fclose(f);
+    for (int r = 0; r < N_STATS; r++) {
+        nbep_step_stats want = stats_row(r);
+        assert_int_equal(step[r], want.step);
+        assert_int_equal(checks[r], want.checks);
+        assert_int_equal(predictions[r], want.predictions);
+        assert_int_equal(collisions[r], want.collisions);
+        assert_bits_equal(&ke[r], &want.kinetic_energy, sizeof ke[r], "/stats/kinetic_energy");
+        assert_bits_equal(&pe[r], &want.potential_energy, sizeof pe[r],
+                          "/stats/potential_energy");
+        assert_bits_equal(&overlap[r], &want.max_overlap, sizeof overlap[r],
+                          "/stats/max_overlap");
+    }
+}
+
+static void test_root_attributes_hold_the_settings_the_deck_and_the_build(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    write_run(fx, nbep_test_tmp("output_attrs.h5", path, sizeof path), NULL);
+    hid_t f = open_ro(path);
+    assert_string_attr(f, "/", "format", "nbep-1");
+    assert_string_attr(f, "/", "version", NBEP_VERSION);
+    assert_string_attr(f, "/", "algorithm", "predictive");
+    assert_string_attr(f, "/", "deck", deck_text);
+    assert_string_attr(f, "/", "overrides", overrides);
+    char *flags = read_string_attr(f, "/", "build_flags");
+    assert_true(strlen(flags) > 0);
+    free(flags);
+    free(read_string_attr(f, "/", "build_commit"));
+    uint64_t steps, seed;
+    int64_t threads;
+    double dt, restitution, gravity[3];
+    read_root_attr(f, "steps", H5T_STD_U64LE, 1, H5T_NATIVE_UINT64, &steps);
+    read_root_attr(f, "seed", H5T_STD_U64LE, 1, H5T_NATIVE_UINT64, &seed);
+    read_root_attr(f, "threads", H5T_STD_I64LE, 1, H5T_NATIVE_INT64, &threads);
+    read_root_attr(f, "dt", H5T_IEEE_F64LE, 1, H5T_NATIVE_DOUBLE, &dt);
+    read_root_attr(f, "restitution", H5T_IEEE_F64LE, 1, H5T_NATIVE_DOUBLE, &restitution);
+    read_root_attr(f, "gravity", H5T_IEEE_F64LE, 3, H5T_NATIVE_DOUBLE, gravity);
+    H5Fclose(f);
+    assert_int_equal(steps, N_STATS);
+    assert_int_equal(seed, 424242);
+    assert_int_equal(threads, 3);   /* the resolved count given to create, not the deck's 0 */
+    double want_dt = DT, want_e = 0.85, want_g[3] = {0.25, -1.5, -9.81};
+    assert_bits_equal(&dt, &want_dt, sizeof dt, "dt");
+    assert_bits_equal(&restitution, &want_e, sizeof dt, "restitution");
+    assert_bits_equal(gravity, want_g, sizeof gravity, "gravity");
+}
+
+static void test_a_deck_larger_than_an_object_header_is_stored_whole(void **state)
+{
+    fixture *fx = *state;
+    /* 100 kB: beyond the 64 KiB an attribute may take inside an object header. */
+    size_t len = 100000;
+    char *deck = malloc(len + 1);
+    for (size_t k = 0; k < len; k++)
+        deck[k] = k % 61 == 60 ? '\n' : (char)('a' + k % 26);
+    deck[len] = '\0';
+    fx->sc.deck_text = deck;
+    char path[256];
+    write_run(fx, nbep_test_tmp("output_bigdeck.h5", path, sizeof path), NULL);
+    hid_t f = open_ro(path);
+    assert_string_attr(f, "/", "deck", deck);
+    H5Fclose(f);
+    free(deck);
+}
+
+static void test_summary_attribute_is_the_json_text(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    nbep_summary sum = known_summary();
+    write_run(fx, nbep_test_tmp("output_summary.h5", path, sizeof path), &sum);
+    char *json = nbep_summary_to_json(&sum);
+    assert_non_null(json);
+    hid_t f = open_ro(path);
+    assert_string_attr(f, "/summary", "json", json);
+    H5Fclose(f);
+    free(json);
+}
+
+static void test_closing_without_a_summary_leaves_an_empty_summary_group(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    write_run(fx, nbep_test_tmp("output_nosummary.h5", path, sizeof path), NULL);
+    hid_t f = open_ro(path);
+    assert_true(exists(f, "/summary"));
+    assert_int_equal(H5Aexists_by_name(f, "/summary", "json", H5P_DEFAULT), 0);
+    H5Fclose(f);
+}
+
+static void test_velocity_not_asked_for_is_not_created(void **state)
+{
+    fixture *fx = *state;
+    fx->sc.out_velocity = false;
+    char path[256];
+    write_run(fx, nbep_test_tmp("output_novel.h5", path, sizeof path), NULL);
+    hid_t f = open_ro(path);
+    assert_false(exists(f, "/frames/velocity"));
+    H5Fclose(f);
+    assert_frames(path, N_SPHERES, N_FRAMES, false);
+}
+
+static void test_position_not_asked_for_is_not_created(void **state)
+{
+    fixture *fx = *state;
+    fx->sc.out_position = false;
+    char path[256];
+    write_run(fx, nbep_test_tmp("output_nopos.h5", path, sizeof path), NULL);
+    hid_t f = open_ro(path);
+    assert_false(exists(f, "/frames/position"));
+    assert_dataset(f, "/frames/velocity", H5T_IEEE_F64LE, 3, N_FRAMES, N_SPHERES, 3);
+    assert_dataset(f, "/frames/step", H5T_STD_I64LE, 1, N_FRAMES, 0, 0);
+    H5Fclose(f);
+}
+
+static void test_stats_not_asked_for_leave_no_stats_group(void **state)
+{
+    fixture *fx = *state;
+    fx->sc.out_stats = false;
+    char path[256];
+    write_run(fx, nbep_test_tmp("output_nostats.h5", path, sizeof path), NULL);
+    hid_t f = open_ro(path);
+    assert_false(exists(f, "/stats"));
+    H5Fclose(f);
+}
+
+static void test_a_scene_without_spheres_or_planes_still_records_frames(void **state)
+{
+    fixture *fx = *state;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_scene sc = fx->sc;
+    assert_int_equal(nbep_state_init(&sc.state, 0, 0, &d), NBEP_OK);
+    char path[256];
+    nbep_output *o = NULL;
+    nbep_test_tmp("output_empty.h5", path, sizeof path);
+    assert_ok(nbep_output_create(path, &sc, 1, &o, &d), &d);
+    assert_ok(nbep_output_frame(o, 0, DT, &sc.state, &d), &d);
+    assert_ok(nbep_output_frame(o, 10, DT, &sc.state, &d), &d);
+    assert_ok(nbep_output_close(&o, NULL, &d), &d);
+    hid_t f = open_ro(path);
+    assert_dataset(f, "/spheres/radius", H5T_IEEE_F64LE, 1, 0, 0, 0);
+    assert_dataset(f, "/planes/normal", H5T_IEEE_F64LE, 2, 0, 3, 0);
+    assert_dataset(f, "/planes/offset", H5T_IEEE_F64LE, 1, 0, 0, 0);
+    assert_dataset(f, "/frames/position", H5T_IEEE_F64LE, 3, 2, 0, 3);
+    assert_dataset(f, "/frames/step", H5T_STD_I64LE, 1, 2, 0, 0);
+    H5Fclose(f);
+    nbep_state_fini(&sc.state);
+    nbep_diag_fini(&d);
+}
+
+/* ---- handles and errors -------------------------------------------------------------------- */
+
+static void test_closing_releases_every_hdf5_id(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    nbep_summary sum = known_summary();
+    write_run(fx, nbep_test_tmp("output_ids.h5", path, sizeof path), &sum);
+    assert_int_equal(H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL), 0);
+}
+
+static void test_closing_a_null_handle_does_nothing(void **state)
+{
+    fixture *fx = *state;
+    nbep_output *o = NULL;
+    assert_int_equal(nbep_output_close(&o, NULL, &fx->d), NBEP_OK);
+    assert_int_equal(nbep_output_close(NULL, NULL, &fx->d), NBEP_OK);
+    assert_int_equal(fx->d.n_errors, 0);
+}
+
+static void assert_no_file(const char *path)
+{
+    struct stat st;
+    if (stat(path, &st) == 0 || errno != ENOENT)
+        fail_msg("%s exists", path);
+}
+
+/* The one message d holds must be a single line that starts "nbep: PATH: " */
+static void assert_one_line_naming(const nbep_diag *d, const char *path)
+{
+    assert_int_equal(d->n_errors, 1);
+    char prefix[300];
+    snprintf(prefix, sizeof prefix, "nbep: %s: ", path);
+    if (strncmp(d->msg[0], prefix, strlen(prefix)) != 0)
+        fail_msg("message \"%s\" does not start with \"%s\"", d->msg[0], prefix);
+    assert_null(strchr(d->msg[0], '\n'));
+}
+
+static void test_a_path_in_a_missing_directory_fails_with_eio_naming_the_path(void **state)
+{
+    fixture *fx = *state;
+    const char *path = "/nonexistent-dir/x.h5";
+    nbep_output *o = NULL;
+    assert_int_equal(nbep_output_create(path, &fx->sc, 1, &o, &fx->d), NBEP_EIO);
+    assert_null(o);
+    assert_one_line_naming(&fx->d, path);
+    assert_non_null(strstr(fx->d.msg[0], "No such file or directory"));
+}
+
+static void test_a_path_naming_a_directory_fails_and_leaves_the_directory(void **state)
+{
+    fixture *fx = *state;
+    const char *path = "build/tests/tmp";
+    nbep_output *o = NULL;
+    assert_int_equal(nbep_output_create(path, &fx->sc, 1, &o, &fx->d), NBEP_EIO);
+    assert_null(o);
+    assert_one_line_naming(&fx->d, path);
+    assert_non_null(strstr(fx->d.msg[0], "Is a directory"));
+    struct stat st;
+    assert_int_equal(stat(path, &st), 0);
+    assert_true(S_ISDIR(st.st_mode));
+    assert_no_file("build/tests/tmp.partial");
+}
+
+static void test_a_failure_after_the_file_was_created_leaves_no_file(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    nbep_test_tmp("output_removed.h5", path, sizeof path);
+    /* A sphere count no dataspace can hold makes /spheres/radius fail after the file and its
+     * root attributes exist (no array is read: the dataspace fails first). */
+    nbep_scene sc = fx->sc;
+    sc.state.n = SIZE_MAX;
+    nbep_output *o = NULL;
+    assert_int_equal(nbep_output_create(path, &sc, 1, &o, &fx->d), NBEP_EIO);
+    assert_null(o);
+    assert_one_line_naming(&fx->d, path);
+    assert_non_null(strstr(fx->d.msg[0], "/spheres/radius"));
+    assert_no_file(path);
+    assert_no_file(strcat(path, ".partial"));
+}
+
+static void test_a_failed_create_keeps_an_older_file_at_the_path(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    FILE *f = fopen(nbep_test_tmp("output_older.h5", path, sizeof path), "w");
+    assert_non_null(f);
+    fputs("an older run", f);
+    fclose(f);
+    nbep_scene sc = fx->sc;
+    sc.state.n = SIZE_MAX;   /* fails after the file was made, as above */
+    nbep_output *o = NULL;
+    assert_int_equal(nbep_output_create(path, &sc, 1, &o, &fx->d), NBEP_EIO);
+    char text[64] = {0};
+    f = fopen(path, "r");
+    assert_non_null(f);
+    assert_non_null(fgets(text, sizeof text, f));
+    fclose(f);
+    assert_string_equal(text, "an older run");
+}
+
+static void test_a_frame_with_a_non_finite_position_is_refused(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    nbep_output *o = NULL;
+    nbep_test_tmp("output_nan.h5", path, sizeof path);
+    assert_ok(nbep_output_create(path, &fx->sc, 1, &o, &fx->d), &fx->d);
+    assert_ok(nbep_output_frame(o, 0, DT, &fx->sc.state, &fx->d), &fx->d);
+    fx->sc.state.pos[2].y = NAN;
+    assert_int_equal(nbep_output_frame(o, 10, DT, &fx->sc.state, &fx->d), NBEP_ENUMERIC);
+    assert_one_line_naming(&fx->d, path);
+    assert_ok(nbep_output_close(&o, NULL, &fx->d), &fx->d);
+    hid_t f = open_ro(path);
+    assert_dataset(f, "/frames/position", H5T_IEEE_F64LE, 3, 1, N_SPHERES, 3);
+    H5Fclose(f);
+}
+
+/* ---- crashes ------------------------------------------------------------------------------- */
+
+/* Child codes: which step failed (the child cannot use cmocka's asserts). */
+enum { CHILD_CREATE = 11, CHILD_FRAME, CHILD_STATS, CHILD_CLOSE, CHILD_PIPE };
+
+/* In a child process: creates path, writes n_frames frames and some stats rows, then dies
+ * without closing: by SIGKILL (kill9) or by _exit(0). */
+static void child_write_and_die(fixture *fx, const char *path, int n_frames, bool kill9)
+{
+    nbep_output *o = NULL;
+    if (nbep_output_create(path, &fx->sc, 2, &o, &fx->d) != NBEP_OK)
+        _exit(CHILD_CREATE);
+    nbep_step_stats rows[N_STATS];
+    for (int r = 0; r < N_STATS; r++)
+        rows[r] = stats_row(r);
+    if (nbep_output_stats(o, rows, N_STATS, &fx->d) != NBEP_OK)
+        _exit(CHILD_STATS);
+    for (int k = 0; k < n_frames; k++) {
+        fill_frame(&fx->sc.state, k);
+        if (nbep_output_frame(o, (int64_t)k * FRAME_EVERY, DT, &fx->sc.state, &fx->d) != NBEP_OK)
+            _exit(CHILD_FRAME);
+    }
+    if (kill9)
+        raise(SIGKILL);
+    _exit(0);
+}
+
+static void run_crashing_child(fixture *fx, const char *path, bool kill9)
+{
+    fflush(NULL);   /* or the child's stdio buffers would hold a copy of ours */
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0)
+        child_write_and_die(fx, path, N_FRAMES, kill9);
+    int status;
+    assert_int_equal(waitpid(pid, &status, 0), pid);
+    if (kill9) {
+        assert_true(WIFSIGNALED(status));
+        assert_int_equal(WTERMSIG(status), SIGKILL);
+    } else {
+        assert_true(WIFEXITED(status));
+        assert_int_equal(WEXITSTATUS(status), 0);
+    }
+}
+
+static void test_a_run_killed_between_frames_leaves_every_frame_written(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    run_crashing_child(fx, nbep_test_tmp("output_kill9.h5", path, sizeof path), true);
+    assert_frames(path, N_SPHERES, N_FRAMES, true);
+    hid_t f = open_ro(path);
+    assert_dataset(f, "/stats/checks", H5T_STD_U64LE, 1, N_STATS, 0, 0);
+    assert_int_equal(read_count(f, "/frames"), N_FRAMES);
+    assert_int_equal(read_count(f, "/stats"), N_STATS);
+    assert_string_attr(f, "/", "format", "nbep-1");
+    assert_int_equal(H5Aexists_by_name(f, "/summary", "json", H5P_DEFAULT), 0);
+    H5Fclose(f);
+}
+
+static void test_a_process_exiting_without_closing_leaves_three_frames(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    run_crashing_child(fx, nbep_test_tmp("output_exit.h5", path, sizeof path), false);
+    assert_frames(path, N_SPHERES, N_FRAMES, true);
+}
+
+static void test_the_chunk_index_holds_every_planned_frame_without_splitting(void **state)
+{
+    fixture *fx = *state;
+    nbep_scene sc = fx->sc;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_state_init(&sc.state, 10000, 0, &d), NBEP_OK);
+    sc.steps = 10000;
+    sc.output_every = 10;   /* frames at 0, 10, ..., 10000: 1001 */
+    char path[256];
+    nbep_output *o = NULL;
+    nbep_test_tmp("output_index_k.h5", path, sizeof path);
+    assert_ok(nbep_output_create(path, &sc, 1, &o, &d), &d);
+    assert_ok(nbep_output_close(&o, NULL, &d), &d);
+    hid_t f = open_ro(path), fcpl = H5Fget_create_plist(f);
+    unsigned k = 0;
+    assert_true(H5Pget_istore_k(fcpl, &k) >= 0);
+    H5Pclose(fcpl);
+    H5Fclose(f);
+    /* A v1 B-tree node holds up to 2K entries: one chunk per frame. */
+    assert_true(2 * k >= 1001);
+    nbep_state_fini(&sc.state);
+    nbep_diag_fini(&d);
+}
+
+static void test_h5dump_reads_the_file_of_a_killed_run(void **state)
+{
+    fixture *fx = *state;
+    if (system("command -v h5dump >/dev/null 2>&1") != 0)
+        skip();
+    char path[256], cmd[400];
+    run_crashing_child(fx, nbep_test_tmp("output_kill9_dump.h5", path, sizeof path), true);
+    snprintf(cmd, sizeof cmd, "h5dump -d /frames/step %s >/dev/null 2>&1", path);
+    assert_int_equal(system(cmd), 0);
+}
+
+/* ---- info ---------------------------------------------------------------------------------- */
+
+/* nbep_output_info's text for path (caller frees) and its status, without failing the test.
+ * Text and status come back separately (no char ** out-parameter): GCC 12 at -O3 mistakes an
+ * address-taken local here for a dangling pointer (a -Wdangling-pointer false positive). */
+static char *info_try(const char *path, nbep_status *st, nbep_diag *d)
+{
+    FILE *f = tmpfile();
+    assert_non_null(f);
+    *st = nbep_output_info(path, f, d);
+    long len = ftell(f);
+    assert_true(len >= 0);
+    char *buf = calloc((size_t)len + 1, 1);
+    assert_non_null(buf);
+    rewind(f);
+    assert_int_equal(fread(buf, 1, (size_t)len, f), (size_t)len);
+    fclose(f);
+    return buf;
+}
+
+/* nbep_output_info's text for path, or fails the test with its messages. Caller frees. */
+static char *info_text(const char *path, nbep_diag *d)
+{
+    nbep_status st;
+    char *text = info_try(path, &st, d);
+    if (st != NBEP_OK)
+        free(text);
+    assert_ok(st, d);
+    return text;
+}
+
+static void assert_has_line(const char *text, const char *line)
+{
+    const char *p = strstr(text, line);
+    if (!p || (p != text && p[-1] != '\n') || (p[strlen(line)] != '\n'))
+        fail_msg("no line \"%s\" in:\n%s", line, text);
+}
+
+static void test_info_reports_the_settings_frames_stats_and_summary(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    nbep_summary sum = known_summary();
+    write_run(fx, nbep_test_tmp("output_info.h5", path, sizeof path), &sum);
+    char *text = info_text(path, &fx->d);
+    char *json = nbep_summary_to_json(&sum);
+    json[strlen(json) - 1] = '\0';   /* the line without its newline */
+    char summary_line[1024];
+    snprintf(summary_line, sizeof summary_line, "summary:     %s", json);
+    assert_has_line(text, "format:      nbep-1");
+    assert_has_line(text, "algorithm:   predictive");
+    assert_has_line(text, "spheres:     5");
+    assert_has_line(text, "planes:      2");
+    assert_has_line(text, "steps asked: 20");
+    assert_has_line(text, "dt:          0.00125");
+    assert_has_line(text, "threads:     3");
+    assert_has_line(text, "seed:        424242");
+    assert_has_line(text, "restitution: 0.85");
+    assert_has_line(text, "gravity:     [0.25, -1.5, -9.81]");
+    assert_has_line(text, "overrides:   physics.restitution=0.85");
+    assert_has_line(text, "             run.steps=20");
+    assert_has_line(text, "frames:      3 (last: step 20, time 0.025)");
+    assert_has_line(text, "stats rows:  20");
+    assert_has_line(text, summary_line);
+    free(json);
+    free(text);
+}
+
+static void test_info_on_a_killed_run_says_it_has_no_summary(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    run_crashing_child(fx, nbep_test_tmp("output_info_kill9.h5", path, sizeof path), true);
+    char *text = info_text(path, &fx->d);
+    assert_has_line(text, "frames:      3 (last: step 20, time 0.025)");
+    assert_has_line(text, "summary:     none (run interrupted or still running)");
+    free(text);
+}
+
+static void test_info_reads_a_run_while_it_is_being_written(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    nbep_test_tmp("output_info_live.h5", path, sizeof path);
+    int to_child[2], to_parent[2];
+    assert_int_equal(pipe(to_child), 0);
+    assert_int_equal(pipe(to_parent), 0);
+    fflush(NULL);
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        /* Each side closes the ends it does not use, so that one side's death ends the other
+         * side's read with end-of-file instead of blocking it forever. */
+        close(to_child[1]), close(to_parent[0]);
+        char c = 0;
+        nbep_output *o = NULL;
+        if (nbep_output_create(path, &fx->sc, 2, &o, &fx->d) != NBEP_OK)
+            _exit(CHILD_CREATE);
+        for (int k = 0; k < N_FRAMES; k++) {
+            fill_frame(&fx->sc.state, k);
+            if (nbep_output_frame(o, (int64_t)k * FRAME_EVERY, DT, &fx->sc.state, &fx->d))
+                _exit(CHILD_FRAME);
+            /* After two frames: tell the parent, wait for it to have looked. */
+            if (k == 1 && (write(to_parent[1], &c, 1) != 1 || read(to_child[0], &c, 1) != 1))
+                _exit(CHILD_PIPE);
+        }
+        nbep_summary sum = known_summary();
+        if (nbep_output_close(&o, &sum, &fx->d) != NBEP_OK)
+            _exit(CHILD_CLOSE);
+        _exit(0);
+    }
+    close(to_child[0]), close(to_parent[1]);
+    char c = 0, *live = NULL;
+    ssize_t got = read(to_parent[0], &c, 1);
+    nbep_status live_st = NBEP_EIO;
+    if (got == 1)
+        live = info_try(path, &live_st, &fx->d);
+    ssize_t put = write(to_child[1], &c, 1);
+    close(to_child[1]), close(to_parent[0]);
+    int status;
+    assert_int_equal(waitpid(pid, &status, 0), pid);
+    assert_true(WIFEXITED(status));
+    assert_int_equal(WEXITSTATUS(status), 0);
+    assert_int_equal(got, 1);
+    assert_int_equal(put, 1);
+    if (live_st != NBEP_OK) {
+        free(live);
+        assert_ok(live_st, &fx->d);
+    }
+    assert_has_line(live, "frames:      2 (last: step 10, time 0.0125)");
+    assert_has_line(live, "summary:     none (run interrupted or still running)");
+    free(live);
+    char *text = info_text(path, &fx->d);
+    assert_has_line(text, "frames:      3 (last: step 20, time 0.025)");
+    assert_non_null(strstr(text, "summary:     {\"format\": \"nbep-summary-1\""));
+    free(text);
+}
+
+static void test_info_counts_only_the_complete_frames_of_a_run_killed_mid_frame(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    run_crashing_child(fx, nbep_test_tmp("output_info_torn.h5", path, sizeof path), true);
+    /* What a kill during a frame's first flush can leave: rows past the counts. */
+    hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+    assert_true(f >= 0);
+    const char *grown[] = {"/frames/step", "/frames/time", "/stats/step"};
+    for (size_t k = 0; k < sizeof grown / sizeof *grown; k++) {
+        hid_t ds = H5Dopen2(f, grown[k], H5P_DEFAULT);
+        hsize_t rows = (k < 2 ? N_FRAMES : N_STATS) + 1;
+        assert_true(H5Dset_extent(ds, &rows) >= 0);
+        H5Dclose(ds);
+    }
+    H5Fclose(f);
+    char *text = info_text(path, &fx->d);
+    assert_has_line(text, "frames:      3 (last: step 20, time 0.025), and 1 incomplete (the run "
+                          "was killed while writing it)");
+    assert_has_line(text, "stats rows:  20, and incomplete ones after them");
+    free(text);
+}
+
+static void test_info_rejects_a_file_that_is_not_hdf5(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    FILE *f = fopen(nbep_test_tmp("output_text.h5", path, sizeof path), "w");
+    assert_non_null(f);
+    fputs("run: { steps = 1; };\n", f);
+    fclose(f);
+    assert_int_equal(nbep_output_info(path, stdout, &fx->d), NBEP_EIO);
+    assert_one_line_naming(&fx->d, path);
+}
+
+static void test_info_rejects_an_hdf5_file_without_the_nbep_1_format(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    nbep_test_tmp("output_plain.h5", path, sizeof path);
+    hid_t f = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    assert_true(f >= 0);
+    H5Fclose(f);
+    assert_int_equal(nbep_output_info(path, stdout, &fx->d), NBEP_EIO);
+    assert_one_line_naming(&fx->d, path);
+    assert_non_null(strstr(fx->d.msg[0], "not an nbep-1 file"));
+}
+
+static void test_info_on_a_missing_file_fails_naming_it(void **state)
+{
+    fixture *fx = *state;
+    const char *path = "build/tests/tmp/output_does_not_exist.h5";
+    assert_int_equal(nbep_output_info(path, stdout, &fx->d), NBEP_EIO);
+    assert_one_line_naming(&fx->d, path);
+}
+
+/* ---- JSON ---------------------------------------------------------------------------------- */
+
+/* SPEC's keys in SPEC's order; numbers as %.17g: 1000 / 1.5 = 666.66666666666663,
+ * 0.25 / -1234.5 = -0.0002025111381125962. */
+static const char known_json[] =
+    "{\"format\": \"nbep-summary-1\", \"version\": \"" NBEP_VERSION "\", "
+    "\"algorithm\": \"predictive\", \"threads\": 2, \"spheres\": 4096, \"planes\": 6, "
+    "\"steps\": 1000, \"dt\": 0.001, \"setup_seconds\": 0.25, \"wall_seconds\": 1.5, "
+    "\"steps_per_second\": 666.66666666666663, \"checks\": 123456789012, "
+    "\"predictions\": 987654321, \"collisions\": 4242, \"sphere_collisions\": 4000, "
+    "\"plane_collisions\": 242, \"quiet_steps\": 950, \"energy_initial\": -1234.5, "
+    "\"energy_final\": -1234.25, \"energy_rel_drift\": -0.0002025111381125962, "
+    "\"max_overlap\": 2.9999999999999998e-14, \"max_overlap_rel\": 5.9999999999999997e-13, "
+    "\"peak_rss_bytes\": 52428800}\n";
+
+static void test_json_of_a_known_summary_is_the_expected_text(void **state)
+{
+    (void)state;
+    nbep_summary s = known_summary();
+    char *json = nbep_summary_to_json(&s);
+    assert_non_null(json);
+    assert_string_equal(json, known_json);
+    free(json);
+}
+
+static void test_json_written_to_a_stream_is_one_line_and_counts_its_bytes(void **state)
+{
+    (void)state;
+    nbep_summary s = known_summary();
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    assert_non_null(f);
+    int n = nbep_summary_write_json(&s, f);
+    fclose(f);
+    assert_int_equal(n, (int)strlen(known_json));
+    assert_string_equal(buf, known_json);
+    assert_ptr_equal(strchr(buf, '\n'), buf + len - 1);
+    free(buf);
+}
+
+static void test_json_parses_with_spec_keys_in_spec_order(void **state)
+{
+    (void)state;
+    if (system("command -v python3 >/dev/null 2>&1") != 0)
+        skip();
+    char path[256], cmd[1024];
+    nbep_summary s = known_summary();
+    FILE *f = fopen(nbep_test_tmp("output_summary.json", path, sizeof path), "w");
+    assert_non_null(f);
+    assert_true(nbep_summary_write_json(&s, f) > 0);
+    fclose(f);
+    /* An independent JSON parser; the keys as SPEC's "JSON summary" lists them. */
+    snprintf(cmd, sizeof cmd,
+             "python3 -c 'import json, sys; d = json.load(open(sys.argv[1])); "
+             "sys.exit(list(d) != [\"format\", \"version\", \"algorithm\", \"threads\", "
+             "\"spheres\", \"planes\", \"steps\", \"dt\", \"setup_seconds\", "
+             "\"wall_seconds\", \"steps_per_second\", \"checks\", \"predictions\", "
+             "\"collisions\", \"sphere_collisions\", \"plane_collisions\", "
+             "\"quiet_steps\", \"energy_initial\", \"energy_final\", "
+             "\"energy_rel_drift\", \"max_overlap\", \"max_overlap_rel\", "
+             "\"peak_rss_bytes\"] or d[\"steps_per_second\"] != 1000 / 1.5)' %s",
+             path);
+    assert_int_equal(system(cmd), 0);
+}
+
+static void test_json_escapes_quotes_backslashes_and_control_characters(void **state)
+{
+    (void)state;
+    nbep_summary s = known_summary();
+    snprintf(s.algorithm, sizeof s.algorithm, "a\"b\\c\td");
+    char *json = nbep_summary_to_json(&s);
+    assert_non_null(json);
+    assert_non_null(strstr(json, "\"algorithm\": \"a\\\"b\\\\c\\u0009d\", \"threads\""));
+    free(json);
+}
+
+static void test_json_keeps_every_digit_of_a_double(void **state)
+{
+    (void)state;
+    nbep_summary s = known_summary();
+    s.energy_initial = 0.1 + 0.2;                /* 0.30000000000000004: needs 17 digits */
+    s.energy_final = -4.9406564584124654e-324;   /* the smallest subnormal */
+    char *json = nbep_summary_to_json(&s);
+    assert_non_null(json);
+    const char *a = strstr(json, "\"energy_initial\": "), *b = strstr(json, "\"energy_final\": ");
+    assert_non_null(a);
+    assert_non_null(b);
+    assert_true(strtod(a + strlen("\"energy_initial\": "), NULL) == 0.1 + 0.2);
+    assert_true(strtod(b + strlen("\"energy_final\": "), NULL) == -4.9406564584124654e-324);
+    free(json);
+}
+
+static int make_dirs(void)
+{
+    const char *dirs[] = {"build", "build/tests", "build/tests/tmp"};
+    for (size_t k = 0; k < sizeof dirs / sizeof *dirs; k++)
+        if (mkdir(dirs[k], 0777) != 0 && errno != EEXIST)
+            return -1;
+    return 0;
+}
+
+int main(void)
+{
+    if (make_dirs() != 0) {
+        perror("test_output: cannot create build/tests/tmp");
+        return 1;
+    }
+    nbep_output_library_init();
+#define T(name) cmocka_unit_test_setup_teardown(name, setup, teardown)
+    const struct CMUnitTest tests[] = {
+        T(test_every_spec_path_exists_with_its_type_and_shape),
+        T(test_sphere_and_plane_arrays_read_back_bit_for_bit),
+        T(test_frames_read_back_bit_for_bit_with_their_steps_and_times),
+        T(test_frame_and_stats_datasets_are_chunked_and_extendable),
+        T(test_a_huge_frame_is_split_into_chunks_of_at_most_4_mib),
+        T(test_stats_rows_read_back_in_order_across_batches),
+        T(test_root_attributes_hold_the_settings_the_deck_and_the_build),
+        T(test_a_deck_larger_than_an_object_header_is_stored_whole),
+        T(test_summary_attribute_is_the_json_text),
+        T(test_closing_without_a_summary_leaves_an_empty_summary_group),
+        T(test_velocity_not_asked_for_is_not_created),
+        T(test_position_not_asked_for_is_not_created),
+        T(test_stats_not_asked_for_leave_no_stats_group),
+        T(test_a_scene_without_spheres_or_planes_still_records_frames),
+        T(test_closing_releases_every_hdf5_id),
+        T(test_closing_a_null_handle_does_nothing),
+        T(test_a_path_in_a_missing_directory_fails_with_eio_naming_the_path),
+        T(test_a_path_naming_a_directory_fails_and_leaves_the_directory),
+        T(test_a_failure_after_the_file_was_created_leaves_no_file),
+        T(test_a_failed_create_keeps_an_older_file_at_the_path),
+        T(test_a_frame_with_a_non_finite_position_is_refused),
+        T(test_a_run_killed_between_frames_leaves_every_frame_written),
+        T(test_a_process_exiting_without_closing_leaves_three_frames),
+        T(test_the_chunk_index_holds_every_planned_frame_without_splitting),
+        T(test_h5dump_reads_the_file_of_a_killed_run),
+        T(test_info_reports_the_settings_frames_stats_and_summary),
+        T(test_info_on_a_killed_run_says_it_has_no_summary),
+        T(test_info_reads_a_run_while_it_is_being_written),
+        T(test_info_counts_only_the_complete_frames_of_a_run_killed_mid_frame),
+        T(test_info_rejects_a_file_that_is_not_hdf5),
+        T(test_info_rejects_an_hdf5_file_without_the_nbep_1_format),
+        T(test_info_on_a_missing_file_fails_naming_it),
+        T(test_json_of_a_known_summary_is_the_expected_text),
+        T(test_json_written_to_a_stream_is_one_line_and_counts_its_bytes),
+        T(test_json_parses_with_spec_keys_in_spec_order),
+        T(test_json_escapes_quotes_backslashes_and_control_characters),
+        T(test_json_keeps_every_digit_of_a_double),
+    };
+#undef T
+    return cmocka_run_group_tests_name("output", tests, NULL, NULL);
+}
