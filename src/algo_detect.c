@@ -248,7 +248,7 @@ static void detect_run(nbep_sim *sim, void *p)
         nbep_state *s = &sim->st;
         const nbep_range own = nbep__range_split(s->n, tid, nt);
         contact_list *mine = &ctx->lists[tid];
-        for (uint64_t step = 1; step <= sim->step_end; step++) {
+        for (uint64_t step = sim->step_first; step <= sim->step_end; step++) {
             const int par = (int)(step & 1);
             /* update: free flight of own spheres */
             for (size_t i = own.lo; i < own.hi; i++)
@@ -288,6 +288,14 @@ static void detect_run(nbep_sim *sim, void *p)
     }
 }
 
-const nbep_algo nbep__algo_naive = {"naive", true, naive_create, detect_run, detect_destroy};
-const nbep_algo nbep__algo_seminaive = {"seminaive", true, seminaive_create, detect_run,
-                                        detect_destroy};
+/* Their whole state is positions and velocities: a resumed run needs nothing else. */
+const nbep_algo nbep__algo_naive = {.name = "naive",
+                                    .exact_overlap = true,
+                                    .create = naive_create,
+                                    .run = detect_run,
+                                    .destroy = detect_destroy};
+const nbep_algo nbep__algo_seminaive = {.name = "seminaive",
+                                        .exact_overlap = true,
+                                        .create = seminaive_create,
+                                        .run = detect_run,
+                                        .destroy = detect_destroy};

@@ -97,6 +97,7 @@ typedef struct pred_ctx {
     _Atomic uint64_t *reacted;    /* owned: round stamp of a sphere's last reaction */
     thread_ws *ws;                /* owned, one per thread */
     int nt;
+    bool imported;                /* slots came from a resumed run: no initial predictions */
 } pred_ctx;
 
 static void pred_destroy(void *p)
@@ -523,18 +524,23 @@ static void pred_run(nbep_sim *sim, void *p)
         thread_ws *w = &c->ws[tid];
         uint64_t round = 0;
 
-        /* initial predictions: every slot starts invalid (paper: "initialize events") */
-        find_phase(c, own, true, 0.0, w, &sim->counters[1][tid]);
-        w->n_cand = 0;
-        nbep_barrier_wait(&c->bar);
-        redo_phase(c, s, own, tid, 0.0, 0.0, w, &sim->counters[1][tid]);
+        /* initial predictions: every slot starts invalid (paper: "initialize events"); a
+         * resumed run has its slots already, and re-predicts its stale ones in its first step */
+        if (!c->imported) {
+            nbep_counters *cnt0 = &sim->counters[sim->step_first & 1][tid];
+            const double T0 = (double)(sim->step_first - 1) * sim->dt;
+            find_phase(c, own, true, T0, w, cnt0);
+            w->n_cand = 0;
+            nbep_barrier_wait(&c->bar);
+            redo_phase(c, s, own, tid, T0, T0, w, cnt0);
+        }
         if (tid == 0) { /* SPEC: the first predictions belong to the set-up time */
             double now = nbep__now();
             sim->setup_seconds += now - sim->t_start;
             sim->t_start = sim->t_last_progress = now;
         }
 
-        for (uint64_t step = 1; step <= sim->step_end; step++) {
+        for (uint64_t step = sim->step_first; step <= sim->step_end; step++) {
             const int spar = (int)(step & 1);
             nbep_counters *cnt = &sim->counters[spar][tid];
             nbep_thread_max *mx = &sim->tmax[spar][tid];
@@ -595,5 +601,45 @@ static void pred_run(nbep_sim *sim, void *p)
     }
 }
 
-const nbep_algo nbep__algo_predictive = {"predictive", false, pred_create, pred_run,
-                                         pred_destroy};
+/* At a frame (all spheres at the step's end, thread 0 between barriers: slots are stable):
+ * each sphere's slot as the next step will see it (stale ones as NONE, so that a resumed run
+ * re-predicts exactly the spheres this run would) and its resting plane. */
+static void pred_export(const void *p, const nbep_state *s, double *time, uint32_t *partner,
+                        uint8_t *kind, int32_t *rest)
+{
+    const pred_ctx *c = p;
+    for (size_t i = 0; i < s->n; i++) {
+        const nbep_event *ev = nbep_feq_slot(c->q, i);
+        bool fresh = is_fresh(c, i, ev);
+        time[i] = fresh && ev->kind != NBEP_EVENT_NEVER ? ev->time : 0.0; /* never inf: STYLE */
+        partner[i] = fresh ? ev->partner : 0;
+        kind[i] = (uint8_t)(fresh ? ev->kind : NBEP_EVENT_NONE);
+        rest[i] = c->rest[i];
+    }
+}
+
+/* A resumed run starts with every response count at 0, so the saved events are stored with
+ * counts 0: fresh exactly where they were fresh when saved. */
+static void pred_import(void *p, const nbep_resume *r)
+{
+    pred_ctx *c = p;
+    for (size_t i = 0; i < r->n; i++) {
+        c->rest[i] = r->rest[i];
+        nbep_feq_remove(c->q, i);
+        if (r->event_kind[i] == NBEP_EVENT_NEVER)
+            nbep_feq_set_never(c->q, i, 0);
+        else if (r->event_kind[i] == NBEP_EVENT_SPHERE || r->event_kind[i] == NBEP_EVENT_PLANE)
+            nbep_feq_insert(c->q, i,
+                            (nbep_event){r->event_time[i], r->event_partner[i],
+                                         r->event_kind[i], 0, 0});
+    }
+    c->imported = true;
+}
+
+const nbep_algo nbep__algo_predictive = {.name = "predictive",
+                                         .exact_overlap = false,
+                                         .create = pred_create,
+                                         .run = pred_run,
+                                         .destroy = pred_destroy,
+                                         .export_events = pred_export,
+                                         .import_events = pred_import};

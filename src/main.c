@@ -17,6 +17,7 @@
 #include "nbep/output.h"
 #include "nbep/scene.h"
 #include "nbep/sim.h"
+#include "nbep/sweep.h"
 
 /* The one mutable global (STYLE 2): the signal that asked the run to stop, 0 if none. The
  * handler only stores to it; the run polls it at the end of every step. */
@@ -113,16 +114,21 @@ static nbep_status cmd_run(const nbep_cli *cli, nbep_diag *d)
     int threads = nbep_sim_resolve_threads(sc.threads);
     nbep_output *out = NULL;
     nbep_sim *sim = NULL;
-    /* The output is created before any simulating: an unwritable path fails at once. */
-    st = nbep_output_create(sc.output_file, &sc, threads, &out, d);
+    nbep_resume res = {0};
+    /* --resume appends to the run it continues; output.file does not apply. */
+    const char *file = cli->resume ? cli->resume : sc.output_file;
+    /* The output is opened before any simulating: an unwritable path fails at once. */
+    st = cli->resume ? nbep_output_open_resume(file, &sc, &out, &res, d)
+                     : nbep_output_create(file, &sc, threads, &out, d);
     if (st == NBEP_OK) {
         nbep_sim_options opt = {.threads = threads, .out = out, .stop_signal = &stop_signal,
-                                .progress = !cli->quiet};
+                                .progress = !cli->quiet, .resume = cli->resume ? &res : NULL};
         st = nbep_sim_create(&sc, &opt, &sim, d);
-        if (st != NBEP_OK) { /* nothing was simulated: leave nothing behind */
+        if (st != NBEP_OK) {
             nbep_status ignored = nbep_output_close(&out, NULL, d);
             (void)ignored;
-            remove(sc.output_file);
+            if (!cli->resume) /* nothing was simulated: leave nothing behind */
+                remove(file);
         }
     }
     if (st == NBEP_OK) {
@@ -133,18 +139,19 @@ static nbep_status cmd_run(const nbep_cli *cli, nbep_diag *d)
         if (st == NBEP_OK)
             st = cst;
         if (!cli->quiet)
-            print_human_summary(&sum, sc.output_file, st);
+            print_human_summary(&sum, file, st);
         if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
             nbep_diag_add(d, __FILE__, __LINE__,
                           "nbep: %s by SIG%s after step %llu; every frame up to it is in %s",
                           st == NBEP_ESIGINT ? "interrupted" : "terminated",
                           st == NBEP_ESIGINT ? "INT" : "TERM", (unsigned long long)sum.steps,
-                          sc.output_file);
+                          file);
         nbep_status sst = write_summary(&sum, cli->summary, d);
         if (st == NBEP_OK)
             st = sst;
     }
     nbep_sim_destroy(&sim);
+    nbep_resume_fini(&res);
     nbep_scene_fini(&sc);
     return st;
 }
@@ -185,12 +192,7 @@ int main(int argc, char **argv)
                    NBEP_BUILD_COMMIT);
             break;
         case NBEP_CMD_RUN:
-            if (cli.resume) {
-                nbep_diag_add(&d, __FILE__, __LINE__, "nbep: --resume is not available yet");
-                st = NBEP_EUSAGE;
-            } else {
-                st = cmd_run(&cli, &d);
-            }
+            st = cmd_run(&cli, &d);
             break;
         case NBEP_CMD_CHECK:
             st = cmd_check(&cli, &d);
@@ -199,8 +201,7 @@ int main(int argc, char **argv)
             st = nbep_output_info(cli.path, stdout, &d);
             break;
         case NBEP_CMD_SWEEP:
-            nbep_diag_add(&d, __FILE__, __LINE__, "nbep: sweep is not available yet");
-            st = NBEP_EUSAGE;
+            st = nbep_sweep_main(&cli, &stop_signal, &d);
             break;
         }
     }

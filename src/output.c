@@ -127,6 +127,18 @@ struct nbep_output {
     hid_t frames_count;            /* the `count` attribute of /frames */
     hid_t stats_count;             /* the `count` attribute of /stats, if any */
     hsize_t n_frames, n_stats;     /* rows written */
+    hid_t ck[4];                   /* /checkpoint series (predictive runs), else invalid */
+};
+
+/* The per-frame columns a predictive run keeps for --resume, in nbep_events_view's order. */
+static const struct ck_column {
+    const char *name;
+    hid_t *file_type, *mem_type;   /* HDF5's type ids are variables, not constants */
+} ck_columns[4] = {
+    {"/checkpoint/event_time", &H5T_IEEE_F64LE_g, &H5T_NATIVE_DOUBLE_g},
+    {"/checkpoint/event_partner", &H5T_STD_U32LE_g, &H5T_NATIVE_UINT32_g},
+    {"/checkpoint/event_kind", &H5T_STD_U8LE_g, &H5T_NATIVE_UINT8_g},
+    {"/checkpoint/rest", &H5T_STD_I32LE_g, &H5T_NATIVE_INT32_g},
 };
 
 /* ---- errors ------------------------------------------------------------------------------ */
@@ -431,6 +443,15 @@ static int create_frames(nbep_output *o, const nbep_scene *sc, nbep_diag *d)
     if (sc->out_velocity && create_series(o, "/frames/velocity", H5T_IEEE_F64LE, 3, tail,
                                           chunk, &o->frame_vel, d) < 0)
         return -1;
+    if (strcmp(sc->algorithm, "predictive") == 0) {
+        hsize_t ck_tail[1] = {n}, ck_chunk[2] = {1, per_chunk};
+        if (make_group(o, "/checkpoint", NULL, d) < 0)
+            return -1;
+        for (int c = 0; c < 4; c++)
+            if (create_series(o, ck_columns[c].name, *ck_columns[c].file_type, 2, ck_tail,
+                              ck_chunk, &o->ck[c], d) < 0)
+                return -1;
+    }
     return 0;
 }
 
@@ -468,6 +489,8 @@ static void release(nbep_output **op)
     close_id(&o->frame_vel);
     for (int c = 0; c < STATS_N_COLUMNS; c++)
         close_id(&o->stats[c]);
+    for (int c = 0; c < 4; c++)
+        close_id(&o->ck[c]);
     close_id(&o->frames_count);
     close_id(&o->stats_count);
     close_id(&o->summary);
@@ -542,6 +565,8 @@ nbep_status nbep_output_create(const char *path, const nbep_scene *sc, int threa
     o->frames_count = o->stats_count = H5I_INVALID_HID;
     for (int c = 0; c < STATS_N_COLUMNS; c++)
         o->stats[c] = H5I_INVALID_HID;
+    for (int c = 0; c < 4; c++)
+        o->ck[c] = H5I_INVALID_HID;
 
     hid_t fapl = make_fapl(true), fcpl = make_fcpl(sc);
     if (fapl < 0 || fcpl < 0) {
@@ -623,6 +648,13 @@ static int commit(nbep_output *o, hsize_t frames, nbep_diag *d)
 nbep_status nbep_output_frame(nbep_output *o, int64_t step, double dt, const nbep_state *s,
                               nbep_diag *d)
 {
+    return nbep_output_frame_events(o, step, dt, s, NULL, d);
+}
+
+nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
+                                     const nbep_state *s, const nbep_events_view *ev,
+                                     nbep_diag *d)
+{
     assert(s->n == o->n_spheres);
     /* The module edge (STYLE 7): never put a NaN or inf in a file. */
     if (!nbep_state_all_finite(s))
@@ -647,6 +679,18 @@ nbep_status nbep_output_frame(nbep_output *o, int64_t step, double dt, const nbe
     if (o->frame_vel >= 0 && append_rows(o, o->frame_vel, "/frames/velocity", 3, f, vec,
                                          H5T_NATIVE_DOUBLE, vec_space, s->vel, d) < 0)
         goto done;
+    if (ev && o->ck[0] >= 0) {
+        hsize_t row[2] = {1, s->n}, nn = s->n;
+        hid_t row_space = H5Screate_simple(1, &nn, NULL);
+        const void *cols[4] = {ev->time, ev->partner, ev->kind, ev->rest};
+        int bad = row_space < 0;
+        for (int c = 0; c < 4 && !bad; c++)
+            bad = append_rows(o, o->ck[c], ck_columns[c].name, 2, f, row,
+                              *ck_columns[c].mem_type, row_space, cols[c], d) < 0;
+        close_id(&row_space);
+        if (bad)
+            goto done;
+    }
     if (append_rows(o, o->frame_time, "/frames/time", 1, f, one, H5T_NATIVE_DOUBLE, one_space,
                     &t, d) < 0 ||
         append_rows(o, o->frame_step, "/frames/step", 1, f, one, H5T_NATIVE_INT64, one_space,
@@ -732,6 +776,8 @@ nbep_status nbep_output_close(nbep_output **op, const nbep_summary *s, nbep_diag
     rc |= checked_close(&o->frame_vel, o->path, "/frames/velocity", d);
     for (int c = 0; c < STATS_N_COLUMNS; c++)
         rc |= checked_close(&o->stats[c], o->path, stats_columns[c].name, d);
+    for (int c = 0; c < 4; c++)
+        rc |= checked_close(&o->ck[c], o->path, ck_columns[c].name, d);
     rc |= checked_close(&o->frames_count, o->path, "attribute count of /frames", d);
     rc |= checked_close(&o->stats_count, o->path, "attribute count of /stats", d);
     rc |= checked_close(&o->summary, o->path, "/summary", d);
@@ -1174,4 +1220,275 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
     }
     run_info_fini(&r);
     return rc == 0 ? NBEP_OK : NBEP_EIO;
+}
+
+/* ---- resume -------------------------------------------------------------------------------- */
+
+void nbep_resume_fini(nbep_resume *r)
+{
+    if (!r)
+        return;
+    free(r->pos);
+    free(r->vel);
+    free(r->event_time);
+    free(r->event_partner);
+    free(r->event_kind);
+    free(r->rest);
+    memset(r, 0, sizeof *r);
+}
+
+/* Reads row `row` of dataset name (rows first; the rest of the shape is `per_row` values of
+ * mem_type) into buf. */
+static int read_dataset_row(hid_t file, const char *path, const char *name, hsize_t row,
+                            hsize_t per_row, hid_t mem_type, void *buf, nbep_diag *d)
+{
+    hsize_t dims[3] = {0, 0, 0}, start[3] = {row, 0, 0}, count[3] = {1, 0, 0};
+    int rc = -1;
+    hid_t ds = H5Dopen2(file, name, H5P_DEFAULT);
+    hid_t space = ds < 0 ? H5I_INVALID_HID : H5Dget_space(ds);
+    int rank = space < 0 ? -1 : H5Sget_simple_extent_dims(space, dims, NULL);
+    hid_t mem = H5Screate_simple(1, &per_row, NULL);
+    if (rank < 1 || rank > 3 || mem < 0) {
+        HDF5_FAIL(d, path, "read the shape of %s", name);
+        goto done;
+    }
+    hsize_t values = 1;
+    for (int k = 1; k < rank; k++)
+        values *= (count[k] = dims[k]);
+    if (values != per_row || row >= dims[0]) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s: %s has the wrong shape for this deck's spheres", path, name);
+        goto done;
+    }
+    if (per_row > 0 &&
+        (H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, count, NULL) < 0 ||
+         H5Dread(ds, mem_type, mem, space, H5P_DEFAULT, buf) < 0)) {
+        HDF5_FAIL(d, path, "read row %llu of %s", (unsigned long long)row, name);
+        goto done;
+    }
+    rc = 0;
+done:
+    close_id(&mem);
+    close_id(&space);
+    close_id(&ds);
+    return rc;
+}
+
+/* Opens dataset name and cuts it to `rows` rows. */
+static int open_cut(nbep_output *o, const char *name, hsize_t rows, hid_t *out, nbep_diag *d)
+{
+    hsize_t dims[3];
+    *out = H5Dopen2(o->file, name, H5P_DEFAULT);
+    hid_t space = *out < 0 ? H5I_INVALID_HID : H5Dget_space(*out);
+    int rank = space < 0 ? -1 : H5Sget_simple_extent_dims(space, dims, NULL);
+    close_id(&space);
+    if (rank < 1) {
+        HDF5_FAIL(d, o->path, "open %s", name);
+        return -1;
+    }
+    dims[0] = rows;
+    if (H5Dset_extent(*out, dims) < 0) {
+        HDF5_FAIL(d, o->path, "cut %s to %llu rows", name, (unsigned long long)rows);
+        return -1;
+    }
+    return 0;
+}
+
+/* The same deck? Sphere and plane counts, radii and masses must match bit for bit: -2 when
+ * they do not, -1 when the file cannot be read. */
+static int same_bodies(hid_t file, const char *path, const nbep_scene *sc, nbep_diag *d)
+{
+    const nbep_state *s = &sc->state;
+    hsize_t n = 0, np = 0;
+    if (dataset_rows(file, path, "/spheres/radius", &n, d) < 0 ||
+        dataset_rows(file, path, "/planes/offset", &np, d) < 0)
+        return -1;
+    if (n != s->n || np != s->n_planes) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s holds %llu spheres and %llu planes but %s makes %zu and %zu; "
+                      "resume with the deck (and --set options) that made it",
+                      path, (unsigned long long)n, (unsigned long long)np, sc->deck_path, s->n,
+                      s->n_planes);
+        return -2;
+    }
+    double *buf = malloc((s->n ? s->n : 1) * sizeof *buf);
+    if (!buf) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory to read %s", path);
+        return -1;
+    }
+    int rc = 0;
+    const char *names[2] = {"/spheres/radius", "/spheres/mass"};
+    const double *want[2] = {s->radius, s->mass};
+    for (int k = 0; k < 2 && rc == 0; k++) {
+        hid_t ds = H5Dopen2(file, names[k], H5P_DEFAULT);
+        if (ds < 0 || (s->n && H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT,
+                                       buf) < 0)) {
+            HDF5_FAIL(d, path, "read %s", names[k]);
+            rc = -1;
+        } else if (s->n && memcmp(buf, want[k], s->n * sizeof *buf) != 0) {
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: %s: %s differ from what %s makes; resume with the deck (and "
+                          "--set options) that made it",
+                          path, names[k] + 9, sc->deck_path);
+            rc = -2;
+        }
+        close_id(&ds);
+    }
+    free(buf);
+    return rc;
+}
+
+nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep_output **out,
+                                    nbep_resume *r, nbep_diag *d)
+{
+    nbep_resume res = {0};
+    nbep_status st = NBEP_EIO;
+    const size_t n = sc->state.n;
+    nbep_output *o = calloc(1, sizeof *o);
+    if (!o || !(o->path = strdup(path))) {
+        free(o);
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: %s: no memory for the output handle", path);
+    }
+    o->n_spheres = n;
+    o->file = o->summary = H5I_INVALID_HID;
+    o->frame_step = o->frame_time = o->frame_pos = o->frame_vel = H5I_INVALID_HID;
+    o->frames_count = o->stats_count = H5I_INVALID_HID;
+    for (int c = 0; c < STATS_N_COLUMNS; c++)
+        o->stats[c] = H5I_INVALID_HID;
+    for (int c = 0; c < 4; c++)
+        o->ck[c] = H5I_INVALID_HID;
+
+    hid_t fapl = make_fapl(true);
+    o->file = fapl < 0 ? H5I_INVALID_HID : H5Fopen(path, H5F_ACC_RDWR, fapl);
+    close_id(&fapl);
+    if (o->file < 0) {
+        HDF5_FAIL(d, path, "open the run to resume it");
+        goto fail;
+    }
+    char *format = NULL;
+    htri_t has_format = H5Aexists(o->file, "format");
+    if (has_format <= 0 || read_string_attr(o->file, path, "format", &format, d) < 0 ||
+        strcmp(format, FORMAT_NAME) != 0) {
+        free(format);
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s is not an %s run file", path,
+                      FORMAT_NAME);
+        goto fail;
+    }
+    free(format);
+    int same = same_bodies(o->file, path, sc, d);
+    if (same < 0) {
+        st = same == -2 ? NBEP_EDECK : NBEP_EIO;
+        goto fail;
+    }
+    uint64_t frames;
+    hsize_t more;
+    if (complete_rows(o->file, path, "/frames", "/frames/step", &frames, &more, d) < 0)
+        goto fail;
+    if (frames == 0) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s has no complete frame to resume from",
+                      path);
+        goto fail;
+    }
+    if (H5Lexists(o->file, "/frames/position", H5P_DEFAULT) <= 0 ||
+        H5Lexists(o->file, "/frames/velocity", H5P_DEFAULT) <= 0) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s cannot be resumed: its frames lack positions or velocities "
+                      "(output.fields)",
+                      path);
+        st = NBEP_EDECK;
+        goto fail;
+    }
+    hsize_t last = frames - 1;
+    res.n = n;
+    res.pos = malloc((n ? n : 1) * sizeof *res.pos);
+    res.vel = malloc((n ? n : 1) * sizeof *res.vel);
+    if (!res.pos || !res.vel) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory to resume %s", path);
+        st = NBEP_ENOMEM;
+        goto fail;
+    }
+    if (read_row(o->file, path, "/frames/step", last, H5T_NATIVE_INT64, &res.step, d) < 0 ||
+        read_dataset_row(o->file, path, "/frames/position", last, 3 * (hsize_t)n,
+                         H5T_NATIVE_DOUBLE, res.pos, d) < 0 ||
+        read_dataset_row(o->file, path, "/frames/velocity", last, 3 * (hsize_t)n,
+                         H5T_NATIVE_DOUBLE, res.vel, d) < 0)
+        goto fail;
+    /* The event slots: only a predictive file continued by a predictive deck can use them. */
+    htri_t has_ck = H5Lexists(o->file, "/checkpoint", H5P_DEFAULT);
+    if (has_ck > 0 && strcmp(sc->algorithm, "predictive") == 0) {
+        res.has_events = true;
+        res.event_time = malloc((n ? n : 1) * sizeof *res.event_time);
+        res.event_partner = malloc((n ? n : 1) * sizeof *res.event_partner);
+        res.event_kind = malloc((n ? n : 1) * sizeof *res.event_kind);
+        res.rest = malloc((n ? n : 1) * sizeof *res.rest);
+        void *cols[4] = {res.event_time, res.event_partner, res.event_kind, res.rest};
+        if (!res.event_time || !res.event_partner || !res.event_kind || !res.rest) {
+            nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory to resume %s", path);
+            st = NBEP_ENOMEM;
+            goto fail;
+        }
+        for (int c = 0; c < 4; c++)
+            if (read_dataset_row(o->file, path, ck_columns[c].name, last, n,
+                                 *ck_columns[c].mem_type, cols[c], d) < 0)
+                goto fail;
+    }
+    /* Continue appending after the last complete frame: cut everything written past it. */
+    if (open_cut(o, "/frames/step", frames, &o->frame_step, d) < 0 ||
+        open_cut(o, "/frames/time", frames, &o->frame_time, d) < 0 ||
+        open_cut(o, "/frames/position", frames, &o->frame_pos, d) < 0 ||
+        open_cut(o, "/frames/velocity", frames, &o->frame_vel, d) < 0)
+        goto fail;
+    if (has_ck > 0)
+        for (int c = 0; c < 4; c++)
+            if (open_cut(o, ck_columns[c].name, frames, &o->ck[c], d) < 0)
+                goto fail;
+    hid_t g = H5Gopen2(o->file, "/frames", H5P_DEFAULT);
+    o->frames_count = g < 0 ? H5I_INVALID_HID : H5Aopen(g, "count", H5P_DEFAULT);
+    close_id(&g);
+    if (o->frames_count < 0) {
+        HDF5_FAIL(d, path, "open the count attribute of /frames");
+        goto fail;
+    }
+    o->n_frames = frames;
+    if (H5Lexists(o->file, "/stats", H5P_DEFAULT) > 0) {
+        uint64_t rows;
+        if (complete_rows(o->file, path, "/stats", "/stats/step", &rows, &more, d) < 0)
+            goto fail;
+        /* one row per step from step 1: the rows up to the frame's step stay */
+        uint64_t keep = rows < (uint64_t)res.step ? rows : (uint64_t)res.step;
+        for (int c = 0; c < STATS_N_COLUMNS; c++)
+            if (open_cut(o, stats_columns[c].name, keep, &o->stats[c], d) < 0)
+                goto fail;
+        hid_t sg = H5Gopen2(o->file, "/stats", H5P_DEFAULT);
+        o->stats_count = sg < 0 ? H5I_INVALID_HID : H5Aopen(sg, "count", H5P_DEFAULT);
+        close_id(&sg);
+        if (o->stats_count < 0) {
+            HDF5_FAIL(d, path, "open the count attribute of /stats");
+            goto fail;
+        }
+        o->n_stats = keep;
+    }
+    /* The summary described the run as it ended; it is written again at the new end. */
+    o->summary = H5Gopen2(o->file, "/summary", H5P_DEFAULT);
+    if (o->summary < 0 ||
+        (H5Aexists(o->summary, "json") > 0 && H5Adelete(o->summary, "json") < 0)) {
+        HDF5_FAIL(d, path, "reset /summary");
+        goto fail;
+    }
+    hid_t steps_attr = H5Aopen(o->file, "steps", H5P_DEFAULT);
+    if (steps_attr < 0 || H5Awrite(steps_attr, H5T_NATIVE_UINT64, &sc->steps) < 0) {
+        HDF5_FAIL(d, path, "update the root attribute steps");
+        close_id(&steps_attr);
+        goto fail;
+    }
+    close_id(&steps_attr);
+    if (commit(o, frames, d) < 0)
+        goto fail;
+    *out = o;
+    *r = res;
+    return NBEP_OK;
+fail:
+    release(&o);
+    nbep_resume_fini(&res);
+    return st;
 }

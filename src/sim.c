@@ -118,6 +118,7 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
     sim->scene = sc;
     sim->opt = *opt;
     sim->nt = opt->threads > 0 ? opt->threads : 1;
+    sim->step_first = opt->resume ? (uint64_t)opt->resume->step + 1 : 1;
     sim->step_end = sc->steps;
     sim->dt = sc->dt;
     sim->algo = algo;
@@ -128,6 +129,10 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
         return st;
     }
     size_t n = sim->st.n;
+    if (opt->resume) {
+        memcpy(sim->st.pos, opt->resume->pos, n * sizeof *sim->st.pos);
+        memcpy(sim->st.vel, opt->resume->vel, n * sizeof *sim->st.vel);
+    }
     sim->n_blocks = (n + NBEP_BLOCK - 1) / NBEP_BLOCK;
     for (int k = 0; k < 2; k++) {
         sim->counters[k] = nbep_alloc_aligned((size_t)sim->nt, sizeof *sim->counters[k]);
@@ -146,6 +151,18 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
     if (st != NBEP_OK) {
         nbep_sim_destroy(&sim);
         return st;
+    }
+    if (opt->resume && opt->resume->has_events && algo->import_events)
+        algo->import_events(sim->algo_ctx, opt->resume);
+    if (opt->out && algo->export_events) {
+        sim->ev_time = nbep_alloc_aligned(n, sizeof *sim->ev_time);
+        sim->ev_partner = nbep_alloc_aligned(n, sizeof *sim->ev_partner);
+        sim->ev_kind = nbep_alloc_aligned(n, sizeof *sim->ev_kind);
+        sim->ev_rest = nbep_alloc_aligned(n, sizeof *sim->ev_rest);
+        if (!sim->ev_time || !sim->ev_partner || !sim->ev_kind || !sim->ev_rest) {
+            nbep_sim_destroy(&sim);
+            NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the run's checkpoints");
+        }
     }
     nbep__sim_block_energy(sim, (nbep_range){0, n});
     double ke, pe;
@@ -169,6 +186,10 @@ void nbep_sim_destroy(nbep_sim **simp)
     }
     nbep_free_aligned(sim->block_ke);
     nbep_free_aligned(sim->block_pe);
+    nbep_free_aligned(sim->ev_time);
+    nbep_free_aligned(sim->ev_partner);
+    nbep_free_aligned(sim->ev_kind);
+    nbep_free_aligned(sim->ev_rest);
     free(sim->rows);
     nbep_state_fini(&sim->st);
     free(sim);
@@ -204,8 +225,14 @@ static nbep_status emit_frame(nbep_sim *sim, uint64_t step)
                   "written for it",
                   (unsigned long long)step);
     nbep_status st = flush_rows(sim);
-    if (st == NBEP_OK && sim->opt.out)
-        st = nbep_output_frame(sim->opt.out, (int64_t)step, sim->dt, &sim->st, sim->diag);
+    if (st == NBEP_OK && sim->opt.out) {
+        nbep_events_view ev = {sim->ev_time, sim->ev_partner, sim->ev_kind, sim->ev_rest};
+        if (sim->ev_time)
+            sim->algo->export_events(sim->algo_ctx, &sim->st, sim->ev_time, sim->ev_partner,
+                                     sim->ev_kind, sim->ev_rest);
+        st = nbep_output_frame_events(sim->opt.out, (int64_t)step, sim->dt, &sim->st,
+                                      sim->ev_time ? &ev : NULL, sim->diag);
+    }
     if (st == NBEP_OK && sim->opt.on_frame)
         st = sim->opt.on_frame(sim->opt.on_frame_ctx, (int64_t)step, &sim->st, sim->diag);
     return st;
@@ -224,6 +251,7 @@ static void progress(nbep_sim *sim, uint64_t step, bool last)
     double el = now - sim->t_start;
     double rate = el > 0.0 ? (double)step / el : 0.0;
     double pct = sim->step_end ? 100.0 * (double)step / (double)sim->step_end : 100.0;
+    rate = el > 0.0 ? (double)(step + 1 - sim->step_first) / el : 0.0;
     double eta = rate > 0.0 ? (double)(sim->step_end - step) / rate : 0.0;
     if (tty)
         fprintf(stderr, "\rstep %llu/%llu  %5.1f%%  %.4g steps/s  ETA %.0f s   %s",
@@ -311,10 +339,12 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
     sim->diag = d;
     sim->status = NBEP_OK;
     sim->t_start = sim->t_last_progress = nbep__now();
-    nbep_status st = emit_frame(sim, 0);
+    /* A resumed run's first frame is already in the file. */
+    nbep_status st = sim->opt.resume ? NBEP_OK : emit_frame(sim, 0);
     if (st != NBEP_OK)
         return st;
-    if (sim->step_end > 0)
+    sim->steps_done = sim->step_first - 1;
+    if (sim->step_end >= sim->step_first)
         sim->algo->run(sim, sim->algo_ctx);
     sim->wall_seconds = nbep__now() - sim->t_start;
     st = flush_rows(sim);
@@ -338,12 +368,12 @@ void nbep_sim_summary(const nbep_sim *sim, nbep_summary *s)
     s->threads = sim->nt;
     s->spheres = sim->st.n;
     s->planes = sim->st.n_planes;
-    s->steps = sim->steps_done;
+    s->steps = sim->steps_done; /* the step reached (a resumed run counts from the start) */
     s->dt = sim->dt;
     s->setup_seconds = sim->setup_seconds;
     s->wall_seconds = sim->wall_seconds;
-    s->steps_per_second = sim->wall_seconds > 0.0 ? (double)sim->steps_done / sim->wall_seconds
-                                                  : 0.0;
+    double stepped = (double)(sim->steps_done + 1 - sim->step_first);
+    s->steps_per_second = sim->wall_seconds > 0.0 ? stepped / sim->wall_seconds : 0.0;
     s->checks = sim->totals[NBEP_COUNTER_CHECKS];
     s->predictions = sim->totals[NBEP_COUNTER_PREDICTIONS];
     s->sphere_collisions = sim->totals[NBEP_COUNTER_SPHERE_COLLISIONS];

@@ -35,7 +35,7 @@ struct nbep_sim {
     nbep_sim_options opt;
     nbep_state st;                   /* owned: the evolving state */
     int nt;                          /* threads */
-    uint64_t step_end;               /* steps to simulate: 1..step_end */
+    uint64_t step_first, step_end;   /* steps to simulate: step_first..step_end (1-based) */
     double dt;
     const nbep_algo *algo;           /* borrowed: static table entry */
     void *algo_ctx;                  /* owned by the algorithm */
@@ -45,6 +45,10 @@ struct nbep_sim {
     nbep_thread_max *tmax[2];        /* owned, nt each */
     double *block_ke, *block_pe;     /* owned, one per NBEP_BLOCK spheres */
     size_t n_blocks;
+    double *ev_time;                 /* owned, n each: event slots exported at frames, when */
+    uint32_t *ev_partner;            /* the algorithm has them and there is an output */
+    uint8_t *ev_kind;
+    int32_t *ev_rest;
     nbep_step_stats *rows;           /* owned: stats rows not yet written */
     size_t n_rows, cap_rows;
     /* totals and summary */
@@ -72,6 +76,11 @@ struct nbep_algo {
     nbep_status (*create)(nbep_sim *sim, void **ctx, nbep_diag *d);
     void (*run)(nbep_sim *sim, void *ctx);
     void (*destroy)(void *ctx);
+    /* optional (NULL): the state beyond positions and velocities that a resumed run needs to
+     * continue bit for bit: export at a frame (thread 0, slots stable), import at create */
+    void (*export_events)(const void *ctx, const nbep_state *s, double *time,
+                          uint32_t *partner, uint8_t *kind, int32_t *rest);
+    void (*import_events)(void *ctx, const nbep_resume *r);
 };
 
 extern const nbep_algo nbep__algo_naive;

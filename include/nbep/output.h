@@ -58,6 +58,47 @@ NBEP_MUST_CHECK nbep_status nbep_output_create(const char *path, const nbep_scen
  * position or velocity is not finite, NBEP_EIO on a write failure. */
 NBEP_MUST_CHECK nbep_status nbep_output_frame(nbep_output *o, int64_t step, double dt,
                                               const nbep_state *s, nbep_diag *d);
+
+/* What a predictive run keeps beside each frame so that `--resume` continues exactly as an
+ * uninterrupted run would: every sphere's event slot (kind NONE where the slot was stale) and
+ * the plane it rests on (-1 for none). Arrays of N, borrowed. */
+typedef struct nbep_events_view {
+    const double *time;
+    const uint32_t *partner;
+    const uint8_t *kind;
+    const int32_t *rest;
+} nbep_events_view;
+
+/* nbep_output_frame plus, when ev is not NULL and the file was made for a predictive run, the
+ * frame's row of /checkpoint/{event_time,event_partner,event_kind,rest}; all rows of one frame
+ * become visible together (the /frames count attribute). */
+NBEP_MUST_CHECK nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
+                                                     const nbep_state *s,
+                                                     const nbep_events_view *ev, nbep_diag *d);
+
+/* Where a run continues from: its last complete frame. */
+typedef struct nbep_resume {
+    int64_t step;                 /* the frame's step */
+    size_t n;
+    nbep_vec3 *pos, *vel;         /* owned, n each */
+    bool has_events;              /* the file has /checkpoint rows for this frame */
+    double *event_time;           /* owned when has_events, n each */
+    uint32_t *event_partner;
+    uint8_t *event_kind;
+    int32_t *rest;
+} nbep_resume;
+void nbep_resume_fini(nbep_resume *r);
+
+/* `nbep run DECK --resume RUN.h5`: opens an existing run for appending. Checks that it is an
+ * nbep-1 file of sc's spheres (same count, radii and masses) and planes, and that its frames
+ * hold positions and velocities; reads its last complete frame (and, for a predictive run of a
+ * predictive scene, that frame's event slots) into *r; drops rows written after that frame
+ * (incomplete frames, stats rows of later steps), removes the old summary and sets the root
+ * attribute `steps` to sc->steps. Frames and stats then append as after nbep_output_create.
+ * NBEP_EIO for a file that cannot be read or written, NBEP_EDECK when deck and file disagree. */
+NBEP_MUST_CHECK nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc,
+                                                    nbep_output **out, nbep_resume *r,
+                                                    nbep_diag *d);
 /* Appends count rows (borrowed) to /stats; they reach the disk with the next frame or close.
  * Only when the scene asked for stats. NBEP_EIO on failure. */
 NBEP_MUST_CHECK nbep_status nbep_output_stats(nbep_output *o, const nbep_step_stats *rows,

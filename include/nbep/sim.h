@@ -28,9 +28,11 @@ typedef struct nbep_sim_options {
     void *on_frame_ctx;
     const atomic_int *stop_signal;  /* borrowed, may be NULL: nonzero = SIGINT/SIGTERM number */
     bool progress;                  /* progress lines on stderr */
+    const nbep_resume *resume;      /* borrowed, may be NULL: continue from this frame */
 } nbep_sim_options;
 
-/* A run of sc (borrowed; must outlive the sim) from its initial state. Allocates everything
+/* A run of sc (borrowed; must outlive the sim) from its initial state, or from opt->resume
+ * (its frame's step, positions, velocities and, for predictive, event slots). Allocates everything
  * the algorithm needs; nothing is allocated inside a step. NBEP_ENOMEM, NBEP_EDECK for an
  * unknown algorithm. */
 NBEP_MUST_CHECK nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt,
