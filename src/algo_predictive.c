@@ -57,10 +57,22 @@
  * removed, m (a t/2)^2 / 2 with t = 1e-9 dt, is far below round-off of the total. */
 #define NBEP_REST_FRACTION 1e-9
 #define NO_PLANE (-1)
-/* Rounds one step may take before the run is stopped as a numerical failure: every round
- * reacts at least once, so more rounds than this means a cascade of zero-time events (a
- * contact the model cannot resolve) rather than physics. */
-#define MAX_ROUNDS_PER_SPHERE 64
+/* Every this many rounds of one step, time must have advanced by more than STALL_FRACTION of
+ * a step, or the run stops as a numerical failure: a step may hold any number of real events
+ * (a fast sphere between close walls: thousands), but a cascade that no longer advances time
+ * is a contact the model cannot resolve. */
+#define STALL_ROUNDS 100000u
+#define STALL_FRACTION 1e-12
+/* Sphere-sphere contacts that different accelerations press together (a sphere on one that
+ * rests on a floor, a pile) would bounce ever faster (inelastic collapse: infinitely many
+ * collisions in finite time) or, with e = 1, forever at a vanishing height. Such a pair leaves
+ * every response with at least the separating speed that keeps it apart for t_min: the smaller
+ * of MIN_BOUNCE_STEP_FRACTION of a step and the time a bounce of MIN_BOUNCE_REL_HEIGHT of the
+ * smaller radius takes (so the jitter stays far below the geometry at any dt). Each such bounce
+ * adds at most mu (a t_min)^2 / 8 of energy (mu the reduced mass, a the pressing
+ * acceleration): about 1e-8 J for two 1 kg spheres under gravity at dt = 1e-3. */
+#define MIN_BOUNCE_STEP_FRACTION 0.1
+#define MIN_BOUNCE_REL_HEIGHT 1e-6
 #define KEY_FREE UINT64_MAX
 
 typedef struct thread_ws {
@@ -439,6 +451,30 @@ static void note_overlap(nbep_thread_max *mx, double ov, double r)
         mx->overlap_rel = ov / r;
 }
 
+/* See MIN_BOUNCE_STEP_FRACTION: a pair pressed together by its accelerations leaves with at
+ * least the separating speed that keeps it apart for t_min, given as an impulse along the line
+ * of centres shared by mass like a response (momentum is kept). */
+static void min_bounce(const pred_ctx *c, nbep_state *s, double dt, uint32_t lo, uint32_t hi)
+{
+    nbep_vec3 dp = nbep_vec3_sub(s->pos[hi], s->pos[lo]);
+    double dist = nbep_vec3_norm(dp);
+    if (!(dist > 0.0))
+        return;
+    nbep_vec3 n = nbep_vec3_scale(dp, 1.0 / dist);
+    double an = nbep_vec3_dot(nbep_vec3_sub(effective_acc(c, s, hi), effective_acc(c, s, lo)), n);
+    if (!(an < 0.0))
+        return; /* nothing presses them together: they part for good */
+    double rmin = fmin(s->radius[lo], s->radius[hi]);
+    double t_min = fmin(MIN_BOUNCE_STEP_FRACTION * dt, sqrt(8.0 * MIN_BOUNCE_REL_HEIGHT * rmin / -an));
+    double want = -an * t_min / 2.0;
+    double u = nbep_vec3_dot(nbep_vec3_sub(s->vel[hi], s->vel[lo]), n);
+    if (u >= want)
+        return;
+    double m = s->mass[lo] + s->mass[hi], du = want - u;
+    s->vel[lo] = nbep_vec3_axpy(s->vel[lo], -du * s->mass[hi] / m, n);
+    s->vel[hi] = nbep_vec3_axpy(s->vel[hi], du * s->mass[lo] / m, n);
+}
+
 static void react(pred_ctx *c, nbep_state *s, double e, double dt, double t_local,
                   uint32_t lo, uint32_t hi, const nbep_event *ev, thread_ws *w,
                   nbep_counters *cnt, nbep_thread_max *mx)
@@ -468,6 +504,7 @@ static void react(pred_ctx *c, nbep_state *s, double e, double dt, double t_loca
     if (nbep_physics_respond_pair(s->pos[lo], s->pos[hi], &s->vel[lo], &s->vel[hi],
                                   s->mass[lo], s->mass[hi], e))
         cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
+    min_bounce(c, s, dt, lo, hi);
     update_rest(c, s, lo);
     update_rest(c, s, hi);
     c->ver[lo]++;
@@ -547,6 +584,7 @@ static void pred_run(nbep_sim *sim, void *p)
             const double T0 = (double)(step - 1) * sim->dt;
             const double T_end = (double)step * sim->dt;
             const uint64_t step_round0 = round;
+            double t_check = T0;
             for (bool first = true;; first = false, round++) {
                 const int par = (int)(round & 1);
                 /* the claim words of the previous round are reset while nobody reads them */
@@ -567,7 +605,8 @@ static void pred_run(nbep_sim *sim, void *p)
                     t_min = fmin(t_min, c->ws[t].t_min);
                 if (!(t_min < T_end))
                     break;
-                if (round - step_round0 > MAX_ROUNDS_PER_SPHERE * (uint64_t)s->n + 1000) {
+                if ((round - step_round0) % STALL_ROUNDS == STALL_ROUNDS - 1 &&
+                    !(t_min - t_check > STALL_FRACTION * sim->dt)) {
                     if (tid == 0) {
                         nbep_diag_add(sim->diag, __FILE__, __LINE__,
                                       "nbep: step %llu: events at t = %.17g do not resolve "
@@ -577,6 +616,8 @@ static void pred_run(nbep_sim *sim, void *p)
                     }
                     goto done;
                 }
+                if ((round - step_round0) % STALL_ROUNDS == STALL_ROUNDS - 1)
+                    t_check = t_min;
                 claim_phase(c, par, t_min, w);
                 nbep_barrier_wait(&c->bar);
                 react_phase(c, s, sim->scene, par, T0, t_min, round + 1, w, cnt, mx);

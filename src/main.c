@@ -89,14 +89,24 @@ static void print_human_summary(const nbep_summary *s, const char *file, nbep_st
             s->energy_rel_drift, s->max_overlap_rel, file);
 }
 
-static nbep_status write_summary(const nbep_summary *s, const char *where, nbep_diag *d)
+/* Opens --summary FILE before anything is simulated, so that an unwritable path fails at once
+ * (stdout for "-", NULL when not asked for). */
+static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
 {
+    *out = NULL;
     if (!where)
         return NBEP_OK;
-    FILE *f = strcmp(where, "-") == 0 ? stdout : fopen(where, "w");
-    if (!f)
+    *out = strcmp(where, "-") == 0 ? stdout : fopen(where, "w");
+    if (!*out)
         NBEP_FAIL(d, NBEP_EIO, "nbep: cannot write the summary to %s: %s", where,
                   strerror(errno));
+    return NBEP_OK;
+}
+
+static nbep_status write_summary(const nbep_summary *s, const char *where, FILE *f, nbep_diag *d)
+{
+    if (!f)
+        return NBEP_OK;
     int bad = nbep_summary_write_json(s, f) < 0;
     bad |= f == stdout ? fflush(f) != 0 : fclose(f) != 0;
     if (bad)
@@ -115,11 +125,14 @@ static nbep_status cmd_run(const nbep_cli *cli, nbep_diag *d)
     nbep_output *out = NULL;
     nbep_sim *sim = NULL;
     nbep_resume res = {0};
+    FILE *summary = NULL;
     /* --resume appends to the run it continues; output.file does not apply. */
     const char *file = cli->resume ? cli->resume : sc.output_file;
-    /* The output is opened before any simulating: an unwritable path fails at once. */
-    st = cli->resume ? nbep_output_open_resume(file, &sc, &out, &res, d)
-                     : nbep_output_create(file, &sc, threads, &out, d);
+    /* Outputs are opened before any simulating: an unwritable path fails at once. */
+    st = open_summary(cli->summary, &summary, d);
+    if (st == NBEP_OK)
+        st = cli->resume ? nbep_output_open_resume(file, &sc, &out, &res, d)
+                         : nbep_output_create(file, &sc, threads, &out, d);
     if (st == NBEP_OK) {
         nbep_sim_options opt = {.threads = threads, .out = out, .stop_signal = &stop_signal,
                                 .progress = !cli->quiet, .resume = cli->resume ? &res : NULL};
@@ -146,9 +159,14 @@ static nbep_status cmd_run(const nbep_cli *cli, nbep_diag *d)
                           st == NBEP_ESIGINT ? "interrupted" : "terminated",
                           st == NBEP_ESIGINT ? "INT" : "TERM", (unsigned long long)sum.steps,
                           file);
-        nbep_status sst = write_summary(&sum, cli->summary, d);
+        nbep_status sst = write_summary(&sum, cli->summary, summary, d);
+        summary = NULL;
         if (st == NBEP_OK)
             st = sst;
+    }
+    if (summary && summary != stdout) { /* never simulated: no summary file either */
+        fclose(summary);
+        remove(cli->summary);
     }
     nbep_sim_destroy(&sim);
     nbep_resume_fini(&res);

@@ -50,6 +50,9 @@ enum { QUARTIC_TERMS = 5 };
  * units of the largest root, where a double real root (a grazing contact) splits under
  * round-off into a pair up to ~sqrt(DBL_EPSILON) = 1.5e-8 apart; 1e-6 leaves a margin. A truly
  * complex root let through only costs a look at the valley of f there (see consider()). */
+/* |dp|^2 - sigma^2 below this fraction of sigma^2 (a gap under 5e-7 sigma) counts as nearly
+ * touching: see nbep_predict_pair. */
+#define NEAR_CONTACT_REL 1e-6
 #define IMAG_TOL 1e-6
 /* In units of the largest root, GSL places a root only to within some ulps of 1; below
  * SMALL_ROOT its estimate may be too rough for Newton, while the truncated quadratic's
@@ -509,6 +512,13 @@ double nbep_predict_pair(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double sigma,
     case SETUP_NONFINITE:
         return NBEP_NEVER;
     }
+    /* Nearly touching: GSL's roots carry an absolute error of about eps times the largest
+     * root, and a contact that starts within a hair's gap can be many orders of magnitude
+     * sooner than that (a sphere at rest on another, pulled onto it by a different
+     * acceleration, touches again after ~1e-9 s). The search has no such scale; pairs this
+     * close are rare (resting contacts), so its cost does not matter. */
+    if (q.a[0] <= NEAR_CONTACT_REL * sigma * sigma)
+        return bracket_search(&q);
 
     /* Monic in units of 2^scale_exp: b_k = a_k / (a_4 2^(scale_exp (4-k))), |b_k| <= 1,
      * formed from mantissas and exponents so that no intermediate overflows. */
