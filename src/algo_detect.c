@@ -248,6 +248,8 @@ static void detect_run(nbep_sim *sim, void *p)
         nbep_state *s = &sim->st;
         const nbep_range own = nbep__range_split(s->n, tid, nt);
         contact_list *mine = &ctx->lists[tid];
+        /* see pred_run: makes OpenMP's hand-over visible to ThreadSanitizer */
+        nbep_barrier_wait(&ctx->bar);
         for (uint64_t step = sim->step_first; step <= sim->step_end; step++) {
             const int par = (int)(step & 1);
             /* update: free flight of own spheres */
@@ -285,6 +287,7 @@ static void detect_run(nbep_sim *sim, void *p)
             if (atomic_load_explicit(&sim->stop, memory_order_relaxed))
                 break;
         }
+        nbep_barrier_wait(&ctx->bar);
     }
 }
 

@@ -560,6 +560,11 @@ static void pred_run(nbep_sim *sim, void *p)
         const nbep_range own = nbep__range_split(s->n, tid, nt);
         thread_ws *w = &c->ws[tid];
         uint64_t round = 0;
+        /* OpenMP's own hand-over into and out of the region is invisible to ThreadSanitizer
+         * (libgomp is not instrumented); crossing our barrier first and last makes every
+         * write before the region visible to all threads, and theirs to the caller, through
+         * C11 atomics it does see. Two crossings per run cost nothing. */
+        nbep_barrier_wait(&c->bar);
 
         /* initial predictions: every slot starts invalid (paper: "initialize events"); a
          * resumed run has its slots already, and re-predicts its stale ones in its first step */
@@ -638,7 +643,8 @@ static void pred_run(nbep_sim *sim, void *p)
              * which the hook does not touch; its stop request is read after that phase's
              * barrier */
         }
-    done:;
+    done:
+        nbep_barrier_wait(&c->bar);
     }
 }
 

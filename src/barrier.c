@@ -18,19 +18,22 @@
 void nbep_barrier_init(nbep_barrier *b, unsigned n)
 {
     assert(b && n >= 1);
-    /* Not atomic itself: the barrier is made before the threads that use it start. */
-    atomic_init(&b->left, n);
-    atomic_init(&b->round, 0u);
+    /* Release stores rather than atomic_init: the threads that will wait may be pooled ones
+     * that OpenMP hands work to by means ThreadSanitizer cannot see; the acquire load that
+     * starts every wait then orders this initialisation (and everything before it) first. */
     b->n = n;
+    atomic_store_explicit(&b->left, n, memory_order_release);
+    atomic_store_explicit(&b->round, 0u, memory_order_release);
 }
 
 void nbep_barrier_wait(nbep_barrier *b)
 {
-    /* Relaxed: `round` cannot advance before we arrive (`left` cannot reach zero without our
+    /* `round` cannot advance before we arrive (`left` cannot reach zero without our
      * decrement), and we have already seen its current value: we either advanced it ourselves
      * or read it with the acquire load that let us out of the previous wait; coherence forbids
-     * reading an older value after that. */
-    const unsigned r = atomic_load_explicit(&b->round, memory_order_relaxed);
+     * reading an older value after that. Relaxed would do for that; acquire also orders the
+     * barrier's initialisation before a thread's first wait (see nbep_barrier_init). */
+    const unsigned r = atomic_load_explicit(&b->round, memory_order_acquire);
     /* acq_rel: the release half publishes this thread's writes before the barrier; the
      * acquire half lets the last arrival see everyone's, since the fetch_subs of one round
      * form a release sequence that its read of 1 completes. */
