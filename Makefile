@@ -102,8 +102,9 @@ test: check
 bench: bin/nbep $(BENCH_BIN)
 	bash scripts/bench.sh
 
-tsan:
-	$(MAKE) clean && $(MAKE) SAN=thread VALGRIND=0 check
+# ThreadSanitizer needs an instrumented OpenMP runtime: clang + libomp + Archer (scripts/).
+tsan: $(BUILD_INFO)
+	bash scripts/tsan.sh
 asan:
 	$(MAKE) clean && $(MAKE) SAN=address VALGRIND=0 check
 

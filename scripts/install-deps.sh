@@ -12,6 +12,7 @@ packages=(
     libcmocka-dev                               # unit tests
     libopenmpi-dev openmpi-bin                  # parameter sweeps across ranks
     valgrind                                    # make check runs the suite under memcheck
+    clang libomp-dev                            # make tsan: ThreadSanitizer with an OpenMP it can see
     python3 python3-numpy python3-matplotlib python3-h5py   # benchmark plots and renderer
 )
 

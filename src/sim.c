@@ -117,7 +117,11 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for a run");
     sim->scene = sc;
     sim->opt = *opt;
+#ifdef _OPENMP
     sim->nt = opt->threads > 0 ? opt->threads : 1;
+#else
+    sim->nt = 1; /* a serial build (make OMP=0) runs one thread whatever was asked */
+#endif
     sim->step_first = opt->resume ? (uint64_t)opt->resume->step + 1 : 1;
     sim->step_end = sc->steps;
     sim->dt = sc->dt;

@@ -122,17 +122,18 @@ nbep_status nbep_state_max_overlap(const nbep_state *s, double *max_out, double 
             lo.z = fmin(lo.z, s->pos[i].z), hi.z = fmax(hi.z, s->pos[i].z);
             rmax = fmax(rmax, s->radius[i]);
         }
+        /* Cells at least a diameter wide, and about n of them over the spheres' bounding box
+         * (each side floored at a diameter, so a flat or thin layout does not collapse the
+         * volume): O(1) spheres per cell for any shape of layout, O(n) memory. */
         double h = 2.0 * rmax;
-        double ext = fmax(hi.x - lo.x, fmax(hi.y - lo.y, hi.z - lo.z));
-        double cube = cbrt((double)n);
-        if (!(h > 0.0) || ext / h > cube)
-            h = fmax(h, ext / cube);
+        double ex = fmax(hi.x - lo.x, h), ey = fmax(hi.y - lo.y, h), ez = fmax(hi.z - lo.z, h);
+        h = fmax(h, cbrt(ex * ey * ez / (double)n));
         if (!(h > 0.0) || !isfinite(h))
             h = 1.0;
         double inv_h = 1.0 / h;
-        size_t cx = (size_t)fmin(floor((hi.x - lo.x) * inv_h) + 1.0, cube + 1.0);
-        size_t cy = (size_t)fmin(floor((hi.y - lo.y) * inv_h) + 1.0, cube + 1.0);
-        size_t cz = (size_t)fmin(floor((hi.z - lo.z) * inv_h) + 1.0, cube + 1.0);
+        size_t cx = (size_t)(floor((hi.x - lo.x) * inv_h) + 1.0);
+        size_t cy = (size_t)(floor((hi.y - lo.y) * inv_h) + 1.0);
+        size_t cz = (size_t)(floor((hi.z - lo.z) * inv_h) + 1.0);
         size_t cells = cx * cy * cz;
         size_t *start = calloc(cells + 1, sizeof *start);
         size_t *order = malloc(n * sizeof *order);

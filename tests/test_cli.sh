@@ -1,0 +1,93 @@
+#!/usr/bin/env bash
+# Checks of bin/nbep that need a whole process: decks that cannot be run must fail cleanly
+# before any simulating, with the SPEC's exit status and one line on stderr that says where
+# and what, and leave no file behind.
+#   - a count far beyond memory (spheres.[0].count = 10^12, in the deck or through --set) and
+#     one beyond this machine's memory (10^9): a clear error, never a crash;
+#   - an output path that cannot be created: status 1 or 2, no file, no step simulated;
+#   - a --summary path that cannot be written: the same, found before simulating.
+# A run that did simulate would take hours here (10^9 steps), so "fails before simulating" is
+# checked by the run ending at all (under a 30 s guard, status 124 if it did not).
+# Run from anywhere after `make`; exit status 1 when a check fails.
+set -u
+cd "$(dirname "$0")/.."
+nbep=bin/nbep
+tmp=build/tests/tmp/cli
+rm -rf "$tmp" && mkdir -p "$tmp"
+fail=0
+check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+
+# Runs nbep with a guard; leaves its status in $rc and its stderr in $tmp/stderr.
+run_nbep() {
+    timeout 30 "$nbep" "$@" >"$tmp/stdout" 2>"$tmp/stderr"
+    rc=$?
+}
+
+# One line on stderr (SPEC: "Every error is one line on stderr that says where and what").
+one_line() { [ "$(wc -l <"$tmp/stderr")" -eq 1 ]; }
+
+# A deck of one group and a long run (10^9 steps: simulating it would not end in time).
+cat >"$tmp/group.deck" <<'EOF'
+run: { algorithm = "predictive"; steps = 1000000000; dt = 1.0e-3; threads = 1; };
+box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; };
+spheres = ( { count = 64; radius = 0.05; mass = 1.0; place = "lattice"; } );
+output: { file = "group.h5"; every = 1000; };
+EOF
+
+# ---- huge counts ------------------------------------------------------------------------------
+sed 's/count = 64/count = 1000000000000/' "$tmp/group.deck" >"$tmp/huge.deck"
+run_nbep run "$tmp/huge.deck" -o "$tmp/huge.h5"
+check "count 10^12 in the deck: exit 2, not a crash (got $rc)" "[ $rc = 2 ]"
+check "count 10^12 in the deck: one line naming deck:line and the setting" \
+    "one_line && grep -q '^$tmp/huge.deck:3: spheres.\[0\].count = 1000000000000' '$tmp/stderr'"
+check "count 10^12 in the deck: no output file" "[ ! -e '$tmp/huge.h5' ]"
+
+run_nbep check "$tmp/group.deck" --set 'spheres.[0].count=1000000000000'
+check "count 10^12 through --set: exit 2, not a crash (got $rc)" "[ $rc = 2 ]"
+check "count 10^12 through --set: one line naming the setting" \
+    "one_line && grep -q 'spheres.\[0\].count = 1000000000000' '$tmp/stderr'"
+
+# 10^9 spheres fit 32-bit ids; they need about 300 GB. A machine with that much memory would
+# place them for minutes: skip there.
+mem_kb=$(awk '/^MemTotal:/ {print $2}' /proc/meminfo 2>/dev/null || echo 0)
+if [ "${mem_kb:-0}" -lt 200000000 ]; then
+    run_nbep run "$tmp/group.deck" --set 'spheres.[0].count=1000000000' -o "$tmp/big.h5"
+    check "count 10^9 beyond memory: exit 1 or 2, not a crash (got $rc)" \
+        "[ $rc = 1 ] || [ $rc = 2 ]"
+    check "count 10^9 beyond memory: one line that names the memory needed" \
+        "one_line && grep -q 'spheres.\[0\].count = 1000000000' '$tmp/stderr' &&
+         grep -qi 'GB\|memory' '$tmp/stderr'"
+    check "count 10^9 beyond memory: no output file" "[ ! -e '$tmp/big.h5' ]"
+fi
+
+# ---- unwritable output ------------------------------------------------------------------------
+# Paths that cannot be created even by root: below a regular file, and a directory itself.
+: >"$tmp/plain-file"
+mkdir -p "$tmp/a-directory"
+for out in "$tmp/plain-file/run.h5" "$tmp/a-directory" "$tmp/no-such-dir/run.h5"; do
+    run_nbep run "$tmp/group.deck" --quiet -o "$out"
+    check "output $out: exit 1 or 2 before simulating (got $rc)" "[ $rc = 1 ] || [ $rc = 2 ]"
+    check "output $out: one line on stderr that names the path" \
+        "one_line && grep -qF '$out' '$tmp/stderr'"
+    check "output $out: nothing left behind" \
+        "[ ! -e '$tmp/plain-file/run.h5' ] && [ ! -e '$tmp/no-such-dir' ] &&
+         [ -z \"\$(ls -A '$tmp/a-directory')\" ]"
+done
+# the same path given in the deck rather than with -o
+sed "s|file = \"group.h5\"|file = \"$tmp/plain-file/deck.h5\"|" "$tmp/group.deck" \
+    >"$tmp/bad-out.deck"
+run_nbep run "$tmp/bad-out.deck" --quiet
+check "output.file unwritable in the deck: exit 1 or 2 (got $rc)" "[ $rc = 1 ] || [ $rc = 2 ]"
+check "output.file unwritable in the deck: one line on stderr" "one_line"
+
+# ---- unwritable summary -----------------------------------------------------------------------
+run_nbep run "$tmp/group.deck" --quiet -o "$tmp/with-summary.h5" \
+    --summary "$tmp/plain-file/summary.json"
+check "--summary unwritable: exit 1 or 2 before simulating (got $rc)" \
+    "[ $rc = 1 ] || [ $rc = 2 ]"
+check "--summary unwritable: one line on stderr that names the path" \
+    "one_line && grep -qF '$tmp/plain-file/summary.json' '$tmp/stderr'"
+check "--summary unwritable: no output file left" "[ ! -e '$tmp/with-summary.h5' ]"
+
+[ $fail = 0 ] && echo "cli: all passed"
+exit $fail
