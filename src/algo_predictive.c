@@ -47,6 +47,7 @@
 
 #include "nbep/barrier.h"
 #include "nbep/feq.h"
+#include "nbep/grid.h"
 #include "nbep/physics.h"
 #include "nbep/predict.h"
 #include "sim_impl.h"
@@ -86,6 +87,8 @@ typedef struct thread_ws {
     size_t n_claimed;
     nbep_event *part;         /* owned: best event over this thread's partners, per chunk entry */
     double t_min;             /* earliest candidate time this round, +inf if none */
+    double vmax_react;        /* grid mode: fastest sphere after this thread's reactions in
+                               * the current step */
     nbep_predict_ws *pws;     /* owned: quartic workspace */
 } thread_ws;
 
@@ -110,6 +113,13 @@ typedef struct pred_ctx {
     thread_ws *ws;                /* owned, one per thread */
     int nt;
     bool imported;                /* slots came from a resumed run: no initial predictions */
+    /* run.neighbors = "grid" (beyond the paper): a re-prediction tests only the spheres that
+     * can reach it before a horizon; see grid_prepare */
+    bool use_grid;
+    nbep_grid grid;               /* owned: centres at the step's start */
+    double rmax;                  /* largest radius */
+    double vmax, amax;            /* fastest sphere and largest acceleration at the step's start */
+    double horizon;               /* H: absolute time up to which this step's predictions look */
 } pred_ctx;
 
 static void pred_destroy(void *p)
@@ -118,6 +128,7 @@ static void pred_destroy(void *p)
     if (!c)
         return;
     nbep_feq_destroy(&c->q);
+    nbep_grid_fini(&c->grid);
     nbep_free_aligned(c->ver);
     nbep_free_aligned(c->tau);
     nbep_free_aligned(c->rest);
@@ -166,6 +177,16 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm (%zu spheres)",
                   n);
     }
+    c->use_grid = sim->scene->neighbors_grid;
+    if (c->use_grid) {
+        st = nbep_grid_init(&c->grid, n, d);
+        if (st != NBEP_OK) {
+            pred_destroy(c);
+            return st;
+        }
+    }
+    for (size_t i = 0; i < n; i++)
+        c->rmax = fmax(c->rmax, sim->st.radius[i]);
     for (size_t i = 0; i < n; i++) {
         c->rest[i] = NO_PLANE;
         atomic_init(&c->claim[0][i], KEY_FREE);
@@ -265,6 +286,79 @@ static nbep_event predict_some(const pred_ctx *c, const nbep_state *s, size_t i,
     return best;
 }
 
+/* Grid mode (beyond the paper): the earliest event of sphere i before the horizon, testing
+ * every plane but only the spheres that can reach i by then; "horizon" when there is none.
+ * A partner j sat in its cell at the step's start and has moved at most V t + amax t^2 / 2
+ * since (V: the fastest sphere at the step's start or after any reaction so far this step), and
+ * i moves at most |v_i| H + |a_i| H^2 / 2 before the horizon, so partners farther than the sum
+ * of those and the radii cannot touch i before it. A partner whose course changes later is
+ * re-predicted itself and finds i then, as in the paper's argument for one-sided inserts. */
+static nbep_event predict_grid(const pred_ctx *c, const nbep_state *s, size_t i, double T0,
+                               double V, thread_ws *w, nbep_counters *cnt)
+{
+    nbep_event best = predict_some(c, s, i, 0, 0, true, T0, w, cnt); /* the planes */
+    const double ti = c->tau[i], H = c->horizon - T0;
+    const nbep_vec3 ai = effective_acc(c, s, i);
+    double reach = s->radius[i] + c->rmax + nbep_vec3_norm(s->vel[i]) * H +
+                   0.5 * nbep_vec3_norm(ai) * H * H + V * H + 0.5 * c->amax * H * H;
+    size_t lo[3], hi[3];
+    uint64_t tested = 0;
+    nbep_grid_block(&c->grid, s->pos[i], reach, lo, hi);
+    for (size_t z = lo[2]; z <= hi[2]; z++)
+        for (size_t y = lo[1]; y <= hi[1]; y++)
+            for (size_t x = lo[0]; x <= hi[0]; x++) {
+                size_t cell = nbep_grid_index(&c->grid, x, y, z);
+                for (size_t k = c->grid.start[cell]; k < c->grid.start[cell + 1]; k++) {
+                    size_t j = c->grid.item[k];
+                    if (j == i)
+                        continue;
+                    const double tj = c->tau[j];
+                    const double t0 = ti > tj ? ti : tj;
+                    nbep_vec3 pi = s->pos[i], vi = s->vel[i], pj = s->pos[j], vj = s->vel[j];
+                    const nbep_vec3 aj = effective_acc(c, s, j);
+                    if (ti < t0)
+                        nbep_physics_drift(&pi, &vi, ai, t0 - ti);
+                    if (tj < t0)
+                        nbep_physics_drift(&pj, &vj, aj, t0 - tj);
+                    double dt = nbep_predict_pair(nbep_vec3_sub(pj, pi), nbep_vec3_sub(vj, vi),
+                                                  nbep_vec3_sub(aj, ai),
+                                                  s->radius[i] + s->radius[j], w->pws);
+                    keep_earlier(&best, (nbep_event){T0 + (t0 + dt), (uint32_t)j,
+                                                     NBEP_EVENT_SPHERE, c->ver[i], c->ver[j]});
+                    tested++;
+                }
+            }
+    cnt->c[NBEP_COUNTER_PREDICTIONS] += tested;
+    /* beyond the horizon nothing is known: a partner from farther away may come first */
+    if (best.kind == NBEP_EVENT_NONE || !(best.time <= c->horizon))
+        best = (nbep_event){c->horizon, 0, NBEP_EVENT_HORIZON, c->ver[i], 0};
+    return best;
+}
+
+/* Grid mode, thread 0 at a step's start (every sphere at T0, no thread reading the grid):
+ * sorts the centres into cells about a diameter wide, finds the fastest sphere and the largest
+ * acceleration, and picks the horizon H = K steps ahead so that the fastest sphere crosses
+ * about half a cell by then (K in 1..64): re-predictions look a few cells around, and each
+ * sphere is re-predicted at least every K steps. */
+static void grid_prepare(pred_ctx *c, const nbep_state *s, double T0, double dt)
+{
+    double vmax = 0.0, amax = 0.0;
+    for (size_t i = 0; i < s->n; i++) {
+        vmax = fmax(vmax, nbep_vec3_norm(s->vel[i]));
+        amax = fmax(amax, nbep_vec3_norm(effective_acc(c, s, i)));
+    }
+    nbep_grid_build(&c->grid, s->pos, s->n, 2.0 * c->rmax);
+    double step_travel = vmax * dt + 0.5 * amax * dt * dt;
+    double k = step_travel > 0.0 ? floor(0.5 * c->grid.h / step_travel) : 64.0;
+    k = fmin(fmax(k, 1.0), 64.0);
+    c->vmax = vmax;
+    c->amax = amax;
+    /* at least the step's end, exactly: a horizon inside the step would recur forever */
+    c->horizon = fmax(T0 + k * dt, T0 + dt);
+    for (int t = 0; t < c->nt; t++)
+        c->ws[t].vmax_react = 0.0;
+}
+
 static void add_cand(pred_ctx *c, thread_ws *w, size_t i)
 {
     if (!(c->flags[i] & IN_CAND)) {
@@ -292,7 +386,7 @@ static void find_phase(pred_ctx *c, nbep_range own, bool first, double T_end, th
         w->n_cand = 0;
         for (size_t i = own.lo; i < own.hi; i++) {
             const nbep_event *ev = nbep_feq_slot(c->q, i);
-            if (!is_fresh(c, i, ev))
+            if (!is_fresh(c, i, ev) || (ev->kind == NBEP_EVENT_HORIZON && ev->time < T_end))
                 add_redo(c, w, i);
             else if (ev->time < T_end)
                 add_cand(c, w, i);
@@ -339,8 +433,11 @@ static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid
                        double T_end, thread_ws *w, nbep_counters *cnt)
 {
     size_t total = 0;
-    for (int t = 0; t < c->nt; t++)
+    double V = c->vmax;
+    for (int t = 0; t < c->nt; t++) {
         total += c->ws[t].n_redo;
+        V = fmax(V, c->ws[t].vmax_react);
+    }
     for (size_t off = 0; off < total; off += CHUNK) {
         size_t end = off + CHUNK < total ? off + CHUNK : total;
         /* this thread's partial best for every sphere of the chunk */
@@ -349,9 +446,15 @@ static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid
             const thread_ws *o = &c->ws[t];
             size_t lo = off > base ? off - base : 0;
             size_t hi = end - base < o->n_redo ? end - base : o->n_redo;
-            for (size_t k = lo; k < hi && base + k < end; k++)
-                w->part[base + k - off] = predict_some(c, s, o->redo[k], own.lo, own.hi,
-                                                       tid == 0, T0, w, cnt);
+            for (size_t k = lo; k < hi && base + k < end; k++) {
+                nbep_event *out = &w->part[base + k - off];
+                if (!c->use_grid) /* every thread takes its own range of partners */
+                    *out = predict_some(c, s, o->redo[k], own.lo, own.hi, tid == 0, T0, w, cnt);
+                else if ((base + k) % (size_t)c->nt == (size_t)tid) /* a few partners: one */
+                    *out = predict_grid(c, s, o->redo[k], T0, V, w, cnt); /* thread each */
+                else
+                    *out = (nbep_event){.time = NBEP_NEVER, .kind = NBEP_EVENT_NONE};
+            }
             base += o->n_redo;
             if (base >= end)
                 break;
@@ -377,7 +480,8 @@ static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid
                 nbep_feq_insert(c->q, i, best);
             }
             c->flags[i] &= (uint8_t)~IN_REDO;
-            if (best.time < T_end)
+            if (best.time < T_end &&
+                (best.kind == NBEP_EVENT_SPHERE || best.kind == NBEP_EVENT_PLANE))
                 add_cand(c, w, i);
         }
         nbep_barrier_wait(&c->bar);
@@ -495,6 +599,7 @@ static void react(pred_ctx *c, nbep_state *s, double e, double dt, double t_loca
         }
         c->ver[lo]++;
         w->fired[w->n_fired++] = lo;
+        w->vmax_react = fmax(w->vmax_react, nbep_vec3_norm(s->vel[lo]));
         return;
     }
     advance_to(c, s, hi, t_local);
@@ -511,6 +616,8 @@ static void react(pred_ctx *c, nbep_state *s, double e, double dt, double t_loca
     c->ver[hi]++;
     w->fired[w->n_fired++] = lo;
     w->fired[w->n_fired++] = hi;
+    w->vmax_react = fmax(w->vmax_react,
+                         fmax(nbep_vec3_norm(s->vel[lo]), nbep_vec3_norm(s->vel[hi])));
 }
 
 static void react_phase(pred_ctx *c, nbep_state *s, const nbep_scene *sc, int par, double T0,
@@ -560,6 +667,8 @@ static void pred_run(nbep_sim *sim, void *p)
         const nbep_range own = nbep__range_split(s->n, tid, nt);
         thread_ws *w = &c->ws[tid];
         uint64_t round = 0;
+        if (tid == 0 && c->use_grid)
+            grid_prepare(c, s, (double)(sim->step_first - 1) * sim->dt, sim->dt);
         /* OpenMP's own hand-over into and out of the region is invisible to ThreadSanitizer
          * (libgomp is not instrumented); crossing our barrier first and last makes every
          * write before the region visible to all threads, and theirs to the caller, through
@@ -637,8 +746,12 @@ static void pred_run(nbep_sim *sim, void *p)
             }
             nbep__sim_block_energy(sim, own);
             nbep_barrier_wait(&c->bar);
-            if (tid == 0)
+            if (tid == 0) {
                 nbep__sim_end_step(sim, step);
+                /* the others are in the next find phase, which reads no grid */
+                if (c->use_grid)
+                    grid_prepare(c, s, T_end, sim->dt);
+            }
             /* no barrier: the next find phase only reads positions and writes queue slots,
              * which the hook does not touch; its stop request is read after that phase's
              * barrier */
@@ -675,7 +788,8 @@ static void pred_import(void *p, const nbep_resume *r)
         nbep_feq_remove(c->q, i);
         if (r->event_kind[i] == NBEP_EVENT_NEVER)
             nbep_feq_set_never(c->q, i, 0);
-        else if (r->event_kind[i] == NBEP_EVENT_SPHERE || r->event_kind[i] == NBEP_EVENT_PLANE)
+        else if (r->event_kind[i] == NBEP_EVENT_SPHERE || r->event_kind[i] == NBEP_EVENT_PLANE ||
+                 r->event_kind[i] == NBEP_EVENT_HORIZON)
             nbep_feq_insert(c->q, i,
                             (nbep_event){r->event_time[i], r->event_partner[i],
                                          r->event_kind[i], 0, 0});

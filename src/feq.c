@@ -91,7 +91,8 @@ bool nbep_feq_event_before(const nbep_event *a, const nbep_event *b)
 bool nbep_feq_insert(nbep_feq *q, size_t i, nbep_event e)
 {
     assert(q && i < q->n);
-    assert(e.kind == NBEP_EVENT_SPHERE || e.kind == NBEP_EVENT_PLANE);
+    assert(e.kind == NBEP_EVENT_SPHERE || e.kind == NBEP_EVENT_PLANE ||
+           e.kind == NBEP_EVENT_HORIZON);
     /* "Never" carries no information: leave the slot as it is (invalid slots get re-predicted,
      * which is what a sphere with no known event needs). Also refuses NaN, which would
      * otherwise compare neither earlier nor later than anything. */
@@ -151,6 +152,8 @@ static const char *slot_problem(const nbep_event *s, size_t i, double t_now, siz
 {
     if (s->kind == NBEP_EVENT_NEVER)
         return s->time == INFINITY ? NULL : "a 'never' slot with a finite time";
+    if (s->kind == NBEP_EVENT_HORIZON)
+        return isfinite(s->time) && s->time >= t_now ? NULL : "a horizon not in the future";
     if (s->kind != NBEP_EVENT_SPHERE && s->kind != NBEP_EVENT_PLANE)
         return "unknown event kind";
     if (!isfinite(s->time))

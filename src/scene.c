@@ -49,6 +49,9 @@ enum {
     X(RUN_THREADS, "run.threads", INT, F_GE0, "0", NULL,                                           \
       "threads; 0: OMP_NUM_THREADS, else all cores")                                               \
     X(RUN_SEED, "run.seed", INT, F_GE0, "1", NULL, "every random choice derives from it")          \
+    X(RUN_NEIGHBORS, "run.neighbors", STRING, 0, "\"all\"", NULL,                                  \
+      "predictive: whom a re-prediction tests: \"all\" spheres (the paper) or \"grid\" (nearby "  \
+      "cells within a time horizon)")                                                              \
     X(PHYSICS, "physics", GROUP, 0, NULL, "-", "physics")                                          \
     X(PHYSICS_GRAVITY, "physics.gravity", VEC3, 0, "[0.0, 0.0, 0.0]", NULL,                        \
       "uniform acceleration of every sphere without its own")                                      \
@@ -127,6 +130,7 @@ static const schema_entry schema[S_COUNT] = {
 };
 
 static const char *const algorithm_names[] = {"naive", "seminaive", "predictive"};
+static const char *const neighbor_names[] = {"all", "grid"};
 static const char *const place_names[] = {"random", "lattice"};
 static const char *const field_names[] = {"position", "velocity"};
 enum { N_ALGORITHMS = 3, N_PLACES = 2, N_FIELDS = 2 };
@@ -593,6 +597,9 @@ static void parse_run(load *L, const config_setting_t *root, nbep_scene *sc, boo
     if (get_string(L, run, "run", S_RUN_ALGORITHM, &algorithm, &at) == GOT &&
         one_of(L, at, "run.algorithm", algorithm, algorithm_names, N_ALGORITHMS) >= 0)
         snprintf(sc->algorithm, sizeof sc->algorithm, "%s", algorithm);
+    const char *neighbors;
+    if (get_string(L, run, "run", S_RUN_NEIGHBORS, &neighbors, &at) == GOT)
+        sc->neighbors_grid = one_of(L, at, "run.neighbors", neighbors, neighbor_names, 2) == 1;
     int64_t v;
     if (get_int(L, run, "run", S_RUN_STEPS, &v, NULL) == GOT)
         sc->steps = (uint64_t)v;

@@ -2,6 +2,8 @@
  * the largest overlap, the latter with a uniform cell grid so that it is O(n), not O(n^2). */
 #include "nbep/state.h"
 
+#include "nbep/grid.h"
+
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
@@ -74,17 +76,6 @@ bool nbep_state_all_finite(const nbep_state *s)
     return true;
 }
 
-/* Cell index of a coordinate along one axis, clamped to the grid. */
-static size_t cell_of(double x, double lo, double inv_h, size_t cells)
-{
-    double c = floor((x - lo) * inv_h);
-    if (!(c >= 0.0))
-        return 0;
-    if (c >= (double)cells)
-        return cells - 1;
-    return (size_t)c;
-}
-
 static void consider(double overlap, double rmin, size_t i, size_t j, double *best,
                      double *best_rel, size_t *bi, size_t *bj)
 {
@@ -112,58 +103,24 @@ nbep_status nbep_state_max_overlap(const nbep_state *s, double *max_out, double 
         }
 
     if (n > 1) {
-        /* Grid with cells of the largest diameter, so overlapping pairs sit in neighbouring
-         * cells; at most about n cells so memory stays O(n) whatever the extent. */
-        nbep_vec3 lo = s->pos[0], hi = s->pos[0];
+        /* Cells at least a diameter wide: overlapping pairs sit in neighbouring cells. */
         double rmax = 0.0;
-        for (size_t i = 0; i < n; i++) {
-            lo.x = fmin(lo.x, s->pos[i].x), hi.x = fmax(hi.x, s->pos[i].x);
-            lo.y = fmin(lo.y, s->pos[i].y), hi.y = fmax(hi.y, s->pos[i].y);
-            lo.z = fmin(lo.z, s->pos[i].z), hi.z = fmax(hi.z, s->pos[i].z);
-            rmax = fmax(rmax, s->radius[i]);
-        }
-        /* Cells at least a diameter wide, and about n of them over the spheres' bounding box
-         * (each side floored at a diameter, so a flat or thin layout does not collapse the
-         * volume): O(1) spheres per cell for any shape of layout, O(n) memory. */
-        double h = 2.0 * rmax;
-        double ex = fmax(hi.x - lo.x, h), ey = fmax(hi.y - lo.y, h), ez = fmax(hi.z - lo.z, h);
-        h = fmax(h, cbrt(ex * ey * ez / (double)n));
-        if (!(h > 0.0) || !isfinite(h))
-            h = 1.0;
-        double inv_h = 1.0 / h;
-        size_t cx = (size_t)(floor((hi.x - lo.x) * inv_h) + 1.0);
-        size_t cy = (size_t)(floor((hi.y - lo.y) * inv_h) + 1.0);
-        size_t cz = (size_t)(floor((hi.z - lo.z) * inv_h) + 1.0);
-        size_t cells = cx * cy * cz;
-        size_t *start = calloc(cells + 1, sizeof *start);
-        size_t *order = malloc(n * sizeof *order);
-        size_t *cell = malloc(n * sizeof *cell);
-        if (!start || !order || !cell) {
-            free(start), free(order), free(cell);
-            NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the overlap check of %zu spheres", n);
-        }
-        for (size_t i = 0; i < n; i++) {
-            cell[i] = (cell_of(s->pos[i].z, lo.z, inv_h, cz) * cy +
-                       cell_of(s->pos[i].y, lo.y, inv_h, cy)) * cx +
-                      cell_of(s->pos[i].x, lo.x, inv_h, cx);
-            start[cell[i] + 1]++;
-        }
-        for (size_t c = 0; c < cells; c++)
-            start[c + 1] += start[c];
         for (size_t i = 0; i < n; i++)
-            order[start[cell[i]]++] = i;
-        for (size_t c = cells; c > 0; c--)
-            start[c] = start[c - 1];
-        start[0] = 0;
-
+            rmax = fmax(rmax, s->radius[i]);
+        nbep_grid g;
+        nbep_status st = nbep_grid_init(&g, n, d);
+        if (st != NBEP_OK)
+            return st;
+        nbep_grid_build(&g, s->pos, n, 2.0 * rmax);
         for (size_t i = 0; i < n; i++) {
-            size_t ix = cell[i] % cx, iy = cell[i] / cx % cy, iz = cell[i] / (cx * cy);
-            for (size_t z = iz ? iz - 1 : 0; z <= iz + 1 && z < cz; z++)
-                for (size_t y = iy ? iy - 1 : 0; y <= iy + 1 && y < cy; y++)
-                    for (size_t x = ix ? ix - 1 : 0; x <= ix + 1 && x < cx; x++) {
-                        size_t c = (z * cy + y) * cx + x;
-                        for (size_t k = start[c]; k < start[c + 1]; k++) {
-                            size_t j = order[k];
+            size_t lo[3], hi[3];
+            nbep_grid_block(&g, s->pos[i], s->radius[i] + rmax, lo, hi);
+            for (size_t z = lo[2]; z <= hi[2]; z++)
+                for (size_t y = lo[1]; y <= hi[1]; y++)
+                    for (size_t x = lo[0]; x <= hi[0]; x++) {
+                        size_t c = nbep_grid_index(&g, x, y, z);
+                        for (size_t k = g.start[c]; k < g.start[c + 1]; k++) {
+                            size_t j = g.item[k];
                             if (j <= i)
                                 continue;
                             double dist = nbep_vec3_norm(nbep_vec3_sub(s->pos[j], s->pos[i]));
@@ -173,7 +130,7 @@ nbep_status nbep_state_max_overlap(const nbep_state *s, double *max_out, double 
                         }
                     }
         }
-        free(start), free(order), free(cell);
+        nbep_grid_fini(&g);
     }
     *max_out = best;
     if (rel_out)

@@ -20,6 +20,8 @@ typedef enum nbep_event_kind {
     NBEP_EVENT_NEVER = 3,   /* valid: nothing ahead on the current course (time +inf); stays
                              * true until the sphere's own course changes, because a partner
                              * whose course changes re-predicts the pair itself */
+    NBEP_EVENT_HORIZON = 4, /* valid: nothing known before `time`, when the sphere must be
+                             * re-predicted (predictions that looked only nearby) */
 } nbep_event_kind;
 
 typedef struct nbep_event {

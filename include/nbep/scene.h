@@ -34,6 +34,7 @@ typedef struct nbep_scene {
     double dt;
     int threads;              /* as given; 0 = OMP_NUM_THREADS or all cores */
     uint64_t seed;
+    bool neighbors_grid;      /* predictive: re-predict against nearby cells, not all spheres */
     /* physics */
     nbep_vec3 gravity;
     double restitution;
