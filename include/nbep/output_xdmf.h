@@ -1,0 +1,48 @@
+/* XDMF sidecars: RUN.xmf beside RUN.h5 describes the run's frames to ParaView and VisIt (open
+ * RUN.xmf with the "XDMF Reader"; VisIt: the Xdmf plugin) as a time series of point sets, one
+ * point per sphere, without copying any data: every frame is a hyperslab of /frames/position
+ * (and /frames/velocity), with the radius and mass from /spheres as point attributes. In
+ * ParaView, the Point Gaussian representation with "Scale By Array" = radius (scale factor 1,
+ * "Use Scale Function" off) draws the spheres at their true size.
+ *
+ * Plain text: no HDF5 or XML library. The file names the run file by its base name, so RUN.h5
+ * and RUN.xmf can be moved together. */
+#ifndef NBEP_OUTPUT_XDMF_H
+#define NBEP_OUTPUT_XDMF_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "nbep/compiler.h"
+#include "nbep/status.h"
+
+/* The sidecar's path for a run file: h5_path with a trailing ".h5" replaced by ".xmf" (".xmf"
+ * appended when h5_path does not end in ".h5"). malloc'd; NULL when out of memory. */
+char *nbep_xdmf_path(const char *h5_path);
+
+/* Writes the sidecar of the run file h5_path describing its first n_frames frames: frame k
+ * (row k of /frames/position) is at step steps[k] and time times[k] (both borrowed, n_frames
+ * entries; steps may be NULL, then frames are named by their index). n_spheres is the row
+ * length of /frames/position; has_velocity says whether /frames/velocity exists. Call only
+ * for runs that write positions. The whole file is written to "SIDECAR.tmp" and renamed over
+ * the sidecar, so a reader (or a kill) sees the old or the new file, never a mix. NBEP_EIO
+ * ("nbep: PATH: cannot write the XDMF sidecar: REASON"), NBEP_ENOMEM. One writing thread. */
+NBEP_MUST_CHECK nbep_status nbep_xdmf_write(const char *h5_path, size_t n_spheres,
+                                            size_t n_frames, const int64_t *steps,
+                                            const double *times, bool has_velocity,
+                                            nbep_diag *d);
+
+/* Seconds between rewrites of a growing sidecar once its frame count is past the first few:
+ * a run killed at any moment has a sidecar at most this old. */
+#define NBEP_XDMF_REWRITE_SECONDS 30.0
+
+/* Whether a writer that has just added frame number n_frames (1-based count) should rewrite
+ * the sidecar now, seconds_since_last after its previous rewrite: for the first 8 frames,
+ * whenever the count reaches a power of two, and once NBEP_XDMF_REWRITE_SECONDS have passed.
+ * A rewrite costs O(frames) (about 1.5 kB per frame), so rewriting after every frame would
+ * cost O(frames^2) over a run; this keeps the total to about twice the final sidecar plus one
+ * sidecar per 30 s. The run's close rewrites it always. */
+bool nbep_xdmf_due(size_t n_frames, double seconds_since_last);
+
+#endif

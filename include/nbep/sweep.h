@@ -1,0 +1,173 @@
+/* `nbep sweep DECK`: a parameter study. The deck's `sweep` group names replicas and axes
+ * (scene.h); every run is the deck plus the command line's overrides plus its own: one value
+ * of every axis and its own run.seed. Runs are independent, each writing its own nbep-1 file
+ * into the sweep directory; a summary table (summary.csv, summary.h5) has one row per run.
+ *
+ * Order of runs (stable; run indices name the files run-0000.h5, run-0001.h5, ...):
+ *   run = replica * n_combinations + combination,
+ *   combination = row-major index of the axes' value indices, the first axis varying slowest
+ *   and the last fastest (the nested loops of the deck's `vary` order).
+ * Replicas are outermost so that raising sweep.replicas later keeps every existing run's
+ * index, file and parameters: a restarted sweep reuses them and runs only the new replicas.
+ * Replica r runs with run.seed = (the deck's run.seed, after the command line) + r.
+ *
+ * Under an MPI launcher (mpirun, srun) the runs are dealt statically to the R ranks in rounds
+ * of R, alternating direction (nbep_sweep_run_owner): run i goes to rank i mod R when i / R is
+ * even and to R - 1 - (i mod R) when it is odd, so that an axis of even length that makes
+ * runs slow or fast (an algorithm, a sphere count) is not tied to one rank. Each rank runs its
+ * runs one after another with run.threads threads, and rank 0 gathers every run's result and
+ * writes the summary. Without MPI, or outside a
+ * launcher, this process runs them all. Only sweep.c includes <mpi.h>. */
+#ifndef NBEP_SWEEP_H
+#define NBEP_SWEEP_H
+
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "nbep/cli.h"
+#include "nbep/compiler.h"
+#include "nbep/output.h"
+#include "nbep/scene.h"
+#include "nbep/status.h"
+
+/* Longest error text kept per run in the summary (longer texts are cut). */
+#define NBEP_SWEEP_ERROR_MAX 512
+
+/* What became of a run. */
+/* not_run: not started (the sweep was stopped before it); ok: every step simulated, now or by
+ * an earlier sweep; failed: a deck error for this combination, or a run-time error;
+ * interrupted: stopped by SIGINT/SIGTERM (run the sweep again to finish it). */
+#define NBEP_SWEEP_OUTCOME_LIST(X)                                                           \
+    X(NOT_RUN, "not_run") X(OK, "ok") X(FAILED, "failed") X(INTERRUPTED, "interrupted")
+
+typedef enum nbep_sweep_outcome {
+#define NBEP_X_ENUM(name, text) NBEP_SWEEP_##name,
+    NBEP_SWEEP_OUTCOME_LIST(NBEP_X_ENUM)
+#undef NBEP_X_ENUM
+} nbep_sweep_outcome;
+
+/* The outcome's name as it appears in the summary's status column; never NULL. */
+const char *nbep_sweep_outcome_text(nbep_sweep_outcome o);
+
+/* The run list: everything a rank needs to build any run's overrides, computed identically on
+ * every rank from the deck and the command line. */
+typedef struct nbep_sweep_plan {
+    char *deck_path;              /* owned copy */
+    char *deck_text;              /* owned: the deck file's text (for summary.h5) */
+    char **base;                  /* owned: the command line's overrides, in order */
+    size_t n_base;
+    size_t n_axes;
+    nbep_sweep_axis *axes;        /* owned: taken over from the deck's scene */
+    uint64_t replicas;            /* >= 1 */
+    uint64_t seed;                /* run.seed of replica 0 */
+    uint64_t steps;               /* run.steps, unless an axis varies it */
+    size_t n_combos, n_runs;      /* n_runs = replicas * n_combos; n_combos = 1 without axes */
+    char *dir;                    /* owned: the sweep directory, without a trailing '/' */
+} nbep_sweep_plan;
+
+/* Loads the deck with the command line's overrides (n_overrides may be 0; each string is
+ * copied) once to validate it and read its sweep group, and fills *out. The sweep directory
+ * is output.file without a trailing ".h5" plus ".sweep" (kept as is when it already ends in
+ * ".sweep"): output.file = "box.h5" or `-o box.sweep` give "box.sweep". NBEP_EDECK (bad deck,
+ * an axis that varies run.seed or output.file, a key varied twice), NBEP_EIO, NBEP_ENOMEM;
+ * *out is written only on success. Creates no file. */
+NBEP_MUST_CHECK nbep_status nbep_sweep_plan_create(const char *deck_path,
+                                                   const char *const *overrides,
+                                                   size_t n_overrides, nbep_sweep_plan *out,
+                                                   nbep_diag *d);
+void nbep_sweep_plan_fini(nbep_sweep_plan *p);
+
+/* Run `run`'s replica (0 .. replicas-1), seed, and value index along `axis`. run < n_runs. */
+uint64_t nbep_sweep_run_replica(const nbep_sweep_plan *p, size_t run);
+uint64_t nbep_sweep_run_seed(const nbep_sweep_plan *p, size_t run);
+size_t nbep_sweep_run_value(const nbep_sweep_plan *p, size_t run, size_t axis);
+/* run.steps that run `run` asks for (an axis on run.steps, else the plan's). */
+uint64_t nbep_sweep_run_steps(const nbep_sweep_plan *p, size_t run);
+
+/* The overrides of run `run`, in the order they are applied: the command line's, then
+ * "KEY=VALUE" for every axis in deck order, then "run.seed=SEED". *out is a malloc'd array of
+ * *n malloc'd strings; release with nbep_sweep_overrides_free. NBEP_ENOMEM. */
+NBEP_MUST_CHECK nbep_status nbep_sweep_run_overrides(const nbep_sweep_plan *p, size_t run,
+                                                     char ***out, size_t *n, nbep_diag *d);
+void nbep_sweep_overrides_free(char **ov, size_t n);
+
+/* The run's output file, "DIR/run-0007.h5": at least 4 digits, more when the sweep has more
+ * than 10^4 runs, so that names sort in run order. malloc'd; NULL when out of memory. */
+char *nbep_sweep_run_path(const nbep_sweep_plan *p, size_t run);
+
+/* Whether rank (of n_ranks) runs run: the alternating round-robin above. */
+bool nbep_sweep_run_owner(size_t run, int rank, int n_ranks);
+
+/* One run's result, as gathered by rank 0: fixed size and plain data (sent as bytes between
+ * ranks of one machine type). */
+typedef struct nbep_sweep_result {
+    uint64_t run;
+    int32_t rank;                 /* that ran or reused it; -1 when not run */
+    int32_t outcome;              /* nbep_sweep_outcome */
+    int32_t exit_code;            /* what `nbep run` would have exited with; -1 when not run */
+    int32_t reused;               /* 1: complete from an earlier sweep, not simulated again */
+    int32_t has_summary;          /* 1: `summary` holds the run's summary */
+    int32_t pad_;
+    double seconds;               /* the whole run as the sweep saw it: deck, file, steps */
+    nbep_summary summary;
+    char error[NBEP_SWEEP_ERROR_MAX];   /* the run's error lines joined by "; ", or "" */
+} nbep_sweep_result;
+
+/* Whether the file at path holds a complete run with these overrides: its /summary json
+ * exists and says `steps` steps, and its root `overrides` attribute (one per line, as the
+ * scene stores them) lists the same overrides in the same order, ignoring those of run.threads
+ * and output.file on both sides (a run's frames do not depend on them). On true, *sum (may be
+ * NULL) gets the stored summary. A missing, unreadable, interrupted or different file is
+ * simply not complete. Edits to the deck file itself are not detected: start such a study in
+ * a fresh directory. */
+bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_overrides,
+                             uint64_t steps, nbep_summary *sum);
+
+/* Parses a JSON summary as nbep_summary_write_json writes it (format "nbep-summary-1") into
+ * *sum. false when a key is missing or the text is not such a summary. */
+bool nbep_sweep_parse_summary(const char *json, nbep_summary *sum);
+
+/* How a process runs its share of a sweep. */
+typedef struct nbep_sweep_exec {
+    int rank, n_ranks;               /* this process runs the runs nbep_sweep_run_owner gives */
+    const atomic_int *stop_signal;   /* borrowed, may be NULL: nonzero stops the sweep */
+    bool quiet;                      /* no per-run progress lines (errors are still printed) */
+} nbep_sweep_exec;
+
+/* Runs this process's share of the plan, one run after another, writing each run's file into
+ * the plan's directory (which must exist). A run already complete (nbep_sweep_run_complete)
+ * is reused, not run again; any other file at its path is replaced. results has n_runs
+ * entries: this process's runs are filled in, the others are left as NOT_RUN. A failing run
+ * prints one line on stderr ("nbep: sweep run 3 (KEY=VALUE ...): error") and the others go
+ * on. On a stop signal the current run stops after its step, no further run starts, and the
+ * status is NBEP_ESIGINT/NBEP_ESIGTERM; otherwise NBEP_OK, whatever the runs' outcomes. */
+NBEP_MUST_CHECK nbep_status nbep_sweep_execute(const nbep_sweep_plan *p,
+                                               const nbep_sweep_exec *ex,
+                                               nbep_sweep_result *results);
+
+/* Writes DIR/summary.csv and DIR/summary.h5 from the results of every run (n_runs entries),
+ * each replaced atomically (written aside, then renamed). Columns, in order: run, replica,
+ * seed, rank, one per axis (its key; the value as deck text, strings without quotes), status,
+ * exit_code, reused, seconds, file, the JSON summary's fields in SPEC order, error. n_ranks
+ * and wall_seconds go into summary.h5's root attributes. NBEP_EIO, NBEP_ENOMEM. */
+NBEP_MUST_CHECK nbep_status nbep_sweep_write_summary(const nbep_sweep_plan *p,
+                                                     const nbep_sweep_result *results,
+                                                     int n_ranks, double wall_seconds,
+                                                     nbep_diag *d);
+
+/* `nbep sweep DECK [options]`: plans the sweep from cli (path, overrides, summary, quiet),
+ * creates the sweep directory, runs every run (split over the ranks when started by an MPI
+ * launcher: mpirun, or srun with PMI/PMIx; NBEP_MPI=0 in the environment forces a serial
+ * sweep, NBEP_MPI=1 forces MPI_Init), gathers and writes the summary on rank 0, and with
+ * cli->summary writes a JSON object about the whole sweep there. MPI_Init and MPI_Finalize
+ * happen inside. stop_signal (borrowed, may be NULL) is main.c's signal flag.
+ * Returns, identically on every rank: NBEP_OK when every run succeeded; NBEP_EUSAGE/NBEP_EDECK
+ * for a bad command line or deck before any run; NBEP_ESIGINT/NBEP_ESIGTERM when interrupted;
+ * NBEP_EIO when some runs failed (d says which) or the summary could not be written, so that
+ * the exit status is 1. d gets messages on rank 0 only. */
+NBEP_MUST_CHECK nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal,
+                                            nbep_diag *d);
+
+#endif

@@ -1,0 +1,194 @@
+#!/usr/bin/python3
+"""Draws frames of an nbep run (an nbep-1 HDF5 file) to PNG images.
+
+    scripts/render.py RUN.h5 [--frames 0,10,-1] [--out DIR] [--view 3d|xy|xz|yz]
+                             [--size 6] [--dpi 150] [--color speed|height|none]
+
+Each frame becomes DIR/RUN-step-000120.png (RUN-step-000120-xz.png for a projection; DIR
+defaults to the run file's folder). Frames
+are indices into /frames (negative ones count from the last complete frame: -1 is the last);
+only complete frames are used (the `count` attribute of /frames), so a run still being
+written or killed can be drawn. --view 3d draws a perspective scatter whose marker sizes
+follow the radii approximately; xy, xz and yz draw an orthographic projection with every
+sphere a disc of its true radius (nearest drawn last). Spheres are coloured by speed when the
+run wrote velocities (--color height colours by the coordinate along the hidden or vertical
+axis). The box, when the run's planes form one, is drawn as an outline.
+
+Needs h5py and matplotlib (Debian: python3-h5py python3-matplotlib)."""
+import argparse
+import math
+import os
+import sys
+
+import h5py
+import numpy as np
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.collections import EllipseCollection  # noqa: E402
+
+AXES = {"x": 0, "y": 1, "z": 2}
+
+
+def parse_frames(text, count):
+    """'0,10,-1' -> sorted distinct indices into the count complete frames."""
+    out = []
+    for item in text.split(","):
+        item = item.strip()
+        if not item:
+            continue
+        k = int(item)
+        if k < 0:
+            k += count
+        if not 0 <= k < count:
+            sys.exit("render.py: frame %s is outside the %d complete frames" % (item, count))
+        out.append(k)
+    return sorted(set(out))
+
+
+def box_of(f, pos, radius):
+    """(lo, hi) of the run's box when six axis-aligned planes bound it, else of the spheres."""
+    lo = np.full(3, np.nan)
+    hi = np.full(3, np.nan)
+    if "planes" in f and "normal" in f["planes"]:
+        for n, off in zip(f["planes/normal"][:], f["planes/offset"][:]):
+            axis = int(np.argmax(np.abs(n)))
+            if abs(abs(n[axis]) - 1.0) > 1e-12:
+                continue
+            if n[axis] > 0:        # spheres live where x_axis > offset
+                lo[axis] = off
+            else:                  # -x_axis > offset: x_axis < -offset
+                hi[axis] = -off
+    if np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)):
+        return lo, hi, True
+    rmax = float(radius.max()) if radius.size else 0.0
+    return pos.min(axis=0) - rmax, pos.max(axis=0) + rmax, False
+
+
+def box_edges(lo, hi):
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                        for z in (lo[2], hi[2])])
+    for i in range(8):
+        for j in range(i + 1, 8):
+            if np.sum(corners[i] != corners[j]) == 1:
+                yield corners[i], corners[j]
+
+
+def colours(args, pos, vel, view):
+    """Values to colour by and their label, or (None, None)."""
+    if args.color == "none":
+        return None, None
+    if args.color == "speed" and vel is not None:
+        return np.linalg.norm(vel, axis=1), "speed"
+    hidden = "xyz".replace(view[0], "").replace(view[1], "") if view != "3d" else "z"
+    return pos[:, AXES[hidden]], "%s (height)" % hidden if view == "3d" else "%s (depth)" % hidden
+
+
+def draw_3d(fig, pos, radius, c, lo, hi, boxed, args):
+    ax = fig.add_subplot(projection="3d")
+    span = hi - lo
+    ax.set_box_aspect(span / span.max())
+    # marker area in points^2 ~ (diameter in points)^2; the axes span about 0.6 of the figure
+    # width for the longest side (perspective makes this approximate)
+    pts_per_unit = 0.6 * args.size * 72.0 / float(span.max())
+    size = (2.0 * radius * pts_per_unit) ** 2
+    sc = ax.scatter(pos[:, 0], pos[:, 1], pos[:, 2], s=size, c=c,
+                    cmap="viridis" if c is not None else None,
+                    color=None if c is not None else "tab:blue",
+                    depthshade=True, edgecolors="none")
+    if boxed:
+        for a, b in box_edges(lo, hi):
+            ax.plot(*zip(a, b), color="0.4", linewidth=0.6)
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_zlim(lo[2], hi[2])
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    ax.set_zlabel("z")
+    return ax, sc
+
+
+def draw_2d(fig, pos, radius, c, lo, hi, boxed, args):
+    ax = fig.add_subplot()
+    i, j = AXES[args.view[0]], AXES[args.view[1]]
+    depth = "xyz".replace(args.view[0], "").replace(args.view[1], "")
+    order = np.argsort(pos[:, AXES[depth]])   # far first, nearest drawn last
+    ec = EllipseCollection(2 * radius[order], 2 * radius[order], np.zeros(len(order)),
+                           units="xy", offsets=pos[order][:, [i, j]],
+                           offset_transform=ax.transData, cmap="viridis",
+                           edgecolors="0.2", linewidths=0.2)
+    if c is not None:
+        ec.set_array(c[order])
+    else:
+        ec.set_facecolor("tab:blue")
+    ax.add_collection(ec)
+    if boxed:
+        ax.add_patch(plt.Rectangle((lo[i], lo[j]), hi[i] - lo[i], hi[j] - lo[j], fill=False,
+                                   edgecolor="0.4", linewidth=0.8))
+    pad = 0.02 * max(hi[i] - lo[i], hi[j] - lo[j])
+    ax.set_xlim(lo[i] - pad, hi[i] + pad)
+    ax.set_ylim(lo[j] - pad, hi[j] + pad)
+    ax.set_aspect("equal")
+    ax.set_xlabel(args.view[0])
+    ax.set_ylabel(args.view[1])
+    return ax, ec if c is not None else None
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter,
+                                 epilog=__doc__.split("\n\n", 2)[2])
+    ap.add_argument("run", help="an nbep-1 run file (RUN.h5)")
+    ap.add_argument("--frames", default="0,-1",
+                    help="frame indices, comma-separated; negative count from the end "
+                    "(default 0,-1)")
+    ap.add_argument("--out", help="folder for the images (default: beside the run file)")
+    ap.add_argument("--view", default="3d", choices=["3d", "xy", "xz", "yz"])
+    ap.add_argument("--color", default="speed", choices=["speed", "height", "none"])
+    ap.add_argument("--size", type=float, default=6.0, help="figure width in inches")
+    ap.add_argument("--dpi", type=int, default=150)
+    args = ap.parse_args()
+
+    with h5py.File(args.run, "r") as f:
+        if f.attrs.get("format") not in ("nbep-1", b"nbep-1"):
+            sys.exit("render.py: %s is not an nbep-1 run file" % args.run)
+        if "frames/position" not in f:
+            sys.exit("render.py: %s has no positions (output.fields lacks \"position\")" %
+                     args.run)
+        rows = f["frames/position"].shape[0]
+        count = int(f["frames"].attrs.get("count", rows))
+        count = min(count, rows, f["frames/step"].shape[0])
+        if count == 0:
+            sys.exit("render.py: %s has no complete frame yet" % args.run)
+        frames = parse_frames(args.frames, count)
+        radius = f["spheres/radius"][:]
+        has_vel = "frames/velocity" in f
+        out = args.out or os.path.dirname(os.path.abspath(args.run))
+        os.makedirs(out, exist_ok=True)
+        stem = os.path.splitext(os.path.basename(args.run))[0]
+        for k in frames:
+            pos = f["frames/position"][k]
+            vel = f["frames/velocity"][k] if has_vel else None
+            step = int(f["frames/step"][k])
+            t = float(f["frames/time"][k])
+            lo, hi, boxed = box_of(f, pos, radius)
+            c, label = colours(args, pos, vel, args.view)
+            fig = plt.figure(figsize=(args.size, args.size * (0.85 if args.view == "3d" else 0.8)))
+            draw = draw_3d if args.view == "3d" else draw_2d
+            ax, mappable = draw(fig, pos, radius, c, lo, hi, boxed, args)
+            if c is not None and mappable is not None:
+                fig.colorbar(mappable, ax=ax, shrink=0.7, pad=0.1, label=label)
+            ax.set_title("%s: step %d, t = %.4g, %d spheres" % (stem, step, t, len(radius)),
+                         fontsize=10)
+            view = "" if args.view == "3d" else "-" + args.view
+            path = os.path.join(out, "%s-step-%06d%s.png" % (stem, step, view))
+            fig.savefig(path, dpi=args.dpi, bbox_inches="tight")
+            plt.close(fig)
+            print(path)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,170 @@
+/* XDMF sidecar of a run file (output_xdmf.h). The layout, per frame k of F (N spheres):
+ *
+ *   <Grid Name="step S" GridType="Uniform">            inside a Temporal Collection
+ *     <Time Value="t_k"/>
+ *     <Topology TopologyType="Polyvertex" NumberOfElements="N" NodesPerElement="1"/>
+ *     <Geometry GeometryType="XYZ">  HyperSlab start (k,0,0) stride (1,1,1) count (1,N,3)
+ *                                    of RUN.h5:/frames/position, declared (F,N,3)
+ *     <Attribute radius|mass Scalar Node>   RUN.h5:/spheres/radius|mass (N)
+ *     <Attribute velocity Vector Node>      the same hyperslab of /frames/velocity
+ *
+ * Polyvertex without a connectivity array: readers (ParaView's XDMF2 and XDMF3 readers,
+ * VisIt) number the points 0..N-1 themselves, which is what one vertex per sphere means.
+ * XDMF 2.0 rather than 3.0 because every XDMF reader in use accepts it.
+ *
+ * The sidecar is rewritten whole at every call (its size grows by about 1.5 kB per frame), to
+ * "SIDECAR.tmp" then renamed: readers never see a half-written file. */
+#include "nbep/output_xdmf.h"
+
+#include <errno.h>
+#include <inttypes.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+char *nbep_xdmf_path(const char *h5_path)
+{
+    size_t len = strlen(h5_path);
+    bool h5 = len >= 3 && strcmp(h5_path + len - 3, ".h5") == 0;
+    size_t stem = h5 ? len - 3 : len;
+    char *p = malloc(stem + sizeof ".xmf");
+    if (p) {
+        memcpy(p, h5_path, stem);
+        memcpy(p + stem, ".xmf", sizeof ".xmf");
+    }
+    return p;
+}
+
+/* The base name of a path, XML-escaped for an element's text, into a malloc'd string. */
+static char *xml_base_name(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    char *out = malloc(6 * strlen(base) + 1);   /* "&quot;" is the longest escape */
+    if (!out)
+        return NULL;
+    char *w = out;
+    for (const char *r = base; *r; r++) {
+        const char *esc = *r == '&'    ? "&amp;"
+                          : *r == '<'  ? "&lt;"
+                          : *r == '>'  ? "&gt;"
+                          : *r == '"'  ? "&quot;"
+                          : *r == '\'' ? "&apos;"
+                                       : NULL;
+        if (esc) {
+            strcpy(w, esc);
+            w += strlen(esc);
+        } else {
+            *w++ = *r;
+        }
+    }
+    *w = '\0';
+    return out;
+}
+
+/* One frame's slice of a (F, N, 3) dataset: start (k, 0, 0), stride 1, count (1, N, 3). */
+static void hyperslab(FILE *f, const char *indent, const char *h5, const char *dataset,
+                      size_t k, size_t n_frames, size_t n)
+{
+    fprintf(f, "%s<DataItem ItemType=\"HyperSlab\" Dimensions=\"1 %zu 3\" Type=\"HyperSlab\">\n",
+            indent, n);
+    fprintf(f, "%s  <DataItem Dimensions=\"3 3\" NumberType=\"Int\" Format=\"XML\">"
+               "%zu 0 0 1 1 1 1 %zu 3</DataItem>\n",
+            indent, k, n);
+    fprintf(f, "%s  <DataItem Dimensions=\"%zu %zu 3\" NumberType=\"Float\" Precision=\"8\" "
+               "Format=\"HDF\">%s:/frames/%s</DataItem>\n",
+            indent, n_frames, n, h5, dataset);
+    fprintf(f, "%s</DataItem>\n", indent);
+}
+
+static void scalar(FILE *f, const char *h5, const char *name, size_t n)
+{
+    fprintf(f, "        <Attribute Name=\"%s\" AttributeType=\"Scalar\" Center=\"Node\">\n", name);
+    fprintf(f, "          <DataItem Dimensions=\"%zu\" NumberType=\"Float\" Precision=\"8\" "
+               "Format=\"HDF\">%s:/spheres/%s</DataItem>\n",
+            n, h5, name);
+    fprintf(f, "        </Attribute>\n");
+}
+
+static void write_xml(FILE *f, const char *h5, size_t n, size_t n_frames, const int64_t *steps,
+                      const double *times, bool has_velocity)
+{
+    fprintf(f, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
+               "<!-- nbep run %s: %zu spheres, %zu frames (written by nbep) -->\n"
+               "<Xdmf Version=\"2.0\">\n  <Domain>\n"
+               "    <Grid Name=\"spheres\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
+            h5, n, n_frames);
+    for (size_t k = 0; k < n_frames; k++) {
+        if (steps)
+            fprintf(f, "      <Grid Name=\"step %" PRId64 "\" GridType=\"Uniform\">\n", steps[k]);
+        else
+            fprintf(f, "      <Grid Name=\"frame %zu\" GridType=\"Uniform\">\n", k);
+        /* %.17g: the exact double, so that readers order and label frames as the file does */
+        fprintf(f, "        <Time Value=\"%.17g\"/>\n", times[k]);
+        fprintf(f, "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" "
+                   "NodesPerElement=\"1\"/>\n",
+                n);
+        fprintf(f, "        <Geometry GeometryType=\"XYZ\">\n");
+        hyperslab(f, "          ", h5, "position", k, n_frames, n);
+        fprintf(f, "        </Geometry>\n");
+        scalar(f, h5, "radius", n);
+        scalar(f, h5, "mass", n);
+        if (has_velocity) {
+            fprintf(f, "        <Attribute Name=\"velocity\" AttributeType=\"Vector\" "
+                       "Center=\"Node\">\n");
+            hyperslab(f, "          ", h5, "velocity", k, n_frames, n);
+            fprintf(f, "        </Attribute>\n");
+        }
+        fprintf(f, "      </Grid>\n");
+    }
+    fprintf(f, "    </Grid>\n  </Domain>\n</Xdmf>\n");
+}
+
+/* Every frame while the sidecar is this short: the first frames are what users open first. */
+#define EVERY_FRAME_UP_TO 8
+
+bool nbep_xdmf_due(size_t n_frames, double seconds_since_last)
+{
+    return n_frames <= EVERY_FRAME_UP_TO || (n_frames & (n_frames - 1)) == 0 ||
+           seconds_since_last >= NBEP_XDMF_REWRITE_SECONDS;
+}
+
+nbep_status nbep_xdmf_write(const char *h5_path, size_t n_spheres, size_t n_frames,
+                            const int64_t *steps, const double *times, bool has_velocity,
+                            nbep_diag *d)
+{
+    char *xmf = nbep_xdmf_path(h5_path);
+    char *tmp = xmf ? malloc(strlen(xmf) + sizeof ".tmp") : NULL;
+    char *h5 = xml_base_name(h5_path);
+    nbep_status st = NBEP_ENOMEM;
+    if (!xmf || !tmp || !h5) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s: no memory for the XDMF sidecar of %zu frames", h5_path,
+                      n_frames);
+        goto done;
+    }
+    sprintf(tmp, "%s.tmp", xmf);
+    st = NBEP_EIO;
+    FILE *f = fopen(tmp, "w");
+    if (!f) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot write the XDMF sidecar: %s", tmp,
+                      strerror(errno));
+        goto done;
+    }
+    write_xml(f, h5, n_spheres, n_frames, steps, times, has_velocity);
+    int err = ferror(f) ? (errno ? errno : EIO) : 0;
+    if (fclose(f) != 0 && !err)
+        err = errno ? errno : EIO;
+    if (err || rename(tmp, xmf) != 0) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot write the XDMF sidecar: %s", xmf,
+                      strerror(err ? err : errno));
+        remove(tmp);
+        goto done;
+    }
+    st = NBEP_OK;
+done:
+    free(h5);
+    free(tmp);
+    free(xmf);
+    return st;
+}

@@ -1,0 +1,1175 @@
+/* `nbep sweep` (sweep.h): the run list, running a share of it, reusing finished runs, the
+ * summary table, and the MPI glue. The only file that includes <mpi.h>, and only under
+ * NBEP_HAVE_MPI (the Makefile's MPI=1); without it a sweep always runs serially.
+ *
+ * Invariants:
+ * - Every rank builds the same plan from the same deck and command line, so run indices,
+ *   overrides and file names agree without communication; the only messages are rank 0's
+ *   gather of results and its broadcast of the final status.
+ * - A run's file is either complete (its /summary says all its steps, its overrides are this
+ *   run's: it is reused) or replaced: a restarted sweep never mixes an old run into a new one.
+ * - Runs are independent processes of the simulation library: one run's failure (a deck error
+ *   for one combination, a numerical failure) is recorded in its row and the others go on.
+ * - MPI calls happen only on the main thread, outside any run's parallel region (the thread
+ *   level asked for is MPI_THREAD_FUNNELED). */
+#include "nbep/sweep.h"
+
+#include <errno.h>
+#include <inttypes.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <time.h>
+
+#include "build_info.h"
+#include "nbep/output_sweep.h"
+#include "nbep/output_xdmf.h"
+#include "nbep/sim.h"
+
+#ifdef NBEP_HAVE_MPI
+#include <mpi.h>
+#endif
+
+/* More runs than this is a mistake in the deck (a product of long axes), not a study. */
+#define RUNS_MAX ((size_t)10000000)
+/* Run files are named with at least this many digits: run-0007.h5. */
+#define RUN_DIGITS_MIN 4
+
+/* The JSON summary's numeric fields in SPEC order (algorithm, a string, comes before them):
+ * field of nbep_summary, and whether it is an integer. Drives parsing and the table. */
+#define SUMMARY_FIELDS(X)                                                                    \
+    X(threads, INT) X(spheres, INT) X(planes, INT) X(steps, INT) X(dt, REAL)                 \
+    X(setup_seconds, REAL) X(wall_seconds, REAL) X(steps_per_second, REAL) X(checks, INT)    \
+    X(predictions, INT) X(collisions, INT) X(sphere_collisions, INT)                         \
+    X(plane_collisions, INT) X(quiet_steps, INT) X(energy_initial, REAL)                     \
+    X(energy_final, REAL) X(energy_rel_drift, REAL) X(max_overlap, REAL)                     \
+    X(max_overlap_rel, REAL) X(peak_rss_bytes, INT)
+#define X_COUNT(field, kind) +1
+enum { N_SUMMARY_FIELDS = 0 SUMMARY_FIELDS(X_COUNT) };
+#undef X_COUNT
+
+const char *nbep_sweep_outcome_text(nbep_sweep_outcome o)
+{
+    switch (o) {
+#define X_TEXT(name, text)                                                                   \
+    case NBEP_SWEEP_##name:                                                                  \
+        return text;
+        NBEP_SWEEP_OUTCOME_LIST(X_TEXT)
+#undef X_TEXT
+    }
+    return "unknown";
+}
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* ---- the plan ---------------------------------------------------------------------------- */
+
+void nbep_sweep_plan_fini(nbep_sweep_plan *p)
+{
+    if (!p)
+        return;
+    free(p->deck_path);
+    free(p->deck_text);
+    for (size_t k = 0; p->base && k < p->n_base; k++)
+        free(p->base[k]);
+    free(p->base);
+    for (size_t k = 0; p->axes && k < p->n_axes; k++) {
+        free(p->axes[k].key);
+        for (size_t v = 0; v < p->axes[k].n_values; v++)
+            free(p->axes[k].values[v]);
+        free(p->axes[k].values);
+    }
+    free(p->axes);
+    free(p->dir);
+    memset(p, 0, sizeof *p);
+}
+
+/* "box.h5" -> "box.sweep"; "box.sweep" stays; "box" -> "box.sweep". */
+static char *sweep_dir_of(const char *output_file)
+{
+    size_t len = strlen(output_file);
+    while (len > 1 && output_file[len - 1] == '/')
+        len--;
+    if (len >= 6 && strncmp(output_file + len - 6, ".sweep", 6) == 0)
+        return strndup(output_file, len);
+    if (len >= 3 && strncmp(output_file + len - 3, ".h5", 3) == 0)
+        len -= 3;
+    char *dir = malloc(len + sizeof ".sweep");
+    if (dir) {
+        memcpy(dir, output_file, len);
+        memcpy(dir + len, ".sweep", sizeof ".sweep");
+    }
+    return dir;
+}
+
+/* Axes the sweep itself sets per run, or that would make no sense varied. */
+static bool axis_key_allowed(const char *key)
+{
+    return strcmp(key, "run.seed") != 0 && strcmp(key, "output.file") != 0 &&
+           strncmp(key, "sweep", 5) != 0;
+}
+
+/* run.steps given as libconfig integer text ("2000", "2000L", "0x7d0"); false if not one. */
+static bool parse_steps(const char *text, uint64_t *steps)
+{
+    char *end;
+    errno = 0;
+    unsigned long long v = strtoull(text, &end, 0);
+    if (end == text || errno || text[0] == '-')
+        return false;
+    if (*end == 'L')
+        end++;
+    if (*end != '\0')
+        return false;
+    *steps = (uint64_t)v;
+    return true;
+}
+
+nbep_status nbep_sweep_plan_create(const char *deck_path, const char *const *overrides,
+                                   size_t n_overrides, nbep_sweep_plan *out, nbep_diag *d)
+{
+    nbep_scene sc;
+    nbep_status st = nbep_scene_load(deck_path, overrides, n_overrides, &sc, d);
+    if (st != NBEP_OK)
+        return st;
+    nbep_sweep_plan p = {0};
+    bool oom = !(p.deck_path = strdup(deck_path)) || !(p.dir = sweep_dir_of(sc.output_file)) ||
+               !(p.base = calloc(n_overrides ? n_overrides : 1, sizeof *p.base));
+    for (size_t k = 0; !oom && k < n_overrides; k++, p.n_base++)
+        oom = !(p.base[k] = strdup(overrides[k]));
+    if (oom) {
+        nbep_sweep_plan_fini(&p);
+        nbep_scene_fini(&sc);
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory planning the sweep of %s", deck_path);
+    }
+    /* The scene's axes and deck text move into the plan. */
+    p.deck_text = sc.deck_text;
+    sc.deck_text = NULL;
+    p.axes = sc.sweep_axes;
+    p.n_axes = sc.sweep_n_axes;
+    sc.sweep_axes = NULL;
+    sc.sweep_n_axes = 0;
+    p.replicas = sc.sweep_replicas;
+    p.seed = sc.seed;
+    p.steps = sc.steps;
+    nbep_scene_fini(&sc);
+
+    const size_t errors0 = d->n_errors;
+    p.n_combos = 1;
+    bool too_many = false;
+    for (size_t k = 0; k < p.n_axes; k++) {
+        const nbep_sweep_axis *a = &p.axes[k];
+        if (!axis_key_allowed(a->key))
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "%s: sweep.vary.[%zu].key: %s cannot be varied (the sweep sets it: "
+                          "replica r runs with run.seed + r in its own file)",
+                          deck_path, k, a->key);
+        for (size_t j = 0; j < k; j++)
+            if (strcmp(p.axes[j].key, a->key) == 0)
+                nbep_diag_add(d, __FILE__, __LINE__,
+                              "%s: sweep.vary.[%zu].key: %s is already varied by "
+                              "sweep.vary.[%zu]",
+                              deck_path, k, a->key, j);
+        uint64_t steps;
+        if (strcmp(a->key, "run.steps") == 0)
+            for (size_t v = 0; v < a->n_values; v++)
+                if (!parse_steps(a->values[v], &steps))
+                    nbep_diag_add(d, __FILE__, __LINE__,
+                                  "%s: sweep.vary.[%zu].values.[%zu]: run.steps must be an "
+                                  "integer >= 0 (got %s)",
+                                  deck_path, k, v, a->values[v]);
+        if (a->n_values && p.n_combos > RUNS_MAX / a->n_values)
+            too_many = true;
+        else
+            p.n_combos *= a->n_values;
+    }
+    if (too_many || p.replicas > RUNS_MAX / p.n_combos)
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "%s: sweep: replicas times the product of the axes' lengths is more "
+                      "than %zu runs",
+                      deck_path, RUNS_MAX);
+    else
+        p.n_runs = (size_t)p.replicas * p.n_combos;
+    if (d->n_errors > errors0) {
+        nbep_sweep_plan_fini(&p);
+        return NBEP_EDECK;
+    }
+    *out = p;
+    return NBEP_OK;
+}
+
+uint64_t nbep_sweep_run_replica(const nbep_sweep_plan *p, size_t run)
+{
+    return run / p->n_combos;
+}
+
+uint64_t nbep_sweep_run_seed(const nbep_sweep_plan *p, size_t run)
+{
+    return p->seed + nbep_sweep_run_replica(p, run);
+}
+
+size_t nbep_sweep_run_value(const nbep_sweep_plan *p, size_t run, size_t axis)
+{
+    /* Row-major: the last axis varies fastest. */
+    size_t combo = run % p->n_combos;
+    for (size_t k = p->n_axes; k-- > axis + 1;)
+        combo /= p->axes[k].n_values;
+    return combo % p->axes[axis].n_values;
+}
+
+uint64_t nbep_sweep_run_steps(const nbep_sweep_plan *p, size_t run)
+{
+    uint64_t steps = p->steps;
+    for (size_t k = 0; k < p->n_axes; k++)
+        if (strcmp(p->axes[k].key, "run.steps") == 0 &&
+            !parse_steps(p->axes[k].values[nbep_sweep_run_value(p, run, k)], &steps))
+            steps = p->steps; /* checked when planning */
+    return steps;
+}
+
+void nbep_sweep_overrides_free(char **ov, size_t n)
+{
+    for (size_t k = 0; ov && k < n; k++)
+        free(ov[k]);
+    free(ov);
+}
+
+nbep_status nbep_sweep_run_overrides(const nbep_sweep_plan *p, size_t run, char ***out,
+                                     size_t *n, nbep_diag *d)
+{
+    size_t total = p->n_base + p->n_axes + 1, k = 0;
+    char **ov = calloc(total, sizeof *ov);
+    bool oom = !ov;
+    for (size_t i = 0; !oom && i < p->n_base; i++)
+        oom = !(ov[k++] = strdup(p->base[i]));
+    for (size_t a = 0; !oom && a < p->n_axes; a++) {
+        const char *value = p->axes[a].values[nbep_sweep_run_value(p, run, a)];
+        size_t len = strlen(p->axes[a].key) + 1 + strlen(value) + 1;
+        if ((oom = !(ov[k] = malloc(len))) == false)
+            snprintf(ov[k++], len, "%s=%s", p->axes[a].key, value);
+    }
+    char seed[64];
+    snprintf(seed, sizeof seed, "run.seed=%" PRIu64, nbep_sweep_run_seed(p, run));
+    if (!oom)
+        oom = !(ov[k++] = strdup(seed));
+    if (oom) {
+        nbep_sweep_overrides_free(ov, total);
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory building the overrides of run %zu", run);
+    }
+    *out = ov;
+    *n = total;
+    return NBEP_OK;
+}
+
+static int run_digits(const nbep_sweep_plan *p)
+{
+    int digits = 1;
+    for (size_t last = p->n_runs ? p->n_runs - 1 : 0; last >= 10; last /= 10)
+        digits++;
+    return digits < RUN_DIGITS_MIN ? RUN_DIGITS_MIN : digits;
+}
+
+char *nbep_sweep_run_path(const nbep_sweep_plan *p, size_t run)
+{
+    char num[24], zeros[24] = "00000000000000000000";
+    int len = snprintf(num, sizeof num, "%zu", run), pad = run_digits(p) - len;
+    zeros[pad > 0 ? pad : 0] = '\0';
+    size_t size = strlen(p->dir) + strlen(zeros) + strlen(num) + sizeof "/run-.h5";
+    char *path = malloc(size);
+    if (path)
+        snprintf(path, size, "%s/run-%s%s.h5", p->dir, zeros, num);
+    return path;
+}
+
+/* An axis value for people: a libconfig string loses its quotes (and its \" and \\ escapes);
+ * numbers, vectors and lists stay as written. malloc'd. */
+static char *display_value(const char *value)
+{
+    size_t len = strlen(value);
+    if (len < 2 || value[0] != '"' || value[len - 1] != '"')
+        return strdup(value);
+    char *out = malloc(len);
+    if (!out)
+        return NULL;
+    char *w = out;
+    for (size_t i = 1; i + 1 < len; i++) {
+        if (value[i] == '\\' && (value[i + 1] == '"' || value[i + 1] == '\\') && i + 2 < len)
+            i++;
+        *w++ = value[i];
+    }
+    *w = '\0';
+    return out;
+}
+
+/* "KEY=VALUE KEY=VALUE seed=S" for messages, cut to fit buf. */
+static void describe_run(const nbep_sweep_plan *p, size_t run, char *buf, size_t len)
+{
+    size_t used = 0;
+    buf[0] = '\0';
+    for (size_t a = 0; a < p->n_axes && used < len; a++) {
+        int k = snprintf(buf + used, len - used, "%s=%s ", p->axes[a].key,
+                         p->axes[a].values[nbep_sweep_run_value(p, run, a)]);
+        used += k > 0 ? (size_t)k : 0;
+    }
+    if (used < len)
+        snprintf(buf + used, len - used, "seed=%" PRIu64, nbep_sweep_run_seed(p, run));
+}
+
+/* ---- reusing finished runs --------------------------------------------------------------- */
+
+/* The position of the value of "key" in a flat JSON object, or NULL. */
+static const char *json_value(const char *json, const char *key)
+{
+    size_t klen = strlen(key);
+    for (const char *q = strchr(json, '"'); q; q = strchr(q + 1, '"')) {
+        if (strncmp(q + 1, key, klen) == 0 && q[1 + klen] == '"') {
+            const char *v = q + 2 + klen;
+            while (*v == ' ')
+                v++;
+            if (*v != ':')
+                continue;
+            v++;
+            while (*v == ' ')
+                v++;
+            return v;
+        }
+    }
+    return NULL;
+}
+
+static bool json_number(const char *json, const char *key, double *out)
+{
+    const char *v = json_value(json, key);
+    char *end;
+    if (!v)
+        return false;
+    double x = strtod(v, &end);
+    if (end == v)
+        return false;
+    *out = x;
+    return true;
+}
+
+static bool json_uint(const char *json, const char *key, uint64_t *out)
+{
+    const char *v = json_value(json, key);
+    char *end;
+    if (!v || *v == '-')
+        return false;
+    errno = 0;
+    unsigned long long x = strtoull(v, &end, 10);
+    if (end == v || errno)
+        return false;
+    *out = (uint64_t)x;
+    return true;
+}
+
+bool nbep_sweep_parse_summary(const char *json, nbep_summary *sum)
+{
+    nbep_summary s;
+    memset(&s, 0, sizeof s);
+    const char *fmt = json ? json_value(json, "format") : NULL;
+    const char *alg = json ? json_value(json, "algorithm") : NULL;
+    if (!fmt || strncmp(fmt, "\"nbep-summary-1\"", 16) != 0 || !alg || *alg != '"')
+        return false;
+    size_t n = strcspn(alg + 1, "\"");
+    if (alg[1 + n] != '"' || n >= sizeof s.algorithm)
+        return false;
+    memcpy(s.algorithm, alg + 1, n);
+    uint64_t u;
+    double x;
+    bool ok = true;
+#define X_PARSE_INT(field, kind)                                                             \
+    ok = ok && json_uint(json, #field, &u);                                                  \
+    s.field = u;
+#define X_PARSE_REAL(field, kind)                                                            \
+    ok = ok && json_number(json, #field, &x);                                                \
+    s.field = x;
+#define X_PARSE(field, kind) X_PARSE_##kind(field, kind)
+    SUMMARY_FIELDS(X_PARSE)
+#undef X_PARSE
+#undef X_PARSE_REAL
+#undef X_PARSE_INT
+    if (!ok)
+        return false;
+    *sum = s;
+    return true;
+}
+
+/* Whether an override changes nothing a run computes: the thread count (SPEC: frames are
+ * bitwise identical for any thread count) and the output file (the sweep names its files). */
+static bool override_is_neutral(const char *ov, size_t len)
+{
+    static const char *const neutral[] = {"run.threads", "output.file"};
+    for (size_t k = 0; k < sizeof neutral / sizeof neutral[0]; k++) {
+        size_t n = strlen(neutral[k]);
+        if (len > n && strncmp(ov, neutral[k], n) == 0) {
+            const char *q = ov + n;
+            while (*q == ' ')
+                q++;
+            if (*q == '=')
+                return true;
+        }
+    }
+    return false;
+}
+
+/* Whether two override lists (newline-separated) are equal but for neutral overrides. */
+static bool same_overrides(const char *a, const char *b)
+{
+    for (;;) {
+        size_t la = strcspn(a, "\n"), lb = strcspn(b, "\n");
+        if (la && override_is_neutral(a, la)) {
+            a += la + (a[la] != '\0');
+            continue;
+        }
+        if (lb && override_is_neutral(b, lb)) {
+            b += lb + (b[lb] != '\0');
+            continue;
+        }
+        if (!*a || !*b)
+            return !*a && !*b;
+        if (la != lb || strncmp(a, b, la) != 0)
+            return false;
+        a += la + (a[la] != '\0');
+        b += lb + (b[lb] != '\0');
+    }
+}
+
+static char *join_lines(char *const *lines, size_t n)
+{
+    size_t len = 1;
+    for (size_t k = 0; k < n; k++)
+        len += strlen(lines[k]) + 1;
+    char *out = malloc(len), *w = out;
+    if (!out)
+        return NULL;
+    *w = '\0';
+    for (size_t k = 0; k < n; k++)
+        w += sprintf(w, "%s%s", k ? "\n" : "", lines[k]);
+    return out;
+}
+
+bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_overrides,
+                             uint64_t steps, nbep_summary *sum)
+{
+    struct stat sb;
+    if (stat(path, &sb) != 0)
+        return false; /* the usual case: not run yet; no HDF5 call, no message */
+    nbep_diag d;
+    nbep_diag_init(&d);
+    char *stored = NULL, *json = NULL, *wanted = join_lines(overrides, n_overrides);
+    nbep_summary s;
+    bool complete = wanted && nbep_output_sweep_read_run(path, &stored, &json, &d) == NBEP_OK &&
+                    json && same_overrides(stored, wanted) &&
+                    nbep_sweep_parse_summary(json, &s) && s.steps == steps;
+    if (complete && sum)
+        *sum = s;
+    free(stored);
+    free(json);
+    free(wanted);
+    nbep_diag_fini(&d);
+    return complete;
+}
+
+/* ---- running ----------------------------------------------------------------------------- */
+
+/* One simulation, as `nbep run` does it but quiet, into path. *has_summary tells whether sum
+ * was filled (the run started stepping). */
+static nbep_status simulate(const nbep_sweep_plan *p, const char *path, char *const *ov,
+                            size_t n_ov, const nbep_sweep_exec *ex, nbep_summary *sum,
+                            bool *has_summary, nbep_diag *d)
+{
+    nbep_scene sc;
+    nbep_status st = nbep_scene_load(p->deck_path, (const char *const *)ov, n_ov, &sc, d);
+    if (st != NBEP_OK)
+        return st;
+    int threads = nbep_sim_resolve_threads(sc.threads);
+    nbep_output *out = NULL;
+    nbep_sim *sim = NULL;
+    st = nbep_output_create(path, &sc, threads, &out, d);
+    if (st == NBEP_OK) {
+        nbep_sim_options opt = {.threads = threads, .out = out,
+                                .stop_signal = ex->stop_signal, .progress = false};
+        st = nbep_sim_create(&sc, &opt, &sim, d);
+        if (st != NBEP_OK) { /* nothing was simulated: leave nothing behind */
+            nbep_status ignored = nbep_output_close(&out, NULL, d);
+            (void)ignored;
+            remove(path);
+        }
+    }
+    if (st == NBEP_OK) {
+        st = nbep_sim_run(sim, d);
+        nbep_sim_summary(sim, sum);
+        *has_summary = true;
+        nbep_status cst = nbep_output_close(&out, sum, d);
+        if (st == NBEP_OK)
+            st = cst;
+    }
+    nbep_sim_destroy(&sim);
+    nbep_scene_fini(&sc);
+    return st;
+}
+
+/* The diag's lines joined by "; " into a fixed buffer (cut when longer). */
+static void error_text(const nbep_diag *d, char *buf, size_t len)
+{
+    size_t used = 0;
+    buf[0] = '\0';
+    for (size_t k = 0; k < d->n_errors && used + 1 < len; k++) {
+        if (!d->msg || !d->msg[k])
+            continue;
+        int n = snprintf(buf + used, len - used, "%s%s", used ? "; " : "", d->msg[k]);
+        used += n > 0 ? (size_t)n : 0;
+    }
+}
+
+static nbep_status stop_status(const nbep_sweep_exec *ex)
+{
+    int sig = ex->stop_signal ? atomic_load_explicit(ex->stop_signal, memory_order_relaxed) : 0;
+    return sig == 0 ? NBEP_OK : sig == SIGINT ? NBEP_ESIGINT : NBEP_ESIGTERM;
+}
+
+static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec *ex,
+                    nbep_sweep_result *res)
+{
+    const double t0 = now_seconds();
+    nbep_diag d;
+    nbep_diag_init(&d);
+    char **ov = NULL, *path = NULL;
+    size_t n_ov = 0;
+    bool has_summary = false, reused = false;
+    nbep_status st = nbep_sweep_run_overrides(p, run, &ov, &n_ov, &d);
+    if (st == NBEP_OK && !(path = nbep_sweep_run_path(p, run))) {
+        nbep_diag_add(&d, __FILE__, __LINE__, "nbep: out of memory naming run %zu", run);
+        st = NBEP_ENOMEM;
+    }
+    if (st == NBEP_OK && nbep_sweep_run_complete(path, ov, n_ov, nbep_sweep_run_steps(p, run),
+                                                 &res->summary)) {
+        has_summary = reused = true;
+    } else if (st == NBEP_OK) {
+        st = simulate(p, path, ov, n_ov, ex, &res->summary, &has_summary, &d);
+        if (!has_summary) { /* a stale file of an earlier sweep must not pass for this run */
+            remove(path);
+            char *xmf = nbep_xdmf_path(path);
+            if (xmf)
+                remove(xmf);
+            free(xmf);
+        }
+    }
+    res->rank = ex->rank;
+    res->reused = reused;
+    res->has_summary = has_summary;
+    res->exit_code = nbep_status_exit_code(st);
+    res->outcome = st == NBEP_OK                                  ? NBEP_SWEEP_OK
+                   : st == NBEP_ESIGINT || st == NBEP_ESIGTERM ? NBEP_SWEEP_INTERRUPTED
+                                                                  : NBEP_SWEEP_FAILED;
+    error_text(&d, res->error, sizeof res->error);
+    res->seconds = now_seconds() - t0;
+
+    char what[256];
+    describe_run(p, run, what, sizeof what);
+    if (res->outcome == NBEP_SWEEP_FAILED)
+        fprintf(stderr, "nbep: sweep run %zu (%s) failed: %s\n", run, what, res->error);
+    else if (!ex->quiet && reused)
+        fprintf(stderr, "nbep sweep: rank %d: run %zu (of %zu; %s): complete already, reused\n",
+                ex->rank, run, p->n_runs, what);
+    else if (!ex->quiet)
+        fprintf(stderr,
+                "nbep sweep: rank %d: run %zu (of %zu; %s): %s in %.3g s (%" PRIu64
+                " steps, %.4g steps/s)\n",
+                ex->rank, run, p->n_runs, what, nbep_sweep_outcome_text(res->outcome),
+                res->seconds, res->summary.steps, res->summary.steps_per_second);
+    nbep_sweep_overrides_free(ov, n_ov);
+    free(path);
+    nbep_diag_fini(&d);
+}
+
+bool nbep_sweep_run_owner(size_t run, int rank, int n_ranks)
+{
+    const size_t size = n_ranks > 0 ? (size_t)n_ranks : 1, round = run / size, j = run % size;
+    return (round % 2 == 0 ? j : size - 1 - j) == (size_t)rank;
+}
+
+nbep_status nbep_sweep_execute(const nbep_sweep_plan *p, const nbep_sweep_exec *ex,
+                               nbep_sweep_result *results)
+{
+    for (size_t run = 0; run < p->n_runs; run++) {
+        memset(&results[run], 0, sizeof results[run]);
+        results[run].run = run;
+        results[run].rank = -1;
+        results[run].outcome = NBEP_SWEEP_NOT_RUN;
+        results[run].exit_code = -1;
+    }
+    for (size_t run = 0; run < p->n_runs; run++) {
+        if (!nbep_sweep_run_owner(run, ex->rank, ex->n_ranks))
+            continue;
+        nbep_status st = stop_status(ex);
+        if (st != NBEP_OK)
+            return st;
+        run_one(p, run, ex, &results[run]);
+        if (results[run].outcome == NBEP_SWEEP_INTERRUPTED)
+            return stop_status(ex) != NBEP_OK ? stop_status(ex) : NBEP_ESIGTERM;
+    }
+    return stop_status(ex);
+}
+
+/* ---- the summary table ------------------------------------------------------------------- */
+
+/* One CSV field (RFC 4180): quoted when it holds a comma, quote or line break. */
+static void csv_text(FILE *f, const char *s)
+{
+    if (!strpbrk(s, ",\"\r\n")) {
+        fputs(s, f);
+        return;
+    }
+    fputc('"', f);
+    for (; *s; s++) {
+        if (*s == '"')
+            fputc('"', f);
+        fputc(*s, f);
+    }
+    fputc('"', f);
+}
+
+static nbep_status write_csv(const char *path, const nbep_table *t, nbep_diag *d)
+{
+    size_t len = strlen(path) + sizeof ".partial";
+    char *tmp = malloc(len);
+    if (!tmp)
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: %s: out of memory", path);
+    snprintf(tmp, len, "%s.partial", path);
+    FILE *f = fopen(tmp, "w");
+    if (!f) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot write: %s", tmp, strerror(errno));
+        free(tmp);
+        return NBEP_EIO;
+    }
+    for (size_t k = 0; k < t->n_cols; k++) {
+        fputs(k ? "," : "", f);
+        csv_text(f, t->cols[k].name);
+    }
+    fputc('\n', f);
+    for (size_t row = 0; row < t->n_rows; row++) {
+        for (size_t k = 0; k < t->n_cols; k++) {
+            const nbep_table_column *c = &t->cols[k];
+            fputs(k ? "," : "", f);
+            if (c->missing && c->missing[row])
+                continue;
+            if (c->kind == NBEP_TABLE_INT)
+                fprintf(f, "%" PRId64, c->i[row]);
+            else if (c->kind == NBEP_TABLE_REAL)
+                fprintf(f, "%.17g", c->r[row]);
+            else
+                csv_text(f, c->s[row] ? c->s[row] : "");
+        }
+        fputc('\n', f);
+    }
+    int bad = ferror(f);
+    bad |= fclose(f) != 0;
+    if (bad || rename(tmp, path) != 0) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot write: %s", path,
+                      strerror(errno ? errno : EIO));
+        remove(tmp);
+        free(tmp);
+        return NBEP_EIO;
+    }
+    free(tmp);
+    return NBEP_OK;
+}
+
+/* Every array the table's columns point into, owned here. */
+typedef struct table_data {
+    size_t n_cols;
+    nbep_table_column *cols;
+    int64_t *ints;        /* n_int_cols x n_rows */
+    double *reals;
+    const char **texts;   /* n_text_cols x n_rows; entries in `owned` or borrowed */
+    char **owned;         /* strings made for the table, n_owned */
+    size_t n_owned, cap_owned;
+    bool *no_summary;     /* per row: the summary's columns are missing */
+} table_data;
+
+static void table_data_fini(table_data *t)
+{
+    for (size_t k = 0; k < t->n_owned; k++)
+        free(t->owned[k]);
+    free(t->owned);
+    free(t->cols);
+    free(t->ints);
+    free(t->reals);
+    free(t->texts);
+    free(t->no_summary);
+}
+
+/* Keeps s (malloc'd, may be NULL) for the table's lifetime; false when out of memory. */
+static bool keep(table_data *t, char *s, const char **slot)
+{
+    if (!s)
+        return false;
+    t->owned[t->n_owned++] = s;
+    *slot = s;
+    return true;
+}
+
+nbep_status nbep_sweep_write_summary(const nbep_sweep_plan *p, const nbep_sweep_result *results,
+                                     int n_ranks, double wall_seconds, nbep_diag *d)
+{
+    enum { N_FIXED_INT = 6, N_FIXED_TEXT = 4 }; /* run replica seed rank exit_code reused;
+                                                   status file algorithm error */
+    const size_t n = p->n_runs;
+    const size_t n_int = N_FIXED_INT + N_SUMMARY_FIELDS, n_text = N_FIXED_TEXT + p->n_axes;
+    table_data t = {0};
+    t.n_cols = n_int + n_text + 1;   /* + seconds */
+    t.cap_owned = n * (p->n_axes + 1);
+    t.cols = calloc(t.n_cols, sizeof *t.cols);
+    t.ints = calloc(n_int * n + 1, sizeof *t.ints);
+    t.reals = calloc((N_SUMMARY_FIELDS + 1) * n + 1, sizeof *t.reals);
+    t.texts = calloc(n_text * n + 1, sizeof *t.texts);
+    t.owned = calloc(t.cap_owned + 1, sizeof *t.owned);
+    t.no_summary = calloc(n + 1, sizeof *t.no_summary);
+    char *csv = malloc(strlen(p->dir) + 32), *h5 = malloc(strlen(p->dir) + 32);
+    char *base = join_lines(p->base, p->n_base), *keys = NULL;
+    nbep_status st = NBEP_ENOMEM;
+    if (!t.cols || !t.ints || !t.reals || !t.texts || !t.owned || !t.no_summary || !csv || !h5 ||
+        !base)
+        goto oom;
+    char **key_list = calloc(p->n_axes + 1, sizeof *key_list);
+    if (!key_list)
+        goto oom;
+    for (size_t a = 0; a < p->n_axes; a++)
+        key_list[a] = p->axes[a].key;
+    keys = join_lines(key_list, p->n_axes);
+    free(key_list);
+    if (!keys)
+        goto oom;
+
+    /* Column by column, in the documented order; ic, rc, tc: next int, real, text array. */
+    size_t col = 0, ic = 0, rc = 0, tc = 0;
+#define INT_COL(label, expr, miss)                                                           \
+    do {                                                                                     \
+        int64_t *v = t.ints + n * ic++;                                                      \
+        for (size_t r = 0; r < n; r++) {                                                     \
+            const nbep_sweep_result *res = &results[r];                                      \
+            (void)res;                                                                       \
+            v[r] = (int64_t)(expr);                                                          \
+        }                                                                                    \
+        t.cols[col++] = (nbep_table_column){.name = (label), .kind = NBEP_TABLE_INT,         \
+                                            .i = v, .missing = (miss)};                      \
+    } while (0)
+#define REAL_COL(label, expr, miss)                                                          \
+    do {                                                                                     \
+        double *v = t.reals + n * rc++;                                                      \
+        for (size_t r = 0; r < n; r++) {                                                     \
+            const nbep_sweep_result *res = &results[r];                                      \
+            v[r] = (double)(expr);                                                           \
+        }                                                                                    \
+        t.cols[col++] = (nbep_table_column){.name = (label), .kind = NBEP_TABLE_REAL,        \
+                                            .r = v, .missing = (miss)};                      \
+    } while (0)
+#define TEXT_COL(label, expr, miss)                                                          \
+    do {                                                                                     \
+        const char **v = t.texts + n * tc++;                                                 \
+        for (size_t r = 0; r < n; r++) {                                                     \
+            const nbep_sweep_result *res = &results[r];                                      \
+            (void)res;                                                                       \
+            v[r] = (expr);                                                                   \
+        }                                                                                    \
+        t.cols[col++] = (nbep_table_column){.name = (label), .kind = NBEP_TABLE_TEXT,        \
+                                            .s = v, .missing = (miss)};                      \
+    } while (0)
+
+    for (size_t r = 0; r < n; r++)
+        t.no_summary[r] = !results[r].has_summary;
+    INT_COL("run", r, NULL);
+    INT_COL("replica", nbep_sweep_run_replica(p, r), NULL);
+    INT_COL("seed", nbep_sweep_run_seed(p, r), NULL);
+    INT_COL("rank", res->rank, NULL);
+    for (size_t a = 0; a < p->n_axes; a++) {
+        const char **v = t.texts + n * tc++;
+        for (size_t r = 0; r < n; r++)
+            if (!keep(&t, display_value(p->axes[a].values[nbep_sweep_run_value(p, r, a)]),
+                      &v[r]))
+                goto oom;
+        t.cols[col++] = (nbep_table_column){.name = p->axes[a].key, .kind = NBEP_TABLE_TEXT,
+                                            .s = v};
+    }
+    TEXT_COL("status", nbep_sweep_outcome_text((nbep_sweep_outcome)res->outcome), NULL);
+    INT_COL("exit_code", res->exit_code, NULL);
+    INT_COL("reused", res->reused, NULL);
+    REAL_COL("seconds", res->seconds, NULL);
+    {
+        const char **v = t.texts + n * tc++;
+        for (size_t r = 0; r < n; r++) {
+            char *path = nbep_sweep_run_path(p, r);
+            char *name = path ? strdup(path + strlen(p->dir) + 1) : NULL;
+            free(path);
+            if (!keep(&t, name, &v[r]))
+                goto oom;
+        }
+        t.cols[col++] = (nbep_table_column){.name = "file", .kind = NBEP_TABLE_TEXT, .s = v,
+                                            .missing = t.no_summary};
+    }
+    TEXT_COL("algorithm", res->summary.algorithm, t.no_summary);
+#define X_COL_INT(field) INT_COL(#field, res->summary.field, t.no_summary)
+#define X_COL_REAL(field) REAL_COL(#field, res->summary.field, t.no_summary)
+#define X_COL(field, kind) X_COL_##kind(field);
+    SUMMARY_FIELDS(X_COL)
+#undef X_COL
+#undef X_COL_REAL
+#undef X_COL_INT
+    TEXT_COL("error", res->error, NULL);
+#undef TEXT_COL
+#undef REAL_COL
+#undef INT_COL
+
+    const nbep_table table = {.n_rows = n, .n_cols = col, .cols = t.cols};
+    sprintf(csv, "%s/summary.csv", p->dir);
+    sprintf(h5, "%s/summary.h5", p->dir);
+    const nbep_table_attr attrs[] = {
+        {.name = "deck_path", .kind = NBEP_TABLE_TEXT, .s = p->deck_path},
+        {.name = "deck", .kind = NBEP_TABLE_TEXT, .s = p->deck_text},
+        {.name = "overrides", .kind = NBEP_TABLE_TEXT, .s = base},
+        {.name = "axes", .kind = NBEP_TABLE_TEXT, .s = keys},
+        {.name = "replicas", .kind = NBEP_TABLE_INT, .i = (int64_t)p->replicas},
+        {.name = "runs", .kind = NBEP_TABLE_INT, .i = (int64_t)n},
+        {.name = "ranks", .kind = NBEP_TABLE_INT, .i = n_ranks},
+        {.name = "wall_seconds", .kind = NBEP_TABLE_REAL, .r = wall_seconds},
+        {.name = "build_flags", .kind = NBEP_TABLE_TEXT, .s = NBEP_BUILD_FLAGS},
+    };
+    st = write_csv(csv, &table, d);
+    nbep_status hst = nbep_output_sweep_write(h5, &table, attrs, sizeof attrs / sizeof *attrs, d);
+    if (st == NBEP_OK)
+        st = hst;
+    goto done;
+oom:
+    nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: out of memory writing the sweep summary",
+                  p->dir);
+    st = NBEP_ENOMEM;
+done:
+    table_data_fini(&t);
+    free(csv);
+    free(h5);
+    free(base);
+    free(keys);
+    return st;
+}
+
+/* ---- the command ------------------------------------------------------------------------- */
+
+/* mkdir -p: every missing directory on the way. */
+static nbep_status make_dir(const char *dir, nbep_diag *d)
+{
+    char *p = strdup(dir);
+    if (!p)
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory");
+    nbep_status st = NBEP_OK;
+    for (char *s = p + 1;; s++) {
+        if (*s != '/' && *s != '\0')
+            continue;
+        char c = *s;
+        *s = '\0';
+        struct stat sb;
+        if (mkdir(p, 0777) != 0 && (errno != EEXIST || stat(p, &sb) != 0 || !S_ISDIR(sb.st_mode))) {
+            nbep_diag_add(d, __FILE__, __LINE__, "nbep: cannot make the sweep directory %s: %s",
+                          p, errno == EEXIST ? "a file is in the way" : strerror(errno));
+            st = NBEP_EIO;
+            break;
+        }
+        *s = c;
+        if (c == '\0')
+            break;
+    }
+    free(p);
+    return st;
+}
+
+/* An integer from the environment, or -1. */
+static long env_long(const char *name)
+{
+    const char *v = getenv(name);
+    char *end;
+    if (!v || !*v)
+        return -1;
+    long x = strtol(v, &end, 10);
+    return *end == '\0' ? x : -1;
+}
+
+/* Whether an MPI launcher started this process, by the variables mpirun (Open MPI), srun
+ * (PMI-2, PMIx) and MPICH's Hydra set; NBEP_MPI=0/1 overrides. *many: certainly more than one
+ * process. MPI_Init is called only then, so that a plain `nbep sweep` (and the test suite)
+ * never starts MPI's runtime. */
+static bool launched_by_mpi(bool *many)
+{
+    long size = env_long("OMPI_COMM_WORLD_SIZE");
+    if (size < 0)
+        size = env_long("PMI_SIZE");
+    long rank = env_long("OMPI_COMM_WORLD_RANK");
+    if (rank < 0)
+        rank = env_long("PMIX_RANK");
+    if (rank < 0)
+        rank = env_long("PMI_RANK");
+    *many = size > 1 || rank > 0;
+    long forced = env_long("NBEP_MPI");
+    if (forced == 0 || forced == 1)
+        return forced == 1;
+    return size >= 0 || rank >= 0;
+}
+
+typedef struct sweep_totals {
+    size_t ok, failed, interrupted, not_run, reused;
+    double sim_seconds;   /* setup + stepping of the runs simulated now */
+} sweep_totals;
+
+static sweep_totals count(const nbep_sweep_plan *p, const nbep_sweep_result *results)
+{
+    sweep_totals s = {0};
+    for (size_t r = 0; r < p->n_runs; r++) {
+        const nbep_sweep_result *x = &results[r];
+        s.ok += x->outcome == NBEP_SWEEP_OK;
+        s.failed += x->outcome == NBEP_SWEEP_FAILED;
+        s.interrupted += x->outcome == NBEP_SWEEP_INTERRUPTED;
+        s.not_run += x->outcome == NBEP_SWEEP_NOT_RUN;
+        s.reused += x->reused != 0;
+        if (x->has_summary && !x->reused)
+            s.sim_seconds += x->summary.setup_seconds + x->summary.wall_seconds;
+    }
+    return s;
+}
+
+/* The --summary JSON of the whole sweep. */
+static nbep_status write_sweep_json(const char *where, const nbep_sweep_plan *p,
+                                    const sweep_totals *s, int n_ranks, double wall,
+                                    nbep_diag *d)
+{
+    FILE *f = strcmp(where, "-") == 0 ? stdout : fopen(where, "w");
+    if (!f)
+        NBEP_FAIL(d, NBEP_EIO, "nbep: cannot write the summary to %s: %s", where,
+                  strerror(errno));
+    const double n = (double)p->n_runs;
+    fprintf(f,
+            "{\"format\": \"nbep-sweep-summary-1\", \"version\": \"%s\", \"dir\": \"",
+            NBEP_VERSION);
+    for (const char *c = p->dir; *c; c++)
+        fprintf(f, *c == '"' || *c == '\\' ? "\\%c" : "%c", *c);
+    fprintf(f,
+            "\", \"runs\": %zu, \"ok\": %zu, \"failed\": %zu, \"interrupted\": %zu, "
+            "\"not_run\": %zu, \"reused\": %zu, \"ranks\": %d, \"wall_seconds\": %.17g, "
+            "\"runs_per_minute\": %.17g, \"sim_seconds\": %.17g, "
+            "\"overhead_seconds_per_run\": %.17g}\n",
+            p->n_runs, s->ok, s->failed, s->interrupted, s->not_run, s->reused, n_ranks, wall,
+            wall > 0.0 ? 60.0 * n / wall : 0.0, s->sim_seconds,
+            n > 0.0 ? ((double)n_ranks * wall - s->sim_seconds) / n : 0.0);
+    int bad = ferror(f);
+    bad |= f == stdout ? fflush(f) != 0 : fclose(f) != 0;
+    if (bad)
+        NBEP_FAIL(d, NBEP_EIO, "nbep: cannot write the summary to %s", where);
+    return NBEP_OK;
+}
+
+/* Rank 0's closing: the summary files, one line about the sweep, the status of the whole. */
+static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *results,
+                          nbep_status run_st, const nbep_cli *cli, int n_ranks, double t0,
+                          nbep_diag *d)
+{
+    nbep_status st = nbep_sweep_write_summary(p, results, n_ranks, now_seconds() - t0, d);
+    const double wall = now_seconds() - t0;
+    sweep_totals s = count(p, results);
+    if (!cli->quiet)
+        fprintf(stderr,
+                "nbep sweep: %zu runs on %d rank%s in %.3g s (%.3g runs/min): %zu ok (%zu "
+                "reused), %zu failed, %zu interrupted, %zu not run; %s/summary.csv\n",
+                p->n_runs, n_ranks, n_ranks == 1 ? "" : "s", wall,
+                wall > 0.0 ? 60.0 * (double)p->n_runs / wall : 0.0, s.ok, s.reused, s.failed,
+                s.interrupted, s.not_run, p->dir);
+    if (cli->summary) {
+        nbep_status jst = write_sweep_json(cli->summary, p, &s, n_ranks, wall, d);
+        if (st == NBEP_OK)
+            st = jst;
+    }
+    if (s.failed) {
+        char list[256];
+        size_t used = 0, shown = 0;
+        list[0] = '\0';
+        for (size_t r = 0; r < p->n_runs && used < sizeof list - 8; r++)
+            if (results[r].outcome == NBEP_SWEEP_FAILED) {
+                int k = snprintf(list + used, sizeof list - used, "%s%zu", shown++ ? ", " : "", r);
+                used += k > 0 ? (size_t)k : 0;
+            }
+        if (shown < s.failed)
+            snprintf(list + used, sizeof list - used, ", ...");
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: sweep: %zu of %zu runs failed (run %s); the others are complete; "
+                      "errors in %s/summary.csv",
+                      s.failed, p->n_runs, list, p->dir);
+    }
+    if (run_st == NBEP_ESIGINT || run_st == NBEP_ESIGTERM) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: sweep %s by SIG%s: %zu of %zu runs complete; the same command "
+                      "again runs the others",
+                      run_st == NBEP_ESIGINT ? "interrupted" : "terminated",
+                      run_st == NBEP_ESIGINT ? "INT" : "TERM", s.ok, p->n_runs);
+        return run_st;
+    }
+    if (st != NBEP_OK)
+        return st;
+    /* Some runs failed: exit status 1 (status.h has no code of its own for it). */
+    return s.failed ? NBEP_EIO : NBEP_OK;
+}
+
+#ifdef NBEP_HAVE_MPI
+/* Rank 0 receives every rank's results (each rank's runs in its own order) and puts each at
+ * its run's index. Byte copies: the ranks of one job run one build on one kind of machine. */
+static nbep_status gather(const nbep_sweep_plan *p, int rank, int size,
+                          nbep_sweep_result *results, nbep_diag *d)
+{
+    const size_t rec = sizeof *results;
+    nbep_status st = NBEP_OK;
+    if (p->n_runs > (size_t)INT32_MAX / rec) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: sweep: %zu runs are too many to gather in one message", p->n_runs);
+        st = NBEP_ENOMEM;
+    }
+    size_t mine = 0;
+    for (size_t r = 0; r < p->n_runs; r++)
+        mine += nbep_sweep_run_owner(r, rank, size);
+    nbep_sweep_result *send = calloc(mine + 1, rec), *recv = NULL;
+    int *counts = NULL, *displs = NULL;
+    if (rank == 0) {
+        recv = calloc(p->n_runs + 1, rec);
+        counts = calloc((size_t)size, sizeof *counts);
+        displs = calloc((size_t)size, sizeof *displs);
+    }
+    int ok = st == NBEP_OK && send && (rank != 0 || (recv && counts && displs));
+    int all_ok = 0;
+    MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    if (!all_ok) {
+        if (st == NBEP_OK)
+            nbep_diag_add(d, __FILE__, __LINE__, "nbep: out of memory gathering the sweep");
+        st = st == NBEP_OK ? NBEP_ENOMEM : st;
+        goto done;
+    }
+    size_t k = 0;
+    for (size_t r = 0; r < p->n_runs; r++)
+        if (nbep_sweep_run_owner(r, rank, size))
+            send[k++] = results[r];
+    if (rank == 0) {
+        size_t off = 0;
+        for (int q = 0; q < size; q++) {
+            size_t n_q = 0;
+            for (size_t r = 0; r < p->n_runs; r++)
+                n_q += nbep_sweep_run_owner(r, q, size);
+            counts[q] = (int)(n_q * rec);
+            displs[q] = (int)(off * rec);
+            off += n_q;
+        }
+    }
+    MPI_Gatherv(send, (int)(mine * rec), MPI_BYTE, recv, counts, displs, MPI_BYTE, 0,
+                MPI_COMM_WORLD);
+    if (rank == 0)
+        for (size_t i = 0; i < p->n_runs; i++)
+            results[recv[i].run] = recv[i];
+done:
+    free(send);
+    free(recv);
+    free(counts);
+    free(displs);
+    return st;
+}
+#endif
+
+/* The most serious of the ranks' statuses, agreed by all (identity without MPI). */
+static nbep_status agree(nbep_status st, bool mpi)
+{
+#ifdef NBEP_HAVE_MPI
+    if (mpi) {
+        int mine = (int)st, worst = 0;
+        MPI_Allreduce(&mine, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+        return (nbep_status)worst;
+    }
+#endif
+    (void)mpi;
+    return st;
+}
+
+nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, nbep_diag *d)
+{
+    double t0 = now_seconds();
+    bool many = false;
+    const bool mpi = launched_by_mpi(&many);
+    int rank = 0, size = 1;
+#ifdef NBEP_HAVE_MPI
+    if (mpi) {
+        int provided;
+        MPI_Init_thread(NULL, NULL, MPI_THREAD_FUNNELED, &provided);
+        MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+        MPI_Comm_size(MPI_COMM_WORLD, &size);
+        /* The sweep's time starts once MPI's runtime is up (about 0.3 s on a laptop): what
+         * it then measures is the sweep's own work, comparable across rank counts. */
+        t0 = now_seconds();
+    }
+#else
+    if (many)
+        NBEP_FAIL(d, NBEP_EUSAGE,
+                  "nbep: this nbep was built without MPI (MPI=0) but was started as one of "
+                  "several MPI processes: each would run the whole sweep; rebuild with MPI=1 "
+                  "or run `nbep sweep` once");
+#endif
+    /* Messages of the ranks other than 0 would repeat rank 0's; they keep theirs apart. */
+    nbep_diag quiet_diag;
+    nbep_diag_init(&quiet_diag);
+    nbep_diag *dd = rank == 0 ? d : &quiet_diag;
+    nbep_sweep_plan p = {0};
+    nbep_sweep_result *results = NULL;
+    nbep_status st = nbep_sweep_plan_create(cli->path, (const char *const *)cli->overrides,
+                                            cli->n_overrides, &p, dd);
+    if (st == NBEP_OK && many && size == 1) {
+        nbep_diag_add(dd, __FILE__, __LINE__,
+                      "nbep: started as one of several processes but MPI sees one: launch "
+                      "with mpirun, or srun --mpi=pmix (or pmi2)");
+        st = NBEP_EUSAGE;
+    }
+    if (st == NBEP_OK && !(results = calloc(p.n_runs + 1, sizeof *results))) {
+        nbep_diag_add(dd, __FILE__, __LINE__, "nbep: out of memory for %zu runs' results",
+                      p.n_runs);
+        st = NBEP_ENOMEM;
+    }
+    if (st == NBEP_OK && rank == 0)
+        st = make_dir(p.dir, dd);
+    st = agree(st, mpi); /* every rank stops here, or none: the collectives below need all */
+    if (st == NBEP_OK) {
+        if (rank == 0 && !cli->quiet)
+            fprintf(stderr, "nbep sweep: %s: %zu runs (%" PRIu64 " replica%s x %zu "
+                            "combination%s) on %d rank%s into %s/\n",
+                    p.deck_path, p.n_runs, p.replicas, p.replicas == 1 ? "" : "s", p.n_combos,
+                    p.n_combos == 1 ? "" : "s", size, size == 1 ? "" : "s", p.dir);
+        const nbep_sweep_exec ex = {.rank = rank, .n_ranks = size,
+                                    .stop_signal = stop_signal, .quiet = cli->quiet};
+        nbep_status run_st = nbep_sweep_execute(&p, &ex, results);
+        run_st = agree(run_st, mpi);
+#ifdef NBEP_HAVE_MPI
+        if (mpi)
+            st = agree(gather(&p, rank, size, results, dd), mpi);
+#endif
+        if (st == NBEP_OK && rank == 0)
+            st = finish(&p, results, run_st, cli, size, t0, dd);
+        st = agree(st, mpi);
+    }
+    free(results);
+    nbep_sweep_plan_fini(&p);
+    nbep_diag_fini(&quiet_diag);
+#ifdef NBEP_HAVE_MPI
+    if (mpi)
+        MPI_Finalize();
+#endif
+    return st;
+}

@@ -1,0 +1,230 @@
+/* Tests of the XDMF sidecar: its name, its text (one grid per frame with the frame's time and
+ * hyperslab), XML escaping of the run file's name, the atomic rewrite, the error line, and
+ * (when /usr/bin/python3 is there) that the XML is well-formed and, with h5py, that every
+ * reference resolves in a real run file: scripts/check_xdmf.py is what a reader does; with
+ * ParaView's pvpython installed, ParaView's XDMF reader itself reads the run. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "nbep/output.h"
+#include "nbep/output_xdmf.h"
+#include "nbep/scene.h"
+#include "nbep_test.h"
+
+#define TMP "build/tests/tmp/"
+#define PYTHON "/usr/bin/python3"
+#define PVPYTHON "/usr/bin/pvpython"
+
+static char *slurp(const char *path)
+{
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    rewind(f);
+    char *text = calloc((size_t)n + 1, 1);
+    assert_non_null(text);
+    assert_int_equal(fread(text, 1, (size_t)n, f), (size_t)n);
+    fclose(f);
+    return text;
+}
+
+static size_t occurrences(const char *text, const char *what)
+{
+    size_t n = 0;
+    for (const char *p = strstr(text, what); p; p = strstr(p + 1, what))
+        n++;
+    return n;
+}
+
+/* 0 when the command succeeded; 77 when python3 (or h5py, with need_h5py) is missing. */
+static int python(const char *args, bool need_h5py)
+{
+    if (access(PYTHON, X_OK) != 0)
+        return 77;
+    if (need_h5py && system(PYTHON " -c 'import h5py' 2>/dev/null") != 0)
+        return 77;
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd, PYTHON " %s", args);
+    return system(cmd) == 0 ? 0 : 1;
+}
+
+static void test_the_sidecar_sits_beside_the_run_file(void **state)
+{
+    (void)state;
+    static const char *const cases[][2] = {{"out/box.h5", "out/box.xmf"},
+                                           {"box", "box.xmf"},
+                                           {"a.h5.h5", "a.h5.xmf"},
+                                           {".h5", ".xmf"}};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        char *p = nbep_xdmf_path(cases[k][0]);
+        assert_string_equal(p, cases[k][1]);
+        free(p);
+    }
+}
+
+static void test_every_frame_is_a_grid_with_its_time_and_its_slab(void **state)
+{
+    (void)state;
+    const int64_t steps[3] = {0, 70, 123};
+    const double times[3] = {0.0, 0.0875, 0.15375};
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_xdmf_write(TMP "xdmf_text.h5", 37, 3, steps, times, true, &d),
+                     NBEP_OK);
+    char *x = slurp(TMP "xdmf_text.xmf");
+    assert_int_equal(occurrences(x, "<Grid Name=\"step "), 3);
+    assert_non_null(strstr(x, "<Grid Name=\"step 123\" GridType=\"Uniform\">\n"
+                              "        <Time Value=\"0.15375\"/>"));
+    assert_int_equal(occurrences(x, "NumberOfElements=\"37\""), 3);
+    /* frame 2: start (2,0,0), stride 1, count (1,37,3) of a (3,37,3) dataset */
+    assert_non_null(strstr(x, ">2 0 0 1 1 1 1 37 3</DataItem>"));
+    assert_int_equal(occurrences(x, "Dimensions=\"3 37 3\""), 6);   /* position + velocity */
+    assert_int_equal(occurrences(x, ">xdmf_text.h5:/frames/position</DataItem>"), 3);
+    assert_int_equal(occurrences(x, ">xdmf_text.h5:/frames/velocity</DataItem>"), 3);
+    assert_int_equal(occurrences(x, ">xdmf_text.h5:/spheres/radius</DataItem>"), 3);
+    assert_int_equal(access(TMP "xdmf_text.xmf.tmp", F_OK), -1);
+    free(x);
+    int py = python("scripts/check_xdmf.py --xml-only " TMP "xdmf_text.xmf", false);
+    if (py == 77)
+        print_message("python3 missing: XML well-formedness not checked\n");
+    else
+        assert_int_equal(py, 0);
+    nbep_diag_fini(&d);
+}
+
+static void test_a_rewrite_replaces_the_sidecar_and_can_drop_velocity(void **state)
+{
+    (void)state;
+    const double times[2] = {0.0, 0.5};
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_xdmf_write(TMP "xdmf_again.h5", 5, 2, NULL, times, true, &d), NBEP_OK);
+    assert_int_equal(nbep_xdmf_write(TMP "xdmf_again.h5", 5, 1, NULL, times, false, &d),
+                     NBEP_OK);
+    char *x = slurp(TMP "xdmf_again.xmf");
+    assert_int_equal(occurrences(x, "<Grid Name=\"frame "), 1);
+    assert_null(strstr(x, "velocity"));
+    assert_non_null(strstr(x, "</Xdmf>\n"));
+    free(x);
+    nbep_diag_fini(&d);
+}
+
+static void test_the_run_file_name_is_escaped_for_xml(void **state)
+{
+    (void)state;
+    const double t = 0.25;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_xdmf_write(TMP "x&y<z>'q\".h5", 2, 1, NULL, &t, false, &d), NBEP_OK);
+    char *x = slurp(TMP "x&y<z>'q\".xmf");
+    assert_non_null(strstr(x, ">x&amp;y&lt;z&gt;&apos;q&quot;.h5:/frames/position<"));
+    free(x);
+    int py = python("scripts/check_xdmf.py --xml-only '" TMP "x&y<z>'\\''q\".xmf'", false);
+    assert_true(py == 0 || py == 77);
+    nbep_diag_fini(&d);
+}
+
+static void test_an_unwritable_place_is_one_error_line(void **state)
+{
+    (void)state;
+    const double t = 0.0;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_xdmf_write(TMP "no/such/dir/run.h5", 2, 1, NULL, &t, false, &d),
+                     NBEP_EIO);
+    assert_int_equal(d.n_errors, 1);
+    assert_string_equal(d.msg[0], "nbep: " TMP "no/such/dir/run.xmf.tmp: cannot write the XDMF "
+                                  "sidecar: No such file or directory");
+    nbep_diag_fini(&d);
+}
+
+static void test_a_growing_sidecar_is_rewritten_at_doublings_or_after_30_s(void **state)
+{
+    (void)state;
+    for (size_t n = 1; n <= 8; n++)
+        assert_true(nbep_xdmf_due(n, 0.0));
+    assert_false(nbep_xdmf_due(9, 0.0));
+    assert_true(nbep_xdmf_due(16, 0.0));
+    assert_false(nbep_xdmf_due(1000, 29.9));
+    assert_true(nbep_xdmf_due(1000, 30.0));
+    assert_true(nbep_xdmf_due(1024, 0.1));
+    /* rewrites up to 10^5 frames with no time passing: 8 + the doublings 16 .. 65536 */
+    size_t rewrites = 0;
+    for (size_t n = 1; n <= 100000; n++)
+        rewrites += nbep_xdmf_due(n, 0.0);
+    assert_int_equal(rewrites, 8 + 13);
+}
+
+/* A real run file (3 frames of 6 spheres, positions and velocities) and its sidecar: every
+ * reference a reader follows must resolve to the right frame. */
+static void test_a_real_run_files_sidecar_resolves_in_a_reader(void **state)
+{
+    (void)state;
+    FILE *f = fopen(TMP "xdmf_real.deck", "w");
+    assert_non_null(f);
+    fputs("run: { steps = 20; dt = 0.0125; seed = 7; threads = 1; };\n"
+          "box: { min = [0.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0]; };\n"
+          "spheres = ( { count = 6; radius = 0.1; mass = 1.0; place = \"random\"; "
+          "speed = 1.0; } );\n"
+          "output: { file = \"" TMP "xdmf_real.h5\"; every = 10; "
+          "fields = [\"position\", \"velocity\"]; };\n",
+          f);
+    fclose(f);
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_scene sc;
+    assert_int_equal(nbep_scene_load(TMP "xdmf_real.deck", NULL, 0, &sc, &d), NBEP_OK);
+    nbep_output *o;
+    assert_int_equal(nbep_output_create(sc.output_file, &sc, 1, &o, &d), NBEP_OK);
+    const int64_t steps[3] = {0, 10, 20};
+    const double times[3] = {0.0, 10 * 0.0125, 20 * 0.0125};
+    for (int k = 0; k < 3; k++) {
+        /* frames that differ, so that a reader taking the wrong slab is caught */
+        for (size_t i = 0; i < sc.state.n; i++) {
+            sc.state.pos[i].x += 0.0137 * k;
+            sc.state.vel[i].z -= 0.25 * k;
+        }
+        assert_int_equal(nbep_output_frame(o, steps[k], sc.dt, &sc.state, &d), NBEP_OK);
+    }
+    assert_int_equal(nbep_output_close(&o, NULL, &d), NBEP_OK);
+    assert_int_equal(nbep_xdmf_write(sc.output_file, sc.state.n, 3, steps, times, true, &d),
+                     NBEP_OK);
+    int py = python("scripts/check_xdmf.py " TMP "xdmf_real.xmf", true);
+    if (py == 77)
+        print_message("python3 or h5py missing: references not checked\n");
+    else
+        assert_int_equal(py, 0);
+    /* ParaView's own XDMF reader, when installed (Debian: python3-paraview) */
+    if (py == 0 && access(PVPYTHON, X_OK) == 0)
+        assert_int_equal(system(PVPYTHON " scripts/check_xdmf.py --paraview " TMP
+                                         "xdmf_real.xmf 2>/dev/null"),
+                         0);
+    else
+        print_message("pvpython missing: not read with ParaView\n");
+    nbep_scene_fini(&sc);
+    nbep_diag_fini(&d);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_the_sidecar_sits_beside_the_run_file),
+        cmocka_unit_test(test_every_frame_is_a_grid_with_its_time_and_its_slab),
+        cmocka_unit_test(test_a_rewrite_replaces_the_sidecar_and_can_drop_velocity),
+        cmocka_unit_test(test_the_run_file_name_is_escaped_for_xml),
+        cmocka_unit_test(test_an_unwritable_place_is_one_error_line),
+        cmocka_unit_test(test_a_growing_sidecar_is_rewritten_at_doublings_or_after_30_s),
+        cmocka_unit_test(test_a_real_run_files_sidecar_resolves_in_a_reader),
+    };
+    return cmocka_run_group_tests_name("output_xdmf", tests, NULL, NULL);
+}

@@ -1,0 +1,713 @@
+/* Tests of `nbep sweep` without MPI: the run list (replicas x the cartesian product of the
+ * axes, in a stable order), the overrides and seed each run gets, the static split over
+ * ranks, reusing complete runs, a failing combination that spares the others, the summary
+ * files (summary.csv read as text, summary.h5 read with the HDF5 C API), and the whole
+ * command. Decks are written into build/tests/tmp/; runs are a few steps of 8 spheres. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <errno.h>
+#include <signal.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <hdf5.h>
+
+#include "nbep/output.h"
+#include "nbep/sweep.h"
+#include "nbep_test.h"
+
+#define TMP "build/tests/tmp/"
+
+/* The runs' common part; each test adds its own output file and sweep group. */
+static const char deck_body[] =
+    "run: { algorithm = \"predictive\"; steps = 20; dt = 1.0e-3; threads = 1; seed = 11; };\n"
+    "physics: { gravity = [0.0, 0.0, -9.81]; restitution = 1.0; };\n"
+    "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+    "spheres = ( { count = 8; radius = 0.05; mass = 1.0; place = \"random\"; speed = 1.0; } );\n";
+
+/* Writes TMP NAME.deck with the common body, output.file = TMP NAME.h5 and extra (the sweep
+ * group); removes an earlier NAME.sweep directory's files. Returns the deck's path. */
+static const char *write_deck(const char *name, const char *extra, char *path, size_t len)
+{
+    snprintf(path, len, TMP "%s.deck", name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, "%soutput: { file = \"" TMP "%s.h5\"; every = 10; };\n%s", deck_body, name,
+            extra);
+    assert_int_equal(fclose(f), 0);
+    char cmd[512];
+    snprintf(cmd, sizeof cmd, "rm -rf '" TMP "%s.sweep'", name);
+    assert_int_equal(system(cmd), 0);
+    return path;
+}
+
+static int make_dir(const char *dir)
+{
+    return mkdir(dir, 0777) == 0 || errno == EEXIST ? 0 : -1;
+}
+
+static void plan_of(const char *deck, const char *const *ov, size_t n_ov, nbep_sweep_plan *p)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_status st = nbep_sweep_plan_create(deck, ov, n_ov, p, &d);
+    if (st != NBEP_OK)
+        nbep_diag_print(&d, stderr);
+    assert_int_equal(st, NBEP_OK);
+    nbep_diag_fini(&d);
+}
+
+static const char three_by_two[] =
+    "sweep: { replicas = 3;\n"
+    "  vary = ( { key = \"physics.restitution\"; values = [1.0, 0.75]; },\n"
+    "           { key = \"physics.gravity\"; values = ( [0.0, 0.0, -9.81], [0.0, 0.0, -1.5],\n"
+    "                                                   [0.0, -2.0, 0.0] ); } ); };\n";
+
+/* ---- the run list ------------------------------------------------------------------------ */
+
+static void test_runs_are_replicas_times_the_product_of_the_axes(void **state)
+{
+    (void)state;
+    char deck[256];
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_list", three_by_two, deck, sizeof deck), NULL, 0, &p);
+    assert_int_equal(p.n_axes, 2);
+    assert_int_equal(p.replicas, 3);
+    assert_int_equal(p.n_combos, 2 * 3);
+    assert_int_equal(p.n_runs, 3 * 2 * 3);
+    nbep_sweep_plan_fini(&p);
+}
+
+static void test_replicas_are_outermost_and_the_last_axis_varies_fastest(void **state)
+{
+    (void)state;
+    char deck[256];
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_order", three_by_two, deck, sizeof deck), NULL, 0, &p);
+    /* Nested loops: for replica, for restitution (2), for gravity (3). */
+    size_t run = 0;
+    for (uint64_t r = 0; r < 3; r++)
+        for (size_t e = 0; e < 2; e++)
+            for (size_t g = 0; g < 3; g++, run++) {
+                assert_int_equal(nbep_sweep_run_replica(&p, run), r);
+                assert_int_equal(nbep_sweep_run_value(&p, run, 0), e);
+                assert_int_equal(nbep_sweep_run_value(&p, run, 1), g);
+            }
+    nbep_sweep_plan_fini(&p);
+}
+
+static void test_every_combination_appears_once_per_replica(void **state)
+{
+    (void)state;
+    char deck[256];
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_product", three_by_two, deck, sizeof deck), NULL, 0, &p);
+    int seen[3][2][3] = {{{0}}};
+    for (size_t run = 0; run < p.n_runs; run++)
+        seen[nbep_sweep_run_replica(&p, run)][nbep_sweep_run_value(&p, run, 0)]
+            [nbep_sweep_run_value(&p, run, 1)]++;
+    for (int r = 0; r < 3; r++)
+        for (int e = 0; e < 2; e++)
+            for (int g = 0; g < 3; g++)
+                assert_int_equal(seen[r][e][g], 1);
+    nbep_sweep_plan_fini(&p);
+}
+
+static void test_a_run_gets_the_command_line_then_its_values_then_its_seed(void **state)
+{
+    (void)state;
+    char deck[256];
+    const char *cli[] = {"run.steps=30", "physics.restitution=0.5"};
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_overrides", three_by_two, deck, sizeof deck), cli, 2, &p);
+    /* run 10 = replica 1 (10 / 6), combination 4: restitution index 1, gravity index 1 */
+    char **ov;
+    size_t n;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_sweep_run_overrides(&p, 10, &ov, &n, &d), NBEP_OK);
+    assert_int_equal(n, 5);
+    assert_string_equal(ov[0], "run.steps=30");
+    assert_string_equal(ov[1], "physics.restitution=0.5");
+    assert_string_equal(ov[2], "physics.restitution=0.75");
+    assert_string_equal(ov[3], "physics.gravity=[0.0, 0.0, -1.5]");
+    assert_string_equal(ov[4], "run.seed=12");
+    nbep_sweep_overrides_free(ov, n);
+    nbep_diag_fini(&d);
+    nbep_sweep_plan_fini(&p);
+}
+
+static void test_replica_r_runs_with_the_decks_seed_plus_r(void **state)
+{
+    (void)state;
+    char deck[256];
+    const char *cli[] = {"run.seed=4711"};
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_seed", three_by_two, deck, sizeof deck), cli, 1, &p);
+    for (size_t run = 0; run < p.n_runs; run++)
+        assert_int_equal(nbep_sweep_run_seed(&p, run), 4711 + run / 6);
+    nbep_sweep_plan_fini(&p);
+}
+
+static void test_a_deck_without_a_sweep_group_is_one_run(void **state)
+{
+    (void)state;
+    char deck[256];
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_none", "", deck, sizeof deck), NULL, 0, &p);
+    assert_int_equal(p.n_runs, 1);
+    char **ov;
+    size_t n;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_sweep_run_overrides(&p, 0, &ov, &n, &d), NBEP_OK);
+    assert_int_equal(n, 1);
+    assert_string_equal(ov[0], "run.seed=11");
+    nbep_sweep_overrides_free(ov, n);
+    nbep_diag_fini(&d);
+    nbep_sweep_plan_fini(&p);
+}
+
+static void test_the_sweep_directory_is_the_output_name_with_sweep(void **state)
+{
+    (void)state;
+    char deck[256];
+    static const struct {
+        const char *output, *dir;
+    } cases[] = {{"output.file=\"results/box.h5\"", "results/box.sweep"},
+                 {"output.file=\"results/box.sweep\"", "results/box.sweep"},
+                 {"output.file=\"box\"", "box.sweep"}};
+    write_deck("sweep_dir", "", deck, sizeof deck);
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        nbep_sweep_plan p;
+        plan_of(deck, &cases[k].output, 1, &p);
+        assert_string_equal(p.dir, cases[k].dir);
+        nbep_sweep_plan_fini(&p);
+    }
+    nbep_sweep_plan p;
+    plan_of(deck, NULL, 0, &p);
+    assert_string_equal(p.dir, TMP "sweep_dir.sweep");
+    nbep_sweep_plan_fini(&p);
+}
+
+static void test_run_files_have_four_digits_or_as_many_as_the_last_run_needs(void **state)
+{
+    (void)state;
+    nbep_sweep_plan p = {.dir = "out.sweep", .n_runs = 18, .n_combos = 1};
+    char *a = nbep_sweep_run_path(&p, 7);
+    assert_string_equal(a, "out.sweep/run-0007.h5");
+    p.n_runs = 123456;
+    char *b = nbep_sweep_run_path(&p, 42);
+    assert_string_equal(b, "out.sweep/run-000042.h5");
+    free(a);
+    free(b);
+}
+
+static void test_varying_the_seed_or_a_key_twice_is_a_deck_error(void **state)
+{
+    (void)state;
+    char deck[256];
+    write_deck("sweep_bad_axes",
+               "sweep: { vary = ( { key = \"run.seed\"; values = [1, 2]; },\n"
+               "  { key = \"physics.restitution\"; values = [1.0]; },\n"
+               "  { key = \"physics.restitution\"; values = [0.5]; } ); };\n",
+               deck, sizeof deck);
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_sweep_plan p;
+    assert_int_equal(nbep_sweep_plan_create(deck, NULL, 0, &p, &d), NBEP_EDECK);
+    assert_int_equal(d.n_errors, 2);
+    assert_string_equal(d.msg[0], TMP "sweep_bad_axes.deck: sweep.vary.[0].key: run.seed cannot "
+                                      "be varied (the sweep sets it: replica r runs with "
+                                      "run.seed + r in its own file)");
+    assert_string_equal(d.msg[1], TMP "sweep_bad_axes.deck: sweep.vary.[2].key: "
+                                      "physics.restitution is already varied by sweep.vary.[1]");
+    nbep_diag_fini(&d);
+}
+
+static void test_a_steps_axis_sets_each_runs_expected_steps(void **state)
+{
+    (void)state;
+    char deck[256];
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_steps",
+                       "sweep: { vary = ( { key = \"run.steps\"; values = ( 7, 30L ); } ); };\n",
+                       deck, sizeof deck),
+            NULL, 0, &p);
+    assert_int_equal(nbep_sweep_run_steps(&p, 0), 7);
+    assert_int_equal(nbep_sweep_run_steps(&p, 1), 30);
+    nbep_sweep_plan_fini(&p);
+}
+
+static void test_ranks_take_runs_in_rounds_of_alternating_direction(void **state)
+{
+    (void)state;
+    /* 2 ranks: rounds (0,1) (3,2) (4,5) (7,6) */
+    static const int owner2[8] = {0, 1, 1, 0, 0, 1, 1, 0};
+    for (size_t run = 0; run < 8; run++) {
+        assert_int_equal(nbep_sweep_run_owner(run, owner2[run], 2), true);
+        assert_int_equal(nbep_sweep_run_owner(run, 1 - owner2[run], 2), false);
+    }
+    /* any rank count: each run has exactly one owner, and the counts differ by at most 1 */
+    for (int ranks = 1; ranks <= 5; ranks++) {
+        size_t count[5] = {0};
+        for (size_t run = 0; run < 23; run++) {
+            int owners = 0;
+            for (int q = 0; q < ranks; q++)
+                if (nbep_sweep_run_owner(run, q, ranks)) {
+                    owners++;
+                    count[q]++;
+                }
+            assert_int_equal(owners, 1);
+        }
+        for (int q = 0; q < ranks; q++)
+            assert_true(count[q] == 23 / (size_t)ranks || count[q] == 23 / (size_t)ranks + 1);
+    }
+}
+
+/* ---- reusing complete runs ----------------------------------------------------------------- */
+
+static void test_a_summary_reads_back_field_by_field(void **state)
+{
+    (void)state;
+    nbep_summary s = {.algorithm = "seminaive", .threads = 3, .spheres = 4097, .planes = 7,
+                      .steps = 1234, .dt = 0.00125, .setup_seconds = 0.0317,
+                      .wall_seconds = 1.4375, .steps_per_second = 858.4347826,
+                      .checks = 9876543210ull, .predictions = 17, .collisions = 19,
+                      .sphere_collisions = 11, .plane_collisions = 8, .quiet_steps = 1200,
+                      .energy_initial = -3.17, .energy_final = -3.1700001,
+                      .energy_rel_drift = -3.1545741324921e-08, .max_overlap = 2.5e-13,
+                      .max_overlap_rel = 5e-12, .peak_rss_bytes = 123456789};
+    char *json = nbep_summary_to_json(&s);
+    assert_non_null(json);
+    nbep_summary r;
+    assert_true(nbep_sweep_parse_summary(json, &r));
+    assert_string_equal(r.algorithm, "seminaive");
+    assert_int_equal(r.threads, 3);
+    assert_int_equal(r.spheres, 4097);
+    assert_int_equal(r.steps, 1234);
+    assert_int_equal(r.checks, 9876543210ull);
+    assert_int_equal(r.quiet_steps, 1200);
+    assert_int_equal(r.peak_rss_bytes, 123456789);
+    assert_true(r.dt == s.dt && r.energy_final == s.energy_final); /* %.17g round-trips */
+    assert_true(r.energy_rel_drift == s.energy_rel_drift && r.max_overlap == s.max_overlap);
+    assert_false(nbep_sweep_parse_summary("{\"format\": \"nbep-summary-1\"}", &r));
+    assert_false(nbep_sweep_parse_summary("not json", &r));
+    free(json);
+}
+
+static nbep_sweep_result *execute(const nbep_sweep_plan *p, const atomic_int *stop,
+                                  nbep_status want)
+{
+    nbep_sweep_result *res = calloc(p->n_runs, sizeof *res);
+    assert_non_null(res);
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(make_dir(p->dir), 0);
+    const nbep_sweep_exec ex = {.rank = 0, .n_ranks = 1, .stop_signal = stop, .quiet = true};
+    assert_int_equal(nbep_sweep_execute(p, &ex, res), want);
+    nbep_diag_fini(&d);
+    return res;
+}
+
+static bool complete(const nbep_sweep_plan *p, size_t run, uint64_t steps, const char *extra)
+{
+    char **ov;
+    size_t n;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_sweep_run_overrides(p, run, &ov, &n, &d), NBEP_OK);
+    if (extra) { /* replace the run's own seed */
+        free(ov[n - 1]);
+        ov[n - 1] = strdup(extra);
+    }
+    char *path = nbep_sweep_run_path(p, run);
+    bool done = nbep_sweep_run_complete(path, ov, n, steps, NULL);
+    free(path);
+    nbep_sweep_overrides_free(ov, n);
+    nbep_diag_fini(&d);
+    return done;
+}
+
+static void test_a_run_is_complete_only_with_its_overrides_and_all_its_steps(void **state)
+{
+    (void)state;
+    char deck[256];
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_complete",
+                       "sweep: { vary = ( { key = \"physics.restitution\"; values = [0.9]; } ); "
+                       "replicas = 2; };\n",
+                       deck, sizeof deck),
+            NULL, 0, &p);
+    nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
+    assert_int_equal(res[0].outcome, NBEP_SWEEP_OK);
+    assert_true(complete(&p, 0, 20, NULL));
+    assert_false(complete(&p, 0, 40, NULL));                /* the deck now asks for more */
+    assert_false(complete(&p, 0, 20, "run.seed=99"));       /* another run's parameters */
+    char *path = nbep_sweep_run_path(&p, 1);
+    assert_true(complete(&p, 1, 20, NULL));
+    assert_int_equal(remove(path), 0);
+    assert_false(complete(&p, 1, 20, NULL));                /* no file */
+    FILE *f = fopen(path, "w");                             /* a file that is not HDF5 */
+    fputs("garbage\n", f);
+    fclose(f);
+    assert_false(complete(&p, 1, 20, NULL));
+    free(path);
+    free(res);
+    nbep_sweep_plan_fini(&p);
+}
+
+static void test_thread_count_and_output_name_do_not_make_a_run_different(void **state)
+{
+    (void)state;
+    char deck[256];
+    const char *cli[] = {"run.threads=1", "output.file=\"" TMP "sweep_neutral.h5\""};
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_neutral", "", deck, sizeof deck), cli, 2, &p);
+    free(execute(&p, NULL, NBEP_OK));
+    char *path = nbep_sweep_run_path(&p, 0);
+    char *same[] = {"run.threads = 2", "run.seed=11"};
+    char *other[] = {"run.threads=1", "run.steps=20", "run.seed=11"};
+    char *reordered[] = {"run.seed=11", "output.file=\"" TMP "sweep_neutral.sweep\""};
+    assert_true(nbep_sweep_run_complete(path, same, 2, 20, NULL));
+    assert_true(nbep_sweep_run_complete(path, same + 1, 1, 20, NULL));
+    assert_true(nbep_sweep_run_complete(path, reordered, 2, 20, NULL));
+    assert_false(nbep_sweep_run_complete(path, other, 3, 20, NULL));
+    free(path);
+    nbep_sweep_plan_fini(&p);
+}
+
+static void test_a_run_killed_before_its_summary_is_not_complete(void **state)
+{
+    (void)state;
+    char deck[256];
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_killed", "", deck, sizeof deck), NULL, 0, &p);
+    assert_int_equal(make_dir(p.dir), 0);
+    /* what a kill -9 leaves: the layout and a frame, no /summary json */
+    char **ov;
+    size_t n;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_sweep_run_overrides(&p, 0, &ov, &n, &d), NBEP_OK);
+    nbep_scene sc;
+    assert_int_equal(nbep_scene_load(deck, (const char *const *)ov, n, &sc, &d), NBEP_OK);
+    char *path = nbep_sweep_run_path(&p, 0);
+    nbep_output *o;
+    assert_int_equal(nbep_output_create(path, &sc, 1, &o, &d), NBEP_OK);
+    assert_int_equal(nbep_output_frame(o, 0, sc.dt, &sc.state, &d), NBEP_OK);
+    assert_int_equal(nbep_output_close(&o, NULL, &d), NBEP_OK);
+    assert_false(nbep_sweep_run_complete(path, ov, n, 20, NULL));
+    /* the sweep runs it again from scratch and then it is complete */
+    nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
+    assert_int_equal(res[0].outcome, NBEP_SWEEP_OK);
+    assert_int_equal(res[0].reused, 0);
+    assert_true(nbep_sweep_run_complete(path, ov, n, 20, NULL));
+    free(res);
+    free(path);
+    nbep_scene_fini(&sc);
+    nbep_sweep_overrides_free(ov, n);
+    nbep_diag_fini(&d);
+    nbep_sweep_plan_fini(&p);
+}
+
+/* ---- running and the summary --------------------------------------------------------------- */
+
+static const char with_bad_value[] =
+    "sweep: { replicas = 2;\n"
+    "  vary = ( { key = \"physics.restitution\"; values = [1.0, 1.5, 0.5]; } ); };\n";
+
+static void test_a_failing_combination_spares_the_other_runs(void **state)
+{
+    (void)state;
+    char deck[256];
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_fail", with_bad_value, deck, sizeof deck), NULL, 0, &p);
+    nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
+    for (size_t run = 0; run < 6; run++) {
+        bool bad = run % 3 == 1; /* restitution 1.5 */
+        assert_int_equal(res[run].outcome, bad ? NBEP_SWEEP_FAILED : NBEP_SWEEP_OK);
+        assert_int_equal(res[run].exit_code, bad ? 2 : 0);
+        assert_int_equal(res[run].has_summary, !bad);
+        if (bad)
+            assert_string_equal(res[run].error, "--set physics.restitution=1.5: "
+                                                "physics.restitution must be in [0, 1] (got 1.5)");
+        else
+            assert_int_equal(res[run].summary.steps, 20);
+        char *path = nbep_sweep_run_path(&p, run);
+        assert_int_equal(access(path, F_OK) == 0, !bad);
+        free(path);
+    }
+    free(res);
+    nbep_sweep_plan_fini(&p);
+}
+
+static void test_a_restarted_sweep_reuses_complete_runs(void **state)
+{
+    (void)state;
+    char deck[256];
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_restart", with_bad_value, deck, sizeof deck), NULL, 0, &p);
+    free(execute(&p, NULL, NBEP_OK));
+    nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
+    for (size_t run = 0; run < 6; run++) {
+        bool bad = run % 3 == 1;
+        assert_int_equal(res[run].outcome, bad ? NBEP_SWEEP_FAILED : NBEP_SWEEP_OK);
+        assert_int_equal(res[run].reused, !bad);
+        if (!bad)
+            assert_int_equal(res[run].summary.steps, 20);
+    }
+    free(res);
+    nbep_sweep_plan_fini(&p);
+}
+
+static void test_a_stop_signal_before_a_run_leaves_it_not_run(void **state)
+{
+    (void)state;
+    char deck[256];
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_stop", with_bad_value, deck, sizeof deck), NULL, 0, &p);
+    atomic_int stop;
+    atomic_init(&stop, SIGINT);
+    nbep_sweep_result *res = execute(&p, &stop, NBEP_ESIGINT);
+    for (size_t run = 0; run < p.n_runs; run++) {
+        assert_int_equal(res[run].outcome, NBEP_SWEEP_NOT_RUN);
+        assert_int_equal(res[run].rank, -1);
+    }
+    free(res);
+    nbep_sweep_plan_fini(&p);
+}
+
+/* The file's lines (at most 16), each malloc'd; returns the count. */
+static size_t read_lines(const char *path, char *lines[16])
+{
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    size_t n = 0;
+    char buf[4096];
+    while (n < 16 && fgets(buf, sizeof buf, f)) {
+        buf[strcspn(buf, "\n")] = '\0';
+        lines[n++] = strdup(buf);
+    }
+    fclose(f);
+    return n;
+}
+
+/* Field k of a CSV line (no quoted commas before it), into buf. */
+static const char *csv_field(const char *line, int k, char *buf, size_t len)
+{
+    for (; k > 0; k--) {
+        line = strchr(line, ',');
+        assert_non_null(line);
+        line++;
+    }
+    size_t n = strcspn(line, ",");
+    snprintf(buf, len, "%.*s", (int)(n < len ? n : len - 1), line);
+    return buf;
+}
+
+static void test_summary_csv_has_a_row_per_run_in_run_order(void **state)
+{
+    (void)state;
+    char deck[256];
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_csv", with_bad_value, deck, sizeof deck), NULL, 0, &p);
+    nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_sweep_write_summary(&p, res, 1, 2.5, &d), NBEP_OK);
+    char *lines[16];
+    size_t n = read_lines(TMP "sweep_csv.sweep/summary.csv", lines);
+    assert_int_equal(n, 1 + 6);
+    assert_string_equal(lines[0],
+                        "run,replica,seed,rank,physics.restitution,status,exit_code,reused,"
+                        "seconds,file,algorithm,threads,spheres,planes,steps,dt,setup_seconds,"
+                        "wall_seconds,steps_per_second,checks,predictions,collisions,"
+                        "sphere_collisions,plane_collisions,quiet_steps,energy_initial,"
+                        "energy_final,energy_rel_drift,max_overlap,max_overlap_rel,"
+                        "peak_rss_bytes,error");
+    static const char *const restitution[3] = {"1.0", "1.5", "0.5"};
+    char f[128], want[64];
+    for (size_t run = 0; run < 6; run++) {
+        const char *row = lines[1 + run];
+        bool bad = run % 3 == 1;
+        snprintf(want, sizeof want, "%zu", run);
+        assert_string_equal(csv_field(row, 0, f, sizeof f), want);
+        snprintf(want, sizeof want, "%zu", run / 3);
+        assert_string_equal(csv_field(row, 1, f, sizeof f), want);
+        snprintf(want, sizeof want, "%zu", 11 + run / 3);
+        assert_string_equal(csv_field(row, 2, f, sizeof f), want);
+        assert_string_equal(csv_field(row, 3, f, sizeof f), "0");
+        assert_string_equal(csv_field(row, 4, f, sizeof f), restitution[run % 3]);
+        assert_string_equal(csv_field(row, 5, f, sizeof f), bad ? "failed" : "ok");
+        assert_string_equal(csv_field(row, 6, f, sizeof f), bad ? "2" : "0");
+        snprintf(want, sizeof want, "run-%04zu.h5", run);
+        assert_string_equal(csv_field(row, 9, f, sizeof f), bad ? "" : want);
+        assert_string_equal(csv_field(row, 10, f, sizeof f), bad ? "" : "predictive");
+        assert_string_equal(csv_field(row, 12, f, sizeof f), bad ? "" : "8");
+        assert_string_equal(csv_field(row, 14, f, sizeof f), bad ? "" : "20");
+        if (bad)   /* the error is quoted: it holds a comma */
+            assert_non_null(strstr(row, ",\"--set physics.restitution=1.5: physics.restitution "
+                                        "must be in [0, 1] (got 1.5)\""));
+        else
+            assert_int_equal(row[strlen(row) - 1], ',');   /* empty error */
+    }
+    for (size_t k = 0; k < n; k++)
+        free(lines[k]);
+    free(res);
+    nbep_diag_fini(&d);
+    nbep_sweep_plan_fini(&p);
+}
+
+/* Reads member `name` of every row of /runs as `type` into buf (n rows of size each). */
+static void read_member(hid_t ds, const char *name, hid_t type, void *buf)
+{
+    hid_t mem = H5Tcreate(H5T_COMPOUND, H5Tget_size(type));
+    assert_true(mem >= 0);
+    assert_true(H5Tinsert(mem, name, 0, type) >= 0);
+    assert_true(H5Dread(ds, mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0);
+    H5Tclose(mem);
+}
+
+static void test_summary_h5_holds_the_same_table(void **state)
+{
+    (void)state;
+    char deck[256];
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_h5", with_bad_value, deck, sizeof deck), NULL, 0, &p);
+    nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_sweep_write_summary(&p, res, 3, 2.5, &d), NBEP_OK);
+    hid_t file = H5Fopen(TMP "sweep_h5.sweep/summary.h5", H5F_ACC_RDONLY, H5P_DEFAULT);
+    assert_true(file >= 0);
+    hid_t ds = H5Dopen2(file, "/runs", H5P_DEFAULT);
+    assert_true(ds >= 0);
+    hid_t type = H5Dget_type(ds), space = H5Dget_space(ds);
+    hsize_t rows;
+    assert_int_equal(H5Sget_simple_extent_dims(space, &rows, NULL), 1);
+    assert_int_equal(rows, 6);
+    assert_int_equal(H5Tget_nmembers(type), 32);   /* the CSV's 32 columns */
+    char *m0 = H5Tget_member_name(type, 0), *m4 = H5Tget_member_name(type, 4);
+    assert_string_equal(m0, "run");
+    assert_string_equal(m4, "physics.restitution");
+    H5free_memory(m0);
+    H5free_memory(m4);
+
+    int64_t run[6], steps[6], seed[6];
+    double drift[6];
+    char *status[6], *value[6];
+    hid_t str = H5Tcopy(H5T_C_S1);
+    H5Tset_size(str, H5T_VARIABLE);
+    read_member(ds, "run", H5T_NATIVE_INT64, run);
+    read_member(ds, "seed", H5T_NATIVE_INT64, seed);
+    read_member(ds, "steps", H5T_NATIVE_INT64, steps);
+    read_member(ds, "energy_rel_drift", H5T_NATIVE_DOUBLE, drift);
+    read_member(ds, "status", str, status);
+    read_member(ds, "physics.restitution", str, value);
+    static const char *const restitution[3] = {"1.0", "1.5", "0.5"};
+    for (size_t r = 0; r < 6; r++) {
+        bool bad = r % 3 == 1;
+        assert_int_equal(run[r], (int64_t)r);
+        assert_int_equal(seed[r], 11 + (int64_t)r / 3);
+        assert_int_equal(steps[r], bad ? 0 : 20);
+        assert_true(bad ? isnan(drift[r]) : drift[r] == res[r].summary.energy_rel_drift);
+        assert_string_equal(status[r], bad ? "failed" : "ok");
+        assert_string_equal(value[r], restitution[r % 3]);
+        H5free_memory(status[r]);
+        H5free_memory(value[r]);
+    }
+    int64_t ranks;
+    hid_t a = H5Aopen(file, "ranks", H5P_DEFAULT);
+    assert_true(a >= 0 && H5Aread(a, H5T_NATIVE_INT64, &ranks) >= 0);
+    assert_int_equal(ranks, 3);
+    H5Aclose(a);
+    H5Tclose(str);
+    H5Tclose(type);
+    H5Sclose(space);
+    H5Dclose(ds);
+    H5Fclose(file);
+    free(res);
+    nbep_diag_fini(&d);
+    nbep_sweep_plan_fini(&p);
+}
+
+/* ---- the whole command --------------------------------------------------------------------- */
+
+static void test_the_command_reports_failed_runs_and_exits_1(void **state)
+{
+    (void)state;
+    char deck[256];
+    write_deck("sweep_main", with_bad_value, deck, sizeof deck);
+    nbep_cli cli = {.cmd = NBEP_CMD_SWEEP, .path = deck, .quiet = true,
+                    .summary = TMP "sweep_main.json"};
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_status st = nbep_sweep_main(&cli, NULL, &d);
+    assert_int_equal(nbep_status_exit_code(st), 1);
+    assert_int_equal(d.n_errors, 1);
+    assert_string_equal(d.msg[0], "nbep: sweep: 2 of 6 runs failed (run 1, 4); the others are "
+                                  "complete; errors in " TMP "sweep_main.sweep/summary.csv");
+    char *lines[16];
+    size_t n = read_lines(TMP "sweep_main.json", lines);
+    assert_int_equal(n, 1);
+    assert_non_null(strstr(lines[0], "\"format\": \"nbep-sweep-summary-1\""));
+    assert_non_null(strstr(lines[0], "\"runs\": 6, \"ok\": 4, \"failed\": 2, \"interrupted\": 0, "
+                                     "\"not_run\": 0, \"reused\": 0, \"ranks\": 1"));
+    free(lines[0]);
+    assert_int_equal(access(TMP "sweep_main.sweep/summary.h5", F_OK), 0);
+    nbep_diag_fini(&d);
+}
+
+static void test_a_bad_deck_stops_the_command_before_any_run(void **state)
+{
+    (void)state;
+    char deck[256];
+    write_deck("sweep_baddeck", "sweep: { replicas = 0; };\n", deck, sizeof deck);
+    nbep_cli cli = {.cmd = NBEP_CMD_SWEEP, .path = deck, .quiet = true};
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_status_exit_code(nbep_sweep_main(&cli, NULL, &d)), 2);
+    assert_true(d.n_errors >= 1);
+    assert_non_null(strstr(d.msg[0], "sweep.replicas"));
+    assert_int_equal(access(TMP "sweep_baddeck.sweep", F_OK), -1);   /* nothing made */
+    nbep_diag_fini(&d);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_runs_are_replicas_times_the_product_of_the_axes),
+        cmocka_unit_test(test_replicas_are_outermost_and_the_last_axis_varies_fastest),
+        cmocka_unit_test(test_every_combination_appears_once_per_replica),
+        cmocka_unit_test(test_a_run_gets_the_command_line_then_its_values_then_its_seed),
+        cmocka_unit_test(test_replica_r_runs_with_the_decks_seed_plus_r),
+        cmocka_unit_test(test_a_deck_without_a_sweep_group_is_one_run),
+        cmocka_unit_test(test_the_sweep_directory_is_the_output_name_with_sweep),
+        cmocka_unit_test(test_run_files_have_four_digits_or_as_many_as_the_last_run_needs),
+        cmocka_unit_test(test_varying_the_seed_or_a_key_twice_is_a_deck_error),
+        cmocka_unit_test(test_a_steps_axis_sets_each_runs_expected_steps),
+        cmocka_unit_test(test_ranks_take_runs_in_rounds_of_alternating_direction),
+        cmocka_unit_test(test_a_summary_reads_back_field_by_field),
+        cmocka_unit_test(test_a_run_is_complete_only_with_its_overrides_and_all_its_steps),
+        cmocka_unit_test(test_thread_count_and_output_name_do_not_make_a_run_different),
+        cmocka_unit_test(test_a_run_killed_before_its_summary_is_not_complete),
+        cmocka_unit_test(test_a_failing_combination_spares_the_other_runs),
+        cmocka_unit_test(test_a_restarted_sweep_reuses_complete_runs),
+        cmocka_unit_test(test_a_stop_signal_before_a_run_leaves_it_not_run),
+        cmocka_unit_test(test_summary_csv_has_a_row_per_run_in_run_order),
+        cmocka_unit_test(test_summary_h5_holds_the_same_table),
+        cmocka_unit_test(test_the_command_reports_failed_runs_and_exits_1),
+        cmocka_unit_test(test_a_bad_deck_stops_the_command_before_any_run),
+    };
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+    return cmocka_run_group_tests_name("sweep", tests, NULL, NULL);
+}

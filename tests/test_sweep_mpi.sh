@@ -1,0 +1,81 @@
+#!/usr/bin/env bash
+# `nbep sweep` under `mpirun -np 2`: both ranks run runs (the rank column of summary.csv), rank
+# 0's summary has every run, each run's file exists, and the same command again reuses them
+# all. A build without MPI (make MPI=0) must refuse to run as one of several MPI processes
+# (each would run the whole sweep) instead. Skipped only when mpirun is not installed.
+set -u
+cd "$(dirname "$0")/.."
+if ! command -v mpirun >/dev/null 2>&1; then
+    echo "skipped: mpirun not found"
+    exit 0
+fi
+tmp=build/tests/tmp/sweep_mpi
+rm -rf "$tmp" && mkdir -p "$tmp"
+fail=0
+check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+
+cat >"$tmp/mpi.deck" <<'EOF'
+# 2 replicas x 2 restitutions x 2 algorithms = 8 short runs of 16 spheres
+run: { algorithm = "predictive"; steps = 50; dt = 1.0e-3; threads = 1; seed = 3; };
+physics: { gravity = [0.0, 0.0, -9.81]; restitution = 1.0; };
+box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };
+spheres = ( { count = 16; radius = 0.05; mass = 1.0; place = "random"; speed = 1.0; } );
+output: { file = "mpi.h5"; every = 10; };
+sweep: { replicas = 2;
+  vary = ( { key = "physics.restitution"; values = [1.0, 0.9]; },
+           { key = "run.algorithm"; values = ["naive", "predictive"]; } ); };
+EOF
+
+# Open MPI refuses to run as root without these two; --oversubscribe allows 2 ranks on a
+# machine with fewer free cores. Containers often forbid the cross-memory attach that Open
+# MPI's shared-memory transport uses for large messages: copy through the shared segment.
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+export OMPI_MCA_btl_vader_single_copy_mechanism=none
+# one thread per rank: two ranks on two cores
+export OMP_NUM_THREADS=1
+sweep() {
+    timeout 300 mpirun -np 2 --oversubscribe bin/nbep sweep "$tmp/mpi.deck" -o "$tmp/mpi.h5" \
+        --summary "$tmp/$1.json" 2>"$tmp/$1.stderr"
+}
+
+if ! bin/nbep --version | grep -q 'MPI=1'; then
+    sweep nompi
+    rc=$?
+    check "a build without MPI refuses to run under mpirun -np 2 (exit $rc)" "[ $rc -ne 0 ]"
+    check "and says why" "grep -q 'built without MPI' '$tmp/nompi.stderr'"
+    [ $fail = 0 ] && echo "sweep_mpi: all passed (MPI=0 build)"
+    exit $fail
+fi
+
+sweep first
+rc=$?
+csv=$tmp/mpi.sweep/summary.csv
+if [ $rc -ne 0 ] || [ ! -s "$csv" ]; then
+    echo "FAIL mpirun -np 2 nbep sweep exited $rc; its stderr:"
+    cat "$tmp/first.stderr"
+    exit 1
+fi
+check "the sweep exits 0" "[ $rc = 0 ]"
+check "summary.csv has a header and 8 runs" "[ \$(wc -l <'$csv') = 9 ]"
+# columns: run,replica,seed,rank,physics.restitution,run.algorithm,status,...
+check "every run is ok" "[ \$(cut -d, -f7 '$csv' | grep -c '^ok$') = 8 ]"
+check "rank 0 ran runs" "cut -d, -f4 '$csv' | grep -qx 0"
+check "rank 1 ran runs" "cut -d, -f4 '$csv' | grep -qx 1"
+# rounds of 2 in alternating direction: runs 0,3,4,7 on rank 0 and 1,2,5,6 on rank 1
+owners=$(tail -n +2 "$csv" | cut -d, -f1,4 | tr '\n' ' ')
+check "runs are dealt in alternating rounds ($owners)" \
+    "[ '$owners' = '0,0 1,1 2,1 3,0 4,0 5,1 6,1 7,0 ' ]"
+check "each run wrote its own file" "[ \$(ls '$tmp/mpi.sweep' | grep -c '^run-000[0-7].h5$') = 8 ]"
+check "summary.h5 exists" "[ -s '$tmp/mpi.sweep/summary.h5' ]"
+check "the sweep's JSON says 8 runs on 2 ranks" \
+    "grep -q '\"runs\": 8, \"ok\": 8, .*\"ranks\": 2' '$tmp/first.json'"
+check "per-run progress lines name both ranks" \
+    "grep -q 'rank 0: run' '$tmp/first.stderr' && grep -q 'rank 1: run' '$tmp/first.stderr'"
+
+sweep again
+rc=$?
+check "the same command again exits 0 (exit $rc)" "[ $rc = 0 ]"
+check "and reuses all 8 runs" "grep -q '\"reused\": 8' '$tmp/again.json'"
+
+[ $fail = 0 ] && echo "sweep_mpi: all passed"
+exit $fail
