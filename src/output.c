@@ -32,6 +32,8 @@
  * innermost entry of HDF5's error stack, captured before any cleanup call clears the stack. */
 #include "nbep/output.h"
 
+#include "nbep/output_xdmf.h"
+
 #include <assert.h>
 #include <errno.h>
 #include <inttypes.h>
@@ -40,6 +42,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include <hdf5.h>
 
@@ -128,7 +131,48 @@ struct nbep_output {
     hid_t stats_count;             /* the `count` attribute of /stats, if any */
     hsize_t n_frames, n_stats;     /* rows written */
     hid_t ck[4];                   /* /checkpoint series (predictive runs), else invalid */
+    /* the XDMF sidecar (RUN.xmf) that lets ParaView and VisIt open the run: rewritten as
+     * frames come (nbep_xdmf_due) and at close; needs positions */
+    bool xmf;
+    int64_t *xmf_step;             /* owned, xmf_cap: every frame's step and time so far */
+    double *xmf_time;
+    size_t xmf_cap;
+    double xmf_last;               /* monotonic seconds of the last rewrite */
 };
+
+static double monotonic_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Room for frame row f in the sidecar's lists; false when memory runs out. */
+static bool xmf_room(nbep_output *o, size_t f)
+{
+    if (f < o->xmf_cap)
+        return true;
+    size_t cap = o->xmf_cap ? 2 * o->xmf_cap : 64;
+    while (cap <= f)
+        cap *= 2;
+    int64_t *s = realloc(o->xmf_step, cap * sizeof *s);
+    if (s)
+        o->xmf_step = s;
+    double *t = realloc(o->xmf_time, cap * sizeof *t);
+    if (t)
+        o->xmf_time = t;
+    if (!s || !t)
+        return false;
+    o->xmf_cap = cap;
+    return true;
+}
+
+static nbep_status xmf_write(nbep_output *o, nbep_diag *d)
+{
+    o->xmf_last = monotonic_seconds();
+    return nbep_xdmf_write(o->path, o->n_spheres, (size_t)o->n_frames, o->xmf_step, o->xmf_time,
+                           o->frame_vel >= 0, d);
+}
 
 /* The per-frame columns a predictive run keeps for --resume, in nbep_events_view's order. */
 static const struct ck_column {
@@ -495,6 +539,8 @@ static void release(nbep_output **op)
     close_id(&o->stats_count);
     close_id(&o->summary);
     close_id(&o->file);
+    free(o->xmf_step);
+    free(o->xmf_time);
     free(o->path);
     free(o);
     *op = NULL;
@@ -600,6 +646,16 @@ nbep_status nbep_output_create(const char *path, const nbep_scene *sc, int threa
         goto fail;
     }
     free(tmp);
+    o->xmf = sc->out_position;
+    if (!o->xmf) { /* a sidecar of an older run at this path would describe frames not here */
+        char *x = nbep_xdmf_path(path);
+        if (x)
+            remove(x);
+        free(x);
+    } else if (!xmf_room(o, (size_t)planned_frames(sc))) {
+        release(&o);
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: %s: no memory for the frame list", path);
+    }
     *out = o;
     return NBEP_OK;
 fail:
@@ -699,6 +755,18 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
     if (commit(o, f + 1, d) < 0)
         goto done;
     st = NBEP_OK;
+    if (o->xmf) {
+        if (!xmf_room(o, (size_t)f)) {
+            nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: no memory for the frame list",
+                          o->path);
+            st = NBEP_ENOMEM;
+            goto done;
+        }
+        o->xmf_step[f] = step;
+        o->xmf_time[f] = t;
+        if (nbep_xdmf_due((size_t)o->n_frames, monotonic_seconds() - o->xmf_last))
+            st = xmf_write(o, d);
+    }
 done:
     close_id(&one_space);
     close_id(&vec_space);
@@ -759,6 +827,8 @@ nbep_status nbep_output_close(nbep_output **op, const nbep_summary *s, nbep_diag
     nbep_output *o = *op;
     /* Stats rows appended after the last frame get counted too. */
     int rc = commit(o, o->n_frames, d);
+    if (rc == 0 && o->xmf && o->n_frames > 0 && xmf_write(o, d) != NBEP_OK)
+        rc = -1;
     if (s && rc == 0) {
         char *json = nbep_summary_to_json(s);
         if (!json) {
@@ -1450,6 +1520,18 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
         goto fail;
     }
     o->n_frames = frames;
+    o->xmf = true; /* resumed runs have positions */
+    if (!xmf_room(o, (size_t)frames)) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory to resume %s", path);
+        st = NBEP_ENOMEM;
+        goto fail;
+    }
+    for (hsize_t k = 0; k < frames; k++)
+        if (read_row(o->file, path, "/frames/step", k, H5T_NATIVE_INT64, &o->xmf_step[k], d) <
+                0 ||
+            read_row(o->file, path, "/frames/time", k, H5T_NATIVE_DOUBLE, &o->xmf_time[k], d) <
+                0)
+            goto fail;
     if (H5Lexists(o->file, "/stats", H5P_DEFAULT) > 0) {
         uint64_t rows;
         if (complete_rows(o->file, path, "/stats", "/stats/step", &rows, &more, d) < 0)
