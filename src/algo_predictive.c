@@ -242,6 +242,24 @@ static void keep_earlier(nbep_event *best, nbep_event e)
         *best = e;
 }
 
+/* The contact of spheres i (flying with ai) and j, each at its own local time: both are
+ * brought to the later of the two, and the event is stamped with both response counts. */
+static nbep_event pair_event(const pred_ctx *c, const nbep_state *s, size_t i, nbep_vec3 ai,
+                             size_t j, double T0, thread_ws *w)
+{
+    const double ti = c->tau[i], tj = c->tau[j];
+    const double t0 = ti > tj ? ti : tj;
+    nbep_vec3 pi = s->pos[i], vi = s->vel[i], pj = s->pos[j], vj = s->vel[j];
+    const nbep_vec3 aj = effective_acc(c, s, j);
+    if (ti < t0)
+        nbep_physics_drift(&pi, &vi, ai, t0 - ti);
+    if (tj < t0)
+        nbep_physics_drift(&pj, &vj, aj, t0 - tj);
+    double dt = nbep_predict_pair(nbep_vec3_sub(pj, pi), nbep_vec3_sub(vj, vi),
+                                  nbep_vec3_sub(aj, ai), s->radius[i] + s->radius[j], w->pws);
+    return (nbep_event){T0 + (t0 + dt), (uint32_t)j, NBEP_EVENT_SPHERE, c->ver[i], c->ver[j]};
+}
+
 /* Paper Procedure 9, one thread's share: the earliest event of sphere i with the spheres
  * [lo, hi) (each at its own local time; a pair is compared at the later of the two) and, when
  * with_planes, with every plane. T0 is the step's start time. Returns kind NONE if none. */
@@ -265,23 +283,9 @@ static nbep_event predict_some(const pred_ctx *c, const nbep_state *s, size_t i,
         }
         cnt->c[NBEP_COUNTER_PREDICTIONS] += s->n_planes;
     }
-    for (size_t j = lo; j < hi; j++) {
-        if (j == i)
-            continue;
-        const double tj = c->tau[j];
-        const double t0 = ti > tj ? ti : tj;
-        nbep_vec3 pi = s->pos[i], vi = s->vel[i], pj = s->pos[j], vj = s->vel[j];
-        const nbep_vec3 aj = effective_acc(c, s, j);
-        if (ti < t0)
-            nbep_physics_drift(&pi, &vi, ai, t0 - ti);
-        if (tj < t0)
-            nbep_physics_drift(&pj, &vj, aj, t0 - tj);
-        double dt = nbep_predict_pair(nbep_vec3_sub(pj, pi), nbep_vec3_sub(vj, vi),
-                                      nbep_vec3_sub(aj, ai), s->radius[i] + s->radius[j],
-                                      w->pws);
-        keep_earlier(&best, (nbep_event){T0 + (t0 + dt), (uint32_t)j, NBEP_EVENT_SPHERE,
-                                         c->ver[i], c->ver[j]});
-    }
+    for (size_t j = lo; j < hi; j++)
+        if (j != i)
+            keep_earlier(&best, pair_event(c, s, i, ai, j, T0, w));
     cnt->c[NBEP_COUNTER_PREDICTIONS] += hi - lo - (i >= lo && i < hi);
     return best;
 }
@@ -297,7 +301,7 @@ static nbep_event predict_grid(const pred_ctx *c, const nbep_state *s, size_t i,
                                double V, thread_ws *w, nbep_counters *cnt)
 {
     nbep_event best = predict_some(c, s, i, 0, 0, true, T0, w, cnt); /* the planes */
-    const double ti = c->tau[i], H = c->horizon - T0;
+    const double H = c->horizon - T0;
     const nbep_vec3 ai = effective_acc(c, s, i);
     double reach = s->radius[i] + c->rmax + nbep_vec3_norm(s->vel[i]) * H +
                    0.5 * nbep_vec3_norm(ai) * H * H + V * H + 0.5 * c->amax * H * H;
@@ -312,19 +316,7 @@ static nbep_event predict_grid(const pred_ctx *c, const nbep_state *s, size_t i,
                     size_t j = c->grid.item[k];
                     if (j == i)
                         continue;
-                    const double tj = c->tau[j];
-                    const double t0 = ti > tj ? ti : tj;
-                    nbep_vec3 pi = s->pos[i], vi = s->vel[i], pj = s->pos[j], vj = s->vel[j];
-                    const nbep_vec3 aj = effective_acc(c, s, j);
-                    if (ti < t0)
-                        nbep_physics_drift(&pi, &vi, ai, t0 - ti);
-                    if (tj < t0)
-                        nbep_physics_drift(&pj, &vj, aj, t0 - tj);
-                    double dt = nbep_predict_pair(nbep_vec3_sub(pj, pi), nbep_vec3_sub(vj, vi),
-                                                  nbep_vec3_sub(aj, ai),
-                                                  s->radius[i] + s->radius[j], w->pws);
-                    keep_earlier(&best, (nbep_event){T0 + (t0 + dt), (uint32_t)j,
-                                                     NBEP_EVENT_SPHERE, c->ver[i], c->ver[j]});
+                    keep_earlier(&best, pair_event(c, s, i, ai, j, T0, w));
                     tested++;
                 }
             }
