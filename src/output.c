@@ -47,6 +47,7 @@
 #include <hdf5.h>
 
 #include "build_info.h"
+#include "output_impl.h"
 
 /* Frames are written straight from nbep_vec3 arrays as n x 3 doubles. */
 static_assert(sizeof(nbep_vec3) == 3 * sizeof(double), "nbep_vec3 must be 3 packed doubles");
@@ -217,11 +218,8 @@ static void hdf5_reason(char *buf)
             *c = ' ';
 }
 
-/* Adds "nbep: PATH: cannot WHAT: REASON". Call right after the failing HDF5 call: any later
- * HDF5 call (even a close) clears the error stack. */
-NBEP_PRINTF(5, 6)
-static void hdf5_fail(nbep_diag *d, const char *file, int line, const char *path,
-                      const char *what_fmt, ...)
+void nbep__output_hdf5_fail(nbep_diag *d, const char *file, int line, const char *path,
+                            const char *what_fmt, ...)
 {
     char reason[REASON_MAX], what[256];
     hdf5_reason(reason);
@@ -231,9 +229,8 @@ static void hdf5_fail(nbep_diag *d, const char *file, int line, const char *path
     va_end(ap);
     nbep_diag_add(d, file, line, "nbep: %s: cannot %s: %s", path, what, reason);
 }
-#define HDF5_FAIL(d, path, ...) hdf5_fail((d), __FILE__, __LINE__, (path), __VA_ARGS__)
 
-static void close_id(hid_t *id)
+void nbep__output_close_id(hid_t *id)
 {
     if (*id >= 0)
         H5Idec_ref(*id);
@@ -242,11 +239,11 @@ static void close_id(hid_t *id)
 
 /* ---- writing helpers ----------------------------------------------------------------------- */
 
-static hid_t utf8_string_type(void)
+hid_t nbep__output_utf8_string_type(void)
 {
     hid_t t = H5Tcopy(H5T_C_S1);
     if (t >= 0 && (H5Tset_size(t, H5T_VARIABLE) < 0 || H5Tset_cset(t, H5T_CSET_UTF8) < 0))
-        close_id(&t);
+        nbep__output_close_id(&t);
     return t;
 }
 
@@ -272,8 +269,8 @@ static int write_attr(hid_t loc, const char *path, const char *name, hid_t file_
     }
     rc = 0;
 done:
-    close_id(&attr);
-    close_id(&space);
+    nbep__output_close_id(&attr);
+    nbep__output_close_id(&space);
     return rc;
 }
 
@@ -281,14 +278,14 @@ done:
 static int write_string_attr(hid_t loc, const char *path, const char *name, const char *value,
                              nbep_diag *d)
 {
-    hid_t t = utf8_string_type();
+    hid_t t = nbep__output_utf8_string_type();
     if (t < 0) {
         HDF5_FAIL(d, path, "make a string type for attribute %s", name);
         return -1;
     }
     const char *v = value ? value : "";
     int rc = write_attr(loc, path, name, t, t, 0, &v, d);
-    close_id(&t);
+    nbep__output_close_id(&t);
     return rc;
 }
 
@@ -302,7 +299,7 @@ static int make_group(nbep_output *o, const char *name, hid_t *out, nbep_diag *d
     if (out)
         *out = g;
     else
-        close_id(&g);
+        nbep__output_close_id(&g);
     return 0;
 }
 
@@ -323,8 +320,8 @@ static int make_group_with_count(nbep_output *o, const char *name, hid_t *count,
     }
     rc = 0;
 done:
-    close_id(&space);
-    close_id(&g);
+    nbep__output_close_id(&space);
+    nbep__output_close_id(&g);
     return rc;
 }
 
@@ -350,8 +347,8 @@ static int write_fixed(nbep_output *o, const char *name, hid_t file_type, hid_t 
     }
     rc = 0;
 done:
-    close_id(&ds);
-    close_id(&space);
+    nbep__output_close_id(&ds);
+    nbep__output_close_id(&space);
     return rc;
 }
 
@@ -378,8 +375,8 @@ static int create_series(nbep_output *o, const char *name, hid_t file_type, int 
     }
     rc = 0;
 done:
-    close_id(&dcpl);
-    close_id(&space);
+    nbep__output_close_id(&dcpl);
+    nbep__output_close_id(&space);
     return rc;
 }
 
@@ -415,7 +412,7 @@ static int append_rows(const nbep_output *o, hid_t ds, const char *name, int ran
     }
     rc = 0;
 done:
-    close_id(&file_space);
+    nbep__output_close_id(&file_space);
     return rc;
 }
 
@@ -527,18 +524,18 @@ static void release(nbep_output **op)
     nbep_output *o = *op;
     if (!o)
         return;
-    close_id(&o->frame_step);
-    close_id(&o->frame_time);
-    close_id(&o->frame_pos);
-    close_id(&o->frame_vel);
+    nbep__output_close_id(&o->frame_step);
+    nbep__output_close_id(&o->frame_time);
+    nbep__output_close_id(&o->frame_pos);
+    nbep__output_close_id(&o->frame_vel);
     for (int c = 0; c < STATS_N_COLUMNS; c++)
-        close_id(&o->stats[c]);
+        nbep__output_close_id(&o->stats[c]);
     for (int c = 0; c < 4; c++)
-        close_id(&o->ck[c]);
-    close_id(&o->frames_count);
-    close_id(&o->stats_count);
-    close_id(&o->summary);
-    close_id(&o->file);
+        nbep__output_close_id(&o->ck[c]);
+    nbep__output_close_id(&o->frames_count);
+    nbep__output_close_id(&o->stats_count);
+    nbep__output_close_id(&o->summary);
+    nbep__output_close_id(&o->file);
     free(o->xmf_step);
     free(o->xmf_time);
     free(o->path);
@@ -567,7 +564,7 @@ static hid_t make_fcpl(const nbep_scene *sc)
         k = CHUNK_INDEX_K_MIN;
     hid_t fcpl = H5Pcreate(H5P_FILE_CREATE);
     if (fcpl >= 0 && H5Pset_istore_k(fcpl, (unsigned)k) < 0)
-        close_id(&fcpl);
+        nbep__output_close_id(&fcpl);
     return fcpl;
 }
 
@@ -579,11 +576,11 @@ static hid_t make_fapl(bool writer)
     if (fapl < 0)
         return fapl;
     if (writer && H5Pset_libver_bounds(fapl, H5F_LIBVER_V18, H5F_LIBVER_V18) < 0)
-        close_id(&fapl);
+        nbep__output_close_id(&fapl);
 #if H5_VERSION_GE(1, 12, 1) || (H5_VERS_MAJOR == 1 && H5_VERS_MINOR == 10 && H5_VERS_RELEASE >= 7)
     /* ignore_when_disabled: a reader still works where the file system has no locks. */
     if (fapl >= 0 && H5Pset_file_locking(fapl, !writer, true) < 0)
-        close_id(&fapl);
+        nbep__output_close_id(&fapl);
 #endif
     /* Older HDF5 cannot switch the lock off per file: HDF5_USE_FILE_LOCKING=FALSE in the
      * environment does it there. */
@@ -617,19 +614,19 @@ nbep_status nbep_output_create(const char *path, const nbep_scene *sc, int threa
     hid_t fapl = make_fapl(true), fcpl = make_fcpl(sc);
     if (fapl < 0 || fcpl < 0) {
         HDF5_FAIL(d, path, "set up file properties");
-        close_id(&fapl);
-        close_id(&fcpl);
+        nbep__output_close_id(&fapl);
+        nbep__output_close_id(&fcpl);
         goto fail_uncreated;
     }
     o->file = H5Fcreate(tmp, H5F_ACC_TRUNC, fcpl, fapl);
     if (o->file < 0) {
         HDF5_FAIL(d, path, "create the output file");
-        close_id(&fapl);
-        close_id(&fcpl);
+        nbep__output_close_id(&fapl);
+        nbep__output_close_id(&fcpl);
         goto fail_uncreated;
     }
-    close_id(&fapl);
-    close_id(&fcpl);
+    nbep__output_close_id(&fapl);
+    nbep__output_close_id(&fcpl);
 
     if (write_root_attrs(o, sc, threads, d) < 0 || write_bodies(o, &sc->state, d) < 0 ||
         create_frames(o, sc, d) < 0 || (sc->out_stats && create_stats(o, d) < 0) ||
@@ -743,7 +740,7 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
         for (int c = 0; c < 4 && !bad; c++)
             bad = append_rows(o, o->ck[c], ck_columns[c].name, 2, f, row,
                               *ck_columns[c].mem_type, row_space, cols[c], d) < 0;
-        close_id(&row_space);
+        nbep__output_close_id(&row_space);
         if (bad)
             goto done;
     }
@@ -768,8 +765,8 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
             st = xmf_write(o, d);
     }
 done:
-    close_id(&one_space);
-    close_id(&vec_space);
+    nbep__output_close_id(&one_space);
+    nbep__output_close_id(&vec_space);
     return st;
 }
 
@@ -804,7 +801,7 @@ nbep_status nbep_output_stats(nbep_output *o, const nbep_step_stats *rows, size_
     o->n_stats += count;
     st = NBEP_OK;
 done:
-    close_id(&mem);
+    nbep__output_close_id(&mem);
     return st;
 }
 
@@ -1025,9 +1022,9 @@ static int read_string_attr(hid_t loc, const char *path, const char *name, char 
     *out = value;
     rc = 0;
 done:
-    close_id(&mtype);
-    close_id(&ftype);
-    close_id(&attr);
+    nbep__output_close_id(&mtype);
+    nbep__output_close_id(&ftype);
+    nbep__output_close_id(&attr);
     return rc;
 }
 
@@ -1037,10 +1034,10 @@ static int read_attr(hid_t loc, const char *path, const char *name, hid_t mem_ty
     hid_t attr = H5Aopen(loc, name, H5P_DEFAULT);
     if (attr < 0 || H5Aread(attr, mem_type, buf) < 0) {
         HDF5_FAIL(d, path, "read attribute %s", name);
-        close_id(&attr);
+        nbep__output_close_id(&attr);
         return -1;
     }
-    close_id(&attr);
+    nbep__output_close_id(&attr);
     return 0;
 }
 
@@ -1058,8 +1055,8 @@ static int dataset_rows(hid_t file, const char *path, const char *name, hsize_t 
     } else {
         *rows = dims[0];
     }
-    close_id(&space);
-    close_id(&ds);
+    nbep__output_close_id(&space);
+    nbep__output_close_id(&ds);
     return rank < 0 ? -1 : 0;
 }
 
@@ -1080,9 +1077,9 @@ static int read_row(hid_t file, const char *path, const char *name, hsize_t row,
     }
     rc = 0;
 done:
-    close_id(&mem);
-    close_id(&space);
-    close_id(&ds);
+    nbep__output_close_id(&mem);
+    nbep__output_close_id(&space);
+    nbep__output_close_id(&ds);
     return rc;
 }
 
@@ -1151,7 +1148,7 @@ static int complete_rows(hid_t file, const char *path, const char *group, const 
     }
     uint64_t count = rows;
     int rc = has > 0 ? read_attr(g, path, "count", H5T_NATIVE_UINT64, &count, d) : 0;
-    close_id(&g);
+    nbep__output_close_id(&g);
     if (rc < 0)
         return -1;
     if (count > rows) {
@@ -1225,7 +1222,7 @@ static int gather_info(hid_t file, const char *path, run_info *r, nbep_diag *d)
             return -1;
         }
         int rc = read_string_attr(g, path, "json", &r->summary, d);
-        close_id(&g);
+        nbep__output_close_id(&g);
         if (rc < 0)
             return -1;
     }
@@ -1242,10 +1239,10 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
     hid_t file = H5Fopen(path, H5F_ACC_RDONLY, fapl);
     if (file < 0) {
         HDF5_FAIL(d, path, "open as an HDF5 file");
-        close_id(&fapl);
+        nbep__output_close_id(&fapl);
         return NBEP_EIO;
     }
-    close_id(&fapl);
+    nbep__output_close_id(&fapl);
     run_info r = {0};
     int rc = gather_info(file, path, &r, d);
     if (H5Fclose(file) < 0 && rc == 0) {
@@ -1338,9 +1335,9 @@ static int read_dataset_row(hid_t file, const char *path, const char *name, hsiz
     }
     rc = 0;
 done:
-    close_id(&mem);
-    close_id(&space);
-    close_id(&ds);
+    nbep__output_close_id(&mem);
+    nbep__output_close_id(&space);
+    nbep__output_close_id(&ds);
     return rc;
 }
 
@@ -1351,7 +1348,7 @@ static int open_cut(nbep_output *o, const char *name, hsize_t rows, hid_t *out, 
     *out = H5Dopen2(o->file, name, H5P_DEFAULT);
     hid_t space = *out < 0 ? H5I_INVALID_HID : H5Dget_space(*out);
     int rank = space < 0 ? -1 : H5Sget_simple_extent_dims(space, dims, NULL);
-    close_id(&space);
+    nbep__output_close_id(&space);
     if (rank < 1) {
         HDF5_FAIL(d, o->path, "open %s", name);
         return -1;
@@ -1402,7 +1399,7 @@ static int same_bodies(hid_t file, const char *path, const nbep_scene *sc, nbep_
                           path, names[k] + 9, sc->deck_path);
             rc = -2;
         }
-        close_id(&ds);
+        nbep__output_close_id(&ds);
     }
     free(buf);
     return rc;
@@ -1430,7 +1427,7 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
 
     hid_t fapl = make_fapl(true);
     o->file = fapl < 0 ? H5I_INVALID_HID : H5Fopen(path, H5F_ACC_RDWR, fapl);
-    close_id(&fapl);
+    nbep__output_close_id(&fapl);
     if (o->file < 0) {
         HDF5_FAIL(d, path, "open the run to resume it");
         goto fail;
@@ -1514,7 +1511,7 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
                 goto fail;
     hid_t g = H5Gopen2(o->file, "/frames", H5P_DEFAULT);
     o->frames_count = g < 0 ? H5I_INVALID_HID : H5Aopen(g, "count", H5P_DEFAULT);
-    close_id(&g);
+    nbep__output_close_id(&g);
     if (o->frames_count < 0) {
         HDF5_FAIL(d, path, "open the count attribute of /frames");
         goto fail;
@@ -1543,7 +1540,7 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
                 goto fail;
         hid_t sg = H5Gopen2(o->file, "/stats", H5P_DEFAULT);
         o->stats_count = sg < 0 ? H5I_INVALID_HID : H5Aopen(sg, "count", H5P_DEFAULT);
-        close_id(&sg);
+        nbep__output_close_id(&sg);
         if (o->stats_count < 0) {
             HDF5_FAIL(d, path, "open the count attribute of /stats");
             goto fail;
@@ -1560,10 +1557,10 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     hid_t steps_attr = H5Aopen(o->file, "steps", H5P_DEFAULT);
     if (steps_attr < 0 || H5Awrite(steps_attr, H5T_NATIVE_UINT64, &sc->steps) < 0) {
         HDF5_FAIL(d, path, "update the root attribute steps");
-        close_id(&steps_attr);
+        nbep__output_close_id(&steps_attr);
         goto fail;
     }
-    close_id(&steps_attr);
+    nbep__output_close_id(&steps_attr);
     if (commit(o, frames, d) < 0)
         goto fail;
     *out = o;

@@ -16,10 +16,9 @@
 #include <hdf5.h>
 
 #include "build_info.h"
+#include "output_impl.h"
 
 #define FORMAT_NAME "nbep-sweep-1"
-/* Longest HDF5 error description kept (they are one line; longer ones are cut). */
-#define REASON_MAX 512
 
 /* Every member of a row takes one slot wide enough for any of the three kinds, so that member
  * k sits at k * sizeof(slot) in memory. */
@@ -29,48 +28,13 @@ typedef union slot {
     const char *s;
 } slot;
 
-static herr_t innermost_cb(unsigned n, const H5E_error2_t *err, void *data)
-{
-    if (n == 0 && err->desc)
-        snprintf(data, REASON_MAX, "%s", err->desc);
-    return 0;
-}
-
-/* Adds "nbep: PATH: cannot WHAT: REASON" with HDF5's innermost (most specific) reason. Call
- * right after the failing HDF5 call: any later HDF5 call clears the error stack. */
-static void hdf5_fail(nbep_diag *d, int line, const char *path, const char *what)
-{
-    char reason[REASON_MAX];
-    snprintf(reason, sizeof reason, "unknown HDF5 error");
-    if (H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, innermost_cb, reason) >= 0)
-        for (char *c = reason; *c; c++) /* one line: some descriptions embed newlines */
-            if (*c == '\n' || *c == '\r')
-                *c = ' ';
-    nbep_diag_add(d, __FILE__, line, "nbep: %s: cannot %s: %s", path, what, reason);
-}
-#define HDF5_FAIL(d, path, what) hdf5_fail((d), __LINE__, (path), (what))
-
-static void close_id(hid_t *id)
-{
-    if (*id >= 0)
-        H5Idec_ref(*id);
-    *id = H5I_INVALID_HID;
-}
-
-static hid_t utf8_string_type(void)
-{
-    hid_t t = H5Tcopy(H5T_C_S1);
-    if (t >= 0 && (H5Tset_size(t, H5T_VARIABLE) < 0 || H5Tset_cset(t, H5T_CSET_UTF8) < 0))
-        close_id(&t);
-    return t;
-}
 
 /* A scalar attribute of one of the table's kinds. */
 static int write_attr(hid_t loc, const char *path, const nbep_table_attr *a, nbep_diag *d)
 {
     int rc = -1;
     const char *text = a->s ? a->s : "";
-    hid_t type = a->kind == NBEP_TABLE_TEXT ? utf8_string_type() : H5I_INVALID_HID;
+    hid_t type = a->kind == NBEP_TABLE_TEXT ? nbep__output_utf8_string_type() : H5I_INVALID_HID;
     hid_t file_type = a->kind == NBEP_TABLE_INT    ? H5T_STD_I64LE
                       : a->kind == NBEP_TABLE_REAL ? H5T_IEEE_F64LE
                                                    : type;
@@ -87,13 +51,13 @@ static int write_attr(hid_t loc, const char *path, const nbep_table_attr *a, nbe
         H5Awrite(attr, mem_type, buf) < 0) {
         char what[128];
         snprintf(what, sizeof what, "write attribute %s", a->name);
-        HDF5_FAIL(d, path, what);
+        HDF5_FAIL(d, path, "%s", what);
     } else {
         rc = 0;
     }
-    close_id(&attr);
-    close_id(&space);
-    close_id(&type);
+    nbep__output_close_id(&attr);
+    nbep__output_close_id(&space);
+    nbep__output_close_id(&type);
     return rc;
 }
 
@@ -192,7 +156,7 @@ nbep_status nbep_output_sweep_write(const char *path, const nbep_table *t,
         if (write_attr(file, tmp, &attrs[k], d) < 0)
             goto done;
     hsize_t n = t->n_rows;
-    if ((str = utf8_string_type()) < 0 || make_row_types(t, str, &mem, &ftype) < 0) {
+    if ((str = nbep__output_utf8_string_type()) < 0 || make_row_types(t, str, &mem, &ftype) < 0) {
         HDF5_FAIL(d, tmp, "make the row type of /runs");
         goto done;
     }
@@ -203,7 +167,7 @@ nbep_status nbep_output_sweep_write(const char *path, const nbep_table *t,
         HDF5_FAIL(d, tmp, "write /runs");
         goto done;
     }
-    close_id(&ds);
+    nbep__output_close_id(&ds);
     if (H5Fclose(file) < 0) {
         file = H5I_INVALID_HID;
         HDF5_FAIL(d, tmp, "close the file");
@@ -217,13 +181,13 @@ nbep_status nbep_output_sweep_write(const char *path, const nbep_table *t,
     made = false;
     st = NBEP_OK;
 done:
-    close_id(&ds);
-    close_id(&space);
-    close_id(&ftype);
-    close_id(&mem);
-    close_id(&str);
-    close_id(&file);
-    close_id(&fapl);
+    nbep__output_close_id(&ds);
+    nbep__output_close_id(&space);
+    nbep__output_close_id(&ftype);
+    nbep__output_close_id(&mem);
+    nbep__output_close_id(&str);
+    nbep__output_close_id(&file);
+    nbep__output_close_id(&fapl);
     if (made)
         remove(tmp);
     free(rows);
@@ -242,7 +206,7 @@ static char *read_string_attr(hid_t loc, const char *path, const char *name, nbe
     hid_t ftype = attr >= 0 ? H5Aget_type(attr) : H5I_INVALID_HID;
     hid_t mtype = H5I_INVALID_HID;
     if (ftype < 0 || H5Tget_class(ftype) != H5T_STRING) {
-        HDF5_FAIL(d, path, what);
+        HDF5_FAIL(d, path, "%s", what);
         goto done;
     }
     htri_t variable = H5Tis_variable_str(ftype);
@@ -250,19 +214,19 @@ static char *read_string_attr(hid_t loc, const char *path, const char *name, nbe
     if (variable < 0 || (mtype = H5Tcopy(H5T_C_S1)) < 0 ||
         H5Tset_size(mtype, variable ? H5T_VARIABLE : size + 1) < 0 ||
         H5Tset_cset(mtype, H5Tget_cset(ftype)) < 0) {
-        HDF5_FAIL(d, path, what);
+        HDF5_FAIL(d, path, "%s", what);
         goto done;
     }
     if (variable) {
         char *v = NULL;
         if (H5Aread(attr, mtype, &v) < 0) {
-            HDF5_FAIL(d, path, what);
+            HDF5_FAIL(d, path, "%s", what);
             goto done;
         }
         value = strdup(v ? v : "");
         H5free_memory(v);
     } else if ((value = calloc(size + 1, 1)) && H5Aread(attr, mtype, value) < 0) {
-        HDF5_FAIL(d, path, what);
+        HDF5_FAIL(d, path, "%s", what);
         free(value);
         value = NULL;
         goto done;
@@ -271,9 +235,9 @@ static char *read_string_attr(hid_t loc, const char *path, const char *name, nbe
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: no memory for attribute %s", path,
                       name);
 done:
-    close_id(&mtype);
-    close_id(&ftype);
-    close_id(&attr);
+    nbep__output_close_id(&mtype);
+    nbep__output_close_id(&ftype);
+    nbep__output_close_id(&attr);
     return value;
 }
 
@@ -286,7 +250,7 @@ nbep_status nbep_output_sweep_read_run(const char *path, char **overrides, char 
 #if H5_VERSION_GE(1, 12, 1) || (H5_VERS_MAJOR == 1 && H5_VERS_MINOR == 10 && H5_VERS_RELEASE >= 7)
     /* No lock: the check must work on file systems without locks, and takes one look. */
     if (fapl >= 0 && H5Pset_file_locking(fapl, false, true) < 0)
-        close_id(&fapl);
+        nbep__output_close_id(&fapl);
 #endif
     if (fapl < 0 || (file = H5Fopen(path, H5F_ACC_RDONLY, fapl)) < 0) {
         HDF5_FAIL(d, path, "open the file");
@@ -311,8 +275,8 @@ nbep_status nbep_output_sweep_read_run(const char *path, char **overrides, char 
 done:
     free(ov);
     free(json);
-    close_id(&g);
-    close_id(&file);
-    close_id(&fapl);
+    nbep__output_close_id(&g);
+    nbep__output_close_id(&file);
+    nbep__output_close_id(&fapl);
     return st;
 }
