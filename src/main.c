@@ -148,9 +148,14 @@ static nbep_status cmd_run(const nbep_cli *cli, nbep_diag *d)
         st = nbep_sim_run(sim, d);
         nbep_summary sum;
         nbep_sim_summary(sim, &sum);
-        nbep_status cst = nbep_output_close(&out, &sum, d);
-        if (st == NBEP_OK)
-            st = cst;
+        /* after a write failure closing fails the same way: keep only the first error */
+        nbep_diag quiet;
+        nbep_diag_init(&quiet);
+        bool io_failed = st == NBEP_EIO || st == NBEP_ENOMEM;
+        nbep_status cst = nbep_output_close(&out, io_failed ? NULL : &sum, io_failed ? &quiet : d);
+        nbep_diag_fini(&quiet);
+        if (st == NBEP_OK || st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
+            st = cst == NBEP_OK ? st : cst;
         if (!cli->quiet)
             print_human_summary(&sum, file, st);
         if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)

@@ -855,6 +855,9 @@ nbep_status nbep_output_close(nbep_output **op, const nbep_summary *s, nbep_diag
 
 void nbep_output_library_init(void)
 {
+    /* No clean-up at exit: after a write failure (disk full) a dataset can refuse to close,
+     * and HDF5's exit handler then crashes closing it again. The process is ending anyway. */
+    H5dont_atexit();
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
 }
 
@@ -1272,7 +1275,7 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
             fprintf(f, " (last: step %" PRId64 ", time %s)", r.last_step,
                     human_double(r.last_time, b0));
         if (r.frames_more)
-            fprintf(f, ", and %llu incomplete (the run was killed while writing it)",
+            fprintf(f, ", and %llu incomplete (its write was cut short: a kill, or a full disk)",
                     (unsigned long long)r.frames_more);
         fprintf(f, "\n");
         if (r.has_stats)

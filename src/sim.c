@@ -351,9 +351,12 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
     if (sim->step_end >= sim->step_first)
         sim->algo->run(sim, sim->algo_ctx);
     sim->wall_seconds = nbep__now() - sim->t_start;
-    st = flush_rows(sim);
-    if (sim->status == NBEP_OK)
-        sim->status = st;
+    /* after a failed write the file gets nothing more: one error, not a cascade */
+    if (sim->status == NBEP_OK || sim->status == NBEP_ESIGINT || sim->status == NBEP_ESIGTERM) {
+        st = flush_rows(sim);
+        if (st != NBEP_OK)
+            sim->status = st;
+    }
     return sim->status;
 }
 

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# A disk that fills up during a run: one clear line naming the file, exit status 1, and every
+# frame written before it still readable. Uses a small tmpfs, so it needs root (CI runs as
+# root); elsewhere it says so and skips.
+set -u
+cd "$(dirname "$0")/.."
+mnt=build/tests/tmp/diskfull
+mkdir -p "$mnt"
+if [ "$(id -u)" != 0 ] || ! mount -t tmpfs -o size=3m tmpfs "$mnt" 2>/dev/null; then
+    echo "diskfull: skipped (cannot mount a small tmpfs here: needs root)"
+    exit 0
+fi
+trap 'umount "$mnt" 2>/dev/null' EXIT
+fail=0
+check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+# 4096 spheres: a frame with positions, velocities and event slots is about 270 kB, so 3 MB
+# fill up after about ten frames of the 41 asked for
+bin/nbep run inputs/paper-box.deck --quiet -n 400 -o "$mnt/full.h5" 2>"$mnt/../diskfull.err"
+rc=$?
+err=$mnt/../diskfull.err
+check "a full disk ends the run with exit 1 (got $rc)" "[ $rc = 1 ]"
+check "with one line on stderr" "[ \$(wc -l < '$err') = 1 ]"
+check "that names the file and the reason" \
+    "grep -q '$mnt/full.h5' '$err' && grep -qi 'no space left' '$err'"
+bin/nbep info "$mnt/full.h5" >"$mnt/../diskfull.info" 2>&1
+check "the file still opens" "[ \$? = 0 ]"
+check "with the frames written before the disk filled" \
+    "grep -Eq '^frames: +([2-9]|[1-9][0-9])' '$mnt/../diskfull.info'"
+/usr/bin/python3 - "$mnt/full.h5" <<'PYEOF' && echo "ok   every counted frame reads back" || { echo "FAIL every counted frame reads back"; fail=1; }
+import sys, h5py, numpy as np
+f = h5py.File(sys.argv[1], "r")
+n = int(f["frames"].attrs["count"])
+pos = f["frames/position"][:n]
+assert np.isfinite(pos).all() and n >= 2
+assert (f["frames/step"][:n] == np.arange(n) * 10).all()
+PYEOF
+[ $fail = 0 ] && echo "diskfull: all passed"
+exit $fail
