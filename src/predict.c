@@ -484,7 +484,21 @@ double nbep_predict_pair_quadratic(nbep_vec3 dp, nbep_vec3 dv, double sigma)
         c = sq_diff(dp, sigma);
     if (c <= 0.0)
         return 0.0;                             /* touching or overlapping, and closing */
-    double disc = b * b - nbep_vec3_dot(dv, dv) * c;
+    /* At grazing incidence disc = b^2 - |dv|^2 c is a small difference; by Lagrange's identity
+     * it equals |dv|^2 sigma^2 - |dp x dv|^2. With s the distance still to fly to the closest
+     * approach, b^2 = |dv|^2 s^2: the first form subtracts two numbers of size |dv|^2 s^2, the
+     * second two of size |dv|^2 sigma^2. So the first serves while the pair is within about
+     * sigma of its closest approach, the second farther out, where it is better by
+     * (s / sigma)^2 (bench_contact: 51 of 4000 grazing hit/miss verdicts wrong before, 0
+     * after, at the same cost). */
+    double vv = nbep_vec3_dot(dv, dv), vs = vv * (sigma * sigma), disc;
+    if (b * b < vs) {
+        disc = b * b - vv * c;
+    } else {
+        nbep_vec3 x = {dp.y * dv.z - dp.z * dv.y, dp.z * dv.x - dp.x * dv.z,
+                       dp.x * dv.y - dp.y * dv.x};
+        disc = vs - nbep_vec3_dot(x, x);
+    }
     if (!(disc >= 0.0))
         return NBEP_NEVER;                      /* they miss */
     /* The smaller root (-b - sqrt(disc))/vv, rewritten so that nothing cancels. */

@@ -435,6 +435,19 @@ static void test_plane_leaving_sphere_meets_on_return_or_at_the_turn(void **stat
     assert_true(isinf(nbep_predict_plane(-1e-2, 0.1, 0.0)));
 }
 
+/* Found by bench_contact against a quad-precision reference: this pair misses by 4.7e-15
+ * sigma. The discriminant's plain form b^2 - |dv|^2 c cancels here (the pair is far from its
+ * closest approach) and called it a hit at t = 1.77; the form |dv|^2 sigma^2 - |dp x dv|^2 does
+ * not. */
+static void test_a_far_grazing_miss_by_5e_15_sigma_is_a_miss(void **state)
+{
+    (void)state;
+    nbep_vec3 dp = {0x1.429b49b3487d2p+1, -0x1.ac3aa6b8a8c98p+2, -0x1.7b3c139c44e4ep+1};
+    nbep_vec3 dv = {-0x1.abea8e3953ab5p+0, 0x1.dc961ddb63071p+1, 0x1.8cab351784405p+0};
+    double sigma = 0x1.005caa5439214p-1;
+    assert_true(nbep_predict_pair_quadratic(dp, dv, sigma) == NBEP_NEVER);
+}
+
 int main(void)
 {
     /* As main.c does: GSL reports failures by status, never by abort. */
@@ -479,6 +492,7 @@ int main(void)
         cmocka_unit_test(test_sphere_resting_on_a_plane_under_gravity_is_pressed_in_now),
         cmocka_unit_test(test_plane_touching_or_overlapping_and_closing_meets_now),
         cmocka_unit_test(test_plane_leaving_sphere_meets_on_return_or_at_the_turn),
+        cmocka_unit_test(test_a_far_grazing_miss_by_5e_15_sigma_is_a_miss),
     };
     return cmocka_run_group_tests_name("predict", tests, NULL, NULL);
 }
