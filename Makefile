@@ -102,6 +102,12 @@ test: check
 bench: bin/nbep $(BENCH_BIN)
 	bash scripts/bench.sh
 
+# Accuracy against cost of the three algorithms over dt, and of the contact-time solvers
+# (docs/accuracy.md); ACC_ARGS=--quick for a smoke run.
+.PHONY: accuracy
+accuracy: bin/nbep $(BUILD)/bench/bench_contact
+	bash scripts/accuracy.sh $(ACC_ARGS)
+
 # ThreadSanitizer needs an instrumented OpenMP runtime: clang + libomp + Archer (scripts/).
 tsan: $(BUILD_INFO)
 	bash scripts/tsan.sh
