@@ -14,6 +14,7 @@ packages=(
     valgrind                                    # make check runs the suite under memcheck
     clang libomp-dev                            # make tsan: ThreadSanitizer with an OpenMP it can see
     python3 python3-numpy python3-matplotlib python3-h5py   # benchmark plots and renderer
+    python3-mpmath                              # make accuracy: 60-digit reference check
 )
 
 if [ "$(id -u)" -eq 0 ]; then
