@@ -1,6 +1,8 @@
 /* Contact times (paper Appendix 1): sphere-sphere as a closed-form quadratic when the two
- * accelerations are equal, as a quartic through GSL's polynomial solver (then Newton-polished)
- * when they differ; sphere-plane as a quadratic. The only user of GSL. */
+ * accelerations are equal; when they differ, the quartic through GSL's polynomial solver (then
+ * Newton-polished) or, where the acceleration bends the approach or the pair nearly touches, a
+ * bracketing search on the quartic's monotone pieces, whichever bench_contact found faster at
+ * equal accuracy; sphere-plane as a quadratic. The only user of GSL. */
 #ifndef NBEP_PREDICT_H
 #define NBEP_PREDICT_H
 
