@@ -39,18 +39,21 @@ for algo in predictive naive seminaive; do
         "same_frames $tmp/$algo-whole.h5 $tmp/$algo-part.h5"
 done
 
-# killed by SIGTERM at an arbitrary step of a very long run, then resumed to a fixed end
-bin/nbep run $deck "${args[@]}" -n 2000 -o $tmp/whole.h5
+# killed by SIGTERM at an arbitrary step of a very long run, then resumed to a fixed end past
+# that step; compared with one uninterrupted run to the same end (no assumption on how far the
+# killed run got: that depends on the machine)
 bin/nbep run $deck "${args[@]}" -n 100000000 -o $tmp/killed.h5 &
 pid=$!
 for _ in $(seq 300); do [ -s $tmp/killed.h5 ] && break; sleep 0.1; done
 sleep 0.5
 kill -TERM $pid
-wait $pid
+wait $pid 2>/dev/null
 check "SIGTERM stops the long run with 143" "[ $? = 143 ]"
 last=$(bin/nbep info $tmp/killed.h5 | sed -n 's/^frames: .*last: step \([0-9]*\).*/\1/p')
-check "it got somewhere, but not to the end (step $last)" "[ -n '$last' ] && [ '$last' -gt 0 ] && [ '$last' -lt 2000 ]"
-bin/nbep run $deck "${args[@]}" -n 2000 --resume $tmp/killed.h5
+check "it got somewhere (step $last)" "[ -n '$last' ] && [ '$last' -gt 0 ]"
+end=$(( ${last:-0} + 200 ))
+bin/nbep run $deck "${args[@]}" -n $end -o $tmp/whole.h5
+bin/nbep run $deck "${args[@]}" -n $end --resume $tmp/killed.h5 2>/dev/null
 check "resumed after SIGTERM, every frame equals the uninterrupted run's" \
     "same_frames $tmp/whole.h5 $tmp/killed.h5"
 
