@@ -25,6 +25,9 @@ LDLIBS_ALL := $(PKG_LIBS) -lm $(LDLIBS)
 ifeq ($(OMP),1)
 CFLAGS_ALL += -fopenmp
 LDLIBS_ALL += -fopenmp
+else
+# a serial build: the algorithms' OpenMP pragmas are meant to be ignored then
+CFLAGS_ALL += -Wno-unknown-pragmas
 endif
 ifeq ($(TIMERS),1)
 CFLAGS_ALL += -DNBEP_TIMERS=1
