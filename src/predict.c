@@ -124,7 +124,7 @@ static void two_sum(double a, double b, double *s, double *err)
 /* |r|^2 - sigma^2 as accurately as if computed in twice the precision and rounded once: each
  * square is split exactly into high and low parts by fma, and the eight parts are summed with
  * TwoSum, the rounding errors accumulated separately (Ogita, Rump and Oishi's Sum2). */
-static double sq_diff(nbep_vec3 r, double sigma)
+double nbep__predict_gap2(nbep_vec3 r, double sigma)
 {
     double px = r.x * r.x, py = r.y * r.y, pz = r.z * r.z, ps = sigma * sigma;
     const double part[8] = {px, py, pz, -ps, fma(r.x, r.x, -px), fma(r.y, r.y, -py),
@@ -178,7 +178,7 @@ static double f_val(const motion *m, double t)
     two_sum(m->p.x, w.x, &hi.x, &lo.x);
     two_sum(m->p.y, w.y, &hi.y, &lo.y);
     two_sum(m->p.z, w.z, &hi.z, &lo.z);
-    return sq_diff(hi, m->sigma) + 2.0 * nbep_vec3_dot(hi, lo);
+    return nbep__predict_gap2(hi, m->sigma) + 2.0 * nbep_vec3_dot(hi, lo);
 }
 
 /* f'(t)/2 = r.r': negative while closing. */
@@ -225,7 +225,7 @@ static setup_kind quartic_setup(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double
     a[3] = nbep_vec3_dot(dv, da);
     a[2] = nbep_vec3_dot(dv, dv) + nbep_vec3_dot(dp, da);
     a[1] = 2.0 * nbep_vec3_dot(dp, dv);
-    a[0] = sq_diff(dp, sigma);
+    a[0] = nbep__predict_gap2(dp, sigma);
     for (int k = 0; k < QUARTIC_TERMS; k++)
         if (!isfinite(a[k]))
             return SETUP_NONFINITE;
@@ -452,6 +452,12 @@ static double bracket_search(const quartic *q)
     return NBEP_NEVER;
 }
 
+double nbep__predict_f(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double sigma, double t)
+{
+    motion m = motion_make(dp, dv, da, sigma);
+    return f_val(&m, t);
+}
+
 double nbep__predict_pair_bracket(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double sigma)
 {
     quartic q;
@@ -484,7 +490,7 @@ double nbep_predict_pair_quadratic(nbep_vec3 dp, nbep_vec3 dv, double sigma)
     double pp = nbep_vec3_dot(dp, dp);
     double c = pp - sigma * sigma;
     if (!(c > 0.5 * pp))
-        c = sq_diff(dp, sigma);
+        c = nbep__predict_gap2(dp, sigma);
     if (c <= 0.0)
         return 0.0;                             /* touching or overlapping, and closing */
     /* At grazing incidence disc = b^2 - |dv|^2 c is a small difference; by Lagrange's identity

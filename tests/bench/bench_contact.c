@@ -593,7 +593,6 @@ static double textbook_quadratic(nbep_vec3 dp, nbep_vec3 dv, double sigma)
     return (-b - sqrt(disc)) / vv;
 }
 
-static double sq_diff_c(nbep_vec3 r, double sigma);
 
 /* nbep's quadratic with the discriminant in the form that cancels least. At grazing
  * incidence disc = b^2 - |dv|^2 c is a small difference; by Lagrange's identity it equals
@@ -610,7 +609,7 @@ static double cross_quadratic(nbep_vec3 dp, nbep_vec3 dv, double sigma)
     double pp = nbep_vec3_dot(dp, dp);
     double c = pp - sigma * sigma;
     if (!(c > 0.5 * pp))
-        c = sq_diff_c(dp, sigma);
+        c = nbep__predict_gap2(dp, sigma);
     if (c <= 0.0)
         return 0.0;
     double vv = nbep_vec3_dot(dv, dv), vs = vv * (sigma * sigma), disc;
@@ -666,40 +665,11 @@ static double gsl_raw(const pair_case *c, gsl_poly_complex_workspace *w)
     return best;
 }
 
-/* f(t) with f(0) compensated the way predict.c does it (this file's own code): each square
- * split exactly by fma, the parts summed with the rounding errors kept; for t > 0 the rounding
- * of dp + w is carried too. */
-static void two_sum(double a, double b, double *s, double *e)
-{
-    double x = a + b, bv = x - a, av = x - bv;
-    *s = x;
-    *e = (a - av) + (b - bv);
-}
-
-static double sq_diff_c(nbep_vec3 r, double sigma)
-{
-    double px = r.x * r.x, py = r.y * r.y, pz = r.z * r.z, ps = sigma * sigma;
-    const double part[8] = {px, py, pz, -ps, fma(r.x, r.x, -px), fma(r.y, r.y, -py),
-                            fma(r.z, r.z, -pz), -fma(sigma, sigma, -ps)};
-    double s = part[0], lost = 0.0;
-    for (int i = 1; i < 8; i++) {
-        double e;
-        two_sum(s, part[i], &s, &e);
-        lost += e;
-    }
-    return s + lost;
-}
-
+/* f(t) exactly as predict.c evaluates it (compensated f(0), and for t > 0 the rounding of
+ * dp + w carried): its own code, through predict_impl.h. */
 static double f_comp(const pair_case *c, double t)
 {
-    double h = 0.5 * t;
-    nbep_vec3 w = {t * (c->dv.x + h * c->da.x), t * (c->dv.y + h * c->da.y),
-                   t * (c->dv.z + h * c->da.z)};
-    nbep_vec3 hi, lo;
-    two_sum(c->dp.x, w.x, &hi.x, &lo.x);
-    two_sum(c->dp.y, w.y, &hi.y, &lo.y);
-    two_sum(c->dp.z, w.z, &hi.z, &lo.z);
-    return sq_diff_c(hi, c->sigma) + 2.0 * nbep_vec3_dot(hi, lo);
+    return nbep__predict_f(c->dp, c->dv, c->da, c->sigma, t);
 }
 
 static double f1_d(const pair_case *c, double t)
@@ -720,7 +690,7 @@ static double quad_newton(const pair_case *c)
 {
     double a[5];
     quartic_coef(c, a);
-    a[0] = sq_diff_c(c->dp, c->sigma);
+    a[0] = nbep__predict_gap2(c->dp, c->sigma);
     /* first positive root of a2 t^2 + a1 t + a0 (the closing root when a2 > 0) */
     double t;
     if (a[2] != 0.0) {
@@ -763,7 +733,7 @@ static double near_newton(const pair_case *c, nbep_predict_ws *ws)
 {
     double a[5];
     quartic_coef(c, a);
-    a[0] = sq_diff_c(c->dp, c->sigma);
+    a[0] = nbep__predict_gap2(c->dp, c->sigma);
     if (a[0] > 0.0 && a[0] <= NEAR_CONTACT * c->sigma * c->sigma && a[1] < 0.0) {
         double disc = a[1] * a[1] - 4.0 * a[2] * a[0];
         double t = disc >= 0.0 ? 2.0 * a[0] / (-a[1] + sqrt(disc)) : a[0] / -a[1];
@@ -869,7 +839,7 @@ static double piece_newton(const pair_case *c)
 {
     double a[5];
     quartic_coef(c, a);
-    a[0] = sq_diff_c(c->dp, c->sigma);
+    a[0] = nbep__predict_gap2(c->dp, c->sigma);
     if (!(a[0] > 0.0))
         return a[1] < 0.0 ? 0.0 : nbep__predict_pair_bracket(c->dp, c->dv, c->da, c->sigma);
     if (!(a[4] > 0.0))
