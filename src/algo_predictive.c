@@ -89,6 +89,8 @@ typedef struct thread_ws {
     double t_min;             /* earliest candidate time this round, +inf if none */
     double vmax_react;        /* grid mode: fastest sphere after this thread's reactions in
                                * the current step */
+    double vmax_end, amax_end; /* grid mode: fastest own sphere and largest own acceleration
+                               * at the end of the last step (read by grid_prepare) */
     nbep_predict_ws *pws;     /* owned: quartic workspace */
 } thread_ws;
 
@@ -332,12 +334,19 @@ static nbep_event predict_grid(const pred_ctx *c, const nbep_state *s, size_t i,
  * acceleration, and picks the horizon H = K steps ahead so that the fastest sphere crosses
  * about half a cell by then (K in 1..64): re-predictions look a few cells around, and each
  * sphere is re-predicted at least every K steps. */
-static void grid_prepare(pred_ctx *c, const nbep_state *s, double T0, double dt)
+static void grid_prepare(pred_ctx *c, const nbep_state *s, double T0, double dt, bool first)
 {
     double vmax = 0.0, amax = 0.0;
-    for (size_t i = 0; i < s->n; i++) {
-        vmax = fmax(vmax, nbep_vec3_norm(s->vel[i]));
-        amax = fmax(amax, nbep_vec3_norm(effective_acc(c, s, i)));
+    if (first) {
+        for (size_t i = 0; i < s->n; i++) {
+            vmax = fmax(vmax, nbep_vec3_norm(s->vel[i]));
+            amax = fmax(amax, nbep_vec3_norm(effective_acc(c, s, i)));
+        }
+    } else { /* each thread measured its own spheres in the update phase */
+        for (int t = 0; t < c->nt; t++) {
+            vmax = fmax(vmax, c->ws[t].vmax_end);
+            amax = fmax(amax, c->ws[t].amax_end);
+        }
     }
     nbep_grid_build(&c->grid, s->pos, s->n, 2.0 * c->rmax);
     double step_travel = vmax * dt + 0.5 * amax * dt * dt;
@@ -660,7 +669,7 @@ static void pred_run(nbep_sim *sim, void *p)
         thread_ws *w = &c->ws[tid];
         uint64_t round = 0;
         if (tid == 0 && c->use_grid)
-            grid_prepare(c, s, (double)(sim->step_first - 1) * sim->dt, sim->dt);
+            grid_prepare(c, s, (double)(sim->step_first - 1) * sim->dt, sim->dt, true);
         /* OpenMP's own hand-over into and out of the region is invisible to ThreadSanitizer
          * (libgomp is not instrumented); crossing our barrier first and last makes every
          * write before the region visible to all threads, and theirs to the caller, through
@@ -729,20 +738,29 @@ static void pred_run(nbep_sim *sim, void *p)
                 react_phase(c, s, sim->scene, par, T0, t_min, round + 1, w, cnt, mx);
                 nbep_barrier_wait(&c->bar);
             }
-            /* update (paper Section 4.3.1): every own sphere flies to the step's end */
+            /* update (paper Section 4.3.1): every own sphere flies to the step's end; grid mode
+             * also takes the speed bounds of the next step here, in parallel */
+            double vmax = 0.0, amax = 0.0;
             for (size_t i = own.lo; i < own.hi; i++) {
                 double h = sim->dt - c->tau[i];
+                nbep_vec3 a = effective_acc(c, s, i);
                 if (h > 0.0)
-                    nbep_physics_drift(&s->pos[i], &s->vel[i], effective_acc(c, s, i), h);
+                    nbep_physics_drift(&s->pos[i], &s->vel[i], a, h);
                 c->tau[i] = 0.0;
+                if (c->use_grid) {
+                    vmax = fmax(vmax, nbep_vec3_norm(s->vel[i]));
+                    amax = fmax(amax, nbep_vec3_norm(a));
+                }
             }
+            w->vmax_end = vmax;
+            w->amax_end = amax;
             nbep__sim_block_energy(sim, own);
             nbep_barrier_wait(&c->bar);
             if (tid == 0) {
                 nbep__sim_end_step(sim, step);
                 /* the others are in the next find phase, which reads no grid */
                 if (c->use_grid)
-                    grid_prepare(c, s, T_end, sim->dt);
+                    grid_prepare(c, s, T_end, sim->dt, false);
             }
             /* no barrier: the next find phase only reads positions and writes queue slots,
              * which the hook does not touch; its stop request is read after that phase's
