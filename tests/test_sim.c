@@ -356,6 +356,72 @@ static void test_predictive_and_naive_agree_on_a_short_gas_run(void **state)
     scene_free(a), scene_free(b);
 }
 
+/* run.neighbors = "grid" (beyond the paper) tests only nearby partners before a horizon; it
+ * must find the same collisions as the paper's all-pairs re-prediction, keep energy and
+ * overlaps at round-off, and give the same bits for any thread count. */
+static void test_grid_predictive_finds_the_same_collisions_as_all_pairs(void **state)
+{
+    (void)state;
+    size_t n = scaled(700, 300);
+    uint64_t steps = scaled(300, 60);
+    nbep_scene *a = gas("predictive", n, 9.81, steps);
+    nbep_scene *g = gas("predictive", n, 9.81, steps);
+    g->neighbors_grid = true;
+    nbep_summary sa = run(a, 1, NULL, NULL), sg = run(g, 1, NULL, NULL);
+    assert_true(sa.collisions > 10);
+    assert_int_equal(sg.sphere_collisions, sa.sphere_collisions);
+    assert_int_equal(sg.plane_collisions, sa.plane_collisions);
+    assert_true(sg.predictions < sa.predictions / 2); /* it tests far fewer partners */
+    assert_close(sg.energy_final, sg.energy_initial, 1e-11, 0.0);
+    assert_true(sg.max_overlap_rel < 1e-9);
+    scene_free(a), scene_free(g);
+}
+
+/* The same, where the horizon's reach matters: spheres so fast (up to 150 m/s, 0.15 per step,
+ * about two cells of the grid) that partners several cells away can meet within one step. A
+ * reach that left out either sphere's travel misses collisions here. */
+static void test_grid_predictive_finds_fast_partners_several_cells_away(void **state)
+{
+    (void)state;
+    const size_t n = scaled(1000, 343);
+    nbep_scene *sc[2];
+    nbep_summary sum[2];
+    for (int k = 0; k < 2; k++) {
+        sc[k] = gas("predictive", n, 0.0, scaled(60, 20));
+        sc[k]->dt = 1e-3;
+        sc[k]->neighbors_grid = k == 1;
+        for (size_t i = 0; i < n; i++) {
+            sc[k]->state.vel[i] = nbep_vec3_scale(sc[k]->state.vel[i], 50.0);
+            sc[k]->state.radius[i] *= 0.2;
+        }
+        sum[k] = run(sc[k], 1, NULL, NULL);
+    }
+    assert_true(sum[0].sphere_collisions > 20);
+    assert_int_equal(sum[1].sphere_collisions, sum[0].sphere_collisions);
+    assert_int_equal(sum[1].plane_collisions, sum[0].plane_collisions);
+    assert_true(sum[1].max_overlap_rel < 1e-9);
+    scene_free(sc[0]), scene_free(sc[1]);
+}
+
+static void test_grid_predictive_frames_are_bitwise_equal_for_1_2_4_threads(void **state)
+{
+    (void)state;
+    nbep_scene *sc = gas("predictive", scaled(700, 300), 9.81, scaled(300, 40));
+    sc->neighbors_grid = true;
+    frames ref = {0};
+    nbep_summary s1 = run(sc, 1, NULL, &ref);
+    assert_true(s1.collisions > 0);
+    for (int nt = 2; nt <= 4; nt *= 2) {
+        frames f = {0};
+        nbep_summary sk = run(sc, nt, NULL, &f);
+        frames_equal(&ref, &f);
+        assert_int_equal(sk.predictions, s1.predictions);
+        free(f.data);
+    }
+    free(ref.data);
+    scene_free(sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -370,6 +436,9 @@ int main(void)
         cmocka_unit_test(test_naive_gas_without_gravity_conserves_energy),
         cmocka_unit_test(test_predictive_gas_under_gravity_conserves_energy),
         cmocka_unit_test(test_predictive_and_naive_agree_on_a_short_gas_run),
+        cmocka_unit_test(test_grid_predictive_finds_the_same_collisions_as_all_pairs),
+        cmocka_unit_test(test_grid_predictive_finds_fast_partners_several_cells_away),
+        cmocka_unit_test(test_grid_predictive_frames_are_bitwise_equal_for_1_2_4_threads),
     };
     return cmocka_run_group_tests_name("sim", tests, NULL, NULL);
 }
