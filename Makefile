@@ -115,7 +115,8 @@ accuracy: bin/nbep $(BUILD)/bench/bench_contact
 tsan: $(BUILD_INFO)
 	bash scripts/tsan.sh
 asan:
-	$(MAKE) clean && $(MAKE) SAN=address VALGRIND=0 check
+	$(MAKE) clean && LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
+	  $(MAKE) SAN=address VALGRIND=0 check
 
 install: bin/nbep
 	install -d $(DESTDIR)$(PREFIX)/bin
