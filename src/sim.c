@@ -156,6 +156,13 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
         nbep_sim_destroy(&sim);
         return st;
     }
+    if (!algo->exact_overlap) {
+        st = nbep_grid_init(&sim->overlap_grid, n, d);
+        if (st != NBEP_OK) {
+            nbep_sim_destroy(&sim);
+            return st;
+        }
+    }
     if (opt->resume && opt->resume->has_events && algo->import_events)
         algo->import_events(sim->algo_ctx, opt->resume);
     if (opt->out && algo->export_events) {
@@ -194,6 +201,7 @@ void nbep_sim_destroy(nbep_sim **simp)
     nbep_free_aligned(sim->ev_partner);
     nbep_free_aligned(sim->ev_kind);
     nbep_free_aligned(sim->ev_rest);
+    nbep_grid_fini(&sim->overlap_grid);
     free(sim->rows);
     nbep_state_fini(&sim->st);
     free(sim);
@@ -303,7 +311,8 @@ int nbep__sim_end_step(nbep_sim *sim, uint64_t step)
     bool frame = step % sim->scene->output_every == 0 || step == sim->step_end || stop;
     if (frame && !sim->algo->exact_overlap) {
         double m = 0.0, mr = 0.0;
-        if (nbep_state_max_overlap(&sim->st, &m, &mr, NULL, NULL, sim->diag) == NBEP_OK) {
+        if (nbep_state_max_overlap(&sim->st, &sim->overlap_grid, &m, &mr, NULL, NULL,
+                                   sim->diag) == NBEP_OK) {
             ov = fmax(ov, m);
             ov_rel = fmax(ov_rel, mr);
         }

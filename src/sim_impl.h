@@ -7,6 +7,7 @@
 #include <stdatomic.h>
 #include <stdint.h>
 
+#include "nbep/grid.h"
 #include "nbep/sim.h"
 #include "nbep/stats.h"
 
@@ -49,6 +50,8 @@ struct nbep_sim {
     uint32_t *ev_partner;            /* the algorithm has them and there is an output */
     uint8_t *ev_kind;
     int32_t *ev_rest;
+    nbep_grid overlap_grid;          /* owned when the algorithm's overlap is not exact: the
+                                      * frame-step overlap check's workspace */
     nbep_step_stats *rows;           /* owned: stats rows not yet written */
     size_t n_rows, cap_rows;
     /* totals and summary */

@@ -88,8 +88,8 @@ static void consider(double overlap, double rmin, size_t i, size_t j, double *be
         *best_rel = overlap / rmin;
 }
 
-nbep_status nbep_state_max_overlap(const nbep_state *s, double *max_out, double *rel_out,
-                                   size_t *i_out, size_t *j_out, nbep_diag *d)
+nbep_status nbep_state_max_overlap(const nbep_state *s, nbep_grid *ws, double *max_out,
+                                   double *rel_out, size_t *i_out, size_t *j_out, nbep_diag *d)
 {
     double best = 0.0, best_rel = 0.0;
     size_t bi = SIZE_MAX, bj = SIZE_MAX;
@@ -107,20 +107,23 @@ nbep_status nbep_state_max_overlap(const nbep_state *s, double *max_out, double 
         double rmax = 0.0;
         for (size_t i = 0; i < n; i++)
             rmax = fmax(rmax, s->radius[i]);
-        nbep_grid g;
-        nbep_status st = nbep_grid_init(&g, n, d);
-        if (st != NBEP_OK)
-            return st;
-        nbep_grid_build(&g, s->pos, n, 2.0 * rmax);
+        nbep_grid own = {0}, *g = ws;
+        if (!g) {
+            nbep_status st = nbep_grid_init(&own, n, d);
+            if (st != NBEP_OK)
+                return st;
+            g = &own;
+        }
+        nbep_grid_build(g, s->pos, n, 2.0 * rmax);
         for (size_t i = 0; i < n; i++) {
             size_t lo[3], hi[3];
-            nbep_grid_block(&g, s->pos[i], s->radius[i] + rmax, lo, hi);
+            nbep_grid_block(g, s->pos[i], s->radius[i] + rmax, lo, hi);
             for (size_t z = lo[2]; z <= hi[2]; z++)
                 for (size_t y = lo[1]; y <= hi[1]; y++)
                     for (size_t x = lo[0]; x <= hi[0]; x++) {
-                        size_t c = nbep_grid_index(&g, x, y, z);
-                        for (size_t k = g.start[c]; k < g.start[c + 1]; k++) {
-                            size_t j = g.item[k];
+                        size_t c = nbep_grid_index(g, x, y, z);
+                        for (size_t k = g->start[c]; k < g->start[c + 1]; k++) {
+                            size_t j = g->item[k];
                             if (j <= i)
                                 continue;
                             double dist = nbep_vec3_norm(nbep_vec3_sub(s->pos[j], s->pos[i]));
@@ -130,7 +133,7 @@ nbep_status nbep_state_max_overlap(const nbep_state *s, double *max_out, double 
                         }
                     }
         }
-        nbep_grid_fini(&g);
+        nbep_grid_fini(&own); /* safe on the zeroed grid when ws was given */
     }
     *max_out = best;
     if (rel_out)

@@ -183,7 +183,7 @@ static nbep_status watch_frame(void *ctx, int64_t step, const nbep_state *s, nbe
         return NBEP_OK; /* the run's own check stops it */
     }
     double ov = 0.0, rel = 0.0;
-    nbep_status st = nbep_state_max_overlap(s, &ov, &rel, NULL, NULL, d);
+    nbep_status st = nbep_state_max_overlap(s, NULL, &ov, &rel, NULL, NULL, d);
     if (st != NBEP_OK)
         w->overlap_st = st;
     else if (rel > w->overlap_rel)

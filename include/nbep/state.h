@@ -36,13 +36,16 @@ size_t nbep_state_bytes(size_t n, size_t n_planes);
 /* True when every position, velocity and acceleration is finite. */
 bool nbep_state_all_finite(const nbep_state *s);
 
+struct nbep_grid;
 /* Largest overlap r_i + r_j - |p_i - p_j| over sphere pairs and r_i - (n.p_i - offset) over
  * sphere-plane pairs, 0 when none overlap. rel_out (may be NULL) receives the largest overlap
- * divided by the smaller radius involved. Uses a uniform cell grid: O(n) expected time, O(n)
- * scratch memory allocated per call (not for use inside a step). i_out/j_out (may be NULL)
- * receive the worst pair, j_out = n + p for plane p; both SIZE_MAX when nothing overlaps. */
-NBEP_MUST_CHECK nbep_status nbep_state_max_overlap(const nbep_state *s, double *max_out,
-                                                   double *rel_out, size_t *i_out,
-                                                   size_t *j_out, nbep_diag *d);
+ * divided by the smaller radius involved. Uses a uniform cell grid: O(n) expected time. ws
+ * (borrowed) is a grid with room for s->n spheres, reused so that a run allocates nothing per
+ * call; NULL makes one for this call (tests, start-up). i_out/j_out (may be NULL) receive the
+ * worst pair, j_out = n + p for plane p; both SIZE_MAX when nothing overlaps. */
+NBEP_MUST_CHECK nbep_status nbep_state_max_overlap(const nbep_state *s, struct nbep_grid *ws,
+                                                   double *max_out, double *rel_out,
+                                                   size_t *i_out, size_t *j_out,
+                                                   nbep_diag *d);
 
 #endif
