@@ -87,7 +87,7 @@ $(BUILD)/tests/%: tests/%.c tests/nbep_test.h $(BUILD)/libnbep.a | $(BUILD)/test
 	$(CC) $(CFLAGS_ALL) -Itests $< $(BUILD)/libnbep.a -o $@ $(LDLIBS_ALL) \
 	  $(shell pkg-config --libs cmocka) -lpthread
 
-$(BUILD)/bench/%: tests/bench/%.c $(BUILD)/libnbep.a | $(BUILD)/bench
+$(BUILD)/bench/%: tests/bench/%.c tests/bench/bench_util.h $(BUILD)/libnbep.a | $(BUILD)/bench
 	$(CC) $(CFLAGS_ALL) -Itests $< $(BUILD)/libnbep.a -o $@ $(LDLIBS_ALL)
 
 run: bin/nbep

@@ -687,7 +687,7 @@ static void pred_run(nbep_sim *sim, void *p)
             redo_phase(c, s, own, tid, T0, T0, w, cnt0);
         }
         if (tid == 0) { /* SPEC: the first predictions belong to the set-up time */
-            double now = nbep__now();
+            double now = nbep_now();
             sim->setup_seconds += now - sim->t_start;
             sim->t_start = sim->t_last_progress = now;
         }

@@ -141,13 +141,6 @@ struct nbep_output {
     double xmf_last;               /* monotonic seconds of the last rewrite */
 };
 
-static double monotonic_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* Room for frame row f in the sidecar's lists; false when memory runs out. */
 static bool xmf_room(nbep_output *o, size_t f)
 {
@@ -170,7 +163,7 @@ static bool xmf_room(nbep_output *o, size_t f)
 
 static nbep_status xmf_write(nbep_output *o, nbep_diag *d)
 {
-    o->xmf_last = monotonic_seconds();
+    o->xmf_last = nbep_now();
     return nbep_xdmf_write(o->path, o->n_spheres, (size_t)o->n_frames, o->xmf_step, o->xmf_time,
                            o->frame_vel >= 0, d);
 }
@@ -761,7 +754,7 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
         }
         o->xmf_step[f] = step;
         o->xmf_time[f] = t;
-        if (nbep_xdmf_due((size_t)o->n_frames, monotonic_seconds() - o->xmf_last))
+        if (nbep_xdmf_due((size_t)o->n_frames, nbep_now() - o->xmf_last))
             st = xmf_write(o, d);
     }
 done:

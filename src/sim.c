@@ -25,13 +25,6 @@
 #define PROGRESS_TTY_SECONDS 0.25
 #define PROGRESS_LOG_SECONDS 10.0
 
-double nbep__now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 int nbep_sim_resolve_threads(int requested)
 {
     if (requested > 0)
@@ -108,7 +101,7 @@ static const nbep_algo *find_algo(const char *name)
 nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, nbep_sim **out,
                             nbep_diag *d)
 {
-    double t0 = nbep__now();
+    double t0 = nbep_now();
     const nbep_algo *algo = find_algo(sc->algorithm);
     if (!algo)
         NBEP_FAIL(d, NBEP_EDECK, "nbep: unknown algorithm '%s'", sc->algorithm);
@@ -179,7 +172,7 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
     double ke, pe;
     energy_total(sim, &ke, &pe);
     sim->energy_initial = sim->energy_final = ke + pe;
-    sim->setup_seconds = nbep__now() - t0;
+    sim->setup_seconds = nbep_now() - t0;
     *out = sim;
     return NBEP_OK;
 }
@@ -254,7 +247,7 @@ static void progress(nbep_sim *sim, uint64_t step, bool last)
 {
     if (!sim->opt.progress)
         return;
-    double now = nbep__now();
+    double now = nbep_now();
     bool tty = isatty(STDERR_FILENO);
     double every = tty ? PROGRESS_TTY_SECONDS : PROGRESS_LOG_SECONDS;
     if (!last && now - sim->t_last_progress < every)
@@ -351,7 +344,7 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
 {
     sim->diag = d;
     sim->status = NBEP_OK;
-    sim->t_start = sim->t_last_progress = nbep__now();
+    sim->t_start = sim->t_last_progress = nbep_now();
     /* A resumed run's first frame is already in the file. */
     nbep_status st = sim->opt.resume ? NBEP_OK : emit_frame(sim, 0);
     if (st != NBEP_OK)
@@ -359,7 +352,7 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
     sim->steps_done = sim->step_first - 1;
     if (sim->step_end >= sim->step_first)
         sim->algo->run(sim, sim->algo_ctx);
-    sim->wall_seconds = nbep__now() - sim->t_start;
+    sim->wall_seconds = nbep_now() - sim->t_start;
     /* after a failed write the file gets nothing more: one error, not a cascade */
     if (sim->status == NBEP_OK || sim->status == NBEP_ESIGINT || sim->status == NBEP_ESIGTERM) {
         st = flush_rows(sim);

@@ -100,7 +100,4 @@ void nbep__sim_block_energy(nbep_sim *sim, nbep_range own);
  * Returns the value of stop. */
 int nbep__sim_end_step(nbep_sim *sim, uint64_t step);
 
-/* Seconds on the monotonic clock. */
-double nbep__now(void);
-
 #endif

@@ -64,13 +64,6 @@ const char *nbep_sweep_outcome_text(nbep_sweep_outcome o)
     return "unknown";
 }
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* ---- the plan ---------------------------------------------------------------------------- */
 
 void nbep_sweep_plan_fini(nbep_sweep_plan *p)
@@ -542,7 +535,7 @@ static nbep_status stop_status(const nbep_sweep_exec *ex)
 static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec *ex,
                     nbep_sweep_result *res)
 {
-    const double t0 = now_seconds();
+    const double t0 = nbep_now();
     nbep_diag d;
     nbep_diag_init(&d);
     char **ov = NULL, *path = NULL;
@@ -574,7 +567,7 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
                    : st == NBEP_ESIGINT || st == NBEP_ESIGTERM ? NBEP_SWEEP_INTERRUPTED
                                                                   : NBEP_SWEEP_FAILED;
     error_text(&d, res->error, sizeof res->error);
-    res->seconds = now_seconds() - t0;
+    res->seconds = nbep_now() - t0;
 
     char what[256];
     describe_run(p, run, what, sizeof what);
@@ -981,8 +974,8 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
                           nbep_status run_st, const nbep_cli *cli, int n_ranks, double t0,
                           nbep_diag *d)
 {
-    nbep_status st = nbep_sweep_write_summary(p, results, n_ranks, now_seconds() - t0, d);
-    const double wall = now_seconds() - t0;
+    nbep_status st = nbep_sweep_write_summary(p, results, n_ranks, nbep_now() - t0, d);
+    const double wall = nbep_now() - t0;
     sweep_totals s = count(p, results);
     if (!cli->quiet)
         fprintf(stderr,
@@ -1103,7 +1096,7 @@ static nbep_status agree(nbep_status st, bool mpi)
 
 nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, nbep_diag *d)
 {
-    double t0 = now_seconds();
+    double t0 = nbep_now();
     bool many = false;
     const bool mpi = launched_by_mpi(&many);
     int rank = 0, size = 1;
@@ -1115,7 +1108,7 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
         MPI_Comm_size(MPI_COMM_WORLD, &size);
         /* The sweep's time starts once MPI's runtime is up (about 0.3 s on a laptop): what
          * it then measures is the sweep's own work, comparable across rank counts. */
-        t0 = now_seconds();
+        t0 = nbep_now();
     }
 #else
     if (many)

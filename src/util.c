@@ -5,6 +5,7 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 void *nbep_alloc_aligned(size_t n, size_t size)
 {
@@ -24,6 +25,13 @@ void *nbep_alloc_aligned(size_t n, size_t size)
 void nbep_free_aligned(void *p)
 {
     free(p);
+}
+
+double nbep_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 void nbep_spin_pause(unsigned k)

@@ -45,13 +45,6 @@ typedef struct broken_barrier {
     alignas(NBEP_CACHELINE) atomic_int count;  /* threads still to collect, then to uncollect */
 } broken_barrier;
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* ---- the harness ------------------------------------------------------------------------- */
 
 typedef struct harness harness;
@@ -99,8 +92,8 @@ static bool broken_wait(harness *h)
             if (atomic_load_explicit(&h->abandon, memory_order_relaxed))
                 return false;
             if (t_start == 0.0) {
-                t_start = now_seconds();
-            } else if (now_seconds() - t_start > STUCK_SECONDS) {
+                t_start = nbep_now();
+            } else if (nbep_now() - t_start > STUCK_SECONDS) {
                 atomic_fetch_add_explicit(&h->stuck, 1, memory_order_relaxed);
                 atomic_store_explicit(&h->abandon, true, memory_order_relaxed);
                 return false;

@@ -21,6 +21,9 @@
 void *nbep_alloc_aligned(size_t n, size_t size);
 void nbep_free_aligned(void *p);
 
+/* Seconds on the monotonic clock (for durations only). */
+double nbep_now(void);
+
 /* One step of a spin-wait: a CPU pause, and sched_yield() every 1024th call so that more
  * threads than cores still make progress (STYLE 6). k counts the calls of one wait from 1. */
 void nbep_spin_pause(unsigned k);

@@ -19,6 +19,7 @@
 
 #ifdef _OPENMP
 #include <omp.h>
+#include "bench_util.h"
 
 #define MAX_REPEATS 101
 /* An oversubscribed crossing costs tens of microseconds (one scheduler pass per waiter), about
@@ -26,25 +27,6 @@
 #define OVERSUBSCRIBED_DIVISOR 100ul
 /* Rounds of the correctness check before timing. */
 #define CHECK_ROUNDS 2000ul
-
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 /* The answer first: each round every thread adds 1 to a counter, crosses, and must then see
  * exactly nt * round; a second crossing keeps the next round's adds out of this round's
@@ -84,19 +66,19 @@ static void time_barriers(int nt, unsigned long crossings, int repeats, double *
             double t0 = 0.0;
 #pragma omp barrier
             if (tid == 0)
-                t0 = now_seconds();
+                t0 = nbep_now();
             for (unsigned long i = 0; i < crossings; i++)
                 nbep_barrier_wait(&bar);
             if (tid == 0)
-                ours[rep] = 1e9 * (now_seconds() - t0) / (double)crossings;
+                ours[rep] = 1e9 * (nbep_now() - t0) / (double)crossings;
 #pragma omp barrier
             if (tid == 0)
-                t0 = now_seconds();
+                t0 = nbep_now();
             for (unsigned long i = 0; i < crossings; i++) {
 #pragma omp barrier
             }
             if (tid == 0)
-                theirs[rep] = 1e9 * (now_seconds() - t0) / (double)crossings;
+                theirs[rep] = 1e9 * (nbep_now() - t0) / (double)crossings;
         }
     }
 }
@@ -142,7 +124,7 @@ int main(int argc, char **argv)
             n = n / OVERSUBSCRIBED_DIVISOR ? n / OVERSUBSCRIBED_DIVISOR : 1;
         double ours[MAX_REPEATS], theirs[MAX_REPEATS];
         time_barriers(nt, n, (int)repeats, ours, theirs);
-        double m_ours = median(ours, (int)repeats), m_theirs = median(theirs, (int)repeats);
+        double m_ours = bench_median(ours, (int)repeats), m_theirs = bench_median(theirs, (int)repeats);
         printf("%d,%lu,%.1f,%.1f,%.3f\n", nt, n, m_ours, m_theirs, m_ours / m_theirs);
         fflush(stdout);
     }

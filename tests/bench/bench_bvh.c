@@ -13,31 +13,13 @@
 
 #include "build_info.h"
 #include "nbep/bvh.h"
+#include "bench_util.h"
 
 #define PACKING_FRACTION 0.05
 #define RADIUS 0.5
 /* Repeats per timing: enough for a stable median, bounded so the largest size stays quick. */
 #define MAX_REPEATS 31
 #define TIME_BUDGET_S 0.5
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 static uint64_t rng_next(uint64_t *x)
 {
@@ -128,9 +110,9 @@ int main(int argc, char **argv)
             goto done;
         tally t;
         uint64_t examined = query_all(b, &s, &t);
-        double t0 = now_s();
+        double t0 = nbep_now();
         uint64_t want = naive_box_pairs(&s);
-        double naive_once = now_s() - t0;
+        double naive_once = nbep_now() - t0;
         if (t.candidates != want) {
             fprintf(stderr, "bench_bvh: n = %zu: %llu candidate pairs, all-pairs finds %llu\n", n,
                     (unsigned long long)t.candidates, (unsigned long long)want);
@@ -138,28 +120,28 @@ int main(int argc, char **argv)
         }
         double build[MAX_REPEATS], queries[MAX_REPEATS], naive[MAX_REPEATS];
         int reps = 0;
-        for (double start = now_s(); reps < MAX_REPEATS && (reps < 5 || now_s() - start <
+        for (double start = nbep_now(); reps < MAX_REPEATS && (reps < 5 || nbep_now() - start <
                                                                             TIME_BUDGET_S);
              reps++) {
-            t0 = now_s();
+            t0 = nbep_now();
             nbep_bvh_build(b, &s);
-            double t1 = now_s();
+            double t1 = nbep_now();
             query_all(b, &s, &t);
             build[reps] = t1 - t0;
-            queries[reps] = now_s() - t1;
+            queries[reps] = nbep_now() - t1;
         }
         /* The all-pairs loop is slow at large n: as many repeats as the budget allows. */
         int reps_naive = 1;
         naive[0] = naive_once;
-        for (double start = now_s(); reps_naive < MAX_REPEATS && now_s() - start < TIME_BUDGET_S;
+        for (double start = nbep_now(); reps_naive < MAX_REPEATS && nbep_now() - start < TIME_BUDGET_S;
              reps_naive++) {
-            t0 = now_s();
+            t0 = nbep_now();
             if (naive_box_pairs(&s) != want)
                 goto done;
-            naive[reps_naive] = now_s() - t0;
+            naive[reps_naive] = nbep_now() - t0;
         }
-        double build_ms = 1e3 * median(build, reps), query_ms = 1e3 * median(queries, reps);
-        double naive_ms = 1e3 * median(naive, reps_naive);
+        double build_ms = 1e3 * bench_median(build, reps), query_ms = 1e3 * bench_median(queries, reps);
+        double naive_ms = 1e3 * bench_median(naive, reps_naive);
         printf("%zu,%.4g,%.4g,%.3f,%.1f,%.3f,%.3f,%zu,%.4g,%.1f\n", n, build_ms, query_ms,
                build_ms / query_ms, (double)examined / (double)n,
                (double)t.candidates / (double)n, (double)t.overlaps / (double)n,

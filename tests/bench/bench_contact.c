@@ -67,6 +67,7 @@
 #include "build_info.h"
 #include "nbep/predict.h"
 #include "predict_impl.h"
+#include "bench_util.h"
 
 /* GCC's binary128 type; __extension__ keeps -Wpedantic quiet (the one compiler extension of
  * this file, which is a benchmark, not library code). */
@@ -593,7 +594,6 @@ static double textbook_quadratic(nbep_vec3 dp, nbep_vec3 dv, double sigma)
     return (-b - sqrt(disc)) / vv;
 }
 
-
 /* nbep's quadratic with the discriminant in the form that cancels least. At grazing
  * incidence disc = b^2 - |dv|^2 c is a small difference; by Lagrange's identity it equals
  * |dv|^2 sigma^2 - |dp x dv|^2. With s the distance still to fly to the closest approach,
@@ -923,19 +923,6 @@ static double solve(method m, const pair_case *c, const solver_ctx *x)
 
 /* ---- measuring ------------------------------------------------------------------------------ */
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 /* A relative error counts as "off" when it exceeds both OFF_RTOL and OFF_SENS times the
  * reference's own sensitivity to a one-ulp change of the inputs: a wrong root, or a root
  * not converged as far as the data allow. OFF_RTOL is nbep's acceptance threshold for a
@@ -988,7 +975,7 @@ static stats measure_accuracy(const pair_case *c, size_t n, method m, const solv
     }
     st.both = n_err;
     if (n_err) {
-        qsort(err, n_err, sizeof *err, cmp_double);
+        qsort(err, n_err, sizeof *err, bench_cmp_double);
         st.median = err[n_err / 2];
         st.p99 = err[(size_t)(0.99 * (double)(n_err - 1))];
         st.max = err[n_err - 1];
@@ -999,12 +986,12 @@ static stats measure_accuracy(const pair_case *c, size_t n, method m, const solv
 static double time_once(const pair_case *c, size_t n, method m, const solver_ctx *x,
                         double *sink)
 {
-    double sum = 0.0, t0 = now_seconds();
+    double sum = 0.0, t0 = nbep_now();
     for (size_t i = 0; i < n; i++) {
         double t = solve(m, &c[i], x);
         sum += isfinite(t) ? t : 1.0;
     }
-    double ns = 1e9 * (now_seconds() - t0) / (double)n;
+    double ns = 1e9 * (nbep_now() - t0) / (double)n;
     *sink += sum;
     return ns;
 }
@@ -1127,7 +1114,7 @@ int main(int argc, char **argv)
     }
 
     /* cases and their references */
-    double t_ref_start = now_seconds();
+    double t_ref_start = nbep_now();
     for (int k = 0; k < N_CLASSES; k++) {
         uint64_t s = 0x5eed0000u + (uint64_t)k;
         for (size_t i = 0; i < n; i++) {
@@ -1142,7 +1129,7 @@ int main(int argc, char **argv)
                         c->da.z, c->sigma, c->t_ref, c->t_ref_lo, c->sens, c->ambiguous);
         }
     }
-    double t_ref_seconds = now_seconds() - t_ref_start;
+    double t_ref_seconds = nbep_now() - t_ref_start;
 
     /* timing: repeats outermost, every method on every class in each repeat */
     double sink = 0.0;
@@ -1173,7 +1160,7 @@ int main(int argc, char **argv)
             int nr = repeats < 64 ? repeats : 64;
             for (int r = 0; r < nr; r++)
                 t[r] = ns[((size_t)r * N_CLASSES + (size_t)k) * N_METHODS + (size_t)m];
-            qsort(t, (size_t)nr, sizeof t[0], cmp_double);
+            qsort(t, (size_t)nr, sizeof t[0], bench_cmp_double);
             st.ns = t[nr / 2];
             printf("| %s | %zu/%zu (%zu) | %s | %.1e | %.1e | %.1e | %.2g | %zu | %zu / %zu "
                    "(+%zu)%s | %.0f |\n",

@@ -18,6 +18,7 @@
 #include "build_info.h"
 #include "nbep/predict.h"
 #include "predict_impl.h"
+#include "bench_util.h"
 
 enum { REPEATS = 5, CHECK_AGAINST_SEARCH = 20000 };
 
@@ -70,13 +71,6 @@ static void make_cases(pair_case *c, size_t n)
     }
 }
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 static bool is_closing_contact(const pair_case *c, nbep_vec3 da, double t)
 {
     nbep_vec3 r = nbep_vec3_axpy(nbep_vec3_axpy(c->dp, t, c->dv), 0.5 * t * t, da);
@@ -107,12 +101,6 @@ static int check_answers(const pair_case *c, size_t n, nbep_predict_ws *ws)
     return bad == 0 ? 0 : 1;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 /* Median over REPEATS of the time per solve, in ns. The sum of finite answers is kept in
  * *sink so the compiler cannot drop the calls. */
 static double time_variant(const pair_case *c, size_t n, bool quartic, nbep_predict_ws *ws,
@@ -120,16 +108,16 @@ static double time_variant(const pair_case *c, size_t n, bool quartic, nbep_pred
 {
     double ns[REPEATS];
     for (int r = 0; r < REPEATS; r++) {
-        double sum = 0.0, t_start = now_seconds();
+        double sum = 0.0, t_start = nbep_now();
         for (size_t i = 0; i < n; i++) {
             double t = quartic ? nbep_predict_pair(c[i].dp, c[i].dv, c[i].da, c[i].sigma, ws)
                                : nbep_predict_pair_quadratic(c[i].dp, c[i].dv, c[i].sigma);
             sum += isfinite(t) ? t : 0.0;
         }
-        ns[r] = 1e9 * (now_seconds() - t_start) / (double)n;
+        ns[r] = 1e9 * (nbep_now() - t_start) / (double)n;
         *sink += sum;
     }
-    qsort(ns, REPEATS, sizeof ns[0], cmp_double);
+    qsort(ns, REPEATS, sizeof ns[0], bench_cmp_double);
     return ns[REPEATS / 2];
 }
 
