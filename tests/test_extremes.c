@@ -26,6 +26,7 @@
 #include "nbep/sim.h"
 #include "nbep/stats.h"
 #include "nbep_test.h"
+#include "nbep_test_scene.h"
 
 /* ---- fixture: the scene and outcomes of the current test ------------------------------------ */
 
@@ -57,15 +58,6 @@ typedef struct fixture {
     outcome ref;              /* owned: a reference run's outcome, for comparisons */
 } fixture;
 
-static void scene_free(nbep_scene **scp)
-{
-    if (!*scp)
-        return;
-    nbep_state_fini(&(*scp)->state);
-    free(*scp);
-    *scp = NULL;
-}
-
 static void outcome_fini(outcome *o)
 {
     nbep_state_fini(&o->fin);
@@ -84,7 +76,7 @@ static int setup(void **state)
 static int teardown(void **state)
 {
     fixture *f = *state;
-    scene_free(&f->sc);
+    nbep_test_scene_free(&f->sc);
     outcome_fini(&f->o);
     outcome_fini(&f->ref);
     free(f);
@@ -110,28 +102,8 @@ static bool small_scale(void)
 static nbep_scene *scene_new(fixture *f, size_t n, size_t np, const char *algo, uint64_t steps,
                              double dt)
 {
-    scene_free(&f->sc);
-    nbep_scene *sc = f->sc = calloc(1, sizeof *sc);
-    assert_non_null(sc);
-    nbep_diag d;
-    nbep_diag_init(&d);
-    assert_int_equal(nbep_state_init(&sc->state, n, np, &d), NBEP_OK);
-    nbep_diag_fini(&d);
-    snprintf(sc->algorithm, sizeof sc->algorithm, "%s", algo);
-    sc->steps = steps;
-    sc->dt = dt;
-    sc->threads = 1;
-    sc->restitution = 1.0;
-    sc->output_every = 1;
-    sc->out_position = sc->out_velocity = true;
-    sc->sweep_replicas = 1;
-    return sc;
-}
-
-static void set_plane(nbep_scene *sc, size_t p, nbep_vec3 n, double offset)
-{
-    sc->state.plane_normal[p] = nbep_vec3_scale(n, 1.0 / nbep_vec3_norm(n));
-    sc->state.plane_offset[p] = offset;
+    nbep_test_scene_free(&f->sc);
+    return f->sc = nbep_test_scene_new(n, np, algo, steps, dt);
 }
 
 /* Planes first..first+5: the six inward walls of the box [lo, hi]. */
@@ -140,22 +112,12 @@ static void set_box(nbep_scene *sc, size_t first, nbep_vec3 lo, nbep_vec3 hi)
     sc->has_box = true;
     sc->box_min = lo;
     sc->box_max = hi;
-    set_plane(sc, first + 0, (nbep_vec3){1, 0, 0}, lo.x);
-    set_plane(sc, first + 1, (nbep_vec3){-1, 0, 0}, -hi.x);
-    set_plane(sc, first + 2, (nbep_vec3){0, 1, 0}, lo.y);
-    set_plane(sc, first + 3, (nbep_vec3){0, -1, 0}, -hi.y);
-    set_plane(sc, first + 4, (nbep_vec3){0, 0, 1}, lo.z);
-    set_plane(sc, first + 5, (nbep_vec3){0, 0, -1}, -hi.z);
-}
-
-static void set_sphere(nbep_scene *sc, size_t i, nbep_vec3 p, nbep_vec3 v, double r, double m,
-                       nbep_vec3 a)
-{
-    sc->state.pos[i] = p;
-    sc->state.vel[i] = v;
-    sc->state.radius[i] = r;
-    sc->state.mass[i] = m;
-    sc->state.acc[i] = a;
+    nbep_test_set_plane(sc, first + 0, (nbep_vec3){1, 0, 0}, lo.x);
+    nbep_test_set_plane(sc, first + 1, (nbep_vec3){-1, 0, 0}, -hi.x);
+    nbep_test_set_plane(sc, first + 2, (nbep_vec3){0, 1, 0}, lo.y);
+    nbep_test_set_plane(sc, first + 3, (nbep_vec3){0, -1, 0}, -hi.y);
+    nbep_test_set_plane(sc, first + 4, (nbep_vec3){0, 0, 1}, lo.z);
+    nbep_test_set_plane(sc, first + 5, (nbep_vec3){0, 0, -1}, -hi.z);
 }
 
 /* Spheres [from, n) parked at rest above everything (a cubic lattice 2.5 apart from z = 10
@@ -165,7 +127,7 @@ static void park_idle(nbep_scene *sc, size_t from)
 {
     const size_t side = (size_t)ceil(cbrt((double)sc->state.n));
     for (size_t i = from; i < sc->state.n; i++)
-        set_sphere(sc, i,
+        nbep_test_set_sphere(sc, i,
                    (nbep_vec3){2.5 * (double)(i % side), 2.5 * (double)(i / side % side),
                                10.0 + 2.5 * (double)(i / side / side)},
                    ZERO, 0.5, 1.0, ZERO);
@@ -318,8 +280,8 @@ static void assert_overlap_within(const outcome *o, double rel_tol)
 static nbep_scene *grazing(fixture *f, const char *algo, double b)
 {
     nbep_scene *sc = scene_new(f, 2, 0, algo, 100, 0.01);
-    set_sphere(sc, 0, ZERO, (nbep_vec3){1.9, 0.0, 0.0}, 0.3125, 1.3, ZERO);
-    set_sphere(sc, 1, (nbep_vec3){1.1, b, 0.0}, ZERO, 0.4375, 0.9, ZERO);
+    nbep_test_set_sphere(sc, 0, ZERO, (nbep_vec3){1.9, 0.0, 0.0}, 0.3125, 1.3, ZERO);
+    nbep_test_set_sphere(sc, 1, (nbep_vec3){1.1, b, 0.0}, ZERO, 0.4375, 0.9, ZERO);
     return sc;
 }
 
@@ -397,8 +359,8 @@ static nbep_scene *touching(fixture *f, const char *algo, double w0, double w1, 
 {
     nbep_scene *sc = scene_new(f, 2, 0, algo, steps, 1e-3);
     sc->restitution = TOUCH_E;
-    set_sphere(sc, 0, TOUCH_P0, touch_v(w0), 0.5, TOUCH_M0, ZERO);
-    set_sphere(sc, 1, TOUCH_P1, touch_v(w1), 0.75, TOUCH_M1, ZERO);
+    nbep_test_set_sphere(sc, 0, TOUCH_P0, touch_v(w0), 0.5, TOUCH_M0, ZERO);
+    nbep_test_set_sphere(sc, 1, TOUCH_P1, touch_v(w1), 0.75, TOUCH_M1, ZERO);
     return sc;
 }
 
@@ -488,10 +450,10 @@ static void test_predictive_spheres_at_rest_on_a_floor_and_touching_stay_put(voi
     fixture *f = *state;
     nbep_scene *sc = scene_new(f, 2, 1, "predictive", 200, 1e-3);
     sc->restitution = 0.7;
-    set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+    nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
     const nbep_vec3 g = {0, 0, -9.81};
-    set_sphere(sc, 0, (nbep_vec3){0.3, -0.2, 0.5}, ZERO, 0.5, 1.0, g);
-    set_sphere(sc, 1, (nbep_vec3){1.55, -0.2, 0.75}, ZERO, 0.75, 2.0, g);
+    nbep_test_set_sphere(sc, 0, (nbep_vec3){0.3, -0.2, 0.5}, ZERO, 0.5, 1.0, g);
+    nbep_test_set_sphere(sc, 1, (nbep_vec3){1.55, -0.2, 0.75}, ZERO, 0.75, 2.0, g);
     const outcome *o = run(f, 1);
     assert_clean(o, "predictive");
     assert_int_equal(o->sum.collisions, 0);
@@ -522,8 +484,8 @@ static void test_radius_ratio_1e4_head_on_gives_the_analytic_velocities(void **s
     for (size_t k = 0; k < N_ALGOS; k++) {
         nbep_scene *sc = scene_new(f, 2, 0, ALGOS[k], (uint64_t)(T / dt + 0.5), dt);
         sc->restitution = e;
-        set_sphere(sc, 0, p_big, vb, R, M, ZERO);
-        set_sphere(sc, 1, p_small, vs, r, m, ZERO);
+        nbep_test_set_sphere(sc, 0, p_big, vb, R, M, ZERO);
+        nbep_test_set_sphere(sc, 1, p_small, vs, r, m, ZERO);
         const outcome *o = run(f, 1);
         assert_clean(o, ALGOS[k]);
         assert_int_equal(o->sum.sphere_collisions, 1);
@@ -561,8 +523,8 @@ static nbep_scene *offset_pair(fixture *f, const char *algo, double off, uint64_
 {
     nbep_scene *sc = scene_new(f, 2, 0, algo, steps, OFF_T / (double)steps);
     nbep_vec3 o = {off, -off, off};
-    set_sphere(sc, 0, nbep_vec3_add(OFF_A, o), OFF_VA, 0.3, OFF_MA, ZERO);
-    set_sphere(sc, 1, nbep_vec3_add(OFF_B, o), OFF_VB, 0.45, OFF_MB, ZERO);
+    nbep_test_set_sphere(sc, 0, nbep_vec3_add(OFF_A, o), OFF_VA, 0.3, OFF_MA, ZERO);
+    nbep_test_set_sphere(sc, 1, nbep_vec3_add(OFF_B, o), OFF_VB, 0.45, OFF_MB, ZERO);
     return sc;
 }
 
@@ -651,7 +613,7 @@ static nbep_scene *thin_box(fixture *f, const char *algo, double u, uint64_t ste
 {
     nbep_scene *sc = scene_new(f, 1, 6, algo, steps, 0.01);
     set_box(sc, 0, ZERO, (nbep_vec3){THIN_L, 1.0, 1.0});
-    set_sphere(sc, 0, (nbep_vec3){THIN_X0, 0.5, 0.5}, (nbep_vec3){u, 0.17, -0.11}, THIN_R, 1.0,
+    nbep_test_set_sphere(sc, 0, (nbep_vec3){THIN_X0, 0.5, 0.5}, (nbep_vec3){u, 0.17, -0.11}, THIN_R, 1.0,
                ZERO);
     return sc;
 }
@@ -699,8 +661,8 @@ static void test_predictive_thousands_of_bounces_in_one_step_are_not_mistaken_fo
 static nbep_scene *bullet(fixture *f, const char *algo)
 {
     nbep_scene *sc = scene_new(f, 2, 0, algo, 10, 0.01);
-    set_sphere(sc, 0, (nbep_vec3){0.0, 0.1, 0.2}, (nbep_vec3){500.0, 0.0, 0.0}, 0.01, 0.5, ZERO);
-    set_sphere(sc, 1, (nbep_vec3){2.0, 0.1, 0.2}, ZERO, 0.02, 1.5, ZERO);
+    nbep_test_set_sphere(sc, 0, (nbep_vec3){0.0, 0.1, 0.2}, (nbep_vec3){500.0, 0.0, 0.0}, 0.01, 0.5, ZERO);
+    nbep_test_set_sphere(sc, 1, (nbep_vec3){2.0, 0.1, 0.2}, ZERO, 0.02, 1.5, ZERO);
     return sc;
 }
 
@@ -776,8 +738,8 @@ static double drop_height(double T, uint64_t *bounces)
 static nbep_scene *drop(fixture *f, const char *algo, double dt, uint64_t steps)
 {
     nbep_scene *sc = scene_new(f, 1, 1, algo, steps, dt);
-    set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
-    set_sphere(sc, 0, (nbep_vec3){0.7, -0.3, DROP_R + DROP_H0}, (nbep_vec3){0.0, 0.0, DROP_W0},
+    nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+    nbep_test_set_sphere(sc, 0, (nbep_vec3){0.7, -0.3, DROP_R + DROP_H0}, (nbep_vec3){0.0, 0.0, DROP_W0},
                DROP_R, 1.0, (nbep_vec3){0.0, 0.0, -DROP_G});
     return sc;
 }
@@ -838,10 +800,10 @@ static nbep_scene *cradle(fixture *f, const char *algo, size_t n, const size_t i
 {
     nbep_scene *sc = scene_new(f, n, 0, algo, 400, 1e-3);
     park_idle(sc, 0);
-    set_sphere(sc, ids[0], (nbep_vec3){0.3 - 2.0 * CRADLE_R - 0.2, 0.7, -0.4},
+    nbep_test_set_sphere(sc, ids[0], (nbep_vec3){0.3 - 2.0 * CRADLE_R - 0.2, 0.7, -0.4},
                (nbep_vec3){CRADLE_U, 0.0, 0.0}, CRADLE_R, 1.1, ZERO);
     for (size_t k = 1; k < 5; k++)
-        set_sphere(sc, ids[k], (nbep_vec3){0.3 + 2.0 * CRADLE_R * (double)(k - 1), 0.7, -0.4},
+        nbep_test_set_sphere(sc, ids[k], (nbep_vec3){0.3 + 2.0 * CRADLE_R * (double)(k - 1), 0.7, -0.4},
                    ZERO, CRADLE_R, 1.1, ZERO);
     return sc;
 }
@@ -919,9 +881,9 @@ static void test_simultaneous_pairs_in_different_threads_react_once_each(void **
         park_idle(sc, 0);
         for (size_t k = 0; k < 3; k++) {
             double y = 8.0 * (double)k;
-            set_sphere(sc, pairs[k][0], (nbep_vec3){-1.31, y, 0.0}, (nbep_vec3){ua, 0, 0}, 0.25,
+            nbep_test_set_sphere(sc, pairs[k][0], (nbep_vec3){-1.31, y, 0.0}, (nbep_vec3){ua, 0, 0}, 0.25,
                        1.3, ZERO);
-            set_sphere(sc, pairs[k][1], (nbep_vec3){1.17, y, 0.0}, (nbep_vec3){ub, 0, 0}, 0.25,
+            nbep_test_set_sphere(sc, pairs[k][1], (nbep_vec3){1.17, y, 0.0}, (nbep_vec3){ub, 0, 0}, 0.25,
                        1.3, ZERO);
         }
         const outcome *o = run(f, nt);
@@ -950,9 +912,9 @@ static void test_sphere_hit_from_both_sides_at_once_stays_and_both_rebound(void 
     for (size_t k = 0; k < N_ALGOS; k++) {
         const bool pred = strcmp(ALGOS[k], "predictive") == 0;
         nbep_scene *sc = scene_new(f, 3, 0, ALGOS[k], 400, 1e-3);
-        set_sphere(sc, 0, (nbep_vec3){-1.0 - g, 0.2, 0.3}, (nbep_vec3){u, 0, 0}, 0.5, 0.8, ZERO);
-        set_sphere(sc, 1, (nbep_vec3){0.0, 0.2, 0.3}, ZERO, 0.5, 0.8, ZERO);
-        set_sphere(sc, 2, (nbep_vec3){1.0 + g, 0.2, 0.3}, (nbep_vec3){-u, 0, 0}, 0.5, 0.8, ZERO);
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){-1.0 - g, 0.2, 0.3}, (nbep_vec3){u, 0, 0}, 0.5, 0.8, ZERO);
+        nbep_test_set_sphere(sc, 1, (nbep_vec3){0.0, 0.2, 0.3}, ZERO, 0.5, 0.8, ZERO);
+        nbep_test_set_sphere(sc, 2, (nbep_vec3){1.0 + g, 0.2, 0.3}, (nbep_vec3){-u, 0, 0}, 0.5, 0.8, ZERO);
         const outcome *o = run(f, 1);
         assert_clean(o, ALGOS[k]);
         assert_vec3_close(o->fin.vel[0], (nbep_vec3){-u, 0, 0}, FEW_ULPS, FEW_ULPS * u);
@@ -980,8 +942,8 @@ static void test_predictive_sphere_comes_to_rest_on_a_floor_with_e_0_5(void **st
     const double e = 0.5, g = 9.81, r = 0.1, h = 1.8, dt = 1e-3, m = 1.7;
     nbep_scene *sc = scene_new(f, 1, 1, "predictive", 3500, dt);
     sc->restitution = e;
-    set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
-    set_sphere(sc, 0, (nbep_vec3){0.2, 0.4, r + h}, ZERO, r, m, (nbep_vec3){0, 0, -g});
+    nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+    nbep_test_set_sphere(sc, 0, (nbep_vec3){0.2, 0.4, r + h}, ZERO, r, m, (nbep_vec3){0, 0, -g});
     const outcome *o = run(f, 1);
     assert_clean(o, "predictive");
     double v0 = sqrt(2.0 * g * h);
@@ -1013,8 +975,8 @@ static void test_detection_sphere_settles_on_a_floor_with_e_0_5(void **state)
     for (size_t k = 0; k < N_DETECTORS; k++) {
         nbep_scene *sc = scene_new(f, 1, 1, DETECTORS[k], 3500, dt);
         sc->restitution = e;
-        set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
-        set_sphere(sc, 0, (nbep_vec3){0.2, 0.4, r + h}, ZERO, r, m, (nbep_vec3){0, 0, -g});
+        nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){0.2, 0.4, r + h}, ZERO, r, m, (nbep_vec3){0, 0, -g});
         const outcome *o = run(f, 1);
         assert_clean(o, DETECTORS[k]);
         /* sinks at most one step at the landing speed (plus the step's own fall) */
@@ -1038,9 +1000,9 @@ static void test_predictive_sphere_pulled_onto_a_resting_sphere_from_a_hair_gap_
     const nbep_vec3 dv = {0x1.0cb1548c41215p-3, 0x1.0aaceae566193p-2, -0x1.a92b3e1600951p-4};
     const nbep_vec3 v_low = {-0.174, -0.0339, 0.0};
     nbep_scene *sc = scene_new(f, 2, 1, "predictive", 20, 1e-3);
-    set_plane(sc, 0, (nbep_vec3){0, 0, 1}, -r);
-    set_sphere(sc, 0, ZERO, v_low, r, 1.06, (nbep_vec3){0, 0, -g});
-    set_sphere(sc, 1, dp, nbep_vec3_add(v_low, dv), r, 1.24, (nbep_vec3){0, 0, -g});
+    nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, -r);
+    nbep_test_set_sphere(sc, 0, ZERO, v_low, r, 1.06, (nbep_vec3){0, 0, -g});
+    nbep_test_set_sphere(sc, 1, dp, nbep_vec3_add(v_low, dv), r, 1.24, (nbep_vec3){0, 0, -g});
     const outcome *o = run(f, 1);
     assert_clean(o, "predictive");
     assert_overlap_within(o, PREDICTIVE_OVERLAP_REL);
@@ -1088,9 +1050,9 @@ static void test_sphere_falling_on_a_resting_sphere_with_e_0_5_ends(void **state
         const bool pred = strcmp(ALGOS[k], "predictive") == 0;
         nbep_scene *sc = scene_new(f, 2, 1, ALGOS[k], 2000, dt);
         sc->restitution = 0.5;
-        set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
-        set_sphere(sc, 0, (nbep_vec3){0.1, 0.2, r}, ZERO, r, 1.0, (nbep_vec3){0, 0, -g});
-        set_sphere(sc, 1, (nbep_vec3){0.1, 0.2, 3.0 * r + h}, ZERO, r, 0.6,
+        nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){0.1, 0.2, r}, ZERO, r, 1.0, (nbep_vec3){0, 0, -g});
+        nbep_test_set_sphere(sc, 1, (nbep_vec3){0.1, 0.2, 3.0 * r + h}, ZERO, r, 0.6,
                    (nbep_vec3){0, 0, -g});
         const outcome *o = run(f, 1);
         char what[64];
@@ -1132,7 +1094,7 @@ static void test_pile_in_a_box_with_e_0_8_ends_without_overlap(void **state)
             double x = 0.15 + 0.3 * (double)(i % 3), y = 0.15 + 0.3 * (double)(i / 3 % 3);
             double z = 0.3 + 0.45 * (double)(i / 9);
             double s = 0.1 * sin(1.7 * (double)i); /* small fixed sideways speeds */
-            set_sphere(sc, i, (nbep_vec3){x, y, z}, (nbep_vec3){s, -0.5 * s, 0.0}, r,
+            nbep_test_set_sphere(sc, i, (nbep_vec3){x, y, z}, (nbep_vec3){s, -0.5 * s, 0.0}, r,
                        1.0 + 0.01 * (double)i, (nbep_vec3){0, 0, -g});
         }
         const outcome *o = run(f, 1);
@@ -1155,12 +1117,12 @@ static void test_pile_in_a_box_with_e_0_8_ends_without_overlap(void **state)
 static nbep_scene *hair(fixture *f, const char *algo, double w_pair, double w_plane)
 {
     nbep_scene *sc = scene_new(f, 3, 1, algo, 100, 1e-3);
-    set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+    nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
     const double sigma = 0.75, d = sigma * (1.0 - 1e-14);
     const nbep_vec3 n = {0.6, 0.0, 0.8};
-    set_sphere(sc, 0, (nbep_vec3){0.1, 0.2, 5.0}, nbep_vec3_scale(n, w_pair), 0.4, 1.2, ZERO);
-    set_sphere(sc, 1, nbep_vec3_axpy((nbep_vec3){0.1, 0.2, 5.0}, d, n), ZERO, 0.35, 0.9, ZERO);
-    set_sphere(sc, 2, (nbep_vec3){3.0, 0.2, 0.3 * (1.0 - 1e-14)}, (nbep_vec3){0.1, 0.0, w_plane},
+    nbep_test_set_sphere(sc, 0, (nbep_vec3){0.1, 0.2, 5.0}, nbep_vec3_scale(n, w_pair), 0.4, 1.2, ZERO);
+    nbep_test_set_sphere(sc, 1, nbep_vec3_axpy((nbep_vec3){0.1, 0.2, 5.0}, d, n), ZERO, 0.35, 0.9, ZERO);
+    nbep_test_set_sphere(sc, 2, (nbep_vec3){3.0, 0.2, 0.3 * (1.0 - 1e-14)}, (nbep_vec3){0.1, 0.0, w_plane},
                0.3, 1.0, ZERO);
     return sc;
 }

@@ -14,48 +14,7 @@
 #include "nbep/sim.h"
 #include "nbep/stats.h"
 #include "nbep_test.h"
-
-/* A scene with n spheres (zeroed) and np planes, no box, no output. */
-static nbep_scene *scene_new(size_t n, size_t np, const char *algo, uint64_t steps, double dt)
-{
-    nbep_scene *sc = calloc(1, sizeof *sc);
-    assert_non_null(sc);
-    nbep_diag d;
-    nbep_diag_init(&d);
-    assert_int_equal(nbep_state_init(&sc->state, n, np, &d), NBEP_OK);
-    nbep_diag_fini(&d);
-    snprintf(sc->algorithm, sizeof sc->algorithm, "%s", algo);
-    sc->steps = steps;
-    sc->dt = dt;
-    sc->threads = 1;
-    sc->restitution = 1.0;
-    sc->output_every = 1;
-    sc->out_position = sc->out_velocity = true;
-    sc->sweep_replicas = 1;
-    return sc;
-}
-
-static void scene_free(nbep_scene *sc)
-{
-    nbep_state_fini(&sc->state);
-    free(sc);
-}
-
-static void set_plane(nbep_scene *sc, size_t p, nbep_vec3 n, double offset)
-{
-    sc->state.plane_normal[p] = nbep_vec3_scale(n, 1.0 / nbep_vec3_norm(n));
-    sc->state.plane_offset[p] = offset;
-}
-
-static void set_sphere(nbep_scene *sc, size_t i, nbep_vec3 p, nbep_vec3 v, double r, double m,
-                       nbep_vec3 a)
-{
-    sc->state.pos[i] = p;
-    sc->state.vel[i] = v;
-    sc->state.radius[i] = r;
-    sc->state.mass[i] = m;
-    sc->state.acc[i] = a;
-}
+#include "nbep_test_scene.h"
 
 /* Every frame's positions and velocities, appended. */
 typedef struct frames {
@@ -110,10 +69,10 @@ static void test_predictive_bounce_matches_the_analytic_flight(void **state)
 {
     (void)state;
     const double g = 9.81, e = 0.83, r = 0.1, z0 = 2.37, dt = 1e-3;
-    nbep_scene *sc = scene_new(1, 1, "predictive", 1000, dt);
+    nbep_scene *sc = nbep_test_scene_new(1, 1, "predictive", 1000, dt);
     sc->restitution = e;
-    set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
-    set_sphere(sc, 0, (nbep_vec3){0.3, -0.2, z0}, ZERO, r, 1.7, (nbep_vec3){0, 0, -g});
+    nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+    nbep_test_set_sphere(sc, 0, (nbep_vec3){0.3, -0.2, z0}, ZERO, r, 1.7, (nbep_vec3){0, 0, -g});
     nbep_state fin;
     nbep_summary sum = run(sc, 1, &fin, NULL);
     double t1 = sqrt(2.0 * (z0 - r) / g), v1 = e * g * t1, T = 1000 * dt;
@@ -125,7 +84,7 @@ static void test_predictive_bounce_matches_the_analytic_flight(void **state)
     assert_int_equal(sum.plane_collisions, 1);
     assert_int_equal(sum.sphere_collisions, 0);
     nbep_state_fini(&fin);
-    scene_free(sc);
+    nbep_test_scene_free(&sc);
 }
 
 /* The naive algorithm detects the landing only after the sphere overlaps the floor, so its
@@ -134,10 +93,10 @@ static void test_naive_bounce_is_within_one_step_of_the_analytic_flight(void **s
 {
     (void)state;
     const double g = 9.81, e = 0.83, r = 0.1, z0 = 2.37, dt = 1e-3;
-    nbep_scene *sc = scene_new(1, 1, "naive", 1000, dt);
+    nbep_scene *sc = nbep_test_scene_new(1, 1, "naive", 1000, dt);
     sc->restitution = e;
-    set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
-    set_sphere(sc, 0, (nbep_vec3){0.3, -0.2, z0}, ZERO, r, 1.7, (nbep_vec3){0, 0, -g});
+    nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+    nbep_test_set_sphere(sc, 0, (nbep_vec3){0.3, -0.2, z0}, ZERO, r, 1.7, (nbep_vec3){0, 0, -g});
     nbep_state fin;
     nbep_summary sum = run(sc, 1, &fin, NULL);
     double t1 = sqrt(2.0 * (z0 - r) / g), v1 = e * g * t1, T = 1000 * dt;
@@ -146,7 +105,7 @@ static void test_naive_bounce_is_within_one_step_of_the_analytic_flight(void **s
     assert_close(fin.pos[0].z, z, 0.0, 2.0 * (vland * dt + g * dt * dt));
     assert_int_equal(sum.plane_collisions, 1);
     nbep_state_fini(&fin);
-    scene_free(sc);
+    nbep_test_scene_free(&sc);
 }
 
 /* Head-on, equal masses, e = 1: the spheres exchange velocities at contact. Sphere 0 sits in
@@ -157,13 +116,13 @@ static void test_head_on_pair_across_threads_reacts_exactly_once(void **state)
     (void)state;
     const size_t n = 301;
     for (int nt = 1; nt <= 4; nt *= 2) {
-        nbep_scene *sc = scene_new(n, 0, "predictive", 500, 1e-3);
+        nbep_scene *sc = nbep_test_scene_new(n, 0, "predictive", 500, 1e-3);
         /* idle spheres far away, at rest, spaced apart */
         for (size_t i = 1; i < n - 1; i++)
-            set_sphere(sc, i, (nbep_vec3){100.0 + 3.0 * (double)i, 50.0, 0.0}, ZERO, 0.5, 1.0,
+            nbep_test_set_sphere(sc, i, (nbep_vec3){100.0 + 3.0 * (double)i, 50.0, 0.0}, ZERO, 0.5, 1.0,
                        ZERO);
-        set_sphere(sc, 0, (nbep_vec3){-1.31, 0, 0}, (nbep_vec3){2.9, 0, 0}, 0.25, 1.3, ZERO);
-        set_sphere(sc, n - 1, (nbep_vec3){1.17, 0, 0}, (nbep_vec3){-1.7, 0, 0}, 0.25, 1.3,
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){-1.31, 0, 0}, (nbep_vec3){2.9, 0, 0}, 0.25, 1.3, ZERO);
+        nbep_test_set_sphere(sc, n - 1, (nbep_vec3){1.17, 0, 0}, (nbep_vec3){-1.7, 0, 0}, 0.25, 1.3,
                    ZERO);
         nbep_state fin;
         nbep_summary sum = run(sc, nt, &fin, NULL);
@@ -176,7 +135,7 @@ static void test_head_on_pair_across_threads_reacts_exactly_once(void **state)
         assert_close(fin.pos[0].x, -1.31 + 2.9 * tc - 1.7 * (T - tc), 0.0, 1e-13);
         assert_close(fin.pos[n - 1].x, 1.17 - 1.7 * tc + 2.9 * (T - tc), 0.0, 1e-13);
         nbep_state_fini(&fin);
-        scene_free(sc);
+        nbep_test_scene_free(&sc);
     }
 }
 
@@ -185,9 +144,9 @@ static void test_head_on_pair_across_threads_reacts_exactly_once(void **state)
 static void test_oblique_unequal_masses_conserve_momentum_and_energy(void **state)
 {
     (void)state;
-    nbep_scene *sc = scene_new(2, 0, "predictive", 2000, 1e-3);
-    set_sphere(sc, 0, ZERO, (nbep_vec3){2.0, 0, 0}, 0.3, 3.0, ZERO);
-    set_sphere(sc, 1, (nbep_vec3){2.0, 0.15, 0}, ZERO, 0.2, 1.0, ZERO);
+    nbep_scene *sc = nbep_test_scene_new(2, 0, "predictive", 2000, 1e-3);
+    nbep_test_set_sphere(sc, 0, ZERO, (nbep_vec3){2.0, 0, 0}, 0.3, 3.0, ZERO);
+    nbep_test_set_sphere(sc, 1, (nbep_vec3){2.0, 0.15, 0}, ZERO, 0.2, 1.0, ZERO);
     nbep_state fin;
     nbep_summary sum = run(sc, 1, &fin, NULL);
     assert_int_equal(sum.sphere_collisions, 1);
@@ -203,23 +162,23 @@ static void test_oblique_unequal_masses_conserve_momentum_and_energy(void **stat
     double un = 2.0 * dx / 0.5;
     assert_close(nbep_vec3_norm(fin.vel[1]), 2.0 * 3.0 / 4.0 * un, 1e-12, 0.0);
     nbep_state_fini(&fin);
-    scene_free(sc);
+    nbep_test_scene_free(&sc);
 }
 
 /* A gas of n spheres in a closed box, random but fixed positions (a lattice jittered by a
  * hash of the index) and velocities. */
 static nbep_scene *gas(const char *algo, size_t n, double g, uint64_t steps)
 {
-    nbep_scene *sc = scene_new(n, 6, algo, steps, 2e-3);
+    nbep_scene *sc = nbep_test_scene_new(n, 6, algo, steps, 2e-3);
     const double L = 4.0;
     sc->has_box = true;
     sc->box_max = (nbep_vec3){L, L, L};
-    set_plane(sc, 0, (nbep_vec3){1, 0, 0}, 0.0);
-    set_plane(sc, 1, (nbep_vec3){-1, 0, 0}, -L);
-    set_plane(sc, 2, (nbep_vec3){0, 1, 0}, 0.0);
-    set_plane(sc, 3, (nbep_vec3){0, -1, 0}, -L);
-    set_plane(sc, 4, (nbep_vec3){0, 0, 1}, 0.0);
-    set_plane(sc, 5, (nbep_vec3){0, 0, -1}, -L);
+    nbep_test_set_plane(sc, 0, (nbep_vec3){1, 0, 0}, 0.0);
+    nbep_test_set_plane(sc, 1, (nbep_vec3){-1, 0, 0}, -L);
+    nbep_test_set_plane(sc, 2, (nbep_vec3){0, 1, 0}, 0.0);
+    nbep_test_set_plane(sc, 3, (nbep_vec3){0, -1, 0}, -L);
+    nbep_test_set_plane(sc, 4, (nbep_vec3){0, 0, 1}, 0.0);
+    nbep_test_set_plane(sc, 5, (nbep_vec3){0, 0, -1}, -L);
     size_t side = (size_t)ceil(cbrt((double)n));
     double h = L / (double)side;
     uint64_t x = 88172645463325252u;
@@ -233,7 +192,7 @@ static nbep_scene *gas(const char *algo, size_t n, double g, uint64_t steps)
                        h * ((double)(i / side % side) + 0.3 + 0.4 * u[1]),
                        h * ((double)(i / side / side) + 0.3 + 0.4 * u[2])};
         nbep_vec3 v = {6.0 * (u[3] - 0.5), 6.0 * (u[4] - 0.5), 6.0 * (u[5] - 0.5)};
-        set_sphere(sc, i, p, v, 0.1 * h * (1.0 + 0.5 * u[0]), 1.0 + u[1], (nbep_vec3){0, 0, -g});
+        nbep_test_set_sphere(sc, i, p, v, 0.1 * h * (1.0 + 0.5 * u[0]), 1.0 + u[1], (nbep_vec3){0, 0, -g});
     }
     return sc;
 }
@@ -267,7 +226,7 @@ static void same_frames_for_threads(const char *algo, size_t n, double g, const 
         free(f.data);
     }
     free(ref.data);
-    scene_free(sc);
+    nbep_test_scene_free(&sc);
 }
 
 static void test_naive_frames_are_bitwise_equal_for_1_2_4_threads(void **state)
@@ -305,7 +264,7 @@ static void test_seminaive_frames_equal_naive_frames_with_fewer_checks(void **st
     assert_int_equal(sa.collisions, sb.collisions);
     assert_true(sb.checks < sa.checks);
     free(fa.data), free(fb.data);
-    scene_free(a), scene_free(b);
+    nbep_test_scene_free(&a), nbep_test_scene_free(&b);
 }
 
 /* Elastic responses conserve kinetic energy exactly whatever the positions, so a naive gas
@@ -318,7 +277,7 @@ static void test_naive_gas_without_gravity_conserves_energy(void **state)
     nbep_summary s = run(sc, 2, NULL, NULL);
     assert_true(s.collisions > 10);
     assert_close(s.energy_final, s.energy_initial, 1e-12, 0.0);
-    scene_free(sc);
+    nbep_test_scene_free(&sc);
 }
 
 /* The predictive algorithm advances each pair to its contact time, so under gravity too the
@@ -333,7 +292,7 @@ static void test_predictive_gas_under_gravity_conserves_energy(void **state)
     assert_close(s.energy_final, s.energy_initial, 1e-11, 0.0);
     /* and nothing overlaps beyond round-off: 1e-9 of the smaller radius */
     assert_true(s.max_overlap_rel < 1e-9);
-    scene_free(sc);
+    nbep_test_scene_free(&sc);
 }
 
 /* The predictive and the naive gas agree to within what naive's detection after the fact
@@ -353,7 +312,7 @@ static void test_predictive_and_naive_agree_on_a_short_gas_run(void **state)
         assert_true(nbep_vec3_norm(nbep_vec3_sub(fa.pos[i], fb.pos[i])) <= tol);
     }
     nbep_state_fini(&fa), nbep_state_fini(&fb);
-    scene_free(a), scene_free(b);
+    nbep_test_scene_free(&a), nbep_test_scene_free(&b);
 }
 
 /* run.neighbors = "grid" (beyond the paper) tests only nearby partners before a horizon; it
@@ -374,7 +333,7 @@ static void test_grid_predictive_finds_the_same_collisions_as_all_pairs(void **s
     assert_true(sg.predictions < sa.predictions / 2); /* it tests far fewer partners */
     assert_close(sg.energy_final, sg.energy_initial, 1e-11, 0.0);
     assert_true(sg.max_overlap_rel < 1e-9);
-    scene_free(a), scene_free(g);
+    nbep_test_scene_free(&a), nbep_test_scene_free(&g);
 }
 
 /* The same, where the horizon's reach matters: spheres so fast (up to 150 m/s, 0.15 per step,
@@ -400,7 +359,7 @@ static void test_grid_predictive_finds_fast_partners_several_cells_away(void **s
     assert_int_equal(sum[1].sphere_collisions, sum[0].sphere_collisions);
     assert_int_equal(sum[1].plane_collisions, sum[0].plane_collisions);
     assert_true(sum[1].max_overlap_rel < 1e-9);
-    scene_free(sc[0]), scene_free(sc[1]);
+    nbep_test_scene_free(&sc[0]), nbep_test_scene_free(&sc[1]);
 }
 
 static void test_grid_predictive_frames_are_bitwise_equal_for_1_2_4_threads(void **state)
@@ -419,7 +378,7 @@ static void test_grid_predictive_frames_are_bitwise_equal_for_1_2_4_threads(void
         free(f.data);
     }
     free(ref.data);
-    scene_free(sc);
+    nbep_test_scene_free(&sc);
 }
 
 int main(void)
