@@ -254,9 +254,9 @@ static void progress(nbep_sim *sim, uint64_t step, bool last)
         return;
     sim->t_last_progress = now;
     double el = now - sim->t_start;
-    double rate = el > 0.0 ? (double)step / el : 0.0;
+    /* steps done in this session (a resumed run started at step_first) */
+    double rate = el > 0.0 ? (double)(step + 1 - sim->step_first) / el : 0.0;
     double pct = sim->step_end ? 100.0 * (double)step / (double)sim->step_end : 100.0;
-    rate = el > 0.0 ? (double)(step + 1 - sim->step_first) / el : 0.0;
     double eta = rate > 0.0 ? (double)(sim->step_end - step) / rate : 0.0;
     if (tty)
         fprintf(stderr, "\rstep %llu/%llu  %5.1f%%  %.4g steps/s  ETA %.0f s   %s",
