@@ -126,3 +126,6 @@ clean:
 	rm -rf $(BUILD) bin
 
 -include $(LIB_OBJ:.o=.d) $(BUILD)/main.d
+# Test and benchmark binaries compile and link in one step; their .d files sit beside them, so
+# editing a header they include (tests/nbep_test_scene.h, include/nbep/...) rebuilds them.
+-include $(TEST_BIN:=.d) $(BENCH_BIN:=.d)
