@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs every Debian/Ubuntu package nbep needs to build, test, benchmark and plot.
 # Idempotent (apt-get skips what is installed); fails loudly on the first error.
-# Works as root without sudo, or as a user through sudo.
+# Works as root without sudo, or as a user (through sudo, asked only when something is missing).
 set -euo pipefail
 
 packages=(
@@ -17,15 +17,6 @@ packages=(
     python3-mpmath                              # make accuracy: 60-digit reference check
 )
 
-if [ "$(id -u)" -eq 0 ]; then
-    as_root=()
-elif command -v sudo >/dev/null 2>&1; then
-    as_root=(sudo)
-else
-    echo "install-deps.sh: must run as root or with sudo available" >&2
-    exit 1
-fi
-
 export DEBIAN_FRONTEND=noninteractive
 missing=()
 for p in "${packages[@]}"; do
@@ -34,6 +25,15 @@ done
 if [ "${#missing[@]}" -eq 0 ]; then
     echo "install-deps.sh: all ${#packages[@]} packages already installed"
     exit 0
+fi
+# Root only now that something is missing: a user whose machine has everything needs no sudo.
+if [ "$(id -u)" -eq 0 ]; then
+    as_root=()
+elif command -v sudo >/dev/null 2>&1; then
+    as_root=(sudo)
+else
+    echo "install-deps.sh: must run as root or with sudo available to install ${missing[*]}" >&2
+    exit 1
 fi
 echo "install-deps.sh: installing ${missing[*]}"
 "${as_root[@]}" apt-get update -q
