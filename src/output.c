@@ -1,5 +1,4 @@
-/* HDF5 output in layout "nbep-1" (SPEC "HDF5 output") and the JSON summary (SPEC "JSON
- * summary"). The only file that includes hdf5.h; one writing thread (thread 0 between barriers).
+/* HDF5 output in layout "nbep-1" (SPEC "HDF5 output"); the JSON summary is summary.c's. The only file that includes hdf5.h; one writing thread (thread 0 between barriers).
  *
  * Invariants of an open nbep_output:
  * - every id field is a valid HDF5 id or H5I_INVALID_HID, so one release path closes them all;
@@ -53,7 +52,6 @@
 static_assert(sizeof(nbep_vec3) == 3 * sizeof(double), "nbep_vec3 must be 3 packed doubles");
 
 #define FORMAT_NAME "nbep-1"
-#define SUMMARY_FORMAT_NAME "nbep-summary-1"
 
 /* One frame per chunk, so that a reader asking for frame f reads one chunk; but a chunk is
  * capped near 4 MiB (by splitting the spheres) because HDF5 reads and writes whole chunks: a
@@ -852,120 +850,6 @@ void nbep_output_library_init(void)
      * and HDF5's exit handler then crashes closing it again. The process is ending anyway. */
     H5dont_atexit();
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
-}
-
-/* ---- JSON ---------------------------------------------------------------------------------- */
-
-/* A stream, the bytes written to it so far and the keys written; bad once a write failed. */
-typedef struct json_out {
-    FILE *f;
-    long n;
-    int keys;
-    int bad;
-} json_out;
-
-NBEP_PRINTF(2, 3)
-static void jprintf(json_out *j, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    int k = vfprintf(j->f, fmt, ap);
-    va_end(ap);
-    if (k < 0)
-        j->bad = 1;
-    else
-        j->n += k;
-}
-
-/* `"key": ` with the separator SPEC's sample uses (", ") before every key but the first. */
-static void jkey(json_out *j, const char *key)
-{
-    jprintf(j, "%s\"%s\": ", j->keys++ ? ", " : "", key);
-}
-
-static void jstring(json_out *j, const char *key, const char *v)
-{
-    jkey(j, key);
-    jprintf(j, "\"");
-    for (const unsigned char *c = (const unsigned char *)v; *c; c++) {
-        if (*c == '"' || *c == '\\')
-            jprintf(j, "\\%c", *c);
-        else if (*c < 0x20)
-            jprintf(j, "\\u%04x", *c);
-        else
-            jprintf(j, "%c", *c);
-    }
-    jprintf(j, "\"");
-}
-
-static void jdouble(json_out *j, const char *key, double v)
-{
-    /* JSON has no inf or nan. The simulation guarantees finite numbers (it checks the state
-     * before every frame), so a non-finite value here is a bug: caught by the assertion in
-     * debug builds, written as 0 otherwise so that the summary still parses. */
-    assert(isfinite(v));
-    if (!isfinite(v))
-        v = 0.0;
-    jkey(j, key);
-    jprintf(j, "%.17g", v);
-}
-
-static void juint(json_out *j, const char *key, uint64_t v)
-{
-    jkey(j, key);
-    jprintf(j, "%" PRIu64, v);
-}
-
-static void jint(json_out *j, const char *key, int v)
-{
-    jkey(j, key);
-    jprintf(j, "%d", v);
-}
-
-int nbep_summary_write_json(const nbep_summary *s, FILE *f)
-{
-    json_out j = {f, 0, 0, 0};
-    jprintf(&j, "{");
-    jstring(&j, "format", SUMMARY_FORMAT_NAME);
-    jstring(&j, "version", NBEP_VERSION);
-    jstring(&j, "algorithm", s->algorithm);
-    jint(&j, "threads", s->threads);
-    juint(&j, "spheres", s->spheres);
-    juint(&j, "planes", s->planes);
-    juint(&j, "steps", s->steps);
-    jdouble(&j, "dt", s->dt);
-    jdouble(&j, "setup_seconds", s->setup_seconds);
-    jdouble(&j, "wall_seconds", s->wall_seconds);
-    jdouble(&j, "steps_per_second", s->steps_per_second);
-    juint(&j, "checks", s->checks);
-    juint(&j, "predictions", s->predictions);
-    juint(&j, "collisions", s->collisions);
-    juint(&j, "sphere_collisions", s->sphere_collisions);
-    juint(&j, "plane_collisions", s->plane_collisions);
-    juint(&j, "quiet_steps", s->quiet_steps);
-    jdouble(&j, "energy_initial", s->energy_initial);
-    jdouble(&j, "energy_final", s->energy_final);
-    jdouble(&j, "energy_rel_drift", s->energy_rel_drift);
-    jdouble(&j, "max_overlap", s->max_overlap);
-    jdouble(&j, "max_overlap_rel", s->max_overlap_rel);
-    juint(&j, "peak_rss_bytes", s->peak_rss_bytes);
-    jprintf(&j, "}\n");
-    return j.bad || ferror(f) ? -1 : (int)j.n;
-}
-
-char *nbep_summary_to_json(const nbep_summary *s)
-{
-    char *buf = NULL;
-    size_t len = 0;
-    FILE *f = open_memstream(&buf, &len);
-    if (!f)
-        return NULL;
-    int n = nbep_summary_write_json(s, f);
-    if (fclose(f) != 0 || n < 0) {
-        free(buf);
-        return NULL;
-    }
-    return buf;
 }
 
 /* ---- info ---------------------------------------------------------------------------------- */

@@ -398,4 +398,6 @@ void nbep_sim_summary(const nbep_sim *sim, nbep_summary *s)
     s->max_overlap = sim->max_overlap;
     s->max_overlap_rel = sim->max_overlap_rel;
     s->peak_rss_bytes = peak_rss();
+    /* pressure stays unknown (null): it is defined for fully periodic boxes only (SPEC
+     * contract 2), which this code does not have yet. */
 }

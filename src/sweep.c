@@ -39,18 +39,21 @@
 /* Run files are named with at least this many digits: run-0007.h5. */
 #define RUN_DIGITS_MIN 4
 
-/* The JSON summary's numeric fields in SPEC order (algorithm, a string, comes before them):
- * field of nbep_summary, and whether it is an integer. Drives parsing and the table. */
-#define SUMMARY_FIELDS(X)                                                                    \
-    X(threads, INT) X(spheres, INT) X(planes, INT) X(steps, INT) X(dt, REAL)                 \
-    X(setup_seconds, REAL) X(wall_seconds, REAL) X(steps_per_second, REAL) X(checks, INT)    \
-    X(predictions, INT) X(collisions, INT) X(sphere_collisions, INT)                         \
-    X(plane_collisions, INT) X(quiet_steps, INT) X(energy_initial, REAL)                     \
-    X(energy_final, REAL) X(energy_rel_drift, REAL) X(max_overlap, REAL)                     \
-    X(max_overlap_rel, REAL) X(peak_rss_bytes, INT)
-#define X_COUNT(field, kind) +1
-enum { N_SUMMARY_FIELDS = 0 SUMMARY_FIELDS(X_COUNT) };
-#undef X_COUNT
+/* The summary's columns in the sweep table: numeric ones (all but algorithm, a text) and, of
+ * those, nullable ones (they need a per-row missing flag of their own). */
+enum {
+    NUMERIC_TEXT = 0, NUMERIC_INT = 1, NUMERIC_UINT = 1, NUMERIC_REAL = 1, NUMERIC_NULLABLE = 1,
+    NULLABLE_TEXT = 0, NULLABLE_INT = 0, NULLABLE_UINT = 0, NULLABLE_REAL = 0,
+    NULLABLE_NULLABLE = 1,
+};
+#define X_NUMERIC(field, kind) +NUMERIC_##kind
+#define X_NULLABLE(field, kind) +NULLABLE_##kind
+enum {
+    N_SUMMARY_FIELDS = 0 NBEP_SUMMARY_FIELDS(X_NUMERIC),
+    N_SUMMARY_NULLABLE = 0 NBEP_SUMMARY_FIELDS(X_NULLABLE),
+};
+#undef X_NULLABLE
+#undef X_NUMERIC
 
 const char *nbep_sweep_outcome_text(nbep_sweep_outcome o)
 {
@@ -319,85 +322,6 @@ static void describe_run(const nbep_sweep_plan *p, size_t run, char *buf, size_t
 
 /* ---- reusing finished runs --------------------------------------------------------------- */
 
-/* The position of the value of "key" in a flat JSON object, or NULL. */
-static const char *json_value(const char *json, const char *key)
-{
-    size_t klen = strlen(key);
-    for (const char *q = strchr(json, '"'); q; q = strchr(q + 1, '"')) {
-        if (strncmp(q + 1, key, klen) == 0 && q[1 + klen] == '"') {
-            const char *v = q + 2 + klen;
-            while (*v == ' ')
-                v++;
-            if (*v != ':')
-                continue;
-            v++;
-            while (*v == ' ')
-                v++;
-            return v;
-        }
-    }
-    return NULL;
-}
-
-static bool json_number(const char *json, const char *key, double *out)
-{
-    const char *v = json_value(json, key);
-    char *end;
-    if (!v)
-        return false;
-    double x = strtod(v, &end);
-    if (end == v)
-        return false;
-    *out = x;
-    return true;
-}
-
-static bool json_uint(const char *json, const char *key, uint64_t *out)
-{
-    const char *v = json_value(json, key);
-    char *end;
-    if (!v || *v == '-')
-        return false;
-    errno = 0;
-    unsigned long long x = strtoull(v, &end, 10);
-    if (end == v || errno)
-        return false;
-    *out = (uint64_t)x;
-    return true;
-}
-
-bool nbep_sweep_parse_summary(const char *json, nbep_summary *sum)
-{
-    nbep_summary s;
-    memset(&s, 0, sizeof s);
-    const char *fmt = json ? json_value(json, "format") : NULL;
-    const char *alg = json ? json_value(json, "algorithm") : NULL;
-    if (!fmt || strncmp(fmt, "\"nbep-summary-1\"", 16) != 0 || !alg || *alg != '"')
-        return false;
-    size_t n = strcspn(alg + 1, "\"");
-    if (alg[1 + n] != '"' || n >= sizeof s.algorithm)
-        return false;
-    memcpy(s.algorithm, alg + 1, n);
-    uint64_t u;
-    double x;
-    bool ok = true;
-#define X_PARSE_INT(field, kind)                                                             \
-    ok = ok && json_uint(json, #field, &u);                                                  \
-    s.field = u;
-#define X_PARSE_REAL(field, kind)                                                            \
-    ok = ok && json_number(json, #field, &x);                                                \
-    s.field = x;
-#define X_PARSE(field, kind) X_PARSE_##kind(field, kind)
-    SUMMARY_FIELDS(X_PARSE)
-#undef X_PARSE
-#undef X_PARSE_REAL
-#undef X_PARSE_INT
-    if (!ok)
-        return false;
-    *sum = s;
-    return true;
-}
-
 /* Whether an override changes nothing a run computes: the thread count (SPEC: frames are
  * bitwise identical for any thread count) and the output file (the sweep names its files). */
 static bool override_is_neutral(const char *ov, size_t len)
@@ -464,7 +388,7 @@ bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_
     nbep_summary s;
     bool complete = wanted && nbep_output_sweep_read_run(path, &stored, &json, &d) == NBEP_OK &&
                     json && same_overrides(stored, wanted) &&
-                    nbep_sweep_parse_summary(json, &s) && s.steps == steps;
+                    nbep_summary_from_json(json, &s) && s.steps == steps;
     if (complete && sum)
         *sum = s;
     free(stored);
@@ -721,6 +645,8 @@ nbep_status nbep_sweep_write_summary(const nbep_sweep_plan *p, const nbep_sweep_
                                                    status file algorithm error */
     const size_t n = p->n_runs;
     const size_t n_int = N_FIXED_INT + N_SUMMARY_FIELDS, n_text = N_FIXED_TEXT + p->n_axes;
+    /* per row and nullable summary column: no summary, or null in it */
+    bool *null_cells = calloc(N_SUMMARY_NULLABLE * n + 1, sizeof *null_cells);
     table_data t = {0};
     t.n_cols = n_int + n_text + 1;   /* + seconds */
     t.cap_owned = n * (p->n_axes + 1);
@@ -734,7 +660,7 @@ nbep_status nbep_sweep_write_summary(const nbep_sweep_plan *p, const nbep_sweep_
     char *base = join_lines(p->base, p->n_base), *keys = NULL;
     nbep_status st = NBEP_ENOMEM;
     if (!t.cols || !t.ints || !t.reals || !t.texts || !t.owned || !t.no_summary || !csv || !h5 ||
-        !base)
+        !base || !null_cells)
         goto oom;
     char **key_list = calloc(p->n_axes + 1, sizeof *key_list);
     if (!key_list)
@@ -812,14 +738,27 @@ nbep_status nbep_sweep_write_summary(const nbep_sweep_plan *p, const nbep_sweep_
         t.cols[col++] = (nbep_table_column){.name = "file", .kind = NBEP_TABLE_TEXT, .s = v,
                                             .missing = t.no_summary};
     }
-    TEXT_COL("algorithm", res->summary.algorithm, t.no_summary);
+    bool *null_col = null_cells;
+#define X_COL_TEXT(field) TEXT_COL(#field, res->summary.field, t.no_summary)
 #define X_COL_INT(field) INT_COL(#field, res->summary.field, t.no_summary)
+#define X_COL_UINT(field) X_COL_INT(field)
 #define X_COL_REAL(field) REAL_COL(#field, res->summary.field, t.no_summary)
+#define X_COL_NULLABLE(field)                                                                \
+    do {                                                                                     \
+        for (size_t r = 0; r < n; r++)                                                       \
+            null_col[r] = !results[r].has_summary || !results[r].summary.field.known;        \
+        REAL_COL(#field, res->summary.field.known ? res->summary.field.value : NAN,          \
+                 null_col);                                                                  \
+        null_col += n;                                                                       \
+    } while (0)
 #define X_COL(field, kind) X_COL_##kind(field);
-    SUMMARY_FIELDS(X_COL)
+    NBEP_SUMMARY_FIELDS(X_COL)
 #undef X_COL
+#undef X_COL_NULLABLE
 #undef X_COL_REAL
+#undef X_COL_UINT
 #undef X_COL_INT
+#undef X_COL_TEXT
     TEXT_COL("error", res->error, NULL);
 #undef TEXT_COL
 #undef REAL_COL
@@ -850,6 +789,7 @@ oom:
     st = NBEP_ENOMEM;
 done:
     table_data_fini(&t);
+    free(null_cells);
     free(csv);
     free(h5);
     free(base);

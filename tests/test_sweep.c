@@ -289,7 +289,7 @@ static void test_a_summary_reads_back_field_by_field(void **state)
     char *json = nbep_summary_to_json(&s);
     assert_non_null(json);
     nbep_summary r;
-    assert_true(nbep_sweep_parse_summary(json, &r));
+    assert_true(nbep_summary_from_json(json, &r));
     assert_string_equal(r.algorithm, "seminaive");
     assert_int_equal(r.threads, 3);
     assert_int_equal(r.spheres, 4097);
@@ -299,8 +299,8 @@ static void test_a_summary_reads_back_field_by_field(void **state)
     assert_int_equal(r.peak_rss_bytes, 123456789);
     assert_true(r.dt == s.dt && r.energy_final == s.energy_final); /* %.17g round-trips */
     assert_true(r.energy_rel_drift == s.energy_rel_drift && r.max_overlap == s.max_overlap);
-    assert_false(nbep_sweep_parse_summary("{\"format\": \"nbep-summary-1\"}", &r));
-    assert_false(nbep_sweep_parse_summary("not json", &r));
+    assert_false(nbep_summary_from_json("{\"format\": \"nbep-summary-1\"}", &r));
+    assert_false(nbep_summary_from_json("not json", &r));
     free(json);
 }
 
@@ -533,7 +533,7 @@ static void test_summary_csv_has_a_row_per_run_in_run_order(void **state)
                         "wall_seconds,steps_per_second,checks,predictions,collisions,"
                         "sphere_collisions,plane_collisions,quiet_steps,energy_initial,"
                         "energy_final,energy_rel_drift,max_overlap,max_overlap_rel,"
-                        "peak_rss_bytes,error");
+                        "peak_rss_bytes,pressure,error");
     static const char *const restitution[3] = {"1.0", "1.5", "0.5"};
     char f[128], want[64];
     for (size_t run = 0; run < 6; run++) {
@@ -559,6 +559,7 @@ static void test_summary_csv_has_a_row_per_run_in_run_order(void **state)
                                         "must be in [0, 1] (got 1.5)\""));
         else
             assert_int_equal(row[strlen(row) - 1], ',');   /* empty error */
+        assert_string_equal(csv_field(row, 31, f, sizeof f), "");   /* pressure: null */
     }
     for (size_t k = 0; k < n; k++)
         free(lines[k]);
@@ -595,7 +596,7 @@ static void test_summary_h5_holds_the_same_table(void **state)
     hsize_t rows;
     assert_int_equal(H5Sget_simple_extent_dims(space, &rows, NULL), 1);
     assert_int_equal(rows, 6);
-    assert_int_equal(H5Tget_nmembers(type), 32);   /* the CSV's 32 columns */
+    assert_int_equal(H5Tget_nmembers(type), 33);   /* the CSV's 33 columns */
     char *m0 = H5Tget_member_name(type, 0), *m4 = H5Tget_member_name(type, 4);
     assert_string_equal(m0, "run");
     assert_string_equal(m4, "physics.restitution");

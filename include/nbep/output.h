@@ -1,4 +1,4 @@
-/* HDF5 output in layout "nbep-1" (SPEC) and the JSON summary. The only user of hdf5.h. One
+/* HDF5 output in layout "nbep-1" (SPEC); the JSON summary it stores is summary.h's. The only user of hdf5.h. One
  * writing thread: call only from thread 0 between barriers, or outside parallel regions.
  *
  * Beyond SPEC's table the file holds root attributes build_flags, build_commit and deck_path,
@@ -19,27 +19,7 @@
 #include "nbep/state.h"
 #include "nbep/stats.h"
 #include "nbep/status.h"
-
-/* Everything the JSON summary holds (SPEC "JSON summary"). */
-typedef struct nbep_summary {
-    char algorithm[NBEP_ALGO_NAME_MAX];
-    int threads;
-    uint64_t spheres, planes;
-    uint64_t steps;                /* steps simulated (fewer than asked when interrupted) */
-    double dt;
-    double setup_seconds, wall_seconds, steps_per_second;
-    uint64_t checks, predictions, collisions, sphere_collisions, plane_collisions;
-    uint64_t quiet_steps;
-    double energy_initial, energy_final, energy_rel_drift;
-    double max_overlap, max_overlap_rel;
-    uint64_t peak_rss_bytes;
-} nbep_summary;
-
-/* Writes the summary as one JSON object (format "nbep-summary-1", numbers as %.17g, keys in
- * SPEC order) followed by a newline. Returns bytes written or -1 on a stream error. */
-int nbep_summary_write_json(const nbep_summary *s, FILE *f);
-/* The same into a malloc'd string (caller frees); NULL on allocation failure. */
-char *nbep_summary_to_json(const nbep_summary *s);
+#include "nbep/summary.h"
 
 typedef struct nbep_output nbep_output;
 

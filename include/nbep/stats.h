@@ -1,5 +1,7 @@
-/* Counters (X-macro list: enum, /stats names and JSON keys from one place), per-thread
- * counter slots padded to a cache line, and the per-step statistics row. */
+/* Counters (X-macro list: the enum from one place), per-thread counter slots padded to a
+ * cache line, and the per-step statistics row. The JSON summary's keys come from its own
+ * table (summary.h) and the /stats columns from output.c's: both mix counters with derived
+ * values (collisions = sphere + plane collisions), and `reactions` is internal. */
 #ifndef NBEP_STATS_H
 #define NBEP_STATS_H
 
@@ -12,7 +14,8 @@
 /* checks: pair tests (naive/seminaive: overlap tests; predictive: queue slots examined by
  * find plus check() calls); predictions: contact-time computations; collisions split by kind
  * (responses applied); reactions: events the predictive algorithm reacted to, whether or not
- * a response was applied (internal: shows that a pair is reacted to exactly once) */
+ * a response was applied (internal: shows that a pair is reacted to exactly once). The second
+ * column is the counter's lowercase name, for readers of this list. */
 #define NBEP_COUNTER_LIST(X)                                                                 \
     X(CHECKS, "checks")                                                                      \
     X(PREDICTIONS, "predictions")                                                            \
@@ -26,8 +29,6 @@ enum nbep_counter {
 #undef NBEP_X_ENUM
     NBEP_COUNTER_COUNT
 };
-
-extern const char *const nbep_counter_names[NBEP_COUNTER_COUNT];
 
 /* One thread's counters, alone on its cache lines. */
 typedef struct nbep_counters {

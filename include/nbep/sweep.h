@@ -125,10 +125,6 @@ typedef struct nbep_sweep_result {
 bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_overrides,
                              uint64_t steps, nbep_summary *sum);
 
-/* Parses a JSON summary as nbep_summary_write_json writes it (format "nbep-summary-1") into
- * *sum. false when a key is missing or the text is not such a summary. */
-bool nbep_sweep_parse_summary(const char *json, nbep_summary *sum);
-
 /* How a process runs its share of a sweep. */
 typedef struct nbep_sweep_exec {
     int rank, n_ranks;               /* this process runs the runs nbep_sweep_run_owner gives */
