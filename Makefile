@@ -12,7 +12,7 @@ SAN ?=
 
 # ---- machinery ---------------------------------------------------------------------------
 VERSION := 0.1.0
-PKGS := gsl libconfig hdf5
+PKGS := gsl libconfig hdf5 jansson
 PKG_CFLAGS := $(shell pkg-config --cflags $(PKGS))
 PKG_LIBS := $(shell pkg-config --libs $(PKGS))
 

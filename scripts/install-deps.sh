@@ -9,6 +9,7 @@ packages=(
     libgsl-dev                                  # polynomial roots (quartic contact times)
     libhdf5-dev hdf5-tools                      # output (serial HDF5) and h5dump/h5ls
     libconfig-dev                               # input decks
+    libjansson-dev                              # the JSON summary (written and read back)
     libcmocka-dev                               # unit tests
     libopenmpi-dev openmpi-bin                  # parameter sweeps across ranks
     valgrind                                    # make check runs the suite under memcheck

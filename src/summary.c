@@ -1,219 +1,158 @@
-/* The JSON summary (summary.h): writer and parser, both driven by NBEP_SUMMARY_FIELDS. */
+/* The JSON summary (summary.h): writer and parser, both driven by NBEP_SUMMARY_FIELDS, on
+ * jansson (README "Build" says why jansson). The only file that includes jansson.h. */
 #include "nbep/summary.h"
 
 #include <assert.h>
-#include <errno.h>
-#include <inttypes.h>
+#include <limits.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include <jansson.h>
+
 #include "build_info.h"
-#include "nbep/compiler.h"
 
 #define SUMMARY_FORMAT_NAME "nbep-summary-1"
+/* One line with SPEC's separators (", " and ": ", jansson's default without JSON_COMPACT or
+ * JSON_INDENT), keys in insertion order, and reals with 17 significant digits so that every
+ * double reads back to the bit. */
+#define DUMP_FLAGS (JSON_PRESERVE_ORDER | JSON_REAL_PRECISION(17))
 
 /* ---- writing ------------------------------------------------------------------------------- */
 
-/* A stream, the bytes written to it so far and the keys written; bad once a write failed. */
-typedef struct json_out {
-    FILE *f;
-    long n;
-    int keys;
-    int bad;
-} json_out;
-
-NBEP_PRINTF(2, 3)
-static void jprintf(json_out *j, const char *fmt, ...)
+/* Each returns a new reference, or NULL when the value has no JSON form or memory ran out. */
+static json_t *value_TEXT(const char *v)
 {
-    va_list ap;
-    va_start(ap, fmt);
-    int k = vfprintf(j->f, fmt, ap);
-    va_end(ap);
-    if (k < 0)
-        j->bad = 1;
-    else
-        j->n += k;
+    return json_string(v);
 }
 
-/* `"key": ` with the separator SPEC's sample uses (", ") before every key but the first. */
-static void jkey(json_out *j, const char *key)
+static json_t *value_INT(int v)
 {
-    jprintf(j, "%s\"%s\": ", j->keys++ ? ", " : "", key);
+    return json_integer(v);
 }
 
-static void put_TEXT(json_out *j, const char *key, const char *v)
+static json_t *value_UINT(uint64_t v)
 {
-    jkey(j, key);
-    jprintf(j, "\"");
-    for (const unsigned char *c = (const unsigned char *)v; *c; c++) {
-        if (*c == '"' || *c == '\\')
-            jprintf(j, "\\%c", *c);
-        else if (*c < 0x20)
-            jprintf(j, "\\u%04x", *c);
-        else
-            jprintf(j, "%c", *c);
-    }
-    jprintf(j, "\"");
+    /* jansson's integers are signed 64-bit; a counter past 2^63 (centuries of stepping) has
+     * no exact JSON number here, and a rounded one would pass for exact: refuse it. */
+    return v <= (uint64_t)LLONG_MAX ? json_integer((json_int_t)v) : NULL;
 }
 
-static void put_REAL(json_out *j, const char *key, double v)
+static json_t *value_REAL(double v)
 {
     /* JSON has no inf or nan. The simulation guarantees finite numbers (it checks the state
      * before every frame), so a non-finite value here is a bug: caught by the assertion in
      * debug builds, written as 0 otherwise so that the summary still parses. */
     assert(isfinite(v));
-    if (!isfinite(v))
-        v = 0.0;
-    jkey(j, key);
-    jprintf(j, "%.17g", v);
+    return json_real(isfinite(v) ? v : 0.0);
 }
 
-static void put_NULLABLE(json_out *j, const char *key, nbep_summary_nullable v)
+static json_t *value_NULLABLE(nbep_summary_nullable v)
 {
-    if (v.known) {
-        put_REAL(j, key, v.value);
-    } else {
-        jkey(j, key);
-        jprintf(j, "null");
+    return v.known ? value_REAL(v.value) : json_null();
+}
+
+/* The summary as a jansson object, or NULL (out of memory, or a value without JSON form). */
+static json_t *summary_object(const nbep_summary *s)
+{
+    json_t *o = json_object();
+    int bad = !o;
+    bad = bad || json_object_set_new(o, "format", json_string(SUMMARY_FORMAT_NAME)) != 0;
+    bad = bad || json_object_set_new(o, "version", json_string(NBEP_VERSION)) != 0;
+#define X_SET(field, kind) bad = bad || json_object_set_new(o, #field, value_##kind(s->field)) != 0;
+    NBEP_SUMMARY_FIELDS(X_SET)
+#undef X_SET
+    if (bad) {
+        json_decref(o);
+        return NULL;
     }
-}
-
-static void put_UINT(json_out *j, const char *key, uint64_t v)
-{
-    jkey(j, key);
-    jprintf(j, "%" PRIu64, v);
-}
-
-static void put_INT(json_out *j, const char *key, int v)
-{
-    jkey(j, key);
-    jprintf(j, "%d", v);
-}
-
-int nbep_summary_write_json(const nbep_summary *s, FILE *f)
-{
-    json_out j = {f, 0, 0, 0};
-    jprintf(&j, "{");
-    put_TEXT(&j, "format", SUMMARY_FORMAT_NAME);
-    put_TEXT(&j, "version", NBEP_VERSION);
-#define X_PUT(field, kind) put_##kind(&j, #field, s->field);
-    NBEP_SUMMARY_FIELDS(X_PUT)
-#undef X_PUT
-    jprintf(&j, "}\n");
-    return j.bad || ferror(f) ? -1 : (int)j.n;
+    return o;
 }
 
 char *nbep_summary_to_json(const nbep_summary *s)
 {
-    char *buf = NULL;
-    size_t len = 0;
-    FILE *f = open_memstream(&buf, &len);
-    if (!f)
-        return NULL;
-    int n = nbep_summary_write_json(s, f);
-    if (fclose(f) != 0 || n < 0) {
-        free(buf);
-        return NULL;
+    json_t *o = summary_object(s);
+    char *text = o ? json_dumps(o, DUMP_FLAGS) : NULL;
+    json_decref(o);
+    char *line = text ? malloc(strlen(text) + 2) : NULL;
+    if (line) {
+        strcpy(line, text);
+        strcat(line, "\n");
     }
-    return buf;
+    free(text);
+    return line;
+}
+
+int nbep_summary_write_json(const nbep_summary *s, FILE *f)
+{
+    char *line = nbep_summary_to_json(s);
+    if (!line)
+        return -1;
+    size_t n = strlen(line);
+    int bad = fputs(line, f) == EOF || ferror(f) || n > INT_MAX;
+    free(line);
+    return bad ? -1 : (int)n;
 }
 
 /* ---- reading ------------------------------------------------------------------------------- */
 
-/* The position of the value of "key" in a flat JSON object, or NULL. */
-static const char *json_value(const char *json, const char *key)
+/* Each reads one value (NULL when the key is missing) and returns false for the wrong type or
+ * a value out of the field's range. */
+static bool get_TEXT(const json_t *v, char *out, size_t cap)
 {
-    size_t klen = strlen(key);
-    for (const char *q = strchr(json, '"'); q; q = strchr(q + 1, '"')) {
-        if (strncmp(q + 1, key, klen) == 0 && q[1 + klen] == '"') {
-            const char *v = q + 2 + klen;
-            while (*v == ' ')
-                v++;
-            if (*v != ':')
-                continue;
-            v++;
-            while (*v == ' ')
-                v++;
-            return v;
-        }
-    }
-    return NULL;
-}
-
-static bool get_REAL(const char *json, const char *key, double *out)
-{
-    const char *v = json_value(json, key);
-    char *end;
-    if (!v)
+    const char *text = json_string_value(v);
+    if (!text || strlen(text) >= cap)
         return false;
-    double x = strtod(v, &end);
-    if (end == v)
-        return false;
-    *out = x;
+    strcpy(out, text);
     return true;
 }
 
-static bool get_NULLABLE(const char *json, const char *key, nbep_summary_nullable *out)
+static bool get_INT(const json_t *v, int *out)
 {
-    const char *v = json_value(json, key);
-    if (v && strncmp(v, "null", 4) == 0) {
+    if (!json_is_integer(v) || json_integer_value(v) < 0 || json_integer_value(v) > INT_MAX)
+        return false;
+    *out = (int)json_integer_value(v);
+    return true;
+}
+
+static bool get_UINT(const json_t *v, uint64_t *out)
+{
+    if (!json_is_integer(v) || json_integer_value(v) < 0)
+        return false;
+    *out = (uint64_t)json_integer_value(v);
+    return true;
+}
+
+/* An integral real may have been written without a fraction ("6" by nbep 0.1.0's writer). */
+static bool get_REAL(const json_t *v, double *out)
+{
+    if (!json_is_number(v))
+        return false;
+    *out = json_number_value(v);
+    return true;
+}
+
+static bool get_NULLABLE(const json_t *v, nbep_summary_nullable *out)
+{
+    if (json_is_null(v)) {
         *out = (nbep_summary_nullable){.known = false};
         return true;
     }
     out->known = true;
-    return get_REAL(json, key, &out->value);
-}
-
-static bool get_UINT(const char *json, const char *key, uint64_t *out)
-{
-    const char *v = json_value(json, key);
-    char *end;
-    if (!v || *v == '-')
-        return false;
-    errno = 0;
-    unsigned long long x = strtoull(v, &end, 10);
-    if (end == v || errno)
-        return false;
-    *out = (uint64_t)x;
-    return true;
-}
-
-static bool get_INT(const char *json, const char *key, int *out)
-{
-    uint64_t u;
-    if (!get_UINT(json, key, &u) || u > INT32_MAX)
-        return false;
-    *out = (int)u;
-    return true;
-}
-
-/* A string without escapes (the algorithm's name) of fewer than cap bytes. */
-static bool get_string(const char *json, const char *key, char *out, size_t cap)
-{
-    const char *v = json_value(json, key);
-    if (!v || *v != '"')
-        return false;
-    size_t n = strcspn(v + 1, "\"\\");
-    if (v[1 + n] != '"' || n >= cap)
-        return false;
-    memcpy(out, v + 1, n);
-    out[n] = '\0';
-    return true;
+    return get_REAL(v, &out->value);
 }
 
 bool nbep_summary_from_json(const char *json, nbep_summary *sum)
 {
+    if (!json)
+        return false;
+    json_t *o = json_loads(json, JSON_REJECT_DUPLICATES, NULL);
+    const char *format = json_string_value(json_object_get(o, "format"));
+    bool ok = json_is_object(o) && format && strcmp(format, SUMMARY_FORMAT_NAME) == 0;
     nbep_summary s;
     memset(&s, 0, sizeof s);
-    char format[sizeof SUMMARY_FORMAT_NAME + 1];
-    if (!json || !get_string(json, "format", format, sizeof format) ||
-        strcmp(format, SUMMARY_FORMAT_NAME) != 0)
-        return false;
-    bool ok = true;
-#define X_GET_TEXT(field) get_string(json, #field, s.field, sizeof s.field)
-#define X_GET_OTHER(field, kind) get_##kind(json, #field, &s.field)
+#define X_GET_TEXT(field) get_TEXT(json_object_get(o, #field), s.field, sizeof s.field)
+#define X_GET_OTHER(field, kind) get_##kind(json_object_get(o, #field), &s.field)
 #define X_GET_INT(field) X_GET_OTHER(field, INT)
 #define X_GET_UINT(field) X_GET_OTHER(field, UINT)
 #define X_GET_REAL(field) X_GET_OTHER(field, REAL)
@@ -221,8 +160,8 @@ bool nbep_summary_from_json(const char *json, nbep_summary *sum)
 #define X_GET(field, kind) ok = ok && X_GET_##kind(field);
     NBEP_SUMMARY_FIELDS(X_GET)
 #undef X_GET
-    if (!ok)
-        return false;
-    *sum = s;
-    return true;
+    json_decref(o);
+    if (ok)
+        *sum = s;
+    return ok;
 }

@@ -131,6 +131,36 @@ static void test_text_that_is_not_a_summary_is_refused(void **state)
     free(json);
 }
 
+static void test_escapes_nested_values_and_old_integral_reals_are_read(void **state)
+{
+    (void)state;
+    nbep_summary s = every_key_set(), r;
+    snprintf(s.algorithm, sizeof s.algorithm, "a\"b\\c\td");
+    char *json = nbep_summary_to_json(&s);
+    assert_non_null(json);
+    assert_true(nbep_summary_from_json(json, &r));
+    assert_string_equal(r.algorithm, "a\"b\\c\td");
+    free(json);
+    /* A later writer may add keys, nested ones too; nbep 0.1.0 wrote an integral double
+     * without a fraction ("energy_initial": 6). */
+    s = every_key_set();
+    s.energy_initial = 6.0;
+    json = nbep_summary_to_json(&s);
+    assert_non_null(json);
+    char *at = strstr(json, "\"energy_initial\": 6.0");
+    assert_non_null(at);
+    memmove(at + strlen("\"energy_initial\": 6"), at + strlen("\"energy_initial\": 6.0"),
+            strlen(at + strlen("\"energy_initial\": 6.0")) + 1);
+    char *longer = malloc(strlen(json) + 64);
+    assert_non_null(longer);
+    snprintf(longer, strlen(json) + 64, "{\"later\": {\"a\": [1, null, \"}\"]}, %s", json + 1);
+    assert_true(nbep_summary_from_json(longer, &r));
+    assert_true(r.energy_initial == 6.0);
+    assert_same_summary(&s, &r);
+    free(longer);
+    free(json);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -138,6 +168,7 @@ int main(void)
         cmocka_unit_test(test_every_key_is_written_once_and_required_by_the_reader),
         cmocka_unit_test(test_an_unknown_pressure_is_null_and_reads_back_unknown),
         cmocka_unit_test(test_text_that_is_not_a_summary_is_refused),
+        cmocka_unit_test(test_escapes_nested_values_and_old_integral_reals_are_read),
     };
     return cmocka_run_group_tests_name("summary", tests, NULL, NULL);
 }
