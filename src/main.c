@@ -1,4 +1,4 @@
-/* nbep's entry point: command line -> scene -> run -> output; maps a status to an exit code.
+/* nbep's entry point: command line -> command (a run goes through run.h); maps a status to an exit code.
  * The only file that prints a status, installs signal handlers or calls exit. */
 #include <math.h>
 #include <assert.h>
@@ -6,7 +6,6 @@
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <errno.h>
 #include <string.h>
 #include <unistd.h>
 
@@ -15,6 +14,7 @@
 #include "build_info.h"
 #include "nbep/cli.h"
 #include "nbep/output.h"
+#include "nbep/run.h"
 #include "nbep/scene.h"
 #include "nbep/sim.h"
 #include "nbep/sweep.h"
@@ -78,105 +78,17 @@ static void print_check(const nbep_scene *sc, int threads)
            (double)frames * frame_bytes / 1e6);
 }
 
-static void print_human_summary(const nbep_summary *s, const char *file, nbep_status st)
-{
-    fprintf(stderr,
-            "nbep: %s %llu steps of %llu spheres (%s, %d thread%s) in %.3g s (%.4g steps/s); "
-            "%llu collisions; energy drift %.3g; max overlap %.3g; %s\n",
-            st == NBEP_OK ? "ran" : "stopped after", (unsigned long long)s->steps,
-            (unsigned long long)s->spheres, s->algorithm, s->threads, s->threads == 1 ? "" : "s",
-            s->wall_seconds, s->steps_per_second, (unsigned long long)s->collisions,
-            s->energy_rel_drift, s->max_overlap_rel, file);
-}
-
-/* Opens --summary FILE before anything is simulated, so that an unwritable path fails at once
- * (stdout for "-", NULL when not asked for). */
-static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
-{
-    *out = NULL;
-    if (!where)
-        return NBEP_OK;
-    *out = strcmp(where, "-") == 0 ? stdout : fopen(where, "w");
-    if (!*out)
-        NBEP_FAIL(d, NBEP_EIO, "nbep: cannot write the summary to %s: %s", where,
-                  strerror(errno));
-    return NBEP_OK;
-}
-
-static nbep_status write_summary(const nbep_summary *s, const char *where, FILE *f, nbep_diag *d)
-{
-    if (!f)
-        return NBEP_OK;
-    int bad = nbep_summary_write_json(s, f) < 0;
-    bad |= f == stdout ? fflush(f) != 0 : fclose(f) != 0;
-    if (bad)
-        NBEP_FAIL(d, NBEP_EIO, "nbep: cannot write the summary to %s", where);
-    return NBEP_OK;
-}
-
 static nbep_status cmd_run(const nbep_cli *cli, nbep_diag *d)
 {
-    nbep_scene sc;
-    nbep_status st = nbep_scene_load(cli->path, (const char *const *)cli->overrides,
-                                     cli->n_overrides, &sc, d);
-    if (st != NBEP_OK)
-        return st;
-    int threads = nbep_sim_resolve_threads(sc.threads);
-    nbep_output *out = NULL;
-    nbep_sim *sim = NULL;
-    nbep_resume res = {0};
-    FILE *summary = NULL;
-    /* --resume appends to the run it continues; output.file does not apply. */
-    const char *file = cli->resume ? cli->resume : sc.output_file;
-    /* Outputs are opened before any simulating: an unwritable path fails at once. */
-    st = open_summary(cli->summary, &summary, d);
-    if (st == NBEP_OK)
-        st = cli->resume ? nbep_output_open_resume(file, &sc, &out, &res, d)
-                         : nbep_output_create(file, &sc, threads, &out, d);
-    if (st == NBEP_OK) {
-        nbep_sim_options opt = {.threads = threads, .out = out, .stop_signal = &stop_signal,
-                                .progress = !cli->quiet, .resume = cli->resume ? &res : NULL};
-        st = nbep_sim_create(&sc, &opt, &sim, d);
-        if (st != NBEP_OK) {
-            nbep_status ignored = nbep_output_close(&out, NULL, d);
-            (void)ignored;
-            if (!cli->resume) /* nothing was simulated: leave nothing behind */
-                remove(file);
-        }
-    }
-    if (st == NBEP_OK) {
-        st = nbep_sim_run(sim, d);
-        nbep_summary sum;
-        nbep_sim_summary(sim, &sum);
-        /* after a write failure closing fails the same way: keep only the first error */
-        nbep_diag quiet;
-        nbep_diag_init(&quiet);
-        bool io_failed = st == NBEP_EIO || st == NBEP_ENOMEM;
-        nbep_status cst = nbep_output_close(&out, io_failed ? NULL : &sum, io_failed ? &quiet : d);
-        nbep_diag_fini(&quiet);
-        if (st == NBEP_OK || st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
-            st = cst == NBEP_OK ? st : cst;
-        if (!cli->quiet)
-            print_human_summary(&sum, file, st);
-        if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
-            nbep_diag_add(d, __FILE__, __LINE__,
-                          "nbep: %s by SIG%s after step %llu; every frame up to it is in %s",
-                          st == NBEP_ESIGINT ? "interrupted" : "terminated",
-                          st == NBEP_ESIGINT ? "INT" : "TERM", (unsigned long long)sum.steps,
-                          file);
-        nbep_status sst = write_summary(&sum, cli->summary, summary, d);
-        summary = NULL;
-        if (st == NBEP_OK)
-            st = sst;
-    }
-    if (summary && summary != stdout) { /* never simulated: no summary file either */
-        fclose(summary);
-        remove(cli->summary);
-    }
-    nbep_sim_destroy(&sim);
-    nbep_resume_fini(&res);
-    nbep_scene_fini(&sc);
-    return st;
+    const nbep_run_request rq = {.deck_path = cli->path,
+                                 .overrides = (const char *const *)cli->overrides,
+                                 .n_overrides = cli->n_overrides,
+                                 .resume = cli->resume,
+                                 .summary_path = cli->summary,
+                                 .stop_signal = &stop_signal,
+                                 .verbose = !cli->quiet};
+    nbep_run_result res;
+    return nbep_run(&rq, &res, d);
 }
 
 static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)

@@ -28,7 +28,7 @@
 #include "build_info.h"
 #include "nbep/output_sweep.h"
 #include "nbep/output_xdmf.h"
-#include "nbep/sim.h"
+#include "nbep/run.h"
 
 #ifdef NBEP_HAVE_MPI
 #include <mpi.h>
@@ -400,43 +400,6 @@ bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_
 
 /* ---- running ----------------------------------------------------------------------------- */
 
-/* One simulation, as `nbep run` does it but quiet, into path. *has_summary tells whether sum
- * was filled (the run started stepping). */
-static nbep_status simulate(const nbep_sweep_plan *p, const char *path, char *const *ov,
-                            size_t n_ov, const nbep_sweep_exec *ex, nbep_summary *sum,
-                            bool *has_summary, nbep_diag *d)
-{
-    nbep_scene sc;
-    nbep_status st = nbep_scene_load(p->deck_path, (const char *const *)ov, n_ov, &sc, d);
-    if (st != NBEP_OK)
-        return st;
-    int threads = nbep_sim_resolve_threads(sc.threads);
-    nbep_output *out = NULL;
-    nbep_sim *sim = NULL;
-    st = nbep_output_create(path, &sc, threads, &out, d);
-    if (st == NBEP_OK) {
-        nbep_sim_options opt = {.threads = threads, .out = out,
-                                .stop_signal = ex->stop_signal, .progress = false};
-        st = nbep_sim_create(&sc, &opt, &sim, d);
-        if (st != NBEP_OK) { /* nothing was simulated: leave nothing behind */
-            nbep_status ignored = nbep_output_close(&out, NULL, d);
-            (void)ignored;
-            remove(path);
-        }
-    }
-    if (st == NBEP_OK) {
-        st = nbep_sim_run(sim, d);
-        nbep_sim_summary(sim, sum);
-        *has_summary = true;
-        nbep_status cst = nbep_output_close(&out, sum, d);
-        if (st == NBEP_OK)
-            st = cst;
-    }
-    nbep_sim_destroy(&sim);
-    nbep_scene_fini(&sc);
-    return st;
-}
-
 /* The diag's lines joined by "; " into a fixed buffer (cut when longer). */
 static void error_text(const nbep_diag *d, char *buf, size_t len)
 {
@@ -474,7 +437,16 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
                                                  &res->summary)) {
         has_summary = reused = true;
     } else if (st == NBEP_OK) {
-        st = simulate(p, path, ov, n_ov, ex, &res->summary, &has_summary, &d);
+        /* as `nbep run` does it, but quiet and into the sweep's file */
+        const nbep_run_request rq = {.deck_path = p->deck_path,
+                                     .overrides = (const char *const *)ov,
+                                     .n_overrides = n_ov,
+                                     .output_path = path,
+                                     .stop_signal = ex->stop_signal};
+        nbep_run_result rr;
+        st = nbep_run(&rq, &rr, &d);
+        has_summary = rr.simulated;
+        res->summary = rr.summary;
         if (!has_summary) { /* a stale file of an earlier sweep must not pass for this run */
             remove(path);
             char *xmf = nbep_xdmf_path(path);

@@ -34,5 +34,18 @@ pos = f["frames/position"][:n]
 assert np.isfinite(pos).all() and n >= 2
 assert (f["frames/step"][:n] == np.arange(n) * 10).all()
 PYEOF
+# A sweep's run goes through the same pipeline as `nbep run`: its row holds that one error,
+# not the cascade of failing closes that follows it.
+rm -f "$mnt/full.h5" "$mnt/full.xmf"
+{ cat inputs/paper-box.deck
+  echo 'sweep: { replicas = 1; vary = ( { key = "run.steps"; values = [400]; } ); };'
+} >"$mnt/../diskfull-sweep.deck"
+bin/nbep sweep "$mnt/../diskfull-sweep.deck" --quiet -o "$mnt/s.h5" 2>"$mnt/../diskfull-sweep.err"
+rc=$?
+line=$(grep 'sweep run 0' "$mnt/../diskfull-sweep.err")
+check "a sweep run on a full disk fails the sweep (exit 1, got $rc)" "[ $rc = 1 ]"
+check "its row names the run's file and the reason" \
+    "echo \"\$line\" | grep -q 's.sweep/run-0000.h5: .*No space left'"
+check "with that one error, as nbep run reports it" "! echo \"\$line\" | grep -q '; nbep:'"
 [ $fail = 0 ] && echo "diskfull: all passed"
 exit $fail

@@ -1,0 +1,41 @@
+/* One run of a deck, from its path to a closed output file: load the scene, open the outputs
+ * (HDF5 file, or the run to resume; the JSON summary file), create the simulation, run it,
+ * close and write the summary. `nbep run` (main.c) and every run of `nbep sweep` (sweep.c)
+ * go through nbep_run, so that they fail, clean up and report errors the same way. */
+#ifndef NBEP_RUN_H
+#define NBEP_RUN_H
+
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "nbep/compiler.h"
+#include "nbep/status.h"
+#include "nbep/summary.h"
+
+typedef struct nbep_run_request {
+    const char *deck_path;
+    const char *const *overrides;  /* n_overrides "key = value" texts, as --set gives them */
+    size_t n_overrides;
+    const char *output_path;       /* NULL: the deck's output.file */
+    const char *resume;            /* NULL, or a run to continue (then output_path is unused) */
+    const char *summary_path;      /* NULL, "-" (stdout) or a file for the JSON summary */
+    const atomic_int *stop_signal; /* borrowed, may be NULL: nonzero = SIGINT/SIGTERM number */
+    bool verbose;                  /* progress lines and a one-line human summary on stderr */
+} nbep_run_request;
+
+typedef struct nbep_run_result {
+    bool simulated;                /* stepping began: `summary` says what was done */
+    nbep_summary summary;
+} nbep_run_result;
+
+/* Runs rq. Deck errors come before anything is written; outputs are opened before any
+ * simulating, so that an unwritable path fails at once; a run that never stepped leaves no
+ * output behind (a new file and its XDMF sidecar are removed, a resumed file is left as it
+ * was; no summary file). After a write failure the file gets nothing more and d holds that
+ * one error. A stop by signal returns NBEP_ESIGINT/NBEP_ESIGTERM with a line saying after
+ * which step and where the frames are. *res is always filled. */
+NBEP_MUST_CHECK nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res,
+                                     nbep_diag *d);
+
+#endif

@@ -1,0 +1,135 @@
+/* The run pipeline (run.h): deck -> outputs -> simulation -> closed file and summary. */
+#include "nbep/run.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "nbep/output.h"
+#include "nbep/output_xdmf.h"
+#include "nbep/scene.h"
+#include "nbep/sim.h"
+
+/* Opens the summary file before anything is simulated, so that an unwritable path fails at
+ * once (stdout for "-", NULL when not asked for). */
+static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
+{
+    *out = NULL;
+    if (!where)
+        return NBEP_OK;
+    *out = strcmp(where, "-") == 0 ? stdout : fopen(where, "w");
+    if (!*out)
+        NBEP_FAIL(d, NBEP_EIO, "nbep: cannot write the summary to %s: %s", where,
+                  strerror(errno));
+    return NBEP_OK;
+}
+
+/* Writes and closes (stdout: flushes) f; NULL f: nothing asked for. */
+static nbep_status write_summary(const nbep_summary *s, const char *where, FILE *f, nbep_diag *d)
+{
+    if (!f)
+        return NBEP_OK;
+    int bad = nbep_summary_write_json(s, f) < 0;
+    bad |= f == stdout ? fflush(f) != 0 : fclose(f) != 0;
+    if (bad)
+        NBEP_FAIL(d, NBEP_EIO, "nbep: cannot write the summary to %s", where);
+    return NBEP_OK;
+}
+
+/* A new output file that nothing was simulated into goes, with its XDMF sidecar. */
+static void remove_output(const char *path)
+{
+    remove(path);
+    char *xmf = nbep_xdmf_path(path);
+    if (xmf)
+        remove(xmf);
+    free(xmf);
+}
+
+static void print_human_summary(const nbep_summary *s, const char *file, nbep_status st)
+{
+    fprintf(stderr,
+            "nbep: %s %llu steps of %llu spheres (%s, %d thread%s) in %.3g s (%.4g steps/s); "
+            "%llu collisions; energy drift %.3g; max overlap %.3g; %s\n",
+            st == NBEP_OK ? "ran" : "stopped after", (unsigned long long)s->steps,
+            (unsigned long long)s->spheres, s->algorithm, s->threads, s->threads == 1 ? "" : "s",
+            s->wall_seconds, s->steps_per_second, (unsigned long long)s->collisions,
+            s->energy_rel_drift, s->max_overlap_rel, file);
+}
+
+/* Steps sim, closes out (with the summary unless writing already failed) and reports. */
+static nbep_status step_and_close(const nbep_run_request *rq, const char *file, nbep_sim *sim,
+                                  nbep_output **out, nbep_run_result *res, nbep_diag *d)
+{
+    nbep_status st = nbep_sim_run(sim, d);
+    nbep_sim_summary(sim, &res->summary);
+    res->simulated = true;
+    /* after a write failure closing fails the same way: keep only the first error */
+    nbep_diag quiet;
+    nbep_diag_init(&quiet);
+    bool io_failed = st == NBEP_EIO || st == NBEP_ENOMEM;
+    nbep_status cst = nbep_output_close(out, io_failed ? NULL : &res->summary,
+                                        io_failed ? &quiet : d);
+    nbep_diag_fini(&quiet);
+    if (st == NBEP_OK || st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
+        st = cst == NBEP_OK ? st : cst;
+    if (rq->verbose)
+        print_human_summary(&res->summary, file, st);
+    if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s by SIG%s after step %llu; every frame up to it is in %s",
+                      st == NBEP_ESIGINT ? "interrupted" : "terminated",
+                      st == NBEP_ESIGINT ? "INT" : "TERM",
+                      (unsigned long long)res->summary.steps, file);
+    return st;
+}
+
+nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag *d)
+{
+    memset(res, 0, sizeof *res);
+    nbep_scene sc;
+    nbep_status st = nbep_scene_load(rq->deck_path, rq->overrides, rq->n_overrides, &sc, d);
+    if (st != NBEP_OK)
+        return st;
+    const int threads = nbep_sim_resolve_threads(sc.threads);
+    nbep_output *out = NULL;
+    nbep_sim *sim = NULL;
+    nbep_resume resume = {0};
+    FILE *summary = NULL;
+    /* A resumed run appends to the file it continues; output.file does not apply. */
+    const char *file = rq->resume        ? rq->resume
+                       : rq->output_path ? rq->output_path
+                                         : sc.output_file;
+    st = open_summary(rq->summary_path, &summary, d);
+    if (st == NBEP_OK)
+        st = rq->resume ? nbep_output_open_resume(file, &sc, &out, &resume, d)
+                        : nbep_output_create(file, &sc, threads, &out, d);
+    if (st == NBEP_OK) {
+        nbep_sim_options opt = {.threads = threads, .out = out,
+                                .stop_signal = rq->stop_signal, .progress = rq->verbose,
+                                .resume = rq->resume ? &resume : NULL};
+        st = nbep_sim_create(&sc, &opt, &sim, d);
+        if (st != NBEP_OK) {
+            nbep_status ignored = nbep_output_close(&out, NULL, d);
+            (void)ignored;
+            if (!rq->resume) /* nothing was simulated: leave nothing behind */
+                remove_output(file);
+        }
+    }
+    if (st == NBEP_OK) {
+        st = step_and_close(rq, file, sim, &out, res, d);
+        nbep_status sst = write_summary(&res->summary, rq->summary_path, summary, d);
+        summary = NULL;
+        if (st == NBEP_OK)
+            st = sst;
+    }
+    if (summary && summary != stdout) { /* never simulated: no summary file either */
+        fclose(summary);
+        remove(rq->summary_path);
+    }
+    nbep_sim_destroy(&sim);
+    nbep_resume_fini(&resume);
+    nbep_scene_fini(&sc);
+    return st;
+}
