@@ -1,5 +1,5 @@
-/* nbep's entry point: command line -> command (a run goes through run.h); maps a status to an exit code.
- * The only file that prints a status, installs signal handlers or calls exit. */
+/* nbep's entry point: command line -> command (a run goes through run.h); maps a status to an
+ * exit code. The only file that prints a status, installs signal handlers or calls exit. */
 #include <math.h>
 #include <assert.h>
 #include <signal.h>

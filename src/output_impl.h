@@ -1,12 +1,103 @@
-/* Internals shared by the output module's files (output.c: the run format; output_sweep.c:
- * the sweep table). The only place besides them that sees hdf5.h. */
+/* Internals shared by the output module's files, one job each:
+ *   output_hdf5.c    HDF5 helpers: error text, id closing, attribute and row readers/writers
+ *   output.c         the run format's writer (create, frames, stats, close)
+ *   output_resume.c  reopening a run to continue it (--resume)
+ *   output_info.c    `nbep info`
+ *   output_sweep.c   the sweep's table and the reading back of a run's overrides and summary
+ * The only place besides them that sees hdf5.h. */
 #ifndef NBEP_OUTPUT_IMPL_H
 #define NBEP_OUTPUT_IMPL_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
 
 #include <hdf5.h>
 
 #include "nbep/compiler.h"
+#include "nbep/output.h"
+#include "nbep/stats.h"
 #include "nbep/status.h"
+
+/* The run file's root attribute `format`. */
+#define FORMAT_NAME "nbep-1"
+
+/* ---- the run format (output.c; read by output_resume.c) --------------------------------- */
+
+/* The /stats columns: dataset name = field of nbep_step_stats, and its type. Written straight
+ * from the caller's array of rows, one strided column at a time, so every field must be 8
+ * bytes at a multiple of 8 (checked in output.c). A column is added here and in
+ * nbep_step_stats, nowhere else. */
+#define STATS_COLUMN_LIST(X)                                                                 \
+    X(step, I64)                                                                             \
+    X(checks, U64)                                                                           \
+    X(predictions, U64)                                                                      \
+    X(collisions, U64)                                                                       \
+    X(kinetic_energy, F64)                                                                   \
+    X(potential_energy, F64)                                                                 \
+    X(max_overlap, F64)
+
+enum column_type { COL_I64, COL_U64, COL_F64 };
+
+enum {
+#define X_ENUM(field, type) STATS_COL_##field,
+    STATS_COLUMN_LIST(X_ENUM)
+#undef X_ENUM
+    STATS_N_COLUMNS
+};
+
+struct nbep__stats_column {
+    const char *name;       /* "/stats/<field>" */
+    size_t word;            /* offset of the field in 8-byte words */
+    enum column_type type;
+};
+extern const struct nbep__stats_column nbep__stats_columns[STATS_N_COLUMNS];
+
+/* The per-frame columns a predictive run keeps for --resume, in nbep_events_view's order. */
+enum { N_CK_COLUMNS = 4 };
+struct nbep__ck_column {
+    const char *name;
+    hid_t *file_type, *mem_type;   /* HDF5's type ids are variables, not constants */
+};
+extern const struct nbep__ck_column nbep__ck_columns[N_CK_COLUMNS];
+
+/* Invariants of an open nbep_output: every id field is a valid HDF5 id or H5I_INVALID_HID, so
+ * one release path closes them all; n_frames rows of each /frames dataset and n_stats rows of
+ * each /stats dataset are written; /frames@count = n_frames on disk once a frame returned. */
+struct nbep_output {
+    char *path;                    /* owned copy, for messages */
+    size_t n_spheres;
+    hid_t file;
+    hid_t summary;                 /* the /summary group; its json attribute comes at close */
+    hid_t frame_step, frame_time;  /* /frames/step, /frames/time */
+    hid_t frame_pos, frame_vel;    /* H5I_INVALID_HID when the deck did not ask for them */
+    hid_t stats[STATS_N_COLUMNS];  /* all H5I_INVALID_HID when the deck did not ask for them */
+    hid_t frames_count;            /* the `count` attribute of /frames */
+    hid_t stats_count;             /* the `count` attribute of /stats, if any */
+    hsize_t n_frames, n_stats;     /* rows written */
+    hid_t ck[N_CK_COLUMNS];        /* /checkpoint series (runs that keep event slots) */
+    bool ck_allowed;               /* a new file: the first frame with events may add them */
+    /* the XDMF sidecar (RUN.xmf) that lets ParaView and VisIt open the run: rewritten as
+     * frames come (nbep_xdmf_due) and at close; needs positions */
+    bool xmf;
+    int64_t *xmf_step;             /* owned, xmf_cap: every frame's step and time so far */
+    double *xmf_time;
+    size_t xmf_cap;
+    double xmf_last;               /* monotonic seconds of the last rewrite */
+};
+
+/* A handle for path with every id invalid; NULL (and NBEP_ENOMEM in d) when out of memory. */
+nbep_output *nbep__output_new(const char *path, size_t n_spheres, nbep_diag *d);
+/* Closes every id, ignoring errors (the failure paths; nbep_output_close checks them), frees
+ * the handle and NULLs the pointer; NULL-safe. */
+void nbep__output_release(nbep_output **op);
+/* Makes the first `frames` frames and the stats rows so far durable and counted; -1 with the
+ * reason in d on failure. */
+int nbep__output_commit(nbep_output *o, hsize_t frames, nbep_diag *d);
+/* Room for frame row f in the sidecar's lists; false when memory runs out. */
+bool nbep__output_xmf_room(nbep_output *o, size_t f);
+
+/* ---- HDF5 helpers (output_hdf5.c) ------------------------------------------------------- */
 
 /* Adds "nbep: PATH: cannot WHAT: REASON", REASON being HDF5's innermost (most specific) error,
  * or the system's text for file-open failures, on one line. Call right after the failing HDF5
@@ -19,5 +110,34 @@ void nbep__output_hdf5_fail(nbep_diag *d, const char *file, int line, const char
 void nbep__output_close_id(hid_t *id);
 /* A variable-length UTF-8 string type (caller closes), or a negative id. */
 hid_t nbep__output_utf8_string_type(void);
+/* File access for the writer (1.8 format bounds, no lock) or a reader (default bounds, a
+ * shared lock where the file system has locks); output.c's top comment says why. */
+hid_t nbep__output_fapl(bool writer);
+
+/* The readers and writers below return 0, or -1 with one line in d ("nbep: PATH: ..."). */
+/* Writes attribute name on loc: n values (a scalar when n == 0) of mem_type as file_type. */
+int nbep__output_write_attr(hid_t loc, const char *path, const char *name, hid_t file_type,
+                            hid_t mem_type, hsize_t n, const void *buf, nbep_diag *d);
+/* A UTF-8 string attribute, variable length so that h5dump prints it as text; NULL is "". */
+int nbep__output_write_string_attr(hid_t loc, const char *path, const char *name,
+                                   const char *value, nbep_diag *d);
+/* A scalar string attribute (variable or fixed length) into a malloc'd *out. */
+int nbep__output_read_string_attr(hid_t loc, const char *path, const char *name, char **out,
+                                  nbep_diag *d);
+/* A numeric attribute as mem_type into buf. */
+int nbep__output_read_attr(hid_t loc, const char *path, const char *name, hid_t mem_type,
+                           void *buf, nbep_diag *d);
+/* The first dimension of dataset name (its row count). */
+int nbep__output_dataset_rows(hid_t file, const char *path, const char *name, hsize_t *rows,
+                              nbep_diag *d);
+/* Row `row` of dataset name (rows first; the rest of its shape is per_row values: 1 for a
+ * 1-D dataset) as mem_type into buf. */
+int nbep__output_read_row(hid_t file, const char *path, const char *name, hsize_t row,
+                          hsize_t per_row, hid_t mem_type, void *buf, nbep_diag *d);
+/* Complete rows of group's datasets (its count attribute; the length of dataset when a file
+ * has no such attribute) and how many rows dataset holds past them. */
+int nbep__output_complete_rows(hid_t file, const char *path, const char *group,
+                               const char *dataset, uint64_t *complete, hsize_t *more,
+                               nbep_diag *d);
 
 #endif

@@ -1,7 +1,8 @@
 /* The HDF5 side of `nbep sweep` (output_sweep.h): the summary table and the reading back of a
  * run's overrides and summary. A separate file from output.c so that the run format's writer
- * stays one owner's; it follows output.c's rules: HDF5's printing is off, every negative id or
- * herr_t becomes NBEP_EIO with HDF5's innermost reason, every id is released on every path.
+ * stays one owner's; it follows the module's rules (output_hdf5.c): HDF5's printing is off,
+ * every negative id or herr_t becomes NBEP_EIO with HDF5's innermost reason, every id is
+ * released on every path.
  *
  * The table is one compound dataset rather than a group of column datasets because that is
  * what table readers expect (h5py structured arrays, pandas, PyTables, HDFView's table view),
@@ -18,7 +19,7 @@
 #include "build_info.h"
 #include "output_impl.h"
 
-#define FORMAT_NAME "nbep-sweep-1"
+#define SWEEP_FORMAT_NAME "nbep-sweep-1"
 
 /* Every member of a row takes one slot wide enough for any of the three kinds, so that member
  * k sits at k * sizeof(slot) in memory. */
@@ -147,7 +148,8 @@ nbep_status nbep_output_sweep_write(const char *path, const nbep_table *t,
         goto done;
     }
     made = true;
-    const nbep_table_attr format = {.name = "format", .kind = NBEP_TABLE_TEXT, .s = FORMAT_NAME};
+    const nbep_table_attr format = {.name = "format", .kind = NBEP_TABLE_TEXT,
+                                    .s = SWEEP_FORMAT_NAME};
     const nbep_table_attr version = {.name = "version", .kind = NBEP_TABLE_TEXT,
                                      .s = NBEP_VERSION};
     if (write_attr(file, tmp, &format, d) < 0 || write_attr(file, tmp, &version, d) < 0)
@@ -195,52 +197,6 @@ done:
     return st;
 }
 
-/* A scalar string attribute (variable or fixed length) as a malloc'd string; NULL on failure
- * (HDF5's reason in d). */
-static char *read_string_attr(hid_t loc, const char *path, const char *name, nbep_diag *d)
-{
-    char *value = NULL;
-    char what[128];
-    snprintf(what, sizeof what, "read attribute %s", name);
-    hid_t attr = H5Aopen(loc, name, H5P_DEFAULT);
-    hid_t ftype = attr >= 0 ? H5Aget_type(attr) : H5I_INVALID_HID;
-    hid_t mtype = H5I_INVALID_HID;
-    if (ftype < 0 || H5Tget_class(ftype) != H5T_STRING) {
-        HDF5_FAIL(d, path, "%s", what);
-        goto done;
-    }
-    htri_t variable = H5Tis_variable_str(ftype);
-    size_t size = H5Tget_size(ftype);
-    if (variable < 0 || (mtype = H5Tcopy(H5T_C_S1)) < 0 ||
-        H5Tset_size(mtype, variable ? H5T_VARIABLE : size + 1) < 0 ||
-        H5Tset_cset(mtype, H5Tget_cset(ftype)) < 0) {
-        HDF5_FAIL(d, path, "%s", what);
-        goto done;
-    }
-    if (variable) {
-        char *v = NULL;
-        if (H5Aread(attr, mtype, &v) < 0) {
-            HDF5_FAIL(d, path, "%s", what);
-            goto done;
-        }
-        value = strdup(v ? v : "");
-        H5free_memory(v);
-    } else if ((value = calloc(size + 1, 1)) && H5Aread(attr, mtype, value) < 0) {
-        HDF5_FAIL(d, path, "%s", what);
-        free(value);
-        value = NULL;
-        goto done;
-    }
-    if (!value)
-        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: no memory for attribute %s", path,
-                      name);
-done:
-    nbep__output_close_id(&mtype);
-    nbep__output_close_id(&ftype);
-    nbep__output_close_id(&attr);
-    return value;
-}
-
 nbep_status nbep_output_sweep_read_run(const char *path, char **overrides, char **summary_json,
                                        nbep_diag *d)
 {
@@ -256,7 +212,7 @@ nbep_status nbep_output_sweep_read_run(const char *path, char **overrides, char 
         HDF5_FAIL(d, path, "open the file");
         goto done;
     }
-    if (!(ov = read_string_attr(file, path, "overrides", d)))
+    if (nbep__output_read_string_attr(file, path, "overrides", &ov, d) < 0)
         goto done;
     htri_t has = H5Aexists_by_name(file, "/summary", "json", H5P_DEFAULT);
     if (has > 0) {
@@ -264,7 +220,7 @@ nbep_status nbep_output_sweep_read_run(const char *path, char **overrides, char 
             HDF5_FAIL(d, path, "open /summary");
             goto done;
         }
-        if (!(json = read_string_attr(g, path, "json", d)))
+        if (nbep__output_read_string_attr(g, path, "json", &json, d) < 0)
             goto done;
     }
     /* has < 0: no /summary group at all, which is what a run killed early leaves. */

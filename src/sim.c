@@ -38,15 +38,27 @@ int nbep_sim_resolve_threads(int requested)
 #endif
 }
 
+/* The algorithm table: the entry of the scene's run.algorithm, NULL for an unknown name. */
+static const nbep_algo *find_algo(const char *name)
+{
+    static const nbep_algo *const table[] = {&nbep__algo_naive, &nbep__algo_seminaive,
+                                             &nbep__algo_predictive};
+    for (size_t i = 0; i < sizeof table / sizeof table[0]; i++)
+        if (strcmp(table[i]->name, name) == 0)
+            return table[i];
+    return NULL;
+}
+
 size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads)
 {
     size_t n = sc->state.n, np = sc->state.n_planes;
     size_t bytes = 2 * nbep_state_bytes(n, np); /* the scene's copy and the run's */
-    if (strcmp(sc->algorithm, "predictive") == 0)
+    const nbep_algo *algo = find_algo(sc->algorithm);
+    if (algo == &nbep__algo_predictive)
         /* slot 32, response count 8, local time 8, rest 4, flag 1, 2 claims 16, reacted 8,
          * candidate 4, fired and claimed lists 16 */
         bytes += n * 97;
-    else if (strcmp(sc->algorithm, "seminaive") == 0)
+    else if (algo == &nbep__algo_seminaive)
         bytes += n * (4 * sizeof(uint64_t) + 2 * 64); /* contacts and tree nodes */
     else
         bytes += n * 4 * sizeof(uint64_t); /* contact lists */
@@ -86,16 +98,6 @@ static void energy_total(const nbep_sim *sim, double *ke, double *pe)
     }
     *ke = k;
     *pe = p;
-}
-
-static const nbep_algo *find_algo(const char *name)
-{
-    static const nbep_algo *const table[] = {&nbep__algo_naive, &nbep__algo_seminaive,
-                                             &nbep__algo_predictive};
-    for (size_t i = 0; i < sizeof table / sizeof table[0]; i++)
-        if (strcmp(table[i]->name, name) == 0)
-            return table[i];
-    return NULL;
 }
 
 nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, nbep_sim **out,

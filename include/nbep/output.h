@@ -1,5 +1,6 @@
-/* HDF5 output in layout "nbep-1" (SPEC); the JSON summary it stores is summary.h's. The only user of hdf5.h. One
- * writing thread: call only from thread 0 between barriers, or outside parallel regions.
+/* HDF5 output in layout "nbep-1" (SPEC); the JSON summary it stores is summary.h's. The
+ * output module's files (output_impl.h) are the only users of hdf5.h. One writing thread:
+ * call only from thread 0 between barriers, or outside parallel regions.
  *
  * Beyond SPEC's table the file holds root attributes build_flags, build_commit and deck_path,
  * and a u64 attribute `count` on /frames and on /stats: the rows known complete on disk. A run
@@ -49,9 +50,11 @@ typedef struct nbep_events_view {
     const int32_t *rest;
 } nbep_events_view;
 
-/* nbep_output_frame plus, when ev is not NULL and the file was made for a predictive run, the
- * frame's row of /checkpoint/{event_time,event_partner,event_kind,rest}; all rows of one frame
- * become visible together (the /frames count attribute). */
+/* nbep_output_frame plus, when ev is not NULL, the frame's row of
+ * /checkpoint/{event_time,event_partner,event_kind,rest}: a new file gets /checkpoint with its
+ * first frame when that frame has events (runs whose algorithm keeps event slots: predictive);
+ * a resumed file has it or not as it was made. All rows of one frame become visible together
+ * (the /frames count attribute). */
 NBEP_MUST_CHECK nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
                                                      const nbep_state *s,
                                                      const nbep_events_view *ev, nbep_diag *d);
@@ -71,8 +74,8 @@ void nbep_resume_fini(nbep_resume *r);
 
 /* `nbep run DECK --resume RUN.h5`: opens an existing run for appending. Checks that it is an
  * nbep-1 file of sc's spheres (same count, radii and masses) and planes, and that its frames
- * hold positions and velocities; reads its last complete frame (and, for a predictive run of a
- * predictive scene, that frame's event slots) into *r; drops rows written after that frame
+ * hold positions and velocities; reads its last complete frame (and, where the file has
+ * /checkpoint, that frame's event slots) into *r; drops rows written after that frame
  * (incomplete frames, stats rows of later steps), removes the old summary and sets the root
  * attribute `steps` to sc->steps. Frames and stats then append as after nbep_output_create.
  * NBEP_EIO for a file that cannot be read or written, NBEP_EDECK when deck and file disagree. */

@@ -1,0 +1,289 @@
+/* HDF5 helpers shared by the output module's files (output_impl.h): error text, id closing,
+ * file access properties, attribute and row readers and writers, and the library's set-up.
+ * Errors: HDF5's automatic printing is off (nbep_output_library_init); every negative id or
+ * herr_t becomes one line "nbep: PATH: cannot WHAT: REASON", REASON being the innermost entry
+ * of HDF5's error stack, captured before any cleanup call clears the stack. */
+#include <inttypes.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <hdf5.h>
+
+#include "output_impl.h"
+
+/* Longest HDF5 error description kept (they are one line; longer ones are cut). */
+#define REASON_MAX 512
+
+static herr_t innermost_cb(unsigned n, const H5E_error2_t *err, void *data)
+{
+    if (n == 0 && err->desc)
+        snprintf(data, REASON_MAX, "%s", err->desc);
+    return 0;
+}
+
+/* HDF5's reason for the failure that just happened: the innermost (most specific) entry of
+ * its error stack. File-open failures carry the system's text inside ("..., errno = 2, error
+ * message = 'No such file or directory', ..."); that text alone is what a user needs. */
+static void hdf5_reason(char *buf)
+{
+    snprintf(buf, REASON_MAX, "unknown HDF5 error");
+    if (H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, innermost_cb, buf) < 0)
+        return;
+    static const char errno_key[] = "error message = '";
+    char *m = strstr(buf, errno_key);
+    if (m) {
+        m += sizeof errno_key - 1;
+        char *end = strchr(m, '\'');
+        if (end) {
+            memmove(buf, m, (size_t)(end - m));
+            buf[end - m] = '\0';
+        }
+    }
+    for (char *c = buf; *c; c++)   /* one line: some descriptions embed newlines */
+        if (*c == '\n' || *c == '\r')
+            *c = ' ';
+}
+
+void nbep__output_hdf5_fail(nbep_diag *d, const char *file, int line, const char *path,
+                            const char *what_fmt, ...)
+{
+    char reason[REASON_MAX], what[256];
+    hdf5_reason(reason);
+    va_list ap;
+    va_start(ap, what_fmt);
+    vsnprintf(what, sizeof what, what_fmt, ap);
+    va_end(ap);
+    nbep_diag_add(d, file, line, "nbep: %s: cannot %s: %s", path, what, reason);
+}
+
+void nbep__output_close_id(hid_t *id)
+{
+    if (*id >= 0)
+        H5Idec_ref(*id);
+    *id = H5I_INVALID_HID;
+}
+
+hid_t nbep__output_utf8_string_type(void)
+{
+    hid_t t = H5Tcopy(H5T_C_S1);
+    if (t >= 0 && (H5Tset_size(t, H5T_VARIABLE) < 0 || H5Tset_cset(t, H5T_CSET_UTF8) < 0))
+        nbep__output_close_id(&t);
+    return t;
+}
+
+int nbep__output_write_attr(hid_t loc, const char *path, const char *name, hid_t file_type,
+                            hid_t mem_type, hsize_t n, const void *buf, nbep_diag *d)
+{
+    int rc = -1;
+    hid_t space = n ? H5Screate_simple(1, &n, NULL) : H5Screate(H5S_SCALAR);
+    hid_t attr = H5I_INVALID_HID;
+    if (space < 0) {
+        HDF5_FAIL(d, path, "make the dataspace of attribute %s", name);
+        goto done;
+    }
+    attr = H5Acreate2(loc, name, file_type, space, H5P_DEFAULT, H5P_DEFAULT);
+    if (attr < 0) {
+        HDF5_FAIL(d, path, "create attribute %s", name);
+        goto done;
+    }
+    if (H5Awrite(attr, mem_type, buf) < 0) {
+        HDF5_FAIL(d, path, "write attribute %s", name);
+        goto done;
+    }
+    rc = 0;
+done:
+    nbep__output_close_id(&attr);
+    nbep__output_close_id(&space);
+    return rc;
+}
+
+int nbep__output_write_string_attr(hid_t loc, const char *path, const char *name,
+                                   const char *value, nbep_diag *d)
+{
+    hid_t t = nbep__output_utf8_string_type();
+    if (t < 0) {
+        HDF5_FAIL(d, path, "make a string type for attribute %s", name);
+        return -1;
+    }
+    const char *v = value ? value : "";
+    int rc = nbep__output_write_attr(loc, path, name, t, t, 0, &v, d);
+    nbep__output_close_id(&t);
+    return rc;
+}
+
+hid_t nbep__output_fapl(bool writer)
+{
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    if (fapl < 0)
+        return fapl;
+    if (writer && H5Pset_libver_bounds(fapl, H5F_LIBVER_V18, H5F_LIBVER_V18) < 0)
+        nbep__output_close_id(&fapl);
+#if H5_VERSION_GE(1, 12, 1) || (H5_VERS_MAJOR == 1 && H5_VERS_MINOR == 10 && H5_VERS_RELEASE >= 7)
+    /* ignore_when_disabled: a reader still works where the file system has no locks. */
+    if (fapl >= 0 && H5Pset_file_locking(fapl, !writer, true) < 0)
+        nbep__output_close_id(&fapl);
+#endif
+    /* Older HDF5 cannot switch the lock off per file: HDF5_USE_FILE_LOCKING=FALSE in the
+     * environment does it there. */
+    return fapl;
+}
+
+int nbep__output_read_string_attr(hid_t loc, const char *path, const char *name, char **out,
+                                  nbep_diag *d)
+{
+    int rc = -1;
+    hid_t attr = H5Aopen(loc, name, H5P_DEFAULT);
+    hid_t ftype = H5I_INVALID_HID, mtype = H5I_INVALID_HID;
+    char *value = NULL;
+    if (attr < 0 || (ftype = H5Aget_type(attr)) < 0) {
+        HDF5_FAIL(d, path, "read attribute %s", name);
+        goto done;
+    }
+    if (H5Tget_class(ftype) != H5T_STRING) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: attribute %s is not a string", path,
+                      name);
+        goto done;
+    }
+    htri_t variable = H5Tis_variable_str(ftype);
+    size_t size = H5Tget_size(ftype);
+    mtype = H5Tcopy(H5T_C_S1);
+    if (variable < 0 || size == 0 || mtype < 0 ||
+        H5Tset_size(mtype, variable ? H5T_VARIABLE : size + 1) < 0 ||
+        H5Tset_cset(mtype, H5Tget_cset(ftype)) < 0) {
+        HDF5_FAIL(d, path, "make a string type to read attribute %s", name);
+        goto done;
+    }
+    if (variable) {
+        char *v = NULL;
+        if (H5Aread(attr, mtype, &v) < 0) {
+            HDF5_FAIL(d, path, "read attribute %s", name);
+            goto done;
+        }
+        value = strdup(v ? v : "");
+        H5free_memory(v);
+    } else if ((value = calloc(size + 1, 1)) && H5Aread(attr, mtype, value) < 0) {
+        HDF5_FAIL(d, path, "read attribute %s", name);
+        free(value);
+        value = NULL;
+        goto done;
+    }
+    if (!value) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: no memory for attribute %s", path,
+                      name);
+        goto done;
+    }
+    *out = value;
+    rc = 0;
+done:
+    nbep__output_close_id(&mtype);
+    nbep__output_close_id(&ftype);
+    nbep__output_close_id(&attr);
+    return rc;
+}
+
+int nbep__output_read_attr(hid_t loc, const char *path, const char *name, hid_t mem_type,
+                           void *buf, nbep_diag *d)
+{
+    hid_t attr = H5Aopen(loc, name, H5P_DEFAULT);
+    if (attr < 0 || H5Aread(attr, mem_type, buf) < 0) {
+        HDF5_FAIL(d, path, "read attribute %s", name);
+        nbep__output_close_id(&attr);
+        return -1;
+    }
+    nbep__output_close_id(&attr);
+    return 0;
+}
+
+int nbep__output_dataset_rows(hid_t file, const char *path, const char *name, hsize_t *rows,
+                              nbep_diag *d)
+{
+    hsize_t dims[H5S_MAX_RANK];
+    hid_t ds = H5Dopen2(file, name, H5P_DEFAULT);
+    hid_t space = ds < 0 ? H5I_INVALID_HID : H5Dget_space(ds);
+    int rank = space < 0 ? -1 : H5Sget_simple_extent_dims(space, dims, NULL);
+    if (rank < 1) {
+        HDF5_FAIL(d, path, "read the shape of %s", name);
+        rank = -1;
+    } else {
+        *rows = dims[0];
+    }
+    nbep__output_close_id(&space);
+    nbep__output_close_id(&ds);
+    return rank < 0 ? -1 : 0;
+}
+
+int nbep__output_read_row(hid_t file, const char *path, const char *name, hsize_t row,
+                          hsize_t per_row, hid_t mem_type, void *buf, nbep_diag *d)
+{
+    hsize_t dims[3] = {0, 0, 0}, start[3] = {row, 0, 0}, count[3] = {1, 0, 0};
+    int rc = -1;
+    hid_t ds = H5Dopen2(file, name, H5P_DEFAULT);
+    hid_t space = ds < 0 ? H5I_INVALID_HID : H5Dget_space(ds);
+    int rank = space < 0 ? -1 : H5Sget_simple_extent_dims(space, dims, NULL);
+    hid_t mem = H5Screate_simple(1, &per_row, NULL);
+    if (rank < 1 || rank > 3 || mem < 0) {
+        HDF5_FAIL(d, path, "read the shape of %s", name);
+        goto done;
+    }
+    hsize_t values = 1;
+    for (int k = 1; k < rank; k++)
+        values *= (count[k] = dims[k]);
+    if (values != per_row || row >= dims[0]) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s: %s has no row %llu of %llu value%s (wrong shape for this deck)",
+                      path, name, (unsigned long long)row, (unsigned long long)per_row,
+                      per_row == 1 ? "" : "s");
+        goto done;
+    }
+    if (per_row > 0 &&
+        (H5Sselect_hyperslab(space, H5S_SELECT_SET, start, NULL, count, NULL) < 0 ||
+         H5Dread(ds, mem_type, mem, space, H5P_DEFAULT, buf) < 0)) {
+        HDF5_FAIL(d, path, "read row %llu of %s", (unsigned long long)row, name);
+        goto done;
+    }
+    rc = 0;
+done:
+    nbep__output_close_id(&mem);
+    nbep__output_close_id(&space);
+    nbep__output_close_id(&ds);
+    return rc;
+}
+
+int nbep__output_complete_rows(hid_t file, const char *path, const char *group,
+                               const char *dataset, uint64_t *complete, hsize_t *more,
+                               nbep_diag *d)
+{
+    hsize_t rows;
+    if (nbep__output_dataset_rows(file, path, dataset, &rows, d) < 0)
+        return -1;
+    htri_t has = H5Aexists_by_name(file, group, "count", H5P_DEFAULT);
+    hid_t g = has > 0 ? H5Gopen2(file, group, H5P_DEFAULT) : H5I_INVALID_HID;
+    if (has < 0 || (has > 0 && g < 0)) {
+        HDF5_FAIL(d, path, "look for the count attribute of %s", group);
+        return -1;
+    }
+    uint64_t count = rows;
+    int rc = has > 0 ? nbep__output_read_attr(g, path, "count", H5T_NATIVE_UINT64, &count, d) : 0;
+    nbep__output_close_id(&g);
+    if (rc < 0)
+        return -1;
+    if (count > rows) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: %s counts %" PRIu64 " rows but %s has %llu",
+                      path, group, count, dataset, (unsigned long long)rows);
+        return -1;
+    }
+    *complete = count;
+    *more = rows - count;
+    return 0;
+}
+
+void nbep_output_library_init(void)
+{
+    /* No clean-up at exit: after a write failure (disk full) a dataset can refuse to close,
+     * and HDF5's exit handler then crashes closing it again. The process is ending anyway. */
+    H5dont_atexit();
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+}
+

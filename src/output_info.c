@@ -1,0 +1,192 @@
+/* `nbep info RUN.h5` (output.h): a run's metadata and summary, read with the HDF5 helpers of
+ * output_hdf5.c; works on interrupted runs and on runs still being written (the writer takes
+ * no lock, and only rows its `count` attributes cover are reported as complete). */
+#include <inttypes.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <hdf5.h>
+
+#include "output_impl.h"
+
+/* x with the fewest of 15, 16 or 17 significant digits that read back as x: "0.9", not
+ * "0.90000000000000002", yet two different values never print alike. */
+static const char *human_double(double x, char buf[32])
+{
+    for (int digits = 15; digits < 17; digits++) {
+        snprintf(buf, 32, "%.*g", digits, x);
+        if (strtod(buf, NULL) == x)
+            return buf;
+    }
+    snprintf(buf, 32, "%.17g", x);
+    return buf;
+}
+
+/* Everything `nbep info` prints, gathered before printing so that a bad file prints nothing
+ * but its one error line. */
+typedef struct run_info {
+    char *version, *build_flags, *build_commit, *algorithm, *overrides, *summary;
+    uint64_t steps, seed;
+    int64_t threads;
+    double dt, restitution, gravity[3];
+    hsize_t spheres, planes;
+    uint64_t frames, stats_rows;           /* complete rows: the count attributes */
+    hsize_t frames_more, stats_more;       /* rows past them, cut off by a crash */
+    bool has_stats;
+    int64_t last_step;
+    double last_time;
+} run_info;
+
+static void run_info_fini(run_info *r)
+{
+    free(r->version);
+    free(r->build_flags);
+    free(r->build_commit);
+    free(r->algorithm);
+    free(r->overrides);
+    free(r->summary);
+}
+
+/* Prints a multi-line value with every line after the first indented under the first. */
+static void print_lines(FILE *f, const char *label, const char *text)
+{
+    fprintf(f, "%-13s%s", label, text[0] ? "" : "\n");
+    for (const char *line = text; *line;) {
+        size_t len = strcspn(line, "\n");
+        fprintf(f, "%s%.*s\n", line == text ? "" : "             ", (int)len, line);
+        line += len + (line[len] == '\n');
+    }
+}
+
+static int gather_info(hid_t file, const char *path, run_info *r, nbep_diag *d)
+{
+    htri_t has = H5Aexists(file, "format");
+    if (has < 0) {
+        HDF5_FAIL(d, path, "read the root attributes");
+        return -1;
+    }
+    char *format = NULL;
+    if (!has || nbep__output_read_string_attr(file, path, "format", &format, d) < 0 ||
+        strcmp(format, FORMAT_NAME) != 0) {
+        if (!has || format)
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: %s: not an nbep-1 file (root attribute format is %s%s%s)", path,
+                          format ? "\"" : "missing", format ? format : "", format ? "\"" : "");
+        free(format);
+        return -1;
+    }
+    free(format);
+    if (nbep__output_read_string_attr(file, path, "version", &r->version, d) < 0 ||
+        nbep__output_read_string_attr(file, path, "build_flags", &r->build_flags, d) < 0 ||
+        nbep__output_read_string_attr(file, path, "build_commit", &r->build_commit, d) < 0 ||
+        nbep__output_read_string_attr(file, path, "algorithm", &r->algorithm, d) < 0 ||
+        nbep__output_read_string_attr(file, path, "overrides", &r->overrides, d) < 0 ||
+        nbep__output_read_attr(file, path, "steps", H5T_NATIVE_UINT64, &r->steps, d) < 0 ||
+        nbep__output_read_attr(file, path, "dt", H5T_NATIVE_DOUBLE, &r->dt, d) < 0 ||
+        nbep__output_read_attr(file, path, "threads", H5T_NATIVE_INT64, &r->threads, d) < 0 ||
+        nbep__output_read_attr(file, path, "seed", H5T_NATIVE_UINT64, &r->seed, d) < 0 ||
+        nbep__output_read_attr(file, path, "restitution", H5T_NATIVE_DOUBLE, &r->restitution,
+                               d) < 0 ||
+        nbep__output_read_attr(file, path, "gravity", H5T_NATIVE_DOUBLE, r->gravity, d) < 0 ||
+        nbep__output_dataset_rows(file, path, "/spheres/radius", &r->spheres, d) < 0 ||
+        nbep__output_dataset_rows(file, path, "/planes/offset", &r->planes, d) < 0 ||
+        nbep__output_complete_rows(file, path, "/frames", "/frames/step", &r->frames,
+                                   &r->frames_more, d) < 0)
+        return -1;
+    if (r->frames > 0 &&
+        (nbep__output_read_row(file, path, "/frames/step", r->frames - 1, 1, H5T_NATIVE_INT64,
+                               &r->last_step, d) < 0 ||
+         nbep__output_read_row(file, path, "/frames/time", r->frames - 1, 1, H5T_NATIVE_DOUBLE,
+                               &r->last_time, d) < 0))
+        return -1;
+    htri_t stats = H5Lexists(file, "/stats", H5P_DEFAULT);
+    if (stats < 0) {
+        HDF5_FAIL(d, path, "look for /stats");
+        return -1;
+    }
+    r->has_stats = stats > 0;
+    if (r->has_stats &&
+        nbep__output_complete_rows(file, path, "/stats", "/stats/step", &r->stats_rows,
+                                   &r->stats_more, d) < 0)
+        return -1;
+    htri_t summary = H5Aexists_by_name(file, "/summary", "json", H5P_DEFAULT);
+    if (summary < 0) {
+        HDF5_FAIL(d, path, "look for the /summary json attribute");
+        return -1;
+    }
+    if (summary > 0) {
+        hid_t g = H5Gopen2(file, "/summary", H5P_DEFAULT);
+        if (g < 0) {
+            HDF5_FAIL(d, path, "open /summary");
+            return -1;
+        }
+        int rc = nbep__output_read_string_attr(g, path, "json", &r->summary, d);
+        nbep__output_close_id(&g);
+        if (rc < 0)
+            return -1;
+    }
+    return 0;
+}
+
+nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
+{
+    hid_t fapl = nbep__output_fapl(false);
+    if (fapl < 0) {
+        HDF5_FAIL(d, path, "set up file access properties");
+        return NBEP_EIO;
+    }
+    hid_t file = H5Fopen(path, H5F_ACC_RDONLY, fapl);
+    if (file < 0) {
+        HDF5_FAIL(d, path, "open as an HDF5 file");
+        nbep__output_close_id(&fapl);
+        return NBEP_EIO;
+    }
+    nbep__output_close_id(&fapl);
+    run_info r = {0};
+    int rc = gather_info(file, path, &r, d);
+    if (H5Fclose(file) < 0 && rc == 0) {
+        HDF5_FAIL(d, path, "close the file");
+        rc = -1;
+    }
+    if (rc == 0) {
+        fprintf(f, "%-13s%s\n", "file:", path);
+        fprintf(f, "%-13s%s\n", "format:", FORMAT_NAME);
+        fprintf(f, "%-13s%s (%s, commit %s)\n", "version:", r.version, r.build_flags,
+                r.build_commit);
+        fprintf(f, "%-13s%s\n", "algorithm:", r.algorithm);
+        fprintf(f, "%-13s%llu\n", "spheres:", (unsigned long long)r.spheres);
+        fprintf(f, "%-13s%llu\n", "planes:", (unsigned long long)r.planes);
+        fprintf(f, "%-13s%" PRIu64 "\n", "steps asked:", r.steps);
+        char b0[32], b1[32], b2[32];
+        fprintf(f, "%-13s%s\n", "dt:", human_double(r.dt, b0));
+        fprintf(f, "%-13s%" PRId64 "\n", "threads:", r.threads);
+        fprintf(f, "%-13s%" PRIu64 "\n", "seed:", r.seed);
+        fprintf(f, "%-13s%s\n", "restitution:", human_double(r.restitution, b0));
+        fprintf(f, "%-13s[%s, %s, %s]\n", "gravity:", human_double(r.gravity[0], b0),
+                human_double(r.gravity[1], b1), human_double(r.gravity[2], b2));
+        if (r.overrides[0])
+            print_lines(f, "overrides:", r.overrides);
+        fprintf(f, "%-13s%" PRIu64, "frames:", r.frames);
+        if (r.frames > 0)
+            fprintf(f, " (last: step %" PRId64 ", time %s)", r.last_step,
+                    human_double(r.last_time, b0));
+        if (r.frames_more)
+            fprintf(f, ", and %llu incomplete (its write was cut short: a kill, or a full disk)",
+                    (unsigned long long)r.frames_more);
+        fprintf(f, "\n");
+        if (r.has_stats)
+            fprintf(f, "%-13s%" PRIu64 "%s\n", "stats rows:", r.stats_rows,
+                    r.stats_more ? ", and incomplete ones after them" : "");
+        else
+            fprintf(f, "%-13snone (not recorded)\n", "stats rows:");
+        if (r.summary)
+            print_lines(f, "summary:", r.summary);
+        else
+            fprintf(f, "%-13snone (run interrupted or still running)\n", "summary:");
+    }
+    run_info_fini(&r);
+    return rc == 0 ? NBEP_OK : NBEP_EIO;
+}
+

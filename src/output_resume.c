@@ -1,0 +1,252 @@
+/* `nbep run DECK --resume RUN.h5` (output.h): reopens a run for appending after its last
+ * complete frame, checking that deck and file agree, and reads that frame (and its event
+ * slots) back; the writer (output.c) then goes on as after nbep_output_create. */
+#include <inttypes.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <hdf5.h>
+
+#include "output_impl.h"
+
+void nbep_resume_fini(nbep_resume *r)
+{
+    if (!r)
+        return;
+    free(r->pos);
+    free(r->vel);
+    free(r->event_time);
+    free(r->event_partner);
+    free(r->event_kind);
+    free(r->rest);
+    memset(r, 0, sizeof *r);
+}
+
+/* Opens dataset name and cuts it to `rows` rows. */
+static int open_cut(nbep_output *o, const char *name, hsize_t rows, hid_t *out, nbep_diag *d)
+{
+    hsize_t dims[3];
+    *out = H5Dopen2(o->file, name, H5P_DEFAULT);
+    hid_t space = *out < 0 ? H5I_INVALID_HID : H5Dget_space(*out);
+    int rank = space < 0 ? -1 : H5Sget_simple_extent_dims(space, dims, NULL);
+    nbep__output_close_id(&space);
+    if (rank < 1) {
+        HDF5_FAIL(d, o->path, "open %s", name);
+        return -1;
+    }
+    dims[0] = rows;
+    if (H5Dset_extent(*out, dims) < 0) {
+        HDF5_FAIL(d, o->path, "cut %s to %llu rows", name, (unsigned long long)rows);
+        return -1;
+    }
+    return 0;
+}
+
+/* Opens the `count` attribute of group into *out (kept open for the writer). */
+static int open_count(nbep_output *o, const char *group, hid_t *out, nbep_diag *d)
+{
+    hid_t g = H5Gopen2(o->file, group, H5P_DEFAULT);
+    *out = g < 0 ? H5I_INVALID_HID : H5Aopen(g, "count", H5P_DEFAULT);
+    nbep__output_close_id(&g);
+    if (*out < 0) {
+        HDF5_FAIL(d, o->path, "open the count attribute of %s", group);
+        return -1;
+    }
+    return 0;
+}
+
+/* The same deck? Sphere and plane counts, radii and masses must match bit for bit: -2 when
+ * they do not, -1 when the file cannot be read. */
+static int same_bodies(hid_t file, const char *path, const nbep_scene *sc, nbep_diag *d)
+{
+    const nbep_state *s = &sc->state;
+    hsize_t n = 0, np = 0;
+    if (nbep__output_dataset_rows(file, path, "/spheres/radius", &n, d) < 0 ||
+        nbep__output_dataset_rows(file, path, "/planes/offset", &np, d) < 0)
+        return -1;
+    if (n != s->n || np != s->n_planes) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s holds %llu spheres and %llu planes but %s makes %zu and %zu; "
+                      "resume with the deck (and --set options) that made it",
+                      path, (unsigned long long)n, (unsigned long long)np, sc->deck_path, s->n,
+                      s->n_planes);
+        return -2;
+    }
+    double *buf = malloc((s->n ? s->n : 1) * sizeof *buf);
+    if (!buf) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory to read %s", path);
+        return -1;
+    }
+    int rc = 0;
+    const char *names[2] = {"/spheres/radius", "/spheres/mass"};
+    const double *want[2] = {s->radius, s->mass};
+    for (int k = 0; k < 2 && rc == 0; k++) {
+        hid_t ds = H5Dopen2(file, names[k], H5P_DEFAULT);
+        if (ds < 0 || (s->n && H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT,
+                                       buf) < 0)) {
+            HDF5_FAIL(d, path, "read %s", names[k]);
+            rc = -1;
+        } else if (s->n && memcmp(buf, want[k], s->n * sizeof *buf) != 0) {
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: %s: %s differ from what %s makes; resume with the deck (and "
+                          "--set options) that made it",
+                          path, names[k] + 9, sc->deck_path);
+            rc = -2;
+        }
+        nbep__output_close_id(&ds);
+    }
+    free(buf);
+    return rc;
+}
+
+nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep_output **out,
+                                    nbep_resume *r, nbep_diag *d)
+{
+    nbep_resume res = {0};
+    nbep_status st = NBEP_EIO;
+    const size_t n = sc->state.n;
+    nbep_output *o = nbep__output_new(path, n, d);
+    if (!o)
+        return NBEP_ENOMEM;
+
+    hid_t fapl = nbep__output_fapl(true);
+    o->file = fapl < 0 ? H5I_INVALID_HID : H5Fopen(path, H5F_ACC_RDWR, fapl);
+    nbep__output_close_id(&fapl);
+    if (o->file < 0) {
+        HDF5_FAIL(d, path, "open the run to resume it");
+        goto fail;
+    }
+    char *format = NULL;
+    htri_t has_format = H5Aexists(o->file, "format");
+    if (has_format <= 0 || nbep__output_read_string_attr(o->file, path, "format", &format, d) < 0 ||
+        strcmp(format, FORMAT_NAME) != 0) {
+        free(format);
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s is not an %s run file", path,
+                      FORMAT_NAME);
+        goto fail;
+    }
+    free(format);
+    int same = same_bodies(o->file, path, sc, d);
+    if (same < 0) {
+        st = same == -2 ? NBEP_EDECK : NBEP_EIO;
+        goto fail;
+    }
+    uint64_t frames;
+    hsize_t more;
+    if (nbep__output_complete_rows(o->file, path, "/frames", "/frames/step", &frames, &more, d) < 0)
+        goto fail;
+    if (frames == 0) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s has no complete frame to resume from",
+                      path);
+        goto fail;
+    }
+    if (H5Lexists(o->file, "/frames/position", H5P_DEFAULT) <= 0 ||
+        H5Lexists(o->file, "/frames/velocity", H5P_DEFAULT) <= 0) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s cannot be resumed: its frames lack positions or velocities "
+                      "(output.fields)",
+                      path);
+        st = NBEP_EDECK;
+        goto fail;
+    }
+    hsize_t last = frames - 1;
+    res.n = n;
+    res.pos = malloc((n ? n : 1) * sizeof *res.pos);
+    res.vel = malloc((n ? n : 1) * sizeof *res.vel);
+    if (!res.pos || !res.vel) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory to resume %s", path);
+        st = NBEP_ENOMEM;
+        goto fail;
+    }
+    if (nbep__output_read_row(o->file, path, "/frames/step", last, 1, H5T_NATIVE_INT64, &res.step,
+                              d) < 0 ||
+        nbep__output_read_row(o->file, path, "/frames/position", last, 3 * (hsize_t)n,
+                         H5T_NATIVE_DOUBLE, res.pos, d) < 0 ||
+        nbep__output_read_row(o->file, path, "/frames/velocity", last, 3 * (hsize_t)n,
+                         H5T_NATIVE_DOUBLE, res.vel, d) < 0)
+        goto fail;
+    /* The event slots, where the file has them; the run uses them only when its algorithm
+     * imports event slots (the algorithm table, sim.c), so a deck of another algorithm
+     * continues from positions and velocities alone. */
+    htri_t has_ck = H5Lexists(o->file, "/checkpoint", H5P_DEFAULT);
+    if (has_ck > 0) {
+        res.has_events = true;
+        res.event_time = malloc((n ? n : 1) * sizeof *res.event_time);
+        res.event_partner = malloc((n ? n : 1) * sizeof *res.event_partner);
+        res.event_kind = malloc((n ? n : 1) * sizeof *res.event_kind);
+        res.rest = malloc((n ? n : 1) * sizeof *res.rest);
+        void *cols[N_CK_COLUMNS] = {res.event_time, res.event_partner, res.event_kind, res.rest};
+        if (!res.event_time || !res.event_partner || !res.event_kind || !res.rest) {
+            nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory to resume %s", path);
+            st = NBEP_ENOMEM;
+            goto fail;
+        }
+        for (int c = 0; c < N_CK_COLUMNS; c++)
+            if (nbep__output_read_row(o->file, path, nbep__ck_columns[c].name, last, n,
+                                 *nbep__ck_columns[c].mem_type, cols[c], d) < 0)
+                goto fail;
+    }
+    /* Continue appending after the last complete frame: cut everything written past it. */
+    if (open_cut(o, "/frames/step", frames, &o->frame_step, d) < 0 ||
+        open_cut(o, "/frames/time", frames, &o->frame_time, d) < 0 ||
+        open_cut(o, "/frames/position", frames, &o->frame_pos, d) < 0 ||
+        open_cut(o, "/frames/velocity", frames, &o->frame_vel, d) < 0)
+        goto fail;
+    if (has_ck > 0)
+        for (int c = 0; c < N_CK_COLUMNS; c++)
+            if (open_cut(o, nbep__ck_columns[c].name, frames, &o->ck[c], d) < 0)
+                goto fail;
+    if (open_count(o, "/frames", &o->frames_count, d) < 0)
+        goto fail;
+    o->n_frames = frames;
+    o->xmf = true; /* resumed runs have positions */
+    if (!nbep__output_xmf_room(o, (size_t)frames)) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory to resume %s", path);
+        st = NBEP_ENOMEM;
+        goto fail;
+    }
+    for (hsize_t k = 0; k < frames; k++)
+        if (nbep__output_read_row(o->file, path, "/frames/step", k, 1, H5T_NATIVE_INT64,
+                                  &o->xmf_step[k], d) < 0 ||
+            nbep__output_read_row(o->file, path, "/frames/time", k, 1, H5T_NATIVE_DOUBLE,
+                                  &o->xmf_time[k], d) < 0)
+            goto fail;
+    if (H5Lexists(o->file, "/stats", H5P_DEFAULT) > 0) {
+        uint64_t rows;
+        if (nbep__output_complete_rows(o->file, path, "/stats", "/stats/step", &rows, &more, d) < 0)
+            goto fail;
+        /* one row per step from step 1: the rows up to the frame's step stay */
+        uint64_t keep = rows < (uint64_t)res.step ? rows : (uint64_t)res.step;
+        for (int c = 0; c < STATS_N_COLUMNS; c++)
+            if (open_cut(o, nbep__stats_columns[c].name, keep, &o->stats[c], d) < 0)
+                goto fail;
+        if (open_count(o, "/stats", &o->stats_count, d) < 0)
+            goto fail;
+        o->n_stats = keep;
+    }
+    /* The summary described the run as it ended; it is written again at the new end. */
+    o->summary = H5Gopen2(o->file, "/summary", H5P_DEFAULT);
+    if (o->summary < 0 ||
+        (H5Aexists(o->summary, "json") > 0 && H5Adelete(o->summary, "json") < 0)) {
+        HDF5_FAIL(d, path, "reset /summary");
+        goto fail;
+    }
+    hid_t steps_attr = H5Aopen(o->file, "steps", H5P_DEFAULT);
+    if (steps_attr < 0 || H5Awrite(steps_attr, H5T_NATIVE_UINT64, &sc->steps) < 0) {
+        HDF5_FAIL(d, path, "update the root attribute steps");
+        nbep__output_close_id(&steps_attr);
+        goto fail;
+    }
+    nbep__output_close_id(&steps_attr);
+    if (nbep__output_commit(o, frames, d) < 0)
+        goto fail;
+    *out = o;
+    *r = res;
+    return NBEP_OK;
+fail:
+    nbep__output_release(&o);
+    nbep_resume_fini(&res);
+    return st;
+}
