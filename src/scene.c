@@ -1,7 +1,8 @@
-/* The input deck (libconfig) -> nbep_scene. One schema table (SCENE_SCHEMA below) gives every
- * setting's path, type, default and meaning; it drives the unknown-setting check (with "did
- * you mean"), the typed getters and their range checks, --set (scene_override.c) and the
- * reference printed by nbep_scene_print_reference.
+/* The input deck (libconfig) -> nbep_scene. One schema table (SCENE_SCHEMA, scene_schema.h)
+ * gives every setting's path, type, default and meaning; it drives the unknown-setting check
+ * (with "did you mean"), the typed getters and their range checks here, --set
+ * (scene_override.c) and the reference printed by nbep_scene_print_reference
+ * (scene_schema.c).
  *
  * A load runs in one pass and reports every problem it finds, one line each, before failing:
  *   read the file -> rewrite for libconfig 1.5 (scene_text.c) -> parse -> apply overrides ->
@@ -24,110 +25,10 @@
 #include <unistd.h>
 
 #include "scene_impl.h"
+#include "scene_schema.h"
 
-/* ---- the schema ----------------------------------------------------------------------------- */
-
-enum {
-    F_REQUIRED = 1 << 0,   /* must be given when its group is */
-    F_GT0 = 1 << 1,        /* > 0 */
-    F_GE0 = 1 << 2,        /* >= 0 */
-    F_GE1 = 1 << 3,        /* >= 1 */
-    F_IN01 = 1 << 4,       /* in [0, 1] */
-    F_ONE = 1 << 5,        /* only in a single-sphere entry (one with position) */
-    F_GROUP = 1 << 6       /* only in a generated group (one with count) */
-};
-
-/* X(id, path, kind, flags, default as libconfig text or NULL, default as shown when there is
- * no literal one, meaning). "[]" in a path stands for any index of that list. */
-#define SCENE_SCHEMA(X)                                                                            \
-    X(RUN, "run", GROUP, 0, NULL, "-", "how to run")                                               \
-    X(RUN_ALGORITHM, "run.algorithm", STRING, 0, "\"predictive\"", NULL,                           \
-      "\"naive\", \"seminaive\" or \"predictive\"")                                                \
-    X(RUN_STEPS, "run.steps", INT, F_GE0, "1000", NULL,                                            \
-      "time steps after t0; frames t0..t_steps")                                                   \
-    X(RUN_DT, "run.dt", FLOAT, F_GT0, "1.0e-3", NULL, "the constant time step")                    \
-    X(RUN_THREADS, "run.threads", INT, F_GE0, "0", NULL,                                           \
-      "threads; 0: OMP_NUM_THREADS, else all cores")                                               \
-    X(RUN_SEED, "run.seed", INT, F_GE0, "1", NULL, "every random choice derives from it")          \
-    X(RUN_NEIGHBORS, "run.neighbors", STRING, 0, "\"all\"", NULL,                                  \
-      "predictive: whom a re-prediction tests: \"all\" spheres (the paper) or \"grid\" (nearby "  \
-      "cells within a time horizon)")                                                              \
-    X(PHYSICS, "physics", GROUP, 0, NULL, "-", "physics")                                          \
-    X(PHYSICS_GRAVITY, "physics.gravity", VEC3, 0, "[0.0, 0.0, 0.0]", NULL,                        \
-      "uniform acceleration of every sphere without its own")                                      \
-    X(PHYSICS_RESTITUTION, "physics.restitution", FLOAT, F_IN01, "1.0", NULL,                      \
-      "coefficient of restitution e, sphere-sphere and sphere-plane")                              \
-    X(BOX, "box", GROUP, 0, NULL, "none", "optional: six inward planes bounding [min, max]")       \
-    X(BOX_MIN, "box.min", VEC3, F_REQUIRED, NULL, "required", "lower corner")                      \
-    X(BOX_MAX, "box.max", VEC3, F_REQUIRED, NULL, "required",                                      \
-      "upper corner, above min on every axis")                                                     \
-    X(PLANES, "planes", LIST, 0, NULL, "none", "extra static planes, after the box's six")         \
-    X(PLANE_NORMAL, "planes.[].normal", VEC3, F_REQUIRED, NULL, "required",                        \
-      "points to where spheres live; normalized; not zero")                                        \
-    X(PLANE_POINT, "planes.[].point", VEC3, F_REQUIRED, NULL, "required",                          \
-      "a point of the plane")                                                                      \
-    X(SPHERES, "spheres", LIST, 0, NULL, "none",                                                   \
-      "single spheres (with position) and generated groups (with count); ids in this order")       \
-    X(SPH_POSITION, "spheres.[].position", VEC3, F_ONE, NULL, "none",                              \
-      "a single sphere's centre")                                                                  \
-    X(SPH_VELOCITY, "spheres.[].velocity", VEC3, F_ONE, "[0.0, 0.0, 0.0]", NULL,                   \
-      "a single sphere's velocity")                                                                \
-    X(SPH_COUNT, "spheres.[].count", INT, F_GE0 | F_GROUP, NULL, "none",                           \
-      "a group's number of spheres")                                                               \
-    X(SPH_RADIUS, "spheres.[].radius", FLOAT, F_REQUIRED | F_GT0, NULL, "required", "radius")      \
-    X(SPH_MASS, "spheres.[].mass", FLOAT, F_REQUIRED | F_GT0, NULL, "required", "mass")            \
-    X(SPH_ACCELERATION, "spheres.[].acceleration", VEC3, 0, NULL, "physics.gravity",               \
-      "own uniform acceleration, replacing physics.gravity")                                       \
-    X(SPH_PLACE, "spheres.[].place", STRING, F_GROUP, "\"random\"", NULL,                          \
-      "\"random\" (uniform, non-overlapping) or \"lattice\" (simple cubic)")                       \
-    X(SPH_SPEED, "spheres.[].speed", FLOAT, F_GE0 | F_GROUP, "0.0", NULL,                          \
-      "each sphere of a group moves at this speed in a random direction")                          \
-    X(SPH_REGION, "spheres.[].region", GROUP, F_GROUP, NULL, "the box",                            \
-      "where a group is placed")                                                                   \
-    X(SPH_REGION_MIN, "spheres.[].region.min", VEC3, F_REQUIRED, NULL, "required",                 \
-      "lower corner")                                                                              \
-    X(SPH_REGION_MAX, "spheres.[].region.max", VEC3, F_REQUIRED, NULL, "required",                 \
-      "upper corner, above min on every axis")                                                     \
-    X(OUTPUT, "output", GROUP, 0, NULL, "-", "output")                                             \
-    X(OUTPUT_FILE, "output.file", STRING, 0, NULL, "the deck's name with .h5",                     \
-      "HDF5 file (nbep-1 format)")                                                                 \
-    X(OUTPUT_EVERY, "output.every", INT, F_GE1, "10", NULL,                                        \
-      "a frame at step 0, every `every` steps, and the last step")                                 \
-    X(OUTPUT_FIELDS, "output.fields", STRINGS, 0, "[\"position\", \"velocity\"]", NULL,            \
-      "per-sphere fields of each frame: \"position\", \"velocity\"")                               \
-    X(OUTPUT_STATS, "output.stats", BOOL, 0, "true", NULL, "per-step counters in /stats")          \
-    X(SWEEP, "sweep", GROUP, 0, NULL, "none",                                                      \
-      "parameter study for `nbep sweep`; run and check ignore it")                                 \
-    X(SWEEP_REPLICAS, "sweep.replicas", INT, F_GE1, "1", NULL,                                     \
-      "runs of every combination of values")                                                       \
-    X(SWEEP_VARY, "sweep.vary", LIST, 0, NULL, "none", "the axes of the study")                    \
-    X(SWEEP_KEY, "sweep.vary.[].key", STRING, F_REQUIRED, NULL, "required",                        \
-      "a deck path, as --set takes it")                                                            \
-    X(SWEEP_VALUES, "sweep.vary.[].values", VALUES, F_REQUIRED, NULL, "required",                  \
-      "the values it takes (array or list)")
-
-enum schema_id {
-#define X_ENUM(id, path, kind, flags, def, def_doc, meaning) S_##id,
-    SCENE_SCHEMA(X_ENUM)
-#undef X_ENUM
-    S_COUNT
-};
-
-typedef struct schema_entry {
-    const char *path;
-    nbep__scene_kind kind;
-    unsigned flags;
-    const char *def;       /* libconfig text of the default, NULL when none is literal */
-    const char *def_doc;   /* the default as documented when def is NULL */
-    const char *meaning;
-} schema_entry;
-
-static const schema_entry schema[S_COUNT] = {
-#define X_ROW(id, path, kind, flags, def, def_doc, meaning) \
-    {path, NBEP__K_##kind, flags, def, def_doc, meaning},
-    SCENE_SCHEMA(X_ROW)
-#undef X_ROW
-};
+/* The schema table, by its short name. */
+static const schema_entry *const schema = nbep__scene_schema;
 
 static const char *const algorithm_names[] = {"naive", "seminaive", "predictive"};
 static const char *const neighbor_names[] = {"all", "grid"};
@@ -138,195 +39,6 @@ enum { N_ALGORITHMS = 3, N_PLACES = 2, N_FIELDS = 2 };
 /* Spheres' own arrays plus what the algorithms allocate per sphere (event slot, reacted tag,
  * BVH leaf, frame buffers): a deliberately round upper estimate for the memory check. */
 enum { WORKSPACE_BYTES_PER_SPHERE = 200 };
-
-/* Concrete paths are short ("sweep.vary.[12].values"); longer user names are cut in messages. */
-enum { PATH_LEN = 256 };
-
-/* snprintf into a path buffer. Paths longer than PATH_LEN only come from long misspelt names
- * and are cut; the format-truncation warning is therefore not wanted here. */
-static void cut_printf(char *out, size_t len, const char *fmt, ...) NBEP_PRINTF(3, 4);
-static void cut_printf(char *out, size_t len, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(out, len, fmt, ap);
-    va_end(ap);
-}
-
-static const char *leaf_of(const char *path)
-{
-    const char *dot = strrchr(path, '.');
-    return dot ? dot + 1 : path;
-}
-
-static int schema_find(const char *abstract)
-{
-    for (int id = 0; id < S_COUNT; id++)
-        if (strcmp(schema[id].path, abstract) == 0)
-            return id;
-    return -1;
-}
-
-/* The schema path of a concrete path: every "[N]" becomes "[]". False on bad syntax. */
-static bool abstract_of(const char *path, char *out, size_t len)
-{
-    size_t o = 0;
-    bool seg_start = true;
-    for (const char *p = path; *p; p++) {
-        if (o + 3 >= len)
-            return false;
-        if (seg_start && *p == '[') {
-            const char *q = p + 1;
-            while (*q >= '0' && *q <= '9')
-                q++;
-            if (q == p + 1 || *q != ']')
-                return false;
-            out[o++] = '[';
-            out[o++] = ']';
-            p = q;
-            seg_start = false;
-            continue;
-        }
-        if (*p == '.') {
-            if (seg_start)
-                return false;
-            seg_start = true;
-        } else {
-            seg_start = false;
-        }
-        out[o++] = *p;
-    }
-    out[o] = '\0';
-    return o > 0 && !seg_start;
-}
-
-static bool kind_is_container(nbep__scene_kind k)
-{
-    return k == NBEP__K_LIST || k == NBEP__K_VEC3 || k == NBEP__K_STRINGS || k == NBEP__K_VALUES;
-}
-
-static bool schema_kind_abstract(const char *abstract, nbep__scene_kind *kind, bool *element)
-{
-    int id = schema_find(abstract);
-    if (id >= 0) {
-        *kind = schema[id].kind;
-        *element = false;
-        return true;
-    }
-    size_t n = strlen(abstract);
-    if (n > 3 && strcmp(abstract + n - 3, ".[]") == 0) {
-        char parent[PATH_LEN];
-        memcpy(parent, abstract, n - 3);
-        parent[n - 3] = '\0';
-        id = schema_find(parent);
-        if (id >= 0 && kind_is_container(schema[id].kind)) {
-            *kind = schema[id].kind;
-            *element = true;
-            return true;
-        }
-    }
-    return false;
-}
-
-bool nbep__scene_schema_kind(const char *path, nbep__scene_kind *kind, bool *element)
-{
-    char abstract[PATH_LEN];
-    return abstract_of(path, abstract, sizeof abstract) &&
-           schema_kind_abstract(abstract, kind, element);
-}
-
-/* A close known path for an unknown one: the first unknown name is compared with its known
- * siblings (a typo: physics.gravty -> physics.gravity), else, when it is the last name, with
- * every setting of that exact name elsewhere (a misplaced one: run.gravity -> physics.gravity). */
-static bool suggest(const char *path, char *out, size_t len)
-{
-    char known_c[PATH_LEN] = "", known_a[PATH_LEN] = "";
-    const char *p = path;
-    while (*p) {
-        const char *dot = strchr(p, '.');
-        size_t seg_len = dot ? (size_t)(dot - p) : strlen(p);
-        if (seg_len == 0 || seg_len >= PATH_LEN)
-            return false;
-        char seg[PATH_LEN], cand_c[PATH_LEN], cand_a[PATH_LEN];
-        memcpy(seg, p, seg_len);
-        seg[seg_len] = '\0';
-        cut_printf(cand_c, sizeof cand_c, "%s%s%s", known_c, *known_c ? "." : "", seg);
-        nbep__scene_kind kind;
-        bool element;
-        if (abstract_of(cand_c, cand_a, sizeof cand_a) &&
-            schema_kind_abstract(cand_a, &kind, &element)) {
-            memcpy(known_c, cand_c, sizeof known_c);
-            memcpy(known_a, cand_a, sizeof known_a);
-            p += seg_len + (dot != NULL);
-            continue;
-        }
-        if (seg[0] == '[')
-            return false;
-        const char *rest = dot ? dot : "";
-        /* A typo: at most a third of the name's letters wrong (one for short names). */
-        size_t limit = seg_len / 3 > 1 ? seg_len / 3 : 1, best = SIZE_MAX;
-        int best_id = -1;
-        for (int id = 0; id < S_COUNT; id++) {
-            const char *leaf = leaf_of(schema[id].path);
-            size_t parent_len = (size_t)(leaf - schema[id].path);
-            parent_len -= parent_len > 0;
-            if (parent_len != strlen(known_a) || strncmp(schema[id].path, known_a, parent_len))
-                continue;
-            size_t dist = nbep__scene_edit_distance(seg, leaf);
-            /* A cut-short name (phys for physics) counts as a typo too. */
-            if (seg_len >= 3 && strncmp(leaf, seg, seg_len) == 0 && limit < dist)
-                dist = limit;
-            if (dist <= limit && dist < best) {
-                best = dist;
-                best_id = id;
-            }
-        }
-        if (best_id >= 0) {
-            cut_printf(out, len, "%s%s%s%s", known_c, *known_c ? "." : "",
-                     leaf_of(schema[best_id].path), rest);
-            return nbep__scene_schema_kind(out, &kind, &element);
-        }
-        if (*rest)
-            return false;
-        for (int id = 0; id < S_COUNT; id++)
-            if (strcmp(leaf_of(schema[id].path), seg) == 0 && !strstr(schema[id].path, "[]")) {
-                snprintf(out, len, "%s", schema[id].path);
-                return true;
-            }
-        return false;
-    }
-    return false;
-}
-
-void nbep__scene_unknown_text(const char *path, nbep__strbuf *b)
-{
-    char s[PATH_LEN];
-    nbep__strbuf_add(b, "unknown setting %s", path);
-    if (suggest(path, s, sizeof s))
-        nbep__strbuf_add(b, " (did you mean %s?)", s);
-}
-
-/* ---- messages ------------------------------------------------------------------------------- */
-
-void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char *file, int line,
-                       const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    char msg[1024];
-    vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
-    const char *ov = NULL;
-    unsigned at = 0;
-    for (const config_setting_t *t = s; t && !ov && !at; t = config_setting_parent(t)) {
-        ov = config_setting_get_hook(t);
-        at = config_setting_source_line(t);
-    }
-    if (ov)
-        nbep_diag_add(c->d, file, line, "--set %s: %s", ov, msg);
-    else
-        nbep_diag_add(c->d, file, line, "%s:%u: %s", c->deck, at ? at : 1u, msg);
-}
 
 #define ERR(L, s, ...) NBEP__SCENE_ERR(&(L)->c, (s), __VA_ARGS__)
 
@@ -562,7 +274,7 @@ static void check_known(load *L, const config_setting_t *group, const char *pref
         char path_c[PATH_LEN], path_a[PATH_LEN];
         path_join(path_c, prefix_c, config_setting_name(m));
         path_join(path_a, prefix_a, config_setting_name(m));
-        int id = schema_find(path_a);
+        int id = nbep__scene_schema_find(path_a);
         if (id < 0) {
             nbep__strbuf b = {0};
             nbep__scene_unknown_text(path_c, &b);
@@ -1217,58 +929,4 @@ void nbep_scene_count_pairs(const nbep_state *s, uint64_t *quadratic, uint64_t *
     }
     *quadratic = same;
     *quartic = all - same;
-}
-
-/* ---- reference ------------------------------------------------------------------------------ */
-
-static const char *kind_name(nbep__scene_kind k)
-{
-    switch (k) {
-    case NBEP__K_GROUP: return "group";
-    case NBEP__K_LIST: return "list of groups";
-    case NBEP__K_STRING: return "string";
-    case NBEP__K_INT: return "integer";
-    case NBEP__K_FLOAT: return "number";
-    case NBEP__K_BOOL: return "true/false";
-    case NBEP__K_VEC3: return "[x, y, z]";
-    case NBEP__K_STRINGS: return "array of strings";
-    case NBEP__K_VALUES: return "array or list";
-    }
-    return "?";
-}
-
-void nbep_scene_print_reference(FILE *f)
-{
-    fprintf(f, "| path | type | default | meaning |\n| --- | --- | --- | --- |\n");
-    for (int id = 0; id < S_COUNT; id++) {
-        const schema_entry *e = &schema[id];
-        fprintf(f, "| `");
-        for (const char *p = e->path; *p; p++) {
-            if (p[0] == '[' && p[1] == ']') {
-                fputs("[i]", f);
-                p++;
-            } else {
-                fputc(*p, f);
-            }
-        }
-        fprintf(f, "` | %s | ", kind_name(e->kind));
-        if (e->def)
-            fprintf(f, "`%s`", e->def);
-        else
-            fprintf(f, "%s", e->def_doc);
-        fprintf(f, " | %s", e->meaning);
-        if (e->flags & F_GT0)
-            fprintf(f, "; > 0");
-        if (e->flags & F_GE0)
-            fprintf(f, "; >= 0");
-        if (e->flags & F_GE1)
-            fprintf(f, "; >= 1");
-        if (e->flags & F_IN01)
-            fprintf(f, "; in [0, 1]");
-        if (e->flags & F_ONE)
-            fprintf(f, "; single sphere only");
-        if (e->flags & F_GROUP)
-            fprintf(f, "; generated group only");
-        fprintf(f, " |\n");
-    }
 }

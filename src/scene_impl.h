@@ -1,6 +1,9 @@
-/* Internals shared by the scene module's files: scene.c (schema, parsing, validation),
- * scene_text.c (text helpers around libconfig), scene_override.c (--set) and scene_place.c
- * (generated groups and the overlap check). Nothing here is used outside the scene module. */
+/* Internals shared by the scene module's files: scene.c (parsing, validation),
+ * scene_schema.c/.h (the schema table and its queries), scene_text.c (messages and text
+ * helpers around libconfig), scene_override.c (--set) and scene_place.c (generated groups and
+ * the overlap check). Calls go one way: scene.c -> override, place, schema, text;
+ * override -> schema, text; schema -> text; place -> text. Nothing here is used outside the
+ * scene module. */
 #ifndef NBEP_SCENE_IMPL_H
 #define NBEP_SCENE_IMPL_H
 
@@ -23,7 +26,8 @@ typedef struct nbep__scene_ctx {
 } nbep__scene_ctx;
 
 /* Adds "WHERE: message" for setting s, WHERE being "deck:line" or, for a setting an override
- * made (its libconfig hook holds the override text), "--set PATH=VALUE". file/line are ours. */
+ * made (its libconfig hook holds the override text), "--set PATH=VALUE". file/line are ours.
+ * In scene_text.c. */
 void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char *file, int line,
                        const char *fmt, ...) NBEP_PRINTF(5, 6);
 #define NBEP__SCENE_ERR(c, s, ...) nbep__scene_error((c), (s), __FILE__, __LINE__, __VA_ARGS__)
@@ -57,7 +61,7 @@ void nbep__scene_describe(const config_setting_t *s, nbep__strbuf *b);
 /* Optimal-string-alignment edit distance (insert, delete, substitute, swap neighbours). */
 size_t nbep__scene_edit_distance(const char *a, const char *b);
 
-/* ---- schema queries (scene.c) --------------------------------------------------------------- */
+/* ---- schema queries (scene_schema.c) ------------------------------------------------------ */
 
 typedef enum nbep__scene_kind {
     NBEP__K_GROUP,     /* { ... } */

@@ -422,3 +422,25 @@ size_t nbep__scene_edit_distance(const char *a, const char *b)
     free(row);
     return dist;
 }
+
+/* ---- messages ------------------------------------------------------------------------------- */
+
+void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char *file, int line,
+                       const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    char msg[1024];
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    const char *ov = NULL;
+    unsigned at = 0;
+    for (const config_setting_t *t = s; t && !ov && !at; t = config_setting_parent(t)) {
+        ov = config_setting_get_hook(t);
+        at = config_setting_source_line(t);
+    }
+    if (ov)
+        nbep_diag_add(c->d, file, line, "--set %s: %s", ov, msg);
+    else
+        nbep_diag_add(c->d, file, line, "%s:%u: %s", c->deck, at ? at : 1u, msg);
+}

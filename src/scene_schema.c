@@ -1,0 +1,225 @@
+/* The deck's schema table (scene_schema.h) and what only reads it: the schema kind of a
+ * concrete path, the "did you mean" suggestion for an unknown one, and the reference that
+ * `nbep --help-deck` prints. */
+#include "nbep/scene.h"
+
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "scene_schema.h"
+
+const schema_entry nbep__scene_schema[S_COUNT] = {
+#define X_ROW(id, path, kind, flags, def, def_doc, meaning) \
+    {path, NBEP__K_##kind, flags, def, def_doc, meaning},
+    SCENE_SCHEMA(X_ROW)
+#undef X_ROW
+};
+
+
+/* The table, by its short name (as scene.c reads it). */
+static const schema_entry *const schema = nbep__scene_schema;
+
+/* ---- path queries ------------------------------------------------------------------------- */
+
+int nbep__scene_schema_find(const char *abstract)
+{
+    for (int id = 0; id < S_COUNT; id++)
+        if (strcmp(schema[id].path, abstract) == 0)
+            return id;
+    return -1;
+}
+
+/* The schema path of a concrete path: every "[N]" becomes "[]". False on bad syntax. */
+static bool abstract_of(const char *path, char *out, size_t len)
+{
+    size_t o = 0;
+    bool seg_start = true;
+    for (const char *p = path; *p; p++) {
+        if (o + 3 >= len)
+            return false;
+        if (seg_start && *p == '[') {
+            const char *q = p + 1;
+            while (*q >= '0' && *q <= '9')
+                q++;
+            if (q == p + 1 || *q != ']')
+                return false;
+            out[o++] = '[';
+            out[o++] = ']';
+            p = q;
+            seg_start = false;
+            continue;
+        }
+        if (*p == '.') {
+            if (seg_start)
+                return false;
+            seg_start = true;
+        } else {
+            seg_start = false;
+        }
+        out[o++] = *p;
+    }
+    out[o] = '\0';
+    return o > 0 && !seg_start;
+}
+
+static bool kind_is_container(nbep__scene_kind k)
+{
+    return k == NBEP__K_LIST || k == NBEP__K_VEC3 || k == NBEP__K_STRINGS || k == NBEP__K_VALUES;
+}
+
+static bool schema_kind_abstract(const char *abstract, nbep__scene_kind *kind, bool *element)
+{
+    int id = nbep__scene_schema_find(abstract);
+    if (id >= 0) {
+        *kind = schema[id].kind;
+        *element = false;
+        return true;
+    }
+    size_t n = strlen(abstract);
+    if (n > 3 && strcmp(abstract + n - 3, ".[]") == 0) {
+        char parent[PATH_LEN];
+        memcpy(parent, abstract, n - 3);
+        parent[n - 3] = '\0';
+        id = nbep__scene_schema_find(parent);
+        if (id >= 0 && kind_is_container(schema[id].kind)) {
+            *kind = schema[id].kind;
+            *element = true;
+            return true;
+        }
+    }
+    return false;
+}
+
+bool nbep__scene_schema_kind(const char *path, nbep__scene_kind *kind, bool *element)
+{
+    char abstract[PATH_LEN];
+    return abstract_of(path, abstract, sizeof abstract) &&
+           schema_kind_abstract(abstract, kind, element);
+}
+
+/* A close known path for an unknown one: the first unknown name is compared with its known
+ * siblings (a typo: physics.gravty -> physics.gravity), else, when it is the last name, with
+ * every setting of that exact name elsewhere (a misplaced one: run.gravity -> physics.gravity). */
+static bool suggest(const char *path, char *out, size_t len)
+{
+    char known_c[PATH_LEN] = "", known_a[PATH_LEN] = "";
+    const char *p = path;
+    while (*p) {
+        const char *dot = strchr(p, '.');
+        size_t seg_len = dot ? (size_t)(dot - p) : strlen(p);
+        if (seg_len == 0 || seg_len >= PATH_LEN)
+            return false;
+        char seg[PATH_LEN], cand_c[PATH_LEN], cand_a[PATH_LEN];
+        memcpy(seg, p, seg_len);
+        seg[seg_len] = '\0';
+        cut_printf(cand_c, sizeof cand_c, "%s%s%s", known_c, *known_c ? "." : "", seg);
+        nbep__scene_kind kind;
+        bool element;
+        if (abstract_of(cand_c, cand_a, sizeof cand_a) &&
+            schema_kind_abstract(cand_a, &kind, &element)) {
+            memcpy(known_c, cand_c, sizeof known_c);
+            memcpy(known_a, cand_a, sizeof known_a);
+            p += seg_len + (dot != NULL);
+            continue;
+        }
+        if (seg[0] == '[')
+            return false;
+        const char *rest = dot ? dot : "";
+        /* A typo: at most a third of the name's letters wrong (one for short names). */
+        size_t limit = seg_len / 3 > 1 ? seg_len / 3 : 1, best = SIZE_MAX;
+        int best_id = -1;
+        for (int id = 0; id < S_COUNT; id++) {
+            const char *leaf = leaf_of(schema[id].path);
+            size_t parent_len = (size_t)(leaf - schema[id].path);
+            parent_len -= parent_len > 0;
+            if (parent_len != strlen(known_a) || strncmp(schema[id].path, known_a, parent_len))
+                continue;
+            size_t dist = nbep__scene_edit_distance(seg, leaf);
+            /* A cut-short name (phys for physics) counts as a typo too. */
+            if (seg_len >= 3 && strncmp(leaf, seg, seg_len) == 0 && limit < dist)
+                dist = limit;
+            if (dist <= limit && dist < best) {
+                best = dist;
+                best_id = id;
+            }
+        }
+        if (best_id >= 0) {
+            cut_printf(out, len, "%s%s%s%s", known_c, *known_c ? "." : "",
+                     leaf_of(schema[best_id].path), rest);
+            return nbep__scene_schema_kind(out, &kind, &element);
+        }
+        if (*rest)
+            return false;
+        for (int id = 0; id < S_COUNT; id++)
+            if (strcmp(leaf_of(schema[id].path), seg) == 0 && !strstr(schema[id].path, "[]")) {
+                snprintf(out, len, "%s", schema[id].path);
+                return true;
+            }
+        return false;
+    }
+    return false;
+}
+
+void nbep__scene_unknown_text(const char *path, nbep__strbuf *b)
+{
+    char s[PATH_LEN];
+    nbep__strbuf_add(b, "unknown setting %s", path);
+    if (suggest(path, s, sizeof s))
+        nbep__strbuf_add(b, " (did you mean %s?)", s);
+}
+
+/* ---- the reference (--help-deck) ---------------------------------------------------------- */
+
+static const char *kind_name(nbep__scene_kind k)
+{
+    switch (k) {
+    case NBEP__K_GROUP: return "group";
+    case NBEP__K_LIST: return "list of groups";
+    case NBEP__K_STRING: return "string";
+    case NBEP__K_INT: return "integer";
+    case NBEP__K_FLOAT: return "number";
+    case NBEP__K_BOOL: return "true/false";
+    case NBEP__K_VEC3: return "[x, y, z]";
+    case NBEP__K_STRINGS: return "array of strings";
+    case NBEP__K_VALUES: return "array or list";
+    }
+    return "?";
+}
+
+void nbep_scene_print_reference(FILE *f)
+{
+    fprintf(f, "| path | type | default | meaning |\n| --- | --- | --- | --- |\n");
+    for (int id = 0; id < S_COUNT; id++) {
+        const schema_entry *e = &schema[id];
+        fprintf(f, "| `");
+        for (const char *p = e->path; *p; p++) {
+            if (p[0] == '[' && p[1] == ']') {
+                fputs("[i]", f);
+                p++;
+            } else {
+                fputc(*p, f);
+            }
+        }
+        fprintf(f, "` | %s | ", kind_name(e->kind));
+        if (e->def)
+            fprintf(f, "`%s`", e->def);
+        else
+            fprintf(f, "%s", e->def_doc);
+        fprintf(f, " | %s", e->meaning);
+        if (e->flags & F_GT0)
+            fprintf(f, "; > 0");
+        if (e->flags & F_GE0)
+            fprintf(f, "; >= 0");
+        if (e->flags & F_GE1)
+            fprintf(f, "; >= 1");
+        if (e->flags & F_IN01)
+            fprintf(f, "; in [0, 1]");
+        if (e->flags & F_ONE)
+            fprintf(f, "; single sphere only");
+        if (e->flags & F_GROUP)
+            fprintf(f, "; generated group only");
+        fprintf(f, " |\n");
+    }
+}

@@ -1,0 +1,134 @@
+/* The deck's schema, shared by the scene module's files (scene_impl.h lists them): one table
+ * (SCENE_SCHEMA) gives every setting's path, type, default and meaning. scene_schema.c holds
+ * the table and what only reads it (path queries, "did you mean", the --help-deck reference);
+ * scene.c (parsing) and scene_override.c (--set) use it; it uses only scene_text.c. */
+#ifndef NBEP_SCENE_SCHEMA_H
+#define NBEP_SCENE_SCHEMA_H
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "scene_impl.h"
+
+enum {
+    F_REQUIRED = 1 << 0,   /* must be given when its group is */
+    F_GT0 = 1 << 1,        /* > 0 */
+    F_GE0 = 1 << 2,        /* >= 0 */
+    F_GE1 = 1 << 3,        /* >= 1 */
+    F_IN01 = 1 << 4,       /* in [0, 1] */
+    F_ONE = 1 << 5,        /* only in a single-sphere entry (one with position) */
+    F_GROUP = 1 << 6       /* only in a generated group (one with count) */
+};
+
+/* X(id, path, kind, flags, default as libconfig text or NULL, default as shown when there is
+ * no literal one, meaning). "[]" in a path stands for any index of that list. */
+#define SCENE_SCHEMA(X)                                                                            \
+    X(RUN, "run", GROUP, 0, NULL, "-", "how to run")                                               \
+    X(RUN_ALGORITHM, "run.algorithm", STRING, 0, "\"predictive\"", NULL,                           \
+      "\"naive\", \"seminaive\" or \"predictive\"")                                                \
+    X(RUN_STEPS, "run.steps", INT, F_GE0, "1000", NULL,                                            \
+      "time steps after t0; frames t0..t_steps")                                                   \
+    X(RUN_DT, "run.dt", FLOAT, F_GT0, "1.0e-3", NULL, "the constant time step")                    \
+    X(RUN_THREADS, "run.threads", INT, F_GE0, "0", NULL,                                           \
+      "threads; 0: OMP_NUM_THREADS, else all cores")                                               \
+    X(RUN_SEED, "run.seed", INT, F_GE0, "1", NULL, "every random choice derives from it")          \
+    X(RUN_NEIGHBORS, "run.neighbors", STRING, 0, "\"all\"", NULL,                                  \
+      "predictive: whom a re-prediction tests: \"all\" spheres (the paper) or \"grid\" (nearby "  \
+      "cells within a time horizon)")                                                              \
+    X(PHYSICS, "physics", GROUP, 0, NULL, "-", "physics")                                          \
+    X(PHYSICS_GRAVITY, "physics.gravity", VEC3, 0, "[0.0, 0.0, 0.0]", NULL,                        \
+      "uniform acceleration of every sphere without its own")                                      \
+    X(PHYSICS_RESTITUTION, "physics.restitution", FLOAT, F_IN01, "1.0", NULL,                      \
+      "coefficient of restitution e, sphere-sphere and sphere-plane")                              \
+    X(BOX, "box", GROUP, 0, NULL, "none", "optional: six inward planes bounding [min, max]")       \
+    X(BOX_MIN, "box.min", VEC3, F_REQUIRED, NULL, "required", "lower corner")                      \
+    X(BOX_MAX, "box.max", VEC3, F_REQUIRED, NULL, "required",                                      \
+      "upper corner, above min on every axis")                                                     \
+    X(PLANES, "planes", LIST, 0, NULL, "none", "extra static planes, after the box's six")         \
+    X(PLANE_NORMAL, "planes.[].normal", VEC3, F_REQUIRED, NULL, "required",                        \
+      "points to where spheres live; normalized; not zero")                                        \
+    X(PLANE_POINT, "planes.[].point", VEC3, F_REQUIRED, NULL, "required",                          \
+      "a point of the plane")                                                                      \
+    X(SPHERES, "spheres", LIST, 0, NULL, "none",                                                   \
+      "single spheres (with position) and generated groups (with count); ids in this order")       \
+    X(SPH_POSITION, "spheres.[].position", VEC3, F_ONE, NULL, "none",                              \
+      "a single sphere's centre")                                                                  \
+    X(SPH_VELOCITY, "spheres.[].velocity", VEC3, F_ONE, "[0.0, 0.0, 0.0]", NULL,                   \
+      "a single sphere's velocity")                                                                \
+    X(SPH_COUNT, "spheres.[].count", INT, F_GE0 | F_GROUP, NULL, "none",                           \
+      "a group's number of spheres")                                                               \
+    X(SPH_RADIUS, "spheres.[].radius", FLOAT, F_REQUIRED | F_GT0, NULL, "required", "radius")      \
+    X(SPH_MASS, "spheres.[].mass", FLOAT, F_REQUIRED | F_GT0, NULL, "required", "mass")            \
+    X(SPH_ACCELERATION, "spheres.[].acceleration", VEC3, 0, NULL, "physics.gravity",               \
+      "own uniform acceleration, replacing physics.gravity")                                       \
+    X(SPH_PLACE, "spheres.[].place", STRING, F_GROUP, "\"random\"", NULL,                          \
+      "\"random\" (uniform, non-overlapping) or \"lattice\" (simple cubic)")                       \
+    X(SPH_SPEED, "spheres.[].speed", FLOAT, F_GE0 | F_GROUP, "0.0", NULL,                          \
+      "each sphere of a group moves at this speed in a random direction")                          \
+    X(SPH_REGION, "spheres.[].region", GROUP, F_GROUP, NULL, "the box",                            \
+      "where a group is placed")                                                                   \
+    X(SPH_REGION_MIN, "spheres.[].region.min", VEC3, F_REQUIRED, NULL, "required",                 \
+      "lower corner")                                                                              \
+    X(SPH_REGION_MAX, "spheres.[].region.max", VEC3, F_REQUIRED, NULL, "required",                 \
+      "upper corner, above min on every axis")                                                     \
+    X(OUTPUT, "output", GROUP, 0, NULL, "-", "output")                                             \
+    X(OUTPUT_FILE, "output.file", STRING, 0, NULL, "the deck's name with .h5",                     \
+      "HDF5 file (nbep-1 format)")                                                                 \
+    X(OUTPUT_EVERY, "output.every", INT, F_GE1, "10", NULL,                                        \
+      "a frame at step 0, every `every` steps, and the last step")                                 \
+    X(OUTPUT_FIELDS, "output.fields", STRINGS, 0, "[\"position\", \"velocity\"]", NULL,            \
+      "per-sphere fields of each frame: \"position\", \"velocity\"")                               \
+    X(OUTPUT_STATS, "output.stats", BOOL, 0, "true", NULL, "per-step counters in /stats")          \
+    X(SWEEP, "sweep", GROUP, 0, NULL, "none",                                                      \
+      "parameter study for `nbep sweep`; run and check ignore it")                                 \
+    X(SWEEP_REPLICAS, "sweep.replicas", INT, F_GE1, "1", NULL,                                     \
+      "runs of every combination of values")                                                       \
+    X(SWEEP_VARY, "sweep.vary", LIST, 0, NULL, "none", "the axes of the study")                    \
+    X(SWEEP_KEY, "sweep.vary.[].key", STRING, F_REQUIRED, NULL, "required",                        \
+      "a deck path, as --set takes it")                                                            \
+    X(SWEEP_VALUES, "sweep.vary.[].values", VALUES, F_REQUIRED, NULL, "required",                  \
+      "the values it takes (array or list)")
+
+enum schema_id {
+#define X_ENUM(id, path, kind, flags, def, def_doc, meaning) S_##id,
+    SCENE_SCHEMA(X_ENUM)
+#undef X_ENUM
+    S_COUNT
+};
+
+typedef struct schema_entry {
+    const char *path;
+    nbep__scene_kind kind;
+    unsigned flags;
+    const char *def;       /* libconfig text of the default, NULL when none is literal */
+    const char *def_doc;   /* the default as documented when def is NULL */
+    const char *meaning;
+} schema_entry;
+
+extern const schema_entry nbep__scene_schema[S_COUNT];
+/* The id of a schema path ("spheres.[].radius"), -1 when there is none. */
+int nbep__scene_schema_find(const char *abstract);
+
+/* Concrete paths are short ("sweep.vary.[12].values"); longer user names are cut in messages. */
+enum { PATH_LEN = 256 };
+
+/* snprintf into a path buffer. Paths longer than PATH_LEN only come from long misspelt names
+ * and are cut; the format-truncation warning is therefore not wanted here. */
+NBEP_PRINTF(3, 4)
+static inline void cut_printf(char *out, size_t len, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(out, len, fmt, ap);
+    va_end(ap);
+}
+
+/* The last name of a path: "spheres.[].radius" -> "radius". */
+static inline const char *leaf_of(const char *path)
+{
+    const char *dot = strrchr(path, '.');
+    return dot ? dot + 1 : path;
+}
+
+#endif
