@@ -27,13 +27,14 @@
 
 int nbep_sim_resolve_threads(int requested)
 {
+#ifdef _OPENMP
     if (requested > 0)
         return requested;
-#ifdef _OPENMP
     /* omp_get_max_threads honours OMP_NUM_THREADS and defaults to the available cores. */
     int n = omp_get_max_threads();
     return n > 0 ? n : 1;
 #else
+    (void)requested; /* a serial build (make OMP=0) runs one thread whatever was asked */
     return 1;
 #endif
 }
@@ -112,11 +113,7 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for a run");
     sim->scene = sc;
     sim->opt = *opt;
-#ifdef _OPENMP
-    sim->nt = opt->threads > 0 ? opt->threads : 1;
-#else
-    sim->nt = 1; /* a serial build (make OMP=0) runs one thread whatever was asked */
-#endif
+    sim->nt = nbep_sim_resolve_threads(opt->threads); /* already resolved: the same count */
     sim->step_first = opt->resume ? (uint64_t)opt->resume->step + 1 : 1;
     sim->step_end = sc->steps;
     sim->dt = sc->dt;

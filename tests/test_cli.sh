@@ -89,5 +89,13 @@ check "--summary unwritable: one line on stderr that names the path" \
     "one_line && grep -qF '$tmp/plain-file/summary.json' '$tmp/stderr'"
 check "--summary unwritable: no output file left" "[ ! -e '$tmp/with-summary.h5' ]"
 
+# ---- threads: what runs, in a serial build too -------------------------------------------------
+# make OMP=0 builds run one thread whatever -t asks; nbep check says what the run will use.
+want=4
+if "$nbep" --version | grep -q 'OMP=0'; then want=1; fi
+run_nbep check "$tmp/group.deck" -t 4
+check "nbep check -t 4 says $want thread(s), what this build runs" \
+    "grep -Eq '^algorithm: .*, $want threads?\$' '$tmp/stdout'"
+
 [ $fail = 0 ] && echo "cli: all passed"
 exit $fail

@@ -22,7 +22,7 @@ typedef nbep_status (*nbep_frame_fn)(void *ctx, int64_t step, const nbep_state *
                                      nbep_diag *d);
 
 typedef struct nbep_sim_options {
-    int threads;                    /* resolved thread count >= 1 */
+    int threads;                    /* nbep_sim_resolve_threads' count (resolved again here) */
     nbep_output *out;               /* borrowed, may be NULL: frames and stats go there */
     nbep_frame_fn on_frame;         /* may be NULL: called after `out` got the frame */
     void *on_frame_ctx;
@@ -56,8 +56,10 @@ const nbep_state *nbep_sim_state(const nbep_sim *sim);
  * frame's output buffers (an estimate for `nbep check`; within a few percent). */
 size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads);
 
-/* The thread count a scene's `threads` setting resolves to: n > 0 as is; 0 ->
- * OMP_NUM_THREADS if set, else the cores available. */
+/* The thread count a scene's `threads` setting resolves to, which is what a run uses: n > 0
+ * as is; 0 -> OMP_NUM_THREADS if set, else the cores available; always 1 in a serial build
+ * (make OMP=0). The one place a count is resolved: the run's file, its summary and
+ * `nbep check` all show this number. */
 int nbep_sim_resolve_threads(int requested);
 
 #endif
