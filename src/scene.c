@@ -504,7 +504,16 @@ static void parse_spheres(load *L, const config_setting_t *root, const nbep_scen
     const config_setting_t *list = NULL;
     *out = NULL;
     *n = 0;
-    if (get_aggregate(L, root, "", S_SPHERES, &list) != GOT)
+    got g = get_aggregate(L, root, "", S_SPHERES, &list);
+    /* No `spheres` at all is almost always a mistake (an empty or truncated file, the list
+     * misnamed or commented out) that would otherwise run every step of nothing and exit 0;
+     * a scene without spheres has to be asked for with an explicit empty list. */
+    if (g == NONE)
+        nbep_diag_add(L->c.d, __FILE__, __LINE__,
+                      "%s: no spheres: the deck has no `spheres` list (write `spheres = ();` "
+                      "for a scene without spheres)",
+                      L->c.deck);
+    if (g != GOT)
         return;
     size_t len = (size_t)config_setting_length(list);
     nbep__scene_entry *e = calloc(len ? len : 1, sizeof *e);

@@ -50,8 +50,9 @@ enum {
       "points to where spheres live; normalized; not zero")                                        \
     X(PLANE_POINT, "planes.[].point", VEC3, F_REQUIRED, NULL, "required",                          \
       "a point of the plane")                                                                      \
-    X(SPHERES, "spheres", LIST, 0, NULL, "none",                                                   \
-      "single spheres (with position) and generated groups (with count); ids in this order")       \
+    X(SPHERES, "spheres", LIST, 0, NULL, "required",                                               \
+      "single spheres (with position) and generated groups (with count); ids in this order; "      \
+      "`spheres = ();` for a scene without spheres (a deck without the list is an error)")         \
     X(SPH_POSITION, "spheres.[].position", VEC3, F_ONE, NULL, "none",                              \
       "a single sphere's centre")                                                                  \
     X(SPH_VELOCITY, "spheres.[].velocity", VEC3, F_ONE, "[0.0, 0.0, 0.0]", NULL,                   \

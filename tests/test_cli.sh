@@ -89,6 +89,18 @@ check "--summary unwritable: one line on stderr that names the path" \
     "one_line && grep -qF '$tmp/plain-file/summary.json' '$tmp/stderr'"
 check "--summary unwritable: no output file left" "[ ! -e '$tmp/with-summary.h5' ]"
 
+# ---- a deck without spheres ------------------------------------------------------------------
+: >"$tmp/empty.deck"
+run_nbep run "$tmp/empty.deck" --quiet -o "$tmp/empty.h5" --summary "$tmp/empty.json"
+check "an empty deck: exit 2 (got $rc)" "[ $rc = 2 ]"
+check "an empty deck: one line on stderr that names the deck" \
+    "one_line && grep -qF '$tmp/empty.deck: no spheres' '$tmp/stderr'"
+check "an empty deck: nothing written" "[ ! -e '$tmp/empty.h5' ] && [ ! -e '$tmp/empty.json' ]"
+echo 'spheres = (); run: { steps = 3; };' >"$tmp/no-spheres.deck"
+run_nbep run "$tmp/no-spheres.deck" --quiet -o "$tmp/no-spheres.h5"
+check "spheres = (); asks for an empty scene: it runs (exit 0, got $rc)" \
+    "[ $rc = 0 ] && [ -e '$tmp/no-spheres.h5' ]"
+
 # ---- threads: what runs, in a serial build too -------------------------------------------------
 # make OMP=0 builds run one thread whatever -t asks; nbep check says what the run will use.
 want=4

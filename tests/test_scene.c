@@ -202,7 +202,8 @@ static void test_output_file_defaults_to_the_deck_name_with_h5_here(void **state
 {
     fixture *f = *state;
     char buf[256];
-    const char *text = "# a good deck\nbox: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n";
+    const char *text = "# a good deck\nbox: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+                       "spheres = ();\n";
     const struct {
         const char *name, *output;
     } cases[] = {{"scene_box.deck", "scene_box.h5"},
@@ -879,6 +880,40 @@ static void test_sweep_values_apply_as_overrides(void **state)
     assert_string_equal(f->sc.algorithm, "predictive");
 }
 
+/* A deck without a `spheres` list (an empty file; a deck cut short) is a deck error; an
+ * explicitly empty list is a scene without spheres. */
+static void test_a_deck_without_spheres_is_an_error_naming_the_deck(void **state)
+{
+    fixture *f = *state;
+    char buf[256], expected[512];
+    const char *texts[] = {"", "# a comment and nothing else\n",
+                           "run: { steps = 10; };\nbox: { min = [0.0, 0.0, 0.0]; "
+                           "max = [1.0, 1.0, 1.0]; };\n"};
+    for (size_t k = 0; k < sizeof texts / sizeof *texts; k++) {
+        const char *deck = write_deck("scene_no_spheres.deck", texts[k], buf, sizeof buf);
+        LOAD_FAILS(f, NBEP_EDECK, deck);
+        snprintf(expected, sizeof expected,
+                 "%s: no spheres: the deck has no `spheres` list (write `spheres = ();` for a "
+                 "scene without spheres)",
+                 deck);
+        ASSERT_DIAG(&f->d, expected);
+        nbep_diag_fini(&f->d);
+        nbep_diag_init(&f->d);
+    }
+}
+
+static void test_an_explicitly_empty_sphere_list_is_a_scene_without_spheres(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    LOAD_OK(f, write_deck("scene_empty_list.deck",
+                          "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+                          "spheres = ();\n",
+                          buf, sizeof buf));
+    assert_int_equal(f->sc.state.n, 0);
+    assert_int_equal(f->sc.state.n_planes, 6);
+}
+
 static void test_sweep_key_must_be_a_known_path(void **state)
 {
     fixture *f = *state;
@@ -886,7 +921,7 @@ static void test_sweep_key_must_be_a_known_path(void **state)
     const char *deck = write_deck("scene_sweep_bad.deck",
                                   "# a sweep over a misspelt key\n"
                                   "sweep: { vary = ( { key = \"physics.gravty\"; "
-                                  "values = [1]; } ); };\n",
+                                  "values = [1]; } ); };\nspheres = ();\n",
                                   buf, sizeof buf);
     LOAD_FAILS(f, NBEP_EDECK, deck);
     char expected[512];
@@ -1001,6 +1036,8 @@ int main(void)
         T(test_sweep_group_is_parsed_into_replicas_and_axes),
         T(test_sweep_values_apply_as_overrides),
         T(test_sweep_key_must_be_a_known_path),
+        T(test_a_deck_without_spheres_is_an_error_naming_the_deck),
+        T(test_an_explicitly_empty_sphere_list_is_a_scene_without_spheres),
         T(test_reference_mentions_every_setting),
         T(test_fini_is_safe_on_a_zeroed_scene_and_twice),
         T(test_fuzz_string_in_place_of_a_name_is_a_syntax_error_at_its_line),
