@@ -68,8 +68,8 @@ fi
 
 # ---- build ----------------------------------------------------------------------------------
 # The parser's sources only (no OpenMP, HDF5 or GSL needed): the deck module and what it uses.
-src=(src/scene.c src/scene_override.c src/scene_place.c src/scene_text.c src/state.c
-     src/util.c src/status.c)
+src=(src/scene.c src/scene_override.c src/scene_place.c src/scene_schema.c src/scene_text.c
+     src/state.c src/util.c src/status.c)
 cflags=(-std=c11 -D_POSIX_C_SOURCE=200809L -g -O1 -fno-omit-frame-pointer
         -fsanitize=address,undefined -fno-sanitize-recover=all -ffp-contract=off
         -Wall -Wextra -Iinclude -Isrc)

@@ -15,8 +15,8 @@ out=build-tsan
 mkdir -p "$out"
 make -s build/build_info.h
 cflags="-std=c11 -D_POSIX_C_SOURCE=200809L -O1 -g -fopenmp=libomp -fsanitize=thread
-        -ffp-contract=off -Iinclude -Isrc -Itests -Ibuild $(pkg-config --cflags gsl libconfig hdf5)"
-libs="$(pkg-config --libs gsl libconfig hdf5 cmocka) -lm -lpthread -fopenmp=libomp
+        -ffp-contract=off -Iinclude -Isrc -Itests -Ibuild $(pkg-config --cflags gsl libconfig hdf5 jansson)"
+libs="$(pkg-config --libs gsl libconfig hdf5 jansson cmocka) -lm -lpthread -fopenmp=libomp
       -fsanitize=thread -L${llvm}lib -Wl,-rpath,${llvm}lib"
 srcs=$(ls src/*.c | grep -v -e '^src/main.c$' -e '^src/sweep.c$')
 fail=0
