@@ -29,7 +29,8 @@ for sig in TERM INT; do
         "grep -q '\"steps\": [1-9]' '$tmp/info-$sig'"
     check "SIG$sig writes the JSON summary" "grep -q nbep-summary-1 '$tmp/summary-$sig.json'"
     check "SIG$sig says so on stderr" "grep -q 'stopped after' '$tmp/stderr-$sig' || grep -qi 'interrupt\\|terminat' '$tmp/stderr-$sig'"
-    check "SIG$sig: that is the only line on stderr (got \$(wc -l < '$tmp/stderr-$sig'))" "[ \$(wc -l < '$tmp/stderr-$sig') = 1 ]"
+    lines=$(wc -l < "$tmp/stderr-$sig")
+    check "SIG$sig: that is the only line on stderr (got $lines)" "[ $lines = 1 ]"
 done
 [ $fail = 0 ] && echo "signals: all passed"
 exit $fail
