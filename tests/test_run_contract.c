@@ -218,6 +218,40 @@ static void test_naive_checks_every_pair_and_every_sphere_plane_once_per_step(vo
     }
 }
 
+/* ---- simultaneous events sharing a sphere ------------------------------------------------ */
+
+/* A and C close on B at rest from both sides, mirror images of each other, so both contacts
+ * come at exactly the same time and share B. Each sphere may take part in one reaction at a
+ * time (paper: the claim); reacting to both at once from B's old velocity would lose momentum.
+ * Equal masses, e = 1: the binary collisions in turn hand the motion through, ending with A and
+ * C flying apart at -v and +v and B at rest; momentum 0 and energy m v^2 throughout. */
+static void test_two_contacts_at_the_same_time_on_one_sphere_keep_momentum(void **state)
+{
+    (void)state;
+    for (int nt = 1; nt <= 2; nt++) {
+        const double v = 1.5, r = 0.1, m = 2.0;
+        nbep_scene *sc = nbep_test_scene_new(3, 0, "predictive", 100, 1e-3);
+        const nbep_vec3 a0 = {0, 0, 0};
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){-0.3, 0, 0}, (nbep_vec3){v, 0, 0}, r, m, a0);
+        nbep_test_set_sphere(sc, 1, (nbep_vec3){0, 0, 0}, (nbep_vec3){0, 0, 0}, r, m, a0);
+        nbep_test_set_sphere(sc, 2, (nbep_vec3){0.3, 0, 0}, (nbep_vec3){-v, 0, 0}, r, m, a0);
+        seen f = {0};
+        nbep_summary s = run(sc, nt, &f);
+        assert_true(s.sphere_collisions >= 2);
+        /* final frame's velocities: momentum 0, energy m v^2, and the outcome above; round-off
+         * of a few responses: 1e-12 of v */
+        const nbep_vec3 *vel = f.vel;
+        double px = m * (vel[0].x + vel[1].x + vel[2].x);
+        assert_close(px, 0.0, 0.0, 1e-12 * m * v);
+        assert_close(s.energy_final, m * v * v, 1e-12, 0.0);
+        assert_close(vel[0].x, -v, 0.0, 1e-12 * v);
+        assert_close(vel[1].x, 0.0, 0.0, 1e-12 * v);
+        assert_close(vel[2].x, v, 0.0, 1e-12 * v);
+        free(f.vel);
+        nbep_test_scene_free(&sc);
+    }
+}
+
 /* ---- grid mode --------------------------------------------------------------------------- */
 
 /* run.neighbors = "grid" tests only the partners that can reach a sphere before the horizon.
@@ -271,6 +305,7 @@ int main(void)
         cmocka_unit_test(test_energy_drift_is_recomputed_from_the_first_and_last_frames),
         cmocka_unit_test(test_quiet_steps_are_the_steps_where_no_velocity_changed),
         cmocka_unit_test(test_naive_checks_every_pair_and_every_sphere_plane_once_per_step),
+        cmocka_unit_test(test_two_contacts_at_the_same_time_on_one_sphere_keep_momentum),
         cmocka_unit_test(test_grid_mode_keeps_overlaps_at_round_off_with_speeds_over_two_decades),
         cmocka_unit_test(test_grid_mode_keeps_overlaps_at_round_off_with_equal_fast_speeds),
     };
