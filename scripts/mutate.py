@@ -138,7 +138,7 @@ def test_path(name):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--jobs", type=int, default=2, help="make -j per build (default 2)")
-    ap.add_argument("--timeout", type=int, default=300, help="seconds per test program")
+    ap.add_argument("--timeout", type=int, default=120, help="seconds per test program")
     ap.add_argument("--only", default="", help="comma-separated mutant ids")
     ap.add_argument("--list", action="store_true", help="list the mutants and exit")
     ap.add_argument("--keep", action="store_true", help="keep the scratch copy")
