@@ -44,11 +44,11 @@ MUTANTS = [
     ("quad-root-sign", "src/predict.c", "return c / (-b + sqrt(disc));",
      "return c / (-b - sqrt(disc));", PRED, None),
     ("quad-miss", "src/predict.c", "if (!(disc >= 0.0))\n        return NBEP_NEVER;                      /* they miss */",
-     "if (!(disc >= -1e-300))\n        return NBEP_NEVER;                      /* they miss */", PRED,
-     "disc >= -1e-300 differs from disc >= 0 only for |disc| < 1e-300, where sqrt(disc) underflows to 0 either way and the root is c/-b"),
+     "if (!(disc > 0.0))\n        return NBEP_NEVER;                      /* they miss */", PRED,
+     "differs only when disc is exactly 0: a pair that touches for one instant with no normal "
+     "velocity, to which the response gives no impulse (c = 0), so no velocity or counter changes"),
     ("quad-receding", "src/predict.c", "if (!(b < 0.0))\n        return NBEP_NEVER;                      /* receding or at rest */",
-     "if (!(b <= 0.0))\n        return NBEP_NEVER;                      /* receding or at rest */", PRED,
-     "b == 0 reaches disc = vs - |dp x dv|^2 = |dv|^2 (sigma^2 - |dp|^2) < 0 while apart: NEVER either way; touching returns 0 only when closing, and b == 0 then goes c <= 0 -> 0.0 (a grazing pair at contact), which the all-pairs loop also treats as touching"),
+     "if (!(b <= 0.0))\n        return NBEP_NEVER;                      /* receding or at rest */", PRED, None),
     ("plane-root", "src/predict.c", "return 2.0 * gap / (-vn + sqrt(disc));",
      "return gap / (-vn + sqrt(disc));", PRED, None),
     ("plane-comeback", "src/predict.c", "return (vn + sqrt(disc)) / -an;             /* the root where it comes back down */",
@@ -223,7 +223,7 @@ def main():
     print("| mutant | result | detail |")
     print("| --- | --- | --- |")
     for mid, verdict, why in rows:
-        print(f"| {mid} | {verdict} | {why} |")
+        print(f"| {mid} | {verdict} | {why.replace('|', chr(92) + '|')} |")
     print()
     if stale:
         print(f"mutate: {len(stale)} stale mutant(s): " + ", ".join(s[0] for s in stale),
