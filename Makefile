@@ -58,7 +58,7 @@ BENCH_SRC := $(wildcard tests/bench/bench_*.c)
 BENCH_BIN := $(BENCH_SRC:tests/bench/%.c=$(BUILD)/bench/%)
 BUILD_INFO := $(BUILD)/build_info.h
 
-.PHONY: all run check test valgrind bench install clean tsan asan
+.PHONY: all run check test valgrind bench install clean tsan asan mutate check-programs
 all: bin/nbep
 
 $(BUILD) $(BUILD)/tests $(BUILD)/bench bin:
@@ -101,6 +101,14 @@ ifeq ($(VALGRIND),1)
 	@bash scripts/run-tests.sh --valgrind $(TEST_BIN)
 endif
 test: check
+
+# Every program make check runs, built but not run (scripts/mutate.py builds these per mutant).
+check-programs: bin/nbep $(TEST_BIN)
+
+# Mutation testing (README "Tests"): scripted small bugs in a scratch copy, each against the
+# tests that should catch it; not part of check (it takes tens of minutes).
+mutate:
+	python3 scripts/mutate.py $(MUTATE_ARGS)
 
 bench: bin/nbep $(BENCH_BIN)
 	bash scripts/bench.sh

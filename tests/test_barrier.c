@@ -3,6 +3,7 @@
  * (no violation allowed) and against the paper's Procedure 4 written out below (it must be
  * caught: a violation, or a thread stuck past a watchdog). No sleeps and no timing assertions:
  * wall time is read only to give up on a thread that can no longer leave a broken barrier. */
+#define _DEFAULT_SOURCE /* setitimer, for the stall test */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -10,6 +11,9 @@
 #include <cmocka.h>
 
 #include <pthread.h>
+#include <signal.h>
+#include <sys/time.h>
+#include <unistd.h>
 #include <stdalign.h>
 #include <stdatomic.h>
 #include <stdbool.h>
@@ -174,13 +178,51 @@ static run_result run_harness(unsigned n_threads, unsigned long rounds, bool use
     return res;
 }
 
-static void assert_stress_passes(unsigned n_threads)
+/* ---- the deadlock watchdog --------------------------------------------------------------- */
+
+/* nbep_barrier has no way out of a wait, so a deadlock in it would hang the test: an alarm
+ * turns that into a failure that says so. Seconds per stress run: a run takes well under a
+ * second natively and a few under valgrind, so only a thread that can never leave hits it. */
+#define DEADLOCK_SECONDS 30u
+
+static void on_deadlock(int sig)
 {
-    run_result res = run_harness(n_threads, stress_rounds(n_threads), false);
+    (void)sig;
+    static const char msg[] = "\nFAIL barrier: threads still waiting in nbep_barrier_wait after "
+                              "the watchdog's 30 s: the barrier deadlocked\n";
+    ssize_t w = write(STDERR_FILENO, msg, sizeof msg - 1);
+    (void)w;
+    _exit(1);
+}
+
+static void watchdog_arm(void)
+{
+    struct sigaction sa = {0};
+    sa.sa_handler = on_deadlock;
+    sigemptyset(&sa.sa_mask);
+    assert_int_equal(sigaction(SIGALRM, &sa, NULL), 0);
+    alarm(DEADLOCK_SECONDS);
+}
+
+static void watchdog_disarm(void)
+{
+    alarm(0);
+}
+
+static void assert_stress_runs_pass(unsigned n_threads, unsigned long rounds)
+{
+    watchdog_arm();
+    run_result res = run_harness(n_threads, rounds, false);
     if (res.violations != 0)
         fail_msg("%u threads: %lu stale slots seen after the barrier", n_threads,
                  res.violations);
     assert_int_equal(res.stuck, 0);
+    watchdog_disarm();
+}
+
+static void assert_stress_passes(unsigned n_threads)
+{
+    assert_stress_runs_pass(n_threads, stress_rounds(n_threads));
 }
 
 static void test_two_threads_never_see_a_stale_round(void **state)
@@ -199,6 +241,45 @@ static void test_eight_threads_on_two_cores_never_see_a_stale_round(void **state
 {
     (void)state;
     assert_stress_passes(8);
+}
+
+/* ---- stalls at random instants ---------------------------------------------------------- */
+
+/* A thread may be descheduled between any two instructions of a wait. Most such stalls are
+ * harmless; the dangerous ones fall in a window a few instructions wide (for instance between
+ * the last arrival's rearm of `left` and its store of the new round, were they in the other
+ * order: a waiter could leave, re-enter and decrement `left` before the rearm overwrote it, and
+ * the next wait would never complete). Natural preemption lands there too rarely to test, so
+ * here a profiling timer interrupts whichever thread is running every STALL_EVERY_US of CPU
+ * time and the handler sleeps STALL_NS, long enough for the other threads to run many
+ * crossings' worth of instructions meanwhile. The watchdog turns a deadlock into a failure.
+ * Measured with the rearm moved after the round store: 2 of 3 runs of this binary deadlocked
+ * (the plain stress tests alone: about 1 in 6), so scripts/mutate.py runs it three times. */
+#define STALL_EVERY_US 50
+#define STALL_NS 20000L
+
+static void on_stall(int sig)
+{
+    (void)sig;
+    struct timespec ts = {0, STALL_NS};
+    nanosleep(&ts, NULL); /* async-signal-safe */
+}
+
+static void test_threads_stalled_at_random_instants_never_deadlock_or_see_a_stale_round(
+    void **state)
+{
+    (void)state;
+    struct sigaction sa = {0};
+    sa.sa_handler = on_stall;
+    sa.sa_flags = SA_RESTART;
+    sigemptyset(&sa.sa_mask);
+    assert_int_equal(sigaction(SIGPROF, &sa, NULL), 0);
+    struct itimerval it = {{0, STALL_EVERY_US}, {0, STALL_EVERY_US}};
+    assert_int_equal(setitimer(ITIMER_PROF, &it, NULL), 0);
+    for (unsigned n = 3; n <= 4; n++)
+        assert_stress_runs_pass(n, 2 * stress_rounds(n));
+    struct itimerval off = {{0, 0}, {0, 0}};
+    assert_int_equal(setitimer(ITIMER_PROF, &off, NULL), 0);
 }
 
 /* Attempts at catching the broken barrier; each ends at its first catch. Measured on the 2-core
@@ -301,8 +382,10 @@ static void test_a_one_thread_barrier_returns_at_once_every_time(void **state)
     nbep_barrier b;
     nbep_barrier_init(&b, 1);
     const unsigned crossings = 100000;
+    watchdog_arm(); /* a one-thread barrier that waits for someone never returns */
     for (unsigned i = 0; i < crossings; i++)
         nbep_barrier_wait(&b);
+    watchdog_disarm();
     /* Each crossing advanced the round once and left the barrier armed for the next. */
     assert_int_equal(atomic_load_explicit(&b.round, memory_order_relaxed), crossings);
     assert_int_equal(atomic_load_explicit(&b.left, memory_order_relaxed), 1);
@@ -316,6 +399,7 @@ int main(void)
         cmocka_unit_test(test_four_threads_on_two_cores_never_see_a_stale_round),
         cmocka_unit_test(test_eight_threads_on_two_cores_never_see_a_stale_round),
         cmocka_unit_test(test_plain_writes_before_the_barrier_are_seen_after_it),
+        cmocka_unit_test(test_threads_stalled_at_random_instants_never_deadlock_or_see_a_stale_round),
         cmocka_unit_test(test_the_paper_barrier_is_caught_with_two_threads),
         cmocka_unit_test(test_the_paper_barrier_is_caught_with_four_threads),
         cmocka_unit_test(test_the_paper_barrier_is_caught_with_eight_threads),

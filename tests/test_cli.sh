@@ -109,5 +109,20 @@ run_nbep check "$tmp/group.deck" -t 4
 check "nbep check -t 4 says $want thread(s), what this build runs" \
     "grep -Eq '^algorithm: .*, $want threads?\$' '$tmp/stdout'"
 
+# ---- nbep check on a good deck -----------------------------------------------------------------
+# The report's numbers follow from the deck alone: 64 spheres, the box's 6 planes, 64*63/2 pairs
+# (equal accelerations: every one a quadratic), 10000/1000 + 1 frames (step 0, every 1000th, the
+# last); exit 0, nothing on stderr, and no file written (check simulates nothing).
+run_nbep check "$tmp/group.deck" --set run.steps=10000 --set output.file="$tmp/never.h5"
+check "nbep check on a good deck: exit 0 (got $rc)" "[ $rc = 0 ]"
+check "nbep check on a good deck: nothing on stderr" "[ ! -s '$tmp/stderr' ]"
+check "nbep check reports the spheres" "grep -Eq '^spheres: +64$' '$tmp/stdout'"
+check "nbep check reports the box's planes" "grep -Eq '^planes: +6 ' '$tmp/stdout'"
+check "nbep check counts n(n-1)/2 = $((64 * 63 / 2)) pairs, all quadratic" \
+    "grep -Eq '^pairs: +$((64 * 63 / 2)) need a quadratic .*, 0 the quartic' '$tmp/stdout'"
+check "nbep check counts $((10000 / 1000 + 1)) frames" \
+    "grep -Eq '^output: .*: $((10000 / 1000 + 1)) frames' '$tmp/stdout'"
+check "nbep check writes no file" "[ ! -e '$tmp/never.h5' ]"
+
 [ $fail = 0 ] && echo "cli: all passed"
 exit $fail

@@ -155,6 +155,11 @@ static void test_the_same_contact_predicted_later_keeps_the_newer_counts(void **
     newer.ver_partner = old.ver_partner + 1;
     assert_int_equal(winner_of(old, newer).ver_partner, newer.ver_partner);
     assert_int_equal(winner_of(newer, old).ver_partner, newer.ver_partner);
+    /* and the same when this sphere's own count is the newer one */
+    nbep_event own = old;
+    own.ver_self = old.ver_self + 1;
+    assert_int_equal(winner_of(old, own).ver_self, own.ver_self);
+    assert_int_equal(winner_of(own, old).ver_self, own.ver_self);
 }
 
 static void test_an_event_that_never_happens_is_not_stored(void **state)

@@ -225,8 +225,11 @@ static void test_energy_of_a_known_configuration_is_summed_by_hand(void **state)
     nbep_diag_fini(&d);
 }
 
-/* Free flight under constant acceleration keeps E = m v.v/2 - m a.p exactly in exact
- * arithmetic; with doubles, to round-off. */
+/* Free flight under constant acceleration, checked by kinematic identities rather than the
+ * position formula: v - v0 = a h (the definition of constant acceleration), p - p0 = h (v0 + v)/2
+ * (the displacement is the mean velocity times the time, exact for constant acceleration),
+ * flying back by -h returns to the start, and E = m v.v/2 - m a.p is kept, all to round-off
+ * (a few ulps of the largest term: 1e-15 relative, 1e-14 for the energy's cancellation). */
 static void test_free_flight_follows_the_kinematic_formula_and_keeps_energy(void **state)
 {
     (void)state;
@@ -234,21 +237,34 @@ static void test_free_flight_follows_the_kinematic_formula_and_keeps_energy(void
     nbep_vec3 p = p0, v = v0;
     double h = 0.0137;
     nbep_physics_drift(&p, &v, a, h);
-    nbep_vec3 pe = {p0.x + v0.x * h + 0.5 * a.x * h * h, p0.y + v0.y * h + 0.5 * a.y * h * h,
-                    p0.z + v0.z * h + 0.5 * a.z * h * h};
-    assert_vec_close(p, pe, 1e-15);
-    assert_vec_close(v, nbep_vec3_axpy(v0, h, a), 1e-15);
+    nbep_vec3 dv = nbep_vec3_sub(v, v0), dp = nbep_vec3_sub(p, p0);
+    assert_vec_close(dv, nbep_vec3_scale(a, h), 1e-13);
+    assert_vec_close(dp, nbep_vec3_scale(nbep_vec3_add(v0, v), 0.5 * h), 1e-13);
+    nbep_vec3 pb = p, vb = v;
+    nbep_physics_drift(&pb, &vb, a, -h);
+    assert_vec_close(pb, p0, 1e-15);
+    assert_vec_close(vb, v0, 1e-15);
     double e0 = 0.5 * nbep_vec3_dot(v0, v0) - nbep_vec3_dot(a, p0);
     double e1 = 0.5 * nbep_vec3_dot(v, v) - nbep_vec3_dot(a, p);
     assert_close(e1, e0, 1e-14, 0.0);
 }
 
+/* The gap of a sphere to a plane, from a point built at a known height: q on the plane (its
+ * foot, offset n, moved along the plane by two vectors orthogonal to n) raised by d along n
+ * is d from the plane, so its gap is d - r; below the plane it is negative. */
 static void test_plane_gap_is_signed_distance_less_radius(void **state)
 {
     (void)state;
-    nbep_vec3 n = {0.0, 0.6, 0.8}, p = {1.7, 2.0, 3.0};
-    assert_close(nbep_physics_plane_gap(n, 0.9, p, 0.35), 0.6 * 2.0 + 0.8 * 3.0 - 0.9 - 0.35,
-                 1e-15, 0.0);
+    const nbep_vec3 n = {0.0, 0.6, 0.8}, u1 = {1.0, 0.0, 0.0}, u2 = {0.0, 0.8, -0.6};
+    const double offset = 0.9, r = 0.35;
+    const double heights[3] = {2.5, 0.35, -0.2};
+    for (int k = 0; k < 3; k++) {
+        nbep_vec3 q = nbep_vec3_add(nbep_vec3_scale(n, offset),
+                                    nbep_vec3_add(nbep_vec3_scale(u1, 1.7),
+                                                  nbep_vec3_scale(u2, -0.4)));
+        nbep_vec3 p = nbep_vec3_axpy(q, heights[k], n);
+        assert_close(nbep_physics_plane_gap(n, offset, p, r), heights[k] - r, 0.0, 1e-15);
+    }
 }
 
 int main(void)

@@ -71,5 +71,15 @@ bin/nbep run $deck --quiet --set spheres.[0].count=401 --set box.max=[2,2,2] -n 
 rc=$?
 check "a different deck is refused with exit 2 (got $rc)" "[ $rc = 2 ]"
 check "the refusal says what differs" "grep -q 'holds 400 spheres' $tmp/mismatch.err"
+# the same counts but other radii or masses: refused too, naming what differs (README: resume
+# checks counts, radii and masses)
+for what in radius mass; do
+    val=$([ $what = radius ] && echo 0.051 || echo 1.5)
+    bin/nbep run $deck --quiet --set spheres.[0].count=400 --set box.max=[2,2,2] \
+        --set spheres.[0].$what=$val -n 80 --resume $tmp/predictive-part.h5 2>$tmp/mismatch-$what.err
+    rc=$?
+    check "a deck with another $what is refused with exit 2 (got $rc)" "[ $rc = 2 ]"
+    check "the refusal names the $what" "grep -q '$what' $tmp/mismatch-$what.err"
+done
 [ $fail = 0 ] && echo "resume: all passed"
 exit $fail

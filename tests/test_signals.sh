@@ -28,7 +28,9 @@ for sig in TERM INT; do
     check "SIG$sig file holds the summary of the steps done" \
         "grep -q '\"steps\": [1-9]' '$tmp/info-$sig'"
     check "SIG$sig writes the JSON summary" "grep -q nbep-summary-1 '$tmp/summary-$sig.json'"
-    check "SIG$sig says so in one line on stderr" "grep -q 'stopped after' '$tmp/stderr-$sig' || grep -qi 'interrupt\\|terminat' '$tmp/stderr-$sig'"
+    check "SIG$sig says so on stderr" "grep -q 'stopped after' '$tmp/stderr-$sig' || grep -qi 'interrupt\\|terminat' '$tmp/stderr-$sig'"
+    lines=$(wc -l < "$tmp/stderr-$sig")
+    check "SIG$sig: that is the only line on stderr (got $lines)" "[ $lines = 1 ]"
 done
 [ $fail = 0 ] && echo "signals: all passed"
 exit $fail

@@ -295,22 +295,43 @@ static void test_predictive_gas_under_gravity_conserves_energy(void **state)
     nbep_test_scene_free(&sc);
 }
 
-/* The predictive and the naive gas agree to within what naive's detection after the fact
- * allows in a short run before chaos amplifies the differences: a few steps of motion. */
+/* The predictive and the naive gas agree on a run in which collisions do happen, to within
+ * what naive's detection after the fact allows. It reacts up to one step late, the pair having
+ * flown on by at most 2 v dt (v: the largest speed), and at positions overlapping by up to
+ * that, so its normal is off by up to 2 v dt / sigma_min radians and the velocities leave off
+ * by up to 2 v times that; over the rest of the run T that makes a sphere at most
+ * 2 v dt + T 2 v (2 v dt / sigma_min) from its predictive self (most spheres collide at most
+ * once in so short a run). A wrong response or a missed collision moves a sphere by about v T
+ * instead, far beyond the bound. The runs must also count the same collisions. */
 static void test_predictive_and_naive_agree_on_a_short_gas_run(void **state)
 {
     (void)state;
-    nbep_scene *a = gas("naive", 64, 9.81, 5);
-    nbep_scene *b = gas("predictive", 64, 9.81, 5);
-    a->dt = b->dt = 1e-4;
+    const size_t n = 512;
+    const uint64_t steps = 1000;
+    const double dt = 2e-4, T = (double)steps * dt;
+    nbep_scene *a = gas("naive", n, 0.0, steps);
+    nbep_scene *b = gas("predictive", n, 0.0, steps);
+    a->dt = b->dt = dt;
     nbep_state fa, fb;
-    run(a, 1, &fa, NULL);
-    run(b, 1, &fb, NULL);
-    for (size_t i = 0; i < fa.n; i++) {
-        /* per sphere: at most one step's travel apart (speed < 6, plus gravity) */
-        double tol = 2.0 * (6.0 * 1e-4 + 9.81 * 1e-8);
-        assert_true(nbep_vec3_norm(nbep_vec3_sub(fa.pos[i], fb.pos[i])) <= tol);
+    nbep_summary sa = run(a, 1, &fa, NULL), sb = run(b, 1, &fb, NULL);
+    assert_true(sb.sphere_collisions >= 20); /* collisions do happen */
+    assert_int_equal(sa.sphere_collisions, sb.sphere_collisions);
+    assert_int_equal(sa.plane_collisions, sb.plane_collisions);
+    double v = 0.0, sigma_min = INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        v = fmax(v, fmax(nbep_vec3_norm(fa.vel[i]), nbep_vec3_norm(fb.vel[i])));
+        v = fmax(v, nbep_vec3_norm(a->state.vel[i]));
+        sigma_min = fmin(sigma_min, 2.0 * a->state.radius[i]);
     }
+    const double tol = 2.0 * v * dt + T * 2.0 * v * (2.0 * v * dt / sigma_min);
+    size_t moved = 0;
+    for (size_t i = 0; i < fa.n; i++) {
+        double d = nbep_vec3_norm(nbep_vec3_sub(fa.pos[i], fb.pos[i]));
+        moved += d > 1e-12;
+        if (!(d <= tol))
+            fail_msg("sphere %zu: naive and predictive %.3g apart (bound %.3g)", i, d, tol);
+    }
+    assert_true(moved > 0); /* the collisions did change something */
     nbep_state_fini(&fa), nbep_state_fini(&fb);
     nbep_test_scene_free(&a), nbep_test_scene_free(&b);
 }
@@ -337,8 +358,11 @@ static void test_grid_predictive_finds_the_same_collisions_as_all_pairs(void **s
 }
 
 /* The same, where the horizon's reach matters: spheres so fast (up to 150 m/s, 0.15 per step,
- * about two cells of the grid) that partners several cells away can meet within one step. A
- * reach that left out either sphere's travel misses collisions here. */
+ * about two cells of the grid) that partners several cells away can meet within one step.
+ * Judged by overlap (a missed collision leaves a pair inside each other), not by equal
+ * collision counts, which round-off can change in a chaotic gas. All speeds here are alike;
+ * test_run_contract.c has the gas over two decades of speed in which a reach that leaves out
+ * either sphere's travel shows (scripts/mutate.py). */
 static void test_grid_predictive_finds_fast_partners_several_cells_away(void **state)
 {
     (void)state;
@@ -356,8 +380,8 @@ static void test_grid_predictive_finds_fast_partners_several_cells_away(void **s
         sum[k] = run(sc[k], 1, NULL, NULL);
     }
     assert_true(sum[0].sphere_collisions > scaled(20, 3));
-    assert_int_equal(sum[1].sphere_collisions, sum[0].sphere_collisions);
-    assert_int_equal(sum[1].plane_collisions, sum[0].plane_collisions);
+    assert_true(sum[1].sphere_collisions > scaled(20, 3));
+    assert_true(sum[0].max_overlap_rel < 1e-9);
     assert_true(sum[1].max_overlap_rel < 1e-9);
     nbep_test_scene_free(&sc[0]), nbep_test_scene_free(&sc[1]);
 }

@@ -1,0 +1,237 @@
+#!/usr/bin/env python3
+"""make mutate: small deliberate bugs put into a scratch copy of the tree one at a time, each
+checked against the tests that should catch it (README "Tests").
+
+Each mutant names a file, an exact snippet of it that must occur exactly once, its replacement,
+and the test programs that should fail. A snippet that no longer occurs exactly once (the core
+changed) makes the mutant "stale": it is reported loudly and makes the run fail, so the list is
+kept up to date rather than silently thinned. Equivalent mutants (no observable change) carry
+the reason and are not run.
+
+Usage: python3 scripts/mutate.py [--jobs N] [--timeout S] [--only ID[,ID...]] [--list]
+Prints one row per mutant and ends with exactly one line
+"mutants: K killed, S survived, E equivalent". Exit 0 when none survived and none is stale.
+"""
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+SIM = ["test_run_contract", "test_sim", "test_extremes"]
+PRED = ["test_predict"]
+
+# (id, file, original, replacement, tests, equivalent-reason or None)
+MUTANTS = [
+    # ---- physics ----
+    ("phys-restitution", "src/physics.c", "double k = c * (1.0 + e) / (m1 + m2);",
+     "double k = c * (1.0 + 0.5 * e) / (m1 + m2);", ["test_physics"], None),
+    ("phys-mass-swap", "src/physics.c", "*v1 = nbep_vec3_axpy(*v1, -m2 * k, n);",
+     "*v1 = nbep_vec3_axpy(*v1, -m1 * k, n);", ["test_physics"], None),
+    ("phys-receding", "src/physics.c", "if (!(c > 0.0))\n        return false;                       /* receding",
+     "if (!(c < 0.0))\n        return false;                       /* receding", ["test_physics"], None),
+    ("phys-plane-e", "src/physics.c", "*v = nbep_vec3_axpy(*v, -(1.0 + e) * vn, n);",
+     "*v = nbep_vec3_axpy(*v, -(2.0) * vn, n);", ["test_physics"], None),
+    ("phys-potential-sign", "src/physics.c", "pe -= m * nbep_vec3_dot(s->acc[i], s->pos[i]);",
+     "pe += m * nbep_vec3_dot(s->acc[i], s->pos[i]);", ["test_physics"], None),
+    ("phys-kinetic-half", "src/physics.c", "ke += 0.5 * m * nbep_vec3_dot(s->vel[i], s->vel[i]);",
+     "ke += m * nbep_vec3_dot(s->vel[i], s->vel[i]);", ["test_physics"], None),
+    # ---- contact times ----
+    ("quad-root-sign", "src/predict.c", "return c / (-b + sqrt(disc));",
+     "return c / (-b - sqrt(disc));", PRED, None),
+    ("quad-miss", "src/predict.c", "if (!(disc >= 0.0))\n        return NBEP_NEVER;                      /* they miss */",
+     "if (!(disc > 0.0))\n        return NBEP_NEVER;                      /* they miss */", PRED,
+     "differs only when disc is exactly 0: a pair that touches for one instant with no normal "
+     "velocity, to which the response gives no impulse (c = 0), so no velocity or counter changes"),
+    ("quad-receding", "src/predict.c", "if (!(b < 0.0))\n        return NBEP_NEVER;                      /* receding or at rest */",
+     "if (!(b <= 0.0))\n        return NBEP_NEVER;                      /* receding or at rest */", PRED, None),
+    ("plane-root", "src/predict.c", "return 2.0 * gap / (-vn + sqrt(disc));",
+     "return gap / (-vn + sqrt(disc));", PRED, None),
+    ("plane-comeback", "src/predict.c", "return (vn + sqrt(disc)) / -an;             /* the root where it comes back down */",
+     "return (vn - sqrt(disc)) / -an;             /* the root where it comes back down */", PRED, None),
+    ("quartic-accel-bends", "src/predict.c",
+     "if (nbep_vec3_norm(da) * nbep_vec3_norm(dp) >= ACCEL_BENDS * nbep_vec3_norm2(dv))\n        return bracket_search(&q);",
+     "if (nbep_vec3_norm(da) * nbep_vec3_norm(dp) >= ACCEL_BENDS * nbep_vec3_norm2(dv))\n        return 2.0 * bracket_search(&q);", PRED, None),
+    ("bracket-overlap-start", "src/predict.c", "if (f_val(m, u) <= 0.0)\n            return u;",
+     "if (f_val(m, u) <= 0.0)\n            return w;", PRED, None),
+    ("quartic-lost", "src/predict.c", "    if (lost)\n        return bracket_search(&q);\n    return best;",
+     "    return best;", PRED, None),
+    # ---- event queue ----
+    ("feq-earlier", "src/feq.c", "return a->time < b->time;", "return a->time > b->time;",
+     ["test_feq"] + SIM, None),
+    ("feq-version", "src/feq.c", "return a->ver_self > b->ver_self;", "return a->ver_self < b->ver_self;",
+     ["test_feq"], None),
+    ("feq-min-bound", "src/feq.c", "if (s->kind != NBEP_EVENT_NONE && s->time < t_end)",
+     "if (s->kind != NBEP_EVENT_NONE && s->time <= t_end)", ["test_feq"] + SIM, None),
+    # ---- barrier ----
+    ("barrier-rearm-after-round", "src/barrier.c",
+     "        atomic_store_explicit(&b->left, b->n, memory_order_relaxed);\n"
+     "        /* Release: passes on everything the last arrival acquired (all threads' writes) and\n"
+     "         * the rearmed `left`; pairs with the waiters' acquire loads. */\n"
+     "        atomic_store_explicit(&b->round, r + 1u, memory_order_release);",
+     "        atomic_store_explicit(&b->round, r + 1u, memory_order_release);\n"
+     "        atomic_store_explicit(&b->left, b->n, memory_order_relaxed);",
+     ["test_barrier"] * 3, None),  # a race: each run catches it about 2 times in 3
+    ("barrier-last-arrival", "src/barrier.c", "memory_order_acq_rel) == 1) {",
+     "memory_order_acq_rel) == 0) {", ["test_barrier"], None),
+    ("barrier-round-step", "src/barrier.c", "atomic_store_explicit(&b->round, r + 1u, memory_order_release);",
+     "atomic_store_explicit(&b->round, r, memory_order_release);", ["test_barrier"], None),
+    # ---- claims ----
+    ("claim-max", "src/algo_predictive.c", "while (key < cur &&", "while (key > cur &&", SIM, None),
+    ("claim-one-side", "src/algo_predictive.c",
+     "        if (ev->kind == NBEP_EVENT_SPHERE &&\n            atomic_load_explicit(&c->claim[par][hi], memory_order_relaxed) != key)\n            continue;\n",
+     "", SIM, None),
+    # ---- grid reach ----
+    ("grid-no-partner-travel", "src/algo_predictive.c", "0.5 * nbep_vec3_norm(ai) * H * H + V * H + 0.5 * c->amax * H * H;",
+     "0.5 * nbep_vec3_norm(ai) * H * H + 0.5 * c->amax * H * H;", SIM, None),
+    ("grid-no-own-speed", "src/algo_predictive.c", "double reach = s->radius[i] + c->rmax + nbep_vec3_norm(s->vel[i]) * H +",
+     "double reach = s->radius[i] + c->rmax +", SIM, None),
+    ("grid-horizon-long", "src/algo_predictive.c", "double k = step_travel > 0.0 ? floor(0.5 * c->grid.h / step_travel) : 64.0;",
+     "double k = step_travel > 0.0 ? floor(8.0 * c->grid.h / step_travel) : 64.0;", SIM, None),
+    ("grid-block-lo", "src/grid.c", "lo[k] = axis_cell(x[k] - reach, o[k], g->inv_h, g->dim[k]);",
+     "lo[k] = axis_cell(x[k], o[k], g->inv_h, g->dim[k]);", SIM + ["test_output"], None),
+    # ---- BVH ----
+    ("bvh-skip-owner", "src/bvh.c", "if (nd->max_id <= i || !boxes_touch", "if (nd->max_id < i || !boxes_touch",
+     ["test_bvh"], None),
+    ("bvh-touch-axis", "src/bvh.c", "alo.z <= bhi.z && blo.z <= ahi.z;", "alo.z <= bhi.z;", ["test_bvh"], None),
+    ("bvh-leaf-max", "src/bvh.c", "max_id = b->order[m] > max_id ? b->order[m] : max_id;",
+     "max_id = b->order[m] < max_id ? b->order[m] : max_id;", ["test_bvh"], None),
+    # ---- detection loops ----
+    ("detect-touching", "src/algo_detect.c", "if (d2 < sigma * sigma) {", "if (d2 < 0.98 * sigma * sigma) {",
+     SIM, None),
+    ("detect-pair-loop", "src/algo_detect.c", "for (size_t j = i + 1; j < n; j++)\n                test_pair",
+     "for (size_t j = i + 2; j < n; j++)\n                test_pair", SIM, None),
+    ("detect-checks-off-by-one", "src/algo_detect.c", "checks += n - 1 - i;", "checks += n - i;", SIM, None),
+    ("detect-plane-gap", "src/algo_detect.c", "if (gap < 0.0) {\n                push_contact",
+     "if (gap < -1e-3 * s->radius[i]) {\n                push_contact", SIM, None),
+    # ---- frame schedule, summary and counters ----
+    ("frame-last-step", "src/sim.c", "bool frame = step % sim->scene->output_every == 0 || step == sim->step_end || stop;",
+     "bool frame = step % sim->scene->output_every == 0 || stop;", SIM + ["test_output"], None),
+    ("summary-drift-sign", "src/sim.c", "? (sim->energy_final - sim->energy_initial) /",
+     "? (sim->energy_initial - sim->energy_final) /", SIM + ["test_output"], None),
+    ("summary-quiet-steps", "src/sim.c", "if (row.collisions == 0)\n        sim->quiet_steps++;",
+     "if (row.collisions <= 1)\n        sim->quiet_steps++;", SIM + ["test_output"], None),
+    ("counter-collisions", "src/sim.c", "row.collisions = c[NBEP_COUNTER_SPHERE_COLLISIONS] + c[NBEP_COUNTER_PLANE_COLLISIONS];",
+     "row.collisions = c[NBEP_COUNTER_SPHERE_COLLISIONS];", SIM + ["test_output"], None),
+    ("counter-predict-checks", "src/algo_predictive.c", "cnt->c[NBEP_COUNTER_CHECKS]++; /* the paper's check() */",
+     "/* check() not counted */", SIM, None),
+]
+
+
+def run(cmd, cwd, timeout=None, log=None):
+    try:
+        r = subprocess.run(cmd, cwd=cwd, timeout=timeout, stdout=log or subprocess.DEVNULL,
+                           stderr=subprocess.STDOUT)
+        return r.returncode
+    except subprocess.TimeoutExpired:
+        return "timeout"
+
+
+def test_path(name):
+    return name if name.endswith(".sh") else "build/tests/" + name
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--jobs", type=int, default=2, help="make -j per build (default 2)")
+    ap.add_argument("--timeout", type=int, default=120, help="seconds per test program")
+    ap.add_argument("--only", default="", help="comma-separated mutant ids")
+    ap.add_argument("--list", action="store_true", help="list the mutants and exit")
+    ap.add_argument("--keep", action="store_true", help="keep the scratch copy")
+    ap.add_argument("--allow-missing", action="store_true",
+                    help="skip tests the tree does not have (to measure an older tree)")
+    a = ap.parse_args()
+    mutants = MUTANTS
+    if a.only:
+        want = set(a.only.split(","))
+        mutants = [m for m in MUTANTS if m[0] in want]
+        unknown = want - {m[0] for m in mutants}
+        if unknown:
+            sys.exit("mutate: no mutant named " + ", ".join(sorted(unknown)))
+    if a.list:
+        for m in mutants:
+            print(f"{m[0]:28} {m[1]:24} {' '.join(m[4])}")
+        return 0
+
+    # staleness first, against the working tree, so it is reported before any build
+    stale = []
+    for mid, path, orig, _repl, _tests, _eq in mutants:
+        with open(os.path.join(ROOT, path)) as f:
+            count = f.read().count(orig)
+        if count != 1:
+            stale.append((mid, path, count))
+    for mid, path, count in stale:
+        print(f"STALE mutant {mid}: its snippet occurs {count} times in {path} (must be once); "
+              f"update scripts/mutate.py", file=sys.stderr)
+
+    scratch = tempfile.mkdtemp(prefix="nbep-mutate-")
+    try:
+        shutil.copytree(ROOT, scratch, dirs_exist_ok=True,
+                        ignore=shutil.ignore_patterns(".git", "build", "bin"))
+        print(f"mutate: building the unmutated copy in {scratch}", flush=True)
+        if run(["make", f"-j{a.jobs}", "MPI=0", "bin/nbep", "check-programs"], scratch) != 0:
+            sys.exit("mutate: the unmutated tree does not build")
+        rows = []
+        counts = {"killed": 0, "survived": 0, "equivalent": 0}
+        for mid, path, orig, repl, tests, eq in mutants:
+            if any(s[0] == mid for s in stale):
+                rows.append((mid, "STALE", "snippet not found exactly once"))
+                continue
+            if eq:
+                counts["equivalent"] += 1
+                rows.append((mid, "equivalent", eq))
+                print(f"{mid:28} equivalent", flush=True)
+                continue
+            target = os.path.join(scratch, path)
+            with open(target) as f:
+                text = f.read()
+            with open(target, "w") as f:
+                f.write(text.replace(orig, repl, 1))
+            t0 = time.monotonic()
+            rc = run(["make", f"-j{a.jobs}", "MPI=0", "bin/nbep", "check-programs"], scratch)
+            if rc != 0:
+                verdict, why = "killed", "does not build"
+            else:
+                verdict, why = "survived", "every test passed: " + " ".join(tests)
+                for t in tests:
+                    if not os.path.exists(os.path.join(scratch, test_path(t))):
+                        if a.allow_missing:
+                            continue
+                        sys.exit(f"mutate: mutant {mid} names a test that does not exist: {t}")
+                    env_log = open(os.path.join(scratch, "build", f"mutant-{mid}-{t}.log"), "w")
+                    cmd = (["bash"] if t.endswith(".sh") else []) + [test_path(t)]
+                    r = run(["timeout", "-k", "5", str(a.timeout)] + cmd, scratch, log=env_log)
+                    env_log.close()
+                    if r != 0:
+                        how = "hung (timeout)" if r in (124, 137, "timeout") else f"exit {r}"
+                        verdict, why = "killed", f"{t} {how}"
+                        break
+            with open(target, "w") as f:
+                f.write(text)
+            counts[verdict] += 1
+            rows.append((mid, verdict, why))
+            print(f"{mid:28} {verdict:10} {why} ({time.monotonic() - t0:.0f} s)", flush=True)
+    finally:
+        if not a.keep:
+            shutil.rmtree(scratch, ignore_errors=True)
+
+    print()
+    print("| mutant | result | detail |")
+    print("| --- | --- | --- |")
+    for mid, verdict, why in rows:
+        print(f"| {mid} | {verdict} | {why.replace('|', chr(92) + '|')} |")
+    print()
+    if stale:
+        print(f"mutate: {len(stale)} stale mutant(s): " + ", ".join(s[0] for s in stale),
+              file=sys.stderr)
+    print(f"mutants: {counts['killed']} killed, {counts['survived']} survived, "
+          f"{counts['equivalent']} equivalent")
+    return 0 if counts["survived"] == 0 and not stale else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
