@@ -138,6 +138,7 @@ typedef struct pred_ctx {
     const nbep_state *st;         /* borrowed: the run's state (pred_import) */
     rest_set *rest;               /* owned: the contacts holding each sphere */
     nbep_vec3 *aeff;              /* owned: acceleration each sphere flies with (rest_solve) */
+    double *t_last;               /* owned: time of each sphere's last sphere collision (TC) */
     uint8_t *flags;               /* owned: IN_CAND | IN_REDO */
     _Atomic uint64_t *claim[2];   /* owned: smallest pair key claiming a sphere, by round parity */
     _Atomic uint64_t *reacted;    /* owned: round stamp of a sphere's last reaction */
@@ -164,6 +165,7 @@ static void pred_destroy(void *p)
     nbep_free_aligned(c->tau);
     nbep_free_aligned(c->rest);
     nbep_free_aligned(c->aeff);
+    nbep_free_aligned(c->t_last);
     nbep_free_aligned(c->flags);
     nbep_free_aligned((void *)c->claim[0]);
     nbep_free_aligned((void *)c->claim[1]);
@@ -201,12 +203,13 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     c->tau = nbep_alloc_aligned(n, sizeof *c->tau);
     c->rest = nbep_alloc_aligned(n, sizeof *c->rest);
     c->aeff = nbep_alloc_aligned(n, sizeof *c->aeff);
+    c->t_last = nbep_alloc_aligned(n, sizeof *c->t_last);
     c->flags = nbep_alloc_aligned(n, sizeof *c->flags);
     c->claim[0] = nbep_alloc_aligned(n, sizeof *c->claim[0]);
     c->claim[1] = nbep_alloc_aligned(n, sizeof *c->claim[1]);
     c->reacted = nbep_alloc_aligned(n, sizeof *c->reacted);
     c->ws = nbep_alloc_aligned((size_t)sim->nt, sizeof *c->ws);
-    if (!c->ver || !c->tau || !c->rest || !c->aeff || !c->flags || !c->claim[0] || !c->claim[1] ||
+    if (!c->ver || !c->tau || !c->rest || !c->aeff || !c->t_last || !c->flags || !c->claim[0] || !c->claim[1] ||
         !c->reacted || !c->ws) {
         pred_destroy(c);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm (%zu spheres)",
@@ -225,6 +228,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     for (size_t i = 0; i < n; i++) {
         c->rest[i] = (rest_set){.n = 0};
         c->aeff[i] = sim->st.acc[i];
+        c->t_last[i] = -INFINITY;
         atomic_init(&c->claim[0][i], KEY_FREE);
         atomic_init(&c->claim[1][i], KEY_FREE);
         atomic_init(&c->reacted[i], 0);
@@ -263,6 +267,13 @@ static nbep_vec3 effective_acc(const pred_ctx *c, const nbep_state *s, size_t i)
 static bool is_zero(nbep_vec3 v)
 {
     return v.x == 0.0 && v.y == 0.0 && v.z == 0.0;
+}
+
+/* A sphere whose contacts carry its whole weight (it may still slide): a slow partner treats it
+ * as part of the support. */
+static bool supported(const pred_ctx *c, size_t i)
+{
+    return c->rest[i].n > 0 && is_zero(c->aeff[i]);
 }
 
 static bool rest_has_plane(const rest_set *r, size_t p)
@@ -314,7 +325,7 @@ static bool rest_solve(const nbep_state *s, size_t i, rest_set *r, nbep_vec3 *v,
         double amag = nbep_vec3_norm(s->acc[i]);
         if (r->n > 0 && nbep_vec3_norm(*a) <= NBEP_CONTACT_TOL * amag) {
             *a = nbep_vec3_make(0.0, 0.0, 0.0);
-            if (spheres && nbep_vec3_norm(*v) <= HOLD_SPEED_FRACTION * amag * dt)
+            if (nbep_vec3_norm(*v) <= HOLD_SPEED_FRACTION * amag * dt)
                 *v = nbep_vec3_make(0.0, 0.0, 0.0);
         }
         r->still = r->n > 0 && is_zero(*a) && is_zero(*v);
@@ -686,8 +697,15 @@ static void min_bounce(const pred_ctx *c, nbep_state *s, double dt, uint32_t lo,
     if (u >= want)
         return;
     double m = s->mass[lo] + s->mass[hi], du = want - u;
-    s->vel[lo] = nbep_vec3_axpy(s->vel[lo], -du * s->mass[hi] / m, n);
-    s->vel[hi] = nbep_vec3_axpy(s->vel[hi], du * s->mass[lo] / m, n);
+    /* a sphere whose planes carry its weight takes no share: the kick would otherwise pump
+     * energy into the bottom of a pile, kick after kick (measured: a settled pile heats up) */
+    double share_lo = s->mass[hi] / m, share_hi = s->mass[lo] / m;
+    if (supported(c, lo) != supported(c, hi)) {
+        share_lo = supported(c, lo) ? 0.0 : 1.0;
+        share_hi = 1.0 - share_lo;
+    }
+    s->vel[lo] = nbep_vec3_axpy(s->vel[lo], -du * share_lo, n);
+    s->vel[hi] = nbep_vec3_axpy(s->vel[hi], du * share_hi, n);
 }
 
 /* A sphere k without support pressed onto a held sphere j (n from j to k) leaves it with at
@@ -706,6 +724,18 @@ static void min_bounce_held(const pred_ctx *c, nbep_state *s, double dt, size_t 
         s->vel[k] = nbep_vec3_axpy(s->vel[k], want - u, n);
 }
 
+/* The TC model (Luding and McNamara 1998; DynamO's choice): a sphere-sphere collision within
+ * tc of the last one of either sphere is elastic. Inelastic collapse needs ever faster
+ * re-collisions; these stop dissipating, so the sequence ends. tc is physically the duration
+ * of a real contact, during which a hard-sphere model has no business dissipating twice. */
+static double tc_restitution(pred_ctx *c, double tc, double e, double t_abs, size_t a, size_t b)
+{
+    bool recent = t_abs - c->t_last[a] < tc || t_abs - c->t_last[b] < tc;
+    c->t_last[a] = t_abs;
+    c->t_last[b] = t_abs;
+    return recent ? 1.0 : e;
+}
+
 static void fire(pred_ctx *c, thread_ws *w, const nbep_state *s, size_t i, bool was_still)
 {
     c->ver[i]++;
@@ -715,17 +745,33 @@ static void fire(pred_ctx *c, thread_ws *w, const nbep_state *s, size_t i, bool 
         w->woken++;
 }
 
-/* Sphere k (not held) meets held sphere j at a normal speed below the rest speed: it joins the
- * held pile if its contacts then leave it no motion, else bounces off j as off a wall (j is
- * carried by the pile; the momentum goes to it as to a plane). */
+
+/* Holds a supported sphere still when slower than the hold speed (see HOLD_SPEED_FRACTION). */
+static bool try_hold(pred_ctx *c, nbep_state *s, size_t i, double dt)
+{
+    if (!supported(c, i) ||
+        !(nbep_vec3_norm(s->vel[i]) <= HOLD_SPEED_FRACTION * nbep_vec3_norm(s->acc[i]) * dt))
+        return false;
+    s->vel[i] = nbep_vec3_make(0.0, 0.0, 0.0);
+    c->rest[i].still = true;
+    return true;
+}
+
+/* Sphere k (not held) meets held sphere j at a normal speed below the hold speed: it joins the
+ * held pile if pressed onto j at the rest speed and its contacts then leave it no motion,
+ * else bounces off j as off a wall (j is carried by the pile; the momentum, below m times the
+ * hold speed, goes to it as to a plane). */
 static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t k, size_t j,
-                         thread_ws *w, nbep_counters *cnt)
+                         double t_abs, double tc, thread_ws *w, nbep_counters *cnt)
 {
     nbep_vec3 d = nbep_vec3_sub(s->pos[k], s->pos[j]);
     double len = nbep_vec3_norm(d);
     nbep_vec3 n = nbep_vec3_make(d.x / len, d.y / len, d.z / len);
+    double u = nbep_vec3_dot(s->vel[k], n), an = nbep_vec3_dot(c->aeff[k], n);
     rest_set r = c->rest[k];
-    if (r.n < NBEP_CONTACT_MAX) {
+    /* a bounce off j shorter than tc would be elastic (TC) and never shrink: rest */
+    if (an < 0.0 && 2.0 * fabs(u) <= -an * fmax(NBEP_REST_FRACTION * dt, tc) &&
+        r.n < NBEP_CONTACT_MAX) {
         r.who[r.n] = -1 - (int32_t)j;
         r.ver[r.n++] = c->ver[j];
         nbep_vec3 v = s->vel[k], a;
@@ -737,7 +783,7 @@ static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t
             return;
         }
     }
-    if (nbep_physics_respond_plane(n, &s->vel[k], e))
+    if (nbep_physics_respond_plane(n, &s->vel[k], tc_restitution(c, tc, e, t_abs, k, k)))
         cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
     update_rest(c, s, k, dt);
     min_bounce_held(c, s, dt, k, j, n);
@@ -745,10 +791,11 @@ static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t
     fire(c, w, s, k, false);
 }
 
-static void react(pred_ctx *c, nbep_state *s, double e, double dt, double t_local,
-                  uint32_t lo, uint32_t hi, const nbep_event *ev, thread_ws *w,
+static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs,
+                  double t_local, uint32_t lo, uint32_t hi, const nbep_event *ev, thread_ws *w,
                   nbep_counters *cnt, nbep_thread_max *mx)
 {
+    const double e = sc->restitution, dt = sc->dt;
     advance_to(c, s, lo, t_local);
     const bool still_lo = c->rest[lo].still;
     if (ev->kind == NBEP_EVENT_PLANE) {
@@ -756,12 +803,13 @@ static void react(pred_ctx *c, nbep_state *s, double e, double dt, double t_loca
         nbep_vec3 n = s->plane_normal[p];
         double gap = nbep_physics_plane_gap(n, s->plane_offset[p], s->pos[lo], s->radius[lo]);
         note_overlap(mx, -gap, s->radius[lo]);
-        if (nbep_physics_respond_plane(n, &s->vel[lo], e))
+        if (nbep_physics_respond_plane(n, &s->vel[lo], tc_restitution(c, sc->tc, e, t_abs, lo, lo)))
             cnt->c[NBEP_COUNTER_PLANE_COLLISIONS]++;
         update_rest(c, s, lo, dt);
         double an = nbep_vec3_dot(s->acc[lo], n), vn = nbep_vec3_dot(s->vel[lo], n);
         rest_set *r = &c->rest[lo];
-        if (an < 0.0 && vn >= 0.0 && 2.0 * vn <= -an * NBEP_REST_FRACTION * dt &&
+        /* a bounce shorter than tc would be elastic (TC) and never shrink: rest */
+        if (an < 0.0 && vn >= 0.0 && 2.0 * vn <= -an * fmax(NBEP_REST_FRACTION * dt, sc->tc) &&
             r->n < NBEP_CONTACT_MAX) {
             r->who[r->n] = (int32_t)p;
             r->ver[r->n++] = 0;
@@ -775,18 +823,21 @@ static void react(pred_ctx *c, nbep_state *s, double e, double dt, double t_loca
     double sigma = s->radius[lo] + s->radius[hi];
     note_overlap(mx, sigma - nbep_vec3_norm(nbep_vec3_sub(s->pos[hi], s->pos[lo])),
                  fmin(s->radius[lo], s->radius[hi]));
-    if (still_lo != still_hi) {
-        size_t k = still_lo ? hi : lo, j = still_lo ? lo : hi;
+    const bool sup_lo = supported(c, lo), sup_hi = supported(c, hi);
+    if (sup_lo != sup_hi) {
+        size_t k = sup_lo ? hi : lo, j = sup_lo ? lo : hi;
+        if (!c->rest[j].still && try_hold(c, s, j, dt))
+            fire(c, w, s, j, false);
         nbep_vec3 d = nbep_vec3_sub(s->pos[k], s->pos[j]);
         double u = nbep_vec3_dot(s->vel[k], d) / nbep_vec3_norm(d);
-        double an = nbep_vec3_dot(c->aeff[k], d) / nbep_vec3_norm(d);
-        if (an < 0.0 && 2.0 * fabs(u) <= -an * NBEP_REST_FRACTION * dt) {
-            land_on_held(c, s, e, dt, k, j, w, cnt);
+        if (c->rest[j].still && fabs(u) <= HOLD_SPEED_FRACTION * nbep_vec3_norm(s->acc[k]) * dt) {
+            land_on_held(c, s, e, dt, k, j, t_abs, sc->tc, w, cnt);
             return;
         }
     }
     if (nbep_physics_respond_pair(s->pos[lo], s->pos[hi], &s->vel[lo], &s->vel[hi],
-                                  s->mass[lo], s->mass[hi], e))
+                                  s->mass[lo], s->mass[hi],
+                                  tc_restitution(c, sc->tc, e, t_abs, lo, hi)))
         cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
     min_bounce(c, s, dt, lo, hi);
     update_rest(c, s, lo, dt);
@@ -860,7 +911,7 @@ static void react_phase(pred_ctx *c, nbep_state *s, const nbep_scene *sc, int pa
                                                      memory_order_relaxed))
             continue;
         cnt->c[NBEP_COUNTER_REACTIONS]++;
-        react(c, s, sc->restitution, sc->dt, t_min - T0, lo, hi, ev, w, cnt, mx);
+        react(c, s, sc, t_min, t_min - T0, lo, hi, ev, w, cnt, mx);
     }
 }
 

@@ -57,6 +57,9 @@ enum {
       "uniform acceleration of every sphere without its own")                                      \
     X(PHYSICS_RESTITUTION, "physics.restitution", FLOAT, F_IN01, "1.0", NULL,                      \
       "coefficient of restitution e, sphere-sphere and sphere-plane")                              \
+    X(PHYSICS_TC, "physics.tc", FLOAT, F_GE0, "1.0e-6", NULL,                                      \
+      "TC model: a sphere-sphere collision within tc seconds of either sphere's last one is "     \
+      "elastic (stops inelastic collapse); 0: off")                                                \
     X(BOX, "box", GROUP, 0, NULL, "none", "optional: six inward planes bounding [min, max]")       \
     X(BOX_MIN, "box.min", VEC3, F_REQUIRED, NULL, "required", "lower corner")                      \
     X(BOX_MAX, "box.max", VEC3, F_REQUIRED, NULL, "required",                                      \
@@ -622,6 +625,7 @@ static void parse_physics(load *L, const config_setting_t *root, nbep_scene *sc)
         physics = NULL;
     (void)get_vec3(L, physics, "physics", S_PHYSICS_GRAVITY, &sc->gravity, NULL);
     (void)get_float(L, physics, "physics", S_PHYSICS_RESTITUTION, &sc->restitution);
+    (void)get_float(L, physics, "physics", S_PHYSICS_TC, &sc->tc);
 }
 
 /* min < max on every axis, else one error at max naming each failing axis. */
