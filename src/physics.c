@@ -99,6 +99,26 @@ bool nbep_physics_respond_plane(nbep_vec3 n, nbep_vec3 *v, double e)
     return true;
 }
 
+void nbep_physics_separate_plane(nbep_vec3 n, double offset, nbep_vec3 *p, double r)
+{
+    double gap = nbep_physics_plane_gap(n, offset, *p, r);
+    if (gap < 0.0)
+        *p = nbep_vec3_axpy(*p, -gap, n);
+}
+
+void nbep_physics_separate_pair(nbep_vec3 *p1, nbep_vec3 *p2, double r1, double r2, double m1,
+                                double m2)
+{
+    nbep_vec3 d = nbep_vec3_sub(*p2, *p1);
+    double len = nbep_vec3_norm(d), ov = r1 + r2 - len;
+    if (!(len > 0.0) || !(ov > 0.0))
+        return;
+    nbep_vec3 n = {d.x / len, d.y / len, d.z / len};
+    double m = m1 + m2;
+    *p1 = nbep_vec3_axpy(*p1, -ov * m2 / m, n);
+    *p2 = nbep_vec3_axpy(*p2, ov * m1 / m, n);
+}
+
 void nbep_physics_energy(const nbep_state *s, size_t lo, size_t hi, double *kinetic,
                          double *potential)
 {

@@ -44,6 +44,14 @@ static inline double nbep_physics_plane_gap(nbep_vec3 n, double offset, nbep_vec
     return nbep_vec3_dot(n, p) - offset - r;
 }
 
+/* Position projection for the detection algorithms (issue 9: spheres that rest must not sink):
+ * a sphere found inside a plane is moved out along n to touch it; an overlapping pair is moved
+ * apart along the line of centres to touch, each by the other's mass share (the centre of
+ * mass stays). No change when not overlapping. */
+void nbep_physics_separate_plane(nbep_vec3 n, double offset, nbep_vec3 *p, double r);
+void nbep_physics_separate_pair(nbep_vec3 *p1, nbep_vec3 *p2, double r1, double r2, double m1,
+                                double m2);
+
 /* Kinetic (m v.v/2) and potential (-m a.p) energy of spheres [lo, hi), summed in index order
  * (so the same range always gives the same bits). */
 void nbep_physics_energy(const nbep_state *s, size_t lo, size_t hi, double *kinetic,
