@@ -34,7 +34,11 @@
  *   NBEP_REST_FRACTION of a step is set to rest on it: its normal velocity is zeroed and the
  *   plane carries its weight (its acceleration loses the component into the plane) until a
  *   response moves it off; otherwise infinitely many ever-smaller bounces would come in finite
- *   time (e < 1), and a sphere pressed on a plane at zero speed would react forever. */
+ *   time (e < 1), and a sphere pressed on a plane at zero speed would react forever.
+ *   Since issue 9 a sphere keeps up to NBEP_CONTACT_MAX such contacts at once (planes, and
+ *   spheres held still), its flight acceleration projected onto the cone they allow
+ *   (contact.h); see HOLD_SPEED_FRACTION for held spheres and tc_restitution for the TC model
+ *   that ends inelastic collapse. */
 #include <math.h>
 #include <stdalign.h>
 #include <stdatomic.h>
@@ -724,8 +728,9 @@ static void min_bounce_held(const pred_ctx *c, nbep_state *s, double dt, size_t 
         s->vel[k] = nbep_vec3_axpy(s->vel[k], want - u, n);
 }
 
-/* The TC model (Luding and McNamara 1998; DynamO's choice): a sphere-sphere collision within
- * tc of the last one of either sphere is elastic. Inelastic collapse needs ever faster
+/* The TC model (Luding and McNamara 1998; DynamO's choice): a collision within tc of the last
+ * one of either sphere is elastic (here planes count too: a sphere squeezed between a wall and
+ * a neighbour collapses just the same; for a plane, a == b). Inelastic collapse needs ever faster
  * re-collisions; these stop dissipating, so the sequence ends. tc is physically the duration
  * of a real contact, during which a hard-sphere model has no business dissipating twice. */
 static double tc_restitution(pred_ctx *c, double tc, double e, double t_abs, size_t a, size_t b)
