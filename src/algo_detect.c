@@ -214,7 +214,14 @@ static uint64_t detect_rows(const detect_ctx *ctx, const nbep_state *s, contact_
 }
 
 /* Thread 0: responds to every contact in the paper's serial order; returns collisions by kind
- * through the counters. A contact responds only while approaching (physics kernels). */
+ * through the counters. A contact responds only while approaching (physics kernels).
+ * Departure from the paper (issue 9): every overlap found is also undone by moving the
+ * sphere(s) back to touching (position projection). Without it a sphere resting under gravity
+ * gains -g dt each step, is found inside the plane, responds with e < 1 and sinks a little
+ * more every step (measured: bounce.deck 0.023 m into the floor after 100 s). With it a
+ * resting sphere never goes deeper than one step's fall, g dt^2, and a stack does not sink
+ * into itself; the potential energy this puts back is at most m |a| g dt^2 per contact and
+ * step, the same order as the detection error the algorithms already have. */
 static void respond_all(const detect_ctx *ctx, nbep_state *s, double e, int nt,
                         nbep_counters *cnt)
 {
@@ -226,9 +233,14 @@ static void respond_all(const detect_ctx *ctx, nbep_state *s, double e, int nt,
             if (j >= n) {
                 if (nbep_physics_respond_plane(s->plane_normal[j - n], &s->vel[i], e))
                     cnt->c[NBEP_COUNTER_PLANE_COLLISIONS]++;
-            } else if (nbep_physics_respond_pair(s->pos[i], s->pos[j], &s->vel[i], &s->vel[j],
-                                                 s->mass[i], s->mass[j], e)) {
-                cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
+                nbep_physics_separate_plane(s->plane_normal[j - n], s->plane_offset[j - n],
+                                            &s->pos[i], s->radius[i]);
+            } else {
+                if (nbep_physics_respond_pair(s->pos[i], s->pos[j], &s->vel[i], &s->vel[j],
+                                              s->mass[i], s->mass[j], e))
+                    cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
+                nbep_physics_separate_pair(&s->pos[i], &s->pos[j], s->radius[i], s->radius[j],
+                                           s->mass[i], s->mass[j]);
             }
         }
     }

@@ -34,7 +34,11 @@
  *   NBEP_REST_FRACTION of a step is set to rest on it: its normal velocity is zeroed and the
  *   plane carries its weight (its acceleration loses the component into the plane) until a
  *   response moves it off; otherwise infinitely many ever-smaller bounces would come in finite
- *   time (e < 1), and a sphere pressed on a plane at zero speed would react forever. */
+ *   time (e < 1), and a sphere pressed on a plane at zero speed would react forever.
+ *   Since issue 9 a sphere keeps up to NBEP_CONTACT_MAX such contacts at once (planes, and
+ *   spheres held still), its flight acceleration projected onto the cone they allow
+ *   (contact.h); see HOLD_SPEED_FRACTION for held spheres and tc_restitution for the TC model
+ *   that ends inelastic collapse. */
 #include <math.h>
 #include <stdalign.h>
 #include <stdatomic.h>
@@ -46,6 +50,7 @@
 #endif
 
 #include "nbep/barrier.h"
+#include "nbep/contact.h"
 #include "nbep/feq.h"
 #include "nbep/grid.h"
 #include "nbep/physics.h"
@@ -74,6 +79,19 @@
  * acceleration): about 1e-8 J for two 1 kg spheres under gravity at dt = 1e-3. */
 #define MIN_BOUNCE_STEP_FRACTION 0.1
 #define MIN_BOUNCE_REL_HEIGHT 1e-6
+/* Lasting sphere-sphere contacts (issue 9). A sphere whose contacts (planes, and spheres that
+ * are themselves held still) leave it no acceleration is "held still": velocity and effective
+ * acceleration exactly zero, so it costs no events and can carry others in turn; a settled
+ * pile is a network of held spheres on planes. A sphere joins it when it meets a held sphere
+ * with a normal speed that would not separate them for NBEP_REST_FRACTION of a step (the
+ * planes' rule) and the contacts it then has leave it no motion: its remaining speed along
+ * them is removed, and any tangential speed too if below HOLD_SPEED_FRACTION |a| dt (1e-5 m/s
+ * under gravity at dt = 1e-3: it would move 1e-8 m in a step). That kinetic energy, at most
+ * m (HOLD_SPEED_FRACTION |a| dt)^2 / 2 per sphere, is the only energy the model removes
+ * besides restitution. A held sphere is let go (time-ordered, at the instant its support
+ * changed) as soon as any of its supports reacts; a real impact (faster than the rest speed)
+ * on a held sphere is an ordinary response and wakes what it carries. */
+#define HOLD_SPEED_FRACTION 1e-3
 #define KEY_FREE UINT64_MAX
 
 typedef struct thread_ws {
@@ -81,8 +99,12 @@ typedef struct thread_ws {
     size_t n_cand;
     uint32_t *redo;           /* owned: own spheres to re-predict this round */
     size_t n_redo;
-    uint32_t *fired;          /* owned: spheres that reacted in this thread's last react phase */
+    uint32_t *fired;          /* owned: spheres that reacted in this thread's last react phase
+                               * (and own spheres let go after it) */
     size_t n_fired;
+    uint32_t *rel;            /* owned: own held spheres to let go this round */
+    size_t n_rel;
+    uint64_t woken;           /* held spheres this thread changed so far (react, let_go) */
     uint32_t *claimed;        /* owned: claim words written in the last claim phase */
     size_t n_claimed;
     nbep_event *part;         /* owned: best event over this thread's partners, per chunk entry */
@@ -103,12 +125,24 @@ typedef struct thread_ws {
 #define IN_CAND 1u
 #define IN_REDO 2u
 
+/* The lasting contacts of one sphere: planes (who >= 0) and held spheres (who = -1 - j, with
+ * the support's response count when it took the load; a later response lets go). */
+typedef struct rest_set {
+    int32_t who[NBEP_CONTACT_MAX];
+    uint64_t ver[NBEP_CONTACT_MAX];
+    uint8_t n;
+    bool still;       /* held still: v = 0 and aeff = 0 exactly */
+} rest_set;
+
 typedef struct pred_ctx {
     nbep_barrier bar;
     nbep_feq *q;                  /* owned */
     uint64_t *ver;                /* owned: responses per sphere; older predictions are stale */
     double *tau;                  /* owned: local time of each sphere inside the step */
-    int32_t *rest;                /* owned: plane a sphere rests on, or NO_PLANE */
+    const nbep_state *st;         /* borrowed: the run's state (pred_import) */
+    rest_set *rest;               /* owned: the contacts holding each sphere */
+    nbep_vec3 *aeff;              /* owned: acceleration each sphere flies with (rest_solve) */
+    double *t_last;               /* owned: time of each sphere's last sphere collision (TC) */
     uint8_t *flags;               /* owned: IN_CAND | IN_REDO */
     _Atomic uint64_t *claim[2];   /* owned: smallest pair key claiming a sphere, by round parity */
     _Atomic uint64_t *reacted;    /* owned: round stamp of a sphere's last reaction */
@@ -134,6 +168,8 @@ static void pred_destroy(void *p)
     nbep_free_aligned(c->ver);
     nbep_free_aligned(c->tau);
     nbep_free_aligned(c->rest);
+    nbep_free_aligned(c->aeff);
+    nbep_free_aligned(c->t_last);
     nbep_free_aligned(c->flags);
     nbep_free_aligned((void *)c->claim[0]);
     nbep_free_aligned((void *)c->claim[1]);
@@ -143,6 +179,7 @@ static void pred_destroy(void *p)
             free(c->ws[t].cand);
             free(c->ws[t].redo);
             free(c->ws[t].fired);
+            free(c->ws[t].rel);
             free(c->ws[t].claimed);
             nbep_free_aligned(c->ws[t].part);
             nbep_predict_ws_destroy(&c->ws[t].pws);
@@ -159,6 +196,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     if (!c)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm");
     c->nt = sim->nt;
+    c->st = &sim->st;
     nbep_barrier_init(&c->bar, (unsigned)sim->nt);
     nbep_status st = nbep_feq_create(n, &c->q, d);
     if (st != NBEP_OK) {
@@ -168,12 +206,14 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     c->ver = nbep_alloc_aligned(n, sizeof *c->ver);
     c->tau = nbep_alloc_aligned(n, sizeof *c->tau);
     c->rest = nbep_alloc_aligned(n, sizeof *c->rest);
+    c->aeff = nbep_alloc_aligned(n, sizeof *c->aeff);
+    c->t_last = nbep_alloc_aligned(n, sizeof *c->t_last);
     c->flags = nbep_alloc_aligned(n, sizeof *c->flags);
     c->claim[0] = nbep_alloc_aligned(n, sizeof *c->claim[0]);
     c->claim[1] = nbep_alloc_aligned(n, sizeof *c->claim[1]);
     c->reacted = nbep_alloc_aligned(n, sizeof *c->reacted);
     c->ws = nbep_alloc_aligned((size_t)sim->nt, sizeof *c->ws);
-    if (!c->ver || !c->tau || !c->rest || !c->flags || !c->claim[0] || !c->claim[1] ||
+    if (!c->ver || !c->tau || !c->rest || !c->aeff || !c->t_last || !c->flags || !c->claim[0] || !c->claim[1] ||
         !c->reacted || !c->ws) {
         pred_destroy(c);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm (%zu spheres)",
@@ -190,7 +230,9 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     for (size_t i = 0; i < n; i++)
         c->rmax = fmax(c->rmax, sim->st.radius[i]);
     for (size_t i = 0; i < n; i++) {
-        c->rest[i] = NO_PLANE;
+        c->rest[i] = (rest_set){.n = 0};
+        c->aeff[i] = sim->st.acc[i];
+        c->t_last[i] = -INFINITY;
         atomic_init(&c->claim[0][i], KEY_FREE);
         atomic_init(&c->claim[1][i], KEY_FREE);
         atomic_init(&c->reacted[i], 0);
@@ -201,10 +243,11 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         thread_ws *w = &c->ws[t];
         w->cand = malloc(own * sizeof *w->cand);
         w->redo = malloc(own * sizeof *w->redo);
-        w->fired = malloc(2 * own * sizeof *w->fired);
+        w->fired = malloc(3 * own * sizeof *w->fired); /* 2 per reaction, 1 per let-go */
+        w->rel = malloc(own * sizeof *w->rel);
         w->claimed = malloc(2 * own * sizeof *w->claimed);
         w->part = nbep_alloc_aligned(CHUNK, sizeof *w->part);
-        if (!w->cand || !w->redo || !w->fired || !w->claimed || !w->part) {
+        if (!w->cand || !w->redo || !w->fired || !w->rel || !w->claimed || !w->part) {
             pred_destroy(c);
             NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm");
         }
@@ -218,17 +261,87 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     return NBEP_OK;
 }
 
-/* The acceleration sphere i flies with: its own, less the part a resting plane carries. */
+/* The acceleration sphere i flies with: its own, less the part its contacts carry. */
 static nbep_vec3 effective_acc(const pred_ctx *c, const nbep_state *s, size_t i)
 {
-    nbep_vec3 a = s->acc[i];
-    if (c->rest[i] != NO_PLANE) {
-        nbep_vec3 n = s->plane_normal[c->rest[i]];
-        double an = nbep_vec3_dot(a, n);
-        if (an < 0.0)
-            a = nbep_vec3_axpy(a, -an, n);
+    (void)s;
+    return c->aeff[i];
+}
+
+static bool is_zero(nbep_vec3 v)
+{
+    return v.x == 0.0 && v.y == 0.0 && v.z == 0.0;
+}
+
+/* A sphere whose contacts carry its whole weight (it may still slide): a slow partner treats it
+ * as part of the support. */
+static bool supported(const pred_ctx *c, size_t i)
+{
+    return c->rest[i].n > 0 && is_zero(c->aeff[i]);
+}
+
+static bool rest_has_plane(const rest_set *r, size_t p)
+{
+    for (int k = 0; k < r->n; k++)
+        if (r->who[k] == (int32_t)p)
+            return true;
+    return false;
+}
+
+/* Unit normals of the contacts of r, from support to sphere i. */
+static void rest_normals(const nbep_state *s, size_t i, const rest_set *r, nbep_vec3 *n)
+{
+    for (int k = 0; k < r->n; k++) {
+        if (r->who[k] >= 0) {
+            n[k] = s->plane_normal[r->who[k]];
+        } else {
+            nbep_vec3 d = nbep_vec3_sub(s->pos[i], s->pos[-1 - r->who[k]]);
+            double len = nbep_vec3_norm(d);
+            n[k] = nbep_vec3_make(d.x / len, d.y / len, d.z / len);
+        }
     }
-    return a;
+}
+
+/* Solves the contacts r of sphere i with velocity *v: keeps the contacts that carry load,
+ * writes the acceleration left (*a) and, when tangent, removes v's components along them.
+ * A sphere contact is only valid while the sphere is held still (a tangent plane would let
+ * it float off a curved support); if the result is not still, sphere contacts are dropped
+ * and the planes solved alone. Returns the still flag. */
+static bool rest_solve(const nbep_state *s, size_t i, rest_set *r, nbep_vec3 *v,
+                       nbep_vec3 *a, double dt, bool tangent)
+{
+    nbep_vec3 n[NBEP_CONTACT_MAX];
+    for (int pass = 0; pass < 2; pass++) {
+        rest_normals(s, i, r, n);
+        unsigned act;
+        *a = nbep_contact_project(s->acc[i], n, r->n, &act);
+        if (tangent)
+            *v = nbep_contact_tangent(*v, n, r->n, act);
+        rest_set k = {.n = 0};
+        bool spheres = false;
+        for (int j = 0; j < r->n; j++)
+            if (act >> j & 1u) {
+                k.who[k.n] = r->who[j];
+                k.ver[k.n++] = r->ver[j];
+                spheres |= r->who[j] < 0;
+            }
+        *r = k;
+        double amag = nbep_vec3_norm(s->acc[i]);
+        if (r->n > 0 && nbep_vec3_norm(*a) <= NBEP_CONTACT_TOL * amag) {
+            *a = nbep_vec3_make(0.0, 0.0, 0.0);
+            if (nbep_vec3_norm(*v) <= HOLD_SPEED_FRACTION * amag * dt)
+                *v = nbep_vec3_make(0.0, 0.0, 0.0);
+        }
+        r->still = r->n > 0 && is_zero(*a) && is_zero(*v);
+        if (r->still || !spheres)
+            return r->still;
+        k.n = 0; /* sphere contacts without being held: planes only */
+        for (int j = 0; j < r->n; j++)
+            if (r->who[j] >= 0)
+                k.who[k.n++] = r->who[j];
+        *r = k;
+    }
+    return r->still;
 }
 
 static bool is_fresh(const pred_ctx *c, size_t i, const nbep_event *ev)
@@ -274,7 +387,7 @@ static nbep_event predict_some(const pred_ctx *c, const nbep_state *s, size_t i,
     const nbep_vec3 ai = effective_acc(c, s, i);
     if (with_planes) {
         for (size_t p = 0; p < s->n_planes; p++) {
-            if ((int32_t)p == c->rest[i])
+            if (rest_has_plane(&c->rest[i], p))
                 continue;
             nbep_vec3 n = s->plane_normal[p];
             double gap = nbep_physics_plane_gap(n, s->plane_offset[p], s->pos[i], s->radius[i]);
@@ -533,11 +646,23 @@ static void claim_phase(pred_ctx *c, int par, double t_min, thread_ws *w)
     }
 }
 
-/* After a response, a resting sphere that now moves along the plane's normal leaves it. */
-static void update_rest(pred_ctx *c, const nbep_state *s, size_t i)
+/* After a response, a sphere leaves every contact along whose normal it now moves (and its
+ * sphere contacts if it moves at all); the rest are solved again. */
+static void update_rest(pred_ctx *c, nbep_state *s, size_t i, double dt)
 {
-    if (c->rest[i] != NO_PLANE && nbep_vec3_dot(s->vel[i], s->plane_normal[c->rest[i]]) != 0.0)
-        c->rest[i] = NO_PLANE;
+    rest_set *r = &c->rest[i];
+    if (r->n == 0)
+        return;
+    nbep_vec3 n[NBEP_CONTACT_MAX];
+    rest_normals(s, i, r, n);
+    rest_set k = {.n = 0};
+    for (int j = 0; j < r->n; j++)
+        if (nbep_vec3_dot(s->vel[i], n[j]) == 0.0 && (r->who[j] >= 0 || is_zero(s->vel[i]))) {
+            k.who[k.n] = r->who[j];
+            k.ver[k.n++] = r->ver[j];
+        }
+    *r = k;
+    rest_solve(s, i, r, &s->vel[i], &c->aeff[i], dt, false);
 }
 
 static void advance_to(pred_ctx *c, nbep_state *s, size_t i, double t_local)
@@ -576,49 +701,191 @@ static void min_bounce(const pred_ctx *c, nbep_state *s, double dt, uint32_t lo,
     if (u >= want)
         return;
     double m = s->mass[lo] + s->mass[hi], du = want - u;
-    s->vel[lo] = nbep_vec3_axpy(s->vel[lo], -du * s->mass[hi] / m, n);
-    s->vel[hi] = nbep_vec3_axpy(s->vel[hi], du * s->mass[lo] / m, n);
+    /* a sphere whose planes carry its weight takes no share: the kick would otherwise pump
+     * energy into the bottom of a pile, kick after kick (measured: a settled pile heats up) */
+    double share_lo = s->mass[hi] / m, share_hi = s->mass[lo] / m;
+    if (supported(c, lo) != supported(c, hi)) {
+        share_lo = supported(c, lo) ? 0.0 : 1.0;
+        share_hi = 1.0 - share_lo;
+    }
+    s->vel[lo] = nbep_vec3_axpy(s->vel[lo], -du * share_lo, n);
+    s->vel[hi] = nbep_vec3_axpy(s->vel[hi], du * share_hi, n);
 }
 
-static void react(pred_ctx *c, nbep_state *s, double e, double dt, double t_local,
-                  uint32_t lo, uint32_t hi, const nbep_event *ev, thread_ws *w,
+/* A sphere k without support pressed onto a held sphere j (n from j to k) leaves it with at
+ * least the separating speed that keeps it off for t_min (see MIN_BOUNCE_STEP_FRACTION); j, held
+ * by the pile, does not move. */
+static void min_bounce_held(const pred_ctx *c, nbep_state *s, double dt, size_t k, size_t j,
+                            nbep_vec3 n)
+{
+    double an = nbep_vec3_dot(c->aeff[k], n);
+    if (!(an < 0.0))
+        return;
+    double rmin = fmin(s->radius[k], s->radius[j]);
+    double t_min = fmin(MIN_BOUNCE_STEP_FRACTION * dt, sqrt(8.0 * MIN_BOUNCE_REL_HEIGHT * rmin / -an));
+    double want = -an * t_min / 2.0, u = nbep_vec3_dot(s->vel[k], n);
+    if (u < want)
+        s->vel[k] = nbep_vec3_axpy(s->vel[k], want - u, n);
+}
+
+/* The TC model (Luding and McNamara 1998; DynamO's choice): a collision within tc of the last
+ * one of either sphere is elastic (here planes count too: a sphere squeezed between a wall and
+ * a neighbour collapses just the same; for a plane, a == b). Inelastic collapse needs ever faster
+ * re-collisions; these stop dissipating, so the sequence ends. tc is physically the duration
+ * of a real contact, during which a hard-sphere model has no business dissipating twice. */
+static double tc_restitution(pred_ctx *c, double tc, double e, double t_abs, size_t a, size_t b)
+{
+    bool recent = t_abs - c->t_last[a] < tc || t_abs - c->t_last[b] < tc;
+    c->t_last[a] = t_abs;
+    c->t_last[b] = t_abs;
+    return recent ? 1.0 : e;
+}
+
+static void fire(pred_ctx *c, thread_ws *w, const nbep_state *s, size_t i, bool was_still)
+{
+    c->ver[i]++;
+    w->fired[w->n_fired++] = (uint32_t)i;
+    w->vmax_react = fmax(w->vmax_react, nbep_vec3_norm(s->vel[i]));
+    if (was_still)
+        w->woken++;
+}
+
+
+/* Holds a supported sphere still when slower than the hold speed (see HOLD_SPEED_FRACTION). */
+static bool try_hold(pred_ctx *c, nbep_state *s, size_t i, double dt)
+{
+    if (!supported(c, i) ||
+        !(nbep_vec3_norm(s->vel[i]) <= HOLD_SPEED_FRACTION * nbep_vec3_norm(s->acc[i]) * dt))
+        return false;
+    s->vel[i] = nbep_vec3_make(0.0, 0.0, 0.0);
+    c->rest[i].still = true;
+    return true;
+}
+
+/* Sphere k (not held) meets held sphere j at a normal speed below the hold speed: it joins the
+ * held pile if pressed onto j at the rest speed and its contacts then leave it no motion,
+ * else bounces off j as off a wall (j is carried by the pile; the momentum, below m times the
+ * hold speed, goes to it as to a plane). */
+static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t k, size_t j,
+                         double t_abs, double tc, thread_ws *w, nbep_counters *cnt)
+{
+    nbep_vec3 d = nbep_vec3_sub(s->pos[k], s->pos[j]);
+    double len = nbep_vec3_norm(d);
+    nbep_vec3 n = nbep_vec3_make(d.x / len, d.y / len, d.z / len);
+    double u = nbep_vec3_dot(s->vel[k], n), an = nbep_vec3_dot(c->aeff[k], n);
+    rest_set r = c->rest[k];
+    /* a bounce off j shorter than tc would be elastic (TC) and never shrink: rest */
+    if (an < 0.0 && 2.0 * fabs(u) <= -an * fmax(NBEP_REST_FRACTION * dt, tc) &&
+        r.n < NBEP_CONTACT_MAX) {
+        r.who[r.n] = -1 - (int32_t)j;
+        r.ver[r.n++] = c->ver[j];
+        nbep_vec3 v = s->vel[k], a;
+        if (rest_solve(s, k, &r, &v, &a, dt, true)) {
+            c->rest[k] = r;
+            s->vel[k] = v;
+            c->aeff[k] = a;
+            fire(c, w, s, k, false);
+            return;
+        }
+    }
+    if (nbep_physics_respond_plane(n, &s->vel[k], tc_restitution(c, tc, e, t_abs, k, k)))
+        cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
+    update_rest(c, s, k, dt);
+    min_bounce_held(c, s, dt, k, j, n);
+    update_rest(c, s, k, dt);
+    fire(c, w, s, k, false);
+}
+
+static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs,
+                  double t_local, uint32_t lo, uint32_t hi, const nbep_event *ev, thread_ws *w,
                   nbep_counters *cnt, nbep_thread_max *mx)
 {
+    const double e = sc->restitution, dt = sc->dt;
     advance_to(c, s, lo, t_local);
+    const bool still_lo = c->rest[lo].still;
     if (ev->kind == NBEP_EVENT_PLANE) {
         uint32_t p = UINT32_MAX - hi;
         nbep_vec3 n = s->plane_normal[p];
         double gap = nbep_physics_plane_gap(n, s->plane_offset[p], s->pos[lo], s->radius[lo]);
         note_overlap(mx, -gap, s->radius[lo]);
-        if (nbep_physics_respond_plane(n, &s->vel[lo], e))
+        if (nbep_physics_respond_plane(n, &s->vel[lo], tc_restitution(c, sc->tc, e, t_abs, lo, lo)))
             cnt->c[NBEP_COUNTER_PLANE_COLLISIONS]++;
-        update_rest(c, s, lo);
+        update_rest(c, s, lo, dt);
         double an = nbep_vec3_dot(s->acc[lo], n), vn = nbep_vec3_dot(s->vel[lo], n);
-        if (an < 0.0 && vn >= 0.0 && 2.0 * vn <= -an * NBEP_REST_FRACTION * dt) {
-            s->vel[lo] = nbep_vec3_axpy(s->vel[lo], -vn, n);
-            c->rest[lo] = (int32_t)p;
+        rest_set *r = &c->rest[lo];
+        /* a bounce shorter than tc would be elastic (TC) and never shrink: rest */
+        if (an < 0.0 && vn >= 0.0 && 2.0 * vn <= -an * fmax(NBEP_REST_FRACTION * dt, sc->tc) &&
+            r->n < NBEP_CONTACT_MAX) {
+            r->who[r->n] = (int32_t)p;
+            r->ver[r->n++] = 0;
+            rest_solve(s, lo, r, &s->vel[lo], &c->aeff[lo], dt, true);
         }
-        c->ver[lo]++;
-        w->fired[w->n_fired++] = lo;
-        w->vmax_react = fmax(w->vmax_react, nbep_vec3_norm(s->vel[lo]));
+        fire(c, w, s, lo, still_lo);
         return;
     }
     advance_to(c, s, hi, t_local);
+    const bool still_hi = c->rest[hi].still;
     double sigma = s->radius[lo] + s->radius[hi];
     note_overlap(mx, sigma - nbep_vec3_norm(nbep_vec3_sub(s->pos[hi], s->pos[lo])),
                  fmin(s->radius[lo], s->radius[hi]));
+    const bool sup_lo = supported(c, lo), sup_hi = supported(c, hi);
+    if (sup_lo != sup_hi) {
+        size_t k = sup_lo ? hi : lo, j = sup_lo ? lo : hi;
+        if (!c->rest[j].still && try_hold(c, s, j, dt))
+            fire(c, w, s, j, false);
+        nbep_vec3 d = nbep_vec3_sub(s->pos[k], s->pos[j]);
+        double u = nbep_vec3_dot(s->vel[k], d) / nbep_vec3_norm(d);
+        if (c->rest[j].still && fabs(u) <= HOLD_SPEED_FRACTION * nbep_vec3_norm(s->acc[k]) * dt) {
+            land_on_held(c, s, e, dt, k, j, t_abs, sc->tc, w, cnt);
+            return;
+        }
+    }
     if (nbep_physics_respond_pair(s->pos[lo], s->pos[hi], &s->vel[lo], &s->vel[hi],
-                                  s->mass[lo], s->mass[hi], e))
+                                  s->mass[lo], s->mass[hi],
+                                  tc_restitution(c, sc->tc, e, t_abs, lo, hi)))
         cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
     min_bounce(c, s, dt, lo, hi);
-    update_rest(c, s, lo);
-    update_rest(c, s, hi);
-    c->ver[lo]++;
-    c->ver[hi]++;
-    w->fired[w->n_fired++] = lo;
-    w->fired[w->n_fired++] = hi;
-    w->vmax_react = fmax(w->vmax_react,
-                         fmax(nbep_vec3_norm(s->vel[lo]), nbep_vec3_norm(s->vel[hi])));
+    update_rest(c, s, lo, dt);
+    update_rest(c, s, hi, dt);
+    fire(c, w, s, lo, still_lo);
+    fire(c, w, s, hi, still_hi);
+}
+
+/* After a react phase that changed held spheres: every thread lets go of its own held spheres
+ * whose sphere supports have reacted since they took the load, at the time of this round
+ * (they have not moved: v = 0, a = 0). A sphere still held by what is left stays. Letting go
+ * changes held spheres in turn, so it repeats round by round down the pile. Two sub-phases
+ * (find, then change) so that no thread reads a response count another is writing. */
+static void let_go_phase(pred_ctx *c, nbep_state *s, nbep_range own, double dt, double t_local,
+                         thread_ws *w)
+{
+    w->n_rel = 0;
+    for (size_t i = own.lo; i < own.hi; i++) {
+        const rest_set *r = &c->rest[i];
+        if (!r->still)
+            continue;
+        for (int k = 0; k < r->n; k++)
+            if (r->who[k] < 0 && r->ver[k] != c->ver[-1 - r->who[k]]) {
+                w->rel[w->n_rel++] = (uint32_t)i;
+                break;
+            }
+    }
+    nbep_barrier_wait(&c->bar);
+    for (size_t m = 0; m < w->n_rel; m++) {
+        size_t i = w->rel[m];
+        rest_set *r = &c->rest[i];
+        rest_set k = {.n = 0};
+        for (int j = 0; j < r->n; j++)
+            if (r->who[j] >= 0 || r->ver[j] == c->ver[-1 - r->who[j]]) {
+                k.who[k.n] = r->who[j];
+                k.ver[k.n++] = r->ver[j];
+            }
+        *r = k;
+        advance_to(c, s, i, t_local);
+        if (!rest_solve(s, i, r, &s->vel[i], &c->aeff[i], dt, false))
+            fire(c, w, s, i, true);
+    }
+    nbep_barrier_wait(&c->bar);
 }
 
 static void react_phase(pred_ctx *c, nbep_state *s, const nbep_scene *sc, int par, double T0,
@@ -649,7 +916,7 @@ static void react_phase(pred_ctx *c, nbep_state *s, const nbep_scene *sc, int pa
                                                      memory_order_relaxed))
             continue;
         cnt->c[NBEP_COUNTER_REACTIONS]++;
-        react(c, s, sc->restitution, sc->dt, t_min - T0, lo, hi, ev, w, cnt, mx);
+        react(c, s, sc, t_min, t_min - T0, lo, hi, ev, w, cnt, mx);
     }
 }
 
@@ -667,7 +934,7 @@ static void pred_run(nbep_sim *sim, void *p)
         nbep_state *s = &sim->st;
         const nbep_range own = nbep__range_split(s->n, tid, nt);
         thread_ws *w = &c->ws[tid];
-        uint64_t round = 0;
+        uint64_t round = 0, seen_woken = 0;
         if (tid == 0 && c->use_grid)
             grid_prepare(c, s, (double)(sim->step_first - 1) * sim->dt, sim->dt, true);
         /* OpenMP's own hand-over into and out of the region is invisible to ThreadSanitizer
@@ -737,6 +1004,13 @@ static void pred_run(nbep_sim *sim, void *p)
                 nbep_barrier_wait(&c->bar);
                 react_phase(c, s, sim->scene, par, T0, t_min, round + 1, w, cnt, mx);
                 nbep_barrier_wait(&c->bar);
+                uint64_t woken = 0;
+                for (int t = 0; t < nt; t++)
+                    woken += c->ws[t].woken;
+                if (woken != seen_woken) { /* the same decision on every thread */
+                    seen_woken = woken;
+                    let_go_phase(c, s, own, sim->dt, t_min - T0, w);
+                }
             }
             /* update (paper Section 4.3.1): every own sphere flies to the step's end; grid mode
              * also takes the speed bounds of the next step here, in parallel */
@@ -784,7 +1058,10 @@ static void pred_export(const void *p, const nbep_state *s, double *time, uint32
         time[i] = fresh && ev->kind != NBEP_EVENT_NEVER ? ev->time : 0.0; /* never inf: STYLE */
         partner[i] = fresh ? ev->partner : 0;
         kind[i] = (uint8_t)(fresh ? ev->kind : NBEP_EVENT_NONE);
-        rest[i] = c->rest[i];
+        rest[i] = NO_PLANE; /* the file keeps one plane: the first (see pred_import) */
+        for (int k = c->rest[i].n - 1; k >= 0; k--)
+            if (c->rest[i].who[k] >= 0)
+                rest[i] = c->rest[i].who[k];
     }
 }
 
@@ -794,7 +1071,15 @@ static void pred_import(void *p, const nbep_resume *r)
 {
     pred_ctx *c = p;
     for (size_t i = 0; i < r->n; i++) {
-        c->rest[i] = r->rest[i];
+        /* A resumed run gets back one resting plane per sphere; other contacts (a second plane,
+         * held spheres) are found again by zero-time events in its first step. */
+        c->rest[i] = (rest_set){.n = 0};
+        if (r->rest[i] >= 0) {
+            c->rest[i].who[0] = r->rest[i];
+            c->rest[i].n = 1;
+        }
+        nbep_vec3 v = r->vel[i];
+        rest_solve(c->st, i, &c->rest[i], &v, &c->aeff[i], 0.0, false);
         nbep_feq_remove(c->q, i);
         if (r->event_kind[i] == NBEP_EVENT_NEVER)
             nbep_feq_set_never(c->q, i, 0);

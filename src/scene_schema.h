@@ -41,6 +41,9 @@ enum {
       "uniform acceleration of every sphere without its own")                                      \
     X(PHYSICS_RESTITUTION, "physics.restitution", FLOAT, F_IN01, "1.0", NULL,                      \
       "coefficient of restitution e, sphere-sphere and sphere-plane")                              \
+    X(PHYSICS_TC, "physics.tc", FLOAT, F_GE0, "1.0e-6", NULL,                                      \
+      "TC model: a collision within tc seconds of the sphere's previous one is elastic (stops "  \
+      "inelastic collapse); 0: off")                                                               \
     X(BOX, "box", GROUP, 0, NULL, "none", "optional: six inward planes bounding [min, max]")       \
     X(BOX_MIN, "box.min", VEC3, F_REQUIRED, NULL, "required", "lower corner")                      \
     X(BOX_MAX, "box.max", VEC3, F_REQUIRED, NULL, "required",                                      \

@@ -396,6 +396,11 @@ static void test_detection_touching_and_approaching_at_t0_react_after_the_first_
         nbep_vec3 v0 = touch_v(w0), v1 = touch_v(w1);
         nbep_vec3 p0 = fly(TOUCH_P0, v0, dt), p1 = fly(TOUCH_P1, v1, dt);
         respond(touch_n(), &v0, &v1, TOUCH_M0, TOUCH_M1, TOUCH_E);
+        /* issue 9: detection then undoes the overlap, (w0 - w1) dt along n, moving each
+         * sphere by the other's mass share (the centre of mass stays) */
+        double ov = (w0 - w1) * dt, m = TOUCH_M0 + TOUCH_M1;
+        p0 = nbep_vec3_axpy(p0, -ov * TOUCH_M1 / m, touch_n());
+        p1 = nbep_vec3_axpy(p1, ov * TOUCH_M0 / m, touch_n());
         assert_vec3_close(o->fin.vel[0], v0, FEW_ULPS, FEW_ULPS);
         assert_vec3_close(o->fin.vel[1], v1, FEW_ULPS, FEW_ULPS);
         assert_vec3_close(o->fin.pos[0], fly(p0, v0, T - dt), 0.0, drift_tol(50, 3.0));
@@ -697,7 +702,7 @@ static void test_detection_fast_sphere_tunnels_through_another_by_design(void **
 }
 
 /* The same trade with planes: the sphere ends steps far beyond a wall before it is turned
- * back, so frames show it outside the box. */
+ * back (and, since issue 9, put back inside by position projection). */
 static void test_detection_fast_sphere_leaves_a_thin_box_between_frames_by_design(void **state)
 {
     fixture *f = *state;
@@ -705,7 +710,10 @@ static void test_detection_fast_sphere_leaves_a_thin_box_between_frames_by_desig
         thin_box(f, DETECTORS[k], 100.0, 20);
         const outcome *o = run(f, 1);
         assert_clean(o, DETECTORS[k]);
-        assert_true(o->w.overlap_rel > 2.0); /* its centre beyond a wall by more than r */
+        /* detection finds its centre beyond a wall by more than r; since issue 9 it puts the
+         * sphere back inside before the frame, so frames show it touching at most */
+        assert_true(o->sum.max_overlap_rel > 2.0);
+        assert_true(o->w.overlap_rel <= 1e-12);
         assert_true(o->sum.plane_collisions > 0);
     }
 }

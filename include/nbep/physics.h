@@ -24,15 +24,18 @@ static inline void nbep_physics_drift(nbep_vec3 *p, nbep_vec3 *v, nbep_vec3 a, d
 }
 
 /* Sphere-sphere response (paper Section 5): n is the unit vector from sphere 1 to sphere 2
- * (p2 - p1 normalised), c = n.(v1 - v2); when c > 0 (approaching)
- * v1 -= m2 c (1+e) n / (m1+m2), v2 += m1 c (1+e) n / (m1+m2) and true is returned; otherwise
- * nothing changes and false is returned (also when p1 == p2, where n is undefined).
- * The result is bitwise the same whichever sphere is called "1". */
+ * (p2 - p1 normalised), c = n.(v1 - v2); when the pair closes by the test prediction uses,
+ * (p2 - p1).(v2 - v1) < 0, v1 -= m2 c (1+e) n / (m1+m2), v2 += m1 c (1+e) n / (m1+m2) and
+ * true is returned; otherwise nothing changes and false is returned (also when p1 == p2,
+ * where n is undefined). Afterwards the pair never closes by that test (a residual of
+ * round-off, e.g. with e = 0, is pushed out along n: see physics.c), so it is not predicted
+ * to touch again at zero time. The result is bitwise the same whichever sphere is called "1". */
 bool nbep_physics_respond_pair(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, nbep_vec3 *v2,
                                double m1, double m2, double e);
 
 /* Sphere-plane response: n is the plane's unit normal (into the live side); when v.n < 0,
- * v -= (1+e)(v.n) n and true is returned, else false. */
+ * v -= (1+e)(v.n) n and true is returned, else false. Afterwards v.n >= 0 exactly (a
+ * round-off residual is pushed out, as for pairs). */
 bool nbep_physics_respond_plane(nbep_vec3 n, nbep_vec3 *v, double e);
 
 /* Signed gap between a sphere and a plane: n.p - offset - r (negative = overlapping). */
@@ -40,6 +43,14 @@ static inline double nbep_physics_plane_gap(nbep_vec3 n, double offset, nbep_vec
 {
     return nbep_vec3_dot(n, p) - offset - r;
 }
+
+/* Position projection for the detection algorithms (issue 9: spheres that rest must not sink):
+ * a sphere found inside a plane is moved out along n to touch it; an overlapping pair is moved
+ * apart along the line of centres to touch, each by the other's mass share (the centre of
+ * mass stays). No change when not overlapping. */
+void nbep_physics_separate_plane(nbep_vec3 n, double offset, nbep_vec3 *p, double r);
+void nbep_physics_separate_pair(nbep_vec3 *p1, nbep_vec3 *p2, double r1, double r2, double m1,
+                                double m2);
 
 /* Kinetic (m v.v/2) and potential (-m a.p) energy of spheres [lo, hi), summed in index order
  * (so the same range always gives the same bits). */

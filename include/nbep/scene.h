@@ -38,6 +38,7 @@ typedef struct nbep_scene {
     /* physics */
     nbep_vec3 gravity;
     double restitution;
+    double tc;                /* TC model: collisions within tc of the last are elastic */
     /* box (optional) */
     bool has_box;
     nbep_vec3 box_min, box_max;
