@@ -50,8 +50,9 @@ enum {
       "threads; 0: OMP_NUM_THREADS, else all cores")                                               \
     X(RUN_SEED, "run.seed", INT, F_GE0, "1", NULL, "every random choice derives from it")          \
     X(RUN_NEIGHBORS, "run.neighbors", STRING, 0, "\"all\"", NULL,                                  \
-      "predictive: whom a re-prediction tests: \"all\" spheres (the paper) or \"grid\" (nearby "  \
-      "cells within a time horizon)")                                                              \
+      "predictive: whom a re-prediction tests: \"all\" spheres (the paper), \"grid\" (nearby "  \
+      "cells within a time horizon) or \"cells\" (event loop: cell lists and a calendar; "        \
+      "needs a box)")                                                              \
     X(PHYSICS, "physics", GROUP, 0, NULL, "-", "physics")                                          \
     X(PHYSICS_GRAVITY, "physics.gravity", VEC3, 0, "[0.0, 0.0, 0.0]", NULL,                        \
       "uniform acceleration of every sphere without its own")                                      \
@@ -130,7 +131,7 @@ static const schema_entry schema[S_COUNT] = {
 };
 
 static const char *const algorithm_names[] = {"naive", "seminaive", "predictive"};
-static const char *const neighbor_names[] = {"all", "grid"};
+static const char *const neighbor_names[] = {"all", "grid", "cells"};
 static const char *const place_names[] = {"random", "lattice"};
 static const char *const field_names[] = {"position", "velocity"};
 enum { N_ALGORITHMS = 3, N_PLACES = 2, N_FIELDS = 2 };
@@ -598,8 +599,11 @@ static void parse_run(load *L, const config_setting_t *root, nbep_scene *sc, boo
         one_of(L, at, "run.algorithm", algorithm, algorithm_names, N_ALGORITHMS) >= 0)
         snprintf(sc->algorithm, sizeof sc->algorithm, "%s", algorithm);
     const char *neighbors;
-    if (get_string(L, run, "run", S_RUN_NEIGHBORS, &neighbors, &at) == GOT)
-        sc->neighbors_grid = one_of(L, at, "run.neighbors", neighbors, neighbor_names, 2) == 1;
+    if (get_string(L, run, "run", S_RUN_NEIGHBORS, &neighbors, &at) == GOT) {
+        int k = one_of(L, at, "run.neighbors", neighbors, neighbor_names, 3);
+        sc->neighbors_grid = k == 1;
+        sc->neighbors_cells = k == 2;
+    }
     int64_t v;
     if (get_int(L, run, "run", S_RUN_STEPS, &v, NULL) == GOT)
         sc->steps = (uint64_t)v;
@@ -1116,6 +1120,9 @@ nbep_status nbep_scene_load(const char *deck_path, const char *const *overrides,
     const size_t geometry0 = d->n_errors;
     parse_physics(&L, root, &sc);
     parse_box(&L, root, &sc);
+    if (sc.neighbors_cells && !config_lookup(&cfg, "box"))
+        ERR(&L, config_lookup(&cfg, "run.neighbors"),
+            "run.neighbors = \"cells\" needs a box (its cells cover the box)");
     parse_planes(&L, root, &planes, &n_planes);
     parse_spheres(&L, root, &sc, &entries, &n_entries);
     const bool geometry_ok = seed_ok && d->n_errors == geometry0 && !L.c.oom;

@@ -47,6 +47,22 @@ bin/nbep run $deck "${args[@]}" "${grid[@]}" -n 80 --resume $tmp/grid-part.h5
 check "predictive grid: resumed after a planned stop, frames equal the whole run's" \
     "same_frames $tmp/grid-whole.h5 $tmp/grid-part.h5"
 
+# the cells mode (beyond the paper) rebuilds its cells and slots at every frame that is a
+# multiple of output.every, and resumes from such frames only
+cells=(--set 'run.neighbors="cells"')
+bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 80 -o $tmp/cells-whole.h5
+bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 40 -o $tmp/cells-part.h5
+bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 80 --resume $tmp/cells-part.h5
+check "predictive cells: resumed after a planned stop, frames equal the whole run's" \
+    "same_frames $tmp/cells-whole.h5 $tmp/cells-part.h5"
+bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 42 -o $tmp/cells-odd.h5
+bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 80 --resume $tmp/cells-odd.h5 \
+    2>$tmp/cells-odd.err
+rc=$?
+check "predictive cells: a resume from step 42 (every 5) is refused with exit 2 (got $rc)" \
+    "[ $rc = 2 ] && grep -q 'multiple of output.every (5); the file.s last frame is step 42' \
+    $tmp/cells-odd.err"
+
 # killed by SIGTERM at an arbitrary step of a very long run, then resumed to a fixed end past
 # that step; compared with one uninterrupted run to the same end (no assumption on how far the
 # killed run got: that depends on the machine)
