@@ -698,11 +698,13 @@ static nbep_event cells_planes(void *u, uint32_t i)
     return predict_some(x->c, x->s, i, 0, 0, true, x->T0, x->w, x->cnt);
 }
 
-static nbep_event cells_pair(void *u, uint32_t i, uint32_t j)
+static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, nbep_event *best)
 {
     cells_user *x = u;
-    x->cnt->c[NBEP_COUNTER_PREDICTIONS]++;
-    return pair_event(x->c, x->s, i, effective_acc(x->c, x->s, i), j, x->T0, x->w);
+    const nbep_vec3 ai = effective_acc(x->c, x->s, i);
+    for (size_t k = 0; k < m; k++)
+        keep_earlier(best, pair_event(x->c, x->s, i, ai, js[k], x->T0, x->w));
+    x->cnt->c[NBEP_COUNTER_PREDICTIONS] += m;
 }
 
 static bool cells_fresh(void *u, uint32_t i, const nbep_event *ev)
@@ -734,7 +736,7 @@ static void cells_flight(void *u, uint32_t i, double t, nbep_vec3 *p, nbep_vec3 
         nbep_physics_drift(p, v, *a, h);
 }
 
-static const nbep_evloop_ops cells_ops = {cells_planes, cells_pair, cells_fresh, cells_react,
+static const nbep_evloop_ops cells_ops = {cells_planes, cells_pairs, cells_fresh, cells_react,
                                           cells_flight};
 
 /* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's

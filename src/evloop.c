@@ -8,6 +8,10 @@
 #include "nbep/cells.h"
 #include "nbep/predict.h"
 
+/* Partners are handed to the algorithm this many at a time (a block holds some 20 to 40 in a
+ * dense fluid): one call per batch, not per pair. */
+#define BATCH 64
+
 struct nbep_evloop {
     size_t n;
     nbep_calendar *cal;   /* owned */
@@ -75,12 +79,6 @@ static uint64_t slot_key(uint32_t i, const nbep_event *ev)
     return (uint64_t)a << 32 | b;
 }
 
-static void keep(nbep_event *best, const nbep_event *x)
-{
-    if (x->time < NBEP_NEVER && (best->kind == NBEP_EVENT_NONE || nbep_feq_event_before(x, best)))
-        *best = *x;
-}
-
 /* Sphere i's slot from scratch at time t: planes, the spheres of its block, its cell exit. */
 static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uint32_t i,
                         double t)
@@ -89,15 +87,23 @@ static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uin
     const nbep_cells *g = &e->cells;
     size_t lo[3], hi[3];
     nbep_cells_block(g, g->cell[i], lo, hi);
+    uint32_t js[BATCH];
+    size_t m = 0;
     for (size_t z = lo[2]; z <= hi[2]; z++)
         for (size_t y = lo[1]; y <= hi[1]; y++)
             for (size_t x = lo[0]; x <= hi[0]; x++)
                 for (uint32_t j = g->head[nbep_cells_index(g, x, y, z)]; j != NBEP_CELLS_NONE;
-                     j = g->next[j])
-                    if (j != i) {
-                        nbep_event ev = ops->pair(u, i, j);
-                        keep(&best, &ev);
+                     j = g->next[j]) {
+                    if (j == i)
+                        continue;
+                    js[m++] = j;
+                    if (m == BATCH) {
+                        ops->pairs(u, i, js, m, &best);
+                        m = 0;
                     }
+                }
+    if (m > 0)
+        ops->pairs(u, i, js, m, &best);
     nbep_vec3 p, v, a;
     ops->flight(u, i, t, &p, &v, &a);
     double t_exit = t + nbep_cells_exit_time(g, i, p, v, a);

@@ -33,8 +33,9 @@
 typedef struct nbep_evloop_ops {
     /* the earliest contact of sphere i with a plane, kind NONE when none */
     nbep_event (*planes)(void *u, uint32_t i);
-    /* the contact of spheres i and j (time NBEP_NEVER when none) */
-    nbep_event (*pair)(void *u, uint32_t i, uint32_t j);
+    /* lowers *best (kind NONE: nothing yet) to the earliest contact of sphere i with the m
+     * spheres js (none of them i); called with the block's members a batch at a time */
+    void (*pairs)(void *u, uint32_t i, const uint32_t *js, size_t m, nbep_event *best);
     /* true while the event in i's slot is still valid (no response since it was predicted) */
     bool (*fresh)(void *u, uint32_t i, const nbep_event *ev);
     /* reacts to the event in i's slot (a sphere or plane contact), at its time */
