@@ -39,22 +39,18 @@ for algo in predictive naive seminaive; do
         "same_frames $tmp/$algo-whole.h5 $tmp/$algo-part.h5"
 done
 
-# the grid mode (beyond the paper) keeps horizon events in its slots: they are saved too
-grid=(--set 'run.neighbors="grid"')
-bin/nbep run $deck "${args[@]}" "${grid[@]}" -n 80 -o $tmp/grid-whole.h5
-bin/nbep run $deck "${args[@]}" "${grid[@]}" -n 40 -o $tmp/grid-part.h5
-bin/nbep run $deck "${args[@]}" "${grid[@]}" -n 80 --resume $tmp/grid-part.h5
-check "predictive grid: resumed after a planned stop, frames equal the whole run's" \
-    "same_frames $tmp/grid-whole.h5 $tmp/grid-part.h5"
-
-# the cells mode (beyond the paper) rebuilds its cells and slots at every frame that is a
-# multiple of output.every, and resumes from such frames only
+# the grid mode (beyond the paper) keeps horizon events in its slots: they are saved too;
+# the cells mode rebuilds its cells and slots at every frame that is a multiple of
+# output.every, and resumes from such frames only
 cells=(--set 'run.neighbors="cells"')
-bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 80 -o $tmp/cells-whole.h5
-bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 40 -o $tmp/cells-part.h5
-bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 80 --resume $tmp/cells-part.h5
-check "predictive cells: resumed after a planned stop, frames equal the whole run's" \
-    "same_frames $tmp/cells-whole.h5 $tmp/cells-part.h5"
+for mode in grid cells; do
+    nb=(--set "run.neighbors=\"$mode\"")
+    bin/nbep run $deck "${args[@]}" "${nb[@]}" -n 80 -o $tmp/$mode-whole.h5
+    bin/nbep run $deck "${args[@]}" "${nb[@]}" -n 40 -o $tmp/$mode-part.h5
+    bin/nbep run $deck "${args[@]}" "${nb[@]}" -n 80 --resume $tmp/$mode-part.h5
+    check "predictive $mode: resumed after a planned stop, frames equal the whole run's" \
+        "same_frames $tmp/$mode-whole.h5 $tmp/$mode-part.h5"
+done
 bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 42 -o $tmp/cells-odd.h5
 bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 80 --resume $tmp/cells-odd.h5 \
     2>$tmp/cells-odd.err
