@@ -18,10 +18,6 @@
 #include "nbep/predict.h"
 #include "nbep_test.h"
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
 static double unit(uint64_t *x)
 {
     *x = *x * 6364136223846793005ULL + 1442695040888963407ULL;
@@ -71,18 +67,10 @@ static void test_a_build_in_two_ranges_on_two_threads_equals_a_serial_one(void *
     init_cells(&b, (nbep_vec3){0, 0, 0}, (nbep_vec3){20, 20, 20}, 1.0, N);
     nbep_cells_assign(&a, pos, 0, N);
     nbep_cells_link(&a);
-#pragma omp parallel num_threads(2)
-    {
-#ifdef _OPENMP
-        int t = omp_get_thread_num();
-#else
-        int t = 0;
-#endif
-        if (t == 0)
-            nbep_cells_assign(&b, pos, 0, N / 3);
-        else
-            nbep_cells_assign(&b, pos, N / 3, N);
-    }
+    /* (a serial build runs the two ranges one after the other) */
+#pragma omp parallel for num_threads(2) schedule(static, 1)
+    for (int t = 0; t < 2; t++)
+        nbep_cells_assign(&b, pos, t ? N / 3 : 0, t ? N : N / 3);
     nbep_cells_link(&b);
     assert_memory_equal(a.cell, b.cell, N * sizeof *a.cell);
     assert_memory_equal(a.head, b.head, a.n_cells * sizeof *a.head);
