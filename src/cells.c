@@ -24,7 +24,9 @@ nbep_status nbep_cells_init(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double re
     g->n = n;
     const double ext[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
     const double cap = 2.0 * (double)n + 8.0;
-    double side = reach * SIDE_FACTOR;
+    /* no contacts possible (no spheres: reach 0): one cell per axis */
+    double side = reach > 0.0 && isfinite(reach) ? reach * SIDE_FACTOR
+                                                 : fmax(ext[0], fmax(ext[1], ext[2])) + 1.0;
     /* grow the side until the cells fit (each pass at least doubles the cell volume) */
     for (;;) {
         double cells = 1.0;

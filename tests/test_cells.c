@@ -52,6 +52,11 @@ static void test_geometry_sides_at_least_reach_and_cells_bounded(void **state)
     assert_true(g.h[0] >= 1.125);
     nbep_cells_fini(&g);
     nbep_cells_fini(&g); /* safe twice */
+    /* no spheres, so no reach: one cell, and init returns */
+    init_cells(&g, (nbep_vec3){0, 0, 0}, (nbep_vec3){1, 1, 1}, 0.0, 0);
+    assert_int_equal(g.n_cells, 1);
+    nbep_cells_link(&g);
+    nbep_cells_fini(&g);
 }
 
 static void test_a_build_in_two_ranges_on_two_threads_equals_a_serial_one(void **state)

@@ -38,8 +38,8 @@ typedef struct nbep_cells {
     uint32_t *cell;        /* owned, n: each sphere's cell */
 } nbep_cells;
 
-/* Cells over the box [lo, hi] for n spheres whose contacts happen within `reach` (> 0, finite)
- * of each other: as many as fit with sides of at least reach (1 + 1/8) (so that the margin is
+/* Cells over the box [lo, hi] (hi > lo) for n spheres whose contacts happen within `reach` of
+ * each other (reach <= 0, as with no spheres: one cell): as many as fit with sides of at least reach (1 + 1/8) (so that the margin is
  * at least reach/32), at most 2n + 8 in all. NBEP_ENOMEM with a message. */
 NBEP_MUST_CHECK nbep_status nbep_cells_init(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi,
                                             double reach, size_t n, nbep_diag *d);
