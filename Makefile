@@ -113,6 +113,12 @@ mutate:
 bench: bin/nbep $(BENCH_BIN)
 	bash scripts/bench.sh
 
+# Dense fluids (N = 32000, phi = 0.30 and 0.50): predictive grid and cells beside EDMD when
+# EDMD_DIR names a checkout of FSmallenburg/EDMD (built in build/bench-dense, never committed).
+.PHONY: bench-dense
+bench-dense: bin/nbep
+	bash scripts/bench-dense.sh
+
 # Accuracy against cost of the three algorithms over dt, and of the contact-time solvers
 # (docs/accuracy.md); ACC_ARGS=--quick for a smoke run.
 .PHONY: accuracy

@@ -55,6 +55,7 @@
 #include "nbep/grid.h"
 #include "nbep/physics.h"
 #include "nbep/predict.h"
+#include "evloop.h"
 #include "sim_impl.h"
 
 /* A bounce whose flight would last less than this fraction of a step ends in resting contact:
@@ -156,6 +157,9 @@ typedef struct pred_ctx {
     double rmax;                  /* largest radius */
     double vmax, amax;            /* fastest sphere and largest acceleration at the step's start */
     double horizon;               /* H: absolute time up to which this step's predictions look */
+    /* run.neighbors = "cells" (beyond the paper): the in-step event loop (evloop.h) */
+    nbep_evloop *ev;              /* owned, NULL in the other modes */
+    bool ev_failed;               /* thread 0: the loop stalled this step */
 } pred_ctx;
 
 static void pred_destroy(void *p)
@@ -165,6 +169,7 @@ static void pred_destroy(void *p)
         return;
     nbep_feq_destroy(&c->q);
     nbep_grid_fini(&c->grid);
+    nbep_evloop_destroy(&c->ev);
     nbep_free_aligned(c->ver);
     nbep_free_aligned(c->tau);
     nbep_free_aligned(c->rest);
@@ -229,6 +234,23 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     }
     for (size_t i = 0; i < n; i++)
         c->rmax = fmax(c->rmax, sim->st.radius[i]);
+    if (sim->scene->neighbors_cells) {
+        /* see cells_steps: only those frames are rebuild points of the uninterrupted run */
+        const nbep_resume *r = sim->opt.resume;
+        if (r && r->step % (int64_t)sim->scene->output_every != 0) {
+            pred_destroy(c);
+            NBEP_FAIL(d, NBEP_EDECK,
+                      "nbep: run.neighbors = \"cells\" resumes bit for bit only from a frame at a "
+                      "multiple of output.every (%llu); the file's last frame is step %lld",
+                      (unsigned long long)sim->scene->output_every, (long long)r->step);
+        }
+        st = nbep_evloop_create(n, sim->scene->box_min, sim->scene->box_max, 2.0 * c->rmax,
+                                c->q, c->ver, &c->ev, d);
+        if (st != NBEP_OK) {
+            pred_destroy(c);
+            return st;
+        }
+    }
     for (size_t i = 0; i < n; i++) {
         c->rest[i] = (rest_set){.n = 0};
         c->aeff[i] = sim->st.acc[i];
@@ -920,6 +942,143 @@ static void react_phase(pred_ctx *c, nbep_state *s, const nbep_scene *sc, int pa
     }
 }
 
+/* ---- run.neighbors = "cells": the algorithm's side of the event loop (evloop.h) ---------- */
+
+/* Every this many events of one step, time must have advanced by more than STALL_FRACTION of
+ * a step (as for rounds, STALL_ROUNDS): otherwise the loop is a cascade that does not resolve. */
+#define STALL_EVENTS 1000000u
+
+/* What the callbacks need: one per thread, T0 the current step's start. */
+typedef struct cells_user {
+    pred_ctx *c;
+    nbep_state *s;
+    const nbep_scene *sc;
+    double T0;
+    thread_ws *w;
+    nbep_counters *cnt;
+    nbep_thread_max *mx;
+} cells_user;
+
+static nbep_event cells_planes(void *u, uint32_t i)
+{
+    cells_user *x = u;
+    return predict_some(x->c, x->s, i, 0, 0, true, x->T0, x->w, x->cnt);
+}
+
+static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, nbep_event *best)
+{
+    cells_user *x = u;
+    const nbep_vec3 ai = effective_acc(x->c, x->s, i);
+    for (size_t k = 0; k < m; k++)
+        keep_earlier(best, pair_event(x->c, x->s, i, ai, js[k], x->T0, x->w));
+    x->cnt->c[NBEP_COUNTER_PREDICTIONS] += m;
+}
+
+static bool cells_fresh(void *u, uint32_t i, const nbep_event *ev)
+{
+    const cells_user *x = u;
+    return is_fresh(x->c, i, ev);
+}
+
+static void cells_react(void *u, uint32_t i, const nbep_event *ev)
+{
+    cells_user *x = u;
+    uint32_t lo, hi;
+    (void)event_key(i, ev, &lo, &hi);
+    x->w->n_fired = 0; /* react's list of fired spheres is not used here */
+    x->cnt->c[NBEP_COUNTER_REACTIONS]++;
+    /* the scene has no accelerations (scene.c refuses cells mode with any), so no sphere
+     * rests or is held: only lo and hi change, and the loop re-predicts both */
+    react(x->c, x->s, x->sc, ev->time, ev->time - x->T0, lo, hi, ev, x->w, x->cnt, x->mx);
+}
+
+static void cells_flight(void *u, uint32_t i, double t, nbep_vec3 *p, nbep_vec3 *v,
+                         nbep_vec3 *a)
+{
+    const cells_user *x = u;
+    *p = x->s->pos[i];
+    *v = x->s->vel[i];
+    *a = effective_acc(x->c, x->s, i);
+    double h = t - x->T0 - x->c->tau[i];
+    if (h > 0.0)
+        nbep_physics_drift(p, v, *a, h);
+}
+
+static const nbep_evloop_ops cells_ops = {cells_planes, cells_pairs, cells_fresh, cells_react,
+                                          cells_flight};
+
+/* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's
+ * event loop; all threads share the rebuilds, the update to the step's end and the energy.
+ * A rebuild (cells from positions, every slot predicted afresh: about the cost of n/2
+ * collisions) happens at the first step and after every step that writes a frame to a file in
+ * step with output.every, so that a run resumed from such a frame starts from exactly the state
+ * this run continues from (bit-for-bit resume): the cell membership and the moments at which
+ * slots were predicted depend on the run's history, the rebuild makes them depend only on the
+ * frame. */
+static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thread_ws *w)
+{
+    nbep_state *s = &sim->st;
+    bool rebuild = true;
+    for (uint64_t step = sim->step_first; step <= sim->step_end; step++) {
+        const int spar = (int)(step & 1);
+        cells_user u = {c, s, sim->scene, (double)(step - 1) * sim->dt, w,
+                        &sim->counters[spar][tid], &sim->tmax[spar][tid]};
+        const double T_end = (double)step * sim->dt;
+        if (rebuild) { /* every sphere sits at T0 (tau = 0) */
+            nbep_evloop_assign(c->ev, s->pos, own.lo, own.hi);
+            nbep_barrier_wait(&c->bar);
+            if (tid == 0)
+                nbep_evloop_link(c->ev);
+            nbep_barrier_wait(&c->bar);
+            nbep_evloop_predict(c->ev, &cells_ops, &u, own.lo, own.hi, u.T0);
+            u.cnt->c[NBEP_COUNTER_CHECKS] += own.hi - own.lo;
+            nbep_barrier_wait(&c->bar);
+            if (tid == 0) {
+                nbep_evloop_schedule(c->ev);
+                if (step == sim->step_first) { /* SPEC: first predictions are set-up time */
+                    double now = nbep_now();
+                    sim->setup_seconds += now - sim->t_start;
+                    sim->t_start = sim->t_last_progress = now;
+                }
+            }
+            rebuild = false;
+        }
+        if (tid == 0) {
+            nbep_evloop_tally tally = {0};
+            double t_stuck = 0.0;
+            c->ev_failed = !nbep_evloop_run(c->ev, &cells_ops, &u, T_end, STALL_EVENTS,
+                                            STALL_FRACTION * sim->dt, &tally, &t_stuck);
+            u.cnt->c[NBEP_COUNTER_CHECKS] += tally.events;
+            if (c->ev_failed) {
+                nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                              "nbep: step %llu: events at t = %.17g do not resolve "
+                              "(endless zero-time reactions); stopping",
+                              (unsigned long long)step, t_stuck);
+                sim->status = NBEP_ENUMERIC;
+            }
+        }
+        nbep_barrier_wait(&c->bar);
+        if (c->ev_failed) /* written by thread 0 before the barrier */
+            return;
+        for (size_t i = own.lo; i < own.hi; i++) { /* update: every sphere to the step's end */
+            double h = sim->dt - c->tau[i];
+            if (h > 0.0)
+                nbep_physics_drift(&s->pos[i], &s->vel[i], effective_acc(c, s, i), h);
+            c->tau[i] = 0.0;
+        }
+        nbep__sim_block_energy(sim, own);
+        nbep_barrier_wait(&c->bar);
+        if (tid == 0)
+            nbep__sim_end_step(sim, step);
+        /* only frames written to a file can be resumed from */
+        rebuild = sim->opt.out && step % sim->scene->output_every == 0;
+        nbep_barrier_wait(&c->bar);
+        /* relaxed: the barrier above ordered thread 0's store of stop */
+        if (atomic_load_explicit(&sim->stop, memory_order_relaxed))
+            return;
+    }
+}
+
 static void pred_run(nbep_sim *sim, void *p)
 {
     pred_ctx *c = p;
@@ -935,6 +1094,10 @@ static void pred_run(nbep_sim *sim, void *p)
         const nbep_range own = nbep__range_split(s->n, tid, nt);
         thread_ws *w = &c->ws[tid];
         uint64_t round = 0, seen_woken = 0;
+        if (c->ev) {
+            cells_steps(sim, c, tid, own, w);
+            goto done;
+        }
         if (tid == 0 && c->use_grid)
             grid_prepare(c, s, (double)(sim->step_first - 1) * sim->dt, sim->dt, true);
         /* OpenMP's own hand-over into and out of the region is invisible to ThreadSanitizer

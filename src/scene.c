@@ -31,7 +31,7 @@
 static const schema_entry *const schema = nbep__scene_schema;
 
 static const char *const algorithm_names[] = {"naive", "seminaive", "predictive"};
-static const char *const neighbor_names[] = {"all", "grid"};
+static const char *const neighbor_names[] = {"all", "grid", "cells"};
 static const char *const place_names[] = {"random", "lattice"};
 static const char *const field_names[] = {"position", "velocity"};
 enum { N_ALGORITHMS = 3, N_PLACES = 2, N_FIELDS = 2 };
@@ -310,8 +310,11 @@ static void parse_run(load *L, const config_setting_t *root, nbep_scene *sc, boo
         one_of(L, at, "run.algorithm", algorithm, algorithm_names, N_ALGORITHMS) >= 0)
         snprintf(sc->algorithm, sizeof sc->algorithm, "%s", algorithm);
     const char *neighbors;
-    if (get_string(L, run, "run", S_RUN_NEIGHBORS, &neighbors, &at) == GOT)
-        sc->neighbors_grid = one_of(L, at, "run.neighbors", neighbors, neighbor_names, 2) == 1;
+    if (get_string(L, run, "run", S_RUN_NEIGHBORS, &neighbors, &at) == GOT) {
+        int k = one_of(L, at, "run.neighbors", neighbors, neighbor_names, 3);
+        sc->neighbors_grid = k == 1;
+        sc->neighbors_cells = k == 2;
+    }
     int64_t v;
     if (get_int(L, run, "run", S_RUN_STEPS, &v, NULL) == GOT)
         sc->steps = (uint64_t)v;
@@ -838,8 +841,22 @@ nbep_status nbep_scene_load(const char *deck_path, const char *const *overrides,
     const size_t geometry0 = d->n_errors;
     parse_physics(&L, root, &sc);
     parse_box(&L, root, &sc);
+    if (sc.neighbors_cells && !config_lookup(&cfg, "box"))
+        ERR(&L, config_lookup(&cfg, "run.neighbors"),
+            "run.neighbors = \"cells\" needs a box (its cells cover the box)");
     parse_planes(&L, root, &planes, &n_planes);
     parse_spheres(&L, root, &sc, &entries, &n_entries);
+    if (sc.neighbors_cells) {
+        /* the cells engine re-predicts only the one or two spheres of an event; resting and
+         * held contact (which only acceleration brings) change others too */
+        bool accelerated = false;
+        for (size_t k = 0; k < n_entries; k++)
+            accelerated |= nbep_vec3_norm2(entries[k].acc) != 0.0;
+        if (accelerated)
+            ERR(&L, config_lookup(&cfg, "run.neighbors"),
+                "run.neighbors = \"cells\" is for scenes without acceleration (gravity or a "
+                "sphere's own); use \"grid\"");
+    }
     const bool geometry_ok = seed_ok && d->n_errors == geometry0 && !L.c.oom;
     parse_output(&L, root, &sc);
     parse_sweep(&L, root, &sc);

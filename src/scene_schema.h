@@ -34,8 +34,9 @@ enum {
       "threads; 0: OMP_NUM_THREADS, else all cores")                                               \
     X(RUN_SEED, "run.seed", INT, F_GE0, "1", NULL, "every random choice derives from it")          \
     X(RUN_NEIGHBORS, "run.neighbors", STRING, 0, "\"all\"", NULL,                                  \
-      "predictive: whom a re-prediction tests: \"all\" spheres (the paper) or \"grid\" (nearby "  \
-      "cells within a time horizon)")                                                              \
+      "predictive: whom a re-prediction tests: \"all\" spheres (the paper), \"grid\" (nearby "  \
+      "cells within a time horizon) or \"cells\" (event loop: cell lists and a calendar; "        \
+      "needs a box)")                                                                              \
     X(PHYSICS, "physics", GROUP, 0, NULL, "-", "physics")                                          \
     X(PHYSICS_GRAVITY, "physics.gravity", VEC3, 0, "[0.0, 0.0, 0.0]", NULL,                        \
       "uniform acceleration of every sphere without its own")                                      \

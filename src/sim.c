@@ -16,6 +16,7 @@
 #include <omp.h>
 #endif
 
+#include "evloop.h"
 #include "nbep/physics.h"
 #include "sim_impl.h"
 
@@ -58,7 +59,7 @@ size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads)
     if (algo == &nbep__algo_predictive)
         /* slot 32, response count 8, local time 8, rest 4, flag 1, 2 claims 16, reacted 8,
          * candidate 4, fired and claimed lists 16 */
-        bytes += n * 97;
+        bytes += n * 97 + (sc->neighbors_cells ? nbep_evloop_bytes(n) : 0);
     else if (algo == &nbep__algo_seminaive)
         bytes += n * (4 * sizeof(uint64_t) + 2 * 64); /* contacts and tree nodes */
     else

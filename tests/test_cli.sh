@@ -34,6 +34,15 @@ spheres = ( { count = 64; radius = 0.05; mass = 1.0; place = "lattice"; } );
 output: { file = "group.h5"; every = 1000; };
 EOF
 
+# ---- run.neighbors = "cells" needs a box ---------------------------------------------------------
+sed 's/seed = 1;/seed = 1; neighbors = "cells";/' inputs/two-spheres.deck >"$tmp/nobox.deck"
+run_nbep check "$tmp/nobox.deck"
+check "cells without a box: exit 2 (got $rc)" "[ $rc = 2 ]"
+check "cells without a box: one line naming deck:line and the setting" \
+    "one_line && grep -q 'nobox.deck:5: run.neighbors = \"cells\" needs a box' $tmp/stderr"
+run_nbep check "$tmp/group.deck" --set 'run.neighbors="cells"'
+check "cells with a box: accepted (got $rc)" "[ $rc = 0 ]"
+
 # ---- huge counts ------------------------------------------------------------------------------
 sed 's/count = 64/count = 1000000000000/' "$tmp/group.deck" >"$tmp/huge.deck"
 run_nbep run "$tmp/huge.deck" -o "$tmp/huge.h5"

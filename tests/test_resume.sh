@@ -39,13 +39,25 @@ for algo in predictive naive seminaive; do
         "same_frames $tmp/$algo-whole.h5 $tmp/$algo-part.h5"
 done
 
-# the grid mode (beyond the paper) keeps horizon events in its slots: they are saved too
-grid=(--set 'run.neighbors="grid"')
-bin/nbep run $deck "${args[@]}" "${grid[@]}" -n 80 -o $tmp/grid-whole.h5
-bin/nbep run $deck "${args[@]}" "${grid[@]}" -n 40 -o $tmp/grid-part.h5
-bin/nbep run $deck "${args[@]}" "${grid[@]}" -n 80 --resume $tmp/grid-part.h5
-check "predictive grid: resumed after a planned stop, frames equal the whole run's" \
-    "same_frames $tmp/grid-whole.h5 $tmp/grid-part.h5"
+# the grid mode (beyond the paper) keeps horizon events in its slots: they are saved too;
+# the cells mode rebuilds its cells and slots at every frame that is a multiple of
+# output.every, and resumes from such frames only
+cells=(--set 'run.neighbors="cells"')
+for mode in grid cells; do
+    nb=(--set "run.neighbors=\"$mode\"")
+    bin/nbep run $deck "${args[@]}" "${nb[@]}" -n 80 -o $tmp/$mode-whole.h5
+    bin/nbep run $deck "${args[@]}" "${nb[@]}" -n 40 -o $tmp/$mode-part.h5
+    bin/nbep run $deck "${args[@]}" "${nb[@]}" -n 80 --resume $tmp/$mode-part.h5
+    check "predictive $mode: resumed after a planned stop, frames equal the whole run's" \
+        "same_frames $tmp/$mode-whole.h5 $tmp/$mode-part.h5"
+done
+bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 42 -o $tmp/cells-odd.h5
+bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 80 --resume $tmp/cells-odd.h5 \
+    2>$tmp/cells-odd.err
+rc=$?
+check "predictive cells: a resume from step 42 (every 5) is refused with exit 2 (got $rc)" \
+    "[ $rc = 2 ] && grep -q 'multiple of output.every (5); the file.s last frame is step 42' \
+    $tmp/cells-odd.err"
 
 # killed by SIGTERM at an arbitrary step of a very long run, then resumed to a fixed end past
 # that step; compared with one uninterrupted run to the same end (no assumption on how far the

@@ -405,6 +405,133 @@ static void test_grid_predictive_frames_are_bitwise_equal_for_1_2_4_threads(void
     nbep_test_scene_free(&sc);
 }
 
+
+/* run.neighbors = "cells" (beyond the paper): the step's events one at a time from a calendar,
+ * re-predictions over cell lists. The same collisions as the paper's all-pairs mode on a gas
+ * under gravity, energy and overlaps at round-off, far fewer predictions. */
+static void test_cells_predictive_finds_the_same_collisions_as_all_pairs(void **state)
+{
+    (void)state;
+    size_t n = scaled(700, 300);
+    uint64_t steps = scaled(300, 60);
+    nbep_scene *a = gas("predictive", n, 9.81, steps);
+    nbep_scene *c = gas("predictive", n, 9.81, steps);
+    c->neighbors_cells = true;
+    nbep_summary sa = run(a, 1, NULL, NULL), sc = run(c, 1, NULL, NULL);
+    assert_true(sa.sphere_collisions > 10 && sa.plane_collisions > 10);
+    assert_int_equal(sc.sphere_collisions, sa.sphere_collisions);
+    assert_int_equal(sc.plane_collisions, sa.plane_collisions);
+    assert_true(sc.predictions < sa.predictions / 2);
+    /* round-off: each of some thousand events moves the energy by a few ulps */
+    assert_close(sc.energy_final, sc.energy_initial, 1e-11, 0.0);
+    assert_close(sc.energy_final, sa.energy_final, 1e-11, 0.0);
+    assert_true(sc.max_overlap_rel < 1e-9);
+    nbep_test_scene_free(&a), nbep_test_scene_free(&c);
+}
+
+/* A hard-sphere fluid at packing fraction phi on a simple cubic lattice (side^3 spheres of
+ * diameter 1 and mass 1) in a closed box, speeds sqrt(3) (kT = 1) in random directions. */
+static nbep_scene *fluid(size_t side, double phi, uint64_t steps, double dt)
+{
+    size_t n = side * side * side;
+    nbep_scene *sc = nbep_test_scene_new(n, 6, "predictive", steps, dt);
+    const double L = cbrt((double)n * (4.0 * atan(1.0)) / 6.0 / phi), a = L / (double)side;
+    sc->has_box = true;
+    sc->box_max = (nbep_vec3){L, L, L};
+    for (int k = 0; k < 3; k++) {
+        nbep_vec3 e = {k == 0, k == 1, k == 2};
+        nbep_test_set_plane(sc, (size_t)(2 * k), e, 0.0);
+        nbep_test_set_plane(sc, (size_t)(2 * k + 1), nbep_vec3_scale(e, -1.0), -L);
+    }
+    uint64_t x = 0x9E3779B97F4A7C15u;
+    for (size_t i = 0; i < n; i++) {
+        double u[3];
+        for (int k = 0; k < 3; k++) {
+            x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+            u[k] = (double)(x >> 11) / 9007199254740992.0 - 0.5;
+        }
+        nbep_vec3 v = nbep_vec3_scale((nbep_vec3){u[0], u[1], u[2]},
+                                      sqrt(3.0) / nbep_vec3_norm((nbep_vec3){u[0], u[1], u[2]}));
+        nbep_vec3 p = {a * ((double)(i % side) + 0.5), a * ((double)(i / side % side) + 0.5),
+                       a * ((double)(i / side / side) + 0.5)};
+        nbep_test_set_sphere(sc, i, p, v, 0.5, 1.0, ZERO);
+    }
+    return sc;
+}
+
+/* A fluid at phi = 0.35: thousands of collisions per step, no overlap beyond round-off,
+ * energy kept, the same collisions as grid mode over a short stretch (before round-off
+ * differences could reorder any events), and frames bitwise equal for 1, 2 and 4 threads. */
+static void test_cells_predictive_dense_fluid_is_exact_and_thread_independent(void **state)
+{
+    (void)state;
+    size_t side = scaled(10, 7);
+    nbep_scene *sc = fluid(side, 0.35, 10, 0.01);
+    sc->neighbors_cells = true;
+    frames ref = {0};
+    nbep_summary s1 = run(sc, 1, NULL, &ref);
+    size_t n = side * side * side;
+    /* Enskog: about 13 collisions per sphere per unit time at phi = 0.35, so some 0.65 n
+     * pair collisions in 0.1; fewer from the ordered lattice start */
+    assert_true(s1.sphere_collisions > n / 4);
+    assert_true(s1.max_overlap_rel < 1e-9);
+    assert_close(s1.energy_final, s1.energy_initial, 1e-12, 0.0);
+    for (int nt = 2; nt <= 4; nt *= 2) {
+        frames f = {0};
+        nbep_summary sk = run(sc, nt, NULL, &f);
+        frames_equal(&ref, &f);
+        assert_int_equal(sk.collisions, s1.collisions);
+        free(f.data);
+    }
+    nbep_test_scene_free(&sc);
+    free(ref.data);
+    nbep_scene *g = fluid(side, 0.35, 10, 0.01);
+    g->neighbors_grid = true;
+    nbep_summary sg = run(g, 1, NULL, NULL);
+    assert_int_equal(sg.sphere_collisions, s1.sphere_collisions);
+    assert_int_equal(sg.plane_collisions, s1.plane_collisions);
+    nbep_test_scene_free(&g);
+}
+
+/* A longer run of the same fluid (many cell exits, rebuilds at every frame): still exact. */
+static void test_cells_predictive_dense_fluid_keeps_energy_over_a_longer_run(void **state)
+{
+    (void)state;
+    nbep_scene *sc = fluid(scaled(12, 8), 0.45, scaled(200, 60), 0.02);
+    sc->neighbors_cells = true;
+    sc->output_every = 7;
+    nbep_summary s = run(sc, 2, NULL, NULL);
+    assert_true(s.sphere_collisions > 10 * s.spheres);
+    assert_true(s.max_overlap_rel < 1e-9);
+    /* a few ulps per collision, over ~1e5 collisions */
+    assert_close(s.energy_final, s.energy_initial, 1e-10, 0.0);
+    nbep_test_scene_free(&sc);
+}
+
+/* A pile settling under gravity with e < 1 in cells mode: resting contacts on the floor and
+ * on each other must resolve (no stall, no overlap), energy only goes down, and the threads
+ * give the same bits. */
+static void test_cells_predictive_pile_settles_under_gravity(void **state)
+{
+    (void)state;
+    nbep_scene *sc = fluid(scaled(6, 4), 0.3, scaled(100, 60), 5e-3);
+    sc->neighbors_cells = true;
+    sc->restitution = 0.6;
+    for (size_t i = 0; i < sc->state.n; i++)
+        sc->state.acc[i] = (nbep_vec3){0, 0, -9.81};
+    frames ref = {0}, f2 = {0};
+    nbep_summary s1 = run(sc, 1, NULL, &ref);
+    nbep_summary s2 = run(sc, 2, NULL, &f2);
+    frames_equal(&ref, &f2);
+    assert_true(s1.collisions > s1.spheres);
+    assert_true(s1.max_overlap_rel < 1e-6);
+    assert_true(s1.energy_final < s1.energy_initial);
+    assert_int_equal(s2.collisions, s1.collisions);
+    free(ref.data);
+    free(f2.data);
+    nbep_test_scene_free(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -422,6 +549,10 @@ int main(void)
         cmocka_unit_test(test_grid_predictive_finds_the_same_collisions_as_all_pairs),
         cmocka_unit_test(test_grid_predictive_finds_fast_partners_several_cells_away),
         cmocka_unit_test(test_grid_predictive_frames_are_bitwise_equal_for_1_2_4_threads),
+        cmocka_unit_test(test_cells_predictive_finds_the_same_collisions_as_all_pairs),
+        cmocka_unit_test(test_cells_predictive_dense_fluid_is_exact_and_thread_independent),
+        cmocka_unit_test(test_cells_predictive_dense_fluid_keeps_energy_over_a_longer_run),
+        cmocka_unit_test(test_cells_predictive_pile_settles_under_gravity),
     };
     return cmocka_run_group_tests_name("sim", tests, NULL, NULL);
 }

@@ -35,6 +35,7 @@ typedef struct nbep_scene {
     int threads;              /* as given; 0 = OMP_NUM_THREADS or all cores */
     uint64_t seed;
     bool neighbors_grid;      /* predictive: re-predict against nearby cells, not all spheres */
+    bool neighbors_cells;     /* predictive: the in-step event loop (evloop.c) over cell lists */
     /* physics */
     nbep_vec3 gravity;
     double restitution;

@@ -1,0 +1,82 @@
+/* Cell lists kept up to date event by event, for the cells engine (evloop.c): the box is cut
+ * into cells at least `reach` (the largest contact distance) wide, each sphere belongs to one
+ * cell, and two spheres that touch always belong to the same or adjacent cells (the 27-cell
+ * block around either), so a re-prediction tests only that block.
+ *
+ * Membership has hysteresis: a sphere stays a member of its cell until its centre leaves the
+ * cell grown by a margin of (h - reach)/4 on every interior face (nbep_cells_exit_time gives
+ * when), and is then moved to the cell its centre is in. Members of two cells two apart are
+ * then still more than reach apart, with (h - reach)/2 to spare for round-off, and a sphere
+ * that grazes a face does not flip between cells. The outer faces of the box have no margin
+ * and no exit: spheres beyond them (walls keep them in) are clamped into the edge cells, which
+ * keeps the adjacency property.
+ *
+ * Lists are doubly linked through per-sphere arrays (no allocation after init). Building is
+ * split so that the heavy part runs in parallel: nbep_cells_assign is pure per sphere (any
+ * index range on any thread), nbep_cells_link one O(n + cells) pass. Memory: 16 bytes per
+ * sphere plus 4 per cell, cells at most 2n + 8. */
+#ifndef NBEP_CELLS_H
+#define NBEP_CELLS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "nbep/compiler.h"
+#include "nbep/status.h"
+#include "nbep/vec3.h"
+
+#define NBEP_CELLS_NONE UINT32_MAX
+
+typedef struct nbep_cells {
+    nbep_vec3 lo, hi;      /* the box */
+    double h[3];           /* cell side per axis */
+    double margin[3];      /* how far a member may stray past an interior face */
+    size_t dim[3];         /* cells per axis */
+    size_t n_cells, n;
+    uint32_t *head;        /* owned, n_cells: first member, or NBEP_CELLS_NONE */
+    uint32_t *next, *prev; /* owned, n: the list links */
+    uint32_t *cell;        /* owned, n: each sphere's cell */
+} nbep_cells;
+
+/* Cells over the box [lo, hi] (hi > lo) for n spheres whose contacts happen within `reach` of
+ * each other (reach <= 0, as with no spheres: one cell): as many as fit with sides of at least reach (1 + 1/8) (so that the margin is
+ * at least reach/32), at most 2n + 8 in all. NBEP_ENOMEM with a message. */
+NBEP_MUST_CHECK nbep_status nbep_cells_init(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi,
+                                            double reach, size_t n, nbep_diag *d);
+/* Frees; safe on a zeroed grid. */
+void nbep_cells_fini(nbep_cells *g);
+
+/* The cell holding point p (clamped into the box; NaN goes to cell 0). */
+size_t nbep_cells_locate(const nbep_cells *g, nbep_vec3 p);
+/* Assigns spheres [lo, hi) to the cells of their centres; touches nothing shared, so threads
+ * may assign disjoint ranges at once. */
+void nbep_cells_assign(nbep_cells *g, const nbep_vec3 *pos, size_t lo, size_t hi);
+/* Links every sphere into its assigned cell's list (ascending ids within a cell). One thread. */
+void nbep_cells_link(nbep_cells *g);
+/* Moves sphere i into cell c. O(1). */
+void nbep_cells_move(nbep_cells *g, uint32_t i, size_t c);
+
+/* Time from now until the centre of sphere i (at p, flying with v and a) leaves its cell's
+ * box grown by the margin, through a face that has a neighbour cell; NBEP_NEVER when it does
+ * not (no interior faces, or it never reaches one). */
+double nbep_cells_exit_time(const nbep_cells *g, uint32_t i, nbep_vec3 p, nbep_vec3 v,
+                            nbep_vec3 a);
+
+/* The block of cells [lo, hi] per axis around cell c: c and its neighbours, clamped. */
+void nbep_cells_block(const nbep_cells *g, size_t c, size_t lo[3], size_t hi[3]);
+
+/* Index of cell (x, y, z). */
+static inline size_t nbep_cells_index(const nbep_cells *g, size_t x, size_t y, size_t z)
+{
+    return (z * g->dim[1] + y) * g->dim[0] + x;
+}
+
+/* Invariant check for tests: each sphere is listed once, in the cell it is assigned to, and
+ * its centre pos[i] lies within its cell grown by the margin (plus tol) on interior faces.
+ * Returns the number of violations. */
+size_t nbep_cells_check(const nbep_cells *g, const nbep_vec3 *pos, double tol);
+
+/* Bytes nbep_cells_init takes at most for n spheres. */
+size_t nbep_cells_bytes(size_t n);
+
+#endif

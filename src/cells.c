@@ -1,0 +1,180 @@
+/* Cell lists with hysteresis (see cells.h). */
+#include "nbep/cells.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "nbep/predict.h"
+
+/* Cell sides are at least reach times this, so that the hysteresis margin (h - reach)/4 is at
+ * least reach/32: far above round-off, small enough to cost few extra partners. */
+#define SIDE_FACTOR (1.0 + 1.0 / 8.0)
+
+size_t nbep_cells_bytes(size_t n)
+{
+    return (2 * n + 9) * sizeof(uint32_t) + 4 * n * sizeof(uint32_t);
+}
+
+nbep_status nbep_cells_init(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double reach, size_t n,
+                            nbep_diag *d)
+{
+    memset(g, 0, sizeof *g);
+    g->lo = lo;
+    g->hi = hi;
+    g->n = n;
+    const double ext[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
+    const double cap = 2.0 * (double)n + 8.0;
+    /* no contacts possible (no spheres: reach 0): one cell per axis */
+    double side = reach > 0.0 && isfinite(reach) ? reach * SIDE_FACTOR
+                                                 : fmax(ext[0], fmax(ext[1], ext[2])) + 1.0;
+    /* grow the side until the cells fit (each pass at least doubles the cell volume) */
+    for (;;) {
+        double cells = 1.0;
+        for (int k = 0; k < 3; k++)
+            cells *= fmax(1.0, floor(ext[k] / side));
+        if (cells <= cap)
+            break;
+        side *= 1.26; /* > cbrt(2) */
+    }
+    g->n_cells = 1;
+    for (int k = 0; k < 3; k++) {
+        double cells = fmax(1.0, floor(ext[k] / side));
+        g->dim[k] = (size_t)cells;
+        g->h[k] = ext[k] / cells;
+        g->margin[k] = g->dim[k] > 1 ? 0.25 * (g->h[k] - reach) : 0.0;
+        g->n_cells *= g->dim[k];
+    }
+    g->head = nbep_alloc_aligned(g->n_cells, sizeof *g->head);
+    g->next = nbep_alloc_aligned(n ? n : 1, sizeof *g->next);
+    g->prev = nbep_alloc_aligned(n ? n : 1, sizeof *g->prev);
+    g->cell = nbep_alloc_aligned(n ? n : 1, sizeof *g->cell);
+    if (!g->head || !g->next || !g->prev || !g->cell) {
+        nbep_cells_fini(g);
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for cell lists of %zu spheres", n);
+    }
+    return NBEP_OK;
+}
+
+void nbep_cells_fini(nbep_cells *g)
+{
+    if (!g)
+        return;
+    nbep_free_aligned(g->head);
+    nbep_free_aligned(g->next);
+    nbep_free_aligned(g->prev);
+    nbep_free_aligned(g->cell);
+    memset(g, 0, sizeof *g);
+}
+
+static size_t axis_cell(double x, double lo, double h, size_t dim)
+{
+    double c = floor((x - lo) / h);
+    if (!(c > 0.0)) /* also NaN */
+        return 0;
+    return c >= (double)dim ? dim - 1 : (size_t)c;
+}
+
+size_t nbep_cells_locate(const nbep_cells *g, nbep_vec3 p)
+{
+    return nbep_cells_index(g, axis_cell(p.x, g->lo.x, g->h[0], g->dim[0]),
+                            axis_cell(p.y, g->lo.y, g->h[1], g->dim[1]),
+                            axis_cell(p.z, g->lo.z, g->h[2], g->dim[2]));
+}
+
+void nbep_cells_assign(nbep_cells *g, const nbep_vec3 *pos, size_t lo, size_t hi)
+{
+    for (size_t i = lo; i < hi; i++)
+        g->cell[i] = (uint32_t)nbep_cells_locate(g, pos[i]);
+}
+
+static void link_in(nbep_cells *g, uint32_t i, size_t c)
+{
+    g->cell[i] = (uint32_t)c;
+    g->prev[i] = NBEP_CELLS_NONE;
+    g->next[i] = g->head[c];
+    if (g->head[c] != NBEP_CELLS_NONE)
+        g->prev[g->head[c]] = i;
+    g->head[c] = i;
+}
+
+void nbep_cells_link(nbep_cells *g)
+{
+    for (size_t c = 0; c < g->n_cells; c++)
+        g->head[c] = NBEP_CELLS_NONE;
+    for (size_t i = g->n; i-- > 0;) /* head insertion, downwards: ids ascend in a list */
+        link_in(g, (uint32_t)i, g->cell[i]);
+}
+
+void nbep_cells_move(nbep_cells *g, uint32_t i, size_t c)
+{
+    if (g->prev[i] != NBEP_CELLS_NONE)
+        g->next[g->prev[i]] = g->next[i];
+    else
+        g->head[g->cell[i]] = g->next[i];
+    if (g->next[i] != NBEP_CELLS_NONE)
+        g->prev[g->next[i]] = g->prev[i];
+    link_in(g, i, c);
+}
+
+static void cell_coords(const nbep_cells *g, size_t c, size_t xyz[3])
+{
+    xyz[0] = c % g->dim[0];
+    xyz[1] = c / g->dim[0] % g->dim[1];
+    xyz[2] = c / (g->dim[0] * g->dim[1]);
+}
+
+double nbep_cells_exit_time(const nbep_cells *g, uint32_t i, nbep_vec3 p, nbep_vec3 v,
+                            nbep_vec3 a)
+{
+    size_t xyz[3];
+    cell_coords(g, g->cell[i], xyz);
+    const double x[3] = {p.x, p.y, p.z}, u[3] = {v.x, v.y, v.z}, acc[3] = {a.x, a.y, a.z};
+    const double o[3] = {g->lo.x, g->lo.y, g->lo.z};
+    double t = NBEP_NEVER;
+    for (int k = 0; k < 3; k++) {
+        /* each interior face as a plane facing into the grown cell, the centre as a point */
+        if (xyz[k] > 0) {
+            double face = o[k] + (double)xyz[k] * g->h[k] - g->margin[k];
+            t = fmin(t, nbep_predict_plane(x[k] - face, u[k], acc[k]));
+        }
+        if (xyz[k] + 1 < g->dim[k]) {
+            double face = o[k] + (double)(xyz[k] + 1) * g->h[k] + g->margin[k];
+            t = fmin(t, nbep_predict_plane(face - x[k], -u[k], -acc[k]));
+        }
+    }
+    return t;
+}
+
+void nbep_cells_block(const nbep_cells *g, size_t c, size_t lo[3], size_t hi[3])
+{
+    size_t xyz[3];
+    cell_coords(g, c, xyz);
+    for (int k = 0; k < 3; k++) {
+        lo[k] = xyz[k] > 0 ? xyz[k] - 1 : 0;
+        hi[k] = xyz[k] + 1 < g->dim[k] ? xyz[k] + 1 : xyz[k];
+    }
+}
+
+size_t nbep_cells_check(const nbep_cells *g, const nbep_vec3 *pos, double tol)
+{
+    size_t bad = 0, listed = 0;
+    const double o[3] = {g->lo.x, g->lo.y, g->lo.z};
+    for (size_t c = 0; c < g->n_cells; c++) {
+        uint32_t before = NBEP_CELLS_NONE;
+        for (uint32_t i = g->head[c]; i != NBEP_CELLS_NONE; i = g->next[i]) {
+            if (i >= g->n || g->cell[i] != c || g->prev[i] != before || ++listed > g->n)
+                return bad + 1; /* a broken list: stop before looping forever */
+            before = i;
+            size_t xyz[3];
+            cell_coords(g, c, xyz);
+            const double x[3] = {pos[i].x, pos[i].y, pos[i].z};
+            for (int k = 0; k < 3; k++) {
+                double lo = o[k] + (double)xyz[k] * g->h[k] - g->margin[k];
+                double hi = o[k] + (double)(xyz[k] + 1) * g->h[k] + g->margin[k];
+                if ((xyz[k] > 0 && x[k] < lo - tol) || (xyz[k] + 1 < g->dim[k] && x[k] > hi + tol))
+                    bad++;
+            }
+        }
+    }
+    return bad + (listed != g->n);
+}

@@ -1,0 +1,184 @@
+/* The cells engine: see evloop.h. */
+#include "evloop.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+#include "nbep/calendar.h"
+#include "nbep/cells.h"
+#include "nbep/predict.h"
+
+/* Partners are handed to the algorithm this many at a time (a block holds some 20 to 40 in a
+ * dense fluid): one call per batch, not per pair. */
+#define BATCH 64
+
+struct nbep_evloop {
+    size_t n;
+    nbep_calendar *cal;   /* owned */
+    nbep_cells cells;     /* owned */
+    nbep_feq *q;          /* borrowed */
+    const uint64_t *ver;  /* borrowed */
+};
+
+nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reach, nbep_feq *q,
+                               const uint64_t *ver, nbep_evloop **out, nbep_diag *d)
+{
+    nbep_evloop *e = calloc(1, sizeof *e);
+    if (!e)
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the cells engine");
+    e->n = n;
+    e->q = q;
+    e->ver = ver;
+    nbep_status st = nbep_calendar_create(n, &e->cal, d);
+    if (st == NBEP_OK)
+        st = nbep_cells_init(&e->cells, lo, hi, reach, n, d);
+    if (st != NBEP_OK) {
+        nbep_evloop_destroy(&e);
+        return st;
+    }
+    *out = e;
+    return NBEP_OK;
+}
+
+void nbep_evloop_destroy(nbep_evloop **e)
+{
+    if (!e || !*e)
+        return;
+    nbep_calendar_destroy(&(*e)->cal);
+    nbep_cells_fini(&(*e)->cells);
+    free(*e);
+    *e = NULL;
+}
+
+size_t nbep_evloop_bytes(size_t n)
+{
+    return nbep_calendar_bytes(n) + nbep_cells_bytes(n);
+}
+
+void nbep_evloop_assign(nbep_evloop *e, const nbep_vec3 *pos, size_t lo, size_t hi)
+{
+    nbep_cells_assign(&e->cells, pos, lo, hi);
+}
+
+void nbep_evloop_link(nbep_evloop *e)
+{
+    nbep_cells_link(&e->cells);
+}
+
+/* The calendar's tie key: the pair (lower sphere high, higher low), the same in both spheres'
+ * slots; a plane contact or a cell exit ranks after every pair of its sphere. */
+static uint64_t slot_key(uint32_t i, const nbep_event *ev)
+{
+    uint32_t a = i, b = UINT32_MAX;
+    if (ev->kind == NBEP_EVENT_SPHERE) {
+        a = i < ev->partner ? i : ev->partner;
+        b = i < ev->partner ? ev->partner : i;
+    } else if (ev->kind == NBEP_EVENT_PLANE) {
+        b = UINT32_MAX - ev->partner;
+    }
+    return (uint64_t)a << 32 | b;
+}
+
+/* Sphere i's slot from scratch at time t: planes, the spheres of its block, its cell exit. */
+static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uint32_t i,
+                        double t)
+{
+    nbep_event best = ops->planes(u, i);
+    const nbep_cells *g = &e->cells;
+    size_t lo[3], hi[3];
+    nbep_cells_block(g, g->cell[i], lo, hi);
+    uint32_t js[BATCH];
+    size_t m = 0;
+    for (size_t z = lo[2]; z <= hi[2]; z++)
+        for (size_t y = lo[1]; y <= hi[1]; y++)
+            for (size_t x = lo[0]; x <= hi[0]; x++)
+                for (uint32_t j = g->head[nbep_cells_index(g, x, y, z)]; j != NBEP_CELLS_NONE;
+                     j = g->next[j]) {
+                    if (j == i)
+                        continue;
+                    js[m++] = j;
+                    if (m == BATCH) {
+                        ops->pairs(u, i, js, m, &best);
+                        m = 0;
+                    }
+                }
+    if (m > 0)
+        ops->pairs(u, i, js, m, &best);
+    nbep_vec3 p, v, a;
+    ops->flight(u, i, t, &p, &v, &a);
+    double t_exit = t + nbep_cells_exit_time(g, i, p, v, a);
+    if (t_exit < NBEP_NEVER && (best.kind == NBEP_EVENT_NONE || t_exit < best.time))
+        best = (nbep_event){t_exit, 0, NBEP_EVENT_HORIZON, e->ver[i], 0};
+    if (best.kind == NBEP_EVENT_NONE) {
+        nbep_feq_set_never(e->q, i, e->ver[i]);
+    } else {
+        nbep_feq_remove(e->q, i);
+        nbep_feq_insert(e->q, i, best);
+    }
+}
+
+/* The calendar entry of sphere i from its slot. */
+static void schedule_one(nbep_evloop *e, uint32_t i)
+{
+    const nbep_event *ev = nbep_feq_slot(e->q, i);
+    if (ev->kind == NBEP_EVENT_SPHERE || ev->kind == NBEP_EVENT_PLANE ||
+        ev->kind == NBEP_EVENT_HORIZON)
+        nbep_calendar_set(e->cal, i, ev->time, slot_key(i, ev));
+    else
+        nbep_calendar_remove(e->cal, i);
+}
+
+void nbep_evloop_predict(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, size_t lo,
+                         size_t hi, double t)
+{
+    for (size_t i = lo; i < hi; i++)
+        predict_one(e, ops, u, (uint32_t)i, t);
+}
+
+void nbep_evloop_schedule(nbep_evloop *e)
+{
+    nbep_calendar_clear(e->cal);
+    for (size_t i = 0; i < e->n; i++)
+        schedule_one(e, (uint32_t)i);
+}
+
+bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_end,
+                     uint64_t stall_events, double stall_dt, nbep_evloop_tally *tally,
+                     double *t_stuck)
+{
+    uint64_t since = 0;
+    double t_mark = -INFINITY;
+    uint32_t i;
+    double t;
+    while (nbep_calendar_top(e->cal, &i, &t) && t < t_end) {
+        const nbep_event ev = *nbep_feq_slot(e->q, i);
+        tally->events++;
+        if (++since >= stall_events) {
+            if (!(t - t_mark > stall_dt)) {
+                *t_stuck = t;
+                return false;
+            }
+            t_mark = t;
+            since = 0;
+        }
+        if (ev.kind == NBEP_EVENT_HORIZON) {
+            nbep_vec3 p, v, a;
+            ops->flight(u, i, t, &p, &v, &a);
+            size_t c = nbep_cells_locate(&e->cells, p);
+            if (c != e->cells.cell[i])
+                nbep_cells_move(&e->cells, i, c);
+            tally->exits++;
+        } else if (ops->fresh(u, i, &ev)) {
+            ops->react(u, i, &ev);
+            tally->reactions++;
+            if (ev.kind == NBEP_EVENT_SPHERE) {
+                predict_one(e, ops, u, ev.partner, t);
+                schedule_one(e, ev.partner);
+            }
+        }
+        /* in every case (exit, stale slot, reaction) i looks again from now */
+        predict_one(e, ops, u, i, t);
+        schedule_one(e, i);
+    }
+    return true;
+}

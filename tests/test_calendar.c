@@ -1,0 +1,169 @@
+/* Tests of the event calendar: the earliest entry against a brute-force minimum over random
+ * sets, moves and removals; the tie order (time, key, item) whatever the order of operations;
+ * clearing; and the invariant checker catching nothing on a healthy heap. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <string.h>
+
+#include "nbep/calendar.h"
+#include "nbep_test.h"
+
+static nbep_calendar *make(size_t n)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_calendar *c = NULL;
+    assert_int_equal(nbep_calendar_create(n, &c, &d), NBEP_OK);
+    nbep_diag_fini(&d);
+    return c;
+}
+
+static uint64_t lcg(uint64_t *x)
+{
+    *x = *x * 6364136223846793005ULL + 1442695040888963407ULL;
+    return *x >> 33;
+}
+
+/* The reference: a plain array scanned for the minimum in the same order. */
+typedef struct ref {
+    bool has;
+    double time;
+    uint64_t key;
+} ref;
+
+static bool ref_before(const ref *r, uint32_t a, uint32_t b)
+{
+    if (r[a].time != r[b].time)
+        return r[a].time < r[b].time;
+    if (r[a].key != r[b].key)
+        return r[a].key < r[b].key;
+    return a < b;
+}
+
+static void test_top_is_the_brute_force_minimum_under_random_operations(void **state)
+{
+    (void)state;
+    enum { N = 300, OPS = 20000 };
+    nbep_calendar *c = make(N);
+    ref r[N];
+    memset(r, 0, sizeof r);
+    uint64_t x = 12345;
+    for (int op = 0; op < OPS; op++) {
+        uint32_t i = (uint32_t)(lcg(&x) % N);
+        uint64_t what = lcg(&x) % 10;
+        if (what < 2) {
+            nbep_calendar_remove(c, i);
+            r[i].has = false;
+        } else if (what == 2 && op % 1000 == 0) {
+            nbep_calendar_clear(c);
+            memset(r, 0, sizeof r);
+        } else {
+            /* few distinct times and keys: ties on time and on key are common */
+            double t = (double)(lcg(&x) % 50) * 0.125;
+            uint64_t key = lcg(&x) % 4;
+            nbep_calendar_set(c, i, t, key);
+            r[i] = (ref){true, t, key};
+        }
+        size_t held = 0;
+        uint32_t best = UINT32_MAX;
+        for (uint32_t k = 0; k < N; k++) {
+            if (!r[k].has)
+                continue;
+            held++;
+            if (best == UINT32_MAX || ref_before(r, k, best))
+                best = k;
+        }
+        assert_int_equal(nbep_calendar_size(c), held);
+        uint32_t top;
+        double t_top;
+        bool any = nbep_calendar_top(c, &top, &t_top);
+        assert_int_equal(any, held > 0);
+        if (any) {
+            assert_int_equal(top, best);
+            assert_true(t_top == r[best].time);
+        }
+        double t_has;
+        assert_int_equal(nbep_calendar_has(c, i, &t_has), r[i].has);
+        if (r[i].has)
+            assert_true(t_has == r[i].time);
+        if (op % 97 == 0)
+            assert_int_equal(nbep_calendar_check(c), 0);
+    }
+    assert_int_equal(nbep_calendar_check(c), 0);
+    nbep_calendar_destroy(&c);
+    assert_null(c);
+}
+
+/* Draining the calendar gives the entries in (time, key, item) order, the same whatever
+ * order they were set in. */
+static void test_drain_order_is_time_then_key_then_item_for_any_insert_order(void **state)
+{
+    (void)state;
+    enum { N = 64 };
+    uint32_t first[N];
+    for (int pass = 0; pass < 2; pass++) {
+        nbep_calendar *c = make(N);
+        for (uint32_t k = 0; k < N; k++) {
+            uint32_t i = pass == 0 ? k : N - 1 - k;
+            /* times 0, 1, 2, 3; keys descend with i so that key, not item, decides first */
+            nbep_calendar_set(c, i, (double)(i % 4), (uint64_t)(N - i) / 8);
+        }
+        /* a move to +inf and back must not disturb the order */
+        nbep_calendar_set(c, 5, INFINITY, 0);
+        nbep_calendar_set(c, 5, (double)(5 % 4), (uint64_t)(N - 5) / 8);
+        uint32_t prev = UINT32_MAX;
+        double prev_t = -1.0;
+        for (uint32_t k = 0; k < N; k++) {
+            uint32_t i;
+            double t;
+            assert_true(nbep_calendar_top(c, &i, &t));
+            if (prev != UINT32_MAX) {
+                uint64_t kp = (uint64_t)(N - prev) / 8, ki = (uint64_t)(N - i) / 8;
+                assert_true(prev_t < t || (prev_t == t && (kp < ki || (kp == ki && prev < i))));
+            }
+            if (pass == 0)
+                first[k] = i;
+            else
+                assert_int_equal(first[k], i);
+            nbep_calendar_remove(c, i);
+            prev = i;
+            prev_t = t;
+        }
+        uint32_t i;
+        double t;
+        assert_false(nbep_calendar_top(c, &i, &t));
+        nbep_calendar_destroy(&c);
+    }
+}
+
+static void test_remove_of_an_absent_item_and_an_empty_calendar_are_harmless(void **state)
+{
+    (void)state;
+    nbep_calendar *c = make(3);
+    nbep_calendar_remove(c, 1);
+    assert_int_equal(nbep_calendar_size(c), 0);
+    assert_false(nbep_calendar_has(c, 1, NULL));
+    assert_false(nbep_calendar_has(c, 7, NULL)); /* out of range */
+    nbep_calendar_set(c, 2, 1.0, 0);
+    nbep_calendar_remove(c, 2);
+    nbep_calendar_remove(c, 2);
+    assert_int_equal(nbep_calendar_size(c), 0);
+    assert_int_equal(nbep_calendar_check(c), 0);
+    nbep_calendar_destroy(&c);
+    nbep_calendar_destroy(&c); /* NULL-safe */
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_top_is_the_brute_force_minimum_under_random_operations),
+        cmocka_unit_test(test_drain_order_is_time_then_key_then_item_for_any_insert_order),
+        cmocka_unit_test(test_remove_of_an_absent_item_and_an_empty_calendar_are_harmless),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,226 @@
+/* Tests of the cell lists: geometry (sides at least reach, cells bounded), a build in two
+ * ranges on two threads equal to one serial build, and, along analytic flights with and
+ * without acceleration whose cell exits are processed in time order, the two properties the
+ * engine relies on: every sphere sits within its grown cell, and every pair within reach is
+ * in the same or adjacent cells; an exit always lands in another cell. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "nbep/calendar.h"
+#include "nbep/cells.h"
+#include "nbep/predict.h"
+#include "nbep_test.h"
+
+static double unit(uint64_t *x)
+{
+    *x = *x * 6364136223846793005ULL + 1442695040888963407ULL;
+    return (double)(*x >> 11) / 9007199254740992.0;
+}
+
+static void init_cells(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double reach, size_t n)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_cells_init(g, lo, hi, reach, n, &d), NBEP_OK);
+    nbep_diag_fini(&d);
+}
+
+static void test_geometry_sides_at_least_reach_and_cells_bounded(void **state)
+{
+    (void)state;
+    nbep_cells g;
+    init_cells(&g, (nbep_vec3){-1, 0, 0}, (nbep_vec3){9, 4.5, 1}, 1.0, 1000);
+    assert_int_equal(g.dim[0], 8);  /* 10 / 1.125 = 8.9 */
+    assert_int_equal(g.dim[1], 4);  /* 4.5 / 1.125 = 4 exactly */
+    assert_int_equal(g.dim[2], 1);  /* thinner than a cell: one */
+    for (int k = 0; k < 2; k++) {
+        assert_true(g.h[k] >= 1.125);
+        assert_close(g.margin[k], 0.25 * (g.h[k] - 1.0), 1e-15, 0.0);
+    }
+    assert_true(g.margin[2] == 0.0);
+    nbep_cells_fini(&g);
+    /* a huge sparse box: cells capped at 2n + 8 */
+    init_cells(&g, (nbep_vec3){0, 0, 0}, (nbep_vec3){1e3, 1e3, 1e3}, 1.0, 10);
+    assert_true(g.n_cells <= 28);
+    assert_true(g.h[0] >= 1.125);
+    nbep_cells_fini(&g);
+    nbep_cells_fini(&g); /* safe twice */
+    /* no spheres, so no reach: one cell, and init returns */
+    init_cells(&g, (nbep_vec3){0, 0, 0}, (nbep_vec3){1, 1, 1}, 0.0, 0);
+    assert_int_equal(g.n_cells, 1);
+    nbep_cells_link(&g);
+    nbep_cells_fini(&g);
+}
+
+static void test_a_build_in_two_ranges_on_two_threads_equals_a_serial_one(void **state)
+{
+    (void)state;
+    enum { N = 5000 };
+    nbep_vec3 *pos = malloc(N * sizeof *pos);
+    uint64_t x = 7;
+    for (size_t i = 0; i < N; i++)
+        pos[i] = (nbep_vec3){20 * unit(&x), 20 * unit(&x), 20 * unit(&x)};
+    nbep_cells a, b;
+    init_cells(&a, (nbep_vec3){0, 0, 0}, (nbep_vec3){20, 20, 20}, 1.0, N);
+    init_cells(&b, (nbep_vec3){0, 0, 0}, (nbep_vec3){20, 20, 20}, 1.0, N);
+    nbep_cells_assign(&a, pos, 0, N);
+    nbep_cells_link(&a);
+    /* (a serial build runs the two ranges one after the other) */
+#pragma omp parallel for num_threads(2) schedule(static, 1)
+    for (int t = 0; t < 2; t++)
+        nbep_cells_assign(&b, pos, t ? N / 3 : 0, t ? N : N / 3);
+    nbep_cells_link(&b);
+    assert_memory_equal(a.cell, b.cell, N * sizeof *a.cell);
+    assert_memory_equal(a.head, b.head, a.n_cells * sizeof *a.head);
+    assert_memory_equal(a.next, b.next, N * sizeof *a.next);
+    assert_int_equal(nbep_cells_check(&a, pos, 0.0), 0);
+    /* ids ascend within a list */
+    for (size_t c = 0; c < a.n_cells; c++)
+        for (uint32_t i = a.head[c]; i != NBEP_CELLS_NONE && a.next[i] != NBEP_CELLS_NONE;
+             i = a.next[i])
+            assert_true(a.next[i] > i);
+    nbep_cells_fini(&a);
+    nbep_cells_fini(&b);
+    free(pos);
+}
+
+typedef struct flight {
+    nbep_vec3 p0, v, a;
+} flight;
+
+static nbep_vec3 at(const flight *f, double t)
+{
+    return nbep_vec3_axpy(nbep_vec3_axpy(f->p0, t, f->v), 0.5 * t * t, f->a);
+}
+
+static void run_flights(bool accelerate)
+{
+    enum { N = 300, SAMPLES = 400 };
+    const double L = 8.0, reach = 1.0, T = 20.0;
+    flight *f = malloc(N * sizeof *f);
+    nbep_vec3 *pos = malloc(N * sizeof *pos);
+    uint64_t x = accelerate ? 99 : 5;
+    for (size_t i = 0; i < N; i++) {
+        f[i].p0 = (nbep_vec3){L * unit(&x), L * unit(&x), L * unit(&x)};
+        f[i].v = (nbep_vec3){unit(&x) - 0.5, unit(&x) - 0.5, unit(&x) - 0.5};
+        /* some spheres grazing along a face: no velocity across it */
+        if (i % 17 == 0)
+            f[i].v.x = 0.0;
+        f[i].a = accelerate ? (nbep_vec3){0.1 * (unit(&x) - 0.5), 0.0, -0.05} : (nbep_vec3){0};
+        pos[i] = f[i].p0;
+    }
+    nbep_cells g;
+    init_cells(&g, (nbep_vec3){0, 0, 0}, (nbep_vec3){L, L, L}, reach, N);
+    nbep_cells_assign(&g, pos, 0, N);
+    nbep_cells_link(&g);
+    nbep_calendar *cal = NULL;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_calendar_create(N, &cal, &d), NBEP_OK);
+    nbep_diag_fini(&d);
+    for (uint32_t i = 0; i < N; i++) {
+        double te = nbep_cells_exit_time(&g, i, f[i].p0, f[i].v, f[i].a);
+        if (te < NBEP_NEVER)
+            nbep_calendar_set(cal, i, te, i);
+    }
+    size_t exits = 0;
+    for (int s = 1; s <= SAMPLES; s++) {
+        double ts = T * s / SAMPLES;
+        uint32_t i;
+        double te;
+        while (nbep_calendar_top(cal, &i, &te) && te <= ts) {
+            nbep_vec3 p = at(&f[i], te);
+            size_t c = nbep_cells_locate(&g, p);
+            assert_int_not_equal(c, g.cell[i]); /* an exit lands elsewhere */
+            nbep_cells_move(&g, i, c);
+            nbep_vec3 v = nbep_vec3_axpy(f[i].v, te, f[i].a);
+            double next = nbep_cells_exit_time(&g, i, p, v, f[i].a);
+            assert_true(next > 0.0);
+            if (next < NBEP_NEVER)
+                nbep_calendar_set(cal, i, te + next, i);
+            else
+                nbep_calendar_remove(cal, i);
+            exits++;
+        }
+        for (size_t k = 0; k < N; k++)
+            pos[k] = at(&f[k], ts);
+        /* tolerance: the flight is evaluated in a different order than the exit time */
+        assert_int_equal(nbep_cells_check(&g, pos, 1e-12), 0);
+        for (size_t a = 0; a < N; a++)
+            for (size_t b = a + 1; b < N; b++) {
+                if (nbep_vec3_norm(nbep_vec3_sub(pos[a], pos[b])) > reach)
+                    continue;
+                size_t lo[3], hi[3], ca = g.cell[b];
+                nbep_cells_block(&g, g.cell[a], lo, hi);
+                size_t cx = ca % g.dim[0], cy = ca / g.dim[0] % g.dim[1],
+                       cz = ca / (g.dim[0] * g.dim[1]);
+                assert_true(cx >= lo[0] && cx <= hi[0] && cy >= lo[1] && cy <= hi[1] &&
+                            cz >= lo[2] && cz <= hi[2]);
+            }
+    }
+    assert_true(exits > N); /* the flights did cross cells */
+    nbep_calendar_destroy(&cal);
+    nbep_cells_fini(&g);
+    free(f);
+    free(pos);
+}
+
+static void test_straight_flights_keep_members_in_their_cells_and_contacts_adjacent(void **state)
+{
+    (void)state;
+    run_flights(false);
+}
+
+static void test_accelerated_flights_keep_members_in_their_cells_and_contacts_adjacent(void **s)
+{
+    (void)s;
+    run_flights(true);
+}
+
+/* The exit time is the first crossing of a grown interior face: the centre is on it then. */
+static void test_exit_time_reaches_the_grown_face(void **state)
+{
+    (void)state;
+    nbep_cells g;
+    init_cells(&g, (nbep_vec3){0, 0, 0}, (nbep_vec3){9, 9, 9}, 2.5, 20);
+    /* 3 cells of side 3 per axis (9 / 2.8125 = 3.2), margin (3 - 2.5) / 4 = 0.125 */
+    /* room for 20 spheres (so that 27 cells fit), one placed: the rest sit in cell 0 */
+    nbep_vec3 p = {4.5, 4.5, 4.5}, all[20] = {{0}};
+    all[0] = p;
+    nbep_cells_assign(&g, all, 0, 20);
+    nbep_cells_link(&g);
+    assert_close(nbep_cells_exit_time(&g, 0, p, (nbep_vec3){1, 0, 0}, (nbep_vec3){0}), 1.625,
+                 1e-15, 0.0);
+    assert_close(nbep_cells_exit_time(&g, 0, p, (nbep_vec3){0, -0.5, 0}, (nbep_vec3){0}), 3.25,
+                 1e-15, 0.0);
+    /* from rest under -z acceleration 2: 1.625 = t^2 */
+    assert_close(nbep_cells_exit_time(&g, 0, p, (nbep_vec3){0}, (nbep_vec3){0, 0, -2}),
+                 sqrt(1.625), 1e-15, 0.0);
+    assert_true(nbep_cells_exit_time(&g, 0, p, (nbep_vec3){0}, (nbep_vec3){0}) == NBEP_NEVER);
+    /* an edge cell has no exit through the box's face */
+    p = (nbep_vec3){8.0, 4.5, 4.5};
+    nbep_cells_move(&g, 0, nbep_cells_locate(&g, p));
+    assert_true(nbep_cells_exit_time(&g, 0, p, (nbep_vec3){1, 0, 0}, (nbep_vec3){0}) ==
+                NBEP_NEVER);
+    nbep_cells_fini(&g);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_geometry_sides_at_least_reach_and_cells_bounded),
+        cmocka_unit_test(test_a_build_in_two_ranges_on_two_threads_equals_a_serial_one),
+        cmocka_unit_test(test_straight_flights_keep_members_in_their_cells_and_contacts_adjacent),
+        cmocka_unit_test(
+            test_accelerated_flights_keep_members_in_their_cells_and_contacts_adjacent),
+        cmocka_unit_test(test_exit_time_reaches_the_grown_face),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
