@@ -265,7 +265,10 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         thread_ws *w = &c->ws[t];
         w->cand = malloc(own * sizeof *w->cand);
         w->redo = malloc(own * sizeof *w->redo);
-        w->fired = malloc(3 * own * sizeof *w->fired); /* 2 per reaction, 1 per let-go */
+        /* 2 per reaction, 1 per let-go; cells mode: one reaction's 3 and every held sphere
+         * letting go after it, on the thread that runs the event loop */
+        size_t n_fired = 3 * own + (c->ev && t == 0 ? n : 0);
+        w->fired = malloc(n_fired * sizeof *w->fired);
         w->rel = malloc(own * sizeof *w->rel);
         w->claimed = malloc(2 * own * sizeof *w->claimed);
         w->part = nbep_alloc_aligned(CHUNK, sizeof *w->part);
@@ -873,6 +876,35 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
     fire(c, w, s, hi, still_hi);
 }
 
+/* Sphere i is held and a sphere it rests on has reacted since it took the load. */
+static bool held_on_changed(const pred_ctx *c, size_t i)
+{
+    const rest_set *r = &c->rest[i];
+    if (!r->still)
+        return false;
+    for (int k = 0; k < r->n; k++)
+        if (r->who[k] < 0 && r->ver[k] != c->ver[-1 - r->who[k]])
+            return true;
+    return false;
+}
+
+/* Held sphere i lets go of the sphere supports that reacted, at local time t_local; it fires
+ * (moves again) unless what is left still holds it. */
+static void let_go(pred_ctx *c, nbep_state *s, size_t i, double dt, double t_local, thread_ws *w)
+{
+    rest_set *r = &c->rest[i];
+    rest_set k = {.n = 0};
+    for (int j = 0; j < r->n; j++)
+        if (r->who[j] >= 0 || r->ver[j] == c->ver[-1 - r->who[j]]) {
+            k.who[k.n] = r->who[j];
+            k.ver[k.n++] = r->ver[j];
+        }
+    *r = k;
+    advance_to(c, s, i, t_local);
+    if (!rest_solve(s, i, r, &s->vel[i], &c->aeff[i], dt, false))
+        fire(c, w, s, i, true);
+}
+
 /* After a react phase that changed held spheres: every thread lets go of its own held spheres
  * whose sphere supports have reacted since they took the load, at the time of this round
  * (they have not moved: v = 0, a = 0). A sphere still held by what is left stays. Letting go
@@ -882,31 +914,12 @@ static void let_go_phase(pred_ctx *c, nbep_state *s, nbep_range own, double dt, 
                          thread_ws *w)
 {
     w->n_rel = 0;
-    for (size_t i = own.lo; i < own.hi; i++) {
-        const rest_set *r = &c->rest[i];
-        if (!r->still)
-            continue;
-        for (int k = 0; k < r->n; k++)
-            if (r->who[k] < 0 && r->ver[k] != c->ver[-1 - r->who[k]]) {
-                w->rel[w->n_rel++] = (uint32_t)i;
-                break;
-            }
-    }
+    for (size_t i = own.lo; i < own.hi; i++)
+        if (held_on_changed(c, i))
+            w->rel[w->n_rel++] = (uint32_t)i;
     nbep_barrier_wait(&c->bar);
-    for (size_t m = 0; m < w->n_rel; m++) {
-        size_t i = w->rel[m];
-        rest_set *r = &c->rest[i];
-        rest_set k = {.n = 0};
-        for (int j = 0; j < r->n; j++)
-            if (r->who[j] >= 0 || r->ver[j] == c->ver[-1 - r->who[j]]) {
-                k.who[k.n] = r->who[j];
-                k.ver[k.n++] = r->ver[j];
-            }
-        *r = k;
-        advance_to(c, s, i, t_local);
-        if (!rest_solve(s, i, r, &s->vel[i], &c->aeff[i], dt, false))
-            fire(c, w, s, i, true);
-    }
+    for (size_t m = 0; m < w->n_rel; m++)
+        let_go(c, s, w->rel[m], dt, t_local, w);
     nbep_barrier_wait(&c->bar);
 }
 
@@ -954,6 +967,7 @@ typedef struct cells_user {
     nbep_state *s;
     const nbep_scene *sc;
     double T0;
+    double t_local;           /* the current event's time in the step */
     thread_ws *w;
     nbep_counters *cnt;
     nbep_thread_max *mx;
@@ -980,16 +994,32 @@ static bool cells_fresh(void *u, uint32_t i, const nbep_event *ev)
     return is_fresh(x->c, i, ev);
 }
 
-static void cells_react(void *u, uint32_t i, const nbep_event *ev)
+static void cells_let_go(void *u, uint32_t j)
 {
     cells_user *x = u;
+    if (held_on_changed(x->c, j))
+        let_go(x->c, x->s, j, x->sc->dt, x->t_local, x->w);
+}
+
+/* One reaction, then, as let_go_phase does after a round that changed held spheres, the held
+ * spheres resting on a changed one let go: they touch it, so they are in its block; each that
+ * moves again is changed in turn (the list grows as the loop walks it). */
+static size_t cells_react(void *u, uint32_t i, const nbep_event *ev, const uint32_t **changed)
+{
+    cells_user *x = u;
+    thread_ws *w = x->w;
     uint32_t lo, hi;
     (void)event_key(i, ev, &lo, &hi);
-    x->w->n_fired = 0; /* react's list of fired spheres is not used here */
+    w->n_fired = 0;
+    const uint64_t woken = w->woken;
+    x->t_local = ev->time - x->T0;
     x->cnt->c[NBEP_COUNTER_REACTIONS]++;
-    /* the scene has no accelerations (scene.c refuses cells mode with any), so no sphere
-     * rests or is held: only lo and hi change, and the loop re-predicts both */
-    react(x->c, x->s, x->sc, ev->time, ev->time - x->T0, lo, hi, ev, x->w, x->cnt, x->mx);
+    react(x->c, x->s, x->sc, ev->time, x->t_local, lo, hi, ev, w, x->cnt, x->mx);
+    if (w->woken != woken)
+        for (size_t k = 0; k < w->n_fired; k++)
+            nbep_evloop_visit_block(x->c->ev, w->fired[k], cells_let_go, x);
+    *changed = w->fired;
+    return w->n_fired;
 }
 
 static void cells_flight(void *u, uint32_t i, double t, nbep_vec3 *p, nbep_vec3 *v,
@@ -1021,7 +1051,7 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
     bool rebuild = true;
     for (uint64_t step = sim->step_first; step <= sim->step_end; step++) {
         const int spar = (int)(step & 1);
-        cells_user u = {c, s, sim->scene, (double)(step - 1) * sim->dt, w,
+        cells_user u = {c, s, sim->scene, (double)(step - 1) * sim->dt, 0.0, w,
                         &sim->counters[spar][tid], &sim->tmax[spar][tid]};
         const double T_end = (double)step * sim->dt;
         if (rebuild) { /* every sphere sits at T0 (tau = 0) */

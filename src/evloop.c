@@ -79,6 +79,20 @@ static uint64_t slot_key(uint32_t i, const nbep_event *ev)
     return (uint64_t)a << 32 | b;
 }
 
+void nbep_evloop_visit_block(const nbep_evloop *e, uint32_t i,
+                             void (*visit)(void *u, uint32_t j), void *u)
+{
+    const nbep_cells *g = &e->cells;
+    size_t lo[3], hi[3];
+    nbep_cells_block(g, g->cell[i], lo, hi);
+    for (size_t z = lo[2]; z <= hi[2]; z++)
+        for (size_t y = lo[1]; y <= hi[1]; y++)
+            for (size_t x = lo[0]; x <= hi[0]; x++)
+                for (uint32_t j = g->head[nbep_cells_index(g, x, y, z)]; j != NBEP_CELLS_NONE;
+                     j = g->next[j])
+                    visit(u, j);
+}
+
 /* Sphere i's slot from scratch at time t: planes, the spheres of its block, its cell exit. */
 static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uint32_t i,
                         double t)
@@ -169,12 +183,14 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
                 nbep_cells_move(&e->cells, i, c);
             tally->exits++;
         } else if (ops->fresh(u, i, &ev)) {
-            ops->react(u, i, &ev);
+            const uint32_t *changed;
+            size_t m = ops->react(u, i, &ev, &changed);
             tally->reactions++;
-            if (ev.kind == NBEP_EVENT_SPHERE) {
-                predict_one(e, ops, u, ev.partner, t);
-                schedule_one(e, ev.partner);
-            }
+            for (size_t k = 0; k < m; k++)
+                if (changed[k] != i) {
+                    predict_one(e, ops, u, changed[k], t);
+                    schedule_one(e, changed[k]);
+                }
         }
         /* in every case (exit, stale slot, reaction) i looks again from now */
         predict_one(e, ops, u, i, t);

@@ -15,7 +15,7 @@
  * Events are handled in the order (time, pair key, sphere): a slot that names a partner whose
  * response count moved on is stale and its sphere is re-predicted; a cell exit moves the sphere
  * into the cell its centre is in then and re-predicts it; any other event reacts and both its
- * spheres are re-predicted. The loop is serial (one thread), so results cannot depend on the
+ * spheres (and any other sphere the reaction changed) are re-predicted. The loop is serial (one thread), so results cannot depend on the
  * thread count; nbep_evloop_assign and nbep_evloop_predict are per sphere and run on every
  * thread's own range. */
 #ifndef NBEP_EVLOOP_H
@@ -38,8 +38,10 @@ typedef struct nbep_evloop_ops {
     void (*pairs)(void *u, uint32_t i, const uint32_t *js, size_t m, nbep_event *best);
     /* true while the event in i's slot is still valid (no response since it was predicted) */
     bool (*fresh)(void *u, uint32_t i, const nbep_event *ev);
-    /* reacts to the event in i's slot (a sphere or plane contact), at its time */
-    void (*react)(void *u, uint32_t i, const nbep_event *ev);
+    /* reacts to the event in i's slot (a sphere or plane contact), at its time; returns the
+     * number of spheres whose motion it changed and points *changed at them (the event's own
+     * and any that resting or held contact moved; the loop re-predicts each) */
+    size_t (*react)(void *u, uint32_t i, const nbep_event *ev, const uint32_t **changed);
     /* sphere i's centre, velocity and acceleration at absolute time t (not stored) */
     void (*flight)(void *u, uint32_t i, double t, nbep_vec3 *p, nbep_vec3 *v, nbep_vec3 *a);
 } nbep_evloop_ops;
@@ -75,6 +77,11 @@ typedef struct nbep_evloop_tally {
 bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_end,
                      uint64_t stall_events, double stall_dt, nbep_evloop_tally *tally,
                      double *t_stuck);
+
+/* Calls visit(u, j) for every sphere j (i included) in the 27-cell block of i's cell: every
+ * sphere that can touch i. Read-only; a react callback may call it. */
+void nbep_evloop_visit_block(const nbep_evloop *e, uint32_t i,
+                             void (*visit)(void *u, uint32_t j), void *u);
 
 /* Bytes the engine itself takes for n spheres (calendar and cells). */
 size_t nbep_evloop_bytes(size_t n);

@@ -846,17 +846,6 @@ nbep_status nbep_scene_load(const char *deck_path, const char *const *overrides,
             "run.neighbors = \"cells\" needs a box (its cells cover the box)");
     parse_planes(&L, root, &planes, &n_planes);
     parse_spheres(&L, root, &sc, &entries, &n_entries);
-    if (sc.neighbors_cells) {
-        /* the cells engine re-predicts only the one or two spheres of an event; resting and
-         * held contact (which only acceleration brings) change others too */
-        bool accelerated = false;
-        for (size_t k = 0; k < n_entries; k++)
-            accelerated |= nbep_vec3_norm2(entries[k].acc) != 0.0;
-        if (accelerated)
-            ERR(&L, config_lookup(&cfg, "run.neighbors"),
-                "run.neighbors = \"cells\" is for scenes without acceleration (gravity or a "
-                "sphere's own); use \"grid\"");
-    }
     const bool geometry_ok = seed_ok && d->n_errors == geometry0 && !L.c.oom;
     parse_output(&L, root, &sc);
     parse_sweep(&L, root, &sc);
