@@ -393,6 +393,39 @@ static void test_grazing_pairs_agree_with_the_search(void **state)
     assert_true(hits > n / 10 && misses > n / 10); /* both sides of grazing were exercised */
 }
 
+/* Grazing hits under an acceleration far too small to bend the path: the contact comes at the
+ * straight-line time t = (s - sqrt(sigma^2 - b^2)) / |dv| (s the distance to closest approach,
+ * b the impact parameter), with b only 1e-12 to 1e-10 of sigma inside. So close to tangency
+ * GSL's roots often do not polish (f' ~ 0), and the answer must come from the search the GSL
+ * path falls back on (predict.c: "an estimate that neither route can settle"); without it the
+ * pair would be called a miss. Tolerance: the acceleration (1e-14 to 1e-12 of the bound that
+ * sends a pair to the search, |da| <= 1e-14 |dv|^2 / |dp|) moves the pair sideways by at most
+ * |da| t^2 / 2 <= 5e-15 |dp|, which moves the entry along the path by that times
+ * sigma / sqrt(sigma^2 - b^2) <= 1 / sqrt(2e-12): at most 4e-9 of t. b and s are taken from the
+ * rounded dp. 2e-8 of t leaves a margin. */
+static void test_grazing_hits_by_1e_12_of_sigma_are_found_at_the_straight_line_time(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    uint64_t seed = 23;
+    const int n = small_scale() ? 100 : 2000;
+    for (int i = 0; i < n; i++) {
+        nbep_vec3 dv = uniform_vec(&seed, 2.0);
+        double eps = pow(10.0, uniform(&seed, -12.0, -10.0));
+        double dist = uniform(&seed, 2.0, 50.0);
+        nbep_vec3 dp = approach(dv, uniform_vec(&seed, 1.0), dist, 1.0 - eps);
+        double bend = 1e-2 * nbep_vec3_norm2(dv) / nbep_vec3_norm(dp);
+        nbep_vec3 da = nbep_vec3_scale(unit(uniform_vec(&seed, 1.0)),
+                                       bend * pow(10.0, uniform(&seed, -14.0, -12.0)));
+        nbep_vec3 u = unit(dv);
+        double s = -nbep_vec3_dot(dp, u);
+        double b2 = nbep_vec3_norm2(nbep_vec3_axpy(dp, s, u));
+        double want = (s - sqrt(1.0 - b2)) / nbep_vec3_norm(dv);
+        double t = nbep_predict_pair(dp, dv, da, 1.0, ws);
+        if (!(fabs(t - want) <= 2e-8 * want))
+            fail_msg("grazing hit %d (b = 1 - %.3g): %.17g, expected %.17g", i, eps, t, want);
+    }
+}
+
 /* Zero vectors in every combination: never NaN, and never a negative time. */
 static void test_degenerate_inputs_give_a_time_or_never_but_not_nan(void **state)
 {
@@ -525,6 +558,9 @@ int main(void)
                                         ws_setup, ws_teardown),
         cmocka_unit_test_setup_teardown(test_grazing_pairs_agree_with_the_search, ws_setup,
                                         ws_teardown),
+        cmocka_unit_test_setup_teardown(
+            test_grazing_hits_by_1e_12_of_sigma_are_found_at_the_straight_line_time, ws_setup,
+            ws_teardown),
         cmocka_unit_test_setup_teardown(test_fallback_search_agrees_with_the_gsl_path, ws_setup,
                                         ws_teardown),
         cmocka_unit_test_setup_teardown(test_degenerate_inputs_give_a_time_or_never_but_not_nan,

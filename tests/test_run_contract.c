@@ -28,6 +28,7 @@ typedef struct seen {
     double energy[MAX_FRAMES];
     bool changed[MAX_FRAMES];
     nbep_vec3 *vel;   /* the previous frame's velocities */
+    nbep_vec3 pos[8]; /* the last frame's positions, for scenes of at most 8 spheres */
 } seen;
 
 static nbep_status see_frame(void *ctx, int64_t step, const nbep_state *s, nbep_diag *d)
@@ -47,6 +48,8 @@ static nbep_status see_frame(void *ctx, int64_t step, const nbep_state *s, nbep_
     if (!f->vel)
         assert_non_null(f->vel = malloc(s->n * sizeof *f->vel));
     memcpy(f->vel, s->vel, s->n * sizeof *s->vel);
+    if (s->n <= 8)
+        memcpy(f->pos, s->pos, s->n * sizeof *s->pos);
     f->step[f->n_frames] = step;
     f->energy[f->n_frames] = e;
     f->changed[f->n_frames] = changed;
@@ -254,6 +257,81 @@ static void test_two_contacts_at_the_same_time_on_one_sphere_keep_momentum(void 
     }
 }
 
+/* SPEC: predictive's checks are "queue slots examined by find plus check() calls"; predictions
+ * are contact-time computations. Counted by hand on a scene whose events are known (README
+ * "Algorithms": find examines every slot at set-up and in each step's first round, and in a
+ * later round the candidates left; check() looks at each slot whose event is at the round's
+ * earliest time; a re-prediction computes a time with every other sphere and every plane):
+ * spheres 0 and 1 meet head-on along y at t = 0.4 (step 2), sphere 2 meets the plane x = 0 at
+ * t = 0.9 (step 4), nothing else ever meets. So
+ *   checks      = (S + 1) n          every slot at set-up and in each step's first round
+ *               + 2 + 2              the pair: both copies checked, then both re-examined
+ *               + 1 + 1              the plane contact: one slot checked, then re-examined
+ *   predictions = n (n - 1 + np)     set-up
+ *               + 2 (n - 1 + np)     the pair re-predicted
+ *               + (n - 1 + np)       sphere 2 re-predicted
+ * the same for any thread count (each thread counts its own slots and partners). */
+static void test_predictive_checks_and_predictions_follow_spec_on_a_counted_scene(void **state)
+{
+    (void)state;
+    const uint64_t S = 8, n = 3, np = 1;
+    for (int nt = 1; nt <= 3; nt++) {
+        nbep_scene *sc = nbep_test_scene_new(n, np, "predictive", S, 0.25);
+        const nbep_vec3 a0 = {0, 0, 0};
+        nbep_test_set_plane(sc, 0, (nbep_vec3){1, 0, 0}, 0.0);
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){1, -0.5, 0}, (nbep_vec3){0, 1, 0}, 0.1, 1, a0);
+        nbep_test_set_sphere(sc, 1, (nbep_vec3){1, 0.5, 0}, (nbep_vec3){0, -1, 0}, 0.1, 1, a0);
+        nbep_test_set_sphere(sc, 2, (nbep_vec3){1, 0, 5}, (nbep_vec3){-1, 0, 0}, 0.1, 1, a0);
+        seen f = {0};
+        nbep_summary s = run(sc, nt, &f);
+        assert_int_equal(s.sphere_collisions, 1);
+        assert_int_equal(s.plane_collisions, 1);
+        assert_int_equal(s.checks, (S + 1) * n + 4 + 2);
+        assert_int_equal(s.predictions, (n + 2 + 1) * (n - 1 + np));
+        free(f.vel);
+        nbep_test_scene_free(&sc);
+    }
+}
+
+/* Two contacts at exactly the same time on one sphere B (index 2), from spheres of lower index:
+ * README "Algorithms": simultaneous events sharing a sphere react one at a time in pair-key
+ * order, the same for any thread count. The first contact's sphere A (index 0) only finds its
+ * event during the step (after bouncing off the plane x = 0 at t = 0.875), after C (index 1),
+ * whose event was known from the start, so an engine that reacted to both at once would take
+ * them in the order it found them. Every number is a short binary fraction, so the contact times
+ * are exact: A from x = 1 at -1 (bounce at 0.875, back at +1), B at rest at x = 2, C from
+ * x = 4.75 at -1; radii 1/8: both contacts at t = 2.5. Masses A = C = 1, B = 3, e = 1; the 1-D
+ * elastic collision v1' = ((m1 - m2) v1 + 2 m2 v2) / (m1 + m2), in key order:
+ *   (A,B): A 1, B 0      -> A -1/2, B 1/2
+ *   (C,B): C -1, B 1/2   -> B -1/4, C 5/4      (then A and B recede: done)
+ * and free flight to t = 4: A at 1.75 - 1.5/2 = 1, B at 2 - 1.5/4 = 1.625, C at 2.25 + 1.5 * 5/4
+ * = 4.125. (In the other order A would end at -5/4, reach the plane at t = 3.8 and come back.)
+ * Exact binary fractions throughout; 1e-12 of the speed allows a few roundings anyway. */
+static void test_simultaneous_contacts_sharing_a_sphere_react_in_pair_key_order(void **state)
+{
+    (void)state;
+    for (int nt = 1; nt <= 3; nt++) {
+        nbep_scene *sc = nbep_test_scene_new(3, 1, "predictive", 1, 4.0);
+        const nbep_vec3 a0 = {0, 0, 0};
+        nbep_test_set_plane(sc, 0, (nbep_vec3){1, 0, 0}, 0.0);
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){1, 0, 0}, (nbep_vec3){-1, 0, 0}, 0.125, 1, a0);
+        nbep_test_set_sphere(sc, 1, (nbep_vec3){4.75, 0, 0}, (nbep_vec3){-1, 0, 0}, 0.125, 1, a0);
+        nbep_test_set_sphere(sc, 2, (nbep_vec3){2, 0, 0}, (nbep_vec3){0, 0, 0}, 0.125, 3, a0);
+        seen f = {0};
+        nbep_summary s = run(sc, nt, &f);
+        assert_int_equal(s.plane_collisions, 1);
+        assert_int_equal(s.sphere_collisions, 2);
+        const double want_v[3] = {-0.5, 1.25, -0.25}, want_x[3] = {1.0, 4.125, 1.625};
+        for (int i = 0; i < 3; i++) {
+            assert_close(f.vel[i].x, want_v[i], 0.0, 1e-12);
+            assert_close(f.pos[i].x, want_x[i], 0.0, 1e-12);
+        }
+        assert_close(s.energy_final, 1.0, 1e-12, 0.0); /* (1 + 1)/2 before, kept (e = 1) */
+        free(f.vel);
+        nbep_test_scene_free(&sc);
+    }
+}
+
 /* ---- grid mode --------------------------------------------------------------------------- */
 
 /* run.neighbors = "grid" tests only the partners that can reach a sphere before the horizon.
@@ -308,6 +386,8 @@ int main(void)
         cmocka_unit_test(test_quiet_steps_are_the_steps_where_no_velocity_changed),
         cmocka_unit_test(test_naive_checks_every_pair_and_every_sphere_plane_once_per_step),
         cmocka_unit_test(test_two_contacts_at_the_same_time_on_one_sphere_keep_momentum),
+        cmocka_unit_test(test_predictive_checks_and_predictions_follow_spec_on_a_counted_scene),
+        cmocka_unit_test(test_simultaneous_contacts_sharing_a_sphere_react_in_pair_key_order),
         cmocka_unit_test(test_grid_mode_keeps_overlaps_at_round_off_with_speeds_over_two_decades),
         cmocka_unit_test(test_grid_mode_keeps_overlaps_at_round_off_with_equal_fast_speeds),
     };
