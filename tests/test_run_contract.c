@@ -332,6 +332,40 @@ static void test_simultaneous_contacts_sharing_a_sphere_react_in_pair_key_order(
     }
 }
 
+/* README "Physics, granular" (physics.tc): a collision within tc of the previous collision of
+ * either sphere (planes included) is elastic. On a line, no gravity, radii 0.1, masses 1,
+ * e = 0.5, tc = 0.012: B (index 1) at x = 0.2 and A (index 0) at x = 0.415 both move at -1
+ * towards the plane x = 0. In order:
+ *   t = 0.1    B hits the plane, its first collision: inelastic, B -> +0.5
+ *   t = 0.11   A meets B (gap 0.015 closed at 1.5): B's last was 0.01 ago, so elastic (A has
+ *              none): they swap, A +0.5, B -1
+ *   t = 0.115  B hits the plane again, 0.005 after its last: elastic, B -> +1
+ *   t = 0.13   B catches A (gap 0.0075 at 0.5): their last were 0.015 and 0.02 ago, more than
+ *              tc: inelastic, centre-of-mass speed 0.75, A -> 0.75 + 0.5 * 0.25 = 0.875,
+ *              B -> 0.75 - 0.5 * 0.25 = 0.625
+ * then both fly off. Every margin to tc is at least 0.002, far above round-off of the times. */
+static void test_tc_model_makes_a_collision_within_tc_of_either_spheres_last_one_elastic(
+    void **state)
+{
+    (void)state;
+    nbep_scene *sc = nbep_test_scene_new(2, 1, "predictive", 40, 0.005);
+    const nbep_vec3 a0 = {0, 0, 0};
+    sc->restitution = 0.5;
+    sc->tc = 0.012;
+    nbep_test_set_plane(sc, 0, (nbep_vec3){1, 0, 0}, 0.0);
+    nbep_test_set_sphere(sc, 0, (nbep_vec3){0.415, 0, 0}, (nbep_vec3){-1, 0, 0}, 0.1, 1, a0);
+    nbep_test_set_sphere(sc, 1, (nbep_vec3){0.2, 0, 0}, (nbep_vec3){-1, 0, 0}, 0.1, 1, a0);
+    seen f = {0};
+    nbep_summary s = run(sc, 1, &f);
+    assert_int_equal(s.plane_collisions, 2);
+    assert_int_equal(s.sphere_collisions, 2);
+    /* a few roundings of speeds of order 1 */
+    assert_close(f.vel[0].x, 0.875, 0.0, 1e-12);
+    assert_close(f.vel[1].x, 0.625, 0.0, 1e-12);
+    free(f.vel);
+    nbep_test_scene_free(&sc);
+}
+
 /* ---- grid mode --------------------------------------------------------------------------- */
 
 /* run.neighbors = "grid" tests only the partners that can reach a sphere before the horizon.
@@ -388,6 +422,7 @@ int main(void)
         cmocka_unit_test(test_two_contacts_at_the_same_time_on_one_sphere_keep_momentum),
         cmocka_unit_test(test_predictive_checks_and_predictions_follow_spec_on_a_counted_scene),
         cmocka_unit_test(test_simultaneous_contacts_sharing_a_sphere_react_in_pair_key_order),
+        cmocka_unit_test(test_tc_model_makes_a_collision_within_tc_of_either_spheres_last_one_elastic),
         cmocka_unit_test(test_grid_mode_keeps_overlaps_at_round_off_with_speeds_over_two_decades),
         cmocka_unit_test(test_grid_mode_keeps_overlaps_at_round_off_with_equal_fast_speeds),
     };
