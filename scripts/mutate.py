@@ -24,6 +24,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 SIM = ["test_run_contract", "test_sim", "test_extremes"]
 PRED = ["test_predict"]
+CELLS = ["test_sim"]  # its cells-mode tests: exact against all pairs, dense fluid, pile
+GRAN = ["test_granular"]
 
 # (id, file, original, replacement, tests, equivalent-reason or None)
 MUTANTS = [
@@ -110,6 +112,66 @@ MUTANTS = [
     ("detect-checks-off-by-one", "src/algo_detect.c", "checks += n - 1 - i;", "checks += n - i;", SIM, None),
     ("detect-plane-gap", "src/algo_detect.c", "if (gap < 0.0) {\n                push_contact",
      "if (gap < -1e-3 * s->radius[i]) {\n                push_contact", SIM, None),
+    # ---- event calendar (cells mode) ----
+    ("cal-time-order", "src/calendar.c", "if (a->time != b->time)\n        return a->time < b->time;",
+     "if (a->time != b->time)\n        return a->time > b->time;", ["test_calendar"] + CELLS, None),
+    ("cal-tie-key", "src/calendar.c", "return a->key < b->key;", "return a->key > b->key;",
+     ["test_calendar"] + CELLS, None),
+    ("cal-sift-down-child", "src/calendar.c",
+     "if (child + 1 < c->size && before(&c->heap[child + 1], &c->heap[child]))",
+     "if (child + 1 < c->size && before(&c->heap[child], &c->heap[child + 1]))",
+     ["test_calendar"] + CELLS, None),
+    ("cal-remove-hole-up", "src/calendar.c",
+     "if (k > 0 && before(&last, &c->heap[(k - 1) / 2]))\n        sift_up(c, k, last);",
+     "if (0 && before(&last, &c->heap[(k - 1) / 2]))\n        sift_up(c, k, last);",
+     ["test_calendar"] + CELLS, None),
+    # ---- cell lists ----
+    ("cells-block-lo", "src/cells.c", "lo[k] = xyz[k] > 0 ? xyz[k] - 1 : 0;", "lo[k] = xyz[k];",
+     ["test_cells"] + CELLS, None),
+    ("cells-block-hi", "src/cells.c", "hi[k] = xyz[k] + 1 < g->dim[k] ? xyz[k] + 1 : xyz[k];",
+     "hi[k] = xyz[k];", ["test_cells"] + CELLS, None),
+    ("cells-exit-lower-face", "src/cells.c",
+     "double face = o[k] + (double)xyz[k] * g->h[k] - g->margin[k];",
+     "double face = o[k] + (double)xyz[k] * g->h[k] + g->margin[k];", ["test_cells"] + CELLS, None),
+    ("cells-exit-upper-sign", "src/cells.c", "nbep_predict_plane(face - x[k], -u[k], -acc[k])",
+     "nbep_predict_plane(face - x[k], u[k], -acc[k])", ["test_cells"] + CELLS, None),
+    ("cells-margin-wide", "src/cells.c", "0.25 * (g->h[k] - reach) : 0.0;",
+     "0.75 * (g->h[k] - reach) : 0.0;", ["test_cells"] + CELLS, None),
+    # ---- the cells event loop ----
+    ("evloop-changed-unpredicted", "src/evloop.c",
+     "                if (changed[k] != i) {\n                    predict_one(e, ops, u, changed[k], t);",
+     "                if (changed[k] != i && 0) {\n                    predict_one(e, ops, u, changed[k], t);",
+     CELLS, None),
+    ("evloop-react-stale", "src/evloop.c", "} else if (ops->fresh(u, i, &ev)) {", "} else {", CELLS, None),
+    ("evloop-last-batch", "src/evloop.c", "    if (m > 0)\n        ops->pairs(u, i, js, m, &best);\n",
+     "", CELLS, None),
+    ("evloop-exit-after-event", "src/evloop.c",
+     "(best.kind == NBEP_EVENT_NONE || t_exit < best.time)",
+     "(best.kind == NBEP_EVENT_NONE || t_exit > best.time)", CELLS, None),
+    ("evloop-exit-no-move", "src/evloop.c",
+     "if (c != e->cells.cell[i])\n                nbep_cells_move(&e->cells, i, c);",
+     "(void)c;", CELLS, None),
+    # ---- lasting contacts, TC model, cells-mode let-go ----
+    ("contact-one-pushes", "src/contact.c", "if (!(an < 0.0))\n            return false;",
+     "if (!(an > 0.0))\n            return false;", ["test_contact"] + GRAN, None),
+    ("contact-leaves-tol", "src/contact.c", "if (m == 0 ? !(xn >= 0.0) : !(xn >= -tol))",
+     "if (m == 0 ? !(xn >= 0.0) : !(xn >= tol))", ["test_contact"] + GRAN, None),
+    ("contact-edge-pushes", "src/contact.c",
+     "if (!(r1 - g * r2 >= -tol * den) || !(r2 - g * r1 >= -tol * den))",
+     "if (!(r1 - g * r2 >= -tol * den))", ["test_contact"] + GRAN, None),
+    ("tc-off", "src/algo_predictive.c", "return recent ? 1.0 : e;", "return e;", SIM + GRAN, None),
+    ("tc-own-history-only", "src/algo_predictive.c",
+     "bool recent = t_abs - c->t_last[a] < tc || t_abs - c->t_last[b] < tc;",
+     "bool recent = t_abs - c->t_last[a] < tc;", SIM + GRAN, None),
+    ("tc-partner-unstamped", "src/algo_predictive.c",
+     "    c->t_last[a] = t_abs;\n    c->t_last[b] = t_abs;\n", "    c->t_last[a] = t_abs;\n",
+     SIM + GRAN, None),
+    ("cells-no-let-go", "src/algo_predictive.c",
+     "            nbep_evloop_visit_block(x->c->ev, w->fired[k], cells_let_go, x);",
+     "            (void)cells_let_go;", ["test_run_contract"] + CELLS + GRAN, None),
+    ("cells-let-go-at-step-start", "src/algo_predictive.c",
+     "let_go(x->c, x->s, j, x->sc->dt, x->t_local, x->w);",
+     "let_go(x->c, x->s, j, x->sc->dt, 0.0, x->w);", ["test_run_contract"] + CELLS + GRAN, None),
     # ---- frame schedule, summary and counters ----
     ("frame-last-step", "src/sim.c", "bool frame = step % sim->scene->output_every == 0 || step == sim->step_end || stop;",
      "bool frame = step % sim->scene->output_every == 0 || stop;", SIM + ["test_output"], None),

@@ -366,6 +366,47 @@ static void test_tc_model_makes_a_collision_within_tc_of_either_spheres_last_one
     nbep_test_scene_free(&sc);
 }
 
+/* README "Physics, granular": a held sphere is let go as soon as a sphere it rests on reacts.
+ * A stack on the floor of a box, at rest and touching: B (index 1) on the floor, A (index 0) on
+ * B; C (index 2, mass 1/2) slides along the floor at 3 m/s and hits B at t = 0.31 / 3. B leaves
+ * at 2 m/s (1-D elastic: 2 m_C u / (m_B + m_C)); since 2^2 > g (r_A + r_B), B's top drops away
+ * faster than A falls, so A touches nothing until the floor (0.2 s later) and falls freely
+ * from rest at the instant of the hit: at T = 0.2, z_A = 0.3 - g (T - 0.31/3)^2 / 2. Held
+ * spheres in the round mode (all pairs) and in cells mode. Round-off of a few flights: 1e-12. */
+static void test_a_held_sphere_falls_freely_once_its_support_is_knocked_away(void **state)
+{
+    (void)state;
+    const double g = 9.81, T = 0.2, t_hit = 0.31 / 3.0;
+    for (int cells = 0; cells <= 1; cells++)
+        for (int nt = 1; nt <= 2; nt++) {
+            nbep_scene *sc = nbep_test_scene_new(3, 6, "predictive", 20, 0.01);
+            const double L = 2.0;
+            sc->has_box = true;
+            sc->box_max = (nbep_vec3){L, L, L};
+            sc->neighbors_cells = cells;
+            sc->tc = 1e-6;
+            nbep_test_set_plane(sc, 0, (nbep_vec3){1, 0, 0}, 0.0);
+            nbep_test_set_plane(sc, 1, (nbep_vec3){-1, 0, 0}, -L);
+            nbep_test_set_plane(sc, 2, (nbep_vec3){0, 1, 0}, 0.0);
+            nbep_test_set_plane(sc, 3, (nbep_vec3){0, -1, 0}, -L);
+            nbep_test_set_plane(sc, 4, (nbep_vec3){0, 0, 1}, 0.0);
+            nbep_test_set_plane(sc, 5, (nbep_vec3){0, 0, -1}, -L);
+            const nbep_vec3 down = {0, 0, -g}, rest = {0, 0, 0};
+            nbep_test_set_sphere(sc, 0, (nbep_vec3){1, 1, 0.3}, rest, 0.1, 1, down);
+            nbep_test_set_sphere(sc, 1, (nbep_vec3){1, 1, 0.1}, rest, 0.1, 1, down);
+            nbep_test_set_sphere(sc, 2, (nbep_vec3){0.49, 1, 0.1}, (nbep_vec3){3, 0, 0}, 0.1, 0.5,
+                                 down);
+            seen f = {0};
+            nbep_summary s = run(sc, nt, &f);
+            assert_int_equal(s.sphere_collisions, 1);
+            assert_close(f.pos[0].z, 0.3 - 0.5 * g * (T - t_hit) * (T - t_hit), 0.0, 1e-12);
+            assert_close(f.pos[0].x, 1.0, 0.0, 1e-12);
+            assert_close(f.vel[1].x, 2.0, 0.0, 1e-12);
+            free(f.vel);
+            nbep_test_scene_free(&sc);
+        }
+}
+
 /* ---- grid mode --------------------------------------------------------------------------- */
 
 /* run.neighbors = "grid" tests only the partners that can reach a sphere before the horizon.
@@ -423,6 +464,7 @@ int main(void)
         cmocka_unit_test(test_predictive_checks_and_predictions_follow_spec_on_a_counted_scene),
         cmocka_unit_test(test_simultaneous_contacts_sharing_a_sphere_react_in_pair_key_order),
         cmocka_unit_test(test_tc_model_makes_a_collision_within_tc_of_either_spheres_last_one_elastic),
+        cmocka_unit_test(test_a_held_sphere_falls_freely_once_its_support_is_knocked_away),
         cmocka_unit_test(test_grid_mode_keeps_overlaps_at_round_off_with_speeds_over_two_decades),
         cmocka_unit_test(test_grid_mode_keeps_overlaps_at_round_off_with_equal_fast_speeds),
     };

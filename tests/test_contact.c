@@ -1,0 +1,74 @@
+/* The lasting-contact kernel (contact.h) against answers worked out by hand from its contract:
+ * the motion is the point of the cone {x : x.n_j >= 0} nearest to the acceleration (the KKT
+ * conditions: x - a = sum mu_j n_j with every mu_j >= 0, mu_j = 0 unless x.n_j = 0), and the
+ * active sets are tried from the smallest up, so the reported set is the smallest that
+ * carries the load. Each expected answer is also checked against those conditions here. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+
+#include "nbep/contact.h"
+#include "nbep_test.h"
+
+static nbep_vec3 unit(double x, double y, double z)
+{
+    nbep_vec3 v = {x, y, z};
+    return nbep_vec3_scale(v, 1.0 / nbep_vec3_norm(v));
+}
+
+/* A sphere on a floor slides along a wall without being pushed into it (a.n = 0): the floor
+ * alone carries the load, so the wall is not active, and a velocity leaving the wall keeps its
+ * normal part (a frictionless wall that does not push cannot hold the sphere back). */
+static void test_a_wall_the_motion_only_grazes_carries_no_load(void **state)
+{
+    (void)state;
+    const nbep_vec3 n[2] = {{0, 0, 1}, {1, 0, 0}}; /* floor, wall */
+    unsigned act = 99;
+    nbep_vec3 x = nbep_contact_project((nbep_vec3){0, 2, -9.81}, n, 2, &act);
+    assert_int_equal(act, 1u);
+    assert_true(x.x == 0.0 && x.y == 2.0 && x.z == 0.0);
+    nbep_vec3 v = nbep_contact_tangent((nbep_vec3){1, 2, 0.5}, n, 2, act);
+    assert_true(v.x == 1.0 && v.y == 2.0 && v.z == 0.0);
+}
+
+/* Floor n0 = z, a sloped wall n1 = (-1, 0, 1)/sqrt2 the sphere is pulled away from, and a
+ * vertical wall n2 = (1, 1, 0)/sqrt2 it is pushed into, with a = (-2, 1, -10). Worked by hand:
+ * - alone, no contact will do: along the floor (-2, 1, 0) goes into n2; n1 alone leaves
+ *   (-6, 1, -6), into the floor; n2 alone (-1.5, 1.5, -10), into the floor;
+ * - floor and n1 hold it only by pulling: along their edge (y) x = (0, 1, 0), and
+ *   x - a = (2, 0, 10) = mu0 n0 + mu1 n1 needs mu1 = -2 sqrt2 < 0;
+ * - floor and n2: along their edge t = (-1, 1, 0)/sqrt2, x = (a.t) t = (-1.5, 1.5, 0), and
+ *   x - a = (0.5, 0.5, 10) = 10 n0 + (sqrt2 / 2) n2, both pushing; x leaves n1 (x.n1 > 0).
+ * So x = (-1.5, 1.5, 0) with contacts 0 and 2 active. Round-off of the normals: 1e-12. */
+static void test_an_edge_held_by_a_pulling_contact_is_not_the_answer(void **state)
+{
+    (void)state;
+    const nbep_vec3 n[3] = {{0, 0, 1}, unit(-1, 0, 1), unit(1, 1, 0)};
+    const nbep_vec3 a = {-2, 1, -10};
+    unsigned act = 99;
+    nbep_vec3 x = nbep_contact_project(a, n, 3, &act);
+    assert_int_equal(act, 5u);
+    assert_close(x.x, -1.5, 0.0, 1e-12);
+    assert_close(x.y, 1.5, 0.0, 1e-12);
+    assert_close(x.z, 0.0, 0.0, 1e-12);
+    /* the KKT conditions for the answer: in the cone, and x - a pushes along n0 and n2 */
+    for (int j = 0; j < 3; j++)
+        assert_true(nbep_vec3_dot(x, n[j]) >= -1e-12);
+    nbep_vec3 r = nbep_vec3_sub(x, a);
+    assert_close(r.x, 0.5, 0.0, 1e-12);
+    assert_close(r.y, 0.5, 0.0, 1e-12);
+    assert_close(r.z, 10.0, 0.0, 1e-12);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_a_wall_the_motion_only_grazes_carries_no_load),
+        cmocka_unit_test(test_an_edge_held_by_a_pulling_contact_is_not_the_answer),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
