@@ -259,9 +259,10 @@ static void test_two_contacts_at_the_same_time_on_one_sphere_keep_momentum(void 
 
 /* SPEC: predictive's checks are "queue slots examined by find plus check() calls"; predictions
  * are contact-time computations. Counted by hand on a scene whose events are known (README
- * "Algorithms": find examines every slot at set-up and in each step's first round, and in a
- * later round the candidates left; check() looks at each slot whose event is at the round's
- * earliest time; a re-prediction computes a time with every other sphere and every plane):
+ * "Algorithms" and src/algo_predictive.c: find examines every slot at set-up and in each
+ * step's first round, and in a later round the candidates left; check() looks at each slot
+ * whose event is at the round's earliest time; a re-prediction computes a time with every
+ * other sphere and every plane):
  * spheres 0 and 1 meet head-on along y at t = 0.4 (step 2), sphere 2 meets the plane x = 0 at
  * t = 0.9 (step 4), nothing else ever meets. So
  *   checks      = (S + 1) n          every slot at set-up and in each step's first round
