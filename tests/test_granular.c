@@ -329,10 +329,11 @@ static nbep_scene *pile(size_t n, double e, uint64_t steps, const char *algo)
 static void test_pile_energy_never_rises(void **state)
 {
     (void)state;
-    const double es[] = {0.5, 0.0};
-    for (size_t k = 0; k < 2; k++) {
+    const double es[] = {0.5, 0.0, 0.5};
+    for (size_t k = 0; k < 3; k++) { /* grid mode; the last in cells mode (the event loop) */
         nbep_scene *sc = pile(scaled(40, 16), es[k], scaled(400, 300), "predictive");
-        sc->neighbors_grid = true;
+        sc->neighbors_grid = k < 2;
+        sc->neighbors_cells = k == 2;
         trace t = {0};
         (void)run(sc, 2, &t);
         if (es[k] > 0.0)
@@ -350,9 +351,10 @@ static void test_pile_frames_equal_for_1_2_4_threads(void **state)
 {
     (void)state;
     const int nts[] = {1, 2, 4};
-    for (int grid = 0; grid < 2; grid++) {
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells (the event loop) */
         nbep_scene *sc = pile(scaled(40, 16), 0.5, scaled(400, 300), "predictive");
-        sc->neighbors_grid = grid;
+        sc->neighbors_grid = mode == 1;
+        sc->neighbors_cells = mode == 2;
         trace ref = {0};
         nbep_summary s1 = run(sc, nts[0], &ref);
         assert_true(s1.collisions > 100); /* otherwise the comparison proves little */
