@@ -673,8 +673,9 @@ static void claim_phase(pred_ctx *c, int par, double t_min, thread_ws *w)
 
 /* What sphere i's plane contacts leave of a unit impulse direction u (frictionless: they push,
  * never pull; contact.h): u itself when it has none. Sphere contacts do not count: a response
- * lets go of them. */
-static nbep_vec3 plane_mobility(const pred_ctx *c, const nbep_state *s, size_t i, nbep_vec3 u)
+ * lets go of them. *leans is set when i has a plane contact. */
+static nbep_vec3 plane_mobility(const pred_ctx *c, const nbep_state *s, size_t i, nbep_vec3 u,
+                                bool *leans)
 {
     const rest_set *r = &c->rest[i];
     nbep_vec3 n[NBEP_CONTACT_MAX];
@@ -683,6 +684,7 @@ static nbep_vec3 plane_mobility(const pred_ctx *c, const nbep_state *s, size_t i
         if (r->who[j] >= 0)
             n[k++] = s->plane_normal[r->who[j]];
     unsigned act;
+    *leans |= k > 0;
     return k == 0 ? u : nbep_contact_project(u, n, k, &act);
 }
 
@@ -883,15 +885,19 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
             return;
         }
     }
-    /* spheres leaning on planes move only along them: the planes take their share */
+    /* spheres leaning on planes move only along them: the planes take their share (a free
+     * pair keeps the paper's formula, bit for bit) */
     nbep_vec3 d = nbep_vec3_sub(s->pos[hi], s->pos[lo]);
     double len = nbep_vec3_norm(d);
     nbep_vec3 n = len > 0.0 ? nbep_vec3_make(d.x / len, d.y / len, d.z / len) : d;
-    if (nbep_physics_respond_pair_along(s->pos[lo], s->pos[hi], &s->vel[lo], &s->vel[hi],
-                                        s->mass[lo], s->mass[hi],
-                                        tc_restitution(c, sc->tc, e, t_abs, lo, hi),
-                                        plane_mobility(c, s, lo, nbep_vec3_scale(n, -1.0)),
-                                        plane_mobility(c, s, hi, n)))
+    bool leans = false;
+    nbep_vec3 d_lo = plane_mobility(c, s, lo, nbep_vec3_scale(n, -1.0), &leans);
+    nbep_vec3 d_hi = plane_mobility(c, s, hi, n, &leans);
+    const double e_pair = tc_restitution(c, sc->tc, e, t_abs, lo, hi);
+    if (leans ? nbep_physics_respond_pair_along(s->pos[lo], s->pos[hi], &s->vel[lo], &s->vel[hi],
+                                                s->mass[lo], s->mass[hi], e_pair, d_lo, d_hi)
+              : nbep_physics_respond_pair(s->pos[lo], s->pos[hi], &s->vel[lo], &s->vel[hi],
+                                          s->mass[lo], s->mass[hi], e_pair))
         cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
     min_bounce(c, s, dt, lo, hi);
     update_rest(c, s, lo, dt);
