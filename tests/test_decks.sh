@@ -38,6 +38,7 @@ for deck in "${decks[@]}"; do
     drift=$(field "$tmp/$name.json" energy_rel_drift)
     ovl=$(field "$tmp/$name.json" max_overlap_rel)
     e=$(sed -n 's/.*restitution = \([0-9.]*\);.*/\1/p' "$deck" | head -n 1)
+    e=${e:-1.0}   # physics.restitution's default
     if holds "$e" "x == 1.0"; then
         # elastic: energy kept to the round-off of summing it over the run (1e-9 is far above)
         check "$name: e = 1 keeps energy (drift $drift)" "holds '$drift' 'x < 1e-9 && x > -1e-9'"
