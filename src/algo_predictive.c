@@ -671,8 +671,26 @@ static void claim_phase(pred_ctx *c, int par, double t_min, thread_ws *w)
     }
 }
 
+/* What sphere i's plane contacts leave of a unit impulse direction u (frictionless: they push,
+ * never pull; contact.h): u itself when it has none. Sphere contacts do not count: a response
+ * lets go of them. *leans is set when i has a plane contact. */
+static nbep_vec3 plane_mobility(const pred_ctx *c, const nbep_state *s, size_t i, nbep_vec3 u,
+                                bool *leans)
+{
+    const rest_set *r = &c->rest[i];
+    nbep_vec3 n[NBEP_CONTACT_MAX];
+    int k = 0;
+    for (int j = 0; j < r->n; j++)
+        if (r->who[j] >= 0)
+            n[k++] = s->plane_normal[r->who[j]];
+    unsigned act;
+    *leans |= k > 0;
+    return k == 0 ? u : nbep_contact_project(u, n, k, &act);
+}
+
 /* After a response, a sphere leaves every contact along whose normal it now moves (and its
- * sphere contacts if it moves at all); the rest are solved again. */
+ * sphere contacts if it moves at all); the rest are solved again. A plane counts as left only
+ * beyond round-off: a response along a tilted plane leaves v.n at a few ulps of |v|. */
 static void update_rest(pred_ctx *c, nbep_state *s, size_t i, double dt)
 {
     rest_set *r = &c->rest[i];
@@ -682,12 +700,14 @@ static void update_rest(pred_ctx *c, nbep_state *s, size_t i, double dt)
     rest_normals(s, i, r, n);
     rest_set k = {.n = 0};
     for (int j = 0; j < r->n; j++)
-        if (nbep_vec3_dot(s->vel[i], n[j]) == 0.0 && (r->who[j] >= 0 || is_zero(s->vel[i]))) {
+        if (r->who[j] >= 0 ? fabs(nbep_vec3_dot(s->vel[i], n[j])) <=
+                                 NBEP_CONTACT_TOL * nbep_vec3_norm(s->vel[i])
+                           : nbep_vec3_dot(s->vel[i], n[j]) == 0.0 && is_zero(s->vel[i])) {
             k.who[k.n] = r->who[j];
             k.ver[k.n++] = r->ver[j];
         }
     *r = k;
-    rest_solve(s, i, r, &s->vel[i], &c->aeff[i], dt, false);
+    rest_solve(s, i, r, &s->vel[i], &c->aeff[i], dt, true);
 }
 
 static void advance_to(pred_ctx *c, nbep_state *s, size_t i, double t_local)
@@ -865,9 +885,19 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
             return;
         }
     }
-    if (nbep_physics_respond_pair(s->pos[lo], s->pos[hi], &s->vel[lo], &s->vel[hi],
-                                  s->mass[lo], s->mass[hi],
-                                  tc_restitution(c, sc->tc, e, t_abs, lo, hi)))
+    /* spheres leaning on planes move only along them: the planes take their share (a free
+     * pair keeps the paper's formula, bit for bit) */
+    nbep_vec3 d = nbep_vec3_sub(s->pos[hi], s->pos[lo]);
+    double len = nbep_vec3_norm(d);
+    nbep_vec3 n = len > 0.0 ? nbep_vec3_make(d.x / len, d.y / len, d.z / len) : d;
+    bool leans = false;
+    nbep_vec3 d_lo = plane_mobility(c, s, lo, nbep_vec3_scale(n, -1.0), &leans);
+    nbep_vec3 d_hi = plane_mobility(c, s, hi, n, &leans);
+    const double e_pair = tc_restitution(c, sc->tc, e, t_abs, lo, hi);
+    if (leans ? nbep_physics_respond_pair_along(s->pos[lo], s->pos[hi], &s->vel[lo], &s->vel[hi],
+                                                s->mass[lo], s->mass[hi], e_pair, d_lo, d_hi)
+              : nbep_physics_respond_pair(s->pos[lo], s->pos[hi], &s->vel[lo], &s->vel[hi],
+                                          s->mass[lo], s->mass[hi], e_pair))
         cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
     min_bounce(c, s, dt, lo, hi);
     update_rest(c, s, lo, dt);

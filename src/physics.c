@@ -85,6 +85,41 @@ bool nbep_physics_respond_pair(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, nbep_v
     return respond_ordered(p1, p2, v1, v2, m1, m2, e);
 }
 
+bool nbep_physics_respond_pair_along(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, nbep_vec3 *v2,
+                                     double m1, double m2, double e, nbep_vec3 d1,
+                                     nbep_vec3 d2)
+{
+    assert(nbep_vec3_isfinite(p1) && nbep_vec3_isfinite(p2));
+    assert(nbep_vec3_isfinite(*v1) && nbep_vec3_isfinite(*v2));
+    assert(m1 > 0.0 && m2 > 0.0 && e >= 0.0 && e <= 1.0);
+    double w = nbep_vec3_dot(d1, d1) / m1 + nbep_vec3_dot(d2, d2) / m2;
+    if (!(w > 0.0))
+        return nbep_physics_respond_pair(p1, p2, v1, v2, m1, m2, e);
+    nbep_vec3 d = nbep_vec3_sub(p2, p1);
+    double len = nbep_vec3_norm(d);
+    if (!(len > 0.0))
+        return false;                       /* coincident centres: no normal */
+    nbep_vec3 n = {d.x / len, d.y / len, d.z / len};
+    double u = nbep_vec3_dot(d, nbep_vec3_sub(*v2, *v1));
+    if (!(u < 0.0))
+        return false;                       /* receding or sliding: no impulse */
+    double c = nbep_vec3_dot(n, nbep_vec3_sub(*v1, *v2));
+    double J = c > 0.0 ? c * (1.0 + e) / w : 0.0; /* else closing only to round-off */
+    /* see TIE_TRIES: then J grows by at least DBL_EPSILON (|v1| + |v2|) / w, doubled */
+    double dJ = DBL_EPSILON * (nbep_vec3_norm(*v1) + nbep_vec3_norm(*v2)) / w;
+    nbep_vec3 a1 = *v1, a2 = *v2;
+    for (int k = 0; k < TIE_TRIES; k++) {
+        *v1 = nbep_vec3_axpy(a1, J / m1, d1);
+        *v2 = nbep_vec3_axpy(a2, J / m2, d2);
+        u = nbep_vec3_dot(d, nbep_vec3_sub(*v2, *v1));
+        if (!(u < 0.0))
+            break;
+        J += fmax(-u / len / w, dJ);
+        dJ *= 2.0;
+    }
+    return true;
+}
+
 bool nbep_physics_respond_plane(nbep_vec3 n, nbep_vec3 *v, double e)
 {
     assert(nbep_vec3_isfinite(n) && nbep_vec3_isfinite(*v));

@@ -329,10 +329,11 @@ static nbep_scene *pile(size_t n, double e, uint64_t steps, const char *algo)
 static void test_pile_energy_never_rises(void **state)
 {
     (void)state;
-    const double es[] = {0.5, 0.0};
-    for (size_t k = 0; k < 2; k++) {
+    const double es[] = {0.5, 0.0, 0.5};
+    for (size_t k = 0; k < 3; k++) { /* grid mode; the last in cells mode (the event loop) */
         nbep_scene *sc = pile(scaled(40, 16), es[k], scaled(400, 300), "predictive");
-        sc->neighbors_grid = true;
+        sc->neighbors_grid = k < 2;
+        sc->neighbors_cells = k == 2;
         trace t = {0};
         (void)run(sc, 2, &t);
         if (es[k] > 0.0)
@@ -350,9 +351,10 @@ static void test_pile_frames_equal_for_1_2_4_threads(void **state)
 {
     (void)state;
     const int nts[] = {1, 2, 4};
-    for (int grid = 0; grid < 2; grid++) {
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells (the event loop) */
         nbep_scene *sc = pile(scaled(40, 16), 0.5, scaled(400, 300), "predictive");
-        sc->neighbors_grid = grid;
+        sc->neighbors_grid = mode == 1;
+        sc->neighbors_cells = mode == 2;
         trace ref = {0};
         nbep_summary s1 = run(sc, nts[0], &ref);
         assert_true(s1.collisions > 100); /* otherwise the comparison proves little */
@@ -395,10 +397,43 @@ static void test_contact_projection(void **state)
     assert_true(v.x == 0.0 && v.y == 2.0 && v.z == 0.0);
 }
 
+/* The response of a pair whose lower sphere leans on a floor (issue 9): the floor takes the
+ * normal part of the impulse on it, so it slides (z velocity stays exactly 0: its mobility is
+ * the projection of -n onto the floor), the pair's normal relative speed becomes -e times what
+ * it was, and with e = 1 the kinetic energy is kept (the floor does no work). */
+static void test_pair_on_a_floor_responds_along_it(void **state)
+{
+    (void)state;
+    const double es[] = {1.0, 0.5, 0.0};
+    for (size_t k = 0; k < 3; k++) {
+        nbep_vec3 p1 = {0, 0, 0.1}, p2 = {0.06, 0.0, 0.1 + sqrt(0.04 - 0.0036)};
+        nbep_vec3 v1 = ZERO, v2 = {-0.3, 0.2, -1.0}, d = nbep_vec3_sub(p2, p1);
+        nbep_vec3 n = nbep_vec3_scale(d, 1.0 / nbep_vec3_norm(d));
+        nbep_vec3 floor_n[1] = {{0, 0, 1}};
+        unsigned act;
+        nbep_vec3 d1 = nbep_contact_project(nbep_vec3_scale(n, -1.0), floor_n, 1, &act);
+        double u0 = nbep_vec3_dot(nbep_vec3_sub(v2, v1), n);
+        double ke0 = 0.5 * 2.0 * nbep_vec3_dot(v1, v1) + 0.5 * 1.0 * nbep_vec3_dot(v2, v2);
+        assert_true(nbep_physics_respond_pair_along(p1, p2, &v1, &v2, 2.0, 1.0, es[k], d1, n));
+        assert_true(v1.z == 0.0 && v1.y == 0.0 && v1.x < 0.0);
+        double u1 = nbep_vec3_dot(nbep_vec3_sub(v2, v1), n);
+        /* relative to the speeds involved (~1): a few roundings */
+        assert_true(fabs(u1 + es[k] * u0) <= 1e-14);
+        double ke1 = 0.5 * 2.0 * nbep_vec3_dot(v1, v1) + 0.5 * 1.0 * nbep_vec3_dot(v2, v2);
+        if (es[k] == 1.0)
+            assert_true(fabs(ke1 - ke0) <= 1e-14 * ke0);
+        else
+            assert_true(ke1 < ke0);
+        /* not closing afterwards, by the test prediction uses */
+        assert_false(nbep_vec3_dot(d, nbep_vec3_sub(v2, v1)) < 0.0);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_contact_projection),
+        cmocka_unit_test(test_pair_on_a_floor_responds_along_it),
         cmocka_unit_test(test_stack_stays_put_predictive),
         cmocka_unit_test(test_stack_does_not_sink_naive_seminaive),
         cmocka_unit_test(test_bounce_stays_above_the_floor_naive_seminaive),

@@ -33,6 +33,19 @@ static inline void nbep_physics_drift(nbep_vec3 *p, nbep_vec3 *v, nbep_vec3 a, d
 bool nbep_physics_respond_pair(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, nbep_vec3 *v2,
                                double m1, double m2, double e);
 
+/* The response of a pair whose spheres lean on planes (issue 9): under an impulse J along
+ * n = (p2 - p1)/|p2 - p1| sphere 1 moves by (J/m1) d1 and sphere 2 by (J/m2) d2, where d1
+ * (d2) is what its frictionless plane contacts leave of -n (+n): the planes take the rest
+ * and do no work, as the sphere does not move along their normals. With d1 = -n, d2 = n this
+ * is nbep_physics_respond_pair. J makes the normal relative speed -e times what it was:
+ * J = (1+e) c / (|d1|^2/m1 + |d2|^2/m2), since d1.n = -|d1|^2 and d2.n = |d2|^2 for a
+ * projection onto a cone. With e = 1 kinetic energy is kept; momentum along the planes' normals
+ * goes to them. Returns as nbep_physics_respond_pair; the same round-off tie rule applies
+ * (along d1, d2). When both are zero (the pair cannot move along n at all) it responds freely. */
+bool nbep_physics_respond_pair_along(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, nbep_vec3 *v2,
+                                     double m1, double m2, double e, nbep_vec3 d1,
+                                     nbep_vec3 d2);
+
 /* Sphere-plane response: n is the plane's unit normal (into the live side); when v.n < 0,
  * v -= (1+e)(v.n) n and true is returned, else false. Afterwards v.n >= 0 exactly (a
  * round-off residual is pushed out, as for pairs). */
