@@ -563,8 +563,16 @@ static const char *const box_names[6] = {"box x-min", "box x-max", "box y-min",
 
 nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                                        const nbep__scene_entry *e, size_t n_entries,
-                                       bool has_box)
+                                       const bool *box_periodic)
 {
+    /* the box's walls in fill_planes's order: the two of each axis that is not periodic */
+    const char *names[6];
+    size_t n_box = 0;
+    for (int a = 0; box_periodic && a < 3; a++)
+        if (!box_periodic[a]) {
+            names[n_box++] = box_names[2 * a];
+            names[n_box++] = box_names[2 * a + 1];
+        }
     overlaps o = {c, s, e, n_entries, 0, false, 0};
     for (size_t i = 0; i < s->n; i++)
         for (size_t p = 0; p < s->n_planes; p++) {
@@ -574,10 +582,10 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                          (max_abs(s->pos[i]) + fabs(s->plane_offset[p]) + s->radius[i]);
             if (by > tol) {
                 char name[48];
-                if (has_box && p < 6)
-                    snprintf(name, sizeof name, "%s", box_names[p]);
+                if (p < n_box)
+                    snprintf(name, sizeof name, "%s", names[p]);
                 else
-                    snprintf(name, sizeof name, "planes.[%zu]", p - (has_box ? 6 : 0));
+                    snprintf(name, sizeof name, "planes.[%zu]", p - n_box);
                 report(&o, i, name, by);
             }
         }

@@ -49,6 +49,9 @@ enum {
     X(BOX_MIN, "box.min", VEC3, F_REQUIRED, NULL, "required", "lower corner")                      \
     X(BOX_MAX, "box.max", VEC3, F_REQUIRED, NULL, "required",                                      \
       "upper corner, above min on every axis")                                                     \
+    X(BOX_PERIODIC, "box.periodic", BOOL3, 0, "[false, false, false]", NULL,                       \
+      "per axis: the box repeats (no walls on that axis; minimum-image contacts; positions "   \
+      "wrapped); a periodic side must exceed twice the largest diameter")                       \
     X(PLANES, "planes", LIST, 0, NULL, "none", "extra static planes, after the box's six")         \
     X(PLANE_NORMAL, "planes.[].normal", VEC3, F_REQUIRED, NULL, "required",                        \
       "points to where spheres live; normalized; not zero")                                        \
