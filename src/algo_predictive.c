@@ -161,7 +161,12 @@ typedef struct pred_ctx {
     double horizon;               /* H: absolute time up to which this step's predictions look */
     /* run.neighbors = "cells" (beyond the paper): the in-step event loop (evloop.h) */
     nbep_evloop *ev;              /* owned, NULL in the other modes */
-    nbep_periodic pb;             /* the box's periodic axes (cells mode only: scene.c) */
+    nbep_periodic pb;             /* the box's periodic axes (scene.c: cells and all-pairs) */
+    /* all-pairs mode in a periodic box: partners are compared at their nearest image, which
+     * stays the touching one while no sphere strays farther than image_reach from where it
+     * was last predicted (periodic.h); an image-horizon event re-predicts it there */
+    bool image_horizon;
+    double image_reach;
     bool ev_failed;               /* thread 0: the loop stalled this step */
 } pred_ctx;
 
@@ -239,6 +244,8 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     }
     for (size_t i = 0; i < n; i++)
         c->rmax = fmax(c->rmax, sim->st.radius[i]);
+    c->image_horizon = c->pb.any && !c->use_grid && !sim->scene->neighbors_cells;
+    c->image_reach = nbep_periodic_reach(&c->pb, 2.0 * c->rmax);
     if (sim->scene->neighbors_cells) {
         /* see cells_steps: only those frames are rebuild points of the uninterrupted run */
         const nbep_resume *r = sim->opt.resume;
@@ -417,6 +424,22 @@ static nbep_event pair_event(const pred_ctx *c, const nbep_state *s, size_t i, n
     return (nbep_event){T0 + (t0 + dt), (uint32_t)j, NBEP_EVENT_SPHERE, c->ver[i], c->ver[j]};
 }
 
+/* All-pairs mode in a periodic box: when sphere i (at its local time) will have strayed
+ * image_reach from here along a periodic axis (kind HORIZON, partner n_planes so that it ranks
+ * after the planes); NBEP_NEVER when it does not move. */
+static nbep_event image_horizon(const pred_ctx *c, const nbep_state *s, size_t i, nbep_vec3 ai,
+                                double T0)
+{
+    const double D = c->image_reach;
+    const double v[3] = {s->vel[i].x, s->vel[i].y, s->vel[i].z}, a[3] = {ai.x, ai.y, ai.z};
+    double t = NBEP_NEVER;
+    for (int k = 0; k < 3; k++)
+        if (c->pb.axis[k])
+            t = fmin(t, fmin(nbep_predict_plane(D, v[k], a[k]), nbep_predict_plane(D, -v[k], -a[k])));
+    return (nbep_event){T0 + (c->tau[i] + t), (uint32_t)s->n_planes, NBEP_EVENT_HORIZON,
+                        c->ver[i], 0};
+}
+
 /* Paper Procedure 9, one thread's share: the earliest event of sphere i with the spheres
  * [lo, hi) (each at its own local time; a pair is compared at the later of the two) and, when
  * with_planes, with every plane. T0 is the step's start time. Returns kind NONE if none. */
@@ -439,10 +462,20 @@ static nbep_event predict_some(const pred_ctx *c, const nbep_state *s, size_t i,
                                              c->ver[i], 0});
         }
         cnt->c[NBEP_COUNTER_PREDICTIONS] += s->n_planes;
+        if (c->image_horizon)
+            keep_earlier(&best, image_horizon(c, s, i, ai, T0));
     }
-    for (size_t j = lo; j < hi; j++)
-        if (j != i)
-            keep_earlier(&best, pair_event(c, s, i, ai, j, ZERO3, T0, w));
+    for (size_t j = lo; j < hi; j++) {
+        if (j == i)
+            continue;
+        nbep_vec3 shift = ZERO3;
+        if (c->pb.any) { /* all-pairs in a periodic box: j's nearest image */
+            int cells[3];
+            nbep_periodic_nearest(&c->pb, nbep_vec3_sub(s->pos[j], s->pos[i]), cells);
+            shift = nbep_periodic_shift(&c->pb, cells);
+        }
+        keep_earlier(&best, pair_event(c, s, i, ai, j, shift, T0, w));
+    }
     cnt->c[NBEP_COUNTER_PREDICTIONS] += hi - lo - (i >= lo && i < hi);
     return best;
 }
@@ -637,7 +670,8 @@ static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid
             }
             c->flags[i] &= (uint8_t)~IN_REDO;
             if (best.time < T_end &&
-                (best.kind == NBEP_EVENT_SPHERE || best.kind == NBEP_EVENT_PLANE))
+                (best.kind == NBEP_EVENT_SPHERE || best.kind == NBEP_EVENT_PLANE ||
+                 (best.kind == NBEP_EVENT_HORIZON && c->image_horizon)))
                 add_cand(c, w, i);
         }
         nbep_barrier_wait(&c->bar);
@@ -645,10 +679,11 @@ static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid
 }
 
 /* The ordering key of an event: lower sphere in the high half, then the partner; planes
- * (stored as UINT32_MAX - plane) after every sphere. Equal for both copies of one pair. */
+ * (stored as UINT32_MAX - plane) after every sphere, and an image horizon after the planes.
+ * Equal for both copies of one pair. */
 static uint64_t event_key(size_t i, const nbep_event *ev, uint32_t *lo, uint32_t *hi)
 {
-    if (ev->kind == NBEP_EVENT_PLANE) {
+    if (ev->kind != NBEP_EVENT_SPHERE) {
         *lo = (uint32_t)i;
         *hi = UINT32_MAX - ev->partner;
     } else {
@@ -845,6 +880,10 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
     const double e = sc->restitution, dt = sc->dt;
     advance_to(c, s, lo, t_local);
     const bool still_lo = c->rest[lo].still;
+    if (ev->kind == NBEP_EVENT_HORIZON) { /* image horizon: re-predicted from here */
+        fire(c, w, s, lo, still_lo);
+        return;
+    }
     if (ev->kind == NBEP_EVENT_PLANE) {
         uint32_t p = UINT32_MAX - hi;
         nbep_vec3 n = s->plane_normal[p];
@@ -1261,6 +1300,8 @@ static void pred_run(nbep_sim *sim, void *p)
                 if (h > 0.0)
                     nbep_physics_drift(&s->pos[i], &s->vel[i], a, h);
                 c->tau[i] = 0.0;
+                if (c->pb.any) /* into the box, as frames are written (slots hold no positions) */
+                    nbep_periodic_wrap(&c->pb, &s->pos[i], &s->image[3 * i]);
                 if (c->use_grid) {
                     vmax = fmax(vmax, nbep_vec3_norm(s->vel[i]));
                     amax = fmax(amax, nbep_vec3_norm(a));

@@ -72,6 +72,25 @@ void nbep_periodic_wrap(const nbep_periodic *pb, nbep_vec3 *p, int32_t image[3])
         wrap_1(&p->z, pb->lo[2], pb->len[2], &image[2]);
 }
 
+void nbep_periodic_nearest(const nbep_periodic *pb, nbep_vec3 d, int cells[3])
+{
+    const double x[3] = {d.x, d.y, d.z};
+    for (int k = 0; k < 3; k++)
+        cells[k] = pb->axis[k] ? -(int)round(x[k] / pb->len[k]) : 0;
+}
+
+/* Two spheres each within D of its anchor move at most 2 D each between their comparison and a
+ * contact, 4 D together; the touching image is within sigma then, so within sigma + 4 D at the
+ * comparison, which is the nearest one while that is at most len/2. */
+double nbep_periodic_reach(const nbep_periodic *pb, double sigma)
+{
+    double r = INFINITY;
+    for (int k = 0; k < 3; k++)
+        if (pb->axis[k])
+            r = fmin(r, (0.5 * pb->len[k] - sigma) / 4.0);
+    return r;
+}
+
 nbep_vec3 nbep_periodic_shift(const nbep_periodic *pb, const int cells[3])
 {
     return nbep_vec3_make(pb->axis[0] ? cells[0] * pb->len[0] : 0.0,

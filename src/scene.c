@@ -399,10 +399,11 @@ static void parse_box(load *L, const config_setting_t *root, nbep_scene *sc,
 }
 
 /* Periodic axes (SPEC contract 2): each longer than twice the largest diameter (the minimum
- * image needs it), and a run mode that supports them: the predictive algorithm's cells mode,
- * whose cell blocks wrap around the box (three cells at least per periodic axis, so that a
- * neighbour is one image only). The other modes would need their own image handling; they are
- * refused rather than run wrong. */
+ * image needs it), and a run mode that supports them: the predictive algorithm's all-pairs
+ * mode (nearest images with an image horizon, algo_predictive.c) and cells mode, whose cell
+ * blocks wrap around the box (three cells at least per periodic axis, so that a neighbour is
+ * one image only). naive, seminaive and grid mode would need their own image handling; they
+ * are refused rather than run wrong. */
 static void check_periodic(load *L, const config_setting_t *at, const nbep_scene *sc,
                            const nbep__scene_entry *e, size_t n_entries)
 {
@@ -421,19 +422,17 @@ static void check_periodic(load *L, const config_setting_t *at, const nbep_scene
                 "sphere diameter (%g)",
                 "xyz"[k], len[k], 2.0 * rmax);
         /* the cells engine's sides are at least 1.125 diameters (cells.h) */
-        else if (!(len[k] >= 3.0 * 2.25 * rmax))
+        else if (sc->neighbors_cells && !(len[k] >= 3.0 * 2.25 * rmax))
             ERR(L, at,
                 "box.periodic: run.neighbors = \"cells\" needs the box's %c side (%g) to be at "
                 "least 6.75 times the largest radius (%g), three cells across",
                 "xyz"[k], len[k], rmax);
     }
-    if (strcmp(sc->algorithm, "predictive") != 0 || !sc->neighbors_cells)
+    if (strcmp(sc->algorithm, "predictive") != 0 || sc->neighbors_grid)
         ERR(L, at,
             "box.periodic needs run.algorithm = \"predictive\" with run.neighbors = \"cells\" "
-            "(got \"%s\"%s): the other modes do not handle periodic images",
-            sc->algorithm, strcmp(sc->algorithm, "predictive") == 0
-                               ? (sc->neighbors_grid ? ", \"grid\"" : ", \"all\"")
-                               : "");
+            "or \"all\" (got \"%s\"%s): the other modes do not handle periodic images",
+            sc->algorithm, strcmp(sc->algorithm, "predictive") == 0 ? ", \"grid\"" : "");
 }
 
 typedef struct plane {

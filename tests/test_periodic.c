@@ -167,11 +167,13 @@ static nbep_summary run(const nbep_scene *sc, int nt, nbep_state *final, frames 
     return sum;
 }
 
-/* A fully periodic box of side L, no planes, cells mode. */
+/* A fully periodic box of side L, no planes, cells mode (all-pairs when cells_mode is off). */
+static bool cells_mode = true;
+
 static nbep_scene *periodic_scene(size_t n, double L, uint64_t steps, double dt)
 {
     nbep_scene *sc = nbep_test_scene_new(n, 0, "predictive", steps, dt);
-    sc->neighbors_cells = true;
+    sc->neighbors_cells = cells_mode;
     sc->has_box = true;
     sc->box_max = (nbep_vec3){L, L, L};
     for (int k = 0; k < 3; k++)
@@ -183,9 +185,8 @@ static nbep_scene *periodic_scene(size_t n, double L, uint64_t steps, double dt)
  * they are 2 g apart across it (gap g each side of the minimum image) and touch after
  * g / v, where they exchange velocities (equal masses, e = 1). Without the minimum image they
  * would fly apart inside the box and never meet before t_end. */
-static void test_spheres_collide_across_a_periodic_face_at_the_analytic_time(void **state)
+static void collide_across_a_face(void)
 {
-    (void)state;
     const double L = 10.0, r = 0.5, v = 1.0, dt = 0.01;
     /* centres at 0.3 + L and ... : gap between surfaces across the face = (0.3 + (L - 9.6)) - 2r */
     nbep_scene *sc = periodic_scene(2, L, 100, dt);
@@ -204,16 +205,24 @@ static void test_spheres_collide_across_a_periodic_face_at_the_analytic_time(voi
     assert_close(fin.pos[1].x, x1, 0.0, 1e-13);
     assert_close(fin.vel[0].x, v, 0.0, 1e-15);
     assert_close(fin.vel[1].x, -v, 0.0, 1e-15);
-    /* SPEC virial: r12 . dp2 over the collision; r12 = sigma n, dp2 = 2 m v along n */
     nbep_state_fini(&fin);
     nbep_test_scene_free(&sc);
 }
 
-/* One sphere flying along x through a fully periodic box for several periods: its position
- * stays in the box and position + image * L is the straight flight. */
-static void test_a_free_flight_wraps_and_counts_its_images(void **state)
+static void test_spheres_collide_across_a_periodic_face_at_the_analytic_time(void **state)
 {
     (void)state;
+    cells_mode = true;
+    collide_across_a_face();
+    cells_mode = false; /* all-pairs: the nearest image */
+    collide_across_a_face();
+    cells_mode = true;
+}
+
+/* One sphere flying along x through a fully periodic box for several periods: its position
+ * stays in the box and position + image * L is the straight flight. */
+static void free_flight(void)
+{
     const double L = 8.0, v = 3.7, dt = 0.01;
     const uint64_t steps = 1000; /* 10 time units: 37 length units, over 4 periods */
     nbep_scene *sc = periodic_scene(1, L, steps, dt);
@@ -240,6 +249,16 @@ static void test_a_free_flight_wraps_and_counts_its_images(void **state)
     assert_true(f.n_frames == steps / 50 + 1);
     frames_free(&f);
     nbep_test_scene_free(&sc);
+}
+
+static void test_a_free_flight_wraps_and_counts_its_images(void **state)
+{
+    (void)state;
+    cells_mode = true;
+    free_flight();
+    cells_mode = false;
+    free_flight();
+    cells_mode = true;
 }
 
 /* A hard-sphere fluid at packing fraction phi: side^3 spheres of diameter 1 and mass 1 on a
@@ -269,6 +288,40 @@ static nbep_scene *periodic_fluid(size_t side, double phi, uint64_t steps, doubl
     for (size_t i = 0; i < n; i++)
         sc->state.vel[i] = nbep_vec3_sub(sc->state.vel[i], mean);
     return sc;
+}
+
+/* The all-pairs mode (the paper's, nearest images and image horizons) and the cells mode find
+ * the same collisions on a periodic fluid over a short stretch (before round-off differences
+ * could reorder events), and all-pairs frames are bitwise equal for 1, 2 and 4 threads. A
+ * free flight over several periods keeps re-predicting at its image horizons. */
+static void test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box(void **state)
+{
+    (void)state;
+    size_t side = scaled(7, 5), n = side * side * side;
+    nbep_scene *cs = periodic_fluid(side, 0.30, 30, 0.01, 3);
+    nbep_summary sc1 = run(cs, 1, NULL, NULL);
+    cells_mode = false;
+    nbep_scene *as = periodic_fluid(side, 0.30, 30, 0.01, 3);
+    cells_mode = true;
+    frames ref = {0};
+    nbep_summary sa1 = run(as, 1, NULL, &ref);
+    fprintf(stderr, "# all-pairs %llu, cells %llu collisions\n", (unsigned long long)sa1.sphere_collisions, (unsigned long long)sc1.sphere_collisions);
+    assert_true(sa1.sphere_collisions > n / 4);
+    assert_int_equal(sa1.sphere_collisions, sc1.sphere_collisions);
+    assert_close(sa1.energy_final, sa1.energy_initial, 1e-12, 0.0);
+    assert_true(sa1.max_overlap_rel < 1e-9);
+    for (int nt = 2; nt <= 4; nt *= 2) {
+        frames f = {0};
+        nbep_summary sk = run(as, nt, NULL, &f);
+        assert_int_equal(f.n_frames, ref.n_frames);
+        assert_memory_equal(f.data, ref.data, ref.n_frames * 2 * n * sizeof *f.data);
+        assert_memory_equal(f.image, ref.image, ref.n_frames * 3 * n * sizeof *f.image);
+        assert_int_equal(sk.collisions, sa1.collisions);
+        frames_free(&f);
+    }
+    frames_free(&ref);
+    nbep_test_scene_free(&cs);
+    nbep_test_scene_free(&as);
 }
 
 static nbep_vec3 momentum(const nbep_state *s)
@@ -495,12 +548,18 @@ static void test_periodic_deck_errors_name_the_line(void **state)
              "run: { algorithm = \"naive\"; };\n"
              "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; periodic = [true, true, true]; };\n%s",
              sph);
-    expect_deck_error(text, "box.periodic needs run.algorithm = \"predictive\" with run.neighbors = \"cells\"");
+    expect_deck_error(text, "box.periodic needs run.algorithm = \"predictive\" with run.neighbors = \"cells\" or \"all\"");
     snprintf(text, sizeof text,
-             "run: { neighbors = \"all\"; };\n"
+             "run: { neighbors = \"grid\"; };\n"
              "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; periodic = [false, false, true]; };\n%s",
              sph);
-    expect_deck_error(text, "(got \"predictive\", \"all\")");
+    expect_deck_error(text, "(got \"predictive\", \"grid\")");
+    /* cells mode needs three cells across */
+    snprintf(text, sizeof text,
+             "run: { neighbors = \"cells\"; };\n"
+             "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 3.0]; periodic = [false, false, true]; };\n%s",
+             sph);
+    expect_deck_error(text, "needs the box's z side (3) to be at least 6.75 times the largest radius");
     /* not three booleans */
     snprintf(text, sizeof text,
              "run: { neighbors = \"cells\"; };\n"
@@ -541,6 +600,7 @@ int main(void)
         cmocka_unit_test(test_spheres_collide_across_a_periodic_face_at_the_analytic_time),
         cmocka_unit_test(test_a_free_flight_wraps_and_counts_its_images),
         cmocka_unit_test(test_periodic_fluid_is_exact_and_thread_independent),
+        cmocka_unit_test(test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box),
         cmocka_unit_test(test_periodic_fluid_pressure_and_collision_rate_match_theory),
         cmocka_unit_test(test_wall_impulse_of_a_sphere_between_two_walls),
         cmocka_unit_test(test_periodic_deck_errors_name_the_line),

@@ -31,6 +31,17 @@ nbep_vec3 nbep_periodic_image(const nbep_periodic *pb, nbep_vec3 d);
  * Idempotent: a position already inside is not touched. Non-finite coordinates are left. */
 void nbep_periodic_wrap(const nbep_periodic *pb, nbep_vec3 *p, int32_t image[3]);
 
+/* The periods to add to the end of the separation d to reach its minimum image: cells[k] =
+ * -round(d_k / len_k) on periodic axes, 0 elsewhere, so that d + nbep_periodic_shift(cells) is
+ * the minimum image (with whole periods, exactly representable shifts). */
+void nbep_periodic_nearest(const nbep_periodic *pb, nbep_vec3 d, int cells[3]);
+
+/* The horizon of the minimum image: while neither sphere of a pair strays more than this from
+ * where the pair was last compared (per axis), the image that was nearest then is the only
+ * one that can touch (contact distance up to sigma): (min over periodic sides of len/2 - sigma)
+ * / 4; INFINITY without periodic axes. */
+double nbep_periodic_reach(const nbep_periodic *pb, double sigma);
+
 /* The displacement of the copy of the box `cells` periods away: cells[k] * len[k] per axis
  * (0 on non-periodic axes). */
 nbep_vec3 nbep_periodic_shift(const nbep_periodic *pb, const int cells[3]);
