@@ -112,11 +112,13 @@ static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uin
     /* a batch shares one shift: it is handed over when full or when the shift changes (only
      * at the periodic faces of the box) */
     nbep_vec3 shift = {0.0, 0.0, 0.0};
+    const nbep_vec3 period = nbep_periodic_shift(&e->pb, (const int[3]){1, 1, 1});
     for (int z = 0; z < b.cnt[2]; z++)
         for (int y = 0; y < b.cnt[1]; y++)
             for (int x = 0; x < b.cnt[0]; x++) {
-                const int per[3] = {b.per[0][x], b.per[1][y], b.per[2][z]};
-                nbep_vec3 sh = nbep_periodic_shift(&e->pb, per);
+                /* the cell's copy of the box: whole periods, 0 off the periodic faces */
+                const nbep_vec3 sh = {b.per[0][x] * period.x, b.per[1][y] * period.y,
+                                      b.per[2][z] * period.z};
                 if (m > 0 && !nbep_vec3_equal(sh, shift)) {
                     ops->pairs(u, i, js, m, shift, &best);
                     m = 0;

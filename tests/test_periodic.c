@@ -167,6 +167,22 @@ static nbep_summary run(const nbep_scene *sc, int nt, nbep_state *final, frames 
     return sum;
 }
 
+/* sc run on 2 and 4 threads gives ref's frames (positions, velocities, image counts) bit for
+ * bit and its collision count; frees ref. */
+static void same_frames_on_2_and_4_threads(const nbep_scene *sc, frames *ref, uint64_t collisions)
+{
+    for (int nt = 2; nt <= 4; nt *= 2) {
+        frames f = {0};
+        nbep_summary sk = run(sc, nt, NULL, &f);
+        assert_int_equal(f.n_frames, ref->n_frames);
+        assert_memory_equal(f.data, ref->data, ref->n_frames * 2 * ref->n * sizeof *f.data);
+        assert_memory_equal(f.image, ref->image, ref->n_frames * 3 * ref->n * sizeof *f.image);
+        assert_int_equal(sk.collisions, collisions);
+        frames_free(&f);
+    }
+    frames_free(ref);
+}
+
 /* A fully periodic box of side L, no planes, cells mode (all-pairs when cells_mode is off). */
 static bool cells_mode = true;
 
@@ -305,21 +321,11 @@ static void test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box(void **
     cells_mode = true;
     frames ref = {0};
     nbep_summary sa1 = run(as, 1, NULL, &ref);
-    fprintf(stderr, "# all-pairs %llu, cells %llu collisions\n", (unsigned long long)sa1.sphere_collisions, (unsigned long long)sc1.sphere_collisions);
     assert_true(sa1.sphere_collisions > n / 4);
     assert_int_equal(sa1.sphere_collisions, sc1.sphere_collisions);
     assert_close(sa1.energy_final, sa1.energy_initial, 1e-12, 0.0);
     assert_true(sa1.max_overlap_rel < 1e-9);
-    for (int nt = 2; nt <= 4; nt *= 2) {
-        frames f = {0};
-        nbep_summary sk = run(as, nt, NULL, &f);
-        assert_int_equal(f.n_frames, ref.n_frames);
-        assert_memory_equal(f.data, ref.data, ref.n_frames * 2 * n * sizeof *f.data);
-        assert_memory_equal(f.image, ref.image, ref.n_frames * 3 * n * sizeof *f.image);
-        assert_int_equal(sk.collisions, sa1.collisions);
-        frames_free(&f);
-    }
-    frames_free(&ref);
+    same_frames_on_2_and_4_threads(as, &ref, sa1.collisions);
     nbep_test_scene_free(&cs);
     nbep_test_scene_free(&as);
 }
@@ -359,16 +365,7 @@ static void test_periodic_fluid_is_exact_and_thread_independent(void **state)
         crossed += fin.image[k] != 0;
     assert_true(crossed > 0);
     nbep_state_fini(&fin);
-    for (int nt = 2; nt <= 4; nt *= 2) {
-        frames f = {0};
-        nbep_summary sk = run(sc, nt, NULL, &f);
-        assert_int_equal(f.n_frames, ref.n_frames);
-        assert_memory_equal(f.data, ref.data, ref.n_frames * 2 * n * sizeof *f.data);
-        assert_memory_equal(f.image, ref.image, ref.n_frames * 3 * n * sizeof *f.image);
-        assert_int_equal(sk.collisions, s1.collisions);
-        frames_free(&f);
-    }
-    frames_free(&ref);
+    same_frames_on_2_and_4_threads(sc, &ref, s1.collisions);
     nbep_test_scene_free(&sc);
 }
 
