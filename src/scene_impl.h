@@ -116,11 +116,13 @@ NBEP_MUST_CHECK nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s,
 /* Reports every pair of spheres, and every sphere and plane, that overlap by more than
  * round-off (the first few by name, then how many more). box_periodic is NULL without a box,
  * else the box's periodic axes: the box's walls (two per other axis) come first and are named
- * "box x-min" ..., the rest "planes.[k]". Pairs are compared in the box as placed, not across
- * periodic faces. O(n) expected time. */
+ * "box x-min" ..., the rest "planes.[k]"; pairs that overlap across a periodic face of the
+ * box [lo, hi] are found too (spheres as placed, whose centres are inside the box). O(n)
+ * expected time. */
 NBEP_MUST_CHECK nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                                                        const nbep__scene_entry *e,
                                                        size_t n_entries,
-                                                       const bool *box_periodic);
+                                                       const bool *box_periodic, nbep_vec3 lo,
+                                                       nbep_vec3 hi);
 
 #endif

@@ -345,7 +345,7 @@ static void test_periodic_fluid_is_exact_and_thread_independent(void **state)
 {
     (void)state;
     size_t side = scaled(10, 6);
-    nbep_scene *sc = periodic_fluid(side, 0.35, scaled(100, 30), 0.01, 1);
+    nbep_scene *sc = periodic_fluid(side, 0.35, scaled(100, 40), 0.02, 1);
     sc->output_every = 10;
     frames ref = {0};
     nbep_state fin;
@@ -509,7 +509,7 @@ static void test_wall_impulse_of_a_sphere_between_two_walls(void **state)
 }
 
 /* The deck's errors: one line each, naming deck and line, status NBEP_EDECK. */
-static void expect_deck_error(const char *text, const char *needle)
+static void expect_deck_error(const char *text, int line, const char *needle)
 {
     char deck[256];
     write_deck("bad-periodic.deck", text, deck, sizeof deck);
@@ -523,8 +523,10 @@ static void expect_deck_error(const char *text, const char *needle)
     FILE *m = open_memstream(&msg, &len);
     nbep_diag_print(&d, m);
     fclose(m);
-    if (!strstr(msg, needle) || !strstr(msg, "bad-periodic.deck:2:"))
-        fail_msg("expected \"%s\" at line 2, got: %s", needle, msg);
+    char where[64];
+    snprintf(where, sizeof where, "bad-periodic.deck:%d: ", line);
+    if (!strstr(msg, needle) || !strstr(msg, where) || strchr(msg, '\n') != msg + strlen(msg) - 1)
+        fail_msg("expected one line \"%s\" at line %d, got: %s", needle, line, msg);
     free(msg);
     nbep_diag_fini(&d);
 }
@@ -539,30 +541,37 @@ static void test_periodic_deck_errors_name_the_line(void **state)
              "run: { neighbors = \"cells\"; };\n"
              "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 2.0, 10.0]; periodic = [true, true, false]; };\n%s",
              sph);
-    expect_deck_error(text, "y side (2) must be longer than twice the largest sphere diameter");
+    expect_deck_error(text, 2, "y side (2) must be longer than twice the largest sphere diameter");
     /* a mode that does not handle images */
     snprintf(text, sizeof text,
              "run: { algorithm = \"naive\"; };\n"
              "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; periodic = [true, true, true]; };\n%s",
              sph);
-    expect_deck_error(text, "box.periodic needs run.algorithm = \"predictive\" with run.neighbors = \"cells\" or \"all\"");
+    expect_deck_error(text, 2, "box.periodic needs run.algorithm = \"predictive\" with run.neighbors = \"cells\" or \"all\"");
     snprintf(text, sizeof text,
              "run: { neighbors = \"grid\"; };\n"
              "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; periodic = [false, false, true]; };\n%s",
              sph);
-    expect_deck_error(text, "(got \"predictive\", \"grid\")");
+    expect_deck_error(text, 2, "(got \"predictive\", \"grid\")");
     /* cells mode needs three cells across */
     snprintf(text, sizeof text,
              "run: { neighbors = \"cells\"; };\n"
              "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 3.0]; periodic = [false, false, true]; };\n%s",
              sph);
-    expect_deck_error(text, "needs the box's z side (3) to be at least 6.75 times the largest radius");
+    expect_deck_error(text, 2, "needs the box's z side (3) to be at least 6.75 times the largest radius");
+    /* spheres overlapping across a periodic face (0.3 + 10 - 9.6 = 0.7 apart, x and z) */
+    snprintf(text, sizeof text,
+             "run: { neighbors = \"cells\"; };\n"
+             "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; periodic = [true, false, true]; };\n"
+             "spheres = ( { position = [0.3, 5.0, 9.8]; radius = 0.5; mass = 1.0; },\n"
+             "            { position = [9.6, 5.0, 0.1]; radius = 0.5; mass = 1.0; } );\n");
+    expect_deck_error(text, 4, "spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) across a periodic face by 0.238");
     /* not three booleans */
     snprintf(text, sizeof text,
              "run: { neighbors = \"cells\"; };\n"
              "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; periodic = [true, true]; };\n%s",
              sph);
-    expect_deck_error(text, "box.periodic must be 3 booleans");
+    expect_deck_error(text, 2, "box.periodic must be 3 booleans");
 }
 
 /* A periodic deck loads without the walls of its periodic axes. */
