@@ -435,7 +435,8 @@ static nbep_event image_horizon(const pred_ctx *c, const nbep_state *s, size_t i
     double t = NBEP_NEVER;
     for (int k = 0; k < 3; k++)
         if (c->pb.axis[k])
-            t = fmin(t, fmin(nbep_predict_plane(D, v[k], a[k]), nbep_predict_plane(D, -v[k], -a[k])));
+            t = fmin(t, fmin(nbep_predict_plane(D, v[k], a[k]),
+                             nbep_predict_plane(D, -v[k], -a[k])));
     return (nbep_event){T0 + (c->tau[i] + t), (uint32_t)s->n_planes, NBEP_EVENT_HORIZON,
                         c->ver[i], 0};
 }

@@ -193,7 +193,8 @@ size_t nbep_cells_check(const nbep_cells *g, const nbep_vec3 *pos, double tol)
             for (int k = 0; k < 3; k++) {
                 double lo = o[k] + (double)xyz[k] * g->h[k] - g->margin[k];
                 double hi = o[k] + (double)(xyz[k] + 1) * g->h[k] + g->margin[k];
-                bool low = xyz[k] > 0 || g->periodic[k], high = xyz[k] + 1 < g->dim[k] || g->periodic[k];
+                bool low = xyz[k] > 0 || g->periodic[k];
+                bool high = xyz[k] + 1 < g->dim[k] || g->periodic[k];
                 if ((low && x[k] < lo - tol) || (high && x[k] > hi + tol))
                     bad++;
             }

@@ -66,7 +66,8 @@ static bool abstract_of(const char *path, char *out, size_t len)
 
 static bool kind_is_container(nbep__scene_kind k)
 {
-    return k == NBEP__K_LIST || k == NBEP__K_VEC3 || k == NBEP__K_BOOL3 || k == NBEP__K_STRINGS || k == NBEP__K_VALUES;
+    return k == NBEP__K_LIST || k == NBEP__K_VEC3 || k == NBEP__K_BOOL3 || k == NBEP__K_STRINGS ||
+           k == NBEP__K_VALUES;
 }
 
 static bool schema_kind_abstract(const char *abstract, nbep__scene_kind *kind, bool *element)

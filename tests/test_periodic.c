@@ -40,7 +40,8 @@ static void test_minimum_image_picks_the_nearest_copy_on_periodic_axes_only(void
 {
     (void)state;
     const bool xz[3] = {true, false, true};
-    nbep_periodic pb = nbep_periodic_make(xz, (nbep_vec3){-1.0, 0.0, 2.0}, (nbep_vec3){3.0, 5.0, 12.0});
+    nbep_periodic pb =
+        nbep_periodic_make(xz, (nbep_vec3){-1.0, 0.0, 2.0}, (nbep_vec3){3.0, 5.0, 12.0});
     assert_true(pb.any);
     /* x: period 4; y: not periodic; z: period 10 */
     nbep_vec3 d = nbep_periodic_image(&pb, (nbep_vec3){3.5, 4.9, -7.0});
@@ -64,7 +65,8 @@ static void test_minimum_image_picks_the_nearest_copy_on_periodic_axes_only(void
 static void test_wrap_moves_into_the_box_and_counts_the_periods(void **state)
 {
     (void)state;
-    nbep_periodic pb = nbep_periodic_make(ALL3, (nbep_vec3){-1.0, 0.0, 2.0}, (nbep_vec3){3.0, 5.0, 12.0});
+    nbep_periodic pb =
+        nbep_periodic_make(ALL3, (nbep_vec3){-1.0, 0.0, 2.0}, (nbep_vec3){3.0, 5.0, 12.0});
     nbep_vec3 p = {3.5, -0.25, 2.0 + 10.0 * 3 + 0.5};
     int32_t img[3] = {7, 0, -2};
     nbep_vec3 unwrapped0 = {p.x + 7 * 4.0, p.y, p.z - 2 * 10.0};
@@ -317,7 +319,8 @@ static int reference_pair(nbep_vec3 r, nbep_vec3 u, double L, double t_end, nbep
     double t = 0.0;
     const double window = 0.5 / nbep_vec3_norm(u);
     while (t < t_end) {
-        r = (nbep_vec3){r.x - L * round(r.x / L), r.y - L * round(r.y / L), r.z - L * round(r.z / L)};
+        r = (nbep_vec3){r.x - L * round(r.x / L), r.y - L * round(r.y / L),
+                        r.z - L * round(r.z / L)};
         double best = INFINITY;
         nbep_vec3 best_d = ZERO;
         for (int i = -2; i <= 2; i++)
