@@ -66,6 +66,8 @@ EOF2
     bin/nbep run $tmp/periodic-$mode.deck --quiet -n 80 --resume $tmp/periodic-$mode-part.h5
     check "predictive $mode, periodic: resumed after a planned stop, frames equal the whole run's" \
         "same_frames $tmp/periodic-$mode-whole.h5 $tmp/periodic-$mode-part.h5"
+    check "nbep info names the periodic axes" \
+        "bin/nbep info $tmp/periodic-$mode-part.h5 | grep -q '^periodic: *xyz\$'"
     check "and so do the image counts, which do move" \
         "$PY - $tmp/periodic-$mode-whole.h5 $tmp/periodic-$mode-part.h5 <<'PYEOF'
 import sys, h5py
