@@ -935,6 +935,10 @@ nbep_status nbep_scene_load(const char *deck_path, const char *const *overrides,
         if (st != NBEP_OK)
             goto done;
         fill_planes(&sc.state, &sc, planes, n_planes);
+        const double side[3] = {sc.box_max.x - sc.box_min.x, sc.box_max.y - sc.box_min.y,
+                                sc.box_max.z - sc.box_min.z};
+        for (int k = 0; k < 3; k++)
+            sc.state.period[k] = sc.has_box && sc.periodic[k] ? side[k] : 0.0;
         const size_t fill0 = d->n_errors;
         st = nbep__scene_place(&L.c, &sc.state, entries, n_entries, sc.seed);
         if (st == NBEP_OK && d->n_errors == fill0)

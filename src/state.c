@@ -66,6 +66,7 @@ nbep_status nbep_state_copy(nbep_state *dst, const nbep_state *src, nbep_diag *d
     memcpy(dst->radius, src->radius, n * sizeof *dst->radius);
     memcpy(dst->mass, src->mass, n * sizeof *dst->mass);
     memcpy(dst->image, src->image, 3 * n * sizeof *dst->image);
+    memcpy(dst->period, src->period, sizeof dst->period);
     memcpy(dst->plane_normal, src->plane_normal, p * sizeof *dst->plane_normal);
     memcpy(dst->plane_offset, src->plane_offset, p * sizeof *dst->plane_offset);
     return NBEP_OK;
