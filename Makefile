@@ -113,7 +113,7 @@ mutate:
 bench: bin/nbep $(BENCH_BIN)
 	bash scripts/bench.sh
 
-# Dense fluids (N = 32000, phi = 0.30 and 0.50): predictive grid and cells beside EDMD when
+# Dense fluids (N = 32000, phi = 0.30 and 0.50, periodic): predictive cells beside EDMD when
 # EDMD_DIR names a checkout of FSmallenburg/EDMD (built in build/bench-dense, never committed).
 .PHONY: bench-dense
 bench-dense: bin/nbep

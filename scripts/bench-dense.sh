@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Dense hard-sphere fluids: collisions per wall second of nbep's predictive algorithm with
-# run.neighbors = "grid" and "cells", beside Smallenburg's EDMD (Single variant) when a copy
-# of it is available, and peak memory per sphere.
+# run.neighbors = "cells" in a periodic box (and "grid" in a closed box of the same volume when
+# ENGINES asks: grid mode has no periodic boundaries), beside Smallenburg's EDMD (Single
+# variant) when a copy of it is available, and peak memory per sphere.
 #
 #   scripts/bench-dense.sh            (make bench-dense)
 #   EDMD_DIR=/path/to/EDMD scripts/bench-dense.sh
@@ -13,14 +14,15 @@
 #   N            spheres (default 32000 = 4 x 20^3, as EDMD's FCC start wants)
 #   PHIS         packing fractions (default "0.30 0.50")
 #   THREADS      nbep thread counts (default "1 2")
+#   ENGINES      nbep modes (default "cells"; add "grid" for the closed-box grid mode)
 #   REPS         repeats; the table shows medians (default 3)
 #   SCALE        multiplies every simulated time (default 1; 0.2 for a smoke run)
 #   OUT          where the raw rows go (default build/bench-dense)
 #
 # The scenes: N spheres of diameter 1, mass 1, kT = 1 (nbep: speed sqrt(3) in random
-# directions; EDMD: Gaussian velocities scaled to kT = 1). nbep has no periodic boundaries yet,
-# so its fluid is in a closed box with walls of the volume of EDMD's periodic box,
-# L^3 = N pi / (6 phi), started on a simple cubic lattice; EDMD starts from its FCC crystal.
+# directions; EDMD: Gaussian velocities scaled to kT = 1) in a periodic cube of side L,
+# L^3 = N pi / (6 phi), as EDMD's (nbep's grid mode, which has no periodic boundaries: a closed
+# box of that volume). nbep starts on a simple cubic lattice, EDMD from its FCC crystal.
 # Each run simulates a fixed time chosen per engine so that it takes a few seconds (the grid
 # mode is far slower on dense scenes and simulates less); collisions per second are
 # collisions / wall seconds: nbep's stepping loop (the summary's wall_seconds), EDMD's whole
@@ -31,6 +33,7 @@ cd "$(dirname "$0")/.."
 N=${N:-32000}
 PHIS=${PHIS:-"0.30 0.50"}
 THREADS=${THREADS:-"1 2"}
+ENGINES=${ENGINES:-cells}
 REPS=${REPS:-3}
 SCALE=${SCALE:-1}
 OUT=${OUT:-build/bench-dense}
@@ -80,9 +83,11 @@ run_nbep() { # mode phi threads rep
     T=$(scaled "$(sim_time "$1" "$2")")
     dt=$(awk -v t="$T" -v s=$steps 'BEGIN { printf "%.6g", t / s }')
     L=$(awk -v n="$N" -v p="$2" 'BEGIN { printf "%.12g", (n * atan2(0, -1) / (6 * p)) ^ (1 / 3) }')
+    local per="true"
+    [ "$1" = grid ] && per="false"
     cat >"$deck" <<EOF
 run: { algorithm = "predictive"; steps = $steps; dt = $dt; threads = $3; seed = $4; neighbors = "$1"; };
-box: { min = [0.0, 0.0, 0.0]; max = [$L, $L, $L]; };
+box: { min = [0.0, 0.0, 0.0]; max = [$L, $L, $L]; periodic = [$per, $per, $per]; };
 spheres = ( { count = $N; radius = 0.5; mass = 1.0; place = "lattice"; speed = 1.7320508075688772; } );
 output: { file = "$OUT/fluid.h5"; every = 1000000; fields = []; stats = false; };
 EOF
@@ -111,8 +116,9 @@ run_edmd() { # phi rep
 for rep in $(seq "$REPS"); do
     for phi in $PHIS; do
         for nt in $THREADS; do
-            run_nbep grid "$phi" "$nt" "$rep"
-            run_nbep cells "$phi" "$nt" "$rep"
+            for engine in $ENGINES; do
+                run_nbep "$engine" "$phi" "$nt" "$rep"
+            done
         done
         [ -n "${edmd_src:-}" ] && run_edmd "$phi" "$rep"
     done
@@ -148,7 +154,9 @@ for (eng, phi, nt), (rate, _, _) in sorted(med.items()):
     g = med.get(("grid", phi, nt))
     e = med.get(("edmd", phi, 1))
     c1 = med.get(("cells", phi, 1))
-    parts = [f"phi {phi}, {nt} thread(s): cells/grid = {rate / g[0]:.1f}x" if g else ""]
+    parts = [f"phi {phi}, {nt} thread(s)"]
+    if g:
+        parts.append(f"cells/grid = {rate / g[0]:.1f}x")
     if e:
         parts.append(f"cells/EDMD = {rate / e[0]:.2f}")
     if c1 and nt != 1:

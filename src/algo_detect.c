@@ -223,7 +223,7 @@ static uint64_t detect_rows(const detect_ctx *ctx, const nbep_state *s, contact_
  * into itself; the potential energy this puts back is at most m |a| g dt^2 per contact and
  * step, the same order as the detection error the algorithms already have. */
 static void respond_all(const detect_ctx *ctx, nbep_state *s, double e, int nt,
-                        nbep_counters *cnt)
+                        nbep_counters *cnt, nbep_thread_max *mx)
 {
     const size_t n = s->n;
     for (int t = 0; t < nt; t++) {
@@ -231,14 +231,23 @@ static void respond_all(const detect_ctx *ctx, nbep_state *s, double e, int nt,
         for (size_t k = 0; k < l->len; k++) {
             uint32_t i = l->c[k].i, j = l->c[k].j;
             if (j >= n) {
-                if (nbep_physics_respond_plane(s->plane_normal[j - n], &s->vel[i], e))
+                const nbep_vec3 pn = s->plane_normal[j - n];
+                const double vn0 = nbep_vec3_dot(pn, s->vel[i]);
+                if (nbep_physics_respond_plane(pn, &s->vel[i], e))
                     cnt->c[NBEP_COUNTER_PLANE_COLLISIONS]++;
+                /* SPEC /stats/wall_impulse: the normal momentum the plane received */
+                mx->wall[j - n] += s->mass[i] * (nbep_vec3_dot(pn, s->vel[i]) - vn0);
                 nbep_physics_separate_plane(s->plane_normal[j - n], s->plane_offset[j - n],
                                             &s->pos[i], s->radius[i]);
             } else {
+                const nbep_vec3 vj = s->vel[j];
                 if (nbep_physics_respond_pair(s->pos[i], s->pos[j], &s->vel[i], &s->vel[j],
                                               s->mass[i], s->mass[j], e))
                     cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
+                /* SPEC /stats/virial: r12 . dp2 (r12 as found, after the step's flight) */
+                mx->virial += nbep_vec3_dot(nbep_vec3_sub(s->pos[j], s->pos[i]),
+                                            nbep_vec3_scale(nbep_vec3_sub(s->vel[j], vj),
+                                                            s->mass[j]));
                 nbep_physics_separate_pair(&s->pos[i], &s->pos[j], s->radius[i], s->radius[j],
                                            s->mass[i], s->mass[j]);
             }
@@ -277,7 +286,8 @@ static void detect_run(nbep_sim *sim, void *p)
                 detect_rows(ctx, s, mine, &sim->tmax[par][tid]);
             nbep_barrier_wait(&ctx->bar);
             if (tid == 0)
-                respond_all(ctx, s, sim->scene->restitution, nt, &sim->counters[par][0]);
+                respond_all(ctx, s, sim->scene->restitution, nt, &sim->counters[par][0],
+                            &sim->tmax[par][0]);
             nbep_barrier_wait(&ctx->bar);
             nbep__sim_block_energy(sim, own);
             nbep_barrier_wait(&ctx->bar);

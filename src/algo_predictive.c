@@ -53,6 +53,7 @@
 #include "nbep/contact.h"
 #include "nbep/feq.h"
 #include "nbep/grid.h"
+#include "nbep/periodic.h"
 #include "nbep/physics.h"
 #include "nbep/predict.h"
 #include "evloop.h"
@@ -94,6 +95,7 @@
  * on a held sphere is an ordinary response and wakes what it carries. */
 #define HOLD_SPEED_FRACTION 1e-3
 #define KEY_FREE UINT64_MAX
+static const nbep_vec3 ZERO3 = {0.0, 0.0, 0.0};
 
 typedef struct thread_ws {
     alignas(NBEP_CACHELINE) uint32_t *cand;  /* owned: own spheres with an event before T_end */
@@ -159,6 +161,12 @@ typedef struct pred_ctx {
     double horizon;               /* H: absolute time up to which this step's predictions look */
     /* run.neighbors = "cells" (beyond the paper): the in-step event loop (evloop.h) */
     nbep_evloop *ev;              /* owned, NULL in the other modes */
+    nbep_periodic pb;             /* the box's periodic axes (scene.c: cells and all-pairs) */
+    /* all-pairs mode in a periodic box: partners are compared at their nearest image, which
+     * stays the touching one while no sphere strays farther than image_reach from where it
+     * was last predicted (periodic.h); an image-horizon event re-predicts it there */
+    bool image_horizon;
+    double image_reach;
     bool ev_failed;               /* thread 0: the loop stalled this step */
 } pred_ctx;
 
@@ -225,6 +233,8 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
                   n);
     }
     c->use_grid = sim->scene->neighbors_grid;
+    c->pb = nbep_periodic_make(sim->scene->has_box ? sim->scene->periodic : NULL,
+                               sim->scene->box_min, sim->scene->box_max);
     if (c->use_grid) {
         st = nbep_grid_init(&c->grid, n, d);
         if (st != NBEP_OK) {
@@ -234,6 +244,8 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     }
     for (size_t i = 0; i < n; i++)
         c->rmax = fmax(c->rmax, sim->st.radius[i]);
+    c->image_horizon = c->pb.any && !c->use_grid && !sim->scene->neighbors_cells;
+    c->image_reach = nbep_periodic_reach(&c->pb, 2.0 * c->rmax);
     if (sim->scene->neighbors_cells) {
         /* see cells_steps: only those frames are rebuild points of the uninterrupted run */
         const nbep_resume *r = sim->opt.resume;
@@ -245,7 +257,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
                       (unsigned long long)sim->scene->output_every, (long long)r->step);
         }
         st = nbep_evloop_create(n, sim->scene->box_min, sim->scene->box_max, 2.0 * c->rmax,
-                                c->q, c->ver, &c->ev, d);
+                                c->pb.axis, c->q, c->ver, &c->ev, d);
         if (st != NBEP_OK) {
             pred_destroy(c);
             return st;
@@ -293,6 +305,14 @@ static nbep_vec3 effective_acc(const pred_ctx *c, const nbep_state *s, size_t i)
     return c->aeff[i];
 }
 
+/* The separation from sphere a to sphere b, by the minimum image in a periodic box (a pair in
+ * contact is closer than half a period, so this is the image that touches). */
+static nbep_vec3 sep(const pred_ctx *c, const nbep_state *s, size_t a, size_t b)
+{
+    nbep_vec3 d = nbep_vec3_sub(s->pos[b], s->pos[a]);
+    return c->pb.any ? nbep_periodic_image(&c->pb, d) : d;
+}
+
 static bool is_zero(nbep_vec3 v)
 {
     return v.x == 0.0 && v.y == 0.0 && v.z == 0.0;
@@ -314,13 +334,14 @@ static bool rest_has_plane(const rest_set *r, size_t p)
 }
 
 /* Unit normals of the contacts of r, from support to sphere i. */
-static void rest_normals(const nbep_state *s, size_t i, const rest_set *r, nbep_vec3 *n)
+static void rest_normals(const pred_ctx *c, const nbep_state *s, size_t i, const rest_set *r,
+                         nbep_vec3 *n)
 {
     for (int k = 0; k < r->n; k++) {
         if (r->who[k] >= 0) {
             n[k] = s->plane_normal[r->who[k]];
         } else {
-            nbep_vec3 d = nbep_vec3_sub(s->pos[i], s->pos[-1 - r->who[k]]);
+            nbep_vec3 d = sep(c, s, (size_t)(-1 - r->who[k]), i);
             double len = nbep_vec3_norm(d);
             n[k] = nbep_vec3_make(d.x / len, d.y / len, d.z / len);
         }
@@ -332,12 +353,12 @@ static void rest_normals(const nbep_state *s, size_t i, const rest_set *r, nbep_
  * A sphere contact is only valid while the sphere is held still (a tangent plane would let
  * it float off a curved support); if the result is not still, sphere contacts are dropped
  * and the planes solved alone. Returns the still flag. */
-static bool rest_solve(const nbep_state *s, size_t i, rest_set *r, nbep_vec3 *v,
-                       nbep_vec3 *a, double dt, bool tangent)
+static bool rest_solve(const pred_ctx *c, const nbep_state *s, size_t i, rest_set *r,
+                       nbep_vec3 *v, nbep_vec3 *a, double dt, bool tangent)
 {
     nbep_vec3 n[NBEP_CONTACT_MAX];
     for (int pass = 0; pass < 2; pass++) {
-        rest_normals(s, i, r, n);
+        rest_normals(c, s, i, r, n);
         unsigned act;
         *a = nbep_contact_project(s->acc[i], n, r->n, &act);
         if (tangent)
@@ -383,13 +404,16 @@ static void keep_earlier(nbep_event *best, nbep_event e)
 }
 
 /* The contact of spheres i (flying with ai) and j, each at its own local time: both are
- * brought to the later of the two, and the event is stamped with both response counts. */
+ * brought to the later of the two, and the event is stamped with both response counts. j is
+ * taken at its position plus shift (its copy across periodic faces; zero otherwise). */
 static nbep_event pair_event(const pred_ctx *c, const nbep_state *s, size_t i, nbep_vec3 ai,
-                             size_t j, double T0, thread_ws *w)
+                             size_t j, nbep_vec3 shift, double T0, thread_ws *w)
 {
     const double ti = c->tau[i], tj = c->tau[j];
     const double t0 = ti > tj ? ti : tj;
     nbep_vec3 pi = s->pos[i], vi = s->vel[i], pj = s->pos[j], vj = s->vel[j];
+    if (c->pb.any)
+        pj = nbep_vec3_add(pj, shift);
     const nbep_vec3 aj = effective_acc(c, s, j);
     if (ti < t0)
         nbep_physics_drift(&pi, &vi, ai, t0 - ti);
@@ -398,6 +422,23 @@ static nbep_event pair_event(const pred_ctx *c, const nbep_state *s, size_t i, n
     double dt = nbep_predict_pair(nbep_vec3_sub(pj, pi), nbep_vec3_sub(vj, vi),
                                   nbep_vec3_sub(aj, ai), s->radius[i] + s->radius[j], w->pws);
     return (nbep_event){T0 + (t0 + dt), (uint32_t)j, NBEP_EVENT_SPHERE, c->ver[i], c->ver[j]};
+}
+
+/* All-pairs mode in a periodic box: when sphere i (at its local time) will have strayed
+ * image_reach from here along a periodic axis (kind HORIZON, partner n_planes so that it ranks
+ * after the planes); NBEP_NEVER when it does not move. */
+static nbep_event image_horizon(const pred_ctx *c, const nbep_state *s, size_t i, nbep_vec3 ai,
+                                double T0)
+{
+    const double D = c->image_reach;
+    const double v[3] = {s->vel[i].x, s->vel[i].y, s->vel[i].z}, a[3] = {ai.x, ai.y, ai.z};
+    double t = NBEP_NEVER;
+    for (int k = 0; k < 3; k++)
+        if (c->pb.axis[k])
+            t = fmin(t, fmin(nbep_predict_plane(D, v[k], a[k]),
+                             nbep_predict_plane(D, -v[k], -a[k])));
+    return (nbep_event){T0 + (c->tau[i] + t), (uint32_t)s->n_planes, NBEP_EVENT_HORIZON,
+                        c->ver[i], 0};
 }
 
 /* Paper Procedure 9, one thread's share: the earliest event of sphere i with the spheres
@@ -422,10 +463,20 @@ static nbep_event predict_some(const pred_ctx *c, const nbep_state *s, size_t i,
                                              c->ver[i], 0});
         }
         cnt->c[NBEP_COUNTER_PREDICTIONS] += s->n_planes;
+        if (c->image_horizon)
+            keep_earlier(&best, image_horizon(c, s, i, ai, T0));
     }
-    for (size_t j = lo; j < hi; j++)
-        if (j != i)
-            keep_earlier(&best, pair_event(c, s, i, ai, j, T0, w));
+    for (size_t j = lo; j < hi; j++) {
+        if (j == i)
+            continue;
+        nbep_vec3 shift = ZERO3;
+        if (c->pb.any) { /* all-pairs in a periodic box: j's nearest image */
+            int cells[3];
+            nbep_periodic_nearest(&c->pb, nbep_vec3_sub(s->pos[j], s->pos[i]), cells);
+            shift = nbep_periodic_shift(&c->pb, cells);
+        }
+        keep_earlier(&best, pair_event(c, s, i, ai, j, shift, T0, w));
+    }
     cnt->c[NBEP_COUNTER_PREDICTIONS] += hi - lo - (i >= lo && i < hi);
     return best;
 }
@@ -456,7 +507,7 @@ static nbep_event predict_grid(const pred_ctx *c, const nbep_state *s, size_t i,
                     size_t j = c->grid.item[k];
                     if (j == i)
                         continue;
-                    keep_earlier(&best, pair_event(c, s, i, ai, j, T0, w));
+                    keep_earlier(&best, pair_event(c, s, i, ai, j, ZERO3, T0, w));
                     tested++;
                 }
             }
@@ -620,7 +671,8 @@ static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid
             }
             c->flags[i] &= (uint8_t)~IN_REDO;
             if (best.time < T_end &&
-                (best.kind == NBEP_EVENT_SPHERE || best.kind == NBEP_EVENT_PLANE))
+                (best.kind == NBEP_EVENT_SPHERE || best.kind == NBEP_EVENT_PLANE ||
+                 (best.kind == NBEP_EVENT_HORIZON && c->image_horizon)))
                 add_cand(c, w, i);
         }
         nbep_barrier_wait(&c->bar);
@@ -628,10 +680,11 @@ static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid
 }
 
 /* The ordering key of an event: lower sphere in the high half, then the partner; planes
- * (stored as UINT32_MAX - plane) after every sphere. Equal for both copies of one pair. */
+ * (stored as UINT32_MAX - plane) after every sphere, and an image horizon after the planes.
+ * Equal for both copies of one pair. */
 static uint64_t event_key(size_t i, const nbep_event *ev, uint32_t *lo, uint32_t *hi)
 {
-    if (ev->kind == NBEP_EVENT_PLANE) {
+    if (ev->kind != NBEP_EVENT_SPHERE) {
         *lo = (uint32_t)i;
         *hi = UINT32_MAX - ev->partner;
     } else {
@@ -697,7 +750,7 @@ static void update_rest(pred_ctx *c, nbep_state *s, size_t i, double dt)
     if (r->n == 0)
         return;
     nbep_vec3 n[NBEP_CONTACT_MAX];
-    rest_normals(s, i, r, n);
+    rest_normals(c, s, i, r, n);
     rest_set k = {.n = 0};
     for (int j = 0; j < r->n; j++)
         if (r->who[j] >= 0 ? fabs(nbep_vec3_dot(s->vel[i], n[j])) <=
@@ -707,7 +760,7 @@ static void update_rest(pred_ctx *c, nbep_state *s, size_t i, double dt)
             k.ver[k.n++] = r->ver[j];
         }
     *r = k;
-    rest_solve(s, i, r, &s->vel[i], &c->aeff[i], dt, true);
+    rest_solve(c, s, i, r, &s->vel[i], &c->aeff[i], dt, true);
 }
 
 static void advance_to(pred_ctx *c, nbep_state *s, size_t i, double t_local)
@@ -731,7 +784,7 @@ static void note_overlap(nbep_thread_max *mx, double ov, double r)
  * of centres shared by mass like a response (momentum is kept). */
 static void min_bounce(const pred_ctx *c, nbep_state *s, double dt, uint32_t lo, uint32_t hi)
 {
-    nbep_vec3 dp = nbep_vec3_sub(s->pos[hi], s->pos[lo]);
+    nbep_vec3 dp = sep(c, s, lo, hi);
     double dist = nbep_vec3_norm(dp);
     if (!(dist > 0.0))
         return;
@@ -814,7 +867,7 @@ static bool try_hold(pred_ctx *c, nbep_state *s, size_t i, double dt)
 static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t k, size_t j,
                          double t_abs, double tc, thread_ws *w, nbep_counters *cnt)
 {
-    nbep_vec3 d = nbep_vec3_sub(s->pos[k], s->pos[j]);
+    nbep_vec3 d = sep(c, s, j, k);
     double len = nbep_vec3_norm(d);
     nbep_vec3 n = nbep_vec3_make(d.x / len, d.y / len, d.z / len);
     double u = nbep_vec3_dot(s->vel[k], n), an = nbep_vec3_dot(c->aeff[k], n);
@@ -825,7 +878,7 @@ static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t
         r.who[r.n] = -1 - (int32_t)j;
         r.ver[r.n++] = c->ver[j];
         nbep_vec3 v = s->vel[k], a;
-        if (rest_solve(s, k, &r, &v, &a, dt, true)) {
+        if (rest_solve(c, s, k, &r, &v, &a, dt, true)) {
             c->rest[k] = r;
             s->vel[k] = v;
             c->aeff[k] = a;
@@ -848,13 +901,20 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
     const double e = sc->restitution, dt = sc->dt;
     advance_to(c, s, lo, t_local);
     const bool still_lo = c->rest[lo].still;
+    if (ev->kind == NBEP_EVENT_HORIZON) { /* image horizon: re-predicted from here */
+        fire(c, w, s, lo, still_lo);
+        return;
+    }
     if (ev->kind == NBEP_EVENT_PLANE) {
         uint32_t p = UINT32_MAX - hi;
         nbep_vec3 n = s->plane_normal[p];
         double gap = nbep_physics_plane_gap(n, s->plane_offset[p], s->pos[lo], s->radius[lo]);
         note_overlap(mx, -gap, s->radius[lo]);
+        const double vn0 = nbep_vec3_dot(n, s->vel[lo]);
         if (nbep_physics_respond_plane(n, &s->vel[lo], tc_restitution(c, sc->tc, e, t_abs, lo, lo)))
             cnt->c[NBEP_COUNTER_PLANE_COLLISIONS]++;
+        /* SPEC /stats/wall_impulse: the normal momentum the plane received, pushed outward */
+        mx->wall[p] += s->mass[lo] * (nbep_vec3_dot(n, s->vel[lo]) - vn0);
         update_rest(c, s, lo, dt);
         double an = nbep_vec3_dot(s->acc[lo], n), vn = nbep_vec3_dot(s->vel[lo], n);
         rest_set *r = &c->rest[lo];
@@ -863,7 +923,7 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
             r->n < NBEP_CONTACT_MAX) {
             r->who[r->n] = (int32_t)p;
             r->ver[r->n++] = 0;
-            rest_solve(s, lo, r, &s->vel[lo], &c->aeff[lo], dt, true);
+            rest_solve(c, s, lo, r, &s->vel[lo], &c->aeff[lo], dt, true);
         }
         fire(c, w, s, lo, still_lo);
         return;
@@ -871,35 +931,41 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
     advance_to(c, s, hi, t_local);
     const bool still_hi = c->rest[hi].still;
     double sigma = s->radius[lo] + s->radius[hi];
-    note_overlap(mx, sigma - nbep_vec3_norm(nbep_vec3_sub(s->pos[hi], s->pos[lo])),
+    const nbep_vec3 r12 = sep(c, s, lo, hi);
+    note_overlap(mx, sigma - nbep_vec3_norm(r12),
                  fmin(s->radius[lo], s->radius[hi]));
     const bool sup_lo = supported(c, lo), sup_hi = supported(c, hi);
     if (sup_lo != sup_hi) {
         size_t k = sup_lo ? hi : lo, j = sup_lo ? lo : hi;
         if (!c->rest[j].still && try_hold(c, s, j, dt))
             fire(c, w, s, j, false);
-        nbep_vec3 d = nbep_vec3_sub(s->pos[k], s->pos[j]);
+        nbep_vec3 d = sep(c, s, j, k);
         double u = nbep_vec3_dot(s->vel[k], d) / nbep_vec3_norm(d);
         if (c->rest[j].still && fabs(u) <= HOLD_SPEED_FRACTION * nbep_vec3_norm(s->acc[k]) * dt) {
             land_on_held(c, s, e, dt, k, j, t_abs, sc->tc, w, cnt);
             return;
         }
     }
+    /* hi's image that touches lo (the same as pos[hi] without periodic axes) */
+    const nbep_vec3 p_hi = c->pb.any ? nbep_vec3_add(s->pos[lo], r12) : s->pos[hi];
+    const nbep_vec3 v_hi = s->vel[hi];
     /* spheres leaning on planes move only along them: the planes take their share (a free
      * pair keeps the paper's formula, bit for bit) */
-    nbep_vec3 d = nbep_vec3_sub(s->pos[hi], s->pos[lo]);
-    double len = nbep_vec3_norm(d);
-    nbep_vec3 n = len > 0.0 ? nbep_vec3_make(d.x / len, d.y / len, d.z / len) : d;
+    double len = nbep_vec3_norm(r12);
+    nbep_vec3 n = len > 0.0 ? nbep_vec3_make(r12.x / len, r12.y / len, r12.z / len) : r12;
     bool leans = false;
     nbep_vec3 d_lo = plane_mobility(c, s, lo, nbep_vec3_scale(n, -1.0), &leans);
     nbep_vec3 d_hi = plane_mobility(c, s, hi, n, &leans);
     const double e_pair = tc_restitution(c, sc->tc, e, t_abs, lo, hi);
-    if (leans ? nbep_physics_respond_pair_along(s->pos[lo], s->pos[hi], &s->vel[lo], &s->vel[hi],
+    if (leans ? nbep_physics_respond_pair_along(s->pos[lo], p_hi, &s->vel[lo], &s->vel[hi],
                                                 s->mass[lo], s->mass[hi], e_pair, d_lo, d_hi)
-              : nbep_physics_respond_pair(s->pos[lo], s->pos[hi], &s->vel[lo], &s->vel[hi],
+              : nbep_physics_respond_pair(s->pos[lo], p_hi, &s->vel[lo], &s->vel[hi],
                                           s->mass[lo], s->mass[hi], e_pair))
         cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
     min_bounce(c, s, dt, lo, hi);
+    /* SPEC /stats/virial: r12 . dp2, dp2 the momentum hi received */
+    mx->virial += nbep_vec3_dot(r12, nbep_vec3_scale(nbep_vec3_sub(s->vel[hi], v_hi),
+                                                     s->mass[hi]));
     update_rest(c, s, lo, dt);
     update_rest(c, s, hi, dt);
     fire(c, w, s, lo, still_lo);
@@ -931,7 +997,7 @@ static void let_go(pred_ctx *c, nbep_state *s, size_t i, double dt, double t_loc
         }
     *r = k;
     advance_to(c, s, i, t_local);
-    if (!rest_solve(s, i, r, &s->vel[i], &c->aeff[i], dt, false))
+    if (!rest_solve(c, s, i, r, &s->vel[i], &c->aeff[i], dt, false))
         fire(c, w, s, i, true);
 }
 
@@ -1009,12 +1075,13 @@ static nbep_event cells_planes(void *u, uint32_t i)
     return predict_some(x->c, x->s, i, 0, 0, true, x->T0, x->w, x->cnt);
 }
 
-static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, nbep_event *best)
+static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, nbep_vec3 shift,
+                        nbep_event *best)
 {
     cells_user *x = u;
     const nbep_vec3 ai = effective_acc(x->c, x->s, i);
     for (size_t k = 0; k < m; k++)
-        keep_earlier(best, pair_event(x->c, x->s, i, ai, js[k], x->T0, x->w));
+        keep_earlier(best, pair_event(x->c, x->s, i, ai, js[k], shift, x->T0, x->w));
     x->cnt->c[NBEP_COUNTER_PREDICTIONS] += m;
 }
 
@@ -1064,8 +1131,24 @@ static void cells_flight(void *u, uint32_t i, double t, nbep_vec3 *p, nbep_vec3 
         nbep_physics_drift(p, v, *a, h);
 }
 
+/* Sphere i leaves its cell at absolute time t: when its centre is then outside the box on a
+ * periodic axis, it is brought to t and wrapped (image counted), so that its position stays
+ * in its cell (cells.h). */
+static void cells_wrap(void *u, uint32_t i, double t)
+{
+    const cells_user *x = u;
+    nbep_vec3 p, v, a;
+    cells_flight(u, i, t, &p, &v, &a);
+    int32_t img[3] = {0, 0, 0};
+    nbep_periodic_wrap(&x->c->pb, &p, img);
+    if (img[0] == 0 && img[1] == 0 && img[2] == 0)
+        return;
+    advance_to(x->c, x->s, i, t - x->T0);
+    nbep_periodic_wrap(&x->c->pb, &x->s->pos[i], &x->s->image[3 * (size_t)i]);
+}
+
 static const nbep_evloop_ops cells_ops = {cells_planes, cells_pairs, cells_fresh, cells_react,
-                                          cells_flight};
+                                          cells_flight, cells_wrap};
 
 /* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's
  * event loop; all threads share the rebuilds, the update to the step's end and the energy.
@@ -1085,6 +1168,10 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
                         &sim->counters[spar][tid], &sim->tmax[spar][tid]};
         const double T_end = (double)step * sim->dt;
         if (rebuild) { /* every sphere sits at T0 (tau = 0) */
+            /* positions wrapped into a periodic box, as frames write them (output.c): the
+             * run continues from what a resumed one reads */
+            for (size_t i = own.lo; c->pb.any && i < own.hi; i++)
+                nbep_periodic_wrap(&c->pb, &s->pos[i], &s->image[3 * i]);
             nbep_evloop_assign(c->ev, s->pos, own.lo, own.hi);
             nbep_barrier_wait(&c->bar);
             if (tid == 0)
@@ -1244,6 +1331,8 @@ static void pred_run(nbep_sim *sim, void *p)
                 if (h > 0.0)
                     nbep_physics_drift(&s->pos[i], &s->vel[i], a, h);
                 c->tau[i] = 0.0;
+                if (c->pb.any) /* into the box, as frames are written (slots hold no positions) */
+                    nbep_periodic_wrap(&c->pb, &s->pos[i], &s->image[3 * i]);
                 if (c->use_grid) {
                     vmax = fmax(vmax, nbep_vec3_norm(s->vel[i]));
                     amax = fmax(amax, nbep_vec3_norm(a));
@@ -1302,7 +1391,7 @@ static void pred_import(void *p, const nbep_resume *r)
             c->rest[i].n = 1;
         }
         nbep_vec3 v = r->vel[i];
-        rest_solve(c->st, i, &c->rest[i], &v, &c->aeff[i], 0.0, false);
+        rest_solve(c, c->st, i, &c->rest[i], &v, &c->aeff[i], 0.0, false);
         nbep_feq_remove(c->q, i);
         if (r->event_kind[i] == NBEP_EVENT_NEVER)
             nbep_feq_set_never(c->q, i, 0);

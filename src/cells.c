@@ -16,9 +16,11 @@ size_t nbep_cells_bytes(size_t n)
 }
 
 nbep_status nbep_cells_init(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double reach, size_t n,
-                            nbep_diag *d)
+                            const bool *periodic, nbep_diag *d)
 {
     memset(g, 0, sizeof *g);
+    for (int k = 0; k < 3; k++)
+        g->periodic[k] = periodic && periodic[k];
     g->lo = lo;
     g->hi = hi;
     g->n = n;
@@ -39,6 +41,9 @@ nbep_status nbep_cells_init(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double re
     g->n_cells = 1;
     for (int k = 0; k < 3; k++) {
         double cells = fmax(1.0, floor(ext[k] / side));
+        /* a periodic axis: three cells at least, so that a neighbour is one image only */
+        if (g->periodic[k] && cells < 3.0)
+            cells = 3.0;
         g->dim[k] = (size_t)cells;
         g->h[k] = ext[k] / cells;
         g->margin[k] = g->dim[k] > 1 ? 0.25 * (g->h[k] - reach) : 0.0;
@@ -132,12 +137,13 @@ double nbep_cells_exit_time(const nbep_cells *g, uint32_t i, nbep_vec3 p, nbep_v
     const double o[3] = {g->lo.x, g->lo.y, g->lo.z};
     double t = NBEP_NEVER;
     for (int k = 0; k < 3; k++) {
-        /* each interior face as a plane facing into the grown cell, the centre as a point */
-        if (xyz[k] > 0) {
+        /* each interior face as a plane facing into the grown cell, the centre as a point
+         * (on a periodic axis every face is interior) */
+        if (xyz[k] > 0 || g->periodic[k]) {
             double face = o[k] + (double)xyz[k] * g->h[k] - g->margin[k];
             t = fmin(t, nbep_predict_plane(x[k] - face, u[k], acc[k]));
         }
-        if (xyz[k] + 1 < g->dim[k]) {
+        if (xyz[k] + 1 < g->dim[k] || g->periodic[k]) {
             double face = o[k] + (double)(xyz[k] + 1) * g->h[k] + g->margin[k];
             t = fmin(t, nbep_predict_plane(face - x[k], -u[k], -acc[k]));
         }
@@ -145,13 +151,29 @@ double nbep_cells_exit_time(const nbep_cells *g, uint32_t i, nbep_vec3 p, nbep_v
     return t;
 }
 
-void nbep_cells_block(const nbep_cells *g, size_t c, size_t lo[3], size_t hi[3])
+void nbep_cells_block_of(const nbep_cells *g, size_t c, nbep_cells_block *b)
 {
     size_t xyz[3];
     cell_coords(g, c, xyz);
     for (int k = 0; k < 3; k++) {
-        lo[k] = xyz[k] > 0 ? xyz[k] - 1 : 0;
-        hi[k] = xyz[k] + 1 < g->dim[k] ? xyz[k] + 1 : xyz[k];
+        int m = 0;
+        if (xyz[k] > 0) {
+            b->idx[k][m] = xyz[k] - 1;
+            b->per[k][m++] = 0;
+        } else if (g->periodic[k]) {
+            b->idx[k][m] = g->dim[k] - 1;
+            b->per[k][m++] = -1;
+        }
+        b->idx[k][m] = xyz[k];
+        b->per[k][m++] = 0;
+        if (xyz[k] + 1 < g->dim[k]) {
+            b->idx[k][m] = xyz[k] + 1;
+            b->per[k][m++] = 0;
+        } else if (g->periodic[k]) {
+            b->idx[k][m] = 0;
+            b->per[k][m++] = 1;
+        }
+        b->cnt[k] = m;
     }
 }
 
@@ -171,7 +193,9 @@ size_t nbep_cells_check(const nbep_cells *g, const nbep_vec3 *pos, double tol)
             for (int k = 0; k < 3; k++) {
                 double lo = o[k] + (double)xyz[k] * g->h[k] - g->margin[k];
                 double hi = o[k] + (double)(xyz[k] + 1) * g->h[k] + g->margin[k];
-                if ((xyz[k] > 0 && x[k] < lo - tol) || (xyz[k] + 1 < g->dim[k] && x[k] > hi + tol))
+                bool low = xyz[k] > 0 || g->periodic[k];
+                bool high = xyz[k] + 1 < g->dim[k] || g->periodic[k];
+                if ((low && x[k] < lo - tol) || (high && x[k] > hi + tol))
                     bad++;
             }
         }

@@ -6,6 +6,7 @@
 
 #include "nbep/calendar.h"
 #include "nbep/cells.h"
+#include "nbep/periodic.h"
 #include "nbep/predict.h"
 
 /* Partners are handed to the algorithm this many at a time (a block holds some 20 to 40 in a
@@ -16,12 +17,14 @@ struct nbep_evloop {
     size_t n;
     nbep_calendar *cal;   /* owned */
     nbep_cells cells;     /* owned */
+    nbep_periodic pb;     /* the box's periodic geometry */
     nbep_feq *q;          /* borrowed */
     const uint64_t *ver;  /* borrowed */
 };
 
-nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reach, nbep_feq *q,
-                               const uint64_t *ver, nbep_evloop **out, nbep_diag *d)
+nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reach,
+                               const bool *periodic, nbep_feq *q, const uint64_t *ver,
+                               nbep_evloop **out, nbep_diag *d)
 {
     nbep_evloop *e = calloc(1, sizeof *e);
     if (!e)
@@ -31,7 +34,9 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->ver = ver;
     nbep_status st = nbep_calendar_create(n, &e->cal, d);
     if (st == NBEP_OK)
-        st = nbep_cells_init(&e->cells, lo, hi, reach, n, d);
+        st = nbep_cells_init(&e->cells, lo, hi, reach, n, periodic, d);
+    if (st == NBEP_OK)
+        e->pb = nbep_periodic_make(periodic, lo, hi);
     if (st != NBEP_OK) {
         nbep_evloop_destroy(&e);
         return st;
@@ -83,13 +88,14 @@ void nbep_evloop_visit_block(const nbep_evloop *e, uint32_t i,
                              void (*visit)(void *u, uint32_t j), void *u)
 {
     const nbep_cells *g = &e->cells;
-    size_t lo[3], hi[3];
-    nbep_cells_block(g, g->cell[i], lo, hi);
-    for (size_t z = lo[2]; z <= hi[2]; z++)
-        for (size_t y = lo[1]; y <= hi[1]; y++)
-            for (size_t x = lo[0]; x <= hi[0]; x++)
-                for (uint32_t j = g->head[nbep_cells_index(g, x, y, z)]; j != NBEP_CELLS_NONE;
-                     j = g->next[j])
+    nbep_cells_block b;
+    nbep_cells_block_of(g, g->cell[i], &b);
+    for (int z = 0; z < b.cnt[2]; z++)
+        for (int y = 0; y < b.cnt[1]; y++)
+            for (int x = 0; x < b.cnt[0]; x++)
+                for (uint32_t j = g->head[nbep_cells_index(g, b.idx[0][x], b.idx[1][y],
+                                                           b.idx[2][z])];
+                     j != NBEP_CELLS_NONE; j = g->next[j])
                     visit(u, j);
 }
 
@@ -99,25 +105,39 @@ static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uin
 {
     nbep_event best = ops->planes(u, i);
     const nbep_cells *g = &e->cells;
-    size_t lo[3], hi[3];
-    nbep_cells_block(g, g->cell[i], lo, hi);
+    nbep_cells_block b;
+    nbep_cells_block_of(g, g->cell[i], &b);
     uint32_t js[BATCH];
     size_t m = 0;
-    for (size_t z = lo[2]; z <= hi[2]; z++)
-        for (size_t y = lo[1]; y <= hi[1]; y++)
-            for (size_t x = lo[0]; x <= hi[0]; x++)
-                for (uint32_t j = g->head[nbep_cells_index(g, x, y, z)]; j != NBEP_CELLS_NONE;
-                     j = g->next[j]) {
+    /* a batch shares one shift: it is handed over when full or when the shift changes (only
+     * at the periodic faces of the box) */
+    nbep_vec3 shift = {0.0, 0.0, 0.0};
+    const nbep_vec3 period = nbep_periodic_shift(&e->pb, (const int[3]){1, 1, 1});
+    for (int z = 0; z < b.cnt[2]; z++)
+        for (int y = 0; y < b.cnt[1]; y++)
+            for (int x = 0; x < b.cnt[0]; x++) {
+                /* the cell's copy of the box: whole periods, 0 off the periodic faces */
+                const nbep_vec3 sh = {b.per[0][x] * period.x, b.per[1][y] * period.y,
+                                      b.per[2][z] * period.z};
+                if (m > 0 && !nbep_vec3_equal(sh, shift)) {
+                    ops->pairs(u, i, js, m, shift, &best);
+                    m = 0;
+                }
+                shift = sh;
+                for (uint32_t j = g->head[nbep_cells_index(g, b.idx[0][x], b.idx[1][y],
+                                                           b.idx[2][z])];
+                     j != NBEP_CELLS_NONE; j = g->next[j]) {
                     if (j == i)
                         continue;
                     js[m++] = j;
                     if (m == BATCH) {
-                        ops->pairs(u, i, js, m, &best);
+                        ops->pairs(u, i, js, m, shift, &best);
                         m = 0;
                     }
                 }
+            }
     if (m > 0)
-        ops->pairs(u, i, js, m, &best);
+        ops->pairs(u, i, js, m, shift, &best);
     nbep_vec3 p, v, a;
     ops->flight(u, i, t, &p, &v, &a);
     double t_exit = t + nbep_cells_exit_time(g, i, p, v, a);
@@ -177,6 +197,8 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
         }
         if (ev.kind == NBEP_EVENT_HORIZON) {
             nbep_vec3 p, v, a;
+            if (e->pb.any) /* a centre past a periodic face enters through the other */
+                ops->wrap(u, i, t);
             ops->flight(u, i, t, &p, &v, &a);
             size_t c = nbep_cells_locate(&e->cells, p);
             if (c != e->cells.cell[i])

@@ -34,8 +34,11 @@ typedef struct nbep_evloop_ops {
     /* the earliest contact of sphere i with a plane, kind NONE when none */
     nbep_event (*planes)(void *u, uint32_t i);
     /* lowers *best (kind NONE: nothing yet) to the earliest contact of sphere i with the m
-     * spheres js (none of them i); called with the block's members a batch at a time */
-    void (*pairs)(void *u, uint32_t i, const uint32_t *js, size_t m, nbep_event *best);
+     * spheres js (none of them i), each taken at its position plus shift (a copy of the box
+     * across periodic faces; zero otherwise); called with the block's members a batch at a
+     * time */
+    void (*pairs)(void *u, uint32_t i, const uint32_t *js, size_t m, nbep_vec3 shift,
+                  nbep_event *best);
     /* true while the event in i's slot is still valid (no response since it was predicted) */
     bool (*fresh)(void *u, uint32_t i, const nbep_event *ev);
     /* reacts to the event in i's slot (a sphere or plane contact), at its time; returns the
@@ -44,14 +47,21 @@ typedef struct nbep_evloop_ops {
     size_t (*react)(void *u, uint32_t i, const nbep_event *ev, const uint32_t **changed);
     /* sphere i's centre, velocity and acceleration at absolute time t (not stored) */
     void (*flight)(void *u, uint32_t i, double t, nbep_vec3 *p, nbep_vec3 *v, nbep_vec3 *a);
+    /* periodic boxes only (may be NULL otherwise): sphere i, leaving its cell at absolute time
+     * t, is brought to t and wrapped into the box (periodic.h), its image count kept */
+    void (*wrap)(void *u, uint32_t i, double t);
 } nbep_evloop_ops;
 
 typedef struct nbep_evloop nbep_evloop;
 
 /* An engine for n spheres in the box [lo, hi] whose contacts happen within `reach` (the
- * largest diameter), with the slots q and response counts ver (both borrowed, n each). */
+ * largest diameter), with the slots q and response counts ver (both borrowed, n each).
+ * periodic (NULL: none) names the axes along which the box repeats: the cells wrap around
+ * (cells.h), partners across a periodic face are tested at their image, and a sphere that
+ * leaves the box is wrapped (ops->wrap) when it changes cell. */
 NBEP_MUST_CHECK nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi,
-                                               double reach, nbep_feq *q, const uint64_t *ver,
+                                               double reach, const bool *periodic,
+                                               nbep_feq *q, const uint64_t *ver,
                                                nbep_evloop **out, nbep_diag *d);
 void nbep_evloop_destroy(nbep_evloop **e);
 

@@ -62,7 +62,14 @@ static void print_check(const nbep_scene *sc, int threads)
     printf("steps:           %llu of dt = %g (t = 0 .. %g)\n", (unsigned long long)sc->steps,
            sc->dt, (double)sc->steps * sc->dt);
     printf("spheres:         %zu\n", sc->state.n);
-    printf("planes:          %zu%s\n", sc->state.n_planes, sc->has_box ? " (6 from the box)" : "");
+    int walls = 2 * (!sc->periodic[0] + !sc->periodic[1] + !sc->periodic[2]);
+    if (sc->has_box)
+        printf("planes:          %zu (%d from the box)\n", sc->state.n_planes, walls);
+    else
+        printf("planes:          %zu\n", sc->state.n_planes);
+    if (sc->periodic[0] || sc->periodic[1] || sc->periodic[2])
+        printf("periodic:        %s%s%s\n", sc->periodic[0] ? "x" : "", sc->periodic[1] ? "y" : "",
+               sc->periodic[2] ? "z" : "");
     printf("pairs:           %llu need a quadratic (equal accelerations), %llu the quartic\n",
            (unsigned long long)quad, (unsigned long long)quart);
     double pf = packing_fraction(sc);

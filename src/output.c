@@ -276,6 +276,11 @@ static int write_root_attrs(nbep_output *o, const nbep_scene *sc, int threads, n
         nbep__output_write_string_attr(root, p, "deck", sc->deck_text, d) < 0 ||
         nbep__output_write_string_attr(root, p, "overrides", sc->overrides, d) < 0)
         return -1;
+    const int32_t periodic[3] = {sc->has_box && sc->periodic[0], sc->has_box && sc->periodic[1],
+                                 sc->has_box && sc->periodic[2]};
+    if (nbep__output_write_attr(root, p, "periodic", H5T_STD_I32LE, H5T_NATIVE_INT32, 3,
+                                periodic, d) < 0)
+        return -1;
     return 0;
 }
 
@@ -326,6 +331,9 @@ static int create_frames(nbep_output *o, const nbep_scene *sc, nbep_diag *d)
     if (sc->out_velocity && create_series(o, "/frames/velocity", H5T_IEEE_F64LE, 3, tail,
                                           chunk, &o->frame_vel, d) < 0)
         return -1;
+    if (o->pb.any && create_series(o, "/frames/image", H5T_STD_I32LE, 3, tail, chunk,
+                                   &o->frame_img, d) < 0)
+        return -1;
     return 0;
 }
 
@@ -363,6 +371,30 @@ static int create_stats(nbep_output *o, nbep_diag *d)
                           column_file_type(nbep__stats_columns[c].type), 1, NULL, chunk,
                           &o->stats[c], d) < 0)
             return -1;
+    /* (S, P), chunks of about as many values as a column's; none without planes (HDF5 has no
+     * chunks of zero width) */
+    if (o->n_planes > 0) {
+        hsize_t tail[1] = {o->n_planes};
+        hsize_t rows = STATS_CHUNK_ROWS / o->n_planes, wchunk[2] = {rows ? rows : 1, o->n_planes};
+        if (create_series(o, "/stats/wall_impulse", H5T_IEEE_F64LE, 2, tail, wchunk,
+                          &o->stats_wall, d) < 0)
+            return -1;
+    }
+    return 0;
+}
+
+int nbep__output_periodic(nbep_output *o, const nbep_scene *sc, nbep_diag *d)
+{
+    o->pb = nbep_periodic_make(sc->has_box ? sc->periodic : NULL, sc->box_min, sc->box_max);
+    if (!o->pb.any)
+        return 0;
+    size_t n = o->n_spheres ? o->n_spheres : 1;
+    o->wrap_pos = malloc(n * sizeof *o->wrap_pos);
+    o->wrap_img = malloc(3 * n * sizeof *o->wrap_img);
+    if (!o->wrap_pos || !o->wrap_img) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: no memory for wrapped frames", o->path);
+        return -1;
+    }
     return 0;
 }
 
@@ -377,6 +409,7 @@ nbep_output *nbep__output_new(const char *path, size_t n_spheres, nbep_diag *d)
     o->n_spheres = n_spheres;
     o->file = o->summary = H5I_INVALID_HID;
     o->frame_step = o->frame_time = o->frame_pos = o->frame_vel = H5I_INVALID_HID;
+    o->frame_img = o->stats_wall = H5I_INVALID_HID;
     o->frames_count = o->stats_count = H5I_INVALID_HID;
     for (int c = 0; c < STATS_N_COLUMNS; c++)
         o->stats[c] = H5I_INVALID_HID;
@@ -394,6 +427,8 @@ void nbep__output_release(nbep_output **op)
     nbep__output_close_id(&o->frame_time);
     nbep__output_close_id(&o->frame_pos);
     nbep__output_close_id(&o->frame_vel);
+    nbep__output_close_id(&o->frame_img);
+    nbep__output_close_id(&o->stats_wall);
     for (int c = 0; c < STATS_N_COLUMNS; c++)
         nbep__output_close_id(&o->stats[c]);
     for (int c = 0; c < N_CK_COLUMNS; c++)
@@ -404,6 +439,8 @@ void nbep__output_release(nbep_output **op)
     nbep__output_close_id(&o->file);
     free(o->xmf_step);
     free(o->xmf_time);
+    free(o->wrap_pos);
+    free(o->wrap_img);
     free(o->path);
     free(o);
     *op = NULL;
@@ -451,6 +488,12 @@ nbep_status nbep_output_create(const char *path, const nbep_scene *sc, int threa
     }
     strcat(strcpy(tmp, path), suffix);
     o->ck_allowed = true;
+    o->n_planes = sc->state.n_planes;
+    if (nbep__output_periodic(o, sc, d) < 0) {
+        free(tmp);
+        nbep__output_release(&o);
+        return NBEP_ENOMEM;
+    }
 
     hid_t fapl = nbep__output_fapl(true), fcpl = make_fcpl(sc);
     if (fapl < 0 || fcpl < 0) {
@@ -565,10 +608,23 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
         HDF5_FAIL(d, o->path, "make the dataspaces of frame %llu", (unsigned long long)f);
         goto done;
     }
+    /* A periodic box: positions wrapped into it, the periods removed added to the images
+     * (the algorithm may hold positions a little outside, see cells.h) */
+    const nbep_vec3 *pos = s->pos;
+    if (o->pb.any) {
+        memcpy(o->wrap_pos, s->pos, s->n * sizeof *o->wrap_pos);
+        memcpy(o->wrap_img, s->image, 3 * s->n * sizeof *o->wrap_img);
+        for (size_t i = 0; i < s->n; i++)
+            nbep_periodic_wrap(&o->pb, &o->wrap_pos[i], &o->wrap_img[3 * i]);
+        pos = o->wrap_pos;
+        if (o->frame_img >= 0 && append_rows(o, o->frame_img, "/frames/image", 3, f, vec,
+                                             H5T_NATIVE_INT32, vec_space, o->wrap_img, d) < 0)
+            goto done;
+    }
     /* Which rows are complete is said by the count attributes (see commit), not by the
      * datasets' lengths, so the order of these appends does not matter for crash safety. */
     if (o->frame_pos >= 0 && append_rows(o, o->frame_pos, "/frames/position", 3, f, vec,
-                                         H5T_NATIVE_DOUBLE, vec_space, s->pos, d) < 0)
+                                         H5T_NATIVE_DOUBLE, vec_space, pos, d) < 0)
         goto done;
     if (o->frame_vel >= 0 && append_rows(o, o->frame_vel, "/frames/velocity", 3, f, vec,
                                          H5T_NATIVE_DOUBLE, vec_space, s->vel, d) < 0)
@@ -613,8 +669,28 @@ done:
     return st;
 }
 
-nbep_status nbep_output_stats(nbep_output *o, const nbep_step_stats *rows, size_t count,
-                              nbep_diag *d)
+/* count rows of /stats/wall_impulse from wall (NULL: zeros). */
+static int write_wall(nbep_output *o, const double *wall, size_t count, nbep_diag *d)
+{
+    hsize_t values = (hsize_t)count * o->n_planes, rows[2] = {count, o->n_planes};
+    double *zeros = wall ? NULL : calloc((size_t)values, sizeof *zeros);
+    hid_t mem = H5Screate_simple(1, &values, NULL);
+    int rc = -1;
+    if (!wall && !zeros)
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: no memory for /stats/wall_impulse",
+                      o->path);
+    else if (mem < 0)
+        HDF5_FAIL(d, o->path, "make the dataspace of %zu wall_impulse rows", count);
+    else
+        rc = append_rows(o, o->stats_wall, "/stats/wall_impulse", 2, o->n_stats, rows,
+                         H5T_NATIVE_DOUBLE, mem, wall ? wall : zeros, d);
+    nbep__output_close_id(&mem);
+    free(zeros);
+    return rc;
+}
+
+nbep_status nbep_output_stats(nbep_output *o, const nbep_step_stats *rows, const double *wall,
+                              size_t count, nbep_diag *d)
 {
     if (count == 0)
         return NBEP_OK;
@@ -642,6 +718,8 @@ nbep_status nbep_output_stats(nbep_output *o, const nbep_step_stats *rows, size_
                         column_mem_type(nbep__stats_columns[c].type), mem, rows, d) < 0)
             goto done;
     }
+    if (o->stats_wall >= 0 && write_wall(o, wall, count, d) < 0)
+        goto done;
     o->n_stats += count;
     st = NBEP_OK;
 done:
@@ -685,6 +763,8 @@ nbep_status nbep_output_close(nbep_output **op, const nbep_summary *s, nbep_diag
     rc |= checked_close(&o->frame_time, o->path, "/frames/time", d);
     rc |= checked_close(&o->frame_pos, o->path, "/frames/position", d);
     rc |= checked_close(&o->frame_vel, o->path, "/frames/velocity", d);
+    rc |= checked_close(&o->frame_img, o->path, "/frames/image", d);
+    rc |= checked_close(&o->stats_wall, o->path, "/stats/wall_impulse", d);
     for (int c = 0; c < STATS_N_COLUMNS; c++)
         rc |= checked_close(&o->stats[c], o->path, nbep__stats_columns[c].name, d);
     for (int c = 0; c < N_CK_COLUMNS; c++)

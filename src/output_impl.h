@@ -16,6 +16,7 @@
 
 #include "nbep/compiler.h"
 #include "nbep/output.h"
+#include "nbep/periodic.h"
 #include "nbep/stats.h"
 #include "nbep/status.h"
 
@@ -35,7 +36,8 @@
     X(collisions, U64)                                                                       \
     X(kinetic_energy, F64)                                                                   \
     X(potential_energy, F64)                                                                 \
-    X(max_overlap, F64)
+    X(max_overlap, F64)                                                                      \
+    X(virial, F64)
 
 enum column_type { COL_I64, COL_U64, COL_F64 };
 
@@ -71,6 +73,12 @@ struct nbep_output {
     hid_t summary;                 /* the /summary group; its json attribute comes at close */
     hid_t frame_step, frame_time;  /* /frames/step, /frames/time */
     hid_t frame_pos, frame_vel;    /* H5I_INVALID_HID when the deck did not ask for them */
+    hid_t frame_img;               /* /frames/image, when the box has a periodic axis */
+    hid_t stats_wall;              /* /stats/wall_impulse (S, P), with stats and P > 0 */
+    size_t n_planes;
+    nbep_periodic pb;              /* the box's periodic axes: frames are written wrapped */
+    nbep_vec3 *wrap_pos;           /* owned when pb.any: a frame's wrapped positions */
+    int32_t *wrap_img;             /* and their image counts (3 per sphere) */
     hid_t stats[STATS_N_COLUMNS];  /* all H5I_INVALID_HID when the deck did not ask for them */
     hid_t frames_count;            /* the `count` attribute of /frames */
     hid_t stats_count;             /* the `count` attribute of /stats, if any */
@@ -88,6 +96,9 @@ struct nbep_output {
 
 /* A handle for path with every id invalid; NULL (and NBEP_ENOMEM in d) when out of memory. */
 nbep_output *nbep__output_new(const char *path, size_t n_spheres, nbep_diag *d);
+/* Sets o's periodic geometry from sc and, when it has a periodic axis, the buffers frames are
+ * wrapped in; -1 (NBEP_ENOMEM's message in d) when out of memory. */
+int nbep__output_periodic(nbep_output *o, const nbep_scene *sc, nbep_diag *d);
 /* Closes every id, ignoring errors (the failure paths; nbep_output_close checks them), frees
  * the handle and NULLs the pointer; NULL-safe. */
 void nbep__output_release(nbep_output **op);

@@ -31,6 +31,7 @@ typedef struct run_info {
     uint64_t steps, seed;
     int64_t threads;
     double dt, restitution, gravity[3];
+    int32_t periodic[3];                   /* 0 0 0 for files made before contract 2 */
     hsize_t spheres, planes;
     uint64_t frames, stats_rows;           /* complete rows: the count attributes */
     hsize_t frames_more, stats_more;       /* rows past them, cut off by a crash */
@@ -90,6 +91,8 @@ static int gather_info(hid_t file, const char *path, run_info *r, nbep_diag *d)
         nbep__output_read_attr(file, path, "restitution", H5T_NATIVE_DOUBLE, &r->restitution,
                                d) < 0 ||
         nbep__output_read_attr(file, path, "gravity", H5T_NATIVE_DOUBLE, r->gravity, d) < 0 ||
+        (H5Aexists(file, "periodic") > 0 &&
+         nbep__output_read_attr(file, path, "periodic", H5T_NATIVE_INT32, r->periodic, d) < 0) ||
         nbep__output_dataset_rows(file, path, "/spheres/radius", &r->spheres, d) < 0 ||
         nbep__output_dataset_rows(file, path, "/planes/offset", &r->planes, d) < 0 ||
         nbep__output_complete_rows(file, path, "/frames", "/frames/step", &r->frames,
@@ -166,6 +169,9 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
         fprintf(f, "%-13s%s\n", "restitution:", human_double(r.restitution, b0));
         fprintf(f, "%-13s[%s, %s, %s]\n", "gravity:", human_double(r.gravity[0], b0),
                 human_double(r.gravity[1], b1), human_double(r.gravity[2], b2));
+        if (r.periodic[0] || r.periodic[1] || r.periodic[2])
+            fprintf(f, "%-13s%s%s%s\n", "periodic:", r.periodic[0] ? "x" : "",
+                    r.periodic[1] ? "y" : "", r.periodic[2] ? "z" : "");
         if (r.overrides[0])
             print_lines(f, "overrides:", r.overrides);
         fprintf(f, "%-13s%" PRIu64, "frames:", r.frames);

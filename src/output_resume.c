@@ -21,6 +21,7 @@ void nbep_resume_fini(nbep_resume *r)
     free(r->event_partner);
     free(r->event_kind);
     free(r->rest);
+    free(r->image);
     memset(r, 0, sizeof *r);
 }
 
@@ -167,6 +168,31 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
         nbep__output_read_row(o->file, path, "/frames/velocity", last, 3 * (hsize_t)n,
                          H5T_NATIVE_DOUBLE, res.vel, d) < 0)
         goto fail;
+    /* A periodic box: the image counts of that frame (SPEC /frames/image) */
+    if (sc->has_box && (sc->periodic[0] || sc->periodic[1] || sc->periodic[2])) {
+        res.image = malloc((n ? 3 * n : 1) * sizeof *res.image);
+        if (!res.image) {
+            nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory to resume %s", path);
+            st = NBEP_ENOMEM;
+            goto fail;
+        }
+        if (H5Lexists(o->file, "/frames/image", H5P_DEFAULT) <= 0) {
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: %s has no /frames/image but %s has a periodic box; resume with "
+                          "the deck (and --set options) that made it",
+                          path, sc->deck_path);
+            st = NBEP_EDECK;
+            goto fail;
+        }
+        if (nbep__output_read_row(o->file, path, "/frames/image", last, 3 * (hsize_t)n,
+                                  H5T_NATIVE_INT32, res.image, d) < 0 ||
+            open_cut(o, "/frames/image", frames, &o->frame_img, d) < 0)
+            goto fail;
+    }
+    if (nbep__output_periodic(o, sc, d) < 0) {
+        st = NBEP_ENOMEM;
+        goto fail;
+    }
     /* The event slots, where the file has them; the run uses them only when its algorithm
      * imports event slots (the algorithm table, sim.c), so a deck of another algorithm
      * continues from positions and velocities alone. */
@@ -222,6 +248,10 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
         for (int c = 0; c < STATS_N_COLUMNS; c++)
             if (open_cut(o, nbep__stats_columns[c].name, keep, &o->stats[c], d) < 0)
                 goto fail;
+        o->n_planes = sc->state.n_planes;
+        if (H5Lexists(o->file, "/stats/wall_impulse", H5P_DEFAULT) > 0 &&
+            open_cut(o, "/stats/wall_impulse", keep, &o->stats_wall, d) < 0)
+            goto fail;
         if (open_count(o, "/stats", &o->stats_count, d) < 0)
             goto fail;
         o->n_stats = keep;

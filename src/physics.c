@@ -163,6 +163,11 @@ void nbep_physics_energy(const nbep_state *s, size_t lo, size_t hi, double *kine
         double m = s->mass[i];
         ke += 0.5 * m * nbep_vec3_dot(s->vel[i], s->vel[i]);
         pe -= m * nbep_vec3_dot(s->acc[i], s->pos[i]);
+        const int32_t *im = s->image + 3 * i;
+        if (im[0] | im[1] | im[2]) /* a periodic box: the field acts on the unwrapped centre */
+            pe -= m * nbep_vec3_dot(s->acc[i], nbep_vec3_make(im[0] * s->period[0],
+                                                              im[1] * s->period[1],
+                                                              im[2] * s->period[2]));
     }
     *kinetic = ke;
     *potential = pe;

@@ -224,6 +224,30 @@ static got get_bool(load *L, const config_setting_t *parent, const char *prefix,
     return GOT;
 }
 
+static got get_bool3(load *L, const config_setting_t *parent, const char *prefix, int id,
+                     bool out[3], const config_setting_t **at)
+{
+    const config_setting_t *s;
+    got g = find(L, parent, prefix, id, &s);
+    if (g != GOT)
+        return g;
+    bool ok = (config_setting_is_array(s) || config_setting_is_list(s)) &&
+              config_setting_length(s) == 3;
+    for (unsigned k = 0; ok && k < 3; k++)
+        ok = config_setting_type(config_setting_get_elem(s, k)) == CONFIG_TYPE_BOOL;
+    if (!ok) {
+        char path[PATH_LEN];
+        path_join(path, prefix, leaf_of(schema[id].path));
+        type_error(L, s, path, "3 booleans [x, y, z]");
+        return BAD;
+    }
+    for (unsigned k = 0; k < 3; k++)
+        out[k] = config_setting_get_bool(config_setting_get_elem(s, k)) != 0;
+    if (at)
+        *at = s;
+    return GOT;
+}
+
 /* A group entry, or a list entry (an empty [] counts as an empty list). */
 static got get_aggregate(load *L, const config_setting_t *parent, const char *prefix, int id,
                          const config_setting_t **out)
@@ -357,15 +381,58 @@ static bool check_corners(load *L, const config_setting_t *at, const char *prefi
     return false;
 }
 
-static void parse_box(load *L, const config_setting_t *root, nbep_scene *sc)
+/* *periodic_at: the box.periodic setting when the deck (or --set) gives one with an axis on. */
+static void parse_box(load *L, const config_setting_t *root, nbep_scene *sc,
+                      const config_setting_t **periodic_at)
 {
-    const config_setting_t *box = NULL, *at = NULL;
+    const config_setting_t *box = NULL, *at = NULL, *per = NULL;
+    *periodic_at = NULL;
     if (get_aggregate(L, root, "", S_BOX, &box) != GOT)
         return;
     got g_min = get_vec3(L, box, "box", S_BOX_MIN, &sc->box_min, NULL);
     got g_max = get_vec3(L, box, "box", S_BOX_MAX, &sc->box_max, &at);
     if (g_min == GOT && g_max == GOT && check_corners(L, at, "box", sc->box_min, sc->box_max))
         sc->has_box = true;
+    if (get_bool3(L, box, "box", S_BOX_PERIODIC, sc->periodic, &per) == GOT &&
+        (sc->periodic[0] || sc->periodic[1] || sc->periodic[2]))
+        *periodic_at = per;
+}
+
+/* Periodic axes (SPEC contract 2): each longer than twice the largest diameter (the minimum
+ * image needs it), and a run mode that supports them: the predictive algorithm's all-pairs
+ * mode (nearest images with an image horizon, algo_predictive.c) and cells mode, whose cell
+ * blocks wrap around the box (three cells at least per periodic axis, so that a neighbour is
+ * one image only). naive, seminaive and grid mode would need their own image handling; they
+ * are refused rather than run wrong. */
+static void check_periodic(load *L, const config_setting_t *at, const nbep_scene *sc,
+                           const nbep__scene_entry *e, size_t n_entries)
+{
+    double rmax = 0.0;
+    for (size_t k = 0; k < n_entries; k++)
+        if (e[k].count > 0)
+            rmax = fmax(rmax, e[k].radius);
+    const double len[3] = {sc->box_max.x - sc->box_min.x, sc->box_max.y - sc->box_min.y,
+                           sc->box_max.z - sc->box_min.z};
+    for (int k = 0; k < 3; k++) {
+        if (!sc->periodic[k])
+            continue;
+        if (!(len[k] > 4.0 * rmax))
+            ERR(L, at,
+                "box.periodic: the box's %c side (%g) must be longer than twice the largest "
+                "sphere diameter (%g)",
+                "xyz"[k], len[k], 2.0 * rmax);
+        /* the cells engine's sides are at least 1.125 diameters (cells.h) */
+        else if (sc->neighbors_cells && !(len[k] >= 3.0 * 2.25 * rmax))
+            ERR(L, at,
+                "box.periodic: run.neighbors = \"cells\" needs the box's %c side (%g) to be at "
+                "least 6.75 times the largest radius (%g), three cells across",
+                "xyz"[k], len[k], rmax);
+    }
+    if (strcmp(sc->algorithm, "predictive") != 0 || sc->neighbors_grid)
+        ERR(L, at,
+            "box.periodic needs run.algorithm = \"predictive\" with run.neighbors = \"cells\" "
+            "or \"all\" (got \"%s\"%s): the other modes do not handle periodic images",
+            sc->algorithm, strcmp(sc->algorithm, "predictive") == 0 ? ", \"grid\"" : "");
 }
 
 typedef struct plane {
@@ -705,7 +772,14 @@ static bool check_counts(load *L, nbep__scene_entry *e, size_t n_entries, size_t
     return true;
 }
 
-/* Box planes first (inward: +x at min.x, -x at max.x, ...), then `planes`. */
+/* The box's walls: two per axis that is not periodic. */
+static size_t box_walls(const nbep_scene *sc)
+{
+    return 2u * (size_t)(!sc->periodic[0] + !sc->periodic[1] + !sc->periodic[2]);
+}
+
+/* Box planes first (inward: +x at min.x, -x at max.x, ...; none on periodic axes), then
+ * `planes`. */
 static void fill_planes(nbep_state *s, const nbep_scene *sc, const plane *p, size_t n_p)
 {
     size_t k = 0;
@@ -713,6 +787,8 @@ static void fill_planes(nbep_state *s, const nbep_scene *sc, const plane *p, siz
         const double lo[3] = {sc->box_min.x, sc->box_min.y, sc->box_min.z};
         const double hi[3] = {sc->box_max.x, sc->box_max.y, sc->box_max.z};
         for (int axis = 0; axis < 3; axis++) {
+            if (sc->periodic[axis])
+                continue;
             double u[3] = {0.0, 0.0, 0.0};
             u[axis] = 1.0;
             s->plane_normal[k] = nbep_vec3_make(u[0], u[1], u[2]);
@@ -840,26 +916,35 @@ nbep_status nbep_scene_load(const char *deck_path, const char *const *overrides,
     parse_run(&L, root, &sc, &seed_ok);
     const size_t geometry0 = d->n_errors;
     parse_physics(&L, root, &sc);
-    parse_box(&L, root, &sc);
+    const config_setting_t *periodic_at;
+    parse_box(&L, root, &sc, &periodic_at);
     if (sc.neighbors_cells && !config_lookup(&cfg, "box"))
         ERR(&L, config_lookup(&cfg, "run.neighbors"),
             "run.neighbors = \"cells\" needs a box (its cells cover the box)");
     parse_planes(&L, root, &planes, &n_planes);
     parse_spheres(&L, root, &sc, &entries, &n_entries);
+    if (periodic_at)
+        check_periodic(&L, periodic_at, &sc, entries, n_entries);
     const bool geometry_ok = seed_ok && d->n_errors == geometry0 && !L.c.oom;
     parse_output(&L, root, &sc);
     parse_sweep(&L, root, &sc);
 
-    size_t total, n_all_planes = n_planes + (sc.has_box ? 6 : 0);
+    size_t total, n_all_planes = n_planes + (sc.has_box ? box_walls(&sc) : 0);
     if (geometry_ok && check_counts(&L, entries, n_entries, n_all_planes, &total)) {
         st = nbep_state_init(&sc.state, total, n_all_planes, d);
         if (st != NBEP_OK)
             goto done;
         fill_planes(&sc.state, &sc, planes, n_planes);
+        const double side[3] = {sc.box_max.x - sc.box_min.x, sc.box_max.y - sc.box_min.y,
+                                sc.box_max.z - sc.box_min.z};
+        for (int k = 0; k < 3; k++)
+            sc.state.period[k] = sc.has_box && sc.periodic[k] ? side[k] : 0.0;
         const size_t fill0 = d->n_errors;
         st = nbep__scene_place(&L.c, &sc.state, entries, n_entries, sc.seed);
         if (st == NBEP_OK && d->n_errors == fill0)
-            st = nbep__scene_check_overlaps(&L.c, &sc.state, entries, n_entries, sc.has_box);
+            st = nbep__scene_check_overlaps(&L.c, &sc.state, entries, n_entries,
+                                            sc.has_box ? sc.periodic : NULL, sc.box_min,
+                                            sc.box_max);
         if (st != NBEP_OK)
             goto done;
     }

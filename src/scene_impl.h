@@ -71,6 +71,7 @@ typedef enum nbep__scene_kind {
     NBEP__K_FLOAT,     /* float, int or int64; finite */
     NBEP__K_BOOL,
     NBEP__K_VEC3,      /* 3 finite numbers, array or list */
+    NBEP__K_BOOL3,     /* 3 booleans, array or list */
     NBEP__K_STRINGS,   /* array or list of strings */
     NBEP__K_VALUES     /* non-empty array or list of any values */
 } nbep__scene_kind;
@@ -113,10 +114,15 @@ NBEP_MUST_CHECK nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s,
                                               const nbep__scene_entry *e, size_t n_entries,
                                               uint64_t seed);
 /* Reports every pair of spheres, and every sphere and plane, that overlap by more than
- * round-off (the first few by name, then how many more). Planes are named "box x-min" ...
- * for the first six when has_box, else "planes.[k]". O(n) expected time. */
+ * round-off (the first few by name, then how many more). box_periodic is NULL without a box,
+ * else the box's periodic axes: the box's walls (two per other axis) come first and are named
+ * "box x-min" ..., the rest "planes.[k]"; pairs that overlap across a periodic face of the
+ * box [lo, hi] are found too (spheres as placed, whose centres are inside the box). O(n)
+ * expected time. */
 NBEP_MUST_CHECK nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                                                        const nbep__scene_entry *e,
-                                                       size_t n_entries, bool has_box);
+                                                       size_t n_entries,
+                                                       const bool *box_periodic, nbep_vec3 lo,
+                                                       nbep_vec3 hi);
 
 #endif

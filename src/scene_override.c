@@ -169,7 +169,7 @@ static int container_type(const char *path, const seg *next)
     if (!next->index)
         return CONFIG_TYPE_GROUP;
     if (nbep__scene_schema_kind(path, &kind, &element) && !element &&
-        (kind == NBEP__K_VEC3 || kind == NBEP__K_STRINGS))
+        (kind == NBEP__K_VEC3 || kind == NBEP__K_BOOL3 || kind == NBEP__K_STRINGS))
         return CONFIG_TYPE_ARRAY;
     return CONFIG_TYPE_LIST;
 }

@@ -505,6 +505,7 @@ typedef struct overlaps {
     const nbep__scene_entry *e;
     size_t n_entries;
     size_t i;             /* the sphere whose neighbours are visited */
+    nbep_vec3 shift;      /* at its position plus this (a copy across periodic faces) */
     bool same_level;      /* they are in its level: only smaller ids count */
     uint64_t found;
 } overlaps;
@@ -535,15 +536,17 @@ static void report(overlaps *o, size_t a, const char *other, double by)
 static void check_pair(overlaps *o, size_t i, size_t j)
 {
     const nbep_state *s = o->s;
-    double dist = nbep_vec3_norm(nbep_vec3_sub(s->pos[i], s->pos[j]));
+    double dist = nbep_vec3_norm(nbep_vec3_sub(nbep_vec3_add(s->pos[i], o->shift), s->pos[j]));
     double by = s->radius[i] + s->radius[j] - dist;
     double tol = TOUCH_ULPS * DBL_EPSILON *
                  (max_abs(s->pos[i]) + max_abs(s->pos[j]) + s->radius[i] + s->radius[j]);
     if (by > tol) {
         size_t a = i > j ? i : j, b = i > j ? j : i;
         char other[96];
-        snprintf(other, sizeof other, "spheres.[%zu] (sphere %zu)",
-                 entry_of(o->e, o->n_entries, b), b);
+        snprintf(other, sizeof other, "spheres.[%zu] (sphere %zu)%s",
+                 entry_of(o->e, o->n_entries, b), b,
+                 nbep_vec3_equal(o->shift, (nbep_vec3){0.0, 0.0, 0.0}) ? ""
+                                                                       : " across a periodic face");
         report(o, a, other, by);
     }
 }
@@ -563,9 +566,19 @@ static const char *const box_names[6] = {"box x-min", "box x-max", "box y-min",
 
 nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                                        const nbep__scene_entry *e, size_t n_entries,
-                                       bool has_box)
+                                       const bool *box_periodic, nbep_vec3 box_lo,
+                                       nbep_vec3 box_hi)
 {
-    overlaps o = {c, s, e, n_entries, 0, false, 0};
+    /* the box's walls in fill_planes's order: the two of each axis that is not periodic */
+    const char *names[6];
+    size_t n_box = 0;
+    for (int a = 0; box_periodic && a < 3; a++)
+        if (!box_periodic[a]) {
+            names[n_box++] = box_names[2 * a];
+            names[n_box++] = box_names[2 * a + 1];
+        }
+    overlaps o = {c, s, e, n_entries, 0, {0.0, 0.0, 0.0}, false, 0};
+    const double blo[3] = {box_lo.x, box_lo.y, box_lo.z}, bhi[3] = {box_hi.x, box_hi.y, box_hi.z};
     for (size_t i = 0; i < s->n; i++)
         for (size_t p = 0; p < s->n_planes; p++) {
             double by = s->radius[i] - (nbep_vec3_dot(s->plane_normal[p], s->pos[i]) -
@@ -574,10 +587,10 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                          (max_abs(s->pos[i]) + fabs(s->plane_offset[p]) + s->radius[i]);
             if (by > tol) {
                 char name[48];
-                if (has_box && p < 6)
-                    snprintf(name, sizeof name, "%s", box_names[p]);
+                if (p < n_box)
+                    snprintf(name, sizeof name, "%s", names[p]);
                 else
-                    snprintf(name, sizeof name, "planes.[%zu]", p - (has_box ? 6 : 0));
+                    snprintf(name, sizeof name, "planes.[%zu]", p - n_box);
                 report(&o, i, name, by);
             }
         }
@@ -589,14 +602,36 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
     /* Each pair once: a sphere looks at its own level (partners of smaller id) and at the
      * levels of larger spheres (all partners), never at smaller spheres, whose cells would be
      * many for its reach; those pairs are found from the smaller sphere's side. */
+    double rmax_all = 0.0;
+    for (int l = 0; ok && l < LEVELS_MAX; l++)
+        rmax_all = fmax(rmax_all, g.lv[l].rmax);
     for (size_t i = 0; ok && i < s->n; i++) {
         o.i = i;
         int own = level_of(&g, s->radius[i]);
-        for (int l = own; l < LEVELS_MAX; l++) {
-            o.same_level = l == own;
-            if (g.lv[l].rmax > 0.0)
-                (void)level_near(&g, &g.lv[l], s->pos[i], s->radius[i] + g.lv[l].rmax,
-                                 pair_visit, &o);
+        /* periodic faces: the copies of i across each face it is near (within the largest
+         * contact distance), alone and in combination (edges, corners); a pair is near in one
+         * copy only, since a periodic side exceeds twice the largest diameter */
+        const double x[3] = {s->pos[i].x, s->pos[i].y, s->pos[i].z};
+        double near[3] = {0.0, 0.0, 0.0};
+        for (int a = 0; box_periodic && a < 3; a++) {
+            double reach = s->radius[i] + rmax_all;
+            if (box_periodic[a] && x[a] - blo[a] < reach)
+                near[a] = bhi[a] - blo[a];
+            else if (box_periodic[a] && bhi[a] - x[a] < reach)
+                near[a] = blo[a] - bhi[a];
+        }
+        for (int m = 0; m < 8; m++) {
+            if (((m & 1) && near[0] == 0.0) || ((m & 2) && near[1] == 0.0) ||
+                ((m & 4) && near[2] == 0.0))
+                continue;
+            o.shift = nbep_vec3_make(m & 1 ? near[0] : 0.0, m & 2 ? near[1] : 0.0,
+                                     m & 4 ? near[2] : 0.0);
+            for (int l = own; l < LEVELS_MAX; l++) {
+                o.same_level = l == own;
+                if (g.lv[l].rmax > 0.0)
+                    (void)level_near(&g, &g.lv[l], nbep_vec3_add(s->pos[i], o.shift),
+                                     s->radius[i] + g.lv[l].rmax, pair_visit, &o);
+            }
         }
     }
     grid_fini(&g);

@@ -66,7 +66,8 @@ static bool abstract_of(const char *path, char *out, size_t len)
 
 static bool kind_is_container(nbep__scene_kind k)
 {
-    return k == NBEP__K_LIST || k == NBEP__K_VEC3 || k == NBEP__K_STRINGS || k == NBEP__K_VALUES;
+    return k == NBEP__K_LIST || k == NBEP__K_VEC3 || k == NBEP__K_BOOL3 || k == NBEP__K_STRINGS ||
+           k == NBEP__K_VALUES;
 }
 
 static bool schema_kind_abstract(const char *abstract, nbep__scene_kind *kind, bool *element)
@@ -182,6 +183,7 @@ static const char *kind_name(nbep__scene_kind k)
     case NBEP__K_FLOAT: return "number";
     case NBEP__K_BOOL: return "true/false";
     case NBEP__K_VEC3: return "[x, y, z]";
+    case NBEP__K_BOOL3: return "[bool, bool, bool]";
     case NBEP__K_STRINGS: return "array of strings";
     case NBEP__K_VALUES: return "array or list";
     }

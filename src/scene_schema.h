@@ -45,11 +45,16 @@ enum {
     X(PHYSICS_TC, "physics.tc", FLOAT, F_GE0, "1.0e-6", NULL,                                      \
       "TC model: a collision within tc seconds of the sphere's previous one is elastic (stops "  \
       "inelastic collapse); 0: off")                                                               \
-    X(BOX, "box", GROUP, 0, NULL, "none", "optional: six inward planes bounding [min, max]")       \
+    X(BOX, "box", GROUP, 0, NULL, "none",                                                          \
+      "optional: inward planes bounding [min, max], two per axis that is not periodic")          \
     X(BOX_MIN, "box.min", VEC3, F_REQUIRED, NULL, "required", "lower corner")                      \
     X(BOX_MAX, "box.max", VEC3, F_REQUIRED, NULL, "required",                                      \
       "upper corner, above min on every axis")                                                     \
-    X(PLANES, "planes", LIST, 0, NULL, "none", "extra static planes, after the box's six")         \
+    X(BOX_PERIODIC, "box.periodic", BOOL3, 0, "[false, false, false]", NULL,                       \
+      "per axis: the box repeats along it (no walls there; contacts by the minimum image; "    \
+      "positions wrapped, /frames/image counts the periods); a periodic side must exceed "      \
+      "twice the largest diameter; predictive \"all\" or \"cells\" only")                      \
+    X(PLANES, "planes", LIST, 0, NULL, "none", "extra static planes, after the box's walls")       \
     X(PLANE_NORMAL, "planes.[].normal", VEC3, F_REQUIRED, NULL, "required",                        \
       "points to where spheres live; normalized; not zero")                                        \
     X(PLANE_POINT, "planes.[].point", VEC3, F_REQUIRED, NULL, "required",                          \

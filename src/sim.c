@@ -129,6 +129,8 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
     if (opt->resume) {
         memcpy(sim->st.pos, opt->resume->pos, n * sizeof *sim->st.pos);
         memcpy(sim->st.vel, opt->resume->vel, n * sizeof *sim->st.vel);
+        if (opt->resume->image)
+            memcpy(sim->st.image, opt->resume->image, 3 * n * sizeof *sim->st.image);
     }
     sim->n_blocks = (n + NBEP_BLOCK - 1) / NBEP_BLOCK;
     for (int k = 0; k < 2; k++) {
@@ -139,11 +141,19 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
     sim->block_pe = nbep_alloc_aligned(sim->n_blocks, sizeof *sim->block_pe);
     sim->cap_rows = ROWS_BATCH;
     sim->rows = malloc(sim->cap_rows * sizeof *sim->rows);
+    const size_t np = sim->st.n_planes;
+    sim->wall_rows = nbep_alloc_aligned(sim->cap_rows * np, sizeof *sim->wall_rows);
+    for (int k = 0; k < 2; k++)
+        sim->wall_buf[k] = nbep_alloc_aligned((size_t)sim->nt * np, sizeof *sim->wall_buf[k]);
     if (!sim->counters[0] || !sim->counters[1] || !sim->tmax[0] || !sim->tmax[1] ||
-        !sim->block_ke || !sim->block_pe || !sim->rows) {
+        !sim->block_ke || !sim->block_pe || !sim->rows || !sim->wall_rows ||
+        !sim->wall_buf[0] || !sim->wall_buf[1]) {
         nbep_sim_destroy(&sim);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the run's counters");
     }
+    for (int k = 0; k < 2; k++)
+        for (int t = 0; t < sim->nt; t++)
+            sim->tmax[k][t].wall = sim->wall_buf[k] + (size_t)t * np;
     st = algo->create(sim, &sim->algo_ctx, d);
     if (st != NBEP_OK) {
         nbep_sim_destroy(&sim);
@@ -190,6 +200,9 @@ void nbep_sim_destroy(nbep_sim **simp)
     }
     nbep_free_aligned(sim->block_ke);
     nbep_free_aligned(sim->block_pe);
+    nbep_free_aligned(sim->wall_rows);
+    nbep_free_aligned(sim->wall_buf[0]);
+    nbep_free_aligned(sim->wall_buf[1]);
     nbep_free_aligned(sim->ev_time);
     nbep_free_aligned(sim->ev_partner);
     nbep_free_aligned(sim->ev_kind);
@@ -217,7 +230,8 @@ static nbep_status flush_rows(nbep_sim *sim)
         return NBEP_OK;
     nbep_status st = NBEP_OK;
     if (sim->opt.out && sim->scene->out_stats)
-        st = nbep_output_stats(sim->opt.out, sim->rows, sim->n_rows, sim->diag);
+        st = nbep_output_stats(sim->opt.out, sim->rows, sim->wall_rows, sim->n_rows,
+                               sim->diag);
     sim->n_rows = 0;
     return st;
 }
@@ -273,7 +287,18 @@ int nbep__sim_end_step(nbep_sim *sim, uint64_t step)
     nbep_step_stats row = {.step = (int64_t)step};
     uint64_t c[NBEP_COUNTER_COUNT] = {0};
     double ov = 0.0, ov_rel = 0.0;
-    for (int t = 0; t < sim->nt; t++) {
+    const size_t np = sim->st.n_planes;
+    double *wall = sim->wall_rows + sim->n_rows * np;
+    for (size_t p = 0; p < np; p++)
+        wall[p] = 0.0;
+    for (int t = 0; t < sim->nt; t++) { /* in thread order: the same sums for the same split */
+        nbep_thread_max *tm = &sim->tmax[par][t];
+        row.virial += tm->virial;
+        tm->virial = 0.0;
+        for (size_t p = 0; p < np; p++) {
+            wall[p] += tm->wall[p];
+            tm->wall[p] = 0.0;
+        }
         for (int k = 0; k < NBEP_COUNTER_COUNT; k++) {
             c[k] += sim->counters[par][t].c[k];
             sim->counters[par][t].c[k] = 0;
@@ -291,6 +316,8 @@ int nbep__sim_end_step(nbep_sim *sim, uint64_t step)
         sim->quiet_steps++;
     energy_total(sim, &row.kinetic_energy, &row.potential_energy);
     sim->energy_final = row.kinetic_energy + row.potential_energy;
+    sim->virial_total += row.virial;
+    sim->ke_total += row.kinetic_energy;
     sim->steps_done = step;
 
     int stop = 0;
@@ -398,6 +425,17 @@ void nbep_sim_summary(const nbep_sim *sim, nbep_summary *s)
     s->max_overlap = sim->max_overlap;
     s->max_overlap_rel = sim->max_overlap_rel;
     s->peak_rss_bytes = peak_rss();
-    /* pressure stays unknown (null): it is defined for fully periodic boxes only (SPEC
-     * contract 2), which this code does not have yet. */
+    /* SPEC contract 2: for a fully periodic box, P = (N kT + W / (3 T)) / V with kT = 2 <KE> /
+     * (3 N) over this session's steps (a resumed run measures its own part), W their summed
+     * virial and T their simulated time; null otherwise or before any step */
+    const nbep_scene *sc = sim->scene;
+    if (sc->has_box && sc->periodic[0] && sc->periodic[1] && sc->periodic[2] && stepped > 0.0 &&
+        sim->st.n > 0) {
+        double V = (sc->box_max.x - sc->box_min.x) * (sc->box_max.y - sc->box_min.y) *
+                   (sc->box_max.z - sc->box_min.z);
+        double T = stepped * sim->dt, ke = sim->ke_total / stepped;
+        double P = (2.0 * ke / 3.0 + sim->virial_total / (3.0 * T)) / V;
+        if (isfinite(P))
+            s->pressure = (nbep_summary_nullable){true, P};
+    }
 }

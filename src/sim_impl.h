@@ -27,6 +27,10 @@ nbep_range nbep__range_split(size_t n, int tid, int nt);
 typedef struct nbep_thread_max {
     alignas(NBEP_CACHELINE) double overlap;
     double overlap_rel;
+    /* sums of the step (SPEC contract 2): r12 . dp2 over sphere collisions, and per plane the
+     * normal momentum it received (wall: this thread's n_planes slots, owned by the sim) */
+    double virial;
+    double *wall;
 } nbep_thread_max;
 
 typedef struct nbep_algo nbep_algo;
@@ -53,6 +57,10 @@ struct nbep_sim {
     nbep_grid overlap_grid;          /* owned when the algorithm's overlap is not exact: the
                                       * frame-step overlap check's workspace */
     nbep_step_stats *rows;           /* owned: stats rows not yet written */
+    double *wall_rows;               /* owned: their /stats/wall_impulse rows, n_planes each */
+    double *wall_buf[2];             /* owned: per parity, nt x n_planes (nbep_thread_max.wall) */
+    double virial_total;             /* summary pressure: the virial summed over this session */
+    double ke_total;                 /* and the kinetic energy at each step's end, summed */
     size_t n_rows, cap_rows;
     /* totals and summary */
     uint64_t totals[NBEP_COUNTER_COUNT];

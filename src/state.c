@@ -12,7 +12,7 @@
 
 size_t nbep_state_bytes(size_t n, size_t n_planes)
 {
-    return n * (3 * sizeof(nbep_vec3) + 2 * sizeof(double)) +
+    return n * (3 * sizeof(nbep_vec3) + 2 * sizeof(double) + 3 * sizeof(int32_t)) +
            n_planes * (sizeof(nbep_vec3) + sizeof(double));
 }
 
@@ -24,14 +24,16 @@ nbep_status nbep_state_init(nbep_state *s, size_t n, size_t n_planes, nbep_diag 
     s->acc = nbep_alloc_aligned(n, sizeof *s->acc);
     s->radius = nbep_alloc_aligned(n, sizeof *s->radius);
     s->mass = nbep_alloc_aligned(n, sizeof *s->mass);
+    s->image = nbep_alloc_aligned(3 * n, sizeof *s->image);
     s->plane_normal = nbep_alloc_aligned(n_planes, sizeof *s->plane_normal);
     s->plane_offset = nbep_alloc_aligned(n_planes, sizeof *s->plane_offset);
-    if (!s->pos || !s->vel || !s->acc || !s->radius || !s->mass || !s->plane_normal ||
+    if (!s->pos || !s->vel || !s->acc || !s->radius || !s->mass || !s->image || !s->plane_normal ||
         !s->plane_offset) {
         nbep_state_fini(s);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for %zu spheres (%.3g GB)", n,
                   (double)nbep_state_bytes(n, n_planes) / 1e9);
     }
+    memset(s->image, 0, 3 * n * sizeof *s->image);
     s->n = n;
     s->n_planes = n_planes;
     return NBEP_OK;
@@ -46,6 +48,7 @@ void nbep_state_fini(nbep_state *s)
     nbep_free_aligned(s->acc);
     nbep_free_aligned(s->radius);
     nbep_free_aligned(s->mass);
+    nbep_free_aligned(s->image);
     nbep_free_aligned(s->plane_normal);
     nbep_free_aligned(s->plane_offset);
     memset(s, 0, sizeof *s);
@@ -62,6 +65,8 @@ nbep_status nbep_state_copy(nbep_state *dst, const nbep_state *src, nbep_diag *d
     memcpy(dst->acc, src->acc, n * sizeof *dst->acc);
     memcpy(dst->radius, src->radius, n * sizeof *dst->radius);
     memcpy(dst->mass, src->mass, n * sizeof *dst->mass);
+    memcpy(dst->image, src->image, 3 * n * sizeof *dst->image);
+    memcpy(dst->period, src->period, sizeof dst->period);
     memcpy(dst->plane_normal, src->plane_normal, p * sizeof *dst->plane_normal);
     memcpy(dst->plane_offset, src->plane_offset, p * sizeof *dst->plane_offset);
     return NBEP_OK;

@@ -2,7 +2,8 @@
  * ranges on two threads equal to one serial build, and, along analytic flights with and
  * without acceleration whose cell exits are processed in time order, the two properties the
  * engine relies on: every sphere sits within its grown cell, and every pair within reach is
- * in the same or adjacent cells; an exit always lands in another cell. */
+ * in the same or adjacent cells; an exit always lands in another cell. Periodic axes: blocks
+ * wrap with the period of each neighbour, and every face has an exit. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -28,7 +29,7 @@ static void init_cells(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double reach, 
 {
     nbep_diag d;
     nbep_diag_init(&d);
-    assert_int_equal(nbep_cells_init(g, lo, hi, reach, n, &d), NBEP_OK);
+    assert_int_equal(nbep_cells_init(g, lo, hi, reach, n, NULL, &d), NBEP_OK);
     nbep_diag_fini(&d);
 }
 
@@ -100,6 +101,23 @@ static nbep_vec3 at(const flight *f, double t)
     return nbep_vec3_axpy(nbep_vec3_axpy(f->p0, t, f->v), 0.5 * t * t, f->a);
 }
 
+/* Cell cb is in the block of cell ca. */
+static bool in_block(const nbep_cells *g, size_t ca, size_t cb)
+{
+    nbep_cells_block b;
+    nbep_cells_block_of(g, ca, &b);
+    const size_t xyz[3] = {cb % g->dim[0], cb / g->dim[0] % g->dim[1],
+                           cb / (g->dim[0] * g->dim[1])};
+    for (int k = 0; k < 3; k++) {
+        bool found = false;
+        for (int m = 0; m < b.cnt[k]; m++)
+            found = found || b.idx[k][m] == xyz[k];
+        if (!found)
+            return false;
+    }
+    return true;
+}
+
 static void run_flights(bool accelerate)
 {
     enum { N = 300, SAMPLES = 400 };
@@ -157,12 +175,7 @@ static void run_flights(bool accelerate)
             for (size_t b = a + 1; b < N; b++) {
                 if (nbep_vec3_norm(nbep_vec3_sub(pos[a], pos[b])) > reach)
                     continue;
-                size_t lo[3], hi[3], ca = g.cell[b];
-                nbep_cells_block(&g, g.cell[a], lo, hi);
-                size_t cx = ca % g.dim[0], cy = ca / g.dim[0] % g.dim[1],
-                       cz = ca / (g.dim[0] * g.dim[1]);
-                assert_true(cx >= lo[0] && cx <= hi[0] && cy >= lo[1] && cy <= hi[1] &&
-                            cz >= lo[2] && cz <= hi[2]);
+                assert_true(in_block(&g, g.cell[a], g.cell[b]));
             }
     }
     assert_true(exits > N); /* the flights did cross cells */
@@ -212,6 +225,48 @@ static void test_exit_time_reaches_the_grown_face(void **state)
     nbep_cells_fini(&g);
 }
 
+/* Periodic axes: at least three cells across (a sparse box would get fewer), the first and
+ * last cells are neighbours with the period the neighbour lies in, every face has a margin
+ * and an exit, while a wall axis keeps its clamped block and no exit through the wall. */
+static void test_periodic_axes_wrap_blocks_and_exits(void **state)
+{
+    (void)state;
+    const bool xz[3] = {true, false, true};
+    nbep_cells g;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    /* 10 spheres: the cap (28 cells) would leave 3 per axis at most; the thin z axis (3.4,
+     * three sides of 1.125 fit) still gets three */
+    assert_int_equal(
+        nbep_cells_init(&g, (nbep_vec3){0, 0, 0}, (nbep_vec3){1e3, 1e3, 3.4}, 1.0, 10, xz, &d),
+        NBEP_OK);
+    nbep_diag_fini(&d);
+    assert_true(g.dim[0] >= 3 && g.dim[2] == 3);
+    assert_true(g.margin[0] > 0.0 && g.margin[2] > 0.0);
+    nbep_cells_block b;
+    nbep_cells_block_of(&g, nbep_cells_index(&g, 0, 0, 0), &b);
+    /* x: the last cell below (one period down), 0 and 1; y (walls): 0 and 1; z likewise x */
+    assert_int_equal(b.cnt[0], 3);
+    assert_true(b.idx[0][0] == g.dim[0] - 1 && b.per[0][0] == -1);
+    assert_true(b.idx[0][1] == 0 && b.per[0][1] == 0 && b.idx[0][2] == 1 && b.per[0][2] == 0);
+    assert_int_equal(b.cnt[1], 2);
+    assert_true(b.idx[1][0] == 0 && b.idx[1][1] == 1 && b.per[1][0] == 0 && b.per[1][1] == 0);
+    assert_int_equal(b.cnt[2], 3);
+    nbep_cells_block_of(&g, nbep_cells_index(&g, g.dim[0] - 1, 0, 2), &b);
+    assert_true(b.idx[0][2] == 0 && b.per[0][2] == 1);
+    assert_true(b.idx[2][2] == 0 && b.per[2][2] == 1);
+    /* a sphere in cell (0, 0, 0) moving down every axis leaves through the periodic faces,
+     * never through the y wall: its exit is at the grown x or z face, whichever first */
+    nbep_vec3 p = {0.5 * g.h[0], 0.5 * g.h[1], 0.5 * g.h[2]};
+    g.cell[0] = (uint32_t)nbep_cells_index(&g, 0, 0, 0);
+    const nbep_vec3 a0 = {0, 0, 0};
+    double t = nbep_cells_exit_time(&g, 0, p, (nbep_vec3){-1.0, -100.0, 0.0}, a0);
+    assert_close(t, 0.5 * g.h[0] + g.margin[0], 1e-12, 0.0);
+    double never = nbep_cells_exit_time(&g, 0, p, (nbep_vec3){0.0, -1.0, 0.0}, a0);
+    assert_true(never >= NBEP_NEVER);
+    nbep_cells_fini(&g);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -221,6 +276,7 @@ int main(void)
         cmocka_unit_test(
             test_accelerated_flights_keep_members_in_their_cells_and_contacts_adjacent),
         cmocka_unit_test(test_exit_time_reaches_the_grown_face),
+        cmocka_unit_test(test_periodic_axes_wrap_blocks_and_exits),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -166,9 +166,9 @@ static void write_run(fixture *fx, const char *path, const nbep_summary *summary
         rows[r] = stats_row(r);
     for (int k = 0; k < N_FRAMES; k++) {
         if (fx->sc.out_stats && k == 1)
-            assert_ok(nbep_output_stats(o, rows, 12, &fx->d), &fx->d);
+            assert_ok(nbep_output_stats(o, rows, NULL, 12, &fx->d), &fx->d);
         if (fx->sc.out_stats && k == 2)
-            assert_ok(nbep_output_stats(o, rows + 12, N_STATS - 12, &fx->d), &fx->d);
+            assert_ok(nbep_output_stats(o, rows + 12, NULL, N_STATS - 12, &fx->d), &fx->d);
         fill_frame(s, k);
         assert_ok(nbep_output_frame(o, (int64_t)k * FRAME_EVERY, DT, s, &fx->d), &fx->d);
     }
@@ -772,7 +772,7 @@ static void child_write_and_die(fixture *fx, const char *path, int n_frames, boo
     nbep_step_stats rows[N_STATS];
     for (int r = 0; r < N_STATS; r++)
         rows[r] = stats_row(r);
-    if (nbep_output_stats(o, rows, N_STATS, &fx->d) != NBEP_OK)
+    if (nbep_output_stats(o, rows, NULL, N_STATS, &fx->d) != NBEP_OK)
         _exit(CHILD_STATS);
     for (int k = 0; k < n_frames; k++) {
         fill_frame(&fx->sc.state, k);

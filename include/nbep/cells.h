@@ -11,6 +11,14 @@
  * and no exit: spheres beyond them (walls keep them in) are clamped into the edge cells, which
  * keeps the adjacency property.
  *
+ * Periodic axes (box.periodic): the cells wrap around, so the first and last cells of such an
+ * axis are neighbours and every face is interior (it has a margin and an exit). There are at
+ * least three cells along a periodic axis, so that a neighbouring cell is one copy of the box
+ * only: a block names each neighbour cell with the period it lies in (-1, 0, +1), and the
+ * sphere a re-prediction tests is at its position plus that many box lengths. The caller keeps
+ * positions wrapped consistently: a sphere moved into a cell across a periodic face is first
+ * wrapped into the box (periodic.h), so a member's centre always lies in its grown cell.
+ *
  * Lists are doubly linked through per-sphere arrays (no allocation after init). Building is
  * split so that the heavy part runs in parallel: nbep_cells_assign is pure per sphere (any
  * index range on any thread), nbep_cells_link one O(n + cells) pass. Memory: 16 bytes per
@@ -18,6 +26,7 @@
 #ifndef NBEP_CELLS_H
 #define NBEP_CELLS_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -33,16 +42,20 @@ typedef struct nbep_cells {
     double margin[3];      /* how far a member may stray past an interior face */
     size_t dim[3];         /* cells per axis */
     size_t n_cells, n;
+    bool periodic[3];      /* the cells wrap around along that axis */
     uint32_t *head;        /* owned, n_cells: first member, or NBEP_CELLS_NONE */
     uint32_t *next, *prev; /* owned, n: the list links */
     uint32_t *cell;        /* owned, n: each sphere's cell */
 } nbep_cells;
 
 /* Cells over the box [lo, hi] (hi > lo) for n spheres whose contacts happen within `reach` of
- * each other (reach <= 0, as with no spheres: one cell): as many as fit with sides of at least reach (1 + 1/8) (so that the margin is
- * at least reach/32), at most 2n + 8 in all. NBEP_ENOMEM with a message. */
+ * each other (reach <= 0, as with no spheres: one cell): as many as fit with sides of at least
+ * reach (1 + 1/8) (so that the margin is at least reach/32), at most 2n + 8 in all but never
+ * fewer than three along a periodic axis (periodic: NULL for none; such an axis must be at least
+ * 3 reach (1 + 1/8) long, which the deck check ensures). NBEP_ENOMEM with a message. */
 NBEP_MUST_CHECK nbep_status nbep_cells_init(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi,
-                                            double reach, size_t n, nbep_diag *d);
+                                            double reach, size_t n, const bool *periodic,
+                                            nbep_diag *d);
 /* Frees; safe on a zeroed grid. */
 void nbep_cells_fini(nbep_cells *g);
 
@@ -62,8 +75,16 @@ void nbep_cells_move(nbep_cells *g, uint32_t i, size_t c);
 double nbep_cells_exit_time(const nbep_cells *g, uint32_t i, nbep_vec3 p, nbep_vec3 v,
                             nbep_vec3 a);
 
-/* The block of cells [lo, hi] per axis around cell c: c and its neighbours, clamped. */
-void nbep_cells_block(const nbep_cells *g, size_t c, size_t lo[3], size_t hi[3]);
+/* The block around cell c: per axis k, cnt[k] (1 to 3) cell coordinates idx[k][] (c's and its
+ * neighbours', clamped at walls, wrapped on periodic axes) and the period each lies in,
+ * per[k][] (-1 below the box, +1 above, else 0). Every cell of the block is
+ * (idx[0][a], idx[1][b], idx[2][c]) and lies per[0][a], per[1][b], per[2][c] periods away. */
+typedef struct nbep_cells_block {
+    size_t idx[3][3];
+    int per[3][3];
+    int cnt[3];
+} nbep_cells_block;
+void nbep_cells_block_of(const nbep_cells *g, size_t c, nbep_cells_block *b);
 
 /* Index of cell (x, y, z). */
 static inline size_t nbep_cells_index(const nbep_cells *g, size_t x, size_t y, size_t z)

@@ -69,6 +69,7 @@ typedef struct nbep_resume {
     uint32_t *event_partner;
     uint8_t *event_kind;
     int32_t *rest;
+    int32_t *image;               /* owned when the box is periodic: 3n image counts */
 } nbep_resume;
 void nbep_resume_fini(nbep_resume *r);
 
@@ -82,10 +83,11 @@ void nbep_resume_fini(nbep_resume *r);
 NBEP_MUST_CHECK nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc,
                                                     nbep_output **out, nbep_resume *r,
                                                     nbep_diag *d);
-/* Appends count rows (borrowed) to /stats; they reach the disk with the next frame or close.
- * Only when the scene asked for stats. NBEP_EIO on failure. */
+/* Appends count rows (borrowed) to /stats, and their rows of /stats/wall_impulse from wall
+ * (count x n_planes, row by row; NULL: zeros); they reach the disk with the next frame or
+ * close. Only when the scene asked for stats. NBEP_EIO on failure. */
 NBEP_MUST_CHECK nbep_status nbep_output_stats(nbep_output *o, const nbep_step_stats *rows,
-                                              size_t count, nbep_diag *d);
+                                              const double *wall, size_t count, nbep_diag *d);
 /* Writes the /summary json attribute (when s is not NULL), flushes and closes; NULL-safe,
  * NULLs the pointer. Even on error (NBEP_EIO) the handle and all HDF5 ids are released. */
 NBEP_MUST_CHECK nbep_status nbep_output_close(nbep_output **o, const nbep_summary *s,

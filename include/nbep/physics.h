@@ -66,7 +66,8 @@ void nbep_physics_separate_pair(nbep_vec3 *p1, nbep_vec3 *p2, double r1, double 
                                 double m2);
 
 /* Kinetic (m v.v/2) and potential (-m a.p) energy of spheres [lo, hi), summed in index order
- * (so the same range always gives the same bits). */
+ * (so the same range always gives the same bits); p is the unwrapped centre in a periodic box
+ * (pos + image * period), so that a sphere falling through a periodic face keeps its energy. */
 void nbep_physics_energy(const nbep_state *s, size_t lo, size_t hi, double *kinetic,
                          double *potential);
 

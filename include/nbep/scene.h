@@ -43,6 +43,7 @@ typedef struct nbep_scene {
     /* box (optional) */
     bool has_box;
     nbep_vec3 box_min, box_max;
+    bool periodic[3];         /* box.periodic: the box repeats along that axis (no walls) */
     /* output */
     char *output_file;        /* owned: resolved (default: deck name with .h5) */
     uint64_t output_every;    /* >= 1 */

@@ -16,6 +16,10 @@ typedef struct nbep_state {
     nbep_vec3 *pos, *vel;      /* owned, length n, at the current time */
     nbep_vec3 *acc;            /* owned: own uniform acceleration (gravity unless overridden) */
     double *radius, *mass;     /* owned, length n */
+    int32_t *image;            /* owned, length 3n: periods crossed per periodic axis (SPEC
+                                * /frames/image); all 0 without periodic axes */
+    double period[3];          /* the box's side on periodic axes, 0 on others: the unwrapped
+                                * centre is pos + image * period (potential energy) */
     size_t n_planes;
     nbep_vec3 *plane_normal;   /* owned, unit, pointing into the live region */
     double *plane_offset;      /* owned: plane = {x : n.x = offset}, live where n.x > offset */

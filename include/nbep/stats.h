@@ -41,6 +41,7 @@ typedef struct nbep_step_stats {
     uint64_t checks, predictions, collisions;
     double kinetic_energy, potential_energy;
     double max_overlap;
+    double virial;   /* sum of r12 . dp2 over the step's sphere collisions (SPEC) */
 } nbep_step_stats;
 
 #endif
