@@ -27,6 +27,7 @@ for deck in "${decks[@]}"; do
         hopper) args=(-n 500) ;;                             # spheres land in the groove
         paper-box) args=(-n 50 --set spheres.[0].count=512) ;;
         sweep-restitution) args=(-n 50) ;;
+        hard-sphere-fluid) args=(-n 20) ;;                  # 2 tau: about 3e5 collisions
         bounce) args=(-n 1500) ;;                            # past the first bounce
         *) args=(-n 500) ;;
     esac
