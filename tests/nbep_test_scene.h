@@ -1,12 +1,14 @@
-/* Scenes built by hand for the end-to-end tests (test_sim, test_extremes): no deck, no box
- * unless set, no output. Include after <cmocka.h>. */
+/* Scenes built by hand for the end-to-end tests (test_sim, test_extremes, ...): no deck, no box
+ * unless set, no output; and running them. Include after <cmocka.h>. */
 #ifndef NBEP_TEST_SCENE_H
 #define NBEP_TEST_SCENE_H
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "nbep/scene.h"
+#include "nbep/sim.h"
 #include "nbep/vec3.h"
 
 /* n spheres (zeroed) and np planes; e = 1, one thread, a frame every step. */
@@ -55,6 +57,73 @@ static inline void nbep_test_set_sphere(nbep_scene *sc, size_t i, nbep_vec3 p, n
     sc->state.radius[i] = r;
     sc->state.mass[i] = m;
     sc->state.acc[i] = a;
+}
+
+/* ---- runs ------------------------------------------------------------------------------------ */
+
+/* Smaller problems under valgrind (scripts/run-tests.sh sets NBEP_TEST_SCALE=small). */
+static inline size_t nbep_test_scaled(size_t big, size_t small)
+{
+    const char *s = getenv("NBEP_TEST_SCALE");
+    return s && strcmp(s, "small") == 0 ? small : big;
+}
+
+/* Every frame's positions and velocities (data: per frame n positions, then n velocities)
+ * and image counts (3 per sphere), appended by nbep_test_keep_frame. */
+typedef struct nbep_test_frames {
+    size_t n_frames, n;
+    nbep_vec3 *data;
+    int32_t *image;
+} nbep_test_frames;
+
+static inline nbep_status nbep_test_keep_frame(void *ctx, int64_t step, const nbep_state *s,
+                                               nbep_diag *d)
+{
+    (void)step, (void)d;
+    nbep_test_frames *f = ctx;
+    f->n = s->n;
+    f->data = realloc(f->data, (f->n_frames + 1) * 2 * s->n * sizeof *f->data);
+    f->image = realloc(f->image, (f->n_frames + 1) * 3 * s->n * sizeof *f->image);
+    assert_non_null(f->data);
+    assert_non_null(f->image);
+    memcpy(f->data + f->n_frames * 2 * s->n, s->pos, s->n * sizeof *s->pos);
+    memcpy(f->data + f->n_frames * 2 * s->n + s->n, s->vel, s->n * sizeof *s->vel);
+    memcpy(f->image + f->n_frames * 3 * s->n, s->image, 3 * s->n * sizeof *s->image);
+    f->n_frames++;
+    return NBEP_OK;
+}
+
+static inline void nbep_test_frames_free(nbep_test_frames *f)
+{
+    free(f->data);
+    free(f->image);
+    memset(f, 0, sizeof *f);
+}
+
+/* Runs sc on nt threads, each frame to on_frame(ctx) (NULL: none); the run must end with
+ * NBEP_OK (a stall is a failure). The final state goes to *final (caller finis) and the
+ * reactions counter to *reactions, each when not NULL. */
+static inline nbep_summary nbep_test_run(const nbep_scene *sc, int nt, nbep_frame_fn on_frame,
+                                         void *ctx, nbep_state *final, uint64_t *reactions)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_sim_options opt = {.threads = nt, .on_frame = on_frame, .on_frame_ctx = ctx};
+    nbep_sim *sim = NULL;
+    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
+    nbep_status st = nbep_sim_run(sim, &d);
+    if (st != NBEP_OK)
+        nbep_diag_print(&d, stderr);
+    assert_int_equal(st, NBEP_OK);
+    nbep_summary sum;
+    nbep_sim_summary(sim, &sum);
+    if (final)
+        assert_int_equal(nbep_state_copy(final, nbep_sim_state(sim), &d), NBEP_OK);
+    if (reactions)
+        *reactions = nbep_sim_counter(sim, NBEP_COUNTER_REACTIONS);
+    nbep_sim_destroy(&sim);
+    nbep_diag_fini(&d);
+    return sum;
 }
 
 #endif

@@ -71,27 +71,7 @@ static const nbep_vec3 *last_vel(const trace *t)
 /* Runs sc on nt threads; must finish with NBEP_OK (a stall is a failure). */
 static nbep_summary run(const nbep_scene *sc, int nt, trace *t)
 {
-    nbep_diag d;
-    nbep_diag_init(&d);
-    nbep_sim_options opt = {.threads = nt, .on_frame = keep_frame, .on_frame_ctx = t};
-    nbep_sim *sim = NULL;
-    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
-    nbep_status st = nbep_sim_run(sim, &d);
-    if (st != NBEP_OK)
-        nbep_diag_print(&d, stderr);
-    assert_int_equal(st, NBEP_OK);
-    nbep_summary sum;
-    nbep_sim_summary(sim, &sum);
-    nbep_sim_destroy(&sim);
-    nbep_diag_fini(&d);
-    return sum;
-}
-
-/* Smaller problems under valgrind (scripts/run-tests.sh sets NBEP_TEST_SCALE=small). */
-static size_t scaled(size_t big, size_t small)
-{
-    const char *s = getenv("NBEP_TEST_SCALE");
-    return s && strcmp(s, "small") == 0 ? small : big;
+    return nbep_test_run(sc, nt, keep_frame, t, NULL, NULL);
 }
 
 static nbep_scene *scene(size_t n, size_t np, const char *algo, uint64_t steps, double e)
@@ -331,7 +311,7 @@ static void test_pile_energy_never_rises(void **state)
     (void)state;
     const double es[] = {0.5, 0.0, 0.5};
     for (size_t k = 0; k < 3; k++) { /* grid mode; the last in cells mode (the event loop) */
-        nbep_scene *sc = pile(scaled(40, 16), es[k], scaled(400, 300), "predictive");
+        nbep_scene *sc = pile(nbep_test_scaled(40, 16), es[k], nbep_test_scaled(400, 300), "predictive");
         sc->neighbors_grid = k < 2;
         sc->neighbors_cells = k == 2;
         trace t = {0};
@@ -352,7 +332,7 @@ static void test_pile_frames_equal_for_1_2_4_threads(void **state)
     (void)state;
     const int nts[] = {1, 2, 4};
     for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells (the event loop) */
-        nbep_scene *sc = pile(scaled(40, 16), 0.5, scaled(400, 300), "predictive");
+        nbep_scene *sc = pile(nbep_test_scaled(40, 16), 0.5, nbep_test_scaled(400, 300), "predictive");
         sc->neighbors_grid = mode == 1;
         sc->neighbors_cells = mode == 2;
         trace ref = {0};

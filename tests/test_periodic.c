@@ -28,12 +28,6 @@
 static const nbep_vec3 ZERO = {0.0, 0.0, 0.0};
 static const bool ALL3[3] = {true, true, true};
 
-static size_t scaled(size_t big, size_t small)
-{
-    const char *s = getenv("NBEP_TEST_SCALE");
-    return s && strcmp(s, "small") == 0 ? small : big;
-}
-
 /* ---- the geometry module -------------------------------------------------------------------- */
 
 static void test_minimum_image_picks_the_nearest_copy_on_periodic_axes_only(void **state)
@@ -119,54 +113,11 @@ static void test_shift_is_whole_periods_on_periodic_axes(void **state)
 
 /* ---- runs ------------------------------------------------------------------------------------ */
 
-/* Every frame's positions, velocities and image counts, appended. */
-typedef struct frames {
-    size_t n_frames, n;
-    nbep_vec3 *data;
-    int32_t *image;
-} frames;
-
-static nbep_status keep_frame(void *ctx, int64_t step, const nbep_state *s, nbep_diag *d)
-{
-    (void)step, (void)d;
-    frames *f = ctx;
-    f->n = s->n;
-    f->data = realloc(f->data, (f->n_frames + 1) * 2 * s->n * sizeof *f->data);
-    f->image = realloc(f->image, (f->n_frames + 1) * 3 * s->n * sizeof *f->image);
-    assert_non_null(f->data);
-    assert_non_null(f->image);
-    memcpy(f->data + f->n_frames * 2 * s->n, s->pos, s->n * sizeof *s->pos);
-    memcpy(f->data + f->n_frames * 2 * s->n + s->n, s->vel, s->n * sizeof *s->vel);
-    memcpy(f->image + f->n_frames * 3 * s->n, s->image, 3 * s->n * sizeof *s->image);
-    f->n_frames++;
-    return NBEP_OK;
-}
-
-static void frames_free(frames *f)
-{
-    free(f->data);
-    free(f->image);
-    memset(f, 0, sizeof *f);
-}
+typedef nbep_test_frames frames;
 
 static nbep_summary run(const nbep_scene *sc, int nt, nbep_state *final, frames *fr)
 {
-    nbep_diag d;
-    nbep_diag_init(&d);
-    nbep_sim_options opt = {.threads = nt, .on_frame = fr ? keep_frame : NULL, .on_frame_ctx = fr};
-    nbep_sim *sim = NULL;
-    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
-    nbep_status st = nbep_sim_run(sim, &d);
-    if (st != NBEP_OK)
-        nbep_diag_print(&d, stderr);
-    assert_int_equal(st, NBEP_OK);
-    nbep_summary sum;
-    nbep_sim_summary(sim, &sum);
-    if (final)
-        assert_int_equal(nbep_state_copy(final, nbep_sim_state(sim), &d), NBEP_OK);
-    nbep_sim_destroy(&sim);
-    nbep_diag_fini(&d);
-    return sum;
+    return nbep_test_run(sc, nt, fr ? nbep_test_keep_frame : NULL, fr, final, NULL);
 }
 
 /* sc run on 2 and 4 threads gives ref's frames (positions, velocities, image counts) bit for
@@ -180,9 +131,9 @@ static void same_frames_on_2_and_4_threads(const nbep_scene *sc, frames *ref, ui
         assert_memory_equal(f.data, ref->data, ref->n_frames * 2 * ref->n * sizeof *f.data);
         assert_memory_equal(f.image, ref->image, ref->n_frames * 3 * ref->n * sizeof *f.image);
         assert_int_equal(sk.collisions, collisions);
-        frames_free(&f);
+        nbep_test_frames_free(&f);
     }
-    frames_free(ref);
+    nbep_test_frames_free(ref);
 }
 
 /* A fully periodic box of side L, no planes, cells mode (all-pairs when cells_mode is off). */
@@ -267,7 +218,7 @@ static void free_flight(void)
         assert_close(p.z + img[2] * L, 3.0 + 0.25 * v * t, 0.0, 1e-12);
     }
     assert_true(f.n_frames == steps / 50 + 1);
-    frames_free(&f);
+    nbep_test_frames_free(&f);
     nbep_test_scene_free(&sc);
 }
 
@@ -425,7 +376,7 @@ static void test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference(void 
 static void test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box(void **state)
 {
     (void)state;
-    size_t side = scaled(7, 5), n = side * side * side;
+    size_t side = nbep_test_scaled(7, 5), n = side * side * side;
     nbep_scene *cs = periodic_fluid(side, 0.30, 30, 0.01, 3);
     nbep_summary sc1 = run(cs, 1, NULL, NULL);
     cells_mode = false;
@@ -456,8 +407,8 @@ static nbep_vec3 momentum(const nbep_state *s)
 static void test_periodic_fluid_is_exact_and_thread_independent(void **state)
 {
     (void)state;
-    size_t side = scaled(10, 6);
-    nbep_scene *sc = periodic_fluid(side, 0.35, scaled(100, 40), 0.02, 1);
+    size_t side = nbep_test_scaled(10, 6);
+    nbep_scene *sc = periodic_fluid(side, 0.35, nbep_test_scaled(100, 40), 0.02, 1);
     sc->output_every = 10;
     frames ref = {0};
     nbep_state fin;

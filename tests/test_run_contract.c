@@ -59,26 +59,7 @@ static nbep_status see_frame(void *ctx, int64_t step, const nbep_state *s, nbep_
 
 static nbep_summary run(const nbep_scene *sc, int nt, seen *f)
 {
-    nbep_diag d;
-    nbep_diag_init(&d);
-    nbep_sim_options opt = {.threads = nt, .on_frame = see_frame, .on_frame_ctx = f};
-    nbep_sim *sim = NULL;
-    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
-    nbep_status st = nbep_sim_run(sim, &d);
-    if (st != NBEP_OK)
-        nbep_diag_print(&d, stderr);
-    assert_int_equal(st, NBEP_OK);
-    nbep_summary sum;
-    nbep_sim_summary(sim, &sum);
-    nbep_sim_destroy(&sim);
-    nbep_diag_fini(&d);
-    return sum;
-}
-
-static size_t scaled(size_t big, size_t small)
-{
-    const char *s = getenv("NBEP_TEST_SCALE");
-    return s && strcmp(s, "small") == 0 ? small : big;
+    return nbep_test_run(sc, nt, see_frame, f, NULL, NULL);
 }
 
 /* xorshift64: any fixed sequence will do; uniform in [0, 1). */
@@ -421,9 +402,9 @@ static void test_a_held_sphere_falls_freely_once_its_support_is_knocked_away(voi
  * covers a slow sphere's own travel, so only two fast spheres closing head-on show it). */
 static void assert_grid_overlaps_at_round_off(double v_lo, bool spread, int seeds)
 {
-    const size_t n = scaled(1000, 343);
+    const size_t n = nbep_test_scaled(1000, 343);
     for (int seed = 1; seed <= seeds; seed++) {
-        nbep_scene *sc = box_gas_r("predictive", n, 0.0, scaled(60, 20), 2e-3, v_lo, spread,
+        nbep_scene *sc = box_gas_r("predictive", n, 0.0, nbep_test_scaled(60, 20), 2e-3, v_lo, spread,
                                    (uint64_t)seed + 100, 0.2);
         sc->neighbors_grid = true;
         sc->output_every = 1; /* overlaps are measured at frames: every step */
@@ -443,7 +424,7 @@ static void assert_grid_overlaps_at_round_off(double v_lo, bool spread, int seed
 static void test_grid_mode_keeps_overlaps_at_round_off_with_speeds_over_two_decades(void **state)
 {
     (void)state;
-    assert_grid_overlaps_at_round_off(1.0, true, (int)scaled(40, 2));
+    assert_grid_overlaps_at_round_off(1.0, true, (int)nbep_test_scaled(40, 2));
 }
 
 /* Every sphere at 10 m/s: head-on pairs of fast spheres, where each sphere's own travel
@@ -451,7 +432,7 @@ static void test_grid_mode_keeps_overlaps_at_round_off_with_speeds_over_two_deca
 static void test_grid_mode_keeps_overlaps_at_round_off_with_equal_fast_speeds(void **state)
 {
     (void)state;
-    assert_grid_overlaps_at_round_off(1.0, false, (int)scaled(80, 2));
+    assert_grid_overlaps_at_round_off(1.0, false, (int)nbep_test_scaled(80, 2));
 }
 
 int main(void)

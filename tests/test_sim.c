@@ -17,23 +17,7 @@
 #include "nbep_test_scene.h"
 
 /* Every frame's positions and velocities, appended. */
-typedef struct frames {
-    size_t n_frames, n;
-    nbep_vec3 *data;
-} frames;
-
-static nbep_status keep_frame(void *ctx, int64_t step, const nbep_state *s, nbep_diag *d)
-{
-    (void)step, (void)d;
-    frames *f = ctx;
-    f->n = s->n;
-    f->data = realloc(f->data, (f->n_frames + 1) * 2 * s->n * sizeof *f->data);
-    assert_non_null(f->data);
-    memcpy(f->data + f->n_frames * 2 * s->n, s->pos, s->n * sizeof *s->pos);
-    memcpy(f->data + f->n_frames * 2 * s->n + s->n, s->vel, s->n * sizeof *s->vel);
-    f->n_frames++;
-    return NBEP_OK;
-}
+typedef nbep_test_frames frames;
 
 /* Runs sc with nt threads; returns its summary, final state in *final (caller finis) and
  * frames in *fr (may be NULL). */
@@ -41,23 +25,7 @@ static uint64_t last_reactions;
 
 static nbep_summary run(const nbep_scene *sc, int nt, nbep_state *final, frames *fr)
 {
-    nbep_diag d;
-    nbep_diag_init(&d);
-    nbep_sim_options opt = {.threads = nt, .on_frame = fr ? keep_frame : NULL, .on_frame_ctx = fr};
-    nbep_sim *sim = NULL;
-    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
-    nbep_status st = nbep_sim_run(sim, &d);
-    if (st != NBEP_OK)
-        nbep_diag_print(&d, stderr);
-    assert_int_equal(st, NBEP_OK);
-    nbep_summary sum;
-    nbep_sim_summary(sim, &sum);
-    if (final)
-        assert_int_equal(nbep_state_copy(final, nbep_sim_state(sim), &d), NBEP_OK);
-    last_reactions = nbep_sim_counter(sim, NBEP_COUNTER_REACTIONS);
-    nbep_sim_destroy(&sim);
-    nbep_diag_fini(&d);
-    return sum;
+    return nbep_test_run(sc, nt, fr ? nbep_test_keep_frame : NULL, fr, final, &last_reactions);
 }
 
 static const nbep_vec3 ZERO = {0.0, 0.0, 0.0};
@@ -197,12 +165,6 @@ static nbep_scene *gas(const char *algo, size_t n, double g, uint64_t steps)
     return sc;
 }
 
-static size_t scaled(size_t big, size_t small)
-{
-    const char *s = getenv("NBEP_TEST_SCALE");
-    return s && strcmp(s, "small") == 0 ? small : big;
-}
-
 static void frames_equal(const frames *a, const frames *b)
 {
     assert_int_equal(a->n_frames, b->n_frames);
@@ -213,7 +175,7 @@ static void frames_equal(const frames *a, const frames *b)
 static void same_frames_for_threads(const char *algo, size_t n, double g, const int *nts,
                                     size_t count)
 {
-    nbep_scene *sc = gas(algo, n, g, scaled(300, 40));
+    nbep_scene *sc = gas(algo, n, g, nbep_test_scaled(300, 40));
     frames ref = {0};
     nbep_summary s1 = run(sc, nts[0], NULL, &ref);
     assert_true(s1.collisions > 0); /* otherwise the comparison proves little */
@@ -223,9 +185,9 @@ static void same_frames_for_threads(const char *algo, size_t n, double g, const 
         frames_equal(&ref, &f);
         assert_int_equal(sk.collisions, s1.collisions);
         assert_int_equal(sk.checks, s1.checks);
-        free(f.data);
+        nbep_test_frames_free(&f);
     }
-    free(ref.data);
+    nbep_test_frames_free(&ref);
     nbep_test_scene_free(&sc);
 }
 
@@ -233,21 +195,21 @@ static void test_naive_frames_are_bitwise_equal_for_1_2_4_threads(void **state)
 {
     (void)state;
     const int nts[] = {1, 2, 4};
-    same_frames_for_threads("naive", scaled(700, 300), 9.81, nts, 3);
+    same_frames_for_threads("naive", nbep_test_scaled(700, 300), 9.81, nts, 3);
 }
 
 static void test_seminaive_frames_are_bitwise_equal_for_1_2_4_threads(void **state)
 {
     (void)state;
     const int nts[] = {1, 2, 4};
-    same_frames_for_threads("seminaive", scaled(700, 300), 9.81, nts, 3);
+    same_frames_for_threads("seminaive", nbep_test_scaled(700, 300), 9.81, nts, 3);
 }
 
 static void test_predictive_frames_are_bitwise_equal_for_1_2_4_8_threads(void **state)
 {
     (void)state;
     const int nts[] = {1, 2, 4, 8};
-    same_frames_for_threads("predictive", scaled(700, 300), 9.81, nts, 4);
+    same_frames_for_threads("predictive", nbep_test_scaled(700, 300), 9.81, nts, 4);
 }
 
 /* Seminaive pre-filters naive's tests but must find, and answer, exactly the same pairs in
@@ -255,15 +217,15 @@ static void test_predictive_frames_are_bitwise_equal_for_1_2_4_8_threads(void **
 static void test_seminaive_frames_equal_naive_frames_with_fewer_checks(void **state)
 {
     (void)state;
-    size_t n = scaled(800, 300);
-    nbep_scene *a = gas("naive", n, 9.81, scaled(200, 30));
-    nbep_scene *b = gas("seminaive", n, 9.81, scaled(200, 30));
+    size_t n = nbep_test_scaled(800, 300);
+    nbep_scene *a = gas("naive", n, 9.81, nbep_test_scaled(200, 30));
+    nbep_scene *b = gas("seminaive", n, 9.81, nbep_test_scaled(200, 30));
     frames fa = {0}, fb = {0};
     nbep_summary sa = run(a, 2, NULL, &fa), sb = run(b, 2, NULL, &fb);
     frames_equal(&fa, &fb);
     assert_int_equal(sa.collisions, sb.collisions);
     assert_true(sb.checks < sa.checks);
-    free(fa.data), free(fb.data);
+    nbep_test_frames_free(&fa), nbep_test_frames_free(&fb);
     nbep_test_scene_free(&a), nbep_test_scene_free(&b);
 }
 
@@ -273,7 +235,7 @@ static void test_seminaive_frames_equal_naive_frames_with_fewer_checks(void **st
 static void test_naive_gas_without_gravity_conserves_energy(void **state)
 {
     (void)state;
-    nbep_scene *sc = gas("naive", scaled(500, 200), 0.0, scaled(400, 60));
+    nbep_scene *sc = gas("naive", nbep_test_scaled(500, 200), 0.0, nbep_test_scaled(400, 60));
     nbep_summary s = run(sc, 2, NULL, NULL);
     assert_true(s.collisions > 10);
     assert_close(s.energy_final, s.energy_initial, 1e-12, 0.0);
@@ -286,9 +248,9 @@ static void test_naive_gas_without_gravity_conserves_energy(void **state)
 static void test_predictive_gas_under_gravity_conserves_energy(void **state)
 {
     (void)state;
-    nbep_scene *sc = gas("predictive", scaled(500, 200), 9.81, scaled(1000, 100));
+    nbep_scene *sc = gas("predictive", nbep_test_scaled(500, 200), 9.81, nbep_test_scaled(1000, 100));
     nbep_summary s = run(sc, 2, NULL, NULL);
-    assert_true(s.collisions > scaled(100, 10));
+    assert_true(s.collisions > nbep_test_scaled(100, 10));
     assert_close(s.energy_final, s.energy_initial, 1e-11, 0.0);
     /* and nothing overlaps beyond round-off: 1e-9 of the smaller radius */
     assert_true(s.max_overlap_rel < 1e-9);
@@ -342,8 +304,8 @@ static void test_predictive_and_naive_agree_on_a_short_gas_run(void **state)
 static void test_grid_predictive_finds_the_same_collisions_as_all_pairs(void **state)
 {
     (void)state;
-    size_t n = scaled(700, 300);
-    uint64_t steps = scaled(300, 60);
+    size_t n = nbep_test_scaled(700, 300);
+    uint64_t steps = nbep_test_scaled(300, 60);
     nbep_scene *a = gas("predictive", n, 9.81, steps);
     nbep_scene *g = gas("predictive", n, 9.81, steps);
     g->neighbors_grid = true;
@@ -366,11 +328,11 @@ static void test_grid_predictive_finds_the_same_collisions_as_all_pairs(void **s
 static void test_grid_predictive_finds_fast_partners_several_cells_away(void **state)
 {
     (void)state;
-    const size_t n = scaled(1000, 343);
+    const size_t n = nbep_test_scaled(1000, 343);
     nbep_scene *sc[2];
     nbep_summary sum[2];
     for (int k = 0; k < 2; k++) {
-        sc[k] = gas("predictive", n, 0.0, scaled(60, 40));
+        sc[k] = gas("predictive", n, 0.0, nbep_test_scaled(60, 40));
         sc[k]->dt = 1e-3;
         sc[k]->neighbors_grid = k == 1;
         for (size_t i = 0; i < n; i++) {
@@ -379,8 +341,8 @@ static void test_grid_predictive_finds_fast_partners_several_cells_away(void **s
         }
         sum[k] = run(sc[k], 1, NULL, NULL);
     }
-    assert_true(sum[0].sphere_collisions > scaled(20, 3));
-    assert_true(sum[1].sphere_collisions > scaled(20, 3));
+    assert_true(sum[0].sphere_collisions > nbep_test_scaled(20, 3));
+    assert_true(sum[1].sphere_collisions > nbep_test_scaled(20, 3));
     assert_true(sum[0].max_overlap_rel < 1e-9);
     assert_true(sum[1].max_overlap_rel < 1e-9);
     nbep_test_scene_free(&sc[0]), nbep_test_scene_free(&sc[1]);
@@ -389,7 +351,7 @@ static void test_grid_predictive_finds_fast_partners_several_cells_away(void **s
 static void test_grid_predictive_frames_are_bitwise_equal_for_1_2_4_threads(void **state)
 {
     (void)state;
-    nbep_scene *sc = gas("predictive", scaled(700, 300), 9.81, scaled(300, 40));
+    nbep_scene *sc = gas("predictive", nbep_test_scaled(700, 300), 9.81, nbep_test_scaled(300, 40));
     sc->neighbors_grid = true;
     frames ref = {0};
     nbep_summary s1 = run(sc, 1, NULL, &ref);
@@ -399,9 +361,9 @@ static void test_grid_predictive_frames_are_bitwise_equal_for_1_2_4_threads(void
         nbep_summary sk = run(sc, nt, NULL, &f);
         frames_equal(&ref, &f);
         assert_int_equal(sk.predictions, s1.predictions);
-        free(f.data);
+        nbep_test_frames_free(&f);
     }
-    free(ref.data);
+    nbep_test_frames_free(&ref);
     nbep_test_scene_free(&sc);
 }
 
@@ -412,8 +374,8 @@ static void test_grid_predictive_frames_are_bitwise_equal_for_1_2_4_threads(void
 static void test_cells_predictive_finds_the_same_collisions_as_all_pairs(void **state)
 {
     (void)state;
-    size_t n = scaled(700, 300);
-    uint64_t steps = scaled(300, 60);
+    size_t n = nbep_test_scaled(700, 300);
+    uint64_t steps = nbep_test_scaled(300, 60);
     nbep_scene *a = gas("predictive", n, 9.81, steps);
     nbep_scene *c = gas("predictive", n, 9.81, steps);
     c->neighbors_cells = true;
@@ -465,7 +427,7 @@ static nbep_scene *fluid(size_t side, double phi, uint64_t steps, double dt)
 static void test_cells_predictive_dense_fluid_is_exact_and_thread_independent(void **state)
 {
     (void)state;
-    size_t side = scaled(10, 7);
+    size_t side = nbep_test_scaled(10, 7);
     nbep_scene *sc = fluid(side, 0.35, 10, 0.01);
     sc->neighbors_cells = true;
     frames ref = {0};
@@ -481,10 +443,10 @@ static void test_cells_predictive_dense_fluid_is_exact_and_thread_independent(vo
         nbep_summary sk = run(sc, nt, NULL, &f);
         frames_equal(&ref, &f);
         assert_int_equal(sk.collisions, s1.collisions);
-        free(f.data);
+        nbep_test_frames_free(&f);
     }
     nbep_test_scene_free(&sc);
-    free(ref.data);
+    nbep_test_frames_free(&ref);
     nbep_scene *g = fluid(side, 0.35, 10, 0.01);
     g->neighbors_grid = true;
     nbep_summary sg = run(g, 1, NULL, NULL);
@@ -497,7 +459,7 @@ static void test_cells_predictive_dense_fluid_is_exact_and_thread_independent(vo
 static void test_cells_predictive_dense_fluid_keeps_energy_over_a_longer_run(void **state)
 {
     (void)state;
-    nbep_scene *sc = fluid(scaled(12, 8), 0.45, scaled(200, 60), 0.02);
+    nbep_scene *sc = fluid(nbep_test_scaled(12, 8), 0.45, nbep_test_scaled(200, 60), 0.02);
     sc->neighbors_cells = true;
     sc->output_every = 7;
     nbep_summary s = run(sc, 2, NULL, NULL);
@@ -514,7 +476,7 @@ static void test_cells_predictive_dense_fluid_keeps_energy_over_a_longer_run(voi
 static void test_cells_predictive_pile_settles_under_gravity(void **state)
 {
     (void)state;
-    nbep_scene *sc = fluid(scaled(6, 4), 0.3, scaled(100, 60), 5e-3);
+    nbep_scene *sc = fluid(nbep_test_scaled(6, 4), 0.3, nbep_test_scaled(100, 60), 5e-3);
     sc->neighbors_cells = true;
     sc->restitution = 0.6;
     for (size_t i = 0; i < sc->state.n; i++)
@@ -527,8 +489,8 @@ static void test_cells_predictive_pile_settles_under_gravity(void **state)
     assert_true(s1.max_overlap_rel < 1e-6);
     assert_true(s1.energy_final < s1.energy_initial);
     assert_int_equal(s2.collisions, s1.collisions);
-    free(ref.data);
-    free(f2.data);
+    nbep_test_frames_free(&ref);
+    nbep_test_frames_free(&f2);
     nbep_test_scene_free(&sc);
 }
 
