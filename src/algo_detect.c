@@ -18,10 +18,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
 #include "nbep/barrier.h"
 #include "nbep/bvh.h"
 #include "nbep/physics.h"
@@ -260,11 +256,7 @@ static void detect_run(nbep_sim *sim, void *p)
     detect_ctx *ctx = p;
 #pragma omp parallel num_threads(sim->nt) default(none) shared(sim, ctx)
     {
-#ifdef _OPENMP
-        const int tid = omp_get_thread_num();
-#else
-        const int tid = 0;
-#endif
+        const int tid = nbep__thread_id();
         const int nt = sim->nt;
         nbep_state *s = &sim->st;
         const nbep_range own = nbep__range_split(s->n, tid, nt);

@@ -45,10 +45,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
 #include "nbep/barrier.h"
 #include "nbep/contact.h"
 #include "nbep/feq.h"
@@ -1231,11 +1227,7 @@ static void pred_run(nbep_sim *sim, void *p)
     pred_ctx *c = p;
 #pragma omp parallel num_threads(sim->nt) default(none) shared(sim, c)
     {
-#ifdef _OPENMP
-        const int tid = omp_get_thread_num();
-#else
-        const int tid = 0;
-#endif
+        const int tid = nbep__thread_id();
         const int nt = sim->nt;
         nbep_state *s = &sim->st;
         const nbep_range own = nbep__range_split(s->n, tid, nt);

@@ -26,6 +26,15 @@
 #define PROGRESS_TTY_SECONDS 0.25
 #define PROGRESS_LOG_SECONDS 10.0
 
+int nbep__thread_id(void)
+{
+#ifdef _OPENMP
+    return omp_get_thread_num();
+#else
+    return 0;
+#endif
+}
+
 int nbep_sim_resolve_threads(int requested)
 {
 #ifdef _OPENMP

@@ -23,6 +23,9 @@ typedef struct nbep_range {
  * every step. */
 nbep_range nbep__range_split(size_t n, int tid, int nt);
 
+/* The calling thread's number inside the run's parallel region (0 in a serial build). */
+int nbep__thread_id(void);
+
 /* Per-thread maximum of a step, padded to its own cache line. */
 typedef struct nbep_thread_max {
     alignas(NBEP_CACHELINE) double overlap;
