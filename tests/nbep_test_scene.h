@@ -59,6 +59,24 @@ static inline void nbep_test_set_sphere(nbep_scene *sc, size_t i, nbep_vec3 p, n
     sc->state.acc[i] = a;
 }
 
+/* A fixed pseudo-random sequence for hand-built scenes (xorshift64; any fixed one will do):
+ * the next number in [0, 1). */
+static inline double nbep_test_uniform(uint64_t *x)
+{
+    *x ^= *x << 13, *x ^= *x >> 7, *x ^= *x << 17;
+    return (double)(*x >> 11) / 9007199254740992.0;
+}
+
+/* A velocity of the given speed in a direction from the sequence x. */
+static inline nbep_vec3 nbep_test_random_velocity(uint64_t *x, double speed)
+{
+    nbep_vec3 u;
+    u.x = nbep_test_uniform(x) - 0.5;
+    u.y = nbep_test_uniform(x) - 0.5;
+    u.z = nbep_test_uniform(x) - 0.5;
+    return nbep_vec3_scale(u, speed / nbep_vec3_norm(u));
+}
+
 /* ---- runs ------------------------------------------------------------------------------------ */
 
 /* Smaller problems under valgrind (scripts/run-tests.sh sets NBEP_TEST_SCALE=small). */

@@ -273,13 +273,7 @@ static nbep_scene *periodic_fluid(size_t side, double phi, uint64_t steps, doubl
     uint64_t x = 0x9E3779B97F4A7C15u ^ (seed * 0xD1B54A32D192ED03u);
     nbep_vec3 mean = ZERO;
     for (size_t i = 0; i < n; i++) {
-        double u[3];
-        for (int k = 0; k < 3; k++) {
-            x ^= x << 13, x ^= x >> 7, x ^= x << 17;
-            u[k] = (double)(x >> 11) / 9007199254740992.0 - 0.5;
-        }
-        nbep_vec3 v = nbep_vec3_scale((nbep_vec3){u[0], u[1], u[2]},
-                                      sqrt(3.0) / nbep_vec3_norm((nbep_vec3){u[0], u[1], u[2]}));
+        nbep_vec3 v = nbep_test_random_velocity(&x, sqrt(3.0));
         mean = nbep_vec3_add(mean, nbep_vec3_scale(v, 1.0 / (double)n));
         nbep_vec3 p = {a * ((double)(i % side) + 0.5), a * ((double)(i / side % side) + 0.5),
                        a * ((double)(i / side / side) + 0.5)};

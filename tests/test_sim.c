@@ -152,10 +152,8 @@ static nbep_scene *gas(const char *algo, size_t n, double g, uint64_t steps)
     uint64_t x = 88172645463325252u;
     for (size_t i = 0; i < n; i++) {
         double u[6];
-        for (int k = 0; k < 6; k++) { /* xorshift: any fixed sequence will do */
-            x ^= x << 13, x ^= x >> 7, x ^= x << 17;
-            u[k] = (double)(x >> 11) / 9007199254740992.0;
-        }
+        for (int k = 0; k < 6; k++)
+            u[k] = nbep_test_uniform(&x);
         nbep_vec3 p = {h * ((double)(i % side) + 0.3 + 0.4 * u[0]),
                        h * ((double)(i / side % side) + 0.3 + 0.4 * u[1]),
                        h * ((double)(i / side / side) + 0.3 + 0.4 * u[2])};
@@ -407,13 +405,7 @@ static nbep_scene *fluid(size_t side, double phi, uint64_t steps, double dt)
     }
     uint64_t x = 0x9E3779B97F4A7C15u;
     for (size_t i = 0; i < n; i++) {
-        double u[3];
-        for (int k = 0; k < 3; k++) {
-            x ^= x << 13, x ^= x >> 7, x ^= x << 17;
-            u[k] = (double)(x >> 11) / 9007199254740992.0 - 0.5;
-        }
-        nbep_vec3 v = nbep_vec3_scale((nbep_vec3){u[0], u[1], u[2]},
-                                      sqrt(3.0) / nbep_vec3_norm((nbep_vec3){u[0], u[1], u[2]}));
+        nbep_vec3 v = nbep_test_random_velocity(&x, sqrt(3.0));
         nbep_vec3 p = {a * ((double)(i % side) + 0.5), a * ((double)(i / side % side) + 0.5),
                        a * ((double)(i / side / side) + 0.5)};
         nbep_test_set_sphere(sc, i, p, v, 0.5, 1.0, ZERO);
