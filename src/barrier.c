@@ -15,6 +15,12 @@
 
 #include <assert.h>
 
+/* A pause between the last arrival's two stores, for tests/test_barrier_rearm.c only (it
+ * compiles its own copy of this file): the moment a descheduled thread would stall there. */
+#ifndef NBEP_BARRIER_BETWEEN_STORES
+#define NBEP_BARRIER_BETWEEN_STORES() ((void)0)
+#endif
+
 void nbep_barrier_init(nbep_barrier *b, unsigned n)
 {
     assert(b && n >= 1);
@@ -41,6 +47,7 @@ void nbep_barrier_wait(nbep_barrier *b)
         /* Relaxed: published by the release store below, which every waiter acquires before
          * it can re-enter and decrement `left` again. */
         atomic_store_explicit(&b->left, b->n, memory_order_relaxed);
+        NBEP_BARRIER_BETWEEN_STORES();
         /* Release: passes on everything the last arrival acquired (all threads' writes) and
          * the rearmed `left`; pairs with the waiters' acquire loads. */
         atomic_store_explicit(&b->round, r + 1u, memory_order_release);

@@ -254,7 +254,8 @@ static void test_eight_threads_on_two_cores_never_see_a_stale_round(void **state
  * time and the handler sleeps STALL_NS, long enough for the other threads to run many
  * crossings' worth of instructions meanwhile. The watchdog turns a deadlock into a failure.
  * Measured with the rearm moved after the round store: 2 of 3 runs of this binary deadlocked
- * (the plain stress tests alone: about 1 in 6), so scripts/mutate.py runs it three times. */
+ * (the plain stress tests alone: about 1 in 6); tests/test_barrier_rearm.c catches that
+ * order every time with a pause placed in the window. */
 #define STALL_EVERY_US 50
 #define STALL_NS 20000L
 
