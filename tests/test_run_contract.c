@@ -78,14 +78,7 @@ static nbep_scene *box_gas_r(const char *algo, size_t n, double g, uint64_t step
 {
     nbep_scene *sc = nbep_test_scene_new(n, 6, algo, steps, dt);
     const double L = 4.0;
-    sc->has_box = true;
-    sc->box_max = (nbep_vec3){L, L, L};
-    nbep_test_set_plane(sc, 0, (nbep_vec3){1, 0, 0}, 0.0);
-    nbep_test_set_plane(sc, 1, (nbep_vec3){-1, 0, 0}, -L);
-    nbep_test_set_plane(sc, 2, (nbep_vec3){0, 1, 0}, 0.0);
-    nbep_test_set_plane(sc, 3, (nbep_vec3){0, -1, 0}, -L);
-    nbep_test_set_plane(sc, 4, (nbep_vec3){0, 0, 1}, 0.0);
-    nbep_test_set_plane(sc, 5, (nbep_vec3){0, 0, -1}, -L);
+    nbep_test_set_box(sc, L);
     size_t side = (size_t)ceil(cbrt((double)n));
     double h = L / (double)side;
     uint64_t x = 88172645463325252u ^ (seed * 0x9E3779B97F4A7C15u);
@@ -363,16 +356,9 @@ static void test_a_held_sphere_falls_freely_once_its_support_is_knocked_away(voi
         for (int nt = 1; nt <= 2; nt++) {
             nbep_scene *sc = nbep_test_scene_new(3, 6, "predictive", 20, 0.01);
             const double L = 2.0;
-            sc->has_box = true;
-            sc->box_max = (nbep_vec3){L, L, L};
             sc->neighbors_cells = cells;
             sc->tc = 1e-6;
-            nbep_test_set_plane(sc, 0, (nbep_vec3){1, 0, 0}, 0.0);
-            nbep_test_set_plane(sc, 1, (nbep_vec3){-1, 0, 0}, -L);
-            nbep_test_set_plane(sc, 2, (nbep_vec3){0, 1, 0}, 0.0);
-            nbep_test_set_plane(sc, 3, (nbep_vec3){0, -1, 0}, -L);
-            nbep_test_set_plane(sc, 4, (nbep_vec3){0, 0, 1}, 0.0);
-            nbep_test_set_plane(sc, 5, (nbep_vec3){0, 0, -1}, -L);
+            nbep_test_set_box(sc, L);
             const nbep_vec3 down = {0, 0, -g}, rest = {0, 0, 0};
             nbep_test_set_sphere(sc, 0, (nbep_vec3){1, 1, 0.3}, rest, 0.1, 1, down);
             nbep_test_set_sphere(sc, 1, (nbep_vec3){1, 1, 0.1}, rest, 0.1, 1, down);

@@ -139,14 +139,7 @@ static nbep_scene *gas(const char *algo, size_t n, double g, uint64_t steps)
 {
     nbep_scene *sc = nbep_test_scene_new(n, 6, algo, steps, 2e-3);
     const double L = 4.0;
-    sc->has_box = true;
-    sc->box_max = (nbep_vec3){L, L, L};
-    nbep_test_set_plane(sc, 0, (nbep_vec3){1, 0, 0}, 0.0);
-    nbep_test_set_plane(sc, 1, (nbep_vec3){-1, 0, 0}, -L);
-    nbep_test_set_plane(sc, 2, (nbep_vec3){0, 1, 0}, 0.0);
-    nbep_test_set_plane(sc, 3, (nbep_vec3){0, -1, 0}, -L);
-    nbep_test_set_plane(sc, 4, (nbep_vec3){0, 0, 1}, 0.0);
-    nbep_test_set_plane(sc, 5, (nbep_vec3){0, 0, -1}, -L);
+    nbep_test_set_box(sc, L);
     size_t side = (size_t)ceil(cbrt((double)n));
     double h = L / (double)side;
     uint64_t x = 88172645463325252u;
@@ -396,13 +389,7 @@ static nbep_scene *fluid(size_t side, double phi, uint64_t steps, double dt)
     size_t n = side * side * side;
     nbep_scene *sc = nbep_test_scene_new(n, 6, "predictive", steps, dt);
     const double L = cbrt((double)n * (4.0 * atan(1.0)) / 6.0 / phi), a = L / (double)side;
-    sc->has_box = true;
-    sc->box_max = (nbep_vec3){L, L, L};
-    for (int k = 0; k < 3; k++) {
-        nbep_vec3 e = {k == 0, k == 1, k == 2};
-        nbep_test_set_plane(sc, (size_t)(2 * k), e, 0.0);
-        nbep_test_set_plane(sc, (size_t)(2 * k + 1), nbep_vec3_scale(e, -1.0), -L);
-    }
+    nbep_test_set_box(sc, L);
     uint64_t x = 0x9E3779B97F4A7C15u;
     for (size_t i = 0; i < n; i++) {
         nbep_vec3 v = nbep_test_random_velocity(&x, sqrt(3.0));
