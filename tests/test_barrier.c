@@ -10,6 +10,8 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include "nbep_test_watchdog.h"
+
 #include <pthread.h>
 #include <signal.h>
 #include <sys/time.h>
@@ -185,28 +187,11 @@ static run_result run_harness(unsigned n_threads, unsigned long rounds, bool use
  * second natively and a few under valgrind, so only a thread that can never leave hits it. */
 #define DEADLOCK_SECONDS 30u
 
-static void on_deadlock(int sig)
-{
-    (void)sig;
-    static const char msg[] = "\nFAIL barrier: threads still waiting in nbep_barrier_wait after "
-                              "the watchdog's 30 s: the barrier deadlocked\n";
-    ssize_t w = write(STDERR_FILENO, msg, sizeof msg - 1);
-    (void)w;
-    _exit(1);
-}
-
 static void watchdog_arm(void)
 {
-    struct sigaction sa = {0};
-    sa.sa_handler = on_deadlock;
-    sigemptyset(&sa.sa_mask);
-    assert_int_equal(sigaction(SIGALRM, &sa, NULL), 0);
-    alarm(DEADLOCK_SECONDS);
-}
-
-static void watchdog_disarm(void)
-{
-    alarm(0);
+    nbep_test_watchdog_arm(DEADLOCK_SECONDS,
+                           "\nFAIL barrier: threads still waiting in nbep_barrier_wait after "
+                           "the watchdog's 30 s: the barrier deadlocked\n");
 }
 
 static void assert_stress_runs_pass(unsigned n_threads, unsigned long rounds)
@@ -217,7 +202,7 @@ static void assert_stress_runs_pass(unsigned n_threads, unsigned long rounds)
         fail_msg("%u threads: %lu stale slots seen after the barrier", n_threads,
                  res.violations);
     assert_int_equal(res.stuck, 0);
-    watchdog_disarm();
+    nbep_test_watchdog_disarm();
 }
 
 static void assert_stress_passes(unsigned n_threads)
@@ -386,7 +371,7 @@ static void test_a_one_thread_barrier_returns_at_once_every_time(void **state)
     watchdog_arm(); /* a one-thread barrier that waits for someone never returns */
     for (unsigned i = 0; i < crossings; i++)
         nbep_barrier_wait(&b);
-    watchdog_disarm();
+    nbep_test_watchdog_disarm();
     /* Each crossing advanced the round once and left the barrier armed for the next. */
     assert_int_equal(atomic_load_explicit(&b.round, memory_order_relaxed), crossings);
     assert_int_equal(atomic_load_explicit(&b.left, memory_order_relaxed), 1);

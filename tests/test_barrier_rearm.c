@@ -28,21 +28,13 @@ static void between_stores(void)
 
 #include <cmocka.h>
 
+#include "nbep_test_watchdog.h"
+
 #define ROUNDS 300u       /* 300 pauses: 60 ms when right */
 #define DEADLOCK_SECONDS 20u
 
 static nbep_barrier bar;
 static atomic_uint crossings; /* waits completed, all threads */
-
-static void on_deadlock(int sig)
-{
-    (void)sig;
-    static const char msg[] = "\nFAIL barrier_rearm: threads still waiting after 20 s: a "
-                              "waiter's decrement was lost to a late rearm (deadlock)\n";
-    ssize_t w = write(STDERR_FILENO, msg, sizeof msg - 1);
-    (void)w;
-    _exit(1);
-}
 
 static void *worker(void *arg)
 {
@@ -56,11 +48,9 @@ static void *worker(void *arg)
 
 static void run_threads(unsigned n)
 {
-    struct sigaction sa = {0};
-    sa.sa_handler = on_deadlock;
-    sigemptyset(&sa.sa_mask);
-    assert_int_equal(sigaction(SIGALRM, &sa, NULL), 0);
-    alarm(DEADLOCK_SECONDS);
+    nbep_test_watchdog_arm(DEADLOCK_SECONDS,
+                           "\nFAIL barrier_rearm: threads still waiting after 20 s: a waiter's "
+                           "decrement was lost to a late rearm (deadlock)\n");
     nbep_barrier_init(&bar, n);
     atomic_store_explicit(&crossings, 0, memory_order_relaxed);
     pthread_t t[4];
@@ -68,7 +58,7 @@ static void run_threads(unsigned n)
         assert_int_equal(pthread_create(&t[k], NULL, worker, NULL), 0);
     for (unsigned k = 0; k < n; k++)
         assert_int_equal(pthread_join(t[k], NULL), 0);
-    alarm(0);
+    nbep_test_watchdog_disarm();
     assert_int_equal(atomic_load_explicit(&crossings, memory_order_relaxed), n * ROUNDS);
     /* the invariant between waits (barrier.c): left == n */
     assert_int_equal(atomic_load_explicit(&bar.left, memory_order_relaxed), n);
