@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "nbep/run.h"
 #include "nbep/scene.h"
 #include "nbep/sim.h"
 #include "nbep/vec3.h"
@@ -155,6 +156,22 @@ static inline nbep_summary nbep_test_run(const nbep_scene *sc, int nt, nbep_fram
     nbep_sim_destroy(&sim);
     nbep_diag_fini(&d);
     return sum;
+}
+
+/* Runs the deck at deck_path through nbep's one run pipeline (what `nbep run` does), writing
+ * output_path; the run must end with NBEP_OK. */
+static inline nbep_run_result nbep_test_run_deck(const char *deck_path, const char *output_path)
+{
+    const nbep_run_request rq = {.deck_path = deck_path, .output_path = output_path};
+    nbep_run_result res;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_status st = nbep_run(&rq, &res, &d);
+    if (st != NBEP_OK)
+        nbep_diag_print(&d, stderr);
+    assert_int_equal(st, NBEP_OK);
+    nbep_diag_fini(&d);
+    return res;
 }
 
 #endif

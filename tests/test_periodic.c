@@ -518,15 +518,7 @@ static void test_wall_impulse_of_a_sphere_between_two_walls(void **state)
                "output: { every = 100; };\n",
                deck, sizeof deck);
     nbep_test_tmp("wall.h5", out, sizeof out);
-    const nbep_run_request rq = {.deck_path = deck, .output_path = out};
-    nbep_run_result res;
-    nbep_diag d;
-    nbep_diag_init(&d);
-    nbep_status st = nbep_run(&rq, &res, &d);
-    if (st != NBEP_OK)
-        nbep_diag_print(&d, stderr);
-    assert_int_equal(st, NBEP_OK);
-    nbep_diag_fini(&d);
+    const nbep_run_result res = nbep_test_run_deck(deck, out);
     assert_int_equal(res.summary.planes, 2);
     assert_int_equal(res.summary.plane_collisions, 5); /* t = 1.555, 3.555, ..., 9.555 */
     assert_false(res.summary.pressure.known); /* SPEC: only a fully periodic box has one */

@@ -18,6 +18,7 @@
 #include "nbep/run.h"
 #include "nbep/sim.h"
 #include "nbep_test.h"
+#include "nbep_test_scene.h"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -58,15 +59,7 @@ static void test_a_run_records_the_threads_it_ran_with(void **state)
           "speed = 1.0; } );\n",
           f);
     fclose(f);
-    const nbep_run_request rq = {.deck_path = deck, .output_path = out};
-    nbep_run_result res;
-    nbep_diag d;
-    nbep_diag_init(&d);
-    nbep_status st = nbep_run(&rq, &res, &d);
-    if (st != NBEP_OK)
-        nbep_diag_print(&d, stderr);
-    assert_int_equal(st, NBEP_OK);
-    nbep_diag_fini(&d);
+    const nbep_run_result res = nbep_test_run_deck(deck, out);
     const int want = SERIAL ? 1 : 4;
     assert_int_equal(res.summary.threads, want);
     hid_t file = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
