@@ -164,7 +164,13 @@ typedef struct pred_ctx {
     bool image_horizon;
     double image_reach;
     bool ev_failed;               /* thread 0: the loop stalled this step */
+    bool free_flight;             /* no sphere accelerates: straight flight, nothing rests */
 } pred_ctx;
+
+static bool is_zero(nbep_vec3 v)
+{
+    return v.x == 0.0 && v.y == 0.0 && v.z == 0.0;
+}
 
 static void pred_destroy(void *p)
 {
@@ -238,8 +244,11 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
             return st;
         }
     }
-    for (size_t i = 0; i < n; i++)
+    c->free_flight = true;
+    for (size_t i = 0; i < n; i++) {
         c->rmax = fmax(c->rmax, sim->st.radius[i]);
+        c->free_flight &= is_zero(sim->st.acc[i]);
+    }
     c->image_horizon = c->pb.any && !c->use_grid && !sim->scene->neighbors_cells;
     c->image_reach = nbep_periodic_reach(&c->pb, 2.0 * c->rmax);
     if (sim->scene->neighbors_cells) {
@@ -307,11 +316,6 @@ static nbep_vec3 sep(const pred_ctx *c, const nbep_state *s, size_t a, size_t b)
 {
     nbep_vec3 d = nbep_vec3_sub(s->pos[b], s->pos[a]);
     return c->pb.any ? nbep_periodic_image(&c->pb, d) : d;
-}
-
-static bool is_zero(nbep_vec3 v)
-{
-    return v.x == 0.0 && v.y == 0.0 && v.z == 0.0;
 }
 
 /* A sphere whose contacts carry its whole weight (it may still slide): a slow partner treats it
@@ -1071,13 +1075,59 @@ static nbep_event cells_planes(void *u, uint32_t i)
     return predict_some(x->c, x->s, i, 0, 0, true, x->T0, x->w, x->cnt);
 }
 
-static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, nbep_vec3 shift,
-                        nbep_event *best)
+/* Where neighbour j is compared with sphere i: at its image nearest to i in a periodic box
+ * (the shift to add to its position), at itself otherwise. */
+static inline nbep_vec3 neighbour_shift(const pred_ctx *c, const nbep_state *s, size_t i,
+                                        size_t j)
+{
+    return nbep_periodic_near_shift(&c->pb, nbep_vec3_sub(s->pos[j], s->pos[i]));
+}
+
+static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, nbep_event *best)
 {
     cells_user *x = u;
     const nbep_vec3 ai = effective_acc(x->c, x->s, i);
     for (size_t k = 0; k < m; k++)
-        keep_earlier(best, pair_event(x->c, x->s, i, ai, js[k], shift, x->T0, x->w));
+        keep_earlier(best, pair_event(x->c, x->s, i, ai, js[k],
+                                      neighbour_shift(x->c, x->s, i, js[k]), x->T0, x->w));
+    x->cnt->c[NBEP_COUNTER_PREDICTIONS] += m;
+}
+
+/* cells_pairs for a scene where nothing accelerates (c->free_flight: every acceleration zero,
+ * so no contact ever rests or holds and every sphere flies straight): the same pairs, positions
+ * and roots as pair_event, bit for bit (a drift with zero acceleration is p + v h exactly,
+ * and ffp-contract is off), with two savings that matter in a dense fluid, where this loop is
+ * most of the run: no acceleration is loaded or applied, and a closing pair whose contact
+ * cannot come before the best one so far is skipped on a bound without its root
+ * (nbep_predict_pair_quadratic_floor; strictly later, so the winner, ties included, is the
+ * same). */
+static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m,
+                             nbep_event *best)
+{
+    cells_user *x = u;
+    const pred_ctx *c = x->c;
+    const nbep_state *s = x->s;
+    const double T0 = x->T0, ti = c->tau[i], ri = s->radius[i];
+    const nbep_vec3 pi0 = s->pos[i], vi = s->vel[i];
+    for (size_t k = 0; k < m; k++) {
+        const uint32_t j = js[k];
+        const double tj = c->tau[j];
+        const double t0 = ti > tj ? ti : tj;
+        nbep_vec3 pi = pi0, pj = nbep_vec3_add(s->pos[j], neighbour_shift(c, s, i, j));
+        const nbep_vec3 vj = s->vel[j];
+        if (ti < t0)
+            pi = nbep_vec3_add(pi, nbep_vec3_scale(vi, t0 - ti));
+        if (tj < t0)
+            pj = nbep_vec3_add(pj, nbep_vec3_scale(vj, t0 - tj));
+        const nbep_vec3 dp = nbep_vec3_sub(pj, pi), dv = nbep_vec3_sub(vj, vi);
+        const double sigma = ri + s->radius[j];
+        const double lb = nbep_predict_pair_quadratic_floor(dp, dv, sigma);
+        if (lb == NBEP_NEVER || T0 + (t0 + lb) > best->time)
+            continue;
+        const double dt = nbep_predict_pair_quadratic(dp, dv, sigma);
+        keep_earlier(best, (nbep_event){T0 + (t0 + dt), j, NBEP_EVENT_SPHERE, c->ver[i],
+                                        c->ver[j]});
+    }
     x->cnt->c[NBEP_COUNTER_PREDICTIONS] += m;
 }
 
@@ -1145,6 +1195,8 @@ static void cells_wrap(void *u, uint32_t i, double t)
 
 static const nbep_evloop_ops cells_ops = {cells_planes, cells_pairs, cells_fresh, cells_react,
                                           cells_flight, cells_wrap};
+static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, cells_fresh,
+                                               cells_react, cells_flight, cells_wrap};
 
 /* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's
  * event loop; all threads share the rebuilds, the update to the step's end and the energy.
@@ -1157,6 +1209,7 @@ static const nbep_evloop_ops cells_ops = {cells_planes, cells_pairs, cells_fresh
 static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thread_ws *w)
 {
     nbep_state *s = &sim->st;
+    const nbep_evloop_ops *ops = c->free_flight ? &cells_ops_free : &cells_ops;
     bool rebuild = true;
     for (uint64_t step = sim->step_first; step <= sim->step_end; step++) {
         const int spar = (int)(step & 1);
@@ -1173,7 +1226,12 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
             if (tid == 0)
                 nbep_evloop_link(c->ev);
             nbep_barrier_wait(&c->bar);
-            nbep_evloop_predict(c->ev, &cells_ops, &u, own.lo, own.hi, u.T0);
+            nbep_evloop_count(c->ev, own.lo, own.hi);
+            nbep_barrier_wait(&c->bar);
+            if (tid == 0)
+                nbep_evloop_layout(c->ev);
+            nbep_barrier_wait(&c->bar);
+            nbep_evloop_predict(c->ev, ops, &u, own.lo, own.hi, u.T0);
             u.cnt->c[NBEP_COUNTER_CHECKS] += own.hi - own.lo;
             nbep_barrier_wait(&c->bar);
             if (tid == 0) {
@@ -1189,10 +1247,15 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
         if (tid == 0) {
             nbep_evloop_tally tally = {0};
             double t_stuck = 0.0;
-            c->ev_failed = !nbep_evloop_run(c->ev, &cells_ops, &u, T_end, STALL_EVENTS,
+            c->ev_failed = !nbep_evloop_run(c->ev, ops, &u, T_end, STALL_EVENTS,
                                             STALL_FRACTION * sim->dt, &tally, &t_stuck);
             u.cnt->c[NBEP_COUNTER_CHECKS] += tally.events;
-            if (c->ev_failed) {
+            if (c->ev_failed && nbep_evloop_failed(c->ev)) {
+                nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                              "nbep: step %llu: no memory for the neighbour lists; stopping",
+                              (unsigned long long)step);
+                sim->status = NBEP_ENOMEM;
+            } else if (c->ev_failed) {
                 nbep_diag_add(sim->diag, __FILE__, __LINE__,
                               "nbep: step %llu: events at t = %.17g do not resolve "
                               "(endless zero-time reactions); stopping",

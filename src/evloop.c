@@ -6,18 +6,28 @@
 
 #include "nbep/calendar.h"
 #include "nbep/cells.h"
+#include "nbep/nblist.h"
 #include "nbep/periodic.h"
 #include "nbep/predict.h"
 
-/* Partners are handed to the algorithm this many at a time (a block holds some 20 to 40 in a
- * dense fluid): one call per batch, not per pair. */
-#define BATCH 64
+/* How far past contact distance plus skin a list still reaches: it covers the roundings of the
+ * expiry time and of the centres' distance. An expiry time carries the rounding of an absolute
+ * time (eps T, with T the run's time in any unit); a sphere at speed v strays eps T v past half
+ * the skin by it, below 1e-6 of the contact distance for any run shorter than 1e9 times the
+ * time a sphere takes to fly its own diameter. */
+#define CUT_SLACK 1e-6
 
 struct nbep_evloop {
     size_t n;
     nbep_calendar *cal;   /* owned */
-    nbep_cells cells;     /* owned */
+    nbep_cells cells;     /* owned: cells of the list centres, at least `cut` wide */
+    nbep_nblist nl;       /* owned */
+    nbep_vec3 *centre;    /* owned, n: where each sphere's list was built */
+    uint32_t *count;      /* owned, n: list lengths, at a full rebuild */
     nbep_periodic pb;     /* the box's periodic geometry */
+    double cut;           /* the list cutoff: contact distance plus skin, plus slack */
+    double stray;         /* half the skin: how far a sphere goes before its list expires */
+    bool failed;          /* out of memory for a list: the run stops */
     nbep_feq *q;          /* borrowed */
     const uint64_t *ver;  /* borrowed */
 };
@@ -32,11 +42,35 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->n = n;
     e->q = q;
     e->ver = ver;
-    nbep_status st = nbep_calendar_create(n, &e->cal, d);
+    e->pb = nbep_periodic_make(periodic, lo, hi);
+    /* the skin, cut down in a small periodic box so that three cells (sides of the cutoff
+     * times 1 + 1/8, cells.h) fit across; the deck check keeps it at NBEP_NBLIST_SKIN_MIN */
+    double skin = NBEP_NBLIST_SKIN * reach;
+    for (int k = 0; k < 3; k++)
+        if (e->pb.axis[k])
+            skin = fmin(skin, e->pb.len[k] / (3.0 * 1.125 * (1.0 + CUT_SLACK)) - reach);
+    if (reach > 0.0 && !(skin >= NBEP_NBLIST_SKIN_MIN * reach)) {
+        nbep_evloop_destroy(&e);
+        NBEP_FAIL(d, NBEP_EDECK,
+                  "nbep: run.neighbors = \"cells\": a periodic side is shorter than %g (the "
+                  "largest diameter %g times %g)",
+                  nbep_evloop_min_periodic_side(reach), reach,
+                  nbep_evloop_min_periodic_side(1.0));
+    }
+    skin = fmax(skin, 0.0);
+    e->stray = 0.5 * skin;
+    e->cut = (reach + skin) * (1.0 + CUT_SLACK);
+    e->centre = nbep_alloc_aligned(n ? n : 1, sizeof *e->centre);
+    e->count = nbep_alloc_aligned(n ? n : 1, sizeof *e->count);
+    nbep_status st = e->centre && e->count ? NBEP_OK : NBEP_ENOMEM;
+    if (st != NBEP_OK)
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory for the cells engine");
     if (st == NBEP_OK)
-        st = nbep_cells_init(&e->cells, lo, hi, reach, n, periodic, d);
+        st = nbep_calendar_create(n, &e->cal, d);
     if (st == NBEP_OK)
-        e->pb = nbep_periodic_make(periodic, lo, hi);
+        st = nbep_cells_init(&e->cells, lo, hi, e->cut, n, periodic, d);
+    if (st == NBEP_OK)
+        st = nbep_nblist_init(&e->nl, n, d);
     if (st != NBEP_OK) {
         nbep_evloop_destroy(&e);
         return st;
@@ -45,29 +79,119 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     return NBEP_OK;
 }
 
+double nbep_evloop_min_periodic_side(double reach)
+{
+    return 3.0 * 1.125 * (1.0 + NBEP_NBLIST_SKIN_MIN) * reach * (1.0 + CUT_SLACK);
+}
+
 void nbep_evloop_destroy(nbep_evloop **e)
 {
     if (!e || !*e)
         return;
     nbep_calendar_destroy(&(*e)->cal);
     nbep_cells_fini(&(*e)->cells);
+    nbep_nblist_fini(&(*e)->nl);
+    nbep_free_aligned((*e)->centre);
+    nbep_free_aligned((*e)->count);
     free(*e);
     *e = NULL;
 }
 
-size_t nbep_evloop_bytes(size_t n)
+size_t nbep_evloop_bytes(size_t n, double neighbours)
 {
-    return nbep_calendar_bytes(n) + nbep_cells_bytes(n);
+    return nbep_calendar_bytes(n) + nbep_cells_bytes(n) +
+           nbep_nblist_bytes(n, (size_t)(neighbours * (double)n)) +
+           n * (sizeof(nbep_vec3) + sizeof(uint32_t));
+}
+
+bool nbep_evloop_failed(const nbep_evloop *e)
+{
+    return e->failed;
+}
+
+/* Calls f(e, i, j, arg) for every sphere j != i whose centre is within the cutoff of i's, from
+ * the 27-cell block of i's cell (each at its image across periodic faces). */
+static void near_centres(nbep_evloop *e, uint32_t i,
+                         void (*f)(nbep_evloop *e, uint32_t i, uint32_t j, void *arg), void *arg)
+{
+    const nbep_cells *g = &e->cells;
+    nbep_cells_block b;
+    nbep_cells_block_of(g, g->cell[i], &b);
+    const nbep_vec3 period = nbep_periodic_shift(&e->pb, (const int[3]){1, 1, 1});
+    const nbep_vec3 ci = e->centre[i];
+    const double cut2 = e->cut * e->cut;
+    for (int z = 0; z < b.cnt[2]; z++)
+        for (int y = 0; y < b.cnt[1]; y++)
+            for (int x = 0; x < b.cnt[0]; x++) {
+                const nbep_vec3 at = {ci.x - b.per[0][x] * period.x,
+                                      ci.y - b.per[1][y] * period.y,
+                                      ci.z - b.per[2][z] * period.z};
+                for (uint32_t j = g->head[nbep_cells_index(g, b.idx[0][x], b.idx[1][y],
+                                                           b.idx[2][z])];
+                     j != NBEP_CELLS_NONE; j = g->next[j]) {
+                    const nbep_vec3 dd = nbep_vec3_sub(e->centre[j], at);
+                    if (j != i && nbep_vec3_dot(dd, dd) < cut2)
+                        f(e, i, j, arg);
+                }
+            }
+}
+
+static void count_one(nbep_evloop *e, uint32_t i, uint32_t j, void *arg)
+{
+    (void)j;
+    (void)arg;
+    e->count[i]++;
+}
+
+static void fill_one(nbep_evloop *e, uint32_t i, uint32_t j, void *arg)
+{
+    (void)arg;
+    nbep_nblist_fill(&e->nl, i, j);
+}
+
+static void attach_one(nbep_evloop *e, uint32_t i, uint32_t j, void *arg)
+{
+    (void)arg;
+    if (!nbep_nblist_append(&e->nl, i, j) || !nbep_nblist_append(&e->nl, j, i))
+        e->failed = true;
+}
+
+/* Sphere i's list from scratch, its centre now at c: it leaves its old neighbours' lists and
+ * enters its new ones'. */
+static void rebuild_one(nbep_evloop *e, uint32_t i, nbep_vec3 c)
+{
+    nbep_nblist_detach(&e->nl, i);
+    e->centre[i] = c;
+    const size_t cell = nbep_cells_locate(&e->cells, c);
+    if (cell != e->cells.cell[i])
+        nbep_cells_move(&e->cells, i, cell);
+    near_centres(e, i, attach_one, NULL);
 }
 
 void nbep_evloop_assign(nbep_evloop *e, const nbep_vec3 *pos, size_t lo, size_t hi)
 {
+    for (size_t i = lo; i < hi; i++)
+        e->centre[i] = pos[i];
     nbep_cells_assign(&e->cells, pos, lo, hi);
 }
 
 void nbep_evloop_link(nbep_evloop *e)
 {
     nbep_cells_link(&e->cells);
+}
+
+void nbep_evloop_count(nbep_evloop *e, size_t lo, size_t hi)
+{
+    for (size_t i = lo; i < hi; i++) {
+        e->count[i] = 0;
+        near_centres(e, (uint32_t)i, count_one, NULL);
+    }
+}
+
+void nbep_evloop_layout(nbep_evloop *e)
+{
+    if (!nbep_nblist_layout(&e->nl, e->count))
+        e->failed = true;
 }
 
 /* The calendar's tie key: the pair (lower sphere high, higher low), the same in both spheres'
@@ -87,60 +211,49 @@ static uint64_t slot_key(uint32_t i, const nbep_event *ev)
 void nbep_evloop_visit_block(const nbep_evloop *e, uint32_t i,
                              void (*visit)(void *u, uint32_t j), void *u)
 {
-    const nbep_cells *g = &e->cells;
-    nbep_cells_block b;
-    nbep_cells_block_of(g, g->cell[i], &b);
-    for (int z = 0; z < b.cnt[2]; z++)
-        for (int y = 0; y < b.cnt[1]; y++)
-            for (int x = 0; x < b.cnt[0]; x++)
-                for (uint32_t j = g->head[nbep_cells_index(g, b.idx[0][x], b.idx[1][y],
-                                                           b.idx[2][z])];
-                     j != NBEP_CELLS_NONE; j = g->next[j])
-                    visit(u, j);
+    size_t m;
+    const uint32_t *js = nbep_nblist_of(&e->nl, i, &m);
+    visit(u, i);
+    for (size_t k = 0; k < m; k++)
+        visit(u, js[k]);
 }
 
-/* Sphere i's slot from scratch at time t: planes, the spheres of its block, its cell exit. */
+/* Time from now until a centre at d from where its list was built, flying with v and a, is
+ * `stray` away: the exact root without acceleration; with one, the root of the bound
+ * |d| + |v| s + |a| s^2 / 2, which comes no later (an early rebuild costs a little, a late one
+ * would miss a pair). 0 when already there; NBEP_NEVER when it does not move. */
+static double stray_time(nbep_vec3 d, nbep_vec3 v, nbep_vec3 a, double stray)
+{
+    const double vv = nbep_vec3_dot(v, v);
+    if (a.x == 0.0 && a.y == 0.0 && a.z == 0.0) {
+        if (vv == 0.0)
+            return NBEP_NEVER;
+        const double b = nbep_vec3_dot(d, v), c = nbep_vec3_dot(d, d) - stray * stray;
+        if (!(c < 0.0))
+            return 0.0;
+        const double root = sqrt(b * b - vv * c); /* c < 0: positive, and at least |b| */
+        /* the positive root (-b + root) / vv, in the form that does not cancel */
+        return b > 0.0 ? -c / (b + root) : (root - b) / vv;
+    }
+    const double left = stray - nbep_vec3_norm(d);
+    if (!(left > 0.0))
+        return 0.0;
+    const double sv = sqrt(vv), sa = nbep_vec3_norm(a);
+    return 2.0 * left / (sv + sqrt(sv * sv + 2.0 * sa * left));
+}
+
+/* Sphere i's slot from scratch at time t: planes, the spheres of its list, its list's expiry. */
 static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uint32_t i,
                         double t)
 {
     nbep_event best = ops->planes(u, i);
-    const nbep_cells *g = &e->cells;
-    nbep_cells_block b;
-    nbep_cells_block_of(g, g->cell[i], &b);
-    uint32_t js[BATCH];
-    size_t m = 0;
-    /* a batch shares one shift: it is handed over when full or when the shift changes (only
-     * at the periodic faces of the box) */
-    nbep_vec3 shift = {0.0, 0.0, 0.0};
-    const nbep_vec3 period = nbep_periodic_shift(&e->pb, (const int[3]){1, 1, 1});
-    for (int z = 0; z < b.cnt[2]; z++)
-        for (int y = 0; y < b.cnt[1]; y++)
-            for (int x = 0; x < b.cnt[0]; x++) {
-                /* the cell's copy of the box: whole periods, 0 off the periodic faces */
-                const nbep_vec3 sh = {b.per[0][x] * period.x, b.per[1][y] * period.y,
-                                      b.per[2][z] * period.z};
-                if (m > 0 && !nbep_vec3_equal(sh, shift)) {
-                    ops->pairs(u, i, js, m, shift, &best);
-                    m = 0;
-                }
-                shift = sh;
-                for (uint32_t j = g->head[nbep_cells_index(g, b.idx[0][x], b.idx[1][y],
-                                                           b.idx[2][z])];
-                     j != NBEP_CELLS_NONE; j = g->next[j]) {
-                    if (j == i)
-                        continue;
-                    js[m++] = j;
-                    if (m == BATCH) {
-                        ops->pairs(u, i, js, m, shift, &best);
-                        m = 0;
-                    }
-                }
-            }
+    size_t m;
+    const uint32_t *js = nbep_nblist_of(&e->nl, i, &m);
     if (m > 0)
-        ops->pairs(u, i, js, m, shift, &best);
+        ops->pairs(u, i, js, m, &best);
     nbep_vec3 p, v, a;
     ops->flight(u, i, t, &p, &v, &a);
-    double t_exit = t + nbep_cells_exit_time(g, i, p, v, a);
+    double t_exit = t + stray_time(nbep_vec3_sub(p, e->centre[i]), v, a, e->stray);
     if (t_exit < NBEP_NEVER && (best.kind == NBEP_EVENT_NONE || t_exit < best.time))
         best = (nbep_event){t_exit, 0, NBEP_EVENT_HORIZON, e->ver[i], 0};
     if (best.kind == NBEP_EVENT_NONE) {
@@ -165,6 +278,10 @@ static void schedule_one(nbep_evloop *e, uint32_t i)
 void nbep_evloop_predict(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, size_t lo,
                          size_t hi, double t)
 {
+    if (e->failed)
+        return;
+    for (size_t i = lo; i < hi; i++) /* own lists first: a prediction reads only its own */
+        near_centres(e, (uint32_t)i, fill_one, NULL);
     for (size_t i = lo; i < hi; i++)
         predict_one(e, ops, u, (uint32_t)i, t);
 }
@@ -180,6 +297,8 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
                      uint64_t stall_events, double stall_dt, nbep_evloop_tally *tally,
                      double *t_stuck)
 {
+    if (e->failed) /* a rebuild ran out of memory */
+        return false;
     uint64_t since = 0;
     double t_mark = -INFINITY;
     uint32_t i;
@@ -200,9 +319,9 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
             if (e->pb.any) /* a centre past a periodic face enters through the other */
                 ops->wrap(u, i, t);
             ops->flight(u, i, t, &p, &v, &a);
-            size_t c = nbep_cells_locate(&e->cells, p);
-            if (c != e->cells.cell[i])
-                nbep_cells_move(&e->cells, i, c);
+            rebuild_one(e, i, p);
+            if (e->failed)
+                return false;
             tally->exits++;
         } else if (ops->fresh(u, i, &ev)) {
             const uint32_t *changed;

@@ -1,22 +1,27 @@
 /* The cells engine of the predictive algorithm (run.neighbors = "cells", beyond the paper): a
  * step's events processed one at a time in time order from an event calendar (calendar.h),
- * each re-prediction testing only the 27-cell block of cell lists kept up to date by cell-exit
- * events (cells.h), spheres moved lazily (each keeps its own local time). Per event the work is
- * O(log n) for the calendar plus a re-prediction of the one or two spheres involved against
- * their block: independent of n.
+ * each re-prediction testing only the sphere's neighbour list (nblist.h): the spheres whose
+ * centres were within contact distance plus a skin when the list was built. Cell lists of the
+ * list centres (cells.h) find the new neighbours when a list is rebuilt, which happens when
+ * its sphere has strayed half the skin from where it was built (an expiry event, kind
+ * HORIZON), so no pair can touch without being listed. Spheres move lazily (each keeps its own
+ * local time). Per event the work is O(log n) for the calendar plus a re-prediction of the one
+ * or two spheres involved against their lists (12 to 20 spheres in a dense fluid, against 20
+ * to 30 in the 27-cell block the engine scanned before): independent of n.
  *
- * The engine owns the calendar and the cells, and borrows the algorithm's one-slot event queue
- * (feq.h) and response counts: a sphere's slot holds the earliest of its contacts with the
- * planes and the spheres of its block and its cell exit (kind HORIZON), and the calendar holds
- * every slot that is not NEVER. The physics (contact times with both spheres brought to the
- * later local time, responses, resting contact) stays with the algorithm, reached through
+ * The engine owns the calendar, the cells and the lists, and borrows the algorithm's one-slot
+ * event queue (feq.h) and response counts: a sphere's slot holds the earliest of its contacts
+ * with the planes and its listed spheres and its list's expiry, and the calendar holds every
+ * slot that is not NEVER. The physics (contact times with both spheres brought to the later
+ * local time, responses, resting contact) stays with the algorithm, reached through
  * nbep_evloop_ops, so there is one copy of it.
  *
  * Events are handled in the order (time, pair key, sphere): a slot that names a partner whose
- * response count moved on is stale and its sphere is re-predicted; a cell exit moves the sphere
- * into the cell its centre is in then and re-predicts it; any other event reacts and both its
- * spheres (and any other sphere the reaction changed) are re-predicted. The loop is serial (one thread), so results cannot depend on the
- * thread count; nbep_evloop_assign and nbep_evloop_predict are per sphere and run on every
+ * response count moved on is stale and its sphere is re-predicted; an expiry wraps the sphere
+ * into a periodic box if it left it, rebuilds its list around where it is and re-predicts it;
+ * any other event reacts and both its spheres (and any other sphere the reaction changed) are
+ * re-predicted. The loop is serial (one thread), so results cannot depend on the thread count;
+ * the full rebuild (nbep_evloop_assign, _count, _predict) is per sphere and runs on every
  * thread's own range. */
 #ifndef NBEP_EVLOOP_H
 #define NBEP_EVLOOP_H
@@ -34,11 +39,8 @@ typedef struct nbep_evloop_ops {
     /* the earliest contact of sphere i with a plane, kind NONE when none */
     nbep_event (*planes)(void *u, uint32_t i);
     /* lowers *best (kind NONE: nothing yet) to the earliest contact of sphere i with the m
-     * spheres js (none of them i), each taken at its position plus shift (a copy of the box
-     * across periodic faces; zero otherwise); called with the block's members a batch at a
-     * time */
-    void (*pairs)(void *u, uint32_t i, const uint32_t *js, size_t m, nbep_vec3 shift,
-                  nbep_event *best);
+     * spheres js (none of them i); in a periodic box each at its image nearest to i */
+    void (*pairs)(void *u, uint32_t i, const uint32_t *js, size_t m, nbep_event *best);
     /* true while the event in i's slot is still valid (no response since it was predicted) */
     bool (*fresh)(void *u, uint32_t i, const nbep_event *ev);
     /* reacts to the event in i's slot (a sphere or plane contact), at its time; returns the
@@ -64,36 +66,49 @@ NBEP_MUST_CHECK nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3
                                                nbep_feq *q, const uint64_t *ver,
                                                nbep_evloop **out, nbep_diag *d);
 void nbep_evloop_destroy(nbep_evloop **e);
+/* The shortest periodic side the engine takes for contacts within `reach`: three cells of
+ * the list cutoff with the thinnest skin (NBEP_NBLIST_SKIN_MIN); a shorter one is refused. */
+double nbep_evloop_min_periodic_side(double reach);
 
 /* A full rebuild, from spheres that all sit at one time t: (1) every thread assigns its range
- * to cells, (2) one thread links the lists, (3) every thread predicts its range (writes those
- * slots), (4) one thread schedules every slot. Barriers between the parts are the caller's. */
+ * to cells, (2) one thread links the cell lists, (3) every thread counts its range's
+ * neighbours, (4) one thread lays the neighbour lists out, (5) every thread fills its range's
+ * lists and predicts its range (writes those slots), (6) one thread schedules every slot.
+ * Barriers between the parts are the caller's. Out of memory for the lists: nothing is
+ * predicted and nbep_evloop_failed says so. */
 void nbep_evloop_assign(nbep_evloop *e, const nbep_vec3 *pos, size_t lo, size_t hi);
 void nbep_evloop_link(nbep_evloop *e);
+void nbep_evloop_count(nbep_evloop *e, size_t lo, size_t hi);
+void nbep_evloop_layout(nbep_evloop *e);
 void nbep_evloop_predict(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, size_t lo,
                          size_t hi, double t);
 void nbep_evloop_schedule(nbep_evloop *e);
+/* True once a neighbour list could not get memory (at a rebuild or in nbep_evloop_run, which
+ * then returns false): the run must stop. */
+bool nbep_evloop_failed(const nbep_evloop *e);
 
 /* What one call of nbep_evloop_run did. */
 typedef struct nbep_evloop_tally {
-    uint64_t events;     /* calendar entries handled (stale, exits and reactions) */
+    uint64_t events;     /* calendar entries handled (stale, expiries and reactions) */
     uint64_t reactions;
-    uint64_t exits;      /* cell exits */
+    uint64_t exits;      /* list expiries (rebuilds of one list) */
 } nbep_evloop_tally;
 
 /* Handles every event before t_end, in order. One thread. Returns false, with the time of
  * the stuck event in *t_stuck, when `stall_events` events in a row did not advance time by
- * more than stall_dt (a cascade of zero-time events the model cannot resolve). */
+ * more than stall_dt (a cascade of zero-time events the model cannot resolve), or when a
+ * neighbour list could not get memory (nbep_evloop_failed). */
 bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_end,
                      uint64_t stall_events, double stall_dt, nbep_evloop_tally *tally,
                      double *t_stuck);
 
-/* Calls visit(u, j) for every sphere j (i included) in the 27-cell block of i's cell: every
- * sphere that can touch i. Read-only; a react callback may call it. */
+/* Calls visit(u, j) for sphere i and every sphere j of its neighbour list: every sphere that
+ * can touch i. Read-only; a react callback may call it. */
 void nbep_evloop_visit_block(const nbep_evloop *e, uint32_t i,
                              void (*visit)(void *u, uint32_t j), void *u);
 
-/* Bytes the engine itself takes for n spheres (calendar and cells). */
-size_t nbep_evloop_bytes(size_t n);
+/* Bytes the engine itself takes for n spheres with `neighbours` listed per sphere on average
+ * (calendar, cells, lists). */
+size_t nbep_evloop_bytes(size_t n, double neighbours);
 
 #endif

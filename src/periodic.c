@@ -14,6 +14,7 @@ nbep_periodic nbep_periodic_make(const bool axis[3], nbep_vec3 lo, nbep_vec3 hi)
         pb.any = pb.any || pb.axis[k];
         pb.lo[k] = l[k];
         pb.len[k] = h[k] - l[k];
+        pb.half[k] = pb.axis[k] ? 0.5 * pb.len[k] : INFINITY;
     }
     return pb;
 }

@@ -24,6 +24,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "evloop.h"
 #include "scene_impl.h"
 #include "scene_schema.h"
 
@@ -421,12 +422,12 @@ static void check_periodic(load *L, const config_setting_t *at, const nbep_scene
                 "box.periodic: the box's %c side (%g) must be longer than twice the largest "
                 "sphere diameter (%g)",
                 "xyz"[k], len[k], 2.0 * rmax);
-        /* the cells engine's sides are at least 1.125 diameters (cells.h) */
-        else if (sc->neighbors_cells && !(len[k] >= 3.0 * 2.25 * rmax))
+        /* three cells of the neighbour lists' cutoff across (evloop.h) */
+        else if (sc->neighbors_cells && !(len[k] >= nbep_evloop_min_periodic_side(2.0 * rmax)))
             ERR(L, at,
                 "box.periodic: run.neighbors = \"cells\" needs the box's %c side (%g) to be at "
-                "least 6.75 times the largest radius (%g), three cells across",
-                "xyz"[k], len[k], rmax);
+                "least %.4g times the largest radius (%g), three cells across",
+                "xyz"[k], len[k], 2.0 * nbep_evloop_min_periodic_side(1.0), rmax);
     }
     if (strcmp(sc->algorithm, "predictive") != 0 || sc->neighbors_grid)
         ERR(L, at,

@@ -68,7 +68,9 @@ size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads)
     if (algo == &nbep__algo_predictive)
         /* slot 32, response count 8, local time 8, rest 4, flag 1, 2 claims 16, reacted 8,
          * candidate 4, fired and claimed lists 16 */
-        bytes += n * 97 + (sc->neighbors_cells ? nbep_evloop_bytes(n) : 0);
+        /* cells mode: neighbour lists of up to 24 (a dense fluid's lists, skin 0.5, hold
+         * 12 to 20) */
+        bytes += n * 97 + (sc->neighbors_cells ? nbep_evloop_bytes(n, 24.0) : 0);
     else if (algo == &nbep__algo_seminaive)
         bytes += n * (4 * sizeof(uint64_t) + 2 * 64); /* contacts and tree nodes */
     else

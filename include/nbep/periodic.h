@@ -16,6 +16,8 @@ typedef struct nbep_periodic {
     bool any;       /* some axis is */
     double lo[3];   /* the box's lower corner */
     double len[3];  /* its side (> 0 on periodic axes) */
+    double half[3]; /* len / 2 on periodic axes, INFINITY on the others (so that a test
+                     * against it needs no branch on the axis) */
 } nbep_periodic;
 
 /* The geometry of the box [lo, hi] with the periodic axes `axis` (NULL: none). */
@@ -35,6 +37,17 @@ void nbep_periodic_wrap(const nbep_periodic *pb, nbep_vec3 *p, int32_t image[3])
  * -round(d_k / len_k) on periodic axes, 0 elsewhere, so that d + nbep_periodic_shift(cells) is
  * the minimum image (with whole periods, exactly representable shifts). */
 void nbep_periodic_nearest(const nbep_periodic *pb, nbep_vec3 d, int cells[3]);
+
+/* nbep_periodic_shift of nbep_periodic_nearest(d) for a separation within one and a half
+ * periods of its minimum image on every periodic axis (a pair of neighbours, whose stored
+ * positions are never a whole box apart): compares instead of divisions, for inner loops.
+ * Equal to the general one except at |d_k| = len_k / 2 exactly, where either image is as near. */
+static inline nbep_vec3 nbep_periodic_near_shift(const nbep_periodic *pb, nbep_vec3 d)
+{
+    return nbep_vec3_make(d.x > pb->half[0] ? -pb->len[0] : d.x < -pb->half[0] ? pb->len[0] : 0.0,
+                          d.y > pb->half[1] ? -pb->len[1] : d.y < -pb->half[1] ? pb->len[1] : 0.0,
+                          d.z > pb->half[2] ? -pb->len[2] : d.z < -pb->half[2] ? pb->len[2] : 0.0);
+}
 
 /* The horizon of the minimum image: while neither sphere of a pair strays more than this from
  * where the pair was last compared (per axis), the image that was nearest then is the only

@@ -1,0 +1,82 @@
+/* Neighbour lists of the cells engine (evloop.c): for every sphere, the spheres whose list
+ * centres were within its cutoff (contact distance plus a skin) when either list was last
+ * built. The engine keeps the lists symmetric (j is in i's list exactly when i is in j's),
+ * so a sphere that rebuilds its list also enters the lists of its new neighbours and leaves
+ * those of its old ones, and no other list has to be rebuilt with it.
+ *
+ * Storage: one pool of uint32 entries; sphere i's list is pool[off[i] .. off[i] + cnt[i]) with
+ * room for cap[i]. A list that outgrows its room moves to the end of the pool with twice the
+ * room; when the pool fills and holds more than twice what a fresh layout would take, it is
+ * compacted (every list copied with a little slack), so memory stays proportional to the
+ * entries (4 bytes per neighbour, 12 to 20 neighbours in a dense fluid) however long the run. Not thread-safe
+ * for appends and removals (one thread); nbep_nblist_layout and nbep_nblist_fill_own let threads
+ * fill disjoint spheres' lists at a full rebuild. */
+#ifndef NBEP_NBLIST_H
+#define NBEP_NBLIST_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "nbep/compiler.h"
+#include "nbep/status.h"
+
+/* The skin, as a fraction of the largest contact distance: a list holds the spheres whose
+ * centres were within contact distance plus the skin, and is rebuilt when its sphere has
+ * strayed half the skin from where it was built. A wider skin means longer lists (more pairs
+ * tested per re-prediction, as the cube of 1 + skin), a thinner one more rebuilds; half a
+ * diameter is the usual optimum for hard-sphere fluids (Smallenburg 2022 uses the same), and
+ * measured here: bench-dense with 0.3, 0.5 and 0.7 (README, Dense fluids). */
+#ifndef NBEP_NBLIST_SKIN /* a -D overrides it, for benchmarks only */
+#define NBEP_NBLIST_SKIN 0.5
+#endif
+/* In a small periodic box the skin is cut down so that three cells of width contact distance
+ * plus skin fit across, but never below this (the deck check asks for that much room). */
+#define NBEP_NBLIST_SKIN_MIN 0.125
+
+typedef struct nbep_nblist {
+    size_t n;
+    uint32_t *off, *cnt, *cap; /* owned, n each */
+    uint32_t *pool;            /* owned, pool_cap entries */
+    size_t pool_len;           /* entries handed out (live lists and given-up room) */
+    size_t pool_cap;
+    size_t room;               /* sum of cap[]: the room in use */
+} nbep_nblist;
+
+/* Empty lists for n spheres (n < UINT32_MAX). NBEP_ENOMEM with a message. */
+NBEP_MUST_CHECK nbep_status nbep_nblist_init(nbep_nblist *l, size_t n, nbep_diag *d);
+/* Frees; safe on a zeroed value. */
+void nbep_nblist_fini(nbep_nblist *l);
+
+/* A full rebuild: given how many entries each sphere's list will get (counts, n), lays the
+ * lists out one after another, each with a little slack, all empty. False when out of memory
+ * (the lists are then all empty with no room; appends fail). One thread. */
+bool nbep_nblist_layout(nbep_nblist *l, const uint32_t *counts);
+/* Appends j to i's list after nbep_nblist_layout; i's room must not be full. Threads may fill
+ * disjoint spheres' lists at once. */
+static inline void nbep_nblist_fill(nbep_nblist *l, uint32_t i, uint32_t j)
+{
+    l->pool[l->off[i] + l->cnt[i]++] = j;
+}
+
+/* Appends j to i's list, growing its room if needed. False when out of memory (nothing
+ * changed). One thread. */
+bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j);
+/* Removes i from the list of every sphere in i's list, then empties i's list. One thread. */
+void nbep_nblist_detach(nbep_nblist *l, uint32_t i);
+
+/* i's list: *m entries. */
+static inline const uint32_t *nbep_nblist_of(const nbep_nblist *l, uint32_t i, size_t *m)
+{
+    *m = l->cnt[i];
+    return l->pool + l->off[i];
+}
+
+/* Invariant check for tests: every list within its room and the pool, no sphere listing
+ * itself or a sphere twice, and symmetry. Returns the number of violations. */
+size_t nbep_nblist_check(const nbep_nblist *l);
+
+/* Bytes for n spheres with `entries` neighbours in all, as laid out (pool slack included). */
+size_t nbep_nblist_bytes(size_t n, size_t entries);
+
+#endif

@@ -1,0 +1,172 @@
+/* Neighbour lists: see nblist.h. */
+#include "nbep/nblist.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "nbep/compiler.h"
+
+/* The room a list of c entries gets at a layout or compaction: a quarter more and four
+ * (a sphere's neighbour count drifts by a few between rebuilds of a dense fluid, so most
+ * lists never move). */
+static uint32_t room_for(uint32_t c)
+{
+    return c + c / 4u + 4u;
+}
+
+nbep_status nbep_nblist_init(nbep_nblist *l, size_t n, nbep_diag *d)
+{
+    memset(l, 0, sizeof *l);
+    if (n < UINT32_MAX) {
+        l->n = n;
+        l->off = calloc(n ? n : 1, sizeof *l->off);
+        l->cnt = calloc(n ? n : 1, sizeof *l->cnt);
+        l->cap = calloc(n ? n : 1, sizeof *l->cap);
+    }
+    if (!l->off || !l->cnt || !l->cap) {
+        nbep_nblist_fini(l);
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the neighbour lists of %zu spheres", n);
+    }
+    return NBEP_OK;
+}
+
+void nbep_nblist_fini(nbep_nblist *l)
+{
+    free(l->off);
+    free(l->cnt);
+    free(l->cap);
+    free(l->pool);
+    memset(l, 0, sizeof *l);
+}
+
+/* Makes the pool hold at least `need` entries, keeping its contents. */
+static bool reserve(nbep_nblist *l, size_t need)
+{
+    if (need <= l->pool_cap)
+        return true;
+    size_t cap = need + need / 2u;
+    uint32_t *p = realloc(l->pool, cap * sizeof *p);
+    if (!p)
+        return false;
+    l->pool = p;
+    l->pool_cap = cap;
+    return true;
+}
+
+bool nbep_nblist_layout(nbep_nblist *l, const uint32_t *counts)
+{
+    size_t total = 0;
+    for (size_t i = 0; i < l->n; i++)
+        total += room_for(counts[i]);
+    bool ok = reserve(l, total);
+    size_t at = 0;
+    for (size_t i = 0; i < l->n; i++) {
+        l->off[i] = (uint32_t)(ok ? at : 0);
+        l->cap[i] = ok ? room_for(counts[i]) : 0;
+        l->cnt[i] = 0;
+        at += l->cap[i];
+    }
+    l->pool_len = l->room = at;
+    return ok;
+}
+
+/* Copies every list into a fresh pool with room_for(cnt) each: the room given up by lists that
+ * moved is reclaimed. */
+static bool compact(nbep_nblist *l, size_t extra)
+{
+    size_t total = extra;
+    for (size_t i = 0; i < l->n; i++)
+        total += room_for(l->cnt[i]);
+    uint32_t *p = malloc((total + total / 2u) * sizeof *p);
+    if (!p)
+        return false;
+    size_t at = 0;
+    for (size_t i = 0; i < l->n; i++) {
+        memcpy(p + at, l->pool + l->off[i], l->cnt[i] * sizeof *p);
+        l->off[i] = (uint32_t)at;
+        l->cap[i] = room_for(l->cnt[i]);
+        at += l->cap[i];
+    }
+    free(l->pool);
+    l->pool = p;
+    l->pool_cap = total + total / 2u;
+    l->pool_len = l->room = at;
+    return true;
+}
+
+bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j)
+{
+    if (l->cnt[i] == l->cap[i]) { /* full: move to the end with twice the room */
+        const uint32_t grown = 2u * l->cap[i] + 4u;
+        /* The pool is full: compact it if it holds more than twice what a fresh layout of the
+         * lists as they are would take (room given up by moves, and rooms grown for counts
+         * that have since fallen), else let it grow by half. Either way the pool stays
+         * within about three fresh layouts, and the O(n) count is paid only when it fills. */
+        if (l->pool_len + grown > l->pool_cap) {
+            size_t fresh = 0;
+            for (size_t k = 0; k < l->n; k++)
+                fresh += room_for(l->cnt[k]);
+            if (l->pool_len > 2u * fresh && !compact(l, grown))
+                return false;
+        }
+        if (l->cnt[i] == l->cap[i]) { /* compaction may have made room already */
+            if (l->pool_len + grown > UINT32_MAX || !reserve(l, l->pool_len + grown))
+                return false;
+            memcpy(l->pool + l->pool_len, l->pool + l->off[i], l->cnt[i] * sizeof *l->pool);
+            l->off[i] = (uint32_t)l->pool_len;
+            l->room += grown - l->cap[i];
+            l->cap[i] = grown;
+            l->pool_len += grown;
+        }
+    }
+    l->pool[l->off[i] + l->cnt[i]++] = j;
+    return true;
+}
+
+void nbep_nblist_detach(nbep_nblist *l, uint32_t i)
+{
+    const uint32_t *mine = l->pool + l->off[i];
+    for (uint32_t k = 0; k < l->cnt[i]; k++) {
+        const uint32_t j = mine[k];
+        uint32_t *theirs = l->pool + l->off[j];
+        for (uint32_t q = 0; q < l->cnt[j]; q++)
+            if (theirs[q] == i) { /* order does not matter: swap the last in */
+                theirs[q] = theirs[--l->cnt[j]];
+                break;
+            }
+    }
+    l->cnt[i] = 0;
+}
+
+/* Is j in i's list? */
+static bool listed(const nbep_nblist *l, uint32_t i, uint32_t j)
+{
+    for (uint32_t k = 0; k < l->cnt[i]; k++)
+        if (l->pool[l->off[i] + k] == j)
+            return true;
+    return false;
+}
+
+size_t nbep_nblist_check(const nbep_nblist *l)
+{
+    size_t bad = 0;
+    for (size_t i = 0; i < l->n; i++) {
+        if (l->cnt[i] > l->cap[i] || (size_t)l->off[i] + l->cap[i] > l->pool_len) {
+            bad++;
+            continue;
+        }
+        const uint32_t *a = l->pool + l->off[i];
+        for (uint32_t k = 0; k < l->cnt[i]; k++) {
+            bad += a[k] >= l->n || a[k] == i;
+            for (uint32_t q = k + 1; q < l->cnt[i]; q++)
+                bad += a[q] == a[k];
+            bad += a[k] < l->n && !listed(l, a[k], (uint32_t)i);
+        }
+    }
+    return bad;
+}
+
+size_t nbep_nblist_bytes(size_t n, size_t entries)
+{
+    return n * 3 * sizeof(uint32_t) + (entries + entries / 4u + 4u * n) * 3 / 2 * sizeof(uint32_t);
+}

@@ -1,0 +1,153 @@
+/* Tests of the neighbour lists (nblist.h): against a reference adjacency matrix under random
+ * symmetric attach and detach operations, with lists growing past their room (moves to the
+ * pool's end) and enough of it given up that the pool compacts; a layout from counts and a
+ * fill; the invariant checker catching an asymmetric pair, a duplicate and a self entry. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "nbep/nblist.h"
+#include "nbep_test.h"
+
+static void init(nbep_nblist *l, size_t n)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_nblist_init(l, n, &d), NBEP_OK);
+    nbep_diag_fini(&d);
+}
+
+static uint64_t lcg(uint64_t *x)
+{
+    *x = *x * 6364136223846793005ULL + 1442695040888963407ULL;
+    return *x >> 33;
+}
+
+/* Every list holds exactly the reference's row (as a set). */
+static void assert_matches(const nbep_nblist *l, const unsigned char *adj, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        size_t m, want = 0;
+        const uint32_t *js = nbep_nblist_of(l, (uint32_t)i, &m);
+        for (size_t j = 0; j < n; j++)
+            want += adj[i * n + j];
+        assert_int_equal(m, want);
+        for (size_t k = 0; k < m; k++)
+            assert_true(adj[i * n + js[k]]);
+    }
+    assert_int_equal(nbep_nblist_check(l), 0);
+}
+
+static void test_random_attach_and_detach_match_a_reference_adjacency(void **state)
+{
+    (void)state;
+    enum { N = 60 };
+    nbep_nblist l;
+    init(&l, N);
+    uint32_t zero[N] = {0};
+    assert_true(nbep_nblist_layout(&l, zero)); /* room 4 each: growth comes early */
+    unsigned char *adj = calloc(N * N, 1);
+    assert_non_null(adj);
+    uint64_t x = 7;
+    size_t moves = 0, compactions = 0;
+    for (int op = 0; op < 20000; op++) {
+        const uint32_t i = (uint32_t)(lcg(&x) % N);
+        if (lcg(&x) % 4 == 0) { /* a rebuild: i leaves every list, then joins some again */
+            nbep_nblist_detach(&l, i);
+            for (size_t j = 0; j < N; j++)
+                adj[i * N + j] = adj[j * N + i] = 0;
+            const size_t want = lcg(&x) % 40; /* up to 2/3 of all: lists outgrow their room */
+            for (size_t k = 0; k < want; k++) {
+                const uint32_t j = (uint32_t)(lcg(&x) % N);
+                if (j == i || adj[i * N + j])
+                    continue;
+                const uint32_t *before = l.pool;
+                const size_t len_before = l.pool_len;
+                assert_true(nbep_nblist_append(&l, i, j));
+                assert_true(nbep_nblist_append(&l, j, i));
+                adj[i * N + j] = adj[j * N + i] = 1;
+                moves += l.pool_len > len_before;
+                compactions += l.pool != before && l.pool_len < len_before;
+            }
+        }
+        if (op % 997 == 0)
+            assert_matches(&l, adj, N);
+        /* the pool stays within about three fresh layouts (nblist.h), plus one list's growth */
+        size_t fresh = 0;
+        for (size_t k = 0; k < N; k++)
+            fresh += l.cnt[k] + l.cnt[k] / 4 + 4;
+        assert_true(l.pool_cap <= 3 * fresh + 8 * N + 16);
+    }
+    assert_matches(&l, adj, N);
+    assert_true(moves > 0);       /* the test went through the growth path */
+    assert_true(compactions > 0); /* and through compaction */
+    free(adj);
+    nbep_nblist_fini(&l);
+}
+
+static void test_layout_gives_each_list_its_count_and_slack_and_fill_appends(void **state)
+{
+    (void)state;
+    nbep_nblist l;
+    init(&l, 4);
+    const uint32_t counts[4] = {0, 3, 1, 2};
+    assert_true(nbep_nblist_layout(&l, counts));
+    for (uint32_t i = 0; i < 4; i++) {
+        assert_true(l.cap[i] >= counts[i] + 4); /* slack for drift between rebuilds */
+        assert_int_equal(l.cnt[i], 0);
+        if (i > 0) /* laid out one after another, no overlap */
+            assert_int_equal(l.off[i], l.off[i - 1] + l.cap[i - 1]);
+    }
+    /* the complete graph minus 0: 1-2, 1-3, 2-3 ... filled from both sides as a rebuild does */
+    nbep_nblist_fill(&l, 1, 2);
+    nbep_nblist_fill(&l, 1, 3);
+    nbep_nblist_fill(&l, 2, 1);
+    nbep_nblist_fill(&l, 3, 1);
+    assert_int_equal(nbep_nblist_check(&l), 0);
+    size_t m;
+    const uint32_t *js = nbep_nblist_of(&l, 1, &m);
+    assert_int_equal(m, 2);
+    assert_int_equal(js[0], 2);
+    assert_int_equal(js[1], 3);
+    /* detaching 1 empties its list and removes it from 2's and 3's */
+    nbep_nblist_detach(&l, 1);
+    for (uint32_t i = 0; i < 4; i++) {
+        (void)nbep_nblist_of(&l, i, &m);
+        assert_int_equal(m, 0);
+    }
+    nbep_nblist_fini(&l);
+}
+
+static void test_check_catches_asymmetry_duplicates_and_self_entries(void **state)
+{
+    (void)state;
+    nbep_nblist l;
+    init(&l, 3);
+    const uint32_t counts[3] = {2, 2, 2};
+    assert_true(nbep_nblist_layout(&l, counts));
+    nbep_nblist_fill(&l, 0, 1); /* 1 does not list 0 */
+    assert_int_equal(nbep_nblist_check(&l), 1);
+    nbep_nblist_fill(&l, 1, 0);
+    assert_int_equal(nbep_nblist_check(&l), 0);
+    nbep_nblist_fill(&l, 2, 2); /* itself */
+    assert_int_equal(nbep_nblist_check(&l), 1);
+    l.cnt[2] = 0;
+    nbep_nblist_fill(&l, 0, 1); /* twice */
+    assert_true(nbep_nblist_check(&l) >= 1);
+    nbep_nblist_fini(&l);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_random_attach_and_detach_match_a_reference_adjacency),
+        cmocka_unit_test(test_layout_gives_each_list_its_count_and_slack_and_fill_appends),
+        cmocka_unit_test(test_check_catches_asymmetry_duplicates_and_self_entries),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
