@@ -43,12 +43,12 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->q = q;
     e->ver = ver;
     e->pb = nbep_periodic_make(periodic, lo, hi);
-    /* the skin, cut down in a small periodic box so that three cells (sides of the cutoff
-     * times 1 + 1/8, cells.h) fit across; the deck check keeps it at NBEP_NBLIST_SKIN_MIN */
+    /* the skin, cut down in a small periodic box so that three cells (sides of the cutoff)
+     * fit across; the deck check keeps it at NBEP_NBLIST_SKIN_MIN */
     double skin = NBEP_NBLIST_SKIN * reach;
     for (int k = 0; k < 3; k++)
         if (e->pb.axis[k])
-            skin = fmin(skin, e->pb.len[k] / (3.0 * 1.125 * (1.0 + CUT_SLACK)) - reach);
+            skin = fmin(skin, e->pb.len[k] / (3.0 * (1.0 + CUT_SLACK)) - reach);
     if (reach > 0.0 && !(skin >= NBEP_NBLIST_SKIN_MIN * reach)) {
         nbep_evloop_destroy(&e);
         NBEP_FAIL(d, NBEP_EDECK,
@@ -68,7 +68,10 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     if (st == NBEP_OK)
         st = nbep_calendar_create(n, &e->cal, d);
     if (st == NBEP_OK)
-        st = nbep_cells_init(&e->cells, lo, hi, e->cut, n, periodic, d);
+        /* cells_init makes sides of 1.125 times the reach it is given, for the hysteresis of
+         * moving members (cells.h); list centres stay put between rebuilds, so sides of the
+         * cutoff itself suffice: a 27-cell block a third smaller to scan at each rebuild */
+        st = nbep_cells_init(&e->cells, lo, hi, e->cut / 1.125, n, periodic, d);
     if (st == NBEP_OK)
         st = nbep_nblist_init(&e->nl, n, d);
     if (st != NBEP_OK) {
@@ -81,7 +84,7 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
 
 double nbep_evloop_min_periodic_side(double reach)
 {
-    return 3.0 * 1.125 * (1.0 + NBEP_NBLIST_SKIN_MIN) * reach * (1.0 + CUT_SLACK);
+    return 3.0 * (1.0 + NBEP_NBLIST_SKIN_MIN) * reach * (1.0 + CUT_SLACK);
 }
 
 void nbep_evloop_destroy(nbep_evloop **e)

@@ -607,7 +607,7 @@ static void test_periodic_deck_errors_name_the_line(void **state)
              "run: { neighbors = \"cells\"; };\n"
              "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 3.0]; periodic = [false, false, true]; };\n%s",
              sph);
-    expect_deck_error(text, 2, "needs the box's z side (3) to be at least 7.594 times the largest radius");
+    expect_deck_error(text, 2, "needs the box's z side (3) to be at least 6.75 times the largest radius");
     /* spheres overlapping across a periodic face (0.3 + 10 - 9.6 = 0.7 apart, x and z) */
     snprintf(text, sizeof text,
              "run: { neighbors = \"cells\"; };\n"

@@ -44,8 +44,8 @@ double nbep_predict_pair_quadratic(nbep_vec3 dp, nbep_vec3 dv, double sigma);
 
 /* A cheap lower bound (no square root) on nbep_predict_pair_quadratic(dp, dv, sigma), for
  * loops that only want a pair's contact if it comes before the best one found so far:
- * NBEP_NEVER when the pair does not close (the root is NBEP_NEVER too); 0 when the pair is
- * within sigma sqrt(2) (no bound: take the root); otherwise c / (-2 b), b = dp.dv < 0,
+ * NBEP_NEVER when the pair does not close (the root is NBEP_NEVER too); 0 when the pair
+ * touches or nearly (no bound: take the root); otherwise c / (-2 b), b = dp.dv < 0,
  * c = |dp|^2 - sigma^2, because the root is c / (-b + sqrt(b^2 - |dv|^2 c)) and the square
  * root is at most -b. In floating point the root as computed can fall below c / (-2 b) by a
  * few roundings (the sqrt, the sum, the division: under 4 ulps, 1e-15 relative); the bound is
@@ -57,7 +57,13 @@ static inline double nbep_predict_pair_quadratic_floor(nbep_vec3 dp, nbep_vec3 d
         return NBEP_NEVER;
     double pp = dp.x * dp.x + dp.y * dp.y + dp.z * dp.z;
     double c = pp - sigma * sigma;
+    /* Nearer than that the root takes c compensated (it may be a tiny gap). c as computed here
+     * is then within about 5 ulps of pp of the exact one (pp's three products and two sums,
+     * sigma^2 <= pp, the subtraction), so c - 8 eps pp (eps = 2^-52) is below both, and a
+     * bound still, where positive. */
     if (!(c > 0.5 * pp))
+        c -= 8.0 * 0x1p-52 * pp;
+    if (!(c > 0.0))
         return 0.0;
     return c / (-2.0 * b) * (1.0 - 1e-12);
 }
