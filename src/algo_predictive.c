@@ -223,13 +223,18 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     c->rest = nbep_alloc_aligned(n, sizeof *c->rest);
     c->aeff = nbep_alloc_aligned(n, sizeof *c->aeff);
     c->t_last = nbep_alloc_aligned(n, sizeof *c->t_last);
-    c->flags = nbep_alloc_aligned(n, sizeof *c->flags);
-    c->claim[0] = nbep_alloc_aligned(n, sizeof *c->claim[0]);
-    c->claim[1] = nbep_alloc_aligned(n, sizeof *c->claim[1]);
-    c->reacted = nbep_alloc_aligned(n, sizeof *c->reacted);
+    /* the rounds' bookkeeping (flags, claims, reaction stamps, candidate and redo lists):
+     * not in cells mode, whose event loop needs none of it (25 to 45 bytes a sphere) */
+    const bool rounds = !sim->scene->neighbors_cells;
+    if (rounds) {
+        c->flags = nbep_alloc_aligned(n, sizeof *c->flags);
+        c->claim[0] = nbep_alloc_aligned(n, sizeof *c->claim[0]);
+        c->claim[1] = nbep_alloc_aligned(n, sizeof *c->claim[1]);
+        c->reacted = nbep_alloc_aligned(n, sizeof *c->reacted);
+    }
     c->ws = nbep_alloc_aligned((size_t)sim->nt, sizeof *c->ws);
-    if (!c->ver || !c->tau || !c->rest || !c->aeff || !c->t_last || !c->flags || !c->claim[0] || !c->claim[1] ||
-        !c->reacted || !c->ws) {
+    if (!c->ver || !c->tau || !c->rest || !c->aeff || !c->t_last || !c->ws ||
+        (rounds && (!c->flags || !c->claim[0] || !c->claim[1] || !c->reacted))) {
         pred_destroy(c);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm (%zu spheres)",
                   n);
@@ -272,24 +277,29 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         c->rest[i] = (rest_set){.n = 0};
         c->aeff[i] = sim->st.acc[i];
         c->t_last[i] = -INFINITY;
-        atomic_init(&c->claim[0][i], KEY_FREE);
-        atomic_init(&c->claim[1][i], KEY_FREE);
-        atomic_init(&c->reacted[i], 0);
+        if (rounds) {
+            atomic_init(&c->claim[0][i], KEY_FREE);
+            atomic_init(&c->claim[1][i], KEY_FREE);
+            atomic_init(&c->reacted[i], 0);
+        }
     }
     for (int t = 0; t < sim->nt; t++) {
         nbep_range r = nbep__range_split(n, t, sim->nt);
         size_t own = r.hi - r.lo + 1;
         thread_ws *w = &c->ws[t];
-        w->cand = malloc(own * sizeof *w->cand);
-        w->redo = malloc(own * sizeof *w->redo);
         /* 2 per reaction, 1 per let-go; cells mode: one reaction's 3 and every held sphere
          * letting go after it, on the thread that runs the event loop */
-        size_t n_fired = 3 * own + (c->ev && t == 0 ? n : 0);
+        size_t n_fired = rounds ? 3 * own : t == 0 ? n + 3 : 1;
         w->fired = malloc(n_fired * sizeof *w->fired);
-        w->rel = malloc(own * sizeof *w->rel);
-        w->claimed = malloc(2 * own * sizeof *w->claimed);
         w->part = nbep_alloc_aligned(CHUNK, sizeof *w->part);
-        if (!w->cand || !w->redo || !w->fired || !w->rel || !w->claimed || !w->part) {
+        if (rounds) {
+            w->cand = malloc(own * sizeof *w->cand);
+            w->redo = malloc(own * sizeof *w->redo);
+            w->rel = malloc(own * sizeof *w->rel);
+            w->claimed = malloc(2 * own * sizeof *w->claimed);
+        }
+        if (!w->fired || !w->part ||
+            (rounds && (!w->cand || !w->redo || !w->rel || !w->claimed))) {
             pred_destroy(c);
             NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm");
         }

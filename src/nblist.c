@@ -39,12 +39,13 @@ void nbep_nblist_fini(nbep_nblist *l)
     memset(l, 0, sizeof *l);
 }
 
-/* Makes the pool hold at least `need` entries, keeping its contents. */
-static bool reserve(nbep_nblist *l, size_t need)
+/* Makes the pool hold at least `need` entries, keeping its contents; when it must grow, it
+ * grows to need + need / spare_div (room for later moves). */
+static bool reserve(nbep_nblist *l, size_t need, size_t spare_div)
 {
     if (need <= l->pool_cap)
         return true;
-    size_t cap = need + need / 2u;
+    size_t cap = need + need / spare_div;
     uint32_t *p = realloc(l->pool, cap * sizeof *p);
     if (!p)
         return false;
@@ -58,7 +59,7 @@ bool nbep_nblist_layout(nbep_nblist *l, const uint32_t *counts)
     size_t total = 0;
     for (size_t i = 0; i < l->n; i++)
         total += room_for(counts[i]);
-    bool ok = reserve(l, total);
+    bool ok = reserve(l, total, 8u); /* an eighth spare: lists that outgrow their room move */
     size_t at = 0;
     for (size_t i = 0; i < l->n; i++) {
         l->off[i] = (uint32_t)(ok ? at : 0);
@@ -110,7 +111,7 @@ bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j)
                 return false;
         }
         if (l->cnt[i] == l->cap[i]) { /* compaction may have made room already */
-            if (l->pool_len + grown > UINT32_MAX || !reserve(l, l->pool_len + grown))
+            if (l->pool_len + grown > UINT32_MAX || !reserve(l, l->pool_len + grown, 2u))
                 return false;
             memcpy(l->pool + l->pool_len, l->pool + l->off[i], l->cnt[i] * sizeof *l->pool);
             l->off[i] = (uint32_t)l->pool_len;

@@ -39,6 +39,16 @@ nbep_status nbep_state_init(nbep_state *s, size_t n, size_t n_planes, nbep_diag 
     return NBEP_OK;
 }
 
+void nbep_state_release_motion(nbep_state *s)
+{
+    nbep_free_aligned(s->pos);
+    nbep_free_aligned(s->vel);
+    nbep_free_aligned(s->acc);
+    nbep_free_aligned(s->image);
+    s->pos = s->vel = s->acc = NULL;
+    s->image = NULL;
+}
+
 void nbep_state_fini(nbep_state *s)
 {
     if (!s)
