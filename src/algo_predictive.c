@@ -1245,7 +1245,7 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
             u.cnt->c[NBEP_COUNTER_CHECKS] += own.hi - own.lo;
             nbep_barrier_wait(&c->bar);
             if (tid == 0) {
-                nbep_evloop_schedule(c->ev);
+                nbep_evloop_schedule(c->ev, u.T0);
                 if (step == sim->step_first) { /* SPEC: first predictions are set-up time */
                     double now = nbep_now();
                     sim->setup_seconds += now - sim->t_start;

@@ -1,32 +1,63 @@
-/* Indexed binary min-heap (see calendar.h). Entries live in the heap array itself, so a
- * comparison touches one cache line per side; where[item] is the item's slot in the heap.
+/* Event calendar (see calendar.h): a calendar queue after Brown (1988) and the scheduler of
+ * Smallenburg's EDMD, with an indexed binary min-heap for the bucket being drained.
  *
- * Why a heap and not EDMD's or DynamO's calendar (a sorted block for the near future plus
- * unsorted lists for later blocks): the engine keeps one entry per sphere, whose times spread
- * over less than a step ahead of the current event, so the heap is shallow (log2 n ~ 15 at
- * n = 32000) and every operation is a handful of predictable compares; the bucket scheme's
- * O(1) pays off once re-predictions are cheaper than a heap walk, which they are not yet here
- * (a re-prediction tests some 30 partners). The interface hides the structure, so a bucket
- * queue can replace it without touching the engine. */
+ * Time is cut into buckets of width w from an origin t0; an entry's bucket number is
+ * ab = floor((time - t0) / w), which never decreases as time grows, so an entry in an earlier
+ * bucket always comes before one in a later bucket. Entries live in one of three places:
+ *   heap      every entry with ab <= cur (the bucket being drained), ordered exactly;
+ *   ring      entries with cur < ab <= cur + nb, unsorted, in doubly linked lists, one per
+ *             ring slot ab mod nb (nb consecutive bucket numbers map to distinct slots);
+ *   overflow  entries further ahead (and +inf), one unsorted list.
+ * The earliest entry is the heap's top; when the heap empties, cur advances and the next
+ * slot's list moves into the heap. Every nb buckets (a lap) the overflow entries that now fall
+ * within the ring move into it; no entry can be passed over (each overflow entry is further
+ * than the next lap boundary when it is filed). Moving an entry to a later bucket, the common
+ * case (a sphere's next event), costs an O(log h) heap removal (h: entries in the current
+ * bucket, a handful) and an O(1) list insertion, whatever n is.
+ *
+ * The width is set by nbep_calendar_retune from the entries' mean distance ahead of now, so
+ * that a bucket holds about BUCKET_ENTRIES entries; a lap that finds the buckets far too full
+ * or far too empty retunes on its own. The width only decides where entries wait: the order
+ * they come out in is (time, key, item) exactly, whatever the width. */
 #include "nbep/calendar.h"
 
 #include <assert.h>
 #include <math.h>
 #include <stdlib.h>
 
-#define NOWHERE UINT32_MAX
+#define NIL UINT32_MAX
+/* The entries a bucket should hold on average: a small heap to drain, few empty buckets. */
+#define BUCKET_ENTRIES 4.0
+/* A lap retunes when its non-empty buckets held more than this many times BUCKET_ENTRIES on
+ * average, or when fewer than one bucket in EMPTY_LIMIT held anything. */
+#define CROWDED_FACTOR 16.0
+#define EMPTY_LIMIT 64
 
-typedef struct entry {
+enum { WHERE_NONE = 0, WHERE_HEAP, WHERE_RING, WHERE_OVERFLOW };
+
+typedef struct node {
     double time;
     uint64_t key;
-    uint32_t item;
-} entry;
+    uint32_t next, prev; /* ring and overflow lists */
+    uint32_t loc;        /* heap index (WHERE_HEAP) or ring slot (WHERE_RING) */
+    uint32_t where;
+} node;
 
 struct nbep_calendar {
-    size_t n;         /* items */
-    size_t size;      /* entries held */
-    entry *heap;      /* owned, n */
-    uint32_t *where;  /* owned, n: heap index of an item's entry, or NOWHERE */
+    size_t n;            /* items */
+    size_t size;         /* entries held */
+    node *node;          /* owned, n */
+    uint32_t *heap;      /* owned, n: items of the buckets up to cur, a min-heap */
+    size_t heap_len;
+    uint32_t *head;      /* owned, nb: first item of each ring slot's list */
+    size_t nb;           /* ring slots, a power of two */
+    size_t ring_len;     /* entries in the ring */
+    uint32_t overflow;   /* first item of the overflow list */
+    int64_t cur;         /* bucket being drained */
+    int64_t ovf_min;     /* no overflow entry's bucket is below this */
+    double t0, w, inv_w; /* bucket origin, width and 1 / width */
+    /* this lap so far: buckets advanced, of which non-empty, and entries they brought */
+    size_t lap_steps, lap_full, lap_moved;
 };
 
 nbep_status nbep_calendar_create(size_t n, nbep_calendar **out, nbep_diag *d)
@@ -34,15 +65,24 @@ nbep_status nbep_calendar_create(size_t n, nbep_calendar **out, nbep_diag *d)
     nbep_calendar *c = calloc(1, sizeof *c);
     if (c && n < UINT32_MAX) {
         c->n = n;
+        c->nb = 16;
+        while (c->nb < n)
+            c->nb *= 2;
+        c->node = nbep_alloc_aligned(n ? n : 1, sizeof *c->node);
         c->heap = nbep_alloc_aligned(n ? n : 1, sizeof *c->heap);
-        c->where = nbep_alloc_aligned(n ? n : 1, sizeof *c->where);
+        c->head = nbep_alloc_aligned(c->nb, sizeof *c->head);
     }
-    if (!c || !c->heap || !c->where) {
+    if (!c || !c->node || !c->heap || !c->head) {
         nbep_calendar_destroy(&c);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for an event calendar of %zu items", n);
     }
     for (size_t i = 0; i < n; i++)
-        c->where[i] = NOWHERE;
+        c->node[i].where = WHERE_NONE;
+    for (size_t s = 0; s < c->nb; s++)
+        c->head[s] = NIL;
+    c->overflow = NIL;
+    c->w = c->inv_w = 1.0;
+    c->ovf_min = INT64_MAX;
     *out = c;
     return NBEP_OK;
 }
@@ -51,106 +91,310 @@ void nbep_calendar_destroy(nbep_calendar **c)
 {
     if (!c || !*c)
         return;
+    nbep_free_aligned((*c)->node);
     nbep_free_aligned((*c)->heap);
-    nbep_free_aligned((*c)->where);
+    nbep_free_aligned((*c)->head);
     free(*c);
     *c = NULL;
 }
 
 size_t nbep_calendar_bytes(size_t n)
 {
-    return sizeof(nbep_calendar) + n * (sizeof(entry) + sizeof(uint32_t));
+    size_t nb = 16;
+    while (nb < n)
+        nb *= 2;
+    return sizeof(nbep_calendar) + n * (sizeof(node) + sizeof(uint32_t)) +
+           nb * sizeof(uint32_t);
 }
+
+/* ---- the strict order and the heap of the current bucket ---------------------------------- */
 
 /* The strict order: time, then key, then item (items are unique, so no two entries tie). */
-static bool before(const entry *a, const entry *b)
+static inline bool before(const nbep_calendar *c, uint32_t a, uint32_t b)
 {
-    if (a->time != b->time)
-        return a->time < b->time;
-    if (a->key != b->key)
-        return a->key < b->key;
-    return a->item < b->item;
+    const node *x = &c->node[a], *y = &c->node[b];
+    if (x->time != y->time)
+        return x->time < y->time;
+    if (x->key != y->key)
+        return x->key < y->key;
+    return a < b;
 }
 
-static void place(nbep_calendar *c, size_t k, entry e)
+static inline void heap_place(nbep_calendar *c, size_t k, uint32_t item)
 {
-    c->heap[k] = e;
-    c->where[e.item] = (uint32_t)k;
+    c->heap[k] = item;
+    c->node[item].loc = (uint32_t)k;
 }
 
-static void sift_up(nbep_calendar *c, size_t k, entry e)
+static void sift_up(nbep_calendar *c, size_t k, uint32_t item)
 {
     while (k > 0) {
         size_t parent = (k - 1) / 2;
-        if (!before(&e, &c->heap[parent]))
+        if (!before(c, item, c->heap[parent]))
             break;
-        place(c, k, c->heap[parent]);
+        heap_place(c, k, c->heap[parent]);
         k = parent;
     }
-    place(c, k, e);
+    heap_place(c, k, item);
 }
 
-static void sift_down(nbep_calendar *c, size_t k, entry e)
+static void sift_down(nbep_calendar *c, size_t k, uint32_t item)
 {
     for (;;) {
         size_t child = 2 * k + 1;
-        if (child >= c->size)
+        if (child >= c->heap_len)
             break;
-        if (child + 1 < c->size && before(&c->heap[child + 1], &c->heap[child]))
+        if (child + 1 < c->heap_len && before(c, c->heap[child + 1], c->heap[child]))
             child++;
-        if (!before(&c->heap[child], &e))
+        if (!before(c, c->heap[child], item))
             break;
-        place(c, k, c->heap[child]);
+        heap_place(c, k, c->heap[child]);
         k = child;
     }
-    place(c, k, e);
+    heap_place(c, k, item);
 }
 
-void nbep_calendar_set(nbep_calendar *c, uint32_t item, double time, uint64_t key)
+static void heap_push(nbep_calendar *c, uint32_t item)
 {
-    assert(item < c->n && !isnan(time));
-    entry e = {time, key, item};
-    uint32_t k = c->where[item];
-    if (k == NOWHERE) {
-        sift_up(c, c->size++, e);
-        return;
-    }
-    if (before(&e, &c->heap[k]))
-        sift_up(c, k, e);
-    else
-        sift_down(c, k, e);
+    c->node[item].where = WHERE_HEAP;
+    sift_up(c, c->heap_len++, item);
 }
 
-void nbep_calendar_remove(nbep_calendar *c, uint32_t item)
+static void heap_delete(nbep_calendar *c, uint32_t item)
 {
-    assert(item < c->n);
-    uint32_t k = c->where[item];
-    if (k == NOWHERE)
-        return;
-    c->where[item] = NOWHERE;
-    entry last = c->heap[--c->size];
-    if (k == c->size)
+    size_t k = c->node[item].loc;
+    uint32_t last = c->heap[--c->heap_len];
+    if (k == c->heap_len)
         return; /* it was the last entry */
     /* the last entry fills the hole and moves whichever way the order asks */
-    if (k > 0 && before(&last, &c->heap[(k - 1) / 2]))
+    if (k > 0 && before(c, last, c->heap[(k - 1) / 2]))
         sift_up(c, k, last);
     else
         sift_down(c, k, last);
 }
 
-void nbep_calendar_clear(nbep_calendar *c)
+/* ---- the ring and the overflow ------------------------------------------------------------- */
+
+/* The bucket number of a time; +inf and anything beyond 2^62 buckets ahead: INT64_MAX. */
+static inline int64_t bucket_of(const nbep_calendar *c, double time)
 {
-    for (size_t k = 0; k < c->size; k++)
-        c->where[c->heap[k].item] = NOWHERE;
-    c->size = 0;
+    double q = floor((time - c->t0) * c->inv_w);
+    if (!(q < 0x1p62))
+        return INT64_MAX;
+    return q < -0x1p62 ? -INT64_MAX : (int64_t)q;
 }
 
-bool nbep_calendar_top(const nbep_calendar *c, uint32_t *item, double *time)
+static void list_push(nbep_calendar *c, uint32_t *head, uint32_t item)
+{
+    node *x = &c->node[item];
+    x->prev = NIL;
+    x->next = *head;
+    if (*head != NIL)
+        c->node[*head].prev = item;
+    *head = item;
+}
+
+static void list_unlink(nbep_calendar *c, uint32_t *head, uint32_t item)
+{
+    node *x = &c->node[item];
+    if (x->prev != NIL)
+        c->node[x->prev].next = x->next;
+    else
+        *head = x->next;
+    if (x->next != NIL)
+        c->node[x->next].prev = x->prev;
+}
+
+/* Files an entry (its node's time and key set) where its bucket says. */
+static void file(nbep_calendar *c, uint32_t item)
+{
+    node *x = &c->node[item];
+    int64_t ab = bucket_of(c, x->time);
+    if (ab <= c->cur) {
+        heap_push(c, item);
+    } else if (ab - c->cur <= (int64_t)c->nb) {
+        x->where = WHERE_RING;
+        x->loc = (uint32_t)((uint64_t)ab & (c->nb - 1));
+        list_push(c, &c->head[x->loc], item);
+        c->ring_len++;
+    } else {
+        x->where = WHERE_OVERFLOW;
+        list_push(c, &c->overflow, item);
+        if (ab < c->ovf_min)
+            c->ovf_min = ab;
+    }
+}
+
+/* Takes an entry out of wherever it is. */
+static void unfile(nbep_calendar *c, uint32_t item)
+{
+    node *x = &c->node[item];
+    if (x->where == WHERE_HEAP) {
+        heap_delete(c, item);
+    } else if (x->where == WHERE_RING) {
+        list_unlink(c, &c->head[x->loc], item);
+        c->ring_len--;
+    } else {
+        list_unlink(c, &c->overflow, item);
+    }
+    x->where = WHERE_NONE;
+}
+
+/* Re-files the overflow entries, which brings those now within the ring into it. */
+static void redistribute(nbep_calendar *c)
+{
+    uint32_t item = c->overflow;
+    c->overflow = NIL;
+    c->ovf_min = INT64_MAX;
+    while (item != NIL) {
+        uint32_t next = c->node[item].next;
+        file(c, item);
+        item = next;
+    }
+}
+
+/* Re-files every entry with the origin at t_now and the width w (> 0). */
+static void refile_all(nbep_calendar *c, double t_now, double w)
+{
+    /* gather every entry into one list through the overflow (the heap's items first) */
+    uint32_t all = c->overflow;
+    for (size_t k = 0; k < c->heap_len; k++)
+        list_push(c, &all, c->heap[k]);
+    for (size_t s = 0; s < c->nb && c->ring_len > 0; s++) {
+        uint32_t item = c->head[s];
+        while (item != NIL) {
+            uint32_t next = c->node[item].next;
+            list_push(c, &all, item);
+            c->ring_len--;
+            item = next;
+        }
+        c->head[s] = NIL;
+    }
+    c->overflow = all;
+    c->heap_len = 0;
+    c->t0 = t_now;
+    c->w = w;
+    c->inv_w = 1.0 / w;
+    c->cur = 0;
+    c->lap_steps = c->lap_full = c->lap_moved = 0;
+    redistribute(c);
+}
+
+void nbep_calendar_retune(nbep_calendar *c, double t_now)
+{
+    double sum = 0.0;
+    size_t ahead = 0;
+    for (size_t i = 0; i < c->n; i++) {
+        const node *x = &c->node[i];
+        if (x->where != WHERE_NONE && x->time > t_now && x->time < INFINITY) {
+            sum += x->time - t_now;
+            ahead++;
+        }
+    }
+    /* ahead entries spread over about twice their mean distance ahead: the width that puts
+     * BUCKET_ENTRIES of them in a bucket; finite, positive and not subnormal, or unchanged */
+    double w = ahead > 0 ? 2.0 * sum / (double)ahead * BUCKET_ENTRIES / (double)ahead : 0.0;
+    if (!(w > 1e-300 && w < 1e300 && 1.0 / w < 1e300))
+        w = c->w;
+    refile_all(c, t_now, w);
+}
+
+/* The heap is empty and entries are held: brings the next non-empty bucket into the heap. */
+static void advance(nbep_calendar *c)
+{
+    while (c->heap_len == 0) {
+        if (c->ring_len == 0) {
+            /* everything waits in the overflow: jump to its earliest bucket, which re-filing
+             * brings into the heap (the lap rule holds from any bucket: what stays in the
+             * overflow is further than the next lap boundary) */
+            int64_t m = INT64_MAX;
+            for (uint32_t item = c->overflow; item != NIL; item = c->node[item].next) {
+                int64_t ab = bucket_of(c, c->node[item].time);
+                m = ab < m ? ab : m;
+            }
+            if (m == INT64_MAX) { /* only +inf entries: they come out in order from the heap */
+                uint32_t item = c->overflow;
+                c->overflow = NIL;
+                while (item != NIL) {
+                    uint32_t next = c->node[item].next;
+                    heap_push(c, item);
+                    item = next;
+                }
+                return;
+            }
+            c->cur = m;
+            redistribute(c);
+            continue;
+        }
+        c->cur++;
+        const uint32_t slot = (uint32_t)((uint64_t)c->cur & (c->nb - 1));
+        uint32_t item = c->head[slot];
+        c->head[slot] = NIL;
+        c->lap_steps++;
+        c->lap_full += item != NIL;
+        while (item != NIL) {
+            uint32_t next = c->node[item].next;
+            c->ring_len--;
+            c->lap_moved++;
+            heap_push(c, item);
+            item = next;
+        }
+        if ((c->cur & (int64_t)(c->nb - 1)) == 0) { /* a lap: the overflow's turn */
+            if (c->ovf_min <= c->cur + (int64_t)c->nb)
+                redistribute(c);
+            /* far too full or far too empty buckets: a new width from where things are now */
+            if (c->lap_full > 0 &&
+                ((double)c->lap_moved > CROWDED_FACTOR * BUCKET_ENTRIES * (double)c->lap_full ||
+                 c->lap_full * EMPTY_LIMIT < c->lap_steps))
+                nbep_calendar_retune(c, c->t0 + (double)c->cur * c->w);
+            c->lap_steps = c->lap_full = c->lap_moved = 0;
+        }
+    }
+}
+
+/* ---- the interface ------------------------------------------------------------------------- */
+
+void nbep_calendar_set(nbep_calendar *c, uint32_t item, double time, uint64_t key)
+{
+    assert(item < c->n && !isnan(time));
+    node *x = &c->node[item];
+    if (x->where != WHERE_NONE)
+        unfile(c, item);
+    else
+        c->size++;
+    x->time = time;
+    x->key = key;
+    file(c, item);
+}
+
+void nbep_calendar_remove(nbep_calendar *c, uint32_t item)
+{
+    assert(item < c->n);
+    if (c->node[item].where == WHERE_NONE)
+        return;
+    unfile(c, item);
+    c->size--;
+}
+
+void nbep_calendar_clear(nbep_calendar *c)
+{
+    for (size_t i = 0; i < c->n; i++)
+        c->node[i].where = WHERE_NONE;
+    for (size_t s = 0; s < c->nb; s++)
+        c->head[s] = NIL;
+    c->overflow = NIL;
+    c->ovf_min = INT64_MAX;
+    c->heap_len = c->ring_len = c->size = 0;
+}
+
+bool nbep_calendar_top(nbep_calendar *c, uint32_t *item, double *time)
 {
     if (c->size == 0)
         return false;
-    *item = c->heap[0].item;
-    *time = c->heap[0].time;
+    if (c->heap_len == 0)
+        advance(c);
+    *item = c->heap[0];
+    *time = c->node[*item].time;
     return true;
 }
 
@@ -161,24 +405,51 @@ size_t nbep_calendar_size(const nbep_calendar *c)
 
 bool nbep_calendar_has(const nbep_calendar *c, uint32_t item, double *time)
 {
-    if (item >= c->n || c->where[item] == NOWHERE)
+    if (item >= c->n || c->node[item].where == WHERE_NONE)
         return false;
     if (time)
-        *time = c->heap[c->where[item]].time;
+        *time = c->node[item].time;
     return true;
 }
 
 size_t nbep_calendar_check(const nbep_calendar *c)
 {
-    size_t bad = 0, held = 0;
-    for (size_t k = 0; k < c->size; k++) {
-        const entry *e = &c->heap[k];
-        if (e->item >= c->n || c->where[e->item] != k)
+    size_t bad = 0, held = 0, in_heap = 0, in_ring = 0;
+    for (size_t k = 0; k < c->heap_len; k++) {
+        uint32_t item = c->heap[k];
+        if (item >= c->n || c->node[item].where != WHERE_HEAP || c->node[item].loc != k)
             bad++;
-        if (k > 0 && before(e, &c->heap[(k - 1) / 2]))
+        else if (k > 0 && before(c, item, c->heap[(k - 1) / 2]))
             bad++;
+        else if (bucket_of(c, c->node[item].time) > c->cur && c->node[item].time < INFINITY)
+            bad++; /* a later bucket's entry in the heap */
     }
-    for (size_t i = 0; i < c->n; i++)
-        held += c->where[i] != NOWHERE;
-    return bad + (held != c->size);
+    for (size_t s = 0; s < c->nb; s++)
+        for (uint32_t item = c->head[s], prev = NIL; item != NIL;
+             prev = item, item = c->node[item].next) {
+            const node *x = &c->node[item];
+            int64_t ab = bucket_of(c, x->time);
+            in_ring++;
+            if (x->where != WHERE_RING || x->loc != s || x->prev != prev || ab <= c->cur ||
+                ab - c->cur > (int64_t)c->nb || (uint64_t)ab % c->nb != s)
+                bad++;
+            if (in_ring > c->n)
+                return bad + 1; /* a cycle */
+        }
+    size_t in_ovf = 0;
+    for (uint32_t item = c->overflow, prev = NIL; item != NIL;
+         prev = item, item = c->node[item].next) {
+        const node *x = &c->node[item];
+        in_ovf++;
+        if (x->where != WHERE_OVERFLOW || x->prev != prev || bucket_of(c, x->time) < c->ovf_min)
+            bad++;
+        if (in_ovf > c->n)
+            return bad + 1;
+    }
+    for (size_t i = 0; i < c->n; i++) {
+        held += c->node[i].where != WHERE_NONE;
+        in_heap += c->node[i].where == WHERE_HEAP;
+    }
+    return bad + (held != c->size) + (in_heap != c->heap_len) + (in_ring != c->ring_len) +
+           (in_heap + in_ring + in_ovf != c->size);
 }

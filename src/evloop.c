@@ -289,11 +289,12 @@ void nbep_evloop_predict(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, si
         predict_one(e, ops, u, (uint32_t)i, t);
 }
 
-void nbep_evloop_schedule(nbep_evloop *e)
+void nbep_evloop_schedule(nbep_evloop *e, double t)
 {
     nbep_calendar_clear(e->cal);
     for (size_t i = 0; i < e->n; i++)
         schedule_one(e, (uint32_t)i);
+    nbep_calendar_retune(e->cal, t);
 }
 
 bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_end,

@@ -82,7 +82,7 @@ void nbep_evloop_count(nbep_evloop *e, size_t lo, size_t hi);
 void nbep_evloop_layout(nbep_evloop *e);
 void nbep_evloop_predict(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, size_t lo,
                          size_t hi, double t);
-void nbep_evloop_schedule(nbep_evloop *e);
+void nbep_evloop_schedule(nbep_evloop *e, double t);
 /* True once a neighbour list could not get memory (at a rebuild or in nbep_evloop_run, which
  * then returns false): the run must stop. */
 bool nbep_evloop_failed(const nbep_evloop *e);

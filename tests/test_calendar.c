@@ -158,12 +158,109 @@ static void test_remove_of_an_absent_item_and_an_empty_calendar_are_harmless(voi
     nbep_calendar_destroy(&c); /* NULL-safe */
 }
 
+/* The brute-force minimum of the reference, or UINT32_MAX when it holds nothing. */
+static uint32_t ref_min(const ref *r, uint32_t n)
+{
+    uint32_t best = UINT32_MAX;
+    for (uint32_t k = 0; k < n; k++)
+        if (r[k].has && (best == UINT32_MAX || ref_before(r, k, best)))
+            best = k;
+    return best;
+}
+
+/* Used as an event loop uses it, over many laps of the ring of buckets: the earliest entry is
+ * moved later each time (mostly a little, sometimes far past the ring, sometimes to +inf),
+ * others are moved or removed at random, and the pace changes by factors of 1000 both ways
+ * so that the buckets retune themselves; every top is the brute-force minimum. */
+static void test_top_is_the_minimum_over_many_laps_with_far_entries_and_changing_pace(void **st)
+{
+    (void)st;
+    enum { N = 200, OPS = 60000 };
+    nbep_calendar *c = make(N);
+    ref r[N];
+    memset(r, 0, sizeof r);
+    uint64_t x = 777;
+    for (uint32_t i = 0; i < N; i++) {
+        r[i] = (ref){true, (double)(lcg(&x) % 1000) / 1000.0, lcg(&x) % 3};
+        nbep_calendar_set(c, i, r[i].time, r[i].key);
+    }
+    nbep_calendar_retune(c, 0.0);
+    assert_int_equal(nbep_calendar_check(c), 0);
+    double pace = 1.0;
+    for (int op = 0; op < OPS; op++) {
+        if (op == OPS / 3)
+            pace = 1000.0; /* far too many empty buckets for the old width */
+        if (op == 2 * OPS / 3)
+            pace = 1e-3;   /* far too full buckets */
+        uint32_t best = ref_min(r, N), top;
+        double t;
+        bool any = nbep_calendar_top(c, &top, &t);
+        assert_int_equal(any, best != UINT32_MAX);
+        if (!any) { /* everything was removed: refill from where time stands */
+            for (uint32_t i = 0; i < N; i++) {
+                r[i] = (ref){true, (double)(lcg(&x) % 1000) * pace, 0};
+                nbep_calendar_set(c, i, r[i].time, 0);
+            }
+            continue;
+        }
+        assert_int_equal(top, best);
+        assert_true(t == r[best].time);
+        uint64_t what = lcg(&x) % 100;
+        double later = t + pace * (double)(lcg(&x) % 4096) / 2048.0;
+        if (what < 30) { /* often past the ring, due laps later */
+            later = t + pace * (double)(lcg(&x) % 4096) / 64.0;
+        } else if (what < 31) {
+            later = lcg(&x) % 2 ? INFINITY : t + pace * 1e6;
+        } else if (what < 34) {
+            nbep_calendar_remove(c, top);
+            r[top].has = false;
+        }
+        if (what >= 34 || what < 31) {
+            uint64_t key = lcg(&x) % 3;
+            nbep_calendar_set(c, top, later, key);
+            r[top] = (ref){true, later, key};
+        }
+        /* another item moves to a time not before the top's, or goes */
+        uint32_t other = (uint32_t)(lcg(&x) % N);
+        if (lcg(&x) % 4 == 0) {
+            nbep_calendar_remove(c, other);
+            r[other].has = false;
+        } else {
+            double when = t + pace * (double)(lcg(&x) % 4096) / 1024.0;
+            nbep_calendar_set(c, other, when, 1);
+            r[other] = (ref){true, when, 1};
+        }
+        assert_int_equal(nbep_calendar_check(c), 0);
+    }
+    /* only +inf entries left: they still come out, in (key, item) order */
+    for (uint32_t i = 0; i < N; i++) {
+        nbep_calendar_remove(c, i);
+        r[i].has = false;
+    }
+    for (uint32_t i = 10; i > 0; i--) {
+        nbep_calendar_set(c, i, INFINITY, i % 3);
+        r[i] = (ref){true, INFINITY, i % 3};
+    }
+    for (uint32_t k = 0; k < 10; k++) {
+        uint32_t top, best = ref_min(r, N);
+        double t;
+        assert_true(nbep_calendar_top(c, &top, &t));
+        assert_int_equal(top, best);
+        assert_true(isinf(t));
+        nbep_calendar_remove(c, top);
+        r[top].has = false;
+        assert_int_equal(nbep_calendar_check(c), 0);
+    }
+    nbep_calendar_destroy(&c);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_top_is_the_brute_force_minimum_under_random_operations),
         cmocka_unit_test(test_drain_order_is_time_then_key_then_item_for_any_insert_order),
         cmocka_unit_test(test_remove_of_an_absent_item_and_an_empty_calendar_are_harmless),
+        cmocka_unit_test(test_top_is_the_minimum_over_many_laps_with_far_entries_and_changing_pace),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,9 +1,10 @@
-/* The event calendar of the cells engine (evloop.c): an indexed binary min-heap holding at most
- * one entry per item (a sphere), ordered by (time, key, item). The key is the caller's tie
- * breaker (the pair key of an event, the same whoever computes it), so the order of equal
- * times never depends on the order of operations or on the thread count. Setting, moving and
- * removing an item's entry cost O(log n); the earliest entry is read in O(1). Not thread-safe:
- * one thread owns a calendar. */
+/* The event calendar of the cells engine (evloop.c): at most one entry per item (a sphere),
+ * ordered by (time, key, item). The key is the caller's tie breaker (the pair key of an event,
+ * the same whoever computes it), so the order of equal times never depends on the order of
+ * operations or on the thread count. A calendar queue (buckets of time, the current one a small
+ * heap; calendar.c): moving an entry later or removing it costs O(1) plus a heap operation over
+ * the current bucket's few entries, independent of n; reading the earliest entry is O(1)
+ * amortised. Not thread-safe: one thread owns a calendar. */
 #ifndef NBEP_CALENDAR_H
 #define NBEP_CALENDAR_H
 
@@ -27,8 +28,14 @@ void nbep_calendar_set(nbep_calendar *c, uint32_t item, double time, uint64_t ke
 void nbep_calendar_remove(nbep_calendar *c, uint32_t item);
 /* Removes every entry. O(entries). */
 void nbep_calendar_clear(nbep_calendar *c);
-/* The earliest entry: false when empty, else its item and time. */
-bool nbep_calendar_top(const nbep_calendar *c, uint32_t *item, double *time);
+/* The earliest entry: false when empty, else its item and time. (It may move entries between
+ * the calendar's internal buckets, hence not const.) */
+bool nbep_calendar_top(nbep_calendar *c, uint32_t *item, double *time);
+/* Sizes the buckets to the entries held, as seen from time t_now (the earliest time that can
+ * still come out): a speed setting only, the order entries come out in does not change. Call
+ * after filling the calendar; it also retunes itself when its buckets get far too full or far
+ * too empty. O(n). */
+void nbep_calendar_retune(nbep_calendar *c, double t_now);
 /* Entries held. */
 size_t nbep_calendar_size(const nbep_calendar *c);
 /* True when item has an entry; its time in *time (may be NULL). */
