@@ -139,6 +139,9 @@ typedef struct pred_ctx {
     uint64_t *ver;                /* owned: responses per sphere; older predictions are stale */
     double *tau;                  /* owned: local time of each sphere inside the step */
     const nbep_state *st;         /* borrowed: the run's state (pred_import) */
+    /* model only what the scene needs: rest and aeff are NULL when no sphere accelerates
+     * (free_flight: no contact can rest or hold, every sphere flies with a = 0), t_last when
+     * the TC model cannot change a restitution (e = 1 or tc = 0) */
     rest_set *rest;               /* owned: the contacts holding each sphere */
     nbep_vec3 *aeff;              /* owned: acceleration each sphere flies with (rest_solve) */
     double *t_last;               /* owned: time of each sphere's last sphere collision (TC) */
@@ -218,11 +221,18 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         pred_destroy(c);
         return st;
     }
+    c->free_flight = true;
+    for (size_t i = 0; i < n; i++)
+        c->free_flight &= is_zero(sim->st.acc[i]);
+    const bool tc_model = sim->scene->tc > 0.0 && sim->scene->restitution < 1.0;
     c->ver = nbep_alloc_aligned(n, sizeof *c->ver);
     c->tau = nbep_alloc_aligned(n, sizeof *c->tau);
-    c->rest = nbep_alloc_aligned(n, sizeof *c->rest);
-    c->aeff = nbep_alloc_aligned(n, sizeof *c->aeff);
-    c->t_last = nbep_alloc_aligned(n, sizeof *c->t_last);
+    if (!c->free_flight) {
+        c->rest = nbep_alloc_aligned(n, sizeof *c->rest);
+        c->aeff = nbep_alloc_aligned(n, sizeof *c->aeff);
+    }
+    if (tc_model)
+        c->t_last = nbep_alloc_aligned(n, sizeof *c->t_last);
     /* the rounds' bookkeeping (flags, claims, reaction stamps, candidate and redo lists):
      * not in cells mode, whose event loop needs none of it (25 to 45 bytes a sphere) */
     const bool rounds = !sim->scene->neighbors_cells;
@@ -233,7 +243,8 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         c->reacted = nbep_alloc_aligned(n, sizeof *c->reacted);
     }
     c->ws = nbep_alloc_aligned((size_t)sim->nt, sizeof *c->ws);
-    if (!c->ver || !c->tau || !c->rest || !c->aeff || !c->t_last || !c->ws ||
+    if (!c->ver || !c->tau || (!c->free_flight && (!c->rest || !c->aeff)) ||
+        (tc_model && !c->t_last) || !c->ws ||
         (rounds && (!c->flags || !c->claim[0] || !c->claim[1] || !c->reacted))) {
         pred_destroy(c);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm (%zu spheres)",
@@ -249,11 +260,8 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
             return st;
         }
     }
-    c->free_flight = true;
-    for (size_t i = 0; i < n; i++) {
+    for (size_t i = 0; i < n; i++)
         c->rmax = fmax(c->rmax, sim->st.radius[i]);
-        c->free_flight &= is_zero(sim->st.acc[i]);
-    }
     c->image_horizon = c->pb.any && !c->use_grid && !sim->scene->neighbors_cells;
     c->image_reach = nbep_periodic_reach(&c->pb, 2.0 * c->rmax);
     if (sim->scene->neighbors_cells) {
@@ -274,9 +282,12 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         }
     }
     for (size_t i = 0; i < n; i++) {
-        c->rest[i] = (rest_set){.n = 0};
-        c->aeff[i] = sim->st.acc[i];
-        c->t_last[i] = -INFINITY;
+        if (c->rest) {
+            c->rest[i] = (rest_set){.n = 0};
+            c->aeff[i] = sim->st.acc[i];
+        }
+        if (c->t_last)
+            c->t_last[i] = -INFINITY;
         if (rounds) {
             atomic_init(&c->claim[0][i], KEY_FREE);
             atomic_init(&c->claim[1][i], KEY_FREE);
@@ -317,7 +328,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
 static nbep_vec3 effective_acc(const pred_ctx *c, const nbep_state *s, size_t i)
 {
     (void)s;
-    return c->aeff[i];
+    return c->aeff ? c->aeff[i] : ZERO3;
 }
 
 /* The separation from sphere a to sphere b, by the minimum image in a periodic box (a pair in
@@ -332,7 +343,7 @@ static nbep_vec3 sep(const pred_ctx *c, const nbep_state *s, size_t a, size_t b)
  * as part of the support. */
 static bool supported(const pred_ctx *c, size_t i)
 {
-    return c->rest[i].n > 0 && is_zero(c->aeff[i]);
+    return c->rest && c->rest[i].n > 0 && is_zero(c->aeff[i]);
 }
 
 static bool rest_has_plane(const rest_set *r, size_t p)
@@ -463,7 +474,7 @@ static nbep_event predict_some(const pred_ctx *c, const nbep_state *s, size_t i,
     const nbep_vec3 ai = effective_acc(c, s, i);
     if (with_planes) {
         for (size_t p = 0; p < s->n_planes; p++) {
-            if (rest_has_plane(&c->rest[i], p))
+            if (c->rest && rest_has_plane(&c->rest[i], p))
                 continue;
             nbep_vec3 n = s->plane_normal[p];
             double gap = nbep_physics_plane_gap(n, s->plane_offset[p], s->pos[i], s->radius[i]);
@@ -740,6 +751,8 @@ static void claim_phase(pred_ctx *c, int par, double t_min, thread_ws *w)
 static nbep_vec3 plane_mobility(const pred_ctx *c, const nbep_state *s, size_t i, nbep_vec3 u,
                                 bool *leans)
 {
+    if (!c->rest)
+        return u;
     const rest_set *r = &c->rest[i];
     nbep_vec3 n[NBEP_CONTACT_MAX];
     int k = 0;
@@ -756,9 +769,9 @@ static nbep_vec3 plane_mobility(const pred_ctx *c, const nbep_state *s, size_t i
  * beyond round-off: a response along a tilted plane leaves v.n at a few ulps of |v|. */
 static void update_rest(pred_ctx *c, nbep_state *s, size_t i, double dt)
 {
-    rest_set *r = &c->rest[i];
-    if (r->n == 0)
+    if (!c->rest || c->rest[i].n == 0)
         return;
+    rest_set *r = &c->rest[i];
     nbep_vec3 n[NBEP_CONTACT_MAX];
     rest_normals(c, s, i, r, n);
     rest_set k = {.n = 0};
@@ -843,6 +856,8 @@ static void min_bounce_held(const pred_ctx *c, nbep_state *s, double dt, size_t 
  * of a real contact, during which a hard-sphere model has no business dissipating twice. */
 static double tc_restitution(pred_ctx *c, double tc, double e, double t_abs, size_t a, size_t b)
 {
+    if (!c->t_last) /* e = 1 or tc = 0: the model never changes e */
+        return e;
     bool recent = t_abs - c->t_last[a] < tc || t_abs - c->t_last[b] < tc;
     c->t_last[a] = t_abs;
     c->t_last[b] = t_abs;
@@ -910,7 +925,7 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
 {
     const double e = sc->restitution, dt = sc->dt;
     advance_to(c, s, lo, t_local);
-    const bool still_lo = c->rest[lo].still;
+    const bool still_lo = c->rest && c->rest[lo].still;
     if (ev->kind == NBEP_EVENT_HORIZON) { /* image horizon: re-predicted from here */
         fire(c, w, s, lo, still_lo);
         return;
@@ -927,9 +942,9 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
         mx->wall[p] += s->mass[lo] * (nbep_vec3_dot(n, s->vel[lo]) - vn0);
         update_rest(c, s, lo, dt);
         double an = nbep_vec3_dot(s->acc[lo], n), vn = nbep_vec3_dot(s->vel[lo], n);
-        rest_set *r = &c->rest[lo];
+        rest_set *r = c->rest ? &c->rest[lo] : NULL; /* NULL: nothing accelerates */
         /* a bounce shorter than tc would be elastic (TC) and never shrink: rest */
-        if (an < 0.0 && vn >= 0.0 && 2.0 * vn <= -an * fmax(NBEP_REST_FRACTION * dt, sc->tc) &&
+        if (r && an < 0.0 && vn >= 0.0 && 2.0 * vn <= -an * fmax(NBEP_REST_FRACTION * dt, sc->tc) &&
             r->n < NBEP_CONTACT_MAX) {
             r->who[r->n] = (int32_t)p;
             r->ver[r->n++] = 0;
@@ -939,7 +954,7 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
         return;
     }
     advance_to(c, s, hi, t_local);
-    const bool still_hi = c->rest[hi].still;
+    const bool still_hi = c->rest && c->rest[hi].still;
     double sigma = s->radius[lo] + s->radius[hi];
     const nbep_vec3 r12 = sep(c, s, lo, hi);
     note_overlap(mx, sigma - nbep_vec3_norm(r12),
@@ -985,9 +1000,9 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
 /* Sphere i is held and a sphere it rests on has reacted since it took the load. */
 static bool held_on_changed(const pred_ctx *c, size_t i)
 {
-    const rest_set *r = &c->rest[i];
-    if (!r->still)
+    if (!c->rest || !c->rest[i].still)
         return false;
+    const rest_set *r = &c->rest[i];
     for (int k = 0; k < r->n; k++)
         if (r->who[k] < 0 && r->ver[k] != c->ver[-1 - r->who[k]])
             return true;
@@ -1119,6 +1134,11 @@ static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m,
     const nbep_state *s = x->s;
     const double T0 = x->T0, ti = c->tau[i], ri = s->radius[i];
     const nbep_vec3 pi0 = s->pos[i], vi = s->vel[i];
+    for (size_t k = 0; k < m; k++) { /* the partners' lines, all requested before any is used */
+        NBEP_PREFETCH(&c->tau[js[k]]);
+        NBEP_PREFETCH(&s->pos[js[k]]);
+        NBEP_PREFETCH(&s->vel[js[k]]);
+    }
     for (size_t k = 0; k < m; k++) {
         const uint32_t j = js[k];
         const double tj = c->tau[j];
@@ -1436,7 +1456,7 @@ static void pred_export(const void *p, const nbep_state *s, double *time, uint32
         partner[i] = fresh ? ev->partner : 0;
         kind[i] = (uint8_t)(fresh ? ev->kind : NBEP_EVENT_NONE);
         rest[i] = NO_PLANE; /* the file keeps one plane: the first (see pred_import) */
-        for (int k = c->rest[i].n - 1; k >= 0; k--)
+        for (int k = c->rest ? c->rest[i].n - 1 : -1; k >= 0; k--)
             if (c->rest[i].who[k] >= 0)
                 rest[i] = c->rest[i].who[k];
     }
@@ -1450,13 +1470,15 @@ static void pred_import(void *p, const nbep_resume *r)
     for (size_t i = 0; i < r->n; i++) {
         /* A resumed run gets back one resting plane per sphere; other contacts (a second plane,
          * held spheres) are found again by zero-time events in its first step. */
-        c->rest[i] = (rest_set){.n = 0};
-        if (r->rest[i] >= 0) {
-            c->rest[i].who[0] = r->rest[i];
-            c->rest[i].n = 1;
+        if (c->rest) { /* NULL: nothing accelerates, nothing rests (a file says -1) */
+            c->rest[i] = (rest_set){.n = 0};
+            if (r->rest[i] >= 0) {
+                c->rest[i].who[0] = r->rest[i];
+                c->rest[i].n = 1;
+            }
+            nbep_vec3 v = r->vel[i];
+            rest_solve(c, c->st, i, &c->rest[i], &v, &c->aeff[i], 0.0, false);
         }
-        nbep_vec3 v = r->vel[i];
-        rest_solve(c, c->st, i, &c->rest[i], &v, &c->aeff[i], 0.0, false);
         nbep_feq_remove(c->q, i);
         if (r->event_kind[i] == NBEP_EVENT_NEVER)
             nbep_feq_set_never(c->q, i, 0);

@@ -10,10 +10,13 @@
 #define NBEP_MUST_CHECK __attribute__((warn_unused_result))
 #define NBEP_PRINTF(fmt, args) __attribute__((format(printf, fmt, args)))
 #define NBEP_UNLIKELY(x) __builtin_expect(!!(x), 0)
+/* A hint to fetch the cache line holding *p for reading; no effect on results. */
+#define NBEP_PREFETCH(p) __builtin_prefetch((p), 0, 3)
 #else
 #define NBEP_MUST_CHECK
 #define NBEP_PRINTF(fmt, args)
 #define NBEP_UNLIKELY(x) (x)
+#define NBEP_PREFETCH(p) ((void)(p))
 #endif
 
 /* Allocates n * size bytes aligned to a cache line, zero-filled; NULL on failure or overflow.
