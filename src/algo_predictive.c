@@ -332,11 +332,12 @@ static nbep_vec3 effective_acc(const pred_ctx *c, const nbep_state *s, size_t i)
 }
 
 /* The separation from sphere a to sphere b, by the minimum image in a periodic box (a pair in
- * contact is closer than half a period, so this is the image that touches). */
+ * contact is closer than half a period, so this is the image that touches; stored positions
+ * are never more than a period apart, so the comparing form serves). */
 static nbep_vec3 sep(const pred_ctx *c, const nbep_state *s, size_t a, size_t b)
 {
     nbep_vec3 d = nbep_vec3_sub(s->pos[b], s->pos[a]);
-    return c->pb.any ? nbep_periodic_image(&c->pb, d) : d;
+    return c->pb.any ? nbep_periodic_near_image(&c->pb, d) : d;
 }
 
 /* A sphere whose contacts carry its whole weight (it may still slide): a slow partner treats it
@@ -1097,6 +1098,9 @@ typedef struct cells_user {
 static nbep_event cells_planes(void *u, uint32_t i)
 {
     cells_user *x = u;
+    if (x->s->n_planes == 0) /* a periodic fluid: nothing to look at (cells mode has no image
+                              * horizons) */
+        return (nbep_event){.time = NBEP_NEVER, .kind = NBEP_EVENT_NONE};
     return predict_some(x->c, x->s, i, 0, 0, true, x->T0, x->w, x->cnt);
 }
 
@@ -1108,25 +1112,30 @@ static inline nbep_vec3 neighbour_shift(const pred_ctx *c, const nbep_state *s, 
     return nbep_periodic_near_shift(&c->pb, nbep_vec3_sub(s->pos[j], s->pos[i]));
 }
 
-static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, nbep_event *best)
+static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, bool images,
+                        nbep_event *best)
 {
     cells_user *x = u;
     const nbep_vec3 ai = effective_acc(x->c, x->s, i);
     for (size_t k = 0; k < m; k++)
         keep_earlier(best, pair_event(x->c, x->s, i, ai, js[k],
-                                      neighbour_shift(x->c, x->s, i, js[k]), x->T0, x->w));
+                                      images ? neighbour_shift(x->c, x->s, i, js[k]) : ZERO3,
+                                      x->T0, x->w));
     x->cnt->c[NBEP_COUNTER_PREDICTIONS] += m;
 }
 
 /* cells_pairs for a scene where nothing accelerates (c->free_flight: every acceleration zero,
  * so no contact ever rests or holds and every sphere flies straight): the same pairs, positions
- * and roots as pair_event, bit for bit (a drift with zero acceleration is p + v h exactly,
- * and ffp-contract is off), with two savings that matter in a dense fluid, where this loop is
- * most of the run: no acceleration is loaded or applied, and a closing pair whose contact
- * cannot come before the best one so far is skipped on a bound without its root
+ * and roots as pair_event, and the same winner as keep_earlier over them, bit for bit (a drift
+ * with zero acceleration is p + v h exactly, and ffp-contract is off), with savings that matter
+ * in a dense fluid, where this loop is most of the run: no acceleration is loaded or applied;
+ * no image is looked for when none can be needed; a closing pair whose contact cannot come
+ * before the best one so far is skipped on a bound without its root
  * (nbep_predict_pair_quadratic_floor; strictly later, so the winner, ties included, is the
- * same). */
-static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m,
+ * same); the best so far is kept as a time and a partner, and only the winner's response
+ * count is read. Within one sphere's list partners are distinct, so the order keep_earlier
+ * applies reduces to (time, then sphere events before planes and horizons, then partner). */
+static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m, bool images,
                              nbep_event *best)
 {
     cells_user *x = u;
@@ -1139,11 +1148,17 @@ static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m,
         NBEP_PREFETCH(&s->pos[js[k]]);
         NBEP_PREFETCH(&s->vel[js[k]]);
     }
+    double best_t = best->kind == NBEP_EVENT_NONE ? NBEP_NEVER : best->time;
+    /* ties: a sphere event ranks by partner, before any plane or horizon */
+    uint32_t tie_j = best->kind == NBEP_EVENT_SPHERE ? best->partner : UINT32_MAX;
+    bool found = false;
     for (size_t k = 0; k < m; k++) {
         const uint32_t j = js[k];
         const double tj = c->tau[j];
         const double t0 = ti > tj ? ti : tj;
-        nbep_vec3 pi = pi0, pj = nbep_vec3_add(s->pos[j], neighbour_shift(c, s, i, j));
+        nbep_vec3 pi = pi0, pj = s->pos[j];
+        if (images)
+            pj = nbep_vec3_add(pj, neighbour_shift(c, s, i, j));
         const nbep_vec3 vj = s->vel[j];
         if (ti < t0)
             pi = nbep_vec3_add(pi, nbep_vec3_scale(vi, t0 - ti));
@@ -1152,12 +1167,17 @@ static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m,
         const nbep_vec3 dp = nbep_vec3_sub(pj, pi), dv = nbep_vec3_sub(vj, vi);
         const double sigma = ri + s->radius[j];
         const double lb = nbep_predict_pair_quadratic_floor(dp, dv, sigma);
-        if (lb == NBEP_NEVER || T0 + (t0 + lb) > best->time)
+        if (lb == NBEP_NEVER || T0 + (t0 + lb) > best_t)
             continue;
-        const double dt = nbep_predict_pair_quadratic(dp, dv, sigma);
-        keep_earlier(best, (nbep_event){T0 + (t0 + dt), j, NBEP_EVENT_SPHERE, c->ver[i],
-                                        c->ver[j]});
+        const double t = T0 + (t0 + nbep_predict_pair_quadratic(dp, dv, sigma));
+        if (t < NBEP_NEVER && (t < best_t || (t == best_t && j < tie_j))) {
+            best_t = t;
+            tie_j = j;
+            found = true;
+        }
     }
+    if (found)
+        *best = (nbep_event){best_t, tie_j, NBEP_EVENT_SPHERE, c->ver[i], c->ver[tie_j]};
     x->cnt->c[NBEP_COUNTER_PREDICTIONS] += m;
 }
 

@@ -27,6 +27,7 @@ struct nbep_evloop {
     nbep_periodic pb;     /* the box's periodic geometry */
     double cut;           /* the list cutoff: contact distance plus skin, plus slack */
     double stray;         /* half the skin: how far a sphere goes before its list expires */
+    double face_reach;    /* cut + stray, and a margin: see near_face */
     bool failed;          /* out of memory for a list: the run stops */
     nbep_feq *q;          /* borrowed */
     const uint64_t *ver;  /* borrowed */
@@ -60,6 +61,7 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     skin = fmax(skin, 0.0);
     e->stray = 0.5 * skin;
     e->cut = (reach + skin) * (1.0 + CUT_SLACK);
+    e->face_reach = e->cut + 1.01 * e->stray;
     e->centre = nbep_alloc_aligned(n ? n : 1, sizeof *e->centre);
     e->count = nbep_alloc_aligned(n ? n : 1, sizeof *e->count);
     nbep_status st = e->centre && e->count ? NBEP_OK : NBEP_ENOMEM;
@@ -245,6 +247,24 @@ static double stray_time(nbep_vec3 d, nbep_vec3 v, nbep_vec3 a, double stray)
     return 2.0 * left / (sv + sqrt(sv * sv + 2.0 * sa * left));
 }
 
+/* Whether a neighbour of sphere i may have to be taken at an image across a periodic face: its
+ * list centre is within the reach of a face on a periodic axis. Every listed j has its centre
+ * within the cutoff of i's and its position within the stray of its centre, so when i's centre
+ * is farther than cutoff + stray from both faces of every periodic axis, every neighbour
+ * flies inside the box near i and its nearest image is itself (a margin of a hundredth of the
+ * stray covers the roundings). */
+static bool near_face(const nbep_evloop *e, uint32_t i)
+{
+    if (!e->pb.any)
+        return false;
+    const double c[3] = {e->centre[i].x, e->centre[i].y, e->centre[i].z};
+    for (int k = 0; k < 3; k++)
+        if (e->pb.axis[k] && !(c[k] - e->pb.lo[k] > e->face_reach &&
+                               e->pb.lo[k] + e->pb.len[k] - c[k] > e->face_reach))
+            return true;
+    return false;
+}
+
 /* Sphere i's slot from scratch at time t: planes, the spheres of its list, its list's expiry. */
 static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uint32_t i,
                         double t)
@@ -253,7 +273,7 @@ static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uin
     size_t m;
     const uint32_t *js = nbep_nblist_of(&e->nl, i, &m);
     if (m > 0)
-        ops->pairs(u, i, js, m, &best);
+        ops->pairs(u, i, js, m, near_face(e, i), &best);
     nbep_vec3 p, v, a;
     ops->flight(u, i, t, &p, &v, &a);
     double t_exit = t + stray_time(nbep_vec3_sub(p, e->centre[i]), v, a, e->stray);

@@ -39,8 +39,11 @@ typedef struct nbep_evloop_ops {
     /* the earliest contact of sphere i with a plane, kind NONE when none */
     nbep_event (*planes)(void *u, uint32_t i);
     /* lowers *best (kind NONE: nothing yet) to the earliest contact of sphere i with the m
-     * spheres js (none of them i); in a periodic box each at its image nearest to i */
-    void (*pairs)(void *u, uint32_t i, const uint32_t *js, size_t m, nbep_event *best);
+     * spheres js (none of them i); in a periodic box each at its image nearest to i, which
+     * is the sphere itself for all of them when images is false (i is far from every
+     * periodic face: the engine knows, see near_face) */
+    void (*pairs)(void *u, uint32_t i, const uint32_t *js, size_t m, bool images,
+                  nbep_event *best);
     /* true while the event in i's slot is still valid (no response since it was predicted) */
     bool (*fresh)(void *u, uint32_t i, const nbep_event *ev);
     /* reacts to the event in i's slot (a sphere or plane contact), at its time; returns the

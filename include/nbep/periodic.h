@@ -49,6 +49,21 @@ static inline nbep_vec3 nbep_periodic_near_shift(const nbep_periodic *pb, nbep_v
                           d.z > pb->half[2] ? -pb->len[2] : d.z < -pb->half[2] ? pb->len[2] : 0.0);
 }
 
+/* nbep_periodic_image for a separation within one and a half periods of its minimum image on
+ * every periodic axis (two spheres in contact): compares instead of a division and a rounding,
+ * for the response of every collision. Equal to the general one except at |d_k| = len_k / 2
+ * exactly, where either image is as near. */
+static inline double nbep_periodic_near_image_1(double d, double half, double len)
+{
+    return d > half ? d - len : d < -half ? d + len : d;
+}
+static inline nbep_vec3 nbep_periodic_near_image(const nbep_periodic *pb, nbep_vec3 d)
+{
+    return nbep_vec3_make(nbep_periodic_near_image_1(d.x, pb->half[0], pb->len[0]),
+                          nbep_periodic_near_image_1(d.y, pb->half[1], pb->len[1]),
+                          nbep_periodic_near_image_1(d.z, pb->half[2], pb->len[2]));
+}
+
 /* The horizon of the minimum image: while neither sphere of a pair strays more than this from
  * where the pair was last compared (per axis), the image that was nearest then is the only
  * one that can touch (contact distance up to sigma): (min over periodic sides of len/2 - sigma)
