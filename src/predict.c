@@ -127,15 +127,24 @@ static void two_sum(double a, double b, double *s, double *err)
 double nbep__predict_gap2(nbep_vec3 r, double sigma)
 {
     double px = r.x * r.x, py = r.y * r.y, pz = r.z * r.z, ps = sigma * sigma;
-    const double part[8] = {px, py, pz, -ps, fma(r.x, r.x, -px), fma(r.y, r.y, -py),
-                            fma(r.z, r.z, -pz), -fma(sigma, sigma, -ps)};
-    double s = part[0], lost = 0.0;
+    double ex = fma(r.x, r.x, -px), ey = fma(r.y, r.y, -py), ez = fma(r.z, r.z, -pz),
+           es = fma(sigma, sigma, -ps);
+    double s, e1, e2;
+    two_sum(px, py, &s, &e1);
+    two_sum(s, pz, &s, &e2);
+    /* The usual case, a near contact: |r|^2 within a factor 2 of sigma^2, so that s - ps is
+     * exact (Sterbenz) and the exact result is it plus six terms each below an ulp of |r|^2,
+     * whose plain sum is off by a few ulps of an ulp: half the work of the general sum. */
+    if (s >= 0.5 * ps && s <= 2.0 * ps)
+        return (s - ps) + (((ex + ey) + (ez + e1)) + (e2 - es));
+    const double part[8] = {px, py, pz, -ps, ex, ey, ez, -es};
+    double sum = part[0], lost = 0.0;
     for (int i = 1; i < 8; i++) {
         double err;
-        two_sum(s, part[i], &s, &err);
+        two_sum(sum, part[i], &sum, &err);
         lost += err;
     }
-    return s + lost;
+    return sum + lost;
 }
 
 /* ---- the pair's relative motion ------------------------------------------------------ */
