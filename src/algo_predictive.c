@@ -808,6 +808,8 @@ static void note_overlap(nbep_thread_max *mx, double ov, double r)
  * of centres shared by mass like a response (momentum is kept). */
 static void min_bounce(const pred_ctx *c, nbep_state *s, double dt, uint32_t lo, uint32_t hi)
 {
+    if (!c->aeff)
+        return; /* nothing accelerates: nothing presses a pair together */
     nbep_vec3 dp = sep(c, s, lo, hi);
     double dist = nbep_vec3_norm(dp);
     if (!(dist > 0.0))
@@ -869,7 +871,8 @@ static void fire(pred_ctx *c, thread_ws *w, const nbep_state *s, size_t i, bool 
 {
     c->ver[i]++;
     w->fired[w->n_fired++] = (uint32_t)i;
-    w->vmax_react = fmax(w->vmax_react, nbep_vec3_norm(s->vel[i]));
+    if (c->use_grid) /* the grid's speed bound (grid_prepare) */
+        w->vmax_react = fmax(w->vmax_react, nbep_vec3_norm(s->vel[i]));
     if (was_still)
         w->woken++;
 }
@@ -1129,12 +1132,25 @@ static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, bool 
  * and roots as pair_event, and the same winner as keep_earlier over them, bit for bit (a drift
  * with zero acceleration is p + v h exactly, and ffp-contract is off), with savings that matter
  * in a dense fluid, where this loop is most of the run: no acceleration is loaded or applied;
- * no image is looked for when none can be needed; a closing pair whose contact cannot come
- * before the best one so far is skipped on a bound without its root
- * (nbep_predict_pair_quadratic_floor; strictly later, so the winner, ties included, is the
- * same); the best so far is kept as a time and a partner, and only the winner's response
- * count is read. Within one sphere's list partners are distinct, so the order keep_earlier
- * applies reduces to (time, then sphere events before planes and horizons, then partner). */
+ * no image is looked for when none can be needed; the best so far is kept as a time and a
+ * partner, and only the winner's response count is read. Within one sphere's list partners are
+ * distinct, so the order keep_earlier applies reduces to (time, then sphere events before
+ * planes and horizons, then partner), which does not depend on the order pairs are tried in.
+ *
+ * Roots are the expensive part, and most are not needed: a closing pair's contact comes no
+ * earlier than its root-free bound (nbep_predict_pair_quadratic_floor, strictly below the
+ * computed root) and no later than twice it. So the bounds of a batch of partners come first,
+ * then the root of the pair with the lowest bound, which sets a best that prunes most of the
+ * others (a pair is skipped only when its bound is strictly later than the best: the winner,
+ * ties included, is the one trying every pair would give). */
+#define PAIR_BATCH 32
+
+typedef struct pair_try {
+    nbep_vec3 dp, dv;
+    double sigma, t0, lb; /* lb: the bound, from t0 */
+    uint32_t j;
+} pair_try;
+
 static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m, bool images,
                              nbep_event *best)
 {
@@ -1152,28 +1168,43 @@ static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m, 
     /* ties: a sphere event ranks by partner, before any plane or horizon */
     uint32_t tie_j = best->kind == NBEP_EVENT_SPHERE ? best->partner : UINT32_MAX;
     bool found = false;
-    for (size_t k = 0; k < m; k++) {
-        const uint32_t j = js[k];
-        const double tj = c->tau[j];
-        const double t0 = ti > tj ? ti : tj;
-        nbep_vec3 pi = pi0, pj = s->pos[j];
-        if (images)
-            pj = nbep_vec3_add(pj, neighbour_shift(c, s, i, j));
-        const nbep_vec3 vj = s->vel[j];
-        if (ti < t0)
-            pi = nbep_vec3_add(pi, nbep_vec3_scale(vi, t0 - ti));
-        if (tj < t0)
-            pj = nbep_vec3_add(pj, nbep_vec3_scale(vj, t0 - tj));
-        const nbep_vec3 dp = nbep_vec3_sub(pj, pi), dv = nbep_vec3_sub(vj, vi);
-        const double sigma = ri + s->radius[j];
-        const double lb = nbep_predict_pair_quadratic_floor(dp, dv, sigma);
-        if (lb == NBEP_NEVER || T0 + (t0 + lb) > best_t)
-            continue;
-        const double t = T0 + (t0 + nbep_predict_pair_quadratic(dp, dv, sigma));
-        if (t < NBEP_NEVER && (t < best_t || (t == best_t && j < tie_j))) {
-            best_t = t;
-            tie_j = j;
-            found = true;
+    pair_try tr[PAIR_BATCH];
+    for (size_t k0 = 0; k0 < m; k0 += PAIR_BATCH) {
+        const size_t k1 = m - k0 < PAIR_BATCH ? m : k0 + PAIR_BATCH;
+        size_t n = 0, first = 0;
+        for (size_t k = k0; k < k1; k++) { /* the bounds of the closing pairs */
+            pair_try *p = &tr[n];
+            p->j = js[k];
+            const double tj = c->tau[p->j];
+            p->t0 = ti > tj ? ti : tj;
+            nbep_vec3 pi = pi0, pj = s->pos[p->j];
+            if (images)
+                pj = nbep_vec3_add(pj, neighbour_shift(c, s, i, p->j));
+            const nbep_vec3 vj = s->vel[p->j];
+            if (ti < p->t0)
+                pi = nbep_vec3_add(pi, nbep_vec3_scale(vi, p->t0 - ti));
+            if (tj < p->t0)
+                pj = nbep_vec3_add(pj, nbep_vec3_scale(vj, p->t0 - tj));
+            p->dp = nbep_vec3_sub(pj, pi);
+            p->dv = nbep_vec3_sub(vj, vi);
+            p->sigma = ri + s->radius[p->j];
+            p->lb = nbep_predict_pair_quadratic_floor(p->dp, p->dv, p->sigma);
+            if (p->lb == NBEP_NEVER)
+                continue;
+            if (p->t0 + p->lb < tr[first].t0 + tr[first].lb)
+                first = n;
+            n++;
+        }
+        for (size_t q = 0; q < n; q++) { /* roots: the lowest bound first, then what it leaves */
+            const pair_try *p = &tr[q == 0 ? first : q == first ? 0 : q];
+            if (T0 + (p->t0 + p->lb) > best_t)
+                continue;
+            const double t = T0 + (p->t0 + nbep_predict_pair_quadratic(p->dp, p->dv, p->sigma));
+            if (t < NBEP_NEVER && (t < best_t || (t == best_t && p->j < tie_j))) {
+                best_t = t;
+                tie_j = p->j;
+                found = true;
+            }
         }
     }
     if (found)
