@@ -168,6 +168,8 @@ typedef struct pred_ctx {
     double image_reach;
     bool ev_failed;               /* thread 0: the loop stalled this step */
     bool free_flight;             /* no sphere accelerates: straight flight, nothing rests */
+    double sigma_all;             /* every pair's contact distance when all radii are equal,
+                                   * else 0 (the pair loop then looks each radius up) */
 } pred_ctx;
 
 static bool is_zero(nbep_vec3 v)
@@ -260,8 +262,12 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
             return st;
         }
     }
-    for (size_t i = 0; i < n; i++)
+    bool mono = true;
+    for (size_t i = 0; i < n; i++) {
         c->rmax = fmax(c->rmax, sim->st.radius[i]);
+        mono &= sim->st.radius[i] == sim->st.radius[0];
+    }
+    c->sigma_all = n > 0 && mono ? sim->st.radius[0] + sim->st.radius[0] : 0.0;
     c->image_horizon = c->pb.any && !c->use_grid && !sim->scene->neighbors_cells;
     c->image_reach = nbep_periodic_reach(&c->pb, 2.0 * c->rmax);
     if (sim->scene->neighbors_cells) {
@@ -1145,11 +1151,32 @@ static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, bool 
  * ties included, is the one trying every pair would give). */
 #define PAIR_BATCH 32
 
+/* A closing pair of the batch: its partner's place in the list and its bound (from t0). */
 typedef struct pair_try {
-    nbep_vec3 dp, dv;
-    double sigma, t0, lb; /* lb: the bound, from t0 */
-    uint32_t j;
+    double lb;
+    uint32_t k;
 } pair_try;
+
+/* The relative motion of sphere i (at pi, vi, local time ti) and partner j at the later of the
+ * two local times t0, j at its image when images; the pair's contact distance. */
+static inline void pair_motion(const pred_ctx *c, const nbep_state *s, uint32_t i, nbep_vec3 pi,
+                               nbep_vec3 vi, double ti, uint32_t j, bool images, nbep_vec3 *dp,
+                               nbep_vec3 *dv, double *t0, double *sigma)
+{
+    const double tj = c->tau[j];
+    *t0 = ti > tj ? ti : tj;
+    nbep_vec3 pj = s->pos[j];
+    if (images)
+        pj = nbep_vec3_add(pj, neighbour_shift(c, s, i, j));
+    const nbep_vec3 vj = s->vel[j];
+    if (ti < *t0)
+        pi = nbep_vec3_add(pi, nbep_vec3_scale(vi, *t0 - ti));
+    if (tj < *t0)
+        pj = nbep_vec3_add(pj, nbep_vec3_scale(vj, *t0 - tj));
+    *dp = nbep_vec3_sub(pj, pi);
+    *dv = nbep_vec3_sub(vj, vi);
+    *sigma = c->sigma_all > 0.0 ? c->sigma_all : s->radius[i] + s->radius[j];
+}
 
 static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m, bool images,
                              nbep_event *best)
@@ -1157,8 +1184,8 @@ static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m, 
     cells_user *x = u;
     const pred_ctx *c = x->c;
     const nbep_state *s = x->s;
-    const double T0 = x->T0, ti = c->tau[i], ri = s->radius[i];
-    const nbep_vec3 pi0 = s->pos[i], vi = s->vel[i];
+    const double T0 = x->T0, ti = c->tau[i];
+    const nbep_vec3 pi = s->pos[i], vi = s->vel[i];
     for (size_t k = 0; k < m; k++) { /* the partners' lines, all requested before any is used */
         NBEP_PREFETCH(&c->tau[js[k]]);
         NBEP_PREFETCH(&s->pos[js[k]]);
@@ -1173,36 +1200,29 @@ static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m, 
         const size_t k1 = m - k0 < PAIR_BATCH ? m : k0 + PAIR_BATCH;
         size_t n = 0, first = 0;
         for (size_t k = k0; k < k1; k++) { /* the bounds of the closing pairs */
-            pair_try *p = &tr[n];
-            p->j = js[k];
-            const double tj = c->tau[p->j];
-            p->t0 = ti > tj ? ti : tj;
-            nbep_vec3 pi = pi0, pj = s->pos[p->j];
-            if (images)
-                pj = nbep_vec3_add(pj, neighbour_shift(c, s, i, p->j));
-            const nbep_vec3 vj = s->vel[p->j];
-            if (ti < p->t0)
-                pi = nbep_vec3_add(pi, nbep_vec3_scale(vi, p->t0 - ti));
-            if (tj < p->t0)
-                pj = nbep_vec3_add(pj, nbep_vec3_scale(vj, p->t0 - tj));
-            p->dp = nbep_vec3_sub(pj, pi);
-            p->dv = nbep_vec3_sub(vj, vi);
-            p->sigma = ri + s->radius[p->j];
-            p->lb = nbep_predict_pair_quadratic_floor(p->dp, p->dv, p->sigma);
-            if (p->lb == NBEP_NEVER)
+            nbep_vec3 dp, dv;
+            double t0, sigma;
+            pair_motion(c, s, i, pi, vi, ti, js[k], images, &dp, &dv, &t0, &sigma);
+            const double lb = nbep_predict_pair_quadratic_floor(dp, dv, sigma);
+            if (lb == NBEP_NEVER)
                 continue;
-            if (p->t0 + p->lb < tr[first].t0 + tr[first].lb)
+            tr[n] = (pair_try){t0 + lb, (uint32_t)k};
+            if (tr[n].lb < tr[first].lb)
                 first = n;
             n++;
         }
         for (size_t q = 0; q < n; q++) { /* roots: the lowest bound first, then what it leaves */
             const pair_try *p = &tr[q == 0 ? first : q == first ? 0 : q];
-            if (T0 + (p->t0 + p->lb) > best_t)
+            if (T0 + p->lb > best_t)
                 continue;
-            const double t = T0 + (p->t0 + nbep_predict_pair_quadratic(p->dp, p->dv, p->sigma));
-            if (t < NBEP_NEVER && (t < best_t || (t == best_t && p->j < tie_j))) {
+            const uint32_t j = js[p->k];
+            nbep_vec3 dp, dv;
+            double t0, sigma;
+            pair_motion(c, s, i, pi, vi, ti, j, images, &dp, &dv, &t0, &sigma);
+            const double t = T0 + (t0 + nbep_predict_pair_quadratic(dp, dv, sigma));
+            if (t < NBEP_NEVER && (t < best_t || (t == best_t && j < tie_j))) {
                 best_t = t;
-                tie_j = p->j;
+                tie_j = j;
                 found = true;
             }
         }

@@ -24,6 +24,12 @@ struct nbep_evloop {
     nbep_nblist nl;       /* owned */
     nbep_vec3 *centre;    /* owned, n: where each sphere's list was built */
     uint32_t *count;      /* owned, n: list lengths, at a full rebuild */
+    /* a rebuild of one list (rebuild_one): the neighbours it had are marked `stamp`, those it
+     * keeps re-marked stamp + 1; near holds the new list, was the old one */
+    uint32_t *mark;       /* owned, n */
+    uint32_t stamp;
+    uint32_t *near, *was; /* owned, room for near_cap each */
+    size_t near_cap, n_near;
     nbep_periodic pb;     /* the box's periodic geometry */
     double cut;           /* the list cutoff: contact distance plus skin, plus slack */
     double stray;         /* half the skin: how far a sphere goes before its list expires */
@@ -64,7 +70,12 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->face_reach = e->cut + 1.01 * e->stray;
     e->centre = nbep_alloc_aligned(n ? n : 1, sizeof *e->centre);
     e->count = nbep_alloc_aligned(n ? n : 1, sizeof *e->count);
-    nbep_status st = e->centre && e->count ? NBEP_OK : NBEP_ENOMEM;
+    e->mark = nbep_alloc_aligned(n ? n : 1, sizeof *e->mark);
+    e->near_cap = 64;
+    e->near = malloc(e->near_cap * sizeof *e->near);
+    e->was = malloc(e->near_cap * sizeof *e->was);
+    e->stamp = 2; /* marks start at 0: no sphere is marked */
+    nbep_status st = e->centre && e->count && e->mark && e->near && e->was ? NBEP_OK : NBEP_ENOMEM;
     if (st != NBEP_OK)
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory for the cells engine");
     if (st == NBEP_OK)
@@ -98,6 +109,9 @@ void nbep_evloop_destroy(nbep_evloop **e)
     nbep_nblist_fini(&(*e)->nl);
     nbep_free_aligned((*e)->centre);
     nbep_free_aligned((*e)->count);
+    nbep_free_aligned((*e)->mark);
+    free((*e)->near);
+    free((*e)->was);
     free(*e);
     *e = NULL;
 }
@@ -106,7 +120,7 @@ size_t nbep_evloop_bytes(size_t n, double neighbours)
 {
     return nbep_calendar_bytes(n) + nbep_cells_bytes(n) +
            nbep_nblist_bytes(n, (size_t)(neighbours * (double)n)) +
-           n * (sizeof(nbep_vec3) + sizeof(uint32_t));
+           n * (sizeof(nbep_vec3) + 2 * sizeof(uint32_t));
 }
 
 bool nbep_evloop_failed(const nbep_evloop *e)
@@ -116,29 +130,33 @@ bool nbep_evloop_failed(const nbep_evloop *e)
 
 /* Calls f(e, i, j, arg) for every sphere j != i whose centre is within the cutoff of i's, from
  * the 27-cell block of i's cell (each at its image across periodic faces). */
-static void near_centres(nbep_evloop *e, uint32_t i,
-                         void (*f)(nbep_evloop *e, uint32_t i, uint32_t j, void *arg), void *arg)
+static inline void near_centres(nbep_evloop *e, uint32_t i,
+                                void (*f)(nbep_evloop *e, uint32_t i, uint32_t j, void *arg),
+                                void *arg)
 {
     const nbep_cells *g = &e->cells;
     nbep_cells_block b;
     nbep_cells_block_of(g, g->cell[i], &b);
-    const nbep_vec3 period = nbep_periodic_shift(&e->pb, (const int[3]){1, 1, 1});
     const nbep_vec3 ci = e->centre[i];
     const double cut2 = e->cut * e->cut;
-    for (int z = 0; z < b.cnt[2]; z++)
-        for (int y = 0; y < b.cnt[1]; y++)
+    for (int z = 0; z < b.cnt[2]; z++) {
+        /* i's centre as seen from the block's cell: moved by the cell's period */
+        const double az = b.per[2][z] ? ci.z - b.per[2][z] * e->pb.len[2] : ci.z;
+        for (int y = 0; y < b.cnt[1]; y++) {
+            const double ay = b.per[1][y] ? ci.y - b.per[1][y] * e->pb.len[1] : ci.y;
+            const size_t row = (b.idx[2][z] * g->dim[1] + b.idx[1][y]) * g->dim[0];
             for (int x = 0; x < b.cnt[0]; x++) {
-                const nbep_vec3 at = {ci.x - b.per[0][x] * period.x,
-                                      ci.y - b.per[1][y] * period.y,
-                                      ci.z - b.per[2][z] * period.z};
-                for (uint32_t j = g->head[nbep_cells_index(g, b.idx[0][x], b.idx[1][y],
-                                                           b.idx[2][z])];
-                     j != NBEP_CELLS_NONE; j = g->next[j]) {
-                    const nbep_vec3 dd = nbep_vec3_sub(e->centre[j], at);
-                    if (j != i && nbep_vec3_dot(dd, dd) < cut2)
+                const double ax = b.per[0][x] ? ci.x - b.per[0][x] * e->pb.len[0] : ci.x;
+                for (uint32_t j = g->head[row + b.idx[0][x]]; j != NBEP_CELLS_NONE;
+                     j = g->next[j]) {
+                    const double dx = e->centre[j].x - ax, dy = e->centre[j].y - ay,
+                                 dz = e->centre[j].z - az;
+                    if (dx * dx + dy * dy + dz * dz < cut2 && j != i)
                         f(e, i, j, arg);
                 }
             }
+        }
+    }
 }
 
 static void count_one(nbep_evloop *e, uint32_t i, uint32_t j, void *arg)
@@ -154,23 +172,73 @@ static void fill_one(nbep_evloop *e, uint32_t i, uint32_t j, void *arg)
     nbep_nblist_fill(&e->nl, i, j);
 }
 
-static void attach_one(nbep_evloop *e, uint32_t i, uint32_t j, void *arg)
+/* Twice the room for rebuild_one's lists. */
+static bool grow_near(nbep_evloop *e)
 {
-    (void)arg;
-    if (!nbep_nblist_append(&e->nl, i, j) || !nbep_nblist_append(&e->nl, j, i))
-        e->failed = true;
+    size_t cap = 2 * e->near_cap;
+    uint32_t *a = realloc(e->near, cap * sizeof *a);
+    if (a)
+        e->near = a;
+    uint32_t *b = realloc(e->was, cap * sizeof *b);
+    if (b)
+        e->was = b;
+    if (!a || !b)
+        return false;
+    e->near_cap = cap;
+    return true;
 }
 
-/* Sphere i's list from scratch, its centre now at c: it leaves its old neighbours' lists and
- * enters its new ones'. */
+/* A sphere j near i during i's rebuild: into i's new list; into j's list too unless i was in
+ * it already (a neighbour i keeps, marked stamp by rebuild_one, is re-marked kept). */
+static void gather_one(nbep_evloop *e, uint32_t i, uint32_t j, void *arg)
+{
+    (void)arg;
+    if (e->mark[j] == e->stamp)
+        e->mark[j] = e->stamp + 1;
+    else if (!nbep_nblist_append(&e->nl, j, i))
+        e->failed = true;
+    if (e->n_near == e->near_cap && !grow_near(e)) {
+        e->failed = true;
+        return;
+    }
+    e->near[e->n_near++] = j;
+}
+
+/* Sphere i's list from scratch, its centre now at c: it leaves the lists of the neighbours it
+ * loses and enters those of the ones it gains; those it keeps (most: it moved by half a skin)
+ * are not touched. */
 static void rebuild_one(nbep_evloop *e, uint32_t i, nbep_vec3 c)
 {
-    nbep_nblist_detach(&e->nl, i);
+    if (e->stamp >= UINT32_MAX - 2) { /* the marks wrap: start them afresh */
+        for (size_t k = 0; k < e->n; k++)
+            e->mark[k] = 0;
+        e->stamp = 2;
+    }
+    e->stamp += 2;
+    size_t m;
+    const uint32_t *old = nbep_nblist_of(&e->nl, i, &m);
+    while (m > e->near_cap)
+        if (!grow_near(e)) {
+            e->failed = true;
+            return;
+        }
+    for (size_t k = 0; k < m; k++) { /* a copy: appends below may move the pool */
+        e->was[k] = old[k];
+        e->mark[old[k]] = e->stamp;
+    }
     e->centre[i] = c;
     const size_t cell = nbep_cells_locate(&e->cells, c);
     if (cell != e->cells.cell[i])
         nbep_cells_move(&e->cells, i, cell);
-    near_centres(e, i, attach_one, NULL);
+    e->n_near = 0;
+    near_centres(e, i, gather_one, NULL);
+    for (size_t k = 0; k < m; k++)
+        if (e->mark[e->was[k]] == e->stamp) /* lost */
+            nbep_nblist_drop(&e->nl, e->was[k], i);
+    nbep_nblist_clear(&e->nl, i);
+    for (size_t k = 0; k < e->n_near && !e->failed; k++)
+        if (!nbep_nblist_append(&e->nl, i, e->near[k]))
+            e->failed = true;
 }
 
 void nbep_evloop_assign(nbep_evloop *e, const nbep_vec3 *pos, size_t lo, size_t hi)
@@ -279,12 +347,9 @@ static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uin
     double t_exit = t + stray_time(nbep_vec3_sub(p, e->centre[i]), v, a, e->stray);
     if (t_exit < NBEP_NEVER && (best.kind == NBEP_EVENT_NONE || t_exit < best.time))
         best = (nbep_event){t_exit, 0, NBEP_EVENT_HORIZON, e->ver[i], 0};
-    if (best.kind == NBEP_EVENT_NONE) {
-        nbep_feq_set_never(e->q, i, e->ver[i]);
-    } else {
-        nbep_feq_remove(e->q, i);
-        nbep_feq_insert(e->q, i, best);
-    }
+    if (best.kind == NBEP_EVENT_NONE)
+        best = (nbep_event){.time = INFINITY, .kind = NBEP_EVENT_NEVER, .ver_self = e->ver[i]};
+    nbep_feq_put(e->q, i, best); /* from scratch: whatever the slot held goes */
 }
 
 /* The calendar entry of sphere i from its slot. */

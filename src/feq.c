@@ -31,11 +31,6 @@
 static_assert(sizeof(nbep_event) == 32, "nbep_event must stay 32 bytes");
 static_assert(NBEP_CACHELINE % sizeof(nbep_event) == 0, "slots must not straddle cache lines");
 
-struct nbep_feq {
-    size_t n;            /* spheres, one slot each */
-    nbep_event *slot;    /* owned, length n, cache-line aligned */
-};
-
 /* What an invalid slot holds: kind NONE, and a time of +inf so that a reader that forgets to
  * test the kind still sees "never". */
 static nbep_event empty_event(void)
@@ -115,12 +110,6 @@ void nbep_feq_remove(nbep_feq *q, size_t i)
 {
     assert(q && i < q->n);
     q->slot[i] = empty_event();
-}
-
-const nbep_event *nbep_feq_slot(const nbep_feq *q, size_t i)
-{
-    assert(q && i < q->n);
-    return &q->slot[i];
 }
 
 size_t nbep_feq_find(const nbep_feq *q, size_t lo, size_t hi, double t_end, uint32_t *out)

@@ -124,19 +124,22 @@ bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j)
     return true;
 }
 
+void nbep_nblist_drop(nbep_nblist *l, uint32_t i, uint32_t j)
+{
+    uint32_t *theirs = l->pool + l->off[i];
+    for (uint32_t q = 0; q < l->cnt[i]; q++)
+        if (theirs[q] == j) { /* order does not matter: swap the last in */
+            theirs[q] = theirs[--l->cnt[i]];
+            return;
+        }
+}
+
 void nbep_nblist_detach(nbep_nblist *l, uint32_t i)
 {
     const uint32_t *mine = l->pool + l->off[i];
-    for (uint32_t k = 0; k < l->cnt[i]; k++) {
-        const uint32_t j = mine[k];
-        uint32_t *theirs = l->pool + l->off[j];
-        for (uint32_t q = 0; q < l->cnt[j]; q++)
-            if (theirs[q] == i) { /* order does not matter: swap the last in */
-                theirs[q] = theirs[--l->cnt[j]];
-                break;
-            }
-    }
-    l->cnt[i] = 0;
+    for (uint32_t k = 0; k < l->cnt[i]; k++)
+        nbep_nblist_drop(l, mine[k], i);
+    nbep_nblist_clear(l, i);
 }
 
 /* Is j in i's list? */

@@ -32,7 +32,12 @@ typedef struct nbep_event {
     uint64_t ver_partner;   /* response count of the partner sphere (0 for planes) */
 } nbep_event;
 
-typedef struct nbep_feq nbep_feq;
+/* The slots, visible so that the accessors below inline into the event loops; only feq.c and
+ * those accessors touch them. */
+typedef struct nbep_feq {
+    size_t n;            /* spheres, one slot each */
+    nbep_event *slot;    /* owned, length n, cache-line aligned */
+} nbep_feq;
 
 /* A queue of n invalid slots. NBEP_ENOMEM with a message on failure. */
 NBEP_MUST_CHECK nbep_status nbep_feq_create(size_t n, nbep_feq **out, nbep_diag *d);
@@ -53,7 +58,16 @@ void nbep_feq_set_never(nbep_feq *q, size_t i, uint64_t ver_self);
 /* Paper Procedure 11: marks sphere i's slot invalid. */
 void nbep_feq_remove(nbep_feq *q, size_t i);
 /* The slot of sphere i (kind NBEP_EVENT_NONE when invalid). */
-const nbep_event *nbep_feq_slot(const nbep_feq *q, size_t i);
+static inline const nbep_event *nbep_feq_slot(const nbep_feq *q, size_t i)
+{
+    return &q->slot[i];
+}
+/* Stores e in sphere i's slot whatever was there: a fresh prediction from scratch (kind
+ * SPHERE, PLANE or HORIZON with a finite time, or NEVER). */
+static inline void nbep_feq_put(nbep_feq *q, size_t i, nbep_event e)
+{
+    q->slot[i] = e;
+}
 
 /* Paper Procedure 13, for one thread's spheres [lo, hi): writes to out (room for hi - lo ids)
  * the spheres whose valid event happens before t_end, in increasing index, and returns their

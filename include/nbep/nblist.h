@@ -64,6 +64,13 @@ static inline void nbep_nblist_fill(nbep_nblist *l, uint32_t i, uint32_t j)
 /* Appends j to i's list, growing its room if needed. False when out of memory (nothing
  * changed). One thread. */
 bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j);
+/* Removes j from i's list, if it is there (the last entry takes its place). One thread. */
+void nbep_nblist_drop(nbep_nblist *l, uint32_t i, uint32_t j);
+/* Empties i's list; its room stays. */
+static inline void nbep_nblist_clear(nbep_nblist *l, uint32_t i)
+{
+    l->cnt[i] = 0;
+}
 /* Removes i from the list of every sphere in i's list, then empties i's list. One thread. */
 void nbep_nblist_detach(nbep_nblist *l, uint32_t i);
 
