@@ -30,7 +30,10 @@
  *   progress; a sphere reacts at most once per round. An event can still be shadowed: a
  *   reaction creates an earlier event for a sphere that has already reacted later in the same
  *   round; the next round finds that pair from the later of the two local times, overlapping,
- *   and reacts to it there (predict.h: an overlapping, closing pair touches now).
+ *   and reacts to it there (predict.h: an overlapping, closing pair touches now). Held
+ *   spheres whose support reacted in a round let go at the round's earliest event time
+ *   (let_go_phase), as in time order; one that became held later in that round starts to fall
+ *   from there, the same kind of approximation.
  * - Reacting twice. Procedure 8 tests-and-sets a flag of e.o1 only; when the slots of both
  *   spheres name each other and the spheres belong to two threads, both react. Here the two
  *   copies of one pair carry the same key, both see they won the claims, and a
@@ -1118,11 +1121,8 @@ static void let_go_phase(pred_ctx *c, nbep_state *s, nbep_range own, double dt, 
         if (held_on_changed(c, i))
             w->rel[w->n_rel++] = (uint32_t)i;
     nbep_barrier_wait(&c->bar);
-    /* step order: a round reacts at many times, and t_local is its earliest; a held sphere
-     * that reacted later in the round (try_hold) keeps its later local time */
     for (size_t m = 0; m < w->n_rel; m++)
-        let_go(c, s, w->rel[m], dt,
-               c->order_step ? fmax(t_local, c->tau[w->rel[m]]) : t_local, w);
+        let_go(c, s, w->rel[m], dt, t_local, w);
     nbep_barrier_wait(&c->bar);
 }
 
