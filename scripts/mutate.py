@@ -203,6 +203,8 @@ MUTANTS = [
     ("order-step-react-any-copy", "src/algo_predictive.c",
      "        if (c->order_step && !holds_time(c, ev, lo, hi))\n            continue;\n"
      "        /* Both copies", "        /* Both copies", ORDER, None),
+    ("react-both-copies", "src/algo_predictive.c", "        if (seen == stamp ||\n",
+     "        if (0 ||\n", SIM + ORDER, None),
     ("order-step-time-claim-lo-only", "src/algo_predictive.c",
      "            claim_min(&c->tclaim[hi], t);\n", "", ORDER, None),
     # ---- frame schedule, summary and counters ----
