@@ -119,6 +119,12 @@ bench: bin/nbep $(BENCH_BIN)
 bench-dense: bin/nbep
 	bash scripts/bench-dense.sh
 
+# The paper's step (run.order = "step", approximate) against the exact time order on crowded
+# scenes (fluids at phi 0.30 and 0.50, a pile), cells mode beside them; BENCH_ORDER_ARGS.
+.PHONY: bench-order
+bench-order: bin/nbep
+	/usr/bin/python3 scripts/bench-order.py $(BENCH_ORDER_ARGS)
+
 # Accuracy against cost of the three algorithms over dt, and of the contact-time solvers
 # (docs/accuracy.md); ACC_ARGS=--quick for a smoke run.
 .PHONY: accuracy

@@ -19,6 +19,14 @@ What is measured, for each (scene, algorithm, dt), over the same simulated time 
 - missed: sphere pairs that passed through each other (and spheres through planes), found by
   `missed` in a separate run with a frame every step (see missed_collisions()).
 
+The dense fluid (issue 8, item 6) compares the predictive algorithm's exact modes (run.order =
+"time" with run.neighbors "all", "grid", "cells") with the paper's own step (run.order = "step",
+approximate, in "all" and "grid") and naive, on one crowded scene. It has no analytic answer:
+its error is the collision count's relative deviation from the exact reference (cells mode at
+the smallest dt; the collision rate is what a hard-sphere user's pressure comes from), and its
+second measure the final positions' divergence from that reference, rms over spheres, in
+diameters (T = 1 tau is well inside the time round-off alone needs to separate exact runs).
+
 Needs numpy, h5py and matplotlib (/usr/bin/python3 has them; a pyenv shim may not).
 """
 import argparse
@@ -248,8 +256,37 @@ def two_spheres_reference(t_end):
     return [p1, p2], float(tc), 1
 
 
+# The variants of the study: (label, run.algorithm, extra --set overrides). The analytic scenes
+# and the gas compare the three algorithms; the dense fluid the predictive algorithm's exact
+# modes with the paper's step (run.order = "step") and naive.
+ALGORITHMS = [("naive", "naive", []), ("seminaive", "seminaive", []),
+              ("predictive", "predictive", [])]
+FLUID_VARIANTS = [
+    ("naive", "naive", []),
+    ("predictive", "predictive", ['run.neighbors="all"']),
+    ("predictive-grid", "predictive", ['run.neighbors="grid"']),
+    ("predictive-cells", "predictive", ['run.neighbors="cells"']),
+    ("step-all", "predictive", ['run.neighbors="all"', 'run.order="step"']),
+    ("step-grid", "predictive", ['run.neighbors="grid"', 'run.order="step"']),
+]
+FLUID_REF = "predictive-cells"   # the exact reference, at the smallest dt
+FLUID_N = 1000                   # 10^3 on a lattice (--quick: 8^3)
+FLUID_PHI = 0.5
+FLUID_SIGMA = 1.0
+
+
+def fluid_sets(n):
+    """inputs/hard-sphere-fluid.deck cut to n spheres in a closed box (grid mode has no
+    periodic boundaries) whose centres can reach a cube of volume n pi sigma^3 / (6 phi): side
+    L = sigma + (n pi / (6 phi))^(1/3), so the walls do not squeeze the packing."""
+    side = FLUID_SIGMA + (n * math.pi / (6.0 * FLUID_PHI)) ** (1.0 / 3.0)
+    return [f"spheres.[0].count={n}", f"box.max={vec([side, side, side])}",
+            "box.periodic=[false,false,false]"]
+
+
 def make_scenes(quick):
-    """Each scene: deck, --set overrides, simulated time T, and how to judge a final frame."""
+    """Each scene: deck, --set overrides, simulated time T, and how to judge a final frame;
+    the fluid also its own variants and time steps (in tau)."""
     gas_t = 0.2 if quick else 0.5
     return [
         {"name": "gas", "deck": "inputs/paper-box.deck", "T": gas_t,
@@ -265,7 +302,21 @@ def make_scenes(quick):
         {"name": "two-spheres", "deck": "inputs/two-spheres.deck", "T": 2.0,
          "sets": [], "label": "two spheres, oblique, e = 1",
          "error_what": "max |p(T) - p_exact| / sigma, sigma = 0.5 m"},
+        {"name": "fluid", "deck": "inputs/hard-sphere-fluid.deck", "T": 0.3 if quick else 1.0,
+         "sets": fluid_sets(512 if quick else FLUID_N), "variants": FLUID_VARIANTS,
+         "dts": [0.1, 0.01, 0.001] if quick else [0.1, 0.05, 0.02, 0.01, 0.005, 0.002, 0.001],
+         "window": 10 if quick else 20,
+         "label": f"dense fluid: phi = {FLUID_PHI}, closed box, e = 1",
+         "error_what": "|collisions - exact| / exact"},
     ]
+
+
+def variants(scene):
+    return scene.get("variants", ALGORITHMS)
+
+
+def scene_dts(scene, dts):
+    return scene.get("dts", dts)
 
 
 def analytic(scene, t_end, pos):
@@ -360,6 +411,21 @@ def median(xs):
     return statistics.median(xs) if xs else float("nan")
 
 
+def fluid_errors(sc, dts, rows):
+    """The dense fluid's errors against the exact reference (FLUID_REF at the smallest dt):
+    the collision count's relative deviation over T, and the final positions' rms divergence
+    in diameters."""
+    ref_row = rows[(sc["name"], FLUID_REF, min(dts))]
+    ref, p_ref = ref_row["summ"]["collisions"], ref_row["final_pos"]
+    for dt in dts:
+        for label, _alg, _sets in variants(sc):
+            r = rows[(sc["name"], label, dt)]
+            r["error"] = abs(r["summ"]["collisions"] - ref) / ref
+            d = np.linalg.norm(r["final_pos"] - p_ref, axis=1) / FLUID_SIGMA
+            r["divergence"] = float(np.sqrt(np.mean(d * d)))
+            r["expect"] = ref
+
+
 def study(args):
     quick = args.quick
     nbep = args.nbep
@@ -367,7 +433,6 @@ def study(args):
     repeats = 1 if quick else 3
     window = 100 if quick else 400
     threads = args.threads
-    algs = ["naive", "seminaive", "predictive"]
     scenes = make_scenes(quick)
     os.makedirs(args.out, exist_ok=True)
     work = tempfile.mkdtemp(prefix="nbep-accuracy.")
@@ -386,15 +451,15 @@ def study(args):
         # Repeats outermost, so that a burst of background load hits every variant alike.
         for rep in range(repeats):
             for sc in scenes:
-                for dt in dts:
+                for dt in scene_dts(sc, dts):
                     steps = max(1, round(sc["T"] / dt))
-                    for alg in algs:
-                        key = (sc["name"], alg, dt)
+                    for label, alg, vsets in variants(sc):
+                        key = (sc["name"], label, dt)
                         h5 = os.path.join(work, "run.h5")
                         # No per-sphere fields: writing the last frame is inside the timed
                         # loop (SPEC: output time is in wall_seconds) and costs ~0.2 ms.
-                        sets = sc["sets"] + [f"output.every={steps}", "output.stats=false",
-                                             "output.fields=[]"]
+                        sets = sc["sets"] + vsets + [f"output.every={steps}",
+                                                     "output.stats=false", "output.fields=[]"]
                         summ = run_nbep(nbep, sc["deck"], alg, dt, steps, sets, h5, threads)
                         if key not in rows:
                             rows[key] = {"summ": summ, "sps": [], "wall": [], "steps": steps}
@@ -420,40 +485,48 @@ def study(args):
                   flush=True)
         # Final positions, for the error: one more (untimed) run with the fields written.
         for sc in scenes:
-            for dt in dts:
-                for alg in algs:
-                    r = rows[(sc["name"], alg, dt)]
+            for dt in scene_dts(sc, dts):
+                for label, alg, vsets in variants(sc):
+                    r = rows[(sc["name"], label, dt)]
                     h5 = os.path.join(work, "final.h5")
-                    sets = sc["sets"] + [f"output.every={r['steps']}", "output.stats=false"]
+                    sets = sc["sets"] + vsets + [f"output.every={r['steps']}",
+                                                 "output.stats=false"]
                     summ = run_nbep(nbep, sc["deck"], alg, dt, r["steps"], sets, h5, threads)
                     with h5py.File(h5, "r") as f:
                         pos = f["/frames/position"][-1]
                         r["t_end"] = float(f["/frames/time"][-1])
                     os.remove(h5)
                     if summ["energy_final"] != r["summ"]["energy_final"]:
-                        print(f"accuracy: {sc['name']} {alg} {dt}: runs differ", file=sys.stderr)
+                        print(f"accuracy: {sc['name']} {label} {dt}: runs differ",
+                              file=sys.stderr)
                         return 1
                     r["error"], r["expect"] = analytic(sc, r["t_end"], pos)
+                    r["divergence"] = None
+                    if "variants" in sc:
+                        r["final_pos"] = pos
+        for sc in scenes:
+            if "variants" in sc:
+                fluid_errors(sc, scene_dts(sc, dts), rows)
         # Missed collisions: a frame every step over a window of at most `window` steps.
         for sc in scenes:
-            for dt in dts:
-                steps = rows[(sc["name"], "naive", dt)]["steps"]
+            for dt in scene_dts(sc, dts):
+                steps = rows[(sc["name"], variants(sc)[0][0], dt)]["steps"]
                 extra, t_start_w = miss_window_sets(sc, dt, window)
-                n_w = min(steps, window)
-                for alg in algs:
+                n_w = min(steps, sc.get("window", window))
+                for label, alg, vsets in variants(sc):
                     h5 = os.path.join(work, "miss.h5")
-                    sets = sc["sets"] + extra + ["output.every=1", "output.stats=false"]
+                    sets = sc["sets"] + vsets + extra + ["output.every=1", "output.stats=false"]
                     summ = run_nbep(nbep, sc["deck"], alg, dt, n_w, sets, h5, threads)
                     m = missed_collisions(h5)
                     os.remove(h5)
-                    r = rows[(sc["name"], alg, dt)]
+                    r = rows[(sc["name"], label, dt)]
                     r["miss"] = m
                     r["miss_steps"] = n_w
                     r["miss_t0"] = t_start_w
                     r["miss_collisions"] = summ["collisions"]
         elapsed = time.time() - t_start
         csv_path = os.path.join(args.out, "accuracy.csv")
-        write_csv(csv_path, scenes, dts, algs, rows, threads, repeats)
+        write_csv(csv_path, scenes, dts, rows, threads, repeats)
         meta = {
             "mode": "quick" if quick else "default", "date": time.strftime("%Y-%m-%d %H:%M"),
             "host": platform.node(), "nproc": os.cpu_count(), "cpu": cpu_name(),
@@ -489,15 +562,15 @@ COLUMNS = ["scene", "algorithm", "dt", "steps", "sim_time", "threads", "repeats"
            "max_overlap_rel", "collisions", "sphere_collisions", "plane_collisions",
            "expected_collisions", "checks", "predictions", "missed", "sphere_missed",
            "plane_missed", "unresolved_overlaps", "miss_window_steps", "miss_window_t0",
-           "miss_window_collisions", "error", "error_measure"]
+           "miss_window_collisions", "error", "error_measure", "divergence"]
 
 
-def write_csv(path, scenes, dts, algs, rows, threads, repeats):
+def write_csv(path, scenes, dts, rows, threads, repeats):
     with open(path, "w") as fh:
         fh.write(",".join(COLUMNS) + "\n")
         for sc in scenes:
-            for alg in algs:
-                for dt in dts:
+            for alg, _a, _s in variants(sc):
+                for dt in scene_dts(sc, dts):
                     r = rows[(sc["name"], alg, dt)]
                     s = r["summ"]
                     sps = median(r["sps"])
@@ -512,7 +585,8 @@ def write_csv(path, scenes, dts, algs, rows, threads, repeats):
                             r["miss"]["plane_missed"], r["miss"]["unresolved"], r["miss_steps"],
                             repr(r["miss_t0"]),
                             r["miss_collisions"], f"{err:.3e}",
-                            '"' + sc["error_what"] + '"']
+                            '"' + sc["error_what"] + '"',
+                            "" if r["divergence"] is None else f"{r['divergence']:.3e}"]
                     fh.write(",".join(str(v) for v in vals) + "\n")
 
 
@@ -559,6 +633,8 @@ def _write_table(rows, path, meta):
             "| collisions (exact) | missed (unresolved) / window | error |")
     lines = [head, "|" + " --- |" * 10]
     for r in rows:
+        if r.get("divergence"):
+            continue                    # the dense fluid: its own table below
         exp = f" ({r['expected_collisions']})" if r["expected_collisions"] else ""
         lines.append(
             f"| {r['scene']} | {r['algorithm']} | {dt_label(r['dt'])} "
@@ -567,6 +643,20 @@ def _write_table(rows, path, meta):
             f"| {r['collisions']}{exp} | {r['missed']} ({r['unresolved_overlaps']}) / "
             f"{r['miss_window_steps']} "
             f"| {float(r['error']):.1e} |")
+    fluid = [r for r in rows if r.get("divergence")]
+    if fluid:
+        lines += ["", "| scene | variant | dt | steps/s | s per sim. s | energy drift | max overlap "
+                  "| collisions (reference) | missed (unresolved) / window | collision error "
+                  "| divergence at T |", "|" + " --- |" * 11]
+        for r in fluid:
+            lines.append(
+                f"| {r['scene']} | {r['algorithm']} | {dt_label(r['dt'])} "
+                f"| {float(r['steps_per_second']):.3g} "
+                f"| {float(r['wall_per_sim_second']):.3g} "
+                f"| {float(r['energy_rel_drift']):.1e} | {float(r['max_overlap_rel']):.1e} "
+                f"| {r['collisions']} ({r['expected_collisions']}) "
+                f"| {r['missed']} ({r['unresolved_overlaps']}) / {r['miss_window_steps']} "
+                f"| {float(r['error']):.1e} | {float(r['divergence']):.1e} |")
     with open(path, "w") as fh:
         if meta:
             fh.write(f"<!-- {meta['mode']} run, {meta['date']}, {meta['nbep']}, {meta['cpu']} x "
@@ -582,23 +672,37 @@ def plot(rows, path, meta):
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
     algs = list(dict.fromkeys(r["algorithm"] for r in rows))
     measures = {r["scene"]: r["error_measure"] for r in rows}
+    # one panel column per scene; the dense fluid has a second, its positions' divergence
+    # (scene, value, title, measure, where 0 is drawn): the fluid's collision error resolves
+    # one collision in ~1e4, so its 0 is drawn at 1e-5; its reference's divergence at 1e-13
+    panels = []
+    for sc in scenes:
+        fluid = any(r["scene"] == sc and r.get("divergence") for r in rows)
+        panels.append((sc, "error", sc, measures[sc], 1e-5 if fluid else FLOOR))
+        if fluid:
+            panels.append((sc, "divergence", sc + ": positions at T",
+                           "rms |p(T) - p_exact(T)| / sigma", 1e-13))
     style = {"naive": ("tab:red", "o"), "seminaive": ("tab:orange", "s"),
-             "predictive": ("tab:blue", "^")}
-    fig, axes = plt.subplots(2, len(scenes), figsize=(4.6 * len(scenes), 8.4), squeeze=False)
-    for col, sc in enumerate(scenes):
+             "predictive": ("tab:blue", "^"), "predictive-grid": ("tab:cyan", "v"),
+             "predictive-cells": ("navy", "D"), "step-all": ("tab:green", "P"),
+             "step-grid": ("tab:olive", "X")}
+    fig, axes = plt.subplots(2, len(panels), figsize=(4.6 * len(panels), 8.4), squeeze=False)
+    for col, (sc, ykey, title, measure, floor) in enumerate(panels):
         for row_i, (xkey, xlabel) in enumerate([("us_per_step", "time per step [us]"),
                                                 ("wall_per_sim_second",
                                                  "wall time per simulated second [s]")]):
             ax = axes[row_i][col]
             for alg in algs:
                 rs = [r for r in rows if r["scene"] == sc and r["algorithm"] == alg]
+                if not rs:
+                    continue
                 x = [float(r[xkey]) for r in rs]
-                y = [max(float(r["error"]), FLOOR) for r in rs]
+                y = [max(float(r[ykey]), floor) for r in rs]
                 color, marker = style.get(alg, ("k", "x"))
                 ax.plot(x, y, marker=marker, color=color, label=alg, lw=1.2, ms=5)
                 for r, xi, yi in zip(rs, x, y):
-                    if alg == "seminaive":
-                        continue        # equal to naive's error; labels would overlap
+                    if alg in ("seminaive", "predictive-grid", "predictive-cells", "step-all"):
+                        continue        # equal or close to a labelled line's; would overlap
                     ax.annotate(dt_label(r["dt"]), (xi, yi), fontsize=6.5, color=color,
                                 xytext=(3, 3 if alg == "naive" else -9),
                                 textcoords="offset points")
@@ -606,17 +710,20 @@ def plot(rows, path, meta):
                         ax.plot([xi], [yi], marker="o", ms=11, mfc="none", color="k", lw=0)
             ax.set_xscale("log")
             ax.set_yscale("log")
-            ax.axhline(FLOOR, color="0.7", lw=0.8, ls=":")
+            ax.axhline(floor, color="0.7", lw=0.8, ls=":")
             ax.grid(True, which="major", alpha=0.3)
             ax.set_xlabel(xlabel)
             if row_i == 0:
-                ax.set_title(sc, fontsize=10)
+                ax.set_title(title, fontsize=10)
             if col == 0:
                 ax.set_ylabel("error")
-            ax.text(0.02, 0.02, measures[sc], transform=ax.transAxes, fontsize=7, va="bottom")
+            ax.text(0.02, 0.02, measure, transform=ax.transAxes, fontsize=7, va="bottom")
     axes[0][0].legend(fontsize=8, loc="center left")
-    note = ("points labelled by dt; error 0 drawn at 1e-17 (dotted); ringed: missed "
-            "collisions > 0")
+    if any(p[1] == "divergence" for p in panels):
+        col = [p[1] for p in panels].index("divergence")       # the fluid's own variants
+        axes[1][col].legend(fontsize=7, loc="center left")
+    note = ("points labelled by dt; error 0 drawn at 1e-17 (fluid: 1e-5 and 1e-13; dotted); "
+            "ringed: missed collisions > 0")
     if meta:
         note += (f".  {meta['nbep']}, {meta['cpu']} x {meta['nproc']}, threads "
                  f"{meta['threads']}, median of {meta['repeats']}")

@@ -26,6 +26,7 @@ SIM = ["test_run_contract", "test_sim", "test_extremes"]
 PRED = ["test_predict"]
 CELLS = ["test_sim"]  # its cells-mode tests: exact against all pairs, dense fluid, pile
 GRAN = ["test_granular"]
+ORDER = ["test_order"]  # run.order = "step", the paper's step
 
 # (id, file, original, replacement, tests, equivalent-reason or None)
 MUTANTS = [
@@ -190,6 +191,26 @@ MUTANTS = [
     ("cells-let-go-at-step-start", "src/algo_predictive.c",
      "let_go(x->c, x->s, j, x->sc->dt, x->t_local, x->w);",
      "let_go(x->c, x->s, j, x->sc->dt, 0.0, x->w);", ["test_run_contract"] + CELLS + GRAN, None),
+    # ---- run.order = "step": the paper's step (approximate, opt-in) ----
+    ("order-step-ignored", "src/algo_predictive.c",
+     "c->order_step = rounds && sim->scene->order_step;", "c->order_step = false;", ORDER, None),
+    ("order-step-cells-allowed", "src/scene.c",
+     "(strcmp(sc->algorithm, \"predictive\") != 0 || sc->neighbors_cells))",
+     "(strcmp(sc->algorithm, \"predictive\") != 0))", ORDER, None),
+    ("order-step-react-at-round-min", "src/algo_predictive.c",
+     "react(c, s, sc, ev->time, ev->time - T0, lo, hi, ev, w, cnt, mx);",
+     "react(c, s, sc, t_min, t_min - T0, lo, hi, ev, w, cnt, mx);", ORDER, None),
+    ("order-step-key-claim-without-time", "src/algo_predictive.c",
+     "        if (c->order_step && !holds_time(c, ev, lo, hi))\n            continue;\n"
+     "        claim_min(&c->claim[par][lo], key);",
+     "        claim_min(&c->claim[par][lo], key);", ORDER, None),
+    ("order-step-react-any-copy", "src/algo_predictive.c",
+     "        if (c->order_step && !holds_time(c, ev, lo, hi))\n            continue;\n"
+     "        /* Both copies", "        /* Both copies", ORDER, None),
+    ("react-both-copies", "src/algo_predictive.c", "        if (seen == stamp ||\n",
+     "        if (0 ||\n", SIM + ORDER, None),
+    ("order-step-time-claim-lo-only", "src/algo_predictive.c",
+     "            claim_min(&c->tclaim[hi], t);\n", "", ORDER, None),
     # ---- frame schedule, summary and counters ----
     ("frame-last-step", "src/sim.c", "bool frame = step % sim->scene->output_every == 0 || step == sim->step_end || stop;",
      "bool frame = step % sim->scene->output_every == 0 || stop;", SIM + ["test_output"], None),

@@ -22,7 +22,18 @@
  *   because its true partner only changed course in this step. Reacting only to the earliest
  *   events of each round, and re-predicting in between, gives the sequence a serial event-
  *   driven code would, so positions stay exact (pairs are advanced to contact, not detected
- *   after they overlap).
+ *   after they overlap). The paper's own step stays available as run.order = "step"
+ *   (scene.h: order_step; approximate, off by default): each round reacts at once to every
+ *   candidate that is the earliest event of both its spheres, found by two claims: by time
+ *   (claim_time_phase), then, among the events that hold both time claims, by pair key
+ *   (claim_phase). The earliest candidate of all always reacts, so each round makes
+ *   progress; a sphere reacts at most once per round. An event can still be shadowed: a
+ *   reaction creates an earlier event for a sphere that has already reacted later in the same
+ *   round; the next round finds that pair from the later of the two local times, overlapping,
+ *   and reacts to it there (predict.h: an overlapping, closing pair touches now). Held
+ *   spheres whose support reacted in a round let go at the round's earliest event time
+ *   (let_go_phase), as in time order; one that became held later in that round starts to fall
+ *   from there, the same kind of approximation.
  * - Reacting twice. Procedure 8 tests-and-sets a flag of e.o1 only; when the slots of both
  *   spheres name each other and the spheres belong to two threads, both react. Here the two
  *   copies of one pair carry the same key, both see they won the claims, and a
@@ -106,6 +117,9 @@ typedef struct thread_ws {
     uint64_t woken;           /* held spheres this thread changed so far (react, let_go) */
     uint32_t *claimed;        /* owned: claim words written in the last claim phase */
     size_t n_claimed;
+    uint32_t *tclaimed;       /* owned, run.order = "step": time claim words written in the
+                               * last claim_time_phase */
+    size_t n_tclaimed;
     nbep_event *part;         /* owned: best event over this thread's partners, per chunk entry */
     double t_min;             /* earliest candidate time this round, +inf if none */
     double vmax_react;        /* grid mode: fastest sphere after this thread's reactions in
@@ -147,6 +161,11 @@ typedef struct pred_ctx {
     double *t_last;               /* owned: time of each sphere's last sphere collision (TC) */
     uint8_t *flags;               /* owned: IN_CAND | IN_REDO */
     _Atomic uint64_t *claim[2];   /* owned: smallest pair key claiming a sphere, by round parity */
+    /* run.order = "step" (the paper's step, approximate): every candidate reacts that is the
+     * earliest of both its spheres, not only those at the round's earliest time */
+    bool order_step;
+    _Atomic uint64_t *tclaim;     /* owned, step order only: earliest event time claiming a
+                                   * sphere this round (time_word) */
     _Atomic uint64_t *reacted;    /* owned: round stamp of a sphere's last reaction */
     thread_ws *ws;                /* owned, one per thread */
     int nt;
@@ -193,6 +212,7 @@ static void pred_destroy(void *p)
     nbep_free_aligned(c->flags);
     nbep_free_aligned((void *)c->claim[0]);
     nbep_free_aligned((void *)c->claim[1]);
+    nbep_free_aligned((void *)c->tclaim);
     nbep_free_aligned((void *)c->reacted);
     if (c->ws) {
         for (int t = 0; t < c->nt; t++) {
@@ -201,6 +221,7 @@ static void pred_destroy(void *p)
             free(c->ws[t].fired);
             free(c->ws[t].rel);
             free(c->ws[t].claimed);
+            free(c->ws[t].tclaimed);
             nbep_free_aligned(c->ws[t].part);
             nbep_predict_ws_destroy(&c->ws[t].pws);
         }
@@ -244,10 +265,14 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         c->claim[1] = nbep_alloc_aligned(n, sizeof *c->claim[1]);
         c->reacted = nbep_alloc_aligned(n, sizeof *c->reacted);
     }
+    c->order_step = rounds && sim->scene->order_step; /* scene.c refuses it in cells mode */
+    if (c->order_step)
+        c->tclaim = nbep_alloc_aligned(n, sizeof *c->tclaim);
     c->ws = nbep_alloc_aligned((size_t)sim->nt, sizeof *c->ws);
     if (!c->ver || !c->tau || (!c->free_flight && (!c->rest || !c->aeff)) ||
         (tc_model && !c->t_last) || !c->ws ||
-        (rounds && (!c->flags || !c->claim[0] || !c->claim[1] || !c->reacted))) {
+        (rounds && (!c->flags || !c->claim[0] || !c->claim[1] || !c->reacted)) ||
+        (c->order_step && !c->tclaim)) {
         pred_destroy(c);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm (%zu spheres)",
                   n);
@@ -299,6 +324,8 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
             atomic_init(&c->claim[1][i], KEY_FREE);
             atomic_init(&c->reacted[i], 0);
         }
+        if (c->order_step)
+            atomic_init(&c->tclaim[i], KEY_FREE);
     }
     for (int t = 0; t < sim->nt; t++) {
         nbep_range r = nbep__range_split(n, t, sim->nt);
@@ -315,8 +342,11 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
             w->rel = malloc(own * sizeof *w->rel);
             w->claimed = malloc(2 * own * sizeof *w->claimed);
         }
+        if (c->order_step)
+            w->tclaimed = malloc(2 * own * sizeof *w->tclaimed);
         if (!w->fired || !w->part ||
-            (rounds && (!w->cand || !w->redo || !w->rel || !w->claimed))) {
+            (rounds && (!w->cand || !w->redo || !w->rel || !w->claimed)) ||
+            (c->order_step && !w->tclaimed)) {
             pred_destroy(c);
             NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm");
         }
@@ -733,16 +763,64 @@ static void claim_min(_Atomic uint64_t *word, uint64_t key)
     }
 }
 
+/* run.order = "step": an event time as a claim word. Event times are absolute and a run
+ * starts at t = 0, so they are >= +0, and the bits of non-negative doubles order as the
+ * numbers do (+inf and KEY_FREE above every finite time). */
+static uint64_t time_word(double t)
+{
+    uint64_t u;
+    memcpy(&u, &t, sizeof u);
+    return u;
+}
+
+/* run.order = "step", the first of two claims: every candidate claims both its spheres with
+ * its time, the earliest winning. An event of sphere i's slot may name a partner j whose own
+ * slot holds a later event (inserts are one-sided: j was not re-predicted when i found the
+ * pair), so a sphere's earliest event is found here, not in its slot. relaxed: read only in
+ * claim_phase and react_phase, after the barrier that ends this phase; reset at the next
+ * round's start, after the barrier that ends react_phase. */
+static void claim_time_phase(pred_ctx *c, thread_ws *w)
+{
+    w->n_tclaimed = 0;
+    for (size_t k = 0; k < w->n_cand; k++) {
+        size_t i = w->cand[k];
+        const nbep_event *ev = nbep_feq_slot(c->q, i);
+        uint32_t lo, hi;
+        (void)event_key(i, ev, &lo, &hi);
+        const uint64_t t = time_word(ev->time);
+        claim_min(&c->tclaim[lo], t);
+        w->tclaimed[w->n_tclaimed++] = lo;
+        if (ev->kind == NBEP_EVENT_SPHERE) {
+            claim_min(&c->tclaim[hi], t);
+            w->tclaimed[w->n_tclaimed++] = hi;
+        }
+    }
+}
+
+/* run.order = "step": the event is the earliest of both its spheres (it may share that time
+ * with another event of one of them: the pair key decides in claim_phase). */
+static bool holds_time(const pred_ctx *c, const nbep_event *ev, uint32_t lo, uint32_t hi)
+{
+    const uint64_t t = time_word(ev->time);
+    return atomic_load_explicit(&c->tclaim[lo], memory_order_relaxed) == t &&
+           (ev->kind != NBEP_EVENT_SPHERE ||
+            atomic_load_explicit(&c->tclaim[hi], memory_order_relaxed) == t);
+}
+
+/* Each event at t_min (run.order = "step": each event holding both its time claims) claims
+ * both its spheres with its pair key, the smallest winning. */
 static void claim_phase(pred_ctx *c, int par, double t_min, thread_ws *w)
 {
     w->n_claimed = 0;
     for (size_t k = 0; k < w->n_cand; k++) {
         size_t i = w->cand[k];
         const nbep_event *ev = nbep_feq_slot(c->q, i);
-        if (ev->time != t_min)
+        if (!c->order_step && ev->time != t_min)
             continue;
         uint32_t lo, hi;
         uint64_t key = event_key(i, ev, &lo, &hi);
+        if (c->order_step && !holds_time(c, ev, lo, hi))
+            continue;
         claim_min(&c->claim[par][lo], key);
         w->claimed[w->n_claimed++] = lo;
         if (ev->kind == NBEP_EVENT_SPHERE) {
@@ -1062,7 +1140,7 @@ static void react_phase(pred_ctx *c, nbep_state *s, const nbep_scene *sc, int pa
     for (size_t k = 0; k < w->n_cand; k++) {
         size_t i = w->cand[k];
         const nbep_event *ev = nbep_feq_slot(c->q, i);
-        if (ev->time != t_min)
+        if (!c->order_step && ev->time != t_min)
             continue;
         cnt->c[NBEP_COUNTER_CHECKS]++; /* the paper's check() */
         uint32_t lo, hi;
@@ -1071,6 +1149,11 @@ static void react_phase(pred_ctx *c, nbep_state *s, const nbep_scene *sc, int pa
             continue;
         if (ev->kind == NBEP_EVENT_SPHERE &&
             atomic_load_explicit(&c->claim[par][hi], memory_order_relaxed) != key)
+            continue;
+        /* step order: the two copies of a pair carry the same key, but their times may differ
+         * in the last bits (each sphere predicted the pair from its own side); only a copy at
+         * the claimed time reacts, so the reaction is the same for any thread count */
+        if (c->order_step && !holds_time(c, ev, lo, hi))
             continue;
         /* Both copies of a pair hold the claims; one compare-and-swap lets one react.
          * relaxed: the other copy only needs the outcome, and the barrier after this phase
@@ -1082,7 +1165,8 @@ static void react_phase(pred_ctx *c, nbep_state *s, const nbep_scene *sc, int pa
                                                      memory_order_relaxed))
             continue;
         cnt->c[NBEP_COUNTER_REACTIONS]++;
-        react(c, s, sc, t_min, t_min - T0, lo, hi, ev, w, cnt, mx);
+        /* at t_min in time order; at its own time in step order */
+        react(c, s, sc, ev->time, ev->time - T0, lo, hi, ev, w, cnt, mx);
     }
 }
 
@@ -1440,6 +1524,10 @@ static void pred_run(nbep_sim *sim, void *p)
                     atomic_store_explicit(&c->claim[par ^ 1][w->claimed[k]], KEY_FREE,
                                           memory_order_relaxed);
                 w->n_claimed = 0;
+                for (size_t k = 0; k < w->n_tclaimed; k++) /* step order's, the same way */
+                    atomic_store_explicit(&c->tclaim[w->tclaimed[k]], KEY_FREE,
+                                          memory_order_relaxed);
+                w->n_tclaimed = 0;
                 find_phase(c, own, first, T_end, w, cnt);
                 nbep_barrier_wait(&c->bar);
                 /* relaxed: the barrier above ordered thread 0's store of stop */
@@ -1466,6 +1554,10 @@ static void pred_run(nbep_sim *sim, void *p)
                 }
                 if ((round - step_round0) % STALL_ROUNDS == STALL_ROUNDS - 1)
                     t_check = t_min;
+                if (c->order_step) {
+                    claim_time_phase(c, w);
+                    nbep_barrier_wait(&c->bar);
+                }
                 claim_phase(c, par, t_min, w);
                 nbep_barrier_wait(&c->bar);
                 react_phase(c, s, sim->scene, par, T0, t_min, round + 1, w, cnt, mx);

@@ -33,6 +33,7 @@ static const schema_entry *const schema = nbep__scene_schema;
 
 static const char *const algorithm_names[] = {"naive", "seminaive", "predictive"};
 static const char *const neighbor_names[] = {"all", "grid", "cells"};
+static const char *const order_names[] = {"time", "step"};
 static const char *const place_names[] = {"random", "lattice"};
 static const char *const field_names[] = {"position", "velocity"};
 enum { N_ALGORITHMS = 3, N_PLACES = 2, N_FIELDS = 2 };
@@ -340,6 +341,18 @@ static void parse_run(load *L, const config_setting_t *root, nbep_scene *sc, boo
         sc->neighbors_grid = k == 1;
         sc->neighbors_cells = k == 2;
     }
+    /* The paper's step (run.order = "step") is a way of running the predictive algorithm's
+     * rounds ("all" and "grid"); the cells mode's event loop takes one event at a time and the
+     * detection algorithms have no events, so it means nothing there: refused, not ignored. */
+    const char *order;
+    if (get_string(L, run, "run", S_RUN_ORDER, &order, &at) == GOT &&
+        (sc->order_step = one_of(L, at, "run.order", order, order_names, 2) == 1) &&
+        (strcmp(sc->algorithm, "predictive") != 0 || sc->neighbors_cells))
+        ERR(L, at,
+            "run.order = \"step\" needs run.algorithm = \"predictive\" with run.neighbors = "
+            "\"all\" or \"grid\" (got \"%s\"%s): only their rounds can react to a step's "
+            "events at once",
+            sc->algorithm, strcmp(sc->algorithm, "predictive") == 0 ? ", \"cells\"" : "");
     int64_t v;
     if (get_int(L, run, "run", S_RUN_STEPS, &v, NULL) == GOT)
         sc->steps = (uint64_t)v;

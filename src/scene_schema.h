@@ -37,6 +37,11 @@ enum {
       "predictive: whom a re-prediction tests: \"all\" spheres (the paper), \"grid\" (nearby "  \
       "cells within a time horizon) or \"cells\" (event loop: cell lists and a calendar; "        \
       "needs a box)")                                                                              \
+    X(RUN_ORDER, "run.order", STRING, 0, "\"time\"", NULL,                                         \
+      "predictive \"all\" or \"grid\": how a step's events are reacted to: \"time\" (earliest "    \
+      "first, re-predicting in between: exact) or \"step\" (the paper's step: every event "        \
+      "found before the step's end that is the earliest of both its spheres reacts in one "        \
+      "round, then re-predict; faster on crowded scenes, approximate: spheres may overlap)")       \
     X(PHYSICS, "physics", GROUP, 0, NULL, "-", "physics")                                          \
     X(PHYSICS_GRAVITY, "physics.gravity", VEC3, 0, "[0.0, 0.0, 0.0]", NULL,                        \
       "uniform acceleration of every sphere without its own")                                      \

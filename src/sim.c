@@ -75,6 +75,8 @@ size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads)
         bytes += n * (4 * sizeof(uint64_t) + 2 * 64); /* contacts and tree nodes */
     else
         bytes += n * 4 * sizeof(uint64_t); /* contact lists */
+    if (algo == &nbep__algo_predictive && sc->order_step)
+        bytes += n * 16; /* run.order = "step": a time claim 8, its list 8 */
     bytes += (size_t)threads * 4 * NBEP_CACHELINE;
     bytes += n * 2 * sizeof(nbep_vec3); /* one frame in flight in HDF5's buffers */
     return bytes;

@@ -43,6 +43,15 @@ check "cells without a box: one line naming deck:line and the setting" \
 run_nbep check "$tmp/group.deck" --set 'run.neighbors="cells"'
 check "cells with a box: accepted (got $rc)" "[ $rc = 0 ]"
 
+# ---- run.order = "step" (the paper's step) only where rounds run ---------------------------------
+sed 's/threads = 1;/threads = 1; order = "step";/' "$tmp/group.deck" >"$tmp/order.deck"
+run_nbep check "$tmp/order.deck" --set 'run.neighbors="cells"'
+check "step order in cells mode: exit 2 (got $rc)" "[ $rc = 2 ]"
+check "step order in cells mode: one line naming deck:line and the setting" \
+    "one_line && grep -q 'order.deck:1: run.order = \"step\" needs run.algorithm' $tmp/stderr"
+run_nbep check "$tmp/order.deck" --set 'run.neighbors="grid"'
+check "step order in grid mode: accepted (got $rc)" "[ $rc = 0 ]"
+
 # ---- huge counts ------------------------------------------------------------------------------
 sed 's/count = 64/count = 1000000000000/' "$tmp/group.deck" >"$tmp/huge.deck"
 run_nbep run "$tmp/huge.deck" -o "$tmp/huge.h5"

@@ -36,6 +36,8 @@ typedef struct nbep_scene {
     uint64_t seed;
     bool neighbors_grid;      /* predictive: re-predict against nearby cells, not all spheres */
     bool neighbors_cells;     /* predictive: the in-step event loop (evloop.c) over cell lists */
+    bool order_step;          /* predictive "all"/"grid": run.order = "step", the paper's step
+                               * (a step's events react at once; approximate) */
     /* physics */
     nbep_vec3 gravity;
     double restitution;
