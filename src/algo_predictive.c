@@ -1227,12 +1227,14 @@ static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, bool 
  * distinct, so the order keep_earlier applies reduces to (time, then sphere events before
  * planes and horizons, then partner), which does not depend on the order pairs are tried in.
  *
- * Roots are the expensive part, and most are not needed: a closing pair's contact comes no
- * earlier than its root-free bound (nbep_predict_pair_quadratic_floor, strictly below the
- * computed root) and no later than twice it. So the bounds of a batch of partners come first,
- * then the root of the pair with the lowest bound, which sets a best that prunes most of the
- * others (a pair is skipped only when its bound is strictly later than the best: the winner,
- * ties included, is the one trying every pair would give). */
+ * Roots are the expensive part, and most are not needed: most closing pairs of a fluid pass
+ * each other (nbep_predict_pair_quadratic_hit_floor says so, without a root, only where the
+ * root would say so too), and a closing pair's contact comes no earlier than its root-free
+ * bound (nbep_predict_pair_quadratic_floor, strictly below the computed root) and no later than
+ * twice it. So the bounds of a batch of partners come first, then the root of the pair with
+ * the lowest bound, which sets a best that prunes most of the others (a pair is skipped only
+ * when its bound is strictly later than the best: the winner, ties included, is the one trying
+ * every pair would give). */
 #define PAIR_BATCH 32
 
 /* A closing pair of the batch: its partner's place in the list and its bound (from t0). */
@@ -1287,7 +1289,7 @@ static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m, 
             nbep_vec3 dp, dv;
             double t0, sigma;
             pair_motion(c, s, i, pi, vi, ti, js[k], images, &dp, &dv, &t0, &sigma);
-            const double lb = nbep_predict_pair_quadratic_floor(dp, dv, sigma);
+            const double lb = nbep_predict_pair_quadratic_hit_floor(dp, dv, sigma);
             if (lb == NBEP_NEVER)
                 continue;
             tr[n] = (pair_try){t0 + lb, (uint32_t)k};

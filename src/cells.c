@@ -12,7 +12,7 @@
 
 size_t nbep_cells_bytes(size_t n)
 {
-    return (2 * n + 9) * sizeof(uint32_t) + 4 * n * sizeof(uint32_t);
+    return (2 * n + 9) * sizeof(uint32_t) + n * (sizeof(nbep_cells_member) + sizeof(uint32_t));
 }
 
 nbep_status nbep_cells_init(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double reach, size_t n,
@@ -50,10 +50,9 @@ nbep_status nbep_cells_init(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double re
         g->n_cells *= g->dim[k];
     }
     g->head = nbep_alloc_aligned(g->n_cells, sizeof *g->head);
-    g->next = nbep_alloc_aligned(n ? n : 1, sizeof *g->next);
+    g->m = nbep_alloc_aligned(n ? n : 1, sizeof *g->m);
     g->prev = nbep_alloc_aligned(n ? n : 1, sizeof *g->prev);
-    g->cell = nbep_alloc_aligned(n ? n : 1, sizeof *g->cell);
-    if (!g->head || !g->next || !g->prev || !g->cell) {
+    if (!g->head || !g->m || !g->prev) {
         nbep_cells_fini(g);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for cell lists of %zu spheres", n);
     }
@@ -65,9 +64,8 @@ void nbep_cells_fini(nbep_cells *g)
     if (!g)
         return;
     nbep_free_aligned(g->head);
-    nbep_free_aligned(g->next);
+    nbep_free_aligned(g->m);
     nbep_free_aligned(g->prev);
-    nbep_free_aligned(g->cell);
     memset(g, 0, sizeof *g);
 }
 
@@ -88,15 +86,17 @@ size_t nbep_cells_locate(const nbep_cells *g, nbep_vec3 p)
 
 void nbep_cells_assign(nbep_cells *g, const nbep_vec3 *pos, size_t lo, size_t hi)
 {
-    for (size_t i = lo; i < hi; i++)
-        g->cell[i] = (uint32_t)nbep_cells_locate(g, pos[i]);
+    for (size_t i = lo; i < hi; i++) {
+        g->m[i].at = pos[i];
+        g->m[i].cell = (uint32_t)nbep_cells_locate(g, pos[i]);
+    }
 }
 
 static void link_in(nbep_cells *g, uint32_t i, size_t c)
 {
-    g->cell[i] = (uint32_t)c;
+    g->m[i].cell = (uint32_t)c;
     g->prev[i] = NBEP_CELLS_NONE;
-    g->next[i] = g->head[c];
+    g->m[i].next = g->head[c];
     if (g->head[c] != NBEP_CELLS_NONE)
         g->prev[g->head[c]] = i;
     g->head[c] = i;
@@ -107,18 +107,27 @@ void nbep_cells_link(nbep_cells *g)
     for (size_t c = 0; c < g->n_cells; c++)
         g->head[c] = NBEP_CELLS_NONE;
     for (size_t i = g->n; i-- > 0;) /* head insertion, downwards: ids ascend in a list */
-        link_in(g, (uint32_t)i, g->cell[i]);
+        link_in(g, (uint32_t)i, g->m[i].cell);
 }
 
 void nbep_cells_move(nbep_cells *g, uint32_t i, size_t c)
 {
+    const uint32_t nx = g->m[i].next;
     if (g->prev[i] != NBEP_CELLS_NONE)
-        g->next[g->prev[i]] = g->next[i];
+        g->m[g->prev[i]].next = nx;
     else
-        g->head[g->cell[i]] = g->next[i];
-    if (g->next[i] != NBEP_CELLS_NONE)
-        g->prev[g->next[i]] = g->prev[i];
+        g->head[g->m[i].cell] = nx;
+    if (nx != NBEP_CELLS_NONE)
+        g->prev[nx] = g->prev[i];
     link_in(g, i, c);
+}
+
+void nbep_cells_place(nbep_cells *g, uint32_t i, nbep_vec3 p)
+{
+    g->m[i].at = p;
+    const size_t c = nbep_cells_locate(g, p);
+    if (c != g->m[i].cell)
+        nbep_cells_move(g, i, c);
 }
 
 static void cell_coords(const nbep_cells *g, size_t c, size_t xyz[3])
@@ -132,7 +141,7 @@ double nbep_cells_exit_time(const nbep_cells *g, uint32_t i, nbep_vec3 p, nbep_v
                             nbep_vec3 a)
 {
     size_t xyz[3];
-    cell_coords(g, g->cell[i], xyz);
+    cell_coords(g, g->m[i].cell, xyz);
     const double x[3] = {p.x, p.y, p.z}, u[3] = {v.x, v.y, v.z}, acc[3] = {a.x, a.y, a.z};
     const double o[3] = {g->lo.x, g->lo.y, g->lo.z};
     double t = NBEP_NEVER;
@@ -183,13 +192,14 @@ size_t nbep_cells_check(const nbep_cells *g, const nbep_vec3 *pos, double tol)
     const double o[3] = {g->lo.x, g->lo.y, g->lo.z};
     for (size_t c = 0; c < g->n_cells; c++) {
         uint32_t before = NBEP_CELLS_NONE;
-        for (uint32_t i = g->head[c]; i != NBEP_CELLS_NONE; i = g->next[i]) {
-            if (i >= g->n || g->cell[i] != c || g->prev[i] != before || ++listed > g->n)
+        for (uint32_t i = g->head[c]; i != NBEP_CELLS_NONE; i = g->m[i].next) {
+            if (i >= g->n || g->m[i].cell != c || g->prev[i] != before || ++listed > g->n)
                 return bad + 1; /* a broken list: stop before looping forever */
             before = i;
             size_t xyz[3];
             cell_coords(g, c, xyz);
-            const double x[3] = {pos[i].x, pos[i].y, pos[i].z};
+            const nbep_vec3 pi = pos ? pos[i] : g->m[i].at;
+            const double x[3] = {pi.x, pi.y, pi.z};
             for (int k = 0; k < 3; k++) {
                 double lo = o[k] + (double)xyz[k] * g->h[k] - g->margin[k];
                 double hi = o[k] + (double)(xyz[k] + 1) * g->h[k] + g->margin[k];

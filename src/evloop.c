@@ -20,9 +20,9 @@
 struct nbep_evloop {
     size_t n;
     nbep_calendar *cal;   /* owned */
-    nbep_cells cells;     /* owned: cells of the list centres, at least `cut` wide */
+    nbep_cells cells;     /* owned: cells of the list centres, at least `cut` wide; a
+                           * member's place (cells.m[i].at) is where i's list was built */
     nbep_nblist nl;       /* owned */
-    nbep_vec3 *centre;    /* owned, n: where each sphere's list was built */
     uint32_t *count;      /* owned, n: list lengths, at a full rebuild */
     /* a rebuild of one list (rebuild_one): the neighbours it had are marked `stamp`, those it
      * keeps re-marked stamp + 1; near holds the new list, was the old one */
@@ -68,14 +68,13 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->stray = 0.5 * skin;
     e->cut = (reach + skin) * (1.0 + CUT_SLACK);
     e->face_reach = e->cut + 1.01 * e->stray;
-    e->centre = nbep_alloc_aligned(n ? n : 1, sizeof *e->centre);
     e->count = nbep_alloc_aligned(n ? n : 1, sizeof *e->count);
     e->mark = nbep_alloc_aligned(n ? n : 1, sizeof *e->mark);
     e->near_cap = 64;
     e->near = malloc(e->near_cap * sizeof *e->near);
     e->was = malloc(e->near_cap * sizeof *e->was);
     e->stamp = 2; /* marks start at 0: no sphere is marked */
-    nbep_status st = e->centre && e->count && e->mark && e->near && e->was ? NBEP_OK : NBEP_ENOMEM;
+    nbep_status st = e->count && e->mark && e->near && e->was ? NBEP_OK : NBEP_ENOMEM;
     if (st != NBEP_OK)
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory for the cells engine");
     if (st == NBEP_OK)
@@ -107,7 +106,6 @@ void nbep_evloop_destroy(nbep_evloop **e)
     nbep_calendar_destroy(&(*e)->cal);
     nbep_cells_fini(&(*e)->cells);
     nbep_nblist_fini(&(*e)->nl);
-    nbep_free_aligned((*e)->centre);
     nbep_free_aligned((*e)->count);
     nbep_free_aligned((*e)->mark);
     free((*e)->near);
@@ -120,7 +118,7 @@ size_t nbep_evloop_bytes(size_t n, double neighbours)
 {
     return nbep_calendar_bytes(n) + nbep_cells_bytes(n) +
            nbep_nblist_bytes(n, (size_t)(neighbours * (double)n)) +
-           n * (sizeof(nbep_vec3) + 2 * sizeof(uint32_t));
+           n * 2 * sizeof(uint32_t);
 }
 
 bool nbep_evloop_failed(const nbep_evloop *e)
@@ -136,8 +134,8 @@ static inline void near_centres(nbep_evloop *e, uint32_t i,
 {
     const nbep_cells *g = &e->cells;
     nbep_cells_block b;
-    nbep_cells_block_of(g, g->cell[i], &b);
-    const nbep_vec3 ci = e->centre[i];
+    nbep_cells_block_of(g, g->m[i].cell, &b);
+    const nbep_vec3 ci = g->m[i].at;
     const double cut2 = e->cut * e->cut;
     for (int z = 0; z < b.cnt[2]; z++) {
         /* i's centre as seen from the block's cell: moved by the cell's period */
@@ -148,9 +146,9 @@ static inline void near_centres(nbep_evloop *e, uint32_t i,
             for (int x = 0; x < b.cnt[0]; x++) {
                 const double ax = b.per[0][x] ? ci.x - b.per[0][x] * e->pb.len[0] : ci.x;
                 for (uint32_t j = g->head[row + b.idx[0][x]]; j != NBEP_CELLS_NONE;
-                     j = g->next[j]) {
-                    const double dx = e->centre[j].x - ax, dy = e->centre[j].y - ay,
-                                 dz = e->centre[j].z - az;
+                     j = g->m[j].next) {
+                    const nbep_vec3 cj = g->m[j].at;
+                    const double dx = cj.x - ax, dy = cj.y - ay, dz = cj.z - az;
                     if (dx * dx + dy * dy + dz * dz < cut2 && j != i)
                         f(e, i, j, arg);
                 }
@@ -226,10 +224,7 @@ static void rebuild_one(nbep_evloop *e, uint32_t i, nbep_vec3 c)
         e->was[k] = old[k];
         e->mark[old[k]] = e->stamp;
     }
-    e->centre[i] = c;
-    const size_t cell = nbep_cells_locate(&e->cells, c);
-    if (cell != e->cells.cell[i])
-        nbep_cells_move(&e->cells, i, cell);
+    nbep_cells_place(&e->cells, i, c);
     e->n_near = 0;
     near_centres(e, i, gather_one, NULL);
     for (size_t k = 0; k < m; k++)
@@ -243,8 +238,6 @@ static void rebuild_one(nbep_evloop *e, uint32_t i, nbep_vec3 c)
 
 void nbep_evloop_assign(nbep_evloop *e, const nbep_vec3 *pos, size_t lo, size_t hi)
 {
-    for (size_t i = lo; i < hi; i++)
-        e->centre[i] = pos[i];
     nbep_cells_assign(&e->cells, pos, lo, hi);
 }
 
@@ -325,7 +318,8 @@ static bool near_face(const nbep_evloop *e, uint32_t i)
 {
     if (!e->pb.any)
         return false;
-    const double c[3] = {e->centre[i].x, e->centre[i].y, e->centre[i].z};
+    const nbep_vec3 ci = e->cells.m[i].at;
+    const double c[3] = {ci.x, ci.y, ci.z};
     for (int k = 0; k < 3; k++)
         if (e->pb.axis[k] && !(c[k] - e->pb.lo[k] > e->face_reach &&
                                e->pb.lo[k] + e->pb.len[k] - c[k] > e->face_reach))
@@ -344,7 +338,7 @@ static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uin
         ops->pairs(u, i, js, m, near_face(e, i), &best);
     nbep_vec3 p, v, a;
     ops->flight(u, i, t, &p, &v, &a);
-    double t_exit = t + stray_time(nbep_vec3_sub(p, e->centre[i]), v, a, e->stray);
+    double t_exit = t + stray_time(nbep_vec3_sub(p, e->cells.m[i].at), v, a, e->stray);
     if (t_exit < NBEP_NEVER && (best.kind == NBEP_EVENT_NONE || t_exit < best.time))
         best = (nbep_event){t_exit, 0, NBEP_EVENT_HORIZON, e->ver[i], 0};
     if (best.kind == NBEP_EVENT_NONE)

@@ -78,15 +78,18 @@ static void test_a_build_in_two_ranges_on_two_threads_equals_a_serial_one(void *
     for (int t = 0; t < 2; t++)
         nbep_cells_assign(&b, pos, t ? N / 3 : 0, t ? N : N / 3);
     nbep_cells_link(&b);
-    assert_memory_equal(a.cell, b.cell, N * sizeof *a.cell);
     assert_memory_equal(a.head, b.head, a.n_cells * sizeof *a.head);
-    assert_memory_equal(a.next, b.next, N * sizeof *a.next);
+    for (size_t i = 0; i < N; i++) { /* the same cells, links and places */
+        assert_int_equal(a.m[i].cell, b.m[i].cell);
+        assert_int_equal(a.m[i].next, b.m[i].next);
+        assert_true(nbep_vec3_equal(a.m[i].at, pos[i]) && nbep_vec3_equal(b.m[i].at, pos[i]));
+    }
     assert_int_equal(nbep_cells_check(&a, pos, 0.0), 0);
     /* ids ascend within a list */
     for (size_t c = 0; c < a.n_cells; c++)
-        for (uint32_t i = a.head[c]; i != NBEP_CELLS_NONE && a.next[i] != NBEP_CELLS_NONE;
-             i = a.next[i])
-            assert_true(a.next[i] > i);
+        for (uint32_t i = a.head[c]; i != NBEP_CELLS_NONE && a.m[i].next != NBEP_CELLS_NONE;
+             i = a.m[i].next)
+            assert_true(a.m[i].next > i);
     nbep_cells_fini(&a);
     nbep_cells_fini(&b);
     free(pos);
@@ -156,7 +159,7 @@ static void run_flights(bool accelerate)
         while (nbep_calendar_top(cal, &i, &te) && te <= ts) {
             nbep_vec3 p = at(&f[i], te);
             size_t c = nbep_cells_locate(&g, p);
-            assert_int_not_equal(c, g.cell[i]); /* an exit lands elsewhere */
+            assert_int_not_equal(c, g.m[i].cell); /* an exit lands elsewhere */
             nbep_cells_move(&g, i, c);
             nbep_vec3 v = nbep_vec3_axpy(f[i].v, te, f[i].a);
             double next = nbep_cells_exit_time(&g, i, p, v, f[i].a);
@@ -175,7 +178,7 @@ static void run_flights(bool accelerate)
             for (size_t b = a + 1; b < N; b++) {
                 if (nbep_vec3_norm(nbep_vec3_sub(pos[a], pos[b])) > reach)
                     continue;
-                assert_true(in_block(&g, g.cell[a], g.cell[b]));
+                assert_true(in_block(&g, g.m[a].cell, g.m[b].cell));
             }
     }
     assert_true(exits > N); /* the flights did cross cells */
@@ -258,7 +261,7 @@ static void test_periodic_axes_wrap_blocks_and_exits(void **state)
     /* a sphere in cell (0, 0, 0) moving down every axis leaves through the periodic faces,
      * never through the y wall: its exit is at the grown x or z face, whichever first */
     nbep_vec3 p = {0.5 * g.h[0], 0.5 * g.h[1], 0.5 * g.h[2]};
-    g.cell[0] = (uint32_t)nbep_cells_index(&g, 0, 0, 0);
+    g.m[0].cell = (uint32_t)nbep_cells_index(&g, 0, 0, 0);
     const nbep_vec3 a0 = {0, 0, 0};
     double t = nbep_cells_exit_time(&g, 0, p, (nbep_vec3){-1.0, -100.0, 0.0}, a0);
     assert_close(t, 0.5 * g.h[0] + g.margin[0], 1e-12, 0.0);

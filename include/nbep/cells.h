@@ -19,10 +19,12 @@
  * positions wrapped consistently: a sphere moved into a cell across a periodic face is first
  * wrapped into the box (periodic.h), so a member's centre always lies in its grown cell.
  *
- * Lists are doubly linked through per-sphere arrays (no allocation after init). Building is
- * split so that the heavy part runs in parallel: nbep_cells_assign is pure per sphere (any
- * index range on any thread), nbep_cells_link one O(n + cells) pass. Memory: 16 bytes per
- * sphere plus 4 per cell, cells at most 2n + 8. */
+ * Lists are doubly linked through per-sphere arrays (no allocation after init). A member's
+ * place (the point its cell was chosen by), its link to the next member and its cell share one
+ * 32-byte record, so that walking a cell and testing its members' places touches one cache
+ * line half per member. Building is split so that the heavy part runs in parallel:
+ * nbep_cells_assign is pure per sphere (any index range on any thread), nbep_cells_link one
+ * O(n + cells) pass. Memory: 36 bytes per sphere plus 4 per cell, cells at most 2n + 8. */
 #ifndef NBEP_CELLS_H
 #define NBEP_CELLS_H
 
@@ -36,6 +38,12 @@
 
 #define NBEP_CELLS_NONE UINT32_MAX
 
+typedef struct nbep_cells_member {
+    nbep_vec3 at;          /* the member's place: where it was assigned or last placed */
+    uint32_t next;         /* the next member of its cell, or NBEP_CELLS_NONE */
+    uint32_t cell;         /* its cell */
+} nbep_cells_member;
+
 typedef struct nbep_cells {
     nbep_vec3 lo, hi;      /* the box */
     double h[3];           /* cell side per axis */
@@ -44,8 +52,8 @@ typedef struct nbep_cells {
     size_t n_cells, n;
     bool periodic[3];      /* the cells wrap around along that axis */
     uint32_t *head;        /* owned, n_cells: first member, or NBEP_CELLS_NONE */
-    uint32_t *next, *prev; /* owned, n: the list links */
-    uint32_t *cell;        /* owned, n: each sphere's cell */
+    nbep_cells_member *m;  /* owned, n: each sphere's place, forward link and cell */
+    uint32_t *prev;        /* owned, n: the backward links */
 } nbep_cells;
 
 /* Cells over the box [lo, hi] (hi > lo) for n spheres whose contacts happen within `reach` of
@@ -61,13 +69,15 @@ void nbep_cells_fini(nbep_cells *g);
 
 /* The cell holding point p (clamped into the box; NaN goes to cell 0). */
 size_t nbep_cells_locate(const nbep_cells *g, nbep_vec3 p);
-/* Assigns spheres [lo, hi) to the cells of their centres; touches nothing shared, so threads
- * may assign disjoint ranges at once. */
+/* Assigns spheres [lo, hi) to the cells of their centres pos[] (their places); touches nothing
+ * shared, so threads may assign disjoint ranges at once. */
 void nbep_cells_assign(nbep_cells *g, const nbep_vec3 *pos, size_t lo, size_t hi);
 /* Links every sphere into its assigned cell's list (ascending ids within a cell). One thread. */
 void nbep_cells_link(nbep_cells *g);
 /* Moves sphere i into cell c. O(1). */
 void nbep_cells_move(nbep_cells *g, uint32_t i, size_t c);
+/* Gives sphere i the place p, moving it into p's cell if that is another. O(1). */
+void nbep_cells_place(nbep_cells *g, uint32_t i, nbep_vec3 p);
 
 /* Time from now until the centre of sphere i (at p, flying with v and a) leaves its cell's
  * box grown by the margin, through a face that has a neighbour cell; NBEP_NEVER when it does
@@ -93,8 +103,8 @@ static inline size_t nbep_cells_index(const nbep_cells *g, size_t x, size_t y, s
 }
 
 /* Invariant check for tests: each sphere is listed once, in the cell it is assigned to, and
- * its centre pos[i] lies within its cell grown by the margin (plus tol) on interior faces.
- * Returns the number of violations. */
+ * its centre pos[i] (NULL: its place) lies within its cell grown by the margin (plus tol) on
+ * interior faces. Returns the number of violations. */
 size_t nbep_cells_check(const nbep_cells *g, const nbep_vec3 *pos, double tol);
 
 /* Bytes nbep_cells_init takes at most for n spheres. */
