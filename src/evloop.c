@@ -24,12 +24,11 @@ struct nbep_evloop {
                            * member's place (cells.m[i].at) is where i's list was built */
     nbep_nblist nl;       /* owned */
     uint32_t *count;      /* owned, n: list lengths, at a full rebuild */
-    /* a rebuild of one list (rebuild_one): the neighbours it had are marked `stamp`, those it
-     * keeps re-marked stamp + 1; near holds the new list, was the old one */
-    uint32_t *mark;       /* owned, n */
-    uint32_t stamp;
+    /* a rebuild of one list (rebuild_one): near holds the new list, was the old one (n_was
+     * entries, kept[k] set for those found again) */
     uint32_t *near, *was; /* owned, room for near_cap each */
-    size_t near_cap, n_near;
+    uint8_t *kept;        /* owned, room for near_cap */
+    size_t near_cap, n_near, n_was;
     nbep_periodic pb;     /* the box's periodic geometry */
     double cut;           /* the list cutoff: contact distance plus skin, plus slack */
     double stray;         /* half the skin: how far a sphere goes before its list expires */
@@ -69,12 +68,11 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->cut = (reach + skin) * (1.0 + CUT_SLACK);
     e->face_reach = e->cut + 1.01 * e->stray;
     e->count = nbep_alloc_aligned(n ? n : 1, sizeof *e->count);
-    e->mark = nbep_alloc_aligned(n ? n : 1, sizeof *e->mark);
     e->near_cap = 64;
     e->near = malloc(e->near_cap * sizeof *e->near);
     e->was = malloc(e->near_cap * sizeof *e->was);
-    e->stamp = 2; /* marks start at 0: no sphere is marked */
-    nbep_status st = e->count && e->mark && e->near && e->was ? NBEP_OK : NBEP_ENOMEM;
+    e->kept = malloc(e->near_cap * sizeof *e->kept);
+    nbep_status st = e->count && e->near && e->was && e->kept ? NBEP_OK : NBEP_ENOMEM;
     if (st != NBEP_OK)
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory for the cells engine");
     if (st == NBEP_OK)
@@ -107,7 +105,7 @@ void nbep_evloop_destroy(nbep_evloop **e)
     nbep_cells_fini(&(*e)->cells);
     nbep_nblist_fini(&(*e)->nl);
     nbep_free_aligned((*e)->count);
-    nbep_free_aligned((*e)->mark);
+    free((*e)->kept);
     free((*e)->near);
     free((*e)->was);
     free(*e);
@@ -118,7 +116,7 @@ size_t nbep_evloop_bytes(size_t n, double neighbours)
 {
     return nbep_calendar_bytes(n) + nbep_cells_bytes(n) +
            nbep_nblist_bytes(n, (size_t)(neighbours * (double)n)) +
-           n * 2 * sizeof(uint32_t);
+           n * sizeof(uint32_t);
 }
 
 bool nbep_evloop_failed(const nbep_evloop *e)
@@ -180,19 +178,25 @@ static bool grow_near(nbep_evloop *e)
     uint32_t *b = realloc(e->was, cap * sizeof *b);
     if (b)
         e->was = b;
-    if (!a || !b)
+    uint8_t *k = realloc(e->kept, cap * sizeof *k);
+    if (k)
+        e->kept = k;
+    if (!a || !b || !k)
         return false;
     e->near_cap = cap;
     return true;
 }
 
 /* A sphere j near i during i's rebuild: into i's new list; into j's list too unless i was in
- * it already (a neighbour i keeps, marked stamp by rebuild_one, is re-marked kept). */
+ * it already (j is among i's old neighbours, a handful looked through in cache: it is kept). */
 static void gather_one(nbep_evloop *e, uint32_t i, uint32_t j, void *arg)
 {
     (void)arg;
-    if (e->mark[j] == e->stamp)
-        e->mark[j] = e->stamp + 1;
+    size_t k = 0;
+    while (k < e->n_was && e->was[k] != j)
+        k++;
+    if (k < e->n_was)
+        e->kept[k] = 1;
     else if (!nbep_nblist_append(&e->nl, j, i))
         e->failed = true;
     if (e->n_near == e->near_cap && !grow_near(e)) {
@@ -207,12 +211,6 @@ static void gather_one(nbep_evloop *e, uint32_t i, uint32_t j, void *arg)
  * are not touched. */
 static void rebuild_one(nbep_evloop *e, uint32_t i, nbep_vec3 c)
 {
-    if (e->stamp >= UINT32_MAX - 2) { /* the marks wrap: start them afresh */
-        for (size_t k = 0; k < e->n; k++)
-            e->mark[k] = 0;
-        e->stamp = 2;
-    }
-    e->stamp += 2;
     size_t m;
     const uint32_t *old = nbep_nblist_of(&e->nl, i, &m);
     while (m > e->near_cap)
@@ -222,13 +220,14 @@ static void rebuild_one(nbep_evloop *e, uint32_t i, nbep_vec3 c)
         }
     for (size_t k = 0; k < m; k++) { /* a copy: appends below may move the pool */
         e->was[k] = old[k];
-        e->mark[old[k]] = e->stamp;
+        e->kept[k] = 0;
     }
+    e->n_was = m;
     nbep_cells_place(&e->cells, i, c);
     e->n_near = 0;
     near_centres(e, i, gather_one, NULL);
     for (size_t k = 0; k < m; k++)
-        if (e->mark[e->was[k]] == e->stamp) /* lost */
+        if (!e->kept[k]) /* lost */
             nbep_nblist_drop(&e->nl, e->was[k], i);
     nbep_nblist_clear(&e->nl, i);
     for (size_t k = 0; k < e->n_near && !e->failed; k++)

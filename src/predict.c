@@ -124,7 +124,7 @@ static void two_sum(double a, double b, double *s, double *err)
 /* |r|^2 - sigma^2 as accurately as if computed in twice the precision and rounded once: each
  * square is split exactly into high and low parts by fma, and the eight parts are summed with
  * TwoSum, the rounding errors accumulated separately (Ogita, Rump and Oishi's Sum2). */
-double nbep__predict_gap2(nbep_vec3 r, double sigma)
+static inline double gap2(nbep_vec3 r, double sigma)
 {
     double px = r.x * r.x, py = r.y * r.y, pz = r.z * r.z, ps = sigma * sigma;
     double ex = fma(r.x, r.x, -px), ey = fma(r.y, r.y, -py), ez = fma(r.z, r.z, -pz),
@@ -145,6 +145,11 @@ double nbep__predict_gap2(nbep_vec3 r, double sigma)
         lost += err;
     }
     return sum + lost;
+}
+
+double nbep__predict_gap2(nbep_vec3 r, double sigma)
+{
+    return gap2(r, sigma);
 }
 
 /* ---- the pair's relative motion ------------------------------------------------------ */
@@ -486,7 +491,7 @@ double nbep__predict_pair_bracket(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, doub
 
 /* ---- public entry points -------------------------------------------------------------- */
 
-double nbep_predict_pair_quadratic(nbep_vec3 dp, nbep_vec3 dv, double sigma)
+NBEP_FMA_CLONES double nbep_predict_pair_quadratic(nbep_vec3 dp, nbep_vec3 dv, double sigma)
 {
     assert(sigma > 0.0); /* dp and dv finite: the caller's (this is the innermost loop) */
     double b = nbep_vec3_dot(dp, dv);
@@ -499,7 +504,7 @@ double nbep_predict_pair_quadratic(nbep_vec3 dp, nbep_vec3 dv, double sigma)
     double pp = nbep_vec3_dot(dp, dp);
     double c = pp - sigma * sigma;
     if (!(c > 0.5 * pp))
-        c = nbep__predict_gap2(dp, sigma);
+        c = gap2(dp, sigma);
     if (c <= 0.0)
         return 0.0;                             /* touching or overlapping, and closing */
     /* At grazing incidence disc = b^2 - |dv|^2 c is a small difference; by Lagrange's identity

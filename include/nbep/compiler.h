@@ -19,6 +19,16 @@
 #define NBEP_PREFETCH(p) ((void)(p))
 #endif
 
+/* A function built twice, for CPUs with fused multiply-add and for the rest, the right one
+ * chosen when the program starts: its fma() calls become one instruction instead of a call
+ * into libm. fma is correctly rounded either way and ffp-contract stays off, so both give the
+ * same bits. GCC on x86-64 only; elsewhere a plain function. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define NBEP_FMA_CLONES __attribute__((target_clones("fma", "default")))
+#else
+#define NBEP_FMA_CLONES
+#endif
+
 /* Allocates n * size bytes aligned to a cache line, zero-filled; NULL on failure or overflow.
  * Free with nbep_free_aligned (NULL-safe). */
 void *nbep_alloc_aligned(size_t n, size_t size);
