@@ -1264,6 +1264,41 @@ static inline void pair_motion(const pred_ctx *c, const nbep_state *s, uint32_t 
     *sigma = c->sigma_all > 0.0 ? c->sigma_all : s->radius[i] + s->radius[j];
 }
 
+/* The bounds of partners js[0..m) of sphere i (at pi, vi, local time ti): for each, the
+ * bound (from the step's start) of a closing pair that may hit, +inf for one receding or
+ * certainly passing; the same numbers pair_motion and nbep_predict_pair_quadratic_hit_floor
+ * give, written without branches so that it runs on four pairs at once where the CPU has
+ * AVX2 (a drift by zero time is the position itself). */
+NBEP_AVX2_CLONES static void pair_bounds(const double *restrict tau,
+                                        const nbep_vec3 *restrict pos,
+                                        const nbep_vec3 *restrict vel,
+                                        const uint32_t *restrict js, size_t m, nbep_vec3 pi,
+                                        nbep_vec3 vi, double ti, double sigma,
+                                        double *restrict out)
+{
+    const double s2 = sigma * sigma;
+    for (size_t k = 0; k < m; k++) {
+        const uint32_t j = js[k];
+        const double tj = tau[j];
+        const double t0 = ti > tj ? ti : tj;
+        const double hi = t0 - ti, hj = t0 - tj;
+        const double dpx = (pos[j].x + vel[j].x * hj) - (pi.x + vi.x * hi);
+        const double dpy = (pos[j].y + vel[j].y * hj) - (pi.y + vi.y * hi);
+        const double dpz = (pos[j].z + vel[j].z * hj) - (pi.z + vi.z * hi);
+        const double dvx = vel[j].x - vi.x, dvy = vel[j].y - vi.y, dvz = vel[j].z - vi.z;
+        const double b = dpx * dvx + dpy * dvy + dpz * dvz;
+        const double pp = dpx * dpx + dpy * dpy + dpz * dpz;
+        const double vv = dvx * dvx + dvy * dvy + dvz * dvz;
+        double c = pp - s2;
+        const double bb = b * b, vc = vv * c;
+        const bool hit = (b < 0.0) & !(bb - vc < -1e-12 * (bb + vv * (fabs(c) + pp)));
+        c = c > 0.5 * pp ? c : c - 8.0 * 0x1p-52 * pp;
+        const double den = hit ? -2.0 * b : 1.0; /* never 0: no branch around the division */
+        const double q = c / den * (1.0 - 1e-12);
+        out[k] = hit ? t0 + (c > 0.0 ? q : 0.0) : INFINITY;
+    }
+}
+
 static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m, bool images,
                              nbep_event *best)
 {
@@ -1282,17 +1317,30 @@ static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m, 
     uint32_t tie_j = best->kind == NBEP_EVENT_SPHERE ? best->partner : UINT32_MAX;
     bool found = false;
     pair_try tr[PAIR_BATCH];
+    double lbs[PAIR_BATCH];
+    const bool fast = !images && c->sigma_all > 0.0;
     for (size_t k0 = 0; k0 < m; k0 += PAIR_BATCH) {
         const size_t k1 = m - k0 < PAIR_BATCH ? m : k0 + PAIR_BATCH;
         size_t n = 0, first = 0;
+        if (fast) /* the bounds of the whole batch at once */
+            pair_bounds(c->tau, s->pos, s->vel, js + k0, k1 - k0, pi, vi, ti, c->sigma_all,
+                        lbs);
         for (size_t k = k0; k < k1; k++) { /* the bounds of the closing pairs */
-            nbep_vec3 dp, dv;
-            double t0, sigma;
-            pair_motion(c, s, i, pi, vi, ti, js[k], images, &dp, &dv, &t0, &sigma);
-            const double lb = nbep_predict_pair_quadratic_hit_floor(dp, dv, sigma);
-            if (lb == NBEP_NEVER)
-                continue;
-            tr[n] = (pair_try){t0 + lb, (uint32_t)k};
+            double lb;
+            if (fast) {
+                if (!(lbs[k - k0] < INFINITY))
+                    continue;
+                lb = lbs[k - k0];
+            } else {
+                nbep_vec3 dp, dv;
+                double t0, sigma;
+                pair_motion(c, s, i, pi, vi, ti, js[k], images, &dp, &dv, &t0, &sigma);
+                lb = nbep_predict_pair_quadratic_hit_floor(dp, dv, sigma);
+                if (lb == NBEP_NEVER)
+                    continue;
+                lb += t0;
+            }
+            tr[n] = (pair_try){lb, (uint32_t)k};
             if (tr[n].lb < tr[first].lb)
                 first = n;
             n++;
