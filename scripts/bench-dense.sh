@@ -1,8 +1,7 @@
 #!/usr/bin/env bash
-# Dense hard-sphere fluids: collisions per wall second of nbep's predictive algorithm with
-# run.neighbors = "cells" in a periodic box (and "grid" in a closed box of the same volume when
-# ENGINES asks: grid mode has no periodic boundaries), beside Smallenburg's EDMD (Single
-# variant) when a copy of it is available, and peak memory per sphere.
+# Dense hard-sphere fluids at equilibrium: collisions per wall second of nbep's predictive
+# algorithm with run.neighbors = "cells" in a periodic box, beside Smallenburg's EDMD (Single
+# variant) on the very same fluid when a copy of it is available, and peak memory per sphere.
 #
 #   scripts/bench-dense.sh            (make bench-dense)
 #   EDMD_DIR=/path/to/EDMD scripts/bench-dense.sh
@@ -11,155 +10,187 @@
 #   EDMD_DIR     a checkout of github.com/FSmallenburg/EDMD (its Single/ folder is copied to a
 #                scratch folder, its parameters set there, built with its own Makefile; nothing
 #                of it enters nbep). Unset or missing: EDMD is skipped, with a message.
-#   N            spheres (default 32000 = 4 x 20^3, as EDMD's FCC start wants)
+#   NS           sphere counts (default "32000"; "32000 256000" for the large fluid too)
 #   PHIS         packing fractions (default "0.30 0.50")
 #   THREADS      nbep thread counts (default "1 2")
-#   ENGINES      nbep modes (default "cells"; add "grid" for the closed-box grid mode)
 #   REPS         repeats; the table shows medians (default 3)
-#   SCALE        multiplies every simulated time (default 1; 0.2 for a smoke run)
-#   OUT          where the raw rows go (default build/bench-dense)
+#   SCALE        multiplies every measured stretch of simulated time (default 1; 0.2: smoke)
+#   OUT          where the raw rows and the scratch builds go (default build/bench-dense)
 #
-# The scenes: N spheres of diameter 1, mass 1, kT = 1 (nbep: speed sqrt(3) in random
-# directions; EDMD: Gaussian velocities scaled to kT = 1) in a periodic cube of side L,
-# L^3 = N pi / (6 phi), as EDMD's (nbep's grid mode, which has no periodic boundaries: a closed
-# box of that volume). nbep starts on a simple cubic lattice, EDMD from its FCC crystal.
-# Each run simulates a fixed time chosen per engine so that it takes a few seconds (the grid
-# mode is far slower on dense scenes and simulates less); collisions per second are
-# collisions / wall seconds: nbep's stepping loop (the summary's wall_seconds), EDMD's whole
-# process (its set-up, an FCC build and neighbour lists, is a small part). Repeats are the
-# outer loop and every engine runs once per repeat, so background load hits all alike.
+# The scene: N spheres of diameter 1, mass 1, kT = 1 in a periodic cube of side L,
+# L^3 = N pi / (6 phi) (inputs/hard-sphere-fluid.deck is the N = 32000, phi = 0.30 one).
+# Both engines are timed on the equilibrium fluid, not on their starts: nbep starts from a
+# simple cubic lattice (speed sqrt(3) in random directions), which melts within a time unit;
+# its rate is the difference of two runs of the same deck, to T1 = 1 and to T1 + S, which share
+# their first T1 bit for bit: (collisions(T1 + S) - collisions(T1)) / (wall(T1 + S) - wall(T1)),
+# wall being the summary's stepping loop. EDMD starts from nbep's fluid at T1 (written as its
+# init.sph; its own FCC start would stay crystalline at phi = 0.50, a different scene with a
+# third fewer collisions), with its Gaussian velocities, and is timed the same way: two runs,
+# to 0.1 and to 0.1 + S, whole processes (so its set-up cancels). Repeats are the outer loop and
+# every engine runs once per repeat, so background load hits all alike; medians are reported,
+# and the ratios are of medians taken in the same run.
 set -u
 cd "$(dirname "$0")/.."
-N=${N:-32000}
+NS=${NS:-32000}
 PHIS=${PHIS:-"0.30 0.50"}
 THREADS=${THREADS:-"1 2"}
-ENGINES=${ENGINES:-cells}
 REPS=${REPS:-3}
 SCALE=${SCALE:-1}
 OUT=${OUT:-build/bench-dense}
+PY=${PYTHON:-/usr/bin/python3}
 mkdir -p "$OUT"
 rows="$OUT/rows.csv"
-echo "engine,phi,threads,rep,collisions,seconds,rss_bytes" >"$rows"
+echo "engine,n,phi,threads,rep,collisions,seconds,rss_bytes" >"$rows"
 
-# simulated time (in tau) per engine and phi: a few seconds each on one core
-sim_time() { # engine phi
-    case "$1:$2" in
-    grid:0.30) echo 0.2 ;; grid:*) echo 0.01 ;;
-    cells:0.30) echo 1.0 ;; cells:*) echo 0.4 ;;
-    edmd:0.30) echo 10 ;; edmd:*) echo 5 ;;
-    esac
+# the stretch S of simulated time measured, per phi (about 0.3 million collisions per 32000
+# spheres: a couple of seconds), and per sphere count
+stretch() { # n phi
+    awk -v n="$1" -v p="$2" -v s="$SCALE" 'BEGIN { t = (p < 0.4 ? 4.0 : 1.0) * 32000 / n * s;
+        printf "%.6g", t }'
 }
-scaled() { awk -v a="$1" -v s="$SCALE" 'BEGIN { printf "%.6g", a * s }'; }
+side() { awk -v n="$1" -v p="$2" 'BEGIN { printf "%.12g", (n * atan2(0, -1) / (6 * p)) ^ (1 / 3) }'; }
+T1=1
 
-edmd_bin=""
+edmd_src=""
 if [ -n "${EDMD_DIR:-}" ] && [ -f "$EDMD_DIR/Single/mdSingle.c" ]; then
     edmd_src="$OUT/edmd-src"
     rm -rf "$edmd_src" && cp -r "$EDMD_DIR/Single" "$edmd_src"
-    echo "EDMD: building $EDMD_DIR/Single in $edmd_src with its own Makefile"
+    echo "EDMD: building $EDMD_DIR/Single in $OUT with its own Makefile"
 else
     echo "EDMD: skipped (set EDMD_DIR to a checkout of github.com/FSmallenburg/EDMD)"
 fi
 
-# EDMD's parameters are globals in its source: a build per packing fraction and time.
-edmd_build() { # phi time -> path of the binary
-    local dir="$OUT/edmd-$1-$2"
+deck() { # n phi steps dt threads file fields -> path of the deck
+    local d="$OUT/fluid-$1-$2-$3-$5.deck" L
+    L=$(side "$1" "$2")
+    cat >"$d" <<EOF
+run: { algorithm = "predictive"; steps = $3; dt = $4; threads = $5; seed = 1; neighbors = "cells"; };
+box: { min = [0.0, 0.0, 0.0]; max = [$L, $L, $L]; periodic = [true, true, true]; };
+spheres = ( { count = $1; radius = 0.5; mass = 1.0; place = "lattice"; speed = 1.7320508075688772; } );
+output: { file = "$6"; every = $3; fields = [$7]; stats = false; };
+EOF
+    echo "$d"
+}
+
+# EDMD's parameters are globals in its source: a build per (n, phi, time), reading init.sph,
+# the fluid nbep reaches at T1.
+edmd_build() { # n phi time -> path of the build
+    local dir="$OUT/edmd-$1-$2-$3"
     if [ ! -x "$dir/md" ]; then
         rm -rf "$dir" && cp -r "$edmd_src" "$dir"
-        sed -i -e "s/^double maxtime = [0-9.e+-]*;/double maxtime = $2;/" \
-            -e "s/^double writeinterval = [0-9.e+-]*;/double writeinterval = $2;/" \
-            -e "s/^double snapshotinterval = [0-9.e+-]*;/double snapshotinterval = $2;/" \
-            -e "s/^int initialconfig = 0;/int initialconfig = 1;/" \
-            -e "s/^double packfrac = [0-9.e+-]*;/double packfrac = $1;/" \
-            -e "s/^int N = [0-9]*;/int N = $N;/" \
+        sed -i -e "s/^double maxtime = [0-9.e+-]*;/double maxtime = $3;/" \
+            -e "s/^double writeinterval = [0-9.e+-]*;/double writeinterval = $3;/" \
+            -e "s/^double snapshotinterval = [0-9.e+-]*;/double snapshotinterval = $3;/" \
+            -e "s/^int initialconfig = [0-9]*;/int initialconfig = 0;/" \
             -e "s/^const int usethermostat = 1;/const int usethermostat = 0;/" "$dir/mdSingle.c"
         (cd "$dir" && make -s >build.log 2>&1) || { echo "EDMD build failed: $dir/build.log" >&2; return 1; }
+        cp "$OUT/init-$1-$2.sph" "$dir/init.sph"
     fi
     echo "$dir"
 }
 
-deck="$OUT/fluid.deck"
-run_nbep() { # mode phi threads rep
-    local T L steps=10 dt
-    T=$(scaled "$(sim_time "$1" "$2")")
-    dt=$(awk -v t="$T" -v s=$steps 'BEGIN { printf "%.6g", t / s }')
-    L=$(awk -v n="$N" -v p="$2" 'BEGIN { printf "%.12g", (n * atan2(0, -1) / (6 * p)) ^ (1 / 3) }')
-    local per="true"
-    [ "$1" = grid ] && per="false"
-    cat >"$deck" <<EOF
-run: { algorithm = "predictive"; steps = $steps; dt = $dt; threads = $3; seed = $4; neighbors = "$1"; };
-box: { min = [0.0, 0.0, 0.0]; max = [$L, $L, $L]; periodic = [$per, $per, $per]; };
-spheres = ( { count = $N; radius = 0.5; mass = 1.0; place = "lattice"; speed = 1.7320508075688772; } );
-output: { file = "$OUT/fluid.h5"; every = 1000000; fields = []; stats = false; };
-EOF
-    local s
-    s=$(bin/nbep run "$deck" --quiet --summary -) || { echo "nbep failed: $deck" >&2; return 1; }
-    local col sec rss
-    col=$(echo "$s" | sed -n 's/.*"collisions": *\([0-9]*\).*/\1/p')
-    sec=$(echo "$s" | sed -n 's/.*"wall_seconds": *\([0-9.e+-]*\).*/\1/p')
-    rss=$(echo "$s" | sed -n 's/.*"peak_rss_bytes": *\([0-9]*\).*/\1/p')
-    echo "$1,$2,$3,$4,$col,$sec,$rss" >>"$rows"
+# nbep's fluid at T1, as EDMD's init.sph (positions wrapped into the box, radius 0.5)
+melt() { # n phi
+    local h5="$OUT/melt-$1-$2.h5" d
+    d=$(deck "$1" "$2" 1 "$T1" 1 "$h5" '"position"')
+    bin/nbep run "$d" --quiet || { echo "nbep failed: $d" >&2; return 1; }
+    "$PY" - "$h5" "$(side "$1" "$2")" "$OUT/init-$1-$2.sph" <<'PYEOF' || return 1
+import sys, h5py
+f = h5py.File(sys.argv[1], "r"); L = float(sys.argv[2])
+p = f["/frames/position"][-1]
+with open(sys.argv[3], "w") as o:
+    o.write("%d\n%.12f %.12f %.12f\n" % (len(p), L, L, L))
+    for x in p:
+        o.write("a %.15f %.15f %.15f 0.5\n" % (x[0] % L, x[1] % L, x[2] % L))
+PYEOF
 }
 
-run_edmd() { # phi rep
-    local T dir t0 t1 log col rss
-    T=$(scaled "$(sim_time edmd "$1")")
-    dir=$(edmd_build "$1" "$T") || return 1
-    log="$dir/run-$2.log"
+summary_field() { sed -n "s/.*\"$1\": *\([0-9.e+-]*\).*/\1/p"; }
+
+run_nbep() { # n phi threads rep
+    local S d1 d2 s1 s2 steps2
+    S=$(stretch "$1" "$2")
+    # steps of 0.05 (an update and energy sum of every sphere each: a few percent of a step)
+    steps2=$(awk -v s="$S" -v t="$T1" 'BEGIN { printf "%d", (t + s) / 0.05 + 0.5 }')
+    d1=$(deck "$1" "$2" "$(awk -v t="$T1" 'BEGIN { printf "%d", t / 0.05 + 0.5 }')" 0.05 "$3" "$OUT/run.h5" "")
+    d2=$(deck "$1" "$2" "$steps2" 0.05 "$3" "$OUT/run.h5" "")
+    s1=$(bin/nbep run "$d1" --quiet --summary -) || { echo "nbep failed: $d1" >&2; return 1; }
+    s2=$(bin/nbep run "$d2" --quiet --summary -) || { echo "nbep failed: $d2" >&2; return 1; }
+    local c1 c2 w1 w2 rss
+    c1=$(echo "$s1" | summary_field collisions); c2=$(echo "$s2" | summary_field collisions)
+    w1=$(echo "$s1" | summary_field wall_seconds); w2=$(echo "$s2" | summary_field wall_seconds)
+    rss=$(echo "$s2" | summary_field peak_rss_bytes)
+    echo "nbep,$1,$2,$3,$4,$((c2 - c1)),$(awk -v a="$w1" -v b="$w2" 'BEGIN { print b - a }'),$rss" >>"$rows"
+}
+
+edmd_once() { # dir -> "collisions seconds rss"
+    local t0 t1 col rss
     t0=$(date +%s.%N)
-    (cd "$dir" && /usr/bin/time -f "RSS %M" ./md >"run-$2.log" 2>&1)
+    (cd "$1" && /usr/bin/time -f "RSS %M" ./md >run.log 2>&1)
     t1=$(date +%s.%N)
-    col=$(sed -n 's/^Simtime: .*Collisions: \([0-9]*\),.*/\1/p' "$log" | tail -1)
-    rss=$(sed -n 's/^RSS \([0-9]*\)/\1/p' "$log")
-    echo "edmd,$1,1,$2,$col,$(awk -v a="$t0" -v b="$t1" 'BEGIN { print b - a }'),$((rss * 1024))" >>"$rows"
+    col=$(sed -n 's/^Simtime: .*Collisions: \([0-9]*\),.*/\1/p' "$1/run.log" | tail -1)
+    rss=$(sed -n 's/^RSS \([0-9]*\)/\1/p' "$1/run.log")
+    echo "$col $(awk -v a="$t0" -v b="$t1" 'BEGIN { print b - a }') $((rss * 1024))"
 }
 
-for rep in $(seq "$REPS"); do
+run_edmd() { # n phi rep
+    local S e1 e2 a b
+    S=$(stretch "$1" "$2")
+    e1=$(edmd_build "$1" "$2" 0.1) || return 1
+    e2=$(edmd_build "$1" "$2" "$(awk -v s="$S" 'BEGIN { print 0.1 + s }')") || return 1
+    read -r ca wa ra < <(edmd_once "$e1")
+    read -r cb wb rb < <(edmd_once "$e2")
+    echo "edmd,$1,$2,1,$3,$((cb - ca)),$(awk -v a="$wa" -v b="$wb" 'BEGIN { print b - a }'),$rb" >>"$rows"
+}
+
+for n in $NS; do
     for phi in $PHIS; do
-        for nt in $THREADS; do
-            for engine in $ENGINES; do
-                run_nbep "$engine" "$phi" "$nt" "$rep"
+        melt "$n" "$phi" || exit 1
+    done
+done
+for rep in $(seq "$REPS"); do
+    for n in $NS; do
+        for phi in $PHIS; do
+            for nt in $THREADS; do
+                run_nbep "$n" "$phi" "$nt" "$rep"
             done
+            [ -n "$edmd_src" ] && run_edmd "$n" "$phi" "$rep"
         done
-        [ -n "${edmd_src:-}" ] && run_edmd "$phi" "$rep"
     done
     echo "repeat $rep of $REPS done"
 done
 
 # medians over repeats, then the table and the ratios
-python3 - "$rows" "$N" <<'PYEOF'
+"$PY" - "$rows" <<'PYEOF'
 import csv, statistics, sys
 rows = list(csv.DictReader(open(sys.argv[1])))
-n = int(sys.argv[2])
 groups = {}
 for r in rows:
-    if not r["collisions"] or not r["seconds"]:
+    if not r["collisions"] or not r["seconds"] or float(r["seconds"]) <= 0:
         continue
-    key = (r["engine"], r["phi"], int(r["threads"]))
-    groups.setdefault(key, []).append(r)
+    groups.setdefault((r["engine"], int(r["n"]), r["phi"], int(r["threads"])), []).append(r)
 med = {}
 for key, rs in groups.items():
-    rate = statistics.median(int(r["collisions"]) / float(r["seconds"]) for r in rs)
+    rates = [int(r["collisions"]) / float(r["seconds"]) for r in rs]
     rss = statistics.median(int(r["rss_bytes"] or 0) for r in rs)
-    med[key] = (rate, rss, len(rs))
-print(f"\nN = {n}; collisions per wall second, medians of the repeats")
-print("| engine | phi | threads | collisions/s | peak RSS / sphere | runs |")
-print("| --- | --- | --- | --- | --- | --- |")
+    med[key] = (statistics.median(rates), min(rates), max(rates), rss, len(rs))
+print("\nEquilibrium fluid, collisions per wall second: medians (spread) of the repeats")
+print("| engine | N | phi | threads | collisions/s | spread | peak RSS / sphere | runs |")
+print("| --- | --- | --- | --- | --- | --- | --- | --- |")
 for key in sorted(med):
-    rate, rss, k = med[key]
-    print(f"| {key[0]} | {key[1]} | {key[2]} | {rate/1e3:.1f} k | {rss/n/1e3:.2f} kB | {k} |")
-print("\nratios")
-for (eng, phi, nt), (rate, _, _) in sorted(med.items()):
-    if eng != "cells":
+    rate, lo, hi, rss, k = med[key]
+    print(f"| {key[0]} | {key[1]} | {key[2]} | {key[3]} | {rate/1e3:.1f} k | "
+          f"{lo/1e3:.0f}-{hi/1e3:.0f} k | {rss/key[1]/1e3:.3f} kB | {k} |")
+print("\nratios of medians")
+for (eng, n, phi, nt), (rate, *_rest) in sorted(med.items()):
+    if eng != "nbep":
         continue
-    g = med.get(("grid", phi, nt))
-    e = med.get(("edmd", phi, 1))
-    c1 = med.get(("cells", phi, 1))
-    parts = [f"phi {phi}, {nt} thread(s)"]
-    if g:
-        parts.append(f"cells/grid = {rate / g[0]:.1f}x")
+    e = med.get(("edmd", n, phi, 1))
+    c1 = med.get(("nbep", n, phi, 1))
+    parts = [f"N {n}, phi {phi}, {nt} thread(s)"]
     if e:
-        parts.append(f"cells/EDMD = {rate / e[0]:.2f}")
+        parts.append(f"nbep / EDMD = {rate / e[0]:.2f}")
     if c1 and nt != 1:
-        parts.append(f"cells {nt} threads / 1 thread = {rate / c1[0]:.2f}")
-    print("  " + "; ".join(p for p in parts if p))
+        parts.append(f"{nt} threads / 1 thread = {rate / c1[0]:.2f}")
+    print("  " + "; ".join(parts))
 PYEOF
