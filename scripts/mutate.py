@@ -174,8 +174,11 @@ MUTANTS = [
      "memcpy(l->pool + l->pool_len, l->pool + l->off[i], l->cnt[i] * sizeof *l->pool);",
      "l->cnt[i] = 0;", ["test_nblist"] + CELLS, None),
     # ---- the root-free bound of the straight-flight kernel ----
-    ("floor-bound-loose", "include/nbep/predict.h", "return c / (-2.0 * b) * (1.0 - 1e-12);",
-     "return c / (-1.0 * b) * (1.0 - 1e-12);", CELLS, None),
+    ("floor-bound-loose", "include/nbep/predict.h", "const double q = c / den * (1.0 - 1e-12);",
+     "const double q = c / den * (2.0 - 1e-12);", ["test_predict"] + CELLS, None),
+    ("bound-miss-margin-wrong-way", "include/nbep/predict.h",
+     "!(bb - vc < -1e-12 * (bb + vv * (fabs(c) + pp)))", "!(bb - vc < 1e-12 * (bb + vv * (fabs(c) + pp)))",
+     ["test_predict"] + CELLS, None),
     # ---- lasting contacts, TC model, cells-mode let-go ----
     ("contact-one-pushes", "src/contact.c", "if (!(an < 0.0))\n            return false;",
      "if (!(an > 0.0))\n            return false;", ["test_contact"] + GRAN, None),

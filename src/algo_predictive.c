@@ -1228,10 +1228,9 @@ static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, bool 
  * planes and horizons, then partner), which does not depend on the order pairs are tried in.
  *
  * Roots are the expensive part, and most are not needed: most closing pairs of a fluid pass
- * each other (nbep_predict_pair_quadratic_hit_floor says so, without a root, only where the
- * root would say so too), and a closing pair's contact comes no earlier than its root-free
- * bound (nbep_predict_pair_quadratic_floor, strictly below the computed root) and no later than
- * twice it. So the bounds of a batch of partners come first, then the root of the pair with
+ * each other, which nbep_predict_pair_quadratic_bound tells without a root (only where the root
+ * would say so too), and a closing pair's contact comes no earlier than that bound (strictly
+ * below the computed root) and no later than twice it. So the bounds of a batch of partners come first, then the root of the pair with
  * the lowest bound, which sets a best that prunes most of the others (a pair is skipped only
  * when its bound is strictly later than the best: the winner, ties included, is the one trying
  * every pair would give). */
@@ -1264,38 +1263,45 @@ static inline void pair_motion(const pred_ctx *c, const nbep_state *s, uint32_t 
     *sigma = c->sigma_all > 0.0 ? c->sigma_all : s->radius[i] + s->radius[j];
 }
 
-/* The bounds of partners js[0..m) of sphere i (at pi, vi, local time ti): for each, the
- * bound (from the step's start) of a closing pair that may hit, +inf for one receding or
- * certainly passing; the same numbers pair_motion and nbep_predict_pair_quadratic_hit_floor
- * give, written without branches so that it runs on four pairs at once where the CPU has
- * AVX2 (a drift by zero time is the position itself). */
+/* The bounds of partners js[0..m) of sphere i (at pi, vi, local time ti, radius ri): for each,
+ * the bound (from the step's start) of a closing pair that may hit, +inf for one receding or
+ * certainly passing (nbep_predict_pair_quadratic_bound of the motion pair_motion gives: a
+ * drift by zero time is the position itself, a shift by no period the position itself),
+ * written without branches so that it runs on four pairs at once where the CPU has
+ * AVX2. pb: the periodic box when images may be needed, else NULL. Partner j's radius is
+ * radius[j & rmask]: rmask 0 and radius pointing at the one radius of a monodisperse scene
+ * spare the loop a scattered load (ri + ri is the contact distance exactly), without a
+ * condition that would keep the compiler from vectorising it. */
 NBEP_AVX2_CLONES static void pair_bounds(const double *restrict tau,
                                         const nbep_vec3 *restrict pos,
                                         const nbep_vec3 *restrict vel,
+                                        const double *restrict radius, uint32_t rmask,
                                         const uint32_t *restrict js, size_t m, nbep_vec3 pi,
-                                        nbep_vec3 vi, double ti, double sigma,
-                                        double *restrict out)
+                                        nbep_vec3 vi, double ti, double ri,
+                                        const nbep_periodic *pb, double *restrict out)
 {
-    const double s2 = sigma * sigma;
+    const bool images = pb != NULL;
+    const double hx = images ? pb->half[0] : INFINITY, hy = images ? pb->half[1] : INFINITY,
+                 hz = images ? pb->half[2] : INFINITY;
+    const double lx = images ? pb->len[0] : 0.0, ly = images ? pb->len[1] : 0.0,
+                 lz = images ? pb->len[2] : 0.0;
     for (size_t k = 0; k < m; k++) {
         const uint32_t j = js[k];
         const double tj = tau[j];
         const double t0 = ti > tj ? ti : tj;
         const double hi = t0 - ti, hj = t0 - tj;
-        const double dpx = (pos[j].x + vel[j].x * hj) - (pi.x + vi.x * hi);
-        const double dpy = (pos[j].y + vel[j].y * hj) - (pi.y + vi.y * hi);
-        const double dpz = (pos[j].z + vel[j].z * hj) - (pi.z + vi.z * hi);
+        /* j's image nearest to i, from the stored positions, as neighbour_shift takes it */
+        const double sx0 = pos[j].x - pi.x, sy0 = pos[j].y - pi.y, sz0 = pos[j].z - pi.z;
+        const double shx = sx0 > hx ? -lx : sx0 < -hx ? lx : 0.0;
+        const double shy = sy0 > hy ? -ly : sy0 < -hy ? ly : 0.0;
+        const double shz = sz0 > hz ? -lz : sz0 < -hz ? lz : 0.0;
+        const double dpx = ((pos[j].x + shx) + vel[j].x * hj) - (pi.x + vi.x * hi);
+        const double dpy = ((pos[j].y + shy) + vel[j].y * hj) - (pi.y + vi.y * hi);
+        const double dpz = ((pos[j].z + shz) + vel[j].z * hj) - (pi.z + vi.z * hi);
         const double dvx = vel[j].x - vi.x, dvy = vel[j].y - vi.y, dvz = vel[j].z - vi.z;
-        const double b = dpx * dvx + dpy * dvy + dpz * dvz;
-        const double pp = dpx * dpx + dpy * dpy + dpz * dpz;
-        const double vv = dvx * dvx + dvy * dvy + dvz * dvz;
-        double c = pp - s2;
-        const double bb = b * b, vc = vv * c;
-        const bool hit = (b < 0.0) & !(bb - vc < -1e-12 * (bb + vv * (fabs(c) + pp)));
-        c = c > 0.5 * pp ? c : c - 8.0 * 0x1p-52 * pp;
-        const double den = hit ? -2.0 * b : 1.0; /* never 0: no branch around the division */
-        const double q = c / den * (1.0 - 1e-12);
-        out[k] = hit ? t0 + (c > 0.0 ? q : 0.0) : INFINITY;
+        const double lb = nbep_predict_pair_quadratic_bound(
+            nbep_vec3_make(dpx, dpy, dpz), nbep_vec3_make(dvx, dvy, dvz), ri + radius[j & rmask]);
+        out[k] = lb < NBEP_NEVER ? t0 + lb : NBEP_NEVER;
     }
 }
 
@@ -1318,29 +1324,15 @@ static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m, 
     bool found = false;
     pair_try tr[PAIR_BATCH];
     double lbs[PAIR_BATCH];
-    const bool fast = !images && c->sigma_all > 0.0;
     for (size_t k0 = 0; k0 < m; k0 += PAIR_BATCH) {
         const size_t k1 = m - k0 < PAIR_BATCH ? m : k0 + PAIR_BATCH;
         size_t n = 0, first = 0;
-        if (fast) /* the bounds of the whole batch at once */
-            pair_bounds(c->tau, s->pos, s->vel, js + k0, k1 - k0, pi, vi, ti, c->sigma_all,
-                        lbs);
-        for (size_t k = k0; k < k1; k++) { /* the bounds of the closing pairs */
-            double lb;
-            if (fast) {
-                if (!(lbs[k - k0] < INFINITY))
-                    continue;
-                lb = lbs[k - k0];
-            } else {
-                nbep_vec3 dp, dv;
-                double t0, sigma;
-                pair_motion(c, s, i, pi, vi, ti, js[k], images, &dp, &dv, &t0, &sigma);
-                lb = nbep_predict_pair_quadratic_hit_floor(dp, dv, sigma);
-                if (lb == NBEP_NEVER)
-                    continue;
-                lb += t0;
-            }
-            tr[n] = (pair_try){lb, (uint32_t)k};
+        pair_bounds(c->tau, s->pos, s->vel, s->radius, c->sigma_all > 0.0 ? 0u : UINT32_MAX,
+                    js + k0, k1 - k0, pi, vi, ti, s->radius[i], images ? &c->pb : NULL, lbs);
+        for (size_t k = k0; k < k1; k++) { /* the closing pairs that may hit */
+            if (!(lbs[k - k0] < INFINITY))
+                continue;
+            tr[n] = (pair_try){lbs[k - k0], (uint32_t)k};
             if (tr[n].lb < tr[first].lb)
                 first = n;
             n++;

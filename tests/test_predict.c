@@ -328,6 +328,55 @@ static nbep_vec3 uniform_vec(uint64_t *s, double half)
     return (nbep_vec3){uniform(s, -half, half), uniform(s, -half, half), uniform(s, -half, half)};
 }
 
+/* The root-free bound of the cells mode's pair loop (nbep_predict_pair_quadratic_bound), over
+ * pairs of every kind (far, near, grazing within 1e-15 to 1e-3 of sigma, touching within
+ * 1e-13, receding): it is never above the root, so a pair skipped for it is truly later; it
+ * calls no pair a miss that the root has meet, so no hit is lost; and it is a useful bound:
+ * most misses of the set are told without a root, and a hit's bound is at least half its
+ * root (the root lies between c / (-2b) and c / (-b)). */
+static void test_the_root_free_bound_is_below_the_root_and_never_drops_a_hit(void **state)
+{
+    (void)state;
+    uint64_t seed = 11;
+    const int n = small_scale() ? 20000 : 400000;
+    int told_misses = 0, misses = 0, hits = 0;
+    for (int i = 0; i < n; i++) {
+        const double sigma = uniform(&seed, 0.1, 2.0);
+        nbep_vec3 dv = uniform_vec(&seed, 2.0), dp;
+        const int kind = i % 4;
+        if (kind < 2) { /* aimed at an impact parameter near sigma: grazing hits and misses */
+            const double far = uniform(&seed, 1.5, 6.0) * sigma;
+            const double rel = pow(10.0, uniform(&seed, -15.0, -3.0)) * (i % 8 < 4 ? 1 : -1);
+            dp = approach(dv, unit(uniform_vec(&seed, 1.0)), far, sigma * (1.0 + rel));
+        } else if (kind == 2) { /* touching within 1e-13, closing or not */
+            dp = nbep_vec3_scale(unit(uniform_vec(&seed, 1.0)),
+                                 sigma * (1.0 + uniform(&seed, -1e-13, 1e-13)));
+        } else { /* anywhere apart */
+            dp = uniform_vec(&seed, 4.0);
+            if (nbep_vec3_norm(dp) < 1.01 * sigma)
+                dp = nbep_vec3_scale(dp, uniform(&seed, 1.01, 3.0) * sigma / nbep_vec3_norm(dp));
+        }
+        const double t = nbep_predict_pair_quadratic(dp, dv, sigma);
+        const double lb = nbep_predict_pair_quadratic_bound(dp, dv, sigma);
+        assert_false(isnan(lb));
+        if (isinf(t)) { /* usefulness: counted where misses are clear (not grazing) */
+            misses += kind == 3;
+            told_misses += kind == 3 && isinf(lb);
+            continue;
+        }
+        hits++;
+        if (isinf(lb))
+            fail_msg("pair %d: meets at %.17g but the bound calls it a miss", i, t);
+        if (!(lb <= t))
+            fail_msg("pair %d: bound %.17g above the root %.17g", i, lb, t);
+        /* (near contact the bound is lowered by some ulps of |dp|^2 on purpose: not there) */
+        if (kind == 3 && !(lb >= 0.49 * t))
+            fail_msg("pair %d: bound %.17g below half the root %.17g", i, lb, t);
+    }
+    assert_true(hits > n / 10 && misses > n / 20);
+    assert_true(told_misses > misses * 9 / 10);
+}
+
 /* The GSL-free search that a GSL failure falls back on must give the same answers as the GSL
  * path, over pairs of every kind: apart, aimed, tiny and large accelerations. Only pairs that
  * nbep_predict_pair sends to GSL compare two solvers: its documented routing (predict.c) sends
@@ -531,6 +580,7 @@ int main(void)
         cmocka_unit_test(test_pair_whose_impact_parameter_exceeds_sigma_misses),
         cmocka_unit_test(test_grazing_pair_still_hits_at_the_geometric_time),
         cmocka_unit_test(test_receding_pair_never_meets),
+        cmocka_unit_test(test_the_root_free_bound_is_below_the_root_and_never_drops_a_hit),
         cmocka_unit_test(test_pair_at_rest_or_moving_sideways_never_meets),
         cmocka_unit_test(test_touching_and_closing_pair_meets_now),
         cmocka_unit_test(test_touching_or_overlapping_but_receding_pair_never_meets),

@@ -42,58 +42,35 @@ void nbep_predict_ws_destroy(nbep_predict_ws **ws);
  * |dp|^2 - sigma^2 is computed compensated: a gap of 1e-12 sigma still gives about 15 digits. */
 double nbep_predict_pair_quadratic(nbep_vec3 dp, nbep_vec3 dv, double sigma);
 
-/* A cheap lower bound (no square root) on nbep_predict_pair_quadratic(dp, dv, sigma), for
- * loops that only want a pair's contact if it comes before the best one found so far:
- * NBEP_NEVER when the pair does not close (the root is NBEP_NEVER too); 0 when the pair
- * touches or nearly (no bound: take the root); otherwise c / (-2 b), b = dp.dv < 0,
- * c = |dp|^2 - sigma^2, because the root is c / (-b + sqrt(b^2 - |dv|^2 c)) and the square
- * root is at most -b. In floating point the root as computed can fall below c / (-2 b) by a
- * few roundings (the sqrt, the sum, the division: under 4 ulps, 1e-15 relative); the bound is
- * shrunk by 1e-12, far more than that, so a pair skipped for it is truly later. */
-static inline double nbep_predict_pair_quadratic_floor(nbep_vec3 dp, nbep_vec3 dv, double sigma)
+/* A cheap lower bound (no square root, no branch) on nbep_predict_pair_quadratic(dp, dv,
+ * sigma), for loops that only want a pair's contact if it comes before the best one so far:
+ * - NBEP_NEVER when the pair does not close (b = dp.dv >= 0: the root is NBEP_NEVER too), and
+ *   when it certainly passes the other sphere: the discriminant b^2 - |dv|^2 c, c = |dp|^2 -
+ *   sigma^2, computed plainly, is below minus a margin of 1e-12 of the magnitudes it is made
+ *   of; its rounding, and that of either form the root takes (see there), stay below 16 ulps
+ *   of those magnitudes (4e-15), so a pair called a miss here is a miss for the root too (one
+ *   let through may still miss). Most closing pairs of a fluid pass each other.
+ * - 0 when the pair touches or nearly (no bound: take the root);
+ * - otherwise c / (-2 b), because the root is c / (-b + sqrt(b^2 - |dv|^2 c)) and the square
+ *   root is at most -b. In floating point the root as computed can fall below c / (-2 b) by a
+ *   few roundings (the sqrt, the sum, the division: under 4 ulps, 1e-15 relative); the bound is
+ *   shrunk by 1e-12, far more than that, so a pair skipped for it is truly later. Nearer than
+ *   |dp|^2 / 2 the root takes c compensated (it may be a tiny gap); c as computed here is then
+ *   within about 5 ulps of |dp|^2 of the exact one, so c - 8 eps |dp|^2 (eps = 2^-52) is below
+ *   both, and a bound still, where positive.
+ * Written with selects only, so that a loop over partners runs several at once (vectorised). */
+static inline double nbep_predict_pair_quadratic_bound(nbep_vec3 dp, nbep_vec3 dv, double sigma)
 {
-    double b = dp.x * dv.x + dp.y * dv.y + dp.z * dv.z;
-    if (!(b < 0.0))
-        return NBEP_NEVER;
-    double pp = dp.x * dp.x + dp.y * dp.y + dp.z * dp.z;
+    const double b = dp.x * dv.x + dp.y * dv.y + dp.z * dv.z;
+    const double pp = dp.x * dp.x + dp.y * dp.y + dp.z * dp.z;
+    const double vv = dv.x * dv.x + dv.y * dv.y + dv.z * dv.z;
     double c = pp - sigma * sigma;
-    /* Nearer than that the root takes c compensated (it may be a tiny gap). c as computed here
-     * is then within about 5 ulps of pp of the exact one (pp's three products and two sums,
-     * sigma^2 <= pp, the subtraction), so c - 8 eps pp (eps = 2^-52) is below both, and a
-     * bound still, where positive. */
-    if (!(c > 0.5 * pp))
-        c -= 8.0 * 0x1p-52 * pp;
-    if (!(c > 0.0))
-        return 0.0;
-    return c / (-2.0 * b) * (1.0 - 1e-12);
-}
-
-/* nbep_predict_pair_quadratic_floor for a pair that may hit, NBEP_NEVER also when
- * nbep_predict_pair_quadratic(dp, dv, sigma) certainly returns NBEP_NEVER because the pair
- * passes the other sphere: the discriminant b^2 - |dv|^2 (|dp|^2 - sigma^2), computed plainly,
- * is below minus a margin of 1e-12 of the magnitudes it is made of. Its rounding, and that of
- * either form the root takes (see there), stay below 16 ulps of those magnitudes (4e-15), so a
- * pair called a miss here is a miss for the root too; one let through may still miss. The
- * inner loop of a fluid, where most closing pairs pass each other: no square root, and the
- * bound's division only for the pairs that may hit. */
-static inline double nbep_predict_pair_quadratic_hit_floor(nbep_vec3 dp, nbep_vec3 dv,
-                                                           double sigma)
-{
-    double b = dp.x * dv.x + dp.y * dv.y + dp.z * dv.z;
-    if (!(b < 0.0))
-        return NBEP_NEVER;
-    double pp = dp.x * dp.x + dp.y * dp.y + dp.z * dp.z;
-    double vv = dv.x * dv.x + dv.y * dv.y + dv.z * dv.z;
-    double c = pp - sigma * sigma;
-    double bb = b * b, vc = vv * c;
-    if (bb - vc < -1e-12 * (bb + vv * (fabs(c) + pp)))
-        return NBEP_NEVER;
-    /* the bound, as nbep_predict_pair_quadratic_floor takes it */
-    if (!(c > 0.5 * pp))
-        c -= 8.0 * 0x1p-52 * pp;
-    if (!(c > 0.0))
-        return 0.0;
-    return c / (-2.0 * b) * (1.0 - 1e-12);
+    const double bb = b * b, vc = vv * c;
+    const bool hit = (b < 0.0) & !(bb - vc < -1e-12 * (bb + vv * (fabs(c) + pp)));
+    c = c > 0.5 * pp ? c : c - 8.0 * 0x1p-52 * pp;
+    const double den = hit ? -2.0 * b : 1.0; /* never 0: no branch around the division */
+    const double q = c / den * (1.0 - 1e-12);
+    return hit ? (c > 0.0 ? q : 0.0) : NBEP_NEVER;
 }
 
 /* The same for any relative acceleration da = a2 - a1: quadratic when da is exactly zero,
