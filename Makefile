@@ -18,7 +18,7 @@ PKG_LIBS := $(shell pkg-config --libs $(PKGS))
 
 CSTD := -std=c11 -D_POSIX_C_SOURCE=200809L
 WARN := -Wall -Wextra -Wpedantic -Wshadow -Wstrict-prototypes -Wmissing-prototypes $(WERROR)
-OPT := -O3 -g -ffp-contract=off
+OPT := -O3 -g -ffp-contract=off -fno-trapping-math
 CFLAGS_ALL := $(CSTD) $(OPT) $(WARN) -MMD -MP -Iinclude -Isrc -Ibuild $(PKG_CFLAGS) $(CFLAGS)
 LDLIBS_ALL := $(PKG_LIBS) -lm $(LDLIBS)
 
