@@ -398,6 +398,13 @@ bool nbep_calendar_top(nbep_calendar *c, uint32_t *item, double *time)
     return true;
 }
 
+void nbep_calendar_runners_up(const nbep_calendar *c, uint32_t items[2], int *n)
+{
+    *n = 0;
+    for (size_t k = 1; k < 3 && k < c->heap_len; k++)
+        items[(*n)++] = c->heap[k];
+}
+
 size_t nbep_calendar_size(const nbep_calendar *c)
 {
     return c->size;

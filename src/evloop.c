@@ -387,6 +387,21 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
     double t;
     while (nbep_calendar_top(e->cal, &i, &t) && t < t_end) {
         const nbep_event ev = *nbep_feq_slot(e->q, i);
+        /* what this event and the next ones will read, requested now (no effect on results):
+         * the lists and places of its spheres, the slots and places of the runners-up */
+        NBEP_PREFETCH(&e->nl.off[i]);
+        NBEP_PREFETCH(&e->cells.m[i]);
+        if (ev.kind == NBEP_EVENT_SPHERE) {
+            NBEP_PREFETCH(&e->nl.off[ev.partner]);
+            NBEP_PREFETCH(&e->cells.m[ev.partner]);
+        }
+        uint32_t next[2];
+        int n_next;
+        nbep_calendar_runners_up(e->cal, next, &n_next);
+        for (int k = 0; k < n_next; k++) {
+            NBEP_PREFETCH(nbep_feq_slot(e->q, next[k]));
+            NBEP_PREFETCH(&e->cells.m[next[k]]);
+        }
         tally->events++;
         if (++since >= stall_events) {
             if (!(t - t_mark > stall_dt)) {

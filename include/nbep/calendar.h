@@ -36,6 +36,10 @@ bool nbep_calendar_top(nbep_calendar *c, uint32_t *item, double *time);
  * after filling the calendar; it also retunes itself when its buckets get far too full or far
  * too empty. O(n). */
 void nbep_calendar_retune(nbep_calendar *c, double t_now);
+/* Up to two items likely to come out after the earliest (the current bucket's runners-up),
+ * for a caller that wants to fetch their data ahead; *n of them in items. No effect on the
+ * order. */
+void nbep_calendar_runners_up(const nbep_calendar *c, uint32_t items[2], int *n);
 /* Entries held. */
 size_t nbep_calendar_size(const nbep_calendar *c);
 /* True when item has an entry; its time in *time (may be NULL). */
