@@ -389,10 +389,10 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
         const nbep_event ev = *nbep_feq_slot(e->q, i);
         /* what this event and the next ones will read, requested now (no effect on results):
          * the lists and places of its spheres, the slots and places of the runners-up */
-        NBEP_PREFETCH(&e->nl.off[i]);
+        NBEP_PREFETCH(&e->nl.sp[i]);
         NBEP_PREFETCH(&e->cells.m[i]);
         if (ev.kind == NBEP_EVENT_SPHERE) {
-            NBEP_PREFETCH(&e->nl.off[ev.partner]);
+            NBEP_PREFETCH(&e->nl.sp[ev.partner]);
             NBEP_PREFETCH(&e->cells.m[ev.partner]);
         }
         uint32_t next[2];

@@ -19,11 +19,9 @@ nbep_status nbep_nblist_init(nbep_nblist *l, size_t n, nbep_diag *d)
     memset(l, 0, sizeof *l);
     if (n < UINT32_MAX) {
         l->n = n;
-        l->off = calloc(n ? n : 1, sizeof *l->off);
-        l->cnt = calloc(n ? n : 1, sizeof *l->cnt);
-        l->cap = calloc(n ? n : 1, sizeof *l->cap);
+        l->sp = calloc(n ? n : 1, sizeof *l->sp);
     }
-    if (!l->off || !l->cnt || !l->cap) {
+    if (!l->sp) {
         nbep_nblist_fini(l);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the neighbour lists of %zu spheres", n);
     }
@@ -32,9 +30,7 @@ nbep_status nbep_nblist_init(nbep_nblist *l, size_t n, nbep_diag *d)
 
 void nbep_nblist_fini(nbep_nblist *l)
 {
-    free(l->off);
-    free(l->cnt);
-    free(l->cap);
+    free(l->sp);
     free(l->pool);
     memset(l, 0, sizeof *l);
 }
@@ -62,10 +58,10 @@ bool nbep_nblist_layout(nbep_nblist *l, const uint32_t *counts)
     bool ok = reserve(l, total, 8u); /* an eighth spare: lists that outgrow their room move */
     size_t at = 0;
     for (size_t i = 0; i < l->n; i++) {
-        l->off[i] = (uint32_t)(ok ? at : 0);
-        l->cap[i] = ok ? room_for(counts[i]) : 0;
-        l->cnt[i] = 0;
-        at += l->cap[i];
+        l->sp[i].off = (uint32_t)(ok ? at : 0);
+        l->sp[i].cap = ok ? room_for(counts[i]) : 0;
+        l->sp[i].cnt = 0;
+        at += l->sp[i].cap;
     }
     l->pool_len = l->room = at;
     return ok;
@@ -77,16 +73,16 @@ static bool compact(nbep_nblist *l, size_t extra)
 {
     size_t total = extra;
     for (size_t i = 0; i < l->n; i++)
-        total += room_for(l->cnt[i]);
+        total += room_for(l->sp[i].cnt);
     uint32_t *p = malloc((total + total / 2u) * sizeof *p);
     if (!p)
         return false;
     size_t at = 0;
     for (size_t i = 0; i < l->n; i++) {
-        memcpy(p + at, l->pool + l->off[i], l->cnt[i] * sizeof *p);
-        l->off[i] = (uint32_t)at;
-        l->cap[i] = room_for(l->cnt[i]);
-        at += l->cap[i];
+        memcpy(p + at, l->pool + l->sp[i].off, l->sp[i].cnt * sizeof *p);
+        l->sp[i].off = (uint32_t)at;
+        l->sp[i].cap = room_for(l->sp[i].cnt);
+        at += l->sp[i].cap;
     }
     free(l->pool);
     l->pool = p;
@@ -97,8 +93,8 @@ static bool compact(nbep_nblist *l, size_t extra)
 
 bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j)
 {
-    if (l->cnt[i] == l->cap[i]) { /* full: move to the end with twice the room */
-        const uint32_t grown = 2u * l->cap[i] + 4u;
+    if (l->sp[i].cnt == l->sp[i].cap) { /* full: move to the end with twice the room */
+        const uint32_t grown = 2u * l->sp[i].cap + 4u;
         /* The pool is full: compact it if it holds more than twice what a fresh layout of the
          * lists as they are would take (room given up by moves, and rooms grown for counts
          * that have since fallen), else let it grow by half. Either way the pool stays
@@ -106,38 +102,38 @@ bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j)
         if (l->pool_len + grown > l->pool_cap) {
             size_t fresh = 0;
             for (size_t k = 0; k < l->n; k++)
-                fresh += room_for(l->cnt[k]);
+                fresh += room_for(l->sp[k].cnt);
             if (l->pool_len > 2u * fresh && !compact(l, grown))
                 return false;
         }
-        if (l->cnt[i] == l->cap[i]) { /* compaction may have made room already */
+        if (l->sp[i].cnt == l->sp[i].cap) { /* compaction may have made room already */
             if (l->pool_len + grown > UINT32_MAX || !reserve(l, l->pool_len + grown, 2u))
                 return false;
-            memcpy(l->pool + l->pool_len, l->pool + l->off[i], l->cnt[i] * sizeof *l->pool);
-            l->off[i] = (uint32_t)l->pool_len;
-            l->room += grown - l->cap[i];
-            l->cap[i] = grown;
+            memcpy(l->pool + l->pool_len, l->pool + l->sp[i].off, l->sp[i].cnt * sizeof *l->pool);
+            l->sp[i].off = (uint32_t)l->pool_len;
+            l->room += grown - l->sp[i].cap;
+            l->sp[i].cap = grown;
             l->pool_len += grown;
         }
     }
-    l->pool[l->off[i] + l->cnt[i]++] = j;
+    l->pool[l->sp[i].off + l->sp[i].cnt++] = j;
     return true;
 }
 
 void nbep_nblist_drop(nbep_nblist *l, uint32_t i, uint32_t j)
 {
-    uint32_t *theirs = l->pool + l->off[i];
-    for (uint32_t q = 0; q < l->cnt[i]; q++)
+    uint32_t *theirs = l->pool + l->sp[i].off;
+    for (uint32_t q = 0; q < l->sp[i].cnt; q++)
         if (theirs[q] == j) { /* order does not matter: swap the last in */
-            theirs[q] = theirs[--l->cnt[i]];
+            theirs[q] = theirs[--l->sp[i].cnt];
             return;
         }
 }
 
 void nbep_nblist_detach(nbep_nblist *l, uint32_t i)
 {
-    const uint32_t *mine = l->pool + l->off[i];
-    for (uint32_t k = 0; k < l->cnt[i]; k++)
+    const uint32_t *mine = l->pool + l->sp[i].off;
+    for (uint32_t k = 0; k < l->sp[i].cnt; k++)
         nbep_nblist_drop(l, mine[k], i);
     nbep_nblist_clear(l, i);
 }
@@ -145,8 +141,8 @@ void nbep_nblist_detach(nbep_nblist *l, uint32_t i)
 /* Is j in i's list? */
 static bool listed(const nbep_nblist *l, uint32_t i, uint32_t j)
 {
-    for (uint32_t k = 0; k < l->cnt[i]; k++)
-        if (l->pool[l->off[i] + k] == j)
+    for (uint32_t k = 0; k < l->sp[i].cnt; k++)
+        if (l->pool[l->sp[i].off + k] == j)
             return true;
     return false;
 }
@@ -155,14 +151,14 @@ size_t nbep_nblist_check(const nbep_nblist *l)
 {
     size_t bad = 0;
     for (size_t i = 0; i < l->n; i++) {
-        if (l->cnt[i] > l->cap[i] || (size_t)l->off[i] + l->cap[i] > l->pool_len) {
+        if (l->sp[i].cnt > l->sp[i].cap || (size_t)l->sp[i].off + l->sp[i].cap > l->pool_len) {
             bad++;
             continue;
         }
-        const uint32_t *a = l->pool + l->off[i];
-        for (uint32_t k = 0; k < l->cnt[i]; k++) {
+        const uint32_t *a = l->pool + l->sp[i].off;
+        for (uint32_t k = 0; k < l->sp[i].cnt; k++) {
             bad += a[k] >= l->n || a[k] == i;
-            for (uint32_t q = k + 1; q < l->cnt[i]; q++)
+            for (uint32_t q = k + 1; q < l->sp[i].cnt; q++)
                 bad += a[q] == a[k];
             bad += a[k] < l->n && !listed(l, a[k], (uint32_t)i);
         }
@@ -172,5 +168,5 @@ size_t nbep_nblist_check(const nbep_nblist *l)
 
 size_t nbep_nblist_bytes(size_t n, size_t entries)
 {
-    return n * 3 * sizeof(uint32_t) + (entries + entries / 4u + 4u * n) * 3 / 2 * sizeof(uint32_t);
+    return n * sizeof(nbep_nblist_span) + (entries + entries / 4u + 4u * n) * 3 / 2 * sizeof(uint32_t);
 }

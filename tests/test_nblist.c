@@ -80,7 +80,7 @@ static void test_random_attach_and_detach_match_a_reference_adjacency(void **sta
         /* the pool stays within about three fresh layouts (nblist.h), plus one list's growth */
         size_t fresh = 0;
         for (size_t k = 0; k < N; k++)
-            fresh += l.cnt[k] + l.cnt[k] / 4 + 4;
+            fresh += l.sp[k].cnt + l.sp[k].cnt / 4 + 4;
         assert_true(l.pool_cap <= 3 * fresh + 8 * N + 16);
     }
     assert_matches(&l, adj, N);
@@ -98,10 +98,10 @@ static void test_layout_gives_each_list_its_count_and_slack_and_fill_appends(voi
     const uint32_t counts[4] = {0, 3, 1, 2};
     assert_true(nbep_nblist_layout(&l, counts));
     for (uint32_t i = 0; i < 4; i++) {
-        assert_true(l.cap[i] >= counts[i] + 4); /* slack for drift between rebuilds */
-        assert_int_equal(l.cnt[i], 0);
+        assert_true(l.sp[i].cap >= counts[i] + 4); /* slack for drift between rebuilds */
+        assert_int_equal(l.sp[i].cnt, 0);
         if (i > 0) /* laid out one after another, no overlap */
-            assert_int_equal(l.off[i], l.off[i - 1] + l.cap[i - 1]);
+            assert_int_equal(l.sp[i].off, l.sp[i - 1].off + l.sp[i - 1].cap);
     }
     /* the complete graph minus 0: 1-2, 1-3, 2-3 ... filled from both sides as a rebuild does */
     nbep_nblist_fill(&l, 1, 2);
@@ -136,7 +136,7 @@ static void test_check_catches_asymmetry_duplicates_and_self_entries(void **stat
     assert_int_equal(nbep_nblist_check(&l), 0);
     nbep_nblist_fill(&l, 2, 2); /* itself */
     assert_int_equal(nbep_nblist_check(&l), 1);
-    l.cnt[2] = 0;
+    l.sp[2].cnt = 0;
     nbep_nblist_fill(&l, 0, 1); /* twice */
     assert_true(nbep_nblist_check(&l) >= 1);
     nbep_nblist_fini(&l);

@@ -36,9 +36,15 @@
  * plus skin fit across, but never below this (the deck check asks for that much room). */
 #define NBEP_NBLIST_SKIN_MIN 0.125
 
+/* Sphere i's list: pool[off .. off + cnt), room for cap; the three in one record, so that a
+ * list is found with one cache line. */
+typedef struct nbep_nblist_span {
+    uint32_t off, cnt, cap;
+} nbep_nblist_span;
+
 typedef struct nbep_nblist {
     size_t n;
-    uint32_t *off, *cnt, *cap; /* owned, n each */
+    nbep_nblist_span *sp;      /* owned, n */
     uint32_t *pool;            /* owned, pool_cap entries */
     size_t pool_len;           /* entries handed out (live lists and given-up room) */
     size_t pool_cap;
@@ -58,7 +64,7 @@ bool nbep_nblist_layout(nbep_nblist *l, const uint32_t *counts);
  * disjoint spheres' lists at once. */
 static inline void nbep_nblist_fill(nbep_nblist *l, uint32_t i, uint32_t j)
 {
-    l->pool[l->off[i] + l->cnt[i]++] = j;
+    l->pool[l->sp[i].off + l->sp[i].cnt++] = j;
 }
 
 /* Appends j to i's list, growing its room if needed. False when out of memory (nothing
@@ -69,7 +75,7 @@ void nbep_nblist_drop(nbep_nblist *l, uint32_t i, uint32_t j);
 /* Empties i's list; its room stays. */
 static inline void nbep_nblist_clear(nbep_nblist *l, uint32_t i)
 {
-    l->cnt[i] = 0;
+    l->sp[i].cnt = 0;
 }
 /* Removes i from the list of every sphere in i's list, then empties i's list. One thread. */
 void nbep_nblist_detach(nbep_nblist *l, uint32_t i);
@@ -77,8 +83,8 @@ void nbep_nblist_detach(nbep_nblist *l, uint32_t i);
 /* i's list: *m entries. */
 static inline const uint32_t *nbep_nblist_of(const nbep_nblist *l, uint32_t i, size_t *m)
 {
-    *m = l->cnt[i];
-    return l->pool + l->off[i];
+    *m = l->sp[i].cnt;
+    return l->pool + l->sp[i].off;
 }
 
 /* Invariant check for tests: every list within its room and the pool, no sphere listing
