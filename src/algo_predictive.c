@@ -126,6 +126,8 @@ typedef struct thread_ws {
                                * the current step */
     double vmax_end, amax_end; /* grid mode: fastest own sphere and largest own acceleration
                                * at the end of the last step (read by grid_prepare) */
+    nbep_vec3 grid_lo, grid_hi; /* grid mode: bounds of own centres at the step's start */
+    size_t grid_sum;          /* grid mode: spheres in own cells (the build's prefix sum) */
     nbep_predict_ws *pws;     /* owned: quartic workspace */
 } thread_ws;
 
@@ -576,35 +578,61 @@ static nbep_event predict_grid(const pred_ctx *c, const nbep_state *s, size_t i,
     return best;
 }
 
-/* Grid mode, thread 0 at a step's start (every sphere at T0, no thread reading the grid):
- * sorts the centres into cells about a diameter wide, finds the fastest sphere and the largest
- * acceleration, and picks the horizon H = K steps ahead so that the fastest sphere crosses
- * about half a cell by then (K in 1..64): re-predictions look a few cells around, and each
- * sphere is re-predicted at least every K steps. */
-static void grid_prepare(pred_ctx *c, const nbep_state *s, double T0, double dt, bool first)
+/* Grid mode, every thread at a step's start (every sphere at T0, no thread reading the grid:
+ * the find phase that follows reads none): the grid of the centres, built by all threads
+ * (grid.h: the same grid whatever their number; four barriers), and the horizon: predictions
+ * look up to H = T0 + k dt, k chosen so that the fastest sphere travels at most half a cell by
+ * then (at least one step, at most 64). The speed bounds are the whole scene's: each thread's
+ * own, measured in the update (or here, at the first step). */
+static void grid_prepare(pred_ctx *c, const nbep_state *s, int tid, nbep_range own, double T0,
+                         double dt, bool first)
 {
-    double vmax = 0.0, amax = 0.0;
+    thread_ws *w = &c->ws[tid];
+    const int nt = c->nt;
     if (first) {
-        for (size_t i = 0; i < s->n; i++) {
+        double vmax = 0.0, amax = 0.0;
+        for (size_t i = own.lo; i < own.hi; i++) {
             vmax = fmax(vmax, nbep_vec3_norm(s->vel[i]));
             amax = fmax(amax, nbep_vec3_norm(effective_acc(c, s, i)));
         }
-    } else { /* each thread measured its own spheres in the update phase */
-        for (int t = 0; t < c->nt; t++) {
-            vmax = fmax(vmax, c->ws[t].vmax_end);
-            amax = fmax(amax, c->ws[t].amax_end);
-        }
+        w->vmax_end = vmax;
+        w->amax_end = amax;
     }
-    nbep_grid_build(&c->grid, s->pos, s->n, 2.0 * c->rmax);
-    double step_travel = vmax * dt + 0.5 * amax * dt * dt;
-    double k = step_travel > 0.0 ? floor(0.5 * c->grid.h / step_travel) : 64.0;
-    k = fmin(fmax(k, 1.0), 64.0);
-    c->vmax = vmax;
-    c->amax = amax;
-    /* at least the step's end, exactly: a horizon inside the step would recur forever */
-    c->horizon = fmax(T0 + k * dt, T0 + dt);
-    for (int t = 0; t < c->nt; t++)
-        c->ws[t].vmax_react = 0.0;
+    nbep_grid_bounds(s->pos, own.lo, own.hi, &w->grid_lo, &w->grid_hi);
+    nbep_barrier_wait(&c->bar);
+    if (tid == 0) {
+        double vmax = 0.0, amax = 0.0;
+        nbep_vec3 lo = w->grid_lo, hi = w->grid_hi;
+        for (int t = 0; t < nt; t++) {
+            const thread_ws *u = &c->ws[t];
+            vmax = fmax(vmax, u->vmax_end);
+            amax = fmax(amax, u->amax_end);
+            lo = nbep_vec3_make(fmin(lo.x, u->grid_lo.x), fmin(lo.y, u->grid_lo.y),
+                                fmin(lo.z, u->grid_lo.z));
+            hi = nbep_vec3_make(fmax(hi.x, u->grid_hi.x), fmax(hi.y, u->grid_hi.y),
+                                fmax(hi.z, u->grid_hi.z));
+        }
+        nbep_grid_size(&c->grid, lo, hi, s->n, 2.0 * c->rmax);
+        double step_travel = vmax * dt + 0.5 * amax * dt * dt;
+        double k = step_travel > 0.0 ? floor(0.5 * c->grid.h / step_travel) : 64.0;
+        k = fmin(fmax(k, 1.0), 64.0);
+        c->vmax = vmax;
+        c->amax = amax;
+        /* at least the step's end, exactly: a horizon inside the step would recur forever */
+        c->horizon = fmax(T0 + k * dt, T0 + dt);
+        for (int t = 0; t < nt; t++)
+            c->ws[t].vmax_react = 0.0;
+    }
+    nbep_barrier_wait(&c->bar);
+    nbep_grid_assign(&c->grid, s->pos, own.lo, own.hi);
+    nbep_barrier_wait(&c->bar);
+    const nbep_range cells = nbep__range_split(nbep_grid_cells(&c->grid), tid, nt);
+    w->grid_sum = nbep_grid_count(&c->grid, cells.lo, cells.hi);
+    nbep_barrier_wait(&c->bar);
+    size_t offset = 0;
+    for (int t = 0; t < tid; t++)
+        offset += c->ws[t].grid_sum;
+    nbep_grid_place(&c->grid, cells.lo, cells.hi, offset);
 }
 
 static void add_cand(pred_ctx *c, thread_ws *w, size_t i)
@@ -1527,8 +1555,8 @@ static void pred_run(nbep_sim *sim, void *p)
             cells_steps(sim, c, tid, own, w);
             goto done;
         }
-        if (tid == 0 && c->use_grid)
-            grid_prepare(c, s, (double)(sim->step_first - 1) * sim->dt, sim->dt, true);
+        if (c->use_grid)
+            grid_prepare(c, s, tid, own, (double)(sim->step_first - 1) * sim->dt, sim->dt, true);
         /* OpenMP's own hand-over into and out of the region is invisible to ThreadSanitizer
          * (libgomp is not instrumented); crossing our barrier first and last makes every
          * write before the region visible to all threads, and theirs to the caller, through
@@ -1632,12 +1660,10 @@ static void pred_run(nbep_sim *sim, void *p)
             w->amax_end = amax;
             nbep__sim_block_energy(sim, own);
             nbep_barrier_wait(&c->bar);
-            if (tid == 0) {
+            if (c->use_grid) /* all threads, from the positions at T_end */
+                grid_prepare(c, s, tid, own, T_end, sim->dt, false);
+            if (tid == 0) /* the others are in the next find phase, which reads no grid */
                 nbep__sim_end_step(sim, step);
-                /* the others are in the next find phase, which reads no grid */
-                if (c->use_grid)
-                    grid_prepare(c, s, T_end, sim->dt, false);
-            }
             /* no barrier: the next find phase only reads positions and writes queue slots,
              * which the hook does not touch; its stop request is read after that phase's
              * barrier */

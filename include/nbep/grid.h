@@ -19,6 +19,7 @@ typedef struct nbep_grid {
     uint32_t *start;       /* owned, cap_cells + 1: items of cell c are item[start[c]..start[c+1]) */
     uint32_t *item;        /* owned, cap_n: sphere ids by cell, ascending within a cell */
     uint32_t *cell;        /* owned, cap_n: each sphere's cell */
+    uint32_t *fill;        /* owned, cap_cells: per-cell cursors of a build */
     size_t cap_n, cap_cells;
 } nbep_grid;
 
@@ -31,6 +32,26 @@ void nbep_grid_fini(nbep_grid *g);
  * over the centres' bounding box fit the room). Allocates nothing; O(n + cells). Not
  * thread-safe; queries afterwards may run in parallel. */
 void nbep_grid_build(nbep_grid *g, const nbep_vec3 *pos, size_t n, double h_min);
+
+/* The same build in parts, for threads that share it (grid mode builds its grid every step).
+ * Every thread owns a range of spheres [lo_i, hi_i) and a range of cells [c_lo, c_hi) (of
+ * nbep_grid_cells(g)); barriers between the steps:
+ * 1. every thread: nbep_grid_bounds over its spheres, into its own lo/hi;
+ * 2. one thread: nbep_grid_size from the union of the bounds;
+ * 3. every thread: nbep_grid_assign over its spheres (their cells: the arithmetic);
+ * 4. every thread: nbep_grid_count over its cells, returning the spheres in them; the totals
+ *    of the threads before it, in thread order, are its offset;
+ * 5. every thread: nbep_grid_place over its cells from that offset.
+ * Counting and placing read every sphere's cell (one pass over 4 bytes a sphere each) and
+ * write only the thread's own cells, in ascending sphere order: no atomics, and the result is
+ * bit for bit nbep_grid_build's whatever the split into threads. */
+void nbep_grid_bounds(const nbep_vec3 *pos, size_t lo_i, size_t hi_i, nbep_vec3 *lo,
+                      nbep_vec3 *hi);
+void nbep_grid_size(nbep_grid *g, nbep_vec3 lo, nbep_vec3 hi, size_t n, double h_min);
+size_t nbep_grid_cells(const nbep_grid *g);
+void nbep_grid_assign(nbep_grid *g, const nbep_vec3 *pos, size_t lo_i, size_t hi_i);
+size_t nbep_grid_count(nbep_grid *g, size_t c_lo, size_t c_hi);
+void nbep_grid_place(nbep_grid *g, size_t c_lo, size_t c_hi, size_t offset);
 
 /* The block of cells [lo, hi] (inclusive, per axis) holding every centre within `reach` of p
  * (clamped to the grid). */
