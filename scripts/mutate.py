@@ -120,6 +120,16 @@ MUTANTS = [
     ("detect-checks-off-by-one", "src/algo_detect.c", "checks += n - 1 - i;", "checks += n - i;", SIM, None),
     ("detect-plane-gap", "src/algo_detect.c", "if (gap < 0.0) {\n                push_contact",
      "if (gap < -1e-3 * s->radius[i]) {\n                push_contact", SIM, None),
+    # ---- jams (run.max_reactions) ----
+    ("jam-count-never-reset", "src/algo_predictive.c", "        if (c->jam_at[i] != w->jam_step) {",
+     "        if (c->jam_at[i] == UINT32_MAX) {", ["tests/test_jam.sh"], None),
+    ("jam-rounds-not-checked", "src/algo_predictive.c", "                if (jammed) {\n                    if (tid == 0)",
+     "                if (0) {\n                    if (tid == 0)", ["tests/test_jam.sh"], None),
+    ("jam-evloop-stop-ignored", "src/evloop.c", "            if (e->stop) {", "            if (0) {",
+     ["tests/test_jam.sh"], None),
+    ("jam-limit-off-by-one-more", "src/algo_predictive.c", "if (++c->jam_n[i] > c->jam_max &&",
+     "if (++c->jam_n[i] > c->jam_max + 1 &&", ["tests/test_jam.sh"],
+     "one reaction later on a jammed sphere changes nothing a test can see: the line names the limit, not the count"),
     # ---- event calendar (cells mode) ----
     ("cal-time-order", "src/calendar.c", "if (x->time != y->time)\n        return x->time < y->time;",
      "if (x->time != y->time)\n        return x->time > y->time;", ["test_calendar"] + CELLS, None),
@@ -319,7 +329,7 @@ def main():
                         if a.allow_missing:
                             continue
                         sys.exit(f"mutate: mutant {mid} names a test that does not exist: {t}")
-                    env_log = open(os.path.join(scratch, "build", f"mutant-{mid}-{t}.log"), "w")
+                    env_log = open(os.path.join(scratch, "build", f"mutant-{mid}-{os.path.basename(t)}.log"), "w")
                     cmd = (["bash"] if t.endswith(".sh") else []) + [test_path(t)]
                     r = run(["timeout", "-k", "5", str(a.timeout)] + cmd, scratch, log=env_log)
                     env_log.close()

@@ -101,6 +101,15 @@
  * changed) as soon as any of its supports reacts; a real impact (faster than the rest speed)
  * on a held sphere is an ordinary response and wakes what it carries. */
 #define HOLD_SPEED_FRACTION 1e-3
+/* Jams (run.max_reactions). A sphere that reacts more than run.max_reactions times within one
+ * step is jammed: pressed between walls and neighbours that the contact model cannot hold
+ * still (README, granular: a wedge), it would collide ever faster while time crawls on (1e-9 s
+ * per event is typical), so the step never ends and the job's SIGTERM, read between steps, is
+ * never seen. The run stops as a numerical failure instead, its frames intact. A real scene
+ * stays far below the default of 1e6: a sphere collides about once per mean free time, so that
+ * would be a step of a million mean free times (a fast sphere bouncing between walls close
+ * together: thousands; the granular decks: tens). Counting costs 8 bytes a sphere, not spent on
+ * elastic free flight, which cannot jam. Counts saturate below UINT32_MAX. */
 #define KEY_FREE UINT64_MAX
 static const nbep_vec3 ZERO3 = {0.0, 0.0, 0.0};
 
@@ -115,6 +124,9 @@ typedef struct thread_ws {
     uint32_t *rel;            /* owned: own held spheres to let go this round */
     size_t n_rel;
     uint64_t woken;           /* held spheres this thread changed so far (react, let_go) */
+    uint32_t jam_step;        /* the current step's number, low bits (run.max_reactions) */
+    uint32_t jammed;          /* 1 + the lowest sphere this thread saw past run.max_reactions
+                               * (the run then stops), 0 if none */
     uint32_t *claimed;        /* owned: claim words written in the last claim phase */
     size_t n_claimed;
     uint32_t *tclaimed;       /* owned, run.order = "step": time claim words written in the
@@ -161,6 +173,10 @@ typedef struct pred_ctx {
     rest_set *rest;               /* owned: the contacts holding each sphere */
     nbep_vec3 *aeff;              /* owned: acceleration each sphere flies with (rest_solve) */
     double *t_last;               /* owned: time of each sphere's last sphere collision (TC) */
+    /* run.max_reactions (jam_max): each sphere's reactions in the step jam_at[i] (NULL for an
+     * elastic scene without accelerations: free flight at e = 1 cannot jam) */
+    uint32_t *jam_n, *jam_at;
+    uint32_t jam_max;
     uint8_t *flags;               /* owned: IN_CAND | IN_REDO */
     _Atomic uint64_t *claim[2];   /* owned: smallest pair key claiming a sphere, by round parity */
     /* run.order = "step" (the paper's step, approximate): every candidate reacts that is the
@@ -211,6 +227,8 @@ static void pred_destroy(void *p)
     nbep_free_aligned(c->rest);
     nbep_free_aligned(c->aeff);
     nbep_free_aligned(c->t_last);
+    nbep_free_aligned(c->jam_n);
+    nbep_free_aligned(c->jam_at);
     nbep_free_aligned(c->flags);
     nbep_free_aligned((void *)c->claim[0]);
     nbep_free_aligned((void *)c->claim[1]);
@@ -258,6 +276,13 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     }
     if (tc_model)
         c->t_last = nbep_alloc_aligned(n, sizeof *c->t_last);
+    const bool jam_model = !c->free_flight || sim->scene->restitution < 1.0;
+    const uint64_t jam_max = sim->scene->max_reactions; /* 0 (a scene built in code): none */
+    c->jam_max = (uint32_t)(jam_max > 0 && jam_max < UINT32_MAX - 1 ? jam_max : UINT32_MAX - 1);
+    if (jam_model) {
+        c->jam_n = nbep_alloc_aligned(n, sizeof *c->jam_n);
+        c->jam_at = nbep_alloc_aligned(n, sizeof *c->jam_at);
+    }
     /* the rounds' bookkeeping (flags, claims, reaction stamps, candidate and redo lists):
      * not in cells mode, whose event loop needs none of it (25 to 45 bytes a sphere) */
     const bool rounds = !sim->scene->neighbors_cells;
@@ -272,7 +297,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         c->tclaim = nbep_alloc_aligned(n, sizeof *c->tclaim);
     c->ws = nbep_alloc_aligned((size_t)sim->nt, sizeof *c->ws);
     if (!c->ver || !c->tau || (!c->free_flight && (!c->rest || !c->aeff)) ||
-        (tc_model && !c->t_last) || !c->ws ||
+        (tc_model && !c->t_last) || (jam_model && (!c->jam_n || !c->jam_at)) || !c->ws ||
         (rounds && (!c->flags || !c->claim[0] || !c->claim[1] || !c->reacted)) ||
         (c->order_step && !c->tclaim)) {
         pred_destroy(c);
@@ -982,6 +1007,14 @@ static double tc_restitution(pred_ctx *c, double tc, double e, double t_abs, siz
 static void fire(pred_ctx *c, thread_ws *w, const nbep_state *s, size_t i, bool was_still)
 {
     c->ver[i]++;
+    if (c->jam_n) { /* run.max_reactions; i is this thread's to change (it reacts or lets go) */
+        if (c->jam_at[i] != w->jam_step) {
+            c->jam_at[i] = w->jam_step;
+            c->jam_n[i] = 0;
+        }
+        if (++c->jam_n[i] > c->jam_max && (w->jammed == 0 || i + 1 < w->jammed))
+            w->jammed = (uint32_t)i + 1;
+    }
     w->fired[w->n_fired++] = (uint32_t)i;
     if (c->use_grid) /* the grid's speed bound (grid_prepare) */
         w->vmax_react = fmax(w->vmax_react, nbep_vec3_norm(s->vel[i]));
@@ -1196,6 +1229,17 @@ static void react_phase(pred_ctx *c, nbep_state *s, const nbep_scene *sc, int pa
         /* at t_min in time order; at its own time in step order */
         react(c, s, sc, ev->time, ev->time - T0, lo, hi, ev, w, cnt, mx);
     }
+}
+
+/* run.max_reactions: sphere i reacted too often in one step, at about time t; the run stops. */
+static void jam_fail(nbep_sim *sim, uint64_t step, size_t i, double t)
+{
+    nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                  "nbep: step %llu: sphere %zu reacted over %llu times in one step (t = %.17g, "
+                  "run.max_reactions): jammed between walls and neighbours that nbep cannot hold "
+                  "still (README, granular scenes: not solved yet); stopping",
+                  (unsigned long long)step, i, (unsigned long long)sim->scene->max_reactions, t);
+    sim->status = NBEP_ENUMERIC;
 }
 
 /* ---- run.neighbors = "cells": the algorithm's side of the event loop (evloop.h) ---------- */
@@ -1416,6 +1460,8 @@ static size_t cells_react(void *u, uint32_t i, const nbep_event *ev, const uint3
     if (w->woken != woken)
         for (size_t k = 0; k < w->n_fired; k++)
             nbep_evloop_visit_block(x->c->ev, w->fired[k], cells_let_go, x);
+    if (w->jammed) /* run.max_reactions: the loop stops after this event */
+        nbep_evloop_stop(x->c->ev);
     *changed = w->fired;
     return w->n_fired;
 }
@@ -1471,6 +1517,7 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
         cells_user u = {c, s, sim->scene, (double)(step - 1) * sim->dt, 0.0, w,
                         &sim->counters[spar][tid], &sim->tmax[spar][tid]};
         const double T_end = (double)step * sim->dt;
+        w->jam_step = (uint32_t)step;
         if (rebuild) { /* every sphere sits at T0 (tau = 0) */
             /* positions wrapped into a periodic box, as frames write them (output.c): the
              * run continues from what a resumed one reads */
@@ -1510,6 +1557,8 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
                               "nbep: step %llu: no memory for the neighbour lists; stopping",
                               (unsigned long long)step);
                 sim->status = NBEP_ENOMEM;
+            } else if (c->ev_failed && w->jammed) {
+                jam_fail(sim, step, w->jammed - 1, t_stuck);
             } else if (c->ev_failed) {
                 nbep_diag_add(sim->diag, __FILE__, __LINE__,
                               "nbep: step %llu: events at t = %.17g do not resolve "
@@ -1587,6 +1636,7 @@ static void pred_run(nbep_sim *sim, void *p)
             const double T_end = (double)step * sim->dt;
             const uint64_t step_round0 = round;
             double t_check = T0;
+            w->jam_step = (uint32_t)step;
             for (bool first = true;; first = false, round++) {
                 const int par = (int)(round & 1);
                 /* the claim words of the previous round are reset while nobody reads them */
@@ -1632,6 +1682,15 @@ static void pred_run(nbep_sim *sim, void *p)
                 nbep_barrier_wait(&c->bar);
                 react_phase(c, s, sim->scene, par, T0, t_min, round + 1, w, cnt, mx);
                 nbep_barrier_wait(&c->bar);
+                uint32_t jammed = 0; /* the same on every thread: the lowest sphere index */
+                for (int t = 0; t < nt; t++)
+                    if (c->ws[t].jammed && (!jammed || c->ws[t].jammed < jammed))
+                        jammed = c->ws[t].jammed;
+                if (jammed) {
+                    if (tid == 0)
+                        jam_fail(sim, step, jammed - 1, t_min);
+                    goto done;
+                }
                 uint64_t woken = 0;
                 for (int t = 0; t < nt; t++)
                     woken += c->ws[t].woken;

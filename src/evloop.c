@@ -34,6 +34,7 @@ struct nbep_evloop {
     double stray;         /* half the skin: how far a sphere goes before its list expires */
     double face_reach;    /* cut + stray, and a margin: see near_face */
     bool failed;          /* out of memory for a list: the run stops */
+    bool stop;            /* nbep_evloop_stop: the run stops after the current event */
     nbep_feq *q;          /* borrowed */
     const uint64_t *ver;  /* borrowed */
 };
@@ -375,6 +376,11 @@ void nbep_evloop_schedule(nbep_evloop *e, double t)
     nbep_calendar_retune(e->cal, t);
 }
 
+void nbep_evloop_stop(nbep_evloop *e)
+{
+    e->stop = true;
+}
+
 bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_end,
                      uint64_t stall_events, double stall_dt, nbep_evloop_tally *tally,
                      double *t_stuck)
@@ -424,6 +430,10 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
             const uint32_t *changed;
             size_t m = ops->react(u, i, &ev, &changed);
             tally->reactions++;
+            if (e->stop) {
+                *t_stuck = t;
+                return false;
+            }
             for (size_t k = 0; k < m; k++)
                 if (changed[k] != i) {
                     predict_one(e, ops, u, changed[k], t);

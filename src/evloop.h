@@ -90,6 +90,10 @@ void nbep_evloop_schedule(nbep_evloop *e, double t);
  * then returns false): the run must stop. */
 bool nbep_evloop_failed(const nbep_evloop *e);
 
+/* Called from the react callback: nbep_evloop_run returns false after this event, with its
+ * time in *t_stuck (the caller knows why it asked). */
+void nbep_evloop_stop(nbep_evloop *e);
+
 /* What one call of nbep_evloop_run did. */
 typedef struct nbep_evloop_tally {
     uint64_t events;     /* calendar entries handled (stale, expiries and reactions) */
@@ -99,8 +103,9 @@ typedef struct nbep_evloop_tally {
 
 /* Handles every event before t_end, in order. One thread. Returns false, with the time of
  * the stuck event in *t_stuck, when `stall_events` events in a row did not advance time by
- * more than stall_dt (a cascade of zero-time events the model cannot resolve), or when a
- * neighbour list could not get memory (nbep_evloop_failed). */
+ * more than stall_dt (a cascade of zero-time events the model cannot resolve), when a
+ * neighbour list could not get memory (nbep_evloop_failed), or after an event whose reaction
+ * called nbep_evloop_stop. */
 bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_end,
                      uint64_t stall_events, double stall_dt, nbep_evloop_tally *tally,
                      double *t_stuck);

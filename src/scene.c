@@ -363,6 +363,8 @@ static void parse_run(load *L, const config_setting_t *root, nbep_scene *sc, boo
         else
             sc->threads = (int)v;
     }
+    if (get_int(L, run, "run", S_RUN_MAX_REACTIONS, &v, NULL) == GOT)
+        sc->max_reactions = (uint64_t)v;
     *seed_ok = get_int(L, run, "run", S_RUN_SEED, &v, NULL) == GOT;
     if (*seed_ok)
         sc->seed = (uint64_t)v;

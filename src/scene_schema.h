@@ -42,6 +42,10 @@ enum {
       "first, re-predicting in between: exact) or \"step\" (the paper's step: every event "        \
       "found before the step's end that is the earliest of both its spheres reacts in one "        \
       "round, then re-predict; faster on crowded scenes, approximate: spheres may overlap)")       \
+    X(RUN_MAX_REACTIONS, "run.max_reactions", INT, F_GE1, "1000000", NULL,                         \
+      "predictive: a sphere that reacts more than this many times in one step is jammed "         \
+      "(pressed between walls and neighbours that nbep cannot hold still, README: granular "      \
+      "scenes): the run stops with exit 1, its frames kept, instead of never ending the step")     \
     X(PHYSICS, "physics", GROUP, 0, NULL, "-", "physics")                                          \
     X(PHYSICS_GRAVITY, "physics.gravity", VEC3, 0, "[0.0, 0.0, 0.0]", NULL,                        \
       "uniform acceleration of every sphere without its own")                                      \

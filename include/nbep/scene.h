@@ -36,6 +36,8 @@ typedef struct nbep_scene {
     uint64_t seed;
     bool neighbors_grid;      /* predictive: re-predict against nearby cells, not all spheres */
     bool neighbors_cells;     /* predictive: the in-step event loop (evloop.c) over cell lists */
+    uint64_t max_reactions;   /* predictive: more reactions of one sphere in a step: jammed,
+                               * the run stops (0: no limit) */
     bool order_step;          /* predictive "all"/"grid": run.order = "step", the paper's step
                                * (a step's events react at once; approximate) */
     /* physics */

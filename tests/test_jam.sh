@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# A jam ends the run instead of the step never ending (run.max_reactions, issue 9): twelve
+# spheres (e = 0.5) poured into a 0.35 m box wedge three of them between the walls and each
+# other after about 0.67 s, where they would collide ever faster while time crawls on. Every
+# predictive mode must stop there with exit 1 and one line naming the step, the sphere and the
+# setting, the same for 1 and 2 threads, with the frames written before it readable; and a
+# setting above what the scene needs must not stop a run that is not jammed. The limit is set
+# low (1e4) so that the jam is found in well under a second; a run that hangs instead is
+# killed by the time limit and fails.
+set -u
+cd "$(dirname "$0")/.."
+tmp=build/tests/tmp/jam
+rm -rf "$tmp" && mkdir -p "$tmp"
+fail=0
+check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+
+cat >"$tmp/jam.deck" <<'DECK'
+run: { algorithm = "predictive"; steps = 800; dt = 1.0e-3; seed = 1; neighbors = "grid";
+       max_reactions = 10000; };
+physics: { gravity = [0.0, 0.0, -9.81]; restitution = 0.5; };
+box: { min = [0.0, 0.0, 0.0]; max = [0.35, 0.35, 0.6]; };
+spheres = ( { count = 12; radius = 0.05; mass = 1.0; place = "random"; speed = 0.0; } );
+output: { file = "jam.h5"; every = 100; };
+DECK
+
+for mode in grid cells; do
+    for t in 1 2; do
+        out="$tmp/$mode-$t"
+        timeout -k 5 60 bin/nbep run "$tmp/jam.deck" --quiet -t "$t" \
+            --set "run.neighbors=\"$mode\"" -o "$out.h5" 2>"$out.err"
+        rc=$?
+        check "$mode, $t thread(s): a jam stops the run with exit 1 (got $rc)" "[ $rc -eq 1 ]"
+        check "$mode, $t thread(s): one line naming step, sphere and run.max_reactions" \
+            "[ \$(wc -l <'$out.err') -eq 1 ] &&
+             grep -Eq '^nbep: step [0-9]+: sphere [0-9]+ reacted over 10000 times in one step .*run.max_reactions.*jammed' '$out.err'"
+        check "$mode, $t thread(s): the frames before the jam are readable" \
+            "bin/nbep info '$out.h5' >'$out.info' 2>&1 && grep -Eq '^frames: +[1-9]' '$out.info'"
+    done
+    # where and on which sphere the jam is found does not depend on the thread count
+    check "$mode: 1 and 2 threads stop at the same step and sphere" \
+        "[ \"\$(sed 's/ (t = .*//' '$tmp/$mode-1.err')\" = \"\$(sed 's/ (t = .*//' '$tmp/$mode-2.err')\" ]"
+done
+
+# the same scene stopped before the jam runs to exit 0 under a limit of 200: the count is
+# per step, not a budget over the run (its 600 steps cost each sphere hundreds of
+# reactions in all, fewer than 200 in any one step)
+timeout -k 5 60 bin/nbep run "$tmp/jam.deck" --quiet -n 600 --set 'run.neighbors="cells"' \
+    --set run.max_reactions=200 -o "$tmp/before.h5" 2>"$tmp/before.err"
+rc=$?
+check "the pour up to step 600 runs to exit 0 with run.max_reactions = 200 (got $rc)" \
+    "[ $rc -eq 0 ] && [ ! -s '$tmp/before.err' ]"
+
+# bad values are refused like any other setting
+bin/nbep check "$tmp/jam.deck" --set run.max_reactions=0 >/dev/null 2>"$tmp/zero.err"
+rc=$?
+check "run.max_reactions = 0 is refused with exit 2 (got $rc)" \
+    "[ $rc -eq 2 ] && grep -q 'run.max_reactions must be >= 1' '$tmp/zero.err'"
+
+exit $fail
