@@ -3,6 +3,7 @@
 #ifndef NBEP_TEST_SCENE_H
 #define NBEP_TEST_SCENE_H
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -89,6 +90,24 @@ static inline nbep_vec3 nbep_test_random_velocity(uint64_t *x, double speed)
     u.y = nbep_test_uniform(x) - 0.5;
     u.z = nbep_test_uniform(x) - 0.5;
     return nbep_vec3_scale(u, speed / nbep_vec3_norm(u));
+}
+
+/* A hard-sphere fluid at packing fraction phi on a simple cubic lattice (side^3 spheres of
+ * diameter 1 and mass 1) in a closed box, speeds sqrt(3) (kT = 1) in random directions. */
+static inline nbep_scene *nbep_test_fluid(size_t side, double phi, uint64_t steps, double dt)
+{
+    size_t n = side * side * side;
+    nbep_scene *sc = nbep_test_scene_new(n, 6, "predictive", steps, dt);
+    const double L = cbrt((double)n * (4.0 * atan(1.0)) / 6.0 / phi), a = L / (double)side;
+    nbep_test_set_box(sc, L);
+    uint64_t x = 0x9E3779B97F4A7C15u;
+    for (size_t i = 0; i < n; i++) {
+        nbep_vec3 v = nbep_test_random_velocity(&x, sqrt(3.0));
+        nbep_vec3 p = {a * ((double)(i % side) + 0.5), a * ((double)(i / side % side) + 0.5),
+                       a * ((double)(i / side / side) + 0.5)};
+        nbep_test_set_sphere(sc, i, p, v, 0.5, 1.0, (nbep_vec3){0.0, 0.0, 0.0});
+    }
+    return sc;
 }
 
 /* ---- runs ------------------------------------------------------------------------------------ */

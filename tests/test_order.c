@@ -192,23 +192,6 @@ static void test_a_shadowed_event_step_order_gives_the_papers_answer(void **stat
 
 /* ---- crowded scenes ----------------------------------------------------------------------- */
 
-/* A hard-sphere fluid at packing fraction phi on a simple cubic lattice (side^3 spheres of
- * diameter 1 and mass 1) in a closed box, speeds sqrt(3) (kT = 1) in random directions. */
-static nbep_scene *fluid(size_t side, double phi, uint64_t steps, double dt)
-{
-    size_t n = side * side * side;
-    nbep_scene *sc = nbep_test_scene_new(n, 6, "predictive", steps, dt);
-    const double L = cbrt((double)n * (4.0 * atan(1.0)) / 6.0 / phi), a = L / (double)side;
-    nbep_test_set_box(sc, L);
-    uint64_t x = 0x9E3779B97F4A7C15u;
-    for (size_t i = 0; i < n; i++) {
-        nbep_vec3 v = nbep_test_random_velocity(&x, sqrt(3.0));
-        nbep_vec3 p = {a * ((double)(i % side) + 0.5), a * ((double)(i / side % side) + 0.5),
-                       a * ((double)(i / side / side) + 0.5)};
-        nbep_test_set_sphere(sc, i, p, v, 0.5, 1.0, ZERO);
-    }
-    return sc;
-}
 
 static void frames_equal(const nbep_test_frames *a, const nbep_test_frames *b)
 {
@@ -236,7 +219,7 @@ static void test_step_order_crowded_fluid_keeps_energy_and_is_thread_independent
     (void)state;
     const size_t side = nbep_test_scaled(10, 7), n = side * side * side;
     for (int grid = 0; grid < 2; grid++) {
-        nbep_scene *sc = fluid(side, 0.5, nbep_test_scaled(grid ? 10 : 4, 3), 0.05);
+        nbep_scene *sc = nbep_test_fluid(side, 0.5, nbep_test_scaled(grid ? 10 : 4, 3), 0.05);
         sc->neighbors_grid = grid;
         sc->order_step = true;
         nbep_test_frames ref = {0};
@@ -269,7 +252,7 @@ static void test_step_order_checks_far_less_and_loses_collisions_to_shadowing(vo
 {
     (void)state;
     const size_t side = nbep_test_scaled(10, 7);
-    nbep_scene *sc = fluid(side, 0.5, nbep_test_scaled(10, 3), 0.05);
+    nbep_scene *sc = nbep_test_fluid(side, 0.5, nbep_test_scaled(10, 3), 0.05);
     sc->neighbors_grid = true;
     nbep_summary t = nbep_test_run(sc, 1, NULL, NULL, NULL, NULL);
     sc->order_step = true;
@@ -318,7 +301,7 @@ static void test_step_order_reacts_to_a_spheres_earliest_event_not_its_lowest_pa
 static void test_step_order_pile_settles_and_is_thread_independent(void **state)
 {
     (void)state;
-    nbep_scene *sc = fluid(nbep_test_scaled(6, 4), 0.3, nbep_test_scaled(100, 60), 5e-3);
+    nbep_scene *sc = nbep_test_fluid(nbep_test_scaled(6, 4), 0.3, nbep_test_scaled(100, 60), 5e-3);
     sc->neighbors_grid = true;
     sc->order_step = true;
     sc->restitution = 0.6;

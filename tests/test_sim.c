@@ -382,23 +382,6 @@ static void test_cells_predictive_finds_the_same_collisions_as_all_pairs(void **
     nbep_test_scene_free(&a), nbep_test_scene_free(&c);
 }
 
-/* A hard-sphere fluid at packing fraction phi on a simple cubic lattice (side^3 spheres of
- * diameter 1 and mass 1) in a closed box, speeds sqrt(3) (kT = 1) in random directions. */
-static nbep_scene *fluid(size_t side, double phi, uint64_t steps, double dt)
-{
-    size_t n = side * side * side;
-    nbep_scene *sc = nbep_test_scene_new(n, 6, "predictive", steps, dt);
-    const double L = cbrt((double)n * (4.0 * atan(1.0)) / 6.0 / phi), a = L / (double)side;
-    nbep_test_set_box(sc, L);
-    uint64_t x = 0x9E3779B97F4A7C15u;
-    for (size_t i = 0; i < n; i++) {
-        nbep_vec3 v = nbep_test_random_velocity(&x, sqrt(3.0));
-        nbep_vec3 p = {a * ((double)(i % side) + 0.5), a * ((double)(i / side % side) + 0.5),
-                       a * ((double)(i / side / side) + 0.5)};
-        nbep_test_set_sphere(sc, i, p, v, 0.5, 1.0, ZERO);
-    }
-    return sc;
-}
 
 /* A fluid at phi = 0.35: thousands of collisions per step, no overlap beyond round-off,
  * energy kept, the same collisions as grid mode over a short stretch (before round-off
@@ -407,7 +390,7 @@ static void test_cells_predictive_dense_fluid_is_exact_and_thread_independent(vo
 {
     (void)state;
     size_t side = nbep_test_scaled(10, 7);
-    nbep_scene *sc = fluid(side, 0.35, 10, 0.01);
+    nbep_scene *sc = nbep_test_fluid(side, 0.35, 10, 0.01);
     sc->neighbors_cells = true;
     frames ref = {0};
     nbep_summary s1 = run(sc, 1, NULL, &ref);
@@ -426,7 +409,7 @@ static void test_cells_predictive_dense_fluid_is_exact_and_thread_independent(vo
     }
     nbep_test_scene_free(&sc);
     nbep_test_frames_free(&ref);
-    nbep_scene *g = fluid(side, 0.35, 10, 0.01);
+    nbep_scene *g = nbep_test_fluid(side, 0.35, 10, 0.01);
     g->neighbors_grid = true;
     nbep_summary sg = run(g, 1, NULL, NULL);
     assert_int_equal(sg.sphere_collisions, s1.sphere_collisions);
@@ -438,7 +421,7 @@ static void test_cells_predictive_dense_fluid_is_exact_and_thread_independent(vo
 static void test_cells_predictive_dense_fluid_keeps_energy_over_a_longer_run(void **state)
 {
     (void)state;
-    nbep_scene *sc = fluid(nbep_test_scaled(12, 8), 0.45, nbep_test_scaled(200, 60), 0.02);
+    nbep_scene *sc = nbep_test_fluid(nbep_test_scaled(12, 8), 0.45, nbep_test_scaled(200, 60), 0.02);
     sc->neighbors_cells = true;
     sc->output_every = 7;
     nbep_summary s = run(sc, 2, NULL, NULL);
@@ -455,7 +438,7 @@ static void test_cells_predictive_dense_fluid_keeps_energy_over_a_longer_run(voi
 static void test_cells_predictive_pile_settles_under_gravity(void **state)
 {
     (void)state;
-    nbep_scene *sc = fluid(nbep_test_scaled(6, 4), 0.3, nbep_test_scaled(100, 60), 5e-3);
+    nbep_scene *sc = nbep_test_fluid(nbep_test_scaled(6, 4), 0.3, nbep_test_scaled(100, 60), 5e-3);
     sc->neighbors_cells = true;
     sc->restitution = 0.6;
     for (size_t i = 0; i < sc->state.n; i++)
