@@ -108,7 +108,7 @@
  * never seen. The run stops as a numerical failure instead, its frames intact. A real scene
  * stays far below the default of 1e6: a sphere collides about once per mean free time, so that
  * would be a step of a million mean free times (a fast sphere bouncing between walls close
- * together: thousands; the granular decks: tens). Counting costs 8 bytes a sphere, not spent on
+ * together: thousands; the busiest sphere of the hopper and pile decks: 200 to 2000). Counting costs 8 bytes a sphere, not spent on
  * elastic free flight, which cannot jam. Counts saturate below UINT32_MAX. */
 #define KEY_FREE UINT64_MAX
 static const nbep_vec3 ZERO3 = {0.0, 0.0, 0.0};
