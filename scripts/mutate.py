@@ -121,14 +121,14 @@ MUTANTS = [
     ("detect-plane-gap", "src/algo_detect.c", "if (gap < 0.0) {\n                push_contact",
      "if (gap < -1e-3 * s->radius[i]) {\n                push_contact", SIM, None),
     # ---- jams (run.max_reactions) ----
-    ("jam-count-never-reset", "src/algo_predictive.c", "        if (c->jam_at[i] != w->jam_step) {",
-     "        if (c->jam_at[i] == UINT32_MAX) {", ["tests/test_jam.sh"], None),
+    ("jam-count-never-reset", "src/algo_predictive.c", "        if (j->step != w->jam_step)",
+     "        if (j->step == UINT32_MAX)", ["tests/test_jam.sh"], None),
     ("jam-rounds-not-checked", "src/algo_predictive.c", "                if (jammed) {\n                    if (tid == 0)",
      "                if (0) {\n                    if (tid == 0)", ["tests/test_jam.sh"], None),
     ("jam-evloop-stop-ignored", "src/evloop.c", "            if (e->stop) {", "            if (0) {",
      ["tests/test_jam.sh"], None),
-    ("jam-limit-off-by-one-more", "src/algo_predictive.c", "if (++c->jam_n[i] > c->jam_max &&",
-     "if (++c->jam_n[i] > c->jam_max + 1 &&", ["tests/test_jam.sh"],
+    ("jam-limit-off-by-one-more", "src/algo_predictive.c", "if (++j->n > c->jam_max &&",
+     "if (++j->n > c->jam_max + 1 &&", ["tests/test_jam.sh"],
      "one reaction later on a jammed sphere changes nothing a test can see: the line names the limit, not the count"),
     # ---- event calendar (cells mode) ----
     ("cal-time-order", "src/calendar.c", "if (x->time != y->time)\n        return x->time < y->time;",

@@ -108,8 +108,9 @@
  * never seen. The run stops as a numerical failure instead, its frames intact. A real scene
  * stays far below the default of 1e6: a sphere collides about once per mean free time, so that
  * would be a step of a million mean free times (a fast sphere bouncing between walls close
- * together: thousands; the busiest sphere of the hopper and pile decks: 200 to 2000). Counting costs 8 bytes a sphere, not spent on
- * elastic free flight, which cannot jam. Counts saturate below UINT32_MAX. */
+ * together: thousands; the busiest sphere of the hopper and pile decks: 200 to 2000).
+ * Counting costs 8 bytes a sphere (jam_count), not spent on elastic free flight, which cannot
+ * jam. The limit is kept below UINT32_MAX, so a count never wraps before it trips. */
 #define KEY_FREE UINT64_MAX
 static const nbep_vec3 ZERO3 = {0.0, 0.0, 0.0};
 
@@ -161,6 +162,11 @@ typedef struct rest_set {
     bool still;       /* held still: v = 0 and aeff = 0 exactly */
 } rest_set;
 
+/* A sphere's reactions in the step `step` (low bits; zeroed memory: none, steps start at 1). */
+typedef struct jam_count {
+    uint32_t step, n;
+} jam_count;
+
 typedef struct pred_ctx {
     nbep_barrier bar;
     nbep_feq *q;                  /* owned */
@@ -173,9 +179,9 @@ typedef struct pred_ctx {
     rest_set *rest;               /* owned: the contacts holding each sphere */
     nbep_vec3 *aeff;              /* owned: acceleration each sphere flies with (rest_solve) */
     double *t_last;               /* owned: time of each sphere's last sphere collision (TC) */
-    /* run.max_reactions (jam_max): each sphere's reactions in the step jam_at[i] (NULL for an
-     * elastic scene without accelerations: free flight at e = 1 cannot jam) */
-    uint32_t *jam_n, *jam_at;
+    /* run.max_reactions (jam_max): each sphere's reactions in one step (NULL for an elastic
+     * scene without accelerations: free flight at e = 1 cannot jam) */
+    jam_count *jam;
     uint32_t jam_max;
     uint8_t *flags;               /* owned: IN_CAND | IN_REDO */
     _Atomic uint64_t *claim[2];   /* owned: smallest pair key claiming a sphere, by round parity */
@@ -227,8 +233,7 @@ static void pred_destroy(void *p)
     nbep_free_aligned(c->rest);
     nbep_free_aligned(c->aeff);
     nbep_free_aligned(c->t_last);
-    nbep_free_aligned(c->jam_n);
-    nbep_free_aligned(c->jam_at);
+    nbep_free_aligned(c->jam);
     nbep_free_aligned(c->flags);
     nbep_free_aligned((void *)c->claim[0]);
     nbep_free_aligned((void *)c->claim[1]);
@@ -279,10 +284,8 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     const bool jam_model = !c->free_flight || sim->scene->restitution < 1.0;
     const uint64_t jam_max = sim->scene->max_reactions; /* 0 (a scene built in code): none */
     c->jam_max = (uint32_t)(jam_max > 0 && jam_max < UINT32_MAX - 1 ? jam_max : UINT32_MAX - 1);
-    if (jam_model) {
-        c->jam_n = nbep_alloc_aligned(n, sizeof *c->jam_n);
-        c->jam_at = nbep_alloc_aligned(n, sizeof *c->jam_at);
-    }
+    if (jam_model)
+        c->jam = nbep_alloc_aligned(n, sizeof *c->jam);
     /* the rounds' bookkeeping (flags, claims, reaction stamps, candidate and redo lists):
      * not in cells mode, whose event loop needs none of it (25 to 45 bytes a sphere) */
     const bool rounds = !sim->scene->neighbors_cells;
@@ -297,7 +300,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         c->tclaim = nbep_alloc_aligned(n, sizeof *c->tclaim);
     c->ws = nbep_alloc_aligned((size_t)sim->nt, sizeof *c->ws);
     if (!c->ver || !c->tau || (!c->free_flight && (!c->rest || !c->aeff)) ||
-        (tc_model && !c->t_last) || (jam_model && (!c->jam_n || !c->jam_at)) || !c->ws ||
+        (tc_model && !c->t_last) || (jam_model && !c->jam) || !c->ws ||
         (rounds && (!c->flags || !c->claim[0] || !c->claim[1] || !c->reacted)) ||
         (c->order_step && !c->tclaim)) {
         pred_destroy(c);
@@ -1007,12 +1010,11 @@ static double tc_restitution(pred_ctx *c, double tc, double e, double t_abs, siz
 static void fire(pred_ctx *c, thread_ws *w, const nbep_state *s, size_t i, bool was_still)
 {
     c->ver[i]++;
-    if (c->jam_n) { /* run.max_reactions; i is this thread's to change (it reacts or lets go) */
-        if (c->jam_at[i] != w->jam_step) {
-            c->jam_at[i] = w->jam_step;
-            c->jam_n[i] = 0;
-        }
-        if (++c->jam_n[i] > c->jam_max && (w->jammed == 0 || i + 1 < w->jammed))
+    if (c->jam) { /* run.max_reactions; i is this thread's to change (it reacts or lets go) */
+        jam_count *j = &c->jam[i];
+        if (j->step != w->jam_step)
+            *j = (jam_count){.step = w->jam_step, .n = 0};
+        if (++j->n > c->jam_max && (w->jammed == 0 || i + 1 < w->jammed))
             w->jammed = (uint32_t)i + 1;
     }
     w->fired[w->n_fired++] = (uint32_t)i;

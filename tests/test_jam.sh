@@ -6,7 +6,8 @@
 # setting, the same for 1 and 2 threads, with the frames written before it readable; and a
 # setting above what the scene needs must not stop a run that is not jammed. The limit is set
 # low (1e4) so that the jam is found in well under a second; a run that hangs instead is
-# killed by the time limit and fails.
+# killed by the time limit and fails. Frames every 50 steps: this pour's jam then lets time
+# crawl on (the stall check does not fire), so only the limit stops it.
 set -u
 cd "$(dirname "$0")/.."
 tmp=build/tests/tmp/jam
@@ -20,7 +21,7 @@ run: { algorithm = "predictive"; steps = 800; dt = 1.0e-3; seed = 1; neighbors =
 physics: { gravity = [0.0, 0.0, -9.81]; restitution = 0.5; };
 box: { min = [0.0, 0.0, 0.0]; max = [0.35, 0.35, 0.6]; };
 spheres = ( { count = 12; radius = 0.05; mass = 1.0; place = "random"; speed = 0.0; } );
-output: { file = "jam.h5"; every = 100; };
+output: { file = "jam.h5"; every = 50; };
 DECK
 
 for mode in grid cells; do
@@ -39,6 +40,14 @@ for mode in grid cells; do
     # where and on which sphere the jam is found does not depend on the thread count
     check "$mode: 1 and 2 threads stop at the same step and sphere" \
         "[ \"\$(sed 's/ (t = .*//' '$tmp/$mode-1.err')\" = \"\$(sed 's/ (t = .*//' '$tmp/$mode-2.err')\" ]"
+    # the run stops where the limit is passed, not at some later check: twice the limit,
+    # later in the jam (time crawls on in it)
+    timeout -k 5 60 bin/nbep run "$tmp/jam.deck" --quiet --set "run.neighbors=\"$mode\"" \
+        --set run.max_reactions=20000 -o "$tmp/$mode-twice.h5" 2>"$tmp/$mode-twice.err"
+    t1=$(sed -n 's/.*(t = \([0-9.e+-]*\),.*/\1/p' "$tmp/$mode-1.err")
+    t2=$(sed -n 's/.*(t = \([0-9.e+-]*\),.*/\1/p' "$tmp/$mode-twice.err")
+    check "$mode: a limit twice as high stops later in the jam ($t1 < $t2)" \
+        "[ -n '$t1' ] && [ -n '$t2' ] && awk -v a='$t1' -v b='$t2' 'BEGIN { exit !(a < b) }'"
 done
 
 # the same scene stopped before the jam runs to exit 0 under a limit of 200: the count is
