@@ -505,8 +505,10 @@ NBEP_FMA_CLONES double nbep_predict_pair_quadratic(nbep_vec3 dp, nbep_vec3 dv, d
     double c = pp - sigma * sigma;
     if (!(c > 0.5 * pp))
         c = gap2(dp, sigma);
-    if (c <= 0.0)
-        return 0.0;                             /* touching or overlapping, and closing */
+    if (c <= 0.0) /* touching or overlapping: closing now, unless only by round-off */
+        return b * b > NBEP_PREDICT_GRAZE * NBEP_PREDICT_GRAZE * (pp * nbep_vec3_dot(dv, dv))
+                   ? 0.0
+                   : NBEP_NEVER;
     /* At grazing incidence disc = b^2 - |dv|^2 c is a small difference; by Lagrange's identity
      * it equals |dv|^2 sigma^2 - |dp x dv|^2. With s the distance still to fly to the closest
      * approach, b^2 = |dv|^2 s^2: the first form subtracts two numbers of size |dv|^2 s^2, the

@@ -154,6 +154,21 @@ static void test_touching_or_overlapping_but_receding_pair_never_meets(void **st
     assert_true(isinf(nbep_predict_pair_quadratic(overlapping, dv, 0.83)));
 }
 
+/* A touching pair that closes only by round-off (a normal speed of 1e-17 of the relative speed,
+ * what a response's tie push on a neighbour leaves: physics.c) slides: never, else a sphere
+ * caught between two fixed neighbours would meet them in turn at zero time for ever. A normal
+ * speed of 1e-13 of it, above the tolerance (16 ulps), is a real contact: now. */
+static void test_touching_pair_closing_by_round_off_slides(void **state)
+{
+    (void)state;
+    nbep_vec3 dp = {0.83, 0.0, 0.0};
+    assert_true(isinf(nbep_predict_pair_quadratic(dp, (nbep_vec3){-0.5e-17, 0.5, 0.0}, 0.83)));
+    assert_true(nbep_predict_pair_quadratic(dp, (nbep_vec3){-0.5e-13, 0.5, 0.0}, 0.83) == 0.0);
+    /* the same through the general entry (no relative acceleration) */
+    assert_true(isinf(nbep_predict_pair(dp, (nbep_vec3){-0.5e-17, 0.5, 0.0}, (nbep_vec3){0, 0, 0},
+                                        0.83, NULL)));
+}
+
 /* dp's components are multiples of 2^-20 below 2^5, so |dp|^2 is exact in integers (and in a
  * double); sigma sits 1e-12 below |dp|. The reference gap c = |dp|^2 - sigma^2 is formed
  * exactly: sigma^2 = s2 + e2 exactly (fma), |dp|^2 - s2 is exact (the two are within a factor
@@ -584,6 +599,7 @@ int main(void)
         cmocka_unit_test(test_pair_at_rest_or_moving_sideways_never_meets),
         cmocka_unit_test(test_touching_and_closing_pair_meets_now),
         cmocka_unit_test(test_touching_or_overlapping_but_receding_pair_never_meets),
+        cmocka_unit_test(test_touching_pair_closing_by_round_off_slides),
         cmocka_unit_test_setup_teardown(test_tiny_gap_gives_an_accurate_contact_time, ws_setup,
                                         ws_teardown),
         cmocka_unit_test(test_zero_relative_acceleration_gives_the_quadratic_bits),

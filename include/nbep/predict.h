@@ -7,6 +7,7 @@
 #define NBEP_PREDICT_H
 
 #include <math.h>
+#include <float.h>
 #include <stdbool.h>
 
 #include "nbep/compiler.h"
@@ -35,10 +36,21 @@ void nbep_predict_ws_destroy(nbep_predict_ws **ws);
  * the time at which they start closing again: the turn, if they are pulled back before they
  * come apart, or the return contact if they come apart first. */
 
+/* A touching pair whose closing speed is at most this fraction of its relative speed closes
+ * only by round-off, and slides instead (issue 9). A response leaves its own pair receding by
+ * a push of at least DBL_EPSILON (|v1| + |v2|) along the normal (physics.c); a sphere caught
+ * between two fixed neighbours that touch it from opposite sides is then left closing on the
+ * other by about that much, and before this tolerance the two met it in turn at zero time for
+ * ever (a 300-sphere pile: a sphere sliding between two held ones, a million reactions in a
+ * step). 16 ulps covers that push with margin; a real contact closing this slowly would
+ * overlap by at most about (16 ulps)^2 sigma, far below round-off of the position. */
+#define NBEP_PREDICT_GRAZE (16.0 * DBL_EPSILON)
+
 /* Earliest t >= 0 at which |dp + dv t| = sigma while closing (d|dp|/dt < 0), for a pair with
  * equal accelerations; dp = p2 - p1, dv = v2 - v1, sigma = r1 + r2. NBEP_NEVER when they do
- * not meet. A pair already touching or overlapping (|dp| <= sigma) and closing returns 0;
- * receding or at rest, NBEP_NEVER (with equal accelerations it never turns back).
+ * not meet. A pair already touching or overlapping (|dp| <= sigma) and closing returns 0,
+ * unless it closes only by round-off (|dp.dv| <= NBEP_PREDICT_GRAZE |dp| |dv|: it slides, see
+ * there); receding or at rest, NBEP_NEVER (with equal accelerations it never turns back).
  * |dp|^2 - sigma^2 is computed compensated: a gap of 1e-12 sigma still gives about 15 digits. */
 double nbep_predict_pair_quadratic(nbep_vec3 dp, nbep_vec3 dv, double sigma);
 
