@@ -42,14 +42,14 @@
  *   same for any thread count, so frames are bitwise identical for 1..N threads.
  * - The barrier is nbep_barrier, safe to reuse back to back (Procedure 4 is not).
  * - Resting contact: a sphere whose bounce off a plane would last less than
- *   NBEP_REST_FRACTION of a step is set to rest on it: its normal velocity is zeroed and the
- *   plane carries its weight (its acceleration loses the component into the plane) until a
+ *   NBEP_REST_FRACTION of a step (or, squeezed by a neighbour, that is no faster than the rest
+ *   speed) is set to rest on it: its normal velocity is zeroed and the plane carries its weight (its acceleration loses the component into the plane) until a
  *   response moves it off; otherwise infinitely many ever-smaller bounces would come in finite
  *   time (e < 1), and a sphere pressed on a plane at zero speed would react forever.
  *   Since issue 9 a sphere keeps up to NBEP_CONTACT_MAX such contacts at once (planes, and
  *   spheres held still), its flight acceleration projected onto the cone they allow
- *   (contact.h); see HOLD_SPEED_FRACTION for held spheres and tc_restitution for the TC model
- *   that ends inelastic collapse. */
+ *   (contact.h); see "Lasting sphere-sphere contacts" for held spheres, tc_restitution for the
+ *   TC model that ends inelastic collapse, and caged for a sphere between two fixed faces. */
 #include <math.h>
 #include <stdalign.h>
 #include <stdatomic.h>
@@ -95,16 +95,22 @@
 /* Lasting sphere-sphere contacts (issue 9). A sphere whose contacts (planes, and spheres that
  * are themselves held still) leave it no acceleration is "held still": velocity and effective
  * acceleration exactly zero, so it costs no events and can carry others in turn; a settled
- * pile is a network of held spheres on planes. A sphere joins it when it meets a held sphere
- * with a normal speed that would not separate them for NBEP_REST_FRACTION of a step (the
- * planes' rule) and the contacts it then has leave it no motion: its remaining speed along
- * them is removed, and any tangential speed too if below HOLD_SPEED_FRACTION |a| dt (1e-5 m/s
- * under gravity at dt = 1e-3: it would move 1e-8 m in a step). That kinetic energy, at most
- * m (HOLD_SPEED_FRACTION |a| dt)^2 / 2 per sphere, is the only energy the model removes
- * besides restitution. A held sphere is let go (time-ordered, at the instant its support
- * changed) as soon as any of its supports reacts; a real impact (faster than the rest speed)
- * on a held sphere is an ordinary response and wakes what it carries. */
-#define HOLD_SPEED_FRACTION 1e-3
+ * pile is a network of held spheres on planes.
+ *
+ * The rest speed (rest_speed) sets what is slow enough to hold: |a| t_min, twice the separating
+ * speed of the minimum bounce above (9.8e-4 m/s under gravity at dt = 1e-3). A pressed pair
+ * leaves every response at least that fast, so any lasting contact the model does not hold
+ * jitters at that speed for ever; a hold threshold below it (1e-3 |a| dt, before) is never met
+ * in a crowd: a 300-sphere pour had no sphere held at all after 0.8 s, and every jittering
+ * impact on a held sphere knocked it loose again. So a supported sphere slower than the rest
+ * speed is held when a partner meets it; a sphere that meets a held one no faster than the
+ * rest speed (along the line of centres, and in all) joins it if the contacts it then has
+ * leave it no motion, else bounces off it as off a wall (the held sphere, carried by the pile,
+ * takes no momentum); a faster impact is an ordinary response and wakes what the held sphere
+ * carried. The kinetic energy removed by holding, at most m (rest speed)^2 / 2 per hold
+ * (4.8e-7 J for 1 kg under gravity at dt = 1e-3), is the model's, besides restitution. A held
+ * sphere is let go (time-ordered, at the instant its support changed) as soon as any of its
+ * supports reacts. */
 /* Jams (run.max_reactions). A sphere that reacts more than run.max_reactions times within one
  * step is jammed: pressed between walls and neighbours that the contact model cannot hold
  * still (README, granular: a wedge), it would collide ever faster while time crawls on (1e-9 s
@@ -166,6 +172,17 @@ typedef struct rest_set {
     bool still;       /* held still: v = 0 and aeff = 0 exactly */
 } rest_set;
 
+/* A sphere's last meeting with an immobile face (a plane, or a held sphere): when, the face's
+ * normal towards the sphere and the sphere's centre then (t = -inf before the first). */
+typedef struct face_met {
+    double t;
+    nbep_vec3 n, p;
+} face_met;
+/* A cage's second face comes at zero time: the sphere has not moved off the first one. One
+ * that has moved off it along its normal by more than this fraction of its radius had room to
+ * bounce (a channel a little wider than the sphere): no cage. */
+#define CAGE_TOUCH_REL 1e-9
+
 /* A sphere's reactions in the step `step` (low bits; zeroed memory: none, steps start at 1). */
 typedef struct jam_count {
     uint32_t step, n;
@@ -183,6 +200,8 @@ typedef struct pred_ctx {
     rest_set *rest;               /* owned: the contacts holding each sphere */
     nbep_vec3 *aeff;              /* owned: acceleration each sphere flies with (rest_solve) */
     double *t_last;               /* owned: time of each sphere's last sphere collision (TC) */
+    face_met *face;               /* owned with t_last when something accelerates: each
+                                   * sphere's last meeting with an immobile face (caged) */
     /* run.max_reactions (jam_max): each sphere's reactions in one step (NULL for an elastic
      * scene without accelerations: free flight at e = 1 cannot jam) */
     jam_count *jam;
@@ -237,6 +256,7 @@ static void pred_destroy(void *p)
     nbep_free_aligned(c->rest);
     nbep_free_aligned(c->aeff);
     nbep_free_aligned(c->t_last);
+    nbep_free_aligned(c->face);
     nbep_free_aligned(c->jam);
     nbep_free_aligned(c->flags);
     nbep_free_aligned((void *)c->claim[0]);
@@ -285,6 +305,9 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     }
     if (tc_model)
         c->t_last = nbep_alloc_aligned(n, sizeof *c->t_last);
+    const bool cage_model = tc_model && !c->free_flight;
+    if (cage_model)
+        c->face = nbep_alloc_aligned(n, sizeof *c->face);
     const bool jam_model = !c->free_flight || sim->scene->restitution < 1.0;
     const uint64_t jam_max = sim->scene->max_reactions; /* 0 (a scene built in code): none */
     c->jam_max = (uint32_t)(jam_max > 0 && jam_max < UINT32_MAX - 1 ? jam_max : UINT32_MAX - 1);
@@ -304,7 +327,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         c->tclaim = nbep_alloc_aligned(n, sizeof *c->tclaim);
     c->ws = nbep_alloc_aligned((size_t)sim->nt, sizeof *c->ws);
     if (!c->ver || !c->tau || (!c->free_flight && (!c->rest || !c->aeff)) ||
-        (tc_model && !c->t_last) || (jam_model && !c->jam) || !c->ws ||
+        (tc_model && !c->t_last) || (cage_model && !c->face) || (jam_model && !c->jam) || !c->ws ||
         (rounds && (!c->flags || !c->claim[0] || !c->claim[1] || !c->reacted)) ||
         (c->order_step && !c->tclaim)) {
         pred_destroy(c);
@@ -353,6 +376,8 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         }
         if (c->t_last)
             c->t_last[i] = -INFINITY;
+        if (c->face)
+            c->face[i] = (face_met){.t = -INFINITY};
         if (rounds) {
             atomic_init(&c->claim[0][i], KEY_FREE);
             atomic_init(&c->claim[1][i], KEY_FREE);
@@ -408,6 +433,18 @@ static nbep_vec3 sep(const pred_ctx *c, const nbep_state *s, size_t a, size_t b)
 {
     nbep_vec3 d = nbep_vec3_sub(s->pos[b], s->pos[a]);
     return c->pb.any ? nbep_periodic_near_image(&c->pb, d) : d;
+}
+
+/* The rest speed of sphere i pressed by an acceleration of magnitude amag (see "Lasting
+ * sphere-sphere contacts"): amag t_min, with t_min the minimum bounce's (MIN_BOUNCE_STEP_FRACTION),
+ * twice the speed that bounce leaves with, the speed it comes back at. 0 when nothing presses. */
+static double rest_speed(const nbep_state *s, size_t i, double amag, double dt)
+{
+    if (!(amag > 0.0))
+        return 0.0;
+    double t_min = fmin(MIN_BOUNCE_STEP_FRACTION * dt,
+                        sqrt(8.0 * MIN_BOUNCE_REL_HEIGHT * s->radius[i] / amag));
+    return amag * t_min;
 }
 
 /* A sphere whose contacts carry its whole weight (it may still slide): a slow partner treats it
@@ -467,7 +504,7 @@ static bool rest_solve(const pred_ctx *c, const nbep_state *s, size_t i, rest_se
         double amag = nbep_vec3_norm(s->acc[i]);
         if (r->n > 0 && nbep_vec3_norm(*a) <= NBEP_CONTACT_TOL * amag) {
             *a = nbep_vec3_make(0.0, 0.0, 0.0);
-            if (nbep_vec3_norm(*v) <= HOLD_SPEED_FRACTION * amag * dt)
+            if (nbep_vec3_norm(*v) <= rest_speed(s, i, amag, dt))
                 *v = nbep_vec3_make(0.0, 0.0, 0.0);
         }
         r->still = r->n > 0 && is_zero(*a) && is_zero(*v);
@@ -1029,21 +1066,49 @@ static void fire(pred_ctx *c, thread_ws *w, const nbep_state *s, size_t i, bool 
 }
 
 
-/* Holds a supported sphere still when slower than the hold speed (see HOLD_SPEED_FRACTION). */
+/* Holds a supported sphere still when slower than the rest speed (see rest_speed). */
 static bool try_hold(pred_ctx *c, nbep_state *s, size_t i, double dt)
 {
     if (!supported(c, i) ||
-        !(nbep_vec3_norm(s->vel[i]) <= HOLD_SPEED_FRACTION * nbep_vec3_norm(s->acc[i]) * dt))
+        !(nbep_vec3_norm(s->vel[i]) <= rest_speed(s, i, nbep_vec3_norm(s->acc[i]), dt)))
         return false;
     s->vel[i] = nbep_vec3_make(0.0, 0.0, 0.0);
     c->rest[i].still = true;
     return true;
 }
 
-/* Sphere k (not held) meets held sphere j at a normal speed below the hold speed: it joins the
- * held pile if pressed onto j at the rest speed and its contacts then leave it no motion,
- * else bounces off j as off a wall (j is carried by the pile; the momentum, below m times the
- * hold speed, goes to it as to a plane). */
+/* Sphere k meets an immobile face (a plane, or a held sphere) whose normal towards it is n.
+ * Caged: the last face it met, within tc (the TC model's time) before, faces this one (n.n' < 0:
+ * a bounce off either heads into the other) and it has not moved off that one since
+ * (CAGE_TOUCH_REL): a gap exactly its diameter wide, a rigid cage, where the bounces between the faces take no time, and the TC model,
+ * which makes them elastic, would keep them going for ever (a sphere on the floor between a
+ * wall and a held sphere one diameter from it: a million reactions in a step). The cage takes
+ * the speed against both instead: k's velocity becomes the nearest that leaves both
+ * (nbep_contact_project; e = 0 against the cage), its speed along them stays. Energy: that
+ * normal kinetic energy, which restitution would have taken as the bounces collapsed. The
+ * face's normal is kept from the meeting, so no other sphere's state is read (threads react
+ * to other events meanwhile). Returns whether caged; records this meeting either way. */
+static bool caged(pred_ctx *c, nbep_state *s, size_t k, nbep_vec3 n, double t_abs, double tc)
+{
+    if (!c->face)
+        return false;
+    const face_met prev = c->face[k];
+    c->face[k] = (face_met){.t = t_abs, .n = n, .p = s->pos[k]};
+    if (!(t_abs - prev.t <= tc) || !(nbep_vec3_dot(prev.n, n) < 0.0) ||
+        !(nbep_vec3_dot(prev.n, nbep_vec3_sub(s->pos[k], prev.p)) <=
+          CAGE_TOUCH_REL * s->radius[k]))
+        return false;
+    const nbep_vec3 nn[2] = {n, prev.n};
+    unsigned act;
+    s->vel[k] = nbep_contact_project(s->vel[k], nn, 2, &act);
+    return true;
+}
+
+/* Sphere k (not held) meets held sphere j at a normal speed no faster than the rest speed: it
+ * joins the held pile if pressed onto j, no faster than the rest speed in all, and its
+ * contacts then leave it no motion; else it bounces off j as off a wall (j is carried by the
+ * pile; the momentum, below m (1 + e) times the rest speed, goes to it as to a plane), or is
+ * caged if the face it met before faces this one and it still touches that (caged). */
 static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t k, size_t j,
                          double t_abs, double tc, thread_ws *w, nbep_counters *cnt)
 {
@@ -1052,8 +1117,8 @@ static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t
     nbep_vec3 n = nbep_vec3_make(d.x / len, d.y / len, d.z / len);
     double u = nbep_vec3_dot(s->vel[k], n), an = nbep_vec3_dot(c->aeff[k], n);
     rest_set r = c->rest[k];
-    /* a bounce off j shorter than tc would be elastic (TC) and never shrink: rest */
-    if (an < 0.0 && 2.0 * fabs(u) <= -an * fmax(NBEP_REST_FRACTION * dt, tc) &&
+    const double v_rest = rest_speed(s, k, nbep_vec3_norm(s->acc[k]), dt);
+    if (an < 0.0 && fabs(u) <= v_rest && nbep_vec3_norm(s->vel[k]) <= v_rest &&
         r.n < NBEP_CONTACT_MAX) {
         r.who[r.n] = -1 - (int32_t)j;
         r.ver[r.n++] = c->ver[j];
@@ -1066,7 +1131,9 @@ static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t
             return;
         }
     }
-    if (nbep_physics_respond_plane(n, &s->vel[k], tc_restitution(c, tc, e, t_abs, k, k)))
+    const double e_k = tc_restitution(c, tc, e, t_abs, k, k);
+    if (caged(c, s, k, n, t_abs, tc) ||
+        nbep_physics_respond_plane(n, &s->vel[k], e_k))
         cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
     update_rest(c, s, k, dt);
     min_bounce_held(c, s, dt, k, j, n);
@@ -1091,15 +1158,22 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
         double gap = nbep_physics_plane_gap(n, s->plane_offset[p], s->pos[lo], s->radius[lo]);
         note_overlap(mx, -gap, s->radius[lo]);
         const double vn0 = nbep_vec3_dot(n, s->vel[lo]);
-        if (nbep_physics_respond_plane(n, &s->vel[lo], tc_restitution(c, sc->tc, e, t_abs, lo, lo)))
+        const double e_pl = tc_restitution(c, sc->tc, e, t_abs, lo, lo);
+        if (caged(c, s, lo, n, t_abs, sc->tc) ||
+            nbep_physics_respond_plane(n, &s->vel[lo], e_pl))
             cnt->c[NBEP_COUNTER_PLANE_COLLISIONS]++;
         /* SPEC /stats/wall_impulse: the normal momentum the plane received, pushed outward */
         mx->wall[p] += s->mass[lo] * (nbep_vec3_dot(n, s->vel[lo]) - vn0);
         update_rest(c, s, lo, dt);
         double an = nbep_vec3_dot(s->acc[lo], n), vn = nbep_vec3_dot(s->vel[lo], n);
         rest_set *r = c->rest ? &c->rest[lo] : NULL; /* NULL: nothing accelerates */
-        /* a bounce shorter than tc would be elastic (TC) and never shrink: rest */
-        if (r && an < 0.0 && vn >= 0.0 && 2.0 * vn <= -an * fmax(NBEP_REST_FRACTION * dt, sc->tc) &&
+        /* a bounce shorter than tc would be elastic (TC) and never shrink: rest; and one that
+         * the TC model made elastic (the sphere is squeezed: it met something within tc) rests
+         * no faster than the rest speed, what the minimum bounce of its neighbours leaves it
+         * with. A lone sphere's bounces are all kept down to the first rule. */
+        if (r && an < 0.0 && vn >= 0.0 &&
+            (2.0 * vn <= -an * fmax(NBEP_REST_FRACTION * dt, sc->tc) ||
+             (e_pl != e && vn <= rest_speed(s, lo, -an, dt))) &&
             r->n < NBEP_CONTACT_MAX) {
             r->who[r->n] = (int32_t)p;
             r->ver[r->n++] = 0;
@@ -1115,13 +1189,18 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
     note_overlap(mx, sigma - nbep_vec3_norm(r12),
                  fmin(s->radius[lo], s->radius[hi]));
     const bool sup_lo = supported(c, lo), sup_hi = supported(c, hi);
-    if (sup_lo != sup_hi) {
-        size_t k = sup_lo ? hi : lo, j = sup_lo ? lo : hi;
+    if (sup_lo != sup_hi) { /* a supported sphere slow enough is held when a free one meets it */
+        size_t j = sup_lo ? lo : hi;
         if (!c->rest[j].still && try_hold(c, s, j, dt))
             fire(c, w, s, j, false);
+    }
+    /* one of them held, the other not (free, or sliding on planes): a slow meeting lands on
+     * the held one; a faster one is an ordinary response below, which wakes it */
+    if (c->rest && c->rest[lo].still != c->rest[hi].still) {
+        size_t k = c->rest[lo].still ? hi : lo, j = c->rest[lo].still ? lo : hi;
         nbep_vec3 d = sep(c, s, j, k);
         double u = nbep_vec3_dot(s->vel[k], d) / nbep_vec3_norm(d);
-        if (c->rest[j].still && fabs(u) <= HOLD_SPEED_FRACTION * nbep_vec3_norm(s->acc[k]) * dt) {
+        if (fabs(u) <= rest_speed(s, k, nbep_vec3_norm(s->acc[k]), dt)) {
             land_on_held(c, s, e, dt, k, j, t_abs, sc->tc, w, cnt);
             return;
         }

@@ -198,6 +198,56 @@ static void test_corner_ball_ends_at_rest_in_the_corner(void **state)
     nbep_test_scene_free(&sc);
 }
 
+/* A cage: a ball on the floor of a slot exactly one diameter wide, moving across it (vy) and
+ * along it (vx). It meets one wall, then at once the other, then the first ... at zero time,
+ * elastic by the TC model: before the cage rule, endless (the stall check failed the run).
+ * Now the second wall within tc of the first cages it: its speed across is taken (all of it:
+ * half by restitution at the first wall, the rest by the cage), it slides on along the slot
+ * with vx unchanged, and the energy lost is exactly the kinetic energy across. */
+static void test_ball_in_a_slot_one_diameter_wide_slides_on(void **state)
+{
+    (void)state;
+    const double r = 0.1, m = 1.3, vx = 0.3, vy = 0.2;
+    nbep_scene *sc = scene(1, 6, "predictive", 500, 0.5);
+    box(sc, 1.0, 2.0 * r, 1.0);
+    nbep_test_set_sphere(sc, 0, (nbep_vec3){0.3, r, r}, (nbep_vec3){vx, vy, 0.0}, r, m, DOWN);
+    trace t = {0};
+    nbep_summary sum = run(sc, 1, &t);
+    nbep_vec3 p = last_pos(&t)[0], v = last_vel(&t)[0];
+    assert_true(v.x == vx && v.y == 0.0 && v.z == 0.0);
+    assert_true(fabs(p.y - r) <= 1e-12 && fabs(p.z - r) <= 1e-12);
+    assert_true(fabs(p.x - (0.3 + vx * 0.5)) <= 1e-12);
+    assert_true(sum.plane_collisions <= 4);
+    /* energy: (e_first - e_last) = m vy^2 / 2, to round-off of the energy */
+    assert_true(fabs((t.e_first - t.e_last) - 0.5 * m * vy * vy) <= 1e-12 * t.e_first);
+    free(t.data);
+    nbep_test_scene_free(&sc);
+}
+
+/* Not a cage: the same slot 2 mm wider than the ball, with tc = 0.05 s. The ball crosses it in
+ * 0.01 s, within tc of its previous collision (the first: its contact with the floor at the
+ * start), so the TC model makes every bounce elastic, but it moves off each wall before it meets
+ * the other: it keeps bouncing across at vy for ever. Nor is the floor it slides on a face of a
+ * cage with the walls (perpendicular: a bounce off a wall does not drive it into the floor). */
+static void test_ball_in_a_slot_with_room_keeps_bouncing(void **state)
+{
+    (void)state;
+    const double r = 0.1, vx = 0.3, vy = 0.2, e = 0.5;
+    nbep_scene *sc = scene(1, 6, "predictive", 500, e);
+    sc->tc = 0.05;
+    box(sc, 1.0, 2.0 * r + 2e-3, 1.0);
+    nbep_test_set_sphere(sc, 0, (nbep_vec3){0.3, r + 1e-3, r}, (nbep_vec3){vx, vy, 0.0}, r, 1.0,
+                         DOWN);
+    trace t = {0};
+    nbep_summary sum = run(sc, 1, &t);
+    nbep_vec3 v = last_vel(&t)[0];
+    assert_true(v.x == vx && v.z == 0.0);
+    assert_true(fabs(fabs(v.y) - vy) <= 1e-12);
+    assert_true(sum.plane_collisions >= 40); /* 0.5 s at 0.2 m/s across 2 mm: about 50 */
+    free(t.data);
+    nbep_test_scene_free(&sc);
+}
+
 /* Three walls at once: gravity into a corner of the box; the ball ends still in the corner. */
 static void test_ball_held_by_three_walls(void **state)
 {
@@ -419,6 +469,8 @@ int main(void)
         cmocka_unit_test(test_bounce_stays_above_the_floor_naive_seminaive),
         cmocka_unit_test(test_corner_ball_ends_at_rest_in_the_corner),
         cmocka_unit_test(test_ball_held_by_three_walls),
+        cmocka_unit_test(test_ball_in_a_slot_one_diameter_wide_slides_on),
+        cmocka_unit_test(test_ball_in_a_slot_with_room_keeps_bouncing),
         cmocka_unit_test(test_groove_ball_ends_at_the_bottom_of_the_v),
         cmocka_unit_test(test_e0_pair_keeps_momentum_and_loses_energy),
         cmocka_unit_test(test_e0_plane_stops_at_first_contact),
