@@ -50,6 +50,7 @@
  *   spheres held still), its flight acceleration projected onto the cone they allow
  *   (contact.h); see "Lasting sphere-sphere contacts" for held spheres, tc_restitution for the
  *   TC model that ends inelastic collapse, and caged for a sphere between two fixed faces. */
+#include <float.h>
 #include <math.h>
 #include <stdalign.h>
 #include <stdatomic.h>
@@ -105,6 +106,7 @@
  * impact on a held sphere knocked it loose again. So a supported sphere slower than the rest
  * speed is held when a partner meets it; a sphere that meets a held one no faster than the
  * rest speed (along the line of centres, and in all) joins it if the contacts it then has
+ * (its planes, that sphere, and the other held spheres it touches: a pocket, pocket_gather)
  * leave it no motion, else bounces off it as off a wall (the held sphere, carried by the pile,
  * takes no momentum); a faster impact is an ordinary response and wakes what the held sphere
  * carried. The kinetic energy removed by holding, at most m (rest speed)^2 / 2 per hold
@@ -128,6 +130,8 @@ typedef struct thread_ws {
     alignas(NBEP_CACHELINE) uint32_t *cand;  /* owned: own spheres with an event before T_end */
     size_t n_cand;
     uint32_t *redo;           /* owned: own spheres to re-predict this round */
+    int par;                  /* rounds modes: the parity of the round being reacted to (its
+                               * claims name the spheres other threads may change) */
     size_t n_redo;
     uint32_t *fired;          /* owned: spheres that reacted in this thread's last react phase
                                * (and own spheres let go after it) */
@@ -1109,6 +1113,63 @@ static bool caged(pred_ctx *c, nbep_state *s, size_t k, nbep_vec3 n, double t_ab
  * contacts then leave it no motion; else it bounces off j as off a wall (j is carried by the
  * pile; the momentum, below m (1 + e) times the rest speed, goes to it as to a plane), or is
  * caged if the face it met before faces this one and it still touches that (caged). */
+/* A pocket (see land_on_held): the held spheres besides j that sphere k touches to within tol,
+ * added to its contacts r (up to NBEP_CONTACT_MAX). */
+typedef struct pocket {
+    const pred_ctx *c;
+    const nbep_state *s;
+    size_t k, j;
+    double tol;
+    rest_set *r;
+} pocket;
+
+static void pocket_one(void *u, uint32_t m)
+{
+    pocket *x = u;
+    if (m == x->k || m == x->j || x->r->n >= NBEP_CONTACT_MAX || !x->c->rest[m].still)
+        return;
+    double gap = nbep_vec3_norm(sep(x->c, x->s, m, x->k)) - (x->s->radius[m] + x->s->radius[x->k]);
+    if (gap <= x->tol) {
+        x->r->who[x->r->n] = -1 - (int32_t)m;
+        x->r->ver[x->r->n++] = x->c->ver[m];
+    }
+}
+
+/* Cells mode: k's neighbour list names every sphere that can touch it, and the loop is serial.
+ * Rounds modes: every sphere, except those this round's events claim (other threads may be
+ * changing them now; the claims were made before a barrier and stay until the next round). */
+static void pocket_gather(const pred_ctx *c, const nbep_state *s, const thread_ws *w, size_t k,
+                          size_t j, double tol, rest_set *r)
+{
+    pocket x = {c, s, k, j, tol, r};
+    if (c->ev) {
+        nbep_evloop_visit_block(c->ev, (uint32_t)k, pocket_one, &x);
+        return;
+    }
+    for (size_t m = 0; m < s->n && r->n < NBEP_CONTACT_MAX; m++)
+        if (atomic_load_explicit(&c->claim[w->par][m], memory_order_relaxed) == KEY_FREE)
+            pocket_one(&x, (uint32_t)m);
+}
+
+/* After k bounced off held sphere j: k must leave j receding by the predictor's own test
+ * (d.v >= 0, d from j to k; j does not move), or the same contact returns at zero time: the
+ * response's v.n with the normalised n can disagree with it in the last bit (a sphere sliding
+ * under a held one while gravity pulls it off). The push is at least DBL_EPSILON |v|, doubled
+ * until the test passes, as physics.c does for a free pair. */
+static void leave_held(const pred_ctx *c, nbep_state *s, size_t k, size_t j)
+{
+    nbep_vec3 d = sep(c, s, j, k);
+    double len = nbep_vec3_norm(d), u = nbep_vec3_dot(d, s->vel[k]);
+    if (!(u < 0.0) || !(len > 0.0))
+        return;
+    nbep_vec3 n = nbep_vec3_make(d.x / len, d.y / len, d.z / len);
+    double du = fmax(-u / len, DBL_EPSILON * nbep_vec3_norm(s->vel[k]));
+    for (int t = 0; t < 64 && u < 0.0; t++, du *= 2.0) {
+        s->vel[k] = nbep_vec3_axpy(s->vel[k], du, n);
+        u = nbep_vec3_dot(d, s->vel[k]);
+    }
+}
+
 static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t k, size_t j,
                          double t_abs, double tc, thread_ws *w, nbep_counters *cnt)
 {
@@ -1122,8 +1183,19 @@ static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t
         r.n < NBEP_CONTACT_MAX) {
         r.who[r.n] = -1 - (int32_t)j;
         r.ver[r.n++] = c->ver[j];
+        const rest_set r0 = r;
         nbep_vec3 v = s->vel[k], a;
-        if (rest_solve(c, s, k, &r, &v, &a, dt, true)) {
+        bool held = rest_solve(c, s, k, &r, &v, &a, dt, true);
+        if (!held) { /* a pocket: j with the other held spheres k touches (within twice the
+                      * highest hop of the rest speed, |a| t_min^2) */
+            r = r0;
+            pocket_gather(c, s, w, k, j, v_rest * v_rest / nbep_vec3_norm(s->acc[k]), &r);
+            if (r.n > r0.n) {
+                v = s->vel[k];
+                held = rest_solve(c, s, k, &r, &v, &a, dt, true);
+            }
+        }
+        if (held) {
             c->rest[k] = r;
             s->vel[k] = v;
             c->aeff[k] = a;
@@ -1138,6 +1210,7 @@ static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t
     update_rest(c, s, k, dt);
     min_bounce_held(c, s, dt, k, j, n);
     update_rest(c, s, k, dt);
+    leave_held(c, s, k, j);
     fire(c, w, s, k, false);
 }
 
@@ -1283,6 +1356,7 @@ static void react_phase(pred_ctx *c, nbep_state *s, const nbep_scene *sc, int pa
                         nbep_thread_max *mx)
 {
     w->n_fired = 0;
+    w->par = par;
     for (size_t k = 0; k < w->n_cand; k++) {
         size_t i = w->cand[k];
         const nbep_event *ev = nbep_feq_slot(c->q, i);

@@ -248,6 +248,37 @@ static void test_ball_in_a_slot_with_room_keeps_bouncing(void **state)
     nbep_test_scene_free(&sc);
 }
 
+/* A pocket: four spheres fill the floor of a 0.4 m box (radius 0.1, touching each other and the
+ * walls) and a fifth is set on them, touching all four. Meeting one held sphere at a time it
+ * would only ever find a single support, bounce (minimum bounce) and bounce again: 20
+ * collisions a step for ever before pockets, and before the cage rule a jam at step 1. With
+ * the other held spheres it touches counted too, it is held as soon as all four are: all five
+ * still, in every neighbour mode, the top one exactly where it was set. */
+static void test_sphere_in_a_pocket_of_four_is_held(void **state)
+{
+    (void)state;
+    const double r = 0.1, h = r + sqrt(4.0 * r * r - 2.0 * r * r);
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
+        nbep_scene *sc = scene(5, 6, "predictive", 300, 0.5);
+        sc->neighbors_grid = mode == 1;
+        sc->neighbors_cells = mode == 2;
+        box(sc, 2.0 * 2.0 * r, 2.0 * 2.0 * r, 0.6);
+        for (size_t i = 0; i < 4; i++)
+            nbep_test_set_sphere(sc, i, (nbep_vec3){r + 2.0 * r * (double)(i % 2),
+                                                    r + 2.0 * r * (double)(i / 2), r},
+                                 ZERO, r, 1.0, DOWN);
+        nbep_test_set_sphere(sc, 4, (nbep_vec3){2.0 * r, 2.0 * r, h}, ZERO, r, 1.0, DOWN);
+        trace t = {0};
+        nbep_summary sum = run(sc, 1, &t);
+        for (size_t i = 0; i < 5; i++)
+            assert_true(nbep_vec3_equal(last_vel(&t)[i], ZERO));
+        assert_true(fabs(last_pos(&t)[4].z - h) <= 1e-12);
+        assert_true(sum.collisions <= 10);
+        free(t.data);
+        nbep_test_scene_free(&sc);
+    }
+}
+
 /* Three walls at once: gravity into a corner of the box; the ball ends still in the corner. */
 static void test_ball_held_by_three_walls(void **state)
 {
@@ -471,6 +502,7 @@ int main(void)
         cmocka_unit_test(test_ball_held_by_three_walls),
         cmocka_unit_test(test_ball_in_a_slot_one_diameter_wide_slides_on),
         cmocka_unit_test(test_ball_in_a_slot_with_room_keeps_bouncing),
+        cmocka_unit_test(test_sphere_in_a_pocket_of_four_is_held),
         cmocka_unit_test(test_groove_ball_ends_at_the_bottom_of_the_v),
         cmocka_unit_test(test_e0_pair_keeps_momentum_and_loses_energy),
         cmocka_unit_test(test_e0_plane_stops_at_first_contact),
