@@ -50,7 +50,6 @@
  *   spheres held still), its flight acceleration projected onto the cone they allow
  *   (contact.h); see "Lasting sphere-sphere contacts" for held spheres, tc_restitution for the
  *   TC model that ends inelastic collapse, and caged for a sphere between two fixed faces. */
-#include <float.h>
 #include <math.h>
 #include <stdalign.h>
 #include <stdatomic.h>
@@ -1153,21 +1152,22 @@ static void pocket_gather(const pred_ctx *c, const nbep_state *s, const thread_w
 
 /* After k bounced off held sphere j: k must leave j receding by the predictor's own test
  * (d.v >= 0, d from j to k; j does not move), or the same contact returns at zero time: the
- * response's v.n with the normalised n can disagree with it in the last bit (a sphere sliding
- * under a held one while gravity pulls it off). The push is at least DBL_EPSILON |v|, doubled
- * until the test passes, as physics.c does for a free pair. */
-static void leave_held(const pred_ctx *c, nbep_state *s, size_t k, size_t j)
+ * bounce's v.n with the normalised n can disagree with it in the last bit (a sphere sliding
+ * under a held one while gravity pulls it off). The kernel's pair response with j immobile
+ * (d1 = 0, d2 = n) does nothing to a receding pair and applies its round-off tie push
+ * (physics.c) to one closing by round-off. */
+static void leave_held(const pred_ctx *c, nbep_state *s, size_t k, size_t j, double e)
 {
-    nbep_vec3 d = sep(c, s, j, k);
-    double len = nbep_vec3_norm(d), u = nbep_vec3_dot(d, s->vel[k]);
-    if (!(u < 0.0) || !(len > 0.0))
+    nbep_vec3 d = sep(c, s, j, k), v_j = ZERO3;
+    double len = nbep_vec3_norm(d);
+    if (!(len > 0.0) || !(nbep_vec3_dot(d, s->vel[k]) < 0.0))
         return;
     nbep_vec3 n = nbep_vec3_make(d.x / len, d.y / len, d.z / len);
-    double du = fmax(-u / len, DBL_EPSILON * nbep_vec3_norm(s->vel[k]));
-    for (int t = 0; t < 64 && u < 0.0; t++, du *= 2.0) {
-        s->vel[k] = nbep_vec3_axpy(s->vel[k], du, n);
-        u = nbep_vec3_dot(d, s->vel[k]);
-    }
+    /* k's image that touches j (pos[k] itself without periodic axes: the same subtraction as
+     * the predictor's) */
+    const nbep_vec3 p_k = c->pb.any ? nbep_vec3_add(s->pos[j], d) : s->pos[k];
+    (void)nbep_physics_respond_pair_along(s->pos[j], p_k, &v_j, &s->vel[k], s->mass[j],
+                                          s->mass[k], e, ZERO3, n);
 }
 
 static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t k, size_t j,
@@ -1210,7 +1210,7 @@ static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t
     update_rest(c, s, k, dt);
     min_bounce_held(c, s, dt, k, j, n);
     update_rest(c, s, k, dt);
-    leave_held(c, s, k, j);
+    leave_held(c, s, k, j, e);
     fire(c, w, s, k, false);
 }
 
