@@ -43,8 +43,9 @@
  * - The barrier is nbep_barrier, safe to reuse back to back (Procedure 4 is not).
  * - Resting contact: a sphere whose bounce off a plane would last less than
  *   NBEP_REST_FRACTION of a step (or, squeezed by a neighbour, that is no faster than the rest
- *   speed) is set to rest on it: its normal velocity is zeroed and the plane carries its weight (its acceleration loses the component into the plane) until a
- *   response moves it off; otherwise infinitely many ever-smaller bounces would come in finite
+ *   speed) is set to rest on it: its normal velocity is zeroed and the plane carries its
+ *   weight (its acceleration loses the component into the plane) until a response moves it
+ *   off; otherwise infinitely many ever-smaller bounces would come in finite
  *   time (e < 1), and a sphere pressed on a plane at zero speed would react forever.
  *   Since issue 9 a sphere keeps up to NBEP_CONTACT_MAX such contacts at once (planes, and
  *   spheres held still), its flight acceleration projected onto the cone they allow
@@ -129,9 +130,9 @@ typedef struct thread_ws {
     alignas(NBEP_CACHELINE) uint32_t *cand;  /* owned: own spheres with an event before T_end */
     size_t n_cand;
     uint32_t *redo;           /* owned: own spheres to re-predict this round */
+    size_t n_redo;
     int par;                  /* rounds modes: the parity of the round being reacted to (its
                                * claims name the spheres other threads may change) */
-    size_t n_redo;
     uint32_t *fired;          /* owned: spheres that reacted in this thread's last react phase
                                * (and own spheres let go after it) */
     size_t n_fired;
@@ -330,7 +331,8 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         c->tclaim = nbep_alloc_aligned(n, sizeof *c->tclaim);
     c->ws = nbep_alloc_aligned((size_t)sim->nt, sizeof *c->ws);
     if (!c->ver || !c->tau || (!c->free_flight && (!c->rest || !c->aeff)) ||
-        (tc_model && !c->t_last) || (cage_model && !c->face) || (jam_model && !c->jam) || !c->ws ||
+        (tc_model && !c->t_last) || (cage_model && !c->face) || (jam_model && !c->jam) ||
+        !c->ws ||
         (rounds && (!c->flags || !c->claim[0] || !c->claim[1] || !c->reacted)) ||
         (c->order_step && !c->tclaim)) {
         pred_destroy(c);
@@ -438,16 +440,19 @@ static nbep_vec3 sep(const pred_ctx *c, const nbep_state *s, size_t a, size_t b)
     return c->pb.any ? nbep_periodic_near_image(&c->pb, d) : d;
 }
 
+/* The minimum bounce's time (MIN_BOUNCE_STEP_FRACTION) for radius r pressed by an acceleration
+ * of magnitude a > 0. */
+static double min_bounce_time(double r, double a, double dt)
+{
+    return fmin(MIN_BOUNCE_STEP_FRACTION * dt, sqrt(8.0 * MIN_BOUNCE_REL_HEIGHT * r / a));
+}
+
 /* The rest speed of sphere i pressed by an acceleration of magnitude amag (see "Lasting
- * sphere-sphere contacts"): amag t_min, with t_min the minimum bounce's (MIN_BOUNCE_STEP_FRACTION),
- * twice the speed that bounce leaves with, the speed it comes back at. 0 when nothing presses. */
+ * sphere-sphere contacts"): amag t_min, twice the speed the minimum bounce leaves with, the
+ * speed it comes back at. 0 when nothing presses. */
 static double rest_speed(const nbep_state *s, size_t i, double amag, double dt)
 {
-    if (!(amag > 0.0))
-        return 0.0;
-    double t_min = fmin(MIN_BOUNCE_STEP_FRACTION * dt,
-                        sqrt(8.0 * MIN_BOUNCE_REL_HEIGHT * s->radius[i] / amag));
-    return amag * t_min;
+    return amag > 0.0 ? amag * min_bounce_time(s->radius[i], amag, dt) : 0.0;
 }
 
 /* A sphere whose contacts carry its whole weight (it may still slide): a slow partner treats it
@@ -1003,7 +1008,7 @@ static void min_bounce(const pred_ctx *c, nbep_state *s, double dt, uint32_t lo,
     if (!(an < 0.0))
         return; /* nothing presses them together: they part for good */
     double rmin = fmin(s->radius[lo], s->radius[hi]);
-    double t_min = fmin(MIN_BOUNCE_STEP_FRACTION * dt, sqrt(8.0 * MIN_BOUNCE_REL_HEIGHT * rmin / -an));
+    double t_min = min_bounce_time(rmin, -an, dt);
     double want = -an * t_min / 2.0;
     double u = nbep_vec3_dot(nbep_vec3_sub(s->vel[hi], s->vel[lo]), n);
     if (u >= want)
@@ -1030,7 +1035,7 @@ static void min_bounce_held(const pred_ctx *c, nbep_state *s, double dt, size_t 
     if (!(an < 0.0))
         return;
     double rmin = fmin(s->radius[k], s->radius[j]);
-    double t_min = fmin(MIN_BOUNCE_STEP_FRACTION * dt, sqrt(8.0 * MIN_BOUNCE_REL_HEIGHT * rmin / -an));
+    double t_min = min_bounce_time(rmin, -an, dt);
     double want = -an * t_min / 2.0, u = nbep_vec3_dot(s->vel[k], n);
     if (u < want)
         s->vel[k] = nbep_vec3_axpy(s->vel[k], want - u, n);
@@ -1081,10 +1086,11 @@ static bool try_hold(pred_ctx *c, nbep_state *s, size_t i, double dt)
 }
 
 /* Sphere k meets an immobile face (a plane, or a held sphere) whose normal towards it is n.
- * Caged: the last face it met, within tc (the TC model's time) before, faces this one (n.n' < 0:
- * a bounce off either heads into the other) and it has not moved off that one since
- * (CAGE_TOUCH_REL): a gap exactly its diameter wide, a rigid cage, where the bounces between the faces take no time, and the TC model,
- * which makes them elastic, would keep them going for ever (a sphere on the floor between a
+ * Caged: the last face it met, within tc (the TC model's time) before, faces this one
+ * (n.n' < 0: a bounce off either heads into the other) and it has not moved off that one since
+ * (CAGE_TOUCH_REL): a gap exactly its diameter wide, a rigid cage, where the bounces between
+ * the faces take no time, and the TC model, which makes them elastic, would keep them going
+ * for ever (a sphere on the floor between a
  * wall and a held sphere one diameter from it: a million reactions in a step). The cage takes
  * the speed against both instead: k's velocity becomes the nearest that leaves both
  * (nbep_contact_project; e = 0 against the cage), its speed along them stays. Energy: that
@@ -1107,11 +1113,6 @@ static bool caged(pred_ctx *c, nbep_state *s, size_t k, nbep_vec3 n, double t_ab
     return true;
 }
 
-/* Sphere k (not held) meets held sphere j at a normal speed no faster than the rest speed: it
- * joins the held pile if pressed onto j, no faster than the rest speed in all, and its
- * contacts then leave it no motion; else it bounces off j as off a wall (j is carried by the
- * pile; the momentum, below m (1 + e) times the rest speed, goes to it as to a plane), or is
- * caged if the face it met before faces this one and it still touches that (caged). */
 /* A pocket (see land_on_held): the held spheres besides j that sphere k touches to within tol,
  * added to its contacts r (up to NBEP_CONTACT_MAX). */
 typedef struct pocket {
@@ -1170,6 +1171,13 @@ static void leave_held(const pred_ctx *c, nbep_state *s, size_t k, size_t j, dou
                                           s->mass[k], e, ZERO3, n);
 }
 
+/* Sphere k (not held) meets held sphere j at a normal speed no faster than the rest speed: it
+ * joins the held pile if pressed onto j, no faster than the rest speed in all, and its
+ * contacts then leave it no motion; else it bounces off j as off a wall (j is carried by the
+ * pile; the momentum, below m (1 + e) times the rest speed, goes to it as to a plane), or is
+ * caged if the face it met before faces this one and it still touches that (caged).
+ * Not held by its planes and j alone, it may be by the pocket they make with the other held
+ * spheres it touches (pocket_gather). */
 static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t k, size_t j,
                          double t_abs, double tc, thread_ws *w, nbep_counters *cnt)
 {
@@ -1178,7 +1186,7 @@ static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t
     nbep_vec3 n = nbep_vec3_make(d.x / len, d.y / len, d.z / len);
     double u = nbep_vec3_dot(s->vel[k], n), an = nbep_vec3_dot(c->aeff[k], n);
     rest_set r = c->rest[k];
-    const double v_rest = rest_speed(s, k, nbep_vec3_norm(s->acc[k]), dt);
+    const double amag = nbep_vec3_norm(s->acc[k]), v_rest = rest_speed(s, k, amag, dt);
     if (an < 0.0 && fabs(u) <= v_rest && nbep_vec3_norm(s->vel[k]) <= v_rest &&
         r.n < NBEP_CONTACT_MAX) {
         r.who[r.n] = -1 - (int32_t)j;
@@ -1189,7 +1197,7 @@ static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t
         if (!held) { /* a pocket: j with the other held spheres k touches (within twice the
                       * highest hop of the rest speed, |a| t_min^2) */
             r = r0;
-            pocket_gather(c, s, w, k, j, v_rest * v_rest / nbep_vec3_norm(s->acc[k]), &r);
+            pocket_gather(c, s, w, k, j, v_rest * v_rest / amag, &r);
             if (r.n > r0.n) {
                 v = s->vel[k];
                 held = rest_solve(c, s, k, &r, &v, &a, dt, true);

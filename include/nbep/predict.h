@@ -6,8 +6,8 @@
 #ifndef NBEP_PREDICT_H
 #define NBEP_PREDICT_H
 
-#include <math.h>
 #include <float.h>
+#include <math.h>
 #include <stdbool.h>
 
 #include "nbep/compiler.h"
