@@ -214,6 +214,7 @@ typedef struct quartic {
     motion m;
     double a[QUARTIC_TERMS];   /* f(t) = sum a[k] t^k; a[0] compensated */
     int scale_exp;             /* every root of f and of f' lies within 2^(scale_exp + 1) */
+    double t_start;            /* the search starts here: 0, or past a round-off dip (setup) */
 } quartic;
 
 typedef enum setup_kind {
@@ -235,6 +236,7 @@ static setup_kind quartic_setup(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double
 {
     q->m = motion_make(dp, dv, da, sigma);
     double *a = q->a;
+    q->t_start = 0.0;
     a[4] = 0.25 * nbep_vec3_dot(da, da);
     a[3] = nbep_vec3_dot(dv, da);
     a[2] = nbep_vec3_dot(dv, dv) + nbep_vec3_dot(dp, da);
@@ -269,7 +271,18 @@ static setup_kind quartic_setup(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double
 
     if (a[0] > 0.0)
         return SETUP_APART;
-    return a[1] < 0.0 ? SETUP_CLOSING : SETUP_OVERLAP;
+    if (!(a[1] < 0.0))
+        return SETUP_OVERLAP;
+    /* touching or overlapping and closing: now, unless only by round-off (NBEP_PREDICT_GRAZE,
+     * as in the quadratic) while the accelerations do not press them together (a2 > 0): then
+     * f dips by round-off until -a1 / (2 a2) and is back at f(0) at -a1 / a2, where the search
+     * starts (it would call the dip "overlapping as it starts to close": now) */
+    const double pp_vv = nbep_vec3_dot(dp, dp) * nbep_vec3_dot(dv, dv);
+    if (a[2] > 0.0 && a[1] * a[1] <= 4.0 * NBEP_PREDICT_GRAZE * NBEP_PREDICT_GRAZE * pp_vv) {
+        q->t_start = -a[1] / a[2];
+        return SETUP_OVERLAP;
+    }
+    return SETUP_CLOSING;
 }
 
 /* ---- Newton polish and the acceptance tests ------------------------------------------- */
@@ -438,14 +451,17 @@ static double bracket_search(const quartic *q)
 {
     const motion *m = &q->m;
     double tb = ldexp(1.0, q->scale_exp + 1);
-    double knot[4] = {0.0};
+    double knot[4] = {q->t_start};
     int n_knot = 1;
-    n_knot += quadratic_roots_in(1.5 * nbep_vec3_dot(m->a, m->a), 3.0 * nbep_vec3_dot(m->v, m->a),
-                                 nbep_vec3_dot(m->v, m->v) + nbep_vec3_dot(m->p, m->a), tb,
-                                 knot + 1);
+    double r[2];
+    int n_r = quadratic_roots_in(1.5 * nbep_vec3_dot(m->a, m->a), 3.0 * nbep_vec3_dot(m->v, m->a),
+                                 nbep_vec3_dot(m->v, m->v) + nbep_vec3_dot(m->p, m->a), tb, r);
+    for (int k = 0; k < n_r; k++)
+        if (r[k] > q->t_start)
+            knot[n_knot++] = r[k];
     knot[n_knot++] = tb;
 
-    double crit[5] = {0.0};
+    double crit[5] = {q->t_start};
     int n_crit = 1;
     for (int i = 0; i + 1 < n_knot; i++) {
         double u = knot[i], w = knot[i + 1];
@@ -638,4 +654,11 @@ double nbep_predict_plane(double gap, double vn, double an)
     if (!(disc > 0.0))
         return vn / -an;                        /* still overlapping at the turn (gap <= 0) */
     return (vn + sqrt(disc)) / -an;             /* the root where it comes back down */
+}
+
+double nbep_predict_plane_contact(double gap, double vn, double an, double speed)
+{
+    if (gap <= 0.0 && vn < 0.0 && -vn <= NBEP_PREDICT_GRAZE_PLANE * speed)
+        vn = 0.0;
+    return nbep_predict_plane(gap, vn, an);
 }

@@ -169,6 +169,41 @@ static void test_touching_pair_closing_by_round_off_slides(void **state)
                                         0.83, NULL)));
 }
 
+/* The same tolerance where the accelerations differ (the quartic's touching branch): a sphere
+ * under gravity just below a held one (da parts them) that closes by round-off slides off:
+ * never (issue 9: a sphere under two held ones met them in turn at zero time, a 300-sphere pour
+ * at step 1390); above the tolerance it meets it now; pressed together (da closes them) it
+ * meets it now however slowly it closes, as a resting contact must. */
+static void test_touching_pair_with_accelerations_closing_by_round_off_slides(void **state)
+{
+    (void)state;
+    nbep_predict_ws *ws = NULL;
+    assert_int_equal(nbep_predict_ws_create(&ws, NULL), NBEP_OK);
+    const nbep_vec3 dp = {0.0, 0.0, 0.2}, parting = {0.0, 0.0, 9.81}, pressing = {0.0, 0.0, -9.81};
+    const nbep_vec3 grazing = {0.3, 0.0, -0.3e-17}, closing = {0.3, 0.0, -0.3e-13};
+    assert_true(nbep_predict_pair(dp, grazing, parting, 0.2, ws) > 0.0);
+    assert_true(nbep_predict_pair(dp, closing, parting, 0.2, ws) == 0.0);
+    assert_true(nbep_predict_pair(dp, grazing, pressing, 0.2, ws) == 0.0);
+    nbep_predict_ws_destroy(&ws);
+}
+
+/* And on a plane (nbep_predict_plane_contact, NBEP_PREDICT_GRAZE_PLANE): a touching sphere
+ * closing on it by 1e-18 of its speed slides (a cage's projection left that, at step 1305 of
+ * the same pour: a million zero-time meetings with a wall), and by 1.1e-14 of it (a pair's tie
+ * push through a held sphere's normal, step 1771); by 1e-10 of it, it meets it now; at rest
+ * and pressed into the plane it meets it now (resting contact); apart, the tolerance changes
+ * nothing. */
+static void test_sphere_on_a_plane_closing_by_round_off_slides(void **state)
+{
+    (void)state;
+    assert_true(isinf(nbep_predict_plane_contact(0.0, -1e-22, 0.0, 1e-4)));
+    assert_true(isinf(nbep_predict_plane_contact(0.0, -1.1e-18, 0.0, 1e-4)));
+    assert_true(nbep_predict_plane_contact(0.0, -1e-14, 0.0, 1e-4) == 0.0);
+    assert_true(nbep_predict_plane_contact(0.0, -1e-22, -9.81, 1e-4) == 0.0);
+    assert_close(nbep_predict_plane_contact(1e-3, -1e-22, -9.81, 1e-4),
+                 nbep_predict_plane(1e-3, -1e-22, -9.81), 0.0, 0.0);
+}
+
 /* dp's components are multiples of 2^-20 below 2^5, so |dp|^2 is exact in integers (and in a
  * double); sigma sits 1e-12 below |dp|. The reference gap c = |dp|^2 - sigma^2 is formed
  * exactly: sigma^2 = s2 + e2 exactly (fma), |dp|^2 - s2 is exact (the two are within a factor
@@ -600,6 +635,8 @@ int main(void)
         cmocka_unit_test(test_touching_and_closing_pair_meets_now),
         cmocka_unit_test(test_touching_or_overlapping_but_receding_pair_never_meets),
         cmocka_unit_test(test_touching_pair_closing_by_round_off_slides),
+        cmocka_unit_test(test_touching_pair_with_accelerations_closing_by_round_off_slides),
+        cmocka_unit_test(test_sphere_on_a_plane_closing_by_round_off_slides),
         cmocka_unit_test_setup_teardown(test_tiny_gap_gives_an_accurate_contact_time, ws_setup,
                                         ws_teardown),
         cmocka_unit_test(test_zero_relative_acceleration_gives_the_quadratic_bits),

@@ -103,4 +103,22 @@ double nbep_predict_pair(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double sigma,
  * the return contact, or the turn t = vn/-an if it is pulled back before it gets out. */
 double nbep_predict_plane(double gap, double vn, double an);
 
+/* A sphere touching a plane and closing on it by no more than this fraction of its speed
+ * slides (nbep_predict_plane_contact). Wider than NBEP_PREDICT_GRAZE because the push that
+ * leaves a pair receding (physics.c: DBL_EPSILON (|v1| + |v2|), doubled until the pair's test
+ * passes) lands on the plane through the pair's normal: a sphere caged between a wall and a
+ * held sphere was pushed into the wall by 1.1e-14 of its speed (50 ulps) and met the two in
+ * turn a million times in a step (a 300-sphere pour, step 1771). Sliding into the plane that
+ * slowly overlaps it by 1e-12 of the distance travelled: 1e-15 m over a step of a 1 m/s
+ * sphere at dt = 1e-3, far below round-off of its position. */
+#define NBEP_PREDICT_GRAZE_PLANE 1e-12
+
+/* nbep_predict_plane for a sphere moving at `speed` (|v|): touching or overlapping (gap <= 0)
+ * and closing only by round-off (-vn <= NBEP_PREDICT_GRAZE_PLANE speed), it slides along the
+ * plane (vn taken as 0), as a pair does (see NBEP_PREDICT_GRAZE). Issue 9: a sphere caught
+ * between a wall and a held sphere, the cage's projection leaving it closing on the wall by
+ * 1e-18 of its speed and the held sphere's tie push giving that back, met the wall at zero
+ * time a million times in one step (a 300-sphere pour, step 1305). */
+double nbep_predict_plane_contact(double gap, double vn, double an, double speed);
+
 #endif
