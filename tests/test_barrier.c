@@ -75,6 +75,9 @@ struct harness {
     padded_round published[MAX_THREADS];
 };
 
+/* Rounds thread 0 has finished in the current run: the watchdog's progress count. */
+static atomic_ulong rounds_done;
+
 typedef struct worker {
     harness *h;
     unsigned tid;
@@ -135,6 +138,8 @@ static void *worker_main(void *arg)
         }
         if (!h->wait(h))
             break;
+        if (w->tid == 0)
+            atomic_fetch_add_explicit(&rounds_done, 1ul, memory_order_relaxed);
     }
     return NULL;
 }
@@ -183,15 +188,19 @@ static run_result run_harness(unsigned n_threads, unsigned long rounds, bool use
 /* ---- the deadlock watchdog --------------------------------------------------------------- */
 
 /* nbep_barrier has no way out of a wait, so a deadlock in it would hang the test: an alarm
- * turns that into a failure that says so. Seconds per stress run: a run takes well under a
- * second natively and a few under valgrind, so only a thread that can never leave hits it. */
-#define DEADLOCK_SECONDS 30u
+ * turns that into a failure that says so. It fires when thread 0 has finished no round for
+ * DEADLOCK_SECONDS (a round takes microseconds natively, milliseconds under valgrind): a
+ * machine shared with other work slows a run down without failing it (a fixed 30 s per run
+ * did, once, with a pile simulation on the other core), a deadlock stops the count. */
+#define DEADLOCK_SECONDS 10u
 
 static void watchdog_arm(void)
 {
-    nbep_test_watchdog_arm(DEADLOCK_SECONDS,
-                           "\nFAIL barrier: threads still waiting in nbep_barrier_wait after "
-                           "the watchdog's 30 s: the barrier deadlocked\n");
+    atomic_store_explicit(&rounds_done, 0ul, memory_order_relaxed);
+    nbep_test_watchdog_arm_progress(DEADLOCK_SECONDS,
+                                    "\nFAIL barrier: no round finished for the watchdog's 10 s: "
+                                    "the barrier deadlocked\n",
+                                    &rounds_done);
 }
 
 static void assert_stress_runs_pass(unsigned n_threads, unsigned long rounds)
