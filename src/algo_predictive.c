@@ -123,6 +123,37 @@
  * together: thousands; the busiest sphere of the hopper and pile decks: 200 to 2000).
  * Counting costs 8 bytes a sphere (jam_count), not spent on elastic free flight, which cannot
  * jam. The limit is kept below UINT32_MAX, so a count never wraps before it trips. */
+/* Settling (issue 9). try_hold and land_on_held hold a sphere on what it touches at one
+ * meeting, which must already be held: a pile whose spheres carry each other (one on two
+ * neighbours that lean on it in turn) never freezes that way, and jitters near the rest speed
+ * for ever, at a cost that rises as it cools (a 300-sphere pour: 150 to 260 collisions per
+ * sphere per step after 0.9 s, rising). Speed over time shows what one meeting cannot: a sphere
+ * whose speed stayed at or below its settle speed v_s = SETTLE_SPEED_FACTOR x its rest speed
+ * for SETTLE_STEPS whole steps changed velocity by at most 2 v_s over that window, so the mean
+ * net force on it was at most 2 v_s / (SETTLE_STEPS dt) / |a| of its weight: with t_min <=
+ * 0.1 dt (min_bounce_time), at most 2 x 2 x 0.1 / 10 = 4 %, at any dt. Its contacts carry
+ * it. It is held where it is (settle_hold), on the planes and the spheres below it (against its
+ * acceleration) that it touches within v_s^2 / |a| (twice its highest hop at that speed) and
+ * that are held already or settle in the same step; then it wakes as any held sphere does (an
+ * impact faster than the rest speed, or a support that reacts). The speed test is exact:
+ * between events |v + a t| is convex in t, so a step's highest speed is at an event (advance_to
+ * before a reaction, fire after it) or at its ends (the update). Only dissipative scenes
+ * (e < 1) with accelerations settle: an elastic pile keeps its energy. Energy: at most
+ * m v_s^2 / 2 per hold (1.9e-6 J for 1 kg under gravity at dt = 1e-3), the model's, besides
+ * restitution. A resumed run starts its windows afresh (it re-finds held spheres anyway). */
+#define SETTLE_STEPS 10u
+#define SETTLE_SPEED_FACTOR 2.0
+
+/* One sphere's settling record (see SETTLE_STEPS): written by its owner, in the update and in
+ * the settle sub-phases; cand and still are the snapshot other threads read in settle_hold. */
+typedef struct settle_rec {
+    double peak2;     /* highest speed squared in the current step so far */
+    uint32_t slow;    /* whole steps in a row at or below the settle speed (up to SETTLE_STEPS) */
+    bool cand;        /* at the last step's end: not held, slow for SETTLE_STEPS steps */
+    bool still;       /* at the last step's end: held */
+    bool held_now;    /* held by settle_hold this step (its supports' counts not yet stamped) */
+} settle_rec;
+
 #define KEY_FREE UINT64_MAX
 static const nbep_vec3 ZERO3 = {0.0, 0.0, 0.0};
 
@@ -139,6 +170,8 @@ typedef struct thread_ws {
     uint32_t *rel;            /* owned: own held spheres to let go this round */
     size_t n_rel;
     uint64_t woken;           /* held spheres this thread changed so far (react, let_go) */
+    size_t n_settle;          /* own settle candidates at the last step's end (settle_count) */
+    size_t n_settled;         /* own spheres settle_hold held in the last step */
     uint32_t jam_step;        /* the current step's number, low bits (run.max_reactions) */
     uint32_t jammed;          /* 1 + the lowest sphere this thread saw past run.max_reactions
                                * (the run then stops), 0 if none */
@@ -206,6 +239,7 @@ typedef struct pred_ctx {
     double *t_last;               /* owned: time of each sphere's last sphere collision (TC) */
     face_met *face;               /* owned with t_last when something accelerates: each
                                    * sphere's last meeting with an immobile face (caged) */
+    settle_rec *settle;           /* owned when something accelerates and e < 1 (SETTLE_STEPS) */
     /* run.max_reactions (jam_max): each sphere's reactions in one step (NULL for an elastic
      * scene without accelerations: free flight at e = 1 cannot jam) */
     jam_count *jam;
@@ -261,6 +295,7 @@ static void pred_destroy(void *p)
     nbep_free_aligned(c->aeff);
     nbep_free_aligned(c->t_last);
     nbep_free_aligned(c->face);
+    nbep_free_aligned(c->settle);
     nbep_free_aligned(c->jam);
     nbep_free_aligned(c->flags);
     nbep_free_aligned((void *)c->claim[0]);
@@ -312,6 +347,9 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     const bool cage_model = tc_model && !c->free_flight;
     if (cage_model)
         c->face = nbep_alloc_aligned(n, sizeof *c->face);
+    const bool settle_model = !c->free_flight && sim->scene->restitution < 1.0;
+    if (settle_model)
+        c->settle = nbep_alloc_aligned(n, sizeof *c->settle);
     const bool jam_model = !c->free_flight || sim->scene->restitution < 1.0;
     const uint64_t jam_max = sim->scene->max_reactions; /* 0 (a scene built in code): none */
     c->jam_max = (uint32_t)(jam_max > 0 && jam_max < UINT32_MAX - 1 ? jam_max : UINT32_MAX - 1);
@@ -332,6 +370,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     c->ws = nbep_alloc_aligned((size_t)sim->nt, sizeof *c->ws);
     if (!c->ver || !c->tau || (!c->free_flight && (!c->rest || !c->aeff)) ||
         (tc_model && !c->t_last) || (cage_model && !c->face) || (jam_model && !c->jam) ||
+        (settle_model && !c->settle) ||
         !c->ws ||
         (rounds && (!c->flags || !c->claim[0] || !c->claim[1] || !c->reacted)) ||
         (c->order_step && !c->tclaim)) {
@@ -383,6 +422,8 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
             c->t_last[i] = -INFINITY;
         if (c->face)
             c->face[i] = (face_met){.t = -INFINITY};
+        if (c->settle)
+            c->settle[i] = (settle_rec){.peak2 = nbep_vec3_norm2(sim->st.vel[i])};
         if (rounds) {
             atomic_init(&c->claim[0][i], KEY_FREE);
             atomic_init(&c->claim[1][i], KEY_FREE);
@@ -589,13 +630,14 @@ static nbep_event predict_some(const pred_ctx *c, const nbep_state *s, size_t i,
     const double ti = c->tau[i];
     const nbep_vec3 ai = effective_acc(c, s, i);
     if (with_planes) {
+        const double speed = nbep_vec3_norm(s->vel[i]);
         for (size_t p = 0; p < s->n_planes; p++) {
             if (c->rest && rest_has_plane(&c->rest[i], p))
                 continue;
             nbep_vec3 n = s->plane_normal[p];
             double gap = nbep_physics_plane_gap(n, s->plane_offset[p], s->pos[i], s->radius[i]);
-            double dt = nbep_predict_plane(gap, nbep_vec3_dot(n, s->vel[i]),
-                                           nbep_vec3_dot(n, ai));
+            double dt = nbep_predict_plane_contact(gap, nbep_vec3_dot(n, s->vel[i]),
+                                                   nbep_vec3_dot(n, ai), speed);
             keep_earlier(&best, (nbep_event){T0 + (ti + dt), (uint32_t)p, NBEP_EVENT_PLANE,
                                              c->ver[i], 0});
         }
@@ -976,12 +1018,20 @@ static void update_rest(pred_ctx *c, nbep_state *s, size_t i, double dt)
     rest_solve(c, s, i, r, &s->vel[i], &c->aeff[i], dt, true);
 }
 
+/* Sphere i's speed now counts towards its step's highest (SETTLE_STEPS). */
+static void settle_note(pred_ctx *c, const nbep_state *s, size_t i)
+{
+    if (c->settle)
+        c->settle[i].peak2 = fmax(c->settle[i].peak2, nbep_vec3_norm2(s->vel[i]));
+}
+
 static void advance_to(pred_ctx *c, nbep_state *s, size_t i, double t_local)
 {
     double h = t_local - c->tau[i];
     if (h > 0.0)
         nbep_physics_drift(&s->pos[i], &s->vel[i], effective_acc(c, s, i), h);
     c->tau[i] = t_local;
+    settle_note(c, s, i);
 }
 
 static void note_overlap(nbep_thread_max *mx, double ov, double r)
@@ -1059,6 +1109,10 @@ static double tc_restitution(pred_ctx *c, double tc, double e, double t_abs, siz
 static void fire(pred_ctx *c, thread_ws *w, const nbep_state *s, size_t i, bool was_still)
 {
     c->ver[i]++;
+    settle_note(c, s, i);
+    if (was_still && c->settle) /* woken: its window starts again (a sphere let go at rest is
+                                 * slow for a while as it starts to fall) */
+        c->settle[i].slow = 0;
     if (c->jam) { /* run.max_reactions; i is this thread's to change (it reacts or lets go) */
         jam_count *j = &c->jam[i];
         if (j->step != w->jam_step)
@@ -1151,6 +1205,20 @@ static void pocket_gather(const pred_ctx *c, const nbep_state *s, const thread_w
             pocket_one(&x, (uint32_t)m);
 }
 
+/* The planes besides those of r that sphere k touches to within tol, added to r (up to
+ * NBEP_CONTACT_MAX): a wall beside it is part of a pocket too (a sphere on the curve of a held
+ * one, pressed against a wall by it: a wedge that the two hold together and neither alone). */
+static void pocket_planes(const nbep_state *s, size_t k, double tol, rest_set *r)
+{
+    for (size_t p = 0; p < s->n_planes && r->n < NBEP_CONTACT_MAX; p++)
+        if (!rest_has_plane(r, p) &&
+            nbep_physics_plane_gap(s->plane_normal[p], s->plane_offset[p], s->pos[k],
+                                   s->radius[k]) <= tol) {
+            r->who[r->n] = (int32_t)p;
+            r->ver[r->n++] = 0;
+        }
+}
+
 /* After k bounced off held sphere j: k must leave j receding by the predictor's own test
  * (d.v >= 0, d from j to k; j does not move), or the same contact returns at zero time: the
  * bounce's v.n with the normalised n can disagree with it in the last bit (a sphere sliding
@@ -1198,6 +1266,7 @@ static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t
                       * highest hop of the rest speed, |a| t_min^2) */
             r = r0;
             pocket_gather(c, s, w, k, j, v_rest * v_rest / amag, &r);
+            pocket_planes(s, k, v_rest * v_rest / amag, &r);
             if (r.n > r0.n) {
                 v = s->vel[k];
                 held = rest_solve(c, s, k, &r, &v, &a, dt, true);
@@ -1357,6 +1426,160 @@ static void let_go_phase(pred_ctx *c, nbep_state *s, nbep_range own, double dt, 
     for (size_t m = 0; m < w->n_rel; m++)
         let_go(c, s, w->rel[m], dt, t_local, w);
     nbep_barrier_wait(&c->bar);
+}
+
+/* ---- Settling (SETTLE_STEPS) ------------------------------------------------------------ */
+
+/* Sphere i's settle speed: SETTLE_SPEED_FACTOR times its rest speed. */
+static double settle_speed(const nbep_state *s, size_t i, double dt)
+{
+    return SETTLE_SPEED_FACTOR * rest_speed(s, i, nbep_vec3_norm(s->acc[i]), dt);
+}
+
+/* The update, own sphere i at the step's end: counts the step if its highest speed stayed at or
+ * below the settle speed, starts the next step's peak from here, and takes the snapshot that
+ * settle_hold reads. Returns whether i is a candidate to settle. */
+static bool settle_count(pred_ctx *c, const nbep_state *s, size_t i, double dt)
+{
+    settle_rec *x = &c->settle[i];
+    const double v2 = nbep_vec3_norm2(s->vel[i]), vs = settle_speed(s, i, dt);
+    const bool slow = vs > 0.0 && fmax(x->peak2, v2) <= vs * vs;
+    x->slow = slow ? (x->slow < SETTLE_STEPS ? x->slow + 1 : SETTLE_STEPS) : 0;
+    x->peak2 = v2;
+    x->still = c->rest[i].still;
+    x->cand = !x->still && x->slow >= SETTLE_STEPS;
+    return x->cand;
+}
+
+/* What settle_hold gathers for sphere i: its supports r, each scored by the cosine between its
+ * normal and i's acceleration (planes -2: kept first; the most nearly below kept when more
+ * than NBEP_CONTACT_MAX touch). */
+typedef struct settle_gather {
+    const pred_ctx *c;
+    const nbep_state *s;
+    size_t i;
+    nbep_vec3 a;      /* i's acceleration, unit */
+    double tol;       /* largest gap that counts as touching */
+    rest_set r;
+    double score[NBEP_CONTACT_MAX];
+} settle_gather;
+
+static void settle_add(settle_gather *g, int32_t who, double score)
+{
+    int k = g->r.n;
+    if (k == NBEP_CONTACT_MAX) { /* replace the least nearly below, if this one is more so */
+        k = 0;
+        for (int m = 1; m < g->r.n; m++)
+            if (g->score[m] > g->score[k])
+                k = m;
+        if (!(score < g->score[k]))
+            return;
+    } else {
+        g->r.n++;
+    }
+    g->r.who[k] = who;
+    g->score[k] = score;
+}
+
+/* Sphere j is a support of i if it is held or settles in this step (the snapshot), touches i
+ * within tol and lies against i's acceleration. */
+static void settle_one(void *u, uint32_t j)
+{
+    settle_gather *g = u;
+    const settle_rec *y = &g->c->settle[j];
+    if (j == g->i || (!y->still && !y->cand))
+        return;
+    const nbep_vec3 d = sep(g->c, g->s, j, g->i);
+    const double len = nbep_vec3_norm(d);
+    if (!(len - (g->s->radius[j] + g->s->radius[g->i]) <= g->tol))
+        return;
+    const double cosine = nbep_vec3_dot(d, g->a) / len;
+    if (cosine < 0.0)
+        settle_add(g, -1 - (int32_t)j, cosine);
+}
+
+/* Own candidate i, every sphere at the step's end: held where it is on its supports (settle_one
+ * and the planes it touches below it), if it has any. Reads other spheres' positions, radii and
+ * snapshots only, which nothing writes in this sub-phase; the supports' response counts are
+ * stamped after the counts move on (settle_phases). */
+static bool settle_hold(pred_ctx *c, nbep_state *s, size_t i, double dt)
+{
+    const double amag = nbep_vec3_norm(s->acc[i]), vs = settle_speed(s, i, dt);
+    settle_gather g = {.c = c, .s = s, .i = i, .a = nbep_vec3_scale(s->acc[i], 1.0 / amag),
+                       .tol = vs * vs / amag};
+    for (size_t p = 0; p < s->n_planes; p++)
+        if (nbep_vec3_dot(s->plane_normal[p], g.a) < 0.0 &&
+            nbep_physics_plane_gap(s->plane_normal[p], s->plane_offset[p], s->pos[i],
+                                   s->radius[i]) <= g.tol)
+            settle_add(&g, (int32_t)p, -2.0);
+    if (c->ev) {
+        nbep_evloop_visit_block(c->ev, (uint32_t)i, settle_one, &g);
+    } else if (c->use_grid) { /* the grid of the step's end (grid_prepare) */
+        size_t lo[3], hi[3];
+        nbep_grid_block(&c->grid, s->pos[i], s->radius[i] + c->rmax + g.tol, lo, hi);
+        for (size_t z = lo[2]; z <= hi[2]; z++)
+            for (size_t y = lo[1]; y <= hi[1]; y++)
+                for (size_t x = lo[0]; x <= hi[0]; x++) {
+                    size_t cell = nbep_grid_index(&c->grid, x, y, z);
+                    for (size_t k = c->grid.start[cell]; k < c->grid.start[cell + 1]; k++)
+                        settle_one(&g, c->grid.item[k]);
+                }
+    } else {
+        for (size_t j = 0; j < s->n; j++)
+            settle_one(&g, (uint32_t)j);
+    }
+    if (g.r.n == 0)
+        return false;
+    g.r.still = true;
+    c->rest[i] = g.r;
+    s->vel[i] = ZERO3;
+    c->aeff[i] = ZERO3;
+    c->settle[i].held_now = true;
+    return true;
+}
+
+/* Every thread at a step's end, after a barrier that follows the update (settle_count): holds
+ * the candidates that have supports. Three sub-phases, so that no thread reads what another
+ * writes: hold (settle_hold), then the held spheres' response counts move on (their slots and
+ * every prediction naming them are stale) and their block energies are taken again, then each
+ * stamps its sphere supports' counts. The same decisions on every thread and for any thread
+ * count (they read the snapshot). Returns whether any sphere was held. */
+static bool settle_phases(nbep_sim *sim, pred_ctx *c, nbep_range own, thread_ws *w)
+{
+    if (!c->settle)
+        return false;
+    size_t cands = 0;
+    for (int t = 0; t < c->nt; t++)
+        cands += c->ws[t].n_settle;
+    if (cands == 0)
+        return false;
+    nbep_state *s = &sim->st;
+    nbep_barrier_wait(&c->bar); /* grid mode: the grid is placed */
+    w->n_settled = 0;
+    for (size_t i = own.lo; i < own.hi; i++)
+        if (c->settle[i].cand && settle_hold(c, s, i, sim->dt))
+            w->n_settled++;
+    nbep_barrier_wait(&c->bar);
+    size_t held = 0;
+    for (int t = 0; t < c->nt; t++)
+        held += c->ws[t].n_settled;
+    if (held == 0)
+        return false;
+    for (size_t i = own.lo; w->n_settled > 0 && i < own.hi; i++)
+        if (c->settle[i].held_now)
+            c->ver[i]++;
+    if (w->n_settled > 0)
+        nbep__sim_block_energy(sim, own);
+    nbep_barrier_wait(&c->bar);
+    for (size_t i = own.lo; w->n_settled > 0 && i < own.hi; i++) {
+        if (!c->settle[i].held_now)
+            continue;
+        rest_set *r = &c->rest[i];
+        for (int k = 0; k < r->n; k++)
+            r->ver[k] = r->who[k] < 0 ? c->ver[-1 - r->who[k]] : 0;
+        c->settle[i].held_now = false;
+    }
+    return true;
 }
 
 static void react_phase(pred_ctx *c, nbep_state *s, const nbep_scene *sc, int par, double T0,
@@ -1737,18 +1960,24 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
         nbep_barrier_wait(&c->bar);
         if (c->ev_failed) /* written by thread 0 before the barrier */
             return;
+        w->n_settle = 0;
         for (size_t i = own.lo; i < own.hi; i++) { /* update: every sphere to the step's end */
             double h = sim->dt - c->tau[i];
             if (h > 0.0)
                 nbep_physics_drift(&s->pos[i], &s->vel[i], effective_acc(c, s, i), h);
             c->tau[i] = 0.0;
+            if (c->settle)
+                w->n_settle += settle_count(c, s, i, sim->dt);
         }
         nbep__sim_block_energy(sim, own);
         nbep_barrier_wait(&c->bar);
+        /* spheres held by settling move no more: every slot is predicted again (a rebuild) */
+        const bool settled = settle_phases(sim, c, own, w);
         if (tid == 0)
             nbep__sim_end_step(sim, step);
-        /* only frames written to a file can be resumed from */
-        rebuild = sim->opt.out && step % sim->scene->output_every == 0;
+        /* only frames written to a file can be resumed from (and, with settling, the next
+         * step's rebuild follows from the state, so a resumed run takes it too) */
+        rebuild = settled || (sim->opt.out && step % sim->scene->output_every == 0);
         nbep_barrier_wait(&c->bar);
         /* relaxed: the barrier above ordered thread 0's store of stop */
         if (atomic_load_explicit(&sim->stop, memory_order_relaxed))
@@ -1869,6 +2098,7 @@ static void pred_run(nbep_sim *sim, void *p)
             /* update (paper Section 4.3.1): every own sphere flies to the step's end; grid mode
              * also takes the speed bounds of the next step here, in parallel */
             double vmax = 0.0, amax = 0.0;
+            w->n_settle = 0;
             for (size_t i = own.lo; i < own.hi; i++) {
                 double h = sim->dt - c->tau[i];
                 nbep_vec3 a = effective_acc(c, s, i);
@@ -1881,6 +2111,8 @@ static void pred_run(nbep_sim *sim, void *p)
                     vmax = fmax(vmax, nbep_vec3_norm(s->vel[i]));
                     amax = fmax(amax, nbep_vec3_norm(a));
                 }
+                if (c->settle)
+                    w->n_settle += settle_count(c, s, i, sim->dt);
             }
             w->vmax_end = vmax;
             w->amax_end = amax;
@@ -1888,6 +2120,8 @@ static void pred_run(nbep_sim *sim, void *p)
             nbep_barrier_wait(&c->bar);
             if (c->use_grid) /* all threads, from the positions at T_end */
                 grid_prepare(c, s, tid, own, T_end, sim->dt, false);
+            /* the speed bounds taken above stay bounds: held spheres only slow down */
+            (void)settle_phases(sim, c, own, w);
             if (tid == 0) /* the others are in the next find phase, which reads no grid */
                 nbep__sim_end_step(sim, step);
             /* no barrier: the next find phase only reads positions and writes queue slots,

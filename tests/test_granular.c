@@ -279,6 +279,134 @@ static void test_sphere_in_a_pocket_of_four_is_held(void **state)
     }
 }
 
+/* The pair of the settling tests, as spheres i and i + 1 at depth y of a box 0.28 m wide (box):
+ * A (radius 0.1) on the floor against the far wall, B a millimetre above where it rests on A
+ * against the near wall. Returns B's resting height. */
+static double lean_pair(nbep_scene *sc, size_t i, double y)
+{
+    const double r = 0.1, d = 0.08, zb = r + sqrt(4.0 * r * r - d * d);
+    nbep_test_set_sphere(sc, i, (nbep_vec3){r + d, y, r}, ZERO, r, 1.0, DOWN);
+    nbep_test_set_sphere(sc, i + 1, (nbep_vec3){r, y, zb + 1e-3}, ZERO, r, 1.0, DOWN);
+    return zb;
+}
+
+/* Two spheres that carry each other (settling, SETTLE_STEPS): A on the floor against the far
+ * wall (x = 0.28), B dropped onto A and against the near wall (x = 0). B's weight goes to A and
+ * the near wall, A's to the floor and the far wall: neither is held on what it meets alone
+ * (B slides off A but for the wall; a vertical wall carries nothing), so before settling B
+ * rattled between them for ever. Each slow for SETTLE_STEPS whole steps, both are held where
+ * they sit, touching, in every neighbour mode; after that nothing collides. */
+static void test_spheres_that_carry_each_other_settle(void **state)
+{
+    (void)state;
+    const double r = 0.1, d = 0.08, zb = r + sqrt(4.0 * r * r - d * d);
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
+        uint64_t coll[2];
+        for (int k = 0; k < 2; k++) {
+            nbep_scene *sc = scene(2, 6, "predictive", k == 0 ? 1000 : 1300, 0.5);
+            sc->neighbors_grid = mode == 1;
+            sc->neighbors_cells = mode == 2;
+            box(sc, 2.0 * r + d, 1.0, 1.0);
+            assert_true(lean_pair(sc, 0, 0.5) == zb);
+            trace t = {0};
+            nbep_summary sum = run(sc, 1, &t);
+            coll[k] = sum.collisions;
+            const nbep_vec3 *p = last_pos(&t);
+            for (size_t i = 0; i < 2; i++)
+                assert_true(nbep_vec3_equal(last_vel(&t)[i], ZERO));
+            /* where they rest, to within 1e-4 r: held while rattling between their contacts
+             * (measured: A 5.7e-6 m off the far wall, B 5e-9 m off the near one), each within
+             * 4e-7 m (the settle speed's hop) of the floor and of each other */
+            const double tol = 1e-4 * r;
+            assert_true(fabs(p[0].x - (r + d)) <= tol && fabs(p[0].z - r) <= 4e-7);
+            assert_true(fabs(p[1].x - r) <= tol);
+            assert_true(fabs(nbep_vec3_norm(nbep_vec3_sub(p[1], p[0])) - 2.0 * r) <= 4e-7);
+            free(t.data);
+            nbep_test_scene_free(&sc);
+        }
+        assert_true(coll[0] < 20000);
+        assert_int_equal(coll[1], coll[0]); /* settled: not one collision in 300 steps */
+    }
+}
+
+/* A wedge: A on the floor against one wall, B resting on A's curve against the other wall, a
+ * hair (1e-4 m) short of a diameter from A's side: the two carry B together, neither alone.
+ * B lands on held A slowly and is held at once by A and the wall (a pocket counts the planes
+ * it touches); before, the minimum bounce off A kicked it into the wall and the cage took it
+ * back, a million times in one step (run.max_reactions: the run fails). */
+static void test_sphere_wedged_between_a_held_one_and_a_wall_is_held(void **state)
+{
+    (void)state;
+    const double r = 0.1, w = 4.0 * r - 1e-4, dx = w - 2.0 * r;
+    const double zb = r + sqrt(4.0 * r * r - dx * dx);
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
+        nbep_scene *sc = scene(2, 6, "predictive", 300, 0.5);
+        sc->neighbors_grid = mode == 1;
+        sc->neighbors_cells = mode == 2;
+        sc->max_reactions = 100000;
+        box(sc, w, 1.0, 1.0);
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){r, 0.5, r}, ZERO, r, 1.0, DOWN);
+        nbep_test_set_sphere(sc, 1, (nbep_vec3){w - r, 0.5, zb + 1e-6}, ZERO, r, 1.0, DOWN);
+        trace t = {0};
+        nbep_summary sum = run(sc, 1, &t);
+        for (size_t i = 0; i < 2; i++)
+            assert_true(nbep_vec3_equal(last_vel(&t)[i], ZERO));
+        assert_true(fabs(last_pos(&t)[1].z - zb) <= 1e-6);
+        assert_true(sum.collisions < 1000);
+        free(t.data);
+        nbep_test_scene_free(&sc);
+    }
+}
+
+/* Settled spheres stay held while something else wakes (and frames are the same on 1 and 4
+ * threads): the pair of the test above settles at
+ * one end of a box (y = 0.25); at the other (y = 0.8) a ball falls onto a sphere held on the
+ * floor, an impact that wakes it, long after the pair is held. The two groups never touch, so
+ * the run's collisions are those of each group run alone, in every mode: a settled sphere that
+ * let go when anything anywhere woke (its supports' response counts stamped wrong) would fall
+ * and collide again. */
+static void test_settled_spheres_stay_held_when_others_wake(void **state)
+{
+    (void)state;
+    const double r = 0.1, d = 0.08;
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
+        uint64_t coll[3];
+        for (int k = 0; k < 3; k++) { /* both groups, the pair alone, the drop alone */
+            const bool pair = k != 2, drop = k != 1;
+            nbep_scene *sc = scene((pair ? 2 : 0) + (drop ? 2 : 0), 6, "predictive", 700, 0.5);
+            sc->neighbors_grid = mode == 1;
+            sc->neighbors_cells = mode == 2;
+            box(sc, 2.0 * r + d, 1.05, 1.5);
+            size_t i = 0;
+            if (pair) {
+                (void)lean_pair(sc, i, 0.25);
+                i += 2;
+            }
+            if (drop) { /* lands at about 0.5 s, after the pair has settled (0.15 s) */
+                nbep_test_set_sphere(sc, i++, (nbep_vec3){r + 0.5 * d, 0.8, r}, ZERO, r, 1.0, DOWN);
+                nbep_test_set_sphere(sc, i++, (nbep_vec3){r + 0.5 * d, 0.8, 1.4}, ZERO, r, 1.0,
+                                     DOWN);
+            }
+            trace t = {0};
+            coll[k] = run(sc, 1, &t).collisions;
+            if (pair)
+                for (size_t j = 0; j < 2; j++)
+                    assert_true(nbep_vec3_equal(last_vel(&t)[j], ZERO));
+            if (k == 0) { /* settling's sub-phases on 4 threads, one sphere each: the same */
+                trace t4 = {0};
+                assert_int_equal(run(sc, 4, &t4).collisions, coll[0]);
+                assert_int_equal(t4.n_frames, t.n_frames);
+                assert_memory_equal(t4.data, t.data, t.n_frames * 2 * t.n * sizeof *t.data);
+                free(t4.data);
+            }
+            free(t.data);
+            nbep_test_scene_free(&sc);
+        }
+        assert_true(coll[2] > 0);
+        assert_int_equal(coll[0], coll[1] + coll[2]);
+    }
+}
+
 /* Three walls at once: gravity into a corner of the box; the ball ends still in the corner. */
 static void test_ball_held_by_three_walls(void **state)
 {
@@ -503,6 +631,9 @@ int main(void)
         cmocka_unit_test(test_ball_in_a_slot_one_diameter_wide_slides_on),
         cmocka_unit_test(test_ball_in_a_slot_with_room_keeps_bouncing),
         cmocka_unit_test(test_sphere_in_a_pocket_of_four_is_held),
+        cmocka_unit_test(test_spheres_that_carry_each_other_settle),
+        cmocka_unit_test(test_settled_spheres_stay_held_when_others_wake),
+        cmocka_unit_test(test_sphere_wedged_between_a_held_one_and_a_wall_is_held),
         cmocka_unit_test(test_groove_ball_ends_at_the_bottom_of_the_v),
         cmocka_unit_test(test_e0_pair_keeps_momentum_and_loses_energy),
         cmocka_unit_test(test_e0_plane_stops_at_first_contact),
