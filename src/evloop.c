@@ -332,15 +332,18 @@ static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uin
                         double t)
 {
     nbep_event best = ops->planes(u, i);
-    size_t m;
-    const uint32_t *js = nbep_nblist_of(&e->nl, i, &m);
-    if (m > 0)
-        ops->pairs(u, i, js, m, near_face(e, i), &best);
+    /* the expiry before the pairs: a pair that comes later cannot win, so its root is skipped
+     * (pairs ranks a pair before a plane or an expiry at the same time, as the slot key
+     * does; the winner is the one trying the expiry last would give) */
     nbep_vec3 p, v, a;
     ops->flight(u, i, t, &p, &v, &a);
     double t_exit = t + stray_time(nbep_vec3_sub(p, e->cells.m[i].at), v, a, e->stray);
     if (t_exit < NBEP_NEVER && (best.kind == NBEP_EVENT_NONE || t_exit < best.time))
         best = (nbep_event){t_exit, 0, NBEP_EVENT_HORIZON, e->ver[i], 0};
+    size_t m;
+    const uint32_t *js = nbep_nblist_of(&e->nl, i, &m);
+    if (m > 0)
+        ops->pairs(u, i, js, m, near_face(e, i), &best);
     if (best.kind == NBEP_EVENT_NONE)
         best = (nbep_event){.time = INFINITY, .kind = NBEP_EVENT_NEVER, .ver_self = e->ver[i]};
     nbep_feq_put(e->q, i, best); /* from scratch: whatever the slot held goes */
@@ -395,7 +398,7 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
         const nbep_event ev = *nbep_feq_slot(e->q, i);
         /* what this event and the next ones will read, requested now (no effect on results):
          * the lists and places of its spheres, the slots and places of the runners-up */
-        NBEP_PREFETCH(&e->nl.sp[i]);
+        NBEP_PREFETCH(&e->nl.pool[e->nl.sp[i].off]);
         NBEP_PREFETCH(&e->cells.m[i]);
         if (ev.kind == NBEP_EVENT_SPHERE) {
             NBEP_PREFETCH(&e->nl.sp[ev.partner]);
@@ -407,6 +410,7 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
         for (int k = 0; k < n_next; k++) {
             NBEP_PREFETCH(nbep_feq_slot(e->q, next[k]));
             NBEP_PREFETCH(&e->cells.m[next[k]]);
+            NBEP_PREFETCH(&e->nl.sp[next[k]]);
         }
         tally->events++;
         if (++since >= stall_events) {
