@@ -28,7 +28,10 @@
 # third fewer collisions), with its Gaussian velocities, and is timed the same way: two runs,
 # to 0.1 and to 0.1 + S, whole processes (so its set-up cancels). Repeats are the outer loop and
 # every engine runs once per repeat, so background load hits all alike; medians are reported,
-# and the ratios are of medians taken in the same run.
+# and the ratios are of medians taken in the same run. Beside wall time, each row has the
+# processes' CPU time (user + system, /usr/bin/time), differenced the same way: on a shared
+# machine another job's load lengthens wall time far more than CPU time, so the CPU-time ratio
+# is the steadier comparison of the two engines (both include their set-up, which cancels).
 set -u
 cd "$(dirname "$0")/.."
 NS=${NS:-32000}
@@ -40,7 +43,7 @@ OUT=${OUT:-build/bench-dense}
 PY=${PYTHON:-/usr/bin/python3}
 mkdir -p "$OUT"
 rows="$OUT/rows.csv"
-echo "engine,n,phi,threads,rep,collisions,seconds,rss_bytes" >"$rows"
+echo "engine,n,phi,threads,rep,collisions,seconds,rss_bytes,cpu_seconds" >"$rows"
 
 # the stretch S of simulated time measured, per phi: 0.6 million collisions per 32000 spheres,
 # whatever N (a shorter stretch at large N would be a small difference of two long runs, which
@@ -107,6 +110,11 @@ PYEOF
 
 summary_field() { sed -n "s/.*\"$1\": *\([0-9.e+-]*\).*/\1/p"; }
 
+# Runs a command (stdout kept), its CPU time (user + system, seconds) into the file $CPU_OUT.
+CPU_OUT="$OUT/cpu.txt"
+timed() { /usr/bin/time -f "%U %S" -o "$CPU_OUT" "$@"; }
+cpu_of() { awk '{ print $1 + $2 }' "$CPU_OUT"; }
+
 run_nbep() { # n phi threads rep
     local S d1 d2 s1 s2 steps2
     S=$(stretch "$1" "$2")
@@ -114,23 +122,27 @@ run_nbep() { # n phi threads rep
     steps2=$(awk -v s="$S" -v t="$T1" 'BEGIN { printf "%d", (t + s) / 0.05 + 0.5 }')
     d1=$(deck "$1" "$2" "$(awk -v t="$T1" 'BEGIN { printf "%d", t / 0.05 + 0.5 }')" 0.05 "$3" "$OUT/run.h5" "")
     d2=$(deck "$1" "$2" "$steps2" 0.05 "$3" "$OUT/run.h5" "")
-    s1=$(bin/nbep run "$d1" --quiet --summary -) || { echo "nbep failed: $d1" >&2; return 1; }
-    s2=$(bin/nbep run "$d2" --quiet --summary -) || { echo "nbep failed: $d2" >&2; return 1; }
+    local u1 u2
+    s1=$(timed bin/nbep run "$d1" --quiet --summary -) || { echo "nbep failed: $d1" >&2; return 1; }
+    u1=$(cpu_of)
+    s2=$(timed bin/nbep run "$d2" --quiet --summary -) || { echo "nbep failed: $d2" >&2; return 1; }
+    u2=$(cpu_of)
     local c1 c2 w1 w2 rss
     c1=$(echo "$s1" | summary_field collisions); c2=$(echo "$s2" | summary_field collisions)
     w1=$(echo "$s1" | summary_field wall_seconds); w2=$(echo "$s2" | summary_field wall_seconds)
     rss=$(echo "$s2" | summary_field peak_rss_bytes)
-    echo "nbep,$1,$2,$3,$4,$((c2 - c1)),$(awk -v a="$w1" -v b="$w2" 'BEGIN { print b - a }'),$rss" >>"$rows"
+    echo "nbep,$1,$2,$3,$4,$((c2 - c1)),$(awk -v a="$w1" -v b="$w2" 'BEGIN { print b - a }'),$rss,$(awk -v a="$u1" -v b="$u2" 'BEGIN { print b - a }')" >>"$rows"
 }
 
-edmd_once() { # dir -> "collisions seconds rss"
-    local t0 t1 col rss
+edmd_once() { # dir -> "collisions seconds rss cpu_seconds"
+    local t0 t1 col rss cpu
     t0=$(date +%s.%N)
-    (cd "$1" && /usr/bin/time -f "RSS %M" ./md >run.log 2>&1)
+    (cd "$1" && /usr/bin/time -f "RSS %M CPU %U %S" ./md >run.log 2>&1)
     t1=$(date +%s.%N)
     col=$(sed -n 's/^Simtime: .*Collisions: \([0-9]*\),.*/\1/p' "$1/run.log" | tail -1)
-    rss=$(sed -n 's/^RSS \([0-9]*\)/\1/p' "$1/run.log")
-    echo "$col $(awk -v a="$t0" -v b="$t1" 'BEGIN { print b - a }') $((rss * 1024))"
+    rss=$(sed -n 's/^RSS \([0-9]*\) .*/\1/p' "$1/run.log")
+    cpu=$(sed -n 's/^RSS [0-9]* CPU \([0-9.]*\) \([0-9.]*\)/\1 \2/p' "$1/run.log" | awk '{ print $1 + $2 }')
+    echo "$col $(awk -v a="$t0" -v b="$t1" 'BEGIN { print b - a }') $((rss * 1024)) $cpu"
 }
 
 run_edmd() { # n phi rep
@@ -138,9 +150,9 @@ run_edmd() { # n phi rep
     S=$(stretch "$1" "$2")
     e1=$(edmd_build "$1" "$2" 0.1) || return 1
     e2=$(edmd_build "$1" "$2" "$(awk -v s="$S" 'BEGIN { print 0.1 + s }')") || return 1
-    read -r ca wa ra < <(edmd_once "$e1")
-    read -r cb wb rb < <(edmd_once "$e2")
-    echo "edmd,$1,$2,1,$3,$((cb - ca)),$(awk -v a="$wa" -v b="$wb" 'BEGIN { print b - a }'),$rb" >>"$rows"
+    read -r ca wa ra ua < <(edmd_once "$e1")
+    read -r cb wb rb ub < <(edmd_once "$e2")
+    echo "edmd,$1,$2,1,$3,$((cb - ca)),$(awk -v a="$wa" -v b="$wb" 'BEGIN { print b - a }'),$rb,$(awk -v a="$ua" -v b="$ub" 'BEGIN { print b - a }')" >>"$rows"
 }
 
 for n in $NS; do
@@ -172,24 +184,34 @@ for r in rows:
 med = {}
 for key, rs in groups.items():
     rates = [int(r["collisions"]) / float(r["seconds"]) for r in rs]
+    cpus = [int(r["collisions"]) / float(r["cpu_seconds"]) for r in rs
+            if r.get("cpu_seconds") and float(r["cpu_seconds"]) > 0]
     rss = statistics.median(int(r["rss_bytes"] or 0) for r in rs)
-    med[key] = (statistics.median(rates), min(rates), max(rates), rss, len(rs))
-print("\nEquilibrium fluid, collisions per wall second: medians (spread) of the repeats")
-print("| engine | N | phi | threads | collisions/s | spread | peak RSS / sphere | runs |")
-print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    med[key] = (statistics.median(rates), min(rates), max(rates), rss, len(rs),
+                statistics.median(cpus) if cpus else None)
+print("\nEquilibrium fluid, collisions per second of wall time and of CPU time (user + system):")
+print("medians (spread) of the repeats")
+print("| engine | N | phi | threads | collisions/s (wall) | spread | collisions/CPU s | "
+      "peak RSS / sphere | runs |")
+print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
 for key in sorted(med):
-    rate, lo, hi, rss, k = med[key]
+    rate, lo, hi, rss, k, cpu = med[key]
+    cpu_s = f"{cpu/1e3:.1f} k" if cpu else "-"
     print(f"| {key[0]} | {key[1]} | {key[2]} | {key[3]} | {rate/1e3:.1f} k | "
-          f"{lo/1e3:.0f}-{hi/1e3:.0f} k | {rss/key[1]/1e3:.3f} kB | {k} |")
-print("\nratios of medians")
+          f"{lo/1e3:.0f}-{hi/1e3:.0f} k | {cpu_s} | {rss/key[1]/1e3:.3f} kB | {k} |")
+print("\nratios of medians (wall; CPU)")
 for (eng, n, phi, nt), (rate, *_rest) in sorted(med.items()):
     if eng != "nbep":
         continue
+    cpu = med[(eng, n, phi, nt)][5]
     e = med.get(("edmd", n, phi, 1))
     c1 = med.get(("nbep", n, phi, 1))
     parts = [f"N {n}, phi {phi}, {nt} thread(s)"]
     if e:
-        parts.append(f"nbep / EDMD = {rate / e[0]:.2f}")
+        r = f"nbep / EDMD = {rate / e[0]:.2f}"
+        if cpu and e[5]:
+            r += f"; by CPU time {cpu / e[5]:.2f}"
+        parts.append(r)
     if c1 and nt != 1:
         parts.append(f"{nt} threads / 1 thread = {rate / c1[0]:.2f}")
     print("  " + "; ".join(parts))
