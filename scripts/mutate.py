@@ -76,17 +76,25 @@ MUTANTS = [
     ("barrier-rearm-after-round", "src/barrier.c",
      "        atomic_store_explicit(&b->left, b->n, memory_order_relaxed);\n"
      "        NBEP_BARRIER_BETWEEN_STORES();\n"
-     "        /* Release: passes on everything the last arrival acquired (all threads' writes) and\n"
-     "         * the rearmed `left`; pairs with the waiters' acquire loads. */\n"
-     "        atomic_store_explicit(&b->round, r + 1u, memory_order_release);",
-     "        atomic_store_explicit(&b->round, r + 1u, memory_order_release);\n"
+     "        /* Release (and sequentially consistent, for the sleepers below): passes on everything\n"
+     "         * the last arrival acquired (all threads' writes) and the rearmed `left`; pairs with\n"
+     "         * the waiters' acquire loads. */\n"
+     "        atomic_store_explicit(&b->round, r + 1u, memory_order_seq_cst);",
+     "        atomic_store_explicit(&b->round, r + 1u, memory_order_seq_cst);\n"
      "        NBEP_BARRIER_BETWEEN_STORES();\n"
      "        atomic_store_explicit(&b->left, b->n, memory_order_relaxed);",
      ["test_barrier_rearm", "test_barrier"], None),  # test_barrier_rearm: every run
     ("barrier-last-arrival", "src/barrier.c", "memory_order_acq_rel) == 1) {",
      "memory_order_acq_rel) == 0) {", ["test_barrier"], None),
-    ("barrier-round-step", "src/barrier.c", "atomic_store_explicit(&b->round, r + 1u, memory_order_release);",
-     "atomic_store_explicit(&b->round, r, memory_order_release);", ["test_barrier"], None),
+    ("barrier-round-step", "src/barrier.c", "atomic_store_explicit(&b->round, r + 1u, memory_order_seq_cst);",
+     "atomic_store_explicit(&b->round, r, memory_order_seq_cst);", ["test_barrier"], None),
+    ("barrier-no-wake", "src/barrier.c", "            nbep_word_wake_all(&b->round);",
+     "            (void)0;", ["test_barrier"], None),
+    ("barrier-sleeper-uncounted", "src/barrier.c",
+     "            atomic_fetch_add_explicit(&b->sleepers, 1u, memory_order_seq_cst);", "",
+     ["test_barrier"], None),
+    ("barrier-never-sleeps", "src/barrier.c", "            if (k < NBEP_BARRIER_SPINS) {",
+     "            if (1) {", ["test_barrier"], None),
     # ---- claims ----
     ("claim-max", "src/algo_predictive.c", "while (key < cur &&", "while (key > cur &&", SIM, None),
     ("claim-one-side", "src/algo_predictive.c",

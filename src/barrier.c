@@ -10,6 +10,13 @@
  * next wait. `left` and `round` sit on separate cache lines so that arrivals writing `left`
  * do not keep invalidating the line the waiters spin on.
  *
+ * After NBEP_BARRIER_SPINS spins a waiter sleeps on `round` (nbep_word_wait). The last arrival
+ * wakes the sleepers after advancing it, and only when `sleepers` says there may be some: the
+ * waiter counts itself in before it looks at `round` a last time, the last arrival advances
+ * `round` before it looks at `sleepers`, all four sequentially consistent, so at least one of
+ * them sees the other's write (no waiter sleeps through its round); the kernel's own compare
+ * covers an advance between the waiter's last look and its sleep.
+ *
  * Invariant between waits: left == n. The round number wraps; only its change is watched. */
 #include "nbep/barrier.h"
 
@@ -28,6 +35,8 @@ void nbep_barrier_init(nbep_barrier *b, unsigned n)
      * that OpenMP hands work to by means ThreadSanitizer cannot see; the acquire load that
      * starts every wait then orders this initialisation (and everything before it) first. */
     b->n = n;
+    atomic_store_explicit(&b->sleepers, 0u, memory_order_release);
+    atomic_store_explicit(&b->sleeps, 0ul, memory_order_release);
     atomic_store_explicit(&b->left, n, memory_order_release);
     atomic_store_explicit(&b->round, 0u, memory_order_release);
 }
@@ -48,13 +57,27 @@ void nbep_barrier_wait(nbep_barrier *b)
          * it can re-enter and decrement `left` again. */
         atomic_store_explicit(&b->left, b->n, memory_order_relaxed);
         NBEP_BARRIER_BETWEEN_STORES();
-        /* Release: passes on everything the last arrival acquired (all threads' writes) and
-         * the rearmed `left`; pairs with the waiters' acquire loads. */
-        atomic_store_explicit(&b->round, r + 1u, memory_order_release);
+        /* Release (and sequentially consistent, for the sleepers below): passes on everything
+         * the last arrival acquired (all threads' writes) and the rearmed `left`; pairs with
+         * the waiters' acquire loads. */
+        atomic_store_explicit(&b->round, r + 1u, memory_order_seq_cst);
+        if (atomic_load_explicit(&b->sleepers, memory_order_seq_cst) != 0u)
+            nbep_word_wake_all(&b->round);
     } else {
         /* Acquire: pairs with the release store of the new round, so writes before the
          * barrier in any thread happen before our code after it. */
-        for (unsigned k = 1; atomic_load_explicit(&b->round, memory_order_acquire) == r; k++)
-            nbep_spin_pause(k);  /* cpu pause; sched_yield() every 1024th */
+        for (unsigned k = 1; atomic_load_explicit(&b->round, memory_order_acquire) == r; k++) {
+            if (k < NBEP_BARRIER_SPINS) {
+                nbep_spin_pause(k); /* cpu pause; sched_yield() every 1024th */
+                continue;
+            }
+            /* long enough: sleep until the round advances (see the top of the file) */
+            atomic_fetch_add_explicit(&b->sleepers, 1u, memory_order_seq_cst);
+            atomic_fetch_add_explicit(&b->sleeps, 1ul, memory_order_relaxed);
+            while (atomic_load_explicit(&b->round, memory_order_seq_cst) == r)
+                nbep_word_wait(&b->round, r);
+            /* relaxed: a count that lags only costs a last arrival a wake with no one to wake */
+            atomic_fetch_sub_explicit(&b->sleepers, 1u, memory_order_relaxed);
+        }
     }
 }

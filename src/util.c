@@ -1,8 +1,14 @@
-/* Aligned allocation and the spin-wait pause, shared by every module. */
+/* Aligned allocation, the spin-wait pause and sleeping on a word, shared by every module. */
+#define _DEFAULT_SOURCE /* syscall() for futexes */
 #include "nbep/compiler.h"
 
 #include <sched.h>
 #include <stdint.h>
+#ifdef __linux__
+#include <linux/futex.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+#endif
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -46,5 +52,27 @@ void nbep_spin_pause(unsigned k)
     __builtin_ia32_pause();
 #elif defined(__aarch64__)
     __asm__ __volatile__("yield");
+#endif
+}
+
+void nbep_word_wait(const void *word, unsigned expected)
+{
+#ifdef __linux__
+    /* the kernel compares *word with expected and sleeps only if equal, atomically with
+     * respect to a wake: a change made before the wake is never slept through */
+    syscall(SYS_futex, word, FUTEX_WAIT_PRIVATE, expected, NULL, NULL, 0);
+#else
+    (void)word;
+    (void)expected;
+    sched_yield();
+#endif
+}
+
+void nbep_word_wake_all(const void *word)
+{
+#ifdef __linux__
+    syscall(SYS_futex, word, FUTEX_WAKE_PRIVATE, INT32_MAX, NULL, NULL, 0);
+#else
+    (void)word;
 #endif
 }

@@ -1,8 +1,10 @@
 /* Tests of the reusable barrier: a stress harness in which every thread publishes the round
  * number between barriers and checks everyone else's after them, run against nbep_barrier
  * (no violation allowed) and against the paper's Procedure 4 written out below (it must be
- * caught: a violation, or a thread stuck past a watchdog). No sleeps and no timing assertions:
- * wall time is read only to give up on a thread that can no longer leave a broken barrier. */
+ * caught: a violation, or a thread stuck past a watchdog), and the barrier's sleeping waiters
+ * (woken every round; asleep, not spinning, through a long wait). No timing assertions on
+ * speed: wall time is read only to give up on a thread that can no longer leave a broken
+ * barrier, and CPU time only to tell a sleeping waiter from a spinning one. */
 #define _DEFAULT_SOURCE /* setitimer, for the stall test */
 #include <stdarg.h>
 #include <stddef.h>
@@ -67,6 +69,7 @@ struct harness {
     unsigned long rounds;
     wait_fn wait;
     bool stop_early;          /* broken barrier: end the run at the first catch */
+    long late_us;             /* > 0: each round one thread arrives up to this late (sleeps) */
     nbep_barrier good;
     broken_barrier broken;
     atomic_bool abandon;      /* set with stop_early at the first catch; relaxed (a hint) */
@@ -127,6 +130,11 @@ static void *worker_main(void *arg)
         if (h->stop_early && atomic_load_explicit(&h->abandon, memory_order_relaxed))
             break;
         atomic_store_explicit(&h->published[w->tid].value, r, memory_order_relaxed);
+        if (h->late_us > 0 && r % h->n_threads == w->tid) { /* the round's late arrival */
+            uint64_t x = r * 0x9E3779B97F4A7C15ull;
+            struct timespec ts = {0, 1000L * (long)((x >> 33) % (uint64_t)(h->late_us + 1))};
+            nanosleep(&ts, NULL);
+        }
         if (!h->wait(h))
             break;
         for (unsigned j = 0; j < h->n_threads; j++) {
@@ -150,7 +158,8 @@ typedef struct run_result {
 } run_result;
 
 /* Runs n_threads workers through `rounds` rounds of the harness on a fresh barrier. */
-static run_result run_harness(unsigned n_threads, unsigned long rounds, bool use_broken)
+static run_result run_harness_late(unsigned n_threads, unsigned long rounds, bool use_broken,
+                                   long late_us, unsigned long *sleeps)
 {
     assert_true(n_threads >= 1 && n_threads <= MAX_THREADS);
     harness *h = nbep_alloc_aligned(1, sizeof *h);  /* zeroed, cache-line aligned */
@@ -159,6 +168,7 @@ static run_result run_harness(unsigned n_threads, unsigned long rounds, bool use
     h->rounds = rounds;
     h->wait = use_broken ? broken_wait : good_wait;
     h->stop_early = use_broken;
+    h->late_us = late_us;
     nbep_barrier_init(&h->good, n_threads);
     atomic_init(&h->broken.count, (int)n_threads);
     atomic_init(&h->abandon, false);
@@ -181,8 +191,15 @@ static run_result run_harness(unsigned n_threads, unsigned long rounds, bool use
         .violations = atomic_load_explicit(&h->violations, memory_order_relaxed),
         .stuck = atomic_load_explicit(&h->stuck, memory_order_relaxed),
     };
+    if (sleeps)
+        *sleeps = atomic_load_explicit(&h->good.sleeps, memory_order_relaxed);
     nbep_free_aligned(h);
     return res;
+}
+
+static run_result run_harness(unsigned n_threads, unsigned long rounds, bool use_broken)
+{
+    return run_harness_late(n_threads, rounds, use_broken, 0, NULL);
 }
 
 /* ---- the deadlock watchdog --------------------------------------------------------------- */
@@ -235,6 +252,82 @@ static void test_eight_threads_on_two_cores_never_see_a_stale_round(void **state
 {
     (void)state;
     assert_stress_passes(8);
+}
+
+/* ---- waiters that sleep ------------------------------------------------------------------ */
+
+/* Every round one thread arrives late, by 0 to 1.5 ms (pseudo-random), so the others spin out
+ * NBEP_BARRIER_SPINS and sleep in most rounds, and the late arrival's advance of the round
+ * falls before, during and after their going to sleep: none may sleep through its round (the
+ * watchdog) or leave early (the stale-round check). */
+static void test_waiters_that_sleep_are_woken_every_round(void **state)
+{
+    (void)state;
+    const char *scale = getenv("NBEP_TEST_SCALE");
+    const unsigned long rounds = scale && strcmp(scale, "small") == 0 ? 40 : 400;
+    for (unsigned n = 2; n <= 4; n += 2) {
+        watchdog_arm();
+        unsigned long sleeps = 0;
+        run_result res = run_harness_late(n, rounds, false, 1500, &sleeps);
+        nbep_test_watchdog_disarm();
+        assert_int_equal(res.violations, 0);
+        assert_int_equal(res.stuck, 0);
+        assert_true(sleeps > 0); /* the sleeping path ran */
+    }
+}
+
+typedef struct sleeper {
+    nbep_barrier *b;
+    atomic_bool out;
+} sleeper;
+
+static void *sleeper_main(void *arg)
+{
+    sleeper *z = arg;
+    nbep_barrier_wait(z->b);
+    atomic_store_explicit(&z->out, true, memory_order_release);
+    return NULL;
+}
+
+static double thread_cpu_seconds(pthread_t t)
+{
+    clockid_t cid;
+    struct timespec ts;
+    assert_int_equal(pthread_getcpuclockid(t, &cid), 0);
+    assert_int_equal(clock_gettime(cid, &ts), 0);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* A thread that waits long sleeps: while the other thread is away for 200 ms it takes (far)
+ * less than half of that in CPU time, and it stays in the barrier until the other arrives. A
+ * waiter that spun would take about the whole 200 ms whenever a core is free for it. */
+static void test_a_long_wait_sleeps_instead_of_spinning(void **state)
+{
+    (void)state;
+    nbep_barrier *b = nbep_alloc_aligned(1, sizeof *b);
+    assert_non_null(b);
+    nbep_barrier_init(b, 2);
+    sleeper z = {b, false};
+    atomic_init(&z.out, false);
+    watchdog_arm();
+    pthread_t t;
+    assert_int_equal(pthread_create(&t, NULL, sleeper_main, &z), 0);
+    struct timespec tick = {0, 1000000L};
+    while (atomic_load_explicit(&b->sleeps, memory_order_relaxed) == 0)
+        nanosleep(&tick, NULL); /* until it has spun out and gone to sleep */
+    const double cpu0 = thread_cpu_seconds(t);
+    struct timespec away = {0, 200000000L};
+    nanosleep(&away, NULL);
+    const double cpu = thread_cpu_seconds(t) - cpu0;
+    assert_false(atomic_load_explicit(&z.out, memory_order_acquire));
+    nbep_barrier_wait(b); /* the other arrives: it must be woken */
+    assert_int_equal(pthread_join(t, NULL), 0);
+    nbep_test_watchdog_disarm();
+    assert_true(atomic_load_explicit(&z.out, memory_order_acquire));
+    if (!(cpu < 0.1))
+        fail_msg("the waiting thread took %.3f s of CPU time in 0.2 s asleep", cpu);
+    assert_int_equal(atomic_load_explicit(&b->sleeps, memory_order_relaxed), 1);
+    nbep_free_aligned(b);
 }
 
 /* ---- stalls at random instants ---------------------------------------------------------- */
@@ -395,6 +488,8 @@ int main(void)
         cmocka_unit_test(test_eight_threads_on_two_cores_never_see_a_stale_round),
         cmocka_unit_test(test_plain_writes_before_the_barrier_are_seen_after_it),
         cmocka_unit_test(test_threads_stalled_at_random_instants_never_deadlock_or_see_a_stale_round),
+        cmocka_unit_test(test_waiters_that_sleep_are_woken_every_round),
+        cmocka_unit_test(test_a_long_wait_sleeps_instead_of_spinning),
         cmocka_unit_test(test_the_paper_barrier_is_caught_with_two_threads),
         cmocka_unit_test(test_the_paper_barrier_is_caught_with_four_threads),
         cmocka_unit_test(test_the_paper_barrier_is_caught_with_eight_threads),

@@ -45,4 +45,11 @@ double nbep_now(void);
  * threads than cores still make progress (STYLE 6). k counts the calls of one wait from 1. */
 void nbep_spin_pause(unsigned k);
 
+/* Sleeping on a 32-bit word (Linux futexes; elsewhere a yield): nbep_word_wait returns once
+ * *word may differ from `expected` (at once if it already does; spuriously at times: callers
+ * look again), nbep_word_wake_all wakes every thread waiting on word. The word is read and
+ * written through C11 atomics only; these add no ordering of their own. */
+void nbep_word_wait(const void *word, unsigned expected);
+void nbep_word_wake_all(const void *word);
+
 #endif
