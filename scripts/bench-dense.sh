@@ -29,9 +29,11 @@
 # to 0.1 and to 0.1 + S, whole processes (so its set-up cancels). Repeats are the outer loop and
 # every engine runs once per repeat, so background load hits all alike; medians are reported,
 # and the ratios are of medians taken in the same run. Beside wall time, each row has the
-# processes' CPU time (user + system, /usr/bin/time), differenced the same way: on a shared
-# machine another job's load lengthens wall time far more than CPU time, so the CPU-time ratio
-# is the steadier comparison of the two engines (both include their set-up, which cancels).
+# processes' CPU time (user + system, /usr/bin/time), differenced the same way. CPU time leaves
+# out the time a process waited for a core, not the slowdown another job causes through the
+# shared caches and memory: on this project's 2-core machine the two ratios came out the same;
+# where a machine is oversubscribed the CPU-time one is the steadier (both include set-up,
+# which cancels).
 set -u
 cd "$(dirname "$0")/.."
 NS=${NS:-32000}
