@@ -91,10 +91,10 @@ MUTANTS = [
     ("barrier-no-wake", "src/barrier.c", "            nbep_word_wake_all(&b->round);",
      "            (void)0;", ["test_barrier"], None),
     ("barrier-sleeper-uncounted", "src/barrier.c",
-     "            atomic_fetch_add_explicit(&b->sleepers, 1u, memory_order_seq_cst);", "",
+     "        atomic_fetch_add_explicit(&b->sleepers, 1u, memory_order_seq_cst);", "",
      ["test_barrier"], None),
-    ("barrier-never-sleeps", "src/barrier.c", "            if (k < NBEP_BARRIER_SPINS) {",
-     "            if (1) {", ["test_barrier"], None),
+    ("barrier-never-sleeps", "src/barrier.c", "for (unsigned k = 1; k < NBEP_BARRIER_SPINS; k++) {",
+     "for (unsigned k = 1;; k++) {", ["test_barrier"], None),
     # ---- claims ----
     ("claim-max", "src/algo_predictive.c", "while (key < cur &&", "while (key > cur &&", SIM, None),
     ("claim-one-side", "src/algo_predictive.c",

@@ -64,20 +64,20 @@ void nbep_barrier_wait(nbep_barrier *b)
         if (atomic_load_explicit(&b->sleepers, memory_order_seq_cst) != 0u)
             nbep_word_wake_all(&b->round);
     } else {
-        /* Acquire: pairs with the release store of the new round, so writes before the
-         * barrier in any thread happen before our code after it. */
-        for (unsigned k = 1; atomic_load_explicit(&b->round, memory_order_acquire) == r; k++) {
-            if (k < NBEP_BARRIER_SPINS) {
-                nbep_spin_pause(k); /* cpu pause; sched_yield() every 1024th */
-                continue;
-            }
-            /* long enough: sleep until the round advances (see the top of the file) */
-            atomic_fetch_add_explicit(&b->sleepers, 1u, memory_order_seq_cst);
-            atomic_fetch_add_explicit(&b->sleeps, 1ul, memory_order_relaxed);
-            while (atomic_load_explicit(&b->round, memory_order_seq_cst) == r)
-                nbep_word_wait(&b->round, r);
-            /* relaxed: a count that lags only costs a last arrival a wake with no one to wake */
-            atomic_fetch_sub_explicit(&b->sleepers, 1u, memory_order_relaxed);
+        /* Acquire (the sequentially consistent loads below too): pairs with the release store
+         * of the new round, so writes before the barrier in any thread happen before our code
+         * after it. */
+        for (unsigned k = 1; k < NBEP_BARRIER_SPINS; k++) {
+            if (atomic_load_explicit(&b->round, memory_order_acquire) != r)
+                return;
+            nbep_spin_pause(k); /* cpu pause; sched_yield() every 1024th */
         }
+        /* long enough: sleep until the round advances (see the top of the file) */
+        atomic_fetch_add_explicit(&b->sleepers, 1u, memory_order_seq_cst);
+        atomic_fetch_add_explicit(&b->sleeps, 1ul, memory_order_relaxed);
+        while (atomic_load_explicit(&b->round, memory_order_seq_cst) == r)
+            nbep_word_wait(&b->round, r);
+        /* relaxed: a count that lags only costs a last arrival a wake with no one to wake */
+        atomic_fetch_sub_explicit(&b->sleepers, 1u, memory_order_relaxed);
     }
 }
