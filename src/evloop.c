@@ -397,7 +397,9 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
     while (nbep_calendar_top(e->cal, &i, &t) && t < t_end) {
         const nbep_event ev = *nbep_feq_slot(e->q, i);
         /* what this event and the next ones will read, requested now (no effect on results):
-         * the lists and places of its spheres, the slots and places of the runners-up */
+         * the first line of its list (from the list's record, which the event before requested
+         * with the runners-up), its place, its partner's list record and place, and the
+         * runners-up' slots, places and list records */
         NBEP_PREFETCH(&e->nl.pool[e->nl.sp[i].off]);
         NBEP_PREFETCH(&e->cells.m[i]);
         if (ev.kind == NBEP_EVENT_SPHERE) {
