@@ -112,10 +112,13 @@ PYEOF
 
 summary_field() { sed -n "s/.*\"$1\": *\([0-9.e+-]*\).*/\1/p"; }
 
-# Runs a command (stdout kept), its CPU time (user + system, seconds) into the file $CPU_OUT.
-CPU_OUT="$OUT/cpu.txt"
-timed() { /usr/bin/time -f "%U %S" -o "$CPU_OUT" "$@"; }
-cpu_of() { awk '{ print $1 + $2 }' "$CPU_OUT"; }
+# timed CMD...: runs it (stdout kept) and records its CPU time and peak RSS, which cpu_of
+# (user + system, seconds) and rss_of (bytes) read back; minus A B prints B - A.
+TIME_OUT="$(cd "$OUT" && pwd)/time.txt"
+timed() { /usr/bin/time -f "%U %S %M" -o "$TIME_OUT" "$@"; }
+cpu_of() { awk 'END { print $1 + $2 }' "$TIME_OUT"; } # the last line: a failed command's
+rss_of() { awk 'END { print $3 * 1024 }' "$TIME_OUT"; } # status line comes first
+minus() { awk -v a="$1" -v b="$2" 'BEGIN { print b - a }'; }
 
 run_nbep() { # n phi threads rep
     local S d1 d2 s1 s2 steps2
@@ -133,18 +136,16 @@ run_nbep() { # n phi threads rep
     c1=$(echo "$s1" | summary_field collisions); c2=$(echo "$s2" | summary_field collisions)
     w1=$(echo "$s1" | summary_field wall_seconds); w2=$(echo "$s2" | summary_field wall_seconds)
     rss=$(echo "$s2" | summary_field peak_rss_bytes)
-    echo "nbep,$1,$2,$3,$4,$((c2 - c1)),$(awk -v a="$w1" -v b="$w2" 'BEGIN { print b - a }'),$rss,$(awk -v a="$u1" -v b="$u2" 'BEGIN { print b - a }')" >>"$rows"
+    echo "nbep,$1,$2,$3,$4,$((c2 - c1)),$(minus "$w1" "$w2"),$rss,$(minus "$u1" "$u2")" >>"$rows"
 }
 
 edmd_once() { # dir -> "collisions seconds rss cpu_seconds"
-    local t0 t1 col rss cpu
+    local t0 t1 col
     t0=$(date +%s.%N)
-    (cd "$1" && /usr/bin/time -f "RSS %M CPU %U %S" ./md >run.log 2>&1)
+    (cd "$1" && timed ./md >run.log 2>&1)
     t1=$(date +%s.%N)
     col=$(sed -n 's/^Simtime: .*Collisions: \([0-9]*\),.*/\1/p' "$1/run.log" | tail -1)
-    rss=$(sed -n 's/^RSS \([0-9]*\) .*/\1/p' "$1/run.log")
-    cpu=$(sed -n 's/^RSS [0-9]* CPU \([0-9.]*\) \([0-9.]*\)/\1 \2/p' "$1/run.log" | awk '{ print $1 + $2 }')
-    echo "$col $(awk -v a="$t0" -v b="$t1" 'BEGIN { print b - a }') $((rss * 1024)) $cpu"
+    echo "$col $(minus "$t0" "$t1") $(rss_of) $(cpu_of)"
 }
 
 run_edmd() { # n phi rep
@@ -154,7 +155,7 @@ run_edmd() { # n phi rep
     e2=$(edmd_build "$1" "$2" "$(awk -v s="$S" 'BEGIN { print 0.1 + s }')") || return 1
     read -r ca wa ra ua < <(edmd_once "$e1")
     read -r cb wb rb ub < <(edmd_once "$e2")
-    echo "edmd,$1,$2,1,$3,$((cb - ca)),$(awk -v a="$wa" -v b="$wb" 'BEGIN { print b - a }'),$rb,$(awk -v a="$ua" -v b="$ub" 'BEGIN { print b - a }')" >>"$rows"
+    echo "edmd,$1,$2,1,$3,$((cb - ca)),$(minus "$wa" "$wb"),$rb,$(minus "$ua" "$ub")" >>"$rows"
 }
 
 for n in $NS; do
