@@ -358,6 +358,103 @@ static void test_sphere_wedged_between_a_held_one_and_a_wall_is_held(void **stat
     }
 }
 
+/* A channel of three faces: a ball on the floor against a wall, an overhang at 45 degrees
+ * touching it from above on the other side, the three turned by `turn` about z so that the
+ * normals carry round-off. It moves along the channel and into the wall; whatever faces cage
+ * it (a wall and the overhang, the overhang and the floor, or all three), it slides on along
+ * the channel on the floor with its speed along it unchanged. */
+static void test_ball_in_a_channel_of_three_faces_slides_on(void **state)
+{
+    (void)state;
+    const double r = 0.1, v_along = 0.3, v_in = 0.2;
+    for (int k = 0; k < 8; k++) {
+        const double turn = 0.37 * k, c = cos(turn), s = sin(turn);
+        const nbep_vec3 along = {c, s, 0.0}, wall = {-s, c, 0.0};
+        nbep_scene *sc = scene(1, 3, "predictive", 300, 0.5);
+        sc->max_reactions = 100000;
+        nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+        nbep_test_set_plane(sc, 1, wall, 0.0);
+        const nbep_vec3 p0 = nbep_vec3_add(nbep_vec3_scale(wall, r), (nbep_vec3){0, 0, r});
+        const nbep_vec3 over = nbep_vec3_scale(nbep_vec3_add(wall, (nbep_vec3){0, 0, 1}),
+                                               -1.0 / sqrt(2.0));
+        nbep_test_set_plane(sc, 2, over, nbep_vec3_dot(over, p0) - r);
+        const nbep_vec3 v0 = nbep_vec3_add(nbep_vec3_scale(along, v_along),
+                                           nbep_vec3_scale(wall, -v_in));
+        nbep_test_set_sphere(sc, 0, p0, v0, r, 1.0, DOWN);
+        trace t = {0};
+        nbep_summary sum = run(sc, 1, &t);
+        const nbep_vec3 v = last_vel(&t)[0], p = last_pos(&t)[0];
+        /* 1e-9: the turned normals' round-off, taken by a few projections */
+        assert_true(nbep_vec3_norm(nbep_vec3_sub(v, nbep_vec3_scale(along, v_along))) <=
+                    1e-9 * v_along);
+        assert_true(fabs(p.z - r) <= 1e-9 * r);
+        assert_true(sum.plane_collisions <= 10);
+        free(t.data);
+        nbep_test_scene_free(&sc);
+    }
+}
+
+/* Against the crest of a held sphere: B slides along a channel (the floor, an overhang at 45
+ * degrees touching it from above) towards H, held on the floor beside the channel a hair
+ * (eps) inside B's reach. B meets H just before H's crest, closing on it at about
+ * sqrt(eps / r) of its speed; the overhang leaves it no room to climb over, so it is stopped.
+ * Taken two at a time, the three faces (H, the overhang, the floor) each leave it a velocity
+ * of round-off size heading into the third, at zero time, for ever (a 300-sphere pour jammed
+ * so, seed 3 at step 618: a million reactions in a step); caged by all three at once it stops
+ * against H and stays on the floor, in every neighbour mode. */
+static void test_sphere_stopped_at_a_held_crest_under_an_overhang(void **state)
+{
+    (void)state;
+    const double r = 0.1, vx = 0.1, eps = 1e-12 * r;
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
+        nbep_scene *sc = scene(2, 2, "predictive", 800, 0.5);
+        sc->neighbors_grid = mode == 1;
+        sc->neighbors_cells = mode == 2;
+        sc->max_reactions = 100000;
+        nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+        const nbep_vec3 b0 = {0.0, 0.0, r};
+        const nbep_vec3 over = {0.0, -1.0 / sqrt(2.0), -1.0 / sqrt(2.0)};
+        nbep_test_set_plane(sc, 1, over, nbep_vec3_dot(over, b0) - r);
+        nbep_test_set_sphere(sc, 0, b0, (nbep_vec3){vx, 0.0, 0.0}, r, 1.0, DOWN);
+        nbep_test_set_sphere(sc, 1, (nbep_vec3){0.05, -(2.0 * r - eps), r}, ZERO, r, 1.0, DOWN);
+        trace t = {0};
+        nbep_summary sum = run(sc, 1, &t);
+        const nbep_vec3 *p = last_pos(&t), *v = last_vel(&t);
+        assert_true(nbep_vec3_equal(v[1], ZERO) && p[1].x == 0.05); /* H stays held */
+        assert_true(p[0].x <= 0.05 && v[0].x <= 0.0);               /* B does not pass */
+        assert_true(fabs(p[0].z - r) <= 1e-12 && fabs(p[0].y) <= 1e-12);
+        assert_true(sum.collisions < 1000);
+        free(t.data);
+        nbep_test_scene_free(&sc);
+    }
+}
+
+/* A cage is made of faces met within tc: a ball slides along a wall A (gravity tilted into
+ * it and the floor) for 0.3 s and meets a wall B across its way, turned 0.01 rad towards A
+ * (B faces A a little). Long after it met A, it bounces off B with restitution and runs back
+ * along A (then the round-off of A, met at once, and B, within tc, cage its bounce: it keeps
+ * only its speed along A); caged by A and B together at once, it would stop dead at B. */
+static void test_ball_along_a_wall_rebounds_off_a_wall_across_its_way(void **state)
+{
+    (void)state;
+    const double r = 0.1, vx = 0.5, e = 0.5, tilt = 0.01;
+    nbep_scene *sc = scene(1, 3, "predictive", 600, e);
+    nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+    nbep_test_set_plane(sc, 1, (nbep_vec3){0, 1, 0}, 0.0);
+    const nbep_vec3 nb = {-cos(tilt), -sin(tilt), 0.0};
+    nbep_test_set_plane(sc, 2, nb, nbep_vec3_dot(nb, (nbep_vec3){0.25, 0.0, 0.0}));
+    nbep_test_set_sphere(sc, 0, (nbep_vec3){0.0, r, r}, (nbep_vec3){vx, 0.0, 0.0}, r, 1.0,
+                         (nbep_vec3){0.0, -1.0, -9.81});
+    trace t = {0};
+    (void)run(sc, 1, &t);
+    const nbep_vec3 v = last_vel(&t)[0], p = last_pos(&t)[0];
+    /* back along A at e times its speed against B, to within what A's cage takes (0.01 of it) */
+    assert_true(v.x < -0.9 * e * vx * cos(tilt) && v.x > -1.01 * e * vx);
+    assert_true(v.y == 0.0 && v.z == 0.0 && fabs(p.y - r) <= 1e-12 && fabs(p.z - r) <= 1e-12);
+    free(t.data);
+    nbep_test_scene_free(&sc);
+}
+
 /* Settled spheres stay held while something else wakes (and frames are the same on 1 and 4
  * threads): the pair of the test above settles at
  * one end of a box (y = 0.25); at the other (y = 0.8) a ball falls onto a sphere held on the
@@ -634,6 +731,9 @@ int main(void)
         cmocka_unit_test(test_spheres_that_carry_each_other_settle),
         cmocka_unit_test(test_settled_spheres_stay_held_when_others_wake),
         cmocka_unit_test(test_sphere_wedged_between_a_held_one_and_a_wall_is_held),
+        cmocka_unit_test(test_ball_in_a_channel_of_three_faces_slides_on),
+        cmocka_unit_test(test_sphere_stopped_at_a_held_crest_under_an_overhang),
+        cmocka_unit_test(test_ball_along_a_wall_rebounds_off_a_wall_across_its_way),
         cmocka_unit_test(test_groove_ball_ends_at_the_bottom_of_the_v),
         cmocka_unit_test(test_e0_pair_keeps_momentum_and_loses_energy),
         cmocka_unit_test(test_e0_plane_stops_at_first_contact),
