@@ -429,6 +429,76 @@ static void test_sphere_stopped_at_a_held_crest_under_an_overhang(void **state)
     }
 }
 
+/* A groove that tilts by less than the contacts resolve (HOLD_SLOPE): B lies in the groove
+ * between A1 and A2 on the floor, against a wall at one end, under an overhang at 45 degrees
+ * that touches it from the side of A2; A2 sits `tilt` radii further from the wall than A1, so
+ * the groove falls away from the wall by about tilt / 3 (towards it for a negative tilt: the
+ * wall then holds B exactly). Held by A1 and A2 (once they are held), B is left that slope's
+ * share of its weight along the groove, an acceleration that the contacts' gaps do not
+ * resolve; it is held where it lies. Not held, the minimum bounce off A1 drives it into the
+ * overhang and the cage takes it back, at zero time, for ever (a 300-sphere pour jammed so,
+ * seed 3 at step 1429, a slope of 3e-7). */
+static void test_sphere_in_a_groove_tilted_below_resolution_is_held(void **state)
+{
+    (void)state;
+    const double r = 0.1, w = 1.0, h = sqrt(2.0) * r;
+    const double tilts[] = {1e-7, -1e-7, 1e-6};
+    for (int mode = 0; mode < 3; mode++) /* all pairs, grid, cells */
+        for (size_t k = 0; k < 3; k++) {
+            nbep_scene *sc = scene(3, 3, "predictive", 300, 0.5);
+            sc->neighbors_grid = mode == 1;
+            sc->neighbors_cells = mode == 2;
+            sc->max_reactions = 100000;
+            nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+            nbep_test_set_plane(sc, 1, (nbep_vec3){0, -1, 0}, -w);
+            const nbep_vec3 b = {0.0, w - r, r + h};
+            const nbep_vec3 over = {-1.0 / sqrt(2.0), 0.0, -1.0 / sqrt(2.0)};
+            nbep_test_set_plane(sc, 2, over, nbep_vec3_dot(over, b) - r);
+            nbep_test_set_sphere(sc, 0, (nbep_vec3){-h, w - r, r}, ZERO, r, 1.0, DOWN);
+            nbep_test_set_sphere(sc, 1, (nbep_vec3){h, w - r - tilts[k] * r, r}, ZERO, r, 1.0,
+                                 DOWN);
+            nbep_test_set_sphere(sc, 2, b, ZERO, r, 1.0, DOWN);
+            trace t = {0};
+            nbep_summary sum = run(sc, 1, &t);
+            const nbep_vec3 *p = last_pos(&t);
+            for (size_t i = 0; i < 3; i++)
+                assert_true(nbep_vec3_equal(last_vel(&t)[i], ZERO));
+            assert_true(nbep_vec3_norm(nbep_vec3_sub(p[2], b)) <= 1e-6 * r);
+            assert_true(sum.collisions < 1000);
+            free(t.data);
+            nbep_test_scene_free(&sc);
+        }
+}
+
+/* Planes are exact: a ball set at rest on a plane tilted by 1e-7 rad (below HOLD_SLOPE, the
+ * tolerance for sphere supports) slides down it as the analytic s = g sin(theta) t^2 / 2,
+ * about 4.9e-7 m in 1 s, and is never held. (e = 1: with e < 1 the settling rule holds it
+ * after SETTLE_STEPS steps slower than the settle speed, as any sphere on any support below
+ * it; README, granular.) */
+static void test_ball_slides_down_a_plane_tilted_below_hold_slope(void **state)
+{
+    (void)state;
+    const double r = 0.1, theta = 1e-7, g = 9.81, T = 1.0;
+    nbep_scene *sc = scene(1, 1, "predictive", 1000, 1.0);
+    const nbep_vec3 n = {sin(theta), 0.0, cos(theta)};
+    nbep_test_set_plane(sc, 0, n, 0.0);
+    const nbep_vec3 p0 = nbep_vec3_scale(n, r);
+    nbep_test_set_sphere(sc, 0, p0, ZERO, r, 1.0, DOWN);
+    trace t = {0};
+    (void)run(sc, 1, &t);
+    const nbep_vec3 d = nbep_vec3_sub(last_pos(&t)[0], p0);
+    const nbep_vec3 down = {cos(theta), 0.0, -sin(theta)}; /* along the plane, downhill */
+    const double s_exact = 0.5 * g * sin(theta) * T * T;
+    /* 1e-6 relative: the drift's round-off on coordinates of size r (1e-16 r a step, 1e-14 m
+     * in all against 4.9e-7 m) with a wide margin */
+    assert_true(fabs(nbep_vec3_dot(d, down) - s_exact) <= 1e-6 * s_exact);
+    assert_true(fabs(nbep_vec3_dot(d, n)) <= 1e-12 * r);
+    assert_true(fabs(nbep_vec3_dot(last_vel(&t)[0], down) - g * sin(theta) * T) <=
+                1e-6 * g * sin(theta) * T);
+    free(t.data);
+    nbep_test_scene_free(&sc);
+}
+
 /* A cage is made of faces met within tc: a ball slides along a wall A (gravity tilted into
  * it and the floor) for 0.3 s and meets a wall B across its way, turned 0.01 rad towards A
  * (B faces A a little). Long after it met A, it bounces off B with restitution and runs back
@@ -733,6 +803,8 @@ int main(void)
         cmocka_unit_test(test_sphere_wedged_between_a_held_one_and_a_wall_is_held),
         cmocka_unit_test(test_ball_in_a_channel_of_three_faces_slides_on),
         cmocka_unit_test(test_sphere_stopped_at_a_held_crest_under_an_overhang),
+        cmocka_unit_test(test_sphere_in_a_groove_tilted_below_resolution_is_held),
+        cmocka_unit_test(test_ball_slides_down_a_plane_tilted_below_hold_slope),
         cmocka_unit_test(test_ball_along_a_wall_rebounds_off_a_wall_across_its_way),
         cmocka_unit_test(test_groove_ball_ends_at_the_bottom_of_the_v),
         cmocka_unit_test(test_e0_pair_keeps_momentum_and_loses_energy),
