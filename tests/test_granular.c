@@ -525,6 +525,41 @@ static void test_ball_along_a_wall_rebounds_off_a_wall_across_its_way(void **sta
     nbep_test_scene_free(&sc);
 }
 
+/* A slot a diameter wide between a wall and a held sphere H, with a sphere B in it a hair
+ * (dz) higher than H and a hair (dy) along the slot off H's crest, sliding on along the slot
+ * away from the crest (at 1.3 and 3.9 mm/s, the rest speed 1 mm/s): its weight presses it on
+ * H's curve, and each minimum bounce off H heads into the wall, whose cage takes it back; B met
+ * H again 1e-10 s later, a million times in a step (a 300-sphere pour, seed 1, steps 892 and
+ * 898). Having reacted ten thousand times in a step (JAM_HOLD), B is held where it is, in
+ * every neighbour mode: the run goes on, nothing moves, B stays in the slot. */
+static void test_sphere_sliding_in_a_slot_on_a_held_curve_is_held(void **state)
+{
+    (void)state;
+    const double r = 0.03, dy = 1.64e-6, dz = 7.27e-5;
+    const double x = sqrt(4.0 * r * r - dy * dy - dz * dz);
+    for (int mode = 0; mode < 6; mode++) { /* all pairs, grid, cells; two speeds */
+        const double v0 = mode < 3 ? 1.32e-3 : 3.89e-3;
+        nbep_scene *sc = scene(2, 2, "predictive", 100, 0.5);
+        sc->neighbors_grid = mode % 3 == 1;
+        sc->neighbors_cells = mode % 3 == 2;
+        sc->max_reactions = 100000;
+        nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+        nbep_test_set_plane(sc, 1, (nbep_vec3){-1, 0, 0}, -(x + r));
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){0.0, 0.0, r}, ZERO, r, 1.0, DOWN);
+        const nbep_vec3 b = {x, -dy, r + dz};
+        nbep_test_set_sphere(sc, 1, b, (nbep_vec3){0.0, -v0, 0.0}, r, 1.0, DOWN);
+        trace t = {0};
+        nbep_summary sum = run(sc, 1, &t);
+        const nbep_vec3 *p = last_pos(&t);
+        for (size_t i = 0; i < 2; i++)
+            assert_true(nbep_vec3_equal(last_vel(&t)[i], ZERO));
+        assert_true(fabs(p[1].x - x) <= 1e-9 && p[1].z >= r && p[1].z <= r + dz);
+        assert_true(sum.collisions < 100000);
+        free(t.data);
+        nbep_test_scene_free(&sc);
+    }
+}
+
 /* Settled spheres stay held while something else wakes (and frames are the same on 1 and 4
  * threads): the pair of the test above settles at
  * one end of a box (y = 0.25); at the other (y = 0.8) a ball falls onto a sphere held on the
@@ -806,6 +841,7 @@ int main(void)
         cmocka_unit_test(test_sphere_in_a_groove_tilted_below_resolution_is_held),
         cmocka_unit_test(test_ball_slides_down_a_plane_tilted_below_hold_slope),
         cmocka_unit_test(test_ball_along_a_wall_rebounds_off_a_wall_across_its_way),
+        cmocka_unit_test(test_sphere_sliding_in_a_slot_on_a_held_curve_is_held),
         cmocka_unit_test(test_groove_ball_ends_at_the_bottom_of_the_v),
         cmocka_unit_test(test_e0_pair_keeps_momentum_and_loses_energy),
         cmocka_unit_test(test_e0_plane_stops_at_first_contact),
