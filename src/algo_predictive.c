@@ -1289,15 +1289,17 @@ static void leave_held(const pred_ctx *c, nbep_state *s, size_t k, size_t j, dou
 }
 
 /* Sphere k, which has reacted JAM_HOLD times or more in this step, meets held sphere j slowly
- * (land_on_held): it is held where it is, on j and what it touches (pocket_gather,
- * pocket_planes, within the settle tolerance). See JAM_HOLD. */
+ * (land_on_held), or meets any sphere while its planes carry it (j = NO_SPHERE): it is held
+ * where it is, on its planes, j and what it touches (pocket_gather, pocket_planes, within
+ * the settle tolerance). See JAM_HOLD. */
+#define NO_SPHERE SIZE_MAX
 static bool jam_hold(pred_ctx *c, nbep_state *s, thread_ws *w, size_t k, size_t j, double dt)
 {
     if (!c->settle || !c->jam || c->jam[k].step != w->jam_step || c->jam[k].n < JAM_HOLD)
         return false;
     const double vs = settle_speed(s, k, dt), amag = nbep_vec3_norm(s->acc[k]);
     rest_set r = c->rest[k];
-    if (r.n < NBEP_CONTACT_MAX) {
+    if (j != NO_SPHERE && r.n < NBEP_CONTACT_MAX) {
         r.who[r.n] = -1 - (int32_t)j;
         r.ver[r.n++] = c->ver[j];
     }
@@ -1426,6 +1428,18 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
         double u = nbep_vec3_dot(s->vel[k], d) / nbep_vec3_norm(d);
         if (fabs(u) <= rest_speed(s, k, nbep_vec3_norm(s->acc[k]), dt)) {
             land_on_held(c, s, e, dt, k, j, t_abs, sc->tc, w, cnt);
+            return;
+        }
+    }
+    /* a jammed sphere that its planes carry is held where it is (JAM_HOLD: a row of spheres
+     * that fits a box exactly passes its momentum to and fro at zero time); the other takes
+     * no response and, unless held (as land_on_held leaves the held sphere), is predicted
+     * again against it */
+    for (int q = 0; c->rest && q < 2; q++) {
+        const size_t k = q ? hi : lo, o = q ? lo : hi;
+        if (!c->rest[k].still && supported(c, k) && jam_hold(c, s, w, k, NO_SPHERE, dt)) {
+            if (!c->rest[o].still)
+                fire(c, w, s, o, false);
             return;
         }
     }

@@ -560,6 +560,39 @@ static void test_sphere_sliding_in_a_slot_on_a_held_curve_is_held(void **state)
     }
 }
 
+/* A row that fits exactly: three spheres on the floor of a box exactly three diameters long,
+ * touching each other and both end walls, the middle one moving along the row. With no room
+ * its momentum passes to and fro at zero time, elastic by the TC model (a Newton's cradle
+ * without gaps: 12 spheres poured into a 0.30 m box stopped so on run.max_reactions); having
+ * reacted JAM_HOLD times in a step, a sphere its planes carry is held where it is, and so in
+ * turn the row, in every neighbour mode: nothing moves, every centre where it was set. */
+static void test_row_that_fits_exactly_is_held(void **state)
+{
+    (void)state;
+    const double r = 0.05;
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
+        nbep_scene *sc = scene(3, 6, "predictive", 50, 0.5);
+        sc->neighbors_grid = mode == 1;
+        sc->neighbors_cells = mode == 2;
+        sc->max_reactions = 100000;
+        box(sc, 6.0 * r, 0.5, 0.5);
+        for (size_t i = 0; i < 3; i++)
+            nbep_test_set_sphere(sc, i, (nbep_vec3){r * (1.0 + 2.0 * (double)i), 0.25, r},
+                                 (nbep_vec3){i == 1 ? 0.1 : 0.0, 0.0, 0.0}, r, 1.0, DOWN);
+        trace t = {0};
+        nbep_summary sum = run(sc, 1, &t);
+        for (size_t i = 0; i < 3; i++) {
+            const nbep_vec3 p = last_pos(&t)[i];
+            assert_true(nbep_vec3_equal(last_vel(&t)[i], ZERO));
+            assert_true(fabs(p.x - r * (1.0 + 2.0 * (double)i)) <= 1e-9 * r &&
+                        p.y == 0.25 && fabs(p.z - r) <= 1e-12);
+        }
+        assert_true(sum.collisions < 100000);
+        free(t.data);
+        nbep_test_scene_free(&sc);
+    }
+}
+
 /* Settled spheres stay held while something else wakes (and frames are the same on 1 and 4
  * threads): the pair of the test above settles at
  * one end of a box (y = 0.25); at the other (y = 0.8) a ball falls onto a sphere held on the
@@ -842,6 +875,7 @@ int main(void)
         cmocka_unit_test(test_ball_slides_down_a_plane_tilted_below_hold_slope),
         cmocka_unit_test(test_ball_along_a_wall_rebounds_off_a_wall_across_its_way),
         cmocka_unit_test(test_sphere_sliding_in_a_slot_on_a_held_curve_is_held),
+        cmocka_unit_test(test_row_that_fits_exactly_is_held),
         cmocka_unit_test(test_groove_ball_ends_at_the_bottom_of_the_v),
         cmocka_unit_test(test_e0_pair_keeps_momentum_and_loses_energy),
         cmocka_unit_test(test_e0_plane_stops_at_first_contact),
