@@ -565,7 +565,8 @@ static void test_sphere_sliding_in_a_slot_on_a_held_curve_is_held(void **state)
  * its momentum passes to and fro at zero time, elastic by the TC model (a Newton's cradle
  * without gaps: 12 spheres poured into a 0.30 m box stopped so on run.max_reactions); having
  * reacted JAM_HOLD times in a step, a sphere its planes carry is held where it is, and so in
- * turn the row, in every neighbour mode: nothing moves, every centre where it was set. */
+ * turn the row, in every neighbour mode and on 1, 2 and 4 threads alike: nothing moves,
+ * every centre where it was set. */
 static void test_row_that_fits_exactly_is_held(void **state)
 {
     (void)state;
@@ -581,6 +582,15 @@ static void test_row_that_fits_exactly_is_held(void **state)
                                  (nbep_vec3){i == 1 ? 0.1 : 0.0, 0.0, 0.0}, r, 1.0, DOWN);
         trace t = {0};
         nbep_summary sum = run(sc, 1, &t);
+        { /* the holds, mid-round, the same on 2 and 4 threads */
+            for (int nt = 2; nt <= 4; nt += 2) {
+                trace tn = {0};
+                assert_int_equal(run(sc, nt, &tn).collisions, sum.collisions);
+                assert_int_equal(tn.n_frames, t.n_frames);
+                assert_memory_equal(tn.data, t.data, t.n_frames * 2 * t.n * sizeof *t.data);
+                free(tn.data);
+            }
+        }
         for (size_t i = 0; i < 3; i++) {
             const nbep_vec3 p = last_pos(&t)[i];
             assert_true(nbep_vec3_equal(last_vel(&t)[i], ZERO));
