@@ -45,7 +45,9 @@ enum {
     X(RUN_MAX_REACTIONS, "run.max_reactions", INT, F_GE1, "1000000", NULL,                         \
       "predictive: a sphere that reacts more than this many times in one step is jammed "         \
       "(pressed between walls and neighbours that nbep cannot hold still, README: granular "      \
-      "scenes): the run stops with exit 1, its frames kept, instead of never ending the step")     \
+      "scenes): the run stops with exit 1, its frames kept, instead of never ending the step "    \
+      "(with e < 1 and gravity a sphere is first held where it is after 10000 reactions in a "    \
+      "step, at its next slow meeting with a held sphere or, carried by planes, any sphere)")    \
     X(PHYSICS, "physics", GROUP, 0, NULL, "-", "physics")                                          \
     X(PHYSICS_GRAVITY, "physics.gravity", VEC3, 0, "[0.0, 0.0, 0.0]", NULL,                        \
       "uniform acceleration of every sphere without its own")                                      \
