@@ -148,7 +148,7 @@ MUTANTS = [
     ("cage-last-face-only", "src/algo_predictive.c", "    for (int j = 0; j < CAGE_FACES; j++)\n        if (f[j].who != who",
      "    for (int j = 0; j < 1; j++)\n        if (f[j].who != who", GRAN, None),
     ("jam-hold-off", "src/algo_predictive.c", "    if (jam_hold(c, s, w, k, j, dt))\n        return;\n", "", GRAN, None),
-    ("jam-hold-late", "src/algo_predictive.c", "#define JAM_HOLD 10000u", "#define JAM_HOLD 1000000u", GRAN, None),
+    ("jam-hold-late", "src/algo_predictive.c", "#define JAM_HOLD ((uint32_t)NBEP_JAM_HOLD)", "#define JAM_HOLD ((uint32_t)NBEP_JAM_HOLD * 100u)", GRAN, None),
     ("jam-hold-slow-only", "src/algo_predictive.c",
      "    const double vs = settle_speed(s, k, dt), amag = nbep_vec3_norm(s->acc[k]);\n    rest_set r",
      "    const double vs = settle_speed(s, k, dt), amag = nbep_vec3_norm(s->acc[k]);\n    if (!(nbep_vec3_norm(s->vel[k]) <= vs))\n        return false;\n    rest_set r", GRAN, None),

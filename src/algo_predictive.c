@@ -156,7 +156,7 @@
  * far above any motion it resolves (the busiest sphere of the hopper and pile decks reacts 200
  * to 2000 times in a step). Energy: the sphere's kinetic energy at the hold, the model's,
  * besides restitution (1/2 m (3.9 mm/s)^2 = 7.6e-6 J per kg in the case measured). */
-#define JAM_HOLD 10000u
+#define JAM_HOLD ((uint32_t)NBEP_JAM_HOLD) /* nbep/scene.h: --help-deck names it */
 
 /* One sphere's settling record (see SETTLE_STEPS): written by its owner, in the update and in
  * the settle sub-phases; cand and still are the snapshot other threads read in settle_hold. */

@@ -11,6 +11,10 @@
 
 #include "scene_impl.h"
 
+/* A macro's value as a string literal (NBEP_JAM_HOLD in the help text) */
+#define NBEP_SCHEMA_STR(x) #x
+#define NBEP_SCHEMA_XSTR(x) NBEP_SCHEMA_STR(x)
+
 enum {
     F_REQUIRED = 1 << 0,   /* must be given when its group is */
     F_GT0 = 1 << 1,        /* > 0 */
@@ -46,7 +50,8 @@ enum {
       "predictive: a sphere that reacts more than this many times in one step is jammed "         \
       "(pressed between walls and neighbours that nbep cannot hold still, README: granular "      \
       "scenes): the run stops with exit 1, its frames kept, instead of never ending the step "    \
-      "(with e < 1 and gravity a sphere is first held where it is after 10000 reactions in a "    \
+      "(with e < 1 and gravity a sphere is first held where it is after "                        \
+      NBEP_SCHEMA_XSTR(NBEP_JAM_HOLD) " reactions in a "                                          \
       "step, at its next slow meeting with a held sphere or, carried by planes, any sphere)")    \
     X(PHYSICS, "physics", GROUP, 0, NULL, "-", "physics")                                          \
     X(PHYSICS_GRAVITY, "physics.gravity", VEC3, 0, "[0.0, 0.0, 0.0]", NULL,                        \

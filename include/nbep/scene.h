@@ -23,6 +23,11 @@ typedef struct nbep_sweep_axis {
     char **values;      /* owned, e.g. "0.9", "[0.0, 0.0, -1.0]", "\"naive\"" */
 } nbep_sweep_axis;
 
+/* The jam hold (algo_predictive.c, JAM_HOLD): with e < 1 and accelerations, a sphere that has
+ * reacted this many times in one step is held where it is at its next slow meeting with a
+ * held sphere or, carried by planes, any sphere. Here because --help-deck names it. */
+#define NBEP_JAM_HOLD 10000
+
 typedef struct nbep_scene {
     /* provenance */
     char *deck_path;          /* owned: as given on the command line */
