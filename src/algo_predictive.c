@@ -146,8 +146,9 @@
 /* A sphere that has reacted this many times in one step is held where it is when it next
  * meets a held sphere slowly (along the line of centres no faster than the rest speed:
  * land_on_held; jam_hold), or any sphere while its planes carry it (react: a row of spheres
- * that fits a box exactly, a Newton's cradle without gaps). Bounced between a held sphere and a face across from it (a slot a
- * diameter wide between a wall and a held sphere a hair lower than it, so that its weight
+ * that fits a box exactly, a Newton's cradle without gaps). Bounced between a held sphere and
+ * a face across from it (a slot a diameter wide between a wall and a held sphere a hair lower
+ * than it, so that its weight
  * presses it on that sphere's curve as it slides along the slot), a sphere re-meets the held
  * one 1e-10 to 1e-12 s after each minimum bounce (the cage takes the bounce back), a million
  * times before the step ends (a 300-sphere pour, seed 1, steps 892 and 898, sliding at 1.3
