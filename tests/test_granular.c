@@ -82,6 +82,13 @@ static nbep_scene *scene(size_t n, size_t np, const char *algo, uint64_t steps, 
     return sc;
 }
 
+/* Neighbour mode 0, 1, 2: all pairs, grid, cells (the tests run each in turn). */
+static void neighbor_mode(nbep_scene *sc, int mode)
+{
+    sc->neighbors_grid = mode == 1;
+    sc->neighbors_cells = mode == 2;
+}
+
 /* The six inward planes of the box [0, L]^3 as planes 0..5. */
 static void box(nbep_scene *sc, double lx, double ly, double lz)
 {
@@ -260,8 +267,7 @@ static void test_sphere_in_a_pocket_of_four_is_held(void **state)
     const double r = 0.1, h = r + sqrt(4.0 * r * r - 2.0 * r * r);
     for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
         nbep_scene *sc = scene(5, 6, "predictive", 300, 0.5);
-        sc->neighbors_grid = mode == 1;
-        sc->neighbors_cells = mode == 2;
+        neighbor_mode(sc, mode);
         box(sc, 2.0 * 2.0 * r, 2.0 * 2.0 * r, 0.6);
         for (size_t i = 0; i < 4; i++)
             nbep_test_set_sphere(sc, i, (nbep_vec3){r + 2.0 * r * (double)(i % 2),
@@ -304,8 +310,7 @@ static void test_spheres_that_carry_each_other_settle(void **state)
         uint64_t coll[2];
         for (int k = 0; k < 2; k++) {
             nbep_scene *sc = scene(2, 6, "predictive", k == 0 ? 1000 : 1300, 0.5);
-            sc->neighbors_grid = mode == 1;
-            sc->neighbors_cells = mode == 2;
+            neighbor_mode(sc, mode);
             box(sc, 2.0 * r + d, 1.0, 1.0);
             assert_true(lean_pair(sc, 0, 0.5) == zb);
             trace t = {0};
@@ -341,8 +346,7 @@ static void test_sphere_wedged_between_a_held_one_and_a_wall_is_held(void **stat
     const double zb = r + sqrt(4.0 * r * r - dx * dx);
     for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
         nbep_scene *sc = scene(2, 6, "predictive", 300, 0.5);
-        sc->neighbors_grid = mode == 1;
-        sc->neighbors_cells = mode == 2;
+        neighbor_mode(sc, mode);
         sc->max_reactions = 100000;
         box(sc, w, 1.0, 1.0);
         nbep_test_set_sphere(sc, 0, (nbep_vec3){r, 0.5, r}, ZERO, r, 1.0, DOWN);
@@ -408,8 +412,7 @@ static void test_sphere_stopped_at_a_held_crest_under_an_overhang(void **state)
     const double r = 0.1, vx = 0.1, eps = 1e-12 * r;
     for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
         nbep_scene *sc = scene(2, 2, "predictive", 800, 0.5);
-        sc->neighbors_grid = mode == 1;
-        sc->neighbors_cells = mode == 2;
+        neighbor_mode(sc, mode);
         sc->max_reactions = 100000;
         nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
         const nbep_vec3 b0 = {0.0, 0.0, r};
@@ -446,8 +449,7 @@ static void test_sphere_in_a_groove_tilted_below_resolution_is_held(void **state
     for (int mode = 0; mode < 3; mode++) /* all pairs, grid, cells */
         for (size_t k = 0; k < 3; k++) {
             nbep_scene *sc = scene(3, 3, "predictive", 300, 0.5);
-            sc->neighbors_grid = mode == 1;
-            sc->neighbors_cells = mode == 2;
+            neighbor_mode(sc, mode);
             sc->max_reactions = 100000;
             nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
             nbep_test_set_plane(sc, 1, (nbep_vec3){0, -1, 0}, -w);
@@ -540,8 +542,7 @@ static void test_sphere_sliding_in_a_slot_on_a_held_curve_is_held(void **state)
     for (int mode = 0; mode < 6; mode++) { /* all pairs, grid, cells; two speeds */
         const double v0 = mode < 3 ? 1.32e-3 : 3.89e-3;
         nbep_scene *sc = scene(2, 2, "predictive", 100, 0.5);
-        sc->neighbors_grid = mode % 3 == 1;
-        sc->neighbors_cells = mode % 3 == 2;
+        neighbor_mode(sc, mode % 3);
         sc->max_reactions = 100000;
         nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
         nbep_test_set_plane(sc, 1, (nbep_vec3){-1, 0, 0}, -(x + r));
@@ -573,8 +574,7 @@ static void test_row_that_fits_exactly_is_held(void **state)
     const double r = 0.05;
     for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
         nbep_scene *sc = scene(3, 6, "predictive", 50, 0.5);
-        sc->neighbors_grid = mode == 1;
-        sc->neighbors_cells = mode == 2;
+        neighbor_mode(sc, mode);
         sc->max_reactions = 100000;
         box(sc, 6.0 * r, 0.5, 0.5);
         for (size_t i = 0; i < 3; i++)
@@ -628,8 +628,7 @@ static void test_sphere_balanced_near_a_crest_settles(void **state)
         uint64_t coll[2];
         for (int k = 0; k < 2; k++) {
             nbep_scene *sc = scene(2, 1, "predictive", k == 0 ? 150 : 400, 0.5);
-            sc->neighbors_grid = mode == 1;
-            sc->neighbors_cells = mode == 2;
+            neighbor_mode(sc, mode);
             nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
             const nbep_vec3 b0 = crest_pair(sc, 0, 0.0, 0.0);
             trace t = {0};
@@ -656,8 +655,7 @@ static void test_settling_needs_supports_that_settle(void **state)
     const double r = 0.1;
     for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
         nbep_scene *sc = scene(2, 1, "predictive", 1000, 0.5);
-        sc->neighbors_grid = mode == 1;
-        sc->neighbors_cells = mode == 2;
+        neighbor_mode(sc, mode);
         sc->output_every = 20;
         nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
         nbep_test_set_sphere(sc, 0, (nbep_vec3){0.0, 0.0, r}, (nbep_vec3){5e-3, 0.0, 0.0}, r,
@@ -718,8 +716,7 @@ static void test_settled_spheres_stay_held_when_others_wake(void **state)
         for (int k = 0; k < 3; k++) { /* both groups, the pair alone, the drop alone */
             const bool pair = k != 2, drop = k != 1;
             nbep_scene *sc = scene((pair ? 2 : 0) + (drop ? 2 : 0), 6, "predictive", 700, 0.5);
-            sc->neighbors_grid = mode == 1;
-            sc->neighbors_cells = mode == 2;
+            neighbor_mode(sc, mode);
             box(sc, 2.0 * r + d, 1.05, 1.5);
             size_t i = 0;
             if (pair) {
@@ -886,8 +883,7 @@ static void test_pile_frames_equal_for_1_2_4_threads(void **state)
     const int nts[] = {1, 2, 4};
     for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells (the event loop) */
         nbep_scene *sc = pile(nbep_test_scaled(40, 16), 0.5, nbep_test_scaled(400, 300), "predictive");
-        sc->neighbors_grid = mode == 1;
-        sc->neighbors_cells = mode == 2;
+        neighbor_mode(sc, mode);
         trace ref = {0};
         nbep_summary s1 = run(sc, nts[0], &ref);
         assert_true(s1.collisions > 100); /* otherwise the comparison proves little */
