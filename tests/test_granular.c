@@ -700,6 +700,58 @@ static void test_slow_slider_is_held_fast_one_slides_on(void **state)
     }
 }
 
+/* Impacts the pile carries (CARRY_REL_DROP): a ball sliding along the floor at speed v hits a
+ * sphere held on the floor (radius 0.1: the carry speed is sqrt(2 g 0.01 r) = 0.14 m/s).
+ * Against a held neighbour or a wall behind it, at 0.1 m/s, the held sphere and its neighbour
+ * never move (not a bit) and the ball rebounds at e v, as off a wall; at 0.2 m/s (faster than
+ * the carry speed), and with nothing behind it (a sideways push that its floor cannot take),
+ * it is an ordinary collision: the struck spheres move (a lone one off at (1 + e) v / 2). All
+ * three neighbour modes; the row on 2 threads gives the same frames. */
+static void test_held_sphere_carries_a_slow_push_its_faces_take(void **state)
+{
+    (void)state;
+    const double r = 0.1, e = 0.5, lx = 2.0;
+    for (int mode = 0; mode < 3; mode++)
+        for (int k = 0; k < 5; k++) { /* behind: 0 neighbour, 1 wall, 2 nothing; 3, 4: fast */
+            const int behind = k < 3 ? k : k - 3;
+            const double v = k < 3 ? 0.1 : 0.2, x1 = behind == 1 ? lx - r : 1.0;
+            nbep_scene *sc = scene(behind == 0 ? 3 : 2, 6, "predictive", 700, e);
+            neighbor_mode(sc, mode);
+            box(sc, lx, 0.4, 0.6);
+            nbep_test_set_sphere(sc, 0, (nbep_vec3){x1 - 2.0 * r - 0.05, 0.2, r},
+                                 (nbep_vec3){v, 0.0, 0.0}, r, 1.0, DOWN);
+            nbep_test_set_sphere(sc, 1, (nbep_vec3){x1, 0.2, r}, ZERO, r, 1.0, DOWN);
+            if (behind == 0)
+                nbep_test_set_sphere(sc, 2, (nbep_vec3){x1 + 2.0 * r, 0.2, r}, ZERO, r, 1.0,
+                                     DOWN);
+            trace t = {0};
+            const uint64_t coll = run(sc, 1, &t).collisions;
+            if (k == 0) { /* the pocket's search on 2 threads (rounds modes): the same frames */
+                trace t2 = {0};
+                assert_int_equal(run(sc, 2, &t2).collisions, coll);
+                assert_int_equal(t2.n_frames, t.n_frames);
+                assert_memory_equal(t2.data, t.data, t.n_frames * 2 * t.n * sizeof *t.data);
+                free(t2.data);
+            }
+            const nbep_vec3 *u = last_vel(&t);
+            bool moved = false; /* did a struck sphere ever leave its place? */
+            for (size_t f = 0; f < t.n_frames; f++)
+                for (size_t i = 1; i < t.n; i++)
+                    moved |= !nbep_vec3_equal(t.data[f * 2 * t.n + t.n + i], ZERO) ||
+                             t.data[f * 2 * t.n + i].x != x1 + 2.0 * r * (double)(i - 1);
+            if (k < 2) {
+                assert_false(moved);
+                assert_true(fabs(u[0].x + e * v) <= 1e-12 && u[0].y == 0.0 && u[0].z == 0.0);
+            } else {
+                assert_true(moved);
+                if (k == 2) /* alone on the floor: the textbook collision, still sliding */
+                    assert_true(fabs(u[1].x - (1.0 + e) * v / 2.0) <= 1e-12 * v);
+            }
+            free(t.data);
+            nbep_test_scene_free(&sc);
+        }
+}
+
 /* Settled spheres stay held while something else wakes (and frames are the same on 1 and 4
  * threads): a pair that only settling holds (a sphere near the crest of another) settles at
  * one end of a box (y = 0.25); at the other (y = 0.8) a ball falls onto a sphere held on the
@@ -972,6 +1024,7 @@ int main(void)
         cmocka_unit_test(test_ball_in_a_slot_with_room_keeps_bouncing),
         cmocka_unit_test(test_sphere_in_a_pocket_of_four_is_held),
         cmocka_unit_test(test_spheres_that_carry_each_other_settle),
+        cmocka_unit_test(test_held_sphere_carries_a_slow_push_its_faces_take),
         cmocka_unit_test(test_settled_spheres_stay_held_when_others_wake),
         cmocka_unit_test(test_sphere_wedged_between_a_held_one_and_a_wall_is_held),
         cmocka_unit_test(test_ball_in_a_channel_of_three_faces_slides_on),
