@@ -152,7 +152,7 @@ MUTANTS = [
     ("jam-hold-slow-only", "src/algo_predictive.c",
      "    const double vs = settle_speed(s, k, dt), amag = nbep_vec3_norm(s->acc[k]);\n    rest_set r",
      "    const double vs = settle_speed(s, k, dt), amag = nbep_vec3_norm(s->acc[k]);\n    if (!(nbep_vec3_norm(s->vel[k]) <= vs))\n        return false;\n    rest_set r", GRAN, None),
-    ("carry-off", "src/algo_predictive.c", " ||\n            carried(c, s, w, j, k, -u, dt)) {", ") {", GRAN, None),
+    ("carry-off", "src/algo_predictive.c", " ||\n            carried(c, s, w, j, k, -u, nbep_vec3_scale(d, -1.0), dt)) {", ") {", GRAN, None),
     ("carry-any-speed", "src/algo_predictive.c",
      "    if (!(amag > 0.0) || u > sqrt(2.0 * amag * CARRY_REL_DROP * s->radius[j]))",
      "    if (!(amag > 0.0))", GRAN, None),

@@ -109,8 +109,9 @@
  * (its planes, that sphere, and the other held spheres it touches: a pocket, pocket_gather)
  * leave it no motion, else bounces off it as off a wall (the held sphere, carried by the pile,
  * takes no momentum); a faster impact is an ordinary response and wakes what the held sphere
- * carried, unless the pile carries it (carried, below). The kinetic energy removed by holding, at most m (rest speed)^2 / 2 per hold
- * (4.8e-7 J for 1 kg under gravity at dt = 1e-3), is the model's, besides restitution. A held
+ * carried, unless the pile carries it (carried, below). The kinetic energy removed by
+ * holding, at most m (rest speed)^2 / 2 per hold (4.8e-7 J for 1 kg under gravity at
+ * dt = 1e-3), is the model's, besides restitution. A held
  * sphere is let go (time-ordered, at the instant its support changed) as soon as any of its
  * supports reacts. */
 /* Jams (run.max_reactions). A sphere that reacts more than run.max_reactions times within one
@@ -1401,16 +1402,15 @@ static bool faces_take(const pred_ctx *c, const nbep_state *s, size_t i, const r
            HOLD_SLOPE * nbep_vec3_norm(m);
 }
 
-/* Held sphere j carries the impact of free sphere k, closing at speed u along their line of
- * centres (CARRY_REL_DROP): slow enough, and pushed into the faces that hold j, its own
- * contacts first, then with the held spheres and planes it touches. */
+/* Held sphere j carries the impact of free sphere k, closing at speed u along m (their line of
+ * centres, from k to j) (CARRY_REL_DROP): slow enough, and pushed into the faces that hold j,
+ * its own contacts first, then with the held spheres and planes it touches. */
 static bool carried(const pred_ctx *c, const nbep_state *s, const thread_ws *w, size_t j,
-                    size_t k, double u, double dt)
+                    size_t k, double u, nbep_vec3 m, double dt)
 {
     const double amag = nbep_vec3_norm(s->acc[j]);
     if (!(amag > 0.0) || u > sqrt(2.0 * amag * CARRY_REL_DROP * s->radius[j]))
         return false;
-    const nbep_vec3 m = sep(c, s, k, j);
     rest_set r = c->rest[j];
     if (faces_take(c, s, j, &r, m))
         return true;
@@ -1481,7 +1481,7 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
         nbep_vec3 d = sep(c, s, j, k);
         double u = nbep_vec3_dot(s->vel[k], d) / nbep_vec3_norm(d);
         if (fabs(u) <= rest_speed(s, k, nbep_vec3_norm(s->acc[k]), dt) ||
-            carried(c, s, w, j, k, -u, dt)) {
+            carried(c, s, w, j, k, -u, nbep_vec3_scale(d, -1.0), dt)) {
             land_on_held(c, s, e, dt, k, j, t_abs, sc->tc, w, cnt);
             return;
         }
