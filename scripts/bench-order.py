@@ -53,7 +53,7 @@ SCENES = {
     "fluid-0.50-all": ("inputs/hard-sphere-fluid.deck", fluid(0.50, True), 0.05, 0.1),
     "fluid-0.30-grid": ("inputs/hard-sphere-fluid.deck", fluid(0.30, False), 0.1, 1.0),
     "fluid-0.50-grid": ("inputs/hard-sphere-fluid.deck", fluid(0.50, False), 0.1, 0.5),
-    "pile": ("inputs/pile.deck", ["spheres.[0].count=1000"], 1e-3, 0.45),
+    "pile": ("inputs/pile.deck", ["spheres.[0].count=1000", 'run.neighbors="grid"'], 1e-3, 0.45),
 }
 ENGINES = {"time": ['run.order="time"'], "step": ['run.order="step"'],
            "cells": ['run.neighbors="cells"']}
