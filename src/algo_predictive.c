@@ -168,15 +168,14 @@
  * the line of centres, from k to j) points into the cone of the faces that hold it -- its own
  * contacts, and the other held spheres and the planes it touches to within settle_hold's reach,
  * all immobile, as for a sphere that lands on j (land_on_held) -- and k closes no faster than
- * the speed of a fall from CARRY_REL_DROP of j's radius, sqrt(2 |a| CARRY_REL_DROP r): 7.7 cm/s
- * for the deck's 3 cm spheres under g. That is above the agitation of a settling pile (the
- * deck's fastest sphere at 2.5 s: 5 cm/s) and far below what a pour brings (a sphere falling
- * one diameter onto it: 1.1 m/s). k then bounces off j as off a wall (land_on_held:
- * restitution, and the TC model); the momentum, at most m (1 + e) times that speed, goes to
- * the pile, as to a plane, and no energy does (j does not move). A push j's faces cannot take
- * (from the side of a sphere alone on a floor, from below) or a faster one is an ordinary
- * response, which wakes j. */
-#define CARRY_REL_DROP 0.01
+ * the speed of a fall from physics.carry_drop of j's radius, sqrt(2 |a| carry_drop r): 7.7 cm/s
+ * for the pile deck's 3 cm spheres under g at the default, NBEP_CARRY_DROP = 0.01. That is
+ * above the agitation of a settling pile (the deck's fastest sphere at 2.5 s: 5 cm/s) and far
+ * below what a pour brings (a sphere falling one diameter onto it: 1.1 m/s). k then bounces
+ * off j as off a wall (land_on_held: restitution, and the TC model); the momentum, at most
+ * m (1 + e) times that speed, goes to the pile, as to a plane, and no energy does (j does not
+ * move). A push j's faces cannot take (from the side of a sphere alone on a floor, from below)
+ * or a faster one is an ordinary response, which wakes j. carry_drop = 0 turns the rule off. */
 
 /* One sphere's settling record (see SETTLE_STEPS): written by its owner, in the update and in
  * the settle sub-phases; cand and still are the snapshot other threads read in settle_hold. */
@@ -316,6 +315,7 @@ typedef struct pred_ctx {
     bool free_flight;             /* no sphere accelerates: straight flight, nothing rests */
     double sigma_all;             /* every pair's contact distance when all radii are equal,
                                    * else 0 (the pair loop then looks each radius up) */
+    double carry_drop;            /* physics.carry_drop (carried) */
 } pred_ctx;
 
 static bool is_zero(nbep_vec3 v)
@@ -374,6 +374,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         pred_destroy(c);
         return st;
     }
+    c->carry_drop = sim->scene->carry_drop;
     c->free_flight = true;
     for (size_t i = 0; i < n; i++)
         c->free_flight &= is_zero(sim->st.acc[i]);
@@ -1403,13 +1404,13 @@ static bool faces_take(const pred_ctx *c, const nbep_state *s, size_t i, const r
 }
 
 /* Held sphere j carries the impact of free sphere k, closing at speed u along m (their line of
- * centres, from k to j) (CARRY_REL_DROP): slow enough, and pushed into the faces that hold j,
+ * centres, from k to j) (physics.carry_drop): slow enough, and pushed into the faces that hold j,
  * its own contacts first, then with the held spheres and planes it touches. */
 static bool carried(const pred_ctx *c, const nbep_state *s, const thread_ws *w, size_t j,
                     size_t k, double u, nbep_vec3 m, double dt)
 {
     const double amag = nbep_vec3_norm(s->acc[j]);
-    if (!(amag > 0.0) || u > sqrt(2.0 * amag * CARRY_REL_DROP * s->radius[j]))
+    if (!(amag > 0.0) || !(u <= sqrt(2.0 * amag * c->carry_drop * s->radius[j])))
         return false;
     rest_set r = c->rest[j];
     if (faces_take(c, s, j, &r, m))

@@ -378,6 +378,7 @@ static void parse_physics(load *L, const config_setting_t *root, nbep_scene *sc)
     (void)get_vec3(L, physics, "physics", S_PHYSICS_GRAVITY, &sc->gravity, NULL);
     (void)get_float(L, physics, "physics", S_PHYSICS_RESTITUTION, &sc->restitution);
     (void)get_float(L, physics, "physics", S_PHYSICS_TC, &sc->tc);
+    (void)get_float(L, physics, "physics", S_PHYSICS_CARRY_DROP, &sc->carry_drop);
 }
 
 /* min < max on every axis, else one error at max naming each failing axis. */

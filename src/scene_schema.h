@@ -61,6 +61,11 @@ enum {
     X(PHYSICS_TC, "physics.tc", FLOAT, F_GE0, "1.0e-6", NULL,                                      \
       "TC model: a collision within tc seconds of the sphere's previous one is elastic (stops "  \
       "inelastic collapse); 0: off")                                                               \
+    X(PHYSICS_CARRY_DROP, "physics.carry_drop", FLOAT, F_GE0, NBEP_SCHEMA_XSTR(NBEP_CARRY_DROP),   \
+      NULL, "a held sphere (e < 1, accelerated) struck no faster than a fall from carry_drop of "  \
+      "its radius (sqrt(2 a carry_drop r), a its acceleration) stays held when the faces that "    \
+      "hold it take the push, and the striker bounces off it as off a wall, so a settling pile "  \
+      "does not wake at every touch; a faster impact wakes it and what it carries; 0: off")        \
     X(BOX, "box", GROUP, 0, NULL, "none",                                                          \
       "optional: inward planes bounding [min, max], two per axis that is not periodic")          \
     X(BOX_MIN, "box.min", VEC3, F_REQUIRED, NULL, "required", "lower corner")                      \

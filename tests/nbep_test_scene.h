@@ -13,7 +13,8 @@
 #include "nbep/sim.h"
 #include "nbep/vec3.h"
 
-/* n spheres (zeroed) and np planes; e = 1, one thread, a frame every step. */
+/* n spheres (zeroed) and np planes; e = 1, tc = 0, the deck's carry_drop, one thread, a frame
+ * every step. */
 static inline nbep_scene *nbep_test_scene_new(size_t n, size_t np, const char *algo,
                                               uint64_t steps, double dt)
 {
@@ -28,6 +29,7 @@ static inline nbep_scene *nbep_test_scene_new(size_t n, size_t np, const char *a
     sc->dt = dt;
     sc->threads = 1;
     sc->restitution = 1.0;
+    sc->carry_drop = NBEP_CARRY_DROP;
     sc->output_every = 1;
     sc->out_position = sc->out_velocity = true;
     sc->sweep_replicas = 1;

@@ -563,7 +563,7 @@ static void test_sphere_sliding_in_a_slot_on_a_held_curve_is_held(void **state)
 
 /* A row that fits exactly: three spheres on the floor of a box exactly three diameters long,
  * touching each other and both end walls, the middle one moving along the row at 0.3 m/s
- * (faster than a held sphere carries: CARRY_REL_DROP, 0.099 m/s for r = 0.05). With no room
+ * (faster than a held sphere carries: physics.carry_drop, 0.099 m/s for r = 0.05). With no room
  * its momentum passes to and fro at zero time, elastic by the TC model (a Newton's cradle
  * without gaps: 12 spheres poured into a 0.30 m box stopped so on run.max_reactions); having
  * reacted JAM_HOLD times in a step, a sphere its planes carry is held where it is, and so in
@@ -701,22 +701,26 @@ static void test_slow_slider_is_held_fast_one_slides_on(void **state)
     }
 }
 
-/* Impacts the pile carries (CARRY_REL_DROP): a ball sliding along the floor at speed v hits a
- * sphere held on the floor (radius 0.1: the carry speed is sqrt(2 g 0.01 r) = 0.14 m/s).
- * Against a held neighbour or a wall behind it, at 0.1 m/s, the held sphere and its neighbour
- * never move (not a bit) and the ball rebounds at e v, as off a wall; at 0.2 m/s (faster than
- * the carry speed), and with nothing behind it (a sideways push that its floor cannot take),
- * it is an ordinary collision: the struck spheres move (a lone one off at (1 + e) v / 2). All
- * three neighbour modes; the row on 2 threads gives the same frames. */
+/* Impacts the pile carries (physics.carry_drop): a ball sliding along the floor at speed v hits
+ * a sphere held on the floor (radius 0.1: the carry speed is sqrt(2 g 0.01 r) = 0.14 m/s at the
+ * default carry_drop). Against a held neighbour or a wall behind it, at 0.1 m/s, the held
+ * sphere and its neighbour never move (not a bit) and the ball rebounds at e v, as off a wall;
+ * at 0.2 m/s (faster than the carry speed), and with nothing behind it (a sideways push that
+ * its floor cannot take), it is an ordinary collision: the struck spheres move (a lone one off
+ * at (1 + e) v / 2). The deck's carry_drop decides: 0.05 (0.31 m/s) carries the 0.2 m/s
+ * impact, 0 (off) carries not even the 0.1 m/s one. All three neighbour modes; the row on 2
+ * threads gives the same frames. */
 static void test_held_sphere_carries_a_slow_push_its_faces_take(void **state)
 {
     (void)state;
     const double r = 0.1, e = 0.5, lx = 2.0;
     for (int mode = 0; mode < 3; mode++)
-        for (int k = 0; k < 5; k++) { /* behind: 0 neighbour, 1 wall, 2 nothing; 3, 4: fast */
-            const int behind = k < 3 ? k : k - 3;
-            const double v = k < 3 ? 0.1 : 0.2, x1 = behind == 1 ? lx - r : 1.0;
+        for (int k = 0; k < 7; k++) { /* behind: 0 neighbour, 1 wall, 2 nothing; 3, 4: fast;
+                                       * 5: fast, carry_drop 0.05; 6: carry_drop 0 */
+            const int behind = k < 3 ? k : k < 5 ? k - 3 : 0;
+            const double v = k < 3 || k == 6 ? 0.1 : 0.2, x1 = behind == 1 ? lx - r : 1.0;
             nbep_scene *sc = scene(behind == 0 ? 3 : 2, 6, "predictive", 700, e);
+            sc->carry_drop = k == 5 ? 0.05 : k == 6 ? 0.0 : sc->carry_drop;
             neighbor_mode(sc, mode);
             box(sc, lx, 0.4, 0.6);
             nbep_test_set_sphere(sc, 0, (nbep_vec3){x1 - 2.0 * r - 0.05, 0.2, r},
@@ -740,7 +744,7 @@ static void test_held_sphere_carries_a_slow_push_its_faces_take(void **state)
                 for (size_t i = 1; i < t.n; i++)
                     moved |= !nbep_vec3_equal(t.data[f * 2 * t.n + t.n + i], ZERO) ||
                              t.data[f * 2 * t.n + i].x != x1 + 2.0 * r * (double)(i - 1);
-            if (k < 2) {
+            if (k < 2 || k == 5) {
                 assert_false(moved);
                 assert_true(fabs(u[0].x + e * v) <= 1e-12 && u[0].y == 0.0 && u[0].z == 0.0);
             } else {

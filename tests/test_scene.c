@@ -145,6 +145,8 @@ static void test_good_deck_resolves_every_setting(void **state)
     assert_int_equal(sc->seed, 42);
     assert_vec3(sc->gravity, 0.0, 0.0, -9.81, 0.0);
     assert_close(sc->restitution, 0.85, 0.0, 0.0);
+    assert_close(sc->tc, 2e-6, 0.0, 0.0);
+    assert_close(sc->carry_drop, 0.03, 0.0, 0.0);
     assert_true(sc->has_box);
     assert_vec3(sc->box_min, -1.0, -2.0, -3.0, 0.0);
     assert_vec3(sc->box_max, 4.0, 5.0, 6.0, 0.0);
@@ -185,6 +187,8 @@ static void test_absent_settings_take_their_defaults(void **state)
     assert_int_equal(sc->seed, 1);
     assert_vec3(sc->gravity, 0.0, 0.0, 0.0, 0.0);
     assert_close(sc->restitution, 1.0, 0.0, 0.0);
+    assert_close(sc->tc, 1e-6, 0.0, 0.0);
+    assert_close(sc->carry_drop, NBEP_CARRY_DROP, 0.0, 0.0);
     assert_int_equal(sc->output_every, 10);
     assert_true(sc->out_position);
     assert_true(sc->out_velocity);
@@ -344,6 +348,7 @@ static void test_values_out_of_range_are_all_reported_in_one_pass(void **state)
                 R "4: run.steps must be >= 0 (got -1)", R "5: run.dt must be > 0 (got 0)",
                 R "6: run.threads must be >= 0 (got -4)", R "7: run.seed must be >= 0 (got -7)",
                 R "9: physics.restitution must be in [0, 1] (got 1.25)",
+                R "9: physics.carry_drop must be >= 0 (got -0.5)",
                 R "10: box.min must be < box.max on every axis (got y: 0 >= 0, z: 5 >= 2)",
                 R "11: planes.[0].normal must not be zero (got [0, 0, 0])",
                 R "13: spheres.[0].radius must be > 0 (got -0.5)",

@@ -28,6 +28,11 @@ typedef struct nbep_sweep_axis {
  * held sphere or, carried by planes, any sphere. Here because --help-deck names it. */
 #define NBEP_JAM_HOLD 10000
 
+/* physics.carry_drop's default (algo_predictive.c, carried): a held sphere struck no faster
+ * than a fall from this fraction of its radius stays held when its faces take the push. Here
+ * because --help-deck and the tests' hand-built scenes use it. */
+#define NBEP_CARRY_DROP 0.01
+
 typedef struct nbep_scene {
     /* provenance */
     char *deck_path;          /* owned: as given on the command line */
@@ -49,6 +54,8 @@ typedef struct nbep_scene {
     nbep_vec3 gravity;
     double restitution;
     double tc;                /* TC model: collisions within tc of the last are elastic */
+    double carry_drop;        /* held spheres carry impacts no faster than a fall from
+                               * carry_drop of their radius (0: off) */
     /* box (optional) */
     bool has_box;
     nbep_vec3 box_min, box_max;
