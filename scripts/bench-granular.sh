@@ -7,10 +7,10 @@
 # of the repeats is reported (counts are the same in every repeat: runs are deterministic).
 #   scripts/bench-granular.sh [COUNT [STEPS [REPEATS]]]     (default 300 450 3)
 # COUNT spheres replace the deck's 2000 (same radius and height; the floor shrinks with COUNT so
-# the pile is as deep as the deck's); the full deck costs minutes. MODES (default "grid cells")
-# picks the neighbour modes: MODES=cells scripts/bench-granular.sh 300 2000 1 runs the 300-sphere
-# pour until it has settled (about 1.6 s) in some minutes per run; grid mode takes several times
-# longer. The table also gives the spheres held at the end (velocity exactly zero) and the last
+# the pile is as deep as the deck's); the whole deck, settled, is scripts/bench-pile.py. MODES
+# (default "grid cells") picks the neighbour modes: MODES=cells scripts/bench-granular.sh 300
+# 2000 1 runs the 300-sphere pour until it has settled (about 1.6 s) in some minutes per run;
+# grid mode takes several times longer. The table also gives the spheres held at the end (velocity exactly zero) and the last
 # step with a collision.
 set -eu
 count=${1:-300}

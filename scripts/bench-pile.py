@@ -3,7 +3,7 @@
 e = 1, on 1 and 2 threads: collisions per step, spheres held and wall time over the run.
 
     scripts/bench-pile.py [--threads 1,2] [--restitution 0.5,1] [--steps N] [--count N]
-                          [--jobs J] [--out DIR] [--plot FILE] [--nbep BIN]
+                          [--jobs J] [--out DIR] [--plot FILE] [--nbep BIN] [--replot]
 
 Every configuration (restitution x threads) runs the deck once, as set but for the overrides
 given (--steps, --count: fewer spheres on a proportionally smaller floor, so the pile is as
@@ -18,7 +18,8 @@ each on whatever load the machine has.
 Prints one table row per configuration, checks that the thread counts of one restitution give
 the same frames bit for bit (exit 1 if not), keeps the runs in --out (default: a temporary
 folder, removed) and draws --plot (default: none): collisions per step, held spheres and wall
-time against simulated time, one line per configuration.
+time against simulated time, one line per configuration. --replot reads the runs kept in --out
+instead of running them (to redraw the table and the figure).
 
 Needs h5py, numpy and (for --plot) matplotlib (Debian: python3-h5py python3-matplotlib)."""
 import argparse
@@ -73,6 +74,16 @@ def run(cfg, a, work):
     return summary, stamps, name + ".h5"
 
 
+def kept(cfg, work):
+    """A run kept in work by an earlier call: its summary, stamped progress and file name."""
+    name = os.path.join(work, f"pile-e{cfg[0]}-t{cfg[1]}")
+    with open(name + ".json") as fh:
+        summary = json.load(fh)
+    with open(name + ".wall") as fh:
+        stamps = [(int(a), float(b)) for a, b in (line.split() for line in fh)]
+    return summary, stamps, name + ".h5"
+
+
 def held_per_frame(path):
     with h5py.File(path, "r") as f:
         vel = f["/frames/velocity"]
@@ -99,19 +110,26 @@ def main():
     ap.add_argument("--out", default="")
     ap.add_argument("--plot", default="")
     ap.add_argument("--nbep", default=os.path.join(ROOT, "bin", "nbep"))
+    ap.add_argument("--replot", action="store_true", help="use the runs kept in --out")
     a = ap.parse_args()
+    if a.replot and not a.out:
+        sys.exit("bench-pile: --replot needs --out (the folder of the kept runs)")
     threads = [int(x) for x in a.threads.split(",")]
     rests = [x.strip() for x in a.restitution.split(",")]
     cfgs = [(e, t) for e in rests for t in threads]
     work = a.out or tempfile.mkdtemp(prefix="nbep-bench-pile.")
     os.makedirs(work, exist_ok=True)
-    # one private copy of the binary: every run uses the same build even if bin/nbep changes
-    binary = os.path.join(work, "nbep")
-    shutil.copy2(a.nbep, binary)
-    a.nbep = binary
     try:
-        with concurrent.futures.ThreadPoolExecutor(max_workers=a.jobs) as ex:
-            res = dict(zip(cfgs, ex.map(lambda c: run(c, a, work), cfgs)))
+        if a.replot:
+            res = {c: kept(c, work) for c in cfgs}
+        else:
+            # one private copy of the binary: every run uses the same build even if bin/nbep
+            # changes meanwhile
+            binary = os.path.join(work, "nbep")
+            shutil.copy2(a.nbep, binary)
+            a.nbep = binary
+            with concurrent.futures.ThreadPoolExecutor(max_workers=a.jobs) as ex:
+                res = dict(zip(cfgs, ex.map(lambda c: run(c, a, work), cfgs)))
         rows, curves, failed = [], {}, False
         print("| e | threads | steps | collisions | per sphere/step | last tenth, per sphere/step | "
               "held at end | last collision step | wall s | energy drift |")
@@ -150,10 +168,12 @@ def plot(curves, path):
         steps = np.arange(1, len(coll) + 1)
         w = 50  # collisions per step, averaged over 50 steps (zeros kept: a settled pile)
         avg = np.convolve(coll, np.ones(w) / w, mode="valid")
-        ax[0].plot(steps[w - 1:] * dt, np.maximum(avg, 0.1), label=lab)
-        ax[1].plot(times, held, label=lab)
+        style = dict(label=lab, ls="-" if t == 1 else "--", lw=2.5 if t == 1 else 1.2)
+        ax[0].plot(steps[w - 1:] * dt, np.maximum(avg, 0.1), **style)
+        # frame 0 left out: the spheres start at rest, velocity zero but falling, not held
+        ax[1].plot(times[1:], held[1:], **style)
         st = np.array(stamps, dtype=float)
-        ax[2].plot(st[:, 0] * dt, st[:, 1] / 60.0, label=lab)
+        ax[2].plot(st[:, 0] * dt, st[:, 1] / 60.0, **style)
     ax[0].set_yscale("log")
     ax[0].set_ylabel("collisions per step\n(mean of 50; 0.1 = none)")
     ax[1].set_ylabel("spheres held")
