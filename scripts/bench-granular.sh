@@ -10,8 +10,8 @@
 # the pile is as deep as the deck's); the whole deck, settled, is scripts/bench-pile.py. MODES
 # (default "grid cells") picks the neighbour modes: MODES=cells scripts/bench-granular.sh 300
 # 2000 1 runs the 300-sphere pour until it has settled (about 1.6 s) in some minutes per run;
-# grid mode takes several times longer. The table also gives the spheres held at the end (velocity exactly zero) and the last
-# step with a collision.
+# grid mode takes several times longer. The table also gives the spheres held at the end
+# (velocity exactly zero) and the last step with a collision.
 set -eu
 count=${1:-300}
 steps=${2:-450}

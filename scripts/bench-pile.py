@@ -52,7 +52,8 @@ def run(cfg, a, work):
         cmd += ["-n", str(a.steps)]
     if a.count:  # the deck's 2000 spheres on a 1 m floor: the floor shrinks with the count
         side = math.sqrt(a.count / 2000.0)
-        cmd += ["--set", f"spheres.[0].count={a.count}", "--set", f"box.max=[{side!r}, {side!r}, 1.2]"]
+        cmd += ["--set", f"spheres.[0].count={a.count}",
+                "--set", f"box.max=[{side!r}, {side!r}, 1.2]"]
     t0 = time.monotonic()
     stamps = [(0, 0.0)]
     with subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True) as p:
@@ -77,6 +78,9 @@ def run(cfg, a, work):
 def kept(cfg, work):
     """A run kept in work by an earlier call: its summary, stamped progress and file name."""
     name = os.path.join(work, f"pile-e{cfg[0]}-t{cfg[1]}")
+    if not os.path.exists(name + ".json") or not os.path.exists(name + ".wall"):
+        sys.exit(f"bench-pile: --replot: no run {name}.json and .wall (restitution and threads "
+                 f"as given when it ran)")
     with open(name + ".json") as fh:
         summary = json.load(fh)
     with open(name + ".wall") as fh:
@@ -129,10 +133,16 @@ def main():
             shutil.copy2(a.nbep, binary)
             a.nbep = binary
             with concurrent.futures.ThreadPoolExecutor(max_workers=a.jobs) as ex:
-                res = dict(zip(cfgs, ex.map(lambda c: run(c, a, work), cfgs)))
+                futs = [ex.submit(run, c, a, work) for c in cfgs]
+                try:
+                    res = {c: f.result() for c, f in zip(cfgs, futs)}
+                except BaseException:  # a failed run: start no more (running ones finish)
+                    ex.shutdown(wait=False, cancel_futures=True)
+                    raise
         rows, curves, failed = [], {}, False
-        print("| e | threads | steps | collisions | per sphere/step | last tenth, per sphere/step | "
-              "held at end | last collision step | wall s | energy drift |")
+        print("| e | threads | steps | collisions | per sphere/step | "
+              "last tenth, per sphere/step | held at end | last collision step | wall s | "
+              "energy drift |")
         print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
         for (e, t), (s, stamps, h5) in res.items():
             times, held, coll = held_per_frame(h5)
@@ -140,9 +150,9 @@ def main():
             hit = np.nonzero(coll)[0]
             last = int(hit[-1]) + 1 if len(hit) else 0
             tail = coll[-max(1, len(coll) // 10):].mean() / n
-            print(f"| {e} | {t} | {steps} | {s['collisions']} | {s['collisions'] / steps / n:.3f} | "
-                  f"{tail:.3f} | {held[-1]} | {last} | {s['wall_seconds']:.1f} | "
-                  f"{s['energy_rel_drift']:.3g} |")
+            print(f"| {e} | {t} | {steps} | {s['collisions']} | "
+                  f"{s['collisions'] / steps / n:.3f} | {tail:.3f} | {held[-1]} | {last} | "
+                  f"{s['wall_seconds']:.1f} | {s['energy_rel_drift']:.3g} |")
             curves[(e, t)] = (times, held, coll, stamps, s["dt"])
         for e in rests:
             for t in threads[1:]:
@@ -166,7 +176,7 @@ def plot(curves, path):
     for (e, t), (times, held, coll, stamps, dt) in curves.items():
         lab = f"e = {e}, {t} thread{'s' if t > 1 else ''}"
         steps = np.arange(1, len(coll) + 1)
-        w = 50  # collisions per step, averaged over 50 steps (zeros kept: a settled pile)
+        w = min(50, len(coll))  # collisions per step, mean of 50 (zeros kept: a settled pile)
         avg = np.convolve(coll, np.ones(w) / w, mode="valid")
         style = dict(label=lab, ls="-" if t == 1 else "--", lw=2.5 if t == 1 else 1.2)
         ax[0].plot(steps[w - 1:] * dt, np.maximum(avg, 0.1), **style)

@@ -1410,7 +1410,8 @@ static bool carried(const pred_ctx *c, const nbep_state *s, const thread_ws *w, 
                     size_t k, double u, nbep_vec3 m, double dt)
 {
     const double amag = nbep_vec3_norm(s->acc[j]);
-    if (!(amag > 0.0) || !(u <= sqrt(2.0 * amag * c->carry_drop * s->radius[j])))
+    if (!(c->carry_drop > 0.0) || !(amag > 0.0) ||
+        !(u <= sqrt(2.0 * amag * c->carry_drop * s->radius[j])))
         return false;
     rest_set r = c->rest[j];
     if (faces_take(c, s, j, &r, m))
