@@ -315,7 +315,6 @@ typedef struct pred_ctx {
     bool free_flight;             /* no sphere accelerates: straight flight, nothing rests */
     double sigma_all;             /* every pair's contact distance when all radii are equal,
                                    * else 0 (the pair loop then looks each radius up) */
-    double carry_drop;            /* physics.carry_drop (carried) */
 } pred_ctx;
 
 static bool is_zero(nbep_vec3 v)
@@ -374,7 +373,6 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         pred_destroy(c);
         return st;
     }
-    c->carry_drop = sim->scene->carry_drop;
     c->free_flight = true;
     for (size_t i = 0; i < n; i++)
         c->free_flight &= is_zero(sim->st.acc[i]);
@@ -1404,14 +1402,15 @@ static bool faces_take(const pred_ctx *c, const nbep_state *s, size_t i, const r
 }
 
 /* Held sphere j carries the impact of free sphere k, closing at speed u along m (their line of
- * centres, from k to j) (physics.carry_drop): slow enough, and pushed into the faces that hold j,
- * its own contacts first, then with the held spheres and planes it touches. */
+ * centres, from k to j): slow enough (no faster than a fall from physics.carry_drop of j's
+ * radius), and pushed into the faces that hold j, its own contacts first, then with the held
+ * spheres and planes it touches. */
 static bool carried(const pred_ctx *c, const nbep_state *s, const thread_ws *w, size_t j,
-                    size_t k, double u, nbep_vec3 m, double dt)
+                    size_t k, double u, nbep_vec3 m, double carry_drop, double dt)
 {
     const double amag = nbep_vec3_norm(s->acc[j]);
-    if (!(c->carry_drop > 0.0) || !(amag > 0.0) ||
-        !(u <= sqrt(2.0 * amag * c->carry_drop * s->radius[j])))
+    if (!(carry_drop > 0.0) || !(amag > 0.0) ||
+        !(u <= sqrt(2.0 * amag * carry_drop * s->radius[j])))
         return false;
     rest_set r = c->rest[j];
     if (faces_take(c, s, j, &r, m))
@@ -1483,7 +1482,7 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
         nbep_vec3 d = sep(c, s, j, k);
         double u = nbep_vec3_dot(s->vel[k], d) / nbep_vec3_norm(d);
         if (fabs(u) <= rest_speed(s, k, nbep_vec3_norm(s->acc[k]), dt) ||
-            carried(c, s, w, j, k, -u, nbep_vec3_scale(d, -1.0), dt)) {
+            carried(c, s, w, j, k, -u, nbep_vec3_scale(d, -1.0), sc->carry_drop, dt)) {
             land_on_held(c, s, e, dt, k, j, t_abs, sc->tc, w, cnt);
             return;
         }
