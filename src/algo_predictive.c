@@ -315,6 +315,14 @@ typedef struct pred_ctx {
     bool free_flight;             /* no sphere accelerates: straight flight, nothing rests */
     double sigma_all;             /* every pair's contact distance when all radii are equal,
                                    * else 0 (the pair loop then looks each radius up) */
+    /* cells mode on two threads or more, in a scene whose reactions change only their own two
+     * spheres (free flight at e = 1): thread 1 handles events ahead of thread 0's
+     * (nbep_evloop_run_lead), counting them apart until they stand (cells_merge) */
+    bool team;
+    nbep_counters *help_cnt;      /* owned when team, NBEP_EVLOOP_BATCH: each place's event's
+                                   * counts (a round's events, evloop.h) */
+    nbep_thread_max *help_mx;     /* owned when team, the same: their sums (wall: one buffer) */
+    double *help_wall;            /* owned when team: NBEP_EVLOOP_BATCH rows of n_planes */
 } pred_ctx;
 
 static bool is_zero(nbep_vec3 v)
@@ -330,6 +338,9 @@ static void pred_destroy(void *p)
     nbep_feq_destroy(&c->q);
     nbep_grid_fini(&c->grid);
     nbep_evloop_destroy(&c->ev);
+    nbep_free_aligned(c->help_cnt);
+    nbep_free_aligned(c->help_mx);
+    free(c->help_wall);
     nbep_free_aligned(c->ver);
     nbep_free_aligned(c->tau);
     nbep_free_aligned(c->rest);
@@ -449,6 +460,25 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         }
         st = nbep_evloop_create(n, sim->scene->box_min, sim->scene->box_max, 2.0 * c->rmax,
                                 c->pb.axis, c->q, c->ver, &c->ev, d);
+        /* the team loop: reactions of a free flight at e = 1 change their two spheres only
+         * (no resting, holding, settling, TC clocks or reaction counts: all NULL here) */
+        c->team = st == NBEP_OK && sim->nt >= 2 && c->free_flight && !c->t_last && !c->jam &&
+                  !c->settle && !c->rest;
+        if (c->team) {
+            const size_t np = sim->st.n_planes;
+            c->help_cnt = nbep_alloc_aligned(NBEP_EVLOOP_BATCH, sizeof *c->help_cnt);
+            c->help_mx = nbep_alloc_aligned(NBEP_EVLOOP_BATCH, sizeof *c->help_mx);
+            c->help_wall = calloc(NBEP_EVLOOP_BATCH * (np ? np : 1), sizeof(double));
+            if (!c->help_cnt || !c->help_mx || !c->help_wall) {
+                nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory for the cells engine");
+                st = NBEP_ENOMEM;
+            } else {
+                for (size_t m = 0; m < NBEP_EVLOOP_BATCH; m++) {
+                    c->help_cnt[m] = (nbep_counters){0};
+                    c->help_mx[m] = (nbep_thread_max){.wall = c->help_wall + m * np};
+                }
+            }
+        }
         if (st != NBEP_OK) {
             pred_destroy(c);
             return st;
@@ -478,8 +508,9 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         size_t own = r.hi - r.lo + 1;
         thread_ws *w = &c->ws[t];
         /* 2 per reaction, 1 per let-go; cells mode: one reaction's 3 and every held sphere
-         * letting go after it, on the thread that runs the event loop */
-        size_t n_fired = rounds ? 3 * own : t == 0 ? n + 3 : 1;
+         * letting go after it, on the thread that runs the event loop (and a team's helper,
+         * whose reactions change their own two spheres only) */
+        size_t n_fired = rounds ? 3 * own : t == 0 ? n + 3 : c->team && t == 1 ? 3 : 1;
         w->fired = malloc(n_fired * sizeof *w->fired);
         w->part = nbep_alloc_aligned(CHUNK, sizeof *w->part);
         if (rounds) {
@@ -2022,10 +2053,56 @@ static void cells_wrap(void *u, uint32_t i, double t)
     nbep_periodic_wrap(&x->c->pb, &x->s->pos[i], &x->s->image[3 * (size_t)i]);
 }
 
-static const nbep_evloop_ops cells_ops = {cells_planes, cells_pairs, cells_fresh, cells_react,
-                                          cells_flight, cells_wrap};
+static void cells_save(void *u, uint32_t i, nbep_evloop_motion *m)
+{
+    const cells_user *x = u;
+    *m = (nbep_evloop_motion){x->s->pos[i], x->s->vel[i], x->c->tau[i], x->c->ver[i],
+                              {x->s->image[3 * (size_t)i], x->s->image[3 * (size_t)i + 1],
+                               x->s->image[3 * (size_t)i + 2]}};
+}
+
+static void cells_restore(void *u, uint32_t i, const nbep_evloop_motion *m)
+{
+    const cells_user *x = u;
+    x->s->pos[i] = m->pos;
+    x->s->vel[i] = m->vel;
+    x->c->tau[i] = m->tau;
+    x->c->ver[i] = m->ver;
+    for (int k = 0; k < 3; k++)
+        x->s->image[3 * (size_t)i + (size_t)k] = m->image[k];
+}
+
+/* The helper's event (counted from zero in uh) added to the leader's counts and sums when it
+ * stands: in the order of events, one addition each, as the one thread adds it (a sum never
+ * holds -0, so adding the +0 of what the event did not touch changes nothing). */
+static void cells_merge(void *u, void *uh, bool keep)
+{
+    cells_user *x = u, *h = uh;
+    nbep_thread_max *a = x->mx, *b = h->mx;
+    for (int k = 0; k < NBEP_COUNTER_COUNT; k++) {
+        if (keep)
+            x->cnt->c[k] += h->cnt->c[k];
+        h->cnt->c[k] = 0;
+    }
+    if (keep) {
+        a->virial += b->virial;
+        a->overlap = fmax(a->overlap, b->overlap); /* both from 0, as note_overlap keeps them */
+        a->overlap_rel = fmax(a->overlap_rel, b->overlap_rel);
+    }
+    b->virial = b->overlap = b->overlap_rel = 0.0;
+    for (size_t p = 0; p < x->s->n_planes; p++) {
+        if (keep)
+            a->wall[p] += b->wall[p];
+        b->wall[p] = 0.0;
+    }
+}
+
+static const nbep_evloop_ops cells_ops = {cells_planes,  cells_pairs,   cells_fresh,
+                                          cells_react,   cells_flight,  cells_wrap,
+                                          cells_save,    cells_restore, cells_merge};
 static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, cells_fresh,
-                                               cells_react, cells_flight, cells_wrap};
+                                               cells_react,  cells_flight,     cells_wrap,
+                                               cells_save,   cells_restore,    cells_merge};
 
 /* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's
  * event loop; all threads share the rebuilds, the update to the step's end and the energy.
@@ -2074,12 +2151,27 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
             }
             rebuild = false;
         }
+        /* the team loop's contexts, one per place of a round, on each of the two threads
+         * (with that thread's workspace), the counts and sums of a place apart */
+        cells_user ups[NBEP_EVLOOP_BATCH];
+        void *us[NBEP_EVLOOP_BATCH];
+        for (size_t m = 0; c->team && m < NBEP_EVLOOP_BATCH; m++) {
+            ups[m] = (cells_user){c, s, sim->scene, u.T0, 0.0, w, &c->help_cnt[m], &c->help_mx[m]};
+            us[m] = &ups[m];
+        }
+        if (tid == 1 && c->team)
+            nbep_evloop_help(c->ev, ops, us);
         if (tid == 0) {
             nbep_evloop_tally tally = {0};
             double t_stuck = 0.0;
-            c->ev_failed = !nbep_evloop_run(c->ev, ops, &u, T_end, STALL_EVENTS,
-                                            STALL_FRACTION * sim->dt, &tally, &t_stuck);
+            c->ev_failed =
+                !(c->team ? nbep_evloop_run_lead(c->ev, ops, &u, us, T_end, STALL_EVENTS,
+                                                 STALL_FRACTION * sim->dt, &tally, &t_stuck)
+                          : nbep_evloop_run(c->ev, ops, &u, T_end, STALL_EVENTS,
+                                            STALL_FRACTION * sim->dt, &tally, &t_stuck));
             u.cnt->c[NBEP_COUNTER_CHECKS] += tally.events;
+            u.cnt->c[NBEP_COUNTER_AHEAD] += tally.ahead;
+            u.cnt->c[NBEP_COUNTER_UNDONE] += tally.undone;
             if (c->ev_failed && nbep_evloop_failed(c->ev)) {
                 nbep_diag_add(sim->diag, __FILE__, __LINE__,
                               "nbep: step %llu: no memory for the neighbour lists; stopping",

@@ -405,6 +405,63 @@ void nbep_calendar_runners_up(const nbep_calendar *c, uint32_t items[2], int *n)
         items[(*n)++] = c->heap[k];
 }
 
+/* The k-th earliest entry of a heap is no deeper than level k - 1, so the first 2^k - 1
+ * places hold the k earliest: FRONT_HEAP places give the 5 earliest of a larger heap. */
+#define FRONT_HEAP 31
+/* Ring slots looked through after the heap (empty ones count). */
+#define FRONT_SLOTS 8
+
+/* Sorts items[0..n) by the calendar's order (a handful: insertion). */
+static void sort_items(const nbep_calendar *c, uint32_t *items, size_t n)
+{
+    for (size_t k = 1; k < n; k++) {
+        const uint32_t x = items[k];
+        size_t q = k;
+        for (; q > 0 && before(c, x, items[q - 1]); q--)
+            items[q] = items[q - 1];
+        items[q] = x;
+    }
+}
+
+size_t nbep_calendar_front(const nbep_calendar *c, uint32_t *items, size_t max)
+{
+    if (max == 0 || c->heap_len == 0)
+        return 0;
+    uint32_t tmp[FRONT_HEAP];
+    size_t n = 0;
+    const size_t h = c->heap_len < FRONT_HEAP ? c->heap_len : FRONT_HEAP;
+    for (size_t k = 1; k < h; k++)
+        tmp[n++] = c->heap[k];
+    sort_items(c, tmp, n);
+    if (c->heap_len > FRONT_HEAP) /* only the first four after the top are surely these */
+        n = n < 4 ? n : 4;
+    n = n < max ? n : max;
+    for (size_t k = 0; k < n; k++)
+        items[k] = tmp[k];
+    if (c->heap_len > FRONT_HEAP)
+        return n;
+    /* every entry of the heap comes before every entry of the ring, and a ring slot holds one
+     * bucket, which comes before the next slot's */
+    for (int64_t ab = c->cur + 1;
+         n < max && ab <= c->cur + FRONT_SLOTS && ab - c->cur <= (int64_t)c->nb; ab++) {
+        const size_t first = n;
+        for (uint32_t x = c->head[(uint64_t)ab & (c->nb - 1)]; x != NIL && n < max;
+             x = c->node[x].next)
+            items[n++] = x;
+        if (n == max && c->head[(uint64_t)ab & (c->nb - 1)] != NIL) {
+            /* the slot may hold more than room was left for: its earliest may be missing */
+            size_t all = 0;
+            for (uint32_t x = c->head[(uint64_t)ab & (c->nb - 1)]; x != NIL;
+                 x = c->node[x].next)
+                all++;
+            if (all > n - first)
+                return first;
+        }
+        sort_items(c, items + first, n - first);
+    }
+    return n;
+}
+
 size_t nbep_calendar_size(const nbep_calendar *c)
 {
     return c->size;

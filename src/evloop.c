@@ -2,6 +2,8 @@
 #include "evloop.h"
 
 #include <math.h>
+#include <stdalign.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 
 #include "nbep/calendar.h"
@@ -17,6 +19,30 @@
  * time a sphere takes to fly its own diameter. */
 #define CUT_SLACK 1e-6
 
+/* One thread's side of an event (handle, then commit): the list a rebuild found and what the
+ * event changed, held until its commit; for a speculative event (the team loop's helper), the
+ * motion and slots it may change, kept to undo it. */
+typedef struct evl_ws {
+    /* a rebuild of one list (walk): near holds the new list, gain[k] set for the entries i's
+     * old list lacked; was holds the old list (n_was entries), kept[k] set for those found again */
+    uint32_t *near, *was;   /* owned, room for cap each */
+    uint8_t *kept, *gain;   /* owned, room for cap each */
+    size_t cap, n_near, n_was;
+    bool oom;               /* the walk ran out of memory */
+    /* the event handled, waiting for its commit */
+    uint32_t item;
+    bool rebuilt;           /* a list expiry: near is item's list, built around `at` */
+    bool reacted;
+    nbep_vec3 at;
+    uint32_t *changed;      /* owned, room for chg_cap: the spheres the reaction changed */
+    size_t n_changed, chg_cap;
+    /* a speculative event's undo: the spheres it may change, as they were */
+    uint32_t kept_id[2];
+    nbep_evloop_motion kept_motion[2];
+    nbep_event kept_slot[2];
+    int n_kept;
+} evl_ws;
+
 struct nbep_evloop {
     size_t n;
     nbep_calendar *cal;   /* owned */
@@ -24,20 +50,54 @@ struct nbep_evloop {
                            * member's place (cells.m[i].at) is where i's list was built */
     nbep_nblist nl;       /* owned */
     uint32_t *count;      /* owned, n: list lengths, at a full rebuild */
-    /* a rebuild of one list (rebuild_one): near holds the new list, was the old one (n_was
-     * entries, kept[k] set for those found again) */
-    uint32_t *near, *was; /* owned, room for near_cap each */
-    uint8_t *kept;        /* owned, room for near_cap */
-    size_t near_cap, n_near, n_was;
+    evl_ws ws[NBEP_EVLOOP_BATCH]; /* one per event of a team round (the one thread: ws[0]) */
     nbep_periodic pb;     /* the box's periodic geometry */
     double cut;           /* the list cutoff: contact distance plus skin, plus slack */
     double stray;         /* half the skin: how far a sphere goes before its list expires */
     double face_reach;    /* cut + stray, and a margin: see near_face */
+    double apart2;        /* square of the distance between list centres beyond which two
+                           * events touch no common sphere (nbep_evloop_run_team) */
     bool failed;          /* out of memory for a list: the run stops */
     bool stop;            /* nbep_evloop_stop: the run stops after the current event */
     nbep_feq *q;          /* borrowed */
     const uint64_t *ver;  /* borrowed */
+    /* a team round: its events in order (the spheres and their slots as they were) */
+    uint32_t batch[NBEP_EVLOOP_BATCH];
+    nbep_event batch_ev[NBEP_EVLOOP_BATCH];
+    size_t batch_cell[NBEP_EVLOOP_BATCH][3]; /* the cell coordinates of their list centres */
+    /* the team loop's hand-over: the leader posts a round (go = its number, job = how many
+     * events it has, NO_JOB to end); either thread takes the next place to handle from `next`
+     * (the round's number times NBEP_EVLOOP_BATCH plus the place) and marks it handled (the
+     * round's number); the helper answers done = the number of the NO_JOB round */
+    alignas(NBEP_CACHELINE) _Atomic uint64_t go;
+    uint32_t job;
+    alignas(NBEP_CACHELINE) _Atomic uint64_t next;
+    alignas(NBEP_CACHELINE) _Atomic uint64_t done;
+    struct {
+        alignas(NBEP_CACHELINE) _Atomic uint64_t round;
+    } handled[NBEP_EVLOOP_BATCH];
 };
+
+static bool ws_init(evl_ws *w)
+{
+    w->cap = 64;
+    w->near = malloc(w->cap * sizeof *w->near);
+    w->was = malloc(w->cap * sizeof *w->was);
+    w->kept = malloc(w->cap * sizeof *w->kept);
+    w->gain = malloc(w->cap * sizeof *w->gain);
+    w->chg_cap = 8;
+    w->changed = malloc(w->chg_cap * sizeof *w->changed);
+    return w->near && w->was && w->kept && w->gain && w->changed;
+}
+
+static void ws_fini(evl_ws *w)
+{
+    free(w->near);
+    free(w->was);
+    free(w->kept);
+    free(w->gain);
+    free(w->changed);
+}
 
 nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reach,
                                const bool *periodic, nbep_feq *q, const uint64_t *ver,
@@ -68,12 +128,21 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->stray = 0.5 * skin;
     e->cut = (reach + skin) * (1.0 + CUT_SLACK);
     e->face_reach = e->cut + 1.01 * e->stray;
+    /* two list centres farther apart than this: an event on the first writes spheres within
+     * cut of it (a pair's partner is listed) and reads spheres within 2 cut (the partner's
+     * list), or within cut + stray for an expiry (the list around where it now is), so
+     * neither reads what the other writes (3 cut and a stray, for the roundings) */
+    e->apart2 = (3.0 * e->cut + e->stray) * (3.0 * e->cut + e->stray);
+    atomic_init(&e->go, 0);
+    atomic_init(&e->next, 0);
+    atomic_init(&e->done, 0);
+    for (int k = 0; k < NBEP_EVLOOP_BATCH; k++)
+        atomic_init(&e->handled[k].round, 0);
     e->count = nbep_alloc_aligned(n ? n : 1, sizeof *e->count);
-    e->near_cap = 64;
-    e->near = malloc(e->near_cap * sizeof *e->near);
-    e->was = malloc(e->near_cap * sizeof *e->was);
-    e->kept = malloc(e->near_cap * sizeof *e->kept);
-    nbep_status st = e->count && e->near && e->was && e->kept ? NBEP_OK : NBEP_ENOMEM;
+    bool ws_ok = true;
+    for (int k = 0; k < NBEP_EVLOOP_BATCH; k++)
+        ws_ok &= ws_init(&e->ws[k]);
+    nbep_status st = e->count && ws_ok ? NBEP_OK : NBEP_ENOMEM;
     if (st != NBEP_OK)
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory for the cells engine");
     if (st == NBEP_OK)
@@ -106,9 +175,8 @@ void nbep_evloop_destroy(nbep_evloop **e)
     nbep_cells_fini(&(*e)->cells);
     nbep_nblist_fini(&(*e)->nl);
     nbep_free_aligned((*e)->count);
-    free((*e)->kept);
-    free((*e)->near);
-    free((*e)->was);
+    for (int k = 0; k < NBEP_EVLOOP_BATCH; k++)
+        ws_fini(&(*e)->ws[k]);
     free(*e);
     *e = NULL;
 }
@@ -125,19 +193,20 @@ bool nbep_evloop_failed(const nbep_evloop *e)
     return e->failed;
 }
 
-/* Calls f(e, i, j, arg) for every sphere j != i whose centre is within the cutoff of i's, from
- * the 27-cell block of i's cell (each at its image across periodic faces). */
-static inline void near_centres(nbep_evloop *e, uint32_t i,
-                                void (*f)(nbep_evloop *e, uint32_t i, uint32_t j, void *arg),
+/* Calls f(e, i, j, arg) for every sphere j != i whose place is within the cutoff of ci, from
+ * the 27-cell block of cell `cell` (each at its image across periodic faces). Reads the cells
+ * only. */
+static inline void near_centres(const nbep_evloop *e, uint32_t i, nbep_vec3 ci, size_t cell,
+                                void (*f)(const nbep_evloop *e, uint32_t i, uint32_t j,
+                                          void *arg),
                                 void *arg)
 {
     const nbep_cells *g = &e->cells;
     nbep_cells_block b;
-    nbep_cells_block_of(g, g->m[i].cell, &b);
-    const nbep_vec3 ci = g->m[i].at;
+    nbep_cells_block_of(g, cell, &b);
     const double cut2 = e->cut * e->cut;
     for (int z = 0; z < b.cnt[2]; z++) {
-        /* i's centre as seen from the block's cell: moved by the cell's period */
+        /* ci as seen from the block's cell: moved by the cell's period */
         const double az = b.per[2][z] ? ci.z - b.per[2][z] * e->pb.len[2] : ci.z;
         for (int y = 0; y < b.cnt[1]; y++) {
             const double ay = b.per[1][y] ? ci.y - b.per[1][y] * e->pb.len[1] : ci.y;
@@ -156,83 +225,105 @@ static inline void near_centres(nbep_evloop *e, uint32_t i,
     }
 }
 
-static void count_one(nbep_evloop *e, uint32_t i, uint32_t j, void *arg)
+/* near_centres around i's own place (a full rebuild: every place is where it will be) */
+static inline void near_own(nbep_evloop *e, uint32_t i,
+                            void (*f)(const nbep_evloop *e, uint32_t i, uint32_t j, void *arg))
+{
+    near_centres(e, i, e->cells.m[i].at, e->cells.m[i].cell, f, NULL);
+}
+
+static void count_one(const nbep_evloop *e, uint32_t i, uint32_t j, void *arg)
 {
     (void)j;
     (void)arg;
-    e->count[i]++;
+    e->count[i]++; /* the array, not the engine, is written: one thread per i */
 }
 
-static void fill_one(nbep_evloop *e, uint32_t i, uint32_t j, void *arg)
+static void fill_one(const nbep_evloop *e, uint32_t i, uint32_t j, void *arg)
 {
     (void)arg;
-    nbep_nblist_fill(&e->nl, i, j);
+    /* i's own list only (nbep_nblist_fill: threads fill disjoint spheres' lists) */
+    nbep_nblist_fill((nbep_nblist *)&e->nl, i, j);
 }
 
-/* Twice the room for rebuild_one's lists. */
-static bool grow_near(nbep_evloop *e)
+/* Twice the room for a walk's lists. */
+static bool grow_ws(evl_ws *w)
 {
-    size_t cap = 2 * e->near_cap;
-    uint32_t *a = realloc(e->near, cap * sizeof *a);
+    size_t cap = 2 * w->cap;
+    uint32_t *a = realloc(w->near, cap * sizeof *a);
     if (a)
-        e->near = a;
-    uint32_t *b = realloc(e->was, cap * sizeof *b);
+        w->near = a;
+    uint32_t *b = realloc(w->was, cap * sizeof *b);
     if (b)
-        e->was = b;
-    uint8_t *k = realloc(e->kept, cap * sizeof *k);
+        w->was = b;
+    uint8_t *k = realloc(w->kept, cap * sizeof *k);
     if (k)
-        e->kept = k;
-    if (!a || !b || !k)
+        w->kept = k;
+    uint8_t *g = realloc(w->gain, cap * sizeof *g);
+    if (g)
+        w->gain = g;
+    if (!a || !b || !k || !g)
         return false;
-    e->near_cap = cap;
+    w->cap = cap;
     return true;
 }
 
-/* A sphere j near i during i's rebuild: into i's new list; into j's list too unless i was in
- * it already (j is among i's old neighbours, a handful looked through in cache: it is kept). */
-static void gather_one(nbep_evloop *e, uint32_t i, uint32_t j, void *arg)
+/* A sphere j near i during i's walk: into the new list, marked gained unless i's old list has
+ * it (a handful looked through in cache: it is kept). */
+static void gather_one(const nbep_evloop *e, uint32_t i, uint32_t j, void *arg)
 {
-    (void)arg;
+    (void)e;
+    (void)i;
+    evl_ws *w = arg;
     size_t k = 0;
-    while (k < e->n_was && e->was[k] != j)
+    while (k < w->n_was && w->was[k] != j)
         k++;
-    if (k < e->n_was)
-        e->kept[k] = 1;
-    else if (!nbep_nblist_append(&e->nl, j, i))
-        e->failed = true;
-    if (e->n_near == e->near_cap && !grow_near(e)) {
-        e->failed = true;
+    if (k < w->n_was)
+        w->kept[k] = 1;
+    if (w->n_near == w->cap && !grow_ws(w)) {
+        w->oom = true;
         return;
     }
-    e->near[e->n_near++] = j;
+    w->gain[w->n_near] = k == w->n_was;
+    w->near[w->n_near++] = j;
 }
 
-/* Sphere i's list from scratch, its centre now at c: it leaves the lists of the neighbours it
- * loses and enters those of the ones it gains; those it keeps (most: it moved by half a skin)
- * are not touched. */
-static void rebuild_one(nbep_evloop *e, uint32_t i, nbep_vec3 c)
+/* Sphere i's new list around c, found (w->near) but not yet entered: reads the cells and i's
+ * list only, so that threads may walk at once (what it changes waits for apply). */
+static void walk(const nbep_evloop *e, evl_ws *w, uint32_t i, nbep_vec3 c)
 {
     size_t m;
     const uint32_t *old = nbep_nblist_of(&e->nl, i, &m);
-    while (m > e->near_cap)
-        if (!grow_near(e)) {
-            e->failed = true;
+    w->oom = false;
+    while (m > w->cap)
+        if (!grow_ws(w)) {
+            w->oom = true;
             return;
         }
-    for (size_t k = 0; k < m; k++) { /* a copy: appends below may move the pool */
-        e->was[k] = old[k];
-        e->kept[k] = 0;
+    for (size_t k = 0; k < m; k++) {
+        w->was[k] = old[k];
+        w->kept[k] = 0;
     }
-    e->n_was = m;
+    w->n_was = m;
+    w->n_near = 0;
+    near_centres(e, i, c, nbep_cells_locate(&e->cells, c), gather_one, w);
+}
+
+/* The walk's list entered: i placed at c; it enters the lists of the neighbours it gains and
+ * leaves those of the ones it loses; those it keeps (most: it moved by half a skin) are not
+ * touched. One thread, no other walking. */
+static void apply(nbep_evloop *e, const evl_ws *w, uint32_t i, nbep_vec3 c)
+{
     nbep_cells_place(&e->cells, i, c);
-    e->n_near = 0;
-    near_centres(e, i, gather_one, NULL);
-    for (size_t k = 0; k < m; k++)
-        if (!e->kept[k]) /* lost */
-            nbep_nblist_drop(&e->nl, e->was[k], i);
+    for (size_t k = 0; k < w->n_near && !e->failed; k++)
+        if (w->gain[k] && !nbep_nblist_append(&e->nl, w->near[k], i))
+            e->failed = true;
+    for (size_t k = 0; k < w->n_was; k++)
+        if (!w->kept[k]) /* lost */
+            nbep_nblist_drop(&e->nl, w->was[k], i);
     nbep_nblist_clear(&e->nl, i);
-    for (size_t k = 0; k < e->n_near && !e->failed; k++)
-        if (!nbep_nblist_append(&e->nl, i, e->near[k]))
+    for (size_t k = 0; k < w->n_near && !e->failed; k++)
+        if (!nbep_nblist_append(&e->nl, i, w->near[k]))
             e->failed = true;
 }
 
@@ -250,7 +341,7 @@ void nbep_evloop_count(nbep_evloop *e, size_t lo, size_t hi)
 {
     for (size_t i = lo; i < hi; i++) {
         e->count[i] = 0;
-        near_centres(e, (uint32_t)i, count_one, NULL);
+        near_own(e, (uint32_t)i, count_one);
     }
 }
 
@@ -314,11 +405,10 @@ static double stray_time(nbep_vec3 d, nbep_vec3 v, nbep_vec3 a, double stray)
  * is farther than cutoff + stray from both faces of every periodic axis, every neighbour
  * flies inside the box near i and its nearest image is itself (a margin of a hundredth of the
  * stray covers the roundings). */
-static bool near_face(const nbep_evloop *e, uint32_t i)
+static bool near_face(const nbep_evloop *e, nbep_vec3 ci)
 {
     if (!e->pb.any)
         return false;
-    const nbep_vec3 ci = e->cells.m[i].at;
     const double c[3] = {ci.x, ci.y, ci.z};
     for (int k = 0; k < 3; k++)
         if (e->pb.axis[k] && !(c[k] - e->pb.lo[k] > e->face_reach &&
@@ -327,9 +417,10 @@ static bool near_face(const nbep_evloop *e, uint32_t i)
     return false;
 }
 
-/* Sphere i's slot from scratch at time t: planes, the spheres of its list, its list's expiry. */
-static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uint32_t i,
-                        double t)
+/* Sphere i's slot from scratch at time t: planes, the m spheres js of its list (built around
+ * ci), the list's expiry. Writes i's slot only. */
+static void predict_with(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uint32_t i,
+                         double t, const uint32_t *js, size_t m, nbep_vec3 ci)
 {
     nbep_event best = ops->planes(u, i);
     /* the expiry before the pairs: a pair that comes later cannot win, so its root is skipped
@@ -337,16 +428,23 @@ static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uin
      * does; the winner is the one trying the expiry last would give) */
     nbep_vec3 p, v, a;
     ops->flight(u, i, t, &p, &v, &a);
-    double t_exit = t + stray_time(nbep_vec3_sub(p, e->cells.m[i].at), v, a, e->stray);
+    double t_exit = t + stray_time(nbep_vec3_sub(p, ci), v, a, e->stray);
     if (t_exit < NBEP_NEVER && (best.kind == NBEP_EVENT_NONE || t_exit < best.time))
         best = (nbep_event){t_exit, 0, NBEP_EVENT_HORIZON, e->ver[i], 0};
-    size_t m;
-    const uint32_t *js = nbep_nblist_of(&e->nl, i, &m);
     if (m > 0)
-        ops->pairs(u, i, js, m, near_face(e, i), &best);
+        ops->pairs(u, i, js, m, near_face(e, ci), &best);
     if (best.kind == NBEP_EVENT_NONE)
         best = (nbep_event){.time = INFINITY, .kind = NBEP_EVENT_NEVER, .ver_self = e->ver[i]};
     nbep_feq_put(e->q, i, best); /* from scratch: whatever the slot held goes */
+}
+
+/* predict_with i's own list and place */
+static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uint32_t i,
+                        double t)
+{
+    size_t m;
+    const uint32_t *js = nbep_nblist_of(&e->nl, i, &m);
+    predict_with(e, ops, u, i, t, js, m, e->cells.m[i].at);
 }
 
 /* The calendar entry of sphere i from its slot. */
@@ -366,7 +464,7 @@ void nbep_evloop_predict(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, si
     if (e->failed)
         return;
     for (size_t i = lo; i < hi; i++) /* own lists first: a prediction reads only its own */
-        near_centres(e, (uint32_t)i, fill_one, NULL);
+        near_own(e, (uint32_t)i, fill_one);
     for (size_t i = lo; i < hi; i++)
         predict_one(e, ops, u, (uint32_t)i, t);
 }
@@ -384,6 +482,115 @@ void nbep_evloop_stop(nbep_evloop *e)
     e->stop = true;
 }
 
+/* The event in i's slot (ev, at time t), handled on workspace w: the motion and the slots of
+ * the spheres it involves are written (an expiry also finds its sphere's new list); the lists,
+ * the cells and the calendar wait for commit. A stale slot is predicted again; an expiry wraps
+ * its sphere into a periodic box if it left it and predicts it from its new list; a contact
+ * reacts and every sphere the reaction changed is predicted again. */
+static void handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, void *u, uint32_t i,
+                   const nbep_event *ev, double t)
+{
+    w->item = i;
+    w->rebuilt = w->reacted = w->oom = false;
+    w->n_changed = 0;
+    if (ev->kind == NBEP_EVENT_HORIZON) {
+        nbep_vec3 p, v, a;
+        if (e->pb.any) /* a centre past a periodic face enters through the other */
+            ops->wrap(u, i, t);
+        ops->flight(u, i, t, &p, &v, &a);
+        walk(e, w, i, p);
+        if (w->oom)
+            return;
+        w->rebuilt = true;
+        w->at = p;
+        predict_with(e, ops, u, i, t, w->near, w->n_near, p);
+        return;
+    }
+    if (ops->fresh(u, i, ev)) {
+        w->reacted = true;
+        const uint32_t *changed;
+        const size_t m = ops->react(u, i, ev, &changed);
+        if (e->stop)
+            return;
+        /* a copy: the callback's array is the thread's, and a team thread handles several
+         * events before they are committed */
+        while (m > w->chg_cap) {
+            uint32_t *a = realloc(w->changed, 2 * w->chg_cap * sizeof *a);
+            if (!a) {
+                w->oom = true;
+                return;
+            }
+            w->changed = a;
+            w->chg_cap *= 2;
+        }
+        for (size_t k = 0; k < m; k++)
+            w->changed[k] = changed[k];
+        w->n_changed = m;
+        for (size_t k = 0; k < w->n_changed; k++)
+            if (w->changed[k] != i)
+                predict_one(e, ops, u, w->changed[k], t);
+    }
+    /* in every other case (stale slot, reaction) i looks again from now */
+    predict_one(e, ops, u, i, t);
+}
+
+/* What handle left waiting: the new list entered, the changed spheres' calendar entries set. */
+static void commit(nbep_evloop *e, const evl_ws *w)
+{
+    if (w->oom)
+        e->failed = true;
+    if (w->rebuilt)
+        apply(e, w, w->item, w->at);
+    if (e->failed)
+        return;
+    for (size_t k = 0; k < w->n_changed; k++)
+        if (w->changed[k] != w->item)
+            schedule_one(e, w->changed[k]);
+    schedule_one(e, w->item);
+}
+
+/* Counts one event at time t towards the stall check: false when `stall_events` events in a row
+ * have not advanced time by more than stall_dt. */
+static bool advances(uint64_t *since, double *t_mark, double t, uint64_t stall_events,
+                     double stall_dt)
+{
+    if (++*since >= stall_events) {
+        if (!(t - *t_mark > stall_dt))
+            return false;
+        *t_mark = t;
+        *since = 0;
+    }
+    return true;
+}
+
+/* Requests what the event of sphere i (slot ev) and the next ones will read (no effect on
+ * results): the first line of its list (from the list's record, which the event before
+ * requested with the runners-up), its place, its partner's list record and place, and the
+ * runners-up' slots, places and list records. */
+static void prefetch_event(const nbep_evloop *e, uint32_t i, const nbep_event *ev)
+{
+    NBEP_PREFETCH(&e->nl.pool[e->nl.sp[i].off]);
+    NBEP_PREFETCH(&e->cells.m[i]);
+    if (ev->kind == NBEP_EVENT_SPHERE) {
+        NBEP_PREFETCH(&e->nl.sp[ev->partner]);
+        NBEP_PREFETCH(&e->cells.m[ev->partner]);
+    }
+    uint32_t next[2];
+    int n_next;
+    nbep_calendar_runners_up(e->cal, next, &n_next);
+    for (int k = 0; k < n_next; k++) {
+        NBEP_PREFETCH(nbep_feq_slot(e->q, next[k]));
+        NBEP_PREFETCH(&e->cells.m[next[k]]);
+        NBEP_PREFETCH(&e->nl.sp[next[k]]);
+    }
+}
+
+static void count_handled(nbep_evloop_tally *tally, const evl_ws *w)
+{
+    tally->exits += w->rebuilt;
+    tally->reactions += w->reacted;
+}
+
 bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_end,
                      uint64_t stall_events, double stall_dt, nbep_evloop_tally *tally,
                      double *t_stuck)
@@ -392,63 +599,278 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
         return false;
     uint64_t since = 0;
     double t_mark = -INFINITY;
+    evl_ws *w = &e->ws[0];
     uint32_t i;
     double t;
     while (nbep_calendar_top(e->cal, &i, &t) && t < t_end) {
         const nbep_event ev = *nbep_feq_slot(e->q, i);
-        /* what this event and the next ones will read, requested now (no effect on results):
-         * the first line of its list (from the list's record, which the event before requested
-         * with the runners-up), its place, its partner's list record and place, and the
-         * runners-up' slots, places and list records */
-        NBEP_PREFETCH(&e->nl.pool[e->nl.sp[i].off]);
-        NBEP_PREFETCH(&e->cells.m[i]);
-        if (ev.kind == NBEP_EVENT_SPHERE) {
-            NBEP_PREFETCH(&e->nl.sp[ev.partner]);
-            NBEP_PREFETCH(&e->cells.m[ev.partner]);
-        }
-        uint32_t next[2];
-        int n_next;
-        nbep_calendar_runners_up(e->cal, next, &n_next);
-        for (int k = 0; k < n_next; k++) {
-            NBEP_PREFETCH(nbep_feq_slot(e->q, next[k]));
-            NBEP_PREFETCH(&e->cells.m[next[k]]);
-            NBEP_PREFETCH(&e->nl.sp[next[k]]);
-        }
+        prefetch_event(e, i, &ev);
         tally->events++;
-        if (++since >= stall_events) {
-            if (!(t - t_mark > stall_dt)) {
-                *t_stuck = t;
-                return false;
-            }
-            t_mark = t;
-            since = 0;
+        if (!advances(&since, &t_mark, t, stall_events, stall_dt)) {
+            *t_stuck = t;
+            return false;
         }
-        if (ev.kind == NBEP_EVENT_HORIZON) {
-            nbep_vec3 p, v, a;
-            if (e->pb.any) /* a centre past a periodic face enters through the other */
-                ops->wrap(u, i, t);
-            ops->flight(u, i, t, &p, &v, &a);
-            rebuild_one(e, i, p);
-            if (e->failed)
-                return false;
-            tally->exits++;
-        } else if (ops->fresh(u, i, &ev)) {
-            const uint32_t *changed;
-            size_t m = ops->react(u, i, &ev, &changed);
-            tally->reactions++;
-            if (e->stop) {
-                *t_stuck = t;
-                return false;
-            }
-            for (size_t k = 0; k < m; k++)
-                if (changed[k] != i) {
-                    predict_one(e, ops, u, changed[k], t);
-                    schedule_one(e, changed[k]);
-                }
+        handle(e, w, ops, u, i, &ev, t);
+        count_handled(tally, w);
+        if (e->stop) {
+            *t_stuck = t;
+            return false;
         }
-        /* in every case (exit, stale slot, reaction) i looks again from now */
-        predict_one(e, ops, u, i, t);
-        schedule_one(e, i);
+        commit(e, w);
+        if (e->failed)
+            return false;
     }
     return true;
+}
+
+/* ---- the team loop (nbep_evloop_run_lead, nbep_evloop_help) -------------------------------- */
+
+#define NO_JOB UINT32_MAX
+
+/* Whether events on spheres a and b touch no common sphere: their list centres are more than
+ * sqrt(apart2) apart, in a periodic box the nearest way round. */
+static bool apart(const nbep_evloop *e, uint32_t a, uint32_t b)
+{
+    const nbep_vec3 pa = e->cells.m[a].at, pb = e->cells.m[b].at;
+    const double d[3] = {pa.x - pb.x, pa.y - pb.y, pa.z - pb.z};
+    double d2 = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double x = fabs(d[k]);
+        if (e->pb.axis[k] && x > 0.5 * e->pb.len[k])
+            x = e->pb.len[k] - x;
+        d2 += x * x;
+    }
+    return d2 > e->apart2;
+}
+
+/* Whether the cells that a commit of an event in cell a changes (a's cell and, for a rebuilt
+ * list, the one next to it that its new centre is in) lie outside the cells a walk of an event
+ * in cell b reads (the blocks around b's cell and its neighbours): 4 cells apart along some
+ * axis, the nearest way round on a periodic one. */
+static bool cells_apart(const nbep_evloop *e, const size_t *a, const size_t *b)
+{
+    for (int k = 0; k < 3; k++) {
+        size_t d = a[k] > b[k] ? a[k] - b[k] : b[k] - a[k];
+        if (e->cells.periodic[k] && d > e->cells.dim[k] - d)
+            d = e->cells.dim[k] - d;
+        if (d >= 4)
+            return true;
+    }
+    return false;
+}
+
+static void cell_xyz(const nbep_evloop *e, uint32_t i, size_t *xyz)
+{
+    const size_t c = e->cells.m[i].cell, nx = e->cells.dim[0], ny = e->cells.dim[1];
+    xyz[0] = c % nx;
+    xyz[1] = c / nx % ny;
+    xyz[2] = c / (nx * ny);
+}
+
+/* A round's events: the earliest (sphere i, slot ev) and those that follow it in the calendar
+ * while each is apart from all before it, in the spheres it touches (apart) and in the cells
+ * (cells_apart: a commit changes cells while later events of the round are handled), and
+ * comes before t_end; entries of partners of the round's pair events are passed over (the
+ * pair's reaction moves them). Returns how many. */
+static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_end)
+{
+    e->batch[0] = i;
+    e->batch_ev[0] = *ev;
+    cell_xyz(e, i, e->batch_cell[0]);
+    size_t n = 1, n_skip = 0;
+    uint32_t skip[NBEP_EVLOOP_BATCH], front[2 * NBEP_EVLOOP_BATCH];
+    if (ev->kind == NBEP_EVENT_SPHERE)
+        skip[n_skip++] = ev->partner;
+    const size_t nf = nbep_calendar_front(e->cal, front, 2 * NBEP_EVLOOP_BATCH);
+    for (size_t f = 0; f < nf && n < NBEP_EVLOOP_BATCH; f++) {
+        const uint32_t x = front[f];
+        bool passed = false;
+        for (size_t k = 0; k < n_skip; k++)
+            passed |= skip[k] == x;
+        if (passed)
+            continue;
+        const nbep_event *ex = nbep_feq_slot(e->q, x);
+        if (!(ex->time < t_end))
+            break;
+        cell_xyz(e, x, e->batch_cell[n]);
+        for (size_t k = 0; k < n; k++)
+            if (!cells_apart(e, e->batch_cell[k], e->batch_cell[n]) || !apart(e, x, e->batch[k]))
+                return n;
+        e->batch[n] = x;
+        e->batch_ev[n] = *ex;
+        if (ex->kind == NBEP_EVENT_SPHERE)
+            skip[n_skip++] = ex->partner;
+        n++;
+    }
+    return n;
+}
+
+/* Keeps what the event in i's slot (ev) may change, to undo it: i's motion and slot, and its
+ * partner's for a pair. */
+static void keep(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, void *u, uint32_t i,
+                 const nbep_event *ev)
+{
+    w->n_kept = 0;
+    w->kept_id[w->n_kept++] = i;
+    if (ev->kind == NBEP_EVENT_SPHERE)
+        w->kept_id[w->n_kept++] = ev->partner;
+    for (int k = 0; k < w->n_kept; k++) {
+        ops->save(u, w->kept_id[k], &w->kept_motion[k]);
+        w->kept_slot[k] = *nbep_feq_slot(e->q, w->kept_id[k]);
+    }
+}
+
+/* A speculative event undone: the spheres it changed as they were, their slots too (the
+ * calendar, the lists and the cells were not touched), its counts dropped. */
+static void undo(nbep_evloop *e, const evl_ws *w, const nbep_evloop_ops *ops, void *u,
+                 void *uk)
+{
+    for (int k = w->n_kept - 1; k >= 0; k--) {
+        ops->restore(uk, w->kept_id[k], &w->kept_motion[k]);
+        nbep_feq_put(e->q, w->kept_id[k], w->kept_slot[k]);
+    }
+    ops->merge(u, uk, false);
+}
+
+/* Takes the next place of round `round` (n places) to handle and handles it: false when none
+ * is left. */
+static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us,
+                     uint64_t round, size_t n)
+{
+    uint64_t v = atomic_load_explicit(&e->next, memory_order_relaxed);
+    do {
+        if (v / NBEP_EVLOOP_BATCH != round || v % NBEP_EVLOOP_BATCH >= n)
+            return false;
+    } while (!atomic_compare_exchange_weak_explicit(&e->next, &v, v + 1, memory_order_relaxed,
+                                                    memory_order_relaxed));
+    const size_t m = v % NBEP_EVLOOP_BATCH;
+    if (m > 0) /* every event but the round's first may be undone */
+        keep(e, &e->ws[m], ops, us[m], e->batch[m], &e->batch_ev[m]);
+    handle(e, &e->ws[m], ops, us[m], e->batch[m], &e->batch_ev[m], e->batch_ev[m].time);
+    atomic_store_explicit(&e->handled[m].round, round, memory_order_release);
+    return true;
+}
+
+/* The leader waits for place m of the round to be handled, handling places meanwhile. */
+static void wait_handled(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us,
+                         uint64_t round, size_t n, size_t m)
+{
+    for (unsigned k = 1;
+         atomic_load_explicit(&e->handled[m].round, memory_order_acquire) != round; k++)
+        if (!take_one(e, ops, us, round, n))
+            nbep_spin_pause(k);
+}
+
+/* Places m.. of the round undone, once every one is handled. */
+static void undo_from(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
+                      uint64_t round, size_t n, size_t m)
+{
+    for (size_t q = m; q < n; q++) {
+        wait_handled(e, ops, us, round, n, q);
+        undo(e, &e->ws[q], ops, u, us[q]);
+    }
+}
+
+static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
+                 double t_end, uint64_t stall_events, double stall_dt, nbep_evloop_tally *tally,
+                 double *t_stuck, uint64_t *round)
+{
+    uint64_t since = 0;
+    double t_mark = -INFINITY;
+    uint32_t i;
+    double t;
+    while (nbep_calendar_top(e->cal, &i, &t) && t < t_end) {
+        const nbep_event ev = *nbep_feq_slot(e->q, i);
+        prefetch_event(e, i, &ev);
+        if (!advances(&since, &t_mark, t, stall_events, stall_dt)) {
+            tally->events++;
+            *t_stuck = t;
+            return false;
+        }
+        const size_t n = pick(e, i, &ev, t_end);
+        const uint64_t r = ++*round;
+        atomic_store_explicit(&e->next, r * NBEP_EVLOOP_BATCH, memory_order_relaxed);
+        if (n > 1) { /* the places and the events, published to the helper */
+            e->job = (uint32_t)n;
+            atomic_store_explicit(&e->go, r, memory_order_release);
+        }
+        /* the events in order, as they are handled: each stands when it is then the earliest
+         * (the one thread would handle it next, from the same state: no event before it
+         * touched its spheres) */
+        for (size_t m = 0; m < n; m++) {
+            wait_handled(e, ops, us, r, n, m);
+            const evl_ws *w = &e->ws[m];
+            if (m > 0) {
+                uint32_t im;
+                double tm;
+                if (!(nbep_calendar_top(e->cal, &im, &tm) && im == e->batch[m] && tm < t_end)) {
+                    undo_from(e, ops, u, us, r, n, m);
+                    tally->undone += n - m;
+                    break;
+                }
+                if (!advances(&since, &t_mark, tm, stall_events, stall_dt)) {
+                    undo_from(e, ops, u, us, r, n, m);
+                    tally->events++;
+                    *t_stuck = tm;
+                    return false;
+                }
+            }
+            if (e->stop) { /* not in the scenes a team runs */
+                undo_from(e, ops, u, us, r, n, m + 1);
+                *t_stuck = w->item == i ? t : e->batch_ev[m].time;
+                return false;
+            }
+            /* a commit that would make the pool of lists move waits until no list is read */
+            if (w->rebuilt && nbep_nblist_spare(&e->nl) <
+                                  nbep_nblist_need(&e->nl, w->n_near, w->n_near))
+                for (size_t q = m + 1; q < n; q++)
+                    wait_handled(e, ops, us, r, n, q);
+            tally->events++;
+            count_handled(tally, w);
+            ops->merge(u, us[m], true);
+            commit(e, w);
+            if (e->failed) {
+                undo_from(e, ops, u, us, r, n, m + 1);
+                return false;
+            }
+            tally->ahead += m > 0;
+        }
+    }
+    return true;
+}
+
+bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
+                          double t_end, uint64_t stall_events, double stall_dt,
+                          nbep_evloop_tally *tally, double *t_stuck)
+{
+    uint64_t round = atomic_load_explicit(&e->go, memory_order_relaxed); /* its own stores */
+    if (atomic_load_explicit(&e->next, memory_order_relaxed) / NBEP_EVLOOP_BATCH > round)
+        round = atomic_load_explicit(&e->next, memory_order_relaxed) / NBEP_EVLOOP_BATCH;
+    bool ok = !e->failed && lead(e, ops, u, us, t_end, stall_events, stall_dt, tally, t_stuck,
+                                 &round);
+    /* the helper returns (it has handled every place it took: each was waited for) */
+    e->job = NO_JOB;
+    atomic_store_explicit(&e->go, ++round, memory_order_release);
+    for (unsigned k = 1; atomic_load_explicit(&e->done, memory_order_acquire) != round; k++)
+        nbep_spin_pause(k);
+    return ok;
+}
+
+void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us)
+{
+    uint64_t seen = atomic_load_explicit(&e->done, memory_order_relaxed); /* its own stores */
+    for (;;) {
+        uint64_t go;
+        for (unsigned k = 1; (go = atomic_load_explicit(&e->go, memory_order_acquire)) == seen;
+             k++)
+            nbep_spin_pause(k);
+        seen = go;
+        const uint32_t n = e->job;
+        if (n == NO_JOB) {
+            atomic_store_explicit(&e->done, go, memory_order_release);
+            return;
+        }
+        while (take_one(e, ops, us, go, n))
+            ;
+    }
 }

@@ -34,6 +34,14 @@
 #include "nbep/status.h"
 #include "nbep/vec3.h"
 
+/* What an event may change of one sphere (the team loop keeps it to undo a speculative one). */
+typedef struct nbep_evloop_motion {
+    nbep_vec3 pos, vel;
+    double tau;           /* its local time */
+    uint64_t ver;         /* its response count */
+    int32_t image[3];
+} nbep_evloop_motion;
+
 /* The algorithm's side. u is the caller's context, passed through. */
 typedef struct nbep_evloop_ops {
     /* the earliest contact of sphere i with a plane, kind NONE when none */
@@ -55,6 +63,14 @@ typedef struct nbep_evloop_ops {
     /* periodic boxes only (may be NULL otherwise): sphere i, leaving its cell at absolute time
      * t, is brought to t and wrapped into the box (periodic.h), its image count kept */
     void (*wrap)(void *u, uint32_t i, double t);
+    /* the team loop only (may be NULL otherwise): sphere i's motion kept and put back */
+    void (*save)(void *u, uint32_t i, nbep_evloop_motion *m);
+    void (*restore)(void *u, uint32_t i, const nbep_evloop_motion *m);
+    /* the team loop only: context uh has handled one event, whose counts and sums (kept
+     * apart, from zero) go into the leader's u when keep (the event stands, and is added in
+     * its place in the order of events, so that every sum is the one thread's bit for bit)
+     * and are dropped otherwise; either way uh's start from zero again */
+    void (*merge)(void *u, void *uh, bool keep);
 } nbep_evloop_ops;
 
 typedef struct nbep_evloop nbep_evloop;
@@ -99,6 +115,8 @@ typedef struct nbep_evloop_tally {
     uint64_t events;     /* calendar entries handled (stale, expiries and reactions) */
     uint64_t reactions;
     uint64_t exits;      /* list expiries (rebuilds of one list) */
+    uint64_t ahead;      /* team loop: events handled ahead of the round's first that stood */
+    uint64_t undone;     /* team loop: events handled ahead and undone */
 } nbep_evloop_tally;
 
 /* Handles every event before t_end, in order. One thread. Returns false, with the time of
@@ -109,6 +127,28 @@ typedef struct nbep_evloop_tally {
 bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_end,
                      uint64_t stall_events, double stall_dt, nbep_evloop_tally *tally,
                      double *t_stuck);
+
+/* Events a round of the team loop handles at most. */
+#define NBEP_EVLOOP_BATCH 16
+
+/* nbep_evloop_run on two threads, with the same results bit for bit. Each round takes the
+ * earliest event and those that follow it in the calendar while every one is apart from all
+ * the others (their spheres' list centres 3 cutoffs and a stray apart: none reads what another
+ * writes, and lists, cells and calendar are written only at commits), up to
+ * NBEP_EVLOOP_BATCH. The leader (thread 0) handles the events at even places, the helper
+ * (thread 1, in nbep_evloop_help at the same time) those at odd places, each but the first
+ * speculatively (what it may change kept: ops save). Then the leader commits them in order:
+ * each stands if it is then the earliest in the calendar (the one thread would handle it next,
+ * from the same state), else it and the rest are undone (ops restore) and handled in later
+ * rounds. The event at place m is handled with context us[m] (one per place, its counts and
+ * sums kept apart and merged into u, the leader's, when it stands: ops merge); even places
+ * run on the leader, odd on the helper. For scenes whose reactions change only the event's own
+ * spheres (the caller's choice: an elastic scene where nothing accelerates). Returns as
+ * nbep_evloop_run; the helper returns when it does. */
+bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
+                          double t_end, uint64_t stall_events, double stall_dt,
+                          nbep_evloop_tally *tally, double *t_stuck);
+void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us);
 
 /* Calls visit(u, j) for sphere i and every sphere j of its neighbour list: every sphere that
  * can touch i. Read-only; a react callback may call it. */

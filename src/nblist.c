@@ -57,11 +57,14 @@ bool nbep_nblist_layout(nbep_nblist *l, const uint32_t *counts)
         total += room_for(counts[i]);
     bool ok = reserve(l, total, 8u); /* an eighth spare: lists that outgrow their room move */
     size_t at = 0;
+    l->cap_max = 0;
     for (size_t i = 0; i < l->n; i++) {
         l->sp[i].off = (uint32_t)(ok ? at : 0);
         l->sp[i].cap = ok ? room_for(counts[i]) : 0;
         l->sp[i].cnt = 0;
         at += l->sp[i].cap;
+        if (l->sp[i].cap > l->cap_max)
+            l->cap_max = l->sp[i].cap;
     }
     l->pool_len = l->room = at;
     return ok;
@@ -78,11 +81,14 @@ static bool compact(nbep_nblist *l, size_t extra)
     if (!p)
         return false;
     size_t at = 0;
+    l->cap_max = 0;
     for (size_t i = 0; i < l->n; i++) {
         memcpy(p + at, l->pool + l->sp[i].off, l->sp[i].cnt * sizeof *p);
         l->sp[i].off = (uint32_t)at;
         l->sp[i].cap = room_for(l->sp[i].cnt);
         at += l->sp[i].cap;
+        if (l->sp[i].cap > l->cap_max)
+            l->cap_max = l->sp[i].cap;
     }
     free(l->pool);
     l->pool = p;
@@ -114,6 +120,8 @@ bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j)
             l->room += grown - l->sp[i].cap;
             l->sp[i].cap = grown;
             l->pool_len += grown;
+            if (grown > l->cap_max)
+                l->cap_max = grown;
         }
     }
     l->pool[l->sp[i].off + l->sp[i].cnt++] = j;

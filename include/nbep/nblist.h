@@ -49,6 +49,7 @@ typedef struct nbep_nblist {
     size_t pool_len;           /* entries handed out (live lists and given-up room) */
     size_t pool_cap;
     size_t room;               /* sum of cap[]: the room in use */
+    uint32_t cap_max;          /* no list has more room than this */
 } nbep_nblist;
 
 /* Empty lists for n spheres (n < UINT32_MAX). NBEP_ENOMEM with a message. */
@@ -87,6 +88,19 @@ static inline const uint32_t *nbep_nblist_of(const nbep_nblist *l, uint32_t i, s
     return l->pool + l->sp[i].off;
 }
 
+/* Entries the pool can still hand out before it must grow or be compacted: appends that
+ * move lists needing no more than this in all leave the pool where it is (a reader of other
+ * lists may go on reading them meanwhile). */
+static inline size_t nbep_nblist_spare(const nbep_nblist *l)
+{
+    return l->pool_cap - l->pool_len;
+}
+/* The most a list of m entries built from scratch, and n_gain other lists gaining one entry
+ * each, can take of the spare (each list that outgrows its room moves with twice the room). */
+static inline size_t nbep_nblist_need(const nbep_nblist *l, size_t m, size_t n_gain)
+{
+    return n_gain * (2u * (size_t)l->cap_max + 4u) + 4u * m + 8u;
+}
 /* Invariant check for tests: every list within its room and the pool, no sphere listing
  * itself or a sphere twice, and symmetry. Returns the number of violations. */
 size_t nbep_nblist_check(const nbep_nblist *l);

@@ -14,14 +14,18 @@
 /* checks: pair tests (naive/seminaive: overlap tests; predictive: queue slots examined by
  * find plus check() calls); predictions: contact-time computations; collisions split by kind
  * (responses applied); reactions: events the predictive algorithm reacted to, whether or not
- * a response was applied (internal: shows that a pair is reacted to exactly once). The second
+ * a response was applied (internal: shows that a pair is reacted to exactly once); ahead and
+ * undone (internal): events the cells mode's team loop handled ahead of their turn on a second
+ * thread that stood, and that it undid (evloop.h, nbep_evloop_run_lead). The second
  * column is the counter's lowercase name, for readers of this list. */
 #define NBEP_COUNTER_LIST(X)                                                                 \
     X(CHECKS, "checks")                                                                      \
     X(PREDICTIONS, "predictions")                                                            \
     X(SPHERE_COLLISIONS, "sphere_collisions")                                                \
     X(PLANE_COLLISIONS, "plane_collisions")                                                  \
-    X(REACTIONS, "reactions")
+    X(REACTIONS, "reactions")                                                                \
+    X(AHEAD, "ahead")                                                                        \
+    X(UNDONE, "undone")
 
 enum nbep_counter {
 #define NBEP_X_ENUM(name, key) NBEP_COUNTER_##name,
