@@ -319,6 +319,10 @@ typedef struct pred_ctx {
      * spheres (free flight at e = 1): thread 1 handles events ahead of thread 0's
      * (nbep_evloop_run_lead), counting them apart until they stand (cells_merge) */
     bool team;
+    /* whether the current step runs the team loop (team_choose, thread 0, before the barrier
+     * that ends the step before) and the measured seconds per event of each way (0: none yet) */
+    bool team_on;
+    double team_cost[2];
     nbep_counters *help_cnt;      /* owned when team, NBEP_EVLOOP_BATCH: each place's event's
                                    * counts (a round's events, evloop.h) */
     nbep_thread_max *help_mx;     /* owned when team, the same: their sums (wall: one buffer) */
@@ -369,6 +373,8 @@ static void pred_destroy(void *p)
     }
     free(c);
 }
+
+static int team_forced(void);
 
 static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
 {
@@ -464,6 +470,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
          * (no resting, holding, settling, TC clocks or reaction counts: all NULL here) */
         c->team = st == NBEP_OK && sim->nt >= 2 && c->free_flight && !c->t_last && !c->jam &&
                   !c->settle && !c->rest;
+        c->team_on = c->team && team_forced() >= 0; /* the first step: the team (team_choose) */
         if (c->team) {
             const size_t np = sim->st.n_planes;
             c->help_cnt = nbep_alloc_aligned(NBEP_EVLOOP_BATCH, sizeof *c->help_cnt);
@@ -2104,6 +2111,40 @@ static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, c
                                                cells_react,  cells_flight,     cells_wrap,
                                                cells_save,   cells_restore,    cells_merge};
 
+/* The team loop pays where a second core is close (it passes a few cache lines per event
+ * between the two), and loses where it is not or is busy with other work: the same fluid on
+ * this project's 2-core virtual machine ran 1.5 times as fast as one thread in some runs and
+ * 0.8 times in others. Results are the same bit for bit either way, so the run measures both
+ * and takes the faster: every TEAM_PROBE-th step runs the other way, and each way's seconds
+ * per event are a running mean of its steps (half the last step, half what it was).
+ * NBEP_TEAM=always or never in the environment fixes the choice (tests, benchmarks). */
+#define TEAM_PROBE 8
+
+static int team_forced(void)
+{
+    const char *v = getenv("NBEP_TEAM");
+    return !v ? 0 : strcmp(v, "always") == 0 ? 1 : strcmp(v, "never") == 0 ? -1 : 0;
+}
+
+/* Thread 0, after step `step` ran its events (`events` of them in `seconds`) one way (team):
+ * the way of the next step. */
+static void team_choose(pred_ctx *c, uint64_t step, bool team, uint64_t events, double seconds)
+{
+    if (events > 0) {
+        const double per = seconds / (double)events;
+        double *m = &c->team_cost[team];
+        *m = *m > 0.0 ? 0.5 * (*m + per) : per;
+    }
+    const int forced = team_forced();
+    const bool faster = c->team_cost[1] <= c->team_cost[0];
+    if (forced)
+        c->team_on = forced > 0;
+    else if (c->team_cost[0] == 0.0 || c->team_cost[1] == 0.0) /* each way measured once */
+        c->team_on = c->team_cost[1] == 0.0;
+    else
+        c->team_on = (step + 1) % TEAM_PROBE == 0 ? !faster : faster;
+}
+
 /* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's
  * event loop; all threads share the rebuilds, the update to the step's end and the energy.
  * A rebuild (cells from positions, every slot predicted afresh: about the cost of n/2
@@ -2159,16 +2200,21 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
             ups[m] = (cells_user){c, s, sim->scene, u.T0, 0.0, w, &c->help_cnt[m], &c->help_mx[m]};
             us[m] = &ups[m];
         }
-        if (tid == 1 && c->team)
+        /* thread 0 set team_on before the barrier that ended the last step */
+        const bool team = c->team && c->team_on;
+        if (tid == 1 && team)
             nbep_evloop_help(c->ev, ops, us);
         if (tid == 0) {
             nbep_evloop_tally tally = {0};
             double t_stuck = 0.0;
+            const double t_loop = nbep_now();
             c->ev_failed =
-                !(c->team ? nbep_evloop_run_lead(c->ev, ops, &u, us, T_end, STALL_EVENTS,
-                                                 STALL_FRACTION * sim->dt, &tally, &t_stuck)
-                          : nbep_evloop_run(c->ev, ops, &u, T_end, STALL_EVENTS,
-                                            STALL_FRACTION * sim->dt, &tally, &t_stuck));
+                !(team ? nbep_evloop_run_lead(c->ev, ops, &u, us, T_end, STALL_EVENTS,
+                                              STALL_FRACTION * sim->dt, &tally, &t_stuck)
+                       : nbep_evloop_run(c->ev, ops, &u, T_end, STALL_EVENTS,
+                                         STALL_FRACTION * sim->dt, &tally, &t_stuck));
+            if (c->team)
+                team_choose(c, step, team, tally.events, nbep_now() - t_loop);
             u.cnt->c[NBEP_COUNTER_CHECKS] += tally.events;
             u.cnt->c[NBEP_COUNTER_AHEAD] += tally.ahead;
             u.cnt->c[NBEP_COUNTER_UNDONE] += tally.undone;

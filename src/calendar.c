@@ -423,7 +423,21 @@ static void sort_items(const nbep_calendar *c, uint32_t *items, size_t n)
     }
 }
 
-size_t nbep_calendar_front(const nbep_calendar *c, uint32_t *items, size_t max)
+/* The times and keys of items[0..n) (either may be NULL); returns n. */
+static size_t fill_front(const nbep_calendar *c, const uint32_t *items, size_t n, double *times,
+                         uint64_t *keys)
+{
+    for (size_t k = 0; k < n; k++) {
+        if (times)
+            times[k] = c->node[items[k]].time;
+        if (keys)
+            keys[k] = c->node[items[k]].key;
+    }
+    return n;
+}
+
+size_t nbep_calendar_front(const nbep_calendar *c, uint32_t *items, double *times,
+                           uint64_t *keys, size_t max)
 {
     if (max == 0 || c->heap_len == 0)
         return 0;
@@ -439,7 +453,7 @@ size_t nbep_calendar_front(const nbep_calendar *c, uint32_t *items, size_t max)
     for (size_t k = 0; k < n; k++)
         items[k] = tmp[k];
     if (c->heap_len > FRONT_HEAP)
-        return n;
+        return fill_front(c, items, n, times, keys);
     /* every entry of the heap comes before every entry of the ring, and a ring slot holds one
      * bucket, which comes before the next slot's */
     for (int64_t ab = c->cur + 1;
@@ -455,11 +469,11 @@ size_t nbep_calendar_front(const nbep_calendar *c, uint32_t *items, size_t max)
                  x = c->node[x].next)
                 all++;
             if (all > n - first)
-                return first;
+                return fill_front(c, items, first, times, keys);
         }
         sort_items(c, items + first, n - first);
     }
-    return n;
+    return fill_front(c, items, n, times, keys);
 }
 
 size_t nbep_calendar_size(const nbep_calendar *c)

@@ -670,8 +670,10 @@ static void cell_xyz(const nbep_evloop *e, uint32_t i, size_t *xyz)
 /* A round's events: the earliest (sphere i, slot ev) and those that follow it in the calendar
  * while each is apart from all before it, in the spheres it touches (apart) and in the cells
  * (cells_apart: a commit changes cells while later events of the round are handled), and
- * comes before t_end; entries of partners of the round's pair events are passed over (the
- * pair's reaction moves them). Returns how many. */
+ * comes before t_end; the entries of the other sphere of a pair event of the round are
+ * passed over (the pair's reaction moves them; a pair's key names both spheres, slot_key).
+ * Reads the calendar and the list centres only: each event's slot is read by the thread that
+ * handles it. Returns how many. */
 static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_end)
 {
     e->batch[0] = i;
@@ -679,9 +681,11 @@ static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_en
     cell_xyz(e, i, e->batch_cell[0]);
     size_t n = 1, n_skip = 0;
     uint32_t skip[NBEP_EVLOOP_BATCH], front[2 * NBEP_EVLOOP_BATCH];
+    double times[2 * NBEP_EVLOOP_BATCH];
+    uint64_t keys[2 * NBEP_EVLOOP_BATCH];
     if (ev->kind == NBEP_EVENT_SPHERE)
         skip[n_skip++] = ev->partner;
-    const size_t nf = nbep_calendar_front(e->cal, front, 2 * NBEP_EVLOOP_BATCH);
+    const size_t nf = nbep_calendar_front(e->cal, front, times, keys, 2 * NBEP_EVLOOP_BATCH);
     for (size_t f = 0; f < nf && n < NBEP_EVLOOP_BATCH; f++) {
         const uint32_t x = front[f];
         bool passed = false;
@@ -689,17 +693,18 @@ static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_en
             passed |= skip[k] == x;
         if (passed)
             continue;
-        const nbep_event *ex = nbep_feq_slot(e->q, x);
-        if (!(ex->time < t_end))
+        if (!(times[f] < t_end))
             break;
         cell_xyz(e, x, e->batch_cell[n]);
         for (size_t k = 0; k < n; k++)
             if (!cells_apart(e, e->batch_cell[k], e->batch_cell[n]) || !apart(e, x, e->batch[k]))
                 return n;
         e->batch[n] = x;
-        e->batch_ev[n] = *ex;
-        if (ex->kind == NBEP_EVENT_SPHERE)
-            skip[n_skip++] = ex->partner;
+        /* the other sphere of a pair (a plane's or an expiry's low half, UINT32_MAX - plane
+         * or UINT32_MAX, names no sphere in any scene with fewer than 2^32 - planes spheres;
+         * a wrong skip would only cost its round's later events, which the commit checks) */
+        const uint32_t lo = (uint32_t)(keys[f] >> 32), hi = (uint32_t)keys[f];
+        skip[n_skip++] = lo == x ? hi : lo;
         n++;
     }
     return n;
@@ -744,8 +749,10 @@ static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us
     } while (!atomic_compare_exchange_weak_explicit(&e->next, &v, v + 1, memory_order_relaxed,
                                                     memory_order_relaxed));
     const size_t m = v % NBEP_EVLOOP_BATCH;
-    if (m > 0) /* every event but the round's first may be undone */
+    if (m > 0) { /* every event but the round's first (read by pick) may be undone */
+        e->batch_ev[m] = *nbep_feq_slot(e->q, e->batch[m]);
         keep(e, &e->ws[m], ops, us[m], e->batch[m], &e->batch_ev[m]);
+    }
     handle(e, &e->ws[m], ops, us[m], e->batch[m], &e->batch_ev[m], e->batch_ev[m].time);
     atomic_store_explicit(&e->handled[m].round, round, memory_order_release);
     return true;

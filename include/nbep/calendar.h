@@ -42,11 +42,12 @@ void nbep_calendar_retune(nbep_calendar *c, double t_now);
 void nbep_calendar_runners_up(const nbep_calendar *c, uint32_t items[2], int *n);
 /* The entries that come out after the earliest one, in order, as far as the front of the
  * calendar tells (the current bucket, then a few of the next): up to max items, their count
- * returned. Call after nbep_calendar_top. For a caller that handles events ahead,
+ * returned, with their times and keys (either may be NULL). Call after nbep_calendar_top. For a caller that handles events ahead,
  * speculatively, and checks each (it is the earliest once those before it have moved on): the
  * list may stop short, or miss an entry filed far ahead that has come near. No effect on the
  * order. */
-size_t nbep_calendar_front(const nbep_calendar *c, uint32_t *items, size_t max);
+size_t nbep_calendar_front(const nbep_calendar *c, uint32_t *items, double *times,
+                           uint64_t *keys, size_t max);
 /* Entries held. */
 size_t nbep_calendar_size(const nbep_calendar *c);
 /* True when item has an entry; its time in *time (may be NULL). */
