@@ -319,9 +319,11 @@ typedef struct pred_ctx {
      * spheres (free flight at e = 1): thread 1 handles events ahead of thread 0's
      * (nbep_evloop_run_lead), counting them apart until they stand (cells_merge) */
     bool team;
-    /* whether the current step runs the team loop (team_choose, thread 0, before the barrier
-     * that ends the step before) and the measured seconds per event of each way (0: none yet) */
-    bool team_on;
+    /* whether a step runs the team loop, by the step's parity: step k reads team_on[k & 1],
+     * which thread 0 wrote during step k - 1 (team_choose), whose end both threads crossed,
+     * and which no one writes during step k; and the measured seconds per event of each way
+     * (0: none yet) */
+    bool team_on[2];
     double team_cost[2];
     nbep_counters *help_cnt;      /* owned when team, NBEP_EVLOOP_BATCH: each place's event's
                                    * counts (a round's events, evloop.h) */
@@ -470,7 +472,8 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
          * (no resting, holding, settling, TC clocks or reaction counts: all NULL here) */
         c->team = st == NBEP_OK && sim->nt >= 2 && c->free_flight && !c->t_last && !c->jam &&
                   !c->settle && !c->rest;
-        c->team_on = c->team && team_forced() >= 0; /* the first step: the team (team_choose) */
+        /* the first step: the team (team_choose) */
+        c->team_on[0] = c->team_on[1] = c->team && team_forced() >= 0;
         if (c->team) {
             const size_t np = sim->st.n_planes;
             c->help_cnt = nbep_alloc_aligned(NBEP_EVLOOP_BATCH, sizeof *c->help_cnt);
@@ -2137,12 +2140,13 @@ static void team_choose(pred_ctx *c, uint64_t step, bool team, uint64_t events, 
     }
     const int forced = team_forced();
     const bool faster = c->team_cost[1] <= c->team_cost[0];
+    bool *next = &c->team_on[(step + 1) & 1];
     if (forced)
-        c->team_on = forced > 0;
+        *next = forced > 0;
     else if (c->team_cost[0] == 0.0 || c->team_cost[1] == 0.0) /* each way measured once */
-        c->team_on = c->team_cost[1] == 0.0;
+        *next = c->team_cost[1] == 0.0;
     else
-        c->team_on = (step + 1) % TEAM_PROBE == 0 ? !faster : faster;
+        *next = (step + 1) % TEAM_PROBE == 0 ? !faster : faster;
 }
 
 /* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's
@@ -2200,8 +2204,7 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
             ups[m] = (cells_user){c, s, sim->scene, u.T0, 0.0, w, &c->help_cnt[m], &c->help_mx[m]};
             us[m] = &ups[m];
         }
-        /* thread 0 set team_on before the barrier that ended the last step */
-        const bool team = c->team && c->team_on;
+        const bool team = c->team && c->team_on[step & 1];
         if (tid == 1 && team)
             nbep_evloop_help(c->ev, ops, us);
         if (tid == 0) {

@@ -154,10 +154,11 @@ static inline void nbep_test_frames_free(nbep_test_frames *f)
 }
 
 /* Runs sc on nt threads, each frame to on_frame(ctx) (NULL: none); the run must end with
- * NBEP_OK (a stall is a failure). The final state goes to *final (caller finis) and the
- * reactions counter to *reactions, each when not NULL. */
-static inline nbep_summary nbep_test_run(const nbep_scene *sc, int nt, nbep_frame_fn on_frame,
-                                         void *ctx, nbep_state *final, uint64_t *reactions)
+ * NBEP_OK (a stall is a failure). The final state goes to *final (caller finis) and every
+ * counter's total to counts[NBEP_COUNTER_COUNT], each when not NULL. */
+static inline nbep_summary nbep_test_run_counted(const nbep_scene *sc, int nt,
+                                                 nbep_frame_fn on_frame, void *ctx,
+                                                 nbep_state *final, uint64_t *counts)
 {
     nbep_diag d;
     nbep_diag_init(&d);
@@ -172,10 +173,21 @@ static inline nbep_summary nbep_test_run(const nbep_scene *sc, int nt, nbep_fram
     nbep_sim_summary(sim, &sum);
     if (final)
         assert_int_equal(nbep_state_copy(final, nbep_sim_state(sim), &d), NBEP_OK);
-    if (reactions)
-        *reactions = nbep_sim_counter(sim, NBEP_COUNTER_REACTIONS);
+    for (int k = 0; counts && k < NBEP_COUNTER_COUNT; k++)
+        counts[k] = nbep_sim_counter(sim, k);
     nbep_sim_destroy(&sim);
     nbep_diag_fini(&d);
+    return sum;
+}
+
+/* nbep_test_run_counted with the reactions counter alone to *reactions (may be NULL). */
+static inline nbep_summary nbep_test_run(const nbep_scene *sc, int nt, nbep_frame_fn on_frame,
+                                         void *ctx, nbep_state *final, uint64_t *reactions)
+{
+    uint64_t counts[NBEP_COUNTER_COUNT];
+    nbep_summary sum = nbep_test_run_counted(sc, nt, on_frame, ctx, final, counts);
+    if (reactions)
+        *reactions = counts[NBEP_COUNTER_REACTIONS];
     return sum;
 }
 

@@ -99,6 +99,80 @@ static void test_top_is_the_brute_force_minimum_under_random_operations(void **s
     assert_null(c);
 }
 
+/* nbep_calendar_front after top: the entries after the earliest, in the calendar's order,
+ * with their times and keys; a guess (it may stop short, or miss an entry filed far ahead
+ * that has come near), but under random moves over many buckets it is nearly always the
+ * exact next entries, as a brute-force sort gives them. */
+static void test_front_is_the_next_entries_in_order(void **state)
+{
+    (void)state;
+    enum { N = 400, OPS = 6000, MAX = 12 };
+    nbep_calendar *c = make(N);
+    ref r[N];
+    memset(r, 0, sizeof r);
+    uint64_t x = 777;
+    double now = 0.0;
+    size_t calls = 0, exact = 0, returned = 0;
+    for (int op = 0; op < OPS; op++) {
+        uint32_t i = (uint32_t)(lcg(&x) % N);
+        if (lcg(&x) % 8 == 0) {
+            nbep_calendar_remove(c, i);
+            r[i].has = false;
+        } else { /* ahead of now by up to 4 (ties on a coarse grid now and then) */
+            double t = now + (lcg(&x) % 3 == 0 ? (double)(lcg(&x) % 32) * 0.125
+                                              : (double)(lcg(&x) % 100000) * 4e-5);
+            uint64_t key = lcg(&x) % 3;
+            nbep_calendar_set(c, i, t, key);
+            r[i] = (ref){true, t, key};
+        }
+        if (op == 500)
+            nbep_calendar_retune(c, now);
+        uint32_t top;
+        double t_top;
+        if (!nbep_calendar_top(c, &top, &t_top))
+            continue;
+        now = t_top;
+        /* the brute-force order after the top: MAX selections */
+        uint32_t want[MAX];
+        size_t n_want = 0;
+        bool taken[N] = {false};
+        taken[top] = true;
+        for (; n_want < MAX; n_want++) {
+            uint32_t best = UINT32_MAX;
+            for (uint32_t k = 0; k < N; k++)
+                if (r[k].has && !taken[k] && (best == UINT32_MAX || ref_before(r, k, best)))
+                    best = k;
+            if (best == UINT32_MAX)
+                break;
+            taken[best] = true;
+            want[n_want] = best;
+        }
+        uint32_t got[MAX];
+        double times[MAX];
+        uint64_t keys[MAX];
+        size_t n_got = nbep_calendar_front(c, got, times, keys, MAX);
+        assert_true(n_got <= MAX);
+        calls++;
+        returned += n_got;
+        for (size_t k = 0; k < n_got; k++) {
+            assert_true(r[got[k]].has && got[k] != top);
+            assert_true(times[k] == r[got[k]].time);
+            assert_int_equal(keys[k], r[got[k]].key);
+            assert_true(ref_before(r, top, got[k]));
+            if (k > 0)
+                assert_true(ref_before(r, got[k - 1], got[k]));
+        }
+        exact += n_got > 0 && n_got <= n_want && memcmp(got, want, n_got * sizeof *got) == 0;
+        if (op % 97 == 0) /* the earliest moves on, as the event loop moves it */
+            nbep_calendar_set(c, top, t_top + 1.0, r[top].key), r[top].time = t_top + 1.0;
+    }
+    /* a few entries a call on average, the exact next ones nearly always */
+    assert_true(returned > 3 * calls);
+    assert_true(exact > 9 * calls / 10);
+    assert_int_equal(nbep_calendar_check(c), 0);
+    nbep_calendar_destroy(&c);
+}
+
 /* Draining the calendar gives the entries in (time, key, item) order, the same whatever
  * order they were set in. */
 static void test_drain_order_is_time_then_key_then_item_for_any_insert_order(void **state)
@@ -259,6 +333,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_top_is_the_brute_force_minimum_under_random_operations),
         cmocka_unit_test(test_drain_order_is_time_then_key_then_item_for_any_insert_order),
+        cmocka_unit_test(test_front_is_the_next_entries_in_order),
         cmocka_unit_test(test_remove_of_an_absent_item_and_an_empty_calendar_are_harmless),
         cmocka_unit_test(test_top_is_the_minimum_over_many_laps_with_far_entries_and_changing_pace),
     };

@@ -426,6 +426,68 @@ static void test_periodic_fluid_is_exact_and_thread_independent(void **state)
     nbep_test_scene_free(&sc);
 }
 
+/* The cells mode's team loop (evloop.h, nbep_evloop_run_lead; NBEP_TEAM=always so that every
+ * step runs it): on 2 and 4 threads, a dense periodic fluid gives the frames, image counts,
+ * collision, check and prediction counts and the pressure of one thread bit for bit, while
+ * many events were handled ahead on the second thread and some were undone (handled ahead,
+ * then not the earliest once those before them had reacted). Without the team (one thread,
+ * or NBEP_TEAM=never) nothing is handled ahead. */
+static void test_team_loop_handles_events_ahead_and_undoes_some_bit_for_bit(void **state)
+{
+    (void)state;
+    /* side 12 at phi = 0.45: 9 cells of the list cutoff across, room for events 4 cells
+     * apart; the small scale keeps that room */
+    const size_t side = nbep_test_scaled(16, 12);
+    nbep_scene *sc = periodic_fluid(side, 0.45, nbep_test_scaled(30, 12), 0.02, 3);
+    sc->output_every = 6;
+    setenv("NBEP_TEAM", "always", 1);
+    frames ref = {0};
+    uint64_t c1[NBEP_COUNTER_COUNT], ck[NBEP_COUNTER_COUNT];
+    nbep_summary s1 = nbep_test_run_counted(sc, 1, nbep_test_keep_frame, &ref, NULL, c1);
+    assert_int_equal(c1[NBEP_COUNTER_AHEAD], 0);
+    assert_int_equal(c1[NBEP_COUNTER_UNDONE], 0);
+    assert_true(s1.sphere_collisions > 2 * s1.spheres);
+    for (int nt = 2; nt <= 4; nt *= 2) {
+        frames f = {0};
+        nbep_summary sk = nbep_test_run_counted(sc, nt, nbep_test_keep_frame, &f, NULL, ck);
+        assert_int_equal(f.n_frames, ref.n_frames);
+        assert_memory_equal(f.data, ref.data, ref.n_frames * 2 * ref.n * sizeof *f.data);
+        assert_memory_equal(f.image, ref.image, ref.n_frames * 3 * ref.n * sizeof *f.image);
+        assert_int_equal(sk.collisions, s1.collisions);
+        assert_int_equal(sk.checks, s1.checks);
+        assert_int_equal(sk.predictions, s1.predictions);
+        assert_memory_equal(&sk.pressure.value, &s1.pressure.value, sizeof(double));
+        /* a round holds several events far apart: most events of a box this size go ahead
+         * of their turn, and a few of those come too early */
+        assert_true(ck[NBEP_COUNTER_AHEAD] > s1.checks / 4);
+        assert_true(ck[NBEP_COUNTER_UNDONE] > 0);
+        nbep_test_frames_free(&f);
+    }
+    setenv("NBEP_TEAM", "never", 1);
+    frames f = {0};
+    nbep_summary sn = nbep_test_run_counted(sc, 2, nbep_test_keep_frame, &f, NULL, ck);
+    assert_int_equal(ck[NBEP_COUNTER_AHEAD], 0);
+    assert_memory_equal(f.data, ref.data, ref.n_frames * 2 * ref.n * sizeof *f.data);
+    assert_int_equal(sn.collisions, s1.collisions);
+    nbep_test_frames_free(&f);
+    /* the run's own choice, step by step (team, one thread, then the faster with a probe of
+     * the other every 8 steps): both threads must agree on every step's way, or one waits
+     * for the other for ever (run-tests.sh's time limit fails it) */
+    unsetenv("NBEP_TEAM");
+    sc->steps = 3 * sc->steps;
+    frames ra = {0}, fa = {0};
+    nbep_summary r1 = nbep_test_run_counted(sc, 1, nbep_test_keep_frame, &ra, NULL, NULL);
+    nbep_summary r2 = nbep_test_run_counted(sc, 2, nbep_test_keep_frame, &fa, NULL, ck);
+    assert_true(ck[NBEP_COUNTER_AHEAD] > 0); /* the first step is the team's */
+    assert_int_equal(fa.n_frames, ra.n_frames);
+    assert_memory_equal(fa.data, ra.data, ra.n_frames * 2 * ra.n * sizeof *fa.data);
+    assert_int_equal(r2.collisions, r1.collisions);
+    nbep_test_frames_free(&ra);
+    nbep_test_frames_free(&fa);
+    nbep_test_frames_free(&ref);
+    nbep_test_scene_free(&sc);
+}
+
 /* Carnahan-Starling: beta P sigma^3 = rho sigma^3 (1 + eta + eta^2 - eta^3) / (1 - eta)^3 with
  * rho sigma^3 = 6 eta / pi (2.2768 at eta = 0.30; issue 8 quotes 2.283). Enskog's collision
  * rate per sphere: 4 sqrt(pi) rho sigma^2 g(sigma) sqrt(kT/m), g(sigma) from the same equation
@@ -498,6 +560,58 @@ static void read_all(hid_t file, const char *name, hid_t type, void *buf, hsize_
         assert_true(H5Dread(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0);
     H5Sclose(sp);
     H5Dclose(ds);
+}
+
+/* Dataset `name` of the run written to path: *n doubles, malloc'd. */
+static double *read_doubles(const char *path, const char *name, size_t *n)
+{
+    hid_t file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    assert_true(file >= 0);
+    hsize_t dims[3] = {1, 1, 1};
+    read_all(file, name, H5T_NATIVE_DOUBLE, NULL, dims);
+    *n = (size_t)(dims[0] * dims[1] * dims[2]);
+    double *buf = malloc(*n * sizeof *buf);
+    assert_non_null(buf);
+    read_all(file, name, H5T_NATIVE_DOUBLE, buf, dims);
+    H5Fclose(file);
+    return buf;
+}
+
+/* The team loop in a closed box (walls on every axis, NBEP_TEAM=always): the sums its events
+ * add apart and merge in order, /stats/wall_impulse and /stats/virial, are one thread's bit
+ * for bit on 2 threads, as are the frames, while events (plane contacts among them) went
+ * ahead. */
+static void test_team_loop_keeps_one_threads_wall_impulses_and_virial(void **state)
+{
+    (void)state;
+    const char *body = "box: { min = [0.0, 0.0, 0.0]; max = [18.0, 18.0, 18.0]; };\n"
+                       "spheres = ( { count = 2744; radius = 0.5; mass = 1.0; place = "
+                       "\"lattice\"; speed = 1.7320508075688772; } );\n"
+                       "output: { every = 10; fields = [\"position\", \"velocity\"]; };\n";
+    char text[1024], deck[2][256], out[2][256];
+    setenv("NBEP_TEAM", "always", 1);
+    for (int k = 0; k < 2; k++) {
+        snprintf(text, sizeof text,
+                 "run: { algorithm = \"predictive\"; neighbors = \"cells\"; steps = %d; "
+                 "dt = 0.05; threads = %d; seed = 4; };\n%s",
+                 (int)nbep_test_scaled(40, 20), k + 1, body);
+        write_deck(k ? "team2.deck" : "team1.deck", text, deck[k], sizeof deck[k]);
+        nbep_test_tmp(k ? "team2.h5" : "team1.h5", out[k], sizeof out[k]);
+        const nbep_run_result res = nbep_test_run_deck(deck[k], out[k]);
+        assert_int_equal(res.summary.planes, 6);
+        assert_true(res.summary.plane_collisions > 100);
+    }
+    unsetenv("NBEP_TEAM");
+    const char *sets[] = {"/stats/wall_impulse", "/stats/virial", "/frames/position",
+                          "/frames/velocity"};
+    for (size_t q = 0; q < sizeof sets / sizeof *sets; q++) {
+        size_t n1, n2;
+        double *a = read_doubles(out[0], sets[q], &n1), *b = read_doubles(out[1], sets[q], &n2);
+        assert_int_equal(n1, n2);
+        assert_memory_equal(a, b, n1 * sizeof *a);
+        free(a);
+        free(b);
+    }
 }
 
 /* One sphere bouncing between the x walls of a box (x periodic off, y and z periodic: the box
@@ -656,10 +770,12 @@ int main(void)
         cmocka_unit_test(test_a_free_flight_wraps_and_counts_its_images),
         cmocka_unit_test(test_falling_through_a_periodic_axis_keeps_the_energy),
         cmocka_unit_test(test_periodic_fluid_is_exact_and_thread_independent),
+        cmocka_unit_test(test_team_loop_handles_events_ahead_and_undoes_some_bit_for_bit),
         cmocka_unit_test(test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box),
         cmocka_unit_test(test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference),
         cmocka_unit_test(test_periodic_fluid_pressure_and_collision_rate_match_theory),
         cmocka_unit_test(test_wall_impulse_of_a_sphere_between_two_walls),
+        cmocka_unit_test(test_team_loop_keeps_one_threads_wall_impulses_and_virial),
         cmocka_unit_test(test_periodic_deck_errors_name_the_line),
         cmocka_unit_test(test_periodic_axes_have_no_walls),
     };
