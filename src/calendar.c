@@ -459,18 +459,11 @@ size_t nbep_calendar_front(const nbep_calendar *c, uint32_t *items, double *time
     for (int64_t ab = c->cur + 1;
          n < max && ab <= c->cur + FRONT_SLOTS && ab - c->cur <= (int64_t)c->nb; ab++) {
         const size_t first = n;
-        for (uint32_t x = c->head[(uint64_t)ab & (c->nb - 1)]; x != NIL && n < max;
-             x = c->node[x].next)
+        uint32_t x = c->head[(uint64_t)ab & (c->nb - 1)];
+        for (; x != NIL && n < max; x = c->node[x].next)
             items[n++] = x;
-        if (n == max && c->head[(uint64_t)ab & (c->nb - 1)] != NIL) {
-            /* the slot may hold more than room was left for: its earliest may be missing */
-            size_t all = 0;
-            for (uint32_t x = c->head[(uint64_t)ab & (c->nb - 1)]; x != NIL;
-                 x = c->node[x].next)
-                all++;
-            if (all > n - first)
-                return fill_front(c, items, first, times, keys);
-        }
+        if (x != NIL) /* the slot holds more than there is room for: its earliest may be out */
+            return fill_front(c, items, first, times, keys);
         sort_items(c, items + first, n - first);
     }
     return fill_front(c, items, n, times, keys);

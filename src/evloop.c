@@ -680,12 +680,16 @@ static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_en
     e->batch_ev[0] = *ev;
     cell_xyz(e, i, e->batch_cell[0]);
     size_t n = 1, n_skip = 0;
-    uint32_t skip[NBEP_EVLOOP_BATCH], front[2 * NBEP_EVLOOP_BATCH];
-    double times[2 * NBEP_EVLOOP_BATCH];
-    uint64_t keys[2 * NBEP_EVLOOP_BATCH];
+    /* enough entries for a full round and the partners' entries it passes over */
+    enum { FRONT = NBEP_EVLOOP_BATCH + NBEP_EVLOOP_BATCH / 2 };
+    uint32_t skip[NBEP_EVLOOP_BATCH], front[FRONT];
+    double times[FRONT];
+    uint64_t keys[FRONT];
     if (ev->kind == NBEP_EVENT_SPHERE)
         skip[n_skip++] = ev->partner;
-    const size_t nf = nbep_calendar_front(e->cal, front, times, keys, 2 * NBEP_EVLOOP_BATCH);
+    const size_t nf = nbep_calendar_front(e->cal, front, times, keys, FRONT);
+    for (size_t f = 0; f < nf; f++) /* the places, all requested before the first is used */
+        NBEP_PREFETCH(&e->cells.m[front[f]]);
     for (size_t f = 0; f < nf && n < NBEP_EVLOOP_BATCH; f++) {
         const uint32_t x = front[f];
         bool passed = false;
