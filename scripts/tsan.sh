@@ -20,7 +20,7 @@ libs="$(pkg-config --libs gsl libconfig hdf5 jansson cmocka) -lm -lpthread -fope
       -fsanitize=thread -L${llvm}lib -Wl,-rpath,${llvm}lib"
 srcs=$(ls src/*.c | grep -v -e '^src/main.c$' -e '^src/sweep.c$')
 fail=0
-for t in test_sim test_barrier test_extremes test_order test_granular; do
+for t in test_sim test_periodic test_barrier test_extremes test_order test_granular; do
     [ -e tests/$t.c ] || continue
     # shellcheck disable=SC2086
     clang $cflags $srcs tests/$t.c -o "$out/$t" $libs

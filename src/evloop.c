@@ -65,12 +65,11 @@ struct nbep_evloop {
     uint32_t batch[NBEP_EVLOOP_BATCH];
     nbep_event batch_ev[NBEP_EVLOOP_BATCH];
     size_t batch_cell[NBEP_EVLOOP_BATCH][3]; /* the cell coordinates of their list centres */
-    /* the team loop's hand-over: the leader posts a round (go = its number, job = how many
-     * events it has, NO_JOB to end); either thread takes the next place to handle from `next`
-     * (the round's number times NBEP_EVLOOP_BATCH plus the place) and marks it handled (the
-     * round's number); the helper answers done = the number of the NO_JOB round */
+    /* the team loop's hand-over: the leader posts a round in one word, go = its number times
+     * 256 plus how many events it has (0: the loop ends); either thread takes the next place
+     * to handle from `next` (the round's number times NBEP_EVLOOP_BATCH plus the place) and
+     * marks it handled (the round's number); the helper answers done = the go of the end */
     alignas(NBEP_CACHELINE) _Atomic uint64_t go;
-    uint32_t job;
     alignas(NBEP_CACHELINE) _Atomic uint64_t next;
     alignas(NBEP_CACHELINE) _Atomic uint64_t done;
     struct {
@@ -625,7 +624,8 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
 
 /* ---- the team loop (nbep_evloop_run_lead, nbep_evloop_help) -------------------------------- */
 
-#define NO_JOB UINT32_MAX
+#define GO_SHIFT 8 /* go = round << GO_SHIFT | events */
+_Static_assert(NBEP_EVLOOP_BATCH < (1 << GO_SHIFT), "a round's size fits below GO_SHIFT");
 
 /* Whether events on spheres a and b touch no common sphere: their list centres are more than
  * sqrt(apart2) apart, in a periodic box the nearest way round. */
@@ -801,10 +801,8 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
         const size_t n = pick(e, i, &ev, t_end);
         const uint64_t r = ++*round;
         atomic_store_explicit(&e->next, r * NBEP_EVLOOP_BATCH, memory_order_relaxed);
-        if (n > 1) { /* the places and the events, published to the helper */
-            e->job = (uint32_t)n;
-            atomic_store_explicit(&e->go, r, memory_order_release);
-        }
+        if (n > 1) /* the places and the events, published to the helper */
+            atomic_store_explicit(&e->go, r << GO_SHIFT | n, memory_order_release);
         /* the events in order, as they are handled: each stands when it is then the earliest
          * (the one thread would handle it next, from the same state: no event before it
          * touched its spheres) */
@@ -854,15 +852,17 @@ bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, v
                           double t_end, uint64_t stall_events, double stall_dt,
                           nbep_evloop_tally *tally, double *t_stuck)
 {
-    uint64_t round = atomic_load_explicit(&e->go, memory_order_relaxed); /* its own stores */
-    if (atomic_load_explicit(&e->next, memory_order_relaxed) / NBEP_EVLOOP_BATCH > round)
-        round = atomic_load_explicit(&e->next, memory_order_relaxed) / NBEP_EVLOOP_BATCH;
+    /* its own stores: the last round it numbered, posted or not */
+    uint64_t round = atomic_load_explicit(&e->go, memory_order_relaxed) >> GO_SHIFT;
+    const uint64_t taken = atomic_load_explicit(&e->next, memory_order_relaxed);
+    if (taken / NBEP_EVLOOP_BATCH > round)
+        round = taken / NBEP_EVLOOP_BATCH;
     bool ok = !e->failed && lead(e, ops, u, us, t_end, stall_events, stall_dt, tally, t_stuck,
                                  &round);
     /* the helper returns (it has handled every place it took: each was waited for) */
-    e->job = NO_JOB;
-    atomic_store_explicit(&e->go, ++round, memory_order_release);
-    for (unsigned k = 1; atomic_load_explicit(&e->done, memory_order_acquire) != round; k++)
+    const uint64_t end = ++round << GO_SHIFT;
+    atomic_store_explicit(&e->go, end, memory_order_release);
+    for (unsigned k = 1; atomic_load_explicit(&e->done, memory_order_acquire) != end; k++)
         nbep_spin_pause(k);
     return ok;
 }
@@ -876,12 +876,12 @@ void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *u
              k++)
             nbep_spin_pause(k);
         seen = go;
-        const uint32_t n = e->job;
-        if (n == NO_JOB) {
+        const size_t n = go & ((1u << GO_SHIFT) - 1);
+        if (n == 0) {
             atomic_store_explicit(&e->done, go, memory_order_release);
             return;
         }
-        while (take_one(e, ops, us, go, n))
+        while (take_one(e, ops, us, go >> GO_SHIFT, n))
             ;
     }
 }
