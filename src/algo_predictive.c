@@ -2150,7 +2150,8 @@ static void team_choose(pred_ctx *c, uint64_t step, bool team, uint64_t events, 
 }
 
 /* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's
- * event loop; all threads share the rebuilds, the update to the step's end and the energy.
+ * event loop, with thread 1 in a team where the scene allows it (c->team, team_choose); all
+ * threads share the rebuilds, the update to the step's end and the energy.
  * A rebuild (cells from positions, every slot predicted afresh: about the cost of n/2
  * collisions) happens at the first step and after every step that writes a frame to a file in
  * step with output.every, so that a run resumed from such a frame starts from exactly the state

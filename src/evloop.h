@@ -20,9 +20,13 @@
  * response count moved on is stale and its sphere is re-predicted; an expiry wraps the sphere
  * into a periodic box if it left it, rebuilds its list around where it is and re-predicts it;
  * any other event reacts and both its spheres (and any other sphere the reaction changed) are
- * re-predicted. The loop is serial (one thread), so results cannot depend on the thread count;
- * the full rebuild (nbep_evloop_assign, _count, _predict) is per sphere and runs on every
- * thread's own range. */
+ * re-predicted. nbep_evloop_run handles them on one thread; nbep_evloop_run_lead with
+ * nbep_evloop_help on two (the team loop, below), with the same results bit for bit, so results
+ * cannot depend on the thread count. An event is handled in two parts: handle (the motion and
+ * slots of its spheres; an expiry's new list found by a walk that reads the cells and lists
+ * only) and commit (the new list entered, the cells changed, the calendar entries set). The
+ * full rebuild (nbep_evloop_assign, _count, _predict) is per sphere and runs on every thread's
+ * own range. */
 #ifndef NBEP_EVLOOP_H
 #define NBEP_EVLOOP_H
 
