@@ -456,8 +456,11 @@ size_t nbep_calendar_front(const nbep_calendar *c, uint32_t *items, double *time
         return fill_front(c, items, n, times, keys);
     /* every entry of the heap comes before every entry of the ring, and a ring slot holds one
      * bucket, which comes before the next slot's */
-    for (int64_t ab = c->cur + 1;
-         n < max && ab <= c->cur + FRONT_SLOTS && ab - c->cur <= (int64_t)c->nb; ab++) {
+    /* an overflow entry may have come within the slots looked at (it moves into the ring at
+     * the next lap): stop before its bucket, so that what is returned is the exact front */
+    for (int64_t ab = c->cur + 1; n < max && ab <= c->cur + FRONT_SLOTS &&
+                                  ab - c->cur <= (int64_t)c->nb && ab < c->ovf_min;
+         ab++) {
         const size_t first = n;
         uint32_t x = c->head[(uint64_t)ab & (c->nb - 1)];
         for (; x != NIL && n < max; x = c->node[x].next)

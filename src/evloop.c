@@ -20,7 +20,7 @@
 #define CUT_SLACK 1e-6
 
 /* One thread's side of an event (handle, then commit): the list a rebuild found and what the
- * event changed, held until its commit; for a speculative event (the team loop's helper), the
+ * event changed, held until its commit; for a speculative event (the team loop's), the
  * motion and slots it may change, kept to undo it. */
 typedef struct evl_ws {
     /* a rebuild of one list (walk): near holds the new list, gain[k] set for the entries i's
@@ -56,7 +56,7 @@ struct nbep_evloop {
     double stray;         /* half the skin: how far a sphere goes before its list expires */
     double face_reach;    /* cut + stray, and a margin: see near_face */
     double apart2;        /* square of the distance between list centres beyond which two
-                           * events touch no common sphere (nbep_evloop_run_team) */
+                           * events touch no common sphere (nbep_evloop_run_lead) */
     bool failed;          /* out of memory for a list: the run stops */
     bool stop;            /* nbep_evloop_stop: the run stops after the current event */
     nbep_feq *q;          /* borrowed */
@@ -64,7 +64,10 @@ struct nbep_evloop {
     /* a team round: its events in order (the spheres and their slots as they were) */
     uint32_t batch[NBEP_EVLOOP_BATCH];
     nbep_event batch_ev[NBEP_EVLOOP_BATCH];
-    size_t batch_cell[NBEP_EVLOOP_BATCH][3]; /* the cell coordinates of their list centres */
+    /* the other sphere each event's slot names (a pair's partner, fresh or stale; NO_SPHERE
+     * for a plane or an expiry) and the cell coordinates of both spheres' list centres */
+    uint32_t batch_other[NBEP_EVLOOP_BATCH];
+    size_t batch_cell[NBEP_EVLOOP_BATCH][2][3];
     /* the team loop's hand-over: the leader posts a round in one word, go = its number times
      * 256 plus how many events it has (0: the loop ends); either thread takes the next place
      * to handle from `next` (the round's number times NBEP_EVLOOP_BATCH plus the place) and
@@ -127,10 +130,11 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->stray = 0.5 * skin;
     e->cut = (reach + skin) * (1.0 + CUT_SLACK);
     e->face_reach = e->cut + 1.01 * e->stray;
-    /* two list centres farther apart than this: an event on the first writes spheres within
-     * cut of it (a pair's partner is listed) and reads spheres within 2 cut (the partner's
-     * list), or within cut + stray for an expiry (the list around where it now is), so
-     * neither reads what the other writes (3 cut and a stray, for the roundings) */
+    /* two events whose spheres' list centres are all farther apart than this (places_apart:
+     * each event's own sphere and the other its slot names) touch no common sphere: an event
+     * writes its spheres and reads their lists' members, within cut of their centres, or
+     * within cut + stray for an expiry (the list around where it now is); 3 cut and a stray
+     * leave room for the roundings and for a partner that a rebuild has taken off the list */
     e->apart2 = (3.0 * e->cut + e->stray) * (3.0 * e->cut + e->stray);
     atomic_init(&e->go, 0);
     atomic_init(&e->next, 0);
@@ -667,26 +671,54 @@ static void cell_xyz(const nbep_evloop *e, uint32_t i, size_t *xyz)
     xyz[2] = c / (nx * ny);
 }
 
+#define NO_SPHERE UINT32_MAX
+
+/* Whether round places k and m are apart: every sphere of the one (its own and the one its
+ * slot names) apart from every sphere of the other, in what they touch and in their cells. */
+static bool places_apart(const nbep_evloop *e, size_t k, size_t m)
+{
+    const uint32_t a[2] = {e->batch[k], e->batch_other[k]};
+    const uint32_t b[2] = {e->batch[m], e->batch_other[m]};
+    for (int p = 0; p < 2; p++)
+        for (int q = 0; q < 2; q++)
+            if (a[p] != NO_SPHERE && b[q] != NO_SPHERE &&
+                !(cells_apart(e, e->batch_cell[k][p], e->batch_cell[m][q]) &&
+                  apart(e, a[p], b[q])))
+                return false;
+    return true;
+}
+
+/* Round place m is sphere x with the event its slot (key) names: the other sphere and the
+ * cells of both. */
+static void set_place(nbep_evloop *e, size_t m, uint32_t x, uint32_t other)
+{
+    e->batch[m] = x;
+    e->batch_other[m] = other < e->n ? other : NO_SPHERE;
+    cell_xyz(e, x, e->batch_cell[m][0]);
+    if (e->batch_other[m] != NO_SPHERE)
+        cell_xyz(e, other, e->batch_cell[m][1]);
+}
+
 /* A round's events: the earliest (sphere i, slot ev) and those that follow it in the calendar
- * while each is apart from all before it, in the spheres it touches (apart) and in the cells
- * (cells_apart: a commit changes cells while later events of the round are handled), and
- * comes before t_end; the entries of the other sphere of a pair event of the round are
- * passed over (the pair's reaction moves them; a pair's key names both spheres, slot_key).
- * Reads the calendar and the list centres only: each event's slot is read by the thread that
- * handles it. Returns how many. */
+ * while each is apart from all before it (places_apart: both its spheres, the one whose entry
+ * it is and the other its slot names, against both of every event before it: the other may be
+ * far when the slot is stale, and a far sphere must not be read, kept or put back while
+ * another event writes it), and comes before t_end; the entries of the other sphere of the
+ * round's pair events are passed over (the pair's reaction moves them; a pair's key names both
+ * spheres, slot_key). Reads the calendar and the list centres only: each event's slot is read
+ * by the thread that handles it. Returns how many. */
 static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_end)
 {
-    e->batch[0] = i;
     e->batch_ev[0] = *ev;
-    cell_xyz(e, i, e->batch_cell[0]);
+    set_place(e, 0, i, ev->kind == NBEP_EVENT_SPHERE ? ev->partner : NO_SPHERE);
     size_t n = 1, n_skip = 0;
     /* enough entries for a full round and the partners' entries it passes over */
     enum { FRONT = NBEP_EVLOOP_BATCH + NBEP_EVLOOP_BATCH / 2 };
     uint32_t skip[NBEP_EVLOOP_BATCH], front[FRONT];
     double times[FRONT];
     uint64_t keys[FRONT];
-    if (ev->kind == NBEP_EVENT_SPHERE)
-        skip[n_skip++] = ev->partner;
+    if (e->batch_other[0] != NO_SPHERE)
+        skip[n_skip++] = e->batch_other[0];
     const size_t nf = nbep_calendar_front(e->cal, front, times, keys, FRONT);
     for (size_t f = 0; f < nf; f++) /* the places, all requested before the first is used */
         NBEP_PREFETCH(&e->cells.m[front[f]]);
@@ -699,16 +731,15 @@ static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_en
             continue;
         if (!(times[f] < t_end))
             break;
-        cell_xyz(e, x, e->batch_cell[n]);
-        for (size_t k = 0; k < n; k++)
-            if (!cells_apart(e, e->batch_cell[k], e->batch_cell[n]) || !apart(e, x, e->batch[k]))
-                return n;
-        e->batch[n] = x;
-        /* the other sphere of a pair (a plane's or an expiry's low half, UINT32_MAX - plane
-         * or UINT32_MAX, names no sphere in any scene with fewer than 2^32 - planes spheres;
-         * a wrong skip would only cost its round's later events, which the commit checks) */
+        /* the other sphere of a pair; a plane's or an expiry's key has UINT32_MAX - plane or
+         * UINT32_MAX there, no sphere's index (set_place: NO_SPHERE) */
         const uint32_t lo = (uint32_t)(keys[f] >> 32), hi = (uint32_t)keys[f];
-        skip[n_skip++] = lo == x ? hi : lo;
+        set_place(e, n, x, lo == x ? hi : lo);
+        for (size_t k = 0; k < n; k++)
+            if (!places_apart(e, k, n))
+                return n;
+        if (e->batch_other[n] != NO_SPHERE)
+            skip[n_skip++] = e->batch_other[n];
         n++;
     }
     return n;
@@ -824,7 +855,8 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
                     return false;
                 }
             }
-            if (e->stop) { /* not in the scenes a team runs */
+            if (e->stop) { /* not in the scenes a team runs (no reaction there stops the run;
+                            * a helper's stop would also be a race on e->stop) */
                 undo_from(e, ops, u, us, r, n, m + 1);
                 *t_stuck = w->item == i ? t : e->batch_ev[m].time;
                 return false;

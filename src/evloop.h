@@ -137,18 +137,19 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
 
 /* nbep_evloop_run on two threads, with the same results bit for bit. Each round takes the
  * earliest event and those that follow it in the calendar while every one is apart from all
- * the others (their spheres' list centres 3 cutoffs and a stray apart: none reads what another
- * writes, and lists, cells and calendar are written only at commits), up to
- * NBEP_EVLOOP_BATCH. The leader (thread 0) handles the events at even places, the helper
- * (thread 1, in nbep_evloop_help at the same time) those at odd places, each but the first
- * speculatively (what it may change kept: ops save). Then the leader commits them in order:
- * each stands if it is then the earliest in the calendar (the one thread would handle it next,
- * from the same state), else it and the rest are undone (ops restore) and handled in later
- * rounds. The event at place m is handled with context us[m] (one per place, its counts and
- * sums kept apart and merged into u, the leader's, when it stands: ops merge); even places
- * run on the leader, odd on the helper. For scenes whose reactions change only the event's own
- * spheres (the caller's choice: an elastic scene where nothing accelerates). Returns as
- * nbep_evloop_run; the helper returns when it does. */
+ * the others (both spheres of each, the one whose entry it is and the other its slot names,
+ * list centres 3 cutoffs and a stray apart and cells 4 apart along an axis: none reads what
+ * another writes, and lists, cells and calendar are written only at commits), up to
+ * NBEP_EVLOOP_BATCH. The leader (thread 0) and the helper (thread 1, in nbep_evloop_help at
+ * the same time) take the round's places one at a time and handle them, each but the first
+ * speculatively (what it may change kept: ops save). The leader commits them in order: each
+ * stands if it is then the earliest in the calendar (the one thread would handle it next, from
+ * the same state), else it and the rest are undone (ops restore) and handled in later rounds.
+ * The event at place m is handled with context us[m] of the thread that takes it (each
+ * thread passes its own array: one context per place, the place's counts and sums kept apart
+ * and merged into u, the leader's, when it stands: ops merge). For scenes whose reactions
+ * change only the event's own spheres (the caller's choice: an elastic scene where nothing
+ * accelerates). Returns as nbep_evloop_run; the helper returns when it does. */
 bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
                           double t_end, uint64_t stall_events, double stall_dt,
                           nbep_evloop_tally *tally, double *t_stuck);

@@ -41,11 +41,11 @@ void nbep_calendar_retune(nbep_calendar *c, double t_now);
  * order. */
 void nbep_calendar_runners_up(const nbep_calendar *c, uint32_t items[2], int *n);
 /* The entries that come out after the earliest one, in order, as far as the front of the
- * calendar tells (the current bucket, then a few of the next): up to max items, their count
- * returned, with their times and keys (either may be NULL). Call after nbep_calendar_top. For a caller that handles events ahead,
- * speculatively, and checks each (it is the earliest once those before it have moved on): the
- * list may stop short, or miss an entry filed far ahead that has come near. No effect on the
- * order. */
+ * calendar tells (the current bucket, then a few of the next, stopping short of any bucket an
+ * overflow entry may have reached): up to max items, their count returned, with their times
+ * and keys (either may be NULL); what it returns is exactly the next entries. Call after
+ * nbep_calendar_top. For a caller that handles events ahead, speculatively (it still checks
+ * each: it is the earliest once those before it have moved on). No effect on the order. */
 size_t nbep_calendar_front(const nbep_calendar *c, uint32_t *items, double *times,
                            uint64_t *keys, size_t max);
 /* Entries held. */
