@@ -72,6 +72,7 @@ struct nbep_evloop {
      * 256 plus how many events it has (0: the loop ends); either thread takes the next place
      * to handle from `next` (the round's number times NBEP_EVLOOP_BATCH plus the place) and
      * marks it handled (the round's number); the helper answers done = the go of the end */
+    uint64_t round;       /* the leader's: the last round it numbered, posted or not */
     alignas(NBEP_CACHELINE) _Atomic uint64_t go;
     alignas(NBEP_CACHELINE) _Atomic uint64_t next;
     alignas(NBEP_CACHELINE) _Atomic uint64_t done;
@@ -745,15 +746,15 @@ static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_en
     return n;
 }
 
-/* Keeps what the event in i's slot (ev) may change, to undo it: i's motion and slot, and its
- * partner's for a pair. */
-static void keep(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, void *u, uint32_t i,
-                 const nbep_event *ev)
+/* Keeps what the event at round place m may change, to undo it: the motion and slot of its
+ * sphere and of the other its slot names (pick's batch_other, from the calendar key). */
+static void keep(nbep_evloop *e, size_t m, const nbep_evloop_ops *ops, void *u)
 {
+    evl_ws *w = &e->ws[m];
     w->n_kept = 0;
-    w->kept_id[w->n_kept++] = i;
-    if (ev->kind == NBEP_EVENT_SPHERE)
-        w->kept_id[w->n_kept++] = ev->partner;
+    w->kept_id[w->n_kept++] = e->batch[m];
+    if (e->batch_other[m] != NO_SPHERE)
+        w->kept_id[w->n_kept++] = e->batch_other[m];
     for (int k = 0; k < w->n_kept; k++) {
         ops->save(u, w->kept_id[k], &w->kept_motion[k]);
         w->kept_slot[k] = *nbep_feq_slot(e->q, w->kept_id[k]);
@@ -786,7 +787,7 @@ static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us
     const size_t m = v % NBEP_EVLOOP_BATCH;
     if (m > 0) { /* every event but the round's first (read by pick) may be undone */
         e->batch_ev[m] = *nbep_feq_slot(e->q, e->batch[m]);
-        keep(e, &e->ws[m], ops, us[m], e->batch[m], &e->batch_ev[m]);
+        keep(e, m, ops, us[m]);
     }
     handle(e, &e->ws[m], ops, us[m], e->batch[m], &e->batch_ev[m], e->batch_ev[m].time);
     atomic_store_explicit(&e->handled[m].round, round, memory_order_release);
@@ -858,7 +859,7 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
             if (e->stop) { /* not in the scenes a team runs (no reaction there stops the run;
                             * a helper's stop would also be a race on e->stop) */
                 undo_from(e, ops, u, us, r, n, m + 1);
-                *t_stuck = w->item == i ? t : e->batch_ev[m].time;
+                *t_stuck = e->batch_ev[m].time;
                 return false;
             }
             /* a commit that would make the pool of lists move waits until no list is read */
@@ -884,15 +885,10 @@ bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, v
                           double t_end, uint64_t stall_events, double stall_dt,
                           nbep_evloop_tally *tally, double *t_stuck)
 {
-    /* its own stores: the last round it numbered, posted or not */
-    uint64_t round = atomic_load_explicit(&e->go, memory_order_relaxed) >> GO_SHIFT;
-    const uint64_t taken = atomic_load_explicit(&e->next, memory_order_relaxed);
-    if (taken / NBEP_EVLOOP_BATCH > round)
-        round = taken / NBEP_EVLOOP_BATCH;
     bool ok = !e->failed && lead(e, ops, u, us, t_end, stall_events, stall_dt, tally, t_stuck,
-                                 &round);
+                                 &e->round);
     /* the helper returns (it has handled every place it took: each was waited for) */
-    const uint64_t end = ++round << GO_SHIFT;
+    const uint64_t end = ++e->round << GO_SHIFT;
     atomic_store_explicit(&e->go, end, memory_order_release);
     for (unsigned k = 1; atomic_load_explicit(&e->done, memory_order_acquire) != end; k++)
         nbep_spin_pause(k);
