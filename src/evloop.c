@@ -209,22 +209,35 @@ static inline void near_centres(const nbep_evloop *e, uint32_t i, nbep_vec3 ci, 
     nbep_cells_block b;
     nbep_cells_block_of(g, cell, &b);
     const double cut2 = e->cut * e->cut;
+    /* the block's first members and ci as seen from each cell (moved by the cell's period),
+     * all requested before any is read: a cell holds one or two members in a fluid, so the
+     * walk is mostly these first loads, which then overlap instead of following each other */
+    uint32_t first[27];
+    nbep_vec3 from[27];
+    int nc = 0;
     for (int z = 0; z < b.cnt[2]; z++) {
-        /* ci as seen from the block's cell: moved by the cell's period */
         const double az = b.per[2][z] ? ci.z - b.per[2][z] * e->pb.len[2] : ci.z;
         for (int y = 0; y < b.cnt[1]; y++) {
             const double ay = b.per[1][y] ? ci.y - b.per[1][y] * e->pb.len[1] : ci.y;
             const size_t row = (b.idx[2][z] * g->dim[1] + b.idx[1][y]) * g->dim[0];
             for (int x = 0; x < b.cnt[0]; x++) {
                 const double ax = b.per[0][x] ? ci.x - b.per[0][x] * e->pb.len[0] : ci.x;
-                for (uint32_t j = g->head[row + b.idx[0][x]]; j != NBEP_CELLS_NONE;
-                     j = g->m[j].next) {
-                    const nbep_vec3 cj = g->m[j].at;
-                    const double dx = cj.x - ax, dy = cj.y - ay, dz = cj.z - az;
-                    if (dx * dx + dy * dy + dz * dz < cut2 && j != i)
-                        f(e, i, j, arg);
-                }
+                const uint32_t j = g->head[row + b.idx[0][x]];
+                if (j == NBEP_CELLS_NONE)
+                    continue;
+                NBEP_PREFETCH(&g->m[j]);
+                first[nc] = j;
+                from[nc++] = nbep_vec3_make(ax, ay, az);
             }
+        }
+    }
+    for (int q = 0; q < nc; q++) {
+        const nbep_vec3 a = from[q];
+        for (uint32_t j = first[q]; j != NBEP_CELLS_NONE; j = g->m[j].next) {
+            const nbep_vec3 cj = g->m[j].at;
+            const double dx = cj.x - a.x, dy = cj.y - a.y, dz = cj.z - a.z;
+            if (dx * dx + dy * dy + dz * dz < cut2 && j != i)
+                f(e, i, j, arg);
         }
     }
 }
