@@ -392,6 +392,17 @@ void nbep_evloop_visit_block(const nbep_evloop *e, uint32_t i,
         visit(u, js[k]);
 }
 
+/* Requests the lines of sphere i's list (no effect on results). */
+static inline void prefetch_list(const nbep_evloop *e, uint32_t i)
+{
+    const nbep_nblist_span sp = e->nl.sp[i];
+    const char *a = (const char *)&e->nl.pool[sp.off];
+    const char *z = (const char *)&e->nl.pool[sp.off + sp.cnt];
+    for (; a < z; a += NBEP_CACHELINE)
+        NBEP_PREFETCH(a);
+    NBEP_PREFETCH(z - 1);
+}
+
 /* Time from now until a centre at d from where its list was built, flying with v and a, is
  * `stray` away: the exact root without acceleration; with one, the root of the bound
  * |d| + |v| s + |a| s^2 / 2, which comes no later (an early rebuild costs a little, a late one
@@ -523,6 +534,8 @@ static void handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, void *
         predict_with(e, ops, u, i, t, w->near, w->n_near, p);
         return;
     }
+    if (ev->kind == NBEP_EVENT_SPHERE) /* read if the event is fresh */
+        prefetch_list(e, ev->partner);
     if (ops->fresh(u, i, ev)) {
         w->reacted = true;
         const uint32_t *changed;
