@@ -1913,15 +1913,13 @@ static inline void pair_motion(const pred_ctx *c, const nbep_state *s, uint32_t 
  * radius[j & rmask]: rmask 0 and radius pointing at the one radius of a monodisperse scene
  * spare the loop a scattered load (ri + ri is the contact distance exactly), without a
  * condition that would keep the compiler from vectorising it. */
-NBEP_AVX2_CLONES static void pair_bounds(const double *restrict tau,
-                                        const nbep_vec3 *restrict pos,
-                                        const nbep_vec3 *restrict vel,
-                                        const double *restrict radius, uint32_t rmask,
-                                        const uint32_t *restrict js, size_t m, nbep_vec3 pi,
-                                        nbep_vec3 vi, double ti, double ri,
-                                        const nbep_periodic *pb, double *restrict out)
+static inline __attribute__((always_inline)) void
+pair_bounds_with(const double *restrict tau, const nbep_vec3 *restrict pos,
+                 const nbep_vec3 *restrict vel, const double *restrict radius, uint32_t rmask,
+                 const uint32_t *restrict js, size_t m, nbep_vec3 pi, nbep_vec3 vi, double ti,
+                 double ri, const nbep_periodic *pb, double *restrict out, const bool images,
+                 const bool mono)
 {
-    const bool images = pb != NULL;
     const double hx = images ? pb->half[0] : INFINITY, hy = images ? pb->half[1] : INFINITY,
                  hz = images ? pb->half[2] : INFINITY;
     const double lx = images ? pb->len[0] : 0.0, ly = images ? pb->len[1] : 0.0,
@@ -1941,9 +1939,33 @@ NBEP_AVX2_CLONES static void pair_bounds(const double *restrict tau,
         const double dpz = ((pos[j].z + shz) + vel[j].z * hj) - (pi.z + vi.z * hi);
         const double dvx = vel[j].x - vi.x, dvy = vel[j].y - vi.y, dvz = vel[j].z - vi.z;
         const double lb = nbep_predict_pair_quadratic_bound(
-            nbep_vec3_make(dpx, dpy, dpz), nbep_vec3_make(dvx, dvy, dvz), ri + radius[j & rmask]);
+            nbep_vec3_make(dpx, dpy, dpz), nbep_vec3_make(dvx, dvy, dvz),
+            mono ? ri + ri : ri + radius[j & rmask]);
         out[k] = lb < NBEP_NEVER ? t0 + lb : NBEP_NEVER;
     }
+}
+
+NBEP_AVX2_CLONES static void pair_bounds(const double *restrict tau,
+                                        const nbep_vec3 *restrict pos,
+                                        const nbep_vec3 *restrict vel,
+                                        const double *restrict radius, uint32_t rmask,
+                                        const uint32_t *restrict js, size_t m, nbep_vec3 pi,
+                                        nbep_vec3 vi, double ti, double ri,
+                                        const nbep_periodic *pb, double *restrict out)
+{
+    /* two copies: most spheres are far from every periodic face (no image to look for) */
+    if (pb && rmask)
+        pair_bounds_with(tau, pos, vel, radius, rmask, js, m, pi, vi, ti, ri, pb, out, true,
+                         false);
+    else if (pb)
+        pair_bounds_with(tau, pos, vel, radius, rmask, js, m, pi, vi, ti, ri, pb, out, true,
+                         true);
+    else if (rmask)
+        pair_bounds_with(tau, pos, vel, radius, rmask, js, m, pi, vi, ti, ri, NULL, out, false,
+                         false);
+    else
+        pair_bounds_with(tau, pos, vel, radius, rmask, js, m, pi, vi, ti, ri, NULL, out, false,
+                         true);
 }
 
 static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m, bool images,
