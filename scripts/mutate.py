@@ -270,6 +270,12 @@ MUTANTS = [
      "            nbep_nblist_drop(&e->nl, w->was[k], i);", "            (void)0;", CELLS, None),
     ("evloop-rebuild-drops-kept", "src/evloop.c", "        w->kept[k] = 1;",
      "        (void)0;", CELLS, None),
+    ("evloop-list-centred-behind", "src/evloop.c",
+     "nbep_vec3_add(p, nbep_vec3_scale(v, NBEP_NBLIST_LEAD * e->stray / speed))",
+     "nbep_vec3_add(p, nbep_vec3_scale(v, -NBEP_NBLIST_LEAD * e->stray / speed))", TEAM, None),
+    ("evloop-stray-not-nearest", "src/evloop.c",
+     "        d = nbep_vec3_add(d, nbep_periodic_near_shift(&e->pb, d));", "        (void)0;",
+     TEAM, None),
     # ---- the cells team loop (two threads, events handled ahead and committed in order) ----
     ("team-undo-nothing", "src/evloop.c",
      "        ops->restore(uk, w->kept_id[k], &w->kept_motion[k]);\n        nbep_feq_put(e->q, w->kept_id[k], w->kept_slot[k]);",

@@ -19,6 +19,7 @@
  * time a sphere takes to fly its own diameter. */
 #define CUT_SLACK 1e-6
 
+
 /* One thread's side of an event (handle, then commit): the list a rebuild found and what the
  * event changed, held until its commit; for a speculative event (the team loop's), the
  * motion and slots it may change, kept to undo it. */
@@ -427,6 +428,26 @@ static double stray_time(nbep_vec3 d, nbep_vec3 v, nbep_vec3 a, double stray)
     return 2.0 * left / (sv + sqrt(sv * sv + 2.0 * sa * left));
 }
 
+/* Where a list rebuilt for a sphere at p, flying with v and a, is centred. A list lasts while
+ * its sphere stays within the stray of the centre, and any centre will do (the list holds
+ * the spheres whose centres are within the cutoff of it): one ahead of the sphere along its
+ * flight, NBEP_NBLIST_LEAD strays, lets it fly (1 + NBEP_NBLIST_LEAD) strays before the list
+ * expires instead of one, if nothing deflects it. Only for straight flight (with an acceleration the
+ * expiry is found from a bound that a centre ahead would shorten). Wrapped into a periodic
+ * box; stray_time takes the sphere's offset from it the nearest way round. */
+static nbep_vec3 list_centre(const nbep_evloop *e, nbep_vec3 p, nbep_vec3 v, nbep_vec3 a)
+{
+    const double speed = nbep_vec3_norm(v);
+    if (!(a.x == 0.0 && a.y == 0.0 && a.z == 0.0) || !(speed > 0.0))
+        return p;
+    nbep_vec3 c = nbep_vec3_add(p, nbep_vec3_scale(v, NBEP_NBLIST_LEAD * e->stray / speed));
+    if (e->pb.any) {
+        int32_t img[3] = {0, 0, 0};
+        nbep_periodic_wrap(&e->pb, &c, img);
+    }
+    return c;
+}
+
 /* Whether a neighbour of sphere i may have to be taken at an image across a periodic face: its
  * list centre is within the reach of a face on a periodic axis. Every listed j has its centre
  * within the cutoff of i's and its position within the stray of its centre, so when i's centre
@@ -456,7 +477,10 @@ static void predict_with(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, ui
      * does; the winner is the one trying the expiry last would give) */
     nbep_vec3 p, v, a;
     ops->flight(u, i, t, &p, &v, &a);
-    double t_exit = t + stray_time(nbep_vec3_sub(p, ci), v, a, e->stray);
+    nbep_vec3 d = nbep_vec3_sub(p, ci);
+    if (e->pb.any) /* the nearest way round: the centre may be wrapped while p is not */
+        d = nbep_vec3_add(d, nbep_periodic_near_shift(&e->pb, d));
+    double t_exit = t + stray_time(d, v, a, e->stray);
     if (t_exit < NBEP_NEVER && (best.kind == NBEP_EVENT_NONE || t_exit < best.time))
         best = (nbep_event){t_exit, 0, NBEP_EVENT_HORIZON, e->ver[i], 0};
     if (m > 0)
@@ -526,12 +550,13 @@ static void handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, void *
         if (e->pb.any) /* a centre past a periodic face enters through the other */
             ops->wrap(u, i, t);
         ops->flight(u, i, t, &p, &v, &a);
-        walk(e, w, i, p);
+        const nbep_vec3 c = list_centre(e, p, v, a);
+        walk(e, w, i, c);
         if (w->oom)
             return;
         w->rebuilt = true;
-        w->at = p;
-        predict_with(e, ops, u, i, t, w->near, w->n_near, p);
+        w->at = c;
+        predict_with(e, ops, u, i, t, w->near, w->n_near, c);
         return;
     }
     if (ev->kind == NBEP_EVENT_SPHERE) /* read if the event is fresh */

@@ -17,11 +17,13 @@
 
 #include <hdf5.h>
 
+#include "nbep/nblist.h"
 #include "nbep/output.h"
 #include "nbep/periodic.h"
 #include "nbep/run.h"
 #include "nbep/scene.h"
 #include "nbep/sim.h"
+#include "nbep/stats.h"
 #include "nbep_test.h"
 #include "nbep_test_scene.h"
 
@@ -259,6 +261,36 @@ static void test_a_free_flight_wraps_and_counts_its_images(void **state)
     cells_mode = false;
     free_flight();
     cells_mode = true;
+}
+
+/* A lone sphere flying straight across a periodic box for 100 time units, cells mode: its
+ * list expires first when it has flown half a skin from where the run placed it, then after
+ * every 1 + NBEP_NBLIST_LEAD half skins, each new list centred ahead of it along its flight
+ * (it has no partner, so every event after the set-up's one prediction is an expiry; the
+ * centre ahead is wrapped into the box while the sphere is not, so the expiry must take their
+ * offset the nearest way round, or the sphere would seem to have strayed a box length at once
+ * and the loop would stall). */
+static void test_a_list_is_centred_ahead_of_a_straight_flight(void **state)
+{
+    (void)state;
+    const double L = 10.0, T = 100.0, speed = 1.3;
+    nbep_scene *sc = periodic_scene(1, L, 100, T / 100.0);
+    sc->output_every = 100;
+    nbep_test_set_sphere(sc, 0, (nbep_vec3){1.0, 2.0, 3.0}, (nbep_vec3){0.3, 0.4, 1.2}, 0.5,
+                         1.0, ZERO);
+    uint64_t counts[NBEP_COUNTER_COUNT];
+    nbep_state fin;
+    nbep_summary s = nbep_test_run_counted(sc, 1, NULL, NULL, &fin, counts);
+    const double half_skin = 0.5 * NBEP_NBLIST_SKIN; /* diameter 1; the box is wide enough
+                                                      * that the skin is not cut down */
+    const double expect = floor((speed * T - half_skin) / ((1.0 + NBEP_NBLIST_LEAD) * half_skin)) + 1.0;
+    const double events = (double)(counts[NBEP_COUNTER_CHECKS] - 1);
+    assert_true(fabs(events - expect) <= 1.0);
+    assert_int_equal(s.collisions, 0);
+    /* it crossed the box 13 times along z: the image count says so */
+    assert_int_equal(fin.image[2], (int32_t)floor((3.0 + 1.2 * T) / L));
+    nbep_state_fini(&fin);
+    nbep_test_scene_free(&sc);
 }
 
 /* A hard-sphere fluid at packing fraction phi: side^3 spheres of diameter 1 and mass 1 on a
@@ -768,6 +800,7 @@ int main(void)
         cmocka_unit_test(test_shift_is_whole_periods_on_periodic_axes),
         cmocka_unit_test(test_spheres_collide_across_a_periodic_face_at_the_analytic_time),
         cmocka_unit_test(test_a_free_flight_wraps_and_counts_its_images),
+        cmocka_unit_test(test_a_list_is_centred_ahead_of_a_straight_flight),
         cmocka_unit_test(test_falling_through_a_periodic_axis_keeps_the_energy),
         cmocka_unit_test(test_periodic_fluid_is_exact_and_thread_independent),
         cmocka_unit_test(test_team_loop_handles_events_ahead_and_undoes_some_bit_for_bit),
