@@ -306,6 +306,10 @@ MUTANTS = [
     ("nblist-move-loses-entries", "src/nblist.c",
      "memcpy(l->pool + l->pool_len, l->pool + l->sp[i].off, l->sp[i].cnt * sizeof *l->pool);",
      "l->sp[i].cnt = 0;", ["test_nblist"] + CELLS, None),
+    ("nblist-compact-spread-forward", "src/nblist.c", "    for (size_t k = l->n; k-- > 0;) {",
+     "    for (size_t k = 0; k < l->n; k++) {", ["test_nblist"], None),
+    ("nblist-compact-unsorted", "src/nblist.c", "    qsort(ord, l->n, sizeof *ord, by_key);\n", "",
+     ["test_nblist"], None),
     # ---- the root-free bound of the straight-flight kernel ----
     ("floor-bound-loose", "include/nbep/predict.h", "const double q = c / den * (1.0 - 1e-12);",
      "const double q = c / den * (2.0 - 1e-12);", ["test_predict"] + CELLS, None),

@@ -70,30 +70,59 @@ bool nbep_nblist_layout(nbep_nblist *l, const uint32_t *counts)
     return ok;
 }
 
-/* Copies every list into a fresh pool with room_for(cnt) each: the room given up by lists that
- * moved is reclaimed. */
+static int by_key(const void *a, const void *b)
+{
+    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Lays every list out again in place with room_for(cnt) each, then `extra` entries and a
+ * quarter of the whole spare: the room given up by lists that moved is reclaimed. In place,
+ * so that the pool is never held twice (a copy into a fresh pool doubled the peak memory of a
+ * fluid whose lists grow as it melts from a lattice): the lists in order of their places are
+ * first packed down with no room to spare (each lands no later than it was), then spread out
+ * from the last down to their rooms (each lands no earlier than it was packed). */
 static bool compact(nbep_nblist *l, size_t extra)
 {
     size_t total = extra;
     for (size_t i = 0; i < l->n; i++)
         total += room_for(l->sp[i].cnt);
-    uint32_t *p = malloc((total + total / 2u) * sizeof *p);
-    if (!p)
+    const size_t cap = total + total / 4u;
+    uint64_t *ord = malloc((l->n ? l->n : 1) * sizeof *ord);
+    if (!ord || !reserve(l, cap, 1u << 30)) {
+        free(ord);
         return false;
-    size_t at = 0;
-    l->cap_max = 0;
-    for (size_t i = 0; i < l->n; i++) {
-        memcpy(p + at, l->pool + l->sp[i].off, l->sp[i].cnt * sizeof *p);
-        l->sp[i].off = (uint32_t)at;
-        l->sp[i].cap = room_for(l->sp[i].cnt);
-        at += l->sp[i].cap;
-        if (l->sp[i].cap > l->cap_max)
-            l->cap_max = l->sp[i].cap;
     }
-    free(l->pool);
-    l->pool = p;
-    l->pool_cap = total + total / 2u;
-    l->pool_len = l->room = at;
+    for (size_t i = 0; i < l->n; i++)
+        ord[i] = (uint64_t)l->sp[i].off << 32 | (uint64_t)i;
+    qsort(ord, l->n, sizeof *ord, by_key);
+    size_t at = 0;
+    for (size_t k = 0; k < l->n; k++) { /* packed: at <= off, as every cnt <= its cap */
+        nbep_nblist_span *sp = &l->sp[(uint32_t)ord[k]];
+        memmove(l->pool + at, l->pool + sp->off, sp->cnt * sizeof *l->pool);
+        sp->off = (uint32_t)at;
+        at += sp->cnt;
+    }
+    size_t end = total - extra;
+    l->cap_max = 0;
+    for (size_t k = l->n; k-- > 0;) { /* spread: each list's new place is past its packed one */
+        nbep_nblist_span *sp = &l->sp[(uint32_t)ord[k]];
+        sp->cap = room_for(sp->cnt);
+        end -= sp->cap;
+        memmove(l->pool + end, l->pool + sp->off, sp->cnt * sizeof *l->pool);
+        sp->off = (uint32_t)end;
+        if (sp->cap > l->cap_max)
+            l->cap_max = sp->cap;
+    }
+    free(ord);
+    l->pool_len = l->room = total - extra;
+    if (l->pool_cap > cap) { /* give back what a long melt grew */
+        uint32_t *p = realloc(l->pool, cap * sizeof *p);
+        if (p) {
+            l->pool = p;
+            l->pool_cap = cap;
+        }
+    }
     return true;
 }
 
@@ -101,19 +130,20 @@ bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j)
 {
     if (l->sp[i].cnt == l->sp[i].cap) { /* full: move to the end with twice the room */
         const uint32_t grown = 2u * l->sp[i].cap + 4u;
-        /* The pool is full: compact it if it holds more than twice what a fresh layout of the
-         * lists as they are would take (room given up by moves, and rooms grown for counts
-         * that have since fallen), else let it grow by half. Either way the pool stays
-         * within about three fresh layouts, and the O(n) count is paid only when it fills. */
+        /* The pool is full: compact it if it holds more than one and a half times what a
+         * fresh layout of the lists as they are would take (room given up by moves, and rooms
+         * grown for counts that have since fallen), else let it grow by a quarter. Either way
+         * the pool stays within about two fresh layouts, and the O(n) count is paid only when
+         * it fills. */
         if (l->pool_len + grown > l->pool_cap) {
             size_t fresh = 0;
             for (size_t k = 0; k < l->n; k++)
                 fresh += room_for(l->sp[k].cnt);
-            if (l->pool_len > 2u * fresh && !compact(l, grown))
+            if (2u * l->pool_len > 3u * fresh && !compact(l, grown))
                 return false;
         }
         if (l->sp[i].cnt == l->sp[i].cap) { /* compaction may have made room already */
-            if (l->pool_len + grown > UINT32_MAX || !reserve(l, l->pool_len + grown, 2u))
+            if (l->pool_len + grown > UINT32_MAX || !reserve(l, l->pool_len + grown, 4u))
                 return false;
             memcpy(l->pool + l->pool_len, l->pool + l->sp[i].off, l->sp[i].cnt * sizeof *l->pool);
             l->sp[i].off = (uint32_t)l->pool_len;
