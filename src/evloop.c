@@ -66,9 +66,11 @@ struct nbep_evloop {
     uint32_t batch[NBEP_EVLOOP_BATCH];
     nbep_event batch_ev[NBEP_EVLOOP_BATCH];
     /* the other sphere each event's slot names (a pair's partner, fresh or stale; NO_SPHERE
-     * for a plane or an expiry) and the cell coordinates of both spheres' list centres */
+     * for a plane or an expiry), and the cell coordinates of an expiry's list centre */
     uint32_t batch_other[NBEP_EVLOOP_BATCH];
-    size_t batch_cell[NBEP_EVLOOP_BATCH][2][3];
+    size_t batch_cell[NBEP_EVLOOP_BATCH][3];
+    bool batch_walks[NBEP_EVLOOP_BATCH]; /* a list expiry: its handle walks the cells around
+                                          * its sphere and its commit changes them */
     /* the team loop's hand-over: the leader posts a round in one word, go = its number times
      * 256 plus how many events it has (0: the loop ends); either thread takes the next place
      * to handle from `next` (the round's number times NBEP_EVLOOP_BATCH plus the place) and
@@ -726,29 +728,32 @@ static void cell_xyz(const nbep_evloop *e, uint32_t i, size_t *xyz)
 #define NO_SPHERE UINT32_MAX
 
 /* Whether round places k and m are apart: every sphere of the one (its own and the one its
- * slot names) apart from every sphere of the other, in what they touch and in their cells. */
+ * slot names) apart from every sphere of the other in what they touch, and, when both are list
+ * expiries, in their cells (only an expiry reads the cells of other spheres, in its walk, and
+ * only an expiry's commit changes cells; an expiry's slot names no other sphere). */
 static bool places_apart(const nbep_evloop *e, size_t k, size_t m)
 {
+    if (e->batch_walks[k] && e->batch_walks[m] &&
+        !cells_apart(e, e->batch_cell[k], e->batch_cell[m]))
+        return false;
     const uint32_t a[2] = {e->batch[k], e->batch_other[k]};
     const uint32_t b[2] = {e->batch[m], e->batch_other[m]};
     for (int p = 0; p < 2; p++)
         for (int q = 0; q < 2; q++)
-            if (a[p] != NO_SPHERE && b[q] != NO_SPHERE &&
-                !(cells_apart(e, e->batch_cell[k][p], e->batch_cell[m][q]) &&
-                  apart(e, a[p], b[q])))
+            if (a[p] != NO_SPHERE && b[q] != NO_SPHERE && !apart(e, a[p], b[q]))
                 return false;
     return true;
 }
 
 /* Round place m is sphere x with the event its slot (key) names: the other sphere and the
  * cells of both. */
-static void set_place(nbep_evloop *e, size_t m, uint32_t x, uint32_t other)
+static void set_place(nbep_evloop *e, size_t m, uint32_t x, uint32_t other, bool walks)
 {
     e->batch[m] = x;
+    e->batch_walks[m] = walks;
     e->batch_other[m] = other < e->n ? other : NO_SPHERE;
-    cell_xyz(e, x, e->batch_cell[m][0]);
-    if (e->batch_other[m] != NO_SPHERE)
-        cell_xyz(e, other, e->batch_cell[m][1]);
+    if (walks)
+        cell_xyz(e, x, e->batch_cell[m]);
 }
 
 /* A round's events: the earliest (sphere i, slot ev) and those that follow it in the calendar
@@ -762,7 +767,8 @@ static void set_place(nbep_evloop *e, size_t m, uint32_t x, uint32_t other)
 static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_end)
 {
     e->batch_ev[0] = *ev;
-    set_place(e, 0, i, ev->kind == NBEP_EVENT_SPHERE ? ev->partner : NO_SPHERE);
+    set_place(e, 0, i, ev->kind == NBEP_EVENT_SPHERE ? ev->partner : NO_SPHERE,
+              ev->kind == NBEP_EVENT_HORIZON);
     size_t n = 1, n_skip = 0;
     /* enough entries for a full round and the partners' entries it passes over */
     enum { FRONT = NBEP_EVLOOP_BATCH + NBEP_EVLOOP_BATCH / 2 };
@@ -786,7 +792,7 @@ static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_en
         /* the other sphere of a pair; a plane's or an expiry's key has UINT32_MAX - plane or
          * UINT32_MAX there, no sphere's index (set_place: NO_SPHERE) */
         const uint32_t lo = (uint32_t)(keys[f] >> 32), hi = (uint32_t)keys[f];
-        set_place(e, n, x, lo == x ? hi : lo);
+        set_place(e, n, x, lo == x ? hi : lo, lo == x && hi == UINT32_MAX); /* slot_key */
         for (size_t k = 0; k < n; k++)
             if (!places_apart(e, k, n))
                 return n;
