@@ -405,11 +405,10 @@ void nbep_calendar_runners_up(const nbep_calendar *c, uint32_t items[2], int *n)
         items[(*n)++] = c->heap[k];
 }
 
-/* The k-th earliest entry of a heap is no deeper than level k - 1, so the first 2^k - 1
- * places hold the k earliest: FRONT_HEAP places give the 5 earliest of a larger heap. */
-#define FRONT_HEAP 31
 /* Ring slots looked through after the heap (empty ones count). */
 #define FRONT_SLOTS 8
+/* The most entries nbep_calendar_front takes from the heap at once. */
+#define FRONT_MAX 64
 
 /* Sorts items[0..n) by the calendar's order (a handful: insertion). */
 static void sort_items(const nbep_calendar *c, uint32_t *items, size_t n)
@@ -436,23 +435,60 @@ static size_t fill_front(const nbep_calendar *c, const uint32_t *items, size_t n
     return n;
 }
 
+/* The up to max entries of the heap after its top, in order: a best-first walk down from the
+ * top (an entry comes after its parent), the places reached kept in a small heap of their
+ * own, so that each entry taken costs O(log max) however large the heap. */
+static size_t heap_front(const nbep_calendar *c, uint32_t *items, size_t max)
+{
+    uint32_t cand[FRONT_MAX + 2]; /* places in c->heap; each taken adds at most one */
+    size_t nc = 0, n = 0;
+    for (size_t q = 1; q < 3 && q < c->heap_len; q++)
+        cand[nc++] = (uint32_t)q;
+    if (nc == 2 && before(c, c->heap[cand[1]], c->heap[cand[0]])) {
+        const uint32_t x = cand[0];
+        cand[0] = cand[1];
+        cand[1] = x;
+    }
+    while (n < max && nc > 0) {
+        const uint32_t q = cand[0];
+        items[n++] = c->heap[q];
+        /* the last candidate takes the top's place, sifted down */
+        uint32_t x = cand[--nc];
+        size_t k = 0;
+        for (;;) {
+            size_t ch = 2 * k + 1;
+            if (ch >= nc)
+                break;
+            if (ch + 1 < nc && before(c, c->heap[cand[ch + 1]], c->heap[cand[ch]]))
+                ch++;
+            if (!before(c, c->heap[cand[ch]], c->heap[x]))
+                break;
+            cand[k] = cand[ch];
+            k = ch;
+        }
+        if (nc > 0)
+            cand[k] = x;
+        /* the taken entry's children join, sifted up */
+        for (size_t ch = 2 * (size_t)q + 1; ch <= 2 * (size_t)q + 2 && ch < c->heap_len; ch++) {
+            size_t m = nc++;
+            while (m > 0 && before(c, c->heap[ch], c->heap[cand[(m - 1) / 2]])) {
+                cand[m] = cand[(m - 1) / 2];
+                m = (m - 1) / 2;
+            }
+            cand[m] = (uint32_t)ch;
+        }
+    }
+    return n;
+}
+
 size_t nbep_calendar_front(const nbep_calendar *c, uint32_t *items, double *times,
                            uint64_t *keys, size_t max)
 {
     if (max == 0 || c->heap_len == 0)
         return 0;
-    uint32_t tmp[FRONT_HEAP];
-    size_t n = 0;
-    const size_t h = c->heap_len < FRONT_HEAP ? c->heap_len : FRONT_HEAP;
-    for (size_t k = 1; k < h; k++)
-        tmp[n++] = c->heap[k];
-    sort_items(c, tmp, n);
-    if (c->heap_len > FRONT_HEAP) /* only the first four after the top are surely these */
-        n = n < 4 ? n : 4;
-    n = n < max ? n : max;
-    for (size_t k = 0; k < n; k++)
-        items[k] = tmp[k];
-    if (c->heap_len > FRONT_HEAP)
+    max = max < FRONT_MAX ? max : FRONT_MAX;
+    size_t n = heap_front(c, items, max);
+    if (n < c->heap_len - 1) /* the heap after its top holds more than max: they are the front */
         return fill_front(c, items, n, times, keys);
     /* every entry of the heap comes before every entry of the ring, and a ring slot holds one
      * bucket, which comes before the next slot's */

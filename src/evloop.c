@@ -135,11 +135,18 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->cut = (reach + skin) * (1.0 + CUT_SLACK);
     e->face_reach = e->cut + 1.01 * e->stray;
     /* two events whose spheres' list centres are all farther apart than this (places_apart:
-     * each event's own sphere and the other its slot names) touch no common sphere: an event
-     * writes its spheres and reads their lists' members, within cut of their centres, or
-     * within cut + stray for an expiry (the list around where it now is); 3 cut and a stray
-     * leave room for the roundings and for a partner that a rebuild has taken off the list */
-    e->apart2 = (3.0 * e->cut + e->stray) * (3.0 * e->cut + e->stray);
+     * each event's own sphere and the other its slot names, checked themselves, however far
+     * a stale slot's other may be) touch nothing in common. An event handled writes the motion
+     * and slot of its spheres and reads those of their lists' members; committed, it writes
+     * the lists of its spheres' old and new members. Members lie within the cutoff of a list
+     * centre, and an expiry's new centre within (1 + LEAD) strays of the old (its sphere
+     * strayed up to one, the new centre leads by LEAD), so what an event touches lies within
+     * touch = cut + (1 + LEAD) stray of its spheres' centres, and two events whose spheres
+     * are more than touch apart touch nothing in common (a written sphere is never read by the
+     * other, a written list is never the other's own). Twice the reach leaves a wide margin
+     * for the roundings. */
+    const double touch = e->cut + (1.0 + NBEP_NBLIST_LEAD) * e->stray;
+    e->apart2 = (2.0 * touch) * (2.0 * touch);
     atomic_init(&e->go, 0);
     atomic_init(&e->next, 0);
     atomic_init(&e->done, 0);
@@ -771,7 +778,7 @@ static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_en
               ev->kind == NBEP_EVENT_HORIZON);
     size_t n = 1, n_skip = 0;
     /* enough entries for a full round and the partners' entries it passes over */
-    enum { FRONT = NBEP_EVLOOP_BATCH + NBEP_EVLOOP_BATCH / 2 };
+    enum { FRONT = 2 * NBEP_EVLOOP_BATCH };
     uint32_t skip[NBEP_EVLOOP_BATCH], front[FRONT];
     double times[FRONT];
     uint64_t keys[FRONT];

@@ -176,6 +176,42 @@ static void test_front_is_the_next_entries_in_order(void **state)
     nbep_calendar_destroy(&c);
 }
 
+/* A bucket far fuller than the front asked for (every entry at one time, ordered by key and
+ * item): the front is exactly the next entries after the earliest, found by walking the
+ * bucket's heap from its top, for any count asked. */
+static void test_front_of_a_crowded_bucket_is_exact(void **state)
+{
+    (void)state;
+    enum { N = 300, MAX = 64 };
+    nbep_calendar *c = make(N);
+    ref r[N];
+    uint64_t x = 4242;
+    for (uint32_t i = 0; i < N; i++) {
+        r[i] = (ref){true, 1.0, lcg(&x) % 50};
+        nbep_calendar_set(c, i, 1.0, r[i].key);
+    }
+    nbep_calendar_retune(c, 0.0);
+    uint32_t top;
+    double t_top;
+    assert_true(nbep_calendar_top(c, &top, &t_top));
+    for (size_t max = 1; max <= MAX; max += 7) {
+        uint32_t got[MAX];
+        const size_t n_got = nbep_calendar_front(c, got, NULL, NULL, max);
+        assert_int_equal(n_got, max);
+        bool taken[N] = {false};
+        taken[top] = true;
+        for (size_t k = 0; k < n_got; k++) { /* the brute-force next one */
+            uint32_t best = UINT32_MAX;
+            for (uint32_t q = 0; q < N; q++)
+                if (!taken[q] && (best == UINT32_MAX || ref_before(r, q, best)))
+                    best = q;
+            assert_int_equal(got[k], best);
+            taken[best] = true;
+        }
+    }
+    nbep_calendar_destroy(&c);
+}
+
 /* Draining the calendar gives the entries in (time, key, item) order, the same whatever
  * order they were set in. */
 static void test_drain_order_is_time_then_key_then_item_for_any_insert_order(void **state)
@@ -357,6 +393,7 @@ int main(void)
         cmocka_unit_test(test_top_is_the_brute_force_minimum_under_random_operations),
         cmocka_unit_test(test_drain_order_is_time_then_key_then_item_for_any_insert_order),
         cmocka_unit_test(test_front_is_the_next_entries_in_order),
+        cmocka_unit_test(test_front_of_a_crowded_bucket_is_exact),
         cmocka_unit_test(test_remove_of_an_absent_item_and_an_empty_calendar_are_harmless),
         cmocka_unit_test(test_top_is_the_minimum_over_many_laps_with_far_entries_and_changing_pace),
     };
