@@ -19,7 +19,6 @@
  * time a sphere takes to fly its own diameter. */
 #define CUT_SLACK 1e-6
 
-
 /* One thread's side of an event (handle, then commit): the list a rebuild found and what the
  * event changed, held until its commit; for a speculative event (the team loop's), the
  * motion and slots it may change, kept to undo it. */
@@ -143,8 +142,8 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
      * strayed up to one, the new centre leads by LEAD), so what an event touches lies within
      * touch = cut + (1 + LEAD) stray of its spheres' centres, and two events whose spheres
      * are more than touch apart touch nothing in common (a written sphere is never read by the
-     * other, a written list is never the other's own). Twice the reach leaves a wide margin
-     * for the roundings. */
+     * other, a written list is never the other's own). Twice that leaves a wide margin for
+     * the roundings. */
     const double touch = e->cut + (1.0 + NBEP_NBLIST_LEAD) * e->stray;
     e->apart2 = (2.0 * touch) * (2.0 * touch);
     atomic_init(&e->go, 0);
@@ -441,9 +440,9 @@ static double stray_time(nbep_vec3 d, nbep_vec3 v, nbep_vec3 a, double stray)
  * its sphere stays within the stray of the centre, and any centre will do (the list holds
  * the spheres whose centres are within the cutoff of it): one ahead of the sphere along its
  * flight, NBEP_NBLIST_LEAD strays, lets it fly (1 + NBEP_NBLIST_LEAD) strays before the list
- * expires instead of one, if nothing deflects it. Only for straight flight (with an acceleration the
- * expiry is found from a bound that a centre ahead would shorten). Wrapped into a periodic
- * box; stray_time takes the sphere's offset from it the nearest way round. */
+ * expires instead of one, if nothing deflects it. Only for straight flight (with an
+ * acceleration the expiry is found from a bound that a centre ahead would shorten). Wrapped
+ * into a periodic box; stray_time takes the sphere's offset from it the nearest way round. */
 static nbep_vec3 list_centre(const nbep_evloop *e, nbep_vec3 p, nbep_vec3 v, nbep_vec3 a)
 {
     const double speed = nbep_vec3_norm(v);
@@ -752,8 +751,8 @@ static bool places_apart(const nbep_evloop *e, size_t k, size_t m)
     return true;
 }
 
-/* Round place m is sphere x with the event its slot (key) names: the other sphere and the
- * cells of both. */
+/* Round place m is sphere x with the event its slot (key) names: the other sphere, whether
+ * it is a list expiry (walks), and then the cell of its list centre. */
 static void set_place(nbep_evloop *e, size_t m, uint32_t x, uint32_t other, bool walks)
 {
     e->batch[m] = x;

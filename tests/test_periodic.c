@@ -283,7 +283,8 @@ static void test_a_list_is_centred_ahead_of_a_straight_flight(void **state)
     nbep_summary s = nbep_test_run_counted(sc, 1, NULL, NULL, &fin, counts);
     const double half_skin = 0.5 * NBEP_NBLIST_SKIN; /* diameter 1; the box is wide enough
                                                       * that the skin is not cut down */
-    const double expect = floor((speed * T - half_skin) / ((1.0 + NBEP_NBLIST_LEAD) * half_skin)) + 1.0;
+    const double lap = (1.0 + NBEP_NBLIST_LEAD) * half_skin;
+    const double expect = floor((speed * T - half_skin) / lap) + 1.0;
     const double events = (double)(counts[NBEP_COUNTER_CHECKS] - 1);
     assert_true(fabs(events - expect) <= 1.0);
     assert_int_equal(s.collisions, 0);
