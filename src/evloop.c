@@ -70,6 +70,9 @@ struct nbep_evloop {
     size_t batch_cell[NBEP_EVLOOP_BATCH][3];
     bool batch_walks[NBEP_EVLOOP_BATCH]; /* a list expiry: its handle walks the cells around
                                           * its sphere and its commit changes them */
+    /* the list centres of the round's spheres so far (each place's own and other), for pick */
+    double taken_x[2 * NBEP_EVLOOP_BATCH], taken_y[2 * NBEP_EVLOOP_BATCH],
+        taken_z[2 * NBEP_EVLOOP_BATCH];
     /* the team loop's hand-over: the leader posts a round in one word, go = its number times
      * 256 plus how many events it has (0: the loop ends); either thread takes the next place
      * to handle from `next` (the round's number times NBEP_EVLOOP_BATCH plus the place) and
@@ -133,7 +136,7 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->stray = 0.5 * skin;
     e->cut = (reach + skin) * (1.0 + CUT_SLACK);
     e->face_reach = e->cut + 1.01 * e->stray;
-    /* two events whose spheres' list centres are all farther apart than this (places_apart:
+    /* two events whose spheres' list centres are all farther apart than this (place_apart:
      * each event's own sphere and the other its slot names, checked themselves, however far
      * a stale slot's other may be) touch nothing in common. An event handled writes the motion
      * and slot of its spheres and reads those of their lists' members; committed, it writes
@@ -691,20 +694,25 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
 #define GO_SHIFT 8 /* go = round << GO_SHIFT | events */
 _Static_assert(NBEP_EVLOOP_BATCH < (1 << GO_SHIFT), "a round's size fits below GO_SHIFT");
 
-/* Whether events on spheres a and b touch no common sphere: their list centres are more than
- * sqrt(apart2) apart, in a periodic box the nearest way round. */
-static bool apart(const nbep_evloop *e, uint32_t a, uint32_t b)
+/* Whether list centre c is more than sqrt(apart2) from each of the first nt centres taken
+ * for the round (pick), in a periodic box the nearest way round: then events on their spheres
+ * touch nothing in common. One pass without branches over the taken centres (up to 32): the
+ * nearest of them decides. */
+static bool clear_of(const nbep_evloop *e, nbep_vec3 c, size_t nt)
 {
-    const nbep_vec3 pa = e->cells.m[a].at, pb = e->cells.m[b].at;
-    const double d[3] = {pa.x - pb.x, pa.y - pb.y, pa.z - pb.z};
-    double d2 = 0.0;
-    for (int k = 0; k < 3; k++) {
-        double x = fabs(d[k]);
-        if (e->pb.axis[k] && x > 0.5 * e->pb.len[k])
-            x = e->pb.len[k] - x;
-        d2 += x * x;
+    const double hx = e->pb.half[0], hy = e->pb.half[1], hz = e->pb.half[2];
+    const double lx = e->pb.len[0], ly = e->pb.len[1], lz = e->pb.len[2];
+    double near = INFINITY;
+    for (size_t k = 0; k < nt; k++) {
+        double dx = fabs(c.x - e->taken_x[k]), dy = fabs(c.y - e->taken_y[k]),
+               dz = fabs(c.z - e->taken_z[k]);
+        dx = dx > hx ? lx - dx : dx; /* half is +inf on an axis that is not periodic */
+        dy = dy > hy ? ly - dy : dy;
+        dz = dz > hz ? lz - dz : dz;
+        const double d2 = dx * dx + dy * dy + dz * dz;
+        near = d2 < near ? d2 : near;
     }
-    return d2 > e->apart2;
+    return near > e->apart2;
 }
 
 /* Whether the cells that a commit of an event in cell a changes (a's cell and, for a rebuilt
@@ -733,22 +741,36 @@ static void cell_xyz(const nbep_evloop *e, uint32_t i, size_t *xyz)
 
 #define NO_SPHERE UINT32_MAX
 
-/* Whether round places k and m are apart: every sphere of the one (its own and the one its
- * slot names) apart from every sphere of the other in what they touch, and, when both are list
+/* Whether round place m is apart from every place before it: both its spheres (its own and
+ * the one its slot names) clear of both spheres of every earlier place in what they touch
+ * (clear_of: nt centres taken so far), and, when it and an earlier place are both list
  * expiries, in their cells (only an expiry reads the cells of other spheres, in its walk, and
  * only an expiry's commit changes cells; an expiry's slot names no other sphere). */
-static bool places_apart(const nbep_evloop *e, size_t k, size_t m)
+static bool place_apart(const nbep_evloop *e, size_t m, size_t nt)
 {
-    if (e->batch_walks[k] && e->batch_walks[m] &&
-        !cells_apart(e, e->batch_cell[k], e->batch_cell[m]))
-        return false;
-    const uint32_t a[2] = {e->batch[k], e->batch_other[k]};
-    const uint32_t b[2] = {e->batch[m], e->batch_other[m]};
-    for (int p = 0; p < 2; p++)
-        for (int q = 0; q < 2; q++)
-            if (a[p] != NO_SPHERE && b[q] != NO_SPHERE && !apart(e, a[p], b[q]))
+    if (e->batch_walks[m])
+        for (size_t k = 0; k < m; k++)
+            if (e->batch_walks[k] && !cells_apart(e, e->batch_cell[k], e->batch_cell[m]))
                 return false;
-    return true;
+    if (!clear_of(e, e->cells.m[e->batch[m]].at, nt))
+        return false;
+    return e->batch_other[m] == NO_SPHERE ||
+           clear_of(e, e->cells.m[e->batch_other[m]].at, nt);
+}
+
+/* The centres of place m's spheres taken, after the nt before them; returns the new count. */
+static size_t take_centres(nbep_evloop *e, size_t m, size_t nt)
+{
+    const uint32_t s[2] = {e->batch[m], e->batch_other[m]};
+    for (int k = 0; k < 2; k++)
+        if (s[k] != NO_SPHERE) {
+            const nbep_vec3 c = e->cells.m[s[k]].at;
+            e->taken_x[nt] = c.x;
+            e->taken_y[nt] = c.y;
+            e->taken_z[nt] = c.z;
+            nt++;
+        }
+    return nt;
 }
 
 /* Round place m is sphere x with the event its slot (key) names: the other sphere, whether
@@ -763,7 +785,7 @@ static void set_place(nbep_evloop *e, size_t m, uint32_t x, uint32_t other, bool
 }
 
 /* A round's events: the earliest (sphere i, slot ev) and those that follow it in the calendar
- * while each is apart from all before it (places_apart: both its spheres, the one whose entry
+ * while each is apart from all before it (place_apart: both its spheres, the one whose entry
  * it is and the other its slot names, against both of every event before it: the other may be
  * far when the slot is stale, and a far sphere must not be read, kept or put back while
  * another event writes it), and comes before t_end; the entries of the other sphere of the
@@ -775,7 +797,7 @@ static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_en
     e->batch_ev[0] = *ev;
     set_place(e, 0, i, ev->kind == NBEP_EVENT_SPHERE ? ev->partner : NO_SPHERE,
               ev->kind == NBEP_EVENT_HORIZON);
-    size_t n = 1, n_skip = 0;
+    size_t n = 1, n_skip = 0, nt = take_centres(e, 0, 0);
     /* enough entries for a full round and the partners' entries it passes over */
     enum { FRONT = 2 * NBEP_EVLOOP_BATCH };
     uint32_t skip[NBEP_EVLOOP_BATCH], front[FRONT];
@@ -799,9 +821,9 @@ static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_en
          * UINT32_MAX there, no sphere's index (set_place: NO_SPHERE) */
         const uint32_t lo = (uint32_t)(keys[f] >> 32), hi = (uint32_t)keys[f];
         set_place(e, n, x, lo == x ? hi : lo, lo == x && hi == UINT32_MAX); /* slot_key */
-        for (size_t k = 0; k < n; k++)
-            if (!places_apart(e, k, n))
-                return n;
+        if (!place_apart(e, n, nt))
+            return n;
+        nt = take_centres(e, n, nt);
         if (e->batch_other[n] != NO_SPHERE)
             skip[n_skip++] = e->batch_other[n];
         n++;
