@@ -806,8 +806,14 @@ static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_en
     if (e->batch_other[0] != NO_SPHERE)
         skip[n_skip++] = e->batch_other[0];
     const size_t nf = nbep_calendar_front(e->cal, front, times, keys, FRONT);
-    for (size_t f = 0; f < nf; f++) /* the places, all requested before the first is used */
+    for (size_t f = 0; f < nf; f++) { /* the places of both spheres (the key names the
+                                       * other), all requested before the first is used */
+        const uint32_t lo = (uint32_t)(keys[f] >> 32), hi = (uint32_t)keys[f];
+        const uint32_t other = lo == front[f] ? hi : lo;
         NBEP_PREFETCH(&e->cells.m[front[f]]);
+        if (other < e->n)
+            NBEP_PREFETCH(&e->cells.m[other]);
+    }
     for (size_t f = 0; f < nf && n < NBEP_EVLOOP_BATCH; f++) {
         const uint32_t x = front[f];
         bool passed = false;
