@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Paired A/B timing of two nbep binaries on one deck, for a machine whose speed moves from
+# minute to minute (this project's shared 2-core one: the same run takes 10 to 20 % longer or
+# shorter from one minute to the next). A and B run at the same time, one per core
+# (taskset), swapping cores each repeat, so that both meet the same load; the figure is the
+# median over repeats of B's loop time over A's (the summary's wall_seconds), with the
+# collision counts compared (the same bits when the change should not alter results).
+# One thread per run: the deck's run.threads should be 1.
+#
+#   scripts/ab-pair.sh REPS DECK BIN_A BIN_B
+#   e.g. scripts/ab-pair.sh 8 inputs/hard-sphere-fluid.deck /tmp/nbep.old bin/nbep
+#
+# Prints A's and B's median seconds, the median ratio B/A with every repeat's, and whether the
+# collision counts agreed in every repeat. Outputs go to a temporary folder, removed after.
+set -euo pipefail
+if [ $# -ne 4 ]; then
+    echo "usage: scripts/ab-pair.sh REPS DECK BIN_A BIN_B" >&2
+    exit 2
+fi
+reps=$1 deck=$2 a=$3 b=$4
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+for r in $(seq "$reps"); do
+    if [ $((r % 2)) = 1 ]; then ca=0 cb=1; else ca=1 cb=0; fi
+    taskset -c $ca "$a" run "$deck" --output "$tmp/a.h5" --summary "$tmp/a.json" --quiet &
+    pa=$!
+    taskset -c $cb "$b" run "$deck" --output "$tmp/b.h5" --summary "$tmp/b.json" --quiet &
+    pb=$!
+    wait $pa
+    wait $pb
+    python3 - "$tmp/a.json" "$tmp/b.json" <<'PYEOF'
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+print(a["wall_seconds"], b["wall_seconds"], a["collisions"] == b["collisions"])
+PYEOF
+done | python3 -c '
+import statistics as st, sys
+rows = [l.split() for l in sys.stdin]
+A = [float(r[0]) for r in rows]; B = [float(r[1]) for r in rows]
+R = [b / a for a, b in zip(A, B)]
+print("A median %.3f s, B median %.3f s, B/A median %.3f [%s]; same collisions: %s"
+      % (st.median(A), st.median(B), st.median(R), " ".join("%.3f" % x for x in R),
+         all(r[2] == "True" for r in rows)))
+'
