@@ -1908,14 +1908,14 @@ static inline void pair_motion(const pred_ctx *c, const nbep_state *s, uint32_t 
  * the bound (from the step's start) of a closing pair that may hit, +inf for one receding or
  * certainly passing (nbep_predict_pair_quadratic_bound of the motion pair_motion gives: a
  * drift by zero time is the position itself, a shift by no period the position itself),
- * written without branches so that it runs on four pairs at once where the CPU has
- * AVX2. pb: the periodic box when images may be needed, else NULL. Partner j's radius is
- * radius[j & rmask]: rmask 0 and radius pointing at the one radius of a monodisperse scene
- * spare the loop a scattered load (ri + ri is the contact distance exactly), without a
- * condition that would keep the compiler from vectorising it. */
+ * written without branches so that it runs on four pairs at once where the CPU has AVX2.
+ * pb: the periodic box when images may be needed, else NULL. mono: every sphere has radius
+ * ri (ri + ri is the contact distance exactly), which spares the loop a scattered load. Built
+ * in four copies (images or not, mono or not), each free of what it does not need: most
+ * spheres are far from every periodic face, and a fluid has one radius. */
 static inline __attribute__((always_inline)) void
 pair_bounds_with(const double *restrict tau, const nbep_vec3 *restrict pos,
-                 const nbep_vec3 *restrict vel, const double *restrict radius, uint32_t rmask,
+                 const nbep_vec3 *restrict vel, const double *restrict radius,
                  const uint32_t *restrict js, size_t m, nbep_vec3 pi, nbep_vec3 vi, double ti,
                  double ri, const nbep_periodic *pb, double *restrict out, const bool images,
                  const bool mono)
@@ -1940,7 +1940,7 @@ pair_bounds_with(const double *restrict tau, const nbep_vec3 *restrict pos,
         const double dvx = vel[j].x - vi.x, dvy = vel[j].y - vi.y, dvz = vel[j].z - vi.z;
         const double lb = nbep_predict_pair_quadratic_bound(
             nbep_vec3_make(dpx, dpy, dpz), nbep_vec3_make(dvx, dvy, dvz),
-            mono ? ri + ri : ri + radius[j & rmask]);
+            mono ? ri + ri : ri + radius[j]);
         out[k] = lb < NBEP_NEVER ? t0 + lb : NBEP_NEVER;
     }
 }
@@ -1948,24 +1948,19 @@ pair_bounds_with(const double *restrict tau, const nbep_vec3 *restrict pos,
 NBEP_AVX2_CLONES static void pair_bounds(const double *restrict tau,
                                         const nbep_vec3 *restrict pos,
                                         const nbep_vec3 *restrict vel,
-                                        const double *restrict radius, uint32_t rmask,
+                                        const double *restrict radius, bool mono,
                                         const uint32_t *restrict js, size_t m, nbep_vec3 pi,
                                         nbep_vec3 vi, double ti, double ri,
                                         const nbep_periodic *pb, double *restrict out)
 {
-    /* two copies: most spheres are far from every periodic face (no image to look for) */
-    if (pb && rmask)
-        pair_bounds_with(tau, pos, vel, radius, rmask, js, m, pi, vi, ti, ri, pb, out, true,
-                         false);
+    if (pb && mono)
+        pair_bounds_with(tau, pos, vel, radius, js, m, pi, vi, ti, ri, pb, out, true, true);
     else if (pb)
-        pair_bounds_with(tau, pos, vel, radius, rmask, js, m, pi, vi, ti, ri, pb, out, true,
-                         true);
-    else if (rmask)
-        pair_bounds_with(tau, pos, vel, radius, rmask, js, m, pi, vi, ti, ri, NULL, out, false,
-                         false);
+        pair_bounds_with(tau, pos, vel, radius, js, m, pi, vi, ti, ri, pb, out, true, false);
+    else if (mono)
+        pair_bounds_with(tau, pos, vel, radius, js, m, pi, vi, ti, ri, NULL, out, false, true);
     else
-        pair_bounds_with(tau, pos, vel, radius, rmask, js, m, pi, vi, ti, ri, NULL, out, false,
-                         true);
+        pair_bounds_with(tau, pos, vel, radius, js, m, pi, vi, ti, ri, NULL, out, false, false);
 }
 
 static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m, bool images,
@@ -1990,7 +1985,7 @@ static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m, 
     for (size_t k0 = 0; k0 < m; k0 += PAIR_BATCH) {
         const size_t k1 = m - k0 < PAIR_BATCH ? m : k0 + PAIR_BATCH;
         size_t n = 0, first = 0;
-        pair_bounds(c->tau, s->pos, s->vel, s->radius, c->sigma_all > 0.0 ? 0u : UINT32_MAX,
+        pair_bounds(c->tau, s->pos, s->vel, s->radius, c->sigma_all > 0.0,
                     js + k0, k1 - k0, pi, vi, ti, s->radius[i], images ? &c->pb : NULL, lbs);
         for (size_t k = k0; k < k1; k++) { /* the closing pairs that may hit */
             if (!(lbs[k - k0] < INFINITY))

@@ -394,6 +394,18 @@ static uint64_t slot_key(uint32_t i, const nbep_event *ev)
     return (uint64_t)a << 32 | b;
 }
 
+/* What slot_key(i, ev) says back: the other sphere of a pair (an index at or past n for a plane
+ * or an expiry: UINT32_MAX - plane or UINT32_MAX), and whether it is an expiry. */
+static uint32_t key_other(uint64_t key, uint32_t i)
+{
+    const uint32_t a = (uint32_t)(key >> 32), b = (uint32_t)key;
+    return a == i ? b : a;
+}
+static bool key_expiry(uint64_t key, uint32_t i)
+{
+    return key == ((uint64_t)i << 32 | UINT32_MAX);
+}
+
 void nbep_evloop_visit_block(const nbep_evloop *e, uint32_t i,
                              void (*visit)(void *u, uint32_t j), void *u)
 {
@@ -408,11 +420,13 @@ void nbep_evloop_visit_block(const nbep_evloop *e, uint32_t i,
 static inline void prefetch_list(const nbep_evloop *e, uint32_t i)
 {
     const nbep_nblist_span sp = e->nl.sp[i];
+    if (sp.cnt == 0)
+        return;
     const char *a = (const char *)&e->nl.pool[sp.off];
-    const char *z = (const char *)&e->nl.pool[sp.off + sp.cnt];
+    const char *z = (const char *)&e->nl.pool[sp.off + sp.cnt - 1]; /* the last entry */
     for (; a < z; a += NBEP_CACHELINE)
         NBEP_PREFETCH(a);
-    NBEP_PREFETCH(z - 1);
+    NBEP_PREFETCH(z);
 }
 
 /* Time from now until a centre at d from where its list was built, flying with v and a, is
@@ -808,8 +822,7 @@ static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_en
     const size_t nf = nbep_calendar_front(e->cal, front, times, keys, FRONT);
     for (size_t f = 0; f < nf; f++) { /* the places of both spheres (the key names the
                                        * other), all requested before the first is used */
-        const uint32_t lo = (uint32_t)(keys[f] >> 32), hi = (uint32_t)keys[f];
-        const uint32_t other = lo == front[f] ? hi : lo;
+        const uint32_t other = key_other(keys[f], front[f]);
         NBEP_PREFETCH(&e->cells.m[front[f]]);
         if (other < e->n)
             NBEP_PREFETCH(&e->cells.m[other]);
@@ -823,10 +836,7 @@ static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_en
             continue;
         if (!(times[f] < t_end))
             break;
-        /* the other sphere of a pair; a plane's or an expiry's key has UINT32_MAX - plane or
-         * UINT32_MAX there, no sphere's index (set_place: NO_SPHERE) */
-        const uint32_t lo = (uint32_t)(keys[f] >> 32), hi = (uint32_t)keys[f];
-        set_place(e, n, x, lo == x ? hi : lo, lo == x && hi == UINT32_MAX); /* slot_key */
+        set_place(e, n, x, key_other(keys[f], x), key_expiry(keys[f], x));
         if (!place_apart(e, n, nt))
             return n;
         nt = take_centres(e, n, nt);

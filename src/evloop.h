@@ -142,8 +142,8 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
  * along an axis when both are list expiries: none reads what another writes, and lists,
  * cells and calendar are written only at commits), up to NBEP_EVLOOP_BATCH. The leader
  * (thread 0) and the helper (thread 1, in nbep_evloop_help at the same time) take the round's
- * places one at a time and handle them, each but the first
- * speculatively (what it may change kept: ops save). The leader commits them in order: each
+ * places one at a time and handle them, each but the first speculatively (what it may change
+ * kept: ops save). The leader commits them in order: each
  * stands if it is then the earliest in the calendar (the one thread would handle it next, from
  * the same state), else it and the rest are undone (ops restore) and handled in later rounds.
  * The event at place m is handled with context us[m] of the thread that takes it (each

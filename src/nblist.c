@@ -89,7 +89,7 @@ static bool compact(nbep_nblist *l, size_t extra)
         total += room_for(l->sp[i].cnt);
     const size_t cap = total + total / 4u;
     uint64_t *ord = malloc((l->n ? l->n : 1) * sizeof *ord);
-    if (!ord || !reserve(l, cap, 1u << 30)) {
+    if (!ord || !reserve(l, cap, 1u << 30)) { /* room for cap (next to no spare) */
         free(ord);
         return false;
     }

@@ -8,8 +8,8 @@
  * room for cap[i]. A list that outgrows its room moves to the end of the pool with twice the
  * room; when the pool fills and holds more than one and a half times what a fresh layout would
  * take, it is compacted in place (every list moved, with a little slack), so memory stays
- * within about two fresh layouts and proportional to the
- * entries (4 bytes per neighbour, 12 to 20 neighbours in a dense fluid) however long the run. Not thread-safe
+ * within about two fresh layouts and proportional to the entries (4 bytes per neighbour, 6 to
+ * 12 neighbours in a fluid at phi 0.30 to 0.50) however long the run. Not thread-safe
  * for appends and removals (one thread); nbep_nblist_layout and nbep_nblist_fill_own let threads
  * fill disjoint spheres' lists at a full rebuild. */
 #ifndef NBEP_NBLIST_H
