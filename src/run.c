@@ -108,10 +108,9 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     if (st == NBEP_OK) {
         nbep_sim_options opt = {.threads = threads, .out = out,
                                 .stop_signal = rq->stop_signal, .progress = rq->verbose,
-                                .resume = rq->resume ? &resume : NULL};
+                                .resume = rq->resume ? &resume : NULL,
+                                .take_state = &sc.state}; /* nothing reads the scene's again */
         st = nbep_sim_create(&sc, &opt, &sim, d);
-        if (st == NBEP_OK) /* the run has its own copy; nothing reads the scene's again */
-            nbep_state_release_motion(&sc.state);
         if (st != NBEP_OK) {
             nbep_status ignored = nbep_output_close(&out, NULL, d);
             (void)ignored;

@@ -3,6 +3,7 @@
  * parallel region; this file holds no OpenMP pragmas. */
 #include "nbep/sim.h"
 
+#include <assert.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -63,7 +64,7 @@ static const nbep_algo *find_algo(const char *name)
 size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads)
 {
     size_t n = sc->state.n, np = sc->state.n_planes;
-    size_t bytes = 2 * nbep_state_bytes(n, np); /* the scene's copy and the run's */
+    size_t bytes = nbep_state_bytes(n, np); /* the scene's, which nbep run hands over */
     const nbep_algo *algo = find_algo(sc->algorithm);
     if (algo == &nbep__algo_predictive)
         /* slot 32, response count 8, local time 8, rest 4, flag 1, 2 claims 16, reacted 8,
@@ -133,7 +134,12 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
     sim->dt = sc->dt;
     sim->algo = algo;
     atomic_init(&sim->stop, 0);
-    nbep_status st = nbep_state_copy(&sim->st, &sc->state, d);
+    assert(!opt->take_state || opt->take_state == &sc->state);
+    nbep_status st = NBEP_OK;
+    if (opt->take_state)
+        nbep_state_take(&sim->st, opt->take_state);
+    else
+        st = nbep_state_copy(&sim->st, &sc->state, d);
     if (st != NBEP_OK) {
         free(sim);
         return st;

@@ -39,16 +39,6 @@ nbep_status nbep_state_init(nbep_state *s, size_t n, size_t n_planes, nbep_diag 
     return NBEP_OK;
 }
 
-void nbep_state_release_motion(nbep_state *s)
-{
-    nbep_free_aligned(s->pos);
-    nbep_free_aligned(s->vel);
-    nbep_free_aligned(s->acc);
-    nbep_free_aligned(s->image);
-    s->pos = s->vel = s->acc = NULL;
-    s->image = NULL;
-}
-
 void nbep_state_fini(nbep_state *s)
 {
     if (!s)
@@ -64,22 +54,39 @@ void nbep_state_fini(nbep_state *s)
     memset(s, 0, sizeof *s);
 }
 
+/* The radii, masses, period and planes of src into dst, whose arrays have room. */
+static void copy_shape(nbep_state *dst, const nbep_state *src)
+{
+    size_t n = src->n, p = src->n_planes;
+    memcpy(dst->radius, src->radius, n * sizeof *dst->radius);
+    memcpy(dst->mass, src->mass, n * sizeof *dst->mass);
+    memcpy(dst->period, src->period, sizeof dst->period);
+    memcpy(dst->plane_normal, src->plane_normal, p * sizeof *dst->plane_normal);
+    memcpy(dst->plane_offset, src->plane_offset, p * sizeof *dst->plane_offset);
+}
+
 nbep_status nbep_state_copy(nbep_state *dst, const nbep_state *src, nbep_diag *d)
 {
     nbep_status st = nbep_state_init(dst, src->n, src->n_planes, d);
     if (st != NBEP_OK)
         return st;
-    size_t n = src->n, p = src->n_planes;
+    size_t n = src->n;
     memcpy(dst->pos, src->pos, n * sizeof *dst->pos);
     memcpy(dst->vel, src->vel, n * sizeof *dst->vel);
     memcpy(dst->acc, src->acc, n * sizeof *dst->acc);
-    memcpy(dst->radius, src->radius, n * sizeof *dst->radius);
-    memcpy(dst->mass, src->mass, n * sizeof *dst->mass);
     memcpy(dst->image, src->image, 3 * n * sizeof *dst->image);
-    memcpy(dst->period, src->period, sizeof dst->period);
-    memcpy(dst->plane_normal, src->plane_normal, p * sizeof *dst->plane_normal);
-    memcpy(dst->plane_offset, src->plane_offset, p * sizeof *dst->plane_offset);
+    copy_shape(dst, src);
     return NBEP_OK;
+}
+
+void nbep_state_take(nbep_state *dst, nbep_state *src)
+{
+    *dst = *src;
+    src->pos = src->vel = src->acc = NULL;
+    src->radius = src->mass = NULL;
+    src->image = NULL;
+    src->plane_normal = NULL;
+    src->plane_offset = NULL;
 }
 
 bool nbep_state_all_finite(const nbep_state *s)

@@ -29,6 +29,9 @@ typedef struct nbep_sim_options {
     const atomic_int *stop_signal;  /* borrowed, may be NULL: nonzero = SIGINT/SIGTERM number */
     bool progress;                  /* progress lines on stderr */
     const nbep_resume *resume;      /* borrowed, may be NULL: continue from this frame */
+    nbep_state *take_state;         /* may be NULL: the scene's own state, whose arrays the
+                                     * run takes over instead of copying (nbep_state_take);
+                                     * nothing reads them through the scene after */
 } nbep_sim_options;
 
 /* A run of sc (borrowed; must outlive the sim) from its initial state, or from opt->resume

@@ -31,13 +31,14 @@ NBEP_MUST_CHECK nbep_status nbep_state_init(nbep_state *s, size_t n, size_t n_pl
                                             nbep_diag *d);
 /* Frees the arrays; safe on a zeroed or already finalised state. */
 void nbep_state_fini(nbep_state *s);
-/* Frees the per-sphere motion (positions, velocities, accelerations, images; NULL after),
- * keeping counts, radii, masses and planes: for a scene whose initial state a run has copied
- * (nbep run holds one copy of the motion, not two: 84 bytes a sphere). */
-void nbep_state_release_motion(nbep_state *s);
 /* Deep copy of src into dst (dst uninitialised on entry). */
 NBEP_MUST_CHECK nbep_status nbep_state_copy(nbep_state *dst, const nbep_state *src,
                                             nbep_diag *d);
+/* dst (uninitialised on entry) gets src's arrays themselves; src keeps its counts and
+ * period, with NULL for every array. A run's start with one copy of the spheres, never two:
+ * copying them and then freeing the original left the freed bytes resident (in the
+ * allocator's heap, behind what the run allocated after). */
+void nbep_state_take(nbep_state *dst, nbep_state *src);
 /* Bytes nbep_state_init would allocate, for memory estimates. */
 size_t nbep_state_bytes(size_t n, size_t n_planes);
 
