@@ -319,6 +319,13 @@ MUTANTS = [
      "    for (size_t k = 0; k < l->n; k++) {", ["test_nblist"], None),
     ("nblist-compact-unsorted", "src/nblist.c", "    qsort(ord, l->n, sizeof *ord, by_key);\n", "",
      ["test_nblist"], None),
+    ("nblist-compact-late", "src/nblist.c", "if (4u * l->pool_len > 5u * fresh && !compact(l, grown))",
+     "if (2u * l->pool_len > 3u * fresh && !compact(l, grown))", ["test_nblist"], None),
+    ("nblist-need-scratch-short", "include/nbep/nblist.h", "+ 5u * m + 8u;", "+ 4u * m + 8u;",
+     ["test_nblist"], None),
+    ("nblist-need-gain-unmoved", "include/nbep/nblist.h",
+     "return n_gain * (size_t)nbep_nblist_grown(l->cap_max) + 5u * m + 8u;",
+     "return n_gain * (size_t)l->cap_max + 5u * m + 8u;", ["test_nblist"], None),
     # ---- the root-free bound of the straight-flight kernel ----
     ("floor-bound-loose", "include/nbep/predict.h", "const double q = c / den * (1.0 - 1e-12);",
      "const double q = c / den * (2.0 - 1e-12);", ["test_predict"] + CELLS, None),

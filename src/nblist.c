@@ -6,14 +6,6 @@
 
 #include "nbep/compiler.h"
 
-/* The room a list of c entries gets at a layout or compaction: a quarter more and four
- * (a sphere's neighbour count drifts by a few between rebuilds of a dense fluid, so most
- * lists never move). */
-static uint32_t room_for(uint32_t c)
-{
-    return c + c / 4u + 4u;
-}
-
 nbep_status nbep_nblist_init(nbep_nblist *l, size_t n, nbep_diag *d)
 {
     memset(l, 0, sizeof *l);
@@ -54,13 +46,13 @@ bool nbep_nblist_layout(nbep_nblist *l, const uint32_t *counts)
 {
     size_t total = 0;
     for (size_t i = 0; i < l->n; i++)
-        total += room_for(counts[i]);
+        total += nbep_nblist_room_for(counts[i]);
     bool ok = reserve(l, total, 8u); /* an eighth spare: lists that outgrow their room move */
     size_t at = 0;
     l->cap_max = 0;
     for (size_t i = 0; i < l->n; i++) {
         l->sp[i].off = (uint32_t)(ok ? at : 0);
-        l->sp[i].cap = ok ? room_for(counts[i]) : 0;
+        l->sp[i].cap = ok ? nbep_nblist_room_for(counts[i]) : 0;
         l->sp[i].cnt = 0;
         at += l->sp[i].cap;
         if (l->sp[i].cap > l->cap_max)
@@ -76,8 +68,8 @@ static int by_key(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* Lays every list out again in place with room_for(cnt) each, then `extra` entries and a
- * quarter of the whole spare: the room given up by lists that moved is reclaimed. In place,
+/* Lays every list out again in place with its room for its count, then `extra` entries and
+ * an eighth of the whole spare: the room given up by lists that moved is reclaimed. In place,
  * so that the pool is never held twice (a copy into a fresh pool doubled the peak memory of a
  * fluid whose lists grow as it melts from a lattice): the lists in order of their places are
  * first packed down with no room to spare (each lands no later than it was), then spread out
@@ -86,8 +78,8 @@ static bool compact(nbep_nblist *l, size_t extra)
 {
     size_t total = extra;
     for (size_t i = 0; i < l->n; i++)
-        total += room_for(l->sp[i].cnt);
-    const size_t cap = total + total / 4u;
+        total += nbep_nblist_room_for(l->sp[i].cnt);
+    const size_t cap = total + total / 8u;
     uint64_t *ord = malloc((l->n ? l->n : 1) * sizeof *ord);
     if (!ord || !reserve(l, cap, 1u << 30)) { /* room for cap (next to no spare) */
         free(ord);
@@ -107,7 +99,7 @@ static bool compact(nbep_nblist *l, size_t extra)
     l->cap_max = 0;
     for (size_t k = l->n; k-- > 0;) { /* spread: each list's new place is past its packed one */
         nbep_nblist_span *sp = &l->sp[(uint32_t)ord[k]];
-        sp->cap = room_for(sp->cnt);
+        sp->cap = nbep_nblist_room_for(sp->cnt);
         end -= sp->cap;
         memmove(l->pool + end, l->pool + sp->off, sp->cnt * sizeof *l->pool);
         sp->off = (uint32_t)end;
@@ -128,18 +120,18 @@ static bool compact(nbep_nblist *l, size_t extra)
 
 bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j)
 {
-    if (l->sp[i].cnt == l->sp[i].cap) { /* full: move to the end with twice the room */
-        const uint32_t grown = 2u * l->sp[i].cap + 4u;
-        /* The pool is full: compact it if it holds more than one and a half times what a
-         * fresh layout of the lists as they are would take (room given up by moves, and rooms
-         * grown for counts that have since fallen), else let it grow by a quarter. Either way
-         * the pool stays within about two fresh layouts, and the O(n) count is paid only when
-         * it fills. */
+    if (l->sp[i].cnt == l->sp[i].cap) { /* full: move to the end with more room */
+        const uint32_t grown = nbep_nblist_grown(l->sp[i].cap);
+        /* The pool is full: compact it if it holds more than a quarter more than a fresh
+         * layout of the lists as they are would take (room given up by moves, and rooms grown
+         * for counts that have since fallen), else let it grow by a quarter. Either way the
+         * pool stays within about 1.6 fresh layouts (5/4 of 5/4), and the O(n) count is paid
+         * only when it fills. */
         if (l->pool_len + grown > l->pool_cap) {
             size_t fresh = 0;
             for (size_t k = 0; k < l->n; k++)
-                fresh += room_for(l->sp[k].cnt);
-            if (2u * l->pool_len > 3u * fresh && !compact(l, grown))
+                fresh += nbep_nblist_room_for(l->sp[k].cnt);
+            if (4u * l->pool_len > 5u * fresh && !compact(l, grown))
                 return false;
         }
         if (l->sp[i].cnt == l->sp[i].cap) { /* compaction may have made room already */
@@ -206,5 +198,7 @@ size_t nbep_nblist_check(const nbep_nblist *l)
 
 size_t nbep_nblist_bytes(size_t n, size_t entries)
 {
-    return n * sizeof(nbep_nblist_span) + (entries + entries / 4u + 4u * n) * 3 / 2 * sizeof(uint32_t);
+    /* the rooms of a fresh layout (nbep_nblist_room_for), and the pool's bound of 5/4 of 5/4 */
+    return n * sizeof(nbep_nblist_span) +
+           (entries + entries / 8u + 3u * n) * 25 / 16 * sizeof(uint32_t);
 }

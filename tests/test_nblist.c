@@ -76,11 +76,12 @@ static void test_random_attach_and_detach_match_a_reference_adjacency(void **sta
         }
         if (op % 997 == 0)
             assert_matches(&l, adj, N);
-        /* the pool stays within about two fresh layouts (nblist.h), plus one list's growth */
+        /* the pool stays within about 1.6 fresh layouts (nblist.h), plus one list's growth
+         * and the room of counts that fell since the pool last grew */
         size_t fresh = 0;
         for (size_t k = 0; k < N; k++)
-            fresh += l.sp[k].cnt + l.sp[k].cnt / 4 + 4;
-        assert_true(l.pool_cap <= 2 * fresh + 8 * N + 16);
+            fresh += nbep_nblist_room_for(l.sp[k].cnt);
+        assert_true(l.pool_cap <= fresh * 8 / 5 + 8 * N + 16);
     }
     assert_matches(&l, adj, N);
     assert_true(moves > 0);       /* the test went through the growth path */
@@ -97,7 +98,8 @@ static void test_layout_gives_each_list_its_count_and_slack_and_fill_appends(voi
     const uint32_t counts[4] = {0, 3, 1, 2};
     assert_true(nbep_nblist_layout(&l, counts));
     for (uint32_t i = 0; i < 4; i++) {
-        assert_true(l.sp[i].cap >= counts[i] + 4); /* slack for drift between rebuilds */
+        assert_int_equal(l.sp[i].cap, nbep_nblist_room_for(counts[i]));
+        assert_true(l.sp[i].cap >= counts[i] + 3); /* slack for drift between rebuilds */
         assert_int_equal(l.sp[i].cnt, 0);
         if (i > 0) /* laid out one after another, no overlap */
             assert_int_equal(l.sp[i].off, l.sp[i - 1].off + l.sp[i - 1].cap);
@@ -120,6 +122,41 @@ static void test_layout_gives_each_list_its_count_and_slack_and_fill_appends(voi
         assert_int_equal(m, 0);
     }
     nbep_nblist_fini(&l);
+}
+
+/* nbep_nblist_need bounds what a rebuild takes of the pool's spare: the rebuilt list moving
+ * from its room up to m entries, and each of its m new neighbours' lists, full, gaining one
+ * entry (while the spare covers it, the pool stays where it is, which the team loop's helper
+ * relies on as it reads other lists meanwhile). */
+static void test_need_bounds_what_a_rebuild_takes_of_the_spare(void **state)
+{
+    (void)state;
+    enum { N = 1200 };
+    uint32_t *counts = calloc(N, sizeof *counts);
+    assert_non_null(counts);
+    size_t tight = 0;
+    for (uint32_t c0 = 0; c0 < 40; c0 += 3)
+        for (uint32_t m = 0; m < N - 1; m = m * 3 / 2 + 1) {
+            nbep_nblist l;
+            init(&l, N);
+            for (uint32_t j = 0; j < N; j++) /* one room for all: each gain takes the most */
+                counts[j] = c0;
+            assert_true(nbep_nblist_layout(&l, counts));
+            for (uint32_t j = 1; j < N; j++) /* every other list full */
+                for (uint32_t k = 0; k < l.sp[j].cap; k++)
+                    nbep_nblist_fill(&l, j, (j + 1 + k) % N);
+            const size_t need = nbep_nblist_need(&l, m, m), len0 = l.pool_len;
+            for (uint32_t k = 1; k <= m; k++) {
+                assert_true(nbep_nblist_append(&l, 0, k));
+                assert_true(nbep_nblist_append(&l, k, 0));
+                assert_true(l.pool_len >= len0); /* grown, never compacted here */
+            }
+            assert_true(l.pool_len - len0 <= need);
+            tight += 10 * (l.pool_len - len0) > 9 * need; /* the bound is near what it takes */
+            nbep_nblist_fini(&l);
+        }
+    assert_true(tight > 0);
+    free(counts);
 }
 
 static void test_check_catches_asymmetry_duplicates_and_self_entries(void **state)
@@ -146,6 +183,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_random_attach_and_detach_match_a_reference_adjacency),
         cmocka_unit_test(test_layout_gives_each_list_its_count_and_slack_and_fill_appends),
+        cmocka_unit_test(test_need_bounds_what_a_rebuild_takes_of_the_spare),
         cmocka_unit_test(test_check_catches_asymmetry_duplicates_and_self_entries),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
