@@ -309,6 +309,9 @@ MUTANTS = [
      "        if (n + cnt[k] > max)", ["test_calendar"], None),
     ("cal-front-times-off", "src/calendar.c", "            times[k] = c->node[items[k]].time;",
      "            times[k] = c->node[items[0]].time;", ["test_calendar"], None),
+    # ---- the run takes the scene's arrays (nbep_state_take): the scene's must not be freed too ----
+    ("state-take-leaves-src", "src/state.c", "    src->pos = src->vel = src->acc = NULL;\n", "",
+     ["test_threads", "tests/test_cli.sh"], None),
     # ---- neighbour lists ----
     ("nblist-drop-keeps-count", "src/nblist.c", "theirs[q] = theirs[--l->sp[i].cnt];",
      "theirs[q] = theirs[l->sp[i].cnt - 1];", ["test_nblist"] + CELLS, None),

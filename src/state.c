@@ -54,28 +54,21 @@ void nbep_state_fini(nbep_state *s)
     memset(s, 0, sizeof *s);
 }
 
-/* The radii, masses, period and planes of src into dst, whose arrays have room. */
-static void copy_shape(nbep_state *dst, const nbep_state *src)
-{
-    size_t n = src->n, p = src->n_planes;
-    memcpy(dst->radius, src->radius, n * sizeof *dst->radius);
-    memcpy(dst->mass, src->mass, n * sizeof *dst->mass);
-    memcpy(dst->period, src->period, sizeof dst->period);
-    memcpy(dst->plane_normal, src->plane_normal, p * sizeof *dst->plane_normal);
-    memcpy(dst->plane_offset, src->plane_offset, p * sizeof *dst->plane_offset);
-}
-
 nbep_status nbep_state_copy(nbep_state *dst, const nbep_state *src, nbep_diag *d)
 {
     nbep_status st = nbep_state_init(dst, src->n, src->n_planes, d);
     if (st != NBEP_OK)
         return st;
-    size_t n = src->n;
+    size_t n = src->n, p = src->n_planes;
     memcpy(dst->pos, src->pos, n * sizeof *dst->pos);
     memcpy(dst->vel, src->vel, n * sizeof *dst->vel);
     memcpy(dst->acc, src->acc, n * sizeof *dst->acc);
+    memcpy(dst->radius, src->radius, n * sizeof *dst->radius);
+    memcpy(dst->mass, src->mass, n * sizeof *dst->mass);
     memcpy(dst->image, src->image, 3 * n * sizeof *dst->image);
-    copy_shape(dst, src);
+    memcpy(dst->period, src->period, sizeof dst->period);
+    memcpy(dst->plane_normal, src->plane_normal, p * sizeof *dst->plane_normal);
+    memcpy(dst->plane_offset, src->plane_offset, p * sizeof *dst->plane_offset);
     return NBEP_OK;
 }
 
