@@ -9,14 +9,14 @@
  * the end of the pool with half as much room again (nbep_nblist_grown); when the pool fills
  * and holds more than a quarter more than a fresh layout would take, it is compacted in place
  * (every list moved, with its room for its count), so memory stays within about 1.6 fresh
- * layouts and proportional to the entries (4 bytes per neighbour, 6 to 12 neighbours in a
+ * layouts and proportional to the entries (4 bytes per neighbour, 6 to 11 neighbours in a
  * fluid at phi 0.30 to 0.50) however long the run. The slack is small on purpose: the pool
  * was the largest thing a dense run grew (120 bytes a sphere at N = 256000, phi 0.50, when a
  * list got a quarter more and four, moved with twice its room and the pool was compacted at
- * one and a half fresh layouts; 77 now); the moves and compactions this costs are rare (two
- * compactions in that run). Not thread-safe
- * for appends and removals (one thread); nbep_nblist_layout and nbep_nblist_fill_own let threads
- * fill disjoint spheres' lists at a full rebuild. */
+ * one and a half fresh layouts; at most 79 now, for 45 of entries); the moves and
+ * compactions this costs are rare (two compactions in that run). Not thread-safe for appends
+ * and removals (one thread); nbep_nblist_layout and nbep_nblist_fill_own let threads fill
+ * disjoint spheres' lists at a full rebuild. */
 #ifndef NBEP_NBLIST_H
 #define NBEP_NBLIST_H
 

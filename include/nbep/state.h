@@ -36,8 +36,8 @@ NBEP_MUST_CHECK nbep_status nbep_state_copy(nbep_state *dst, const nbep_state *s
                                             nbep_diag *d);
 /* dst (uninitialised on entry) gets src's arrays themselves; src keeps its counts and
  * period, with NULL for every array. A run's start with one copy of the spheres, never two:
- * copying them and then freeing the original left the freed bytes resident (in the
- * allocator's heap, behind what the run allocated after). */
+ * a copy left the scene's radii and masses beside the run's for the whole run, and the
+ * motion twice at once while the run was set up. */
 void nbep_state_take(nbep_state *dst, nbep_state *src);
 /* Bytes nbep_state_init would allocate, for memory estimates. */
 size_t nbep_state_bytes(size_t n, size_t n_planes);
