@@ -277,6 +277,10 @@ MUTANTS = [
      "        d = nbep_vec3_add(d, nbep_periodic_near_shift(&e->pb, d));", "        (void)0;",
      TEAM, None),
     # ---- the cells team loop (two threads, events handled ahead and committed in order) ----
+    ("team-apart-unwrapped", "src/evloop.c", "        dx = dx > hx ? lx - dx : dx; /* half",
+     "        dx = dx; /* half", TEAM, None),
+    ("team-apart-halved", "src/evloop.c", "        near += !(dx * dx + dy * dy + dz * dz > apart2);",
+     "        near += !(dx * dx + dy * dy + dz * dz > 0.25 * apart2);", TEAM, None),
     ("team-undo-nothing", "src/evloop.c",
      "        ops->restore(uk, w->kept_id[k], &w->kept_motion[k]);\n        nbep_feq_put(e->q, w->kept_id[k], w->kept_slot[k]);",
      "        (void)0;", TEAM, None),
