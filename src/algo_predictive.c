@@ -1975,6 +1975,7 @@ static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js, size_t m, 
         NBEP_PREFETCH(&c->tau[js[k]]);
         NBEP_PREFETCH(&s->pos[js[k]]);
         NBEP_PREFETCH(&s->vel[js[k]]);
+        NBEP_PREFETCH(&c->ver[js[k]]); /* the winner's is read at the end */
     }
     double best_t = best->kind == NBEP_EVENT_NONE ? NBEP_NEVER : best->time;
     /* ties: a sphere event ranks by partner, before any plane or horizon */
