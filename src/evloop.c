@@ -815,7 +815,7 @@ static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_en
     size_t n = 1, n_skip = 0, nt = take_centres(e, 0, 0);
     /* enough entries for a full round and the partners' entries it passes over */
     enum { FRONT = 2 * NBEP_EVLOOP_BATCH };
-    uint32_t skip[NBEP_EVLOOP_BATCH], front[FRONT];
+    uint32_t skip[NBEP_EVLOOP_BATCH], front[FRONT], other[FRONT];
     double times[FRONT];
     uint64_t keys[FRONT];
     if (e->batch_other[0] != NO_SPHERE)
@@ -823,10 +823,10 @@ static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_en
     const size_t nf = nbep_calendar_front(e->cal, front, times, keys, FRONT);
     for (size_t f = 0; f < nf; f++) { /* the places of both spheres (the key names the
                                        * other), all requested before the first is used */
-        const uint32_t other = key_other(keys[f], front[f]);
+        other[f] = key_other(keys[f], front[f]);
         NBEP_PREFETCH(&e->cells.m[front[f]]);
-        if (other < e->n)
-            NBEP_PREFETCH(&e->cells.m[other]);
+        if (other[f] < e->n)
+            NBEP_PREFETCH(&e->cells.m[other[f]]);
     }
     for (size_t f = 0; f < nf && n < NBEP_EVLOOP_BATCH; f++) {
         const uint32_t x = front[f];
@@ -837,7 +837,7 @@ static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_en
             continue;
         if (!(times[f] < t_end))
             break;
-        set_place(e, n, x, key_other(keys[f], x), key_expiry(keys[f], x));
+        set_place(e, n, x, other[f], key_expiry(keys[f], x));
         if (!place_apart(e, n, nt))
             return n;
         nt = take_centres(e, n, nt);

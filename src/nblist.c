@@ -68,17 +68,15 @@ static int by_key(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* Lays every list out again in place with its room for its count, then `extra` entries and
- * an eighth of the whole spare: the room given up by lists that moved is reclaimed. In place,
+/* Lays every list out again in place with its room for its count (`fresh` rooms in all, the
+ * sum the caller counted), then `extra` entries and an eighth of the whole spare: the room given up by lists that moved is reclaimed. In place,
  * so that the pool is never held twice (a copy into a fresh pool doubled the peak memory of a
  * fluid whose lists grow as it melts from a lattice): the lists in order of their places are
  * first packed down with no room to spare (each lands no later than it was), then spread out
  * from the last down to their rooms (each lands no earlier than it was packed). */
-static bool compact(nbep_nblist *l, size_t extra)
+static bool compact(nbep_nblist *l, size_t fresh, size_t extra)
 {
-    size_t total = extra;
-    for (size_t i = 0; i < l->n; i++)
-        total += nbep_nblist_room_for(l->sp[i].cnt);
+    const size_t total = fresh + extra;
     const size_t cap = total + total / 8u;
     uint64_t *ord = malloc((l->n ? l->n : 1) * sizeof *ord);
     if (!ord || !reserve(l, cap, 1u << 30)) { /* room for cap (next to no spare) */
@@ -95,7 +93,7 @@ static bool compact(nbep_nblist *l, size_t extra)
         sp->off = (uint32_t)at;
         at += sp->cnt;
     }
-    size_t end = total - extra;
+    size_t end = fresh;
     l->cap_max = 0;
     for (size_t k = l->n; k-- > 0;) { /* spread: each list's new place is past its packed one */
         nbep_nblist_span *sp = &l->sp[(uint32_t)ord[k]];
@@ -107,7 +105,7 @@ static bool compact(nbep_nblist *l, size_t extra)
             l->cap_max = sp->cap;
     }
     free(ord);
-    l->pool_len = l->room = total - extra;
+    l->pool_len = l->room = fresh;
     if (l->pool_cap > cap) { /* give back what a long melt grew */
         uint32_t *p = realloc(l->pool, cap * sizeof *p);
         if (p) {
@@ -131,7 +129,7 @@ bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j)
             size_t fresh = 0;
             for (size_t k = 0; k < l->n; k++)
                 fresh += nbep_nblist_room_for(l->sp[k].cnt);
-            if (4u * l->pool_len > 5u * fresh && !compact(l, grown))
+            if (4u * l->pool_len > 5u * fresh && !compact(l, fresh, grown))
                 return false;
         }
         if (l->sp[i].cnt == l->sp[i].cap) { /* compaction may have made room already */
