@@ -1913,7 +1913,7 @@ static inline void pair_motion(const pred_ctx *c, const nbep_state *s, uint32_t 
  * ri (ri + ri is the contact distance exactly), which spares the loop a scattered load. Built
  * in four copies (images or not, mono or not), each free of what it does not need: most
  * spheres are far from every periodic face, and a fluid has one radius. */
-static inline __attribute__((always_inline)) void
+static inline NBEP_ALWAYS_INLINE void
 pair_bounds_with(const double *restrict tau, const nbep_vec3 *restrict pos,
                  const nbep_vec3 *restrict vel, const double *restrict radius,
                  const uint32_t *restrict js, size_t m, nbep_vec3 pi, nbep_vec3 vi, double ti,

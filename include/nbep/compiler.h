@@ -12,11 +12,17 @@
 #define NBEP_UNLIKELY(x) __builtin_expect(!!(x), 0)
 /* A hint to fetch the cache line holding *p for reading; no effect on results. */
 #define NBEP_PREFETCH(p) __builtin_prefetch((p), 0, 3)
+/* Inlined whatever the compiler's estimate. A helper made only of NBEP_PREFETCH needs it: GCC
+ * 12 takes prefetches for no effect, so a helper it does not inline is found pure, and a call
+ * to a pure function returning nothing is deleted with its prefetches. Also for a kernel that
+ * must be specialised at each call (its flags constant there). */
+#define NBEP_ALWAYS_INLINE __attribute__((always_inline))
 #else
 #define NBEP_MUST_CHECK
 #define NBEP_PRINTF(fmt, args)
 #define NBEP_UNLIKELY(x) (x)
 #define NBEP_PREFETCH(p) ((void)(p))
+#define NBEP_ALWAYS_INLINE
 #endif
 
 /* A function built twice, for CPUs with fused multiply-add and for the rest, the right one
