@@ -654,6 +654,7 @@ static void prefetch_event(const nbep_evloop *e, uint32_t i, const nbep_event *e
     if (ev->kind == NBEP_EVENT_SPHERE) {
         NBEP_PREFETCH(&e->nl.sp[ev->partner]);
         NBEP_PREFETCH(&e->cells.m[ev->partner]);
+        nbep_calendar_prefetch(e->cal, ev->partner); /* moved at the commit if it is fresh */
     }
     uint32_t next[2];
     int n_next;

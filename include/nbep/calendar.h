@@ -40,6 +40,8 @@ void nbep_calendar_retune(nbep_calendar *c, double t_now);
  * for a caller that wants to fetch their data ahead; *n of them in items. No effect on the
  * order. */
 void nbep_calendar_runners_up(const nbep_calendar *c, uint32_t items[2], int *n);
+/* Requests item's entry, to be set or removed soon (no effect on the order). */
+void nbep_calendar_prefetch(const nbep_calendar *c, uint32_t item);
 /* The entries that come out after the earliest one, in order, as far as the front of the
  * calendar tells (the current bucket, then a few of the next, stopping short of any bucket an
  * overflow entry may have reached): up to max items, their count returned, with their times
