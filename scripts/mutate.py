@@ -97,6 +97,8 @@ MUTANTS = [
     ("barrier-never-sleeps", "src/barrier.c", "for (unsigned k = 1; k < NBEP_BARRIER_SPINS; k++) {",
      "for (unsigned k = 1;; k++) {", ["test_barrier"], None),
     # ---- claims ----
+    ("mass-all-any", "src/algo_predictive.c", "same_mass &= sim->st.mass[i] == sim->st.mass[0];",
+     "same_mass &= true;", SIM, None),
     ("claim-max", "src/algo_predictive.c", "while (key < cur &&", "while (key > cur &&", SIM, None),
     ("claim-one-side", "src/algo_predictive.c",
      "        if (ev->kind == NBEP_EVENT_SPHERE &&\n            atomic_load_explicit(&c->claim[par][hi], memory_order_relaxed) != key)\n            continue;\n",
