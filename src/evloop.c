@@ -861,8 +861,8 @@ static inline NBEP_ALWAYS_INLINE void prefetch_place(const nbep_evloop *e, size_
     const uint32_t x = e->batch[m];
     NBEP_PREFETCH(nbep_feq_slot(e->q, x));
     NBEP_PREFETCH(&e->nl.pool[e->nl.sp[x].off]);
-    const uint32_t o = e->batch_other[m];
-    NBEP_PREFETCH(&e->nl.sp[o != NO_SPHERE ? o : x]);
+    if (e->batch_other[m] != NO_SPHERE)
+        NBEP_PREFETCH(&e->nl.sp[e->batch_other[m]]);
 }
 
 /* Keeps what the event at round place m may change, to undo it: the motion and slot of its

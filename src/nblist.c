@@ -69,11 +69,12 @@ static int by_key(const void *a, const void *b)
 }
 
 /* Lays every list out again in place with its room for its count (`fresh` rooms in all, the
- * sum the caller counted), then `extra` entries and an eighth of the whole spare: the room given up by lists that moved is reclaimed. In place,
- * so that the pool is never held twice (a copy into a fresh pool doubled the peak memory of a
- * fluid whose lists grow as it melts from a lattice): the lists in order of their places are
- * first packed down with no room to spare (each lands no later than it was), then spread out
- * from the last down to their rooms (each lands no earlier than it was packed). */
+ * sum the caller counted), then `extra` entries and an eighth of the whole spare: the room
+ * given up by lists that moved is reclaimed. In place, so that the pool is never held twice
+ * (a copy into a fresh pool doubled the peak memory of a fluid whose lists grow as it melts
+ * from a lattice): the lists in order of their places are first packed down with no room to
+ * spare (each lands no later than it was), then spread out from the last down to their rooms
+ * (each lands no earlier than it was packed). */
 static bool compact(nbep_nblist *l, size_t fresh, size_t extra)
 {
     const size_t total = fresh + extra;
