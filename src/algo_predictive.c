@@ -329,7 +329,7 @@ typedef struct pred_ctx {
     bool team_on[2];
     double team_cost[2];
     nbep_counters *help_cnt;      /* owned when team, NBEP_EVLOOP_BATCH: each place's event's
-                                   * counts (a round's events, evloop.h) */
+                                   * counts (the team loop's ring of places, evloop.h) */
     nbep_thread_max *help_mx;     /* owned when team, the same: their sums (wall: one buffer) */
     double *help_wall;            /* owned when team: NBEP_EVLOOP_BATCH rows of n_planes */
 } pred_ctx;
@@ -2095,6 +2095,16 @@ static void cells_save(void *u, uint32_t i, nbep_evloop_motion *m)
                                x->s->image[3 * (size_t)i + 2]}};
 }
 
+static void cells_prefetch(const void *u, uint32_t i)
+{
+    const cells_user *x = u;
+    NBEP_PREFETCH_W(&x->s->pos[i]);
+    NBEP_PREFETCH_W(&x->s->vel[i]);
+    NBEP_PREFETCH_W(&x->c->tau[i]);
+    NBEP_PREFETCH_W(&x->c->ver[i]);
+    NBEP_PREFETCH_W(&x->s->image[3 * (size_t)i]);
+}
+
 static void cells_restore(void *u, uint32_t i, const nbep_evloop_motion *m)
 {
     const cells_user *x = u;
@@ -2133,10 +2143,12 @@ static void cells_merge(void *u, void *uh, bool keep)
 
 static const nbep_evloop_ops cells_ops = {cells_planes,  cells_pairs,   cells_fresh,
                                           cells_react,   cells_flight,  cells_wrap,
-                                          cells_save,    cells_restore, cells_merge};
+                                          cells_save,    cells_restore, cells_merge,
+                                          cells_prefetch};
 static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, cells_fresh,
                                                cells_react,  cells_flight,     cells_wrap,
-                                               cells_save,   cells_restore,    cells_merge};
+                                               cells_save,   cells_restore,    cells_merge,
+                                               cells_prefetch};
 
 /* The team loop pays where a second core is close (it passes a few cache lines per event
  * between the two), and loses where it is not or is busy with other work: the same fluid on
@@ -2221,7 +2233,7 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
             }
             rebuild = false;
         }
-        /* the team loop's contexts, one per place of a round, on each of the two threads
+        /* the team loop's contexts, one per ring slot of its places, on each of the two threads
          * (with that thread's workspace), the counts and sums of a place apart */
         cells_user ups[NBEP_EVLOOP_BATCH];
         void *us[NBEP_EVLOOP_BATCH];

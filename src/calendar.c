@@ -118,11 +118,8 @@ size_t nbep_calendar_bytes(size_t n)
 static inline bool before(const nbep_calendar *c, uint32_t a, uint32_t b)
 {
     const node *x = &c->node[a], *y = &c->node[b];
-    if (x->time != y->time)
-        return x->time < y->time;
-    if (x->key != y->key)
-        return x->key < y->key;
-    return a < b;
+    return nbep_calendar_before((nbep_calendar_entry){x->time, x->key, a},
+                                (nbep_calendar_entry){y->time, y->key, b});
 }
 
 static inline void heap_place(nbep_calendar *c, size_t k, uint32_t item)
@@ -422,146 +419,28 @@ bool nbep_calendar_top(nbep_calendar *c, uint32_t *item, double *time)
     return true;
 }
 
+bool nbep_calendar_first(nbep_calendar *c, nbep_calendar_entry *entry)
+{
+    if (!nbep_calendar_top(c, &entry->item, &entry->time))
+        return false;
+    entry->key = c->node[entry->item].key;
+    return true;
+}
+
 void nbep_calendar_prefetch(const nbep_calendar *c, uint32_t item)
 {
     NBEP_PREFETCH(&c->node[item]);
 }
 
-void nbep_calendar_runners_up(const nbep_calendar *c, uint32_t items[2], int *n)
+void nbep_calendar_runners_up(const nbep_calendar *c, uint32_t items[2], uint64_t *keys,
+                              int *n)
 {
     *n = 0;
-    for (size_t k = 1; k < 3 && k < c->heap_len; k++)
-        items[(*n)++] = c->heap[k];
-}
-
-/* Ring slots looked through after the heap (empty ones count). */
-#define FRONT_SLOTS 8
-/* The most entries nbep_calendar_front takes from the heap at once. */
-#define FRONT_MAX 64
-
-/* Sorts items[0..n) by the calendar's order (a handful: insertion). */
-static void sort_items(const nbep_calendar *c, uint32_t *items, size_t n)
-{
-    for (size_t k = 1; k < n; k++) {
-        const uint32_t x = items[k];
-        size_t q = k;
-        for (; q > 0 && before(c, x, items[q - 1]); q--)
-            items[q] = items[q - 1];
-        items[q] = x;
-    }
-}
-
-/* The times and keys of items[0..n) (either may be NULL); returns n. */
-static size_t fill_front(const nbep_calendar *c, const uint32_t *items, size_t n, double *times,
-                         uint64_t *keys)
-{
-    for (size_t k = 0; k < n; k++) {
-        if (times)
-            times[k] = c->node[items[k]].time;
+    for (size_t k = 1; k < 3 && k < c->heap_len; k++) {
         if (keys)
-            keys[k] = c->node[items[k]].key;
+            keys[*n] = c->node[c->heap[k]].key;
+        items[(*n)++] = c->heap[k];
     }
-    return n;
-}
-
-/* The up to max entries of the heap after its top, in order: a best-first walk down from the
- * top (an entry comes after its parent), the places reached kept in a small heap of their
- * own, so that each entry taken costs O(log max) however large the heap. */
-static size_t heap_front(const nbep_calendar *c, uint32_t *items, size_t max)
-{
-    uint32_t cand[FRONT_MAX + 2]; /* places in c->heap; each taken adds at most one */
-    size_t nc = 0, n = 0;
-    for (size_t q = 1; q < 3 && q < c->heap_len; q++)
-        cand[nc++] = (uint32_t)q;
-    if (nc == 2 && before(c, c->heap[cand[1]], c->heap[cand[0]])) {
-        const uint32_t x = cand[0];
-        cand[0] = cand[1];
-        cand[1] = x;
-    }
-    while (n < max && nc > 0) {
-        const uint32_t q = cand[0];
-        items[n++] = c->heap[q];
-        /* the last candidate takes the top's place, sifted down */
-        uint32_t x = cand[--nc];
-        size_t k = 0;
-        for (;;) {
-            size_t ch = 2 * k + 1;
-            if (ch >= nc)
-                break;
-            if (ch + 1 < nc && before(c, c->heap[cand[ch + 1]], c->heap[cand[ch]]))
-                ch++;
-            if (!before(c, c->heap[cand[ch]], c->heap[x]))
-                break;
-            cand[k] = cand[ch];
-            k = ch;
-        }
-        if (nc > 0)
-            cand[k] = x;
-        /* the taken entry's children join, sifted up */
-        for (size_t ch = 2 * (size_t)q + 1; ch <= 2 * (size_t)q + 2 && ch < c->heap_len; ch++) {
-            size_t m = nc++;
-            while (m > 0 && before(c, c->heap[ch], c->heap[cand[(m - 1) / 2]])) {
-                cand[m] = cand[(m - 1) / 2];
-                m = (m - 1) / 2;
-            }
-            cand[m] = (uint32_t)ch;
-        }
-    }
-    return n;
-}
-
-size_t nbep_calendar_front(const nbep_calendar *c, uint32_t *items, double *times,
-                           uint64_t *keys, size_t max)
-{
-    if (max == 0 || c->heap_len == 0)
-        return 0;
-    max = max < FRONT_MAX ? max : FRONT_MAX;
-    size_t n = heap_front(c, items, max);
-    if (n < c->heap_len - 1) /* the heap after its top holds more than max: they are the front */
-        return fill_front(c, items, n, times, keys);
-    /* every entry of the heap comes before every entry of the ring, and a ring slot holds one
-     * bucket, which comes before the next slot's */
-    /* an overflow entry may have come within the slots looked at (it moves into the ring at
-     * the next lap): stop before its bucket, so that what is returned is the exact front */
-    int ns = 0;
-    for (int64_t ab = c->cur + 1; ab <= c->cur + FRONT_SLOTS && ab - c->cur <= (int64_t)c->nb &&
-                                  ab < c->ovf_min;
-         ab++)
-        ns++;
-    /* the slots' lists walked side by side, one step of each in turn, each node requested a
-     * step before it is read: their misses overlap instead of following each other (this walk
-     * was most of the front's time); walked at most as far as there is room for */
-    uint32_t at[FRONT_SLOTS], got[FRONT_SLOTS][FRONT_MAX];
-    size_t cnt[FRONT_SLOTS];
-    for (int k = 0; k < ns; k++) {
-        at[k] = c->head[(uint64_t)(c->cur + 1 + k) & (c->nb - 1)];
-        cnt[k] = 0;
-        if (at[k] != NIL)
-            NBEP_PREFETCH(&c->node[at[k]]);
-    }
-    const size_t room = max - n;
-    for (bool more = true; more;) {
-        more = false;
-        size_t before = 0; /* what the slots before k hold so far */
-        for (int k = 0; k < ns && before < room; before += cnt[k], k++)
-            if (at[k] != NIL && before + cnt[k] < room) {
-                got[k][cnt[k]++] = at[k];
-                at[k] = c->node[at[k]].next;
-                if (at[k] != NIL)
-                    NBEP_PREFETCH(&c->node[at[k]]);
-                more = true;
-            }
-    }
-    for (int k = 0; k < ns && n < max; k++) {
-        if (at[k] != NIL || n + cnt[k] > max) /* more than there is room for: its earliest may
-                                               * be out */
-            break;
-        for (size_t q = 0; q < cnt[k]; q++)
-            items[n + q] = got[k][q];
-        sort_items(c, items + n, cnt[k]);
-        n += cnt[k];
-    }
-    return fill_front(c, items, n, times, keys);
 }
 
 size_t nbep_calendar_size(const nbep_calendar *c)

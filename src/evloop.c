@@ -24,8 +24,9 @@
  * motion and slots it may change, kept to undo it. */
 typedef struct evl_ws {
     /* a rebuild of one list (walk): near holds the new list, gain[k] set for the entries i's
-     * old list lacked; was holds the old list (n_was entries), kept[k] set for those found again */
-    uint32_t *near, *was;   /* owned, room for cap each */
+     * old list lacked; was holds the old list (n_was entries), kept[k] set for those found again
+     * (a workspace starts a cache line: the team's two threads write neighbouring ones) */
+    alignas(NBEP_CACHELINE) uint32_t *near, *was; /* owned, room for cap each */
     uint8_t *kept, *gain;   /* owned, room for cap each */
     size_t cap, n_near, n_was;
     bool oom;               /* the walk ran out of memory */
@@ -50,7 +51,7 @@ struct nbep_evloop {
                            * member's place (cells.m[i].at) is where i's list was built */
     nbep_nblist nl;       /* owned */
     uint32_t *count;      /* owned, n: list lengths, at a full rebuild */
-    evl_ws ws[NBEP_EVLOOP_BATCH]; /* one per event of a team round (the one thread: ws[0]) */
+    evl_ws ws[NBEP_EVLOOP_BATCH]; /* one per ring slot of the team loop (one thread: ws[0]) */
     nbep_periodic pb;     /* the box's periodic geometry */
     double cut;           /* the list cutoff: contact distance plus skin, plus slack */
     double stray;         /* half the skin: how far a sphere goes before its list expires */
@@ -61,28 +62,42 @@ struct nbep_evloop {
     bool stop;            /* nbep_evloop_stop: the run stops after the current event */
     nbep_feq *q;          /* borrowed */
     const uint64_t *ver;  /* borrowed */
-    /* a team round: its events in order (the spheres and their slots as they were) */
-    uint32_t batch[NBEP_EVLOOP_BATCH];
-    nbep_event batch_ev[NBEP_EVLOOP_BATCH];
-    /* the other sphere each event's slot names (a pair's partner, fresh or stale; NO_SPHERE
-     * for a plane or an expiry), and the cell coordinates of an expiry's list centre */
+    /* the team loop's window: the places handled ahead and not yet committed, numbered in
+     * order (place s lives in ring slot s % NBEP_EVLOOP_BATCH). Written by the leader and read
+     * by both threads: each one's sphere, the other sphere its slot names (a pair's partner,
+     * fresh or stale; NO_SPHERE for a plane or an expiry), and whether it was the calendar's
+     * earliest when the window was empty (it stands, and is neither kept nor checked) */
+    alignas(NBEP_CACHELINE) uint32_t batch[NBEP_EVLOOP_BATCH];
     uint32_t batch_other[NBEP_EVLOOP_BATCH];
+    bool batch_first[NBEP_EVLOOP_BATCH];
+    struct { /* its slot as it was when handled, written by the thread that takes it: a cache
+              * line each */
+        alignas(NBEP_CACHELINE) nbep_event ev;
+    } batch_slot[NBEP_EVLOOP_BATCH];
+    /* the leader's alone (a line that the other core reads makes each write to it wait): the
+     * list centres of the window's spheres (slot k's own at 2k, its other at 2k + 1; +inf for
+     * none), for the places that join (place_apart); which spheres are the others of places
+     * in flight (their entries are passed over); whether each place is a list expiry (its
+     * handle walks the cells around its sphere and its commit changes them) and then the cell
+     * coordinates of its list centre; each place's calendar entry, taken out while it is in
+     * flight, and the window's last (cur); the window, places head .. tail - 1, more looked
+     * for once head reaches fill_at; and `ends`, the count of calls of nbep_evloop_run_lead */
+    alignas(NBEP_CACHELINE) double taken_x[2 * NBEP_EVLOOP_BATCH];
+    double taken_y[2 * NBEP_EVLOOP_BATCH], taken_z[2 * NBEP_EVLOOP_BATCH];
+    uint8_t *is_other; /* owned, n: 1 for the other sphere of a place in flight */
+    bool batch_walks[NBEP_EVLOOP_BATCH];
     size_t batch_cell[NBEP_EVLOOP_BATCH][3];
-    bool batch_walks[NBEP_EVLOOP_BATCH]; /* a list expiry: its handle walks the cells around
-                                          * its sphere and its commit changes them */
-    /* the list centres of the round's spheres so far (each place's own and other), for pick */
-    double taken_x[2 * NBEP_EVLOOP_BATCH], taken_y[2 * NBEP_EVLOOP_BATCH],
-        taken_z[2 * NBEP_EVLOOP_BATCH];
-    /* the team loop's hand-over: the leader posts a round in one word, go = its number times
-     * 256 plus how many events it has (0: the loop ends); either thread takes the next place
-     * to handle from `next` (the round's number times NBEP_EVLOOP_BATCH plus the place) and
-     * marks it handled (the round's number); the helper answers done = the go of the end */
-    uint64_t round;       /* the leader's: the last round it numbered, posted or not */
-    alignas(NBEP_CACHELINE) _Atomic uint64_t go;
+    nbep_calendar_entry batch_entry[NBEP_EVLOOP_BATCH], cur;
+    uint64_t head, tail, fill_at, ends;
+    /* the hand-over: the leader publishes places up to avail; either thread takes the next
+     * place to handle from `next` and marks it handled (its number); the leader posts the end
+     * of a call in quit (its count), the helper answers it in done */
+    alignas(NBEP_CACHELINE) _Atomic uint64_t avail;
     alignas(NBEP_CACHELINE) _Atomic uint64_t next;
+    alignas(NBEP_CACHELINE) _Atomic uint64_t quit;
     alignas(NBEP_CACHELINE) _Atomic uint64_t done;
     struct {
-        alignas(NBEP_CACHELINE) _Atomic uint64_t round;
+        alignas(NBEP_CACHELINE) _Atomic uint64_t place;
     } handled[NBEP_EVLOOP_BATCH];
 };
 
@@ -111,7 +126,8 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
                                const bool *periodic, nbep_feq *q, const uint64_t *ver,
                                nbep_evloop **out, nbep_diag *d)
 {
-    nbep_evloop *e = calloc(1, sizeof *e);
+    /* aligned: its fields that the team's two threads write start cache lines */
+    nbep_evloop *e = nbep_alloc_aligned(1, sizeof *e);
     if (!e)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the cells engine");
     e->n = n;
@@ -149,16 +165,24 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
      * the roundings. */
     const double touch = e->cut + (1.0 + NBEP_NBLIST_LEAD) * e->stray;
     e->apart2 = (2.0 * touch) * (2.0 * touch);
-    atomic_init(&e->go, 0);
-    atomic_init(&e->next, 0);
+    /* places are numbered from 1: a mark of 0 is no place's */
+    e->head = e->tail = e->fill_at = 1;
+    atomic_init(&e->avail, 1);
+    atomic_init(&e->next, 1);
+    atomic_init(&e->quit, 0);
     atomic_init(&e->done, 0);
-    for (int k = 0; k < NBEP_EVLOOP_BATCH; k++)
-        atomic_init(&e->handled[k].round, 0);
+    for (int k = 0; k < NBEP_EVLOOP_BATCH; k++) {
+        atomic_init(&e->handled[k].place, 0);
+        e->taken_x[2 * k] = e->taken_x[2 * k + 1] = INFINITY;
+        e->taken_y[2 * k] = e->taken_y[2 * k + 1] = INFINITY;
+        e->taken_z[2 * k] = e->taken_z[2 * k + 1] = INFINITY;
+    }
     e->count = nbep_alloc_aligned(n ? n : 1, sizeof *e->count);
+    e->is_other = calloc(n ? n : 1, sizeof *e->is_other);
     bool ws_ok = true;
     for (int k = 0; k < NBEP_EVLOOP_BATCH; k++)
         ws_ok &= ws_init(&e->ws[k]);
-    nbep_status st = e->count && ws_ok ? NBEP_OK : NBEP_ENOMEM;
+    nbep_status st = e->count && e->is_other && ws_ok ? NBEP_OK : NBEP_ENOMEM;
     if (st != NBEP_OK)
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory for the cells engine");
     if (st == NBEP_OK)
@@ -193,7 +217,8 @@ void nbep_evloop_destroy(nbep_evloop **e)
     nbep_free_aligned((*e)->count);
     for (int k = 0; k < NBEP_EVLOOP_BATCH; k++)
         ws_fini(&(*e)->ws[k]);
-    free(*e);
+    free((*e)->is_other);
+    nbep_free_aligned(*e);
     *e = NULL;
 }
 
@@ -201,7 +226,7 @@ size_t nbep_evloop_bytes(size_t n, double neighbours)
 {
     return nbep_calendar_bytes(n) + nbep_cells_bytes(n) +
            nbep_nblist_bytes(n, (size_t)(neighbours * (double)n)) +
-           n * sizeof(uint32_t);
+           n * (sizeof(uint32_t) + sizeof(uint8_t));
 }
 
 bool nbep_evloop_failed(const nbep_evloop *e)
@@ -658,7 +683,7 @@ static void prefetch_event(const nbep_evloop *e, uint32_t i, const nbep_event *e
     }
     uint32_t next[2];
     int n_next;
-    nbep_calendar_runners_up(e->cal, next, &n_next);
+    nbep_calendar_runners_up(e->cal, next, NULL, &n_next);
     for (int k = 0; k < n_next; k++) {
         NBEP_PREFETCH(nbep_feq_slot(e->q, next[k]));
         NBEP_PREFETCH(&e->cells.m[next[k]]);
@@ -706,29 +731,46 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
 
 /* ---- the team loop (nbep_evloop_run_lead, nbep_evloop_help) -------------------------------- */
 
-#define GO_SHIFT 8 /* go = round << GO_SHIFT | events */
-_Static_assert(NBEP_EVLOOP_BATCH < (1 << GO_SHIFT), "a round's size fits below GO_SHIFT");
+#define NO_SPHERE UINT32_MAX
+#define RING NBEP_EVLOOP_BATCH
+_Static_assert((RING & (RING - 1)) == 0, "the ring's size is a power of 2");
 
-/* Whether list centre c is more than sqrt(apart2) from each of the first nt centres taken
- * for the round (pick), in a periodic box the nearest way round: then events on their spheres
- * touch nothing in common. One pass without branches over the taken centres (up to 32),
- * counting those too near: a count vectorises where a running minimum of doubles does not
- * (this loop was most of pick's time, a tenth of the leader's). */
-NBEP_AVX2_CLONES static bool clear_of(const nbep_evloop *e, nbep_vec3 c, size_t nt)
+/* Places in flight at most: enough that the helper finds one to take while the leader commits
+ * (a window of 12 to 32 ran within the noise of this one at N = 256000, phi = 0.30). */
+#define WINDOW 16
+_Static_assert(WINDOW <= RING, "a window fits the ring");
+/* The window is filled again once this many of its places are free: each fill reads the
+ * calendar's front afresh, and one after every commit would mostly find the next entry still
+ * held back by a place in flight. */
+#define FILL_FREE 2
+
+/* How many of the centres at taken[lo, hi) lie within sqrt(apart2) of centre a or centre b,
+ * in a periodic box the nearest way round: 0 when events on their spheres and on a's and b's
+ * touch nothing in common (an event with one sphere passes it twice). One pass without
+ * branches, the taken centres read once for both: a count vectorises where a running minimum
+ * of doubles does not (this loop was most of the finding of places, a tenth of the leader's
+ * time). A free ring slot's centres are +inf, far from every centre. */
+NBEP_AVX2_CLONES static int near_count(const nbep_evloop *e, nbep_vec3 a, nbep_vec3 b, size_t lo,
+                                       size_t hi)
 {
     const double hx = e->pb.half[0], hy = e->pb.half[1], hz = e->pb.half[2];
     const double lx = e->pb.len[0], ly = e->pb.len[1], lz = e->pb.len[2];
     const double apart2 = e->apart2;
     const double *restrict tx = e->taken_x, *restrict ty = e->taken_y, *restrict tz = e->taken_z;
     int near = 0;
-    for (size_t k = 0; k < nt; k++) {
-        double dx = fabs(c.x - tx[k]), dy = fabs(c.y - ty[k]), dz = fabs(c.z - tz[k]);
+    for (size_t k = lo; k < hi; k++) {
+        double dx = fabs(a.x - tx[k]), dy = fabs(a.y - ty[k]), dz = fabs(a.z - tz[k]);
+        double ex = fabs(b.x - tx[k]), ey = fabs(b.y - ty[k]), ez = fabs(b.z - tz[k]);
         dx = dx > hx ? lx - dx : dx; /* half is +inf on an axis that is not periodic */
         dy = dy > hy ? ly - dy : dy;
         dz = dz > hz ? lz - dz : dz;
+        ex = ex > hx ? lx - ex : ex;
+        ey = ey > hy ? ly - ey : ey;
+        ez = ez > hz ? lz - ez : ez;
         near += !(dx * dx + dy * dy + dz * dz > apart2);
+        near += !(ex * ex + ey * ey + ez * ez > apart2);
     }
-    return near == 0;
+    return near;
 }
 
 /* Whether the cells that a commit of an event in cell a changes (a's cell and, for a rebuilt
@@ -755,128 +797,217 @@ static void cell_xyz(const nbep_evloop *e, uint32_t i, size_t *xyz)
     xyz[2] = c / (nx * ny);
 }
 
-#define NO_SPHERE UINT32_MAX
-
-/* Whether round place m is apart from every place before it: both its spheres (its own and
- * the one its slot names) clear of both spheres of every earlier place in what they touch
- * (clear_of: nt centres taken so far), and, when it and an earlier place are both list
- * expiries, in their cells (only an expiry reads the cells of other spheres, in its walk, and
- * only an expiry's commit changes cells; an expiry's slot names no other sphere). */
-static bool place_apart(const nbep_evloop *e, size_t m, size_t nt)
+/* The list centre of ring slot k's sphere (which 0) or of the other its slot names (which 1;
+ * its own when it names none). */
+static nbep_vec3 place_centre(const nbep_evloop *e, size_t k, int which)
 {
-    if (e->batch_walks[m])
-        for (size_t k = 0; k < m; k++)
-            if (e->batch_walks[k] && !cells_apart(e, e->batch_cell[k], e->batch_cell[m]))
-                return false;
-    if (!clear_of(e, e->cells.m[e->batch[m]].at, nt))
+    const uint32_t x = which && e->batch_other[k] != NO_SPHERE ? e->batch_other[k] : e->batch[k];
+    return e->cells.m[x].at;
+}
+
+/* Whether the events at ring slots a and b touch nothing in common: both spheres of each (its
+ * own and the other its slot names) clear of both of the other's (the centres at lo, hi are
+ * slot b's), and, when both are list expiries, their cells apart (only an expiry reads the
+ * cells of other spheres, in its walk, and only an expiry's commit changes cells; an expiry's
+ * slot names no other sphere). */
+static bool slots_apart(const nbep_evloop *e, size_t a, size_t lo, size_t hi, size_t b)
+{
+    if (e->batch_walks[a] && e->batch_walks[b] &&
+        !cells_apart(e, e->batch_cell[a], e->batch_cell[b]))
         return false;
-    return e->batch_other[m] == NO_SPHERE ||
-           clear_of(e, e->cells.m[e->batch_other[m]].at, nt);
+    return !near_count(e, place_centre(e, a, 0), place_centre(e, a, 1), lo, hi);
 }
 
-/* The centres of place m's spheres taken, after the nt before them; returns the new count. */
-static size_t take_centres(nbep_evloop *e, size_t m, size_t nt)
+/* How many centres of the places in flight lie near a or b (near_count over their ring
+ * slots, in one or two runs). */
+static int window_near(const nbep_evloop *e, nbep_vec3 a, nbep_vec3 b)
 {
-    const uint32_t s[2] = {e->batch[m], e->batch_other[m]};
-    for (int k = 0; k < 2; k++)
-        if (s[k] != NO_SPHERE) {
-            const nbep_vec3 c = e->cells.m[s[k]].at;
-            e->taken_x[nt] = c.x;
-            e->taken_y[nt] = c.y;
-            e->taken_z[nt] = c.z;
-            nt++;
+    if (e->head == e->tail)
+        return 0;
+    /* runs of whole blocks of 4 entries (the vector loop's, with no scalar tail; the ring's
+     * 2 RING entries are a multiple): an entry added is a free slot's (+inf) or in flight */
+    const size_t h = 2 * (e->head % RING) & ~(size_t)3;
+    const size_t t = (2 * (e->tail % RING) + 3) & ~(size_t)3;
+    if (h < t)
+        return near_count(e, a, b, h, t);
+    return near_count(e, a, b, h, 2 * RING) + near_count(e, a, b, 0, t);
+}
+
+/* Whether place s (set, not yet in the window) is apart from every place in flight; when it
+ * is not, *after is the last of them it touches, whose commit it must wait for. */
+static bool place_apart(const nbep_evloop *e, uint64_t s, uint64_t *after)
+{
+    const size_t a = s % RING;
+    bool walks = false;
+    for (uint64_t p = e->head; p < e->tail; p++)
+        walks |= e->batch_walks[p % RING];
+    if (!(walks && e->batch_walks[a]) && /* the window's centres at once */
+        !window_near(e, place_centre(e, a, 0), place_centre(e, a, 1)))
+        return true;
+    bool apart = true;
+    for (uint64_t p = e->head; p < e->tail; p++)
+        if (!slots_apart(e, a, 2 * (p % RING), 2 * (p % RING) + 2, p % RING)) {
+            apart = false;
+            *after = p;
         }
-    return nt;
+    return apart;
 }
 
-/* Round place m is sphere x with the event its slot (key) names: the other sphere, whether
- * it is a list expiry (walks), and then the cell of its list centre. */
-static void set_place(nbep_evloop *e, size_t m, uint32_t x, uint32_t other, bool walks)
+/* Ring slot k's spheres' centres, taken into place_apart's arrays, or dropped from them. */
+static void take_centres(nbep_evloop *e, size_t k, bool drop)
 {
-    e->batch[m] = x;
-    e->batch_walks[m] = walks;
-    e->batch_other[m] = other < e->n ? other : NO_SPHERE;
+    const uint32_t s[2] = {e->batch[k], e->batch_other[k]};
+    for (int q = 0; q < 2; q++) {
+        const bool none = drop || s[q] == NO_SPHERE;
+        const nbep_vec3 c = none ? (nbep_vec3){0} : e->cells.m[s[q]].at;
+        e->taken_x[2 * k + q] = none ? INFINITY : c.x;
+        e->taken_y[2 * k + q] = none ? INFINITY : c.y;
+        e->taken_z[2 * k + q] = none ? INFINITY : c.z;
+    }
+}
+
+/* Place s is sphere x with the event its slot (key) names: the other sphere, whether it is a
+ * list expiry (walks), and then the cell of its list centre. */
+static void set_place(nbep_evloop *e, uint64_t s, uint32_t x, uint32_t other, bool walks,
+                      bool first)
+{
+    const size_t k = s % RING;
+    e->batch[k] = x;
+    e->batch_walks[k] = walks;
+    e->batch_first[k] = first;
+    e->batch_other[k] = other < e->n ? other : NO_SPHERE;
     if (walks)
-        cell_xyz(e, x, e->batch_cell[m]);
+        cell_xyz(e, x, e->batch_cell[k]);
 }
 
-/* A round's events: the earliest (sphere i, slot ev) and those that follow it in the calendar
- * while each is apart from all before it (place_apart: both its spheres, the one whose entry
- * it is and the other its slot names, against both of every event before it: the other may be
- * far when the slot is stale, and a far sphere must not be read, kept or put back while
- * another event writes it), and comes before t_end; the entries of the other sphere of the
- * round's pair events are passed over (the pair's reaction moves them; a pair's key names both
- * spheres, slot_key). Reads the calendar and the list centres only: each event's slot is read
- * by the thread that handles it. Returns how many. */
-static size_t pick(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_end)
+/* Ring slot k's place joins the window: its centres taken, its other sphere marked (no two
+ * places in flight touch the same sphere). */
+static void join(nbep_evloop *e, size_t k)
 {
-    e->batch_ev[0] = *ev;
-    set_place(e, 0, i, ev->kind == NBEP_EVENT_SPHERE ? ev->partner : NO_SPHERE,
-              ev->kind == NBEP_EVENT_HORIZON);
-    size_t n = 1, n_skip = 0, nt = take_centres(e, 0, 0);
-    /* enough entries for a full round and the partners' entries it passes over */
-    enum { FRONT = 2 * NBEP_EVLOOP_BATCH };
-    uint32_t skip[NBEP_EVLOOP_BATCH], front[FRONT], other[FRONT];
-    double times[FRONT];
-    uint64_t keys[FRONT];
-    if (e->batch_other[0] != NO_SPHERE)
-        skip[n_skip++] = e->batch_other[0];
-    const size_t nf = nbep_calendar_front(e->cal, front, times, keys, FRONT);
-    for (size_t f = 0; f < nf; f++) { /* the places of both spheres (the key names the
-                                       * other), all requested before the first is used */
-        other[f] = key_other(keys[f], front[f]);
-        NBEP_PREFETCH(&e->cells.m[front[f]]);
-        if (other[f] < e->n)
-            NBEP_PREFETCH(&e->cells.m[other[f]]);
-    }
-    for (size_t f = 0; f < nf && n < NBEP_EVLOOP_BATCH; f++) {
-        const uint32_t x = front[f];
-        bool passed = false;
-        for (size_t k = 0; k < n_skip; k++)
-            passed |= skip[k] == x;
-        if (passed)
+    take_centres(e, k, false);
+    if (e->batch_other[k] != NO_SPHERE)
+        e->is_other[e->batch_other[k]] = 1;
+}
+
+/* Place s leaves the window (committed or undone): its ring slot is free. */
+static void drop_place(nbep_evloop *e, uint64_t s)
+{
+    take_centres(e, s % RING, true);
+    if (e->batch_other[s % RING] != NO_SPHERE)
+        e->is_other[e->batch_other[s % RING]] = 0;
+}
+
+/* Requests the list centres of the spheres of the calendar entry (item, key) (no effect on
+ * results): place_apart reads them. */
+static void prefetch_centres(const nbep_evloop *e, uint32_t item, uint64_t key)
+{
+    NBEP_PREFETCH(&e->cells.m[item]);
+    NBEP_PREFETCH(&e->is_other[item]);
+    const uint32_t o = key_other(key, item);
+    if (o < e->n)
+        NBEP_PREFETCH(&e->cells.m[o]);
+}
+
+/* Requests the centres of the calendar's runners-up (no effect on results): fill reads them
+ * next, or the fill after. */
+static void prefetch_next(const nbep_evloop *e)
+{
+    uint32_t next[2];
+    uint64_t keys[2];
+    int n_next;
+    nbep_calendar_runners_up(e->cal, next, keys, &n_next);
+    for (int k = 0; k < n_next; k++)
+        prefetch_centres(e, next[k], keys[k]);
+}
+
+/* Adds places to the window behind those in flight, from the calendar's earliest entries,
+ * which it takes out (a place's entry goes back at its commit or undo, with the others'):
+ * each next one that is apart from every place in flight (place_apart: both its spheres, the
+ * one whose entry it is and the other its slot names, against both of every place in flight:
+ * the other may be far when the slot is stale, and a far sphere must not be read, kept or put
+ * back while another event writes it) and comes before t_end, taking out the entries of the
+ * other spheres of pairs in flight too (the pair's commit sets them again). It stops at the
+ * first that is not (it must wait for the commit of what it touches) and sets when to look
+ * again (fill_at). An entry before the window's last (`cur`; a commit's new entry) means a
+ * place in flight will not stand: nothing is taken until the window is undone. Reads the
+ * calendar and the list centres only, which only the leader writes: each place's slot is read
+ * by the thread that handles it. */
+static void fill(nbep_evloop *e, double t_end)
+{
+    nbep_calendar_entry c;
+    for (;; prefetch_next(e)) {
+        if (!nbep_calendar_first(e->cal, &c)) {
+            e->fill_at = e->head + 1;
+            return;
+        }
+        if (!nbep_calendar_before(e->cur, c)) {
+            e->fill_at = UINT64_MAX;
+            return;
+        }
+        if (e->is_other[c.item]) {
+            nbep_calendar_remove(e->cal, c.item);
             continue;
-        if (!(times[f] < t_end))
-            break;
-        set_place(e, n, x, other[f], key_expiry(keys[f], x));
-        if (!place_apart(e, n, nt))
-            return n;
-        nt = take_centres(e, n, nt);
-        if (e->batch_other[n] != NO_SPHERE)
-            skip[n_skip++] = e->batch_other[n];
-        NBEP_PREFETCH(nbep_feq_slot(e->q, x));
-        NBEP_PREFETCH(&e->nl.sp[x]);
-        n++;
+        }
+        if (e->tail - e->head >= WINDOW) {
+            e->fill_at = e->head + 1;
+            prefetch_centres(e, c.item, c.key); /* the next fill's first */
+            return;
+        }
+        if (!(c.time < t_end)) {
+            e->fill_at = UINT64_MAX;
+            return;
+        }
+        const uint64_t s = e->tail;
+        const size_t k = s % RING;
+        set_place(e, s, c.item, key_other(c.key, c.item), key_expiry(c.key, c.item), false);
+        uint64_t after;
+        if (!place_apart(e, s, &after)) {
+            e->fill_at = after + 1;
+            return;
+        }
+        join(e, k);
+        NBEP_PREFETCH(nbep_feq_slot(e->q, c.item));
+        NBEP_PREFETCH(&e->nl.sp[c.item]);
+        e->batch_entry[k] = e->cur = c;
+        nbep_calendar_remove(e->cal, c.item);
+        e->tail++;
     }
-    return n;
 }
 
-/* Requests what round place m's handle reads first (no effect on results): the slot and list
- * record of its sphere, the first line of its list (from the record, which pick requested),
- * and the other sphere's record. The one-thread loop requests the same for the events after
- * the current one (prefetch_event); without it, a team thread met each of these as a miss:
- * the team loop on one core ran 1.23 times the one-thread loop's time. */
-static inline NBEP_ALWAYS_INLINE void prefetch_place(const nbep_evloop *e, size_t m)
+/* Requests what place s's handle reads and writes first (no effect on results): the slots,
+ * list records and motion (ops prefetch) of its spheres, and when `list`, the first line of
+ * its sphere's list, found from the record (which an earlier request should have brought: a
+ * record that is not there stalls the thread). The one-thread loop requests the same for the
+ * events after the current one (prefetch_event); without it, a team thread met each of these
+ * as a miss: the team loop on one core ran 1.23 times the one-thread loop's time. */
+static inline NBEP_ALWAYS_INLINE void prefetch_place(const nbep_evloop *e,
+                                                     const nbep_evloop_ops *ops,
+                                                     void *const *us, uint64_t s, bool list)
 {
-    const uint32_t x = e->batch[m];
-    NBEP_PREFETCH(nbep_feq_slot(e->q, x));
-    NBEP_PREFETCH(&e->nl.pool[e->nl.sp[x].off]);
-    if (e->batch_other[m] != NO_SPHERE)
-        NBEP_PREFETCH(&e->nl.sp[e->batch_other[m]]);
+    const size_t k = s % RING;
+    const uint32_t x[2] = {e->batch[k], e->batch_other[k]};
+    for (int q = 0; q < 2; q++)
+        if (x[q] != NO_SPHERE) {
+            NBEP_PREFETCH_W(nbep_feq_slot(e->q, x[q]));
+            NBEP_PREFETCH(&e->nl.sp[x[q]]);
+            ops->prefetch(us[k], x[q]);
+        }
+    if (list)
+        NBEP_PREFETCH(&e->nl.pool[e->nl.sp[x[0]].off]);
 }
 
-/* Keeps what the event at round place m may change, to undo it: the motion and slot of its
- * sphere and of the other its slot names (pick's batch_other, from the calendar key). */
-static void keep(nbep_evloop *e, size_t m, const nbep_evloop_ops *ops, void *u)
+/* Keeps what the event at ring slot k may change, to undo it: the motion and slot of its
+ * sphere and of the other its slot names (fill's batch_other, from the calendar key). */
+static void keep(nbep_evloop *e, size_t k, const nbep_evloop_ops *ops, void *u)
 {
-    evl_ws *w = &e->ws[m];
+    evl_ws *w = &e->ws[k];
     w->n_kept = 0;
-    w->kept_id[w->n_kept++] = e->batch[m];
-    if (e->batch_other[m] != NO_SPHERE)
-        w->kept_id[w->n_kept++] = e->batch_other[m];
-    for (int k = 0; k < w->n_kept; k++) {
-        ops->save(u, w->kept_id[k], &w->kept_motion[k]);
-        w->kept_slot[k] = *nbep_feq_slot(e->q, w->kept_id[k]);
+    w->kept_id[w->n_kept++] = e->batch[k];
+    if (e->batch_other[k] != NO_SPHERE)
+        w->kept_id[w->n_kept++] = e->batch_other[k];
+    for (int q = 0; q < w->n_kept; q++) {
+        ops->save(u, w->kept_id[q], &w->kept_motion[q]);
+        w->kept_slot[q] = *nbep_feq_slot(e->q, w->kept_id[q]);
     }
 }
 
@@ -892,125 +1023,184 @@ static void undo(nbep_evloop *e, const evl_ws *w, const nbep_evloop_ops *ops, vo
     ops->merge(u, uk, false);
 }
 
-/* Takes the next place of round `round` (n places) to handle and handles it: false when none
- * is left. */
-static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us,
-                     uint64_t round, size_t n)
+/* Takes the next published place to handle and handles it: false when none is left. */
+static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us)
 {
-    uint64_t v = atomic_load_explicit(&e->next, memory_order_relaxed);
+    uint64_t v = atomic_load_explicit(&e->next, memory_order_relaxed), n;
     do {
-        if (v / NBEP_EVLOOP_BATCH != round || v % NBEP_EVLOOP_BATCH >= n)
+        n = atomic_load_explicit(&e->avail, memory_order_acquire); /* the places up to n */
+        if (v >= n)
             return false;
     } while (!atomic_compare_exchange_weak_explicit(&e->next, &v, v + 1, memory_order_relaxed,
                                                     memory_order_relaxed));
-    const size_t m = v % NBEP_EVLOOP_BATCH;
-    for (size_t q = m + 1; q < n && q < m + 3; q++)
-        prefetch_place(e, q);
-    if (m > 0) { /* every event but the round's first (read by pick) may be undone */
-        e->batch_ev[m] = *nbep_feq_slot(e->q, e->batch[m]);
-        keep(e, m, ops, us[m]);
+    if (v + 1 < n)
+        prefetch_place(e, ops, us, v + 1, true);
+    if (v + 2 < n)
+        prefetch_place(e, ops, us, v + 2, false);
+    const size_t k = v % RING;
+    if (!e->batch_first[k]) { /* every other place (the window's first was read by lead) may
+                               * be undone */
+        e->batch_slot[k].ev = *nbep_feq_slot(e->q, e->batch[k]);
+        keep(e, k, ops, us[k]);
     }
-    handle(e, &e->ws[m], ops, us[m], e->batch[m], &e->batch_ev[m], e->batch_ev[m].time);
-    atomic_store_explicit(&e->handled[m].round, round, memory_order_release);
+    const nbep_event *ev = &e->batch_slot[k].ev;
+    handle(e, &e->ws[k], ops, us[k], e->batch[k], ev, ev->time);
+    atomic_store_explicit(&e->handled[k].place, v, memory_order_release);
     return true;
 }
 
-/* The leader waits for place m of the round to be handled, handling places meanwhile. */
+/* The leader waits for place s to be handled, handling places meanwhile. */
 static void wait_handled(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us,
-                         uint64_t round, size_t n, size_t m)
+                         uint64_t s)
 {
     for (unsigned k = 1;
-         atomic_load_explicit(&e->handled[m].round, memory_order_acquire) != round; k++)
-        if (!take_one(e, ops, us, round, n))
+         atomic_load_explicit(&e->handled[s % RING].place, memory_order_acquire) != s; k++)
+        if (!take_one(e, ops, us))
             nbep_spin_pause(k);
 }
 
-/* Places m.. of the round undone, once every one is handled. */
-static void undo_from(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
-                      uint64_t round, size_t n, size_t m)
+/* The calendar entries of place s's spheres set again from their slots (fill took them out;
+ * an entry it did not take out is set to what it is). */
+static void put_back(nbep_evloop *e, uint64_t s)
 {
-    for (size_t q = m; q < n; q++) {
-        wait_handled(e, ops, us, round, n, q);
-        undo(e, &e->ws[q], ops, u, us[q]);
+    const size_t k = s % RING;
+    schedule_one(e, e->batch[k]);
+    if (e->batch_other[k] != NO_SPHERE)
+        schedule_one(e, e->batch_other[k]);
+}
+
+/* Places s.. of the window undone, and the window emptied (place s - 1, if in it, is the
+ * leader's to finish): those not yet taken are taken from the threads (`next` moves past
+ * them), those taken are undone once handled. Returns how many were undone. */
+static uint64_t undo_from(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
+                          uint64_t s)
+{
+    const uint64_t taken = atomic_exchange_explicit(&e->next, e->tail, memory_order_relaxed);
+    for (uint64_t p = s; p < taken; p++) {
+        wait_handled(e, ops, us, p);
+        undo(e, &e->ws[p % RING], ops, u, us[p % RING]);
     }
+    for (uint64_t p = s; p < e->tail; p++) /* the entries taken out go back, as they were */
+        put_back(e, p);
+    for (uint64_t p = e->head; p < e->tail; p++)
+        drop_place(e, p);
+    /* the next place is numbered past these: the marks of those taken are theirs */
+    e->head = e->fill_at = e->tail;
+    return e->tail - s;
+}
+
+/* The window's first place, when nothing is in flight: the calendar's earliest, sphere i with
+ * slot ev, which stands (the one thread would handle it next, from the same state). */
+static void start(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_end)
+{
+    const size_t k = e->tail % RING;
+    e->batch_slot[k].ev = *ev;
+    set_place(e, e->tail, i, ev->kind == NBEP_EVENT_SPHERE ? ev->partner : NO_SPHERE,
+              ev->kind == NBEP_EVENT_HORIZON, true);
+    join(e, k);
+    e->tail++;
+    e->batch_entry[k] = e->cur = (nbep_calendar_entry){ev->time, slot_key(i, ev), i};
+    nbep_calendar_remove(e->cal, i);
+    fill(e, t_end);
 }
 
 static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
                  double t_end, uint64_t stall_events, double stall_dt, nbep_evloop_tally *tally,
-                 double *t_stuck, uint64_t *round)
+                 double *t_stuck)
 {
     uint64_t since = 0;
     double t_mark = -INFINITY;
-    uint32_t i;
-    double t;
-    while (nbep_calendar_top(e->cal, &i, &t) && t < t_end) {
-        const nbep_event ev = *nbep_feq_slot(e->q, i);
-        prefetch_event(e, i, &ev);
-        if (!advances(&since, &t_mark, t, stall_events, stall_dt)) {
-            tally->events++;
-            *t_stuck = t;
-            return false;
+    for (;;) {
+        if (e->head == e->tail) {
+            uint32_t i;
+            double t;
+            if (!(nbep_calendar_top(e->cal, &i, &t) && t < t_end))
+                return true;
+            const nbep_event ev = *nbep_feq_slot(e->q, i);
+            prefetch_event(e, i, &ev);
+            if (!advances(&since, &t_mark, t, stall_events, stall_dt)) {
+                tally->events++;
+                *t_stuck = t;
+                return false;
+            }
+            start(e, i, &ev, t_end);
+            atomic_store_explicit(&e->avail, e->tail, memory_order_release);
         }
-        const size_t n = pick(e, i, &ev, t_end);
-        const uint64_t r = ++*round;
-        atomic_store_explicit(&e->next, r * NBEP_EVLOOP_BATCH, memory_order_relaxed);
-        if (n > 1) /* the places and the events, published to the helper */
-            atomic_store_explicit(&e->go, r << GO_SHIFT | n, memory_order_release);
-        /* the events in order, as they are handled: each stands when it is then the earliest
+        /* the places in order, as they are handled: each stands when it is then the earliest
          * (the one thread would handle it next, from the same state: no event before it
          * touched its spheres) */
-        for (size_t m = 0; m < n; m++) {
-            wait_handled(e, ops, us, r, n, m);
-            const evl_ws *w = &e->ws[m];
-            if (m > 0) {
-                uint32_t im;
-                double tm;
-                if (!(nbep_calendar_top(e->cal, &im, &tm) && im == e->batch[m] && tm < t_end)) {
-                    undo_from(e, ops, u, us, r, n, m);
-                    tally->undone += n - m;
-                    break;
-                }
-                if (!advances(&since, &t_mark, tm, stall_events, stall_dt)) {
-                    undo_from(e, ops, u, us, r, n, m);
-                    tally->events++;
-                    *t_stuck = tm;
-                    return false;
-                }
+        const uint64_t s = e->head;
+        const size_t k = s % RING;
+        wait_handled(e, ops, us, s);
+        const evl_ws *w = &e->ws[k];
+        if (!e->batch_first[k]) {
+            /* the calendar holds every entry but those of the window's places and their
+             * others, which all come after this one: it is the earliest if the calendar's
+             * earliest comes after it */
+            nbep_calendar_entry top;
+            const double tm = e->batch_entry[k].time;
+            if (nbep_calendar_first(e->cal, &top) &&
+                nbep_calendar_before(top, e->batch_entry[k])) {
+                tally->undone += undo_from(e, ops, u, us, s);
+                continue;
             }
-            if (e->stop) { /* not in the scenes a team runs (no reaction there stops the run;
-                            * a helper's stop would also be a race on e->stop) */
-                undo_from(e, ops, u, us, r, n, m + 1);
-                *t_stuck = e->batch_ev[m].time;
+            if (!advances(&since, &t_mark, tm, stall_events, stall_dt)) {
+                undo_from(e, ops, u, us, s);
+                tally->events++;
+                *t_stuck = tm;
                 return false;
             }
-            /* a commit that would make the pool of lists move waits until no list is read */
-            if (w->rebuilt && nbep_nblist_spare(&e->nl) <
-                                  nbep_nblist_need(&e->nl, w->n_near, w->n_near))
-                for (size_t q = m + 1; q < n; q++)
-                    wait_handled(e, ops, us, r, n, q);
-            tally->events++;
-            count_handled(tally, w);
-            ops->merge(u, us[m], true);
-            commit(e, w);
-            if (e->failed) {
-                undo_from(e, ops, u, us, r, n, m + 1);
-                return false;
-            }
-            tally->ahead += m > 0;
+        }
+        if (e->stop) { /* not in the scenes a team runs (no reaction there stops the run;
+                        * a helper's stop would also be a race on e->stop) */
+            undo_from(e, ops, u, us, s + 1);
+            nbep_calendar_set(e->cal, e->batch[k], e->batch_entry[k].time,
+                              e->batch_entry[k].key); /* its entry back, as it was */
+            *t_stuck = e->batch_slot[k].ev.time;
+            return false;
+        }
+        /* a commit that would make the pool of lists move waits until no list is read */
+        if (w->rebuilt &&
+            nbep_nblist_spare(&e->nl) < nbep_nblist_need(&e->nl, w->n_near, w->n_near))
+            for (uint64_t p = s + 1; p < e->tail; p++)
+                wait_handled(e, ops, us, p);
+        tally->events++;
+        count_handled(tally, w);
+        ops->merge(u, us[k], true);
+        commit(e, w);
+        if (e->failed) {
+            undo_from(e, ops, u, us, s + 1);
+            return false;
+        }
+        if (e->batch_other[k] != NO_SPHERE) { /* its entry back if the reaction did not set
+                                               * it (a stale slot's other) */
+            bool set = false;
+            for (size_t q = 0; q < w->n_changed; q++)
+                set |= w->changed[q] == e->batch_other[k];
+            if (!set)
+                schedule_one(e, e->batch_other[k]);
+        }
+        tally->ahead += !e->batch_first[k];
+        drop_place(e, s);
+        e->head++;
+        /* more places, once the threads are about to run out of them (a guess that changes
+         * only what is handled ahead, never what stands) */
+        if (e->head < e->tail && e->head >= e->fill_at &&
+            e->tail - e->head <= WINDOW - FILL_FREE) {
+            fill(e, t_end);
+            atomic_store_explicit(&e->avail, e->tail, memory_order_release);
         }
     }
-    return true;
 }
 
 bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
                           double t_end, uint64_t stall_events, double stall_dt,
                           nbep_evloop_tally *tally, double *t_stuck)
 {
-    bool ok = !e->failed && lead(e, ops, u, us, t_end, stall_events, stall_dt, tally, t_stuck,
-                                 &e->round);
+    bool ok = !e->failed && lead(e, ops, u, us, t_end, stall_events, stall_dt, tally, t_stuck);
     /* the helper returns (it has handled every place it took: each was waited for) */
-    const uint64_t end = ++e->round << GO_SHIFT;
-    atomic_store_explicit(&e->go, end, memory_order_release);
+    const uint64_t end = ++e->ends;
+    atomic_store_explicit(&e->quit, end, memory_order_release);
     for (unsigned k = 1; atomic_load_explicit(&e->done, memory_order_acquire) != end; k++)
         nbep_spin_pause(k);
     return ok;
@@ -1018,19 +1208,17 @@ bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, v
 
 void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us)
 {
-    uint64_t seen = atomic_load_explicit(&e->done, memory_order_relaxed); /* its own stores */
-    for (;;) {
-        uint64_t go;
-        for (unsigned k = 1; (go = atomic_load_explicit(&e->go, memory_order_acquire)) == seen;
-             k++)
-            nbep_spin_pause(k);
-        seen = go;
-        const size_t n = go & ((1u << GO_SHIFT) - 1);
-        if (n == 0) {
-            atomic_store_explicit(&e->done, go, memory_order_release);
+    const uint64_t seen = atomic_load_explicit(&e->done, memory_order_relaxed); /* its own */
+    for (unsigned k = 1;; k++) {
+        if (take_one(e, ops, us)) {
+            k = 0;
+            continue;
+        }
+        const uint64_t q = atomic_load_explicit(&e->quit, memory_order_acquire);
+        if (q != seen) {
+            atomic_store_explicit(&e->done, q, memory_order_release);
             return;
         }
-        while (take_one(e, ops, us, go >> GO_SHIFT, n))
-            ;
+        nbep_spin_pause(k);
     }
 }

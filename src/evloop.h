@@ -75,6 +75,9 @@ typedef struct nbep_evloop_ops {
      * its place in the order of events, so that every sum is the one thread's bit for bit)
      * and are dropped otherwise; either way uh's start from zero again */
     void (*merge)(void *u, void *uh, bool keep);
+    /* the team loop only: requests sphere i's motion, which a handle is about to read and
+     * write (no effect on results) */
+    void (*prefetch)(const void *u, uint32_t i);
 } nbep_evloop_ops;
 
 typedef struct nbep_evloop nbep_evloop;
@@ -119,7 +122,7 @@ typedef struct nbep_evloop_tally {
     uint64_t events;     /* calendar entries handled (stale, expiries and reactions) */
     uint64_t reactions;
     uint64_t exits;      /* list expiries (rebuilds of one list) */
-    uint64_t ahead;      /* team loop: events handled ahead of the round's first that stood */
+    uint64_t ahead;      /* team loop: events handled ahead (not a window's first) that stood */
     uint64_t undone;     /* team loop: events handled ahead and undone */
 } nbep_evloop_tally;
 
@@ -132,24 +135,27 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
                      uint64_t stall_events, double stall_dt, nbep_evloop_tally *tally,
                      double *t_stuck);
 
-/* Events a round of the team loop handles at most. */
-#define NBEP_EVLOOP_BATCH 16
+/* The team loop's ring of places (a power of 2): places in flight at most, and the contexts
+ * a caller passes it (us, below). */
+#define NBEP_EVLOOP_BATCH 32
 
-/* nbep_evloop_run on two threads, with the same results bit for bit. Each round takes the
- * earliest event and those that follow it in the calendar while every one is apart from all
- * the others (both spheres of each, the one whose entry it is and the other its slot names,
- * list centres twice (cutoff + (1 + NBEP_NBLIST_LEAD) strays) apart, and cells 4 apart
- * along an axis when both are list expiries: none reads what another writes, and lists,
- * cells and calendar are written only at commits), up to NBEP_EVLOOP_BATCH. The leader
- * (thread 0) and the helper (thread 1, in nbep_evloop_help at the same time) take the round's
- * places one at a time and handle them, each but the first speculatively (what it may change
- * kept: ops save). The leader commits them in order: each
- * stands if it is then the earliest in the calendar (the one thread would handle it next, from
- * the same state), else it and the rest are undone (ops restore) and handled in later rounds.
- * The event at place m is handled with context us[m] of the thread that takes it (each
- * thread passes its own array: one context per place, the place's counts and sums kept apart
- * and merged into u, the leader's, when it stands: ops merge). For scenes whose reactions
- * change only the event's own spheres (the caller's choice: an elastic scene where nothing
+/* nbep_evloop_run on two threads, with the same results bit for bit. The leader (thread 0)
+ * keeps a window of places in flight: the calendar's earliest events, taken out of it in
+ * order while each is apart from every place in flight (both spheres of each, the one whose
+ * entry it is and the other its slot names, list centres twice (cutoff + (1 +
+ * NBEP_NBLIST_LEAD) strays) apart, and cells 4 apart along an axis when both are list
+ * expiries: none reads what another writes, and lists, cells and calendar are written only
+ * at commits), the entries of the other spheres of its pairs taken out with them. The leader
+ * and the helper (thread 1, in nbep_evloop_help at the same time) take the places one at a
+ * time and handle them, each but a window's first speculatively (what it may change kept:
+ * ops save). The leader commits them in order, and adds places behind them as they free the
+ * window: a place stands if no entry left in the calendar comes before it (the one thread
+ * would handle it next, from the same state), else it and the places after it are undone
+ * (ops restore), their entries put back, and handled again. The event at place m is handled
+ * with context us[m % NBEP_EVLOOP_BATCH] of the thread that takes it (each thread passes its
+ * own array: one context per ring slot, the place's counts and sums kept apart and merged
+ * into u, the leader's, when it stands: ops merge). For scenes whose reactions change only
+ * the event's own spheres (the caller's choice: an elastic scene where nothing
  * accelerates). Returns as nbep_evloop_run; the helper returns when it does. */
 bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
                           double t_end, uint64_t stall_events, double stall_dt,

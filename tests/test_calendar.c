@@ -99,119 +99,6 @@ static void test_top_is_the_brute_force_minimum_under_random_operations(void **s
     assert_null(c);
 }
 
-/* nbep_calendar_front after top: exactly the next entries after the earliest, as a brute-force
- * sort gives them, with their times and keys (it may stop short, never skip one), under random
- * moves over many buckets and entries filed far ahead (the overflow) coming near. */
-static void test_front_is_the_next_entries_in_order(void **state)
-{
-    (void)state;
-    enum { N = 400, OPS = 6000, MAX = 12 };
-    nbep_calendar *c = make(N);
-    ref r[N];
-    memset(r, 0, sizeof r);
-    uint64_t x = 777;
-    double now = 0.0;
-    size_t calls = 0, exact = 0, returned = 0;
-    for (int op = 0; op < OPS; op++) {
-        uint32_t i = (uint32_t)(lcg(&x) % N);
-        if (lcg(&x) % 8 == 0) {
-            nbep_calendar_remove(c, i);
-            r[i].has = false;
-        } else { /* ahead of now by up to 4 (ties on a coarse grid now and then), or far */
-            const uint64_t how = lcg(&x) % 16;
-            double t = now + (how == 0   ? 50.0 + (double)(lcg(&x) % 1000)
-                              : how < 6 ? (double)(lcg(&x) % 32) * 0.125
-                                        : (double)(lcg(&x) % 100000) * 4e-5);
-            uint64_t key = lcg(&x) % 3;
-            nbep_calendar_set(c, i, t, key);
-            r[i] = (ref){true, t, key};
-        }
-        if (op == 500)
-            nbep_calendar_retune(c, now);
-        uint32_t top;
-        double t_top;
-        if (!nbep_calendar_top(c, &top, &t_top))
-            continue;
-        now = t_top;
-        /* the brute-force order after the top: MAX selections */
-        uint32_t want[MAX];
-        size_t n_want = 0;
-        bool taken[N] = {false};
-        taken[top] = true;
-        for (; n_want < MAX; n_want++) {
-            uint32_t best = UINT32_MAX;
-            for (uint32_t k = 0; k < N; k++)
-                if (r[k].has && !taken[k] && (best == UINT32_MAX || ref_before(r, k, best)))
-                    best = k;
-            if (best == UINT32_MAX)
-                break;
-            taken[best] = true;
-            want[n_want] = best;
-        }
-        uint32_t got[MAX];
-        double times[MAX];
-        uint64_t keys[MAX];
-        size_t n_got = nbep_calendar_front(c, got, times, keys, MAX);
-        assert_true(n_got <= MAX);
-        calls++;
-        returned += n_got;
-        for (size_t k = 0; k < n_got; k++) {
-            assert_true(r[got[k]].has && got[k] != top);
-            assert_true(times[k] == r[got[k]].time);
-            assert_int_equal(keys[k], r[got[k]].key);
-            assert_true(ref_before(r, top, got[k]));
-            if (k > 0)
-                assert_true(ref_before(r, got[k - 1], got[k]));
-        }
-        assert_true(n_got <= n_want);
-        assert_memory_equal(got, want, n_got * sizeof *got);
-        exact += n_got > 0;
-        if (op % 97 == 0) /* the earliest moves on, as the event loop moves it */
-            nbep_calendar_set(c, top, t_top + 1.0, r[top].key), r[top].time = t_top + 1.0;
-    }
-    /* a few entries a call on average, and some nearly always */
-    assert_true(returned > 3 * calls);
-    assert_true(exact > 9 * calls / 10);
-    assert_int_equal(nbep_calendar_check(c), 0);
-    nbep_calendar_destroy(&c);
-}
-
-/* A bucket far fuller than the front asked for (every entry at one time, ordered by key and
- * item): the front is exactly the next entries after the earliest, found by walking the
- * bucket's heap from its top, for any count asked. */
-static void test_front_of_a_crowded_bucket_is_exact(void **state)
-{
-    (void)state;
-    enum { N = 300, MAX = 64 };
-    nbep_calendar *c = make(N);
-    ref r[N];
-    uint64_t x = 4242;
-    for (uint32_t i = 0; i < N; i++) {
-        r[i] = (ref){true, 1.0, lcg(&x) % 50};
-        nbep_calendar_set(c, i, 1.0, r[i].key);
-    }
-    nbep_calendar_retune(c, 0.0);
-    uint32_t top;
-    double t_top;
-    assert_true(nbep_calendar_top(c, &top, &t_top));
-    for (size_t max = 1; max <= MAX; max += 7) {
-        uint32_t got[MAX];
-        const size_t n_got = nbep_calendar_front(c, got, NULL, NULL, max);
-        assert_int_equal(n_got, max);
-        bool taken[N] = {false};
-        taken[top] = true;
-        for (size_t k = 0; k < n_got; k++) { /* the brute-force next one */
-            uint32_t best = UINT32_MAX;
-            for (uint32_t q = 0; q < N; q++)
-                if (!taken[q] && (best == UINT32_MAX || ref_before(r, q, best)))
-                    best = q;
-            assert_int_equal(got[k], best);
-            taken[best] = true;
-        }
-    }
-    nbep_calendar_destroy(&c);
-}
-
 /* Draining the calendar gives the entries in (time, key, item) order, the same whatever
  * order they were set in. */
 static void test_drain_order_is_time_then_key_then_item_for_any_insert_order(void **state)
@@ -285,24 +172,6 @@ static uint32_t ref_min(const ref *r, uint32_t n)
  * moved later each time (mostly a little, sometimes far past the ring, sometimes to +inf),
  * others are moved or removed at random, and the pace changes by factors of 1000 both ways
  * so that the buckets retune themselves; every top is the brute-force minimum. */
-/* nbep_calendar_front after top is exactly the brute-force next entries (it may stop short). */
-static void front_is_exact(const nbep_calendar *c, const ref *r, uint32_t n, uint32_t top)
-{
-    enum { MAX = 8 };
-    uint32_t got[MAX], want[MAX];
-    size_t n_got = nbep_calendar_front(c, got, NULL, NULL, MAX), n_want = 0;
-    uint32_t last = top;
-    for (; n_want < n_got; n_want++) { /* the next after `last`, in the order */
-        uint32_t best = UINT32_MAX;
-        for (uint32_t k = 0; k < n; k++)
-            if (r[k].has && ref_before(r, last, k) && (best == UINT32_MAX || ref_before(r, k, best)))
-                best = k;
-        assert_true(best != UINT32_MAX);
-        want[n_want] = last = best;
-    }
-    assert_memory_equal(got, want, n_got * sizeof *got);
-}
-
 static void test_top_is_the_minimum_over_many_laps_with_far_entries_and_changing_pace(void **st)
 {
     (void)st;
@@ -336,8 +205,19 @@ static void test_top_is_the_minimum_over_many_laps_with_far_entries_and_changing
         }
         assert_int_equal(top, best);
         assert_true(t == r[best].time);
-        if (op % 7 == 0) /* the front, over laps, with entries past the ring coming near */
-            front_is_exact(c, r, N, top);
+        /* the whole earliest entry, and the order a caller compares entries by (the team
+         * loop's) agrees with the calendar's against another entry */
+        nbep_calendar_entry first;
+        assert_true(nbep_calendar_first(c, &first));
+        assert_int_equal(first.item, best);
+        assert_int_equal(first.key, r[best].key);
+        assert_true(first.time == t);
+        const uint32_t o = (uint32_t)(lcg(&x) % N);
+        if (r[o].has && o != best) {
+            const nbep_calendar_entry other = {r[o].time, r[o].key, o};
+            assert_true(nbep_calendar_before(first, other));
+            assert_false(nbep_calendar_before(other, first));
+        }
         uint64_t what = lcg(&x) % 100;
         double later = t + pace * (double)(lcg(&x) % 4096) / 2048.0;
         if (what < 30) { /* often past the ring, due laps later */
@@ -392,8 +272,6 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_top_is_the_brute_force_minimum_under_random_operations),
         cmocka_unit_test(test_drain_order_is_time_then_key_then_item_for_any_insert_order),
-        cmocka_unit_test(test_front_is_the_next_entries_in_order),
-        cmocka_unit_test(test_front_of_a_crowded_bucket_is_exact),
         cmocka_unit_test(test_remove_of_an_absent_item_and_an_empty_calendar_are_harmless),
         cmocka_unit_test(test_top_is_the_minimum_over_many_laps_with_far_entries_and_changing_pace),
     };

@@ -490,8 +490,8 @@ static void test_team_loop_handles_events_ahead_and_undoes_some_bit_for_bit(void
         assert_int_equal(sk.checks, s1.checks);
         assert_int_equal(sk.predictions, s1.predictions);
         assert_memory_equal(&sk.pressure.value, &s1.pressure.value, sizeof(double));
-        /* a round holds several events far apart: most events of a box this size go ahead
-         * of their turn, and a few of those come too early */
+        /* the window holds several events far apart: most events of a box this size go
+         * ahead of their turn, and a few of those come too early */
         assert_true(ck[NBEP_COUNTER_AHEAD] > s1.checks / 4);
         assert_true(ck[NBEP_COUNTER_UNDONE] > 0);
         nbep_test_frames_free(&f);

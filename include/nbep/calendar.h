@@ -17,6 +17,24 @@
 
 typedef struct nbep_calendar nbep_calendar;
 
+/* An entry of the calendar, as its order sees it. */
+typedef struct nbep_calendar_entry {
+    double time;
+    uint64_t key;
+    uint32_t item;
+} nbep_calendar_entry;
+
+/* Whether entry a comes out before entry b: the calendar's order (time, then key, then item),
+ * for callers that keep a copy of part of it in order. */
+static inline bool nbep_calendar_before(nbep_calendar_entry a, nbep_calendar_entry b)
+{
+    if (a.time != b.time)
+        return a.time < b.time;
+    if (a.key != b.key)
+        return a.key < b.key;
+    return a.item < b.item;
+}
+
 /* An empty calendar for items 0..n-1 (n < UINT32_MAX). NBEP_ENOMEM with a message. */
 NBEP_MUST_CHECK nbep_status nbep_calendar_create(size_t n, nbep_calendar **out, nbep_diag *d);
 /* NULL-safe; NULLs the pointer. */
@@ -31,25 +49,20 @@ void nbep_calendar_clear(nbep_calendar *c);
 /* The earliest entry: false when empty, else its item and time. (It may move entries between
  * the calendar's internal buckets, hence not const.) */
 bool nbep_calendar_top(nbep_calendar *c, uint32_t *item, double *time);
+/* nbep_calendar_top, the whole entry (its key too). */
+bool nbep_calendar_first(nbep_calendar *c, nbep_calendar_entry *entry);
 /* Sizes the buckets to the entries held, as seen from time t_now (the earliest time that can
  * still come out): a speed setting only, the order entries come out in does not change. Call
  * after filling the calendar; it also retunes itself when its buckets get far too full or far
  * too empty. O(n). */
 void nbep_calendar_retune(nbep_calendar *c, double t_now);
 /* Up to two items likely to come out after the earliest (the current bucket's runners-up),
- * for a caller that wants to fetch their data ahead; *n of them in items. No effect on the
- * order. */
-void nbep_calendar_runners_up(const nbep_calendar *c, uint32_t items[2], int *n);
+ * for a caller that wants to fetch their data ahead; *n of them in items, and their keys in
+ * keys unless it is NULL. No effect on the order. */
+void nbep_calendar_runners_up(const nbep_calendar *c, uint32_t items[2], uint64_t *keys,
+                              int *n);
 /* Requests item's entry, to be set or removed soon (no effect on the order). */
 void nbep_calendar_prefetch(const nbep_calendar *c, uint32_t item);
-/* The entries that come out after the earliest one, in order, as far as the front of the
- * calendar tells (the current bucket, then a few of the next, stopping short of any bucket an
- * overflow entry may have reached): up to max items, their count returned, with their times
- * and keys (either may be NULL); what it returns is exactly the next entries. Call after
- * nbep_calendar_top. For a caller that handles events ahead, speculatively (it still checks
- * each: it is the earliest once those before it have moved on). No effect on the order. */
-size_t nbep_calendar_front(const nbep_calendar *c, uint32_t *items, double *times,
-                           uint64_t *keys, size_t max);
 /* Entries held. */
 size_t nbep_calendar_size(const nbep_calendar *c);
 /* True when item has an entry; its time in *time (may be NULL). */

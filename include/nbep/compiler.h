@@ -12,6 +12,9 @@
 #define NBEP_UNLIKELY(x) __builtin_expect(!!(x), 0)
 /* A hint to fetch the cache line holding *p for reading; no effect on results. */
 #define NBEP_PREFETCH(p) __builtin_prefetch((p), 0, 3)
+/* The same, for writing: the line is fetched ready to be written (from another core's cache,
+ * without a second trip to take it over). */
+#define NBEP_PREFETCH_W(p) __builtin_prefetch((p), 1, 3)
 /* Inlined whatever the compiler's estimate. A helper made only of NBEP_PREFETCH needs it: GCC
  * 12 takes prefetches for no effect, so a helper it does not inline is found pure, and a call
  * to a pure function returning nothing is deleted with its prefetches. Also for a kernel that
@@ -22,6 +25,7 @@
 #define NBEP_PRINTF(fmt, args)
 #define NBEP_UNLIKELY(x) (x)
 #define NBEP_PREFETCH(p) ((void)(p))
+#define NBEP_PREFETCH_W(p) ((void)(p))
 #define NBEP_ALWAYS_INLINE
 #endif
 
