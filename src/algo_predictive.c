@@ -2155,9 +2155,15 @@ static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, c
  * this project's 2-core virtual machine ran 1.5 times as fast as one thread in some runs and
  * 0.8 times in others. Results are the same bit for bit either way, so the run measures both
  * and takes the faster: every TEAM_PROBE-th step runs the other way, and each way's seconds
- * per event are a running mean of its steps (half the last step, half what it was).
- * NBEP_TEAM=always or never in the environment fixes the choice (tests, benchmarks). */
+ * per event are a running mean of its steps (half the last step, half what it was). A probe
+ * costs what the slower way loses: with the team 1.6 times as fast, one step in 8 run alone
+ * adds 7 % to the run's time. Where one way is at least TEAM_CLEAR times as fast, the other is probed
+ * every TEAM_PROBE_FAR-th step only; the way taken is measured at every step, so a change
+ * that makes it the slower one is seen at once. NBEP_TEAM=always or never in the environment
+ * fixes the choice (tests, benchmarks). */
 #define TEAM_PROBE 8
+#define TEAM_PROBE_FAR 64
+#define TEAM_CLEAR 1.25
 
 static int team_forced(void)
 {
@@ -2176,13 +2182,15 @@ static void team_choose(pred_ctx *c, uint64_t step, bool team, uint64_t events, 
     }
     const int forced = team_forced();
     const bool faster = c->team_cost[1] <= c->team_cost[0];
+    const double fast = c->team_cost[faster], slow = c->team_cost[!faster];
+    const uint64_t probe = slow >= TEAM_CLEAR * fast ? TEAM_PROBE_FAR : TEAM_PROBE;
     bool *next = &c->team_on[(step + 1) & 1];
     if (forced)
         *next = forced > 0;
     else if (c->team_cost[0] == 0.0 || c->team_cost[1] == 0.0) /* each way measured once */
         *next = c->team_cost[1] == 0.0;
     else
-        *next = (step + 1) % TEAM_PROBE == 0 ? !faster : faster;
+        *next = (step + 1) % probe == 0 ? !faster : faster;
 }
 
 /* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's

@@ -739,9 +739,9 @@ _Static_assert((RING & (RING - 1)) == 0, "the ring's size is a power of 2");
  * (a window of 12 to 32 ran within the noise of this one at N = 256000, phi = 0.30). */
 #define WINDOW 16
 _Static_assert(WINDOW <= RING, "a window fits the ring");
-/* The window is filled again once this many of its places are free: each fill reads the
- * calendar's front afresh, and one after every commit would mostly find the next entry still
- * held back by a place in flight. */
+/* The window is filled again once this many of its slots are free, not after every commit
+ * (2 to 8 ran within the noise of each other; filling whenever the helper had at most 2 or 4
+ * places left to take, which reads its counter's line each commit, no better). */
 #define FILL_FREE 2
 
 /* How many of the centres at taken[lo, hi) lie within sqrt(apart2) of centre a or centre b,
