@@ -328,10 +328,10 @@ typedef struct pred_ctx {
      * (0: none yet) */
     bool team_on[2];
     double team_cost[2];
-    nbep_counters *help_cnt;      /* owned when team, NBEP_EVLOOP_BATCH: each place's event's
+    nbep_counters *help_cnt;      /* owned when team, NBEP_EVLOOP_RING: each place's event's
                                    * counts (the team loop's ring of places, evloop.h) */
     nbep_thread_max *help_mx;     /* owned when team, the same: their sums (wall: one buffer) */
-    double *help_wall;            /* owned when team: NBEP_EVLOOP_BATCH rows of n_planes */
+    double *help_wall;            /* owned when team: NBEP_EVLOOP_RING rows of n_planes */
 } pred_ctx;
 
 static bool is_zero(nbep_vec3 v)
@@ -481,14 +481,14 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         c->team_on[0] = c->team_on[1] = c->team && team_forced() >= 0;
         if (c->team) {
             const size_t np = sim->st.n_planes;
-            c->help_cnt = nbep_alloc_aligned(NBEP_EVLOOP_BATCH, sizeof *c->help_cnt);
-            c->help_mx = nbep_alloc_aligned(NBEP_EVLOOP_BATCH, sizeof *c->help_mx);
-            c->help_wall = calloc(NBEP_EVLOOP_BATCH * (np ? np : 1), sizeof(double));
+            c->help_cnt = nbep_alloc_aligned(NBEP_EVLOOP_RING, sizeof *c->help_cnt);
+            c->help_mx = nbep_alloc_aligned(NBEP_EVLOOP_RING, sizeof *c->help_mx);
+            c->help_wall = calloc(NBEP_EVLOOP_RING * (np ? np : 1), sizeof(double));
             if (!c->help_cnt || !c->help_mx || !c->help_wall) {
                 nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory for the cells engine");
                 st = NBEP_ENOMEM;
             } else {
-                for (size_t m = 0; m < NBEP_EVLOOP_BATCH; m++) {
+                for (size_t m = 0; m < NBEP_EVLOOP_RING; m++) {
                     c->help_cnt[m] = (nbep_counters){0};
                     c->help_mx[m] = (nbep_thread_max){.wall = c->help_wall + m * np};
                 }
@@ -1877,10 +1877,10 @@ static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, bool 
  * Roots are the expensive part, and most are not needed: most closing pairs of a fluid pass
  * each other, which nbep_predict_pair_quadratic_bound tells without a root (only where the root
  * would say so too), and a closing pair's contact comes no earlier than that bound (strictly
- * below the computed root) and no later than twice it. So the bounds of a batch of partners come first, then the root of the pair with
- * the lowest bound, which sets a best that prunes most of the others (a pair is skipped only
- * when its bound is strictly later than the best: the winner, ties included, is the one trying
- * every pair would give). */
+ * below the computed root) and no later than twice it. So the bounds of a batch of partners
+ * come first, then the root of the pair with the lowest bound, which sets a best that prunes
+ * most of the others (a pair is skipped only when its bound is strictly later than the best:
+ * the winner, ties included, is the one trying every pair would give). */
 #define PAIR_BATCH 32
 
 /* A closing pair of the batch: its partner's place in the list and its bound (from t0). */
@@ -2157,10 +2157,10 @@ static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, c
  * and takes the faster: every TEAM_PROBE-th step runs the other way, and each way's seconds
  * per event are a running mean of its steps (half the last step, half what it was). A probe
  * costs what the slower way loses: with the team 1.6 times as fast, one step in 8 run alone
- * adds 7 % to the run's time. Where one way is at least TEAM_CLEAR times as fast, the other is probed
- * every TEAM_PROBE_FAR-th step only; the way taken is measured at every step, so a change
- * that makes it the slower one is seen at once. NBEP_TEAM=always or never in the environment
- * fixes the choice (tests, benchmarks). */
+ * adds 7 % to the run's time. Where one way is at least TEAM_CLEAR times as fast, the other
+ * is probed every TEAM_PROBE_FAR-th step only; the way taken is measured at every step, so a
+ * change that makes it the slower one is seen at once. NBEP_TEAM=always or never in the
+ * environment fixes the choice (tests, benchmarks). */
 #define TEAM_PROBE 8
 #define TEAM_PROBE_FAR 64
 #define TEAM_CLEAR 1.25
@@ -2243,9 +2243,9 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
         }
         /* the team loop's contexts, one per ring slot of its places, on each of the two threads
          * (with that thread's workspace), the counts and sums of a place apart */
-        cells_user ups[NBEP_EVLOOP_BATCH];
-        void *us[NBEP_EVLOOP_BATCH];
-        for (size_t m = 0; c->team && m < NBEP_EVLOOP_BATCH; m++) {
+        cells_user ups[NBEP_EVLOOP_RING];
+        void *us[NBEP_EVLOOP_RING];
+        for (size_t m = 0; c->team && m < NBEP_EVLOOP_RING; m++) {
             ups[m] = (cells_user){c, s, sim->scene, u.T0, 0.0, w, &c->help_cnt[m], &c->help_mx[m]};
             us[m] = &ups[m];
         }

@@ -51,7 +51,7 @@ struct nbep_evloop {
                            * member's place (cells.m[i].at) is where i's list was built */
     nbep_nblist nl;       /* owned */
     uint32_t *count;      /* owned, n: list lengths, at a full rebuild */
-    evl_ws ws[NBEP_EVLOOP_BATCH]; /* one per ring slot of the team loop (one thread: ws[0]) */
+    evl_ws ws[NBEP_EVLOOP_RING]; /* one per ring slot of the team loop (one thread: ws[0]) */
     nbep_periodic pb;     /* the box's periodic geometry */
     double cut;           /* the list cutoff: contact distance plus skin, plus slack */
     double stray;         /* half the skin: how far a sphere goes before its list expires */
@@ -63,17 +63,17 @@ struct nbep_evloop {
     nbep_feq *q;          /* borrowed */
     const uint64_t *ver;  /* borrowed */
     /* the team loop's window: the places handled ahead and not yet committed, numbered in
-     * order (place s lives in ring slot s % NBEP_EVLOOP_BATCH). Written by the leader and read
+     * order (place s lives in ring slot s % NBEP_EVLOOP_RING). Written by the leader and read
      * by both threads: each one's sphere, the other sphere its slot names (a pair's partner,
      * fresh or stale; NO_SPHERE for a plane or an expiry), and whether it was the calendar's
      * earliest when the window was empty (it stands, and is neither kept nor checked) */
-    alignas(NBEP_CACHELINE) uint32_t batch[NBEP_EVLOOP_BATCH];
-    uint32_t batch_other[NBEP_EVLOOP_BATCH];
-    bool batch_first[NBEP_EVLOOP_BATCH];
+    alignas(NBEP_CACHELINE) uint32_t batch[NBEP_EVLOOP_RING];
+    uint32_t batch_other[NBEP_EVLOOP_RING];
+    bool batch_first[NBEP_EVLOOP_RING];
     struct { /* its slot as it was when handled, written by the thread that takes it: a cache
               * line each */
         alignas(NBEP_CACHELINE) nbep_event ev;
-    } batch_slot[NBEP_EVLOOP_BATCH];
+    } batch_slot[NBEP_EVLOOP_RING];
     /* the leader's alone (a line that the other core reads makes each write to it wait): the
      * list centres of the window's spheres (slot k's own at 2k, its other at 2k + 1; +inf for
      * none), for the places that join (place_apart); which spheres are the others of places
@@ -82,12 +82,12 @@ struct nbep_evloop {
      * coordinates of its list centre; each place's calendar entry, taken out while it is in
      * flight, and the window's last (cur); the window, places head .. tail - 1, more looked
      * for once head reaches fill_at; and `ends`, the count of calls of nbep_evloop_run_lead */
-    alignas(NBEP_CACHELINE) double taken_x[2 * NBEP_EVLOOP_BATCH];
-    double taken_y[2 * NBEP_EVLOOP_BATCH], taken_z[2 * NBEP_EVLOOP_BATCH];
+    alignas(NBEP_CACHELINE) double taken_x[2 * NBEP_EVLOOP_RING];
+    double taken_y[2 * NBEP_EVLOOP_RING], taken_z[2 * NBEP_EVLOOP_RING];
     uint8_t *is_other; /* owned, n: 1 for the other sphere of a place in flight */
-    bool batch_walks[NBEP_EVLOOP_BATCH];
-    size_t batch_cell[NBEP_EVLOOP_BATCH][3];
-    nbep_calendar_entry batch_entry[NBEP_EVLOOP_BATCH], cur;
+    bool batch_walks[NBEP_EVLOOP_RING];
+    size_t batch_cell[NBEP_EVLOOP_RING][3];
+    nbep_calendar_entry batch_entry[NBEP_EVLOOP_RING], cur;
     uint64_t head, tail, fill_at, ends;
     /* the hand-over: the leader publishes places up to avail; either thread takes the next
      * place to handle from `next` and marks it handled (its number); the leader posts the end
@@ -98,7 +98,7 @@ struct nbep_evloop {
     alignas(NBEP_CACHELINE) _Atomic uint64_t done;
     struct {
         alignas(NBEP_CACHELINE) _Atomic uint64_t place;
-    } handled[NBEP_EVLOOP_BATCH];
+    } handled[NBEP_EVLOOP_RING];
 };
 
 static bool ws_init(evl_ws *w)
@@ -171,7 +171,7 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     atomic_init(&e->next, 1);
     atomic_init(&e->quit, 0);
     atomic_init(&e->done, 0);
-    for (int k = 0; k < NBEP_EVLOOP_BATCH; k++) {
+    for (int k = 0; k < NBEP_EVLOOP_RING; k++) {
         atomic_init(&e->handled[k].place, 0);
         e->taken_x[2 * k] = e->taken_x[2 * k + 1] = INFINITY;
         e->taken_y[2 * k] = e->taken_y[2 * k + 1] = INFINITY;
@@ -180,7 +180,7 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->count = nbep_alloc_aligned(n ? n : 1, sizeof *e->count);
     e->is_other = calloc(n ? n : 1, sizeof *e->is_other);
     bool ws_ok = true;
-    for (int k = 0; k < NBEP_EVLOOP_BATCH; k++)
+    for (int k = 0; k < NBEP_EVLOOP_RING; k++)
         ws_ok &= ws_init(&e->ws[k]);
     nbep_status st = e->count && e->is_other && ws_ok ? NBEP_OK : NBEP_ENOMEM;
     if (st != NBEP_OK)
@@ -215,7 +215,7 @@ void nbep_evloop_destroy(nbep_evloop **e)
     nbep_cells_fini(&(*e)->cells);
     nbep_nblist_fini(&(*e)->nl);
     nbep_free_aligned((*e)->count);
-    for (int k = 0; k < NBEP_EVLOOP_BATCH; k++)
+    for (int k = 0; k < NBEP_EVLOOP_RING; k++)
         ws_fini(&(*e)->ws[k]);
     free((*e)->is_other);
     nbep_free_aligned(*e);
@@ -732,7 +732,7 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
 /* ---- the team loop (nbep_evloop_run_lead, nbep_evloop_help) -------------------------------- */
 
 #define NO_SPHERE UINT32_MAX
-#define RING NBEP_EVLOOP_BATCH
+#define RING NBEP_EVLOOP_RING
 _Static_assert((RING & (RING - 1)) == 0, "the ring's size is a power of 2");
 
 /* Places in flight at most: enough that the helper finds one to take while the leader commits
@@ -866,27 +866,33 @@ static void take_centres(nbep_evloop *e, size_t k, bool drop)
     }
 }
 
-/* Place s is sphere x with the event its slot (key) names: the other sphere, whether it is a
- * list expiry (walks), and then the cell of its list centre. */
-static void set_place(nbep_evloop *e, uint64_t s, uint32_t x, uint32_t other, bool walks,
-                      bool first)
+/* Place s is the calendar entry c: its sphere, the other sphere its key names, whether it is
+ * a list expiry (walks), and then the cell of its list centre. */
+static void set_place(nbep_evloop *e, uint64_t s, nbep_calendar_entry c, bool first)
 {
     const size_t k = s % RING;
-    e->batch[k] = x;
+    const uint32_t other = key_other(c.key, c.item);
+    const bool walks = key_expiry(c.key, c.item);
+    e->batch[k] = c.item;
     e->batch_walks[k] = walks;
     e->batch_first[k] = first;
     e->batch_other[k] = other < e->n ? other : NO_SPHERE;
+    e->batch_entry[k] = c;
     if (walks)
-        cell_xyz(e, x, e->batch_cell[k]);
+        cell_xyz(e, c.item, e->batch_cell[k]);
 }
 
-/* Ring slot k's place joins the window: its centres taken, its other sphere marked (no two
- * places in flight touch the same sphere). */
-static void join(nbep_evloop *e, size_t k)
+/* The place set at the window's tail joins it: its centres taken, its other sphere marked (no
+ * two places in flight touch the same sphere), its entry taken out of the calendar. */
+static void join(nbep_evloop *e)
 {
+    const size_t k = e->tail % RING;
     take_centres(e, k, false);
     if (e->batch_other[k] != NO_SPHERE)
         e->is_other[e->batch_other[k]] = 1;
+    e->cur = e->batch_entry[k];
+    nbep_calendar_remove(e->cal, e->batch[k]);
+    e->tail++;
 }
 
 /* Place s leaves the window (committed or undone): its ring slot is free. */
@@ -957,20 +963,15 @@ static void fill(nbep_evloop *e, double t_end)
             e->fill_at = UINT64_MAX;
             return;
         }
-        const uint64_t s = e->tail;
-        const size_t k = s % RING;
-        set_place(e, s, c.item, key_other(c.key, c.item), key_expiry(c.key, c.item), false);
+        set_place(e, e->tail, c, false);
         uint64_t after;
-        if (!place_apart(e, s, &after)) {
+        if (!place_apart(e, e->tail, &after)) {
             e->fill_at = after + 1;
             return;
         }
-        join(e, k);
         NBEP_PREFETCH(nbep_feq_slot(e->q, c.item));
         NBEP_PREFETCH(&e->nl.sp[c.item]);
-        e->batch_entry[k] = e->cur = c;
-        nbep_calendar_remove(e->cal, c.item);
-        e->tail++;
+        join(e);
     }
 }
 
@@ -1089,18 +1090,13 @@ static uint64_t undo_from(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, v
     return e->tail - s;
 }
 
-/* The window's first place, when nothing is in flight: the calendar's earliest, sphere i with
- * slot ev, which stands (the one thread would handle it next, from the same state). */
-static void start(nbep_evloop *e, uint32_t i, const nbep_event *ev, double t_end)
+/* The window's first place, when nothing is in flight: the calendar's earliest entry c, whose
+ * slot is ev, which stands (the one thread would handle it next, from the same state). */
+static void start(nbep_evloop *e, nbep_calendar_entry c, const nbep_event *ev, double t_end)
 {
-    const size_t k = e->tail % RING;
-    e->batch_slot[k].ev = *ev;
-    set_place(e, e->tail, i, ev->kind == NBEP_EVENT_SPHERE ? ev->partner : NO_SPHERE,
-              ev->kind == NBEP_EVENT_HORIZON, true);
-    join(e, k);
-    e->tail++;
-    e->batch_entry[k] = e->cur = (nbep_calendar_entry){ev->time, slot_key(i, ev), i};
-    nbep_calendar_remove(e->cal, i);
+    e->batch_slot[e->tail % RING].ev = *ev;
+    set_place(e, e->tail, c, true);
+    join(e);
     fill(e, t_end);
 }
 
@@ -1112,18 +1108,17 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
     double t_mark = -INFINITY;
     for (;;) {
         if (e->head == e->tail) {
-            uint32_t i;
-            double t;
-            if (!(nbep_calendar_top(e->cal, &i, &t) && t < t_end))
+            nbep_calendar_entry c;
+            if (!(nbep_calendar_first(e->cal, &c) && c.time < t_end))
                 return true;
-            const nbep_event ev = *nbep_feq_slot(e->q, i);
-            prefetch_event(e, i, &ev);
-            if (!advances(&since, &t_mark, t, stall_events, stall_dt)) {
+            const nbep_event ev = *nbep_feq_slot(e->q, c.item);
+            prefetch_event(e, c.item, &ev);
+            if (!advances(&since, &t_mark, c.time, stall_events, stall_dt)) {
                 tally->events++;
-                *t_stuck = t;
+                *t_stuck = c.time;
                 return false;
             }
-            start(e, i, &ev, t_end);
+            start(e, c, &ev, t_end);
             atomic_store_explicit(&e->avail, e->tail, memory_order_release);
         }
         /* the places in order, as they are handled: each stands when it is then the earliest

@@ -137,7 +137,7 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
 
 /* The team loop's ring of places (a power of 2): places in flight at most, and the contexts
  * a caller passes it (us, below). */
-#define NBEP_EVLOOP_BATCH 32
+#define NBEP_EVLOOP_RING 32
 
 /* nbep_evloop_run on two threads, with the same results bit for bit. The leader (thread 0)
  * keeps a window of places in flight: the calendar's earliest events, taken out of it in
@@ -152,7 +152,7 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
  * window: a place stands if no entry left in the calendar comes before it (the one thread
  * would handle it next, from the same state), else it and the places after it are undone
  * (ops restore), their entries put back, and handled again. The event at place m is handled
- * with context us[m % NBEP_EVLOOP_BATCH] of the thread that takes it (each thread passes its
+ * with context us[m % NBEP_EVLOOP_RING] of the thread that takes it (each thread passes its
  * own array: one context per ring slot, the place's counts and sums kept apart and merged
  * into u, the leader's, when it stands: ops merge). For scenes whose reactions change only
  * the event's own spheres (the caller's choice: an elastic scene where nothing
