@@ -19,21 +19,33 @@
  * time a sphere takes to fly its own diameter. */
 #define CUT_SLACK 1e-6
 
+/* The calendar entries an event's workspace holds for its commit (a pair's two spheres), and
+ * the mark of more. */
+#define NEXT_MAX 2
+#define NEXT_ALL UINT8_MAX
+
 /* One thread's side of an event (handle, then commit): the list a rebuild found and what the
  * event changed, held until its commit; for a speculative event (the team loop's), the
  * motion and slots it may change, kept to undo it. */
 typedef struct evl_ws {
-    /* a rebuild of one list (walk): near holds the new list, gain[k] set for the entries i's
-     * old list lacked; was holds the old list (n_was entries), kept[k] set for those found again
-     * (a workspace starts a cache line: the team's two threads write neighbouring ones) */
-    alignas(NBEP_CACHELINE) uint32_t *near, *was; /* owned, room for cap each */
-    uint8_t *kept, *gain;   /* owned, room for cap each */
-    size_t cap, n_near, n_was;
-    bool oom;               /* the walk ran out of memory */
-    /* the event handled, waiting for its commit */
-    uint32_t item;
+    /* the event handled, waiting for its commit, and what the commit reads first, on one
+     * cache line (the team's leader reads it from the other core; a workspace starts a line):
+     * the calendar entries to set, the changed spheres' then item's, from the slots handle
+     * wrote (n_next of them; NEXT_ALL where there were more than NEXT_MAX: the commit reads
+     * them from the slots), each set or, where next_set is false, taken out */
+    alignas(NBEP_CACHELINE) uint32_t item;
     bool rebuilt;           /* a list expiry: near is item's list, built around `at` */
     bool reacted;
+    bool oom;               /* out of memory for the walk or the copy of `changed` */
+    uint8_t n_next;
+    bool next_set[NEXT_MAX];
+    nbep_calendar_entry next[NEXT_MAX];
+    /* a rebuild of one list (walk): near holds the new list, gain[k] set for the entries i's
+     * old list lacked; was holds the old list (n_was entries), kept[k] set for those found
+     * again */
+    uint32_t *near, *was;   /* owned, room for cap each */
+    uint8_t *kept, *gain;   /* owned, room for cap each */
+    size_t cap, n_near, n_was;
     nbep_vec3 at;
     uint32_t *changed;      /* owned, room for chg_cap: the spheres the reaction changed */
     size_t n_changed, chg_cap;
@@ -56,8 +68,6 @@ struct nbep_evloop {
     double cut;           /* the list cutoff: contact distance plus skin, plus slack */
     double stray;         /* half the skin: how far a sphere goes before its list expires */
     double face_reach;    /* cut + stray, and a margin: see near_face */
-    double apart2;        /* square of the distance between list centres beyond which two
-                           * events touch no common sphere (nbep_evloop_run_lead) */
     bool failed;          /* out of memory for a list: the run stops */
     bool stop;            /* nbep_evloop_stop: the run stops after the current event */
     nbep_feq *q;          /* borrowed */
@@ -82,9 +92,13 @@ struct nbep_evloop {
      * coordinates of its list centre; each place's calendar entry, taken out while it is in
      * flight, and the window's last (cur); the window, places head .. tail - 1, more looked
      * for once head reaches fill_at; and `ends`, the count of calls of nbep_evloop_run_lead */
-    alignas(NBEP_CACHELINE) double taken_x[2 * NBEP_EVLOOP_RING];
-    double taken_y[2 * NBEP_EVLOOP_RING], taken_z[2 * NBEP_EVLOOP_RING];
-    uint8_t *is_other; /* owned, n: 1 for the other sphere of a place in flight */
+    alignas(NBEP_CACHELINE) float taken_x[2 * NBEP_EVLOOP_RING];
+    alignas(NBEP_CACHELINE) float taken_y[2 * NBEP_EVLOOP_RING];
+    alignas(NBEP_CACHELINE) float taken_z[2 * NBEP_EVLOOP_RING];
+    float near2;          /* the square of the distance beyond which two events touch nothing
+                           * in common, for those float centres (set_near2) */
+    float len_f[3], half_f[3]; /* the periodic sides and their halves (+inf: not periodic) */
+    double shore;         /* how far a centre is taken past a side that is not periodic */
     bool batch_walks[NBEP_EVLOOP_RING];
     size_t batch_cell[NBEP_EVLOOP_RING][3];
     nbep_calendar_entry batch_entry[NBEP_EVLOOP_RING], cur;
@@ -100,6 +114,9 @@ struct nbep_evloop {
         alignas(NBEP_CACHELINE) _Atomic uint64_t place;
     } handled[NBEP_EVLOOP_RING];
 };
+
+_Static_assert(offsetof(evl_ws, next) + sizeof((evl_ws *)0)->next <= NBEP_CACHELINE,
+               "what a commit reads first is on one cache line");
 
 static bool ws_init(evl_ws *w)
 {
@@ -120,6 +137,32 @@ static void ws_fini(evl_ws *w)
     free(w->kept);
     free(w->gain);
     free(w->changed);
+}
+
+/* The threshold of the team loop's apartness test (near_count), which reads list centres as
+ * floats (half the width of doubles: the test over the window was a tenth of the leader's
+ * time): the centres are more than `apart` apart when their float distance's square exceeds
+ * near2. A centre is stored as its offset from the box's low corner, clamped to `shore` past
+ * a side that is not periodic (which moves no two centres closer: the clamp is a projection),
+ * so every coordinate is at most m = side + 2 shore in size (a periodic one is wrapped, and
+ * its list centre leads it by less than a stray, within shore). With u the float unit
+ * roundoff: each stored coordinate is off by u m, their difference's rounding adds 2 u m, a
+ * periodic side's rounding and its subtraction 2 u m more, and where the nearest way round is
+ * chosen wrongly (the difference within those errors of half the side) the two ways differ
+ * by twice that: 20 u m on an axis at most, 20 sqrt(3) u m in all. The squares and their sum
+ * add a relative 5 u, covered by the factor 1 + 8 u; the result is rounded up. */
+static void set_near2(nbep_evloop *e, nbep_vec3 lo, nbep_vec3 hi, double apart)
+{
+    const double u = 0x1p-24, side[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
+    e->shore = e->face_reach;
+    double m = 0.0;
+    for (int k = 0; k < 3; k++) {
+        m = fmax(m, side[k] + 2.0 * e->shore);
+        e->len_f[k] = (float)e->pb.len[k];
+        e->half_f[k] = (float)e->pb.half[k]; /* +inf where not periodic */
+    }
+    const double far = apart + 20.0 * sqrt(3.0) * u * m;
+    e->near2 = nextafterf((float)(far * far * (1.0 + 8.0 * u)), INFINITY);
 }
 
 nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reach,
@@ -152,7 +195,7 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->stray = 0.5 * skin;
     e->cut = (reach + skin) * (1.0 + CUT_SLACK);
     e->face_reach = e->cut + 1.01 * e->stray;
-    /* two events whose spheres' list centres are all farther apart than this (place_apart:
+    /* two events whose spheres' list centres are all farther apart than 2 touch (place_apart:
      * each event's own sphere and the other its slot names, checked themselves, however far
      * a stale slot's other may be) touch nothing in common. An event handled writes the motion
      * and slot of its spheres and reads those of their lists' members; committed, it writes
@@ -162,9 +205,8 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
      * touch = cut + (1 + LEAD) stray of its spheres' centres, and two events whose spheres
      * are more than touch apart touch nothing in common (a written sphere is never read by the
      * other, a written list is never the other's own). Twice that leaves a wide margin for
-     * the roundings. */
+     * the roundings of the centres (set_near2 adds those of the test's floats). */
     const double touch = e->cut + (1.0 + NBEP_NBLIST_LEAD) * e->stray;
-    e->apart2 = (2.0 * touch) * (2.0 * touch);
     /* places are numbered from 1: a mark of 0 is no place's */
     e->head = e->tail = e->fill_at = 1;
     atomic_init(&e->avail, 1);
@@ -177,12 +219,12 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
         e->taken_y[2 * k] = e->taken_y[2 * k + 1] = INFINITY;
         e->taken_z[2 * k] = e->taken_z[2 * k + 1] = INFINITY;
     }
+    set_near2(e, lo, hi, 2.0 * touch);
     e->count = nbep_alloc_aligned(n ? n : 1, sizeof *e->count);
-    e->is_other = calloc(n ? n : 1, sizeof *e->is_other);
     bool ws_ok = true;
     for (int k = 0; k < NBEP_EVLOOP_RING; k++)
         ws_ok &= ws_init(&e->ws[k]);
-    nbep_status st = e->count && e->is_other && ws_ok ? NBEP_OK : NBEP_ENOMEM;
+    nbep_status st = e->count && ws_ok ? NBEP_OK : NBEP_ENOMEM;
     if (st != NBEP_OK)
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory for the cells engine");
     if (st == NBEP_OK)
@@ -217,7 +259,6 @@ void nbep_evloop_destroy(nbep_evloop **e)
     nbep_free_aligned((*e)->count);
     for (int k = 0; k < NBEP_EVLOOP_RING; k++)
         ws_fini(&(*e)->ws[k]);
-    free((*e)->is_other);
     nbep_free_aligned(*e);
     *e = NULL;
 }
@@ -226,7 +267,7 @@ size_t nbep_evloop_bytes(size_t n, double neighbours)
 {
     return nbep_calendar_bytes(n) + nbep_cells_bytes(n) +
            nbep_nblist_bytes(n, (size_t)(neighbours * (double)n)) +
-           n * (sizeof(uint32_t) + sizeof(uint8_t));
+           n * sizeof(uint32_t);
 }
 
 bool nbep_evloop_failed(const nbep_evloop *e)
@@ -549,15 +590,31 @@ static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uin
     predict_with(e, ops, u, i, t, js, m, e->cells.m[i].at);
 }
 
+/* The calendar entry of sphere i from its slot, in *c: false when the slot holds nothing to
+ * come out (the sphere has no entry). */
+static bool slot_entry(const nbep_evloop *e, uint32_t i, nbep_calendar_entry *c)
+{
+    const nbep_event *ev = nbep_feq_slot(e->q, i);
+    *c = (nbep_calendar_entry){ev->time, slot_key(i, ev), i};
+    return ev->kind == NBEP_EVENT_SPHERE || ev->kind == NBEP_EVENT_PLANE ||
+           ev->kind == NBEP_EVENT_HORIZON;
+}
+
+/* Entry c set in the calendar, or its item's taken out (set false). */
+static void enter(nbep_evloop *e, bool set, nbep_calendar_entry c)
+{
+    if (set)
+        nbep_calendar_set(e->cal, c.item, c.time, c.key);
+    else
+        nbep_calendar_remove(e->cal, c.item);
+}
+
 /* The calendar entry of sphere i from its slot. */
 static void schedule_one(nbep_evloop *e, uint32_t i)
 {
-    const nbep_event *ev = nbep_feq_slot(e->q, i);
-    if (ev->kind == NBEP_EVENT_SPHERE || ev->kind == NBEP_EVENT_PLANE ||
-        ev->kind == NBEP_EVENT_HORIZON)
-        nbep_calendar_set(e->cal, i, ev->time, slot_key(i, ev));
-    else
-        nbep_calendar_remove(e->cal, i);
+    nbep_calendar_entry c;
+    const bool set = slot_entry(e, i, &c);
+    enter(e, set, c);
 }
 
 void nbep_evloop_predict(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, size_t lo,
@@ -584,6 +641,25 @@ void nbep_evloop_stop(nbep_evloop *e)
     e->stop = true;
 }
 
+/* The calendar entries that the commit of the event handled on w sets, from the slots its
+ * handle wrote (this thread's: read here, they are at hand), in the order the commit sets
+ * them: the changed spheres' other than the event's own, then its own. */
+static void note_next(const nbep_evloop *e, evl_ws *w)
+{
+    size_t n = 0;
+    for (size_t k = 0; k < w->n_changed && n < NEXT_MAX; k++)
+        if (w->changed[k] != w->item) {
+            w->next_set[n] = slot_entry(e, w->changed[k], &w->next[n]);
+            n++;
+        }
+    if (n + 1 > NEXT_MAX) { /* more than NEXT_MAX (not with one pair): the slots, at commit */
+        w->n_next = NEXT_ALL;
+        return;
+    }
+    w->next_set[n] = slot_entry(e, w->item, &w->next[n]);
+    w->n_next = (uint8_t)(n + 1);
+}
+
 /* The event in i's slot (ev, at time t), handled on workspace w: the motion and the slots of
  * the spheres it involves are written (an expiry also finds its sphere's new list); the lists,
  * the cells and the calendar wait for commit. A stale slot is predicted again; an expiry wraps
@@ -595,6 +671,7 @@ static void handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, void *
     w->item = i;
     w->rebuilt = w->reacted = w->oom = false;
     w->n_changed = 0;
+    w->n_next = 0;
     if (ev->kind == NBEP_EVENT_HORIZON) {
         nbep_vec3 p, v, a;
         if (e->pb.any) /* a centre past a periodic face enters through the other */
@@ -607,6 +684,7 @@ static void handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, void *
         w->rebuilt = true;
         w->at = c;
         predict_with(e, ops, u, i, t, w->near, w->n_near, c);
+        note_next(e, w);
         return;
     }
     if (ev->kind == NBEP_EVENT_SPHERE) /* read if the event is fresh */
@@ -637,6 +715,7 @@ static void handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, void *
     }
     /* in every other case (stale slot, reaction) i looks again from now */
     predict_one(e, ops, u, i, t);
+    note_next(e, w);
 }
 
 /* What handle left waiting: the new list entered, the changed spheres' calendar entries set. */
@@ -648,10 +727,28 @@ static void commit(nbep_evloop *e, const evl_ws *w)
         apply(e, w, w->item, w->at);
     if (e->failed)
         return;
+    if (w->n_next != NEXT_ALL) {
+        for (size_t k = 0; k < w->n_next; k++)
+            enter(e, w->next_set[k], w->next[k]);
+        return;
+    }
     for (size_t k = 0; k < w->n_changed; k++)
         if (w->changed[k] != w->item)
             schedule_one(e, w->changed[k]);
     schedule_one(e, w->item);
+}
+
+/* Whether the commit of the event handled on w set sphere j's calendar entry. */
+static bool commit_sets(const evl_ws *w, uint32_t j)
+{
+    bool set = j == w->item;
+    if (w->n_next != NEXT_ALL)
+        for (size_t k = 0; k < w->n_next; k++)
+            set |= w->next[k].item == j;
+    else
+        for (size_t k = 0; k < w->n_changed; k++)
+            set |= w->changed[k] == j;
+    return set;
 }
 
 /* Counts one event at time t towards the stall check: false when `stall_events` events in a row
@@ -744,33 +841,50 @@ _Static_assert(WINDOW <= RING, "a window fits the ring");
  * places left to take, which reads its counter's line each commit, no better). */
 #define FILL_FREE 2
 
-/* How many of the centres at taken[lo, hi) lie within sqrt(apart2) of centre a or centre b,
- * in a periodic box the nearest way round: 0 when events on their spheres and on a's and b's
- * touch nothing in common (an event with one sphere passes it twice). One pass without
- * branches, the taken centres read once for both: a count vectorises where a running minimum
- * of doubles does not (this loop was most of the finding of places, a tenth of the leader's
- * time). A free ring slot's centres are +inf, far from every centre. */
-NBEP_AVX2_CLONES static int near_count(const nbep_evloop *e, nbep_vec3 a, nbep_vec3 b, size_t lo,
-                                       size_t hi)
+/* A list centre as place_apart's floats (set_near2): from the box's low corner, clamped to
+ * `shore` past a side that is not periodic. */
+static void float_centre(const nbep_evloop *e, nbep_vec3 c, float *f)
 {
-    const double hx = e->pb.half[0], hy = e->pb.half[1], hz = e->pb.half[2];
-    const double lx = e->pb.len[0], ly = e->pb.len[1], lz = e->pb.len[2];
-    const double apart2 = e->apart2;
-    const double *restrict tx = e->taken_x, *restrict ty = e->taken_y, *restrict tz = e->taken_z;
+    const double x[3] = {c.x - e->pb.lo[0], c.y - e->pb.lo[1], c.z - e->pb.lo[2]};
+    for (int k = 0; k < 3; k++)
+        f[k] = (float)(e->pb.axis[k] ? x[k]
+                                     : fmin(fmax(x[k], -e->shore), e->pb.len[k] + e->shore));
+}
+
+/* How many of the centres taken at ring entries [lo, hi) are near centre a or centre b
+ * (set_near2: within the distance beyond which events on them touch nothing in common), in a
+ * periodic box the nearest way round: 0 when events on their spheres and on a's and b's touch
+ * nothing in common (an event with one sphere passes it twice). Without branches, the taken
+ * centres read once for both. A free ring slot's centres are +inf, far from every centre. */
+static inline NBEP_ALWAYS_INLINE int near_span(const nbep_evloop *e, const float *a,
+                                               const float *b, size_t lo, size_t hi)
+{
+    const float hx = e->half_f[0], hy = e->half_f[1], hz = e->half_f[2];
+    const float lx = e->len_f[0], ly = e->len_f[1], lz = e->len_f[2];
+    const float near2 = e->near2;
+    const float *restrict tx = e->taken_x, *restrict ty = e->taken_y, *restrict tz = e->taken_z;
     int near = 0;
     for (size_t k = lo; k < hi; k++) {
-        double dx = fabs(a.x - tx[k]), dy = fabs(a.y - ty[k]), dz = fabs(a.z - tz[k]);
-        double ex = fabs(b.x - tx[k]), ey = fabs(b.y - ty[k]), ez = fabs(b.z - tz[k]);
+        float dx = fabsf(a[0] - tx[k]), dy = fabsf(a[1] - ty[k]), dz = fabsf(a[2] - tz[k]);
+        float ex = fabsf(b[0] - tx[k]), ey = fabsf(b[1] - ty[k]), ez = fabsf(b[2] - tz[k]);
         dx = dx > hx ? lx - dx : dx; /* half is +inf on an axis that is not periodic */
         dy = dy > hy ? ly - dy : dy;
         dz = dz > hz ? lz - dz : dz;
         ex = ex > hx ? lx - ex : ex;
         ey = ey > hy ? ly - ey : ey;
         ez = ez > hz ? lz - ez : ez;
-        near += !(dx * dx + dy * dy + dz * dz > apart2);
-        near += !(ex * ex + ey * ey + ez * ez > apart2);
+        near += !(dx * dx + dy * dy + dz * dz > near2);
+        near += !(ex * ex + ey * ey + ez * ez > near2);
     }
     return near;
+}
+
+/* near_span over every entry of the ring (a free slot's are +inf): one pass of a fixed length,
+ * in floats, 16 a vector (this test over the window's centres in doubles, in runs that
+ * followed the window round the ring, was a tenth of the leader's time). */
+NBEP_AVX512_CLONES static int near_count(const nbep_evloop *e, const float *a, const float *b)
+{
+    return near_span(e, a, b, 0, 2 * RING);
 }
 
 /* Whether the cells that a commit of an event in cell a changes (a's cell and, for a rebuilt
@@ -798,59 +912,43 @@ static void cell_xyz(const nbep_evloop *e, uint32_t i, size_t *xyz)
 }
 
 /* The list centre of ring slot k's sphere (which 0) or of the other its slot names (which 1;
- * its own when it names none). */
-static nbep_vec3 place_centre(const nbep_evloop *e, size_t k, int which)
+ * its own when it names none), as place_apart's floats. */
+static void place_centre(const nbep_evloop *e, size_t k, int which, float *f)
 {
     const uint32_t x = which && e->batch_other[k] != NO_SPHERE ? e->batch_other[k] : e->batch[k];
-    return e->cells.m[x].at;
+    float_centre(e, e->cells.m[x].at, f);
 }
 
-/* Whether the events at ring slots a and b touch nothing in common: both spheres of each (its
- * own and the other its slot names) clear of both of the other's (the centres at lo, hi are
- * slot b's), and, when both are list expiries, their cells apart (only an expiry reads the
- * cells of other spheres, in its walk, and only an expiry's commit changes cells; an expiry's
- * slot names no other sphere). */
-static bool slots_apart(const nbep_evloop *e, size_t a, size_t lo, size_t hi, size_t b)
-{
-    if (e->batch_walks[a] && e->batch_walks[b] &&
-        !cells_apart(e, e->batch_cell[a], e->batch_cell[b]))
-        return false;
-    return !near_count(e, place_centre(e, a, 0), place_centre(e, a, 1), lo, hi);
-}
-
-/* How many centres of the places in flight lie near a or b (near_count over their ring
- * slots, in one or two runs). */
-static int window_near(const nbep_evloop *e, nbep_vec3 a, nbep_vec3 b)
-{
-    if (e->head == e->tail)
-        return 0;
-    /* runs of whole blocks of 4 entries (the vector loop's, with no scalar tail; the ring's
-     * 2 RING entries are a multiple): an entry added is a free slot's (+inf) or in flight */
-    const size_t h = 2 * (e->head % RING) & ~(size_t)3;
-    const size_t t = (2 * (e->tail % RING) + 3) & ~(size_t)3;
-    if (h < t)
-        return near_count(e, a, b, h, t);
-    return near_count(e, a, b, h, 2 * RING) + near_count(e, a, b, 0, t);
-}
-
-/* Whether place s (set, not yet in the window) is apart from every place in flight; when it
- * is not, *after is the last of them it touches, whose commit it must wait for. */
+/* Whether place s (set, not yet in the window) is apart from every place in flight: both its
+ * spheres (the one whose entry it is and the other its slot names) clear of both of each
+ * one's, and, when both are list expiries, their cells apart (only an expiry reads the cells
+ * of other spheres, in its walk, and only an expiry's commit changes cells; an expiry's slot
+ * names no other sphere). When it is not, *after is the last place it touches, whose commit
+ * it must wait for. The window's centres in one pass, and the cells of those that walk when s
+ * walks; the place it touches, place by place, only when that finds one (a place in every
+ * hundred at N = 256000, phi 0.30, where two in five of those that join walk). */
 static bool place_apart(const nbep_evloop *e, uint64_t s, uint64_t *after)
 {
     const size_t a = s % RING;
-    bool walks = false;
-    for (uint64_t p = e->head; p < e->tail; p++)
-        walks |= e->batch_walks[p % RING];
-    if (!(walks && e->batch_walks[a]) && /* the window's centres at once */
-        !window_near(e, place_centre(e, a, 0), place_centre(e, a, 1)))
+    float ca[3], cb[3];
+    place_centre(e, a, 0, ca);
+    place_centre(e, a, 1, cb);
+    bool apart = !near_count(e, ca, cb);
+    if (apart && e->batch_walks[a])
+        for (uint64_t p = e->head; p < e->tail; p++)
+            apart &= !e->batch_walks[p % RING] ||
+                     cells_apart(e, e->batch_cell[a], e->batch_cell[p % RING]);
+    if (apart)
         return true;
-    bool apart = true;
-    for (uint64_t p = e->head; p < e->tail; p++)
-        if (!slots_apart(e, a, 2 * (p % RING), 2 * (p % RING) + 2, p % RING)) {
-            apart = false;
+    *after = e->tail - 1; /* (the loop finds one: what the pass found is one place's) */
+    for (uint64_t p = e->head; p < e->tail; p++) {
+        const size_t k = p % RING;
+        if ((e->batch_walks[a] && e->batch_walks[k] &&
+             !cells_apart(e, e->batch_cell[a], e->batch_cell[k])) ||
+            near_span(e, ca, cb, 2 * k, 2 * k + 2))
             *after = p;
-        }
-    return apart;
+    }
+    return false;
 }
 
 /* Ring slot k's spheres' centres, taken into place_apart's arrays, or dropped from them. */
@@ -859,10 +957,12 @@ static void take_centres(nbep_evloop *e, size_t k, bool drop)
     const uint32_t s[2] = {e->batch[k], e->batch_other[k]};
     for (int q = 0; q < 2; q++) {
         const bool none = drop || s[q] == NO_SPHERE;
-        const nbep_vec3 c = none ? (nbep_vec3){0} : e->cells.m[s[q]].at;
-        e->taken_x[2 * k + q] = none ? INFINITY : c.x;
-        e->taken_y[2 * k + q] = none ? INFINITY : c.y;
-        e->taken_z[2 * k + q] = none ? INFINITY : c.z;
+        float c[3] = {INFINITY, INFINITY, INFINITY};
+        if (!none)
+            float_centre(e, e->cells.m[s[q]].at, c);
+        e->taken_x[2 * k + q] = c[0];
+        e->taken_y[2 * k + q] = c[1];
+        e->taken_z[2 * k + q] = c[2];
     }
 }
 
@@ -882,16 +982,18 @@ static void set_place(nbep_evloop *e, uint64_t s, nbep_calendar_entry c, bool fi
         cell_xyz(e, c.item, e->batch_cell[k]);
 }
 
-/* The place set at the window's tail joins it: its centres taken, its other sphere marked (no
- * two places in flight touch the same sphere), its entry taken out of the calendar. */
+/* The place set at the window's tail joins it: its centres taken, its entry and its other
+ * sphere's taken out of the calendar (no place joins on a sphere in flight: its entry is not
+ * there to be found; the other's comes after this one, as every entry left does, and the
+ * place's commit or undo sets it again). */
 static void join(nbep_evloop *e)
 {
     const size_t k = e->tail % RING;
     take_centres(e, k, false);
-    if (e->batch_other[k] != NO_SPHERE)
-        e->is_other[e->batch_other[k]] = 1;
     e->cur = e->batch_entry[k];
     nbep_calendar_remove(e->cal, e->batch[k]);
+    if (e->batch_other[k] != NO_SPHERE)
+        nbep_calendar_remove(e->cal, e->batch_other[k]);
     e->tail++;
 }
 
@@ -899,8 +1001,6 @@ static void join(nbep_evloop *e)
 static void drop_place(nbep_evloop *e, uint64_t s)
 {
     take_centres(e, s % RING, true);
-    if (e->batch_other[s % RING] != NO_SPHERE)
-        e->is_other[e->batch_other[s % RING]] = 0;
 }
 
 /* Requests the list centres of the spheres of the calendar entry (item, key) (no effect on
@@ -908,7 +1008,6 @@ static void drop_place(nbep_evloop *e, uint64_t s)
 static void prefetch_centres(const nbep_evloop *e, uint32_t item, uint64_t key)
 {
     NBEP_PREFETCH(&e->cells.m[item]);
-    NBEP_PREFETCH(&e->is_other[item]);
     const uint32_t o = key_other(key, item);
     if (o < e->n)
         NBEP_PREFETCH(&e->cells.m[o]);
@@ -931,8 +1030,8 @@ static void prefetch_next(const nbep_evloop *e)
  * each next one that is apart from every place in flight (place_apart: both its spheres, the
  * one whose entry it is and the other its slot names, against both of every place in flight:
  * the other may be far when the slot is stale, and a far sphere must not be read, kept or put
- * back while another event writes it) and comes before t_end, taking out the entries of the
- * other spheres of pairs in flight too (the pair's commit sets them again). It stops at the
+ * back while another event writes it) and comes before t_end (join takes its other sphere's
+ * entry out too: the pair's commit or undo sets it again). It stops at the
  * first that is not (it must wait for the commit of what it touches) and sets when to look
  * again (fill_at). An entry before the window's last (`cur`; a commit's new entry) means a
  * place in flight will not stand: nothing is taken until the window is undone. Reads the
@@ -949,10 +1048,6 @@ static void fill(nbep_evloop *e, double t_end)
         if (!nbep_calendar_before(e->cur, c)) {
             e->fill_at = UINT64_MAX;
             return;
-        }
-        if (e->is_other[c.item]) {
-            nbep_calendar_remove(e->cal, c.item);
-            continue;
         }
         if (e->tail - e->head >= WINDOW) {
             e->fill_at = e->head + 1;
@@ -1151,6 +1246,8 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
             undo_from(e, ops, u, us, s + 1);
             nbep_calendar_set(e->cal, e->batch[k], e->batch_entry[k].time,
                               e->batch_entry[k].key); /* its entry back, as it was */
+            if (e->batch_other[k] != NO_SPHERE) /* and its other's, from its slot */
+                schedule_one(e, e->batch_other[k]);
             *t_stuck = e->batch_slot[k].ev.time;
             return false;
         }
@@ -1167,14 +1264,9 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
             undo_from(e, ops, u, us, s + 1);
             return false;
         }
-        if (e->batch_other[k] != NO_SPHERE) { /* its entry back if the reaction did not set
-                                               * it (a stale slot's other) */
-            bool set = false;
-            for (size_t q = 0; q < w->n_changed; q++)
-                set |= w->changed[q] == e->batch_other[k];
-            if (!set)
-                schedule_one(e, e->batch_other[k]);
-        }
+        /* its other's entry back if the reaction did not set it (a stale slot's other) */
+        if (e->batch_other[k] != NO_SPHERE && !commit_sets(w, e->batch_other[k]))
+            schedule_one(e, e->batch_other[k]);
         tally->ahead += !e->batch_first[k];
         drop_place(e, s);
         e->head++;

@@ -805,6 +805,48 @@ static void test_settled_spheres_stay_held_when_others_wake(void **state)
     }
 }
 
+/* A struck support lets go of what it carries: B held on held A's crest (settling), then a ball
+ * sliding along the floor at 0.2 m/s (faster than the carry speed) strikes A, an ordinary
+ * collision. A moves, so B, which rests on it, is let go in the same reaction: one event
+ * changes three spheres (in cells mode the commit of such an event sets three calendar
+ * entries, more than its workspace holds: evloop.c, NEXT_MAX). In every neighbour mode B
+ * moves after the strike and meets A as a sphere, never passing into it, and A leaves its
+ * place. */
+static void test_struck_support_lets_go_what_it_carries(void **state)
+{
+    (void)state;
+    const double r = 0.1, v = 0.2, x = 1.0;
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
+        nbep_scene *sc = scene(3, 6, "predictive", 700, 0.5);
+        neighbor_mode(sc, mode);
+        box(sc, 2.0, 0.4, 0.6);
+        sc->output_every = 10;
+        (void)crest_pair(sc, 0, x, 0.2);
+        /* strikes A at 0.25 s, long after the pair is held (0.02 s) */
+        nbep_test_set_sphere(sc, 2, (nbep_vec3){x - 2.0 * r - 0.05, 0.2, r},
+                             (nbep_vec3){v, 0.0, 0.0}, r, 1.0, DOWN);
+        trace t = {0};
+        const nbep_summary s = run(sc, 1, &t);
+        bool held_before = true, b_moved = false;
+        const nbep_vec3 b = t.data[5 * 2 * t.n + 1]; /* where B is held (frame 5: 0.05 s) */
+        for (size_t f = 5; f < t.n_frames; f++) {
+            const nbep_vec3 *p = t.data + f * 2 * t.n, *u = p + t.n;
+            const double time = 10e-3 * (double)f;
+            if (time < 0.24)
+                held_before &= nbep_vec3_equal(u[1], ZERO) && nbep_vec3_equal(p[1], b);
+            if (time > 0.26)
+                b_moved |= !nbep_vec3_equal(p[1], b);
+        }
+        assert_true(held_before);
+        assert_true(b_moved);
+        assert_true(last_pos(&t)[0].x > x + 0.01); /* A struck and gone on */
+        assert_true(s.max_overlap_rel < 1e-6);    /* B fell along A, not into it */
+        assert_true(t.min_z_minus_r > -1e-9);
+        free(t.data);
+        nbep_test_scene_free(&sc);
+    }
+}
+
 /* Three walls at once: gravity into a corner of the box; the ball ends still in the corner. */
 static void test_ball_held_by_three_walls(void **state)
 {
@@ -1031,6 +1073,7 @@ int main(void)
         cmocka_unit_test(test_spheres_that_carry_each_other_settle),
         cmocka_unit_test(test_held_sphere_carries_a_slow_push_its_faces_take),
         cmocka_unit_test(test_settled_spheres_stay_held_when_others_wake),
+        cmocka_unit_test(test_struck_support_lets_go_what_it_carries),
         cmocka_unit_test(test_sphere_wedged_between_a_held_one_and_a_wall_is_held),
         cmocka_unit_test(test_ball_in_a_channel_of_three_faces_slides_on),
         cmocka_unit_test(test_sphere_stopped_at_a_held_crest_under_an_overhang),

@@ -38,9 +38,12 @@
 /* The same with AVX2 (four doubles a vector, gathers): for loops the compiler vectorises (the
  * build's -fno-trapping-math lets it turn their selects into vector blends). */
 #define NBEP_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
+/* The same with AVX-512 too (sixteen floats a vector), for short loops of a fixed length. */
+#define NBEP_AVX512_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
 #else
 #define NBEP_FMA_CLONES
 #define NBEP_AVX2_CLONES
+#define NBEP_AVX512_CLONES
 #endif
 
 /* Allocates n * size bytes aligned to a cache line, zero-filled; NULL on failure or overflow.
