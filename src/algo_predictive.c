@@ -2116,39 +2116,44 @@ static void cells_restore(void *u, uint32_t i, const nbep_evloop_motion *m)
         x->s->image[3 * (size_t)i + (size_t)k] = m->image[k];
 }
 
-/* The helper's event (counted from zero in uh) added to the leader's counts and sums when it
- * stands: in the order of events, one addition each, as the one thread adds it (a sum never
- * holds -0, so adding the +0 of what the event did not touch changes nothing). */
-static void cells_merge(void *u, void *uh, bool keep)
+/* A team context's counts and sums from zero, before it handles a place (on the thread that
+ * handles it). */
+static void cells_clear(void *uh)
 {
-    cells_user *x = u, *h = uh;
-    nbep_thread_max *a = x->mx, *b = h->mx;
-    for (int k = 0; k < NBEP_COUNTER_COUNT; k++) {
-        if (keep)
-            x->cnt->c[k] += h->cnt->c[k];
+    cells_user *h = uh;
+    for (int k = 0; k < NBEP_COUNTER_COUNT; k++)
         h->cnt->c[k] = 0;
-    }
-    if (keep) {
-        a->virial += b->virial;
-        a->overlap = fmax(a->overlap, b->overlap); /* both from 0, as note_overlap keeps them */
-        a->overlap_rel = fmax(a->overlap_rel, b->overlap_rel);
-    }
-    b->virial = b->overlap = b->overlap_rel = 0.0;
-    for (size_t p = 0; p < x->s->n_planes; p++) {
-        if (keep)
-            a->wall[p] += b->wall[p];
-        b->wall[p] = 0.0;
-    }
+    h->mx->virial = h->mx->overlap = h->mx->overlap_rel = 0.0;
+    for (size_t p = 0; p < h->s->n_planes; p++)
+        h->mx->wall[p] = 0.0;
+}
+
+/* The event of a team context (counted from zero in uh) added to the leader's counts and sums
+ * when it stands: in the order of events, one addition each, as the one thread adds it (a sum
+ * never holds -0, so adding the +0 of what the event did not touch changes nothing). */
+static void cells_merge(void *u, const void *uh)
+{
+    cells_user *x = u;
+    const cells_user *h = uh;
+    nbep_thread_max *a = x->mx;
+    const nbep_thread_max *b = h->mx;
+    for (int k = 0; k < NBEP_COUNTER_COUNT; k++)
+        x->cnt->c[k] += h->cnt->c[k];
+    a->virial += b->virial;
+    a->overlap = fmax(a->overlap, b->overlap); /* both from 0, as note_overlap keeps them */
+    a->overlap_rel = fmax(a->overlap_rel, b->overlap_rel);
+    for (size_t p = 0; p < x->s->n_planes; p++)
+        a->wall[p] += b->wall[p];
 }
 
 static const nbep_evloop_ops cells_ops = {cells_planes,  cells_pairs,   cells_fresh,
                                           cells_react,   cells_flight,  cells_wrap,
-                                          cells_save,    cells_restore, cells_merge,
-                                          cells_prefetch};
+                                          cells_save,    cells_restore, cells_clear,
+                                          cells_merge,   cells_prefetch};
 static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, cells_fresh,
                                                cells_react,  cells_flight,     cells_wrap,
-                                               cells_save,   cells_restore,    cells_merge,
-                                               cells_prefetch};
+                                               cells_save,   cells_restore,    cells_clear,
+                                               cells_merge,  cells_prefetch};
 
 /* The team loop pays where a second core is close (it passes a few cache lines per event
  * between the two), and loses where it is not or is busy with other work: the same fluid on

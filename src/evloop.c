@@ -19,6 +19,11 @@
  * time a sphere takes to fly its own diameter. */
 #define CUT_SLACK 1e-6
 
+/* The team loop's places in flight at most: enough that the helper finds one to take while
+ * the leader commits (a window of 12 to 32 ran within the noise of this one at N = 256000,
+ * phi = 0.30). */
+#define WINDOW 16
+
 /* The calendar entries an event's workspace holds for its commit (a pair's two spheres), and
  * the mark of more. */
 #define NEXT_MAX 2
@@ -29,17 +34,22 @@
  * motion and slots it may change, kept to undo it. */
 typedef struct evl_ws {
     /* the event handled, waiting for its commit, and what the commit reads first, on one
-     * cache line (the team's leader reads it from the other core; a workspace starts a line):
-     * the calendar entries to set, the changed spheres' then item's, from the slots handle
-     * wrote (n_next of them; NEXT_ALL where there were more than NEXT_MAX: the commit reads
-     * them from the slots), each set or, where next_set is false, taken out */
-    alignas(NBEP_CACHELINE) uint32_t item;
+     * cache line (the team's leader waits for it and reads it from the other core; a
+     * workspace starts a line): in the team loop, the number of the place last handled on it
+     * (stored last, with release: what handle wrote is then there to read); the calendar
+     * entries to set, the changed spheres' then item's, from the slots handle wrote (n_next
+     * of them; NEXT_ALL where there were more than NEXT_MAX: the commit reads them from the
+     * slots), each set or, where next_set is false, taken out */
+    alignas(NBEP_CACHELINE) _Atomic uint64_t place;
+    uint32_t item;
     bool rebuilt;           /* a list expiry: near is item's list, built around `at` */
     bool reacted;
     bool oom;               /* out of memory for the walk or the copy of `changed` */
     uint8_t n_next;
+    uint32_t next_item[NEXT_MAX];
     bool next_set[NEXT_MAX];
-    nbep_calendar_entry next[NEXT_MAX];
+    double next_time[NEXT_MAX];
+    uint64_t next_key[NEXT_MAX];
     /* a rebuild of one list (walk): near holds the new list, gain[k] set for the entries i's
      * old list lacked; was holds the old list (n_was entries), kept[k] set for those found
      * again */
@@ -85,16 +95,16 @@ struct nbep_evloop {
         alignas(NBEP_CACHELINE) nbep_event ev;
     } batch_slot[NBEP_EVLOOP_RING];
     /* the leader's alone (a line that the other core reads makes each write to it wait): the
-     * list centres of the window's spheres (slot k's own at 2k, its other at 2k + 1; +inf for
-     * none), for the places that join (place_apart); which spheres are the others of places
-     * in flight (their entries are passed over); whether each place is a list expiry (its
+     * list centres of the window's spheres as floats (place p's own at 2 (p % WINDOW), its
+     * other's next; +inf for none), for the places that join (place_apart); whether each
+     * place is a list expiry (its
      * handle walks the cells around its sphere and its commit changes them) and then the cell
      * coordinates of its list centre; each place's calendar entry, taken out while it is in
      * flight, and the window's last (cur); the window, places head .. tail - 1, more looked
      * for once head reaches fill_at; and `ends`, the count of calls of nbep_evloop_run_lead */
-    alignas(NBEP_CACHELINE) float taken_x[2 * NBEP_EVLOOP_RING];
-    alignas(NBEP_CACHELINE) float taken_y[2 * NBEP_EVLOOP_RING];
-    alignas(NBEP_CACHELINE) float taken_z[2 * NBEP_EVLOOP_RING];
+    alignas(NBEP_CACHELINE) float taken_x[2 * WINDOW];
+    alignas(NBEP_CACHELINE) float taken_y[2 * WINDOW];
+    alignas(NBEP_CACHELINE) float taken_z[2 * WINDOW];
     float near2;          /* the square of the distance beyond which two events touch nothing
                            * in common, for those float centres (set_near2) */
     float len_f[3], half_f[3]; /* the periodic sides and their halves (+inf: not periodic) */
@@ -103,19 +113,18 @@ struct nbep_evloop {
     size_t batch_cell[NBEP_EVLOOP_RING][3];
     nbep_calendar_entry batch_entry[NBEP_EVLOOP_RING], cur;
     uint64_t head, tail, fill_at, ends;
+    uint64_t lead_seen;   /* the leader's last reading of avail (take_one) */
     /* the hand-over: the leader publishes places up to avail; either thread takes the next
-     * place to handle from `next` and marks it handled (its number); the leader posts the end
-     * of a call in quit (its count), the helper answers it in done */
+     * place to handle from `next` and marks it handled (its number, in its workspace's
+     * `place`); the leader posts the end of a call in quit (its count), the helper answers it
+     * in done */
     alignas(NBEP_CACHELINE) _Atomic uint64_t avail;
     alignas(NBEP_CACHELINE) _Atomic uint64_t next;
     alignas(NBEP_CACHELINE) _Atomic uint64_t quit;
     alignas(NBEP_CACHELINE) _Atomic uint64_t done;
-    struct {
-        alignas(NBEP_CACHELINE) _Atomic uint64_t place;
-    } handled[NBEP_EVLOOP_RING];
 };
 
-_Static_assert(offsetof(evl_ws, next) + sizeof((evl_ws *)0)->next <= NBEP_CACHELINE,
+_Static_assert(offsetof(evl_ws, next_key) + sizeof((evl_ws *)0)->next_key <= NBEP_CACHELINE,
                "what a commit reads first is on one cache line");
 
 static bool ws_init(evl_ws *w)
@@ -213,12 +222,10 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     atomic_init(&e->next, 1);
     atomic_init(&e->quit, 0);
     atomic_init(&e->done, 0);
-    for (int k = 0; k < NBEP_EVLOOP_RING; k++) {
-        atomic_init(&e->handled[k].place, 0);
-        e->taken_x[2 * k] = e->taken_x[2 * k + 1] = INFINITY;
-        e->taken_y[2 * k] = e->taken_y[2 * k + 1] = INFINITY;
-        e->taken_z[2 * k] = e->taken_z[2 * k + 1] = INFINITY;
-    }
+    for (int k = 0; k < NBEP_EVLOOP_RING; k++)
+        atomic_init(&e->ws[k].place, 0);
+    for (int k = 0; k < 2 * WINDOW; k++)
+        e->taken_x[k] = e->taken_y[k] = e->taken_z[k] = INFINITY;
     set_near2(e, lo, hi, 2.0 * touch);
     e->count = nbep_alloc_aligned(n ? n : 1, sizeof *e->count);
     bool ws_ok = true;
@@ -641,6 +648,16 @@ void nbep_evloop_stop(nbep_evloop *e)
     e->stop = true;
 }
 
+/* Entry k of w's calendar entries: sphere i's, from its slot. */
+static void note_one(const nbep_evloop *e, evl_ws *w, size_t k, uint32_t i)
+{
+    nbep_calendar_entry c;
+    w->next_set[k] = slot_entry(e, i, &c);
+    w->next_item[k] = i;
+    w->next_time[k] = c.time;
+    w->next_key[k] = c.key;
+}
+
 /* The calendar entries that the commit of the event handled on w sets, from the slots its
  * handle wrote (this thread's: read here, they are at hand), in the order the commit sets
  * them: the changed spheres' other than the event's own, then its own. */
@@ -648,15 +665,13 @@ static void note_next(const nbep_evloop *e, evl_ws *w)
 {
     size_t n = 0;
     for (size_t k = 0; k < w->n_changed && n < NEXT_MAX; k++)
-        if (w->changed[k] != w->item) {
-            w->next_set[n] = slot_entry(e, w->changed[k], &w->next[n]);
-            n++;
-        }
+        if (w->changed[k] != w->item)
+            note_one(e, w, n++, w->changed[k]);
     if (n + 1 > NEXT_MAX) { /* more than NEXT_MAX (not with one pair): the slots, at commit */
         w->n_next = NEXT_ALL;
         return;
     }
-    w->next_set[n] = slot_entry(e, w->item, &w->next[n]);
+    note_one(e, w, n, w->item);
     w->n_next = (uint8_t)(n + 1);
 }
 
@@ -729,7 +744,8 @@ static void commit(nbep_evloop *e, const evl_ws *w)
         return;
     if (w->n_next != NEXT_ALL) {
         for (size_t k = 0; k < w->n_next; k++)
-            enter(e, w->next_set[k], w->next[k]);
+            enter(e, w->next_set[k],
+                  (nbep_calendar_entry){w->next_time[k], w->next_key[k], w->next_item[k]});
         return;
     }
     for (size_t k = 0; k < w->n_changed; k++)
@@ -744,7 +760,7 @@ static bool commit_sets(const evl_ws *w, uint32_t j)
     bool set = j == w->item;
     if (w->n_next != NEXT_ALL)
         for (size_t k = 0; k < w->n_next; k++)
-            set |= w->next[k].item == j;
+            set |= w->next_item[k] == j;
     else
         for (size_t k = 0; k < w->n_changed; k++)
             set |= w->changed[k] == j;
@@ -832,9 +848,6 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
 #define RING NBEP_EVLOOP_RING
 _Static_assert((RING & (RING - 1)) == 0, "the ring's size is a power of 2");
 
-/* Places in flight at most: enough that the helper finds one to take while the leader commits
- * (a window of 12 to 32 ran within the noise of this one at N = 256000, phi = 0.30). */
-#define WINDOW 16
 _Static_assert(WINDOW <= RING, "a window fits the ring");
 /* The window is filled again once this many of its slots are free, not after every commit
  * (2 to 8 ran within the noise of each other; filling whenever the helper had at most 2 or 4
@@ -879,12 +892,12 @@ static inline NBEP_ALWAYS_INLINE int near_span(const nbep_evloop *e, const float
     return near;
 }
 
-/* near_span over every entry of the ring (a free slot's are +inf): one pass of a fixed length,
- * in floats, 16 a vector (this test over the window's centres in doubles, in runs that
- * followed the window round the ring, was a tenth of the leader's time). */
+/* near_span over every entry (a free one's are +inf): one pass of a fixed length, in floats,
+ * 16 a vector (this test over the window's centres in doubles, in runs that followed the
+ * window round the ring, was a tenth of the leader's time). */
 NBEP_AVX512_CLONES static int near_count(const nbep_evloop *e, const float *a, const float *b)
 {
-    return near_span(e, a, b, 0, 2 * RING);
+    return near_span(e, a, b, 0, 2 * WINDOW);
 }
 
 /* Whether the cells that a commit of an event in cell a changes (a's cell and, for a rebuilt
@@ -945,24 +958,26 @@ static bool place_apart(const nbep_evloop *e, uint64_t s, uint64_t *after)
         const size_t k = p % RING;
         if ((e->batch_walks[a] && e->batch_walks[k] &&
              !cells_apart(e, e->batch_cell[a], e->batch_cell[k])) ||
-            near_span(e, ca, cb, 2 * k, 2 * k + 2))
+            near_span(e, ca, cb, 2 * (p % WINDOW), 2 * (p % WINDOW) + 2))
             *after = p;
     }
     return false;
 }
 
-/* Ring slot k's spheres' centres, taken into place_apart's arrays, or dropped from them. */
-static void take_centres(nbep_evloop *e, size_t k, bool drop)
+/* Place p's spheres' centres, taken into place_apart's arrays, or dropped from them (at
+ * 2 (p % WINDOW) and the next: the places in flight are at most WINDOW consecutive numbers). */
+static void take_centres(nbep_evloop *e, uint64_t p, bool drop)
 {
+    const size_t k = p % RING, j = 2 * (p % WINDOW);
     const uint32_t s[2] = {e->batch[k], e->batch_other[k]};
     for (int q = 0; q < 2; q++) {
         const bool none = drop || s[q] == NO_SPHERE;
         float c[3] = {INFINITY, INFINITY, INFINITY};
         if (!none)
             float_centre(e, e->cells.m[s[q]].at, c);
-        e->taken_x[2 * k + q] = c[0];
-        e->taken_y[2 * k + q] = c[1];
-        e->taken_z[2 * k + q] = c[2];
+        e->taken_x[j + q] = c[0];
+        e->taken_y[j + q] = c[1];
+        e->taken_z[j + q] = c[2];
     }
 }
 
@@ -989,7 +1004,7 @@ static void set_place(nbep_evloop *e, uint64_t s, nbep_calendar_entry c, bool fi
 static void join(nbep_evloop *e)
 {
     const size_t k = e->tail % RING;
-    take_centres(e, k, false);
+    take_centres(e, e->tail, false);
     e->cur = e->batch_entry[k];
     nbep_calendar_remove(e->cal, e->batch[k]);
     if (e->batch_other[k] != NO_SPHERE)
@@ -1000,7 +1015,7 @@ static void join(nbep_evloop *e)
 /* Place s leaves the window (committed or undone): its ring slot is free. */
 static void drop_place(nbep_evloop *e, uint64_t s)
 {
-    take_centres(e, s % RING, true);
+    take_centres(e, s, true);
 }
 
 /* Requests the list centres of the spheres of the calendar entry (item, key) (no effect on
@@ -1108,25 +1123,31 @@ static void keep(nbep_evloop *e, size_t k, const nbep_evloop_ops *ops, void *u)
 }
 
 /* A speculative event undone: the spheres it changed as they were, their slots too (the
- * calendar, the lists and the cells were not touched), its counts dropped. */
-static void undo(nbep_evloop *e, const evl_ws *w, const nbep_evloop_ops *ops, void *u,
-                 void *uk)
+ * calendar, the lists and the cells were not touched); its counts are never merged (the next
+ * place handled on its context clears them). */
+static void undo(nbep_evloop *e, const evl_ws *w, const nbep_evloop_ops *ops, void *uk)
 {
     for (int k = w->n_kept - 1; k >= 0; k--) {
         ops->restore(uk, w->kept_id[k], &w->kept_motion[k]);
         nbep_feq_put(e->q, w->kept_id[k], w->kept_slot[k]);
     }
-    ops->merge(u, uk, false);
 }
 
-/* Takes the next published place to handle and handles it: false when none is left. */
-static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us)
+/* Takes the next published place to handle and handles it: false when none is left. *seen is
+ * the calling thread's last reading of avail, read again only when the next place is past it
+ * (avail never goes down, and a place below it was published before that reading: an undo
+ * moves `next` to the window's tail, past every place it withdrew), so that a thread meets
+ * the leader's line once for several places. */
+static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us,
+                     uint64_t *seen)
 {
-    uint64_t v = atomic_load_explicit(&e->next, memory_order_relaxed), n;
+    uint64_t v = atomic_load_explicit(&e->next, memory_order_relaxed), n = *seen;
     do {
-        n = atomic_load_explicit(&e->avail, memory_order_acquire); /* the places up to n */
-        if (v >= n)
-            return false;
+        if (v >= n) { /* the places up to n */
+            n = *seen = atomic_load_explicit(&e->avail, memory_order_acquire);
+            if (v >= n)
+                return false;
+        }
     } while (!atomic_compare_exchange_weak_explicit(&e->next, &v, v + 1, memory_order_relaxed,
                                                     memory_order_relaxed));
     if (v + 1 < n)
@@ -1140,8 +1161,9 @@ static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us
         keep(e, k, ops, us[k]);
     }
     const nbep_event *ev = &e->batch_slot[k].ev;
+    ops->clear(us[k]); /* its counts from zero, on this thread */
     handle(e, &e->ws[k], ops, us[k], e->batch[k], ev, ev->time);
-    atomic_store_explicit(&e->handled[k].place, v, memory_order_release);
+    atomic_store_explicit(&e->ws[k].place, v, memory_order_release);
     return true;
 }
 
@@ -1149,9 +1171,9 @@ static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us
 static void wait_handled(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us,
                          uint64_t s)
 {
-    for (unsigned k = 1;
-         atomic_load_explicit(&e->handled[s % RING].place, memory_order_acquire) != s; k++)
-        if (!take_one(e, ops, us))
+    for (unsigned k = 1; atomic_load_explicit(&e->ws[s % RING].place, memory_order_acquire) != s;
+         k++)
+        if (!take_one(e, ops, us, &e->lead_seen))
             nbep_spin_pause(k);
 }
 
@@ -1168,13 +1190,13 @@ static void put_back(nbep_evloop *e, uint64_t s)
 /* Places s.. of the window undone, and the window emptied (place s - 1, if in it, is the
  * leader's to finish): those not yet taken are taken from the threads (`next` moves past
  * them), those taken are undone once handled. Returns how many were undone. */
-static uint64_t undo_from(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
+static uint64_t undo_from(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us,
                           uint64_t s)
 {
     const uint64_t taken = atomic_exchange_explicit(&e->next, e->tail, memory_order_relaxed);
     for (uint64_t p = s; p < taken; p++) {
         wait_handled(e, ops, us, p);
-        undo(e, &e->ws[p % RING], ops, u, us[p % RING]);
+        undo(e, &e->ws[p % RING], ops, us[p % RING]);
     }
     for (uint64_t p = s; p < e->tail; p++) /* the entries taken out go back, as they were */
         put_back(e, p);
@@ -1231,11 +1253,11 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
             const double tm = e->batch_entry[k].time;
             if (nbep_calendar_first(e->cal, &top) &&
                 nbep_calendar_before(top, e->batch_entry[k])) {
-                tally->undone += undo_from(e, ops, u, us, s);
+                tally->undone += undo_from(e, ops, us, s);
                 continue;
             }
             if (!advances(&since, &t_mark, tm, stall_events, stall_dt)) {
-                undo_from(e, ops, u, us, s);
+                undo_from(e, ops, us, s);
                 tally->events++;
                 *t_stuck = tm;
                 return false;
@@ -1243,7 +1265,7 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
         }
         if (e->stop) { /* not in the scenes a team runs (no reaction there stops the run;
                         * a helper's stop would also be a race on e->stop) */
-            undo_from(e, ops, u, us, s + 1);
+            undo_from(e, ops, us, s + 1);
             nbep_calendar_set(e->cal, e->batch[k], e->batch_entry[k].time,
                               e->batch_entry[k].key); /* its entry back, as it was */
             if (e->batch_other[k] != NO_SPHERE) /* and its other's, from its slot */
@@ -1258,10 +1280,10 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
                 wait_handled(e, ops, us, p);
         tally->events++;
         count_handled(tally, w);
-        ops->merge(u, us[k], true);
+        ops->merge(u, us[k]);
         commit(e, w);
         if (e->failed) {
-            undo_from(e, ops, u, us, s + 1);
+            undo_from(e, ops, us, s + 1);
             return false;
         }
         /* its other's entry back if the reaction did not set it (a stale slot's other) */
@@ -1296,8 +1318,9 @@ bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, v
 void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us)
 {
     const uint64_t seen = atomic_load_explicit(&e->done, memory_order_relaxed); /* its own */
+    uint64_t avail_seen = 0;
     for (unsigned k = 1;; k++) {
-        if (take_one(e, ops, us)) {
+        if (take_one(e, ops, us, &avail_seen)) {
             k = 0;
             continue;
         }

@@ -70,11 +70,14 @@ typedef struct nbep_evloop_ops {
     /* the team loop only (may be NULL otherwise): sphere i's motion kept and put back */
     void (*save)(void *u, uint32_t i, nbep_evloop_motion *m);
     void (*restore)(void *u, uint32_t i, const nbep_evloop_motion *m);
-    /* the team loop only: context uh has handled one event, whose counts and sums (kept
-     * apart, from zero) go into the leader's u when keep (the event stands, and is added in
-     * its place in the order of events, so that every sum is the one thread's bit for bit)
-     * and are dropped otherwise; either way uh's start from zero again */
-    void (*merge)(void *u, void *uh, bool keep);
+    /* the team loop only: context uh's counts and sums from zero, before it handles one
+     * event (on the thread that handles it: the lines stay on that core until the merge) */
+    void (*clear)(void *uh);
+    /* the team loop only: context uh has handled one event that stands; its counts and sums
+     * (kept apart, from zero) go into the leader's u, in the event's place in the order of
+     * events, so that every sum is the one thread's bit for bit (an undone event's are never
+     * merged) */
+    void (*merge)(void *u, const void *uh);
     /* the team loop only: requests sphere i's motion, which a handle is about to read and
      * write (no effect on results) */
     void (*prefetch)(const void *u, uint32_t i);
