@@ -48,10 +48,13 @@ rows="$OUT/rows.csv"
 echo "engine,n,phi,threads,rep,collisions,seconds,rss_bytes,cpu_seconds" >"$rows"
 
 # the stretch S of simulated time measured, per phi: 0.6 million collisions per 32000 spheres,
-# whatever N (a shorter stretch at large N would be a small difference of two long runs, which
-# the machine's noise swamps)
+# and never fewer than 96000 spheres' worth, 1.9 million (a shorter stretch at large N would be
+# a small difference of two long runs, which the machine's noise swamps; at N = 32000 the
+# stretch was 0.65 million collisions, about a second, and one slow run of a pair put a
+# repeat's two-thread ratio at 4.66 where the others were 1.08 and 2.46)
 stretch() { # n phi
-    awk -v p="$2" -v s="$SCALE" 'BEGIN { printf "%.6g", (p < 0.4 ? 4.0 : 1.0) * s }'
+    awk -v n="$1" -v p="$2" -v s="$SCALE" \
+        'BEGIN { f = n < 96000 ? 96000 / n : 1; printf "%.6g", (p < 0.4 ? 4.0 : 1.0) * f * s }'
 }
 side() { awk -v n="$1" -v p="$2" 'BEGIN { printf "%.12g", (n * atan2(0, -1) / (6 * p)) ^ (1 / 3) }'; }
 T1=1
