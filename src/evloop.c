@@ -97,11 +97,11 @@ struct nbep_evloop {
     /* the leader's alone (a line that the other core reads makes each write to it wait): the
      * list centres of the window's spheres as floats (place p's own at 2 (p % WINDOW), its
      * other's next; +inf for none), for the places that join (place_apart); whether each
-     * place is a list expiry (its
-     * handle walks the cells around its sphere and its commit changes them) and then the cell
-     * coordinates of its list centre; each place's calendar entry, taken out while it is in
-     * flight, and the window's last (cur); the window, places head .. tail - 1, more looked
-     * for once head reaches fill_at; and `ends`, the count of calls of nbep_evloop_run_lead */
+     * place is a list expiry (its handle walks the cells around its sphere and its commit
+     * changes them) and then the cell coordinates of its list centre; each place's calendar
+     * entry, taken out while it is in flight, and the window's last (cur); the window, places
+     * head .. tail - 1, more looked for once head reaches fill_at; and `ends`, the count of
+     * calls of nbep_evloop_run_lead */
     alignas(NBEP_CACHELINE) float taken_x[2 * WINDOW];
     alignas(NBEP_CACHELINE) float taken_y[2 * WINDOW];
     alignas(NBEP_CACHELINE) float taken_z[2 * WINDOW];
