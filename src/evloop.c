@@ -924,60 +924,65 @@ static void cell_xyz(const nbep_evloop *e, uint32_t i, size_t *xyz)
     xyz[2] = c / (nx * ny);
 }
 
-/* The list centre of ring slot k's sphere (which 0) or of the other its slot names (which 1;
- * its own when it names none), as place_apart's floats. */
-static void place_centre(const nbep_evloop *e, size_t k, int which, float *f)
+/* The list centres of place s's sphere (own) and of the other its slot names (other; its
+ * own again when it names none), as place_apart's floats. */
+static void place_centres(const nbep_evloop *e, uint64_t s, float *own, float *other)
 {
-    const uint32_t x = which && e->batch_other[k] != NO_SPHERE ? e->batch_other[k] : e->batch[k];
-    float_centre(e, e->cells.m[x].at, f);
+    const size_t k = s % RING;
+    float_centre(e, e->cells.m[e->batch[k]].at, own);
+    for (int q = 0; q < 3; q++)
+        other[q] = own[q];
+    if (e->batch_other[k] != NO_SPHERE)
+        float_centre(e, e->cells.m[e->batch_other[k]].at, other);
 }
 
-/* Whether place s (set, not yet in the window) is apart from every place in flight: both its
- * spheres (the one whose entry it is and the other its slot names) clear of both of each
- * one's, and, when both are list expiries, their cells apart (only an expiry reads the cells
- * of other spheres, in its walk, and only an expiry's commit changes cells; an expiry's slot
- * names no other sphere). When it is not, *after is the last place it touches, whose commit
- * it must wait for. The window's centres in one pass, and the cells of those that walk when s
- * walks; the place it touches, place by place, only when that finds one (a place in every
- * hundred at N = 256000, phi 0.30, where two in five of those that join walk). */
-static bool place_apart(const nbep_evloop *e, uint64_t s, uint64_t *after)
+/* Whether the places at ring slots a and k are both list expiries whose cells are not apart
+ * (only an expiry reads the cells of other spheres, in its walk, and only an expiry's commit
+ * changes cells). */
+static bool cells_clash(const nbep_evloop *e, size_t a, size_t k)
+{
+    return e->batch_walks[a] && e->batch_walks[k] &&
+           !cells_apart(e, e->batch_cell[a], e->batch_cell[k]);
+}
+
+/* Whether place s (set, not yet in the window; own and other its centres, place_centres) is
+ * apart from every place in flight: both its spheres (the one whose entry it is and the other
+ * its slot names) clear of both of each one's, and no clash of cells (cells_clash; an
+ * expiry's slot names no other sphere). When it is not, *after is the last place it touches,
+ * whose commit it must wait for. The window's centres in one pass, and the cells of those
+ * that walk when s walks; the place it touches, place by place, only when that finds one (a
+ * place in every hundred at N = 256000, phi 0.30, where two in five of those that join
+ * walk). */
+static bool place_apart(const nbep_evloop *e, uint64_t s, const float *own, const float *other,
+                        uint64_t *after)
 {
     const size_t a = s % RING;
-    float ca[3], cb[3];
-    place_centre(e, a, 0, ca);
-    place_centre(e, a, 1, cb);
-    bool apart = !near_count(e, ca, cb);
+    bool apart = !near_count(e, own, other);
     if (apart && e->batch_walks[a])
         for (uint64_t p = e->head; p < e->tail; p++)
-            apart &= !e->batch_walks[p % RING] ||
-                     cells_apart(e, e->batch_cell[a], e->batch_cell[p % RING]);
+            apart &= !cells_clash(e, a, p % RING);
     if (apart)
         return true;
     *after = e->tail - 1; /* (the loop finds one: what the pass found is one place's) */
-    for (uint64_t p = e->head; p < e->tail; p++) {
-        const size_t k = p % RING;
-        if ((e->batch_walks[a] && e->batch_walks[k] &&
-             !cells_apart(e, e->batch_cell[a], e->batch_cell[k])) ||
-            near_span(e, ca, cb, 2 * (p % WINDOW), 2 * (p % WINDOW) + 2))
+    for (uint64_t p = e->head; p < e->tail; p++)
+        if (cells_clash(e, a, p % RING) ||
+            near_span(e, own, other, 2 * (p % WINDOW), 2 * (p % WINDOW) + 2))
             *after = p;
-    }
     return false;
 }
 
-/* Place p's spheres' centres, taken into place_apart's arrays, or dropped from them (at
- * 2 (p % WINDOW) and the next: the places in flight are at most WINDOW consecutive numbers). */
-static void take_centres(nbep_evloop *e, uint64_t p, bool drop)
+/* Place p's centres as place_apart's arrays hold them (at 2 (p % WINDOW) and the next: the
+ * places in flight are at most WINDOW consecutive numbers): own and other (NULL: none, +inf,
+ * far from every centre). */
+static void put_centres(nbep_evloop *e, uint64_t p, const float *own, const float *other)
 {
-    const size_t k = p % RING, j = 2 * (p % WINDOW);
-    const uint32_t s[2] = {e->batch[k], e->batch_other[k]};
+    static const float none[3] = {INFINITY, INFINITY, INFINITY};
+    const float *c[2] = {own ? own : none, other ? other : none};
+    const size_t j = 2 * (p % WINDOW);
     for (int q = 0; q < 2; q++) {
-        const bool none = drop || s[q] == NO_SPHERE;
-        float c[3] = {INFINITY, INFINITY, INFINITY};
-        if (!none)
-            float_centre(e, e->cells.m[s[q]].at, c);
-        e->taken_x[j + q] = c[0];
-        e->taken_y[j + q] = c[1];
-        e->taken_z[j + q] = c[2];
+        e->taken_x[j + q] = c[q][0];
+        e->taken_y[j + q] = c[q][1];
+        e->taken_z[j + q] = c[q][2];
     }
 }
 
@@ -997,14 +1002,14 @@ static void set_place(nbep_evloop *e, uint64_t s, nbep_calendar_entry c, bool fi
         cell_xyz(e, c.item, e->batch_cell[k]);
 }
 
-/* The place set at the window's tail joins it: its centres taken, its entry and its other
- * sphere's taken out of the calendar (no place joins on a sphere in flight: its entry is not
- * there to be found; the other's comes after this one, as every entry left does, and the
- * place's commit or undo sets it again). */
-static void join(nbep_evloop *e)
+/* The place set at the window's tail (own and other its centres, place_centres) joins it: its
+ * centres taken, its entry and its other sphere's taken out of the calendar (no place joins
+ * on a sphere in flight: its entry is not there to be found; the other's comes after this
+ * one, as every entry left does, and the place's commit or undo sets it again). */
+static void join(nbep_evloop *e, const float *own, const float *other)
 {
     const size_t k = e->tail % RING;
-    take_centres(e, e->tail, false);
+    put_centres(e, e->tail, own, e->batch_other[k] != NO_SPHERE ? other : NULL);
     e->cur = e->batch_entry[k];
     nbep_calendar_remove(e->cal, e->batch[k]);
     if (e->batch_other[k] != NO_SPHERE)
@@ -1012,10 +1017,10 @@ static void join(nbep_evloop *e)
     e->tail++;
 }
 
-/* Place s leaves the window (committed or undone): its ring slot is free. */
+/* Place s leaves the window (committed or undone): its centres are no longer taken. */
 static void drop_place(nbep_evloop *e, uint64_t s)
 {
-    take_centres(e, s, true);
+    put_centres(e, s, NULL, NULL);
 }
 
 /* Requests the list centres of the spheres of the calendar entry (item, key) (no effect on
@@ -1074,14 +1079,16 @@ static void fill(nbep_evloop *e, double t_end)
             return;
         }
         set_place(e, e->tail, c, false);
+        float own[3], other[3];
+        place_centres(e, e->tail, own, other);
         uint64_t after;
-        if (!place_apart(e, e->tail, &after)) {
+        if (!place_apart(e, e->tail, own, other, &after)) {
             e->fill_at = after + 1;
             return;
         }
         NBEP_PREFETCH(nbep_feq_slot(e->q, c.item));
         NBEP_PREFETCH(&e->nl.sp[c.item]);
-        join(e);
+        join(e, own, other);
     }
 }
 
@@ -1177,8 +1184,8 @@ static void wait_handled(nbep_evloop *e, const nbep_evloop_ops *ops, void *const
             nbep_spin_pause(k);
 }
 
-/* The calendar entries of place s's spheres set again from their slots (fill took them out;
- * an entry it did not take out is set to what it is). */
+/* The calendar entries of place s's spheres set again from their slots (join took them
+ * out). */
 static void put_back(nbep_evloop *e, uint64_t s)
 {
     const size_t k = s % RING;
@@ -1213,7 +1220,9 @@ static void start(nbep_evloop *e, nbep_calendar_entry c, const nbep_event *ev, d
 {
     e->batch_slot[e->tail % RING].ev = *ev;
     set_place(e, e->tail, c, true);
-    join(e);
+    float own[3], other[3];
+    place_centres(e, e->tail, own, other);
+    join(e, own, other);
     fill(e, t_end);
 }
 

@@ -138,8 +138,8 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
                      uint64_t stall_events, double stall_dt, nbep_evloop_tally *tally,
                      double *t_stuck);
 
-/* The team loop's ring of places (a power of 2): places in flight at most, and the contexts
- * a caller passes it (us, below). */
+/* The team loop's ring of places (a power of 2, more than the places it keeps in flight):
+ * the contexts a caller passes it (us, below), one per ring slot. */
 #define NBEP_EVLOOP_RING 32
 
 /* nbep_evloop_run on two threads, with the same results bit for bit. The leader (thread 0)
