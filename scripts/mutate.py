@@ -323,6 +323,13 @@ MUTANTS = [
      "        (void)0;", TEAM, None),
     ("team-undone-counts-kept", "src/evloop.c", "    ops->clear(us[k]); /* its counts from zero, on this thread */",
      "    (void)0;", TEAM, None),
+    ("team-merge-leader-context", "src/evloop.c",
+     "        void *const uh = by ? e->help_us[k] : us[k];",
+     "        void *const uh = us[k];", TEAM, None),
+    ("team-helper-taken-as-leader", "src/evloop.c",
+     "    return atomic_load_explicit(&e->ws[1][k].place, memory_order_acquire) == s ? 1 : -1;",
+     "    return atomic_load_explicit(&e->ws[1][k].place, memory_order_acquire) == s ? 0 : -1;",
+     TEAM, None),
     ("team-way-one-slot", "src/algo_predictive.c", "    bool *next = &c->team_on[(step + 1) & 1];",
      "    bool *next = &c->team_on[step & 1];", TEAM, None),
     # ---- the run takes the scene's arrays (nbep_state_take): the scene's must not be freed too ----

@@ -328,10 +328,12 @@ typedef struct pred_ctx {
      * (0: none yet) */
     bool team_on[2];
     double team_cost[2];
-    nbep_counters *help_cnt;      /* owned when team, NBEP_EVLOOP_RING: each place's event's
-                                   * counts (the team loop's ring of places, evloop.h) */
+    nbep_counters *help_cnt;      /* owned when team, 2 NBEP_EVLOOP_RING: each place's event's
+                                   * counts (the team loop's ring of places, evloop.h), thread
+                                   * t's at t NBEP_EVLOOP_RING + ring slot (each written by the
+                                   * thread that handles the place: it stays on its core) */
     nbep_thread_max *help_mx;     /* owned when team, the same: their sums (wall: one buffer) */
-    double *help_wall;            /* owned when team: NBEP_EVLOOP_RING rows of n_planes */
+    double *help_wall;            /* owned when team: 2 NBEP_EVLOOP_RING rows of n_planes */
 } pred_ctx;
 
 static bool is_zero(nbep_vec3 v)
@@ -481,14 +483,14 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         c->team_on[0] = c->team_on[1] = c->team && team_forced() >= 0;
         if (c->team) {
             const size_t np = sim->st.n_planes;
-            c->help_cnt = nbep_alloc_aligned(NBEP_EVLOOP_RING, sizeof *c->help_cnt);
-            c->help_mx = nbep_alloc_aligned(NBEP_EVLOOP_RING, sizeof *c->help_mx);
-            c->help_wall = calloc(NBEP_EVLOOP_RING * (np ? np : 1), sizeof(double));
+            c->help_cnt = nbep_alloc_aligned(2 * NBEP_EVLOOP_RING, sizeof *c->help_cnt);
+            c->help_mx = nbep_alloc_aligned(2 * NBEP_EVLOOP_RING, sizeof *c->help_mx);
+            c->help_wall = calloc(2 * NBEP_EVLOOP_RING * (np ? np : 1), sizeof(double));
             if (!c->help_cnt || !c->help_mx || !c->help_wall) {
                 nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory for the cells engine");
                 st = NBEP_ENOMEM;
             } else {
-                for (size_t m = 0; m < NBEP_EVLOOP_RING; m++) {
+                for (size_t m = 0; m < 2 * NBEP_EVLOOP_RING; m++) {
                     c->help_cnt[m] = (nbep_counters){0};
                     c->help_mx[m] = (nbep_thread_max){.wall = c->help_wall + m * np};
                 }
@@ -2247,11 +2249,13 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
             rebuild = false;
         }
         /* the team loop's contexts, one per ring slot of its places, on each of the two threads
-         * (with that thread's workspace), the counts and sums of a place apart */
+         * (with that thread's workspace), the counts and sums of a place apart, the thread's
+         * own */
         cells_user ups[NBEP_EVLOOP_RING];
         void *us[NBEP_EVLOOP_RING];
-        for (size_t m = 0; c->team && m < NBEP_EVLOOP_RING; m++) {
-            ups[m] = (cells_user){c, s, sim->scene, u.T0, 0.0, w, &c->help_cnt[m], &c->help_mx[m]};
+        for (size_t m = 0; c->team && tid < 2 && m < NBEP_EVLOOP_RING; m++) {
+            const size_t h = (size_t)tid * NBEP_EVLOOP_RING + m;
+            ups[m] = (cells_user){c, s, sim->scene, u.T0, 0.0, w, &c->help_cnt[h], &c->help_mx[h]};
             us[m] = &ups[m];
         }
         const bool team = c->team && c->team_on[step & 1];

@@ -432,6 +432,18 @@ void nbep_calendar_prefetch(const nbep_calendar *c, uint32_t item)
     NBEP_PREFETCH(&c->node[item]);
 }
 
+void nbep_calendar_prefetch_set(const nbep_calendar *c, double time, bool deep)
+{
+    const int64_t ab = bucket_of(c, time);
+    if (!(ab > c->cur && ab - c->cur <= (int64_t)c->nb)) /* the heap's or the overflow's */
+        return;
+    const uint32_t *head = &c->head[(uint64_t)ab & (c->nb - 1)];
+    if (!deep)
+        NBEP_PREFETCH_W(head);
+    else if (*head != NIL)
+        NBEP_PREFETCH_W(&c->node[*head]);
+}
+
 void nbep_calendar_runners_up(const nbep_calendar *c, uint32_t items[2], uint64_t *keys,
                               int *n)
 {

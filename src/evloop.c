@@ -73,7 +73,10 @@ struct nbep_evloop {
                            * member's place (cells.m[i].at) is where i's list was built */
     nbep_nblist nl;       /* owned */
     uint32_t *count;      /* owned, n: list lengths, at a full rebuild */
-    evl_ws ws[NBEP_EVLOOP_RING]; /* one per ring slot of the team loop (one thread: ws[0]) */
+    /* one per ring slot of the team loop and thread, the leader's [0] and the helper's [1]:
+     * a place's workspace is its taker's, written by it alone, so that its lines pass to the
+     * other core only where the leader reads what the helper handled (one thread: ws[0][0]) */
+    evl_ws ws[2][NBEP_EVLOOP_RING];
     nbep_periodic pb;     /* the box's periodic geometry */
     double cut;           /* the list cutoff: contact distance plus skin, plus slack */
     double stray;         /* half the skin: how far a sphere goes before its list expires */
@@ -90,10 +93,6 @@ struct nbep_evloop {
     alignas(NBEP_CACHELINE) uint32_t batch[NBEP_EVLOOP_RING];
     uint32_t batch_other[NBEP_EVLOOP_RING];
     bool batch_first[NBEP_EVLOOP_RING];
-    struct { /* its slot as it was when handled, written by the thread that takes it: a cache
-              * line each */
-        alignas(NBEP_CACHELINE) nbep_event ev;
-    } batch_slot[NBEP_EVLOOP_RING];
     /* the leader's alone (a line that the other core reads makes each write to it wait): the
      * list centres of the window's spheres as floats (place p's own at 2 (p % WINDOW), its
      * other's next; +inf for none), for the places that join (place_apart); whether each
@@ -122,6 +121,7 @@ struct nbep_evloop {
     alignas(NBEP_CACHELINE) _Atomic uint64_t next;
     alignas(NBEP_CACHELINE) _Atomic uint64_t quit;
     alignas(NBEP_CACHELINE) _Atomic uint64_t done;
+    void *const *help_us; /* the helper's contexts, one per ring slot (nbep_evloop_help) */
 };
 
 _Static_assert(offsetof(evl_ws, next_key) + sizeof((evl_ws *)0)->next_key <= NBEP_CACHELINE,
@@ -223,14 +223,14 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     atomic_init(&e->quit, 0);
     atomic_init(&e->done, 0);
     for (int k = 0; k < NBEP_EVLOOP_RING; k++)
-        atomic_init(&e->ws[k].place, 0);
+        atomic_init(&e->ws[0][k].place, 0), atomic_init(&e->ws[1][k].place, 0);
     for (int k = 0; k < 2 * WINDOW; k++)
         e->taken_x[k] = e->taken_y[k] = e->taken_z[k] = INFINITY;
     set_near2(e, lo, hi, 2.0 * touch);
     e->count = nbep_alloc_aligned(n ? n : 1, sizeof *e->count);
     bool ws_ok = true;
     for (int k = 0; k < NBEP_EVLOOP_RING; k++)
-        ws_ok &= ws_init(&e->ws[k]);
+        ws_ok &= ws_init(&e->ws[0][k]) & ws_init(&e->ws[1][k]);
     nbep_status st = e->count && ws_ok ? NBEP_OK : NBEP_ENOMEM;
     if (st != NBEP_OK)
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory for the cells engine");
@@ -265,7 +265,7 @@ void nbep_evloop_destroy(nbep_evloop **e)
     nbep_nblist_fini(&(*e)->nl);
     nbep_free_aligned((*e)->count);
     for (int k = 0; k < NBEP_EVLOOP_RING; k++)
-        ws_fini(&(*e)->ws[k]);
+        ws_fini(&(*e)->ws[0][k]), ws_fini(&(*e)->ws[1][k]);
     nbep_free_aligned(*e);
     *e = NULL;
 }
@@ -818,7 +818,7 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
         return false;
     uint64_t since = 0;
     double t_mark = -INFINITY;
-    evl_ws *w = &e->ws[0];
+    evl_ws *w = &e->ws[0][0];
     uint32_t i;
     double t;
     while (nbep_calendar_top(e->cal, &i, &t) && t < t_end) {
@@ -1029,8 +1029,10 @@ static void prefetch_centres(const nbep_evloop *e, uint32_t item, uint64_t key)
 {
     NBEP_PREFETCH(&e->cells.m[item]);
     const uint32_t o = key_other(key, item);
-    if (o < e->n)
+    if (o < e->n) {
         NBEP_PREFETCH(&e->cells.m[o]);
+        nbep_calendar_prefetch(e->cal, o); /* join takes its entry out */
+    }
 }
 
 /* Requests the centres of the calendar's runners-up (no effect on results): fill reads them
@@ -1114,11 +1116,10 @@ static inline NBEP_ALWAYS_INLINE void prefetch_place(const nbep_evloop *e,
         NBEP_PREFETCH(&e->nl.pool[e->nl.sp[x[0]].off]);
 }
 
-/* Keeps what the event at ring slot k may change, to undo it: the motion and slot of its
+/* Keeps on w what the event at ring slot k may change, to undo it: the motion and slot of its
  * sphere and of the other its slot names (fill's batch_other, from the calendar key). */
-static void keep(nbep_evloop *e, size_t k, const nbep_evloop_ops *ops, void *u)
+static void keep(nbep_evloop *e, evl_ws *w, size_t k, const nbep_evloop_ops *ops, void *u)
 {
-    evl_ws *w = &e->ws[k];
     w->n_kept = 0;
     w->kept_id[w->n_kept++] = e->batch[k];
     if (e->batch_other[k] != NO_SPHERE)
@@ -1140,13 +1141,14 @@ static void undo(nbep_evloop *e, const evl_ws *w, const nbep_evloop_ops *ops, vo
     }
 }
 
-/* Takes the next published place to handle and handles it: false when none is left. *seen is
+/* Takes the next published place to handle and handles it on the workspace of thread t (0
+ * the leader, 1 the helper) and context us of its slot: false when none is left. *seen is
  * the calling thread's last reading of avail, read again only when the next place is past it
  * (avail never goes down, and a place below it was published before that reading: an undo
  * moves `next` to the window's tail, past every place it withdrew), so that a thread meets
  * the leader's line once for several places. */
 static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us,
-                     uint64_t *seen)
+                     uint64_t *seen, int t)
 {
     uint64_t v = atomic_load_explicit(&e->next, memory_order_relaxed), n = *seen;
     do {
@@ -1162,26 +1164,76 @@ static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us
     if (v + 2 < n)
         prefetch_place(e, ops, us, v + 2, false);
     const size_t k = v % RING;
-    if (!e->batch_first[k]) { /* every other place (the window's first was read by lead) may
-                               * be undone */
-        e->batch_slot[k].ev = *nbep_feq_slot(e->q, e->batch[k]);
-        keep(e, k, ops, us[k]);
-    }
-    const nbep_event *ev = &e->batch_slot[k].ev;
+    /* its slot, as the calendar entry that made it a place was set from: no place in flight
+     * writes it (the places are apart), so the copy is the taker's own, read here */
+    const nbep_event ev = *nbep_feq_slot(e->q, e->batch[k]);
+    evl_ws *w = &e->ws[t][k];
+    if (!e->batch_first[k]) /* every other place may be undone */
+        keep(e, w, k, ops, us[k]);
     ops->clear(us[k]); /* its counts from zero, on this thread */
-    handle(e, &e->ws[k], ops, us[k], e->batch[k], ev, ev->time);
-    atomic_store_explicit(&e->ws[k].place, v, memory_order_release);
+    handle(e, w, ops, us[k], e->batch[k], &ev, ev.time);
+    atomic_store_explicit(&w->place, v, memory_order_release);
     return true;
 }
 
-/* The leader waits for place s to be handled, handling places meanwhile. */
-static void wait_handled(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us,
-                         uint64_t s)
+/* Requests a list's record (not deep), or what it leads to (deep): the lines of the list that
+ * an entry is appended to or dropped from (no effect on results). */
+static inline NBEP_ALWAYS_INLINE void prefetch_record(const nbep_evloop *e, uint32_t j,
+                                                     bool deep)
 {
-    for (unsigned k = 1; atomic_load_explicit(&e->ws[s % RING].place, memory_order_acquire) != s;
-         k++)
-        if (!take_one(e, ops, us, &e->lead_seen))
+    if (!deep) {
+        NBEP_PREFETCH_W(&e->nl.sp[j]);
+        return;
+    }
+    const nbep_nblist_span sp = e->nl.sp[j];
+    NBEP_PREFETCH_W(&e->nl.pool[sp.off]);
+    if (sp.cnt > 0)
+        NBEP_PREFETCH_W(&e->nl.pool[sp.off + sp.cnt - 1]);
+}
+
+/* Requests what the leader's commit of the event handled on w writes (no effect on results),
+ * in two stages, the first (not deep) a commit ahead: the calendar's lists that its entries
+ * join (the two lines of a set that missed most: its list's head and the entry there) and,
+ * for a rebuilt list, the records and then the lists of the spheres whose lists it enters or
+ * leaves, and its own. The handle knew them a while before, on the other core. */
+static void prefetch_commit(const nbep_evloop *e, const evl_ws *w, bool deep)
+{
+    if (w->n_next != NEXT_ALL)
+        for (size_t k = 0; k < w->n_next; k++)
+            if (w->next_set[k])
+                nbep_calendar_prefetch_set(e->cal, w->next_time[k], deep);
+    if (!w->rebuilt)
+        return;
+    prefetch_record(e, w->item, deep);
+    for (size_t k = 0; k < w->n_near; k++)
+        if (w->gain[k])
+            prefetch_record(e, w->near[k], deep);
+    for (size_t k = 0; k < w->n_was; k++)
+        if (!w->kept[k])
+            prefetch_record(e, w->was[k], deep);
+}
+
+/* The thread that handled place s, if it has been handled: 0 the leader, 1 the helper, -1 not
+ * yet. The leader's mark is its own line; the helper's is read with acquire (what its handle
+ * wrote is then there to read). */
+static int handled_by(const nbep_evloop *e, uint64_t s)
+{
+    const size_t k = s % RING;
+    if (atomic_load_explicit(&e->ws[0][k].place, memory_order_relaxed) == s)
+        return 0;
+    return atomic_load_explicit(&e->ws[1][k].place, memory_order_acquire) == s ? 1 : -1;
+}
+
+/* The leader waits for place s to be handled, handling places meanwhile: the thread that
+ * handled it (handled_by). */
+static int wait_handled(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us,
+                        uint64_t s)
+{
+    int t;
+    for (unsigned k = 1; (t = handled_by(e, s)) < 0; k++)
+        if (!take_one(e, ops, us, &e->lead_seen, 0))
             nbep_spin_pause(k);
+    return t;
 }
 
 /* The calendar entries of place s's spheres set again from their slots (join took them
@@ -1202,8 +1254,8 @@ static uint64_t undo_from(nbep_evloop *e, const nbep_evloop_ops *ops, void *cons
 {
     const uint64_t taken = atomic_exchange_explicit(&e->next, e->tail, memory_order_relaxed);
     for (uint64_t p = s; p < taken; p++) {
-        wait_handled(e, ops, us, p);
-        undo(e, &e->ws[p % RING], ops, us[p % RING]);
+        const int t = wait_handled(e, ops, us, p);
+        undo(e, &e->ws[t][p % RING], ops, us[p % RING]);
     }
     for (uint64_t p = s; p < e->tail; p++) /* the entries taken out go back, as they were */
         put_back(e, p);
@@ -1214,11 +1266,10 @@ static uint64_t undo_from(nbep_evloop *e, const nbep_evloop_ops *ops, void *cons
     return e->tail - s;
 }
 
-/* The window's first place, when nothing is in flight: the calendar's earliest entry c, whose
- * slot is ev, which stands (the one thread would handle it next, from the same state). */
-static void start(nbep_evloop *e, nbep_calendar_entry c, const nbep_event *ev, double t_end)
+/* The window's first place, when nothing is in flight: the calendar's earliest entry c, which
+ * stands (the one thread would handle it next, from the same state). */
+static void start(nbep_evloop *e, nbep_calendar_entry c, double t_end)
 {
-    e->batch_slot[e->tail % RING].ev = *ev;
     set_place(e, e->tail, c, true);
     float own[3], other[3];
     place_centres(e, e->tail, own, other);
@@ -1244,7 +1295,7 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
                 *t_stuck = c.time;
                 return false;
             }
-            start(e, c, &ev, t_end);
+            start(e, c, t_end);
             atomic_store_explicit(&e->avail, e->tail, memory_order_release);
         }
         /* the places in order, as they are handled: each stands when it is then the earliest
@@ -1252,8 +1303,13 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
          * touched its spheres) */
         const uint64_t s = e->head;
         const size_t k = s % RING;
-        wait_handled(e, ops, us, s);
-        const evl_ws *w = &e->ws[k];
+        const int by = wait_handled(e, ops, us, s);
+        const evl_ws *w = &e->ws[by][k];
+        void *const uh = by ? e->help_us[k] : us[k];
+        /* the next place's commit prepared during this one's, when it is handled already */
+        const int next_by = s + 1 < e->tail ? handled_by(e, s + 1) : -1;
+        if (next_by >= 0)
+            prefetch_commit(e, &e->ws[next_by][(s + 1) % RING], false);
         if (!e->batch_first[k]) {
             /* the calendar holds every entry but those of the window's places and their
              * others, which all come after this one: it is the earliest if the calendar's
@@ -1279,7 +1335,7 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
                               e->batch_entry[k].key); /* its entry back, as it was */
             if (e->batch_other[k] != NO_SPHERE) /* and its other's, from its slot */
                 schedule_one(e, e->batch_other[k]);
-            *t_stuck = e->batch_slot[k].ev.time;
+            *t_stuck = e->batch_entry[k].time; /* its slot's time */
             return false;
         }
         /* a commit that would make the pool of lists move waits until no list is read */
@@ -1289,7 +1345,7 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
                 wait_handled(e, ops, us, p);
         tally->events++;
         count_handled(tally, w);
-        ops->merge(u, us[k]);
+        ops->merge(u, uh);
         commit(e, w);
         if (e->failed) {
             undo_from(e, ops, us, s + 1);
@@ -1299,6 +1355,8 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
         if (e->batch_other[k] != NO_SPHERE && !commit_sets(w, e->batch_other[k]))
             schedule_one(e, e->batch_other[k]);
         tally->ahead += !e->batch_first[k];
+        if (next_by >= 0)
+            prefetch_commit(e, &e->ws[next_by][(s + 1) % RING], true);
         drop_place(e, s);
         e->head++;
         /* more places, once the threads are about to run out of them (a guess that changes
@@ -1326,10 +1384,11 @@ bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, v
 
 void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us)
 {
+    e->help_us = us; /* read by the leader after each place's mark, which comes after */
     const uint64_t seen = atomic_load_explicit(&e->done, memory_order_relaxed); /* its own */
     uint64_t avail_seen = 0;
     for (unsigned k = 1;; k++) {
-        if (take_one(e, ops, us, &avail_seen)) {
+        if (take_one(e, ops, us, &avail_seen, 1)) {
             k = 0;
             continue;
         }

@@ -63,6 +63,11 @@ void nbep_calendar_runners_up(const nbep_calendar *c, uint32_t items[2], uint64_
                               int *n);
 /* Requests item's entry, to be set or removed soon (no effect on the order). */
 void nbep_calendar_prefetch(const nbep_calendar *c, uint32_t item);
+/* Requests what setting an entry at `time` will write (no effect on the order): the bucket
+ * list it joins when it waits in the ring; with `deep`, the entry at that list's head, which it
+ * links to (read from the list's head: call it deep a while after a call without, when the
+ * head is in cache). */
+void nbep_calendar_prefetch_set(const nbep_calendar *c, double time, bool deep);
 /* Entries held. */
 size_t nbep_calendar_size(const nbep_calendar *c);
 /* True when item has an entry; its time in *time (may be NULL). */
