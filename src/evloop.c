@@ -1225,14 +1225,20 @@ static int handled_by(const nbep_evloop *e, uint64_t s)
 }
 
 /* The leader waits for place s to be handled, handling places meanwhile: the thread that
- * handled it (handled_by). */
+ * handled it (handled_by). Once none is left to take, it stops looking at `next` until it
+ * returns: only the leader publishes places, so none comes meanwhile, and each look would pull
+ * the line of the counter that the helper writes as it takes each place. */
 static int wait_handled(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us,
                         uint64_t s)
 {
     int t;
-    for (unsigned k = 1; (t = handled_by(e, s)) < 0; k++)
-        if (!take_one(e, ops, us, &e->lead_seen, 0))
-            nbep_spin_pause(k);
+    bool dry = false;
+    for (unsigned k = 1; (t = handled_by(e, s)) < 0; k++) {
+        if (!dry && take_one(e, ops, us, &e->lead_seen, 0))
+            continue;
+        dry = true;
+        nbep_spin_pause(k);
+    }
     return t;
 }
 
