@@ -2161,8 +2161,13 @@ static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, c
  * between the two), and loses where it is not or is busy with other work: the same fluid on
  * this project's 2-core virtual machine ran 1.5 times as fast as one thread in some runs and
  * 0.8 times in others. Results are the same bit for bit either way, so the run measures both
- * and takes the faster: every TEAM_PROBE-th step runs the other way, and each way's seconds
- * per event are a running mean of its steps (half the last step, half what it was). A probe
+ * and takes the faster: every TEAM_PROBE-th step runs the other way (a probe). The way taken
+ * keeps its seconds per event as a running mean of its steps (half the last step, half what it
+ * was); a probe's figure replaces the other way's, which would otherwise carry a probe from
+ * many steps before (the first, at the second step, runs while a lattice start melts, on
+ * events a quarter cheaper than later: its figure kept the run probing every TEAM_PROBE-th
+ * step, 5 probes in 80 steps of a fluid at N = 256000, phi = 0.30, each costing 0.75 of a
+ * team step). A probe
  * costs what the slower way loses: with the team 1.6 times as fast, one step in 8 run alone
  * adds 7 % to the run's time. Where one way is at least TEAM_CLEAR times as fast, the other
  * is probed every TEAM_PROBE_FAR-th step only; the way taken is measured at every step, so a
@@ -2184,8 +2189,9 @@ static void team_choose(pred_ctx *c, uint64_t step, bool team, uint64_t events, 
 {
     if (events > 0) {
         const double per = seconds / (double)events;
+        const bool probed = (c->team_cost[1] <= c->team_cost[0]) != team; /* the slower way */
         double *m = &c->team_cost[team];
-        *m = *m > 0.0 ? 0.5 * (*m + per) : per;
+        *m = *m > 0.0 && !probed ? 0.5 * (*m + per) : per;
     }
     const int forced = team_forced();
     const bool faster = c->team_cost[1] <= c->team_cost[0];
