@@ -1314,8 +1314,9 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
         void *const uh = by ? e->help_us[k] : us[k];
         /* the next place's commit prepared during this one's, when it is handled already */
         const int next_by = s + 1 < e->tail ? handled_by(e, s + 1) : -1;
-        if (next_by >= 0)
-            prefetch_commit(e, &e->ws[next_by][(s + 1) % RING], false);
+        const evl_ws *w_next = next_by >= 0 ? &e->ws[next_by][(s + 1) % RING] : NULL;
+        if (w_next)
+            prefetch_commit(e, w_next, false);
         if (!e->batch_first[k]) {
             /* the calendar holds every entry but those of the window's places and their
              * others, which all come after this one: it is the earliest if the calendar's
@@ -1361,8 +1362,8 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
         if (e->batch_other[k] != NO_SPHERE && !commit_sets(w, e->batch_other[k]))
             schedule_one(e, e->batch_other[k]);
         tally->ahead += !e->batch_first[k];
-        if (next_by >= 0)
-            prefetch_commit(e, &e->ws[next_by][(s + 1) % RING], true);
+        if (w_next)
+            prefetch_commit(e, w_next, true);
         drop_place(e, s);
         e->head++;
         /* more places, once the threads are about to run out of them (a guess that changes

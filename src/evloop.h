@@ -157,7 +157,9 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
  * (ops restore), their entries put back, and handled again. The event at place m is handled
  * with context us[m % NBEP_EVLOOP_RING] of the thread that takes it (each thread passes its
  * own array: one context per ring slot, the place's counts and sums kept apart and merged
- * into u, the leader's, when it stands: ops merge). For scenes whose reactions change only
+ * into u, the leader's, when it stands: ops merge, which for a place the helper handled reads
+ * the helper's context, so the helper's array lives until the leader returns, as the helper
+ * does). For scenes whose reactions change only
  * the event's own spheres (the caller's choice: an elastic scene where nothing
  * accelerates). Returns as nbep_evloop_run; the helper returns when it does. */
 bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
