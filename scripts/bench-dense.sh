@@ -34,6 +34,13 @@
 # shared caches and memory: on this project's 2-core machine the two ratios came out the same;
 # where a machine is oversubscribed the CPU-time one is the steadier (both include set-up,
 # which cancels).
+#
+# Beside each multi-thread run, the time a cache line takes to pass between two cores
+# (scripts/handover.c, built in OUT; median of 5 stretches, before and after the run): the team
+# loop passes a few lines between its threads for each event, so a repeat's two-thread ratio
+# follows it. On this project's 2-core virtual machine it was about 28 ns most of the time and
+# about 160 ns in stretches of minutes (the host had put the two virtual CPUs on cores that
+# share no cache); the table lists each repeat's ratio with it.
 set -u
 cd "$(dirname "$0")/.."
 NS=${NS:-32000}
@@ -45,7 +52,9 @@ OUT=${OUT:-build/bench-dense}
 PY=${PYTHON:-/usr/bin/python3}
 mkdir -p "$OUT"
 rows="$OUT/rows.csv"
-echo "engine,n,phi,threads,rep,collisions,seconds,rss_bytes,cpu_seconds" >"$rows"
+echo "engine,n,phi,threads,rep,collisions,seconds,rss_bytes,cpu_seconds,handover_ns" >"$rows"
+handover="$OUT/handover"
+cc -std=c11 -O2 -pthread scripts/handover.c -o "$handover" || { echo "handover probe: build failed" >&2; exit 1; }
 
 # the stretch S of simulated time measured, per phi: 0.6 million collisions per 32000 spheres,
 # and never fewer than 96000 spheres' worth, 1.9 million (a shorter stretch at large N would be
@@ -133,13 +142,16 @@ run_nbep() { # n phi threads rep
     local u1 u2
     s1=$(timed bin/nbep run "$d1" --quiet --summary -) || { echo "nbep failed: $d1" >&2; return 1; }
     u1=$(cpu_of)
+    local h1="" h2="" ho=""
+    [ "$3" -gt 1 ] && h1=$("$handover")
     s2=$(timed bin/nbep run "$d2" --quiet --summary -) || { echo "nbep failed: $d2" >&2; return 1; }
     u2=$(cpu_of)
+    [ "$3" -gt 1 ] && h2=$("$handover") && ho="$h1 $h2"
     local c1 c2 w1 w2 rss
     c1=$(echo "$s1" | summary_field collisions); c2=$(echo "$s2" | summary_field collisions)
     w1=$(echo "$s1" | summary_field wall_seconds); w2=$(echo "$s2" | summary_field wall_seconds)
     rss=$(echo "$s2" | summary_field peak_rss_bytes)
-    echo "nbep,$1,$2,$3,$4,$((c2 - c1)),$(minus "$w1" "$w2"),$rss,$(minus "$u1" "$u2")" >>"$rows"
+    echo "nbep,$1,$2,$3,$4,$((c2 - c1)),$(minus "$w1" "$w2"),$rss,$(minus "$u1" "$u2"),$ho" >>"$rows"
 }
 
 edmd_once() { # dir -> "collisions seconds rss cpu_seconds"
@@ -158,7 +170,7 @@ run_edmd() { # n phi rep
     e2=$(edmd_build "$1" "$2" "$(awk -v s="$S" 'BEGIN { print 0.1 + s }')") || return 1
     read -r ca wa ra ua < <(edmd_once "$e1")
     read -r cb wb rb ub < <(edmd_once "$e2")
-    echo "edmd,$1,$2,1,$3,$((cb - ca)),$(minus "$wa" "$wb"),$rb,$(minus "$ua" "$ub")" >>"$rows"
+    echo "edmd,$1,$2,1,$3,$((cb - ca)),$(minus "$wa" "$wb"),$rb,$(minus "$ua" "$ub")," >>"$rows"
 }
 
 for n in $NS; do
@@ -221,4 +233,19 @@ for (eng, n, phi, nt), (rate, *_rest) in sorted(med.items()):
     if c1 and nt != 1:
         parts.append(f"{nt} threads / 1 thread = {rate / c1[0]:.2f}")
     print("  " + "; ".join(parts))
+
+# each repeat's multi-thread rate over the same repeat's one-thread rate, with the cores'
+# hand-over time (ns, before and after the run)
+one = {(r["n"], r["phi"], r["rep"]): r for r in rows if r["engine"] == "nbep" and r["threads"] == "1"}
+print("\nper repeat: threads / 1 thread (hand-over ns before, after)")
+for key in sorted(k for k in groups if k[0] == "nbep" and k[3] != 1):
+    parts = []
+    for r in sorted(groups[key], key=lambda r: int(r["rep"])):
+        o = one.get((r["n"], r["phi"], r["rep"]))
+        if not o or float(o["seconds"]) <= 0:
+            continue
+        ratio = (int(r["collisions"]) / float(r["seconds"])) / (int(o["collisions"]) / float(o["seconds"]))
+        ho = ", ".join(r.get("handover_ns", "").split())
+        parts.append(f"{ratio:.2f} ({ho})" if ho else f"{ratio:.2f}")
+    print(f"  N {key[1]}, phi {key[2]}, {key[3]} threads: " + "; ".join(parts))
 PYEOF
