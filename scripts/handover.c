@@ -81,7 +81,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "handover: no thread\n");
         return 2;
     }
-    double ns[CHUNKS_MAX];
+    double ns[CHUNKS_MAX] = {0};
     for (int k = 0; k < chunks; k++) { /* the even numbers, timed a chunk at a time */
         const double t0 = now();
         for (long i = k * PER_CHUNK; i < (k + 1) * PER_CHUNK; i += 2) {
