@@ -234,8 +234,8 @@ MUTANTS = [
     ("cal-lap-no-overflow", "src/calendar.c",
      "            if (c->ovf_min <= c->cur + (int64_t)c->nb)\n                redistribute(c);",
      "            (void)0;", ["test_calendar"] + CELLS, None),
-    ("cal-ring-one-too-far", "src/calendar.c", "} else if (ab - c->cur <= (int64_t)c->nb) {",
-     "} else if (ab - c->cur <= (int64_t)c->nb + 1) {", ["test_calendar"] + CELLS, None),
+    ("cal-ring-one-too-far", "src/calendar.c", "    return ab > c->cur && ab - c->cur <= (int64_t)c->nb;",
+     "    return ab > c->cur && ab - c->cur <= (int64_t)c->nb + 1;", ["test_calendar"] + CELLS, None),
     # ---- cell lists ----
     ("cells-block-lo", "src/cells.c", "        if (xyz[k] > 0) {\n            b->idx[k][m] = xyz[k] - 1;", "        if (0) {\n            b->idx[k][m] = xyz[k] - 1;",
      ["test_cells"] + CELLS, None),

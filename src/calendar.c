@@ -186,6 +186,17 @@ static inline int64_t bucket_of(const nbep_calendar *c, double time)
     return q < -0x1p62 ? -INT64_MAX : (int64_t)q;
 }
 
+/* Whether bucket ab waits in the ring (after the current one, at most nb ahead), and its list
+ * there. */
+static inline bool in_ring(const nbep_calendar *c, int64_t ab)
+{
+    return ab > c->cur && ab - c->cur <= (int64_t)c->nb;
+}
+static inline uint32_t ring_loc(const nbep_calendar *c, int64_t ab)
+{
+    return (uint32_t)((uint64_t)ab & (c->nb - 1));
+}
+
 static void list_push(nbep_calendar *c, uint32_t *head, uint32_t item)
 {
     node *x = &c->node[item];
@@ -214,9 +225,9 @@ static void file(nbep_calendar *c, uint32_t item)
     int64_t ab = bucket_of(c, x->time);
     if (ab <= c->cur) {
         heap_push(c, item);
-    } else if (ab - c->cur <= (int64_t)c->nb) {
+    } else if (in_ring(c, ab)) {
         x->where = WHERE_RING;
-        x->loc = (uint32_t)((uint64_t)ab & (c->nb - 1));
+        x->loc = ring_loc(c, ab);
         list_push(c, &c->head[x->loc], item);
         c->ring_len++;
     } else {
@@ -435,9 +446,9 @@ void nbep_calendar_prefetch(const nbep_calendar *c, uint32_t item)
 void nbep_calendar_prefetch_set(const nbep_calendar *c, double time, bool deep)
 {
     const int64_t ab = bucket_of(c, time);
-    if (!(ab > c->cur && ab - c->cur <= (int64_t)c->nb)) /* the heap's or the overflow's */
+    if (!in_ring(c, ab)) /* the heap's or the overflow's */
         return;
-    const uint32_t *head = &c->head[(uint64_t)ab & (c->nb - 1)];
+    const uint32_t *head = &c->head[ring_loc(c, ab)];
     if (!deep)
         NBEP_PREFETCH_W(head);
     else if (*head != NIL)

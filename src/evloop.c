@@ -222,15 +222,17 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     atomic_init(&e->next, 1);
     atomic_init(&e->quit, 0);
     atomic_init(&e->done, 0);
-    for (int k = 0; k < NBEP_EVLOOP_RING; k++)
-        atomic_init(&e->ws[0][k].place, 0), atomic_init(&e->ws[1][k].place, 0);
+    for (int t = 0; t < 2; t++)
+        for (int k = 0; k < NBEP_EVLOOP_RING; k++)
+            atomic_init(&e->ws[t][k].place, 0);
     for (int k = 0; k < 2 * WINDOW; k++)
         e->taken_x[k] = e->taken_y[k] = e->taken_z[k] = INFINITY;
     set_near2(e, lo, hi, 2.0 * touch);
     e->count = nbep_alloc_aligned(n ? n : 1, sizeof *e->count);
     bool ws_ok = true;
-    for (int k = 0; k < NBEP_EVLOOP_RING; k++)
-        ws_ok &= ws_init(&e->ws[0][k]) & ws_init(&e->ws[1][k]);
+    for (int t = 0; t < 2; t++)
+        for (int k = 0; k < NBEP_EVLOOP_RING; k++)
+            ws_ok &= ws_init(&e->ws[t][k]); /* each tried: ws_fini frees what any holds */
     nbep_status st = e->count && ws_ok ? NBEP_OK : NBEP_ENOMEM;
     if (st != NBEP_OK)
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory for the cells engine");
@@ -264,8 +266,9 @@ void nbep_evloop_destroy(nbep_evloop **e)
     nbep_cells_fini(&(*e)->cells);
     nbep_nblist_fini(&(*e)->nl);
     nbep_free_aligned((*e)->count);
-    for (int k = 0; k < NBEP_EVLOOP_RING; k++)
-        ws_fini(&(*e)->ws[0][k]), ws_fini(&(*e)->ws[1][k]);
+    for (int t = 0; t < 2; t++)
+        for (int k = 0; k < NBEP_EVLOOP_RING; k++)
+            ws_fini(&(*e)->ws[t][k]);
     nbep_free_aligned(*e);
     *e = NULL;
 }
