@@ -16,6 +16,8 @@
 #   REPS         repeats; the table shows medians (default 3)
 #   SCALE        multiplies every measured stretch of simulated time (default 1; 0.2: smoke)
 #   OUT          where the raw rows and the scratch builds go (default build/bench-dense)
+#   NBEP         the nbep binary (default bin/nbep; a wrapper script for a node that lacks the
+#                libraries, for example)
 #
 # The scene: N spheres of diameter 1, mass 1, kT = 1 in a periodic cube of side L,
 # L^3 = N pi / (6 phi) (inputs/hard-sphere-fluid.deck is the N = 32000, phi = 0.30 one).
@@ -49,12 +51,20 @@ THREADS=${THREADS:-"1 2"}
 REPS=${REPS:-3}
 SCALE=${SCALE:-1}
 OUT=${OUT:-build/bench-dense}
+NBEP=${NBEP:-bin/nbep}
 PY=${PYTHON:-/usr/bin/python3}
 mkdir -p "$OUT"
 rows="$OUT/rows.csv"
 echo "engine,n,phi,threads,rep,collisions,seconds,rss_bytes,cpu_seconds,handover_ns" >"$rows"
+# the hand-over probe: built here; on a node without a compiler, a copy already in OUT is used,
+# and with neither the column stays empty
 handover="$OUT/handover"
-cc -std=c11 -O2 -pthread scripts/handover.c -o "$handover" || { echo "handover probe: build failed" >&2; exit 1; }
+if command -v cc >/dev/null; then
+    cc -std=c11 -O2 -pthread scripts/handover.c -o "$handover" || { echo "handover probe: build failed" >&2; exit 1; }
+elif [ ! -x "$handover" ]; then
+    echo "handover probe: skipped (no cc, none in $OUT)"
+    handover=""
+fi
 
 # the stretch S of simulated time measured, per phi: 0.6 million collisions per 32000 spheres,
 # and never fewer than 96000 spheres' worth, 1.9 million (a shorter stretch at large N would be
@@ -101,7 +111,7 @@ edmd_build() { # n phi time -> path of the build
             -e "s/^int initialconfig = [0-9]*;/int initialconfig = 0;/" \
             -e "s/^const int usethermostat = 1;/const int usethermostat = 0;/" "$dir/mdSingle.c"
         (cd "$dir" && make -s >build.log 2>&1) || { echo "EDMD build failed: $dir/build.log" >&2; return 1; }
-        cp "$OUT/init-$1-$2.sph" "$dir/init.sph"
+        ln -sf "../init-$1-$2.sph" "$dir/init.sph" # (a folder of builds can travel without it)
     fi
     echo "$dir"
 }
@@ -110,7 +120,7 @@ edmd_build() { # n phi time -> path of the build
 melt() { # n phi
     local h5="$OUT/melt-$1-$2.h5" d
     d=$(deck "$1" "$2" 1 "$T1" 1 "$h5" '"position"')
-    bin/nbep run "$d" --quiet || { echo "nbep failed: $d" >&2; return 1; }
+    "$NBEP" run "$d" --quiet || { echo "nbep failed: $d" >&2; return 1; }
     "$PY" - "$h5" "$(side "$1" "$2")" "$OUT/init-$1-$2.sph" <<'PYEOF' || return 1
 import sys, h5py
 f = h5py.File(sys.argv[1], "r"); L = float(sys.argv[2])
@@ -125,9 +135,16 @@ PYEOF
 summary_field() { sed -n "s/.*\"$1\": *\([0-9.e+-]*\).*/\1/p"; }
 
 # timed CMD...: runs it (stdout kept) and records its CPU time and peak RSS, which cpu_of
-# (user + system, seconds) and rss_of (bytes) read back; minus A B prints B - A.
+# (user + system, seconds) and rss_of (bytes) read back; minus A B prints B - A. Without GNU
+# time (GNU_TIME, default /usr/bin/time) the command runs untimed and those columns are 0.
 TIME_OUT="$(cd "$OUT" && pwd)/time.txt"
-timed() { /usr/bin/time -f "%U %S %M" -o "$TIME_OUT" "$@"; }
+GNU_TIME=${GNU_TIME:-/usr/bin/time}
+if [ -x "$GNU_TIME" ]; then
+    timed() { "$GNU_TIME" -f "%U %S %M" -o "$TIME_OUT" "$@"; }
+else
+    echo "CPU time and EDMD's memory: not measured (no $GNU_TIME)"
+    timed() { echo "0 0 0" >"$TIME_OUT"; "$@"; }
+fi
 cpu_of() { awk 'END { print $1 + $2 }' "$TIME_OUT"; } # the last line: a failed command's
 rss_of() { awk 'END { print $3 * 1024 }' "$TIME_OUT"; } # status line comes first
 minus() { awk -v a="$1" -v b="$2" 'BEGIN { print b - a }'; }
@@ -140,13 +157,13 @@ run_nbep() { # n phi threads rep
     d1=$(deck "$1" "$2" "$(awk -v t="$T1" 'BEGIN { printf "%d", t / 0.05 + 0.5 }')" 0.05 "$3" "$OUT/run.h5" "")
     d2=$(deck "$1" "$2" "$steps2" 0.05 "$3" "$OUT/run.h5" "")
     local u1 u2
-    s1=$(timed bin/nbep run "$d1" --quiet --summary -) || { echo "nbep failed: $d1" >&2; return 1; }
+    s1=$(timed "$NBEP" run "$d1" --quiet --summary -) || { echo "nbep failed: $d1" >&2; return 1; }
     u1=$(cpu_of)
     local h1="" h2="" ho=""
-    [ "$3" -gt 1 ] && h1=$("$handover")
-    s2=$(timed bin/nbep run "$d2" --quiet --summary -) || { echo "nbep failed: $d2" >&2; return 1; }
+    [ "$3" -gt 1 ] && [ -n "$handover" ] && h1=$("$handover")
+    s2=$(timed "$NBEP" run "$d2" --quiet --summary -) || { echo "nbep failed: $d2" >&2; return 1; }
     u2=$(cpu_of)
-    [ "$3" -gt 1 ] && h2=$("$handover") && ho="$h1 $h2"
+    [ "$3" -gt 1 ] && [ -n "$handover" ] && h2=$("$handover") && ho="$h1 $h2"
     local c1 c2 w1 w2 rss
     c1=$(echo "$s1" | summary_field collisions); c2=$(echo "$s2" | summary_field collisions)
     w1=$(echo "$s1" | summary_field wall_seconds); w2=$(echo "$s2" | summary_field wall_seconds)
