@@ -44,7 +44,7 @@
 # about 160 ns in stretches of minutes (the host had put the two virtual CPUs on cores that
 # share no cache); the table lists each repeat's ratio with it.
 set -u
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/.." || exit 1
 NS=${NS:-32000}
 PHIS=${PHIS:-"0.30 0.50"}
 THREADS=${THREADS:-"1 2"}
@@ -181,7 +181,7 @@ edmd_once() { # dir -> "collisions seconds rss cpu_seconds"
 }
 
 run_edmd() { # n phi rep
-    local S e1 e2 a b
+    local S e1 e2
     S=$(stretch "$1" "$2")
     e1=$(edmd_build "$1" "$2" 0.1) || return 1
     e2=$(edmd_build "$1" "$2" "$(awk -v s="$S" 'BEGIN { print 0.1 + s }')") || return 1

@@ -21,7 +21,7 @@
 # three times at each thread count, "all" (the paper's algorithm, n = 16384: its set-up
 # predicts all pairs, 8 s on one core) once. Its table: ms per step (stepping loop), median.
 set -u
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/.." || exit 1
 cores=$(nproc)
 powers() { local n=1 l=""; while [ "$n" -lt "$1" ]; do l="$l $n"; n=$((n * 2)); done; echo "$l $1"; }
 THREADS=${THREADS:-$(powers "$cores")}

@@ -17,7 +17,8 @@ cp bin/nbep "$dir/nbep.bin"
 # ldd's lines: "libx.so.N => /path (addr)" and the loader's "/lib64/ld-linux-x86-64.so.2 (addr)"
 ldd bin/nbep | awk '$2 == "=>" && $3 ~ /^\// { print $3 } $1 ~ /^\// { print $1 }' |
     while read -r f; do cp -L "$f" "$dir/lib/"; done
-loader=$(cd "$dir/lib" && ls ld-linux* | head -1)
+loader=""
+for f in "$dir"/lib/ld-linux*; do [ -e "$f" ] && loader=${f##*/}; done
 [ -n "$loader" ] || { echo "pack-kit: no loader in ldd's list" >&2; exit 1; }
 cat >"$dir/nbep" <<W
 #!/bin/sh
@@ -26,4 +27,5 @@ d=\$(cd "\$(dirname "\$0")" && pwd)
 exec "\$d/lib/$loader" --library-path "\$d/lib" "\$d/nbep.bin" "\$@"
 W
 chmod +x "$dir/nbep"
-echo "packed $(ls "$dir/lib" | wc -l) libraries: $dir/nbep ($("$dir/nbep" --version))"
+libs=("$dir"/lib/*)
+echo "packed ${#libs[@]} libraries: $dir/nbep ($("$dir/nbep" --version))"
