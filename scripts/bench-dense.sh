@@ -185,7 +185,7 @@ run_edmd() { # n phi rep
     S=$(stretch "$1" "$2")
     e1=$(edmd_build "$1" "$2" 0.1) || return 1
     e2=$(edmd_build "$1" "$2" "$(awk -v s="$S" 'BEGIN { print 0.1 + s }')") || return 1
-    read -r ca wa ra ua < <(edmd_once "$e1")
+    read -r ca wa _ ua < <(edmd_once "$e1")
     read -r cb wb rb ub < <(edmd_once "$e2")
     echo "edmd,$1,$2,1,$3,$((cb - ca)),$(minus "$wa" "$wb"),$rb,$(minus "$ua" "$ub")," >>"$rows"
 }
