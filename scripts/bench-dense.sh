@@ -22,20 +22,23 @@
 # The scene: N spheres of diameter 1, mass 1, kT = 1 in a periodic cube of side L,
 # L^3 = N pi / (6 phi) (inputs/hard-sphere-fluid.deck is the N = 32000, phi = 0.30 one).
 # Both engines are timed on the equilibrium fluid, not on their starts: nbep starts from a
-# simple cubic lattice (speed sqrt(3) in random directions), which melts within a time unit;
-# its rate is the difference of two runs of the same deck, to T1 = 1 and to T1 + S, which share
-# their first T1 bit for bit: (collisions(T1 + S) - collisions(T1)) / (wall(T1 + S) - wall(T1)),
-# wall being the summary's stepping loop. EDMD starts from nbep's fluid at T1 (written as its
+# simple cubic lattice (speed sqrt(3) in random directions), which melts within a time unit,
+# run once to T1 = 1 (the melt); each timed run resumes that file (--resume, on a copy) and
+# steps on to T1 + S: its summary counts its own collisions and its stepping loop alone (the
+# resumed run's set-up, reading the frame and the first predictions, is outside wall_seconds),
+# so the rate is one run's collisions / wall_seconds. (Until 1e9f22d it was the difference of
+# two runs from the lattice, to T1 and to T1 + S: twice the runs, and one slow short run could
+# give an impossible ratio.) EDMD starts from nbep's fluid at T1 (written as its
 # init.sph; its own FCC start would stay crystalline at phi = 0.50, a different scene with a
 # third fewer collisions), with its Gaussian velocities, and is timed the same way: two runs,
 # to 0.1 and to 0.1 + S, whole processes (so its set-up cancels). Repeats are the outer loop and
 # every engine runs once per repeat, so background load hits all alike; medians are reported,
 # and the ratios are of medians taken in the same run. Beside wall time, each row has the
-# processes' CPU time (user + system, /usr/bin/time), differenced the same way. CPU time leaves
+# processes' CPU time (user + system, /usr/bin/time): EDMD's differenced the same way, nbep's
+# less its set-up's wall seconds (one thread's: its set-up is mostly serial). CPU time leaves
 # out the time a process waited for a core, not the slowdown another job causes through the
 # shared caches and memory: on this project's 2-core machine the two ratios came out the same;
-# where a machine is oversubscribed the CPU-time one is the steadier (both include set-up,
-# which cancels).
+# where a machine is oversubscribed the CPU-time one is the steadier.
 #
 # Beside each multi-thread run, the time a cache line takes to pass between two cores
 # (scripts/handover.c, built in OUT; median of 5 stretches, before and after the run): the team
@@ -67,10 +70,9 @@ elif [ ! -x "$handover" ]; then
 fi
 
 # the stretch S of simulated time measured, per phi: 0.6 million collisions per 32000 spheres,
-# and never fewer than 96000 spheres' worth, 1.9 million (a shorter stretch at large N would be
-# a small difference of two long runs, which the machine's noise swamps; at N = 32000 the
-# stretch was 0.65 million collisions, about a second, and one slow run of a pair put a
-# repeat's two-thread ratio at 4.66 where the others were 1.08 and 2.46)
+# and never fewer than 96000 spheres' worth, 1.9 million (chosen when the rate was a difference
+# of two runs, which the machine's noise swamped at about a second a stretch; EDMD's still is,
+# and keeping the stretches keeps the tables comparable)
 stretch() { # n phi
     awk -v n="$1" -v p="$2" -v s="$SCALE" \
         'BEGIN { f = n < 96000 ? 96000 / n : 1; printf "%.6g", (p < 0.4 ? 4.0 : 1.0) * f * s }'
@@ -87,14 +89,14 @@ else
     echo "EDMD: skipped (set EDMD_DIR to a checkout of github.com/FSmallenburg/EDMD)"
 fi
 
-deck() { # n phi steps dt threads file fields -> path of the deck
+deck() { # n phi steps dt threads file fields [every] -> path of the deck
     local d="$OUT/fluid-$1-$2-$3-$5.deck" L
     L=$(side "$1" "$2")
     cat >"$d" <<EOF
 run: { algorithm = "predictive"; steps = $3; dt = $4; threads = $5; seed = 1; neighbors = "cells"; };
 box: { min = [0.0, 0.0, 0.0]; max = [$L, $L, $L]; periodic = [true, true, true]; };
 spheres = ( { count = $1; radius = 0.5; mass = 1.0; place = "lattice"; speed = 1.7320508075688772; } );
-output: { file = "$6"; every = $3; fields = [$7]; stats = false; };
+output: { file = "$6"; every = ${8:-$3}; fields = [$7]; stats = false; };
 EOF
     echo "$d"
 }
@@ -116,10 +118,12 @@ edmd_build() { # n phi time -> path of the build
     echo "$dir"
 }
 
-# nbep's fluid at T1, as EDMD's init.sph (positions wrapped into the box, radius 0.5)
+# nbep's fluid at T1 (steps of 0.05, as the timed runs': the frame at T1 is where they resume),
+# and as EDMD's init.sph (positions wrapped into the box, radius 0.5)
+STEPS1=$(awk -v t="$T1" 'BEGIN { printf "%d", t / 0.05 + 0.5 }')
 melt() { # n phi
     local h5="$OUT/melt-$1-$2.h5" d
-    d=$(deck "$1" "$2" 1 "$T1" 1 "$h5" '"position"')
+    d=$(deck "$1" "$2" "$STEPS1" 0.05 1 "$h5" '"position", "velocity"')
     "$NBEP" run "$d" --quiet || { echo "nbep failed: $d" >&2; return 1; }
     "$PY" - "$h5" "$(side "$1" "$2")" "$OUT/init-$1-$2.sph" <<'PYEOF' || return 1
 import sys, h5py
@@ -150,25 +154,20 @@ rss_of() { awk 'END { print $3 * 1024 }' "$TIME_OUT"; } # status line comes firs
 minus() { awk -v a="$1" -v b="$2" 'BEGIN { print b - a }'; }
 
 run_nbep() { # n phi threads rep
-    local S d1 d2 s1 s2 steps2
+    local S d steps2 out u s h1="" h2="" ho=""
     S=$(stretch "$1" "$2")
-    # steps of 0.05 (an update and energy sum of every sphere each: a few percent of a step)
+    # steps of 0.05 (an update and energy sum of every sphere each: a few percent of a step); a
+    # frame (no fields) each T1, since a cells run resumes only from a frame at a multiple of
+    # output.every
     steps2=$(awk -v s="$S" -v t="$T1" 'BEGIN { printf "%d", (t + s) / 0.05 + 0.5 }')
-    d1=$(deck "$1" "$2" "$(awk -v t="$T1" 'BEGIN { printf "%d", t / 0.05 + 0.5 }')" 0.05 "$3" "$OUT/run.h5" "")
-    d2=$(deck "$1" "$2" "$steps2" 0.05 "$3" "$OUT/run.h5" "")
-    local u1 u2
-    s1=$(timed "$NBEP" run "$d1" --quiet --summary -) || { echo "nbep failed: $d1" >&2; return 1; }
-    u1=$(cpu_of)
-    local h1="" h2="" ho=""
+    d=$(deck "$1" "$2" "$steps2" 0.05 "$3" "$OUT/run.h5" "" "$STEPS1")
+    out="$OUT/run.h5"
+    cp "$OUT/melt-$1-$2.h5" "$out"
     [ "$3" -gt 1 ] && [ -n "$handover" ] && h1=$("$handover")
-    s2=$(timed "$NBEP" run "$d2" --quiet --summary -) || { echo "nbep failed: $d2" >&2; return 1; }
-    u2=$(cpu_of)
+    s=$(timed "$NBEP" run "$d" --resume "$out" --quiet --summary -) || { echo "nbep failed: $d" >&2; return 1; }
+    u=$(awk -v c="$(cpu_of)" -v w="$(echo "$s" | summary_field setup_seconds)" 'BEGIN { print c - w }')
     [ "$3" -gt 1 ] && [ -n "$handover" ] && h2=$("$handover") && ho="$h1 $h2"
-    local c1 c2 w1 w2 rss
-    c1=$(echo "$s1" | summary_field collisions); c2=$(echo "$s2" | summary_field collisions)
-    w1=$(echo "$s1" | summary_field wall_seconds); w2=$(echo "$s2" | summary_field wall_seconds)
-    rss=$(echo "$s2" | summary_field peak_rss_bytes)
-    echo "nbep,$1,$2,$3,$4,$((c2 - c1)),$(minus "$w1" "$w2"),$rss,$(minus "$u1" "$u2"),$ho" >>"$rows"
+    echo "nbep,$1,$2,$3,$4,$(echo "$s" | summary_field collisions),$(echo "$s" | summary_field wall_seconds),$(echo "$s" | summary_field peak_rss_bytes),$u,$ho" >>"$rows"
 }
 
 edmd_once() { # dir -> "collisions seconds rss cpu_seconds"

@@ -399,6 +399,14 @@ MUTANTS = [
      "        if (0 ||\n", SIM + ORDER, None),
     ("order-step-time-claim-lo-only", "src/algo_predictive.c",
      "            claim_min(&c->tclaim[hi], t);\n", "", ORDER, None),
+    # ---- resuming ----
+    ("resume-apply-velocity", "src/output_resume.c",
+     "        memcpy(s->vel, r->vel, r->n * sizeof *s->vel);\n", "", ["tests/test_resume.sh"], None),
+    ("resume-apply-image", "src/output_resume.c",
+     "        memcpy(s->image, r->image, 3 * r->n * sizeof *s->image);\n", "",
+     ["tests/test_resume.sh"], None),
+    ("resume-first-frame-again", "src/sim.c", "nbep_status st = sim->resumed ? NBEP_OK : emit_frame(sim, 0);",
+     "nbep_status st = emit_frame(sim, 0);", ["tests/test_resume.sh"], None),
     # ---- frame schedule, summary and counters ----
     ("frame-last-step", "src/sim.c", "bool frame = step % sim->scene->output_every == 0 || step == sim->step_end || stop;",
      "bool frame = step % sim->scene->output_every == 0 || stop;", SIM + ["test_output"], None),

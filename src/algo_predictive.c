@@ -2506,7 +2506,7 @@ static void pred_import(void *p, const nbep_resume *r)
                 c->rest[i].who[0] = r->rest[i];
                 c->rest[i].n = 1;
             }
-            nbep_vec3 v = r->vel[i];
+            nbep_vec3 v = c->st->vel[i]; /* the frame's (nbep_resume_apply) */
             rest_solve(c, c->st, i, &c->rest[i], &v, &c->aeff[i], 0.0, false);
         }
         nbep_feq_remove(c->q, i);

@@ -1,6 +1,7 @@
 /* `nbep run DECK --resume RUN.h5` (output.h): reopens a run for appending after its last
  * complete frame, checking that deck and file agree, and reads that frame (and its event
  * slots) back; the writer (output.c) then goes on as after nbep_output_create. */
+#include <assert.h>
 #include <inttypes.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -23,6 +24,22 @@ void nbep_resume_fini(nbep_resume *r)
     free(r->rest);
     free(r->image);
     memset(r, 0, sizeof *r);
+}
+
+void nbep_resume_apply(nbep_resume *r, nbep_state *s)
+{
+    assert(r->n == s->n);
+    if (r->pos)
+        memcpy(s->pos, r->pos, r->n * sizeof *s->pos);
+    if (r->vel)
+        memcpy(s->vel, r->vel, r->n * sizeof *s->vel);
+    if (r->image)
+        memcpy(s->image, r->image, 3 * r->n * sizeof *s->image);
+    free(r->pos);
+    free(r->vel);
+    free(r->image);
+    r->pos = r->vel = NULL;
+    r->image = NULL;
 }
 
 /* Opens dataset name and cuts it to `rows` rows. */

@@ -106,11 +106,14 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         st = rq->resume ? nbep_output_open_resume(file, &sc, &out, &resume, d)
                         : nbep_output_create(file, &sc, threads, &out, d);
     if (st == NBEP_OK) {
+        if (rq->resume)
+            nbep_resume_apply(&resume, &sc.state);
         nbep_sim_options opt = {.threads = threads, .out = out,
                                 .stop_signal = rq->stop_signal, .progress = rq->verbose,
                                 .resume = rq->resume ? &resume : NULL,
                                 .take_state = &sc.state}; /* nothing reads the scene's again */
         st = nbep_sim_create(&sc, &opt, &sim, d);
+        nbep_resume_fini(&resume); /* the run has its event slots now */
         if (st != NBEP_OK) {
             nbep_status ignored = nbep_output_close(&out, NULL, d);
             (void)ignored;

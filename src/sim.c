@@ -130,6 +130,7 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
     sim->opt = *opt;
     sim->nt = nbep_sim_resolve_threads(opt->threads); /* already resolved: the same count */
     sim->step_first = opt->resume ? (uint64_t)opt->resume->step + 1 : 1;
+    sim->resumed = opt->resume != NULL;
     sim->step_end = sc->steps;
     sim->dt = sc->dt;
     sim->algo = algo;
@@ -145,12 +146,8 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
         return st;
     }
     size_t n = sim->st.n;
-    if (opt->resume) {
-        memcpy(sim->st.pos, opt->resume->pos, n * sizeof *sim->st.pos);
-        memcpy(sim->st.vel, opt->resume->vel, n * sizeof *sim->st.vel);
-        if (opt->resume->image)
-            memcpy(sim->st.image, opt->resume->image, 3 * n * sizeof *sim->st.image);
-    }
+    /* a resumed frame's positions, velocities and images are in the scene's state already */
+    assert(!opt->resume || (!opt->resume->pos && !opt->resume->vel && !opt->resume->image));
     sim->n_blocks = (n + NBEP_BLOCK - 1) / NBEP_BLOCK;
     for (int k = 0; k < 2; k++) {
         sim->counters[k] = nbep_alloc_aligned((size_t)sim->nt, sizeof *sim->counters[k]);
@@ -187,6 +184,7 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
     }
     if (opt->resume && opt->resume->has_events && algo->import_events)
         algo->import_events(sim->algo_ctx, opt->resume);
+    sim->opt.resume = NULL; /* read: borrowed for nbep_sim_create only */
     if (opt->out && algo->export_events) {
         sim->ev_time = nbep_alloc_aligned(n, sizeof *sim->ev_time);
         sim->ev_partner = nbep_alloc_aligned(n, sizeof *sim->ev_partner);
@@ -392,7 +390,7 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
     sim->status = NBEP_OK;
     sim->t_start = sim->t_last_progress = nbep_now();
     /* A resumed run's first frame is already in the file. */
-    nbep_status st = sim->opt.resume ? NBEP_OK : emit_frame(sim, 0);
+    nbep_status st = sim->resumed ? NBEP_OK : emit_frame(sim, 0);
     if (st != NBEP_OK)
         return st;
     sim->steps_done = sim->step_first - 1;

@@ -44,6 +44,7 @@ struct nbep_sim {
     nbep_state st;                   /* owned: the evolving state */
     int nt;                          /* threads */
     uint64_t step_first, step_end;   /* steps to simulate: step_first..step_end (1-based) */
+    bool resumed;                    /* continues a file's frame (opt.resume, read in create) */
     double dt;
     const nbep_algo *algo;           /* borrowed: static table entry */
     void *algo_ctx;                  /* owned by the algorithm */

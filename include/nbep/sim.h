@@ -28,14 +28,16 @@ typedef struct nbep_sim_options {
     void *on_frame_ctx;
     const atomic_int *stop_signal;  /* borrowed, may be NULL: nonzero = SIGINT/SIGTERM number */
     bool progress;                  /* progress lines on stderr */
-    const nbep_resume *resume;      /* borrowed, may be NULL: continue from this frame */
+    const nbep_resume *resume;      /* borrowed by nbep_sim_create, may be NULL: continue from
+                                     * this frame, whose positions, velocities and images
+                                     * nbep_resume_apply has put into the scene's state */
     nbep_state *take_state;         /* may be NULL: the scene's own state, whose arrays the
                                      * run takes over instead of copying (nbep_state_take);
                                      * nothing reads them through the scene after */
 } nbep_sim_options;
 
 /* A run of sc (borrowed; must outlive the sim) from its initial state, or from opt->resume
- * (its frame's step, positions, velocities and, for predictive, event slots). Allocates everything
+ * (its frame's step and, for predictive, event slots; the state is the frame's). Allocates everything
  * the algorithm needs; nothing is allocated inside a step. NBEP_ENOMEM, NBEP_EDECK for an
  * unknown algorithm. */
 NBEP_MUST_CHECK nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt,
