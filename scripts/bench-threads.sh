@@ -12,8 +12,9 @@
 #   REPS      repeats, the outer loop (default 3)
 #   SCALE     the dense fluids' stretches, as a fraction of make bench-dense's (default 0.25:
 #             about 7 minutes on 16 cores with EDMD)
-#   OUT       results (default build/bench-threads): paper.csv, and dense-32000/ and
-#             dense-256000/ as make bench-dense leaves them (rows.csv)
+#   OUT       results (default build/bench-threads): paper.csv, dense-32000/ and
+#             dense-256000/ as make bench-dense leaves them (rows.csv), and threads.png, the
+#             speed-ups over one thread (scripts/plot_threads.py)
 #   NBEP, EDMD_DIR, PYTHON: as for scripts/bench-dense.sh
 #
 # The paper's box (inputs/paper-box.deck, n = 32768 spheres of radius 0.05 in the 10 m box,
@@ -73,3 +74,5 @@ for n in 32000 256000; do
     OUT="$OUT/dense-$n" NS=$n PHIS="$phis" THREADS="$THREADS" REPS="$REPS" SCALE="$SCALE" \
         NBEP="$NBEP" scripts/bench-dense.sh
 done
+"$PY" scripts/plot_threads.py "$OUT" "$OUT/threads.png" ||
+    echo "plot_threads: no figure (matplotlib missing?)" >&2
