@@ -26,7 +26,7 @@
 # run once to T1 = 1 (the melt); each timed run resumes that file (--resume, on a copy) and
 # steps on to T1 + S: its summary counts its own collisions and its stepping loop alone (the
 # resumed run's set-up, reading the frame and the first predictions, is outside wall_seconds),
-# so the rate is one run's collisions / wall_seconds. (Until 1e9f22d it was the difference of
+# so the rate is one run's collisions / wall_seconds. (Until fe29f48 it was the difference of
 # two runs from the lattice, to T1 and to T1 + S: twice the runs, and one slow short run could
 # give an impossible ratio.) EDMD starts from nbep's fluid at T1 (written as its
 # init.sph; its own FCC start would stay crystalline at phi = 0.50, a different scene with a
