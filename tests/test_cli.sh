@@ -142,5 +142,12 @@ check "nbep check counts $((10000 / 1000 + 1)) frames" \
     "grep -Eq '^output: .*: $((10000 / 1000 + 1)) frames' '$tmp/stdout'"
 check "nbep check writes no file" "[ ! -e '$tmp/never.h5' ]"
 
+# ---- the README's deck table is --help-deck's, row for row -------------------------------------
+# (README: "prints this table from the same schema the parser uses, so it cannot drift")
+"$nbep" --help-deck | grep '^|' >"$tmp/help-deck.md"
+sed -n '/^| path | type | default | meaning |/,/^$/p' README.md | grep '^|' >"$tmp/readme-deck.md"
+check "README's deck table equals nbep --help-deck's ($(wc -l <"$tmp/help-deck.md") rows)" \
+    "[ -s '$tmp/help-deck.md' ] && cmp -s '$tmp/help-deck.md' '$tmp/readme-deck.md'"
+
 [ $fail = 0 ] && echo "cli: all passed"
 exit $fail
