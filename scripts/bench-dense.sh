@@ -120,10 +120,13 @@ edmd_build() { # n phi time -> path of the build
 
 # nbep's fluid at T1 (steps of 0.05, as the timed runs': the frame at T1 is where they resume),
 # and as EDMD's init.sph (positions wrapped into the box, radius 0.5)
-STEPS1=$(awk -v t="$T1" 'BEGIN { printf "%d", t / 0.05 + 0.5 }')
+# Steps of DT (an update and energy sum of every sphere each: a few percent of a step).
+DT=0.05
+steps_to() { awk -v t="$1" -v dt="$DT" 'BEGIN { printf "%d", t / dt + 0.5 }'; } # time -> steps
+STEPS1=$(steps_to "$T1")
 melt() { # n phi
     local h5="$OUT/melt-$1-$2.h5" d
-    d=$(deck "$1" "$2" "$STEPS1" 0.05 1 "$h5" '"position", "velocity"')
+    d=$(deck "$1" "$2" "$STEPS1" "$DT" 1 "$h5" '"position", "velocity"')
     "$NBEP" run "$d" --quiet || { echo "nbep failed: $d" >&2; return 1; }
     "$PY" - "$h5" "$(side "$1" "$2")" "$OUT/init-$1-$2.sph" <<'PYEOF' || return 1
 import sys, h5py
@@ -153,20 +156,20 @@ cpu_of() { awk 'END { print $1 + $2 }' "$TIME_OUT"; } # the last line: a failed 
 rss_of() { awk 'END { print $3 * 1024 }' "$TIME_OUT"; } # status line comes first
 minus() { awk -v a="$1" -v b="$2" 'BEGIN { print b - a }'; }
 
+probe() { [ -n "$handover" ] && "$handover"; } # the hand-over now, or nothing
+
 run_nbep() { # n phi threads rep
-    local S d steps2 out u s h1="" h2="" ho=""
-    S=$(stretch "$1" "$2")
-    # steps of 0.05 (an update and energy sum of every sphere each: a few percent of a step); a
-    # frame (no fields) each T1, since a cells run resumes only from a frame at a multiple of
-    # output.every
-    steps2=$(awk -v s="$S" -v t="$T1" 'BEGIN { printf "%d", (t + s) / 0.05 + 0.5 }')
-    d=$(deck "$1" "$2" "$steps2" 0.05 "$3" "$OUT/run.h5" "" "$STEPS1")
-    out="$OUT/run.h5"
+    local out="$OUT/run.h5" d u s h1="" h2="" ho=""
+    # to T1 + S, resuming the melt's frame at T1: a frame (no fields) each T1, since a cells
+    # run resumes only from a frame at a multiple of output.every
+    d=$(deck "$1" "$2" "$(steps_to "$(awk -v s="$(stretch "$1" "$2")" -v t="$T1" 'BEGIN { print t + s }')")" \
+        "$DT" "$3" "$out" "" "$STEPS1")
     cp "$OUT/melt-$1-$2.h5" "$out"
-    [ "$3" -gt 1 ] && [ -n "$handover" ] && h1=$("$handover")
+    [ "$3" -gt 1 ] && h1=$(probe)
     s=$(timed "$NBEP" run "$d" --resume "$out" --quiet --summary -) || { echo "nbep failed: $d" >&2; return 1; }
-    u=$(awk -v c="$(cpu_of)" -v w="$(echo "$s" | summary_field setup_seconds)" 'BEGIN { print c - w }')
-    [ "$3" -gt 1 ] && [ -n "$handover" ] && h2=$("$handover") && ho="$h1 $h2"
+    # CPU seconds less the set-up's wall seconds (0 where GNU time did not measure)
+    u=$(awk -v c="$(cpu_of)" -v w="$(echo "$s" | summary_field setup_seconds)" 'BEGIN { print (c > 0 ? c - w : 0) }')
+    [ "$3" -gt 1 ] && h2=$(probe) && ho="$h1 $h2"
     echo "nbep,$1,$2,$3,$4,$(echo "$s" | summary_field collisions),$(echo "$s" | summary_field wall_seconds),$(echo "$s" | summary_field peak_rss_bytes),$u,$ho" >>"$rows"
 }
 

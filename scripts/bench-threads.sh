@@ -20,7 +20,8 @@
 # The paper's box (inputs/paper-box.deck, n = 32768 spheres of radius 0.05 in the 10 m box,
 # gravity, e = 1, 100 steps of 1 ms; no per-sphere output): run.neighbors "grid" and "cells"
 # three times at each thread count, "all" (the paper's algorithm, n = 16384: its set-up
-# predicts all pairs, 8 s on one core) once. Its table: ms per step (stepping loop), median.
+# predicts all pairs, 8 s on one core) once. At the end, scripts/plot_threads.py prints its
+# table (ms per step of the stepping loop, medians) and every series' speed-ups, and draws them.
 set -u
 cd "$(dirname "$0")/.." || exit 1
 cores=$(nproc)
@@ -51,22 +52,6 @@ for rep in $(seq "$REPS"); do
         [ "$rep" = 1 ] && paper all 16384 "$t" 1
     done
 done
-"$PY" - "$csv" <<'PYEOF'
-import csv, statistics, sys
-rows = list(csv.DictReader(open(sys.argv[1])))
-print("\nThe paper's box, 100 steps: ms per step, median of the repeats (set-up s); speed-up over 1 thread")
-for mode in ("all", "grid", "cells"):
-    by = {}
-    for r in rows:
-        if r["mode"] == mode:
-            by.setdefault(int(r["threads"]), []).append(r)
-    one = None
-    for t in sorted(by):
-        ms = statistics.median(float(r["wall_seconds"]) * 10 for r in by[t])
-        su = statistics.median(float(r["setup_seconds"]) for r in by[t])
-        one = one or ms
-        print(f"  {mode:5} n {by[t][0]['n']:>5}, {t:2} threads: {ms:7.2f} ms ({su:.3f} s)  x{one / ms:.2f}")
-PYEOF
 
 for n in 32000 256000; do
     phis="0.30"

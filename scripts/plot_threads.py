@@ -17,33 +17,33 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
-def paper_series(path):
+def medians(rows, key, value):
+    """{key(r): {threads: median of value(r)}} over the rows."""
     by = {}
-    for r in csv.DictReader(open(path)):
-        key = f"paper box, {'all pairs' if r['mode'] == 'all' else r['mode']}, n = {r['n']}"
-        by.setdefault(key, {}).setdefault(int(r["threads"]), []).append(float(r["wall_seconds"]))
-    out = {}
-    for key, ts in by.items():
-        med = {t: statistics.median(v) for t, v in ts.items()}
-        if 1 in med:
-            out[key] = {t: med[1] / m for t, m in sorted(med.items())}
-    return out
+    for r in rows:
+        by.setdefault(key(r), {}).setdefault(int(r["threads"]), []).append(value(r))
+    return {k: {t: statistics.median(v) for t, v in sorted(ts.items())} for k, ts in by.items()}
+
+
+def paper_series(path):
+    """The paper box's speed-ups (a time: one thread's over t threads'), its table printed."""
+    rows = list(csv.DictReader(open(path)))
+    key = lambda r: f"paper box, {'all pairs' if r['mode'] == 'all' else r['mode']}, n = {r['n']}"
+    ms = medians(rows, key, lambda r: float(r["wall_seconds"]) * 10)  # 100 steps
+    setup = medians(rows, key, lambda r: float(r["setup_seconds"]))
+    print("The paper's box, 100 steps: ms per step, median of the repeats (set-up, s)")
+    for k, m in ms.items():
+        print(f"  {k}: " + ", ".join(f"{t} threads {v:.2f} ({setup[k][t]:.3f})" for t, v in m.items()))
+    return {k: {t: m[1] / v for t, v in m.items()} for k, m in ms.items() if 1 in m}
 
 
 def dense_series(path):
-    by = {}
-    for r in csv.DictReader(open(path)):
-        if r["engine"] != "nbep" or float(r["seconds"] or 0) <= 0:
-            continue
-        key = f"fluid, N = {r['n']}, phi = {r['phi']}"
-        rate = int(r["collisions"]) / float(r["seconds"])
-        by.setdefault(key, {}).setdefault(int(r["threads"]), []).append(rate)
-    out = {}
-    for key, ts in by.items():
-        med = {t: statistics.median(v) for t, v in ts.items()}
-        if 1 in med:
-            out[key] = {t: m / med[1] for t, m in sorted(med.items())}
-    return out
+    """A dense fluid's speed-ups (a rate: t threads' over one thread's)."""
+    rows = [r for r in csv.DictReader(open(path))
+            if r["engine"] == "nbep" and float(r["seconds"] or 0) > 0]
+    rate = medians(rows, lambda r: f"fluid, N = {r['n']}, phi = {r['phi']}",
+                   lambda r: int(r["collisions"]) / float(r["seconds"]))
+    return {k: {t: v / m[1] for t, v in m.items()} for k, m in rate.items() if 1 in m}
 
 
 def main():
