@@ -328,6 +328,7 @@ typedef struct pred_ctx {
      * (0: none yet) */
     bool team_on[2];
     double team_cost[2];
+    int team_force; /* NBEP_TEAM, read once: 1 always, -1 never, 0 the faster way */
     nbep_counters *help_cnt;      /* owned when team, 2 NBEP_EVLOOP_RING: each place's event's
                                    * counts (the team loop's ring of places, evloop.h), thread
                                    * t's at t NBEP_EVLOOP_RING + ring slot (each written by the
@@ -480,7 +481,8 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         c->team = st == NBEP_OK && sim->nt >= 2 && c->free_flight && !c->t_last && !c->jam &&
                   !c->settle && !c->rest;
         /* the first step: the team (team_choose) */
-        c->team_on[0] = c->team_on[1] = c->team && team_forced() >= 0;
+        c->team_force = team_forced();
+        c->team_on[0] = c->team_on[1] = c->team && c->team_force >= 0;
         if (c->team) {
             const size_t np = sim->st.n_planes;
             c->help_cnt = nbep_alloc_aligned(2 * NBEP_EVLOOP_RING, sizeof *c->help_cnt);
@@ -2167,12 +2169,11 @@ static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, c
  * many steps before (the first, at the second step, runs while a lattice start melts, on
  * events a quarter cheaper than later: its figure kept the run probing every TEAM_PROBE-th
  * step, 5 probes in 80 steps of a fluid at N = 256000, phi = 0.30, each costing 0.75 of a
- * team step). A probe
- * costs what the slower way loses: with the team 1.6 times as fast, one step in 8 run alone
- * adds 7 % to the run's time. Where one way is at least TEAM_CLEAR times as fast, the other
+ * team step). A probe costs what the slower way loses: with the team 1.6 times as fast, one
+ * step in 8 run alone adds 7 % to the run's time. Where one way is at least TEAM_CLEAR times as fast, the other
  * is probed every TEAM_PROBE_FAR-th step only; the way taken is measured at every step, so a
  * change that makes it the slower one is seen at once. NBEP_TEAM=always or never in the
- * environment fixes the choice (tests, benchmarks). */
+ * environment, read as the run is made, fixes the choice (tests, benchmarks). */
 #define TEAM_PROBE 8
 #define TEAM_PROBE_FAR 64
 #define TEAM_CLEAR 1.25
@@ -2193,7 +2194,7 @@ static void team_choose(pred_ctx *c, uint64_t step, bool team, uint64_t events, 
         double *m = &c->team_cost[team];
         *m = *m > 0.0 && !probed ? 0.5 * (*m + per) : per;
     }
-    const int forced = team_forced();
+    const int forced = c->team_force;
     const bool faster = c->team_cost[1] <= c->team_cost[0];
     const double fast = c->team_cost[faster], slow = c->team_cost[!faster];
     const uint64_t probe = slow >= TEAM_CLEAR * fast ? TEAM_PROBE_FAR : TEAM_PROBE;
