@@ -39,14 +39,37 @@ int nbep__thread_id(void)
 int nbep_sim_resolve_threads(int requested)
 {
 #ifdef _OPENMP
-    if (requested > 0)
-        return requested;
-    /* omp_get_max_threads honours OMP_NUM_THREADS and defaults to the available cores. */
-    int n = omp_get_max_threads();
+    /* omp_get_max_threads honours OMP_NUM_THREADS and defaults to the available cores; no
+     * region gets more than the thread limit (OMP_THREAD_LIMIT) */
+    int n = requested > 0 ? requested : omp_get_max_threads();
+    const int limit = omp_get_thread_limit();
+    if (limit > 0 && n > limit)
+        n = limit;
     return n > 0 ? n : 1;
 #else
     (void)requested; /* a serial build (make OMP=0) runs one thread whatever was asked */
     return 1;
+#endif
+}
+
+/* The threads that a parallel region asking for n gets, and then every later one. Every
+ * algorithm's threads meet at barriers sized for the run's count, so the count must be what
+ * OpenMP gives: fewer under OMP_DYNAMIC=true (it may choose at will: turned off here, nbep's
+ * regions are its own) or inside a parallel region of a caller's (nested, one thread). The run
+ * takes what it gets: results do not depend on it. */
+static int team_size(int n)
+{
+#ifdef _OPENMP
+    omp_set_dynamic(0);
+    int got = 1;
+#pragma omp parallel num_threads(n) default(none) shared(got)
+    {
+#pragma omp single
+        got = omp_get_num_threads();
+    }
+    return got;
+#else
+    return n;
 #endif
 }
 
@@ -128,7 +151,7 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for a run");
     sim->scene = sc;
     sim->opt = *opt;
-    sim->nt = nbep_sim_resolve_threads(opt->threads); /* already resolved: the same count */
+    sim->nt = team_size(nbep_sim_resolve_threads(opt->threads)); /* resolved already */
     sim->step_first = opt->resume ? (uint64_t)opt->resume->step + 1 : 1;
     sim->resumed = opt->resume != NULL;
     sim->step_end = sc->steps;
