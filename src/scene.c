@@ -825,8 +825,10 @@ static void fill_planes(nbep_state *s, const nbep_scene *sc, const plane *p, siz
 static nbep_status read_text(const char *path, char **out, nbep_diag *d)
 {
     FILE *f = fopen(path, "rb");
-    if (!f)
-        NBEP_FAIL(d, NBEP_EIO, "nbep: cannot read %s: %s", path, strerror(errno));
+    if (!f) {
+        const int err = errno;
+        NBEP_FAIL(d, nbep_status_of_open(err), "nbep: cannot read %s: %s", path, strerror(err));
+    }
     size_t len = 0, cap = 4096;
     char *text = malloc(cap);
     while (text) {
@@ -848,7 +850,7 @@ static nbep_status read_text(const char *path, char **out, nbep_diag *d)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory to read %s", path);
     if (failed) {
         free(text);
-        NBEP_FAIL(d, NBEP_EIO, "nbep: cannot read %s: %s", path, strerror(err));
+        NBEP_FAIL(d, nbep_status_of_open(err), "nbep: cannot read %s: %s", path, strerror(err));
     }
     text[len] = '\0';
     *out = text;

@@ -1,6 +1,7 @@
 /* Status texts and exit codes from the one X-macro list, and the diag message list. */
 #include "nbep/status.h"
 
+#include <errno.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -15,6 +16,14 @@ int nbep_status_exit_code(nbep_status s)
 #undef NBEP_X_CODE
     }
     return 1;
+}
+
+nbep_status nbep_status_of_open(int err)
+{
+    return err == ENOENT || err == ENOTDIR || err == EISDIR || err == EACCES ||
+                   err == ENAMETOOLONG || err == ELOOP
+               ? NBEP_EUSAGE
+               : NBEP_EIO;
 }
 
 const char *nbep_status_text(nbep_status s)

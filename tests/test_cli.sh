@@ -119,6 +119,18 @@ run_nbep run "$tmp/no-spheres.deck" --quiet -o "$tmp/no-spheres.h5"
 check "spheres = (); asks for an empty scene: it runs (exit 0, got $rc)" \
     "[ $rc = 0 ] && [ -e '$tmp/no-spheres.h5' ]"
 
+# ---- a deck name that is no file, a missing file to resume -------------------------------------
+for cmd in run check sweep; do
+    run_nbep $cmd "$tmp/no-such.deck" --quiet
+    check "nbep $cmd on a missing deck: exit 2, as a bad command line (got $rc)" "[ $rc = 2 ]"
+    check "nbep $cmd on a missing deck: one line naming it and the reason" \
+        "one_line && grep -qF 'cannot read $tmp/no-such.deck: No such file' '$tmp/stderr'"
+done
+run_nbep run "$tmp/group.deck" -n 1 --quiet -o "$tmp/resume.h5" --resume "$tmp/no-such.h5"
+check "--resume of a missing file: exit 2 (got $rc)" "[ $rc = 2 ]"
+check "--resume of a missing file: one line naming it and the reason" \
+    "one_line && grep -qF '$tmp/no-such.h5' '$tmp/stderr' && grep -qF 'No such file' '$tmp/stderr'"
+
 # ---- threads: what runs, in a serial build too -------------------------------------------------
 # make OMP=0 builds run one thread whatever -t asks; nbep check says what the run will use.
 want=4

@@ -270,13 +270,25 @@ static void test_deck_text_is_kept_whole_and_overrides_one_per_line(void **state
 
 /* ---- deck errors ---------------------------------------------------------------------------- */
 
-static void test_unreadable_deck_is_an_io_error(void **state)
+/* A deck name that is no readable file is the command line's mistake: exit 2, as for a bad
+ * deck (SPEC: 2 bad usage or bad deck), with the system's reason. */
+static void test_missing_deck_is_a_usage_error(void **state)
 {
     fixture *f = *state;
-    LOAD_FAILS(f, NBEP_EIO, DATA "scene_no_such.deck");
+    LOAD_FAILS(f, NBEP_EUSAGE, DATA "scene_no_such.deck");
+    assert_int_equal(nbep_status_exit_code(NBEP_EUSAGE), 2);
     char expected[256];
     snprintf(expected, sizeof expected, "nbep: cannot read " DATA "scene_no_such.deck: %s",
              strerror(ENOENT));
+    ASSERT_DIAG(&f->d, expected);
+}
+
+static void test_a_directory_as_deck_is_a_usage_error(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EUSAGE, DATA);
+    char expected[256];
+    snprintf(expected, sizeof expected, "nbep: cannot read " DATA ": %s", strerror(EISDIR));
     ASSERT_DIAG(&f->d, expected);
 }
 
@@ -998,7 +1010,8 @@ int main(void)
         T(test_box_gives_six_inward_planes_first_in_axis_order),
         T(test_extra_plane_is_normalized_with_offset_n_dot_point),
         T(test_deck_text_is_kept_whole_and_overrides_one_per_line),
-        T(test_unreadable_deck_is_an_io_error),
+        T(test_missing_deck_is_a_usage_error),
+        T(test_a_directory_as_deck_is_a_usage_error),
         T(test_syntax_error_names_the_deck_line),
         T(test_syntax_error_carries_libconfig_text),
         T(test_unknown_settings_are_named_with_the_closest_known_one),
