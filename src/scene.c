@@ -682,6 +682,36 @@ static void parse_output(load *L, const config_setting_t *root, nbep_scene *sc)
     }
 }
 
+/* Why key cannot be a sweep axis, or NULL if it can: settings the sweep itself sets per run. */
+static const char *axis_key_refused(const char *key)
+{
+    if (strcmp(key, "run.seed") == 0)
+        return "the sweep sets it: replica r runs with run.seed + r";
+    if (strcmp(key, "output.file") == 0)
+        return "the sweep sets it: each run writes its own file in the sweep's directory";
+    if (strncmp(key, "sweep.", 6) == 0)
+        return "the sweep's own settings cannot vary within it";
+    return NULL;
+}
+
+/* The values of a run.steps axis are integers >= 0: the sweep compares a finished run's steps
+ * with them to reuse it. */
+static void check_steps_values(load *L, const config_setting_t *values, const char *prefix)
+{
+    for (int v = 0; v < config_setting_length(values); v++) {
+        const config_setting_t *x = config_setting_get_elem(values, (unsigned)v);
+        const int t = config_setting_type(x);
+        if ((t == CONFIG_TYPE_INT || t == CONFIG_TYPE_INT64) && config_setting_get_int64(x) >= 0)
+            continue;
+        nbep__strbuf b = {0};
+        nbep__scene_value_text(x, &b);
+        L->c.oom = L->c.oom || b.oom;
+        ERR(L, x, "%s.values.[%d]: run.steps must be an integer >= 0 (got %s)", prefix, v,
+            b.p ? b.p : "?");
+        nbep__strbuf_fini(&b);
+    }
+}
+
 static void parse_sweep(load *L, const config_setting_t *root, nbep_scene *sc)
 {
     const config_setting_t *sweep = NULL, *vary = NULL;
@@ -719,6 +749,18 @@ static void parse_sweep(load *L, const config_setting_t *root, nbep_scene *sc)
             L->c.oom = L->c.oom || b.oom;
             nbep__strbuf_fini(&b);
             g_key = BAD;
+        } else if (g_key == GOT && axis_key_refused(key)) {
+            ERR(L, at, "%s.key: %s cannot be varied (%s)", prefix, key, axis_key_refused(key));
+            g_key = BAD;
+        }
+        for (size_t j = 0; g_key == GOT && j < k; j++) {
+            const char *kj;
+            if (config_setting_lookup_string(config_setting_get_elem(vary, (unsigned)j), "key",
+                                             &kj) == CONFIG_TRUE &&
+                strcmp(kj, key) == 0) {
+                ERR(L, at, "%s.key: %s is already varied by sweep.vary.[%zu]", prefix, key, j);
+                g_key = BAD;
+            }
         }
         const config_setting_t *values;
         got g_values = find(L, e, prefix, S_SWEEP_VALUES, &values);
@@ -732,6 +774,8 @@ static void parse_sweep(load *L, const config_setting_t *root, nbep_scene *sc)
         }
         if (g_key != GOT || g_values != GOT)
             continue;
+        if (strcmp(key, "run.steps") == 0)
+            check_steps_values(L, values, prefix);
         nbep_sweep_axis *axis = &sc->sweep_axes[sc->sweep_n_axes++];
         axis->key = dup_string(L, key);
         size_t n_values = (size_t)config_setting_length(values);

@@ -113,7 +113,8 @@ enum {
       "per-sphere fields of each frame: \"position\", \"velocity\"")                               \
     X(OUTPUT_STATS, "output.stats", BOOL, 0, "true", NULL, "per-step counters in /stats")          \
     X(SWEEP, "sweep", GROUP, 0, NULL, "none",                                                      \
-      "parameter study for `nbep sweep`; run and check ignore it")                                 \
+      "parameter study for `nbep sweep`; run and check validate it, then take the deck as one "    \
+      "run without it")                                                                            \
     X(SWEEP_REPLICAS, "sweep.replicas", INT, F_GE1, "1", NULL,                                     \
       "runs of every combination of values")                                                       \
     X(SWEEP_VARY, "sweep.vary", LIST, 0, NULL, "none", "the axes of the study")                    \

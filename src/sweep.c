@@ -107,13 +107,6 @@ static char *sweep_dir_of(const char *output_file)
     return dir;
 }
 
-/* Axes the sweep itself sets per run, or that would make no sense varied. */
-static bool axis_key_allowed(const char *key)
-{
-    return strcmp(key, "run.seed") != 0 && strcmp(key, "output.file") != 0 &&
-           strncmp(key, "sweep", 5) != 0;
-}
-
 /* run.steps given as libconfig integer text ("2000", "2000L", "0x7d0"); false if not one. */
 static bool parse_steps(const char *text, uint64_t *steps)
 {
@@ -164,25 +157,6 @@ nbep_status nbep_sweep_plan_create(const char *deck_path, const char *const *ove
     bool too_many = false;
     for (size_t k = 0; k < p.n_axes; k++) {
         const nbep_sweep_axis *a = &p.axes[k];
-        if (!axis_key_allowed(a->key))
-            nbep_diag_add(d, __FILE__, __LINE__,
-                          "%s: sweep.vary.[%zu].key: %s cannot be varied (the sweep sets it: "
-                          "replica r runs with run.seed + r in its own file)",
-                          deck_path, k, a->key);
-        for (size_t j = 0; j < k; j++)
-            if (strcmp(p.axes[j].key, a->key) == 0)
-                nbep_diag_add(d, __FILE__, __LINE__,
-                              "%s: sweep.vary.[%zu].key: %s is already varied by "
-                              "sweep.vary.[%zu]",
-                              deck_path, k, a->key, j);
-        uint64_t steps;
-        if (strcmp(a->key, "run.steps") == 0)
-            for (size_t v = 0; v < a->n_values; v++)
-                if (!parse_steps(a->values[v], &steps))
-                    nbep_diag_add(d, __FILE__, __LINE__,
-                                  "%s: sweep.vary.[%zu].values.[%zu]: run.steps must be an "
-                                  "integer >= 0 (got %s)",
-                                  deck_path, k, v, a->values[v]);
         if (a->n_values && p.n_combos > RUNS_MAX / a->n_values)
             too_many = true;
         else

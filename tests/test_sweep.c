@@ -225,11 +225,30 @@ static void test_varying_the_seed_or_a_key_twice_is_a_deck_error(void **state)
     nbep_sweep_plan p;
     assert_int_equal(nbep_sweep_plan_create(deck, NULL, 0, &p, &d), NBEP_EDECK);
     assert_int_equal(d.n_errors, 2);
-    assert_string_equal(d.msg[0], TMP "sweep_bad_axes.deck: sweep.vary.[0].key: run.seed cannot "
-                                      "be varied (the sweep sets it: replica r runs with "
-                                      "run.seed + r in its own file)");
-    assert_string_equal(d.msg[1], TMP "sweep_bad_axes.deck: sweep.vary.[2].key: "
+    assert_string_equal(d.msg[0], TMP "sweep_bad_axes.deck:6: sweep.vary.[0].key: run.seed "
+                                      "cannot be varied (the sweep sets it: replica r runs "
+                                      "with run.seed + r)");
+    assert_string_equal(d.msg[1], TMP "sweep_bad_axes.deck:8: sweep.vary.[2].key: "
                                       "physics.restitution is already varied by sweep.vary.[1]");
+    nbep_diag_fini(&d);
+    /* the deck's own check finds them too, before any run (nbep check, nbep run) */
+    nbep_scene sc;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_scene_load(deck, NULL, 0, &sc, &d), NBEP_EDECK);
+    assert_int_equal(d.n_errors, 2);
+    nbep_diag_fini(&d);
+    /* a run.steps axis takes integers >= 0 only, each checked on its line */
+    write_deck("sweep_bad_steps",
+               "sweep: { vary = ( { key = \"run.steps\";\n"
+               "  values = ( 7, -2, 1.5 ); } ); };\n",
+               deck, sizeof deck);
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_sweep_plan_create(deck, NULL, 0, &p, &d), NBEP_EDECK);
+    assert_int_equal(d.n_errors, 2);
+    assert_string_equal(d.msg[0], TMP "sweep_bad_steps.deck:7: sweep.vary.[0].values.[1]: "
+                                      "run.steps must be an integer >= 0 (got -2)");
+    assert_string_equal(d.msg[1], TMP "sweep_bad_steps.deck:7: sweep.vary.[0].values.[2]: "
+                                      "run.steps must be an integer >= 0 (got 1.5)");
     nbep_diag_fini(&d);
 }
 
