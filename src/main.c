@@ -78,11 +78,9 @@ static void print_check(const nbep_scene *sc, int threads)
     else
         printf("packing:         %.4g of the box volume\n", pf);
     printf("memory:          about %.3g MB\n", (double)nbep_sim_memory_estimate(sc, threads) / 1e6);
-    unsigned long long frames = sc->steps / sc->output_every + 1 +
-                                (sc->steps % sc->output_every ? 1 : 0);
-    double frame_bytes = (double)sc->state.n * 24.0 * (sc->out_position + sc->out_velocity);
-    printf("output:          %s: %llu frames, about %.3g MB\n", sc->output_file, frames,
-           (double)frames * frame_bytes / 1e6);
+    printf("output:          %s: %llu frames, about %.3g MB\n", sc->output_file,
+           (unsigned long long)nbep_output_frames(sc),
+           nbep_output_bytes(sc, nbep_sim_keeps_events(sc)) / 1e6);
 }
 
 static nbep_status cmd_run(const nbep_cli *cli, nbep_diag *d)

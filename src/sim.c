@@ -84,6 +84,12 @@ static const nbep_algo *find_algo(const char *name)
     return NULL;
 }
 
+bool nbep_sim_keeps_events(const nbep_scene *sc)
+{
+    const nbep_algo *algo = find_algo(sc->algorithm);
+    return algo && algo->export_events;
+}
+
 size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads)
 {
     size_t n = sc->state.n, np = sc->state.n_planes;

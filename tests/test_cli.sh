@@ -119,6 +119,23 @@ run_nbep run "$tmp/no-spheres.deck" --quiet -o "$tmp/no-spheres.h5"
 check "spheres = (); asks for an empty scene: it runs (exit 0, got $rc)" \
     "[ $rc = 0 ] && [ -e '$tmp/no-spheres.h5' ]"
 
+# ---- nbep check's file size: the file a run then writes, within 1 % ---------------------------
+# a periodic fluid (image counts, checkpoints, stats) and one whose frames take two chunks each
+# (more than 174762 spheres: HDF5 stores a frame's last chunk whole, so chunks must be equal)
+sed 's/count = 32000/count = 180000/; s/38.2245559209/67.8823/g' inputs/hard-sphere-fluid.deck \
+    >"$tmp/big-fluid.deck"
+for deck in inputs/hard-sphere-fluid.deck "$tmp/big-fluid.deck"; do
+    name=$(basename "$deck" .deck)
+    run_nbep check "$deck" -n 2 --set output.every=1 -o "$tmp/$name.h5"
+    est=$(sed -n 's/^output: .* frames, about \([0-9.e+]*\) MB$/\1/p' "$tmp/stdout")
+    run_nbep run "$deck" -n 2 --set output.every=1 -o "$tmp/$name.h5" --quiet
+    size=$(stat -c %s "$tmp/$name.h5" 2>/dev/null || echo 0)
+    check "nbep check's size of $name.h5 ($est MB) is the file's ($size bytes) within 1 %" \
+        "[ $rc = 0 ] && [ -n '$est' ] && awk -v e='$est' -v s='$size' 'BEGIN { r = e * 1e6 / s; exit !(r > 0.99 && r < 1.01) }'"
+done
+check "the big fluid's frames are stored without padding (equal chunks)" \
+    "h5ls -v '$tmp/big-fluid.h5/frames/position' | grep -q '100.00% utilization'"
+
 # ---- a deck name that is no file, a missing file to resume -------------------------------------
 for cmd in run check sweep; do
     run_nbep $cmd "$tmp/no-such.deck" --quiet

@@ -647,6 +647,33 @@ static void test_team_loop_keeps_one_threads_wall_impulses_and_virial(void **sta
     }
 }
 
+/* A fully periodic box has no walls, and its file still has /stats/wall_impulse, (S, 0): SPEC
+ * lists it in every file with stats, so a script reads it without asking first. */
+static void test_a_box_without_walls_has_an_empty_wall_impulse_per_step(void **state)
+{
+    (void)state;
+    char deck[256], out[256];
+    write_deck("nowall.deck",
+               "run: { algorithm = \"predictive\"; neighbors = \"cells\"; steps = 30; "
+               "dt = 0.01; threads = 1; };\n"
+               "box: { min = [0.0, 0.0, 0.0]; max = [5.0, 5.0, 5.0]; "
+               "periodic = [true, true, true]; };\n"
+               "spheres = ( { position = [1.39, 2.0, 2.0]; velocity = [2.0, 0.0, 0.0]; "
+               "radius = 0.5; mass = 1.5; } );\n"
+               "output: { every = 10; };\n",
+               deck, sizeof deck);
+    nbep_test_tmp("nowall.h5", out, sizeof out);
+    const nbep_run_result res = nbep_test_run_deck(deck, out);
+    assert_int_equal(res.summary.planes, 0);
+    hid_t file = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+    assert_true(file >= 0);
+    hsize_t dims[2] = {0, 1};
+    read_all(file, "/stats/wall_impulse", H5T_NATIVE_DOUBLE, NULL, dims);
+    assert_int_equal(dims[0], 30);
+    assert_int_equal(dims[1], 0);
+    H5Fclose(file);
+}
+
 /* One sphere bouncing between the x walls of a box (x periodic off, y and z periodic: the box
  * has two walls), e = 1, speed v: each hit gives its wall 2 m v of normal momentum, one hit
  * every (L - 2 r) / v. /stats/wall_impulse has a column per wall; the other steps are 0. */
@@ -809,6 +836,7 @@ int main(void)
         cmocka_unit_test(test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference),
         cmocka_unit_test(test_periodic_fluid_pressure_and_collision_rate_match_theory),
         cmocka_unit_test(test_wall_impulse_of_a_sphere_between_two_walls),
+        cmocka_unit_test(test_a_box_without_walls_has_an_empty_wall_impulse_per_step),
         cmocka_unit_test(test_team_loop_keeps_one_threads_wall_impulses_and_virial),
         cmocka_unit_test(test_periodic_deck_errors_name_the_line),
         cmocka_unit_test(test_periodic_axes_have_no_walls),

@@ -33,6 +33,13 @@ typedef struct nbep_output nbep_output;
  * ("nbep: PATH: cannot ...: reason"), and then no new file is left behind; NBEP_ENOMEM. */
 NBEP_MUST_CHECK nbep_status nbep_output_create(const char *path, const nbep_scene *sc,
                                                int threads, nbep_output **out, nbep_diag *d);
+/* The frames a run of sc writes (the first, every output.every-th step's and the last step's)
+ * and the bytes of its file, about: the data of the frames, the checkpoints beside them when
+ * `events` (a run that keeps event slots, nbep_sim_keeps_events) and the stats, without
+ * HDF5's own few kilobytes (an estimate for `nbep check`). */
+uint64_t nbep_output_frames(const nbep_scene *sc);
+double nbep_output_bytes(const nbep_scene *sc, bool events);
+
 /* Appends one frame (step, step*dt, and the fields the deck asked for) and flushes the file;
  * on NBEP_OK the frame and every stats row appended before it survive a kill -9. s is
  * borrowed and must have the scene's sphere count. NBEP_ENUMERIC (nothing written) when a

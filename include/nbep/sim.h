@@ -60,6 +60,8 @@ const nbep_state *nbep_sim_state(const nbep_sim *sim);
 /* Bytes a run of sc with `threads` threads needs: state, the algorithm's workspaces and one
  * frame's output buffers (an estimate for `nbep check`; within a few percent). */
 size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads);
+/* Whether a run of sc keeps every sphere's event slot beside each frame (/checkpoint). */
+bool nbep_sim_keeps_events(const nbep_scene *sc);
 
 /* The thread count a scene's `threads` setting resolves to, which is what a run uses: n > 0
  * as is; 0 -> OMP_NUM_THREADS if set, else the cores available; always 1 in a serial build
