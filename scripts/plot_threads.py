@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Speed-up over one thread against threads, from what scripts/bench-threads.sh leaves in OUT:
 the paper's box in its three predictive modes (paper.csv) and the dense fluids (dense-*/rows.csv),
 medians of the repeats (the paper box's ms per step; the fluids' collisions per second).

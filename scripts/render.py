@@ -4,18 +4,21 @@
     scripts/render.py RUN.h5 [--frames 0,10,-1] [--out DIR] [--view 3d|xy|xz|yz]
                              [--size 6] [--dpi 150] [--color speed|height|none]
 
-Each frame becomes DIR/RUN-step-000120.png (RUN-step-000120-xz.png for a projection; DIR
-defaults to the run file's folder). Frames
-are indices into /frames (negative ones count from the last complete frame: -1 is the last);
-only complete frames are used (the `count` attribute of /frames), so a run still being
-written or killed can be drawn. --view 3d draws a perspective scatter whose marker sizes
-follow the radii approximately; xy, xz and yz draw an orthographic projection with every
-sphere a disc of its true radius (nearest drawn last). Spheres are coloured by speed when the
-run wrote velocities (--color height colours by the coordinate along the hidden or vertical
-axis). The box, when the run's planes form one, is drawn as an outline.
+Each frame becomes DIR/RUN-step-000120.png with --view 3d and DIR/RUN-step-000120-xz.png
+(-xy, -xz or -yz: the view) for a projection, 000120 being the frame's step; DIR defaults to
+the run file's folder. Frames are indices into /frames (negative ones count from the last
+complete frame: -1 is the last); only complete frames are used (the `count` attribute of
+/frames), so a run still being written or killed can be drawn. --view 3d draws a perspective
+scatter whose marker sizes follow the radii approximately; xy, xz and yz draw an orthographic
+projection with every sphere a disc of its true radius (nearest drawn last). Spheres are
+coloured by speed when the run wrote velocities (--color height colours by the coordinate
+along the hidden or vertical axis). The box, when the run's planes form one, is drawn as an
+outline. An error (a missing or unreadable file, a frame out of range) is one line on stderr
+and exit status 2.
 
 Needs h5py and matplotlib (Debian: python3-h5py python3-matplotlib)."""
 import argparse
+import errno
 import math
 import os
 import sys
@@ -32,6 +35,12 @@ from matplotlib.collections import EllipseCollection  # noqa: E402
 AXES = {"x": 0, "y": 1, "z": 2}
 
 
+def fail(message):
+    """One line on stderr, exit 2 (bad input, as nbep's own)."""
+    print("render.py: " + message, file=sys.stderr)
+    sys.exit(2)
+
+
 def parse_frames(text, count):
     """'0,10,-1' -> sorted distinct indices into the count complete frames."""
     out = []
@@ -43,7 +52,7 @@ def parse_frames(text, count):
         if k < 0:
             k += count
         if not 0 <= k < count:
-            sys.exit("render.py: frame %s is outside the %d complete frames" % (item, count))
+            fail("frame %s is outside the %d complete frames" % (item, count))
         out.append(k)
     return sorted(set(out))
 
@@ -151,17 +160,22 @@ def main():
     ap.add_argument("--dpi", type=int, default=150)
     args = ap.parse_args()
 
-    with h5py.File(args.run, "r") as f:
+    try:
+        run = h5py.File(args.run, "r")
+    except OSError as e:  # h5py's text for these spans lines; errno names the reason
+        if e.errno == errno.ENOENT:
+            fail("%s: no such file" % args.run)
+        fail("%s: %s" % (args.run, os.strerror(e.errno) if e.errno else str(e).splitlines()[0]))
+    with run as f:
         if f.attrs.get("format") not in ("nbep-1", b"nbep-1"):
-            sys.exit("render.py: %s is not an nbep-1 run file" % args.run)
+            fail("%s is not an nbep-1 run file" % args.run)
         if "frames/position" not in f:
-            sys.exit("render.py: %s has no positions (output.fields lacks \"position\")" %
-                     args.run)
+            fail("%s has no positions (output.fields lacks \"position\")" % args.run)
         rows = f["frames/position"].shape[0]
         count = int(f["frames"].attrs.get("count", rows))
         count = min(count, rows, f["frames/step"].shape[0])
         if count == 0:
-            sys.exit("render.py: %s has no complete frame yet" % args.run)
+            fail("%s has no complete frame yet" % args.run)
         frames = parse_frames(args.frames, count)
         radius = f["spheres/radius"][:]
         has_vel = "frames/velocity" in f
