@@ -647,21 +647,32 @@ static void test_team_loop_keeps_one_threads_wall_impulses_and_virial(void **sta
     }
 }
 
+/* A deck of one sphere (m = 1.5, r = 0.5) at x = 1.39 flying along x at speed 2 in a box of side
+ * 5, y and z periodic, x periodic when x_periodic is "true" (else walls there), dt = 0.01,
+ * a frame every 10 steps. */
+static void one_sphere_in_a_box(const char *name, int steps, const char *x_periodic, char *deck,
+                                size_t len)
+{
+    char text[512];
+    snprintf(text, sizeof text,
+             "run: { algorithm = \"predictive\"; neighbors = \"cells\"; steps = %d; "
+             "dt = 0.01; threads = 1; };\n"
+             "box: { min = [0.0, 0.0, 0.0]; max = [5.0, 5.0, 5.0]; "
+             "periodic = [%s, true, true]; };\n"
+             "spheres = ( { position = [1.39, 2.0, 2.0]; velocity = [2.0, 0.0, 0.0]; "
+             "radius = 0.5; mass = 1.5; } );\n"
+             "output: { every = 10; };\n",
+             steps, x_periodic);
+    write_deck(name, text, deck, len);
+}
+
 /* A fully periodic box has no walls, and its file still has /stats/wall_impulse, (S, 0): SPEC
  * lists it in every file with stats, so a script reads it without asking first. */
 static void test_a_box_without_walls_has_an_empty_wall_impulse_per_step(void **state)
 {
     (void)state;
     char deck[256], out[256];
-    write_deck("nowall.deck",
-               "run: { algorithm = \"predictive\"; neighbors = \"cells\"; steps = 30; "
-               "dt = 0.01; threads = 1; };\n"
-               "box: { min = [0.0, 0.0, 0.0]; max = [5.0, 5.0, 5.0]; "
-               "periodic = [true, true, true]; };\n"
-               "spheres = ( { position = [1.39, 2.0, 2.0]; velocity = [2.0, 0.0, 0.0]; "
-               "radius = 0.5; mass = 1.5; } );\n"
-               "output: { every = 10; };\n",
-               deck, sizeof deck);
+    one_sphere_in_a_box("nowall.deck", 30, "true", deck, sizeof deck);
     nbep_test_tmp("nowall.h5", out, sizeof out);
     const nbep_run_result res = nbep_test_run_deck(deck, out);
     assert_int_equal(res.summary.planes, 0);
@@ -682,15 +693,7 @@ static void test_wall_impulse_of_a_sphere_between_two_walls(void **state)
     (void)state;
     char deck[256], out[256];
     /* L - 2r = 4: a hit every 2 time units (200 steps); the first at x = 4.5, t = 1.555 */
-    write_deck("wall.deck",
-               "run: { algorithm = \"predictive\"; neighbors = \"cells\"; steps = 1000; "
-               "dt = 0.01; threads = 1; };\n"
-               "box: { min = [0.0, 0.0, 0.0]; max = [5.0, 5.0, 5.0]; "
-               "periodic = [false, true, true]; };\n"
-               "spheres = ( { position = [1.39, 2.0, 2.0]; velocity = [2.0, 0.0, 0.0]; "
-               "radius = 0.5; mass = 1.5; } );\n"
-               "output: { every = 100; };\n",
-               deck, sizeof deck);
+    one_sphere_in_a_box("wall.deck", 1000, "false", deck, sizeof deck);
     nbep_test_tmp("wall.h5", out, sizeof out);
     const nbep_run_result res = nbep_test_run_deck(deck, out);
     assert_int_equal(res.summary.planes, 2);
