@@ -439,10 +439,11 @@ static void test_frame_and_stats_datasets_are_chunked_and_extendable(void **stat
     H5Fclose(f);
 }
 
-static void test_a_huge_frame_is_split_into_chunks_of_at_most_4_mib(void **state)
+static void test_a_huge_frame_is_split_into_equal_chunks_of_at_most_4_mib(void **state)
 {
-    /* 4 MiB / (3 doubles) spheres per chunk: 174762; 200000 spheres need two chunks. */
-    const size_t n = 200000, per_chunk = (4u << 20) / 24;
+    /* 4 MiB / (3 doubles) spheres per chunk at most: 174762; 200000 spheres take two chunks,
+     * of 100000 each (HDF5 stores a last chunk whole: chunks of 174762 would store 349524) */
+    const size_t n = 200000, per_chunk = 100000;
     nbep_diag d;
     nbep_diag_init(&d);
     fixture *fx = *state;
@@ -1047,12 +1048,14 @@ static void test_info_rejects_an_hdf5_file_without_the_nbep_1_format(void **stat
     assert_non_null(strstr(fx->d.msg[0], "not an nbep-1 file"));
 }
 
+/* a name that is no file is the user's mistake (exit 2), said with the system's reason */
 static void test_info_on_a_missing_file_fails_naming_it(void **state)
 {
     fixture *fx = *state;
     const char *path = "build/tests/tmp/output_does_not_exist.h5";
-    assert_int_equal(nbep_output_info(path, stdout, &fx->d), NBEP_EIO);
+    assert_int_equal(nbep_output_info(path, stdout, &fx->d), NBEP_EUSAGE);
     assert_one_line_naming(&fx->d, path);
+    assert_non_null(strstr(fx->d.msg[0], strerror(ENOENT)));
 }
 
 /* ---- JSON ---------------------------------------------------------------------------------- */
@@ -1171,7 +1174,7 @@ int main(void)
         T(test_sphere_and_plane_arrays_read_back_bit_for_bit),
         T(test_frames_read_back_bit_for_bit_with_their_steps_and_times),
         T(test_frame_and_stats_datasets_are_chunked_and_extendable),
-        T(test_a_huge_frame_is_split_into_chunks_of_at_most_4_mib),
+        T(test_a_huge_frame_is_split_into_equal_chunks_of_at_most_4_mib),
         T(test_stats_rows_read_back_in_order_across_batches),
         T(test_root_attributes_hold_the_settings_the_deck_and_the_build),
         T(test_a_deck_larger_than_an_object_header_is_stored_whole),
