@@ -718,6 +718,7 @@ static void parse_sweep(load *L, const config_setting_t *root, nbep_scene *sc)
     sc->sweep_replicas = 1;
     if (get_aggregate(L, root, "", S_SWEEP, &sweep) != GOT)
         return;
+    sc->sweep_line = config_setting_source_line(sweep);
     int64_t replicas;
     if (get_int(L, sweep, "sweep", S_SWEEP_REPLICAS, &replicas, NULL) == GOT)
         sc->sweep_replicas = (uint64_t)replicas;

@@ -148,6 +148,7 @@ nbep_status nbep_sweep_plan_create(const char *deck_path, const char *const *ove
     sc.sweep_axes = NULL;
     sc.sweep_n_axes = 0;
     p.replicas = sc.sweep_replicas;
+    const int sweep_line = sc.sweep_line;
     p.seed = sc.seed;
     p.steps = sc.steps;
     nbep_scene_fini(&sc);
@@ -164,9 +165,9 @@ nbep_status nbep_sweep_plan_create(const char *deck_path, const char *const *ove
     }
     if (too_many || p.replicas > RUNS_MAX / p.n_combos)
         nbep_diag_add(d, __FILE__, __LINE__,
-                      "%s: sweep: replicas times the product of the axes' lengths is more "
+                      "%s:%d: sweep: replicas times the product of the axes' lengths is more "
                       "than %zu runs",
-                      deck_path, RUNS_MAX);
+                      deck_path, sweep_line > 0 ? sweep_line : 1, RUNS_MAX);
     else
         p.n_runs = (size_t)p.replicas * p.n_combos;
     if (d->n_errors > errors0) {

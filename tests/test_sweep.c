@@ -252,6 +252,26 @@ static void test_varying_the_seed_or_a_key_twice_is_a_deck_error(void **state)
     nbep_diag_fini(&d);
 }
 
+/* More runs than a sweep takes (10^7) is a deck error at the sweep group's line, found before
+ * anything runs. */
+static void test_too_many_runs_is_a_deck_error_at_the_sweep_group(void **state)
+{
+    (void)state;
+    char deck[256];
+    write_deck("sweep_too_many",
+               "sweep: { replicas = 5000001;\n"
+               "  vary = ( { key = \"physics.restitution\"; values = [1.0, 0.5]; } ); };\n",
+               deck, sizeof deck);
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_sweep_plan p;
+    assert_int_equal(nbep_sweep_plan_create(deck, NULL, 0, &p, &d), NBEP_EDECK);
+    assert_int_equal(d.n_errors, 1);
+    assert_string_equal(d.msg[0], TMP "sweep_too_many.deck:6: sweep: replicas times the product "
+                                      "of the axes' lengths is more than 10000000 runs");
+    nbep_diag_fini(&d);
+}
+
 static void test_a_steps_axis_sets_each_runs_expected_steps(void **state)
 {
     (void)state;
@@ -714,6 +734,7 @@ int main(void)
         cmocka_unit_test(test_the_sweep_directory_is_the_output_name_with_sweep),
         cmocka_unit_test(test_run_files_have_four_digits_or_as_many_as_the_last_run_needs),
         cmocka_unit_test(test_varying_the_seed_or_a_key_twice_is_a_deck_error),
+        cmocka_unit_test(test_too_many_runs_is_a_deck_error_at_the_sweep_group),
         cmocka_unit_test(test_a_steps_axis_sets_each_runs_expected_steps),
         cmocka_unit_test(test_ranks_take_runs_in_rounds_of_alternating_direction),
         cmocka_unit_test(test_a_summary_reads_back_field_by_field),

@@ -69,6 +69,7 @@ typedef struct nbep_scene {
     nbep_state state;
     /* sweep (optional group, used by `nbep sweep`): replicas x cartesian product of axes */
     uint64_t sweep_replicas;              /* >= 1; 1 when the deck has no sweep group */
+    int sweep_line;                       /* the sweep group's line in the deck (0: none) */
     size_t sweep_n_axes;
     struct nbep_sweep_axis *sweep_axes;   /* owned */
 } nbep_scene;
