@@ -50,12 +50,13 @@ static void remove_output(const char *path)
 static void print_human_summary(const nbep_summary *s, const char *file, nbep_status st)
 {
     fprintf(stderr,
-            "nbep: %s %llu steps of %llu spheres (%s, %d thread%s) in %.3g s (%.4g steps/s); "
-            "%llu collisions; energy drift %.3g; max overlap %.3g; %s\n",
+            "nbep: %s %llu step%s of %llu sphere%s (%s, %d thread%s) in %.3g s (%.4g steps/s); "
+            "%llu collision%s; energy drift %.3g; max overlap %.3g; %s\n",
             st == NBEP_OK ? "ran" : "stopped after", (unsigned long long)s->steps,
-            (unsigned long long)s->spheres, s->algorithm, s->threads, s->threads == 1 ? "" : "s",
-            s->wall_seconds, s->steps_per_second, (unsigned long long)s->collisions,
-            s->energy_rel_drift, s->max_overlap_rel, file);
+            s->steps == 1 ? "" : "s", (unsigned long long)s->spheres, s->spheres == 1 ? "" : "s",
+            s->algorithm, s->threads, s->threads == 1 ? "" : "s", s->wall_seconds,
+            s->steps_per_second, (unsigned long long)s->collisions,
+            s->collisions == 1 ? "" : "s", s->energy_rel_drift, s->max_overlap_rel, file);
 }
 
 /* Steps sim, closes out (with the summary unless writing already failed) and reports. */

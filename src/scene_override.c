@@ -286,8 +286,8 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
                 child = config_setting_add(node, NULL, container_type(sofar, &segs[k + 1]));
             } else {
                 sofar[used] = '\0';
-                OVERR(c, ov, "%s has %u entries: the index can be at most %u (to add one)",
-                      sofar, len, len);
+                OVERR(c, ov, "%s has %u entr%s: the index can be at most %u (to add one)",
+                      sofar, len, len == 1 ? "y" : "ies", len);
                 goto out;
             }
         }
@@ -327,8 +327,8 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
     else if (last->idx == len)
         ok = copy_value(node, NULL, v, ov) != NULL;
     else
-        OVERR(c, ov, "%s has %u entries: the index can be at most %u (to add one)", sofar, len,
-              len);
+        OVERR(c, ov, "%s has %u entr%s: the index can be at most %u (to add one)", sofar, len,
+              len == 1 ? "y" : "ies", len);
     c->oom = c->oom || !ok;
 out:
     config_destroy(&tmp);

@@ -136,6 +136,14 @@ done
 check "the big fluid's frames are stored without padding (equal chunks)" \
     "h5ls -v '$tmp/big-fluid.h5/frames/position' | grep -q '100.00% utilization'"
 
+# ---- the end line and messages count in words: 1 step, 1 entry --------------------------------
+run_nbep run inputs/two-spheres.deck -n 1 -o "$tmp/one-step.h5"
+check "the end line says '1 step of 2 spheres' (exit $rc)" \
+    "[ $rc = 0 ] && grep -qF 'ran 1 step of 2 spheres' '$tmp/stderr'"
+run_nbep check inputs/bounce.deck --set 'planes.[3].normal=[0,0,1]'
+check "a --set index past a list of one says '1 entry' (exit $rc)" \
+    "[ $rc = 2 ] && one_line && grep -qF 'planes has 1 entry: the index' '$tmp/stderr'"
+
 # ---- a deck name that is no file, a missing file to resume -------------------------------------
 for cmd in run check sweep; do
     run_nbep $cmd "$tmp/no-such.deck" --quiet
