@@ -712,16 +712,10 @@ static void check_steps_values(load *L, const config_setting_t *values, const ch
     }
 }
 
-static void parse_sweep(load *L, const config_setting_t *root, nbep_scene *sc)
+/* The axes of the sweep group: sweep.vary's entries, each checked. */
+static void parse_axes(load *L, const config_setting_t *sweep, nbep_scene *sc)
 {
-    const config_setting_t *sweep = NULL, *vary = NULL;
-    sc->sweep_replicas = 1;
-    if (get_aggregate(L, root, "", S_SWEEP, &sweep) != GOT)
-        return;
-    sc->sweep_line = config_setting_source_line(sweep);
-    int64_t replicas;
-    if (get_int(L, sweep, "sweep", S_SWEEP_REPLICAS, &replicas, NULL) == GOT)
-        sc->sweep_replicas = (uint64_t)replicas;
+    const config_setting_t *vary = NULL;
     if (get_aggregate(L, sweep, "sweep", S_SWEEP_VARY, &vary) != GOT)
         return;
     size_t n = (size_t)config_setting_length(vary);
@@ -750,9 +744,12 @@ static void parse_sweep(load *L, const config_setting_t *root, nbep_scene *sc)
             L->c.oom = L->c.oom || b.oom;
             nbep__strbuf_fini(&b);
             g_key = BAD;
-        } else if (g_key == GOT && axis_key_refused(key)) {
-            ERR(L, at, "%s.key: %s cannot be varied (%s)", prefix, key, axis_key_refused(key));
-            g_key = BAD;
+        } else if (g_key == GOT) {
+            const char *refused = axis_key_refused(key);
+            if (refused) {
+                ERR(L, at, "%s.key: %s cannot be varied (%s)", prefix, key, refused);
+                g_key = BAD;
+            }
         }
         for (size_t j = 0; g_key == GOT && j < k; j++) {
             const char *kj;
@@ -791,6 +788,26 @@ static void parse_sweep(load *L, const config_setting_t *root, nbep_scene *sc)
             axis->values[axis->n_values++] = b.p ? b.p : dup_string(L, "");
         }
     }
+}
+
+static void parse_sweep(load *L, const config_setting_t *root, nbep_scene *sc)
+{
+    const config_setting_t *sweep = NULL;
+    sc->sweep_replicas = 1;
+    if (get_aggregate(L, root, "", S_SWEEP, &sweep) != GOT)
+        return;
+    int64_t replicas;
+    if (get_int(L, sweep, "sweep", S_SWEEP_REPLICAS, &replicas, NULL) == GOT)
+        sc->sweep_replicas = (uint64_t)replicas;
+    parse_axes(L, sweep, sc);
+    uint64_t runs = sc->sweep_replicas;
+    for (size_t k = 0; k < sc->sweep_n_axes && runs <= NBEP_SWEEP_RUNS_MAX; k++)
+        runs *= sc->sweep_axes[k].n_values; /* at most 10^7 times a list length < 2^31 */
+    if (runs > NBEP_SWEEP_RUNS_MAX)
+        ERR(L, sweep,
+            "sweep: replicas times the product of the axes' lengths is more than %" PRIu64
+            " runs",
+            NBEP_SWEEP_RUNS_MAX);
 }
 
 /* ---- counts, memory, and the state ---------------------------------------------------------- */

@@ -211,6 +211,26 @@ static void test_run_files_have_four_digits_or_as_many_as_the_last_run_needs(voi
     free(b);
 }
 
+/* The sweep's plan of deck (with overrides set) is refused with exactly the n messages msg, and
+ * the deck's own check (nbep check, nbep run) refuses it alike, before any run. */
+static void assert_refused(const char *deck, const char *const *set, size_t n_set, size_t n,
+                           const char *const *msg)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_sweep_plan p;
+    assert_int_equal(nbep_sweep_plan_create(deck, set, n_set, &p, &d), NBEP_EDECK);
+    assert_int_equal(d.n_errors, n);
+    for (size_t k = 0; k < n; k++)
+        assert_string_equal(d.msg[k], msg[k]);
+    nbep_diag_fini(&d);
+    nbep_scene sc;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_scene_load(deck, set, n_set, &sc, &d), NBEP_EDECK);
+    assert_int_equal(d.n_errors, n);
+    nbep_diag_fini(&d);
+}
+
 static void test_varying_the_seed_or_a_key_twice_is_a_deck_error(void **state)
 {
     (void)state;
@@ -220,40 +240,27 @@ static void test_varying_the_seed_or_a_key_twice_is_a_deck_error(void **state)
                "  { key = \"physics.restitution\"; values = [1.0]; },\n"
                "  { key = \"physics.restitution\"; values = [0.5]; } ); };\n",
                deck, sizeof deck);
-    nbep_diag d;
-    nbep_diag_init(&d);
-    nbep_sweep_plan p;
-    assert_int_equal(nbep_sweep_plan_create(deck, NULL, 0, &p, &d), NBEP_EDECK);
-    assert_int_equal(d.n_errors, 2);
-    assert_string_equal(d.msg[0], TMP "sweep_bad_axes.deck:6: sweep.vary.[0].key: run.seed "
-                                      "cannot be varied (the sweep sets it: replica r runs "
-                                      "with run.seed + r)");
-    assert_string_equal(d.msg[1], TMP "sweep_bad_axes.deck:8: sweep.vary.[2].key: "
-                                      "physics.restitution is already varied by sweep.vary.[1]");
-    nbep_diag_fini(&d);
-    /* the deck's own check finds them too, before any run (nbep check, nbep run) */
-    nbep_scene sc;
-    nbep_diag_init(&d);
-    assert_int_equal(nbep_scene_load(deck, NULL, 0, &sc, &d), NBEP_EDECK);
-    assert_int_equal(d.n_errors, 2);
-    nbep_diag_fini(&d);
+    const char *const axes[] = {
+        TMP "sweep_bad_axes.deck:6: sweep.vary.[0].key: run.seed cannot be varied (the sweep "
+            "sets it: replica r runs with run.seed + r)",
+        TMP "sweep_bad_axes.deck:8: sweep.vary.[2].key: physics.restitution is already varied "
+            "by sweep.vary.[1]"};
+    assert_refused(deck, NULL, 0, 2, axes);
     /* a run.steps axis takes integers >= 0 only, each checked on its line */
     write_deck("sweep_bad_steps",
                "sweep: { vary = ( { key = \"run.steps\";\n"
                "  values = ( 7, -2, 1.5 ); } ); };\n",
                deck, sizeof deck);
-    nbep_diag_init(&d);
-    assert_int_equal(nbep_sweep_plan_create(deck, NULL, 0, &p, &d), NBEP_EDECK);
-    assert_int_equal(d.n_errors, 2);
-    assert_string_equal(d.msg[0], TMP "sweep_bad_steps.deck:7: sweep.vary.[0].values.[1]: "
-                                      "run.steps must be an integer >= 0 (got -2)");
-    assert_string_equal(d.msg[1], TMP "sweep_bad_steps.deck:7: sweep.vary.[0].values.[2]: "
-                                      "run.steps must be an integer >= 0 (got 1.5)");
-    nbep_diag_fini(&d);
+    const char *const steps[] = {
+        TMP "sweep_bad_steps.deck:7: sweep.vary.[0].values.[1]: run.steps must be an integer "
+            ">= 0 (got -2)",
+        TMP "sweep_bad_steps.deck:7: sweep.vary.[0].values.[2]: run.steps must be an integer "
+            ">= 0 (got 1.5)"};
+    assert_refused(deck, NULL, 0, 2, steps);
 }
 
-/* More runs than a sweep takes (10^7) is a deck error at the sweep group's line, found before
- * anything runs. */
+/* More runs than a sweep takes (10^7) is a deck error at the sweep group's line, or at the
+ * --set that asked for them, found before anything runs. */
 static void test_too_many_runs_is_a_deck_error_at_the_sweep_group(void **state)
 {
     (void)state;
@@ -262,14 +269,14 @@ static void test_too_many_runs_is_a_deck_error_at_the_sweep_group(void **state)
                "sweep: { replicas = 5000001;\n"
                "  vary = ( { key = \"physics.restitution\"; values = [1.0, 0.5]; } ); };\n",
                deck, sizeof deck);
-    nbep_diag d;
-    nbep_diag_init(&d);
-    nbep_sweep_plan p;
-    assert_int_equal(nbep_sweep_plan_create(deck, NULL, 0, &p, &d), NBEP_EDECK);
-    assert_int_equal(d.n_errors, 1);
-    assert_string_equal(d.msg[0], TMP "sweep_too_many.deck:6: sweep: replicas times the product "
-                                      "of the axes' lengths is more than 10000000 runs");
-    nbep_diag_fini(&d);
+    const char *const in_deck[] = {TMP "sweep_too_many.deck:6: sweep: replicas times the "
+                                       "product of the axes' lengths is more than 10000000 runs"};
+    assert_refused(deck, NULL, 0, 1, in_deck);
+    write_deck("sweep_few", "", deck, sizeof deck);
+    const char *set[] = {"sweep.replicas=10000001"};
+    const char *const by_set[] = {"--set sweep.replicas=10000001: sweep: replicas times the "
+                                  "product of the axes' lengths is more than 10000000 runs"};
+    assert_refused(deck, set, 1, 1, by_set);
 }
 
 static void test_a_steps_axis_sets_each_runs_expected_steps(void **state)

@@ -23,6 +23,11 @@ typedef struct nbep_sweep_axis {
     char **values;      /* owned, e.g. "0.9", "[0.0, 0.0, -1.0]", "\"naive\"" */
 } nbep_sweep_axis;
 
+/* The most runs a sweep takes (replicas times the product of the axes' lengths): more is a
+ * mistake in the deck (a product of long axes), not a study. The deck check refuses it, so
+ * that nbep sweep's plan (sweep.c) can count its runs without overflow. */
+#define NBEP_SWEEP_RUNS_MAX ((uint64_t)10000000)
+
 /* The jam hold (algo_predictive.c, JAM_HOLD): with e < 1 and accelerations, a sphere that has
  * reacted this many times in one step is held where it is at its next slow meeting with a
  * held sphere or, carried by planes, any sphere. Here because --help-deck names it. */
@@ -69,7 +74,6 @@ typedef struct nbep_scene {
     nbep_state state;
     /* sweep (optional group, used by `nbep sweep`): replicas x cartesian product of axes */
     uint64_t sweep_replicas;              /* >= 1; 1 when the deck has no sweep group */
-    int sweep_line;                       /* the sweep group's line in the deck (0: none) */
     size_t sweep_n_axes;
     struct nbep_sweep_axis *sweep_axes;   /* owned */
 } nbep_scene;
