@@ -2170,10 +2170,10 @@ static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, c
  * events a quarter cheaper than later: its figure kept the run probing every TEAM_PROBE-th
  * step, 5 probes in 80 steps of a fluid at N = 256000, phi = 0.30, each costing 0.75 of a
  * team step). A probe costs what the slower way loses: with the team 1.6 times as fast, one
- * step in 8 run alone adds 7 % to the run's time. Where one way is at least TEAM_CLEAR times as fast, the other
- * is probed every TEAM_PROBE_FAR-th step only; the way taken is measured at every step, so a
- * change that makes it the slower one is seen at once. NBEP_TEAM=always or never in the
- * environment, read as the run is made, fixes the choice (tests, benchmarks). */
+ * step in 8 run alone adds 7 % to the run's time. Where one way is at least TEAM_CLEAR times
+ * as fast, the other is probed every TEAM_PROBE_FAR-th step only; the way taken is measured at
+ * every step, so a change that makes it the slower one is seen at once. NBEP_TEAM=always or
+ * never in the environment, read as the run is made, fixes the choice (tests, benchmarks). */
 #define TEAM_PROBE 8
 #define TEAM_PROBE_FAR 64
 #define TEAM_CLEAR 1.25

@@ -215,6 +215,13 @@ static const config_setting_t *parse_value(nbep__scene_ctx *c, const char *ov, c
     return s;
 }
 
+/* An index past the end of a list of len entries (len itself appends one). */
+static void index_past_end(nbep__scene_ctx *c, const char *ov, const char *list, unsigned len)
+{
+    OVERR(c, ov, "%s has %u entr%s: the index can be at most %u (to add one)", list, len,
+          len == 1 ? "y" : "ies", len);
+}
+
 void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *ov)
 {
     const char *eq = strchr(ov, '=');
@@ -286,8 +293,7 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
                 child = config_setting_add(node, NULL, container_type(sofar, &segs[k + 1]));
             } else {
                 sofar[used] = '\0';
-                OVERR(c, ov, "%s has %u entr%s: the index can be at most %u (to add one)",
-                      sofar, len, len == 1 ? "y" : "ies", len);
+                index_past_end(c, ov, sofar, len);
                 goto out;
             }
         }
@@ -327,8 +333,7 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
     else if (last->idx == len)
         ok = copy_value(node, NULL, v, ov) != NULL;
     else
-        OVERR(c, ov, "%s has %u entr%s: the index can be at most %u (to add one)", sofar, len,
-              len == 1 ? "y" : "ies", len);
+        index_past_end(c, ov, sofar, len);
     c->oom = c->oom || !ok;
 out:
     config_destroy(&tmp);

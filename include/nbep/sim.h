@@ -37,9 +37,10 @@ typedef struct nbep_sim_options {
 } nbep_sim_options;
 
 /* A run of sc (borrowed; must outlive the sim) from its initial state, or from opt->resume
- * (its frame's step and, for predictive, event slots; the state is the frame's). Allocates everything
- * the algorithm needs; nothing is allocated inside a step. NBEP_ENOMEM, NBEP_EDECK for an
- * unknown algorithm. */
+ * (its frame's step and, for predictive, event slots; the state is the frame's). Allocates
+ * everything the algorithm needs; nothing is allocated inside a step. NBEP_ENOMEM, NBEP_EDECK
+ * for an unknown algorithm. The run takes the threads OpenMP gives a region of the resolved
+ * count (fewer only inside a caller's parallel region). */
 NBEP_MUST_CHECK nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt,
                                             nbep_sim **out, nbep_diag *d);
 void nbep_sim_destroy(nbep_sim **sim);
@@ -64,9 +65,9 @@ size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads);
 bool nbep_sim_keeps_events(const nbep_scene *sc);
 
 /* The thread count a scene's `threads` setting resolves to, which is what a run uses: n > 0
- * as is; 0 -> OMP_NUM_THREADS if set, else the cores available; always 1 in a serial build
- * (make OMP=0). The one place a count is resolved: the run's file, its summary and
- * `nbep check` all show this number. */
+ * as is; 0 -> OMP_NUM_THREADS if set, else the cores available; at most OMP_THREAD_LIMIT;
+ * always 1 in a serial build (make OMP=0). The one place a count is resolved: the run's file,
+ * its summary and `nbep check` all show this number. */
 int nbep_sim_resolve_threads(int requested);
 
 #endif
