@@ -3,11 +3,13 @@
  * Errors: HDF5's automatic printing is off (nbep_output_library_init); every negative id or
  * herr_t becomes one line "nbep: PATH: cannot WHAT: REASON", REASON being the innermost entry
  * of HDF5's error stack, captured before any cleanup call clears the stack. */
+#include <errno.h>
 #include <inttypes.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <hdf5.h>
 
@@ -287,3 +289,11 @@ void nbep_output_library_init(void)
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
 }
 
+nbep_status nbep__output_openable(const char *path, int mode, const char *what, nbep_diag *d)
+{
+    if (access(path, mode) == 0)
+        return NBEP_OK;
+    const int err = errno;
+    nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot %s: %s", path, what, strerror(err));
+    return nbep_status_of_open(err);
+}

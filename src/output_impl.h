@@ -116,6 +116,11 @@ bool nbep__output_xmf_room(nbep_output *o, size_t f);
 void nbep__output_hdf5_fail(nbep_diag *d, const char *file, int line, const char *path,
                             const char *what_fmt, ...) NBEP_PRINTF(5, 6);
 #define HDF5_FAIL(d, path, ...) nbep__output_hdf5_fail((d), __FILE__, __LINE__, (path), __VA_ARGS__)
+/* NBEP_OK when path may be opened with `mode` (access(2): R_OK, W_OK); else adds "nbep: PATH:
+ * cannot WHAT: the system's reason" and returns nbep_status_of_open's class. For the files a
+ * user names (--resume, nbep info) before HDF5 opens them: HDF5's own failure does not always
+ * carry the system's reason, and a name that is no file is a usage error, not an I/O one. */
+nbep_status nbep__output_openable(const char *path, int mode, const char *what, nbep_diag *d);
 
 /* Releases an id (ignoring errors: failure paths) and sets it invalid. */
 void nbep__output_close_id(hid_t *id);

@@ -1,7 +1,6 @@
 /* `nbep info RUN.h5` (output.h): a run's metadata and summary, read with the HDF5 helpers of
  * output_hdf5.c; works on interrupted runs and on runs still being written (the writer takes
  * no lock, and only rows its `count` attributes cover are reported as complete). */
-#include <errno.h>
 #include <inttypes.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -137,11 +136,9 @@ static int gather_info(hid_t file, const char *path, run_info *r, nbep_diag *d)
 
 nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
 {
-    if (access(path, R_OK) != 0) {
-        const int err = errno;
-        NBEP_FAIL(d, nbep_status_of_open(err), "nbep: %s: cannot open it: %s", path,
-                  strerror(err));
-    }
+    const nbep_status open_st = nbep__output_openable(path, R_OK, "open it", d);
+    if (open_st != NBEP_OK)
+        return open_st;
     hid_t fapl = nbep__output_fapl(false);
     if (fapl < 0) {
         HDF5_FAIL(d, path, "set up file access properties");

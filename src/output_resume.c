@@ -2,7 +2,6 @@
  * complete frame, checking that deck and file agree, and reads that frame (and its event
  * slots) back; the writer (output.c) then goes on as after nbep_output_create. */
 #include <assert.h>
-#include <errno.h>
 #include <inttypes.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -125,20 +124,15 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
                                     nbep_resume *r, nbep_diag *d)
 {
     nbep_resume res = {0};
-    nbep_status st = NBEP_EIO;
+    nbep_status st = nbep__output_openable(path, R_OK | W_OK, "open the run to resume it", d);
+    if (st != NBEP_OK)
+        return st;
+    st = NBEP_EIO;
     const size_t n = sc->state.n;
     nbep_output *o = nbep__output_new(path, n, d);
     if (!o)
         return NBEP_ENOMEM;
 
-    /* a name that is no file to write says so (HDF5's own reason is not always the system's) */
-    if (access(path, R_OK | W_OK) != 0) {
-        const int err = errno;
-        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot open the run to resume it: %s",
-                      path, strerror(err));
-        st = nbep_status_of_open(err);
-        goto fail;
-    }
     hid_t fapl = nbep__output_fapl(true);
     o->file = fapl < 0 ? H5I_INVALID_HID : H5Fopen(path, H5F_ACC_RDWR, fapl);
     nbep__output_close_id(&fapl);
