@@ -182,7 +182,6 @@ if ! "$nbep" --version | grep -q 'OMP=0'; then
     rc=$?
     check "OMP_THREAD_LIMIT=1, the fluid's event loop on 2 threads: it ends on 1 (exit $rc)" \
         "[ $rc = 0 ] && grep -q '\"threads\": 1' '$tmp/omp.json'"
-    run_nbep check "$tmp/group.deck" -t 4
     OMP_THREAD_LIMIT=1 run_nbep check "$tmp/group.deck" -t 4
     check "nbep check under OMP_THREAD_LIMIT=1 says 1 thread" \
         "grep -Eq '^algorithm: .*, 1 thread\$' '$tmp/stdout'"
