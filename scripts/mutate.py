@@ -284,6 +284,11 @@ MUTANTS = [
     ("evloop-stray-not-nearest", "src/evloop.c",
      "        d = nbep_vec3_add(d, nbep_periodic_near_shift(&e->pb, d));", "        (void)0;",
      TEAM, None),
+    ("evloop-walk-no-images", "src/evloop.c",
+     "const double ax = b.per[0][x] ? ci.x - b.per[0][x] * e->pb.len[0] : ci.x;",
+     "const double ax = ci.x;", TEAM, None),
+    ("overlap-check-no-images", "src/state.c", "        if (per > 0.0 && x[a] + per - reach <= hi)",
+     "        if (0)", TEAM, None),
     # ---- the cells team loop (two threads, events handled ahead and committed in order) ----
     ("team-apart-unwrapped", "src/evloop.c", "        dx = dx > hx ? lx - dx : dx; /* half",
      "        dx = dx; /* half", TEAM, None),

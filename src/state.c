@@ -103,6 +103,25 @@ static void consider(double overlap, double rmin, size_t i, size_t j, double *be
         *best_rel = overlap / rmin;
 }
 
+/* The offsets of sphere i's copies whose reach can meet a centre in the grid g's extent: none
+ * (0) always, and on a periodic axis (period > 0) the period either way where the copy's reach
+ * still meets the extent (near a face: centres are only wrapped into the box at times, so the
+ * extent may be a little wider than the box). Returns how many, into off[axis][k]. */
+static void copy_offsets(const nbep_state *s, const nbep_grid *g, nbep_vec3 p, double reach,
+                         double off[3][3], int cnt[3])
+{
+    const double x[3] = {p.x, p.y, p.z}, lo[3] = {g->lo.x, g->lo.y, g->lo.z};
+    for (int a = 0; a < 3; a++) {
+        const double hi = lo[a] + (double)g->dim[a] * g->h, per = s->period[a];
+        cnt[a] = 0;
+        off[a][cnt[a]++] = 0.0;
+        if (per > 0.0 && x[a] + per - reach <= hi)
+            off[a][cnt[a]++] = per;
+        if (per > 0.0 && x[a] - per + reach >= lo[a])
+            off[a][cnt[a]++] = -per;
+    }
+}
+
 nbep_status nbep_state_max_overlap(const nbep_state *s, nbep_grid *ws, double *max_out,
                                    double *rel_out, size_t *i_out, size_t *j_out, nbep_diag *d)
 {
@@ -118,7 +137,9 @@ nbep_status nbep_state_max_overlap(const nbep_state *s, nbep_grid *ws, double *m
         }
 
     if (n > 1) {
-        /* Cells at least a diameter wide: overlapping pairs sit in neighbouring cells. */
+        /* Cells at least a diameter wide: overlapping pairs sit in neighbouring cells, or in
+         * a periodic box in cells next to i's copy across a face (the nearest way round: a
+         * periodic side is over two diameters, so one copy of j is within reach at most). */
         double rmax = 0.0;
         for (size_t i = 0; i < n; i++)
             rmax = fmax(rmax, s->radius[i]);
@@ -131,22 +152,37 @@ nbep_status nbep_state_max_overlap(const nbep_state *s, nbep_grid *ws, double *m
         }
         nbep_grid_build(g, s->pos, n, 2.0 * rmax);
         for (size_t i = 0; i < n; i++) {
-            size_t lo[3], hi[3];
-            nbep_grid_block(g, s->pos[i], s->radius[i] + rmax, lo, hi);
-            for (size_t z = lo[2]; z <= hi[2]; z++)
-                for (size_t y = lo[1]; y <= hi[1]; y++)
-                    for (size_t x = lo[0]; x <= hi[0]; x++) {
-                        size_t c = nbep_grid_index(g, x, y, z);
-                        for (size_t k = g->start[c]; k < g->start[c + 1]; k++) {
-                            size_t j = g->item[k];
-                            if (j <= i)
-                                continue;
-                            double dist = nbep_vec3_norm(nbep_vec3_sub(s->pos[j], s->pos[i]));
-                            double ov = s->radius[i] + s->radius[j] - dist;
-                            consider(ov, fmin(s->radius[i], s->radius[j]), i, j, &best,
-                                     &best_rel, &bi, &bj);
+            const double reach = s->radius[i] + rmax;
+            double off[3][3];
+            int cnt[3];
+            copy_offsets(s, g, s->pos[i], reach, off, cnt);
+            for (int u = 0; u < cnt[0] * cnt[1] * cnt[2]; u++) {
+                /* copy u of i: a pair is met once from i (j > i) unmoved, from either
+                 * sphere across a face (the largest overlap is the same) */
+                const nbep_vec3 shift = nbep_vec3_make(off[0][u % cnt[0]],
+                                                       off[1][u / cnt[0] % cnt[1]],
+                                                       off[2][u / (cnt[0] * cnt[1])]);
+                const bool moved = u > 0;
+                size_t lo[3], hi[3];
+                nbep_grid_block(g, nbep_vec3_add(s->pos[i], shift), reach, lo, hi);
+                for (size_t z = lo[2]; z <= hi[2]; z++)
+                    for (size_t y = lo[1]; y <= hi[1]; y++)
+                        for (size_t x = lo[0]; x <= hi[0]; x++) {
+                            size_t c = nbep_grid_index(g, x, y, z);
+                            for (size_t k = g->start[c]; k < g->start[c + 1]; k++) {
+                                size_t j = g->item[k];
+                                if (moved ? j == i : j <= i)
+                                    continue;
+                                /* as the engine takes an image: the centres' difference,
+                                 * less whole periods */
+                                double dist = nbep_vec3_norm(nbep_vec3_sub(
+                                    nbep_vec3_sub(s->pos[j], s->pos[i]), shift));
+                                double ov = s->radius[i] + s->radius[j] - dist;
+                                consider(ov, fmin(s->radius[i], s->radius[j]), i, j, &best,
+                                         &best_rel, &bi, &bj);
+                            }
                         }
-                    }
+            }
         }
         nbep_grid_fini(&own); /* safe on the zeroed grid when ws was given */
     }

@@ -182,6 +182,47 @@ static void collide_across_a_face(void)
     nbep_test_scene_free(&sc);
 }
 
+/* The overlap check that every frame runs (nbep_state_max_overlap: the summary's max_overlap)
+ * sees a pair that overlaps across a periodic face, the nearest way round, on a periodic axis
+ * only, and with centres a little outside the box (a run wraps them only at rebuilds). */
+static void test_overlap_check_sees_pairs_across_a_periodic_face(void **state)
+{
+    (void)state;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_state s;
+    assert_int_equal(nbep_state_init(&s, 6, 0, &d), NBEP_OK);
+    s.period[0] = s.period[2] = 10.0; /* a box [0, 10]^3, periodic in x and z, not in y */
+    const nbep_vec3 p[6] = {
+        {0.2, 5.0, 5.0}, {9.9, 5.0, 5.0},     /* 0.3 apart across the x faces: 0.7 deep */
+        {5.0, 0.1, 2.0}, {5.0, 9.95, 2.0},    /* across the y faces, which are walls: apart */
+        {9.8, 2.0, -0.05}, {0.3, 2.0, 9.45},  /* across a corner, one centre outside the
+                                              * box: 0.5 apart in x and in z */
+    };
+    for (size_t i = 0; i < 6; i++) {
+        s.pos[i] = p[i];
+        s.radius[i] = 0.5;
+        s.mass[i] = 1.0;
+    }
+    double worst = 0.0, rel = 0.0;
+    size_t wi = 0, wj = 0;
+    assert_int_equal(nbep_state_max_overlap(&s, NULL, &worst, &rel, &wi, &wj, &d), NBEP_OK);
+    assert_close(worst, 0.7, 0.0, 1e-13);
+    assert_close(rel, 1.4, 0.0, 1e-13);
+    assert_true((wi == 0 && wj == 1) || (wi == 1 && wj == 0));
+    /* without the first pair, the corner's: 1 - 0.5 sqrt 2 deep */
+    s.pos[1] = (nbep_vec3){5.0, 5.0, 5.0};
+    assert_int_equal(nbep_state_max_overlap(&s, NULL, &worst, &rel, &wi, &wj, &d), NBEP_OK);
+    assert_close(worst, 1.0 - 0.5 * sqrt(2.0), 0.0, 1e-13);
+    assert_true((wi == 4 && wj == 5) || (wi == 5 && wj == 4));
+    /* and nothing when the box is not periodic: they are a box apart */
+    s.period[0] = s.period[2] = 0.0;
+    assert_int_equal(nbep_state_max_overlap(&s, NULL, &worst, &rel, &wi, &wj, &d), NBEP_OK);
+    assert_true(worst == 0.0 && rel == 0.0);
+    nbep_state_fini(&s);
+    nbep_diag_fini(&d);
+}
+
 static void test_spheres_collide_across_a_periodic_face_at_the_analytic_time(void **state)
 {
     (void)state;
@@ -829,6 +870,7 @@ int main(void)
         cmocka_unit_test(test_minimum_image_picks_the_nearest_copy_on_periodic_axes_only),
         cmocka_unit_test(test_wrap_moves_into_the_box_and_counts_the_periods),
         cmocka_unit_test(test_shift_is_whole_periods_on_periodic_axes),
+        cmocka_unit_test(test_overlap_check_sees_pairs_across_a_periodic_face),
         cmocka_unit_test(test_spheres_collide_across_a_periodic_face_at_the_analytic_time),
         cmocka_unit_test(test_a_free_flight_wraps_and_counts_its_images),
         cmocka_unit_test(test_a_list_is_centred_ahead_of_a_straight_flight),

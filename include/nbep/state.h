@@ -47,7 +47,8 @@ bool nbep_state_all_finite(const nbep_state *s);
 
 struct nbep_grid;
 /* Largest overlap r_i + r_j - |p_i - p_j| over sphere pairs and r_i - (n.p_i - offset) over
- * sphere-plane pairs, 0 when none overlap. rel_out (may be NULL) receives the largest overlap
+ * sphere-plane pairs, 0 when none overlap; on a periodic axis (s->period) a pair's distance is
+ * the nearest way round, as the engine takes it. rel_out (may be NULL) receives the largest overlap
  * divided by the smaller radius involved. Uses a uniform cell grid: O(n) expected time. ws
  * (borrowed) is a grid with room for s->n spheres, reused so that a run allocates nothing per
  * call; NULL makes one for this call (tests, start-up). i_out/j_out (may be NULL) receive the
