@@ -3,7 +3,6 @@
 # ---- switches ----------------------------------------------------------------------------
 OMP ?= 1
 MPI ?= auto
-TIMERS ?= 1
 VALGRIND ?= 1
 PREFIX ?= /usr/local
 CC ?= gcc
@@ -28,9 +27,6 @@ LDLIBS_ALL += -fopenmp
 else
 # a serial build: the algorithms' OpenMP pragmas are meant to be ignored then
 CFLAGS_ALL += -Wno-unknown-pragmas
-endif
-ifeq ($(TIMERS),1)
-CFLAGS_ALL += -DNBEP_TIMERS=1
 endif
 ifeq ($(MPI),auto)
 MPI := $(shell pkg-config --exists ompi-c && echo 1 || echo 0)
@@ -67,7 +63,7 @@ $(BUILD) $(BUILD)/tests $(BUILD)/bench bin:
 # Regenerated only when its text changes, so objects do not rebuild needlessly.
 $(BUILD_INFO): FORCE | $(BUILD)
 	@printf '#define NBEP_VERSION "%s"\n#define NBEP_BUILD_FLAGS "%s"\n#define NBEP_BUILD_COMMIT "%s"\n' \
-	  '$(VERSION)' '$(CC) $(OPT) OMP=$(OMP) MPI=$(MPI) TIMERS=$(TIMERS)' \
+	  '$(VERSION)' '$(CC) $(OPT) OMP=$(OMP) MPI=$(MPI)' \
 	  "$$(git rev-parse --short HEAD 2>/dev/null || echo unknown)" > $@.tmp
 	@cmp -s $@.tmp $@ && rm -f $@.tmp || mv $@.tmp $@
 FORCE:
