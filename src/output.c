@@ -630,9 +630,11 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
                   "written",
                   o->path, step);
     double t = (double)step * dt;
-    hsize_t f = o->n_frames, one[1] = {1}, vec[3] = {1, s->n, 3}, flat = 3 * (hsize_t)s->n;
+    /* memory spaces of the file selection's shape: a flat one made HDF5 map each element
+     * to its chunk apart (a sixth of a frame step's time at N = 256000) */
+    hsize_t f = o->n_frames, one[1] = {1}, vec[3] = {1, s->n, 3};
     hid_t one_space = H5Screate_simple(1, one, NULL);
-    hid_t vec_space = H5Screate_simple(1, &flat, NULL);
+    hid_t vec_space = H5Screate_simple(3, vec, NULL);
     nbep_status st = NBEP_EIO;
     if (one_space < 0 || vec_space < 0) {
         HDF5_FAIL(d, o->path, "make the dataspaces of frame %llu", (unsigned long long)f);
@@ -662,8 +664,8 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
     if (ev && o->ck[0] < 0 && o->ck_allowed && f == 0 && create_checkpoint(o, d) < 0)
         goto done;
     if (ev && o->ck[0] >= 0) {
-        hsize_t row[2] = {1, s->n}, nn = s->n;
-        hid_t row_space = H5Screate_simple(1, &nn, NULL);
+        hsize_t row[2] = {1, s->n};
+        hid_t row_space = H5Screate_simple(2, row, NULL);
         const void *cols[N_CK_COLUMNS] = {ev->time, ev->partner, ev->kind, ev->rest};
         int bad = row_space < 0;
         for (int c = 0; c < N_CK_COLUMNS && !bad; c++)

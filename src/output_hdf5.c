@@ -224,14 +224,18 @@ int nbep__output_read_row(hid_t file, const char *path, const char *name, hsize_
     hid_t ds = H5Dopen2(file, name, H5P_DEFAULT);
     hid_t space = ds < 0 ? H5I_INVALID_HID : H5Dget_space(ds);
     int rank = space < 0 ? -1 : H5Sget_simple_extent_dims(space, dims, NULL);
-    hid_t mem = H5Screate_simple(1, &per_row, NULL);
+    hid_t mem = H5I_INVALID_HID;
+    hsize_t values = 1;
+    for (int k = 1; k < rank && k < 3; k++)
+        values *= (count[k] = dims[k]);
+    /* the memory space of the row's own shape: a flat one made HDF5 map each element to
+     * its chunk apart */
+    if (rank >= 1 && rank <= 3)
+        mem = H5Screate_simple(rank, count, NULL);
     if (rank < 1 || rank > 3 || mem < 0) {
         HDF5_FAIL(d, path, "read the shape of %s", name);
         goto done;
     }
-    hsize_t values = 1;
-    for (int k = 1; k < rank; k++)
-        values *= (count[k] = dims[k]);
     if (values != per_row || row >= dims[0]) {
         nbep_diag_add(d, __FILE__, __LINE__,
                       "nbep: %s: %s has no row %llu of %llu value%s (wrong shape for this deck)",
