@@ -289,6 +289,8 @@ MUTANTS = [
      "const double ax = ci.x;", TEAM, None),
     ("overlap-check-no-images", "src/state.c", "        if (per > 0.0 && x[a] + per - reach <= hi)",
      "        if (0)", TEAM, None),
+    ("overlap-check-skips-shallow", "src/state.c", "if (d2 > sum * sum * (1.0 + 1e-12))",
+     "if (d2 > sum * sum * (1.0 - 1e-6))", TEAM, None),
     # ---- the cells team loop (two threads, events handled ahead and committed in order) ----
     ("team-apart-unwrapped", "src/evloop.c", "        dx = dx > hx ? lx - dx : dx; /* half",
      "        dx = dx; /* half", TEAM, None),
@@ -314,6 +316,8 @@ MUTANTS = [
     ("team-commit-other-lost", "src/evloop.c",
      "        if (e->batch_other[k] != NO_SPHERE && !commit_sets(w, e->batch_other[k]))",
      "        if (0)", TEAM, None),
+    ("overlap-check-skips-shallow", "src/state.c", "if (d2 > sum * sum * (1.0 + 1e-12))",
+     "if (d2 > sum * sum * (1.0 - 1e-6))", TEAM, None),
     ("team-intruder-taken", "src/evloop.c", "        if (!nbep_calendar_before(e->cur, c)) {",
      "        if (0) {", TEAM, None),
     ("team-ring-half-unseen", "src/evloop.c", "    return near_span(e, a, b, 0, 2 * WINDOW);",

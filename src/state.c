@@ -175,9 +175,16 @@ nbep_status nbep_state_max_overlap(const nbep_state *s, nbep_grid *ws, double *m
                                     continue;
                                 /* as the engine takes an image: the centres' difference,
                                  * less whole periods */
-                                double dist = nbep_vec3_norm(nbep_vec3_sub(
-                                    nbep_vec3_sub(s->pos[j], s->pos[i]), shift));
-                                double ov = s->radius[i] + s->radius[j] - dist;
+                                const nbep_vec3 dv = nbep_vec3_sub(
+                                    nbep_vec3_sub(s->pos[j], s->pos[i]), shift);
+                                const double sum = s->radius[i] + s->radius[j];
+                                const double d2 = nbep_vec3_norm2(dv);
+                                /* most pairs are apart by far: no root for them (a margin
+                                 * of 1e-12 over the rounding of the squares, so that every
+                                 * pair the root could find overlapping is taken) */
+                                if (d2 > sum * sum * (1.0 + 1e-12))
+                                    continue;
+                                double ov = sum - sqrt(d2);
                                 consider(ov, fmin(s->radius[i], s->radius[j]), i, j, &best,
                                          &best_rel, &bi, &bj);
                             }

@@ -219,6 +219,11 @@ static void test_overlap_check_sees_pairs_across_a_periodic_face(void **state)
     s.period[0] = s.period[2] = 0.0;
     assert_int_equal(nbep_state_max_overlap(&s, NULL, &worst, &rel, &wi, &wj, &d), NBEP_OK);
     assert_true(worst == 0.0 && rel == 0.0);
+    /* a shallow overlap (a billionth of a diameter) is measured too */
+    s.pos[3] = (nbep_vec3){5.0, 0.1 + (1.0 - 1e-9), 2.0};
+    assert_int_equal(nbep_state_max_overlap(&s, NULL, &worst, &rel, &wi, &wj, &d), NBEP_OK);
+    assert_close(worst, 1e-9, 1e-6, 0.0); /* the positions' rounding: 1e-16 */
+    assert_true(wi == 2 && wj == 3);
     nbep_state_fini(&s);
     nbep_diag_fini(&d);
 }
