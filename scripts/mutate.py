@@ -292,6 +292,12 @@ MUTANTS = [
     ("overlap-check-skips-shallow", "src/state.c", "if (d2 > sum * sum * (1.0 + 1e-12))",
      "if (d2 > sum * sum * (1.0 - 1e-6))", TEAM, None),
     # ---- the cells team loop (two threads, events handled ahead and committed in order) ----
+    ("team-helper-takes-an-old-end", "src/evloop.c",
+     "        if (atomic_load_explicit(&e->quit, memory_order_acquire) == call) {\n            atomic_store_explicit(&e->done[t].word, call, memory_order_release);",
+     "        const uint64_t q_ = atomic_load_explicit(&e->quit, memory_order_acquire);\n        if (q_ != atomic_load_explicit(&e->done[t].word, memory_order_relaxed)) {\n            atomic_store_explicit(&e->done[t].word, q_, memory_order_release);",
+     TEAM, None),
+    ("team-handled-by-two", "src/evloop.c", "    for (int t = 1; t < e->crew; t++)\n        if (atomic_load_explicit(&e->ws[t][k].place",
+     "    for (int t = 1; t < 2; t++)\n        if (atomic_load_explicit(&e->ws[t][k].place", TEAM, None),
     ("team-apart-unwrapped", "src/evloop.c", "        dx = dx > hx ? lx - dx : dx; /* half",
      "        dx = dx; /* half", TEAM, None),
     ("team-apart-halved", "src/evloop.c", "    const float near2 = e->near2;",

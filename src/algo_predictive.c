@@ -319,22 +319,29 @@ typedef struct pred_ctx {
                                    * are positive): a pair's reaction then reads no mass,
                                    * two misses fewer in a large fluid */
     /* cells mode on two threads or more, in a scene whose reactions change only their own two
-     * spheres (free flight at e = 1): thread 1 handles events ahead of thread 0's
-     * (nbep_evloop_run_lead), counting them apart until they stand (cells_merge) */
+     * spheres (free flight at e = 1): threads 1 to team_size - 1 handle events ahead of
+     * thread 0's (nbep_evloop_run_lead), counting them apart until they stand (cells_merge) */
     bool team;
-    /* whether a step runs the team loop, by the step's parity: step k reads team_on[k & 1],
-     * which thread 0 wrote during step k - 1 (team_choose), whose end both threads crossed,
-     * and which no one writes during step k; and the measured seconds per event of each way
-     * (0: none yet) */
-    bool team_on[2];
-    double team_cost[2];
-    int team_force; /* NBEP_TEAM, read once: 1 always, -1 never, 0 the faster way */
-    nbep_counters *help_cnt;      /* owned when team, 2 NBEP_EVLOOP_RING: each place's event's
-                                   * counts (the team loop's ring of places, evloop.h), thread
-                                   * t's at t NBEP_EVLOOP_RING + ring slot (each written by the
-                                   * thread that handles the place: it stays on its core) */
+    int team_size;  /* the threads that may run the event loop: the run's, at most
+                     * NBEP_EVLOOP_TEAM_MAX, or NBEP_TEAM's count */
+    /* the ways a step's events may run (team_crew: the threads of each, 1 for the one-thread
+     * loop, 2 for a pair, team_size for the whole team when that is more), and the way of
+     * each step, by the step's parity: step k reads team_way[k & 1], which thread 0 wrote
+     * during step k - 1 (team_choose), whose end every thread crossed, and which no one writes
+     * during step k; and the measured seconds per event of each way (0: none yet) */
+    int team_ways;
+    int team_crew[3];
+    int team_way[2];
+    double team_cost[3];
+    int team_force; /* NBEP_TEAM, read once (team_forced) */
+    nbep_counters *help_cnt;      /* owned when team, team_size NBEP_EVLOOP_RING: each place's
+                                   * event's counts (the team loop's ring of places, evloop.h),
+                                   * thread t's at t NBEP_EVLOOP_RING + ring slot (each written
+                                   * by the thread that handles the place: it stays on its
+                                   * core) */
     nbep_thread_max *help_mx;     /* owned when team, the same: their sums (wall: one buffer) */
-    double *help_wall;            /* owned when team: 2 NBEP_EVLOOP_RING rows of n_planes */
+    double *help_wall;            /* owned when team: team_size NBEP_EVLOOP_RING rows of
+                                   * n_planes */
 } pred_ctx;
 
 static bool is_zero(nbep_vec3 v)
@@ -474,25 +481,34 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
                       "multiple of output.every (%llu); the file's last frame is step %lld",
                       (unsigned long long)sim->scene->output_every, (long long)r->step);
         }
-        st = nbep_evloop_create(n, sim->scene->box_min, sim->scene->box_max, 2.0 * c->rmax,
-                                c->pb.axis, c->q, c->ver, &c->ev, d);
         /* the team loop: reactions of a free flight at e = 1 change their two spheres only
          * (no resting, holding, settling, TC clocks or reaction counts: all NULL here) */
-        c->team = st == NBEP_OK && sim->nt >= 2 && c->free_flight && !c->t_last && !c->jam &&
-                  !c->settle && !c->rest;
-        /* the first step: the team (team_choose) */
         c->team_force = team_forced();
-        c->team_on[0] = c->team_on[1] = c->team && c->team_force >= 0;
+        const bool can_team = sim->nt >= 2 && c->free_flight && !c->t_last && !c->jam &&
+                              !c->settle && !c->rest;
+        int size = sim->nt < NBEP_EVLOOP_TEAM_MAX ? sim->nt : NBEP_EVLOOP_TEAM_MAX;
+        if (c->team_force >= 2 && c->team_force < size)
+            size = c->team_force;
+        c->team_size = can_team ? size : 1;
+        st = nbep_evloop_create(n, sim->scene->box_min, sim->scene->box_max, 2.0 * c->rmax,
+                                c->pb.axis, c->team_size, c->q, c->ver, &c->ev, d);
+        c->team = st == NBEP_OK && c->team_size >= 2;
+        c->team_ways = !c->team ? 1 : c->team_size > 2 ? 3 : 2;
+        c->team_crew[0] = 1;
+        c->team_crew[1] = 2;
+        c->team_crew[2] = c->team_size;
+        /* the first step: the whole team (team_choose) */
+        c->team_way[0] = c->team_way[1] = c->team_force == -1 ? 0 : c->team_ways - 1;
         if (c->team) {
-            const size_t np = sim->st.n_planes;
-            c->help_cnt = nbep_alloc_aligned(2 * NBEP_EVLOOP_RING, sizeof *c->help_cnt);
-            c->help_mx = nbep_alloc_aligned(2 * NBEP_EVLOOP_RING, sizeof *c->help_mx);
-            c->help_wall = calloc(2 * NBEP_EVLOOP_RING * (np ? np : 1), sizeof(double));
+            const size_t np = sim->st.n_planes, rows = (size_t)c->team_size * NBEP_EVLOOP_RING;
+            c->help_cnt = nbep_alloc_aligned(rows, sizeof *c->help_cnt);
+            c->help_mx = nbep_alloc_aligned(rows, sizeof *c->help_mx);
+            c->help_wall = calloc(rows * (np ? np : 1), sizeof(double));
             if (!c->help_cnt || !c->help_mx || !c->help_wall) {
                 nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory for the cells engine");
                 st = NBEP_ENOMEM;
             } else {
-                for (size_t m = 0; m < 2 * NBEP_EVLOOP_RING; m++) {
+                for (size_t m = 0; m < rows; m++) {
                     c->help_cnt[m] = (nbep_counters){0};
                     c->help_mx[m] = (nbep_thread_max){.wall = c->help_wall + m * np};
                 }
@@ -529,7 +545,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         /* 2 per reaction, 1 per let-go; cells mode: one reaction's 3 and every held sphere
          * letting go after it, on the thread that runs the event loop (and a team's helper,
          * whose reactions change their own two spheres only) */
-        size_t n_fired = rounds ? 3 * own : t == 0 ? n + 3 : c->team && t == 1 ? 3 : 1;
+        size_t n_fired = rounds ? 3 * own : t == 0 ? n + 3 : c->team && t < c->team_size ? 3 : 1;
         w->fired = malloc(n_fired * sizeof *w->fired);
         w->part = nbep_alloc_aligned(CHUNK, sizeof *w->part);
         if (rounds) {
@@ -2159,56 +2175,99 @@ static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, c
                                                cells_save,   cells_restore,    cells_clear,
                                                cells_merge,  cells_prefetch};
 
-/* The team loop pays where a second core is close (it passes a few cache lines per event
- * between the two), and loses where it is not or is busy with other work: the same fluid on
+/* The team loop pays where other cores are close (it passes a few cache lines per event
+ * between them), and loses where they are not or are busy with other work: the same fluid on
  * this project's 2-core virtual machine ran 1.5 times as fast as one thread in some runs and
- * 0.8 times in others. Results are the same bit for bit either way, so the run measures both
- * and takes the faster: every TEAM_PROBE-th step runs the other way (a probe). The way taken
- * keeps its seconds per event as a running mean of its steps (half the last step, half what it
- * was); a probe's figure replaces the other way's, which would otherwise carry a probe from
- * many steps before (the first, at the second step, runs while a lattice start melts, on
- * events a quarter cheaper than later: its figure kept the run probing every TEAM_PROBE-th
- * step, 5 probes in 80 steps of a fluid at N = 256000, phi = 0.30, each costing 0.75 of a
- * team step). A probe costs what the slower way loses: with the team 1.6 times as fast, one
- * step in 8 run alone adds 7 % to the run's time. Where one way is at least TEAM_CLEAR times
- * as fast, the other is probed every TEAM_PROBE_FAR-th step only; the way taken is measured at
- * every step, so a change that makes it the slower one is seen at once. NBEP_TEAM=always or
- * never in the environment, read as the run is made, fixes the choice (tests, benchmarks). */
+ * 0.8 times in others. Results are the same bit for bit whatever the way, so the run measures
+ * each (one thread, a pair, and the whole team where it has more than two threads) and takes
+ * the fastest: every TEAM_PROBE-th step runs another way (a probe; with three ways, the other
+ * two in turn). The way taken keeps its seconds per event as a running mean of its steps (half
+ * the last step, half what it was); a probe's figure replaces the probed way's, which would
+ * otherwise carry a probe from many steps before (the first, at the second step, runs while a
+ * lattice start melts, on events a quarter cheaper than later: its figure kept the run probing
+ * every TEAM_PROBE-th step, 5 probes in 80 steps of a fluid at N = 256000, phi = 0.30, each
+ * costing 0.75 of a team step). A probe costs what the slower way loses: with the team 1.6
+ * times as fast, one step in 8 run alone adds 7 % to the run's time. Where the fastest way is
+ * at least TEAM_CLEAR times as fast as every other, they are probed every TEAM_PROBE_FAR-th
+ * step only; the way taken is measured at every step, so a change that makes it slower is
+ * seen at once. NBEP_TEAM in the environment, read as the run is made, fixes the choice
+ * (tests, benchmarks): "always" the whole team, "never" one thread, a count k >= 2 a team of
+ * k threads (at most the run's), "cycle" the ways in turn, step by step, the whole team
+ * first (every change of way, for the tests). */
 #define TEAM_PROBE 8
 #define TEAM_PROBE_FAR 64
 #define TEAM_CLEAR 1.25
 
+#define TEAM_CYCLE (-2)
+
+/* NBEP_TEAM: 1 always, -1 never, k >= 2 always with a team of k, TEAM_CYCLE, 0 (unset or
+ * anything else) the fastest way. */
 static int team_forced(void)
 {
     const char *v = getenv("NBEP_TEAM");
-    return !v ? 0 : strcmp(v, "always") == 0 ? 1 : strcmp(v, "never") == 0 ? -1 : 0;
+    if (!v)
+        return 0;
+    if (strcmp(v, "always") == 0)
+        return 1;
+    if (strcmp(v, "never") == 0)
+        return -1;
+    if (strcmp(v, "cycle") == 0)
+        return TEAM_CYCLE;
+    char *end;
+    const long k = strtol(v, &end, 10);
+    return end != v && *end == '\0' && k >= 2 && k <= NBEP_EVLOOP_TEAM_MAX ? (int)k : 0;
 }
 
-/* Thread 0, after step `step` ran its events (`events` of them in `seconds`) one way (team):
- * the way of the next step. */
-static void team_choose(pred_ctx *c, uint64_t step, bool team, uint64_t events, double seconds)
+/* The fastest way measured (ties: the one with more threads). */
+static int team_best(const pred_ctx *c)
+{
+    int best = c->team_ways - 1;
+    for (int w = best - 1; w >= 0; w--)
+        if (c->team_cost[w] < c->team_cost[best])
+            best = w;
+    return best;
+}
+
+/* Thread 0, after step `step` ran its events (`events` of them in `seconds`) way `way`: the
+ * way of the next step. */
+static void team_choose(pred_ctx *c, uint64_t step, int way, uint64_t events, double seconds)
 {
     if (events > 0) {
         const double per = seconds / (double)events;
-        const bool probed = (c->team_cost[1] <= c->team_cost[0]) != team; /* the slower way */
-        double *m = &c->team_cost[team];
+        const bool probed = way != team_best(c); /* a slower way */
+        double *m = &c->team_cost[way];
         *m = *m > 0.0 && !probed ? 0.5 * (*m + per) : per;
     }
-    const int forced = c->team_force;
-    const bool faster = c->team_cost[1] <= c->team_cost[0];
-    const double fast = c->team_cost[faster], slow = c->team_cost[!faster];
-    const uint64_t probe = slow >= TEAM_CLEAR * fast ? TEAM_PROBE_FAR : TEAM_PROBE;
-    bool *next = &c->team_on[(step + 1) & 1];
-    if (forced)
-        *next = forced > 0;
-    else if (c->team_cost[0] == 0.0 || c->team_cost[1] == 0.0) /* each way measured once */
-        *next = c->team_cost[1] == 0.0;
-    else
-        *next = (step + 1) % probe == 0 ? !faster : faster;
+    int *next = &c->team_way[(step + 1) & 1];
+    if (c->team_force == TEAM_CYCLE) {
+        *next = way > 0 ? way - 1 : c->team_ways - 1;
+        return;
+    }
+    if (c->team_force) {
+        *next = c->team_force > 0 ? c->team_ways - 1 : 0;
+        return;
+    }
+    for (int w = c->team_ways - 1; w >= 0; w--)
+        if (c->team_cost[w] == 0.0) { /* each way measured once, the largest first */
+            *next = w;
+            return;
+        }
+    const int best = team_best(c);
+    bool clear = true;
+    for (int w = 0; w < c->team_ways; w++)
+        clear &= w == best || c->team_cost[w] >= TEAM_CLEAR * c->team_cost[best];
+    const uint64_t probe = clear ? TEAM_PROBE_FAR : TEAM_PROBE;
+    if ((step + 1) % probe != 0) {
+        *next = best;
+        return;
+    }
+    /* the probes take the other ways in turn */
+    const int k = (int)((step + 1) / probe % (uint64_t)(c->team_ways - 1));
+    *next = (best + 1 + k) % c->team_ways;
 }
 
 /* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's
- * event loop, with thread 1 in a team where the scene allows it (c->team, team_choose); all
+ * event loop, with threads 1.. in a team where the scene allows it (c->team, team_choose); all
  * threads share the rebuilds, the update to the step's end and the energy.
  * A rebuild (cells from positions, every slot predicted afresh: about the cost of n/2
  * collisions) happens at the first step and after every step that writes a frame to a file in
@@ -2255,30 +2314,31 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
             }
             rebuild = false;
         }
-        /* the team loop's contexts, one per ring slot of its places, on each of the two threads
-         * (with that thread's workspace), the counts and sums of a place apart, the thread's
-         * own */
+        /* the team loop's contexts, one per ring slot of its places, on each thread of the
+         * team (with that thread's workspace), the counts and sums of a place apart, the
+         * thread's own */
         cells_user ups[NBEP_EVLOOP_RING];
         void *us[NBEP_EVLOOP_RING];
-        for (size_t m = 0; c->team && tid < 2 && m < NBEP_EVLOOP_RING; m++) {
+        for (size_t m = 0; c->team && tid < c->team_size && m < NBEP_EVLOOP_RING; m++) {
             const size_t h = (size_t)tid * NBEP_EVLOOP_RING + m;
             ups[m] = (cells_user){c, s, sim->scene, u.T0, 0.0, w, &c->help_cnt[h], &c->help_mx[h]};
             us[m] = &ups[m];
         }
-        const bool team = c->team && c->team_on[step & 1];
-        if (tid == 1 && team)
-            nbep_evloop_help(c->ev, ops, us);
+        const int way = c->team_way[step & 1], crew = c->team_crew[way];
+        if (tid >= 1 && tid < crew)
+            nbep_evloop_help(c->ev, ops, us, tid, step);
         if (tid == 0) {
             nbep_evloop_tally tally = {0};
             double t_stuck = 0.0;
             const double t_loop = nbep_now();
             c->ev_failed =
-                !(team ? nbep_evloop_run_lead(c->ev, ops, &u, us, T_end, STALL_EVENTS,
-                                              STALL_FRACTION * sim->dt, &tally, &t_stuck)
-                       : nbep_evloop_run(c->ev, ops, &u, T_end, STALL_EVENTS,
-                                         STALL_FRACTION * sim->dt, &tally, &t_stuck));
+                !(crew > 1 ? nbep_evloop_run_lead(c->ev, ops, &u, us, crew, step, T_end,
+                                                  STALL_EVENTS, STALL_FRACTION * sim->dt,
+                                                  &tally, &t_stuck)
+                           : nbep_evloop_run(c->ev, ops, &u, T_end, STALL_EVENTS,
+                                             STALL_FRACTION * sim->dt, &tally, &t_stuck));
             if (c->team)
-                team_choose(c, step, team, tally.events, nbep_now() - t_loop);
+                team_choose(c, step, way, tally.events, nbep_now() - t_loop);
             u.cnt->c[NBEP_COUNTER_CHECKS] += tally.events;
             u.cnt->c[NBEP_COUNTER_AHEAD] += tally.ahead;
             u.cnt->c[NBEP_COUNTER_UNDONE] += tally.undone;

@@ -1,6 +1,7 @@
 /* The cells engine: see evloop.h. */
 #include "evloop.h"
 
+#include <assert.h>
 #include <math.h>
 #include <stdalign.h>
 #include <stdatomic.h>
@@ -73,10 +74,13 @@ struct nbep_evloop {
                            * member's place (cells.m[i].at) is where i's list was built */
     nbep_nblist nl;       /* owned */
     uint32_t *count;      /* owned, n: list lengths, at a full rebuild */
-    /* one per ring slot of the team loop and thread, the leader's [0] and the helper's [1]:
-     * a place's workspace is its taker's, written by it alone, so that its lines pass to the
-     * other core only where the leader reads what the helper handled (one thread: ws[0][0]) */
-    evl_ws ws[2][NBEP_EVLOOP_RING];
+    /* one per ring slot of the team loop and thread, the leader's [0] and helper t's [t]
+     * (t < team): a place's workspace is its taker's, written by it alone, so that its lines
+     * pass to another core only where the leader reads what a helper handled (one thread:
+     * ws[0][0]) */
+    evl_ws ws[NBEP_EVLOOP_TEAM_MAX][NBEP_EVLOOP_RING];
+    int team;             /* the threads that may run the loop together (create) */
+    int crew;             /* the leader's alone: the threads of this call (run_lead) */
     nbep_periodic pb;     /* the box's periodic geometry */
     double cut;           /* the list cutoff: contact distance plus skin, plus slack */
     double stray;         /* half the skin: how far a sphere goes before its list expires */
@@ -99,8 +103,7 @@ struct nbep_evloop {
      * place is a list expiry (its handle walks the cells around its sphere and its commit
      * changes them) and then the cell coordinates of its list centre; each place's calendar
      * entry, taken out while it is in flight, and the window's last (cur); the window, places
-     * head .. tail - 1, more looked for once head reaches fill_at; and `ends`, the count of
-     * calls of nbep_evloop_run_lead */
+     * head .. tail - 1, more looked for once head reaches fill_at */
     alignas(NBEP_CACHELINE) float taken_x[2 * WINDOW];
     alignas(NBEP_CACHELINE) float taken_y[2 * WINDOW];
     alignas(NBEP_CACHELINE) float taken_z[2 * WINDOW];
@@ -111,17 +114,20 @@ struct nbep_evloop {
     bool batch_walks[NBEP_EVLOOP_RING];
     size_t batch_cell[NBEP_EVLOOP_RING][3];
     nbep_calendar_entry batch_entry[NBEP_EVLOOP_RING], cur;
-    uint64_t head, tail, fill_at, ends;
+    uint64_t head, tail, fill_at;
     uint64_t lead_seen;   /* the leader's last reading of avail (take_one) */
-    /* the hand-over: the leader publishes places up to avail; either thread takes the next
-     * place to handle from `next` and marks it handled (its number, in its workspace's
-     * `place`); the leader posts the end of a call in quit (its count), the helper answers it
-     * in done */
+    /* the hand-over: the leader publishes places up to avail; any thread of the team takes
+     * the next place to handle from `next` and marks it handled (its number, in its
+     * workspace's `place`); the leader posts the end of a call in quit (the call's number),
+     * helper t answers it in done[t].word, and its contexts are help_us[t] (one per ring
+     * slot, set as it enters nbep_evloop_help) */
     alignas(NBEP_CACHELINE) _Atomic uint64_t avail;
     alignas(NBEP_CACHELINE) _Atomic uint64_t next;
     alignas(NBEP_CACHELINE) _Atomic uint64_t quit;
-    alignas(NBEP_CACHELINE) _Atomic uint64_t done;
-    void *const *help_us; /* the helper's contexts, one per ring slot (nbep_evloop_help) */
+    struct {
+        alignas(NBEP_CACHELINE) _Atomic uint64_t word;
+    } done[NBEP_EVLOOP_TEAM_MAX];
+    void *const *help_us[NBEP_EVLOOP_TEAM_MAX];
 };
 
 _Static_assert(offsetof(evl_ws, next_key) + sizeof((evl_ws *)0)->next_key <= NBEP_CACHELINE,
@@ -175,14 +181,16 @@ static void set_near2(nbep_evloop *e, nbep_vec3 lo, nbep_vec3 hi, double apart)
 }
 
 nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reach,
-                               const bool *periodic, nbep_feq *q, const uint64_t *ver,
-                               nbep_evloop **out, nbep_diag *d)
+                               const bool *periodic, int team, nbep_feq *q,
+                               const uint64_t *ver, nbep_evloop **out, nbep_diag *d)
 {
+    assert(team >= 1 && team <= NBEP_EVLOOP_TEAM_MAX);
     /* aligned: its fields that the team's two threads write start cache lines */
     nbep_evloop *e = nbep_alloc_aligned(1, sizeof *e);
     if (!e)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the cells engine");
     e->n = n;
+    e->team = team;
     e->q = q;
     e->ver = ver;
     e->pb = nbep_periodic_make(periodic, lo, hi);
@@ -221,16 +229,17 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     atomic_init(&e->avail, 1);
     atomic_init(&e->next, 1);
     atomic_init(&e->quit, 0);
-    atomic_init(&e->done, 0);
-    for (int t = 0; t < 2; t++)
+    for (int t = 0; t < NBEP_EVLOOP_TEAM_MAX; t++) {
+        atomic_init(&e->done[t].word, 0);
         for (int k = 0; k < NBEP_EVLOOP_RING; k++)
             atomic_init(&e->ws[t][k].place, 0);
+    }
     for (int k = 0; k < 2 * WINDOW; k++)
         e->taken_x[k] = e->taken_y[k] = e->taken_z[k] = INFINITY;
     set_near2(e, lo, hi, 2.0 * touch);
     e->count = nbep_alloc_aligned(n ? n : 1, sizeof *e->count);
     bool ws_ok = true;
-    for (int t = 0; t < 2; t++)
+    for (int t = 0; t < team; t++)
         for (int k = 0; k < NBEP_EVLOOP_RING; k++)
             ws_ok &= ws_init(&e->ws[t][k]); /* each tried: ws_fini frees what any holds */
     nbep_status st = e->count && ws_ok ? NBEP_OK : NBEP_ENOMEM;
@@ -266,7 +275,7 @@ void nbep_evloop_destroy(nbep_evloop **e)
     nbep_cells_fini(&(*e)->cells);
     nbep_nblist_fini(&(*e)->nl);
     nbep_free_aligned((*e)->count);
-    for (int t = 0; t < 2; t++)
+    for (int t = 0; t < NBEP_EVLOOP_TEAM_MAX; t++) /* (those never made are zero) */
         for (int k = 0; k < NBEP_EVLOOP_RING; k++)
             ws_fini(&(*e)->ws[t][k]);
     nbep_free_aligned(*e);
@@ -1145,7 +1154,7 @@ static void undo(nbep_evloop *e, const evl_ws *w, const nbep_evloop_ops *ops, vo
 }
 
 /* Takes the next published place to handle and handles it on the workspace of thread t (0
- * the leader, 1 the helper) and context us of its slot: false when none is left. *seen is
+ * the leader, t > 0 helper t) and context us of its slot: false when none is left. *seen is
  * the calling thread's last reading of avail, read again only when the next place is past it
  * (avail never goes down, and a place below it was published before that reading: an undo
  * moves `next` to the window's tail, past every place it withdrew), so that a thread meets
@@ -1216,15 +1225,18 @@ static void prefetch_commit(const nbep_evloop *e, const evl_ws *w, bool deep)
             prefetch_record(e, w->was[k], deep);
 }
 
-/* The thread that handled place s, if it has been handled: 0 the leader, 1 the helper, -1 not
- * yet. The leader's mark is its own line; the helper's is read with acquire (what its handle
- * wrote is then there to read). */
+/* The thread that handled place s, if it has been handled: 0 the leader, t the helper t, -1
+ * not yet. The leader's mark is its own line; a helper's is read with acquire (what its
+ * handle wrote is then there to read). */
 static int handled_by(const nbep_evloop *e, uint64_t s)
 {
     const size_t k = s % RING;
     if (atomic_load_explicit(&e->ws[0][k].place, memory_order_relaxed) == s)
         return 0;
-    return atomic_load_explicit(&e->ws[1][k].place, memory_order_acquire) == s ? 1 : -1;
+    for (int t = 1; t < e->crew; t++)
+        if (atomic_load_explicit(&e->ws[t][k].place, memory_order_acquire) == s)
+            return t;
+    return -1;
 }
 
 /* The leader waits for place s to be handled, handling places meanwhile: the thread that
@@ -1314,7 +1326,7 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
         const size_t k = s % RING;
         const int by = wait_handled(e, ops, us, s);
         const evl_ws *w = &e->ws[by][k];
-        void *const uh = by ? e->help_us[k] : us[k];
+        void *const uh = by ? e->help_us[by][k] : us[k];
         /* the next place's commit prepared during this one's, when it is handled already */
         const int next_by = s + 1 < e->tail ? handled_by(e, s + 1) : -1;
         const evl_ws *w_next = next_by >= 0 ? &e->ws[next_by][(s + 1) % RING] : NULL;
@@ -1380,31 +1392,36 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
 }
 
 bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
-                          double t_end, uint64_t stall_events, double stall_dt,
-                          nbep_evloop_tally *tally, double *t_stuck)
+                          int crew, uint64_t call, double t_end, uint64_t stall_events,
+                          double stall_dt, nbep_evloop_tally *tally, double *t_stuck)
 {
+    assert(crew >= 2 && crew <= e->team && call > 0);
+    e->crew = crew;
     bool ok = !e->failed && lead(e, ops, u, us, t_end, stall_events, stall_dt, tally, t_stuck);
-    /* the helper returns (it has handled every place it took: each was waited for) */
-    const uint64_t end = ++e->ends;
-    atomic_store_explicit(&e->quit, end, memory_order_release);
-    for (unsigned k = 1; atomic_load_explicit(&e->done, memory_order_acquire) != end; k++)
-        nbep_spin_pause(k);
+    /* the helpers return (each has handled every place it took: each was waited for) */
+    atomic_store_explicit(&e->quit, call, memory_order_release);
+    for (int t = 1; t < crew; t++)
+        for (unsigned k = 1; atomic_load_explicit(&e->done[t].word, memory_order_acquire) != call;
+             k++)
+            nbep_spin_pause(k);
     return ok;
 }
 
-void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us)
+void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us, int t,
+                      uint64_t call)
 {
-    e->help_us = us; /* read by the leader after each place's mark, which comes after */
-    const uint64_t seen = atomic_load_explicit(&e->done, memory_order_relaxed); /* its own */
+    assert(t >= 1 && t < e->team && call > 0);
+    e->help_us[t] = us; /* read by the leader after each place's mark, which comes after */
     uint64_t avail_seen = 0;
     for (unsigned k = 1;; k++) {
-        if (take_one(e, ops, us, &avail_seen, 1)) {
+        if (take_one(e, ops, us, &avail_seen, t)) {
             k = 0;
             continue;
         }
-        const uint64_t q = atomic_load_explicit(&e->quit, memory_order_acquire);
-        if (q != seen) {
-            atomic_store_explicit(&e->done, q, memory_order_release);
+        /* the leader may have ended the call before this thread came: quit names it, and
+         * no earlier call (a helper that sat out calls finds theirs there) */
+        if (atomic_load_explicit(&e->quit, memory_order_acquire) == call) {
+            atomic_store_explicit(&e->done[t].word, call, memory_order_release);
             return;
         }
         nbep_spin_pause(k);

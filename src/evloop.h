@@ -17,16 +17,15 @@
  * nbep_evloop_ops, so there is one copy of it.
  *
  * Events are handled in the order (time, pair key, sphere): a slot that names a partner whose
- * response count moved on is stale and its sphere is re-predicted; an expiry wraps the sphere
- * into a periodic box if it left it, rebuilds its list around where it is and re-predicts it;
- * any other event reacts and both its spheres (and any other sphere the reaction changed) are
- * re-predicted. nbep_evloop_run handles them on one thread; nbep_evloop_run_lead with
- * nbep_evloop_help on two (the team loop, below), with the same results bit for bit, so results
- * cannot depend on the thread count. An event is handled in two parts: handle (the motion and
- * slots of its spheres; an expiry's new list found by a walk that reads the cells and lists
- * only) and commit (the new list entered, the cells changed, the calendar entries set). The
- * full rebuild (nbep_evloop_assign, _count, _predict) is per sphere and runs on every thread's
- * own range. */
+ * response count moved on is stale and its sphere is re-predicted; an expiry wraps the sphere into
+ * a periodic box if it left it, rebuilds its list around where it is and re-predicts it; any other
+ * event reacts and both its spheres (and any other sphere the reaction changed) are re-predicted.
+ * nbep_evloop_run handles them on one thread; nbep_evloop_run_lead with nbep_evloop_help on a team
+ * of threads (the team loop, below), with the same results bit for bit, so results cannot depend
+ * on the thread count. An event is handled in two parts: handle (the motion and slots of its
+ * spheres; an expiry's new list found by a walk that reads the cells and lists only) and commit
+ * (the new list entered, the cells changed, the calendar entries set). The full rebuild
+ * (nbep_evloop_assign, _count, _predict) is per sphere and runs on every thread's own range. */
 #ifndef NBEP_EVLOOP_H
 #define NBEP_EVLOOP_H
 
@@ -89,10 +88,11 @@ typedef struct nbep_evloop nbep_evloop;
  * largest diameter), with the slots q and response counts ver (both borrowed, n each).
  * periodic (NULL: none) names the axes along which the box repeats: the cells wrap around
  * (cells.h), partners across a periodic face are tested at their image, and a sphere that
- * leaves the box is wrapped (ops->wrap) when it changes cell. */
+ * leaves the box is wrapped (ops->wrap) when it changes cell. team (1 to
+ * NBEP_EVLOOP_TEAM_MAX): the threads that may run the team loop together. */
 NBEP_MUST_CHECK nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi,
                                                double reach, const bool *periodic,
-                                               nbep_feq *q, const uint64_t *ver,
+                                               int team, nbep_feq *q, const uint64_t *ver,
                                                nbep_evloop **out, nbep_diag *d);
 void nbep_evloop_destroy(nbep_evloop **e);
 /* The shortest periodic side the engine takes for contacts within `reach`: three cells of
@@ -141,31 +141,35 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
 /* The team loop's ring of places (a power of 2, more than the places it keeps in flight):
  * the contexts a caller passes it (us, below), one per ring slot. */
 #define NBEP_EVLOOP_RING 32
+/* The most threads that run the team loop together (the leader and its helpers). */
+#define NBEP_EVLOOP_TEAM_MAX 16
 
-/* nbep_evloop_run on two threads, with the same results bit for bit. The leader (thread 0)
- * keeps a window of places in flight: the calendar's earliest events, taken out of it in
- * order while each is apart from every place in flight (both spheres of each, the one whose
- * entry it is and the other its slot names, list centres twice (cutoff + (1 +
- * NBEP_NBLIST_LEAD) strays) apart, and cells 4 apart along an axis when both are list
- * expiries: none reads what another writes, and lists, cells and calendar are written only
- * at commits), the entries of the other spheres of its pairs taken out with them. The leader
- * and the helper (thread 1, in nbep_evloop_help at the same time) take the places one at a
- * time and handle them, each but a window's first speculatively (what it may change kept:
- * ops save). The leader commits them in order, and adds places behind them as they free the
- * window: a place stands if no entry left in the calendar comes before it (the one thread
- * would handle it next, from the same state), else it and the places after it are undone
- * (ops restore), their entries put back, and handled again. The event at place m is handled
- * with context us[m % NBEP_EVLOOP_RING] of the thread that takes it (each thread passes its
- * own array: one context per ring slot, the place's counts and sums kept apart and merged
- * into u, the leader's, when it stands: ops merge, which for a place the helper handled reads
- * the helper's context, so the helper's array lives until the leader returns, as the helper
- * does). For scenes whose reactions change only
- * the event's own spheres (the caller's choice: an elastic scene where nothing
- * accelerates). Returns as nbep_evloop_run; the helper returns when it does. */
+/* nbep_evloop_run on `crew` threads (2 to the engine's team), with the same results bit for bit.
+ * The leader (thread 0) keeps a window of places in flight: the calendar's earliest events, taken
+ * out of it in order while each is apart from every place in flight (both spheres of each, the one
+ * whose entry it is and the other its slot names, list centres twice (cutoff + (1 +
+ * NBEP_NBLIST_LEAD) strays) apart, and cells 4 apart along an axis when both are list expiries:
+ * none reads what another writes, and lists, cells and calendar are written only at commits), the
+ * entries of the other spheres of its pairs taken out with them. The leader and the helpers
+ * (threads 1 to crew - 1, in nbep_evloop_help at the same time, each with its number t) take the
+ * places one at a time and handle them, each but a window's first speculatively (what it may change
+ * kept: ops save). The leader commits them in order, and adds places behind them as they free the
+ * window: a place stands if no entry left in the calendar comes before it (the one thread would
+ * handle it next, from the same state), else it and the places after it are undone (ops restore),
+ * their entries put back, and handled again. The event at place m is handled with context us[m %
+ * NBEP_EVLOOP_RING] of the thread that takes it (each thread passes its own array: one context per
+ * ring slot, the place's counts and sums kept apart and merged into u, the leader's, when it
+ * stands: ops merge, which for a place a helper handled reads that helper's context, so a helper's
+ * array lives until the leader returns, as the helpers do). For scenes whose reactions change only
+ * the event's own spheres (the caller's choice: an elastic scene where nothing accelerates).
+ * `call` (> 0) names the call, the same on the leader and its helpers and unlike every earlier
+ * call's (the step: a thread may sit out calls of fewer threads, and must not take an earlier
+ * call's end for this one's). Returns as nbep_evloop_run; the helpers return when it does. */
 bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
-                          double t_end, uint64_t stall_events, double stall_dt,
-                          nbep_evloop_tally *tally, double *t_stuck);
-void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us);
+                          int crew, uint64_t call, double t_end, uint64_t stall_events,
+                          double stall_dt, nbep_evloop_tally *tally, double *t_stuck);
+void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us, int t,
+                      uint64_t call);
 
 /* Calls visit(u, j) for sphere i and every sphere j of its neighbour list: every sphere that
  * can touch i. Read-only; a react callback may call it. */
