@@ -2370,6 +2370,7 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
                 w->n_settle += settle_count(c, s, i, sim->dt);
         }
         nbep__sim_block_energy(sim, own);
+        nbep__sim_frame_overlap(sim, step, tid, own, &c->bar);
         nbep_barrier_wait(&c->bar);
         /* spheres held by settling move no more: every slot is predicted again (a rebuild) */
         const bool settled = settle_phases(sim, c, own, w);
@@ -2517,6 +2518,7 @@ static void pred_run(nbep_sim *sim, void *p)
             w->vmax_end = vmax;
             w->amax_end = amax;
             nbep__sim_block_energy(sim, own);
+            nbep__sim_frame_overlap(sim, step, tid, own, &c->bar);
             nbep_barrier_wait(&c->bar);
             if (c->use_grid) /* all threads, from the positions at T_end */
                 grid_prepare(c, s, tid, own, T_end, sim->dt, false);

@@ -327,6 +327,30 @@ static void progress(nbep_sim *sim, uint64_t step, bool last)
                 (unsigned long long)step, (unsigned long long)sim->step_end, pct, rate, eta);
 }
 
+bool nbep__sim_frame_due(const nbep_sim *sim, uint64_t step)
+{
+    return step % sim->scene->output_every == 0 || step == sim->step_end;
+}
+
+void nbep__sim_frame_overlap(nbep_sim *sim, uint64_t step, int tid, nbep_range own,
+                             nbep_barrier *bar)
+{
+    if (sim->algo->exact_overlap || !nbep__sim_frame_due(sim, step))
+        return;
+    nbep_barrier_wait(bar); /* every sphere at the step's end */
+    if (tid == 0) {
+        sim->overlap_rmax = nbep_state_overlap_grid(&sim->st, &sim->overlap_grid);
+        sim->overlap_step = step;
+    }
+    nbep_barrier_wait(bar);
+    nbep_overlap best = NBEP_OVERLAP_NONE;
+    nbep_state_overlap_part(&sim->st, &sim->overlap_grid, sim->overlap_rmax, own.lo, own.hi,
+                            &best);
+    nbep_thread_max *m = &sim->tmax[step & 1][tid];
+    m->overlap = fmax(m->overlap, best.max);
+    m->overlap_rel = fmax(m->overlap_rel, best.rel);
+}
+
 int nbep__sim_end_step(nbep_sim *sim, uint64_t step)
 {
     const int par = (int)(step & 1);
@@ -374,8 +398,9 @@ int nbep__sim_end_step(nbep_sim *sim, uint64_t step)
             sim->status = sig == SIGTERM ? NBEP_ESIGTERM : NBEP_ESIGINT;
         }
     }
-    bool frame = step % sim->scene->output_every == 0 || step == sim->step_end || stop;
-    if (frame && !sim->algo->exact_overlap) {
+    bool frame = nbep__sim_frame_due(sim, step) || stop;
+    /* (the threads shared the check of a frame due: nbep__sim_frame_overlap) */
+    if (frame && !sim->algo->exact_overlap && sim->overlap_step != step) {
         double m = 0.0, mr = 0.0;
         if (nbep_state_max_overlap(&sim->st, &sim->overlap_grid, &m, &mr, NULL, NULL,
                                    sim->diag) == NBEP_OK) {

@@ -7,6 +7,7 @@
 #include <stdatomic.h>
 #include <stdint.h>
 
+#include "nbep/barrier.h"
 #include "nbep/grid.h"
 #include "nbep/sim.h"
 #include "nbep/stats.h"
@@ -60,6 +61,8 @@ struct nbep_sim {
     int32_t *ev_rest;
     nbep_grid overlap_grid;          /* owned when the algorithm's overlap is not exact: the
                                       * frame-step overlap check's workspace */
+    double overlap_rmax;             /* its largest radius (nbep__sim_frame_overlap) */
+    uint64_t overlap_step;           /* the last step whose check the threads shared */
     nbep_step_stats *rows;           /* owned: stats rows not yet written */
     double *wall_rows;               /* owned: their /stats/wall_impulse rows, n_planes each */
     double *wall_buf[2];             /* owned: per parity, nt x n_planes (nbep_thread_max.wall) */
@@ -105,6 +108,17 @@ extern const nbep_algo nbep__algo_predictive;
 /* Kinetic and potential energy of the spheres of thread's range, per block, into the block
  * arrays (call for the own range only; ranges are whole blocks). */
 void nbep__sim_block_energy(nbep_sim *sim, nbep_range own);
+
+/* Whether the end of step `step` writes a frame on the run's schedule (every output.every
+ * steps, and the last); a stop signal adds a frame at the step it comes. */
+bool nbep__sim_frame_due(const nbep_sim *sim, uint64_t step);
+
+/* Every thread, all spheres at the end of step `step`, before nbep__sim_end_step: at a frame
+ * due (nbep__sim_frame_due) of an algorithm whose overlap is not exact, the frame's overlap
+ * check shared (thread 0 sorts the centres between two waits on bar, then each thread checks
+ * its own spheres into its step's maxima), which end_step then does not repeat. */
+void nbep__sim_frame_overlap(nbep_sim *sim, uint64_t step, int tid, nbep_range own,
+                             nbep_barrier *bar);
 
 /* Thread 0, between barriers, all spheres at the end of step `step` (1-based): merges the
  * step's counters, sums block energies, records the stats row, writes a frame when due,

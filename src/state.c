@@ -91,16 +91,15 @@ bool nbep_state_all_finite(const nbep_state *s)
     return true;
 }
 
-static void consider(double overlap, double rmin, size_t i, size_t j, double *best,
-                     double *best_rel, size_t *bi, size_t *bj)
+static void consider(double overlap, double rmin, size_t i, size_t j, nbep_overlap *b)
 {
-    if (overlap > *best) {
-        *best = overlap;
-        *bi = i;
-        *bj = j;
+    if (overlap > b->max) {
+        b->max = overlap;
+        b->i = i;
+        b->j = j;
     }
-    if (overlap > 0.0 && overlap / rmin > *best_rel)
-        *best_rel = overlap / rmin;
+    if (overlap > 0.0 && overlap / rmin > b->rel)
+        b->rel = overlap / rmin;
 }
 
 /* The offsets of sphere i's copies whose reach can meet a centre in the grid g's extent: none
@@ -122,83 +121,93 @@ static void copy_offsets(const nbep_state *s, const nbep_grid *g, nbep_vec3 p, d
     }
 }
 
-nbep_status nbep_state_max_overlap(const nbep_state *s, nbep_grid *ws, double *max_out,
-                                   double *rel_out, size_t *i_out, size_t *j_out, nbep_diag *d)
+double nbep_state_overlap_grid(const nbep_state *s, nbep_grid *g)
 {
-    double best = 0.0, best_rel = 0.0;
-    size_t bi = SIZE_MAX, bj = SIZE_MAX;
-    const size_t n = s->n;
+    /* Cells at least a diameter wide: overlapping pairs sit in neighbouring cells, or in a
+     * periodic box in cells next to a sphere's copy across a face (the nearest way round: a
+     * periodic side is over two diameters, so one copy of a partner is within reach at
+     * most). */
+    double rmax = 0.0;
+    for (size_t i = 0; i < s->n; i++)
+        rmax = fmax(rmax, s->radius[i]);
+    if (s->n > 1)
+        nbep_grid_build(g, s->pos, s->n, 2.0 * rmax);
+    return rmax;
+}
 
-    for (size_t i = 0; i < n; i++)
+void nbep_state_overlap_part(const nbep_state *s, const nbep_grid *g, double rmax, size_t lo,
+                             size_t hi, nbep_overlap *best)
+{
+    const size_t n = s->n;
+    for (size_t i = lo; i < hi; i++)
         for (size_t p = 0; p < s->n_planes; p++) {
             double gap = nbep_vec3_dot(s->plane_normal[p], s->pos[i]) - s->plane_offset[p] -
                          s->radius[i];
-            consider(-gap, s->radius[i], i, n + p, &best, &best_rel, &bi, &bj);
+            consider(-gap, s->radius[i], i, n + p, best);
         }
-
-    if (n > 1) {
-        /* Cells at least a diameter wide: overlapping pairs sit in neighbouring cells, or in
-         * a periodic box in cells next to i's copy across a face (the nearest way round: a
-         * periodic side is over two diameters, so one copy of j is within reach at most). */
-        double rmax = 0.0;
-        for (size_t i = 0; i < n; i++)
-            rmax = fmax(rmax, s->radius[i]);
-        nbep_grid own = {0}, *g = ws;
-        if (!g) {
-            nbep_status st = nbep_grid_init(&own, n, d);
-            if (st != NBEP_OK)
-                return st;
-            g = &own;
-        }
-        nbep_grid_build(g, s->pos, n, 2.0 * rmax);
-        for (size_t i = 0; i < n; i++) {
-            const double reach = s->radius[i] + rmax;
-            double off[3][3];
-            int cnt[3];
-            copy_offsets(s, g, s->pos[i], reach, off, cnt);
-            for (int u = 0; u < cnt[0] * cnt[1] * cnt[2]; u++) {
-                /* copy u of i: a pair is met once from i (j > i) unmoved, from either
-                 * sphere across a face (the largest overlap is the same) */
-                const nbep_vec3 shift = nbep_vec3_make(off[0][u % cnt[0]],
-                                                       off[1][u / cnt[0] % cnt[1]],
-                                                       off[2][u / (cnt[0] * cnt[1])]);
-                const bool moved = u > 0;
-                size_t lo[3], hi[3];
-                nbep_grid_block(g, nbep_vec3_add(s->pos[i], shift), reach, lo, hi);
-                for (size_t z = lo[2]; z <= hi[2]; z++)
-                    for (size_t y = lo[1]; y <= hi[1]; y++)
-                        for (size_t x = lo[0]; x <= hi[0]; x++) {
-                            size_t c = nbep_grid_index(g, x, y, z);
-                            for (size_t k = g->start[c]; k < g->start[c + 1]; k++) {
-                                size_t j = g->item[k];
-                                if (moved ? j == i : j <= i)
-                                    continue;
-                                /* as the engine takes an image: the centres' difference,
-                                 * less whole periods */
-                                const nbep_vec3 dv = nbep_vec3_sub(
-                                    nbep_vec3_sub(s->pos[j], s->pos[i]), shift);
-                                const double sum = s->radius[i] + s->radius[j];
-                                const double d2 = nbep_vec3_norm2(dv);
-                                /* most pairs are apart by far: no root for them (a margin
-                                 * of 1e-12 over the rounding of the squares, so that every
-                                 * pair the root could find overlapping is taken) */
-                                if (d2 > sum * sum * (1.0 + 1e-12))
-                                    continue;
-                                double ov = sum - sqrt(d2);
-                                consider(ov, fmin(s->radius[i], s->radius[j]), i, j, &best,
-                                         &best_rel, &bi, &bj);
-                            }
+    if (n < 2)
+        return;
+    for (size_t i = lo; i < hi; i++) {
+        const double reach = s->radius[i] + rmax;
+        double off[3][3];
+        int cnt[3];
+        copy_offsets(s, g, s->pos[i], reach, off, cnt);
+        for (int u = 0; u < cnt[0] * cnt[1] * cnt[2]; u++) {
+            /* copy u of i: a pair is met once from i (j > i) unmoved, from either sphere
+             * across a face (the largest overlap is the same) */
+            const nbep_vec3 shift =
+                nbep_vec3_make(off[0][u % cnt[0]], off[1][u / cnt[0] % cnt[1]],
+                               off[2][u / (cnt[0] * cnt[1])]);
+            const bool moved = u > 0;
+            size_t blo[3], bhi[3];
+            nbep_grid_block(g, nbep_vec3_add(s->pos[i], shift), reach, blo, bhi);
+            for (size_t z = blo[2]; z <= bhi[2]; z++)
+                for (size_t y = blo[1]; y <= bhi[1]; y++)
+                    for (size_t x = blo[0]; x <= bhi[0]; x++) {
+                        size_t c = nbep_grid_index(g, x, y, z);
+                        for (size_t k = g->start[c]; k < g->start[c + 1]; k++) {
+                            size_t j = g->item[k];
+                            if (moved ? j == i : j <= i)
+                                continue;
+                            /* as the engine takes an image: the centres' difference, less
+                             * whole periods */
+                            const nbep_vec3 dv =
+                                nbep_vec3_sub(nbep_vec3_sub(s->pos[j], s->pos[i]), shift);
+                            const double sum = s->radius[i] + s->radius[j];
+                            const double d2 = nbep_vec3_norm2(dv);
+                            /* most pairs are apart by far: no root for them (a margin of
+                             * 1e-12 over the rounding of the squares, so that every pair the
+                             * root could find overlapping is taken) */
+                            if (d2 > sum * sum * (1.0 + 1e-12))
+                                continue;
+                            consider(sum - sqrt(d2), fmin(s->radius[i], s->radius[j]), i, j,
+                                     best);
                         }
-            }
+                    }
         }
-        nbep_grid_fini(&own); /* safe on the zeroed grid when ws was given */
     }
-    *max_out = best;
+}
+
+nbep_status nbep_state_max_overlap(const nbep_state *s, nbep_grid *ws, double *max_out,
+                                   double *rel_out, size_t *i_out, size_t *j_out, nbep_diag *d)
+{
+    nbep_overlap best = NBEP_OVERLAP_NONE;
+    nbep_grid own = {0}, *g = ws;
+    if (!g && s->n > 1) {
+        nbep_status st = nbep_grid_init(&own, s->n, d);
+        if (st != NBEP_OK)
+            return st;
+        g = &own;
+    }
+    const double rmax = nbep_state_overlap_grid(s, g);
+    nbep_state_overlap_part(s, g, rmax, 0, s->n, &best);
+    nbep_grid_fini(&own); /* safe on the zeroed grid when ws was given */
+    *max_out = best.max;
     if (rel_out)
-        *rel_out = best_rel;
+        *rel_out = best.rel;
     if (i_out)
-        *i_out = bi;
+        *i_out = best.i;
     if (j_out)
-        *j_out = bj;
+        *j_out = best.j;
     return NBEP_OK;
 }

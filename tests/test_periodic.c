@@ -228,6 +228,35 @@ static void test_overlap_check_sees_pairs_across_a_periodic_face(void **state)
     nbep_diag_fini(&d);
 }
 
+/* A run's frames check overlaps with the threads sharing the work (nbep__sim_frame_overlap):
+ * an overlap that no event makes, a pair at rest 0.7 deep through a periodic face among 998
+ * spheres at rest on a lattice, is in the summary on 1, 2 and 4 threads, in cells and
+ * all-pairs mode. The pair is the last two spheres, in the last thread's share. */
+static void test_frames_overlap_check_is_shared_by_the_threads(void **state)
+{
+    (void)state;
+    for (int mode = 0; mode < 2; mode++) {
+        cells_mode = mode == 0;
+        nbep_scene *sc = periodic_scene(1000, 20.0, 4, 0.1);
+        sc->output_every = 2;
+        for (size_t i = 0; i < 1000; i++) { /* sites 2 apart, at odd coordinates */
+            const nbep_vec3 p = {1.0 + 2.0 * (double)(i % 10), 1.0 + 2.0 * (double)(i / 10 % 10),
+                                 1.0 + 2.0 * (double)(i / 100)};
+            nbep_test_set_sphere(sc, i, p, ZERO, 0.5, 1.0, ZERO);
+        }
+        sc->state.pos[998] = (nbep_vec3){0.2, 10.0, 10.0}; /* in the empty plane x = 0 */
+        sc->state.pos[999] = (nbep_vec3){19.9, 10.0, 10.0};
+        for (int nt = 1; nt <= 4; nt *= 2) {
+            const nbep_summary sk = nbep_test_run(sc, nt, NULL, NULL, NULL, NULL);
+            assert_int_equal(sk.collisions, 0);
+            assert_close(sk.max_overlap, 0.7, 1e-12, 0.0);
+            assert_close(sk.max_overlap_rel, 1.4, 1e-12, 0.0);
+        }
+        nbep_test_scene_free(&sc);
+    }
+    cells_mode = true;
+}
+
 static void test_spheres_collide_across_a_periodic_face_at_the_analytic_time(void **state)
 {
     (void)state;
@@ -887,6 +916,7 @@ int main(void)
         cmocka_unit_test(test_wrap_moves_into_the_box_and_counts_the_periods),
         cmocka_unit_test(test_shift_is_whole_periods_on_periodic_axes),
         cmocka_unit_test(test_overlap_check_sees_pairs_across_a_periodic_face),
+        cmocka_unit_test(test_frames_overlap_check_is_shared_by_the_threads),
         cmocka_unit_test(test_spheres_collide_across_a_periodic_face_at_the_analytic_time),
         cmocka_unit_test(test_a_free_flight_wraps_and_counts_its_images),
         cmocka_unit_test(test_a_list_is_centred_ahead_of_a_straight_flight),

@@ -58,4 +58,21 @@ NBEP_MUST_CHECK nbep_status nbep_state_max_overlap(const nbep_state *s, struct n
                                                    size_t *i_out, size_t *j_out,
                                                    nbep_diag *d);
 
+/* The largest overlap found so far (as nbep_state_max_overlap reports it): its depth, its
+ * depth over the smaller radius, and the pair (SIZE_MAX: none). */
+typedef struct nbep_overlap {
+    double max, rel;
+    size_t i, j;
+} nbep_overlap;
+#define NBEP_OVERLAP_NONE ((nbep_overlap){0.0, 0.0, SIZE_MAX, SIZE_MAX})
+
+/* nbep_state_max_overlap in parts, for threads that share it: one thread sorts the centres
+ * into g (room for s->n spheres) and gets the largest radius, then each thread, after a
+ * barrier, folds the overlaps of spheres [lo, hi) (with their planes, and with every other
+ * sphere) into its own best. The largest depth and relative depth over the parts are the
+ * whole check's, whatever the split. */
+double nbep_state_overlap_grid(const nbep_state *s, struct nbep_grid *g);
+void nbep_state_overlap_part(const nbep_state *s, const struct nbep_grid *g, double rmax,
+                             size_t lo, size_t hi, nbep_overlap *best);
+
 #endif
