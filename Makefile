@@ -92,6 +92,7 @@ run: bin/nbep
 # Every test binary and shell test (those drive bin/nbep as a user would), then (VALGRIND=1)
 # the test binaries again under memcheck.
 check: bin/nbep $(TEST_BIN)
+	@python3 scripts/mutate.py --stale
 	@bash scripts/run-tests.sh $(TEST_BIN) $(TEST_SH)
 ifeq ($(VALGRIND),1)
 	@bash scripts/run-tests.sh --valgrind $(TEST_BIN)

@@ -8,7 +8,9 @@ changed) makes the mutant "stale": it is reported loudly and makes the run fail,
 kept up to date rather than silently thinned. Equivalent mutants (no observable change) carry
 the reason and are not run.
 
-Usage: python3 scripts/mutate.py [--jobs N] [--timeout S] [--only ID[,ID...]] [--list]
+Usage: python3 scripts/mutate.py [--jobs N] [--timeout S] [--only ID[,ID...]] [--list] [--stale]
+(--stale: only the staleness check, which make check runs, so that a change to the core that
+leaves a mutant behind fails at once.)
 Prints one row per mutant and ends with exactly one line
 "mutants: K killed, S survived, E equivalent". Exit 0 when none survived and none is stale.
 """
@@ -345,14 +347,14 @@ MUTANTS = [
     ("team-undone-counts-kept", "src/evloop.c", "    ops->clear(us[k]); /* its counts from zero, on this thread */",
      "    (void)0;", TEAM, None),
     ("team-merge-leader-context", "src/evloop.c",
-     "        void *const uh = by ? e->help_us[k] : us[k];",
+     "        void *const uh = by ? e->help_us[by][k] : us[k];",
      "        void *const uh = us[k];", TEAM, None),
     ("team-helper-taken-as-leader", "src/evloop.c",
-     "    return atomic_load_explicit(&e->ws[1][k].place, memory_order_acquire) == s ? 1 : -1;",
-     "    return atomic_load_explicit(&e->ws[1][k].place, memory_order_acquire) == s ? 0 : -1;",
+     "        if (atomic_load_explicit(&e->ws[t][k].place, memory_order_acquire) == s)\n            return t;",
+     "        if (atomic_load_explicit(&e->ws[t][k].place, memory_order_acquire) == s)\n            return 0;",
      TEAM, None),
-    ("team-way-one-slot", "src/algo_predictive.c", "    bool *next = &c->team_on[(step + 1) & 1];",
-     "    bool *next = &c->team_on[step & 1];", TEAM, None),
+    ("team-way-one-slot", "src/algo_predictive.c", "    int *next = &c->team_way[(step + 1) & 1];",
+     "    int *next = &c->team_way[step & 1];", TEAM, None),
     # ---- the run takes the scene's arrays (nbep_state_take): the scene's must not be freed too ----
     ("state-take-leaves-src", "src/state.c", "    src->pos = src->vel = src->acc = NULL;\n", "",
      ["test_threads", "tests/test_cli.sh"], None),
@@ -429,8 +431,8 @@ MUTANTS = [
     ("resume-first-frame-again", "src/sim.c", "nbep_status st = sim->resumed ? NBEP_OK : emit_frame(sim, 0);",
      "nbep_status st = emit_frame(sim, 0);", ["tests/test_resume.sh"], None),
     # ---- frame schedule, summary and counters ----
-    ("frame-last-step", "src/sim.c", "bool frame = step % sim->scene->output_every == 0 || step == sim->step_end || stop;",
-     "bool frame = step % sim->scene->output_every == 0 || stop;", SIM + ["test_output"], None),
+    ("frame-last-step", "src/sim.c", "    return step % sim->scene->output_every == 0 || step == sim->step_end;",
+     "    return step % sim->scene->output_every == 0;", SIM + ["test_output"], None),
     ("summary-drift-sign", "src/sim.c", "? (sim->energy_final - sim->energy_initial) /",
      "? (sim->energy_initial - sim->energy_final) /", SIM + ["test_output"], None),
     ("summary-quiet-steps", "src/sim.c", "if (row.collisions == 0)\n        sim->quiet_steps++;",
@@ -461,6 +463,8 @@ def main():
     ap.add_argument("--timeout", type=int, default=120, help="seconds per test program")
     ap.add_argument("--only", default="", help="comma-separated mutant ids")
     ap.add_argument("--list", action="store_true", help="list the mutants and exit")
+    ap.add_argument("--stale", action="store_true",
+                    help="only check that every mutant's snippet occurs once (make check)")
     ap.add_argument("--keep", action="store_true", help="keep the scratch copy")
     ap.add_argument("--allow-missing", action="store_true",
                     help="skip tests the tree does not have (to measure an older tree)")
@@ -487,6 +491,9 @@ def main():
     for mid, path, count in stale:
         print(f"STALE mutant {mid}: its snippet occurs {count} times in {path} (must be once); "
               f"update scripts/mutate.py", file=sys.stderr)
+    if a.stale:
+        print(f"mutate: {len(mutants) - len(stale)} of {len(mutants)} mutants apply")
+        return 1 if stale else 0
 
     scratch = tempfile.mkdtemp(prefix="nbep-mutate-")
     try:

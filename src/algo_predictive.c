@@ -2191,9 +2191,9 @@ static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, c
  * at least TEAM_CLEAR times as fast as every other, they are probed every TEAM_PROBE_FAR-th
  * step only; the way taken is measured at every step, so a change that makes it slower is
  * seen at once. NBEP_TEAM in the environment, read as the run is made, fixes the choice
- * (tests, benchmarks): "always" the whole team, "never" one thread, a count k >= 2 a team of
- * k threads (at most the run's), "cycle" the ways in turn, step by step, the whole team
- * first (every change of way, for the tests). */
+ * (tests, benchmarks): "always" the whole team, "never" (or 1) one thread, a count k >= 2 a
+ * team of k threads (at most the run's and NBEP_EVLOOP_TEAM_MAX), "cycle" the ways in turn,
+ * step by step, the whole team first (every change of way, for the tests). */
 #define TEAM_PROBE 8
 #define TEAM_PROBE_FAR 64
 #define TEAM_CLEAR 1.25
@@ -2215,7 +2215,10 @@ static int team_forced(void)
         return TEAM_CYCLE;
     char *end;
     const long k = strtol(v, &end, 10);
-    return end != v && *end == '\0' && k >= 2 && k <= NBEP_EVLOOP_TEAM_MAX ? (int)k : 0;
+    if (end == v || *end != '\0' || k < 1)
+        return 0;
+    /* a team of one is one thread; a team is at most NBEP_EVLOOP_TEAM_MAX */
+    return k == 1 ? -1 : k < NBEP_EVLOOP_TEAM_MAX ? (int)k : NBEP_EVLOOP_TEAM_MAX;
 }
 
 /* The fastest way measured (ties: the one with more threads). */

@@ -20,9 +20,9 @@
  * time a sphere takes to fly its own diameter. */
 #define CUT_SLACK 1e-6
 
-/* The team loop's places in flight at most: enough that the helper finds one to take while
- * the leader commits (a window of 12 to 32 ran within the noise of this one at N = 256000,
- * phi = 0.30). */
+/* The team loop's places in flight at most: enough that a helper finds one to take while the
+ * leader commits (a window of 12 to 32 ran within the noise of this one at N = 256000,
+ * phi = 0.30, with one helper; more helpers may want more, unmeasured). */
 #define WINDOW 16
 
 /* The calendar entries an event's workspace holds for its commit (a pair's two spheres), and
@@ -35,7 +35,7 @@
  * motion and slots it may change, kept to undo it. */
 typedef struct evl_ws {
     /* the event handled, waiting for its commit, and what the commit reads first, on one
-     * cache line (the team's leader waits for it and reads it from the other core; a
+     * cache line (the team's leader waits for it and reads it from another core; a
      * workspace starts a line): in the team loop, the number of the place last handled on it
      * (stored last, with release: what handle wrote is then there to read); the calendar
      * entries to set, the changed spheres' then item's, from the slots handle wrote (n_next
@@ -97,7 +97,7 @@ struct nbep_evloop {
     alignas(NBEP_CACHELINE) uint32_t batch[NBEP_EVLOOP_RING];
     uint32_t batch_other[NBEP_EVLOOP_RING];
     bool batch_first[NBEP_EVLOOP_RING];
-    /* the leader's alone (a line that the other core reads makes each write to it wait): the
+    /* the leader's alone (a line that another core reads makes each write to it wait): the
      * list centres of the window's spheres as floats (place p's own at 2 (p % WINDOW), its
      * other's next; +inf for none), for the places that join (place_apart); whether each
      * place is a list expiry (its handle walks the cells around its sphere and its commit
@@ -185,7 +185,7 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
                                const uint64_t *ver, nbep_evloop **out, nbep_diag *d)
 {
     assert(team >= 1 && team <= NBEP_EVLOOP_TEAM_MAX);
-    /* aligned: its fields that the team's two threads write start cache lines */
+    /* aligned: its fields that the team's threads write start cache lines */
     nbep_evloop *e = nbep_alloc_aligned(1, sizeof *e);
     if (!e)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the cells engine");
@@ -1207,7 +1207,7 @@ static inline NBEP_ALWAYS_INLINE void prefetch_record(const nbep_evloop *e, uint
  * in two stages, the first (not deep) a commit ahead: the calendar's lists that its entries
  * join (the two lines of a set that missed most: its list's head and the entry there) and,
  * for a rebuilt list, the records and then the lists of the spheres whose lists it enters or
- * leaves, and its own. The handle knew them a while before, on the other core. */
+ * leaves, and its own. The handle knew them a while before, maybe on another core. */
 static void prefetch_commit(const nbep_evloop *e, const evl_ws *w, bool deep)
 {
     if (w->n_next != NEXT_ALL)
@@ -1242,7 +1242,7 @@ static int handled_by(const nbep_evloop *e, uint64_t s)
 /* The leader waits for place s to be handled, handling places meanwhile: the thread that
  * handled it (handled_by). Once none is left to take, it stops looking at `next` until it
  * returns: only the leader publishes places, so none comes meanwhile, and each look would pull
- * the line of the counter that the helper writes as it takes each place. */
+ * the line of the counter that the helpers write as they take each place. */
 static int wait_handled(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us,
                         uint64_t s)
 {
