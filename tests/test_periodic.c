@@ -607,6 +607,30 @@ static void test_team_loop_handles_events_ahead_and_undoes_some_bit_for_bit(void
     nbep_test_scene_free(&sc);
 }
 
+/* Every thread reads each step's way from the slot thread 0 wrote during the step before
+ * (team_way, by parity), never from the one it writes during this step: 1000 spheres at rest
+ * (no events, so thread 0's event loop, and its choice of the next way, end at once, while a
+ * helper may still be on its way to reading this step's), the ways in turn on 4 threads for
+ * 300 steps. A helper that read the next way would wait for a call that never comes (the
+ * test's time limit ends it). */
+static void test_every_thread_reads_the_way_of_its_step(void **state)
+{
+    (void)state;
+    nbep_scene *sc = periodic_scene(1000, 20.0, 300, 0.1);
+    sc->output_every = 300;
+    for (size_t i = 0; i < 1000; i++) {
+        const nbep_vec3 p = {1.0 + 2.0 * (double)(i % 10), 1.0 + 2.0 * (double)(i / 10 % 10),
+                             1.0 + 2.0 * (double)(i / 100)};
+        nbep_test_set_sphere(sc, i, p, ZERO, 0.5, 1.0, ZERO);
+    }
+    setenv("NBEP_TEAM", "cycle", 1);
+    const nbep_summary sk = nbep_test_run(sc, 4, NULL, NULL, NULL, NULL);
+    unsetenv("NBEP_TEAM");
+    assert_int_equal(sk.steps, 300);
+    assert_int_equal(sk.collisions, 0);
+    nbep_test_scene_free(&sc);
+}
+
 /* Carnahan-Starling: beta P sigma^3 = rho sigma^3 (1 + eta + eta^2 - eta^3) / (1 - eta)^3 with
  * rho sigma^3 = 6 eta / pi (2.2768 at eta = 0.30; issue 8 quotes 2.283). Enskog's collision
  * rate per sphere: 4 sqrt(pi) rho sigma^2 g(sigma) sqrt(kT/m), g(sigma) from the same equation
@@ -923,6 +947,7 @@ int main(void)
         cmocka_unit_test(test_falling_through_a_periodic_axis_keeps_the_energy),
         cmocka_unit_test(test_periodic_fluid_is_exact_and_thread_independent),
         cmocka_unit_test(test_team_loop_handles_events_ahead_and_undoes_some_bit_for_bit),
+        cmocka_unit_test(test_every_thread_reads_the_way_of_its_step),
         cmocka_unit_test(test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box),
         cmocka_unit_test(test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference),
         cmocka_unit_test(test_periodic_fluid_pressure_and_collision_rate_match_theory),
