@@ -228,6 +228,19 @@ static void test_overlap_check_sees_pairs_across_a_periodic_face(void **state)
     nbep_diag_fini(&d);
 }
 
+/* 1000 spheres (diameter 1) at rest on a lattice of spacing 2 at odd coordinates, in a
+ * periodic cube of side 20, for `steps` steps of 0.1: nothing ever happens. */
+static nbep_scene *lattice_at_rest(uint64_t steps)
+{
+    nbep_scene *sc = periodic_scene(1000, 20.0, steps, 0.1);
+    for (size_t i = 0; i < 1000; i++) {
+        const nbep_vec3 p = {1.0 + 2.0 * (double)(i % 10), 1.0 + 2.0 * (double)(i / 10 % 10),
+                             1.0 + 2.0 * (double)(i / 100)};
+        nbep_test_set_sphere(sc, i, p, ZERO, 0.5, 1.0, ZERO);
+    }
+    return sc;
+}
+
 /* A run's frames check overlaps with the threads sharing the work (nbep__sim_frame_overlap):
  * an overlap that no event makes, a pair at rest 0.7 deep through a periodic face among 998
  * spheres at rest on a lattice, is in the summary on 1, 2 and 4 threads, in cells and
@@ -237,13 +250,8 @@ static void test_frames_overlap_check_is_shared_by_the_threads(void **state)
     (void)state;
     for (int mode = 0; mode < 2; mode++) {
         cells_mode = mode == 0;
-        nbep_scene *sc = periodic_scene(1000, 20.0, 4, 0.1);
+        nbep_scene *sc = lattice_at_rest(4);
         sc->output_every = 2;
-        for (size_t i = 0; i < 1000; i++) { /* sites 2 apart, at odd coordinates */
-            const nbep_vec3 p = {1.0 + 2.0 * (double)(i % 10), 1.0 + 2.0 * (double)(i / 10 % 10),
-                                 1.0 + 2.0 * (double)(i / 100)};
-            nbep_test_set_sphere(sc, i, p, ZERO, 0.5, 1.0, ZERO);
-        }
         sc->state.pos[998] = (nbep_vec3){0.2, 10.0, 10.0}; /* in the empty plane x = 0 */
         sc->state.pos[999] = (nbep_vec3){19.9, 10.0, 10.0};
         for (int nt = 1; nt <= 4; nt *= 2) {
@@ -616,13 +624,8 @@ static void test_team_loop_handles_events_ahead_and_undoes_some_bit_for_bit(void
 static void test_every_thread_reads_the_way_of_its_step(void **state)
 {
     (void)state;
-    nbep_scene *sc = periodic_scene(1000, 20.0, 300, 0.1);
+    nbep_scene *sc = lattice_at_rest(300);
     sc->output_every = 300;
-    for (size_t i = 0; i < 1000; i++) {
-        const nbep_vec3 p = {1.0 + 2.0 * (double)(i % 10), 1.0 + 2.0 * (double)(i / 10 % 10),
-                             1.0 + 2.0 * (double)(i / 100)};
-        nbep_test_set_sphere(sc, i, p, ZERO, 0.5, 1.0, ZERO);
-    }
     setenv("NBEP_TEAM", "cycle", 1);
     const nbep_summary sk = nbep_test_run(sc, 4, NULL, NULL, NULL, NULL);
     unsetenv("NBEP_TEAM");
