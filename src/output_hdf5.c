@@ -219,19 +219,18 @@ int nbep__output_dataset_rows(hid_t file, const char *path, const char *name, hs
 int nbep__output_read_row(hid_t file, const char *path, const char *name, hsize_t row,
                           hsize_t per_row, hid_t mem_type, void *buf, nbep_diag *d)
 {
-    hsize_t dims[3] = {0, 0, 0}, start[3] = {row, 0, 0}, count[3] = {1, 0, 0};
+    /* dims of any rank a file may hold (a row is read from ranks 1 to 3 only) */
+    hsize_t dims[H5S_MAX_RANK] = {0}, start[3] = {row, 0, 0}, count[3] = {1, 0, 0};
     int rc = -1;
     hid_t ds = H5Dopen2(file, name, H5P_DEFAULT);
     hid_t space = ds < 0 ? H5I_INVALID_HID : H5Dget_space(ds);
     int rank = space < 0 ? -1 : H5Sget_simple_extent_dims(space, dims, NULL);
-    hid_t mem = H5I_INVALID_HID;
     hsize_t values = 1;
     for (int k = 1; k < rank && k < 3; k++)
         values *= (count[k] = dims[k]);
     /* the memory space of the row's own shape: a flat one made HDF5 map each element to
      * its chunk apart */
-    if (rank >= 1 && rank <= 3)
-        mem = H5Screate_simple(rank, count, NULL);
+    hid_t mem = rank >= 1 && rank <= 3 ? H5Screate_simple(rank, count, NULL) : H5I_INVALID_HID;
     if (rank < 1 || rank > 3 || mem < 0) {
         HDF5_FAIL(d, path, "read the shape of %s", name);
         goto done;

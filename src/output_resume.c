@@ -46,7 +46,7 @@ void nbep_resume_apply(nbep_resume *r, nbep_state *s)
 /* Opens dataset name and cuts it to `rows` rows. */
 static int open_cut(nbep_output *o, const char *name, hsize_t rows, hid_t *out, nbep_diag *d)
 {
-    hsize_t dims[3];
+    hsize_t dims[H5S_MAX_RANK]; /* any rank a file may hold */
     *out = H5Dopen2(o->file, name, H5P_DEFAULT);
     hid_t space = *out < 0 ? H5I_INVALID_HID : H5Dget_space(*out);
     int rank = space < 0 ? -1 : H5Sget_simple_extent_dims(space, dims, NULL);
