@@ -760,13 +760,14 @@ static void test_team_loop_keeps_one_threads_wall_impulses_and_virial(void **sta
     }
 }
 
-/* A deck of one sphere (m = 1.5, r = 0.5) at x = 1.39 flying along x at speed 2 in a box of side
- * 5, y and z periodic, x periodic when x_periodic is "true" (else walls there), dt = 0.01,
- * a frame every 10 steps. */
-static void one_sphere_in_a_box(const char *name, int steps, const char *x_periodic, char *deck,
-                                size_t len)
+/* Runs a deck NAME.deck of one sphere (m = 1.5, r = 0.5) at x = 1.39 flying along x at speed 2
+ * in a box of side 5, y and z periodic, x periodic when x_periodic is "true" (else walls
+ * there), dt = 0.01, a frame every 10 steps, into NAME.h5; returns that file, open, and the
+ * run's result in *res. */
+static hid_t one_sphere_in_a_box(const char *name, int steps, const char *x_periodic,
+                                 nbep_run_result *res)
 {
-    char text[512];
+    char text[512], deck[256], out[256], file[64];
     snprintf(text, sizeof text,
              "run: { algorithm = \"predictive\"; neighbors = \"cells\"; steps = %d; "
              "dt = 0.01; threads = 1; };\n"
@@ -776,7 +777,14 @@ static void one_sphere_in_a_box(const char *name, int steps, const char *x_perio
              "radius = 0.5; mass = 1.5; } );\n"
              "output: { every = 10; };\n",
              steps, x_periodic);
-    write_deck(name, text, deck, len);
+    snprintf(file, sizeof file, "%s.deck", name);
+    write_deck(file, text, deck, sizeof deck);
+    snprintf(file, sizeof file, "%s.h5", name);
+    nbep_test_tmp(file, out, sizeof out);
+    *res = nbep_test_run_deck(deck, out);
+    hid_t f = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+    assert_true(f >= 0);
+    return f;
 }
 
 /* A fully periodic box has no walls, and its file still has /stats/wall_impulse, (S, 0): SPEC
@@ -784,13 +792,9 @@ static void one_sphere_in_a_box(const char *name, int steps, const char *x_perio
 static void test_a_box_without_walls_has_an_empty_wall_impulse_per_step(void **state)
 {
     (void)state;
-    char deck[256], out[256];
-    one_sphere_in_a_box("nowall.deck", 30, "true", deck, sizeof deck);
-    nbep_test_tmp("nowall.h5", out, sizeof out);
-    const nbep_run_result res = nbep_test_run_deck(deck, out);
+    nbep_run_result res;
+    hid_t file = one_sphere_in_a_box("nowall", 30, "true", &res);
     assert_int_equal(res.summary.planes, 0);
-    hid_t file = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
-    assert_true(file >= 0);
     hsize_t dims[2] = {0, 1};
     read_all(file, "/stats/wall_impulse", H5T_NATIVE_DOUBLE, NULL, dims);
     assert_int_equal(dims[0], 30);
@@ -804,16 +808,12 @@ static void test_a_box_without_walls_has_an_empty_wall_impulse_per_step(void **s
 static void test_wall_impulse_of_a_sphere_between_two_walls(void **state)
 {
     (void)state;
-    char deck[256], out[256];
     /* L - 2r = 4: a hit every 2 time units (200 steps); the first at x = 4.5, t = 1.555 */
-    one_sphere_in_a_box("wall.deck", 1000, "false", deck, sizeof deck);
-    nbep_test_tmp("wall.h5", out, sizeof out);
-    const nbep_run_result res = nbep_test_run_deck(deck, out);
+    nbep_run_result res;
+    hid_t file = one_sphere_in_a_box("wall", 1000, "false", &res);
     assert_int_equal(res.summary.planes, 2);
     assert_int_equal(res.summary.plane_collisions, 5); /* t = 1.555, 3.555, ..., 9.555 */
     assert_false(res.summary.pressure.known); /* SPEC: only a fully periodic box has one */
-    hid_t file = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
-    assert_true(file >= 0);
     hsize_t dims[2];
     static double wall[1000 * 2];
     read_all(file, "/stats/wall_impulse", H5T_NATIVE_DOUBLE, NULL, dims);
