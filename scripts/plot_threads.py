@@ -38,12 +38,20 @@ def paper_series(path):
 
 
 def dense_series(path):
-    """A dense fluid's speed-ups (a rate: t threads' over one thread's)."""
+    """A dense fluid's speed-ups (a rate: t threads' over one thread's). Rows may name the run's
+    NBEP_TEAM in a column "team" (absent or "auto": the chooser); each value past one thread
+    makes a series of its own, over the same one-thread rows."""
     rows = [r for r in csv.DictReader(open(path))
             if r["engine"] == "nbep" and float(r["seconds"] or 0) > 0]
-    rate = medians(rows, lambda r: f"fluid, N = {r['n']}, phi = {r['phi']}",
-                   lambda r: int(r["collisions"]) / float(r["seconds"]))
-    return {k: {t: v / m[1] for t, v in m.items()} for k, m in rate.items() if 1 in m}
+    team = lambda r: "" if r.get("team") in (None, "", "auto") else r["team"]
+    series = {}
+    for name in sorted({team(r) for r in rows if int(r["threads"]) > 1}):
+        label = f", NBEP_TEAM={name}" if name else ""
+        rate = medians([r for r in rows if int(r["threads"]) == 1 or team(r) == name],
+                       lambda r: f"fluid, N = {r['n']}, phi = {r['phi']}{label}",
+                       lambda r: int(r["collisions"]) / float(r["seconds"]))
+        series.update({k: {t: v / m[1] for t, v in m.items()} for k, m in rate.items() if 1 in m})
+    return series
 
 
 def main():
@@ -63,7 +71,7 @@ def main():
     tmax = max(max(s) for s in series.values())
     ax.plot([1, tmax], [1, tmax], color="0.8", lw=1, label="ideal")
     for key, s in series.items():
-        style = "--" if key.startswith("fluid") else "-"
+        style = (":" if "NBEP_TEAM" in key else "--") if key.startswith("fluid") else "-"
         ax.plot(list(s), list(s.values()), style, marker="o", label=key)
         print(f"{key}: " + ", ".join(f"{t} threads x{v:.2f}" for t, v in s.items()))
     ax.set_xscale("log", base=2)
