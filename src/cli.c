@@ -47,26 +47,53 @@ void nbep_cli_print_help(FILE *f)
 
 void nbep_cli_fini(nbep_cli *cli)
 {
-    for (size_t i = 0; i < cli->n_overrides; i++)
+    for (size_t i = 0; i < cli->n_overrides; i++) {
         free(cli->overrides[i]);
+        free(cli->origins[i]);
+    }
     free(cli->overrides);
-    cli->overrides = NULL;
+    free(cli->origins);
+    cli->overrides = cli->origins = NULL;
     cli->n_overrides = 0;
 }
 
+/* Appends override s with its origin (both taken; s NULL: out of memory; origin NULL for
+ * --set). */
+static nbep_status push_override(nbep_cli *cli, char *s, char *origin, nbep_diag *d)
+{
+    char **o = s ? realloc(cli->overrides, (cli->n_overrides + 1) * sizeof *o) : NULL;
+    if (o)
+        cli->overrides = o;
+    char **g = o ? realloc(cli->origins, (cli->n_overrides + 1) * sizeof *g) : NULL;
+    if (g)
+        cli->origins = g;
+    if (!g) {
+        free(s);
+        free(origin);
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory reading the command line");
+    }
+    cli->overrides[cli->n_overrides] = s;
+    cli->origins[cli->n_overrides++] = origin;
+    return NBEP_OK;
+}
+
+/* The override of an option that sets a deck path: "path=value", value quoted as a libconfig
+ * string where quote. Its origin, for messages, is what was typed: opt ("--steps=abc"), or opt
+ * and its value apart ("-n abc") where apart. */
 static nbep_status add_override(nbep_cli *cli, const char *path, const char *value, bool quote,
-                                nbep_diag *d)
+                                const char *opt, bool apart, nbep_diag *d)
 {
     size_t len = strlen(path) + 1 + 2 * strlen(value) + 3;
     char *s = malloc(len);
-    char **o = realloc(cli->overrides, (cli->n_overrides + 1) * sizeof *o);
-    if (!s || !o) {
+    char *origin = malloc(strlen(opt) + (apart ? 1 + strlen(value) : 0) + 1);
+    if (!s || !origin) { /* push_override reports it */
         free(s);
-        if (o)
-            cli->overrides = o;
-        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory reading the command line");
+        return push_override(cli, NULL, origin, d);
     }
-    cli->overrides = o;
+    if (apart)
+        sprintf(origin, "%s %s", opt, value);
+    else
+        strcpy(origin, opt);
     char *w = s + sprintf(s, "%s=", path);
     if (quote) { /* a libconfig string: escape quotes and backslashes */
         *w++ = '"';
@@ -80,8 +107,7 @@ static nbep_status add_override(nbep_cli *cli, const char *path, const char *val
     } else {
         strcpy(w, value);
     }
-    cli->overrides[cli->n_overrides++] = s;
-    return NBEP_OK;
+    return push_override(cli, s, origin, d);
 }
 
 static nbep_status parse_command(const char *word, nbep_command *cmd, nbep_diag *d)
@@ -145,12 +171,13 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
             if ((opts[i].shrt && strcmp(name, opts[i].shrt) == 0) ||
                 strcmp(name, opts[i].lng) == 0) {
                 known = true;
+                const bool apart = !value;
                 if (!value) {
                     if (k + 1 >= argc)
                         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: option %s needs a value", name);
                     value = argv[++k];
                 }
-                st = add_override(cli, opts[i].path, value, opts[i].quote, d);
+                st = add_override(cli, opts[i].path, value, opts[i].quote, a, apart, d);
                 if (st != NBEP_OK)
                     return st;
             }
@@ -174,13 +201,9 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
                               "nbep: --set takes PATH=VALUE, e.g. --set physics.restitution=0.9 "
                               "(got '%s')",
                               value);
-                char **o = realloc(cli->overrides, (cli->n_overrides + 1) * sizeof *o);
-                char *copy = o ? strdup(value) : NULL;
-                if (o)
-                    cli->overrides = o;
-                if (!copy)
-                    NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory reading the command line");
-                cli->overrides[cli->n_overrides++] = copy;
+                st = push_override(cli, strdup(value), NULL, d);
+                if (st != NBEP_OK)
+                    return st;
             } else {
                 *slot = value;
             }

@@ -87,6 +87,7 @@ static nbep_status cmd_run(const nbep_cli *cli, nbep_diag *d)
 {
     const nbep_run_request rq = {.deck_path = cli->path,
                                  .overrides = (const char *const *)cli->overrides,
+                                 .override_origins = (const char *const *)cli->origins,
                                  .n_overrides = cli->n_overrides,
                                  .resume = cli->resume,
                                  .summary_path = cli->summary,
@@ -99,8 +100,9 @@ static nbep_status cmd_run(const nbep_cli *cli, nbep_diag *d)
 static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
 {
     nbep_scene sc;
-    nbep_status st = nbep_scene_load(cli->path, (const char *const *)cli->overrides,
-                                     cli->n_overrides, &sc, d);
+    nbep_status st = nbep_scene_load_from(cli->path, (const char *const *)cli->overrides,
+                                          (const char *const *)cli->origins, cli->n_overrides,
+                                          &sc, d);
     if (st != NBEP_OK)
         return st;
     print_check(&sc, nbep_sim_resolve_threads(sc.threads));

@@ -90,7 +90,8 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
 {
     memset(res, 0, sizeof *res);
     nbep_scene sc;
-    nbep_status st = nbep_scene_load(rq->deck_path, rq->overrides, rq->n_overrides, &sc, d);
+    nbep_status st = nbep_scene_load_from(rq->deck_path, rq->overrides, rq->override_origins,
+                                          rq->n_overrides, &sc, d);
     if (st != NBEP_OK)
         return st;
     const int threads = nbep_sim_resolve_threads(sc.threads);

@@ -957,6 +957,25 @@ static void load_defaults(load *L, config_t *defaults)
 nbep_status nbep_scene_load(const char *deck_path, const char *const *overrides,
                             size_t n_overrides, nbep_scene *out, nbep_diag *d)
 {
+    return nbep_scene_load_from(deck_path, overrides, NULL, n_overrides, out, d);
+}
+
+/* Override k's label for messages (nbep_scene_load_from); NULL when out of memory. */
+static char *override_label(const char *const *overrides, const char *const *origins, size_t k)
+{
+    if (origins && origins[k])
+        return strdup(origins[k]);
+    nbep__strbuf b = {0};
+    nbep__strbuf_add(&b, "--set %s", overrides[k]);
+    if (b.oom)
+        nbep__strbuf_fini(&b);
+    return b.p;
+}
+
+nbep_status nbep_scene_load_from(const char *deck_path, const char *const *overrides,
+                                 const char *const *origins, size_t n_overrides,
+                                 nbep_scene *out, nbep_diag *d)
+{
     load L = {.c = {deck_path, d, false}};
     nbep_scene sc;
     memset(&sc, 0, sizeof sc);
@@ -967,6 +986,8 @@ nbep_status nbep_scene_load(const char *deck_path, const char *const *overrides,
     plane *planes = NULL;
     size_t n_entries = 0, n_planes = 0;
     char *text = NULL;
+    /* the overrides' labels, the hooks of the settings they make: freed with the tree */
+    char **labels = calloc(n_overrides ? n_overrides : 1, sizeof *labels);
     const size_t errors0 = d->n_errors;
 
     nbep_status st = read_text(deck_path, &sc.deck_text, d);
@@ -987,8 +1008,12 @@ nbep_status nbep_scene_load(const char *deck_path, const char *const *overrides,
                       strcmp(what, "syntax error") ? what : "");
         goto finish;
     }
-    for (size_t k = 0; k < n_overrides; k++)
-        nbep__scene_apply_override(&L.c, &cfg, overrides[k]);
+    for (size_t k = 0; k < n_overrides && !L.c.oom; k++) {
+        if (!labels || !(labels[k] = override_label(overrides, origins, k)))
+            L.c.oom = true;
+        else
+            nbep__scene_apply_override(&L.c, &cfg, overrides[k], labels[k]);
+    }
     load_defaults(&L, &defaults);
 
     const config_setting_t *root = config_root_setting(&cfg);
@@ -1042,6 +1067,9 @@ done:
     free(text);
     config_destroy(&defaults);
     config_destroy(&cfg);
+    for (size_t k = 0; labels && k < n_overrides; k++)
+        free(labels[k]);
+    free(labels);
     if (st == NBEP_OK)
         *out = sc;
     else

@@ -85,9 +85,11 @@ void nbep__scene_unknown_text(const char *path, nbep__strbuf *b);
 
 /* ---- overrides (scene_override.c) ----------------------------------------------------------- */
 
-/* Applies one "PATH=VALUE" override to the tree; problems go to the diag as
- * "--set PATH=VALUE: ...". Settings it makes carry the override text as their hook. */
-void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *ov);
+/* Applies one "PATH=VALUE" override to the tree; problems go to the diag as "LABEL: ...",
+ * label the option the user typed ("--set PATH=VALUE", "-n abc"). Settings it makes carry
+ * the label as their hook (it must outlive the tree's messages). */
+void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *ov,
+                                const char *label);
 
 /* ---- placement (scene_place.c) -------------------------------------------------------------- */
 

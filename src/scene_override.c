@@ -3,8 +3,9 @@
  * whose list indices are "[N]" (spheres.[0].count; spheres[0].count is accepted too); VALUE
  * is libconfig value text, or a bare word taken as a string. Missing groups and lists on the
  * way are created; an index equal to a list's length appends an entry. Every setting made
- * here carries the override text as its libconfig hook, which is how messages about it say
- * "--set PATH=VALUE" instead of "deck:line". */
+ * here carries the override's label as its libconfig hook, which is how messages about it name
+ * the option the user typed ("--set PATH=VALUE", or "-n abc" for an option that sets a deck
+ * path) instead of "deck:line". */
 #include "scene_impl.h"
 
 #include <ctype.h>
@@ -21,12 +22,12 @@ typedef struct seg {
     char name[NAME_LEN];
 } seg;
 
-#define OVERR(c, ov, ...) ov_error((c), (ov), __FILE__, __LINE__, __VA_ARGS__)
+#define OVERR(c, label, ...) ov_error((c), (label), __FILE__, __LINE__, __VA_ARGS__)
 
-static void ov_error(nbep__scene_ctx *c, const char *ov, const char *file, int line,
+static void ov_error(nbep__scene_ctx *c, const char *label, const char *file, int line,
                      const char *fmt, ...) NBEP_PRINTF(5, 6);
 
-static void ov_error(nbep__scene_ctx *c, const char *ov, const char *file, int line,
+static void ov_error(nbep__scene_ctx *c, const char *label, const char *file, int line,
                      const char *fmt, ...)
 {
     char msg[1024];
@@ -34,7 +35,7 @@ static void ov_error(nbep__scene_ctx *c, const char *ov, const char *file, int l
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    nbep_diag_add(c->d, file, line, "--set %s: %s", ov, msg);
+    nbep_diag_add(c->d, file, line, "%s: %s", label, msg);
 }
 
 static bool is_name_start(char ch)
@@ -117,15 +118,15 @@ static char *trimmed(const char *s, size_t len)
 }
 
 /* A deep copy of src added to parent (name ignored in lists and arrays), every new setting
- * hooked to the override. NULL when libconfig refuses (say, a group inside an array). */
+ * hooked to the override's label. NULL when libconfig refuses (say, a group inside an array). */
 static config_setting_t *copy_value(config_setting_t *parent, const char *name,
-                                    const config_setting_t *src, const char *ov)
+                                    const config_setting_t *src, const char *label)
 {
     int type = config_setting_type(src);
     config_setting_t *dst = config_setting_add(parent, name, type);
     if (!dst)
         return NULL;
-    config_setting_set_hook(dst, (void *)ov);
+    config_setting_set_hook(dst, (void *)label);
     switch (type) {
     case CONFIG_TYPE_INT: config_setting_set_int(dst, config_setting_get_int(src)); break;
     case CONFIG_TYPE_INT64: config_setting_set_int64(dst, config_setting_get_int64(src)); break;
@@ -138,7 +139,7 @@ static config_setting_t *copy_value(config_setting_t *parent, const char *name,
     default:
         for (int k = 0; k < config_setting_length(src); k++) {
             const config_setting_t *e = config_setting_get_elem(src, (unsigned)k);
-            if (!copy_value(dst, config_setting_name(e), e, ov))
+            if (!copy_value(dst, config_setting_name(e), e, label))
                 return NULL;
         }
     }
@@ -149,9 +150,9 @@ static config_setting_t *copy_value(config_setting_t *parent, const char *name,
  * adding appends at the end: so the copy is appended, swapped into place through the public
  * config_list_t, and the old element, now last, removed (which frees it). */
 static bool replace_elem(config_setting_t *list, unsigned idx, const config_setting_t *v,
-                         const char *ov)
+                         const char *label)
 {
-    if (!copy_value(list, NULL, v, ov))
+    if (!copy_value(list, NULL, v, label))
         return false;
     config_list_t *l = list->value.list;
     config_setting_t *old = l->elements[idx];
@@ -176,16 +177,14 @@ static int container_type(const char *path, const seg *next)
 
 /* Parses VALUE into tmp's setting "v": libconfig text, or a bare word as a string. NULL after
  * reporting a value that is neither. */
-static const config_setting_t *parse_value(nbep__scene_ctx *c, const char *ov, const char *value,
-                                           bool string_target, config_t *tmp)
+static const config_setting_t *parse_value(nbep__scene_ctx *c, const char *label,
+                                           const char *value, bool string_target, config_t *tmp)
 {
     if (!(string_target && value[0] != '"')) {
         nbep__strbuf b = {0};
         nbep__strbuf_add(&b, "v = %s;", value);
-        char origin[OV_PATH_LEN + 8];
-        snprintf(origin, sizeof origin, "--set %s", ov);
         size_t n_bad = 0;
-        char *text = b.oom ? NULL : nbep__scene_widen(nbep__strbuf_str(&b), origin, false, c->d,
+        char *text = b.oom ? NULL : nbep__scene_widen(nbep__strbuf_str(&b), label, false, c->d,
                                                       &n_bad);
         nbep__strbuf_fini(&b);
         if (!text) {
@@ -201,7 +200,7 @@ static const config_setting_t *parse_value(nbep__scene_ctx *c, const char *ov, c
         /* A word that is no libconfig value (predictive, out.h5, /tmp/x.h5) is a string;
          * text that starts like a string, array, list or group is a malformed value. */
         if (value[0] && strchr("\"[({", value[0])) {
-            OVERR(c, ov, "bad value: %s", ok ? "more than one value" : config_error_text(tmp));
+            OVERR(c, label, "bad value: %s", ok ? "more than one value" : config_error_text(tmp));
             return NULL;
         }
         config_destroy(tmp);
@@ -216,17 +215,19 @@ static const config_setting_t *parse_value(nbep__scene_ctx *c, const char *ov, c
 }
 
 /* An index past the end of a list of len entries (len itself appends one). */
-static void index_past_end(nbep__scene_ctx *c, const char *ov, const char *list, unsigned len)
+static void index_past_end(nbep__scene_ctx *c, const char *label, const char *list,
+                           unsigned len)
 {
-    OVERR(c, ov, "%s has %u entr%s: the index can be at most %u (to add one)", list, len,
+    OVERR(c, label, "%s has %u entr%s: the index can be at most %u (to add one)", list, len,
           len == 1 ? "y" : "ies", len);
 }
 
-void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *ov)
+void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *ov,
+                                const char *label)
 {
     const char *eq = strchr(ov, '=');
     if (!eq) {
-        OVERR(c, ov, "expected PATH=VALUE, e.g. physics.restitution=0.9");
+        OVERR(c, label, "expected PATH=VALUE, e.g. physics.restitution=0.9");
         return;
     }
     char *path = trimmed(ov, (size_t)(eq - ov)), *value = trimmed(eq + 1, strlen(eq + 1));
@@ -240,7 +241,7 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
         goto out;
     }
     if (!split_path(path, segs, &n, canon, sizeof canon)) {
-        OVERR(c, ov, "bad path \"%s\": names and [N] indices joined by dots, e.g. "
+        OVERR(c, label, "bad path \"%s\": names and [N] indices joined by dots, e.g. "
                      "spheres.[0].count",
               path);
         goto out;
@@ -250,13 +251,13 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
     if (!nbep__scene_schema_kind(canon, &kind, &element)) {
         nbep__strbuf b = {0};
         nbep__scene_unknown_text(canon, &b);
-        OVERR(c, ov, "%s", nbep__strbuf_str(&b));
+        OVERR(c, label, "%s", nbep__strbuf_str(&b));
         c->oom = c->oom || b.oom;
         nbep__strbuf_fini(&b);
         goto out;
     }
     bool string_target = element ? kind == NBEP__K_STRINGS : kind == NBEP__K_STRING;
-    const config_setting_t *v = parse_value(c, ov, value, string_target, &tmp);
+    const config_setting_t *v = parse_value(c, label, value, string_target, &tmp);
     if (!v)
         goto out;
 
@@ -274,7 +275,7 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
         if (!s->index) {
             if (!config_setting_is_group(node)) {
                 sofar[used] = '\0';
-                OVERR(c, ov, "%s is not a group", sofar);
+                OVERR(c, label, "%s is not a group", sofar);
                 goto out;
             }
             child = config_setting_get_member(node, s->name);
@@ -284,7 +285,7 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
             unsigned len = (unsigned)config_setting_length(node);
             if (!config_setting_is_list(node)) {
                 sofar[used] = '\0';
-                OVERR(c, ov, "%s is not a list", sofar);
+                OVERR(c, label, "%s is not a list", sofar);
                 goto out;
             }
             if (s->idx < len) {
@@ -293,47 +294,47 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
                 child = config_setting_add(node, NULL, container_type(sofar, &segs[k + 1]));
             } else {
                 sofar[used] = '\0';
-                index_past_end(c, ov, sofar, len);
+                index_past_end(c, label, sofar, len);
                 goto out;
             }
         }
         if (!child) {
-            OVERR(c, ov, "cannot make %s here (is its parent a group?)", sofar);
+            OVERR(c, label, "cannot make %s here (is its parent a group?)", sofar);
             goto out;
         }
         if (!config_setting_get_hook(child) && config_setting_source_line(child) == 0)
-            config_setting_set_hook(child, (void *)ov);
+            config_setting_set_hook(child, (void *)label);
         node = child;
     }
 
     const seg *last = &segs[n - 1];
     if (!last->index) {
         if (!config_setting_is_group(node)) {
-            OVERR(c, ov, "%s is not a group", sofar);
+            OVERR(c, label, "%s is not a group", sofar);
             goto out;
         }
         if (config_setting_get_member(node, last->name))
             config_setting_remove(node, last->name);
-        if (!copy_value(node, last->name, v, ov))
+        if (!copy_value(node, last->name, v, label))
             c->oom = true;
         goto out;
     }
     if (!config_setting_is_list(node) && !config_setting_is_array(node)) {
-        OVERR(c, ov, "%s is not a list or array", sofar);
+        OVERR(c, label, "%s is not a list or array", sofar);
         goto out;
     }
     if (config_setting_is_array(node) && config_setting_is_aggregate(v)) {
-        OVERR(c, ov, "an element of the array %s must be a number, string or boolean", sofar);
+        OVERR(c, label, "an element of the array %s must be a number, string or boolean", sofar);
         goto out;
     }
     unsigned len = (unsigned)config_setting_length(node);
     bool ok = true;
     if (last->idx < len)
-        ok = replace_elem(node, (unsigned)last->idx, v, ov);
+        ok = replace_elem(node, (unsigned)last->idx, v, label);
     else if (last->idx == len)
-        ok = copy_value(node, NULL, v, ov) != NULL;
+        ok = copy_value(node, NULL, v, label) != NULL;
     else
-        index_past_end(c, ov, sofar, len);
+        index_past_end(c, label, sofar, len);
     c->oom = c->oom || !ok;
 out:
     config_destroy(&tmp);

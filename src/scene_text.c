@@ -439,8 +439,8 @@ void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char
         ov = config_setting_get_hook(t);
         at = config_setting_source_line(t);
     }
-    if (ov)
-        nbep_diag_add(c->d, file, line, "--set %s: %s", ov, msg);
+    if (ov) /* the override's label (scene_override.c) */
+        nbep_diag_add(c->d, file, line, "%s: %s", ov, msg);
     else
         nbep_diag_add(c->d, file, line, "%s:%u: %s", c->deck, at ? at : 1u, msg);
 }

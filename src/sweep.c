@@ -121,11 +121,13 @@ static bool parse_steps(const char *text, uint64_t *steps)
     return true;
 }
 
-nbep_status nbep_sweep_plan_create(const char *deck_path, const char *const *overrides,
-                                   size_t n_overrides, nbep_sweep_plan *out, nbep_diag *d)
+/* nbep_sweep_plan_create, with what was typed for each override (nbep_scene_load_from). */
+static nbep_status plan_create(const char *deck_path, const char *const *overrides,
+                               const char *const *origins, size_t n_overrides,
+                               nbep_sweep_plan *out, nbep_diag *d)
 {
     nbep_scene sc;
-    nbep_status st = nbep_scene_load(deck_path, overrides, n_overrides, &sc, d);
+    nbep_status st = nbep_scene_load_from(deck_path, overrides, origins, n_overrides, &sc, d);
     if (st != NBEP_OK)
         return st;
     nbep_sweep_plan p = {0};
@@ -157,6 +159,12 @@ nbep_status nbep_sweep_plan_create(const char *deck_path, const char *const *ove
     p.n_runs = (size_t)p.replicas * p.n_combos;
     *out = p;
     return NBEP_OK;
+}
+
+nbep_status nbep_sweep_plan_create(const char *deck_path, const char *const *overrides,
+                                   size_t n_overrides, nbep_sweep_plan *out, nbep_diag *d)
+{
+    return plan_create(deck_path, overrides, NULL, n_overrides, out, d);
 }
 
 uint64_t nbep_sweep_run_replica(const nbep_sweep_plan *p, size_t run)
@@ -991,8 +999,8 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
     nbep_diag *dd = rank == 0 ? d : &quiet_diag;
     nbep_sweep_plan p = {0};
     nbep_sweep_result *results = NULL;
-    nbep_status st = nbep_sweep_plan_create(cli->path, (const char *const *)cli->overrides,
-                                            cli->n_overrides, &p, dd);
+    nbep_status st = plan_create(cli->path, (const char *const *)cli->overrides,
+                                 (const char *const *)cli->origins, cli->n_overrides, &p, dd);
     if (st == NBEP_OK && many && size == 1) {
         nbep_diag_add(dd, __FILE__, __LINE__,
                       "nbep: started as one of several processes but MPI sees one: launch "

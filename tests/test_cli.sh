@@ -144,6 +144,18 @@ run_nbep check inputs/bounce.deck --set 'planes.[3].normal=[0,0,1]'
 check "a --set index past a list of one says '1 entry' (exit $rc)" \
     "[ $rc = 2 ] && one_line && grep -qF 'planes has 1 entry: the index' '$tmp/stderr'"
 
+# ---- a bad value given to an option names the option as typed, not the --set it becomes ------
+for cmd in run check sweep; do
+    run_nbep $cmd "$tmp/group.deck" -n abc --quiet -o "$tmp/never-$cmd.h5"
+    check "nbep $cmd -n abc: exit 2, one line naming '-n abc' (got $rc: $(head -c 200 "$tmp/stderr"))" \
+        "[ $rc = 2 ] && one_line && grep -qxF -- '-n abc: run.steps must be an integer (got \"abc\")' '$tmp/stderr'"
+done
+check "nbep run -n abc: no file written" "[ ! -e '$tmp/never-run.h5' ]"
+run_nbep check "$tmp/group.deck" --dt=-1 --set run.steps=0.5
+check "--dt=-1 and --set run.steps=0.5: each message names what was typed (got $rc)" \
+    "[ $rc = 2 ] && grep -qxF -- '--dt=-1: run.dt must be > 0 (got -1)' '$tmp/stderr' &&
+     grep -qxF -- '--set run.steps=0.5: run.steps must be an integer (got 0.5)' '$tmp/stderr'"
+
 # ---- a deck name that is no file, a missing file to resume -------------------------------------
 for cmd in run check sweep; do
     run_nbep $cmd "$tmp/no-such.deck" --quiet

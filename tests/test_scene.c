@@ -532,6 +532,24 @@ static void test_bad_override_value_is_reported_at_the_override(void **state)
                 "--set spheres.[0].radius=-0.5: spheres.[0].radius must be > 0 (got -0.5)");
 }
 
+/* Messages name what the user typed for an override where it is given (nbep_scene_load_from):
+ * an option's own text for the override it became, "--set PATH=VALUE" where its origin is
+ * NULL; also for a setting deeper than the one a message is about (a group the override made,
+ * whose member is missing), and for a value that is no libconfig text at all. */
+static void test_override_messages_name_their_origin(void **state)
+{
+    fixture *f = *state;
+    const char *const ov[] = {"run.steps=many", "physics.restitution=1.5",
+                              "spheres.[2]={radius=0.1;}", "physics.gravity=[0,0"};
+    const char *const origins[] = {"-n many", NULL, "--add-a-sphere", "-g [0,0"};
+    assert_int_equal(nbep_scene_load_from(DATA "scene_good.deck", ov, origins, 4, &f->sc, &f->d),
+                     NBEP_EDECK);
+    ASSERT_DIAG(&f->d, "-g [0,0: bad value: syntax error",
+                "-n many: run.steps must be an integer (got \"many\")",
+                "--set physics.restitution=1.5: physics.restitution must be in [0, 1] (got 1.5)",
+                "--add-a-sphere: spheres.[2] needs position (one sphere) or count (a group)");
+}
+
 static void test_malformed_overrides_are_one_line_each(void **state)
 {
     fixture *f = *state;
@@ -1030,6 +1048,7 @@ int main(void)
         T(test_override_can_replace_and_append_list_entries),
         T(test_unknown_override_path_is_an_error_with_a_suggestion),
         T(test_bad_override_value_is_reported_at_the_override),
+        T(test_override_messages_name_their_origin),
         T(test_malformed_overrides_are_one_line_each),
         T(test_override_making_half_a_box_reports_the_other_half_missing),
         T(test_random_placement_is_the_same_for_the_same_seed),

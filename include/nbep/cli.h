@@ -25,6 +25,8 @@ typedef struct nbep_cli {
     nbep_command cmd;
     const char *path;         /* borrowed from argv: the deck, or the run file for info */
     char **overrides;         /* owned: "PATH=VALUE" strings */
+    char **origins;           /* owned, n_overrides: what was typed for each ("-n abc",
+                               * "--steps=abc"), NULL for --set PATH=VALUE (its own text) */
     size_t n_overrides;
     const char *summary;      /* borrowed: --summary FILE, "-" = stdout, NULL = none */
     const char *resume;       /* borrowed: --resume RUN.h5, NULL = none */

@@ -16,6 +16,8 @@
 typedef struct nbep_run_request {
     const char *deck_path;
     const char *const *overrides;  /* n_overrides "key = value" texts, as --set gives them */
+    const char *const *override_origins; /* NULL, or what was typed for each (NULL: --set),
+                                          * for messages (nbep_scene_load_from) */
     size_t n_overrides;
     const char *output_path;       /* NULL: the deck's output.file */
     const char *resume;            /* NULL, or a run to continue (then output_path is unused) */

@@ -86,6 +86,13 @@ typedef struct nbep_scene {
 NBEP_MUST_CHECK nbep_status nbep_scene_load(const char *deck_path,
                                             const char *const *overrides, size_t n_overrides,
                                             nbep_scene *out, nbep_diag *d);
+/* The same, with what the user typed for each override, for its messages: origins[k] (say
+ * "-n abc" for `-n abc`, which gives the override "run.steps=abc"), or, where origins or
+ * origins[k] is NULL, "--set PATH=VALUE". */
+NBEP_MUST_CHECK nbep_status nbep_scene_load_from(const char *deck_path,
+                                                 const char *const *overrides,
+                                                 const char *const *origins, size_t n_overrides,
+                                                 nbep_scene *out, nbep_diag *d);
 void nbep_scene_fini(nbep_scene *sc);
 
 /* Pairs of spheres whose accelerations are equal (quadratic contact time) and differ
