@@ -53,6 +53,10 @@ TEST_SH := $(wildcard tests/test_*.sh)
 BENCH_SRC := $(wildcard tests/bench/bench_*.c)
 BENCH_BIN := $(BENCH_SRC:tests/bench/%.c=$(BUILD)/bench/%)
 BUILD_INFO := $(BUILD)/build_info.h
+# the deck parser's fuzz harness, replayed on the tests' decks (tests/fuzz/replay.c): built from
+# the sources scripts/fuzz.sh links, without OpenMP
+FUZZ_SRC := $(shell grep -v '^\#' tests/fuzz/sources)
+FUZZ_REPLAY := $(BUILD)/tests/fuzz_replay
 
 .PHONY: all run check test valgrind bench install clean tsan asan mutate check-programs
 all: bin/nbep
@@ -91,7 +95,7 @@ run: bin/nbep
 
 # Every test binary and shell test (those drive bin/nbep as a user would), then (VALGRIND=1)
 # the test binaries again under memcheck.
-check: bin/nbep $(TEST_BIN)
+check: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY)
 	@python3 scripts/mutate.py --stale
 	@bash scripts/run-tests.sh $(TEST_BIN) $(TEST_SH)
 ifeq ($(VALGRIND),1)
@@ -100,7 +104,13 @@ endif
 test: check
 
 # Every program make check runs, built but not run (scripts/mutate.py builds these per mutant).
-check-programs: bin/nbep $(TEST_BIN)
+check-programs: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY)
+
+$(FUZZ_REPLAY): tests/fuzz/replay.c tests/fuzz/fuzz_scene.c tests/fuzz/sources $(FUZZ_SRC) \
+		$(wildcard include/nbep/*.h src/*.h) | $(BUILD)/tests
+	$(CC) $(CSTD) -O1 -g $(WARN) -Wno-unknown-pragmas -Iinclude -Isrc $(PKG_CFLAGS) \
+		$(CFLAGS) tests/fuzz/replay.c tests/fuzz/fuzz_scene.c $(FUZZ_SRC) -o $@ \
+		$(PKG_LIBS) -lm $(LDLIBS)
 
 # Mutation testing (README "Tests"): scripted small bugs in a scratch copy, each against the
 # tests that should catch it; not part of check (it takes tens of minutes).

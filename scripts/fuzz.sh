@@ -67,9 +67,8 @@ if ! fuzzer_links; then
 fi
 
 # ---- build ----------------------------------------------------------------------------------
-# The parser's sources only (no OpenMP, HDF5 or GSL needed): the deck module and what it uses.
-src=(src/scene.c src/scene_override.c src/scene_place.c src/scene_schema.c src/scene_text.c
-     src/state.c src/util.c src/status.c)
+# The parser's sources, as tests/fuzz/sources lists them (make check links the same list).
+mapfile -t src < <(grep -v '^#' tests/fuzz/sources)
 cflags=(-std=c11 -D_POSIX_C_SOURCE=200809L -g -O1 -fno-omit-frame-pointer
         -fsanitize=address,undefined -fno-sanitize-recover=all -ffp-contract=off
         -Wall -Wextra -Iinclude -Isrc)
@@ -82,7 +81,7 @@ for s in "${src[@]}"; do
     objs+=("$o")
 done
 clang "${cflags[@]}" "${pkg_cflags[@]}" -fsanitize=fuzzer tests/fuzz/fuzz_scene.c "${objs[@]}" \
-    -o "$out/fuzz_scene" "${pkg_libs[@]}" -lm || exit 2
+    -o "$out/fuzz_scene" "${pkg_libs[@]}" -lgsl -lgslcblas -lm || exit 2
 
 # ---- seeds ----------------------------------------------------------------------------------
 rm -rf "$out/seed" && mkdir -p "$out/seed"

@@ -1,4 +1,4 @@
-/* libFuzzer harness for the deck parser, nbep_scene_load: every input is a deck, written to a
+/* libFuzzer harness for the deck parser, nbep_scene_load(_from): every input is a deck, written to a
  * scratch file (the loader takes a path) and loaded; a load must either succeed and give a
  * scene that nbep_scene_fini releases, or fail with one of its documented statuses and at
  * least one message. Anything else (a crash, a sanitizer report, a leak, a status outside
@@ -6,7 +6,9 @@
  *
  * An input may carry --set overrides too: the lines after a line "#@set" (a comment to
  * libconfig, so the deck above stays a deck) are passed as overrides, one per line, so the
- * fuzzer also explores scene_override.c.
+ * fuzzer also explores scene_override.c. Every other override comes with an origin (what a
+ * user typed for an option, nbep_scene_load_from): the override's own text behind "-x ", so
+ * that messages name labels of any length and content too.
  *
  * Built and run by scripts/fuzz.sh (clang -fsanitize=fuzzer,address,undefined); not part of
  * `make`. */
@@ -69,7 +71,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         if ((i == 0 || data[i - 1] == '\n') && memcmp(data + i, SET_MARK, mark_len) == 0)
             mark = data + i;
     char *ov_text = NULL;
-    const char *ov[MAX_OVERRIDES];
+    const char *ov[MAX_OVERRIDES], *origins[MAX_OVERRIDES];
+    char *labels[MAX_OVERRIDES] = {0};
     size_t n_ov = 0;
     if (mark) {
         deck_len = (size_t)(mark - data);
@@ -83,8 +86,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             char *nl = strchr(line, '\n');
             if (nl)
                 *nl = '\0';
-            if (*line)
+            if (*line) {
+                if (n_ov % 2 && (labels[n_ov] = malloc(strlen(line) + 4)))
+                    sprintf(labels[n_ov], "-x %s", line);
+                origins[n_ov] = labels[n_ov]; /* NULL: "--set PATH=VALUE" */
                 ov[n_ov++] = line;
+            }
             line = nl ? nl + 1 : NULL;
         }
     }
@@ -94,7 +101,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     nbep_diag_init(&d);
     nbep_scene sc;
     memset(&sc, 0xA5, sizeof sc); /* *out must be written only on success */
-    nbep_status st = nbep_scene_load(deck_path, ov, n_ov, &sc, &d);
+    nbep_status st = nbep_scene_load_from(deck_path, ov, origins, n_ov, &sc, &d);
     switch (st) {
     case NBEP_OK:
         if (d.n_errors != 0)
@@ -111,6 +118,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         abort(); /* a status nbep_scene_load does not return */
     }
     nbep_diag_fini(&d);
+    for (size_t k = 0; k < n_ov; k++)
+        free(labels[k]);
     free(ov_text);
     return 0;
 }
