@@ -294,9 +294,37 @@ void nbep_output_library_init(void)
 
 nbep_status nbep__output_openable(const char *path, int mode, const char *what, nbep_diag *d)
 {
-    if (access(path, mode) == 0)
-        return NBEP_OK;
-    const int err = errno;
-    nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot %s: %s", path, what, strerror(err));
-    return nbep_status_of_open(err);
+    if (access(path, mode) != 0) {
+        const int err = errno;
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot %s: %s", path, what,
+                      strerror(err));
+        return nbep_status_of_open(err);
+    }
+    /* the signature; < 0 (cannot tell) leaves the verdict to the open that follows */
+    if (H5Fis_hdf5(path) == 0) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot %s: not an HDF5 file", path,
+                      what);
+        return NBEP_EUSAGE;
+    }
+    return NBEP_OK;
+}
+
+int nbep__output_is_run(hid_t file, const char *path, nbep_diag *d)
+{
+    const htri_t has = H5Aexists(file, "format");
+    if (has < 0) {
+        HDF5_FAIL(d, path, "read the root attributes");
+        return -1;
+    }
+    char *format = NULL;
+    if (has && nbep__output_read_string_attr(file, path, "format", &format, d) < 0)
+        return -1;
+    const int is_run = format && strcmp(format, FORMAT_NAME) == 0;
+    if (!is_run)
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s: not an %s file (root attribute format is %s%s%s)", path,
+                      FORMAT_NAME, format ? "\"" : "missing", format ? format : "",
+                      format ? "\"" : "");
+    free(format);
+    return is_run;
 }

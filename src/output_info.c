@@ -62,24 +62,12 @@ static void print_lines(FILE *f, const char *label, const char *text)
     }
 }
 
+/* 0 when read; -1 after a message; -2 for a file that is no nbep run (a usage error). */
 static int gather_info(hid_t file, const char *path, run_info *r, nbep_diag *d)
 {
-    htri_t has = H5Aexists(file, "format");
-    if (has < 0) {
-        HDF5_FAIL(d, path, "read the root attributes");
-        return -1;
-    }
-    char *format = NULL;
-    if (!has || nbep__output_read_string_attr(file, path, "format", &format, d) < 0 ||
-        strcmp(format, FORMAT_NAME) != 0) {
-        if (!has || format)
-            nbep_diag_add(d, __FILE__, __LINE__,
-                          "nbep: %s: not an nbep-1 file (root attribute format is %s%s%s)", path,
-                          format ? "\"" : "missing", format ? format : "", format ? "\"" : "");
-        free(format);
-        return -1;
-    }
-    free(format);
+    const int is_run = nbep__output_is_run(file, path, d);
+    if (is_run <= 0)
+        return is_run == 0 ? -2 : -1;
     if (nbep__output_read_string_attr(file, path, "version", &r->version, d) < 0 ||
         nbep__output_read_string_attr(file, path, "build_flags", &r->build_flags, d) < 0 ||
         nbep__output_read_string_attr(file, path, "build_commit", &r->build_commit, d) < 0 ||
@@ -197,6 +185,6 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
             fprintf(f, "%-13snone (run interrupted or still running)\n", "summary:");
     }
     run_info_fini(&r);
-    return rc == 0 ? NBEP_OK : NBEP_EIO;
+    return rc == 0 ? NBEP_OK : rc == -2 ? NBEP_EUSAGE : NBEP_EIO;
 }
 

@@ -140,16 +140,11 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
         HDF5_FAIL(d, path, "open the run to resume it");
         goto fail;
     }
-    char *format = NULL;
-    htri_t has_format = H5Aexists(o->file, "format");
-    if (has_format <= 0 || nbep__output_read_string_attr(o->file, path, "format", &format, d) < 0 ||
-        strcmp(format, FORMAT_NAME) != 0) {
-        free(format);
-        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s is not an %s run file", path,
-                      FORMAT_NAME);
+    const int is_run = nbep__output_is_run(o->file, path, d);
+    if (is_run <= 0) {
+        st = is_run == 0 ? NBEP_EUSAGE : NBEP_EIO;
         goto fail;
     }
-    free(format);
     int same = same_bodies(o->file, path, sc, d);
     if (same < 0) {
         st = same == -2 ? NBEP_EDECK : NBEP_EIO;

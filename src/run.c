@@ -47,13 +47,21 @@ static void remove_output(const char *path)
     free(xmf);
 }
 
-static void print_human_summary(const nbep_summary *s, const char *file, nbep_status st)
+/* The end line; a resumed run (from its frame at step `from`, else from < 0) counts the steps
+ * it ran and names the step reached, which is the summary's `steps`. */
+static void print_human_summary(const nbep_summary *s, const char *file, nbep_status st,
+                                int64_t from)
 {
+    const uint64_t ran = from >= 0 && s->steps >= (uint64_t)from ? s->steps - (uint64_t)from
+                                                                  : s->steps;
+    char reached[48] = "";
+    if (from >= 0)
+        snprintf(reached, sizeof reached, " (to step %llu)", (unsigned long long)s->steps);
     fprintf(stderr,
-            "nbep: %s %llu step%s of %llu sphere%s (%s, %d thread%s) in %.3g s (%.4g steps/s); "
+            "nbep: %s %llu step%s%s of %llu sphere%s (%s, %d thread%s) in %.3g s (%.4g steps/s); "
             "%llu collision%s; energy drift %.3g; max overlap %.3g; %s\n",
-            st == NBEP_OK ? "ran" : "stopped after", (unsigned long long)s->steps,
-            s->steps == 1 ? "" : "s", (unsigned long long)s->spheres, s->spheres == 1 ? "" : "s",
+            st == NBEP_OK ? "ran" : "stopped after", (unsigned long long)ran, ran == 1 ? "" : "s",
+            reached, (unsigned long long)s->spheres, s->spheres == 1 ? "" : "s",
             s->algorithm, s->threads, s->threads == 1 ? "" : "s", s->wall_seconds,
             s->steps_per_second, (unsigned long long)s->collisions,
             s->collisions == 1 ? "" : "s", s->energy_rel_drift, s->max_overlap_rel, file);
@@ -61,7 +69,8 @@ static void print_human_summary(const nbep_summary *s, const char *file, nbep_st
 
 /* Steps sim, closes out (with the summary unless writing already failed) and reports. */
 static nbep_status step_and_close(const nbep_run_request *rq, const char *file, nbep_sim *sim,
-                                  nbep_output **out, nbep_run_result *res, nbep_diag *d)
+                                  int64_t from, nbep_output **out, nbep_run_result *res,
+                                  nbep_diag *d)
 {
     nbep_status st = nbep_sim_run(sim, d);
     nbep_sim_summary(sim, &res->summary);
@@ -76,7 +85,7 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
     if (st == NBEP_OK || st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
         st = cst == NBEP_OK ? st : cst;
     if (rq->verbose)
-        print_human_summary(&res->summary, file, st);
+        print_human_summary(&res->summary, file, st, from);
     if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
         nbep_diag_add(d, __FILE__, __LINE__,
                       "nbep: %s by SIG%s after step %llu; every frame up to it is in %s",
@@ -98,6 +107,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     nbep_output *out = NULL;
     nbep_sim *sim = NULL;
     nbep_resume resume = {0};
+    int64_t from = -1; /* the resumed frame's step */
     FILE *summary = NULL;
     /* A resumed run appends to the file it continues; output.file does not apply. */
     const char *file = rq->resume        ? rq->resume
@@ -115,6 +125,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                                 .resume = rq->resume ? &resume : NULL,
                                 .take_state = &sc.state}; /* nothing reads the scene's again */
         st = nbep_sim_create(&sc, &opt, &sim, d);
+        from = rq->resume ? resume.step : -1;
         nbep_resume_fini(&resume); /* the run has its event slots now */
         if (st != NBEP_OK) {
             nbep_status ignored = nbep_output_close(&out, NULL, d);
@@ -124,7 +135,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         }
     }
     if (st == NBEP_OK) {
-        st = step_and_close(rq, file, sim, &out, res, d);
+        st = step_and_close(rq, file, sim, from, &out, res, d);
         nbep_status sst = write_summary(&res->summary, rq->summary_path, summary, d);
         summary = NULL;
         if (st == NBEP_OK)

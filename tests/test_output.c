@@ -1023,6 +1023,7 @@ static void test_info_counts_only_the_complete_frames_of_a_run_killed_mid_frame(
     free(text);
 }
 
+/* the wrong file named is the user's mistake too (exit 2), said as what the file is not */
 static void test_info_rejects_a_file_that_is_not_hdf5(void **state)
 {
     fixture *fx = *state;
@@ -1031,8 +1032,9 @@ static void test_info_rejects_a_file_that_is_not_hdf5(void **state)
     assert_non_null(f);
     fputs("run: { steps = 1; };\n", f);
     fclose(f);
-    assert_int_equal(nbep_output_info(path, stdout, &fx->d), NBEP_EIO);
+    assert_int_equal(nbep_output_info(path, stdout, &fx->d), NBEP_EUSAGE);
     assert_one_line_naming(&fx->d, path);
+    assert_non_null(strstr(fx->d.msg[0], "not an HDF5 file"));
 }
 
 static void test_info_rejects_an_hdf5_file_without_the_nbep_1_format(void **state)
@@ -1043,9 +1045,9 @@ static void test_info_rejects_an_hdf5_file_without_the_nbep_1_format(void **stat
     hid_t f = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
     assert_true(f >= 0);
     H5Fclose(f);
-    assert_int_equal(nbep_output_info(path, stdout, &fx->d), NBEP_EIO);
+    assert_int_equal(nbep_output_info(path, stdout, &fx->d), NBEP_EUSAGE);
     assert_one_line_naming(&fx->d, path);
-    assert_non_null(strstr(fx->d.msg[0], "not an nbep-1 file"));
+    assert_non_null(strstr(fx->d.msg[0], "not an nbep-1 file (root attribute format is missing)"));
 }
 
 /* a name that is no file is the user's mistake (exit 2), said with the system's reason */

@@ -39,6 +39,14 @@ for algo in predictive naive seminaive; do
         "same_frames $tmp/$algo-whole.h5 $tmp/$algo-part.h5"
 done
 
+# the end line of a resumed run counts the steps it ran and names the step reached (the
+# summary's `steps`), as the JSON summary's steps_per_second counts the steps run
+loud=("${args[@]:1}") # args without --quiet
+bin/nbep run $deck "${loud[@]}" -n 30 -o $tmp/end-line.h5 2>/dev/null
+bin/nbep run $deck "${loud[@]}" -n 55 --resume $tmp/end-line.h5 2>$tmp/end-line.err
+check "a resumed run's end line: 'ran 25 steps (to step 55) of 400 spheres' ($(tail -n 1 $tmp/end-line.err))" \
+    "tail -n 1 $tmp/end-line.err | grep -q '^nbep: ran 25 steps (to step 55) of 400 spheres'"
+
 # the grid mode (beyond the paper) keeps horizon events in its slots: they are saved too;
 # the cells mode rebuilds its cells and slots at every frame that is a multiple of
 # output.every, and resumes from such frames only
