@@ -55,7 +55,7 @@ BENCH_BIN := $(BENCH_SRC:tests/bench/%.c=$(BUILD)/bench/%)
 BUILD_INFO := $(BUILD)/build_info.h
 # the deck parser's fuzz harness, replayed on the tests' decks (tests/fuzz/replay.c): built from
 # the sources scripts/fuzz.sh links, without OpenMP
-FUZZ_SRC := $(shell grep -v '^\#' tests/fuzz/sources)
+FUZZ_SRC := $(shell grep -v -e '^\#' -e '^[[:space:]]*$$' tests/fuzz/sources)
 FUZZ_REPLAY := $(BUILD)/tests/fuzz_replay
 
 .PHONY: all run check test valgrind bench install clean tsan asan mutate check-programs

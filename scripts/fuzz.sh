@@ -56,7 +56,7 @@ apt_install() {
 
 if ! fuzzer_links; then
     # clang brings the runtime on most releases; Debian 12 and later ship it separately.
-    apt_install clang pkg-config libconfig-dev || true
+    apt_install clang pkg-config libconfig-dev libgsl-dev || true
     if ! fuzzer_links && apt-cache show libclang-rt-dev >/dev/null 2>&1; then
         apt_install libclang-rt-dev || true
     fi
@@ -68,12 +68,12 @@ fi
 
 # ---- build ----------------------------------------------------------------------------------
 # The parser's sources, as tests/fuzz/sources lists them (make check links the same list).
-mapfile -t src < <(grep -v '^#' tests/fuzz/sources)
+mapfile -t src < <(grep -v -e '^#' -e '^[[:space:]]*$' tests/fuzz/sources)
 cflags=(-std=c11 -D_POSIX_C_SOURCE=200809L -g -O1 -fno-omit-frame-pointer
         -fsanitize=address,undefined -fno-sanitize-recover=all -ffp-contract=off
         -Wall -Wextra -Iinclude -Isrc)
-read -r -a pkg_cflags <<< "$(pkg-config --cflags libconfig)"
-read -r -a pkg_libs <<< "$(pkg-config --libs libconfig)"
+read -r -a pkg_cflags <<< "$(pkg-config --cflags libconfig gsl)"
+read -r -a pkg_libs <<< "$(pkg-config --libs libconfig gsl)"
 objs=()
 for s in "${src[@]}"; do
     o=$obj/$(basename "$s" .c).o
@@ -81,7 +81,7 @@ for s in "${src[@]}"; do
     objs+=("$o")
 done
 clang "${cflags[@]}" "${pkg_cflags[@]}" -fsanitize=fuzzer tests/fuzz/fuzz_scene.c "${objs[@]}" \
-    -o "$out/fuzz_scene" "${pkg_libs[@]}" -lgsl -lgslcblas -lm || exit 2
+    -o "$out/fuzz_scene" "${pkg_libs[@]}" -lm || exit 2
 
 # ---- seeds ----------------------------------------------------------------------------------
 rm -rf "$out/seed" && mkdir -p "$out/seed"

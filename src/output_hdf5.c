@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <hdf5.h>
@@ -292,24 +293,9 @@ void nbep_output_library_init(void)
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
 }
 
-nbep_status nbep__output_openable(const char *path, int mode, const char *what, nbep_diag *d)
-{
-    if (access(path, mode) != 0) {
-        const int err = errno;
-        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot %s: %s", path, what,
-                      strerror(err));
-        return nbep_status_of_open(err);
-    }
-    /* the signature; < 0 (cannot tell) leaves the verdict to the open that follows */
-    if (H5Fis_hdf5(path) == 0) {
-        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot %s: not an HDF5 file", path,
-                      what);
-        return NBEP_EUSAGE;
-    }
-    return NBEP_OK;
-}
-
-int nbep__output_is_run(hid_t file, const char *path, nbep_diag *d)
+/* 1 when the open file's root attribute `format` is the string FORMAT_NAME, 0 (after a line
+ * saying what it is instead) when it is another, missing or no string, -1 after a failure. */
+static int is_run(hid_t file, const char *path, nbep_diag *d)
 {
     const htri_t has = H5Aexists(file, "format");
     if (has < 0) {
@@ -317,14 +303,65 @@ int nbep__output_is_run(hid_t file, const char *path, nbep_diag *d)
         return -1;
     }
     char *format = NULL;
-    if (has && nbep__output_read_string_attr(file, path, "format", &format, d) < 0)
-        return -1;
-    const int is_run = format && strcmp(format, FORMAT_NAME) == 0;
-    if (!is_run)
+    const char *what = "missing";
+    if (has) {
+        hid_t attr = H5Aopen(file, "format", H5P_DEFAULT), type = H5I_INVALID_HID;
+        const H5T_class_t cls = attr < 0 || (type = H5Aget_type(attr)) < 0
+                                    ? H5T_NO_CLASS
+                                    : H5Tget_class(type);
+        if (cls == H5T_NO_CLASS) /* HDF5's reason, before a close clears it */
+            HDF5_FAIL(d, path, "read attribute format");
+        nbep__output_close_id(&type);
+        nbep__output_close_id(&attr);
+        if (cls == H5T_NO_CLASS)
+            return -1;
+        if (cls != H5T_STRING)
+            what = "not a string";
+        else if (nbep__output_read_string_attr(file, path, "format", &format, d) < 0)
+            return -1;
+    }
+    const int run = format && strcmp(format, FORMAT_NAME) == 0;
+    if (!run)
         nbep_diag_add(d, __FILE__, __LINE__,
                       "nbep: %s: not an %s file (root attribute format is %s%s%s)", path,
-                      FORMAT_NAME, format ? "\"" : "missing", format ? format : "",
+                      FORMAT_NAME, format ? "\"" : what, format ? format : "",
                       format ? "\"" : "");
     free(format);
-    return is_run;
+    return run;
+}
+
+nbep_status nbep__output_run_openable(const char *path, int mode, const char *what,
+                                      nbep_diag *d)
+{
+    struct stat sb;
+    int err = access(path, mode) != 0 ? errno : stat(path, &sb) != 0 ? errno : 0;
+    if (!err && !S_ISREG(sb.st_mode))
+        err = S_ISDIR(sb.st_mode) ? EISDIR : EINVAL; /* a device, a pipe: no run file */
+    if (err) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot %s: %s", path, what,
+                      err == EINVAL ? "not a regular file" : strerror(err));
+        return err == EINVAL ? NBEP_EUSAGE : nbep_status_of_open(err);
+    }
+    /* the signature; < 0 (cannot tell) leaves the verdict to the open */
+#if H5_VERSION_GE(1, 12, 0)
+    const htri_t hdf5 = H5Fis_accessible(path, H5P_DEFAULT);
+#else
+    const htri_t hdf5 = H5Fis_hdf5(path);
+#endif
+    if (hdf5 == 0) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot %s: not an HDF5 file", path,
+                      what);
+        return NBEP_EUSAGE;
+    }
+    hid_t fapl = nbep__output_fapl(false);
+    hid_t file = fapl < 0 ? H5I_INVALID_HID : H5Fopen(path, H5F_ACC_RDONLY, fapl);
+    if (file < 0) { /* HDF5's reason first: closing the fapl would clear it */
+        HDF5_FAIL(d, path, "%s", what);
+        nbep__output_close_id(&fapl);
+        return NBEP_EIO;
+    }
+    nbep__output_close_id(&fapl);
+    const int run = is_run(file, path, d);
+    nbep__output_close_id(&file);
+    return run > 0 ? NBEP_OK : run == 0 ? NBEP_EUSAGE : NBEP_EIO;
 }

@@ -116,17 +116,15 @@ bool nbep__output_xmf_room(nbep_output *o, size_t f);
 void nbep__output_hdf5_fail(nbep_diag *d, const char *file, int line, const char *path,
                             const char *what_fmt, ...) NBEP_PRINTF(5, 6);
 #define HDF5_FAIL(d, path, ...) nbep__output_hdf5_fail((d), __FILE__, __LINE__, (path), __VA_ARGS__)
-/* NBEP_OK when path may be opened with `mode` (access(2): R_OK, W_OK) and is an HDF5 file; else
- * adds "nbep: PATH: cannot WHAT: REASON" (the system's, or "not an HDF5 file") and returns
- * nbep_status_of_open's class, NBEP_EUSAGE for a file that is not HDF5. For the files a user
- * names (--resume, nbep info) before HDF5 opens them: HDF5's own failure does not always carry
- * the system's reason, and a name that is no file, or the wrong file, is a usage error, not an
- * I/O one. */
-nbep_status nbep__output_openable(const char *path, int mode, const char *what, nbep_diag *d);
-/* 1 when the open file's root attribute `format` is FORMAT_NAME; else adds one line ("nbep:
- * PATH: not an nbep-1 file (root attribute format is ...)", or HDF5's failure) and returns 0
- * for another format (a usage error: the wrong file named), -1 for a failure to read. */
-int nbep__output_is_run(hid_t file, const char *path, nbep_diag *d);
+/* NBEP_OK when path is a run file (an HDF5 file whose root attribute `format` is FORMAT_NAME)
+ * that may be opened with `mode` (access(2): R_OK, W_OK); else one line, "nbep: PATH: cannot
+ * WHAT: REASON" (the system's, "not an HDF5 file") or "nbep: PATH: not an nbep-1 file (root
+ * attribute format is ...)", and NBEP_EUSAGE for a name that is no file, a directory or the
+ * wrong file (exit 2: the user's mistake), nbep_status_of_open's class for the system's other
+ * refusals, NBEP_EIO where HDF5 fails to read it. For the files a user names (--resume, nbep
+ * info), checked read-only before they are opened for what they are for. */
+nbep_status nbep__output_run_openable(const char *path, int mode, const char *what,
+                                      nbep_diag *d);
 
 /* Releases an id (ignoring errors: failure paths) and sets it invalid. */
 void nbep__output_close_id(hid_t *id);

@@ -62,12 +62,9 @@ static void print_lines(FILE *f, const char *label, const char *text)
     }
 }
 
-/* 0 when read; -1 after a message; -2 for a file that is no nbep run (a usage error). */
+/* 0 when read (a run file: nbep__output_run_openable said so); -1 after a message. */
 static int gather_info(hid_t file, const char *path, run_info *r, nbep_diag *d)
 {
-    const int is_run = nbep__output_is_run(file, path, d);
-    if (is_run <= 0)
-        return is_run == 0 ? -2 : -1;
     if (nbep__output_read_string_attr(file, path, "version", &r->version, d) < 0 ||
         nbep__output_read_string_attr(file, path, "build_flags", &r->build_flags, d) < 0 ||
         nbep__output_read_string_attr(file, path, "build_commit", &r->build_commit, d) < 0 ||
@@ -124,7 +121,7 @@ static int gather_info(hid_t file, const char *path, run_info *r, nbep_diag *d)
 
 nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
 {
-    const nbep_status open_st = nbep__output_openable(path, R_OK, "open it", d);
+    const nbep_status open_st = nbep__output_run_openable(path, R_OK, "open it", d);
     if (open_st != NBEP_OK)
         return open_st;
     hid_t fapl = nbep__output_fapl(false);
@@ -185,6 +182,6 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
             fprintf(f, "%-13snone (run interrupted or still running)\n", "summary:");
     }
     run_info_fini(&r);
-    return rc == 0 ? NBEP_OK : rc == -2 ? NBEP_EUSAGE : NBEP_EIO;
+    return rc == 0 ? NBEP_OK : NBEP_EIO;
 }
 

@@ -124,7 +124,8 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
                                     nbep_resume *r, nbep_diag *d)
 {
     nbep_resume res = {0};
-    nbep_status st = nbep__output_openable(path, R_OK | W_OK, "open the run to resume it", d);
+    nbep_status st =
+        nbep__output_run_openable(path, R_OK | W_OK, "open the run to resume it", d);
     if (st != NBEP_OK)
         return st;
     st = NBEP_EIO;
@@ -135,16 +136,11 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
 
     hid_t fapl = nbep__output_fapl(true);
     o->file = fapl < 0 ? H5I_INVALID_HID : H5Fopen(path, H5F_ACC_RDWR, fapl);
-    nbep__output_close_id(&fapl);
-    if (o->file < 0) {
+    if (o->file < 0) /* HDF5's reason (a lock another writer holds), before a close clears it */
         HDF5_FAIL(d, path, "open the run to resume it");
+    nbep__output_close_id(&fapl);
+    if (o->file < 0)
         goto fail;
-    }
-    const int is_run = nbep__output_is_run(o->file, path, d);
-    if (is_run <= 0) {
-        st = is_run == 0 ? NBEP_EUSAGE : NBEP_EIO;
-        goto fail;
-    }
     int same = same_bodies(o->file, path, sc, d);
     if (same < 0) {
         st = same == -2 ? NBEP_EDECK : NBEP_EIO;

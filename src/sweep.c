@@ -73,9 +73,12 @@ void nbep_sweep_plan_fini(nbep_sweep_plan *p)
         return;
     free(p->deck_path);
     free(p->deck_text);
-    for (size_t k = 0; p->base && k < p->n_base; k++)
+    for (size_t k = 0; p->base && k < p->n_base; k++) {
         free(p->base[k]);
+        free(p->base_origins ? p->base_origins[k] : NULL);
+    }
     free(p->base);
+    free(p->base_origins);
     for (size_t k = 0; p->axes && k < p->n_axes; k++) {
         free(p->axes[k].key);
         for (size_t v = 0; v < p->axes[k].n_values; v++)
@@ -132,9 +135,11 @@ static nbep_status plan_create(const char *deck_path, const char *const *overrid
         return st;
     nbep_sweep_plan p = {0};
     bool oom = !(p.deck_path = strdup(deck_path)) || !(p.dir = sweep_dir_of(sc.output_file)) ||
-               !(p.base = calloc(n_overrides ? n_overrides : 1, sizeof *p.base));
+               !(p.base = calloc(n_overrides ? n_overrides : 1, sizeof *p.base)) ||
+               !(p.base_origins = calloc(n_overrides ? n_overrides : 1, sizeof *p.base_origins));
     for (size_t k = 0; !oom && k < n_overrides; k++, p.n_base++)
-        oom = !(p.base[k] = strdup(overrides[k]));
+        oom = !(p.base[k] = strdup(overrides[k])) ||
+              (origins && origins[k] && !(p.base_origins[k] = strdup(origins[k])));
     if (oom) {
         nbep_sweep_plan_fini(&p);
         nbep_scene_fini(&sc);
@@ -401,14 +406,20 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
                                                  &res->summary)) {
         has_summary = reused = true;
     } else if (st == NBEP_OK) {
-        /* as `nbep run` does it, but quiet and into the sweep's file */
+        /* as `nbep run` does it, but quiet and into the sweep's file; the command line's
+         * overrides named as typed (without room for that, as --set) */
+        const char **origins = calloc(n_ov ? n_ov : 1, sizeof *origins);
+        for (size_t k = 0; origins && p->base_origins && k < p->n_base; k++)
+            origins[k] = p->base_origins[k];
         const nbep_run_request rq = {.deck_path = p->deck_path,
                                      .overrides = (const char *const *)ov,
+                                     .override_origins = origins,
                                      .n_overrides = n_ov,
                                      .output_path = path,
                                      .stop_signal = ex->stop_signal};
         nbep_run_result rr;
         st = nbep_run(&rq, &rr, &d);
+        free(origins);
         has_summary = rr.simulated;
         res->summary = rr.summary;
         if (!has_summary) { /* a stale file of an earlier sweep must not pass for this run */

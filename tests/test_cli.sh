@@ -167,11 +167,17 @@ run_nbep run "$tmp/group.deck" -n 1 --quiet -o "$tmp/resume.h5" --resume "$tmp/n
 check "--resume of a missing file: exit 2 (got $rc)" "[ $rc = 2 ]"
 check "--resume of a missing file: one line naming it and the reason" \
     "one_line && grep -qF '$tmp/no-such.h5' '$tmp/stderr' && grep -qF 'No such file' '$tmp/stderr'"
-# the wrong file named (not HDF5; HDF5 but no nbep run): bad usage too, and left as it was
+# the wrong file named (not HDF5; HDF5 but no nbep run, in the newest format too, or with a
+# format that is no string; a directory): bad usage too, and left as it was
 printf 'not a run\n' >"$tmp/text.h5"
-/usr/bin/python3 -c "import h5py; h5py.File('$tmp/other.h5', 'w').attrs['format'] = 'other-1'"
-for f in text other; do
-    sum0=$(md5sum <"$tmp/$f.h5")
+/usr/bin/python3 -c "
+import h5py
+h5py.File('$tmp/other.h5', 'w').attrs['format'] = 'other-1'
+h5py.File('$tmp/latest.h5', 'w', libver='latest').attrs['format'] = 'other-1'
+h5py.File('$tmp/number.h5', 'w').attrs['format'] = 3"
+mkdir -p "$tmp/folder.h5"
+for f in text other latest number folder; do
+    sum0=$([ -f "$tmp/$f.h5" ] && md5sum <"$tmp/$f.h5")
     for cmd in resume info; do
         if [ $cmd = resume ]; then
             run_nbep run "$tmp/group.deck" -n 1 --quiet --resume "$tmp/$f.h5"
@@ -179,9 +185,9 @@ for f in text other; do
             run_nbep info "$tmp/$f.h5"
         fi
         check "$cmd of $f.h5 (no nbep run): exit 2, one line saying what it is (got $rc: $(head -c 200 "$tmp/stderr"))" \
-            "[ $rc = 2 ] && one_line && grep -qE '$tmp/$f.h5: (cannot .*: not an HDF5 file|not an nbep-1 file \(root attribute format is \"other-1\"\))\$' '$tmp/stderr'"
+            "[ $rc = 2 ] && one_line && grep -qE '$tmp/$f.h5: (cannot .*: (not an HDF5 file|Is a directory)|not an nbep-1 file \(root attribute format is (\"other-1\"|not a string)\))\$' '$tmp/stderr'"
     done
-    check "$f.h5 untouched by the refused resume" "[ '$(md5sum <"$tmp/$f.h5")' = '$sum0' ]"
+    [ -f "$tmp/$f.h5" ] && check "$f.h5 untouched by the refused resume" "[ '$(md5sum <"$tmp/$f.h5")' = '$sum0' ]"
 done
 
 # ---- threads: what runs, in a serial build too -------------------------------------------------
