@@ -441,6 +441,16 @@ MUTANTS = [
      "row.collisions = c[NBEP_COUNTER_SPHERE_COLLISIONS];", SIM + ["test_output"], None),
     ("counter-predict-checks", "src/algo_predictive.c", "cnt->c[NBEP_COUNTER_CHECKS]++; /* the paper's check() */",
      "/* check() not counted */", SIM, None),
+    # ---- the command line and the files a user names ----
+    ("override-origin-ignored", "src/scene.c", "    if (origins && origins[k])\n        return strdup(origins[k]);",
+     "    (void)origins;", ["test_scene", "tests/test_cli.sh"], None),
+    ("run-file-format-unchecked", "src/output_hdf5.c", "    const int run = is_run(file, path, d);",
+     "    const int run = 1;", ["test_output", "tests/test_cli.sh"], None),
+    ("run-file-directory-passes", "src/output_hdf5.c", "    if (!err && !S_ISREG(sb.st_mode))",
+     "    if (0)", ["tests/test_cli.sh"], None),
+    ("resume-end-line-counts-from-0", "src/run.c", "    const uint64_t ran = from >= 0 && s->steps >= (uint64_t)from ? s->steps - (uint64_t)from",
+     "    const uint64_t ran = 0 && s->steps >= (uint64_t)from ? s->steps - (uint64_t)from",
+     ["tests/test_resume.sh"], None),
 ]
 
 
@@ -455,6 +465,24 @@ def run(cmd, cwd, timeout=None, log=None):
 
 def test_path(name):
     return name if name.endswith(".sh") else "build/tests/" + name
+
+
+def copy_tree(dst):
+    """The tree as git sees it into dst: tracked files and untracked ones git does not ignore,
+    as they are in the working tree (not build outputs, nor scratch folders a developer keeps
+    in ignored paths); without git, everything but .git, build and bin."""
+    listed = subprocess.run(["git", "ls-files", "-z", "-c", "-o", "--exclude-standard"],
+                            cwd=ROOT, capture_output=True)
+    if listed.returncode != 0:
+        shutil.copytree(ROOT, dst, dirs_exist_ok=True,
+                        ignore=shutil.ignore_patterns(".git", "build", "bin"))
+        return
+    for rel in sorted(set(listed.stdout.decode().split("\0")) - {""}):
+        src = os.path.join(ROOT, rel)
+        if not os.path.lexists(src):  # tracked, deleted in the working tree
+            continue
+        os.makedirs(os.path.dirname(os.path.join(dst, rel)), exist_ok=True)
+        shutil.copy2(src, os.path.join(dst, rel), follow_symlinks=False)
 
 
 def main():
@@ -497,8 +525,7 @@ def main():
 
     scratch = tempfile.mkdtemp(prefix="nbep-mutate-")
     try:
-        shutil.copytree(ROOT, scratch, dirs_exist_ok=True,
-                        ignore=shutil.ignore_patterns(".git", "build", "bin"))
+        copy_tree(scratch)
         print(f"mutate: building the unmutated copy in {scratch}", flush=True)
         if run(["make", f"-j{a.jobs}", "MPI=0", "bin/nbep", "check-programs"], scratch) != 0:
             sys.exit("mutate: the unmutated tree does not build")
