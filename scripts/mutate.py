@@ -451,6 +451,10 @@ MUTANTS = [
     ("resume-end-line-counts-from-0", "src/run.c", "    const uint64_t ran = from >= 0 && s->steps >= (uint64_t)from ? s->steps - (uint64_t)from",
      "    const uint64_t ran = 0 && s->steps >= (uint64_t)from ? s->steps - (uint64_t)from",
      ["tests/test_resume.sh"], None),
+    ("real-text-17-digits", "src/summary.c", "    for (int digits = 1; digits <= 17; digits++) {",
+     "    for (int digits = 17; digits <= 17; digits++) {", ["test_output"], None),
+    ("real-text-exponent-kept", "src/summary.c", "    if (strpbrk(buf, \"eE\") && fabs(v) >= 1.0 && fabs(v) < 1e15 && v == floor(v))",
+     "    if (0)", ["test_output"], None),
 ]
 
 

@@ -10,19 +10,14 @@
 
 #include <hdf5.h>
 
+#include "nbep/summary.h"
 #include "output_impl.h"
 
-/* x with the fewest of 15, 16 or 17 significant digits that read back as x: "0.9", not
- * "0.90000000000000002", yet two different values never print alike. */
-static const char *human_double(double x, char buf[32])
+/* x in the fewest digits that read back as x: "0.9", not "0.90000000000000002", yet two
+ * different values never print alike (nbep_format_real, without JSON's ".0"). */
+static const char *human_double(double x, char buf[NBEP_REAL_TEXT_MAX])
 {
-    for (int digits = 15; digits < 17; digits++) {
-        snprintf(buf, 32, "%.*g", digits, x);
-        if (strtod(buf, NULL) == x)
-            return buf;
-    }
-    snprintf(buf, 32, "%.17g", x);
-    return buf;
+    return nbep_format_real(x, false, buf);
 }
 
 /* Everything `nbep info` prints, gathered before printing so that a bad file prints nothing

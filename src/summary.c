@@ -69,11 +69,71 @@ static json_t *summary_object(const nbep_summary *s)
     return o;
 }
 
+const char *nbep_format_real(double v, bool mark_real, char buf[NBEP_REAL_TEXT_MAX])
+{
+    for (int digits = 1; digits <= 17; digits++) {
+        snprintf(buf, NBEP_REAL_TEXT_MAX, "%.*g", digits, v);
+        if (strtod(buf, NULL) == v)
+            break;
+    }
+    /* %g takes an exponent from the digits' count up; such a whole number is exact in a
+     * double below 2^53, so %.0f writes the same value */
+    if (strpbrk(buf, "eE") && fabs(v) >= 1.0 && fabs(v) < 1e15 && v == floor(v))
+        snprintf(buf, NBEP_REAL_TEXT_MAX, "%.0f", v);
+    if (mark_real && !strpbrk(buf, ".eEn")) /* (n: inf and nan, which JSON never gets) */
+        strcat(buf, ".0");
+    return buf;
+}
+
+/* jansson's text with every real number written as nbep_format_real does (jansson writes 17
+ * digits, 0.050000000000000003 for 0.05; the same double either way, so every value still
+ * reads back bit for bit); strings and integers as they are. NULL when out of memory. */
+static char *shorten_reals(const char *text)
+{
+    /* a number does not grow (jansson's has 17 digits and the same form): room to spare */
+    char *out = malloc(2 * strlen(text) + 1);
+    if (!out)
+        return NULL;
+    char *w = out;
+    for (const char *r = text; *r;) {
+        if (*r == '"') { /* a string, escapes and all */
+            *w++ = *r++;
+            while (*r && *r != '"') {
+                if (*r == '\\' && r[1])
+                    *w++ = *r++;
+                *w++ = *r++;
+            }
+            if (*r)
+                *w++ = *r++;
+            continue;
+        }
+        if (*r != '-' && !(*r >= '0' && *r <= '9')) {
+            *w++ = *r++;
+            continue;
+        }
+        const size_t len = strspn(r, "+-0123456789.eE");
+        if (memchr(r, '.', len) || memchr(r, 'e', len) || memchr(r, 'E', len)) {
+            char real[NBEP_REAL_TEXT_MAX];
+            nbep_format_real(strtod(r, NULL), true, real);
+            memcpy(w, real, strlen(real));
+            w += strlen(real);
+        } else {
+            memcpy(w, r, len);
+            w += len;
+        }
+        r += len;
+    }
+    *w = '\0';
+    return out;
+}
+
 char *nbep_summary_to_json(const nbep_summary *s)
 {
     json_t *o = summary_object(s);
-    char *text = o ? json_dumps(o, DUMP_FLAGS) : NULL;
+    char *dumped = o ? json_dumps(o, DUMP_FLAGS) : NULL;
     json_decref(o);
+    char *text = dumped ? shorten_reals(dumped) : NULL;
+    free(dumped);
     char *line = text ? malloc(strlen(text) + 2) : NULL;
     if (line) {
         strcpy(line, text);

@@ -29,6 +29,7 @@
 #include "nbep/output_sweep.h"
 #include "nbep/output_xdmf.h"
 #include "nbep/run.h"
+#include "nbep/summary.h"
 
 #ifdef NBEP_HAVE_MPI
 #include <mpi.h>
@@ -518,6 +519,7 @@ static nbep_status write_csv(const char *path, const nbep_table *t, nbep_diag *d
         free(tmp);
         return NBEP_EIO;
     }
+    char real[NBEP_REAL_TEXT_MAX];
     for (size_t k = 0; k < t->n_cols; k++) {
         fputs(k ? "," : "", f);
         csv_text(f, t->cols[k].name);
@@ -532,7 +534,7 @@ static nbep_status write_csv(const char *path, const nbep_table *t, nbep_diag *d
             if (c->kind == NBEP_TABLE_INT)
                 fprintf(f, "%" PRId64, c->i[row]);
             else if (c->kind == NBEP_TABLE_REAL)
-                fprintf(f, "%.17g", c->r[row]);
+                fputs(nbep_format_real(c->r[row], false, real), f);
             else
                 csv_text(f, c->s[row] ? c->s[row] : "");
         }
@@ -841,14 +843,17 @@ static nbep_status write_sweep_json(const char *where, const nbep_sweep_plan *p,
             NBEP_VERSION);
     for (const char *c = p->dir; *c; c++)
         fprintf(f, *c == '"' || *c == '\\' ? "\\%c" : "%c", *c);
+    char r[4][NBEP_REAL_TEXT_MAX];
     fprintf(f,
             "\", \"runs\": %zu, \"ok\": %zu, \"failed\": %zu, \"interrupted\": %zu, "
-            "\"not_run\": %zu, \"reused\": %zu, \"ranks\": %d, \"wall_seconds\": %.17g, "
-            "\"runs_per_minute\": %.17g, \"sim_seconds\": %.17g, "
-            "\"overhead_seconds_per_run\": %.17g}\n",
-            p->n_runs, s->ok, s->failed, s->interrupted, s->not_run, s->reused, n_ranks, wall,
-            wall > 0.0 ? 60.0 * n / wall : 0.0, s->sim_seconds,
-            n > 0.0 ? ((double)n_ranks * wall - s->sim_seconds) / n : 0.0);
+            "\"not_run\": %zu, \"reused\": %zu, \"ranks\": %d, \"wall_seconds\": %s, "
+            "\"runs_per_minute\": %s, \"sim_seconds\": %s, \"overhead_seconds_per_run\": %s}\n",
+            p->n_runs, s->ok, s->failed, s->interrupted, s->not_run, s->reused, n_ranks,
+            nbep_format_real(wall, true, r[0]),
+            nbep_format_real(wall > 0.0 ? 60.0 * n / wall : 0.0, true, r[1]),
+            nbep_format_real(s->sim_seconds, true, r[2]),
+            nbep_format_real(n > 0.0 ? ((double)n_ranks * wall - s->sim_seconds) / n : 0.0, true,
+                             r[3]));
     int bad = ferror(f);
     bad |= f == stdout ? fflush(f) != 0 : fclose(f) != 0;
     if (bad)

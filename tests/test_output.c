@@ -1068,11 +1068,11 @@ static const char known_json[] =
     "{\"format\": \"nbep-summary-1\", \"version\": \"" NBEP_VERSION "\", "
     "\"algorithm\": \"predictive\", \"threads\": 2, \"spheres\": 4096, \"planes\": 6, "
     "\"steps\": 1000, \"dt\": 0.001, \"setup_seconds\": 0.25, \"wall_seconds\": 1.5, "
-    "\"steps_per_second\": 666.66666666666663, \"checks\": 123456789012, "
+    "\"steps_per_second\": 666.6666666666666, \"checks\": 123456789012, "
     "\"predictions\": 987654321, \"collisions\": 4242, \"sphere_collisions\": 4000, "
     "\"plane_collisions\": 242, \"quiet_steps\": 950, \"energy_initial\": -1234.5, "
     "\"energy_final\": -1234.25, \"energy_rel_drift\": -0.0002025111381125962, "
-    "\"max_overlap\": 2.9999999999999998e-14, \"max_overlap_rel\": 5.9999999999999997e-13, "
+    "\"max_overlap\": 3e-14, \"max_overlap_rel\": 6e-13, "
     "\"peak_rss_bytes\": 52428800, \"pressure\": null}\n";
 
 static void test_json_of_a_known_summary_is_the_expected_text(void **state)
@@ -1136,6 +1136,37 @@ static void test_json_escapes_quotes_backslashes_and_control_characters(void **s
     assert_non_null(json);
     assert_non_null(strstr(json, "\"algorithm\": \"a\\\"b\\\\c\\td\", \"threads\""));
     free(json);
+}
+
+/* Reals are written in the fewest digits that read back exactly (a double has one shortest
+ * such text of at most 17 digits): 0.05, not jansson's 0.050000000000000003; a whole number
+ * as 48000.0 (a real stays a real, and no exponent below 10^15); 17 digits where they are
+ * needed; every value reads back bit for bit. */
+static void test_json_writes_reals_in_their_shortest_exact_form(void **state)
+{
+    (void)state;
+    static const struct {
+        double v;
+        const char *text;
+    } cases[] = {
+        {0.05, "0.05"},       {48000.0, "48000.0"}, {-1.0, "-1.0"},
+        {1e20, "1e+20"},      {0.1 + 0.2, "0.30000000000000004"},
+        {1.0 / 3.0, "0.3333333333333333"}, {2.5e-300, "2.5e-300"}, {123456789.125, "123456789.125"},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof *cases; k++) {
+        nbep_summary s = known_summary();
+        s.dt = cases[k].v;
+        char *json = nbep_summary_to_json(&s);
+        assert_non_null(json);
+        char want[64];
+        snprintf(want, sizeof want, "\"dt\": %s, ", cases[k].text);
+        if (!strstr(json, want))
+            fail_msg("dt = %.17g: wanted %s in %s", cases[k].v, want, json);
+        nbep_summary back;
+        assert_true(nbep_summary_from_json(json, &back));
+        assert_true(back.dt == cases[k].v);
+        free(json);
+    }
 }
 
 static void test_json_keeps_every_digit_of_a_double(void **state)
@@ -1208,6 +1239,7 @@ int main(void)
         T(test_json_written_to_a_stream_is_one_line_and_counts_its_bytes),
         T(test_json_parses_with_spec_keys_in_spec_order),
         T(test_json_escapes_quotes_backslashes_and_control_characters),
+        T(test_json_writes_reals_in_their_shortest_exact_form),
         T(test_json_keeps_every_digit_of_a_double),
     };
 #undef T

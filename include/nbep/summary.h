@@ -57,9 +57,17 @@ typedef struct nbep_summary {
 #undef NBEP_X_MEMBER
 } nbep_summary;
 
+/* The text of v in the fewest significant digits (at most 17) that read back as v exactly
+ * ("0.05", not "0.050000000000000003"; two different values never print alike), with %g's
+ * exponent but none for a whole number below 10^15 ("48000", not "4.8e+04"), and where
+ * mark_real, a decimal point or an exponent ("48000.0": a real stays a real in JSON). Into
+ * buf; returns it. Every real nbep writes as text (JSON summaries, summary.csv, nbep info). */
+#define NBEP_REAL_TEXT_MAX 32
+const char *nbep_format_real(double v, bool mark_real, char buf[NBEP_REAL_TEXT_MAX]);
+
 /* Writes the summary as one JSON object ("format": "nbep-summary-1", "version", then the
- * table's keys in order) followed by a newline. Returns bytes written or -1 on a stream
- * error. */
+ * table's keys in order, reals as nbep_format_real writes them) followed by a newline.
+ * Returns bytes written or -1 on a stream error. */
 int nbep_summary_write_json(const nbep_summary *s, FILE *f);
 /* The same into a malloc'd string (caller frees); NULL on allocation failure. */
 char *nbep_summary_to_json(const nbep_summary *s);
