@@ -331,7 +331,7 @@ static int is_run(hid_t file, const char *path, nbep_diag *d)
 }
 
 nbep_status nbep__output_run_openable(const char *path, int mode, const char *what,
-                                      nbep_diag *d)
+                                      hid_t *file_out, nbep_diag *d)
 {
     struct stat sb;
     int err = access(path, mode) != 0 ? errno : stat(path, &sb) != 0 ? errno : 0;
@@ -362,6 +362,9 @@ nbep_status nbep__output_run_openable(const char *path, int mode, const char *wh
     }
     nbep__output_close_id(&fapl);
     const int run = is_run(file, path, d);
-    nbep__output_close_id(&file);
+    if (run > 0 && file_out)
+        *file_out = file;
+    else
+        nbep__output_close_id(&file);
     return run > 0 ? NBEP_OK : run == 0 ? NBEP_EUSAGE : NBEP_EIO;
 }

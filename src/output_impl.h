@@ -122,9 +122,10 @@ void nbep__output_hdf5_fail(nbep_diag *d, const char *file, int line, const char
  * attribute format is ...)", and NBEP_EUSAGE for a name that is no file, a directory or the
  * wrong file (exit 2: the user's mistake), nbep_status_of_open's class for the system's other
  * refusals, NBEP_EIO where HDF5 fails to read it. For the files a user names (--resume, nbep
- * info), checked read-only before they are opened for what they are for. */
+ * info), checked read-only before they are opened for what they are for: *file (when file is
+ * not NULL) is then the file open read-only, for the caller to close, else it is closed. */
 nbep_status nbep__output_run_openable(const char *path, int mode, const char *what,
-                                      nbep_diag *d);
+                                      hid_t *file, nbep_diag *d);
 
 /* Releases an id (ignoring errors: failure paths) and sets it invalid. */
 void nbep__output_close_id(hid_t *id);

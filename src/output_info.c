@@ -116,21 +116,10 @@ static int gather_info(hid_t file, const char *path, run_info *r, nbep_diag *d)
 
 nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
 {
-    const nbep_status open_st = nbep__output_run_openable(path, R_OK, "open it", d);
+    hid_t file = H5I_INVALID_HID;
+    const nbep_status open_st = nbep__output_run_openable(path, R_OK, "open it", &file, d);
     if (open_st != NBEP_OK)
         return open_st;
-    hid_t fapl = nbep__output_fapl(false);
-    if (fapl < 0) {
-        HDF5_FAIL(d, path, "set up file access properties");
-        return NBEP_EIO;
-    }
-    hid_t file = H5Fopen(path, H5F_ACC_RDONLY, fapl);
-    if (file < 0) {
-        HDF5_FAIL(d, path, "open as an HDF5 file");
-        nbep__output_close_id(&fapl);
-        return NBEP_EIO;
-    }
-    nbep__output_close_id(&fapl);
     run_info r = {0};
     int rc = gather_info(file, path, &r, d);
     if (H5Fclose(file) < 0 && rc == 0) {

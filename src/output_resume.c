@@ -125,7 +125,7 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
 {
     nbep_resume res = {0};
     nbep_status st =
-        nbep__output_run_openable(path, R_OK | W_OK, "open the run to resume it", d);
+        nbep__output_run_openable(path, R_OK | W_OK, "open the run to resume it", NULL, d);
     if (st != NBEP_OK)
         return st;
     st = NBEP_EIO;
