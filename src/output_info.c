@@ -13,12 +13,6 @@
 #include "nbep/summary.h"
 #include "output_impl.h"
 
-/* x in the fewest digits that read back as x: "0.9", not "0.90000000000000002", yet two
- * different values never print alike (nbep_format_real, without JSON's ".0"). */
-static const char *human_double(double x, char buf[NBEP_REAL_TEXT_MAX])
-{
-    return nbep_format_real(x, false, buf);
-}
 
 /* Everything `nbep info` prints, gathered before printing so that a bad file prints nothing
  * but its one error line. */
@@ -135,13 +129,14 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
         fprintf(f, "%-13s%llu\n", "spheres:", (unsigned long long)r.spheres);
         fprintf(f, "%-13s%llu\n", "planes:", (unsigned long long)r.planes);
         fprintf(f, "%-13s%" PRIu64 "\n", "steps asked:", r.steps);
-        char b0[32], b1[32], b2[32];
-        fprintf(f, "%-13s%s\n", "dt:", human_double(r.dt, b0));
+        char b0[NBEP_REAL_TEXT_MAX], b1[NBEP_REAL_TEXT_MAX], b2[NBEP_REAL_TEXT_MAX];
+        fprintf(f, "%-13s%s\n", "dt:", nbep_format_real(r.dt, false, b0));
         fprintf(f, "%-13s%" PRId64 "\n", "threads:", r.threads);
         fprintf(f, "%-13s%" PRIu64 "\n", "seed:", r.seed);
-        fprintf(f, "%-13s%s\n", "restitution:", human_double(r.restitution, b0));
-        fprintf(f, "%-13s[%s, %s, %s]\n", "gravity:", human_double(r.gravity[0], b0),
-                human_double(r.gravity[1], b1), human_double(r.gravity[2], b2));
+        fprintf(f, "%-13s%s\n", "restitution:", nbep_format_real(r.restitution, false, b0));
+        fprintf(f, "%-13s[%s, %s, %s]\n", "gravity:",
+                nbep_format_real(r.gravity[0], false, b0), nbep_format_real(r.gravity[1], false, b1),
+                nbep_format_real(r.gravity[2], false, b2));
         if (r.periodic[0] || r.periodic[1] || r.periodic[2])
             fprintf(f, "%-13s%s%s%s\n", "periodic:", r.periodic[0] ? "x" : "",
                     r.periodic[1] ? "y" : "", r.periodic[2] ? "z" : "");
@@ -150,7 +145,7 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
         fprintf(f, "%-13s%" PRIu64, "frames:", r.frames);
         if (r.frames > 0)
             fprintf(f, " (last: step %" PRId64 ", time %s)", r.last_step,
-                    human_double(r.last_time, b0));
+                    nbep_format_real(r.last_time, false, b0));
         if (r.frames_more)
             fprintf(f, ", and %llu incomplete (its write was cut short: a kill, or a full disk)",
                     (unsigned long long)r.frames_more);
