@@ -135,7 +135,8 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
         fprintf(f, "%-13s%" PRIu64 "\n", "seed:", r.seed);
         fprintf(f, "%-13s%s\n", "restitution:", nbep_format_real(r.restitution, false, b0));
         fprintf(f, "%-13s[%s, %s, %s]\n", "gravity:",
-                nbep_format_real(r.gravity[0], false, b0), nbep_format_real(r.gravity[1], false, b1),
+                nbep_format_real(r.gravity[0], false, b0),
+                nbep_format_real(r.gravity[1], false, b1),
                 nbep_format_real(r.gravity[2], false, b2));
         if (r.periodic[0] || r.periodic[1] || r.periodic[2])
             fprintf(f, "%-13s%s%s%s\n", "periodic:", r.periodic[0] ? "x" : "",
