@@ -137,7 +137,8 @@ static nbep_status plan_create(const char *deck_path, const char *const *overrid
     nbep_sweep_plan p = {0};
     bool oom = !(p.deck_path = strdup(deck_path)) || !(p.dir = sweep_dir_of(sc.output_file)) ||
                !(p.base = calloc(n_overrides ? n_overrides : 1, sizeof *p.base)) ||
-               !(p.base_origins = calloc(n_overrides ? n_overrides : 1, sizeof *p.base_origins));
+               !(p.base_origins =
+                     calloc(n_overrides + sc.sweep_n_axes + 1, sizeof *p.base_origins));
     for (size_t k = 0; !oom && k < n_overrides; k++, p.n_base++)
         oom = !(p.base[k] = strdup(overrides[k])) ||
               (origins && origins[k] && !(p.base_origins[k] = strdup(origins[k])));
@@ -212,7 +213,7 @@ void nbep_sweep_overrides_free(char **ov, size_t n)
 nbep_status nbep_sweep_run_overrides(const nbep_sweep_plan *p, size_t run, char ***out,
                                      size_t *n, nbep_diag *d)
 {
-    size_t total = p->n_base + p->n_axes + 1, k = 0;
+    size_t total = p->n_base + p->n_axes + 1, k = 0; /* as many as p->base_origins has */
     char **ov = calloc(total, sizeof *ov);
     bool oom = !ov;
     for (size_t i = 0; !oom && i < p->n_base; i++)
@@ -408,19 +409,15 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
         has_summary = reused = true;
     } else if (st == NBEP_OK) {
         /* as `nbep run` does it, but quiet and into the sweep's file; the command line's
-         * overrides named as typed (without room for that, as --set) */
-        const char **origins = calloc(n_ov ? n_ov : 1, sizeof *origins);
-        for (size_t k = 0; origins && p->base_origins && k < p->n_base; k++)
-            origins[k] = p->base_origins[k];
+         * overrides named as typed */
         const nbep_run_request rq = {.deck_path = p->deck_path,
                                      .overrides = (const char *const *)ov,
-                                     .override_origins = origins,
+                                     .override_origins = (const char *const *)p->base_origins,
                                      .n_overrides = n_ov,
                                      .output_path = path,
                                      .stop_signal = ex->stop_signal};
         nbep_run_result rr;
         st = nbep_run(&rq, &rr, &d);
-        free(origins);
         has_summary = rr.simulated;
         res->summary = rr.summary;
         if (!has_summary) { /* a stale file of an earlier sweep must not pass for this run */

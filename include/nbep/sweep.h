@@ -57,8 +57,9 @@ typedef struct nbep_sweep_plan {
     char *deck_path;              /* owned copy */
     char *deck_text;              /* owned: the deck file's text (for summary.h5) */
     char **base;                  /* owned: the command line's overrides, in order */
-    char **base_origins;          /* owned, n_base: what was typed for each, NULL for --set
-                                   * (messages, nbep_scene_load_from); NULL: all --set */
+    char **base_origins;          /* owned: what was typed for each, NULL for --set (messages,
+                                   * nbep_scene_load_from), then NULL for each axis and the
+                                   * seed: one entry for every override of a run */
     size_t n_base;
     size_t n_axes;
     nbep_sweep_axis *axes;        /* owned: taken over from the deck's scene */
