@@ -112,6 +112,42 @@ static inline nbep_scene *nbep_test_fluid(size_t side, double phi, uint64_t step
     return sc;
 }
 
+/* The box [0, L]^3, periodic along every axis (no planes). */
+static inline void nbep_test_set_periodic_box(nbep_scene *sc, double L)
+{
+    sc->has_box = true;
+    sc->box_max = (nbep_vec3){L, L, L};
+    for (int k = 0; k < 3; k++) {
+        sc->periodic[k] = true;
+        sc->state.period[k] = L; /* as the deck loader sets it */
+    }
+}
+
+/* A hard-sphere fluid at packing fraction phi in a fully periodic cube, cells mode: side^3
+ * spheres of diameter 1 and mass 1 on a simple cubic lattice filling the box, speeds sqrt(3)
+ * (kT = 1) in random directions (from seed) with the mean removed (zero total momentum). */
+static inline nbep_scene *nbep_test_periodic_fluid(size_t side, double phi, uint64_t steps,
+                                                   double dt, uint64_t seed)
+{
+    size_t n = side * side * side;
+    const double L = cbrt((double)n * (4.0 * atan(1.0)) / 6.0 / phi), a = L / (double)side;
+    nbep_scene *sc = nbep_test_scene_new(n, 0, "predictive", steps, dt);
+    sc->neighbors_cells = true;
+    nbep_test_set_periodic_box(sc, L);
+    uint64_t x = 0x9E3779B97F4A7C15u ^ (seed * 0xD1B54A32D192ED03u);
+    nbep_vec3 mean = {0.0, 0.0, 0.0};
+    for (size_t i = 0; i < n; i++) {
+        nbep_vec3 v = nbep_test_random_velocity(&x, sqrt(3.0));
+        mean = nbep_vec3_add(mean, nbep_vec3_scale(v, 1.0 / (double)n));
+        nbep_vec3 p = {a * ((double)(i % side) + 0.5), a * ((double)(i / side % side) + 0.5),
+                       a * ((double)(i / side / side) + 0.5)};
+        nbep_test_set_sphere(sc, i, p, v, 0.5, 1.0, (nbep_vec3){0.0, 0.0, 0.0});
+    }
+    for (size_t i = 0; i < n; i++)
+        sc->state.vel[i] = nbep_vec3_sub(sc->state.vel[i], mean);
+    return sc;
+}
+
 /* ---- runs ------------------------------------------------------------------------------------ */
 
 /* Smaller problems under valgrind (scripts/run-tests.sh sets NBEP_TEST_SCALE=small). */

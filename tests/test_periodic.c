@@ -145,12 +145,7 @@ static nbep_scene *periodic_scene(size_t n, double L, uint64_t steps, double dt)
 {
     nbep_scene *sc = nbep_test_scene_new(n, 0, "predictive", steps, dt);
     sc->neighbors_cells = cells_mode;
-    sc->has_box = true;
-    sc->box_max = (nbep_vec3){L, L, L};
-    for (int k = 0; k < 3; k++) {
-        sc->periodic[k] = true;
-        sc->state.period[k] = L; /* as the deck loader sets it */
-    }
+    nbep_test_set_periodic_box(sc, L);
     return sc;
 }
 
@@ -377,26 +372,12 @@ static void test_a_list_is_centred_ahead_of_a_straight_flight(void **state)
     nbep_test_scene_free(&sc);
 }
 
-/* A hard-sphere fluid at packing fraction phi: side^3 spheres of diameter 1 and mass 1 on a
- * simple cubic lattice filling a periodic box, speeds sqrt(3) (kT = 1) in random directions
- * with the mean removed (zero total momentum). */
+/* nbep_test_periodic_fluid in cells mode or not (cells_mode). */
 static nbep_scene *periodic_fluid(size_t side, double phi, uint64_t steps, double dt,
                                   uint64_t seed)
 {
-    size_t n = side * side * side;
-    const double L = cbrt((double)n * (4.0 * atan(1.0)) / 6.0 / phi), a = L / (double)side;
-    nbep_scene *sc = periodic_scene(n, L, steps, dt);
-    uint64_t x = 0x9E3779B97F4A7C15u ^ (seed * 0xD1B54A32D192ED03u);
-    nbep_vec3 mean = ZERO;
-    for (size_t i = 0; i < n; i++) {
-        nbep_vec3 v = nbep_test_random_velocity(&x, sqrt(3.0));
-        mean = nbep_vec3_add(mean, nbep_vec3_scale(v, 1.0 / (double)n));
-        nbep_vec3 p = {a * ((double)(i % side) + 0.5), a * ((double)(i / side % side) + 0.5),
-                       a * ((double)(i / side / side) + 0.5)};
-        nbep_test_set_sphere(sc, i, p, v, 0.5, 1.0, ZERO);
-    }
-    for (size_t i = 0; i < n; i++)
-        sc->state.vel[i] = nbep_vec3_sub(sc->state.vel[i], mean);
+    nbep_scene *sc = nbep_test_periodic_fluid(side, phi, steps, dt, seed);
+    sc->neighbors_cells = cells_mode;
     return sc;
 }
 
