@@ -28,6 +28,8 @@ SIM = ["test_run_contract", "test_sim", "test_extremes"]
 PRED = ["test_predict"]
 CELLS = ["test_sim"]  # its cells-mode tests: exact against all pairs, dense fluid, pile
 TEAM = ["test_periodic"]  # the team loop's tests: one thread's frames, counts and sums
+# the window's apartness: checked at each place's joining (deterministic), then the results
+APART = ["test_evloop_apart", "test_periodic"]
 GRAN = ["test_granular"]
 ORDER = ["test_order"]  # run.order = "step", the paper's step
 
@@ -309,12 +311,18 @@ MUTANTS = [
     ("team-handled-by-two", "src/evloop.c", "    for (int t = 1; t < e->crew; t++)\n        if (atomic_load_explicit(&e->ws[t][k].place",
      "    for (int t = 1; t < 2; t++)\n        if (atomic_load_explicit(&e->ws[t][k].place", TEAM, None),
     ("team-apart-unwrapped", "src/evloop.c", "        dx = dx > hx ? lx - dx : dx; /* half",
-     "        dx = dx; /* half", TEAM, None),
+     "        dx = dx; /* half", APART, None),
+    ("team-apart-other-unwrapped", "src/evloop.c", "        ex = ex > hx ? lx - ex : ex;",
+     "        ex = ex;", APART, None),
     ("team-apart-halved", "src/evloop.c", "    const float near2 = e->near2;",
-     "    const float near2 = 0.01f * e->near2;", TEAM, None),
+     "    const float near2 = 0.01f * e->near2;", APART, None),
     ("team-walks-not-apart", "src/evloop.c",
      "    return e->batch_walks[a] && e->batch_walks[k] &&\n           !cells_apart(e, e->batch_cell[a], e->batch_cell[k]);",
-     "    return false;", TEAM, None),
+     "    return false;", APART, None),
+    ("team-walks-3-cells-apart", "src/evloop.c", "        if (d >= 4)\n            return true;",
+     "        if (d >= 3)\n            return true;", APART, None),
+    ("team-cells-unwrapped", "src/evloop.c",
+     "        if (e->cells.periodic[k] && d > e->cells.dim[k] - d)", "        if (0)", APART, None),
     ("team-undo-nothing", "src/evloop.c",
      "        ops->restore(uk, w->kept_id[k], &w->kept_motion[k]);\n        nbep_feq_put(e->q, w->kept_id[k], w->kept_slot[k]);",
      "        (void)0;", TEAM, None),
@@ -335,7 +343,7 @@ MUTANTS = [
     ("team-intruder-taken", "src/evloop.c", "        if (!nbep_calendar_before(e->cur, c)) {",
      "        if (0) {", TEAM, None),
     ("team-ring-half-unseen", "src/evloop.c", "    return near_span(e, a, b, 0, 2 * WINDOW);",
-     "    return near_span(e, a, b, 0, WINDOW);", TEAM, None),
+     "    return near_span(e, a, b, 0, WINDOW);", APART, None),
     ("team-merge-drops-counts", "src/algo_predictive.c", "        x->cnt->c[k] += h->cnt->c[k];",
      "        (void)0;", TEAM, None),
     ("team-merge-drops-virial", "src/algo_predictive.c", "    a->virial += b->virial;",

@@ -20,6 +20,13 @@
  * time a sphere takes to fly its own diameter. */
 #define CUT_SLACK 1e-6
 
+/* A look at the window each time a place joins it (places head .. tail - 1 in flight, place
+ * tail joining): tests/test_evloop_apart.c compiles its own copy of this file with a check of
+ * the places' apartness by means of its own; a build of nbep has nothing here. */
+#ifndef NBEP_EVLOOP_JOIN_HOOK
+#define NBEP_EVLOOP_JOIN_HOOK(e) ((void)0)
+#endif
+
 /* The team loop's places in flight at most: enough that a helper finds one to take while the
  * leader commits (a window of 12 to 32 ran within the noise of this one at N = 256000,
  * phi = 0.30, with one helper; more helpers may want more, unmeasured). */
@@ -1021,6 +1028,7 @@ static void set_place(nbep_evloop *e, uint64_t s, nbep_calendar_entry c, bool fi
 static void join(nbep_evloop *e, const float *own, const float *other)
 {
     const size_t k = e->tail % RING;
+    NBEP_EVLOOP_JOIN_HOOK(e);
     put_centres(e, e->tail, own, e->batch_other[k] != NO_SPHERE ? other : NULL);
     e->cur = e->batch_entry[k];
     nbep_calendar_remove(e->cal, e->batch[k]);
