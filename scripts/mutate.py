@@ -431,6 +431,12 @@ MUTANTS = [
     ("order-step-time-claim-lo-only", "src/algo_predictive.c",
      "            claim_min(&c->tclaim[hi], t);\n", "", ORDER, None),
     # ---- resuming ----
+    ("resume-dt-unchecked", "src/output_resume.c",
+     "    if (memcmp(&dt, &sc->dt, sizeof dt) != 0) {", "    if (0) {", ["tests/test_resume.sh"],
+     None),
+    ("resume-bodies-radius-mass-only", "src/output_resume.c",
+     "    for (size_t k = 0; k < sizeof sets / sizeof *sets && rc == 0; k++) {",
+     "    for (size_t k = 0; k < 2 && rc == 0; k++) {", ["tests/test_resume.sh"], None),
     ("resume-apply-velocity", "src/output_resume.c",
      "        memcpy(s->vel, r->vel, r->n * sizeof *s->vel);\n", "", ["tests/test_resume.sh"], None),
     ("resume-apply-image", "src/output_resume.c",

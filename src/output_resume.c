@@ -76,14 +76,22 @@ static int open_count(nbep_output *o, const char *group, hid_t *out, nbep_diag *
     return 0;
 }
 
-/* The same deck? Sphere and plane counts, radii and masses must match bit for bit: -2 when
- * they do not, -1 when the file cannot be read. */
-static int same_bodies(hid_t file, const char *path, const nbep_scene *sc, nbep_diag *d)
+/* The same run? What the file's frames and event slots were made under must be what the deck
+ * makes, bit for bit: the sphere and plane counts, each sphere's radius, mass and acceleration
+ * and each plane (the slots are predictions from them: a slot predicted under another gravity
+ * or wall is a contact that does not happen), and dt (a step's time is the step times dt, and
+ * the slots' times are absolute: resumed with another dt, the run began its clock at another
+ * time than its spheres' and its predictions came out in its past, spheres passing through each
+ * other). Restitution and the other response settings may change: they act only when an event
+ * comes. -2 when they do not match (the reason added to d), -1 when the file cannot be read. */
+static int same_run(hid_t file, const char *path, const nbep_scene *sc, nbep_diag *d)
 {
     const nbep_state *s = &sc->state;
     hsize_t n = 0, np = 0;
+    double dt;
     if (nbep__output_dataset_rows(file, path, "/spheres/radius", &n, d) < 0 ||
-        nbep__output_dataset_rows(file, path, "/planes/offset", &np, d) < 0)
+        nbep__output_dataset_rows(file, path, "/planes/offset", &np, d) < 0 ||
+        nbep__output_read_attr(file, path, "dt", H5T_NATIVE_DOUBLE, &dt, d) < 0)
         return -1;
     if (n != s->n || np != s->n_planes) {
         nbep_diag_add(d, __FILE__, __LINE__,
@@ -93,25 +101,46 @@ static int same_bodies(hid_t file, const char *path, const nbep_scene *sc, nbep_
                       s->n_planes);
         return -2;
     }
-    double *buf = malloc((s->n ? s->n : 1) * sizeof *buf);
+    if (memcmp(&dt, &sc->dt, sizeof dt) != 0) {
+        char was[NBEP_REAL_TEXT_MAX], now[NBEP_REAL_TEXT_MAX];
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s was run with run.dt = %s but %s makes %s; a resumed run keeps "
+                      "the dt of the run it continues (a frame's time is its step times dt)",
+                      path, nbep_format_real(dt, false, was), sc->deck_path,
+                      nbep_format_real(sc->dt, false, now));
+        return -2;
+    }
+    const struct {
+        const char *name, *what;
+        const void *want;
+        size_t count; /* doubles */
+    } sets[] = {
+        {"/spheres/radius", "radii", s->radius, s->n},
+        {"/spheres/mass", "masses", s->mass, s->n},
+        {"/spheres/acceleration", "accelerations (physics.gravity)", s->acc, 3 * s->n},
+        {"/planes/normal", "normals", s->plane_normal, 3 * s->n_planes},
+        {"/planes/offset", "offsets", s->plane_offset, s->n_planes},
+    };
+    const size_t room = 3 * (s->n > s->n_planes ? s->n : s->n_planes);
+    double *buf = malloc((room ? room : 1) * sizeof *buf);
     if (!buf) {
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory to read %s", path);
         return -1;
     }
     int rc = 0;
-    const char *names[2] = {"/spheres/radius", "/spheres/mass"};
-    const double *want[2] = {s->radius, s->mass};
-    for (int k = 0; k < 2 && rc == 0; k++) {
-        hid_t ds = H5Dopen2(file, names[k], H5P_DEFAULT);
-        if (ds < 0 || (s->n && H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT,
-                                       buf) < 0)) {
-            HDF5_FAIL(d, path, "read %s", names[k]);
+    for (size_t k = 0; k < sizeof sets / sizeof *sets && rc == 0; k++) {
+        if (!sets[k].count)
+            continue;
+        hid_t ds = H5Dopen2(file, sets[k].name, H5P_DEFAULT);
+        if (ds < 0 ||
+            H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) < 0) {
+            HDF5_FAIL(d, path, "read %s", sets[k].name);
             rc = -1;
-        } else if (s->n && memcmp(buf, want[k], s->n * sizeof *buf) != 0) {
+        } else if (memcmp(buf, sets[k].want, sets[k].count * sizeof *buf) != 0) {
             nbep_diag_add(d, __FILE__, __LINE__,
-                          "nbep: %s: %s differ from what %s makes; resume with the deck (and "
-                          "--set options) that made it",
-                          path, names[k] + 9, sc->deck_path);
+                          "nbep: %s: the %s of %s differ from what %s makes; resume with the "
+                          "deck (and --set options) that made it",
+                          path, sets[k].what, sets[k].name, sc->deck_path);
             rc = -2;
         }
         nbep__output_close_id(&ds);
@@ -141,7 +170,7 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     nbep__output_close_id(&fapl);
     if (o->file < 0)
         goto fail;
-    int same = same_bodies(o->file, path, sc, d);
+    int same = same_run(o->file, path, sc, d);
     if (same < 0) {
         st = same == -2 ? NBEP_EDECK : NBEP_EIO;
         goto fail;

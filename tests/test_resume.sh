@@ -146,5 +146,27 @@ for what in radius mass; do
     check "a deck with another $what is refused with exit 2 (got $rc)" "[ $rc = 2 ]"
     check "the refusal names the $what" "grep -q '$what' $tmp/mismatch-$what.err"
 done
+# the same spheres under another dt, gravity or walls: refused too, the file left as it was
+# (its event slots were predicted under them, and a frame's time is its step times dt: resumed
+# with another dt, a run's clock and its slots' times disagreed and spheres passed through each
+# other); another restitution is taken (it acts only when an event comes)
+sum=$(md5sum < $tmp/predictive-part.h5)
+for case in "run.dt=0.002|run.dt = 0.001 but" \
+    "physics.gravity=[0.0,0.0,-9.8]|accelerations (physics.gravity) of /spheres/acceleration" \
+    "box.max=[2.0,2.0,2.5]|offsets of /planes/offset"; do
+    set_=${case%%|*} want=${case#*|}
+    box=$([ "${set_%%=*}" = box.max ] && echo "$set_" || echo "box.max=[2,2,2]")
+    bin/nbep run $deck --quiet --set spheres.[0].count=400 --set "$box" --set "$set_" -n 90 \
+        --resume $tmp/predictive-part.h5 2>$tmp/mismatch-other.err
+    rc=$?
+    check "a deck with $set_ is refused with exit 2 (got $rc)" "[ $rc = 2 ]"
+    check "the refusal says '$want'" "grep -qF '$want' $tmp/mismatch-other.err"
+    check "the refused resume leaves the file as it was" \
+        "[ \"\$(md5sum < $tmp/predictive-part.h5)\" = '$sum' ]"
+done
+bin/nbep run $deck --quiet --set spheres.[0].count=400 --set box.max=[2,2,2] \
+    --set physics.restitution=0.9 -n 90 --resume $tmp/predictive-part.h5
+rc=$?
+check "a deck with another restitution resumes (got $rc)" "[ $rc = 0 ]"
 [ $fail = 0 ] && echo "resume: all passed"
 exit $fail
