@@ -284,6 +284,14 @@ static int write_root_attrs(nbep_output *o, const nbep_scene *sc, int threads, n
     if (nbep__output_write_attr(root, p, "periodic", H5T_STD_I32LE, H5T_NATIVE_INT32, 3,
                                 periodic, d) < 0)
         return -1;
+    /* the box, where the deck has one: the periods of /frames/image, and what a resume checks
+     * (on a periodic axis no wall records it) */
+    if (sc->has_box &&
+        (nbep__output_write_attr(root, p, "box_min", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3,
+                                 &sc->box_min, d) < 0 ||
+         nbep__output_write_attr(root, p, "box_max", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3,
+                                 &sc->box_max, d) < 0))
+        return -1;
     return 0;
 }
 

@@ -22,6 +22,8 @@ typedef struct run_info {
     int64_t threads;
     double dt, restitution, gravity[3];
     int32_t periodic[3];                   /* 0 0 0 for files made before contract 2 */
+    bool has_box;                          /* false too for files made before 2026-11-27 */
+    double box_min[3], box_max[3];
     hsize_t spheres, planes;
     uint64_t frames, stats_rows;           /* complete rows: the count attributes */
     hsize_t frames_more, stats_more;       /* rows past them, cut off by a crash */
@@ -68,6 +70,10 @@ static int gather_info(hid_t file, const char *path, run_info *r, nbep_diag *d)
         nbep__output_read_attr(file, path, "gravity", H5T_NATIVE_DOUBLE, r->gravity, d) < 0 ||
         (H5Aexists(file, "periodic") > 0 &&
          nbep__output_read_attr(file, path, "periodic", H5T_NATIVE_INT32, r->periodic, d) < 0) ||
+        ((r->has_box = H5Aexists(file, "box_min") > 0) &&
+         (nbep__output_read_attr(file, path, "box_min", H5T_NATIVE_DOUBLE, r->box_min, d) < 0 ||
+          nbep__output_read_attr(file, path, "box_max", H5T_NATIVE_DOUBLE, r->box_max, d) <
+              0)) ||
         nbep__output_dataset_rows(file, path, "/spheres/radius", &r->spheres, d) < 0 ||
         nbep__output_dataset_rows(file, path, "/planes/offset", &r->planes, d) < 0 ||
         nbep__output_complete_rows(file, path, "/frames", "/frames/step", &r->frames,
@@ -138,6 +144,16 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
                 nbep_format_real(r.gravity[0], false, b0),
                 nbep_format_real(r.gravity[1], false, b1),
                 nbep_format_real(r.gravity[2], false, b2));
+        if (r.has_box) {
+            char c0[NBEP_REAL_TEXT_MAX], c1[NBEP_REAL_TEXT_MAX], c2[NBEP_REAL_TEXT_MAX];
+            fprintf(f, "%-13s[%s, %s, %s] to [%s, %s, %s]\n", "box:",
+                    nbep_format_real(r.box_min[0], false, b0),
+                    nbep_format_real(r.box_min[1], false, b1),
+                    nbep_format_real(r.box_min[2], false, b2),
+                    nbep_format_real(r.box_max[0], false, c0),
+                    nbep_format_real(r.box_max[1], false, c1),
+                    nbep_format_real(r.box_max[2], false, c2));
+        }
         if (r.periodic[0] || r.periodic[1] || r.periodic[2])
             fprintf(f, "%-13s%s%s%s\n", "periodic:", r.periodic[0] ? "x" : "",
                     r.periodic[1] ? "y" : "", r.periodic[2] ? "z" : "");

@@ -110,6 +110,26 @@ static int same_run(hid_t file, const char *path, const nbep_scene *sc, nbep_dia
                       nbep_format_real(sc->dt, false, now));
         return -2;
     }
+    /* the box, which on a periodic axis no wall records (files made before 2026-11-27 lack
+     * it, and are not checked for it) */
+    const htri_t has_box = H5Aexists(file, "box_min");
+    nbep_vec3 lo, hi;
+    if (has_box < 0 ||
+        (has_box &&
+         (nbep__output_read_attr(file, path, "box_min", H5T_NATIVE_DOUBLE, &lo, d) < 0 ||
+          nbep__output_read_attr(file, path, "box_max", H5T_NATIVE_DOUBLE, &hi, d) < 0))) {
+        if (has_box < 0)
+            HDF5_FAIL(d, path, "read its attributes");
+        return -1;
+    }
+    if (has_box && !(sc->has_box && memcmp(&lo, &sc->box_min, sizeof lo) == 0 &&
+                     memcmp(&hi, &sc->box_max, sizeof hi) == 0)) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s was run in another box than %s makes (box.min, box.max); "
+                      "resume with the deck (and --set options) that made it",
+                      path, sc->deck_path);
+        return -2;
+    }
     const struct {
         const char *name, *what;
         const void *want;

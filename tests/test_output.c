@@ -117,6 +117,9 @@ static int setup(void **state)
     sc->seed = 424242;
     sc->gravity = nbep_vec3_make(0.25, -1.5, -9.81);
     sc->restitution = 0.85;
+    sc->has_box = true;
+    sc->box_min = nbep_vec3_make(-1.0, -2.0, 0.0);
+    sc->box_max = nbep_vec3_make(4.0, 5.5, 6.25);
     sc->output_every = FRAME_EVERY;
     sc->out_position = sc->out_velocity = sc->out_stats = true;
     sc->sweep_replicas = 1;
@@ -525,6 +528,9 @@ static void test_root_attributes_hold_the_settings_the_deck_and_the_build(void *
     read_root_attr(f, "dt", H5T_IEEE_F64LE, 1, H5T_NATIVE_DOUBLE, &dt);
     read_root_attr(f, "restitution", H5T_IEEE_F64LE, 1, H5T_NATIVE_DOUBLE, &restitution);
     read_root_attr(f, "gravity", H5T_IEEE_F64LE, 3, H5T_NATIVE_DOUBLE, gravity);
+    double box[2][3];
+    read_root_attr(f, "box_min", H5T_IEEE_F64LE, 3, H5T_NATIVE_DOUBLE, box[0]);
+    read_root_attr(f, "box_max", H5T_IEEE_F64LE, 3, H5T_NATIVE_DOUBLE, box[1]);
     H5Fclose(f);
     assert_int_equal(steps, N_STATS);
     assert_int_equal(seed, 424242);
@@ -533,6 +539,8 @@ static void test_root_attributes_hold_the_settings_the_deck_and_the_build(void *
     assert_bits_equal(&dt, &want_dt, sizeof dt, "dt");
     assert_bits_equal(&restitution, &want_e, sizeof dt, "restitution");
     assert_bits_equal(gravity, want_g, sizeof gravity, "gravity");
+    const double want_box[2][3] = {{-1.0, -2.0, 0.0}, {4.0, 5.5, 6.25}};
+    assert_bits_equal(box, want_box, sizeof box, "box");
 }
 
 static void test_a_deck_larger_than_an_object_header_is_stored_whole(void **state)
@@ -921,6 +929,7 @@ static void test_info_reports_the_settings_frames_stats_and_summary(void **state
     assert_has_line(text, "seed:        424242");
     assert_has_line(text, "restitution: 0.85");
     assert_has_line(text, "gravity:     [0.25, -1.5, -9.81]");
+    assert_has_line(text, "box:         [-1, -2, 0] to [4, 5.5, 6.25]");
     assert_has_line(text, "overrides:   physics.restitution=0.85");
     assert_has_line(text, "             run.steps=20");
     assert_has_line(text, "frames:      3 (last: step 20, time 0.025)");
