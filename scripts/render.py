@@ -12,8 +12,8 @@ complete frame: -1 is the last); only complete frames are used (the `count` attr
 scatter whose marker sizes follow the radii approximately; xy, xz and yz draw an orthographic
 projection with every sphere a disc of its true radius (nearest drawn last). Spheres are
 coloured by speed when the run wrote velocities (--color height colours by the coordinate
-along the hidden or vertical axis). The box, when the run's planes form one, is drawn as an
-outline. An error (a missing or unreadable file, a frame out of range) is one line on stderr
+along the hidden or vertical axis). The box, from the file's box_min and box_max (a periodic
+one too), or where an older file's planes form one, is drawn as an outline. An error (a missing or unreadable file, a frame out of range) is one line on stderr
 and exit status 2.
 
 Needs h5py and matplotlib (Debian: python3-h5py python3-matplotlib)."""
@@ -58,7 +58,11 @@ def parse_frames(text, count):
 
 
 def box_of(f, pos, radius):
-    """(lo, hi) of the run's box when six axis-aligned planes bound it, else of the spheres."""
+    """(lo, hi) of the run's box: its root attributes box_min and box_max (files since
+    2026-11-27; a periodic box has no walls to tell it), or six axis-aligned planes that bound
+    it; else of the spheres."""
+    if "box_min" in f.attrs and "box_max" in f.attrs:
+        return np.asarray(f.attrs["box_min"], float), np.asarray(f.attrs["box_max"], float), True
     lo = np.full(3, np.nan)
     hi = np.full(3, np.nan)
     if "planes" in f and "normal" in f["planes"]:

@@ -41,6 +41,24 @@ rc=$?
 check "a frame past the last is refused (exit $rc)" \
     "[ $rc != 0 ] && grep -q 'frame 6 is outside the 6 complete frames' '$tmp/bad.out'"
 
+# a periodic box has no walls: the box drawn is the file's (box_min, box_max), not the spheres'
+cat >"$tmp/periodic.deck" <<'EOF'
+run: { algorithm = "predictive"; neighbors = "cells"; steps = 4; dt = 0.05; threads = 1; };
+box: { min = [-1.0, 0.0, 0.0]; max = [5.0, 7.0, 6.5]; periodic = [true, true, true]; };
+spheres = ( { count = 27; radius = 0.5; mass = 1.0; place = "lattice"; speed = 1.0; } );
+output: { file = "build/tests/tmp/viz/periodic.h5"; every = 2; };
+EOF
+bin/nbep run "$tmp/periodic.deck" --quiet
+check "render.py takes a periodic run's box from the file" \
+    "'$py' - '$tmp/periodic.h5' <<'PYEOF'
+import sys, h5py
+sys.path.insert(0, 'scripts')
+import render
+f = h5py.File(sys.argv[1], 'r')
+lo, hi, boxed = render.box_of(f, f['frames/position'][0], f['spheres/radius'][:])
+assert boxed and list(lo) == [-1.0, 0.0, 0.0] and list(hi) == [5.0, 7.0, 6.5], (lo, hi, boxed)
+PYEOF"
+
 # every run writes RUN.xmf beside RUN.h5 (ParaView and VisIt open it as animated spheres)
 check "a run writes its XDMF sidecar" "[ -s '$tmp/viz.xmf' ]"
 check "the sidecar resolves in a reader" "'$py' scripts/check_xdmf.py '$tmp/viz.xmf' >/dev/null"
