@@ -57,6 +57,10 @@ BUILD_INFO := $(BUILD)/build_info.h
 # the sources scripts/fuzz.sh links, without OpenMP
 FUZZ_SRC := $(shell grep -v -e '^\#' -e '^[[:space:]]*$$' tests/fuzz/sources)
 FUZZ_REPLAY := $(BUILD)/tests/fuzz_replay
+# bin/nbep with a copy of the event loop that follows what each event touches (README, Threads
+# on dense scenes): built by check too, so that a change to the loop's hooks cannot leave it
+# broken unseen
+PARALLELISM := $(BUILD)/bench/bench_parallelism
 
 .PHONY: all run check test valgrind bench install clean tsan asan mutate check-programs
 all: bin/nbep
@@ -95,7 +99,7 @@ run: bin/nbep
 
 # Every test binary and shell test (those drive bin/nbep as a user would), then (VALGRIND=1)
 # the test binaries again under memcheck.
-check: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY)
+check: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY) $(PARALLELISM)
 	@python3 scripts/mutate.py --stale
 	@bash scripts/run-tests.sh $(TEST_BIN) $(TEST_SH)
 ifeq ($(VALGRIND),1)
@@ -104,7 +108,7 @@ endif
 test: check
 
 # Every program make check runs, built but not run (scripts/mutate.py builds these per mutant).
-check-programs: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY)
+check-programs: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY) $(PARALLELISM)
 
 $(FUZZ_REPLAY): tests/fuzz/replay.c tests/fuzz/fuzz_scene.c tests/fuzz/sources $(FUZZ_SRC) \
 		$(wildcard include/nbep/*.h src/*.h) | $(BUILD)/tests

@@ -26,6 +26,12 @@
 #ifndef NBEP_EVLOOP_JOIN_HOOK
 #define NBEP_EVLOOP_JOIN_HOOK(e) ((void)0)
 #endif
+/* A look at each event once handled (w: what it found and changed; ev: its slot):
+ * tests/bench/bench_parallelism.c compiles its own copy of this file that follows what every
+ * event reads and writes; a build of nbep has nothing here. */
+#ifndef NBEP_EVLOOP_HANDLED_HOOK
+#define NBEP_EVLOOP_HANDLED_HOOK(e, w, ev) ((void)0)
+#endif
 
 /* The team loop's places in flight at most: enough that a helper finds one to take while the
  * leader commits (a window of 12 to 32 ran within the noise of this one at N = 256000,
@@ -719,6 +725,7 @@ static void handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, void *
         w->at = c;
         predict_with(e, ops, u, i, t, w->near, w->n_near, c);
         note_next(e, w);
+        NBEP_EVLOOP_HANDLED_HOOK(e, w, ev);
         return;
     }
     if (ev->kind == NBEP_EVENT_SPHERE) /* read if the event is fresh */
@@ -750,6 +757,7 @@ static void handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, void *
     /* in every other case (stale slot, reaction) i looks again from now */
     predict_one(e, ops, u, i, t);
     note_next(e, w);
+    NBEP_EVLOOP_HANDLED_HOOK(e, w, ev);
 }
 
 /* What handle left waiting: the new list entered, the changed spheres' calendar entries set. */

@@ -1,0 +1,214 @@
+/* How much parallelism an exact run's events allow: bin/nbep itself (src/main.c), with its own
+ * copy of src/evloop.c in which every event handled (cells mode, one thread: the events in
+ * the calendar's order) reports what it read and wrote. Each event is a node of a graph whose
+ * edges run from the last event that wrote what it reads or writes; the longest chain of
+ * events (the critical path) is the least number of event times that any exact scheme, however
+ * many threads it has and however it schedules them, needs for the run, so events / chain is
+ * the most it could gain over one thread, at one event's cost a time (README, Threads on dense
+ * scenes, *What the events allow*). Two bounds: with the edges of true dependences alone (a
+ * read after a write, a write after a write: a scheme that keeps versions of what it writes,
+ * as an optimistic one may), and with a write after a read too (a scheme that writes in
+ * place, as nbep's team does).
+ *
+ * What an event touches, as evloop.c handles it (each sphere's motion and slot M, each list L,
+ * each cell C of the list centres):
+ *   a contact (a fresh slot): reads M of its two spheres and, for every sphere it changed,
+ *     that sphere's list L and the motion M of the list's members (the new prediction);
+ *     writes M of every sphere it changed;
+ *   a stale slot: reads M of its sphere and of the partner the slot names (the freshness
+ *     check), L of its sphere and M of the list's members; writes M of its sphere;
+ *   a list expiry: reads M of its sphere, its old list L and the cells C of the block its walk
+ *     visits (their members and centres), M of the new list's members; writes M, L of its
+ *     sphere, L of every neighbour it joins or leaves, the cell it leaves and the one it
+ *     enters.
+ *
+ *   make build/bench/bench_parallelism
+ *   build/bench/bench_parallelism run DECK --resume MELT.h5 -t 1 ...   (any nbep command line)
+ *
+ * The figures go to stderr at exit, one line. Not for production: every event does the
+ * bookkeeping (about twice the run's time). */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+struct nbep_evloop;
+struct evl_ws;
+static void dag_event(const struct nbep_evloop *e, const struct evl_ws *w, const void *ev);
+#define NBEP_EVLOOP_HANDLED_HOOK(e, w, ev) dag_event(e, w, ev)
+#include "../../src/evloop.c"
+#include "../../src/main.c"
+
+/* The graph's state: for each object (M of sphere k at k, L at n + k, cell c at 2 n + c), the
+ * depth of the event that last wrote it, in each model, and (write-after-read model) the
+ * deepest event that read it since. */
+static struct {
+    size_t n, objects;
+    uint32_t *wd, *wd_war, *rd_war;
+    uint32_t *reads, *writes; /* one event's objects */
+    size_t n_reads, n_writes, cap;
+    uint64_t events;
+    uint32_t depth, depth_war;
+    double t_first, t_last;
+    bool failed;
+} dag;
+
+static void dag_report(void)
+{
+    if (dag.failed) {
+        fprintf(stderr, "bench_parallelism: no memory for the graph\n");
+        return;
+    }
+    if (!dag.events)
+        return;
+    fprintf(stderr,
+            "bench_parallelism: %llu events from t = %.6g to %.6g; critical path %u events "
+            "(true dependences: events / path = %.1f), %u with writes after reads too (%.1f); "
+            "path per unit of time %.1f and %.1f\n",
+            (unsigned long long)dag.events, dag.t_first, dag.t_last, dag.depth,
+            (double)dag.events / dag.depth, dag.depth_war, (double)dag.events / dag.depth_war,
+            dag.depth / (dag.t_last - dag.t_first), dag.depth_war / (dag.t_last - dag.t_first));
+    free(dag.wd);
+    free(dag.wd_war);
+    free(dag.rd_war);
+    free(dag.reads);
+    free(dag.writes);
+}
+
+static bool dag_start(const nbep_evloop *e)
+{
+    dag.n = e->n;
+    dag.objects = 2 * e->n + e->cells.n_cells;
+    dag.cap = 1024;
+    dag.wd = calloc(dag.objects, sizeof *dag.wd);
+    dag.wd_war = calloc(dag.objects, sizeof *dag.wd_war);
+    dag.rd_war = calloc(dag.objects, sizeof *dag.rd_war);
+    dag.reads = malloc(dag.cap * sizeof *dag.reads);
+    dag.writes = malloc(dag.cap * sizeof *dag.writes);
+    atexit(dag_report);
+    dag.failed = !dag.wd || !dag.wd_war || !dag.rd_war || !dag.reads || !dag.writes;
+    return !dag.failed;
+}
+
+static void dag_add(uint32_t **list, size_t *len, uint32_t x)
+{
+    if (*len == dag.cap) {
+        dag.cap *= 2;
+        uint32_t *r = realloc(dag.reads, dag.cap * sizeof *r);
+        if (r)
+            dag.reads = r;
+        uint32_t *w = realloc(dag.writes, dag.cap * sizeof *w);
+        if (w)
+            dag.writes = w;
+        if (!r || !w) {
+            dag.failed = true;
+            dag.cap /= 2;
+            return;
+        }
+        *list = list == &dag.reads ? dag.reads : dag.writes;
+    }
+    (*list)[(*len)++] = x;
+}
+
+static void read_obj(uint32_t x)
+{
+    dag_add(&dag.reads, &dag.n_reads, x);
+}
+
+static void write_obj(uint32_t x)
+{
+    dag_add(&dag.writes, &dag.n_writes, x);
+}
+
+/* The prediction of sphere k from list js[0..m): its list and its members' motion. */
+static void read_prediction(uint32_t k, const uint32_t *js, size_t m)
+{
+    read_obj((uint32_t)dag.n + k);
+    for (size_t q = 0; q < m; q++)
+        read_obj(js[q]);
+}
+
+static void read_list_of(const nbep_evloop *e, uint32_t k)
+{
+    size_t m;
+    const uint32_t *js = nbep_nblist_of(&e->nl, k, &m);
+    read_prediction(k, js, m);
+}
+
+static uint32_t cell_obj(size_t c)
+{
+    return (uint32_t)(2 * dag.n + c);
+}
+
+static void dag_event(const nbep_evloop *e, const evl_ws *w, const void *evp)
+{
+    const nbep_event *ev = evp;
+    if (!dag.wd && !dag_start(e))
+        return;
+    if (dag.failed)
+        return;
+    dag.n_reads = dag.n_writes = 0;
+    const uint32_t i = w->item;
+    read_obj(i);
+    write_obj(i);
+    if (w->rebuilt) {
+        read_prediction(i, w->near, w->n_near);
+        read_list_of(e, i); /* the old list */
+        write_obj((uint32_t)dag.n + i);
+        for (size_t k = 0; k < w->n_near; k++)
+            if (w->gain[k])
+                write_obj((uint32_t)dag.n + w->near[k]);
+        for (size_t k = 0; k < w->n_was; k++)
+            if (!w->kept[k])
+                write_obj((uint32_t)dag.n + w->was[k]);
+        const size_t to = nbep_cells_locate(&e->cells, w->at);
+        nbep_cells_block b;
+        nbep_cells_block_of(&e->cells, to, &b);
+        for (int z = 0; z < b.cnt[2]; z++)
+            for (int y = 0; y < b.cnt[1]; y++)
+                for (int x = 0; x < b.cnt[0]; x++)
+                    read_obj(cell_obj(nbep_cells_index(&e->cells, b.idx[0][x], b.idx[1][y],
+                                                       b.idx[2][z])));
+        write_obj(cell_obj(e->cells.m[i].cell));
+        write_obj(cell_obj(to));
+    } else {
+        if (ev->kind == NBEP_EVENT_SPHERE)
+            read_obj(ev->partner);
+        for (size_t k = 0; k < w->n_changed; k++) {
+            write_obj(w->changed[k]);
+            read_list_of(e, w->changed[k]);
+        }
+        read_list_of(e, i);
+    }
+    if (dag.failed)
+        return;
+    uint32_t d = 0, dw = 0;
+    for (size_t k = 0; k < dag.n_reads; k++) {
+        const uint32_t x = dag.reads[k];
+        d = dag.wd[x] > d ? dag.wd[x] : d;
+        dw = dag.wd_war[x] > dw ? dag.wd_war[x] : dw;
+    }
+    for (size_t k = 0; k < dag.n_writes; k++) {
+        const uint32_t x = dag.writes[k];
+        d = dag.wd[x] > d ? dag.wd[x] : d;
+        dw = dag.wd_war[x] > dw ? dag.wd_war[x] : dw;
+        dw = dag.rd_war[x] > dw ? dag.rd_war[x] : dw;
+    }
+    d++;
+    dw++;
+    for (size_t k = 0; k < dag.n_reads; k++) {
+        const uint32_t x = dag.reads[k];
+        dag.rd_war[x] = dw > dag.rd_war[x] ? dw : dag.rd_war[x];
+    }
+    for (size_t k = 0; k < dag.n_writes; k++) {
+        const uint32_t x = dag.writes[k];
+        dag.wd[x] = d;
+        dag.wd_war[x] = dw;
+        dag.rd_war[x] = 0;
+    }
+    dag.depth = d > dag.depth ? d : dag.depth;
+    dag.depth_war = dw > dag.depth_war ? dw : dag.depth_war;
+    if (!dag.events)
+        dag.t_first = ev->time;
+    dag.t_last = ev->time;
+    dag.events++;
+}
