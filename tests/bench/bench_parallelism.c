@@ -8,7 +8,9 @@
  * scenes, *What the events allow*). Two bounds: with the edges of true dependences alone (a
  * read after a write, a write after a write: a scheme that keeps versions of what it writes,
  * as an optimistic one may), and with a write after a read too (a scheme that writes in
- * place, as nbep's team does).
+ * place, as nbep's team does). Then the same with the box cut into regions, each region's
+ * events handled in time order by one thread (REGIONS): the ceiling of a scheme that commits
+ * by regions.
  *
  * What an event touches, as evloop.c handles it (each sphere's motion and slot M, each list L,
  * each cell C of the list centres):
@@ -38,6 +40,14 @@ static void dag_event(const struct nbep_evloop *e, const struct evl_ws *w, const
 #include "../../src/evloop.c"
 #include "../../src/main.c"
 
+/* Regions, each with one thread that handles its events in time order (the event's region:
+ * where its sphere's list centre lies), the events still waiting for what they read or write
+ * as above (writes after reads too): how far a scheme that commits by regions could go with
+ * perfect knowledge of what crosses their edges. Slabs across x, and blocks. */
+#define N_MODELS 7
+static const int REGIONS[N_MODELS][3] = {{1, 1, 1}, {2, 1, 1}, {4, 1, 1}, {8, 1, 1},
+                                          {16, 1, 1}, {2, 2, 4}, {4, 4, 4}};
+
 /* The graph's state: for each object (M of sphere k at k, L at n + k, cell c at 2 n + c), the
  * depth of the event that last wrote it, in each model, and (write-after-read model) the
  * deepest event that read it since. */
@@ -48,6 +58,9 @@ static struct {
     size_t n_reads, n_writes, cap;
     uint64_t events;
     uint32_t depth, depth_war;
+    /* the region models (REGIONS): per model, the write-after-read model's depths and each
+     * region's last event */
+    uint32_t *wd_reg[N_MODELS], *rd_reg[N_MODELS], *last_reg[N_MODELS], depth_reg[N_MODELS];
     double t_first, t_last;
     bool failed;
 } dag;
@@ -60,6 +73,14 @@ static void dag_report(void)
     }
     if (!dag.events)
         return;
+    for (int m = 0; m < N_MODELS; m++) {
+        fprintf(stderr, "bench_parallelism: regions %dx%dx%d: path %u events, events / path %.1f\n",
+                REGIONS[m][0], REGIONS[m][1], REGIONS[m][2], dag.depth_reg[m],
+                (double)dag.events / dag.depth_reg[m]);
+        free(dag.wd_reg[m]);
+        free(dag.rd_reg[m]);
+        free(dag.last_reg[m]);
+    }
     fprintf(stderr,
             "bench_parallelism: %llu events from t = %.6g to %.6g; critical path %u events "
             "(true dependences: events / path = %.1f), %u with writes after reads too (%.1f); "
@@ -86,6 +107,13 @@ static bool dag_start(const nbep_evloop *e)
     dag.writes = malloc(dag.cap * sizeof *dag.writes);
     atexit(dag_report);
     dag.failed = !dag.wd || !dag.wd_war || !dag.rd_war || !dag.reads || !dag.writes;
+    for (int m = 0; m < N_MODELS; m++) {
+        dag.wd_reg[m] = calloc(dag.objects, sizeof *dag.wd_reg[m]);
+        dag.rd_reg[m] = calloc(dag.objects, sizeof *dag.rd_reg[m]);
+        dag.last_reg[m] = calloc((size_t)REGIONS[m][0] * REGIONS[m][1] * REGIONS[m][2],
+                                 sizeof *dag.last_reg[m]);
+        dag.failed |= !dag.wd_reg[m] || !dag.rd_reg[m] || !dag.last_reg[m];
+    }
     return !dag.failed;
 }
 
@@ -137,6 +165,40 @@ static void read_list_of(const nbep_evloop *e, uint32_t k)
 static uint32_t cell_obj(size_t c)
 {
     return (uint32_t)(2 * dag.n + c);
+}
+
+/* Event of sphere i in region model m (dag's reads and writes set). */
+static void region_model(const nbep_evloop *e, uint32_t i, int m)
+{
+    const nbep_vec3 at = e->cells.m[i].at;
+    const double c[3] = {at.x, at.y, at.z};
+    const double lo[3] = {e->cells.lo.x, e->cells.lo.y, e->cells.lo.z};
+    const double hi[3] = {e->cells.hi.x, e->cells.hi.y, e->cells.hi.z};
+    size_t r = 0;
+    for (int k = 2; k >= 0; k--) {
+        const int s = REGIONS[m][k];
+        double f = floor((c[k] - lo[k]) / (hi[k] - lo[k]) * s);
+        f = f < 0.0 ? 0.0 : f > s - 1 ? s - 1 : f;
+        r = r * (size_t)s + (size_t)f;
+    }
+    uint32_t *wd = dag.wd_reg[m], *rd = dag.rd_reg[m];
+    uint32_t d = dag.last_reg[m][r];
+    for (size_t k = 0; k < dag.n_reads; k++)
+        d = wd[dag.reads[k]] > d ? wd[dag.reads[k]] : d;
+    for (size_t k = 0; k < dag.n_writes; k++) {
+        const uint32_t x = dag.writes[k];
+        d = wd[x] > d ? wd[x] : d;
+        d = rd[x] > d ? rd[x] : d;
+    }
+    d++;
+    for (size_t k = 0; k < dag.n_reads; k++)
+        rd[dag.reads[k]] = d > rd[dag.reads[k]] ? d : rd[dag.reads[k]];
+    for (size_t k = 0; k < dag.n_writes; k++) {
+        wd[dag.writes[k]] = d;
+        rd[dag.writes[k]] = 0;
+    }
+    dag.last_reg[m][r] = d;
+    dag.depth_reg[m] = d > dag.depth_reg[m] ? d : dag.depth_reg[m];
 }
 
 static void dag_event(const nbep_evloop *e, const evl_ws *w, const void *evp)
@@ -205,6 +267,8 @@ static void dag_event(const nbep_evloop *e, const evl_ws *w, const void *evp)
         dag.wd_war[x] = dw;
         dag.rd_war[x] = 0;
     }
+    for (int m = 0; m < N_MODELS; m++)
+        region_model(e, i, m);
     dag.depth = d > dag.depth ? d : dag.depth;
     dag.depth_war = dw > dag.depth_war ? dw : dag.depth_war;
     if (!dag.events)
