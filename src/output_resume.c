@@ -149,14 +149,25 @@ static int same_run(hid_t file, const char *path, const nbep_scene *sc, nbep_dia
     }
     int rc = 0;
     for (size_t k = 0; k < sizeof sets / sizeof *sets && rc == 0; k++) {
-        if (!sets[k].count)
-            continue;
+        /* its size first: a damaged file's longer dataset must not be read into buf */
         hid_t ds = H5Dopen2(file, sets[k].name, H5P_DEFAULT);
-        if (ds < 0 ||
-            H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) < 0) {
+        hid_t space = ds < 0 ? H5I_INVALID_HID : H5Dget_space(ds);
+        const hssize_t got = space < 0 ? -1 : H5Sget_simple_extent_npoints(space);
+        nbep__output_close_id(&space);
+        if (got < 0) {
             HDF5_FAIL(d, path, "read %s", sets[k].name);
             rc = -1;
-        } else if (memcmp(buf, sets[k].want, sets[k].count * sizeof *buf) != 0) {
+        } else if ((size_t)got != sets[k].count) {
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: %s: %s holds %lld values where %s makes %zu; resume with the "
+                          "deck (and --set options) that made it",
+                          path, sets[k].name, (long long)got, sc->deck_path, sets[k].count);
+            rc = -2;
+        } else if (got > 0 &&
+                   H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) < 0) {
+            HDF5_FAIL(d, path, "read %s", sets[k].name);
+            rc = -1;
+        } else if (got > 0 && memcmp(buf, sets[k].want, sets[k].count * sizeof *buf) != 0) {
             nbep_diag_add(d, __FILE__, __LINE__,
                           "nbep: %s: the %s of %s differ from what %s makes; resume with the "
                           "deck (and --set options) that made it",

@@ -191,6 +191,38 @@ for case in "planes.[0].point=[0.0,0.0,0.01]|offsets of /planes/offset" \
     check "the refused resume leaves the file as it was" \
         "[ \"\$(md5sum < $tmp/bounce-part.h5)\" = '$sum' ]"
 done
+# files edited by hand: a dataset longer than the deck's (read only after its size is checked:
+# it overran the buffer), box attributes on a run whose deck has no box, and a file without
+# them (made before they were written: its box is not checked)
+"$PY" - $tmp/bounce-part.h5 $tmp/bounce-long.h5 $tmp/bounce-boxed.h5 <<'PYEOF'
+import shutil, sys, h5py, numpy as np
+src, long_, boxed = sys.argv[1:4]
+shutil.copy(src, long_)
+shutil.copy(src, boxed)
+with h5py.File(long_, "r+") as f:
+    a = f["spheres/acceleration"][:]
+    del f["spheres/acceleration"]
+    f["spheres/acceleration"] = np.tile(a, (200, 1))
+with h5py.File(boxed, "r+") as f:
+    f.attrs["box_min"] = np.zeros(3)
+    f.attrs["box_max"] = np.ones(3)
+PYEOF
+bin/nbep run inputs/bounce.deck --quiet -n 80 --resume $tmp/bounce-long.h5 2>$tmp/long.err
+rc=$?
+check "a file with a longer /spheres/acceleration is refused with exit 2 (got $rc)" \
+    "[ $rc = 2 ] && grep -q 'acceleration holds 600 values where .* makes 3' $tmp/long.err"
+bin/nbep run inputs/bounce.deck --quiet -n 80 --resume $tmp/bounce-boxed.h5 2>$tmp/boxed.err
+rc=$?
+check "a file with a box resumed by a deck without one is refused with exit 2 (got $rc)" \
+    "[ $rc = 2 ] && grep -q 'was run in another box than' $tmp/boxed.err"
+cp $tmp/predictive-part.h5 $tmp/no-box.h5
+"$PY" -c "import h5py, sys; f = h5py.File(sys.argv[1], 'r+'); del f.attrs['box_min']; \
+del f.attrs['box_max']" $tmp/no-box.h5
+bin/nbep run $deck --quiet --set spheres.[0].count=400 --set box.max=[2,2,2] -n 90 \
+    --resume $tmp/no-box.h5
+rc=$?
+check "a file without box attributes resumes (got $rc), and nbep info prints no box" \
+    "[ $rc = 0 ] && ! bin/nbep info $tmp/no-box.h5 | grep -q '^box:'"
 bin/nbep run $deck --quiet --set spheres.[0].count=400 --set box.max=[2,2,2] \
     --set physics.restitution=0.9 -n 90 --resume $tmp/predictive-part.h5
 rc=$?
