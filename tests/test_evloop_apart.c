@@ -65,14 +65,26 @@ static void seen_reset(void)
     seen.least_cells = SIZE_MAX;
 }
 
-/* The spheres of ring slot k's place: its own and the other its slot names. */
-static int place_spheres(const nbep_evloop *e, size_t k, uint32_t *x)
+/* What each place in flight touches, as this test reads it when the place joins (by ring
+ * slot): its calendar entry's sphere, and from that sphere's slot (which the thread that
+ * handles it reads, and which nothing writes between), the partner a sphere event names and
+ * whether it is a list expiry. Not from the window's own record of them (batch, batch_other,
+ * batch_walks), which a wrong decoding of the calendar key would spoil for this test too. */
+static struct {
+    uint32_t sphere[2];
+    int n;
+    bool walks;
+} placed[RING];
+
+static void record_place(const nbep_evloop *e, size_t k)
 {
-    int n = 0;
-    x[n++] = e->batch[k];
-    if (e->batch_other[k] != NO_SPHERE)
-        x[n++] = e->batch_other[k];
-    return n;
+    const uint32_t i = e->batch_entry[k].item;
+    const nbep_event ev = *nbep_feq_slot(e->q, i);
+    placed[k].n = 0;
+    placed[k].sphere[placed[k].n++] = i;
+    if (ev.kind == NBEP_EVENT_SPHERE && ev.partner < e->n)
+        placed[k].sphere[placed[k].n++] = ev.partner;
+    placed[k].walks = ev.kind == NBEP_EVENT_HORIZON;
 }
 
 /* Cell a's index along one axis of dim cells, moved by da, wrapped on a periodic axis; -1 off
@@ -110,16 +122,18 @@ static void cell_coords(const nbep_cells *g, uint32_t i, size_t *c)
 
 static void audit_join(const nbep_evloop *e)
 {
+    const size_t kj = e->tail % RING;
+    record_place(e, kj);
     if (e->head == e->tail)
         return;
     seen.joins++;
     const double touch = e->cut + (1.0 + NBEP_NBLIST_LEAD) * e->stray;
-    const size_t kj = e->tail % RING;
-    uint32_t a[2], b[2];
-    const int na = place_spheres(e, kj, a);
+    const uint32_t *a = placed[kj].sphere;
+    const int na = placed[kj].n;
     for (uint64_t p = e->head; p < e->tail; p++) {
         const size_t kp = p % RING;
-        const int nb = place_spheres(e, kp, b);
+        const uint32_t *b = placed[kp].sphere;
+        const int nb = placed[kp].n;
         for (int q = 0; q < na; q++)
             for (int r = 0; r < nb; r++) {
                 const nbep_vec3 raw = nbep_vec3_sub(e->cells.m[a[q]].at, e->cells.m[b[r]].at);
@@ -130,12 +144,12 @@ static void audit_join(const nbep_evloop *e)
                 seen.least = fmin(seen.least, dist / touch);
                 seen.across += dist < 3.0 * touch && !(nbep_vec3_norm(raw) < 3.0 * touch);
             }
-        if (!(e->batch_walks[kj] && e->batch_walks[kp]))
+        if (!(placed[kj].walks && placed[kp].walks))
             continue;
         seen.walks++;
         size_t ca[3], cb[3], far = 0;
-        cell_coords(&e->cells, e->batch[kj], ca);
-        cell_coords(&e->cells, e->batch[kp], cb);
+        cell_coords(&e->cells, a[0], ca);
+        cell_coords(&e->cells, b[0], cb);
         bool meets = true;
         for (int k = 0; k < 3; k++) {
             const bool wrap = e->cells.periodic[k];
@@ -173,8 +187,6 @@ static void run_audited(nbep_scene *sc, bool periodic)
     assert_int_equal(seen.least_cells, 4);
     if (periodic)
         assert_true(seen.across > 100);
-    else
-        assert_int_equal(seen.across, 0);
 }
 
 /* A dense periodic fluid, as test_periodic's team test has it: 9 cells of the list cutoff
