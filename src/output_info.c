@@ -18,6 +18,7 @@
  * but its one error line. */
 typedef struct run_info {
     char *version, *build_flags, *build_commit, *algorithm, *overrides, *summary;
+    char *resumed; /* NULL: never resumed */
     uint64_t steps, seed;
     int64_t threads;
     double dt, restitution, gravity[3];
@@ -40,6 +41,7 @@ static void run_info_fini(run_info *r)
     free(r->algorithm);
     free(r->overrides);
     free(r->summary);
+    free(r->resumed);
 }
 
 /* Prints a multi-line value with every line after the first indented under the first. */
@@ -74,6 +76,8 @@ static int gather_info(hid_t file, const char *path, run_info *r, nbep_diag *d)
          (nbep__output_read_attr(file, path, "box_min", H5T_NATIVE_DOUBLE, r->box_min, d) < 0 ||
           nbep__output_read_attr(file, path, "box_max", H5T_NATIVE_DOUBLE, r->box_max, d) <
               0)) ||
+        (H5Aexists(file, "resumed") > 0 &&
+         nbep__output_read_string_attr(file, path, "resumed", &r->resumed, d) < 0) ||
         nbep__output_dataset_rows(file, path, "/spheres/radius", &r->spheres, d) < 0 ||
         nbep__output_dataset_rows(file, path, "/planes/offset", &r->planes, d) < 0 ||
         nbep__output_complete_rows(file, path, "/frames", "/frames/step", &r->frames,
@@ -159,6 +163,8 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
                     r.periodic[1] ? "y" : "", r.periodic[2] ? "z" : "");
         if (r.overrides[0])
             print_lines(f, "overrides:", r.overrides);
+        if (r.resumed)
+            print_lines(f, "resumed:", r.resumed);
         fprintf(f, "%-13s%" PRIu64, "frames:", r.frames);
         if (r.frames > 0)
             fprintf(f, " (last: step %" PRId64 ", time %s)", r.last_step,

@@ -11,6 +11,7 @@
 
 #include <hdf5.h>
 
+#include "build_info.h"
 #include "output_impl.h"
 
 void nbep_resume_fini(nbep_resume *r)
@@ -180,8 +181,55 @@ static int same_run(hid_t file, const char *path, const nbep_scene *sc, nbep_dia
     return rc;
 }
 
-nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep_output **out,
-                                    nbep_resume *r, nbep_diag *d)
+/* Adds this resume's line to the root attribute `resumed` (made with the first): the step it
+ * continues from, the threads, this build and the overrides, so that `nbep info` tells the
+ * parts of a run apart (the root's `threads` and `overrides` stay the first part's: a sweep
+ * knows its runs by those overrides). */
+static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int threads,
+                       int64_t step, nbep_diag *d)
+{
+    char *was = NULL;
+    const htri_t had = H5Aexists(file, "resumed");
+    if (had < 0 || (had && nbep__output_read_string_attr(file, path, "resumed", &was, d) < 0)) {
+        if (had < 0)
+            HDF5_FAIL(d, path, "read the root attribute resumed");
+        return -1;
+    }
+    const char *ov = sc->overrides ? sc->overrides : "";
+    const size_t len = (was ? strlen(was) : 0) + 2 * strlen(ov) + strlen(NBEP_VERSION) +
+                       strlen(NBEP_BUILD_COMMIT) + 128;
+    char *text = malloc(len);
+    if (!text) {
+        free(was);
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory to resume %s", path);
+        return -1;
+    }
+    snprintf(text, len, "%s%sstep %" PRId64 ": %d thread%s, nbep %s (commit %s)%s",
+             was ? was : "", was && was[0] ? "\n" : "", step, threads, threads == 1 ? "" : "s",
+             NBEP_VERSION, NBEP_BUILD_COMMIT, ov[0] ? ", " : "");
+    size_t at = strlen(text);
+    for (const char *c = ov; *c; c++) { /* one per line becomes "a=1; b=2" */
+        if (*c != '\n') {
+            text[at++] = *c;
+        } else if (c[1]) {
+            text[at++] = ';';
+            text[at++] = ' ';
+        }
+    }
+    text[at] = '\0';
+    free(was);
+    int rc = 0;
+    if ((had && H5Adelete(file, "resumed") < 0) ||
+        nbep__output_write_string_attr(file, path, "resumed", text, d) < 0) {
+        HDF5_FAIL(d, path, "write the root attribute resumed");
+        rc = -1;
+    }
+    free(text);
+    return rc;
+}
+
+nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, int threads,
+                                    nbep_output **out, nbep_resume *r, nbep_diag *d)
 {
     nbep_resume res = {0};
     nbep_status st =
@@ -342,7 +390,8 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
         goto fail;
     }
     nbep__output_close_id(&steps_attr);
-    if (nbep__output_commit(o, frames, d) < 0)
+    if (note_resume(o->file, path, sc, threads, res.step, d) < 0 ||
+        nbep__output_commit(o, frames, d) < 0)
         goto fail;
     *out = o;
     *r = res;

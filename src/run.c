@@ -115,7 +115,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                                          : sc.output_file;
     st = open_summary(rq->summary_path, &summary, d);
     if (st == NBEP_OK)
-        st = rq->resume ? nbep_output_open_resume(file, &sc, &out, &resume, d)
+        st = rq->resume ? nbep_output_open_resume(file, &sc, threads, &out, &resume, d)
                         : nbep_output_create(file, &sc, threads, &out, d);
     if (st == NBEP_OK) {
         if (rq->resume)

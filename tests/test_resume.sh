@@ -46,6 +46,16 @@ bin/nbep run $deck "${loud[@]}" -n 30 -o $tmp/end-line.h5 2>/dev/null
 bin/nbep run $deck "${loud[@]}" -n 55 --resume $tmp/end-line.h5 2>$tmp/end-line.err
 check "a resumed run's end line: 'ran 25 steps (to step 55) of 400 spheres' ($(tail -n 1 $tmp/end-line.err))" \
     "tail -n 1 $tmp/end-line.err | grep -q '^nbep: ran 25 steps (to step 55) of 400 spheres'"
+# each resume adds a line to the root attribute `resumed`, which nbep info prints: the step it
+# continued from, its threads, the build and its overrides (the root's own stay the first
+# part's, by which a sweep knows its runs)
+bin/nbep run $deck "${args[@]}" -n 60 -t 1 --resume $tmp/end-line.h5
+bin/nbep info $tmp/end-line.h5 >$tmp/end-line.info
+check "nbep info lists both resumes, in order, with their threads and overrides" \
+    "grep -A1 '^resumed: *step 30: [0-9]* threads*, nbep [^ ]* (commit [^)]*), .*run.steps=55' \
+     $tmp/end-line.info | grep -q '^ *step 55: 1 thread, nbep .*run.steps=60; run.threads=1'"
+check "and the first part's overrides as they were" \
+    "grep -A8 '^overrides:' $tmp/end-line.info | grep -q 'run.steps=30'"
 
 # the grid mode (beyond the paper) keeps horizon events in its slots: they are saved too;
 # the cells mode rebuilds its cells and slots at every frame that is a multiple of

@@ -86,15 +86,17 @@ void nbep_resume_fini(nbep_resume *r);
 void nbep_resume_apply(nbep_resume *r, nbep_state *s);
 
 /* `nbep run DECK --resume RUN.h5`: opens an existing run for appending. Checks that it is an
- * nbep-1 file of sc's spheres (same count, radii and masses) and planes, and that its frames
- * hold positions and velocities; reads its last complete frame (and, where the file has
- * /checkpoint, that frame's event slots) into *r; drops rows written after that frame
- * (incomplete frames, stats rows of later steps), removes the old summary and sets the root
- * attribute `steps` to sc->steps. Frames and stats then append as after nbep_output_create.
- * NBEP_EIO for a file that cannot be read or written, NBEP_EDECK when deck and file disagree. */
+ * nbep-1 file of the run sc makes (sphere and plane counts, radii, masses, accelerations,
+ * planes, box and dt), and that its frames hold positions and velocities; reads its last
+ * complete frame (and, where the file has /checkpoint, that frame's event slots) into *r;
+ * drops rows written after that frame (incomplete frames, stats rows of later steps), removes
+ * the old summary, sets the root attribute `steps` to sc->steps and adds a line to the root
+ * attribute `resumed` (the step resumed from, `threads`, this build and sc's overrides).
+ * Frames and stats then append as after nbep_output_create. NBEP_EIO for a file that cannot
+ * be read or written, NBEP_EDECK when deck and file disagree. */
 NBEP_MUST_CHECK nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc,
-                                                    nbep_output **out, nbep_resume *r,
-                                                    nbep_diag *d);
+                                                    int threads, nbep_output **out,
+                                                    nbep_resume *r, nbep_diag *d);
 /* Appends count rows (borrowed) to /stats, and their rows of /stats/wall_impulse from wall
  * (count x n_planes, row by row; NULL: zeros); they reach the disk with the next frame or
  * close. Only when the scene asked for stats. NBEP_EIO on failure. */
