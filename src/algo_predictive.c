@@ -699,11 +699,16 @@ static void keep_earlier(nbep_event *best, nbep_event e)
         *best = e;
 }
 
-/* The contact of spheres i (flying with ai) and j, each at its own local time: both are
- * brought to the later of the two, and the event is stamped with both response counts. j is
- * taken at its position plus shift (its copy across periodic faces; zero otherwise). */
-static nbep_event pair_event(const pred_ctx *c, const nbep_state *s, size_t i, nbep_vec3 ai,
-                             size_t j, nbep_vec3 shift, double T0, thread_ws *w)
+/* The relative motion of spheres i (flying with ai) and j, each at its own local time, both
+ * brought to the later of the two (t0): dp, dv, da and their contact distance. j is taken at
+ * its position plus shift (its copy across periodic faces; zero otherwise). */
+typedef struct pair_rel {
+    nbep_vec3 dp, dv, da;
+    double t0, sigma;
+} pair_rel;
+
+static pair_rel pair_relative(const pred_ctx *c, const nbep_state *s, size_t i, nbep_vec3 ai,
+                              size_t j, nbep_vec3 shift)
 {
     const double ti = c->tau[i], tj = c->tau[j];
     const double t0 = ti > tj ? ti : tj;
@@ -715,9 +720,53 @@ static nbep_event pair_event(const pred_ctx *c, const nbep_state *s, size_t i, n
         nbep_physics_drift(&pi, &vi, ai, t0 - ti);
     if (tj < t0)
         nbep_physics_drift(&pj, &vj, aj, t0 - tj);
-    double dt = nbep_predict_pair(nbep_vec3_sub(pj, pi), nbep_vec3_sub(vj, vi),
-                                  nbep_vec3_sub(aj, ai), s->radius[i] + s->radius[j], w->pws);
-    return (nbep_event){T0 + (t0 + dt), (uint32_t)j, NBEP_EVENT_SPHERE, c->ver[i], c->ver[j]};
+    return (pair_rel){nbep_vec3_sub(pj, pi), nbep_vec3_sub(vj, vi), nbep_vec3_sub(aj, ai), t0,
+                      s->radius[i] + s->radius[j]};
+}
+
+/* The earliest the pair r can touch, from the step's start T0 (nbep_predict_pair_bound):
+ * NBEP_NEVER where it never can. Rounding is monotone, so the time of the root, no earlier
+ * than the bound, is no earlier than this either. A pair with equal accelerations takes no
+ * bound (its root, a quadratic's, costs about what the bound would: the paper's box, where
+ * every sphere falls alike, solves every pair as before): its t0. */
+static double pair_earliest(const pair_rel *r, double T0)
+{
+    if (r->da.x == 0.0 && r->da.y == 0.0 && r->da.z == 0.0)
+        return T0 + r->t0;
+    const double lb = nbep_predict_pair_bound(r->dp, r->dv, r->da, r->sigma);
+    return lb == NBEP_NEVER ? NBEP_NEVER : T0 + (r->t0 + lb);
+}
+
+/* Whether a pair that can touch no earlier than `earliest` may still come before *best (ties
+ * may: the partner decides them). */
+static bool may_beat(const nbep_event *best, double earliest)
+{
+    return earliest < NBEP_NEVER && (best->kind == NBEP_EVENT_NONE || !(earliest > best->time));
+}
+
+/* The contact of spheres i (flying with ai) and j (pair_relative), stamped with both response
+ * counts: the paper's all-pairs loop, which solves every pair (its pairs share one
+ * acceleration in the paper's box, and a bound per pair slowed its step by a quarter). */
+static nbep_event pair_event(const pred_ctx *c, const nbep_state *s, size_t i, nbep_vec3 ai,
+                             size_t j, nbep_vec3 shift, double T0, thread_ws *w)
+{
+    const pair_rel r = pair_relative(c, s, i, ai, j, shift);
+    const double dt = nbep_predict_pair(r.dp, r.dv, r.da, r.sigma, w->pws);
+    return (nbep_event){T0 + (r.t0 + dt), (uint32_t)j, NBEP_EVENT_SPHERE, c->ver[i], c->ver[j]};
+}
+
+/* keep_earlier of the contact of spheres i (flying with ai) and j (pair_relative), stamped
+ * with both response counts. A pair that cannot come before *best is not solved: *best ends
+ * the same, bit for bit. */
+static void keep_pair(nbep_event *best, const pred_ctx *c, const nbep_state *s, size_t i,
+                      nbep_vec3 ai, size_t j, nbep_vec3 shift, double T0, thread_ws *w)
+{
+    const pair_rel r = pair_relative(c, s, i, ai, j, shift);
+    if (!may_beat(best, pair_earliest(&r, T0)))
+        return;
+    const double dt = nbep_predict_pair(r.dp, r.dv, r.da, r.sigma, w->pws);
+    keep_earlier(best, (nbep_event){T0 + (r.t0 + dt), (uint32_t)j, NBEP_EVENT_SPHERE, c->ver[i],
+                                    c->ver[j]});
 }
 
 /* All-pairs mode in a periodic box: when sphere i (at its local time) will have strayed
@@ -804,7 +853,7 @@ static nbep_event predict_grid(const pred_ctx *c, const nbep_state *s, size_t i,
                     size_t j = c->grid.item[k];
                     if (j == i)
                         continue;
-                    keep_earlier(&best, pair_event(c, s, i, ai, j, ZERO3, T0, w));
+                    keep_pair(&best, c, s, i, ai, j, ZERO3, T0, w);
                     tested++;
                 }
             }
@@ -1877,16 +1926,32 @@ static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, bool 
 {
     cells_user *x = u;
     const nbep_vec3 ai = effective_acc(x->c, x->s, i);
-    for (size_t k = 0; k < m; k++)
-        keep_earlier(best, pair_event(x->c, x->s, i, ai, js[k],
-                                      images ? neighbour_shift(x->c, x->s, i, js[k]) : ZERO3,
-                                      x->T0, x->w));
+    /* the pair that can touch first is solved first, so that its root (a quartic where the two
+     * accelerate differently: a settling pile, where this was most of the run) lets most of
+     * the others go unsolved; the winner is the same in any order (cells_pairs_free) */
+    size_t first = m;
+    double first_t = NBEP_NEVER;
+    for (size_t k = 0; k < m; k++) {
+        const pair_rel r = pair_relative(x->c, x->s, i, ai, js[k],
+                                         images ? neighbour_shift(x->c, x->s, i, js[k]) : ZERO3);
+        const double t = pair_earliest(&r, x->T0);
+        if (t < first_t) {
+            first = k;
+            first_t = t;
+        }
+    }
+    for (size_t q = 0; q < m; q++) {
+        const size_t k = q == 0 ? first : q == first ? 0 : q;
+        if (k < m)
+            keep_pair(best, x->c, x->s, i, ai, js[k],
+                      images ? neighbour_shift(x->c, x->s, i, js[k]) : ZERO3, x->T0, x->w);
+    }
     x->cnt->c[NBEP_COUNTER_PREDICTIONS] += m;
 }
 
 /* cells_pairs for a scene where nothing accelerates (c->free_flight: every acceleration zero,
  * so no contact ever rests or holds and every sphere flies straight): the same pairs, positions
- * and roots as pair_event, and the same winner as keep_earlier over them, bit for bit (a drift
+ * and roots as keep_pair, and the same winner as its keep_earlier, bit for bit (a drift
  * with zero acceleration is p + v h exactly, and ffp-contract is off), with savings that matter
  * in a dense fluid, where this loop is most of the run: no acceleration is loaded or applied;
  * no image is looked for when none can be needed; the best so far is kept as a time and a

@@ -427,6 +427,70 @@ static void test_the_root_free_bound_is_below_the_root_and_never_drops_a_hit(voi
     assert_true(told_misses > misses * 9 / 10);
 }
 
+/* The bound that lets a pair loop skip roots (nbep_predict_pair_bound), over pairs with any
+ * relative acceleration: head-on with the acceleration along the approach (where it is
+ * reached, so it must be shrunk to stay below the computed root), aimed near sigma (grazing
+ * hits and misses), touching, and anywhere, with accelerations from none to strong. It is
+ * never above the root; NBEP_NEVER only where the root is NBEP_NEVER; within 1e-9 of the
+ * root head-on, and a useful bound elsewhere (most pairs that draw apart are told without
+ * a root). */
+static void test_the_general_bound_is_below_the_root_and_tight_head_on(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    uint64_t seed = 23;
+    const int n = small_scale() ? 20000 : 200000;
+    int head_on = 0, apart = 0, told_apart = 0;
+    for (int i = 0; i < n; i++) {
+        const double sigma = uniform(&seed, 0.1, 2.0);
+        const int kind = i % 4;
+        nbep_vec3 dv = uniform_vec(&seed, 2.0), dp, da;
+        const double acc = kind == 3 && i % 8 == 3 ? 0.0 : pow(10.0, uniform(&seed, -3.0, 1.5));
+        if (kind == 0) { /* head-on, the acceleration along the approach, closing */
+            const nbep_vec3 u = unit(uniform_vec(&seed, 1.0));
+            dp = nbep_vec3_scale(u, sigma * uniform(&seed, 1.001, 4.0));
+            dv = nbep_vec3_scale(u, -uniform(&seed, 0.0, 2.0));
+            da = nbep_vec3_scale(u, -acc);
+        } else if (kind == 1) { /* aimed at an impact parameter near sigma */
+            const double rel = pow(10.0, uniform(&seed, -12.0, -3.0)) * (i % 8 < 4 ? 1 : -1);
+            dp = approach(dv, unit(uniform_vec(&seed, 1.0)), uniform(&seed, 1.5, 6.0) * sigma,
+                          sigma * (1.0 + rel));
+            da = nbep_vec3_scale(unit(uniform_vec(&seed, 1.0)), acc);
+        } else if (kind == 2) { /* touching within 1e-13 */
+            dp = nbep_vec3_scale(unit(uniform_vec(&seed, 1.0)),
+                                 sigma * (1.0 + uniform(&seed, -1e-13, 1e-13)));
+            da = nbep_vec3_scale(unit(uniform_vec(&seed, 1.0)), acc);
+        } else { /* anywhere apart */
+            dp = uniform_vec(&seed, 4.0);
+            if (nbep_vec3_norm(dp) < 1.01 * sigma)
+                dp = nbep_vec3_scale(dp, uniform(&seed, 1.01, 3.0) * sigma / nbep_vec3_norm(dp));
+            da = nbep_vec3_scale(unit(uniform_vec(&seed, 1.0)), acc);
+        }
+        const double t = nbep_predict_pair(dp, dv, da, sigma, ws);
+        const double lb = nbep_predict_pair_bound(dp, dv, da, sigma);
+        assert_false(isnan(lb));
+        assert_true(lb >= 0.0);
+        if (kind == 3 && nbep_vec3_dot(dp, dv) > 0.0 && nbep_vec3_dot(dv, da) > 0.0 &&
+            nbep_vec3_dot(dv, dv) + nbep_vec3_dot(dp, da) > 0.0) {
+            apart++; /* draws apart for ever */
+            told_apart += isinf(lb);
+        }
+        if (isinf(t))
+            continue;
+        if (isinf(lb))
+            fail_msg("pair %d: meets at %.17g but the bound says never", i, t);
+        if (!(lb <= t))
+            fail_msg("pair %d (kind %d): bound %.17g above the root %.17g", i, kind, lb, t);
+        if (kind == 0 && t > 0.0) {
+            head_on++;
+            if (!(lb >= t * (1.0 - 1e-9)))
+                fail_msg("pair %d: head-on bound %.17g not within 1e-9 of the root %.17g", i,
+                         lb, t);
+        }
+    }
+    assert_true(head_on > n / 8);
+    assert_true(apart > n / 100 && told_apart == apart);
+}
+
 /* The GSL-free search that a GSL failure falls back on must give the same answers as the GSL
  * path, over pairs of every kind: apart, aimed, tiny and large accelerations. Only pairs that
  * nbep_predict_pair sends to GSL compare two solvers: its documented routing (predict.c) sends
@@ -631,6 +695,8 @@ int main(void)
         cmocka_unit_test(test_grazing_pair_still_hits_at_the_geometric_time),
         cmocka_unit_test(test_receding_pair_never_meets),
         cmocka_unit_test(test_the_root_free_bound_is_below_the_root_and_never_drops_a_hit),
+        cmocka_unit_test_setup_teardown(test_the_general_bound_is_below_the_root_and_tight_head_on,
+                                        ws_setup, ws_teardown),
         cmocka_unit_test(test_pair_at_rest_or_moving_sideways_never_meets),
         cmocka_unit_test(test_touching_and_closing_pair_meets_now),
         cmocka_unit_test(test_touching_or_overlapping_but_receding_pair_never_meets),
