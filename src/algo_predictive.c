@@ -1940,13 +1940,14 @@ static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, bool 
             first_t = t;
         }
     }
-    for (size_t q = 0; q < m; q++) {
-        const size_t k = q == 0 ? first : q == first ? 0 : q;
-        if (k < m)
-            keep_pair(best, x->c, x->s, i, ai, js[k],
-                      images ? neighbour_shift(x->c, x->s, i, js[k]) : ZERO3, x->T0, x->w);
-    }
     x->cnt->c[NBEP_COUNTER_PREDICTIONS] += m;
+    if (first == m) /* every pair never touches */
+        return;
+    for (size_t q = 0; q < m; q++) { /* first, then the others in list order */
+        const size_t k = q == 0 ? first : q == first ? 0 : q;
+        keep_pair(best, x->c, x->s, i, ai, js[k],
+                  images ? neighbour_shift(x->c, x->s, i, js[k]) : ZERO3, x->T0, x->w);
+    }
 }
 
 /* cells_pairs for a scene where nothing accelerates (c->free_flight: every acceleration zero,

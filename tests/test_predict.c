@@ -491,6 +491,76 @@ static void test_the_general_bound_is_below_the_root_and_tight_head_on(void **st
     assert_true(apart > n / 100 && told_apart == apart);
 }
 
+/* The same bound in any units: pairs of every kind above, near contact (gaps of 1e-12 to 1e-6
+ * sigma) and from rest head-on, with lengths scaled by 2^k and times by 2^m (|k| up to 500,
+ * |m| up to 250, accelerations up to 2^1000: squares leave the normal range both ways): never above the root, and where every
+ * number stays within 2^-300 .. 2^300, the same bound as unscaled, scaled (powers of two scale
+ * exactly). And the cases a review found where squares underflowed (the bound came out above
+ * the root, or never for a pair that meets). */
+static void test_the_general_bound_holds_in_any_units(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    const struct {
+        nbep_vec3 dp, dv, da;
+        double sigma;
+    } found[] = {{{1, 0, 0}, {-1e-170, 0, 0}, {1e-170, 0, 0}, 0.5},
+                 {{1, 0, 0}, {-1e-161, 0, 0}, {1e-200, 0, 0}, 0.5},
+                 {{1e-80, 0, 0}, {0, 0, 0}, {-4.14e-162, 0, 0}, 0.5e-80}};
+    for (size_t k = 0; k < sizeof found / sizeof *found; k++) {
+        const double t = nbep_predict_pair(found[k].dp, found[k].dv, found[k].da, found[k].sigma, ws);
+        const double lb = nbep_predict_pair_bound(found[k].dp, found[k].dv, found[k].da,
+                                                  found[k].sigma);
+        if (!(lb <= t))
+            fail_msg("case %zu: bound %.17g above the root %.17g", k, lb, t);
+    }
+    uint64_t seed = 29;
+    const int n = small_scale() ? 20000 : 200000;
+    int same = 0;
+    for (int i = 0; i < n; i++) {
+        const double sigma = uniform(&seed, 0.1, 2.0);
+        const nbep_vec3 u = unit(uniform_vec(&seed, 1.0));
+        nbep_vec3 dp, dv, da;
+        const double acc = pow(10.0, uniform(&seed, -3.0, 1.5));
+        switch (i % 4) {
+        case 0: /* near contact, closing head-on */
+            dp = nbep_vec3_scale(u, sigma * (1.0 + pow(10.0, uniform(&seed, -12.0, -6.0))));
+            dv = nbep_vec3_scale(u, -uniform(&seed, 0.0, 2.0));
+            da = nbep_vec3_scale(u, -acc);
+            break;
+        case 1: /* from rest, pulled together head-on */
+            dp = nbep_vec3_scale(u, sigma * uniform(&seed, 1.001, 4.0));
+            dv = zero;
+            da = nbep_vec3_scale(u, -acc);
+            break;
+        case 2: /* aimed near sigma */
+            dv = uniform_vec(&seed, 2.0);
+            dp = approach(dv, u, uniform(&seed, 1.5, 6.0) * sigma,
+                          sigma * (1.0 + pow(10.0, uniform(&seed, -12.0, -3.0))));
+            da = nbep_vec3_scale(unit(uniform_vec(&seed, 1.0)), acc);
+            break;
+        default: /* anywhere apart */
+            dp = nbep_vec3_scale(u, sigma * uniform(&seed, 1.01, 3.0));
+            dv = uniform_vec(&seed, 2.0);
+            da = nbep_vec3_scale(unit(uniform_vec(&seed, 1.0)), acc);
+        }
+        const int k = (int)uniform(&seed, -500.0, 500.0), m = (int)uniform(&seed, -250.0, 250.0);
+        const double L = ldexp(1.0, k), V = ldexp(1.0, k - m), A = ldexp(1.0, k - 2 * m);
+        const nbep_vec3 sp = nbep_vec3_scale(dp, L), sv = nbep_vec3_scale(dv, V),
+                        sa = nbep_vec3_scale(da, A);
+        const double t = nbep_predict_pair(sp, sv, sa, sigma * L, ws);
+        const double lb = nbep_predict_pair_bound(sp, sv, sa, sigma * L);
+        assert_false(isnan(lb));
+        if (!(lb <= t) && !(isinf(lb) && isinf(t)))
+            fail_msg("pair %d (2^%d m, 2^%d s): bound %.17g above the root %.17g", i, k, m, lb,
+                     t);
+        if (abs(k) < 250 && abs(k - 2 * m) < 250 && abs(k - m) < 250 && sa.x != 0.0) {
+            const double lb1 = nbep_predict_pair_bound(dp, dv, da, sigma);
+            same += lb == ldexp(lb1, m) || (isinf(lb) && isinf(lb1));
+        }
+    }
+    assert_true(same > n / 20);
+}
+
 /* The GSL-free search that a GSL failure falls back on must give the same answers as the GSL
  * path, over pairs of every kind: apart, aimed, tiny and large accelerations. Only pairs that
  * nbep_predict_pair sends to GSL compare two solvers: its documented routing (predict.c) sends
@@ -697,6 +767,8 @@ int main(void)
         cmocka_unit_test(test_the_root_free_bound_is_below_the_root_and_never_drops_a_hit),
         cmocka_unit_test_setup_teardown(test_the_general_bound_is_below_the_root_and_tight_head_on,
                                         ws_setup, ws_teardown),
+        cmocka_unit_test_setup_teardown(test_the_general_bound_holds_in_any_units, ws_setup,
+                                        ws_teardown),
         cmocka_unit_test(test_pair_at_rest_or_moving_sideways_never_meets),
         cmocka_unit_test(test_touching_and_closing_pair_meets_now),
         cmocka_unit_test(test_touching_or_overlapping_but_receding_pair_never_meets),

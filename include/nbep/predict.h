@@ -102,18 +102,34 @@ double nbep_predict_pair(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double sigma,
  * the pair cannot touch before |dv| t + |da| t^2/2 reaches the gap g = |dp| - sigma:
  * t = 2 g / (|dv| + sqrt(|dv|^2 + 2 |da| g)) (without cancellation). NBEP_NEVER where nothing
  * moves them (|dv| = |da| = 0: the root is NBEP_NEVER too); 0 where they touch or nearly.
- * g is taken 1e-12 |dp| short, which lowers the bound by at least 1e-12 of itself (it is about
- * g over a speed, and |dp| > g): far more than the bound's own rounding (a few ulps, and that
- * of |dp| in g) and than the computed root's error where the two can be close. They are close
- * only for a pair closing head-on at the full relative speed, whose root is simple (about
- * 1e-15 relative; a grazing pair's double root, off by up to 1e-8, lies well beyond the
- * bound). So a pair skipped for it is truly later (head-on without the shortfall, the bound
+ * g is taken 1e-12 |dp| short, which lowers the bound by at least half of 1e-12 of itself (it
+ * grows as g, or as sqrt(g) where the acceleration rules, and |dp| > g): far more than the
+ * bound's own rounding (a few ulps, and that of |dp| in g) and than the computed root's error
+ * where the two can be close. They are close only for a pair closing head-on at the full
+ * relative speed, whose root is simple and Newton-polished to a few ulps (a grazing pair's
+ * double root, off by up to 1e-8, lies well beyond the bound). Where a component of dp, dv or
+ * da (nonzero) or sigma lies outside 2^-300 .. 2^300, 0: no bound (their products would leave
+ * the normal range, where those roundings do not hold). So a pair skipped for it is truly later (head-on without the shortfall, the bound
  * came out an ulp above the root: tests/test_predict.c). Below 1e-12 |dp| of contact, 0: no
  * bound, take the root. NBEP_NEVER too where the pair, apart, only draws apart (below), whose
  * root is NBEP_NEVER as well. */
+static inline bool nbep__predict_bound_scale(double x)
+{
+    return x == 0.0 || (fabs(x) >= 0x1p-300 && fabs(x) <= 0x1p300);
+}
+
 static inline double nbep_predict_pair_bound(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da,
                                              double sigma)
 {
+    /* every product below normal and finite, so that the roundings argued here hold: else no
+     * bound (the root itself is scaled to any units; a bound from underflowed squares came out
+     * above it) */
+    const double c[9] = {dp.x, dp.y, dp.z, dv.x, dv.y, dv.z, da.x, da.y, da.z};
+    for (int k = 0; k < 9; k++)
+        if (!nbep__predict_bound_scale(c[k]))
+            return 0.0;
+    if (!nbep__predict_bound_scale(sigma))
+        return 0.0;
     const double d = sqrt(dp.x * dp.x + dp.y * dp.y + dp.z * dp.z);
     const double g = d - sigma - 1e-12 * d;
     if (!(g > 0.0))
