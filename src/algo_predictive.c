@@ -755,18 +755,26 @@ static nbep_event pair_event(const pred_ctx *c, const nbep_state *s, size_t i, n
     return (nbep_event){T0 + (r.t0 + dt), (uint32_t)j, NBEP_EVENT_SPHERE, c->ver[i], c->ver[j]};
 }
 
-/* keep_earlier of the contact of spheres i (flying with ai) and j (pair_relative), stamped
- * with both response counts. A pair that cannot come before *best is not solved: *best ends
- * the same, bit for bit. */
+/* keep_earlier of the contact of spheres i and j, moving relative to each other as r says
+ * (pair_relative), stamped with both response counts; not solved where it can touch no
+ * earlier than `earliest` (pair_earliest) and that cannot come before *best: *best ends the
+ * same, bit for bit. */
+static void keep_rel(nbep_event *best, const pred_ctx *c, size_t i, size_t j, const pair_rel *r,
+                     double earliest, double T0, thread_ws *w)
+{
+    if (!may_beat(best, earliest))
+        return;
+    const double dt = nbep_predict_pair(r->dp, r->dv, r->da, r->sigma, w->pws);
+    keep_earlier(best, (nbep_event){T0 + (r->t0 + dt), (uint32_t)j, NBEP_EVENT_SPHERE, c->ver[i],
+                                    c->ver[j]});
+}
+
+/* keep_rel of spheres i (flying with ai) and j (at its position plus shift). */
 static void keep_pair(nbep_event *best, const pred_ctx *c, const nbep_state *s, size_t i,
                       nbep_vec3 ai, size_t j, nbep_vec3 shift, double T0, thread_ws *w)
 {
     const pair_rel r = pair_relative(c, s, i, ai, j, shift);
-    if (!may_beat(best, pair_earliest(&r, T0)))
-        return;
-    const double dt = nbep_predict_pair(r.dp, r.dv, r.da, r.sigma, w->pws);
-    keep_earlier(best, (nbep_event){T0 + (r.t0 + dt), (uint32_t)j, NBEP_EVENT_SPHERE, c->ver[i],
-                                    c->ver[j]});
+    keep_rel(best, c, i, j, &r, pair_earliest(&r, T0), T0, w);
 }
 
 /* All-pairs mode in a periodic box: when sphere i (at its local time) will have strayed
@@ -1921,33 +1929,37 @@ static inline nbep_vec3 neighbour_shift(const pred_ctx *c, const nbep_state *s, 
     return nbep_periodic_near_shift(&c->pb, nbep_vec3_sub(s->pos[j], s->pos[i]));
 }
 
+/* Partners whose relative motions cells_pairs holds at once (a list of a fluid or a pile has
+ * about 10 to 40). */
+#define CELLS_BATCH 32
+
 static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, bool images,
                         nbep_event *best)
 {
     cells_user *x = u;
     const nbep_vec3 ai = effective_acc(x->c, x->s, i);
-    /* the pair that can touch first is solved first, so that its root (a quartic where the two
-     * accelerate differently: a settling pile, where this was most of the run) lets most of
-     * the others go unsolved; the winner is the same in any order (cells_pairs_free) */
-    size_t first = m;
-    double first_t = NBEP_NEVER;
-    for (size_t k = 0; k < m; k++) {
-        const pair_rel r = pair_relative(x->c, x->s, i, ai, js[k],
-                                         images ? neighbour_shift(x->c, x->s, i, js[k]) : ZERO3);
-        const double t = pair_earliest(&r, x->T0);
-        if (t < first_t) {
-            first = k;
-            first_t = t;
+    /* in each batch of partners, the pair that can touch first is solved first, so that its
+     * root (a quartic where the two accelerate differently: a settling pile, where this was
+     * most of the run) lets most of the others go unsolved; the winner is the same in any
+     * order (cells_pairs_free) */
+    pair_rel rel[CELLS_BATCH];
+    double earliest[CELLS_BATCH];
+    for (size_t k0 = 0; k0 < m; k0 += CELLS_BATCH) {
+        const size_t n = m - k0 < CELLS_BATCH ? m - k0 : CELLS_BATCH;
+        size_t first = 0;
+        for (size_t q = 0; q < n; q++) {
+            const uint32_t j = js[k0 + q];
+            rel[q] = pair_relative(x->c, x->s, i, ai, j,
+                                   images ? neighbour_shift(x->c, x->s, i, j) : ZERO3);
+            earliest[q] = pair_earliest(&rel[q], x->T0);
+            first = earliest[q] < earliest[first] ? q : first;
+        }
+        for (size_t q = 0; q < n; q++) { /* first, then the others in list order */
+            const size_t k = q == 0 ? first : q == first ? 0 : q;
+            keep_rel(best, x->c, i, js[k0 + k], &rel[k], earliest[k], x->T0, x->w);
         }
     }
     x->cnt->c[NBEP_COUNTER_PREDICTIONS] += m;
-    if (first == m) /* every pair never touches */
-        return;
-    for (size_t q = 0; q < m; q++) { /* first, then the others in list order */
-        const size_t k = q == 0 ? first : q == first ? 0 : q;
-        keep_pair(best, x->c, x->s, i, ai, js[k],
-                  images ? neighbour_shift(x->c, x->s, i, js[k]) : ZERO3, x->T0, x->w);
-    }
 }
 
 /* cells_pairs for a scene where nothing accelerates (c->free_flight: every acceleration zero,

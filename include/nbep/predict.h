@@ -100,19 +100,20 @@ double nbep_predict_pair(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double sigma,
  * root costs about a hundred times a quadratic one: a settling pile spent four fifths of its
  * time on roots it then discarded). |dp + dv t + da t^2/2| >= |dp| - |dv| t - |da| t^2/2, so
  * the pair cannot touch before |dv| t + |da| t^2/2 reaches the gap g = |dp| - sigma:
- * t = 2 g / (|dv| + sqrt(|dv|^2 + 2 |da| g)) (without cancellation). NBEP_NEVER where nothing
- * moves them (|dv| = |da| = 0: the root is NBEP_NEVER too); 0 where they touch or nearly.
- * g is taken 1e-12 |dp| short, which lowers the bound by at least half of 1e-12 of itself (it
- * grows as g, or as sqrt(g) where the acceleration rules, and |dp| > g): far more than the
- * bound's own rounding (a few ulps, and that of |dp| in g) and than the computed root's error
- * where the two can be close. They are close only for a pair closing head-on at the full
- * relative speed, whose root is simple and Newton-polished to a few ulps (a grazing pair's
- * double root, off by up to 1e-8, lies well beyond the bound). Where a component of dp, dv or
- * da (nonzero) or sigma lies outside 2^-300 .. 2^300, 0: no bound (their products would leave
- * the normal range, where those roundings do not hold). So a pair skipped for it is truly later (head-on without the shortfall, the bound
- * came out an ulp above the root: tests/test_predict.c). Below 1e-12 |dp| of contact, 0: no
- * bound, take the root. NBEP_NEVER too where the pair, apart, only draws apart (below), whose
- * root is NBEP_NEVER as well. */
+ * t = 2 g / (|dv| + sqrt(|dv|^2 + 2 |da| g)) (without cancellation).
+ * - g is taken 1e-12 |dp| short, which lowers the bound by at least half of 1e-12 of itself
+ *   (it grows as g, or as sqrt(g) where the acceleration rules, and |dp| > g): far more than
+ *   the bound's own rounding (a few ulps, and that of |dp| in g) and than the computed root's
+ *   error where the two can be close. They are close only for a pair closing head-on at the
+ *   full relative speed, whose root is simple and Newton-polished to a few ulps (a grazing
+ *   pair's double root, off by up to 1e-8, lies well beyond the bound). Without the shortfall
+ *   the head-on bound came out an ulp above the root (tests/test_predict.c). So a pair skipped
+ *   for it is truly later.
+ * - 0 (no bound: take the root) where they touch or are within that shortfall of it, and where
+ *   a nonzero component of dp, dv or da, or sigma, lies outside 2^-300 .. 2^300: their
+ *   products would leave the normal range, where those roundings do not hold.
+ * - NBEP_NEVER where the pair, apart, only draws apart (below; a pair that nothing moves among
+ *   them), whose root is NBEP_NEVER as well. */
 static inline bool nbep__predict_bound_scale(double x)
 {
     return x == 0.0 || (fabs(x) >= 0x1p-300 && fabs(x) <= 0x1p300);
@@ -148,10 +149,9 @@ static inline double nbep_predict_pair_bound(nbep_vec3 dp, nbep_vec3 dv, nbep_ve
     const double va_size = fabs(dv.x * da.x) + fabs(dv.y * da.y) + fabs(dv.z * da.z);
     if (pv >= e4 * pv_size && vv + pa >= e4 * (vv + pa_size) && va >= e4 * va_size)
         return NBEP_NEVER;
-    const double v = sqrt(vv);
+    /* dv or da is not 0 (with both 0 the test above holds): den > 0 */
     const double a = sqrt(da.x * da.x + da.y * da.y + da.z * da.z);
-    const double den = v + sqrt(v * v + 2.0 * a * g);
-    return den > 0.0 ? 2.0 * g / den : NBEP_NEVER;
+    return 2.0 * g / (sqrt(vv) + sqrt(vv + 2.0 * a * g));
 }
 
 /* Earliest t >= 0 at which a sphere's gap to a plane, g(t) = gap + vn t + an t^2/2, reaches
