@@ -129,22 +129,21 @@ static void dag_start(const nbep_evloop *e)
     }
 }
 
+/* Appends x to one event's list (reads or writes, sharing the capacity: both grow at once). */
 static void dag_add(uint32_t **list, size_t *len, uint32_t x)
 {
     if (*len == dag.cap) {
-        dag.cap *= 2;
-        uint32_t *r = realloc(dag.reads, dag.cap * sizeof *r);
+        uint32_t *r = realloc(dag.reads, 2 * dag.cap * sizeof *r);
         if (r)
             dag.reads = r;
-        uint32_t *w = realloc(dag.writes, dag.cap * sizeof *w);
+        uint32_t *w = r ? realloc(dag.writes, 2 * dag.cap * sizeof *w) : NULL;
         if (w)
             dag.writes = w;
-        if (!r || !w) {
+        if (!w) {
             dag.failed = true;
-            dag.cap /= 2;
             return;
         }
-        *list = list == &dag.reads ? dag.reads : dag.writes;
+        dag.cap *= 2;
     }
     (*list)[(*len)++] = x;
 }
