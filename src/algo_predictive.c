@@ -769,12 +769,45 @@ static void keep_rel(nbep_event *best, const pred_ctx *c, size_t i, size_t j, co
                                     c->ver[j]});
 }
 
-/* keep_rel of spheres i (flying with ai) and j (at its position plus shift). */
-static void keep_pair(nbep_event *best, const pred_ctx *c, const nbep_state *s, size_t i,
-                      nbep_vec3 ai, size_t j, nbep_vec3 shift, double T0, thread_ws *w)
+/* Where neighbour j is compared with sphere i: at its image nearest to i in a periodic box
+ * (the shift to add to its position), at itself otherwise. */
+static inline nbep_vec3 neighbour_shift(const pred_ctx *c, const nbep_state *s, size_t i,
+                                        size_t j)
 {
-    const pair_rel r = pair_relative(c, s, i, ai, j, shift);
-    keep_rel(best, c, i, j, &r, pair_earliest(&r, T0), T0, w);
+    return nbep_periodic_near_shift(&c->pb, nbep_vec3_sub(s->pos[j], s->pos[i]));
+}
+
+/* Partners whose relative motions keep_pairs holds at once (a list of a fluid or a pile has
+ * about 10 to 40; a grid block as many or more, taken 32 at a time). */
+#define PAIRS_BATCH 32
+
+/* keep_rel of sphere i (flying with ai) and each of js[0..m) (pair_relative, pair_earliest), j
+ * at its nearest image when images: *best ends the same, bit for bit, as solving every pair in
+ * list order would leave it. In each
+ * batch of partners the pair that can touch first is solved first, so that its root (a
+ * quartic where the two accelerate differently: a settling pile, where this was most of the
+ * run) lets most of the others go unsolved; keep_earlier's winner is the same in any order
+ * (cells_pairs_free). */
+static void keep_pairs(nbep_event *best, const pred_ctx *c, const nbep_state *s, uint32_t i,
+                       nbep_vec3 ai, const uint32_t *js, size_t m, bool images, double T0,
+                       thread_ws *w)
+{
+    pair_rel rel[PAIRS_BATCH];
+    double earliest[PAIRS_BATCH];
+    for (size_t k0 = 0; k0 < m; k0 += PAIRS_BATCH) {
+        const size_t n = m - k0 < PAIRS_BATCH ? m - k0 : PAIRS_BATCH;
+        size_t first = 0;
+        for (size_t q = 0; q < n; q++) {
+            const uint32_t j = js[k0 + q];
+            rel[q] = pair_relative(c, s, i, ai, j, images ? neighbour_shift(c, s, i, j) : ZERO3);
+            earliest[q] = pair_earliest(&rel[q], T0);
+            first = earliest[q] < earliest[first] ? q : first;
+        }
+        for (size_t q = 0; q < n; q++) { /* first, then the others in list order */
+            const size_t k = q == 0 ? first : q == first ? 0 : q;
+            keep_rel(best, c, i, js[k0 + k], &rel[k], earliest[k], T0, w);
+        }
+    }
 }
 
 /* All-pairs mode in a periodic box: when sphere i (at its local time) will have strayed
@@ -846,29 +879,41 @@ static nbep_event predict_grid(const pred_ctx *c, const nbep_state *s, size_t i,
                                double V, thread_ws *w, nbep_counters *cnt)
 {
     nbep_event best = predict_some(c, s, i, 0, 0, true, T0, w, cnt); /* the planes */
+    /* beyond the horizon nothing is known (a partner from farther away may come first): the
+     * horizon stands for anything later before the pairs are tried, so that a pair that
+     * cannot touch by then goes unsolved (most of a settling pile's quartics). A pair
+     * touching at the horizon itself still comes first, as it did when the horizon replaced
+     * a later best at the end: at one time a sphere event ranks before a horizon. */
+    if (best.kind == NBEP_EVENT_NONE || !(best.time <= c->horizon))
+        best = (nbep_event){c->horizon, 0, NBEP_EVENT_HORIZON, c->ver[i], 0};
     const double H = c->horizon - T0;
     const nbep_vec3 ai = effective_acc(c, s, i);
     double reach = s->radius[i] + c->rmax + nbep_vec3_norm(s->vel[i]) * H +
                    0.5 * nbep_vec3_norm(ai) * H * H + V * H + 0.5 * c->amax * H * H;
     size_t lo[3], hi[3];
     uint64_t tested = 0;
+    uint32_t js[PAIRS_BATCH]; /* the partners, a batch at a time (keep_pairs) */
+    size_t m = 0;
     nbep_grid_block(&c->grid, s->pos[i], reach, lo, hi);
     for (size_t z = lo[2]; z <= hi[2]; z++)
         for (size_t y = lo[1]; y <= hi[1]; y++)
             for (size_t x = lo[0]; x <= hi[0]; x++) {
                 size_t cell = nbep_grid_index(&c->grid, x, y, z);
                 for (size_t k = c->grid.start[cell]; k < c->grid.start[cell + 1]; k++) {
-                    size_t j = c->grid.item[k];
+                    const uint32_t j = c->grid.item[k];
                     if (j == i)
                         continue;
-                    keep_pair(&best, c, s, i, ai, j, ZERO3, T0, w);
-                    tested++;
+                    js[m++] = j;
+                    if (m == PAIRS_BATCH) {
+                        keep_pairs(&best, c, s, (uint32_t)i, ai, js, m, false, T0, w);
+                        tested += m;
+                        m = 0;
+                    }
                 }
             }
+    keep_pairs(&best, c, s, (uint32_t)i, ai, js, m, false, T0, w);
+    tested += m;
     cnt->c[NBEP_COUNTER_PREDICTIONS] += tested;
-    /* beyond the horizon nothing is known: a partner from farther away may come first */
-    if (best.kind == NBEP_EVENT_NONE || !(best.time <= c->horizon))
-        best = (nbep_event){c->horizon, 0, NBEP_EVENT_HORIZON, c->ver[i], 0};
     return best;
 }
 
@@ -1921,50 +1966,17 @@ static nbep_event cells_planes(void *u, uint32_t i)
     return predict_some(x->c, x->s, i, 0, 0, true, x->T0, x->w, x->cnt);
 }
 
-/* Where neighbour j is compared with sphere i: at its image nearest to i in a periodic box
- * (the shift to add to its position), at itself otherwise. */
-static inline nbep_vec3 neighbour_shift(const pred_ctx *c, const nbep_state *s, size_t i,
-                                        size_t j)
-{
-    return nbep_periodic_near_shift(&c->pb, nbep_vec3_sub(s->pos[j], s->pos[i]));
-}
-
-/* Partners whose relative motions cells_pairs holds at once (a list of a fluid or a pile has
- * about 10 to 40). */
-#define CELLS_BATCH 32
-
 static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, bool images,
                         nbep_event *best)
 {
     cells_user *x = u;
-    const nbep_vec3 ai = effective_acc(x->c, x->s, i);
-    /* in each batch of partners, the pair that can touch first is solved first, so that its
-     * root (a quartic where the two accelerate differently: a settling pile, where this was
-     * most of the run) lets most of the others go unsolved; the winner is the same in any
-     * order (cells_pairs_free) */
-    pair_rel rel[CELLS_BATCH];
-    double earliest[CELLS_BATCH];
-    for (size_t k0 = 0; k0 < m; k0 += CELLS_BATCH) {
-        const size_t n = m - k0 < CELLS_BATCH ? m - k0 : CELLS_BATCH;
-        size_t first = 0;
-        for (size_t q = 0; q < n; q++) {
-            const uint32_t j = js[k0 + q];
-            rel[q] = pair_relative(x->c, x->s, i, ai, j,
-                                   images ? neighbour_shift(x->c, x->s, i, j) : ZERO3);
-            earliest[q] = pair_earliest(&rel[q], x->T0);
-            first = earliest[q] < earliest[first] ? q : first;
-        }
-        for (size_t q = 0; q < n; q++) { /* first, then the others in list order */
-            const size_t k = q == 0 ? first : q == first ? 0 : q;
-            keep_rel(best, x->c, i, js[k0 + k], &rel[k], earliest[k], x->T0, x->w);
-        }
-    }
+    keep_pairs(best, x->c, x->s, i, effective_acc(x->c, x->s, i), js, m, images, x->T0, x->w);
     x->cnt->c[NBEP_COUNTER_PREDICTIONS] += m;
 }
 
 /* cells_pairs for a scene where nothing accelerates (c->free_flight: every acceleration zero,
  * so no contact ever rests or holds and every sphere flies straight): the same pairs, positions
- * and roots as keep_pair, and the same winner as its keep_earlier, bit for bit (a drift
+ * and roots as keep_pairs, and the same winner as its keep_earlier, bit for bit (a drift
  * with zero acceleration is p + v h exactly, and ffp-contract is off), with savings that matter
  * in a dense fluid, where this loop is most of the run: no acceleration is loaded or applied;
  * no image is looked for when none can be needed; the best so far is kept as a time and a
