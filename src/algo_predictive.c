@@ -334,6 +334,19 @@ typedef struct pred_ctx {
     int team_way[2];
     double team_cost[3];
     int team_force; /* NBEP_TEAM, read once (team_forced) */
+    /* grid mode on two threads or more: a step's rounds run on the crew team_crew[team_way[step
+     * & 1]] (threads 0 .. crew - 1, each with its own share of the spheres for that crew),
+     * chosen by team_choose as the cells mode's team is, with the barrier of its size; the
+     * other threads wait for the rounds at bar. A crowded scene's rounds are short (a settling
+     * pile: about one event each, behind four barriers), and a crew of 16 ran a pour 1.4 times
+     * as long as one thread on a 16-core node; the paper's box gains from every thread. The
+     * results are the same bit for bit whatever the crew: every round's outcome is (tests). */
+    bool crews;
+    nbep_barrier crew_bar[3];
+    /* thread 0, where the crew is smaller than the run's threads, for the others after the
+     * barrier that ends the rounds: whether the rounds stopped the run */
+    bool crew_quit;
+    uint64_t rounds_before; /* thread 0's: the rounds of the steps before this one */
     nbep_counters *help_cnt;      /* owned when team, team_size NBEP_EVLOOP_RING: each place's
                                    * event's counts (the team loop's ring of places, evloop.h),
                                    * thread t's at t NBEP_EVLOOP_RING + ring slot (each written
@@ -452,6 +465,22 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
                   n);
     }
     c->use_grid = sim->scene->neighbors_grid;
+    c->team_force = team_forced();
+    if (c->use_grid && sim->nt >= 2) {
+        /* the ways of grid mode's rounds: one thread, two, and every thread (or NBEP_TEAM's
+         * count) where that is more; the first step takes the largest (team_choose) */
+        int size = sim->nt;
+        if (c->team_force >= 2 && c->team_force < size)
+            size = c->team_force;
+        c->crews = true;
+        c->team_ways = size > 2 ? 3 : 2;
+        c->team_crew[0] = 1;
+        c->team_crew[1] = 2;
+        c->team_crew[2] = size;
+        for (int w = 0; w < c->team_ways; w++)
+            nbep_barrier_init(&c->crew_bar[w], (unsigned)c->team_crew[w]);
+        c->team_way[0] = c->team_way[1] = c->team_force == -1 ? 0 : c->team_ways - 1;
+    }
     c->pb = nbep_periodic_make(sim->scene->has_box ? sim->scene->periodic : NULL,
                                sim->scene->box_min, sim->scene->box_max);
     if (c->use_grid) {
@@ -483,7 +512,6 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         }
         /* the team loop: reactions of a free flight at e = 1 change their two spheres only
          * (no resting, holding, settling, TC clocks or reaction counts: all NULL here) */
-        c->team_force = team_forced();
         const bool can_team = sim->nt >= 2 && c->free_flight && !c->t_last && !c->jam &&
                               !c->settle && !c->rest;
         int size = sim->nt < NBEP_EVLOOP_TEAM_MAX ? sim->nt : NBEP_EVLOOP_TEAM_MAX;
@@ -541,6 +569,11 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     for (int t = 0; t < sim->nt; t++) {
         nbep_range r = nbep__range_split(n, t, sim->nt);
         size_t own = r.hi - r.lo + 1;
+        for (int k = 0; c->crews && k < c->team_ways; k++) /* its largest share in a crew */
+            if (t < c->team_crew[k]) {
+                const nbep_range q = nbep__range_split(n, t, c->team_crew[k]);
+                own = own > q.hi - q.lo + 1 ? own : q.hi - q.lo + 1;
+            }
         thread_ws *w = &c->ws[t];
         /* 2 per reaction, 1 per let-go; cells mode: one reaction's 3 and every held sphere
          * letting go after it, on the thread that runs the event loop (and a team's helper,
@@ -992,9 +1025,10 @@ static void add_redo(pred_ctx *c, thread_ws *w, size_t i)
 
 /* The find sub-phase of one round (paper Procedures 12 and 13), own spheres only: the first
  * round of a step examines every own slot (stale or invalid -> redo, event before T_end ->
- * candidate); later rounds only the own candidates and the own spheres that reacted. */
-static void find_phase(pred_ctx *c, nbep_range own, bool first, double T_end, thread_ws *w,
-                       nbep_counters *cnt)
+ * candidate); later rounds only the own candidates and the own spheres that reacted (in the
+ * reactions of the crew's threads, 0 .. crew - 1). */
+static void find_phase(pred_ctx *c, nbep_range own, int crew, bool first, double T_end,
+                       thread_ws *w, nbep_counters *cnt)
 {
     w->n_redo = 0;
     if (first) {
@@ -1008,7 +1042,7 @@ static void find_phase(pred_ctx *c, nbep_range own, bool first, double T_end, th
         }
         cnt->c[NBEP_COUNTER_CHECKS] += own.hi - own.lo;
     } else {
-        for (int t = 0; t < c->nt; t++) {
+        for (int t = 0; t < crew; t++) {
             const thread_ws *o = &c->ws[t];
             for (size_t k = 0; k < o->n_fired; k++) {
                 size_t i = o->fired[k];
@@ -1039,17 +1073,19 @@ static double cand_t_min(const pred_ctx *c, const thread_ws *w)
     return t_min;
 }
 
-/* Re-prediction of every thread's redo spheres, shared by all threads chunk by chunk: each
- * thread finds each sphere's best event among its own partners (and thread 0 the planes);
- * then each owner keeps the earliest of the partial bests (the order of nbep_feq_insert is
- * strict, so the result is the same for any split) and adds it to its candidates. Every
- * thread calls this with the same totals; it ends with a barrier. */
-static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid, double T0,
-                       double T_end, thread_ws *w, nbep_counters *cnt)
+/* Re-prediction of every thread's redo spheres, shared by the crew's threads (0 .. crew - 1,
+ * meeting at bar) chunk by chunk: each thread finds each sphere's best event among its own
+ * partners (and thread 0 the planes); then each owner keeps the earliest of the partial bests
+ * (the order of nbep_feq_insert is strict, so the result is the same for any split) and adds
+ * it to its candidates. Every thread of the crew calls this with the same totals; it ends
+ * with a barrier. */
+static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid, int crew,
+                       nbep_barrier *bar, double T0, double T_end, thread_ws *w,
+                       nbep_counters *cnt)
 {
     size_t total = 0;
     double V = c->vmax;
-    for (int t = 0; t < c->nt; t++) {
+    for (int t = 0; t < crew; t++) {
         total += c->ws[t].n_redo;
         V = fmax(V, c->ws[t].vmax_react);
     }
@@ -1057,7 +1093,7 @@ static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid
         size_t end = off + CHUNK < total ? off + CHUNK : total;
         /* this thread's partial best for every sphere of the chunk */
         size_t base = 0;
-        for (int t = 0; t < c->nt; t++) {
+        for (int t = 0; t < crew; t++) {
             const thread_ws *o = &c->ws[t];
             size_t lo = off > base ? off - base : 0;
             size_t hi = end - base < o->n_redo ? end - base : o->n_redo;
@@ -1065,7 +1101,7 @@ static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid
                 nbep_event *out = &w->part[base + k - off];
                 if (!c->use_grid) /* every thread takes its own range of partners */
                     *out = predict_some(c, s, o->redo[k], own.lo, own.hi, tid == 0, T0, w, cnt);
-                else if ((base + k) % (size_t)c->nt == (size_t)tid) /* a few partners: one */
+                else if ((base + k) % (size_t)crew == (size_t)tid) /* a few partners: one */
                     *out = predict_grid(c, s, o->redo[k], T0, V, w, cnt); /* thread each */
                 else
                     *out = (nbep_event){.time = NBEP_NEVER, .kind = NBEP_EVENT_NONE};
@@ -1074,7 +1110,7 @@ static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid
             if (base >= end)
                 break;
         }
-        nbep_barrier_wait(&c->bar);
+        nbep_barrier_wait(bar);
         /* owners merge their spheres of the chunk */
         base = 0;
         for (int t = 0; t < tid; t++)
@@ -1085,7 +1121,7 @@ static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid
                 continue;
             size_t i = w->redo[k];
             nbep_event best = {.time = NBEP_NEVER, .kind = NBEP_EVENT_NONE};
-            for (int t = 0; t < c->nt; t++)
+            for (int t = 0; t < crew; t++)
                 if (c->ws[t].part[g - off].kind != NBEP_EVENT_NONE)
                     keep_earlier(&best, c->ws[t].part[g - off]);
             if (best.kind == NBEP_EVENT_NONE) {
@@ -1100,7 +1136,7 @@ static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid
                  (best.kind == NBEP_EVENT_HORIZON && c->image_horizon)))
                 add_cand(c, w, i);
         }
-        nbep_barrier_wait(&c->bar);
+        nbep_barrier_wait(bar);
     }
 }
 
@@ -1728,17 +1764,17 @@ static void let_go(pred_ctx *c, nbep_state *s, size_t i, double dt, double t_loc
  * (they have not moved: v = 0, a = 0). A sphere still held by what is left stays. Letting go
  * changes held spheres in turn, so it repeats round by round down the pile. Two sub-phases
  * (find, then change) so that no thread reads a response count another is writing. */
-static void let_go_phase(pred_ctx *c, nbep_state *s, nbep_range own, double dt, double t_local,
-                         thread_ws *w)
+static void let_go_phase(pred_ctx *c, nbep_state *s, nbep_range own, nbep_barrier *bar,
+                         double dt, double t_local, thread_ws *w)
 {
     w->n_rel = 0;
     for (size_t i = own.lo; i < own.hi; i++)
         if (held_on_changed(c, i))
             w->rel[w->n_rel++] = (uint32_t)i;
-    nbep_barrier_wait(&c->bar);
+    nbep_barrier_wait(bar);
     for (size_t m = 0; m < w->n_rel; m++)
         let_go(c, s, w->rel[m], dt, t_local, w);
-    nbep_barrier_wait(&c->bar);
+    nbep_barrier_wait(bar);
 }
 
 /* ---- Settling (SETTLE_STEPS) ------------------------------------------------------------ */
@@ -2489,7 +2525,6 @@ static void pred_run(nbep_sim *sim, void *p)
         nbep_state *s = &sim->st;
         const nbep_range own = nbep__range_split(s->n, tid, nt);
         thread_ws *w = &c->ws[tid];
-        uint64_t round = 0, seen_woken = 0;
         if (c->ev) {
             cells_steps(sim, c, tid, own, w);
             goto done;
@@ -2507,10 +2542,10 @@ static void pred_run(nbep_sim *sim, void *p)
         if (!c->imported) {
             nbep_counters *cnt0 = &sim->counters[sim->step_first & 1][tid];
             const double T0 = (double)(sim->step_first - 1) * sim->dt;
-            find_phase(c, own, true, T0, w, cnt0);
+            find_phase(c, own, nt, true, T0, w, cnt0);
             w->n_cand = 0;
             nbep_barrier_wait(&c->bar);
-            redo_phase(c, s, own, tid, T0, T0, w, cnt0);
+            redo_phase(c, s, own, tid, nt, &c->bar, T0, T0, w, cnt0);
         }
         if (tid == 0) { /* SPEC: the first predictions belong to the set-up time */
             double now = nbep_now();
@@ -2524,10 +2559,30 @@ static void pred_run(nbep_sim *sim, void *p)
             nbep_thread_max *mx = &sim->tmax[spar][tid];
             const double T0 = (double)(step - 1) * sim->dt;
             const double T_end = (double)step * sim->dt;
-            const uint64_t step_round0 = round;
             double t_check = T0;
             w->jam_step = (uint32_t)step;
-            for (bool first = true;; first = false, round++) {
+            /* the held spheres woken so far, from every thread's count (only reactions change
+             * them, and none has begun: each round's first barrier comes before them) */
+            uint64_t seen_woken = 0;
+            for (int t = 0; t < nt; t++)
+                seen_woken += c->ws[t].woken;
+            /* the crew of this step's rounds (c->crews), its barrier and each one's share */
+            const int way = c->crews ? c->team_way[step & 1] : 0;
+            const int crew = c->crews ? c->team_crew[way] : nt;
+            nbep_barrier *bar = c->crews ? &c->crew_bar[way] : &c->bar;
+            const nbep_range mine = crew == nt ? own : nbep__range_split(s->n, tid, crew);
+            /* a crew smaller than the run's starts once every thread has placed its cells of
+             * the grid (grid_prepare ends without a barrier: the whole team's find phase,
+             * which reads no grid, ends with one) */
+            if (crew < nt)
+                nbep_barrier_wait(&c->bar);
+            const double t_rounds = nbep_now();
+            bool quit = false;
+            /* the rounds of the step, numbered from 0 on every thread of the crew: the claims'
+             * parity, and past the rounds of the steps before (stamp0), a reaction's stamp */
+            const uint64_t stamp0 = c->rounds_before;
+            uint64_t round = 0;
+            for (bool first = true; tid < crew; first = false, round++) {
                 const int par = (int)(round & 1);
                 /* the claim words of the previous round are reset while nobody reads them */
                 for (size_t k = 0; k < w->n_claimed; k++)
@@ -2538,20 +2593,22 @@ static void pred_run(nbep_sim *sim, void *p)
                     atomic_store_explicit(&c->tclaim[w->tclaimed[k]], KEY_FREE,
                                           memory_order_relaxed);
                 w->n_tclaimed = 0;
-                find_phase(c, own, first, T_end, w, cnt);
-                nbep_barrier_wait(&c->bar);
+                find_phase(c, mine, crew, first, T_end, w, cnt);
+                nbep_barrier_wait(bar);
                 /* relaxed: the barrier above ordered thread 0's store of stop */
-                if (first && atomic_load_explicit(&sim->stop, memory_order_relaxed))
-                    goto done;
-                redo_phase(c, s, own, tid, T0, T_end, w, cnt);
+                if (first && atomic_load_explicit(&sim->stop, memory_order_relaxed)) {
+                    quit = true;
+                    break;
+                }
+                redo_phase(c, s, mine, tid, crew, bar, T0, T_end, w, cnt);
                 w->t_min = cand_t_min(c, w);
-                nbep_barrier_wait(&c->bar);
+                nbep_barrier_wait(bar);
                 double t_min = INFINITY;
-                for (int t = 0; t < nt; t++)
+                for (int t = 0; t < crew; t++)
                     t_min = fmin(t_min, c->ws[t].t_min);
                 if (!(t_min < T_end))
                     break;
-                if ((round - step_round0) % STALL_ROUNDS == STALL_ROUNDS - 1 &&
+                if (round % STALL_ROUNDS == STALL_ROUNDS - 1 &&
                     !(t_min - t_check > STALL_FRACTION * sim->dt)) {
                     if (tid == 0) {
                         nbep_diag_add(sim->diag, __FILE__, __LINE__,
@@ -2560,35 +2617,50 @@ static void pred_run(nbep_sim *sim, void *p)
                                       (unsigned long long)step, t_min);
                         sim->status = NBEP_ENUMERIC;
                     }
-                    goto done;
+                    quit = true;
+                    break;
                 }
-                if ((round - step_round0) % STALL_ROUNDS == STALL_ROUNDS - 1)
+                if (round % STALL_ROUNDS == STALL_ROUNDS - 1)
                     t_check = t_min;
                 if (c->order_step) {
                     claim_time_phase(c, w);
-                    nbep_barrier_wait(&c->bar);
+                    nbep_barrier_wait(bar);
                 }
                 claim_phase(c, par, t_min, w);
-                nbep_barrier_wait(&c->bar);
-                react_phase(c, s, sim->scene, par, T0, t_min, round + 1, w, cnt, mx);
-                nbep_barrier_wait(&c->bar);
+                nbep_barrier_wait(bar);
+                react_phase(c, s, sim->scene, par, T0, t_min, stamp0 + round + 1, w, cnt, mx);
+                nbep_barrier_wait(bar);
                 uint32_t jammed = 0; /* the same on every thread: the lowest sphere index */
-                for (int t = 0; t < nt; t++)
+                for (int t = 0; t < crew; t++)
                     if (c->ws[t].jammed && (!jammed || c->ws[t].jammed < jammed))
                         jammed = c->ws[t].jammed;
                 if (jammed) {
                     if (tid == 0)
                         jam_fail(sim, step, jammed - 1, t_min);
-                    goto done;
+                    quit = true;
+                    break;
                 }
-                uint64_t woken = 0;
+                uint64_t woken = 0; /* every thread's: those out of the crew change none */
                 for (int t = 0; t < nt; t++)
                     woken += c->ws[t].woken;
                 if (woken != seen_woken) { /* the same decision on every thread */
                     seen_woken = woken;
-                    let_go_phase(c, s, own, sim->dt, t_min - T0, w);
+                    let_go_phase(c, s, mine, bar, sim->dt, t_min - T0, w);
                 }
             }
+            if (crew < nt) { /* the others learn whether the rounds stopped the run */
+                if (tid == 0)
+                    c->crew_quit = quit;
+                nbep_barrier_wait(&c->bar);
+                quit = c->crew_quit;
+            }
+            if (quit)
+                goto done;
+            if (tid == 0) /* read at the next step's start, past the barriers of this one's end */
+                c->rounds_before = stamp0 + round + 1;
+            if (tid == 0 && c->crews) /* the crew of the next step */
+                team_choose(c, step, way, round + 1, nbep_now() - t_rounds);
+
             /* update (paper Section 4.3.1): every own sphere flies to the step's end; grid mode
              * also takes the speed bounds of the next step here, in parallel */
             double vmax = 0.0, amax = 0.0;

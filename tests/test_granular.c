@@ -975,23 +975,37 @@ static void test_pile_energy_never_rises(void **state)
 }
 
 /* Lasting contacts, held spheres and TC decisions are taken by whichever thread owns a sphere:
- * frames must not depend on that. */
+ * frames must not depend on that, nor the counts (the work done: a sphere re-predicted more or
+ * less often, or a grid block read while another thread was still filling it, shows there
+ * first). Grid mode runs each step's rounds on a crew of 1, 2 or all threads, chosen by
+ * timing; NBEP_TEAM fixes it: "never" (a crew of one on four threads), "cycle" (every change
+ * of crew, step after step), "always" (all four). */
 static void test_pile_frames_equal_for_1_2_4_threads(void **state)
 {
     (void)state;
-    const int nts[] = {1, 2, 4};
+    const struct {
+        int nt;
+        const char *team; /* NBEP_TEAM (NULL: unset, the run's own choice) */
+    } runs[] = {{1, NULL}, {2, NULL}, {4, NULL}, {4, "never"}, {4, "cycle"}, {4, "always"}};
     for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells (the event loop) */
         nbep_scene *sc = pile(nbep_test_scaled(40, 16), 0.5, nbep_test_scaled(400, 300), "predictive");
         neighbor_mode(sc, mode);
         trace ref = {0};
-        nbep_summary s1 = run(sc, nts[0], &ref);
+        nbep_summary s1 = run(sc, runs[0].nt, &ref);
         assert_true(s1.collisions > 100); /* otherwise the comparison proves little */
-        for (size_t k = 1; k < 3; k++) {
+        for (size_t k = 1; k < sizeof runs / sizeof runs[0]; k++) {
+            if (runs[k].team && mode != 1)
+                continue;
+            if (runs[k].team)
+                setenv("NBEP_TEAM", runs[k].team, 1);
             trace t = {0};
-            nbep_summary sk = run(sc, nts[k], &t);
+            nbep_summary sk = run(sc, runs[k].nt, &t);
+            unsetenv("NBEP_TEAM");
             assert_int_equal(t.n_frames, ref.n_frames);
             assert_memory_equal(t.data, ref.data, ref.n_frames * 2 * ref.n * sizeof *ref.data);
             assert_int_equal(sk.collisions, s1.collisions);
+            assert_int_equal(sk.predictions, s1.predictions);
+            assert_int_equal(sk.checks, s1.checks);
             free(t.data);
         }
         free(ref.data);
