@@ -2566,6 +2566,7 @@ static void pred_run(nbep_sim *sim, void *p)
             uint64_t seen_woken = 0;
             for (int t = 0; t < nt; t++)
                 seen_woken += c->ws[t].woken;
+            const double t_step = nbep_now();
             /* the crew of this step's rounds (c->crews), its barrier and each one's share */
             const int way = c->crews ? c->team_way[step & 1] : 0;
             const int crew = c->crews ? c->team_crew[way] : nt;
@@ -2576,7 +2577,6 @@ static void pred_run(nbep_sim *sim, void *p)
              * which reads no grid, ends with one) */
             if (crew < nt)
                 nbep_barrier_wait(&c->bar);
-            const double t_rounds = nbep_now();
             bool quit = false;
             /* the rounds of the step, numbered from 0 on every thread of the crew: the claims'
              * parity, and past the rounds of the steps before (stamp0), a reaction's stamp */
@@ -2658,8 +2658,6 @@ static void pred_run(nbep_sim *sim, void *p)
                 goto done;
             if (tid == 0) /* read at the next step's start, past the barriers of this one's end */
                 c->rounds_before = stamp0 + round + 1;
-            if (tid == 0 && c->crews) /* the crew of the next step */
-                team_choose(c, step, way, round + 1, nbep_now() - t_rounds);
 
             /* update (paper Section 4.3.1): every own sphere flies to the step's end; grid mode
              * also takes the speed bounds of the next step here, in parallel */
@@ -2685,6 +2683,13 @@ static void pred_run(nbep_sim *sim, void *p)
             nbep__sim_block_energy(sim, own);
             nbep__sim_frame_overlap(sim, step, tid, own, &c->bar);
             nbep_barrier_wait(&c->bar);
+            /* the crew of the next step, from the seconds per round of this one's rounds and
+             * update: a crew smaller than the run's leaves the others waiting, asleep after a
+             * while, and they take their share of the update late (timed on the rounds alone,
+             * the paper's box on a 16-core node took 1.17 times as long as with every thread);
+             * the others read it past grid_prepare's barriers */
+            if (tid == 0 && c->crews)
+                team_choose(c, step, way, round + 1, nbep_now() - t_step);
             if (c->use_grid) /* all threads, from the positions at T_end */
                 grid_prepare(c, s, tid, own, T_end, sim->dt, false);
             /* the speed bounds taken above stay bounds: held spheres only slow down */
