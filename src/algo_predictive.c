@@ -346,6 +346,7 @@ typedef struct pred_ctx {
     /* thread 0, where the crew is smaller than the run's threads, for the others after the
      * barrier that ends the rounds: whether the rounds stopped the run */
     bool crew_quit;
+    int crew_last;  /* thread 0's: the way of the step before (-1: none yet) */
     uint64_t rounds_before; /* thread 0's: the rounds of the steps before this one */
     nbep_counters *help_cnt;      /* owned when team, team_size NBEP_EVLOOP_RING: each place's
                                    * event's counts (the team loop's ring of places, evloop.h),
@@ -480,6 +481,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         for (int w = 0; w < c->team_ways; w++)
             nbep_barrier_init(&c->crew_bar[w], (unsigned)c->team_crew[w]);
         c->team_way[0] = c->team_way[1] = c->team_force == -1 ? 0 : c->team_ways - 1;
+        c->crew_last = -1;
     }
     c->pb = nbep_periodic_make(sim->scene->has_box ? sim->scene->periodic : NULL,
                                sim->scene->box_min, sim->scene->box_max);
@@ -2395,6 +2397,31 @@ static void team_choose(pred_ctx *c, uint64_t step, int way, uint64_t events, do
     *next = (best + 1 + k) % c->team_ways;
 }
 
+/* Thread 0, after step `step` of grid mode ran way `way` in `seconds` (from its start to the
+ * barrier after the update: a crew smaller than the run's leaves the others waiting, asleep
+ * after a while, and they take their share of the update late; timed on its rounds alone, the
+ * paper's box on a 16-core node took 1.17 times as long as with every thread): the way of the
+ * next step, team_choose's, timed per step. Two differences, both from the same node, where
+ * the box of 32768 spheres ran 1.19, 1.40 and 1.61 ms a step on 16, 2 and 1 threads and the
+ * run's own choice took 1.4 times as long as 16 threads throughout:
+ * - per step, not per event (round): much of a step does not depend on its rounds (the first
+ *   round's look at every slot, the update), and the box has 20 to 40 rounds a step;
+ * - a step whose way differs from the step before's is not timed, and the next runs the same
+ *   way: after a change the sphere states, slots and candidate lists that the other crew
+ *   wrote are still in its cores' caches, so a probe timed on its first step pays for the
+ *   change, which a way kept for many steps pays once (our reading of why the box's run kept
+ *   to the smaller crews). */
+static void crew_choose(pred_ctx *c, uint64_t step, int way, double seconds)
+{
+    if (way != c->crew_last && c->team_force != TEAM_CYCLE) {
+        c->crew_last = way;
+        c->team_way[(step + 1) & 1] = way;
+        return;
+    }
+    c->crew_last = way;
+    team_choose(c, step, way, 1, seconds);
+}
+
 /* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's
  * event loop, with threads 1.. in a team where the scene allows it (c->team, team_choose); all
  * threads share the rebuilds, the update to the step's end and the energy.
@@ -2567,23 +2594,23 @@ static void pred_run(nbep_sim *sim, void *p)
             for (int t = 0; t < nt; t++)
                 seen_woken += c->ws[t].woken;
             const double t_step = nbep_now();
-            /* the crew of this step's rounds (c->crews), its barrier and each one's share */
+            /* the crew of this step's rounds after the first (c->crews), its barrier and each
+             * one's share; the first round (every slot looked at, and every sphere whose slot
+             * is stale or whose horizon has come re-predicted: a grid's horizon, every 1 to 64
+             * steps, re-predicts them all) runs on every thread */
             const int way = c->crews ? c->team_way[step & 1] : 0;
             const int crew = c->crews ? c->team_crew[way] : nt;
             nbep_barrier *bar = c->crews ? &c->crew_bar[way] : &c->bar;
             const nbep_range mine = crew == nt ? own : nbep__range_split(s->n, tid, crew);
-            /* a crew smaller than the run's starts once every thread has placed its cells of
-             * the grid (grid_prepare ends without a barrier: the whole team's find phase,
-             * which reads no grid, ends with one) */
-            if (crew < nt)
-                nbep_barrier_wait(&c->bar);
             bool quit = false;
             /* the rounds of the step, numbered from 0 on every thread of the crew: the claims'
              * parity, and past the rounds of the steps before (stamp0), a reaction's stamp */
             const uint64_t stamp0 = c->rounds_before;
             uint64_t round = 0;
-            for (bool first = true; tid < crew; first = false, round++) {
+            for (bool first = true;; first = false, round++) {
                 const int par = (int)(round & 1);
+                const int k_all = first ? nt : crew; /* this round's threads so far */
+                nbep_barrier *b_all = first ? &c->bar : bar;
                 /* the claim words of the previous round are reset while nobody reads them */
                 for (size_t k = 0; k < w->n_claimed; k++)
                     atomic_store_explicit(&c->claim[par ^ 1][w->claimed[k]], KEY_FREE,
@@ -2593,21 +2620,39 @@ static void pred_run(nbep_sim *sim, void *p)
                     atomic_store_explicit(&c->tclaim[w->tclaimed[k]], KEY_FREE,
                                           memory_order_relaxed);
                 w->n_tclaimed = 0;
-                find_phase(c, mine, crew, first, T_end, w, cnt);
-                nbep_barrier_wait(bar);
+                find_phase(c, first ? own : mine, crew, first, T_end, w, cnt);
+                nbep_barrier_wait(b_all);
                 /* relaxed: the barrier above ordered thread 0's store of stop */
                 if (first && atomic_load_explicit(&sim->stop, memory_order_relaxed)) {
                     quit = true;
                     break;
                 }
-                redo_phase(c, s, mine, tid, crew, bar, T0, T_end, w, cnt);
+                redo_phase(c, s, first ? own : mine, tid, k_all, b_all, T0, T_end, w, cnt);
                 w->t_min = cand_t_min(c, w);
-                nbep_barrier_wait(bar);
+                nbep_barrier_wait(b_all);
                 double t_min = INFINITY;
-                for (int t = 0; t < crew; t++)
+                for (int t = 0; t < k_all; t++)
                     t_min = fmin(t_min, c->ws[t].t_min);
                 if (!(t_min < T_end))
                     break;
+                if (first && crew < nt) {
+                    /* the crew takes the candidates over, each thread those of its share from
+                     * every thread's list (gathered in its redo list, free until the next
+                     * round's find phase, and as long as its share); the others are done */
+                    if (tid >= crew)
+                        break;
+                    w->n_redo = 0;
+                    for (int t = 0; t < nt; t++)
+                        for (size_t q = 0; q < c->ws[t].n_cand; q++) {
+                            const uint32_t i = c->ws[t].cand[q];
+                            if (i >= mine.lo && i < mine.hi)
+                                w->redo[w->n_redo++] = i;
+                        }
+                    nbep_barrier_wait(bar); /* every list read before any is replaced */
+                    memcpy(w->cand, w->redo, w->n_redo * sizeof *w->cand);
+                    w->n_cand = w->n_redo;
+                    w->n_redo = 0;
+                }
                 if (round % STALL_ROUNDS == STALL_ROUNDS - 1 &&
                     !(t_min - t_check > STALL_FRACTION * sim->dt)) {
                     if (tid == 0) {
@@ -2683,13 +2728,10 @@ static void pred_run(nbep_sim *sim, void *p)
             nbep__sim_block_energy(sim, own);
             nbep__sim_frame_overlap(sim, step, tid, own, &c->bar);
             nbep_barrier_wait(&c->bar);
-            /* the crew of the next step, from the seconds per round of this one's rounds and
-             * update: a crew smaller than the run's leaves the others waiting, asleep after a
-             * while, and they take their share of the update late (timed on the rounds alone,
-             * the paper's box on a 16-core node took 1.17 times as long as with every thread);
-             * the others read it past grid_prepare's barriers */
+            /* the crew of the next step (crew_choose), from the seconds of this one's rounds
+             * and update; the others read it past grid_prepare's barriers */
             if (tid == 0 && c->crews)
-                team_choose(c, step, way, round + 1, nbep_now() - t_step);
+                crew_choose(c, step, way, nbep_now() - t_step);
             if (c->use_grid) /* all threads, from the positions at T_end */
                 grid_prepare(c, s, tid, own, T_end, sim->dt, false);
             /* the speed bounds taken above stay bounds: held spheres only slow down */
