@@ -346,7 +346,7 @@ MUTANTS = [
     ("grid-crew-quit-unshared", "src/algo_predictive.c",
      "                quit = c->crew_quit;\n", "", ["tests/test_jam.sh"], None),
     ("grid-crew-tmin-all", "src/algo_predictive.c",
-     "                for (int t = 0; t < crew; t++)\n                    t_min = fmin(t_min, c->ws[t].t_min);",
+     "                for (int t = 0; t < k_all; t++)\n                    t_min = fmin(t_min, c->ws[t].t_min);",
      "                for (int t = 0; t < nt; t++)\n                    t_min = fmin(t_min, c->ws[t].t_min);", GRAN, None),
     ("grid-crew-fired-all", "src/algo_predictive.c",
      "        for (int t = 0; t < crew; t++) {\n            const thread_ws *o = &c->ws[t];\n            for (size_t k = 0; k < o->n_fired; k++) {",
