@@ -2630,6 +2630,10 @@ static void pred_run(nbep_sim *sim, void *p)
                 redo_phase(c, s, first ? own : mine, tid, k_all, b_all, T0, T_end, w, cnt);
                 w->t_min = cand_t_min(c, w);
                 nbep_barrier_wait(b_all);
+                /* the threads out of the crew are done: the rest of the step's rounds is the
+                 * crew's (each t_min is read here by the crew alone, before its next write) */
+                if (first && tid >= crew)
+                    break;
                 double t_min = INFINITY;
                 for (int t = 0; t < k_all; t++)
                     t_min = fmin(t_min, c->ws[t].t_min);
@@ -2638,9 +2642,7 @@ static void pred_run(nbep_sim *sim, void *p)
                 if (first && crew < nt) {
                     /* the crew takes the candidates over, each thread those of its share from
                      * every thread's list (gathered in its redo list, free until the next
-                     * round's find phase, and as long as its share); the others are done */
-                    if (tid >= crew)
-                        break;
+                     * round's find phase, and as long as its share) */
                     w->n_redo = 0;
                     for (int t = 0; t < nt; t++)
                         for (size_t q = 0; q < c->ws[t].n_cand; q++) {
