@@ -348,6 +348,7 @@ typedef struct pred_ctx {
     bool crew_quit;
     int crew_last;  /* thread 0's: the way of the step before (-1: none yet) */
     uint64_t rounds_before; /* thread 0's: the rounds of the steps before this one */
+    uint64_t seen_before;   /* thread 0's: seen_woken where the step before's rounds ended */
     nbep_counters *help_cnt;      /* owned when team, team_size NBEP_EVLOOP_RING: each place's
                                    * event's counts (the team loop's ring of places, evloop.h),
                                    * thread t's at t NBEP_EVLOOP_RING + ring slot (each written
@@ -1966,6 +1967,19 @@ static void react_phase(pred_ctx *c, nbep_state *s, const nbep_scene *sc, int pa
     }
 }
 
+/* Grid mode, between a round's barriers: 1 + the lowest sphere any thread saw past
+ * run.max_reactions (the same on every thread), 0 for none. Every thread's: a let-go in a
+ * step's last round may have passed the limit on a thread that the next step's crew leaves
+ * out. */
+static uint32_t lowest_jammed(const pred_ctx *c)
+{
+    uint32_t jammed = 0;
+    for (int t = 0; t < c->nt; t++)
+        if (c->ws[t].jammed && (!jammed || c->ws[t].jammed < jammed))
+            jammed = c->ws[t].jammed;
+    return jammed;
+}
+
 /* run.max_reactions: sphere i reacted too often in one step, at about time t; the run stops. */
 static void jam_fail(nbep_sim *sim, uint64_t step, size_t i, double t)
 {
@@ -2588,11 +2602,10 @@ static void pred_run(nbep_sim *sim, void *p)
             const double T_end = (double)step * sim->dt;
             double t_check = T0;
             w->jam_step = (uint32_t)step;
-            /* the held spheres woken so far, from every thread's count (only reactions change
-             * them, and none has begun: each round's first barrier comes before them) */
-            uint64_t seen_woken = 0;
-            for (int t = 0; t < nt; t++)
-                seen_woken += c->ws[t].woken;
+            /* the held spheres woken so far as the rounds have acted on them (let_go_phase):
+             * the crew's count where the last step's rounds ended, not every thread's count
+             * now, which a let-go in the last round may have raised without its turn yet */
+            uint64_t seen_woken = c->seen_before;
             const double t_step = nbep_now();
             /* the crew of this step's rounds after the first (c->crews), its barrier and each
              * one's share; the first round (every slot looked at, and every sphere whose slot
@@ -2677,22 +2690,23 @@ static void pred_run(nbep_sim *sim, void *p)
                 nbep_barrier_wait(bar);
                 react_phase(c, s, sim->scene, par, T0, t_min, stamp0 + round + 1, w, cnt, mx);
                 nbep_barrier_wait(bar);
-                uint32_t jammed = 0; /* the same on every thread: the lowest sphere index */
-                for (int t = 0; t < crew; t++)
-                    if (c->ws[t].jammed && (!jammed || c->ws[t].jammed < jammed))
-                        jammed = c->ws[t].jammed;
+                /* a limit passed by this round's reactions, or by the let-go after them (seen
+                 * here, in the step it happened: found at the next reaction, it was reported
+                 * 37 steps late in a review's scene) */
+                uint32_t jammed = lowest_jammed(c);
+                uint64_t woken = 0; /* every thread's: those out of the crew change none */
+                for (int t = 0; t < nt; t++)
+                    woken += c->ws[t].woken;
+                if (!jammed && woken != seen_woken) { /* the same decision on every thread */
+                    seen_woken = woken;
+                    let_go_phase(c, s, mine, bar, sim->dt, t_min - T0, w);
+                    jammed = lowest_jammed(c);
+                }
                 if (jammed) {
                     if (tid == 0)
                         jam_fail(sim, step, jammed - 1, t_min);
                     quit = true;
                     break;
-                }
-                uint64_t woken = 0; /* every thread's: those out of the crew change none */
-                for (int t = 0; t < nt; t++)
-                    woken += c->ws[t].woken;
-                if (woken != seen_woken) { /* the same decision on every thread */
-                    seen_woken = woken;
-                    let_go_phase(c, s, mine, bar, sim->dt, t_min - T0, w);
                 }
             }
             if (crew < nt) { /* the others learn whether the rounds stopped the run */
@@ -2703,8 +2717,10 @@ static void pred_run(nbep_sim *sim, void *p)
             }
             if (quit)
                 goto done;
-            if (tid == 0) /* read at the next step's start, past the barriers of this one's end */
+            if (tid == 0) { /* read at the next step's start, past the barriers of its end */
                 c->rounds_before = stamp0 + round + 1;
+                c->seen_before = seen_woken;
+            }
 
             /* update (paper Section 4.3.1): every own sphere flies to the step's end; grid mode
              * also takes the speed bounds of the next step here, in parallel */
