@@ -51,6 +51,8 @@ MUTANTS = [
     ("phys-kinetic-half", "src/physics.c", "ke += 0.5 * m * nbep_vec3_dot(s->vel[i], s->vel[i]);",
      "ke += m * nbep_vec3_dot(s->vel[i], s->vel[i]);", ["test_physics"], None),
     # ---- contact times ----
+    ("bisect-keeps-wrong-side", "src/predict.c", "        if ((gc <= 0.0) == lo_side) {",
+     "        if ((gc <= 0.0) != lo_side) {", PRED, None),
     ("quad-root-sign", "src/predict.c", "return c / (-b + sqrt(disc));",
      "return c / (-b - sqrt(disc));", PRED, None),
     ("quad-miss", "src/predict.c", "if (!(disc >= 0.0))\n        return NBEP_NEVER;                      /* they miss */",

@@ -398,19 +398,47 @@ static double bits_double(uint64_t u)
 }
 
 /* For 0 <= lo < hi where (g <= 0) differs between lo and hi: the first double in (lo, hi] at
- * which it has hi's value, g monotone in between. Bisects the bit patterns (ordered like the
- * values for non-negative doubles), so it ends in at most 64 steps at adjacent doubles
- * whatever the range spans. */
+ * which it has hi's value, g monotone in between. Keeps a bracket of bit patterns (ordered
+ * like the values for non-negative doubles) that ends at adjacent doubles. Each try is the
+ * false-position point of the bracket's ends (Illinois: an end kept twice in a row counts its
+ * value half), unless the try before did not halve the bracket's bit span, when it is the
+ * span's midpoint: at most about twice the 64 tries of plain bisection, and near a simple root
+ * a handful (the point lands within rounding of the root, and the midpoint steps then close
+ * the last bits from both sides). With g monotone the answer is the one double where g turns,
+ * whatever the tries: plain bisection's. */
 static double bisect(const motion *m, double (*g)(const motion *, double), double lo, double hi)
 {
-    bool lo_side = g(m, lo) <= 0.0;
+    double ga = g(m, lo), gb = g(m, hi);
+    const bool lo_side = ga <= 0.0;
     uint64_t a = double_bits(lo), b = double_bits(hi);
+    double ta = lo, tb = hi;
+    int kept = 0; /* the end kept by the last tries: -1 a, 1 b, 0 none */
+    bool halve = false;
     while (b - a > 1) {
-        uint64_t c = a + (b - a) / 2;
-        if ((g(m, bits_double(c)) <= 0.0) == lo_side)
+        const uint64_t span = b - a;
+        uint64_t c = a + span / 2;
+        if (!halve && ga != gb) {
+            const double t = ta + (tb - ta) * (ga / (ga - gb));
+            if (t > ta && t < tb) /* inside, so its bits too; NaN or outside: the midpoint */
+                c = double_bits(t);
+        }
+        const double tc = bits_double(c), gc = g(m, tc);
+        if ((gc <= 0.0) == lo_side) {
             a = c;
-        else
+            ta = tc;
+            ga = gc;
+            if (kept == 1)
+                gb *= 0.5;
+            kept = 1;
+        } else {
             b = c;
+            tb = tc;
+            gb = gc;
+            if (kept == -1)
+                ga *= 0.5;
+            kept = -1;
+        }
+        halve = b - a > span / 2;
     }
     return bits_double(b);
 }
