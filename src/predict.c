@@ -400,11 +400,15 @@ static double bits_double(uint64_t u)
 /* For 0 <= lo < hi where (g <= 0) differs between lo and hi: the first double in (lo, hi] at
  * which it has hi's value, g monotone in between. Keeps a bracket of bit patterns (ordered
  * like the values for non-negative doubles) that ends at adjacent doubles. Each try is the
- * false-position point of the bracket's ends (Illinois: an end kept twice in a row counts its
- * value half), unless the try before did not halve the bracket's bit span, when it is the
- * span's midpoint: at most about twice the 64 tries of plain bisection, and near a simple root
- * a handful (the point lands within rounding of the root, and the midpoint steps then close
- * the last bits from both sides). With g monotone the answer is the one double where g turns,
+ * false-position point of the bracket's ends (Illinois: an end that stays twice in a row
+ * counts its value half), pushed 4^k ulps farther from the end that the last k + 1 tries all
+ * moved (k >= 1): once that end lies within rounding of the root, false position lands on it
+ * or just short of it again and again, and the push brings the other end in instead. After a
+ * try that did not halve the bracket's bit span, the next is the span's midpoint: at most
+ * about twice the 64 tries of plain bisection. Over the quartic classes of bench_contact: 28
+ * evaluations a call on average, against 61 for plain bisection and 43 for false position
+ * without the push (a review's count, whose reading of the one-sided stall this follows),
+ * 1.3 % of calls above 100. With g monotone the answer is the one double where g turns,
  * whatever the tries: plain bisection's. */
 static double bisect(const motion *m, double (*g)(const motion *, double), double lo, double hi)
 {
@@ -412,31 +416,47 @@ static double bisect(const motion *m, double (*g)(const motion *, double), doubl
     const bool lo_side = ga <= 0.0;
     uint64_t a = double_bits(lo), b = double_bits(hi);
     double ta = lo, tb = hi;
-    int kept = 0; /* the end kept by the last tries: -1 a, 1 b, 0 none */
+    int moved = 0; /* the end the last try moved: -1 a, 1 b, 0 none yet */
+    int run = 0;   /* the tries before it that moved the same end */
     bool halve = false;
     while (b - a > 1) {
         const uint64_t span = b - a;
         uint64_t c = a + span / 2;
         if (!halve && ga != gb) {
             const double t = ta + (tb - ta) * (ga / (ga - gb));
-            if (t > ta && t < tb) /* inside, so its bits too; NaN or outside: the midpoint */
-                c = double_bits(t);
+            if (t >= ta && t <= tb) { /* NaN: the midpoint */
+                const uint64_t push = run > 0 ? (uint64_t)1 << (2 * run < 62 ? 2 * run : 62) : 0;
+                uint64_t ct = double_bits(t);
+                if (moved == -1) /* a keeps moving up: past the point, towards b */
+                    ct = b - ct > push ? ct + push : b - 1;
+                else if (moved == 1) /* b keeps moving down: short of it, towards a */
+                    ct = ct - a > push ? ct - push : a + 1;
+                c = ct <= a ? a + 1 : ct >= b ? b - 1 : ct; /* strictly inside */
+            }
         }
         const double tc = bits_double(c), gc = g(m, tc);
         if ((gc <= 0.0) == lo_side) {
             a = c;
             ta = tc;
             ga = gc;
-            if (kept == 1)
+            if (moved == -1) {
                 gb *= 0.5;
-            kept = 1;
+                run++;
+            } else {
+                run = 0;
+            }
+            moved = -1;
         } else {
             b = c;
             tb = tc;
             gb = gc;
-            if (kept == -1)
+            if (moved == 1) {
                 ga *= 0.5;
-            kept = -1;
+                run++;
+            } else {
+                run = 0;
+            }
+            moved = 1;
         }
         halve = b - a > span / 2;
     }
