@@ -2622,8 +2622,10 @@ static void pred_run(nbep_sim *sim, void *p)
             uint64_t round = 0;
             for (bool first = true;; first = false, round++) {
                 const int par = (int)(round & 1);
-                const int k_all = first ? nt : crew; /* this round's threads so far */
+                /* this round's threads so far, their barrier and each one's share */
+                const int k_all = first ? nt : crew;
                 nbep_barrier *b_all = first ? &c->bar : bar;
+                const nbep_range share = first ? own : mine;
                 /* the claim words of the previous round are reset while nobody reads them */
                 for (size_t k = 0; k < w->n_claimed; k++)
                     atomic_store_explicit(&c->claim[par ^ 1][w->claimed[k]], KEY_FREE,
@@ -2633,14 +2635,14 @@ static void pred_run(nbep_sim *sim, void *p)
                     atomic_store_explicit(&c->tclaim[w->tclaimed[k]], KEY_FREE,
                                           memory_order_relaxed);
                 w->n_tclaimed = 0;
-                find_phase(c, first ? own : mine, crew, first, T_end, w, cnt);
+                find_phase(c, share, crew, first, T_end, w, cnt);
                 nbep_barrier_wait(b_all);
                 /* relaxed: the barrier above ordered thread 0's store of stop */
                 if (first && atomic_load_explicit(&sim->stop, memory_order_relaxed)) {
                     quit = true;
                     break;
                 }
-                redo_phase(c, s, first ? own : mine, tid, k_all, b_all, T0, T_end, w, cnt);
+                redo_phase(c, s, share, tid, k_all, b_all, T0, T_end, w, cnt);
                 w->t_min = cand_t_min(c, w);
                 nbep_barrier_wait(b_all);
                 /* the threads out of the crew are done: the rest of the step's rounds is the
