@@ -232,7 +232,8 @@ static void respond_all(const detect_ctx *ctx, nbep_state *s, double e, int nt,
                 if (nbep_physics_respond_plane(pn, &s->vel[i], e))
                     cnt->c[NBEP_COUNTER_PLANE_COLLISIONS]++;
                 /* SPEC /stats/wall_impulse: the normal momentum the plane received */
-                mx->wall[j - n] += s->mass[i] * (nbep_vec3_dot(pn, s->vel[i]) - vn0);
+                nbep_xsum_add(&mx->wall[j - n],
+                              s->mass[i] * (nbep_vec3_dot(pn, s->vel[i]) - vn0));
                 nbep_physics_separate_plane(s->plane_normal[j - n], s->plane_offset[j - n],
                                             &s->pos[i], s->radius[i]);
             } else {
@@ -241,9 +242,10 @@ static void respond_all(const detect_ctx *ctx, nbep_state *s, double e, int nt,
                                               s->mass[i], s->mass[j], e))
                     cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
                 /* SPEC /stats/virial: r12 . dp2 (r12 as found, after the step's flight) */
-                mx->virial += nbep_vec3_dot(nbep_vec3_sub(s->pos[j], s->pos[i]),
+                nbep_xsum_add(&mx->virial,
+                              nbep_vec3_dot(nbep_vec3_sub(s->pos[j], s->pos[i]),
                                             nbep_vec3_scale(nbep_vec3_sub(s->vel[j], vj),
-                                                            s->mass[j]));
+                                                            s->mass[j])));
                 nbep_physics_separate_pair(&s->pos[i], &s->pos[j], s->radius[i], s->radius[j],
                                            s->mass[i], s->mass[j]);
             }

@@ -355,7 +355,7 @@ typedef struct pred_ctx {
                                    * by the thread that handles the place: it stays on its
                                    * core) */
     nbep_thread_max *help_mx;     /* owned when team, the same: their sums (wall: one buffer) */
-    double *help_wall;            /* owned when team: team_size NBEP_EVLOOP_RING rows of
+    nbep_xsum *help_wall;         /* owned when team: team_size NBEP_EVLOOP_RING rows of
                                    * n_planes */
 } pred_ctx;
 
@@ -534,7 +534,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
             const size_t np = sim->st.n_planes, rows = (size_t)c->team_size * NBEP_EVLOOP_RING;
             c->help_cnt = nbep_alloc_aligned(rows, sizeof *c->help_cnt);
             c->help_mx = nbep_alloc_aligned(rows, sizeof *c->help_mx);
-            c->help_wall = calloc(rows * (np ? np : 1), sizeof(double));
+            c->help_wall = calloc(rows * (np ? np : 1), sizeof *c->help_wall);
             if (!c->help_cnt || !c->help_mx || !c->help_wall) {
                 nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory for the cells engine");
                 st = NBEP_ENOMEM;
@@ -1650,7 +1650,7 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
             nbep_physics_respond_plane(n, &s->vel[lo], e_pl))
             cnt->c[NBEP_COUNTER_PLANE_COLLISIONS]++;
         /* SPEC /stats/wall_impulse: the normal momentum the plane received, pushed outward */
-        mx->wall[p] += s->mass[lo] * (nbep_vec3_dot(n, s->vel[lo]) - vn0);
+        nbep_xsum_add(&mx->wall[p], s->mass[lo] * (nbep_vec3_dot(n, s->vel[lo]) - vn0));
         update_rest(c, s, lo, dt);
         double an = nbep_vec3_dot(s->acc[lo], n), vn = nbep_vec3_dot(s->vel[lo], n);
         rest_set *r = c->rest ? &c->rest[lo] : NULL; /* NULL: nothing accelerates */
@@ -1726,7 +1726,8 @@ static void react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs
         cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
     min_bounce(c, s, dt, lo, hi);
     /* SPEC /stats/virial: r12 . dp2, dp2 the momentum hi received */
-    mx->virial += nbep_vec3_dot(r12, nbep_vec3_scale(nbep_vec3_sub(s->vel[hi], v_hi), m_hi));
+    nbep_xsum_add(&mx->virial,
+                  nbep_vec3_dot(r12, nbep_vec3_scale(nbep_vec3_sub(s->vel[hi], v_hi), m_hi)));
     update_rest(c, s, lo, dt);
     update_rest(c, s, hi, dt);
     fire(c, w, s, lo, still_lo);
@@ -2285,14 +2286,14 @@ static void cells_clear(void *uh)
     cells_user *h = uh;
     for (int k = 0; k < NBEP_COUNTER_COUNT; k++)
         h->cnt->c[k] = 0;
-    h->mx->virial = h->mx->overlap = h->mx->overlap_rel = 0.0;
+    h->mx->overlap = h->mx->overlap_rel = 0.0;
+    nbep_xsum_clear(&h->mx->virial);
     for (size_t p = 0; p < h->s->n_planes; p++)
-        h->mx->wall[p] = 0.0;
+        nbep_xsum_clear(&h->mx->wall[p]);
 }
 
 /* The event of a team context (counted from zero in uh) added to the leader's counts and sums
- * when it stands: in the order of events, one addition each, as the one thread adds it (a sum
- * never holds -0, so adding the +0 of what the event did not touch changes nothing). */
+ * when it stands (the sums exact, so the same as the one thread's whoever handled it). */
 static void cells_merge(void *u, const void *uh)
 {
     cells_user *x = u;
@@ -2301,11 +2302,11 @@ static void cells_merge(void *u, const void *uh)
     const nbep_thread_max *b = h->mx;
     for (int k = 0; k < NBEP_COUNTER_COUNT; k++)
         x->cnt->c[k] += h->cnt->c[k];
-    a->virial += b->virial;
+    nbep_xsum_merge(&a->virial, &b->virial);
     a->overlap = fmax(a->overlap, b->overlap); /* both from 0, as note_overlap keeps them */
     a->overlap_rel = fmax(a->overlap_rel, b->overlap_rel);
     for (size_t p = 0; p < x->s->n_planes; p++)
-        a->wall[p] += b->wall[p];
+        nbep_xsum_merge(&a->wall[p], &b->wall[p]);
 }
 
 static const nbep_evloop_ops cells_ops = {cells_planes,  cells_pairs,   cells_fresh,

@@ -359,16 +359,23 @@ int nbep__sim_end_step(nbep_sim *sim, uint64_t step)
     double ov = 0.0, ov_rel = 0.0;
     const size_t np = sim->st.n_planes;
     double *wall = sim->wall_rows + sim->n_rows * np;
-    for (size_t p = 0; p < np; p++)
-        wall[p] = 0.0;
-    for (int t = 0; t < sim->nt; t++) { /* in thread order: the same sums for the same split */
+    /* the threads' exact sums merged: the same for any split of the terms among threads */
+    nbep_xsum virial = {.adds = 0};
+    for (int t = 0; t < sim->nt; t++) {
         nbep_thread_max *tm = &sim->tmax[par][t];
-        row.virial += tm->virial;
-        tm->virial = 0.0;
-        for (size_t p = 0; p < np; p++) {
-            wall[p] += tm->wall[p];
-            tm->wall[p] = 0.0;
+        nbep_xsum_merge(&virial, &tm->virial);
+        nbep_xsum_clear(&tm->virial);
+    }
+    row.virial = nbep_xsum_value(&virial);
+    for (size_t p = 0; p < np; p++) {
+        nbep_xsum w = {.adds = 0};
+        for (int t = 0; t < sim->nt; t++) {
+            nbep_xsum_merge(&w, &sim->tmax[par][t].wall[p]);
+            nbep_xsum_clear(&sim->tmax[par][t].wall[p]);
         }
+        wall[p] = nbep_xsum_value(&w);
+    }
+    for (int t = 0; t < sim->nt; t++) {
         for (int k = 0; k < NBEP_COUNTER_COUNT; k++) {
             c[k] += sim->counters[par][t].c[k];
             sim->counters[par][t].c[k] = 0;

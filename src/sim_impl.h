@@ -11,10 +11,16 @@
 #include "nbep/grid.h"
 #include "nbep/sim.h"
 #include "nbep/stats.h"
+#include "nbep/xsum.h"
 
 /* Spheres are split among threads in whole blocks of this many, so that per-block partial
- * sums (energy) are the same for any thread count: sums never group by thread. */
-#define NBEP_BLOCK 256
+ * sums (energy) are the same for any thread count: sums never group by thread. Small, so
+ * that a scene of a hundred spheres is shared among four threads too: at 256 every scene of
+ * up to 256 spheres ran on one thread whatever the run's count (the others idle at the
+ * barriers), and the tests that compare thread counts on small scenes compared one thread
+ * with itself. 16 spheres' positions and velocities are 6 cache lines, so neighbouring
+ * shares seldom write one line. */
+#define NBEP_BLOCK 16
 
 typedef struct nbep_range {
     size_t lo, hi;
@@ -32,9 +38,10 @@ typedef struct nbep_thread_max {
     alignas(NBEP_CACHELINE) double overlap;
     double overlap_rel;
     /* sums of the step (SPEC contract 2): r12 . dp2 over sphere collisions, and per plane the
-     * normal momentum it received (wall: this thread's n_planes slots, owned by the sim) */
-    double virial;
-    double *wall;
+     * normal momentum it received (wall: this thread's n_planes slots, owned by the sim); exact
+     * (xsum.h), so that the step's sums do not depend on which thread added what */
+    nbep_xsum virial;
+    nbep_xsum *wall;
 } nbep_thread_max;
 
 typedef struct nbep_algo nbep_algo;
@@ -65,7 +72,7 @@ struct nbep_sim {
     uint64_t overlap_step;           /* the last step whose check the threads shared */
     nbep_step_stats *rows;           /* owned: stats rows not yet written */
     double *wall_rows;               /* owned: their /stats/wall_impulse rows, n_planes each */
-    double *wall_buf[2];             /* owned: per parity, nt x n_planes (nbep_thread_max.wall) */
+    nbep_xsum *wall_buf[2];             /* owned: per parity, nt x n_planes (nbep_thread_max.wall) */
     double virial_total;             /* summary pressure: the virial summed over this session */
     double ke_total;                 /* and the kinetic energy at each step's end, summed */
     size_t n_rows, cap_rows;

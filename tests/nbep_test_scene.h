@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "nbep/output.h"
 #include "nbep/run.h"
 #include "nbep/scene.h"
 #include "nbep/sim.h"
@@ -189,16 +190,22 @@ static inline void nbep_test_frames_free(nbep_test_frames *f)
     memset(f, 0, sizeof *f);
 }
 
-/* Runs sc on nt threads, each frame to on_frame(ctx) (NULL: none); the run must end with
- * NBEP_OK (a stall is a failure). The final state goes to *final (caller finis) and every
- * counter's total to counts[NBEP_COUNTER_COUNT], each when not NULL. */
-static inline nbep_summary nbep_test_run_counted(const nbep_scene *sc, int nt,
-                                                 nbep_frame_fn on_frame, void *ctx,
-                                                 nbep_state *final, uint64_t *counts)
+/* Runs sc on nt threads, each frame to on_frame(ctx) (NULL: none), and when path is not NULL
+ * into that HDF5 file (frames and stats as sc asks); the run must end with NBEP_OK (a stall
+ * is a failure). The final state goes to *final (caller finis) and every counter's total to
+ * counts[NBEP_COUNTER_COUNT], each when not NULL. */
+static inline nbep_summary nbep_test_run_to(const nbep_scene *sc, int nt, nbep_frame_fn on_frame,
+                                            void *ctx, const char *path, nbep_state *final,
+                                            uint64_t *counts)
 {
     nbep_diag d;
     nbep_diag_init(&d);
-    nbep_sim_options opt = {.threads = nt, .on_frame = on_frame, .on_frame_ctx = ctx};
+    nbep_output *out = NULL;
+    if (path)
+        assert_int_equal(
+            nbep_output_create(path, sc, nbep_sim_resolve_threads(nt), &out, &d), NBEP_OK);
+    nbep_sim_options opt = {
+        .threads = nt, .out = out, .on_frame = on_frame, .on_frame_ctx = ctx};
     nbep_sim *sim = NULL;
     assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
     nbep_status st = nbep_sim_run(sim, &d);
@@ -212,8 +219,17 @@ static inline nbep_summary nbep_test_run_counted(const nbep_scene *sc, int nt,
     for (int k = 0; counts && k < NBEP_COUNTER_COUNT; k++)
         counts[k] = nbep_sim_counter(sim, k);
     nbep_sim_destroy(&sim);
+    assert_int_equal(nbep_output_close(&out, &sum, &d), NBEP_OK);
     nbep_diag_fini(&d);
     return sum;
+}
+
+/* nbep_test_run_to without a file. */
+static inline nbep_summary nbep_test_run_counted(const nbep_scene *sc, int nt,
+                                                 nbep_frame_fn on_frame, void *ctx,
+                                                 nbep_state *final, uint64_t *counts)
+{
+    return nbep_test_run_to(sc, nt, on_frame, ctx, NULL, final, counts);
 }
 
 /* nbep_test_run_counted with the reactions counter alone to *reactions (may be NULL). */

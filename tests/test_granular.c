@@ -18,6 +18,7 @@
 #include "nbep/sim.h"
 #include "nbep/stats.h"
 #include "nbep_test.h"
+#include "nbep_test_h5.h"
 #include "nbep_test_scene.h"
 
 static const nbep_vec3 ZERO = {0.0, 0.0, 0.0};
@@ -1010,12 +1011,29 @@ static void test_pile_energy_never_rises(void **state)
     }
 }
 
+/* Runs sc on nt threads (the pile test's runs) into a temporary file NAME.h5; frames to t,
+ * the counters' totals to counts, the step rows of /stats/virial and /stats/wall_impulse to
+ * sums[0] and sums[1] (n values each in n[0], n[1]; malloc'd). */
+static nbep_summary run_sums(const nbep_scene *sc, int nt, const char *name, trace *t,
+                             double *sums[2], size_t n[2])
+{
+    char path[256];
+    nbep_test_tmp(name, path, sizeof path);
+    nbep_summary s = nbep_test_run_to(sc, nt, keep_frame, t, path, NULL, NULL);
+    sums[0] = nbep_test_h5_doubles(path, "/stats/virial", &n[0]);
+    sums[1] = nbep_test_h5_doubles(path, "/stats/wall_impulse", &n[1]);
+    remove(path);
+    return s;
+}
+
 /* Lasting contacts, held spheres and TC decisions are taken by whichever thread owns a sphere:
  * frames must not depend on that, nor the counts (the work done: a sphere re-predicted more or
  * less often, or a grid block read while another thread was still filling it, shows there
- * first). Grid mode runs each step's rounds on a crew of 1, 2 or all threads, chosen by
- * timing; NBEP_TEAM fixes it: "never" (a crew of one on four threads), "cycle" (every change
- * of crew, step after step), "always" (all four). */
+ * first), nor the step's sums, /stats/virial and /stats/wall_impulse (grid mode's thread that
+ * reacts to a pair is a compare-and-swap race; each thread sums its own reactions, and the
+ * sums are exact, xsum.h, so the split does not show). Grid mode runs each step's rounds on a
+ * crew of 1, 2 or all threads, chosen by timing; NBEP_TEAM fixes it: "never" (a crew of one
+ * on four threads), "cycle" (every change of crew, step after step), "always" (all four). */
 static void test_pile_frames_equal_for_1_2_4_threads(void **state)
 {
     (void)state;
@@ -1026,24 +1044,105 @@ static void test_pile_frames_equal_for_1_2_4_threads(void **state)
     for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells (the event loop) */
         nbep_scene *sc = pile(nbep_test_scaled(40, 16), 0.5, nbep_test_scaled(400, 300), "predictive");
         neighbor_mode(sc, mode);
+        sc->out_stats = true;
         trace ref = {0};
-        nbep_summary s1 = run(sc, runs[0].nt, &ref);
+        double *ref_sums[2];
+        size_t ref_n[2];
+        nbep_summary s1 = run_sums(sc, runs[0].nt, "pile-ref.h5", &ref, ref_sums, ref_n);
         assert_true(s1.collisions > 100); /* otherwise the comparison proves little */
+        assert_true(s1.plane_collisions > 10);
         for (size_t k = 1; k < sizeof runs / sizeof runs[0]; k++) {
             if (runs[k].team && mode != 1)
                 continue;
             if (runs[k].team)
                 setenv("NBEP_TEAM", runs[k].team, 1);
             trace t = {0};
-            nbep_summary sk = run(sc, runs[k].nt, &t);
+            double *sums[2];
+            size_t n[2];
+            nbep_summary sk = run_sums(sc, runs[k].nt, "pile.h5", &t, sums, n);
             unsetenv("NBEP_TEAM");
             assert_int_equal(t.n_frames, ref.n_frames);
             assert_memory_equal(t.data, ref.data, ref.n_frames * 2 * ref.n * sizeof *ref.data);
             assert_int_equal(sk.collisions, s1.collisions);
             assert_int_equal(sk.predictions, s1.predictions);
             assert_int_equal(sk.checks, s1.checks);
+            for (int q = 0; q < 2; q++) {
+                assert_int_equal(n[q], ref_n[q]);
+                assert_memory_equal(sums[q], ref_sums[q], n[q] * sizeof *sums[q]);
+                free(sums[q]);
+            }
             free(t.data);
         }
+        free(ref_sums[0]);
+        free(ref_sums[1]);
+        free(ref.data);
+        nbep_test_scene_free(&sc);
+    }
+}
+
+/* A granular gas: n = k^3 spheres of radius r on a jittered lattice of spacing 2.5 r filling
+ * a closed box, moving at random (a fixed linear congruential sequence), no gravity, e < 1:
+ * collisions everywhere in the box, with each other and with all six walls. */
+static nbep_scene *gas(size_t k, double r, double e, uint64_t steps, double dt)
+{
+    const double a = 2.5 * r, L = a * (double)k;
+    nbep_scene *sc = scene(k * k * k, 6, "predictive", steps, e);
+    sc->dt = dt;
+    box(sc, L, L, L);
+    uint64_t x = 987654321;
+    for (size_t i = 0; i < k * k * k; i++) {
+        double u[6];
+        for (int q = 0; q < 6; q++) {
+            x = x * 6364136223846793005ull + 1442695040888963407ull;
+            u[q] = (double)(x >> 11) / 9007199254740992.0 - 0.5;
+        }
+        const size_t ia = i % k, ib = (i / k) % k, ic = i / (k * k);
+        nbep_test_set_sphere(sc, i,
+                             (nbep_vec3){a * (0.5 + (double)ia) + 0.2 * r * u[0],
+                                         a * (0.5 + (double)ib) + 0.2 * r * u[1],
+                                         a * (0.5 + (double)ic) + 0.2 * r * u[2]},
+                             (nbep_vec3){2.0 * u[3], 2.0 * u[4], 2.0 * u[5]}, r, 1.0, ZERO);
+    }
+    return sc;
+}
+
+/* The step's sums where every thread reacts (a granular gas, steps of tens of collisions):
+ * /stats/virial and /stats/wall_impulse equal bit for bit for 1, 2 and 4 threads in every
+ * neighbour mode (grid mode's rounds on every thread, NBEP_TEAM=always), where summing each
+ * thread's share apart and adding the shares changes the last bits of some steps' sums (a
+ * pile would not show it: its collisions are all low in the box, where one thread's share
+ * lies). */
+static void test_step_sums_equal_for_1_2_4_threads(void **state)
+{
+    (void)state;
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells (the event loop) */
+        nbep_scene *sc = gas(5, 0.04, 0.9, nbep_test_scaled(60, 30), 1e-2);
+        neighbor_mode(sc, mode);
+        sc->out_stats = true;
+        trace ref = {0};
+        double *ref_sums[2];
+        size_t ref_n[2];
+        nbep_summary s1 = run_sums(sc, 1, "sums-ref.h5", &ref, ref_sums, ref_n);
+        /* some ten collisions a step: terms enough for the sums to round differently */
+        assert_true(s1.collisions > 10 * sc->steps);
+        assert_true(s1.plane_collisions > sc->steps);
+        setenv("NBEP_TEAM", "always", 1);
+        for (int nt = 2; nt <= 4; nt += 2) {
+            trace t = {0};
+            double *sums[2];
+            size_t n[2];
+            (void)run_sums(sc, nt, "sums.h5", &t, sums, n);
+            assert_memory_equal(t.data, ref.data, ref.n_frames * 2 * ref.n * sizeof *ref.data);
+            for (int q = 0; q < 2; q++) {
+                assert_int_equal(n[q], ref_n[q]);
+                assert_memory_equal(sums[q], ref_sums[q], n[q] * sizeof *sums[q]);
+                free(sums[q]);
+            }
+            free(t.data);
+        }
+        unsetenv("NBEP_TEAM");
+        free(ref_sums[0]);
+        free(ref_sums[1]);
         free(ref.data);
         nbep_test_scene_free(&sc);
     }
@@ -1140,6 +1239,7 @@ int main(void)
         cmocka_unit_test(test_e0_plane_stops_at_first_contact),
         cmocka_unit_test(test_pile_energy_never_rises),
         cmocka_unit_test(test_pile_frames_equal_for_1_2_4_threads),
+        cmocka_unit_test(test_step_sums_equal_for_1_2_4_threads),
         cmocka_unit_test(test_knocked_stack_falls),
     };
     return cmocka_run_group_tests_name("granular", tests, NULL, NULL);

@@ -15,8 +15,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include <hdf5.h>
-
 #include "nbep/nblist.h"
 #include "nbep/output.h"
 #include "nbep/periodic.h"
@@ -25,6 +23,7 @@
 #include "nbep/sim.h"
 #include "nbep/stats.h"
 #include "nbep_test.h"
+#include "nbep_test_h5.h"
 #include "nbep_test_scene.h"
 
 static const nbep_vec3 ZERO = {0.0, 0.0, 0.0};
@@ -676,36 +675,8 @@ static const char *write_deck(const char *name, const char *text, char *buf, siz
     return buf;
 }
 
-/* n doubles of dataset name of file. */
-static void read_all(hid_t file, const char *name, hid_t type, void *buf, hsize_t *dims)
-{
-    hid_t ds = H5Dopen2(file, name, H5P_DEFAULT);
-    assert_true(ds >= 0);
-    hid_t sp = H5Dget_space(ds);
-    assert_true(H5Sget_simple_extent_dims(sp, dims, NULL) >= 1);
-    if (buf)
-        assert_true(H5Dread(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0);
-    H5Sclose(sp);
-    H5Dclose(ds);
-}
-
-/* Dataset `name` of the run written to path: *n doubles, malloc'd. */
-static double *read_doubles(const char *path, const char *name, size_t *n)
-{
-    hid_t file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
-    assert_true(file >= 0);
-    hsize_t dims[3] = {1, 1, 1};
-    read_all(file, name, H5T_NATIVE_DOUBLE, NULL, dims);
-    *n = (size_t)(dims[0] * dims[1] * dims[2]);
-    double *buf = malloc(*n * sizeof *buf);
-    assert_non_null(buf);
-    read_all(file, name, H5T_NATIVE_DOUBLE, buf, dims);
-    H5Fclose(file);
-    return buf;
-}
-
 /* The team loop in a closed box (walls on every axis, NBEP_TEAM=always): the sums its events
- * add apart and merge in order, /stats/wall_impulse and /stats/virial, are one thread's bit
+ * add apart and the leader merges, /stats/wall_impulse and /stats/virial, are one thread's bit
  * for bit on 2 threads, as are the frames, while events (plane contacts among them) went
  * ahead. */
 static void test_team_loop_keeps_one_threads_wall_impulses_and_virial(void **state)
@@ -733,7 +704,7 @@ static void test_team_loop_keeps_one_threads_wall_impulses_and_virial(void **sta
                           "/frames/velocity"};
     for (size_t q = 0; q < sizeof sets / sizeof *sets; q++) {
         size_t n1, n2;
-        double *a = read_doubles(out[0], sets[q], &n1), *b = read_doubles(out[1], sets[q], &n2);
+        double *a = nbep_test_h5_doubles(out[0], sets[q], &n1), *b = nbep_test_h5_doubles(out[1], sets[q], &n2);
         assert_int_equal(n1, n2);
         assert_memory_equal(a, b, n1 * sizeof *a);
         free(a);
@@ -777,7 +748,7 @@ static void test_a_box_without_walls_has_an_empty_wall_impulse_per_step(void **s
     hid_t file = one_sphere_in_a_box("nowall", 30, "true", &res);
     assert_int_equal(res.summary.planes, 0);
     hsize_t dims[2] = {0, 1};
-    read_all(file, "/stats/wall_impulse", H5T_NATIVE_DOUBLE, NULL, dims);
+    nbep_test_h5_read(file, "/stats/wall_impulse", H5T_NATIVE_DOUBLE, NULL, dims);
     assert_int_equal(dims[0], 30);
     assert_int_equal(dims[1], 0);
     H5Fclose(file);
@@ -797,10 +768,10 @@ static void test_wall_impulse_of_a_sphere_between_two_walls(void **state)
     assert_false(res.summary.pressure.known); /* SPEC: only a fully periodic box has one */
     hsize_t dims[2];
     static double wall[1000 * 2];
-    read_all(file, "/stats/wall_impulse", H5T_NATIVE_DOUBLE, NULL, dims);
+    nbep_test_h5_read(file, "/stats/wall_impulse", H5T_NATIVE_DOUBLE, NULL, dims);
     assert_int_equal(dims[0], 1000);
     assert_int_equal(dims[1], 2);
-    read_all(file, "/stats/wall_impulse", H5T_NATIVE_DOUBLE, wall, dims);
+    nbep_test_h5_read(file, "/stats/wall_impulse", H5T_NATIVE_DOUBLE, wall, dims);
     double sum[2] = {0.0, 0.0};
     int hits = 0;
     for (size_t k = 0; k < 1000; k++)
