@@ -397,6 +397,10 @@ MUTANTS = [
      "        if (0) {", TEAM, None),
     ("team-ring-half-unseen", "src/evloop.c", "    return near_span(e, a, b, 0, 2 * WINDOW);",
      "    return near_span(e, a, b, 0, WINDOW);", APART, None),
+    ("pocket-gathers-what-rests-on-it", "src/algo_predictive.c",
+     "    if (m == x->k || m == x->j || x->r->n >= NBEP_CONTACT_MAX || !x->c->rest[m].still ||\n        rest_has_sphere(&x->c->rest[m], x->k))",
+     "    if (m == x->k || m == x->j || x->r->n >= NBEP_CONTACT_MAX || !x->c->rest[m].still)",
+     ["tests/test_settle.sh"], None),
     # ---- exact sums (xsum.c) and the step's sums over threads ----
     ("xsum-no-sticky", "src/xsum.c", "        v = ldexp((double)(w | (uint64_t)sticky),",
      "        v = ldexp((double)w,", ["test_xsum"], None),
