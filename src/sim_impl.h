@@ -15,12 +15,13 @@
 
 /* Spheres are split among threads in whole blocks of this many, so that per-block partial
  * sums (energy) are the same for any thread count: sums never group by thread. Small, so
- * that a scene of a hundred spheres is shared among four threads too: at 256 every scene of
- * up to 256 spheres ran on one thread whatever the run's count (the others idle at the
- * barriers), and the tests that compare thread counts on small scenes compared one thread
- * with itself. 16 spheres' positions and velocities are 6 cache lines, so neighbouring
- * shares seldom write one line. */
-#define NBEP_BLOCK 16
+ * that a scene of a dozen spheres is shared among threads too: at 256 every scene of up to
+ * 256 spheres ran on one thread whatever the run's count (the others idle at the barriers),
+ * and the tests that compare thread counts on small scenes (a 40-sphere pile, 12-sphere
+ * jams) compared one thread with itself. Only the spheres at a share's ends can share a cache
+ * line with another thread's; the energy's blocks are n / 8 partial sums a step (32000 at
+ * N = 256000: tens of microseconds against a step's tens of milliseconds). */
+#define NBEP_BLOCK 8
 
 typedef struct nbep_range {
     size_t lo, hi;
