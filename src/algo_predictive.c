@@ -1452,25 +1452,47 @@ static bool caged(pred_ctx *c, nbep_state *s, size_t k, int32_t who, nbep_vec3 n
     return true;
 }
 
+/* Whether held sphere m rests on sphere k. Such an m is no support for k to be held on: the
+ * two would hold each other, and each one's landing (a reaction: the spheres resting on it
+ * let go) would let the other go, which lands again at the same instant (grid mode's
+ * 120-sphere pour at e = 0.9 went round such a pair 100000 times at one time and stopped,
+ * "events do not resolve"). When k is free, m's entry for k is stale (k moved since m took
+ * its load) and m's let-go is pending. */
+static bool leans_on(const pred_ctx *c, size_t m, size_t k)
+{
+    return c->rest[m].still && rest_has_sphere(&c->rest[m], k);
+}
+
+/* The sphere contacts of r (free sphere k's, kept from when it was held) that rest on k
+ * themselves, taken out (leans_on). */
+static void drop_leaning(const pred_ctx *c, size_t k, rest_set *r)
+{
+    int n = 0;
+    for (int q = 0; q < r->n; q++)
+        if (r->who[q] >= 0 || !leans_on(c, (size_t)(-1 - r->who[q]), k)) {
+            r->who[n] = r->who[q];
+            r->ver[n++] = r->ver[q];
+        }
+    r->n = n;
+}
+
 /* A pocket (see land_on_held): the held spheres besides j that sphere k touches to within tol,
- * added to its contacts r (up to NBEP_CONTACT_MAX). */
+ * added to its contacts r (up to NBEP_CONTACT_MAX); for supports to hold k on (`holds`), not
+ * those that rest on k (leans_on). */
 typedef struct pocket {
     const pred_ctx *c;
     const nbep_state *s;
     size_t k, j;
     double tol;
     rest_set *r;
+    bool holds;
 } pocket;
 
 static void pocket_one(void *u, uint32_t m)
 {
     pocket *x = u;
-    /* a held sphere that rests on k is no support of k: the two would hold each other, and
-     * each one's landing (a reaction) lets the other go, which lands again at the same
-     * instant (grid mode's 120-sphere pile at e = 0.9 went round such a pair 100000 times
-     * at one time and stopped, "events do not resolve") */
     if (m == x->k || m == x->j || x->r->n >= NBEP_CONTACT_MAX || !x->c->rest[m].still ||
-        rest_has_sphere(&x->c->rest[m], x->k))
+        (x->holds && leans_on(x->c, m, x->k)))
         return;
     double gap = nbep_vec3_norm(sep(x->c, x->s, m, x->k)) - (x->s->radius[m] + x->s->radius[x->k]);
     if (gap <= x->tol) {
@@ -1483,9 +1505,9 @@ static void pocket_one(void *u, uint32_t m)
  * Rounds modes: every sphere, except those this round's events claim (other threads may be
  * changing them now; the claims were made before a barrier and stay until the next round). */
 static void pocket_gather(const pred_ctx *c, const nbep_state *s, const thread_ws *w, size_t k,
-                          size_t j, double tol, rest_set *r)
+                          size_t j, double tol, bool holds, rest_set *r)
 {
-    pocket x = {c, s, k, j, tol, r};
+    pocket x = {c, s, k, j, tol, r, holds};
     if (c->ev) {
         nbep_evloop_visit_block(c->ev, (uint32_t)k, pocket_one, &x);
         return;
@@ -1540,11 +1562,12 @@ static bool jam_hold(pred_ctx *c, nbep_state *s, thread_ws *w, size_t k, size_t 
         return false;
     const double vs = settle_speed(s, k, dt), amag = nbep_vec3_norm(s->acc[k]);
     rest_set r = c->rest[k];
-    if (j != NO_SPHERE && r.n < NBEP_CONTACT_MAX) {
+    drop_leaning(c, k, &r);
+    if (j != NO_SPHERE && r.n < NBEP_CONTACT_MAX && !leans_on(c, j, k)) {
         r.who[r.n] = -1 - (int32_t)j;
         r.ver[r.n++] = c->ver[j];
     }
-    pocket_gather(c, s, w, k, j, vs * vs / amag, &r);
+    pocket_gather(c, s, w, k, j, vs * vs / amag, true, &r);
     pocket_planes(s, k, vs * vs / amag, &r);
     r.still = true;
     c->rest[k] = r;
@@ -1570,9 +1593,11 @@ static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t
     nbep_vec3 n = nbep_vec3_make(d.x / len, d.y / len, d.z / len);
     double u = nbep_vec3_dot(s->vel[k], n), an = nbep_vec3_dot(c->aeff[k], n);
     rest_set r = c->rest[k];
+    drop_leaning(c, k, &r);
     const double amag = nbep_vec3_norm(s->acc[k]), v_rest = rest_speed(s, k, amag, dt);
+    /* not on a j that rests on k (leans_on): it bounces, and meets j again after j's let-go */
     if (an < 0.0 && fabs(u) <= v_rest && nbep_vec3_norm(s->vel[k]) <= v_rest &&
-        r.n < NBEP_CONTACT_MAX) {
+        r.n < NBEP_CONTACT_MAX && !leans_on(c, j, k)) {
         r.who[r.n] = -1 - (int32_t)j;
         r.ver[r.n++] = c->ver[j];
         const rest_set r0 = r;
@@ -1581,7 +1606,7 @@ static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t
         if (!held) { /* a pocket: j with the other held spheres k touches (within twice the
                       * highest hop of the rest speed, |a| t_min^2) */
             r = r0;
-            pocket_gather(c, s, w, k, j, v_rest * v_rest / amag, &r);
+            pocket_gather(c, s, w, k, j, v_rest * v_rest / amag, true, &r);
             pocket_planes(s, k, v_rest * v_rest / amag, &r);
             if (r.n > r0.n) {
                 v = s->vel[k];
@@ -1637,7 +1662,7 @@ static bool carried(const pred_ctx *c, const nbep_state *s, const thread_ws *w, 
     if (faces_take(c, s, j, &r, m))
         return true;
     const double vs = settle_speed(s, j, dt), reach = vs * vs / amag;
-    pocket_gather(c, s, w, j, k, reach, &r);
+    pocket_gather(c, s, w, j, k, reach, false, &r);
     pocket_planes(s, j, reach, &r);
     return faces_take(c, s, j, &r, m);
 }

@@ -108,6 +108,11 @@ size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads)
     if (algo == &nbep__algo_predictive && sc->order_step)
         bytes += n * 16; /* run.order = "step": a time claim 8, its list 8 */
     bytes += (size_t)threads * 4 * NBEP_CACHELINE;
+    /* the step's exact sums (virial, each plane's impulse), per thread and parity; the cells
+     * team's places have theirs too, a ring of them per thread */
+    bytes += (size_t)threads * 2 * (np + 1) * sizeof(nbep_xsum);
+    if (algo == &nbep__algo_predictive && sc->neighbors_cells && threads > 1)
+        bytes += (size_t)threads * NBEP_EVLOOP_RING * (np + 1) * sizeof(nbep_xsum);
     bytes += n * 2 * sizeof(nbep_vec3); /* one frame in flight in HDF5's buffers */
     return bytes;
 }
