@@ -68,8 +68,8 @@ MUTANTS = [
     ("quartic-accel-bends", "src/predict.c",
      "if (nbep_vec3_norm(da) * nbep_vec3_norm(dp) >= ACCEL_BENDS * nbep_vec3_norm2(dv))\n        return bracket_search(&q);",
      "if (nbep_vec3_norm(da) * nbep_vec3_norm(dp) >= ACCEL_BENDS * nbep_vec3_norm2(dv))\n        return 2.0 * bracket_search(&q);", PRED, None),
-    ("bracket-overlap-start", "src/predict.c", "if (f_val(m, u) <= 0.0)\n            return u;",
-     "if (f_val(m, u) <= 0.0)\n            return w;", PRED, None),
+    ("bracket-overlap-start", "src/predict.c", "if (fu <= 0.0)\n            return u;",
+     "if (fu <= 0.0)\n            return w;", PRED, None),
     ("quartic-lost", "src/predict.c", "    if (lost)\n        return bracket_search(&q);\n    return best;",
      "    return best;", PRED, None),
     # ---- event queue ----

@@ -397,8 +397,8 @@ static double bits_double(uint64_t u)
     return x;
 }
 
-/* For 0 <= lo < hi where (g <= 0) differs between lo and hi: the first double in (lo, hi] at
- * which it has hi's value, g monotone in between. Keeps a bracket of bit patterns (ordered
+/* For 0 <= lo < hi where (g <= 0) differs between lo and hi (ga and gb: g there, which the
+ * caller has): the first double in (lo, hi] at which it has hi's value, g monotone in between. Keeps a bracket of bit patterns (ordered
  * like the values for non-negative doubles) that ends at adjacent doubles. Each try is the
  * false-position point of the bracket's ends (Illinois: an end that stays twice in a row
  * counts its value half), pushed 4^k ulps farther from the end that the last k + 1 tries all
@@ -410,9 +410,9 @@ static double bits_double(uint64_t u)
  * without the push (a review's count, whose reading of the one-sided stall this follows),
  * 1.3 % of calls above 100. With g monotone the answer is the one double where g turns,
  * whatever the tries: plain bisection's. */
-static double bisect(const motion *m, double (*g)(const motion *, double), double lo, double hi)
+static double bisect(const motion *m, double (*g)(const motion *, double), double lo, double hi,
+                     double ga, double gb)
 {
-    double ga = g(m, lo), gb = g(m, hi);
     const bool lo_side = ga <= 0.0;
     uint64_t a = double_bits(lo), b = double_bits(hi);
     double ta = lo, tb = hi;
@@ -509,23 +509,26 @@ static double bracket_search(const quartic *q)
             knot[n_knot++] = r[k];
     knot[n_knot++] = tb;
 
+    double slope[4]; /* f'/2 at each knot, each found once */
+    for (int k = 0; k < n_knot; k++)
+        slope[k] = f_half_slope(m, knot[k]);
     double crit[5] = {q->t_start};
     int n_crit = 1;
-    for (int i = 0; i + 1 < n_knot; i++) {
-        double u = knot[i], w = knot[i + 1];
-        if ((f_half_slope(m, u) <= 0.0) != (f_half_slope(m, w) <= 0.0))
-            crit[n_crit++] = bisect(m, f_half_slope, u, w);
-    }
+    for (int i = 0; i + 1 < n_knot; i++)
+        if ((slope[i] <= 0.0) != (slope[i + 1] <= 0.0))
+            crit[n_crit++] = bisect(m, f_half_slope, knot[i], knot[i + 1], slope[i], slope[i + 1]);
     crit[n_crit++] = tb;
 
     for (int i = 0; i + 1 < n_crit; i++) {
         double u = crit[i], w = crit[i + 1];
         if (!(w > u) || !(f_half_slope(m, 0.5 * (u + w)) < 0.0))
             continue;                           /* f does not decrease here */
-        if (f_val(m, u) <= 0.0)
+        const double fu = f_val(m, u);
+        if (fu <= 0.0)
             return u;                           /* overlapping as it starts to close */
-        if (f_val(m, w) <= 0.0)
-            return bisect(m, f_val, u, w);
+        const double fw = f_val(m, w);
+        if (fw <= 0.0)
+            return bisect(m, f_val, u, w, fu, fw);
     }
     return NBEP_NEVER;
 }
