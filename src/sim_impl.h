@@ -73,7 +73,7 @@ struct nbep_sim {
     uint64_t overlap_step;           /* the last step whose check the threads shared */
     nbep_step_stats *rows;           /* owned: stats rows not yet written */
     double *wall_rows;               /* owned: their /stats/wall_impulse rows, n_planes each */
-    nbep_xsum *wall_buf[2];             /* owned: per parity, nt x n_planes (nbep_thread_max.wall) */
+    nbep_xsum *wall_buf[2];          /* owned: per parity, nt x n_planes (nbep_thread_max.wall) */
     double virial_total;             /* summary pressure: the virial summed over this session */
     double ke_total;                 /* and the kinetic energy at each step's end, summed */
     size_t n_rows, cap_rows;

@@ -111,7 +111,7 @@ void nbep_xsum_merge(nbep_xsum *a, const nbep_xsum *b)
 
 double nbep_xsum_value(const nbep_xsum *s)
 {
-    if (s->special != 0.0 || isnan(s->special))
+    if (s->special != 0.0) /* an infinity, or NaN (which differs from everything) */
         return s->special;
     if (s->lo > s->hi)
         return 0.0;

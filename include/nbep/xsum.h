@@ -6,9 +6,9 @@
  * the step's virial then changed in its last bits from run to run and with the thread count.
  *
  * The accumulator is 2^-1074 (the least subnormal) times a signed integer held in
- * NBEP_XSUM_LIMBS limbs of 32 bits, each kept in an int64_t so that a limb takes up to 2^31
- * additions of less than 2^32 before its carries need passing on (nbep_xsum_add does that
- * every NBEP_XSUM_BATCH terms). All zero bytes is the empty sum. Infinities and NaN are summed
+ * NBEP_XSUM_LIMBS limbs of 32 bits, each kept in an int64_t so that a limb takes many
+ * additions of less than 2^32 before its carries need passing on (nbep_xsum_add and
+ * nbep_xsum_merge do that every 2^29 terms: BATCH in xsum.c). All zero bytes is the empty sum. Infinities and NaN are summed
  * apart, as doubles, and win: a sum with one is that sum. */
 #ifndef NBEP_XSUM_H
 #define NBEP_XSUM_H
