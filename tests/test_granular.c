@@ -1026,6 +1026,17 @@ static nbep_summary run_sums(const nbep_scene *sc, int nt, const char *name, tra
     return s;
 }
 
+/* run_sums' two step sums equal the reference's bit for bit; frees them. */
+static void same_sums(double *sums[2], const size_t n[2], double *const ref_sums[2],
+                      const size_t ref_n[2])
+{
+    for (int q = 0; q < 2; q++) {
+        assert_int_equal(n[q], ref_n[q]);
+        assert_memory_equal(sums[q], ref_sums[q], n[q] * sizeof *sums[q]);
+        free(sums[q]);
+    }
+}
+
 /* Lasting contacts, held spheres and TC decisions are taken by whichever thread owns a sphere:
  * frames must not depend on that, nor the counts (the work done: a sphere re-predicted more or
  * less often, or a grid block read while another thread was still filling it, shows there
@@ -1066,11 +1077,7 @@ static void test_pile_frames_equal_for_1_2_4_threads(void **state)
             assert_int_equal(sk.collisions, s1.collisions);
             assert_int_equal(sk.predictions, s1.predictions);
             assert_int_equal(sk.checks, s1.checks);
-            for (int q = 0; q < 2; q++) {
-                assert_int_equal(n[q], ref_n[q]);
-                assert_memory_equal(sums[q], ref_sums[q], n[q] * sizeof *sums[q]);
-                free(sums[q]);
-            }
+            same_sums(sums, n, ref_sums, ref_n);
             free(t.data);
         }
         free(ref_sums[0]);
@@ -1133,11 +1140,7 @@ static void test_step_sums_equal_for_1_2_4_threads(void **state)
             size_t n[2];
             (void)run_sums(sc, nt, "sums.h5", &t, sums, n);
             assert_memory_equal(t.data, ref.data, ref.n_frames * 2 * ref.n * sizeof *ref.data);
-            for (int q = 0; q < 2; q++) {
-                assert_int_equal(n[q], ref_n[q]);
-                assert_memory_equal(sums[q], ref_sums[q], n[q] * sizeof *sums[q]);
-                free(sums[q]);
-            }
+            same_sums(sums, n, ref_sums, ref_n);
             free(t.data);
         }
         unsetenv("NBEP_TEAM");
