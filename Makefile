@@ -136,6 +136,12 @@ bench-dense: bin/nbep
 bench-order: bin/nbep
 	/usr/bin/python3 scripts/bench-order.py $(BENCH_ORDER_ARGS)
 
+# The hopper (inputs/hopper.deck, no box) with 400 spheres: grid against cells mode, 1 and 2
+# threads, medians of 3; BENCH_HOPPER_ARGS = COUNT STEPS REPEATS.
+.PHONY: bench-hopper
+bench-hopper: bin/nbep
+	sh scripts/bench-hopper.sh $(BENCH_HOPPER_ARGS)
+
 # The granular pile (inputs/pile.deck) poured and settled, e = 0.5 against 1, 1 and 2 threads:
 # collisions per step, spheres held and wall time over the run (over an hour per e = 0.5 run;
 # BENCH_PILE_ARGS, e.g. "--count 300 --steps 2400" for a smaller pile, with BENCH_PILE_PLOT

@@ -219,7 +219,8 @@ typedef struct thread_ws {
                                * the current step */
     double vmax_end, amax_end; /* grid mode: fastest own sphere and largest own acceleration
                                * at the end of the last step (read by grid_prepare) */
-    nbep_vec3 grid_lo, grid_hi; /* grid mode: bounds of own centres at the step's start */
+    nbep_vec3 grid_lo, grid_hi; /* grid mode: bounds of own centres at the step's start;
+                                 * cells mode without a box: at a rebuild or a step's end */
     size_t grid_sum;          /* grid mode: spheres in own cells (the build's prefix sum) */
     nbep_predict_ws *pws;     /* owned: quartic workspace */
 } thread_ws;
@@ -305,6 +306,11 @@ typedef struct pred_ctx {
     double horizon;               /* H: absolute time up to which this step's predictions look */
     /* run.neighbors = "cells" (beyond the paper): the in-step event loop (evloop.h) */
     nbep_evloop *ev;              /* owned, NULL in the other modes */
+    /* a scene without a box: the cells cover the spheres' extent at each rebuild, grown on
+     * each side (fit_region), and a step whose spheres have left that region rebuilds
+     * (cells_fit, cells_outgrown) */
+    bool refit;
+    nbep_vec3 fit_lo, fit_hi;     /* the region the cells cover now */
     nbep_periodic pb;             /* the box's periodic axes (scene.c: cells and all-pairs) */
     /* all-pairs mode in a periodic box: partners are compared at their nearest image, which
      * stays the touching one while no sphere strays farther than image_reach from where it
@@ -402,6 +408,24 @@ static void pred_destroy(void *p)
         nbep_free_aligned(c->ws);
     }
     free(c);
+}
+
+/* A scene without a box, cells mode: the region the cells cover around the centres' extent
+ * [lo, hi] (fit_lo, fit_hi), grown on each side by an eighth of the extent along that axis
+ * and at least two of the largest diameters. Spheres move between rebuilds, and one that
+ * leaves the region is clamped into its edge cells (correct, slower), so a step whose spheres
+ * have left it rebuilds (cells_outgrown): the eighth makes a region that has to follow a
+ * growing extent (a hopper's outflow, a gas that expands) grow geometrically, a few rebuilds
+ * in all; the two diameters keep a layer one sphere thick (no extent across it) from
+ * rebuilding each time a sphere hops off it. */
+static void fit_region(pred_ctx *c, nbep_vec3 lo, nbep_vec3 hi)
+{
+    const double floor_pad = 4.0 * c->rmax;
+    const nbep_vec3 pad = {fmax(floor_pad, 0.125 * (hi.x - lo.x)),
+                           fmax(floor_pad, 0.125 * (hi.y - lo.y)),
+                           fmax(floor_pad, 0.125 * (hi.z - lo.z))};
+    c->fit_lo = nbep_vec3_sub(lo, pad);
+    c->fit_hi = nbep_vec3_add(hi, pad);
 }
 
 static int team_forced(void);
@@ -521,8 +545,16 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         if (c->team_force >= 2 && c->team_force < size)
             size = c->team_force;
         c->team_size = can_team ? size : 1;
-        st = nbep_evloop_create(n, sim->scene->box_min, sim->scene->box_max, 2.0 * c->rmax,
-                                c->pb.axis, c->team_size, c->q, c->ver, &c->ev, d);
+        nbep_vec3 lo = sim->scene->box_min, hi = sim->scene->box_max;
+        c->refit = !sim->scene->has_box && n > 0;
+        if (c->refit) { /* each rebuild lays the cells out again (cells_fit) */
+            nbep_grid_bounds(sim->st.pos, 0, n, &lo, &hi);
+            fit_region(c, lo, hi);
+            lo = c->fit_lo;
+            hi = c->fit_hi;
+        }
+        st = nbep_evloop_create(n, lo, hi, 2.0 * c->rmax, c->pb.axis, c->team_size, c->q,
+                                c->ver, &c->ev, d);
         c->team = st == NBEP_OK && c->team_size >= 2;
         c->team_ways = !c->team ? 1 : c->team_size > 2 ? 3 : 2;
         c->team_crew[0] = 1;
@@ -962,6 +994,22 @@ static nbep_event predict_grid(const pred_ctx *c, const nbep_state *s, size_t i,
     return best;
 }
 
+/* The bounds of every thread's centres (each thread's grid_lo and grid_hi), in *lo and *hi:
+ * min and max are exact, so the result is the same for any thread count. */
+static void merged_bounds(const pred_ctx *c, nbep_vec3 *lo, nbep_vec3 *hi)
+{
+    nbep_vec3 l = c->ws[0].grid_lo, h = c->ws[0].grid_hi;
+    for (int t = 1; t < c->nt; t++) {
+        const thread_ws *u = &c->ws[t];
+        l = nbep_vec3_make(fmin(l.x, u->grid_lo.x), fmin(l.y, u->grid_lo.y),
+                           fmin(l.z, u->grid_lo.z));
+        h = nbep_vec3_make(fmax(h.x, u->grid_hi.x), fmax(h.y, u->grid_hi.y),
+                           fmax(h.z, u->grid_hi.z));
+    }
+    *lo = l;
+    *hi = h;
+}
+
 /* Grid mode, every thread at a step's start (every sphere at T0, no thread reading the grid:
  * the find phase that follows reads none): the grid of the centres, built by all threads
  * (grid.h: the same grid whatever their number; four barriers), and the horizon: predictions
@@ -986,16 +1034,12 @@ static void grid_prepare(pred_ctx *c, const nbep_state *s, int tid, nbep_range o
     nbep_barrier_wait(&c->bar);
     if (tid == 0) {
         double vmax = 0.0, amax = 0.0;
-        nbep_vec3 lo = w->grid_lo, hi = w->grid_hi;
         for (int t = 0; t < nt; t++) {
-            const thread_ws *u = &c->ws[t];
-            vmax = fmax(vmax, u->vmax_end);
-            amax = fmax(amax, u->amax_end);
-            lo = nbep_vec3_make(fmin(lo.x, u->grid_lo.x), fmin(lo.y, u->grid_lo.y),
-                                fmin(lo.z, u->grid_lo.z));
-            hi = nbep_vec3_make(fmax(hi.x, u->grid_hi.x), fmax(hi.y, u->grid_hi.y),
-                                fmax(hi.z, u->grid_hi.z));
+            vmax = fmax(vmax, c->ws[t].vmax_end);
+            amax = fmax(amax, c->ws[t].amax_end);
         }
+        nbep_vec3 lo, hi;
+        merged_bounds(c, &lo, &hi);
         nbep_grid_size(&c->grid, lo, hi, s->n, 2.0 * c->rmax);
         double step_travel = vmax * dt + 0.5 * amax * dt * dt;
         double k = step_travel > 0.0 ? floor(0.5 * c->grid.h / step_travel) : 64.0;
@@ -2031,6 +2075,37 @@ static void jam_fail(nbep_sim *sim, uint64_t step, size_t i, double t)
     sim->status = NBEP_ENUMERIC;
 }
 
+/* Cells mode without a box, every thread before a rebuild: the cells laid out afresh over the
+ * centres' extent (fit_region). False on every thread when out of memory (the run stops). */
+static bool cells_fit(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thread_ws *w,
+                      nbep_counters *cnt)
+{
+    nbep_grid_bounds(sim->st.pos, own.lo, own.hi, &w->grid_lo, &w->grid_hi);
+    nbep_barrier_wait(&c->bar);
+    if (tid == 0) {
+        nbep_vec3 lo, hi;
+        merged_bounds(c, &lo, &hi);
+        fit_region(c, lo, hi);
+        c->ev_failed = nbep_evloop_refit(c->ev, c->fit_lo, c->fit_hi, sim->diag) != NBEP_OK;
+        cnt->c[NBEP_COUNTER_REFITS]++;
+        if (c->ev_failed)
+            sim->status = NBEP_ENOMEM;
+    }
+    nbep_barrier_wait(&c->bar);
+    return !c->ev_failed;
+}
+
+/* Cells mode without a box, every thread after each thread has put its centres' bounds at the
+ * step's end in its grid_lo, grid_hi (and a barrier): whether some centre has left the region
+ * the cells cover. The same answer on every thread, for any thread count. */
+static bool cells_outgrown(const pred_ctx *c)
+{
+    nbep_vec3 lo, hi;
+    merged_bounds(c, &lo, &hi);
+    return lo.x < c->fit_lo.x || lo.y < c->fit_lo.y || lo.z < c->fit_lo.z ||
+           hi.x > c->fit_hi.x || hi.y > c->fit_hi.y || hi.z > c->fit_hi.z;
+}
+
 /* ---- run.neighbors = "cells": the algorithm's side of the event loop (evloop.h) ---------- */
 
 /* Every this many events of one step, time must have advanced by more than STALL_FRACTION of
@@ -2501,6 +2576,8 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
              * run continues from what a resumed one reads */
             for (size_t i = own.lo; c->pb.any && i < own.hi; i++)
                 nbep_periodic_wrap(&c->pb, &s->pos[i], &s->image[3 * i]);
+            if (c->refit && !cells_fit(sim, c, tid, own, w, u.cnt))
+                return;
             nbep_evloop_assign(c->ev, s->pos, own.lo, own.hi);
             nbep_barrier_wait(&c->bar);
             if (tid == 0)
@@ -2579,6 +2656,8 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
             if (c->settle)
                 w->n_settle += settle_count(c, s, i, sim->dt);
         }
+        if (c->refit)
+            nbep_grid_bounds(s->pos, own.lo, own.hi, &w->grid_lo, &w->grid_hi);
         nbep__sim_block_energy(sim, own);
         nbep__sim_frame_overlap(sim, step, tid, own, &c->bar);
         nbep_barrier_wait(&c->bar);
@@ -2586,9 +2665,11 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
         const bool settled = settle_phases(sim, c, own, w);
         if (tid == 0)
             nbep__sim_end_step(sim, step);
-        /* only frames written to a file can be resumed from (and, with settling, the next
-         * step's rebuild follows from the state, so a resumed run takes it too) */
-        rebuild = settled || (sim->opt.out && step % sim->scene->output_every == 0);
+        /* only frames written to a file can be resumed from (and, with settling or spheres
+         * that left the cells, the next step's rebuild follows from the state, so a resumed
+         * run takes it too) */
+        rebuild = settled || (c->refit && cells_outgrown(c)) ||
+                  (sim->opt.out && step % sim->scene->output_every == 0);
         nbep_barrier_wait(&c->bar);
         /* relaxed: the barrier above ordered thread 0's store of stop */
         if (atomic_load_explicit(&sim->stop, memory_order_relaxed))

@@ -1,6 +1,7 @@
 /* Cell lists with hysteresis (see cells.h). */
 #include "nbep/cells.h"
 
+#include <assert.h>
 #include <math.h>
 #include <string.h>
 
@@ -15,17 +16,13 @@ size_t nbep_cells_bytes(size_t n)
     return (2 * n + 9) * sizeof(uint32_t) + n * (sizeof(nbep_cells_member) + sizeof(uint32_t));
 }
 
-nbep_status nbep_cells_init(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double reach, size_t n,
-                            const bool *periodic, nbep_diag *d)
+/* The cells' layout over [lo, hi] (sides, margins, counts): see nbep_cells_init. */
+static void lay_out(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double reach)
 {
-    memset(g, 0, sizeof *g);
-    for (int k = 0; k < 3; k++)
-        g->periodic[k] = periodic && periodic[k];
     g->lo = lo;
     g->hi = hi;
-    g->n = n;
     const double ext[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
-    const double cap = 2.0 * (double)n + 8.0;
+    const double cap = 2.0 * (double)g->n + 8.0;
     /* no contacts possible (no spheres: reach 0): one cell per axis */
     double side = reach > 0.0 && isfinite(reach) ? reach * SIDE_FACTOR
                                                  : fmax(ext[0], fmax(ext[1], ext[2])) + 1.0;
@@ -49,12 +46,38 @@ nbep_status nbep_cells_init(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double re
         g->margin[k] = g->dim[k] > 1 ? 0.25 * (g->h[k] - reach) : 0.0;
         g->n_cells *= g->dim[k];
     }
+}
+
+nbep_status nbep_cells_init(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double reach, size_t n,
+                            const bool *periodic, nbep_diag *d)
+{
+    memset(g, 0, sizeof *g);
+    for (int k = 0; k < 3; k++)
+        g->periodic[k] = periodic && periodic[k];
+    g->n = n;
+    lay_out(g, lo, hi, reach);
+    g->cap_cells = g->n_cells;
     g->head = nbep_alloc_aligned(g->n_cells, sizeof *g->head);
     g->m = nbep_alloc_aligned(n ? n : 1, sizeof *g->m);
     g->prev = nbep_alloc_aligned(n ? n : 1, sizeof *g->prev);
     if (!g->head || !g->m || !g->prev) {
         nbep_cells_fini(g);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for cell lists of %zu spheres", n);
+    }
+    return NBEP_OK;
+}
+
+nbep_status nbep_cells_refit(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double reach,
+                             nbep_diag *d)
+{
+    assert(!g->periodic[0] && !g->periodic[1] && !g->periodic[2]);
+    lay_out(g, lo, hi, reach);
+    if (g->n_cells > g->cap_cells) {
+        nbep_free_aligned(g->head);
+        g->head = nbep_alloc_aligned(g->n_cells, sizeof *g->head);
+        g->cap_cells = g->head ? g->n_cells : 0;
+        if (!g->head)
+            NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for %zu cells", g->n_cells);
     }
     return NBEP_OK;
 }

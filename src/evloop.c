@@ -98,6 +98,7 @@ struct nbep_evloop {
     double cut;           /* the list cutoff: contact distance plus skin, plus slack */
     double stray;         /* half the skin: how far a sphere goes before its list expires */
     double face_reach;    /* cut + stray, and a margin: see near_face */
+    double apart;         /* twice `touch`: see nbep_evloop_create */
     bool failed;          /* out of memory for a list: the run stops */
     bool stop;            /* nbep_evloop_stop: the run stops after the current event */
     nbep_feq *q;          /* borrowed */
@@ -193,6 +194,15 @@ static void set_near2(nbep_evloop *e, nbep_vec3 lo, nbep_vec3 hi, double apart)
     e->near2 = nextafterf((float)(far * far * (1.0 + 8.0 * u)), INFINITY);
 }
 
+/* The reach the cells are laid out for: cells_init makes sides of 1.125 times the reach it is
+ * given, for the hysteresis of moving members (cells.h); list centres stay put between
+ * rebuilds, so sides of the cutoff itself suffice: a 27-cell block a third smaller to scan at
+ * each rebuild. */
+static double cells_reach(const nbep_evloop *e)
+{
+    return e->cut / 1.125;
+}
+
 nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reach,
                                const bool *periodic, int team, nbep_feq *q,
                                const uint64_t *ver, nbep_evloop **out, nbep_diag *d)
@@ -249,7 +259,8 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     }
     for (int k = 0; k < 2 * WINDOW; k++)
         e->taken_x[k] = e->taken_y[k] = e->taken_z[k] = INFINITY;
-    set_near2(e, lo, hi, 2.0 * touch);
+    e->apart = 2.0 * touch;
+    set_near2(e, lo, hi, e->apart);
     e->count = nbep_alloc_aligned(n ? n : 1, sizeof *e->count);
     bool ws_ok = true;
     for (int t = 0; t < team; t++)
@@ -261,10 +272,7 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     if (st == NBEP_OK)
         st = nbep_calendar_create(n, &e->cal, d);
     if (st == NBEP_OK)
-        /* cells_init makes sides of 1.125 times the reach it is given, for the hysteresis of
-         * moving members (cells.h); list centres stay put between rebuilds, so sides of the
-         * cutoff itself suffice: a 27-cell block a third smaller to scan at each rebuild */
-        st = nbep_cells_init(&e->cells, lo, hi, e->cut / 1.125, n, periodic, d);
+        st = nbep_cells_init(&e->cells, lo, hi, cells_reach(e), n, periodic, d);
     if (st == NBEP_OK)
         st = nbep_nblist_init(&e->nl, n, d);
     if (st != NBEP_OK) {
@@ -273,6 +281,14 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     }
     *out = e;
     return NBEP_OK;
+}
+
+nbep_status nbep_evloop_refit(nbep_evloop *e, nbep_vec3 lo, nbep_vec3 hi, nbep_diag *d)
+{
+    assert(!e->pb.any);
+    e->pb = nbep_periodic_make(NULL, lo, hi);
+    set_near2(e, lo, hi, e->apart);
+    return nbep_cells_refit(&e->cells, lo, hi, cells_reach(e), d);
 }
 
 double nbep_evloop_min_periodic_side(double reach)

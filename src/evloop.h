@@ -99,6 +99,13 @@ void nbep_evloop_destroy(nbep_evloop **e);
  * the list cutoff with the thinnest skin (NBEP_NBLIST_SKIN_MIN); a shorter one is refused. */
 double nbep_evloop_min_periodic_side(double reach);
 
+/* A scene without a box: the cells laid out afresh over [lo, hi], the extent of the spheres'
+ * centres now (with a margin), before a full rebuild (one thread, before part 1). Between
+ * rebuilds spheres may leave it: they are clamped into its edge cells (cells.h), so contacts are
+ * still found, at the cost of fuller cells there. No periodic axis. Out of memory:
+ * NBEP_ENOMEM with a message. */
+NBEP_MUST_CHECK nbep_status nbep_evloop_refit(nbep_evloop *e, nbep_vec3 lo, nbep_vec3 hi,
+                                              nbep_diag *d);
 /* A full rebuild, from spheres that all sit at one time t: (1) every thread assigns its range
  * to cells, (2) one thread links the cell lists, (3) every thread counts its range's
  * neighbours, (4) one thread lays the neighbour lists out, (5) every thread fills its range's

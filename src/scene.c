@@ -1024,9 +1024,6 @@ nbep_status nbep_scene_load_from(const char *deck_path, const char *const *overr
     parse_physics(&L, root, &sc);
     const config_setting_t *periodic_at;
     parse_box(&L, root, &sc, &periodic_at);
-    if (sc.neighbors_cells && !config_lookup(&cfg, "box"))
-        ERR(&L, config_lookup(&cfg, "run.neighbors"),
-            "run.neighbors = \"cells\" needs a box (its cells cover the box)");
     parse_planes(&L, root, &planes, &n_planes);
     parse_spheres(&L, root, &sc, &entries, &n_entries);
     if (periodic_at)

@@ -36,12 +36,12 @@ enum {
     X(RUN_DT, "run.dt", FLOAT, F_GT0, "1.0e-3", NULL, "the constant time step")                    \
     X(RUN_THREADS, "run.threads", INT, F_GE0, "0", NULL,                                           \
       "threads; 0: OMP_NUM_THREADS, else all cores (\"cells\" with e = 1 and no gravity: the "    \
-      "event loop runs on two, the others share the rebuilds and update only)")                    \
+      "event loop runs as a team of up to 16, any others share the rebuilds and update only)")     \
     X(RUN_SEED, "run.seed", INT, F_GE0, "1", NULL, "every random choice derives from it")          \
     X(RUN_NEIGHBORS, "run.neighbors", STRING, 0, "\"all\"", NULL,                                  \
       "predictive: whom a re-prediction tests: \"all\" spheres (the paper), \"grid\" (nearby "  \
-      "cells within a time horizon) or \"cells\" (event loop: cell lists and a calendar; "        \
-      "needs a box)")                                                                              \
+      "cells within a time horizon) or \"cells\" (event loop: cell lists and a calendar over "   \
+      "the box, or without one over the spheres' extent)")                                         \
     X(RUN_ORDER, "run.order", STRING, 0, "\"time\"", NULL,                                         \
       "predictive \"all\" or \"grid\": how a step's events are reacted to: \"time\" (earliest "    \
       "first, re-predicting in between: exact) or \"step\" (the paper's step: every event "        \

@@ -3,7 +3,8 @@
  * without acceleration whose cell exits are processed in time order, the two properties the
  * engine relies on: every sphere sits within its grown cell, and every pair within reach is
  * in the same or adjacent cells; an exit always lands in another cell. Periodic axes: blocks
- * wrap with the period of each neighbour, and every face has an exit. */
+ * wrap with the period of each neighbour, and every face has an exit. A layout fitted afresh
+ * to a new region (nbep_cells_refit) is the one a fresh init makes. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -92,6 +93,50 @@ static void test_a_build_in_two_ranges_on_two_threads_equals_a_serial_one(void *
             assert_true(a.m[i].next > i);
     nbep_cells_fini(&a);
     nbep_cells_fini(&b);
+    free(pos);
+}
+
+/* A layout fitted afresh (a scene without a box, at each rebuild): the geometry a fresh init
+ * over the new region would have, room for more cells when it needs them (a small region
+ * first, then one with many more cells), and a build over it that keeps the invariant, with
+ * spheres outside the region clamped into its edge cells. */
+static void test_refit_lays_the_cells_out_as_a_fresh_init_would(void **state)
+{
+    (void)state;
+    enum { N = 2000 };
+    nbep_vec3 *pos = malloc(N * sizeof *pos);
+    uint64_t x = 11;
+    for (size_t i = 0; i < N; i++) /* a quarter of them outside [0, 12]^3 */
+        pos[i] = (nbep_vec3){15 * unit(&x) - 1.5, 15 * unit(&x) - 1.5, 12 * unit(&x)};
+    nbep_cells g, fresh;
+    init_cells(&g, (nbep_vec3){0, 0, 0}, (nbep_vec3){2, 3, 2}, 1.0, N);
+    assert_int_equal(g.n_cells, 2);
+    const nbep_vec3 lo = {0, 0, 0}, hi = {12, 12, 12};
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_cells_refit(&g, lo, hi, 1.0, &d), NBEP_OK);
+    nbep_diag_fini(&d);
+    init_cells(&fresh, lo, hi, 1.0, N);
+    assert_int_equal(g.n_cells, fresh.n_cells);
+    assert_true(g.n_cells == 10 * 10 * 10); /* 12 / 1.125 = 10.7 */
+    assert_true(g.cap_cells >= g.n_cells);
+    for (int k = 0; k < 3; k++) {
+        assert_int_equal(g.dim[k], fresh.dim[k]);
+        assert_true(g.h[k] == fresh.h[k] && g.margin[k] == fresh.margin[k]);
+    }
+    assert_true(nbep_vec3_equal(g.lo, lo) && nbep_vec3_equal(g.hi, hi));
+    nbep_cells_assign(&g, pos, 0, N);
+    nbep_cells_link(&g);
+    nbep_cells_assign(&fresh, pos, 0, N);
+    nbep_cells_link(&fresh);
+    assert_memory_equal(g.head, fresh.head, g.n_cells * sizeof *g.head);
+    assert_int_equal(nbep_cells_check(&g, NULL, 0.0), 0);
+    /* outside along x: in the edge cells */
+    for (size_t i = 0; i < N; i++)
+        if (pos[i].x < 0.0 || pos[i].x > 12.0)
+            assert_int_equal(g.m[i].cell % g.dim[0], pos[i].x < 0.0 ? 0 : g.dim[0] - 1);
+    nbep_cells_fini(&g);
+    nbep_cells_fini(&fresh);
     free(pos);
 }
 
@@ -275,6 +320,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_geometry_sides_at_least_reach_and_cells_bounded),
         cmocka_unit_test(test_a_build_in_two_ranges_on_two_threads_equals_a_serial_one),
+        cmocka_unit_test(test_refit_lays_the_cells_out_as_a_fresh_init_would),
         cmocka_unit_test(test_straight_flights_keep_members_in_their_cells_and_contacts_adjacent),
         cmocka_unit_test(
             test_accelerated_flights_keep_members_in_their_cells_and_contacts_adjacent),

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "nbep/grid.h"
 #include "nbep/sim.h"
 #include "nbep/stats.h"
 #include "nbep_test.h"
@@ -456,6 +457,119 @@ static void test_cells_predictive_pile_settles_under_gravity(void **state)
     nbep_test_scene_free(&sc);
 }
 
+/* A scene without a box in cells mode: the cells cover the spheres' extent instead, laid out
+ * afresh at each rebuild (counted as refits). Where walls given as planes keep the spheres in,
+ * that layout changes nothing: the gas above, under gravity, with its box's walls as planes
+ * only, gives the boxed run's frames bit for bit (on 2 threads, its bounds from both). */
+static void test_cells_without_a_box_gives_the_boxed_frames(void **state)
+{
+    (void)state;
+    const size_t n = nbep_test_scaled(700, 300);
+    const uint64_t steps = nbep_test_scaled(300, 60);
+    nbep_scene *b = gas("predictive", n, 9.81, steps), *p = gas("predictive", n, 9.81, steps);
+    b->neighbors_cells = p->neighbors_cells = true;
+    p->has_box = false;
+    frames fb = {0}, fp = {0};
+    uint64_t cb[NBEP_COUNTER_COUNT], cp[NBEP_COUNTER_COUNT];
+    nbep_summary sb = nbep_test_run_counted(b, 1, nbep_test_keep_frame, &fb, NULL, cb);
+    nbep_summary sp = nbep_test_run_counted(p, 2, nbep_test_keep_frame, &fp, NULL, cp);
+    assert_true(sb.sphere_collisions > 10 && sb.plane_collisions > 10);
+    frames_equal(&fb, &fp);
+    assert_int_equal(sp.collisions, sb.collisions);
+    assert_int_equal(cb[NBEP_COUNTER_REFITS], 0);
+    assert_true(cp[NBEP_COUNTER_REFITS] >= 1);
+    nbep_test_frames_free(&fb), nbep_test_frames_free(&fp);
+    nbep_test_scene_free(&b), nbep_test_scene_free(&p);
+}
+
+/* side^3 spheres of radius 0.5 packed on a jittered lattice of spacing 1.25 around the origin,
+ * velocities uniform in [-1, 1]^3, no planes, no box, nothing accelerating: a cluster that
+ * collides at first and then expands into free space. */
+static nbep_scene *cluster(const char *algo, size_t side, uint64_t steps)
+{
+    const size_t n = side * side * side;
+    nbep_scene *sc = nbep_test_scene_new(n, 0, algo, steps, 0.05);
+    uint64_t x = 0x2545F4914F6CDD1Du;
+    for (size_t i = 0; i < n; i++) {
+        double u[6];
+        for (int k = 0; k < 6; k++)
+            u[k] = nbep_test_uniform(&x);
+        const double h = 1.25, o = -0.5 * h * (double)side;
+        nbep_vec3 p = {o + h * ((double)(i % side) + 0.4 + 0.2 * u[0]),
+                       o + h * ((double)(i / side % side) + 0.4 + 0.2 * u[1]),
+                       o + h * ((double)(i / side / side) + 0.4 + 0.2 * u[2])};
+        nbep_vec3 v = {2.0 * u[3] - 1.0, 2.0 * u[4] - 1.0, 2.0 * u[5] - 1.0};
+        nbep_test_set_sphere(sc, i, p, v, 0.5, 1.0, ZERO);
+    }
+    return sc;
+}
+
+/* The cluster expands out of any region the cells cover: each step whose spheres have left it
+ * rebuilds over their new extent. The same collisions as the paper's all-pairs mode, energy and
+ * overlaps at round-off, frames bitwise equal for 1, 2 and 4 threads (the team runs it: elastic,
+ * nothing accelerating), and the region grows geometrically (by an eighth of the extent on each
+ * side): a few refits while the extent grows several times, not one a step. */
+static void test_cells_without_a_box_follows_an_expanding_cluster(void **state)
+{
+    (void)state;
+    const size_t side = nbep_test_scaled(8, 6);
+    const uint64_t steps = nbep_test_scaled(200, 120);
+    nbep_scene *c = cluster("predictive", side, steps), *a = cluster("predictive", side, steps);
+    c->neighbors_cells = true;
+    c->output_every = steps; /* no rebuilds but the refits and the first */
+    frames ref = {0};
+    uint64_t counts[NBEP_COUNTER_COUNT];
+    nbep_state fin;
+    nbep_summary s1 = nbep_test_run_counted(c, 1, nbep_test_keep_frame, &ref, &fin, counts);
+    nbep_summary sa = run(a, 1, NULL, NULL);
+    assert_true(s1.sphere_collisions > 2 * s1.spheres);
+    assert_int_equal(s1.sphere_collisions, sa.sphere_collisions);
+    assert_true(s1.max_overlap_rel < 1e-9);
+    assert_close(s1.energy_final, s1.energy_initial, 1e-12, 0.0);
+    /* the extent at the end, several times the start's (side * 1.25 across) */
+    nbep_vec3 lo, hi;
+    nbep_grid_bounds(fin.pos, 0, fin.n, &lo, &hi);
+    assert_true(hi.x - lo.x > 3.0 * 1.25 * (double)side);
+    const uint64_t refits = counts[NBEP_COUNTER_REFITS];
+    assert_true(refits >= 4 && refits <= steps / 10);
+    nbep_state_fini(&fin);
+    for (int nt = 2; nt <= 4; nt *= 2) {
+        frames f = {0};
+        nbep_summary sk = nbep_test_run_counted(c, nt, nbep_test_keep_frame, &f, NULL, counts);
+        frames_equal(&ref, &f);
+        assert_int_equal(sk.predictions, s1.predictions);
+        assert_int_equal(counts[NBEP_COUNTER_REFITS], refits);
+        assert_true(counts[NBEP_COUNTER_AHEAD] > 0); /* the team ran events ahead */
+        nbep_test_frames_free(&f);
+    }
+    nbep_test_frames_free(&ref);
+    nbep_test_scene_free(&c), nbep_test_scene_free(&a);
+}
+
+/* Two spheres flying apart along x at speed 1 each, from 2 apart to 2 + 2 T (100 times as far at
+ * T = 100): the region the cells cover grows with the extent, by an eighth of it on each side
+ * at each refit (at least two diameters, 2 here), so it follows in about 4 refits while the
+ * two diameters are the larger pad (extent up to 16, 4 more each time) and log(202 / 16) /
+ * log(1.25) = 11.4 more: some 17, where a fixed pad would take one per 4 of extent, about 50. */
+static void test_cells_without_a_box_region_grows_geometrically(void **state)
+{
+    (void)state;
+    const uint64_t steps = 2000;
+    nbep_scene *sc = nbep_test_scene_new(2, 0, "predictive", steps, 0.05);
+    sc->neighbors_cells = true;
+    sc->output_every = steps;
+    nbep_test_set_sphere(sc, 0, (nbep_vec3){-1, 0, 0}, (nbep_vec3){-1, 0, 0}, 0.5, 1.0, ZERO);
+    nbep_test_set_sphere(sc, 1, (nbep_vec3){1, 0, 0}, (nbep_vec3){1, 0, 0}, 0.5, 1.0, ZERO);
+    uint64_t counts[NBEP_COUNTER_COUNT];
+    nbep_state fin;
+    nbep_summary s = nbep_test_run_counted(sc, 1, NULL, NULL, &fin, counts);
+    assert_int_equal(s.collisions, 0);
+    assert_close(fin.pos[1].x - fin.pos[0].x, 202.0, 1e-12, 0.0);
+    assert_true(counts[NBEP_COUNTER_REFITS] >= 12 && counts[NBEP_COUNTER_REFITS] <= 20);
+    nbep_state_fini(&fin);
+    nbep_test_scene_free(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -477,6 +591,9 @@ int main(void)
         cmocka_unit_test(test_cells_predictive_dense_fluid_is_exact_and_thread_independent),
         cmocka_unit_test(test_cells_predictive_dense_fluid_keeps_energy_over_a_longer_run),
         cmocka_unit_test(test_cells_predictive_pile_settles_under_gravity),
+        cmocka_unit_test(test_cells_without_a_box_gives_the_boxed_frames),
+        cmocka_unit_test(test_cells_without_a_box_follows_an_expanding_cluster),
+        cmocka_unit_test(test_cells_without_a_box_region_grows_geometrically),
     };
     return cmocka_run_group_tests_name("sim", tests, NULL, NULL);
 }

@@ -50,6 +50,7 @@ typedef struct nbep_cells {
     double margin[3];      /* how far a member may stray past an interior face */
     size_t dim[3];         /* cells per axis */
     size_t n_cells, n;
+    size_t cap_cells;      /* the cells head has room for */
     bool periodic[3];      /* the cells wrap around along that axis */
     uint32_t *head;        /* owned, n_cells: first member, or NBEP_CELLS_NONE */
     nbep_cells_member *m;  /* owned, n: each sphere's place, forward link and cell */
@@ -64,6 +65,12 @@ typedef struct nbep_cells {
 NBEP_MUST_CHECK nbep_status nbep_cells_init(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi,
                                             double reach, size_t n, const bool *periodic,
                                             nbep_diag *d);
+/* The same cells laid out afresh over [lo, hi] (no periodic axis), for a scene without a box
+ * whose spheres' extent changes: every member must be assigned and linked again. The head
+ * array grows when the new layout has more cells than it holds (at most 2n + 8); NBEP_ENOMEM
+ * with a message, the cells then unusable. */
+NBEP_MUST_CHECK nbep_status nbep_cells_refit(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi,
+                                             double reach, nbep_diag *d);
 /* Frees; safe on a zeroed grid. */
 void nbep_cells_fini(nbep_cells *g);
 

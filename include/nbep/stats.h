@@ -16,7 +16,9 @@
  * (responses applied); reactions: events the predictive algorithm reacted to, whether or not
  * a response was applied (internal: shows that a pair is reacted to exactly once); ahead and
  * undone (internal): events the cells mode's team loop handled ahead of their turn on a second
- * thread that stood, and that it undid (evloop.h, nbep_evloop_run_lead). The second
+ * thread that stood, and that it undid (evloop.h, nbep_evloop_run_lead); refits (internal):
+ * the times the cells mode laid its cells out afresh over the spheres' extent, in a scene
+ * without a box (algo_predictive.c, cells_fit). The second
  * column is the counter's lowercase name, for readers of this list. */
 #define NBEP_COUNTER_LIST(X)                                                                 \
     X(CHECKS, "checks")                                                                      \
@@ -25,7 +27,8 @@
     X(PLANE_COLLISIONS, "plane_collisions")                                                  \
     X(REACTIONS, "reactions")                                                                \
     X(AHEAD, "ahead")                                                                        \
-    X(UNDONE, "undone")
+    X(UNDONE, "undone")                                                                      \
+    X(REFITS, "refits")
 
 enum nbep_counter {
 #define NBEP_X_ENUM(name, key) NBEP_COUNTER_##name,
