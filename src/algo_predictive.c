@@ -51,6 +51,7 @@
  *   spheres held still), its flight acceleration projected onto the cone they allow
  *   (contact.h); see "Lasting sphere-sphere contacts" for held spheres, tc_restitution for the
  *   TC model that ends inelastic collapse, and caged for a sphere between two fixed faces. */
+#include <float.h>
 #include <math.h>
 #include <stdalign.h>
 #include <stdatomic.h>
@@ -821,6 +822,19 @@ static bool may_beat(const nbep_event *best, double earliest)
     return earliest < NBEP_NEVER && (best->kind == NBEP_EVENT_NONE || !(earliest > best->time));
 }
 
+/* How far from T0 + t0 a pair's contact may come and still beat *best or tie with it (for
+ * nbep_predict_pair_within): T0 + (t0 + dt) can round to best's time or below only while dt
+ * is below best - T0 - t0 plus the roundings of those sums, each under an ulp of the largest
+ * of |best|, |T0|, |t0| and |dt| (dt is near best - T0 - t0 there); 16 ulps of their sum is
+ * far more. No best: no limit. */
+static double beat_cap(const nbep_event *best, double T0, double t0)
+{
+    if (best->kind == NBEP_EVENT_NONE || !(best->time < NBEP_NEVER))
+        return INFINITY;
+    const double d = best->time - T0 - t0;
+    return d + 16.0 * DBL_EPSILON * (fabs(best->time) + fabs(T0) + fabs(t0));
+}
+
 /* The contact of spheres i (flying with ai) and j (pair_relative), stamped with both response
  * counts: the paper's all-pairs loop, which solves every pair (its pairs share one
  * acceleration in the paper's box, and a bound per pair slowed its step by a quarter). */
@@ -841,7 +855,8 @@ static void keep_rel(nbep_event *best, const pred_ctx *c, size_t i, size_t j, co
 {
     if (!may_beat(best, earliest))
         return;
-    const double dt = nbep_predict_pair(r->dp, r->dv, r->da, r->sigma, w->pws);
+    const double dt =
+        nbep_predict_pair_within(r->dp, r->dv, r->da, r->sigma, beat_cap(best, T0, r->t0), w->pws);
     keep_earlier(best, (nbep_event){T0 + (r->t0 + dt), (uint32_t)j, NBEP_EVENT_SPHERE, c->ver[i],
                                     c->ver[j]});
 }

@@ -491,14 +491,24 @@ static int quadratic_roots_in(double c2, double c1, double c0, double hi, double
 }
 
 /* The earliest t >= 0 at which the pair touches or overlaps (f <= 0) while closing (f
- * decreasing). The inflection points of f (roots of f''/2 = 1.5|a|^2 t^2 + 3 v.a t
- * + |v|^2 + p.a) split [0, tb] into pieces on which f' is monotone, so each piece holds at
- * most one critical point of f; those split it into pieces on which f is monotone, which are
- * walked in order. No root lies beyond tb, and f > 0 there. */
-static double bracket_search(const quartic *q)
+ * decreasing): the same double whatever t_max when it comes before t_max, NBEP_NEVER or a
+ * time at or past t_max otherwise. The inflection points of f (roots of f''/2 = 1.5|a|^2 t^2
+ * + 3 v.a t + |v|^2 + p.a) split [0, tb] into knot pieces on which f' is monotone, so each
+ * holds at most one critical point of f; those split [0, tb] into pieces on which f is
+ * monotone, which are walked in order, each critical point found (bisecting f') as the walk
+ * reaches it. No root lies beyond tb, and f > 0 there.
+ * Past t_max: where the next critical point w lies beyond t_max (f' at t_max still has the
+ * sign it had at its knot piece's start, or no knot piece turns), f is monotone on [u, t_max],
+ * so f > 0 at both ends means no root before t_max, here or in the pieces after w: the search
+ * stops without finding w (a pile's pairs, slowly closing under different accelerations, spent
+ * most of their time finding critical points far beyond their sphere's next event). Otherwise
+ * the walk goes on exactly as it would without t_max, so a root before t_max is found by the
+ * same bisections. (Only a root within f's rounding noise of t_max could come out otherwise;
+ * callers pass a t_max with a margin past the times they compare with.) */
+static double bracket_search(const quartic *q, double t_max)
 {
     const motion *m = &q->m;
-    double tb = ldexp(1.0, q->scale_exp + 1);
+    const double tb = ldexp(1.0, q->scale_exp + 1);
     double knot[4] = {q->t_start};
     int n_knot = 1;
     double r[2];
@@ -512,25 +522,33 @@ static double bracket_search(const quartic *q)
     double slope[4]; /* f'/2 at each knot, each found once */
     for (int k = 0; k < n_knot; k++)
         slope[k] = f_half_slope(m, knot[k]);
-    double crit[5] = {q->t_start};
-    int n_crit = 1;
-    for (int i = 0; i + 1 < n_knot; i++)
-        if ((slope[i] <= 0.0) != (slope[i + 1] <= 0.0))
-            crit[n_crit++] = bisect(m, f_half_slope, knot[i], knot[i + 1], slope[i], slope[i + 1]);
-    crit[n_crit++] = tb;
-
-    for (int i = 0; i + 1 < n_crit; i++) {
-        double u = crit[i], w = crit[i + 1];
-        if (!(w > u) || !(f_half_slope(m, 0.5 * (u + w)) < 0.0))
-            continue;                           /* f does not decrease here */
-        const double fu = f_val(m, u);
-        if (fu <= 0.0)
-            return u;                           /* overlapping as it starts to close */
-        const double fw = f_val(m, w);
-        if (fw <= 0.0)
-            return bisect(m, f_val, u, w, fu, fw);
+    double u = q->t_start; /* the start of the piece walked next */
+    for (int i = 0;; i++) {
+        /* the knot piece i holding the next critical point (none: the piece ends at tb) */
+        while (i + 1 < n_knot && (slope[i] <= 0.0) == (slope[i + 1] <= 0.0))
+            i++;
+        const bool last = i + 1 >= n_knot;
+        if (!(u < t_max))
+            return NBEP_NEVER;
+        if (t_max < tb &&
+            (last || t_max < knot[i] ||
+             (t_max < knot[i + 1] && (f_half_slope(m, t_max) <= 0.0) == (slope[i] <= 0.0))) &&
+            f_val(m, u) > 0.0 && f_val(m, t_max) > 0.0)
+            return NBEP_NEVER;
+        const double w =
+            last ? tb : bisect(m, f_half_slope, knot[i], knot[i + 1], slope[i], slope[i + 1]);
+        if (w > u && f_half_slope(m, 0.5 * (u + w)) < 0.0) { /* f decreases here */
+            const double fu = f_val(m, u);
+            if (fu <= 0.0)
+                return u;                       /* overlapping as it starts to close */
+            const double fw = f_val(m, w);
+            if (fw <= 0.0)
+                return bisect(m, f_val, u, w, fu, fw);
+        }
+        if (last)
+            return NBEP_NEVER;
+        u = w;
     }
-    return NBEP_NEVER;
 }
 
 double nbep__predict_f(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double sigma, double t)
@@ -545,7 +563,7 @@ double nbep__predict_pair_bracket(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, doub
     switch (quartic_setup(dp, dv, da, sigma, &q)) {
     case SETUP_APART:
     case SETUP_OVERLAP:
-        return bracket_search(&q);
+        return bracket_search(&q, INFINITY);
     case SETUP_CLOSING:
         return 0.0;
     case SETUP_NO_ACCEL:
@@ -600,6 +618,12 @@ NBEP_FMA_CLONES double nbep_predict_pair_quadratic(nbep_vec3 dp, nbep_vec3 dv, d
 double nbep_predict_pair(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double sigma,
                          nbep_predict_ws *ws)
 {
+    return nbep_predict_pair_within(dp, dv, da, sigma, INFINITY, ws);
+}
+
+double nbep_predict_pair_within(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double sigma,
+                                double t_max, nbep_predict_ws *ws)
+{
     if (da.x == 0.0 && da.y == 0.0 && da.z == 0.0)
         return nbep_predict_pair_quadratic(dp, dv, sigma);
     assert(nbep_vec3_isfinite(dp) && nbep_vec3_isfinite(dv) && nbep_vec3_isfinite(da));
@@ -612,7 +636,7 @@ double nbep_predict_pair(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double sigma,
     case SETUP_CLOSING:
         return 0.0;
     case SETUP_OVERLAP:
-        return bracket_search(&q);
+        return bracket_search(&q, t_max);
     case SETUP_NO_ACCEL:
         return nbep_predict_pair_quadratic(dp, dv, sigma);
     case SETUP_NONFINITE:
@@ -624,14 +648,14 @@ double nbep_predict_pair(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double sigma,
      * acceleration, touches again after ~1e-9 s). The search has no such scale; pairs this
      * close are rare (resting contacts), so its cost does not matter. */
     if (q.a[0] <= NEAR_CONTACT_REL * sigma * sigma)
-        return bracket_search(&q);
+        return bracket_search(&q, t_max);
     /* Both solvers are right everywhere (bench_contact, against a quad-precision reference);
      * which is faster depends on how much the acceleration bends the approach: where
      * |da| |dp| >= 1e-2 |dv|^2 the search takes 0.36-0.58 of GSL's time (random, large,
      * from-rest and grazing cases), below it GSL takes half the search's (the search's root
      * bound grows as da vanishes). */
     if (nbep_vec3_norm(da) * nbep_vec3_norm(dp) >= ACCEL_BENDS * nbep_vec3_norm2(dv))
-        return bracket_search(&q);
+        return bracket_search(&q, t_max);
 
     /* Monic in units of 2^scale_exp: b_k = a_k / (a_4 2^(scale_exp (4-k))), |b_k| <= 1,
      * formed from mantissas and exponents so that no intermediate overflows. */
@@ -646,7 +670,7 @@ double nbep_predict_pair(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double sigma,
     ws->coef[4] = 1.0;
 
     if (gsl_poly_complex_solve(ws->coef, QUARTIC_TERMS, ws->gsl, ws->root) != GSL_SUCCESS)
-        return bracket_search(&q);              /* QR did not converge: never seen, but safe */
+        return bracket_search(&q, t_max); /* QR did not converge: never seen, but safe */
 
     double best = NBEP_NEVER;
     bool lost = false;
@@ -677,7 +701,7 @@ double nbep_predict_pair(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double sigma,
      * small root, which the truncated quadratic covers; see SMALL_ROOT). Only the search can
      * tell which, and where. */
     if (lost)
-        return bracket_search(&q);
+        return bracket_search(&q, t_max);
     return best;
 }
 

@@ -561,6 +561,69 @@ static void test_the_general_bound_holds_in_any_units(void **state)
     assert_true(same > n / 20);
 }
 
+/* nbep_predict_pair_within(..., t_max) on pairs of every kind the search takes (slowly closing
+ * under a bending acceleration, near contact, from rest, overlapping) and the GSL path takes:
+ * the very bits of nbep_predict_pair where that comes before t_max, and otherwise never before
+ * t_max. Limits from half the root to a thousand times it, and, for pairs that never meet,
+ * from 1e-3 to 1e3 time units; none within 1e-6 of the root (a root within f's rounding noise
+ * of t_max may come out otherwise, which callers' margins keep away). Most limits past the
+ * root stop the search early (NBEP_NEVER where the pair does meet later): counted. */
+static void test_a_search_within_a_limit_finds_the_same_root_before_it(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    uint64_t seed = 31;
+    const int n = small_scale() ? 4000 : 60000;
+    const double factor[] = {0.5, 1.0 - 1e-6, 1.0 + 1e-6, 2.0, 1e3};
+    int before = 0, cut = 0;
+    for (int i = 0; i < n; i++) {
+        const double sigma = uniform(&seed, 0.1, 2.0);
+        const nbep_vec3 u = unit(uniform_vec(&seed, 1.0));
+        const double acc = pow(10.0, uniform(&seed, -3.0, 1.5));
+        nbep_vec3 dp, dv, da = nbep_vec3_scale(unit(uniform_vec(&seed, 1.0)), acc);
+        switch (i % 5) {
+        case 0: /* near contact (gaps of 1e-12 to 1e-6 sigma), closing or not */
+            dp = nbep_vec3_scale(u, sigma * (1.0 + pow(10.0, uniform(&seed, -12.0, -6.0))));
+            dv = uniform_vec(&seed, 0.5);
+            break;
+        case 1: /* from rest */
+            dp = nbep_vec3_scale(u, sigma * uniform(&seed, 1.001, 4.0));
+            dv = zero;
+            break;
+        case 2: /* overlapping */
+            dp = nbep_vec3_scale(u, sigma * uniform(&seed, 0.9, 0.999));
+            dv = uniform_vec(&seed, 1.0);
+            break;
+        case 3: /* apart, slowly closing: the acceleration bends the approach */
+            dp = nbep_vec3_scale(u, sigma * uniform(&seed, 1.01, 3.0));
+            dv = nbep_vec3_scale(uniform_vec(&seed, 1.0), 0.1 * sqrt(acc * sigma));
+            break;
+        default: /* apart, anywhere: mostly the GSL path */
+            dp = nbep_vec3_scale(u, sigma * uniform(&seed, 1.01, 3.0));
+            dv = uniform_vec(&seed, 2.0);
+            da = nbep_vec3_scale(da, 1e-4);
+        }
+        const double t = nbep_predict_pair(dp, dv, da, sigma, ws);
+        assert_false(isnan(t));
+        for (size_t k = 0; k < sizeof factor / sizeof *factor; k++) {
+            const double t_max = isfinite(t) && t > 0.0 ? t * factor[k]
+                                                        : pow(10.0, uniform(&seed, -3.0, 3.0));
+            const double tw = nbep_predict_pair_within(dp, dv, da, sigma, t_max, ws);
+            if (t < t_max) {
+                if (memcmp(&tw, &t, sizeof t) != 0)
+                    fail_msg("pair %d: %.17g before the limit %.17g, but within it %.17g", i, t,
+                             t_max, tw);
+                before++;
+            } else if (!(tw >= t_max)) {
+                fail_msg("pair %d: %.17g past the limit %.17g, but within it %.17g", i, t, t_max,
+                         tw);
+            } else {
+                cut += isfinite(t) && isinf(tw);
+            }
+        }
+    }
+    assert_true(before > n / 2 && cut > n / 4);
+}
+
 /* The GSL-free search that a GSL failure falls back on must give the same answers as the GSL
  * path, over pairs of every kind: apart, aimed, tiny and large accelerations. Only pairs that
  * nbep_predict_pair sends to GSL compare two solvers: its documented routing (predict.c) sends
@@ -812,6 +875,8 @@ int main(void)
         cmocka_unit_test(test_plane_touching_or_overlapping_and_closing_meets_now),
         cmocka_unit_test(test_plane_leaving_sphere_meets_on_return_or_at_the_turn),
         cmocka_unit_test(test_a_far_grazing_miss_by_5e_15_sigma_is_a_miss),
+        cmocka_unit_test_setup_teardown(test_a_search_within_a_limit_finds_the_same_root_before_it,
+                                        ws_setup, ws_teardown),
     };
     return cmocka_run_group_tests_name("predict", tests, NULL, NULL);
 }

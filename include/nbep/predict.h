@@ -94,6 +94,13 @@ static inline double nbep_predict_pair_quadratic_bound(nbep_vec3 dp, nbep_vec3 d
  * ~1e72), the quadratic is used. ws is borrowed, written, and may be NULL only when da is zero. */
 double nbep_predict_pair(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double sigma,
                          nbep_predict_ws *ws);
+/* nbep_predict_pair for a caller that wants the contact only if it comes before t_max (a loop
+ * that keeps the earliest of a sphere's contacts: t_max the best so far, plus a margin for
+ * ties): the same time when it does, and otherwise NBEP_NEVER or a time at or past t_max.
+ * The slow search that accelerated, slowly approaching pairs take (a settling pile, a hopper)
+ * then stops at t_max. t_max = INFINITY is nbep_predict_pair. */
+double nbep_predict_pair_within(nbep_vec3 dp, nbep_vec3 dv, nbep_vec3 da, double sigma,
+                                double t_max, nbep_predict_ws *ws);
 
 /* A lower bound on nbep_predict_pair(dp, dv, da, sigma) for any relative acceleration, for
  * loops that only want a pair's contact if it comes before the best one so far (a quartic
