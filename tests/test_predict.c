@@ -564,16 +564,18 @@ static void test_the_general_bound_holds_in_any_units(void **state)
 /* nbep_predict_pair_within(..., t_max) on pairs of every kind the search takes (slowly closing
  * under a bending acceleration, near contact, from rest, overlapping) and the GSL path takes:
  * the very bits of nbep_predict_pair where that comes before t_max, and otherwise never before
- * t_max. Limits from half the root to a thousand times it, and, for pairs that never meet,
- * from 1e-3 to 1e3 time units; none within 1e-6 of the root (a root within f's rounding noise
- * of t_max may come out otherwise, which callers' margins keep away). Most limits past the
- * root stop the search early (NBEP_NEVER where the pair does meet later): counted. */
+ * t_max. Limits from half the root to a thousand times it, 1 to 4096 ulps past it (where the
+ * computed f turns sign every few ulps near a slowly crossing root: a first version stopped
+ * there with the root left before the limit), and, for pairs that never meet, from 1e-3 to 1e3
+ * time units. Most limits well past the root stop the search early (NBEP_NEVER where the pair
+ * does meet later): counted. */
 static void test_a_search_within_a_limit_finds_the_same_root_before_it(void **state)
 {
     nbep_predict_ws *ws = *state;
     uint64_t seed = 31;
     const int n = small_scale() ? 4000 : 60000;
     const double factor[] = {0.5, 1.0 - 1e-6, 1.0 + 1e-6, 2.0, 1e3};
+    const int ulps[] = {1, 16, 256, 4096};
     int before = 0, cut = 0;
     for (int i = 0; i < n; i++) {
         const double sigma = uniform(&seed, 0.1, 2.0);
@@ -604,9 +606,13 @@ static void test_a_search_within_a_limit_finds_the_same_root_before_it(void **st
         }
         const double t = nbep_predict_pair(dp, dv, da, sigma, ws);
         assert_false(isnan(t));
-        for (size_t k = 0; k < sizeof factor / sizeof *factor; k++) {
-            const double t_max = isfinite(t) && t > 0.0 ? t * factor[k]
-                                                        : pow(10.0, uniform(&seed, -3.0, 3.0));
+        const size_t n_f = sizeof factor / sizeof *factor, n_u = sizeof ulps / sizeof *ulps;
+        for (size_t k = 0; k < n_f + n_u; k++) {
+            double t_max = pow(10.0, uniform(&seed, -3.0, 3.0));
+            if (isfinite(t) && t > 0.0 && k < n_f)
+                t_max = t * factor[k];
+            else if (isfinite(t) && t > 0.0)
+                t_max = t + ulps[k - n_f] * (nextafter(t, INFINITY) - t);
             const double tw = nbep_predict_pair_within(dp, dv, da, sigma, t_max, ws);
             if (t < t_max) {
                 if (memcmp(&tw, &t, sizeof t) != 0)
