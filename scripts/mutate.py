@@ -53,6 +53,11 @@ MUTANTS = [
     # ---- contact times ----
     ("bisect-keeps-wrong-side", "src/predict.c", "        if ((gc <= 0.0) == lo_side) {",
      "        if ((gc <= 0.0) != lo_side) {", PRED, None),
+    ("bisect-newton-half-slope", "src/predict.c", "    return 2.0 * f_half_slope(m, t);\n}",
+     "    return f_half_slope(m, t);\n}", PRED,
+     "Newton's tries only choose which doubles the bisection tries; the bracket, not the tries, "
+     "decides the answer (the double where f turns), so a wrong derivative costs tries, not "
+     "answers: speed is bench_contact's to measure, not a test's"),
     ("quad-root-sign", "src/predict.c", "return c / (-b + sqrt(disc));",
      "return c / (-b - sqrt(disc));", PRED, None),
     ("quad-miss", "src/predict.c", "if (!(disc >= 0.0))\n        return NBEP_NEVER;                      /* they miss */",
