@@ -124,6 +124,28 @@ static inline void nbep_test_set_periodic_box(nbep_scene *sc, double L)
     }
 }
 
+/* side^3 spheres of radius 0.5 and mass 1 on a jittered lattice of spacing 1.25 around the
+ * origin, velocities uniform in [-1, 1]^3, no planes, no box, nothing accelerating, steps of
+ * 0.05: a cluster that collides at first and then expands into free space. */
+static inline nbep_scene *nbep_test_cluster(const char *algo, size_t side, uint64_t steps)
+{
+    const size_t n = side * side * side;
+    nbep_scene *sc = nbep_test_scene_new(n, 0, algo, steps, 0.05);
+    uint64_t x = 0x2545F4914F6CDD1Du;
+    for (size_t i = 0; i < n; i++) {
+        double u[6];
+        for (int k = 0; k < 6; k++)
+            u[k] = nbep_test_uniform(&x);
+        const double h = 1.25, o = -0.5 * h * (double)side;
+        nbep_vec3 p = {o + h * ((double)(i % side) + 0.4 + 0.2 * u[0]),
+                       o + h * ((double)(i / side % side) + 0.4 + 0.2 * u[1]),
+                       o + h * ((double)(i / side / side) + 0.4 + 0.2 * u[2])};
+        nbep_vec3 v = {2.0 * u[3] - 1.0, 2.0 * u[4] - 1.0, 2.0 * u[5] - 1.0};
+        nbep_test_set_sphere(sc, i, p, v, 0.5, 1.0, (nbep_vec3){0.0, 0.0, 0.0});
+    }
+    return sc;
+}
+
 /* A hard-sphere fluid at packing fraction phi in a fully periodic cube, cells mode: side^3
  * spheres of diameter 1 and mass 1 on a simple cubic lattice filling the box, speeds sqrt(3)
  * (kT = 1) in random directions (from seed) with the mean removed (zero total momentum). */

@@ -211,11 +211,25 @@ static void test_places_in_flight_are_apart_in_a_closed_box(void **state)
     nbep_test_scene_free(&sc);
 }
 
+/* Without a box: an expanding cluster (its cells cover the spheres' extent, laid out afresh
+ * as it grows; list centres that left the region are clamped into the loop's floats, a
+ * projection that only brings them closer). */
+static void test_places_in_flight_are_apart_in_a_cluster_without_a_box(void **state)
+{
+    (void)state;
+    nbep_scene *sc = nbep_test_cluster("predictive", nbep_test_scaled(14, 12),
+                                       nbep_test_scaled(60, 40));
+    sc->neighbors_cells = true;
+    run_audited(sc, false);
+    nbep_test_scene_free(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_places_in_flight_are_apart_in_a_periodic_fluid),
         cmocka_unit_test(test_places_in_flight_are_apart_in_a_closed_box),
+        cmocka_unit_test(test_places_in_flight_are_apart_in_a_cluster_without_a_box),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

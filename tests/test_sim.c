@@ -482,28 +482,6 @@ static void test_cells_without_a_box_gives_the_boxed_frames(void **state)
     nbep_test_scene_free(&b), nbep_test_scene_free(&p);
 }
 
-/* side^3 spheres of radius 0.5 packed on a jittered lattice of spacing 1.25 around the origin,
- * velocities uniform in [-1, 1]^3, no planes, no box, nothing accelerating: a cluster that
- * collides at first and then expands into free space. */
-static nbep_scene *cluster(const char *algo, size_t side, uint64_t steps)
-{
-    const size_t n = side * side * side;
-    nbep_scene *sc = nbep_test_scene_new(n, 0, algo, steps, 0.05);
-    uint64_t x = 0x2545F4914F6CDD1Du;
-    for (size_t i = 0; i < n; i++) {
-        double u[6];
-        for (int k = 0; k < 6; k++)
-            u[k] = nbep_test_uniform(&x);
-        const double h = 1.25, o = -0.5 * h * (double)side;
-        nbep_vec3 p = {o + h * ((double)(i % side) + 0.4 + 0.2 * u[0]),
-                       o + h * ((double)(i / side % side) + 0.4 + 0.2 * u[1]),
-                       o + h * ((double)(i / side / side) + 0.4 + 0.2 * u[2])};
-        nbep_vec3 v = {2.0 * u[3] - 1.0, 2.0 * u[4] - 1.0, 2.0 * u[5] - 1.0};
-        nbep_test_set_sphere(sc, i, p, v, 0.5, 1.0, ZERO);
-    }
-    return sc;
-}
-
 /* The cluster expands out of any region the cells cover: each step whose spheres have left it
  * rebuilds over their new extent. The same collisions as the paper's all-pairs mode, energy and
  * overlaps at round-off, frames bitwise equal for 1, 2 and 4 threads (the team runs it: elastic,
@@ -514,7 +492,8 @@ static void test_cells_without_a_box_follows_an_expanding_cluster(void **state)
     (void)state;
     const size_t side = nbep_test_scaled(8, 6);
     const uint64_t steps = nbep_test_scaled(200, 120);
-    nbep_scene *c = cluster("predictive", side, steps), *a = cluster("predictive", side, steps);
+    nbep_scene *c = nbep_test_cluster("predictive", side, steps),
+               *a = nbep_test_cluster("predictive", side, steps);
     c->neighbors_cells = true;
     c->output_every = steps; /* no rebuilds but the refits and the first */
     frames ref = {0};
