@@ -286,6 +286,8 @@ MUTANTS = [
      CELLS, None),
     ("fit-pad-fixed", "src/algo_predictive.c", "fmax(floor_pad, 0.125 * (hi.x - lo.x))",
      "fmax(floor_pad, 0.0 * (hi.x - lo.x))", CELLS, None),
+    ("cells-cap-all-axes", "src/cells.c", "        side[widest] *= 2.0;",
+     "        side[0] *= 2.0, side[1] *= 2.0, side[2] *= 2.0;", ["test_cells"], None),
     ("cells-refit-no-room", "src/cells.c", "    if (g->n_cells > g->cap_cells) {",
      "    if (0) {", ["test_cells"], None),
     ("cells-refit-old-layout", "src/cells.c", "    assert(!g->periodic[0] && !g->periodic[1] && !g->periodic[2]);\n    lay_out(g, lo, hi, reach);",

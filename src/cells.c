@@ -24,20 +24,31 @@ static void lay_out(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double reach)
     const double ext[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
     const double cap = 2.0 * (double)g->n + 8.0;
     /* no contacts possible (no spheres: reach 0): one cell per axis */
-    double side = reach > 0.0 && isfinite(reach) ? reach * SIDE_FACTOR
-                                                 : fmax(ext[0], fmax(ext[1], ext[2])) + 1.0;
-    /* grow the side until the cells fit (each pass at least doubles the cell volume) */
+    const double base = reach > 0.0 && isfinite(reach) ? reach * SIDE_FACTOR
+                                                       : fmax(ext[0], fmax(ext[1], ext[2])) + 1.0;
+    double side[3] = {base, base, base};
+    /* too many cells: the side of the axis with the most doubles until they fit (at least
+     * halving the count each pass). Axis by axis, not all at once: a region stretched along
+     * one axis (a scene without a box, one sphere flown far off) keeps cells of the reach
+     * across the others, so the rest of its spheres do not all share a few coarse cells. */
     for (;;) {
-        double cells = 1.0;
-        for (int k = 0; k < 3; k++)
-            cells *= fmax(1.0, floor(ext[k] / side));
+        double cells = 1.0, most = 0.0;
+        int widest = 0;
+        for (int k = 0; k < 3; k++) {
+            const double c = fmax(1.0, floor(ext[k] / side[k]));
+            cells *= c;
+            if (c > most) {
+                most = c;
+                widest = k;
+            }
+        }
         if (cells <= cap)
             break;
-        side *= 1.26; /* > cbrt(2) */
+        side[widest] *= 2.0;
     }
     g->n_cells = 1;
     for (int k = 0; k < 3; k++) {
-        double cells = fmax(1.0, floor(ext[k] / side));
+        double cells = fmax(1.0, floor(ext[k] / side[k]));
         /* a periodic axis: three cells at least, so that a neighbour is one image only */
         if (g->periodic[k] && cells < 3.0)
             cells = 3.0;

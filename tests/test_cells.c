@@ -54,6 +54,15 @@ static void test_geometry_sides_at_least_reach_and_cells_bounded(void **state)
     assert_true(g.h[0] >= 1.125);
     nbep_cells_fini(&g);
     nbep_cells_fini(&g); /* safe twice */
+    /* a region stretched along x (a scene without a box, one sphere flown far off) and too
+     * long for cells of the reach everywhere: the axis with the most cells gives way first,
+     * so y and z keep cells of at most twice the reach's side (17 of them would be the
+     * reach's: 20 / 1.125 = 17.8), where growing every side alike left them one cell each */
+    init_cells(&g, (nbep_vec3){0, 0, 0}, (nbep_vec3){1e4, 20, 20}, 1.0, 1000);
+    assert_true(g.n_cells <= 2008);
+    assert_true(g.dim[1] >= 8 && g.dim[2] >= 8);
+    assert_true(g.dim[0] >= 4);
+    nbep_cells_fini(&g);
     /* no spheres, so no reach: one cell, and init returns */
     init_cells(&g, (nbep_vec3){0, 0, 0}, (nbep_vec3){1, 1, 1}, 0.0, 0);
     assert_int_equal(g.n_cells, 1);
