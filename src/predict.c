@@ -433,39 +433,29 @@ static double bisect(const motion *m, double (*g)(const motion *, double),
     double step = INFINITY;              /* the last Newton step's length */
     while (b - a > 1) {
         const uint64_t span = b - a;
-        uint64_t c = a + span / 2;
-        bool newton = false;
         /* Newton from the last try, if g's slope there has the sign g takes from a to b, its
-         * step lands inside the bracket, and it is at most half the last one */
+         * step lands inside the bracket, and it is at most a quarter of the last one */
+        double t = NAN;
+        bool newton = false;
         if (moved != 0 && (lo_side ? dl > 0.0 : dl < 0.0)) {
-            const double t = tl - gl / dl;
-            if (t > ta && t < tb && fabs(t - tl) <= 0.25 * step) {
-                step = fabs(t - tl);
-                c = double_bits(t);
+            const double tn = tl - gl / dl;
+            if (tn > ta && tn < tb && fabs(tn - tl) <= 0.25 * step) {
+                step = fabs(tn - tl);
+                t = tn;
                 newton = true;
             }
         }
-        if (!newton && !halve) {
-            double t = NAN;
-            if (ga != gb)
-                t = ta + (tb - ta) * (ga / (ga - gb));
-            if (t >= ta && t <= tb) { /* NaN: the midpoint */
-                const uint64_t push = run > 0 ? (uint64_t)1 << (2 * run < 62 ? 2 * run : 62) : 0;
-                uint64_t ct = double_bits(t);
-                if (moved == -1) /* a keeps moving up: past the point, towards b */
-                    ct = b - ct > push ? ct + push : b - 1;
-                else if (moved == 1) /* b keeps moving down: short of it, towards a */
-                    ct = ct - a > push ? ct - push : a + 1;
-                c = ct <= a ? a + 1 : ct >= b ? b - 1 : ct; /* strictly inside */
-            }
-        }
-        if (newton) { /* pushed as false position's tries are */
+        if (!newton && !halve && ga != gb)
+            t = ta + (tb - ta) * (ga / (ga - gb));
+        uint64_t c = a + span / 2;
+        if (t >= ta && t <= tb) { /* NaN (none, or halving): the midpoint */
             const uint64_t push = run > 0 ? (uint64_t)1 << (2 * run < 62 ? 2 * run : 62) : 0;
-            if (moved == -1)
-                c = b - c > push ? c + push : b - 1;
-            else
-                c = c - a > push ? c - push : a + 1;
-            c = c <= a ? a + 1 : c >= b ? b - 1 : c;
+            uint64_t ct = double_bits(t);
+            if (moved == -1) /* a keeps moving up: past the point, towards b */
+                ct = b - ct > push ? ct + push : b - 1;
+            else if (moved == 1) /* b keeps moving down: short of it, towards a */
+                ct = ct - a > push ? ct - push : a + 1;
+            c = ct <= a ? a + 1 : ct >= b ? b - 1 : ct; /* strictly inside */
         }
         const double tc = bits_double(c), gc = g(m, tc);
         tl = tc;
