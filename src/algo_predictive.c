@@ -546,16 +546,11 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         if (c->team_force >= 2 && c->team_force < size)
             size = c->team_force;
         c->team_size = can_team ? size : 1;
-        nbep_vec3 lo = sim->scene->box_min, hi = sim->scene->box_max;
+        /* without a box, the cells are laid out at the first rebuild (cells_fit) and again at
+         * each one after; until then they are one cell */
         c->refit = !sim->scene->has_box && n > 0;
-        if (c->refit) { /* each rebuild lays the cells out again (cells_fit) */
-            nbep_grid_bounds(sim->st.pos, 0, n, &lo, &hi);
-            fit_region(c, lo, hi);
-            lo = c->fit_lo;
-            hi = c->fit_hi;
-        }
-        st = nbep_evloop_create(n, lo, hi, 2.0 * c->rmax, c->pb.axis, c->team_size, c->q,
-                                c->ver, &c->ev, d);
+        st = nbep_evloop_create(n, sim->scene->box_min, sim->scene->box_max, 2.0 * c->rmax,
+                                c->pb.axis, c->team_size, c->q, c->ver, &c->ev, d);
         c->team = st == NBEP_OK && c->team_size >= 2;
         c->team_ways = !c->team ? 1 : c->team_size > 2 ? 3 : 2;
         c->team_crew[0] = 1;
@@ -2090,12 +2085,12 @@ static void jam_fail(nbep_sim *sim, uint64_t step, size_t i, double t)
     sim->status = NBEP_ENUMERIC;
 }
 
-/* Cells mode without a box, every thread before a rebuild: the cells laid out afresh over the
- * centres' extent (fit_region). False on every thread when out of memory (the run stops). */
-static bool cells_fit(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thread_ws *w,
-                      nbep_counters *cnt)
+/* Cells mode without a box, every thread before a rebuild, each thread's centres' bounds in its
+ * grid_lo, grid_hi (taken before the first step and at each step's end; a rebuild moves no
+ * sphere before this): the cells laid out afresh over the centres' extent (fit_region). False
+ * on every thread when out of memory (the run stops). */
+static bool cells_fit(nbep_sim *sim, pred_ctx *c, int tid, nbep_counters *cnt)
 {
-    nbep_grid_bounds(sim->st.pos, own.lo, own.hi, &w->grid_lo, &w->grid_hi);
     nbep_barrier_wait(&c->bar);
     if (tid == 0) {
         nbep_vec3 lo, hi;
@@ -2580,6 +2575,8 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
     nbep_state *s = &sim->st;
     const nbep_evloop_ops *ops = c->free_flight ? &cells_ops_free : &cells_ops;
     bool rebuild = true;
+    if (c->refit) /* for the first rebuild's cells_fit; each step's end takes them again */
+        nbep_grid_bounds(s->pos, own.lo, own.hi, &w->grid_lo, &w->grid_hi);
     for (uint64_t step = sim->step_first; step <= sim->step_end; step++) {
         const int spar = (int)(step & 1);
         cells_user u = {c, s, sim->scene, (double)(step - 1) * sim->dt, 0.0, w,
@@ -2591,7 +2588,7 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
              * run continues from what a resumed one reads */
             for (size_t i = own.lo; c->pb.any && i < own.hi; i++)
                 nbep_periodic_wrap(&c->pb, &s->pos[i], &s->image[3 * i]);
-            if (c->refit && !cells_fit(sim, c, tid, own, w, u.cnt))
+            if (c->refit && !cells_fit(sim, c, tid, u.cnt))
                 return;
             nbep_evloop_assign(c->ev, s->pos, own.lo, own.hi);
             nbep_barrier_wait(&c->bar);

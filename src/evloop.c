@@ -98,7 +98,6 @@ struct nbep_evloop {
     double cut;           /* the list cutoff: contact distance plus skin, plus slack */
     double stray;         /* half the skin: how far a sphere goes before its list expires */
     double face_reach;    /* cut + stray, and a margin: see near_face */
-    double apart;         /* twice `touch`: see nbep_evloop_create */
     bool failed;          /* out of memory for a list: the run stops */
     bool stop;            /* nbep_evloop_stop: the run stops after the current event */
     nbep_feq *q;          /* borrowed */
@@ -168,29 +167,46 @@ static void ws_fini(evl_ws *w)
     free(w->changed);
 }
 
+/* Two events whose spheres' list centres are all farther apart than 2 touch (place_apart:
+ * each event's own sphere and the other its slot names, checked themselves, however far
+ * a stale slot's other may be) touch nothing in common. An event handled writes the motion
+ * and slot of its spheres and reads those of their lists' members; committed, it writes
+ * the lists of its spheres' old and new members. Members lie within the cutoff of a list
+ * centre, and an expiry's new centre within (1 + LEAD) strays of the old (its sphere
+ * strayed up to one, the new centre leads by LEAD), so what an event touches lies within
+ * touch = cut + (1 + LEAD) stray of its spheres' centres, and two events whose spheres
+ * are more than touch apart touch nothing in common (a written sphere is never read by the
+ * other, a written list is never the other's own). Twice that leaves a wide margin for
+ * the roundings of the centres (set_near2 adds those of the test's floats). */
+static double apart(const nbep_evloop *e)
+{
+    return 2.0 * (e->cut + (1.0 + NBEP_NBLIST_LEAD) * e->stray);
+}
+
 /* The threshold of the team loop's apartness test (near_count), which reads list centres as
  * floats (half the width of doubles: the test over the window was a tenth of the leader's
- * time): the centres are more than `apart` apart when their float distance's square exceeds
- * near2. A centre is stored as its offset from the box's low corner, clamped to `shore` past
- * a side that is not periodic (which moves no two centres closer: the clamp is a projection),
- * so every coordinate is at most m = side + 2 shore in size (a periodic one is wrapped, and
+ * time): the centres are more than apart(e) apart when their float distance's square exceeds
+ * near2. A centre is stored as its offset from the low corner of the cells' region (pb: the
+ * box, or the spheres' extent without one), clamped to `shore` past a side that is not
+ * periodic (which moves no two centres closer: the clamp is a projection), so every
+ * coordinate is at most m = side + 2 shore in size (a periodic one is wrapped, and
  * its list centre leads it by less than a stray, within shore). With u the float unit
  * roundoff: each stored coordinate is off by u m, their difference's rounding adds 2 u m, a
  * periodic side's rounding and its subtraction 2 u m more, and where the nearest way round is
  * chosen wrongly (the difference within those errors of half the side) the two ways differ
  * by twice that: 20 u m on an axis at most, 20 sqrt(3) u m in all. The squares and their sum
  * add a relative 5 u, covered by the factor 1 + 8 u; the result is rounded up. */
-static void set_near2(nbep_evloop *e, nbep_vec3 lo, nbep_vec3 hi, double apart)
+static void set_near2(nbep_evloop *e)
 {
-    const double u = 0x1p-24, side[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
+    const double u = 0x1p-24;
     e->shore = e->face_reach;
     double m = 0.0;
     for (int k = 0; k < 3; k++) {
-        m = fmax(m, side[k] + 2.0 * e->shore);
+        m = fmax(m, e->pb.len[k] + 2.0 * e->shore);
         e->len_f[k] = (float)e->pb.len[k];
         e->half_f[k] = (float)e->pb.half[k]; /* +inf where not periodic */
     }
-    const double far = apart + 20.0 * sqrt(3.0) * u * m;
+    const double far = apart(e) + 20.0 * sqrt(3.0) * u * m;
     e->near2 = nextafterf((float)(far * far * (1.0 + 8.0 * u)), INFINITY);
 }
 
@@ -235,18 +251,6 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->stray = 0.5 * skin;
     e->cut = (reach + skin) * (1.0 + CUT_SLACK);
     e->face_reach = e->cut + 1.01 * e->stray;
-    /* two events whose spheres' list centres are all farther apart than 2 touch (place_apart:
-     * each event's own sphere and the other its slot names, checked themselves, however far
-     * a stale slot's other may be) touch nothing in common. An event handled writes the motion
-     * and slot of its spheres and reads those of their lists' members; committed, it writes
-     * the lists of its spheres' old and new members. Members lie within the cutoff of a list
-     * centre, and an expiry's new centre within (1 + LEAD) strays of the old (its sphere
-     * strayed up to one, the new centre leads by LEAD), so what an event touches lies within
-     * touch = cut + (1 + LEAD) stray of its spheres' centres, and two events whose spheres
-     * are more than touch apart touch nothing in common (a written sphere is never read by the
-     * other, a written list is never the other's own). Twice that leaves a wide margin for
-     * the roundings of the centres (set_near2 adds those of the test's floats). */
-    const double touch = e->cut + (1.0 + NBEP_NBLIST_LEAD) * e->stray;
     /* places are numbered from 1: a mark of 0 is no place's */
     e->head = e->tail = e->fill_at = 1;
     atomic_init(&e->avail, 1);
@@ -259,8 +263,7 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     }
     for (int k = 0; k < 2 * WINDOW; k++)
         e->taken_x[k] = e->taken_y[k] = e->taken_z[k] = INFINITY;
-    e->apart = 2.0 * touch;
-    set_near2(e, lo, hi, e->apart);
+    set_near2(e);
     e->count = nbep_alloc_aligned(n ? n : 1, sizeof *e->count);
     bool ws_ok = true;
     for (int t = 0; t < team; t++)
@@ -287,7 +290,7 @@ nbep_status nbep_evloop_refit(nbep_evloop *e, nbep_vec3 lo, nbep_vec3 hi, nbep_d
 {
     assert(!e->pb.any);
     e->pb = nbep_periodic_make(NULL, lo, hi);
-    set_near2(e, lo, hi, e->apart);
+    set_near2(e);
     return nbep_cells_refit(&e->cells, lo, hi, cells_reach(e), d);
 }
 
