@@ -8,8 +8,8 @@
  * The accumulator is 2^-1074 (the least subnormal) times a signed integer held in
  * NBEP_XSUM_LIMBS limbs of 32 bits, each kept in an int64_t so that a limb takes many
  * additions of less than 2^32 before its carries need passing on (nbep_xsum_add and
- * nbep_xsum_merge do that every 2^29 terms: BATCH in xsum.c). All zero bytes is the empty sum. Infinities and NaN are summed
- * apart, as doubles, and win: a sum with one is that sum. */
+ * nbep_xsum_merge do that every 2^29 terms: BATCH in xsum.c). All zero bytes is the empty
+ * sum. Infinities and NaN are summed apart, as doubles, and win: a sum with one is that sum. */
 #ifndef NBEP_XSUM_H
 #define NBEP_XSUM_H
 
