@@ -418,10 +418,13 @@ static double f_slope(const motion *m, double t)
  * again, and the push brings the other end in instead. With g monotone the answer is the one
  * double where g turns, whatever the tries: plain bisection's. On a settling pile (300
  * spheres, 700 steps) the tries per search went from 26 (critical points) and 24 (contacts) on
- * average with false position alone to 11 and 12, the most 116 (docs/accuracy.md). */
+ * average with false position alone to 11 and 12, the most 116 (docs/accuracy.md).
+ * dip (NULL: none): g is f'/2 on a stretch where f falls until g turns (lo's side: f' <= 0);
+ * each try where f' < 0, short of the turn, also takes f there, and the first at which f <= 0
+ * ends the search: that try is returned and *dip set to f there (else *dip is left alone). */
 static double bisect(const motion *m, double (*g)(const motion *, double),
                      double (*dg)(const motion *, double), double lo, double hi, double ga,
-                     double gb)
+                     double gb, double *dip)
 {
     const bool lo_side = ga <= 0.0;
     uint64_t a = double_bits(lo), b = double_bits(hi);
@@ -462,6 +465,13 @@ static double bisect(const motion *m, double (*g)(const motion *, double),
         gl = gc;
         dl = dg(m, tc);
         if ((gc <= 0.0) == lo_side) {
+            if (dip && gc < 0.0) { /* closing there (not flat: f' = 0 in round-off) */
+                const double fc = f_val(m, tc);
+                if (fc <= 0.0) {
+                    *dip = fc;
+                    return tc;
+                }
+            }
             a = c;
             ta = tc;
             ga = gc;
@@ -562,16 +572,23 @@ static double bracket_search(const quartic *q, double t_max)
              (t_max < knot[i + 1] && (f_half_slope(m, t_max) <= 0.0) == (slope[i] <= 0.0))) &&
             f_val(m, u) > 0.0 && f_val(m, t_max) > ROOT_TOL * f_scale(m, t_max))
             return NBEP_NEVER;
+        /* where f falls until w, the search for w stops at the first try past the root (f
+         * <= 0 there, short of w: the root lies between u and it) */
+        double fz = 1.0;
         const double w = last ? tb
                               : bisect(m, f_half_slope, f_half_curv, knot[i], knot[i + 1],
-                                       slope[i], slope[i + 1]);
+                                       slope[i], slope[i + 1], slope[i] <= 0.0 ? &fz : NULL);
+        if (fz <= 0.0) {
+            const double fu = f_val(m, u);
+            return fu <= 0.0 ? u : bisect(m, f_val, f_slope, u, w, fu, fz, NULL);
+        }
         if (w > u && f_half_slope(m, 0.5 * (u + w)) < 0.0) { /* f decreases here */
             const double fu = f_val(m, u);
             if (fu <= 0.0)
                 return u;                       /* overlapping as it starts to close */
             const double fw = f_val(m, w);
             if (fw <= 0.0)
-                return bisect(m, f_val, f_slope, u, w, fu, fw);
+                return bisect(m, f_val, f_slope, u, w, fu, fw, NULL);
         }
         if (last)
             return NBEP_NEVER;
