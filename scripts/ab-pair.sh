@@ -11,7 +11,10 @@
 #   e.g. scripts/ab-pair.sh 8 inputs/hard-sphere-fluid.deck /tmp/nbep.old bin/nbep
 #
 # Prints A's and B's median seconds, the median ratio B/A with every repeat's, and whether the
-# collision counts agreed in every repeat. Outputs go to a temporary folder, removed after.
+# collision counts agreed in every repeat; where they did not (a change that alters a granular
+# scene's trajectories, which then collide more or less), also the median ratio of B's
+# collisions per second to A's, the figure that compares them. Outputs go to a temporary
+# folder, removed after.
 set -euo pipefail
 if [ $# -ne 4 ]; then
     echo "usage: scripts/ab-pair.sh REPS DECK BIN_A BIN_B" >&2
@@ -31,14 +34,19 @@ for r in $(seq "$reps"); do
     python3 - "$tmp/a.json" "$tmp/b.json" <<'PYEOF'
 import json, sys
 a, b = (json.load(open(p)) for p in sys.argv[1:3])
-print(a["wall_seconds"], b["wall_seconds"], a["collisions"] == b["collisions"])
+print(a["wall_seconds"], b["wall_seconds"], a["collisions"] == b["collisions"],
+      a["collisions"], b["collisions"])
 PYEOF
 done | python3 -c '
 import statistics as st, sys
 rows = [l.split() for l in sys.stdin]
 A = [float(r[0]) for r in rows]; B = [float(r[1]) for r in rows]
 R = [b / a for a, b in zip(A, B)]
+same = all(r[2] == "True" for r in rows)
 print("A median %.3f s, B median %.3f s, B/A median %.3f [%s]; same collisions: %s"
-      % (st.median(A), st.median(B), st.median(R), " ".join("%.3f" % x for x in R),
-         all(r[2] == "True" for r in rows)))
+      % (st.median(A), st.median(B), st.median(R), " ".join("%.3f" % x for x in R), same))
+if not same:
+    C = [(float(r[4]) / b) / (float(r[3]) / a) for a, b, r in zip(A, B, rows)]
+    print("collisions A %s, B %s; B/A collisions per second median %.3f [%s]"
+          % (rows[0][3], rows[0][4], st.median(C), " ".join("%.3f" % x for x in C)))
 '
