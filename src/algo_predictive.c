@@ -529,13 +529,14 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     c->image_horizon = c->pb.any && !c->use_grid && !sim->scene->neighbors_cells;
     c->image_reach = nbep_periodic_reach(&c->pb, 2.0 * c->rmax);
     if (sim->scene->neighbors_cells) {
-        /* see cells_steps: only those frames are rebuild points of the uninterrupted run */
+        /* see cells_steps: only those frames are rebuild points of the uninterrupted run
+         * (nbep_output_open_resume picks such a frame; a caller of its own may not) */
         const nbep_resume *r = sim->opt.resume;
         if (r && r->step % (int64_t)sim->scene->output_every != 0) {
             pred_destroy(c);
             NBEP_FAIL(d, NBEP_EDECK,
                       "nbep: run.neighbors = \"cells\" resumes bit for bit only from a frame at a "
-                      "multiple of output.every (%llu); the file's last frame is step %lld",
+                      "multiple of output.every (%llu), not from step %lld",
                       (unsigned long long)sim->scene->output_every, (long long)r->step);
         }
         /* the team loop: reactions of a free flight at e = 1 change their two spheres only

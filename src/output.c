@@ -784,6 +784,10 @@ nbep_status nbep_output_close(nbep_output **op, const nbep_summary *s, nbep_diag
     if (!op || !*op)
         return NBEP_OK;
     nbep_output *o = *op;
+    if (o->resume.pending) { /* a resume refused before it began: the file as it was */
+        nbep__output_release(op);
+        return NBEP_OK;
+    }
     /* Stats rows appended after the last frame get counted too. */
     int rc = nbep__output_commit(o, o->n_frames, d);
     if (rc == 0 && o->xmf && o->n_frames > 0 && xmf_write(o, d) != NBEP_OK)

@@ -92,6 +92,15 @@ struct nbep_output {
     double *xmf_time;
     size_t xmf_cap;
     double xmf_last;               /* monotonic seconds of the last rewrite */
+    /* a run opened to be resumed (nbep_output_open_resume), not yet changed: pending until
+     * nbep_output_resume_begin, and closing it then writes nothing */
+    struct {
+        bool pending;
+        hsize_t frames;            /* the frames kept: up to the one resumed from */
+        int64_t step;              /* that frame's step */
+        uint64_t stats_keep;       /* the /stats rows kept (stats: the file has /stats) */
+        bool image, checkpoint, stats, wall; /* the series the file has that a run appends to */
+    } resume;
 };
 
 /* A handle for path with every id invalid; NULL (and NBEP_ENOMEM in d) when out of memory. */

@@ -228,8 +228,22 @@ static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int t
     return rc;
 }
 
-nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, int threads,
-                                    nbep_output **out, nbep_resume *r, nbep_diag *d)
+/* The frame a resumed run continues from, among the file's `frames` complete ones (their steps
+ * in steps[]): the last, or in cells mode the last at a multiple of output.every, the only
+ * frames from which the run continues bit for bit (algo_predictive.c, cells_steps: its
+ * rebuilds fall at those steps); the frames after it (a stop's own frame, written off that
+ * grid) are dropped, and written again as the run passes their steps. 0 when none. */
+static hsize_t resume_frames(const nbep_scene *sc, const int64_t *steps, hsize_t frames)
+{
+    if (!sc->neighbors_cells)
+        return frames;
+    while (frames > 0 && steps[frames - 1] % (int64_t)sc->output_every != 0)
+        frames--;
+    return frames;
+}
+
+nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep_output **out,
+                                    nbep_resume *r, nbep_diag *d)
 {
     nbep_resume res = {0};
     nbep_status st =
@@ -272,7 +286,40 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, int 
         st = NBEP_EDECK;
         goto fail;
     }
+    /* every frame's step and time (the sidecar lists them all), which choose the frame */
+    if (!nbep__output_xmf_room(o, (size_t)frames)) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory to resume %s", path);
+        st = NBEP_ENOMEM;
+        goto fail;
+    }
+    for (hsize_t k = 0; k < frames; k++)
+        if (nbep__output_read_row(o->file, path, "/frames/step", k, 1, H5T_NATIVE_INT64,
+                                  &o->xmf_step[k], d) < 0 ||
+            nbep__output_read_row(o->file, path, "/frames/time", k, 1, H5T_NATIVE_DOUBLE,
+                                  &o->xmf_time[k], d) < 0)
+            goto fail;
+    const uint64_t complete = frames;
+    frames = resume_frames(sc, o->xmf_step, frames);
+    if (frames == 0) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s has no frame at a multiple of output.every (%llu) to resume "
+                      "from in run.neighbors = \"cells\"",
+                      path, (unsigned long long)sc->output_every);
+        st = NBEP_EDECK;
+        goto fail;
+    }
     hsize_t last = frames - 1;
+    res.step = o->xmf_step[last];
+    res.last_step = o->xmf_step[complete - 1];
+    if (res.step < 0 || sc->steps <= (uint64_t)res.step) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s: nothing to resume: its %s frame is at step %lld and run.steps "
+                      "is %llu (ask for more steps: -n, --set run.steps=)",
+                      path, frames == complete ? "last" : "resume", (long long)res.step,
+                      (unsigned long long)sc->steps);
+        st = NBEP_EDECK;
+        goto fail;
+    }
     res.n = n;
     res.pos = malloc((n ? n : 1) * sizeof *res.pos);
     res.vel = malloc((n ? n : 1) * sizeof *res.vel);
@@ -281,15 +328,14 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, int 
         st = NBEP_ENOMEM;
         goto fail;
     }
-    if (nbep__output_read_row(o->file, path, "/frames/step", last, 1, H5T_NATIVE_INT64, &res.step,
-                              d) < 0 ||
-        nbep__output_read_row(o->file, path, "/frames/position", last, 3 * (hsize_t)n,
-                         H5T_NATIVE_DOUBLE, res.pos, d) < 0 ||
+    if (nbep__output_read_row(o->file, path, "/frames/position", last, 3 * (hsize_t)n,
+                              H5T_NATIVE_DOUBLE, res.pos, d) < 0 ||
         nbep__output_read_row(o->file, path, "/frames/velocity", last, 3 * (hsize_t)n,
-                         H5T_NATIVE_DOUBLE, res.vel, d) < 0)
+                              H5T_NATIVE_DOUBLE, res.vel, d) < 0)
         goto fail;
     /* A periodic box: the image counts of that frame (SPEC /frames/image) */
-    if (sc->has_box && (sc->periodic[0] || sc->periodic[1] || sc->periodic[2])) {
+    o->resume.image = sc->has_box && (sc->periodic[0] || sc->periodic[1] || sc->periodic[2]);
+    if (o->resume.image) {
         res.image = malloc((n ? 3 * n : 1) * sizeof *res.image);
         if (!res.image) {
             nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory to resume %s", path);
@@ -305,8 +351,7 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, int 
             goto fail;
         }
         if (nbep__output_read_row(o->file, path, "/frames/image", last, 3 * (hsize_t)n,
-                                  H5T_NATIVE_INT32, res.image, d) < 0 ||
-            open_cut(o, "/frames/image", frames, &o->frame_img, d) < 0)
+                                  H5T_NATIVE_INT32, res.image, d) < 0)
             goto fail;
     }
     if (nbep__output_periodic(o, sc, d) < 0) {
@@ -317,6 +362,7 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, int 
      * imports event slots (the algorithm table, sim.c), so a deck of another algorithm
      * continues from positions and velocities alone. */
     htri_t has_ck = H5Lexists(o->file, "/checkpoint", H5P_DEFAULT);
+    o->resume.checkpoint = has_ck > 0;
     if (has_ck > 0) {
         res.has_events = true;
         res.event_time = malloc((n ? n : 1) * sizeof *res.event_time);
@@ -334,65 +380,21 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, int 
                                  *nbep__ck_columns[c].mem_type, cols[c], d) < 0)
                 goto fail;
     }
-    /* Continue appending after the last complete frame: cut everything written past it. */
-    if (open_cut(o, "/frames/step", frames, &o->frame_step, d) < 0 ||
-        open_cut(o, "/frames/time", frames, &o->frame_time, d) < 0 ||
-        open_cut(o, "/frames/position", frames, &o->frame_pos, d) < 0 ||
-        open_cut(o, "/frames/velocity", frames, &o->frame_vel, d) < 0)
-        goto fail;
-    if (has_ck > 0)
-        for (int c = 0; c < N_CK_COLUMNS; c++)
-            if (open_cut(o, nbep__ck_columns[c].name, frames, &o->ck[c], d) < 0)
-                goto fail;
-    if (open_count(o, "/frames", &o->frames_count, d) < 0)
-        goto fail;
-    o->n_frames = frames;
-    o->xmf = true; /* resumed runs have positions */
-    if (!nbep__output_xmf_room(o, (size_t)frames)) {
-        nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory to resume %s", path);
-        st = NBEP_ENOMEM;
-        goto fail;
-    }
-    for (hsize_t k = 0; k < frames; k++)
-        if (nbep__output_read_row(o->file, path, "/frames/step", k, 1, H5T_NATIVE_INT64,
-                                  &o->xmf_step[k], d) < 0 ||
-            nbep__output_read_row(o->file, path, "/frames/time", k, 1, H5T_NATIVE_DOUBLE,
-                                  &o->xmf_time[k], d) < 0)
-            goto fail;
-    if (H5Lexists(o->file, "/stats", H5P_DEFAULT) > 0) {
+    o->resume.stats = H5Lexists(o->file, "/stats", H5P_DEFAULT) > 0;
+    if (o->resume.stats) {
         uint64_t rows;
         if (nbep__output_complete_rows(o->file, path, "/stats", "/stats/step", &rows, &more, d) < 0)
             goto fail;
         /* one row per step from step 1: the rows up to the frame's step stay */
-        uint64_t keep = rows < (uint64_t)res.step ? rows : (uint64_t)res.step;
-        for (int c = 0; c < STATS_N_COLUMNS; c++)
-            if (open_cut(o, nbep__stats_columns[c].name, keep, &o->stats[c], d) < 0)
-                goto fail;
-        o->n_planes = sc->state.n_planes;
-        if (H5Lexists(o->file, "/stats/wall_impulse", H5P_DEFAULT) > 0 &&
-            open_cut(o, "/stats/wall_impulse", keep, &o->stats_wall, d) < 0)
-            goto fail;
-        if (open_count(o, "/stats", &o->stats_count, d) < 0)
-            goto fail;
-        o->n_stats = keep;
+        o->resume.stats_keep = rows < (uint64_t)res.step ? rows : (uint64_t)res.step;
+        o->resume.wall = H5Lexists(o->file, "/stats/wall_impulse", H5P_DEFAULT) > 0;
     }
-    /* The summary described the run as it ended; it is written again at the new end. */
-    o->summary = H5Gopen2(o->file, "/summary", H5P_DEFAULT);
-    if (o->summary < 0 ||
-        (H5Aexists(o->summary, "json") > 0 && H5Adelete(o->summary, "json") < 0)) {
-        HDF5_FAIL(d, path, "reset /summary");
-        goto fail;
-    }
-    hid_t steps_attr = H5Aopen(o->file, "steps", H5P_DEFAULT);
-    if (steps_attr < 0 || H5Awrite(steps_attr, H5T_NATIVE_UINT64, &sc->steps) < 0) {
-        HDF5_FAIL(d, path, "update the root attribute steps");
-        nbep__output_close_id(&steps_attr);
-        goto fail;
-    }
-    nbep__output_close_id(&steps_attr);
-    if (note_resume(o->file, path, sc, threads, res.step, d) < 0 ||
-        nbep__output_commit(o, frames, d) < 0)
-        goto fail;
+    /* nothing is written until nbep_output_resume_begin: a run refused after this (its
+     * algorithm's own checks) leaves the file as it was */
+    o->resume.pending = true;
+    o->resume.frames = frames;
+    o->resume.step = res.step;
+    o->n_frames = frames;
     *out = o;
     *r = res;
     return NBEP_OK;
@@ -400,4 +402,58 @@ fail:
     nbep__output_release(&o);
     nbep_resume_fini(&res);
     return st;
+}
+
+nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int threads,
+                                     nbep_diag *d)
+{
+    if (!o->resume.pending)
+        return NBEP_OK;
+    const char *path = o->path;
+    const hsize_t frames = o->resume.frames;
+    const uint64_t keep = o->resume.stats_keep;
+    /* Continue appending after the frame resumed from: cut everything written past it. */
+    if ((o->resume.image && open_cut(o, "/frames/image", frames, &o->frame_img, d) < 0) ||
+        open_cut(o, "/frames/step", frames, &o->frame_step, d) < 0 ||
+        open_cut(o, "/frames/time", frames, &o->frame_time, d) < 0 ||
+        open_cut(o, "/frames/position", frames, &o->frame_pos, d) < 0 ||
+        open_cut(o, "/frames/velocity", frames, &o->frame_vel, d) < 0)
+        return NBEP_EIO;
+    if (o->resume.checkpoint)
+        for (int c = 0; c < N_CK_COLUMNS; c++)
+            if (open_cut(o, nbep__ck_columns[c].name, frames, &o->ck[c], d) < 0)
+                return NBEP_EIO;
+    if (open_count(o, "/frames", &o->frames_count, d) < 0)
+        return NBEP_EIO;
+    o->xmf = true; /* resumed runs have positions */
+    if (o->resume.stats) {
+        for (int c = 0; c < STATS_N_COLUMNS; c++)
+            if (open_cut(o, nbep__stats_columns[c].name, keep, &o->stats[c], d) < 0)
+                return NBEP_EIO;
+        o->n_planes = sc->state.n_planes;
+        if (o->resume.wall && open_cut(o, "/stats/wall_impulse", keep, &o->stats_wall, d) < 0)
+            return NBEP_EIO;
+        if (open_count(o, "/stats", &o->stats_count, d) < 0)
+            return NBEP_EIO;
+        o->n_stats = keep;
+    }
+    o->resume.pending = false;
+    /* The summary described the run as it ended; it is written again at the new end. */
+    o->summary = H5Gopen2(o->file, "/summary", H5P_DEFAULT);
+    if (o->summary < 0 ||
+        (H5Aexists(o->summary, "json") > 0 && H5Adelete(o->summary, "json") < 0)) {
+        HDF5_FAIL(d, path, "reset /summary");
+        return NBEP_EIO;
+    }
+    hid_t steps_attr = H5Aopen(o->file, "steps", H5P_DEFAULT);
+    if (steps_attr < 0 || H5Awrite(steps_attr, H5T_NATIVE_UINT64, &sc->steps) < 0) {
+        HDF5_FAIL(d, path, "update the root attribute steps");
+        nbep__output_close_id(&steps_attr);
+        return NBEP_EIO;
+    }
+    nbep__output_close_id(&steps_attr);
+    if (note_resume(o->file, path, sc, threads, o->resume.step, d) < 0 ||
+        nbep__output_commit(o, frames, d) < 0)
+        return NBEP_EIO;
+    return NBEP_OK;
 }

@@ -115,7 +115,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                                          : sc.output_file;
     st = open_summary(rq->summary_path, &summary, d);
     if (st == NBEP_OK)
-        st = rq->resume ? nbep_output_open_resume(file, &sc, threads, &out, &resume, d)
+        st = rq->resume ? nbep_output_open_resume(file, &sc, &out, &resume, d)
                         : nbep_output_create(file, &sc, threads, &out, d);
     if (st == NBEP_OK) {
         if (rq->resume)
@@ -125,6 +125,14 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                                 .resume = rq->resume ? &resume : NULL,
                                 .take_state = &sc.state}; /* nothing reads the scene's again */
         st = nbep_sim_create(&sc, &opt, &sim, d);
+        if (st == NBEP_OK && rq->resume) /* only now is the file changed */
+            st = nbep_output_resume_begin(out, &sc, threads, d);
+        if (st == NBEP_OK && rq->resume && rq->verbose && resume.last_step != resume.step)
+            fprintf(stderr,
+                    "nbep: %s continues from its frame at step %lld, the last at a multiple of "
+                    "output.every (run.neighbors = \"cells\" continues bit for bit from those "
+                    "only); the frames after it, to step %lld, are dropped\n",
+                    file, (long long)resume.step, (long long)resume.last_step);
         from = rq->resume ? resume.step : -1;
         nbep_resume_fini(&resume); /* the run has its event slots now */
         if (st != NBEP_OK) {

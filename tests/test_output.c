@@ -1194,6 +1194,73 @@ static void test_json_keeps_every_digit_of_a_double(void **state)
     free(json);
 }
 
+/* The bytes of a file (NULL: none), in *len. */
+static unsigned char *slurp(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    unsigned char *buf = NULL;
+    size_t cap = 0;
+    *len = 0;
+    for (;;) {
+        if (*len == cap) {
+            cap = cap ? 2 * cap : 65536;
+            unsigned char *b = realloc(buf, cap);
+            assert_non_null(b);
+            buf = b;
+        }
+        size_t got = fread(buf + *len, 1, cap - *len, f);
+        *len += got;
+        if (got == 0)
+            break;
+    }
+    fclose(f);
+    return buf;
+}
+
+/* A resume is checked before anything is written: a run refused after the file was opened
+ * for it (nbep_output_open_resume, then no nbep_output_resume_begin) leaves the file and its
+ * sidecar byte for byte as they were; begun, the file is changed (its root `steps`). */
+static void test_a_resume_closed_before_it_begins_leaves_the_file_as_it_was(void **state)
+{
+    fixture *fx = *state;
+    const char *path = "build/tests/tmp/output_resume_refused.h5";
+    const char *xmf = "build/tests/tmp/output_resume_refused.xmf";
+    const nbep_summary summary = known_summary();
+    write_run(fx, path, &summary);
+    size_t len0, xlen0, len1, xlen1;
+    unsigned char *before = slurp(path, &len0), *xbefore = slurp(xmf, &xlen0);
+    assert_non_null(before);
+    assert_non_null(xbefore);
+    fx->sc.steps = 2 * N_STATS; /* past the last frame (step 20): something to resume */
+    nbep_output *o = NULL;
+    nbep_resume r;
+    assert_ok(nbep_output_open_resume(path, &fx->sc, &o, &r, &fx->d), &fx->d);
+    assert_int_equal(r.step, (N_FRAMES - 1) * FRAME_EVERY);
+    nbep_resume_fini(&r);
+    assert_ok(nbep_output_close(&o, NULL, &fx->d), &fx->d);
+    unsigned char *after = slurp(path, &len1), *xafter = slurp(xmf, &xlen1);
+    assert_non_null(after);
+    assert_non_null(xafter);
+    assert_true(len1 == len0 && memcmp(after, before, len0) == 0);
+    assert_true(xlen1 == xlen0 && memcmp(xafter, xbefore, xlen0) == 0);
+    free(after);
+    free(xafter);
+    /* begun: the file is the resumed run's (steps = 40, no summary until its close) */
+    assert_ok(nbep_output_open_resume(path, &fx->sc, &o, &r, &fx->d), &fx->d);
+    nbep_resume_fini(&r);
+    assert_ok(nbep_output_resume_begin(o, &fx->sc, 1, &fx->d), &fx->d);
+    assert_ok(nbep_output_close(&o, NULL, &fx->d), &fx->d);
+    uint64_t steps = 0;
+    hid_t f = open_ro(path);
+    read_root_attr(f, "steps", H5T_STD_U64LE, 1, H5T_NATIVE_UINT64, &steps);
+    H5Fclose(f);
+    assert_int_equal(steps, 2 * N_STATS);
+    free(before);
+    free(xbefore);
+}
+
 static int make_dirs(void)
 {
     const char *dirs[] = {"build", "build/tests", "build/tests/tmp"};
@@ -1238,6 +1305,7 @@ int main(void)
         T(test_the_chunk_index_holds_every_planned_frame_without_splitting),
         T(test_h5dump_reads_the_file_of_a_killed_run),
         T(test_info_reports_the_settings_frames_stats_and_summary),
+        T(test_a_resume_closed_before_it_begins_leaves_the_file_as_it_was),
         T(test_info_on_a_killed_run_says_it_has_no_summary),
         T(test_info_reads_a_run_while_it_is_being_written),
         T(test_info_counts_only_the_complete_frames_of_a_run_killed_mid_frame),

@@ -139,13 +139,50 @@ bin/nbep run inputs/hopper.deck "${hop[@]}" -n 600 --resume $tmp/hopper-part.h5
 check "predictive cells without a box (hopper): resumed after a planned stop, frames equal the whole run's" \
     "same_frames $tmp/hopper-whole.h5 $tmp/hopper-part.h5"
 
+# a cells-mode file whose last frame is off the grid of output.every (a stop's own frame:
+# SIGTERM writes the step it stopped at) continues from its last frame on the grid, dropping
+# the frames after it, and ends as the whole run: the same frames, bit for bit, and no other
+# (until 2026-11-27 it was refused, and so was every cells run stopped by SIGTERM)
 bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 42 -o $tmp/cells-odd.h5
-bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 80 --resume $tmp/cells-odd.h5 \
-    2>$tmp/cells-odd.err
+loud_cells=("${args[@]:1}" "${cells[@]}")
+bin/nbep run $deck "${loud_cells[@]}" -n 80 --resume $tmp/cells-odd.h5 2>$tmp/cells-odd.err
 rc=$?
-check "predictive cells: a resume from step 42 (every 5) is refused with exit 2 (got $rc)" \
-    "[ $rc = 2 ] && grep -q 'multiple of output.every (5); the file.s last frame is step 42' \
-    $tmp/cells-odd.err"
+check "predictive cells: a file that ends at step 42 (every 5) resumes (got $rc)" "[ $rc = 0 ]"
+check "from its frame at step 40, saying that the frames after it, to step 42, are dropped" \
+    "grep -q 'continues from its frame at step 40, .*to step 42, are dropped' $tmp/cells-odd.err"
+check "and its frames are the whole run's, the same steps and bits" \
+    "same_frames $tmp/cells-whole.h5 $tmp/cells-odd.h5 && \
+     \"\$PY\" -c \"import h5py, sys; a, b = (h5py.File(p, 'r')['frames/step'][:].tolist() \
+     for p in sys.argv[1:]); sys.exit(a != b)\" $tmp/cells-whole.h5 $tmp/cells-odd.h5"
+# cells mode stopped by SIGTERM at whatever step it reached, resumed to a fixed end past it
+bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 100000000 -o $tmp/cells-killed.h5 2>/dev/null &
+pid=$!
+for _ in $(seq 300); do [ -s $tmp/cells-killed.h5 ] && break; sleep 0.1; done
+sleep 0.5
+kill -TERM $pid
+wait $pid 2>/dev/null
+rc=$?
+last=$(bin/nbep info $tmp/cells-killed.h5 | sed -n 's/^frames: .*last: step \([0-9]*\).*/\1/p')
+check "predictive cells: SIGTERM stops the long run with 143 (got $rc) at step $last" \
+    "[ $rc = 143 ] && [ -n '$last' ] && [ '$last' -gt 0 ]"
+end=$(( ${last:-0} + 30 ))
+bin/nbep run $deck "${args[@]}" "${cells[@]}" -n $end -o $tmp/cells-whole2.h5
+bin/nbep run $deck "${args[@]}" "${cells[@]}" -n $end --resume $tmp/cells-killed.h5
+check "predictive cells: resumed after SIGTERM, every frame equals the uninterrupted run's" \
+    "same_frames $tmp/cells-whole2.h5 $tmp/cells-killed.h5"
+
+# nothing to resume: run.steps at or before the file's last frame is refused with exit 2, the
+# file left as it was (it was given a zero-step summary, and its root `steps` the smaller count)
+sum=$(md5sum < $tmp/predictive-whole.h5)
+for n in 80 50; do
+    bin/nbep run $deck "${args[@]}" -n $n --resume $tmp/predictive-whole.h5 2>$tmp/nothing.err
+    rc=$?
+    check "a resume of a file at step 80 with run.steps = $n is refused with exit 2 (got $rc)" \
+        "[ $rc = 2 ] && grep -q 'nothing to resume: its last frame is at step 80 and run.steps is $n' \
+         $tmp/nothing.err"
+    check "the refused resume leaves the file as it was" \
+        "[ \"\$(md5sum < $tmp/predictive-whole.h5)\" = '$sum' ]"
+done
 
 # killed by SIGTERM at an arbitrary step of a very long run, then resumed to a fixed end past
 # that step; compared with one uninterrupted run to the same end (no assumption on how far the

@@ -69,6 +69,8 @@ NBEP_MUST_CHECK nbep_status nbep_output_frame_events(nbep_output *o, int64_t ste
 /* Where a run continues from: its last complete frame. */
 typedef struct nbep_resume {
     int64_t step;                 /* the frame's step */
+    int64_t last_step;            /* the file's last complete frame's step (later than step
+                                   * where cells mode resumes from an earlier frame) */
     size_t n;
     nbep_vec3 *pos, *vel;         /* owned, n each, until nbep_resume_apply moves them */
     bool has_events;              /* the file has /checkpoint rows for this frame */
@@ -87,16 +89,24 @@ void nbep_resume_apply(nbep_resume *r, nbep_state *s);
 
 /* `nbep run DECK --resume RUN.h5`: opens an existing run for appending. Checks that it is an
  * nbep-1 file of the run sc makes (sphere and plane counts, radii, masses, accelerations,
- * planes, box and dt), and that its frames hold positions and velocities; reads its last
- * complete frame (and, where the file has /checkpoint, that frame's event slots) into *r;
- * drops rows written after that frame (incomplete frames, stats rows of later steps), removes
- * the old summary, sets the root attribute `steps` to sc->steps and adds a line to the root
- * attribute `resumed` (the step resumed from, `threads`, this build and sc's overrides).
- * Frames and stats then append as after nbep_output_create. NBEP_EIO for a file that cannot
- * be read or written, NBEP_EDECK when deck and file disagree. */
+ * planes, box and dt), that its frames hold positions and velocities, and that run.steps lies
+ * past the frame it continues from; reads that frame (the last complete one; with
+ * run.neighbors = "cells" the last at a multiple of output.every, where such a run continues
+ * bit for bit) and, where the file has /checkpoint, its event slots into *r. Writes nothing:
+ * closing the handle now leaves the file as it was (a run refused after this).
+ * NBEP_EIO for a file that cannot be read, NBEP_EDECK when deck and file disagree or there is
+ * nothing to continue. */
 NBEP_MUST_CHECK nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc,
-                                                    int threads, nbep_output **out,
-                                                    nbep_resume *r, nbep_diag *d);
+                                                    nbep_output **out, nbep_resume *r,
+                                                    nbep_diag *d);
+/* The resumed run starts: drops the rows written after that frame (later frames, incomplete
+ * ones, stats rows of later steps), removes the old summary, sets the root attribute `steps`
+ * to sc->steps and adds a line to the root attribute `resumed` (the step resumed from,
+ * `threads`, this build and sc's overrides). Frames and stats then append as after
+ * nbep_output_create. NBEP_OK at once for a handle not opened by nbep_output_open_resume or
+ * begun already; NBEP_EIO when the file cannot be written. */
+NBEP_MUST_CHECK nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc,
+                                                     int threads, nbep_diag *d);
 /* Appends count rows (borrowed) to /stats, and their rows of /stats/wall_impulse from wall
  * (count x n_planes, row by row; NULL: zeros); they reach the disk with the next frame or
  * close. Only when the scene asked for stats. NBEP_EIO on failure. */
