@@ -58,9 +58,26 @@ static void print_check(const nbep_scene *sc, int threads)
     uint64_t quad = 0, quart = 0;
     nbep_scene_count_pairs(&sc->state, &quad, &quart);
     printf("deck:            %s\n", sc->deck_path);
-    printf("algorithm:       %s, %d thread%s\n", sc->algorithm, threads, threads == 1 ? "" : "s");
-    printf("steps:           %llu of dt = %g (t = 0 .. %g)\n", (unsigned long long)sc->steps,
-           sc->dt, (double)sc->steps * sc->dt);
+    if (strcmp(sc->algorithm, "predictive") == 0) /* run.neighbors and run.order act there */
+        printf("algorithm:       predictive (neighbors %s, order %s), %d thread%s\n",
+               sc->neighbors_cells ? "cells" : sc->neighbors_grid ? "grid" : "all",
+               sc->order_step ? "step" : "time", threads, threads == 1 ? "" : "s");
+    else
+        printf("algorithm:       %s, %d thread%s\n", sc->algorithm, threads,
+               threads == 1 ? "" : "s");
+    printf("steps:           %llu of dt = %g (t = 0 .. %g), seed %llu\n",
+           (unsigned long long)sc->steps, sc->dt, (double)sc->steps * sc->dt,
+           (unsigned long long)sc->seed);
+    printf("physics:         restitution %g, gravity [%g, %g, %g]", sc->restitution,
+           sc->gravity.x, sc->gravity.y, sc->gravity.z);
+    if (sc->restitution < 1.0) /* the TC model and the carry rule act on dissipative scenes */
+        printf(", tc %g, carry_drop %g", sc->tc, sc->carry_drop);
+    printf("\n");
+    if (sc->has_box)
+        printf("box:             [%g, %g, %g] .. [%g, %g, %g]\n", sc->box_min.x, sc->box_min.y,
+               sc->box_min.z, sc->box_max.x, sc->box_max.y, sc->box_max.z);
+    else
+        printf("box:             none\n");
     printf("spheres:         %zu\n", sc->state.n);
     int walls = 2 * (!sc->periodic[0] + !sc->periodic[1] + !sc->periodic[2]);
     if (sc->has_box)
@@ -78,8 +95,9 @@ static void print_check(const nbep_scene *sc, int threads)
     else
         printf("packing:         %.4g of the box volume\n", pf);
     printf("memory:          about %.3g MB\n", (double)nbep_sim_memory_estimate(sc, threads) / 1e6);
-    printf("output:          %s: %llu frames, about %.3g MB\n", sc->output_file,
-           (unsigned long long)nbep_output_frames(sc),
+    printf("output:          %s: %llu frames (every %llu steps), about %.3g MB\n",
+           sc->output_file, (unsigned long long)nbep_output_frames(sc),
+           (unsigned long long)sc->output_every,
            nbep_output_bytes(sc, nbep_sim_keeps_events(sc)) / 1e6);
 }
 
