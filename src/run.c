@@ -98,6 +98,7 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
 nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag *d)
 {
     memset(res, 0, sizeof *res);
+    const double t_begin = nbep_now(); /* setup_seconds counts the deck and placement (SPEC) */
     nbep_scene sc;
     nbep_status st = nbep_scene_load_from(rq->deck_path, rq->overrides, rq->override_origins,
                                           rq->n_overrides, &sc, d);
@@ -123,7 +124,8 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         nbep_sim_options opt = {.threads = threads, .out = out,
                                 .stop_signal = rq->stop_signal, .progress = rq->verbose,
                                 .resume = rq->resume ? &resume : NULL,
-                                .take_state = &sc.state}; /* nothing reads the scene's again */
+                                .take_state = &sc.state, /* nothing reads the scene's again */
+                                .t_begin = t_begin};
         st = nbep_sim_create(&sc, &opt, &sim, d);
         if (st == NBEP_OK && rq->resume) /* only now is the file changed */
             st = nbep_output_resume_begin(out, &sc, threads, d);

@@ -153,7 +153,7 @@ static void energy_total(const nbep_sim *sim, double *ke, double *pe)
 nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, nbep_sim **out,
                             nbep_diag *d)
 {
-    double t0 = nbep_now();
+    double t0 = opt->t_begin > 0.0 ? opt->t_begin : nbep_now();
     const nbep_algo *algo = find_algo(sc->algorithm);
     if (!algo)
         NBEP_FAIL(d, NBEP_EDECK, "nbep: unknown algorithm '%s'", sc->algorithm);

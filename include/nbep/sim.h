@@ -34,6 +34,9 @@ typedef struct nbep_sim_options {
     nbep_state *take_state;         /* may be NULL: the scene's own state, whose arrays the
                                      * run takes over instead of copying (nbep_state_take);
                                      * nothing reads them through the scene after */
+    double t_begin;                 /* nbep_now() when the run's set-up began (before its deck
+                                     * was read: SPEC's setup_seconds counts deck and
+                                     * placement); 0: when nbep_sim_create is called */
 } nbep_sim_options;
 
 /* A run of sc (borrowed; must outlive the sim) from its initial state, or from opt->resume
