@@ -524,13 +524,26 @@ static size_t entry_of(const nbep__scene_entry *e, size_t n, size_t id)
     return lo;
 }
 
-static void report(overlaps *o, size_t a, const char *other, double by)
+/* The setting an overlap of sphere id is blamed on: its group's `position` where the group
+ * gives one (its deck line, or the --set that gave it: its own label), else the group. */
+static const config_setting_t *placed_by(const overlaps *o, size_t id)
+{
+    const config_setting_t *g = o->e[entry_of(o->e, o->n_entries, id)].setting;
+    const config_setting_t *pos = config_setting_get_member(g, "position");
+    return pos ? pos : g;
+}
+
+/* Sphere a overlaps `other` (sphere b, or SIZE_MAX for a plane) by `by`; blamed on a's
+ * placement, or on b's where only b's came from a --set (the change that made it). */
+static void report(overlaps *o, size_t a, size_t b, const char *other, double by)
 {
     if (++o->found > OVERLAP_REPORT_MAX)
         return;
-    size_t ea = entry_of(o->e, o->n_entries, a);
-    NBEP__SCENE_ERR(o->c, o->e[ea].setting, "spheres.[%zu] (sphere %zu) overlaps %s by %g", ea,
-                    a, other, by);
+    const config_setting_t *at = placed_by(o, a);
+    if (b != SIZE_MAX && !config_setting_get_hook(at) && config_setting_get_hook(placed_by(o, b)))
+        at = placed_by(o, b);
+    NBEP__SCENE_ERR(o->c, at, "spheres.[%zu] (sphere %zu) overlaps %s by %g",
+                    entry_of(o->e, o->n_entries, a), a, other, by);
 }
 
 static void check_pair(overlaps *o, size_t i, size_t j)
@@ -547,7 +560,7 @@ static void check_pair(overlaps *o, size_t i, size_t j)
                  entry_of(o->e, o->n_entries, b), b,
                  nbep_vec3_equal(o->shift, (nbep_vec3){0.0, 0.0, 0.0}) ? ""
                                                                        : " across a periodic face");
-        report(o, a, other, by);
+        report(o, a, b, other, by);
     }
 }
 
@@ -591,7 +604,7 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                     snprintf(name, sizeof name, "%s", names[p]);
                 else
                     snprintf(name, sizeof name, "planes.[%zu]", p - n_box);
-                report(&o, i, name, by);
+                report(&o, i, SIZE_MAX, name, by);
             }
         }
 

@@ -742,6 +742,37 @@ static void test_overlaps_with_spheres_and_planes_are_named(void **state)
                      "(sphere 0) by 0.25");
 }
 
+/* An overlap made by a --set of a position is blamed on that --set, not on the deck's line of
+ * the sphere (a user looked for it there), whichever of the two it moved; one that the deck's
+ * positions make (here with a radius set larger), on the line of the position. */
+static void test_an_overlap_a_set_made_names_the_set(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *deck = write_deck("scene_overlap_set.deck",
+                                  "spheres = (\n"
+                                  "  { position = [0.0, 0.0, 0.0]; radius = 0.5; mass = 1.0; },\n"
+                                  "  { radius = 0.5; mass = 1.0;\n"
+                                  "    position = [3.0, 0.0, 0.0]; }\n"
+                                  ");\n",
+                                  buf, sizeof buf);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[1].position=[0.75,0,0]");
+    ASSERT_DIAG(&f->d, "--set spheres.[1].position=[0.75,0,0]: spheres.[1] (sphere 1) overlaps "
+                       "spheres.[0] (sphere 0) by 0.25");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].position=[2.5,0,0]");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].position=[2.5,0,0]: spheres.[1] (sphere 1) overlaps "
+                       "spheres.[0] (sphere 0) by 0.5");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[1].radius=3");
+    char want[300];
+    snprintf(want, sizeof want, "%.200s:4: spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) by 0.5",
+             deck);
+    ASSERT_DIAG(&f->d, want);
+}
+
 static void test_overlap_names_entries_and_sphere_ids(void **state)
 {
     fixture *f = *state;
@@ -1063,6 +1094,7 @@ int main(void)
         T(test_random_fill_that_cannot_fit_names_its_packing_fraction),
         T(test_lattice_fill_that_cannot_fit_names_its_capacity),
         T(test_overlaps_with_spheres_and_planes_are_named),
+        T(test_an_overlap_a_set_made_names_the_set),
         T(test_overlap_names_entries_and_sphere_ids),
         T(test_many_overlaps_list_twenty_then_count_the_rest),
         T(test_overlaps_between_radius_levels_are_each_found_once),
