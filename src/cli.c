@@ -25,10 +25,11 @@ static const char HELP[] =
     "      --dt X             time step (run.dt)\n"
     "      --set PATH=VALUE   override any deck setting, repeatable, e.g.\n"
     "                         --set physics.restitution=0.9 --set spheres.[0].count=8192\n"
-    "      --summary FILE     write the JSON summary there (- = stdout)\n"
+    "      --summary FILE     (run, sweep) write the JSON summary there (- = stdout)\n"
     "      --resume RUN.h5    (run) continue RUN.h5 from its last complete frame up to\n"
     "                         run.steps, appending to it; frames equal an uninterrupted run's\n"
     "      --quiet            no progress output\n"
+    "a short option's value may follow it attached: -n500, -ofile.h5\n"
     "\n"
     "sweep writes OUTPUT.sweep/run-NNNN.h5 (OUTPUT = output.file or -o without .h5) and\n"
     "summary.csv, summary.h5 there; --summary gets the sweep's totals; run again to finish\n"
@@ -158,6 +159,12 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
         }
         const char *name = a, *value = NULL;
         char longname[32];
+        /* -n5, -t2, -ofile.h5: a short option with its value attached (getopt's way) */
+        for (size_t i = 0; i < sizeof opts / sizeof opts[0] && !value; i++)
+            if (opts[i].shrt && strncmp(a, opts[i].shrt, 2) == 0 && a[2] != '\0') {
+                name = opts[i].shrt;
+                value = a + 2;
+            }
         /* --name=value form */
         const char *eq = strncmp(a, "--", 2) == 0 ? strchr(a, '=') : NULL;
         if (eq && (size_t)(eq - a) < sizeof longname) {
@@ -223,5 +230,7 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: info takes only a run file");
     if (cli->resume && cli->cmd != NBEP_CMD_RUN)
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: --resume goes with run only");
+    if (cli->summary && cli->cmd == NBEP_CMD_CHECK) /* it was taken and nothing written */
+        NBEP_FAIL(d, NBEP_EUSAGE, "nbep: --summary goes with run and sweep (check runs nothing)");
     return NBEP_OK;
 }

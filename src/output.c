@@ -38,6 +38,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <sys/stat.h>
 
 #include <hdf5.h>
 
@@ -333,6 +334,13 @@ uint64_t nbep_output_frames(const nbep_scene *sc)
 }
 
 /* rows rounded up to whole chunks of `chunk` rows: a growing dataset's last chunk is whole */
+bool nbep_output_same_file(const char *a, const char *b)
+{
+    struct stat sa, sb;
+    return a && b && stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev &&
+           sa.st_ino == sb.st_ino;
+}
+
 /* What a chunk's entry in its dataset's index takes on disk, measured: the 1-sphere bounce deck
  * (six series a chunk a frame) grows by 381 bytes a frame, of which 81 are data, so about 50 a
  * chunk (a small, many-frame deck's estimate was 30 % low without it; a fluid's frames are

@@ -2,6 +2,8 @@
 #include "nbep/run.h"
 
 #include <errno.h>
+#include <signal.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -104,6 +106,17 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                                           rq->n_overrides, &sc, d);
     if (st != NBEP_OK)
         return st;
+    /* a signal while the deck was read and the spheres placed (seconds for millions): stop
+     * now, with nothing written (the step loop would only see it after its first step, and a
+     * run of 0 steps never) */
+    const int sig = rq->stop_signal ? atomic_load_explicit(rq->stop_signal, memory_order_relaxed)
+                                    : 0;
+    if (sig) {
+        nbep_scene_fini(&sc);
+        NBEP_FAIL(d, sig == SIGTERM ? NBEP_ESIGTERM : NBEP_ESIGINT,
+                  "nbep: %s by SIG%s before the run began; nothing written",
+                  sig == SIGTERM ? "terminated" : "interrupted", sig == SIGTERM ? "TERM" : "INT");
+    }
     const int threads = nbep_sim_resolve_threads(sc.threads);
     nbep_output *out = NULL;
     nbep_sim *sim = NULL;
@@ -114,6 +127,13 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     const char *file = rq->resume        ? rq->resume
                        : rq->output_path ? rq->output_path
                                          : sc.output_file;
+    if (!rq->resume && nbep_output_same_file(file, rq->deck_path)) { /* -o DECK replaced the deck */
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: the output file %s is the deck %s itself; choose another (-o FILE)",
+                      file, rq->deck_path);
+        nbep_scene_fini(&sc);
+        return NBEP_EUSAGE;
+    }
     st = open_summary(rq->summary_path, &summary, d);
     if (st == NBEP_OK)
         st = rq->resume ? nbep_output_open_resume(file, &sc, &out, &resume, d)

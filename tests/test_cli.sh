@@ -180,6 +180,27 @@ check "--dt=-1 and --set run.steps=0.5: each message names what was typed (got $
     "[ $rc = 2 ] && grep -qxF -- '--dt=-1: run.dt must be > 0 (got -1)' '$tmp/stderr' &&
      grep -qxF -- '--set run.steps=0.5: run.steps must be an integer (got 0.5)' '$tmp/stderr'"
 
+# ---- short options with the value attached (getopt's -n5), as typed in messages ------------------
+run_nbep run inputs/two-spheres.deck -n5 -t1 -o"$tmp/short.h5" --quiet --summary "$tmp/short.json"
+check "-n5 -t1 -oFILE: taken as -n 5 -t 1 -o FILE (exit $rc)" \
+    "[ $rc = 0 ] && grep -q '\"steps\": 5,' '$tmp/short.json' && grep -q '\"threads\": 1,' '$tmp/short.json'"
+run_nbep check "$tmp/group.deck" -nabc
+check "-nabc: exit 2, the message names '-nabc' (got $rc)" \
+    "[ $rc = 2 ] && one_line && grep -qxF -- '-nabc: run.steps must be an integer (got \"abc\")' '$tmp/stderr'"
+
+# ---- an output file that is the deck: refused, the deck kept (it was replaced by the HDF5 file) --
+cp inputs/two-spheres.deck "$tmp/self.deck"
+for cmd in run check; do
+    run_nbep $cmd "$tmp/self.deck" -o "$tmp/./self.deck" -n 5 --quiet
+    check "nbep $cmd -o DECK: exit 2, one line (got $rc)" \
+        "[ $rc = 2 ] && one_line && grep -q 'is the deck .* itself; choose another' '$tmp/stderr'"
+done
+check "the deck is kept" "cmp -s inputs/two-spheres.deck '$tmp/self.deck'"
+# ---- check simulates nothing, so it takes no --summary (it took one and wrote nothing) ---------
+run_nbep check "$tmp/group.deck" --summary "$tmp/check.json"
+check "nbep check --summary: exit 2, one line (got $rc)" \
+    "[ $rc = 2 ] && one_line && grep -q 'summary goes with run and sweep' '$tmp/stderr'"
+
 # ---- a deck name that is no file, a missing file to resume -------------------------------------
 for cmd in run check sweep; do
     run_nbep $cmd "$tmp/no-such.deck" --quiet

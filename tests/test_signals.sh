@@ -32,5 +32,33 @@ for sig in TERM INT; do
     lines=$(wc -l < "$tmp/stderr-$sig")
     check "SIG$sig: that is the only line on stderr (got $lines)" "[ $lines = 1 ]"
 done
+# a signal while the deck is read and the spheres placed (600000 random spheres: about a second
+# here) ends the run before it begins, with nothing written: exit 130, no file, one line (it was
+# taken only after the first step, and a run of 0 steps ignored it and exited 0). The signal
+# comes at a quarter of the time `nbep check` takes to place them; skipped where that is under
+# 0.2 s (a machine too fast for the signal to land inside the placement)
+cat >"$tmp/place.deck" <<'EOF'
+run: { algorithm = "predictive"; steps = 0; dt = 1.0e-3; seed = 1; };
+box: { min = [0.0, 0.0, 0.0]; max = [80.0, 80.0, 80.0]; };
+spheres = ( { count = 600000; radius = 0.05; mass = 1.0; place = "random"; } );
+EOF
+t0=$(date +%s.%N)
+bin/nbep check "$tmp/place.deck" >/dev/null
+t1=$(date +%s.%N)
+wait_s=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.3f", (b - a) / 4 }')
+if awk -v w="$wait_s" 'BEGIN { exit !(w >= 0.05) }'; then
+    bin/nbep run "$tmp/place.deck" --quiet -o "$tmp/place.h5" 2>"$tmp/stderr-place" &
+    pid=$!
+    sleep "$wait_s"
+    kill -INT $pid
+    wait $pid
+    rc=$?
+    check "SIGINT while placing the spheres exits 130 (got $rc)" "[ $rc = 130 ]"
+    check "and writes nothing" "[ ! -e '$tmp/place.h5' ] && [ ! -e '$tmp/place.xmf' ]"
+    check "and says so in one line" \
+        "[ \$(wc -l < '$tmp/stderr-place') = 1 ] && grep -q 'before the run began; nothing written' '$tmp/stderr-place'"
+else
+    echo "skip SIGINT while placing: placement takes only ${wait_s}x4 s here"
+fi
 [ $fail = 0 ] && echo "signals: all passed"
 exit $fail

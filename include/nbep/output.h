@@ -87,6 +87,10 @@ void nbep_resume_fini(nbep_resume *r);
  * run's peak memory). r keeps its step and event slots. */
 void nbep_resume_apply(nbep_resume *r, nbep_state *s);
 
+/* Whether a and b name one existing file (the same device and inode): an output path that
+ * names the deck would replace it. */
+bool nbep_output_same_file(const char *a, const char *b);
+
 /* `nbep run DECK --resume RUN.h5`: opens an existing run for appending. Checks that it is an
  * nbep-1 file of the run sc makes (sphere and plane counts, radii, masses, accelerations,
  * planes, box and dt), that its frames hold positions and velocities, and that run.steps lies
