@@ -563,6 +563,7 @@ nbep_status nbep_output_create(const char *path, const nbep_scene *sc, int threa
         return NBEP_ENOMEM;
     }
 
+    nbep_status create_st = NBEP_EIO; /* how a failure to make the file is classed */
     hid_t fapl = nbep__output_fapl(true), fcpl = make_fcpl(sc);
     if (fapl < 0 || fcpl < 0) {
         HDF5_FAIL(d, path, "set up file properties");
@@ -570,8 +571,12 @@ nbep_status nbep_output_create(const char *path, const nbep_scene *sc, int threa
         nbep__output_close_id(&fcpl);
         goto fail_uncreated;
     }
+    errno = 0;
     o->file = H5Fcreate(tmp, H5F_ACC_TRUNC, fcpl, fapl);
     if (o->file < 0) {
+        /* a missing directory or one not ours to write is the user's to fix, exit 2 like a
+         * missing deck (nbep_status_of_open); a full disk or failing device is run time's */
+        create_st = errno ? nbep_status_of_open(errno) : NBEP_EIO;
         HDF5_FAIL(d, path, "create the output file");
         nbep__output_close_id(&fapl);
         nbep__output_close_id(&fcpl);
@@ -590,6 +595,7 @@ nbep_status nbep_output_create(const char *path, const nbep_scene *sc, int threa
     }
     /* HDF5 keeps writing through its open descriptor, whatever the file's name. */
     if (rename(tmp, path) != 0) {
+        create_st = nbep_status_of_open(errno); /* a directory at path: the user's (exit 2) */
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot create the output file: %s",
                       path, strerror(errno));
         goto fail;
@@ -611,11 +617,11 @@ fail:
     nbep__output_release(&o);
     remove(tmp);   /* bad output leaves no file behind (STYLE 4) */
     free(tmp);
-    return NBEP_EIO;
+    return create_st;
 fail_uncreated:
     nbep__output_release(&o);
     free(tmp);
-    return NBEP_EIO;
+    return create_st;
 }
 
 /* ---- frames, stats, close ------------------------------------------------------------------ */

@@ -21,9 +21,9 @@ static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
     if (!where)
         return NBEP_OK;
     *out = strcmp(where, "-") == 0 ? stdout : fopen(where, "w");
-    if (!*out)
-        NBEP_FAIL(d, NBEP_EIO, "nbep: cannot write the summary to %s: %s", where,
-                  strerror(errno));
+    if (!*out) /* a missing directory: the user's (exit 2), as for the output file */
+        NBEP_FAIL(d, nbep_status_of_open(errno), "nbep: cannot write the summary to %s: %s",
+                  where, strerror(errno));
     return NBEP_OK;
 }
 

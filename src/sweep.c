@@ -831,9 +831,9 @@ static nbep_status write_sweep_json(const char *where, const nbep_sweep_plan *p,
                                     nbep_diag *d)
 {
     FILE *f = strcmp(where, "-") == 0 ? stdout : fopen(where, "w");
-    if (!f)
-        NBEP_FAIL(d, NBEP_EIO, "nbep: cannot write the summary to %s: %s", where,
-                  strerror(errno));
+    if (!f) /* a missing directory: the user's (exit 2), as for nbep run */
+        NBEP_FAIL(d, nbep_status_of_open(errno), "nbep: cannot write the summary to %s: %s",
+                  where, strerror(errno));
     const double n = (double)p->n_runs;
     fprintf(f,
             "{\"format\": \"nbep-sweep-summary-1\", \"version\": \"%s\", \"dir\": \"",

@@ -685,12 +685,13 @@ static void assert_one_line_naming(const nbep_diag *d, const char *path)
     assert_null(strchr(d->msg[0], '\n'));
 }
 
-static void test_a_path_in_a_missing_directory_fails_with_eio_naming_the_path(void **state)
+/* (exit 2: a missing directory is the user's to fix, like a missing deck) */
+static void test_a_path_in_a_missing_directory_fails_as_usage_naming_the_path(void **state)
 {
     fixture *fx = *state;
     const char *path = "/nonexistent-dir/x.h5";
     nbep_output *o = NULL;
-    assert_int_equal(nbep_output_create(path, &fx->sc, 1, &o, &fx->d), NBEP_EIO);
+    assert_int_equal(nbep_output_create(path, &fx->sc, 1, &o, &fx->d), NBEP_EUSAGE);
     assert_null(o);
     assert_one_line_naming(&fx->d, path);
     assert_non_null(strstr(fx->d.msg[0], "No such file or directory"));
@@ -701,7 +702,7 @@ static void test_a_path_naming_a_directory_fails_and_leaves_the_directory(void *
     fixture *fx = *state;
     const char *path = "build/tests/tmp";
     nbep_output *o = NULL;
-    assert_int_equal(nbep_output_create(path, &fx->sc, 1, &o, &fx->d), NBEP_EIO);
+    assert_int_equal(nbep_output_create(path, &fx->sc, 1, &o, &fx->d), NBEP_EUSAGE);
     assert_null(o);
     assert_one_line_naming(&fx->d, path);
     assert_non_null(strstr(fx->d.msg[0], "Is a directory"));
@@ -1295,7 +1296,7 @@ int main(void)
         T(test_a_scene_without_spheres_or_planes_still_records_frames),
         T(test_closing_releases_every_hdf5_id),
         T(test_closing_a_null_handle_does_nothing),
-        T(test_a_path_in_a_missing_directory_fails_with_eio_naming_the_path),
+        T(test_a_path_in_a_missing_directory_fails_as_usage_naming_the_path),
         T(test_a_path_naming_a_directory_fails_and_leaves_the_directory),
         T(test_a_failure_after_the_file_was_created_leaves_no_file),
         T(test_a_failed_create_keeps_an_older_file_at_the_path),
