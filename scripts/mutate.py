@@ -96,6 +96,10 @@ MUTANTS = [
      "             (t_max < knot[i + 1])) &&", PRED, None),
     ("within-start-past-half", "src/predict.c", "        if (!(u < t_max))\n            return NBEP_NEVER;",
      "        if (!(u < 0.5 * t_max))\n            return NBEP_NEVER;", PRED, None),
+    ("earliest-quad-bound-late", "src/algo_predictive.c",
+     "        return lb == NBEP_NEVER ? NBEP_NEVER : T0 + (r->t0 + lb);\n    }",
+     "        return lb == NBEP_NEVER ? NBEP_NEVER : T0 + (r->t0 + 1.5 * lb);\n    }",
+     CELLS + GRAN + SIM, None),
     ("beat-cap-short", "src/algo_predictive.c", "    const double d = best->time - T0 - t0;",
      "    const double d = 0.5 * (best->time - T0 - t0);", CELLS + GRAN, None),
     # ---- event queue ----
