@@ -125,7 +125,7 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
         return st;
     if (nbep_output_same_file(sc.output_file, cli->path)) { /* as nbep run would refuse it */
         nbep_diag_add(d, __FILE__, __LINE__,
-                      "nbep: the output file %s is the deck %s itself; choose another (-o FILE)",
+                      "nbep: the output file %s is the deck %s itself; choose another",
                       sc.output_file, cli->path);
         nbep_scene_fini(&sc);
         return NBEP_EUSAGE;

@@ -127,10 +127,15 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     const char *file = rq->resume        ? rq->resume
                        : rq->output_path ? rq->output_path
                                          : sc.output_file;
-    if (!rq->resume && nbep_output_same_file(file, rq->deck_path)) { /* -o DECK replaced the deck */
+    /* -o DECK replaced the deck with the run's file, --summary DECK with the JSON */
+    const char *over = !rq->resume && nbep_output_same_file(file, rq->deck_path) ? file
+                       : nbep_output_same_file(rq->summary_path, rq->deck_path)
+                           ? rq->summary_path
+                           : NULL;
+    if (over) {
         nbep_diag_add(d, __FILE__, __LINE__,
-                      "nbep: the output file %s is the deck %s itself; choose another (-o FILE)",
-                      file, rq->deck_path);
+                      "nbep: the %s file %s is the deck %s itself; choose another",
+                      over == file ? "output" : "summary", over, rq->deck_path);
         nbep_scene_fini(&sc);
         return NBEP_EUSAGE;
     }

@@ -195,7 +195,11 @@ for cmd in run check; do
     check "nbep $cmd -o DECK: exit 2, one line (got $rc)" \
         "[ $rc = 2 ] && one_line && grep -q 'is the deck .* itself; choose another' '$tmp/stderr'"
 done
-check "the deck is kept" "cmp -s inputs/two-spheres.deck '$tmp/self.deck'"
+run_nbep run "$tmp/self.deck" -o "$tmp/self.h5" --summary "$tmp/self.deck" -n 5 --quiet
+check "nbep run --summary DECK: exit 2, one line (got $rc)" \
+    "[ $rc = 2 ] && one_line && grep -q 'summary file .* is the deck .* itself' '$tmp/stderr'"
+check "the deck is kept, and no run file made" \
+    "cmp -s inputs/two-spheres.deck '$tmp/self.deck' && [ ! -e '$tmp/self.h5' ]"
 # ---- check simulates nothing, so it takes no --summary (it took one and wrote nothing) ---------
 run_nbep check "$tmp/group.deck" --summary "$tmp/check.json"
 check "nbep check --summary: exit 2, one line (got $rc)" \
