@@ -280,6 +280,17 @@ static int write_root_attrs(nbep_output *o, const nbep_scene *sc, int threads, n
         nbep__output_write_string_attr(root, p, "deck", sc->deck_text, d) < 0 ||
         nbep__output_write_string_attr(root, p, "overrides", sc->overrides, d) < 0)
         return -1;
+    /* predictive: how it finds pairs and reacts (run.neighbors, run.order), which nbep info
+     * prints beside the algorithm (the deck and overrides say it too, but not at a glance) */
+    if (strcmp(sc->algorithm, "predictive") == 0 &&
+        (nbep__output_write_string_attr(root, p, "neighbors",
+                                        sc->neighbors_cells  ? "cells"
+                                        : sc->neighbors_grid ? "grid"
+                                                             : "all",
+                                        d) < 0 ||
+         nbep__output_write_string_attr(root, p, "order", sc->order_step ? "step" : "time", d) <
+             0))
+        return -1;
     const int32_t periodic[3] = {sc->has_box && sc->periodic[0], sc->has_box && sc->periodic[1],
                                  sc->has_box && sc->periodic[2]};
     if (nbep__output_write_attr(root, p, "periodic", H5T_STD_I32LE, H5T_NATIVE_INT32, 3,

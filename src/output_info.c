@@ -18,6 +18,7 @@
  * but its one error line. */
 typedef struct run_info {
     char *version, *build_flags, *build_commit, *algorithm, *overrides, *summary;
+    char *neighbors, *order; /* predictive's (NULL: another algorithm, or an older file) */
     char *resumed; /* NULL: never resumed */
     uint64_t steps, seed;
     int64_t threads;
@@ -42,6 +43,8 @@ static void run_info_fini(run_info *r)
     free(r->overrides);
     free(r->summary);
     free(r->resumed);
+    free(r->neighbors);
+    free(r->order);
 }
 
 /* Prints a multi-line value with every line after the first indented under the first. */
@@ -78,6 +81,10 @@ static int gather_info(hid_t file, const char *path, run_info *r, nbep_diag *d)
               0)) ||
         (H5Aexists(file, "resumed") > 0 &&
          nbep__output_read_string_attr(file, path, "resumed", &r->resumed, d) < 0) ||
+        (H5Aexists(file, "neighbors") > 0 &&
+         nbep__output_read_string_attr(file, path, "neighbors", &r->neighbors, d) < 0) ||
+        (H5Aexists(file, "order") > 0 &&
+         nbep__output_read_string_attr(file, path, "order", &r->order, d) < 0) ||
         nbep__output_dataset_rows(file, path, "/spheres/radius", &r->spheres, d) < 0 ||
         nbep__output_dataset_rows(file, path, "/planes/offset", &r->planes, d) < 0 ||
         nbep__output_complete_rows(file, path, "/frames", "/frames/step", &r->frames,
@@ -135,7 +142,11 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
         fprintf(f, "%-13s%s\n", "format:", FORMAT_NAME);
         fprintf(f, "%-13s%s (%s, commit %s)\n", "version:", r.version, r.build_flags,
                 r.build_commit);
-        fprintf(f, "%-13s%s\n", "algorithm:", r.algorithm);
+        if (r.neighbors && r.order)
+            fprintf(f, "%-13s%s (neighbors %s, order %s)\n", "algorithm:", r.algorithm,
+                    r.neighbors, r.order);
+        else
+            fprintf(f, "%-13s%s\n", "algorithm:", r.algorithm);
         fprintf(f, "%-13s%llu\n", "spheres:", (unsigned long long)r.spheres);
         fprintf(f, "%-13s%llu\n", "planes:", (unsigned long long)r.planes);
         fprintf(f, "%-13s%" PRIu64 "\n", "steps asked:", r.steps);

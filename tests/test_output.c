@@ -513,6 +513,8 @@ static void test_root_attributes_hold_the_settings_the_deck_and_the_build(void *
     assert_string_attr(f, "/", "format", "nbep-1");
     assert_string_attr(f, "/", "version", NBEP_VERSION);
     assert_string_attr(f, "/", "algorithm", "predictive");
+    assert_string_attr(f, "/", "neighbors", "all"); /* the fixture's run.neighbors, run.order */
+    assert_string_attr(f, "/", "order", "time");
     assert_string_attr(f, "/", "deck", deck_text);
     assert_string_attr(f, "/", "overrides", overrides);
     char *flags = read_string_attr(f, "/", "build_flags");
@@ -921,7 +923,7 @@ static void test_info_reports_the_settings_frames_stats_and_summary(void **state
     char summary_line[1024];
     snprintf(summary_line, sizeof summary_line, "summary:     %s", json);
     assert_has_line(text, "format:      nbep-1");
-    assert_has_line(text, "algorithm:   predictive");
+    assert_has_line(text, "algorithm:   predictive (neighbors all, order time)");
     assert_has_line(text, "spheres:     5");
     assert_has_line(text, "planes:      2");
     assert_has_line(text, "steps asked: 20");
