@@ -105,7 +105,7 @@ bool nbep__output_xmf_room(nbep_output *o, size_t f)
     return true;
 }
 
-static nbep_status xmf_write(nbep_output *o, nbep_diag *d)
+nbep_status nbep__output_xmf_write(nbep_output *o, nbep_diag *d)
 {
     o->xmf_last = nbep_now();
     return nbep_xdmf_write(o->path, o->n_spheres, (size_t)o->n_frames, o->xmf_step, o->xmf_time,
@@ -582,13 +582,20 @@ nbep_status nbep_output_create(const char *path, const nbep_scene *sc, int threa
         nbep__output_close_id(&fcpl);
         goto fail_uncreated;
     }
-    errno = 0;
     o->file = H5Fcreate(tmp, H5F_ACC_TRUNC, fcpl, fapl);
     if (o->file < 0) {
-        /* a missing directory or one not ours to write is the user's to fix, exit 2 like a
-         * missing deck (nbep_status_of_open); a full disk or failing device is run time's */
-        create_st = errno ? nbep_status_of_open(errno) : NBEP_EIO;
         HDF5_FAIL(d, path, "create the output file");
+        /* a missing directory or one not ours to write is the user's to fix, exit 2 like a
+         * missing deck (nbep_status_of_open); a full disk or failing device is run time's.
+         * errno after HDF5 may be left from a look it took first (it opens the name before it
+         * creates it: ENOENT), so the system is asked again, plainly. */
+        FILE *probe = fopen(tmp, "w");
+        if (probe) {
+            fclose(probe);
+            remove(tmp);
+        } else {
+            create_st = nbep_status_of_open(errno);
+        }
         nbep__output_close_id(&fapl);
         nbep__output_close_id(&fcpl);
         goto fail_uncreated;
@@ -748,7 +755,7 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
         o->xmf_step[f] = step;
         o->xmf_time[f] = t;
         if (nbep_xdmf_due((size_t)o->n_frames, nbep_now() - o->xmf_last))
-            st = xmf_write(o, d);
+            st = nbep__output_xmf_write(o, d);
     }
 done:
     nbep__output_close_id(&one_space);
@@ -837,7 +844,7 @@ nbep_status nbep_output_close(nbep_output **op, const nbep_summary *s, nbep_diag
     }
     /* Stats rows appended after the last frame get counted too. */
     int rc = nbep__output_commit(o, o->n_frames, d);
-    if (rc == 0 && o->xmf && o->n_frames > 0 && xmf_write(o, d) != NBEP_OK)
+    if (rc == 0 && o->xmf && o->n_frames > 0 && nbep__output_xmf_write(o, d) != NBEP_OK)
         rc = -1;
     if (s && rc == 0) {
         char *json = nbep_summary_to_json(s);

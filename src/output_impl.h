@@ -100,6 +100,7 @@ struct nbep_output {
         int64_t step;              /* that frame's step */
         uint64_t stats_keep;       /* the /stats rows kept (stats: the file has /stats) */
         bool image, checkpoint, stats, wall; /* the series the file has that a run appends to */
+        bool dropped;              /* complete frames after it are dropped (cells mode) */
     } resume;
 };
 
@@ -116,6 +117,8 @@ void nbep__output_release(nbep_output **op);
 int nbep__output_commit(nbep_output *o, hsize_t frames, nbep_diag *d);
 /* Room for frame row f in the sidecar's lists; false when memory runs out. */
 bool nbep__output_xmf_room(nbep_output *o, size_t f);
+/* Rewrites the sidecar (RUN.xmf) for o's frames so far; NBEP_EIO, NBEP_ENOMEM. */
+nbep_status nbep__output_xmf_write(nbep_output *o, nbep_diag *d);
 
 /* ---- HDF5 helpers (output_hdf5.c) ------------------------------------------------------- */
 

@@ -235,7 +235,7 @@ static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int t
  * grid) are dropped, and written again as the run passes their steps. 0 when none. */
 static hsize_t resume_frames(const nbep_scene *sc, const int64_t *steps, hsize_t frames)
 {
-    if (!sc->neighbors_cells)
+    if (!sc->neighbors_cells || strcmp(sc->algorithm, "predictive") != 0) /* theirs only */
         return frames;
     while (frames > 0 && steps[frames - 1] % (int64_t)sc->output_every != 0)
         frames--;
@@ -311,12 +311,13 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     hsize_t last = frames - 1;
     res.step = o->xmf_step[last];
     res.last_step = o->xmf_step[complete - 1];
-    if (res.step < 0 || sc->steps <= (uint64_t)res.step) {
+    /* past the file's last frame, not only the one resumed from: a cells run resumed from an
+     * earlier frame to a step before its last would cut the frames it already has */
+    if (res.step < 0 || res.last_step < 0 || sc->steps <= (uint64_t)res.last_step) {
         nbep_diag_add(d, __FILE__, __LINE__,
-                      "nbep: %s: nothing to resume: its %s frame is at step %lld and run.steps "
-                      "is %llu (ask for more steps: -n, --set run.steps=)",
-                      path, frames == complete ? "last" : "resume", (long long)res.step,
-                      (unsigned long long)sc->steps);
+                      "nbep: %s: nothing to resume: its last frame is at step %lld and "
+                      "run.steps is %llu (ask for more steps: -n, --set run.steps=)",
+                      path, (long long)res.last_step, (unsigned long long)sc->steps);
         st = NBEP_EDECK;
         goto fail;
     }
@@ -381,6 +382,14 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
                 goto fail;
     }
     o->resume.stats = H5Lexists(o->file, "/stats", H5P_DEFAULT) > 0;
+    if (o->resume.stats != sc->out_stats) { /* rows for every step, or none: not half */
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s %s /stats but the deck %s them (output.stats); resume with the "
+                      "deck (and --set options) that made it",
+                      path, o->resume.stats ? "has" : "has no", sc->out_stats ? "asks for" : "does not ask for");
+        st = NBEP_EDECK;
+        goto fail;
+    }
     if (o->resume.stats) {
         uint64_t rows;
         if (nbep__output_complete_rows(o->file, path, "/stats", "/stats/step", &rows, &more, d) < 0)
@@ -392,6 +401,7 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     /* nothing is written until nbep_output_resume_begin: a run refused after this (its
      * algorithm's own checks) leaves the file as it was */
     o->resume.pending = true;
+    o->resume.dropped = frames < complete;
     o->resume.frames = frames;
     o->resume.step = res.step;
     o->n_frames = frames;
@@ -412,6 +422,20 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
     const char *path = o->path;
     const hsize_t frames = o->resume.frames;
     const uint64_t keep = o->resume.stats_keep;
+    /* The counts first, made durable, then the rows cut: a kill between the two leaves counts
+     * at or below the rows (readable, as any file whose last write was cut short), where the
+     * other order left counts above them (a file nothing could read: frames kept in cells
+     * mode are fewer than the complete ones). */
+    if (open_count(o, "/frames", &o->frames_count, d) < 0 ||
+        (o->resume.stats && open_count(o, "/stats", &o->stats_count, d) < 0))
+        return NBEP_EIO;
+    const uint64_t n_frames = frames, n_stats = keep;
+    if (H5Awrite(o->frames_count, H5T_NATIVE_UINT64, &n_frames) < 0 ||
+        (o->resume.stats && H5Awrite(o->stats_count, H5T_NATIVE_UINT64, &n_stats) < 0) ||
+        H5Fflush(o->file, H5F_SCOPE_GLOBAL) < 0) {
+        HDF5_FAIL(d, path, "lower the count attributes to the frame resumed from");
+        return NBEP_EIO;
+    }
     /* Continue appending after the frame resumed from: cut everything written past it. */
     if ((o->resume.image && open_cut(o, "/frames/image", frames, &o->frame_img, d) < 0) ||
         open_cut(o, "/frames/step", frames, &o->frame_step, d) < 0 ||
@@ -423,8 +447,6 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
         for (int c = 0; c < N_CK_COLUMNS; c++)
             if (open_cut(o, nbep__ck_columns[c].name, frames, &o->ck[c], d) < 0)
                 return NBEP_EIO;
-    if (open_count(o, "/frames", &o->frames_count, d) < 0)
-        return NBEP_EIO;
     o->xmf = true; /* resumed runs have positions */
     if (o->resume.stats) {
         for (int c = 0; c < STATS_N_COLUMNS; c++)
@@ -432,8 +454,6 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
                 return NBEP_EIO;
         o->n_planes = sc->state.n_planes;
         if (o->resume.wall && open_cut(o, "/stats/wall_impulse", keep, &o->stats_wall, d) < 0)
-            return NBEP_EIO;
-        if (open_count(o, "/stats", &o->stats_count, d) < 0)
             return NBEP_EIO;
         o->n_stats = keep;
     }
@@ -455,5 +475,6 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
     if (note_resume(o->file, path, sc, threads, o->resume.step, d) < 0 ||
         nbep__output_commit(o, frames, d) < 0)
         return NBEP_EIO;
-    return NBEP_OK;
+    /* frames dropped (cells mode): the sidecar listed them; it lists what the file holds */
+    return o->resume.dropped ? nbep__output_xmf_write(o, d) : NBEP_OK;
 }

@@ -460,7 +460,14 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
     if (st != NBEP_OK)
         return st;
     sim->steps_done = sim->step_first - 1;
-    if (sim->step_end >= sim->step_first)
+    /* a signal since the run began (the steps poll it at their ends; a run of 0 steps has
+     * none): it stops here, with frame 0 written */
+    const int sig = sim->opt.stop_signal
+                        ? atomic_load_explicit(sim->opt.stop_signal, memory_order_relaxed)
+                        : 0;
+    if (sig)
+        sim->status = sig == SIGTERM ? NBEP_ESIGTERM : NBEP_ESIGINT;
+    else if (sim->step_end >= sim->step_first)
         sim->algo->run(sim, sim->algo_ctx);
     sim->wall_seconds = nbep_now() - sim->t_start;
     /* after a failed write the file gets nothing more: one error, not a cascade */

@@ -198,6 +198,11 @@ done
 run_nbep run "$tmp/self.deck" -o "$tmp/self.h5" --summary "$tmp/self.deck" -n 5 --quiet
 check "nbep run --summary DECK: exit 2, one line (got $rc)" \
     "[ $rc = 2 ] && one_line && grep -q 'summary file .* is the deck .* itself' '$tmp/stderr'"
+"$nbep" sweep "$tmp/self.deck" -o "$tmp/self-sweep" --summary "$tmp/self.deck" --quiet \
+    >"$tmp/stdout" 2>"$tmp/stderr"
+rc=$?
+check "nbep sweep --summary DECK: exit 2, one line (got $rc)" \
+    "[ $rc = 2 ] && one_line && grep -q 'summary file .* is the deck .* itself' '$tmp/stderr'"
 check "the deck is kept, and no run file made" \
     "cmp -s inputs/two-spheres.deck '$tmp/self.deck' && [ ! -e '$tmp/self.h5' ]"
 # ---- check simulates nothing, so it takes no --summary (it took one and wrote nothing) ---------

@@ -154,6 +154,45 @@ check "and its frames are the whole run's, the same steps and bits" \
     "same_frames $tmp/cells-whole.h5 $tmp/cells-odd.h5 && \
      \"\$PY\" -c \"import h5py, sys; a, b = (h5py.File(p, 'r')['frames/step'][:].tolist() \
      for p in sys.argv[1:]); sys.exit(a != b)\" $tmp/cells-whole.h5 $tmp/cells-odd.h5"
+# ... but not to a step before that last frame (it cut frames 41 and 42 and exited 0), and the
+# frame rule is predictive's alone (naive ignores run.neighbors: it resumes from step 42)
+bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 42 -o $tmp/cells-short.h5
+sum=$(md5sum < $tmp/cells-short.h5)
+bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 41 --resume $tmp/cells-short.h5 2>$tmp/short.err
+rc=$?
+check "predictive cells: a resume of a file at step 42 to step 41 is refused (got $rc)" \
+    "[ $rc = 2 ] && grep -q 'nothing to resume: its last frame is at step 42 and run.steps is 41' $tmp/short.err"
+check "the refused resume leaves the file as it was" "[ \"\$(md5sum < $tmp/cells-short.h5)\" = '$sum' ]"
+bin/nbep run $deck "${args[@]}" "${cells[@]}" -a naive -n 42 -o $tmp/naive-cells.h5
+bin/nbep run $deck "${loud_cells[@]}" -a naive -n 50 --resume $tmp/naive-cells.h5 2>$tmp/naive-cells.err
+rc=$?
+check "naive with run.neighbors = cells resumes from its last frame, step 42, dropping none (got $rc)" \
+    "[ $rc = 0 ] && ! grep -q 'dropped' $tmp/naive-cells.err &&
+     bin/nbep info $tmp/naive-cells.h5 | grep -q 'step 42: '"
+# the summary file given as the run's own file: refused before it is opened (it emptied the
+# run file, and the failed resume then removed it)
+cp $tmp/cells-short.h5 $tmp/victim.h5
+bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 90 --resume $tmp/victim.h5 --summary $tmp/victim.h5 \
+    2>$tmp/victim.err
+rc=$?
+check "--resume RUN.h5 --summary RUN.h5 is refused with exit 2 (got $rc), the run file kept" \
+    "[ $rc = 2 ] && grep -q 'summary file .* is the run.s file itself' $tmp/victim.err &&
+     [ \"\$(md5sum < $tmp/victim.h5)\" = '$sum' ]"
+# a deck that asks for stats where the file has none, or the other way: refused, the file as it
+# was (a file without /stats resumed with stats aborted after it was changed; the other way
+# left /stats short of the frames)
+for want in false true; do
+    bin/nbep run $deck "${args[@]}" --set output.stats=$want -n 20 -o $tmp/stats-$want.h5
+    sum=$(md5sum < $tmp/stats-$want.h5)
+    other=$([ $want = true ] && echo false || echo true)
+    bin/nbep run $deck "${args[@]}" --set output.stats=$other -n 40 --resume $tmp/stats-$want.h5 \
+        2>$tmp/stats.err
+    rc=$?
+    check "a file made with output.stats = $want resumed with $other: exit 2 (got $rc), file kept" \
+        "[ $rc = 2 ] && grep -q 'output.stats' $tmp/stats.err &&
+         [ \"\$(md5sum < $tmp/stats-$want.h5)\" = '$sum' ]"
+done
+
 # cells mode stopped by SIGTERM at whatever step it reached, resumed to a fixed end past it
 bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 100000000 -o $tmp/cells-killed.h5 2>/dev/null &
 pid=$!
