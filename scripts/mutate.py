@@ -74,7 +74,13 @@ MUTANTS = [
      "if (nbep_vec3_norm(da) * nbep_vec3_norm(dp) >= ACCEL_BENDS * nbep_vec3_norm2(dv))\n        return bracket_search(&q, t_max);",
      "if (nbep_vec3_norm(da) * nbep_vec3_norm(dp) >= ACCEL_BENDS * nbep_vec3_norm2(dv))\n        return 2.0 * bracket_search(&q, t_max);", PRED, None),
     ("bracket-overlap-start", "src/predict.c", "if (fu <= 0.0)\n                return u;",
-     "if (fu <= 0.0)\n                return w;", PRED, None),
+     "if (fu <= 0.0)\n                return w;", PRED,
+     "since the dip stop (84fe58e) a pair overlapping where f starts to fall is answered on the "
+     "dip's path (bracket-dip-overlap-start, killed): w's search tries a point short of w with "
+     "f' < 0 and f below f(u) <= 0. This branch is left where no try lands short of w: w within "
+     "an ulp of the inflection that starts the knot piece, f' changing sign where f'' = 0 (a "
+     "triple root of the cubic f', a double one of f'', or round-off); no test aims at that, "
+     "and the branch stays as the safe answer"),
     ("bracket-dip-is-root", "src/predict.c",
      "return fu <= 0.0 ? u : bisect(m, f_val, f_slope, u, w, fu, fz, NULL);",
      "return fu <= 0.0 ? u : w;", PRED, None),
