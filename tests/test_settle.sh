@@ -4,11 +4,11 @@
 # jam, or cost hundreds of thousands of collisions with nothing held, before those rules:
 # - a closed V groove: 6 spheres (e = 0.5) dropped into a 45-degree V with an end wall, gravity
 #   tilted towards it; before: 110559 collisions in 2000 steps, one sphere held at the end;
-#   now about 10500, all six held and no collision in the last 100 steps;
+#   now about 11000, all six held and no collision in the last 100 steps;
 # - 12 spheres poured into a 0.33 m box: before, the stall check stopped the run at step 949;
 #   now it settles, in every neighbour mode (see below).
 # "Held" is read off the last frame: a held sphere's velocity is exactly zero. The limits
-# below leave room (2x to 3x) for the model's counts, and stay far below the old ones; a
+# below leave room (1.8x to 3x) for the model's counts, and stay far below the old ones; a
 # jam stops the run at run.max_reactions = 20000 (the busiest sphere now reacts under 5000
 # times in a step), so a regression fails fast instead of hanging. Frames are identical for 1
 # and 2 threads. Skipped when /usr/bin/python3 lacks h5py.
@@ -50,9 +50,11 @@ for t in 1 2; do
     rc=$?
     check "groove, $t thread(s): runs to exit 0 (got $rc)" "[ $rc -eq 0 ] && [ ! -s '$tmp/groove-$t.err' ]"
 done
+# (11217 at 2026-11-27; 25817 with the rest of a plane bounce that the TC model made elastic
+# taken out, which 30000 let pass once the quartic search's changes moved the trajectories)
 c=$(collisions "$tmp/groove-1.json")
-check "groove: under 30000 collisions (got ${c:-none}; before the rest speed: 110559)" \
-    "[ -n '$c' ] && [ '$c' -lt 30000 ]"
+check "groove: under 20000 collisions (got ${c:-none}; before the rest speed: 110559)" \
+    "[ -n '$c' ] && [ '$c' -lt 20000 ]"
 h=$(held "$tmp/groove-1.h5")
 check "groove: all 6 spheres held at the end (got ${h:-none})" "[ '${h:-0}' -eq 6 ]"
 check "groove: frames identical for 1 and 2 threads" \
