@@ -344,7 +344,6 @@ uint64_t nbep_output_frames(const nbep_scene *sc)
     return sc->steps / sc->output_every + 1 + (sc->steps % sc->output_every ? 1 : 0);
 }
 
-/* rows rounded up to whole chunks of `chunk` rows: a growing dataset's last chunk is whole */
 bool nbep_output_same_file(const char *a, const char *b)
 {
     struct stat sa, sb;
@@ -362,6 +361,7 @@ bool nbep_output_same_file(const char *a, const char *b)
  * the shipped decks' files of one frame (bounce 56 kB, two-spheres 54 kB, paper-box 45 kB). */
 #define FILE_META_BYTES 50e3
 
+/* rows rounded up to whole chunks of `chunk` rows: a growing dataset's last chunk is whole */
 static double whole_chunks(uint64_t rows, uint64_t chunk)
 {
     return (double)((rows + chunk - 1) / chunk * chunk);

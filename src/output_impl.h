@@ -95,9 +95,7 @@ struct nbep_output {
     /* a run opened to be resumed (nbep_output_open_resume), not yet changed: pending until
      * nbep_output_resume_begin, and closing it then writes nothing */
     struct {
-        bool pending;
-        hsize_t frames;            /* the frames kept: up to the one resumed from */
-        int64_t step;              /* that frame's step */
+        bool pending;              /* (the frames kept, up to the one resumed from: n_frames) */
         uint64_t stats_keep;       /* the /stats rows kept (stats: the file has /stats) */
         bool image, checkpoint, stats, wall; /* the series the file has that a run appends to */
         bool dropped;              /* complete frames after it are dropped (cells mode) */

@@ -402,8 +402,6 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
      * algorithm's own checks) leaves the file as it was */
     o->resume.pending = true;
     o->resume.dropped = frames < complete;
-    o->resume.frames = frames;
-    o->resume.step = res.step;
     o->n_frames = frames;
     *out = o;
     *r = res;
@@ -420,7 +418,7 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
     if (!o->resume.pending)
         return NBEP_OK;
     const char *path = o->path;
-    const hsize_t frames = o->resume.frames;
+    const hsize_t frames = o->n_frames;
     const uint64_t keep = o->resume.stats_keep;
     /* The counts first, made durable, then the rows cut: a kill between the two leaves counts
      * at or below the rows (readable, as any file whose last write was cut short), where the
@@ -472,7 +470,7 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
         return NBEP_EIO;
     }
     nbep__output_close_id(&steps_attr);
-    if (note_resume(o->file, path, sc, threads, o->resume.step, d) < 0 ||
+    if (note_resume(o->file, path, sc, threads, o->xmf_step[frames - 1], d) < 0 ||
         nbep__output_commit(o, frames, d) < 0)
         return NBEP_EIO;
     /* frames dropped (cells mode): the sidecar listed them; it lists what the file holds */

@@ -2,8 +2,6 @@
 #include "nbep/run.h"
 
 #include <errno.h>
-#include <signal.h>
-#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -109,13 +107,12 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     /* a signal while the deck was read and the spheres placed (seconds for millions): stop
      * now, with nothing written (the step loop would only see it after its first step, and a
      * run of 0 steps never) */
-    const int sig = rq->stop_signal ? atomic_load_explicit(rq->stop_signal, memory_order_relaxed)
-                                    : 0;
-    if (sig) {
+    const nbep_status sig = nbep_sim_stop_status(rq->stop_signal);
+    if (sig != NBEP_OK) {
         nbep_scene_fini(&sc);
-        NBEP_FAIL(d, sig == SIGTERM ? NBEP_ESIGTERM : NBEP_ESIGINT,
-                  "nbep: %s by SIG%s before the run began; nothing written",
-                  sig == SIGTERM ? "terminated" : "interrupted", sig == SIGTERM ? "TERM" : "INT");
+        NBEP_FAIL(d, sig, "nbep: %s by SIG%s before the run began; nothing written",
+                  sig == NBEP_ESIGTERM ? "terminated" : "interrupted",
+                  sig == NBEP_ESIGTERM ? "TERM" : "INT");
     }
     const int threads = nbep_sim_resolve_threads(sc.threads);
     nbep_output *out = NULL;

@@ -84,6 +84,12 @@ static const nbep_algo *find_algo(const char *name)
     return NULL;
 }
 
+nbep_status nbep_sim_stop_status(const atomic_int *stop)
+{
+    const int sig = stop ? atomic_load_explicit(stop, memory_order_relaxed) : 0;
+    return !sig ? NBEP_OK : sig == SIGTERM ? NBEP_ESIGTERM : NBEP_ESIGINT;
+}
+
 bool nbep_sim_keeps_events(const nbep_scene *sc)
 {
     const nbep_algo *algo = find_algo(sc->algorithm);
@@ -402,14 +408,10 @@ int nbep__sim_end_step(nbep_sim *sim, uint64_t step)
     sim->ke_total += row.kinetic_energy;
     sim->steps_done = step;
 
-    int stop = 0;
-    if (sim->opt.stop_signal) {
-        int sig = atomic_load_explicit(sim->opt.stop_signal, memory_order_relaxed);
-        if (sig) {
-            stop = 1;
-            sim->status = sig == SIGTERM ? NBEP_ESIGTERM : NBEP_ESIGINT;
-        }
-    }
+    const nbep_status stop_st = nbep_sim_stop_status(sim->opt.stop_signal);
+    int stop = stop_st != NBEP_OK;
+    if (stop)
+        sim->status = stop_st;
     bool frame = nbep__sim_frame_due(sim, step) || stop;
     /* (the threads shared the check of a frame due: nbep__sim_frame_overlap) */
     if (frame && !sim->algo->exact_overlap && sim->overlap_step != step) {
@@ -462,12 +464,8 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
     sim->steps_done = sim->step_first - 1;
     /* a signal since the run began (the steps poll it at their ends; a run of 0 steps has
      * none): it stops here, with frame 0 written */
-    const int sig = sim->opt.stop_signal
-                        ? atomic_load_explicit(sim->opt.stop_signal, memory_order_relaxed)
-                        : 0;
-    if (sig)
-        sim->status = sig == SIGTERM ? NBEP_ESIGTERM : NBEP_ESIGINT;
-    else if (sim->step_end >= sim->step_first)
+    sim->status = nbep_sim_stop_status(sim->opt.stop_signal);
+    if (sim->status == NBEP_OK && sim->step_end >= sim->step_first)
         sim->algo->run(sim, sim->algo_ctx);
     sim->wall_seconds = nbep_now() - sim->t_start;
     /* after a failed write the file gets nothing more: one error, not a cascade */

@@ -66,6 +66,9 @@ const nbep_state *nbep_sim_state(const nbep_sim *sim);
 size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads);
 /* Whether a run of sc keeps every sphere's event slot beside each frame (/checkpoint). */
 bool nbep_sim_keeps_events(const nbep_scene *sc);
+/* What a stop signal asks of a run (stop may be NULL): NBEP_OK (none yet), NBEP_ESIGINT or
+ * NBEP_ESIGTERM. */
+nbep_status nbep_sim_stop_status(const atomic_int *stop);
 
 /* The thread count a scene's `threads` setting resolves to, which is what a run uses: n > 0
  * as is; 0 -> OMP_NUM_THREADS if set, else the cores available; at most OMP_THREAD_LIMIT;
