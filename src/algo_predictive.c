@@ -532,7 +532,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         /* see cells_steps: only those frames are rebuild points of the uninterrupted run
          * (nbep_output_open_resume picks such a frame; a caller of its own may not) */
         const nbep_resume *r = sim->opt.resume;
-        if (r && r->step % (int64_t)sim->scene->output_every != 0) {
+        if (r && !nbep_scene_resume_point(sim->scene, r->step)) {
             pred_destroy(c);
             NBEP_FAIL(d, NBEP_EDECK,
                       "nbep: run.neighbors = \"cells\" resumes bit for bit only from a frame at a "

@@ -283,10 +283,7 @@ static int write_root_attrs(nbep_output *o, const nbep_scene *sc, int threads, n
     /* predictive: how it finds pairs and reacts (run.neighbors, run.order), which nbep info
      * prints beside the algorithm (the deck and overrides say it too, but not at a glance) */
     if (strcmp(sc->algorithm, "predictive") == 0 &&
-        (nbep__output_write_string_attr(root, p, "neighbors",
-                                        sc->neighbors_cells  ? "cells"
-                                        : sc->neighbors_grid ? "grid"
-                                                             : "all",
+        (nbep__output_write_string_attr(root, p, "neighbors", nbep_scene_neighbors_name(sc),
                                         d) < 0 ||
          nbep__output_write_string_attr(root, p, "order", sc->order_step ? "step" : "time", d) <
              0))

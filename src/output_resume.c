@@ -235,9 +235,7 @@ static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int t
  * grid) are dropped, and written again as the run passes their steps. 0 when none. */
 static hsize_t resume_frames(const nbep_scene *sc, const int64_t *steps, hsize_t frames)
 {
-    if (!sc->neighbors_cells || strcmp(sc->algorithm, "predictive") != 0) /* theirs only */
-        return frames;
-    while (frames > 0 && steps[frames - 1] % (int64_t)sc->output_every != 0)
+    while (frames > 0 && !nbep_scene_resume_point(sc, steps[frames - 1]))
         frames--;
     return frames;
 }

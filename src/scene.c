@@ -1107,6 +1107,17 @@ static int cmp_vec3(const void *a, const void *b)
     return 0;
 }
 
+const char *nbep_scene_neighbors_name(const nbep_scene *sc)
+{
+    return sc->neighbors_cells ? "cells" : sc->neighbors_grid ? "grid" : "all";
+}
+
+bool nbep_scene_resume_point(const nbep_scene *sc, int64_t step)
+{
+    return !sc->neighbors_cells || strcmp(sc->algorithm, "predictive") != 0 ||
+           step % (int64_t)sc->output_every == 0;
+}
+
 void nbep_scene_count_pairs(const nbep_state *s, uint64_t *quadratic, uint64_t *quartic)
 {
     const uint64_t n = s->n, all = n * (n ? n - 1 : 0) / 2;

@@ -95,6 +95,13 @@ NBEP_MUST_CHECK nbep_status nbep_scene_load_from(const char *deck_path,
                                                  nbep_scene *out, nbep_diag *d);
 void nbep_scene_fini(nbep_scene *sc);
 
+/* run.neighbors as the deck spells it: "all", "grid" or "cells" (predictive's setting). */
+const char *nbep_scene_neighbors_name(const nbep_scene *sc);
+/* Whether a run of sc continues bit for bit from its frame at `step`: any frame, but in the
+ * predictive cells mode only those at a multiple of output.every (its rebuild points,
+ * algo_predictive.c cells_steps). */
+bool nbep_scene_resume_point(const nbep_scene *sc, int64_t step);
+
 /* Pairs of spheres whose accelerations are equal (quadratic contact time) and differ
  * (quartic), counted in O(n log n) by grouping equal accelerations. */
 void nbep_scene_count_pairs(const nbep_state *s, uint64_t *quadratic, uint64_t *quartic);
