@@ -123,12 +123,10 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
                                           &sc, d);
     if (st != NBEP_OK)
         return st;
-    if (nbep_output_same_file(sc.output_file, cli->path)) { /* as nbep run would refuse it */
-        nbep_diag_add(d, __FILE__, __LINE__,
-                      "nbep: the output file %s is the deck %s itself; choose another",
-                      sc.output_file, cli->path);
+    st = nbep_run_check_paths(cli->path, sc.output_file, NULL, d); /* as nbep run would */
+    if (st != NBEP_OK) {
         nbep_scene_fini(&sc);
-        return NBEP_EUSAGE;
+        return st;
     }
     print_check(&sc, nbep_sim_resolve_threads(sc.threads));
     nbep_scene_fini(&sc);

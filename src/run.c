@@ -95,6 +95,25 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
     return st;
 }
 
+nbep_status nbep_run_check_paths(const char *deck, const char *output, const char *summary,
+                                 nbep_diag *d)
+{
+    /* -o DECK replaced the deck with the run's file, --summary DECK with the JSON; --summary
+     * RUN.h5 emptied the run file (its fopen comes first) and, a resume then failing,
+     * removed it */
+    const char *over = nbep_output_same_file(output, deck)    ? output
+                       : nbep_output_same_file(summary, deck) ? summary
+                                                              : NULL;
+    if (over)
+        NBEP_FAIL(d, NBEP_EUSAGE, "nbep: the %s file %s is the deck %s itself; choose another",
+                  over == output ? "output" : "summary", over, deck);
+    if (summary && output &&
+        (strcmp(summary, output) == 0 || nbep_output_same_file(summary, output)))
+        NBEP_FAIL(d, NBEP_EUSAGE,
+                  "nbep: the summary file %s is the run's file itself; choose another", summary);
+    return NBEP_OK;
+}
+
 nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag *d)
 {
     memset(res, 0, sizeof *res);
@@ -124,26 +143,10 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     const char *file = rq->resume        ? rq->resume
                        : rq->output_path ? rq->output_path
                                          : sc.output_file;
-    /* -o DECK replaced the deck with the run's file, --summary DECK with the JSON; --summary
-     * RUN.h5 emptied the run file (its fopen comes first) and, the resume then failing,
-     * removed it */
-    const bool summary_is_run = rq->summary_path && (strcmp(rq->summary_path, file) == 0 ||
-                                                     nbep_output_same_file(rq->summary_path, file));
-    const char *over = !rq->resume && nbep_output_same_file(file, rq->deck_path) ? file
-                       : nbep_output_same_file(rq->summary_path, rq->deck_path)
-                           ? rq->summary_path
-                           : NULL;
-    if (over || summary_is_run) {
-        if (over)
-            nbep_diag_add(d, __FILE__, __LINE__,
-                          "nbep: the %s file %s is the deck %s itself; choose another",
-                          over == file ? "output" : "summary", over, rq->deck_path);
-        else
-            nbep_diag_add(d, __FILE__, __LINE__,
-                          "nbep: the summary file %s is the run's file itself; choose another",
-                          rq->summary_path);
+    st = nbep_run_check_paths(rq->deck_path, file, rq->summary_path, d);
+    if (st != NBEP_OK) {
         nbep_scene_fini(&sc);
-        return NBEP_EUSAGE;
+        return st;
     }
     st = open_summary(rq->summary_path, &summary, d);
     if (st == NBEP_OK)

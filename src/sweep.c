@@ -1014,13 +1014,8 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
     nbep_sweep_result *results = NULL;
     nbep_status st = plan_create(cli->path, (const char *const *)cli->overrides,
                                  (const char *const *)cli->origins, cli->n_overrides, &p, dd);
-    if (st == NBEP_OK && nbep_output_same_file(cli->summary, cli->path)) {
-        /* its JSON would replace the deck (nbep run refuses the same) */
-        nbep_diag_add(dd, __FILE__, __LINE__,
-                      "nbep: the summary file %s is the deck %s itself; choose another",
-                      cli->summary, cli->path);
-        st = NBEP_EUSAGE;
-    }
+    if (st == NBEP_OK) /* its JSON would replace the deck, as for nbep run */
+        st = nbep_run_check_paths(cli->path, NULL, cli->summary, dd);
     if (st == NBEP_OK && many && size == 1) {
         nbep_diag_add(dd, __FILE__, __LINE__,
                       "nbep: started as one of several processes but MPI sees one: launch "

@@ -31,6 +31,13 @@ typedef struct nbep_run_result {
     nbep_summary summary;
 } nbep_run_result;
 
+/* The files a command writes, against the deck and each other: an output file (the run's, or
+ * the one resumed) or a summary file that is the deck would replace it, and a summary file
+ * that is the run's file would empty it before the run opens it. NBEP_EUSAGE with one line
+ * naming both; NBEP_OK otherwise. output and summary may be NULL. */
+NBEP_MUST_CHECK nbep_status nbep_run_check_paths(const char *deck, const char *output,
+                                                 const char *summary, nbep_diag *d);
+
 /* Runs rq. Deck errors come before anything is written; outputs are opened before any
  * simulating, so that an unwritable path fails at once; a run that never stepped leaves no
  * output behind (a new file and its XDMF sidecar are removed, a resumed file is left as it
