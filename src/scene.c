@@ -1048,6 +1048,8 @@ nbep_status nbep_scene_load_from(const char *deck_path, const char *const *overr
             st = nbep__scene_check_overlaps(&L.c, &sc.state, entries, n_entries,
                                             sc.has_box ? sc.periodic : NULL, sc.box_min,
                                             sc.box_max);
+        if (st == NBEP_OK && d->n_errors == fill0)
+            st = nbep__scene_check_energy(&L.c, &sc.state, entries, n_entries);
         if (st != NBEP_OK)
             goto done;
     }

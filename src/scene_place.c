@@ -15,6 +15,8 @@
  * another sphere drew, and the placement is the same for a seed whatever else changes. */
 #include "scene_impl.h"
 
+#include "nbep/physics.h"
+
 #include <float.h>
 #include <inttypes.h>
 #include <math.h>
@@ -653,5 +655,32 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
     if (o.found > OVERLAP_REPORT_MAX)
         nbep_diag_add(c->d, __FILE__, __LINE__, "nbep: %s: %" PRIu64 " more overlaps not listed",
                       c->deck, o.found - OVERLAP_REPORT_MAX);
+    return NBEP_OK;
+}
+
+nbep_status nbep__scene_check_energy(nbep__scene_ctx *c, const nbep_state *s,
+                                     const nbep__scene_entry *e, size_t n_entries)
+{
+    double total = 0.0;
+    for (size_t k = 0; k < n_entries; k++) {
+        const size_t lo = e[k].first, hi = lo + (size_t)e[k].count;
+        for (size_t i = lo; i < hi; i++) {
+            double ke, pe;
+            nbep_physics_energy(s, i, i + 1, &ke, &pe);
+            if (!isfinite(ke + pe)) {
+                NBEP__SCENE_ERR(c, e[k].setting,
+                                "spheres.[%zu] (sphere %zu): its energy (kinetic %g, potential "
+                                "%g) is beyond doubles: a speed, mass, acceleration or position "
+                                "too large",
+                                k, i, ke, pe);
+                return NBEP_OK;
+            }
+            total += ke + pe;
+        }
+    }
+    if (!isfinite(total) && n_entries > 0)
+        NBEP__SCENE_ERR(c, config_setting_parent(e[0].setting),
+                        "the spheres' total energy is beyond doubles (each sphere's is finite): "
+                        "speeds, masses, accelerations or positions too large");
     return NBEP_OK;
 }

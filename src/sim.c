@@ -395,6 +395,26 @@ int nbep__sim_end_step(nbep_sim *sim, uint64_t step)
         ov_rel = fmax(ov_rel, sim->tmax[par][t].overlap_rel);
         sim->tmax[par][t].overlap = sim->tmax[par][t].overlap_rel = 0.0;
     }
+    energy_total(sim, &row.kinetic_energy, &row.potential_energy);
+    /* A step whose energy or sums overflowed (a deck whose speeds or time step are too large
+     * for doubles): the run stops, with its message and status, as at the end of the step
+     * before: no row, no frame and no totals of this step, so that nothing non-finite reaches
+     * the file or the summary (which reports the last step written). */
+    bool finite = isfinite(row.kinetic_energy + row.potential_energy) && isfinite(row.virial);
+    for (size_t p = 0; p < np; p++)
+        finite = finite && isfinite(wall[p]);
+    if (!finite) {
+        if (sim->status == NBEP_OK) {
+            nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                          "nbep: the energy became non-finite at step %llu (a position or "
+                          "velocity overflowed or is NaN); the file ends at the step before",
+                          (unsigned long long)step);
+            sim->status = NBEP_ENUMERIC;
+        }
+        progress(sim, step - 1, true);
+        atomic_store_explicit(&sim->stop, 1, memory_order_relaxed); /* next barrier orders it */
+        return 1;
+    }
     for (int k = 0; k < NBEP_COUNTER_COUNT; k++)
         sim->totals[k] += c[k];
     row.checks = c[NBEP_COUNTER_CHECKS];
@@ -402,7 +422,6 @@ int nbep__sim_end_step(nbep_sim *sim, uint64_t step)
     row.collisions = c[NBEP_COUNTER_SPHERE_COLLISIONS] + c[NBEP_COUNTER_PLANE_COLLISIONS];
     if (row.collisions == 0)
         sim->quiet_steps++;
-    energy_total(sim, &row.kinetic_energy, &row.potential_energy);
     sim->energy_final = row.kinetic_energy + row.potential_energy;
     sim->virial_total += row.virial;
     sim->ke_total += row.kinetic_energy;
@@ -425,15 +444,6 @@ int nbep__sim_end_step(nbep_sim *sim, uint64_t step)
     row.max_overlap = ov;
     sim->max_overlap = fmax(sim->max_overlap, ov);
     sim->max_overlap_rel = fmax(sim->max_overlap_rel, ov_rel);
-    if (!isfinite(sim->energy_final) && sim->status == NBEP_OK) {
-        nbep_diag_add(sim->diag, __FILE__, __LINE__,
-                      "nbep: the energy became non-finite at step %llu (a position or "
-                      "velocity overflowed or is NaN)",
-                      (unsigned long long)step);
-        sim->status = NBEP_ENUMERIC;
-        stop = 1;
-        frame = false;
-    }
     sim->rows[sim->n_rows++] = row;
     if (sim->n_rows == sim->cap_rows) {
         nbep_status st = flush_rows(sim);

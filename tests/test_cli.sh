@@ -275,6 +275,42 @@ if ! "$nbep" --version | grep -q 'OMP=0'; then
         "grep -Eq '^algorithm: .*, 1 thread\$' '$tmp/stdout'"
 fi
 
+# ---- energies beyond doubles --------------------------------------------------------------------
+# A deck whose sphere's energy overflows (a speed of 1e160: m v^2/2 = inf) is a bad deck, found by
+# check and run alike (exit 2, its line, nothing written); one whose energy overflows while it runs
+# (dt = 1e200 under gravity: the fall overflows the position in a step) stops with exit 1 and one
+# line, every algorithm, the file readable and ending at frame 0 with no stats row, and a summary
+# whose numbers are finite (an assertion aborted it with status 134 and an empty summary before).
+cat >"$tmp/overflow.deck" <<'EOF'
+run: { steps = 3; threads = 1; };
+spheres = ( { position = [0.0, 0.0, 0.0]; velocity = [1.0e160, 0.0, 0.0]; radius = 0.1; mass = 1.0; } );
+EOF
+for cmd in check run; do
+    summary=()
+    [ $cmd = run ] && summary=(--summary "$tmp/overflow.json")
+    run_nbep $cmd "$tmp/overflow.deck" -o "$tmp/overflow.h5" "${summary[@]}"
+    check "nbep $cmd: a sphere's energy beyond doubles is a bad deck (exit 2, got $rc)" "[ $rc = 2 ]"
+    check "nbep $cmd: ... one line naming its line" \
+        "one_line && grep -q 'overflow.deck:2: spheres.\[0\] (sphere 0): its energy' '$tmp/stderr'"
+    check "nbep $cmd: ... nothing written" "[ ! -e '$tmp/overflow.h5' ] && [ ! -e '$tmp/overflow.json' ]"
+done
+cat >"$tmp/fall.deck" <<'EOF'
+run: { steps = 3; threads = 1; };
+physics: { gravity = [0.0, 0.0, -9.81]; };
+planes = ( { normal = [0.0, 0.0, 1.0]; point = [0.0, 0.0, -1.0]; } );
+spheres = ( { position = [0.0, 0.0, 0.0]; radius = 0.1; mass = 1.0; } );
+EOF
+for algo in naive seminaive predictive; do
+    rm -f "$tmp/fall.h5" "$tmp/fall.json"
+    run_nbep run "$tmp/fall.deck" -a $algo --dt 1e200 --quiet -o "$tmp/fall.h5" --summary "$tmp/fall.json"
+    check "$algo: an energy that overflows while it runs: exit 1 (got $rc)" "[ $rc = 1 ]"
+    check "$algo: ... one line saying so" "one_line && grep -q 'energy became non-finite at step 1' '$tmp/stderr'"
+    check "$algo: ... a summary of finite numbers, 0 steps" \
+        "/usr/bin/python3 -c 'import json,math,sys; s=json.load(open(sys.argv[1])); sys.exit(not (s[\"steps\"] == 0 and all(math.isfinite(v) for v in s.values() if isinstance(v, float))))' '$tmp/fall.json'"
+    check "$algo: ... the file readable, frame 0 and no stats row" \
+        "'$nbep' info '$tmp/fall.h5' >'$tmp/info' && grep -Eq '^frames: +1 ' '$tmp/info' && grep -Eq '^stats rows: +0' '$tmp/info'"
+done
+
 # ---- nbep check on a good deck -----------------------------------------------------------------
 # The report's numbers follow from the deck alone: 64 spheres, the box's 6 planes, 64*63/2 pairs
 # (equal accelerations: every one a quadratic), 10000/1000 + 1 frames (step 0, every 1000th, the
