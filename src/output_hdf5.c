@@ -358,7 +358,9 @@ nbep_status nbep__output_run_openable(const char *path, int mode, const char *wh
     if (file < 0) { /* HDF5's reason first: closing the fapl would clear it */
         HDF5_FAIL(d, path, "%s", what);
         nbep__output_close_id(&fapl);
-        return NBEP_EIO;
+        /* HDF5's signature, but no file it can open (cut short by a copy, or locked by the
+         * run that writes it): not a file this command can take, as a file of another kind */
+        return NBEP_EUSAGE;
     }
     nbep__output_close_id(&fapl);
     const int run = is_run(file, path, d);

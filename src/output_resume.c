@@ -259,8 +259,10 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     if (o->file < 0) /* HDF5's reason (a lock another writer holds), before a close clears it */
         HDF5_FAIL(d, path, "open the run to resume it");
     nbep__output_close_id(&fapl);
-    if (o->file < 0)
+    if (o->file < 0) { /* cut short, or another run's: bad usage, as a file of another kind */
+        st = NBEP_EUSAGE;
         goto fail;
+    }
     int same = same_run(o->file, path, sc, d);
     if (same < 0) {
         st = same == -2 ? NBEP_EDECK : NBEP_EIO;

@@ -244,6 +244,21 @@ for f in text other latest number folder; do
     [ -f "$tmp/$f.h5" ] && check "$f.h5 untouched by the refused resume" "[ '$(md5sum <"$tmp/$f.h5")' = '$sum0' ]"
 done
 
+# a run file cut short (a copy that stopped half way): HDF5's signature, but no file HDF5 opens
+run_nbep run "$tmp/group.deck" -n 20 --set output.every=1 --quiet -o "$tmp/whole.h5"
+head -c $(($(stat -c %s "$tmp/whole.h5") / 2)) "$tmp/whole.h5" >"$tmp/cut.h5"
+sum0=$(md5sum <"$tmp/cut.h5")
+for cmd in resume info; do
+    if [ $cmd = resume ]; then
+        run_nbep run "$tmp/group.deck" -n 40 --quiet --resume "$tmp/cut.h5"
+    else
+        run_nbep info "$tmp/cut.h5"
+    fi
+    check "$cmd of a run file cut short: exit 2, one line naming it (got $rc: $(head -c 200 "$tmp/stderr"))" \
+        "[ $rc = 2 ] && one_line && grep -qF '$tmp/cut.h5: cannot ' '$tmp/stderr'"
+done
+check "cut.h5 untouched by the refused resume" "[ '$(md5sum <"$tmp/cut.h5")' = '$sum0' ]"
+
 # ---- threads: what runs, in a serial build too -------------------------------------------------
 # make OMP=0 builds run one thread whatever -t asks; nbep check says what the run will use.
 want=4
