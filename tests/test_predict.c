@@ -491,6 +491,80 @@ static void test_the_general_bound_is_below_the_root_and_tight_head_on(void **st
     assert_true(apart > n / 100 && told_apart == apart);
 }
 
+/* The bound's line-of-centres part (|r(t)| >= u.r(t), u = dp / |dp|): below the root where it
+ * comes closest to it, and far above the all-directions bound where the motions are not along
+ * u. Head-on with the acceleration pushing apart (a sphere thrown up at a held one above it,
+ * turning at or near contact: the apex, whose double root the search finds within about 1e-8,
+ * early or late), the bound must stay below the root whether the turn touches or not; closing
+ * and pulled together head-on, short of it by no more than its shortfall (1e-12 |dp| of the
+ * gap); thrown apart head-on and pulled back from far, below it (the bound stops where the
+ * pair has travelled 64 times its distance: beyond, the shortfall is below rounding). Falling past a held sphere beside it (gap across the
+ * fall, the two apart by 1.01 to 3 sigma, falling from rest or thrown along the fall): never
+ * meeting, and the bound at least 8 times the one that takes all the acceleration towards
+ * the other (a settling pile's commonest pair, solved before for nothing). */
+static void test_the_bound_along_the_line_of_centres_is_below_the_root_and_tight(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    uint64_t seed = 37;
+    const int n = small_scale() ? 20000 : 200000;
+    int apex_hits = 0, apex_misses = 0, sideways = 0;
+    for (int i = 0; i < n; i++) {
+        const double sigma = uniform(&seed, 0.01, 2.0);
+        const nbep_vec3 u = unit(uniform_vec(&seed, 1.0));
+        const double gap = sigma * pow(10.0, uniform(&seed, -9.0, 0.5));
+        const double acc = pow(10.0, uniform(&seed, -3.0, 1.5));
+        const nbep_vec3 dp = nbep_vec3_scale(u, sigma + gap);
+        if (i % 3 == 0) { /* head-on, the acceleration pushing apart: the turn near contact */
+            const double rel = pow(10.0, uniform(&seed, -14.0, -2.0)) * (i % 6 == 0 ? 1 : -1);
+            const double v = sqrt(2.0 * acc * gap * (1.0 + rel)); /* turns at gap / (1 + rel) */
+            const nbep_vec3 dv = nbep_vec3_scale(u, -v), da = nbep_vec3_scale(u, acc);
+            const double t = nbep_predict_pair(dp, dv, da, sigma, ws);
+            const double lb = nbep_predict_pair_bound(dp, dv, da, sigma);
+            if (!(lb <= t))
+                fail_msg("apex %d (rel %.3g): bound %.17g above the root %.17g", i, rel, lb, t);
+            apex_hits += t < NBEP_NEVER;
+            apex_misses += t == NBEP_NEVER;
+        } else if (i % 6 == 1) { /* head-on, thrown apart and pulled back from far (turning
+                                  * 1 to 1e6 times its distance out): where the line's time
+                                  * lies within rounding of the root, but for its cap */
+            const double far = pow(10.0, uniform(&seed, 0.0, 6.0)) * (sigma + gap);
+            const nbep_vec3 dv = nbep_vec3_scale(u, sqrt(2.0 * acc * far));
+            const nbep_vec3 da = nbep_vec3_scale(u, -acc);
+            const double t = nbep_predict_pair(dp, dv, da, sigma, ws);
+            const double lb = nbep_predict_pair_bound(dp, dv, da, sigma);
+            if (!(lb <= t))
+                fail_msg("pulled back %d: bound %.17g above the root %.17g", i, lb, t);
+        } else if (i % 3 == 1) { /* head-on, closing and pulled together: all but the root */
+            const nbep_vec3 dv = nbep_vec3_scale(u, uniform(&seed, -2.0, 0.0));
+            const nbep_vec3 da = nbep_vec3_scale(u, -acc);
+            const double t = nbep_predict_pair(dp, dv, da, sigma, ws);
+            const double lb = nbep_predict_pair_bound(dp, dv, da, sigma);
+            /* short by the bound's shortfall of the gap, 1e-12 |dp| / gap, at most */
+            if (!(lb <= t && lb >= t * (1.0 - 2e-12 * (sigma + gap) / gap)))
+                fail_msg("pulled %d: bound %.17g, root %.17g", i, lb, t);
+        } else { /* falling past: the acceleration and the velocity across u */
+            const nbep_vec3 across = uniform_vec(&seed, 1.0);
+            nbep_vec3 w = nbep_vec3_sub(across, nbep_vec3_scale(u, nbep_vec3_dot(across, u)));
+            if (nbep_vec3_norm(w) < 1e-3)
+                continue;
+            w = unit(w);
+            const nbep_vec3 dq = nbep_vec3_scale(u, sigma * uniform(&seed, 1.01, 3.0));
+            const nbep_vec3 dv = nbep_vec3_scale(w, uniform(&seed, -2.0, 2.0));
+            const nbep_vec3 da = nbep_vec3_scale(w, acc);
+            const double t = nbep_predict_pair(dq, dv, da, sigma, ws);
+            const double lb = nbep_predict_pair_bound(dq, dv, da, sigma);
+            const double g = nbep_vec3_norm(dq) - sigma, vn = nbep_vec3_norm(dv);
+            const double t_all = 2.0 * g / (vn + sqrt(vn * vn + 2.0 * acc * g));
+            if (t != NBEP_NEVER)
+                fail_msg("falling past %d: meets at %.17g", i, t);
+            if (!(lb >= 8.0 * t_all))
+                fail_msg("falling past %d: bound %.17g, all directions %.17g", i, lb, t_all);
+            sideways++;
+        }
+    }
+    assert_true(apex_hits > n / 20 && apex_misses > n / 20 && sideways > n / 4);
+}
+
 /* The same bound in any units: pairs of every kind above, near contact (gaps of 1e-12 to 1e-6
  * sigma) and from rest head-on, with lengths scaled by 2^k and times by 2^m (|k| up to 500,
  * |m| up to 250, accelerations up to 2^1000: squares leave the normal range both ways): never above the root, and where every
@@ -883,6 +957,9 @@ int main(void)
         cmocka_unit_test(test_a_far_grazing_miss_by_5e_15_sigma_is_a_miss),
         cmocka_unit_test_setup_teardown(test_a_search_within_a_limit_finds_the_same_root_before_it,
                                         ws_setup, ws_teardown),
+        cmocka_unit_test_setup_teardown(
+            test_the_bound_along_the_line_of_centres_is_below_the_root_and_tight, ws_setup,
+            ws_teardown),
     };
     return cmocka_run_group_tests_name("predict", tests, NULL, NULL);
 }
