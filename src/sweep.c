@@ -24,6 +24,7 @@
 #include <sys/stat.h>
 #include <sys/types.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "build_info.h"
 #include "nbep/output_sweep.h"
@@ -294,9 +295,14 @@ static void describe_run(const nbep_sweep_plan *p, size_t run, char *buf, size_t
 /* ---- reusing finished runs --------------------------------------------------------------- */
 
 /* Whether an override changes nothing a run computes: the thread count (SPEC: frames are
- * bitwise identical for any thread count) and the output file (the sweep names its files). */
+ * bitwise identical for any thread count), the output file (the sweep names its files) and
+ * the study's own settings (sweep.*: a run's combination and seed are in its other
+ * overrides; README's way to add replicas, --set sweep.replicas=N, re-ran every finished run
+ * while it counted). */
 static bool override_is_neutral(const char *ov, size_t len)
 {
+    if (len > 6 && strncmp(ov, "sweep.", 6) == 0)
+        return true;
     static const char *const neutral[] = {"run.threads", "output.file"};
     for (size_t k = 0; k < sizeof neutral / sizeof neutral[0]; k++) {
         size_t n = strlen(neutral[k]);
@@ -759,9 +765,12 @@ static nbep_status make_dir(const char *dir, nbep_diag *d)
         *s = '\0';
         struct stat sb;
         if (mkdir(p, 0777) != 0 && (errno != EEXIST || stat(p, &sb) != 0 || !S_ISDIR(sb.st_mode))) {
+            const int err = errno;
             nbep_diag_add(d, __FILE__, __LINE__, "nbep: cannot make the sweep directory %s: %s",
-                          p, errno == EEXIST ? "a file is in the way" : strerror(errno));
-            st = NBEP_EIO;
+                          p, err == EEXIST ? "a file is in the way" : strerror(err));
+            /* a file in the way, a path not allowed: the command line's (exit 2), as for a
+             * run's output path */
+            st = err == EEXIST ? NBEP_EUSAGE : nbep_status_of_open(err);
             break;
         }
         *s = c;
@@ -770,6 +779,45 @@ static nbep_status make_dir(const char *dir, nbep_diag *d)
     }
     free(p);
     return st;
+}
+
+/* Rank 0, before anything is made: whether the --summary path can be written (a typo in a
+ * job script's path was found only after every run), without changing a file that is there
+ * or leaving one that was not. */
+static nbep_status try_summary(const char *summary, nbep_diag *d)
+{
+    if (!summary || strcmp(summary, "-") == 0)
+        return NBEP_OK;
+    const bool there = access(summary, F_OK) == 0;
+    FILE *f = fopen(summary, "a");
+    if (!f)
+        NBEP_FAIL(d, nbep_status_of_open(errno), "nbep: cannot write the summary to %s: %s",
+                  summary, strerror(errno));
+    fclose(f);
+    if (!there)
+        remove(summary);
+    return NBEP_OK;
+}
+
+/* Rank 0, before any run: the last sweep's summary.csv and summary.h5 go, so that a sweep
+ * killed outright (kill -9, a node lost, mpirun's SIGKILL) leaves no table that the run files
+ * contradict: the same command again reuses the finished runs and writes it. */
+static nbep_status remove_tables(const nbep_sweep_plan *p, nbep_diag *d)
+{
+    const char *const tables[] = {"summary.csv", "summary.h5"};
+    for (size_t k = 0; k < 2; k++) {
+        char *path = malloc(strlen(p->dir) + strlen(tables[k]) + 2);
+        if (!path)
+            NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory");
+        sprintf(path, "%s/%s", p->dir, tables[k]);
+        const int gone = remove(path) == 0 || errno == ENOENT;
+        const int err = errno;
+        free(path);
+        if (!gone)
+            NBEP_FAIL(d, NBEP_EIO, "nbep: cannot remove the last sweep's %s/%s: %s", p->dir,
+                      tables[k], strerror(err));
+    }
+    return NBEP_OK;
 }
 
 /* An integer from the environment, or -1. */
@@ -798,6 +846,12 @@ static bool launched_by_mpi(bool *many)
     if (rank < 0)
         rank = env_long("PMI_RANK");
     *many = size > 1 || rank > 0;
+    /* srun without a PMI plugin (--mpi=none, a cluster's default): no MPI variables, but each
+     * task has its SLURM_PROCID, and the step's task count (a batch script's own shell has no
+     * SLURM_STEP_ID); each task would run the whole study into the same files */
+    if (env_long("SLURM_PROCID") > 0 ||
+        (getenv("SLURM_STEP_ID") && env_long("SLURM_STEP_NUM_TASKS") > 1))
+        *many = true;
     long forced = env_long("NBEP_MPI");
     if (forced == 0 || forced == 1)
         return forced == 1;
@@ -1028,7 +1082,11 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
         st = NBEP_ENOMEM;
     }
     if (st == NBEP_OK && rank == 0)
+        st = try_summary(cli->summary, dd);
+    if (st == NBEP_OK && rank == 0)
         st = make_dir(p.dir, dd);
+    if (st == NBEP_OK && rank == 0)
+        st = remove_tables(&p, dd);
     st = agree(st, mpi); /* every rank stops here, or none: the collectives below need all */
     if (st == NBEP_OK) {
         if (rank == 0 && !cli->quiet)

@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# `nbep sweep` as a job script uses it, one process (test_sweep_mpi.sh has the ranks):
+#   - README's way to add replicas, `--set sweep.replicas=N`, reuses every finished run and runs
+#     only the new replicas (it re-ran the whole study: sweep.* was compared as a run's own);
+#   - a --summary path that cannot be written, or a file where the sweep's directory goes, is
+#     refused before any run with exit 2 and nothing made (they were found after every run, or
+#     gave exit 1);
+#   - a sweep killed outright (SIGKILL) leaves no summary table of the sweep before it, which
+#     its run files would contradict;
+#   - srun without a PMI plugin (each task alone, SLURM_PROCID and the step's task count set):
+#     refused with exit 2 and one line saying how to launch, nothing run.
+# Run from anywhere after `make`; exit status 1 when a check fails.
+set -u
+cd "$(dirname "$0")/.."
+nbep=bin/nbep
+tmp=build/tests/tmp/sweep_cli
+rm -rf "$tmp" && mkdir -p "$tmp"
+fail=0
+check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+run_sweep() {
+    timeout -k 5 120 "$nbep" sweep "$@" >"$tmp/stdout" 2>"$tmp/stderr"
+    rc=$?
+}
+one_line() { [ "$(wc -l <"$tmp/stderr")" -eq 1 ]; }
+
+cat >"$tmp/s.deck" <<'EOF'
+# 2 replicas x 2 restitutions = 4 short runs of 8 spheres
+run: { steps = 20; threads = 1; };
+physics: { gravity = [0.0, 0.0, -9.81]; restitution = 1.0; };
+box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };
+spheres = ( { count = 8; radius = 0.05; mass = 1.0; place = "random"; speed = 1.0; } );
+output: { file = "s.h5"; every = 10; };
+sweep: { replicas = 2; vary = ( { key = "physics.restitution"; values = [1.0, 0.9]; } ); };
+EOF
+json() { /usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$@"; }
+
+# ---- more replicas from the command line -----------------------------------------------------
+run_sweep "$tmp/s.deck" -o "$tmp/s" --quiet --summary "$tmp/first.json"
+check "the study runs (exit $rc, 4 runs)" "[ $rc = 0 ] && [ \"\$(json '$tmp/first.json' runs)\" = 4 ]"
+md5_0=$(md5sum <"$tmp/s.sweep/run-0000.h5")
+run_sweep "$tmp/s.deck" -o "$tmp/s" --quiet --set sweep.replicas=3 --summary "$tmp/more.json"
+check "--set sweep.replicas=3: 6 runs, the 4 finished reused (exit $rc, $(json "$tmp/more.json" reused) reused)" \
+    "[ $rc = 0 ] && [ \"\$(json '$tmp/more.json' runs)\" = 6 ] && [ \"\$(json '$tmp/more.json' reused)\" = 4 ]"
+check "... run 0's file untouched" "[ '$(md5sum <"$tmp/s.sweep/run-0000.h5")' = '$md5_0' ]"
+run_sweep "$tmp/s.deck" -o "$tmp/s" --quiet --set sweep.replicas=3 --summary "$tmp/again.json"
+check "the same command again reuses all 6" "[ \"\$(json '$tmp/again.json' reused)\" = 6 ]"
+
+# ---- bad paths: refused before any run, nothing made -----------------------------------------
+run_sweep "$tmp/s.deck" -o "$tmp/fresh" --quiet --summary "$tmp/no-such-dir/x.json"
+check "--summary in a missing directory: exit 2 (got $rc), one line" \
+    "[ $rc = 2 ] && one_line && grep -q 'cannot write the summary to $tmp/no-such-dir/x.json' '$tmp/stderr'"
+check "... no sweep directory made" "[ ! -e '$tmp/fresh.sweep' ]"
+touch "$tmp/infile.sweep"
+run_sweep "$tmp/s.deck" -o "$tmp/infile" --quiet
+check "a file where the sweep's directory goes: exit 2 (got $rc), one line" \
+    "[ $rc = 2 ] && one_line && grep -q 'a file is in the way' '$tmp/stderr'"
+
+# ---- a sweep killed outright leaves no stale table -------------------------------------------
+# another study into the same directory (longer runs: other overrides, so nothing is reused),
+# killed once its first run's file is there
+timeout -k 5 120 "$nbep" sweep "$tmp/s.deck" -o "$tmp/s" --quiet -n 200000 >/dev/null 2>&1 &
+pid=$!
+for _ in $(seq 200); do
+    [ -e "$tmp/s.sweep/run-0000.h5" ] && [ "$(md5sum <"$tmp/s.sweep/run-0000.h5")" != "$md5_0" ] && break
+    sleep 0.1
+done
+kill -KILL $pid 2>/dev/null
+wait $pid 2>/dev/null
+check "killed outright: the last sweep's summary.csv and summary.h5 are gone" \
+    "[ ! -e '$tmp/s.sweep/summary.csv' ] && [ ! -e '$tmp/s.sweep/summary.h5' ]"
+
+# ---- srun without PMI ------------------------------------------------------------------------
+for procid in 0 1; do
+    rm -rf "$tmp/srun.sweep"
+    SLURM_JOB_ID=7 SLURM_STEP_ID=0 SLURM_PROCID=$procid SLURM_NTASKS=2 SLURM_STEP_NUM_TASKS=2 \
+        run_sweep "$tmp/s.deck" -o "$tmp/srun" --quiet
+    check "task $procid of srun -n 2 without PMI: exit 2 (got $rc), one line naming the launch" \
+        "[ $rc = 2 ] && one_line && grep -q 'srun --mpi=pmix' '$tmp/stderr'"
+    check "... nothing run" "[ ! -e '$tmp/srun.sweep' ]"
+done
+SLURM_JOB_ID=7 SLURM_STEP_ID=0 SLURM_PROCID=0 SLURM_NTASKS=1 SLURM_STEP_NUM_TASKS=1 \
+    run_sweep "$tmp/s.deck" -o "$tmp/srun" --quiet
+check "srun -n 1: runs (exit $rc)" "[ $rc = 0 ] && [ -s '$tmp/srun.sweep/summary.csv' ]"
+
+[ $fail = 0 ] && echo "sweep_cli: all passed"
+exit $fail
