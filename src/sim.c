@@ -487,14 +487,6 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
     return sim->status;
 }
 
-static uint64_t peak_rss(void)
-{
-    struct rusage ru;
-    if (getrusage(RUSAGE_SELF, &ru) != 0)
-        return 0;
-    return (uint64_t)ru.ru_maxrss * 1024u; /* Linux reports KiB */
-}
-
 void nbep_sim_summary(const nbep_sim *sim, nbep_summary *s)
 {
     memset(s, 0, sizeof *s);
@@ -522,7 +514,7 @@ void nbep_sim_summary(const nbep_sim *sim, nbep_summary *s)
                               : 0.0;
     s->max_overlap = sim->max_overlap;
     s->max_overlap_rel = sim->max_overlap_rel;
-    s->peak_rss_bytes = peak_rss();
+    s->peak_rss_bytes = nbep_peak_rss();
     /* SPEC contract 2: for a fully periodic box, P = (N kT + W / (3 T)) / V with kT = 2 <KE> /
      * (3 N) over this session's steps (a resumed run measures its own part), W their summed
      * virial and T their simulated time; null otherwise or before any step */

@@ -3,14 +3,18 @@
 #include "nbep/compiler.h"
 
 #include <sched.h>
+#include <stdbool.h>
 #include <stdint.h>
 #ifdef __linux__
 #include <linux/futex.h>
+#include <malloc.h>
 #include <sys/syscall.h>
 #include <unistd.h>
 #endif
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <time.h>
 
 void *nbep_alloc_aligned(size_t n, size_t size)
@@ -75,4 +79,37 @@ void nbep_word_wake_all(const void *word)
 #else
     (void)word;
 #endif
+}
+
+void nbep_peak_rss_reset(void)
+{
+#ifdef __linux__
+    malloc_trim(0); /* what an earlier run freed goes back first: it is not this run's */
+    FILE *f = fopen("/proc/self/clear_refs", "w");
+    if (f) {
+        fputs("5", f);
+        fclose(f);
+    }
+#endif
+}
+
+uint64_t nbep_peak_rss(void)
+{
+#ifdef __linux__
+    FILE *f = fopen("/proc/self/status", "r");
+    if (f) {
+        char line[256];
+        unsigned long long kib = 0;
+        bool found = false;
+        while (!found && fgets(line, sizeof line, f))
+            found = sscanf(line, "VmHWM: %llu kB", &kib) == 1;
+        fclose(f);
+        if (found)
+            return (uint64_t)kib * 1024u;
+    }
+#endif
+    struct rusage ru;
+    if (getrusage(RUSAGE_SELF, &ru) != 0)
+        return 0;
+    return (uint64_t)ru.ru_maxrss * 1024u; /* Linux reports KiB */
 }

@@ -8,7 +8,8 @@
 #   - a sweep killed outright (SIGKILL) leaves no summary table of the sweep before it, which
 #     its run files would contradict;
 #   - srun without a PMI plugin (each task alone, SLURM_PROCID and the step's task count set):
-#     refused with exit 2 and one line saying how to launch, nothing run.
+#     refused with exit 2 and one line saying how to launch, nothing run;
+#   - each run's row has its own peak memory, not the largest of the runs before it.
 # Run from anywhere after `make`; exit status 1 when a check fails.
 set -u
 cd "$(dirname "$0")/.."
@@ -81,6 +82,25 @@ done
 SLURM_JOB_ID=7 SLURM_STEP_ID=0 SLURM_PROCID=0 SLURM_NTASKS=1 SLURM_STEP_NUM_TASKS=1 \
     run_sweep "$tmp/s.deck" -o "$tmp/srun" --quiet
 check "srun -n 1: runs (exit $rc)" "[ $rc = 0 ] && [ -s '$tmp/srun.sweep/summary.csv' ]"
+
+# ---- each run's own peak memory ---------------------------------------------------------------
+# a run of 64 spheres after one of 40000 in the same rank: its row's peak_rss_bytes is its own
+# (the lifetime peak gave it the big run's), well under the big run's
+cat >"$tmp/rss.deck" <<'EOF'
+run: { steps = 2; threads = 1; };
+box: { min = [0.0, 0.0, 0.0]; max = [50.0, 50.0, 50.0]; };
+spheres = ( { count = 40000; radius = 0.1; mass = 1.0; place = "random"; speed = 1.0; } );
+output: { file = "rss.h5"; every = 10; };
+sweep: { vary = ( { key = "spheres.[0].count"; values = [40000, 64]; } ); };
+EOF
+run_sweep "$tmp/rss.deck" -o "$tmp/rss" --quiet
+/usr/bin/python3 -c "
+import csv, sys
+r = list(csv.DictReader(open(sys.argv[1])))
+print(r[0]['peak_rss_bytes'], r[1]['peak_rss_bytes'])" "$tmp/rss.sweep/summary.csv" >"$tmp/rss.txt"
+read -r big small <"$tmp/rss.txt"
+check "peak_rss_bytes of a small run after a big one is its own ($small against $big)" \
+    "[ $rc = 0 ] && [ $small -gt 0 ] && [ \$((small * 10)) -lt \$((big * 9)) ]"
 
 [ $fail = 0 ] && echo "sweep_cli: all passed"
 exit $fail

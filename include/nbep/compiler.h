@@ -3,6 +3,7 @@
 #define NBEP_COMPILER_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #define NBEP_CACHELINE 64
 
@@ -53,6 +54,13 @@ void nbep_free_aligned(void *p);
 
 /* Seconds on the monotonic clock (for durations only). */
 double nbep_now(void);
+
+/* The process's peak resident memory in bytes since the last nbep_peak_rss_reset (Linux:
+ * VmHWM of /proc/self/status, which writing 5 to /proc/self/clear_refs resets), else since it
+ * started (getrusage's ru_maxrss); 0 when neither can be read. A sweep's rank runs one run
+ * after another, and a lifetime peak gave a small run the memory of a large one before it. */
+uint64_t nbep_peak_rss(void);
+void nbep_peak_rss_reset(void);
 
 /* One step of a spin-wait: a CPU pause, and sched_yield() every 1024th call so that more
  * threads than cores still make progress (STYLE 6). k counts the calls of one wait from 1. */
