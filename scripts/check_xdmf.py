@@ -66,6 +66,9 @@ def main():
     ap.add_argument("--paraview", action="store_true")
     args = ap.parse_args()
     problems = []
+    if not os.path.isfile(args.xmf):
+        sys.stderr.write("check_xdmf.py: %s: no such file\n" % args.xmf)
+        sys.exit(2)
     root = ET.parse(args.xmf).getroot()  # raises (exit 1) when not well-formed
     if root.tag != "Xdmf":
         problems.append("root element is %s, not Xdmf" % root.tag)

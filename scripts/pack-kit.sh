@@ -9,8 +9,9 @@
 # architecture only (x86-64 here); about 30 MB with Open MPI's libraries.
 set -eu
 [ $# = 1 ] || { echo "usage: scripts/pack-kit.sh DIR" >&2; exit 2; }
-cd "$(dirname "$0")/.."
 dir=$1
+case $dir in /*) ;; *) dir=$PWD/$dir ;; esac   # relative to where it was called from
+cd "$(dirname "$0")/.."
 [ -x bin/nbep ] || { echo "pack-kit: bin/nbep missing: run make first" >&2; exit 1; }
 mkdir -p "$dir/lib"
 cp bin/nbep "$dir/nbep.bin"

@@ -2,7 +2,7 @@
 """Renders one frame of an nbep run through its XDMF sidecar with ParaView: every sphere at its
 true radius (Point Gaussian, scaled by the radius array), coloured by speed, inside the
 outline of the spheres' extent. The same settings, made by hand in the ParaView GUI, are in
-docs/viz.md.
+README.md, *ParaView and VisIt: the XDMF sidecar*.
 
     pvpython scripts/paraview-spheres.py RUN.xmf OUT.png [--frame -1] [--size 900x700]
 

@@ -705,6 +705,10 @@ def main():
     ap.add_argument("--figdir", default="docs/figures")
     args = ap.parse_args()
 
+    if not os.path.isfile(os.path.join(args.results, "runs.csv")):
+        sys.stderr.write("plot_bench.py: %s has no runs.csv: run `make bench` first "
+                         "(or pass --results DIR)\n" % args.results)
+        sys.exit(2)
     all_runs = read_runs(os.path.join(args.results, "runs.csv"))
     meta = read_meta(os.path.join(args.results, "meta.txt"))
     barrier = read_barrier(os.path.join(args.results, "barrier.csv"))

@@ -48,7 +48,10 @@ def parse_frames(text, count):
         item = item.strip()
         if not item:
             continue
-        k = int(item)
+        try:
+            k = int(item)
+        except ValueError:
+            fail("--frames wants frame indices such as 0,10,-1 (-1: the last); got %r" % item)
         if k < 0:
             k += count
         if not 0 <= k < count:
