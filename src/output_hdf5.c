@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -354,7 +355,20 @@ nbep_status nbep__output_run_openable(const char *path, int mode, const char *wh
         return NBEP_EUSAGE;
     }
     hid_t fapl = nbep__output_fapl(false);
-    hid_t file = fapl < 0 ? H5I_INVALID_HID : H5Fopen(path, H5F_ACC_RDONLY, fapl);
+    hid_t file = H5I_INVALID_HID;
+    /* A run being written is flushed in pieces (its superblock's end of file, then the data): a
+     * reader that comes in between sees a file cut short, 13 opens in 30 of a run writing 300
+     * frames a second. It is tried again, 20 times 50 ms apart, before it counts as cut short:
+     * a truly broken file costs a second. */
+    for (int tries = 0; fapl >= 0 && tries < 20; tries++) {
+        if (tries > 0)
+            nanosleep(&(struct timespec){.tv_nsec = 50 * 1000 * 1000}, NULL);
+        H5E_BEGIN_TRY { file = H5Fopen(path, H5F_ACC_RDONLY, fapl); } H5E_END_TRY;
+        if (file >= 0)
+            break;
+    }
+    if (file < 0 && fapl >= 0) /* once more with HDF5's reason kept, for the message */
+        file = H5Fopen(path, H5F_ACC_RDONLY, fapl);
     if (file < 0) { /* HDF5's reason first: closing the fapl would clear it */
         HDF5_FAIL(d, path, "%s", what);
         nbep__output_close_id(&fapl);
