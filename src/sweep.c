@@ -482,13 +482,23 @@ nbep_status nbep_sweep_execute(const nbep_sweep_plan *p, const nbep_sweep_exec *
         if (!nbep_sweep_run_owner(run, ex->rank, ex->n_ranks))
             continue;
         nbep_status st = stop_status(ex);
-        if (st != NBEP_OK)
+        if (st == NBEP_OK && ex->peer_stop && (st = ex->peer_stop(ex->u)) != NBEP_OK)
+            return st; /* another's signal: no new run here either */
+        if (st == NBEP_OK) {
+            run_one(p, run, ex, &results[run]);
+            if (results[run].outcome == NBEP_SWEEP_INTERRUPTED)
+                st = stop_status(ex) != NBEP_OK ? stop_status(ex) : NBEP_ESIGTERM;
+        }
+        if (st != NBEP_OK) {
+            if (ex->announce_stop)
+                ex->announce_stop(ex->u, st);
             return st;
-        run_one(p, run, ex, &results[run]);
-        if (results[run].outcome == NBEP_SWEEP_INTERRUPTED)
-            return stop_status(ex) != NBEP_OK ? stop_status(ex) : NBEP_ESIGTERM;
+        }
     }
-    return stop_status(ex);
+    const nbep_status st = stop_status(ex);
+    if (st != NBEP_OK && ex->announce_stop)
+        ex->announce_stop(ex->u, st);
+    return st;
 }
 
 /* ---- the summary table ------------------------------------------------------------------- */
@@ -1023,6 +1033,66 @@ done:
 }
 #endif
 
+#ifdef NBEP_HAVE_MPI
+/* A rank's stop, told to the others (nbep_sweep_exec's peer_stop and announce_stop): one int,
+ * the status, to every other rank; each takes what was sent to it before it ends (drain). */
+enum { TAG_STOP = 7 };
+typedef struct peers {
+    int rank, size;
+    bool announced;
+    int received;              /* stop messages taken so far */
+    nbep_status seen;          /* the first peer's status taken */
+    MPI_Request *req;          /* the announcement's sends, size entries */
+} peers;
+
+static nbep_status peers_stop(void *u)
+{
+    peers *q = u;
+    int flag = 0;
+    MPI_Status s;
+    /* a few looks: one Iprobe may give MPI's progress engine too little to find a message
+     * that has arrived (Open MPI 4 over shared memory missed one sent seconds before) */
+    for (int k = 0; k < 64 && !flag; k++)
+        MPI_Iprobe(MPI_ANY_SOURCE, TAG_STOP, MPI_COMM_WORLD, &flag, &s);
+    if (flag) {
+        int v;
+        MPI_Recv(&v, 1, MPI_INT, s.MPI_SOURCE, TAG_STOP, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        if (q->received++ == 0)
+            q->seen = (nbep_status)v;
+    }
+    return q->received ? q->seen : NBEP_OK;
+}
+
+static void peers_announce(void *u, nbep_status st)
+{
+    peers *q = u;
+    static int value; /* the sends read it until drained */
+    if (q->announced || !q->req)
+        return;
+    q->announced = true;
+    value = (int)st;
+    for (int r = 0; r < q->size; r++)
+        q->req[r] = MPI_REQUEST_NULL;
+    for (int r = 0; r < q->size; r++)
+        if (r != q->rank)
+            MPI_Isend(&value, 1, MPI_INT, r, TAG_STOP, MPI_COMM_WORLD, &q->req[r]);
+}
+
+/* Every rank, after its runs: takes the stop messages still on their way to it (each
+ * announcer sent one to every other rank) and completes its own sends. */
+static void peers_drain(peers *q)
+{
+    int mine = q->announced, all = 0;
+    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+    for (int k = q->received; k < all - mine; k++) {
+        int v;
+        MPI_Recv(&v, 1, MPI_INT, MPI_ANY_SOURCE, TAG_STOP, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    }
+    if (q->announced && q->req)
+        MPI_Waitall(q->size, q->req, MPI_STATUSES_IGNORE);
+}
+#endif
+
 /* The most serious of the ranks' statuses, agreed by all (identity without MPI). */
 static nbep_status agree(nbep_status st, bool mpi)
 {
@@ -1094,9 +1164,24 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
                             "combination%s) on %d rank%s into %s/\n",
                     p.deck_path, p.n_runs, p.replicas, p.replicas == 1 ? "" : "s", p.n_combos,
                     p.n_combos == 1 ? "" : "s", size, size == 1 ? "" : "s", p.dir);
-        const nbep_sweep_exec ex = {.rank = rank, .n_ranks = size,
-                                    .stop_signal = stop_signal, .quiet = cli->quiet};
+        nbep_sweep_exec ex = {.rank = rank, .n_ranks = size, .stop_signal = stop_signal,
+                              .quiet = cli->quiet};
+#ifdef NBEP_HAVE_MPI
+        peers q = {.rank = rank, .size = size, .seen = NBEP_OK};
+        if (mpi && size > 1) {
+            q.req = calloc((size_t)size, sizeof *q.req); /* NULL: no announcing, as before */
+            ex.peer_stop = peers_stop;
+            ex.announce_stop = peers_announce;
+            ex.u = &q;
+        }
+#endif
         nbep_status run_st = nbep_sweep_execute(&p, &ex, results);
+#ifdef NBEP_HAVE_MPI
+        if (mpi && size > 1) {
+            peers_drain(&q);
+            free(q.req);
+        }
+#endif
         run_st = agree(run_st, mpi);
 #ifdef NBEP_HAVE_MPI
         if (mpi)

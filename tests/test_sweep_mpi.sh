@@ -81,5 +81,35 @@ rc=$?
 check "the same command again exits 0 (exit $rc)" "[ $rc = 0 ]"
 check "and reuses all 8 runs" "grep -q '\"reused\": 8' '$tmp/again.json'"
 
+# ---- a SIGTERM that reaches one rank alone stops the new runs of both ----------------------
+# 8 runs of a few seconds each (4 a rank); rank 1 alone gets SIGTERM during its first run.
+# Rank 0 finishes the run it is in and starts no other (it ran all four before: the signal's
+# rank waited for it, spinning); both exit 143, and the table has at most the two first runs
+# done and every other run not_run.
+mkdir -p "$tmp/one"
+sed -e 's/steps = 50;/steps = 150000;/' -e 's/count = 16;/count = 4;/' "$tmp/mpi.deck" >"$tmp/one/one.deck"
+timeout 300 mpirun -np 2 --oversubscribe bin/nbep sweep "$tmp/one/one.deck" -o "$tmp/one/one.h5" \
+    --summary "$tmp/one/one.json" 2>"$tmp/one/stderr" &
+pid=$!
+rank1=""
+for _ in $(seq 200); do
+    for p in $(pgrep -f "nbep sweep $tmp/one/one.deck"); do
+        tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx 'OMPI_COMM_WORLD_RANK=1' && rank1=$p
+    done
+    [ -n "$rank1" ] && [ -e "$tmp/one/one.sweep/run-0000.h5" ] &&
+        [ -e "$tmp/one/one.sweep/run-0001.h5" ] && break
+    sleep 0.05
+done
+sleep 0.3
+[ -n "$rank1" ] && kill -TERM "$rank1"
+wait $pid
+rc=$?
+csv1=$tmp/one/one.sweep/summary.csv
+done_runs=$(tail -n +2 "$csv1" 2>/dev/null | cut -d, -f7 | grep -cE '^(ok|interrupted)$')
+not_run=$(tail -n +2 "$csv1" 2>/dev/null | cut -d, -f7 | grep -c '^not_run$')
+check "SIGTERM to rank 1 alone: exit 143 (got $rc; rank 1 pid '${rank1}')" "[ $rc = 143 ]"
+check "... at most the two first runs ran ($done_runs), the other six not run ($not_run)" \
+    "[ $done_runs -le 2 ] && [ $not_run -ge 6 ]"
+
 [ $fail = 0 ] && echo "sweep_mpi: all passed"
 exit $fail

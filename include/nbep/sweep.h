@@ -133,6 +133,13 @@ typedef struct nbep_sweep_exec {
     int rank, n_ranks;               /* this process runs the runs nbep_sweep_run_owner gives */
     const atomic_int *stop_signal;   /* borrowed, may be NULL: nonzero stops the sweep */
     bool quiet;                      /* no per-run progress lines (errors are still printed) */
+    /* Several processes (NULL: one): peer_stop, asked before each run, says whether another
+     * process has stopped on its signal (its status) or NBEP_OK; announce_stop tells the
+     * others that this one has. A signal that reaches one rank alone (a kill, the OOM killer's
+     * SIGTERM) then stops the new runs of all, as a signal to all of them does. u: theirs. */
+    nbep_status (*peer_stop)(void *u);
+    void (*announce_stop)(void *u, nbep_status st);
+    void *u;
 } nbep_sweep_exec;
 
 /* Runs this process's share of the plan, one run after another, writing each run's file into
@@ -141,7 +148,8 @@ typedef struct nbep_sweep_exec {
  * entries: this process's runs are filled in, the others are left as NOT_RUN. A failing run
  * prints one line on stderr ("nbep: sweep run 3 (KEY=VALUE ...): error") and the others go
  * on. On a stop signal the current run stops after its step, no further run starts, and the
- * status is NBEP_ESIGINT/NBEP_ESIGTERM; otherwise NBEP_OK, whatever the runs' outcomes. */
+ * status is NBEP_ESIGINT/NBEP_ESIGTERM (a peer's stop: its status, the current run finished);
+ * otherwise NBEP_OK, whatever the runs' outcomes. */
 NBEP_MUST_CHECK nbep_status nbep_sweep_execute(const nbep_sweep_plan *p,
                                                const nbep_sweep_exec *ex,
                                                nbep_sweep_result *results);
