@@ -322,11 +322,16 @@ static int is_run(hid_t file, const char *path, nbep_diag *d)
             return -1;
     }
     const int run = format && strcmp(format, FORMAT_NAME) == 0;
+    /* a sweep's table (output_sweep.c), the file most often taken for a run */
+    const bool table = format && strcmp(format, "nbep-sweep-1") == 0;
     if (!run)
         nbep_diag_add(d, __FILE__, __LINE__,
-                      "nbep: %s: not an %s file (root attribute format is %s%s%s)", path,
+                      "nbep: %s: not an %s file (root attribute format is %s%s%s)%s", path,
                       FORMAT_NAME, format ? "\"" : what, format ? format : "",
-                      format ? "\"" : "");
+                      format ? "\"" : "",
+                      table ? ": a sweep's summary table; read summary.csv beside it, or pass "
+                              "one of its run-NNNN.h5"
+                            : "");
     free(format);
     return run;
 }

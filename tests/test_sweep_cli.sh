@@ -46,6 +46,12 @@ check "... run 0's file untouched" "[ '$(md5sum <"$tmp/s.sweep/run-0000.h5")' = 
 run_sweep "$tmp/s.deck" -o "$tmp/s" --quiet --set sweep.replicas=3 --summary "$tmp/again.json"
 check "the same command again reuses all 6" "[ \"\$(json '$tmp/again.json' reused)\" = 6 ]"
 
+# the table is no run: info says what it is and where to look
+timeout 30 "$nbep" info "$tmp/s.sweep/summary.h5" >/dev/null 2>"$tmp/stderr"
+rc=$?
+check "nbep info of the sweep's summary.h5: exit 2, one line pointing to summary.csv (got $rc)" \
+    "[ $rc = 2 ] && one_line && grep -q \"a sweep's summary table; read summary.csv\" '$tmp/stderr'"
+
 # ---- bad paths: refused before any run, nothing made -----------------------------------------
 run_sweep "$tmp/s.deck" -o "$tmp/fresh" --quiet --summary "$tmp/no-such-dir/x.json"
 check "--summary in a missing directory: exit 2 (got $rc), one line" \
