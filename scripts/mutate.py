@@ -637,6 +637,32 @@ MUTANTS = [
      "    for (int digits = 17; digits <= 17; digits++) {", ["test_output"], None),
     ("real-text-exponent-kept", "src/summary.c", "    if (strpbrk(buf, \"eE\") && fabs(v) >= 1.0 && fabs(v) < 1e15 && v == floor(v))",
      "    if (0)", ["test_output"], None),
+    # ---- energies beyond doubles, files being written, sweeps as job scripts use them ----
+    ("step-overflow-written", "src/sim.c", "    if (!finite) {\n        if (sim->status == NBEP_OK) {",
+     "    if (0) {\n        if (sim->status == NBEP_OK) {", ["tests/test_cli.sh"], None),
+    ("deck-energy-unchecked", "src/scene_place.c", "            if (!isfinite(ke) || !isfinite(pe)) {",
+     "            if (0) {", ["tests/test_cli.sh"], None),
+    ("info-open-once", "src/output_hdf5.c", "    for (int tries = 0; fapl >= 0 && tries < 20; tries++) {",
+     "    for (int tries = 0; fapl >= 0 && tries < 1; tries++) {", ["tests/test_cli.sh"], None),
+    ("info-cut-short-is-io", "src/output_hdf5.c",
+     "        nbep__output_close_id(&fapl);\n        /* HDF5's signature, but no file it can open (cut short by a copy, or locked by the\n         * run that writes it): not a file this command can take, as a file of another kind */\n        return NBEP_EUSAGE;",
+     "        nbep__output_close_id(&fapl);\n        return NBEP_EIO;", ["tests/test_cli.sh"], None),
+    ("sweep-replicas-not-neutral", "src/sweep.c", "    if (len > 6 && strncmp(ov, \"sweep.\", 6) == 0)\n        return true;",
+     "", ["tests/test_sweep_cli.sh"], None),
+    ("sweep-summary-untried", "src/sweep.c", "(st = try_summary(cli->summary, dd)) != NBEP_OK)",
+     "(st = NBEP_OK) != NBEP_OK)", ["tests/test_sweep_cli.sh"], None),
+    ("sweep-stale-table-kept", "src/sweep.c", "        st = remove_tables(&p, dd);",
+     "        st = NBEP_OK;", ["tests/test_sweep_cli.sh"], None),
+    ("sweep-srun-unseen", "src/sweep.c", "    if (env_long(\"SLURM_PROCID\") > 0 ||\n        (getenv(\"SLURM_STEP_ID\") && env_long(\"SLURM_STEP_NUM_TASKS\") > 1))",
+     "    if (0)", ["tests/test_sweep_cli.sh"], None),
+    ("sweep-summary-dir-kept", "src/sweep.c", "        unmake_dir(p.dir, made);", "        (void)made;",
+     ["tests/test_sweep_cli.sh"], None),
+    ("sweep-farm-refused", "src/sweep.c", "    if (forced == 0) /* one study per process",
+     "    if (0) /* one study per process", ["tests/test_sweep_cli.sh"], None),
+    ("sweep-peer-stop-unseen", "src/sweep.c", "    return q->received ? q->seen : NBEP_OK;",
+     "    return NBEP_OK;", ["tests/test_sweep_mpi.sh"], None),
+    ("peak-rss-lifetime", "src/run.c", "    nbep_peak_rss_reset(); /* peak_rss_bytes",
+     "    (void)0; /* peak_rss_bytes", ["tests/test_sweep_cli.sh"], None),
 ]
 
 
@@ -732,7 +758,11 @@ def main():
             with open(target, "w") as f:
                 f.write(text.replace(orig, repl, 1))
             t0 = time.monotonic()
-            rc = run(["make", f"-j{a.jobs}", "MPI=0", "bin/nbep", "check-programs"], scratch)
+            # MPI=0 keeps Open MPI out of the tests' processes; a mutant only an MPI test can
+            # see is built with it (only sweep.c takes MPI's flags, and the mutant or its undoing
+            # touches it, so it and every link are made again either way)
+            mpi = [] if any("sweep_mpi" in t for t in tests) else ["MPI=0"]  # []: the default
+            rc = run(["make", f"-j{a.jobs}"] + mpi + ["bin/nbep", "check-programs"], scratch)
             if rc != 0:
                 verdict, why = "killed", "does not build"
             else:

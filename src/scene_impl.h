@@ -127,9 +127,10 @@ NBEP_MUST_CHECK nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const
                                                        const bool *box_periodic, nbep_vec3 lo,
                                                        nbep_vec3 hi);
 
-/* Reports (at its entry) the first sphere of s whose energy, kinetic m v.v/2 plus potential
- * -m a.p (nbep_physics_energy), is not finite in doubles, or else a total that is not: a run
- * could not report its energy, nor keep it. NBEP_OK (the errors go to the diag). */
+/* Reports (at its entry) the first sphere of s whose kinetic m v.v/2 or potential -m a.p
+ * energy (nbep_physics_energy) is not finite in doubles: a run could not report its energy,
+ * nor keep it. (A total beyond doubles from finite terms is nbep_sim_create's to refuse: it
+ * sums them in its own order.) NBEP_OK (the errors go to the diag). */
 NBEP_MUST_CHECK nbep_status nbep__scene_check_energy(nbep__scene_ctx *c, const nbep_state *s,
                                                      const nbep__scene_entry *e,
                                                      size_t n_entries);

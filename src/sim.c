@@ -239,6 +239,14 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
     double ke, pe;
     energy_total(sim, &ke, &pe);
     sim->energy_initial = sim->energy_final = ke + pe;
+    if (!isfinite(sim->energy_initial)) { /* each sphere's is finite (the deck's check): their
+                                           * sum is not */
+        nbep_sim_destroy(&sim);
+        NBEP_FAIL(d, NBEP_EDECK,
+                  "nbep: the spheres' total energy (kinetic %g, potential %g) is beyond doubles: "
+                  "speeds, masses, accelerations or positions too large",
+                  ke, pe);
+    }
     sim->setup_seconds = nbep_now() - t0;
     *out = sim;
     return NBEP_OK;
@@ -478,8 +486,11 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
     if (sim->status == NBEP_OK && sim->step_end >= sim->step_first)
         sim->algo->run(sim, sim->algo_ctx);
     sim->wall_seconds = nbep_now() - sim->t_start;
-    /* after a failed write the file gets nothing more: one error, not a cascade */
-    if (sim->status == NBEP_OK || sim->status == NBEP_ESIGINT || sim->status == NBEP_ESIGTERM) {
+    /* after a failed write the file gets nothing more: one error, not a cascade; a run stopped
+     * by an energy beyond doubles keeps its rows up to the step before (all finite), which
+     * its summary counts */
+    if (sim->status == NBEP_OK || sim->status == NBEP_ESIGINT || sim->status == NBEP_ESIGTERM ||
+        sim->status == NBEP_ENUMERIC) {
         st = flush_rows(sim);
         if (st != NBEP_OK)
             sim->status = st;

@@ -762,8 +762,11 @@ done:
 /* ---- the command ------------------------------------------------------------------------- */
 
 /* mkdir -p: every missing directory on the way. */
-static nbep_status make_dir(const char *dir, nbep_diag *d)
+/* Makes dir and the folders above it that are missing; *made: how many of its trailing
+ * components it made (unmake_dir takes them away again). */
+static nbep_status make_dir(const char *dir, int *made, nbep_diag *d)
 {
+    *made = 0;
     char *p = strdup(dir);
     if (!p)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory");
@@ -774,7 +777,12 @@ static nbep_status make_dir(const char *dir, nbep_diag *d)
         char c = *s;
         *s = '\0';
         struct stat sb;
-        if (mkdir(p, 0777) != 0 && (errno != EEXIST || stat(p, &sb) != 0 || !S_ISDIR(sb.st_mode))) {
+        const int r = mkdir(p, 0777);
+        if (r == 0)
+            (*made)++;
+        else if (errno == EEXIST && stat(p, &sb) == 0 && S_ISDIR(sb.st_mode))
+            *made = 0; /* a folder there already: those below it count */
+        if (r != 0 && (errno != EEXIST || stat(p, &sb) != 0 || !S_ISDIR(sb.st_mode))) {
             const int err = errno;
             nbep_diag_add(d, __FILE__, __LINE__, "nbep: cannot make the sweep directory %s: %s",
                           p, err == EEXIST ? "a file is in the way" : strerror(err));
@@ -791,9 +799,24 @@ static nbep_status make_dir(const char *dir, nbep_diag *d)
     return st;
 }
 
-/* Rank 0, before anything is made: whether the --summary path can be written (a typo in a
- * job script's path was found only after every run), without changing a file that is there
- * or leaving one that was not. */
+/* Takes away the last `made` components of dir that make_dir made (empty: nothing in them). */
+static void unmake_dir(const char *dir, int made)
+{
+    char *p = strdup(dir);
+    for (int k = 0; p && k < made; k++) {
+        if (rmdir(p) != 0)
+            break;
+        char *slash = strrchr(p, '/');
+        if (!slash || slash == p)
+            break;
+        *slash = '\0';
+    }
+    free(p);
+}
+
+/* Rank 0, before any run: whether the --summary path can be written (a typo in a job
+ * script's path was found only after every run), without changing a file that is there or
+ * leaving one that was not. */
 static nbep_status try_summary(const char *summary, nbep_diag *d)
 {
     if (!summary || strcmp(summary, "-") == 0)
@@ -863,6 +886,9 @@ static bool launched_by_mpi(bool *many)
         (getenv("SLURM_STEP_ID") && env_long("SLURM_STEP_NUM_TASKS") > 1))
         *many = true;
     long forced = env_long("NBEP_MPI");
+    if (forced == 0) /* one study per process, as asked (a task farm: srun -n 4 running a
+                      * study of its own in each task) */
+        *many = false;
     if (forced == 0 || forced == 1)
         return forced == 1;
     return size >= 0 || rank >= 0;
@@ -1143,7 +1169,8 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
     if (st == NBEP_OK && many && size == 1) {
         nbep_diag_add(dd, __FILE__, __LINE__,
                       "nbep: started as one of several processes but MPI sees one: launch "
-                      "with mpirun, or srun --mpi=pmix (or pmi2)");
+                      "with mpirun, or srun --mpi=pmix (or pmi2); NBEP_MPI=0 if each process "
+                      "runs a study of its own");
         st = NBEP_EUSAGE;
     }
     if (st == NBEP_OK && !(results = calloc(p.n_runs + 1, sizeof *results))) {
@@ -1151,10 +1178,13 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
                       p.n_runs);
         st = NBEP_ENOMEM;
     }
+    int made = 0;
     if (st == NBEP_OK && rank == 0)
-        st = try_summary(cli->summary, dd);
-    if (st == NBEP_OK && rank == 0)
-        st = make_dir(p.dir, dd);
+        st = make_dir(p.dir, &made, dd);
+    /* after the sweep's folder, which may hold it (-o res/a --summary res/a.sweep/t.json); a
+     * path it cannot take leaves nothing made */
+    if (st == NBEP_OK && rank == 0 && (st = try_summary(cli->summary, dd)) != NBEP_OK)
+        unmake_dir(p.dir, made);
     if (st == NBEP_OK && rank == 0)
         st = remove_tables(&p, dd);
     st = agree(st, mpi); /* every rank stops here, or none: the collectives below need all */

@@ -323,6 +323,29 @@ physics: { gravity = [0.0, 0.0, -9.81]; };
 planes = ( { normal = [0.0, 0.0, 1.0]; point = [0.0, 0.0, -1.0]; } );
 spheres = ( { position = [0.0, 0.0, 0.0]; radius = 0.1; mass = 1.0; } );
 EOF
+# four spheres each of finite energy (5e307) whose sum is not: check cannot tell (it sums no
+# energies), run refuses before anything is written
+cat >"$tmp/sum.deck" <<'EOF'
+run: { steps = 3; threads = 1; };
+spheres = ( { position = [0.0, 0.0, 0.0]; velocity = [1.0e154, 0.0, 0.0]; radius = 0.1; mass = 1.0; },
+            { position = [1.0, 0.0, 0.0]; velocity = [1.0e154, 0.0, 0.0]; radius = 0.1; mass = 1.0; },
+            { position = [2.0, 0.0, 0.0]; velocity = [1.0e154, 0.0, 0.0]; radius = 0.1; mass = 1.0; },
+            { position = [3.0, 0.0, 0.0]; velocity = [1.0e154, 0.0, 0.0]; radius = 0.1; mass = 1.0; } );
+EOF
+run_nbep run "$tmp/sum.deck" -o "$tmp/sum.h5" --summary "$tmp/sum.json"
+check "a total energy beyond doubles from finite spheres: run exit 2 (got $rc), one line, nothing written" \
+    "[ $rc = 2 ] && one_line && grep -q 'total energy .* is beyond doubles' '$tmp/stderr' && [ ! -e '$tmp/sum.h5' ] && [ ! -e '$tmp/sum.json' ]"
+# a fall that overflows at step 2 (every 4): the stats rows it ran are in the file, as many as
+# the summary's steps and with its checks
+cat >"$tmp/grow.deck" <<'EOF'
+run: { steps = 20; threads = 1; dt = 1.0; };
+physics: { gravity = [0.0, 0.0, -9.0e153]; };
+spheres = ( { position = [0.0, 0.0, 0.0]; radius = 0.1; mass = 1.0; } );
+output: { every = 4; };
+EOF
+run_nbep run "$tmp/grow.deck" -a naive --quiet -o "$tmp/grow.h5" --summary "$tmp/grow.json"
+check "an overflow at step 2: exit 1 (got $rc); the file's stats rows are the summary's steps and checks" \
+    "[ $rc = 1 ] && /usr/bin/python3 -c 'import h5py,json,sys; f=h5py.File(sys.argv[1],\"r\"); s=json.load(open(sys.argv[2])); sys.exit(not (s[\"steps\"] == 1 and len(f[\"stats/step\"]) == 1 and int(f[\"stats/checks\"][:].sum()) == s[\"checks\"]))' '$tmp/grow.h5' '$tmp/grow.json'"
 for algo in naive seminaive predictive; do
     rm -f "$tmp/fall.h5" "$tmp/fall.json"
     run_nbep run "$tmp/fall.deck" -a $algo --dt 1e200 --quiet -o "$tmp/fall.h5" --summary "$tmp/fall.json"

@@ -35,6 +35,11 @@ sweep: { replicas = 2; vary = ( { key = "physics.restitution"; values = [1.0, 0.
 EOF
 json() { /usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$@"; }
 
+# ---- a --summary inside the sweep's own new folder: taken (the folder is made first) --------
+run_sweep "$tmp/s.deck" -o "$tmp/res/study.h5" --quiet --summary "$tmp/res/study.sweep/totals.json"
+check "--summary inside the sweep's folder on a fresh study: exit 0 (got $rc), written" \
+    "[ $rc = 0 ] && [ -s '$tmp/res/study.sweep/totals.json' ]"
+
 # ---- more replicas from the command line -----------------------------------------------------
 run_sweep "$tmp/s.deck" -o "$tmp/s" --quiet --summary "$tmp/first.json"
 check "the study runs (exit $rc, 4 runs)" "[ $rc = 0 ] && [ \"\$(json '$tmp/first.json' runs)\" = 4 ]"
@@ -57,6 +62,8 @@ run_sweep "$tmp/s.deck" -o "$tmp/fresh" --quiet --summary "$tmp/no-such-dir/x.js
 check "--summary in a missing directory: exit 2 (got $rc), one line" \
     "[ $rc = 2 ] && one_line && grep -q 'cannot write the summary to $tmp/no-such-dir/x.json' '$tmp/stderr'"
 check "... no sweep directory made" "[ ! -e '$tmp/fresh.sweep' ]"
+run_sweep "$tmp/s.deck" -o "$tmp/new/deep/study.h5" --quiet --summary "$tmp/no-such-dir/x.json"
+check "... nor the folders above a new one (got $rc)" "[ $rc = 2 ] && [ ! -e '$tmp/new' ]"
 touch "$tmp/infile.sweep"
 run_sweep "$tmp/s.deck" -o "$tmp/infile" --quiet
 check "a file where the sweep's directory goes: exit 2 (got $rc), one line" \
@@ -85,6 +92,11 @@ for procid in 0 1; do
         "[ $rc = 2 ] && one_line && grep -q 'srun --mpi=pmix' '$tmp/stderr'"
     check "... nothing run" "[ ! -e '$tmp/srun.sweep' ]"
 done
+# a task farm (each task its own study) says so with NBEP_MPI=0
+NBEP_MPI=0 SLURM_JOB_ID=7 SLURM_STEP_ID=0 SLURM_PROCID=1 SLURM_NTASKS=2 SLURM_STEP_NUM_TASKS=2 \
+    run_sweep "$tmp/s.deck" -o "$tmp/farm" --quiet
+check "task 1 of a task farm (NBEP_MPI=0): runs its own study (exit $rc)" \
+    "[ $rc = 0 ] && [ -s '$tmp/farm.sweep/summary.csv' ]"
 SLURM_JOB_ID=7 SLURM_STEP_ID=0 SLURM_PROCID=0 SLURM_NTASKS=1 SLURM_STEP_NUM_TASKS=1 \
     run_sweep "$tmp/s.deck" -o "$tmp/srun" --quiet
 check "srun -n 1: runs (exit $rc)" "[ $rc = 0 ] && [ -s '$tmp/srun.sweep/summary.csv' ]"

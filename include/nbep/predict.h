@@ -173,7 +173,10 @@ static inline double nbep_predict_pair_bound(nbep_vec3 dp, nbep_vec3 dv, nbep_ve
      * |dp|), so the computed parabola stays below the exact one by at least the shortfall
      * 1e-12 |dp| less 5 eps (|dv| t + |da| t^2/2) while |dv| t + |da| t^2/2 <= C |dp|, C = 64:
      * 0.9e-12 |dp|. That moves the root by 0.9e-12 |dp| / |slope| >= 0.9e-12 t / (2 C), 30 ulps
-     * of t, far more than the forms' roundings. Past t_cap (where that sum reaches C |dp|) the
+     * of t, far more than the forms' roundings; the computed root lies within a few ulps of
+     * the exact one where the two come close (a simple root, Newton-polished: a review's 80 M
+     * fuzzed pairs found the bound 133 ulps below the root at the nearest, thrown apart and
+     * pulled back to just inside the cap). Past t_cap (where that sum reaches C |dp|) the
      * errors are not bounded: the bound stops there. */
     const double t_cap = 2.0 * 64.0 * d / (v + sqrt(vv + 2.0 * 64.0 * a * d));
     const double p1 = pv / d, p2 = pa / d;
