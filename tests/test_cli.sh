@@ -230,7 +230,11 @@ h5py.File('$tmp/other.h5', 'w').attrs['format'] = 'other-1'
 h5py.File('$tmp/latest.h5', 'w', libver='latest').attrs['format'] = 'other-1'
 h5py.File('$tmp/number.h5', 'w').attrs['format'] = 3"
 mkdir -p "$tmp/folder.h5"
-for f in text other latest number folder; do
+# and a run file cut short (a copy that stopped half way): HDF5's signature, but no file HDF5
+# opens (exit 1 before: an I/O failure)
+run_nbep run "$tmp/group.deck" -n 20 --set output.every=1 --quiet -o "$tmp/whole.h5"
+head -c $(($(stat -c %s "$tmp/whole.h5") / 2)) "$tmp/whole.h5" >"$tmp/cut.h5"
+for f in text other latest number folder cut; do
     sum0=$([ -f "$tmp/$f.h5" ] && md5sum <"$tmp/$f.h5")
     for cmd in resume info; do
         if [ $cmd = resume ]; then
@@ -239,26 +243,12 @@ for f in text other latest number folder; do
             run_nbep info "$tmp/$f.h5"
         fi
         check "$cmd of $f.h5 (no nbep run): exit 2, one line saying what it is (got $rc: $(head -c 200 "$tmp/stderr"))" \
-            "[ $rc = 2 ] && one_line && grep -qE '$tmp/$f.h5: (cannot .*: (not an HDF5 file|Is a directory)|not an nbep-1 file \(root attribute format is (\"other-1\"|not a string)\))\$' '$tmp/stderr'"
+            "[ $rc = 2 ] && one_line && grep -qE '$tmp/$f.h5: (cannot .*: (not an HDF5 file|Is a directory|truncated file: .*)|not an nbep-1 file \(root attribute format is (\"other-1\"|not a string)\))\$' '$tmp/stderr'"
     done
     [ -f "$tmp/$f.h5" ] && check "$f.h5 untouched by the refused resume" "[ '$(md5sum <"$tmp/$f.h5")' = '$sum0' ]"
 done
 
-# a run file cut short (a copy that stopped half way): HDF5's signature, but no file HDF5 opens
-run_nbep run "$tmp/group.deck" -n 20 --set output.every=1 --quiet -o "$tmp/whole.h5"
-head -c $(($(stat -c %s "$tmp/whole.h5") / 2)) "$tmp/whole.h5" >"$tmp/cut.h5"
-sum0=$(md5sum <"$tmp/cut.h5")
-for cmd in resume info; do
-    if [ $cmd = resume ]; then
-        run_nbep run "$tmp/group.deck" -n 40 --quiet --resume "$tmp/cut.h5"
-    else
-        run_nbep info "$tmp/cut.h5"
-    fi
-    check "$cmd of a run file cut short: exit 2, one line naming it (got $rc: $(head -c 200 "$tmp/stderr"))" \
-        "[ $rc = 2 ] && one_line && grep -qF '$tmp/cut.h5: cannot ' '$tmp/stderr'"
-done
-check "cut.h5 untouched by the refused resume" "[ '$(md5sum <"$tmp/cut.h5")' = '$sum0' ]"
-# ... but one that is whole again within a second (a run being written, caught between its
+# a file cut short that is whole again within a second (a run being written, caught between its
 # flushes: 12 of 30 opens failed while a run wrote 300 frames a second) is read: info tries again
 cp "$tmp/cut.h5" "$tmp/live.h5"
 (sleep 0.3 && cp "$tmp/whole.h5" "$tmp/live.tmp" && mv "$tmp/live.tmp" "$tmp/live.h5") &
