@@ -79,6 +79,8 @@ void nbep_sweep_plan_fini(nbep_sweep_plan *p)
         free(p->base[k]);
         free(p->base_origins ? p->base_origins[k] : NULL);
     }
+    for (size_t k = 0; p->base_origins && k < p->n_axes; k++)
+        free(p->base_origins[p->n_base + k]); /* the axes' labels */
     free(p->base);
     free(p->base_origins);
     for (size_t k = 0; p->axes && k < p->n_axes; k++) {
@@ -155,6 +157,19 @@ static nbep_status plan_create(const char *deck_path, const char *const *overrid
     p.n_axes = sc.sweep_n_axes;
     sc.sweep_axes = NULL;
     sc.sweep_n_axes = 0;
+    /* an axis value a run rejects is named as the deck's axis, not as a --set nobody typed */
+    for (size_t k = 0; !oom && k < p.n_axes; k++) {
+        const size_t len = strlen(deck_path) + 48;
+        char *label = malloc(len);
+        if ((oom = !label) == false)
+            snprintf(label, len, "%s: sweep.vary.[%zu]", deck_path, k);
+        p.base_origins[p.n_base + k] = label;
+    }
+    if (oom) {
+        nbep_sweep_plan_fini(&p);
+        nbep_scene_fini(&sc);
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory planning the sweep of %s", deck_path);
+    }
     p.replicas = sc.sweep_replicas;
     p.seed = sc.seed;
     p.steps = sc.steps;
