@@ -62,7 +62,7 @@ FUZZ_REPLAY := $(BUILD)/tests/fuzz_replay
 # broken unseen
 PARALLELISM := $(BUILD)/bench/bench_parallelism
 
-.PHONY: all run check test valgrind bench install clean tsan asan mutate check-programs
+.PHONY: all run check test valgrind bench bench-programs install clean tsan asan mutate check-programs
 all: bin/nbep
 
 $(BUILD) $(BUILD)/tests $(BUILD)/bench bin:
@@ -107,6 +107,10 @@ ifeq ($(VALGRIND),1)
 endif
 test: check
 
+# The test binaries under memcheck alone (check runs them so with VALGRIND=1, the default).
+valgrind: $(TEST_BIN)
+	@bash scripts/run-tests.sh --valgrind $(TEST_BIN)
+
 # Every program make check runs, built but not run (scripts/mutate.py builds these per mutant).
 check-programs: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY) $(PARALLELISM)
 
@@ -123,6 +127,9 @@ mutate:
 
 bench: bin/nbep $(BENCH_BIN)
 	bash scripts/bench.sh
+
+# What scripts/bench.sh needs, built and not run (then `scripts/bench.sh --quick` runs alone).
+bench-programs: bin/nbep $(BENCH_BIN)
 
 # Dense fluids (N = 32000, phi = 0.30 and 0.50, periodic): predictive cells beside EDMD when
 # EDMD_DIR names a checkout of FSmallenburg/EDMD (built in build/bench-dense, never committed).

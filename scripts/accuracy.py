@@ -825,7 +825,11 @@ def main(argv):
         finally:
             shutil.rmtree(work, ignore_errors=True)
     if args.cmd == "missed":
-        print(json.dumps(missed_collisions(args.h5)))
+        try:
+            print(json.dumps(missed_collisions(args.h5)))
+        except (ValueError, OSError) as e:  # one line, as nbep's own errors
+            sys.stderr.write(f"accuracy.py missed: {e}\n")
+            return 2
         return 0
     if args.cmd == "contact-check":
         return contact_check(args.dump, args.per_class)

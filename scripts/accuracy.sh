@@ -7,7 +7,8 @@
 #
 #   --quick       dt = 1e-2, 1e-3, 1e-4, 1e-5, one repeat, a shorter gas run, 500 contact cases
 #                 per class (under a minute); default: seven dt from 1e-2 to 1e-5, three
-#                 repeats, 4000 cases per class (about 2.5 minutes on 2 cores)
+#                 repeats, 4000 cases per class (about 8 minutes on 2 cores: a repeat of part 1
+#                 takes about 72 s)
 #   --plot-only   redraw the table and figure from an existing CSV
 #   --no-contact  skip part 2: build/bench/bench_contact (the contact-time solvers against a
 #                 binary128 reference; `make bench` or `make accuracy` builds it), whose table

@@ -108,7 +108,10 @@ WINDOW=${BENCH_WINDOW:-$WINDOW}
 # The paper's three algorithms, and predictive with run.neighbors = "grid" (beyond the paper: a
 # re-prediction tests only the spheres that can reach it soon), when this nbep has that setting.
 ALGORITHMS="naive seminaive predictive predictive-grid"
-if ! "$NBEP" --help-deck 2>/dev/null | grep -q 'run\.neighbors'; then
+# the help read whole before it is searched: `grep -q` stops at the first match and, under
+# pipefail, nbep's SIGPIPE then read as "no such setting" (4 runs in 5 left grid mode out)
+help_deck=$("$NBEP" --help-deck 2>/dev/null || true)
+if ! grep -q 'run\.neighbors' <<<"$help_deck"; then
     ALGORITHMS="naive seminaive predictive"
 fi
 
@@ -175,7 +178,7 @@ if [ "$dry_run" = 1 ]; then
 fi
 
 for f in "$NBEP" "$BENCH_BIN/bench_barrier" "$BENCH_BIN/bench_bvh" "$BENCH_BIN/bench_predict"; do
-    [ -x "$f" ] || { echo "bench.sh: $f is missing; build with 'make bench'" >&2; exit 2; }
+    [ -x "$f" ] || { echo "bench.sh: $f is missing; build it with 'make bench-programs'" >&2; exit 2; }
 done
 "$PYTHON" -c 'import numpy, matplotlib' 2>/dev/null ||
     { echo "bench.sh: $PYTHON lacks numpy or matplotlib (set PYTHON=...)" >&2; exit 2; }
