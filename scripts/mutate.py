@@ -637,16 +637,6 @@ MUTANTS = [
      "    for (int digits = 17; digits <= 17; digits++) {", ["test_output"], None),
     ("real-text-exponent-kept", "src/summary.c", "    if (strpbrk(buf, \"eE\") && fabs(v) >= 1.0 && fabs(v) < 1e15 && v == floor(v))",
      "    if (0)", ["test_output"], None),
-    # ---- the weight resting and held spheres put on the planes (resting_loads) ----
-    ("loads-held-uncounted", "src/algo_predictive.c",
-     "            load_to_planes(s, c->load_w[i], c->load_planes[i], dt, wall);", "            (void)wall;",
-     GRAN, None),
-    ("loads-sliding-uncounted", "src/algo_predictive.c",
-     "        } else if (mask) {\n            load_to_planes(", "        } else if (0) {\n            load_to_planes(", GRAN, None),
-    ("loads-clusters-apart", "src/algo_predictive.c",
-     "            if (a != b) /* the lower index roots the cluster */", "            if (0) /* the lower index roots the cluster */", GRAN, None),
-    ("loads-split-most-push", "src/algo_predictive.c",
-     "(res <= best_res + tie && sum < best_sum)", "(res <= best_res + tie && sum > best_sum)", GRAN, None),
     # ---- energies beyond doubles, files being written, sweeps as job scripts use them ----
     ("step-overflow-written", "src/sim.c", "    if (!finite) {\n        if (sim->status == NBEP_OK) {",
      "    if (0) {\n        if (sim->status == NBEP_OK) {", ["tests/test_cli.sh"], None),

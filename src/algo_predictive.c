@@ -283,11 +283,6 @@ typedef struct pred_ctx {
     face_met *face;               /* owned with t_last when something accelerates: each
                                    * sphere's last meeting with an immobile face (caged) */
     settle_rec *settle;           /* owned when something accelerates and e < 1 (SETTLE_STEPS) */
-    /* with settle and planes: the weight resting and held spheres put on the planes
-     * (resting_loads), by cluster of held spheres: its root, its load, its planes */
-    uint32_t *load_root;
-    nbep_vec3 *load_w;
-    uint64_t *load_planes;
     /* run.max_reactions (jam_max): each sphere's reactions in one step (NULL for an elastic
      * scene without accelerations: free flight at e = 1 cannot jam) */
     jam_count *jam;
@@ -394,9 +389,6 @@ static void pred_destroy(void *p)
     nbep_free_aligned(c->t_last);
     nbep_free_aligned(c->face);
     nbep_free_aligned(c->settle);
-    nbep_free_aligned(c->load_root);
-    nbep_free_aligned(c->load_w);
-    nbep_free_aligned(c->load_planes);
     nbep_free_aligned(c->jam);
     nbep_free_aligned(c->flags);
     nbep_free_aligned((void *)c->claim[0]);
@@ -471,12 +463,6 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     const bool settle_model = !c->free_flight && sim->scene->restitution < 1.0;
     if (settle_model)
         c->settle = nbep_alloc_aligned(n, sizeof *c->settle);
-    const bool load_model = settle_model && sim->st.n_planes > 0;
-    if (load_model) {
-        c->load_root = nbep_alloc_aligned(n, sizeof *c->load_root);
-        c->load_w = nbep_alloc_aligned(n, sizeof *c->load_w);
-        c->load_planes = nbep_alloc_aligned(n, sizeof *c->load_planes);
-    }
     const bool jam_model = !c->free_flight || sim->scene->restitution < 1.0;
     const uint64_t jam_max = sim->scene->max_reactions; /* 0 (a scene built in code): none */
     c->jam_max = (uint32_t)(jam_max > 0 && jam_max < UINT32_MAX - 1 ? jam_max : UINT32_MAX - 1);
@@ -498,7 +484,6 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     if (!c->ver || !c->tau || (!c->free_flight && (!c->rest || !c->aeff)) ||
         (tc_model && !c->t_last) || (cage_model && !c->face) || (jam_model && !c->jam) ||
         (settle_model && !c->settle) ||
-        (load_model && (!c->load_root || !c->load_w || !c->load_planes)) ||
         !c->ws ||
         (rounds && (!c->flags || !c->claim[0] || !c->claim[1] || !c->reacted)) ||
         (c->order_step && !c->tclaim)) {
@@ -2584,160 +2569,6 @@ static void crew_choose(pred_ctx *c, uint64_t step, int way, double seconds)
     team_choose(c, step, way, 1, seconds);
 }
 
-/* ---- the weight resting and held spheres put on the planes (/stats/wall_impulse) ---------- */
-
-/* Planes a held cluster's load can be split over (a bit each in load_planes): the first 64. */
-#define LOAD_PLANES_MAX 64
-
-/* Nonnegative weights lam[0..k) (one per unit normal n[j]) whose sum lam_j n_j is as near F as
- * any such sum: among the sets of at most three normals (Caratheodory: a load their cone holds
- * is held by three of them or fewer), each solved exactly, those whose weights all push; the
- * least residual |F - sum|^2 (equal within 1e-12 |F|^2), then the least total weight, then the
- * first found. The least total: a rigid, frictionless pile in a box leaves open how hard it
- * presses on two opposite walls besides the floor (any equal pair of pushes balances), and
- * this takes none; the floor then carries its weight, as it must. */
-static void load_split(nbep_vec3 F, const nbep_vec3 *n, int k, double *lam)
-{
-    const double ff = nbep_vec3_dot(F, F), tie = 1e-12 * ff;
-    double best_res = ff, best_sum = 0.0, best_l[3] = {0.0, 0.0, 0.0};
-    int best_i[3] = {-1, -1, -1};
-    for (int j = 0; j < k; j++)
-        lam[j] = 0.0;
-    for (int a = 0; a < k; a++)
-        for (int b = a; b < k; b++)
-            for (int e = b; e < k; e++) {
-                const int m = a == b ? 1 : b == e ? 2 : 3;
-                if ((m == 1 && (b != a || e != a)) || (m == 2 && e != b))
-                    continue; /* each set once: (a, a, a), (a, b, b), (a, b, e) */
-                double l[3] = {0.0, 0.0, 0.0};
-                const int idx[3] = {a, b, e};
-                if (m == 1) {
-                    l[0] = nbep_vec3_dot(F, n[a]);
-                } else if (m == 2) {
-                    const double g = nbep_vec3_dot(n[a], n[b]), den = 1.0 - g * g;
-                    if (!(den > 1e-12))
-                        continue; /* parallel: one of the two serves */
-                    const double fa = nbep_vec3_dot(F, n[a]), fb = nbep_vec3_dot(F, n[b]);
-                    l[0] = (fa - g * fb) / den;
-                    l[1] = (fb - g * fa) / den;
-                } else {
-                    const double det = nbep_vec3_dot(n[a], nbep_vec3_cross(n[b], n[e]));
-                    if (!(fabs(det) > 1e-12))
-                        continue; /* dependent: a smaller set serves */
-                    l[0] = nbep_vec3_dot(F, nbep_vec3_cross(n[b], n[e])) / det;
-                    l[1] = nbep_vec3_dot(F, nbep_vec3_cross(n[e], n[a])) / det;
-                    l[2] = nbep_vec3_dot(F, nbep_vec3_cross(n[a], n[b])) / det;
-                }
-                if (!(l[0] >= 0.0 && l[1] >= 0.0 && l[2] >= 0.0))
-                    continue;
-                nbep_vec3 r = F;
-                double sum = 0.0;
-                for (int q = 0; q < m; q++) {
-                    r = nbep_vec3_axpy(r, -l[q], n[idx[q]]);
-                    sum += l[q];
-                }
-                const double res = nbep_vec3_dot(r, r);
-                if (res < best_res - tie || (res <= best_res + tie && sum < best_sum)) {
-                    best_res = res;
-                    best_sum = sum;
-                    for (int q = 0; q < 3; q++) {
-                        best_i[q] = q < m ? idx[q] : -1;
-                        best_l[q] = l[q];
-                    }
-                }
-            }
-    for (int q = 0; q < 3; q++)
-        if (best_i[q] >= 0)
-            lam[best_i[q]] = best_l[q];
-}
-
-static uint32_t load_find(uint32_t *root, uint32_t i)
-{
-    while (root[i] != i) {
-        root[i] = root[root[i]]; /* halving */
-        i = root[i];
-    }
-    return i;
-}
-
-/* Splits F over the planes of mask (bit p: plane p) into wall[p], times dt. */
-static void load_to_planes(const nbep_state *s, nbep_vec3 F, uint64_t mask, double dt,
-                           nbep_xsum *wall)
-{
-    nbep_vec3 n[LOAD_PLANES_MAX];
-    int p_of[LOAD_PLANES_MAX], k = 0;
-    double lam[LOAD_PLANES_MAX];
-    for (int p = 0; p < LOAD_PLANES_MAX && (size_t)p < s->n_planes; p++)
-        if (mask >> p & 1u) {
-            n[k] = s->plane_normal[p];
-            p_of[k++] = p;
-        }
-    if (k == 0)
-        return;
-    load_split(F, n, k, lam);
-    for (int j = 0; j < k; j++)
-        if (lam[j] > 0.0)
-            nbep_xsum_add(&wall[p_of[j]], lam[j] * dt);
-}
-
-/* Step end, thread 0 (every sphere at T_end, nothing else moving): the momentum the planes give
- * resting and held spheres over the step, taken as their state now for the whole step, added
- * to this step's wall impulses (which count collisions otherwise). A sphere resting or
- * sliding on planes (not held) is pushed by them with m (aeff - a), split over its planes. Held
- * spheres form clusters through the held spheres they rest on; a cluster's planes carry its
- * weight, -sum m a, split over every plane any of its spheres rests on (load_split: how a
- * rigid pile shares its weight among them is not determined by the model; the total is).
- * Serial: one pass over the spheres, a union-find over the held ones; deterministic, and the
- * sums exact (xsum), so the same for any thread count. Only scenes that can settle (e < 1,
- * something accelerating) with planes: an elastic sphere never rests (load_root NULL). */
-static void resting_loads(pred_ctx *c, const nbep_state *s, double dt, nbep_xsum *wall)
-{
-    if (!c->load_root)
-        return;
-    const size_t n = s->n;
-    uint32_t *root = c->load_root;
-    for (size_t i = 0; i < n; i++) {
-        root[i] = (uint32_t)i;
-        c->load_w[i] = ZERO3;
-        c->load_planes[i] = 0;
-    }
-    for (size_t i = 0; i < n; i++) {
-        const rest_set *r = &c->rest[i];
-        if (!r->still)
-            continue;
-        for (int q = 0; q < r->n; q++) {
-            if (r->who[q] >= 0)
-                continue;
-            const uint32_t j = (uint32_t)(-1 - r->who[q]);
-            if (!c->rest[j].still)
-                continue; /* a stale entry: that sphere was let go */
-            const uint32_t a = load_find(root, (uint32_t)i), b = load_find(root, j);
-            if (a != b) /* the lower index roots the cluster */
-                root[a > b ? a : b] = a < b ? a : b;
-        }
-    }
-    for (size_t i = 0; i < n; i++) {
-        const rest_set *r = &c->rest[i];
-        if (r->n == 0)
-            continue;
-        uint64_t mask = 0;
-        for (int q = 0; q < r->n; q++)
-            if (r->who[q] >= 0 && r->who[q] < LOAD_PLANES_MAX)
-                mask |= (uint64_t)1 << r->who[q];
-        if (r->still) {
-            const uint32_t k = load_find(root, (uint32_t)i);
-            c->load_w[k] = nbep_vec3_axpy(c->load_w[k], -s->mass[i], s->acc[i]);
-            c->load_planes[k] |= mask;
-        } else if (mask) {
-            load_to_planes(s, nbep_vec3_scale(nbep_vec3_sub(c->aeff[i], s->acc[i]), s->mass[i]),
-                           mask, dt, wall);
-        }
-    }
-    for (size_t i = 0; i < n; i++)
-        if (c->rest[i].still && root[i] == i)
-            load_to_planes(s, c->load_w[i], c->load_planes[i], dt, wall);
-}
-
 /* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's
  * event loop, with threads 1.. in a team where the scene allows it (c->team, team_choose); all
  * threads share the rebuilds, the update to the step's end and the energy.
@@ -2852,10 +2683,8 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
         nbep_barrier_wait(&c->bar);
         /* spheres held by settling move no more: every slot is predicted again (a rebuild) */
         const bool settled = settle_phases(sim, c, own, w);
-        if (tid == 0) {
-            resting_loads(c, s, sim->dt, sim->tmax[step & 1][0].wall);
+        if (tid == 0)
             nbep__sim_end_step(sim, step);
-        }
         /* only frames written to a file can be resumed from (and, with settling or spheres
          * that left the cells, the next step's rebuild follows from the state, so a resumed
          * run takes it too) */
@@ -3068,10 +2897,8 @@ static void pred_run(nbep_sim *sim, void *p)
                 grid_prepare(c, s, tid, own, T_end, sim->dt, false);
             /* the speed bounds taken above stay bounds: held spheres only slow down */
             (void)settle_phases(sim, c, own, w);
-            if (tid == 0) { /* the others are in the next find phase, which reads no grid */
-                resting_loads(c, s, sim->dt, sim->tmax[step & 1][0].wall);
+            if (tid == 0) /* the others are in the next find phase, which reads no grid */
                 nbep__sim_end_step(sim, step);
-            }
             /* no barrier: the next find phase only reads positions and writes queue slots,
              * which the hook does not touch; its stop request is read after that phase's
              * barrier */

@@ -9,11 +9,16 @@
 #include <assert.h>
 #include <math.h>
 
+static nbep_vec3 cross(nbep_vec3 a, nbep_vec3 b)
+{
+    return nbep_vec3_make(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+
 /* Unit direction of the edge common to planes with normals n1 and n2; false if they are
  * parallel (within NBEP_CONTACT_TOL), when there is no single edge. */
 static bool edge(nbep_vec3 n1, nbep_vec3 n2, nbep_vec3 *t)
 {
-    nbep_vec3 c = nbep_vec3_cross(n1, n2);
+    nbep_vec3 c = cross(n1, n2);
     double len = nbep_vec3_norm(c);
     if (!(len > NBEP_CONTACT_TOL))
         return false;
@@ -57,7 +62,7 @@ static bool try_set(nbep_vec3 a, const nbep_vec3 *n, int k, unsigned mask, doubl
             return false;
     } else {
         nbep_vec3 n1 = n[idx[0]], n2 = n[idx[1]], n3 = n[idx[2]];
-        nbep_vec3 c23 = nbep_vec3_cross(n2, n3), c31 = nbep_vec3_cross(n3, n1), c12 = nbep_vec3_cross(n1, n2);
+        nbep_vec3 c23 = cross(n2, n3), c31 = cross(n3, n1), c12 = cross(n1, n2);
         double det = nbep_vec3_dot(n1, c23);
         if (!(fabs(det) > NBEP_CONTACT_TOL))
             return false;

@@ -1037,100 +1037,6 @@ static void same_sums(double *sums[2], const size_t n[2], double *const ref_sums
     }
 }
 
-/* The weight resting and held spheres put on the planes is in /stats/wall_impulse
- * (resting_loads), as the planes' collisions are (SPEC: the normal momentum each plane
- * received): it was left out, and a sphere at rest on the floor gave the floor nothing.
- * - A stack of three held on the floor (e = 0.5): the floor gets 3 m g dt every step.
- * - A ball held in a corner by three walls (gravity into the corner): each wall gets its share
- *   of the pull, m |a . n| dt, from the step it is held on.
- * - A ball sliding down a plane tilted by 0.3 rad (e = 0.5, never held: it slides): the plane
- *   gets m g cos(theta) dt, the push that keeps it on the plane.
- * - A pile of 27 settled on the floor of a box (e = 0.5, 3000 steps): in its last 100 steps
- *   the floor gets the pile's weight, 27 m g dt a step, and the side walls nothing (the least
- *   push a rigid pile's weight can take; how hard it presses sideways the model leaves open).
- * All to 1e-12 of the load. */
-static double *wall_rows(nbep_scene *sc, const char *name, size_t *n)
-{
-    sc->out_stats = true;
-    char path[256];
-    nbep_test_tmp(name, path, sizeof path);
-    (void)nbep_test_run_to(sc, 1, NULL, NULL, path, NULL, NULL);
-    double *w = nbep_test_h5_doubles(path, "/stats/wall_impulse", n);
-    remove(path);
-    return w;
-}
-
-static void test_resting_weight_goes_to_the_planes(void **state)
-{
-    (void)state;
-    const double g = 9.81, dt = 1e-3;
-    size_t n;
-    { /* the stack */
-        nbep_scene *sc = stack("predictive", 200, 0.5);
-        double *w = wall_rows(sc, "load_stack.h5", &n);
-        assert_int_equal(n, 200);
-        for (size_t k = 0; k < n; k++)
-            if (!(fabs(w[k] - 3.0 * g * dt) <= 1e-12 * 3.0 * g * dt))
-                fail_msg("step %zu: the floor got %.17g, the stack's weight is %.17g", k + 1,
-                         w[k], 3.0 * g * dt);
-        free(w);
-        nbep_test_scene_free(&sc);
-    }
-    { /* the corner */
-        nbep_scene *sc = scene(1, 6, "predictive", 3000, 0.5);
-        box(sc, 1.0, 1.0, 1.0);
-        const nbep_vec3 a = {-3.0, -2.0, -9.81};
-        nbep_test_set_sphere(sc, 0, (nbep_vec3){0.5, 0.6, 0.5}, ZERO, 0.1, 1.0, a);
-        double *w = wall_rows(sc, "load_corner.h5", &n);
-        assert_int_equal(n, 3000 * 6);
-        const double want[6] = {3.0 * dt, 0.0, 2.0 * dt, 0.0, 9.81 * dt, 0.0};
-        for (size_t k = 2900; k < 3000; k++)
-            for (size_t p = 0; p < 6; p++)
-                if (!(fabs(w[6 * k + p] - want[p]) <= 1e-12 * 9.81 * dt))
-                    fail_msg("step %zu, plane %zu: %.17g, want %.17g", k + 1, p, w[6 * k + p],
-                             want[p]);
-        free(w);
-        nbep_test_scene_free(&sc);
-    }
-    { /* sliding down a slope */
-        const double r = 0.1, theta = 0.3;
-        nbep_scene *sc = scene(1, 1, "predictive", 300, 0.5);
-        const nbep_vec3 nrm = {sin(theta), 0.0, cos(theta)};
-        nbep_test_set_plane(sc, 0, nrm, 0.0);
-        nbep_test_set_sphere(sc, 0, nbep_vec3_scale(nrm, r), ZERO, r, 1.0, DOWN);
-        double *w = wall_rows(sc, "load_slope.h5", &n);
-        assert_int_equal(n, 300);
-        for (size_t k = 0; k < n; k++)
-            if (!(fabs(w[k] - g * cos(theta) * dt) <= 1e-12 * g * dt))
-                fail_msg("step %zu: the slope got %.17g, want %.17g", k + 1, w[k],
-                         g * cos(theta) * dt);
-        free(w);
-        nbep_test_scene_free(&sc);
-    }
-    { /* a settled pile */
-        nbep_scene *sc = scene(27, 6, "predictive", 3000, 0.5);
-        box(sc, 0.35, 0.35, 2.0);
-        for (size_t i = 0; i < 27; i++) /* a loose 3 x 3 x 3 lattice, jittered, dropped */
-            nbep_test_set_sphere(sc, i,
-                                 (nbep_vec3){0.06 + 0.11 * (double)(i % 3) + 0.003 * (double)(i % 5),
-                                             0.06 + 0.11 * (double)(i / 3 % 3) +
-                                                 0.002 * (double)(i % 7),
-                                             0.1 + 0.13 * (double)(i / 9) + 0.004 * (double)(i % 4)},
-                                 ZERO, 0.05, 1.0, DOWN);
-        double *w = wall_rows(sc, "load_pile.h5", &n);
-        assert_int_equal(n, 3000 * 6);
-        for (size_t k = 2900; k < 3000; k++)
-            for (size_t p = 0; p < 6; p++) {
-                const double want = p == 4 ? 27.0 * g * dt : 0.0;
-                if (!(fabs(w[6 * k + p] - want) <= 1e-12 * 27.0 * g * dt))
-                    fail_msg("pile, step %zu, plane %zu: %.17g, want %.17g", k + 1, p,
-                             w[6 * k + p], want);
-            }
-        free(w);
-        nbep_test_scene_free(&sc);
-    }
-}
-
 /* Lasting contacts, held spheres and TC decisions are taken by whichever thread owns a sphere:
  * frames must not depend on that, nor the counts (the work done: a sphere re-predicted more or
  * less often, or a grid block read while another thread was still filling it, shows there
@@ -1313,7 +1219,6 @@ int main(void)
         cmocka_unit_test(test_bounce_stays_above_the_floor_naive_seminaive),
         cmocka_unit_test(test_corner_ball_ends_at_rest_in_the_corner),
         cmocka_unit_test(test_ball_held_by_three_walls),
-        cmocka_unit_test(test_resting_weight_goes_to_the_planes),
         cmocka_unit_test(test_ball_in_a_slot_one_diameter_wide_slides_on),
         cmocka_unit_test(test_ball_in_a_slot_with_room_keeps_bouncing),
         cmocka_unit_test(test_sphere_in_a_pocket_of_four_is_held),

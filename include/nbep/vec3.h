@@ -34,10 +34,6 @@ static inline double nbep_vec3_dot(nbep_vec3 a, nbep_vec3 b)
 {
     return a.x * b.x + a.y * b.y + a.z * b.z;
 }
-static inline nbep_vec3 nbep_vec3_cross(nbep_vec3 a, nbep_vec3 b)
-{
-    return (nbep_vec3){a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
 static inline double nbep_vec3_norm2(nbep_vec3 a)
 {
     return nbep_vec3_dot(a, a);
