@@ -12,7 +12,7 @@ if ! command -v clang >/dev/null || [ ! -e "$archer" ]; then
     exit 2
 fi
 out=build-tsan
-mkdir -p "$out"
+mkdir -p "$out" build/tests/tmp   # the tests write their files there (nbep_test_tmp)
 make -s build/build_info.h
 cflags="-std=c11 -D_POSIX_C_SOURCE=200809L -O1 -g -fopenmp=libomp -fsanitize=thread
         -ffp-contract=off -Iinclude -Isrc -Itests -Ibuild $(pkg-config --cflags gsl libconfig hdf5 jansson)"
