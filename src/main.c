@@ -60,8 +60,8 @@ static void print_check(const nbep_scene *sc, int threads)
     printf("deck:            %s\n", sc->deck_path);
     if (strcmp(sc->algorithm, "predictive") == 0) /* run.neighbors and run.order act there */
         printf("algorithm:       predictive (neighbors %s, order %s), %d thread%s\n",
-               nbep_scene_neighbors_name(sc),
-               sc->order_step ? "step" : "time", threads, threads == 1 ? "" : "s");
+               nbep_scene_neighbors_name(sc), nbep_scene_order_name(sc), threads,
+               threads == 1 ? "" : "s");
     else
         printf("algorithm:       %s, %d thread%s\n", sc->algorithm, threads,
                threads == 1 ? "" : "s");

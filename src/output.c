@@ -285,8 +285,7 @@ static int write_root_attrs(nbep_output *o, const nbep_scene *sc, int threads, n
     if (strcmp(sc->algorithm, "predictive") == 0 &&
         (nbep__output_write_string_attr(root, p, "neighbors", nbep_scene_neighbors_name(sc),
                                         d) < 0 ||
-         nbep__output_write_string_attr(root, p, "order", sc->order_step ? "step" : "time", d) <
-             0))
+         nbep__output_write_string_attr(root, p, "order", nbep_scene_order_name(sc), d) < 0))
         return -1;
     const int32_t periodic[3] = {sc->has_box && sc->periodic[0], sc->has_box && sc->periodic[1],
                                  sc->has_box && sc->periodic[2]};

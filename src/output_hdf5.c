@@ -322,8 +322,8 @@ static int is_run(hid_t file, const char *path, nbep_diag *d)
             return -1;
     }
     const int run = format && strcmp(format, FORMAT_NAME) == 0;
-    /* a sweep's table (output_sweep.c), the file most often taken for a run */
-    const bool table = format && strcmp(format, "nbep-sweep-1") == 0;
+    /* a sweep's table, the file most often taken for a run */
+    const bool table = format && strcmp(format, SWEEP_FORMAT_NAME) == 0;
     if (!run)
         nbep_diag_add(d, __FILE__, __LINE__,
                       "nbep: %s: not an %s file (root attribute format is %s%s%s)%s", path,
@@ -364,7 +364,8 @@ nbep_status nbep__output_run_openable(const char *path, int mode, const char *wh
     /* A run being written is flushed in pieces (its superblock's end of file, then the data): a
      * reader that comes in between sees a file cut short, 13 opens in 30 of a run writing 300
      * frames a second. It is tried again, 20 times 50 ms apart, before it counts as cut short:
-     * a truly broken file costs a second. */
+     * a truly broken file costs a second. The last try's reason stays on HDF5's error stack
+     * for the message (the TRY only keeps a test's HDF5 from printing it). */
     for (int tries = 0; fapl >= 0 && tries < 20; tries++) {
         if (tries > 0)
             nanosleep(&(struct timespec){.tv_nsec = 50 * 1000 * 1000}, NULL);
@@ -372,8 +373,6 @@ nbep_status nbep__output_run_openable(const char *path, int mode, const char *wh
         if (file >= 0)
             break;
     }
-    if (file < 0 && fapl >= 0) /* once more with HDF5's reason kept, for the message */
-        file = H5Fopen(path, H5F_ACC_RDONLY, fapl);
     if (file < 0) { /* HDF5's reason first: closing the fapl would clear it */
         HDF5_FAIL(d, path, "%s", what);
         nbep__output_close_id(&fapl);

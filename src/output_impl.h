@@ -22,6 +22,8 @@
 
 /* The run file's root attribute `format`. */
 #define FORMAT_NAME "nbep-1"
+/* A sweep's summary.h5 (output_sweep.c), which is no run (is_run names it) */
+#define SWEEP_FORMAT_NAME "nbep-sweep-1"
 
 /* ---- the run format (output.c; read by output_resume.c) --------------------------------- */
 

@@ -19,8 +19,6 @@
 #include "build_info.h"
 #include "output_impl.h"
 
-#define SWEEP_FORMAT_NAME "nbep-sweep-1"
-
 /* Every member of a row takes one slot wide enough for any of the three kinds, so that member
  * k sits at k * sizeof(slot) in memory. */
 typedef union slot {

@@ -403,6 +403,12 @@ static double f_slope(const motion *m, double t)
     return 2.0 * f_half_slope(m, t);
 }
 
+/* The tries of a critical point's search that also look for f <= 0 (bisect's dip). Where the
+ * pair touches (a pile's), the first such try finds it in most searches (3.0 M of 5.3 M on a
+ * 300-sphere pour); where it misses (most random pairs), each look is an f for nothing: with
+ * no limit random classes of bench_contact took 1.1 to 1.25 times as long. */
+#define DIP_TRIES 1
+
 /* For 0 <= lo < hi where (g <= 0) differs between lo and hi (ga and gb: g there, which the
  * caller has), with dg its derivative: the first double in (lo, hi] at which g has hi's
  * value, g monotone in between. Keeps a bracket of bit patterns (ordered like the values for
@@ -423,12 +429,6 @@ static double f_slope(const motion *m, double t)
  * the first DIP_TRIES tries where f' < 0, short of the turn, also take f there, and the first
  * at which f <= 0 ends the search: that try is returned and *dip set to f there (else *dip is
  * left alone). */
-/* The tries of a critical point's search that also look for f <= 0 (bisect's dip). Where the
- * pair touches (a pile's), the first such try finds it in most searches (3.0 M of 5.3 M on a
- * 300-sphere pour); where it misses (most random pairs), each look is an f for nothing: with
- * no limit random classes of bench_contact took 1.1 to 1.25 times as long. */
-#define DIP_TRIES 1
-
 static double bisect(const motion *m, double (*g)(const motion *, double),
                      double (*dg)(const motion *, double), double lo, double hi, double ga,
                      double gb, double *dip)

@@ -1049,7 +1049,7 @@ nbep_status nbep_scene_load_from(const char *deck_path, const char *const *overr
                                             sc.has_box ? sc.periodic : NULL, sc.box_min,
                                             sc.box_max);
         if (st == NBEP_OK && d->n_errors == fill0)
-            st = nbep__scene_check_energy(&L.c, &sc.state, entries, n_entries);
+            nbep__scene_check_energy(&L.c, &sc.state, entries, n_entries);
         if (st != NBEP_OK)
             goto done;
     }
@@ -1112,6 +1112,11 @@ static int cmp_vec3(const void *a, const void *b)
 const char *nbep_scene_neighbors_name(const nbep_scene *sc)
 {
     return sc->neighbors_cells ? "cells" : sc->neighbors_grid ? "grid" : "all";
+}
+
+const char *nbep_scene_order_name(const nbep_scene *sc)
+{
+    return sc->order_step ? "step" : "time";
 }
 
 bool nbep_scene_resume_point(const nbep_scene *sc, int64_t step)

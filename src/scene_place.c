@@ -658,8 +658,8 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
     return NBEP_OK;
 }
 
-nbep_status nbep__scene_check_energy(nbep__scene_ctx *c, const nbep_state *s,
-                                     const nbep__scene_entry *e, size_t n_entries)
+void nbep__scene_check_energy(nbep__scene_ctx *c, const nbep_state *s,
+                              const nbep__scene_entry *e, size_t n_entries)
 {
     for (size_t k = 0; k < n_entries; k++) {
         const size_t lo = e[k].first, hi = lo + (size_t)e[k].count;
@@ -672,9 +672,8 @@ nbep_status nbep__scene_check_energy(nbep__scene_ctx *c, const nbep_state *s,
                                 "%g) is beyond doubles: a speed, mass, acceleration or position "
                                 "too large",
                                 k, i, ke, pe);
-                return NBEP_OK;
+                return;
             }
         }
     }
-    return NBEP_OK;
 }

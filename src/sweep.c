@@ -793,10 +793,7 @@ static nbep_status make_dir(const char *dir, int *made, nbep_diag *d)
         *s = '\0';
         struct stat sb;
         const int r = mkdir(p, 0777);
-        if (r == 0)
-            (*made)++;
-        else if (errno == EEXIST && stat(p, &sb) == 0 && S_ISDIR(sb.st_mode))
-            *made = 0; /* a folder there already: those below it count */
+        *made += r == 0; /* once one is made, every one below it is */
         if (r != 0 && (errno != EEXIST || stat(p, &sb) != 0 || !S_ISDIR(sb.st_mode))) {
             const int err = errno;
             nbep_diag_add(d, __FILE__, __LINE__, "nbep: cannot make the sweep directory %s: %s",

@@ -97,6 +97,8 @@ void nbep_scene_fini(nbep_scene *sc);
 
 /* run.neighbors as the deck spells it: "all", "grid" or "cells" (predictive's setting). */
 const char *nbep_scene_neighbors_name(const nbep_scene *sc);
+/* run.order as the deck spells it: "time" or "step". */
+const char *nbep_scene_order_name(const nbep_scene *sc);
 /* Whether a run of sc continues bit for bit from its frame at `step`: any frame, but in the
  * predictive cells mode only those at a multiple of output.every (its rebuild points,
  * algo_predictive.c cells_steps). */
