@@ -61,6 +61,8 @@ FUZZ_REPLAY := $(BUILD)/tests/fuzz_replay
 # on dense scenes): built by check too, so that a change to the loop's hooks cannot leave it
 # broken unseen
 PARALLELISM := $(BUILD)/bench/bench_parallelism
+# the same with a copy whose leader notes where its time goes (README, Threads on dense scenes)
+LEADER := $(BUILD)/bench/bench_leader
 
 .PHONY: all run check test valgrind bench bench-programs install clean tsan asan mutate check-programs
 all: bin/nbep
@@ -99,7 +101,7 @@ run: bin/nbep
 
 # Every test binary and shell test (those drive bin/nbep as a user would), then (VALGRIND=1)
 # the test binaries again under memcheck.
-check: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY) $(PARALLELISM)
+check: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY) $(PARALLELISM) $(LEADER)
 	@python3 scripts/mutate.py --stale
 	@bash scripts/run-tests.sh $(TEST_BIN) $(TEST_SH)
 ifeq ($(VALGRIND),1)
@@ -112,7 +114,7 @@ valgrind: $(TEST_BIN)
 	@bash scripts/run-tests.sh --valgrind $(TEST_BIN)
 
 # Every program make check runs, built but not run (scripts/mutate.py builds these per mutant).
-check-programs: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY) $(PARALLELISM)
+check-programs: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY) $(PARALLELISM) $(LEADER)
 
 $(FUZZ_REPLAY): tests/fuzz/replay.c tests/fuzz/fuzz_scene.c tests/fuzz/sources $(FUZZ_SRC) \
 		$(wildcard include/nbep/*.h src/*.h) | $(BUILD)/tests

@@ -2424,8 +2424,9 @@ static void cells_clear(void *uh)
         nbep_xsum_clear(&h->mx->wall[p]);
 }
 
-/* The event of a team context (counted from zero in uh) added to the leader's counts and sums
- * when it stands (the sums exact, so the same as the one thread's whoever handled it). */
+/* The event of a team context (counted from zero in uh) added to the counts and sums of the
+ * thread that handled it (u) when it stands (the sums exact, so their total over the threads
+ * is the one thread's whoever handled what). */
 static void cells_merge(void *u, const void *uh)
 {
     cells_user *x = u;
@@ -2633,7 +2634,7 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
         }
         const int way = c->team_way[step & 1], crew = c->team_crew[way];
         if (tid >= 1 && tid < crew)
-            nbep_evloop_help(c->ev, ops, us, tid, step);
+            nbep_evloop_help(c->ev, ops, &u, us, tid, step);
         if (tid == 0) {
             nbep_evloop_tally tally = {0};
             double t_stuck = 0.0;

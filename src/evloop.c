@@ -33,6 +33,28 @@
 #define NBEP_EVLOOP_HANDLED_HOOK(e, w, ev) ((void)0)
 #endif
 
+/* The team loop's leader's phases, for a look at where its time goes: tests/bench/bench_leader.c
+ * compiles its own copy of this file whose hook notes the time at each change of phase and
+ * returns the phase before it; a build of nbep has nothing here. */
+enum {
+    PH_WAIT,   /* waiting for a place to be handled, with none left to take */
+    PH_HANDLE, /* handling a place itself */
+    PH_STAND,  /* whether the window's first place stands */
+    PH_COMMIT, /* committing it */
+    PH_FILL,   /* adding places to the window */
+    PH_UNDO,   /* undoing places (and waiting for them) */
+    PH_START,  /* an empty window's first place */
+    PH_COUNT
+};
+#ifndef NBEP_EVLOOP_PHASE_HOOK
+#define NBEP_EVLOOP_PHASE_HOOK(p) 0
+#endif
+static inline NBEP_ALWAYS_INLINE int phase(int p)
+{
+    (void)p;
+    return NBEP_EVLOOP_PHASE_HOOK(p);
+}
+
 /* The team loop's places in flight at most: enough that a helper finds one to take while the
  * leader commits (a window of 12 to 32 ran within the noise of this one at N = 256000,
  * phi = 0.30, with one helper; more helpers may want more, unmeasured). */
@@ -64,6 +86,14 @@ typedef struct evl_ws {
     bool next_set[NEXT_MAX];
     double next_time[NEXT_MAX];
     uint64_t next_key[NEXT_MAX];
+    /* the team loop: the number of the place last handled here once it stood, written by the
+     * leader as it commits the place (on the line after the one it reads: it writes without
+     * waiting for it), and whether the handler has yet to add that place's counts and sums
+     * (its context's) to its own (pending: the handler's alone). The handler reads `stood`
+     * before it handles another place here, published after the write, or at the call's end,
+     * after quit: so the leader reads none of a helper's counts (settle) */
+    uint64_t stood;
+    bool pending;
     /* a rebuild of one list (walk): near holds the new list, gain[k] set for the entries i's
      * old list lacked; was holds the old list (n_was entries), kept[k] set for those found
      * again */
@@ -132,15 +162,13 @@ struct nbep_evloop {
     /* the hand-over: the leader publishes places up to avail; any thread of the team takes
      * the next place to handle from `next` and marks it handled (its number, in its
      * workspace's `place`); the leader posts the end of a call in quit (the call's number),
-     * helper t answers it in done[t].word, and its contexts are help_us[t] (one per ring
-     * slot, set as it enters nbep_evloop_help) */
+     * helper t answers it in done[t].word */
     alignas(NBEP_CACHELINE) _Atomic uint64_t avail;
     alignas(NBEP_CACHELINE) _Atomic uint64_t next;
     alignas(NBEP_CACHELINE) _Atomic uint64_t quit;
     struct {
         alignas(NBEP_CACHELINE) _Atomic uint64_t word;
     } done[NBEP_EVLOOP_TEAM_MAX];
-    void *const *help_us[NBEP_EVLOOP_TEAM_MAX];
 };
 
 _Static_assert(offsetof(evl_ws, next_key) + sizeof((evl_ws *)0)->next_key <= NBEP_CACHELINE,
@@ -1188,13 +1216,36 @@ static void undo(nbep_evloop *e, const evl_ws *w, const nbep_evloop_ops *ops, vo
     }
 }
 
+/* The counts and sums of the place last handled on w (context uw) added to the handler's own
+ * (own) if it stood, once: each place's are added by the thread that handled it, whose lines
+ * they are, and the run's sums are exact (xsum.h) and its counts integers, so the totals are
+ * the one thread's whichever thread adds what, in whatever order. Called by the handler only,
+ * once the place is committed or undone. */
+static void settle(const nbep_evloop_ops *ops, evl_ws *w, void *own, void *uw)
+{
+    if (!w->pending)
+        return;
+    if (w->stood == atomic_load_explicit(&w->place, memory_order_relaxed))
+        ops->merge(own, uw);
+    w->pending = false;
+}
+
+/* settle for each of thread t's workspaces, at the call's end (every place is committed or
+ * undone). */
+static void settle_all(nbep_evloop *e, const nbep_evloop_ops *ops, void *own, void *const *us,
+                       int t)
+{
+    for (size_t k = 0; k < RING; k++)
+        settle(ops, &e->ws[t][k], own, us[k]);
+}
+
 /* Takes the next published place to handle and handles it on the workspace of thread t (0
  * the leader, t > 0 helper t) and context us of its slot: false when none is left. *seen is
  * the calling thread's last reading of avail, read again only when the next place is past it
  * (avail never goes down, and a place below it was published before that reading: an undo
  * moves `next` to the window's tail, past every place it withdrew), so that a thread meets
  * the leader's line once for several places. */
-static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us,
+static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *own, void *const *us,
                      uint64_t *seen, int t)
 {
     uint64_t v = atomic_load_explicit(&e->next, memory_order_relaxed), n = *seen;
@@ -1215,10 +1266,14 @@ static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us
      * writes it (the places are apart), so the copy is the taker's own, read here */
     const nbep_event ev = *nbep_feq_slot(e->q, e->batch[k]);
     evl_ws *w = &e->ws[t][k];
+    /* the place handled here before (v - RING at the latest) is committed or undone: place v
+     * was published after that, with release, and read above with acquire */
+    settle(ops, w, own, us[k]);
     if (!e->batch_first[k]) /* every other place may be undone */
         keep(e, w, k, ops, us[k]);
     ops->clear(us[k]); /* its counts from zero, on this thread */
     handle(e, w, ops, us[k], e->batch[k], &ev, ev.time);
+    w->pending = true;
     atomic_store_explicit(&w->place, v, memory_order_release);
     return true;
 }
@@ -1278,17 +1333,21 @@ static int handled_by(const nbep_evloop *e, uint64_t s)
  * handled it (handled_by). Once none is left to take, it stops looking at `next` until it
  * returns: only the leader publishes places, so none comes meanwhile, and each look would pull
  * the line of the counter that the helpers write as they take each place. */
-static int wait_handled(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us,
+static int wait_handled(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
                         uint64_t s)
 {
     int t;
     bool dry = false;
+    const int was = phase(PH_HANDLE);
     for (unsigned k = 1; (t = handled_by(e, s)) < 0; k++) {
-        if (!dry && take_one(e, ops, us, &e->lead_seen, 0))
+        if (!dry && take_one(e, ops, u, us, &e->lead_seen, 0))
             continue;
+        if (!dry)
+            phase(PH_WAIT);
         dry = true;
         nbep_spin_pause(k);
     }
+    phase(was);
     return t;
 }
 
@@ -1305,12 +1364,13 @@ static void put_back(nbep_evloop *e, uint64_t s)
 /* Places s.. of the window undone, and the window emptied (place s - 1, if in it, is the
  * leader's to finish): those not yet taken are taken from the threads (`next` moves past
  * them), those taken are undone once handled. Returns how many were undone. */
-static uint64_t undo_from(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us,
-                          uint64_t s)
+static uint64_t undo_from(nbep_evloop *e, const nbep_evloop_ops *ops, void *u,
+                          void *const *us, uint64_t s)
 {
+    const int was = phase(PH_UNDO);
     const uint64_t taken = atomic_exchange_explicit(&e->next, e->tail, memory_order_relaxed);
     for (uint64_t p = s; p < taken; p++) {
-        const int t = wait_handled(e, ops, us, p);
+        const int t = wait_handled(e, ops, u, us, p);
         undo(e, &e->ws[t][p % RING], ops, us[p % RING]);
     }
     for (uint64_t p = s; p < e->tail; p++) /* the entries taken out go back, as they were */
@@ -1319,6 +1379,7 @@ static uint64_t undo_from(nbep_evloop *e, const nbep_evloop_ops *ops, void *cons
         drop_place(e, p);
     /* the next place is numbered past these: the marks of those taken are theirs */
     e->head = e->fill_at = e->tail;
+    phase(was);
     return e->tail - s;
 }
 
@@ -1341,6 +1402,7 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
     double t_mark = -INFINITY;
     for (;;) {
         if (e->head == e->tail) {
+            phase(PH_START);
             nbep_calendar_entry c;
             if (!(nbep_calendar_first(e->cal, &c) && c.time < t_end))
                 return true;
@@ -1357,11 +1419,11 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
         /* the places in order, as they are handled: each stands when it is then the earliest
          * (the one thread would handle it next, from the same state: no event before it
          * touched its spheres) */
+        phase(PH_STAND);
         const uint64_t s = e->head;
         const size_t k = s % RING;
-        const int by = wait_handled(e, ops, us, s);
-        const evl_ws *w = &e->ws[by][k];
-        void *const uh = by ? e->help_us[by][k] : us[k];
+        const int by = wait_handled(e, ops, u, us, s);
+        evl_ws *w = &e->ws[by][k];
         /* the next place's commit prepared during this one's, when it is handled already */
         const int next_by = s + 1 < e->tail ? handled_by(e, s + 1) : -1;
         const evl_ws *w_next = next_by >= 0 ? &e->ws[next_by][(s + 1) % RING] : NULL;
@@ -1375,11 +1437,11 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
             const double tm = e->batch_entry[k].time;
             if (nbep_calendar_first(e->cal, &top) &&
                 nbep_calendar_before(top, e->batch_entry[k])) {
-                tally->undone += undo_from(e, ops, us, s);
+                tally->undone += undo_from(e, ops, u, us, s);
                 continue;
             }
             if (!advances(&since, &t_mark, tm, stall_events, stall_dt)) {
-                undo_from(e, ops, us, s);
+                undo_from(e, ops, u, us, s);
                 tally->events++;
                 *t_stuck = tm;
                 return false;
@@ -1387,7 +1449,7 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
         }
         if (e->stop) { /* not in the scenes a team runs (no reaction there stops the run;
                         * a helper's stop would also be a race on e->stop) */
-            undo_from(e, ops, us, s + 1);
+            undo_from(e, ops, u, us, s + 1);
             nbep_calendar_set(e->cal, e->batch[k], e->batch_entry[k].time,
                               e->batch_entry[k].key); /* its entry back, as it was */
             if (e->batch_other[k] != NO_SPHERE) /* and its other's, from its slot */
@@ -1399,13 +1461,14 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
         if (w->rebuilt &&
             nbep_nblist_spare(&e->nl) < nbep_nblist_need(&e->nl, w->n_near, w->n_near))
             for (uint64_t p = s + 1; p < e->tail; p++)
-                wait_handled(e, ops, us, p);
+                wait_handled(e, ops, u, us, p);
+        phase(PH_COMMIT);
         tally->events++;
         count_handled(tally, w);
-        ops->merge(u, uh);
+        w->stood = s; /* its counts and sums are its handler's to add (settle) */
         commit(e, w);
         if (e->failed) {
-            undo_from(e, ops, us, s + 1);
+            undo_from(e, ops, u, us, s + 1);
             return false;
         }
         /* its other's entry back if the reaction did not set it (a stale slot's other) */
@@ -1420,6 +1483,7 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
          * only what is handled ahead, never what stands) */
         if (e->head < e->tail && e->head >= e->fill_at &&
             e->tail - e->head <= WINDOW - FILL_FREE) {
+            phase(PH_FILL);
             fill(e, t_end);
             atomic_store_explicit(&e->avail, e->tail, memory_order_release);
         }
@@ -1432,8 +1496,12 @@ bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, v
 {
     assert(crew >= 2 && crew <= e->team && call > 0);
     e->crew = crew;
+    phase(PH_START);
     bool ok = !e->failed && lead(e, ops, u, us, t_end, stall_events, stall_dt, tally, t_stuck);
-    /* the helpers return (each has handled every place it took: each was waited for) */
+    phase(PH_COUNT); /* out of the loop */
+    settle_all(e, ops, u, us, 0);
+    /* the helpers return (each has handled every place it took: each was waited for), each
+     * with the counts and sums of the places it handled that stood added to its own */
     atomic_store_explicit(&e->quit, call, memory_order_release);
     for (int t = 1; t < crew; t++)
         for (unsigned k = 1; atomic_load_explicit(&e->done[t].word, memory_order_acquire) != call;
@@ -1442,20 +1510,20 @@ bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, v
     return ok;
 }
 
-void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us, int t,
-                      uint64_t call)
+void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
+                      int t, uint64_t call)
 {
     assert(t >= 1 && t < e->team && call > 0);
-    e->help_us[t] = us; /* read by the leader after each place's mark, which comes after */
     uint64_t avail_seen = 0;
     for (unsigned k = 1;; k++) {
-        if (take_one(e, ops, us, &avail_seen, t)) {
+        if (take_one(e, ops, u, us, &avail_seen, t)) {
             k = 0;
             continue;
         }
         /* the leader may have ended the call before this thread came: quit names it, and
          * no earlier call (a helper that sat out calls finds theirs there) */
         if (atomic_load_explicit(&e->quit, memory_order_acquire) == call) {
+            settle_all(e, ops, u, us, t); /* the leader wrote every `stood` before quit */
             atomic_store_explicit(&e->done[t].word, call, memory_order_release);
             return;
         }

@@ -73,9 +73,9 @@ typedef struct nbep_evloop_ops {
      * event (on the thread that handles it: the lines stay on that core until the merge) */
     void (*clear)(void *uh);
     /* the team loop only: context uh has handled one event that stands; its counts and sums
-     * (kept apart, from zero) go into the leader's u, in the event's place in the order of
-     * events, so that every sum is the one thread's bit for bit (an undone event's are never
-     * merged) */
+     * (kept apart, from zero) go into u, the context of the thread that handled it, on that
+     * thread; every sum is exact, so the total over the threads is the one thread's bit for
+     * bit (an undone event's are never merged) */
     void (*merge)(void *u, const void *uh);
     /* the team loop only: requests sphere i's motion, which a handle is about to read and
      * write (no effect on results) */
@@ -165,9 +165,11 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
  * handle it next, from the same state), else it and the places after it are undone (ops restore),
  * their entries put back, and handled again. The event at place m is handled with context us[m %
  * NBEP_EVLOOP_RING] of the thread that takes it (each thread passes its own array: one context per
- * ring slot, the place's counts and sums kept apart and merged into u, the leader's, when it
- * stands: ops merge, which for a place a helper handled reads that helper's context, so a helper's
- * array lives until the leader returns, as the helpers do). For scenes whose reactions change only
+ * ring slot, the place's counts and sums kept apart), and added (ops merge) to u, the context of
+ * the thread that handled it (the leader's, or the helper's own passed to nbep_evloop_help),
+ * once it stands: by that thread, before it reuses the slot's context or as the call ends, so
+ * no thread reads another's counts; the sums are exact and the counts integers, so the caller's
+ * total over the threads' u is the one thread's. For scenes whose reactions change only
  * the event's own spheres (the caller's choice: an elastic scene where nothing accelerates).
  * `call` (> 0) names the call, the same on the leader and its helpers and unlike every earlier
  * call's (the step: a thread may sit out calls of fewer threads, and must not take an earlier
@@ -175,8 +177,8 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
 bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
                           int crew, uint64_t call, double t_end, uint64_t stall_events,
                           double stall_dt, nbep_evloop_tally *tally, double *t_stuck);
-void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *const *us, int t,
-                      uint64_t call);
+void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
+                      int t, uint64_t call);
 
 /* Calls visit(u, j) for sphere i and every sphere j of its neighbour list: every sphere that
  * can touch i. Read-only; a react callback may call it. */
