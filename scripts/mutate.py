@@ -670,6 +670,8 @@ MUTANTS = [
      "    if (0) /* one study per process", ["tests/test_sweep_cli.sh"], None),
     ("sweep-peer-stop-unseen", "src/sweep.c", "    return q->received ? q->seen : NBEP_OK;",
      "    return NBEP_OK;", ["tests/test_sweep_mpi.sh"], None),
+    ("sweep-wait-spins", "src/sweep.c", "        nanosleep(&nap, NULL);\n",
+     "        (void)nap;\n", ["tests/test_sweep_mpi.sh"], None),
     ("peak-rss-lifetime", "src/run.c", "    nbep_peak_rss_reset(); /* peak_rss_bytes",
      "    (void)0; /* peak_rss_bytes", ["tests/test_sweep_cli.sh"], None),
 ]

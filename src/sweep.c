@@ -11,7 +11,11 @@
  * - Runs are independent processes of the simulation library: one run's failure (a deck error
  *   for one combination, a numerical failure) is recorded in its row and the others go on.
  * - MPI calls happen only on the main thread, outside any run's parallel region (the thread
- *   level asked for is MPI_THREAD_FUNNELED). */
+ *   level asked for is MPI_THREAD_FUNNELED).
+ * - A rank waiting for the others sleeps between polls (wait_idle): no blocking MPI call, which
+ *   would busy-poll a core away from the ranks still running, but MPI_Init and MPI_Finalize
+ *   (Open MPI 4 waits in their PMIx fences with usleep; all ranks reach MPI_Finalize at once,
+ *   after the last collective). */
 #include "nbep/sweep.h"
 
 #include <errno.h>
@@ -1011,6 +1015,46 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
 }
 
 #ifdef NBEP_HAVE_MPI
+/* Every wait of a rank for the others (the collectives, the stop messages) goes through here, never
+ * through a blocking MPI call: Open MPI's blocking calls busy-poll (its one knob,
+ * mpi_yield_when_idle, on where mpirun sees a node oversubscribed, only adds sched_yield to the
+ * loop: the rank still takes every cycle it is given), so a rank done with its share of the runs
+ * burnt a core for as long as the slowest rank ran, one that the busy ranks' OpenMP threads on the
+ * node could use. MPI_Testall drives Open MPI's progress (libnbc's schedules included) once per
+ * call; between calls the rank sleeps, 20 us at first (collectives that all ranks reach at once end
+ * within a few polls), doubling up to 1 ms. 1 ms keeps a waiting rank at 1 to 4 % of a core
+ * (measured on a 2-core machine, tests/test_sweep_mpi.sh: a poll with its wake-up costs some tens
+ * of microseconds; a blocking collective took 89 %), and adds at most about 1 ms to a collective
+ * per stage of its schedule that waits on a sleeping rank: a sweep makes six collectives, once,
+ * against runs of tenths of a second and more. Longer naps would save little more CPU; shorter ones
+ * would cost it for latency nobody sees. */
+enum { WAIT_SLEEP_MIN_NS = 20000, WAIT_SLEEP_MAX_NS = 1000000 };
+
+static void wait_idle(int n, MPI_Request *req)
+{
+    long ns = WAIT_SLEEP_MIN_NS;
+    for (;;) {
+        int done = 0;
+        MPI_Testall(n, req, &done, MPI_STATUSES_IGNORE);
+        if (done)
+            return;
+        /* a signal cuts the sleep short (EINTR): the loop only polls sooner */
+        const struct timespec nap = {.tv_sec = 0, .tv_nsec = ns};
+        nanosleep(&nap, NULL);
+        ns = ns * 2 < WAIT_SLEEP_MAX_NS ? ns * 2 : WAIT_SLEEP_MAX_NS;
+    }
+}
+
+/* MPI_Allreduce of one int over MPI_COMM_WORLD, waited for with wait_idle. */
+static int allreduce_int(int mine, MPI_Op op)
+{
+    int all = 0;
+    MPI_Request req;
+    MPI_Iallreduce(&mine, &all, 1, MPI_INT, op, MPI_COMM_WORLD, &req);
+    wait_idle(1, &req);
+    return all;
+}
+
 /* Rank 0 receives every rank's results (each rank's runs in its own order) and puts each at
  * its run's index. Byte copies: the ranks of one job run one build on one kind of machine. */
 static nbep_status gather(const nbep_sweep_plan *p, int rank, int size,
@@ -1034,9 +1078,7 @@ static nbep_status gather(const nbep_sweep_plan *p, int rank, int size,
         displs = calloc((size_t)size, sizeof *displs);
     }
     int ok = st == NBEP_OK && send && (rank != 0 || (recv && counts && displs));
-    int all_ok = 0;
-    MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
-    if (!all_ok) {
+    if (!allreduce_int(ok, MPI_MIN)) {
         if (st == NBEP_OK)
             nbep_diag_add(d, __FILE__, __LINE__, "nbep: out of memory gathering the sweep");
         st = st == NBEP_OK ? NBEP_ENOMEM : st;
@@ -1057,8 +1099,10 @@ static nbep_status gather(const nbep_sweep_plan *p, int rank, int size,
             off += n_q;
         }
     }
-    MPI_Gatherv(send, (int)(mine * rec), MPI_BYTE, recv, counts, displs, MPI_BYTE, 0,
-                MPI_COMM_WORLD);
+    MPI_Request req;
+    MPI_Igatherv(send, (int)(mine * rec), MPI_BYTE, recv, counts, displs, MPI_BYTE, 0,
+                 MPI_COMM_WORLD, &req);
+    wait_idle(1, &req);
     if (rank == 0)
         for (size_t i = 0; i < p->n_runs; i++)
             results[recv[i].run] = recv[i];
@@ -1120,14 +1164,15 @@ static void peers_announce(void *u, nbep_status st)
  * announcer sent one to every other rank) and completes its own sends. */
 static void peers_drain(peers *q)
 {
-    int mine = q->announced, all = 0;
-    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD);
+    const int mine = q->announced, all = allreduce_int(mine, MPI_SUM);
     for (int k = q->received; k < all - mine; k++) {
         int v;
-        MPI_Recv(&v, 1, MPI_INT, MPI_ANY_SOURCE, TAG_STOP, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+        MPI_Request req;
+        MPI_Irecv(&v, 1, MPI_INT, MPI_ANY_SOURCE, TAG_STOP, MPI_COMM_WORLD, &req);
+        wait_idle(1, &req);
     }
     if (q->announced && q->req)
-        MPI_Waitall(q->size, q->req, MPI_STATUSES_IGNORE);
+        wait_idle(q->size, q->req);
 }
 #endif
 
@@ -1135,11 +1180,8 @@ static void peers_drain(peers *q)
 static nbep_status agree(nbep_status st, bool mpi)
 {
 #ifdef NBEP_HAVE_MPI
-    if (mpi) {
-        int mine = (int)st, worst = 0;
-        MPI_Allreduce(&mine, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-        return (nbep_status)worst;
-    }
+    if (mpi)
+        return (nbep_status)allreduce_int((int)st, MPI_MAX);
 #endif
     (void)mpi;
     return st;

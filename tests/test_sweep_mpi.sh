@@ -84,7 +84,7 @@ check "and reuses all 8 runs" "grep -q '\"reused\": 8' '$tmp/again.json'"
 # ---- a SIGTERM that reaches one rank alone stops the new runs of both ----------------------
 # 8 runs of a few seconds each (4 a rank); rank 1 alone gets SIGTERM during its first run.
 # Rank 0 finishes the run it is in and starts no other (it ran all four before: the signal's
-# rank waited for it, spinning); both exit 143, and the table has at most the two first runs
+# rank waited for it, asleep); both exit 143, and the table has at most the two first runs
 # done and every other run not_run.
 mkdir -p "$tmp/one"
 sed -e 's/steps = 50;/steps = 150000;/' -e 's/count = 16;/count = 4;/' "$tmp/mpi.deck" >"$tmp/one/one.deck"
@@ -110,6 +110,69 @@ not_run=$(tail -n +2 "$csv1" 2>/dev/null | cut -d, -f7 | grep -c '^not_run$')
 check "SIGTERM to rank 1 alone: exit 143 (got $rc; rank 1 pid '${rank1}')" "[ $rc = 143 ]"
 check "... at most the two first runs ran ($done_runs), the other six not run ($not_run)" \
     "[ $done_runs -le 2 ] && [ $not_run -ge 6 ]"
+
+# ---- a rank done with its runs waits for the others without spinning ----------------------
+# Two runs, one a rank: rank 0's of 20 steps, rank 1's of 10^9 (minutes), so that rank 0 waits
+# for rank 1 at the end of its share. Open MPI's blocking collectives busy-poll: rank 0 burnt
+# a whole core there (89 % of a 3 s window on a quiet 2-core machine; a third with the load at
+# 4, as much as the running rank got), where sleeping between polls uses 1 to 4 %. Measured from
+# outside, in /proc/PID/stat (utime + stime: the process's threads together), over 3 s that
+# start once rank 0's run has ended and end before rank 1's is stopped (SIGTERM: it finishes
+# its step, both exit 143, as a stop reaching one rank does): nbep's output stays as it is.
+# Two checks, each with a wide margin on a noisy machine: the waiting rank used less than a
+# quarter of the window (a sleeping one would need 250 us a poll's wake-up to come near; a
+# spinning one fails it unless 8 threads share the 2 cores), and less than a quarter of the
+# running rank's CPU time over it (a spinning one competes with it alike, and fails it however
+# busy the machine is; a sleeping one only if rank 1 got a tenth of a core or less).
+mkdir -p "$tmp/wait"
+cat >"$tmp/wait/wait.deck" <<'EOF2'
+# rank 0: 20 steps; rank 1: 10^9 steps, stopped by the test (few frames, no per-step stats)
+run: { algorithm = "predictive"; steps = 20; dt = 1.0e-3; threads = 1; seed = 3; };
+physics: { gravity = [0.0, 0.0, -9.81]; restitution = 1.0; };
+box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };
+spheres = ( { count = 4; radius = 0.05; mass = 1.0; place = "random"; speed = 1.0; } );
+output: { file = "wait.h5"; every = 1000000; stats = false; };
+sweep: { vary = ( { key = "run.steps"; values = [20, 1000000000]; } ); };
+EOF2
+timeout 120 mpirun -np 2 --oversubscribe bin/nbep sweep "$tmp/wait/wait.deck" \
+    -o "$tmp/wait/wait.h5" 2>"$tmp/wait/stderr" &
+pid=$!
+r0="" r1=""
+for _ in $(seq 400); do
+    for p in $(pgrep -f "nbep sweep $tmp/wait/wait.deck"); do
+        e=$(tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep '^OMPI_COMM_WORLD_RANK=')
+        [ "$e" = OMPI_COMM_WORLD_RANK=0 ] && r0=$p
+        [ "$e" = OMPI_COMM_WORLD_RANK=1 ] && r1=$p
+    done
+    [ -n "$r0" ] && [ -n "$r1" ] && grep -q 'rank 0: run 0 .*: ok in' "$tmp/wait/stderr" && break
+    sleep 0.05
+done
+ticks() { awk '{print $14 + $15}' "/proc/$1/stat" 2>/dev/null; }
+used="" window="" other="" running=""
+if [ -n "$r0" ] && [ -n "$r1" ]; then
+    sleep 0.5 # past the progress line, into the wait
+    c0=$(ticks "$r0") d0=$(ticks "$r1") t0=$(date +%s%N)
+    sleep 3
+    c1=$(ticks "$r0") d1=$(ticks "$r1") t1=$(date +%s%N)
+    # rank 1 still in its run: rank 0 waited all through the window
+    kill -0 "$r1" 2>/dev/null && ! grep -q 'rank 1: run 1 ' "$tmp/wait/stderr" && running=yes
+    hz=$(getconf CLK_TCK)
+    used=$(((c1 - c0) * 1000 / hz)) window=$(((t1 - t0) / 1000000)) # milliseconds
+    other=$(((d1 - d0) * 1000 / hz))
+    kill -TERM "$r1"
+else
+    kill -TERM "$pid"
+fi
+wait $pid
+rc=$?
+check "rank 0 waited 3 s for rank 1's run (pids '$r0' '$r1'; rank 1 still running: '$running')" \
+    "[ -n '$used' ] && [ '$running' = yes ]"
+check "... ${used:-?} ms CPU in ${window:-?} ms: under 1/4 of that and of rank 1's ${other:-?} ms" \
+    "[ -n '$used' ] && [ $((4 * ${used:-0})) -lt ${window:-0} ] &&
+     [ $((4 * ${used:-0})) -lt ${other:-0} ]"
+statuses=$(tail -n +2 "$tmp/wait/wait.sweep/summary.csv" 2>/dev/null | cut -d, -f6 | tr '\n' ' ')
+check "... then rank 1 stopped by SIGTERM: exit 143 (got $rc), runs ok, interrupted ($statuses)" \
+    "[ $rc = 143 ] && [ '$statuses' = 'ok interrupted ' ]"
 
 [ $fail = 0 ] && echo "sweep_mpi: all passed"
 exit $fail
