@@ -554,7 +554,7 @@ MUTANTS = [
      "let_go(x->c, x->s, j, x->sc->dt, 0.0, x->w);", ["test_run_contract"] + CELLS + GRAN, None),
     # ---- run.order = "step": the paper's step (approximate, opt-in) ----
     ("order-step-ignored", "src/algo_predictive.c",
-     "c->order_step = rounds && sim->scene->order_step;", "c->order_step = false;", ORDER, None),
+     "p.order_step = p.rounds && sc->order_step;", "p.order_step = false;", ORDER, None),
     ("order-step-cells-allowed", "src/scene.c",
      "(strcmp(sc->algorithm, \"predictive\") != 0 || sc->neighbors_cells))",
      "(strcmp(sc->algorithm, \"predictive\") != 0))", ORDER, None),

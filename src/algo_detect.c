@@ -81,6 +81,38 @@ static void split_rows(detect_ctx *ctx, size_t n, size_t n_planes, int nt)
     }
 }
 
+/* The room a contact list starts with for `rows` detection rows: a few contacts per sphere; a
+ * denser pile grows the list (rare). */
+static size_t list_room(size_t rows)
+{
+    return 4 * rows + 64;
+}
+
+/* The bytes detect_create_common allocates for a run of sc on nt threads (nbep check's memory
+ * estimate): the contact lists at their starting room and, with the BVH, a query's hits of
+ * up to n + 1 spheres per thread and the hierarchy. */
+static size_t detect_bytes_common(const nbep_scene *sc, int nt, bool use_bvh)
+{
+    const size_t n = sc->state.n;
+    const contact_list *l = NULL; /* for element sizes only: sizeof does not evaluate */
+    /* the threads' rows cover the n spheres once */
+    size_t bytes = sizeof(detect_ctx) + (size_t)nt * sizeof *l +
+                   (list_room(n) + 64 * (size_t)(nt - 1)) * sizeof *l->c;
+    if (use_bvh)
+        bytes += (size_t)nt * (n + 1) * sizeof *l->hits + nbep_bvh_bytes(n);
+    return bytes;
+}
+
+static size_t naive_bytes(const nbep_scene *sc, int nt)
+{
+    return detect_bytes_common(sc, nt, false);
+}
+
+static size_t seminaive_bytes(const nbep_scene *sc, int nt)
+{
+    return detect_bytes_common(sc, nt, true);
+}
+
 static nbep_status detect_create_common(nbep_sim *sim, void **out, bool use_bvh, nbep_diag *d)
 {
     detect_ctx *ctx = calloc(1, sizeof *ctx);
@@ -97,8 +129,7 @@ static nbep_status detect_create_common(nbep_sim *sim, void **out, bool use_bvh,
     split_rows(ctx, n, sim->st.n_planes, sim->nt);
     for (int t = 0; t < sim->nt; t++) {
         contact_list *l = &ctx->lists[t];
-        /* Room for a few contacts per sphere; a denser pile grows the list (rare). */
-        l->cap = 4 * (l->row_hi - l->row_lo) + 64;
+        l->cap = list_room(l->row_hi - l->row_lo);
         l->c = malloc(l->cap * sizeof *l->c);
         /* a query reports at most n - 1 spheres: room for all, so a step never allocates */
         l->cap_hits = use_bvh ? n + 1 : 0;
@@ -312,9 +343,11 @@ const nbep_algo nbep__algo_naive = {.name = "naive",
                                     .exact_overlap = true,
                                     .create = naive_create,
                                     .run = detect_run,
-                                    .destroy = detect_destroy};
+                                    .destroy = detect_destroy,
+                                    .bytes = naive_bytes};
 const nbep_algo nbep__algo_seminaive = {.name = "seminaive",
                                         .exact_overlap = true,
                                         .create = seminaive_create,
                                         .run = detect_run,
-                                        .destroy = detect_destroy};
+                                        .destroy = detect_destroy,
+                                        .bytes = seminaive_bytes};

@@ -431,6 +431,155 @@ static void fit_region(pred_ctx *c, nbep_vec3 lo, nbep_vec3 hi)
 
 static int team_forced(void);
 
+/* The neighbours per sphere that nbep check counts in cells mode's lists (with their rooms
+ * and the pool's growth, nbep_nblist_bytes): more than a dense scene lists (a fluid at phi
+ * 0.30 to 0.50: 6 to 11, nblist.h; a settled pile at phi 0.6 about 14 by the same scaling),
+ * so a dilute scene's estimate is high (a pour's start lists about one: README, nbep check);
+ * spheres of mixed sizes may list more, as the cutoff is the largest diameter's. */
+#define ESTIMATE_NEIGHBOURS 24.0
+
+/* What pred_create makes for a run of a scene on nt threads: the models the scene needs
+ * (each keeps arrays of its own per sphere), each mode's workspaces and each thread's share.
+ * pred_create allocates by it and pred_bytes (nbep check's memory estimate) counts by it, so
+ * the estimate holds the arrays a run of that scene makes: no granular ones for an elastic
+ * fluid, no rounds' ones in cells mode. */
+typedef struct pred_plan {
+    size_t n, n_planes;
+    int nt;
+    bool free_flight;   /* no sphere accelerates: nothing rests (no rest sets, no aeff) */
+    bool tc_model;      /* physics.tc > 0 and e < 1: each sphere's last collision (t_last) */
+    bool cage_model;    /* the TC model where something accelerates: faces met (face) */
+    bool settle_model;  /* something accelerates and e < 1: settling records (settle) */
+    bool jam_model;     /* something accelerates or e < 1: reaction counts (jam) */
+    bool rounds;        /* not cells mode: flags, claims, reaction stamps, candidate lists */
+    bool order_step;    /* run.order = "step", rounds only: time claims */
+    bool use_grid;      /* run.neighbors = "grid": a cell grid */
+    bool cells;         /* run.neighbors = "cells": the event loop */
+    bool crews;         /* grid mode on two threads or more: crews run the rounds (pred_ctx) */
+    bool team;          /* cells mode: a team of team_size >= 2 may run the event loop */
+    int team_size;      /* cells mode: the threads that may run the event loop */
+    int team_ways;      /* the ways a step may run, their threads (pred_ctx) */
+    int team_crew[3];
+} pred_plan;
+
+/* The plan of a run of scene sc from state st (the scene's, or a run's copy of it) on nt
+ * threads, with NBEP_TEAM's choice team_force (team_forced). */
+static pred_plan plan_of(const nbep_scene *sc, const nbep_state *st, int nt, int team_force)
+{
+    pred_plan p = {.n = st->n, .n_planes = st->n_planes, .nt = nt, .free_flight = true};
+    for (size_t i = 0; i < p.n; i++)
+        p.free_flight &= is_zero(st->acc[i]);
+    p.tc_model = sc->tc > 0.0 && sc->restitution < 1.0;
+    p.cage_model = p.tc_model && !p.free_flight;
+    p.settle_model = !p.free_flight && sc->restitution < 1.0;
+    p.jam_model = !p.free_flight || sc->restitution < 1.0;
+    /* the rounds' bookkeeping (flags, claims, reaction stamps, candidate and redo lists):
+     * not in cells mode, whose event loop needs none of it (25 to 45 bytes a sphere) */
+    p.rounds = !sc->neighbors_cells;
+    p.order_step = p.rounds && sc->order_step; /* scene.c refuses it in cells mode */
+    p.use_grid = sc->neighbors_grid;
+    p.cells = sc->neighbors_cells;
+    if (p.use_grid && nt >= 2) {
+        /* the ways of grid mode's rounds: one thread, two, and every thread (or NBEP_TEAM's
+         * count) where that is more */
+        int size = nt;
+        if (team_force >= 2 && team_force < size)
+            size = team_force;
+        p.crews = true;
+        p.team_ways = size > 2 ? 3 : 2;
+        p.team_crew[0] = 1;
+        p.team_crew[1] = 2;
+        p.team_crew[2] = size;
+    }
+    if (p.cells) {
+        /* the team loop: reactions of a free flight at e = 1 change their two spheres only
+         * (no resting, holding, settling, TC clocks or reaction counts) */
+        const bool can_team = nt >= 2 && p.free_flight && !p.tc_model && !p.jam_model &&
+                              !p.settle_model;
+        int size = nt < NBEP_EVLOOP_TEAM_MAX ? nt : NBEP_EVLOOP_TEAM_MAX;
+        if (team_force >= 2 && team_force < size)
+            size = team_force;
+        p.team_size = can_team ? size : 1;
+        p.team = p.team_size >= 2;
+        p.team_ways = !p.team ? 1 : p.team_size > 2 ? 3 : 2;
+        p.team_crew[0] = 1;
+        p.team_crew[1] = 2;
+        p.team_crew[2] = p.team_size;
+    }
+    return p;
+}
+
+/* Thread t's share of the spheres, which sizes its workspaces: its own range and one, or in
+ * grid mode its largest share in any crew it belongs to. */
+static size_t plan_own(const pred_plan *p, int t)
+{
+    const nbep_range r = nbep__range_split(p->n, t, p->nt);
+    size_t own = r.hi - r.lo + 1;
+    for (int k = 0; p->crews && k < p->team_ways; k++)
+        if (t < p->team_crew[k]) {
+            const nbep_range q = nbep__range_split(p->n, t, p->team_crew[k]);
+            own = own > q.hi - q.lo + 1 ? own : q.hi - q.lo + 1;
+        }
+    return own;
+}
+
+/* The room of thread t's list of fired spheres: 2 per reaction, 1 per let-go; cells mode: one
+ * reaction's 3 and every held sphere letting go after it, on the thread that runs the event
+ * loop (and a team's helper, whose reactions change their own two spheres only). */
+static size_t plan_fired(const pred_plan *p, int t)
+{
+    if (p->rounds)
+        return 3 * plan_own(p, t);
+    return t == 0 ? p->n + 3 : p->team && t < p->team_size ? 3 : 1;
+}
+
+/* The bytes pred_create allocates for a run of sc on nt threads, by the same plan: the
+ * algorithm's part of nbep check's memory estimate (cells mode: lists of ESTIMATE_NEIGHBOURS;
+ * each thread's quartic workspace, a few hundred bytes, left out). */
+static size_t pred_bytes(const nbep_scene *sc, int nt)
+{
+    const pred_plan p = plan_of(sc, &sc->state, nt, team_forced());
+    const pred_ctx *c = NULL;  /* for element sizes only: sizeof does not evaluate */
+    const thread_ws *w = NULL;
+    const size_t n = p.n;
+    size_t bytes = sizeof *c + nbep_feq_bytes(n) + n * (sizeof *c->ver + sizeof *c->tau);
+    if (!p.free_flight)
+        bytes += n * (sizeof *c->rest + sizeof *c->aeff);
+    if (p.tc_model)
+        bytes += n * sizeof *c->t_last;
+    if (p.cage_model)
+        bytes += n * CAGE_FACES * sizeof *c->face;
+    if (p.settle_model)
+        bytes += n * sizeof *c->settle;
+    if (p.jam_model)
+        bytes += n * sizeof *c->jam;
+    if (p.rounds)
+        bytes += n * (sizeof *c->flags + sizeof *c->claim[0] + sizeof *c->claim[1] +
+                      sizeof *c->reacted);
+    if (p.order_step)
+        bytes += n * sizeof *c->tclaim;
+    bytes += (size_t)nt * sizeof *c->ws;
+    for (int t = 0; t < nt; t++) {
+        const size_t own = plan_own(&p, t);
+        bytes += plan_fired(&p, t) * sizeof *w->fired + CHUNK * sizeof *w->part;
+        if (p.rounds)
+            bytes += own * (sizeof *w->cand + sizeof *w->redo + sizeof *w->rel +
+                            2 * sizeof *w->claimed);
+        if (p.order_step)
+            bytes += 2 * own * sizeof *w->tclaimed;
+    }
+    if (p.use_grid)
+        bytes += nbep_grid_bytes(n);
+    if (p.cells)
+        bytes += nbep_evloop_bytes(n, ESTIMATE_NEIGHBOURS);
+    if (p.team) {
+        const size_t rows = (size_t)p.team_size * NBEP_EVLOOP_RING;
+        bytes += rows * (sizeof *c->help_cnt + sizeof *c->help_mx +
+                         (p.n_planes ? p.n_planes : 1) * sizeof *c->help_wall);
+    }
+    return bytes;
+}
+
 static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
 {
     size_t n = sim->st.n;
@@ -445,45 +594,40 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         pred_destroy(c);
         return st;
     }
-    c->free_flight = true;
-    for (size_t i = 0; i < n; i++)
-        c->free_flight &= is_zero(sim->st.acc[i]);
-    const bool tc_model = sim->scene->tc > 0.0 && sim->scene->restitution < 1.0;
+    c->team_force = team_forced();
+    /* what to allocate: the same plan as pred_bytes counts (keep the two in step) */
+    const pred_plan p = plan_of(sim->scene, &sim->st, sim->nt, c->team_force);
+    c->free_flight = p.free_flight;
     c->ver = nbep_alloc_aligned(n, sizeof *c->ver);
     c->tau = nbep_alloc_aligned(n, sizeof *c->tau);
-    if (!c->free_flight) {
+    if (!p.free_flight) {
         c->rest = nbep_alloc_aligned(n, sizeof *c->rest);
         c->aeff = nbep_alloc_aligned(n, sizeof *c->aeff);
     }
-    if (tc_model)
+    if (p.tc_model)
         c->t_last = nbep_alloc_aligned(n, sizeof *c->t_last);
-    const bool cage_model = tc_model && !c->free_flight;
-    if (cage_model)
+    if (p.cage_model)
         c->face = nbep_alloc_aligned(n * CAGE_FACES, sizeof *c->face);
-    const bool settle_model = !c->free_flight && sim->scene->restitution < 1.0;
-    if (settle_model)
+    if (p.settle_model)
         c->settle = nbep_alloc_aligned(n, sizeof *c->settle);
-    const bool jam_model = !c->free_flight || sim->scene->restitution < 1.0;
     const uint64_t jam_max = sim->scene->max_reactions; /* 0 (a scene built in code): none */
     c->jam_max = (uint32_t)(jam_max > 0 && jam_max < UINT32_MAX - 1 ? jam_max : UINT32_MAX - 1);
-    if (jam_model)
+    if (p.jam_model)
         c->jam = nbep_alloc_aligned(n, sizeof *c->jam);
-    /* the rounds' bookkeeping (flags, claims, reaction stamps, candidate and redo lists):
-     * not in cells mode, whose event loop needs none of it (25 to 45 bytes a sphere) */
-    const bool rounds = !sim->scene->neighbors_cells;
+    const bool rounds = p.rounds;
     if (rounds) {
         c->flags = nbep_alloc_aligned(n, sizeof *c->flags);
         c->claim[0] = nbep_alloc_aligned(n, sizeof *c->claim[0]);
         c->claim[1] = nbep_alloc_aligned(n, sizeof *c->claim[1]);
         c->reacted = nbep_alloc_aligned(n, sizeof *c->reacted);
     }
-    c->order_step = rounds && sim->scene->order_step; /* scene.c refuses it in cells mode */
+    c->order_step = p.order_step;
     if (c->order_step)
         c->tclaim = nbep_alloc_aligned(n, sizeof *c->tclaim);
     c->ws = nbep_alloc_aligned((size_t)sim->nt, sizeof *c->ws);
-    if (!c->ver || !c->tau || (!c->free_flight && (!c->rest || !c->aeff)) ||
-        (tc_model && !c->t_last) || (cage_model && !c->face) || (jam_model && !c->jam) ||
-        (settle_model && !c->settle) ||
+    if (!c->ver || !c->tau || (!p.free_flight && (!c->rest || !c->aeff)) ||
+        (p.tc_model && !c->t_last) || (p.cage_model && !c->face) || (p.jam_model && !c->jam) ||
+        (p.settle_model && !c->settle) ||
         !c->ws ||
         (rounds && (!c->flags || !c->claim[0] || !c->claim[1] || !c->reacted)) ||
         (c->order_step && !c->tclaim)) {
@@ -491,21 +635,15 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm (%zu spheres)",
                   n);
     }
-    c->use_grid = sim->scene->neighbors_grid;
-    c->team_force = team_forced();
-    if (c->use_grid && sim->nt >= 2) {
-        /* the ways of grid mode's rounds: one thread, two, and every thread (or NBEP_TEAM's
-         * count) where that is more; the first step takes the largest (team_choose) */
-        int size = sim->nt;
-        if (c->team_force >= 2 && c->team_force < size)
-            size = c->team_force;
-        c->crews = true;
-        c->team_ways = size > 2 ? 3 : 2;
-        c->team_crew[0] = 1;
-        c->team_crew[1] = 2;
-        c->team_crew[2] = size;
+    c->use_grid = p.use_grid;
+    c->crews = p.crews;
+    c->team_ways = p.team_ways;
+    for (int w = 0; w < 3; w++)
+        c->team_crew[w] = p.team_crew[w];
+    if (c->crews) {
         for (int w = 0; w < c->team_ways; w++)
             nbep_barrier_init(&c->crew_bar[w], (unsigned)c->team_crew[w]);
+        /* the first step takes the largest crew (team_choose) */
         c->team_way[0] = c->team_way[1] = c->team_force == -1 ? 0 : c->team_ways - 1;
         c->crew_last = -1;
     }
@@ -528,7 +666,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     c->mass_all = n > 0 && same_mass ? sim->st.mass[0] : 0.0;
     c->image_horizon = c->pb.any && !c->use_grid && !sim->scene->neighbors_cells;
     c->image_reach = nbep_periodic_reach(&c->pb, 2.0 * c->rmax);
-    if (sim->scene->neighbors_cells) {
+    if (p.cells) {
         /* see cells_steps: only those frames are rebuild points of the uninterrupted run
          * (nbep_output_open_resume picks such a frame; a caller of its own may not) */
         const nbep_resume *r = sim->opt.resume;
@@ -539,24 +677,13 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
                       "multiple of output.every (%llu), not from step %lld",
                       (unsigned long long)sim->scene->output_every, (long long)r->step);
         }
-        /* the team loop: reactions of a free flight at e = 1 change their two spheres only
-         * (no resting, holding, settling, TC clocks or reaction counts: all NULL here) */
-        const bool can_team = sim->nt >= 2 && c->free_flight && !c->t_last && !c->jam &&
-                              !c->settle && !c->rest;
-        int size = sim->nt < NBEP_EVLOOP_TEAM_MAX ? sim->nt : NBEP_EVLOOP_TEAM_MAX;
-        if (c->team_force >= 2 && c->team_force < size)
-            size = c->team_force;
-        c->team_size = can_team ? size : 1;
+        c->team_size = p.team_size;
         /* without a box, the cells are laid out at the first rebuild (cells_fit) and again at
          * each one after; until then they are one cell */
         c->refit = !sim->scene->has_box && n > 0;
         st = nbep_evloop_create(n, sim->scene->box_min, sim->scene->box_max, 2.0 * c->rmax,
                                 c->pb.axis, c->team_size, c->q, c->ver, &c->ev, d);
-        c->team = st == NBEP_OK && c->team_size >= 2;
-        c->team_ways = !c->team ? 1 : c->team_size > 2 ? 3 : 2;
-        c->team_crew[0] = 1;
-        c->team_crew[1] = 2;
-        c->team_crew[2] = c->team_size;
+        c->team = st == NBEP_OK && p.team;
         /* the first step: the whole team (team_choose) */
         c->team_way[0] = c->team_way[1] = c->team_force == -1 ? 0 : c->team_ways - 1;
         if (c->team) {
@@ -599,19 +726,9 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
             atomic_init(&c->tclaim[i], KEY_FREE);
     }
     for (int t = 0; t < sim->nt; t++) {
-        nbep_range r = nbep__range_split(n, t, sim->nt);
-        size_t own = r.hi - r.lo + 1;
-        for (int k = 0; c->crews && k < c->team_ways; k++) /* its largest share in a crew */
-            if (t < c->team_crew[k]) {
-                const nbep_range q = nbep__range_split(n, t, c->team_crew[k]);
-                own = own > q.hi - q.lo + 1 ? own : q.hi - q.lo + 1;
-            }
+        const size_t own = plan_own(&p, t);
         thread_ws *w = &c->ws[t];
-        /* 2 per reaction, 1 per let-go; cells mode: one reaction's 3 and every held sphere
-         * letting go after it, on the thread that runs the event loop (and a team's helper,
-         * whose reactions change their own two spheres only) */
-        size_t n_fired = rounds ? 3 * own : t == 0 ? n + 3 : c->team && t < c->team_size ? 3 : 1;
-        w->fired = malloc(n_fired * sizeof *w->fired);
+        w->fired = malloc(plan_fired(&p, t) * sizeof *w->fired);
         w->part = nbep_alloc_aligned(CHUNK, sizeof *w->part);
         if (rounds) {
             w->cand = malloc(own * sizeof *w->cand);
@@ -2963,5 +3080,6 @@ const nbep_algo nbep__algo_predictive = {.name = "predictive",
                                          .create = pred_create,
                                          .run = pred_run,
                                          .destroy = pred_destroy,
+                                         .bytes = pred_bytes,
                                          .export_events = pred_export,
                                          .import_events = pred_import};

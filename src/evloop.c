@@ -344,7 +344,7 @@ void nbep_evloop_destroy(nbep_evloop **e)
 
 size_t nbep_evloop_bytes(size_t n, double neighbours)
 {
-    return nbep_calendar_bytes(n) + nbep_cells_bytes(n) +
+    return sizeof(nbep_evloop) + nbep_calendar_bytes(n) + nbep_cells_bytes(n) +
            nbep_nblist_bytes(n, (size_t)(neighbours * (double)n)) +
            n * sizeof(uint32_t);
 }

@@ -38,6 +38,11 @@ static nbep_event empty_event(void)
     return (nbep_event){.time = INFINITY, .partner = 0, .kind = NBEP_EVENT_NONE};
 }
 
+size_t nbep_feq_bytes(size_t n)
+{
+    return sizeof(nbep_feq) + n * sizeof(nbep_event);
+}
+
 nbep_status nbep_feq_create(size_t n, nbep_feq **out, nbep_diag *d)
 {
     /* find writes sphere ids as uint32_t (STYLE 2: sphere ids are uint32_t). */

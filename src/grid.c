@@ -4,11 +4,26 @@
 #include <math.h>
 #include <string.h>
 
+/* At most this many cells for n_max spheres: about one per sphere or fewer, so memory stays
+ * O(n) whatever the layout. */
+static size_t cap_cells(size_t n_max)
+{
+    return 2 * n_max + 8;
+}
+
+size_t nbep_grid_bytes(size_t n_max)
+{
+    const nbep_grid *g = NULL; /* for the element sizes only (sizeof does not evaluate) */
+    const size_t cells = cap_cells(n_max);
+    return (cells + 1) * sizeof *g->start + cells * sizeof *g->fill +
+           n_max * (sizeof *g->item + sizeof *g->cell);
+}
+
 nbep_status nbep_grid_init(nbep_grid *g, size_t n_max, nbep_diag *d)
 {
     memset(g, 0, sizeof *g);
     g->cap_n = n_max;
-    g->cap_cells = 2 * n_max + 8;
+    g->cap_cells = cap_cells(n_max);
     g->start = nbep_alloc_aligned(g->cap_cells + 1, sizeof *g->start);
     g->item = nbep_alloc_aligned(n_max, sizeof *g->item);
     g->cell = nbep_alloc_aligned(n_max, sizeof *g->cell);

@@ -16,7 +16,6 @@
 #include <omp.h>
 #endif
 
-#include "evloop.h"
 #include "nbep/physics.h"
 #include "sim_impl.h"
 
@@ -95,29 +94,36 @@ bool nbep_sim_keeps_events(const nbep_scene *sc)
     return algo && algo->export_events;
 }
 
+/* The bytes nbep_sim_create allocates beside the state and the algorithm's part, for a run of
+ * n spheres and np planes on nt threads with algo, out: with an output file (keep in step with
+ * nbep_sim_create): counters and sums per thread, energies per block, a batch of stats rows,
+ * the frames' overlap grid of an algorithm whose overlap is not exact, and the event slots
+ * exported at frames. */
+static size_t sim_own_bytes(const nbep_algo *algo, size_t n, size_t np, int nt, bool out)
+{
+    const nbep_sim *sim = NULL; /* for element sizes only: sizeof does not evaluate */
+    const size_t blocks = (n + NBEP_BLOCK - 1) / NBEP_BLOCK;
+    size_t bytes = sizeof *sim +
+                   2 * (size_t)nt *
+                       (sizeof *sim->counters[0] + sizeof *sim->tmax[0] +
+                        np * sizeof *sim->wall_buf[0]) +
+                   blocks * (sizeof *sim->block_ke + sizeof *sim->block_pe) +
+                   ROWS_BATCH * (sizeof *sim->rows + np * sizeof *sim->wall_rows);
+    if (!algo->exact_overlap)
+        bytes += nbep_grid_bytes(n);
+    if (out && algo->export_events)
+        bytes += n * (sizeof *sim->ev_time + sizeof *sim->ev_partner + sizeof *sim->ev_kind +
+                      sizeof *sim->ev_rest);
+    return bytes;
+}
+
 size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads)
 {
-    size_t n = sc->state.n, np = sc->state.n_planes;
+    const size_t n = sc->state.n, np = sc->state.n_planes;
     size_t bytes = nbep_state_bytes(n, np); /* the scene's, which nbep run hands over */
     const nbep_algo *algo = find_algo(sc->algorithm);
-    if (algo == &nbep__algo_predictive)
-        /* slot 32, response count 8, local time 8, rest 4, flag 1, 2 claims 16, reacted 8,
-         * candidate 4, fired and claimed lists 16 */
-        /* cells mode: neighbour lists of up to 24 (a dense fluid's lists, skin 0.5, hold
-         * 12 to 20) */
-        bytes += n * 97 + (sc->neighbors_cells ? nbep_evloop_bytes(n, 24.0) : 0);
-    else if (algo == &nbep__algo_seminaive)
-        bytes += n * (4 * sizeof(uint64_t) + 2 * 64); /* contacts and tree nodes */
-    else
-        bytes += n * 4 * sizeof(uint64_t); /* contact lists */
-    if (algo == &nbep__algo_predictive && sc->order_step)
-        bytes += n * 16; /* run.order = "step": a time claim 8, its list 8 */
-    bytes += (size_t)threads * 4 * NBEP_CACHELINE;
-    /* the step's exact sums (virial, each plane's impulse), per thread and parity; the cells
-     * team's places have theirs too, a ring of them per thread */
-    bytes += (size_t)threads * 2 * (np + 1) * sizeof(nbep_xsum);
-    if (algo == &nbep__algo_predictive && sc->neighbors_cells && threads > 1)
-        bytes += (size_t)threads * NBEP_EVLOOP_RING * (np + 1) * sizeof(nbep_xsum);
+    if (algo) /* what the run and its algorithm allocate, counted beside their allocations */
+        bytes += sim_own_bytes(algo, n, np, threads, true) + algo->bytes(sc, threads);
     bytes += n * 2 * sizeof(nbep_vec3); /* one frame in flight in HDF5's buffers */
     return bytes;
 }
@@ -187,6 +193,7 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
     size_t n = sim->st.n;
     /* a resumed frame's positions, velocities and images are in the scene's state already */
     assert(!opt->resume || (!opt->resume->pos && !opt->resume->vel && !opt->resume->image));
+    /* what follows, sim_own_bytes counts for nbep check (keep the two in step) */
     sim->n_blocks = (n + NBEP_BLOCK - 1) / NBEP_BLOCK;
     for (int k = 0; k < 2; k++) {
         sim->counters[k] = nbep_alloc_aligned((size_t)sim->nt, sizeof *sim->counters[k]);

@@ -102,6 +102,9 @@ struct nbep_algo {
     nbep_status (*create)(nbep_sim *sim, void **ctx, nbep_diag *d);
     void (*run)(nbep_sim *sim, void *ctx);
     void (*destroy)(void *ctx);
+    /* the bytes create allocates for a run of sc on nt threads, by the same conditions (kept
+     * beside create, so that nbep check's memory estimate counts what a run makes) */
+    size_t (*bytes)(const nbep_scene *sc, int nt);
     /* optional (NULL): the state beyond positions and velocities that a resumed run needs to
      * continue bit for bit: export at a frame (thread 0, slots stable), import at create */
     void (*export_events)(const void *ctx, const nbep_state *s, double *time,

@@ -41,6 +41,8 @@ typedef struct nbep_feq {
 
 /* A queue of n invalid slots. NBEP_ENOMEM with a message on failure. */
 NBEP_MUST_CHECK nbep_status nbep_feq_create(size_t n, nbep_feq **out, nbep_diag *d);
+/* Bytes nbep_feq_create(n) allocates, for memory estimates. */
+size_t nbep_feq_bytes(size_t n);
 /* NULL-safe; NULLs the pointer. */
 void nbep_feq_destroy(nbep_feq **q);
 

@@ -25,6 +25,8 @@ typedef struct nbep_grid {
 
 /* Room for builds of up to n_max spheres (cells at most 2 n_max + 8). NBEP_ENOMEM. */
 NBEP_MUST_CHECK nbep_status nbep_grid_init(nbep_grid *g, size_t n_max, nbep_diag *d);
+/* Bytes nbep_grid_init(n_max) allocates, for memory estimates. */
+size_t nbep_grid_bytes(size_t n_max);
 /* Frees; safe on a zeroed grid. */
 void nbep_grid_fini(nbep_grid *g);
 

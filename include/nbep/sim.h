@@ -61,8 +61,12 @@ uint64_t nbep_sim_counter(const nbep_sim *sim, int counter);
 /* The current state (borrowed). */
 const nbep_state *nbep_sim_state(const nbep_sim *sim);
 
-/* Bytes a run of sc with `threads` threads needs: state, the algorithm's workspaces and one
- * frame's output buffers (an estimate for `nbep check`; within a few percent). */
+/* Bytes a run of sc with `threads` threads needs: state, the run's and the algorithm's
+ * workspaces, each counted by a function beside its allocation under the same conditions (a
+ * granular scene's contact arrays, none for an elastic fluid's), and one frame's output
+ * buffers. An estimate for `nbep check`, without the libraries: cells mode's neighbour lists
+ * are counted at what a dense scene's grow to, so a dilute one's estimate is up to a quarter
+ * above its peak (README, nbep check). */
 size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads);
 /* Whether a run of sc keeps every sphere's event slot beside each frame (/checkpoint). */
 bool nbep_sim_keeps_events(const nbep_scene *sc);
