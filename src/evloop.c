@@ -38,12 +38,13 @@
  * returns the phase before it; a build of nbep has nothing here. */
 enum {
     PH_WAIT,   /* waiting for a place to be handled, with none left to take */
-    PH_HANDLE, /* handling a place itself */
-    PH_STAND,  /* whether the window's first place stands */
+    PH_HANDLE, /* handling places itself while it waits for one (a place found handled at the
+                * first look is no wait: the look stays in the phase that looked) */
+    PH_STAND,  /* whether the window's first place stands (with the look for its taker) */
     PH_COMMIT, /* committing it */
     PH_FILL,   /* adding places to the window */
-    PH_UNDO,   /* undoing places (and waiting for them) */
-    PH_START,  /* an empty window's first place */
+    PH_UNDO,   /* undoing places (their waits are handle and wait) */
+    PH_START,  /* an empty window's first place, and the fill that follows it */
     PH_COUNT
 };
 #ifndef NBEP_EVLOOP_PHASE_HOOK
@@ -87,8 +88,8 @@ typedef struct evl_ws {
     double next_time[NEXT_MAX];
     uint64_t next_key[NEXT_MAX];
     /* the team loop: the number of the place last handled here once it stood, written by the
-     * leader as it commits the place (on the line after the one it reads: it writes without
-     * waiting for it), and whether the handler has yet to add that place's counts and sums
+     * leader as it commits the place (on the line after the one it reads first, which for a
+     * pair's event it reads no more of: it writes without waiting for it), and whether the handler has yet to add that place's counts and sums
      * (its context's) to its own (pending: the handler's alone). The handler reads `stood`
      * before it handles another place here, published after the write, or at the call's end,
      * after quit: so the leader reads none of a helper's counts (settle) */
@@ -1266,8 +1267,9 @@ static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *own, void
      * writes it (the places are apart), so the copy is the taker's own, read here */
     const nbep_event ev = *nbep_feq_slot(e->q, e->batch[k]);
     evl_ws *w = &e->ws[t][k];
-    /* the place handled here before (v - RING at the latest) is committed or undone: place v
-     * was published after that, with release, and read above with acquire */
+    /* the place handled here before (v - RING at the latest) is committed or undone: v is
+     * below *seen, a value of avail this thread read with acquire (maybe in an earlier take),
+     * which the leader stored with release once that place had left the window */
     settle(ops, w, own, us[k]);
     if (!e->batch_first[k]) /* every other place may be undone */
         keep(e, w, k, ops, us[k]);
@@ -1336,7 +1338,9 @@ static int handled_by(const nbep_evloop *e, uint64_t s)
 static int wait_handled(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
                         uint64_t s)
 {
-    int t;
+    int t = handled_by(e, s);
+    if (t >= 0)
+        return t;
     bool dry = false;
     const int was = phase(PH_HANDLE);
     for (unsigned k = 1; (t = handled_by(e, s)) < 0; k++) {

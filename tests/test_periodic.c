@@ -675,10 +675,12 @@ static const char *write_deck(const char *name, const char *text, char *buf, siz
     return buf;
 }
 
-/* The team loop in a closed box (walls on every axis, NBEP_TEAM=always): the sums its events
- * add apart and the leader merges, /stats/wall_impulse and /stats/virial, are one thread's bit
- * for bit on 2 threads, as are the frames, while events (plane contacts among them) went
- * ahead. */
+/* The team loop in a closed box (walls on every axis): the sums and counts its events add
+ * apart, each on the thread that handled it, and the step's row adds up over the threads
+ * (/stats/wall_impulse, /stats/virial, the collision, check and prediction counts), and the
+ * frames, are one thread's bit for bit on 2 threads (NBEP_TEAM=always) and on 3 with the
+ * ways in turn (NBEP_TEAM=cycle: helpers sit steps out and join again, and a step's counts
+ * must stay in its own row). */
 static void test_team_loop_keeps_one_threads_wall_impulses_and_virial(void **state)
 {
     (void)state;
@@ -686,30 +688,36 @@ static void test_team_loop_keeps_one_threads_wall_impulses_and_virial(void **sta
                        "spheres = ( { count = 2744; radius = 0.5; mass = 1.0; place = "
                        "\"lattice\"; speed = 1.7320508075688772; } );\n"
                        "output: { every = 10; fields = [\"position\", \"velocity\"]; };\n";
-    char text[1024], deck[2][256], out[2][256];
-    setenv("NBEP_TEAM", "always", 1);
-    for (int k = 0; k < 2; k++) {
+    static const char *const team[3] = {"always", "always", "cycle"};
+    char text[1024], deck[3][256], out[3][256], name[32];
+    for (int k = 0; k < 3; k++) {
+        setenv("NBEP_TEAM", team[k], 1);
         snprintf(text, sizeof text,
                  "run: { algorithm = \"predictive\"; neighbors = \"cells\"; steps = %d; "
                  "dt = 0.05; threads = %d; seed = 4; };\n%s",
                  (int)nbep_test_scaled(40, 20), k + 1, body);
-        write_deck(k ? "team2.deck" : "team1.deck", text, deck[k], sizeof deck[k]);
-        nbep_test_tmp(k ? "team2.h5" : "team1.h5", out[k], sizeof out[k]);
+        snprintf(name, sizeof name, "team%d.deck", k + 1);
+        write_deck(name, text, deck[k], sizeof deck[k]);
+        snprintf(name, sizeof name, "team%d.h5", k + 1);
+        nbep_test_tmp(name, out[k], sizeof out[k]);
         const nbep_run_result res = nbep_test_run_deck(deck[k], out[k]);
         assert_int_equal(res.summary.planes, 6);
         assert_true(res.summary.plane_collisions > 100);
     }
     unsetenv("NBEP_TEAM");
-    const char *sets[] = {"/stats/wall_impulse", "/stats/virial", "/frames/position",
+    const char *sets[] = {"/stats/wall_impulse", "/stats/virial",     "/stats/collisions",
+                          "/stats/checks",       "/stats/predictions", "/frames/position",
                           "/frames/velocity"};
-    for (size_t q = 0; q < sizeof sets / sizeof *sets; q++) {
-        size_t n1, n2;
-        double *a = nbep_test_h5_doubles(out[0], sets[q], &n1), *b = nbep_test_h5_doubles(out[1], sets[q], &n2);
-        assert_int_equal(n1, n2);
-        assert_memory_equal(a, b, n1 * sizeof *a);
-        free(a);
-        free(b);
-    }
+    for (int k = 1; k < 3; k++)
+        for (size_t q = 0; q < sizeof sets / sizeof *sets; q++) {
+            size_t n1, n2;
+            double *a = nbep_test_h5_doubles(out[0], sets[q], &n1),
+                   *b = nbep_test_h5_doubles(out[k], sets[q], &n2);
+            assert_int_equal(n1, n2);
+            assert_memory_equal(a, b, n1 * sizeof *a);
+            free(a);
+            free(b);
+        }
 }
 
 /* Runs a deck NAME.deck of one sphere (m = 1.5, r = 0.5) at x = 1.39 flying along x at speed 2

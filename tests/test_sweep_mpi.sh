@@ -134,7 +134,7 @@ spheres = ( { count = 4; radius = 0.05; mass = 1.0; place = "random"; speed = 1.
 output: { file = "wait.h5"; every = 1000000; stats = false; };
 sweep: { vary = ( { key = "run.steps"; values = [20, 1000000000]; } ); };
 EOF2
-timeout 120 mpirun -np 2 --oversubscribe bin/nbep sweep "$tmp/wait/wait.deck" \
+timeout -k 10 120 mpirun -np 2 --oversubscribe bin/nbep sweep "$tmp/wait/wait.deck" \
     -o "$tmp/wait/wait.h5" 2>"$tmp/wait/stderr" &
 pid=$!
 r0="" r1=""
@@ -157,8 +157,11 @@ if [ -n "$r0" ] && [ -n "$r1" ]; then
     # rank 1 still in its run: rank 0 waited all through the window
     kill -0 "$r1" 2>/dev/null && ! grep -q 'rank 1: run 1 ' "$tmp/wait/stderr" && running=yes
     hz=$(getconf CLK_TCK)
-    used=$(((c1 - c0) * 1000 / hz)) window=$(((t1 - t0) / 1000000)) # milliseconds
-    other=$(((d1 - d0) * 1000 / hz))
+    # a rank gone before a reading leaves it empty: no figures then (the check fails)
+    if [ -n "$c0" ] && [ -n "$c1" ] && [ -n "$d0" ] && [ -n "$d1" ]; then
+        used=$(((c1 - c0) * 1000 / hz)) window=$(((t1 - t0) / 1000000)) # milliseconds
+        other=$(((d1 - d0) * 1000 / hz))
+    fi
     kill -TERM "$r1"
 else
     kill -TERM "$pid"
