@@ -741,6 +741,10 @@ def main():
         print(f"mutate: building the unmutated copy in {scratch}", flush=True)
         if run(["make", f"-j{a.jobs}", "MPI=0", "bin/nbep", "check-programs"], scratch) != 0:
             sys.exit("mutate: the unmutated tree does not build")
+        # the tests' scratch folder (nbep_test_tmp), as scripts/run-tests.sh makes it: without
+        # it a test that writes a file fails whatever the mutant, until some shell test that
+        # makes it has run (a --only of test_granular's mutants was "killed" so)
+        os.makedirs(os.path.join(scratch, "build", "tests", "tmp"), exist_ok=True)
         rows = []
         counts = {"killed": 0, "survived": 0, "equivalent": 0}
         for mid, path, orig, repl, tests, eq in mutants:
