@@ -462,7 +462,7 @@ MUTANTS = [
      "        0)", ["tests/test_settle.sh"], None),
     ("land-on-what-rests-on-it", "src/algo_predictive.c",
      "        r.n < NBEP_CONTACT_MAX && !leans_on(c, j, k)) {",
-     "        r.n < NBEP_CONTACT_MAX) {", ["tests/test_settle.sh"], None),
+     "        r.n < NBEP_CONTACT_MAX) {", GRAN + ["tests/test_settle.sh"], None),
     ("land-keeps-what-rests-on-it", "src/algo_predictive.c",
      "    rest_set r = c->rest[k];\n    drop_leaning(c, k, &r);\n    const double amag",
      "    rest_set r = c->rest[k];\n    const double amag", ["tests/test_settle.sh"], None),

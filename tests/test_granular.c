@@ -884,6 +884,64 @@ static void test_struck_support_lets_go_what_it_carries(void **state)
     }
 }
 
+/* A sphere let go does not land on a held sphere that rests on it (land_on_held, leans_on).
+ * No gravity: each sphere has its own acceleration g in the xy plane. X rests against a wall
+ * (x = 1, pushed along +x); K, pushed along +x too, is held on X; J, pushed towards K along
+ * their line of centres (70 degrees from x), is held on K alone; K also touches a plane below
+ * it (y = 0) that carries nothing. At 0.025 s a light striker knocks X away along the wall
+ * (along -z, 2.7 m/s, too fast for K to follow). K lets go, and J, which rests on K, must go
+ * too. In the rounds modes J's let-go comes a round after K's, and in between K, pushed into
+ * J, meets it at once: were K to land on J (held by J and the plane, as it would be), the two
+ * would hold each other, each one's landing letting the other go, at that one instant for ever
+ * ("events do not resolve"). It bounces off J instead, and both fall free: from the strike on
+ * (until K reaches the wall, after 0.2 s) the pair's momentum along x grows as
+ * m g (1 - cos 70) (t - 0.025), from their own accelerations alone (the plane y = 0 takes only
+ * y), to within the minimum bounce K takes off J while J's let-go is pending,
+ * m g t_min / 2 = 1.7e-4 (in cells mode J lets go in the same reaction: exact). Before the
+ * strike K and J are held (not a bit of motion), in every neighbour mode. */
+static void test_sphere_let_go_does_not_land_on_one_resting_on_it(void **state)
+{
+    (void)state;
+    const double r = 0.1, g = 9.81, xw = 1.0, z = 0.5, t_strike = 0.025;
+    const double th = 70.0 / 180.0 * acos(-1.0), c = cos(th), s = sin(th);
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
+        nbep_scene *sc = scene(4, 2, "predictive", 200, 0.5);
+        neighbor_mode(sc, mode);
+        sc->output_every = 5;
+        nbep_test_set_plane(sc, 0, (nbep_vec3){-1, 0, 0}, -xw);
+        nbep_test_set_plane(sc, 1, (nbep_vec3){0, 1, 0}, 0.0);
+        const nbep_vec3 k0 = {xw - 3.0 * r, r, z};
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){xw - r, r, z}, ZERO, r, 1.0,
+                             (nbep_vec3){g, 0, 0});
+        nbep_test_set_sphere(sc, 1, k0, ZERO, r, 1.0, (nbep_vec3){g, 0, 0});
+        /* J 1e-8 m off K: it lands on K once K is held (at once), slower than the rest speed */
+        nbep_test_set_sphere(sc, 2,
+                             nbep_vec3_add(k0, nbep_vec3_scale((nbep_vec3){c, s, 0.0},
+                                                               2.0 * r + 1e-8)),
+                             ZERO, r, 1.0, (nbep_vec3){-g * c, -g * s, 0.0});
+        /* the striker: a tenth of X's mass, so it rebounds and X leaves at 2.7 m/s */
+        nbep_test_set_sphere(sc, 3, (nbep_vec3){xw - r, r, z + 2.0 * r + 20.0 * t_strike},
+                             (nbep_vec3){0.0, 0.0, -20.0}, r, 0.1, ZERO);
+        trace t = {0};
+        nbep_summary sum = run(sc, 1, &t);
+        const nbep_vec3 *held = t.data + 1 * 2 * t.n; /* frame 1, t = 0.005 s */
+        for (size_t f = 1; f < t.n_frames; f++) {
+            const nbep_vec3 *p = t.data + f * 2 * t.n, *v = p + t.n;
+            const double time = 5e-3 * (double)f;
+            if (time < t_strike - 1e-9) {
+                for (size_t i = 1; i < 3; i++)
+                    assert_true(nbep_vec3_equal(v[i], ZERO) && nbep_vec3_equal(p[i], held[i]));
+            } else if (time > t_strike + 1e-9 && time <= 0.2 + 1e-9) {
+                const double px = v[1].x + v[2].x, want = g * (1.0 - c) * (time - t_strike);
+                assert_true(fabs(px - want) <= 2e-4);
+            }
+        }
+        assert_true(sum.max_overlap_rel < 1e-9);
+        free(t.data);
+        nbep_test_scene_free(&sc);
+    }
+}
+
 /* Three walls at once: gravity into a corner of the box; the ball ends still in the corner. */
 static void test_ball_held_by_three_walls(void **state)
 {
@@ -1226,6 +1284,7 @@ int main(void)
         cmocka_unit_test(test_held_sphere_carries_a_slow_push_its_faces_take),
         cmocka_unit_test(test_settled_spheres_stay_held_when_others_wake),
         cmocka_unit_test(test_struck_support_lets_go_what_it_carries),
+        cmocka_unit_test(test_sphere_let_go_does_not_land_on_one_resting_on_it),
         cmocka_unit_test(test_sphere_wedged_between_a_held_one_and_a_wall_is_held),
         cmocka_unit_test(test_ball_in_a_channel_of_three_faces_slides_on),
         cmocka_unit_test(test_sphere_stopped_at_a_held_crest_under_an_overhang),
