@@ -252,7 +252,7 @@ MUTANTS = [
      "    for (size_t m = 0; m < 0; m++)", GRAN, None),
     ("leave-held-off", "src/algo_predictive.c",
      "    if (!(len > 0.0) || !(nbep_vec3_dot(d, s->vel[k]) < 0.0))\n        return;",
-     "    if (1)\n        return;", ["tests/test_settle.sh"], None),
+     "    if (1)\n        return;", GRAN + ["tests/test_settle.sh"], None),
     ("rest-speed-tiny", "src/algo_predictive.c",
      "    return amag > 0.0 ? amag * min_bounce_time(s->radius[i], amag, dt) : 0.0;",
      "    return amag > 0.0 ? 1e-2 * amag * min_bounce_time(s->radius[i], amag, dt) : 0.0;",

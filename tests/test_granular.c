@@ -942,6 +942,65 @@ static void test_sphere_let_go_does_not_land_on_one_resting_on_it(void **state)
     }
 }
 
+/* A sphere caged against a held one leaves it receding by the predictor's own test
+ * (leave_held). B slides on the floor into the corner of two held spheres, A1 and A2, whose
+ * normals at B are 1e-4 (in cosine) more than a right angle apart: they face each other a
+ * little, a cage. Each has a wall behind it, so that its pile carries the impacts
+ * (physics.carry_drop 0.1: 0.44 m/s). B meets A1 slowly (4 mm/s along their line, restitution),
+ * then, 2.5e-8 s later and still touching A1, A2 head-on at 0.4 m/s: caged, it keeps only the
+ * velocity that leaves both, B's velocity after A1 less its part along A2 (2 mm/s, off A1 along
+ * A2's tangent). The cage's projection takes 0.4 m/s away, so what is left against A2 is zero
+ * only to round-off of 0.4 m/s: up to 1e-14 of the 2 mm/s left, past the grazing tolerance of
+ * 16 ulps, and closing for half the orientations. Turned through 32 orientations about the
+ * vertical, in every neighbour mode: exactly two collisions (without the push that makes B
+ * recede, it meets A2 again at that instant in 4 or 5 of the 32), B's velocity after them
+ * that projection, and A1 and A2 never move. */
+static void test_sphere_caged_against_a_held_one_leaves_it(void **state)
+{
+    (void)state;
+    const double r = 0.1, e = 0.5, v_in = 0.4, v_slow = 4e-3, s = 1e-4, t_meet = 0.01;
+    const double gap = 1e-8; /* B to A2 as it meets A1: 2.5e-8 s later, within tc */
+    for (int mode = 0; mode < 3; mode++) /* all pairs, grid, cells */
+        for (int k = 0; k < 32; k++) {
+            const double phi = 0.3 + 0.37 * k, a = phi + acos(-s);
+            const nbep_vec3 n2 = {cos(phi), sin(phi), 0.0}, n1 = {cos(a), sin(a), 0.0};
+            const nbep_vec3 c = {0.5, 0.5, r}; /* B's centre when it meets A1 */
+            const nbep_vec3 a1 = nbep_vec3_sub(c, nbep_vec3_scale(n1, 2.0 * r));
+            const nbep_vec3 a2 = nbep_vec3_sub(c, nbep_vec3_scale(n2, 2.0 * r + gap));
+            /* B's velocity v: v.n1 = -v_slow, v.n2 = -v_in */
+            const double g = nbep_vec3_dot(n1, n2), al = (g * v_in - v_slow) / (1.0 - g * g);
+            const nbep_vec3 v = nbep_vec3_add(nbep_vec3_scale(n1, al),
+                                              nbep_vec3_scale(n2, -v_in - g * al));
+            nbep_scene *sc = scene(3, 3, "predictive", 15, e);
+            neighbor_mode(sc, mode);
+            sc->carry_drop = 0.1;
+            nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+            nbep_test_set_plane(sc, 1, n1, nbep_vec3_dot(n1, a1) - r);
+            nbep_test_set_plane(sc, 2, n2, nbep_vec3_dot(n2, a2) - r);
+            nbep_test_set_sphere(sc, 0, a1, ZERO, r, 1.0, DOWN);
+            nbep_test_set_sphere(sc, 1, a2, ZERO, r, 1.0, DOWN);
+            nbep_test_set_sphere(sc, 2, nbep_vec3_sub(c, nbep_vec3_scale(v, t_meet)), v, r, 1.0,
+                                 DOWN);
+            trace t = {0};
+            nbep_summary sum = run(sc, 1, &t);
+            assert_int_equal(sum.collisions, 2);
+            for (size_t f = 0; f < t.n_frames; f++) {
+                const nbep_vec3 *p = t.data + f * 2 * t.n, *u = p + t.n;
+                assert_true(nbep_vec3_equal(p[0], a1) && nbep_vec3_equal(u[0], ZERO));
+                assert_true(nbep_vec3_equal(p[1], a2) && nbep_vec3_equal(u[1], ZERO));
+            }
+            /* after A1 (restitution along n1), less the part along n2 (the cage) */
+            const nbep_vec3 v1 = nbep_vec3_axpy(v, (1.0 + e) * v_slow, n1);
+            const nbep_vec3 want = nbep_vec3_axpy(v1, -nbep_vec3_dot(v1, n2), n2);
+            const nbep_vec3 got = t.data[11 * 2 * t.n + t.n + 2]; /* t = 0.011 s */
+            /* B meets A2 5e-11 m along A2's tangent from c, which turns the normal there by
+             * 2.5e-10 rad: 0.4 m/s times that, 5e-8 of the 2 mm/s left; 1e-6 leaves room */
+            assert_true(nbep_vec3_norm(nbep_vec3_sub(got, want)) <= 1e-6 * nbep_vec3_norm(want));
+            free(t.data);
+            nbep_test_scene_free(&sc);
+        }
+}
+
 /* Three walls at once: gravity into a corner of the box; the ball ends still in the corner. */
 static void test_ball_held_by_three_walls(void **state)
 {
@@ -1285,6 +1344,7 @@ int main(void)
         cmocka_unit_test(test_settled_spheres_stay_held_when_others_wake),
         cmocka_unit_test(test_struck_support_lets_go_what_it_carries),
         cmocka_unit_test(test_sphere_let_go_does_not_land_on_one_resting_on_it),
+        cmocka_unit_test(test_sphere_caged_against_a_held_one_leaves_it),
         cmocka_unit_test(test_sphere_wedged_between_a_held_one_and_a_wall_is_held),
         cmocka_unit_test(test_ball_in_a_channel_of_three_faces_slides_on),
         cmocka_unit_test(test_sphere_stopped_at_a_held_crest_under_an_overhang),
