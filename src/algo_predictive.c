@@ -1642,8 +1642,11 @@ static bool leans_on(const pred_ctx *c, size_t m, size_t k)
     return c->rest[m].still && rest_has_sphere(&c->rest[m], k);
 }
 
-/* The sphere contacts of r (free sphere k's, kept from when it was held) that rest on k
- * themselves, taken out (leans_on). */
+/* The sphere contacts of r (free sphere k's) that rest on k themselves, taken out (leans_on).
+ * Nothing to take out today: a sphere that is not held keeps planes only (rest_solve keeps
+ * sphere contacts only when it holds, and every hold sets still), so this guards a change
+ * that would let a free sphere keep a sphere contact (mutate.py: land-keeps-what-rests-on-it,
+ * equivalent). */
 static void drop_leaning(const pred_ctx *c, size_t k, rest_set *r)
 {
     int n = 0;

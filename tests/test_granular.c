@@ -884,6 +884,123 @@ static void test_struck_support_lets_go_what_it_carries(void **state)
     }
 }
 
+/* A sphere let go does not land on a held sphere that rests on it (land_on_held, leans_on).
+ * No gravity: each sphere has its own acceleration g in the xy plane. X rests against a wall
+ * (x = 1, pushed along +x); K, pushed along +x too, is held on X; J, pushed towards K along
+ * their line of centres (70 degrees from x), is held on K alone; K also touches a plane below
+ * it (y = 0) that carries nothing. At 0.025 s a light striker knocks X away along the wall
+ * (along -z, 2.7 m/s, too fast for K to follow). K lets go, and J, which rests on K, must go
+ * too. In the rounds modes J's let-go comes a round after K's, and in between K, pushed into
+ * J, meets it at once: were K to land on J (held by J and the plane, as it would be), the two
+ * would hold each other, each one's landing letting the other go, at that one instant for ever
+ * ("events do not resolve"). It bounces off J instead, and both fall free: from the strike on
+ * (until K reaches the wall, after 0.2 s) the pair's momentum along x grows as
+ * m g (1 - cos 70) (t - 0.025), from their own accelerations alone (the plane y = 0 takes only
+ * y), to within the minimum bounce K takes off J while J's let-go is pending,
+ * m g t_min / 2 = 1.7e-4 (in cells mode J lets go in the same reaction: exact). Before the
+ * strike K and J are held (not a bit of motion), in every neighbour mode. */
+static void test_sphere_let_go_does_not_land_on_one_resting_on_it(void **state)
+{
+    (void)state;
+    const double r = 0.1, g = 9.81, xw = 1.0, z = 0.5, t_strike = 0.025;
+    const double th = 70.0 / 180.0 * acos(-1.0), c = cos(th), s = sin(th);
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
+        nbep_scene *sc = scene(4, 2, "predictive", 200, 0.5);
+        neighbor_mode(sc, mode);
+        sc->output_every = 5;
+        nbep_test_set_plane(sc, 0, (nbep_vec3){-1, 0, 0}, -xw);
+        nbep_test_set_plane(sc, 1, (nbep_vec3){0, 1, 0}, 0.0);
+        const nbep_vec3 k0 = {xw - 3.0 * r, r, z};
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){xw - r, r, z}, ZERO, r, 1.0,
+                             (nbep_vec3){g, 0, 0});
+        nbep_test_set_sphere(sc, 1, k0, ZERO, r, 1.0, (nbep_vec3){g, 0, 0});
+        /* J 1e-8 m off K: it lands on K once K is held (at once), slower than the rest speed */
+        nbep_test_set_sphere(sc, 2,
+                             nbep_vec3_add(k0, nbep_vec3_scale((nbep_vec3){c, s, 0.0},
+                                                               2.0 * r + 1e-8)),
+                             ZERO, r, 1.0, (nbep_vec3){-g * c, -g * s, 0.0});
+        /* the striker: a tenth of X's mass, so it rebounds and X leaves at 2.7 m/s */
+        nbep_test_set_sphere(sc, 3, (nbep_vec3){xw - r, r, z + 2.0 * r + 20.0 * t_strike},
+                             (nbep_vec3){0.0, 0.0, -20.0}, r, 0.1, ZERO);
+        trace t = {0};
+        nbep_summary sum = run(sc, 1, &t);
+        const nbep_vec3 *held = t.data + 1 * 2 * t.n; /* frame 1, t = 0.005 s */
+        for (size_t f = 1; f < t.n_frames; f++) {
+            const nbep_vec3 *p = t.data + f * 2 * t.n, *v = p + t.n;
+            const double time = 5e-3 * (double)f;
+            if (time < t_strike - 1e-9) {
+                for (size_t i = 1; i < 3; i++)
+                    assert_true(nbep_vec3_equal(v[i], ZERO) && nbep_vec3_equal(p[i], held[i]));
+            } else if (time > t_strike + 1e-9 && time <= 0.2 + 1e-9) {
+                const double px = v[1].x + v[2].x, want = g * (1.0 - c) * (time - t_strike);
+                assert_true(fabs(px - want) <= 2e-4);
+            }
+        }
+        assert_true(sum.max_overlap_rel < 1e-9);
+        free(t.data);
+        nbep_test_scene_free(&sc);
+    }
+}
+
+/* A sphere caged against a held one leaves it receding by the predictor's own test
+ * (leave_held). B slides on the floor into the corner of two held spheres, A1 and A2, whose
+ * normals at B are 1e-4 (in cosine) more than a right angle apart: they face each other a
+ * little, a cage. Each has a wall behind it, so that its pile carries the impacts
+ * (physics.carry_drop 0.1: 0.44 m/s). B meets A1 slowly (4 mm/s along their line, restitution),
+ * then, 2.5e-8 s later and still touching A1, A2 head-on at 0.4 m/s: caged, it keeps only the
+ * velocity that leaves both, B's velocity after A1 less its part along A2 (2 mm/s, off A1 along
+ * A2's tangent). The cage's projection takes 0.4 m/s away, so what is left against A2 is zero
+ * only to round-off of 0.4 m/s: up to 1e-14 of the 2 mm/s left, past the grazing tolerance of
+ * 16 ulps, and closing for half the orientations. Turned through 32 orientations about the
+ * vertical, in every neighbour mode: exactly two collisions (without the push that makes B
+ * recede, it meets A2 again at that instant in 4 or 5 of the 32), B's velocity after them
+ * that projection, and A1 and A2 never move. */
+static void test_sphere_caged_against_a_held_one_leaves_it(void **state)
+{
+    (void)state;
+    const double r = 0.1, e = 0.5, v_in = 0.4, v_slow = 4e-3, s = 1e-4, t_meet = 0.01;
+    const double gap = 1e-8; /* B to A2 as it meets A1: 2.5e-8 s later, within tc */
+    for (int mode = 0; mode < 3; mode++) /* all pairs, grid, cells */
+        for (int k = 0; k < 32; k++) {
+            const double phi = 0.3 + 0.37 * k, a = phi + acos(-s);
+            const nbep_vec3 n2 = {cos(phi), sin(phi), 0.0}, n1 = {cos(a), sin(a), 0.0};
+            const nbep_vec3 c = {0.5, 0.5, r}; /* B's centre when it meets A1 */
+            const nbep_vec3 a1 = nbep_vec3_sub(c, nbep_vec3_scale(n1, 2.0 * r));
+            const nbep_vec3 a2 = nbep_vec3_sub(c, nbep_vec3_scale(n2, 2.0 * r + gap));
+            /* B's velocity v: v.n1 = -v_slow, v.n2 = -v_in */
+            const double g = nbep_vec3_dot(n1, n2), al = (g * v_in - v_slow) / (1.0 - g * g);
+            const nbep_vec3 v = nbep_vec3_add(nbep_vec3_scale(n1, al),
+                                              nbep_vec3_scale(n2, -v_in - g * al));
+            nbep_scene *sc = scene(3, 3, "predictive", 15, e);
+            neighbor_mode(sc, mode);
+            sc->carry_drop = 0.1;
+            nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+            nbep_test_set_plane(sc, 1, n1, nbep_vec3_dot(n1, a1) - r);
+            nbep_test_set_plane(sc, 2, n2, nbep_vec3_dot(n2, a2) - r);
+            nbep_test_set_sphere(sc, 0, a1, ZERO, r, 1.0, DOWN);
+            nbep_test_set_sphere(sc, 1, a2, ZERO, r, 1.0, DOWN);
+            nbep_test_set_sphere(sc, 2, nbep_vec3_sub(c, nbep_vec3_scale(v, t_meet)), v, r, 1.0,
+                                 DOWN);
+            trace t = {0};
+            nbep_summary sum = run(sc, 1, &t);
+            assert_int_equal(sum.collisions, 2);
+            for (size_t f = 0; f < t.n_frames; f++) {
+                const nbep_vec3 *p = t.data + f * 2 * t.n, *u = p + t.n;
+                assert_true(nbep_vec3_equal(p[0], a1) && nbep_vec3_equal(u[0], ZERO));
+                assert_true(nbep_vec3_equal(p[1], a2) && nbep_vec3_equal(u[1], ZERO));
+            }
+            /* after A1 (restitution along n1), less the part along n2 (the cage) */
+            const nbep_vec3 v1 = nbep_vec3_axpy(v, (1.0 + e) * v_slow, n1);
+            const nbep_vec3 want = nbep_vec3_axpy(v1, -nbep_vec3_dot(v1, n2), n2);
+            const nbep_vec3 got = t.data[11 * 2 * t.n + t.n + 2]; /* t = 0.011 s */
+            /* B meets A2 5e-11 m along A2's tangent from c, which turns the normal there by
+             * 2.5e-10 rad: 0.4 m/s times that, 5e-8 of the 2 mm/s left; 1e-6 leaves room */
+            assert_true(nbep_vec3_norm(nbep_vec3_sub(got, want)) <= 1e-6 * nbep_vec3_norm(want));
+            free(t.data);
+            nbep_test_scene_free(&sc);
+        }
+}
+
 /* Three walls at once: gravity into a corner of the box; the ball ends still in the corner. */
 static void test_ball_held_by_three_walls(void **state)
 {
@@ -1226,6 +1343,8 @@ int main(void)
         cmocka_unit_test(test_held_sphere_carries_a_slow_push_its_faces_take),
         cmocka_unit_test(test_settled_spheres_stay_held_when_others_wake),
         cmocka_unit_test(test_struck_support_lets_go_what_it_carries),
+        cmocka_unit_test(test_sphere_let_go_does_not_land_on_one_resting_on_it),
+        cmocka_unit_test(test_sphere_caged_against_a_held_one_leaves_it),
         cmocka_unit_test(test_sphere_wedged_between_a_held_one_and_a_wall_is_held),
         cmocka_unit_test(test_ball_in_a_channel_of_three_faces_slides_on),
         cmocka_unit_test(test_sphere_stopped_at_a_held_crest_under_an_overhang),
