@@ -549,6 +549,58 @@ static void test_cells_without_a_box_region_grows_geometrically(void **state)
     nbep_test_scene_free(&sc);
 }
 
+/* A contact past half of what the best event so far leaves. Grid and cells modes solve a pair
+ * only up to the time at which it could still beat, or tie with, the sphere's best event so
+ * far (beat_cap in src/algo_predictive.c; the slow search that pairs accelerating differently
+ * take stops there). Here two spheres stacked on a vertical line, both from rest and flying
+ * sideways alike at u towards a wall, fall with different accelerations (gB below, gA > gB
+ * above), so the upper one catches the lower: their gap s closes as (gA - gB) t^2 / 2,
+ * touching at tc = sqrt(2 s / (gA - gB)), head on along z (their relative velocity is 0, so
+ * the pair takes the search). Each sphere's best before the pair is its wall contact at
+ * tw = 1.25 tc (in grid mode the horizon where that is earlier, no earlier than the step's end
+ * T, past tc): a limit below 0.8 of the way to it (half of it: scripts/mutate.py's
+ * beat-cap-short) misses tc from both sides, and the two fly into each other (no collision, an
+ * overlap of a quarter of s at T, in grid and cells modes alike). The run, one step, ends at
+ * T = 1.125 tc, after tc and before the wall: the collision exchanges the two vertical
+ * velocities (equal masses, e = 1) and leaves the sideways ones; the same in all three modes
+ * (the all-pairs mode solves every pair without a limit). */
+static void test_predictive_modes_find_a_contact_past_half_the_wall_time(void **state)
+{
+    (void)state;
+    const double r = 0.5, s = 0.02, gB = 1.0, gA = 2.0, u = 0.1, zB = 3.0, x0 = 1.0;
+    const double tc = sqrt(2.0 * s / (gA - gB)), tw = 1.25 * tc, T = 1.125 * tc;
+    const double zA = zB + 2.0 * r + s, xwall = x0 + r + u * tw;
+    /* at contact: heights and vertical velocities; after it, the velocities exchanged */
+    const double zBc = zB - 0.5 * gB * tc * tc, zAc = zA - 0.5 * gA * tc * tc;
+    const double vBc = -gB * tc, vAc = -gA * tc, h = T - tc;
+    const double zBT = zBc + vAc * h - 0.5 * gB * h * h, zAT = zAc + vBc * h - 0.5 * gA * h * h;
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
+        nbep_scene *sc = nbep_test_scene_new(2, 1, "predictive", 1, T);
+        sc->neighbors_grid = mode == 1;
+        sc->neighbors_cells = mode == 2;
+        nbep_test_set_plane(sc, 0, (nbep_vec3){-1, 0, 0}, -xwall);
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){x0, 0, zB}, (nbep_vec3){u, 0, 0}, r, 1.0,
+                             (nbep_vec3){0, 0, -gB});
+        nbep_test_set_sphere(sc, 1, (nbep_vec3){x0, 0, zA}, (nbep_vec3){u, 0, 0}, r, 1.0,
+                             (nbep_vec3){0, 0, -gA});
+        nbep_state fin;
+        nbep_summary sum = run(sc, 1, &fin, NULL);
+        assert_int_equal(sum.sphere_collisions, 1);
+        assert_int_equal(sum.plane_collisions, 0);
+        assert_true(sum.max_overlap_rel < 1e-9);
+        for (size_t i = 0; i < 2; i++) {
+            assert_close(fin.pos[i].x, x0 + u * T, 0.0, 1e-14);
+            assert_close(fin.vel[i].x, u, 1e-14, 0.0);
+        }
+        assert_close(fin.pos[0].z, zBT, 0.0, 1e-13);
+        assert_close(fin.pos[1].z, zAT, 0.0, 1e-13);
+        assert_close(fin.vel[0].z, vAc - gB * h, 0.0, 1e-13);
+        assert_close(fin.vel[1].z, vBc - gA * h, 0.0, 1e-13);
+        nbep_state_fini(&fin);
+        nbep_test_scene_free(&sc);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -573,6 +625,7 @@ int main(void)
         cmocka_unit_test(test_cells_without_a_box_gives_the_boxed_frames),
         cmocka_unit_test(test_cells_without_a_box_follows_an_expanding_cluster),
         cmocka_unit_test(test_cells_without_a_box_region_grows_geometrically),
+        cmocka_unit_test(test_predictive_modes_find_a_contact_past_half_the_wall_time),
     };
     return cmocka_run_group_tests_name("sim", tests, NULL, NULL);
 }
