@@ -795,6 +795,44 @@ static void test_settling_supports_must_settle_too(void **state)
     }
 }
 
+/* Candidates that support each other in a ring keep each other (settle_phases' rounds drop only
+ * candidates whose supports lose theirs): two spheres pressed together by opposite
+ * accelerations (no plane, no gravity), each below the other against its own acceleration,
+ * each the other's only support. Their pushes balance, so both are slow and both are held
+ * after SETTLE_STEPS steps, in every neighbour mode, where they were set (within the minimum
+ * bounce's jitter), and nothing collides after; on 2 threads (one sphere each) the same
+ * frames. */
+static void test_settling_keeps_a_ring_of_supports(void **state)
+{
+    (void)state;
+    const double r = 0.1, g = 9.81;
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
+        uint64_t coll[2];
+        for (int k = 0; k < 2; k++) {
+            nbep_scene *sc = scene(2, 0, "predictive", k == 0 ? 100 : 300, 0.5);
+            neighbor_mode(sc, mode);
+            nbep_test_set_sphere(sc, 0, ZERO, ZERO, r, 1.0, (nbep_vec3){g, 0.0, 0.0});
+            nbep_test_set_sphere(sc, 1, (nbep_vec3){2.0 * r, 0.0, 0.0}, ZERO, r, 1.0,
+                                 (nbep_vec3){-g, 0.0, 0.0});
+            trace t = {0};
+            coll[k] = run(sc, 1, &t).collisions;
+            for (size_t i = 0; i < 2; i++) {
+                assert_true(nbep_vec3_equal(last_vel(&t)[i], ZERO));
+                assert_true(nbep_vec3_norm(nbep_vec3_sub(last_pos(&t)[i], sc->state.pos[i])) <=
+                            1e-6);
+            }
+            trace t2 = {0};
+            assert_int_equal(run(sc, 2, &t2).collisions, coll[k]);
+            assert_int_equal(t2.n_frames, t.n_frames);
+            assert_memory_equal(t2.data, t.data, t.n_frames * 2 * t.n * sizeof *t.data);
+            free(t2.data);
+            free(t.data);
+            nbep_test_scene_free(&sc);
+        }
+        assert_int_equal(coll[1], coll[0]);
+    }
+}
+
 /* A frictionless sphere sliding on a floor at 1 mm/s (dt = 1e-3: half the settle speed) is
  * taken for resting after SETTLE_STEPS steps and held where it is (README, granular: what
  * settling gives up); one at 5 mm/s slides on at its speed. */
@@ -1439,6 +1477,7 @@ int main(void)
         cmocka_unit_test(test_sphere_balanced_near_a_crest_settles),
         cmocka_unit_test(test_settling_needs_supports_that_settle),
         cmocka_unit_test(test_settling_supports_must_settle_too),
+        cmocka_unit_test(test_settling_keeps_a_ring_of_supports),
         cmocka_unit_test(test_slow_slider_is_held_fast_one_slides_on),
         cmocka_unit_test(test_groove_ball_ends_at_the_bottom_of_the_v),
         cmocka_unit_test(test_e0_pair_keeps_momentum_and_loses_energy),
