@@ -242,6 +242,14 @@ MUTANTS = [
      "            r->ver[k] = r->who[k] < 0 ? c->ver[-1 - r->who[k]] : 0;",
      "            r->ver[k] = r->who[k] < 0 ? c->ver[-1 - r->who[k]] - 1 : 0;",
      GRAN + ["tests/test_settle.sh"], None),
+    # a candidate held on candidates whose own supports do not settle (the rounds that drop
+    # them never run, or keep them): a sphere on one that rests on a sliding sphere hangs in
+    # the air once that one slides off
+    ("settle-rounds-off", "src/algo_predictive.c", "        if (lost == 0)\n            break;",
+     "        if (1)\n            break;", GRAN, None),
+    ("settle-recheck-keeps", "src/algo_predictive.c",
+     "c->settle[-1 - who].still || c->settle[-1 - who].live[prev])",
+     "c->settle[-1 - who].still || c->settle[-1 - who].cand)", GRAN, None),
     ("cage-moved-off", "src/algo_predictive.c", "CAGE_TOUCH_REL * s->radius[k]) {",
      "INFINITY) {", GRAN, None),
     ("pocket-off", "src/algo_predictive.c", "        if (!held) { /* a pocket:", "        if (0) { /* a pocket:",
