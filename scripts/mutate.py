@@ -235,12 +235,21 @@ MUTANTS = [
     ("settle-window-1", "src/algo_predictive.c", "#define SETTLE_STEPS 10u", "#define SETTLE_STEPS 1u",
      GRAN + ["tests/test_settle.sh"], None),
     ("settle-any-support", "src/algo_predictive.c",
-     "    if (j == g->i || (!y->still && !y->cand))", "    if (j == g->i)",
+     "    if (j == g->i || !(y->still || (y->cand && (g->par < 0 || y->live[g->par]))))",
+     "    if (j == g->i)",
      GRAN + ["tests/test_settle.sh"], None),
     ("settle-stamp-early", "src/algo_predictive.c",
      "            r->ver[k] = r->who[k] < 0 ? c->ver[-1 - r->who[k]] : 0;",
      "            r->ver[k] = r->who[k] < 0 ? c->ver[-1 - r->who[k]] - 1 : 0;",
      GRAN + ["tests/test_settle.sh"], None),
+    # a candidate held on candidates whose own supports do not settle (the rounds that drop
+    # them never run, or keep them): a sphere on one that rests on a sliding sphere hangs in
+    # the air once that one slides off
+    ("settle-rounds-off", "src/algo_predictive.c", "        if (lost == 0)\n            break;",
+     "        if (1)\n            break;", GRAN, None),
+    ("settle-recheck-keeps", "src/algo_predictive.c",
+     "c->settle[-1 - who].still || c->settle[-1 - who].live[prev])",
+     "c->settle[-1 - who].still || c->settle[-1 - who].cand)", GRAN, None),
     ("cage-moved-off", "src/algo_predictive.c", "CAGE_TOUCH_REL * s->radius[k]) {",
      "INFINITY) {", GRAN, None),
     ("pocket-off", "src/algo_predictive.c", "        if (!held) { /* a pocket:", "        if (0) { /* a pocket:",

@@ -134,9 +134,10 @@
  * for SETTLE_STEPS whole steps changed velocity by at most 2 v_s over that window, so the mean
  * net force on it was at most 2 v_s / (SETTLE_STEPS dt) / |a| of its weight: with t_min <=
  * 0.1 dt (min_bounce_time), at most 2 x 2 x 0.1 / 10 = 4 %, at any dt. Its contacts carry
- * it. It is held where it is (settle_hold), on the planes and the spheres below it (against its
- * acceleration) that it touches within v_s^2 / |a| (twice its highest hop at that speed) and
- * that are held already or settle in the same step; then it wakes as any held sphere does (an
+ * it. It is held where it is (settle_phases), on the planes and the spheres below it (against
+ * its acceleration) that it touches within v_s^2 / |a| (twice its highest hop at that speed)
+ * and that are held already or settle in the same step (candidates whose own supports do not
+ * settle do not: settle_recheck); then it wakes as any held sphere does (an
  * impact faster than the rest speed, or a support that reacts). The speed test is exact:
  * between events |v + a t| is convex in t, so a step's highest speed is at an event (advance_to
  * before a reaction, fire after it) or at its ends (the update). Only dissipative scenes
@@ -167,7 +168,7 @@
  * 2 cm/s) held 801 spheres at 2.9 s and 259 at 3.1 s, each cascade letting spheres fall and
  * slide into the next, and did not settle. So held j stays put when k's push on it (along
  * the line of centres, from k to j) points into the cone of the faces that hold it -- its own
- * contacts, and the other held spheres and the planes it touches to within settle_hold's reach,
+ * contacts, and the other held spheres and the planes it touches to within settle_gather's reach,
  * all immobile, as for a sphere that lands on j (land_on_held) -- and k closes no faster than
  * the speed of a fall from physics.carry_drop of j's radius, sqrt(2 |a| carry_drop r): 7.7 cm/s
  * for the pile deck's 3 cm spheres under g at the default, NBEP_CARRY_DROP = 0.01. That is
@@ -179,13 +180,20 @@
  * or a faster one is an ordinary response, which wakes j. carry_drop = 0 turns the rule off. */
 
 /* One sphere's settling record (see SETTLE_STEPS): written by its owner, in the update and in
- * the settle sub-phases; cand and still are the snapshot other threads read in settle_hold. */
+ * the settle sub-phases; cand and still are the snapshot other threads read in settle_gather,
+ * live[] the one they read in settle_phases' rounds (the round before's parity). */
 typedef struct settle_rec {
     double peak2;     /* highest speed squared in the current step so far */
     uint32_t slow;    /* whole steps in a row at or below the settle speed (up to SETTLE_STEPS) */
     bool cand;        /* at the last step's end: not held, slow for SETTLE_STEPS steps */
     bool still;       /* at the last step's end: held */
-    bool held_now;    /* held by settle_hold this step (its supports' counts not yet stamped) */
+    bool held_now;    /* held by settle_phases this step (its supports' counts not yet stamped) */
+    bool more;        /* a candidate touched more supports than sup holds (the least nearly
+                       * below were left out) */
+    bool live[2];     /* a candidate still has supports after settle_phases' round k (written
+                       * at k's parity, read by all at the next round) */
+    uint8_t n_sup;
+    int32_t sup[NBEP_CONTACT_MAX]; /* a candidate's supports as gathered (rest_set's who) */
 } settle_rec;
 
 #define KEY_FREE UINT64_MAX
@@ -205,7 +213,9 @@ typedef struct thread_ws {
     size_t n_rel;
     uint64_t woken;           /* held spheres this thread changed so far (react, let_go) */
     size_t n_settle;          /* own settle candidates at the last step's end (settle_count) */
-    size_t n_settled;         /* own spheres settle_hold held in the last step */
+    size_t n_settled;         /* own spheres settle_phases held in the last step */
+    size_t n_live[2], n_lost[2]; /* own candidates with supports after settle_phases' round k,
+                                  * and those that lost their last in it (k's parity) */
     uint32_t jam_step;        /* the current step's number, low bits (run.max_reactions) */
     uint32_t jammed;          /* 1 + the lowest sphere this thread saw past run.max_reactions
                                * (the run then stops), 0 if none */
@@ -2006,7 +2016,7 @@ static void let_go_phase(pred_ctx *c, nbep_state *s, nbep_range own, nbep_barrie
 
 /* The update, own sphere i at the step's end: counts the step if its highest speed stayed at or
  * below the settle speed, starts the next step's peak from here, and takes the snapshot that
- * settle_hold reads. Returns whether i is a candidate to settle. */
+ * settle_gather reads. Returns whether i is a candidate to settle. */
 static bool settle_count(pred_ctx *c, const nbep_state *s, size_t i, double dt)
 {
     settle_rec *x = &c->settle[i];
@@ -2019,23 +2029,26 @@ static bool settle_count(pred_ctx *c, const nbep_state *s, size_t i, double dt)
     return x->cand;
 }
 
-/* What settle_hold gathers for sphere i: its supports r, each scored by the cosine between its
+/* What settle_gather gathers for sphere i: its supports r, each scored by the cosine between its
  * normal and i's acceleration (planes -2: kept first; the most nearly below kept when more
  * than NBEP_CONTACT_MAX touch). */
-typedef struct settle_gather {
+typedef struct settle_gather_ws {
     const pred_ctx *c;
     const nbep_state *s;
     size_t i;
     nbep_vec3 a;      /* i's acceleration, unit */
     double tol;       /* largest gap that counts as touching */
+    int par;          /* candidates count as supports: all (-1), or those live at this parity */
+    bool more;        /* more touched than r holds */
     rest_set r;
     double score[NBEP_CONTACT_MAX];
-} settle_gather;
+} settle_gather_ws;
 
-static void settle_add(settle_gather *g, int32_t who, double score)
+static void settle_add(settle_gather_ws *g, int32_t who, double score)
 {
     int k = g->r.n;
     if (k == NBEP_CONTACT_MAX) { /* replace the least nearly below, if this one is more so */
+        g->more = true;
         k = 0;
         for (int m = 1; m < g->r.n; m++)
             if (g->score[m] > g->score[k])
@@ -2049,13 +2062,14 @@ static void settle_add(settle_gather *g, int32_t who, double score)
     g->score[k] = score;
 }
 
-/* Sphere j is a support of i if it is held or settles in this step (the snapshot), touches i
- * within tol and lies against i's acceleration. */
+/* Sphere j is a support of i if it is held, or a candidate that may settle in this step (the
+ * snapshot: every candidate, or those still live after the round before), touches i within
+ * tol and lies against i's acceleration. */
 static void settle_one(void *u, uint32_t j)
 {
-    settle_gather *g = u;
+    settle_gather_ws *g = u;
     const settle_rec *y = &g->c->settle[j];
-    if (j == g->i || (!y->still && !y->cand))
+    if (j == g->i || !(y->still || (y->cand && (g->par < 0 || y->live[g->par]))))
         return;
     const nbep_vec3 d = sep(g->c, g->s, j, g->i);
     const double len = nbep_vec3_norm(d);
@@ -2066,15 +2080,15 @@ static void settle_one(void *u, uint32_t j)
         settle_add(g, -1 - (int32_t)j, cosine);
 }
 
-/* Own candidate i, every sphere at the step's end: held where it is on its supports (settle_one
- * and the planes it touches below it), if it has any. Reads other spheres' positions, radii and
- * snapshots only, which nothing writes in this sub-phase; the supports' response counts are
- * stamped after the counts move on (settle_phases). */
-static bool settle_hold(pred_ctx *c, nbep_state *s, size_t i, double dt)
+/* Own candidate i, at the step's end: gathers its supports (settle_one, and the planes it
+ * touches below it) into its record (sup, more). par as settle_gather_ws's. Reads other
+ * spheres' positions, radii and snapshots only, which nothing writes in these sub-phases.
+ * Returns whether it has any. */
+static bool settle_gather(pred_ctx *c, const nbep_state *s, size_t i, double dt, int par)
 {
     const double amag = nbep_vec3_norm(s->acc[i]), vs = settle_speed(s, i, dt);
-    settle_gather g = {.c = c, .s = s, .i = i, .a = nbep_vec3_scale(s->acc[i], 1.0 / amag),
-                       .tol = vs * vs / amag};
+    settle_gather_ws g = {.c = c, .s = s, .i = i, .a = nbep_vec3_scale(s->acc[i], 1.0 / amag),
+                          .tol = vs * vs / amag, .par = par};
     for (size_t p = 0; p < s->n_planes; p++)
         if (nbep_vec3_dot(s->plane_normal[p], g.a) < 0.0 &&
             nbep_physics_plane_gap(s->plane_normal[p], s->plane_offset[p], s->pos[i],
@@ -2096,22 +2110,51 @@ static bool settle_hold(pred_ctx *c, nbep_state *s, size_t i, double dt)
         for (size_t j = 0; j < s->n; j++)
             settle_one(&g, (uint32_t)j);
     }
-    if (g.r.n == 0)
-        return false;
-    g.r.still = true;
-    c->rest[i] = g.r;
-    s->vel[i] = ZERO3;
-    c->aeff[i] = ZERO3;
-    c->settle[i].held_now = true;
-    return true;
+    settle_rec *x = &c->settle[i];
+    x->more = g.more;
+    x->n_sup = g.r.n;
+    for (int k = 0; k < g.r.n; k++)
+        x->sup[k] = g.r.who[k];
+    return g.r.n > 0;
+}
+
+/* Own candidate i, live after the round before (parity prev): drops the candidates among its
+ * supports that were not live then (they have lost theirs: no support under them settles).
+ * Its supports are then those settle_gather would find among what is still live: the same
+ * list less those, unless it had left some out (more), when it gathers again. Returns whether
+ * any is left. */
+static bool settle_recheck(pred_ctx *c, const nbep_state *s, size_t i, double dt, int prev)
+{
+    settle_rec *x = &c->settle[i];
+    uint8_t n = 0;
+    for (int k = 0; k < x->n_sup; k++) {
+        const int32_t who = x->sup[k];
+        if (who >= 0 || c->settle[-1 - who].still || c->settle[-1 - who].live[prev])
+            x->sup[n++] = who;
+    }
+    if (n == x->n_sup)
+        return n > 0;
+    if (x->more)
+        return settle_gather(c, s, i, dt, prev);
+    x->n_sup = n;
+    return n > 0;
 }
 
 /* Every thread at a step's end, after a barrier that follows the update (settle_count): holds
- * the candidates that have supports. Three sub-phases, so that no thread reads what another
- * writes: hold (settle_hold), then the held spheres' response counts move on (their slots and
- * every prediction naming them are stale) and their block energies are taken again, then each
- * stamps its sphere supports' counts. The same decisions on every thread and for any thread
- * count (they read the snapshot). Returns whether any sphere was held. */
+ * the candidates whose supports end up held. Sub-phases, so that no thread reads what another
+ * writes: each candidate gathers its supports among the planes, the held spheres and the
+ * candidates (settle_gather); then, round after round, candidates whose supports have all
+ * lost theirs lose them too (settle_recheck: a sphere on one that rests on a sliding sphere
+ * is no more held than that one), until a round loses none (each round reads the round
+ * before's snapshot, live[]: the same rounds on every thread and for any thread count; a
+ * candidate never comes back, so there are at most as many rounds as candidates, and one more
+ * than the longest chain that loses its supports, in practice); then those left are held where
+ * they are, their response counts move on (their slots and every prediction naming them are
+ * stale) and their block energies are taken again; then each stamps its sphere supports'
+ * counts. Every held sphere thus rests on planes and held spheres only: never on one that goes
+ * on moving (before, the candidate's own support was enough, and a sphere on a sphere that
+ * failed to settle hung in the air). Candidates that support each other in a ring (possible
+ * only where accelerations differ) keep each other. Returns whether any sphere was held. */
 static bool settle_phases(nbep_sim *sim, pred_ctx *c, nbep_range own, thread_ws *w)
 {
     if (!c->settle)
@@ -2123,19 +2166,55 @@ static bool settle_phases(nbep_sim *sim, pred_ctx *c, nbep_range own, thread_ws 
         return false;
     nbep_state *s = &sim->st;
     nbep_barrier_wait(&c->bar); /* grid mode: the grid is placed */
+    w->n_live[0] = w->n_lost[0] = 0;
+    for (size_t i = own.lo; i < own.hi; i++) {
+        if (!c->settle[i].cand)
+            continue;
+        const bool on = settle_gather(c, s, i, sim->dt, -1);
+        c->settle[i].live[0] = on;
+        w->n_live[0] += on;
+        w->n_lost[0] += !on;
+    }
+    int round = 0;
+    for (;;) {
+        nbep_barrier_wait(&c->bar);
+        size_t live = 0, lost = 0;
+        for (int t = 0; t < c->nt; t++) {
+            live += c->ws[t].n_live[round & 1];
+            lost += c->ws[t].n_lost[round & 1];
+        }
+        if (live == 0)
+            return false;
+        if (lost == 0)
+            break;
+        round++; /* written at its parity, read by all after the barrier */
+        const int prev = (round - 1) & 1, cur = round & 1;
+        w->n_live[cur] = w->n_lost[cur] = 0;
+        for (size_t i = own.lo; i < own.hi; i++) {
+            settle_rec *x = &c->settle[i];
+            if (!x->cand)
+                continue;
+            const bool on = x->live[prev] && settle_recheck(c, s, i, sim->dt, prev);
+            x->live[cur] = on;
+            w->n_live[cur] += on;
+            w->n_lost[cur] += x->live[prev] && !on;
+        }
+    }
     w->n_settled = 0;
-    for (size_t i = own.lo; i < own.hi; i++)
-        if (c->settle[i].cand && settle_hold(c, s, i, sim->dt))
-            w->n_settled++;
-    nbep_barrier_wait(&c->bar);
-    size_t held = 0;
-    for (int t = 0; t < c->nt; t++)
-        held += c->ws[t].n_settled;
-    if (held == 0)
-        return false;
-    for (size_t i = own.lo; w->n_settled > 0 && i < own.hi; i++)
-        if (c->settle[i].held_now)
-            c->ver[i]++;
+    for (size_t i = own.lo; i < own.hi; i++) {
+        settle_rec *x = &c->settle[i];
+        if (!x->cand || !x->live[round & 1])
+            continue;
+        rest_set *r = &c->rest[i];
+        *r = (rest_set){.n = x->n_sup, .still = true};
+        for (int k = 0; k < x->n_sup; k++)
+            r->who[k] = x->sup[k];
+        s->vel[i] = ZERO3;
+        c->aeff[i] = ZERO3;
+        x->held_now = true;
+        c->ver[i]++;
+        w->n_settled++;
+    }
     if (w->n_settled > 0)
         nbep__sim_block_energy(sim, own);
     nbep_barrier_wait(&c->bar);

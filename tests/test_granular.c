@@ -712,6 +712,127 @@ static void test_settling_needs_supports_that_settle(void **state)
     }
 }
 
+/* Whether every sphere held still in the frame at p, v (velocity exactly zero) rests on the
+ * floor z = 0 or, through a chain of held spheres each touching the next below it, on the
+ * floor: none hangs in mid-air (tol: the settle tolerance, with margin). */
+static bool held_spheres_grounded(const nbep_vec3 *p, const nbep_vec3 *v, size_t n, double r,
+                                  double tol)
+{
+    bool ground[8] = {false};
+    assert_true(n <= 8);
+    for (bool more = true; more;) {
+        more = false;
+        for (size_t i = 0; i < n; i++) {
+            if (ground[i] || !nbep_vec3_equal(v[i], ZERO))
+                continue;
+            bool on = p[i].z - r <= tol;
+            for (size_t j = 0; !on && j < n; j++)
+                on = ground[j] && p[j].z < p[i].z &&
+                     nbep_vec3_norm(nbep_vec3_sub(p[i], p[j])) - 2.0 * r <= tol;
+            if (on)
+                ground[i] = more = true;
+        }
+    }
+    for (size_t i = 0; i < n; i++)
+        if (nbep_vec3_equal(v[i], ZERO) && !ground[i])
+            return false;
+    return true;
+}
+
+/* Settling holds a sphere only on supports that end up held: A slides along the floor at
+ * 5 mm/s (faster than the settle speed), B is set at rest on A and C at rest on B (and D on C:
+ * a chain of three candidates). B and C are both slow from the start, so both are candidates
+ * after SETTLE_STEPS steps; B has no held support (A slides), so it is not held, and then
+ * neither is C, which rests on B alone (nor D). Before, C was held on B because B was a
+ * candidate, B then slid off A, and C hung still at z = 0.5 for the whole run (B, never held,
+ * let go of nothing when it reacted): every case failed from the frame at step 10 on. At every
+ * frame after the start, in every neighbour mode, every sphere held still rests on the floor
+ * or on held spheres down to it, nothing overlaps, the energy never rises from one frame to
+ * the next (from step 10: the first steps' minimum bounces of spheres set touching may add
+ * some, README), and the top sphere falls: it ends at least a radius lower. The same frames on
+ * 2 threads (a support on another thread). */
+static void test_settling_supports_must_settle_too(void **state)
+{
+    (void)state;
+    const double r = 0.1, tol = 4e-6; /* tol: the settle tolerance at dt = 1e-3, with margin */
+    for (int k = 0; k < 6; k++) { /* all pairs, grid, cells; A and 2 or 3 spheres on it */
+        const int mode = k % 3;
+        const size_t n = k < 3 ? 3 : 4;
+        nbep_scene *sc = scene(n, 1, "predictive", 2000, 0.5);
+        neighbor_mode(sc, mode);
+        sc->output_every = 10;
+        nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){0.0, 0.0, r}, (nbep_vec3){5e-3, 0.0, 0.0}, r,
+                             1.0, DOWN);
+        for (size_t i = 1; i < n; i++)
+            nbep_test_set_sphere(sc, i, (nbep_vec3){0.0, 0.0, (1.0 + 2.0 * (double)i) * r}, ZERO,
+                                 r, 1.0, DOWN);
+        trace t = {0};
+        const uint64_t coll = run(sc, 1, &t).collisions;
+        double e_before = INFINITY;
+        for (size_t f = 1; f < t.n_frames; f++) {
+            const nbep_vec3 *p = t.data + f * 2 * t.n, *v = p + t.n;
+            assert_true(held_spheres_grounded(p, v, t.n, r, tol));
+            double e = 0.0; /* masses 1 */
+            for (size_t i = 0; i < t.n; i++)
+                e += 0.5 * nbep_vec3_norm2(v[i]) - nbep_vec3_dot(DOWN, p[i]);
+            assert_true(e - e_before <= 1e-12 * e);
+            e_before = e;
+            for (size_t i = 0; i < t.n; i++) {
+                assert_true(p[i].z - r >= -1e-12);
+                for (size_t j = i + 1; j < t.n; j++)
+                    assert_true(nbep_vec3_norm(nbep_vec3_sub(p[i], p[j])) - 2.0 * r >= -1e-12);
+            }
+        }
+        assert_true(last_pos(&t)[n - 1].z <= 2.0 * (double)(n - 1) * r);
+        trace t2 = {0};
+        assert_int_equal(run(sc, 2, &t2).collisions, coll);
+        assert_int_equal(t2.n_frames, t.n_frames);
+        assert_memory_equal(t2.data, t.data, t.n_frames * 2 * t.n * sizeof *t.data);
+        free(t2.data);
+        free(t.data);
+        nbep_test_scene_free(&sc);
+    }
+}
+
+/* Candidates that support each other in a ring keep each other (settle_phases' rounds drop only
+ * candidates whose supports lose theirs): two spheres pressed together by opposite
+ * accelerations (no plane, no gravity), each below the other against its own acceleration,
+ * each the other's only support. Their pushes balance, so both are slow and both are held
+ * after SETTLE_STEPS steps, in every neighbour mode, where they were set (within the minimum
+ * bounce's jitter), and nothing collides after; on 2 threads (one sphere each) the same
+ * frames. */
+static void test_settling_keeps_a_ring_of_supports(void **state)
+{
+    (void)state;
+    const double r = 0.1, g = 9.81;
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
+        uint64_t coll[2];
+        for (int k = 0; k < 2; k++) {
+            nbep_scene *sc = scene(2, 0, "predictive", k == 0 ? 100 : 300, 0.5);
+            neighbor_mode(sc, mode);
+            nbep_test_set_sphere(sc, 0, ZERO, ZERO, r, 1.0, (nbep_vec3){g, 0.0, 0.0});
+            nbep_test_set_sphere(sc, 1, (nbep_vec3){2.0 * r, 0.0, 0.0}, ZERO, r, 1.0,
+                                 (nbep_vec3){-g, 0.0, 0.0});
+            trace t = {0};
+            coll[k] = run(sc, 1, &t).collisions;
+            for (size_t i = 0; i < 2; i++) {
+                assert_true(nbep_vec3_equal(last_vel(&t)[i], ZERO));
+                assert_true(nbep_vec3_norm(nbep_vec3_sub(last_pos(&t)[i], sc->state.pos[i])) <=
+                            1e-6);
+            }
+            trace t2 = {0};
+            assert_int_equal(run(sc, 2, &t2).collisions, coll[k]);
+            assert_int_equal(t2.n_frames, t.n_frames);
+            assert_memory_equal(t2.data, t.data, t.n_frames * 2 * t.n * sizeof *t.data);
+            free(t2.data);
+            free(t.data);
+            nbep_test_scene_free(&sc);
+        }
+        assert_int_equal(coll[1], coll[0]);
+    }
+}
+
 /* A frictionless sphere sliding on a floor at 1 mm/s (dt = 1e-3: half the settle speed) is
  * taken for resting after SETTLE_STEPS steps and held where it is (README, granular: what
  * settling gives up); one at 5 mm/s slides on at its speed. */
@@ -1355,6 +1476,8 @@ int main(void)
         cmocka_unit_test(test_row_that_fits_exactly_is_held),
         cmocka_unit_test(test_sphere_balanced_near_a_crest_settles),
         cmocka_unit_test(test_settling_needs_supports_that_settle),
+        cmocka_unit_test(test_settling_supports_must_settle_too),
+        cmocka_unit_test(test_settling_keeps_a_ring_of_supports),
         cmocka_unit_test(test_slow_slider_is_held_fast_one_slides_on),
         cmocka_unit_test(test_groove_ball_ends_at_the_bottom_of_the_v),
         cmocka_unit_test(test_e0_pair_keeps_momentum_and_loses_energy),
