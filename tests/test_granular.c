@@ -69,6 +69,14 @@ static const nbep_vec3 *last_vel(const trace *t)
     return t->data + (t->n_frames - 1) * 2 * t->n + t->n;
 }
 
+/* Trace b holds the frames of trace a bit for bit (positions and velocities, every frame). */
+static void assert_same_frames(const trace *a, const trace *b)
+{
+    assert_int_equal(b->n_frames, a->n_frames);
+    assert_int_equal(b->n, a->n);
+    assert_memory_equal(b->data, a->data, a->n_frames * 2 * a->n * sizeof *a->data);
+}
+
 /* Runs sc on nt threads; must finish with NBEP_OK (a stall is a failure). */
 static nbep_summary run(const nbep_scene *sc, int nt, trace *t)
 {
@@ -163,8 +171,7 @@ static void test_knocked_stack_falls(void **state)
             trace t = {0};
             (void)run(sc, 4, &t);
             unsetenv("NBEP_TEAM");
-            assert_int_equal(t.n_frames, ref.n_frames);
-            assert_memory_equal(t.data, ref.data, ref.n_frames * 2 * ref.n * sizeof *ref.data);
+            assert_same_frames(&ref, &t);
             free(t.data);
         }
         free(ref.data);
@@ -624,8 +631,7 @@ static void test_row_that_fits_exactly_is_held(void **state)
             for (int nt = 2; nt <= 4; nt += 2) {
                 trace tn = {0};
                 assert_int_equal(run(sc, nt, &tn).collisions, sum.collisions);
-                assert_int_equal(tn.n_frames, t.n_frames);
-                assert_memory_equal(tn.data, t.data, t.n_frames * 2 * t.n * sizeof *t.data);
+                assert_same_frames(&t, &tn);
                 free(tn.data);
             }
         }
@@ -787,8 +793,7 @@ static void test_settling_supports_must_settle_too(void **state)
         assert_true(last_pos(&t)[n - 1].z <= 2.0 * (double)(n - 1) * r);
         trace t2 = {0};
         assert_int_equal(run(sc, 2, &t2).collisions, coll);
-        assert_int_equal(t2.n_frames, t.n_frames);
-        assert_memory_equal(t2.data, t.data, t.n_frames * 2 * t.n * sizeof *t.data);
+        assert_same_frames(&t, &t2);
         free(t2.data);
         free(t.data);
         nbep_test_scene_free(&sc);
@@ -823,8 +828,7 @@ static void test_settling_keeps_a_ring_of_supports(void **state)
             }
             trace t2 = {0};
             assert_int_equal(run(sc, 2, &t2).collisions, coll[k]);
-            assert_int_equal(t2.n_frames, t.n_frames);
-            assert_memory_equal(t2.data, t.data, t.n_frames * 2 * t.n * sizeof *t.data);
+            assert_same_frames(&t, &t2);
             free(t2.data);
             free(t.data);
             nbep_test_scene_free(&sc);
@@ -892,8 +896,7 @@ static void test_held_sphere_carries_a_slow_push_its_faces_take(void **state)
             if (k == 0) { /* the pocket's search on 2 threads (rounds modes): the same frames */
                 trace t2 = {0};
                 assert_int_equal(run(sc, 2, &t2).collisions, coll);
-                assert_int_equal(t2.n_frames, t.n_frames);
-                assert_memory_equal(t2.data, t.data, t.n_frames * 2 * t.n * sizeof *t.data);
+                assert_same_frames(&t, &t2);
                 free(t2.data);
             }
             const nbep_vec3 *u = last_vel(&t);
@@ -951,8 +954,7 @@ static void test_settled_spheres_stay_held_when_others_wake(void **state)
             if (k == 0) { /* settling's sub-phases on 4 threads, one sphere each: the same */
                 trace t4 = {0};
                 assert_int_equal(run(sc, 4, &t4).collisions, coll[0]);
-                assert_int_equal(t4.n_frames, t.n_frames);
-                assert_memory_equal(t4.data, t.data, t.n_frames * 2 * t.n * sizeof *t.data);
+                assert_same_frames(&t, &t4);
                 free(t4.data);
             }
             free(t.data);
@@ -1310,8 +1312,7 @@ static void test_pile_frames_equal_for_1_2_4_threads(void **state)
             size_t n[2];
             nbep_summary sk = run_sums(sc, runs[k].nt, "pile.h5", &t, sums, n);
             unsetenv("NBEP_TEAM");
-            assert_int_equal(t.n_frames, ref.n_frames);
-            assert_memory_equal(t.data, ref.data, ref.n_frames * 2 * ref.n * sizeof *ref.data);
+            assert_same_frames(&ref, &t);
             assert_int_equal(sk.collisions, s1.collisions);
             assert_int_equal(sk.predictions, s1.predictions);
             assert_int_equal(sk.checks, s1.checks);
@@ -1377,7 +1378,7 @@ static void test_step_sums_equal_for_1_2_4_threads(void **state)
             double *sums[2];
             size_t n[2];
             (void)run_sums(sc, nt, "sums.h5", &t, sums, n);
-            assert_memory_equal(t.data, ref.data, ref.n_frames * 2 * ref.n * sizeof *ref.data);
+            assert_same_frames(&ref, &t);
             same_sums(sums, n, ref_sums, ref_n);
             free(t.data);
         }
