@@ -139,6 +139,12 @@ bench-programs: bin/nbep $(BENCH_BIN)
 bench-dense: bin/nbep
 	bash scripts/bench-dense.sh
 
+# The same fluids counted instead of timed: instructions and simulated cache misses per
+# collision, nbep beside EDMD, under valgrind's cachegrind (scripts/bench-dense.sh, COUNT).
+.PHONY: bench-dense-count
+bench-dense-count: bin/nbep
+	COUNT=1 bash scripts/bench-dense.sh
+
 # The paper's step (run.order = "step", approximate) against the exact time order on crowded
 # scenes (fluids at phi 0.30 and 0.50, a pile), cells mode beside them; BENCH_ORDER_ARGS.
 .PHONY: bench-order

@@ -18,6 +18,14 @@
 #   OUT          where the raw rows and the scratch builds go (default build/bench-dense)
 #   NBEP         the nbep binary (default bin/nbep; a wrapper script for a node that lacks the
 #                libraries, for example)
+#   COUNT        1: instead of timing, count (make bench-dense-count). Each engine runs under
+#                valgrind's cachegrind on the same melt for two lengths of simulated time, and
+#                the table gives per collision of the difference: instructions, first-level data
+#                cache misses and misses of a second level the size of this machine's (L2 from
+#                lscpu; CG_L2 = bytes,ways overrides it), the caches simulated (so the same
+#                figures on any machine, whatever its load). A machine's speed is roughly
+#                instructions / IPC plus misses times their latency; counting tells which of the
+#                two an engine spends more of, which timing on a shared machine cannot.
 #
 # The scene: N spheres of diameter 1, mass 1, kT = 1 in a periodic cube of side L,
 # L^3 = N pi / (6 phi) (inputs/hard-sphere-fluid.deck is the N = 32000, phi = 0.30 one).
@@ -103,10 +111,11 @@ EOF
 
 # EDMD's parameters are globals in its source: a build per (n, phi, time), reading init.sph,
 # the fluid nbep reaches at T1.
-edmd_build() { # n phi time -> path of the build
-    local dir="$OUT/edmd-$1-$2-$3"
+edmd_build() { # n phi time [cg] -> path of the build (cg: for cachegrind, AVX2 at most)
+    local dir="$OUT/edmd-$1-$2-$3${4:+-$4}"
     if [ ! -x "$dir/md" ]; then
         rm -rf "$dir" && cp -r "$edmd_src" "$dir"
+        [ -n "${4:-}" ] && sed -i -e "s/-march=native/-march=x86-64-v3/" "$dir/Makefile"
         sed -i -e "s/^double maxtime = [0-9.e+-]*;/double maxtime = $3;/" \
             -e "s/^double writeinterval = [0-9.e+-]*;/double writeinterval = $3;/" \
             -e "s/^double snapshotinterval = [0-9.e+-]*;/double snapshotinterval = $3;/" \
@@ -197,6 +206,76 @@ for n in $NS; do
         melt "$n" "$phi" || exit 1
     done
 done
+
+# ---- COUNT=1: cachegrind's counts instead of times -------------------------------------------
+# The counted stretch is a fifteenth of the timed one (0.2 time units at phi 0.50, 0.8 at 0.30
+# for N = 32000: 30 to 130 thousand collisions, a few minutes under cachegrind). nbep resumes the
+# melt at T1 and runs to T1 + 0.05 and to T1 + 0.05 + stretch; EDMD runs from nbep's fluid to 0.1
+# and to 0.1 + stretch, built for AVX2 at most (valgrind 3.19 decodes no AVX-512, which
+# -march=native may emit). The difference of the two runs leaves out set-up, reading and writing.
+if [ "${COUNT:-0}" = 1 ]; then
+    command -v valgrind >/dev/null || { echo "COUNT=1 needs valgrind" >&2; exit 1; }
+    l2=${CG_L2:-$(lscpu -C=NAME,ONE-SIZE,WAYS -B 2>/dev/null | awk '$1 == "L2" { print $2 "," $3 }')}
+    [ -n "$l2" ] || l2=1048576,16
+    cg() { # out.json cg.out CMD...: cachegrind's totals of CMD as "Ir D1mr+D1mw LLmr+LLmw"
+        local o=$1 c=$2
+        shift 2
+        valgrind --tool=cachegrind --cache-sim=yes --D1=49152,12,64 --LL="$l2",64 \
+            --cachegrind-out-file="$c" "$@" >"$o.log" 2>&1 || { echo "failed: $* ($o.log)" >&2; return 1; }
+        awk '/^summary:/ { print $2, $6 + $9, $7 + $10 }' "$c"
+    }
+    crow="$OUT/counts.csv"
+    echo "engine,n,phi,collisions,instructions,d1_misses,l2_misses" >"$crow"
+    for n in $NS; do
+        for phi in $PHIS; do
+            S=$(awk -v s="$(stretch "$n" "$phi")" 'BEGIN { printf "%.6g", s / 15 }')
+            declare -A got=()
+            for k in 1 2; do
+                te=$(awk -v t="$T1" -v s="$S" -v k="$k" -v dt="$DT" 'BEGIN { print t + dt + (k - 1) * s }')
+                out="$OUT/count-$k.h5"
+                d=$(deck "$n" "$phi" "$(steps_to "$te")" "$DT" 1 "$out" "" "$STEPS1")
+                cp "$OUT/melt-$n-$phi.h5" "$out"
+                c=$(cg "$OUT/count-nbep-$k" "$OUT/count-nbep-$k.cg" "$NBEP" run "$d" --resume "$out" \
+                    --quiet --summary "$OUT/count-nbep-$k.json") || exit 1
+                got[nbep$k]="$(summary_field collisions <"$OUT/count-nbep-$k.json") $c"
+                if [ -n "$edmd_src" ]; then
+                    e=$(edmd_build "$n" "$phi" "$(awk -v s="$S" -v k="$k" 'BEGIN { print 0.1 + (k - 1) * s }')" cg) || exit 1
+                    c=$(cd "$e" && cg run cg.out ./md) || exit 1
+                    got[edmd$k]="$(sed -n 's/^Simtime: .*Collisions: \([0-9]*\),.*/\1/p' "$e/run.log" | tail -1) $c"
+                fi
+            done
+            for eng in nbep edmd; do
+                [ -n "${got[${eng}1]:-}" ] || continue
+                read -r c1 i1 d1 l1 <<<"${got[${eng}1]}"
+                read -r c2 i2 d2 l2c <<<"${got[${eng}2]}"
+                echo "$eng,$n,$phi,$((c2 - c1)),$((i2 - i1)),$((d2 - d1)),$((l2c - l1))" >>"$crow"
+            done
+            unset got
+        done
+    done
+    "$PY" - "$crow" "$l2" <<'PYEOF'
+import csv, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+print(f"\nPer collision, from cachegrind (L1d 48 kB; second level {sys.argv[2]} bytes,ways):")
+print("| engine | N | phi | collisions counted | instructions | L1d misses | L2 misses |")
+print("| --- | --- | --- | --- | --- | --- | --- |")
+per = {}
+for r in rows:
+    c = int(r["collisions"])
+    if c <= 0:
+        continue
+    f = [int(r[k]) / c for k in ("instructions", "d1_misses", "l2_misses")]
+    per[(r["engine"], r["n"], r["phi"])] = f
+    print(f"| {r['engine']} | {r['n']} | {r['phi']} | {c} | {f[0]:.0f} | {f[1]:.1f} | {f[2]:.1f} |")
+for (eng, n, phi), f in sorted(per.items()):
+    e = per.get(("edmd", n, phi))
+    if eng == "nbep" and e:
+        print(f"  N {n}, phi {phi}: nbep / EDMD: instructions {f[0] / e[0]:.2f}, "
+              f"L1d misses {f[1] / e[1]:.2f}, L2 misses {f[2] / e[2]:.2f}")
+PYEOF
+    exit 0
+fi
+
 for rep in $(seq "$REPS"); do
     for n in $NS; do
         for phi in $PHIS; do
