@@ -250,6 +250,10 @@ MUTANTS = [
     ("settle-recheck-keeps", "src/algo_predictive.c",
      "c->settle[-1 - who].still || c->settle[-1 - who].live[prev])",
      "c->settle[-1 - who].still || c->settle[-1 - who].cand)", GRAN, None),
+    # a candidate whose support list was cut at NBEP_CONTACT_MAX only drops the kept supports
+    # that lost theirs instead of gathering again: a live support beyond the cut is never seen
+    ("settle-recheck-no-regather", "src/algo_predictive.c",
+     "    if (x->more)\n        return settle_gather(c, s, i, dt, prev);\n", "", GRAN, None),
     ("cage-moved-off", "src/algo_predictive.c", "CAGE_TOUCH_REL * s->radius[k]) {",
      "INFINITY) {", GRAN, None),
     ("pocket-off", "src/algo_predictive.c", "        if (!held) { /* a pocket:", "        if (0) { /* a pocket:",
