@@ -108,6 +108,11 @@ MUTANTS = [
      CELLS + GRAN + SIM, None),
     ("beat-cap-short", "src/algo_predictive.c", "    const double d = best->time - T0 - t0;",
      "    const double d = 0.5 * (best->time - T0 - t0);", CELLS + GRAN, None),
+    # the cap exactly at the best time so far, without the tie margin: a pair that ties with
+    # a plane found first, its time rounded down to the plane's, is cut off and the plane wins
+    ("beat-cap-no-margin", "src/algo_predictive.c",
+     "    return d + 16.0 * DBL_EPSILON * (fabs(best->time) + fabs(T0) + fabs(t0));",
+     "    return d;", CELLS + GRAN, None),
     # ---- event queue ----
     ("feq-earlier", "src/feq.c", "return a->time < b->time;", "return a->time > b->time;",
      ["test_feq"] + SIM, None),
