@@ -108,6 +108,11 @@ MUTANTS = [
      CELLS + GRAN + SIM, None),
     ("beat-cap-short", "src/algo_predictive.c", "    const double d = best->time - T0 - t0;",
      "    const double d = 0.5 * (best->time - T0 - t0);", CELLS + GRAN, None),
+    # the cap exactly at the best time so far, without the tie margin: a pair that ties with
+    # a plane found first, its time rounded down to the plane's, is cut off and the plane wins
+    ("beat-cap-no-margin", "src/algo_predictive.c",
+     "    return d + 16.0 * DBL_EPSILON * (fabs(best->time) + fabs(T0) + fabs(t0));",
+     "    return d;", CELLS + GRAN, None),
     # ---- event queue ----
     ("feq-earlier", "src/feq.c", "return a->time < b->time;", "return a->time > b->time;",
      ["test_feq"] + SIM, None),
@@ -250,6 +255,10 @@ MUTANTS = [
     ("settle-recheck-keeps", "src/algo_predictive.c",
      "c->settle[-1 - who].still || c->settle[-1 - who].live[prev])",
      "c->settle[-1 - who].still || c->settle[-1 - who].cand)", GRAN, None),
+    # a candidate whose support list was cut at NBEP_CONTACT_MAX only drops the kept supports
+    # that lost theirs instead of gathering again: a live support beyond the cut is never seen
+    ("settle-recheck-no-regather", "src/algo_predictive.c",
+     "    if (x->more)\n        return settle_gather(c, s, i, dt, prev);\n", "", GRAN, None),
     ("cage-moved-off", "src/algo_predictive.c", "CAGE_TOUCH_REL * s->radius[k]) {",
      "INFINITY) {", GRAN, None),
     ("pocket-off", "src/algo_predictive.c", "        if (!held) { /* a pocket:", "        if (0) { /* a pocket:",

@@ -724,8 +724,8 @@ static void test_settling_needs_supports_that_settle(void **state)
 static bool held_spheres_grounded(const nbep_vec3 *p, const nbep_vec3 *v, size_t n, double r,
                                   double tol)
 {
-    bool ground[8] = {false};
-    assert_true(n <= 8);
+    bool ground[16] = {false};
+    assert_true(n <= 16);
     for (bool more = true; more;) {
         more = false;
         for (size_t i = 0; i < n; i++) {
@@ -834,6 +834,80 @@ static void test_settling_keeps_a_ring_of_supports(void **state)
             nbep_test_scene_free(&sc);
         }
         assert_int_equal(coll[1], coll[0]);
+    }
+}
+
+/* A support beyond the cut (settle_recheck's fresh gather). A settling candidate keeps at most
+ * NBEP_CONTACT_MAX = 4 supports, the most nearly below; when kept ones lose theirs, one it left
+ * out may still hold it, so it gathers again. X (radius 0.1, pulled along -x by g, no plane
+ * within reach) touches, to within 1e-7 m, five spheres on the -x side of it: four candidates
+ * B at 62 degrees from its acceleration (cosine -0.47), kept, and H at 75 degrees (cosine
+ * -0.26), left out, which rests on the floor, held from the start. Each B is pulled straight
+ * away from X by g onto a heavy sphere (1e6 kg, no acceleration) that slides across the line of
+ * centres at 5 mm/s, faster than the settle speed (about 2 mm/s), so never a candidate; X rests
+ * on such a slider too. Everything carried is slow from the start, so X and the B's are
+ * candidates at the end of step SETTLE_STEPS = 10; the B's have no support at all (their
+ * sliders count for nothing, X is behind them), so all four of X's kept supports fail in
+ * settle_phases' first round, and only the fresh gather finds H: X is held on H there and
+ * stays held (its slider slides away from it), while the B's never are. At every frame, in
+ * every neighbour mode: X is held exactly from step 10 on, no B is ever held, every held sphere
+ * rests on the floor or on held spheres down to it, and nothing overlaps; the same frames on
+ * 2 threads (H and the B's on one, X on the other). */
+static void test_settling_gathers_again_when_kept_supports_fail(void **state)
+{
+    (void)state;
+    /* tol: the settle tolerance (settle speed)^2 / g at dt = 1e-3 (3.9e-7 m), with margin;
+     * touch: how far contacts may overlap, 1e-11 of a radius: they are found to within
+     * round-off of coordinates near 1 m (~1e-16 m) */
+    const double r = 0.1, g = 9.81, gap = 1e-7, tol = 4e-6, touch = 1e-11 * r;
+    const double slide = 5e-3, heavy = 1e6;
+    const double deg = acos(-1.0) / 180.0, th = 62.0 * deg, ps = 75.0 * deg;
+    const size_t n = 11, X = 10;
+    const uint64_t steps = 30, settle_step = 10; /* SETTLE_STEPS */
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
+        nbep_scene *sc = scene(n, 1, "predictive", steps, 0.5);
+        neighbor_mode(sc, mode);
+        nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+        /* X at p, H below it on the floor at 75 degrees from -x */
+        const nbep_vec3 dh = {-cos(ps), 0.0, -sin(ps)};
+        const nbep_vec3 p = {1.0, 1.0, r + (2.0 * r + gap) * sin(ps)};
+        nbep_test_set_sphere(sc, 0, nbep_vec3_axpy(p, 2.0 * r + gap, dh), ZERO, r, 1.0, DOWN);
+        /* the B's at 62 degrees from -x, 72 degrees apart around it (H in the fifth place),
+         * each on its slider, which moves about the x axis, across their line of centres */
+        for (size_t k = 1; k <= 4; k++) {
+            const double az = (270.0 + 72.0 * (double)k) * deg;
+            const nbep_vec3 d = {-cos(th), sin(th) * cos(az), sin(th) * sin(az)};
+            const nbep_vec3 across = {0.0, d.z, -d.y};
+            nbep_test_set_sphere(sc, k, nbep_vec3_axpy(p, 2.0 * r + gap, d), ZERO, r, 1.0,
+                                 nbep_vec3_scale(d, g));
+            nbep_test_set_sphere(sc, 4 + k, nbep_vec3_axpy(p, 4.0 * r + gap, d),
+                                 nbep_vec3_scale(across, slide / nbep_vec3_norm(across)), r,
+                                 heavy, ZERO);
+        }
+        nbep_test_set_sphere(sc, 9, nbep_vec3_add(p, (nbep_vec3){-2.0 * r, 0.0, 0.0}),
+                             (nbep_vec3){0.0, 0.0, -slide}, r, heavy, ZERO);
+        nbep_test_set_sphere(sc, X, p, ZERO, r, 1.0, (nbep_vec3){-g, 0.0, 0.0});
+        trace t = {0};
+        const uint64_t coll = run(sc, 1, &t).collisions;
+        assert_int_equal(t.n_frames, steps + 1);
+        for (size_t f = 1; f < t.n_frames; f++) { /* frame f: the end of step f */
+            const nbep_vec3 *q = t.data + f * 2 * t.n, *v = q + t.n;
+            assert_int_equal(nbep_vec3_equal(v[X], ZERO), f >= settle_step);
+            for (size_t k = 1; k <= 4; k++)
+                assert_false(nbep_vec3_equal(v[k], ZERO));
+            assert_true(held_spheres_grounded(q, v, t.n, r, tol));
+            for (size_t i = 0; i < t.n; i++) {
+                assert_true(q[i].z - r >= -touch);
+                for (size_t j = i + 1; j < t.n; j++)
+                    assert_true(nbep_vec3_norm(nbep_vec3_sub(q[i], q[j])) - 2.0 * r >= -touch);
+            }
+        }
+        trace t2 = {0};
+        assert_int_equal(run(sc, 2, &t2).collisions, coll);
+        assert_same_frames(&t, &t2);
+        free(t2.data);
+        free(t.data);
+        nbep_test_scene_free(&sc);
     }
 }
 
@@ -1479,6 +1553,7 @@ int main(void)
         cmocka_unit_test(test_settling_needs_supports_that_settle),
         cmocka_unit_test(test_settling_supports_must_settle_too),
         cmocka_unit_test(test_settling_keeps_a_ring_of_supports),
+        cmocka_unit_test(test_settling_gathers_again_when_kept_supports_fail),
         cmocka_unit_test(test_slow_slider_is_held_fast_one_slides_on),
         cmocka_unit_test(test_groove_ball_ends_at_the_bottom_of_the_v),
         cmocka_unit_test(test_e0_pair_keeps_momentum_and_loses_energy),

@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -601,6 +602,76 @@ static void test_predictive_modes_find_a_contact_past_half_the_wall_time(void **
     }
 }
 
+/* A pair contact tied with a plane contact found before it. Grid and cells modes solve a pair
+ * only up to the sphere's best event so far plus a margin of 16 ulps (beat_cap in
+ * src/algo_predictive.c), so that a contact that rounds to the same time still ties; without
+ * the margin it is lost whenever its exact time lies above the double the two round to. The
+ * times here are exact fractions. Two spheres, X and its mirror image Y across x = 0 (radius
+ * 1/2, e = 1/2, TC model with tc = 1e-6), each 1/8 above the floor and falling at 3/16 with no
+ * vertical acceleration: they land at exactly 2/3. Along x they close head on under
+ * accelerations +-3/8, each from 1/8 short of x = 0 at 1/16, X's gap to x = 0 being
+ * q(t) = 1/8 - t/16 - 3 t^2/16 = (3/16)(2/3 - t)(1 + t): they touch at 2/3 too, on an approach
+ * the acceleration bends (the pair takes the bracketing search). Both also move along y at 1/16
+ * into a wall, which they meet at t_r = 1365/2048, so each is predicted again there, 1/6144
+ * before the contacts. 2/3 is not a double: it lies a third of an ulp above the double D it
+ * rounds to, so the floor's time and the pair's both round to D, a tie, the floor found first
+ * (planes before pairs), while the pair's root from t_r lies that third of an ulp (some 1400 of
+ * its own ulps) past D - t_r, far beyond its round-off: a cap at D - t_r ends the search short
+ * of it, and the floor wins. By the tie rule (keep_earlier) a sphere event comes before a plane
+ * event at one time, so the pair reacts first, with e, and then the floors, within tc of it,
+ * elastically; the other way round (scripts/mutate.py's beat-cap-no-margin) the floors take e
+ * and the pair bounces elastically. So at T = 11/16, after a flight of h = T - 2/3, X has
+ * vx = -e 5/16 + 3/8 h and vz = +3/16 (Y the mirror image), in all three modes (the all-pairs
+ * mode solves every pair without a limit). */
+static void test_predictive_modes_break_a_pair_plane_tie_for_the_pair(void **state)
+{
+    (void)state;
+    const double r = 0.5, e = 0.5, a = 3.0 / 8.0, q0 = 1.0 / 8.0, u = 1.0 / 16.0;
+    const double g0 = 1.0 / 8.0, w = 3.0 / 16.0, vy = 1.0 / 16.0, tr = 1365.0 / 2048.0;
+    const double T = 11.0 / 16.0, t1 = 2.0 / 3.0, h = T - t1;
+    /* the scene's premise, from the exact values: 2/3 - D (from 2 - 3 D, which fma gives
+     * exactly) is far more than the round-off the pair's root search allows for at its limit
+     * (ROOT_TOL: about 32 ulps of the time from t_r, for this approach) */
+    const double above = -fma(3.0, t1, -2.0) / 3.0;
+    assert_true(above > 64.0 * DBL_EPSILON * (t1 - tr));
+    /* at the contact: X at x = -r moving at vx0 + a 2/3 = 5/16; after the pair (with e) and
+     * the floor (elastic) */
+    const double vxc = u + a * 2.0 / 3.0, vx = -e * vxc + a * h;
+    const double x = -r - e * vxc * h + 0.5 * a * h * h, z = r + w * h;
+    const double y = vy * tr - e * vy * (T - tr); /* at the wall at tr, back at e vy since */
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
+        nbep_scene *sc = nbep_test_scene_new(2, 2, "predictive", 1, T);
+        sc->neighbors_grid = mode == 1;
+        sc->neighbors_cells = mode == 2;
+        sc->restitution = e;
+        sc->tc = 1e-6;
+        nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+        nbep_test_set_plane(sc, 1, (nbep_vec3){0, -1, 0}, -(r + vy * tr));
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){-r - q0, 0.0, r + g0}, (nbep_vec3){u, vy, -w}, r,
+                             1.0, (nbep_vec3){a, 0, 0});
+        nbep_test_set_sphere(sc, 1, (nbep_vec3){r + q0, 0.0, r + g0}, (nbep_vec3){-u, vy, -w}, r,
+                             1.0, (nbep_vec3){-a, 0, 0});
+        nbep_state fin;
+        nbep_summary sum = run(sc, 1, &fin, NULL);
+        assert_int_equal(sum.sphere_collisions, 1);
+        assert_int_equal(sum.plane_collisions, 4); /* the wall and the floor, each sphere */
+        /* round-off of a few flights and responses of numbers below 1, the contacts found
+         * within an ulp of 2/3: some 1e-16; 1e-12 relative is far above it and far below what
+         * swapped restitutions change (vx by 0.16, vz by a factor 2) */
+        for (size_t i = 0; i < 2; i++) {
+            const double sx = i == 0 ? 1.0 : -1.0;
+            assert_close(fin.vel[i].x, sx * vx, 1e-12, 0.0);
+            assert_close(fin.vel[i].y, -e * vy, 1e-12, 0.0);
+            assert_close(fin.vel[i].z, w, 1e-12, 0.0);
+            assert_close(fin.pos[i].x, sx * x, 1e-12, 0.0);
+            assert_close(fin.pos[i].y, y, 1e-12, 0.0);
+            assert_close(fin.pos[i].z, z, 1e-12, 0.0);
+        }
+        nbep_state_fini(&fin);
+        nbep_test_scene_free(&sc);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -626,6 +697,7 @@ int main(void)
         cmocka_unit_test(test_cells_without_a_box_follows_an_expanding_cluster),
         cmocka_unit_test(test_cells_without_a_box_region_grows_geometrically),
         cmocka_unit_test(test_predictive_modes_find_a_contact_past_half_the_wall_time),
+        cmocka_unit_test(test_predictive_modes_break_a_pair_plane_tie_for_the_pair),
     };
     return cmocka_run_group_tests_name("sim", tests, NULL, NULL);
 }
