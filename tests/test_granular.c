@@ -804,10 +804,15 @@ static void test_settling_supports_must_settle_too(void **state)
             }
         }
         assert_true(last_pos(&t)[n - 1].z <= 2.0 * (double)(n - 1) * r);
-        trace t2 = {0};
-        assert_int_equal(run(sc, 2, &t2).collisions, coll);
-        assert_same_frames(&t, &t2);
-        free(t2.data);
+        /* 2 threads give the same frames (not under valgrind: 2000 steps of a team's barriers,
+         * minutes on a guest whose wake-ups cost 0.3 to 0.5 ms; with 3 or 4 spheres, all in
+         * one block of 8, both threads' share is thread 0's anyway) */
+        if (nbep_test_scaled(1, 0)) {
+            trace t2 = {0};
+            assert_int_equal(run(sc, 2, &t2).collisions, coll);
+            assert_same_frames(&t, &t2);
+            free(t2.data);
+        }
         free(t.data);
         nbep_test_scene_free(&sc);
     }
