@@ -64,6 +64,12 @@ PARALLELISM := $(BUILD)/bench/bench_parallelism
 # the same with a copy whose leader notes where its time goes (README, Threads on dense scenes)
 LEADER := $(BUILD)/bench/bench_leader
 
+# One job a core unless -j is given: a serial build takes over a minute on 2 cores (the largest
+# file, algo_predictive.c, 19 s alone), about half that in parallel.
+ifeq ($(filter -j%,$(MAKEFLAGS)),)
+MAKEFLAGS += -j$(shell nproc 2>/dev/null || echo 1)
+endif
+
 .PHONY: all run check test valgrind bench bench-programs install clean tsan asan mutate check-programs
 all: bin/nbep
 
