@@ -731,6 +731,20 @@ static void test_settling_needs_supports_that_settle(void **state)
     }
 }
 
+/* Spheres p[0..n) of radius r above the floor z = 0 and apart from each other, to within tol
+ * (overlap allowed by round-off). */
+static bool clear_of_floor_and_each_other(const nbep_vec3 *p, size_t n, double r, double tol)
+{
+    for (size_t i = 0; i < n; i++) {
+        if (!(p[i].z - r >= -tol))
+            return false;
+        for (size_t j = i + 1; j < n; j++)
+            if (!(nbep_vec3_norm(nbep_vec3_sub(p[i], p[j])) - 2.0 * r >= -tol))
+                return false;
+    }
+    return true;
+}
+
 /* Whether every sphere held still in the frame at p, v (velocity exactly zero) rests on the
  * floor z = 0 or, through a chain of held spheres each touching the next below it, on the
  * floor: none hangs in mid-air (tol: the settle tolerance, with margin). */
@@ -797,11 +811,7 @@ static void test_settling_supports_must_settle_too(void **state)
                 e += 0.5 * nbep_vec3_norm2(v[i]) - nbep_vec3_dot(DOWN, p[i]);
             assert_true(e - e_before <= 1e-12 * e);
             e_before = e;
-            for (size_t i = 0; i < t.n; i++) {
-                assert_true(p[i].z - r >= -1e-12);
-                for (size_t j = i + 1; j < t.n; j++)
-                    assert_true(nbep_vec3_norm(nbep_vec3_sub(p[i], p[j])) - 2.0 * r >= -1e-12);
-            }
+            assert_true(clear_of_floor_and_each_other(p, t.n, r, 1e-12));
         }
         assert_true(last_pos(&t)[n - 1].z <= 2.0 * (double)(n - 1) * r);
         /* 2 threads give the same frames (not under valgrind: 2000 steps of a team's barriers,
@@ -914,11 +924,7 @@ static void test_settling_gathers_again_when_kept_supports_fail(void **state)
             for (size_t k = 1; k <= 4; k++)
                 assert_false(nbep_vec3_equal(v[k], ZERO));
             assert_true(held_spheres_grounded(q, v, t.n, r, tol));
-            for (size_t i = 0; i < t.n; i++) {
-                assert_true(q[i].z - r >= -touch);
-                for (size_t j = i + 1; j < t.n; j++)
-                    assert_true(nbep_vec3_norm(nbep_vec3_sub(q[i], q[j])) - 2.0 * r >= -touch);
-            }
+            assert_true(clear_of_floor_and_each_other(q, t.n, r, touch));
         }
         trace t2 = {0};
         assert_int_equal(run(sc, 2, &t2).collisions, coll);
