@@ -246,9 +246,10 @@ if [ "${COUNT:-0}" = 1 ]; then
             done
             for eng in nbep edmd; do
                 [ -n "${got[${eng}1]:-}" ] || continue
-                read -r c1 i1 d1 l1 <<<"${got[${eng}1]}"
-                read -r c2 i2 d2 l2c <<<"${got[${eng}2]}"
-                echo "$eng,$n,$phi,$((c2 - c1)),$((i2 - i1)),$((d2 - d1)),$((l2c - l1))" >>"$crow"
+                # collisions, instructions, L1d and L2 misses of the short (1) and long (2) run
+                read -r c1 i1 d1 m1 <<<"${got[${eng}1]}"
+                read -r c2 i2 d2 m2 <<<"${got[${eng}2]}"
+                echo "$eng,$n,$phi,$((c2 - c1)),$((i2 - i1)),$((d2 - d1)),$((m2 - m1))" >>"$crow"
             done
             unset got
         done

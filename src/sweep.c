@@ -1025,10 +1025,10 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
  * within a few polls), doubling up to 1 ms. 1 ms keeps a waiting rank at 1 to 4 % of a core
  * (measured on a 2-core machine, tests/test_sweep_mpi.sh: a poll with its wake-up costs some tens
  * of microseconds; a blocking collective took 89 %; on a guest that charges each sleep the idle
- * balancing it sets off, 27 to 31 %, where a bare loop of 1 ms nanosleeps took 30 %), and adds at most about 1 ms to a collective
- * per stage of its schedule that waits on a sleeping rank: a sweep makes seven collectives, once,
- * against runs of tenths of a second and more. Longer naps would save little more CPU; shorter ones
- * would cost it for latency nobody sees. */
+ * balancing it sets off, 27 to 31 %, where a bare loop of 1 ms nanosleeps took 30 %), and adds
+ * at most about 1 ms to a collective per stage of its schedule that waits on a sleeping rank: a
+ * sweep makes seven collectives, once, against runs of tenths of a second and more. Longer naps
+ * would save little more CPU; shorter ones would cost it for latency nobody sees. */
 enum { WAIT_SLEEP_MIN_NS = 20000, WAIT_SLEEP_MAX_NS = 1000000 };
 
 static void wait_idle(int n, MPI_Request *req)
