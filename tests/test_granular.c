@@ -92,6 +92,15 @@ static nbep_summary run(const nbep_scene *sc, int nt, trace *t)
     return nbep_test_run(sc, threads_for(nt), keep_frame, t, NULL, NULL);
 }
 
+/* sc run on nt threads makes coll collisions and the frames of trace t, bit for bit. */
+static void assert_same_on_threads(const nbep_scene *sc, int nt, const trace *t, uint64_t coll)
+{
+    trace tn = {0};
+    assert_int_equal(run(sc, nt, &tn).collisions, coll);
+    assert_same_frames(t, &tn);
+    free(tn.data);
+}
+
 static nbep_scene *scene(size_t n, size_t np, const char *algo, uint64_t steps, double e)
 {
     nbep_scene *sc = nbep_test_scene_new(n, np, algo, steps, 1e-3);
@@ -817,12 +826,8 @@ static void test_settling_supports_must_settle_too(void **state)
         /* 2 threads give the same frames (not under valgrind: 2000 steps of a team's barriers,
          * minutes on a guest whose wake-ups cost 0.3 to 0.5 ms; with 3 or 4 spheres, all in
          * one block of 8, both threads' share is thread 0's anyway) */
-        if (nbep_test_scaled(1, 0)) {
-            trace t2 = {0};
-            assert_int_equal(run(sc, 2, &t2).collisions, coll);
-            assert_same_frames(&t, &t2);
-            free(t2.data);
-        }
+        if (nbep_test_scaled(1, 0))
+            assert_same_on_threads(sc, 2, &t, coll);
         free(t.data);
         nbep_test_scene_free(&sc);
     }
@@ -926,10 +931,7 @@ static void test_settling_gathers_again_when_kept_supports_fail(void **state)
             assert_true(held_spheres_grounded(q, v, t.n, r, tol));
             assert_true(clear_of_floor_and_each_other(q, t.n, r, touch));
         }
-        trace t2 = {0};
-        assert_int_equal(run(sc, 2, &t2).collisions, coll);
-        assert_same_frames(&t, &t2);
-        free(t2.data);
+        assert_same_on_threads(sc, 2, &t, coll);
         free(t.data);
         nbep_test_scene_free(&sc);
     }
