@@ -3,7 +3,7 @@
 # ---- switches ----------------------------------------------------------------------------
 OMP ?= 1
 MPI ?= auto
-VALGRIND ?= 1
+VALGRIND ?= 0
 PREFIX ?= /usr/local
 CC ?= gcc
 WERROR ?=
@@ -105,8 +105,10 @@ $(BUILD)/bench/%: tests/bench/%.c tests/bench/bench_util.h $(BUILD)/libnbep.a | 
 run: bin/nbep
 	bin/nbep run inputs/paper-box.deck --summary -
 
-# Every test binary and shell test (those drive bin/nbep as a user would), then (VALGRIND=1)
-# the test binaries again under memcheck.
+# Every test binary and shell test (those drive bin/nbep as a user would), one a core at a time
+# (NBEP_TEST_JOBS), then with VALGRIND=1 the test binaries again under memcheck (make valgrind;
+# CI runs both, one after the other: memcheck alone takes longer than the 10 minutes a check
+# should take).
 check: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY) $(PARALLELISM) $(LEADER)
 	@python3 scripts/mutate.py --stale
 	@bash scripts/run-tests.sh $(TEST_BIN) $(TEST_SH)
@@ -115,7 +117,7 @@ ifeq ($(VALGRIND),1)
 endif
 test: check
 
-# The test binaries under memcheck alone (check runs them so with VALGRIND=1, the default).
+# The test binaries under memcheck alone (check runs them so too with VALGRIND=1).
 valgrind: $(TEST_BIN)
 	@bash scripts/run-tests.sh --valgrind $(TEST_BIN)
 

@@ -4,6 +4,12 @@
 # convention) was skipped: it says why on its own output and is counted as a skip, never as a
 # pass. A test that runs past its limit is a hang: "TIMEOUT name after N s" and a failure.
 # With --valgrind, each binary runs under memcheck and any leak or error fails.
+#
+# Tests run NBEP_TEST_JOBS at a time (default: one a core). Each writes its output to its own
+# log, shown whole when it ends, so that two tests' lines never interleave; the slowest start
+# first (SLOW below), so that the last to end is not one that started late. Tests may run side
+# by side because each keeps its scratch files under a name of its own in build/tests/tmp (the
+# shell tests in a folder each, the binaries under names that start with their module's).
 # Limits (seconds): NBEP_TEST_TIMEOUT (default 300) natively, NBEP_VALGRIND_TIMEOUT (default
 # 1800) under valgrind; the slowest test took about a tenth of either on the 2-core CI machine
 # until 2026-11-29, when a guest whose thread wake-ups cost 0.3 to 0.5 ms took test_granular past
@@ -14,26 +20,55 @@ valgrind=0
 if [ "${1:-}" = "--valgrind" ]; then valgrind=1; shift; fi
 limit=${NBEP_TEST_TIMEOUT:-300}
 [ "$valgrind" = 1 ] && limit=${NBEP_VALGRIND_TIMEOUT:-1800}
-mkdir -p build/tests/tmp
-passed=0 failed=0 skipped=0 failures=() skips=()
+jobs=${NBEP_TEST_JOBS:-$(nproc 2>/dev/null || echo 1)}
+case "$jobs" in '' | *[!0-9]* | 0) echo "run-tests.sh: NBEP_TEST_JOBS must be a positive integer (got '$jobs')" >&2; exit 2 ;; esac
+logs=build/tests/tmp/logs
+mkdir -p build/tests/tmp "$logs"
+
+# The slowest tests (in this order, natively and under valgrind, on the 2-core machine), started
+# first; the rest follow in the order given.
+SLOW="test_granular test_settle.sh test_resume.sh test_extremes test_sweep_mpi.sh test_viz.sh
+      test_jam.sh test_sim test_run_contract test_order test_barrier test_signals.sh"
+ordered=()
+for s in $SLOW; do
+    for t in "$@"; do [ "$(basename "$t")" = "$s" ] && ordered+=("$t"); done
+done
 for t in "$@"; do
+    case " $(echo $SLOW) " in *" $(basename "$t") "*) ;; *) ordered+=("$t") ;; esac
+done
+
+# One test, its output to its log and its exit status to its .rc file (written last).
+run_one() {
+    local t=$1 name log rc
     name=$(basename "$t")
-    label=$name
     if [ "$valgrind" = 1 ]; then
         # Smaller problem sizes under valgrind (tests read NBEP_TEST_SCALE); OpenMP's pool is
         # torn down at exit so no "still reachable" is reported by libgomp.
-        label="valgrind $name"
-        log=build/tests/tmp/$name.valgrind.log
+        log=$logs/$name.valgrind.log
         NBEP_TEST_SCALE=small OMP_WAIT_POLICY=passive timeout -k 10 "$limit" \
             valgrind --quiet --error-exitcode=99 --leak-check=full --errors-for-leak-kinds=definite,indirect \
             --suppressions=tests/valgrind.supp "$t" >"$log" 2>&1
         rc=$?
     else
+        log=$logs/$name.log
         case "$t" in *.sh) runner=(bash) ;; *) runner=() ;; esac
         # -k: a test that ignores SIGTERM is killed 10 s later
-        timeout -k 10 "$limit" "${runner[@]}" "$t"
+        timeout -k 10 "$limit" "${runner[@]}" "$t" >"$log" 2>&1
         rc=$?
     fi
+    echo "$rc" >"$log.rc.tmp" && mv "$log.rc.tmp" "$log.rc"
+}
+
+passed=0 failed=0 skipped=0 failures=() skips=()
+# The result of test t, its log shown (natively all of it; under valgrind its last lines when
+# it fails).
+report() {
+    local t=$1 name label log rc
+    name=$(basename "$t")
+    label=$name log=$logs/$name.log
+    [ "$valgrind" = 1 ] && label="valgrind $name" log=$logs/$name.valgrind.log
+    rc=$(cat "$log.rc")
+    [ "$valgrind" = 0 ] && cat "$log"
     if [ "$rc" = 0 ]; then
         passed=$((passed + 1)); [ "$valgrind" = 1 ] && echo "ok   $label"
     elif [ "$rc" = 77 ]; then
@@ -47,6 +82,37 @@ for t in "$@"; do
         fi
         [ "$valgrind" = 1 ] && tail -n 30 "$log"
     fi
+}
+
+# Runs ordered[] jobs at a time; reports each test as it ends.
+pending=("${ordered[@]}") running=()
+# Interrupted: every test still running ends too (each job's timeout and what it runs).
+stop_all() {
+    local p
+    for p in $(jobs -p); do pkill -TERM -P "$p" 2>/dev/null; kill "$p" 2>/dev/null; done
+    exit 130
+}
+trap stop_all INT TERM
+for t in "${ordered[@]}"; do
+    n=$(basename "$t")
+    rm -f "$logs/$n.log.rc" "$logs/$n.valgrind.log.rc"
+done
+while [ ${#pending[@]} -gt 0 ] || [ ${#running[@]} -gt 0 ]; do
+    while [ ${#pending[@]} -gt 0 ] && [ ${#running[@]} -lt "$jobs" ]; do
+        run_one "${pending[0]}" &
+        running+=("${pending[0]}")
+        pending=("${pending[@]:1}")
+    done
+    wait -n 2>/dev/null
+    none_left=$? # 127: no job left to wait for; a test without its .rc then ended unrecorded
+    still=()
+    for t in "${running[@]}"; do
+        n=$(basename "$t") suffix=.log
+        [ "$valgrind" = 1 ] && suffix=.valgrind.log
+        [ "$none_left" = 127 ] && [ ! -f "$logs/$n$suffix.rc" ] && echo 1 >"$logs/$n$suffix.rc"
+        if [ -f "$logs/$n$suffix.rc" ]; then report "$t"; else still+=("$t"); fi
+    done
+    running=("${still[@]+"${still[@]}"}")
 done
 [ "$failed" -eq 0 ] || printf 'failed: %s\n' "${failures[*]}"
 [ "$skipped" -eq 0 ] || printf 'skipped: %s\n' "${skips[*]}"
