@@ -720,6 +720,89 @@ static void test_team_loop_keeps_one_threads_wall_impulses_and_virial(void **sta
         }
 }
 
+/* The team loop's rule for an entry that a commit sets before the window's last place (fill:
+ * an "intruder"): nothing more is taken until the window is undone. Places are taken only when
+ * apart (more than 2 touch, about 3.4 diameters here), but an impulse can cross any distance in
+ * no time through a row of touching spheres, so an event that comes later may yet depend on
+ * the intruder. A Newton's cradle on one line (r = 0.5, m = 1, e = 1, no other spheres): d flies
+ * at +1 into a at rest (after t0), a into the first of 8 touching spheres R (after ga more), the
+ * last of R into b at rest (after g more), and c, flying at -1, would meet b at rest at
+ * tp = t0 + ga + g + eps. After d's hit, a's contact with R is the intruder, and c's with b
+ * (eps later than R's with b, and far from a) is already in the window; taken and committed
+ * first, it had b knocked away by c before R's impulse arrived (the mutant team-intruder-taken:
+ * 2 threads' frames were not one thread's). In the right order b is knocked towards c, the two
+ * swap, b knocks the impulse back along R (across the gap g R's last left) and a into d: at
+ * the end d flies at -1 and c at +1
+ * from where the algebra puts them, all else at rest; 2 threads' frames are one thread's bit
+ * for bit, for d's hit at several times between c's list expiries. */
+static void test_team_loop_waits_for_an_intruder_through_a_cradle(void **state)
+{
+    (void)state;
+    const double ga = 0.05, g = 0.05, eps = 0.02, t_end = 4.0, side = 40.0, y = 20.0;
+    const double t0s[] = {0.25, 0.65, 1.05, 1.45};
+    enum { N_ROW = 8, N = N_ROW + 4 }; /* d, a, the row, b, c */
+    for (size_t q = 0; q < sizeof t0s / sizeof *t0s; q++) {
+        const double t0 = t0s[q], tp = t0 + ga + g + eps;
+        double x[N], v[N] = {0};
+        x[0] = 6.0; /* d (far enough from x = 0 that it does not cross it by t_end) */
+        v[0] = 1.0;
+        x[1] = x[0] + 1.0 + t0; /* a */
+        for (int k = 0; k < N_ROW; k++)
+            x[2 + k] = x[1] + 1.0 + ga + (double)k;
+        x[N - 2] = x[N - 3] + 1.0 + g;  /* b */
+        x[N - 1] = x[N - 2] + 1.0 + tp; /* c */
+        v[N - 1] = -1.0;
+        char text[4096], deck[2][256], out[2][256], name[32];
+        for (int k = 0; k < 2; k++) {
+            int at = snprintf(text, sizeof text,
+                              "run: { algorithm = \"predictive\"; neighbors = \"cells\"; "
+                              "steps = 4; dt = 1.0; threads = %d; };\n"
+                              "box: { min = [0.0, 0.0, 0.0]; max = [%.1f, %.1f, %.1f]; "
+                              "periodic = [true, true, true]; };\nspheres = (\n",
+                              k + 1, side, side, side);
+            for (int i = 0; i < N; i++)
+                at += snprintf(text + at, sizeof text - (size_t)at,
+                               "{ position = [%.17g, %.1f, %.1f]; velocity = [%.1f, 0.0, 0.0]; "
+                               "radius = 0.5; mass = 1.0; }%s\n",
+                               x[i], y, y, v[i], i + 1 < N ? "," : "");
+            snprintf(text + at, sizeof text - (size_t)at,
+                     ");\noutput: { every = 1; fields = [\"position\", \"velocity\"]; };\n");
+            setenv("NBEP_TEAM", "always", 1);
+            snprintf(name, sizeof name, "cradle%d.deck", k + 1);
+            write_deck(name, text, deck[k], sizeof deck[k]);
+            snprintf(name, sizeof name, "cradle%d.h5", k + 1);
+            nbep_test_tmp(name, out[k], sizeof out[k]);
+            const nbep_run_result res = nbep_test_run_deck(deck[k], out[k]);
+            unsetenv("NBEP_TEAM");
+            /* d-a, a-R, 7 along R, R-b, b-c, b-R, 7 back, R-a, a-d */
+            assert_int_equal(res.summary.collisions, 2 * (N_ROW + 2) + 1);
+        }
+        size_t n1, n2;
+        double *p1 = nbep_test_h5_doubles(out[0], "/frames/position", &n1),
+               *p2 = nbep_test_h5_doubles(out[1], "/frames/position", &n2),
+               *v1 = nbep_test_h5_doubles(out[0], "/frames/velocity", &n1),
+               *v2 = nbep_test_h5_doubles(out[1], "/frames/velocity", &n2);
+        assert_int_equal(n1, n2);
+        assert_memory_equal(p1, p2, n1 * sizeof *p1);
+        assert_memory_equal(v1, v2, n1 * sizeof *v1);
+        /* the last frame, at t_end: d leaves after a's return, c after its swap with b */
+        const double *pe = p1 + n1 - 3 * N, *ve = v1 + n1 - 3 * N;
+        /* R's last hits b at t2 (b at +1) and has stopped g along; b and c swap at t3; b hits R's
+         * last again at t2 + eps, whose impulse crosses the gap g it left, R and a to d at t5 */
+        const double t2 = t0 + ga + g, t3 = t2 + 0.5 * eps, t5 = t2 + eps + g + ga;
+        for (int i = 0; i < N; i++) {
+            const double want = i == 0 ? -1.0 : i == N - 1 ? 1.0 : 0.0;
+            assert_true(fabs(ve[3 * i] - want) <= 1e-12);
+        }
+        assert_true(fabs(pe[0] - (x[1] - 1.0 - (t_end - t5))) <= 1e-12 * side);
+        assert_true(fabs(pe[3 * (N - 1)] - (x[N - 1] - t3 + (t_end - t3))) <= 1e-12 * side);
+        free(p1);
+        free(p2);
+        free(v1);
+        free(v2);
+    }
+}
+
 /* Runs a deck NAME.deck of one sphere (m = 1.5, r = 0.5) at x = 1.39 flying along x at speed 2
  * in a box of side 5, y and z periodic, x periodic when x_periodic is "true" (else walls
  * there), dt = 0.01, a frame every 10 steps, into NAME.h5; returns that file, open, and the
@@ -917,6 +1000,7 @@ int main(void)
         cmocka_unit_test(test_wall_impulse_of_a_sphere_between_two_walls),
         cmocka_unit_test(test_a_box_without_walls_has_an_empty_wall_impulse_per_step),
         cmocka_unit_test(test_team_loop_keeps_one_threads_wall_impulses_and_virial),
+        cmocka_unit_test(test_team_loop_waits_for_an_intruder_through_a_cradle),
         cmocka_unit_test(test_periodic_deck_errors_name_the_line),
         cmocka_unit_test(test_periodic_axes_have_no_walls),
     };
