@@ -21,7 +21,11 @@ if [ "${1:-}" = "--valgrind" ]; then valgrind=1; shift; fi
 limit=${NBEP_TEST_TIMEOUT:-300}
 [ "$valgrind" = 1 ] && limit=${NBEP_VALGRIND_TIMEOUT:-1800}
 jobs=${NBEP_TEST_JOBS:-$(nproc 2>/dev/null || echo 1)}
-case "$jobs" in '' | *[!0-9]* | 0) echo "run-tests.sh: NBEP_TEST_JOBS must be a positive integer (got '$jobs')" >&2; exit 2 ;; esac
+case "$jobs" in
+'' | *[!0-9]* | 0)
+    echo "run-tests.sh: NBEP_TEST_JOBS must be a positive integer (got '$jobs')" >&2
+    exit 2 ;;
+esac
 logs=build/tests/tmp/logs
 mkdir -p build/tests/tmp "$logs"
 
@@ -29,28 +33,32 @@ mkdir -p build/tests/tmp "$logs"
 # first; the rest follow in the order given.
 SLOW="test_granular test_settle.sh test_resume.sh test_extremes test_sweep_mpi.sh test_viz.sh
       test_jam.sh test_sim test_run_contract test_order test_barrier test_signals.sh"
+SLOW=" $(echo $SLOW) "
 ordered=()
 for s in $SLOW; do
     for t in "$@"; do [ "$(basename "$t")" = "$s" ] && ordered+=("$t"); done
 done
 for t in "$@"; do
-    case " $(echo $SLOW) " in *" $(basename "$t") "*) ;; *) ordered+=("$t") ;; esac
+    case "$SLOW" in *" $(basename "$t") "*) ;; *) ordered+=("$t") ;; esac
 done
 
-# One test, its output to its log and its exit status to its .rc file (written last).
+# Test t's log; its exit status goes to the log's name with .rc added (written last).
+suffix=.log
+[ "$valgrind" = 1 ] && suffix=.valgrind.log
+log_of() { echo "$logs/$(basename "$1")$suffix"; }
+
+# One test, its output to its log and its exit status to its .rc file.
 run_one() {
-    local t=$1 name log rc
-    name=$(basename "$t")
+    local t=$1 log rc
+    log=$(log_of "$t")
     if [ "$valgrind" = 1 ]; then
         # Smaller problem sizes under valgrind (tests read NBEP_TEST_SCALE); OpenMP's pool is
         # torn down at exit so no "still reachable" is reported by libgomp.
-        log=$logs/$name.valgrind.log
         NBEP_TEST_SCALE=small OMP_WAIT_POLICY=passive timeout -k 10 "$limit" \
             valgrind --quiet --error-exitcode=99 --leak-check=full --errors-for-leak-kinds=definite,indirect \
             --suppressions=tests/valgrind.supp "$t" >"$log" 2>&1
         rc=$?
     else
-        log=$logs/$name.log
         case "$t" in *.sh) runner=(bash) ;; *) runner=() ;; esac
         # -k: a test that ignores SIGTERM is killed 10 s later
         timeout -k 10 "$limit" "${runner[@]}" "$t" >"$log" 2>&1
@@ -63,10 +71,9 @@ passed=0 failed=0 skipped=0 failures=() skips=()
 # The result of test t, its log shown (natively all of it; under valgrind its last lines when
 # it fails).
 report() {
-    local t=$1 name label log rc
-    name=$(basename "$t")
-    label=$name log=$logs/$name.log
-    [ "$valgrind" = 1 ] && label="valgrind $name" log=$logs/$name.valgrind.log
+    local t=$1 label log rc
+    label=$(basename "$t") log=$(log_of "$t")
+    [ "$valgrind" = 1 ] && label="valgrind $label"
     rc=$(cat "$log.rc")
     [ "$valgrind" = 0 ] && cat "$log"
     if [ "$rc" = 0 ]; then
@@ -93,10 +100,7 @@ stop_all() {
     exit 130
 }
 trap stop_all INT TERM
-for t in "${ordered[@]}"; do
-    n=$(basename "$t")
-    rm -f "$logs/$n.log.rc" "$logs/$n.valgrind.log.rc"
-done
+for t in "${ordered[@]}"; do rm -f "$(log_of "$t").rc"; done
 while [ ${#pending[@]} -gt 0 ] || [ ${#running[@]} -gt 0 ]; do
     while [ ${#pending[@]} -gt 0 ] && [ ${#running[@]} -lt "$jobs" ]; do
         run_one "${pending[0]}" &
@@ -107,10 +111,9 @@ while [ ${#pending[@]} -gt 0 ] || [ ${#running[@]} -gt 0 ]; do
     none_left=$? # 127: no job left to wait for; a test without its .rc then ended unrecorded
     still=()
     for t in "${running[@]}"; do
-        n=$(basename "$t") suffix=.log
-        [ "$valgrind" = 1 ] && suffix=.valgrind.log
-        [ "$none_left" = 127 ] && [ ! -f "$logs/$n$suffix.rc" ] && echo 1 >"$logs/$n$suffix.rc"
-        if [ -f "$logs/$n$suffix.rc" ]; then report "$t"; else still+=("$t"); fi
+        rc_file=$(log_of "$t").rc
+        [ "$none_left" = 127 ] && [ ! -f "$rc_file" ] && echo 1 >"$rc_file"
+        if [ -f "$rc_file" ]; then report "$t"; else still+=("$t"); fi
     done
     running=("${still[@]+"${still[@]}"}")
 done

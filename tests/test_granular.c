@@ -651,10 +651,7 @@ static void test_row_that_fits_exactly_is_held(void **state)
            * natively and past run-tests.sh's 900 s under valgrind, which runs one thread at a
            * time; the plain run checks them) */
             for (int nt = 2; nt <= (int)nbep_test_scaled(4, 0); nt += 2) {
-                trace tn = {0};
-                assert_int_equal(run(sc, nt, &tn).collisions, sum.collisions);
-                assert_same_frames(&t, &tn);
-                free(tn.data);
+                assert_same_on_threads(sc, nt, &t, sum.collisions);
             }
         }
         for (size_t i = 0; i < 3; i++) {
@@ -868,10 +865,7 @@ static void test_settling_keeps_a_ring_of_supports(void **state)
                 assert_true(nbep_vec3_norm(nbep_vec3_sub(last_pos(&t)[i], sc->state.pos[i])) <=
                             1e-6);
             }
-            trace t2 = {0};
-            assert_int_equal(run(sc, 2, &t2).collisions, coll[k]);
-            assert_same_frames(&t, &t2);
-            free(t2.data);
+            assert_same_on_threads(sc, 2, &t, coll[k]);
             free(t.data);
             nbep_test_scene_free(&sc);
         }
@@ -1003,10 +997,7 @@ static void test_held_sphere_carries_a_slow_push_its_faces_take(void **state)
             trace t = {0};
             const uint64_t coll = run(sc, 1, &t).collisions;
             if (k == 0) { /* the pocket's search on 2 threads (rounds modes): the same frames */
-                trace t2 = {0};
-                assert_int_equal(run(sc, 2, &t2).collisions, coll);
-                assert_same_frames(&t, &t2);
-                free(t2.data);
+                assert_same_on_threads(sc, 2, &t, coll);
             }
             const nbep_vec3 *u = last_vel(&t);
             bool moved = false; /* did a struck sphere ever leave its place? */
@@ -1061,10 +1052,7 @@ static void test_settled_spheres_stay_held_when_others_wake(void **state)
                 for (size_t j = 0; j < 2; j++)
                     assert_true(nbep_vec3_equal(last_vel(&t)[j], ZERO));
             if (k == 0) { /* settling's sub-phases on 4 threads, one sphere each: the same */
-                trace t4 = {0};
-                assert_int_equal(run(sc, 4, &t4).collisions, coll[0]);
-                assert_same_frames(&t, &t4);
-                free(t4.data);
+                assert_same_on_threads(sc, 4, &t, coll[0]);
             }
             free(t.data);
             nbep_test_scene_free(&sc);
