@@ -15,10 +15,11 @@ PKGS := gsl libconfig hdf5 jansson
 PKG_CFLAGS := $(shell pkg-config --cflags $(PKGS))
 PKG_LIBS := $(shell pkg-config --libs $(PKGS))
 
+BUILD := build
 CSTD := -std=c11 -D_POSIX_C_SOURCE=200809L
 WARN := -Wall -Wextra -Wpedantic -Wshadow -Wstrict-prototypes -Wmissing-prototypes $(WERROR)
 OPT := -O3 -g -ffp-contract=off -fno-trapping-math
-CFLAGS_ALL := $(CSTD) $(OPT) $(WARN) -MMD -MP -Iinclude -Isrc -Ibuild $(PKG_CFLAGS) $(CFLAGS)
+CFLAGS_ALL := $(CSTD) $(OPT) $(WARN) -MMD -MP -Iinclude -Isrc -I$(BUILD) $(PKG_CFLAGS) $(CFLAGS)
 LDLIBS_ALL := $(PKG_LIBS) -lm $(LDLIBS)
 
 ifeq ($(OMP),1)
@@ -44,7 +45,6 @@ CFLAGS_ALL += -fsanitize=thread
 LDLIBS_ALL += -fsanitize=thread
 endif
 
-BUILD := build
 LIB_SRC := $(filter-out src/main.c,$(wildcard src/*.c))
 LIB_OBJ := $(LIB_SRC:src/%.c=$(BUILD)/%.o)
 TEST_SRC := $(wildcard tests/test_*.c)
@@ -65,12 +65,13 @@ PARALLELISM := $(BUILD)/bench/bench_parallelism
 LEADER := $(BUILD)/bench/bench_leader
 
 # One job a core unless -j is given: a serial build takes over a minute on 2 cores (the largest
-# file, algo_predictive.c, 19 s alone), about half that in parallel.
-ifeq ($(filter -j%,$(MAKEFLAGS)),)
+# file, algo_predictive.c, 19 s alone), about half that in parallel. Only at the top: a make
+# that `make pgo` runs shares its parent's jobs (it cannot see a -j its parent set here).
+ifeq ($(MAKELEVEL)$(filter -j%,$(MAKEFLAGS)),0)
 MAKEFLAGS += -j$(shell nproc 2>/dev/null || echo 1)
 endif
 
-.PHONY: all run check test valgrind bench bench-programs install clean tsan asan mutate check-programs
+.PHONY: all run check test valgrind bench bench-programs install clean tsan asan mutate check-programs pgo
 all: bin/nbep
 
 $(BUILD) $(BUILD)/tests $(BUILD)/bench bin:
@@ -79,7 +80,7 @@ $(BUILD) $(BUILD)/tests $(BUILD)/bench bin:
 # Regenerated only when its text changes, so objects do not rebuild needlessly.
 $(BUILD_INFO): FORCE | $(BUILD)
 	@printf '#define NBEP_VERSION "%s"\n#define NBEP_BUILD_FLAGS "%s"\n#define NBEP_BUILD_COMMIT "%s"\n' \
-	  '$(VERSION)' '$(CC) $(OPT) OMP=$(OMP) MPI=$(MPI)' \
+	  '$(VERSION)' '$(strip $(CC) $(OPT) $(CFLAGS)) OMP=$(OMP) MPI=$(MPI)' \
 	  "$$(git rev-parse --short HEAD 2>/dev/null || echo unknown)" > $@.tmp
 	@cmp -s $@.tmp $@ && rm -f $@.tmp || mv $@.tmp $@
 FORCE:
@@ -90,9 +91,14 @@ $(BUILD)/sweep.o: CFLAGS_ALL += $(MPI_CFLAGS)
 
 $(BUILD)/libnbep.a: $(LIB_OBJ)
 	@rm -f $@
-	ar rcs $@ $^
+	$(AR) rcs $@ $^
 
 bin/nbep: $(BUILD)/main.o $(BUILD)/libnbep.a | bin
+	$(CC) $(CFLAGS_ALL) $^ -o $@ $(LDLIBS_ALL)
+
+# The same program linked inside a build folder (make pgo builds its own in build/pgo, and
+# compares it with build/nbep, the plain build's).
+$(BUILD)/nbep: $(BUILD)/main.o $(BUILD)/libnbep.a
 	$(CC) $(CFLAGS_ALL) $^ -o $@ $(LDLIBS_ALL)
 
 $(BUILD)/tests/%: tests/%.c tests/nbep_test.h $(BUILD)/libnbep.a | $(BUILD)/tests
@@ -104,6 +110,13 @@ $(BUILD)/bench/%: tests/bench/%.c tests/bench/bench_util.h $(BUILD)/libnbep.a | 
 
 run: bin/nbep
 	bin/nbep run inputs/paper-box.deck --summary -
+
+# bin/nbep built with GCC's profile-guided and link-time optimisation (README, Building for
+# production runs): an instrumented build runs short training scenes, then the build that uses
+# their profile is checked to write the same frames, bit for bit, as the plain build/nbep
+# before it replaces bin/nbep. A later `make` after a source change builds the plain one again.
+pgo: $(BUILD)/nbep
+	+bash scripts/pgo.sh
 
 # Every test binary and shell test (those drive bin/nbep as a user would), one a core at a time
 # (NBEP_TEST_JOBS), then with VALGRIND=1 the test binaries again under memcheck (make valgrind;
