@@ -1279,10 +1279,15 @@ static double cand_t_min(const pred_ctx *c, const thread_ws *w)
  * partners (and thread 0 the planes); then each owner keeps the earliest of the partial bests
  * (the order of nbep_feq_insert is strict, so the result is the same for any split) and adds
  * it to its candidates. Every thread of the crew calls this with the same totals; it ends
- * with a barrier. */
+ * with a barrier.
+ * setup: the run, for the initial predictions (else NULL). All-pairs mode's take n^2/2 pair
+ * tests, minutes for 30000 spheres on one core, and a job's time limit may send its SIGTERM
+ * meanwhile: thread 0 looks at the stop signal once a chunk, between the chunk's barriers,
+ * and sets setup->stop; after the chunk's last barrier every thread sees it and returns (the
+ * slots left unpredicted are never used: the run ends at step 0, whose frame is written). */
 static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid, int crew,
                        nbep_barrier *bar, double T0, double T_end, thread_ws *w,
-                       nbep_counters *cnt)
+                       nbep_counters *cnt, nbep_sim *setup)
 {
     size_t total = 0;
     double V = c->vmax;
@@ -1337,7 +1342,12 @@ static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid
                  (best.kind == NBEP_EVENT_HORIZON && c->image_horizon)))
                 add_cand(c, w, i);
         }
+        if (setup && tid == 0 && nbep_sim_stop_status(setup->opt.stop_signal) != NBEP_OK)
+            atomic_store_explicit(&setup->stop, 1, memory_order_relaxed);
         nbep_barrier_wait(bar);
+        /* relaxed: the barrier above ordered thread 0's store */
+        if (setup && atomic_load_explicit(&setup->stop, memory_order_relaxed))
+            return;
     }
 }
 
@@ -2932,12 +2942,20 @@ static void pred_run(nbep_sim *sim, void *p)
             find_phase(c, own, nt, true, T0, w, cnt0);
             w->n_cand = 0;
             nbep_barrier_wait(&c->bar);
-            redo_phase(c, s, own, tid, nt, &c->bar, T0, T0, w, cnt0);
+            redo_phase(c, s, own, tid, nt, &c->bar, T0, T0, w, cnt0, sim);
         }
         if (tid == 0) { /* SPEC: the first predictions belong to the set-up time */
             double now = nbep_now();
             sim->setup_seconds += now - sim->t_start;
             sim->t_start = sim->t_last_progress = now;
+        }
+        /* a stop signal during the initial predictions (redo_phase): the run ends at step 0,
+         * its frame written, as a signal before them does (nbep_sim_run). relaxed: redo_phase's
+         * last barrier ordered thread 0's store, and nothing stores stop until the steps */
+        if (!c->imported && atomic_load_explicit(&sim->stop, memory_order_relaxed)) {
+            if (tid == 0)
+                sim->status = nbep_sim_stop_status(sim->opt.stop_signal);
+            goto done;
         }
 
         for (uint64_t step = sim->step_first; step <= sim->step_end; step++) {
@@ -2988,7 +3006,7 @@ static void pred_run(nbep_sim *sim, void *p)
                     quit = true;
                     break;
                 }
-                redo_phase(c, s, share, tid, k_all, b_all, T0, T_end, w, cnt);
+                redo_phase(c, s, share, tid, k_all, b_all, T0, T_end, w, cnt, NULL);
                 w->t_min = cand_t_min(c, w);
                 nbep_barrier_wait(b_all);
                 /* the threads out of the crew are done: the rest of the step's rounds is the

@@ -60,5 +60,34 @@ if awk -v w="$wait_s" 'BEGIN { exit !(w >= 0.05) }'; then
 else
     echo "skip SIGINT while placing: placement takes only ${wait_s}x4 s here"
 fi
+# a signal during all-pairs mode's initial predictions (n^2/2 pair tests: 65536 spheres take
+# minutes on one core) ends the run within a chunk of them, at step 0, its frame written: exit
+# 143, one line. Until 2026-11-29 it was taken after step 1, once all were made (79 s after
+# the signal for 32768 spheres on 2 threads here); the bound of 60 s is far above a chunk's
+# time (512 spheres' tests: a few seconds on a slow machine) and below the whole setup's.
+# The file exists from frame 0, which nbep_sim_run writes just before the predictions begin.
+out=$tmp/setup.h5
+bin/nbep run inputs/paper-box.deck --quiet -t 1 --set spheres.[0].count=65536 \
+    --set 'output.fields=["position"]' -o "$out" --summary "$tmp/summary-setup.json" \
+    2>"$tmp/stderr-setup" &
+pid=$!
+for _ in $(seq 600); do [ -s "$out" ] && break; sleep 0.1; done
+sleep 1
+kill -TERM $pid
+stopped=0
+for _ in $(seq 600); do
+    if ! kill -0 $pid 2>/dev/null; then stopped=1; break; fi
+    sleep 0.1
+done
+[ $stopped = 1 ] || kill -KILL $pid
+wait $pid
+rc=$?
+check "SIGTERM during the initial predictions stops the run within 60 s" "[ $stopped = 1 ]"
+check "and exits 143 (got $rc)" "[ $rc = 143 ]"
+check "after step 0, in one line" \
+    "[ \$(wc -l < '$tmp/stderr-setup') = 1 ] && grep -q 'after step 0;' '$tmp/stderr-setup'"
+check "with frame 0 readable and no step run" \
+    "bin/nbep info '$out' > '$tmp/info-setup' && grep -q '^frames: *1 (last: step 0' '$tmp/info-setup' && grep -q '\"steps\": 0' '$tmp/summary-setup.json'"
+
 [ $fail = 0 ] && echo "signals: all passed"
 exit $fail
