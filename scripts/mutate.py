@@ -630,6 +630,8 @@ MUTANTS = [
      "", ["test_output"], None),
     ("run-signal-while-placing-ignored", "src/run.c", "    if (sig != NBEP_OK) {\n        nbep_scene_fini(&sc);",
      "    if (0) {\n        nbep_scene_fini(&sc);", ["tests/test_signals.sh"], None),
+    ("sweep-wait-deaf", "src/sweep.c", "    if (w->st != NBEP_OK || sig == 0)\n        return;",
+     "    if (1 || w->st != NBEP_OK || sig == 0)\n        return;", ["tests/test_sweep_mpi.sh"], None),
     ("setup-signal-unpolled", "src/algo_predictive.c",
      "if (setup && tid == 0 && nbep_sim_stop_status(setup->opt.stop_signal) != NBEP_OK)",
      "if (0 && setup && tid == 0 && nbep_sim_stop_status(setup->opt.stop_signal) != NBEP_OK)",

@@ -1031,7 +1031,8 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
  * would save little more CPU; shorter ones would cost it for latency nobody sees. */
 enum { WAIT_SLEEP_MIN_NS = 20000, WAIT_SLEEP_MAX_NS = 1000000 };
 
-static void wait_idle(int n, MPI_Request *req)
+/* wait_idle, calling look(u) (when not NULL) before each nap. */
+static void wait_idle_looking(int n, MPI_Request *req, void (*look)(void *), void *u)
 {
     long ns = WAIT_SLEEP_MIN_NS;
     for (;;) {
@@ -1039,11 +1040,18 @@ static void wait_idle(int n, MPI_Request *req)
         MPI_Testall(n, req, &done, MPI_STATUSES_IGNORE);
         if (done)
             return;
+        if (look)
+            look(u);
         /* a signal cuts the sleep short (EINTR): the loop only polls sooner */
         const struct timespec nap = {.tv_sec = 0, .tv_nsec = ns};
         nanosleep(&nap, NULL);
         ns = ns * 2 < WAIT_SLEEP_MAX_NS ? ns * 2 : WAIT_SLEEP_MAX_NS;
     }
+}
+
+static void wait_idle(int n, MPI_Request *req)
+{
+    wait_idle_looking(n, req, NULL, NULL);
 }
 
 /* MPI_Allreduce of one int over MPI_COMM_WORLD, waited for with wait_idle. */
@@ -1161,10 +1169,37 @@ static void peers_announce(void *u, nbep_status st)
             MPI_Isend(&value, 1, MPI_INT, r, TAG_STOP, MPI_COMM_WORLD, &q->req[r]);
 }
 
-/* Every rank, after its runs: takes the stop messages still on their way to it (each
- * announcer sent one to every other rank) and completes its own sends. */
-static void peers_drain(peers *q)
+/* A rank done with its runs, waiting for the others' (peers_drain): a stop signal that
+ * reaches it is told to them as one during its runs is, so that they start no other run. */
+typedef struct waiting {
+    peers *q;
+    const atomic_int *stop_signal; /* may be NULL */
+    nbep_status st;                /* the signal's status once seen, else NBEP_OK */
+} waiting;
+
+static void look_for_signal(void *u)
 {
+    waiting *w = u;
+    const int sig =
+        w->stop_signal ? atomic_load_explicit(w->stop_signal, memory_order_relaxed) : 0;
+    if (w->st != NBEP_OK || sig == 0)
+        return;
+    w->st = sig == SIGINT ? NBEP_ESIGINT : NBEP_ESIGTERM;
+    peers_announce(w->q, w->st);
+}
+
+/* Every rank, after its runs: waits until every rank has ended its own (a barrier), telling
+ * the others of a stop signal that reaches it meanwhile (until 2026-11-29 such a rank ignored
+ * it: the others started every run left, and the sweep exited 0); then takes the stop messages
+ * still on their way to it (each announcer sent one to every other rank, the late ones before
+ * the barrier ended) and completes its own sends. Returns the status of a signal seen while
+ * waiting (NBEP_OK: none). */
+static nbep_status peers_drain(peers *q, const atomic_int *stop_signal)
+{
+    waiting w = {.q = q, .stop_signal = stop_signal, .st = NBEP_OK};
+    MPI_Request done;
+    MPI_Ibarrier(MPI_COMM_WORLD, &done);
+    wait_idle_looking(1, &done, look_for_signal, &w);
     const int mine = q->announced, all = allreduce_int(mine, MPI_SUM);
     for (int k = q->received; k < all - mine; k++) {
         int v;
@@ -1174,6 +1209,7 @@ static void peers_drain(peers *q)
     }
     if (q->announced && q->req)
         wait_idle(q->size, q->req);
+    return w.st;
 }
 #endif
 
@@ -1263,7 +1299,8 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
         nbep_status run_st = nbep_sweep_execute(&p, &ex, results);
 #ifdef NBEP_HAVE_MPI
         if (mpi && size > 1) {
-            peers_drain(&q);
+            const nbep_status late = peers_drain(&q, stop_signal);
+            run_st = run_st == NBEP_OK ? late : run_st;
             free(q.req);
         }
 #endif

@@ -185,5 +185,46 @@ statuses=$(tail -n +2 "$tmp/wait/wait.sweep/summary.csv" 2>/dev/null | cut -d, -
 check "... then rank 1 stopped by SIGTERM: exit 143 (got $rc), runs ok, interrupted ($statuses)" \
     "[ $rc = 143 ] && [ '$statuses' = 'ok interrupted ' ]"
 
+# ---- a SIGTERM to a rank that waits for the others, done with its runs ----------------------
+# 8 runs: rank 0's (0, 3, 4, 7) of 20 steps, rank 1's (1, 2, 5, 6) of 10^6 (seconds each).
+# Rank 0 ends its share at once and waits; it alone gets SIGTERM there, during rank 1's first
+# run. It tells rank 1, which ends the run it is in and starts no other: exit 143, runs 2, 5
+# and 6 (at least two of them) not run. Until 2026-11-29 the waiting rank ignored the signal:
+# all 8 runs ran and the sweep exited 0.
+mkdir -p "$tmp/late"
+cat >"$tmp/late/late.deck" <<'EOF2'
+run: { algorithm = "predictive"; steps = 20; dt = 1.0e-3; threads = 1; seed = 3; };
+physics: { gravity = [0.0, 0.0, -9.81]; restitution = 1.0; };
+box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };
+spheres = ( { count = 4; radius = 0.05; mass = 1.0; place = "random"; speed = 1.0; } );
+output: { file = "late.h5"; every = 1000000; stats = false; };
+sweep: { vary = ( { key = "run.steps";
+                    values = [20, 1000000, 1000000, 20, 20, 1000000, 1000000, 20]; } ); };
+EOF2
+timeout -k 10 300 mpirun -np 2 --oversubscribe bin/nbep sweep "$tmp/late/late.deck" \
+    -o "$tmp/late/late.h5" 2>"$tmp/late/stderr" &
+pid=$!
+r0=""
+for _ in $(seq 400); do
+    for p in $(pgrep -f "nbep sweep $tmp/late/late.deck"); do
+        tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx 'OMPI_COMM_WORLD_RANK=0' && r0=$p
+    done
+    [ -n "$r0" ] && grep -q 'rank 0: run 7 .*: ok in' "$tmp/late/stderr" && break
+    sleep 0.05
+done
+sleep 0.3 # into the wait
+waited=no
+grep -q 'rank 0: run 7 .*: ok in' "$tmp/late/stderr" && ! grep -q 'rank 1: run 2 ' "$tmp/late/stderr" &&
+    waited=yes
+if [ -n "$r0" ]; then kill -TERM "$r0"; else kill -TERM "$pid"; fi
+wait $pid
+rc=$?
+statuses=$(tail -n +2 "$tmp/late/late.sweep/summary.csv" 2>/dev/null | cut -d, -f6 | tr '\n' ' ')
+not_run=$(tail -n +2 "$tmp/late/late.sweep/summary.csv" 2>/dev/null | cut -d, -f6 | grep -c '^not_run$')
+check "rank 0 waited, done with its runs, while rank 1 ran its first (pid '$r0': $waited)" \
+    "[ '$waited' = yes ]"
+check "... SIGTERM to it alone: exit 143 (got $rc), rank 1 started no other run ($statuses)" \
+    "[ $rc = 143 ] && [ $not_run -ge 2 ]"
+
 [ $fail = 0 ] && echo "sweep_mpi: all passed"
 exit $fail
