@@ -17,6 +17,15 @@ tmp=build/tests/tmp/sweep_mpi
 rm -rf "$tmp" && mkdir -p "$tmp"
 fail=0
 check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+# rank_pid DECK RANK: the pid of that rank of the sweep of DECK (its environment says which),
+# nothing while it has not started
+rank_pid() {
+    local p
+    for p in $(pgrep -f "nbep sweep $1"); do
+        tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx "OMPI_COMM_WORLD_RANK=$2" &&
+            echo "$p" && return
+    done
+}
 
 cat >"$tmp/mpi.deck" <<'EOF'
 # 2 replicas x 2 restitutions x 2 algorithms = 8 short runs of 16 spheres
@@ -93,9 +102,7 @@ timeout 300 mpirun -np 2 --oversubscribe bin/nbep sweep "$tmp/one/one.deck" -o "
 pid=$!
 rank1=""
 for _ in $(seq 200); do
-    for p in $(pgrep -f "nbep sweep $tmp/one/one.deck"); do
-        tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx 'OMPI_COMM_WORLD_RANK=1' && rank1=$p
-    done
+    rank1=$(rank_pid "$tmp/one/one.deck" 1)
     [ -n "$rank1" ] && [ -e "$tmp/one/one.sweep/run-0000.h5" ] &&
         [ -e "$tmp/one/one.sweep/run-0001.h5" ] && break
     sleep 0.05
@@ -144,11 +151,7 @@ timeout -k 10 120 mpirun -np 2 --oversubscribe bin/nbep sweep "$tmp/wait/wait.de
 pid=$!
 r0="" r1=""
 for _ in $(seq 400); do
-    for p in $(pgrep -f "nbep sweep $tmp/wait/wait.deck"); do
-        e=$(tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep '^OMPI_COMM_WORLD_RANK=')
-        [ "$e" = OMPI_COMM_WORLD_RANK=0 ] && r0=$p
-        [ "$e" = OMPI_COMM_WORLD_RANK=1 ] && r1=$p
-    done
+    r0=$(rank_pid "$tmp/wait/wait.deck" 0) r1=$(rank_pid "$tmp/wait/wait.deck" 1)
     [ -n "$r0" ] && [ -n "$r1" ] && grep -q 'rank 0: run 0 .*: ok in' "$tmp/wait/stderr" && break
     sleep 0.05
 done
@@ -192,23 +195,15 @@ check "... then rank 1 stopped by SIGTERM: exit 143 (got $rc), runs ok, interrup
 # and 6 (at least two of them) not run. Until 2026-11-29 the waiting rank ignored the signal:
 # all 8 runs ran and the sweep exited 0.
 mkdir -p "$tmp/late"
-cat >"$tmp/late/late.deck" <<'EOF2'
-run: { algorithm = "predictive"; steps = 20; dt = 1.0e-3; threads = 1; seed = 3; };
-physics: { gravity = [0.0, 0.0, -9.81]; restitution = 1.0; };
-box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };
-spheres = ( { count = 4; radius = 0.05; mass = 1.0; place = "random"; speed = 1.0; } );
-output: { file = "late.h5"; every = 1000000; stats = false; };
-sweep: { vary = ( { key = "run.steps";
-                    values = [20, 1000000, 1000000, 20, 20, 1000000, 1000000, 20]; } ); };
-EOF2
+# the waiting test's deck with 8 values of run.steps
+sed -e 's/values = \[20, 1000000000\]/values = [20, 1000000, 1000000, 20, 20, 1000000, 1000000, 20]/' \
+    "$tmp/wait/wait.deck" >"$tmp/late/late.deck"
 timeout -k 10 300 mpirun -np 2 --oversubscribe bin/nbep sweep "$tmp/late/late.deck" \
     -o "$tmp/late/late.h5" 2>"$tmp/late/stderr" &
 pid=$!
 r0=""
 for _ in $(seq 400); do
-    for p in $(pgrep -f "nbep sweep $tmp/late/late.deck"); do
-        tr '\0' '\n' <"/proc/$p/environ" 2>/dev/null | grep -qx 'OMPI_COMM_WORLD_RANK=0' && r0=$p
-    done
+    r0=$(rank_pid "$tmp/late/late.deck" 0)
     [ -n "$r0" ] && grep -q 'rank 0: run 7 .*: ok in' "$tmp/late/stderr" && break
     sleep 0.05
 done
