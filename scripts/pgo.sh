@@ -14,7 +14,7 @@
 # The training scenes are the hot paths users run: the dense periodic fluid at phi = 0.30 and
 # 0.50 in cells mode (one thread, and the team loop on two), the paper's box in all-pairs and
 # grid modes, and a granular pour (gravity, e = 0.5) and the hopper (planes). Code they do not
-# reach keeps its normal optimisation (-fprofile-partial-training). About 3 minutes on 2 cores.
+# reach keeps its normal optimisation (-fprofile-partial-training). About 2 minutes on 2 cores.
 #
 # Environment: CFLAGS is added to both builds.
 set -euo pipefail

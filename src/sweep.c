@@ -34,6 +34,7 @@
 #include "nbep/output_sweep.h"
 #include "nbep/output_xdmf.h"
 #include "nbep/run.h"
+#include "nbep/sim.h"
 #include "nbep/summary.h"
 
 #ifdef NBEP_HAVE_MPI
@@ -411,8 +412,7 @@ static void error_text(const nbep_diag *d, char *buf, size_t len)
 
 static nbep_status stop_status(const nbep_sweep_exec *ex)
 {
-    int sig = ex->stop_signal ? atomic_load_explicit(ex->stop_signal, memory_order_relaxed) : 0;
-    return sig == 0 ? NBEP_OK : sig == SIGINT ? NBEP_ESIGINT : NBEP_ESIGTERM;
+    return nbep_sim_stop_status(ex->stop_signal);
 }
 
 static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec *ex,
@@ -1180,11 +1180,8 @@ typedef struct waiting {
 static void look_for_signal(void *u)
 {
     waiting *w = u;
-    const int sig =
-        w->stop_signal ? atomic_load_explicit(w->stop_signal, memory_order_relaxed) : 0;
-    if (w->st != NBEP_OK || sig == 0)
+    if (w->st != NBEP_OK || (w->st = nbep_sim_stop_status(w->stop_signal)) == NBEP_OK)
         return;
-    w->st = sig == SIGINT ? NBEP_ESIGINT : NBEP_ESIGTERM;
     peers_announce(w->q, w->st);
 }
 
