@@ -181,7 +181,7 @@ MUTANTS = [
      "        if (j->step == UINT32_MAX)", ["tests/test_jam.sh"], None),
     ("jam-rounds-not-checked", "src/algo_predictive.c", "                if (jammed) {\n                    if (tid == 0)",
      "                if (0) {\n                    if (tid == 0)", ["tests/test_jam.sh"], None),
-    ("jam-evloop-stop-ignored", "src/evloop.c", "        if (e->stop) {\n            *t_stuck = t;",
+    ("jam-evloop-stop-ignored", "src/evloop.c", "        if (w->stop) {\n            *t_stuck = t;",
      "        if (0) {\n            *t_stuck = t;",
      ["tests/test_jam.sh"], None),
     ("jam-limit-off-by-one-more", "src/algo_predictive.c", "if (++j->n > c->jam_max &&",
@@ -471,6 +471,22 @@ MUTANTS = [
     ("team-commit-other-lost", "src/evloop.c",
      "        if (e->batch_other[k] != NO_SPHERE && !commit_sets(w, e->batch_other[k]))",
      "        if (0)", TEAM, None),
+    # a cooling gas on the team loop: the TC clocks and reaction counts undone with the motion,
+    # and a reaction's stop heeded once it stands
+    ("team-tc-clock-not-put-back", "src/algo_predictive.c",
+     "    if (x->c->t_last)\n        memcpy(&x->c->t_last[i], &m->own[0], sizeof *x->c->t_last);",
+     "    (void)0;", TEAM, None),
+    ("team-jam-count-not-put-back", "src/algo_predictive.c",
+     "    if (x->c->jam)\n        memcpy(&x->c->jam[i], &m->own[1], sizeof *x->c->jam);",
+     "    (void)0;", ["tests/test_jam.sh"], None),
+    ("team-stop-unheeded", "src/evloop.c", "        if (w->stop) { /* it stands",
+     "        if (0) { /* it stands", ["tests/test_jam.sh"], None),
+    ("team-jammed-carried-over", "src/algo_predictive.c",
+     "    if (x->c->free_flight)\n        w->jammed = 0;", "    (void)0;", ["tests/test_jam.sh"],
+     "equivalent in practice: a speculative reaction that passed the limit and was undone is "
+     "handled again from the same count, and passes it again, unless an earlier reaction took "
+     "its sphere elsewhere and none of the sphere's later ones in the step does; no scene of the "
+     "tests has one"),
     ("team-intruder-taken", "src/evloop.c", "        if (!nbep_calendar_before(e->cur, c)) {",
      "        if (0) {", TEAM, None),
     ("team-ring-half-unseen", "src/evloop.c", "    return near_span(e, a, b, 0, 2 * WINDOW);",

@@ -336,7 +336,7 @@ typedef struct pred_ctx {
                                    * are positive): a pair's reaction then reads no mass,
                                    * two misses fewer in a large fluid */
     /* cells mode on two threads or more, in a scene whose reactions change only their own two
-     * spheres (free flight at e = 1): threads 1 to team_size - 1 handle events ahead of
+     * spheres (free flight, any e): threads 1 to team_size - 1 handle events ahead of
      * thread 0's (nbep_evloop_run_lead), counting them apart until they stand (cells_merge) */
     bool team;
     int team_size;  /* the threads that may run the event loop: the run's, at most
@@ -502,10 +502,11 @@ static pred_plan plan_of(const nbep_scene *sc, const nbep_state *st, int nt, int
         p.team_crew[2] = size;
     }
     if (p.cells) {
-        /* the team loop: reactions of a free flight at e = 1 change their two spheres only
-         * (no resting, holding, settling, TC clocks or reaction counts) */
-        const bool can_team = nt >= 2 && p.free_flight && !p.tc_model && !p.jam_model &&
-                              !p.settle_model;
+        /* the team loop: reactions in free flight change their own spheres only (no
+         * resting, holding, settling or cages): their motion, and at e < 1 their TC clocks
+         * and reaction counts, which the loop keeps with the motion to undo a speculative
+         * reaction (cells_save) */
+        const bool can_team = nt >= 2 && p.free_flight && !p.settle_model && !p.cage_model;
         int size = nt < NBEP_EVLOOP_TEAM_MAX ? nt : NBEP_EVLOOP_TEAM_MAX;
         if (team_force >= 2 && team_force < size)
             size = team_force;
@@ -2291,6 +2292,17 @@ static uint32_t lowest_jammed(const pred_ctx *c)
     return jammed;
 }
 
+/* Cells mode, after the event loop stopped in step `step`: 1 + the lowest sphere past
+ * run.max_reactions, read from the counts (each thread's own `jammed` may name a sphere of a
+ * team's speculative reaction that was undone), 0 for none. O(n), once, as the run fails. */
+static uint32_t cells_jammed(const pred_ctx *c, size_t n, uint64_t step)
+{
+    for (size_t i = 0; c->jam && i < n; i++)
+        if (c->jam[i].step == (uint32_t)step && c->jam[i].n > c->jam_max)
+            return (uint32_t)i + 1;
+    return 0;
+}
+
 /* run.max_reactions: sphere i reacted too often in one step, at about time t; the run stops. */
 static void jam_fail(nbep_sim *sim, uint64_t step, size_t i, double t)
 {
@@ -2548,13 +2560,20 @@ static void cells_let_go(void *u, uint32_t j)
 /* One reaction, then, as let_go_phase does after a round that changed held spheres, the held
  * spheres resting on a changed one let go: they touch it, so they are in its block; each that
  * moves again is changed in turn (the list grows as the loop walks it). */
-static size_t cells_react(void *u, uint32_t i, const nbep_event *ev, const uint32_t **changed)
+static size_t cells_react(void *u, uint32_t i, const nbep_event *ev, const uint32_t **changed,
+                          bool *stop)
 {
     cells_user *x = u;
     thread_ws *w = x->w;
     uint32_t lo, hi;
     (void)event_key(i, ev, &lo, &hi);
     w->n_fired = 0;
+    /* in free flight only reactions count towards a jam, and the loop stops at the first
+     * that passes the limit, so the one thread starts every reaction from jammed = 0; a team
+     * thread does too, for its reactions are its own (a speculative one that passed it and
+     * was undone must not stop a later one) */
+    if (x->c->free_flight)
+        w->jammed = 0;
     const uint64_t woken = w->woken;
     x->t_local = ev->time - x->T0;
     x->cnt->c[NBEP_COUNTER_REACTIONS]++;
@@ -2562,8 +2581,7 @@ static size_t cells_react(void *u, uint32_t i, const nbep_event *ev, const uint3
     if (w->woken != woken)
         for (size_t k = 0; k < w->n_fired; k++)
             nbep_evloop_visit_block(x->c->ev, w->fired[k], cells_let_go, x);
-    if (w->jammed) /* run.max_reactions: the loop stops after this event */
-        nbep_evloop_stop(x->c->ev);
+    *stop = w->jammed != 0; /* run.max_reactions: the loop stops after this event */
     *changed = w->fired;
     return w->n_fired;
 }
@@ -2599,9 +2617,19 @@ static void cells_wrap(void *u, uint32_t i, double t)
 static void cells_save(void *u, uint32_t i, nbep_evloop_motion *m)
 {
     const cells_user *x = u;
-    *m = (nbep_evloop_motion){x->s->pos[i], x->s->vel[i], x->c->tau[i], x->c->ver[i],
+    const pred_ctx *c = x->c;
+    *m = (nbep_evloop_motion){x->s->pos[i], x->s->vel[i], c->tau[i], c->ver[i],
                               {x->s->image[3 * (size_t)i], x->s->image[3 * (size_t)i + 1],
-                               x->s->image[3 * (size_t)i + 2]}};
+                               x->s->image[3 * (size_t)i + 2]},
+                              {0, 0}};
+    /* a dissipative free flight's reaction also moves the TC clock and the reaction count
+     * of its spheres (react, fire): nothing else of them (no rest, settle or cage records) */
+    _Static_assert(sizeof *c->t_last <= sizeof m->own[0] && sizeof *c->jam <= sizeof m->own[1],
+                   "a sphere's clock and count fit the engine's words");
+    if (c->t_last)
+        memcpy(&m->own[0], &c->t_last[i], sizeof *c->t_last);
+    if (c->jam)
+        memcpy(&m->own[1], &c->jam[i], sizeof *c->jam);
 }
 
 static void cells_prefetch(const void *u, uint32_t i)
@@ -2623,6 +2651,10 @@ static void cells_restore(void *u, uint32_t i, const nbep_evloop_motion *m)
     x->c->ver[i] = m->ver;
     for (int k = 0; k < 3; k++)
         x->s->image[3 * (size_t)i + (size_t)k] = m->image[k];
+    if (x->c->t_last)
+        memcpy(&x->c->t_last[i], &m->own[0], sizeof *x->c->t_last);
+    if (x->c->jam)
+        memcpy(&x->c->jam[i], &m->own[1], sizeof *x->c->jam);
 }
 
 /* A team context's counts and sums from zero, before it handles a place (on the thread that
@@ -2852,6 +2884,7 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
         if (tid == 0) {
             nbep_evloop_tally tally = {0};
             double t_stuck = 0.0;
+            uint32_t jammed;
             const double t_loop = nbep_now();
             c->ev_failed =
                 !(crew > 1 ? nbep_evloop_run_lead(c->ev, ops, &u, us, crew, step, T_end,
@@ -2869,8 +2902,8 @@ static void cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thr
                               "nbep: step %llu: no memory for the neighbour lists; stopping",
                               (unsigned long long)step);
                 sim->status = NBEP_ENOMEM;
-            } else if (c->ev_failed && w->jammed) {
-                jam_fail(sim, step, w->jammed - 1, t_stuck);
+            } else if (c->ev_failed && (jammed = cells_jammed(c, s->n, step)) != 0) {
+                jam_fail(sim, step, jammed - 1, t_stuck);
             } else if (c->ev_failed) {
                 nbep_diag_add(sim->diag, __FILE__, __LINE__,
                               "nbep: step %llu: events at t = %.17g do not resolve "

@@ -81,6 +81,7 @@ typedef struct evl_ws {
     uint32_t item;
     bool rebuilt;           /* a list expiry: near is item's list, built around `at` */
     bool reacted;
+    bool stop;              /* the reaction asked the run to stop after it (ops react) */
     bool oom;               /* out of memory for the walk or the copy of `changed` */
     uint8_t n_next;
     uint32_t next_item[NEXT_MAX];
@@ -130,7 +131,6 @@ struct nbep_evloop {
     double stray;         /* half the skin: how far a sphere goes before its list expires */
     double face_reach;    /* cut + stray, and a margin: see near_face */
     bool failed;          /* out of memory for a list: the run stops */
-    bool stop;            /* nbep_evloop_stop: the run stops after the current event */
     nbep_feq *q;          /* borrowed */
     const uint64_t *ver;  /* borrowed */
     /* the team loop's window: the places handled ahead and not yet committed, numbered in
@@ -716,11 +716,6 @@ void nbep_evloop_schedule(nbep_evloop *e, double t)
     nbep_calendar_retune(e->cal, t);
 }
 
-void nbep_evloop_stop(nbep_evloop *e)
-{
-    e->stop = true;
-}
-
 /* Entry k of w's calendar entries: sphere i's, from its slot. */
 static void note_one(const nbep_evloop *e, evl_ws *w, size_t k, uint32_t i)
 {
@@ -757,7 +752,7 @@ static void handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, void *
                    const nbep_event *ev, double t)
 {
     w->item = i;
-    w->rebuilt = w->reacted = w->oom = false;
+    w->rebuilt = w->reacted = w->stop = w->oom = false;
     w->n_changed = 0;
     w->n_next = 0;
     if (ev->kind == NBEP_EVENT_HORIZON) {
@@ -781,8 +776,8 @@ static void handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, void *
     if (ops->fresh(u, i, ev)) {
         w->reacted = true;
         const uint32_t *changed;
-        const size_t m = ops->react(u, i, ev, &changed);
-        if (e->stop)
+        const size_t m = ops->react(u, i, ev, &changed, &w->stop);
+        if (w->stop) /* the run stops after it: nothing predicted, nothing to commit */
             return;
         /* a copy: the callback's array is the thread's, and a team thread handles several
          * events before they are committed */
@@ -906,7 +901,7 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
         }
         handle(e, w, ops, u, i, &ev, t);
         count_handled(tally, w);
-        if (e->stop) {
+        if (w->stop) {
             *t_stuck = t;
             return false;
         }
@@ -1451,9 +1446,14 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
                 return false;
             }
         }
-        if (e->stop) { /* not in the scenes a team runs (no reaction there stops the run;
-                        * a helper's stop would also be a race on e->stop) */
+        if (w->stop) { /* it stands and its reaction stopped the run: as the one thread
+                        * stops after it (nbep_evloop_run), counted, its changes kept, nothing
+                        * after it (a speculative place's stop that does not stand is undone
+                        * with it, never seen here) */
             undo_from(e, ops, u, us, s + 1);
+            tally->events++;
+            count_handled(tally, w);
+            w->stood = s; /* its counts and sums, as the one thread's */
             nbep_calendar_set(e->cal, e->batch[k], e->batch_entry[k].time,
                               e->batch_entry[k].key); /* its entry back, as it was */
             if (e->batch_other[k] != NO_SPHERE) /* and its other's, from its slot */

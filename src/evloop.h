@@ -43,6 +43,9 @@ typedef struct nbep_evloop_motion {
     double tau;           /* its local time */
     uint64_t ver;         /* its response count */
     int32_t image[3];
+    uint64_t own[2];      /* two words of the caller's own that a reaction may change (the
+                           * predictive algorithm's: the TC model's clock, the reaction
+                           * count); the engine only keeps them */
 } nbep_evloop_motion;
 
 /* The algorithm's side. u is the caller's context, passed through. */
@@ -59,8 +62,12 @@ typedef struct nbep_evloop_ops {
     bool (*fresh)(void *u, uint32_t i, const nbep_event *ev);
     /* reacts to the event in i's slot (a sphere or plane contact), at its time; returns the
      * number of spheres whose motion it changed and points *changed at them (the event's own
-     * and any that resting or held contact moved; the loop re-predicts each) */
-    size_t (*react)(void *u, uint32_t i, const nbep_event *ev, const uint32_t **changed);
+     * and any that resting or held contact moved; the loop re-predicts each). Setting *stop
+     * (false on entry) ends the run after this event: nbep_evloop_run returns false with its
+     * time in *t_stuck (the caller knows why it asked); the team loop does the same once the
+     * event stands, so a speculative event's stop that is undone stops nothing */
+    size_t (*react)(void *u, uint32_t i, const nbep_event *ev, const uint32_t **changed,
+                    bool *stop);
     /* sphere i's centre, velocity and acceleration at absolute time t (not stored) */
     void (*flight)(void *u, uint32_t i, double t, nbep_vec3 *p, nbep_vec3 *v, nbep_vec3 *a);
     /* periodic boxes only (may be NULL otherwise): sphere i, leaving its cell at absolute time
@@ -123,10 +130,6 @@ void nbep_evloop_schedule(nbep_evloop *e, double t);
  * then returns false): the run must stop. */
 bool nbep_evloop_failed(const nbep_evloop *e);
 
-/* Called from the react callback: nbep_evloop_run returns false after this event, with its
- * time in *t_stuck (the caller knows why it asked). */
-void nbep_evloop_stop(nbep_evloop *e);
-
 /* What one call of nbep_evloop_run did. */
 typedef struct nbep_evloop_tally {
     uint64_t events;     /* calendar entries handled (stale, expiries and reactions) */
@@ -140,7 +143,7 @@ typedef struct nbep_evloop_tally {
  * the stuck event in *t_stuck, when `stall_events` events in a row did not advance time by
  * more than stall_dt (a cascade of zero-time events the model cannot resolve), when a
  * neighbour list could not get memory (nbep_evloop_failed), or after an event whose reaction
- * called nbep_evloop_stop. */
+ * set *stop (ops react). */
 bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_end,
                      uint64_t stall_events, double stall_dt, nbep_evloop_tally *tally,
                      double *t_stuck);

@@ -595,6 +595,58 @@ static void test_team_loop_handles_events_ahead_and_undoes_some_bit_for_bit(void
     nbep_test_scene_free(&sc);
 }
 
+/* The team loop on a cooling fluid (e = 0.8, nothing accelerates: a granular gas): a reaction
+ * there also moves its spheres' TC clocks and reaction counts, which the loop keeps and puts
+ * back with their motion when it undoes a speculative reaction (algo_predictive.c,
+ * cells_save). On 2, 3 and 4 threads (NBEP_TEAM=always) the frames, image counts, counts and
+ * pressure are one thread's bit for bit, with events handled ahead and some undone, without
+ * and with the TC model (tc of a tenth of the mean free time, so that a good share of the
+ * collisions are made elastic: the clocks matter, and a clock left as an undone reaction set
+ * it makes a later collision elastic that the one thread's is not). The gas cools, its
+ * momentum kept. */
+static void test_team_loop_on_a_cooling_fluid_is_bit_for_bit(void **state)
+{
+    (void)state;
+    const size_t side = nbep_test_scaled(16, 12);
+    double e_final[2];
+    for (int with_tc = 0; with_tc < 2; with_tc++) {
+        nbep_scene *sc = periodic_fluid(side, 0.45, nbep_test_scaled(30, 12), 0.02, 5);
+        sc->output_every = 6;
+        sc->restitution = 0.8;
+        sc->tc = with_tc ? 0.005 : 0.0; /* about 20 collisions per sphere per time unit */
+        setenv("NBEP_TEAM", "always", 1);
+        frames ref = {0};
+        nbep_state fin;
+        uint64_t c1[NBEP_COUNTER_COUNT], ck[NBEP_COUNTER_COUNT];
+        nbep_summary s1 = nbep_test_run_counted(sc, 1, nbep_test_keep_frame, &ref, &fin, c1);
+        assert_true(s1.sphere_collisions > 2 * s1.spheres);
+        assert_true(s1.energy_final < 0.9 * s1.energy_initial);
+        assert_true(nbep_vec3_norm(momentum(&fin)) < 1e-10 * sqrt(3.0) * (double)fin.n);
+        nbep_state_fini(&fin);
+        e_final[with_tc] = s1.energy_final;
+        for (int nt = 2; nt <= 4; nt++) {
+            frames f = {0};
+            nbep_summary sk = nbep_test_run_counted(sc, nt, nbep_test_keep_frame, &f, NULL, ck);
+            assert_int_equal(f.n_frames, ref.n_frames);
+            assert_memory_equal(f.data, ref.data, ref.n_frames * 2 * ref.n * sizeof *f.data);
+            assert_memory_equal(f.image, ref.image, ref.n_frames * 3 * ref.n * sizeof *f.image);
+            assert_int_equal(sk.collisions, s1.collisions);
+            assert_int_equal(sk.checks, s1.checks);
+            assert_int_equal(sk.predictions, s1.predictions);
+            assert_memory_equal(&sk.energy_final, &s1.energy_final, sizeof(double));
+            assert_memory_equal(&sk.pressure.value, &s1.pressure.value, sizeof(double));
+            assert_true(ck[NBEP_COUNTER_AHEAD] > s1.checks / 4);
+            assert_true(ck[NBEP_COUNTER_UNDONE] > 0);
+            nbep_test_frames_free(&f);
+        }
+        unsetenv("NBEP_TEAM");
+        nbep_test_frames_free(&ref);
+        nbep_test_scene_free(&sc);
+    }
+    /* the TC model made collisions elastic: the gas kept more of its energy */
+    assert_true(e_final[1] > e_final[0]);
+}
+
 /* Every thread reads each step's way from the slot thread 0 wrote during the step before
  * (team_way, by parity), never from the one it writes during this step: 1000 spheres at rest
  * (no events, so thread 0's event loop, and its choice of the next way, end at once, while a
@@ -995,6 +1047,7 @@ int main(void)
         cmocka_unit_test(test_falling_through_a_periodic_axis_keeps_the_energy),
         cmocka_unit_test(test_periodic_fluid_is_exact_and_thread_independent),
         cmocka_unit_test(test_team_loop_handles_events_ahead_and_undoes_some_bit_for_bit),
+        cmocka_unit_test(test_team_loop_on_a_cooling_fluid_is_bit_for_bit),
         cmocka_unit_test(test_every_thread_reads_the_way_of_its_step),
         cmocka_unit_test(test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box),
         cmocka_unit_test(test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference),
