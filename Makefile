@@ -166,6 +166,13 @@ bench-dense: bin/nbep
 bench-dense-count: bin/nbep
 	COUNT=1 bash scripts/bench-dense.sh
 
+# A freely cooling granular gas (the dense fluid resumed at e = 0.9 from its melt): one
+# thread against the team loop, and the temperature against Haff's law (NS, PHI, E, THREADS,
+# REPS, S in the environment; scripts/bench-cooling.py).
+.PHONY: bench-cooling
+bench-cooling: bin/nbep
+	/usr/bin/python3 scripts/bench-cooling.py
+
 # The paper's step (run.order = "step", approximate) against the exact time order on crowded
 # scenes (fluids at phi 0.30 and 0.50, a pile), cells mode beside them; BENCH_ORDER_ARGS.
 .PHONY: bench-order

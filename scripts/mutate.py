@@ -582,6 +582,9 @@ MUTANTS = [
      "if (!(r1 - g * r2 >= -tol * den) || !(r2 - g * r1 >= -tol * den))",
      "if (!(r1 - g * r2 >= -tol * den))", ["test_contact"] + GRAN, None),
     ("tc-off", "src/algo_predictive.c", "return recent ? 1.0 : e;", "return e;", SIM + GRAN, None),
+    # a restitution a little off in the bulk of a gas (0.9 taken as 0.89): Haff's law
+    ("restitution-off-by-a-hundredth", "src/algo_predictive.c", "return recent ? 1.0 : e;",
+     "return recent ? 1.0 : e - 0.01;", TEAM, None),
     ("tc-own-history-only", "src/algo_predictive.c",
      "bool recent = t_abs - c->t_last[a] < tc || t_abs - c->t_last[b] < tc;",
      "bool recent = t_abs - c->t_last[a] < tc;", SIM + GRAN, None),

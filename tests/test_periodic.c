@@ -716,6 +716,49 @@ static void test_periodic_fluid_pressure_and_collision_rate_match_theory(void **
     nbep_test_scene_free(&sc);
 }
 
+/* A freely cooling granular gas follows Haff's law: the fluid at phi = 0.30 (N = 4096) melted
+ * elastically for one time unit, then run one more at e = 0.9 (tc far below the mean free time
+ * of 0.1, as the deck's default, so every collision dissipates). With each collision taking
+ * (1 - e^2) T on average (the normal speed of colliding pairs of a Maxwellian has mean square
+ * 4 T / m) and omega = omega_E sqrt(T / T0) collisions per sphere per time unit (Enskog),
+ * T(t) / T0 = 1 / (1 + t / t0)^2 with 1 / t0 = (1 - e^2) omega_E(T0) / 6: 0.575 at t = 1 for
+ * T0 = 1. Tolerance: six seeds of the deck at this N gave +0.25 to +1.47 % (mean +0.9 %: the
+ * colliding pairs' velocities are a little correlated, so each collision takes 2 to 3 % less
+ * than the Maxwellian estimate, while the collision rate follows Enskog's within 1 %:
+ * scripts/bench-cooling.py); 3 % is some four standard deviations from that mean, and an
+ * effective restitution off by 0.01 moves T(1) by 4 %. The team loop runs the cooling (two
+ * threads): the same state as one thread's, which test_team_loop_on_a_cooling_fluid_is_bit_for_bit
+ * checks. */
+static void test_cooling_gas_follows_haffs_law(void **state)
+{
+    (void)state;
+    const double phi = 0.30, dt = 0.1, e = 0.9;
+    nbep_scene *sc = periodic_fluid(nbep_test_scaled(16, 12), phi, 10, dt, 7);
+    sc->output_every = 10;
+    nbep_state melt;
+    const nbep_summary m = run(sc, 2, &melt, NULL);
+    memcpy(sc->state.pos, melt.pos, melt.n * sizeof *melt.pos);
+    memcpy(sc->state.vel, melt.vel, melt.n * sizeof *melt.vel);
+    memcpy(sc->state.image, melt.image, 3 * melt.n * sizeof *melt.image);
+    /* kT from the kinetic energy (nothing accelerates; the mean velocity is 0) */
+    const double T0 = m.energy_final / (1.5 * (double)m.spheres);
+    nbep_state_fini(&melt);
+    sc->restitution = e;
+    sc->tc = 1e-6;
+    nbep_state fin;
+    nbep_summary s = run(sc, 2, &fin, NULL);
+    const double T1 = s.energy_final / (1.5 * (double)s.spheres);
+    const double t0_inv = (1.0 - e * e) * enskog_rate(phi) * sqrt(T0) / 6.0;
+    const double haff = 1.0 / ((1.0 + 10.0 * dt * t0_inv) * (1.0 + 10.0 * dt * t0_inv));
+    fprintf(stderr, "# cooling at e = %.2f: T / T0 = %.4f after one time unit (Haff %.4f, %+.2f %%)\n",
+            e, T1 / T0, haff, 100.0 * (T1 / T0 / haff - 1.0));
+    assert_true(s.sphere_collisions > 4 * s.spheres);
+    assert_close(T1 / T0, haff, 0.03, 0.0);
+    assert_true(nbep_vec3_norm(momentum(&fin)) < 1e-10 * sqrt(3.0) * (double)fin.n);
+    nbep_state_fini(&fin);
+    nbep_test_scene_free(&sc);
+}
+
 /* Writes text to the scratch deck `name`; returns its path in buf. */
 static const char *write_deck(const char *name, const char *text, char *buf, size_t len)
 {
@@ -1052,6 +1095,7 @@ int main(void)
         cmocka_unit_test(test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box),
         cmocka_unit_test(test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference),
         cmocka_unit_test(test_periodic_fluid_pressure_and_collision_rate_match_theory),
+        cmocka_unit_test(test_cooling_gas_follows_haffs_law),
         cmocka_unit_test(test_wall_impulse_of_a_sphere_between_two_walls),
         cmocka_unit_test(test_a_box_without_walls_has_an_empty_wall_impulse_per_step),
         cmocka_unit_test(test_team_loop_keeps_one_threads_wall_impulses_and_virial),
