@@ -522,6 +522,32 @@ static void test_periodic_fluid_is_exact_and_thread_independent(void **state)
     nbep_test_scene_free(&sc);
 }
 
+/* With NBEP_TEAM=always, scene sc on 2, 3 and 4 threads gives one thread's frames and image
+ * counts (ref), collision, check and prediction counts, final energy and pressure (s1) bit for
+ * bit, while the helpers handled many events ahead of their turn (the window holds several
+ * events far apart: most events of a box this size go ahead) and some of those came too early
+ * and were undone. */
+static void team_matches_one_thread(const nbep_scene *sc, const frames *ref,
+                                    const nbep_summary *s1)
+{
+    uint64_t ck[NBEP_COUNTER_COUNT];
+    for (int nt = 2; nt <= 4; nt++) {
+        frames f = {0};
+        nbep_summary sk = nbep_test_run_counted(sc, nt, nbep_test_keep_frame, &f, NULL, ck);
+        assert_int_equal(f.n_frames, ref->n_frames);
+        assert_memory_equal(f.data, ref->data, ref->n_frames * 2 * ref->n * sizeof *f.data);
+        assert_memory_equal(f.image, ref->image, ref->n_frames * 3 * ref->n * sizeof *f.image);
+        assert_int_equal(sk.collisions, s1->collisions);
+        assert_int_equal(sk.checks, s1->checks);
+        assert_int_equal(sk.predictions, s1->predictions);
+        assert_memory_equal(&sk.energy_final, &s1->energy_final, sizeof(double));
+        assert_memory_equal(&sk.pressure.value, &s1->pressure.value, sizeof(double));
+        assert_true(ck[NBEP_COUNTER_AHEAD] > s1->checks / 4);
+        assert_true(ck[NBEP_COUNTER_UNDONE] > 0);
+        nbep_test_frames_free(&f);
+    }
+}
+
 /* The cells mode's team loop (evloop.h, nbep_evloop_run_lead; NBEP_TEAM=always so that every
  * step runs it): on 2, 3 and 4 threads, a dense periodic fluid gives the frames, image counts,
  * collision, check and prediction counts and the pressure of one thread bit for bit, while
@@ -545,22 +571,7 @@ static void test_team_loop_handles_events_ahead_and_undoes_some_bit_for_bit(void
     assert_int_equal(c1[NBEP_COUNTER_AHEAD], 0);
     assert_int_equal(c1[NBEP_COUNTER_UNDONE], 0);
     assert_true(s1.sphere_collisions > 2 * s1.spheres);
-    for (int nt = 2; nt <= 4; nt++) {
-        frames f = {0};
-        nbep_summary sk = nbep_test_run_counted(sc, nt, nbep_test_keep_frame, &f, NULL, ck);
-        assert_int_equal(f.n_frames, ref.n_frames);
-        assert_memory_equal(f.data, ref.data, ref.n_frames * 2 * ref.n * sizeof *f.data);
-        assert_memory_equal(f.image, ref.image, ref.n_frames * 3 * ref.n * sizeof *f.image);
-        assert_int_equal(sk.collisions, s1.collisions);
-        assert_int_equal(sk.checks, s1.checks);
-        assert_int_equal(sk.predictions, s1.predictions);
-        assert_memory_equal(&sk.pressure.value, &s1.pressure.value, sizeof(double));
-        /* the window holds several events far apart: most events of a box this size go
-         * ahead of their turn, and a few of those come too early */
-        assert_true(ck[NBEP_COUNTER_AHEAD] > s1.checks / 4);
-        assert_true(ck[NBEP_COUNTER_UNDONE] > 0);
-        nbep_test_frames_free(&f);
-    }
+    team_matches_one_thread(sc, &ref, &s1);
     setenv("NBEP_TEAM", "never", 1);
     frames f = {0};
     nbep_summary sn = nbep_test_run_counted(sc, 2, nbep_test_keep_frame, &f, NULL, ck);
@@ -617,28 +628,13 @@ static void test_team_loop_on_a_cooling_fluid_is_bit_for_bit(void **state)
         setenv("NBEP_TEAM", "always", 1);
         frames ref = {0};
         nbep_state fin;
-        uint64_t c1[NBEP_COUNTER_COUNT], ck[NBEP_COUNTER_COUNT];
-        nbep_summary s1 = nbep_test_run_counted(sc, 1, nbep_test_keep_frame, &ref, &fin, c1);
+        nbep_summary s1 = nbep_test_run_counted(sc, 1, nbep_test_keep_frame, &ref, &fin, NULL);
         assert_true(s1.sphere_collisions > 2 * s1.spheres);
         assert_true(s1.energy_final < 0.9 * s1.energy_initial);
         assert_true(nbep_vec3_norm(momentum(&fin)) < 1e-10 * sqrt(3.0) * (double)fin.n);
         nbep_state_fini(&fin);
         e_final[with_tc] = s1.energy_final;
-        for (int nt = 2; nt <= 4; nt++) {
-            frames f = {0};
-            nbep_summary sk = nbep_test_run_counted(sc, nt, nbep_test_keep_frame, &f, NULL, ck);
-            assert_int_equal(f.n_frames, ref.n_frames);
-            assert_memory_equal(f.data, ref.data, ref.n_frames * 2 * ref.n * sizeof *f.data);
-            assert_memory_equal(f.image, ref.image, ref.n_frames * 3 * ref.n * sizeof *f.image);
-            assert_int_equal(sk.collisions, s1.collisions);
-            assert_int_equal(sk.checks, s1.checks);
-            assert_int_equal(sk.predictions, s1.predictions);
-            assert_memory_equal(&sk.energy_final, &s1.energy_final, sizeof(double));
-            assert_memory_equal(&sk.pressure.value, &s1.pressure.value, sizeof(double));
-            assert_true(ck[NBEP_COUNTER_AHEAD] > s1.checks / 4);
-            assert_true(ck[NBEP_COUNTER_UNDONE] > 0);
-            nbep_test_frames_free(&f);
-        }
+        team_matches_one_thread(sc, &ref, &s1);
         unsetenv("NBEP_TEAM");
         nbep_test_frames_free(&ref);
         nbep_test_scene_free(&sc);
