@@ -114,7 +114,9 @@ def main():
                 elif not all(np.array_equal(a, b) for a, b in zip(ref_last, last)):
                     sys.exit(f"bench-cooling: N = {n}, {t} threads, repeat {rep}: the last frame "
                              "differs from one thread's")
-                os.remove(f)
+                for x in (f, sj, f[:-3] + ".xmf"):  # the run, its summary, its sidecar
+                    if os.path.exists(x):
+                        os.remove(x)
         m1 = statistics.median(rates[threads[0]])
         print(f"\n## N = {n}, {s_time:g} time units from the melt at t = 1 (frames equal on every thread count)\n")
         print("| threads | collisions / s, median (min-max) | over one thread |")
