@@ -27,6 +27,12 @@ velocity distribution's departure from a Maxwellian (a2, about -0.015 at E = 0.9
 by under 0.3 %. A gas this size stays homogeneous over a few t0 (clusters need a box larger
 than the instability's length, which grows as E goes to 1).
 
+Beside each run on more than one thread, the time a cache line takes to pass between two
+cores (scripts/handover.c, as scripts/bench-dense.sh measures it, before the run): the team
+loop passes a few lines between its threads for each event, so its gain follows that figure
+(about 28 ns with the two virtual CPUs of this project's machine close, 150 to 170 ns apart);
+the table lists each repeat's ratio to one thread's run of the same repeat with it.
+
 Environment: NS (default "32000"), PHI (0.30), E (0.9), THREADS ("1 2"), REPS (3), S (1.0
 time units; 0.25 at N >= 100000 unless set), NBEP (bin/nbep), OUT (build/bench-cooling).
 """
@@ -66,6 +72,22 @@ def scene(n, phi):
     return ["--set", f"spheres.[0].count={n}", "--set", f"box.max=[{side:.10f}, {side:.10f}, {side:.10f}]"]
 
 
+def build_probe(out):
+    """scripts/handover.c built in out; None without a compiler."""
+    exe = os.path.join(out, "handover")
+    r = subprocess.run(["cc", "-std=c11", "-O2", "-pthread", os.path.join(ROOT, "scripts", "handover.c"),
+                        "-o", exe], capture_output=True)
+    return exe if r.returncode == 0 else None
+
+
+def handover(probe):
+    """The probe's nanoseconds now, as text ("-" without a probe)."""
+    if not probe:
+        return "-"
+    r = subprocess.run([probe], capture_output=True, text=True)
+    return r.stdout.strip() if r.returncode == 0 else "-"
+
+
 def enskog_rate(phi):
     n = 6.0 * phi / math.pi
     chi = (1.0 - phi / 2.0) / (1.0 - phi) ** 3
@@ -81,6 +103,7 @@ def main():
     reps = int(env("REPS", "3"))
     out = env("OUT", os.path.join(ROOT, "build", "bench-cooling"))
     os.makedirs(out, exist_ok=True)
+    probe = build_probe(out)
     print(f"# freely cooling gas: phi = {phi}, e = {e}, {reps} repeats, nbep = {nbep}")
     for n in ns:
         s_time = float(env("S", "0.25" if n >= 100000 else "1.0"))
@@ -92,12 +115,14 @@ def main():
         run(nbep, ["run", DECK, "-t", "1", "-o", melt, "--set", f"run.steps={MELT_STEPS}",
                    "--set", f"output.every={MELT_STEPS}"] + base)
         rates = {t: [] for t in threads}
+        pairs = []  # per repeat and thread count > 1: (t, ratio to one thread's, handover ns)
         ref_last = None
         energy = None
         for rep in range(reps):
             for t in threads:
                 f = os.path.join(out, f"cool-{n}-{t}-{rep}.h5")
                 shutil.copyfile(melt, f)
+                ho = handover(probe) if t > 1 else None
                 sj = f + ".json"
                 run(nbep, ["run", DECK, "-t", str(t), "--resume", f, "--summary", sj,
                            "--set", f"run.steps={steps}", "--set", f"output.every={MELT_STEPS}",
@@ -105,6 +130,8 @@ def main():
                 with open(sj) as fh:
                     sm = json.load(fh)
                 rates[t].append(sm["collisions"] / sm["wall_seconds"])
+                if t > 1 and threads[0] == 1:
+                    pairs.append((t, rates[t][-1] / rates[1][-1], ho))
                 with h5py.File(f, "r") as h:
                     last = (h["frames/position"][-1], h["frames/velocity"][-1], h["frames/image"][-1])
                     if energy is None:
@@ -125,6 +152,9 @@ def main():
             r = rates[t]
             print(f"| {t} | {statistics.median(r) / 1e3:.1f} k ({min(r) / 1e3:.0f}-{max(r) / 1e3:.0f}) "
                   f"| {statistics.median(r) / m1:.2f} |")
+        if pairs:
+            print("\nper repeat, threads: rate over the same repeat's one thread (hand-over ns):",
+                  "; ".join(f"{t}: {r:.2f} ({h})" for t, r, h in pairs))
         step, ke = energy
         t0_inv = (1.0 - e * e) * enskog_rate(phi) / 6.0
         k0 = 1.5 * n  # kT = 1 at the melt: the deck's speed sqrt(3)
