@@ -481,6 +481,9 @@ MUTANTS = [
      "    (void)0;", ["tests/test_jam.sh"], None),
     ("team-stop-unheeded", "src/evloop.c", "        if (w->stop) { /* it stands",
      "        if (0) { /* it stands", ["tests/test_jam.sh"], None),
+    ("team-off-at-dissipation", "src/algo_predictive.c",
+     "const bool can_team = nt >= 2 && p.free_flight && !p.settle_model && !p.cage_model;",
+     "const bool can_team = nt >= 2 && p.free_flight && !p.jam_model;", TEAM, None),
     ("team-jammed-carried-over", "src/algo_predictive.c",
      "    if (x->c->free_flight)\n        w->jammed = 0;", "    (void)0;", ["tests/test_jam.sh"],
      "equivalent in practice: a speculative reaction that passed the limit and was undone is "

@@ -338,16 +338,24 @@ static void detect_run(nbep_sim *sim, void *p)
     }
 }
 
+static void detect_threads_use(const nbep_scene *sc, int nt, char *buf, size_t len)
+{
+    (void)sc;
+    snprintf(buf, len, "all %d find each step's contacts; thread 0 responds to them in order", nt);
+}
+
 /* Their whole state is positions and velocities: a resumed run needs nothing else. */
 const nbep_algo nbep__algo_naive = {.name = "naive",
                                     .exact_overlap = true,
                                     .create = naive_create,
                                     .run = detect_run,
                                     .destroy = detect_destroy,
-                                    .bytes = naive_bytes};
+                                    .bytes = naive_bytes,
+                                    .threads_use = detect_threads_use};
 const nbep_algo nbep__algo_seminaive = {.name = "seminaive",
                                         .exact_overlap = true,
                                         .create = seminaive_create,
                                         .run = detect_run,
                                         .destroy = detect_destroy,
-                                        .bytes = seminaive_bytes};
+                                        .bytes = seminaive_bytes,
+                                        .threads_use = detect_threads_use};

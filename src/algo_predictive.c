@@ -3213,11 +3213,36 @@ static void pred_import(void *p, const nbep_resume *r)
     c->imported = true;
 }
 
+/* How a run on nt >= 2 threads shares its work, by the plan pred_create follows. */
+static void pred_threads_use(const nbep_scene *sc, int nt, char *buf, size_t len)
+{
+    const pred_plan p = plan_of(sc, &sc->state, nt, team_forced());
+    if (p.team)
+        snprintf(buf, len,
+                 "the event loop on a team of up to %d or on one, whichever the run measures "
+                 "fastest (nothing accelerates); all %d share the rebuilds, the update and the "
+                 "energy",
+                 p.team_size, nt);
+    else if (p.cells)
+        snprintf(buf, len,
+                 "the event loop on one (%s); all %d share the rebuilds, the update and the "
+                 "energy",
+                 p.free_flight ? "NBEP_TEAM"
+                               : "something accelerates: its contacts need the events in order",
+                 nt);
+    else if (p.crews)
+        snprintf(buf, len, "each step's rounds on %s, whichever the run measures fastest",
+                 p.team_ways > 2 ? "1, 2 or all" : "1 or 2");
+    else
+        snprintf(buf, len, "all %d share each round (find, react, predict again)", nt);
+}
+
 const nbep_algo nbep__algo_predictive = {.name = "predictive",
                                          .exact_overlap = false,
                                          .create = pred_create,
                                          .run = pred_run,
                                          .destroy = pred_destroy,
                                          .bytes = pred_bytes,
+                                         .threads_use = pred_threads_use,
                                          .export_events = pred_export,
                                          .import_events = pred_import};

@@ -65,6 +65,9 @@ static void print_check(const nbep_scene *sc, int threads)
     else
         printf("algorithm:       %s, %d thread%s\n", sc->algorithm, threads,
                threads == 1 ? "" : "s");
+    char use[256];
+    nbep_sim_threads_use(sc, threads, use, sizeof use);
+    printf("threads:         %s\n", use);
     printf("steps:           %llu of dt = %g (t = 0 .. %g), seed %llu\n",
            (unsigned long long)sc->steps, sc->dt, (double)sc->steps * sc->dt,
            (unsigned long long)sc->seed);

@@ -128,6 +128,15 @@ size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads)
     return bytes;
 }
 
+void nbep_sim_threads_use(const nbep_scene *sc, int threads, char *buf, size_t len)
+{
+    const nbep_algo *algo = find_algo(sc->algorithm);
+    if (threads < 2 || !algo)
+        snprintf(buf, len, "one does everything");
+    else
+        algo->threads_use(sc, threads, buf, len);
+}
+
 nbep_range nbep__range_split(size_t n, int tid, int nt)
 {
     size_t blocks = (n + NBEP_BLOCK - 1) / NBEP_BLOCK;

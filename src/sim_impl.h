@@ -105,6 +105,9 @@ struct nbep_algo {
     /* the bytes create allocates for a run of sc on nt threads, by the same conditions (kept
      * beside create, so that nbep check's memory estimate counts what a run makes) */
     size_t (*bytes)(const nbep_scene *sc, int nt);
+    /* how a run of sc on nt >= 2 threads shares its work, by the same plan as create's, in a
+     * few words for nbep check (buf, len bytes, always terminated) */
+    void (*threads_use)(const nbep_scene *sc, int nt, char *buf, size_t len);
     /* optional (NULL): the state beyond positions and velocities that a resumed run needs to
      * continue bit for bit: export at a frame (thread 0, slots stable), import at create */
     void (*export_events)(const void *ctx, const nbep_state *s, double *time,

@@ -394,6 +394,18 @@ check "nbep check counts n(n-1)/2 = $((64 * 63 / 2)) pairs, all quadratic" \
 check "nbep check counts $((10000 / 1000 + 1)) frames" \
     "grep -Eq '^output: .*: $((10000 / 1000 + 1)) frames' '$tmp/stdout'"
 check "nbep check writes no file" "[ ! -e '$tmp/never.h5' ]"
+# how the threads share the work: a pile's event loop is one thread's (something accelerates);
+# a fluid's runs on a team, and so does a granular gas cooling without gravity (e < 1)
+run_nbep check inputs/pile.deck -t 2
+check "nbep check: a pile's event loop runs on one thread" \
+    "grep -Eq '^threads: +the event loop on one \(something accelerates' '$tmp/stdout'"
+for e in 1 0.9; do
+    run_nbep check inputs/hard-sphere-fluid.deck -t 2 --set physics.restitution=$e
+    check "nbep check: a fluid's event loop runs on a team (e = $e)" \
+        "grep -Eq '^threads: +the event loop on a team of up to 2 ' '$tmp/stdout'"
+done
+run_nbep check inputs/pile.deck -t 1
+check "nbep check: one thread does everything" "grep -Eq '^threads: +one does everything$' '$tmp/stdout'"
 
 # ---- the README's deck table is --help-deck's, row for row -------------------------------------
 # (README: "prints this table from the same schema the parser uses, so it cannot drift")

@@ -68,6 +68,11 @@ const nbep_state *nbep_sim_state(const nbep_sim *sim);
  * are counted at what a dense scene's grow to, so a dilute one's estimate is up to a quarter
  * above its peak (README, nbep check). */
 size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads);
+/* How a run of sc with `threads` threads shares its work, in a few words for `nbep check`
+ * (buf, len bytes, always terminated): which parts run on every thread and which on one (a
+ * granular scene's event loop in cells mode), so that a user can choose threads per run
+ * against runs per node. */
+void nbep_sim_threads_use(const nbep_scene *sc, int threads, char *buf, size_t len);
 /* Whether a run of sc keeps every sphere's event slot beside each frame (/checkpoint). */
 bool nbep_sim_keeps_events(const nbep_scene *sc);
 /* What a stop signal asks of a run (stop may be NULL): NBEP_OK (none yet), NBEP_ESIGINT or
