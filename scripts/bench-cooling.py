@@ -57,11 +57,9 @@ def env(name, default):
     return os.environ.get(name, default)
 
 
-def run(nbep, args, env_extra=None):
+def run(nbep, args):
     e = dict(os.environ)
-    e.pop("NBEP_TEAM", None)
-    if env_extra:
-        e.update(env_extra)
+    e.pop("NBEP_TEAM", None)  # the run chooses its way, as users get it
     r = subprocess.run([nbep] + args, env=e, capture_output=True, text=True)
     if r.returncode != 0:
         sys.exit(f"bench-cooling: {' '.join([nbep] + args)} failed ({r.returncode}): {r.stderr.strip()}")

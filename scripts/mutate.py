@@ -479,13 +479,13 @@ MUTANTS = [
     ("team-jam-count-not-put-back", "src/algo_predictive.c",
      "    if (x->c->jam)\n        memcpy(&x->c->jam[i], &m->own[1], sizeof *x->c->jam);",
      "    (void)0;", ["tests/test_jam.sh"], None),
-    ("team-stop-unheeded", "src/evloop.c", "        if (w->stop) { /* it stands",
-     "        if (0) { /* it stands", ["tests/test_jam.sh"], None),
+    ("team-stop-unheeded", "src/evloop.c", "        if (w->stop) { /* its reaction stopped the run",
+     "        if (0) { /* its reaction stopped the run", ["tests/test_jam.sh"], None),
     ("team-off-at-dissipation", "src/algo_predictive.c",
-     "const bool can_team = nt >= 2 && p.free_flight && !p.settle_model && !p.cage_model;",
+     "const bool can_team = nt >= 2 && p.free_flight;",
      "const bool can_team = nt >= 2 && p.free_flight && !p.jam_model;", TEAM, None),
     ("team-jammed-carried-over", "src/algo_predictive.c",
-     "    if (x->c->free_flight)\n        w->jammed = 0;", "    (void)0;", ["tests/test_jam.sh"],
+     "    w->jammed = 0;", "    (void)0;", ["tests/test_jam.sh"],
      "equivalent in practice: a speculative reaction that passed the limit and was undone is "
      "handled again from the same count, and passes it again, unless an earlier reaction took "
      "its sphere elsewhere and none of the sphere's later ones in the step does; no scene of the "
@@ -535,7 +535,7 @@ MUTANTS = [
     ("team-settle-undone", "src/evloop.c",
      "    if (w->stood == atomic_load_explicit(&w->place, memory_order_relaxed))\n        ops->merge(own, uw);",
      "    ops->merge(own, uw);", TEAM, None),
-    ("team-stood-unmarked", "src/evloop.c", "        w->stood = s; /* its counts and sums are its handler's to add (settle) */",
+    ("team-stood-unmarked", "src/evloop.c", "        w->stood = s;\n        if (w->stop) {",
      "        (void)0;", TEAM, None),
     ("team-take-unsettled", "src/evloop.c", "    settle(ops, w, own, us[k]);\n    if (!e->batch_first[k])",
      "    if (!e->batch_first[k])", TEAM, None),

@@ -502,11 +502,11 @@ static pred_plan plan_of(const nbep_scene *sc, const nbep_state *st, int nt, int
         p.team_crew[2] = size;
     }
     if (p.cells) {
-        /* the team loop: reactions in free flight change their own spheres only (no
-         * resting, holding, settling or cages): their motion, and at e < 1 their TC clocks
-         * and reaction counts, which the loop keeps with the motion to undo a speculative
-         * reaction (cells_save) */
-        const bool can_team = nt >= 2 && p.free_flight && !p.settle_model && !p.cage_model;
+        /* the team loop: reactions in free flight change their own spheres only (nothing
+         * rests, holds, settles or is caged without an acceleration): their motion, and at
+         * e < 1 their TC clocks and reaction counts, which the loop keeps with the motion to
+         * undo a speculative reaction (cells_save) */
+        const bool can_team = nt >= 2 && p.free_flight;
         int size = nt < NBEP_EVLOOP_TEAM_MAX ? nt : NBEP_EVLOOP_TEAM_MAX;
         if (team_force >= 2 && team_force < size)
             size = team_force;
@@ -2568,12 +2568,11 @@ static size_t cells_react(void *u, uint32_t i, const nbep_event *ev, const uint3
     uint32_t lo, hi;
     (void)event_key(i, ev, &lo, &hi);
     w->n_fired = 0;
-    /* in free flight only reactions count towards a jam, and the loop stops at the first
-     * that passes the limit, so the one thread starts every reaction from jammed = 0; a team
-     * thread does too, for its reactions are its own (a speculative one that passed it and
-     * was undone must not stop a later one) */
-    if (x->c->free_flight)
-        w->jammed = 0;
+    /* in cells mode only this callback fires spheres (counts reactions), and the loop stops
+     * at the first reaction that passes the limit, so the one thread starts every reaction
+     * from jammed = 0; a team thread does too, for its note must be its reaction's (a
+     * speculative one that passed the limit and was undone must not stop a later one) */
+    w->jammed = 0;
     const uint64_t woken = w->woken;
     x->t_local = ev->time - x->T0;
     x->cnt->c[NBEP_COUNTER_REACTIONS]++;
@@ -3225,10 +3224,8 @@ static void pred_threads_use(const nbep_scene *sc, int nt, char *buf, size_t len
                  p.team_size, nt);
     else if (p.cells)
         snprintf(buf, len,
-                 "the event loop on one (%s); all %d share the rebuilds, the update and the "
-                 "energy",
-                 p.free_flight ? "NBEP_TEAM"
-                               : "something accelerates: its contacts need the events in order",
+                 "the event loop on one (something accelerates: its contacts need the events in "
+                 "order); all %d share the rebuilds, the update and the energy",
                  nt);
     else if (p.crews)
         snprintf(buf, len, "each step's rounds on %s, whichever the run measures fastest",

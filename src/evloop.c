@@ -1446,14 +1446,14 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
                 return false;
             }
         }
-        if (w->stop) { /* it stands and its reaction stopped the run: as the one thread
-                        * stops after it (nbep_evloop_run), counted, its changes kept, nothing
-                        * after it (a speculative place's stop that does not stand is undone
-                        * with it, never seen here) */
+        /* it stands: counted, and its counts and sums are its handler's to add (settle) */
+        tally->events++;
+        count_handled(tally, w);
+        w->stood = s;
+        if (w->stop) { /* its reaction stopped the run: as the one thread stops after it
+                        * (nbep_evloop_run), its changes kept, nothing after it (a speculative
+                        * place's stop that does not stand is undone with it, never seen here) */
             undo_from(e, ops, u, us, s + 1);
-            tally->events++;
-            count_handled(tally, w);
-            w->stood = s; /* its counts and sums, as the one thread's */
             nbep_calendar_set(e->cal, e->batch[k], e->batch_entry[k].time,
                               e->batch_entry[k].key); /* its entry back, as it was */
             if (e->batch_other[k] != NO_SPHERE) /* and its other's, from its slot */
@@ -1467,9 +1467,6 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
             for (uint64_t p = s + 1; p < e->tail; p++)
                 wait_handled(e, ops, u, us, p);
         phase(PH_COMMIT);
-        tally->events++;
-        count_handled(tally, w);
-        w->stood = s; /* its counts and sums are its handler's to add (settle) */
         commit(e, w);
         if (e->failed) {
             undo_from(e, ops, u, us, s + 1);
