@@ -536,7 +536,7 @@ MUTANTS = [
      "    if (w->stood == atomic_load_explicit(&w->place, memory_order_relaxed))\n        ops->merge(own, uw);",
      "    ops->merge(own, uw);", TEAM, None),
     ("team-stood-unmarked", "src/evloop.c", "        w->stood = s;\n        if (w->stop) {",
-     "        (void)0;", TEAM, None),
+     "        (void)0;\n        if (w->stop) {", TEAM, None),
     ("team-take-unsettled", "src/evloop.c", "    settle(ops, w, own, us[k]);\n    if (!e->batch_first[k])",
      "    if (!e->batch_first[k])", TEAM, None),
     ("team-helper-end-unsettled", "src/evloop.c",
