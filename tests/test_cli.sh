@@ -18,9 +18,13 @@ rm -rf "$tmp" && mkdir -p "$tmp"
 fail=0
 check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
 
-# Runs nbep with a guard; leaves its status in $rc and its stderr in $tmp/stderr.
+# Runs nbep with a guard; leaves its status in $rc and its stderr in $tmp/stderr. The guard is
+# 30 s (guard=S before the call sets another): enough for a run that must fail before
+# simulating, where a run that did simulate would take hours. Runs that do simulate to their end
+# set a longer one: the bounce example takes 1.7 s on the 2-core machine alone, and once took
+# past 30 s while a CI ran beside four mutants' builds, which cut its file short.
 run_nbep() {
-    timeout -k 5 30 "$nbep" "$@" >"$tmp/stdout" 2>"$tmp/stderr"
+    timeout -k 5 "${guard:-30}" "$nbep" "$@" >"$tmp/stdout" 2>"$tmp/stderr"
     rc=$?
 }
 
@@ -142,7 +146,7 @@ for deck in inputs/hard-sphere-fluid.deck "$tmp/big-fluid.deck"; do
     name=$(basename "$deck" .deck)
     run_nbep check "$deck" -n 2 --set output.every=1 -o "$tmp/$name.h5"
     est=$(sed -n 's/^output: .* frames.*, about \([0-9.e+]*\) MB$/\1/p' "$tmp/stdout")
-    run_nbep run "$deck" -n 2 --set output.every=1 -o "$tmp/$name.h5" --quiet
+    guard=300 run_nbep run "$deck" -n 2 --set output.every=1 -o "$tmp/$name.h5" --quiet
     size=$(stat -c %s "$tmp/$name.h5" 2>/dev/null || echo 0)
     check "nbep check's size of $name.h5 ($est MB) is the file's ($size bytes) within 1 %" \
         "[ $rc = 0 ] && [ -n '$est' ] && awk -v e='$est' -v s='$size' 'BEGIN { r = e * 1e6 / s; exit !(r > 0.99 && r < 1.01) }'"
@@ -153,7 +157,7 @@ for deck in inputs/two-spheres.deck inputs/bounce.deck; do
     name=$(basename "$deck" .deck)
     run_nbep check "$deck" -o "$tmp/$name.h5"
     est=$(sed -n 's/^output: .* frames.*, about \([0-9.e+]*\) MB$/\1/p' "$tmp/stdout")
-    run_nbep run "$deck" -o "$tmp/$name.h5" --quiet
+    guard=300 run_nbep run "$deck" -o "$tmp/$name.h5" --quiet
     size=$(stat -c %s "$tmp/$name.h5" 2>/dev/null || echo 0)
     check "nbep check's size of $name.h5 ($est MB) is the file's ($size bytes) within 3 %" \
         "[ $rc = 0 ] && [ -n '$est' ] && awk -v e='$est' -v s='$size' 'BEGIN { r = e * 1e6 / s; exit !(r > 0.97 && r < 1.03) }'"
@@ -182,7 +186,7 @@ for spec in granular-cells:inputs/pile.deck:50000:cells granular-grid:inputs/pil
     run_nbep check "$deck" "${args[@]}" --set "spheres.[0].count=$count"
     est=$(sed -n 's/^memory: *about \([0-9.e+]*\) MB$/\1/p' "$tmp/stdout")
     for c in 8 "$count"; do
-        run_nbep run "$deck" "${args[@]}" --set "spheres.[0].count=$c" -n 2 --quiet \
+        guard=300 run_nbep run "$deck" "${args[@]}" --set "spheres.[0].count=$c" -n 2 --quiet \
             -o "$tmp/mem-$name.h5" --summary "$tmp/mem-$name-$c.json"
     done
     peak=$(sed -n 's/.*"peak_rss_bytes": \([0-9]*\).*/\1/p' "$tmp/mem-$name-$count.json")
