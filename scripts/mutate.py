@@ -106,6 +106,12 @@ MUTANTS = [
      "        return lb == NBEP_NEVER ? NBEP_NEVER : T0 + (r->t0 + lb);\n    }",
      "        return lb == NBEP_NEVER ? NBEP_NEVER : T0 + (r->t0 + 1.5 * lb);\n    }",
      CELLS + GRAN + SIM, None),
+    # the free-flight partner loop's gathered partners (cells_pairs_free): a partner's own
+    # radius, and its own local time, must be the ones its bound is computed from
+    ("bounds-partner-radius-own", "src/algo_predictive.c", "        g->rj[k] = mono ? ri : radius[j];",
+     "        g->rj[k] = ri;", CELLS + TEAM, None),
+    ("bounds-partner-time-own", "src/algo_predictive.c", "        g->tj[k] = tau[j];",
+     "        g->tj[k] = ti;", CELLS + TEAM, None),
     ("beat-cap-short", "src/algo_predictive.c", "    const double d = best->time - T0 - t0;",
      "    const double d = 0.5 * (best->time - T0 - t0);", CELLS + GRAN, None),
     # the cap exactly at the best time so far, without the tie margin: a pair that ties with

@@ -2426,52 +2426,107 @@ static inline void pair_motion(const pred_ctx *c, const nbep_state *s, uint32_t 
     *sigma = c->sigma_all > 0.0 ? c->sigma_all : s->radius[i] + s->radius[j];
 }
 
-/* The bounds of partners js[0..m) of sphere i (at pi, vi, local time ti, radius ri): for each,
- * the bound (from the step's start) of a closing pair that may hit, +inf for one receding or
- * certainly passing (nbep_predict_pair_quadratic_bound of the motion pair_motion gives: a
- * drift by zero time is the position itself, a shift by no period the position itself),
- * written without branches so that it runs on four pairs at once where the CPU has AVX2.
- * pb: the periodic box when images may be needed, else NULL. mono: every sphere has radius
- * ri (ri + ri is the contact distance exactly), which spares the loop a scattered load. Built
- * in four copies (images or not, mono or not), each free of what it does not need: most
- * spheres are far from every periodic face, and a fluid has one radius. */
-static inline NBEP_ALWAYS_INLINE void
-pair_bounds_with(const double *restrict tau, const nbep_vec3 *restrict pos,
-                 const nbep_vec3 *restrict vel, const double *restrict radius,
-                 const uint32_t *restrict js, size_t m, nbep_vec3 pi, nbep_vec3 vi, double ti,
-                 double ri, const nbep_periodic *pb, double *restrict out, const bool images,
-                 const bool mono)
+/* A batch of partners' motion, gathered from the sphere arrays into arrays of their own (one
+ * per coordinate, 32-byte aligned, padded to whole vectors of four), so that the bounds run on
+ * four pairs at once without a gather or a shuffle: the partners are scattered over the sphere
+ * arrays, and computed straight from them the loop ran two pairs at a time, with half its
+ * instructions moving partners' coordinates into vectors and back to the stack (cachegrind,
+ * the N = 32000 fluid at phi = 0.50: 55 instructions a partner in its vector part, 73 to 102
+ * in its scalar remainder). */
+#define PAIR_LANES 4
+typedef struct pair_gathered {
+    alignas(32) double tj[PAIR_BATCH];
+    alignas(32) double px[PAIR_BATCH];
+    alignas(32) double py[PAIR_BATCH];
+    alignas(32) double pz[PAIR_BATCH];
+    alignas(32) double vx[PAIR_BATCH];
+    alignas(32) double vy[PAIR_BATCH];
+    alignas(32) double vz[PAIR_BATCH];
+    alignas(32) double rj[PAIR_BATCH];
+} pair_gathered;
+
+/* Partners js[0..m) (m <= PAIR_BATCH) into g, and the padding up to whole vectors: a partner at
+ * i's own place, time and motion (no relative motion: never closing, so its bound is +inf,
+ * and every figure of it finite; no caller reads a padding's bound). The count gathered,
+ * padding included. The loads of every partner come first and do not depend on each other,
+ * so they overlap as the prefetch of the partners' lines that this loop replaced did (9
+ * instructions a partner: without it, 5 % fewer instructions a collision of the fluid above
+ * and the same time, paired). */
+static inline NBEP_ALWAYS_INLINE size_t pair_gather(const double *restrict tau,
+                                                    const nbep_vec3 *restrict pos,
+                                                    const nbep_vec3 *restrict vel,
+                                                    const double *restrict radius, bool mono,
+                                                    const uint32_t *restrict js, size_t m,
+                                                    nbep_vec3 pi, nbep_vec3 vi, double ti,
+                                                    double ri, pair_gathered *restrict g)
+{
+    size_t k = 0;
+    for (; k < m; k++) {
+        const uint32_t j = js[k];
+        g->tj[k] = tau[j];
+        g->px[k] = pos[j].x;
+        g->py[k] = pos[j].y;
+        g->pz[k] = pos[j].z;
+        g->vx[k] = vel[j].x;
+        g->vy[k] = vel[j].y;
+        g->vz[k] = vel[j].z;
+        g->rj[k] = mono ? ri : radius[j];
+    }
+    for (; k % PAIR_LANES != 0; k++) {
+        g->tj[k] = ti;
+        g->px[k] = pi.x;
+        g->py[k] = pi.y;
+        g->pz[k] = pi.z;
+        g->vx[k] = vi.x;
+        g->vy[k] = vi.y;
+        g->vz[k] = vi.z;
+        g->rj[k] = ri;
+    }
+    return k;
+}
+
+/* The bounds of the gathered partners g[0..m) (m a whole number of vectors) of sphere i (at pi,
+ * vi, local time ti, radius ri): for each, the bound (from the step's start) of a closing pair
+ * that may hit, +inf for one receding or certainly passing (nbep_predict_pair_quadratic_bound
+ * of the motion pair_motion gives: a drift by zero time is the position itself, a shift by no
+ * period the position itself), written without branches so that it runs on four pairs at
+ * once where the CPU has AVX2. pb: the periodic box when images may be needed, else NULL.
+ * Built in two copies (images or not), each free of what it does not need: most spheres are
+ * far from every periodic face. (A fluid of one radius takes ri + rj = ri + ri, the contact
+ * distance exactly, as pair_motion's sigma_all.) */
+static inline NBEP_ALWAYS_INLINE void pair_bounds_with(const pair_gathered *restrict g, size_t m,
+                                                       nbep_vec3 pi, nbep_vec3 vi, double ti,
+                                                       double ri, const nbep_periodic *pb,
+                                                       double *restrict out, const bool images)
 {
     const double hx = images ? pb->half[0] : INFINITY, hy = images ? pb->half[1] : INFINITY,
                  hz = images ? pb->half[2] : INFINITY;
     const double lx = images ? pb->len[0] : 0.0, ly = images ? pb->len[1] : 0.0,
                  lz = images ? pb->len[2] : 0.0;
     for (size_t k = 0; k < m; k++) {
-        const uint32_t j = js[k];
-        const double tj = tau[j];
+        const double tj = g->tj[k];
         const double t0 = ti > tj ? ti : tj;
         const double hi = t0 - ti, hj = t0 - tj;
         /* j's image nearest to i, from the stored positions, as neighbour_shift takes it */
-        const double sx0 = pos[j].x - pi.x, sy0 = pos[j].y - pi.y, sz0 = pos[j].z - pi.z;
+        const double sx0 = g->px[k] - pi.x, sy0 = g->py[k] - pi.y, sz0 = g->pz[k] - pi.z;
         const double shx = sx0 > hx ? -lx : sx0 < -hx ? lx : 0.0;
         const double shy = sy0 > hy ? -ly : sy0 < -hy ? ly : 0.0;
         const double shz = sz0 > hz ? -lz : sz0 < -hz ? lz : 0.0;
-        const double dpx = ((pos[j].x + shx) + vel[j].x * hj) - (pi.x + vi.x * hi);
-        const double dpy = ((pos[j].y + shy) + vel[j].y * hj) - (pi.y + vi.y * hi);
-        const double dpz = ((pos[j].z + shz) + vel[j].z * hj) - (pi.z + vi.z * hi);
-        const double dvx = vel[j].x - vi.x, dvy = vel[j].y - vi.y, dvz = vel[j].z - vi.z;
+        const double dpx = ((g->px[k] + shx) + g->vx[k] * hj) - (pi.x + vi.x * hi);
+        const double dpy = ((g->py[k] + shy) + g->vy[k] * hj) - (pi.y + vi.y * hi);
+        const double dpz = ((g->pz[k] + shz) + g->vz[k] * hj) - (pi.z + vi.z * hi);
+        const double dvx = g->vx[k] - vi.x, dvy = g->vy[k] - vi.y, dvz = g->vz[k] - vi.z;
         const double lb = nbep_predict_pair_quadratic_bound(
-            nbep_vec3_make(dpx, dpy, dpz), nbep_vec3_make(dvx, dvy, dvz),
-            mono ? ri + ri : ri + radius[j]);
+            nbep_vec3_make(dpx, dpy, dpz), nbep_vec3_make(dvx, dvy, dvz), ri + g->rj[k]);
         out[k] = lb < NBEP_NEVER ? t0 + lb : NBEP_NEVER;
     }
 }
 
-/* pair_bounds_with's four copies, inlined into cells_pairs_free, which is built twice (AVX2
- * and default) as a whole: a call to a clone of its own through the resolver and its 13
- * arguments cost about 40 instructions, once per 11 partners (cachegrind, the N = 32000 fluid
- * at phi = 0.50: 3 % of all instructions per collision together with the prefetch of every
- * partner's version, which only the winner's read needs). */
+/* pair_gather and pair_bounds_with's two copies, inlined into cells_pairs_free, which is built
+ * twice (AVX2 and default) as a whole: a call to a clone of its own through the resolver and
+ * its 13 arguments cost about 40 instructions, once per 11 partners (cachegrind, the
+ * N = 32000 fluid at phi = 0.50: 3 % of all instructions per collision together with the
+ * prefetch of every partner's version, which only the winner's read needs). */
 static inline NBEP_ALWAYS_INLINE void pair_bounds(const double *restrict tau,
                                                   const nbep_vec3 *restrict pos,
                                                   const nbep_vec3 *restrict vel,
@@ -2481,14 +2536,12 @@ static inline NBEP_ALWAYS_INLINE void pair_bounds(const double *restrict tau,
                                                   double ri, const nbep_periodic *pb,
                                                   double *restrict out)
 {
-    if (pb && mono)
-        pair_bounds_with(tau, pos, vel, radius, js, m, pi, vi, ti, ri, pb, out, true, true);
-    else if (pb)
-        pair_bounds_with(tau, pos, vel, radius, js, m, pi, vi, ti, ri, pb, out, true, false);
-    else if (mono)
-        pair_bounds_with(tau, pos, vel, radius, js, m, pi, vi, ti, ri, NULL, out, false, true);
+    pair_gathered g;
+    const size_t m4 = pair_gather(tau, pos, vel, radius, mono, js, m, pi, vi, ti, ri, &g);
+    if (pb)
+        pair_bounds_with(&g, m4, pi, vi, ti, ri, pb, out, true);
     else
-        pair_bounds_with(tau, pos, vel, radius, js, m, pi, vi, ti, ri, NULL, out, false, false);
+        pair_bounds_with(&g, m4, pi, vi, ti, ri, NULL, out, false);
 }
 
 NBEP_AVX2_CLONES static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js,
@@ -2499,17 +2552,12 @@ NBEP_AVX2_CLONES static void cells_pairs_free(void *u, uint32_t i, const uint32_
     const nbep_state *s = x->s;
     const double T0 = x->T0, ti = c->tau[i];
     const nbep_vec3 pi = s->pos[i], vi = s->vel[i];
-    for (size_t k = 0; k < m; k++) { /* the partners' lines, all requested before any is used */
-        NBEP_PREFETCH(&c->tau[js[k]]);
-        NBEP_PREFETCH(&s->pos[js[k]]);
-        NBEP_PREFETCH(&s->vel[js[k]]);
-    } /* (not their versions: only the winner's is read, once, at the end) */
     double best_t = best->kind == NBEP_EVENT_NONE ? NBEP_NEVER : best->time;
     /* ties: a sphere event ranks by partner, before any plane or horizon */
     uint32_t tie_j = best->kind == NBEP_EVENT_SPHERE ? best->partner : UINT32_MAX;
     bool found = false;
     pair_try tr[PAIR_BATCH];
-    double lbs[PAIR_BATCH];
+    alignas(32) double lbs[PAIR_BATCH];
     for (size_t k0 = 0; k0 < m; k0 += PAIR_BATCH) {
         const size_t k1 = m - k0 < PAIR_BATCH ? m : k0 + PAIR_BATCH;
         size_t n = 0, first = 0;
