@@ -130,6 +130,8 @@ struct nbep_evloop {
     double cut;           /* the list cutoff: contact distance plus skin, plus slack */
     double stray;         /* half the skin: how far a sphere goes before its list expires */
     double face_reach;    /* cut + stray, and a margin: see near_face */
+    double face_lo[3], face_hi[3]; /* near_face's faces: a periodic axis's low and high
+                                    * sides, -inf and +inf on any other */
     bool failed;          /* out of memory for a list: the run stops */
     nbep_feq *q;          /* borrowed */
     const uint64_t *ver;  /* borrowed */
@@ -280,6 +282,10 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->stray = 0.5 * skin;
     e->cut = (reach + skin) * (1.0 + CUT_SLACK);
     e->face_reach = e->cut + 1.01 * e->stray;
+    for (int k = 0; k < 3; k++) {
+        e->face_lo[k] = e->pb.axis[k] ? e->pb.lo[k] : -INFINITY;
+        e->face_hi[k] = e->pb.axis[k] ? e->pb.lo[k] + e->pb.len[k] : INFINITY;
+    }
     /* places are numbered from 1: a mark of 0 is no place's */
     e->head = e->tail = e->fill_at = 1;
     atomic_init(&e->avail, 1);
@@ -627,14 +633,11 @@ static nbep_vec3 list_centre(const nbep_evloop *e, nbep_vec3 p, nbep_vec3 v, nbe
  * stray covers the roundings). */
 static bool near_face(const nbep_evloop *e, nbep_vec3 ci)
 {
-    if (!e->pb.any)
-        return false;
-    const double c[3] = {ci.x, ci.y, ci.z};
-    for (int k = 0; k < 3; k++)
-        if (e->pb.axis[k] && !(c[k] - e->pb.lo[k] > e->face_reach &&
-                               e->pb.lo[k] + e->pb.len[k] - c[k] > e->face_reach))
-            return true;
-    return false;
+    /* six comparisons without a branch (an axis that is not periodic has infinite faces, which
+     * no centre is near; a loop over the axes with its tests ran at 28 instructions a call) */
+    const double *lo = e->face_lo, *hi = e->face_hi, r = e->face_reach;
+    return !((ci.x - lo[0] > r) & (hi[0] - ci.x > r) & (ci.y - lo[1] > r) & (hi[1] - ci.y > r) &
+             (ci.z - lo[2] > r) & (hi[2] - ci.z > r));
 }
 
 /* Sphere i's slot from scratch at time t: planes, the m spheres js of its list (built around

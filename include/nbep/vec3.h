@@ -42,9 +42,13 @@ static inline double nbep_vec3_norm(nbep_vec3 a)
 {
     return sqrt(nbep_vec3_dot(a, a));
 }
+/* x * 0 is a zero for every finite x and NaN for an infinite or NaN one, so the sum of the
+ * three is a zero exactly when all three are finite: one comparison instead of three tests
+ * and branches (the response's checks of its inputs ran at 60 instructions a collision of a
+ * fluid). Exact under the build's IEEE arithmetic (no -ffast-math: x * 0 is not folded). */
 static inline bool nbep_vec3_isfinite(nbep_vec3 a)
 {
-    return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
+    return a.x * 0.0 + a.y * 0.0 + a.z * 0.0 == 0.0;
 }
 static inline bool nbep_vec3_equal(nbep_vec3 a, nbep_vec3 b)
 {
