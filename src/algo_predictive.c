@@ -2524,28 +2524,11 @@ static inline NBEP_ALWAYS_INLINE void pair_bounds_with(const pair_gathered *rest
     }
 }
 
-/* pair_gather and pair_bounds_with's two copies, inlined into cells_pairs_free, which is built
- * twice (AVX2 and default) as a whole: a call to a clone of its own through the resolver and
- * its 13 arguments cost about 40 instructions, once per 11 partners (cachegrind, the
+/* pair_gather and pair_bounds_with's two copies are inlined into cells_pairs_free, which is
+ * built twice (AVX2 and default) as a whole: a call to a clone of its own through the resolver
+ * and its 13 arguments cost about 40 instructions, once per 11 partners (cachegrind, the
  * N = 32000 fluid at phi = 0.50: 3 % of all instructions per collision together with the
  * prefetch of every partner's version, which only the winner's read needs). */
-static inline NBEP_ALWAYS_INLINE void pair_bounds(const double *restrict tau,
-                                                  const nbep_vec3 *restrict pos,
-                                                  const nbep_vec3 *restrict vel,
-                                                  const double *restrict radius, bool mono,
-                                                  const uint32_t *restrict js, size_t m,
-                                                  nbep_vec3 pi, nbep_vec3 vi, double ti,
-                                                  double ri, const nbep_periodic *pb,
-                                                  double *restrict out)
-{
-    pair_gathered g;
-    const size_t m4 = pair_gather(tau, pos, vel, radius, mono, js, m, pi, vi, ti, ri, &g);
-    if (pb)
-        pair_bounds_with(&g, m4, pi, vi, ti, ri, pb, out, true);
-    else
-        pair_bounds_with(&g, m4, pi, vi, ti, ri, NULL, out, false);
-}
-
 NBEP_AVX2_CLONES static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js,
                                               size_t m, bool images, nbep_event *best)
 {
@@ -2565,11 +2548,17 @@ NBEP_AVX2_CLONES static void cells_pairs_free(void *u, uint32_t i, const uint32_
     bool found = false;
     pair_try tr[PAIR_BATCH];
     alignas(32) double lbs[PAIR_BATCH];
+    pair_gathered g;
+    const double ri = s->radius[i];
     for (size_t k0 = 0; k0 < m; k0 += PAIR_BATCH) {
         const size_t k1 = m - k0 < PAIR_BATCH ? m : k0 + PAIR_BATCH;
         size_t n = 0, first = 0;
-        pair_bounds(c->tau, s->pos, s->vel, s->radius, c->sigma_all > 0.0,
-                    js + k0, k1 - k0, pi, vi, ti, s->radius[i], images ? &c->pb : NULL, lbs);
+        const size_t m4 = pair_gather(c->tau, s->pos, s->vel, s->radius, c->sigma_all > 0.0,
+                                      js + k0, k1 - k0, pi, vi, ti, ri, &g);
+        if (images)
+            pair_bounds_with(&g, m4, pi, vi, ti, ri, &c->pb, lbs, true);
+        else
+            pair_bounds_with(&g, m4, pi, vi, ti, ri, NULL, lbs, false);
         for (size_t k = k0; k < k1; k++) { /* the closing pairs that may hit */
             if (!(lbs[k - k0] < INFINITY))
                 continue;
