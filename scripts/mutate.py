@@ -32,6 +32,7 @@ TEAM = ["test_periodic"]  # the team loop's tests: one thread's frames, counts a
 APART = ["test_evloop_apart", "test_periodic"]
 GRAN = ["test_granular"]
 ORDER = ["test_order"]  # run.order = "step", the paper's step
+LISTS = ["test_evloop_lists"]  # the cells engine's lists against a search of every sphere
 
 # (id, file, original, replacement, tests, equivalent-reason or None)
 MUTANTS = [
@@ -368,8 +369,22 @@ MUTANTS = [
      "        d = nbep_vec3_add(d, nbep_periodic_near_shift(&e->pb, d));", "        (void)0;",
      TEAM, None),
     ("evloop-walk-no-images", "src/evloop.c",
-     "const double ax = b.per[0][x] ? ci.x - b.per[0][x] * e->pb.len[0] : ci.x;",
-     "const double ax = ci.x;", TEAM, None),
+     "a[k][q] = b.per[k][q] ? c[k] - b.per[k][q] * e->pb.len[k] : c[k];",
+     "a[k][q] = c[k];", LISTS + TEAM, None),
+    ("evloop-walk-prunes-rows", "src/evloop.c", "            if (!(gyz < cut2))",
+     "            if (!(gyz < 0.5 * cut2))", LISTS + CELLS, None),
+    ("evloop-walk-prunes-cells", "src/evloop.c", "                if (!(gyz + gap2[0][x] < cut2))",
+     "                if (!(gyz + gap2[0][x] < 0.7 * cut2))", LISTS + CELLS, None),
+    ("evloop-rebuild-list-short", "src/evloop.c", "e->failed ? 0 : w->n_near", "e->failed ? 0 : w->n_near - (w->n_near > 0)",
+     LISTS + CELLS, None),
+    ("cells-gap-slab-shrunk", "include/nbep/cells.h", "s = g->h[k] / 64.0;", "s = -g->h[k] / 8.0;",
+     ["test_cells"] + LISTS, None),
+    ("cells-gap-wall-closed", "include/nbep/cells.h", "    const double lo = idx > 0 || g->periodic[k] ? o + (double)idx * g->h[k] - s : -INFINITY;",
+     "    const double lo = o + (double)idx * g->h[k] - s;", ["test_cells"] + LISTS, None),
+    ("nblist-set-short", "src/nblist.c", "        l->sp[i].cnt = (uint32_t)m;", "        l->sp[i].cnt = (uint32_t)m - (m > 0);",
+     ["test_nblist"] + LISTS, None),
+    ("nblist-set-past-room", "src/nblist.c", "    if (m <= l->sp[i].cap) {", "    if (m <= l->sp[i].cap + 2) {",
+     ["test_nblist"], None),
     ("overlap-check-no-images", "src/state.c", "        if (per > 0.0 && x[a] + per - reach <= hi)",
      "        if (0)", TEAM, None),
     ("frame-overlap-leader-only", "src/sim.c",

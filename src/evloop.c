@@ -363,7 +363,10 @@ bool nbep_evloop_failed(const nbep_evloop *e)
 
 /* Calls f(e, i, j, arg) for every sphere j != i whose place is within the cutoff of ci, from
  * the 27-cell block of cell `cell` (each at its image across periodic faces). Reads the cells
- * only. */
+ * only. A cell of the block whose slab is farther than the cutoff from ci (nbep_cells_gap2) is
+ * skipped, members unread: with cells as wide as the cutoff that is about a quarter of the
+ * block, its corners and edges away from ci (the walk found the same spheres in the same
+ * order, and read 3 to 4 members fewer at phi = 0.30). */
 static inline void near_centres(const nbep_evloop *e, uint32_t i, nbep_vec3 ci, size_t cell,
                                 void (*f)(const nbep_evloop *e, uint32_t i, uint32_t j,
                                           void *arg),
@@ -373,33 +376,46 @@ static inline void near_centres(const nbep_evloop *e, uint32_t i, nbep_vec3 ci, 
     nbep_cells_block b;
     nbep_cells_block_of(g, cell, &b);
     const double cut2 = e->cut * e->cut;
-    /* the block's first members and ci as seen from each cell (moved by the cell's period),
-     * all requested before any is read: a cell holds one or two members in a fluid, so the
-     * walk is mostly these first loads, which then overlap instead of following each other */
+    /* per axis and cell of the block: ci as seen from the cell (moved by its period), and the
+     * square of its gap to the cell's slab */
+    const double c[3] = {ci.x, ci.y, ci.z};
+    double a[3][3], gap2[3][3];
+    for (int k = 0; k < 3; k++)
+        for (int q = 0; q < b.cnt[k]; q++) {
+            a[k][q] = b.per[k][q] ? c[k] - b.per[k][q] * e->pb.len[k] : c[k];
+            gap2[k][q] = nbep_cells_gap2(g, k, b.idx[k][q], a[k][q]);
+        }
+    /* the block's first members and ci as seen from each cell, all requested before any is
+     * read: a cell holds one or two members in a fluid, so the walk is mostly these first
+     * loads, which then overlap instead of following each other */
     uint32_t first[27];
     nbep_vec3 from[27];
     int nc = 0;
     for (int z = 0; z < b.cnt[2]; z++) {
-        const double az = b.per[2][z] ? ci.z - b.per[2][z] * e->pb.len[2] : ci.z;
+        if (!(gap2[2][z] < cut2))
+            continue;
         for (int y = 0; y < b.cnt[1]; y++) {
-            const double ay = b.per[1][y] ? ci.y - b.per[1][y] * e->pb.len[1] : ci.y;
+            const double gyz = gap2[2][z] + gap2[1][y];
+            if (!(gyz < cut2))
+                continue;
             const size_t row = (b.idx[2][z] * g->dim[1] + b.idx[1][y]) * g->dim[0];
             for (int x = 0; x < b.cnt[0]; x++) {
-                const double ax = b.per[0][x] ? ci.x - b.per[0][x] * e->pb.len[0] : ci.x;
+                if (!(gyz + gap2[0][x] < cut2))
+                    continue;
                 const uint32_t j = g->head[row + b.idx[0][x]];
                 if (j == NBEP_CELLS_NONE)
                     continue;
                 NBEP_PREFETCH(&g->m[j]);
                 first[nc] = j;
-                from[nc++] = nbep_vec3_make(ax, ay, az);
+                from[nc++] = nbep_vec3_make(a[0][x], a[1][y], a[2][z]);
             }
         }
     }
     for (int q = 0; q < nc; q++) {
-        const nbep_vec3 a = from[q];
+        const nbep_vec3 p = from[q];
         for (uint32_t j = first[q]; j != NBEP_CELLS_NONE; j = g->m[j].next) {
             const nbep_vec3 cj = g->m[j].at;
-            const double dx = cj.x - a.x, dy = cj.y - a.y, dz = cj.z - a.z;
+            const double dx = cj.x - p.x, dy = cj.y - p.y, dz = cj.z - p.z;
             if (dx * dx + dy * dy + dz * dz < cut2 && j != i)
                 f(e, i, j, arg);
         }
@@ -502,10 +518,8 @@ static void apply(nbep_evloop *e, const evl_ws *w, uint32_t i, nbep_vec3 c)
     for (size_t k = 0; k < w->n_was; k++)
         if (!w->kept[k]) /* lost */
             nbep_nblist_drop(&e->nl, w->was[k], i);
-    nbep_nblist_clear(&e->nl, i);
-    for (size_t k = 0; k < w->n_near && !e->failed; k++)
-        if (!nbep_nblist_append(&e->nl, i, w->near[k]))
-            e->failed = true;
+    if (!nbep_nblist_set(&e->nl, i, w->near, e->failed ? 0 : w->n_near))
+        e->failed = true;
 }
 
 void nbep_evloop_assign(nbep_evloop *e, const nbep_vec3 *pos, size_t lo, size_t hi)

@@ -149,6 +149,20 @@ bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j)
     return true;
 }
 
+bool nbep_nblist_set(nbep_nblist *l, uint32_t i, const uint32_t *js, size_t m)
+{
+    nbep_nblist_clear(l, i);
+    if (m <= l->sp[i].cap) { /* the common case: a rebuilt list keeps about its length */
+        memcpy(l->pool + l->sp[i].off, js, m * sizeof *js);
+        l->sp[i].cnt = (uint32_t)m;
+        return true;
+    }
+    for (size_t k = 0; k < m; k++)
+        if (!nbep_nblist_append(l, i, js[k]))
+            return false;
+    return true;
+}
+
 void nbep_nblist_drop(nbep_nblist *l, uint32_t i, uint32_t j)
 {
     uint32_t *theirs = l->pool + l->sp[i].off;

@@ -1,7 +1,7 @@
 /* Tests of the neighbour lists (nblist.h): against a reference adjacency matrix under random
  * symmetric attach and detach operations, with lists growing past their room (moves to the
  * pool's end) and enough of it given up that the pool compacts; a layout from counts and a
- * fill; the invariant checker catching an asymmetric pair, a duplicate and a self entry. */
+ * fill; a list set at once against one cleared and appended to; the invariant checker catching an asymmetric pair, a duplicate and a self entry. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -159,6 +159,57 @@ static void test_need_bounds_what_a_rebuild_takes_of_the_spare(void **state)
     free(counts);
 }
 
+/* nbep_nblist_set is a clear and appends, copied in place where the room holds the list: two
+ * pools, one set and one cleared and appended to, step for step through lists shorter and
+ * longer than their rooms (moves, and the compactions a full pool brings), hold the same lists
+ * at the same places with the same rooms. */
+static void test_set_is_clear_and_appends(void **state)
+{
+    (void)state;
+    enum { N = 40 };
+    nbep_nblist a, b;
+    init(&a, N);
+    init(&b, N);
+    uint32_t zero[N] = {0};
+    assert_true(nbep_nblist_layout(&a, zero));
+    assert_true(nbep_nblist_layout(&b, zero));
+    uint64_t x = 11;
+    uint32_t js[3 * N];
+    size_t in_place = 0, moved = 0;
+    for (int op = 0; op < 4000; op++) {
+        const uint32_t i = (uint32_t)(lcg(&x) % N);
+        const size_t m = lcg(&x) % (op % 3 == 0 ? 3 * N : 8); /* mostly short, at times long */
+        for (size_t k = 0; k < m; k++)
+            js[k] = (uint32_t)(lcg(&x) % N);
+        const size_t len0 = a.pool_len;
+        const uint32_t off0 = a.sp[i].off;
+        assert_true(nbep_nblist_set(&a, i, js, m));
+        nbep_nblist_clear(&b, i);
+        for (size_t k = 0; k < m; k++)
+            assert_true(nbep_nblist_append(&b, i, js[k]));
+        in_place += a.pool_len == len0 && a.sp[i].off == off0;
+        moved += a.sp[i].off != off0;
+        assert_int_equal(a.pool_len, b.pool_len);
+        assert_int_equal(a.cap_max, b.cap_max);
+        assert_int_equal(a.room, b.room);
+        for (uint32_t k = 0; k < N; k++) {
+            assert_int_equal(a.sp[k].off, b.sp[k].off);
+            assert_int_equal(a.sp[k].cnt, b.sp[k].cnt);
+            assert_int_equal(a.sp[k].cap, b.sp[k].cap);
+            assert_memory_equal(a.pool + a.sp[k].off, b.pool + b.sp[k].off,
+                                a.sp[k].cnt * sizeof *a.pool);
+        }
+        size_t got;
+        const uint32_t *have = nbep_nblist_of(&a, i, &got);
+        assert_int_equal(got, m);
+        if (m > 0)
+            assert_memory_equal(have, js, m * sizeof *js);
+    }
+    assert_true(in_place > 0 && moved > 0); /* both ways were taken */
+    nbep_nblist_fini(&a);
+    nbep_nblist_fini(&b);
+}
+
 static void test_check_catches_asymmetry_duplicates_and_self_entries(void **state)
 {
     (void)state;
@@ -184,6 +235,7 @@ int main(void)
         cmocka_unit_test(test_random_attach_and_detach_match_a_reference_adjacency),
         cmocka_unit_test(test_layout_gives_each_list_its_count_and_slack_and_fill_appends),
         cmocka_unit_test(test_need_bounds_what_a_rebuild_takes_of_the_spare),
+        cmocka_unit_test(test_set_is_clear_and_appends),
         cmocka_unit_test(test_check_catches_asymmetry_duplicates_and_self_entries),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -28,6 +28,7 @@
 #ifndef NBEP_CELLS_H
 #define NBEP_CELLS_H
 
+#include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -102,6 +103,22 @@ typedef struct nbep_cells_block {
     int cnt[3];
 } nbep_cells_block;
 void nbep_cells_block_of(const nbep_cells *g, size_t c, nbep_cells_block *b);
+
+/* The square of how far coordinate x (along axis k) lies from the slab of the cells with
+ * coordinate idx along k, the slab grown by a 64th of a side at each face and open past an
+ * outer face of an axis that is not periodic (places there are clamped into the edge cell):
+ * no member's place in those cells is nearer x along k. (nbep_cells_locate puts a place in
+ * the cell its coordinates fall in to within a few roundings, which the 64th covers many times
+ * over, so a search that skips cells by this bound skips no place it would have found.) */
+static inline double nbep_cells_gap2(const nbep_cells *g, int k, size_t idx, double x)
+{
+    const double o = k == 0 ? g->lo.x : k == 1 ? g->lo.y : g->lo.z, s = g->h[k] / 64.0;
+    const double lo = idx > 0 || g->periodic[k] ? o + (double)idx * g->h[k] - s : -INFINITY;
+    const double hi =
+        idx + 1 < g->dim[k] || g->periodic[k] ? o + (double)(idx + 1) * g->h[k] + s : INFINITY;
+    const double d = x < lo ? lo - x : x > hi ? x - hi : 0.0;
+    return d * d;
+}
 
 /* Index of cell (x, y, z). */
 static inline size_t nbep_cells_index(const nbep_cells *g, size_t x, size_t y, size_t z)

@@ -87,6 +87,10 @@ static inline void nbep_nblist_fill(nbep_nblist *l, uint32_t i, uint32_t j)
 /* Appends j to i's list, growing its room if needed. False when out of memory (nothing
  * changed). One thread. */
 bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j);
+/* Makes i's list js[0..m) (i's own list rebuilt): copied in place when its room holds m, else
+ * as nbep_nblist_clear and m appends (the same moves and rooms). False when out of memory
+ * (then as an append that failed: i's list holds a part). One thread. */
+NBEP_MUST_CHECK bool nbep_nblist_set(nbep_nblist *l, uint32_t i, const uint32_t *js, size_t m);
 /* Removes j from i's list, if it is there (the last entry takes its place). One thread. */
 void nbep_nblist_drop(nbep_nblist *l, uint32_t i, uint32_t j);
 /* Empties i's list; its room stays. */

@@ -1,0 +1,178 @@
+/* The cells engine's neighbour lists, checked against a search of every sphere. A list holds
+ * the spheres whose list centres lie within the cutoff of its own sphere's centre (evloop.c:
+ * a walk of the 27-cell block at each rebuild, cells it need not read skipped, and the lists of
+ * the neighbours gained and lost changed with it). A list that misses a sphere misses the
+ * collisions with it only when they come, which the tests of results see now and then; this
+ * test compiles its own copy of src/evloop.c with a hook after each event is handled and
+ * checks, against every sphere's centre through nbep_periodic_image:
+ *   - an expiry's new list (what its walk found, before its commit enters it): every sphere
+ *     within the cutoff of its new centre and none beyond, each once;
+ *   - every 4th other event's sphere's list as the lists are: the same, around its centre (lists
+ *     built at a step's start by the full build, or kept since by the rebuilds of neighbours).
+ * A sphere at the cutoff to within rounding may be in or out (the walk's test and this one
+ * round differently); the test counts how close the scenes come, so that one that looked away
+ * would fail. One thread (the hook reads every sphere's centre, which a team's leader may be
+ * changing meanwhile). */
+struct nbep_evloop;
+struct evl_ws;
+static void audit_handled(const struct nbep_evloop *e, const struct evl_ws *w);
+#define NBEP_EVLOOP_HANDLED_HOOK(e, w, ev) audit_handled(e, w)
+#include "../src/evloop.c"
+
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "nbep/sim.h"
+#include "nbep_test.h"
+#include "nbep_test_scene.h"
+
+/* Distances within this relative band of the cutoff may go either way (a few units of 2^-52
+ * in the walk's squares and in this test's, with room to spare). */
+#define BAND 1e-12
+
+static struct {
+    uint64_t walks;   /* expiries' new lists checked */
+    uint64_t lists;   /* lists checked as they are */
+    uint64_t members; /* members those had in all */
+    uint64_t missing; /* spheres within the cutoff not listed */
+    uint64_t extra;   /* spheres listed beyond it, listed twice, or the sphere itself */
+    uint64_t close;   /* spheres between 0.98 and 1 cutoff (the search came near its limit) */
+    uint64_t across;  /* members within the cutoff only the periodic way round */
+    uint64_t beyond;  /* lists not empty around a centre more than the cutoff past the cells */
+    uint64_t events;  /* events that rebuilt no list */
+} seen;
+static unsigned char *mark; /* run_audited's, a flag per sphere: listed */
+
+/* The spheres js[0..m) against every sphere's distance from centre c (sphere i excluded). */
+static void audit_list(const nbep_evloop *e, uint32_t i, nbep_vec3 c, const uint32_t *js,
+                       size_t m)
+{
+    for (size_t k = 0; k < m; k++) {
+        seen.extra += js[k] >= e->n || js[k] == i || mark[js[k]];
+        if (js[k] < e->n)
+            mark[js[k]] = 1;
+    }
+    seen.members += m;
+    const nbep_cells *g = &e->cells;
+    const double r = e->cut;
+    seen.beyond += m > 0 && (c.x < g->lo.x - r || c.y < g->lo.y - r || c.z < g->lo.z - r ||
+                             c.x > g->hi.x + r || c.y > g->hi.y + r || c.z > g->hi.z + r);
+    for (uint32_t j = 0; j < e->n; j++) {
+        const nbep_vec3 raw = nbep_vec3_sub(e->cells.m[j].at, c);
+        const double d = nbep_vec3_norm(nbep_periodic_image(&e->pb, raw));
+        const bool in = mark[j];
+        mark[j] = 0;
+        if (j == i)
+            continue;
+        seen.missing += !in && d < e->cut * (1.0 - BAND);
+        seen.extra += in && d > e->cut * (1.0 + BAND);
+        seen.close += d > 0.98 * e->cut && d < e->cut;
+        seen.across += in && !(nbep_vec3_norm(raw) < e->cut);
+    }
+}
+
+static void audit_handled(const nbep_evloop *e, const evl_ws *w)
+{
+    if (w->rebuilt) {
+        seen.walks++;
+        audit_list(e, w->item, w->at, w->near, w->n_near);
+    }
+    if (!w->rebuilt && seen.events++ % 4 == 0) { /* (a rebuilt list is entered at the commit) */
+        size_t m;
+        const uint32_t *js = nbep_nblist_of(&e->nl, w->item, &m);
+        seen.lists++;
+        audit_list(e, w->item, e->cells.m[w->item].at, js, m);
+    }
+}
+
+/* Runs sc on one thread: every list checked was right, and the run checked many. */
+static void run_checked(nbep_scene *sc)
+{
+    memset(&seen, 0, sizeof seen);
+    mark = calloc(sc->state.n, 1);
+    assert_non_null(mark);
+    const nbep_summary s = nbep_test_run(sc, 1, NULL, NULL, NULL, NULL);
+    free(mark);
+    mark = NULL;
+    assert_true(s.sphere_collisions > s.spheres);
+    assert_int_equal(seen.missing, 0);
+    assert_int_equal(seen.extra, 0);
+    assert_true(seen.walks > s.spheres / 2);
+}
+
+/* run_checked, where the lists are those of a fluid: many lists checked as they are, not
+ * empty, the cutoff often come near, and (periodic) members found across the faces. */
+static void run_audited(nbep_scene *sc, bool periodic)
+{
+    run_checked(sc);
+    const size_t n = sc->state.n;
+    assert_true(seen.lists > n / 2);
+    assert_true(seen.members > 2 * (seen.walks + seen.lists)); /* not empty lists */
+    assert_true(seen.close > seen.walks / 8);
+    if (periodic)
+        assert_true(seen.across > seen.walks / 8);
+}
+
+/* A dense periodic fluid: lists across every face. */
+static void test_lists_hold_every_sphere_near_their_centre_in_a_periodic_fluid(void **state)
+{
+    (void)state;
+    nbep_scene *sc = nbep_test_periodic_fluid(nbep_test_scaled(12, 9), 0.40,
+                                              nbep_test_scaled(30, 15), 0.02, 5);
+    run_audited(sc, true);
+    nbep_test_scene_free(&sc);
+}
+
+/* A closed box: the edge cells' slabs open past the walls (centres clamped into them). */
+static void test_lists_hold_every_sphere_near_their_centre_in_a_closed_box(void **state)
+{
+    (void)state;
+    nbep_scene *sc = nbep_test_fluid(nbep_test_scaled(12, 9), 0.35, nbep_test_scaled(30, 15),
+                                     0.02);
+    sc->neighbors_cells = true;
+    run_audited(sc, false);
+    nbep_test_scene_free(&sc);
+}
+
+/* Without a box: an expanding cluster, its cells laid out afresh as it grows. */
+static void test_lists_hold_every_sphere_near_their_centre_in_a_cluster_without_a_box(void **s)
+{
+    (void)s;
+    nbep_scene *sc = nbep_test_cluster("predictive", nbep_test_scaled(10, 8),
+                                       nbep_test_scaled(60, 40));
+    sc->neighbors_cells = true;
+    run_audited(sc, false);
+    nbep_test_scene_free(&sc);
+}
+
+/* The same with steps so long that spheres fly out of the cells' region by more than the
+ * cutoff before it is laid out again at the step's end (their places clamped into the edge
+ * cells, searched from centres beyond the faces too). */
+static void test_lists_hold_every_sphere_near_their_centre_past_the_cells_region(void **s)
+{
+    (void)s;
+    nbep_scene *sc = nbep_test_cluster("predictive", 10, 6); /* (not smaller: it must go far) */
+    sc->neighbors_cells = true;
+    sc->dt = 3.0;
+    run_checked(sc);
+    assert_true(seen.beyond > 10);
+    nbep_test_scene_free(&sc);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_lists_hold_every_sphere_near_their_centre_in_a_periodic_fluid),
+        cmocka_unit_test(test_lists_hold_every_sphere_near_their_centre_in_a_closed_box),
+        cmocka_unit_test(
+            test_lists_hold_every_sphere_near_their_centre_in_a_cluster_without_a_box),
+        cmocka_unit_test(test_lists_hold_every_sphere_near_their_centre_past_the_cells_region),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
