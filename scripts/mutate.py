@@ -375,6 +375,8 @@ MUTANTS = [
      "            if (!(gyz < 0.5 * cut2))", LISTS + CELLS, None),
     ("evloop-walk-prunes-cells", "src/evloop.c", "                if (!(gyz + gap2[0][x] < cut2))",
      "                if (!(gyz + gap2[0][x] < 0.7 * cut2))", LISTS + CELLS, None),
+    ("evloop-place-old-cell", "src/evloop.c", "nbep_cells_place(&e->cells, i, c, w->at_cell);",
+     "nbep_cells_place(&e->cells, i, c, e->cells.m[i].cell);", LISTS + CELLS, None),
     ("evloop-rebuild-list-short", "src/evloop.c", "e->failed ? 0 : w->n_near", "e->failed ? 0 : w->n_near - (w->n_near > 0)",
      LISTS + CELLS, None),
     ("cells-gap-slab-shrunk", "include/nbep/cells.h", "s = g->h[k] / 64.0;", "s = -g->h[k] / 8.0;",

