@@ -508,12 +508,13 @@ static void walk(const nbep_evloop *e, evl_ws *w, uint32_t i, nbep_vec3 c)
     near_centres(e, i, c, w->at_cell, gather_one, w);
 }
 
-/* The walk's list entered: i placed at c; it enters the lists of the neighbours it gains and
- * leaves those of the ones it loses; those it keeps (most: it moved by half a skin) are not
- * touched. One thread, no other walking. */
-static void apply(nbep_evloop *e, const evl_ws *w, uint32_t i, nbep_vec3 c)
+/* The walk on w entered: its sphere placed at the new centre (in the cell the walk found); it
+ * enters the lists of the neighbours it gains and leaves those of the ones it loses; those it
+ * keeps (most: it moved by half a skin) are not touched. One thread, no other walking. */
+static void apply(nbep_evloop *e, const evl_ws *w)
 {
-    nbep_cells_place(&e->cells, i, c, w->at_cell); /* the cell the walk found */
+    const uint32_t i = w->item;
+    nbep_cells_place(&e->cells, i, w->at, w->at_cell);
     for (size_t k = 0; k < w->n_near && !e->failed; k++)
         if (w->gain[k] && !nbep_nblist_append(&e->nl, w->near[k], i))
             e->failed = true;
@@ -828,7 +829,7 @@ static void commit(nbep_evloop *e, const evl_ws *w)
     if (w->oom)
         e->failed = true;
     if (w->rebuilt)
-        apply(e, w, w->item, w->at);
+        apply(e, w);
     if (e->failed)
         return;
     if (w->n_next != NEXT_ALL) {
