@@ -64,8 +64,8 @@ PARALLELISM := $(BUILD)/bench/bench_parallelism
 # the same with a copy whose leader notes where its time goes (README, Threads on dense scenes)
 LEADER := $(BUILD)/bench/bench_leader
 
-# One job a core unless -j is given: a serial build takes over a minute on 2 cores (the largest
-# file, algo_predictive.c, 19 s alone), about half that in parallel. Only at the top: a make
+# One job a core unless -j is given: a serial build takes over a minute on 2 cores (the slowest
+# file, evloop.c, 5 s alone), about half that in parallel. Only at the top: a make
 # that `make pgo` runs shares its parent's jobs (it cannot see a -j its parent set here).
 ifeq ($(MAKELEVEL)$(filter -j%,$(MAKEFLAGS)),0)
 MAKEFLAGS += -j$(shell nproc 2>/dev/null || echo 1)

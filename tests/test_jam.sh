@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # A jam ends the run instead of the step never ending (run.max_reactions, issue 9): twelve
 # spheres (e = 0.5) poured into a 0.35 m box wedge three of them between the walls and each
-# other after about 0.67 s. Before the cage rule and the rest speed (algo_predictive.c) they
+# other after about 0.67 s. Before the cage rule and the rest speed (pred_react.c) they
 # collided ever faster there while time crawled on, and only the limit stopped the run; now
 # they come through it, but the busiest sphere still reacts 500 to 1000 times (grid mode) or
 # over 1000 (cells mode) in its busiest step (measured), so a limit of 300 stands in for a jam. Every predictive mode must stop
@@ -99,7 +99,7 @@ done
 
 # a cooling gas (e = 0.9, nothing accelerates): the cells mode's team loop runs it, with
 # reactions handled ahead of their turn and some undone, each undo putting back the reaction
-# counts it raised (algo_predictive.c, cells_save). A limit of 31 is passed in the first
+# counts it raised (pred_cells.c, cells_save). A limit of 31 is passed in the first
 # step (the lattice start melting: measured, sphere 2884 on one thread): the team (2 and 3
 # threads, NBEP_TEAM=always) must stop after the same reaction, naming the same step, sphere and
 # time to the last digit, with the frame before it the same bit for bit. A count a speculative

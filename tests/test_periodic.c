@@ -608,7 +608,7 @@ static void test_team_loop_handles_events_ahead_and_undoes_some_bit_for_bit(void
 
 /* The team loop on a cooling fluid (e = 0.8, nothing accelerates: a granular gas): a reaction
  * there also moves its spheres' TC clocks and reaction counts, which the loop keeps and puts
- * back with their motion when it undoes a speculative reaction (algo_predictive.c,
+ * back with their motion when it undoes a speculative reaction (pred_cells.c,
  * cells_save). On 2, 3 and 4 threads (NBEP_TEAM=always) the frames, image counts, counts and
  * pressure are one thread's bit for bit, with events handled ahead and some undone, without
  * and with the TC model (tc of a tenth of the mean free time, so that a good share of the

@@ -69,7 +69,7 @@ spheres = ( { count = 12; radius = 0.05; mass = 1.0; place = "random"; speed = 0
 output: { file = "box.h5"; every = 100; fields = ["position", "velocity"]; };
 DECK
 
-# Settling (SETTLE_STEPS in algo_predictive.c) holds the spheres that carry each other: all 12
+# Settling (SETTLE_STEPS, src/pred_settle.c) holds the spheres that carry each other: all 12
 # (11 in cells mode, where one slides on the floor, frictionless, for good) held, about 47000 to
 # 76000 collisions (before settling: 157511 in grid mode, 10 held, 10050 collisions in the last
 # 100 steps, for ever); the last collision before step 1200 in grid and all-pairs modes.

@@ -598,7 +598,7 @@ static void test_cells_without_a_box_region_grows_geometrically(void **state)
 
 /* A contact past half of what the best event so far leaves. Grid and cells modes solve a pair
  * only up to the time at which it could still beat, or tie with, the sphere's best event so
- * far (beat_cap in src/algo_predictive.c; the slow search that pairs accelerating differently
+ * far (beat_cap in src/pred_find.c; the slow search that pairs accelerating differently
  * take stops there). Here two spheres stacked on a vertical line, both from rest and flying
  * sideways alike at u towards a wall, fall with different accelerations (gB below, gA > gB
  * above), so the upper one catches the lower: their gap s closes as (gA - gB) t^2 / 2,
@@ -650,7 +650,7 @@ static void test_predictive_modes_find_a_contact_past_half_the_wall_time(void **
 
 /* A pair contact tied with a plane contact found before it. Grid and cells modes solve a pair
  * only up to the sphere's best event so far plus a margin of 16 ulps (beat_cap in
- * src/algo_predictive.c), so that a contact that rounds to the same time still ties; without
+ * src/pred_find.c), so that a contact that rounds to the same time still ties; without
  * the margin it is lost whenever its exact time lies above the double the two round to. The
  * times here are exact fractions. Two spheres, X and its mirror image Y across x = 0 (radius
  * 1/2, e = 1/2, TC model with tc = 1e-6), each 1/8 above the floor and falling at 3/16 with no

@@ -1,0 +1,593 @@
+/* run.neighbors = "cells": the predictive algorithm's side of the in-step event loop
+ * (evloop.h): the loop's callbacks (predict from a list, react, fly, wrap, save and restore
+ * for the team loop), the pair loop of a scene in free flight, and the steps (rebuilds, the
+ * loop on one thread or a team, the update). */
+#include "pred_impl.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* A scene without a box, cells mode: the region the cells cover around the centres' extent
+ * [lo, hi] (fit_lo, fit_hi), grown on each side by an eighth of the extent along that axis
+ * and at least two of the largest diameters. Spheres move between rebuilds, and one that
+ * leaves the region is clamped into its edge cells (correct, slower), so a step whose spheres
+ * have left it rebuilds (cells_outgrown): the eighth makes a region that has to follow a
+ * growing extent (a hopper's outflow, a gas that expands) grow geometrically, a few rebuilds
+ * in all; the two diameters keep a layer one sphere thick (no extent across it) from
+ * rebuilding each time a sphere hops off it. */
+static void fit_region(pred_ctx *c, nbep_vec3 lo, nbep_vec3 hi)
+{
+    const double floor_pad = 4.0 * c->rmax;
+    const nbep_vec3 pad = {fmax(floor_pad, 0.125 * (hi.x - lo.x)),
+                           fmax(floor_pad, 0.125 * (hi.y - lo.y)),
+                           fmax(floor_pad, 0.125 * (hi.z - lo.z))};
+    c->fit_lo = nbep_vec3_sub(lo, pad);
+    c->fit_hi = nbep_vec3_add(hi, pad);
+}
+
+/* Cells mode, after the event loop stopped in step `step`: 1 + the lowest sphere past
+ * run.max_reactions, read from the counts (each thread's own `jammed` may name a sphere of a
+ * team's speculative reaction that was undone), 0 for none. O(n), once, as the run fails. */
+static uint32_t cells_jammed(const pred_ctx *c, size_t n, uint64_t step)
+{
+    for (size_t i = 0; c->jam && i < n; i++)
+        if (c->jam[i].step == (uint32_t)step && c->jam[i].n > c->jam_max)
+            return (uint32_t)i + 1;
+    return 0;
+}
+
+/* Cells mode without a box, every thread before a rebuild, each thread's centres' bounds in its
+ * grid_lo, grid_hi (taken before the first step and at each step's end; a rebuild moves no
+ * sphere before this): the cells laid out afresh over the centres' extent (fit_region). False
+ * on every thread when out of memory (the run stops). */
+static bool cells_fit(nbep_sim *sim, pred_ctx *c, int tid, nbep_counters *cnt)
+{
+    nbep_barrier_wait(&c->bar);
+    if (tid == 0) {
+        nbep_vec3 lo, hi;
+        merged_bounds(c, &lo, &hi);
+        fit_region(c, lo, hi);
+        c->ev_failed = nbep_evloop_refit(c->ev, c->fit_lo, c->fit_hi, sim->diag) != NBEP_OK;
+        cnt->c[NBEP_COUNTER_REFITS]++;
+        if (c->ev_failed)
+            sim->status = NBEP_ENOMEM;
+    }
+    nbep_barrier_wait(&c->bar);
+    return !c->ev_failed;
+}
+
+/* Cells mode without a box, every thread after each thread has put its centres' bounds at the
+ * step's end in its grid_lo, grid_hi (and a barrier): whether some centre has left the region
+ * the cells cover. The same answer on every thread, for any thread count. */
+static bool cells_outgrown(const pred_ctx *c)
+{
+    nbep_vec3 lo, hi;
+    merged_bounds(c, &lo, &hi);
+    return lo.x < c->fit_lo.x || lo.y < c->fit_lo.y || lo.z < c->fit_lo.z ||
+           hi.x > c->fit_hi.x || hi.y > c->fit_hi.y || hi.z > c->fit_hi.z;
+}
+
+/* ---- run.neighbors = "cells": the algorithm's side of the event loop (evloop.h) ---------- */
+
+/* Every this many events of one step, time must have advanced by more than STALL_FRACTION of
+ * a step (as for rounds, STALL_ROUNDS): otherwise the loop is a cascade that does not resolve. */
+#define STALL_EVENTS 1000000u
+
+/* What the callbacks need: one per thread, T0 the current step's start. */
+typedef struct cells_user {
+    pred_ctx *c;
+    nbep_state *s;
+    const nbep_scene *sc;
+    double T0;
+    double t_local;           /* the current event's time in the step */
+    thread_ws *w;
+    nbep_counters *cnt;
+    nbep_thread_max *mx;
+} cells_user;
+
+static nbep_event cells_planes(void *u, uint32_t i)
+{
+    cells_user *x = u;
+    if (x->s->n_planes == 0) /* a periodic fluid: nothing to look at (cells mode has no image
+                              * horizons) */
+        return (nbep_event){.time = NBEP_NEVER, .kind = NBEP_EVENT_NONE};
+    return nbep__pred_predict_some(x->c, x->s, i, 0, 0, true, x->T0, x->w, x->cnt);
+}
+
+static void cells_pairs(void *u, uint32_t i, const uint32_t *js, size_t m, bool images,
+                        nbep_event *best)
+{
+    cells_user *x = u;
+    nbep__pred_keep_pairs(best, x->c, x->s, i, effective_acc(x->c, x->s, i), js, m, images,
+                          x->T0, x->w);
+    x->cnt->c[NBEP_COUNTER_PREDICTIONS] += m;
+}
+
+/* cells_pairs for a scene where nothing accelerates (c->free_flight: every acceleration zero,
+ * so no contact ever rests or holds and every sphere flies straight): the same pairs, positions
+ * and roots as keep_pairs, and the same winner as its keep_earlier, bit for bit (a drift
+ * with zero acceleration is p + v h exactly, and ffp-contract is off), with savings that matter
+ * in a dense fluid, where this loop is most of the run: no acceleration is loaded or applied;
+ * no image is looked for when none can be needed; the best so far is kept as a time and a
+ * partner, and only the winner's response count is read. Within one sphere's list partners are
+ * distinct, so the order keep_earlier applies reduces to (time, then sphere events before
+ * planes and horizons, then partner), which does not depend on the order pairs are tried in.
+ *
+ * Roots are the expensive part, and most are not needed: most closing pairs of a fluid pass
+ * each other, which nbep_predict_pair_quadratic_bound tells without a root (only where the root
+ * would say so too), and a closing pair's contact comes no earlier than that bound (strictly
+ * below the computed root) and no later than twice it. So the bounds of a batch of partners
+ * come first, then the root of the pair with the lowest bound, which sets a best that prunes
+ * most of the others (a pair is skipped only when its bound is strictly later than the best:
+ * the winner, ties included, is the one trying every pair would give). */
+#define PAIR_BATCH 32
+
+/* A closing pair of the batch: its partner's place in the list and its bound (from t0). */
+typedef struct pair_try {
+    double lb;
+    uint32_t k;
+} pair_try;
+
+/* The relative motion of sphere i (at pi, vi, local time ti) and partner j at the later of the
+ * two local times t0, j at its image when images; the pair's contact distance. */
+static inline void pair_motion(const pred_ctx *c, const nbep_state *s, uint32_t i, nbep_vec3 pi,
+                               nbep_vec3 vi, double ti, uint32_t j, bool images, nbep_vec3 *dp,
+                               nbep_vec3 *dv, double *t0, double *sigma)
+{
+    const double tj = c->tau[j];
+    *t0 = ti > tj ? ti : tj;
+    nbep_vec3 pj = s->pos[j];
+    if (images)
+        pj = nbep_vec3_add(pj, neighbour_shift(c, s, i, j));
+    const nbep_vec3 vj = s->vel[j];
+    if (ti < *t0)
+        pi = nbep_vec3_add(pi, nbep_vec3_scale(vi, *t0 - ti));
+    if (tj < *t0)
+        pj = nbep_vec3_add(pj, nbep_vec3_scale(vj, *t0 - tj));
+    *dp = nbep_vec3_sub(pj, pi);
+    *dv = nbep_vec3_sub(vj, vi);
+    *sigma = c->sigma_all > 0.0 ? c->sigma_all : s->radius[i] + s->radius[j];
+}
+
+/* A batch of partners' motion, gathered from the sphere arrays into arrays of their own (one
+ * per coordinate, 32-byte aligned, padded to whole vectors of four), so that the bounds run on
+ * four pairs at once without a gather or a shuffle: the partners are scattered over the sphere
+ * arrays, and computed straight from them the loop ran two pairs at a time, with half its
+ * instructions moving partners' coordinates into vectors and back to the stack (cachegrind,
+ * the N = 32000 fluid at phi = 0.50: 55 instructions a partner in its vector part, 73 to 102
+ * in its scalar remainder). */
+#define PAIR_LANES 4
+typedef struct pair_gathered {
+    alignas(32) double tj[PAIR_BATCH];
+    alignas(32) double px[PAIR_BATCH];
+    alignas(32) double py[PAIR_BATCH];
+    alignas(32) double pz[PAIR_BATCH];
+    alignas(32) double vx[PAIR_BATCH];
+    alignas(32) double vy[PAIR_BATCH];
+    alignas(32) double vz[PAIR_BATCH];
+    alignas(32) double rj[PAIR_BATCH];
+} pair_gathered;
+
+/* Partners js[0..m) (m <= PAIR_BATCH) into g, and the padding up to whole vectors: a partner at
+ * i's own place, time and motion (no relative motion: never closing, so its bound is +inf,
+ * and every figure of it finite; no caller reads a padding's bound). The count gathered,
+ * padding included. (The caller has requested every partner's lines first. This gather's
+ * loads could stand in for those requests, 9 instructions a partner, 5 % of a collision's at
+ * phi = 0.50, at the same time at N = 32000; but a load waits in the core until its line
+ * comes and a prefetch does not, and at N = 256000 on two threads, where the partners come
+ * from memory, runs without the requests measured 0.63 to 1.06 of the time with them, median
+ * 0.83, on a host too noisy to be sure: kept.) */
+static inline NBEP_ALWAYS_INLINE size_t pair_gather(const double *restrict tau,
+                                                    const nbep_vec3 *restrict pos,
+                                                    const nbep_vec3 *restrict vel,
+                                                    const double *restrict radius, bool mono,
+                                                    const uint32_t *restrict js, size_t m,
+                                                    nbep_vec3 pi, nbep_vec3 vi, double ti,
+                                                    double ri, pair_gathered *restrict g)
+{
+    size_t k = 0;
+    for (; k < m; k++) {
+        const uint32_t j = js[k];
+        g->tj[k] = tau[j];
+        g->px[k] = pos[j].x;
+        g->py[k] = pos[j].y;
+        g->pz[k] = pos[j].z;
+        g->vx[k] = vel[j].x;
+        g->vy[k] = vel[j].y;
+        g->vz[k] = vel[j].z;
+        g->rj[k] = mono ? ri : radius[j];
+    }
+    for (; k % PAIR_LANES != 0; k++) {
+        g->tj[k] = ti;
+        g->px[k] = pi.x;
+        g->py[k] = pi.y;
+        g->pz[k] = pi.z;
+        g->vx[k] = vi.x;
+        g->vy[k] = vi.y;
+        g->vz[k] = vi.z;
+        g->rj[k] = ri;
+    }
+    return k;
+}
+
+/* The bounds of the gathered partners g[0..m) (m a whole number of vectors) of sphere i (at pi,
+ * vi, local time ti, radius ri): for each, the bound (from the step's start) of a closing pair
+ * that may hit, +inf for one receding or certainly passing (nbep_predict_pair_quadratic_bound
+ * of the motion pair_motion gives: a drift by zero time is the position itself, a shift by no
+ * period the position itself), written without branches so that it runs on four pairs at
+ * once where the CPU has AVX2. pb: the periodic box when images may be needed, else NULL.
+ * Built in two copies (images or not), each free of what it does not need: most spheres are
+ * far from every periodic face. (A fluid of one radius takes ri + rj = ri + ri, the contact
+ * distance exactly, as pair_motion's sigma_all.) */
+static inline NBEP_ALWAYS_INLINE void pair_bounds_with(const pair_gathered *restrict g, size_t m,
+                                                       nbep_vec3 pi, nbep_vec3 vi, double ti,
+                                                       double ri, const nbep_periodic *pb,
+                                                       double *restrict out, const bool images)
+{
+    const double hx = images ? pb->half[0] : INFINITY, hy = images ? pb->half[1] : INFINITY,
+                 hz = images ? pb->half[2] : INFINITY;
+    const double lx = images ? pb->len[0] : 0.0, ly = images ? pb->len[1] : 0.0,
+                 lz = images ? pb->len[2] : 0.0;
+    for (size_t k = 0; k < m; k++) {
+        const double tj = g->tj[k];
+        const double t0 = ti > tj ? ti : tj;
+        const double hi = t0 - ti, hj = t0 - tj;
+        /* j's image nearest to i, from the stored positions, as neighbour_shift takes it */
+        const double sx0 = g->px[k] - pi.x, sy0 = g->py[k] - pi.y, sz0 = g->pz[k] - pi.z;
+        const double shx = sx0 > hx ? -lx : sx0 < -hx ? lx : 0.0;
+        const double shy = sy0 > hy ? -ly : sy0 < -hy ? ly : 0.0;
+        const double shz = sz0 > hz ? -lz : sz0 < -hz ? lz : 0.0;
+        const double dpx = ((g->px[k] + shx) + g->vx[k] * hj) - (pi.x + vi.x * hi);
+        const double dpy = ((g->py[k] + shy) + g->vy[k] * hj) - (pi.y + vi.y * hi);
+        const double dpz = ((g->pz[k] + shz) + g->vz[k] * hj) - (pi.z + vi.z * hi);
+        const double dvx = g->vx[k] - vi.x, dvy = g->vy[k] - vi.y, dvz = g->vz[k] - vi.z;
+        const double lb = nbep_predict_pair_quadratic_bound(
+            nbep_vec3_make(dpx, dpy, dpz), nbep_vec3_make(dvx, dvy, dvz), ri + g->rj[k]);
+        out[k] = lb < NBEP_NEVER ? t0 + lb : NBEP_NEVER;
+    }
+}
+
+/* pair_gather and pair_bounds_with's two copies are inlined into cells_pairs_free, which is
+ * built twice (AVX2 and default) as a whole: a call to a clone of its own through the resolver
+ * and its 13 arguments cost about 40 instructions, once per 11 partners (cachegrind, the
+ * N = 32000 fluid at phi = 0.50: 3 % of all instructions per collision together with the
+ * prefetch of every partner's version, which only the winner's read needs). */
+NBEP_AVX2_CLONES static void cells_pairs_free(void *u, uint32_t i, const uint32_t *js,
+                                              size_t m, bool images, nbep_event *best)
+{
+    cells_user *x = u;
+    const pred_ctx *c = x->c;
+    const nbep_state *s = x->s;
+    const double T0 = x->T0, ti = c->tau[i];
+    const nbep_vec3 pi = s->pos[i], vi = s->vel[i];
+    for (size_t k = 0; k < m; k++) { /* the partners' lines, all requested before any is used */
+        NBEP_PREFETCH(&c->tau[js[k]]);
+        NBEP_PREFETCH(&s->pos[js[k]]);
+        NBEP_PREFETCH(&s->vel[js[k]]);
+    } /* (not their versions: only the winner's is read, once, at the end) */
+    double best_t = best->kind == NBEP_EVENT_NONE ? NBEP_NEVER : best->time;
+    /* ties: a sphere event ranks by partner, before any plane or horizon */
+    uint32_t tie_j = best->kind == NBEP_EVENT_SPHERE ? best->partner : UINT32_MAX;
+    bool found = false;
+    pair_try tr[PAIR_BATCH];
+    alignas(32) double lbs[PAIR_BATCH];
+    pair_gathered g;
+    const double ri = s->radius[i];
+    for (size_t k0 = 0; k0 < m; k0 += PAIR_BATCH) {
+        const size_t k1 = m - k0 < PAIR_BATCH ? m : k0 + PAIR_BATCH;
+        size_t n = 0, first = 0;
+        const size_t m4 = pair_gather(c->tau, s->pos, s->vel, s->radius, c->sigma_all > 0.0,
+                                      js + k0, k1 - k0, pi, vi, ti, ri, &g);
+        if (images)
+            pair_bounds_with(&g, m4, pi, vi, ti, ri, &c->pb, lbs, true);
+        else
+            pair_bounds_with(&g, m4, pi, vi, ti, ri, NULL, lbs, false);
+        for (size_t k = k0; k < k1; k++) { /* the closing pairs that may hit */
+            if (!(lbs[k - k0] < INFINITY))
+                continue;
+            tr[n] = (pair_try){lbs[k - k0], (uint32_t)k};
+            if (tr[n].lb < tr[first].lb)
+                first = n;
+            n++;
+        }
+        for (size_t q = 0; q < n; q++) { /* roots: the lowest bound first, then what it leaves */
+            const pair_try *p = &tr[q == 0 ? first : q == first ? 0 : q];
+            if (T0 + p->lb > best_t)
+                continue;
+            const uint32_t j = js[p->k];
+            nbep_vec3 dp, dv;
+            double t0, sigma;
+            pair_motion(c, s, i, pi, vi, ti, j, images, &dp, &dv, &t0, &sigma);
+            const double t = T0 + (t0 + nbep_predict_pair_quadratic(dp, dv, sigma));
+            if (t < NBEP_NEVER && (t < best_t || (t == best_t && j < tie_j))) {
+                best_t = t;
+                tie_j = j;
+                found = true;
+            }
+        }
+    }
+    if (found)
+        *best = (nbep_event){best_t, tie_j, NBEP_EVENT_SPHERE, c->ver[i], c->ver[tie_j]};
+    x->cnt->c[NBEP_COUNTER_PREDICTIONS] += m;
+}
+
+static bool cells_fresh(void *u, uint32_t i, const nbep_event *ev)
+{
+    const cells_user *x = u;
+    return is_fresh(x->c, i, ev);
+}
+
+static void cells_let_go(void *u, uint32_t j)
+{
+    cells_user *x = u;
+    if (nbep__pred_held_on_changed(x->c, j))
+        nbep__pred_let_go(x->c, x->s, j, x->sc->dt, x->t_local, x->w);
+}
+
+/* One reaction, then, as let_go_phase does after a round that changed held spheres, the held
+ * spheres resting on a changed one let go: they touch it, so they are in its block; each that
+ * moves again is changed in turn (the list grows as the loop walks it). */
+static size_t cells_react(void *u, uint32_t i, const nbep_event *ev, const uint32_t **changed,
+                          bool *stop)
+{
+    cells_user *x = u;
+    thread_ws *w = x->w;
+    uint32_t lo, hi;
+    (void)event_key(i, ev, &lo, &hi);
+    w->n_fired = 0;
+    /* in cells mode only this callback fires spheres (counts reactions), and the loop stops
+     * at the first reaction that passes the limit, so the one thread starts every reaction
+     * from jammed = 0; a team thread does too, for its note must be its reaction's (a
+     * speculative one that passed the limit and was undone must not stop a later one) */
+    w->jammed = 0;
+    const uint64_t woken = w->woken;
+    x->t_local = ev->time - x->T0;
+    x->cnt->c[NBEP_COUNTER_REACTIONS]++;
+    nbep__pred_react(x->c, x->s, x->sc, ev->time, x->t_local, lo, hi, ev, w, x->cnt, x->mx);
+    if (w->woken != woken)
+        for (size_t k = 0; k < w->n_fired; k++)
+            nbep_evloop_visit_block(x->c->ev, w->fired[k], cells_let_go, x);
+    *stop = w->jammed != 0; /* run.max_reactions: the loop stops after this event */
+    *changed = w->fired;
+    return w->n_fired;
+}
+
+static void cells_flight(void *u, uint32_t i, double t, nbep_vec3 *p, nbep_vec3 *v,
+                         nbep_vec3 *a)
+{
+    const cells_user *x = u;
+    *p = x->s->pos[i];
+    *v = x->s->vel[i];
+    *a = effective_acc(x->c, x->s, i);
+    double h = t - x->T0 - x->c->tau[i];
+    if (h > 0.0)
+        nbep_physics_drift(p, v, *a, h);
+}
+
+/* Sphere i leaves its cell at absolute time t: when its centre is then outside the box on a
+ * periodic axis, it is brought to t and wrapped (image counted), so that its position stays
+ * in its cell (cells.h). */
+static void cells_wrap(void *u, uint32_t i, double t)
+{
+    const cells_user *x = u;
+    nbep_vec3 p, v, a;
+    cells_flight(u, i, t, &p, &v, &a);
+    int32_t img[3] = {0, 0, 0};
+    nbep_periodic_wrap(&x->c->pb, &p, img);
+    if (img[0] == 0 && img[1] == 0 && img[2] == 0)
+        return;
+    advance_to(x->c, x->s, i, t - x->T0);
+    nbep_periodic_wrap(&x->c->pb, &x->s->pos[i], &x->s->image[3 * (size_t)i]);
+}
+
+static void cells_save(void *u, uint32_t i, nbep_evloop_motion *m)
+{
+    const cells_user *x = u;
+    const pred_ctx *c = x->c;
+    *m = (nbep_evloop_motion){x->s->pos[i], x->s->vel[i], c->tau[i], c->ver[i],
+                              {x->s->image[3 * (size_t)i], x->s->image[3 * (size_t)i + 1],
+                               x->s->image[3 * (size_t)i + 2]},
+                              {0, 0}};
+    /* a dissipative free flight's reaction also moves the TC clock and the reaction count
+     * of its spheres (react, fire): nothing else of them (no rest, settle or cage records) */
+    _Static_assert(sizeof *c->t_last <= sizeof m->own[0] && sizeof *c->jam <= sizeof m->own[1],
+                   "a sphere's clock and count fit the engine's words");
+    if (c->t_last)
+        memcpy(&m->own[0], &c->t_last[i], sizeof *c->t_last);
+    if (c->jam)
+        memcpy(&m->own[1], &c->jam[i], sizeof *c->jam);
+}
+
+static void cells_prefetch(const void *u, uint32_t i)
+{
+    const cells_user *x = u;
+    NBEP_PREFETCH_W(&x->s->pos[i]);
+    NBEP_PREFETCH_W(&x->s->vel[i]);
+    NBEP_PREFETCH_W(&x->c->tau[i]);
+    NBEP_PREFETCH_W(&x->c->ver[i]);
+    NBEP_PREFETCH_W(&x->s->image[3 * (size_t)i]);
+}
+
+static void cells_restore(void *u, uint32_t i, const nbep_evloop_motion *m)
+{
+    const cells_user *x = u;
+    x->s->pos[i] = m->pos;
+    x->s->vel[i] = m->vel;
+    x->c->tau[i] = m->tau;
+    x->c->ver[i] = m->ver;
+    for (int k = 0; k < 3; k++)
+        x->s->image[3 * (size_t)i + (size_t)k] = m->image[k];
+    if (x->c->t_last)
+        memcpy(&x->c->t_last[i], &m->own[0], sizeof *x->c->t_last);
+    if (x->c->jam)
+        memcpy(&x->c->jam[i], &m->own[1], sizeof *x->c->jam);
+}
+
+/* A team context's counts and sums from zero, before it handles a place (on the thread that
+ * handles it). */
+static void cells_clear(void *uh)
+{
+    cells_user *h = uh;
+    for (int k = 0; k < NBEP_COUNTER_COUNT; k++)
+        h->cnt->c[k] = 0;
+    h->mx->overlap = h->mx->overlap_rel = 0.0;
+    nbep_xsum_clear(&h->mx->virial);
+    for (size_t p = 0; p < h->s->n_planes; p++)
+        nbep_xsum_clear(&h->mx->wall[p]);
+}
+
+/* The event of a team context (counted from zero in uh) added to the counts and sums of the
+ * thread that handled it (u) when it stands (the sums exact, so their total over the threads
+ * is the one thread's whoever handled what). */
+static void cells_merge(void *u, const void *uh)
+{
+    cells_user *x = u;
+    const cells_user *h = uh;
+    nbep_thread_max *a = x->mx;
+    const nbep_thread_max *b = h->mx;
+    for (int k = 0; k < NBEP_COUNTER_COUNT; k++)
+        x->cnt->c[k] += h->cnt->c[k];
+    nbep_xsum_merge(&a->virial, &b->virial);
+    a->overlap = fmax(a->overlap, b->overlap); /* both from 0, as note_overlap keeps them */
+    a->overlap_rel = fmax(a->overlap_rel, b->overlap_rel);
+    for (size_t p = 0; p < x->s->n_planes; p++)
+        nbep_xsum_merge(&a->wall[p], &b->wall[p]);
+}
+
+static const nbep_evloop_ops cells_ops = {cells_planes,  cells_pairs,   cells_fresh,
+                                          cells_react,   cells_flight,  cells_wrap,
+                                          cells_save,    cells_restore, cells_clear,
+                                          cells_merge,   cells_prefetch};
+static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, cells_fresh,
+                                               cells_react,  cells_flight,     cells_wrap,
+                                               cells_save,   cells_restore,    cells_clear,
+                                               cells_merge,  cells_prefetch};
+
+/* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's
+ * event loop, with threads 1.. in a team where the scene allows it (c->team, team_choose); all
+ * threads share the rebuilds, the update to the step's end and the energy.
+ * A rebuild (cells from positions, every slot predicted afresh: about the cost of n/2
+ * collisions) happens at the first step and after every step that writes a frame to a file in
+ * step with output.every, so that a run resumed from such a frame starts from exactly the state
+ * this run continues from (bit-for-bit resume): the cell membership and the moments at which
+ * slots were predicted depend on the run's history, the rebuild makes them depend only on the
+ * frame. */
+void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thread_ws *w)
+{
+    nbep_state *s = &sim->st;
+    const nbep_evloop_ops *ops = c->free_flight ? &cells_ops_free : &cells_ops;
+    bool rebuild = true;
+    if (c->refit) /* for the first rebuild's cells_fit; each step's end takes them again */
+        nbep_grid_bounds(s->pos, own.lo, own.hi, &w->grid_lo, &w->grid_hi);
+    for (uint64_t step = sim->step_first; step <= sim->step_end; step++) {
+        const int spar = (int)(step & 1);
+        cells_user u = {c, s, sim->scene, (double)(step - 1) * sim->dt, 0.0, w,
+                        &sim->counters[spar][tid], &sim->tmax[spar][tid]};
+        const double T_end = (double)step * sim->dt;
+        w->jam_step = (uint32_t)step;
+        if (rebuild) { /* every sphere sits at T0 (tau = 0) */
+            /* positions wrapped into a periodic box, as frames write them (output.c): the
+             * run continues from what a resumed one reads */
+            for (size_t i = own.lo; c->pb.any && i < own.hi; i++)
+                nbep_periodic_wrap(&c->pb, &s->pos[i], &s->image[3 * i]);
+            if (c->refit && !cells_fit(sim, c, tid, u.cnt))
+                return;
+            nbep_evloop_assign(c->ev, s->pos, own.lo, own.hi);
+            nbep_barrier_wait(&c->bar);
+            if (tid == 0)
+                nbep_evloop_link(c->ev);
+            nbep_barrier_wait(&c->bar);
+            nbep_evloop_count(c->ev, own.lo, own.hi);
+            nbep_barrier_wait(&c->bar);
+            if (tid == 0)
+                nbep_evloop_layout(c->ev);
+            nbep_barrier_wait(&c->bar);
+            nbep_evloop_predict(c->ev, ops, &u, own.lo, own.hi, u.T0);
+            u.cnt->c[NBEP_COUNTER_CHECKS] += own.hi - own.lo;
+            nbep_barrier_wait(&c->bar);
+            if (tid == 0) {
+                nbep_evloop_schedule(c->ev, u.T0);
+                if (step == sim->step_first) { /* SPEC: first predictions are set-up time */
+                    double now = nbep_now();
+                    sim->setup_seconds += now - sim->t_start;
+                    sim->t_start = sim->t_last_progress = now;
+                }
+            }
+            rebuild = false;
+        }
+        /* the team loop's contexts, one per ring slot of its places, on each thread of the
+         * team (with that thread's workspace), the counts and sums of a place apart, the
+         * thread's own */
+        cells_user ups[NBEP_EVLOOP_RING];
+        void *us[NBEP_EVLOOP_RING];
+        for (size_t m = 0; c->team && tid < c->team_size && m < NBEP_EVLOOP_RING; m++) {
+            const size_t h = (size_t)tid * NBEP_EVLOOP_RING + m;
+            ups[m] = (cells_user){c, s, sim->scene, u.T0, 0.0, w, &c->help_cnt[h], &c->help_mx[h]};
+            us[m] = &ups[m];
+        }
+        const int way = c->team_way[step & 1], crew = c->team_crew[way];
+        if (tid >= 1 && tid < crew)
+            nbep_evloop_help(c->ev, ops, &u, us, tid, step);
+        if (tid == 0) {
+            nbep_evloop_tally tally = {0};
+            double t_stuck = 0.0;
+            uint32_t jammed;
+            const double t_loop = nbep_now();
+            c->ev_failed =
+                !(crew > 1 ? nbep_evloop_run_lead(c->ev, ops, &u, us, crew, step, T_end,
+                                                  STALL_EVENTS, STALL_FRACTION * sim->dt,
+                                                  &tally, &t_stuck)
+                           : nbep_evloop_run(c->ev, ops, &u, T_end, STALL_EVENTS,
+                                             STALL_FRACTION * sim->dt, &tally, &t_stuck));
+            if (c->team)
+                nbep__pred_team_choose(c, step, way, tally.events, nbep_now() - t_loop);
+            u.cnt->c[NBEP_COUNTER_CHECKS] += tally.events;
+            u.cnt->c[NBEP_COUNTER_AHEAD] += tally.ahead;
+            u.cnt->c[NBEP_COUNTER_UNDONE] += tally.undone;
+            if (c->ev_failed && nbep_evloop_failed(c->ev)) {
+                nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                              "nbep: step %llu: no memory for the neighbour lists; stopping",
+                              (unsigned long long)step);
+                sim->status = NBEP_ENOMEM;
+            } else if (c->ev_failed && (jammed = cells_jammed(c, s->n, step)) != 0) {
+                nbep__pred_jam_fail(sim, step, jammed - 1, t_stuck);
+            } else if (c->ev_failed) {
+                nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                              "nbep: step %llu: events at t = %.17g do not resolve "
+                              "(endless zero-time reactions); stopping",
+                              (unsigned long long)step, t_stuck);
+                sim->status = NBEP_ENUMERIC;
+            }
+        }
+        nbep_barrier_wait(&c->bar);
+        if (c->ev_failed) /* written by thread 0 before the barrier */
+            return;
+        w->n_settle = 0;
+        for (size_t i = own.lo; i < own.hi; i++) { /* update: every sphere to the step's end */
+            double h = sim->dt - c->tau[i];
+            if (h > 0.0)
+                nbep_physics_drift(&s->pos[i], &s->vel[i], effective_acc(c, s, i), h);
+            c->tau[i] = 0.0;
+            if (c->settle)
+                w->n_settle += nbep__pred_settle_count(c, s, i, sim->dt);
+        }
+        if (c->refit)
+            nbep_grid_bounds(s->pos, own.lo, own.hi, &w->grid_lo, &w->grid_hi);
+        nbep__sim_block_energy(sim, own);
+        nbep__sim_frame_overlap(sim, step, tid, own, &c->bar);
+        nbep_barrier_wait(&c->bar);
+        /* spheres held by settling move no more: every slot is predicted again (a rebuild) */
+        const bool settled = nbep__pred_settle_phases(sim, c, own, w);
+        if (tid == 0)
+            nbep__sim_end_step(sim, step);
+        /* only frames written to a file can be resumed from (and, with settling or spheres
+         * that left the cells, the next step's rebuild follows from the state, so a resumed
+         * run takes it too) */
+        rebuild = settled || (c->refit && cells_outgrown(c)) ||
+                  (sim->opt.out && step % sim->scene->output_every == 0);
+        nbep_barrier_wait(&c->bar);
+        /* relaxed: the barrier above ordered thread 0's store of stop */
+        if (atomic_load_explicit(&sim->stop, memory_order_relaxed))
+            return;
+    }
+}

@@ -1,0 +1,417 @@
+/* The predictive algorithm's internals, shared by its files (STYLE: src/<module>_impl.h):
+ *   algo_predictive.c  the orchestration: set-up, the rounds of a step (find, claim, react,
+ *                      predict again) in all-pairs and grid modes, the update, resume;
+ *   pred_find.c        a sphere's earliest event: its pairs and planes (paper Procedure 9);
+ *   pred_react.c       a reaction (Procedure 8) and the lasting contacts it makes or ends:
+ *                      resting on planes, held spheres, cages, jams;
+ *   pred_settle.c      settling: spheres slow for SETTLE_STEPS steps held where they are;
+ *   pred_cells.c       cells mode: the algorithm's side of the in-step event loop (evloop.h);
+ *   pred_ways.c        how many threads run a step's events, measured step by step.
+ * The state they share is pred_ctx (one per run) and thread_ws (one per thread); the small
+ * helpers every one of them calls are inline here. */
+#ifndef NBEP_PRED_IMPL_H
+#define NBEP_PRED_IMPL_H
+
+#include <math.h>
+#include <stdalign.h>
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "nbep/barrier.h"
+#include "nbep/contact.h"
+#include "nbep/feq.h"
+#include "nbep/grid.h"
+#include "nbep/periodic.h"
+#include "nbep/physics.h"
+#include "nbep/predict.h"
+#include "evloop.h"
+#include "sim_impl.h"
+
+/* Every this many rounds of one step, time must have advanced by more than STALL_FRACTION of
+ * a step, or the run stops as a numerical failure: a step may hold any number of real events
+ * (a fast sphere between close walls: thousands), but a cascade that no longer advances time
+ * is a contact the model cannot resolve. */
+#define STALL_ROUNDS 100000u
+#define STALL_FRACTION 1e-12
+/* Sphere-sphere contacts that different accelerations press together (a sphere on one that
+ * rests on a floor, a pile) would bounce ever faster (inelastic collapse: infinitely many
+ * collisions in finite time) or, with e = 1, forever at a vanishing height. Such a pair leaves
+ * every response with at least the separating speed that keeps it apart for t_min: the smaller
+ * of MIN_BOUNCE_STEP_FRACTION of a step and the time a bounce of MIN_BOUNCE_REL_HEIGHT of the
+ * smaller radius takes (so the jitter stays far below the geometry at any dt). Between two free
+ * spheres the kick keeps momentum and adds at most mu (a t_min)^2 / 8 of energy (mu the reduced
+ * mass, a the pressing acceleration): about 6e-8 J for two 1 kg spheres under gravity at
+ * dt = 1e-3. When one of them rests on planes, the other takes the whole kick du and the planes
+ * the momentum, so it changes the energy by m (v.n) du + m du^2 / 2: either sign, and larger
+ * when the pair moves along n (measured on a 300-sphere pile at e = 0: 1492 kicks, 1408 of them
+ * removing energy, the largest adding 4.9e-5 J; README, granular). */
+#define MIN_BOUNCE_STEP_FRACTION 0.1
+#define MIN_BOUNCE_REL_HEIGHT 1e-6
+/* Settling (pred_settle.c): a sphere whose speed stayed at or below SETTLE_SPEED_FACTOR times
+ * its rest speed for SETTLE_STEPS whole steps is held where it is. */
+#define SETTLE_STEPS 10u
+#define SETTLE_SPEED_FACTOR 2.0
+
+/* One sphere's settling record (see SETTLE_STEPS): written by its owner, in the update and in
+ * the settle sub-phases; cand and still are the snapshot other threads read in settle_gather,
+ * live[] the one they read in settle_phases' rounds (the round before's parity). */
+typedef struct settle_rec {
+    double peak2;     /* highest speed squared in the current step so far */
+    uint32_t slow;    /* whole steps in a row at or below the settle speed (up to SETTLE_STEPS) */
+    bool cand;        /* at the last step's end: not held, slow for SETTLE_STEPS steps */
+    bool still;       /* at the last step's end: held */
+    bool held_now;    /* held by settle_phases this step (its supports' counts not yet stamped) */
+    bool more;        /* a candidate touched more supports than sup holds (the least nearly
+                       * below were left out) */
+    bool live[2];     /* a candidate still has supports after settle_phases' round k (written
+                       * at k's parity, read by all at the next round) */
+    uint8_t n_sup;
+    int32_t sup[NBEP_CONTACT_MAX]; /* a candidate's supports as gathered (rest_set's who) */
+} settle_rec;
+
+#define KEY_FREE UINT64_MAX
+static const nbep_vec3 ZERO3 = {0.0, 0.0, 0.0};
+
+typedef struct thread_ws {
+    alignas(NBEP_CACHELINE) uint32_t *cand;  /* owned: own spheres with an event before T_end */
+    size_t n_cand;
+    uint32_t *redo;           /* owned: own spheres to re-predict this round */
+    size_t n_redo;
+    int par;                  /* rounds modes: the parity of the round being reacted to (its
+                               * claims name the spheres other threads may change) */
+    uint32_t *fired;          /* owned: spheres that reacted in this thread's last react phase
+                               * (and own spheres let go after it) */
+    size_t n_fired;
+    uint32_t *rel;            /* owned: own held spheres to let go this round */
+    size_t n_rel;
+    uint64_t woken;           /* held spheres this thread changed so far (react, let_go) */
+    size_t n_settle;          /* own settle candidates at the last step's end (settle_count) */
+    size_t n_settled;         /* own spheres settle_phases held in the last step */
+    size_t n_live[2], n_lost[2]; /* own candidates with supports after settle_phases' round k,
+                                  * and those that lost their last in it (k's parity) */
+    uint32_t jam_step;        /* the current step's number, low bits (run.max_reactions) */
+    uint32_t jammed;          /* 1 + the lowest sphere this thread saw past run.max_reactions
+                               * (the run then stops), 0 if none */
+    uint32_t *claimed;        /* owned: claim words written in the last claim phase */
+    size_t n_claimed;
+    uint32_t *tclaimed;       /* owned, run.order = "step": time claim words written in the
+                               * last claim_time_phase */
+    size_t n_tclaimed;
+    nbep_event *part;         /* owned: best event over this thread's partners, per chunk entry */
+    double t_min;             /* earliest candidate time this round, +inf if none */
+    double vmax_react;        /* grid mode: fastest sphere after this thread's reactions in
+                               * the current step */
+    double vmax_end, amax_end; /* grid mode: fastest own sphere and largest own acceleration
+                               * at the end of the last step (read by grid_prepare) */
+    nbep_vec3 grid_lo, grid_hi; /* grid mode: bounds of own centres at the step's start;
+                                 * cells mode without a box: at a rebuild or a step's end */
+    size_t grid_sum;          /* grid mode: spheres in own cells (the build's prefix sum) */
+    nbep_predict_ws *pws;     /* owned: quartic workspace */
+} thread_ws;
+/* The lasting contacts of one sphere: planes (who >= 0) and held spheres (who = -1 - j, with
+ * the support's response count when it took the load; a later response lets go). */
+typedef struct rest_set {
+    int32_t who[NBEP_CONTACT_MAX];
+    uint64_t ver[NBEP_CONTACT_MAX];
+    uint8_t n;
+    bool still;       /* held still: v = 0 and aeff = 0 exactly */
+} rest_set;
+
+/* A sphere's meeting with an immobile face (a plane p: who = p, or a held sphere j:
+ * who = -1 - j): when, the face's normal towards the sphere and the sphere's centre then
+ * (t = -inf: none). */
+typedef struct face_met {
+    double t;
+    nbep_vec3 n, p;
+    int32_t who;
+} face_met;
+/* Faces remembered per sphere, newest first (caged): with the face met now, as many as a
+ * contact set holds. Two opposite faces make a slot; a sphere on a floor between two held
+ * neighbours, one beside it and one above, is in a three-face channel, whose faces taken two
+ * at a time each leave it a velocity of round-off size heading into the third (measured: a
+ * million zero-time reactions in one step of a 300-sphere pour, seed 3, step 618). */
+#define CAGE_FACES (NBEP_CONTACT_MAX - 1)
+
+/* A sphere's reactions in the step `step` (low bits; zeroed memory: none, steps start at 1). */
+typedef struct jam_count {
+    uint32_t step, n;
+} jam_count;
+
+typedef struct pred_ctx {
+    nbep_barrier bar;
+    nbep_feq *q;                  /* owned */
+    uint64_t *ver;                /* owned: responses per sphere; older predictions are stale */
+    double *tau;                  /* owned: local time of each sphere inside the step */
+    const nbep_state *st;         /* borrowed: the run's state (pred_import) */
+    /* model only what the scene needs: rest and aeff are NULL when no sphere accelerates
+     * (free_flight: no contact can rest or hold, every sphere flies with a = 0), t_last when
+     * the TC model cannot change a restitution (e = 1 or tc = 0) */
+    rest_set *rest;               /* owned: the contacts holding each sphere */
+    nbep_vec3 *aeff;              /* owned: acceleration each sphere flies with (rest_solve) */
+    double *t_last;               /* owned: time of each sphere's last sphere collision (TC) */
+    face_met *face;               /* owned with t_last when something accelerates: each
+                                   * sphere's last meeting with an immobile face (caged) */
+    settle_rec *settle;           /* owned when something accelerates and e < 1 (SETTLE_STEPS) */
+    /* run.max_reactions (jam_max): each sphere's reactions in one step (NULL for an elastic
+     * scene without accelerations: free flight at e = 1 cannot jam) */
+    jam_count *jam;
+    uint32_t jam_max;
+    uint8_t *flags;               /* owned: IN_CAND | IN_REDO */
+    _Atomic uint64_t *claim[2];   /* owned: smallest pair key claiming a sphere, by round parity */
+    /* run.order = "step" (the paper's step, approximate): every candidate reacts that is the
+     * earliest of both its spheres, not only those at the round's earliest time */
+    bool order_step;
+    _Atomic uint64_t *tclaim;     /* owned, step order only: earliest event time claiming a
+                                   * sphere this round (time_word) */
+    _Atomic uint64_t *reacted;    /* owned: round stamp of a sphere's last reaction */
+    thread_ws *ws;                /* owned, one per thread */
+    int nt;
+    bool imported;                /* slots came from a resumed run: no initial predictions */
+    /* run.neighbors = "grid" (beyond the paper): a re-prediction tests only the spheres that
+     * can reach it before a horizon; see grid_prepare */
+    bool use_grid;
+    nbep_grid grid;               /* owned: centres at the step's start */
+    double rmax;                  /* largest radius */
+    double vmax, amax;            /* fastest sphere and largest acceleration at the step's start */
+    double horizon;               /* H: absolute time up to which this step's predictions look */
+    /* run.neighbors = "cells" (beyond the paper): the in-step event loop (evloop.h) */
+    nbep_evloop *ev;              /* owned, NULL in the other modes */
+    /* a scene without a box: the cells cover the spheres' extent at each rebuild, grown on
+     * each side (fit_region), and a step whose spheres have left that region rebuilds
+     * (cells_fit, cells_outgrown) */
+    bool refit;
+    nbep_vec3 fit_lo, fit_hi;     /* the region the cells cover now */
+    nbep_periodic pb;             /* the box's periodic axes (scene.c: cells and all-pairs) */
+    /* all-pairs mode in a periodic box: partners are compared at their nearest image, which
+     * stays the touching one while no sphere strays farther than image_reach from where it
+     * was last predicted (periodic.h); an image-horizon event re-predicts it there */
+    bool image_horizon;
+    double image_reach;
+    bool ev_failed;               /* thread 0: the loop stalled this step */
+    bool free_flight;             /* no sphere accelerates: straight flight, nothing rests */
+    double sigma_all;             /* every pair's contact distance when all radii are equal,
+                                   * else 0 (the pair loop then looks each radius up) */
+    double mass_all;              /* every sphere's mass when all are equal, else 0 (masses
+                                   * are positive): a pair's reaction then reads no mass,
+                                   * two misses fewer in a large fluid */
+    /* cells mode on two threads or more, in a scene whose reactions change only their own two
+     * spheres (free flight, any e): threads 1 to team_size - 1 handle events ahead of
+     * thread 0's (nbep_evloop_run_lead), counting them apart until they stand (cells_merge) */
+    bool team;
+    int team_size;  /* the threads that may run the event loop: the run's, at most
+                     * NBEP_EVLOOP_TEAM_MAX, or NBEP_TEAM's count */
+    /* the ways a step's events may run (team_crew: the threads of each, 1 for the one-thread
+     * loop, 2 for a pair, team_size for the whole team when that is more), and the way of
+     * each step, by the step's parity: step k reads team_way[k & 1], which thread 0 wrote
+     * during step k - 1 (team_choose), whose end every thread crossed, and which no one writes
+     * during step k; and the measured seconds per event of each way (0: none yet) */
+    int team_ways;
+    int team_crew[3];
+    int team_way[2];
+    double team_cost[3];
+    int team_force; /* NBEP_TEAM, read once (team_forced) */
+    /* grid mode on two threads or more: a step's rounds run on the crew team_crew[team_way[step
+     * & 1]] (threads 0 .. crew - 1, each with its own share of the spheres for that crew),
+     * chosen by team_choose as the cells mode's team is, with the barrier of its size; the
+     * other threads wait for the rounds at bar. A crowded scene's rounds are short (a settling
+     * pile: about one event each, behind four barriers), and a crew of 16 ran a pour 1.4 times
+     * as long as one thread on a 16-core node; the paper's box gains from every thread. The
+     * results are the same bit for bit whatever the crew: every round's outcome is (tests). */
+    bool crews;
+    nbep_barrier crew_bar[3];
+    /* thread 0, where the crew is smaller than the run's threads, for the others after the
+     * barrier that ends the rounds: whether the rounds stopped the run */
+    bool crew_quit;
+    int crew_last;  /* thread 0's: the way of the step before (-1: none yet) */
+    uint64_t rounds_before; /* thread 0's: the rounds of the steps before this one */
+    uint64_t seen_before;   /* thread 0's: seen_woken where the step before's rounds ended */
+    nbep_counters *help_cnt;      /* owned when team, team_size NBEP_EVLOOP_RING: each place's
+                                   * event's counts (the team loop's ring of places, evloop.h),
+                                   * thread t's at t NBEP_EVLOOP_RING + ring slot (each written
+                                   * by the thread that handles the place: it stays on its
+                                   * core) */
+    nbep_thread_max *help_mx;     /* owned when team, the same: their sums (wall: one buffer) */
+    nbep_xsum *help_wall;         /* owned when team: team_size NBEP_EVLOOP_RING rows of
+                                   * n_planes */
+} pred_ctx;
+static inline bool is_zero(nbep_vec3 v)
+{
+    return v.x == 0.0 && v.y == 0.0 && v.z == 0.0;
+}
+
+/* The acceleration sphere i flies with: its own, less the part its contacts carry. */
+static inline nbep_vec3 effective_acc(const pred_ctx *c, const nbep_state *s, size_t i)
+{
+    (void)s;
+    return c->aeff ? c->aeff[i] : ZERO3;
+}
+
+/* The separation from sphere a to sphere b, by the minimum image in a periodic box (a pair in
+ * contact is closer than half a period, so this is the image that touches; stored positions
+ * are never more than a period apart, so the comparing form serves). */
+static inline nbep_vec3 sep(const pred_ctx *c, const nbep_state *s, size_t a, size_t b)
+{
+    nbep_vec3 d = nbep_vec3_sub(s->pos[b], s->pos[a]);
+    return c->pb.any ? nbep_periodic_near_image(&c->pb, d) : d;
+}
+
+/* The minimum bounce's time (MIN_BOUNCE_STEP_FRACTION) for radius r pressed by an acceleration
+ * of magnitude a > 0. */
+static inline double min_bounce_time(double r, double a, double dt)
+{
+    return fmin(MIN_BOUNCE_STEP_FRACTION * dt, sqrt(8.0 * MIN_BOUNCE_REL_HEIGHT * r / a));
+}
+
+/* The rest speed of sphere i pressed by an acceleration of magnitude amag (see "Lasting
+ * sphere-sphere contacts"): amag t_min, twice the speed the minimum bounce leaves with, the
+ * speed it comes back at. 0 when nothing presses. */
+static inline double rest_speed(const nbep_state *s, size_t i, double amag, double dt)
+{
+    return amag > 0.0 ? amag * min_bounce_time(s->radius[i], amag, dt) : 0.0;
+}
+
+static inline bool rest_has_plane(const rest_set *r, size_t p)
+{
+    for (int k = 0; k < r->n; k++)
+        if (r->who[k] == (int32_t)p)
+            return true;
+    return false;
+}
+
+static inline bool is_fresh(const pred_ctx *c, size_t i, const nbep_event *ev)
+{
+    if (ev->kind == NBEP_EVENT_NONE || ev->ver_self != c->ver[i])
+        return false;
+    return ev->kind != NBEP_EVENT_SPHERE || ev->ver_partner == c->ver[ev->partner];
+}
+
+static inline void keep_earlier(nbep_event *best, nbep_event e)
+{
+    if (e.time < NBEP_NEVER && (best->kind == NBEP_EVENT_NONE || nbep_feq_event_before(&e, best)))
+        *best = e;
+}
+
+/* Where neighbour j is compared with sphere i: at its image nearest to i in a periodic box
+ * (the shift to add to its position), at itself otherwise. */
+static inline nbep_vec3 neighbour_shift(const pred_ctx *c, const nbep_state *s, size_t i,
+                                        size_t j)
+{
+    return nbep_periodic_near_shift(&c->pb, nbep_vec3_sub(s->pos[j], s->pos[i]));
+}
+
+/* The bounds of every thread's centres (each thread's grid_lo and grid_hi), in *lo and *hi:
+ * min and max are exact, so the result is the same for any thread count. */
+static inline void merged_bounds(const pred_ctx *c, nbep_vec3 *lo, nbep_vec3 *hi)
+{
+    nbep_vec3 l = c->ws[0].grid_lo, h = c->ws[0].grid_hi;
+    for (int t = 1; t < c->nt; t++) {
+        const thread_ws *u = &c->ws[t];
+        l = nbep_vec3_make(fmin(l.x, u->grid_lo.x), fmin(l.y, u->grid_lo.y),
+                           fmin(l.z, u->grid_lo.z));
+        h = nbep_vec3_make(fmax(h.x, u->grid_hi.x), fmax(h.y, u->grid_hi.y),
+                           fmax(h.z, u->grid_hi.z));
+    }
+    *lo = l;
+    *hi = h;
+}
+
+/* The ordering key of an event: lower sphere in the high half, then the partner; planes
+ * (stored as UINT32_MAX - plane) after every sphere, and an image horizon after the planes.
+ * Equal for both copies of one pair. */
+static inline uint64_t event_key(size_t i, const nbep_event *ev, uint32_t *lo, uint32_t *hi)
+{
+    if (ev->kind != NBEP_EVENT_SPHERE) {
+        *lo = (uint32_t)i;
+        *hi = UINT32_MAX - ev->partner;
+    } else {
+        *lo = (uint32_t)(i < ev->partner ? i : ev->partner);
+        *hi = (uint32_t)(i < ev->partner ? ev->partner : i);
+    }
+    return (uint64_t)*lo << 32 | *hi;
+}
+
+/* Sphere i's speed now counts towards its step's highest (SETTLE_STEPS). */
+static inline void settle_note(pred_ctx *c, const nbep_state *s, size_t i)
+{
+    if (c->settle)
+        c->settle[i].peak2 = fmax(c->settle[i].peak2, nbep_vec3_norm2(s->vel[i]));
+}
+
+static inline void advance_to(pred_ctx *c, nbep_state *s, size_t i, double t_local)
+{
+    double h = t_local - c->tau[i];
+    if (h > 0.0)
+        nbep_physics_drift(&s->pos[i], &s->vel[i], effective_acc(c, s, i), h);
+    c->tau[i] = t_local;
+    settle_note(c, s, i);
+}
+
+/* Sphere i's settle speed: SETTLE_SPEED_FACTOR times its rest speed. */
+static inline double settle_speed(const nbep_state *s, size_t i, double dt)
+{
+    return SETTLE_SPEED_FACTOR * rest_speed(s, i, nbep_vec3_norm(s->acc[i]), dt);
+}
+
+
+/* ---- pred_find.c: a sphere's earliest event ----------------------------------------------- */
+
+/* keep_earlier of sphere i (flying with ai) and each of its partners js[0..m), j at its nearest
+ * image when images; T0 the step's start. */
+void nbep__pred_keep_pairs(nbep_event *best, const pred_ctx *c, const nbep_state *s, uint32_t i,
+                           nbep_vec3 ai, const uint32_t *js, size_t m, bool images, double T0,
+                           thread_ws *w);
+/* Paper Procedure 9, one thread's share: sphere i's earliest event with spheres [lo, hi) and,
+ * when with_planes, every plane. */
+nbep_event nbep__pred_predict_some(const pred_ctx *c, const nbep_state *s, size_t i, size_t lo,
+                                   size_t hi, bool with_planes, double T0, thread_ws *w,
+                                   nbep_counters *cnt);
+/* Grid mode: sphere i's earliest event before the horizon, or the horizon. */
+nbep_event nbep__pred_predict_grid(const pred_ctx *c, const nbep_state *s, size_t i, double T0,
+                                   double V, thread_ws *w, nbep_counters *cnt);
+
+/* ---- pred_react.c: a reaction and the lasting contacts ------------------------------------ */
+
+/* Solves sphere i's contacts r with velocity *v (writes the acceleration left in *a); returns
+ * whether they hold it still. */
+bool nbep__pred_rest_solve(const pred_ctx *c, const nbep_state *s, size_t i, rest_set *r,
+                           nbep_vec3 *v, nbep_vec3 *a, double dt, bool tangent);
+/* The reaction to event ev of spheres lo and hi (hi: UINT32_MAX - plane for a plane) at
+ * absolute time t_abs, t_local into the step; the spheres it changed in w->fired. */
+void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs,
+                      double t_local, uint32_t lo, uint32_t hi, const nbep_event *ev,
+                      thread_ws *w, nbep_counters *cnt, nbep_thread_max *mx);
+/* Sphere i is held and a sphere it rests on has reacted since it took the load. */
+bool nbep__pred_held_on_changed(const pred_ctx *c, size_t i);
+/* Held sphere i lets go of the supports that reacted, at local time t_local. */
+void nbep__pred_let_go(pred_ctx *c, nbep_state *s, size_t i, double dt, double t_local,
+                       thread_ws *w);
+/* run.max_reactions: sphere i reacted too often in step `step`, at about time t; the run
+ * stops. */
+void nbep__pred_jam_fail(nbep_sim *sim, uint64_t step, size_t i, double t);
+
+/* ---- pred_settle.c: settling -------------------------------------------------------------- */
+
+/* The update, own sphere i at the step's end: whether it is a candidate to settle. */
+bool nbep__pred_settle_count(pred_ctx *c, const nbep_state *s, size_t i, double dt);
+/* Every thread at a step's end: holds the candidates whose supports end up held; whether any
+ * sphere was held. */
+bool nbep__pred_settle_phases(nbep_sim *sim, pred_ctx *c, nbep_range own, thread_ws *w);
+
+/* ---- pred_cells.c: cells mode ------------------------------------------------------------- */
+
+/* The steps of cells mode, every thread, inside pred_run's parallel region. */
+void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thread_ws *w);
+
+/* ---- pred_ways.c: the threads of a step's events ------------------------------------------ */
+
+/* NBEP_TEAM, read from the environment: 1 always, -1 never, k >= 2 a team of k, or
+ * -2 to cycle (pred_ways.c); 0 for the fastest way. */
+int nbep__pred_team_forced(void);
+/* Thread 0, after cells mode's step `step` ran its events way `way`: the next step's way. */
+void nbep__pred_team_choose(pred_ctx *c, uint64_t step, int way, uint64_t events,
+                            double seconds);
+/* Thread 0, after grid mode's step `step` ran way `way` in `seconds`: the next step's way. */
+void nbep__pred_crew_choose(pred_ctx *c, uint64_t step, int way, double seconds);
+
+#endif

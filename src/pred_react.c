@@ -1,0 +1,714 @@
+/* A reaction (paper Procedure 8, and beyond it): the response to a sphere or plane contact,
+ * and the lasting contacts a reaction makes or ends when something accelerates: resting on
+ * planes, spheres held still on what carries them, cages, jams, the minimum bounce and the TC
+ * model. Every mode reacts here (the rounds' react_phase, cells mode's cells_react). */
+#include "pred_impl.h"
+
+#include <float.h>
+#include <string.h>
+
+/* A bounce whose flight would last less than this fraction of a step ends in resting contact:
+ * with restitution e the remaining bounces take 2 v/|a| / (1 - e) in all, so below this the
+ * sphere is indistinguishable from resting at the step's resolution, and the kinetic energy
+ * removed, m (a t/2)^2 / 2 with t = 1e-9 dt, is far below round-off of the total. */
+#define NBEP_REST_FRACTION 1e-9
+/* Lasting sphere-sphere contacts (issue 9). A sphere whose contacts (planes, and spheres that
+ * are themselves held still) leave it no acceleration is "held still": velocity and effective
+ * acceleration exactly zero, so it costs no events and can carry others in turn; a settled
+ * pile is a network of held spheres on planes.
+ *
+ * The rest speed (rest_speed) sets what is slow enough to hold: |a| t_min, twice the separating
+ * speed of the minimum bounce above (9.8e-4 m/s under gravity at dt = 1e-3). A pressed pair
+ * leaves every response at least that fast, so any lasting contact the model does not hold
+ * jitters at that speed for ever; a hold threshold below it (1e-3 |a| dt, before) is never met
+ * in a crowd: a 300-sphere pour had no sphere held at all after 0.8 s, and every jittering
+ * impact on a held sphere knocked it loose again. So a supported sphere slower than the rest
+ * speed is held when a partner meets it; a sphere that meets a held one no faster than the
+ * rest speed (along the line of centres, and in all) joins it if the contacts it then has
+ * (its planes, that sphere, and the other held spheres it touches: a pocket, pocket_gather)
+ * leave it no motion, else bounces off it as off a wall (the held sphere, carried by the pile,
+ * takes no momentum); a faster impact is an ordinary response and wakes what the held sphere
+ * carried, unless the pile carries it (carried, below). The kinetic energy removed by
+ * holding, at most m (rest speed)^2 / 2 per hold (4.8e-7 J for 1 kg under gravity at
+ * dt = 1e-3), is the model's, besides restitution. A held
+ * sphere is let go (time-ordered, at the instant its support changed) as soon as any of its
+ * supports reacts. */
+/* Jams (run.max_reactions). A sphere that reacts more than run.max_reactions times within one
+ * step is jammed: pressed between walls and neighbours that the contact model cannot hold
+ * still (README, granular: a wedge), it would collide ever faster while time crawls on (1e-9 s
+ * per event is typical), so the step never ends and the job's SIGTERM, read between steps, is
+ * never seen. The run stops as a numerical failure instead, its frames intact. A real scene
+ * stays far below the default of 1e6: a sphere collides about once per mean free time, so that
+ * would be a step of a million mean free times (a fast sphere bouncing between walls close
+ * together: thousands; the busiest sphere of the hopper and pile decks: 200 to 2000).
+ * Counting costs 8 bytes a sphere (jam_count), not spent on elastic free flight, which cannot
+ * jam. The limit is kept below UINT32_MAX, so a count never wraps before it trips. */
+/* A sphere that has reacted this many times in one step is held where it is when it next
+ * meets a held sphere slowly (along the line of centres no faster than the rest speed:
+ * land_on_held; jam_hold), or any sphere while its planes carry it (react: a row of spheres
+ * that fits a box exactly, a Newton's cradle without gaps). Bounced between a held sphere and
+ * a face across from it (a slot a diameter wide between a wall and a held sphere a hair lower
+ * than it, so that its weight
+ * presses it on that sphere's curve as it slides along the slot), a sphere re-meets the held
+ * one 1e-10 to 1e-12 s after each minimum bounce (the cage takes the bounce back), a million
+ * times before the step ends (a 300-sphere pour, seed 1, steps 892 and 898, sliding at 1.3
+ * and 3.9 mm/s). The model holds spheres still on sphere supports but has no sliding contact
+ * with one, and no geometry rule covers every such wedge; ten thousand reactions in a step is
+ * far above any motion it resolves (the busiest sphere of the hopper and pile decks reacts 200
+ * to 2000 times in a step). Energy: the sphere's kinetic energy at the hold, the model's,
+ * besides restitution (1/2 m (3.9 mm/s)^2 = 7.6e-6 J per kg in the case measured). */
+#define JAM_HOLD ((uint32_t)NBEP_JAM_HOLD) /* nbep/scene.h: --help-deck names it */
+/* Impacts the pile carries (carried). A free sphere k meeting held sphere j faster than the rest
+ * speed woke j (an ordinary response), and through let_go everything j carried. In a pile
+ * whose upper layers still move at millimetres to centimetres a second, every such touch woke
+ * part of it: the 2000-sphere deck run on from 2.5 s (median speed 1.6 mm/s, 99th percentile
+ * 2 cm/s) held 801 spheres at 2.9 s and 259 at 3.1 s, each cascade letting spheres fall and
+ * slide into the next, and did not settle. So held j stays put when k's push on it (along
+ * the line of centres, from k to j) points into the cone of the faces that hold it -- its own
+ * contacts, and the other held spheres and the planes it touches to within settle_gather's reach,
+ * all immobile, as for a sphere that lands on j (land_on_held) -- and k closes no faster than
+ * the speed of a fall from physics.carry_drop of j's radius, sqrt(2 |a| carry_drop r): 7.7 cm/s
+ * for the pile deck's 3 cm spheres under g at the default, NBEP_CARRY_DROP = 0.01. That is
+ * above the agitation of a settling pile (the deck's fastest sphere at 2.5 s: 5 cm/s) and far
+ * below what a pour brings (a sphere falling one diameter onto it: 1.1 m/s). k then bounces
+ * off j as off a wall (land_on_held: restitution, and the TC model); the momentum, at most
+ * m (1 + e) times that speed, goes to the pile, as to a plane, and no energy does (j does not
+ * move). A push j's faces cannot take (from the side of a sphere alone on a floor, from below)
+ * or a faster one is an ordinary response, which wakes j. carry_drop = 0 turns the rule off. */
+/* A cage's second face comes at zero time: the sphere has not moved off the first one. One
+ * that has moved off it along its normal by more than this fraction of its radius had room to
+ * bounce (a channel a little wider than the sphere): no cage. */
+#define CAGE_TOUCH_REL 1e-9
+/* A sphere whose contacts carry its whole weight (it may still slide): a slow partner treats it
+ * as part of the support. */
+static bool supported(const pred_ctx *c, size_t i)
+{
+    return c->rest && c->rest[i].n > 0 && is_zero(c->aeff[i]);
+}
+
+/* Whether r (a held sphere's contacts) names sphere k among its supports. */
+static bool rest_has_sphere(const rest_set *r, size_t k)
+{
+    for (int q = 0; q < r->n; q++)
+        if (r->who[q] == -1 - (int32_t)k)
+            return true;
+    return false;
+}
+
+/* Unit normals of the contacts of r, from support to sphere i. */
+static void rest_normals(const pred_ctx *c, const nbep_state *s, size_t i, const rest_set *r,
+                         nbep_vec3 *n)
+{
+    for (int k = 0; k < r->n; k++) {
+        if (r->who[k] >= 0) {
+            n[k] = s->plane_normal[r->who[k]];
+        } else {
+            nbep_vec3 d = sep(c, s, (size_t)(-1 - r->who[k]), i);
+            double len = nbep_vec3_norm(d);
+            n[k] = nbep_vec3_make(d.x / len, d.y / len, d.z / len);
+        }
+    }
+}
+
+/* Sphere contacts hold a sphere still when they leave it at most this fraction of its
+ * acceleration. A sphere contact is taken on within a gap (the pocket and settling
+ * tolerances: at most 8 MIN_BOUNCE_REL_HEIGHT of the radius, twice the highest hop of a
+ * minimum bounce), so its normal is known to about 4 MIN_BOUNCE_REL_HEIGHT radians only; what
+ * is left below that is a slope the geometry does not resolve (measured: a sphere in the
+ * groove between two held floor spheres, another held one above it, a wall at its end; the
+ * groove tilted 3e-7 by where the spheres had settled, and the sphere, not held, bounced a
+ * million times in one step between the groove and the sphere above, a 300-sphere pour, seed
+ * 3, step 1429). Planes are exact: on planes alone the tolerance is NBEP_CONTACT_TOL. */
+#define HOLD_SLOPE MIN_BOUNCE_REL_HEIGHT
+
+/* Solves the contacts r of sphere i with velocity *v: keeps the contacts that carry load,
+ * writes the acceleration left (*a) and, when tangent, removes v's components along them.
+ * A sphere contact is only valid while the sphere is held still (a tangent plane would let
+ * it float off a curved support); if the result is not still, sphere contacts are dropped
+ * and the planes solved alone. Returns the still flag. */
+bool nbep__pred_rest_solve(const pred_ctx *c, const nbep_state *s, size_t i, rest_set *r,
+                           nbep_vec3 *v, nbep_vec3 *a, double dt, bool tangent)
+{
+    nbep_vec3 n[NBEP_CONTACT_MAX];
+    for (int pass = 0; pass < 2; pass++) {
+        rest_normals(c, s, i, r, n);
+        unsigned act;
+        *a = nbep_contact_project(s->acc[i], n, r->n, &act);
+        if (tangent)
+            *v = nbep_contact_tangent(*v, n, r->n, act);
+        rest_set k = {.n = 0};
+        bool spheres = false;
+        for (int j = 0; j < r->n; j++)
+            if (act >> j & 1u) {
+                k.who[k.n] = r->who[j];
+                k.ver[k.n++] = r->ver[j];
+                spheres |= r->who[j] < 0;
+            }
+        *r = k;
+        double amag = nbep_vec3_norm(s->acc[i]);
+        if (r->n > 0 && nbep_vec3_norm(*a) <= (spheres ? HOLD_SLOPE : NBEP_CONTACT_TOL) * amag) {
+            *a = nbep_vec3_make(0.0, 0.0, 0.0);
+            if (nbep_vec3_norm(*v) <= rest_speed(s, i, amag, dt))
+                *v = nbep_vec3_make(0.0, 0.0, 0.0);
+        }
+        r->still = r->n > 0 && is_zero(*a) && is_zero(*v);
+        if (r->still || !spheres)
+            return r->still;
+        k.n = 0; /* sphere contacts without being held: planes only */
+        for (int j = 0; j < r->n; j++)
+            if (r->who[j] >= 0)
+                k.who[k.n++] = r->who[j];
+        *r = k;
+    }
+    return r->still;
+}
+
+/* What sphere i's plane contacts leave of a unit impulse direction u (frictionless: they push,
+ * never pull; contact.h): u itself when it has none. Sphere contacts do not count: a response
+ * lets go of them. *leans is set when i has a plane contact. */
+static nbep_vec3 plane_mobility(const pred_ctx *c, const nbep_state *s, size_t i, nbep_vec3 u,
+                                bool *leans)
+{
+    if (!c->rest)
+        return u;
+    const rest_set *r = &c->rest[i];
+    nbep_vec3 n[NBEP_CONTACT_MAX];
+    int k = 0;
+    for (int j = 0; j < r->n; j++)
+        if (r->who[j] >= 0)
+            n[k++] = s->plane_normal[r->who[j]];
+    unsigned act;
+    *leans |= k > 0;
+    return k == 0 ? u : nbep_contact_project(u, n, k, &act);
+}
+
+/* After a response, a sphere leaves every contact along whose normal it now moves (and its
+ * sphere contacts if it moves at all); the rest are solved again. A plane counts as left only
+ * beyond round-off: a response along a tilted plane leaves v.n at a few ulps of |v|. */
+static void update_rest(pred_ctx *c, nbep_state *s, size_t i, double dt)
+{
+    if (!c->rest || c->rest[i].n == 0)
+        return;
+    rest_set *r = &c->rest[i];
+    nbep_vec3 n[NBEP_CONTACT_MAX];
+    rest_normals(c, s, i, r, n);
+    rest_set k = {.n = 0};
+    for (int j = 0; j < r->n; j++)
+        if (r->who[j] >= 0 ? fabs(nbep_vec3_dot(s->vel[i], n[j])) <=
+                                 NBEP_CONTACT_TOL * nbep_vec3_norm(s->vel[i])
+                           : nbep_vec3_dot(s->vel[i], n[j]) == 0.0 && is_zero(s->vel[i])) {
+            k.who[k.n] = r->who[j];
+            k.ver[k.n++] = r->ver[j];
+        }
+    *r = k;
+    nbep__pred_rest_solve(c, s, i, r, &s->vel[i], &c->aeff[i], dt, true);
+}
+
+static void note_overlap(nbep_thread_max *mx, double ov, double r)
+{
+    if (ov > mx->overlap)
+        mx->overlap = ov;
+    if (ov / r > mx->overlap_rel)
+        mx->overlap_rel = ov / r;
+}
+
+/* See MIN_BOUNCE_STEP_FRACTION: a pair pressed together by its accelerations leaves with at
+ * least the separating speed that keeps it apart for t_min, given as an impulse along the line
+ * of centres shared by mass like a response (momentum is kept). */
+static void min_bounce(const pred_ctx *c, nbep_state *s, double dt, uint32_t lo, uint32_t hi)
+{
+    if (!c->aeff)
+        return; /* nothing accelerates: nothing presses a pair together */
+    nbep_vec3 dp = sep(c, s, lo, hi);
+    double dist = nbep_vec3_norm(dp);
+    if (!(dist > 0.0))
+        return;
+    nbep_vec3 n = nbep_vec3_scale(dp, 1.0 / dist);
+    double an = nbep_vec3_dot(nbep_vec3_sub(effective_acc(c, s, hi), effective_acc(c, s, lo)), n);
+    if (!(an < 0.0))
+        return; /* nothing presses them together: they part for good */
+    double rmin = fmin(s->radius[lo], s->radius[hi]);
+    double t_min = min_bounce_time(rmin, -an, dt);
+    double want = -an * t_min / 2.0;
+    double u = nbep_vec3_dot(nbep_vec3_sub(s->vel[hi], s->vel[lo]), n);
+    if (u >= want)
+        return;
+    double m = s->mass[lo] + s->mass[hi], du = want - u;
+    /* a sphere whose planes carry its weight takes no share: the kick would otherwise pump
+     * energy into the bottom of a pile, kick after kick (measured: a settled pile heats up) */
+    double share_lo = s->mass[hi] / m, share_hi = s->mass[lo] / m;
+    if (supported(c, lo) != supported(c, hi)) {
+        share_lo = supported(c, lo) ? 0.0 : 1.0;
+        share_hi = 1.0 - share_lo;
+    }
+    s->vel[lo] = nbep_vec3_axpy(s->vel[lo], -du * share_lo, n);
+    s->vel[hi] = nbep_vec3_axpy(s->vel[hi], du * share_hi, n);
+}
+
+/* A sphere k without support pressed onto a held sphere j (n from j to k) leaves it with at
+ * least the separating speed that keeps it off for t_min (see MIN_BOUNCE_STEP_FRACTION); j, held
+ * by the pile, does not move. */
+static void min_bounce_held(const pred_ctx *c, nbep_state *s, double dt, size_t k, size_t j,
+                            nbep_vec3 n)
+{
+    double an = nbep_vec3_dot(c->aeff[k], n);
+    if (!(an < 0.0))
+        return;
+    double rmin = fmin(s->radius[k], s->radius[j]);
+    double t_min = min_bounce_time(rmin, -an, dt);
+    double want = -an * t_min / 2.0, u = nbep_vec3_dot(s->vel[k], n);
+    if (u < want)
+        s->vel[k] = nbep_vec3_axpy(s->vel[k], want - u, n);
+}
+
+/* The TC model (Luding and McNamara 1998; DynamO's choice): a collision within tc of the last
+ * one of either sphere is elastic (here planes count too: a sphere squeezed between a wall and
+ * a neighbour collapses just the same; for a plane, a == b). Inelastic collapse needs ever faster
+ * re-collisions; these stop dissipating, so the sequence ends. tc is physically the duration
+ * of a real contact, during which a hard-sphere model has no business dissipating twice. */
+static double tc_restitution(pred_ctx *c, double tc, double e, double t_abs, size_t a, size_t b)
+{
+    if (!c->t_last) /* e = 1 or tc = 0: the model never changes e */
+        return e;
+    bool recent = t_abs - c->t_last[a] < tc || t_abs - c->t_last[b] < tc;
+    c->t_last[a] = t_abs;
+    c->t_last[b] = t_abs;
+    return recent ? 1.0 : e;
+}
+
+static void fire(pred_ctx *c, thread_ws *w, const nbep_state *s, size_t i, bool was_still)
+{
+    c->ver[i]++;
+    settle_note(c, s, i);
+    if (was_still && c->settle) /* woken: its window starts again (a sphere let go at rest is
+                                 * slow for a while as it starts to fall) */
+        c->settle[i].slow = 0;
+    if (c->jam) { /* run.max_reactions; i is this thread's to change (it reacts or lets go) */
+        jam_count *j = &c->jam[i];
+        if (j->step != w->jam_step)
+            *j = (jam_count){.step = w->jam_step, .n = 0};
+        if (++j->n > c->jam_max && (w->jammed == 0 || i + 1 < w->jammed))
+            w->jammed = (uint32_t)i + 1;
+    }
+    w->fired[w->n_fired++] = (uint32_t)i;
+    if (c->use_grid) /* the grid's speed bound (grid_prepare) */
+        w->vmax_react = fmax(w->vmax_react, nbep_vec3_norm(s->vel[i]));
+    if (was_still)
+        w->woken++;
+}
+
+
+/* Holds a supported sphere still when slower than the rest speed (see rest_speed). */
+static bool try_hold(pred_ctx *c, nbep_state *s, size_t i, double dt)
+{
+    if (!supported(c, i) ||
+        !(nbep_vec3_norm(s->vel[i]) <= rest_speed(s, i, nbep_vec3_norm(s->acc[i]), dt)))
+        return false;
+    s->vel[i] = nbep_vec3_make(0.0, 0.0, 0.0);
+    c->rest[i].still = true;
+    return true;
+}
+
+/* Sphere k meets an immobile face `who` (a plane, or a held sphere) whose normal towards it
+ * is n. Caged: a face it met within tc (the TC model's time) before, and has not moved off
+ * since (CAGE_TOUCH_REL), faces this one (n.n' < 0: a bounce off either heads into the other):
+ * a gap exactly its diameter wide, a rigid cage, where the bounces between the faces take no
+ * time, and the TC model, which makes them elastic, would keep them going for ever (a sphere
+ * on the floor between a wall and a held sphere one diameter from it: a million reactions in
+ * a step). The cage takes the speed against every face it still touches instead (CAGE_FACES:
+ * a channel of three): k's velocity becomes the nearest that leaves them all
+ * (nbep_contact_project; e = 0 against the cage), its speed along them stays. Energy: that
+ * normal kinetic energy, which restitution would have taken as the bounces collapsed. The
+ * faces' normals are kept from the meetings, so no other sphere's state is read (threads
+ * react to other events meanwhile). Returns whether caged; records this meeting either way
+ * (newest first; an older meeting with the same face is passed over). */
+static bool caged(pred_ctx *c, nbep_state *s, size_t k, int32_t who, nbep_vec3 n, double t_abs,
+                  double tc)
+{
+    if (!c->face)
+        return false;
+    face_met *f = &c->face[k * CAGE_FACES];
+    nbep_vec3 nn[NBEP_CONTACT_MAX] = {n};
+    int m = 1;
+    bool opposed = false;
+    for (int j = 0; j < CAGE_FACES; j++)
+        if (f[j].who != who && t_abs - f[j].t <= tc &&
+            nbep_vec3_dot(f[j].n, nbep_vec3_sub(s->pos[k], f[j].p)) <=
+                CAGE_TOUCH_REL * s->radius[k]) {
+            nn[m++] = f[j].n;
+            opposed = opposed || nbep_vec3_dot(f[j].n, n) < 0.0;
+        }
+    for (int j = CAGE_FACES - 1; j > 0; j--)
+        f[j] = f[j - 1];
+    f[0] = (face_met){.t = t_abs, .n = n, .p = s->pos[k], .who = who};
+    if (!opposed)
+        return false;
+    unsigned act;
+    s->vel[k] = nbep_contact_project(s->vel[k], nn, m, &act);
+    return true;
+}
+
+/* Whether held sphere m rests on sphere k. Such an m is no support for k to be held on: the
+ * two would hold each other, and each one's landing (a reaction: the spheres resting on it
+ * let go) would let the other go, which lands again at the same instant (grid mode's
+ * 120-sphere pour at e = 0.9 went round such a pair 100000 times at one time and stopped,
+ * "events do not resolve"). When k is free, m's entry for k is stale (k moved since m took
+ * its load) and m's let-go is pending. */
+static bool leans_on(const pred_ctx *c, size_t m, size_t k)
+{
+    return c->rest[m].still && rest_has_sphere(&c->rest[m], k);
+}
+
+/* The sphere contacts of r (free sphere k's) that rest on k themselves, taken out (leans_on).
+ * Nothing to take out today: a sphere that is not held keeps planes only (rest_solve keeps
+ * sphere contacts only when it holds, and every hold sets still), so this guards a change
+ * that would let a free sphere keep a sphere contact (mutate.py: land-keeps-what-rests-on-it,
+ * equivalent). */
+static void drop_leaning(const pred_ctx *c, size_t k, rest_set *r)
+{
+    int n = 0;
+    for (int q = 0; q < r->n; q++)
+        if (r->who[q] >= 0 || !leans_on(c, (size_t)(-1 - r->who[q]), k)) {
+            r->who[n] = r->who[q];
+            r->ver[n++] = r->ver[q];
+        }
+    r->n = n;
+}
+
+/* A pocket (see land_on_held): the held spheres besides j that sphere k touches to within tol,
+ * added to its contacts r (up to NBEP_CONTACT_MAX); for supports to hold k on (`holds`), not
+ * those that rest on k (leans_on). */
+typedef struct pocket {
+    const pred_ctx *c;
+    const nbep_state *s;
+    size_t k, j;
+    double tol;
+    rest_set *r;
+    bool holds;
+} pocket;
+
+static void pocket_one(void *u, uint32_t m)
+{
+    pocket *x = u;
+    if (m == x->k || m == x->j || x->r->n >= NBEP_CONTACT_MAX || !x->c->rest[m].still ||
+        (x->holds && leans_on(x->c, m, x->k)))
+        return;
+    double gap = nbep_vec3_norm(sep(x->c, x->s, m, x->k)) - (x->s->radius[m] + x->s->radius[x->k]);
+    if (gap <= x->tol) {
+        x->r->who[x->r->n] = -1 - (int32_t)m;
+        x->r->ver[x->r->n++] = x->c->ver[m];
+    }
+}
+
+/* Cells mode: k's neighbour list names every sphere that can touch it, and the loop is serial.
+ * Rounds modes: every sphere, except those this round's events claim (other threads may be
+ * changing them now; the claims were made before a barrier and stay until the next round). */
+static void pocket_gather(const pred_ctx *c, const nbep_state *s, const thread_ws *w, size_t k,
+                          size_t j, double tol, bool holds, rest_set *r)
+{
+    pocket x = {c, s, k, j, tol, r, holds};
+    if (c->ev) {
+        nbep_evloop_visit_block(c->ev, (uint32_t)k, pocket_one, &x);
+        return;
+    }
+    for (size_t m = 0; m < s->n && r->n < NBEP_CONTACT_MAX; m++)
+        if (atomic_load_explicit(&c->claim[w->par][m], memory_order_relaxed) == KEY_FREE)
+            pocket_one(&x, (uint32_t)m);
+}
+
+/* The planes besides those of r that sphere k touches to within tol, added to r (up to
+ * NBEP_CONTACT_MAX): a wall beside it is part of a pocket too (a sphere on the curve of a held
+ * one, pressed against a wall by it: a wedge that the two hold together and neither alone). */
+static void pocket_planes(const nbep_state *s, size_t k, double tol, rest_set *r)
+{
+    for (size_t p = 0; p < s->n_planes && r->n < NBEP_CONTACT_MAX; p++)
+        if (!rest_has_plane(r, p) &&
+            nbep_physics_plane_gap(s->plane_normal[p], s->plane_offset[p], s->pos[k],
+                                   s->radius[k]) <= tol) {
+            r->who[r->n] = (int32_t)p;
+            r->ver[r->n++] = 0;
+        }
+}
+
+/* After k bounced off held sphere j: k must leave j receding by the predictor's own test
+ * (d.v >= 0, d from j to k; j does not move), or the same contact returns at zero time: the
+ * bounce's v.n with the normalised n can disagree with it in the last bit (a sphere sliding
+ * under a held one while gravity pulls it off). The kernel's pair response with j immobile
+ * (d1 = 0, d2 = n) does nothing to a receding pair and applies its round-off tie push
+ * (physics.c) to one closing by round-off. */
+static void leave_held(const pred_ctx *c, nbep_state *s, size_t k, size_t j, double e)
+{
+    nbep_vec3 d = sep(c, s, j, k), v_j = ZERO3;
+    double len = nbep_vec3_norm(d);
+    if (!(len > 0.0) || !(nbep_vec3_dot(d, s->vel[k]) < 0.0))
+        return;
+    nbep_vec3 n = nbep_vec3_make(d.x / len, d.y / len, d.z / len);
+    /* k's image that touches j (pos[k] itself without periodic axes: the same subtraction as
+     * the predictor's) */
+    const nbep_vec3 p_k = c->pb.any ? nbep_vec3_add(s->pos[j], d) : s->pos[k];
+    (void)nbep_physics_respond_pair_along(s->pos[j], p_k, &v_j, &s->vel[k], s->mass[j],
+                                          s->mass[k], e, ZERO3, n);
+}
+
+/* Sphere k, which has reacted JAM_HOLD times or more in this step, meets held sphere j slowly
+ * (land_on_held), or meets any sphere while its planes carry it (j = NO_SPHERE): it is held
+ * where it is, on its planes, j and what it touches (pocket_gather, pocket_planes, within
+ * the settle tolerance). See JAM_HOLD. */
+#define NO_SPHERE SIZE_MAX
+static bool jam_hold(pred_ctx *c, nbep_state *s, thread_ws *w, size_t k, size_t j, double dt)
+{
+    if (!c->settle || !c->jam || c->jam[k].step != w->jam_step || c->jam[k].n < JAM_HOLD)
+        return false;
+    const double vs = settle_speed(s, k, dt), amag = nbep_vec3_norm(s->acc[k]);
+    rest_set r = c->rest[k];
+    drop_leaning(c, k, &r);
+    if (j != NO_SPHERE && r.n < NBEP_CONTACT_MAX && !leans_on(c, j, k)) {
+        r.who[r.n] = -1 - (int32_t)j;
+        r.ver[r.n++] = c->ver[j];
+    }
+    pocket_gather(c, s, w, k, j, vs * vs / amag, true, &r);
+    pocket_planes(s, k, vs * vs / amag, &r);
+    r.still = true;
+    c->rest[k] = r;
+    s->vel[k] = ZERO3;
+    c->aeff[k] = ZERO3;
+    fire(c, w, s, k, false);
+    return true;
+}
+
+/* Sphere k (not held) meets held sphere j at a normal speed no faster than the rest speed, or
+ * one that j's pile carries (carried): it joins the held pile if pressed onto j, no faster
+ * than the rest speed in all, and its contacts then leave it no motion; else it bounces off j
+ * as off a wall (j is carried by the pile; the momentum, below m (1 + e) times the rest speed,
+ * or the carry speed, goes to it as to a plane), or is
+ * caged if the face it met before faces this one and it still touches that (caged).
+ * Not held by its planes and j alone, it may be by the pocket they make with the other held
+ * spheres it touches (pocket_gather). */
+static void land_on_held(pred_ctx *c, nbep_state *s, double e, double dt, size_t k, size_t j,
+                         double t_abs, double tc, thread_ws *w, nbep_counters *cnt)
+{
+    nbep_vec3 d = sep(c, s, j, k);
+    double len = nbep_vec3_norm(d);
+    nbep_vec3 n = nbep_vec3_make(d.x / len, d.y / len, d.z / len);
+    double u = nbep_vec3_dot(s->vel[k], n), an = nbep_vec3_dot(c->aeff[k], n);
+    rest_set r = c->rest[k];
+    drop_leaning(c, k, &r);
+    const double amag = nbep_vec3_norm(s->acc[k]), v_rest = rest_speed(s, k, amag, dt);
+    /* not on a j that rests on k (leans_on): it bounces, and meets j again after j's let-go */
+    if (an < 0.0 && fabs(u) <= v_rest && nbep_vec3_norm(s->vel[k]) <= v_rest &&
+        r.n < NBEP_CONTACT_MAX && !leans_on(c, j, k)) {
+        r.who[r.n] = -1 - (int32_t)j;
+        r.ver[r.n++] = c->ver[j];
+        const rest_set r0 = r;
+        nbep_vec3 v = s->vel[k], a;
+        bool held = nbep__pred_rest_solve(c, s, k, &r, &v, &a, dt, true);
+        if (!held) { /* a pocket: j with the other held spheres k touches (within twice the
+                      * highest hop of the rest speed, |a| t_min^2) */
+            r = r0;
+            pocket_gather(c, s, w, k, j, v_rest * v_rest / amag, true, &r);
+            pocket_planes(s, k, v_rest * v_rest / amag, &r);
+            if (r.n > r0.n) {
+                v = s->vel[k];
+                held = nbep__pred_rest_solve(c, s, k, &r, &v, &a, dt, true);
+            }
+        }
+        if (held) {
+            c->rest[k] = r;
+            s->vel[k] = v;
+            c->aeff[k] = a;
+            fire(c, w, s, k, false);
+            return;
+        }
+    }
+    if (jam_hold(c, s, w, k, j, dt))
+        return;
+    const double e_k = tc_restitution(c, tc, e, t_abs, k, k);
+    if (caged(c, s, k, -1 - (int32_t)j, n, t_abs, tc) ||
+        nbep_physics_respond_plane(n, &s->vel[k], e_k))
+        cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
+    update_rest(c, s, k, dt);
+    min_bounce_held(c, s, dt, k, j, n);
+    update_rest(c, s, k, dt);
+    leave_held(c, s, k, j, e);
+    fire(c, w, s, k, false);
+}
+
+/* Whether the faces of r (sphere i's contacts) take a push on i along m: m projected onto the
+ * cone of motions they allow is nothing, to HOLD_SLOPE of |m| (the normals of sphere contacts
+ * are known to a few 1e-6 rad: HOLD_SLOPE). */
+static bool faces_take(const pred_ctx *c, const nbep_state *s, size_t i, const rest_set *r,
+                       nbep_vec3 m)
+{
+    nbep_vec3 n[NBEP_CONTACT_MAX];
+    rest_normals(c, s, i, r, n);
+    unsigned act;
+    return nbep_vec3_norm(nbep_contact_project(m, n, r->n, &act)) <=
+           HOLD_SLOPE * nbep_vec3_norm(m);
+}
+
+/* Held sphere j carries the impact of free sphere k, closing at speed u along m (their line of
+ * centres, from k to j): slow enough (no faster than a fall from physics.carry_drop of j's
+ * radius), and pushed into the faces that hold j, its own contacts first, then with the held
+ * spheres and planes it touches. */
+static bool carried(const pred_ctx *c, const nbep_state *s, const thread_ws *w, size_t j,
+                    size_t k, double u, nbep_vec3 m, double carry_drop, double dt)
+{
+    const double amag = nbep_vec3_norm(s->acc[j]);
+    if (!(carry_drop > 0.0) || !(amag > 0.0) ||
+        !(u <= sqrt(2.0 * amag * carry_drop * s->radius[j])))
+        return false;
+    rest_set r = c->rest[j];
+    if (faces_take(c, s, j, &r, m))
+        return true;
+    const double vs = settle_speed(s, j, dt), reach = vs * vs / amag;
+    pocket_gather(c, s, w, j, k, reach, false, &r);
+    pocket_planes(s, j, reach, &r);
+    return faces_take(c, s, j, &r, m);
+}
+
+void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs,
+                      double t_local, uint32_t lo, uint32_t hi, const nbep_event *ev, thread_ws *w,
+                      nbep_counters *cnt, nbep_thread_max *mx)
+{
+    const double e = sc->restitution, dt = sc->dt;
+    advance_to(c, s, lo, t_local);
+    const bool still_lo = c->rest && c->rest[lo].still;
+    if (ev->kind == NBEP_EVENT_HORIZON) { /* image horizon: re-predicted from here */
+        fire(c, w, s, lo, still_lo);
+        return;
+    }
+    if (ev->kind == NBEP_EVENT_PLANE) {
+        uint32_t p = UINT32_MAX - hi;
+        nbep_vec3 n = s->plane_normal[p];
+        double gap = nbep_physics_plane_gap(n, s->plane_offset[p], s->pos[lo], s->radius[lo]);
+        note_overlap(mx, -gap, s->radius[lo]);
+        const double vn0 = nbep_vec3_dot(n, s->vel[lo]);
+        const double e_pl = tc_restitution(c, sc->tc, e, t_abs, lo, lo);
+        if (caged(c, s, lo, (int32_t)p, n, t_abs, sc->tc) ||
+            nbep_physics_respond_plane(n, &s->vel[lo], e_pl))
+            cnt->c[NBEP_COUNTER_PLANE_COLLISIONS]++;
+        /* SPEC /stats/wall_impulse: the normal momentum the plane received, pushed outward */
+        nbep_xsum_add(&mx->wall[p], s->mass[lo] * (nbep_vec3_dot(n, s->vel[lo]) - vn0));
+        update_rest(c, s, lo, dt);
+        double an = nbep_vec3_dot(s->acc[lo], n), vn = nbep_vec3_dot(s->vel[lo], n);
+        rest_set *r = c->rest ? &c->rest[lo] : NULL; /* NULL: nothing accelerates */
+        /* a bounce shorter than tc would be elastic (TC) and never shrink: rest; and one that
+         * the TC model made elastic (the sphere is squeezed: it met something within tc) rests
+         * no faster than the rest speed, what the minimum bounce of its neighbours leaves it
+         * with. A lone sphere's bounces are all kept down to the first rule. */
+        if (r && an < 0.0 && vn >= 0.0 &&
+            (2.0 * vn <= -an * fmax(NBEP_REST_FRACTION * dt, sc->tc) ||
+             (e_pl != e && vn <= rest_speed(s, lo, -an, dt))) &&
+            r->n < NBEP_CONTACT_MAX) {
+            r->who[r->n] = (int32_t)p;
+            r->ver[r->n++] = 0;
+            nbep__pred_rest_solve(c, s, lo, r, &s->vel[lo], &c->aeff[lo], dt, true);
+        }
+        fire(c, w, s, lo, still_lo);
+        return;
+    }
+    advance_to(c, s, hi, t_local);
+    const bool still_hi = c->rest && c->rest[hi].still;
+    double sigma = s->radius[lo] + s->radius[hi];
+    const nbep_vec3 r12 = sep(c, s, lo, hi);
+    note_overlap(mx, sigma - nbep_vec3_norm(r12),
+                 fmin(s->radius[lo], s->radius[hi]));
+    const bool sup_lo = supported(c, lo), sup_hi = supported(c, hi);
+    if (sup_lo != sup_hi) { /* a supported sphere slow enough is held when a free one meets it */
+        size_t j = sup_lo ? lo : hi;
+        if (!c->rest[j].still && try_hold(c, s, j, dt))
+            fire(c, w, s, j, false);
+    }
+    /* one of them held, the other not (free, or sliding on planes): a slow meeting lands on
+     * the held one, and so does one its pile carries (carried); any other is an ordinary
+     * response below, which wakes it */
+    if (c->rest && c->rest[lo].still != c->rest[hi].still) {
+        size_t k = c->rest[lo].still ? hi : lo, j = c->rest[lo].still ? lo : hi;
+        nbep_vec3 d = sep(c, s, j, k);
+        double u = nbep_vec3_dot(s->vel[k], d) / nbep_vec3_norm(d);
+        if (fabs(u) <= rest_speed(s, k, nbep_vec3_norm(s->acc[k]), dt) ||
+            carried(c, s, w, j, k, -u, nbep_vec3_scale(d, -1.0), sc->carry_drop, dt)) {
+            land_on_held(c, s, e, dt, k, j, t_abs, sc->tc, w, cnt);
+            return;
+        }
+    }
+    /* a jammed sphere that its planes carry is held where it is (JAM_HOLD: a row of spheres
+     * that fits a box exactly passes its momentum to and fro at zero time); the other takes
+     * no response and, unless held (as land_on_held leaves the held sphere), is predicted
+     * again against it */
+    for (int q = 0; c->rest && q < 2; q++) {
+        const size_t k = q ? hi : lo, o = q ? lo : hi;
+        if (!c->rest[k].still && supported(c, k) && jam_hold(c, s, w, k, NO_SPHERE, dt)) {
+            if (!c->rest[o].still)
+                fire(c, w, s, o, false);
+            return;
+        }
+    }
+    /* hi's image that touches lo (the same as pos[hi] without periodic axes) */
+    const nbep_vec3 p_hi = c->pb.any ? nbep_vec3_add(s->pos[lo], r12) : s->pos[hi];
+    const nbep_vec3 v_hi = s->vel[hi];
+    /* spheres leaning on planes move only along them: the planes take their share (a free
+     * pair keeps the paper's formula, bit for bit) */
+    double len = nbep_vec3_norm(r12);
+    nbep_vec3 n = len > 0.0 ? nbep_vec3_make(r12.x / len, r12.y / len, r12.z / len) : r12;
+    bool leans = false;
+    nbep_vec3 d_lo = plane_mobility(c, s, lo, nbep_vec3_scale(n, -1.0), &leans);
+    nbep_vec3 d_hi = plane_mobility(c, s, hi, n, &leans);
+    const double e_pair = tc_restitution(c, sc->tc, e, t_abs, lo, hi);
+    const double m_lo = c->mass_all > 0.0 ? c->mass_all : s->mass[lo];
+    const double m_hi = c->mass_all > 0.0 ? c->mass_all : s->mass[hi];
+    if (leans ? nbep_physics_respond_pair_along(s->pos[lo], p_hi, &s->vel[lo], &s->vel[hi], m_lo,
+                                                m_hi, e_pair, d_lo, d_hi)
+              : nbep_physics_respond_pair(s->pos[lo], p_hi, &s->vel[lo], &s->vel[hi], m_lo,
+                                          m_hi, e_pair))
+        cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
+    min_bounce(c, s, dt, lo, hi);
+    /* SPEC /stats/virial: r12 . dp2, dp2 the momentum hi received */
+    nbep_xsum_add(&mx->virial,
+                  nbep_vec3_dot(r12, nbep_vec3_scale(nbep_vec3_sub(s->vel[hi], v_hi), m_hi)));
+    update_rest(c, s, lo, dt);
+    update_rest(c, s, hi, dt);
+    fire(c, w, s, lo, still_lo);
+    fire(c, w, s, hi, still_hi);
+}
+
+/* Sphere i is held and a sphere it rests on has reacted since it took the load. */
+bool nbep__pred_held_on_changed(const pred_ctx *c, size_t i)
+{
+    if (!c->rest || !c->rest[i].still)
+        return false;
+    const rest_set *r = &c->rest[i];
+    for (int k = 0; k < r->n; k++)
+        if (r->who[k] < 0 && r->ver[k] != c->ver[-1 - r->who[k]])
+            return true;
+    return false;
+}
+
+/* Held sphere i lets go of the sphere supports that reacted, at local time t_local; it fires
+ * (moves again) unless what is left still holds it. */
+void nbep__pred_let_go(pred_ctx *c, nbep_state *s, size_t i, double dt, double t_local,
+                       thread_ws *w)
+{
+    rest_set *r = &c->rest[i];
+    rest_set k = {.n = 0};
+    for (int j = 0; j < r->n; j++)
+        if (r->who[j] >= 0 || r->ver[j] == c->ver[-1 - r->who[j]]) {
+            k.who[k.n] = r->who[j];
+            k.ver[k.n++] = r->ver[j];
+        }
+    *r = k;
+    advance_to(c, s, i, t_local);
+    if (!nbep__pred_rest_solve(c, s, i, r, &s->vel[i], &c->aeff[i], dt, false))
+        fire(c, w, s, i, true);
+}
+
+/* run.max_reactions: sphere i reacted too often in one step, at about time t; the run stops. */
+void nbep__pred_jam_fail(nbep_sim *sim, uint64_t step, size_t i, double t)
+{
+    nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                  "nbep: step %llu: sphere %zu reacted over %llu times in one step (t = %.17g, "
+                  "run.max_reactions): jammed between walls and neighbours that nbep cannot hold "
+                  "still (README, granular scenes: not solved yet); stopping",
+                  (unsigned long long)step, i, (unsigned long long)sim->scene->max_reactions, t);
+    sim->status = NBEP_ENUMERIC;
+}
