@@ -15,7 +15,7 @@ Speed: each repeat resumes a copy of the melt for S time units on every thread c
 collisions / wall_seconds (its stepping loop), the table gives medians and each thread count's
 ratio to one thread's median, and every run's last frame must equal one thread's bit for bit
 (else the script fails). NBEP_TEAM is left unset: the run picks its way (one thread, the team)
-by measuring both (algo_predictive.c, team_choose), as users get it.
+by measuring both (src/pred_ways.c), as users get it.
 
 Physics: Haff's law. With each collision taking (1 - E^2) T on average (Maxwellian velocities:
 the normal speed of colliding pairs has mean square 4 T / m) and N omega / 2 collisions per time

@@ -32,6 +32,7 @@ TEAM = ["test_periodic"]  # the team loop's tests: one thread's frames, counts a
 APART = ["test_evloop_apart", "test_periodic"]
 GRAN = ["test_granular"]
 ORDER = ["test_order"]  # run.order = "step", the paper's step
+WAYS = ["test_pred_ways"]  # the schedule of the ways a step's events run, for given costs
 LISTS = ["test_evloop_lists"]  # the cells engine's lists against a search of every sphere
 
 # (id, file, original, replacement, tests, equivalent-reason or None)
@@ -571,8 +572,38 @@ MUTANTS = [
      "        if (atomic_load_explicit(&e->ws[t][k].place, memory_order_acquire) == s)\n            return t;",
      "        if (atomic_load_explicit(&e->ws[t][k].place, memory_order_acquire) == s)\n            return 0;",
      TEAM, None),
-    ("team-way-one-slot", "src/pred_ways.c", "    int *next = &c->team_way[(step + 1) & 1];",
-     "    int *next = &c->team_way[step & 1];", TEAM, None),
+    # ---- the ways a step's events run (pred_ways.c): the schedule for given costs ----
+    ("team-way-one-slot", "src/pred_ways.c", "    int *next = &w->way[(step + 1) & 1];",
+     "    int *next = &w->way[step & 1];", WAYS + TEAM, None),
+    ("ways-probe-period", "src/pred_ways.c", "#define TEAM_PROBE 8\n", "#define TEAM_PROBE 16\n",
+     WAYS, None),
+    ("ways-probe-far-period", "src/pred_ways.c", "#define TEAM_PROBE_FAR 64\n",
+     "#define TEAM_PROBE_FAR 32\n", WAYS, None),
+    ("ways-clear-threshold", "src/pred_ways.c", "#define TEAM_CLEAR 1.25\n",
+     "#define TEAM_CLEAR 2.5\n", WAYS, None),
+    ("ways-mean-not-kept", "src/pred_ways.c", "*m = *m > 0.0 && !probed ? 0.5 * (*m + per) : per;",
+     "*m = per;", WAYS, None),
+    ("ways-probe-averaged", "src/pred_ways.c", "*m = *m > 0.0 && !probed ? 0.5 * (*m + per) : per;",
+     "*m = *m > 0.0 ? 0.5 * (*m + per) : per;", WAYS, None),
+    ("ways-no-events-measured", "src/pred_ways.c", "    if (events > 0) {\n        const double per",
+     "    if (events >= 0) {\n        const double per", WAYS, None),
+    ("ways-ties-to-fewer-threads", "src/pred_ways.c", "        if (w->cost[k] < w->cost[best])",
+     "        if (w->cost[k] <= w->cost[best])", WAYS, None),
+    ("ways-unmeasured-smallest-first", "src/pred_ways.c",
+     "    for (int k = w->n - 1; k >= 0; k--)\n        if (w->cost[k] == 0.0) {",
+     "    for (int k = 0; k < w->n; k++)\n        if (w->cost[k] == 0.0) {", WAYS, None),
+    ("ways-probes-one-way", "src/pred_ways.c", "    *next = (best + 1 + k) % w->n;",
+     "    *next = (best + 1) % w->n;", WAYS, None),
+    ("ways-cycle-up", "src/pred_ways.c", "        *next = way > 0 ? way - 1 : w->n - 1;",
+     "        *next = way < w->n - 1 ? way + 1 : 0;", WAYS, None),
+    ("ways-count-not-capped", "src/pred_ways.c",
+     "k < NBEP_EVLOOP_TEAM_MAX ? (int)k : NBEP_EVLOOP_TEAM_MAX;", "(int)k;", WAYS, None),
+    ("ways-first-step-never-ignored", "src/pred_ways.c",
+     "w->way[0] = w->way[1] = force == PRED_WAYS_NEVER || n < 1 ? 0 : n - 1;",
+     "w->way[0] = w->way[1] = n < 1 ? 0 : n - 1;", WAYS, None),
+    ("ways-crew-times-a-change", "src/pred_ways.c",
+     "    if (way != w->last && w->force != PRED_WAYS_CYCLE) {",
+     "    if (way != w->last && w->force == PRED_WAYS_NEVER) {", WAYS, None),
     # ---- the run takes the scene's arrays (nbep_state_take): the scene's must not be freed too ----
     ("state-take-leaves-src", "src/state.c", "    src->pos = src->vel = src->acc = NULL;\n", "",
      ["test_threads", "tests/test_cli.sh"], None),

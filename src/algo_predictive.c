@@ -104,6 +104,12 @@ static void pred_destroy(void *p)
     }
     free(c);
 }
+/* NBEP_TEAM, read as a run is made or estimated (pred_ways.c). */
+static int team_forced(void)
+{
+    return nbep__pred_ways_forced(getenv("NBEP_TEAM"));
+}
+
 /* The neighbours per sphere that nbep check counts in cells mode's lists (with their rooms
  * and the pool's growth, nbep_nblist_bytes): more than a dense scene lists (a fluid at phi
  * 0.30 to 0.50: 6 to 11, nblist.h; a settled pile at phi 0.6 about 14 by the same scaling),
@@ -212,7 +218,7 @@ static size_t plan_fired(const pred_plan *p, int t)
  * each thread's quartic workspace, a few hundred bytes, left out). */
 static size_t pred_bytes(const nbep_scene *sc, int nt)
 {
-    const pred_plan p = plan_of(sc, &sc->state, nt, nbep__pred_team_forced());
+    const pred_plan p = plan_of(sc, &sc->state, nt, team_forced());
     const pred_ctx *c = NULL;  /* for element sizes only: sizeof does not evaluate */
     const thread_ws *w = NULL;
     const size_t n = p.n;
@@ -268,9 +274,9 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         pred_destroy(c);
         return st;
     }
-    c->team_force = nbep__pred_team_forced();
+    const int force = team_forced();
     /* what to allocate: the same plan as pred_bytes counts (keep the two in step) */
-    const pred_plan p = plan_of(sim->scene, &sim->st, sim->nt, c->team_force);
+    const pred_plan p = plan_of(sim->scene, &sim->st, sim->nt, force);
     c->free_flight = p.free_flight;
     c->ver = nbep_alloc_aligned(n, sizeof *c->ver);
     c->tau = nbep_alloc_aligned(n, sizeof *c->tau);
@@ -311,16 +317,9 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     }
     c->use_grid = p.use_grid;
     c->crews = p.crews;
-    c->team_ways = p.team_ways;
-    for (int w = 0; w < 3; w++)
-        c->team_crew[w] = p.team_crew[w];
-    if (c->crews) {
-        for (int w = 0; w < c->team_ways; w++)
-            nbep_barrier_init(&c->crew_bar[w], (unsigned)c->team_crew[w]);
-        /* the first step takes the largest crew (team_choose) */
-        c->team_way[0] = c->team_way[1] = c->team_force == -1 ? 0 : c->team_ways - 1;
-        c->crew_last = -1;
-    }
+    nbep__pred_ways_init(&c->ways, p.team_ways, p.team_crew, force);
+    for (int w = 0; c->crews && w < c->ways.n; w++)
+        nbep_barrier_init(&c->crew_bar[w], (unsigned)c->ways.crew[w]);
     c->pb = nbep_periodic_make(sim->scene->has_box ? sim->scene->periodic : NULL,
                                sim->scene->box_min, sim->scene->box_max);
     if (c->use_grid) {
@@ -358,8 +357,6 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         st = nbep_evloop_create(n, sim->scene->box_min, sim->scene->box_max, 2.0 * c->rmax,
                                 c->pb.axis, c->team_size, c->q, c->ver, &c->ev, d);
         c->team = st == NBEP_OK && p.team;
-        /* the first step: the whole team (team_choose) */
-        c->team_way[0] = c->team_way[1] = c->team_force == -1 ? 0 : c->team_ways - 1;
         if (c->team) {
             const size_t np = sim->st.n_planes, rows = (size_t)c->team_size * NBEP_EVLOOP_RING;
             c->help_cnt = nbep_alloc_aligned(rows, sizeof *c->help_cnt);
@@ -837,8 +834,8 @@ static void pred_run(nbep_sim *sim, void *p)
              * one's share; the first round (every slot looked at, and every sphere whose slot
              * is stale or whose horizon has come re-predicted: a grid's horizon, every 1 to 64
              * steps, re-predicts them all) runs on every thread */
-            const int way = c->crews ? c->team_way[step & 1] : 0;
-            const int crew = c->crews ? c->team_crew[way] : nt;
+            const int way = c->crews ? c->ways.way[step & 1] : 0;
+            const int crew = c->crews ? c->ways.crew[way] : nt;
             nbep_barrier *bar = c->crews ? &c->crew_bar[way] : &c->bar;
             const nbep_range mine = crew == nt ? own : nbep__range_split(s->n, tid, crew);
             bool quit = false;
@@ -974,10 +971,10 @@ static void pred_run(nbep_sim *sim, void *p)
             nbep__sim_block_energy(sim, own);
             nbep__sim_frame_overlap(sim, step, tid, own, &c->bar);
             nbep_barrier_wait(&c->bar);
-            /* the crew of the next step (crew_choose), from the seconds of this one's rounds
+            /* the crew of the next step (pred_ways.c), from the seconds of this one's rounds
              * and update; the others read it past grid_prepare's barriers */
             if (tid == 0 && c->crews)
-                nbep__pred_crew_choose(c, step, way, nbep_now() - t_step);
+                nbep__pred_ways_choose_crew(&c->ways, step, way, nbep_now() - t_step);
             if (c->use_grid) /* all threads, from the positions at T_end */
                 grid_prepare(c, s, tid, own, T_end, sim->dt, false);
             /* the speed bounds taken above stay bounds: held spheres only slow down */
@@ -1045,7 +1042,7 @@ static void pred_import(void *p, const nbep_resume *r)
 /* How a run on nt >= 2 threads shares its work, by the plan pred_create follows. */
 static void pred_threads_use(const nbep_scene *sc, int nt, char *buf, size_t len)
 {
-    const pred_plan p = plan_of(sc, &sc->state, nt, nbep__pred_team_forced());
+    const pred_plan p = plan_of(sc, &sc->state, nt, team_forced());
     if (p.team)
         snprintf(buf, len,
                  "the event loop on a team of up to %d or on one, whichever the run measures "

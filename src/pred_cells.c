@@ -464,7 +464,7 @@ static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, c
                                                cells_merge,  cells_prefetch};
 
 /* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's
- * event loop, with threads 1.. in a team where the scene allows it (c->team, team_choose); all
+ * event loop, with threads 1.. in a team where the scene allows it (c->team, pred_ways.c); all
  * threads share the rebuilds, the update to the step's end and the energy.
  * A rebuild (cells from positions, every slot predicted afresh: about the cost of n/2
  * collisions) happens at the first step and after every step that writes a frame to a file in
@@ -525,7 +525,7 @@ void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own,
             ups[m] = (cells_user){c, s, sim->scene, u.T0, 0.0, w, &c->help_cnt[h], &c->help_mx[h]};
             us[m] = &ups[m];
         }
-        const int way = c->team_way[step & 1], crew = c->team_crew[way];
+        const int way = c->ways.way[step & 1], crew = c->ways.crew[way];
         if (tid >= 1 && tid < crew)
             nbep_evloop_help(c->ev, ops, &u, us, tid, step);
         if (tid == 0) {
@@ -540,7 +540,7 @@ void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own,
                            : nbep_evloop_run(c->ev, ops, &u, T_end, STALL_EVENTS,
                                              STALL_FRACTION * sim->dt, &tally, &t_stuck));
             if (c->team)
-                nbep__pred_team_choose(c, step, way, tally.events, nbep_now() - t_loop);
+                nbep__pred_ways_choose(&c->ways, step, way, tally.events, nbep_now() - t_loop);
             u.cnt->c[NBEP_COUNTER_CHECKS] += tally.events;
             u.cnt->c[NBEP_COUNTER_AHEAD] += tally.ahead;
             u.cnt->c[NBEP_COUNTER_UNDONE] += tally.undone;

@@ -138,6 +138,23 @@ typedef struct jam_count {
     uint32_t step, n;
 } jam_count;
 
+/* The ways a step's events may run (pred_ways.c): on one thread, a pair, or the whole team
+ * (cells mode's team loop) or crew (grid mode's rounds) where that is more; chosen step by
+ * step by measuring each. Thread 0 writes it, between steps. */
+#define PRED_WAYS_MAX 3
+typedef struct pred_ways {
+    int n;                      /* the ways: 0 (one thread only, nothing to choose) to 3 */
+    int crew[PRED_WAYS_MAX];    /* each way's threads: 1, 2, and the whole team or crew */
+    /* the way of each step, by the step's parity: step k reads way[k & 1], which thread 0
+     * wrote during step k - 1 (nbep__pred_ways_choose), whose end every thread crossed, and
+     * which no one writes during step k */
+    int way[2];
+    double cost[PRED_WAYS_MAX]; /* measured seconds per event (cells mode) or per step (grid
+                                 * mode) of each way; 0: none yet */
+    int force;                  /* NBEP_TEAM (nbep__pred_ways_forced) */
+    int last;                   /* grid mode: the way of the step before (-1: none yet) */
+} pred_ways;
+
 typedef struct pred_ctx {
     nbep_barrier bar;
     nbep_feq *q;                  /* owned */
@@ -201,19 +218,10 @@ typedef struct pred_ctx {
     bool team;
     int team_size;  /* the threads that may run the event loop: the run's, at most
                      * NBEP_EVLOOP_TEAM_MAX, or NBEP_TEAM's count */
-    /* the ways a step's events may run (team_crew: the threads of each, 1 for the one-thread
-     * loop, 2 for a pair, team_size for the whole team when that is more), and the way of
-     * each step, by the step's parity: step k reads team_way[k & 1], which thread 0 wrote
-     * during step k - 1 (team_choose), whose end every thread crossed, and which no one writes
-     * during step k; and the measured seconds per event of each way (0: none yet) */
-    int team_ways;
-    int team_crew[3];
-    int team_way[2];
-    double team_cost[3];
-    int team_force; /* NBEP_TEAM, read once (team_forced) */
-    /* grid mode on two threads or more: a step's rounds run on the crew team_crew[team_way[step
+    pred_ways ways; /* the ways a step's events may run, and each step's (pred_ways.c) */
+    /* grid mode on two threads or more: a step's rounds run on the crew ways.crew[ways.way[step
      * & 1]] (threads 0 .. crew - 1, each with its own share of the spheres for that crew),
-     * chosen by team_choose as the cells mode's team is, with the barrier of its size; the
+     * chosen as the cells mode's team is (pred_ways.c), with the barrier of its size; the
      * other threads wait for the rounds at bar. A crowded scene's rounds are short (a settling
      * pile: about one event each, behind four barriers), and a crew of 16 ran a pour 1.4 times
      * as long as one thread on a 16-core node; the paper's box gains from every thread. The
@@ -223,7 +231,6 @@ typedef struct pred_ctx {
     /* thread 0, where the crew is smaller than the run's threads, for the others after the
      * barrier that ends the rounds: whether the rounds stopped the run */
     bool crew_quit;
-    int crew_last;  /* thread 0's: the way of the step before (-1: none yet) */
     uint64_t rounds_before; /* thread 0's: the rounds of the steps before this one */
     uint64_t seen_before;   /* thread 0's: seen_woken where the step before's rounds ended */
     nbep_counters *help_cnt;      /* owned when team, team_size NBEP_EVLOOP_RING: each place's
@@ -405,13 +412,22 @@ void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own,
 
 /* ---- pred_ways.c: the threads of a step's events ------------------------------------------ */
 
-/* NBEP_TEAM, read from the environment: 1 always, -1 never, k >= 2 a team of k, or
- * -2 to cycle (pred_ways.c); 0 for the fastest way. */
-int nbep__pred_team_forced(void);
-/* Thread 0, after cells mode's step `step` ran its events way `way`: the next step's way. */
-void nbep__pred_team_choose(pred_ctx *c, uint64_t step, int way, uint64_t events,
+/* NBEP_TEAM's value v (NULL: unset): PRED_WAYS_ALWAYS the whole team, PRED_WAYS_NEVER one
+ * thread, k >= 2 a team of k (at most NBEP_EVLOOP_TEAM_MAX), PRED_WAYS_CYCLE the ways in
+ * turn; PRED_WAYS_FREE (anything else) the fastest way, measured. */
+#define PRED_WAYS_FREE 0
+#define PRED_WAYS_ALWAYS 1
+#define PRED_WAYS_NEVER (-1)
+#define PRED_WAYS_CYCLE (-2)
+int nbep__pred_ways_forced(const char *v);
+/* n ways (0 to PRED_WAYS_MAX) of crew[0..n) threads, NBEP_TEAM's choice force: nothing measured
+ * yet, the first step's way the largest (PRED_WAYS_NEVER: one thread). */
+void nbep__pred_ways_init(pred_ways *w, int n, const int *crew, int force);
+/* Thread 0, after cells mode's step `step` ran its events (`events` of them in `seconds`) way
+ * `way`: the way of step + 1. */
+void nbep__pred_ways_choose(pred_ways *w, uint64_t step, int way, uint64_t events,
                             double seconds);
-/* Thread 0, after grid mode's step `step` ran way `way` in `seconds`: the next step's way. */
-void nbep__pred_crew_choose(pred_ctx *c, uint64_t step, int way, double seconds);
+/* Thread 0, after grid mode's step `step` ran way `way` in `seconds`: the way of step + 1. */
+void nbep__pred_ways_choose_crew(pred_ways *w, uint64_t step, int way, double seconds);
 
 #endif

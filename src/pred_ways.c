@@ -28,84 +28,87 @@
 #define TEAM_PROBE_FAR 64
 #define TEAM_CLEAR 1.25
 
-#define TEAM_CYCLE (-2)
-
-/* NBEP_TEAM: 1 always, -1 never, k >= 2 always with a team of k, TEAM_CYCLE, 0 (unset or
- * anything else) the fastest way. */
-int nbep__pred_team_forced(void)
+int nbep__pred_ways_forced(const char *v)
 {
-    const char *v = getenv("NBEP_TEAM");
     if (!v)
-        return 0;
+        return PRED_WAYS_FREE;
     if (strcmp(v, "always") == 0)
-        return 1;
+        return PRED_WAYS_ALWAYS;
     if (strcmp(v, "never") == 0)
-        return -1;
+        return PRED_WAYS_NEVER;
     if (strcmp(v, "cycle") == 0)
-        return TEAM_CYCLE;
+        return PRED_WAYS_CYCLE;
     char *end;
     const long k = strtol(v, &end, 10);
     if (end == v || *end != '\0' || k < 1)
-        return 0;
+        return PRED_WAYS_FREE;
     /* a team of one is one thread; a team is at most NBEP_EVLOOP_TEAM_MAX */
-    return k == 1 ? -1 : k < NBEP_EVLOOP_TEAM_MAX ? (int)k : NBEP_EVLOOP_TEAM_MAX;
+    return k == 1 ? PRED_WAYS_NEVER : k < NBEP_EVLOOP_TEAM_MAX ? (int)k : NBEP_EVLOOP_TEAM_MAX;
+}
+
+void nbep__pred_ways_init(pred_ways *w, int n, const int *crew, int force)
+{
+    *w = (pred_ways){.n = n, .force = force, .last = -1};
+    for (int k = 0; k < n; k++)
+        w->crew[k] = crew[k];
+    /* the first step: the whole team */
+    w->way[0] = w->way[1] = force == PRED_WAYS_NEVER || n < 1 ? 0 : n - 1;
 }
 
 /* The fastest way measured (ties: the one with more threads). */
-static int team_best(const pred_ctx *c)
+static int best_way(const pred_ways *w)
 {
-    int best = c->team_ways - 1;
-    for (int w = best - 1; w >= 0; w--)
-        if (c->team_cost[w] < c->team_cost[best])
-            best = w;
+    int best = w->n - 1;
+    for (int k = best - 1; k >= 0; k--)
+        if (w->cost[k] < w->cost[best])
+            best = k;
     return best;
 }
 
-/* Thread 0, after step `step` ran its events (`events` of them in `seconds`) way `way`: the
- * way of the next step. */
-void nbep__pred_team_choose(pred_ctx *c, uint64_t step, int way, uint64_t events, double seconds)
+void nbep__pred_ways_choose(pred_ways *w, uint64_t step, int way, uint64_t events,
+                            double seconds)
 {
     if (events > 0) {
         const double per = seconds / (double)events;
-        const bool probed = way != team_best(c); /* a slower way */
-        double *m = &c->team_cost[way];
+        const bool probed = way != best_way(w); /* a slower way */
+        double *m = &w->cost[way];
         *m = *m > 0.0 && !probed ? 0.5 * (*m + per) : per;
     }
-    int *next = &c->team_way[(step + 1) & 1];
-    if (c->team_force == TEAM_CYCLE) {
-        *next = way > 0 ? way - 1 : c->team_ways - 1;
+    int *next = &w->way[(step + 1) & 1];
+    if (w->force == PRED_WAYS_CYCLE) {
+        *next = way > 0 ? way - 1 : w->n - 1;
         return;
     }
-    if (c->team_force) {
-        *next = c->team_force > 0 ? c->team_ways - 1 : 0;
+    if (w->force) {
+        *next = w->force > 0 ? w->n - 1 : 0;
         return;
     }
-    for (int w = c->team_ways - 1; w >= 0; w--)
-        if (c->team_cost[w] == 0.0) { /* each way measured once, the largest first */
-            *next = w;
+    for (int k = w->n - 1; k >= 0; k--)
+        if (w->cost[k] == 0.0) { /* each way measured once, the largest first */
+            *next = k;
             return;
         }
-    const int best = team_best(c);
+    const int best = best_way(w);
     bool clear = true;
-    for (int w = 0; w < c->team_ways; w++)
-        clear &= w == best || c->team_cost[w] >= TEAM_CLEAR * c->team_cost[best];
+    for (int k = 0; k < w->n; k++)
+        clear &= k == best || w->cost[k] >= TEAM_CLEAR * w->cost[best];
     const uint64_t probe = clear ? TEAM_PROBE_FAR : TEAM_PROBE;
     if ((step + 1) % probe != 0) {
         *next = best;
         return;
     }
     /* the probes take the other ways in turn */
-    const int k = (int)((step + 1) / probe % (uint64_t)(c->team_ways - 1));
-    *next = (best + 1 + k) % c->team_ways;
+    const int k = (int)((step + 1) / probe % (uint64_t)(w->n - 1));
+    *next = (best + 1 + k) % w->n;
 }
 
 /* Thread 0, after step `step` of grid mode ran way `way` in `seconds` (from its start to the
  * barrier after the update: a crew smaller than the run's leaves the others waiting, asleep
  * after a while, and they take their share of the update late; timed on its rounds alone, the
  * paper's box on a 16-core node took 1.17 times as long as with every thread): the way of the
- * next step, team_choose's, timed per step. Two differences, both from the same node, where
- * the box of 32768 spheres ran 1.19, 1.40 and 1.61 ms a step on 16, 2 and 1 threads and the
- * run's own choice took 1.4 times as long as 16 threads throughout:
+ * next step, chosen as nbep__pred_ways_choose does, timed per step. Two differences, both
+ * from the same node, where the box of 32768 spheres ran 1.19, 1.40 and 1.61 ms a step on 16,
+ * 2 and 1 threads and the run's own choice took 1.4 times as long as 16 threads throughout:
  * - per step, not per event (round): much of a step does not depend on its rounds (the first
  *   round's look at every slot, the update), and the box has 20 to 40 rounds a step;
  * - a step whose way differs from the step before's is not timed, and the next runs the same
@@ -113,13 +116,13 @@ void nbep__pred_team_choose(pred_ctx *c, uint64_t step, int way, uint64_t events
  *   wrote are still in its cores' caches, so a probe timed on its first step pays for the
  *   change, which a way kept for many steps pays once (our reading of why the box's run kept
  *   to the smaller crews). */
-void nbep__pred_crew_choose(pred_ctx *c, uint64_t step, int way, double seconds)
+void nbep__pred_ways_choose_crew(pred_ways *w, uint64_t step, int way, double seconds)
 {
-    if (way != c->crew_last && c->team_force != TEAM_CYCLE) {
-        c->crew_last = way;
-        c->team_way[(step + 1) & 1] = way;
+    if (way != w->last && w->force != PRED_WAYS_CYCLE) {
+        w->last = way;
+        w->way[(step + 1) & 1] = way;
         return;
     }
-    c->crew_last = way;
-    nbep__pred_team_choose(c, step, way, 1, seconds);
+    w->last = way;
+    nbep__pred_ways_choose(w, step, way, 1, seconds);
 }
