@@ -778,8 +778,9 @@ static void handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, void *
     if (ev->kind == NBEP_EVENT_HORIZON) {
         nbep_vec3 p, v, a;
         if (e->pb.any) /* a centre past a periodic face enters through the other */
-            ops->wrap(u, i, t);
-        ops->flight(u, i, t, &p, &v, &a);
+            ops->wrap(u, i, t, &p, &v, &a);
+        else
+            ops->flight(u, i, t, &p, &v, &a);
         const nbep_vec3 c = list_centre(e, p, v, a);
         walk(e, w, i, c);
         if (w->oom)

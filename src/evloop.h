@@ -70,9 +70,11 @@ typedef struct nbep_evloop_ops {
                     bool *stop);
     /* sphere i's centre, velocity and acceleration at absolute time t (not stored) */
     void (*flight)(void *u, uint32_t i, double t, nbep_vec3 *p, nbep_vec3 *v, nbep_vec3 *a);
-    /* periodic boxes only (may be NULL otherwise): sphere i, leaving its cell at absolute time
-     * t, is brought to t and wrapped into the box (periodic.h), its image count kept */
-    void (*wrap)(void *u, uint32_t i, double t);
+    /* periodic boxes only (may be NULL otherwise): flight's answer for sphere i, leaving its
+     * cell at absolute time t, after it is brought to t and wrapped into the box (periodic.h),
+     * its image count kept, where its centre is then outside the box (an expiry takes its new
+     * list's centre from it: one flight, not a flight to test and another to take) */
+    void (*wrap)(void *u, uint32_t i, double t, nbep_vec3 *p, nbep_vec3 *v, nbep_vec3 *a);
     /* the team loop only (may be NULL otherwise): sphere i's motion kept and put back */
     void (*save)(void *u, uint32_t i, nbep_evloop_motion *m);
     void (*restore)(void *u, uint32_t i, const nbep_evloop_motion *m);

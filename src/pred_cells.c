@@ -366,18 +366,23 @@ static void cells_flight(void *u, uint32_t i, double t, nbep_vec3 *p, nbep_vec3 
 
 /* Sphere i leaves its cell at absolute time t: when its centre is then outside the box on a
  * periodic axis, it is brought to t and wrapped (image counted), so that its position stays
- * in its cell (cells.h). */
-static void cells_wrap(void *u, uint32_t i, double t)
+ * in its cell (cells.h); its flight at t either way (cells_flight's, bit for bit: a sphere
+ * brought to t flies for no time). */
+static void cells_wrap(void *u, uint32_t i, double t, nbep_vec3 *p, nbep_vec3 *v, nbep_vec3 *a)
 {
     const cells_user *x = u;
-    nbep_vec3 p, v, a;
-    cells_flight(u, i, t, &p, &v, &a);
+    cells_flight(u, i, t, p, v, a);
+    if (nbep_periodic_inside(&x->c->pb, *p))
+        return;
+    nbep_vec3 q = *p;
     int32_t img[3] = {0, 0, 0};
-    nbep_periodic_wrap(&x->c->pb, &p, img);
+    nbep_periodic_wrap(&x->c->pb, &q, img);
     if (img[0] == 0 && img[1] == 0 && img[2] == 0)
         return;
     advance_to(x->c, x->s, i, t - x->T0);
     nbep_periodic_wrap(&x->c->pb, &x->s->pos[i], &x->s->image[3 * (size_t)i]);
+    *p = x->s->pos[i];
+    *v = x->s->vel[i];
 }
 
 static void cells_save(void *u, uint32_t i, nbep_evloop_motion *m)

@@ -103,6 +103,40 @@ static void test_wrap_moves_into_the_box_and_counts_the_periods(void **state)
     assert_true(isnan(t.x) && isinf(t.y) && it[0] == 0 && it[1] == 0);
 }
 
+/* nbep_periodic_inside: true exactly where the wrap would leave a finite position as it is,
+ * checked against the wrap itself on points around and on the faces, periodic axes only. */
+static void test_inside_is_where_the_wrap_leaves_a_position(void **state)
+{
+    (void)state;
+    const bool xz[3] = {true, false, true};
+    const nbep_periodic boxes[2] = {
+        nbep_periodic_make(ALL3, (nbep_vec3){-1.0, 0.0, 2.0}, (nbep_vec3){3.0, 5.0, 12.0}),
+        nbep_periodic_make(xz, (nbep_vec3){-1.0, 0.0, 2.0}, (nbep_vec3){3.0, 5.0, 12.0})};
+    const double xs[] = {-1.0 - 1e-12, -1.0, -1.0 + 1e-300, 0.0, 3.0 - 1e-15, 3.0, 3.5};
+    const double ys[] = {-0.5, 0.0, 4.999, 5.0, 7.0};
+    const double zs[] = {2.0, nextafter(2.0, 0.0), 11.9999999, 12.0, -40.0};
+    int inside = 0, outside = 0;
+    for (int b = 0; b < 2; b++)
+        for (size_t i = 0; i < sizeof xs / sizeof *xs; i++)
+            for (size_t j = 0; j < sizeof ys / sizeof *ys; j++)
+                for (size_t k = 0; k < sizeof zs / sizeof *zs; k++) {
+                    const nbep_vec3 p = {xs[i], ys[j], zs[k]};
+                    nbep_vec3 q = p;
+                    int32_t img[3] = {0, 0, 0};
+                    nbep_periodic_wrap(&boxes[b], &q, img);
+                    const bool left = memcmp(&p, &q, sizeof p) == 0;
+                    assert_int_equal(nbep_periodic_inside(&boxes[b], p), left);
+                    inside += left;
+                    outside += !left;
+                }
+    assert_true(inside > 0 && outside > 0);
+    /* y is not periodic in the second box: any y is inside there */
+    assert_true(nbep_periodic_inside(&boxes[1], (nbep_vec3){0.0, 1e9, 5.0}));
+    assert_false(nbep_periodic_inside(&boxes[0], (nbep_vec3){0.0, 1e9, 5.0}));
+    /* non-finite: not inside (the wrap, which leaves it, decides) */
+    assert_false(nbep_periodic_inside(&boxes[0], (nbep_vec3){NAN, 1.0, 5.0}));
+}
+
 static void test_shift_is_whole_periods_on_periodic_axes(void **state)
 {
     (void)state;
@@ -1077,6 +1111,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_minimum_image_picks_the_nearest_copy_on_periodic_axes_only),
         cmocka_unit_test(test_wrap_moves_into_the_box_and_counts_the_periods),
+        cmocka_unit_test(test_inside_is_where_the_wrap_leaves_a_position),
         cmocka_unit_test(test_shift_is_whole_periods_on_periodic_axes),
         cmocka_unit_test(test_overlap_check_sees_pairs_across_a_periodic_face),
         cmocka_unit_test(test_frames_overlap_check_is_shared_by_the_threads),

@@ -33,6 +33,20 @@ nbep_vec3 nbep_periodic_image(const nbep_periodic *pb, nbep_vec3 d);
  * Idempotent: a position already inside is not touched. Non-finite coordinates are left. */
 void nbep_periodic_wrap(const nbep_periodic *pb, nbep_vec3 *p, int32_t image[3]);
 
+/* Whether p lies inside [lo, lo + len) on every periodic axis, by nbep_periodic_wrap's own test
+ * (so that it would leave p as it is): the common case, tested inline without a call. False
+ * for a non-finite coordinate on a periodic axis (which the wrap leaves too). */
+static inline bool nbep_periodic_inside(const nbep_periodic *pb, nbep_vec3 p)
+{
+    const double x[3] = {p.x, p.y, p.z};
+    bool in = true;
+    for (int k = 0; k < 3; k++) {
+        const double u = x[k] - pb->lo[k];
+        in &= !pb->axis[k] || (u >= 0.0 && u < pb->len[k]);
+    }
+    return in;
+}
+
 /* The periods to add to the end of the separation d to reach its minimum image: cells[k] =
  * -round(d_k / len_k) on periodic axes, 0 elsewhere, so that d + nbep_periodic_shift(cells) is
  * the minimum image (with whole periods, exactly representable shifts). */
