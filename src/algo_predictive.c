@@ -50,7 +50,8 @@
  *   Since issue 9 a sphere keeps up to NBEP_CONTACT_MAX such contacts at once (planes, and
  *   spheres held still), its flight acceleration projected onto the cone they allow
  *   (contact.h); see "Lasting sphere-sphere contacts" for held spheres, tc_restitution for the
- *   TC model that ends inelastic collapse, and caged for a sphere between two fixed faces. */
+ *   TC model that ends inelastic collapse, and caged for a sphere between two fixed faces, all
+ *   in pred_react.c, and pred_settle.c for settling. */
 #include "pred_impl.h"
 
 #include <stdlib.h>

@@ -17,10 +17,11 @@
  * acceleration exactly zero, so it costs no events and can carry others in turn; a settled
  * pile is a network of held spheres on planes.
  *
- * The rest speed (rest_speed) sets what is slow enough to hold: |a| t_min, twice the separating
- * speed of the minimum bounce above (9.8e-4 m/s under gravity at dt = 1e-3). A pressed pair
- * leaves every response at least that fast, so any lasting contact the model does not hold
- * jitters at that speed for ever; a hold threshold below it (1e-3 |a| dt, before) is never met
+ * The rest speed (rest_speed, pred_impl.h) sets what is slow enough to hold: |a| t_min, twice
+ * the separating speed of the minimum bounce (MIN_BOUNCE_STEP_FRACTION; 9.8e-4 m/s under
+ * gravity at dt = 1e-3). A pressed pair leaves every response at least that fast, so any
+ * lasting contact the model does not hold jitters at that speed for ever; a hold threshold
+ * below it (1e-3 |a| dt, before) is never met
  * in a crowd: a 300-sphere pour had no sphere held at all after 0.8 s, and every jittering
  * impact on a held sphere knocked it loose again. So a supported sphere slower than the rest
  * speed is held when a partner meets it; a sphere that meets a held one no faster than the
