@@ -105,6 +105,7 @@ static void pred_destroy(void *p)
     }
     free(c);
 }
+
 /* NBEP_TEAM, read as a run is made or estimated (pred_ways.c). */
 static int team_forced(void)
 {
@@ -138,8 +139,7 @@ typedef struct pred_plan {
     bool crews;         /* grid mode on two threads or more: crews run the rounds (pred_ctx) */
     bool team;          /* cells mode: a team of team_size >= 2 may run the event loop */
     int team_size;      /* cells mode: the threads that may run the event loop */
-    int team_ways;      /* the ways a step may run, their threads (pred_ctx) */
-    int team_crew[3];
+    pred_ways ways;     /* the ways a step may run (grid mode's crews, cells mode's team) */
 } pred_plan;
 
 /* The plan of a run of scene sc from state st (the scene's, or a run's copy of it) on nt
@@ -166,10 +166,7 @@ static pred_plan plan_of(const nbep_scene *sc, const nbep_state *st, int nt, int
         if (team_force >= 2 && team_force < size)
             size = team_force;
         p.crews = true;
-        p.team_ways = size > 2 ? 3 : 2;
-        p.team_crew[0] = 1;
-        p.team_crew[1] = 2;
-        p.team_crew[2] = size;
+        nbep__pred_ways_init(&p.ways, size, team_force);
     }
     if (p.cells) {
         /* the team loop: reactions in free flight change their own spheres only (nothing
@@ -182,10 +179,7 @@ static pred_plan plan_of(const nbep_scene *sc, const nbep_state *st, int nt, int
             size = team_force;
         p.team_size = can_team ? size : 1;
         p.team = p.team_size >= 2;
-        p.team_ways = !p.team ? 1 : p.team_size > 2 ? 3 : 2;
-        p.team_crew[0] = 1;
-        p.team_crew[1] = 2;
-        p.team_crew[2] = p.team_size;
+        nbep__pred_ways_init(&p.ways, p.team_size, team_force);
     }
     return p;
 }
@@ -196,9 +190,9 @@ static size_t plan_own(const pred_plan *p, int t)
 {
     const nbep_range r = nbep__range_split(p->n, t, p->nt);
     size_t own = r.hi - r.lo + 1;
-    for (int k = 0; p->crews && k < p->team_ways; k++)
-        if (t < p->team_crew[k]) {
-            const nbep_range q = nbep__range_split(p->n, t, p->team_crew[k]);
+    for (int k = 0; p->crews && k < p->ways.n; k++)
+        if (t < p->ways.crew[k]) {
+            const nbep_range q = nbep__range_split(p->n, t, p->ways.crew[k]);
             own = own > q.hi - q.lo + 1 ? own : q.hi - q.lo + 1;
         }
     return own;
@@ -318,7 +312,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     }
     c->use_grid = p.use_grid;
     c->crews = p.crews;
-    nbep__pred_ways_init(&c->ways, p.team_ways, p.team_crew, force);
+    c->ways = p.ways;
     for (int w = 0; c->crews && w < c->ways.n; w++)
         nbep_barrier_init(&c->crew_bar[w], (unsigned)c->ways.crew[w]);
     c->pb = nbep_periodic_make(sim->scene->has_box ? sim->scene->periodic : NULL,
@@ -1057,7 +1051,7 @@ static void pred_threads_use(const nbep_scene *sc, int nt, char *buf, size_t len
                  nt);
     else if (p.crews)
         snprintf(buf, len, "each step's rounds on %s, whichever the run measures fastest",
-                 p.team_ways > 2 ? "1, 2 or all" : "1 or 2");
+                 p.ways.n > 2 ? "1, 2 or all" : "1 or 2");
     else
         snprintf(buf, len, "all %d share each round (find, react, predict again)", nt);
 }

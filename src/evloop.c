@@ -92,9 +92,9 @@ typedef struct evl_ws {
      * leader as it commits the place (on the line after the one it reads first, which for a
      * pair's event it reads no more of: it writes without waiting for it), and whether the
      * handler has yet to add that place's counts and sums (its context's) to its own
-     * (pending: the handler's alone). The handler reads `stood`
-     * before it handles another place here, published after the write, or at the call's end,
-     * after quit: so the leader reads none of a helper's counts (settle) */
+     * (pending: the handler's alone). The handler reads `stood` before it handles another
+     * place here, published after the write, or at the call's end, after quit: so the leader
+     * reads none of a helper's counts (settle) */
     uint64_t stood;
     bool pending;
     /* a rebuild of one list (walk): near holds the new list, gain[k] set for the entries i's

@@ -374,6 +374,8 @@ static void cells_wrap(void *u, uint32_t i, double t, nbep_vec3 *p, nbep_vec3 *v
     cells_flight(u, i, t, p, v, a);
     if (nbep_periodic_inside(&x->c->pb, *p))
         return;
+    /* outside: wrapped, unless the wrap leaves it too (a non-finite or runaway position, which
+     * is then not brought to t either, as before the inline test) */
     nbep_vec3 q = *p;
     int32_t img[3] = {0, 0, 0};
     nbep_periodic_wrap(&x->c->pb, &q, img);

@@ -227,7 +227,7 @@ typedef struct pred_ctx {
      * as long as one thread on a 16-core node; the paper's box gains from every thread. The
      * results are the same bit for bit whatever the crew: every round's outcome is (tests). */
     bool crews;
-    nbep_barrier crew_bar[3];
+    nbep_barrier crew_bar[PRED_WAYS_MAX];
     /* thread 0, where the crew is smaller than the run's threads, for the others after the
      * barrier that ends the rounds: whether the rounds stopped the run */
     bool crew_quit;
@@ -420,9 +420,10 @@ void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own,
 #define PRED_WAYS_NEVER (-1)
 #define PRED_WAYS_CYCLE (-2)
 int nbep__pred_ways_forced(const char *v);
-/* n ways (0 to PRED_WAYS_MAX) of crew[0..n) threads, NBEP_TEAM's choice force: nothing measured
- * yet, the first step's way the largest (PRED_WAYS_NEVER: one thread). */
-void nbep__pred_ways_init(pred_ways *w, int n, const int *crew, int force);
+/* The ways of a team or crew of `size` threads (0: none, nothing to choose): one thread, a pair
+ * and the whole team, as many as it has threads for; NBEP_TEAM's choice force; nothing
+ * measured yet, the first step's way the largest (PRED_WAYS_NEVER: one thread). */
+void nbep__pred_ways_init(pred_ways *w, int size, int force);
 /* Thread 0, after cells mode's step `step` ran its events (`events` of them in `seconds`) way
  * `way`: the way of step + 1. */
 void nbep__pred_ways_choose(pred_ways *w, uint64_t step, int way, uint64_t events,

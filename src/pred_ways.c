@@ -46,11 +46,12 @@ int nbep__pred_ways_forced(const char *v)
     return k == 1 ? PRED_WAYS_NEVER : k < NBEP_EVLOOP_TEAM_MAX ? (int)k : NBEP_EVLOOP_TEAM_MAX;
 }
 
-void nbep__pred_ways_init(pred_ways *w, int n, const int *crew, int force)
+_Static_assert(PRED_WAYS_MAX == 3, "the ways: one thread, a pair and the whole team");
+
+void nbep__pred_ways_init(pred_ways *w, int size, int force)
 {
-    *w = (pred_ways){.n = n, .force = force, .last = -1};
-    for (int k = 0; k < n; k++)
-        w->crew[k] = crew[k];
+    const int n = size < 1 ? 0 : size < PRED_WAYS_MAX ? size : PRED_WAYS_MAX;
+    *w = (pred_ways){.n = n, .crew = {1, 2, size}, .force = force, .last = -1};
     /* the first step: the whole team */
     w->way[0] = w->way[1] = force == PRED_WAYS_NEVER || n < 1 ? 0 : n - 1;
 }

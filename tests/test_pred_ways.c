@@ -17,7 +17,7 @@
 
 #define EVENTS 1000u
 
-static const int CREW3[PRED_WAYS_MAX] = {1, 2, 8};
+#define TEAM 8 /* a team of 8 threads: three ways, 1, 2 and 8 threads */
 
 /* Runs cells mode's steps first..last of a run whose way k costs cost(k, step) seconds an
  * event, as pred_cells.c does: step s runs w->way[s & 1], then the chooser sets step s + 1's.
@@ -54,16 +54,16 @@ static void test_the_first_step_runs_the_largest_way_unless_never(void **state)
 {
     (void)state;
     pred_ways w;
-    nbep__pred_ways_init(&w, 3, CREW3, PRED_WAYS_FREE);
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     assert_int_equal(w.way[0], 2);
     assert_int_equal(w.way[1], 2);
     assert_int_equal(w.crew[2], 8);
     assert_int_equal(w.last, -1);
     for (int k = 0; k < PRED_WAYS_MAX; k++)
         assert_true(w.cost[k] == 0.0);
-    nbep__pred_ways_init(&w, 3, CREW3, PRED_WAYS_NEVER);
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_NEVER);
     assert_int_equal(w.way[1], 0);
-    nbep__pred_ways_init(&w, 0, CREW3, PRED_WAYS_FREE); /* all pairs: nothing to choose */
+    nbep__pred_ways_init(&w, 0, PRED_WAYS_FREE); /* all pairs: nothing to choose */
     assert_int_equal(w.way[0], 0);
     assert_int_equal(w.way[1], 0);
 }
@@ -79,7 +79,7 @@ static void test_each_way_is_measured_once_largest_first_then_the_fastest_is_tak
 {
     (void)state;
     pred_ways w;
-    nbep__pred_ways_init(&w, 3, CREW3, PRED_WAYS_FREE);
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     int ways[40];
     run_steps(&w, close_costs, 1, 39, ways);
     assert_int_equal(ways[1], 2);
@@ -93,7 +93,7 @@ static void test_probes_come_every_eighth_step_taking_the_other_ways_in_turn(voi
 {
     (void)state;
     pred_ways w;
-    nbep__pred_ways_init(&w, 3, CREW3, PRED_WAYS_FREE);
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     enum { LAST = 200 };
     int ways[LAST + 1];
     run_steps(&w, close_costs, 1, LAST, ways);
@@ -123,7 +123,7 @@ static void test_a_clear_winner_is_probed_every_64th_step_only(void **state)
 {
     (void)state;
     pred_ways w;
-    nbep__pred_ways_init(&w, 3, CREW3, PRED_WAYS_FREE);
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     enum { LAST = 300 };
     int ways[LAST + 1];
     run_steps(&w, clear_costs, 1, LAST, ways);
@@ -147,7 +147,7 @@ static void test_a_way_that_turns_slower_is_left_at_once(void **state)
 {
     (void)state;
     pred_ways w;
-    nbep__pred_ways_init(&w, 3, CREW3, PRED_WAYS_FREE);
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     int ways[31];
     run_steps(&w, team_turns_slow, 1, 30, ways);
     for (uint64_t s = 4; s <= 21; s++)
@@ -169,7 +169,7 @@ static void test_one_slow_step_of_the_fastest_way_does_not_turn_the_run(void **s
 {
     (void)state;
     pred_ways w;
-    nbep__pred_ways_init(&w, 3, CREW3, PRED_WAYS_FREE);
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     int ways[31];
     run_steps(&w, one_noisy_step, 1, 30, ways);
     /* its running mean after step 20 is about 0.85, still below the pair's 1.0 */
@@ -190,7 +190,7 @@ static void test_a_probe_replaces_the_probed_ways_figure(void **state)
 {
     (void)state;
     pred_ways w;
-    nbep__pred_ways_init(&w, 3, CREW3, PRED_WAYS_FREE);
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     int ways[140];
     run_steps(&w, pair_gets_faster, 1, 139, ways);
     /* the team clear of the others (3.0 >= 1.25 x 1.0): the first probe at step 64 */
@@ -212,12 +212,12 @@ static void test_ties_go_to_the_way_with_more_threads(void **state)
 {
     (void)state;
     pred_ways w;
-    nbep__pred_ways_init(&w, 3, CREW3, PRED_WAYS_FREE);
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     int ways[16];
     run_steps(&w, equal_costs, 1, 15, ways);
     for (uint64_t s = 4; s < 8; s++)
         assert_int_equal(ways[s], 2);
-    nbep__pred_ways_init(&w, 2, CREW3, PRED_WAYS_FREE); /* two ways: one thread or a pair */
+    nbep__pred_ways_init(&w, 2, PRED_WAYS_FREE); /* two ways: one thread or a pair */
     run_steps(&w, equal_costs, 1, 15, ways);
     assert_int_equal(ways[1], 1);
     assert_int_equal(ways[2], 0);
@@ -231,18 +231,18 @@ static void test_never_always_a_count_and_cycle_fix_the_way(void **state)
     (void)state;
     pred_ways w;
     int ways[20];
-    nbep__pred_ways_init(&w, 3, CREW3, PRED_WAYS_NEVER);
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_NEVER);
     run_steps(&w, clear_costs, 1, 19, ways);
     for (uint64_t s = 1; s <= 19; s++)
         assert_int_equal(ways[s], 0);
     const int forced[] = {PRED_WAYS_ALWAYS, 3};
     for (size_t f = 0; f < 2; f++) {
-        nbep__pred_ways_init(&w, 3, CREW3, forced[f]);
+        nbep__pred_ways_init(&w, TEAM, forced[f]);
         run_steps(&w, close_costs, 1, 19, ways); /* the team never fastest: still taken */
         for (uint64_t s = 1; s <= 19; s++)
             assert_int_equal(ways[s], 2);
     }
-    nbep__pred_ways_init(&w, 3, CREW3, PRED_WAYS_CYCLE);
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_CYCLE);
     run_steps(&w, clear_costs, 1, 19, ways);
     for (uint64_t s = 1; s <= 19; s++) /* the whole team first, then down, in turn */
         assert_int_equal(ways[s], (int)(2 - (s - 1) % 3));
@@ -252,7 +252,7 @@ static void test_a_step_without_events_measures_nothing(void **state)
 {
     (void)state;
     pred_ways w;
-    nbep__pred_ways_init(&w, 3, CREW3, PRED_WAYS_FREE);
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     nbep__pred_ways_choose(&w, 1, 2, 0, 1.0);
     assert_true(w.cost[2] == 0.0);
     assert_int_equal(w.way[0], 2); /* still unmeasured: the team again */
@@ -262,13 +262,13 @@ static void test_a_steps_way_is_written_for_the_next_step_only(void **state)
 {
     (void)state;
     pred_ways w;
-    nbep__pred_ways_init(&w, 3, CREW3, PRED_WAYS_FREE);
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     for (uint64_t s = 1; s < 40; s++) {
         const int now = w.way[s & 1]; /* other threads may still read it */
         nbep__pred_ways_choose(&w, s, now, EVENTS, close_costs(now, s) * EVENTS);
         assert_int_equal(w.way[s & 1], now);
     }
-    nbep__pred_ways_init(&w, 3, CREW3, PRED_WAYS_FREE);
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     for (uint64_t s = 1; s < 40; s++) {
         const int now = w.way[s & 1];
         nbep__pred_ways_choose_crew(&w, s, now, close_costs(now, s));
@@ -282,7 +282,7 @@ static void test_grid_crews_time_only_the_second_step_of_a_way(void **state)
 {
     (void)state;
     pred_ways w;
-    nbep__pred_ways_init(&w, 3, CREW3, PRED_WAYS_FREE);
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     int ways[40];
     for (uint64_t s = 1; s < 40; s++) {
         ways[s] = w.way[s & 1];
@@ -297,7 +297,7 @@ static void test_grid_crews_time_only_the_second_step_of_a_way(void **state)
     const int first[] = {2, 2, 1, 1, 0, 0, 2, 2};
     for (size_t s = 1; s <= 8; s++)
         assert_int_equal(ways[s], first[s - 1]);
-    nbep__pred_ways_init(&w, 3, CREW3, PRED_WAYS_CYCLE); /* every step a change, for tests */
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_CYCLE); /* every step a change, for tests */
     for (uint64_t s = 1; s < 10; s++) {
         ways[s] = w.way[s & 1];
         nbep__pred_ways_choose_crew(&w, s, ways[s], 1.0);
