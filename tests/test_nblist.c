@@ -1,7 +1,8 @@
 /* Tests of the neighbour lists (nblist.h): against a reference adjacency matrix under random
  * symmetric attach and detach operations, with lists growing past their room (moves to the
  * pool's end) and enough of it given up that the pool compacts; a layout from counts and a
- * fill; a list set at once against one cleared and appended to; the invariant checker catching an asymmetric pair, a duplicate and a self entry. */
+ * fill; a list set at once against one cleared and appended to; the invariant checker
+ * catching an asymmetric pair, a duplicate and a self entry. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
