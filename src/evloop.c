@@ -859,16 +859,15 @@ static bool commit_sets(const evl_ws *w, uint32_t j)
     return set;
 }
 
-/* Counts one event at time t towards the stall check: false when `stall_events` events in a row
- * have not advanced time by more than stall_dt. */
-static bool advances(uint64_t *since, double *t_mark, double t, uint64_t stall_events,
-                     double stall_dt)
+/* Counts one event at time t towards the stall check: false when st->events events in a row
+ * have not advanced time by more than st->dt. */
+static bool advances(nbep_evloop_stall *st, double t)
 {
-    if (++*since >= stall_events) {
-        if (!(t - *t_mark > stall_dt))
+    if (++st->since >= st->events) {
+        if (!(t - st->t_mark > st->dt))
             return false;
-        *t_mark = t;
-        *since = 0;
+        st->t_mark = t;
+        st->since = 0;
     }
     return true;
 }
@@ -903,13 +902,10 @@ static void count_handled(nbep_evloop_tally *tally, const evl_ws *w)
 }
 
 bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_end,
-                     uint64_t stall_events, double stall_dt, nbep_evloop_tally *tally,
-                     double *t_stuck)
+                     nbep_evloop_stall *stall, nbep_evloop_tally *tally, double *t_stuck)
 {
     if (e->failed) /* a rebuild ran out of memory */
         return false;
-    uint64_t since = 0;
-    double t_mark = -INFINITY;
     evl_ws *w = &e->ws[0][0];
     uint32_t i;
     double t;
@@ -917,7 +913,7 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
         const nbep_event ev = *nbep_feq_slot(e->q, i);
         prefetch_event(e, i, &ev);
         tally->events++;
-        if (!advances(&since, &t_mark, t, stall_events, stall_dt)) {
+        if (!advances(stall, t)) {
             *t_stuck = t;
             return false;
         }
@@ -1416,11 +1412,9 @@ static void start(nbep_evloop *e, nbep_calendar_entry c, double t_end)
 }
 
 static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
-                 double t_end, uint64_t stall_events, double stall_dt, nbep_evloop_tally *tally,
+                 double t_end, nbep_evloop_stall *stall, nbep_evloop_tally *tally,
                  double *t_stuck)
 {
-    uint64_t since = 0;
-    double t_mark = -INFINITY;
     for (;;) {
         if (e->head == e->tail) {
             phase(PH_START);
@@ -1429,7 +1423,7 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
                 return true;
             const nbep_event ev = *nbep_feq_slot(e->q, c.item);
             prefetch_event(e, c.item, &ev);
-            if (!advances(&since, &t_mark, c.time, stall_events, stall_dt)) {
+            if (!advances(stall, c.time)) {
                 tally->events++;
                 *t_stuck = c.time;
                 return false;
@@ -1461,7 +1455,7 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
                 tally->undone += undo_from(e, ops, u, us, s);
                 continue;
             }
-            if (!advances(&since, &t_mark, tm, stall_events, stall_dt)) {
+            if (!advances(stall, tm)) {
                 undo_from(e, ops, u, us, s);
                 tally->events++;
                 *t_stuck = tm;
@@ -1514,13 +1508,13 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
 }
 
 bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
-                          int crew, uint64_t call, double t_end, uint64_t stall_events,
-                          double stall_dt, nbep_evloop_tally *tally, double *t_stuck)
+                          int crew, uint64_t call, double t_end, nbep_evloop_stall *stall,
+                          nbep_evloop_tally *tally, double *t_stuck)
 {
     assert(crew >= 2 && crew <= e->team && call > 0);
     e->crew = crew;
     phase(PH_START);
-    bool ok = !e->failed && lead(e, ops, u, us, t_end, stall_events, stall_dt, tally, t_stuck);
+    bool ok = !e->failed && lead(e, ops, u, us, t_end, stall, tally, t_stuck);
     phase(PH_COUNT); /* out of the loop */
     settle_all(e, ops, u, us, 0);
     /* the helpers return (each has handled every place it took: each was waited for), each

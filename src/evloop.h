@@ -29,6 +29,7 @@
 #ifndef NBEP_EVLOOP_H
 #define NBEP_EVLOOP_H
 
+#include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -141,14 +142,24 @@ typedef struct nbep_evloop_tally {
     uint64_t undone;     /* team loop: events handled ahead and undone */
 } nbep_evloop_tally;
 
+/* The stall check: every `events` events time must have advanced by more than dt. `since`
+ * and `t_mark` (0 and -INFINITY at a step's start, NBEP_EVLOOP_STALL) carry the count from one
+ * call to the next, so that a step whose events run in two calls (the first part of the step
+ * on other threads) checks them as one call would. */
+typedef struct nbep_evloop_stall {
+    uint64_t events;
+    double dt;
+    uint64_t since;  /* events since t_mark */
+    double t_mark;
+} nbep_evloop_stall;
+#define NBEP_EVLOOP_STALL(events, dt) ((nbep_evloop_stall){(events), (dt), 0, -INFINITY})
+
 /* Handles every event before t_end, in order. One thread. Returns false, with the time of
- * the stuck event in *t_stuck, when `stall_events` events in a row did not advance time by
- * more than stall_dt (a cascade of zero-time events the model cannot resolve), when a
- * neighbour list could not get memory (nbep_evloop_failed), or after an event whose reaction
- * set *stop (ops react). */
+ * the stuck event in *t_stuck, when the stall check fails (a cascade of zero-time events the
+ * model cannot resolve), when a neighbour list could not get memory (nbep_evloop_failed), or
+ * after an event whose reaction set *stop (ops react). */
 bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_end,
-                     uint64_t stall_events, double stall_dt, nbep_evloop_tally *tally,
-                     double *t_stuck);
+                     nbep_evloop_stall *stall, nbep_evloop_tally *tally, double *t_stuck);
 
 /* The team loop's ring of places (a power of 2, more than the places it keeps in flight):
  * the contexts a caller passes it (us, below), one per ring slot. */
@@ -177,11 +188,11 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
  * total over the threads' u is the one thread's. For scenes whose reactions change only
  * the event's own spheres (the caller's choice: an elastic scene where nothing accelerates).
  * `call` (> 0) names the call, the same on the leader and its helpers and unlike every earlier
- * call's (the step: a thread may sit out calls of fewer threads, and must not take an earlier
- * call's end for this one's). Returns as nbep_evloop_run; the helpers return when it does. */
+ * call's (one per part of a step: a thread may sit out calls of fewer threads, and must not take
+ * an earlier call's end for this one's). Returns as nbep_evloop_run; the helpers return when it does. */
 bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
-                          int crew, uint64_t call, double t_end, uint64_t stall_events,
-                          double stall_dt, nbep_evloop_tally *tally, double *t_stuck);
+                          int crew, uint64_t call, double t_end, nbep_evloop_stall *stall,
+                          nbep_evloop_tally *tally, double *t_stuck);
 void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
                       int t, uint64_t call);
 

@@ -479,6 +479,50 @@ static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, c
  * this run continues from (bit-for-bit resume): the cell membership and the moments at which
  * slots were predicted depend on the run's history, the rebuild makes them depend only on the
  * frame. */
+/* The events of step `step` before t_end, every thread: those of way `way` (a probe when
+ * `probe`: the step's first part) run them, thread 0 leading, through the team loop's call
+ * `call` (unlike every other part's) where the way has more than one thread. Thread 0 then
+ * notes the way's seconds per event (pred_ways.c), and on failure sets c->ev_failed with the
+ * run's status and message. */
+static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void *const *us,
+                       const nbep_evloop_ops *ops, int way, bool probe, uint64_t call,
+                       double t_end, nbep_evloop_stall *stall, uint64_t step)
+{
+    const int crew = c->ways.crew[way];
+    if (tid >= 1 && tid < crew)
+        nbep_evloop_help(c->ev, ops, u, us, tid, call);
+    if (tid != 0)
+        return;
+    nbep_evloop_tally tally = {0};
+    double t_stuck = 0.0;
+    uint32_t jammed;
+    const double t_loop = nbep_now();
+    c->ev_failed = !(crew > 1 ? nbep_evloop_run_lead(c->ev, ops, u, us, crew, call, t_end, stall,
+                                                     &tally, &t_stuck)
+                              : nbep_evloop_run(c->ev, ops, u, t_end, stall, &tally, &t_stuck));
+    if (c->team && probe)
+        nbep__pred_ways_note(&c->ways, way, true, tally.events, nbep_now() - t_loop);
+    else if (c->team)
+        nbep__pred_ways_choose(&c->ways, step, way, tally.events, nbep_now() - t_loop);
+    u->cnt->c[NBEP_COUNTER_CHECKS] += tally.events;
+    u->cnt->c[NBEP_COUNTER_AHEAD] += tally.ahead;
+    u->cnt->c[NBEP_COUNTER_UNDONE] += tally.undone;
+    if (c->ev_failed && nbep_evloop_failed(c->ev)) {
+        nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                      "nbep: step %llu: no memory for the neighbour lists; stopping",
+                      (unsigned long long)step);
+        sim->status = NBEP_ENOMEM;
+    } else if (c->ev_failed && (jammed = cells_jammed(c, sim->st.n, step)) != 0) {
+        nbep__pred_jam_fail(sim, step, jammed - 1, t_stuck);
+    } else if (c->ev_failed) {
+        nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                      "nbep: step %llu: events at t = %.17g do not resolve "
+                      "(endless zero-time reactions); stopping",
+                      (unsigned long long)step, t_stuck);
+        sim->status = NBEP_ENUMERIC;
+    }
+}
+
 void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thread_ws *w)
 {
     nbep_state *s = &sim->st;
@@ -532,40 +576,20 @@ void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own,
             ups[m] = (cells_user){c, s, sim->scene, u.T0, 0.0, w, &c->help_cnt[h], &c->help_mx[h]};
             us[m] = &ups[m];
         }
-        const int way = c->ways.way[step & 1], crew = c->ways.crew[way];
-        if (tid >= 1 && tid < crew)
-            nbep_evloop_help(c->ev, ops, &u, us, tid, step);
-        if (tid == 0) {
-            nbep_evloop_tally tally = {0};
-            double t_stuck = 0.0;
-            uint32_t jammed;
-            const double t_loop = nbep_now();
-            c->ev_failed =
-                !(crew > 1 ? nbep_evloop_run_lead(c->ev, ops, &u, us, crew, step, T_end,
-                                                  STALL_EVENTS, STALL_FRACTION * sim->dt,
-                                                  &tally, &t_stuck)
-                           : nbep_evloop_run(c->ev, ops, &u, T_end, STALL_EVENTS,
-                                             STALL_FRACTION * sim->dt, &tally, &t_stuck));
-            if (c->team)
-                nbep__pred_ways_choose(&c->ways, step, way, tally.events, nbep_now() - t_loop);
-            u.cnt->c[NBEP_COUNTER_CHECKS] += tally.events;
-            u.cnt->c[NBEP_COUNTER_AHEAD] += tally.ahead;
-            u.cnt->c[NBEP_COUNTER_UNDONE] += tally.undone;
-            if (c->ev_failed && nbep_evloop_failed(c->ev)) {
-                nbep_diag_add(sim->diag, __FILE__, __LINE__,
-                              "nbep: step %llu: no memory for the neighbour lists; stopping",
-                              (unsigned long long)step);
-                sim->status = NBEP_ENOMEM;
-            } else if (c->ev_failed && (jammed = cells_jammed(c, s->n, step)) != 0) {
-                nbep__pred_jam_fail(sim, step, jammed - 1, t_stuck);
-            } else if (c->ev_failed) {
-                nbep_diag_add(sim->diag, __FILE__, __LINE__,
-                              "nbep: step %llu: events at t = %.17g do not resolve "
-                              "(endless zero-time reactions); stopping",
-                              (unsigned long long)step, t_stuck);
-                sim->status = NBEP_ENUMERIC;
-            }
+        /* the step's events, on the threads of its way; a probe of another way first runs
+         * those of the step's first part (pred_ways.c), behind a barrier: its threads have
+         * left the team loop before the rest's enter it */
+        nbep_evloop_stall stall = NBEP_EVLOOP_STALL(STALL_EVENTS, STALL_FRACTION * sim->dt);
+        const int probe = c->ways.probe[step & 1];
+        if (probe >= 0) {
+            cells_part(sim, c, tid, &u, us, ops, probe, true, 2 * step,
+                       u.T0 + PRED_WAYS_PART * sim->dt, &stall, step);
+            nbep_barrier_wait(&c->bar);
+            if (c->ev_failed) /* written by thread 0 before the barrier */
+                return;
         }
+        cells_part(sim, c, tid, &u, us, ops, c->ways.way[step & 1], false, 2 * step + 1, T_end,
+                   &stall, step);
         nbep_barrier_wait(&c->bar);
         if (c->ev_failed) /* written by thread 0 before the barrier */
             return;

@@ -142,6 +142,8 @@ typedef struct jam_count {
  * (cells mode's team loop) or crew (grid mode's rounds) where that is more; chosen step by
  * step by measuring each. Thread 0 writes it, between steps. */
 #define PRED_WAYS_MAX 3
+/* A probe's part of a cells-mode step: its events before T0 + PRED_WAYS_PART dt (pred_ways.c) */
+#define PRED_WAYS_PART 0.125
 typedef struct pred_ways {
     int n;                      /* the ways: 0 (one thread only, nothing to choose) to 3 */
     int crew[PRED_WAYS_MAX];    /* each way's threads: 1, 2, and the whole team or crew */
@@ -149,6 +151,9 @@ typedef struct pred_ways {
      * wrote during step k - 1 (nbep__pred_ways_choose), whose end every thread crossed, and
      * which no one writes during step k */
     int way[2];
+    /* cells mode: the way of the first part of each step (a probe, PRED_WAYS_PART), by the
+     * step's parity as way; -1: none, the step runs way[] throughout */
+    int probe[2];
     double cost[PRED_WAYS_MAX]; /* measured seconds per event (cells mode) or per step (grid
                                  * mode) of each way; 0: none yet */
     int force;                  /* NBEP_TEAM (nbep__pred_ways_forced) */
@@ -424,8 +429,11 @@ int nbep__pred_ways_forced(const char *v);
  * and the whole team, as many as it has threads for; NBEP_TEAM's choice force; nothing
  * measured yet, the first step's way the largest (PRED_WAYS_NEVER: one thread). */
 void nbep__pred_ways_init(pred_ways *w, int size, int force);
-/* Thread 0, after cells mode's step `step` ran its events (`events` of them in `seconds`) way
- * `way`: the way of step + 1. */
+/* Thread 0, after a part of a cells-mode step ran `events` events in `seconds` way `way`: its
+ * figure, as a probe's (replacing the way's) or as the way taken's (its running mean). */
+void nbep__pred_ways_note(pred_ways *w, int way, bool probe, uint64_t events, double seconds);
+/* Thread 0, after cells mode's step `step` ran its events (`events` of them in `seconds`, the
+ * first part's apart: nbep__pred_ways_note) way `way`: the ways of step + 1 (way[], probe[]). */
 void nbep__pred_ways_choose(pred_ways *w, uint64_t step, int way, uint64_t events,
                             double seconds);
 /* Thread 0, after grid mode's step `step` ran way `way` in `seconds`: the way of step + 1. */

@@ -10,20 +10,29 @@
  * this project's 2-core virtual machine ran 1.5 times as fast as one thread in some runs and
  * 0.8 times in others. Results are the same bit for bit whatever the way, so the run measures
  * each (one thread, a pair, and the whole team where it has more than two threads) and takes
- * the fastest: every TEAM_PROBE-th step runs another way (a probe; with three ways, the other
- * two in turn). The way taken keeps its seconds per event as a running mean of its steps (half
- * the last step, half what it was); a probe's figure replaces the probed way's, which would
- * otherwise carry a probe from many steps before (the first, at the second step, runs while a
- * lattice start melts, on events a quarter cheaper than later: its figure kept the run probing
- * every TEAM_PROBE-th step, 5 probes in 80 steps of a fluid at N = 256000, phi = 0.30, each
- * costing 0.75 of a team step). A probe costs what the slower way loses: with the team 1.6
- * times as fast, one step in 8 run alone adds 7 % to the run's time. Where the fastest way is
- * at least TEAM_CLEAR times as fast as every other, they are probed every TEAM_PROBE_FAR-th
- * step only; the way taken is measured at every step, so a change that makes it slower is
- * seen at once. NBEP_TEAM in the environment, read as the run is made, fixes the choice
- * (tests, benchmarks): "always" the whole team, "never" (or 1) one thread, a count k >= 2 a
- * team of k threads (at most the run's and NBEP_EVLOOP_TEAM_MAX), "cycle" the ways in turn,
- * step by step, the whole team first (every change of way, for the tests). */
+ * the fastest. In cells mode a probe of another way runs only the first part of a step (its
+ * events before T0 + PRED_WAYS_PART dt; the rest of the step runs the way taken): every way
+ * is measured once, the largest first (the first step the whole team, the next two the
+ * others' parts), then every TEAM_PROBE-th step has a probe (with three ways, the other two in
+ * turn). Until 2026-11-30 a probe was a whole step: on a 16-core node the run's own choice ran
+ * the large fluid (N = 256000, phi = 0.30, 10 steps) 1.63 times as fast as one thread, the
+ * whole team at every step 2.11, as its first three steps ran the team, the pair and one
+ * thread (one alone costs two team steps). Grid mode's probes are still whole steps
+ * (nbep__pred_ways_choose_crew). The way taken keeps its seconds per event as a running mean
+ * of its steps (half the last step, half what it was); a probe's figure replaces the probed
+ * way's, which would otherwise carry a probe from many steps before (the first, at the second
+ * step, runs while a lattice start melts, on events a quarter cheaper than later: its figure
+ * kept the run probing every TEAM_PROBE-th step, 5 probes in 80 steps of a fluid at N =
+ * 256000, phi = 0.30). A probe costs what the slower way loses in its part: with the team 1.6
+ * times as fast, an eighth of every 8th step run alone adds about 1 % to the run's time (a
+ * whole step added 7 %). Where the fastest way is at least TEAM_CLEAR times as fast as every
+ * other, they are probed every TEAM_PROBE_FAR-th step only; the way taken is measured at every
+ * step, so a change that makes it slower is seen at once. NBEP_TEAM in the environment, read
+ * as the run is made, fixes the choice (tests, benchmarks): "always" the whole team, "never"
+ * (or 1) one thread, a count k >= 2 a team of k threads (at most the run's and
+ * NBEP_EVLOOP_TEAM_MAX), "cycle" the ways in turn, step by step, the whole team first, and in
+ * cells mode each step's first part the way after its own (every change of way, for the
+ * tests). */
 #define TEAM_PROBE 8
 #define TEAM_PROBE_FAR 64
 #define TEAM_CLEAR 1.25
@@ -51,56 +60,77 @@ _Static_assert(PRED_WAYS_MAX == 3, "the ways: one thread, a pair and the whole t
 void nbep__pred_ways_init(pred_ways *w, int size, int force)
 {
     const int n = size < 1 ? 0 : size < PRED_WAYS_MAX ? size : PRED_WAYS_MAX;
-    *w = (pred_ways){.n = n, .crew = {1, 2, size}, .force = force, .last = -1};
+    *w = (pred_ways){.n = n, .crew = {1, 2, size}, .probe = {-1, -1}, .force = force,
+                     .last = -1};
     /* the first step: the whole team */
     w->way[0] = w->way[1] = force == PRED_WAYS_NEVER || n < 1 ? 0 : n - 1;
 }
 
-/* The fastest way measured (ties: the one with more threads). */
+/* The fastest way measured (ties: the one with more threads); the largest when none is. */
 static int best_way(const pred_ways *w)
 {
     int best = w->n - 1;
     for (int k = best - 1; k >= 0; k--)
-        if (w->cost[k] < w->cost[best])
+        if (w->cost[k] > 0.0 && (w->cost[k] < w->cost[best] || w->cost[best] == 0.0))
             best = k;
     return best;
 }
 
-void nbep__pred_ways_choose(pred_ways *w, uint64_t step, int way, uint64_t events,
-                            double seconds)
+void nbep__pred_ways_note(pred_ways *w, int way, bool probe, uint64_t events, double seconds)
 {
     if (events > 0) {
         const double per = seconds / (double)events;
-        const bool probed = way != best_way(w); /* a slower way */
         double *m = &w->cost[way];
-        *m = *m > 0.0 && !probed ? 0.5 * (*m + per) : per;
+        *m = *m > 0.0 && !probe ? 0.5 * (*m + per) : per;
     }
-    int *next = &w->way[(step + 1) & 1];
-    if (w->force == PRED_WAYS_CYCLE) {
+}
+
+/* The ways of step + 1 (after step `step` ran `way`): its way and, where `parts` (cells mode),
+ * the way of its first part (probe; -1 none). Without parts a probe is a whole step. */
+static void decide(pred_ways *w, uint64_t step, int way, bool parts)
+{
+    int *next = &w->way[(step + 1) & 1], *probe = &w->probe[(step + 1) & 1];
+    *probe = -1;
+    if (w->force == PRED_WAYS_CYCLE) { /* down, in turn; the first part the way after */
         *next = way > 0 ? way - 1 : w->n - 1;
+        if (parts && w->n > 1)
+            *probe = *next > 0 ? *next - 1 : w->n - 1;
         return;
     }
     if (w->force) {
         *next = w->force > 0 ? w->n - 1 : 0;
         return;
     }
+    const int best = best_way(w);
     for (int k = w->n - 1; k >= 0; k--)
         if (w->cost[k] == 0.0) { /* each way measured once, the largest first */
-            *next = k;
+            if (!parts || k == best) /* (none measured yet: the largest, throughout) */
+                *next = k;
+            else
+                *next = best, *probe = k;
             return;
         }
-    const int best = best_way(w);
     bool clear = true;
     for (int k = 0; k < w->n; k++)
         clear &= k == best || w->cost[k] >= TEAM_CLEAR * w->cost[best];
-    const uint64_t probe = clear ? TEAM_PROBE_FAR : TEAM_PROBE;
-    if ((step + 1) % probe != 0) {
-        *next = best;
+    const uint64_t period = clear ? TEAM_PROBE_FAR : TEAM_PROBE;
+    *next = best;
+    if ((step + 1) % period != 0)
         return;
-    }
     /* the probes take the other ways in turn */
-    const int k = (int)((step + 1) / probe % (uint64_t)(w->n - 1));
-    *next = (best + 1 + k) % w->n;
+    const int k = (int)((step + 1) / period % (uint64_t)(w->n - 1));
+    const int other = (best + 1 + k) % w->n;
+    if (parts)
+        *probe = other;
+    else
+        *next = other;
+}
+
+void nbep__pred_ways_choose(pred_ways *w, uint64_t step, int way, uint64_t events,
+                            double seconds)
+{
+    nbep__pred_ways_note(w, way, false, events, seconds);
+    decide(w, step, way, true);
 }
 
 /* Thread 0, after step `step` of grid mode ran way `way` in `seconds` (from its start to the
@@ -125,5 +155,6 @@ void nbep__pred_ways_choose_crew(pred_ways *w, uint64_t step, int way, double se
         return;
     }
     w->last = way;
-    nbep__pred_ways_choose(w, step, way, 1, seconds);
+    nbep__pred_ways_note(w, way, way != best_way(w), 1, seconds); /* a slower way's: a probe */
+    decide(w, step, way, false);
 }

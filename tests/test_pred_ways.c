@@ -20,18 +20,33 @@
 #define TEAM 8 /* a team of 8 threads: three ways, 1, 2 and 8 threads */
 
 /* Runs cells mode's steps first..last of a run whose way k costs cost(k, step) seconds an
- * event, as pred_cells.c does: step s runs w->way[s & 1], then the chooser sets step s + 1's.
- * The ways taken in ways[s] (s <= last). */
+ * event, as pred_cells.c does: step s runs w->probe[s & 1] on its first part (an eighth of its
+ * events) when that is a way, then w->way[s & 1] on the rest, and the chooser sets step
+ * s + 1's. The ways taken in ways[s] (s <= last), the probes in probes[s] (-1: none). */
 typedef double (*cost_fn)(int way, uint64_t step);
+
+static void run_parts(pred_ways *w, cost_fn cost, uint64_t first, uint64_t last, int *ways,
+                      int *probes)
+{
+    for (uint64_t s = first; s <= last; s++) {
+        const int way = w->way[s & 1], probe = w->probe[s & 1];
+        assert_true(way >= 0 && way < (w->n > 0 ? w->n : 1));
+        assert_true(probe >= -1 && probe < w->n && probe != way);
+        ways[s] = way;
+        probes[s] = probe;
+        if (probe >= 0)
+            nbep__pred_ways_note(w, probe, true, EVENTS / 8, cost(probe, s) * (EVENTS / 8));
+        nbep__pred_ways_choose(w, s, way, EVENTS, cost(way, s) * EVENTS);
+    }
+}
+
+#define STEPS_MAX 400
 
 static void run_steps(pred_ways *w, cost_fn cost, uint64_t first, uint64_t last, int *ways)
 {
-    for (uint64_t s = first; s <= last; s++) {
-        const int way = w->way[s & 1];
-        assert_true(way >= 0 && way < (w->n > 0 ? w->n : 1));
-        ways[s] = way;
-        nbep__pred_ways_choose(w, s, way, EVENTS, cost(way, s) * EVENTS);
-    }
+    int probes[STEPS_MAX];
+    assert_true(last < STEPS_MAX);
+    run_parts(w, cost, first, last, ways, probes);
 }
 
 static void test_nbep_team_values_are_read_as_documented(void **state)
@@ -59,6 +74,8 @@ static void test_the_first_step_runs_the_largest_way_unless_never(void **state)
     assert_int_equal(w.way[1], 2);
     assert_int_equal(w.crew[2], 8);
     assert_int_equal(w.last, -1);
+    assert_int_equal(w.probe[0], -1);
+    assert_int_equal(w.probe[1], -1);
     for (int k = 0; k < PRED_WAYS_MAX; k++)
         assert_true(w.cost[k] == 0.0);
     nbep__pred_ways_init(&w, TEAM, PRED_WAYS_NEVER);
@@ -80,13 +97,39 @@ static void test_each_way_is_measured_once_largest_first_then_the_fastest_is_tak
     (void)state;
     pred_ways w;
     nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
-    int ways[40];
-    run_steps(&w, close_costs, 1, 39, ways);
-    assert_int_equal(ways[1], 2);
-    assert_int_equal(ways[2], 1);
-    assert_int_equal(ways[3], 0);
-    for (uint64_t s = 4; s < 8; s++)
+    int ways[40], probes[40];
+    run_parts(&w, close_costs, 1, 39, ways, probes);
+    /* the team a whole step, the pair and one thread the first parts of the next two */
+    const int probe_of[] = {0, -1, 1, 0, -1, -1, -1, -1};
+    for (uint64_t s = 1; s < 8; s++) {
         assert_int_equal(ways[s], 2);
+        assert_int_equal(probes[s], probe_of[s]);
+    }
+}
+
+/* One thread fastest, the pair next, the team slowest (its cores far apart or busy). */
+static double team_slow(int way, uint64_t step)
+{
+    (void)step;
+    return 1.0 + 0.5 * way;
+}
+
+static void test_from_the_second_step_the_fastest_measured_way_is_taken(void **state)
+{
+    (void)state;
+    pred_ways w;
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
+    int ways[20], probes[20];
+    run_parts(&w, team_slow, 1, 19, ways, probes);
+    assert_int_equal(ways[1], 2);
+    assert_int_equal(ways[2], 2); /* the only way measured */
+    assert_int_equal(probes[2], 1);
+    assert_int_equal(ways[3], 1); /* the pair's part was faster */
+    assert_int_equal(probes[3], 0);
+    for (uint64_t s = 4; s < 8; s++) {
+        assert_int_equal(ways[s], 0);
+        assert_int_equal(probes[s], -1);
+    }
 }
 
 static void test_probes_come_every_eighth_step_taking_the_other_ways_in_turn(void **state)
@@ -95,21 +138,22 @@ static void test_probes_come_every_eighth_step_taking_the_other_ways_in_turn(voi
     pred_ways w;
     nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     enum { LAST = 200 };
-    int ways[LAST + 1];
-    run_steps(&w, close_costs, 1, LAST, ways);
-    int probes[3] = {0, 0, 0}, last_probe = -1;
+    int ways[LAST + 1], probes[LAST + 1];
+    run_parts(&w, close_costs, 1, LAST, ways, probes);
+    int n_probes[3] = {0, 0, 0}, last_probe = -1;
     for (uint64_t s = 4; s <= LAST; s++) {
+        assert_int_equal(ways[s], 2); /* a probe is a step's first part only */
         if (s % 8 != 0) {
-            assert_int_equal(ways[s], 2);
+            assert_int_equal(probes[s], -1);
             continue;
         }
-        assert_int_not_equal(ways[s], 2);
-        assert_int_not_equal(ways[s], last_probe); /* in turn */
-        last_probe = ways[s];
-        probes[ways[s]]++;
+        assert_true(probes[s] == 0 || probes[s] == 1);
+        assert_int_not_equal(probes[s], last_probe); /* in turn */
+        last_probe = probes[s];
+        n_probes[probes[s]]++;
     }
-    assert_int_equal(probes[0] + probes[1], LAST / 8);
-    assert_true(probes[0] >= LAST / 16 - 1 && probes[1] >= LAST / 16 - 1);
+    assert_int_equal(n_probes[0] + n_probes[1], LAST / 8);
+    assert_true(n_probes[0] >= LAST / 16 - 1 && n_probes[1] >= LAST / 16 - 1);
 }
 
 /* The team twice as fast as either other way: clear of them (TEAM_CLEAR). */
@@ -125,12 +169,13 @@ static void test_a_clear_winner_is_probed_every_64th_step_only(void **state)
     pred_ways w;
     nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     enum { LAST = 300 };
-    int ways[LAST + 1];
-    run_steps(&w, clear_costs, 1, LAST, ways);
+    int ways[LAST + 1], probes[LAST + 1];
+    run_parts(&w, clear_costs, 1, LAST, ways, probes);
     int n_probes = 0;
     for (uint64_t s = 4; s <= LAST; s++) {
-        assert_int_equal(ways[s] != 2, s % 64 == 0);
-        n_probes += ways[s] != 2;
+        assert_int_equal(ways[s], 2);
+        assert_int_equal(probes[s] >= 0, s % 64 == 0);
+        n_probes += probes[s] >= 0;
     }
     assert_int_equal(n_probes, LAST / 64);
 }
@@ -150,9 +195,8 @@ static void test_a_way_that_turns_slower_is_left_at_once(void **state)
     nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     int ways[31];
     run_steps(&w, team_turns_slow, 1, 30, ways);
-    for (uint64_t s = 4; s <= 21; s++)
-        if (s % 8 != 0)
-            assert_int_equal(ways[s], 2);
+    for (uint64_t s = 1; s <= 21; s++)
+        assert_int_equal(ways[s], 2);
     /* step 21 measured the team at 2.0: its mean (0.5 + 2.0) / 2 is above the pair's 0.9 */
     assert_int_equal(ways[22], 1);
 }
@@ -191,14 +235,28 @@ static void test_a_probe_replaces_the_probed_ways_figure(void **state)
     (void)state;
     pred_ways w;
     nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
-    int ways[140];
-    run_steps(&w, pair_gets_faster, 1, 139, ways);
+    int ways[140], probes[140];
+    run_parts(&w, pair_gets_faster, 1, 139, ways, probes);
     /* the team clear of the others (3.0 >= 1.25 x 1.0): the first probe at step 64 */
-    for (uint64_t s = 4; s < 64; s++)
+    for (uint64_t s = 4; s <= 64; s++) {
         assert_int_equal(ways[s], 2);
-    assert_int_equal(ways[64], 1); /* the probes take the others in turn, the pair first */
+        assert_int_equal(probes[s], s == 64 ? 1 : -1); /* in turn, the pair first */
+    }
     for (uint64_t s = 65; s < 72; s++)
         assert_int_equal(ways[s], 1);
+}
+
+static void test_a_first_part_replaces_its_ways_figure_and_the_rest_is_averaged(void **state)
+{
+    (void)state;
+    pred_ways w;
+    nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
+    nbep__pred_ways_choose(&w, 1, 2, EVENTS, 1.0 * EVENTS);
+    nbep__pred_ways_note(&w, 1, true, EVENTS, 3.0 * EVENTS);
+    nbep__pred_ways_note(&w, 1, true, EVENTS, 2.0 * EVENTS);
+    assert_true(w.cost[1] == 2.0);
+    nbep__pred_ways_choose(&w, 2, 2, EVENTS, 2.0 * EVENTS);
+    assert_true(w.cost[2] == 1.5);
 }
 
 static double equal_costs(int way, uint64_t step)
@@ -217,35 +275,49 @@ static void test_ties_go_to_the_way_with_more_threads(void **state)
     run_steps(&w, equal_costs, 1, 15, ways);
     for (uint64_t s = 4; s < 8; s++)
         assert_int_equal(ways[s], 2);
+    int probes[16];
     nbep__pred_ways_init(&w, 2, PRED_WAYS_FREE); /* two ways: one thread or a pair */
-    run_steps(&w, equal_costs, 1, 15, ways);
-    assert_int_equal(ways[1], 1);
-    assert_int_equal(ways[2], 0);
-    for (uint64_t s = 3; s < 8; s++)
+    run_parts(&w, equal_costs, 1, 15, ways, probes);
+    for (uint64_t s = 1; s < 16; s++)
         assert_int_equal(ways[s], 1);
-    assert_int_equal(ways[8], 0); /* its probe */
+    for (uint64_t s = 1; s < 16; s++) /* one thread's first part in step 2, then its probes */
+        assert_int_equal(probes[s], s == 2 || s == 8 ? 0 : -1);
 }
 
 static void test_never_always_a_count_and_cycle_fix_the_way(void **state)
 {
     (void)state;
     pred_ways w;
-    int ways[20];
+    int ways[20], probes[20];
     nbep__pred_ways_init(&w, TEAM, PRED_WAYS_NEVER);
-    run_steps(&w, clear_costs, 1, 19, ways);
-    for (uint64_t s = 1; s <= 19; s++)
+    run_parts(&w, clear_costs, 1, 19, ways, probes);
+    for (uint64_t s = 1; s <= 19; s++) {
         assert_int_equal(ways[s], 0);
+        assert_int_equal(probes[s], -1);
+    }
     const int forced[] = {PRED_WAYS_ALWAYS, 3};
     for (size_t f = 0; f < 2; f++) {
         nbep__pred_ways_init(&w, TEAM, forced[f]);
-        run_steps(&w, close_costs, 1, 19, ways); /* the team never fastest: still taken */
-        for (uint64_t s = 1; s <= 19; s++)
+        run_parts(&w, close_costs, 1, 19, ways, probes); /* the team never fastest: taken */
+        for (uint64_t s = 1; s <= 19; s++) {
             assert_int_equal(ways[s], 2);
+            assert_int_equal(probes[s], -1);
+        }
     }
     nbep__pred_ways_init(&w, TEAM, PRED_WAYS_CYCLE);
-    run_steps(&w, clear_costs, 1, 19, ways);
-    for (uint64_t s = 1; s <= 19; s++) /* the whole team first, then down, in turn */
+    run_parts(&w, clear_costs, 1, 19, ways, probes);
+    assert_int_equal(probes[1], -1);
+    for (uint64_t s = 1; s <= 19; s++) { /* the whole team first, then down, in turn */
         assert_int_equal(ways[s], (int)(2 - (s - 1) % 3));
+        if (s > 1) /* the first part: the way after the step's own */
+            assert_int_equal(probes[s], (ways[s] + 2) % 3);
+    }
+    nbep__pred_ways_init(&w, 2, PRED_WAYS_CYCLE); /* two ways: each the other's first part */
+    run_parts(&w, clear_costs, 1, 9, ways, probes);
+    for (uint64_t s = 2; s <= 9; s++) {
+        assert_int_equal(ways[s], (int)(1 - (s - 1) % 2));
+        assert_int_equal(probes[s], 1 - ways[s]);
+    }
 }
 
 static void test_a_step_without_events_measures_nothing(void **state)
@@ -255,7 +327,10 @@ static void test_a_step_without_events_measures_nothing(void **state)
     nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     nbep__pred_ways_choose(&w, 1, 2, 0, 1.0);
     assert_true(w.cost[2] == 0.0);
-    assert_int_equal(w.way[0], 2); /* still unmeasured: the team again */
+    assert_int_equal(w.way[0], 2); /* still unmeasured: the team again, whole */
+    assert_int_equal(w.probe[0], -1);
+    nbep__pred_ways_note(&w, 1, true, 0, 1.0);
+    assert_true(w.cost[1] == 0.0);
 }
 
 static void test_a_steps_way_is_written_for_the_next_step_only(void **state)
@@ -264,9 +339,13 @@ static void test_a_steps_way_is_written_for_the_next_step_only(void **state)
     pred_ways w;
     nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     for (uint64_t s = 1; s < 40; s++) {
-        const int now = w.way[s & 1]; /* other threads may still read it */
+        /* other threads may still read them */
+        const int now = w.way[s & 1], probe = w.probe[s & 1];
+        if (probe >= 0)
+            nbep__pred_ways_note(&w, probe, true, EVENTS, close_costs(probe, s) * EVENTS);
         nbep__pred_ways_choose(&w, s, now, EVENTS, close_costs(now, s) * EVENTS);
         assert_int_equal(w.way[s & 1], now);
+        assert_int_equal(w.probe[s & 1], probe);
     }
     nbep__pred_ways_init(&w, TEAM, PRED_WAYS_FREE);
     for (uint64_t s = 1; s < 40; s++) {
@@ -293,6 +372,7 @@ static void test_grid_crews_time_only_the_second_step_of_a_way(void **state)
             assert_true(w.cost[ways[s]] == before);
         else
             assert_true(w.cost[ways[s]] != 0.0);
+        assert_int_equal(w.probe[(s + 1) & 1], -1); /* whole steps only */
     }
     const int first[] = {2, 2, 1, 1, 0, 0, 2, 2};
     for (size_t s = 1; s <= 8; s++)
@@ -302,6 +382,7 @@ static void test_grid_crews_time_only_the_second_step_of_a_way(void **state)
         ways[s] = w.way[s & 1];
         nbep__pred_ways_choose_crew(&w, s, ways[s], 1.0);
         assert_int_equal(ways[s], (int)(2 - (s - 1) % 3));
+        assert_int_equal(w.probe[(s + 1) & 1], -1);
     }
 }
 
@@ -311,11 +392,13 @@ int main(void)
         cmocka_unit_test(test_nbep_team_values_are_read_as_documented),
         cmocka_unit_test(test_the_first_step_runs_the_largest_way_unless_never),
         cmocka_unit_test(test_each_way_is_measured_once_largest_first_then_the_fastest_is_taken),
+        cmocka_unit_test(test_from_the_second_step_the_fastest_measured_way_is_taken),
         cmocka_unit_test(test_probes_come_every_eighth_step_taking_the_other_ways_in_turn),
         cmocka_unit_test(test_a_clear_winner_is_probed_every_64th_step_only),
         cmocka_unit_test(test_a_way_that_turns_slower_is_left_at_once),
         cmocka_unit_test(test_one_slow_step_of_the_fastest_way_does_not_turn_the_run),
         cmocka_unit_test(test_a_probe_replaces_the_probed_ways_figure),
+        cmocka_unit_test(test_a_first_part_replaces_its_ways_figure_and_the_rest_is_averaged),
         cmocka_unit_test(test_ties_go_to_the_way_with_more_threads),
         cmocka_unit_test(test_never_always_a_count_and_cycle_fix_the_way),
         cmocka_unit_test(test_a_step_without_events_measures_nothing),
