@@ -616,7 +616,7 @@ MUTANTS = [
      WAYS, None),
     ("ways-cycle-up", "src/pred_ways.c", "        *next = way > 0 ? way - 1 : w->n - 1;",
      "        *next = way < w->n - 1 ? way + 1 : 0;", WAYS, None),
-    # a probe a whole step again (before 2026-11-30), or a first way measured on a whole step
+    # a probe a whole step again (before 584504d), or a first way measured on a whole step
     ("ways-probe-whole-step", "src/pred_ways.c", "    if (parts)\n        *probe = other;",
      "    if (0)\n        *probe = other;", WAYS, None),
     ("ways-unmeasured-whole-step", "src/pred_ways.c", "            if (!parts || k == best)",

@@ -188,8 +188,9 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
  * total over the threads' u is the one thread's. For scenes whose reactions change only
  * the event's own spheres (the caller's choice: an elastic scene where nothing accelerates).
  * `call` (> 0) names the call, the same on the leader and its helpers and unlike every earlier
- * call's (one per part of a step: a thread may sit out calls of fewer threads, and must not take
- * an earlier call's end for this one's). Returns as nbep_evloop_run; the helpers return when it does. */
+ * call's (one per part of a step: a thread may sit out calls of fewer threads, and must not
+ * take an earlier call's end for this one's). Returns as nbep_evloop_run; the helpers return
+ * when it does. */
 bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
                           int crew, uint64_t call, double t_end, nbep_evloop_stall *stall,
                           nbep_evloop_tally *tally, double *t_stuck);

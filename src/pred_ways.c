@@ -14,10 +14,10 @@
  * events before T0 + PRED_WAYS_PART dt; the rest of the step runs the way taken): every way
  * is measured once, the largest first (the first step the whole team, the next two the
  * others' parts), then every TEAM_PROBE-th step has a probe (with three ways, the other two in
- * turn). Until 2026-11-30 a probe was a whole step: on a 16-core node the run's own choice ran
- * the large fluid (N = 256000, phi = 0.30, 10 steps) 1.63 times as fast as one thread, the
- * whole team at every step 2.11, as its first three steps ran the team, the pair and one
- * thread (one alone costs two team steps). Grid mode's probes are still whole steps
+ * turn). Before 584504d (2026-11-29) a probe was a whole step: on a 16-core node the run's
+ * own choice ran the large fluid (N = 256000, phi = 0.30, 10 steps) 1.63 times as fast as one
+ * thread, the whole team at every step 2.11, as its first three steps ran the team, the pair
+ * and one thread (one alone costs two team steps). Grid mode's probes are still whole steps
  * (nbep__pred_ways_choose_crew). The way taken keeps its seconds per event as a running mean
  * of its steps (half the last step, half what it was); a probe's figure replaces the probed
  * way's, which would otherwise carry a probe from many steps before (the first, at the second

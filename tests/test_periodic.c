@@ -681,8 +681,9 @@ static void test_team_loop_on_a_cooling_fluid_is_bit_for_bit(void **state)
  * (team_way, by parity), never from the one it writes during this step: 1000 spheres at rest
  * (no events, so thread 0's event loop, and its choice of the next way, end at once, while a
  * helper may still be on its way to reading this step's), the ways in turn on 4 threads for
- * 300 steps. A helper that read the next way would wait for a call that never comes (the
- * test's time limit ends it). */
+ * 300 steps, each after the first in two parts (the probe's way first: NBEP_TEAM=cycle). A
+ * helper that read the next way would wait for a call that never comes (the test's time limit
+ * ends it). */
 static void test_every_thread_reads_the_way_of_its_step(void **state)
 {
     (void)state;
