@@ -634,11 +634,11 @@ MUTANTS = [
      WAYS, None),
     # the parts of a step: a helper of the second part joins before the first has ended
     ("team-parts-no-barrier", "src/pred_cells.c",
-     "                       u.T0 + PRED_WAYS_PART * sim->dt, &stall, step);\n            nbep_barrier_wait(&c->bar);",
-     "                       u.T0 + PRED_WAYS_PART * sim->dt, &stall, step);", TEAM, None),
+     "u.T0 + PRED_WAYS_PART * sim->dt, &stall, step, &c->part_failed);\n            nbep_barrier_wait(&c->bar);",
+     "u.T0 + PRED_WAYS_PART * sim->dt, &stall, step, &c->part_failed);", TEAM, None),
     ("team-parts-first-part-to-end", "src/pred_cells.c",
-     "                       u.T0 + PRED_WAYS_PART * sim->dt, &stall, step);",
-     "                       T_end, &stall, step);", TEAM,
+     "u.T0 + PRED_WAYS_PART * sim->dt, &stall, step, &c->part_failed);",
+     "T_end, &stall, step, &c->part_failed);", TEAM,
      "the first part runs the whole step's events and the second none: the same events in the "
      "same order, so the same results (what the part's length changes is only what a probe "
      "measures)"),

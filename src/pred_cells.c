@@ -482,11 +482,12 @@ static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, c
 /* The events of step `step` before t_end, every thread: those of way `way` (a probe when
  * `probe`: the step's first part) run them, thread 0 leading, through the team loop's call
  * `call` (unlike every other part's) where the way has more than one thread. Thread 0 then
- * notes the way's seconds per event (pred_ways.c), and on failure sets c->ev_failed with the
- * run's status and message. */
+ * notes the way's seconds per event (pred_ways.c), and sets *failed (the part's own flag: the
+ * threads that sit out the second part read the first's while thread 0 runs the second), on
+ * failure with the run's status and message. */
 static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void *const *us,
                        const nbep_evloop_ops *ops, int way, bool probe, uint64_t call,
-                       double t_end, nbep_evloop_stall *stall, uint64_t step)
+                       double t_end, nbep_evloop_stall *stall, uint64_t step, bool *failed)
 {
     const int crew = c->ways.crew[way];
     if (tid >= 1 && tid < crew)
@@ -497,9 +498,10 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
     double t_stuck = 0.0;
     uint32_t jammed;
     const double t_loop = nbep_now();
-    c->ev_failed = !(crew > 1 ? nbep_evloop_run_lead(c->ev, ops, u, us, crew, call, t_end, stall,
-                                                     &tally, &t_stuck)
-                              : nbep_evloop_run(c->ev, ops, u, t_end, stall, &tally, &t_stuck));
+    const bool fail = !(crew > 1 ? nbep_evloop_run_lead(c->ev, ops, u, us, crew, call, t_end,
+                                                        stall, &tally, &t_stuck)
+                                 : nbep_evloop_run(c->ev, ops, u, t_end, stall, &tally, &t_stuck));
+    *failed = fail;
     if (c->team && probe)
         nbep__pred_ways_note(&c->ways, way, true, tally.events, nbep_now() - t_loop);
     else if (c->team)
@@ -507,14 +509,14 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
     u->cnt->c[NBEP_COUNTER_CHECKS] += tally.events;
     u->cnt->c[NBEP_COUNTER_AHEAD] += tally.ahead;
     u->cnt->c[NBEP_COUNTER_UNDONE] += tally.undone;
-    if (c->ev_failed && nbep_evloop_failed(c->ev)) {
+    if (fail && nbep_evloop_failed(c->ev)) {
         nbep_diag_add(sim->diag, __FILE__, __LINE__,
                       "nbep: step %llu: no memory for the neighbour lists; stopping",
                       (unsigned long long)step);
         sim->status = NBEP_ENOMEM;
-    } else if (c->ev_failed && (jammed = cells_jammed(c, sim->st.n, step)) != 0) {
+    } else if (fail && (jammed = cells_jammed(c, sim->st.n, step)) != 0) {
         nbep__pred_jam_fail(sim, step, jammed - 1, t_stuck);
-    } else if (c->ev_failed) {
+    } else if (fail) {
         nbep_diag_add(sim->diag, __FILE__, __LINE__,
                       "nbep: step %llu: events at t = %.17g do not resolve "
                       "(endless zero-time reactions); stopping",
@@ -583,13 +585,13 @@ void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own,
         const int probe = c->ways.probe[step & 1];
         if (probe >= 0) {
             cells_part(sim, c, tid, &u, us, ops, probe, true, 2 * step,
-                       u.T0 + PRED_WAYS_PART * sim->dt, &stall, step);
+                       u.T0 + PRED_WAYS_PART * sim->dt, &stall, step, &c->part_failed);
             nbep_barrier_wait(&c->bar);
-            if (c->ev_failed) /* written by thread 0 before the barrier */
+            if (c->part_failed) /* written by thread 0 before the barrier */
                 return;
         }
         cells_part(sim, c, tid, &u, us, ops, c->ways.way[step & 1], false, 2 * step + 1, T_end,
-                   &stall, step);
+                   &stall, step, &c->ev_failed);
         nbep_barrier_wait(&c->bar);
         if (c->ev_failed) /* written by thread 0 before the barrier */
             return;

@@ -211,6 +211,8 @@ typedef struct pred_ctx {
     bool image_horizon;
     double image_reach;
     bool ev_failed;               /* thread 0: the loop stalled this step */
+    bool part_failed;             /* thread 0: the loop stalled in this step's first part
+                                   * (a probe's; read while thread 0 runs the second) */
     bool free_flight;             /* no sphere accelerates: straight flight, nothing rests */
     double sigma_all;             /* every pair's contact distance when all radii are equal,
                                    * else 0 (the pair loop then looks each radius up) */
