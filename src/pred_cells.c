@@ -470,15 +470,6 @@ static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, c
                                                cells_save,   cells_restore,    cells_clear,
                                                cells_merge,  cells_prefetch};
 
-/* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's
- * event loop, with threads 1.. in a team where the scene allows it (c->team, pred_ways.c); all
- * threads share the rebuilds, the update to the step's end and the energy.
- * A rebuild (cells from positions, every slot predicted afresh: about the cost of n/2
- * collisions) happens at the first step and after every step that writes a frame to a file in
- * step with output.every, so that a run resumed from such a frame starts from exactly the state
- * this run continues from (bit-for-bit resume): the cell membership and the moments at which
- * slots were predicted depend on the run's history, the rebuild makes them depend only on the
- * frame. */
 /* The events of step `step` before t_end, every thread: those of way `way` (a probe when
  * `probe`: the step's first part) run them, thread 0 leading, through the team loop's call
  * `call` (unlike every other part's) where the way has more than one thread. Thread 0 then
@@ -525,6 +516,16 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
     }
 }
 
+/* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's
+ * event loop, with threads 1.. in a team where the scene allows it (c->team, pred_ways.c); all
+ * threads share the rebuilds, the update to the step's end and the energy. A step that probes
+ * another way runs its events in two parts (cells_part).
+ * A rebuild (cells from positions, every slot predicted afresh: about the cost of n/2
+ * collisions) happens at the first step and after every step that writes a frame to a file in
+ * step with output.every, so that a run resumed from such a frame starts from exactly the state
+ * this run continues from (bit-for-bit resume): the cell membership and the moments at which
+ * slots were predicted depend on the run's history, the rebuild makes them depend only on the
+ * frame. */
 void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thread_ws *w)
 {
     nbep_state *s = &sim->st;
