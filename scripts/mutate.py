@@ -619,8 +619,8 @@ MUTANTS = [
     # a probe a whole step again (before 584504d), or a first way measured on a whole step
     ("ways-probe-whole-step", "src/pred_ways.c", "    if (parts)\n        *probe = other;",
      "    if (0)\n        *probe = other;", WAYS, None),
-    ("ways-unmeasured-whole-step", "src/pred_ways.c", "            if (!parts || k == best)",
-     "            if (1)", WAYS, None),
+    ("ways-unmeasured-whole-step", "src/pred_ways.c", "            if (parts && k != best) {",
+     "            if (0) {", WAYS, None),
     ("ways-unmeasured-taken-best", "src/pred_ways.c",
      "        if (w->cost[k] > 0.0 && (w->cost[k] < w->cost[best] || w->cost[best] == 0.0))",
      "        if (w->cost[k] < w->cost[best])", WAYS, None),

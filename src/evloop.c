@@ -901,10 +901,11 @@ static void count_handled(nbep_evloop_tally *tally, const evl_ws *w)
     tally->reactions += w->reacted;
 }
 
-/* nbep_evloop_run's loop, its stall check on a copy (the caller's, inlined: kept in registers) */
-static bool run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_end,
-                nbep_evloop_stall *stall, nbep_evloop_tally *tally, double *t_stuck)
+bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_end,
+                     nbep_evloop_stall *stall, nbep_evloop_tally *tally, double *t_stuck)
 {
+    if (e->failed) /* a rebuild ran out of memory */
+        return false;
     evl_ws *w = &e->ws[0][0];
     uint32_t i;
     double t;
@@ -927,17 +928,6 @@ static bool run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_en
             return false;
     }
     return true;
-}
-
-bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_end,
-                     nbep_evloop_stall *stall, nbep_evloop_tally *tally, double *t_stuck)
-{
-    if (e->failed) /* a rebuild ran out of memory */
-        return false;
-    nbep_evloop_stall st = *stall;
-    const bool ok = run(e, ops, u, t_end, &st, tally, t_stuck);
-    *stall = st;
-    return ok;
 }
 
 /* ---- the team loop (nbep_evloop_run_lead, nbep_evloop_help) -------------------------------- */
@@ -1524,9 +1514,7 @@ bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, v
     assert(crew >= 2 && crew <= e->team && call > 0);
     e->crew = crew;
     phase(PH_START);
-    nbep_evloop_stall st = *stall; /* a copy, as in nbep_evloop_run */
-    bool ok = !e->failed && lead(e, ops, u, us, t_end, &st, tally, t_stuck);
-    *stall = st;
+    bool ok = !e->failed && lead(e, ops, u, us, t_end, stall, tally, t_stuck);
     phase(PH_COUNT); /* out of the loop */
     settle_all(e, ops, u, us, 0);
     /* the helpers return (each has handled every place it took: each was waited for), each

@@ -104,10 +104,11 @@ static void decide(pred_ways *w, uint64_t step, int way, bool parts)
     const int best = best_way(w);
     for (int k = w->n - 1; k >= 0; k--)
         if (w->cost[k] == 0.0) { /* each way measured once, the largest first */
-            if (!parts || k == best) /* (none measured yet: the largest, throughout) */
-                *next = k;
-            else
-                *next = best, *probe = k;
+            *next = k; /* (none measured yet: the largest, throughout) */
+            if (parts && k != best) { /* on a first part, the rest the fastest measured */
+                *next = best;
+                *probe = k;
+            }
             return;
         }
     bool clear = true;
