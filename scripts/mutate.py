@@ -114,6 +114,18 @@ MUTANTS = [
      "        g->rj[k] = ri;", CELLS + TEAM, None),
     ("bounds-partner-time-own", "src/pred_cells.c", "        g->tj[k] = tau[j];",
      "        g->tj[k] = ti;", CELLS + TEAM, None),
+    # the closing pairs kept without a branch: the one with the lowest bound taken first must
+    # be one that closes, and the count must step only for those
+    ("pairs-kept-counts-all", "src/pred_cells.c", "            n += lb < INFINITY;",
+     "            n += 1;", CELLS + TEAM,
+     "a pair kept that does not close has bound +inf, which the root loop's test skips unless "
+     "the best so far is +inf too, and then its root is NBEP_NEVER, which changes nothing"),
+    ("pairs-kept-last-closing-dropped", "src/pred_cells.c", "            n += lb < INFINITY;",
+     "            n += lb < INFINITY && k + 1 < k1;", CELLS + TEAM, None),
+    ("pairs-kept-lowest-first-lost", "src/pred_cells.c",
+     "            first = lb < first_lb ? n : first;", "            first = first;", CELLS + TEAM,
+     "which pair's root comes first changes only how many others its time prunes, not the "
+     "winner: every pair whose bound is not later than the best so far is still tried"),
     ("beat-cap-short", "src/pred_find.c", "    const double d = best->time - T0 - t0;",
      "    const double d = 0.5 * (best->time - T0 - t0);", CELLS + GRAN, None),
     # the cap exactly at the best time so far, without the tie margin: a pair that ties with
@@ -391,6 +403,21 @@ MUTANTS = [
      "            if (!(gyz < 0.5 * cut2))", LISTS + CELLS, None),
     ("evloop-walk-prunes-cells", "src/evloop.c", "                if (!(gyz + gap2[0][x] < cut2))",
      "                if (!(gyz + gap2[0][x] < 0.7 * cut2))", LISTS + CELLS, None),
+    # the walk's members kept without a branch and passed on in batches
+    ("evloop-walk-lists-itself", "src/evloop.c",
+     "            nn += (dx * dx + dy * dy + dz * dz < cut2) & (j != i);",
+     "            nn += (dx * dx + dy * dy + dz * dz < cut2);", LISTS + CELLS, None),
+    ("evloop-walk-full-batch-lost", "src/evloop.c",
+     "            if (nn == NEAR_BATCH) {\n                for (size_t k = 0; k < nn; k++)\n                    f(e, i, near[k], arg);",
+     "            if (nn == NEAR_BATCH) {\n                for (size_t k = 0; k < 0; k++)\n                    f(e, i, near[k], arg);",
+     LISTS, None),
+    ("evloop-walk-last-batch-lost", "src/evloop.c",
+     "    for (size_t k = 0; k < nn; k++)\n        f(e, i, near[k], arg);\n}",
+     "    for (size_t k = 0; k + 1 < nn; k++)\n        f(e, i, near[k], arg);\n}", LISTS + CELLS,
+     None),
+    ("evloop-walk-kept-first-of-list", "src/evloop.c",
+     "        k = w->was[q] == j ? q : k;", "        k = w->was[q] == j ? 0 : k;", CELLS + LISTS,
+     None),
     ("evloop-place-old-cell", "src/evloop.c", "nbep_cells_place(&e->cells, i, w->at, w->at_cell);",
      "nbep_cells_place(&e->cells, i, w->at, e->cells.m[i].cell);", LISTS + CELLS, None),
     ("evloop-rebuild-list-short", "src/evloop.c", "e->failed ? 0 : w->n_near", "e->failed ? 0 : w->n_near - (w->n_near > 0)",

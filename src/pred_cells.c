@@ -282,13 +282,17 @@ NBEP_AVX2_CLONES static void cells_pairs_free(void *u, uint32_t i, const uint32_
             pair_bounds_with(&g, m4, pi, vi, ti, ri, &c->pb, lbs, true);
         else
             pair_bounds_with(&g, m4, pi, vi, ti, ri, NULL, lbs, false);
-        for (size_t k = k0; k < k1; k++) { /* the closing pairs that may hit */
-            if (!(lbs[k - k0] < INFINITY))
-                continue;
-            tr[n] = (pair_try){lbs[k - k0], (uint32_t)k};
-            if (tr[n].lb < tr[first].lb)
-                first = n;
-            n++;
+        /* the closing pairs that may hit, kept without a branch (each written, kept by the
+         * count's step; the lowest bound's place by selects): half a fluid's pairs close and
+         * which half is a coin toss, and as branches this loop took a tenth of the time at
+         * phi = 0.50 (perf; 0.90 of the time without them, paired, the same bits) */
+        double first_lb = INFINITY;
+        for (size_t k = k0; k < k1; k++) {
+            const double lb = lbs[k - k0];
+            tr[n] = (pair_try){lb, (uint32_t)k};
+            first = lb < first_lb ? n : first;
+            first_lb = lb < first_lb ? lb : first_lb;
+            n += lb < INFINITY;
         }
         for (size_t q = 0; q < n; q++) { /* roots: the lowest bound first, then what it leaves */
             const pair_try *p = &tr[q == 0 ? first : q == first ? 0 : q];

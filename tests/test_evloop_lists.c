@@ -11,12 +11,16 @@
  *     built at a step's start by the full build, or kept since by the rebuilds of neighbours).
  * A sphere at the cutoff to within rounding may be in or out (the walk's test and this one
  * round differently); the test counts how close the scenes come, so that one that looked away
- * would fail. One thread (the hook reads every sphere's centre, which a team's leader may be
- * changing meanwhile). */
+ * would fail. The walk's batches are made small (NEAR_BATCH), so that full ones are passed on
+ * mid-walk in most walks. One thread (the hook reads every sphere's centre, which a team's
+ * leader may be changing meanwhile). */
 struct nbep_evloop;
 struct evl_ws;
 static void audit_handled(const struct nbep_evloop *e, const struct evl_ws *w);
 #define NBEP_EVLOOP_HANDLED_HOOK(e, w, ev) audit_handled(e, w)
+/* the walk passes what it finds on in batches of this many (64 in the program): a batch that
+ * fills is passed on mid-walk, which 3 makes happen in most walks here */
+#define NEAR_BATCH 3
 #include "../src/evloop.c"
 
 #include <stdarg.h>
