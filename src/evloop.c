@@ -253,7 +253,7 @@ static double cells_reach(const nbep_evloop *e)
 }
 
 nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reach,
-                               const bool *periodic, int team, nbep_feq *q,
+                               double skin_frac, const bool *periodic, int team, nbep_feq *q,
                                const uint64_t *ver, nbep_evloop **out, nbep_diag *d)
 {
     assert(team >= 1 && team <= NBEP_EVLOOP_TEAM_MAX);
@@ -268,7 +268,7 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->pb = nbep_periodic_make(periodic, lo, hi);
     /* the skin, cut down in a small periodic box so that three cells (sides of the cutoff)
      * fit across; the deck check keeps it at NBEP_NBLIST_SKIN_MIN */
-    double skin = NBEP_NBLIST_SKIN * reach;
+    double skin = skin_frac * reach;
     for (int k = 0; k < 3; k++)
         if (e->pb.axis[k])
             skin = fmin(skin, e->pb.len[k] / (3.0 * (1.0 + CUT_SLACK)) - reach);

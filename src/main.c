@@ -39,19 +39,6 @@ static void install_signal_handlers(void)
     sigaction(SIGTERM, &sa, NULL);
 }
 
-static double packing_fraction(const nbep_scene *sc)
-{
-    if (!sc->has_box)
-        return NAN;
-    double vol = 1.0, spheres = 0.0;
-    vol *= sc->box_max.x - sc->box_min.x;
-    vol *= sc->box_max.y - sc->box_min.y;
-    vol *= sc->box_max.z - sc->box_min.z;
-    for (size_t i = 0; i < sc->state.n; i++)
-        spheres += 4.0 / 3.0 * 3.14159265358979323846 * pow(sc->state.radius[i], 3.0);
-    return spheres / vol;
-}
-
 /* `nbep check`: what the scene needs and nothing more, on stdout. */
 static void print_check(const nbep_scene *sc, int threads)
 {
@@ -92,7 +79,7 @@ static void print_check(const nbep_scene *sc, int threads)
                sc->periodic[2] ? "z" : "");
     printf("pairs:           %llu need a quadratic (equal accelerations), %llu the quartic\n",
            (unsigned long long)quad, (unsigned long long)quart);
-    double pf = packing_fraction(sc);
+    double pf = nbep_scene_packing_fraction(sc, &sc->state);
     if (isnan(pf))
         printf("packing:         n/a (no box)\n");
     else

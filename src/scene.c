@@ -1125,6 +1125,19 @@ bool nbep_scene_resume_point(const nbep_scene *sc, int64_t step)
            step % (int64_t)sc->output_every == 0;
 }
 
+double nbep_scene_packing_fraction(const nbep_scene *sc, const nbep_state *st)
+{
+    if (!sc->has_box)
+        return NAN;
+    double vol = 1.0, spheres = 0.0;
+    vol *= sc->box_max.x - sc->box_min.x;
+    vol *= sc->box_max.y - sc->box_min.y;
+    vol *= sc->box_max.z - sc->box_min.z;
+    for (size_t i = 0; i < st->n; i++)
+        spheres += 4.0 / 3.0 * 3.14159265358979323846 * pow(st->radius[i], 3.0);
+    return spheres / vol;
+}
+
 void nbep_scene_count_pairs(const nbep_state *s, uint64_t *quadratic, uint64_t *quartic)
 {
     const uint64_t n = s->n, all = n * (n ? n - 1 : 0) / 2;

@@ -50,6 +50,7 @@ static struct {
     uint64_t across;  /* members within the cutoff only the periodic way round */
     uint64_t beyond;  /* lists not empty around a centre more than the cutoff past the cells */
     uint64_t events;  /* events that rebuilt no list */
+    double cut;       /* the engine's cutoff */
 } seen;
 static unsigned char *mark; /* run_audited's, a flag per sphere: listed */
 
@@ -63,6 +64,7 @@ static void audit_list(const nbep_evloop *e, uint32_t i, nbep_vec3 c, const uint
             mark[js[k]] = 1;
     }
     seen.members += m;
+    seen.cut = e->cut;
     const nbep_cells *g = &e->cells;
     const double r = e->cut;
     seen.beyond += m > 0 && (c.x < g->lo.x - r || c.y < g->lo.y - r || c.z < g->lo.z - r ||
@@ -123,24 +125,40 @@ static void run_audited(nbep_scene *sc, bool periodic)
         assert_true(seen.across > seen.walks / 8);
 }
 
-/* A dense periodic fluid: lists across every face. */
+/* The cutoff the run's engine had is contact distance (diameter 1) plus the skin its packing
+ * fraction phi asks for (nbep_nblist_skin_for; these boxes are wide enough that it is not cut
+ * down), with the engine's slack. */
+static void assert_skin_of(double phi)
+{
+    const double want = (1.0 + nbep_nblist_skin_for(phi, true)) * (1.0 + CUT_SLACK);
+    assert_close(seen.cut, want, 1e-12, 0.0);
+}
+
+/* A dense periodic fluid: lists across every face; at phi = 0.40, a skin between the dilute
+ * and the dense one. */
 static void test_lists_hold_every_sphere_near_their_centre_in_a_periodic_fluid(void **state)
 {
     (void)state;
     nbep_scene *sc = nbep_test_periodic_fluid(nbep_test_scaled(12, 9), 0.40,
                                               nbep_test_scaled(30, 15), 0.02, 5);
+    const double phi = nbep_scene_packing_fraction(sc, &sc->state);
+    assert_true(phi > NBEP_NBLIST_PHI_DILUTE && phi < NBEP_NBLIST_PHI_DENSE);
     run_audited(sc, true);
+    assert_skin_of(phi);
     nbep_test_scene_free(&sc);
 }
 
-/* A closed box: the edge cells' slabs open past the walls (centres clamped into them). */
+/* A closed box: the edge cells' slabs open past the walls (centres clamped into them); at
+ * phi = 0.35, about the dilute skin. */
 static void test_lists_hold_every_sphere_near_their_centre_in_a_closed_box(void **state)
 {
     (void)state;
     nbep_scene *sc = nbep_test_fluid(nbep_test_scaled(12, 9), 0.35, nbep_test_scaled(30, 15),
                                      0.02);
     sc->neighbors_cells = true;
+    const double phi = nbep_scene_packing_fraction(sc, &sc->state);
     run_audited(sc, false);
+    assert_skin_of(phi);
     nbep_test_scene_free(&sc);
 }
 

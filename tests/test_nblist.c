@@ -9,6 +9,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -230,6 +231,35 @@ static void test_check_catches_asymmetry_duplicates_and_self_entries(void **stat
     nbep_nblist_fini(&l);
 }
 
+/* The skin by packing fraction: the dense one at and above NBEP_NBLIST_PHI_DENSE, without a
+ * box (NAN) and whenever the scene accelerates; the dilute one at and below
+ * NBEP_NBLIST_PHI_DILUTE; a straight line between, so no fraction jumps from one to the
+ * other. */
+static void test_the_skin_follows_the_packing_fraction_of_a_free_scene(void **state)
+{
+    (void)state;
+    const double dense = NBEP_NBLIST_SKIN, dilute = NBEP_NBLIST_SKIN_DILUTE;
+    assert_true(dilute > dense);
+    assert_true(nbep_nblist_skin_for(0.50, true) == dense);
+    assert_true(nbep_nblist_skin_for(NBEP_NBLIST_PHI_DENSE, true) == dense);
+    assert_true(nbep_nblist_skin_for(NBEP_NBLIST_PHI_DILUTE, true) == dilute);
+    assert_true(nbep_nblist_skin_for(0.30, true) == dilute);
+    assert_true(nbep_nblist_skin_for(0.0, true) == dilute);
+    assert_true(nbep_nblist_skin_for(NAN, true) == dense);
+    assert_true(nbep_nblist_skin_for(0.30, false) == dense);
+    const double mid = 0.5 * (NBEP_NBLIST_PHI_DILUTE + NBEP_NBLIST_PHI_DENSE);
+    assert_close(nbep_nblist_skin_for(mid, true), 0.5 * (dense + dilute), 1e-12, 0.0);
+    double last = dilute; /* falls steadily from the dilute skin to the dense one */
+    for (int k = 0; k <= 100; k++) {
+        const double phi = NBEP_NBLIST_PHI_DILUTE +
+                           (NBEP_NBLIST_PHI_DENSE - NBEP_NBLIST_PHI_DILUTE) * k / 100.0;
+        const double skin = nbep_nblist_skin_for(phi, true);
+        assert_true(skin <= last && last - skin < 0.02 * (dilute - dense) + 1e-12);
+        last = skin;
+    }
+    assert_close(last, dense, 1e-12, 0.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -238,6 +268,7 @@ int main(void)
         cmocka_unit_test(test_need_bounds_what_a_rebuild_takes_of_the_spare),
         cmocka_unit_test(test_set_is_clear_and_appends),
         cmocka_unit_test(test_check_catches_asymmetry_duplicates_and_self_entries),
+        cmocka_unit_test(test_the_skin_follows_the_packing_fraction_of_a_free_scene),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

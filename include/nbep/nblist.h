@@ -27,17 +27,50 @@
 #include "nbep/compiler.h"
 #include "nbep/status.h"
 
-/* The skin, as a fraction of the largest contact distance: a list holds the spheres whose
- * centres were within contact distance plus the skin, and is rebuilt when its sphere has
- * strayed half the skin from where it was built. A wider skin means longer lists (more pairs
- * tested per re-prediction, as the cube of 1 + skin), a thinner one more rebuilds. Measured
- * (N = 32000 periodic fluid, one time unit from the lattice, medians of 3 interleaved runs,
- * collisions per second on this 2-core machine) with skins 0.3 / 0.4 / 0.5: phi 0.30: 213 /
- * 273 / 241 k; phi 0.43: 362 / 375 / 333 k; phi 0.50: 437 / 434 / 353 k (0.7 and 0.9 were
- * slower still at both ends). Smallenburg's EDMD uses 0.5. */
+/* The skin of a dense scene (and of any that accelerates or has no box), as a fraction of the
+ * largest contact distance: a list holds the spheres whose centres were within contact
+ * distance plus the skin, and is rebuilt when its sphere has strayed half the skin from where
+ * it was built. A wider skin means longer lists (more pairs tested per re-prediction, as the
+ * cube of 1 + skin), a thinner one more rebuilds. Measured (N = 32000 periodic fluid, one time
+ * unit from the lattice, medians of 3 interleaved runs, collisions per second on this 2-core
+ * machine, before the rebuild's walk lost its branches) with skins 0.3 / 0.4 / 0.5: phi 0.30:
+ * 213 / 273 / 241 k; phi 0.43: 362 / 375 / 333 k; phi 0.50: 437 / 434 / 353 k (0.7 and 0.9
+ * were slower still at both ends). Smallenburg's EDMD uses 0.5. */
 #ifndef NBEP_NBLIST_SKIN /* a -D overrides it, for benchmarks only */
 #define NBEP_NBLIST_SKIN 0.4
 #endif
+/* The skin of a dilute scene that flies free (no acceleration), where a sphere flies farther
+ * between collisions and outruns a thin skin's list: at phi = 0.30 a collision had 0.77 list
+ * expiries with the skin of 0.4 (0.10 at phi = 0.50). Measured on the melted N = 32000 fluids
+ * after the walk lost its branches (7155176; paired resumed runs on an AMD machine, medians
+ * of 4 per-run ratios of collisions a second against a skin of 0.4), skins 0.5 / 0.6 / 0.7:
+ * phi 0.30: 1.07 / 1.10 / 1.12; phi 0.40: 1.08 / 1.07 / 1.07; phi 0.50: 1.03 / 1.01 / 1.00
+ * (0.45: 1.00); and 0.6 / 0.8 at phi 0.10: 1.19 / 1.15, at phi 0.20: 1.09 / 1.15. */
+#ifndef NBEP_NBLIST_SKIN_DILUTE
+#define NBEP_NBLIST_SKIN_DILUTE 0.6
+#endif
+/* The packing fractions at and below which a free-flying scene takes the dilute skin, and at
+ * and above which the dense one (NBEP_NBLIST_SKIN); in between, the skin goes linearly from
+ * one to the other. The dense end keeps the lists of a dense fluid as short as they were
+ * (a list is 4 bytes a neighbour, and a fluid at phi = 0.50 would list half as many again
+ * with the dilute skin, for no gain). */
+#define NBEP_NBLIST_PHI_DILUTE 0.35
+#define NBEP_NBLIST_PHI_DENSE 0.45
+
+/* The skin (a fraction of the largest contact distance) for a scene whose spheres fill the
+ * fraction phi of its box and fly free (free: no acceleration anywhere). NBEP_NBLIST_SKIN when
+ * phi is not a number (no box) or the scene accelerates: a pile's spheres are crowded at the
+ * bottom of a box that is mostly empty, so the box's fraction says nothing of it. */
+static inline double nbep_nblist_skin_for(double phi, bool free)
+{
+    if (!free || !(phi >= 0.0) || phi >= NBEP_NBLIST_PHI_DENSE)
+        return NBEP_NBLIST_SKIN;
+    if (phi <= NBEP_NBLIST_PHI_DILUTE)
+        return NBEP_NBLIST_SKIN_DILUTE;
+    const double f =
+        (phi - NBEP_NBLIST_PHI_DILUTE) / (NBEP_NBLIST_PHI_DENSE - NBEP_NBLIST_PHI_DILUTE);
+    return NBEP_NBLIST_SKIN_DILUTE + f * (NBEP_NBLIST_SKIN - NBEP_NBLIST_SKIN_DILUTE);
+}
 /* A list rebuilt at its expiry is centred this many strays (half skins) ahead of its sphere
  * along a straight flight (evloop.c, list_centre), so that the sphere flies 1 + LEAD strays
  * before the list expires again if nothing deflects it. Measured (N = 32000 periodic fluid

@@ -103,6 +103,10 @@ const char *nbep_scene_order_name(const nbep_scene *sc);
  * predictive cells mode only those at a multiple of output.every (its rebuild points,
  * algo_predictive.c cells_steps). */
 bool nbep_scene_resume_point(const nbep_scene *sc, int64_t step);
+/* The fraction of sc's box that the spheres of st fill (the scene's own, or a run's, whose
+ * radii are the same: `nbep check` prints it; the cells mode picks its lists' skin from it);
+ * NAN without a box. */
+double nbep_scene_packing_fraction(const nbep_scene *sc, const nbep_state *st);
 
 /* Pairs of spheres whose accelerations are equal (quadratic contact time) and differ
  * (quartic), counted in O(n log n) by grouping equal accelerations. */
