@@ -81,6 +81,9 @@ static inline double nbep_nblist_skin_for(double phi, bool free)
 #ifndef NBEP_NBLIST_LEAD /* a -D overrides it, for benchmarks only */
 #define NBEP_NBLIST_LEAD 0.5
 #endif
+/* A centre a whole stray or more ahead puts the rebuilt list's sphere at its expiry at once:
+ * the next expiry comes at the same time, and so on (with 1.0, the loop stalled). */
+_Static_assert((int)NBEP_NBLIST_LEAD == 0, "a list's centre is less than one stray ahead");
 /* In a small periodic box the skin is cut down so that three cells of width contact distance
  * plus skin fit across, but never below this (the deck check asks for that much room). */
 #define NBEP_NBLIST_SKIN_MIN 0.125
