@@ -7,8 +7,13 @@
 # collision counts compared (the same bits when the change should not alter results).
 # One thread per run: the deck's run.threads should be 1.
 #
-#   scripts/ab-pair.sh REPS DECK BIN_A BIN_B
+#   scripts/ab-pair.sh REPS DECK BIN_A BIN_B [MELT]
 #   e.g. scripts/ab-pair.sh 8 inputs/hard-sphere-fluid.deck /tmp/nbep.old bin/nbep
+#
+# With MELT (an nbep output file, such as a melt of make bench-dense: build/bench-dense/
+# melt-32000-0.50.h5 with its deck fluid-32000-0.50-80-1.deck), each run resumes a copy of it
+# (--resume) instead of starting from the deck's own start: the equilibrium fluid, timed
+# without the melting. The deck must be the one that wrote MELT, with more steps.
 #
 # Prints A's and B's median seconds, the median ratio B/A with every repeat's, and whether the
 # collision counts agreed in every repeat; where they did not (a change that alters a granular
@@ -16,18 +21,24 @@
 # collisions per second to A's, the figure that compares them. Outputs go to a temporary
 # folder, removed after.
 set -euo pipefail
-if [ $# -ne 4 ]; then
-    echo "usage: scripts/ab-pair.sh REPS DECK BIN_A BIN_B" >&2
+if [ $# -ne 4 ] && [ $# -ne 5 ]; then
+    echo "usage: scripts/ab-pair.sh REPS DECK BIN_A BIN_B [MELT]" >&2
     exit 2
 fi
-reps=$1 deck=$2 a=$3 b=$4
+reps=$1 deck=$2 a=$3 b=$4 melt=${5:-}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 for r in $(seq "$reps"); do
     if [ $((r % 2)) = 1 ]; then ca=0 cb=1; else ca=1 cb=0; fi
-    taskset -c $ca "$a" run "$deck" --output "$tmp/a.h5" --summary "$tmp/a.json" --quiet &
+    if [ -n "$melt" ]; then # each resumes its own copy
+        cp "$melt" "$tmp/a.h5"
+        cp "$melt" "$tmp/b.h5"
+    fi
+    taskset -c $ca "$a" run "$deck" --output "$tmp/a.h5" ${melt:+--resume "$tmp/a.h5"} \
+        --summary "$tmp/a.json" --quiet &
     pa=$!
-    taskset -c $cb "$b" run "$deck" --output "$tmp/b.h5" --summary "$tmp/b.json" --quiet &
+    taskset -c $cb "$b" run "$deck" --output "$tmp/b.h5" ${melt:+--resume "$tmp/b.h5"} \
+        --summary "$tmp/b.json" --quiet &
     pb=$!
     wait $pa
     wait $pb
