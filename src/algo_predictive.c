@@ -54,8 +54,6 @@
  *   in pred_react.c, and pred_settle.c for settling. */
 #include "pred_impl.h"
 
-#include "nbep/nblist.h"
-
 #include <stdlib.h>
 #include <string.h>
 
@@ -351,8 +349,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         /* without a box, the cells are laid out at the first rebuild (cells_fit) and again at
          * each one after; until then they are one cell */
         c->refit = !sim->scene->has_box && n > 0;
-        const double phi = nbep_scene_packing_fraction(sim->scene, &sim->st);
-        const double skin = nbep_nblist_skin_for(phi, c->free_flight);
+        const double skin = nbep_scene_list_skin(sim->scene, &sim->st);
         st = nbep_evloop_create(n, sim->scene->box_min, sim->scene->box_max, 2.0 * c->rmax,
                                 skin, c->pb.axis, c->team_size, c->q, c->ver, &c->ev, d);
         c->team = st == NBEP_OK && p.team;

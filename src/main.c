@@ -13,6 +13,7 @@
 
 #include "build_info.h"
 #include "nbep/cli.h"
+#include "nbep/nblist.h"
 #include "nbep/output.h"
 #include "nbep/run.h"
 #include "nbep/scene.h"
@@ -84,6 +85,10 @@ static void print_check(const nbep_scene *sc, int threads)
         printf("packing:         n/a (no box)\n");
     else
         printf("packing:         %.4g of the box volume\n", pf);
+    if (sc->neighbors_cells && strcmp(sc->algorithm, "predictive") == 0)
+        printf("lists:           skin %.3g of the largest diameter (wider below packing %g "
+               "when nothing accelerates)\n",
+               nbep_scene_list_skin(sc, &sc->state), NBEP_NBLIST_PHI_DENSE);
     printf("memory:          about %.3g MB\n", (double)nbep_sim_memory_estimate(sc, threads) / 1e6);
     printf("output:          %s: %llu frames (every %llu steps), about %.3g MB\n",
            sc->output_file, (unsigned long long)nbep_output_frames(sc),

@@ -14,6 +14,8 @@
  * made: such settings carry the override text in their libconfig hook. */
 #include "nbep/scene.h"
 
+#include "nbep/nblist.h"
+
 #include <assert.h>
 #include <errno.h>
 #include <inttypes.h>
@@ -1136,6 +1138,14 @@ double nbep_scene_packing_fraction(const nbep_scene *sc, const nbep_state *st)
     for (size_t i = 0; i < st->n; i++)
         spheres += 4.0 / 3.0 * 3.14159265358979323846 * pow(st->radius[i], 3.0);
     return spheres / vol;
+}
+
+double nbep_scene_list_skin(const nbep_scene *sc, const nbep_state *st)
+{
+    bool free = true;
+    for (size_t i = 0; i < st->n; i++)
+        free &= st->acc[i].x == 0.0 && st->acc[i].y == 0.0 && st->acc[i].z == 0.0;
+    return nbep_nblist_skin_for(nbep_scene_packing_fraction(sc, st), free);
 }
 
 void nbep_scene_count_pairs(const nbep_state *s, uint64_t *quadratic, uint64_t *quartic)

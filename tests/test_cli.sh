@@ -54,6 +54,15 @@ run_nbep check "$tmp/group.deck" --set 'run.neighbors="cells"'
 check "cells with a box: accepted (got $rc)" "[ $rc = 0 ]"
 check "nbep check prints the resolved scene: the neighbour mode an override chose" \
     "grep -Eq '^algorithm: +predictive \(neighbors cells, order time\), 1 thread\$' $tmp/stdout"
+check "nbep check prints the lists' skin: a dilute scene that flies free takes the wider one" \
+    "grep -Eq '^lists: +skin 0.6 of the largest diameter' $tmp/stdout"
+run_nbep check "$tmp/group.deck" --set 'run.neighbors="cells"' --set 'physics.gravity=[0,-2,0]'
+check "nbep check prints the lists' skin: under gravity the thin one" \
+    "grep -Eq '^lists: +skin 0.4 of the largest diameter' $tmp/stdout"
+run_nbep check inputs/hard-sphere-fluid.deck \
+    --set 'box.max=[32.2398390803, 32.2398390803, 32.2398390803]'
+check "nbep check prints the lists' skin: a fluid at packing 0.5 the thin one" \
+    "grep -Eq '^packing: +0.5 of' $tmp/stdout && grep -Eq '^lists: +skin 0.4 of' $tmp/stdout"
 run_nbep check "$tmp/group.deck" --set physics.restitution=0.25 --set 'physics.gravity=[0,-2,0]' \
     --set run.seed=7
 check "nbep check prints restitution, gravity, the TC model's settings, seed and box" \

@@ -107,6 +107,10 @@ bool nbep_scene_resume_point(const nbep_scene *sc, int64_t step);
  * radii are the same: `nbep check` prints it; the cells mode picks its lists' skin from it);
  * NAN without a box. */
 double nbep_scene_packing_fraction(const nbep_scene *sc, const nbep_state *st);
+/* The skin of the cells mode's neighbour lists for sc with the spheres of st, as a fraction
+ * of the largest diameter (nbep_nblist_skin_for: from the packing fraction when nothing
+ * accelerates; a small periodic box may cut it down further, evloop.c). */
+double nbep_scene_list_skin(const nbep_scene *sc, const nbep_state *st);
 
 /* Pairs of spheres whose accelerations are equal (quadratic contact time) and differ
  * (quartic), counted in O(n log n) by grouping equal accelerations. */
