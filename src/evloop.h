@@ -95,8 +95,8 @@ typedef struct nbep_evloop_ops {
 typedef struct nbep_evloop nbep_evloop;
 
 /* An engine for n spheres in the box [lo, hi] whose contacts happen within `reach` (the
- * largest diameter), with lists of the skin skin * reach (nbep_nblist_skin_for; cut down in a
- * small periodic box), with the slots q and response counts ver (both borrowed, n each).
+ * largest diameter), with lists of the skin skin * reach (nbep_scene_list_skin's; cut down
+ * in a small periodic box), with the slots q and response counts ver (both borrowed, n each).
  * periodic (NULL: none) names the axes along which the box repeats: the cells wrap around
  * (cells.h), partners across a periodic face are tested at their image, and a sphere that
  * leaves the box is wrapped (ops->wrap) when it changes cell. team (1 to
