@@ -316,6 +316,15 @@ MUTANTS = [
      "            (void)0;", ["test_calendar"] + CELLS, None),
     ("cal-ring-one-too-far", "src/calendar.c", "    return ab > c->cur && ab - c->cur <= (int64_t)c->nb;",
      "    return ab > c->cur && ab - c->cur <= (int64_t)c->nb + 1;", ["test_calendar"] + CELLS, None),
+    # the lists' links by selects: the back link of the item after, and a head's link
+    ("cal-unlink-back-lost", "src/calendar.c", "    *link_back(c, x->next) = x->prev;\n}",
+     "    (void)0;\n}", ["test_calendar"] + CELLS, None),
+    ("cal-push-back-lost", "src/calendar.c", "    *link_back(c, x->next) = item;",
+     "    (void)0;", ["test_calendar"] + CELLS, None),
+    ("cal-head-link-first-slot", "src/calendar.c",
+     "    return prev < c->n ? &c->node[prev].next : &c->head[prev - c->n];",
+     "    return prev < c->n ? &c->node[prev].next : &c->head[0];", ["test_calendar"] + CELLS,
+     None),
     # ---- cell lists ----
     ("cells-block-lo", "src/cells.c", "        if (xyz[k] > 0) {\n            b->idx[k][m] = xyz[k] - 1;", "        if (0) {\n            b->idx[k][m] = xyz[k] - 1;",
      ["test_cells"] + CELLS, None),

@@ -38,7 +38,9 @@ enum { WHERE_NONE = 0, WHERE_HEAP, WHERE_RING, WHERE_OVERFLOW };
 typedef struct node {
     double time;
     uint64_t key;
-    uint32_t next, prev; /* ring and overflow lists */
+    /* ring and overflow lists: the next item (NIL at the end), and the link that leads here:
+     * the item before, or n + s for the head of list s (ring slot s, or nb: the overflow) */
+    uint32_t next, prev;
     uint32_t loc;        /* heap index (WHERE_HEAP) or ring slot (WHERE_RING) */
     uint32_t where;
 } node;
@@ -49,10 +51,11 @@ struct nbep_calendar {
     node *node;          /* owned, n */
     uint32_t *heap;      /* owned, n: items of the buckets up to cur, a min-heap */
     size_t heap_len;
-    uint32_t *head;      /* owned, nb: first item of each ring slot's list */
+    uint32_t *head;      /* owned, nb + 1: first item of each ring slot's list, then of the
+                          * overflow list (head[nb], OVERFLOW) */
     size_t nb;           /* ring slots, a power of two */
     size_t ring_len;     /* entries in the ring */
-    uint32_t overflow;   /* first item of the overflow list */
+    uint32_t sink;       /* where a link to NIL is written (list_push, list_unlink) */
     int64_t cur;         /* bucket being drained */
     int64_t ovf_min;     /* no overflow entry's bucket is below this */
     double t0, w, inv_w; /* bucket origin, width and 1 / width */
@@ -66,14 +69,14 @@ struct nbep_calendar {
 nbep_status nbep_calendar_create(size_t n, nbep_calendar **out, nbep_diag *d)
 {
     nbep_calendar *c = calloc(1, sizeof *c);
-    if (c && n < UINT32_MAX) {
+    if (c && n < UINT32_MAX / 4) { /* (room for the links n + s, s <= nb < 2 n + 16) */
         c->n = n;
         c->nb = 16;
         while (c->nb < n)
             c->nb *= 2;
         c->node = nbep_alloc_aligned(n ? n : 1, sizeof *c->node);
         c->heap = nbep_alloc_aligned(n ? n : 1, sizeof *c->heap);
-        c->head = nbep_alloc_aligned(c->nb, sizeof *c->head);
+        c->head = nbep_alloc_aligned(c->nb + 1, sizeof *c->head);
     }
     if (!c || !c->node || !c->heap || !c->head) {
         nbep_calendar_destroy(&c);
@@ -81,9 +84,8 @@ nbep_status nbep_calendar_create(size_t n, nbep_calendar **out, nbep_diag *d)
     }
     for (size_t i = 0; i < n; i++)
         c->node[i].where = WHERE_NONE;
-    for (size_t s = 0; s < c->nb; s++)
+    for (size_t s = 0; s <= c->nb; s++)
         c->head[s] = NIL;
-    c->overflow = NIL;
     c->w = c->inv_w = 1.0;
     c->ovf_min = INT64_MAX;
     c->ahead = NIL;
@@ -109,7 +111,7 @@ size_t nbep_calendar_bytes(size_t n)
     while (nb < n)
         nb *= 2;
     return sizeof(nbep_calendar) + n * (sizeof(node) + sizeof(uint32_t)) +
-           nb * sizeof(uint32_t);
+           (nb + 1) * sizeof(uint32_t);
 }
 
 /* ---- the strict order and the heap of the current bucket ---------------------------------- */
@@ -197,25 +199,38 @@ static inline uint32_t ring_loc(const nbep_calendar *c, int64_t ab)
     return (uint32_t)((uint64_t)ab & (c->nb - 1));
 }
 
-static void list_push(nbep_calendar *c, uint32_t *head, uint32_t item)
+/* The overflow list's head, after the ring slots'. */
+#define OVERFLOW(c) ((c)->head[(c)->nb])
+
+/* The link that list_push and list_unlink write: the next field of the item before (prev
+ * below n), or the head it leads from (n + s); the back link of the item after, or the sink
+ * when there is none. Chosen by selects, not branches: whether an item heads its list, or
+ * ends it, is a coin toss in a calendar's lists (cachegrind's branch model: five
+ * mispredicted branches a collision in unfile at phi = 0.50). */
+static inline uint32_t *link_to(nbep_calendar *c, uint32_t prev)
 {
-    node *x = &c->node[item];
-    x->prev = NIL;
-    x->next = *head;
-    if (*head != NIL)
-        c->node[*head].prev = item;
-    *head = item;
+    return prev < c->n ? &c->node[prev].next : &c->head[prev - c->n];
+}
+static inline uint32_t *link_back(nbep_calendar *c, uint32_t next)
+{
+    return next != NIL ? &c->node[next].prev : &c->sink;
 }
 
-static void list_unlink(nbep_calendar *c, uint32_t *head, uint32_t item)
+/* Item to the front of list s (a ring slot, or nb: the overflow). */
+static void list_push(nbep_calendar *c, size_t s, uint32_t item)
 {
     node *x = &c->node[item];
-    if (x->prev != NIL)
-        c->node[x->prev].next = x->next;
-    else
-        *head = x->next;
-    if (x->next != NIL)
-        c->node[x->next].prev = x->prev;
+    x->prev = (uint32_t)(c->n + s);
+    x->next = c->head[s];
+    *link_back(c, x->next) = item;
+    c->head[s] = item;
+}
+
+static void list_unlink(nbep_calendar *c, uint32_t item)
+{
+    const node *x = &c->node[item];
+    *link_to(c, x->prev) = x->next;
+    *link_back(c, x->next) = x->prev;
 }
 
 /* Files an entry (its node's time and key set) where its bucket says. */
@@ -228,11 +243,11 @@ static void file(nbep_calendar *c, uint32_t item)
     } else if (in_ring(c, ab)) {
         x->where = WHERE_RING;
         x->loc = ring_loc(c, ab);
-        list_push(c, &c->head[x->loc], item);
+        list_push(c, x->loc, item);
         c->ring_len++;
     } else {
         x->where = WHERE_OVERFLOW;
-        list_push(c, &c->overflow, item);
+        list_push(c, c->nb, item);
         if (ab < c->ovf_min)
             c->ovf_min = ab;
     }
@@ -244,11 +259,9 @@ static void unfile(nbep_calendar *c, uint32_t item)
     node *x = &c->node[item];
     if (x->where == WHERE_HEAP) {
         heap_delete(c, item);
-    } else if (x->where == WHERE_RING) {
-        list_unlink(c, &c->head[x->loc], item);
-        c->ring_len--;
     } else {
-        list_unlink(c, &c->overflow, item);
+        list_unlink(c, item);
+        c->ring_len -= x->where == WHERE_RING;
     }
     x->where = WHERE_NONE;
 }
@@ -256,8 +269,8 @@ static void unfile(nbep_calendar *c, uint32_t item)
 /* Re-files the overflow entries, which brings those now within the ring into it. */
 static void redistribute(nbep_calendar *c)
 {
-    uint32_t item = c->overflow;
-    c->overflow = NIL;
+    uint32_t item = OVERFLOW(c);
+    OVERFLOW(c) = NIL;
     c->ovf_min = INT64_MAX;
     while (item != NIL) {
         uint32_t next = c->node[item].next;
@@ -269,21 +282,19 @@ static void redistribute(nbep_calendar *c)
 /* Re-files every entry with the origin at t_now and the width w (> 0). */
 static void refile_all(nbep_calendar *c, double t_now, double w)
 {
-    /* gather every entry into one list through the overflow (the heap's items first) */
-    uint32_t all = c->overflow;
+    /* gather every entry into one list, the overflow (the heap's items first) */
     for (size_t k = 0; k < c->heap_len; k++)
-        list_push(c, &all, c->heap[k]);
+        list_push(c, c->nb, c->heap[k]);
     for (size_t s = 0; s < c->nb && c->ring_len > 0; s++) {
         uint32_t item = c->head[s];
+        c->head[s] = NIL;
         while (item != NIL) {
             uint32_t next = c->node[item].next;
-            list_push(c, &all, item);
+            list_push(c, c->nb, item);
             c->ring_len--;
             item = next;
         }
-        c->head[s] = NIL;
     }
-    c->overflow = all;
     c->heap_len = 0;
     c->t0 = t_now;
     c->w = w;
@@ -321,13 +332,13 @@ static void advance(nbep_calendar *c)
              * brings into the heap (the lap rule holds from any bucket: what stays in the
              * overflow is further than the next lap boundary) */
             int64_t m = INT64_MAX;
-            for (uint32_t item = c->overflow; item != NIL; item = c->node[item].next) {
+            for (uint32_t item = OVERFLOW(c); item != NIL; item = c->node[item].next) {
                 int64_t ab = bucket_of(c, c->node[item].time);
                 m = ab < m ? ab : m;
             }
             if (m == INT64_MAX) { /* only +inf entries: they come out in order from the heap */
-                uint32_t item = c->overflow;
-                c->overflow = NIL;
+                uint32_t item = OVERFLOW(c);
+                OVERFLOW(c) = NIL;
                 while (item != NIL) {
                     uint32_t next = c->node[item].next;
                     heap_push(c, item);
@@ -393,9 +404,8 @@ void nbep_calendar_clear(nbep_calendar *c)
 {
     for (size_t i = 0; i < c->n; i++)
         c->node[i].where = WHERE_NONE;
-    for (size_t s = 0; s < c->nb; s++)
+    for (size_t s = 0; s <= c->nb; s++)
         c->head[s] = NIL;
-    c->overflow = NIL;
     c->ovf_min = INT64_MAX;
     c->heap_len = c->ring_len = c->size = 0;
 }
@@ -493,7 +503,7 @@ size_t nbep_calendar_check(const nbep_calendar *c)
             bad++; /* a later bucket's entry in the heap */
     }
     for (size_t s = 0; s < c->nb; s++)
-        for (uint32_t item = c->head[s], prev = NIL; item != NIL;
+        for (uint32_t item = c->head[s], prev = (uint32_t)(c->n + s); item != NIL;
              prev = item, item = c->node[item].next) {
             const node *x = &c->node[item];
             int64_t ab = bucket_of(c, x->time);
@@ -505,7 +515,7 @@ size_t nbep_calendar_check(const nbep_calendar *c)
                 return bad + 1; /* a cycle */
         }
     size_t in_ovf = 0;
-    for (uint32_t item = c->overflow, prev = NIL; item != NIL;
+    for (uint32_t item = OVERFLOW(c), prev = (uint32_t)(c->n + c->nb); item != NIL;
          prev = item, item = c->node[item].next) {
         const node *x = &c->node[item];
         in_ovf++;
