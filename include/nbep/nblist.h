@@ -42,7 +42,7 @@
 /* The skin of a dilute scene that flies free (no acceleration), where a sphere flies farther
  * between collisions and outruns a thin skin's list: at phi = 0.30 a collision had 0.77 list
  * expiries with the skin of 0.4 (0.10 at phi = 0.50). Measured on the melted N = 32000 fluids
- * after the walk lost its branches (7155176; paired resumed runs on an AMD machine, medians
+ * after the walk lost its branches (8a3d22d; paired resumed runs on an AMD machine, medians
  * of 4 per-run ratios of collisions a second against a skin of 0.4), skins 0.5 / 0.6 / 0.7:
  * phi 0.30: 1.07 / 1.10 / 1.12; phi 0.40: 1.08 / 1.07 / 1.07; phi 0.50: 1.03 / 1.01 / 1.00
  * (0.45: 1.00); and 0.6 / 0.8 at phi 0.10: 1.19 / 1.15, at phi 0.20: 1.09 / 1.15. */
