@@ -424,8 +424,8 @@ MUTANTS = [
      "    return NBEP_NBLIST_SKIN_DILUTE + f * (NBEP_NBLIST_SKIN - NBEP_NBLIST_SKIN_DILUTE);",
      "    return NBEP_NBLIST_SKIN;", ["test_nblist"] + LISTS, None),
     ("skin-acceleration-unseen", "src/scene.c",
-     "        free &= st->acc[i].x == 0.0 && st->acc[i].y == 0.0 && st->acc[i].z == 0.0;",
-     "        (void)i;", ["tests/test_cli.sh"], None),
+     "nbep_scene_packing_fraction(sc, st), nbep_state_free_flight(st));",
+     "nbep_scene_packing_fraction(sc, st), true);", ["tests/test_cli.sh"], None),
     ("skin-engine-fixed", "src/evloop.c", "    double skin = skin_frac * reach;",
      "    double skin = NBEP_NBLIST_SKIN * reach;", LISTS + ["test_periodic"], None),
     # the walk's members kept without a branch and passed on in batches

@@ -146,9 +146,8 @@ typedef struct pred_plan {
  * threads, with NBEP_TEAM's choice team_force (team_forced). */
 static pred_plan plan_of(const nbep_scene *sc, const nbep_state *st, int nt, int team_force)
 {
-    pred_plan p = {.n = st->n, .n_planes = st->n_planes, .nt = nt, .free_flight = true};
-    for (size_t i = 0; i < p.n; i++)
-        p.free_flight &= is_zero(st->acc[i]);
+    pred_plan p = {.n = st->n, .n_planes = st->n_planes, .nt = nt,
+                   .free_flight = nbep_state_free_flight(st)};
     p.tc_model = sc->tc > 0.0 && sc->restitution < 1.0;
     p.cage_model = p.tc_model && !p.free_flight;
     p.settle_model = !p.free_flight && sc->restitution < 1.0;

@@ -1142,10 +1142,7 @@ double nbep_scene_packing_fraction(const nbep_scene *sc, const nbep_state *st)
 
 double nbep_scene_list_skin(const nbep_scene *sc, const nbep_state *st)
 {
-    bool free = true;
-    for (size_t i = 0; i < st->n; i++)
-        free &= st->acc[i].x == 0.0 && st->acc[i].y == 0.0 && st->acc[i].z == 0.0;
-    return nbep_nblist_skin_for(nbep_scene_packing_fraction(sc, st), free);
+    return nbep_nblist_skin_for(nbep_scene_packing_fraction(sc, st), nbep_state_free_flight(st));
 }
 
 void nbep_scene_count_pairs(const nbep_state *s, uint64_t *quadratic, uint64_t *quartic)
