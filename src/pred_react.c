@@ -649,12 +649,18 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
     const nbep_vec3 p_hi = c->pb.any ? nbep_vec3_add(s->pos[lo], r12) : s->pos[hi];
     const nbep_vec3 v_hi = s->vel[hi];
     /* spheres leaning on planes move only along them: the planes take their share (a free
-     * pair keeps the paper's formula, bit for bit) */
-    double len = nbep_vec3_norm(r12);
-    nbep_vec3 n = len > 0.0 ? nbep_vec3_make(r12.x / len, r12.y / len, r12.z / len) : r12;
+     * pair keeps the paper's formula, bit for bit); only scenes with lasting contacts
+     * (c->rest) have any, and only they need the normal for it (a square root and three
+     * divisions in every collision of a fluid) */
     bool leans = false;
-    nbep_vec3 d_lo = plane_mobility(c, s, lo, nbep_vec3_scale(n, -1.0), &leans);
-    nbep_vec3 d_hi = plane_mobility(c, s, hi, n, &leans);
+    nbep_vec3 d_lo = {0.0, 0.0, 0.0}, d_hi = {0.0, 0.0, 0.0};
+    if (c->rest) {
+        const double len = nbep_vec3_norm(r12);
+        const nbep_vec3 n =
+            len > 0.0 ? nbep_vec3_make(r12.x / len, r12.y / len, r12.z / len) : r12;
+        d_lo = plane_mobility(c, s, lo, nbep_vec3_scale(n, -1.0), &leans);
+        d_hi = plane_mobility(c, s, hi, n, &leans);
+    }
     const double e_pair = tc_restitution(c, sc->tc, e, t_abs, lo, hi);
     const double m_lo = c->mass_all > 0.0 ? c->mass_all : s->mass[lo];
     const double m_hi = c->mass_all > 0.0 ? c->mass_all : s->mass[hi];
