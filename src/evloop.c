@@ -266,12 +266,7 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->q = q;
     e->ver = ver;
     e->pb = nbep_periodic_make(periodic, lo, hi);
-    /* the skin, cut down in a small periodic box so that three cells (sides of the cutoff)
-     * fit across; the deck check keeps it at NBEP_NBLIST_SKIN_MIN */
-    double skin = skin_frac * reach;
-    for (int k = 0; k < 3; k++)
-        if (e->pb.axis[k])
-            skin = fmin(skin, e->pb.len[k] / (3.0 * (1.0 + CUT_SLACK)) - reach);
+    double skin = nbep_evloop_skin_in(skin_frac, reach, periodic, lo, hi);
     if (reach > 0.0 && !(skin >= NBEP_NBLIST_SKIN_MIN * reach)) {
         nbep_evloop_destroy(&e);
         NBEP_FAIL(d, NBEP_EDECK,
@@ -329,6 +324,17 @@ nbep_status nbep_evloop_refit(nbep_evloop *e, nbep_vec3 lo, nbep_vec3 hi, nbep_d
     e->pb = nbep_periodic_make(NULL, lo, hi);
     set_near2(e);
     return nbep_cells_refit(&e->cells, lo, hi, cells_reach(e), d);
+}
+
+double nbep_evloop_skin_in(double skin_frac, double reach, const bool *periodic, nbep_vec3 lo,
+                           nbep_vec3 hi)
+{
+    const double len[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
+    double skin = skin_frac * reach;
+    for (int k = 0; periodic && k < 3; k++)
+        if (periodic[k])
+            skin = fmin(skin, len[k] / (3.0 * (1.0 + CUT_SLACK)) - reach);
+    return skin;
 }
 
 double nbep_evloop_min_periodic_side(double reach)

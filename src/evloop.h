@@ -106,6 +106,12 @@ NBEP_MUST_CHECK nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3
                                                int team, nbep_feq *q, const uint64_t *ver,
                                                nbep_evloop **out, nbep_diag *d);
 void nbep_evloop_destroy(nbep_evloop **e);
+/* The lists' skin that the engine takes when asked for skin_frac of `reach`: cut
+ * down in a small periodic box (its sides hi - lo along the axes that periodic names; NULL:
+ * none) so that three cells, sides of the cutoff, fit across. Below NBEP_NBLIST_SKIN_MIN the
+ * engine refuses the box (the deck check first: nbep_evloop_min_periodic_side). */
+double nbep_evloop_skin_in(double skin_frac, double reach, const bool *periodic, nbep_vec3 lo,
+                           nbep_vec3 hi);
 /* The shortest periodic side the engine takes for contacts within `reach`: three cells of
  * the list cutoff with the thinnest skin (NBEP_NBLIST_SKIN_MIN); a shorter one is refused. */
 double nbep_evloop_min_periodic_side(double reach);

@@ -85,10 +85,19 @@ static void print_check(const nbep_scene *sc, int threads)
         printf("packing:         n/a (no box)\n");
     else
         printf("packing:         %.4g of the box volume\n", pf);
-    if (sc->neighbors_cells && strcmp(sc->algorithm, "predictive") == 0)
-        printf("lists:           skin %.3g of the largest diameter (wider below packing %g "
-               "when nothing accelerates)\n",
-               nbep_scene_list_skin(sc, &sc->state), NBEP_NBLIST_PHI_DENSE);
+    if (sc->neighbors_cells && strcmp(sc->algorithm, "predictive") == 0) {
+        const double asked = nbep_scene_list_skin(sc, &sc->state);
+        const double taken = nbep_scene_list_skin_taken(sc, &sc->state);
+        if (taken < asked)
+            printf("lists:           skin %.3g of the largest diameter (%.3g by the packing, cut "
+                   "down so that three cells fit across the periodic box)\n",
+                   taken, asked);
+        else
+            printf("lists:           skin %.3g of the largest diameter (when nothing "
+                   "accelerates, %g at packing %g or below, %g from %g)\n",
+                   taken, NBEP_NBLIST_SKIN_DILUTE, NBEP_NBLIST_PHI_DILUTE, NBEP_NBLIST_SKIN,
+                   NBEP_NBLIST_PHI_DENSE);
+    }
     printf("memory:          about %.3g MB\n", (double)nbep_sim_memory_estimate(sc, threads) / 1e6);
     printf("output:          %s: %llu frames (every %llu steps), about %.3g MB\n",
            sc->output_file, (unsigned long long)nbep_output_frames(sc),

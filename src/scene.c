@@ -1145,6 +1145,18 @@ double nbep_scene_list_skin(const nbep_scene *sc, const nbep_state *st)
     return nbep_nblist_skin_for(nbep_scene_packing_fraction(sc, st), nbep_state_free_flight(st));
 }
 
+double nbep_scene_list_skin_taken(const nbep_scene *sc, const nbep_state *st)
+{
+    const double skin = nbep_scene_list_skin(sc, st);
+    double rmax = 0.0;
+    for (size_t i = 0; i < st->n; i++)
+        rmax = fmax(rmax, st->radius[i]);
+    if (!sc->has_box || !(rmax > 0.0))
+        return skin;
+    return nbep_evloop_skin_in(skin, 2.0 * rmax, sc->periodic, sc->box_min, sc->box_max) /
+           (2.0 * rmax);
+}
+
 void nbep_scene_count_pairs(const nbep_state *s, uint64_t *quadratic, uint64_t *quartic)
 {
     const uint64_t n = s->n, all = n * (n ? n - 1 : 0) / 2;

@@ -63,6 +63,9 @@ run_nbep check inputs/hard-sphere-fluid.deck \
     --set 'box.max=[32.2398390803, 32.2398390803, 32.2398390803]'
 check "nbep check prints the lists' skin: a fluid at packing 0.5 the thin one" \
     "grep -Eq '^packing: +0.5 of' $tmp/stdout && grep -Eq '^lists: +skin 0.4 of' $tmp/stdout"
+run_nbep check inputs/hard-sphere-fluid.deck --set 'box.max=[4,4,4]' --set 'spheres.[0].count=8'
+check "nbep check prints the lists' skin the run takes: a small periodic box cuts it down" \
+    "grep -Eq '^lists: +skin 0.333 of the largest diameter \(0.6 by the packing, cut down' $tmp/stdout"
 run_nbep check "$tmp/group.deck" --set physics.restitution=0.25 --set 'physics.gravity=[0,-2,0]' \
     --set run.seed=7
 check "nbep check prints restitution, gravity, the TC model's settings, seed and box" \

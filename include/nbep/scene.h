@@ -109,8 +109,11 @@ bool nbep_scene_resume_point(const nbep_scene *sc, int64_t step);
 double nbep_scene_packing_fraction(const nbep_scene *sc, const nbep_state *st);
 /* The skin of the cells mode's neighbour lists for sc with the spheres of st, as a fraction
  * of the largest diameter (nbep_nblist_skin_for: from the packing fraction when nothing
- * accelerates; a small periodic box may cut it down further, evloop.c). */
+ * accelerates), which the run asks its lists for. */
 double nbep_scene_list_skin(const nbep_scene *sc, const nbep_state *st);
+/* The skin the run's lists then take, as a fraction of the largest diameter: the same, unless
+ * a small periodic box cuts it down (nbep check prints this one). */
+double nbep_scene_list_skin_taken(const nbep_scene *sc, const nbep_state *st);
 
 /* Pairs of spheres whose accelerations are equal (quadratic contact time) and differ
  * (quartic), counted in O(n log n) by grouping equal accelerations. */
