@@ -114,7 +114,7 @@ static int team_forced(void)
 
 /* The neighbours per sphere that nbep check counts in cells mode's lists (with their rooms
  * and the pool's growth, nbep_nblist_bytes): more than a dense scene lists (a fluid at phi
- * 0.30 to 0.50: 6 to 11, nblist.h; a settled pile at phi 0.6 about 14 by the same scaling),
+ * 0.30 to 0.50: 10 to 11, nblist.h; a settled pile at phi 0.6 about 14 by the same scaling),
  * so a dilute scene's estimate is high (a pour's start lists about one: README, nbep check);
  * spheres of mixed sizes may list more, as the cutoff is the largest diameter's. */
 #define ESTIMATE_NEIGHBOURS 24.0

@@ -95,15 +95,16 @@ typedef struct nbep_evloop_ops {
 typedef struct nbep_evloop nbep_evloop;
 
 /* An engine for n spheres in the box [lo, hi] whose contacts happen within `reach` (the
- * largest diameter), with lists of the skin skin * reach (nbep_scene_list_skin's; cut down
- * in a small periodic box), with the slots q and response counts ver (both borrowed, n each).
+ * largest diameter), with lists of the skin skin_frac * reach (nbep_scene_list_skin's; cut
+ * down in a small periodic box: nbep_evloop_skin_in), with the slots q and response counts ver (both borrowed, n each).
  * periodic (NULL: none) names the axes along which the box repeats: the cells wrap around
  * (cells.h), partners across a periodic face are tested at their image, and a sphere that
  * leaves the box is wrapped (ops->wrap) when it changes cell. team (1 to
  * NBEP_EVLOOP_TEAM_MAX): the threads that may run the team loop together. */
 NBEP_MUST_CHECK nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi,
-                                               double reach, double skin, const bool *periodic,
-                                               int team, nbep_feq *q, const uint64_t *ver,
+                                               double reach, double skin_frac,
+                                               const bool *periodic, int team, nbep_feq *q,
+                                               const uint64_t *ver,
                                                nbep_evloop **out, nbep_diag *d);
 void nbep_evloop_destroy(nbep_evloop **e);
 /* The lists' skin that the engine takes when asked for skin_frac of `reach`: cut

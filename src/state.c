@@ -93,10 +93,10 @@ bool nbep_state_all_finite(const nbep_state *s)
 
 bool nbep_state_free_flight(const nbep_state *s)
 {
-    bool free = true;
+    bool flies_free = true;
     for (size_t i = 0; i < s->n; i++)
-        free &= s->acc[i].x == 0.0 && s->acc[i].y == 0.0 && s->acc[i].z == 0.0;
-    return free;
+        flies_free &= s->acc[i].x == 0.0 && s->acc[i].y == 0.0 && s->acc[i].z == 0.0;
+    return flies_free;
 }
 
 static void consider(double overlap, double rmin, size_t i, size_t j, nbep_overlap *b)

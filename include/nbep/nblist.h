@@ -9,7 +9,7 @@
  * the end of the pool with half as much room again (nbep_nblist_grown); when the pool fills
  * and holds more than a quarter more than a fresh layout would take, it is compacted in place
  * (every list moved, with its room for its count), so memory stays within about 1.6 fresh
- * layouts and proportional to the entries (4 bytes per neighbour, 6 to 11 neighbours in a
+ * layouts and proportional to the entries (4 bytes per neighbour, 10 to 11 neighbours in a
  * fluid at phi 0.30 to 0.50) however long the run. The slack is small on purpose: the pool
  * was the largest thing a dense run grew (120 bytes a sphere at N = 256000, phi 0.50, when a
  * list got a quarter more and four, moved with twice its room and the pool was compacted at
@@ -58,12 +58,12 @@
 #define NBEP_NBLIST_PHI_DENSE 0.45
 
 /* The skin (a fraction of the largest contact distance) for a scene whose spheres fill the
- * fraction phi of its box and fly free (free: no acceleration anywhere). NBEP_NBLIST_SKIN when
+ * fraction phi of its box and fly free (flies_free: no acceleration anywhere). NBEP_NBLIST_SKIN when
  * phi is not a number (no box) or the scene accelerates: a pile's spheres are crowded at the
  * bottom of a box that is mostly empty, so the box's fraction says nothing of it. */
-static inline double nbep_nblist_skin_for(double phi, bool free)
+static inline double nbep_nblist_skin_for(double phi, bool flies_free)
 {
-    if (!free || !(phi >= 0.0) || phi >= NBEP_NBLIST_PHI_DENSE)
+    if (!flies_free || !(phi >= 0.0) || phi >= NBEP_NBLIST_PHI_DENSE)
         return NBEP_NBLIST_SKIN;
     if (phi <= NBEP_NBLIST_PHI_DILUTE)
         return NBEP_NBLIST_SKIN_DILUTE;
