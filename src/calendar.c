@@ -68,8 +68,13 @@ struct nbep_calendar {
 
 nbep_status nbep_calendar_create(size_t n, nbep_calendar **out, nbep_diag *d)
 {
+    if (n > NBEP_CALENDAR_MAX)
+        NBEP_FAIL(d, NBEP_EDECK,
+                  "nbep: an event calendar holds at most %zu items (its links are 32-bit), not "
+                  "%zu",
+                  NBEP_CALENDAR_MAX, n);
     nbep_calendar *c = calloc(1, sizeof *c);
-    if (c && n < UINT32_MAX / 4) { /* (room for the links n + s, s <= nb < 2 n + 16) */
+    if (c) { /* (room for the links n + s, s <= nb < 2 n + 16: NBEP_CALENDAR_MAX) */
         c->n = n;
         c->nb = 16;
         while (c->nb < n)

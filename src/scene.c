@@ -14,6 +14,7 @@
  * made: such settings carry the override text in their libconfig hook. */
 #include "nbep/scene.h"
 
+#include "nbep/calendar.h"
 #include "nbep/nblist.h"
 
 #include <assert.h>
@@ -814,8 +815,8 @@ static void parse_sweep(load *L, const config_setting_t *root, nbep_scene *sc)
 
 /* ---- counts, memory, and the state ---------------------------------------------------------- */
 
-static bool check_counts(load *L, nbep__scene_entry *e, size_t n_entries, size_t n_planes,
-                         size_t *total_out)
+static bool check_counts(load *L, const nbep_scene *sc, nbep__scene_entry *e, size_t n_entries,
+                         size_t n_planes, size_t *total_out)
 {
     uint64_t total = 0;
     size_t largest = SIZE_MAX;
@@ -837,6 +838,13 @@ static bool check_counts(load *L, nbep__scene_entry *e, size_t n_entries, size_t
         total += e[k].count;
         if (e[k].place != NBEP__PLACE_ONE && (largest == SIZE_MAX || e[k].count > e[largest].count))
             largest = k;
+    }
+    if (sc->neighbors_cells && total > NBEP_CALENDAR_MAX && largest != SIZE_MAX) {
+        ERR(L, e[largest].count_at,
+            "spheres.[%zu].count = %" PRIu64 " brings the total to %" PRIu64 " spheres, more "
+            "than run.neighbors = \"cells\" takes (%zu: its event calendar's links are 32-bit)",
+            largest, e[largest].count, total, NBEP_CALENDAR_MAX);
+        return false;
     }
     /* Checked before allocating: an overcommitting kernel would otherwise accept the
      * allocation and kill the run later, at first touch. */
@@ -1035,7 +1043,7 @@ nbep_status nbep_scene_load_from(const char *deck_path, const char *const *overr
     parse_sweep(&L, root, &sc);
 
     size_t total, n_all_planes = n_planes + (sc.has_box ? box_walls(&sc) : 0);
-    if (geometry_ok && check_counts(&L, entries, n_entries, n_all_planes, &total)) {
+    if (geometry_ok && check_counts(&L, &sc, entries, n_entries, n_all_planes, &total)) {
         st = nbep_state_init(&sc.state, total, n_all_planes, d);
         if (st != NBEP_OK)
             goto done;

@@ -267,10 +267,26 @@ static void test_top_is_the_minimum_over_many_laps_with_far_entries_and_changing
     nbep_calendar_destroy(&c);
 }
 
+/* More items than the 32-bit links hold: refused with a message of its own (not blamed on
+ * memory), before anything is allocated (the request would be for gigabytes). */
+static void test_more_items_than_the_links_hold_is_refused(void **state)
+{
+    (void)state;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_calendar *c = NULL;
+    assert_int_equal(nbep_calendar_create(NBEP_CALENDAR_MAX + 1, &c, &d), NBEP_EDECK);
+    assert_null(c);
+    assert_int_equal(d.n_errors, 1);
+    assert_non_null(strstr(d.msg[0], "holds at most 1073741822 items"));
+    nbep_diag_fini(&d);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_top_is_the_brute_force_minimum_under_random_operations),
+        cmocka_unit_test(test_more_items_than_the_links_hold_is_refused),
         cmocka_unit_test(test_drain_order_is_time_then_key_then_item_for_any_insert_order),
         cmocka_unit_test(test_remove_of_an_absent_item_and_an_empty_calendar_are_harmless),
         cmocka_unit_test(test_top_is_the_minimum_over_many_laps_with_far_entries_and_changing_pace),

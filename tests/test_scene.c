@@ -403,6 +403,19 @@ static void test_too_many_spheres_for_32_bit_ids_is_an_error(void **state)
                             "32-bit)");
 }
 
+/* The cells mode's event calendar links its spheres by 32-bit numbers (NBEP_CALENDAR_MAX):
+ * one sphere more is a deck error naming the count, before the memory check (which would
+ * blame memory on a small machine) and before anything is allocated. */
+static void test_too_many_spheres_for_the_cells_mode_is_an_error(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_cells_too_many.deck");
+    ASSERT_DIAG(&f->d, DATA "scene_cells_too_many.deck:5: spheres.[0].count = 1073741823 brings "
+                            "the total to 1073741823 spheres, more than run.neighbors = "
+                            "\"cells\" takes (1073741822: its event calendar's links are "
+                            "32-bit)");
+}
+
 static void test_integer_beyond_64_bits_is_an_error(void **state)
 {
     fixture *f = *state;
@@ -1069,6 +1082,7 @@ int main(void)
         T(test_values_out_of_range_are_all_reported_in_one_pass),
         T(test_sphere_entries_must_be_one_sphere_or_one_group),
         T(test_too_many_spheres_for_32_bit_ids_is_an_error),
+        T(test_too_many_spheres_for_the_cells_mode_is_an_error),
         T(test_integer_beyond_64_bits_is_an_error),
         T(test_more_spheres_than_memory_holds_fail_before_allocating),
         T(test_deck_and_override_errors_come_in_one_pass),

@@ -35,7 +35,13 @@ static inline bool nbep_calendar_before(nbep_calendar_entry a, nbep_calendar_ent
     return a.item < b.item;
 }
 
-/* An empty calendar for items 0..n-1 (n < UINT32_MAX). NBEP_ENOMEM with a message. */
+/* The most items a calendar holds: its lists link items and buckets (n + bucket, with up to
+ * 2 n + 16 buckets) by 32-bit numbers, below a reserved one. The cells mode's limit on
+ * spheres (the deck check says so). */
+#define NBEP_CALENDAR_MAX ((size_t)(UINT32_MAX / 4 - 1))
+
+/* An empty calendar for items 0..n-1: NBEP_EDECK with a message when n > NBEP_CALENDAR_MAX
+ * (before allocating anything), NBEP_ENOMEM with a message without memory. */
 NBEP_MUST_CHECK nbep_status nbep_calendar_create(size_t n, nbep_calendar **out, nbep_diag *d);
 /* NULL-safe; NULLs the pointer. */
 void nbep_calendar_destroy(nbep_calendar **c);
