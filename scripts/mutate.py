@@ -421,7 +421,7 @@ MUTANTS = [
      "    if (phi <= NBEP_NBLIST_PHI_DILUTE)\n        return NBEP_NBLIST_SKIN;",
      ["test_nblist", "test_periodic"], None),
     ("skin-accelerating-dilute", "include/nbep/nblist.h",
-     "    if (!free || !(phi >= 0.0) || phi >= NBEP_NBLIST_PHI_DENSE)",
+     "    if (!flies_free || !(phi >= 0.0) || phi >= NBEP_NBLIST_PHI_DENSE)",
      "    if (!(phi >= 0.0) || phi >= NBEP_NBLIST_PHI_DENSE)", ["test_nblist"], None),
     ("skin-between-jumps", "include/nbep/nblist.h",
      "    return NBEP_NBLIST_SKIN_DILUTE + f * (NBEP_NBLIST_SKIN - NBEP_NBLIST_SKIN_DILUTE);",
