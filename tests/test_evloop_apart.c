@@ -1,29 +1,29 @@
 /* The team loop's apartness, checked at every place that joins the window, by means of its own.
- * Two events in flight at once must touch nothing in common (src/evloop.c, place_apart): no
- * sphere one writes may be read or written by the other, and no cell one's commit changes may
- * be read by the other's walk. Whether a breach of that does harm depends on the schedule (the
- * two events must run at the same moment and meet), so tests of the results (test_periodic)
- * catch a wrong apartness test only now and then: the mutants that measure the distance
- * without the periodic wrap, or that never compare two expiries' cells, survived runs of
- * test_periodic while other work shared the machine. Which places are in flight together does
- * not depend on the schedule: the leader alone fills the window, after each commit, in the
- * calendar's order. So this test compiles its own copy of src/evloop.c with a hook at each
- * place's joining that checks, in doubles and through nbep_periodic_image rather than the
- * loop's float test, that its spheres' list centres are farther than `touch` from those of
- * every place in flight (what an event touches lies within touch of its spheres' centres: a
- * breach of this may do harm) and farther than twice touch (what the loop keeps, leaving a
- * margin: a breach of only this does no harm, but shows a test other than the one evloop.c
- * describes; one that forgets the wrap for a place's own sphere, say, which errs within touch
- * only once the place's other sphere is far), and,
- * for two list expiries, that the cells one's commit changes (its cell and
- * the neighbour its new centre may enter) and the cells the other's walk reads (the blocks
- * around its cell's neighbours) share none, counted cell by cell. It also counts that the
- * scenes come close to both limits, across periodic faces too, so that a test which looked
- * away would fail. */
+ * Two events in flight at once must touch nothing in common (src/evloop_team.c, place_apart): no
+ * sphere one writes may be read or written by the other, and no cell one's commit changes may be
+ * read by the other's walk. Whether a breach of that does harm depends on the schedule (the two
+ * events must run at the same moment and meet), so tests of the results (test_periodic) catch a
+ * wrong apartness test only now and then: the mutants that measure the distance without the
+ * periodic wrap, or that never compare two expiries' cells, survived runs of test_periodic while
+ * other work shared the machine. Which places are in flight together does not depend on the
+ * schedule: the leader alone fills the window, after each commit, in the calendar's order. So this
+ * test compiles its own copy of the engine (src/evloop.c and src/evloop_team.c) with a hook at
+ * each place's joining that checks, in doubles and through nbep_periodic_image rather than the
+ * loop's float test, that its spheres' list centres are farther than `touch` from those of every
+ * place in flight (what an event touches lies within touch of its spheres' centres: a breach of
+ * this may do harm) and farther than twice touch (what the loop keeps, leaving a margin: a breach
+ * of only this does no harm, but shows a test other than the one evloop_team.c describes; one that
+ * forgets the wrap for a place's own sphere, say, which errs within touch only once the place's
+ * other sphere is far), and, for two list expiries, that the cells one's commit changes (its cell
+ * and the neighbour its new centre may enter) and the cells the other's walk reads (the blocks
+ * around its cell's neighbours) share none, counted cell by cell. It also counts that the scenes
+ * come close to both limits, across periodic faces too, so that a test which looked away would
+ * fail. */
 struct nbep_evloop;
 static void audit_join(const struct nbep_evloop *e);
 #define NBEP_EVLOOP_JOIN_HOOK(e) audit_join(e)
 #include "../src/evloop.c"
+#include "../src/evloop_team.c"
 
 #include <stdarg.h>
 #include <stddef.h>

@@ -22,6 +22,7 @@ static void audit_handled(const struct nbep_evloop *e, const struct evl_ws *w);
  * fills is passed on mid-walk, which 3 makes happen in most walks here */
 #define NEAR_BATCH 3
 #include "../src/evloop.c"
+#include "../src/evloop_team.c"
 
 #include <stdarg.h>
 #include <stddef.h>

@@ -1,8 +1,9 @@
 /* Where the team loop's leader spends its time: bin/nbep itself (src/main.c), with its own
- * copy of src/evloop.c whose phase hook reads the time-stamp counter at each change of the
- * leader's phase (PH_WAIT .. PH_START in src/evloop.c: waiting for a place with none left to
- * take, handling places itself, deciding whether the window's first place stands, committing
- * it, filling the window, undoing, starting an empty window). At exit it prints to stderr, per
+ * copy of the engine (src/evloop.c, src/evloop_team.c) whose phase hook reads the time-stamp
+ * counter at each change of the leader's phase (PH_WAIT .. PH_START in src/evloop_team.c:
+ * waiting for a place with none left to take, handling places itself, deciding whether the
+ * window's first place stands, committing it, filling the window, undoing, starting an empty
+ * window). At exit it prints to stderr, per
  * phase, the leader's seconds and their share of its time in the team loop. The leader can
  * commit no faster than its own work allows, so the phases other than waiting and handling
  * bound what any number of helpers can gain (README, Threads on dense scenes).
@@ -27,6 +28,7 @@
 static int leader_phase(int p);
 #define NBEP_EVLOOP_PHASE_HOOK(p) leader_phase(p)
 #include "../../src/evloop.c"
+#include "../../src/evloop_team.c"
 #include "../../src/main.c"
 
 static const char *const PHASE_NAME[PH_COUNT] = {"wait", "handle", "stand", "commit",

@@ -45,6 +45,7 @@ struct evl_ws;
 static void dag_event(const struct nbep_evloop *e, const struct evl_ws *w, const void *ev);
 #define NBEP_EVLOOP_HANDLED_HOOK(e, w, ev) dag_event(e, w, ev)
 #include "../../src/evloop.c"
+#include "../../src/evloop_team.c"
 #include "../../src/main.c"
 
 /* Regions, each with one thread that handles its events in time order (the event's region:

@@ -1,0 +1,224 @@
+/* The cells engine's insides, shared by its two loops: the one-thread loop and the engine
+ * itself (evloop.c) and the team loop (evloop_team.c, nbep_evloop_run_lead and
+ * nbep_evloop_help). Nothing outside the engine includes this. */
+#ifndef NBEP_EVLOOP_IMPL_H
+#define NBEP_EVLOOP_IMPL_H
+
+#include "evloop.h"
+
+#include <stdalign.h>
+#include <stdatomic.h>
+#include <stddef.h>
+
+#include "nbep/calendar.h"
+#include "nbep/cells.h"
+#include "nbep/compiler.h"
+#include "nbep/nblist.h"
+#include "nbep/periodic.h"
+
+/* The team loop's places in flight at most: enough that a helper finds one to take while the
+ * leader commits (a window of 12 to 32 ran within the noise of this one at N = 256000,
+ * phi = 0.30, with one helper; more helpers may want more, unmeasured). */
+#define WINDOW 16
+
+/* The calendar entries an event's workspace holds for its commit (a pair's two spheres), and
+ * the mark of more. */
+#define NEXT_MAX 2
+#define NEXT_ALL UINT8_MAX
+
+/* One thread's side of an event (handle, then commit): the list a rebuild found and what the
+ * event changed, held until its commit; for a speculative event (the team loop's), the
+ * motion and slots it may change, kept to undo it. */
+typedef struct evl_ws {
+    /* the event handled, waiting for its commit, and what the commit reads first, on one
+     * cache line (the team's leader waits for it and reads it from another core; a
+     * workspace starts a line): in the team loop, the number of the place last handled on it
+     * (stored last, with release: what handle wrote is then there to read); the calendar
+     * entries to set, the changed spheres' then item's, from the slots handle wrote (n_next
+     * of them; NEXT_ALL where there were more than NEXT_MAX: the commit reads them from the
+     * slots), each set or, where next_set is false, taken out */
+    alignas(NBEP_CACHELINE) _Atomic uint64_t place;
+    uint32_t item;
+    bool rebuilt;           /* a list expiry: near is item's list, built around `at` */
+    bool reacted;
+    bool stop;              /* the reaction asked the run to stop after it (ops react) */
+    bool oom;               /* out of memory for the walk or the copy of `changed` */
+    uint8_t n_next;
+    uint32_t next_item[NEXT_MAX];
+    bool next_set[NEXT_MAX];
+    double next_time[NEXT_MAX];
+    uint64_t next_key[NEXT_MAX];
+    /* the team loop: the number of the place last handled here once it stood, written by the
+     * leader as it commits the place (on the line after the one it reads first, which for a
+     * pair's event it reads no more of: it writes without waiting for it), and whether the
+     * handler has yet to add that place's counts and sums (its context's) to its own
+     * (pending: the handler's alone). The handler reads `stood` before it handles another
+     * place here, published after the write, or at the call's end, after quit: so the leader
+     * reads none of a helper's counts (settle) */
+    uint64_t stood;
+    bool pending;
+    /* a rebuild of one list (walk): near holds the new list, gain[k] set for the entries i's
+     * old list lacked; was holds the old list (n_was entries), kept[k] set for those found
+     * again */
+    uint32_t *near, *was;   /* owned, room for cap each */
+    uint8_t *kept, *gain;   /* owned, room for cap each */
+    size_t cap, n_near, n_was;
+    nbep_vec3 at;           /* the new list's centre, and its cell (nbep_cells_locate) */
+    size_t at_cell;
+    uint32_t *changed;      /* owned, room for chg_cap: the spheres the reaction changed */
+    size_t n_changed, chg_cap;
+    /* a speculative event's undo: the spheres it may change, as they were */
+    uint32_t kept_id[2];
+    nbep_evloop_motion kept_motion[2];
+    nbep_event kept_slot[2];
+    int n_kept;
+} evl_ws;
+
+struct nbep_evloop {
+    size_t n;
+    nbep_calendar *cal;   /* owned */
+    nbep_cells cells;     /* owned: cells of the list centres, at least `cut` wide; a
+                           * member's place (cells.m[i].at) is where i's list was built */
+    nbep_nblist nl;       /* owned */
+    uint32_t *count;      /* owned, n: list lengths, at a full rebuild */
+    /* one per ring slot of the team loop and thread, the leader's [0] and helper t's [t]
+     * (t < team): a place's workspace is its taker's, written by it alone, so that its lines
+     * pass to another core only where the leader reads what a helper handled (one thread:
+     * ws[0][0]) */
+    evl_ws ws[NBEP_EVLOOP_TEAM_MAX][NBEP_EVLOOP_RING];
+    int team;             /* the threads that may run the loop together (create) */
+    int crew;             /* the leader's alone: the threads of this call (run_lead) */
+    nbep_periodic pb;     /* the box's periodic geometry */
+    double cut;           /* the list cutoff: contact distance plus skin, plus slack */
+    double stray;         /* half the skin: how far a sphere goes before its list expires */
+    double face_reach;    /* cut + stray, and a margin: see near_face */
+    double face_lo[3], face_hi[3]; /* near_face's faces: a periodic axis's low and high
+                                    * sides, -inf and +inf on any other */
+    bool failed;          /* out of memory for a list: the run stops */
+    nbep_feq *q;          /* borrowed */
+    const uint64_t *ver;  /* borrowed */
+    /* the team loop's window: the places handled ahead and not yet committed, numbered in
+     * order (place s lives in ring slot s % NBEP_EVLOOP_RING). Written by the leader and read
+     * by both threads: each one's sphere, the other sphere its slot names (a pair's partner,
+     * fresh or stale; NO_SPHERE for a plane or an expiry), and whether it was the calendar's
+     * earliest when the window was empty (it stands, and is neither kept nor checked) */
+    alignas(NBEP_CACHELINE) uint32_t batch[NBEP_EVLOOP_RING];
+    uint32_t batch_other[NBEP_EVLOOP_RING];
+    bool batch_first[NBEP_EVLOOP_RING];
+    /* the leader's alone (a line that another core reads makes each write to it wait): the
+     * list centres of the window's spheres as floats (place p's own at 2 (p % WINDOW), its
+     * other's next; +inf for none), for the places that join (place_apart); whether each
+     * place is a list expiry (its handle walks the cells around its sphere and its commit
+     * changes them) and then the cell coordinates of its list centre; each place's calendar
+     * entry, taken out while it is in flight, and the window's last (cur); the window, places
+     * head .. tail - 1, more looked for once head reaches fill_at */
+    alignas(NBEP_CACHELINE) float taken_x[2 * WINDOW];
+    alignas(NBEP_CACHELINE) float taken_y[2 * WINDOW];
+    alignas(NBEP_CACHELINE) float taken_z[2 * WINDOW];
+    float near2;          /* the square of the distance beyond which two events touch nothing
+                           * in common, for those float centres (set_near2) */
+    float len_f[3], half_f[3]; /* the periodic sides and their halves (+inf: not periodic) */
+    double shore;         /* how far a centre is taken past a side that is not periodic */
+    bool batch_walks[NBEP_EVLOOP_RING];
+    size_t batch_cell[NBEP_EVLOOP_RING][3];
+    nbep_calendar_entry batch_entry[NBEP_EVLOOP_RING], cur;
+    uint64_t head, tail, fill_at;
+    uint64_t lead_seen;   /* the leader's last reading of avail (take_one) */
+    /* the hand-over: the leader publishes places up to avail; any thread of the team takes
+     * the next place to handle from `next` and marks it handled (its number, in its
+     * workspace's `place`); the leader posts the end of a call in quit (the call's number),
+     * helper t answers it in done[t].word */
+    alignas(NBEP_CACHELINE) _Atomic uint64_t avail;
+    alignas(NBEP_CACHELINE) _Atomic uint64_t next;
+    alignas(NBEP_CACHELINE) _Atomic uint64_t quit;
+    struct {
+        alignas(NBEP_CACHELINE) _Atomic uint64_t word;
+    } done[NBEP_EVLOOP_TEAM_MAX];
+};
+
+_Static_assert(offsetof(evl_ws, next_key) + sizeof((evl_ws *)0)->next_key <= NBEP_CACHELINE,
+               "what a commit reads first is on one cache line");
+
+/* ---- shared by both loops (evloop.c) ------------------------------------------------------- */
+
+/* Handles the event of sphere i (its slot ev, at absolute time t) on workspace w: reacts if
+ * the slot is fresh and predicts the spheres it changed, writing their motion and slots only;
+ * a list expiry walks the cells for the new list. What the calendar, the lists and the cells
+ * need is left on w for nbep__evloop_commit. */
+void nbep__evloop_handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, void *u,
+                         uint32_t i, const nbep_event *ev, double t);
+/* What nbep__evloop_handle left waiting on w: the new list entered, the changed spheres'
+ * calendar entries set. */
+void nbep__evloop_commit(nbep_evloop *e, const evl_ws *w);
+/* The calendar entry of sphere i from its slot. */
+void nbep__evloop_schedule_one(nbep_evloop *e, uint32_t i);
+
+/* What slot_key(i, ev) says back: the other sphere of a pair (an index at or past n for a plane
+ * or an expiry: UINT32_MAX - plane or UINT32_MAX), and whether it is an expiry. */
+static inline uint32_t nbep__evloop_key_other(uint64_t key, uint32_t i)
+{
+    const uint32_t a = (uint32_t)(key >> 32), b = (uint32_t)key;
+    return a == i ? b : a;
+}
+static inline bool nbep__evloop_key_expiry(uint64_t key, uint32_t i)
+{
+    return key == ((uint64_t)i << 32 | UINT32_MAX);
+}
+
+/* Whether the commit of the event handled on w set sphere j's calendar entry. */
+static inline bool nbep__evloop_commit_sets(const evl_ws *w, uint32_t j)
+{
+    bool set = j == w->item;
+    if (w->n_next != NEXT_ALL)
+        for (size_t k = 0; k < w->n_next; k++)
+            set |= w->next_item[k] == j;
+    else
+        for (size_t k = 0; k < w->n_changed; k++)
+            set |= w->changed[k] == j;
+    return set;
+}
+
+/* Counts one event at time t towards the stall check: false when st->events events in a row
+ * have not advanced time by more than st->dt. */
+static inline bool nbep__evloop_advances(nbep_evloop_stall *st, double t)
+{
+    if (++st->since >= st->events) {
+        if (!(t - st->t_mark > st->dt))
+            return false;
+        st->t_mark = t;
+        st->since = 0;
+    }
+    return true;
+}
+
+/* Requests what the event of sphere i (slot ev) and the next ones will read (no effect on
+ * results): the first line of its list (from the list's record, which the event before
+ * requested with the runners-up), its place, its partner's list record and place, and the
+ * runners-up' slots, places and list records. */
+static inline NBEP_ALWAYS_INLINE void nbep__evloop_prefetch_event(const nbep_evloop *e,
+                                                                uint32_t i, const nbep_event *ev)
+{
+    NBEP_PREFETCH(&e->nl.pool[e->nl.sp[i].off]);
+    NBEP_PREFETCH(&e->cells.m[i]);
+    if (ev->kind == NBEP_EVENT_SPHERE) {
+        NBEP_PREFETCH(&e->nl.sp[ev->partner]);
+        NBEP_PREFETCH(&e->cells.m[ev->partner]);
+        nbep_calendar_prefetch(e->cal, ev->partner); /* moved at the commit if it is fresh */
+    }
+    uint32_t next[2];
+    int n_next;
+    nbep_calendar_runners_up(e->cal, next, NULL, &n_next);
+    for (int k = 0; k < n_next; k++) {
+        NBEP_PREFETCH(nbep_feq_slot(e->q, next[k]));
+        NBEP_PREFETCH(&e->cells.m[next[k]]);
+        NBEP_PREFETCH(&e->nl.sp[next[k]]);
+    }
+}
+
+static inline void nbep__evloop_count_handled(nbep_evloop_tally *tally, const evl_ws *w)
+{
+    tally->exits += w->rebuilt;
+    tally->reactions += w->reacted;
+}
+
+#endif
