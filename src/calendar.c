@@ -64,6 +64,10 @@ struct nbep_calendar {
     /* look_ahead's walk of the next bucket's list: the item reached, and the bucket */
     uint32_t ahead;
     int64_t ahead_ab;
+    /* the heap holds only entries of the last bucket (INT64_MAX: +inf, or 2^62 buckets ahead
+     * and more), brought in from the overflow with cur left where it was (advance): a later
+     * entry of any other bucket is earlier than them all, and sends them back (file) */
+    bool parked;
 };
 
 nbep_status nbep_calendar_create(size_t n, nbep_calendar **out, nbep_diag *d)
@@ -243,7 +247,15 @@ static void file(nbep_calendar *c, uint32_t item)
 {
     node *x = &c->node[item];
     int64_t ab = bucket_of(c, x->time);
-    if (ab <= c->cur) {
+    if (c->parked && ab < INT64_MAX) { /* the last bucket's entries go back to the overflow */
+        for (size_t k = 0; k < c->heap_len; k++) {
+            c->node[c->heap[k]].where = WHERE_OVERFLOW;
+            list_push(c, c->nb, c->heap[k]);
+        }
+        c->heap_len = 0;
+        c->parked = false;
+    }
+    if (ab <= c->cur || c->parked) {
         heap_push(c, item);
     } else if (in_ring(c, ab)) {
         x->where = WHERE_RING;
@@ -301,6 +313,7 @@ static void refile_all(nbep_calendar *c, double t_now, double w)
         }
     }
     c->heap_len = 0;
+    c->parked = false;
     c->t0 = t_now;
     c->w = w;
     c->inv_w = 1.0 / w;
@@ -341,7 +354,7 @@ static void advance(nbep_calendar *c)
                 int64_t ab = bucket_of(c, c->node[item].time);
                 m = ab < m ? ab : m;
             }
-            if (m == INT64_MAX) { /* only +inf entries: they come out in order from the heap */
+            if (m == INT64_MAX) { /* only the last bucket's: they come out in order from the heap */
                 uint32_t item = OVERFLOW(c);
                 OVERFLOW(c) = NIL;
                 while (item != NIL) {
@@ -349,6 +362,7 @@ static void advance(nbep_calendar *c)
                     heap_push(c, item);
                     item = next;
                 }
+                c->parked = true;
                 return;
             }
             c->cur = m;
@@ -413,6 +427,7 @@ void nbep_calendar_clear(nbep_calendar *c)
         c->head[s] = NIL;
     c->ovf_min = INT64_MAX;
     c->heap_len = c->ring_len = c->size = 0;
+    c->parked = false;
 }
 
 /* One step of a walk down the next bucket's list, requesting each node a step before it is
@@ -504,8 +519,10 @@ size_t nbep_calendar_check(const nbep_calendar *c)
             bad++;
         else if (k > 0 && before(c, item, c->heap[(k - 1) / 2]))
             bad++;
-        else if (bucket_of(c, c->node[item].time) > c->cur && c->node[item].time < INFINITY)
-            bad++; /* a later bucket's entry in the heap */
+        else if (!c->parked && bucket_of(c, c->node[item].time) > c->cur)
+            bad++; /* a later bucket's entry in the heap (parked: only the last bucket's) */
+        else if (c->parked && bucket_of(c, c->node[item].time) != INT64_MAX)
+            bad++;
     }
     for (size_t s = 0; s < c->nb; s++)
         for (uint32_t item = c->head[s], prev = (uint32_t)(c->n + s); item != NIL;

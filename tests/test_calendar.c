@@ -267,6 +267,75 @@ static void test_top_is_the_minimum_over_many_laps_with_far_entries_and_changing
     nbep_calendar_destroy(&c);
 }
 
+/* Entries of the last bucket (+inf, or a finite time 2^62 buckets ahead and more) that the top
+ * has brought into the heap, with the bucket being drained left where it was, and then an
+ * entry of an earlier bucket set: it comes out first (a review found the parked entries
+ * returned before it: 93888 wrong tops in 100000 operations of a fuzz mixing +inf and far
+ * entries, the check seeing nothing). Against the brute-force minimum, with the check at each
+ * step. */
+static void test_an_entry_set_after_the_last_buckets_are_drawn_comes_first(void **state)
+{
+    (void)state;
+    enum { N = 64, OPS = 20000 };
+    nbep_calendar *c = make(N);
+    /* the review's two cases: +inf, then 5; a time 1e30 bucket widths ahead, then 2 */
+    uint32_t top;
+    double t;
+    nbep_calendar_set(c, 0, INFINITY, 0);
+    assert_true(nbep_calendar_top(c, &top, &t) && top == 0 && isinf(t));
+    nbep_calendar_set(c, 1, 5.0, 0);
+    assert_true(nbep_calendar_top(c, &top, &t) && top == 1 && t == 5.0);
+    assert_int_equal(nbep_calendar_check(c), 0);
+    nbep_calendar_set(c, 2, 1e6, 0);
+    nbep_calendar_remove(c, 1);
+    assert_true(nbep_calendar_top(c, &top, &t) && top == 2 && t == 1e6);
+    nbep_calendar_clear(c);
+    nbep_calendar_retune(c, 0.0);
+    nbep_calendar_set(c, 3, 1e30, 0);
+    assert_true(nbep_calendar_top(c, &top, &t) && top == 3 && t == 1e30);
+    nbep_calendar_set(c, 4, 2.0, 0);
+    assert_true(nbep_calendar_top(c, &top, &t) && top == 4 && t == 2.0);
+    assert_int_equal(nbep_calendar_check(c), 0);
+    nbep_calendar_clear(c);
+    /* and at random: +inf, far and near entries, the near ones now and then all removed */
+    ref r[N];
+    memset(r, 0, sizeof r);
+    uint64_t x = 4242;
+    double now = 0.0;
+    for (int op = 0; op < OPS; op++) {
+        const uint32_t i = (uint32_t)(lcg(&x) % N);
+        const uint64_t what = lcg(&x) % 100;
+        if (what < 10) {
+            nbep_calendar_remove(c, i);
+            r[i].has = false;
+        } else if (what < 12) { /* every near entry goes */
+            for (uint32_t k = 0; k < N; k++)
+                if (r[k].has && r[k].time < 1e20) {
+                    nbep_calendar_remove(c, k);
+                    r[k].has = false;
+                }
+        } else {
+            const uint64_t key = lcg(&x) % 3;
+            const double when = what < 40   ? INFINITY
+                                : what < 60 ? now + 1e25 * (double)(1 + lcg(&x) % 8)
+                                            : now + (double)(lcg(&x) % 1000) / 100.0;
+            nbep_calendar_set(c, i, when, key);
+            r[i] = (ref){true, when, key};
+        }
+        const uint32_t best = ref_min(r, N);
+        const bool any = nbep_calendar_top(c, &top, &t);
+        assert_int_equal(any, best != UINT32_MAX);
+        if (any) {
+            assert_int_equal(top, best);
+            assert_true(t == r[best].time || (isinf(t) && isinf(r[best].time)));
+            if (t < 1e20)
+                now = t;
+        }
+        assert_int_equal(nbep_calendar_check(c), 0);
+    }
+    nbep_calendar_destroy(&c);
+}
+
 /* More items than the 32-bit links hold: refused with a message of its own (not blamed on
  * memory), before anything is allocated (the request would be for gigabytes). */
 static void test_more_items_than_the_links_hold_is_refused(void **state)
@@ -286,6 +355,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_top_is_the_brute_force_minimum_under_random_operations),
+        cmocka_unit_test(test_an_entry_set_after_the_last_buckets_are_drawn_comes_first),
         cmocka_unit_test(test_more_items_than_the_links_hold_is_refused),
         cmocka_unit_test(test_drain_order_is_time_then_key_then_item_for_any_insert_order),
         cmocka_unit_test(test_remove_of_an_absent_item_and_an_empty_calendar_are_harmless),
