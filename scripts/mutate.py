@@ -335,6 +335,9 @@ MUTANTS = [
      "        else if (c->parked && bucket_of(c, c->node[item].time) != INT64_MAX)\n            bad++;",
      "", ["test_calendar"],
      "the check's rule for parked heaps finds nothing while the calendar keeps it: only a bug it guards against could break it"),
+    ("cal-retune-untrimmed", "src/calendar.c",
+     "        const size_t k = m - (size_t)(RETUNE_TRIM * (double)m); /* at least one */",
+     "        const size_t k = m;", ["test_calendar"], None),
     # ---- cell lists ----
     ("cells-block-lo", "src/cells.c", "        if (xyz[k] > 0) {\n            b->idx[k][m] = xyz[k] - 1;", "        if (0) {\n            b->idx[k][m] = xyz[k] - 1;",
      ["test_cells"] + CELLS, None),

@@ -336,6 +336,28 @@ static void test_an_entry_set_after_the_last_buckets_are_drawn_comes_first(void 
     nbep_calendar_destroy(&c);
 }
 
+/* The width a retune picks puts about BUCKET_ENTRIES (4) entries in a bucket near now: 2000
+ * entries spread evenly over [0, 1) ahead take a width of 2 mean 4 / 2000 = 0.002, as the
+ * mean of their distances gave it before 2026-11-30, within a tenth (the retune reads every
+ * second entry here); and still so with one entry 1e12 ahead among them, which took the
+ * mean's width to 2e6, one bucket for all (a sphere 1e-12 as fast as the others: a gas of
+ * 100000 such ran 1.24 times as fast once the width left it out). */
+static void test_a_retune_is_not_led_by_one_far_entry(void **state)
+{
+    (void)state;
+    enum { N = 2001 };
+    nbep_calendar *c = make(N);
+    for (uint32_t i = 0; i < N - 1; i++)
+        nbep_calendar_set(c, i, ((double)i + 0.5) / (double)(N - 1), 0);
+    nbep_calendar_retune(c, 0.0);
+    assert_close(nbep_calendar_width(c), 0.002, 0.1, 0.0);
+    nbep_calendar_set(c, N - 1, 1e12, 0);
+    nbep_calendar_retune(c, 0.0);
+    assert_close(nbep_calendar_width(c), 0.002, 0.1, 0.0);
+    assert_int_equal(nbep_calendar_check(c), 0);
+    nbep_calendar_destroy(&c);
+}
+
 /* More items than the 32-bit links hold: refused with a message of its own (not blamed on
  * memory), before anything is allocated (the request would be for gigabytes). */
 static void test_more_items_than_the_links_hold_is_refused(void **state)
@@ -356,6 +378,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_top_is_the_brute_force_minimum_under_random_operations),
         cmocka_unit_test(test_an_entry_set_after_the_last_buckets_are_drawn_comes_first),
+        cmocka_unit_test(test_a_retune_is_not_led_by_one_far_entry),
         cmocka_unit_test(test_more_items_than_the_links_hold_is_refused),
         cmocka_unit_test(test_drain_order_is_time_then_key_then_item_for_any_insert_order),
         cmocka_unit_test(test_remove_of_an_absent_item_and_an_empty_calendar_are_harmless),

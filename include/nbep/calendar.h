@@ -76,6 +76,8 @@ void nbep_calendar_prefetch(const nbep_calendar *c, uint32_t item);
 void nbep_calendar_prefetch_set(const nbep_calendar *c, double time, bool deep);
 /* Entries held. */
 size_t nbep_calendar_size(const nbep_calendar *c);
+/* The buckets' width in time (nbep_calendar_retune), for tests and diagnostics. */
+double nbep_calendar_width(const nbep_calendar *c);
 /* True when item has an entry; its time in *time (may be NULL). */
 bool nbep_calendar_has(const nbep_calendar *c, uint32_t item, double *time);
 
