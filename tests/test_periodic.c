@@ -680,6 +680,60 @@ static void test_team_loop_on_a_cooling_fluid_is_bit_for_bit(void **state)
     assert_true(e_final[1] > e_final[0]);
 }
 
+/* A run of sc on nt threads that must stop at a jam (run.max_reactions): its status, its one
+ * message, the counters' internal `ahead` (events handled ahead of their turn, team loop) and
+ * the state it stopped in, into *fin. */
+static nbep_status run_to_jam(const nbep_scene *sc, int nt, char *msg, size_t cap,
+                              uint64_t *ahead, nbep_state *fin)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_sim_options opt = {.threads = nt};
+    nbep_sim *sim = NULL;
+    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
+    const nbep_status st = nbep_sim_run(sim, &d);
+    assert_int_equal(d.n_errors, st == NBEP_OK ? 0 : 1);
+    snprintf(msg, cap, "%s", d.n_errors ? d.msg[0] : "");
+    *ahead = nbep_sim_counter(sim, NBEP_COUNTER_AHEAD);
+    assert_int_equal(nbep_state_copy(fin, nbep_sim_state(sim), &d), NBEP_OK);
+    nbep_sim_destroy(&sim);
+    nbep_diag_fini(&d);
+    return st;
+}
+
+/* The team loop's stop: a reaction that passes run.max_reactions stops the run after it, as
+ * the one thread stops (its changes kept, nothing after it; a speculative place's passing that
+ * is undone must not stop anything). A cooling fluid (e = 0.8, nothing accelerates, so the
+ * team loop runs it) with a limit of 4 reactions a sphere in steps of 0.03 (it stops in step
+ * 2, after a step whose events went ahead and were counted): on 2, 3 and 4
+ * threads (NBEP_TEAM=always), with events handled ahead, the same status, the same message
+ * (step, sphere, time) and the same state, bit for bit (a review found this path untested). */
+static void test_team_loop_stops_at_a_jam_as_one_thread_does(void **state)
+{
+    (void)state;
+    nbep_scene *sc = periodic_fluid(nbep_test_scaled(12, 10), 0.45, 6, 0.03, 5);
+    sc->output_every = 6;
+    sc->restitution = 0.8;
+    sc->max_reactions = 4;
+    setenv("NBEP_TEAM", "always", 1);
+    char ref[512], msg[512];
+    uint64_t ahead;
+    nbep_state fin1, fin;
+    assert_int_equal(run_to_jam(sc, 1, ref, sizeof ref, &ahead, &fin1), NBEP_ENUMERIC);
+    assert_non_null(strstr(ref, "run.max_reactions"));
+    for (int nt = 2; nt <= 4; nt++) {
+        assert_int_equal(run_to_jam(sc, nt, msg, sizeof msg, &ahead, &fin), NBEP_ENUMERIC);
+        assert_string_equal(msg, ref);
+        assert_true(ahead > 0);
+        assert_memory_equal(fin.pos, fin1.pos, fin1.n * sizeof *fin1.pos);
+        assert_memory_equal(fin.vel, fin1.vel, fin1.n * sizeof *fin1.vel);
+        nbep_state_fini(&fin);
+    }
+    unsetenv("NBEP_TEAM");
+    nbep_state_fini(&fin1);
+    nbep_test_scene_free(&sc);
+}
+
 /* Every thread reads each step's way from the slot thread 0 wrote during the step before
  * (team_way, by parity), never from the one it writes during this step: 1000 spheres at rest
  * (no events, so thread 0's event loop, and its choice of the next way, end at once, while a
@@ -1126,6 +1180,7 @@ int main(void)
         cmocka_unit_test(test_periodic_fluid_is_exact_and_thread_independent),
         cmocka_unit_test(test_team_loop_handles_events_ahead_and_undoes_some_bit_for_bit),
         cmocka_unit_test(test_team_loop_on_a_cooling_fluid_is_bit_for_bit),
+        cmocka_unit_test(test_team_loop_stops_at_a_jam_as_one_thread_does),
         cmocka_unit_test(test_every_thread_reads_the_way_of_its_step),
         cmocka_unit_test(test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box),
         cmocka_unit_test(test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference),
