@@ -707,7 +707,8 @@ static nbep_status run_to_jam(const nbep_scene *sc, int nt, char *msg, size_t ca
  * team loop runs it) with a limit of 4 reactions a sphere in steps of 0.03 (it stops in step
  * 2, after a step whose events went ahead and were counted): on 2, 3 and 4
  * threads (NBEP_TEAM=always), with events handled ahead, the same status, the same message
- * (step, sphere, time) and the same state, bit for bit (a review found this path untested). */
+ * (step, sphere, time) and the same state, bit for bit (test_jam.sh compares the frames before
+ * the stop, not the state it leaves). */
 static void test_team_loop_stops_at_a_jam_as_one_thread_does(void **state)
 {
     (void)state;
