@@ -554,6 +554,8 @@ MUTANTS = [
      "    e->batch_other[k] = NO_SPHERE;", APART, None),
     ("team-expiry-unseen", "src/evloop_team.c", "    const bool walks = nbep__evloop_key_expiry(c.key, c.item);",
      "    const bool walks = false;", APART, None),
+    ("team-plane-zero-walks", "src/evloop.c", "        b = UINT32_MAX - 1 - ev->partner;",
+     "        b = UINT32_MAX - ev->partner;", APART, None),
     ("team-walks-3-cells-apart", "src/evloop_team.c", "        if (d >= 4)\n            return true;",
      "        if (d >= 3)\n            return true;", APART, None),
     ("team-cells-unwrapped", "src/evloop_team.c",

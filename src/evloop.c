@@ -429,7 +429,10 @@ void nbep_evloop_layout(nbep_evloop *e)
 }
 
 /* The calendar's tie key: the pair (lower sphere high, higher low), the same in both spheres'
- * slots; a plane contact or a cell exit ranks after every pair of its sphere. */
+ * slots; a plane contact (UINT32_MAX - 1 - plane low) or a list expiry (UINT32_MAX low) ranks
+ * after every pair of its sphere. (Until 2026-11-30 plane p's was UINT32_MAX - p, so plane 0's
+ * was an expiry's and the team loop held such contacts to the expiries' rule; spheres number
+ * fewer than NBEP_CALENDAR_MAX, so either way the order is the same.) */
 static uint64_t slot_key(uint32_t i, const nbep_event *ev)
 {
     uint32_t a = i, b = UINT32_MAX;
@@ -437,7 +440,7 @@ static uint64_t slot_key(uint32_t i, const nbep_event *ev)
         a = i < ev->partner ? i : ev->partner;
         b = i < ev->partner ? ev->partner : i;
     } else if (ev->kind == NBEP_EVENT_PLANE) {
-        b = UINT32_MAX - ev->partner;
+        b = UINT32_MAX - 1 - ev->partner;
     }
     return (uint64_t)a << 32 | b;
 }

@@ -154,7 +154,7 @@ void nbep__evloop_commit(nbep_evloop *e, const evl_ws *w);
 void nbep__evloop_schedule_one(nbep_evloop *e, uint32_t i);
 
 /* What slot_key(i, ev) says back: the other sphere of a pair (an index at or past n for a plane
- * or an expiry: UINT32_MAX - plane or UINT32_MAX), and whether it is an expiry. */
+ * or an expiry: UINT32_MAX - 1 - plane or UINT32_MAX), and whether it is an expiry. */
 static inline uint32_t nbep__evloop_key_other(uint64_t key, uint32_t i)
 {
     const uint32_t a = (uint32_t)(key >> 32), b = (uint32_t)key;

@@ -56,6 +56,8 @@ static struct {
     uint64_t clashes;    /* of those, a cell one's commit changes that the other's walk reads */
     size_t least_cells;  /* the least, over those pairs, of the cells apart along their
                           * farthest axis (the nearest way round on a periodic one) */
+    uint64_t misread;    /* places the window took for an expiry or not, wrongly */
+    uint64_t planes;     /* places that were a plane contact */
 } seen;
 
 static void seen_reset(void)
@@ -124,6 +126,10 @@ static void audit_join(const nbep_evloop *e)
 {
     const size_t kj = e->tail % RING;
     record_place(e, kj);
+    /* the window's own reading of the calendar key agrees: an expiry walks, nothing else does
+     * (a contact with plane 0 had an expiry's key, and the loop held it to the cells' rule) */
+    seen.misread += e->batch_walks[kj] != placed[kj].walks;
+    seen.planes += nbep_feq_slot(e->q, e->batch_entry[kj].item)->kind == NBEP_EVENT_PLANE;
     if (e->head == e->tail)
         return;
     seen.joins++;
@@ -185,8 +191,11 @@ static void run_audited(nbep_scene *sc, bool periodic)
     assert_true(seen.least < 2.1);
     assert_true(seen.walks > 100);
     assert_int_equal(seen.least_cells, 4);
+    assert_int_equal(seen.misread, 0);
     if (periodic)
         assert_true(seen.across > 100);
+    if (sc->state.n_planes > 0) /* walls: plane contacts joined, plane 0's among them */
+        assert_true(seen.planes > 100);
 }
 
 /* A dense periodic fluid, as test_periodic's team test has it: 9 cells of the list cutoff
