@@ -272,6 +272,8 @@ static int write_root_attrs(nbep_output *o, const nbep_scene *sc, int threads, n
                                 &threads64, d) < 0 ||
         nbep__output_write_attr(root, p, "seed", H5T_STD_U64LE, H5T_NATIVE_UINT64, 0, &sc->seed,
                                 d) < 0 ||
+        nbep__output_write_attr(root, p, "output_every", H5T_STD_U64LE, H5T_NATIVE_UINT64, 0,
+                                &sc->output_every, d) < 0 ||
         nbep__output_write_attr(root, p, "restitution", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 0,
                                 &sc->restitution, d) < 0 ||
         nbep__output_write_attr(root, p, "gravity", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 3,
@@ -516,6 +518,9 @@ void nbep__output_release(nbep_output **op)
     free(o->xmf_time);
     free(o->wrap_pos);
     free(o->wrap_img);
+    if (o->staged) /* never published: the temporary file goes, whatever is at path stays */
+        remove(o->staged);
+    free(o->staged);
     free(o->path);
     free(o);
     *op = NULL;
@@ -546,8 +551,8 @@ static hid_t make_fcpl(const nbep_scene *sc)
     return fcpl;
 }
 
-nbep_status nbep_output_create(const char *path, const nbep_scene *sc, int threads,
-                               nbep_output **out, nbep_diag *d)
+nbep_status nbep_output_create_staged(const char *path, const nbep_scene *sc, int threads,
+                                      nbep_output **out, nbep_diag *d)
 {
     /* The file is made under a temporary name and renamed to path once its layout is on
      * disk: a run killed while creating leaves no half-made file at path (only PATH.partial,
@@ -607,24 +612,14 @@ nbep_status nbep_output_create(const char *path, const nbep_scene *sc, int threa
         HDF5_FAIL(d, path, "flush the file");
         goto fail;
     }
-    /* HDF5 keeps writing through its open descriptor, whatever the file's name. */
-    if (rename(tmp, path) != 0) {
-        create_st = nbep_status_of_open(errno); /* a directory at path: the user's (exit 2) */
-        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot create the output file: %s",
-                      path, strerror(errno));
-        goto fail;
-    }
-    free(tmp);
     o->xmf = sc->out_position;
-    if (!o->xmf) { /* a sidecar of an older run at this path would describe frames not here */
-        char *x = nbep_xdmf_path(path);
-        if (x)
-            remove(x);
-        free(x);
-    } else if (!nbep__output_xmf_room(o, (size_t)planned_frames(sc))) {
+    if (o->xmf && !nbep__output_xmf_room(o, (size_t)planned_frames(sc))) {
         nbep__output_release(&o);
+        remove(tmp);
+        free(tmp);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: %s: no memory for the frame list", path);
     }
+    o->staged = tmp; /* renamed to path by nbep_output_publish; removed if it never is */
     *out = o;
     return NBEP_OK;
 fail:
@@ -636,6 +631,36 @@ fail_uncreated:
     nbep__output_release(&o);
     free(tmp);
     return create_st;
+}
+
+nbep_status nbep_output_publish(nbep_output *o, nbep_diag *d)
+{
+    if (!o->staged)
+        return NBEP_OK;
+    /* HDF5 keeps writing through its open descriptor, whatever the file's name. */
+    if (rename(o->staged, o->path) != 0) {
+        const int err = errno;
+        NBEP_FAIL(d, nbep_status_of_open(err), /* a directory at path: the user's (exit 2) */
+                  "nbep: %s: cannot create the output file: %s", o->path, strerror(err));
+    }
+    free(o->staged);
+    o->staged = NULL;
+    if (!o->xmf) { /* a sidecar of an older run at this path would describe frames not here */
+        char *x = nbep_xdmf_path(o->path);
+        if (x)
+            remove(x);
+        free(x);
+    }
+    return NBEP_OK;
+}
+
+nbep_status nbep_output_create(const char *path, const nbep_scene *sc, int threads,
+                               nbep_output **out, nbep_diag *d)
+{
+    nbep_status st = nbep_output_create_staged(path, sc, threads, out, d);
+    if (st == NBEP_OK && (st = nbep_output_publish(*out, d)) != NBEP_OK)
+        nbep__output_release(out); /* removes the staged file */
+    return st;
 }
 
 /* ---- frames, stats, close ------------------------------------------------------------------ */
@@ -834,7 +859,9 @@ nbep_status nbep_output_close(nbep_output **op, const nbep_summary *s, nbep_diag
     if (!op || !*op)
         return NBEP_OK;
     nbep_output *o = *op;
-    if (o->resume.pending) { /* a resume refused before it began: the file as it was */
+    /* a resume refused before it began: the file as it was; a new file never published: its
+     * partial file goes (release), and whatever is at its path stays */
+    if (o->resume.pending || o->staged) {
         nbep__output_release(op);
         return NBEP_OK;
     }

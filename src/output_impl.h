@@ -94,6 +94,9 @@ struct nbep_output {
     double *xmf_time;
     size_t xmf_cap;
     double xmf_last;               /* monotonic seconds of the last rewrite */
+    /* a new file not yet renamed to path (nbep_output_create_staged): its temporary name,
+     * owned, until nbep_output_publish; NULL once published or for a resumed file */
+    char *staged;
     /* a run opened to be resumed (nbep_output_open_resume), not yet changed: pending until
      * nbep_output_resume_begin, and closing it then writes nothing */
     struct {

@@ -111,6 +111,29 @@ static int same_run(hid_t file, const char *path, const nbep_scene *sc, nbep_dia
                       nbep_format_real(sc->dt, false, now));
         return -2;
     }
+    /* cells mode: output.every, whose multiples are the steps at which it rebuilds its lists
+     * and from which alone it continues bit for bit (files made before 2026-11-30 lack it and
+     * are not checked: a changed output.every then resumed from a frame that was no rebuild
+     * point of the run that wrote it, and matched neither deck's uninterrupted run) */
+    const htri_t has_every = H5Aexists(file, "output_every");
+    uint64_t every = 0;
+    if (has_every < 0 ||
+        (has_every &&
+         nbep__output_read_attr(file, path, "output_every", H5T_NATIVE_UINT64, &every, d) < 0)) {
+        if (has_every < 0)
+            HDF5_FAIL(d, path, "read its attributes");
+        return -1;
+    }
+    if (has_every && every != sc->output_every && sc->neighbors_cells &&
+        strcmp(sc->algorithm, "predictive") == 0) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s was written with output.every = %llu but %s makes %llu; "
+                      "run.neighbors = \"cells\" rebuilds its lists at the multiples of "
+                      "output.every and resumes bit for bit only with the same",
+                      path, (unsigned long long)every, sc->deck_path,
+                      (unsigned long long)sc->output_every);
+        return -2;
+    }
     /* the box, which on a periodic axis no wall records (files made before 2026-11-27 lack
      * it, and are not checked for it) */
     const htri_t has_box = H5Aexists(file, "box_min");

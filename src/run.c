@@ -1,7 +1,9 @@
 /* The run pipeline (run.h): deck -> outputs -> simulation -> closed file and summary. */
+#define _XOPEN_SOURCE 700 /* realpath() */
 #include "nbep/run.h"
 
 #include <errno.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,40 +13,82 @@
 #include "nbep/scene.h"
 #include "nbep/sim.h"
 
-/* Opens the summary file before anything is simulated, so that an unwritable path fails at
- * once (stdout for "-", NULL when not asked for). */
+/* The summary file is written as "WHERE.partial" and renamed to WHERE once complete, as the
+ * run's file is: an older summary there survives a run refused or killed before its end (a
+ * resume refused for a deck that does not match removed it, and a full disk left it empty). */
+static const char summary_suffix[] = ".partial";
+
+/* The temporary name of summary file `where` (malloc'd), or NULL without memory. */
+static char *summary_tmp(const char *where)
+{
+    char *tmp = malloc(strlen(where) + sizeof summary_suffix);
+    if (tmp)
+        strcat(strcpy(tmp, where), summary_suffix);
+    return tmp;
+}
+
+/* Opens the summary's temporary file before anything is simulated, so that an unwritable
+ * path fails at once (stdout for "-", NULL when not asked for). */
 static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
 {
     *out = NULL;
     if (!where)
         return NBEP_OK;
-    *out = strcmp(where, "-") == 0 ? stdout : fopen(where, "w");
+    if (strcmp(where, "-") == 0) {
+        *out = stdout;
+        return NBEP_OK;
+    }
+    char *tmp = summary_tmp(where);
+    if (!tmp)
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the summary's file name");
+    *out = fopen(tmp, "w");
+    const int err = errno;
+    free(tmp);
     if (!*out) /* a missing directory: the user's (exit 2), as for the output file */
-        NBEP_FAIL(d, nbep_status_of_open(errno), "nbep: cannot write the summary to %s: %s",
-                  where, strerror(errno));
+        NBEP_FAIL(d, nbep_status_of_open(err), "nbep: cannot write the summary to %s: %s",
+                  where, strerror(err));
     return NBEP_OK;
 }
 
-/* Writes and closes (stdout: flushes) f; NULL f: nothing asked for. */
+/* Nothing to write after all: the temporary file goes, an older summary stays. */
+static void drop_summary(const char *where, FILE *f)
+{
+    if (!f || f == stdout)
+        return;
+    fclose(f);
+    char *tmp = summary_tmp(where);
+    if (tmp)
+        remove(tmp);
+    free(tmp);
+}
+
+/* Writes and closes (stdout: flushes) f, then puts it at `where`; NULL f: nothing asked for.
+ * On failure the temporary file goes and an older summary stays. */
 static nbep_status write_summary(const nbep_summary *s, const char *where, FILE *f, nbep_diag *d)
 {
     if (!f)
         return NBEP_OK;
+    errno = 0;
     int bad = nbep_summary_write_json(s, f) < 0;
-    bad |= f == stdout ? fflush(f) != 0 : fclose(f) != 0;
+    int err = errno;
+    if (f == stdout) {
+        bad |= fflush(f) != 0;
+    } else {
+        bad |= fclose(f) != 0;
+        err = err ? err : errno;
+        char *tmp = summary_tmp(where);
+        if (!tmp || bad || rename(tmp, where) != 0) {
+            err = err ? err : errno;
+            if (tmp)
+                remove(tmp);
+            bad = 1;
+        }
+        free(tmp);
+    }
     if (bad)
-        NBEP_FAIL(d, NBEP_EIO, "nbep: cannot write the summary to %s", where);
+        NBEP_FAIL(d, NBEP_EIO, "nbep: cannot write the summary to %s: %s", where,
+                  err ? strerror(err) : "write failed");
     return NBEP_OK;
-}
-
-/* A new output file that nothing was simulated into goes, with its XDMF sidecar. */
-static void remove_output(const char *path)
-{
-    remove(path);
-    char *xmf = nbep_xdmf_path(path);
-    if (xmf)
-        remove(xmf);
-    free(xmf);
 }
 
 /* The end line; a resumed run (from its frame at step `from`, else from < 0) counts the steps
@@ -95,6 +139,45 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
     return st;
 }
 
+/* path with its directory resolved (realpath) and its last name kept, malloc'd: two names of
+ * one file compare equal even before the file exists. NULL when the directory does not exist
+ * or without memory. */
+static char *canonical(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    char *dir = slash ? malloc((size_t)(slash - path) + 2) : NULL;
+    if (slash && !dir)
+        return NULL;
+    if (dir) { /* "/x": the root */
+        memcpy(dir, path, (size_t)(slash - path));
+        dir[slash == path ? 1 : slash - path] = '\0';
+        if (slash == path)
+            dir[0] = '/';
+    }
+    char *real = realpath(dir ? dir : ".", NULL);
+    free(dir);
+    if (!real)
+        return NULL;
+    char *c = malloc(strlen(real) + strlen(base) + 2);
+    if (c)
+        sprintf(c, "%s/%s", real, base);
+    free(real);
+    return c;
+}
+
+/* Whether paths a and b name one file, which may not exist yet. */
+static bool same_path(const char *a, const char *b)
+{
+    if (strcmp(a, b) == 0 || nbep_output_same_file(a, b))
+        return true;
+    char *ca = canonical(a), *cb = canonical(b);
+    const bool same = ca && cb && strcmp(ca, cb) == 0;
+    free(ca);
+    free(cb);
+    return same;
+}
+
 nbep_status nbep_run_check_paths(const char *deck, const char *output, const char *summary,
                                  nbep_diag *d)
 {
@@ -107,10 +190,16 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
     if (over)
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: the %s file %s is the deck %s itself; choose another",
                   over == output ? "output" : "summary", over, deck);
-    if (summary && output &&
-        (strcmp(summary, output) == 0 || nbep_output_same_file(summary, output)))
-        NBEP_FAIL(d, NBEP_EUSAGE,
-                  "nbep: the summary file %s is the run's file itself; choose another", summary);
+    if (summary && output && strcmp(summary, "-") != 0) {
+        /* the run's file and its sidecar are written by rename: a summary at either name
+         * would be replaced, or would replace it */
+        char *xmf = nbep_xdmf_path(output);
+        const bool run = same_path(summary, output), side = xmf && same_path(summary, xmf);
+        free(xmf);
+        if (run || side)
+            NBEP_FAIL(d, NBEP_EUSAGE, "nbep: the summary file %s is the run's %s; choose another",
+                      summary, run ? "file itself" : "XDMF sidecar");
+    }
     return NBEP_OK;
 }
 
@@ -152,7 +241,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     st = open_summary(rq->summary_path, &summary, d);
     if (st == NBEP_OK)
         st = rq->resume ? nbep_output_open_resume(file, &sc, &out, &resume, d)
-                        : nbep_output_create(file, &sc, threads, &out, d);
+                        : nbep_output_create_staged(file, &sc, threads, &out, d);
     if (st == NBEP_OK) {
         if (rq->resume)
             nbep_resume_apply(&resume, &sc.state);
@@ -162,8 +251,11 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                                 .take_state = &sc.state, /* nothing reads the scene's again */
                                 .t_begin = t_begin};
         st = nbep_sim_create(&sc, &opt, &sim, d);
-        if (st == NBEP_OK && rq->resume) /* only now is the file changed */
-            st = nbep_output_resume_begin(out, &sc, threads, d);
+        /* only now is the file changed: a resumed one appended to, a new one put at its path
+         * (an older file there survives a deck that sim_create refuses) */
+        if (st == NBEP_OK)
+            st = rq->resume ? nbep_output_resume_begin(out, &sc, threads, d)
+                            : nbep_output_publish(out, d);
         if (st == NBEP_OK && rq->resume && rq->verbose && resume.last_step != resume.step)
             fprintf(stderr,
                     "nbep: %s continues from its frame at step %lld, the last at a multiple of "
@@ -172,11 +264,9 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                     file, (long long)resume.step, (long long)resume.last_step);
         from = rq->resume ? resume.step : -1;
         nbep_resume_fini(&resume); /* the run has its event slots now */
-        if (st != NBEP_OK) {
+        if (st != NBEP_OK) { /* nothing was simulated: a new file, never published, goes */
             nbep_status ignored = nbep_output_close(&out, NULL, d);
             (void)ignored;
-            if (!rq->resume) /* nothing was simulated: leave nothing behind */
-                remove_output(file);
         }
     }
     if (st == NBEP_OK) {
@@ -186,10 +276,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         if (st == NBEP_OK)
             st = sst;
     }
-    if (summary && summary != stdout) { /* never simulated: no summary file either */
-        fclose(summary);
-        remove(rq->summary_path);
-    }
+    drop_summary(rq->summary_path, summary); /* never simulated: no summary file either */
     nbep_sim_destroy(&sim);
     nbep_resume_fini(&resume);
     nbep_scene_fini(&sc);

@@ -4,6 +4,7 @@
 #include "nbep/sim.h"
 
 #include <assert.h>
+#include <float.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -538,6 +539,11 @@ void nbep_sim_summary(const nbep_sim *sim, nbep_summary *s)
                               ? (sim->energy_final - sim->energy_initial) /
                                     fabs(sim->energy_initial)
                               : 0.0;
+    /* an initial energy so small (subnormal, say) that the quotient passes the doubles: the
+     * largest double of its sign, not inf, which JSON cannot hold (a review's scene: one
+     * sphere at 1e-160 under gravity above a floor aborted the run at its close) */
+    if (isinf(s->energy_rel_drift))
+        s->energy_rel_drift = copysign(DBL_MAX, s->energy_rel_drift);
     s->max_overlap = sim->max_overlap;
     s->max_overlap_rel = sim->max_overlap_rel;
     s->peak_rss_bytes = nbep_peak_rss();

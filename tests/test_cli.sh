@@ -423,6 +423,46 @@ done
 run_nbep check inputs/pile.deck -t 1
 check "nbep check: one thread does everything" "grep -Eq '^threads: +one does everything$' '$tmp/stdout'"
 
+# ---- files already there survive a run that is refused -----------------------------------------
+# an older run file (and its sidecar) at the output path, and a deck that the simulation
+# refuses once the file is made (an energy beyond doubles): the run's new file was renamed over
+# the old one first, then removed, both gone (a review's reproducer)
+cat >"$tmp/keep.deck" <<'EOF'
+run: { algorithm = "predictive"; steps = 20; dt = 0.01; };
+box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; };
+spheres = ( { count = 4; radius = 0.5; mass = 1.0; place = "random"; speed = 1.0; } );
+output: { every = 5; fields = ["position"]; };
+EOF
+run_nbep run "$tmp/keep.deck" --quiet -o "$tmp/keep.h5" --summary "$tmp/keep.json"
+sums=$(cat "$tmp/keep.h5" "$tmp/keep.xmf" "$tmp/keep.json" | md5sum)
+run_nbep run "$tmp/keep.deck" --quiet -o "$tmp/keep.h5" --summary "$tmp/keep.json" \
+    --set 'spheres.[0].mass=1e300' --set 'spheres.[0].speed=1e4'
+check "a deck the simulation refuses: exit 2 (got $rc), the run file, sidecar and summary there kept" \
+    "[ $rc = 2 ] && one_line && grep -q 'beyond doubles' '$tmp/stderr' &&
+     [ \"\$(cat '$tmp/keep.h5' '$tmp/keep.xmf' '$tmp/keep.json' | md5sum)\" = '$sums' ] &&
+     [ ! -e '$tmp/keep.h5.partial' ] && [ ! -e '$tmp/keep.json.partial' ]"
+# the summary named as the run's file or its sidecar, which may not exist yet (the JSON went to
+# a name the run's renames then replaced, exit 0)
+rm -f "$tmp/fresh.h5" "$tmp/fresh.xmf"
+for s in "$tmp/./fresh.h5" "$tmp/fresh.xmf"; do
+    run_nbep run "$tmp/keep.deck" --quiet -o "$tmp/fresh.h5" --summary "$s"
+    check "--summary $(basename "$s") for a new run file fresh.h5: exit 2 (got $rc), nothing written" \
+        "[ $rc = 2 ] && one_line && grep -q 'summary file .* is the run.s' '$tmp/stderr' &&
+         [ ! -e '$tmp/fresh.h5' ] && [ ! -e '$tmp/fresh.xmf' ]"
+done
+# an initial energy so small that the relative drift passes the doubles: a finite summary
+# (the run aborted at its close, the file without /summary and the JSON empty)
+cat >"$tmp/tiny.deck" <<'EOF'
+run: { algorithm = "predictive"; steps = 200; dt = 0.001; };
+physics: { restitution = 0.5; };
+planes = ( { normal = [0.0, 0.0, 1.0]; point = [0.0, 0.0, -0.2]; } );
+spheres = ( { position = [0.0, 0.0, 0.0]; velocity = [1e-160, 0.0, 0.0]; radius = 0.1; mass = 1.0;
+              acceleration = [0.0, 0.0, -1e3]; } );
+EOF
+run_nbep run "$tmp/tiny.deck" --quiet -o "$tmp/tiny.h5" --summary "$tmp/tiny.json"
+check "a subnormal initial energy: exit 0 (got $rc), the drift the largest double, not inf" \
+    "[ $rc = 0 ] && grep -q '\"energy_rel_drift\": -1.7976931348623157e+308' '$tmp/tiny.json'"
+
 # ---- the README's deck table is --help-deck's, row for row -------------------------------------
 # (README: "prints this table from the same schema the parser uses, so it cannot drift")
 "$nbep" --help-deck | grep '^|' >"$tmp/help-deck.md"

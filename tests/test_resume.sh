@@ -178,6 +178,25 @@ rc=$?
 check "--resume RUN.h5 --summary RUN.h5 is refused with exit 2 (got $rc), the run file kept" \
     "[ $rc = 2 ] && grep -q 'summary file .* is the run.s file itself' $tmp/victim.err &&
      [ \"\$(md5sum < $tmp/victim.h5)\" = '$sum' ]"
+# a refused resume leaves an older summary at --summary as it was (it was opened, so emptied,
+# before the deck was checked against the file, then removed)
+echo '{"older": true}' >$tmp/older.json
+bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 90 --set run.dt=0.002 --resume $tmp/victim.h5 \
+    --summary $tmp/older.json 2>$tmp/older.err
+rc=$?
+check "a resume refused for its dt: exit 2 (got $rc), an older summary kept, no partial one" \
+    "[ $rc = 2 ] && grep -q 'run.dt' $tmp/older.err && grep -q older $tmp/older.json &&
+     [ ! -e $tmp/older.json.partial ] && [ \"\$(md5sum < $tmp/victim.h5)\" = '$sum' ]"
+# cells mode resumes bit for bit only from a multiple of the output.every it was written with
+# (its lists are rebuilt there): another output.every is refused, the file as it was (with 7, it
+# resumed from the stop's frame at step 42, no rebuild point of the run that wrote it, and
+# matched neither deck's uninterrupted run)
+bin/nbep run $deck "${args[@]}" "${cells[@]}" --set output.every=7 -n 90 --resume $tmp/victim.h5 \
+    2>$tmp/every.err
+rc=$?
+check "predictive cells: a resume with another output.every is refused with exit 2 (got $rc)" \
+    "[ $rc = 2 ] && grep -q 'written with output.every = 5 but .* makes 7' $tmp/every.err &&
+     [ \"\$(md5sum < $tmp/victim.h5)\" = '$sum' ]"
 # a deck that asks for stats where the file has none, or the other way: refused, the file as it
 # was (a file without /stats resumed with stats aborted after it was changed; the other way
 # left /stats short of the frames)

@@ -33,6 +33,15 @@ typedef struct nbep_output nbep_output;
  * ("nbep: PATH: cannot ...: reason"), and then no new file is left behind; NBEP_ENOMEM. */
 NBEP_MUST_CHECK nbep_status nbep_output_create(const char *path, const nbep_scene *sc,
                                                int threads, nbep_output **out, nbep_diag *d);
+/* nbep_output_create in two parts, for a caller that may still fail between them and must
+ * then leave an older file at path as it was: the file is made under "PATH.partial" and
+ * renamed to path by nbep_output_publish (NBEP_OK at once for a published or resumed handle;
+ * a failed rename leaves the handle staged); closing a handle never published removes the
+ * partial file and writes nothing at path. */
+NBEP_MUST_CHECK nbep_status nbep_output_create_staged(const char *path, const nbep_scene *sc,
+                                                      int threads, nbep_output **out,
+                                                      nbep_diag *d);
+NBEP_MUST_CHECK nbep_status nbep_output_publish(nbep_output *o, nbep_diag *d);
 /* The frames a run of sc writes (the first, every output.every-th step's and the last step's)
  * and the bytes of its file, about: the data of the frames, the checkpoints beside them when
  * `events` (a run that keeps event slots, nbep_sim_keeps_events) and the stats, without
