@@ -15,10 +15,11 @@
  * case (a sphere's next event), costs an O(log h) heap removal (h: entries in the current
  * bucket, a handful) and an O(1) list insertion, whatever n is.
  *
- * The width is set by nbep_calendar_retune from how soon the entries ahead of now come (their
- * first eighth), so that a bucket holds about BUCKET_ENTRIES entries; a lap that finds the buckets far too full
- * or far too empty retunes on its own. The width only decides where entries wait: the order
- * they come out in is (time, key, item) exactly, whatever the width. */
+ * The width is set by nbep_calendar_retune from the entries' distances ahead of now (the
+ * nearer seven eighths of them), so that a bucket holds about BUCKET_ENTRIES entries; a lap
+ * that finds the buckets far too full or far too empty retunes on its own. The width only
+ * decides where entries wait: the order they come out in is (time, key, item) exactly,
+ * whatever the width. */
 #include "nbep/calendar.h"
 
 #include <assert.h>

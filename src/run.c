@@ -166,8 +166,7 @@ static char *canonical(const char *path)
     return c;
 }
 
-/* Whether paths a and b name one file, which may not exist yet. */
-static bool same_path(const char *a, const char *b)
+bool nbep_run_same_path(const char *a, const char *b)
 {
     if (strcmp(a, b) == 0 || nbep_output_same_file(a, b))
         return true;
@@ -194,7 +193,8 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
         /* the run's file and its sidecar are written by rename: a summary at either name
          * would be replaced, or would replace it */
         char *xmf = nbep_xdmf_path(output);
-        const bool run = same_path(summary, output), side = xmf && same_path(summary, xmf);
+        const bool run = nbep_run_same_path(summary, output);
+        const bool side = xmf && nbep_run_same_path(summary, xmf);
         free(xmf);
         if (run || side)
             NBEP_FAIL(d, NBEP_EUSAGE, "nbep: the summary file %s is the run's %s; choose another",

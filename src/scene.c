@@ -685,13 +685,22 @@ static void parse_output(load *L, const config_setting_t *root, nbep_scene *sc)
     }
 }
 
-/* Why key cannot be a sweep axis, or NULL if it can: settings the sweep itself sets per run. */
+/* Why key cannot be a sweep axis, or NULL if it can: settings the sweep itself sets per run,
+ * the groups that hold them, and the names of the sweep's table's own columns (an axis's
+ * column is named by its key: a `spheres` axis gave the table two `spheres` columns, and
+ * summary.h5 failed once every run had finished). */
 static const char *axis_key_refused(const char *key)
 {
     if (strcmp(key, "run.seed") == 0)
         return "the sweep sets it: replica r runs with run.seed + r";
     if (strcmp(key, "output.file") == 0)
         return "the sweep sets it: each run writes its own file in the sweep's directory";
+    if (strcmp(key, "run") == 0 || strcmp(key, "output") == 0)
+        return "it holds run.seed and run.steps or output.file, which the sweep sets or reads "
+               "per run: vary the settings in it one by one";
+    if (strcmp(key, "spheres") == 0 || strcmp(key, "planes") == 0)
+        return "the sweep's table has a column of that name already: vary a setting in it, "
+               "such as spheres.[0].count";
     if (strncmp(key, "sweep.", 6) == 0)
         return "the sweep's own settings cannot vary within it";
     return NULL;
@@ -803,6 +812,13 @@ static void parse_sweep(load *L, const config_setting_t *root, nbep_scene *sc)
     if (get_int(L, sweep, "sweep", S_SWEEP_REPLICAS, &replicas, NULL) == GOT)
         sc->sweep_replicas = (uint64_t)replicas;
     parse_axes(L, sweep, sc);
+    /* replica r runs with run.seed + r, which must still be a deck's integer (a run past it
+     * failed with a message about a --set nobody typed) */
+    if (sc->sweep_replicas > 1 && sc->seed > (uint64_t)INT64_MAX - (sc->sweep_replicas - 1))
+        ERR(L, sweep,
+            "sweep.replicas = %" PRIu64 " with run.seed = %" PRIu64 ": the last replica's seed "
+            "would pass %" PRId64,
+            sc->sweep_replicas, sc->seed, INT64_MAX);
     uint64_t runs = sc->sweep_replicas;
     for (size_t k = 0; k < sc->sweep_n_axes && runs <= NBEP_SWEEP_RUNS_MAX; k++)
         runs *= sc->sweep_axes[k].n_values; /* at most 10^7 times a list length < 2^31 */

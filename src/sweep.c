@@ -830,6 +830,30 @@ static void unmake_dir(const char *dir, int made)
     free(p);
 }
 
+/* A --summary that is one of the study's own files (its tables or a run's file) would replace
+ * it: the table, or a run the next sweep then runs again (a review's find). NBEP_EUSAGE. */
+static nbep_status summary_not_in_study(const nbep_sweep_plan *p, const char *summary,
+                                        nbep_diag *d)
+{
+    const char *slash = strrchr(summary, '/');
+    const char *base = slash ? slash + 1 : summary;
+    char *dir = slash ? strndup(summary, (size_t)(slash - summary)) : strdup(".");
+    if (!dir)
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory");
+    const bool inside = nbep_run_same_path(slash == summary ? "/" : dir, p->dir);
+    free(dir);
+    const size_t len = strlen(base);
+    const bool run_file =
+        strncmp(base, "run-", 4) == 0 && len > 7 && strcmp(base + len - 3, ".h5") == 0;
+    if (inside &&
+        (strcmp(base, "summary.csv") == 0 || strcmp(base, "summary.h5") == 0 || run_file))
+        NBEP_FAIL(d, NBEP_EUSAGE,
+                  "nbep: the summary file %s is one of the study's own files in %s/; choose "
+                  "another",
+                  summary, p->dir);
+    return NBEP_OK;
+}
+
 /* Rank 0, before any run: whether the --summary path can be written (a typo in a job
  * script's path was found only after every run), without changing a file that is there or
  * leaving one that was not. */
@@ -1065,15 +1089,19 @@ static int allreduce_int(int mine, MPI_Op op)
 }
 
 /* Rank 0 receives every rank's results (each rank's runs in its own order) and puts each at
- * its run's index. Byte copies: the ranks of one job run one build on one kind of machine. */
+ * its run's index. Byte copies, a result a unit (MPI's counts are ints: counted in bytes, a
+ * study of more than 2.9 million runs, which the deck allows, failed here after every run had
+ * finished): the ranks of one job run one build on one kind of machine. */
 static nbep_status gather(const nbep_sweep_plan *p, int rank, int size,
                           nbep_sweep_result *results, nbep_diag *d)
 {
     const size_t rec = sizeof *results;
     nbep_status st = NBEP_OK;
-    if (p->n_runs > (size_t)INT32_MAX / rec) {
-        nbep_diag_add(d, __FILE__, __LINE__,
-                      "nbep: sweep: %zu runs are too many to gather in one message", p->n_runs);
+    _Static_assert(NBEP_SWEEP_RUNS_MAX <= INT32_MAX, "a study's runs count in an int");
+    MPI_Datatype one = MPI_DATATYPE_NULL;
+    if (MPI_Type_contiguous((int)rec, MPI_BYTE, &one) != MPI_SUCCESS ||
+        MPI_Type_commit(&one) != MPI_SUCCESS) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: sweep: cannot describe a result to MPI");
         st = NBEP_ENOMEM;
     }
     size_t mine = 0;
@@ -1103,19 +1131,20 @@ static nbep_status gather(const nbep_sweep_plan *p, int rank, int size,
             size_t n_q = 0;
             for (size_t r = 0; r < p->n_runs; r++)
                 n_q += nbep_sweep_run_owner(r, q, size);
-            counts[q] = (int)(n_q * rec);
-            displs[q] = (int)(off * rec);
+            counts[q] = (int)n_q;
+            displs[q] = (int)off;
             off += n_q;
         }
     }
     MPI_Request req;
-    MPI_Igatherv(send, (int)(mine * rec), MPI_BYTE, recv, counts, displs, MPI_BYTE, 0,
-                 MPI_COMM_WORLD, &req);
+    MPI_Igatherv(send, (int)mine, one, recv, counts, displs, one, 0, MPI_COMM_WORLD, &req);
     wait_idle(1, &req);
     if (rank == 0)
         for (size_t i = 0; i < p->n_runs; i++)
             results[recv[i].run] = recv[i];
 done:
+    if (one != MPI_DATATYPE_NULL)
+        MPI_Type_free(&one);
     free(send);
     free(recv);
     free(counts);
@@ -1254,6 +1283,8 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
                                  (const char *const *)cli->origins, cli->n_overrides, &p, dd);
     if (st == NBEP_OK) /* its JSON would replace the deck, as for nbep run */
         st = nbep_run_check_paths(cli->path, NULL, cli->summary, dd);
+    if (st == NBEP_OK && cli->summary && strcmp(cli->summary, "-") != 0)
+        st = summary_not_in_study(&p, cli->summary, dd);
     if (st == NBEP_OK && many && size == 1) {
         nbep_diag_add(dd, __FILE__, __LINE__,
                       "nbep: started as one of several processes but MPI sees one: launch "

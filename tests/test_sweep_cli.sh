@@ -122,5 +122,31 @@ read -r big small <"$tmp/rss.txt"
 check "peak_rss_bytes of a small run after a big one is its own ($small against $big)" \
     "[ $rc = 0 ] && [ $small -gt 0 ] && [ \$((small * 10)) -lt \$((big * 9)) ]"
 
+# ---- found by a review: refused before any run, exit 2, nothing made --------------------------
+# an axis named as a column of the sweep's table (the table got two `spheres` columns, and
+# summary.h5 failed once every run had finished); a group that holds what the sweep sets
+for key in spheres run; do
+    run_sweep "$tmp/s.deck" -o "$tmp/axis-$key.h5" --quiet \
+        --set "sweep.vary=({ key = \"$key\"; values = ( 1, 2 ); })"
+    check "an axis keyed $key: exit 2 (got $rc), one line, no folder" \
+        "[ $rc = 2 ] && one_line && grep -q 'key: $key cannot be varied' '$tmp/stderr' &&
+         [ ! -e '$tmp/axis-$key.sweep' ]"
+done
+# a seed the last replica would push past a deck's integer (run 1 failed, blaming a --set)
+run_sweep "$tmp/s.deck" -o "$tmp/seed.h5" --quiet --set run.seed=9223372036854775807
+check "run.seed = 2^63 - 1 with 2 replicas: exit 2 (got $rc), one line, no folder" \
+    "[ $rc = 2 ] && one_line && grep -q 'the last replica.s seed would pass' '$tmp/stderr' &&
+     [ ! -e '$tmp/seed.sweep' ]"
+# a --summary that is one of the study's own files: its table, or a run the next sweep would
+# run again
+run_sweep "$tmp/s.deck" -o "$tmp/own.h5" --quiet
+for f in summary.csv run-0001.h5; do
+    sum=$(md5sum < "$tmp/own.sweep/$f")
+    run_sweep "$tmp/s.deck" -o "$tmp/own.h5" --quiet --summary "$tmp/./own.sweep/$f"
+    check "--summary own.sweep/$f: exit 2 (got $rc), one line, the file as it was" \
+        "[ $rc = 2 ] && one_line && grep -q 'one of the study.s own files' '$tmp/stderr' &&
+         [ \"\$(md5sum < '$tmp/own.sweep/$f')\" = '$sum' ]"
+done
+
 [ $fail = 0 ] && echo "sweep_cli: all passed"
 exit $fail

@@ -37,6 +37,9 @@ typedef struct nbep_run_result {
  * naming both; NBEP_OK otherwise. output and summary may be NULL. */
 NBEP_MUST_CHECK nbep_status nbep_run_check_paths(const char *deck, const char *output,
                                                  const char *summary, nbep_diag *d);
+/* Whether paths a and b name one file, which may not exist yet (their directories resolved:
+ * "./x" and "x" are one; so are two names of a file that exists). */
+bool nbep_run_same_path(const char *a, const char *b);
 
 /* Runs rq. Deck errors come before anything is written; outputs are opened before any
  * simulating, so that an unwritable path fails at once; a run that never stepped leaves no
