@@ -21,13 +21,17 @@
 #include "nbep/sweep.h"
 
 /* The one mutable global (STYLE 2): the signal that asked the run to stop, 0 if none. The
- * handler only stores to it; the run polls it at the end of every step. */
+ * handler only sets it; the run polls it at the end of every step. The first signal wins: a
+ * SIGINT then a SIGTERM (a job's Ctrl-C, then its time limit) exits as interrupted, 130,
+ * whichever the handlers stored last (a review saw 130 or 143 by the race). */
 static atomic_int stop_signal;
 static_assert(ATOMIC_INT_LOCK_FREE == 2, "the signal flag must be lock-free");
 
 static void on_signal(int sig)
 {
-    atomic_store_explicit(&stop_signal, sig, memory_order_relaxed);
+    int none = 0;
+    atomic_compare_exchange_strong_explicit(&stop_signal, &none, sig, memory_order_relaxed,
+                                            memory_order_relaxed);
 }
 
 static void install_signal_handlers(void)

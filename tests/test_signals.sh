@@ -32,6 +32,23 @@ for sig in TERM INT; do
     lines=$(wc -l < "$tmp/stderr-$sig")
     check "SIG$sig: that is the only line on stderr (got $lines)" "[ $lines = 1 ]"
 done
+# two signals, SIGINT then SIGTERM while the run finishes its step (a job's Ctrl-C, then its
+# time limit): the first wins, exit 130 (the handlers stored the last: 143). All-pairs naive
+# steps of 32768 spheres, about a second each, so that the second comes within the step.
+out=$tmp/run-two.h5
+bin/nbep run inputs/paper-box.deck --quiet -n 100000000 -t 1 --set spheres.[0].count=32768 \
+    --set 'run.algorithm="naive"' -o "$out" 2>"$tmp/stderr-two" &
+pid=$!
+for _ in $(seq 300); do [ -s "$out" ] && break; sleep 0.1; done
+sleep 0.3
+kill -INT $pid
+sleep 0.2
+kill -TERM $pid
+wait $pid
+rc=$?
+check "SIGINT then SIGTERM: the first wins, exit 130 (got $rc)" \
+    "[ $rc = 130 ] && grep -q 'interrupted by SIGINT' '$tmp/stderr-two'"
+
 # a signal while the deck is read and the spheres placed (600000 random spheres: about a second
 # here) ends the run before it begins, with nothing written: exit 130, no file, one line (it was
 # taken only after the first step, and a run of 0 steps ignored it and exited 0). The signal
