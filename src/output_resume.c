@@ -205,9 +205,11 @@ static int same_run(hid_t file, const char *path, const nbep_scene *sc, nbep_dia
 }
 
 /* Adds this resume's line to the root attribute `resumed` (made with the first): the step it
- * continues from, the threads, this build and the overrides, so that `nbep info` tells the
- * parts of a run apart (the root's `threads` and `overrides` stay the first part's: a sweep
- * knows its runs by those overrides). */
+ * continues from, the threads, this build, the algorithm and restitution where they are not
+ * the root's (a deck edited in place may change them: the root says how the first part was
+ * made) and the overrides, so that `nbep info` tells the parts of a run apart (the root's
+ * `threads` and `overrides` stay the first part's: a sweep knows its runs by those
+ * overrides). */
 static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int threads,
                        int64_t step, nbep_diag *d)
 {
@@ -218,18 +220,36 @@ static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int t
             HDF5_FAIL(d, path, "read the root attribute resumed");
         return -1;
     }
+    /* what the first part ran with, where this part differs */
+    char *algo = NULL, changed[128] = "";
+    double e0 = sc->restitution;
+    if (nbep__output_read_string_attr(file, path, "algorithm", &algo, d) < 0 ||
+        nbep__output_read_attr(file, path, "restitution", H5T_NATIVE_DOUBLE, &e0, d) < 0) {
+        free(algo);
+        free(was);
+        return -1;
+    }
+    if (strcmp(algo, sc->algorithm) != 0)
+        snprintf(changed, sizeof changed, ", algorithm %s", sc->algorithm);
+    if (memcmp(&e0, &sc->restitution, sizeof e0) != 0) {
+        char e[NBEP_REAL_TEXT_MAX];
+        const size_t at = strlen(changed);
+        snprintf(changed + at, sizeof changed - at, ", restitution %s",
+                 nbep_format_real(sc->restitution, false, e));
+    }
+    free(algo);
     const char *ov = sc->overrides ? sc->overrides : "";
     const size_t len = (was ? strlen(was) : 0) + 2 * strlen(ov) + strlen(NBEP_VERSION) +
-                       strlen(NBEP_BUILD_COMMIT) + 128;
+                       strlen(NBEP_BUILD_COMMIT) + strlen(changed) + 128;
     char *text = malloc(len);
     if (!text) {
         free(was);
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory to resume %s", path);
         return -1;
     }
-    snprintf(text, len, "%s%sstep %" PRId64 ": %d thread%s, nbep %s (commit %s)%s",
+    snprintf(text, len, "%s%sstep %" PRId64 ": %d thread%s, nbep %s (commit %s)%s%s",
              was ? was : "", was && was[0] ? "\n" : "", step, threads, threads == 1 ? "" : "s",
-             NBEP_VERSION, NBEP_BUILD_COMMIT, ov[0] ? ", " : "");
+             NBEP_VERSION, NBEP_BUILD_COMMIT, changed, ov[0] ? ", " : "");
     size_t at = strlen(text);
     for (const char *c = ov; *c; c++) { /* one per line becomes "a=1; b=2" */
         if (*c != '\n') {

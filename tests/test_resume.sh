@@ -197,6 +197,18 @@ rc=$?
 check "predictive cells: a resume with another output.every is refused with exit 2 (got $rc)" \
     "[ $rc = 2 ] && grep -q 'written with output.every = 5 but .* makes 7' $tmp/every.err &&
      [ \"\$(md5sum < $tmp/victim.h5)\" = '$sum' ]"
+# a deck edited in place between the parts (another algorithm and restitution, which a resume
+# may change): the resume's line in `resumed` says so, the root still the first part's (the
+# file misdescribed how its later frames were made)
+cp $deck $tmp/edited.deck
+bin/nbep run $tmp/edited.deck "${args[@]}" -n 20 -o $tmp/edited.h5
+sed -i -e 's/algorithm = "predictive"/algorithm = "naive"/' \
+    -e 's/restitution = [0-9.]*/restitution = 0.5/' $tmp/edited.deck
+bin/nbep run $tmp/edited.deck "${args[@]}" -n 30 --resume $tmp/edited.h5
+bin/nbep info $tmp/edited.h5 >$tmp/edited.info
+check "a resume with a deck edited in place: its line names the algorithm and restitution" \
+    "grep -q '^resumed: .*step 20: .*, algorithm naive, restitution 0.5' $tmp/edited.info &&
+     grep -q '^algorithm: *predictive' $tmp/edited.info"
 # a deck that asks for stats where the file has none, or the other way: refused, the file as it
 # was (a file without /stats resumed with stats aborted after it was changed; the other way
 # left /stats short of the frames)
