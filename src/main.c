@@ -89,7 +89,7 @@ static void print_check(const nbep_scene *sc, int threads)
         printf("packing:         n/a (no box)\n");
     else
         printf("packing:         %.4g of the box volume\n", pf);
-    if (sc->neighbors_cells && strcmp(sc->algorithm, "predictive") == 0) {
+    if (nbep_scene_cells_engine(sc)) {
         const double asked = nbep_scene_list_skin(sc, &sc->state);
         const double taken = nbep_scene_list_skin_taken(sc, &sc->state);
         if (taken < asked)

@@ -124,8 +124,7 @@ static int same_run(hid_t file, const char *path, const nbep_scene *sc, nbep_dia
             HDF5_FAIL(d, path, "read its attributes");
         return -1;
     }
-    if (has_every && every != sc->output_every && sc->neighbors_cells &&
-        strcmp(sc->algorithm, "predictive") == 0) {
+    if (has_every && every != sc->output_every && nbep_scene_cells_engine(sc)) {
         nbep_diag_add(d, __FILE__, __LINE__,
                       "nbep: %s was written with output.every = %llu but %s makes %llu; "
                       "run.neighbors = \"cells\" rebuilds its lists at the multiples of "

@@ -1145,10 +1145,14 @@ const char *nbep_scene_order_name(const nbep_scene *sc)
     return sc->order_step ? "step" : "time";
 }
 
+bool nbep_scene_cells_engine(const nbep_scene *sc)
+{
+    return sc->neighbors_cells && strcmp(sc->algorithm, "predictive") == 0;
+}
+
 bool nbep_scene_resume_point(const nbep_scene *sc, int64_t step)
 {
-    return !sc->neighbors_cells || strcmp(sc->algorithm, "predictive") != 0 ||
-           step % (int64_t)sc->output_every == 0;
+    return !nbep_scene_cells_engine(sc) || step % (int64_t)sc->output_every == 0;
 }
 
 double nbep_scene_packing_fraction(const nbep_scene *sc, const nbep_state *st)

@@ -103,6 +103,9 @@ const char *nbep_scene_order_name(const nbep_scene *sc);
  * predictive cells mode only those at a multiple of output.every (its rebuild points,
  * algo_predictive.c cells_steps). */
 bool nbep_scene_resume_point(const nbep_scene *sc, int64_t step);
+/* Whether sc runs on the cells engine (predictive, run.neighbors = "cells"): its lists are
+ * rebuilt at the multiples of output.every, and their skin is nbep_scene_list_skin_taken's. */
+bool nbep_scene_cells_engine(const nbep_scene *sc);
 /* The fraction of sc's box that the spheres of st fill (the scene's own, or a run's, whose
  * radii are the same: `nbep check` prints it; the cells mode picks its lists' skin from it);
  * NAN without a box. */
