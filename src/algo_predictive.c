@@ -324,8 +324,8 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         }
     }
     bool mono = true, same_mass = true;
+    c->rmax = nbep_state_max_radius(&sim->st);
     for (size_t i = 0; i < n; i++) {
-        c->rmax = fmax(c->rmax, sim->st.radius[i]);
         mono &= sim->st.radius[i] == sim->st.radius[0];
         same_mass &= sim->st.mass[i] == sim->st.mass[0];
     }

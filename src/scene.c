@@ -1175,10 +1175,7 @@ double nbep_scene_list_skin(const nbep_scene *sc, const nbep_state *st)
 
 double nbep_scene_list_skin_taken(const nbep_scene *sc, const nbep_state *st)
 {
-    const double skin = nbep_scene_list_skin(sc, st);
-    double rmax = 0.0;
-    for (size_t i = 0; i < st->n; i++)
-        rmax = fmax(rmax, st->radius[i]);
+    const double skin = nbep_scene_list_skin(sc, st), rmax = nbep_state_max_radius(st);
     if (!sc->has_box || !(rmax > 0.0))
         return skin;
     return nbep_evloop_skin_in(skin, 2.0 * rmax, sc->periodic, sc->box_min, sc->box_max) /

@@ -91,6 +91,14 @@ bool nbep_state_all_finite(const nbep_state *s)
     return true;
 }
 
+double nbep_state_max_radius(const nbep_state *s)
+{
+    double rmax = 0.0;
+    for (size_t i = 0; i < s->n; i++)
+        rmax = fmax(rmax, s->radius[i]);
+    return rmax;
+}
+
 bool nbep_state_free_flight(const nbep_state *s)
 {
     bool flies_free = true;
@@ -135,9 +143,7 @@ double nbep_state_overlap_grid(const nbep_state *s, nbep_grid *g)
      * periodic box in cells next to a sphere's copy across a face (the nearest way round: a
      * periodic side is over two diameters, so one copy of a partner is within reach at
      * most). */
-    double rmax = 0.0;
-    for (size_t i = 0; i < s->n; i++)
-        rmax = fmax(rmax, s->radius[i]);
+    const double rmax = nbep_state_max_radius(s);
     if (s->n > 1)
         nbep_grid_build(g, s->pos, s->n, 2.0 * rmax);
     return rmax;

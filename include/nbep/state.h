@@ -44,6 +44,8 @@ size_t nbep_state_bytes(size_t n, size_t n_planes);
 
 /* True when every position, velocity and acceleration is finite. */
 bool nbep_state_all_finite(const nbep_state *s);
+/* The largest radius of s's spheres (0 when it has none). */
+double nbep_state_max_radius(const nbep_state *s);
 /* True when no sphere accelerates (every acceleration exactly zero): every sphere flies
  * straight, nothing rests (the predictive algorithm's plan, the cells mode's skin). */
 bool nbep_state_free_flight(const nbep_state *s);
