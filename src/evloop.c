@@ -428,23 +428,6 @@ void nbep_evloop_layout(nbep_evloop *e)
         e->failed = true;
 }
 
-/* The calendar's tie key: the pair (lower sphere high, higher low), the same in both spheres'
- * slots; a plane contact (UINT32_MAX - 1 - plane low) or a list expiry (UINT32_MAX low) ranks
- * after every pair of its sphere. (Until 2026-11-30 plane p's was UINT32_MAX - p, so plane 0's
- * was an expiry's and the team loop held such contacts to the expiries' rule; spheres number
- * fewer than NBEP_CALENDAR_MAX, so either way the order is the same.) */
-static uint64_t slot_key(uint32_t i, const nbep_event *ev)
-{
-    uint32_t a = i, b = UINT32_MAX;
-    if (ev->kind == NBEP_EVENT_SPHERE) {
-        a = i < ev->partner ? i : ev->partner;
-        b = i < ev->partner ? ev->partner : i;
-    } else if (ev->kind == NBEP_EVENT_PLANE) {
-        b = UINT32_MAX - 1 - ev->partner;
-    }
-    return (uint64_t)a << 32 | b;
-}
-
 void nbep_evloop_visit_block(const nbep_evloop *e, uint32_t i,
                              void (*visit)(void *u, uint32_t j), void *u)
 {
@@ -565,7 +548,7 @@ static void predict_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uin
 static bool slot_entry(const nbep_evloop *e, uint32_t i, nbep_calendar_entry *c)
 {
     const nbep_event *ev = nbep_feq_slot(e->q, i);
-    *c = (nbep_calendar_entry){ev->time, slot_key(i, ev), i};
+    *c = (nbep_calendar_entry){ev->time, nbep__evloop_slot_key(i, ev), i};
     return ev->kind == NBEP_EVENT_SPHERE || ev->kind == NBEP_EVENT_PLANE ||
            ev->kind == NBEP_EVENT_HORIZON;
 }

@@ -153,8 +153,26 @@ void nbep__evloop_commit(nbep_evloop *e, const evl_ws *w);
 /* The calendar entry of sphere i from its slot. */
 void nbep__evloop_schedule_one(nbep_evloop *e, uint32_t i);
 
-/* What slot_key(i, ev) says back: the other sphere of a pair (an index at or past n for a plane
- * or an expiry: UINT32_MAX - 1 - plane or UINT32_MAX), and whether it is an expiry. */
+/* The calendar's tie key: the pair (lower sphere high, higher low), the same in both spheres'
+ * slots; a plane contact (UINT32_MAX - 1 - plane low) or a list expiry (UINT32_MAX low) ranks
+ * after every pair of its sphere. (Until 2026-11-30 plane p's was UINT32_MAX - p, so plane 0's
+ * was an expiry's and the team loop held such contacts to the expiries' rule; spheres number
+ * fewer than NBEP_CALENDAR_MAX, so either way the order is the same.) */
+static inline uint64_t nbep__evloop_slot_key(uint32_t i, const nbep_event *ev)
+{
+    uint32_t a = i, b = UINT32_MAX;
+    if (ev->kind == NBEP_EVENT_SPHERE) {
+        a = i < ev->partner ? i : ev->partner;
+        b = i < ev->partner ? ev->partner : i;
+    } else if (ev->kind == NBEP_EVENT_PLANE) {
+        b = UINT32_MAX - 1 - ev->partner;
+    }
+    return (uint64_t)a << 32 | b;
+}
+
+/* What the key says back (nbep__evloop_slot_key(i, ev)): the other sphere of a pair (an index
+ * at or past n for a plane or an expiry: UINT32_MAX - 1 - plane or UINT32_MAX), and whether it
+ * is an expiry. */
 static inline uint32_t nbep__evloop_key_other(uint64_t key, uint32_t i)
 {
     const uint32_t a = (uint32_t)(key >> 32), b = (uint32_t)key;
