@@ -146,16 +146,11 @@ static char *canonical(const char *path)
 {
     const char *slash = strrchr(path, '/');
     const char *base = slash ? slash + 1 : path;
-    char *dir = slash ? malloc((size_t)(slash - path) + 2) : NULL;
-    if (slash && !dir)
+    /* its directory: "." for a bare name, "/" for one in the root */
+    char *dir = slash ? strndup(path, slash == path ? 1 : (size_t)(slash - path)) : strdup(".");
+    if (!dir)
         return NULL;
-    if (dir) { /* "/x": the root */
-        memcpy(dir, path, (size_t)(slash - path));
-        dir[slash == path ? 1 : slash - path] = '\0';
-        if (slash == path)
-            dir[0] = '/';
-    }
-    char *real = realpath(dir ? dir : ".", NULL);
+    char *real = realpath(dir, NULL);
     free(dir);
     if (!real)
         return NULL;

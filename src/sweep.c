@@ -837,16 +837,19 @@ static nbep_status summary_not_in_study(const nbep_sweep_plan *p, const char *su
 {
     const char *slash = strrchr(summary, '/');
     const char *base = slash ? slash + 1 : summary;
-    char *dir = slash ? strndup(summary, (size_t)(slash - summary)) : strdup(".");
-    if (!dir)
-        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory");
-    const bool inside = nbep_run_same_path(slash == summary ? "/" : dir, p->dir);
-    free(dir);
     const size_t len = strlen(base);
     const bool run_file =
         strncmp(base, "run-", 4) == 0 && len > 7 && strcmp(base + len - 3, ".h5") == 0;
-    if (inside &&
-        (strcmp(base, "summary.csv") == 0 || strcmp(base, "summary.h5") == 0 || run_file))
+    if (!(strcmp(base, "summary.csv") == 0 || strcmp(base, "summary.h5") == 0 || run_file))
+        return NBEP_OK;
+    /* a study file's name: is it that file of this study? */
+    char *own = malloc(strlen(p->dir) + 1 + len + 1);
+    if (!own)
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory");
+    sprintf(own, "%s/%s", p->dir, base);
+    const bool ours = nbep_run_same_path(summary, own);
+    free(own);
+    if (ours)
         NBEP_FAIL(d, NBEP_EUSAGE,
                   "nbep: the summary file %s is one of the study's own files in %s/; choose "
                   "another",
