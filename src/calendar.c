@@ -333,13 +333,17 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* Whether x holds an entry at a finite time after t_now (what a retune sizes buckets for). */
+static bool held_ahead(const node *x, double t_now)
+{
+    return x->where != WHERE_NONE && x->time > t_now && x->time < INFINITY;
+}
+
 void nbep_calendar_retune(nbep_calendar *c, double t_now)
 {
     size_t ahead = 0;
-    for (size_t i = 0; i < c->n; i++) {
-        const node *x = &c->node[i];
-        ahead += x->where != WHERE_NONE && x->time > t_now && x->time < INFINITY;
-    }
+    for (size_t i = 0; i < c->n; i++)
+        ahead += held_ahead(&c->node[i], t_now);
     /* The width that puts BUCKET_ENTRIES entries in a bucket where they are spread evenly over
      * twice their mean distance ahead, taken over the nearer seven eighths of them (of a
      * sample): the next buckets hold the nearer entries. Until 2026-11-30 it was taken over
@@ -350,11 +354,9 @@ void nbep_calendar_retune(nbep_calendar *c, double t_now)
     double d[RETUNE_SAMPLE];
     size_t m = 0;
     const size_t stride = ahead / RETUNE_SAMPLE + 1;
-    for (size_t i = 0, k = 0; i < c->n && m < RETUNE_SAMPLE; i++) {
-        const node *x = &c->node[i];
-        if (x->where != WHERE_NONE && x->time > t_now && x->time < INFINITY && k++ % stride == 0)
-            d[m++] = x->time - t_now;
-    }
+    for (size_t i = 0, k = 0; i < c->n && m < RETUNE_SAMPLE; i++)
+        if (held_ahead(&c->node[i], t_now) && k++ % stride == 0)
+            d[m++] = c->node[i].time - t_now;
     double w = 0.0;
     if (m > 0) {
         qsort(d, m, sizeof *d, cmp_double);
