@@ -314,9 +314,14 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     hsize_t more;
     if (nbep__output_complete_rows(o->file, path, "/frames", "/frames/step", &frames, &more, d) < 0)
         goto fail;
-    if (frames == 0) {
-        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s has no complete frame to resume from",
+    if (frames == 0) { /* killed before its first frame was complete: nothing to resume from,
+                        * which a run without --resume starts afresh (bad usage, as a file cut
+                        * short before HDF5 could open it) */
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s has no complete frame to resume from (run without --resume "
+                      "to start it afresh)",
                       path);
+        st = NBEP_EUSAGE;
         goto fail;
     }
     if (H5Lexists(o->file, "/frames/position", H5P_DEFAULT) <= 0 ||

@@ -1264,6 +1264,37 @@ static void test_a_resume_closed_before_it_begins_leaves_the_file_as_it_was(void
     free(xbefore);
 }
 
+/* A file closed (or killed) before its first frame was complete (its /frames count 0) has
+ * nothing to resume from: refused as bad usage (exit 2, as a file cut short before HDF5 could open it),
+ * with a line that says so and how to go on, and the file left as it was. */
+static void test_a_file_without_a_complete_frame_is_refused_as_bad_usage(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    nbep_test_tmp("output_resume_no_frame.h5", path, sizeof path);
+    nbep_output *o = NULL;
+    assert_ok(nbep_output_create(path, &fx->sc, 3, &o, &fx->d), &fx->d);
+    assert_ok(nbep_output_close(&o, NULL, &fx->d), &fx->d);
+    hid_t f = open_ro(path);
+    assert_int_equal(read_count(f, "/frames"), 0);
+    H5Fclose(f);
+    size_t len0, len1;
+    unsigned char *before = slurp(path, &len0);
+    assert_non_null(before);
+    fx->sc.steps = 2 * N_STATS;
+    nbep_resume r;
+    assert_int_equal(nbep_output_open_resume(path, &fx->sc, &o, &r, &fx->d), NBEP_EUSAGE);
+    assert_null(o);
+    assert_int_equal(fx->d.n_errors, 1);
+    assert_non_null(strstr(fx->d.msg[0], "has no complete frame to resume from"));
+    assert_non_null(strstr(fx->d.msg[0], path));
+    unsigned char *after = slurp(path, &len1);
+    assert_non_null(after);
+    assert_true(len1 == len0 && memcmp(after, before, len0) == 0);
+    free(before);
+    free(after);
+}
+
 static int make_dirs(void)
 {
     const char *dirs[] = {"build", "build/tests", "build/tests/tmp"};
@@ -1309,6 +1340,7 @@ int main(void)
         T(test_h5dump_reads_the_file_of_a_killed_run),
         T(test_info_reports_the_settings_frames_stats_and_summary),
         T(test_a_resume_closed_before_it_begins_leaves_the_file_as_it_was),
+        T(test_a_file_without_a_complete_frame_is_refused_as_bad_usage),
         T(test_info_on_a_killed_run_says_it_has_no_summary),
         T(test_info_reads_a_run_while_it_is_being_written),
         T(test_info_counts_only_the_complete_frames_of_a_run_killed_mid_frame),
