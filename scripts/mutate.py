@@ -34,6 +34,8 @@ GRAN = ["test_granular"]
 ORDER = ["test_order"]  # run.order = "step", the paper's step
 WAYS = ["test_pred_ways"]  # the schedule of the ways a step's events run, for given costs
 LISTS = ["test_evloop_lists"]  # the cells engine's lists against a search of every sphere
+# the engine's ways out of a stall or a failed walk, forced by its own copy's hooks
+FAULTS = ["test_team_faults"]
 
 # (id, file, original, replacement, tests, equivalent-reason or None)
 MUTANTS = [
@@ -658,6 +660,24 @@ MUTANTS = [
      "        if (atomic_load_explicit(&e->ws[t][k].place, memory_order_acquire) == s)\n            return t;",
      "        if (atomic_load_explicit(&e->ws[t][k].place, memory_order_acquire) == s)\n            return 0;",
      TEAM, None),
+    # the ways out of a fault (test_team_faults: a stall, a walk out of memory, from a time
+    # on): the team stops where the one thread does, with its state
+    ("team-stall-stuck-kept", "src/evloop_team.c",
+     "                undo_from(e, ops, u, us, s);\n                tally->events++;",
+     "                undo_from(e, ops, u, us, s + 1);\n                tally->events++;", FAULTS, None),
+    ("team-failed-ahead-kept", "src/evloop_team.c",
+     "        if (e->failed) {\n            undo_from(e, ops, u, us, s + 1);",
+     "        if (e->failed) {\n            (void)0;", FAULTS, None),
+    ("team-failed-walk-goes-on", "src/evloop_team.c",
+     "        if (e->failed) {\n            undo_from(e, ops, u, us, s + 1);\n            return false;",
+     "        if (e->failed) {\n            undo_from(e, ops, u, us, s + 1);\n            e->failed = false;",
+     FAULTS, None),
+    ("evloop-failed-walk-committed", "src/evloop.c", "    if (w->oom)\n        e->failed = true;",
+     "    (void)0;", FAULTS, None),
+    ("evloop-stall-after-handling", "src/evloop.c",
+     "        tally->events++;\n        if (!nbep__evloop_advances(stall, t)) {\n            *t_stuck = t;\n            return false;\n        }\n        nbep__evloop_handle(e, w, ops, u, i, &ev, t);",
+     "        tally->events++;\n        nbep__evloop_handle(e, w, ops, u, i, &ev, t);\n        if (!nbep__evloop_advances(stall, t)) {\n            *t_stuck = t;\n            return false;\n        }",
+     FAULTS, None),
     # ---- the ways a step's events run (pred_ways.c): the schedule for given costs ----
     ("team-way-one-slot", "src/pred_ways.c",
      "    int *next = &w->way[(step + 1) & 1], *probe = &w->probe[(step + 1) & 1];",

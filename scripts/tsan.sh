@@ -21,11 +21,12 @@ libs="$(pkg-config --libs gsl libconfig hdf5 jansson cmocka) -lm -lpthread -fope
 srcs=$(ls src/*.c | grep -v -e '^src/main.c$' -e '^src/sweep.c$')
 fail=0
 for t in test_sim test_periodic test_barrier test_extremes test_order test_granular \
-    test_evloop_apart; do
+    test_evloop_apart test_team_faults; do
     [ -e tests/$t.c ] || continue
-    # test_evloop_apart compiles its own copy of the cells engine (with its hook)
+    # test_evloop_apart and test_team_faults compile their own copy of the cells engine (with
+    # their hooks)
     these=$srcs
-    [ $t = test_evloop_apart ] &&
+    grep -q '^#include "../src/evloop.c"' tests/$t.c &&
         these=$(echo "$srcs" | grep -v -e '^src/evloop.c$' -e '^src/evloop_team.c$')
     # shellcheck disable=SC2086
     clang $cflags $these tests/$t.c -o "$out/$t" $libs

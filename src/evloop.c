@@ -22,6 +22,14 @@
 #define NBEP_EVLOOP_HANDLED_HOOK(e, w, ev) ((void)0)
 #endif
 
+/* Whether the walk of sphere i's list expiry at time t runs out of memory as though its room
+ * could not grow: tests/test_team_faults.c compiles its own copy of this file that makes every
+ * walk past a time fail, so that the loops' way out of a failed walk is tested; a build of nbep
+ * has nothing here. */
+#ifndef NBEP_EVLOOP_OOM_HOOK
+#define NBEP_EVLOOP_OOM_HOOK(i, t) false
+#endif
+
 static bool ws_init(evl_ws *w)
 {
     w->cap = 64;
@@ -636,8 +644,10 @@ void nbep__evloop_handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, 
             ops->flight(u, i, t, &p, &v, &a);
         const nbep_vec3 c = list_centre(e, p, v, a);
         walk(e, w, i, c);
-        if (w->oom)
+        if (w->oom || NBEP_EVLOOP_OOM_HOOK(i, t)) {
+            w->oom = true;
             return;
+        }
         w->rebuilt = true;
         w->at = c;
         predict_with(e, ops, u, i, t, w->near, w->n_near, c);

@@ -1,0 +1,129 @@
+/* The cells engine's ways out of a fault, on one thread and in the team loop: a stall (events
+ * that do not advance time: the stall check, nbep__evloop_advances) and a list expiry whose walk
+ * runs out of memory. Neither happens in a scene a test can build on purpose (an elastic fluid
+ * always advances; a walk's room grows with realloc), so this test compiles its own copy of the
+ * engine (src/evloop.c and src/evloop_team.c) whose hooks make the stall check fail, or every
+ * walk fail, from a time on. Both are functions of the event's time alone, so the one thread and
+ * the team meet them at the same event in the calendar's order: the team, with events handled
+ * ahead of it, must stop there as the one thread does, with its status, its message and its state
+ * bit for bit (the places after the stopping one undone, the stopping one as the one thread left
+ * it: not handled at a stall, handled but not committed at a failed walk). */
+#include <math.h>
+#include <stdbool.h>
+
+struct nbep_evloop_stall;
+static void stall_hook(struct nbep_evloop_stall *st, double t);
+static double oom_from = INFINITY;
+#define NBEP_EVLOOP_STALL_HOOK(st, t) stall_hook(st, t)
+#define NBEP_EVLOOP_OOM_HOOK(i, t) ((void)(i), (t) >= oom_from)
+#include "../src/evloop.c"
+#include "../src/evloop_team.c"
+
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "nbep/sim.h"
+#include "nbep_test.h"
+#include "nbep_test_scene.h"
+
+/* From this time on the stall check fails at its next look (every STALL_LOOK events): as
+ * though the events there stood still. */
+static double stall_from = INFINITY;
+#define STALL_LOOK 64
+
+static void stall_hook(nbep_evloop_stall *st, double t)
+{
+    st->events = STALL_LOOK;
+    if (t >= stall_from)
+        st->dt = INFINITY;
+}
+
+/* A run of sc on nt threads (NBEP_TEAM=always: every step in the team loop) that must fail:
+ * its status, its one message, the counter `ahead` (events the team handled ahead of their
+ * turn) and the state it stopped in, into *fin. */
+static nbep_status run_to_fault(const nbep_scene *sc, int nt, char *msg, size_t cap,
+                                uint64_t *ahead, nbep_state *fin)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_sim_options opt = {.threads = nt};
+    nbep_sim *sim = NULL;
+    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
+    const nbep_status st = nbep_sim_run(sim, &d);
+    assert_int_equal(d.n_errors, st == NBEP_OK ? 0 : 1);
+    snprintf(msg, cap, "%s", d.n_errors ? d.msg[0] : "");
+    *ahead = nbep_sim_counter(sim, NBEP_COUNTER_AHEAD);
+    assert_int_equal(nbep_state_copy(fin, nbep_sim_state(sim), &d), NBEP_OK);
+    nbep_sim_destroy(&sim);
+    nbep_diag_fini(&d);
+    return st;
+}
+
+/* An elastic periodic fluid at phi = 0.45 (the team handles most of its events ahead, undoing
+ * some) that would run 6 steps of 0.03, stopped from t = 0.075 (its third step) by the fault
+ * that *from arms: on 1 thread with status want and a message holding what, then on 2, 3 and
+ * 4 threads with the same status, message and state, events having gone ahead. */
+static void team_stops_as_one_thread(double *from, nbep_status want, const char *what)
+{
+    nbep_scene *sc = nbep_test_periodic_fluid(nbep_test_scaled(12, 10), 0.45, 6, 0.03, 7);
+    sc->output_every = 6;
+    setenv("NBEP_TEAM", "always", 1);
+    char ref[512], msg[512];
+    uint64_t ahead;
+    nbep_state fin1, fin;
+    /* unarmed, the run ends: the fault is the hook's */
+    assert_int_equal(run_to_fault(sc, 2, msg, sizeof msg, &ahead, &fin), NBEP_OK);
+    nbep_state_fini(&fin);
+    *from = 0.075;
+    assert_int_equal(run_to_fault(sc, 1, ref, sizeof ref, &ahead, &fin1), want);
+    assert_non_null(strstr(ref, what));
+    unsigned long long step = 0; /* a step from the one armed (the third) to the last */
+    assert_int_equal(sscanf(ref, "nbep: step %llu:", &step), 1);
+    assert_true(step >= 3 && step <= 6);
+    assert_int_equal(ahead, 0);
+    for (int nt = 2; nt <= 4; nt++) {
+        assert_int_equal(run_to_fault(sc, nt, msg, sizeof msg, &ahead, &fin), want);
+        assert_string_equal(msg, ref);
+        assert_true(ahead > 0);
+        assert_memory_equal(fin.pos, fin1.pos, fin1.n * sizeof *fin1.pos);
+        assert_memory_equal(fin.vel, fin1.vel, fin1.n * sizeof *fin1.vel);
+        assert_memory_equal(fin.image, fin1.image, 3 * fin1.n * sizeof *fin1.image);
+        nbep_state_fini(&fin);
+    }
+    *from = INFINITY;
+    unsetenv("NBEP_TEAM");
+    nbep_state_fini(&fin1);
+    nbep_test_scene_free(&sc);
+}
+
+/* A stall: the step fails at the event where the check first fails (status numeric, "events at
+ * t = ... do not resolve", that event's time), before handling it, on every thread count. */
+static void test_the_team_stops_at_a_stall_as_one_thread_does(void **state)
+{
+    (void)state;
+    team_stops_as_one_thread(&stall_from, NBEP_ENUMERIC, "do not resolve");
+}
+
+/* A walk out of memory: the step fails at the first list expiry from then on, with "no memory
+ * for the neighbour lists" (status out of memory), on every thread count. */
+static void test_the_team_stops_at_a_failed_walk_as_one_thread_does(void **state)
+{
+    (void)state;
+    team_stops_as_one_thread(&oom_from, NBEP_ENOMEM, "no memory for the neighbour lists");
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_the_team_stops_at_a_stall_as_one_thread_does),
+        cmocka_unit_test(test_the_team_stops_at_a_failed_walk_as_one_thread_does),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
