@@ -12,7 +12,7 @@ packages=(
     libjansson-dev                              # the JSON summary (written and read back)
     libcmocka-dev                               # unit tests
     libopenmpi-dev openmpi-bin                  # parameter sweeps across ranks
-    valgrind                                    # make check runs the suite under memcheck
+    valgrind                                    # make valgrind (and make check VALGRIND=1): memcheck
     clang libomp-dev                            # make tsan: ThreadSanitizer with an OpenMP it can see
     python3 python3-numpy python3-matplotlib python3-h5py   # benchmark plots and renderer
     python3-mpmath                              # make accuracy: 60-digit reference check
