@@ -361,8 +361,8 @@ static void parse_run(load *L, const config_setting_t *root, nbep_scene *sc, boo
         sc->steps = (uint64_t)v;
     (void)get_float(L, run, "run", S_RUN_DT, &sc->dt);
     if (get_int(L, run, "run", S_RUN_THREADS, &v, &at) == GOT) {
-        if (v > INT_MAX)
-            ERR(L, at, "run.threads must be <= %d (got %" PRId64 ")", INT_MAX, v);
+        if (v > NBEP_THREADS_MAX)
+            ERR(L, at, "run.threads must be <= %d (got %" PRId64 ")", NBEP_THREADS_MAX, v);
         else
             sc->threads = (int)v;
     }

@@ -36,7 +36,8 @@ enum {
     X(RUN_DT, "run.dt", FLOAT, F_GT0, "1.0e-3", NULL, "the constant time step")                    \
     X(RUN_THREADS, "run.threads", INT, F_GE0, "0", NULL,                                           \
       "threads; 0: OMP_NUM_THREADS, else all cores (\"cells\" with no gravity: the event loop "    \
-      "runs as a team of up to 16, any others share the rebuilds and update only)")                \
+      "runs as a team of up to 16, any others share the rebuilds and update only); at most "     \
+      NBEP_SCHEMA_XSTR(NBEP_THREADS_MAX))                                                         \
     X(RUN_SEED, "run.seed", INT, F_GE0, "1", NULL, "every random choice derives from it")          \
     X(RUN_NEIGHBORS, "run.neighbors", STRING, 0, "\"all\"", NULL,                                  \
       "predictive: whom a re-prediction tests: \"all\" spheres (the paper), \"grid\" (nearby "  \

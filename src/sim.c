@@ -39,9 +39,11 @@ int nbep_sim_resolve_threads(int requested)
 {
 #ifdef _OPENMP
     /* omp_get_max_threads honours OMP_NUM_THREADS and defaults to the available cores; no
-     * region gets more than the thread limit (OMP_THREAD_LIMIT) */
+     * region gets more than the thread limit (OMP_THREAD_LIMIT) nor NBEP_THREADS_MAX (the
+     * deck's limit, which OMP_NUM_THREADS does not pass either) */
     int n = requested > 0 ? requested : omp_get_max_threads();
-    const int limit = omp_get_thread_limit();
+    const int cap = omp_get_thread_limit();
+    const int limit = cap > 0 && cap < NBEP_THREADS_MAX ? cap : NBEP_THREADS_MAX;
     if (limit > 0 && n > limit)
         n = limit;
     return n > 0 ? n : 1;

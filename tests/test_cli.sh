@@ -229,6 +229,13 @@ check "--dt=-1 and --set run.steps=0.5: each message names what was typed (got $
     "[ $rc = 2 ] && grep -qxF -- '--dt=-1: run.dt must be > 0 (got -1)' '$tmp/stderr' &&
      grep -qxF -- '--set run.steps=0.5: run.steps must be an integer (got 0.5)' '$tmp/stderr'"
 
+# ---- more threads than any node has: a deck error, not OpenMP's failure or crash (a run with
+# -t 100000 died inside libgomp and left its .partial file) ---------------------------------------
+run_nbep run inputs/two-spheres.deck -t 100000 --quiet -o "$tmp/threads.h5"
+check "-t 100000: exit 2, one line naming the limit, nothing written (got $rc: $(head -c 200 "$tmp/stderr"))" \
+    "[ $rc = 2 ] && one_line && grep -qxF -- '-t 100000: run.threads must be <= 1024 (got 100000)' '$tmp/stderr' &&
+     [ ! -e '$tmp/threads.h5' ] && [ ! -e '$tmp/threads.h5.partial' ]"
+
 # ---- short options with the value attached (getopt's -n5), as typed in messages ------------------
 run_nbep run inputs/two-spheres.deck -n5 -t1 -o"$tmp/short.h5" --quiet --summary "$tmp/short.json"
 check "-n5 -t1 -oFILE: taken as -n 5 -t 1 -o FILE (exit $rc)" \

@@ -15,6 +15,11 @@
 
 #define NBEP_ALGO_NAME_MAX 16
 
+/* The most threads a run takes (run.threads): more than any node's cores, where OpenMP's pool
+ * fails (40000 threads: libgomp could not create them; 100000: a crash inside it) and every
+ * thread's workspaces cost memory for nothing. */
+#define NBEP_THREADS_MAX 1024
+
 /* One `vary` entry of the sweep group: a deck path and the values it takes, each kept as the
  * libconfig text of the value so that it can be applied as "key=value" like --set. */
 typedef struct nbep_sweep_axis {
