@@ -401,6 +401,28 @@ static bool check_corners(load *L, const config_setting_t *at, const char *prefi
     return false;
 }
 
+/* A group's region must meet the deck's box (a region wholly outside it, on any axis, places
+ * nothing: the random placement said it could place no sphere, the lattice listed every sphere
+ * against a wall). One that lies partly outside is taken: its spheres land in the part inside. */
+static bool check_region_meets_box(load *L, const config_setting_t *at, const char *prefix,
+                                   const nbep_scene *sc, nbep_vec3 lo, nbep_vec3 hi)
+{
+    const double l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};
+    const double bl[3] = {sc->box_min.x, sc->box_min.y, sc->box_min.z};
+    const double bh[3] = {sc->box_max.x, sc->box_max.y, sc->box_max.z};
+    char axes[320] = "";
+    size_t used = 0;
+    for (int k = 0; k < 3; k++)
+        if (!(h[k] > bl[k] && l[k] < bh[k]))
+            used += (size_t)snprintf(axes + used, sizeof axes - used,
+                                     "%s%c: region [%g, %g], box [%g, %g]", used ? ", " : "",
+                                     "xyz"[k], l[k], h[k], bl[k], bh[k]);
+    if (!used)
+        return true;
+    ERR(L, at, "%s lies outside the box (%s)", prefix, axes);
+    return false;
+}
+
 /* *periodic_at: the box.periodic setting when the deck (or --set) gives one with an axis on. */
 static void parse_box(load *L, const config_setting_t *root, nbep_scene *sc,
                       const config_setting_t **periodic_at)
@@ -574,7 +596,8 @@ static bool parse_entry(load *L, const config_setting_t *e, const char *prefix,
         path_join(path, prefix, "region");
         got g_min = get_vec3(L, region, path, S_SPH_REGION_MIN, &out->lo, NULL);
         got g_max = get_vec3(L, region, path, S_SPH_REGION_MAX, &out->hi, &at);
-        ok = g_min == GOT && g_max == GOT && check_corners(L, at, path, out->lo, out->hi) && ok;
+        ok = g_min == GOT && g_max == GOT && check_corners(L, at, path, out->lo, out->hi) &&
+             (!sc->has_box || check_region_meets_box(L, at, path, sc, out->lo, out->hi)) && ok;
     } else if (g == NONE && sc->has_box) {
         out->lo = sc->box_min;
         out->hi = sc->box_max;

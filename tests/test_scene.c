@@ -392,6 +392,39 @@ static void test_sphere_entries_must_be_one_sphere_or_one_group(void **state)
 #undef E
 }
 
+/* A group's region that does not meet the box places nothing: a deck error naming the axes,
+ * for random and lattice placement alike and for a region that only touches a face (until
+ * 2026-11-30 the random placement said it could place none, and the lattice listed every sphere
+ * against a wall). A region partly outside is taken: its spheres land in the box. */
+static void test_a_region_outside_the_box_is_an_error(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_region_outside.deck");
+#define E DATA "scene_region_outside.deck:"
+    ASSERT_DIAG(&f->d,
+                E "5: spheres.[0].region lies outside the box (x: region [3, 4], box [0, 2])",
+                E "7: spheres.[1].region lies outside the box (y: region [-2, -1], box [0, 2], "
+                  "z: region [2.5, 3], box [0, 2])",
+                E "8: spheres.[2].region lies outside the box (z: region [-1, 0], box [0, 2])");
+#undef E
+    nbep_scene_fini(&f->sc);
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    char path[256];
+    LOAD_OK(f, write_deck("scene_region_partly.deck",
+                          "box: { min = [0.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0]; };\n"
+                          "spheres = ( { count = 20; radius = 0.05; mass = 1.0;\n"
+                          "  region = { min = [1.0, 1.0, 1.0]; max = [3.0, 3.0, 3.0]; }; } );\n",
+                          path, sizeof path));
+    const nbep_state *st = &f->sc.state;
+    assert_int_equal(st->n, 20);
+    for (size_t i = 0; i < st->n; i++) {
+        const double p[3] = {st->pos[i].x, st->pos[i].y, st->pos[i].z};
+        for (int k = 0; k < 3; k++)
+            assert_true(p[k] >= 1.0 + 0.05 && p[k] <= 2.0 - 0.05);
+    }
+}
+
 static void test_too_many_spheres_for_32_bit_ids_is_an_error(void **state)
 {
     fixture *f = *state;
@@ -1081,6 +1114,7 @@ int main(void)
         T(test_numbers_beyond_double_range_are_not_finite),
         T(test_values_out_of_range_are_all_reported_in_one_pass),
         T(test_sphere_entries_must_be_one_sphere_or_one_group),
+        T(test_a_region_outside_the_box_is_an_error),
         T(test_too_many_spheres_for_32_bit_ids_is_an_error),
         T(test_too_many_spheres_for_the_cells_mode_is_an_error),
         T(test_integer_beyond_64_bits_is_an_error),
