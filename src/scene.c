@@ -598,6 +598,16 @@ static bool parse_entry(load *L, const config_setting_t *e, const char *prefix,
         got g_max = get_vec3(L, region, path, S_SPH_REGION_MAX, &out->hi, &at);
         ok = g_min == GOT && g_max == GOT && check_corners(L, at, path, out->lo, out->hi) &&
              (!sc->has_box || check_region_meets_box(L, at, path, sc, out->lo, out->hi)) && ok;
+        if (ok && sc->has_box && out->place == NBEP__PLACE_LATTICE) {
+            /* a lattice fills the part of its region inside the box, as random placement
+             * keeps inside it (until 2026-11-30 the lattice filled the whole region and every
+             * sphere outside was reported against a wall) */
+            const nbep_vec3 bl = sc->box_min, bh = sc->box_max;
+            out->lo = nbep_vec3_make(fmax(out->lo.x, bl.x), fmax(out->lo.y, bl.y),
+                                     fmax(out->lo.z, bl.z));
+            out->hi = nbep_vec3_make(fmin(out->hi.x, bh.x), fmin(out->hi.y, bh.y),
+                                     fmin(out->hi.z, bh.z));
+        }
     } else if (g == NONE && sc->has_box) {
         out->lo = sc->box_min;
         out->hi = sc->box_max;

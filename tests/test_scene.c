@@ -395,7 +395,8 @@ static void test_sphere_entries_must_be_one_sphere_or_one_group(void **state)
 /* A group's region that does not meet the box places nothing: a deck error naming the axes,
  * for random and lattice placement alike and for a region that only touches a face (until
  * 2026-11-30 the random placement said it could place none, and the lattice listed every sphere
- * against a wall). A region partly outside is taken: its spheres land in the box. */
+ * against a wall). A region partly outside is taken: its spheres land in the box (a lattice
+ * fills the part inside, which until then listed every sphere outside against a wall). */
 static void test_a_region_outside_the_box_is_an_error(void **state)
 {
     fixture *f = *state;
@@ -414,15 +415,22 @@ static void test_a_region_outside_the_box_is_an_error(void **state)
     LOAD_OK(f, write_deck("scene_region_partly.deck",
                           "box: { min = [0.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0]; };\n"
                           "spheres = ( { count = 20; radius = 0.05; mass = 1.0;\n"
-                          "  region = { min = [1.0, 1.0, 1.0]; max = [3.0, 3.0, 3.0]; }; } );\n",
+                          "  region = { min = [1.0, 1.0, 1.0]; max = [3.0, 3.0, 3.0]; }; },\n"
+                          "  { count = 27; radius = 0.05; mass = 1.0; place = \"lattice\";\n"
+                          "  region = { min = [-1.0, -1.0, -1.0]; max = [0.9, 0.9, 0.9]; }; } );\n",
                           path, sizeof path));
+    /* the random group in [1, 2]^3, the lattice in [0, 0.9]^3 at its widest spacing: the
+     * region's part inside the box, less a radius, 0.8 across, 3 sites a side, 0.4 apart */
     const nbep_state *st = &f->sc.state;
-    assert_int_equal(st->n, 20);
+    assert_int_equal(st->n, 47);
     for (size_t i = 0; i < st->n; i++) {
         const double p[3] = {st->pos[i].x, st->pos[i].y, st->pos[i].z};
+        const double lo = i < 20 ? 1.0 : 0.0, hi = i < 20 ? 2.0 : 0.9;
         for (int k = 0; k < 3; k++)
-            assert_true(p[k] >= 1.0 + 0.05 && p[k] <= 2.0 - 0.05);
+            assert_true(p[k] >= lo + 0.05 && p[k] <= hi - 0.05);
     }
+    assert_vec3(st->pos[20], 0.05, 0.05, 0.05, 1e-15);
+    assert_vec3(st->pos[46], 0.85, 0.85, 0.85, 1e-15);
 }
 
 static void test_too_many_spheres_for_32_bit_ids_is_an_error(void **state)
