@@ -273,10 +273,23 @@ for cmd in run check sweep; do
     check "nbep $cmd on a missing deck: one line naming it and the reason" \
         "one_line && grep -qF 'cannot read $tmp/no-such.deck: No such file' '$tmp/stderr'"
 done
-run_nbep run "$tmp/group.deck" -n 1 --quiet -o "$tmp/resume.h5" --resume "$tmp/no-such.h5"
+run_nbep run "$tmp/group.deck" -n 1 --quiet --resume "$tmp/no-such.h5"
 check "--resume of a missing file: exit 2 (got $rc)" "[ $rc = 2 ]"
 check "--resume of a missing file: one line naming it and the reason" \
     "one_line && grep -qF '$tmp/no-such.h5' '$tmp/stderr' && grep -qF 'No such file' '$tmp/stderr'"
+# another output file with --resume: refused (a resumed run appends to its own file; until
+# 2026-11-30 -o was ignored, exit 0, nothing written there); -o naming the resumed file is taken
+run_nbep run inputs/two-spheres.deck -n 2 --quiet -o "$tmp/resumed-o.h5"
+cp "$tmp/resumed-o.h5" "$tmp/resumed-o.copy.h5"
+for other in "-o $tmp/elsewhere.h5" "--output=$tmp/elsewhere.h5" "--set output.file=\"$tmp/elsewhere.h5\""; do
+    eval "set -- $other"
+    run_nbep run inputs/two-spheres.deck -n 4 --quiet --resume "$tmp/resumed-o.h5" "$@"
+    check "--resume with $*: exit 2, one line naming it, no file, the run's file unchanged (got $rc: $(head -c 200 "$tmp/stderr"))" \
+        "[ $rc = 2 ] && one_line && grep -qF -- '$* does not go with --resume: a resumed run appends to $tmp/resumed-o.h5' '$tmp/stderr' &&
+         [ ! -e '$tmp/elsewhere.h5' ] && cmp -s '$tmp/resumed-o.h5' '$tmp/resumed-o.copy.h5'"
+done
+run_nbep run inputs/two-spheres.deck -n 4 --quiet --resume "$tmp/resumed-o.h5" -o "$tmp/../$(basename "$tmp")/resumed-o.h5"
+check "--resume FILE with -o naming FILE another way: resumed (exit $rc)" "[ $rc = 0 ]"
 # the wrong file named (not HDF5; HDF5 but no nbep run, in the newest format too, or with a
 # format that is no string; a directory): bad usage too, and left as it was
 printf 'not a run\n' >"$tmp/text.h5"
