@@ -135,7 +135,13 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
     if (argc < 2)
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: no command given (try nbep --help)");
     nbep_status st = parse_command(argv[1], &cli->cmd, d);
-    if (st != NBEP_OK || cli->cmd == NBEP_CMD_HELP || cli->cmd == NBEP_CMD_VERSION ||
+    if (st != NBEP_OK)
+        return st;
+    /* --version and --help-deck take nothing more (until 2026-11-30 the rest was ignored);
+     * help may be asked of a command (nbep run --help), so nbep --help ignores the rest */
+    if ((cli->cmd == NBEP_CMD_VERSION || cli->cmd == NBEP_CMD_HELP_DECK) && argc > 2)
+        NBEP_FAIL(d, NBEP_EUSAGE, "nbep: %s takes no arguments (got '%s')", argv[1], argv[2]);
+    if (cli->cmd == NBEP_CMD_HELP || cli->cmd == NBEP_CMD_VERSION ||
         cli->cmd == NBEP_CMD_HELP_DECK)
         return st;
     /* Options that take a value, and the deck path each overrides (NULL: not a deck path). */

@@ -103,7 +103,7 @@ static void print_human_summary(const nbep_summary *s, const char *file, nbep_st
         snprintf(reached, sizeof reached, " (to step %llu)", (unsigned long long)s->steps);
     fprintf(stderr,
             "nbep: %s %llu step%s%s of %llu sphere%s (%s, %d thread%s) in %.3g s (%.4g steps/s); "
-            "%llu collision%s; energy drift %.3g; max overlap %.3g; %s\n",
+            "%llu collision%s; energy drift %.3g; max overlap / r %.3g; %s\n",
             st == NBEP_OK ? "ran" : "stopped after", (unsigned long long)ran, ran == 1 ? "" : "s",
             reached, (unsigned long long)s->spheres, s->spheres == 1 ? "" : "s",
             s->algorithm, s->threads, s->threads == 1 ? "" : "s", s->wall_seconds,

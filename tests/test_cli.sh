@@ -229,6 +229,17 @@ check "--dt=-1 and --set run.steps=0.5: each message names what was typed (got $
     "[ $rc = 2 ] && grep -qxF -- '--dt=-1: run.dt must be > 0 (got -1)' '$tmp/stderr' &&
      grep -qxF -- '--set run.steps=0.5: run.steps must be an integer (got 0.5)' '$tmp/stderr'"
 
+# ---- --version and --help-deck take nothing more (the rest was ignored, exit 0) --------------
+for cmd in --version --help-deck; do
+    run_nbep $cmd extra
+    check "nbep $cmd extra: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr"))" \
+        "[ $rc = 2 ] && one_line && grep -qxF -- 'nbep: $cmd takes no arguments (got '\''extra'\'')' '$tmp/stderr'"
+done
+# ---- the end line's overlap is relative to the radius, as it says ---------------------------
+run_nbep run inputs/two-spheres.deck -n 1 -o "$tmp/end-line.h5"
+check "the end line names max overlap / r (exit $rc)" \
+    "[ $rc = 0 ] && grep -q 'max overlap / r [-0-9.e]*;' '$tmp/stderr'"
+
 # ---- more threads than any node has: a deck error, not OpenMP's failure or crash (a run with
 # -t 100000 died inside libgomp and left its .partial file) ---------------------------------------
 run_nbep run inputs/two-spheres.deck -t 100000 --quiet -o "$tmp/threads.h5"
