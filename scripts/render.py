@@ -23,14 +23,20 @@ import math
 import os
 import sys
 
-import h5py
-import numpy as np
+try:
+    import h5py
+    import numpy as np
 
-import matplotlib
+    import matplotlib
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.collections import EllipseCollection  # noqa: E402
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: E402
+    from matplotlib.collections import EllipseCollection  # noqa: E402
+except ImportError as err:  # one line, as every other error here, not a traceback
+    print(f"render.py: {err.name or err} is missing for {sys.executable}: install "
+          "python3-h5py and python3-matplotlib (Debian), or run /usr/bin/python3",
+          file=sys.stderr)
+    sys.exit(2)
 
 AXES = {"x": 0, "y": 1, "z": 2}
 
