@@ -85,6 +85,10 @@ struct nbep_sim {
     double max_overlap, max_overlap_rel;
     double setup_seconds, wall_seconds;
     double t_start, t_last_progress;
+    /* the progress line's recent rate: steps done (this session) and the time at its last
+     * mark, and the rate between the two marks before (0: none yet) */
+    double t_mark, rate_recent;
+    uint64_t done_mark;
     /* stop request: written by thread 0 in the hook, read by all after the next barrier */
     atomic_int stop;
     nbep_status status;              /* thread 0 only */
