@@ -660,6 +660,12 @@ MUTANTS = [
      "        if (atomic_load_explicit(&e->ws[t][k].place, memory_order_acquire) == s)\n            return t;",
      "        if (atomic_load_explicit(&e->ws[t][k].place, memory_order_acquire) == s)\n            return 0;",
      TEAM, None),
+    # a walk's workspace grown past the 64 lists it starts with (lists of 260 in
+    # test_evloop_lists' two sizes: no other test has lists that long)
+    ("walk-grows-once", "src/evloop.c", "    while (m > w->cap)\n        if (!grow_ws(w)) {",
+     "    if (m > w->cap)\n        if (!grow_ws(w)) {", LISTS, None),
+    ("walk-room-uncounted", "src/evloop.c", "    w->cap = cap;\n    return true;",
+     "    return true;", LISTS, None),
     # the ways out of a fault (test_team_faults: a stall, a walk out of memory, from a time
     # on): the team stops where the one thread does, with its state
     ("team-stall-stuck-kept", "src/evloop_team.c",

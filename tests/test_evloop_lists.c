@@ -51,6 +51,7 @@ static struct {
     uint64_t across;  /* members within the cutoff only the periodic way round */
     uint64_t beyond;  /* lists not empty around a centre more than the cutoff past the cells */
     uint64_t events;  /* events that rebuilt no list */
+    uint64_t longest; /* the most members of a list checked */
     double cut;       /* the engine's cutoff */
 } seen;
 static unsigned char *mark; /* run_audited's, a flag per sphere: listed */
@@ -65,6 +66,7 @@ static void audit_list(const nbep_evloop *e, uint32_t i, nbep_vec3 c, const uint
             mark[js[k]] = 1;
     }
     seen.members += m;
+    seen.longest = m > seen.longest ? m : seen.longest;
     seen.cut = e->cut;
     const nbep_cells *g = &e->cells;
     const double r = e->cut;
@@ -189,6 +191,51 @@ static void test_lists_hold_every_sphere_near_their_centre_past_the_cells_region
     nbep_test_scene_free(&sc);
 }
 
+/* Spheres of two sizes, periodic: big ones (diameter 1, one site in 64) among small ones
+ * (diameter 0.25) on a lattice of spacing 0.35. The cutoff is the big pairs' contact distance
+ * plus the skin (1.6; 1.4 in the small box, which cuts the skin down), so a list holds up to
+ * about 260 spheres (178): past the 64 a walk's workspace starts with, so walks grow it
+ * (grow_ws, which no other test reached) while every list is checked. */
+static void test_lists_hold_every_sphere_near_their_centre_with_two_sizes(void **state)
+{
+    (void)state;
+    const size_t side = nbep_test_scaled(16, 12), sites = side * side * side; /* 4 k */
+    const double a = 0.35, L = a * (double)side;
+    /* a site's kind: 2 big, 1 small, 0 none (the 26 sites around a big sphere: it reaches
+     * 0.625 from its centre) */
+    unsigned char *kind = malloc(sites);
+    assert_non_null(kind);
+    size_t n = 0, big = 0;
+    for (size_t q = 0; q < sites; q++) {
+        const size_t c[3] = {q % side, q / side % side, q / side / side};
+        bool at_big = true, by_big = true;
+        for (int k = 0; k < 3; k++) {
+            at_big = at_big && c[k] % 4 == 0;
+            by_big = by_big && c[k] % 4 != 2;
+        }
+        kind[q] = at_big ? 2 : by_big ? 0 : 1;
+        n += kind[q] != 0;
+        big += at_big;
+    }
+    nbep_scene *sc = nbep_test_scene_new(n, 0, "predictive", nbep_test_scaled(40, 25), 0.01);
+    sc->neighbors_cells = true;
+    nbep_test_set_periodic_box(sc, L);
+    uint64_t x = 0x5DEECE66Du;
+    for (size_t q = 0, i = 0; q < sites; q++) {
+        if (!kind[q])
+            continue;
+        const nbep_vec3 p = {a * (double)(q % side), a * (double)(q / side % side),
+                             a * (double)(q / side / side)};
+        nbep_test_set_sphere(sc, i++, p, nbep_test_random_velocity(&x, sqrt(3.0)),
+                             kind[q] == 2 ? 0.5 : 0.125, 1.0, (nbep_vec3){0.0, 0.0, 0.0});
+    }
+    free(kind);
+    run_checked(sc);
+    assert_true(big >= 27);
+    assert_true(seen.longest > 2 * 64); /* the workspace grew twice (260 seen; 178 small) */
+    nbep_test_scene_free(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -197,6 +244,7 @@ int main(void)
         cmocka_unit_test(
             test_lists_hold_every_sphere_near_their_centre_in_a_cluster_without_a_box),
         cmocka_unit_test(test_lists_hold_every_sphere_near_their_centre_past_the_cells_region),
+        cmocka_unit_test(test_lists_hold_every_sphere_near_their_centre_with_two_sizes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
