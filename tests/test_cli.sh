@@ -229,6 +229,41 @@ check "--dt=-1 and --set run.steps=0.5: each message names what was typed (got $
     "[ $rc = 2 ] && grep -qxF -- '--dt=-1: run.dt must be > 0 (got -1)' '$tmp/stderr' &&
      grep -qxF -- '--set run.steps=0.5: run.steps must be an integer (got 0.5)' '$tmp/stderr'"
 
+# ---- --summary - writes the summary to stdout, one JSON object with SPEC's keys in SPEC's order,
+# and nothing else there (a coverage run showed no test took this path) ----------------------
+run_nbep run inputs/two-spheres.deck -n 3 --quiet --summary - -o "$tmp/stdout-summary.h5"
+check "--summary -: exit 0, SPEC's keys in order on stdout, stderr empty (got $rc)" \
+    "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] && [ \$(wc -l <'$tmp/stdout') = 1 ] &&
+     /usr/bin/python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+spec = [\"format\", \"version\", \"algorithm\", \"threads\", \"spheres\", \"planes\", \"steps\", \"dt\",
+        \"setup_seconds\", \"wall_seconds\", \"steps_per_second\", \"checks\", \"predictions\",
+        \"collisions\", \"sphere_collisions\", \"plane_collisions\", \"quiet_steps\",
+        \"energy_initial\", \"energy_final\", \"energy_rel_drift\", \"max_overlap\",
+        \"max_overlap_rel\", \"peak_rss_bytes\"]
+sys.exit(not (list(d)[:len(spec)] == spec and d[\"steps\"] == 3 and d[\"spheres\"] == 2))
+' '$tmp/stdout'"
+
+# ---- help: nbep --help, -h, help and a command's --help print the usage on stdout, exit 0,
+# with every command and every option of SPEC's table ------------------------------------------
+for ask in "--help" "-h" "help" "run inputs/two-spheres.deck --help"; do
+    # shellcheck disable=SC2086
+    run_nbep $ask
+    missing=""
+    for word in "nbep run DECK" "nbep check DECK" "nbep info RUN.h5" "nbep sweep DECK" --version \
+        -o, --output -a, --algorithm -t, --threads -n, --steps --dt --set --summary --quiet --resume; do
+        grep -qF -- "$word" "$tmp/stdout" || missing="$missing $word"
+    done
+    check "nbep $ask: exit 0, the usage on stdout with every command and option (got $rc; missing:$missing)" \
+        "[ $rc = 0 ] && [ -z '$missing' ] && [ ! -s '$tmp/stderr' ]"
+done
+
+# ---- nbep check names an algorithm other than predictive plainly -------------------------------
+run_nbep check inputs/two-spheres.deck -a naive -t 1
+check "nbep check -a naive -t 1: 'algorithm: naive, 1 thread' (exit $rc)" \
+    "[ $rc = 0 ] && grep -qxE 'algorithm: +naive, 1 thread' '$tmp/stdout'"
+
 # ---- --version and --help-deck take nothing more (the rest was ignored, exit 0) --------------
 for cmd in --version --help-deck; do
     run_nbep $cmd extra
