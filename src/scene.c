@@ -821,6 +821,13 @@ static void parse_axes(load *L, const config_setting_t *sweep, nbep_scene *sc)
             check_steps_values(L, values, prefix);
         nbep_sweep_axis *axis = &sc->sweep_axes[sc->sweep_n_axes++];
         axis->key = dup_string(L, key);
+        /* its line, for the messages of runs that reject a value (sweep.c); none where an
+         * override set it (the hook of the setting, or of a group above it, names it) */
+        for (const config_setting_t *t = values; t && !axis->line; t = config_setting_parent(t)) {
+            if (config_setting_get_hook(t))
+                break;
+            axis->line = config_setting_source_line(t);
+        }
         size_t n_values = (size_t)config_setting_length(values);
         if (!(axis->values = calloc(n_values, sizeof *axis->values))) {
             L->c.oom = true;

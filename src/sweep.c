@@ -166,7 +166,9 @@ static nbep_status plan_create(const char *deck_path, const char *const *overrid
     for (size_t k = 0; !oom && k < p.n_axes; k++) {
         const size_t len = strlen(deck_path) + 48;
         char *label = malloc(len);
-        if ((oom = !label) == false)
+        if ((oom = !label) == false && p.axes[k].line) /* deck:line:, as every deck error */
+            snprintf(label, len, "%s:%u: sweep.vary.[%zu]", deck_path, p.axes[k].line, k);
+        else if (label)
             snprintf(label, len, "%s: sweep.vary.[%zu]", deck_path, k);
         p.base_origins[p.n_base + k] = label;
     }

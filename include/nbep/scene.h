@@ -26,6 +26,7 @@ typedef struct nbep_sweep_axis {
     char *key;          /* owned, e.g. "physics.restitution" */
     size_t n_values;
     char **values;      /* owned, e.g. "0.9", "[0.0, 0.0, -1.0]", "\"naive\"" */
+    unsigned line;      /* the deck's line of its values; 0 where a --set gave them */
 } nbep_sweep_axis;
 
 /* The most runs a sweep takes (replicas times the product of the axes' lengths): more is a
