@@ -766,6 +766,9 @@ static void parse_axes(load *L, const config_setting_t *sweep, nbep_scene *sc)
     size_t n = (size_t)config_setting_length(vary);
     if (n == 0)
         return;
+    const config_setting_t *root = sweep; /* the deck's root, where an axis's path starts */
+    while (config_setting_parent(root))
+        root = config_setting_parent(root);
     if (!(sc->sweep_axes = calloc(n, sizeof *sc->sweep_axes))) {
         L->c.oom = true;
         return;
@@ -791,8 +794,17 @@ static void parse_axes(load *L, const config_setting_t *sweep, nbep_scene *sc)
             g_key = BAD;
         } else if (g_key == GOT) {
             const char *refused = axis_key_refused(key);
+            char list[PATH_LEN];
+            unsigned len;
             if (refused) {
                 ERR(L, at, "%s.key: %s cannot be varied (%s)", prefix, key, refused);
+                g_key = BAD;
+            } else if (!nbep__scene_path_indices_exist(root, key, list, sizeof list, &len)) {
+                /* each run would append an entry with this one setting (until 2026-11-30
+                 * every run failed, exit 1, and the deck check passed) */
+                ERR(L, at, "%s.key: %s has %u entr%s: %s names none (vary a setting the "
+                    "deck has)",
+                    prefix, list, len, len == 1 ? "y" : "ies", key);
                 g_key = BAD;
             }
         }

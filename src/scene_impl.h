@@ -91,6 +91,13 @@ void nbep__scene_unknown_text(const char *path, nbep__strbuf *b);
 void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *ov,
                                 const char *label);
 
+/* Whether every list index of path (a schema path, "spheres.[5].radius") names an entry the
+ * tree root has: false with the first list that lacks one (its path into list, list_len
+ * bytes) and its length. An override there would append an entry instead (a sweep's axis:
+ * the same in every run, so a deck error). A list missing on the way has no entries. */
+bool nbep__scene_path_indices_exist(const config_setting_t *root, const char *path,
+                                    char *list, size_t list_len, unsigned *len);
+
 /* ---- placement (scene_place.c) -------------------------------------------------------------- */
 
 typedef enum nbep__place { NBEP__PLACE_ONE, NBEP__PLACE_RANDOM, NBEP__PLACE_LATTICE } nbep__place;

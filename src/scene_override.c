@@ -222,6 +222,40 @@ static void index_past_end(nbep__scene_ctx *c, const char *label, const char *li
           len == 1 ? "y" : "ies", len);
 }
 
+bool nbep__scene_path_indices_exist(const config_setting_t *root, const char *path,
+                                    char *list, size_t list_len, unsigned *len)
+{
+    seg segs[SEG_MAX];
+    size_t n = 0;
+    char canon[OV_PATH_LEN], sofar[OV_PATH_LEN] = "";
+    if (!split_path(path, segs, &n, canon, sizeof canon))
+        return true; /* not a path: the schema's check says so */
+    const config_setting_t *node = root;
+    for (size_t k = 0; k < n; k++) {
+        const seg *s = &segs[k];
+        if (s->index) {
+            const unsigned have =
+                node && config_setting_is_aggregate(node) ? (unsigned)config_setting_length(node)
+                                                          : 0;
+            if (s->idx >= have) {
+                snprintf(list, list_len, "%s", sofar);
+                *len = have;
+                return false;
+            }
+            node = config_setting_get_elem(node, (unsigned)s->idx);
+        } else {
+            node = node && config_setting_is_group(node) ? config_setting_get_member(node, s->name)
+                                                         : NULL;
+        }
+        const size_t used = strlen(sofar);
+        if (s->index)
+            snprintf(sofar + used, sizeof sofar - used, ".[%lu]", s->idx);
+        else
+            snprintf(sofar + used, sizeof sofar - used, "%s%s", used ? "." : "", s->name);
+    }
+    return true;
+}
+
 void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *ov,
                                 const char *label)
 {

@@ -272,6 +272,31 @@ static void test_varying_the_seed_or_a_key_twice_is_a_deck_error(void **state)
         TMP "sweep_bad_steps.deck:7: sweep.vary.[0].values.[2]: run.steps must be an integer "
             ">= 0 (got 1.5)"};
     assert_refused(deck, NULL, 0, 2, steps);
+    /* an axis whose path indexes an entry the deck lacks (each run would append one with that
+     * setting alone: until 2026-11-30 every run failed, exit 1, and the check passed); an
+     * entry the deck has, or one a --set made, may be varied */
+    write_deck("sweep_bad_index",
+               "sweep: { vary = ( { key = \"spheres.[1].radius\"; values = [0.1]; },\n"
+               "  { key = \"planes.[0].point\"; values = ( [0.0, 0.0, 0.5] ); },\n"
+               "  { key = \"spheres.[0].radius\"; values = [0.04, 0.06]; } ); };\n",
+               deck, sizeof deck);
+    const char *const index[] = {
+        TMP "sweep_bad_index.deck:6: sweep.vary.[0].key: spheres has 1 entry: "
+            "spheres.[1].radius names none (vary a setting the deck has)",
+        TMP "sweep_bad_index.deck:7: sweep.vary.[1].key: planes has 0 entries: "
+            "planes.[0].point names none (vary a setting the deck has)"};
+    assert_refused(deck, NULL, 0, 2, index);
+    const char *const made[] = {"planes.[0].normal=[0.0, 0.0, 1.0]",
+                                "planes.[0].point=[0.0, 0.0, 0.0]",
+                                "spheres.[1].count=2", "spheres.[1].radius=0.03",
+                                "spheres.[1].mass=1.0"};
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_sweep_plan p;
+    assert_int_equal(nbep_sweep_plan_create(deck, made, 5, &p, &d), NBEP_OK);
+    assert_int_equal(p.n_axes, 3);
+    nbep_sweep_plan_fini(&p);
+    nbep_diag_fini(&d);
 }
 
 /* More runs than a sweep takes (10^7) is a deck error at the sweep group's line, or at the
