@@ -880,6 +880,13 @@ MUTANTS = [
     ("sweep-seed-unbounded", "src/scene.c",
      "    if (sc->sweep_replicas > 1 && sc->seed > (uint64_t)INT64_MAX - (sc->sweep_replicas - 1))",
      "    if (0)", ["tests/test_sweep_cli.sh"], None),
+    # an axis's path must name entries the deck has; a run's failure names the axis's line
+    ("sweep-axis-index-appends", "src/scene_override.c", "            if (s->idx >= have) {",
+     "            if (s->idx > have) {", ["test_sweep"], None),
+    ("sweep-axis-line-lost", "src/sweep.c",
+     "        if ((oom = !label) == false && p.axes[k].line) /* deck:line:, as every deck error */",
+     "        if ((oom = !label) == false && false) /* deck:line:, as every deck error */",
+     ["test_sweep"], None),
     ("sweep-summary-in-study", "src/sweep.c",
      "        st = summary_not_in_study(&p, cli->summary, dd);",
      "        st = NBEP_OK;", ["tests/test_sweep_cli.sh"], None),
