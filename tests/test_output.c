@@ -1295,6 +1295,36 @@ static void test_a_file_without_a_complete_frame_is_refused_as_bad_usage(void **
     free(after);
 }
 
+/* A file whose frames lack velocities (output.fields = ["position"]) cannot be resumed: a deck
+ * error that says why (the frames a resume starts from need both), the file left as it was (a
+ * coverage run showed no test took this path). */
+static void test_a_file_without_velocities_is_refused_as_a_deck_error(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    nbep_test_tmp("output_resume_no_velocity.h5", path, sizeof path);
+    fx->sc.out_velocity = false;
+    const nbep_summary summary = known_summary();
+    write_run(fx, path, &summary);
+    size_t len0, len1;
+    unsigned char *before = slurp(path, &len0);
+    assert_non_null(before);
+    fx->sc.out_velocity = true; /* the deck resumed with asks for them, as a resume must */
+    fx->sc.steps = 2 * N_STATS;
+    nbep_output *o = NULL;
+    nbep_resume r;
+    assert_int_equal(nbep_output_open_resume(path, &fx->sc, &o, &r, &fx->d), NBEP_EDECK);
+    assert_null(o);
+    assert_int_equal(fx->d.n_errors, 1);
+    assert_non_null(strstr(fx->d.msg[0], "cannot be resumed: its frames lack positions or "
+                                         "velocities (output.fields)"));
+    unsigned char *after = slurp(path, &len1);
+    assert_non_null(after);
+    assert_true(len1 == len0 && memcmp(after, before, len0) == 0);
+    free(before);
+    free(after);
+}
+
 static int make_dirs(void)
 {
     const char *dirs[] = {"build", "build/tests", "build/tests/tmp"};
@@ -1341,6 +1371,7 @@ int main(void)
         T(test_info_reports_the_settings_frames_stats_and_summary),
         T(test_a_resume_closed_before_it_begins_leaves_the_file_as_it_was),
         T(test_a_file_without_a_complete_frame_is_refused_as_bad_usage),
+        T(test_a_file_without_velocities_is_refused_as_a_deck_error),
         T(test_info_on_a_killed_run_says_it_has_no_summary),
         T(test_info_reads_a_run_while_it_is_being_written),
         T(test_info_counts_only_the_complete_frames_of_a_run_killed_mid_frame),
