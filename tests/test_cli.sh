@@ -259,6 +259,13 @@ run_nbep check "$tmp/group.deck" --summary "$tmp/check.json"
 check "nbep check --summary: exit 2, one line (got $rc)" \
     "[ $rc = 2 ] && one_line && grep -q 'summary goes with run and sweep' '$tmp/stderr'"
 
+# ---- info prints a run file and takes nothing else (an ignored option would pass for applied) --
+for extra in "--resume $tmp/group.h5" "--summary $tmp/info.json" "--set run.steps=5" "-n 5"; do
+    run_nbep info "$tmp/no-such.h5" $extra
+    check "nbep info RUN.h5 $extra: exit 2, one line (got $rc)" \
+        "[ $rc = 2 ] && one_line && grep -qx 'nbep: info takes only a run file' '$tmp/stderr' &&
+         [ ! -e '$tmp/info.json' ]"
+done
 # ---- a deck name that is no file, a missing file to resume -------------------------------------
 for cmd in run check sweep; do
     run_nbep $cmd "$tmp/no-such.deck" --quiet
