@@ -971,6 +971,60 @@ MUTANTS = [
      "        (void)nap;\n", ["tests/test_sweep_mpi.sh"], None),
     ("peak-rss-lifetime", "src/run.c", "    nbep_peak_rss_reset(); /* peak_rss_bytes",
      "    (void)0; /* peak_rss_bytes", ["tests/test_sweep_cli.sh"], None),
+    # ---- the user interface: deck ranges, overrides, suggestions, the command line, the
+    # sidecar, nbep info, the summary's reader, the sweep's table (README "Mutation testing") ----
+    ("ui-threads-max-refused", "src/scene.c", "        if (v > NBEP_THREADS_MAX)\n            ERR(L, at, \"run.threads",
+     "        if (v >= NBEP_THREADS_MAX)\n            ERR(L, at, \"run.threads", ["test_scene", "tests/test_cli.sh"], None),
+    ("ui-sweep-seed-bound-off-by-one", "src/scene.c",
+     "sc->seed > (uint64_t)INT64_MAX - (sc->sweep_replicas - 1))",
+     "sc->seed > (uint64_t)INT64_MAX - sc->sweep_replicas)", ["test_scene", "tests/test_sweep_cli.sh"], None),
+    ("ui-sweep-runs-max-off-by-one", "src/scene.c", "    if (runs > NBEP_SWEEP_RUNS_MAX)\n        ERR(",
+     "    if (runs >= NBEP_SWEEP_RUNS_MAX)\n        ERR(", ["test_scene", "tests/test_sweep_cli.sh"], None),
+    ("ui-sweep-steps-axis-zero-refused", "src/scene.c", "config_setting_get_int64(x) >= 0)\n            continue;",
+     "config_setting_get_int64(x) > 0)\n            continue;", ["test_scene", "test_sweep", "tests/test_sweep_cli.sh"], None),
+    ("ui-override-entry-plural", "src/scene_override.c", "len == 1 ? \"y\" : \"ies\"",
+     "len <= 1 ? \"y\" : \"ies\"", ["test_scene", "tests/test_cli.sh"], None),
+    ("ui-override-array-aggregate-unchecked", "src/scene_override.c",
+     "    if (config_setting_is_array(node) && config_setting_is_aggregate(v)) {",
+     "    if (0 && config_setting_is_aggregate(v)) {", ["test_scene", "tests/test_cli.sh"], None),
+    ("ui-override-path-untrimmed", "src/scene_override.c", "char *path = trimmed(ov, (size_t)(eq - ov)),",
+     "char *path = strndup(ov, (size_t)(eq - ov)),", ["test_scene", "tests/test_cli.sh"], None),
+    ("ui-override-made-groups-unlabelled", "src/scene_override.c",
+     "        if (!config_setting_get_hook(child) && config_setting_source_line(child) == 0)\n            config_setting_set_hook(child, (void *)label);\n",
+     "", ["test_scene"], None),
+    ("ui-suggest-element-path", "src/scene_schema.c",
+     "strcmp(leaf_of(schema[id].path), seg) == 0 && !strstr(schema[id].path, \"[]\")",
+     "strcmp(leaf_of(schema[id].path), seg) == 0", ["test_scene"], None),
+    ("ui-suggest-half-the-letters", "src/scene_schema.c", "size_t limit = seg_len / 3 > 1 ? seg_len / 3 : 1,",
+     "size_t limit = seg_len / 2 > 1 ? seg_len / 2 : 1,", ["test_scene"], None),
+    ("ui-widen-int64-min-refused", "src/scene_text.c",
+     "const uint64_t max64 = neg ? (uint64_t)INT64_MAX + 1 : (uint64_t)INT64_MAX;",
+     "const uint64_t max64 = (uint64_t)INT64_MAX;", ["test_scene", "tests/test_cli.sh"], None),
+    ("ui-cli-output-unquoted", "src/cli.c", "{\"-o\", \"--output\", \"output.file\", true}",
+     "{\"-o\", \"--output\", \"output.file\", false}", ["tests/test_cli.sh"], None),
+    ("ui-cli-info-takes-resume", "src/cli.c", "(cli->n_overrides || cli->summary || cli->resume))",
+     "(cli->n_overrides || cli->summary))", ["tests/test_cli.sh"], None),
+    ("ui-xdmf-time-6-digits", "src/output_xdmf.c", "<Time Value=\\\"%.17g\\\"/>",
+     "<Time Value=\\\"%g\\\"/>", ["test_output_xdmf", "test_output"], None),
+    ("ui-xdmf-slab-count-frames", "src/output_xdmf.c",
+     "Dimensions=\\\"1 %zu 3\\\" Type=\\\"HyperSlab\\\">\\n\",\n            indent, n);",
+     "Dimensions=\\\"1 %zu 3\\\" Type=\\\"HyperSlab\\\">\\n\",\n            indent, n_frames);",
+     ["test_output_xdmf", "test_output"], None),
+    ("ui-xdmf-scalar-dims-frames", "src/output_xdmf.c", "            n, h5, name);", "            n + 1, h5, name);",
+     ["test_output_xdmf", "test_output"], None),
+    ("ui-info-periodic-y-from-x", "src/output_info.c", "r.periodic[1] ? \"y\" : \"\"",
+     "r.periodic[0] ? \"y\" : \"\"", ["test_output", "tests/test_resume.sh"], None),
+    ("ui-output-periodic-attr-y-from-x", "src/output.c", "sc->has_box && sc->periodic[1],",
+     "sc->has_box && sc->periodic[0],", ["test_output", "tests/test_resume.sh", "test_periodic"], None),
+    ("ui-run-end-line-drift-overlap-swapped", "src/run.c", "s->energy_rel_drift, s->max_overlap_rel, file);",
+     "s->max_overlap_rel, s->energy_rel_drift, file);", ["tests/test_cli.sh", "tests/test_resume.sh"], None),
+    ("ui-summary-negative-int-read", "src/summary.c",
+     "if (!json_is_integer(v) || json_integer_value(v) < 0 || json_integer_value(v) > INT_MAX)",
+     "if (!json_is_integer(v) || json_integer_value(v) > INT_MAX)", ["test_summary", "test_sweep"], None),
+    ("ui-summary-duplicate-keys-read", "src/summary.c", "json_loads(json, JSON_REJECT_DUPLICATES, NULL)",
+     "json_loads(json, 0, NULL)", ["test_summary", "test_sweep"], None),
+    ("ui-sweep-table-missing-real-zero", "src/output_sweep.c", "v->r = missing ? NAN : c->r[row];",
+     "v->r = missing ? 0.0 : c->r[row];", ["test_sweep", "tests/test_sweep_cli.sh"], None),
 ]
 
 
@@ -1016,6 +1070,8 @@ def main():
     ap.add_argument("--keep", action="store_true", help="keep the scratch copy")
     ap.add_argument("--allow-missing", action="store_true",
                     help="skip tests the tree does not have (to measure an older tree)")
+    ap.add_argument("--skip-baseline", action="store_true",
+                    help="do not first run the named tests on the unmutated copy")
     a = ap.parse_args()
     mutants = MUTANTS
     if a.only:
@@ -1053,6 +1109,25 @@ def main():
         # it a test that writes a file fails whatever the mutant, until some shell test that
         # makes it has run (a --only of test_granular's mutants was "killed" so)
         os.makedirs(os.path.join(scratch, "build", "tests", "tmp"), exist_ok=True)
+        # every test the run names, once on the unmutated copy: a test that fails there fails
+        # whatever the mutant, and each of its "kills" would be counted for nothing
+        # (test_sweep_cli.sh expected an MPI build's message and "killed" every sweep mutant)
+        stale_ids = {s[0] for s in stale}
+        named = sorted({t for m in mutants if not m[5] and m[0] not in stale_ids for t in m[4]
+                        if os.path.exists(os.path.join(scratch, test_path(t)))})
+        for t in [] if a.skip_baseline else named:
+            if "sweep_mpi" in t:
+                continue  # its mutants are built with MPI, this copy without
+            log_path = os.path.join(scratch, "build", f"baseline-{os.path.basename(t)}.log")
+            with open(log_path, "w") as log:
+                cmd = (["bash"] if t.endswith(".sh") else []) + [test_path(t)]
+                r = run(["timeout", "-k", "5", str(a.timeout)] + cmd, scratch, log=log)
+            if r != 0:
+                with open(log_path) as log:
+                    tail = log.read()[-2000:]
+                sys.exit(f"mutate: {t} fails on the unmutated tree (exit {r}), so it would "
+                         f"'kill' every mutant; fix it first. Its output ends:\n{tail}")
+        print(f"mutate: {len(named)} test(s) pass on the unmutated copy", flush=True)
         rows = []
         counts = {"killed": 0, "survived": 0, "equivalent": 0}
         for mid, path, orig, repl, tests, eq in mutants:

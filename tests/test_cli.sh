@@ -213,6 +213,14 @@ done
 run_nbep run inputs/two-spheres.deck -n 1 -o "$tmp/one-step.h5"
 check "the end line says '1 step of 2 spheres' (exit $rc)" \
     "[ $rc = 0 ] && grep -qF 'ran 1 step of 2 spheres' '$tmp/stderr'"
+# the end line's energy drift and max overlap are the summary's (a bounce at e = 0.9: a drift of
+# about -0.18 after one landing, no overlap)
+guard=120 run_nbep run inputs/bounce.deck -n 1000 -o "$tmp/bounce.h5" --summary "$tmp/bounce.json"
+drift=$(sed -n 's/.*"energy_rel_drift": \([^,]*\),.*/\1/p' "$tmp/bounce.json")
+overlap=$(sed -n 's/.*"max_overlap_rel": \([^,]*\),.*/\1/p' "$tmp/bounce.json")
+want=$(awk -v d="$drift" -v o="$overlap" 'BEGIN { printf "energy drift %.3g; max overlap / r %.3g;", d, o }')
+check "the end line says the summary's '$want' (exit $rc)" \
+    "[ $rc = 0 ] && [ -n '$drift' ] && [ -n '$overlap' ] && grep -qF '$want' '$tmp/stderr'"
 run_nbep check inputs/bounce.deck --set 'planes.[3].normal=[0,0,1]'
 check "a --set index past a list of one says '1 entry' (exit $rc)" \
     "[ $rc = 2 ] && one_line && grep -qF 'planes has 1 entry: the index' '$tmp/stderr'"
@@ -311,6 +319,22 @@ check "the deck is kept, and no run file made" \
 run_nbep check "$tmp/group.deck" --summary "$tmp/check.json"
 check "nbep check --summary: exit 2, one line (got $rc)" \
     "[ $rc = 2 ] && one_line && grep -q 'summary goes with run and sweep' '$tmp/stderr'"
+
+# ---- -o FILE takes the name as typed: quotes, spaces and backslashes are part of it (a name that
+# began with a quote was read as libconfig text: "bad value") --------------------------------------
+run_nbep check "$tmp/group.deck" -o '"odd" na\me.h5'
+sed -n 's/^output: *\(.*\): [0-9]* frames .*/\1/p' "$tmp/stdout" >"$tmp/named"
+printf '%s\n' '"odd" na\me.h5' >"$tmp/typed"
+check "-o with quotes, a space and a backslash: nbep check names that file (got $rc)" \
+    "[ $rc = 0 ] && cmp -s '$tmp/named' '$tmp/typed'"
+
+# ---- info prints a run file and takes nothing else (an ignored option would pass for applied) --
+for extra in "--resume $tmp/group.h5" "--summary $tmp/info.json" "--set run.steps=5" "-n 5"; do
+    run_nbep info "$tmp/no-such.h5" $extra
+    check "nbep info RUN.h5 $extra: exit 2, one line (got $rc)" \
+        "[ $rc = 2 ] && one_line && grep -qx 'nbep: info takes only a run file' '$tmp/stderr' &&
+         [ ! -e '$tmp/info.json' ]"
+done
 
 # ---- a deck name that is no file, a missing file to resume -------------------------------------
 for cmd in run check sweep; do

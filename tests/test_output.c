@@ -942,6 +942,31 @@ static void test_info_reports_the_settings_frames_stats_and_summary(void **state
     free(text);
 }
 
+/* SPEC contract 2: root attribute `periodic`, 3 x int, 0 or 1 per axis; nbep info names the
+ * periodic axes. Two of three, so that an axis read or written as another is seen (every test
+ * before had all three or none). */
+static void test_periodic_axes_are_the_attribute_and_info_names_them(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    fx->sc.periodic[0] = fx->sc.periodic[2] = true;
+    write_run(fx, nbep_test_tmp("output_periodic_xz.h5", path, sizeof path), NULL);
+    hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    assert_true(f >= 0);
+    hid_t a = H5Aopen(f, "periodic", H5P_DEFAULT);
+    assert_true(a >= 0);
+    int32_t periodic[3] = {-1, -1, -1};
+    assert_true(H5Aread(a, H5T_NATIVE_INT32, periodic) >= 0);
+    H5Aclose(a);
+    H5Fclose(f);
+    assert_int_equal(periodic[0], 1);
+    assert_int_equal(periodic[1], 0);
+    assert_int_equal(periodic[2], 1);
+    char *text = info_text(path, &fx->d);
+    assert_has_line(text, "periodic:    xz");
+    free(text);
+}
+
 static void test_info_on_a_killed_run_says_it_has_no_summary(void **state)
 {
     fixture *fx = *state;
@@ -1369,6 +1394,7 @@ int main(void)
         T(test_the_chunk_index_holds_every_planned_frame_without_splitting),
         T(test_h5dump_reads_the_file_of_a_killed_run),
         T(test_info_reports_the_settings_frames_stats_and_summary),
+        T(test_periodic_axes_are_the_attribute_and_info_names_them),
         T(test_a_resume_closed_before_it_begins_leaves_the_file_as_it_was),
         T(test_a_file_without_a_complete_frame_is_refused_as_bad_usage),
         T(test_a_file_without_velocities_is_refused_as_a_deck_error),

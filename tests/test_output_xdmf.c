@@ -102,6 +102,39 @@ static void test_every_frame_is_a_grid_with_its_time_and_its_slab(void **state)
     nbep_diag_fini(&d);
 }
 
+/* What a reader sizes its arrays by, without h5py to follow the references: each frame's slab
+ * of a (F, N, 3) series is (1, N, 3), each per-sphere attribute (N), and each frame's time is
+ * the double the run file holds (a time that needs 17 digits reads back to itself: readers
+ * order and label the frames by it). */
+static void test_every_slab_and_attribute_has_n_spheres_and_times_read_back_exactly(void **state)
+{
+    (void)state;
+    enum { N = 11, F = 3 };
+    const int64_t steps[F] = {0, 1, 2};
+    const double times[F] = {0.0, 0.1 + 0.2, 1.0 / 3.0};
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_xdmf_write(TMP "xdmf_dims.h5", N, F, steps, times, true, &d), NBEP_OK);
+    char *x = slurp(TMP "xdmf_dims.xmf");
+    /* per frame: position and velocity slabs, radius and mass */
+    assert_int_equal(occurrences(x, "ItemType=\"HyperSlab\" Dimensions=\"1 11 3\""), 2 * F);
+    assert_int_equal(occurrences(x, "ItemType=\"HyperSlab\""), 2 * F);
+    assert_int_equal(occurrences(x, "<DataItem Dimensions=\"11\" NumberType=\"Float\""), 2 * F);
+    assert_int_equal(occurrences(x, ":/spheres/"), 2 * F);
+    size_t k = 0;
+    for (const char *p = strstr(x, "<Time Value=\""); p; p = strstr(p + 1, "<Time Value=\""), k++) {
+        char *end;
+        const double v = strtod(p + strlen("<Time Value=\""), &end);
+        assert_true(k < F);
+        assert_true(*end == '"');
+        if (v != times[k])
+            fail_msg("frame %zu: time %.17g read back as %.17g", k, times[k], v);
+    }
+    assert_int_equal(k, F);
+    free(x);
+    nbep_diag_fini(&d);
+}
+
 static void test_a_rewrite_replaces_the_sidecar_and_can_drop_velocity(void **state)
 {
     (void)state;
@@ -220,6 +253,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_the_sidecar_sits_beside_the_run_file),
         cmocka_unit_test(test_every_frame_is_a_grid_with_its_time_and_its_slab),
+        cmocka_unit_test(test_every_slab_and_attribute_has_n_spheres_and_times_read_back_exactly),
         cmocka_unit_test(test_a_rewrite_replaces_the_sidecar_and_can_drop_velocity),
         cmocka_unit_test(test_the_run_file_name_is_escaped_for_xml),
         cmocka_unit_test(test_an_unwritable_place_is_one_error_line),

@@ -433,6 +433,18 @@ static void test_a_region_outside_the_box_is_an_error(void **state)
     assert_vec3(st->pos[46], 0.85, 0.85, 0.85, 1e-15);
 }
 
+/* A bound a message states is the bound taken: run.threads "must be <= 1024"
+ * (NBEP_THREADS_MAX), so 1024 itself loads. */
+static void test_threads_take_up_to_their_limit_and_no_more(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_defaults.deck", "run.threads=1024");
+    assert_int_equal(f->sc.threads, 1024);
+    nbep_scene_fini(&f->sc);
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_defaults.deck", "run.threads=1025");
+    ASSERT_DIAG(&f->d, "--set run.threads=1025: run.threads must be <= 1024 (got 1025)");
+}
+
 static void test_too_many_spheres_for_32_bit_ids_is_an_error(void **state)
 {
     fixture *f = *state;
@@ -463,6 +475,25 @@ static void test_integer_beyond_64_bits_is_an_error(void **state)
     LOAD_FAILS(f, NBEP_EDECK, DATA "scene_int64.deck");
     ASSERT_DIAG(&f->d, DATA "scene_int64.deck:2: integer 99999999999999999999 does not fit in "
                             "64 bits");
+}
+
+/* The edges of 64 bits: -2^63 and 2^63 - 1 are integers the deck can hold (the first then
+ * refused as a seed < 0, naming its value), one beyond either is not. */
+static void test_integers_at_the_edges_of_64_bits_are_read_whole(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_defaults.deck", "run.seed=9223372036854775807");
+    assert_int_equal(f->sc.seed, 9223372036854775807u);
+    nbep_scene_fini(&f->sc);
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_defaults.deck", "run.seed=-9223372036854775808",
+               "run.steps=-9223372036854775809", "run.max_reactions=9223372036854775808");
+    ASSERT_DIAG(&f->d,
+                "--set run.steps=-9223372036854775809: integer -9223372036854775809 does not "
+                "fit in 64 bits",
+                "--set run.max_reactions=9223372036854775808: integer 9223372036854775808 does "
+                "not fit in 64 bits",
+                "--set run.seed=-9223372036854775808: run.seed must be >= 0 "
+                "(got -9223372036854775808)");
 }
 
 static void test_more_spheres_than_memory_holds_fail_before_allocating(void **state)
@@ -525,6 +556,18 @@ static void test_override_strings_may_be_quoted_or_look_like_numbers(void **stat
     assert_string_equal(f->sc.output_file, "2024");
 }
 
+/* --set "PATH = VALUE", as a deck writes a setting: the spaces around the path and the value
+ * are not part of them (a bare word keeps its inner spaces). */
+static void test_override_path_and_value_may_have_spaces_around_them(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_defaults.deck", " run.steps = 5 ", "run.algorithm =\tnaive ",
+            "\toutput.file= my run.h5  ");
+    assert_int_equal(f->sc.steps, 5);
+    assert_string_equal(f->sc.algorithm, "naive");
+    assert_string_equal(f->sc.output_file, "my run.h5");
+}
+
 static void test_override_mixing_integers_and_floats_in_a_vector_reads_floats(void **state)
 {
     fixture *f = *state;
@@ -573,6 +616,20 @@ static void test_unknown_override_path_is_an_error_with_a_suggestion(void **stat
                 "--set spheres.[0].radus=1: unknown setting spheres.[0].radus "
                 "(did you mean spheres.[0].radius?)",
                 "--set colour=1: unknown setting colour");
+}
+
+/* A suggestion is a path the user could write and likely meant: never a list entry's schema
+ * path with its "[]" (radius alone has no one entry to point to), and not a sibling with half
+ * its letters different (box.mass is no typo of box.max: at most a third, one for short
+ * names; box.mx is one). */
+static void test_suggestions_are_writable_paths_a_typo_away(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_defaults.deck", "radius=1", "box.mass=1",
+               "box.mx=[1,1,1]");
+    ASSERT_DIAG(&f->d, "--set radius=1: unknown setting radius",
+                "--set box.mass=1: unknown setting box.mass",
+                "--set box.mx=[1,1,1]: unknown setting box.mx (did you mean box.max?)");
 }
 
 static void test_bad_override_value_is_reported_at_the_override(void **state)
@@ -628,6 +685,31 @@ static void test_override_making_half_a_box_reports_the_other_half_missing(void 
                                   buf, sizeof buf);
     LOAD_FAILS(f, NBEP_EDECK, deck, "box.min=[0,0,0]");
     ASSERT_DIAG(&f->d, "--set box.min=[0,0,0]: box.max is missing");
+}
+
+/* An index past a list the override itself made (no planes in the deck): "0 entries", and the
+ * one place it can go, 0. */
+static void test_an_index_past_an_empty_list_says_0_entries(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_defaults.deck", "planes.[1].normal=[0,0,1]");
+    ASSERT_DIAG(&f->d, "--set planes.[1].normal=[0,0,1]: planes has 0 entries: the index can "
+                       "be at most 0 (to add one)");
+}
+
+/* A list or group where a vector's element goes is the user's mistake, said at the override
+ * (exit 2): libconfig cannot put one in an array, which, unchecked, was "out of memory". */
+static void test_an_aggregate_in_place_of_a_vector_element_is_a_deck_error(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_good.deck", "physics.gravity.[0]=[1,2]",
+               "box.max.[2]={x=1;}");
+    ASSERT_DIAG(&f->d,
+                "--set physics.gravity.[0]=[1,2]: an element of the array physics.gravity must "
+                "be a number, string or boolean",
+                "--set box.max.[2]={x=1;}: an element of the array box.max must be a number, "
+                "string or boolean");
+    assert_int_equal(nbep_status_exit_code(NBEP_EDECK), 2);
 }
 
 /* ---- placement ------------------------------------------------------------------------------ */
@@ -982,6 +1064,52 @@ static void test_sweep_group_is_parsed_into_replicas_and_axes(void **state)
     assert_close(sc->restitution, 1.0, 0.0, 0.0);
 }
 
+/* The sweep's bounds, at their edges: replica r runs with run.seed + r, which may reach
+ * 2^63 - 1 but not pass it; replicas times the axes' lengths may be NBEP_SWEEP_RUNS_MAX runs
+ * but no more; a run.steps axis may hold 0 steps (a run of its first frame) but not -1. */
+static void test_sweep_bounds_take_their_edge_values(void **state)
+{
+    fixture *f = *state;
+    char buf[256], expected[512];
+    const char *deck = write_deck("scene_sweep_edges.deck",
+                                  "# a sweep at its bounds\n"
+                                  "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+                                  "spheres = ();\n"
+                                  "sweep: { replicas = 2; };\n",
+                                  buf, sizeof buf);
+    LOAD_OK(f, deck, "run.seed=9223372036854775806");
+    assert_int_equal(f->sc.sweep_replicas, 2);
+    nbep_scene_fini(&f->sc);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "run.seed=9223372036854775807");
+    snprintf(expected, sizeof expected,
+             "%s:4: sweep.replicas = 2 with run.seed = 9223372036854775807: the last replica's "
+             "seed would pass 9223372036854775807",
+             deck);
+    ASSERT_DIAG(&f->d, expected);
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+
+    char ten_million[64];
+    snprintf(ten_million, sizeof ten_million, "sweep.replicas=%llu",
+             (unsigned long long)NBEP_SWEEP_RUNS_MAX);
+    LOAD_OK(f, deck, ten_million, "sweep.vary=({ key = \"run.steps\"; values = [0]; })");
+    assert_int_equal(f->sc.sweep_replicas, NBEP_SWEEP_RUNS_MAX);
+    assert_int_equal(f->sc.sweep_n_axes, 1);
+    assert_string_equal(f->sc.sweep_axes[0].values[0], "0");
+    nbep_scene_fini(&f->sc);
+    LOAD_FAILS(f, NBEP_EDECK, deck, ten_million,
+               "sweep.vary=({ key = \"run.steps\"; values = [0, -1]; })");
+    char too_many[512];
+    snprintf(too_many, sizeof too_many,
+             "%s:4: sweep: replicas times the product of the axes' lengths is more than "
+             "10000000 runs",
+             deck);
+    ASSERT_DIAG(&f->d,
+                "--set sweep.vary=({ key = \"run.steps\"; values = [0, -1]; }): "
+                "sweep.vary.[0].values.[1]: run.steps must be an integer >= 0 (got -1)",
+                too_many);
+}
+
 static void test_sweep_values_apply_as_overrides(void **state)
 {
     fixture *f = *state;
@@ -1121,23 +1249,29 @@ int main(void)
         T(test_wrong_types_are_errors_but_integers_pass_for_numbers),
         T(test_numbers_beyond_double_range_are_not_finite),
         T(test_values_out_of_range_are_all_reported_in_one_pass),
+        T(test_threads_take_up_to_their_limit_and_no_more),
         T(test_sphere_entries_must_be_one_sphere_or_one_group),
         T(test_a_region_outside_the_box_is_an_error),
         T(test_too_many_spheres_for_32_bit_ids_is_an_error),
         T(test_too_many_spheres_for_the_cells_mode_is_an_error),
         T(test_integer_beyond_64_bits_is_an_error),
+        T(test_integers_at_the_edges_of_64_bits_are_read_whole),
         T(test_more_spheres_than_memory_holds_fail_before_allocating),
         T(test_deck_and_override_errors_come_in_one_pass),
         T(test_overrides_replace_scalars_vectors_list_entries_and_strings),
         T(test_override_strings_may_be_quoted_or_look_like_numbers),
+        T(test_override_path_and_value_may_have_spaces_around_them),
         T(test_override_mixing_integers_and_floats_in_a_vector_reads_floats),
         T(test_override_of_a_missing_setting_creates_it_and_its_groups),
         T(test_override_can_replace_and_append_list_entries),
         T(test_unknown_override_path_is_an_error_with_a_suggestion),
+        T(test_suggestions_are_writable_paths_a_typo_away),
         T(test_bad_override_value_is_reported_at_the_override),
         T(test_override_messages_name_their_origin),
         T(test_malformed_overrides_are_one_line_each),
         T(test_override_making_half_a_box_reports_the_other_half_missing),
+        T(test_an_index_past_an_empty_list_says_0_entries),
+        T(test_an_aggregate_in_place_of_a_vector_element_is_a_deck_error),
         T(test_random_placement_is_the_same_for_the_same_seed),
         T(test_random_placement_differs_for_another_seed),
         T(test_random_sphere_does_not_depend_on_its_group_size),
@@ -1160,6 +1294,7 @@ int main(void)
         T(test_count_pairs_of_a_deck_with_two_accelerations),
         T(test_sweep_group_is_parsed_into_replicas_and_axes),
         T(test_sweep_values_apply_as_overrides),
+        T(test_sweep_bounds_take_their_edge_values),
         T(test_sweep_key_must_be_a_known_path),
         T(test_a_deck_without_spheres_is_an_error_naming_the_deck),
         T(test_an_explicitly_empty_sphere_list_is_a_scene_without_spheres),

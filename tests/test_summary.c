@@ -11,6 +11,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "nbep/summary.h"
@@ -131,6 +132,48 @@ static void test_text_that_is_not_a_summary_is_refused(void **state)
     free(json);
 }
 
+/* json with the text `from` (which must occur once) replaced by `to`: a new string. */
+static char *edited(const char *json, const char *from, const char *to)
+{
+    const char *at = strstr(json, from);
+    assert_non_null(at);
+    assert_null(strstr(at + 1, from));
+    char *out = malloc(strlen(json) + strlen(to) + 1);
+    assert_non_null(out);
+    memcpy(out, json, (size_t)(at - json));
+    strcpy(out + (at - json), to);
+    strcat(out, at + strlen(from));
+    return out;
+}
+
+/* A key out of its range is no summary nbep wrote (threads >= 0 in an int, counters >= 0), nor
+ * is an object with a key twice (which value would be the run's?): the reader refuses them, as
+ * a sweep reusing a finished run must not take its numbers. The unedited text reads. */
+static void test_values_out_of_range_and_repeated_keys_are_refused(void **state)
+{
+    (void)state;
+    nbep_summary s = every_key_set(), r;
+    char *json = nbep_summary_to_json(&s);
+    assert_non_null(json);
+    assert_true(nbep_summary_from_json(json, &r));
+    char threads[64], checks[64];
+    snprintf(threads, sizeof threads, "\"threads\": %d,", s.threads);
+    snprintf(checks, sizeof checks, "\"checks\": %llu,", (unsigned long long)s.checks);
+    const char *const bad[][2] = {
+        {threads, "\"threads\": -1,"},
+        {threads, "\"threads\": 2147483648,"},
+        {checks, "\"checks\": -1,"},
+        {threads, "\"threads\": 3, \"threads\": 4,"},
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+        char *e = edited(json, bad[k][0], bad[k][1]);
+        if (nbep_summary_from_json(e, &r))
+            fail_msg("read as a summary: %s", e);
+        free(e);
+    }
+    free(json);
+}
+
 static void test_escapes_nested_values_and_old_integral_reals_are_read(void **state)
 {
     (void)state;
@@ -169,6 +212,7 @@ int main(void)
         cmocka_unit_test(test_an_unknown_pressure_is_null_and_reads_back_unknown),
         cmocka_unit_test(test_text_that_is_not_a_summary_is_refused),
         cmocka_unit_test(test_escapes_nested_values_and_old_integral_reals_are_read),
+        cmocka_unit_test(test_values_out_of_range_and_repeated_keys_are_refused),
     };
     return cmocka_run_group_tests_name("summary", tests, NULL, NULL);
 }
