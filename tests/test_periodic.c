@@ -103,6 +103,52 @@ static void test_wrap_moves_into_the_box_and_counts_the_periods(void **state)
     assert_true(isnan(t.x) && isinf(t.y) && it[0] == 0 && it[1] == 0);
 }
 
+/* The wrap at every face of many copies, on boxes whose corners and sides are not whole numbers
+ * (so that x - lo, the floor of (x - lo) / len, its steps of len and lo + len all round): the
+ * points from 6 ulps below lo + k len to 6 above, k = -64..64, and the middle of each copy.
+ * Every result lies in [lo, lo + len) by the test nbep_periodic_inside makes, keeps the point
+ * it stands for (result + image * len, SPEC's unwrapped position) to within a few roundings of
+ * the shift, so never a period off, and a second wrap leaves it as it is. Both of the wrap's
+ * corrections of a floor that rounding put a period off are taken here, and its step onto the
+ * upper face (a point within half an ulp below a face, whose sum with len rounds up to lo +
+ * len) which belongs to the next copy. */
+static void test_wrap_near_every_face_keeps_the_unwrapped_point(void **state)
+{
+    (void)state;
+    const double los[] = {0.0, -1.0, 0.3, -7.25, 1e-3, 5.5};
+    const double his[] = {1.0, -0.9, 0.3 + 1.0 / 3.0, -3.55, 0.701, 17.3};
+    int moved = 0;
+    for (size_t b = 0; b < sizeof los / sizeof *los; b++) {
+        const nbep_periodic pb =
+            nbep_periodic_make(ALL3, (nbep_vec3){los[b], 0.0, 0.0}, (nbep_vec3){his[b], 1.0, 1.0});
+        const double lo = pb.lo[0], len = pb.len[0];
+        for (int k = -64; k <= 64; k++) {
+            double x = lo + k * len;
+            for (int s = 0; s < 6; s++)
+                x = nextafter(x, -INFINITY);
+            for (int s = 0; s <= 13; s++, x = nextafter(x, INFINITY)) {
+                const double x0 = s < 13 ? x : lo + (k + 0.5) * len; /* last: mid-copy */
+                nbep_vec3 p = {x0, 0.25, 0.5};
+                int32_t img[3] = {0, 0, 0};
+                nbep_periodic_wrap(&pb, &p, img);
+                assert_true(nbep_periodic_inside(&pb, p));
+                assert_true(p.x >= lo && p.x < lo + len);
+                assert_true(p.y == 0.25 && p.z == 0.5 && img[1] == 0 && img[2] == 0);
+                const double shift = img[0] * len;
+                assert_close(p.x + shift, x0, 0.0,
+                             8.0 * DBL_EPSILON * (fabs(x0) + fabs(shift) + fabs(lo) + len));
+                moved += img[0] != 0;
+                nbep_vec3 q = p;
+                int32_t again[3] = {img[0], 0, 0};
+                nbep_periodic_wrap(&pb, &q, again);
+                assert_memory_equal(&q, &p, sizeof q);
+                assert_int_equal(again[0], img[0]);
+            }
+        }
+    }
+    assert_true(moved > 1000);
+}
+
 /* nbep_periodic_inside: true exactly where the wrap would leave a finite position as it is,
  * checked against the wrap itself on points around and on the faces, periodic axes only. */
 static void test_inside_is_where_the_wrap_leaves_a_position(void **state)
@@ -1170,6 +1216,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_minimum_image_picks_the_nearest_copy_on_periodic_axes_only),
         cmocka_unit_test(test_wrap_moves_into_the_box_and_counts_the_periods),
+        cmocka_unit_test(test_wrap_near_every_face_keeps_the_unwrapped_point),
         cmocka_unit_test(test_inside_is_where_the_wrap_leaves_a_position),
         cmocka_unit_test(test_shift_is_whole_periods_on_periodic_axes),
         cmocka_unit_test(test_overlap_check_sees_pairs_across_a_periodic_face),
