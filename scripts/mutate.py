@@ -168,6 +168,41 @@ MUTANTS = [
     ("claim-one-side", "src/algo_predictive.c",
      "        if (ev->kind == NBEP_EVENT_SPHERE &&\n            atomic_load_explicit(&c->claim[par][hi], memory_order_relaxed) != key)\n            continue;\n",
      "", SIM, None),
+    # ---- periodic geometry (periodic.c, periodic.h): minimum image, wrap and image counts ----
+    # its unit tests are the first of test_periodic's (the geometry module)
+    ("periodic-image-floor", "src/periodic.c", "double m = round(d / len);",
+     "double m = floor(d / len);", ["test_periodic"], None),
+    ("periodic-wrap-image-sign", "src/periodic.c", "*image += (int32_t)m;", "*image -= (int32_t)m;",
+     ["test_periodic"], None),
+    ("periodic-wrap-image-wrong-axis", "src/periodic.c",
+     "wrap_1(&p->z, pb->lo[2], pb->len[2], &image[2]);",
+     "wrap_1(&p->z, pb->lo[2], pb->len[2], &image[1]);", ["test_periodic"], None),
+    # the two corrections of a floor that rounding put one period off: the step taken, the count not
+    ("periodic-wrap-high-fix-uncounted", "src/periodic.c", "        y -= len;\n        m += 1.0;",
+     "        y -= len;", ["test_periodic"], None),
+    ("periodic-wrap-low-fix-uncounted", "src/periodic.c", "        y += len;\n        m -= 1.0;",
+     "        y += len;", ["test_periodic"], None),
+    # a step up that rounds onto the upper face, which belongs to the next copy: left there, or
+    # moved to lo without the period counted (the wrap's bug until 4858b7a)
+    ("periodic-wrap-face-left", "src/periodic.c", "    if (y >= lo + len) {\n        y = lo;\n        m += 1.0;\n    }\n",
+     "", ["test_periodic"], None),
+    ("periodic-wrap-face-uncounted", "src/periodic.c", "        y = lo;\n        m += 1.0;", "        y = lo;",
+     ["test_periodic"], None),
+    ("periodic-nearest-sign", "src/periodic.c", "cells[k] = pb->axis[k] ? -(int)round(x[k] / pb->len[k]) : 0;",
+     "cells[k] = pb->axis[k] ? (int)round(x[k] / pb->len[k]) : 0;", ["test_periodic"] + SIM, None),
+    ("periodic-reach-half", "src/periodic.c", "r = fmin(r, (0.5 * pb->len[k] - sigma) / 4.0);",
+     "r = fmin(r, (0.5 * pb->len[k] - sigma) / 2.0);", ["test_periodic"], None),
+    ("periodic-reach-walls-count", "src/periodic.c", "        if (pb->axis[k])\n            r = fmin",
+     "        r = fmin", ["test_periodic"], None),
+    # the inline nearest image and shift of the collision response and the cells engine
+    ("periodic-half-whole-period", "src/periodic.c", "pb.half[k] = pb.axis[k] ? 0.5 * pb.len[k] : INFINITY;",
+     "pb.half[k] = pb.axis[k] ? pb.len[k] : INFINITY;", ["test_periodic"] + CELLS, None),
+    ("periodic-near-image-sign", "include/nbep/periodic.h",
+     "return d > half ? d - len : d < -half ? d + len : d;",
+     "return d > half ? d - len : d < -half ? d - len : d;", ["test_periodic"] + CELLS, None),
+    ("periodic-near-shift-one-side", "include/nbep/periodic.h",
+     "d.y > pb->half[1] ? -pb->len[1] : d.y < -pb->half[1] ? pb->len[1] : 0.0,",
+     "d.y > pb->half[1] ? -pb->len[1] : 0.0,", ["test_periodic"] + CELLS + LISTS, None),
     # ---- grid reach ----
     ("grid-no-partner-travel", "src/pred_find.c", "0.5 * nbep_vec3_norm(ai) * H * H + V * H + 0.5 * c->amax * H * H;",
      "0.5 * nbep_vec3_norm(ai) * H * H + 0.5 * c->amax * H * H;", SIM, None),

@@ -192,6 +192,103 @@ static void test_shift_is_whole_periods_on_periodic_axes(void **state)
     assert_true(s.x == -2.0 && s.y == 3.0 && s.z == 0.0);
 }
 
+/* A small generator for the separations below (its state the caller's). */
+static double uniform(uint64_t *x, double lo, double hi)
+{
+    *x = *x * 6364136223846793005ULL + 1442695040888963407ULL;
+    return lo + (hi - lo) * (double)(*x >> 11) * 0x1p-53;
+}
+
+/* The periods nbep_periodic_nearest names, shifted by nbep_periodic_shift, take a separation to
+ * its minimum image (all-pairs in a periodic box finds each partner so), with none named on an
+ * axis that is not periodic: separations up to five periods either way on a box periodic along
+ * x and z, walls along y. */
+static void test_nearest_periods_shift_a_separation_to_its_minimum_image(void **state)
+{
+    (void)state;
+    const bool xz[3] = {true, false, true};
+    const nbep_periodic pb =
+        nbep_periodic_make(xz, (nbep_vec3){-1.0, 0.0, 2.0}, (nbep_vec3){2.7, 5.0, 12.0});
+    uint64_t x = 5;
+    for (int i = 0; i < 2000; i++) {
+        const nbep_vec3 d = {uniform(&x, -5.0, 5.0) * pb.len[0], uniform(&x, -20.0, 20.0),
+                             uniform(&x, -5.0, 5.0) * pb.len[2]};
+        int cells[3];
+        nbep_periodic_nearest(&pb, d, cells);
+        assert_int_equal(cells[1], 0);
+        const nbep_vec3 m = nbep_vec3_add(d, nbep_periodic_shift(&pb, cells));
+        const nbep_vec3 want = nbep_periodic_image(&pb, d);
+        assert_true(m.x == want.x && m.y == d.y && m.z == want.z);
+        assert_true(fabs(m.x) <= pb.half[0] && fabs(m.z) <= pb.half[2]);
+    }
+}
+
+/* The compare-only nearest image and shift (the collision response's and the cells engine's)
+ * against the general ones, bit for bit, for separations within one and a half periods on
+ * every periodic axis (ties at exactly half a period left out, where either image is as
+ * near): random ones, and those a few ulps either side of +-len/2 and +-len, where the
+ * compares decide. A wall axis keeps its separation whatever its length. */
+static void test_near_image_and_shift_agree_with_the_general_ones(void **state)
+{
+    (void)state;
+    const bool xz[3] = {true, false, true};
+    const nbep_periodic pb =
+        nbep_periodic_make(xz, (nbep_vec3){-1.0, 0.0, 2.0}, (nbep_vec3){2.7, 0.5, 12.3});
+    double probe[64];
+    int np = 0;
+    const double marks[4] = {-1.0, -0.5, 0.5, 1.0};
+    for (int m = 0; m < 4; m++) {
+        double v = marks[m];
+        for (int s = 0; s < 3; s++)
+            v = nextafter(v, -INFINITY);
+        for (int s = 0; s < 7; s++, v = nextafter(v, INFINITY))
+            if (fabs(v) != 0.5)
+                probe[np++] = v;
+    }
+    uint64_t x = 17;
+    int shifted = 0;
+    for (int i = 0; i < 4000; i++) {
+        /* fractions of a period: one of the probes on x, z or both, or random */
+        double f[3];
+        for (int k = 0; k < 3; k++)
+            f[k] = i % 3 == k || i % 5 == 0 ? probe[(i / 3 + k) % np] : uniform(&x, -1.49, 1.49);
+        const nbep_vec3 d = {f[0] * pb.len[0], f[1] * 7.0, f[2] * pb.len[2]};
+        if (fabs(d.x) == pb.half[0] || fabs(d.z) == pb.half[2])
+            continue;
+        const nbep_vec3 want = nbep_periodic_image(&pb, d);
+        const nbep_vec3 near = nbep_periodic_near_image(&pb, d);
+        const nbep_vec3 moved = nbep_vec3_add(d, nbep_periodic_near_shift(&pb, d));
+        assert_memory_equal(&near, &want, sizeof want);
+        assert_true(moved.x == want.x && moved.y == d.y && moved.z == want.z);
+        shifted += want.x != d.x;
+    }
+    assert_true(shifted > 1000);
+}
+
+/* The horizon of the minimum image: two spheres that each stray at most D from where they were
+ * compared close their separation by at most 4 D, so the image that touches (within sigma)
+ * was within sigma + 4 D then, the nearest one while that is at most half the shortest
+ * periodic side: D = (len/2 - sigma) / 4 there, the walls' sides (however short) counting for
+ * nothing, and no horizon without a periodic axis. */
+static void test_reach_is_the_stray_that_keeps_the_nearest_image(void **state)
+{
+    (void)state;
+    const bool xz[3] = {true, false, true};
+    const double sigma = 1.0;
+    /* x: period 10, y: walls 1 apart, z: period 6 (the shortest periodic side) */
+    const nbep_periodic pb = nbep_periodic_make(xz, ZERO, (nbep_vec3){10.0, 1.0, 6.0});
+    const double D = nbep_periodic_reach(&pb, sigma);
+    assert_true(D > 0.0);
+    assert_true(sigma + 4.0 * D == 0.5 * pb.len[2]);
+    /* the pair compared at sigma + 4 D along z: that image is still as near as any (a tie);
+     * had they strayed a tenth more, another image would be the nearest at the comparison */
+    const nbep_vec3 d = {0.0, 0.0, sigma + 4.0 * D}, e = {0.0, 0.0, sigma + 4.4 * D};
+    assert_true(fabs(nbep_periodic_image(&pb, d).z) == d.z);
+    assert_true(fabs(nbep_periodic_image(&pb, e).z) < e.z);
+    const nbep_periodic walls = nbep_periodic_make(NULL, ZERO, (nbep_vec3){1.0, 1.0, 1.0});
+    assert_true(isinf(nbep_periodic_reach(&walls, sigma)));
+}
+
 /* ---- runs ------------------------------------------------------------------------------------ */
 
 typedef nbep_test_frames frames;
@@ -1219,6 +1316,9 @@ int main(void)
         cmocka_unit_test(test_wrap_near_every_face_keeps_the_unwrapped_point),
         cmocka_unit_test(test_inside_is_where_the_wrap_leaves_a_position),
         cmocka_unit_test(test_shift_is_whole_periods_on_periodic_axes),
+        cmocka_unit_test(test_nearest_periods_shift_a_separation_to_its_minimum_image),
+        cmocka_unit_test(test_near_image_and_shift_agree_with_the_general_ones),
+        cmocka_unit_test(test_reach_is_the_stray_that_keeps_the_nearest_image),
         cmocka_unit_test(test_overlap_check_sees_pairs_across_a_periodic_face),
         cmocka_unit_test(test_frames_overlap_check_is_shared_by_the_threads),
         cmocka_unit_test(test_spheres_collide_across_a_periodic_face_at_the_analytic_time),
