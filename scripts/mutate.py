@@ -217,6 +217,16 @@ MUTANTS = [
      "double k = step_travel > 0.0 ? floor(8.0 * c->grid.h / step_travel) : 64.0;", SIM, None),
     ("grid-block-lo", "src/grid.c", "lo[k] = axis_cell(x[k] - reach, o[k], g->inv_h, g->dim[k]);",
      "lo[k] = axis_cell(x[k], o[k], g->inv_h, g->dim[k]);", SIM + ["test_output"], None),
+    # a block reaching past the last cell names one cell too many (outside the grid)
+    ("grid-clamp-past-last", "src/grid.c", "return c >= (double)dim ? dim - 1 : (size_t)c;",
+     "return c > (double)dim ? dim - 1 : (size_t)c;", ["test_grid"] + SIM, None),
+    # a rebuild counts on top of the last build's counts
+    ("grid-count-not-cleared", "src/grid.c", "        g->fill[c] = 0;\n", "", ["test_grid"] + SIM, None),
+    ("grid-bounds-y-from-x", "src/grid.c", "l.y = p.y < l.y ? p.y : l.y", "l.y = p.x < l.y ? p.x : l.y",
+     ["test_grid"] + SIM, None),
+    # the cells counted for the room one short per axis: a sparse cloud gets more than it holds
+    ("grid-size-undercount", "src/grid.c", "cells *= floor(ext[k] / h) + 1.0;",
+     "cells *= floor(ext[k] / h);", ["test_grid"] + SIM, None),
     # ---- BVH ----
     ("bvh-skip-owner", "src/bvh.c", "if (nd->max_id <= i || !boxes_touch", "if (nd->max_id < i || !boxes_touch",
      ["test_bvh"], None),
