@@ -233,6 +233,14 @@ MUTANTS = [
     ("bvh-touch-axis", "src/bvh.c", "alo.z <= bhi.z && blo.z <= ahi.z;", "alo.z <= bhi.z;", ["test_bvh"], None),
     ("bvh-leaf-max", "src/bvh.c", "max_id = b->order[m] > max_id ? b->order[m] : max_id;",
      "max_id = b->order[m] < max_id ? b->order[m] : max_id;", ["test_bvh"], None),
+    ("bvh-touch-strict-x", "src/bvh.c", "return alo.x <= bhi.x && blo.x <= ahi.x",
+     "return alo.x < bhi.x && blo.x <= ahi.x", ["test_bvh"], None),
+    # equal codes split one off instead of at the median: a chain as deep as the run is long
+    ("bvh-equal-codes-split-first", "src/bvh.c", "return lo + (hi - lo) / 2;", "return lo + 1;",
+     ["test_bvh"], None),
+    # only the lowest digit sorted: the splits are made on unsorted codes
+    ("bvh-sort-one-pass", "src/bvh.c", "if (h[(b->code[0] >> shift) & (RADIX_BUCKETS - 1)] == n)",
+     "if (p > 0 || h[(b->code[0] >> shift) & (RADIX_BUCKETS - 1)] == n)", ["test_bvh"], None),
     # ---- detection loops ----
     ("detect-touching", "src/algo_detect.c", "if (d2 < sigma * sigma) {", "if (d2 < 0.98 * sigma * sigma) {",
      SIM, None),
