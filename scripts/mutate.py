@@ -402,6 +402,16 @@ MUTANTS = [
      "nbep_predict_plane(face - x[k], u[k], -acc[k])", ["test_cells"] + CELLS, None),
     ("cells-margin-wide", "src/cells.c", "0.25 * (g->h[k] - reach) : 0.0;",
      "0.75 * (g->h[k] - reach) : 0.0;", ["test_cells"] + CELLS, None),
+    # two cells along a periodic axis: the one neighbour is both below and above
+    ("cells-periodic-two-cells", "src/cells.c", "if (g->periodic[k] && cells < 3.0)\n            cells = 3.0;",
+     "if (g->periodic[k] && cells < 2.0)\n            cells = 2.0;", ["test_cells"] + CELLS, None),
+    ("cells-exit-periodic-upper", "src/cells.c",
+     "if (xyz[k] + 1 < g->dim[k] || g->periodic[k]) {\n            double face",
+     "if (xyz[k] + 1 < g->dim[k]) {\n            double face", ["test_cells"] + CELLS, None),
+    ("cells-clamp-past-last", "src/cells.c", "return c >= (double)dim ? dim - 1 : (size_t)c;",
+     "return c > (double)dim ? dim - 1 : (size_t)c;", ["test_cells"] + CELLS, None),
+    ("cells-place-no-move", "src/cells.c", "    if (c != g->m[i].cell)\n        nbep_cells_move(g, i, c);", "",
+     ["test_cells"] + LISTS + CELLS, None),
     # ---- the cells event loop ----
     # every scene taken for equal masses: a pair of unequal masses reacts with the first's
     ("mass-all-any", "src/algo_predictive.c", "same_mass &= sim->st.mass[i] == sim->st.mass[0];",
