@@ -823,6 +823,18 @@ MUTANTS = [
     ("contact-edge-pushes", "src/contact.c",
      "if (!(r1 - g * r2 >= -tol * den) || !(r2 - g * r1 >= -tol * den))",
      "if (!(r1 - g * r2 >= -tol * den))", ["test_contact"] + GRAN, None),
+    # three contacts of a left-handed order taken as right-handed: the forces' signs flipped
+    ("contact-corner-det-sign", "src/contact.c", "double s = det > 0.0 ? 1.0 : -1.0;", "double s = 1.0;",
+     ["test_contact"] + GRAN, None),
+    ("contact-no-triples", "src/contact.c", "for (int size = 0; size <= (k < 3 ? k : 3); size++)",
+     "for (int size = 0; size < (k < 3 ? k : 3); size++)", ["test_contact"] + GRAN, None),
+    ("contact-tangent-edge-as-plane", "src/contact.c",
+     "    if (line)\n        return nbep_vec3_scale(t, nbep_vec3_dot(v, t));",
+     "    if (line)\n        return nbep_vec3_axpy(v, -nbep_vec3_dot(v, first), first);",
+     ["test_contact"] + GRAN, None),
+    ("contact-tangent-third-test", "src/contact.c",
+     "} else if (fabs(nbep_vec3_dot(t, n[j])) > NBEP_CONTACT_TOL) {",
+     "} else if (fabs(nbep_vec3_dot(t, n[j])) < NBEP_CONTACT_TOL) {", ["test_contact"] + GRAN, None),
     ("tc-off", "src/pred_react.c", "return recent ? 1.0 : e;", "return e;", SIM + GRAN, None),
     # a restitution a little off in the bulk of a gas (0.9 taken as 0.89): Haff's law
     ("restitution-off-by-a-hundredth", "src/pred_react.c", "return recent ? 1.0 : e;",
