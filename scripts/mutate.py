@@ -170,6 +170,41 @@ MUTANTS = [
     ("claim-one-side", "src/algo_predictive.c",
      "        if (ev->kind == NBEP_EVENT_SPHERE &&\n            atomic_load_explicit(&c->claim[par][hi], memory_order_relaxed) != key)\n            continue;\n",
      "", SIM, None),
+    # ---- periodic geometry (periodic.c, periodic.h): minimum image, wrap and image counts ----
+    # its unit tests are the first of test_periodic's (the geometry module)
+    ("periodic-image-floor", "src/periodic.c", "double m = round(d / len);",
+     "double m = floor(d / len);", ["test_periodic"], None),
+    ("periodic-wrap-image-sign", "src/periodic.c", "*image += (int32_t)m;", "*image -= (int32_t)m;",
+     ["test_periodic"], None),
+    ("periodic-wrap-image-wrong-axis", "src/periodic.c",
+     "wrap_1(&p->z, pb->lo[2], pb->len[2], &image[2]);",
+     "wrap_1(&p->z, pb->lo[2], pb->len[2], &image[1]);", ["test_periodic"], None),
+    # the two corrections of a floor that rounding put one period off: the step taken, the count not
+    ("periodic-wrap-high-fix-uncounted", "src/periodic.c", "        y -= len;\n        m += 1.0;",
+     "        y -= len;", ["test_periodic"], None),
+    ("periodic-wrap-low-fix-uncounted", "src/periodic.c", "        y += len;\n        m -= 1.0;",
+     "        y += len;", ["test_periodic"], None),
+    # a step up that rounds onto the upper face, which belongs to the next copy: left there, or
+    # moved to lo without the period counted (the wrap's bug until 4858b7a)
+    ("periodic-wrap-face-left", "src/periodic.c", "    if (y >= lo + len) {\n        y = lo;\n        m += 1.0;\n    }\n",
+     "", ["test_periodic"], None),
+    ("periodic-wrap-face-uncounted", "src/periodic.c", "        y = lo;\n        m += 1.0;", "        y = lo;",
+     ["test_periodic"], None),
+    ("periodic-nearest-sign", "src/periodic.c", "cells[k] = pb->axis[k] ? -(int)round(x[k] / pb->len[k]) : 0;",
+     "cells[k] = pb->axis[k] ? (int)round(x[k] / pb->len[k]) : 0;", ["test_periodic"] + SIM, None),
+    ("periodic-reach-half", "src/periodic.c", "r = fmin(r, (0.5 * pb->len[k] - sigma) / 4.0);",
+     "r = fmin(r, (0.5 * pb->len[k] - sigma) / 2.0);", ["test_periodic"], None),
+    ("periodic-reach-walls-count", "src/periodic.c", "        if (pb->axis[k])\n            r = fmin",
+     "        r = fmin", ["test_periodic"], None),
+    # the inline nearest image and shift of the collision response and the cells engine
+    ("periodic-half-whole-period", "src/periodic.c", "pb.half[k] = pb.axis[k] ? 0.5 * pb.len[k] : INFINITY;",
+     "pb.half[k] = pb.axis[k] ? pb.len[k] : INFINITY;", ["test_periodic"] + CELLS, None),
+    ("periodic-near-image-sign", "include/nbep/periodic.h",
+     "return d > half ? d - len : d < -half ? d + len : d;",
+     "return d > half ? d - len : d < -half ? d - len : d;", ["test_periodic"] + CELLS, None),
+    ("periodic-near-shift-one-side", "include/nbep/periodic.h",
+     "d.y > pb->half[1] ? -pb->len[1] : d.y < -pb->half[1] ? pb->len[1] : 0.0,",
+     "d.y > pb->half[1] ? -pb->len[1] : 0.0,", ["test_periodic"] + CELLS + LISTS, None),
     # ---- grid reach ----
     ("grid-no-partner-travel", "src/pred_find.c", "0.5 * nbep_vec3_norm(ai) * H * H + V * H + 0.5 * c->amax * H * H;",
      "0.5 * nbep_vec3_norm(ai) * H * H + 0.5 * c->amax * H * H;", SIM, None),
@@ -184,12 +219,30 @@ MUTANTS = [
      "double k = step_travel > 0.0 ? floor(8.0 * c->grid.h / step_travel) : 64.0;", SIM, None),
     ("grid-block-lo", "src/grid.c", "lo[k] = axis_cell(x[k] - reach, o[k], g->inv_h, g->dim[k]);",
      "lo[k] = axis_cell(x[k], o[k], g->inv_h, g->dim[k]);", SIM + ["test_output"], None),
+    # a block reaching past the last cell names one cell too many (outside the grid)
+    ("grid-clamp-past-last", "src/grid.c", "return c >= (double)dim ? dim - 1 : (size_t)c;",
+     "return c > (double)dim ? dim - 1 : (size_t)c;", ["test_grid"] + SIM, None),
+    # a rebuild counts on top of the last build's counts
+    ("grid-count-not-cleared", "src/grid.c", "        g->fill[c] = 0;\n", "", ["test_grid"] + SIM, None),
+    ("grid-bounds-y-from-x", "src/grid.c", "l.y = p.y < l.y ? p.y : l.y", "l.y = p.x < l.y ? p.x : l.y",
+     ["test_grid"] + SIM, None),
+    # the cells counted for the room one short per axis: a sparse cloud gets more than it holds
+    ("grid-size-undercount", "src/grid.c", "cells *= floor(ext[k] / h) + 1.0;",
+     "cells *= floor(ext[k] / h);", ["test_grid"] + SIM, None),
     # ---- BVH ----
     ("bvh-skip-owner", "src/bvh.c", "if (nd->max_id <= i || !boxes_touch", "if (nd->max_id < i || !boxes_touch",
      ["test_bvh"], None),
     ("bvh-touch-axis", "src/bvh.c", "alo.z <= bhi.z && blo.z <= ahi.z;", "alo.z <= bhi.z;", ["test_bvh"], None),
     ("bvh-leaf-max", "src/bvh.c", "max_id = b->order[m] > max_id ? b->order[m] : max_id;",
      "max_id = b->order[m] < max_id ? b->order[m] : max_id;", ["test_bvh"], None),
+    ("bvh-touch-strict-x", "src/bvh.c", "return alo.x <= bhi.x && blo.x <= ahi.x",
+     "return alo.x < bhi.x && blo.x <= ahi.x", ["test_bvh"], None),
+    # equal codes split one off instead of at the median: a chain as deep as the run is long
+    ("bvh-equal-codes-split-first", "src/bvh.c", "return lo + (hi - lo) / 2;", "return lo + 1;",
+     ["test_bvh"], None),
+    # only the lowest digit sorted: the splits are made on unsorted codes
+    ("bvh-sort-one-pass", "src/bvh.c", "if (h[(b->code[0] >> shift) & (RADIX_BUCKETS - 1)] == n)",
+     "if (p > 0 || h[(b->code[0] >> shift) & (RADIX_BUCKETS - 1)] == n)", ["test_bvh"], None),
     # ---- detection loops ----
     ("detect-touching", "src/algo_detect.c", "if (d2 < sigma * sigma) {", "if (d2 < 0.98 * sigma * sigma) {",
      SIM, None),
@@ -351,6 +404,16 @@ MUTANTS = [
      "nbep_predict_plane(face - x[k], u[k], -acc[k])", ["test_cells"] + CELLS, None),
     ("cells-margin-wide", "src/cells.c", "0.25 * (g->h[k] - reach) : 0.0;",
      "0.75 * (g->h[k] - reach) : 0.0;", ["test_cells"] + CELLS, None),
+    # two cells along a periodic axis: the one neighbour is both below and above
+    ("cells-periodic-two-cells", "src/cells.c", "if (g->periodic[k] && cells < 3.0)\n            cells = 3.0;",
+     "if (g->periodic[k] && cells < 2.0)\n            cells = 2.0;", ["test_cells"] + CELLS, None),
+    ("cells-exit-periodic-upper", "src/cells.c",
+     "if (xyz[k] + 1 < g->dim[k] || g->periodic[k]) {\n            double face",
+     "if (xyz[k] + 1 < g->dim[k]) {\n            double face", ["test_cells"] + CELLS, None),
+    ("cells-clamp-past-last", "src/cells.c", "return c >= (double)dim ? dim - 1 : (size_t)c;",
+     "return c > (double)dim ? dim - 1 : (size_t)c;", ["test_cells"] + CELLS, None),
+    ("cells-place-no-move", "src/cells.c", "    if (c != g->m[i].cell)\n        nbep_cells_move(g, i, c);", "",
+     ["test_cells"] + LISTS + CELLS, None),
     # ---- the cells event loop ----
     # every scene taken for equal masses: a pair of unequal masses reacts with the first's
     ("mass-all-any", "src/algo_predictive.c", "same_mass &= sim->st.mass[i] == sim->st.mass[0];",
@@ -760,6 +823,11 @@ MUTANTS = [
      "    for (size_t k = 0; k < l->n; k++) {", ["test_nblist"], None),
     ("nblist-compact-unsorted", "src/nblist.c", "    qsort(ord, l->n, sizeof *ord, by_key);\n", "",
      ["test_nblist"], None),
+    ("nblist-compact-pack-rooms", "src/nblist.c", "        at += sp->cnt;\n", "        at += sp->cap;\n",
+     ["test_nblist"], None),
+    ("nblist-detach-keeps-own", "src/nblist.c",
+     "        nbep_nblist_drop(l, mine[k], i);\n    nbep_nblist_clear(l, i);",
+     "        nbep_nblist_drop(l, mine[k], i);", ["test_nblist"] + CELLS, None),
     ("nblist-compact-late", "src/nblist.c", "if (4u * l->pool_len > 5u * fresh && !compact(l, fresh, grown))",
      "if (2u * l->pool_len > 3u * fresh && !compact(l, fresh, grown))", ["test_nblist"], None),
     ("nblist-need-scratch-short", "include/nbep/nblist.h", "+ 5u * m + 8u;", "+ 4u * m + 8u;",
@@ -781,6 +849,18 @@ MUTANTS = [
     ("contact-edge-pushes", "src/contact.c",
      "if (!(r1 - g * r2 >= -tol * den) || !(r2 - g * r1 >= -tol * den))",
      "if (!(r1 - g * r2 >= -tol * den))", ["test_contact"] + GRAN, None),
+    # three contacts of a left-handed order taken as right-handed: the forces' signs flipped
+    ("contact-corner-det-sign", "src/contact.c", "double s = det > 0.0 ? 1.0 : -1.0;", "double s = 1.0;",
+     ["test_contact"] + GRAN, None),
+    ("contact-no-triples", "src/contact.c", "for (int size = 0; size <= (k < 3 ? k : 3); size++)",
+     "for (int size = 0; size < (k < 3 ? k : 3); size++)", ["test_contact"] + GRAN, None),
+    ("contact-tangent-edge-as-plane", "src/contact.c",
+     "    if (line)\n        return nbep_vec3_scale(t, nbep_vec3_dot(v, t));",
+     "    if (line)\n        return nbep_vec3_axpy(v, -nbep_vec3_dot(v, first), first);",
+     ["test_contact"] + GRAN, None),
+    ("contact-tangent-third-test", "src/contact.c",
+     "} else if (fabs(nbep_vec3_dot(t, n[j])) > NBEP_CONTACT_TOL) {",
+     "} else if (fabs(nbep_vec3_dot(t, n[j])) < NBEP_CONTACT_TOL) {", ["test_contact"] + GRAN, None),
     ("tc-off", "src/pred_react.c", "return recent ? 1.0 : e;", "return e;", SIM + GRAN, None),
     # a restitution a little off in the bulk of a gas (0.9 taken as 0.89): Haff's law
     ("restitution-off-by-a-hundredth", "src/pred_react.c", "return recent ? 1.0 : e;",

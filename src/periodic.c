@@ -39,8 +39,10 @@ nbep_vec3 nbep_periodic_image(const nbep_periodic *pb, nbep_vec3 d)
 }
 
 /* One axis of the wrap. floor gives the periods to remove; rounding of x - m len can leave the
- * result a hair outside [lo, lo + len): one more step either way fixes that, and a result that
- * rounds up to exactly lo + len (x just below lo) is set to lo. */
+ * result a hair outside [lo, lo + len): one more step either way fixes that. A step up that
+ * rounds onto lo + len (the point lay within half an ulp below a face) is at the upper face,
+ * which belongs to the next copy: it becomes lo, one more period removed (set to lo alone, the
+ * count kept, the point it stood for moved a whole period down). */
 static void wrap_1(double *x, double lo, double len, int32_t *image)
 {
     double u = *x - lo;
@@ -57,8 +59,10 @@ static void wrap_1(double *x, double lo, double len, int32_t *image)
         y += len;
         m -= 1.0;
     }
-    if (y >= lo + len)
+    if (y >= lo + len) {
         y = lo;
+        m += 1.0;
+    }
     *x = y;
     *image += (int32_t)m;
 }

@@ -3,8 +3,9 @@
  * without acceleration whose cell exits are processed in time order, the two properties the
  * engine relies on: every sphere sits within its grown cell, and every pair within reach is
  * in the same or adjacent cells; an exit always lands in another cell. Periodic axes: blocks
- * wrap with the period of each neighbour, and every face has an exit. A layout fitted afresh
- * to a new region (nbep_cells_refit) is the one a fresh init makes. */
+ * wrap with the period of each neighbour, every face has an exit, and there are three cells at
+ * least. A layout fitted afresh to a new region (nbep_cells_refit) is the one a fresh init
+ * makes; a member placed at a point of another cell moves there. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -321,6 +322,77 @@ static void test_periodic_axes_wrap_blocks_and_exits(void **state)
     assert_close(t, 0.5 * g.h[0] + g.margin[0], 1e-12, 0.0);
     double never = nbep_cells_exit_time(&g, 0, p, (nbep_vec3){0.0, -1.0, 0.0}, a0);
     assert_true(never >= NBEP_NEVER);
+    /* from the last cell along x (and z) moving up, it leaves through the upper periodic face,
+     * grown by the margin, into the first cell of the next copy */
+    g.m[0].cell = (uint32_t)nbep_cells_index(&g, g.dim[0] - 1, 0, g.dim[2] - 1);
+    p = (nbep_vec3){g.lo.x + ((double)g.dim[0] - 0.5) * g.h[0], 0.5 * g.h[1],
+                    g.lo.z + ((double)g.dim[2] - 0.5) * g.h[2]};
+    t = nbep_cells_exit_time(&g, 0, p, (nbep_vec3){2.0, 0.0, 0.0}, a0);
+    assert_close(t, (0.5 * g.h[0] + g.margin[0]) / 2.0, 1e-12, 0.0);
+    t = nbep_cells_exit_time(&g, 0, p, (nbep_vec3){0.0, 0.0, 0.5}, a0);
+    assert_close(t, (0.5 * g.h[2] + g.margin[2]) / 0.5, 1e-12, 0.0);
+    nbep_cells_fini(&g);
+    /* a box so sparse that the cap (2 n + 8 = 10 cells) would leave two cells or one along an
+     * axis: every periodic axis still gets three, so that a cell's neighbours below and above
+     * are two cells, each one copy away; the wall axis takes what the cap leaves */
+    const bool all3[3] = {true, true, true}, xy[3] = {true, true, false};
+    for (int walls = 0; walls < 2; walls++) {
+        nbep_diag_init(&d);
+        assert_int_equal(nbep_cells_init(&g, (nbep_vec3){0, 0, 0}, (nbep_vec3){40, 40, 40}, 1.0,
+                                         1, walls ? xy : all3, &d),
+                         NBEP_OK);
+        nbep_diag_fini(&d);
+        for (int k = 0; k < 3; k++) {
+            if (walls && k == 2)
+                continue;
+            assert_int_equal(g.dim[k], 3);
+            assert_close(g.h[k], 40.0 / 3.0, 1e-15, 0.0);
+        }
+        nbep_cells_block_of(&g, 0, &b);
+        assert_int_equal(b.cnt[0], 3);
+        assert_true(b.idx[0][0] == 2 && b.per[0][0] == -1 && b.idx[0][2] == 1);
+        nbep_cells_fini(&g);
+    }
+}
+
+/* A place is the point a member's cell was chosen by: placing a member at a point of another
+ * cell moves it there (out of its old list, into the new one), at a point of its own cell
+ * only the place changes; the lists stay whole either way, and a point at or past the box's
+ * upper corner is in the last cell along each axis (clamped, as a point below the lower
+ * corner is in the first). */
+static void test_placing_a_member_moves_it_to_the_cell_of_its_place(void **state)
+{
+    (void)state;
+    enum { N = 30 };
+    nbep_cells g;
+    init_cells(&g, (nbep_vec3){0, 0, 0}, (nbep_vec3){9, 9, 9}, 2.5, N);
+    nbep_vec3 pos[N];
+    uint64_t x = 3;
+    for (size_t i = 0; i < N; i++)
+        pos[i] = (nbep_vec3){9 * unit(&x), 9 * unit(&x), 9 * unit(&x)};
+    nbep_cells_assign(&g, pos, 0, N);
+    nbep_cells_link(&g);
+    const size_t last = nbep_cells_index(&g, g.dim[0] - 1, g.dim[1] - 1, g.dim[2] - 1);
+    assert_int_equal(nbep_cells_locate(&g, g.hi), last);
+    assert_int_equal(nbep_cells_locate(&g, (nbep_vec3){9.5, 20.0, 9.0}), last);
+    assert_int_equal(nbep_cells_locate(&g, (nbep_vec3){-1.0, -0.0, -3.0}), 0);
+    for (int step = 0; step < 200; step++) {
+        const uint32_t i = (uint32_t)(step % N);
+        /* half the time a little way off (often the same cell), else anywhere in the box */
+        const nbep_vec3 off = {unit(&x) - 0.5, unit(&x) - 0.5, unit(&x) - 0.5};
+        const nbep_vec3 p = step % 2 ? (nbep_vec3){9 * unit(&x), 9 * unit(&x), 9 * unit(&x)}
+                                     : nbep_vec3_axpy(pos[i], 0.3, off);
+        const size_t c = nbep_cells_locate(&g, p);
+        nbep_cells_place(&g, i, p, c);
+        pos[i] = p;
+        assert_int_equal(g.m[i].cell, c);
+        assert_true(nbep_vec3_equal(g.m[i].at, p));
+        bool listed = false;
+        for (uint32_t j = g.head[c]; j != NBEP_CELLS_NONE; j = g.m[j].next)
+            listed = listed || j == i;
+        assert_true(listed);
+        assert_int_equal(nbep_cells_check(&g, NULL, 0.0), 0);
+    }
     nbep_cells_fini(&g);
 }
 
@@ -335,6 +407,7 @@ int main(void)
             test_accelerated_flights_keep_members_in_their_cells_and_contacts_adjacent),
         cmocka_unit_test(test_exit_time_reaches_the_grown_face),
         cmocka_unit_test(test_periodic_axes_wrap_blocks_and_exits),
+        cmocka_unit_test(test_placing_a_member_moves_it_to_the_cell_of_its_place),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -64,11 +64,69 @@ static void test_an_edge_held_by_a_pulling_contact_is_not_the_answer(void **stat
     assert_close(r.z, 10.0, 0.0, 1e-12);
 }
 
+/* A sphere pushed into a corner (floor and two walls) by a = (-1, -2, -9.81) is held still by
+ * all three (x = 0: -a = 9.81 n_floor + 1 n_x + 2 n_y, every force pushing), whichever order
+ * the contacts come in (their triple product's sign), while a fourth contact it is pulled
+ * away from (a.n3 > 0) carries no load: the three, not all four, are active. With the fourth
+ * left out, the three are all there is. */
+static void test_a_corner_holds_still_in_either_order_and_a_fourth_contact_carries_nothing(
+    void **state)
+{
+    (void)state;
+    const nbep_vec3 floor_n = {0, 0, 1}, wall_x = {1, 0, 0}, wall_y = {0, 1, 0};
+    const nbep_vec3 away = unit(-1, -1, -1);
+    const nbep_vec3 a = {-1, -2, -9.81};
+    assert_true(nbep_vec3_dot(a, away) > 0.0);
+    const nbep_vec3 orders[2][4] = {{floor_n, wall_x, wall_y, away},  /* right-handed */
+                                    {floor_n, wall_y, wall_x, away}}; /* left-handed */
+    for (int o = 0; o < 2; o++) {
+        for (int k = 3; k <= 4; k++) {
+            unsigned act = 99;
+            nbep_vec3 x = nbep_contact_project(a, orders[o], k, &act);
+            assert_int_equal(act, 7u);
+            assert_true(x.x == 0.0 && x.y == 0.0 && x.z == 0.0);
+        }
+    }
+}
+
+/* The velocity left to a sphere held by two contacts runs along their common edge: a floor
+ * and a wall (edge along y) leave v = (1, 2, 3) its y part only, in either order; three
+ * independent contacts leave nothing; a third whose normal is square to that edge (a slope
+ * along it) adds no constraint, so the edge's motion is kept. */
+static void test_the_tangent_velocity_runs_along_the_edge_of_two_contacts(void **state)
+{
+    (void)state;
+    const nbep_vec3 v = {1, 2, 3};
+    const nbep_vec3 two[2] = {{0, 0, 1}, {1, 0, 0}}, owt[2] = {{1, 0, 0}, {0, 0, 1}};
+    nbep_vec3 t = nbep_contact_tangent(v, two, 2, 3u);
+    assert_close(t.x, 0.0, 0.0, 1e-15);
+    assert_close(t.y, 2.0, 0.0, 1e-15);
+    assert_close(t.z, 0.0, 0.0, 1e-15);
+    t = nbep_contact_tangent(v, owt, 2, 3u);
+    assert_close(t.x, 0.0, 0.0, 1e-15);
+    assert_close(t.y, 2.0, 0.0, 1e-15);
+    assert_close(t.z, 0.0, 0.0, 1e-15);
+    const nbep_vec3 corner[3] = {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}};
+    t = nbep_contact_tangent(v, corner, 3, 7u);
+    assert_true(t.x == 0.0 && t.y == 0.0 && t.z == 0.0);
+    const nbep_vec3 sloped[3] = {{0, 0, 1}, {1, 0, 0}, unit(1, 0, 1)};
+    t = nbep_contact_tangent(v, sloped, 3, 7u);
+    assert_close(t.x, 0.0, 0.0, 1e-15);
+    assert_close(t.y, 2.0, 0.0, 1e-15);
+    assert_close(t.z, 0.0, 0.0, 1e-15);
+    /* only the active ones count: the wall left out of the mask, the floor's part alone goes */
+    t = nbep_contact_tangent(v, corner, 3, 1u);
+    assert_true(t.x == 1.0 && t.y == 2.0 && t.z == 0.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_a_wall_the_motion_only_grazes_carries_no_load),
         cmocka_unit_test(test_an_edge_held_by_a_pulling_contact_is_not_the_answer),
+        cmocka_unit_test(
+            test_a_corner_holds_still_in_either_order_and_a_fourth_contact_carries_nothing),
+        cmocka_unit_test(test_the_tangent_velocity_runs_along_the_edge_of_two_contacts),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

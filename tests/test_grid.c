@@ -146,11 +146,114 @@ static void test_every_centre_is_listed_once_in_its_cell_and_found_by_block_quer
     free(pos);
 }
 
+/* nbep_grid_bounds gives the corners of the centres of its range (the threads' parts are
+ * joined into the grid's), leaving a NaN centre out; the grid's corner is the lower one, and
+ * every centre lies in the box of the cell it is listed in (to within a rounding of the
+ * division), so that a cell holds the centres of its own box. */
+static void test_bounds_are_the_centres_corners_and_each_centre_lies_in_its_cell(void **state)
+{
+    (void)state;
+    enum { N = 2000 };
+    nbep_vec3 *pos = centres(N, 21);
+    for (size_t parts = 1; parts <= 3; parts++)
+        for (size_t t = 0; t < parts; t++) {
+            const size_t a = N * t / parts, b = N * (t + 1) / parts;
+            nbep_vec3 lo, hi;
+            nbep_grid_bounds(pos, a, b, &lo, &hi);
+            nbep_vec3 l = pos[a], h = pos[a];
+            for (size_t i = a; i < b; i++) {
+                l = nbep_vec3_make(fmin(l.x, pos[i].x), fmin(l.y, pos[i].y), fmin(l.z, pos[i].z));
+                h = nbep_vec3_make(fmax(h.x, pos[i].x), fmax(h.y, pos[i].y), fmax(h.z, pos[i].z));
+            }
+            assert_true(nbep_vec3_equal(lo, l) && nbep_vec3_equal(hi, h));
+        }
+    const nbep_vec3 keep = pos[5];
+    pos[5].y = NAN;
+    nbep_vec3 lo, hi;
+    nbep_grid_bounds(pos, 0, N, &lo, &hi);
+    assert_true(isfinite(lo.y) && isfinite(hi.y));
+    pos[5] = keep;
+    nbep_grid g = make(N);
+    nbep_grid_build(&g, pos, N, 0.05);
+    nbep_grid_bounds(pos, 0, N, &lo, &hi);
+    assert_true(nbep_vec3_equal(g.lo, lo));
+    const double o[3] = {g.lo.x, g.lo.y, g.lo.z}, eps = 1e-12 * g.h;
+    for (size_t i = 0; i < N; i++) {
+        const size_t c = g.cell[i];
+        const size_t xyz[3] = {c % g.dim[0], c / g.dim[0] % g.dim[1], c / (g.dim[0] * g.dim[1])};
+        const double x[3] = {pos[i].x, pos[i].y, pos[i].z};
+        for (int k = 0; k < 3; k++) {
+            assert_true(x[k] >= o[k] + (double)xyz[k] * g.h - eps);
+            assert_true(x[k] <= o[k] + (double)(xyz[k] + 1) * g.h + eps);
+        }
+    }
+    nbep_grid_fini(&g);
+    free(pos);
+}
+
+/* A grid built again over other centres (grid mode builds one every step) is the grid a fresh
+ * one builds over them: nothing of the last build's counts or cells is left. */
+static void test_a_rebuild_is_a_fresh_build(void **state)
+{
+    (void)state;
+    enum { N = 3000 };
+    nbep_vec3 *a = centres(N, 31), *b = centres(N, 32);
+    nbep_grid g = make(N), fresh = make(N);
+    nbep_grid_build(&g, a, N, 0.04);
+    build_in_parts(&g, b, N, 0.04, 3);
+    nbep_grid_build(&fresh, b, N, 0.04);
+    const size_t cells = nbep_grid_cells(&fresh);
+    assert_int_equal(nbep_grid_cells(&g), cells);
+    assert_memory_equal(g.start, fresh.start, (cells + 1) * sizeof *g.start);
+    assert_memory_equal(g.item, fresh.item, N * sizeof *g.item);
+    nbep_grid_fini(&g);
+    nbep_grid_fini(&fresh);
+    free(a);
+    free(b);
+}
+
+/* The cells never outnumber the room (2 n + 8), for clouds sparse in one, two or three
+ * dimensions with cells asked far smaller than the spacing; and a block query, about any
+ * point and of any reach, names cells of the grid only (clamped at its faces), its lower
+ * corner at or below its upper one. */
+static void test_cells_fit_the_room_and_blocks_stay_in_the_grid(void **state)
+{
+    (void)state;
+    const size_t ns[] = {1, 7, 50, 500};
+    uint64_t x = 41;
+    for (size_t a = 0; a < sizeof ns / sizeof *ns; a++)
+        for (int shape = 0; shape < 4; shape++) {
+            const size_t n = ns[a];
+            nbep_vec3 *p = malloc(n * sizeof *p);
+            assert_non_null(p);
+            for (size_t i = 0; i < n; i++)
+                p[i] = nbep_vec3_make(100.0 * unit(&x), shape > 0 ? 37.0 * unit(&x) : 1.0,
+                                      shape > 1 ? 13.0 * unit(&x) : shape == 0 ? 2.0 : 0.5);
+            nbep_grid g = make(n);
+            nbep_grid_build(&g, p, n, 1e-3);
+            assert_true(nbep_grid_cells(&g) <= g.cap_cells);
+            for (int q = 0; q < 50; q++) {
+                const nbep_vec3 c = nbep_vec3_make(130.0 * unit(&x) - 15.0,
+                                                   50.0 * unit(&x) - 6.0, 20.0 * unit(&x) - 3.0);
+                const double reach = q % 2 ? g.h * unit(&x) : 3.0 * unit(&x);
+                size_t lo[3], hi[3];
+                nbep_grid_block(&g, q < 5 ? p[q % n] : c, reach, lo, hi);
+                for (int k = 0; k < 3; k++)
+                    assert_true(lo[k] <= hi[k] && hi[k] < g.dim[k]);
+            }
+            nbep_grid_fini(&g);
+            free(p);
+        }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_a_build_in_parts_equals_the_serial_build_for_any_split),
         cmocka_unit_test(test_every_centre_is_listed_once_in_its_cell_and_found_by_block_queries),
+        cmocka_unit_test(test_bounds_are_the_centres_corners_and_each_centre_lies_in_its_cell),
+        cmocka_unit_test(test_a_rebuild_is_a_fresh_build),
+        cmocka_unit_test(test_cells_fit_the_room_and_blocks_stay_in_the_grid),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

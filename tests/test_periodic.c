@@ -103,6 +103,52 @@ static void test_wrap_moves_into_the_box_and_counts_the_periods(void **state)
     assert_true(isnan(t.x) && isinf(t.y) && it[0] == 0 && it[1] == 0);
 }
 
+/* The wrap at every face of many copies, on boxes whose corners and sides are not whole numbers
+ * (so that x - lo, the floor of (x - lo) / len, its steps of len and lo + len all round): the
+ * points from 6 ulps below lo + k len to 6 above, k = -64..64, and the middle of each copy.
+ * Every result lies in [lo, lo + len) by the test nbep_periodic_inside makes, keeps the point
+ * it stands for (result + image * len, SPEC's unwrapped position) to within a few roundings of
+ * the shift, so never a period off, and a second wrap leaves it as it is. Both of the wrap's
+ * corrections of a floor that rounding put a period off are taken here, and its step onto the
+ * upper face (a point within half an ulp below a face, whose sum with len rounds up to lo +
+ * len) which belongs to the next copy. */
+static void test_wrap_near_every_face_keeps_the_unwrapped_point(void **state)
+{
+    (void)state;
+    const double los[] = {0.0, -1.0, 0.3, -7.25, 1e-3, 5.5};
+    const double his[] = {1.0, -0.9, 0.3 + 1.0 / 3.0, -3.55, 0.701, 17.3};
+    int moved = 0;
+    for (size_t b = 0; b < sizeof los / sizeof *los; b++) {
+        const nbep_periodic pb =
+            nbep_periodic_make(ALL3, (nbep_vec3){los[b], 0.0, 0.0}, (nbep_vec3){his[b], 1.0, 1.0});
+        const double lo = pb.lo[0], len = pb.len[0];
+        for (int k = -64; k <= 64; k++) {
+            double x = lo + k * len;
+            for (int s = 0; s < 6; s++)
+                x = nextafter(x, -INFINITY);
+            for (int s = 0; s <= 13; s++, x = nextafter(x, INFINITY)) {
+                const double x0 = s < 13 ? x : lo + (k + 0.5) * len; /* last: mid-copy */
+                nbep_vec3 p = {x0, 0.25, 0.5};
+                int32_t img[3] = {0, 0, 0};
+                nbep_periodic_wrap(&pb, &p, img);
+                assert_true(nbep_periodic_inside(&pb, p));
+                assert_true(p.x >= lo && p.x < lo + len);
+                assert_true(p.y == 0.25 && p.z == 0.5 && img[1] == 0 && img[2] == 0);
+                const double shift = img[0] * len;
+                assert_close(p.x + shift, x0, 0.0,
+                             8.0 * DBL_EPSILON * (fabs(x0) + fabs(shift) + fabs(lo) + len));
+                moved += img[0] != 0;
+                nbep_vec3 q = p;
+                int32_t again[3] = {img[0], 0, 0};
+                nbep_periodic_wrap(&pb, &q, again);
+                assert_memory_equal(&q, &p, sizeof q);
+                assert_int_equal(again[0], img[0]);
+            }
+        }
+    }
+    assert_true(moved > 1000);
+}
+
 /* nbep_periodic_inside: true exactly where the wrap would leave a finite position as it is,
  * checked against the wrap itself on points around and on the faces, periodic axes only. */
 static void test_inside_is_where_the_wrap_leaves_a_position(void **state)
@@ -144,6 +190,103 @@ static void test_shift_is_whole_periods_on_periodic_axes(void **state)
     nbep_periodic pb = nbep_periodic_make(xy, ZERO, (nbep_vec3){2.0, 3.0, 4.0});
     nbep_vec3 s = nbep_periodic_shift(&pb, (const int[3]){-1, 1, 1});
     assert_true(s.x == -2.0 && s.y == 3.0 && s.z == 0.0);
+}
+
+/* A small generator for the separations below (its state the caller's). */
+static double uniform(uint64_t *x, double lo, double hi)
+{
+    *x = *x * 6364136223846793005ULL + 1442695040888963407ULL;
+    return lo + (hi - lo) * (double)(*x >> 11) * 0x1p-53;
+}
+
+/* The periods nbep_periodic_nearest names, shifted by nbep_periodic_shift, take a separation to
+ * its minimum image (all-pairs in a periodic box finds each partner so), with none named on an
+ * axis that is not periodic: separations up to five periods either way on a box periodic along
+ * x and z, walls along y. */
+static void test_nearest_periods_shift_a_separation_to_its_minimum_image(void **state)
+{
+    (void)state;
+    const bool xz[3] = {true, false, true};
+    const nbep_periodic pb =
+        nbep_periodic_make(xz, (nbep_vec3){-1.0, 0.0, 2.0}, (nbep_vec3){2.7, 5.0, 12.0});
+    uint64_t x = 5;
+    for (int i = 0; i < 2000; i++) {
+        const nbep_vec3 d = {uniform(&x, -5.0, 5.0) * pb.len[0], uniform(&x, -20.0, 20.0),
+                             uniform(&x, -5.0, 5.0) * pb.len[2]};
+        int cells[3];
+        nbep_periodic_nearest(&pb, d, cells);
+        assert_int_equal(cells[1], 0);
+        const nbep_vec3 m = nbep_vec3_add(d, nbep_periodic_shift(&pb, cells));
+        const nbep_vec3 want = nbep_periodic_image(&pb, d);
+        assert_true(m.x == want.x && m.y == d.y && m.z == want.z);
+        assert_true(fabs(m.x) <= pb.half[0] && fabs(m.z) <= pb.half[2]);
+    }
+}
+
+/* The compare-only nearest image and shift (the collision response's and the cells engine's)
+ * against the general ones, bit for bit, for separations within one and a half periods on
+ * every periodic axis (ties at exactly half a period left out, where either image is as
+ * near): random ones, and those a few ulps either side of +-len/2 and +-len, where the
+ * compares decide. A wall axis keeps its separation whatever its length. */
+static void test_near_image_and_shift_agree_with_the_general_ones(void **state)
+{
+    (void)state;
+    const bool xz[3] = {true, false, true};
+    const nbep_periodic pb =
+        nbep_periodic_make(xz, (nbep_vec3){-1.0, 0.0, 2.0}, (nbep_vec3){2.7, 0.5, 12.3});
+    double probe[64];
+    int np = 0;
+    const double marks[4] = {-1.0, -0.5, 0.5, 1.0};
+    for (int m = 0; m < 4; m++) {
+        double v = marks[m];
+        for (int s = 0; s < 3; s++)
+            v = nextafter(v, -INFINITY);
+        for (int s = 0; s < 7; s++, v = nextafter(v, INFINITY))
+            if (fabs(v) != 0.5)
+                probe[np++] = v;
+    }
+    uint64_t x = 17;
+    int shifted = 0;
+    for (int i = 0; i < 4000; i++) {
+        /* fractions of a period: one of the probes on x, z or both, or random */
+        double f[3];
+        for (int k = 0; k < 3; k++)
+            f[k] = i % 3 == k || i % 5 == 0 ? probe[(i / 3 + k) % np] : uniform(&x, -1.49, 1.49);
+        const nbep_vec3 d = {f[0] * pb.len[0], f[1] * 7.0, f[2] * pb.len[2]};
+        if (fabs(d.x) == pb.half[0] || fabs(d.z) == pb.half[2])
+            continue;
+        const nbep_vec3 want = nbep_periodic_image(&pb, d);
+        const nbep_vec3 near = nbep_periodic_near_image(&pb, d);
+        const nbep_vec3 moved = nbep_vec3_add(d, nbep_periodic_near_shift(&pb, d));
+        assert_memory_equal(&near, &want, sizeof want);
+        assert_true(moved.x == want.x && moved.y == d.y && moved.z == want.z);
+        shifted += want.x != d.x;
+    }
+    assert_true(shifted > 1000);
+}
+
+/* The horizon of the minimum image: two spheres that each stray at most D from where they were
+ * compared close their separation by at most 4 D, so the image that touches (within sigma)
+ * was within sigma + 4 D then, the nearest one while that is at most half the shortest
+ * periodic side: D = (len/2 - sigma) / 4 there, the walls' sides (however short) counting for
+ * nothing, and no horizon without a periodic axis. */
+static void test_reach_is_the_stray_that_keeps_the_nearest_image(void **state)
+{
+    (void)state;
+    const bool xz[3] = {true, false, true};
+    const double sigma = 1.0;
+    /* x: period 10, y: walls 1 apart, z: period 6 (the shortest periodic side) */
+    const nbep_periodic pb = nbep_periodic_make(xz, ZERO, (nbep_vec3){10.0, 1.0, 6.0});
+    const double D = nbep_periodic_reach(&pb, sigma);
+    assert_true(D > 0.0);
+    assert_true(sigma + 4.0 * D == 0.5 * pb.len[2]);
+    /* the pair compared at sigma + 4 D along z: that image is still as near as any (a tie);
+     * had they strayed a tenth more, another image would be the nearest at the comparison */
+    const nbep_vec3 d = {0.0, 0.0, sigma + 4.0 * D}, e = {0.0, 0.0, sigma + 4.4 * D};
+    assert_true(fabs(nbep_periodic_image(&pb, d).z) == d.z);
+    assert_true(fabs(nbep_periodic_image(&pb, e).z) < e.z);
+    const nbep_periodic walls = nbep_periodic_make(NULL, ZERO, (nbep_vec3){1.0, 1.0, 1.0});
+    assert_true(isinf(nbep_periodic_reach(&walls, sigma)));
 }
 
 /* ---- runs ------------------------------------------------------------------------------------ */
@@ -1170,8 +1313,12 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_minimum_image_picks_the_nearest_copy_on_periodic_axes_only),
         cmocka_unit_test(test_wrap_moves_into_the_box_and_counts_the_periods),
+        cmocka_unit_test(test_wrap_near_every_face_keeps_the_unwrapped_point),
         cmocka_unit_test(test_inside_is_where_the_wrap_leaves_a_position),
         cmocka_unit_test(test_shift_is_whole_periods_on_periodic_axes),
+        cmocka_unit_test(test_nearest_periods_shift_a_separation_to_its_minimum_image),
+        cmocka_unit_test(test_near_image_and_shift_agree_with_the_general_ones),
+        cmocka_unit_test(test_reach_is_the_stray_that_keeps_the_nearest_image),
         cmocka_unit_test(test_overlap_check_sees_pairs_across_a_periodic_face),
         cmocka_unit_test(test_frames_overlap_check_is_shared_by_the_threads),
         cmocka_unit_test(test_spheres_collide_across_a_periodic_face_at_the_analytic_time),

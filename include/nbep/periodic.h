@@ -24,8 +24,9 @@ typedef struct nbep_periodic {
 nbep_periodic nbep_periodic_make(const bool axis[3], nbep_vec3 lo, nbep_vec3 hi);
 
 /* The minimum image of the separation d: on each periodic axis, d minus the multiple of len
- * nearest to it, so that |d| <= len/2 there (ties, |d| = len/2 exactly, keep their sign).
- * Other axes are unchanged. */
+ * nearest to it, so that |d| <= len/2 there (a tie, |d| = len/2 exactly, where either image is
+ * as near, takes the other sign: the rounding is half away from zero). Other axes are
+ * unchanged. */
 nbep_vec3 nbep_periodic_image(const nbep_periodic *pb, nbep_vec3 d);
 
 /* Wraps *p into [lo, lo + len) on each periodic axis and adds to image[k] the number of
