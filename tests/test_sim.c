@@ -222,6 +222,54 @@ static void test_seminaive_frames_equal_naive_frames_with_fewer_checks(void **st
     nbep_test_scene_free(&a), nbep_test_scene_free(&b);
 }
 
+/* The detection algorithms on a crowded scene (a closed-box fluid at phi = 0.35, where every
+ * sphere meets several others each step and many overlaps are found in one step): seminaive
+ * still finds and answers naive's pairs in naive's order (the frames bit for bit, fewer
+ * checks), on 1, 2 and 4 threads alike; elastic responses keep the energy to round-off; and
+ * the spheres stay in the box (overlaps are theirs by design: they detect after the move). */
+static void test_detection_on_a_crowded_fluid_is_exact_across_threads_and_keeps_energy(
+    void **state)
+{
+    (void)state;
+    const size_t side = nbep_test_scaled(7, 5);
+    const uint64_t steps = nbep_test_scaled(60, 25);
+    frames ref = {0};
+    nbep_summary s_ref = {0};
+    const char *algos[] = {"naive", "seminaive"};
+    for (int a = 0; a < 2; a++)
+        for (int nt = 1; nt <= 4; nt *= 2) {
+            nbep_scene *sc = nbep_test_fluid(side, 0.35, steps, 0.01);
+            snprintf(sc->algorithm, sizeof sc->algorithm, "%s", algos[a]);
+            frames f = {0};
+            nbep_state fin;
+            nbep_summary s = run(sc, nt, &fin, &f);
+            assert_true(s.sphere_collisions > 2 * s.spheres); /* crowded: many meetings */
+            assert_close(s.energy_final, s.energy_initial, 1e-12, 0.0);
+            for (size_t i = 0; i < fin.n; i++) {
+                const double p[3] = {fin.pos[i].x, fin.pos[i].y, fin.pos[i].z};
+                const double lo[3] = {sc->box_min.x, sc->box_min.y, sc->box_min.z};
+                const double hi[3] = {sc->box_max.x, sc->box_max.y, sc->box_max.z};
+                for (int k = 0; k < 3; k++)
+                    assert_true(p[k] > lo[k] && p[k] < hi[k]);
+            }
+            nbep_state_fini(&fin);
+            if (a == 0 && nt == 1) {
+                ref = f;
+                s_ref = s;
+            } else {
+                frames_equal(&ref, &f);
+                assert_int_equal(s.collisions, s_ref.collisions);
+                if (a == 1)
+                    assert_true(s.checks < s_ref.checks);
+                else
+                    assert_int_equal(s.checks, s_ref.checks);
+                nbep_test_frames_free(&f);
+            }
+            nbep_test_scene_free(&sc);
+        }
+    nbep_test_frames_free(&ref);
+}
+
 /* Elastic responses conserve kinetic energy exactly whatever the positions, so a naive gas
  * without gravity keeps its energy to round-off: each response changes it by a few ulps, so
  * after C collisions the relative drift is about sqrt(C) * 1e-16; 1e-12 leaves room. */
@@ -729,6 +777,7 @@ int main(void)
         cmocka_unit_test(test_seminaive_frames_are_bitwise_equal_for_1_2_4_threads),
         cmocka_unit_test(test_predictive_frames_are_bitwise_equal_for_1_2_4_8_threads),
         cmocka_unit_test(test_seminaive_frames_equal_naive_frames_with_fewer_checks),
+        cmocka_unit_test(test_detection_on_a_crowded_fluid_is_exact_across_threads_and_keeps_energy),
         cmocka_unit_test(test_naive_gas_without_gravity_conserves_energy),
         cmocka_unit_test(test_predictive_gas_under_gravity_conserves_energy),
         cmocka_unit_test(test_predictive_and_naive_agree_on_a_short_gas_run),
