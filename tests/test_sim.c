@@ -232,7 +232,7 @@ static void test_detection_on_a_crowded_fluid_is_exact_across_threads_and_keeps_
 {
     (void)state;
     const size_t side = nbep_test_scaled(7, 5);
-    const uint64_t steps = nbep_test_scaled(60, 25);
+    const uint64_t steps = nbep_test_scaled(60, 40);
     frames ref = {0};
     nbep_summary s_ref = {0};
     const char *algos[] = {"naive", "seminaive"};
