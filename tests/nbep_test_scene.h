@@ -265,6 +265,27 @@ static inline nbep_summary nbep_test_run(const nbep_scene *sc, int nt, nbep_fram
     return sum;
 }
 
+/* A run of sc on nt threads that may fail (a jam, a fault): its status, its one message (""
+ * when it ended), the counter `ahead` (events the cells team handled ahead of their turn) and
+ * the state it stopped in, into *fin (the caller's to nbep_state_fini). */
+static inline nbep_status nbep_test_run_to_end(const nbep_scene *sc, int nt, char *msg,
+                                               size_t cap, uint64_t *ahead, nbep_state *fin)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_sim_options opt = {.threads = nt};
+    nbep_sim *sim = NULL;
+    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
+    const nbep_status st = nbep_sim_run(sim, &d);
+    assert_int_equal(d.n_errors, st == NBEP_OK ? 0 : 1);
+    snprintf(msg, cap, "%s", d.n_errors ? d.msg[0] : "");
+    *ahead = nbep_sim_counter(sim, NBEP_COUNTER_AHEAD);
+    assert_int_equal(nbep_state_copy(fin, nbep_sim_state(sim), &d), NBEP_OK);
+    nbep_sim_destroy(&sim);
+    nbep_diag_fini(&d);
+    return st;
+}
+
 /* Runs the deck at deck_path through nbep's one run pipeline (what `nbep run` does), writing
  * output_path; the run must end with NBEP_OK. */
 static inline nbep_run_result nbep_test_run_deck(const char *deck_path, const char *output_path)

@@ -1289,9 +1289,32 @@ static void test_a_resume_closed_before_it_begins_leaves_the_file_as_it_was(void
     free(xbefore);
 }
 
+/* A resume of path refused with status want and one line holding says, the file left byte for
+ * byte as it was (the resume checks everything before it writes). */
+static void assert_resume_refused(fixture *fx, const char *path, nbep_status want,
+                                  const char *says)
+{
+    size_t len0, len1;
+    unsigned char *before = slurp(path, &len0);
+    assert_non_null(before);
+    fx->sc.steps = 2 * N_STATS; /* past the last frame: something to resume, were it a run's */
+    nbep_output *o = NULL;
+    nbep_resume r;
+    assert_int_equal(nbep_output_open_resume(path, &fx->sc, &o, &r, &fx->d), want);
+    assert_null(o);
+    assert_int_equal(fx->d.n_errors, 1);
+    assert_non_null(strstr(fx->d.msg[0], says));
+    assert_non_null(strstr(fx->d.msg[0], path));
+    unsigned char *after = slurp(path, &len1);
+    assert_non_null(after);
+    assert_true(len1 == len0 && memcmp(after, before, len0) == 0);
+    free(before);
+    free(after);
+}
+
 /* A file closed (or killed) before its first frame was complete (its /frames count 0) has
- * nothing to resume from: refused as bad usage (exit 2, as a file cut short before HDF5 could open it),
- * with a line that says so and how to go on, and the file left as it was. */
+ * nothing to resume from: refused as bad usage (exit 2, as a file cut short before HDF5 could
+ * open it), with a line that says so and how to go on, and the file left as it was. */
 static void test_a_file_without_a_complete_frame_is_refused_as_bad_usage(void **state)
 {
     fixture *fx = *state;
@@ -1303,21 +1326,8 @@ static void test_a_file_without_a_complete_frame_is_refused_as_bad_usage(void **
     hid_t f = open_ro(path);
     assert_int_equal(read_count(f, "/frames"), 0);
     H5Fclose(f);
-    size_t len0, len1;
-    unsigned char *before = slurp(path, &len0);
-    assert_non_null(before);
-    fx->sc.steps = 2 * N_STATS;
-    nbep_resume r;
-    assert_int_equal(nbep_output_open_resume(path, &fx->sc, &o, &r, &fx->d), NBEP_EUSAGE);
-    assert_null(o);
-    assert_int_equal(fx->d.n_errors, 1);
-    assert_non_null(strstr(fx->d.msg[0], "has no complete frame to resume from"));
-    assert_non_null(strstr(fx->d.msg[0], path));
-    unsigned char *after = slurp(path, &len1);
-    assert_non_null(after);
-    assert_true(len1 == len0 && memcmp(after, before, len0) == 0);
-    free(before);
-    free(after);
+    assert_resume_refused(fx, path, NBEP_EUSAGE, "has no complete frame to resume from (run "
+                                                 "without --resume to start it afresh)");
 }
 
 /* A file whose frames lack velocities (output.fields = ["position"]) cannot be resumed: a deck
@@ -1331,23 +1341,10 @@ static void test_a_file_without_velocities_is_refused_as_a_deck_error(void **sta
     fx->sc.out_velocity = false;
     const nbep_summary summary = known_summary();
     write_run(fx, path, &summary);
-    size_t len0, len1;
-    unsigned char *before = slurp(path, &len0);
-    assert_non_null(before);
     fx->sc.out_velocity = true; /* the deck resumed with asks for them, as a resume must */
-    fx->sc.steps = 2 * N_STATS;
-    nbep_output *o = NULL;
-    nbep_resume r;
-    assert_int_equal(nbep_output_open_resume(path, &fx->sc, &o, &r, &fx->d), NBEP_EDECK);
-    assert_null(o);
-    assert_int_equal(fx->d.n_errors, 1);
-    assert_non_null(strstr(fx->d.msg[0], "cannot be resumed: its frames lack positions or "
-                                         "velocities (output.fields)"));
-    unsigned char *after = slurp(path, &len1);
-    assert_non_null(after);
-    assert_true(len1 == len0 && memcmp(after, before, len0) == 0);
-    free(before);
-    free(after);
+    assert_resume_refused(fx, path, NBEP_EDECK,
+                          "cannot be resumed: its frames lack positions or velocities "
+                          "(output.fields)");
 }
 
 static int make_dirs(void)

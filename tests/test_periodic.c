@@ -823,27 +823,6 @@ static void test_team_loop_on_a_cooling_fluid_is_bit_for_bit(void **state)
     assert_true(e_final[1] > e_final[0]);
 }
 
-/* A run of sc on nt threads that must stop at a jam (run.max_reactions): its status, its one
- * message, the counters' internal `ahead` (events handled ahead of their turn, team loop) and
- * the state it stopped in, into *fin. */
-static nbep_status run_to_jam(const nbep_scene *sc, int nt, char *msg, size_t cap,
-                              uint64_t *ahead, nbep_state *fin)
-{
-    nbep_diag d;
-    nbep_diag_init(&d);
-    nbep_sim_options opt = {.threads = nt};
-    nbep_sim *sim = NULL;
-    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
-    const nbep_status st = nbep_sim_run(sim, &d);
-    assert_int_equal(d.n_errors, st == NBEP_OK ? 0 : 1);
-    snprintf(msg, cap, "%s", d.n_errors ? d.msg[0] : "");
-    *ahead = nbep_sim_counter(sim, NBEP_COUNTER_AHEAD);
-    assert_int_equal(nbep_state_copy(fin, nbep_sim_state(sim), &d), NBEP_OK);
-    nbep_sim_destroy(&sim);
-    nbep_diag_fini(&d);
-    return st;
-}
-
 /* The team loop's stop: a reaction that passes run.max_reactions stops the run after it, as
  * the one thread stops (its changes kept, nothing after it; a speculative place's passing that
  * is undone must not stop anything). A cooling fluid (e = 0.8, nothing accelerates, so the
@@ -863,10 +842,12 @@ static void test_team_loop_stops_at_a_jam_as_one_thread_does(void **state)
     char ref[512], msg[512];
     uint64_t ahead;
     nbep_state fin1, fin;
-    assert_int_equal(run_to_jam(sc, 1, ref, sizeof ref, &ahead, &fin1), NBEP_ENUMERIC);
+    assert_int_equal(nbep_test_run_to_end(sc, 1, ref, sizeof ref, &ahead, &fin1),
+                     NBEP_ENUMERIC);
     assert_non_null(strstr(ref, "run.max_reactions"));
     for (int nt = 2; nt <= 4; nt++) {
-        assert_int_equal(run_to_jam(sc, nt, msg, sizeof msg, &ahead, &fin), NBEP_ENUMERIC);
+        assert_int_equal(nbep_test_run_to_end(sc, nt, msg, sizeof msg, &ahead, &fin),
+                         NBEP_ENUMERIC);
         assert_string_equal(msg, ref);
         assert_true(ahead > 0);
         assert_memory_equal(fin.pos, fin1.pos, fin1.n * sizeof *fin1.pos);

@@ -45,27 +45,6 @@ static void stall_hook(nbep_evloop_stall *st, double t)
         st->dt = INFINITY;
 }
 
-/* A run of sc on nt threads (NBEP_TEAM=always: every step in the team loop) that must fail:
- * its status, its one message, the counter `ahead` (events the team handled ahead of their
- * turn) and the state it stopped in, into *fin. */
-static nbep_status run_to_fault(const nbep_scene *sc, int nt, char *msg, size_t cap,
-                                uint64_t *ahead, nbep_state *fin)
-{
-    nbep_diag d;
-    nbep_diag_init(&d);
-    nbep_sim_options opt = {.threads = nt};
-    nbep_sim *sim = NULL;
-    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
-    const nbep_status st = nbep_sim_run(sim, &d);
-    assert_int_equal(d.n_errors, st == NBEP_OK ? 0 : 1);
-    snprintf(msg, cap, "%s", d.n_errors ? d.msg[0] : "");
-    *ahead = nbep_sim_counter(sim, NBEP_COUNTER_AHEAD);
-    assert_int_equal(nbep_state_copy(fin, nbep_sim_state(sim), &d), NBEP_OK);
-    nbep_sim_destroy(&sim);
-    nbep_diag_fini(&d);
-    return st;
-}
-
 /* An elastic periodic fluid at phi = 0.45 (the team handles most of its events ahead, undoing
  * some) that would run 6 steps of 0.03, stopped from t = 0.075 (its third step) by the fault
  * that *from arms: on 1 thread with status want and a message holding what, then on 2, 3 and
@@ -79,17 +58,17 @@ static void team_stops_as_one_thread(double *from, nbep_status want, const char 
     uint64_t ahead;
     nbep_state fin1, fin;
     /* unarmed, the run ends: the fault is the hook's */
-    assert_int_equal(run_to_fault(sc, 2, msg, sizeof msg, &ahead, &fin), NBEP_OK);
+    assert_int_equal(nbep_test_run_to_end(sc, 2, msg, sizeof msg, &ahead, &fin), NBEP_OK);
     nbep_state_fini(&fin);
     *from = 0.075;
-    assert_int_equal(run_to_fault(sc, 1, ref, sizeof ref, &ahead, &fin1), want);
+    assert_int_equal(nbep_test_run_to_end(sc, 1, ref, sizeof ref, &ahead, &fin1), want);
     assert_non_null(strstr(ref, what));
     unsigned long long step = 0; /* a step from the one armed (the third) to the last */
     assert_int_equal(sscanf(ref, "nbep: step %llu:", &step), 1);
     assert_true(step >= 3 && step <= 6);
     assert_int_equal(ahead, 0);
     for (int nt = 2; nt <= 4; nt++) {
-        assert_int_equal(run_to_fault(sc, nt, msg, sizeof msg, &ahead, &fin), want);
+        assert_int_equal(nbep_test_run_to_end(sc, nt, msg, sizeof msg, &ahead, &fin), want);
         assert_string_equal(msg, ref);
         assert_true(ahead > 0);
         assert_memory_equal(fin.pos, fin1.pos, fin1.n * sizeof *fin1.pos);
