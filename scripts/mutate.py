@@ -868,6 +868,10 @@ MUTANTS = [
      "    if (line)\n        return nbep_vec3_scale(t, nbep_vec3_dot(v, t));",
      "    if (line)\n        return nbep_vec3_axpy(v, -nbep_vec3_dot(v, first), first);",
      ["test_contact"] + GRAN, None),
+    # a second active normal parallel to the first (test_contact: two floors and a wall)
+    ("contact-tangent-parallel-as-edge", "src/contact.c",
+     "            if (!edge(first, n[j], &t))\n                continue;",
+     "            (void)edge(first, n[j], &t);", ["test_contact"], None),
     ("contact-tangent-third-test", "src/contact.c",
      "} else if (fabs(nbep_vec3_dot(t, n[j])) > NBEP_CONTACT_TOL) {",
      "} else if (fabs(nbep_vec3_dot(t, n[j])) < NBEP_CONTACT_TOL) {", ["test_contact"] + GRAN, None),
