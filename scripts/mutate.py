@@ -586,6 +586,16 @@ MUTANTS = [
      "    if (best.kind == NBEP_EVENT_NONE || !(best.time <= c->horizon))\n        best = (nbep_event){c->horizon, 0, NBEP_EVENT_HORIZON, c->ver[i], 0};",
      "    if (best.kind == NBEP_EVENT_NONE || !(best.time <= c->horizon))\n        best = (nbep_event){c->horizon + 1e-3, 0, NBEP_EVENT_HORIZON, c->ver[i], 0};", SIM + GRAN,
      None),
+    # all-pairs mode's image horizons (periodic box) that fall inside a step: a sphere that
+    # strays more than its image reach in one step (test_periodic's tiny box at dt = 0.25)
+    ("image-horizon-in-step-dropped", "src/algo_predictive.c",
+     "(best.kind == NBEP_EVENT_HORIZON && c->image_horizon)))\n                add_cand(c, w, i);",
+     "(best.kind == NBEP_EVENT_HORIZON && false)))\n                add_cand(c, w, i);",
+     ["test_periodic"], None),
+    ("image-horizon-react-no-op", "src/pred_react.c",
+     "        fire(c, w, s, lo, still_lo);\n        return;\n    }\n    if (ev->kind == NBEP_EVENT_PLANE) {",
+     "        return;\n    }\n    if (ev->kind == NBEP_EVENT_PLANE) {",
+     ["test_periodic"], None),
     ("grid-crew-takes-no-candidates", "src/algo_predictive.c",
      "                    memcpy(w->cand, w->redo, w->n_redo * sizeof *w->cand);\n                    w->n_cand = w->n_redo;\n",
      "", GRAN, None),
@@ -858,6 +868,10 @@ MUTANTS = [
      "    if (line)\n        return nbep_vec3_scale(t, nbep_vec3_dot(v, t));",
      "    if (line)\n        return nbep_vec3_axpy(v, -nbep_vec3_dot(v, first), first);",
      ["test_contact"] + GRAN, None),
+    # a second active normal parallel to the first (test_contact: two floors and a wall)
+    ("contact-tangent-parallel-as-edge", "src/contact.c",
+     "            if (!edge(first, n[j], &t))\n                continue;",
+     "            (void)edge(first, n[j], &t);", ["test_contact"], None),
     ("contact-tangent-third-test", "src/contact.c",
      "} else if (fabs(nbep_vec3_dot(t, n[j])) > NBEP_CONTACT_TOL) {",
      "} else if (fabs(nbep_vec3_dot(t, n[j])) < NBEP_CONTACT_TOL) {", ["test_contact"] + GRAN, None),

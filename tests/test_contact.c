@@ -117,6 +117,19 @@ static void test_the_tangent_velocity_runs_along_the_edge_of_two_contacts(void *
     /* only the active ones count: the wall left out of the mask, the floor's part alone goes */
     t = nbep_contact_tangent(v, corner, 3, 1u);
     assert_true(t.x == 1.0 && t.y == 2.0 && t.z == 0.0);
+    /* a normal parallel to one before it adds nothing (two floors at one height, a wall): the
+     * floors' edge with the wall still runs along y, wherever the wall comes; the floors alone
+     * leave the floor's tangent part (a coverage run showed no test gave parallel normals) */
+    const nbep_vec3 floors[3] = {{0, 0, 1}, {0, 0, 1}, {1, 0, 0}};
+    const nbep_vec3 wall_between[3] = {{0, 0, 1}, {1, 0, 0}, {0, 0, 1}};
+    for (int k = 0; k < 2; k++) {
+        t = nbep_contact_tangent(v, k == 0 ? floors : wall_between, 3, 7u);
+        assert_close(t.x, 0.0, 0.0, 1e-15);
+        assert_close(t.y, 2.0, 0.0, 1e-15);
+        assert_close(t.z, 0.0, 0.0, 1e-15);
+    }
+    t = nbep_contact_tangent(v, floors, 3, 3u);
+    assert_true(t.x == 1.0 && t.y == 2.0 && t.z == 0.0);
 }
 
 int main(void)

@@ -610,33 +610,47 @@ static int reference_pair(nbep_vec3 r, nbep_vec3 u, double L, double t_end, nbep
 
 /* Two spheres in a periodic box only 2.5 diameters wide, all-pairs mode, 10 time units: the
  * nearest image changes all the time, so the image horizons must re-predict them in time;
- * the collisions and the final relative velocity are the reference's. */
+ * the collisions and the final relative velocity are the reference's. With steps of 0.01 a
+ * sphere strays at most 0.02 in a step, less than its image reach (0.0625 here), so every
+ * horizon is re-predicted at a step's start; with steps of 0.25 it strays up to 0.4, six
+ * reaches (sphere 0 over five), so horizons fall inside steps and are reacted to there (re-predicted from that
+ * instant: a coverage run showed no test took that path), and frames on 1, 2 and 4 threads
+ * are bitwise the same. */
 static void test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference(void **state)
 {
     (void)state;
-    const double L = 2.5, dt = 0.01;
+    const double L = 2.5, t_end = 10.0, dts[2] = {0.01, 0.25};
     const nbep_vec3 p0 = {0.4, 0.7, 1.9}, p1 = {1.7, 2.1, 0.6};
     const nbep_vec3 v0 = {0.31, -1.17, 0.53}, v1 = {-0.9, 0.27, 1.41};
-    cells_mode = false;
-    nbep_scene *sc = periodic_scene(2, L, 1000, dt);
-    cells_mode = true;
-    sc->output_every = 2000;
-    nbep_test_set_sphere(sc, 0, p0, v0, 0.5, 1.0, ZERO);
-    nbep_test_set_sphere(sc, 1, p1, v1, 0.5, 1.0, ZERO);
-    nbep_state fin;
-    nbep_summary s = run(sc, 1, &fin, NULL);
     nbep_vec3 u;
-    int hits = reference_pair(nbep_vec3_sub(p1, p0), nbep_vec3_sub(v1, v0), L, 1000 * dt, &u);
+    int hits = reference_pair(nbep_vec3_sub(p1, p0), nbep_vec3_sub(v1, v0), L, t_end, &u);
     assert_true(hits >= 3);
-    assert_int_equal(s.sphere_collisions, (uint64_t)hits);
-    nbep_vec3 du = nbep_vec3_sub(nbep_vec3_sub(fin.vel[1], fin.vel[0]), u);
-    /* round-off of some tens of responses on speeds of order 1 */
-    /* a dispersing billiard: a difference grows about tenfold per collision, from round-off
-     * (1e-16) to some 1e-9 after the six collisions of these 10 time units */
-    assert_true(nbep_vec3_norm(du) < 1e-6);
-    assert_close(s.energy_final, s.energy_initial, 1e-13, 0.0);
-    nbep_state_fini(&fin);
-    nbep_test_scene_free(&sc);
+    for (int k = 0; k < 2; k++) {
+        const uint64_t steps = (uint64_t)llround(t_end / dts[k]);
+        cells_mode = false;
+        nbep_scene *sc = periodic_scene(2, L, steps, dts[k]);
+        cells_mode = true;
+        sc->output_every = k == 0 ? 2000 : 4;
+        nbep_test_set_sphere(sc, 0, p0, v0, 0.5, 1.0, ZERO);
+        nbep_test_set_sphere(sc, 1, p1, v1, 0.5, 1.0, ZERO);
+        /* the reach (nbep_periodic_reach): (L / 2 - sigma) / 4 */
+        const double reach = (0.5 * L - 1.0) / 4.0, stray = nbep_vec3_norm(v0) * dts[k];
+        assert_true(k == 0 ? stray < reach : stray > 4.0 * reach);
+        nbep_state fin;
+        frames ref = {0};
+        nbep_summary s = run(sc, 1, &fin, k == 0 ? NULL : &ref);
+        assert_int_equal(s.sphere_collisions, (uint64_t)hits);
+        nbep_vec3 du = nbep_vec3_sub(nbep_vec3_sub(fin.vel[1], fin.vel[0]), u);
+        /* a dispersing billiard: a difference grows about tenfold per collision, from round-off
+         * (1e-16) to some 1e-9 after the six collisions of these 10 time units */
+        assert_true(nbep_vec3_norm(du) < 1e-6);
+        assert_close(s.energy_final, s.energy_initial, 1e-13, 0.0);
+        assert_true(s.max_overlap_rel < 1e-9);
+        if (k == 1)
+            same_frames_on_2_and_4_threads(sc, &ref, s.collisions);
+        nbep_state_fini(&fin);
+        nbep_test_scene_free(&sc);
+    }
 }
 
 /* The all-pairs mode (the paper's, nearest images and image horizons) and the cells mode find
@@ -655,6 +669,34 @@ static void test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box(void **
     frames ref = {0};
     nbep_summary sa1 = run(as, 1, NULL, &ref);
     assert_true(sa1.sphere_collisions > n / 4);
+    assert_int_equal(sa1.sphere_collisions, sc1.sphere_collisions);
+    assert_close(sa1.energy_final, sa1.energy_initial, 1e-12, 0.0);
+    assert_true(sa1.max_overlap_rel < 1e-9);
+    same_frames_on_2_and_4_threads(as, &ref, sa1.collisions);
+    nbep_test_scene_free(&cs);
+    nbep_test_scene_free(&as);
+}
+
+/* Eight spheres at phi = 0.30 in a periodic box 2.4 diameters wide, steps of 0.1: a sphere
+ * (speed sqrt(3)) strays 0.17 in a step, over three times its image reach (0.05), so in all-pairs
+ * mode its image horizons fall inside steps, and each must re-predict it there: its partners
+ * then hold other events, and a collision with an image it came near within the step would
+ * be missed (passed through). The all-pairs mode finds the cells mode's collisions (whose
+ * lists need no horizons), with no overlap, the energy kept, bitwise the same frames on 1, 2
+ * and 4 threads. */
+static void test_all_pairs_mode_reacts_to_image_horizons_inside_a_step(void **state)
+{
+    (void)state;
+    nbep_scene *cs = periodic_fluid(3, 0.30, 4, 0.25, 5);
+    nbep_summary sc1 = run(cs, 1, NULL, NULL);
+    cells_mode = false;
+    nbep_scene *as = periodic_fluid(3, 0.30, 4, 0.25, 5);
+    cells_mode = true;
+    const double reach = (0.5 * as->state.period[0] - 1.0) / 4.0;
+    assert_true(sqrt(3.0) * as->dt > 2.0 * reach);
+    frames ref = {0};
+    nbep_summary sa1 = run(as, 1, NULL, &ref);
+    assert_true(sa1.sphere_collisions > 20);
     assert_int_equal(sa1.sphere_collisions, sc1.sphere_collisions);
     assert_close(sa1.energy_final, sa1.energy_initial, 1e-12, 0.0);
     assert_true(sa1.max_overlap_rel < 1e-9);
@@ -1312,6 +1354,7 @@ int main(void)
         cmocka_unit_test(test_team_loop_stops_at_a_jam_as_one_thread_does),
         cmocka_unit_test(test_every_thread_reads_the_way_of_its_step),
         cmocka_unit_test(test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box),
+        cmocka_unit_test(test_all_pairs_mode_reacts_to_image_horizons_inside_a_step),
         cmocka_unit_test(test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference),
         cmocka_unit_test(test_periodic_fluid_pressure_and_collision_rate_match_theory),
         cmocka_unit_test(test_cooling_gas_follows_haffs_law),
