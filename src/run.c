@@ -198,20 +198,6 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
     return NBEP_OK;
 }
 
-/* The last override that sets output.file (-o FILE, --set output.file=...), when the file it
- * names (output, the scene's after the overrides) is not the one resumed: its index, else -1. */
-static long resume_other_output(const nbep_run_request *rq, const char *output)
-{
-    long last = -1;
-    const size_t n = strlen("output.file");
-    for (size_t k = 0; k < rq->n_overrides; k++) {
-        const char *o = rq->overrides[k];
-        if (strncmp(o, "output.file", n) == 0 && o[n + strspn(o + n, " \t")] == '=')
-            last = (long)k;
-    }
-    return last >= 0 && !nbep_run_same_path(output, rq->resume) ? last : -1;
-}
-
 nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag *d)
 {
     memset(res, 0, sizeof *res);
@@ -244,16 +230,16 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     const char *file = rq->resume        ? rq->resume
                        : rq->output_path ? rq->output_path
                                          : sc.output_file;
-    const long other = rq->resume ? resume_other_output(rq, sc.output_file) : -1;
-    st = other >= 0 ? NBEP_EUSAGE
-                    : nbep_run_check_paths(rq->deck_path, file, rq->summary_path, d);
-    if (other >= 0) {
-        const char *origin = rq->override_origins ? rq->override_origins[other] : NULL;
+    const char *other = rq->resume && sc.output_file_origin &&
+                                !nbep_run_same_path(sc.output_file, rq->resume)
+                            ? sc.output_file_origin
+                            : NULL;
+    st = other ? NBEP_EUSAGE : nbep_run_check_paths(rq->deck_path, file, rq->summary_path, d);
+    if (other)
         nbep_diag_add(d, __FILE__, __LINE__,
-                      "nbep: %s%s does not go with --resume: a resumed run appends to %s (drop "
+                      "nbep: %s does not go with --resume: a resumed run appends to %s (drop "
                       "it, or name that file)",
-                      origin ? "" : "--set ", origin ? origin : rq->overrides[other], rq->resume);
-    }
+                      other, rq->resume);
     if (st != NBEP_OK) {
         nbep_scene_fini(&sc);
         return st;

@@ -401,9 +401,11 @@ static bool check_corners(load *L, const config_setting_t *at, const char *prefi
     return false;
 }
 
-/* A group's region must meet the deck's box (a region wholly outside it, on any axis, places
- * nothing: the random placement said it could place no sphere, the lattice listed every sphere
- * against a wall). One that lies partly outside is taken: its spheres land in the part inside. */
+/* A group's region must meet the deck's box along every wall axis (a region wholly outside it
+ * places nothing: the random placement said it could place no sphere, the lattice listed every
+ * sphere against a wall). One that lies partly outside is taken: its spheres land in the part
+ * inside. Along a periodic axis any region is taken: its places wrap into the box (SPEC:
+ * region and placement work as before there). */
 static bool check_region_meets_box(load *L, const config_setting_t *at, const char *prefix,
                                    const nbep_scene *sc, nbep_vec3 lo, nbep_vec3 hi)
 {
@@ -413,7 +415,7 @@ static bool check_region_meets_box(load *L, const config_setting_t *at, const ch
     char axes[320] = "";
     size_t used = 0;
     for (int k = 0; k < 3; k++)
-        if (!(h[k] > bl[k] && l[k] < bh[k]))
+        if (!sc->periodic[k] && !(h[k] > bl[k] && l[k] < bh[k]))
             used += (size_t)snprintf(axes + used, sizeof axes - used,
                                      "%s%c: region [%g, %g], box [%g, %g]", used ? ", " : "",
                                      "xyz"[k], l[k], h[k], bl[k], bh[k]);
@@ -602,11 +604,17 @@ static bool parse_entry(load *L, const config_setting_t *e, const char *prefix,
             /* a lattice fills the part of its region inside the box, as random placement
              * keeps inside it (until 2026-11-30 the lattice filled the whole region and every
              * sphere outside was reported against a wall) */
-            const nbep_vec3 bl = sc->box_min, bh = sc->box_max;
-            out->lo = nbep_vec3_make(fmax(out->lo.x, bl.x), fmax(out->lo.y, bl.y),
-                                     fmax(out->lo.z, bl.z));
-            out->hi = nbep_vec3_make(fmin(out->hi.x, bh.x), fmin(out->hi.y, bh.y),
-                                     fmin(out->hi.z, bh.z));
+            double lo[3] = {out->lo.x, out->lo.y, out->lo.z}, hi[3] = {out->hi.x, out->hi.y,
+                                                                       out->hi.z};
+            const double bl[3] = {sc->box_min.x, sc->box_min.y, sc->box_min.z};
+            const double bh[3] = {sc->box_max.x, sc->box_max.y, sc->box_max.z};
+            for (int a = 0; a < 3; a++)
+                if (!sc->periodic[a]) { /* a periodic axis wraps its places, as before */
+                    lo[a] = fmax(lo[a], bl[a]);
+                    hi[a] = fmin(hi[a], bh[a]);
+                }
+            out->lo = nbep_vec3_make(lo[0], lo[1], lo[2]);
+            out->hi = nbep_vec3_make(hi[0], hi[1], hi[2]);
         }
     } else if (g == NONE && sc->has_box) {
         out->lo = sc->box_min;
@@ -690,9 +698,20 @@ static void parse_output(load *L, const config_setting_t *root, nbep_scene *sc)
     got g = get_string(L, output, "output", S_OUTPUT_FILE, &file, &at);
     if (g == GOT && !*file)
         ERR(L, at, "output.file must not be empty");
-    else if (g == GOT)
+    else if (g == GOT) {
         sc->output_file = dup_string(L, file);
-    else if (g == NONE)
+        /* set by the command line: the override's label on the setting or on a group above
+         * it that the override made or replaced (output = { file = ... }), as messages find
+         * it (nbep__scene_error); a deck line first means the deck's own */
+        const char *label = NULL;
+        unsigned line = 0;
+        for (const config_setting_t *t = at; t && !label && !line; t = config_setting_parent(t)) {
+            label = config_setting_get_hook(t);
+            line = config_setting_source_line(t);
+        }
+        if (label)
+            sc->output_file_origin = dup_string(L, label);
+    } else if (g == NONE)
         sc->output_file = default_output(L, L->c.deck);
     int64_t every;
     if (get_int(L, output, "output", S_OUTPUT_EVERY, &every, NULL) == GOT)
@@ -835,7 +854,12 @@ static void parse_axes(load *L, const config_setting_t *sweep, nbep_scene *sc)
         axis->key = dup_string(L, key);
         /* its line, for the messages of runs that reject a value (sweep.c); none where an
          * override set it (the hook of the setting, or of a group above it, names it) */
-        for (const config_setting_t *t = values; t && !axis->line; t = config_setting_parent(t)) {
+        bool overridden = false; /* a value of it (--set sweep.vary.[k].values.[v]=...) */
+        for (int v = 0; v < config_setting_length(values); v++)
+            overridden = overridden ||
+                         config_setting_get_hook(config_setting_get_elem(values, (unsigned)v));
+        for (const config_setting_t *t = values; t && !axis->line && !overridden;
+             t = config_setting_parent(t)) {
             if (config_setting_get_hook(t))
                 break;
             axis->line = config_setting_source_line(t);
@@ -1162,6 +1186,7 @@ void nbep_scene_fini(nbep_scene *sc)
     free(sc->deck_text);
     free(sc->overrides);
     free(sc->output_file);
+    free(sc->output_file_origin);
     nbep_state_fini(&sc->state);
     for (size_t k = 0; sc->sweep_axes && k < sc->sweep_n_axes; k++) {
         free(sc->sweep_axes[k].key);

@@ -351,7 +351,8 @@ check "--resume of a missing file: one line naming it and the reason" \
 # 2026-11-30 -o was ignored, exit 0, nothing written there); -o naming the resumed file is taken
 run_nbep run inputs/two-spheres.deck -n 2 --quiet -o "$tmp/resumed-o.h5"
 cp "$tmp/resumed-o.h5" "$tmp/resumed-o.copy.h5"
-for other in "-o $tmp/elsewhere.h5" "--output=$tmp/elsewhere.h5" "--set output.file=\"$tmp/elsewhere.h5\""; do
+for other in "-o $tmp/elsewhere.h5" "--output=$tmp/elsewhere.h5" "--set output.file=\"$tmp/elsewhere.h5\"" \
+    "--set ' output.file=$tmp/elsewhere.h5'" "--set 'output={file=\"$tmp/elsewhere.h5\"}'"; do
     eval "set -- $other"
     run_nbep run inputs/two-spheres.deck -n 4 --quiet --resume "$tmp/resumed-o.h5" "$@"
     check "--resume with $*: exit 2, one line naming it, no file, the run's file unchanged (got $rc: $(head -c 200 "$tmp/stderr"))" \
@@ -359,7 +360,9 @@ for other in "-o $tmp/elsewhere.h5" "--output=$tmp/elsewhere.h5" "--set output.f
          [ ! -e '$tmp/elsewhere.h5' ] && cmp -s '$tmp/resumed-o.h5' '$tmp/resumed-o.copy.h5'"
 done
 run_nbep run inputs/two-spheres.deck -n 4 --quiet --resume "$tmp/resumed-o.h5" -o "$tmp/../$(basename "$tmp")/resumed-o.h5"
-check "--resume FILE with -o naming FILE another way: resumed (exit $rc)" "[ $rc = 0 ]"
+check "--resume FILE with -o naming FILE another way: resumed, appended to FILE (exit $rc)" \
+    "[ $rc = 0 ] && '$nbep' info '$tmp/resumed-o.h5' | grep -q '^frames: .*last: step 4,' &&
+     [ ! -e '$tmp/elsewhere.h5' ]"
 # the wrong file named (not HDF5; HDF5 but no nbep run, in the newest format too, or with a
 # format that is no string; a directory): bad usage too, and left as it was
 printf 'not a run\n' >"$tmp/text.h5"

@@ -677,8 +677,8 @@ static void test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box(void **
     nbep_test_scene_free(&as);
 }
 
-/* Eight spheres at phi = 0.30 in a periodic box 2.4 diameters wide, steps of 0.1: a sphere
- * (speed sqrt(3)) strays 0.17 in a step, over three times its image reach (0.05), so in all-pairs
+/* 27 spheres at phi = 0.30 in a periodic box 3.6 diameters wide, 4 steps of 0.25: a sphere
+ * (speed sqrt(3)) strays 0.43 in a step, over twice its image reach (0.20), so in all-pairs
  * mode its image horizons fall inside steps, and each must re-predict it there: its partners
  * then hold other events, and a collision with an image it came near within the step would
  * be missed (passed through). The all-pairs mode finds the cells mode's collisions (whose

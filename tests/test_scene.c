@@ -431,6 +431,41 @@ static void test_a_region_outside_the_box_is_an_error(void **state)
     }
     assert_vec3(st->pos[20], 0.05, 0.05, 0.05, 1e-15);
     assert_vec3(st->pos[46], 0.85, 0.85, 0.85, 1e-15);
+    /* along a periodic axis any region is taken and not cut to the box: its places wrap in
+     * (SPEC: region and placement work as before there), a lattice's too; the wall axes are
+     * still checked and cut */
+    nbep_scene_fini(&f->sc);
+    LOAD_OK(f, write_deck("scene_region_periodic.deck",
+                          "box: { min = [0.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0];\n"
+                          "  periodic = [true, false, false]; };\n"
+                          "spheres = ( { count = 8; radius = 0.05; mass = 1.0;\n"
+                          "  region = { min = [2.5, 0.0, 0.0]; max = [3.5, 2.0, 2.0]; }; },\n"
+                          "  { count = 3; radius = 0.05; mass = 1.0; place = \"lattice\";\n"
+                          "  region = { min = [1.0, 1.0, 1.0]; max = [3.9, 3.0, 1.1]; }; } );\n",
+                          path, sizeof path));
+    st = &f->sc.state;
+    assert_int_equal(st->n, 11);
+    for (size_t i = 0; i < 8; i++) /* the random group in [2.5, 3.5] (the run wraps it in) */
+        assert_true(st->pos[i].x >= 2.5 + 0.05 && st->pos[i].x <= 3.5 - 0.05);
+    /* the lattice along x over [1, 3.9] less a radius, not cut: 1.05, 2.45, 3.85; along y
+     * cut to [1, 2] */
+    assert_close(st->pos[8].x, 1.05, 1e-14, 0.0);
+    assert_close(st->pos[9].x, 2.45, 1e-14, 0.0);
+    assert_close(st->pos[10].x, 3.85, 1e-14, 0.0);
+    for (size_t i = 8; i < 11; i++)
+        assert_true(st->pos[i].y >= 1.05 - 1e-12 && st->pos[i].y <= 1.95 + 1e-12);
+    nbep_scene_fini(&f->sc);
+    LOAD_FAILS(f, NBEP_EDECK, write_deck("scene_region_periodic_wall.deck",
+                                         "box: { min = [0.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0];\n"
+                                         "  periodic = [true, false, false]; };\n"
+                                         "spheres = ( { count = 2; radius = 0.05; mass = 1.0;\n"
+                                         "  region = { min = [5.0, 5.0, 0.0];\n"
+                                         "             max = [6.0, 6.0, 1.0]; }; } );\n",
+                                         path, sizeof path));
+    char want[512];
+    snprintf(want, sizeof want, "%s:5: spheres.[0].region lies outside the box (y: region [5, 6], "
+                                "box [0, 2])", path);
+    ASSERT_DIAG(&f->d, want);
 }
 
 /* A bound a message states is the bound taken: run.threads "must be <= 1024"

@@ -543,6 +543,30 @@ static void test_a_failing_combination_spares_the_other_runs(void **state)
     nbep_sweep_plan_fini(&p);
 }
 
+/* An axis value that a --set gave (sweep.vary.[0].values.[1]=1.5, the deck's list kept) is
+ * named without the deck's line, which holds another value: the label says the axis only. */
+static void test_a_failing_value_from_the_command_line_names_no_deck_line(void **state)
+{
+    (void)state;
+    char deck[256];
+    nbep_sweep_plan p;
+    const char *const ov[] = {"sweep.vary.[0].values.[1]=1.5"};
+    plan_of(write_deck("sweep_fail_set",
+                       "sweep: { vary = ( { key = \"physics.restitution\";\n"
+                       "  values = [1.0, 0.5]; } ); };\n",
+                       deck, sizeof deck),
+            ov, 1, &p);
+    nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
+    assert_int_equal(res[0].outcome, NBEP_SWEEP_OK);
+    assert_int_equal(res[1].outcome, NBEP_SWEEP_FAILED);
+    char want[512];
+    snprintf(want, sizeof want,
+             "%s: sweep.vary.[0]: physics.restitution must be in [0, 1] (got 1.5)", deck);
+    assert_string_equal(res[1].error, want);
+    free(res);
+    nbep_sweep_plan_fini(&p);
+}
+
 static void test_a_restarted_sweep_reuses_complete_runs(void **state)
 {
     (void)state;
@@ -796,6 +820,7 @@ int main(void)
         cmocka_unit_test(test_thread_count_and_output_name_do_not_make_a_run_different),
         cmocka_unit_test(test_a_run_killed_before_its_summary_is_not_complete),
         cmocka_unit_test(test_a_failing_combination_spares_the_other_runs),
+        cmocka_unit_test(test_a_failing_value_from_the_command_line_names_no_deck_line),
         cmocka_unit_test(test_a_restarted_sweep_reuses_complete_runs),
         cmocka_unit_test(test_a_stop_signal_before_a_run_leaves_it_not_run),
         cmocka_unit_test(test_summary_csv_has_a_row_per_run_in_run_order),

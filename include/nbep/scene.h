@@ -73,6 +73,9 @@ typedef struct nbep_scene {
     bool periodic[3];         /* box.periodic: the box repeats along that axis (no walls) */
     /* output */
     char *output_file;        /* owned: resolved (default: deck name with .h5) */
+    char *output_file_origin; /* owned: the command line's option that set output.file (-o
+                               * FILE, --set ..., as typed), NULL where the deck did or the
+                               * default holds (a resumed run refuses another file) */
     uint64_t output_every;    /* >= 1 */
     bool out_position, out_velocity;
     bool out_stats;
