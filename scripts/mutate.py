@@ -977,6 +977,9 @@ MUTANTS = [
     # an axis's path must name entries the deck has; a run's failure names the axis's line
     ("sweep-axis-index-appends", "src/scene_override.c", "            if (s->idx >= have) {",
      "            if (s->idx > have) {", ["test_sweep"], None),
+    ("override-vector-element-unnamed", "src/scene_text.c",
+     "        ov = config_setting_get_hook(config_setting_get_elem(s, (unsigned)k));",
+     "        (void)0;", ["test_scene"], None),
     ("sweep-axis-line-of-set-value", "src/scene.c",
      "        for (const config_setting_t *t = values; t && !axis->line && !overridden;",
      "        for (const config_setting_t *t = values; t && !axis->line;", ["test_sweep"], None),

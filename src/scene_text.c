@@ -435,6 +435,10 @@ void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char
     va_end(ap);
     const char *ov = NULL;
     unsigned at = 0;
+    /* a vector the deck gave with an element a --set replaced (physics.gravity.[0]="a"): the
+     * --set broke it (until 2026-11-30 the message named the deck's line, which was fine) */
+    for (int k = 0; s && config_setting_is_array(s) && !ov && k < config_setting_length(s); k++)
+        ov = config_setting_get_hook(config_setting_get_elem(s, (unsigned)k));
     for (const config_setting_t *t = s; t && !ov && !at; t = config_setting_parent(t)) {
         ov = config_setting_get_hook(t);
         at = config_setting_source_line(t);

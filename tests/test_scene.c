@@ -667,6 +667,20 @@ static void test_suggestions_are_writable_paths_a_typo_away(void **state)
                 "--set box.mx=[1,1,1]: unknown setting box.mx (did you mean box.max?)");
 }
 
+/* An element of a deck's vector that a --set replaced: the vector's message names the --set,
+ * which broke it, not the deck's line, which was fine (until 2026-11-30). A check between two
+ * vectors (box.min < box.max) names the --set of the element it changed. */
+static void test_a_vector_broken_by_an_element_override_is_reported_at_the_override(void **s)
+{
+    fixture *f = *s;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_good.deck", "physics.gravity.[0]=\"a\"",
+               "box.max.[2]=-5");
+    ASSERT_DIAG(&f->d,
+                "--set physics.gravity.[0]=\"a\": physics.gravity must be 3 numbers [x, y, z] "
+                "(got [\"a\", 0.0, -9.81])",
+                "--set box.max.[2]=-5: box.min must be < box.max on every axis (got z: -3 >= -5)");
+}
+
 static void test_bad_override_value_is_reported_at_the_override(void **state)
 {
     fixture *f = *state;
@@ -1302,6 +1316,7 @@ int main(void)
         T(test_unknown_override_path_is_an_error_with_a_suggestion),
         T(test_suggestions_are_writable_paths_a_typo_away),
         T(test_bad_override_value_is_reported_at_the_override),
+        T(test_a_vector_broken_by_an_element_override_is_reported_at_the_override),
         T(test_override_messages_name_their_origin),
         T(test_malformed_overrides_are_one_line_each),
         T(test_override_making_half_a_box_reports_the_other_half_missing),
