@@ -798,11 +798,8 @@ static void pred_run(nbep_sim *sim, void *p)
             nbep_barrier_wait(&c->bar);
             redo_phase(c, s, own, tid, nt, &c->bar, T0, T0, w, cnt0, sim);
         }
-        if (tid == 0) { /* SPEC: the first predictions belong to the set-up time */
-            double now = nbep_now();
-            sim->setup_seconds += now - sim->t_start;
-            sim->t_start = sim->t_last_progress = now;
-        }
+        if (tid == 0) /* SPEC: the first predictions belong to the set-up time */
+            nbep__sim_setup_done(sim);
         /* a stop signal during the initial predictions (redo_phase): the run ends at step 0,
          * its frame written, as a signal before them does (nbep_sim_run). relaxed: redo_phase's
          * last barrier ordered thread 0's store, and nothing stores stop until the steps */

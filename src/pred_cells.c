@@ -565,11 +565,8 @@ void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own,
             nbep_barrier_wait(&c->bar);
             if (tid == 0) {
                 nbep_evloop_schedule(c->ev, u.T0);
-                if (step == sim->step_first) { /* SPEC: first predictions are set-up time */
-                    double now = nbep_now();
-                    sim->setup_seconds += now - sim->t_start;
-                    sim->t_start = sim->t_last_progress = now;
-                }
+                if (step == sim->step_first) /* SPEC: first predictions are set-up time */
+                    nbep__sim_setup_done(sim);
             }
             rebuild = false;
         }

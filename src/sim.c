@@ -340,6 +340,21 @@ static nbep_status emit_frame(nbep_sim *sim, uint64_t step)
     return st;
 }
 
+/* The stepping loop's clock starts at now, and the progress line's with it. */
+static void clock_start(nbep_sim *sim, double now)
+{
+    sim->t_start = sim->t_last_progress = sim->t_mark = now;
+    sim->done_mark = 0;
+    sim->rate_recent = 0.0;
+}
+
+void nbep__sim_setup_done(nbep_sim *sim)
+{
+    const double now = nbep_now();
+    sim->setup_seconds += now - sim->t_start;
+    clock_start(sim, now);
+}
+
 static void progress(nbep_sim *sim, uint64_t step, bool last)
 {
     if (!sim->opt.progress)
@@ -357,11 +372,6 @@ static void progress(nbep_sim *sim, uint64_t step, bool last)
     /* the rate and ETA from the last PROGRESS_LOG_SECONDS or more once there are such, not
      * the whole run's mean: a pile that settles slows tenfold, and the mean's ETA said 13 s
      * with over 5 minutes to go (a user's review) */
-    if (sim->t_mark < sim->t_start) { /* t_start is set again after the first predictions */
-        sim->t_mark = sim->t_start;
-        sim->done_mark = 0;
-        sim->rate_recent = 0.0;
-    }
     if (now - sim->t_mark >= PROGRESS_LOG_SECONDS) {
         sim->rate_recent = (double)(done - sim->done_mark) / (now - sim->t_mark);
         sim->t_mark = now;
@@ -508,7 +518,7 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
 {
     sim->diag = d;
     sim->status = NBEP_OK;
-    sim->t_start = sim->t_last_progress = nbep_now();
+    clock_start(sim, nbep_now());
     /* A resumed run's first frame is already in the file. */
     nbep_status st = sim->resumed ? NBEP_OK : emit_frame(sim, 0);
     if (st != NBEP_OK)

@@ -86,7 +86,8 @@ struct nbep_sim {
     double setup_seconds, wall_seconds;
     double t_start, t_last_progress;
     /* the progress line's recent rate: steps done (this session) and the time at its last
-     * mark, and the rate between the two marks before (0: none yet) */
+     * mark, and the rate between the two marks before (0: none yet); set with t_start
+     * (clock_start in sim.c) */
     double t_mark, rate_recent;
     uint64_t done_mark;
     /* stop request: written by thread 0 in the hook, read by all after the next barrier */
@@ -130,6 +131,9 @@ void nbep__sim_block_energy(nbep_sim *sim, nbep_range own);
 /* Whether the end of step `step` writes a frame on the run's schedule (every output.every
  * steps, and the last); a stop signal adds a frame at the step it comes. */
 bool nbep__sim_frame_due(const nbep_sim *sim, uint64_t step);
+/* Thread 0, once the first predictions are made: they belong to the set-up time (SPEC), and
+ * the stepping loop's clock and the progress line's start now. */
+void nbep__sim_setup_done(nbep_sim *sim);
 
 /* Every thread, all spheres at the end of step `step`, before nbep__sim_end_step: at a frame
  * due (nbep__sim_frame_due) of an algorithm whose overlap is not exact, the frame's overlap
