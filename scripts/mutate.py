@@ -981,8 +981,8 @@ MUTANTS = [
      "        ov = config_setting_get_hook(config_setting_get_elem(s, (unsigned)k));",
      "        (void)0;", ["test_scene"], None),
     ("sweep-axis-line-of-set-value", "src/scene.c",
-     "        for (const config_setting_t *t = values; t && !axis->line && !overridden;",
-     "        for (const config_setting_t *t = values; t && !axis->line;", ["test_sweep"], None),
+     "        (void)nbep__scene_origin(values, true, &axis->line);",
+     "        (void)nbep__scene_origin(values, false, &axis->line);", ["test_sweep"], None),
     # a region outside the box: refused along wall axes only, a lattice cut to wall axes only
     ("region-periodic-refused", "src/scene.c",
      "        if (!sc->periodic[k] && !(h[k] > bl[k] && l[k] < bh[k]))",

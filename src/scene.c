@@ -700,15 +700,10 @@ static void parse_output(load *L, const config_setting_t *root, nbep_scene *sc)
         ERR(L, at, "output.file must not be empty");
     else if (g == GOT) {
         sc->output_file = dup_string(L, file);
-        /* set by the command line: the override's label on the setting or on a group above
-         * it that the override made or replaced (output = { file = ... }), as messages find
-         * it (nbep__scene_error); a deck line first means the deck's own */
-        const char *label = NULL;
-        unsigned line = 0;
-        for (const config_setting_t *t = at; t && !label && !line; t = config_setting_parent(t)) {
-            label = config_setting_get_hook(t);
-            line = config_setting_source_line(t);
-        }
+        /* set by the command line (-o, --set output.file=, --set output={file=...}): a
+         * resumed run refuses another file */
+        unsigned line;
+        const char *label = nbep__scene_origin(at, false, &line);
         if (label)
             sc->output_file_origin = dup_string(L, label);
     } else if (g == NONE)
@@ -853,17 +848,8 @@ static void parse_axes(load *L, const config_setting_t *sweep, nbep_scene *sc)
         nbep_sweep_axis *axis = &sc->sweep_axes[sc->sweep_n_axes++];
         axis->key = dup_string(L, key);
         /* its line, for the messages of runs that reject a value (sweep.c); none where an
-         * override set it (the hook of the setting, or of a group above it, names it) */
-        bool overridden = false; /* a value of it (--set sweep.vary.[k].values.[v]=...) */
-        for (int v = 0; v < config_setting_length(values); v++)
-            overridden = overridden ||
-                         config_setting_get_hook(config_setting_get_elem(values, (unsigned)v));
-        for (const config_setting_t *t = values; t && !axis->line && !overridden;
-             t = config_setting_parent(t)) {
-            if (config_setting_get_hook(t))
-                break;
-            axis->line = config_setting_source_line(t);
-        }
+         * override gave the values or one of them (--set sweep.vary.[k].values.[v]=...) */
+        (void)nbep__scene_origin(values, true, &axis->line);
         size_t n_values = (size_t)config_setting_length(values);
         if (!(axis->values = calloc(n_values, sizeof *axis->values))) {
             L->c.oom = true;

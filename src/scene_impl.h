@@ -30,6 +30,11 @@ typedef struct nbep__scene_ctx {
  * In scene_text.c. */
 void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char *file, int line,
                        const char *fmt, ...) NBEP_PRINTF(5, 6);
+/* Where setting s came from: the label of the override that made it, or one of its elements
+ * when `elements` (a vector the deck gave, one value of which a --set replaced: that --set is
+ * what changed it), or a group above it that an override made or replaced; else NULL and
+ * *line the deck's line (0 where there is none). In scene_text.c. */
+const char *nbep__scene_origin(const config_setting_t *s, bool elements, unsigned *line);
 #define NBEP__SCENE_ERR(c, s, ...) nbep__scene_error((c), (s), __FILE__, __LINE__, __VA_ARGS__)
 
 /* ---- growable strings ----------------------------------------------------------------------- */

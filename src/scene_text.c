@@ -425,6 +425,21 @@ size_t nbep__scene_edit_distance(const char *a, const char *b)
 
 /* ---- messages ------------------------------------------------------------------------------- */
 
+const char *nbep__scene_origin(const config_setting_t *s, bool elements, unsigned *line)
+{
+    const char *ov = NULL;
+    *line = 0;
+    for (int k = 0; s && elements && !ov && k < config_setting_length(s); k++)
+        ov = config_setting_get_hook(config_setting_get_elem(s, (unsigned)k));
+    for (const config_setting_t *t = s; t && !ov && !*line; t = config_setting_parent(t)) {
+        ov = config_setting_get_hook(t);
+        *line = config_setting_source_line(t);
+    }
+    if (ov)
+        *line = 0;
+    return ov;
+}
+
 void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char *file, int line,
                        const char *fmt, ...)
 {
@@ -433,16 +448,10 @@ void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char
     char msg[1024];
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    const char *ov = NULL;
+    /* a vector (array) with an element a --set replaced (physics.gravity.[0]="a"): the --set
+     * broke it (until 2026-11-30 the message named the deck's line, which was fine) */
     unsigned at = 0;
-    /* a vector the deck gave with an element a --set replaced (physics.gravity.[0]="a"): the
-     * --set broke it (until 2026-11-30 the message named the deck's line, which was fine) */
-    for (int k = 0; s && config_setting_is_array(s) && !ov && k < config_setting_length(s); k++)
-        ov = config_setting_get_hook(config_setting_get_elem(s, (unsigned)k));
-    for (const config_setting_t *t = s; t && !ov && !at; t = config_setting_parent(t)) {
-        ov = config_setting_get_hook(t);
-        at = config_setting_source_line(t);
-    }
+    const char *ov = nbep__scene_origin(s, s && config_setting_is_array(s), &at);
     if (ov) /* the override's label (scene_override.c) */
         nbep_diag_add(c->d, file, line, "%s: %s", ov, msg);
     else
