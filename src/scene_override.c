@@ -222,6 +222,16 @@ static void index_past_end(nbep__scene_ctx *c, const char *label, const char *li
           len == 1 ? "y" : "ies", len);
 }
 
+/* Adds segment s to the path so far (names joined by dots, indices as ".[N]"). */
+static void path_append(char *sofar, size_t cap, const seg *s)
+{
+    const size_t used = strlen(sofar);
+    if (s->index)
+        snprintf(sofar + used, cap - used, ".[%lu]", s->idx);
+    else
+        snprintf(sofar + used, cap - used, "%s%s", used ? "." : "", s->name);
+}
+
 bool nbep__scene_path_indices_exist(const config_setting_t *root, const char *path,
                                     char *list, size_t list_len, unsigned *len)
 {
@@ -247,11 +257,7 @@ bool nbep__scene_path_indices_exist(const config_setting_t *root, const char *pa
             node = node && config_setting_is_group(node) ? config_setting_get_member(node, s->name)
                                                          : NULL;
         }
-        const size_t used = strlen(sofar);
-        if (s->index)
-            snprintf(sofar + used, sizeof sofar - used, ".[%lu]", s->idx);
-        else
-            snprintf(sofar + used, sizeof sofar - used, "%s%s", used ? "." : "", s->name);
+        path_append(sofar, sizeof sofar, s);
     }
     return true;
 }
@@ -301,11 +307,8 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
     for (size_t k = 0; k + 1 < n; k++) {
         const seg *s = &segs[k];
         config_setting_t *child = NULL;
-        size_t used = strlen(sofar);
-        if (s->index)
-            snprintf(sofar + used, sizeof sofar - used, ".[%lu]", s->idx);
-        else
-            snprintf(sofar + used, sizeof sofar - used, "%s%s", used ? "." : "", s->name);
+        const size_t used = strlen(sofar);
+        path_append(sofar, sizeof sofar, s);
         if (!s->index) {
             if (!config_setting_is_group(node)) {
                 sofar[used] = '\0';
