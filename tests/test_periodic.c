@@ -653,27 +653,37 @@ static void test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference(void 
     }
 }
 
-/* The all-pairs mode (the paper's, nearest images and image horizons) and the cells mode find
- * the same collisions on a periodic fluid over a short stretch (before round-off differences
- * could reorder events), and all-pairs frames are bitwise equal for 1, 2 and 4 threads. A
- * free flight over several periods keeps re-predicting at its image horizons. */
-static void test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box(void **state)
+/* The all-pairs mode (the paper's, nearest images and image horizons) on periodic_fluid(side,
+ * 0.30, steps, dt, seed) finds the cells mode's collisions (more than `least`; before
+ * round-off differences could reorder events), with no overlap and the energy kept, and its
+ * frames are bitwise equal for 1, 2 and 4 threads. Returns the all-pairs scene (the caller's to
+ * free). */
+static nbep_scene *all_pairs_finds_the_cells_collisions(size_t side, uint64_t steps, double dt,
+                                                        uint64_t seed, uint64_t least)
 {
-    (void)state;
-    size_t side = nbep_test_scaled(7, 5), n = side * side * side;
-    nbep_scene *cs = periodic_fluid(side, 0.30, 30, 0.01, 3);
+    nbep_scene *cs = periodic_fluid(side, 0.30, steps, dt, seed);
     nbep_summary sc1 = run(cs, 1, NULL, NULL);
     cells_mode = false;
-    nbep_scene *as = periodic_fluid(side, 0.30, 30, 0.01, 3);
+    nbep_scene *as = periodic_fluid(side, 0.30, steps, dt, seed);
     cells_mode = true;
     frames ref = {0};
     nbep_summary sa1 = run(as, 1, NULL, &ref);
-    assert_true(sa1.sphere_collisions > n / 4);
+    assert_true(sa1.sphere_collisions > least);
     assert_int_equal(sa1.sphere_collisions, sc1.sphere_collisions);
     assert_close(sa1.energy_final, sa1.energy_initial, 1e-12, 0.0);
     assert_true(sa1.max_overlap_rel < 1e-9);
     same_frames_on_2_and_4_threads(as, &ref, sa1.collisions);
     nbep_test_scene_free(&cs);
+    return as;
+}
+
+/* A fluid over a short stretch; a free flight over several periods keeps re-predicting at its
+ * image horizons. */
+static void test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box(void **state)
+{
+    (void)state;
+    size_t side = nbep_test_scaled(7, 5), n = side * side * side;
+    nbep_scene *as = all_pairs_finds_the_cells_collisions(side, 30, 0.01, 3, n / 4);
     nbep_test_scene_free(&as);
 }
 
@@ -681,27 +691,13 @@ static void test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box(void **
  * (speed sqrt(3)) strays 0.43 in a step, over twice its image reach (0.20), so in all-pairs
  * mode its image horizons fall inside steps, and each must re-predict it there: its partners
  * then hold other events, and a collision with an image it came near within the step would
- * be missed (passed through). The all-pairs mode finds the cells mode's collisions (whose
- * lists need no horizons), with no overlap, the energy kept, bitwise the same frames on 1, 2
- * and 4 threads. */
+ * be missed (passed through). The cells mode's lists need no horizons. */
 static void test_all_pairs_mode_reacts_to_image_horizons_inside_a_step(void **state)
 {
     (void)state;
-    nbep_scene *cs = periodic_fluid(3, 0.30, 4, 0.25, 5);
-    nbep_summary sc1 = run(cs, 1, NULL, NULL);
-    cells_mode = false;
-    nbep_scene *as = periodic_fluid(3, 0.30, 4, 0.25, 5);
-    cells_mode = true;
+    nbep_scene *as = all_pairs_finds_the_cells_collisions(3, 4, 0.25, 5, 20);
     const double reach = (0.5 * as->state.period[0] - 1.0) / 4.0;
     assert_true(sqrt(3.0) * as->dt > 2.0 * reach);
-    frames ref = {0};
-    nbep_summary sa1 = run(as, 1, NULL, &ref);
-    assert_true(sa1.sphere_collisions > 20);
-    assert_int_equal(sa1.sphere_collisions, sc1.sphere_collisions);
-    assert_close(sa1.energy_final, sa1.energy_initial, 1e-12, 0.0);
-    assert_true(sa1.max_overlap_rel < 1e-9);
-    same_frames_on_2_and_4_threads(as, &ref, sa1.collisions);
-    nbep_test_scene_free(&cs);
     nbep_test_scene_free(&as);
 }
 
