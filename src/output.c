@@ -557,16 +557,14 @@ nbep_status nbep_output_create_staged(const char *path, const nbep_scene *sc, in
     /* The file is made under a temporary name and renamed to path once its layout is on
      * disk: a run killed while creating leaves no half-made file at path (only PATH.partial,
      * which the next run overwrites), and an older file at path survives until then. */
-    static const char suffix[] = ".partial";
     nbep_output *o = nbep__output_new(path, sc->state.n, d);
     if (!o)
         return NBEP_ENOMEM;
-    char *tmp = malloc(strlen(path) + sizeof suffix);
+    char *tmp = nbep_partial_path(path);
     if (!tmp) {
         nbep__output_release(&o);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: %s: no memory for the output handle", path);
     }
-    strcat(strcpy(tmp, path), suffix);
     o->ck_allowed = true;
     o->n_planes = sc->state.n_planes;
     if (nbep__output_periodic(o, sc, d) < 0) {

@@ -120,9 +120,8 @@ static slot *make_rows(const nbep_table *t)
 nbep_status nbep_output_sweep_write(const char *path, const nbep_table *t,
                                     const nbep_table_attr *attrs, size_t n_attrs, nbep_diag *d)
 {
-    static const char suffix[] = ".partial";
     nbep_status st = NBEP_EIO;
-    char *tmp = malloc(strlen(path) + sizeof suffix);
+    char *tmp = nbep_partial_path(path);
     slot *rows = make_rows(t);
     hid_t fapl = H5I_INVALID_HID, file = H5I_INVALID_HID, str = H5I_INVALID_HID;
     hid_t mem = H5I_INVALID_HID, ftype = H5I_INVALID_HID, space = H5I_INVALID_HID;
@@ -133,7 +132,6 @@ nbep_status nbep_output_sweep_write(const char *path, const nbep_table *t,
         st = NBEP_ENOMEM;
         goto done;
     }
-    sprintf(tmp, "%s%s", path, suffix);
     /* The 1.8 format, as for run files (output.c): no "open for write" mark that would make
      * HDF5 tools refuse a file whose writer was killed. */
     if ((fapl = H5Pcreate(H5P_FILE_ACCESS)) < 0 ||

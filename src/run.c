@@ -13,20 +13,10 @@
 #include "nbep/scene.h"
 #include "nbep/sim.h"
 
-/* The summary file is written as "WHERE.partial" and renamed to WHERE once complete, as the
- * run's file is: an older summary there survives a run refused or killed before its end (a
- * resume refused for a deck that does not match removed it, and a full disk left it empty). */
-static const char summary_suffix[] = ".partial";
-
-/* The temporary name of summary file `where` (malloc'd), or NULL without memory. */
-static char *summary_tmp(const char *where)
-{
-    char *tmp = malloc(strlen(where) + sizeof summary_suffix);
-    if (tmp)
-        strcat(strcpy(tmp, where), summary_suffix);
-    return tmp;
-}
-
+/* The summary file is written as "WHERE.partial" (nbep_partial_path) and renamed to WHERE once
+ * complete, as the run's file is: an older summary there survives a run refused or killed
+ * before its end (a resume refused for a deck that does not match removed it, and a full disk
+ * left it empty). */
 /* Opens the summary's temporary file before anything is simulated, so that an unwritable
  * path fails at once (stdout for "-", NULL when not asked for). */
 static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
@@ -38,7 +28,7 @@ static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
         *out = stdout;
         return NBEP_OK;
     }
-    char *tmp = summary_tmp(where);
+    char *tmp = nbep_partial_path(where);
     if (!tmp)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the summary's file name");
     *out = fopen(tmp, "w");
@@ -56,7 +46,7 @@ static void drop_summary(const char *where, FILE *f)
     if (!f || f == stdout)
         return;
     fclose(f);
-    char *tmp = summary_tmp(where);
+    char *tmp = nbep_partial_path(where);
     if (tmp)
         remove(tmp);
     free(tmp);
@@ -76,7 +66,7 @@ static nbep_status write_summary(const nbep_summary *s, const char *where, FILE 
     } else {
         bad |= fclose(f) != 0;
         err = err ? err : errno;
-        char *tmp = summary_tmp(where);
+        char *tmp = nbep_partial_path(where);
         if (!tmp || bad || rename(tmp, where) != 0) {
             err = err ? err : errno;
             if (tmp)

@@ -542,11 +542,9 @@ static void csv_text(FILE *f, const char *s)
 
 static nbep_status write_csv(const char *path, const nbep_table *t, nbep_diag *d)
 {
-    size_t len = strlen(path) + sizeof ".partial";
-    char *tmp = malloc(len);
+    char *tmp = nbep_partial_path(path);
     if (!tmp)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: %s: out of memory", path);
-    snprintf(tmp, len, "%s.partial", path);
     FILE *f = fopen(tmp, "w");
     if (!f) {
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot write: %s", tmp, strerror(errno));

@@ -37,6 +37,15 @@ void nbep_free_aligned(void *p)
     free(p);
 }
 
+char *nbep_partial_path(const char *path)
+{
+    static const char suffix[] = ".partial";
+    char *p = malloc(strlen(path) + sizeof suffix);
+    if (p)
+        strcat(strcpy(p, path), suffix);
+    return p;
+}
+
 double nbep_now(void)
 {
     struct timespec ts;

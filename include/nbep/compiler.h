@@ -55,6 +55,11 @@ void nbep_free_aligned(void *p);
 /* Seconds on the monotonic clock (for durations only). */
 double nbep_now(void);
 
+/* "PATH.partial" (malloc'd; NULL without memory): the name a file is written under before it
+ * is renamed to path once complete, so that a kill or a refusal never leaves a half-written
+ * file at path nor removes an older one (the run's file, its summary, a sweep's tables). */
+char *nbep_partial_path(const char *path);
+
 /* The process's peak resident memory in bytes since the last nbep_peak_rss_reset (Linux:
  * VmHWM of /proc/self/status, which writing 5 to /proc/self/clear_refs resets), else since it
  * started (getrusage's ru_maxrss); 0 when neither can be read. A sweep's rank runs one run
