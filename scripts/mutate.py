@@ -1135,6 +1135,18 @@ MUTANTS = [
      "json_loads(json, 0, NULL)", ["test_summary", "test_sweep"], None),
     ("ui-sweep-table-missing-real-zero", "src/output_sweep.c", "v->r = missing ? NAN : c->r[row];",
      "v->r = missing ? 0.0 : c->r[row];", ["test_sweep", "tests/test_sweep_cli.sh"], None),
+    # ---- the deck's window of magnitudes (scene.h NBEP_DECK_SCALE_MIN, _MAX) ----
+    ("ui-scale-min-edge-refused", "src/scene.c", "(magnitude >= NBEP_DECK_SCALE_MIN &&",
+     "(magnitude > NBEP_DECK_SCALE_MIN &&", ["tests/test_cli.sh"], None),
+    ("ui-scale-no-max", "src/scene.c", "magnitude <= NBEP_DECK_SCALE_MAX);",
+     "magnitude <= INFINITY);", ["tests/test_cli.sh"], None),
+    ("ui-scale-zero-refused", "src/scene.c", "    return magnitude == 0.0 ||\n",
+     "    return 0 ||\n", ["tests/test_cli.sh"], None),
+    ("ui-scale-vector-norm-underflows", "src/scene.c",
+     "return m > 0.0 ? m * nbep_vec3_norm(nbep_vec3_scale(v, 1.0 / m)) : 0.0;",
+     "return nbep_vec3_norm(v);", ["tests/test_cli.sh"], None),
+    ("ui-scale-box-sides-unchecked", "src/scene.c", "        if (!in_scale(h[k] - l[k]))",
+     "        if (0 && !in_scale(h[k] - l[k]))", ["tests/test_cli.sh"], None),
 ]
 
 

@@ -128,6 +128,22 @@ static got get_int(load *L, const config_setting_t *parent, const char *prefix, 
     return GOT;
 }
 
+/* NBEP_DECK_SCALE_MIN and _MAX (scene.h): the magnitudes whose squared products stay normal */
+#define SCALE_HINT "; choose units that bring it within (README, The deck: units)"
+
+static bool in_scale(double magnitude)
+{
+    return magnitude == 0.0 ||
+           (magnitude >= NBEP_DECK_SCALE_MIN && magnitude <= NBEP_DECK_SCALE_MAX);
+}
+
+/* |v| without overflow or underflow of the squares (v finite) */
+static double scaled_norm(nbep_vec3 v)
+{
+    const double m = fmax(fabs(v.x), fmax(fabs(v.y), fabs(v.z)));
+    return m > 0.0 ? m * nbep_vec3_norm(nbep_vec3_scale(v, 1.0 / m)) : 0.0;
+}
+
 static got get_float(load *L, const config_setting_t *parent, const char *prefix, int id,
                      double *out)
 {
@@ -159,6 +175,11 @@ static got get_float(load *L, const config_setting_t *parent, const char *prefix
         ERR(L, s, "%s must be in [0, 1] (got %g)", path, v);
         return BAD;
     }
+    if ((f & F_SCALE) && !in_scale(fabs(v))) {
+        ERR(L, s, "%s must be %s" SCALE_RANGE " in magnitude (got %g)%s", path,
+            f & F_GT0 ? "" : "0 or ", v, SCALE_HINT);
+        return BAD;
+    }
     *out = v;
     return GOT;
 }
@@ -185,6 +206,11 @@ static got get_vec3(load *L, const config_setting_t *parent, const char *prefix,
                    number_of(config_setting_get_elem(s, 2))};
     if (!nbep_vec3_isfinite(v)) {
         ERR(L, s, "%s must be finite (got [%g, %g, %g])", path, v.x, v.y, v.z);
+        return BAD;
+    }
+    if ((schema[id].flags & F_SCALE) && !in_scale(scaled_norm(v))) {
+        ERR(L, s, "%s must be 0 or " SCALE_RANGE " in length (got [%g, %g, %g], length %g)%s",
+            path, v.x, v.y, v.z, scaled_norm(v), SCALE_HINT);
         return BAD;
     }
     *out = v;
@@ -395,9 +421,19 @@ static bool check_corners(load *L, const config_setting_t *at, const char *prefi
         if (!(l[k] < h[k]))
             used += (size_t)snprintf(axes + used, sizeof axes - used, "%s%c: %g >= %g",
                                      used ? ", " : "", "xyz"[k], l[k], h[k]);
+    if (used) {
+        ERR(L, at, "%s.min must be < %s.max on every axis (got %s)", prefix, prefix, axes);
+        return false;
+    }
+    /* a side is a length (NBEP_DECK_SCALE_MIN, _MAX), a region's too */
+    for (int k = 0; k < 3; k++)
+        if (!in_scale(h[k] - l[k]))
+            used += (size_t)snprintf(axes + used, sizeof axes - used, "%s%c: %g",
+                                     used ? ", " : "", "xyz"[k], h[k] - l[k]);
     if (!used)
         return true;
-    ERR(L, at, "%s.min must be < %s.max on every axis (got %s)", prefix, prefix, axes);
+    ERR(L, at, "%s: every side must be " SCALE_RANGE " long (got %s)%s", prefix, axes,
+        SCALE_HINT);
     return false;
 }
 

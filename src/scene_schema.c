@@ -218,6 +218,8 @@ void nbep_scene_print_reference(FILE *f)
             fprintf(f, "; >= 1");
         if (e->flags & F_IN01)
             fprintf(f, "; in [0, 1]");
+        if (e->flags & F_SCALE)
+            fprintf(f, "; %s" SCALE_RANGE " in magnitude", e->flags & F_GT0 ? "" : "0 or ");
         if (e->flags & F_ONE)
             fprintf(f, "; single sphere only");
         if (e->flags & F_GROUP)

@@ -22,8 +22,14 @@ enum {
     F_GE1 = 1 << 3,        /* >= 1 */
     F_IN01 = 1 << 4,       /* in [0, 1] */
     F_ONE = 1 << 5,        /* only in a single-sphere entry (one with position) */
-    F_GROUP = 1 << 6       /* only in a generated group (one with count) */
+    F_GROUP = 1 << 6,      /* only in a generated group (one with count) */
+    F_SCALE = 1 << 7       /* a quantity with units: 0, or its magnitude (a vector's length) in
+                            * [NBEP_DECK_SCALE_MIN, NBEP_DECK_SCALE_MAX] */
 };
+
+/* The window of F_SCALE as text, as scene.h writes its bounds */
+#define SCALE_RANGE                                                                                \
+    NBEP_SCHEMA_XSTR(NBEP_DECK_SCALE_MIN) " to " NBEP_SCHEMA_XSTR(NBEP_DECK_SCALE_MAX)
 
 /* X(id, path, kind, flags, default as libconfig text or NULL, default as shown when there is
  * no literal one, meaning). "[]" in a path stands for any index of that list. */
@@ -33,7 +39,8 @@ enum {
       "\"naive\", \"seminaive\" or \"predictive\"")                                                \
     X(RUN_STEPS, "run.steps", INT, F_GE0, "1000", NULL,                                            \
       "time steps after t0; frames t0..t_steps")                                                   \
-    X(RUN_DT, "run.dt", FLOAT, F_GT0, "1.0e-3", NULL, "the constant time step")                    \
+    X(RUN_DT, "run.dt", FLOAT, F_GT0 | F_SCALE,                                                    \
+      "1.0e-3", NULL, "the constant time step")                                                    \
     X(RUN_THREADS, "run.threads", INT, F_GE0, "0", NULL,                                           \
       "threads; 0: OMP_NUM_THREADS, else all cores (\"cells\" with no gravity: the event loop "    \
       "runs as a team of up to 16, any others share the rebuilds and update only); at most "     \
@@ -56,11 +63,13 @@ enum {
       NBEP_SCHEMA_XSTR(NBEP_JAM_HOLD) " reactions in a "                                          \
       "step, at its next slow meeting with a held sphere or, carried by planes, any sphere)")    \
     X(PHYSICS, "physics", GROUP, 0, NULL, "-", "physics")                                          \
-    X(PHYSICS_GRAVITY, "physics.gravity", VEC3, 0, "[0.0, 0.0, 0.0]", NULL,                        \
+    X(PHYSICS_GRAVITY, "physics.gravity", VEC3, F_SCALE,                                           \
+      "[0.0, 0.0, 0.0]", NULL,                                                                     \
       "uniform acceleration of every sphere without its own")                                      \
     X(PHYSICS_RESTITUTION, "physics.restitution", FLOAT, F_IN01, "1.0", NULL,                      \
       "coefficient of restitution e, sphere-sphere and sphere-plane")                              \
-    X(PHYSICS_TC, "physics.tc", FLOAT, F_GE0, "1.0e-6", NULL,                                      \
+    X(PHYSICS_TC, "physics.tc", FLOAT, F_GE0 | F_SCALE,                                            \
+      "1.0e-6", NULL,                                                                              \
       "TC model: a collision within tc seconds of the sphere's previous one is elastic (stops "  \
       "inelastic collapse); 0: off")                                                               \
     X(PHYSICS_CARRY_DROP, "physics.carry_drop", FLOAT, F_GE0, NBEP_SCHEMA_XSTR(NBEP_CARRY_DROP),   \
@@ -72,7 +81,7 @@ enum {
       "optional: inward planes bounding [min, max], two per axis that is not periodic")          \
     X(BOX_MIN, "box.min", VEC3, F_REQUIRED, NULL, "required", "lower corner")                      \
     X(BOX_MAX, "box.max", VEC3, F_REQUIRED, NULL, "required",                                      \
-      "upper corner, above min on every axis")                                                     \
+      "upper corner, above min on every axis by " SCALE_RANGE)                                     \
     X(BOX_PERIODIC, "box.periodic", BOOL3, 0, "[false, false, false]", NULL,                       \
       "per axis: the box repeats along it (no walls there; contacts by the minimum image; "    \
       "positions wrapped, /frames/image counts the periods); a periodic side must exceed "      \
@@ -87,24 +96,29 @@ enum {
       "`spheres = ();` for a scene without spheres (a deck without the list is an error)")         \
     X(SPH_POSITION, "spheres.[].position", VEC3, F_ONE, NULL, "none",                              \
       "a single sphere's centre")                                                                  \
-    X(SPH_VELOCITY, "spheres.[].velocity", VEC3, F_ONE, "[0.0, 0.0, 0.0]", NULL,                   \
+    X(SPH_VELOCITY, "spheres.[].velocity", VEC3, F_ONE | F_SCALE,                                  \
+      "[0.0, 0.0, 0.0]", NULL,                                                                     \
       "a single sphere's velocity")                                                                \
     X(SPH_COUNT, "spheres.[].count", INT, F_GE0 | F_GROUP, NULL, "none",                           \
       "a group's number of spheres")                                                               \
-    X(SPH_RADIUS, "spheres.[].radius", FLOAT, F_REQUIRED | F_GT0, NULL, "required", "radius")      \
-    X(SPH_MASS, "spheres.[].mass", FLOAT, F_REQUIRED | F_GT0, NULL, "required", "mass")            \
-    X(SPH_ACCELERATION, "spheres.[].acceleration", VEC3, 0, NULL, "physics.gravity",               \
+    X(SPH_RADIUS, "spheres.[].radius", FLOAT, F_REQUIRED | F_GT0 | F_SCALE,                        \
+      NULL, "required", "radius")                                                                  \
+    X(SPH_MASS, "spheres.[].mass", FLOAT, F_REQUIRED | F_GT0 | F_SCALE,                            \
+      NULL, "required", "mass")                                                                    \
+    X(SPH_ACCELERATION, "spheres.[].acceleration", VEC3, F_SCALE,                                  \
+      NULL, "physics.gravity",                                                                     \
       "own uniform acceleration, replacing physics.gravity")                                       \
     X(SPH_PLACE, "spheres.[].place", STRING, F_GROUP, "\"random\"", NULL,                          \
       "\"random\" (uniform, non-overlapping) or \"lattice\" (simple cubic)")                       \
-    X(SPH_SPEED, "spheres.[].speed", FLOAT, F_GE0 | F_GROUP, "0.0", NULL,                          \
+    X(SPH_SPEED, "spheres.[].speed", FLOAT, F_GE0 | F_GROUP | F_SCALE,                             \
+      "0.0", NULL,                                                                                 \
       "each sphere of a group moves at this speed in a random direction")                          \
     X(SPH_REGION, "spheres.[].region", GROUP, F_GROUP, NULL, "the box",                            \
       "where a group is placed")                                                                   \
     X(SPH_REGION_MIN, "spheres.[].region.min", VEC3, F_REQUIRED, NULL, "required",                 \
       "lower corner")                                                                              \
     X(SPH_REGION_MAX, "spheres.[].region.max", VEC3, F_REQUIRED, NULL, "required",                 \
-      "upper corner, above min on every axis")                                                     \
+      "upper corner, above min on every axis by " SCALE_RANGE)                                     \
     X(OUTPUT, "output", GROUP, 0, NULL, "-", "output")                                             \
     X(OUTPUT_FILE, "output.file", STRING, 0, NULL, "the deck's name with .h5",                     \
       "HDF5 file (nbep-1 format)")                                                                 \

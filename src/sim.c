@@ -448,8 +448,8 @@ int nbep__sim_end_step(nbep_sim *sim, uint64_t step)
         sim->tmax[par][t].overlap = sim->tmax[par][t].overlap_rel = 0.0;
     }
     energy_total(sim, &row.kinetic_energy, &row.potential_energy);
-    /* A step whose energy or sums overflowed (a deck whose speeds or time step are too large
-     * for doubles): the run stops, with its message and status, as at the end of the step
+    /* A step whose energy or sums overflowed (no deck within the units' window, scene.h
+     * NBEP_DECK_SCALE_MIN and _MAX, gets here; a scene built otherwise can): the run stops, with its message and status, as at the end of the step
      * before: no row, no frame and no totals of this step, so that nothing non-finite reaches
      * the file or the summary (which reports the last step written). */
     bool finite = isfinite(row.kinetic_energy + row.potential_energy) && isfinite(row.virial);

@@ -1167,6 +1167,166 @@ static void test_hair_overlap_receding_or_at_rest_has_no_event(void **state)
     }
 }
 
+/* ---- units: the deck's window of magnitudes ----------------------------------------------- */
+
+/* The scene in units 2^-a of length, 2^-b of time and 2^-c of mass: every quantity multiplied
+ * by the power of two its dimensions give, which is exact (no rounding) while the results stay
+ * normal doubles. */
+static void scale_units(nbep_scene *sc, int a, int b, int c)
+{
+    nbep_state *s = &sc->state;
+    const double len = ldexp(1.0, a), vel = ldexp(1.0, a - b), acc = ldexp(1.0, a - 2 * b);
+    for (size_t i = 0; i < s->n; i++) {
+        s->pos[i] = nbep_vec3_scale(s->pos[i], len);
+        s->vel[i] = nbep_vec3_scale(s->vel[i], vel);
+        s->acc[i] = nbep_vec3_scale(s->acc[i], acc);
+        s->radius[i] *= len;
+        s->mass[i] = ldexp(s->mass[i], c);
+    }
+    for (size_t p = 0; p < s->n_planes; p++)
+        s->plane_offset[p] *= len;
+    for (int k = 0; k < 3; k++)
+        s->period[k] *= len;
+    sc->box_min = nbep_vec3_scale(sc->box_min, len);
+    sc->box_max = nbep_vec3_scale(sc->box_max, len);
+    sc->gravity = nbep_vec3_scale(sc->gravity, acc);
+    sc->dt = ldexp(sc->dt, b);
+    sc->tc = ldexp(sc->tc, b);
+}
+
+/* Units at the corners of the deck's window (scene.h, NBEP_DECK_SCALE_MIN and _MAX: every
+ * length, speed, acceleration, time and mass of these scenes lands within 1e-40 to 1e40):
+ * (a, b, c) as scale_units takes them. The last puts a fluid's pressure, m v^2 / L^3, at
+ * 2^510 times the reference's, the largest the window allows. */
+static const int CORNERS[][3] = {{-128, 0, -128}, {126, 0, 126},     {0, 126, 0},
+                                 {0, -126, 0},    {126, 126, -126}, {-128, -128, 128},
+                                 {-128, -127, 128}};
+#define N_CORNERS (sizeof CORNERS / sizeof *CORNERS)
+
+/* The fixture's scene, run first as it is and then scaled to each corner (time scaled only
+ * where times_exact: with accelerations the contact search bisects time by its bit patterns,
+ * which scaling time shifts, and its root, a few ulps off, ends elsewhere by round-off): the
+ * same events, and the same final state, energy drift and overlap, scaled, bit for bit. */
+static void assert_same_at_every_corner(fixture *f, nbep_scene *(*make)(fixture *, const char *),
+                                        const char *algo, bool times_exact)
+{
+    make(f, algo);
+    const outcome *ref = run(f, 1);
+    assert_clean(ref, algo);
+    assert_true(ref->sum.collisions > 0);
+    ref = keep_as_ref(f);
+    for (size_t k = 0; k < N_CORNERS; k++) {
+        const int a = CORNERS[k][0], b = times_exact ? CORNERS[k][1] : 0, c = CORNERS[k][2];
+        scale_units(make(f, algo), a, b, c);
+        const outcome *o = run(f, 1);
+        assert_clean(o, algo);
+        if (o->sum.collisions != ref->sum.collisions || o->reactions != ref->reactions)
+            fail_msg("%s in units 2^(%d, %d, %d): %llu collisions, %llu reactions (reference: "
+                     "%llu, %llu)", algo, a, b, c, (unsigned long long)o->sum.collisions,
+                     (unsigned long long)o->reactions,
+                     (unsigned long long)ref->sum.collisions,
+                     (unsigned long long)ref->reactions);
+        for (size_t i = 0; i < o->fin.n; i++) {
+            assert_vec3_same(o->fin.pos[i], nbep_vec3_scale(ref->fin.pos[i], ldexp(1.0, a)));
+            assert_vec3_same(o->fin.vel[i], nbep_vec3_scale(ref->fin.vel[i], ldexp(1.0, a - b)));
+        }
+        assert_true(o->sum.energy_final == ldexp(ref->sum.energy_final, c + 2 * (a - b)));
+        assert_true(o->sum.energy_rel_drift == ref->sum.energy_rel_drift);
+        assert_true(o->sum.max_overlap_rel == ref->sum.max_overlap_rel);
+        assert_true(o->sum.pressure.known == ref->sum.pressure.known);
+        if (ref->sum.pressure.known)
+            assert_true(o->sum.pressure.value ==
+                        ldexp(ref->sum.pressure.value, c - a - 2 * b));
+    }
+}
+
+/* 125 spheres at packing fraction 0.35 in a closed box, 20 steps of 0.05 */
+static nbep_scene *closed_fluid(fixture *f, const char *algo)
+{
+    nbep_test_scene_free(&f->sc);
+    nbep_scene *sc = f->sc = nbep_test_fluid(5, 0.35, 20, 0.05);
+    snprintf(sc->algorithm, sizeof sc->algorithm, "%s", algo);
+    return sc;
+}
+
+/* The same fluid in a periodic box (no walls), cells mode */
+static nbep_scene *periodic_fluid(fixture *f, const char *algo)
+{
+    (void)algo;
+    nbep_scene *closed = nbep_test_fluid(5, 0.35, 20, 0.05);
+    nbep_scene *sc = scene_new(f, closed->state.n, 0, "predictive", 20, 0.05);
+    sc->neighbors_cells = true;
+    nbep_test_set_periodic_box(sc, closed->box_max.x);
+    for (size_t i = 0; i < sc->state.n; i++)
+        nbep_test_set_sphere(sc, i, closed->state.pos[i], closed->state.vel[i], 0.5, 1.0, ZERO);
+    nbep_test_scene_free(&closed);
+    return sc;
+}
+
+/* 27 spheres of unequal masses dropped in a box under gravity, e = 0.8, the TC model on: they
+ * bounce, lean on one another and begin to settle (held spheres, lasting contacts) */
+static nbep_scene *small_pile(fixture *f, const char *algo)
+{
+    nbep_scene *sc = scene_new(f, 27, 6, algo, small_scale() ? 150 : 400, 1e-3);
+    sc->restitution = 0.8;
+    sc->tc = 1e-6;
+    sc->neighbors_cells = strcmp(algo, "predictive") == 0;
+    set_box(sc, 0, ZERO, (nbep_vec3){0.9, 0.9, 2.0});
+    for (size_t i = 0; i < 27; i++) {
+        double x = 0.15 + 0.3 * (double)(i % 3), y = 0.15 + 0.3 * (double)(i / 3 % 3);
+        double z = 0.3 + 0.45 * (double)(i / 9), s = 0.1 * sin(1.7 * (double)i);
+        nbep_test_set_sphere(sc, i, (nbep_vec3){x, y, z}, (nbep_vec3){s, -0.5 * s, 0.0}, 0.1,
+                             1.0 + 0.01 * (double)i, (nbep_vec3){0, 0, -9.81});
+    }
+    return sc;
+}
+
+static void test_scenes_in_units_at_the_window_corners_give_the_same_results_scaled(
+    void **state)
+{
+    fixture *f = *state;
+    for (size_t k = 0; k < N_ALGOS; k++)
+        assert_same_at_every_corner(f, closed_fluid, ALGOS[k], true);
+    assert_same_at_every_corner(f, periodic_fluid, "predictive", true);
+    for (size_t k = 0; k < N_ALGOS; k++)
+        assert_same_at_every_corner(f, small_pile, ALGOS[k], false);
+}
+
+/* ---- energies that overflow while a run goes ---------------------------------------------- */
+
+/* No deck within the window of magnitudes reaches this (its speeds and falls stay far inside
+ * doubles); the check stays for what a deck cannot give. A sphere falling under gravity with
+ * steps so long that the fall overflows: the run stops at that step with NBEP_ENUMERIC and one
+ * line, and its summary reports the step before, every number finite. */
+static void test_an_energy_that_overflows_stops_the_run_at_the_step_before(void **state)
+{
+    fixture *f = *state;
+    const struct {
+        double dt, g;
+        size_t floors; /* a floor 1 below: the fall overflows within the step that reaches it */
+        uint64_t stop; /* the step whose energy overflows */
+    } cases[] = {{1e200, 9.81, 1, 1}, {1.0, 9e153, 0, 2}};
+    for (size_t c = 0; c < sizeof cases / sizeof *cases; c++)
+        for (size_t k = 0; k < N_ALGOS; k++) {
+            nbep_scene *sc = scene_new(f, 1, cases[c].floors, ALGOS[k], 20, cases[c].dt);
+            if (cases[c].floors)
+                nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, -1.0);
+            nbep_test_set_sphere(sc, 0, ZERO, ZERO, 0.1, 1.0, (nbep_vec3){0, 0, -cases[c].g});
+            const outcome *o = run(f, 1);
+            char want[64];
+            snprintf(want, sizeof want, "energy became non-finite at step %llu",
+                     (unsigned long long)cases[c].stop);
+            if (o->status != NBEP_ENUMERIC || !strstr(o->message, want))
+                fail_msg("%s, dt %g: status %d, \"%s\"", ALGOS[k], cases[c].dt, (int)o->status,
+                         o->message);
+            assert_int_equal(o->sum.steps, cases[c].stop - 1);
+            assert_int_equal(o->w.frames, cases[c].stop); /* frames 0 .. stop - 1 */
+            assert_true(o->w.finite);
+            assert_true(isfinite(o->sum.energy_initial) && isfinite(o->sum.energy_final) &&
+                        isfinite(o->sum.energy_rel_drift) && isfinite(o->sum.max_overlap));
+        }
+}
+
 int main(void)
 {
 #define T(name) cmocka_unit_test_setup_teardown(name, setup, teardown)
@@ -1198,6 +1358,8 @@ int main(void)
         T(test_pile_in_a_box_with_e_0_8_ends_without_overlap),
         T(test_hair_overlap_approaching_reacts_once),
         T(test_hair_overlap_receding_or_at_rest_has_no_event),
+        T(test_scenes_in_units_at_the_window_corners_give_the_same_results_scaled),
+        T(test_an_energy_that_overflows_stops_the_run_at_the_step_before),
     };
 #undef T
     return cmocka_run_group_tests_name("extremes", tests, NULL, NULL);

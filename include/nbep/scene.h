@@ -20,6 +20,21 @@
  * thread's workspaces cost memory for nothing. */
 #define NBEP_THREADS_MAX 1024
 
+/* The magnitudes a deck's quantities with units may take when not 0 (a radius, a mass, a time
+ * step, tc, a box's side, a speed, a velocity's, an acceleration's length): within
+ * [NBEP_DECK_SCALE_MIN, NBEP_DECK_SCALE_MAX] in any one system of units. The contact kernels
+ * square products of a length and a speed (the quadratic's b^2 and |dv|^2 sigma^2), which
+ * underflowed past about 1e-75 and overflowed past 1e75 in (length x speed): a fluid scaled
+ * by 2^-300 in length and speed lost its collisions (overlaps of 1.9 radii) without a word.
+ * Within 1e+-40 every quantity nbep forms stays a normal double with room to spare: a product
+ * of a length and a speed differing in the last bit, squared, 1e-192 at least; a pressure
+ * m v^2 / L^3, 1e+-240; sums over 1e12 collisions, 1e+-252; a fall's speed after 1e9 steps,
+ * squared with a length, 1e258 (tests/test_extremes.c runs scenes scaled to the window's
+ * corners and gets the same frames, scaled). It holds every physical system of units: SI from
+ * below the electron's mass (9e-31 kg) and the Planck length (1.6e-35 m) to 1e40 kg. */
+#define NBEP_DECK_SCALE_MIN 1e-40
+#define NBEP_DECK_SCALE_MAX 1e40
+
 /* One `vary` entry of the sweep group: a deck path and the values it takes, each kept as the
  * libconfig text of the value so that it can be applied as "key=value" like --set. */
 typedef struct nbep_sweep_axis {
