@@ -321,6 +321,8 @@ static void test_unknown_settings_are_named_with_the_closest_known_one(void **st
                 DATA "scene_unknown.deck:7: unknown setting outptu (did you mean output?)");
 }
 
+/* By line (planes, checked before spheres and output, are on the last line); the three of line
+ * 2 in the order of the checks, which is not the order they are written in. */
 static void test_wrong_types_are_errors_but_integers_pass_for_numbers(void **state)
 {
     fixture *f = *state;
@@ -332,13 +334,13 @@ static void test_wrong_types_are_errors_but_integers_pass_for_numbers(void **sta
                      "(got [0.0, 0.0])",
                 DATA "scene_types.deck:4: box.max must be 3 numbers [x, y, z] "
                      "(got (1, 2, \"3\"))",
-                DATA "scene_types.deck:7: planes must be a list ( {...}, ... ) "
-                     "(got { normal = [0.0, 0.0, 1.0]; })",
                 DATA "scene_types.deck:5: spheres.[0].mass must be a number (got true)",
                 DATA "scene_types.deck:6: output.every must be an integer (got 2.5)",
                 DATA "scene_types.deck:6: output.stats must be true or false (got 1)",
                 DATA "scene_types.deck:6: output.fields must be an array of strings "
-                     "(got \"position\")");
+                     "(got \"position\")",
+                DATA "scene_types.deck:7: planes must be a list ( {...}, ... ) "
+                     "(got { normal = [0.0, 0.0, 1.0]; })");
 }
 
 static void test_numbers_beyond_double_range_are_not_finite(void **state)
@@ -522,13 +524,14 @@ static void test_integers_at_the_edges_of_64_bits_are_read_whole(void **state)
     nbep_scene_fini(&f->sc);
     LOAD_FAILS(f, NBEP_EDECK, DATA "scene_defaults.deck", "run.seed=-9223372036854775808",
                "run.steps=-9223372036854775809", "run.max_reactions=9223372036854775808");
+    /* in the order of the options (the seed's is found last, when the values are checked) */
     ASSERT_DIAG(&f->d,
+                "--set run.seed=-9223372036854775808: run.seed must be >= 0 "
+                "(got -9223372036854775808)",
                 "--set run.steps=-9223372036854775809: integer -9223372036854775809 does not "
                 "fit in 64 bits",
                 "--set run.max_reactions=9223372036854775808: integer 9223372036854775808 does "
-                "not fit in 64 bits",
-                "--set run.seed=-9223372036854775808: run.seed must be >= 0 "
-                "(got -9223372036854775808)");
+                "not fit in 64 bits");
 }
 
 static void test_more_spheres_than_memory_holds_fail_before_allocating(void **state)
@@ -557,6 +560,62 @@ static void test_deck_and_override_errors_come_in_one_pass(void **state)
                                      "physics.gravty (did you mean physics.gravity?)");
     assert_string_equal(f->d.msg[1], DATA "scene_unknown.deck:2: unknown setting physics.gravty "
                                           "(did you mean physics.gravity?)");
+}
+
+/* The loader checks run, physics, ..., spheres, output in turn; a deck written the other way
+ * round still has its errors listed from its top line down (a user fixes a deck top to
+ * bottom). Two errors of one line keep the checks' order, here not the order written (run.steps
+ * before run.dt on line 4; the radius before the mass on line 2). */
+static void test_errors_are_listed_by_line_whatever_order_the_checks_run(void **state)
+{
+    fixture *f = *state;
+    char path[256], want[6][320];
+    const char *deck = write_deck("scene_reversed.deck",
+                                  "output: { every = 0; };\n"
+                                  "spheres = ( { position = [0.0, 0.0, 0.0]; mass = 0.0; "
+                                  "radius = -1.0; } );\n"
+                                  "physics: { restitution = 2.0; };\n"
+                                  "run: { dt = 0.0; steps = -1; };\n",
+                                  path, sizeof path);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    const char *const says[6] = {"1: output.every must be >= 1 (got 0)",
+                                 "2: spheres.[0].radius must be > 0 (got -1)",
+                                 "2: spheres.[0].mass must be > 0 (got 0)",
+                                 "3: physics.restitution must be in [0, 1] (got 2)",
+                                 "4: run.steps must be >= 0 (got -1)",
+                                 "4: run.dt must be > 0 (got 0)"};
+    for (int k = 0; k < 6; k++)
+        snprintf(want[k], sizeof want[k], "%s:%s", deck, says[k]);
+    ASSERT_DIAG(&f->d, want[0], want[1], want[2], want[3], want[4], want[5]);
+}
+
+/* The command line's errors come first, in the order of its options (the checks find the
+ * seed's too big integer when the override is applied, the unknown setting next, the threads
+ * last), then the deck's by line; a message that names no line (no spheres) comes last, though
+ * found before the output's. */
+static void test_command_line_errors_come_first_in_order_and_unplaced_ones_last(void **state)
+{
+    fixture *f = *state;
+    char path[256], want[3][320], none[480];
+    const char *deck = write_deck("scene_unplaced.deck",
+                                  "run: { dt = 0.0; };\n"
+                                  "sphere = ();\n"
+                                  "output: { every = 0; };\n",
+                                  path, sizeof path);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "run.threads=-1", "physics.gravty=[0,0,-1]",
+               "run.seed=99999999999999999999");
+    snprintf(want[0], sizeof want[0], "%s:1: run.dt must be > 0 (got 0)", deck);
+    snprintf(want[1], sizeof want[1], "%s:2: unknown setting sphere (did you mean spheres?)",
+             deck);
+    snprintf(want[2], sizeof want[2], "%s:3: output.every must be >= 1 (got 0)", deck);
+    snprintf(none, sizeof none, "%s: no spheres: the deck has no `spheres` list (write "
+                                "`spheres = ();` for a scene without spheres)", deck);
+    ASSERT_DIAG(&f->d, "--set run.threads=-1: run.threads must be >= 0 (got -1)",
+                "--set physics.gravty=[0,0,-1]: unknown setting physics.gravty (did you mean "
+                "physics.gravity?)",
+                "--set run.seed=99999999999999999999: integer 99999999999999999999 does not fit "
+                "in 64 bits",
+                want[0], want[1], want[2], none);
 }
 
 /* ---- overrides ------------------------------------------------------------------------------ */
@@ -686,9 +745,10 @@ static void test_bad_override_value_is_reported_at_the_override(void **state)
     fixture *f = *state;
     LOAD_FAILS(f, NBEP_EDECK, DATA "scene_good.deck", "physics.restitution=1.5", "run.steps=many",
                "spheres.[0].radius=-0.5");
-    /* In validation order: run, physics, ..., spheres. */
-    ASSERT_DIAG(&f->d, "--set run.steps=many: run.steps must be an integer (got \"many\")",
+    /* In the order of the overrides, not of the checks (run, physics, ..., spheres). */
+    ASSERT_DIAG(&f->d,
                 "--set physics.restitution=1.5: physics.restitution must be in [0, 1] (got 1.5)",
+                "--set run.steps=many: run.steps must be an integer (got \"many\")",
                 "--set spheres.[0].radius=-0.5: spheres.[0].radius must be > 0 (got -0.5)");
 }
 
@@ -704,10 +764,10 @@ static void test_override_messages_name_their_origin(void **state)
     const char *const origins[] = {"-n many", NULL, "--add-a-sphere", "-g [0,0"};
     assert_int_equal(nbep_scene_load_from(DATA "scene_good.deck", ov, origins, 4, &f->sc, &f->d),
                      NBEP_EDECK);
-    ASSERT_DIAG(&f->d, "-g [0,0: bad value: syntax error",
-                "-n many: run.steps must be an integer (got \"many\")",
+    ASSERT_DIAG(&f->d, "-n many: run.steps must be an integer (got \"many\")",
                 "--set physics.restitution=1.5: physics.restitution must be in [0, 1] (got 1.5)",
-                "--add-a-sphere: spheres.[2] needs position (one sphere) or count (a group)");
+                "--add-a-sphere: spheres.[2] needs position (one sphere) or count (a group)",
+                "-g [0,0: bad value: syntax error");
 }
 
 static void test_malformed_overrides_are_one_line_each(void **state)
@@ -920,11 +980,12 @@ static void test_overlaps_with_spheres_and_planes_are_named(void **state)
 {
     fixture *f = *state;
     LOAD_FAILS(f, NBEP_EDECK, DATA "scene_overlap.deck");
+    /* by line: the planes are checked before the pairs */
     ASSERT_DIAG(&f->d,
-                DATA "scene_overlap.deck:8: spheres.[3] (sphere 3) overlaps box x-max by 0.25",
-                DATA "scene_overlap.deck:9: spheres.[4] (sphere 4) overlaps planes.[0] by 0.25",
                 DATA "scene_overlap.deck:7: spheres.[2] (sphere 2) overlaps spheres.[0] "
-                     "(sphere 0) by 0.25");
+                     "(sphere 0) by 0.25",
+                DATA "scene_overlap.deck:8: spheres.[3] (sphere 3) overlaps box x-max by 0.25",
+                DATA "scene_overlap.deck:9: spheres.[4] (sphere 4) overlaps planes.[0] by 0.25");
 }
 
 /* An overlap made by a --set of a position is blamed on that --set, not on the deck's line of
@@ -1307,6 +1368,8 @@ int main(void)
         T(test_integers_at_the_edges_of_64_bits_are_read_whole),
         T(test_more_spheres_than_memory_holds_fail_before_allocating),
         T(test_deck_and_override_errors_come_in_one_pass),
+        T(test_errors_are_listed_by_line_whatever_order_the_checks_run),
+        T(test_command_line_errors_come_first_in_order_and_unplaced_ones_last),
         T(test_overrides_replace_scalars_vectors_list_entries_and_strings),
         T(test_override_strings_may_be_quoted_or_look_like_numbers),
         T(test_override_path_and_value_may_have_spaces_around_them),
