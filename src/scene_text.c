@@ -465,6 +465,13 @@ static const char *named_by(const config_setting_t *s, unsigned *at)
     return ov;
 }
 
+uint64_t nbep__scene_rank_of(const nbep__scene_ctx *c, const config_setting_t *s)
+{
+    unsigned at;
+    const char *ov = named_by(s, &at);
+    return nbep__scene_rank(c, ov, at);
+}
+
 void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char *file, int line,
                        const char *fmt, ...)
 {

@@ -1052,6 +1052,38 @@ static void test_many_overlaps_list_twenty_then_count_the_rest(void **state)
     assert_string_equal(f->d.msg[20], last);
 }
 
+/* The twenty listed are the first twenty by line, as the list is ordered, not the first twenty
+ * found: the pair on line 5 is found after the 27 spheres of line 6 under the plane (planes
+ * are checked first), and is listed first; the others are counted. */
+static void test_many_overlaps_list_the_first_twenty_by_line(void **state)
+{
+    fixture *f = *state;
+    char path[256], want[21][400];
+    const char *deck = write_deck(
+        "scene_overlap_lines.deck",
+        "# 27 spheres under a plane (line 6) and one pair of spheres (line 5) that overlap\n"
+        "planes = ( { normal = [0.0, 0.0, 1.0]; point = [0.0, 0.0, 5.0]; } );\n"
+        "spheres = (\n"
+        "  { position = [20.0, 20.0, 20.0]; radius = 0.5; mass = 1.0; },\n"
+        "  { position = [20.5, 20.0, 20.0]; radius = 0.5; mass = 1.0; },\n"
+        "  { count = 27; radius = 0.1; mass = 1.0; place = \"lattice\";\n"
+        "    region = { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; }; }\n"
+        ");\n",
+        path, sizeof path);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    /* the lattice's 3 layers at z = 0.1, 0.5, 0.9: overlaps of 5, 4.6 and 4.2 */
+    snprintf(want[0], sizeof want[0],
+             "%s:5: spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) by 0.5", deck);
+    for (int k = 1; k < 20; k++)
+        snprintf(want[k], sizeof want[k], "%s:6: spheres.[2] (sphere %d) overlaps planes.[0] by %g",
+                 deck, k + 1, k + 1 < 11 ? 5.0 : k + 1 < 20 ? 4.6 : 4.2);
+    snprintf(want[20], sizeof want[20], "nbep: %s: 8 more overlaps not listed", deck);
+    const char *lines[21];
+    for (int k = 0; k < 21; k++)
+        lines[k] = want[k];
+    assert_diag(&f->d, lines, 21);
+}
+
 static void test_overlaps_between_radius_levels_are_each_found_once(void **state)
 {
     fixture *f = *state;
@@ -1400,6 +1432,7 @@ int main(void)
         T(test_an_overlap_a_set_made_names_the_set),
         T(test_overlap_names_entries_and_sphere_ids),
         T(test_many_overlaps_list_twenty_then_count_the_rest),
+        T(test_many_overlaps_list_the_first_twenty_by_line),
         T(test_overlaps_between_radius_levels_are_each_found_once),
         T(test_large_random_group_is_placed_without_overlap),
         T(test_random_spheres_avoid_a_big_single_sphere),
