@@ -307,6 +307,23 @@ static void test_syntax_error_carries_libconfig_text(void **state)
                             "in array");
 }
 
+/* The text is read for integers beyond 64 bits before libconfig parses it, so such an integer
+ * below a syntax error is found first; listed by line, the syntax error comes first. */
+static void test_a_syntax_error_comes_before_a_later_line_s_too_big_integer(void **state)
+{
+    fixture *f = *state;
+    char path[256], want[2][320];
+    const char *deck = write_deck("scene_syntax_then_int.deck",
+                                  "physics: { restitution = ; };\n"
+                                  "run: { steps = 99999999999999999999; };\n",
+                                  path, sizeof path);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    snprintf(want[0], sizeof want[0], "%s:1: syntax error", deck);
+    snprintf(want[1], sizeof want[1], "%s:2: integer 99999999999999999999 does not fit in 64 "
+                                      "bits", deck);
+    ASSERT_DIAG(&f->d, want[0], want[1]);
+}
+
 static void test_unknown_settings_are_named_with_the_closest_known_one(void **state)
 {
     fixture *f = *state;
@@ -590,9 +607,9 @@ static void test_errors_are_listed_by_line_whatever_order_the_checks_run(void **
 }
 
 /* The command line's errors come first, in the order of its options (the checks find the
- * seed's too big integer when the override is applied, the unknown setting next, the threads
- * last), then the deck's by line; a message that names no line (no spheres) comes last, though
- * found before the output's. */
+ * seed's too big integer and the bad path when the overrides are applied, the unknown setting
+ * next, the threads last), then the deck's by line; a message that names no line (no spheres)
+ * comes last, though found before the output's. */
 static void test_command_line_errors_come_first_in_order_and_unplaced_ones_last(void **state)
 {
     fixture *f = *state;
@@ -602,8 +619,8 @@ static void test_command_line_errors_come_first_in_order_and_unplaced_ones_last(
                                   "sphere = ();\n"
                                   "output: { every = 0; };\n",
                                   path, sizeof path);
-    LOAD_FAILS(f, NBEP_EDECK, deck, "run.threads=-1", "physics.gravty=[0,0,-1]",
-               "run.seed=99999999999999999999");
+    LOAD_FAILS(f, NBEP_EDECK, deck, "run.threads=-1", "spheres..count=1",
+               "physics.gravty=[0,0,-1]", "run.seed=99999999999999999999");
     snprintf(want[0], sizeof want[0], "%s:1: run.dt must be > 0 (got 0)", deck);
     snprintf(want[1], sizeof want[1], "%s:2: unknown setting sphere (did you mean spheres?)",
              deck);
@@ -611,6 +628,8 @@ static void test_command_line_errors_come_first_in_order_and_unplaced_ones_last(
     snprintf(none, sizeof none, "%s: no spheres: the deck has no `spheres` list (write "
                                 "`spheres = ();` for a scene without spheres)", deck);
     ASSERT_DIAG(&f->d, "--set run.threads=-1: run.threads must be >= 0 (got -1)",
+                "--set spheres..count=1: bad path \"spheres..count\": names and [N] indices "
+                "joined by dots, e.g. spheres.[0].count",
                 "--set physics.gravty=[0,0,-1]: unknown setting physics.gravty (did you mean "
                 "physics.gravity?)",
                 "--set run.seed=99999999999999999999: integer 99999999999999999999 does not fit "
@@ -1387,6 +1406,7 @@ int main(void)
         T(test_a_directory_as_deck_is_a_usage_error),
         T(test_syntax_error_names_the_deck_line),
         T(test_syntax_error_carries_libconfig_text),
+        T(test_a_syntax_error_comes_before_a_later_line_s_too_big_integer),
         T(test_unknown_settings_are_named_with_the_closest_known_one),
         T(test_wrong_types_are_errors_but_integers_pass_for_numbers),
         T(test_numbers_beyond_double_range_are_not_finite),
