@@ -11,7 +11,9 @@
  * Placement needs valid geometry, so it runs only when the box, planes, spheres, physics and
  * seed are valid; errors elsewhere (say run.algorithm) do not hide placement problems.
  * Locations are "deck:line" from libconfig, or "--set PATH=VALUE" for a setting an override
- * made: such settings carry the override text in their libconfig hook. */
+ * made: such settings carry the override text in their libconfig hook. The problems are listed
+ * by location, not in the order found (nbep__scene_rank): the command line's options in the
+ * order given, then the deck's lines from the top, then any that name neither. */
 #include "nbep/scene.h"
 
 #include "nbep/calendar.h"
@@ -676,7 +678,7 @@ static void parse_spheres(load *L, const config_setting_t *root, const nbep_scen
     /* No `spheres` at all is almost always a mistake (an empty or truncated file, the list
      * misnamed or commented out) that would otherwise run every step of nothing and exit 0;
      * a scene without spheres has to be asked for with an explicit empty list. */
-    if (g == NONE)
+    if (g == NONE) /* no line to name: listed after the lines' messages */
         nbep_diag_add(L->c.d, __FILE__, __LINE__,
                       "%s: no spheres: the deck has no `spheres` list (write `spheres = ();` "
                       "for a scene without spheres)",
@@ -1100,7 +1102,7 @@ nbep_status nbep_scene_load_from(const char *deck_path, const char *const *overr
                                  const char *const *origins, size_t n_overrides,
                                  nbep_scene *out, nbep_diag *d)
 {
-    load L = {.c = {deck_path, d, false}};
+    load L = {.c = {.deck = deck_path, .d = d}};
     nbep_scene sc;
     memset(&sc, 0, sizeof sc);
     config_t cfg, defaults;
@@ -1112,6 +1114,8 @@ nbep_status nbep_scene_load_from(const char *deck_path, const char *const *overr
     char *text = NULL;
     /* the overrides' labels, the hooks of the settings they make: freed with the tree */
     char **labels = calloc(n_overrides ? n_overrides : 1, sizeof *labels);
+    L.c.labels = (const char *const *)labels;
+    L.c.n_labels = n_overrides;
     const size_t errors0 = d->n_errors;
 
     nbep_status st = read_text(deck_path, &sc.deck_text, d);
@@ -1120,16 +1124,18 @@ nbep_status nbep_scene_load_from(const char *deck_path, const char *const *overr
     sc.deck_path = dup_string(&L, deck_path);
     sc.overrides = join_overrides(&L, overrides, n_overrides);
     size_t n_bad;
-    if (!(text = nbep__scene_widen(sc.deck_text, deck_path, true, d, &n_bad))) {
+    if (!(text = nbep__scene_widen(&L.c, sc.deck_text, NULL, &n_bad))) {
         L.c.oom = true;
         goto finish;
     }
     if (!config_read_string(&cfg, text)) {
         /* libconfig 1.5's most common text is just "syntax error": not said twice. */
         const char *what = config_error_text(&cfg);
-        nbep_diag_add(d, __FILE__, __LINE__, "%s:%d: syntax error%s%s", deck_path,
-                      config_error_line(&cfg), strcmp(what, "syntax error") ? ": " : "",
-                      strcmp(what, "syntax error") ? what : "");
+        const int at = config_error_line(&cfg);
+        nbep_diag_add_ranked(d, nbep__scene_rank(&L.c, NULL, at > 0 ? (uint64_t)at : 0),
+                             __FILE__, __LINE__, "%s:%d: syntax error%s%s", deck_path, at,
+                             strcmp(what, "syntax error") ? ": " : "",
+                             strcmp(what, "syntax error") ? what : "");
         goto finish;
     }
     for (size_t k = 0; k < n_overrides && !L.c.oom; k++) {
@@ -1185,6 +1191,9 @@ finish:
         st = d->n_errors > errors0 ? NBEP_EDECK : NBEP_OK;
     }
 done:
+    /* the load's messages in the order a user reads and fixes them (nbep__scene_rank): found
+     * check by check, they would jump about the deck */
+    nbep_diag_sort(d, errors0);
     free(entries);
     free(planes);
     free(text);

@@ -23,7 +23,20 @@ typedef struct nbep__scene_ctx {
     const char *deck;   /* borrowed: the deck path as given, for "deck:line:" */
     nbep_diag *d;       /* borrowed */
     bool oom;           /* an allocation failed: the load ends with NBEP_ENOMEM */
+    const char *const *labels;   /* borrowed: the overrides' labels in the order given (n_labels
+                                  * of them, NULL where not made yet), for nbep__scene_rank */
+    size_t n_labels;
 } nbep__scene_ctx;
+
+/* A message's rank in the load's list (nbep_diag_add_ranked; the load sorts its messages when
+ * it ends): the command line's options first, in the order given (label, one of c->labels),
+ * then the deck's lines from the top (label NULL, line >= 1); messages that name neither are
+ * added unranked (nbep_diag_add) and come last. Of one rank, messages keep the order of the
+ * checks. In scene_text.c. */
+uint64_t nbep__scene_rank(const nbep__scene_ctx *c, const char *label, uint64_t line);
+/* The rank of a message about setting s (nbep__scene_error's), for a check that chooses which
+ * of its messages to list. In scene_text.c. */
+uint64_t nbep__scene_rank_of(const nbep__scene_ctx *c, const config_setting_t *s);
 
 /* Adds "WHERE: message" for setting s, WHERE being "deck:line" or, for a setting an override
  * made (its libconfig hook holds the override text), "--set PATH=VALUE". file/line are ours.
@@ -54,10 +67,10 @@ void nbep__strbuf_fini(nbep__strbuf *b);
 /* ---- text (scene_text.c) -------------------------------------------------------------------- */
 
 /* Copy of libconfig text rewritten so that libconfig 1.5 reads what the user meant (see the
- * definition). Integers beyond 64 bits are reported as "ORIGIN:LINE: ..." (with_line) or
- * "ORIGIN: ..." and counted in *n_bad. NULL when out of memory. */
-char *nbep__scene_widen(const char *text, const char *origin, bool with_line, nbep_diag *d,
-                        size_t *n_bad);
+ * definition): the deck's text (label NULL) or an override's value (label, one of c->labels).
+ * Integers beyond 64 bits are reported as "DECK:LINE: ..." or "LABEL: ..." and counted in
+ * *n_bad. NULL when out of memory. */
+char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label, size_t *n_bad);
 /* Appends the libconfig text of a value: 0.9, 8192, 5000000000L, "text", [0.0, 1.0], (...),
  * { a = 1; }. Floats keep a '.' or an exponent so that they read back as floats. */
 void nbep__scene_value_text(const config_setting_t *s, nbep__strbuf *b);
@@ -128,11 +141,11 @@ NBEP_MUST_CHECK nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s,
                                               const nbep__scene_entry *e, size_t n_entries,
                                               uint64_t seed);
 /* Reports every pair of spheres, and every sphere and plane, that overlap by more than
- * round-off (the first few by name, then how many more). box_periodic is NULL without a box,
- * else the box's periodic axes: the box's walls (two per other axis) come first and are named
- * "box x-min" ..., the rest "planes.[k]"; pairs that overlap across a periodic face of the
- * box [lo, hi] are found too (spheres as placed, whose centres are inside the box). O(n)
- * expected time. */
+ * round-off (the first few in the load's order, nbep__scene_rank, by name, then how many
+ * more). box_periodic is NULL without a box, else the box's periodic axes: the box's walls
+ * (two per other axis) come first and are named "box x-min" ..., the rest "planes.[k]"; pairs
+ * that overlap across a periodic face of the box [lo, hi] are found too (spheres as placed,
+ * whose centres are inside the box). O(n) expected time. */
 NBEP_MUST_CHECK nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                                                        const nbep__scene_entry *e,
                                                        size_t n_entries,

@@ -35,7 +35,7 @@ static void ov_error(nbep__scene_ctx *c, const char *label, const char *file, in
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    nbep_diag_add(c->d, file, line, "%s: %s", label, msg);
+    nbep_diag_add_ranked(c->d, nbep__scene_rank(c, label, 0), file, line, "%s: %s", label, msg);
 }
 
 static bool is_name_start(char ch)
@@ -184,8 +184,7 @@ static const config_setting_t *parse_value(nbep__scene_ctx *c, const char *label
         nbep__strbuf b = {0};
         nbep__strbuf_add(&b, "v = %s;", value);
         size_t n_bad = 0;
-        char *text = b.oom ? NULL : nbep__scene_widen(nbep__strbuf_str(&b), label, false, c->d,
-                                                      &n_bad);
+        char *text = b.oom ? NULL : nbep__scene_widen(c, nbep__strbuf_str(&b), label, &n_bad);
         nbep__strbuf_fini(&b);
         if (!text) {
             c->oom = true;

@@ -501,6 +501,16 @@ nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s, const nbep__sce
 
 /* ---- the overlap check ---------------------------------------------------------------------- */
 
+/* An overlap to be listed by name. */
+typedef struct listed {
+    uint64_t rank;                  /* its message's (nbep__scene_rank_of) */
+    uint64_t seq;                   /* how many were found before it */
+    const config_setting_t *at;     /* borrowed: what it is blamed on */
+    size_t entry, a;                /* sphere a, of that entry, */
+    char other[96];                 /* overlaps this */
+    double by;
+} listed;
+
 typedef struct overlaps {
     nbep__scene_ctx *c;
     const nbep_state *s;
@@ -510,6 +520,12 @@ typedef struct overlaps {
     nbep_vec3 shift;      /* at its position plus this (a copy across periodic faces) */
     bool same_level;      /* they are in its level: only smaller ids count */
     uint64_t found;
+    /* the first OVERLAP_REPORT_MAX by rank, which the load lists first, not the first found:
+     * planes are checked before pairs, and a pair is found from either sphere's side, so the
+     * first found can leave out the deck's first lines (and a --set's, listed before them) */
+    listed kept[OVERLAP_REPORT_MAX];
+    size_t n_kept;
+    size_t last;          /* once all are kept: the one last by rank (then found) */
 } overlaps;
 
 /* The entry holding sphere id: the last one starting at or before it. */
@@ -539,13 +555,44 @@ static const config_setting_t *placed_by(const overlaps *o, size_t id)
  * placement, or on b's where only b's came from a --set (the change that made it). */
 static void report(overlaps *o, size_t a, size_t b, const char *other, double by)
 {
-    if (++o->found > OVERLAP_REPORT_MAX)
-        return;
+    const uint64_t seq = o->found++;
     const config_setting_t *at = placed_by(o, a);
     if (b != SIZE_MAX && !config_setting_get_hook(at) && config_setting_get_hook(placed_by(o, b)))
         at = placed_by(o, b);
-    NBEP__SCENE_ERR(o->c, at, "spheres.[%zu] (sphere %zu) overlaps %s by %g",
-                    entry_of(o->e, o->n_entries, a), a, other, by);
+    const uint64_t rank = nbep__scene_rank_of(o->c, at);
+    size_t k;
+    if (o->n_kept < OVERLAP_REPORT_MAX)
+        k = o->n_kept++;
+    else if (rank < o->kept[o->last].rank) /* found later: before the last only by rank */
+        k = o->last;
+    else
+        return;
+    listed *l = &o->kept[k];
+    *l = (listed){.rank = rank, .seq = seq, .at = at, .entry = entry_of(o->e, o->n_entries, a),
+                  .a = a, .by = by};
+    snprintf(l->other, sizeof l->other, "%s", other);
+    if (o->n_kept < OVERLAP_REPORT_MAX)
+        return;
+    o->last = 0;
+    for (size_t j = 1; j < o->n_kept; j++)
+        if (o->kept[j].rank > o->kept[o->last].rank ||
+            (o->kept[j].rank == o->kept[o->last].rank && o->kept[j].seq > o->kept[o->last].seq))
+            o->last = j;
+}
+
+static int cmp_seq(const void *x, const void *y)
+{
+    const listed *u = x, *v = y;
+    return u->seq < v->seq ? -1 : u->seq > v->seq;
+}
+
+/* The kept overlaps, in the order they were found (the load's sort puts them by rank). */
+static void list_kept(overlaps *o)
+{
+    qsort(o->kept, o->n_kept, sizeof *o->kept, cmp_seq);
+    for (size_t k = 0; k < o->n_kept; k++)
+        NBEP__SCENE_ERR(o->c, o->kept[k].at, "spheres.[%zu] (sphere %zu) overlaps %s by %g",
+                        o->kept[k].entry, o->kept[k].a, o->kept[k].other, o->kept[k].by);
 }
 
 static void check_pair(overlaps *o, size_t i, size_t j)
@@ -592,7 +639,7 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
             names[n_box++] = box_names[2 * a];
             names[n_box++] = box_names[2 * a + 1];
         }
-    overlaps o = {c, s, e, n_entries, 0, {0.0, 0.0, 0.0}, false, 0};
+    overlaps o = {.c = c, .s = s, .e = e, .n_entries = n_entries};
     const double blo[3] = {box_lo.x, box_lo.y, box_lo.z}, bhi[3] = {box_hi.x, box_hi.y, box_hi.z};
     for (size_t i = 0; i < s->n; i++)
         for (size_t p = 0; p < s->n_planes; p++) {
@@ -650,6 +697,7 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
         }
     }
     grid_fini(&g);
+    list_kept(&o);
     if (!ok)
         NBEP_FAIL(c->d, NBEP_ENOMEM, "nbep: no memory to check %zu spheres for overlaps", s->n);
     if (o.found > OVERLAP_REPORT_MAX)

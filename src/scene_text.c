@@ -161,8 +161,7 @@ static int hex_digit(char ch)
     return tolower((unsigned char)ch) - 'a' + 10;
 }
 
-char *nbep__scene_widen(const char *text, const char *origin, bool with_line, nbep_diag *d,
-                        size_t *n_bad)
+char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label, size_t *n_bad)
 {
     widen w = {0};
     const size_t n = strlen(text);
@@ -248,14 +247,16 @@ char *nbep__scene_widen(const char *text, const char *origin, bool with_line, nb
             const uint64_t max32 = neg ? (uint64_t)INT32_MAX + 1 : (uint64_t)INT32_MAX;
             if (overflow || v > max64) {
                 (*n_bad)++;
-                if (with_line)
-                    nbep_diag_add(d, __FILE__, __LINE__,
-                                  "%s:%zu: integer %s%.*s does not fit in 64 bits", origin, line,
-                                  neg ? "-" : "", (int)(end - start), text + start);
+                if (!label)
+                    nbep_diag_add_ranked(c->d, nbep__scene_rank(c, NULL, line), __FILE__,
+                                         __LINE__, "%s:%zu: integer %s%.*s does not fit in 64 "
+                                         "bits", c->deck, line, neg ? "-" : "",
+                                         (int)(end - start), text + start);
                 else
-                    nbep_diag_add(d, __FILE__, __LINE__,
-                                  "%s: integer %s%.*s does not fit in 64 bits", origin,
-                                  neg ? "-" : "", (int)(end - start), text + start);
+                    nbep_diag_add_ranked(c->d, nbep__scene_rank(c, label, 0), __FILE__,
+                                         __LINE__, "%s: integer %s%.*s does not fit in 64 bits",
+                                         label, neg ? "-" : "", (int)(end - start),
+                                         text + start);
                 /* Then read as 64-bit, where libconfig saturates it: no second message. */
             }
             widen_int t = {end, overflow || v > max32, hex, has_l};
@@ -440,6 +441,37 @@ const char *nbep__scene_origin(const config_setting_t *s, bool elements, unsigne
     return ov;
 }
 
+uint64_t nbep__scene_rank(const nbep__scene_ctx *c, const char *label, uint64_t line)
+{
+    if (label) { /* a label not among them (none is) would go after the others */
+        size_t k = 0;
+        while (k < c->n_labels && !(c->labels && c->labels[k] == label))
+            k++;
+        return k;
+    }
+    const uint64_t past = (uint64_t)c->n_labels; /* the deck's lines after every option */
+    return line < NBEP_DIAG_UNRANKED - past ? past + line : NBEP_DIAG_UNRANKED - 1;
+}
+
+/* What a message about setting s names: the override's label, or else (NULL) the deck's
+ * line *at (1 where the setting has none). */
+static const char *named_by(const config_setting_t *s, unsigned *at)
+{
+    /* a vector (array) with an element a --set replaced (physics.gravity.[0]="a"): the --set
+     * broke it (until 2026-11-30 the message named the deck's line, which was fine) */
+    const char *ov = nbep__scene_origin(s, s && config_setting_is_array(s), at);
+    if (!ov && !*at)
+        *at = 1;
+    return ov;
+}
+
+uint64_t nbep__scene_rank_of(const nbep__scene_ctx *c, const config_setting_t *s)
+{
+    unsigned at;
+    const char *ov = named_by(s, &at);
+    return nbep__scene_rank(c, ov, at);
+}
+
 void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char *file, int line,
                        const char *fmt, ...)
 {
@@ -448,12 +480,11 @@ void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char
     char msg[1024];
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    /* a vector (array) with an element a --set replaced (physics.gravity.[0]="a"): the --set
-     * broke it (until 2026-11-30 the message named the deck's line, which was fine) */
-    unsigned at = 0;
-    const char *ov = nbep__scene_origin(s, s && config_setting_is_array(s), &at);
+    unsigned at;
+    const char *ov = named_by(s, &at);
+    const uint64_t rank = nbep__scene_rank(c, ov, at);
     if (ov) /* the override's label (scene_override.c) */
-        nbep_diag_add(c->d, file, line, "%s: %s", ov, msg);
+        nbep_diag_add_ranked(c->d, rank, file, line, "%s: %s", ov, msg);
     else
-        nbep_diag_add(c->d, file, line, "%s:%u: %s", c->deck, at ? at : 1u, msg);
+        nbep_diag_add_ranked(c->d, rank, file, line, "%s:%u: %s", c->deck, at, msg);
 }

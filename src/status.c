@@ -61,6 +61,7 @@ void nbep_diag_fini(nbep_diag *d)
     nbep_diag_clear(d);
     free(d->msg);
     free(d->where);
+    free(d->rank);
     memset(d, 0, sizeof *d);
 }
 
@@ -87,10 +88,9 @@ static char *format(const char *fmt, ...)
     return s;
 }
 
-void nbep_diag_add(nbep_diag *d, const char *file, int line, const char *fmt, ...)
+static void diag_vadd(nbep_diag *d, uint64_t rank, const char *file, int line, const char *fmt,
+                      va_list ap)
 {
-    if (!d)
-        return;
     size_t i = d->n_errors++;
     /* Messages are stored densely: once an allocation failed, later ones are only counted. */
     if (i > d->cap)
@@ -105,15 +105,90 @@ void nbep_diag_add(nbep_diag *d, const char *file, int line, const char *fmt, ..
         if (!w)
             return;
         d->where = w;
+        uint64_t *r = realloc(d->rank, cap * sizeof *r);
+        if (!r)
+            return;
+        d->rank = r;
         for (size_t k = d->cap; k < cap; k++)
             d->msg[k] = d->where[k] = NULL;
         d->cap = cap;
     }
+    d->msg[i] = vformat(fmt, ap);
+    d->where[i] = format("%s:%d", file, line);
+    d->rank[i] = rank;
+}
+
+void nbep_diag_add(nbep_diag *d, const char *file, int line, const char *fmt, ...)
+{
+    if (!d)
+        return;
     va_list ap;
     va_start(ap, fmt);
-    d->msg[i] = vformat(fmt, ap);
+    diag_vadd(d, NBEP_DIAG_UNRANKED, file, line, fmt, ap);
     va_end(ap);
-    d->where[i] = format("%s:%d", file, line);
+}
+
+void nbep_diag_add_ranked(nbep_diag *d, uint64_t rank, const char *file, int line,
+                          const char *fmt, ...)
+{
+    if (!d)
+        return;
+    va_list ap;
+    va_start(ap, fmt);
+    diag_vadd(d, rank, file, line, fmt, ap);
+    va_end(ap);
+}
+
+/* One stored message and its place in the list before sorting (the tie-break that keeps the
+ * sort stable: qsort alone is not). */
+typedef struct diag_item {
+    uint64_t rank;
+    size_t seq;
+    char *msg, *where;
+} diag_item;
+
+static int cmp_item(const void *a, const void *b)
+{
+    const diag_item *x = a, *y = b;
+    if (x->rank != y->rank)
+        return x->rank < y->rank ? -1 : 1;
+    return x->seq < y->seq ? -1 : x->seq > y->seq;
+}
+
+void nbep_diag_sort(nbep_diag *d, size_t first)
+{
+    const size_t stored = d->n_errors < d->cap ? d->n_errors : d->cap;
+    if (first >= stored || stored - first < 2)
+        return;
+    const size_t n = stored - first;
+    diag_item *t = malloc(n * sizeof *t);
+    if (t) {
+        for (size_t k = 0; k < n; k++)
+            t[k] = (diag_item){d->rank[first + k], k, d->msg[first + k], d->where[first + k]};
+        qsort(t, n, sizeof *t, cmp_item);
+        for (size_t k = 0; k < n; k++) {
+            d->rank[first + k] = t[k].rank;
+            d->msg[first + k] = t[k].msg;
+            d->where[first + k] = t[k].where;
+        }
+        free(t);
+        return;
+    }
+    /* No memory for that: insertion in place, as stable (quadratic only in how far messages
+     * are out of place). */
+    for (size_t i = first + 1; i < stored; i++) {
+        const uint64_t r = d->rank[i];
+        char *m = d->msg[i], *w = d->where[i];
+        size_t j = i;
+        for (; j > first && d->rank[j - 1] > r; j--) {
+            d->rank[j] = d->rank[j - 1];
+            d->msg[j] = d->msg[j - 1];
+            d->where[j] = d->where[j - 1];
+        }
+        d->rank[j] = r;
+        d->msg[j] = m;
+        d->where[j] = w;
+    }
 }
 
 void nbep_diag_print(const nbep_diag *d, FILE *f)

@@ -237,6 +237,25 @@ check "--dt=-1 and --set run.steps=0.5: each message names what was typed (got $
     "[ $rc = 2 ] && grep -qxF -- '--dt=-1: run.dt must be > 0 (got -1)' '$tmp/stderr' &&
      grep -qxF -- '--set run.steps=0.5: run.steps must be an integer (got 0.5)' '$tmp/stderr'"
 
+# ---- several errors: the command line's first, in the order typed, then the deck's from its top
+# line down (the loader finds them run, physics, spheres, output: here the other way round) ----
+cat >"$tmp/reversed.deck" <<'EOF'
+output: { every = 0; };
+spheres = ( { position = [0.0, 0.0, 0.0]; radius = -1.0; mass = 1.0; } );
+run: { dt = 0.0; };
+EOF
+printf '%s\n' '--set physics.restitution=2: physics.restitution must be in [0, 1] (got 2)' \
+    '-n abc: run.steps must be an integer (got "abc")' \
+    "$tmp/reversed.deck:1: output.every must be >= 1 (got 0)" \
+    "$tmp/reversed.deck:2: spheres.[0].radius must be > 0 (got -1)" \
+    "$tmp/reversed.deck:3: run.dt must be > 0 (got 0)" >"$tmp/reversed.want"
+for cmd in check run; do
+    run_nbep $cmd "$tmp/reversed.deck" --set physics.restitution=2 -n abc --quiet \
+        -o "$tmp/never-reversed.h5"
+    check "nbep $cmd: the options' errors in the order typed, then the deck's by line (exit $rc)" \
+        "[ $rc = 2 ] && cmp -s '$tmp/reversed.want' '$tmp/stderr'"
+done
+
 # ---- --summary - writes the summary to stdout, one JSON object with SPEC's keys in SPEC's order,
 # and nothing else there (a coverage run showed no test took this path) ----------------------
 run_nbep run inputs/two-spheres.deck -n 3 --quiet --summary - -o "$tmp/stdout-summary.h5"

@@ -307,6 +307,23 @@ static void test_syntax_error_carries_libconfig_text(void **state)
                             "in array");
 }
 
+/* The text is read for integers beyond 64 bits before libconfig parses it, so such an integer
+ * below a syntax error is found first; listed by line, the syntax error comes first. */
+static void test_a_syntax_error_comes_before_a_later_line_s_too_big_integer(void **state)
+{
+    fixture *f = *state;
+    char path[256], want[2][320];
+    const char *deck = write_deck("scene_syntax_then_int.deck",
+                                  "physics: { restitution = ; };\n"
+                                  "run: { steps = 99999999999999999999; };\n",
+                                  path, sizeof path);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    snprintf(want[0], sizeof want[0], "%s:1: syntax error", deck);
+    snprintf(want[1], sizeof want[1], "%s:2: integer 99999999999999999999 does not fit in 64 "
+                                      "bits", deck);
+    ASSERT_DIAG(&f->d, want[0], want[1]);
+}
+
 static void test_unknown_settings_are_named_with_the_closest_known_one(void **state)
 {
     fixture *f = *state;
@@ -321,6 +338,8 @@ static void test_unknown_settings_are_named_with_the_closest_known_one(void **st
                 DATA "scene_unknown.deck:7: unknown setting outptu (did you mean output?)");
 }
 
+/* By line (planes, checked before spheres and output, are on the last line); the three of line
+ * 2 in the order of the checks, which is not the order they are written in. */
 static void test_wrong_types_are_errors_but_integers_pass_for_numbers(void **state)
 {
     fixture *f = *state;
@@ -332,13 +351,13 @@ static void test_wrong_types_are_errors_but_integers_pass_for_numbers(void **sta
                      "(got [0.0, 0.0])",
                 DATA "scene_types.deck:4: box.max must be 3 numbers [x, y, z] "
                      "(got (1, 2, \"3\"))",
-                DATA "scene_types.deck:7: planes must be a list ( {...}, ... ) "
-                     "(got { normal = [0.0, 0.0, 1.0]; })",
                 DATA "scene_types.deck:5: spheres.[0].mass must be a number (got true)",
                 DATA "scene_types.deck:6: output.every must be an integer (got 2.5)",
                 DATA "scene_types.deck:6: output.stats must be true or false (got 1)",
                 DATA "scene_types.deck:6: output.fields must be an array of strings "
-                     "(got \"position\")");
+                     "(got \"position\")",
+                DATA "scene_types.deck:7: planes must be a list ( {...}, ... ) "
+                     "(got { normal = [0.0, 0.0, 1.0]; })");
 }
 
 static void test_numbers_beyond_double_range_are_not_finite(void **state)
@@ -522,13 +541,14 @@ static void test_integers_at_the_edges_of_64_bits_are_read_whole(void **state)
     nbep_scene_fini(&f->sc);
     LOAD_FAILS(f, NBEP_EDECK, DATA "scene_defaults.deck", "run.seed=-9223372036854775808",
                "run.steps=-9223372036854775809", "run.max_reactions=9223372036854775808");
+    /* in the order of the options (the seed's is found last, when the values are checked) */
     ASSERT_DIAG(&f->d,
+                "--set run.seed=-9223372036854775808: run.seed must be >= 0 "
+                "(got -9223372036854775808)",
                 "--set run.steps=-9223372036854775809: integer -9223372036854775809 does not "
                 "fit in 64 bits",
                 "--set run.max_reactions=9223372036854775808: integer 9223372036854775808 does "
-                "not fit in 64 bits",
-                "--set run.seed=-9223372036854775808: run.seed must be >= 0 "
-                "(got -9223372036854775808)");
+                "not fit in 64 bits");
 }
 
 static void test_more_spheres_than_memory_holds_fail_before_allocating(void **state)
@@ -557,6 +577,64 @@ static void test_deck_and_override_errors_come_in_one_pass(void **state)
                                      "physics.gravty (did you mean physics.gravity?)");
     assert_string_equal(f->d.msg[1], DATA "scene_unknown.deck:2: unknown setting physics.gravty "
                                           "(did you mean physics.gravity?)");
+}
+
+/* The loader checks run, physics, ..., spheres, output in turn; a deck written the other way
+ * round still has its errors listed from its top line down (a user fixes a deck top to
+ * bottom). Two errors of one line keep the checks' order, here not the order written (run.steps
+ * before run.dt on line 4; the radius before the mass on line 2). */
+static void test_errors_are_listed_by_line_whatever_order_the_checks_run(void **state)
+{
+    fixture *f = *state;
+    char path[256], want[6][320];
+    const char *deck = write_deck("scene_reversed.deck",
+                                  "output: { every = 0; };\n"
+                                  "spheres = ( { position = [0.0, 0.0, 0.0]; mass = 0.0; "
+                                  "radius = -1.0; } );\n"
+                                  "physics: { restitution = 2.0; };\n"
+                                  "run: { dt = 0.0; steps = -1; };\n",
+                                  path, sizeof path);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    const char *const says[6] = {"1: output.every must be >= 1 (got 0)",
+                                 "2: spheres.[0].radius must be > 0 (got -1)",
+                                 "2: spheres.[0].mass must be > 0 (got 0)",
+                                 "3: physics.restitution must be in [0, 1] (got 2)",
+                                 "4: run.steps must be >= 0 (got -1)",
+                                 "4: run.dt must be > 0 (got 0)"};
+    for (int k = 0; k < 6; k++)
+        snprintf(want[k], sizeof want[k], "%s:%s", deck, says[k]);
+    ASSERT_DIAG(&f->d, want[0], want[1], want[2], want[3], want[4], want[5]);
+}
+
+/* The command line's errors come first, in the order of its options (the checks find the
+ * seed's too big integer and the bad path when the overrides are applied, the unknown setting
+ * next, the threads last), then the deck's by line; a message that names no line (no spheres)
+ * comes last, though found before the output's. */
+static void test_command_line_errors_come_first_in_order_and_unplaced_ones_last(void **state)
+{
+    fixture *f = *state;
+    char path[256], want[3][320], none[480];
+    const char *deck = write_deck("scene_unplaced.deck",
+                                  "run: { dt = 0.0; };\n"
+                                  "sphere = ();\n"
+                                  "output: { every = 0; };\n",
+                                  path, sizeof path);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "run.threads=-1", "spheres..count=1",
+               "physics.gravty=[0,0,-1]", "run.seed=99999999999999999999");
+    snprintf(want[0], sizeof want[0], "%s:1: run.dt must be > 0 (got 0)", deck);
+    snprintf(want[1], sizeof want[1], "%s:2: unknown setting sphere (did you mean spheres?)",
+             deck);
+    snprintf(want[2], sizeof want[2], "%s:3: output.every must be >= 1 (got 0)", deck);
+    snprintf(none, sizeof none, "%s: no spheres: the deck has no `spheres` list (write "
+                                "`spheres = ();` for a scene without spheres)", deck);
+    ASSERT_DIAG(&f->d, "--set run.threads=-1: run.threads must be >= 0 (got -1)",
+                "--set spheres..count=1: bad path \"spheres..count\": names and [N] indices "
+                "joined by dots, e.g. spheres.[0].count",
+                "--set physics.gravty=[0,0,-1]: unknown setting physics.gravty (did you mean "
+                "physics.gravity?)",
+                "--set run.seed=99999999999999999999: integer 99999999999999999999 does not fit "
+                "in 64 bits",
+                want[0], want[1], want[2], none);
 }
 
 /* ---- overrides ------------------------------------------------------------------------------ */
@@ -686,9 +764,10 @@ static void test_bad_override_value_is_reported_at_the_override(void **state)
     fixture *f = *state;
     LOAD_FAILS(f, NBEP_EDECK, DATA "scene_good.deck", "physics.restitution=1.5", "run.steps=many",
                "spheres.[0].radius=-0.5");
-    /* In validation order: run, physics, ..., spheres. */
-    ASSERT_DIAG(&f->d, "--set run.steps=many: run.steps must be an integer (got \"many\")",
+    /* In the order of the overrides, not of the checks (run, physics, ..., spheres). */
+    ASSERT_DIAG(&f->d,
                 "--set physics.restitution=1.5: physics.restitution must be in [0, 1] (got 1.5)",
+                "--set run.steps=many: run.steps must be an integer (got \"many\")",
                 "--set spheres.[0].radius=-0.5: spheres.[0].radius must be > 0 (got -0.5)");
 }
 
@@ -704,10 +783,10 @@ static void test_override_messages_name_their_origin(void **state)
     const char *const origins[] = {"-n many", NULL, "--add-a-sphere", "-g [0,0"};
     assert_int_equal(nbep_scene_load_from(DATA "scene_good.deck", ov, origins, 4, &f->sc, &f->d),
                      NBEP_EDECK);
-    ASSERT_DIAG(&f->d, "-g [0,0: bad value: syntax error",
-                "-n many: run.steps must be an integer (got \"many\")",
+    ASSERT_DIAG(&f->d, "-n many: run.steps must be an integer (got \"many\")",
                 "--set physics.restitution=1.5: physics.restitution must be in [0, 1] (got 1.5)",
-                "--add-a-sphere: spheres.[2] needs position (one sphere) or count (a group)");
+                "--add-a-sphere: spheres.[2] needs position (one sphere) or count (a group)",
+                "-g [0,0: bad value: syntax error");
 }
 
 static void test_malformed_overrides_are_one_line_each(void **state)
@@ -920,11 +999,12 @@ static void test_overlaps_with_spheres_and_planes_are_named(void **state)
 {
     fixture *f = *state;
     LOAD_FAILS(f, NBEP_EDECK, DATA "scene_overlap.deck");
+    /* by line: the planes are checked before the pairs */
     ASSERT_DIAG(&f->d,
-                DATA "scene_overlap.deck:8: spheres.[3] (sphere 3) overlaps box x-max by 0.25",
-                DATA "scene_overlap.deck:9: spheres.[4] (sphere 4) overlaps planes.[0] by 0.25",
                 DATA "scene_overlap.deck:7: spheres.[2] (sphere 2) overlaps spheres.[0] "
-                     "(sphere 0) by 0.25");
+                     "(sphere 0) by 0.25",
+                DATA "scene_overlap.deck:8: spheres.[3] (sphere 3) overlaps box x-max by 0.25",
+                DATA "scene_overlap.deck:9: spheres.[4] (sphere 4) overlaps planes.[0] by 0.25");
 }
 
 /* An overlap made by a --set of a position is blamed on that --set, not on the deck's line of
@@ -989,6 +1069,38 @@ static void test_many_overlaps_list_twenty_then_count_the_rest(void **state)
     snprintf(last, sizeof last, "nbep: " DATA "scene_overlap_big.deck: %zu more overlaps not "
                                 "listed", expected - 20);
     assert_string_equal(f->d.msg[20], last);
+}
+
+/* The twenty listed are the first twenty by line, as the list is ordered, not the first twenty
+ * found: the pair on line 5 is found after the 27 spheres of line 6 under the plane (planes
+ * are checked first), and is listed first; the others are counted. */
+static void test_many_overlaps_list_the_first_twenty_by_line(void **state)
+{
+    fixture *f = *state;
+    char path[256], want[21][400];
+    const char *deck = write_deck(
+        "scene_overlap_lines.deck",
+        "# 27 spheres under a plane (line 6) and one pair of spheres (line 5) that overlap\n"
+        "planes = ( { normal = [0.0, 0.0, 1.0]; point = [0.0, 0.0, 5.0]; } );\n"
+        "spheres = (\n"
+        "  { position = [20.0, 20.0, 20.0]; radius = 0.5; mass = 1.0; },\n"
+        "  { position = [20.5, 20.0, 20.0]; radius = 0.5; mass = 1.0; },\n"
+        "  { count = 27; radius = 0.1; mass = 1.0; place = \"lattice\";\n"
+        "    region = { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; }; }\n"
+        ");\n",
+        path, sizeof path);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    /* the lattice's 3 layers at z = 0.1, 0.5, 0.9: overlaps of 5, 4.6 and 4.2 */
+    snprintf(want[0], sizeof want[0],
+             "%s:5: spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) by 0.5", deck);
+    for (int k = 1; k < 20; k++)
+        snprintf(want[k], sizeof want[k], "%s:6: spheres.[2] (sphere %d) overlaps planes.[0] by %g",
+                 deck, k + 1, k + 1 < 11 ? 5.0 : k + 1 < 20 ? 4.6 : 4.2);
+    snprintf(want[20], sizeof want[20], "nbep: %s: 8 more overlaps not listed", deck);
+    const char *lines[21];
+    for (int k = 0; k < 21; k++)
+        lines[k] = want[k];
+    assert_diag(&f->d, lines, 21);
 }
 
 static void test_overlaps_between_radius_levels_are_each_found_once(void **state)
@@ -1294,6 +1406,7 @@ int main(void)
         T(test_a_directory_as_deck_is_a_usage_error),
         T(test_syntax_error_names_the_deck_line),
         T(test_syntax_error_carries_libconfig_text),
+        T(test_a_syntax_error_comes_before_a_later_line_s_too_big_integer),
         T(test_unknown_settings_are_named_with_the_closest_known_one),
         T(test_wrong_types_are_errors_but_integers_pass_for_numbers),
         T(test_numbers_beyond_double_range_are_not_finite),
@@ -1307,6 +1420,8 @@ int main(void)
         T(test_integers_at_the_edges_of_64_bits_are_read_whole),
         T(test_more_spheres_than_memory_holds_fail_before_allocating),
         T(test_deck_and_override_errors_come_in_one_pass),
+        T(test_errors_are_listed_by_line_whatever_order_the_checks_run),
+        T(test_command_line_errors_come_first_in_order_and_unplaced_ones_last),
         T(test_overrides_replace_scalars_vectors_list_entries_and_strings),
         T(test_override_strings_may_be_quoted_or_look_like_numbers),
         T(test_override_path_and_value_may_have_spaces_around_them),
@@ -1337,6 +1452,7 @@ int main(void)
         T(test_an_overlap_a_set_made_names_the_set),
         T(test_overlap_names_entries_and_sphere_ids),
         T(test_many_overlaps_list_twenty_then_count_the_rest),
+        T(test_many_overlaps_list_the_first_twenty_by_line),
         T(test_overlaps_between_radius_levels_are_each_found_once),
         T(test_large_random_group_is_placed_without_overlap),
         T(test_random_spheres_avoid_a_big_single_sphere),

@@ -4,6 +4,7 @@
 #define NBEP_STATUS_H
 
 #include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 
 #include "nbep/compiler.h"
@@ -34,13 +35,18 @@ nbep_status nbep_status_of_open(int err);
 const char *nbep_status_text(nbep_status s);
 
 /* Messages for the user, one line each, plus where in our source each was raised (shown only
- * with NBEP_DEBUG set in the environment). Not thread-safe: one diag per thread. */
+ * with NBEP_DEBUG set in the environment), and each one's rank for nbep_diag_sort. Not
+ * thread-safe: one diag per thread. */
 typedef struct nbep_diag {
     size_t n_errors;       /* messages added */
     size_t cap;
     char **msg;            /* owned, n_errors strings */
     char **where;          /* owned, "file:line" of our source */
+    uint64_t *rank;        /* owned: where nbep_diag_sort puts each message, smaller first */
 } nbep_diag;
+
+/* The rank of a message nbep_diag_add adds: after every message given a smaller one. */
+#define NBEP_DIAG_UNRANKED UINT64_MAX
 
 void nbep_diag_init(nbep_diag *d);
 void nbep_diag_fini(nbep_diag *d);
@@ -48,6 +54,15 @@ void nbep_diag_fini(nbep_diag *d);
  * is dropped but n_errors still counts it, so callers still fail. */
 void nbep_diag_add(nbep_diag *d, const char *file, int line, const char *fmt, ...)
     NBEP_PRINTF(4, 5);
+/* nbep_diag_add with the message's rank: its place once nbep_diag_sort orders the list (a
+ * module that collects many messages says what its ranks mean; the scene's are the command
+ * line's options, then the deck's lines). */
+void nbep_diag_add_ranked(nbep_diag *d, uint64_t rank, const char *file, int line,
+                          const char *fmt, ...) NBEP_PRINTF(5, 6);
+/* Orders the messages from the first'th on by rank, those of one rank in the order they were
+ * added (a stable sort); the messages before `first` stay where they are, and those lost to a
+ * failed allocation stay counted at the end (nbep_diag_print). */
+void nbep_diag_sort(nbep_diag *d, size_t first);
 /* Prints every message verbatim, one per line; with NBEP_DEBUG set, each line is followed by
  * the source location that raised it. Messages name their own place ("deck:line: ...") or
  * start with "nbep: ". */
