@@ -5,8 +5,6 @@
 #include <math.h>
 #include <string.h>
 
-#include "nbep/predict.h"
-
 /* Cell sides are at least reach times this, so that the hysteresis margin (h - reach)/4 is at
  * least reach/32: far above round-off, small enough to cost few extra partners. */
 #define SIDE_FACTOR (1.0 + 1.0 / 8.0)
@@ -169,29 +167,6 @@ static void cell_coords(const nbep_cells *g, size_t c, size_t xyz[3])
     xyz[0] = c % g->dim[0];
     xyz[1] = c / g->dim[0] % g->dim[1];
     xyz[2] = c / (g->dim[0] * g->dim[1]);
-}
-
-double nbep_cells_exit_time(const nbep_cells *g, uint32_t i, nbep_vec3 p, nbep_vec3 v,
-                            nbep_vec3 a)
-{
-    size_t xyz[3];
-    cell_coords(g, g->m[i].cell, xyz);
-    const double x[3] = {p.x, p.y, p.z}, u[3] = {v.x, v.y, v.z}, acc[3] = {a.x, a.y, a.z};
-    const double o[3] = {g->lo.x, g->lo.y, g->lo.z};
-    double t = NBEP_NEVER;
-    for (int k = 0; k < 3; k++) {
-        /* each interior face as a plane facing into the grown cell, the centre as a point
-         * (on a periodic axis every face is interior) */
-        if (xyz[k] > 0 || g->periodic[k]) {
-            double face = o[k] + (double)xyz[k] * g->h[k] - g->margin[k];
-            t = fmin(t, nbep_predict_plane(x[k] - face, u[k], acc[k]));
-        }
-        if (xyz[k] + 1 < g->dim[k] || g->periodic[k]) {
-            double face = o[k] + (double)(xyz[k] + 1) * g->h[k] + g->margin[k];
-            t = fmin(t, nbep_predict_plane(face - x[k], -u[k], -acc[k]));
-        }
-    }
-    return t;
 }
 
 void nbep_cells_block_of(const nbep_cells *g, size_t c, nbep_cells_block *b)

@@ -4,15 +4,15 @@
  * block around either), so a re-prediction tests only that block.
  *
  * Membership has hysteresis: a sphere stays a member of its cell until its centre leaves the
- * cell grown by a margin of (h - reach)/4 on every interior face (nbep_cells_exit_time gives
- * when), and is then moved to the cell its centre is in. Members of two cells two apart are
+ * cell grown by a margin of (h - reach)/4 on every interior face, and is then moved to the
+ * cell its centre is in. Members of two cells two apart are
  * then still more than reach apart, with (h - reach)/2 to spare for round-off, and a sphere
  * that grazes a face does not flip between cells. The outer faces of the box have no margin
  * and no exit: spheres beyond them (walls keep them in) are clamped into the edge cells, which
  * keeps the adjacency property.
  *
  * Periodic axes (box.periodic): the cells wrap around, so the first and last cells of such an
- * axis are neighbours and every face is interior (it has a margin and an exit). There are at
+ * axis are neighbours and every face is interior (it has a margin). There are at
  * least three cells along a periodic axis, so that a neighbouring cell is one copy of the box
  * only: a block names each neighbour cell with the period it lies in (-1, 0, +1), and the
  * sphere a re-prediction tests is at its position plus that many box lengths. The caller keeps
@@ -88,12 +88,6 @@ void nbep_cells_move(nbep_cells *g, uint32_t i, size_t c);
  * cells engine locates a rebuilt list's centre for its walk, then places it at the commit),
  * moving it into c if that is another. O(1). */
 void nbep_cells_place(nbep_cells *g, uint32_t i, nbep_vec3 p, size_t c);
-
-/* Time from now until the centre of sphere i (at p, flying with v and a) leaves its cell's
- * box grown by the margin, through a face that has a neighbour cell; NBEP_NEVER when it does
- * not (no interior faces, or it never reaches one). */
-double nbep_cells_exit_time(const nbep_cells *g, uint32_t i, nbep_vec3 p, nbep_vec3 v,
-                            nbep_vec3 a);
 
 /* The block around cell c: per axis k, cnt[k] (1 to 3) cell coordinates idx[k][] (c's and its
  * neighbours', clamped at walls, wrapped on periodic axes) and the period each lies in,
