@@ -397,8 +397,9 @@ MUTANTS = [
     ("cells-block-lo", "src/cells.c", "        if (xyz[k] > 0) {\n            b->idx[k][m] = xyz[k] - 1;", "        if (0) {\n            b->idx[k][m] = xyz[k] - 1;",
      ["test_cells"] + CELLS, None),
     ("cells-block-hi", "src/cells.c", "        if (xyz[k] + 1 < g->dim[k]) {", "        if (0) {", ["test_cells"] + CELLS, None),
-    ("cells-margin-wide", "src/cells.c", "0.25 * (g->h[k] - reach) : 0.0;",
-     "0.75 * (g->h[k] - reach) : 0.0;", ["test_cells"] + CELLS, None),
+    # sides a hundredth short of the reach: places within reach can lie two cells apart
+    ("cells-side-below-reach", "src/cells.c", "reach > 0.0 && isfinite(reach) ? reach :",
+     "reach > 0.0 && isfinite(reach) ? 0.99 * reach :", ["test_cells"] + CELLS, None),
     # two cells along a periodic axis: the one neighbour is both below and above
     ("cells-periodic-two-cells", "src/cells.c", "if (g->periodic[k] && cells < 3.0)\n            cells = 3.0;",
      "if (g->periodic[k] && cells < 2.0)\n            cells = 2.0;", ["test_cells"] + CELLS, None),
