@@ -405,7 +405,7 @@ MUTANTS = [
      "if (g->periodic[k] && cells < 2.0)\n            cells = 2.0;", ["test_cells"] + CELLS, None),
     ("cells-clamp-past-last", "src/cells.c", "return c >= (double)dim ? dim - 1 : (size_t)c;",
      "return c > (double)dim ? dim - 1 : (size_t)c;", ["test_cells"] + CELLS, None),
-    ("cells-place-no-move", "src/cells.c", "    if (c != g->m[i].cell)\n        nbep_cells_move(g, i, c);", "",
+    ("cells-place-no-move", "src/cells.c", "    if (c != g->m[i].cell)\n        move_member(g, i, c);", "",
      ["test_cells"] + LISTS + CELLS, None),
     # ---- the cells event loop ----
     # every scene taken for equal masses: a pair of unequal masses reacts with the first's

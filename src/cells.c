@@ -137,7 +137,8 @@ void nbep_cells_link(nbep_cells *g)
         link_in(g, (uint32_t)i, g->m[i].cell);
 }
 
-void nbep_cells_move(nbep_cells *g, uint32_t i, size_t c)
+/* Moves sphere i into cell c (its place unchanged). O(1). */
+static void move_member(nbep_cells *g, uint32_t i, size_t c)
 {
     const uint32_t nx = g->m[i].next;
     if (g->prev[i] != NBEP_CELLS_NONE)
@@ -154,7 +155,7 @@ void nbep_cells_place(nbep_cells *g, uint32_t i, nbep_vec3 p, size_t c)
     assert(c < g->n_cells);
     g->m[i].at = p;
     if (c != g->m[i].cell)
-        nbep_cells_move(g, i, c);
+        move_member(g, i, c);
 }
 
 static void cell_coords(const nbep_cells *g, size_t c, size_t xyz[3])

@@ -81,8 +81,6 @@ size_t nbep_cells_locate(const nbep_cells *g, nbep_vec3 p);
 void nbep_cells_assign(nbep_cells *g, const nbep_vec3 *pos, size_t lo, size_t hi);
 /* Links every sphere into its assigned cell's list (ascending ids within a cell). One thread. */
 void nbep_cells_link(nbep_cells *g);
-/* Moves sphere i into cell c. O(1). */
-void nbep_cells_move(nbep_cells *g, uint32_t i, size_t c);
 /* Gives sphere i the place p, whose cell c = nbep_cells_locate(g, p) the caller has found (the
  * cells engine locates a rebuilt list's centre for its walk, then places it at the commit),
  * moving it into c if that is another. O(1). */
