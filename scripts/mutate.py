@@ -516,6 +516,13 @@ MUTANTS = [
      None),
     ("evloop-place-old-cell", "src/evloop.c", "nbep_cells_place(&e->cells, i, w->at, w->at_cell);",
      "nbep_cells_place(&e->cells, i, w->at, e->cells.m[i].cell);", LISTS + CELLS, None),
+    # the cells laid out for less than the cutoff (as before the hysteresis went, cut / 1.125
+    # with no side factor to cancel it): a walk misses centres two cells away
+    ("evloop-cells-below-cut", "src/evloop.c",
+     "nbep_cells_init(&e->cells, lo, hi, e->cut, n, periodic, d);",
+     "nbep_cells_init(&e->cells, lo, hi, e->cut / 1.125, n, periodic, d);", LISTS + CELLS, None),
+    ("evloop-refit-below-cut", "src/evloop.c", "nbep_cells_refit(&e->cells, lo, hi, e->cut, d);",
+     "nbep_cells_refit(&e->cells, lo, hi, e->cut / 1.125, d);", LISTS + CELLS, None),
     ("evloop-rebuild-list-short", "src/evloop.c", "e->failed ? 0 : w->n_near", "e->failed ? 0 : w->n_near - (w->n_near > 0)",
      LISTS + CELLS, None),
     ("cells-gap-slab-shrunk", "include/nbep/cells.h", "s = g->h[k] / 64.0;", "s = -g->h[k] / 8.0;",
