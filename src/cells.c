@@ -1,22 +1,16 @@
-/* Cell lists with hysteresis (see cells.h). */
+/* Cell lists (see cells.h). */
 #include "nbep/cells.h"
 
 #include <assert.h>
 #include <math.h>
 #include <string.h>
 
-#include "nbep/predict.h"
-
-/* Cell sides are at least reach times this, so that the hysteresis margin (h - reach)/4 is at
- * least reach/32: far above round-off, small enough to cost few extra partners. */
-#define SIDE_FACTOR (1.0 + 1.0 / 8.0)
-
 size_t nbep_cells_bytes(size_t n)
 {
     return (2 * n + 9) * sizeof(uint32_t) + n * (sizeof(nbep_cells_member) + sizeof(uint32_t));
 }
 
-/* The cells' layout over [lo, hi] (sides, margins, counts): see nbep_cells_init. */
+/* The cells' layout over [lo, hi] (sides, counts): see nbep_cells_init. */
 static void lay_out(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double reach)
 {
     g->lo = lo;
@@ -24,8 +18,8 @@ static void lay_out(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double reach)
     const double ext[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
     const double cap = 2.0 * (double)g->n + 8.0;
     /* no contacts possible (no spheres: reach 0): one cell per axis */
-    const double base = reach > 0.0 && isfinite(reach) ? reach * SIDE_FACTOR
-                                                       : fmax(ext[0], fmax(ext[1], ext[2])) + 1.0;
+    const double base =
+        reach > 0.0 && isfinite(reach) ? reach : fmax(ext[0], fmax(ext[1], ext[2])) + 1.0;
     double side[3] = {base, base, base};
     /* too many cells: the side of the axis with the most doubles until they fit (at least
      * halving the count each pass). Axis by axis, not all at once: a region stretched along
@@ -54,7 +48,6 @@ static void lay_out(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double reach)
             cells = 3.0;
         g->dim[k] = (size_t)cells;
         g->h[k] = ext[k] / cells;
-        g->margin[k] = g->dim[k] > 1 ? 0.25 * (g->h[k] - reach) : 0.0;
         g->n_cells *= g->dim[k];
     }
 }
@@ -144,7 +137,8 @@ void nbep_cells_link(nbep_cells *g)
         link_in(g, (uint32_t)i, g->m[i].cell);
 }
 
-void nbep_cells_move(nbep_cells *g, uint32_t i, size_t c)
+/* Moves sphere i into cell c (its place unchanged). O(1). */
+static void move_member(nbep_cells *g, uint32_t i, size_t c)
 {
     const uint32_t nx = g->m[i].next;
     if (g->prev[i] != NBEP_CELLS_NONE)
@@ -161,7 +155,7 @@ void nbep_cells_place(nbep_cells *g, uint32_t i, nbep_vec3 p, size_t c)
     assert(c < g->n_cells);
     g->m[i].at = p;
     if (c != g->m[i].cell)
-        nbep_cells_move(g, i, c);
+        move_member(g, i, c);
 }
 
 static void cell_coords(const nbep_cells *g, size_t c, size_t xyz[3])
@@ -169,29 +163,6 @@ static void cell_coords(const nbep_cells *g, size_t c, size_t xyz[3])
     xyz[0] = c % g->dim[0];
     xyz[1] = c / g->dim[0] % g->dim[1];
     xyz[2] = c / (g->dim[0] * g->dim[1]);
-}
-
-double nbep_cells_exit_time(const nbep_cells *g, uint32_t i, nbep_vec3 p, nbep_vec3 v,
-                            nbep_vec3 a)
-{
-    size_t xyz[3];
-    cell_coords(g, g->m[i].cell, xyz);
-    const double x[3] = {p.x, p.y, p.z}, u[3] = {v.x, v.y, v.z}, acc[3] = {a.x, a.y, a.z};
-    const double o[3] = {g->lo.x, g->lo.y, g->lo.z};
-    double t = NBEP_NEVER;
-    for (int k = 0; k < 3; k++) {
-        /* each interior face as a plane facing into the grown cell, the centre as a point
-         * (on a periodic axis every face is interior) */
-        if (xyz[k] > 0 || g->periodic[k]) {
-            double face = o[k] + (double)xyz[k] * g->h[k] - g->margin[k];
-            t = fmin(t, nbep_predict_plane(x[k] - face, u[k], acc[k]));
-        }
-        if (xyz[k] + 1 < g->dim[k] || g->periodic[k]) {
-            double face = o[k] + (double)(xyz[k] + 1) * g->h[k] + g->margin[k];
-            t = fmin(t, nbep_predict_plane(face - x[k], -u[k], -acc[k]));
-        }
-    }
-    return t;
 }
 
 void nbep_cells_block_of(const nbep_cells *g, size_t c, nbep_cells_block *b)
@@ -220,28 +191,16 @@ void nbep_cells_block_of(const nbep_cells *g, size_t c, nbep_cells_block *b)
     }
 }
 
-size_t nbep_cells_check(const nbep_cells *g, const nbep_vec3 *pos, double tol)
+size_t nbep_cells_check(const nbep_cells *g)
 {
     size_t bad = 0, listed = 0;
-    const double o[3] = {g->lo.x, g->lo.y, g->lo.z};
     for (size_t c = 0; c < g->n_cells; c++) {
         uint32_t before = NBEP_CELLS_NONE;
         for (uint32_t i = g->head[c]; i != NBEP_CELLS_NONE; i = g->m[i].next) {
             if (i >= g->n || g->m[i].cell != c || g->prev[i] != before || ++listed > g->n)
                 return bad + 1; /* a broken list: stop before looping forever */
             before = i;
-            size_t xyz[3];
-            cell_coords(g, c, xyz);
-            const nbep_vec3 pi = pos ? pos[i] : g->m[i].at;
-            const double x[3] = {pi.x, pi.y, pi.z};
-            for (int k = 0; k < 3; k++) {
-                double lo = o[k] + (double)xyz[k] * g->h[k] - g->margin[k];
-                double hi = o[k] + (double)(xyz[k] + 1) * g->h[k] + g->margin[k];
-                bool low = xyz[k] > 0 || g->periodic[k];
-                bool high = xyz[k] + 1 < g->dim[k] || g->periodic[k];
-                if ((low && x[k] < lo - tol) || (high && x[k] > hi + tol))
-                    bad++;
-            }
+            bad += nbep_cells_locate(g, g->m[i].at) != c;
         }
     }
     return bad + (listed != g->n);

@@ -9,10 +9,11 @@
 #include "nbep/predict.h"
 
 /* How far past contact distance plus skin a list still reaches: it covers the roundings of the
- * expiry time and of the centres' distance. An expiry time carries the rounding of an absolute
- * time (eps T, with T the run's time in any unit); a sphere at speed v strays eps T v past half
- * the skin by it, below 1e-6 of the contact distance for any run shorter than 1e9 times the
- * time a sphere takes to fly its own diameter. */
+ * expiry time, of the centres' distance and of locating a centre in the cells, which are laid
+ * out for the cutoff (cells.h). An expiry time carries the rounding of an absolute time (eps T,
+ * with T the run's time in any unit); a sphere at speed v strays eps T v past half the skin by
+ * it, below 1e-6 of the contact distance for any run shorter than 1e9 times the time a sphere
+ * takes to fly its own diameter. */
 #define CUT_SLACK 1e-6
 
 /* A look at each event once handled (w: what it found and changed; ev: its slot):
@@ -94,15 +95,6 @@ static void set_near2(nbep_evloop *e)
     e->near2 = nextafterf((float)(far * far * (1.0 + 8.0 * u)), INFINITY);
 }
 
-/* The reach the cells are laid out for: cells_init makes sides of 1.125 times the reach it is
- * given, for the hysteresis of moving members (cells.h); list centres stay put between
- * rebuilds, so sides of the cutoff itself suffice: a 27-cell block a third smaller to scan at
- * each rebuild. */
-static double cells_reach(const nbep_evloop *e)
-{
-    return e->cut / 1.125;
-}
-
 nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reach,
                                double skin_frac, const bool *periodic, int team, nbep_feq *q,
                                const uint64_t *ver, nbep_evloop **out, nbep_diag *d)
@@ -158,7 +150,7 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     if (st == NBEP_OK)
         st = nbep_calendar_create(n, &e->cal, d);
     if (st == NBEP_OK)
-        st = nbep_cells_init(&e->cells, lo, hi, cells_reach(e), n, periodic, d);
+        st = nbep_cells_init(&e->cells, lo, hi, e->cut, n, periodic, d);
     if (st == NBEP_OK)
         st = nbep_nblist_init(&e->nl, n, d);
     if (st != NBEP_OK) {
@@ -174,7 +166,7 @@ nbep_status nbep_evloop_refit(nbep_evloop *e, nbep_vec3 lo, nbep_vec3 hi, nbep_d
     assert(!e->pb.any);
     e->pb = nbep_periodic_make(NULL, lo, hi);
     set_near2(e);
-    return nbep_cells_refit(&e->cells, lo, hi, cells_reach(e), d);
+    return nbep_cells_refit(&e->cells, lo, hi, e->cut, d);
 }
 
 double nbep_evloop_skin_in(double skin_frac, double reach, const bool *periodic, nbep_vec3 lo,

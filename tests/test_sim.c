@@ -513,7 +513,8 @@ static void test_cells_predictive_fluid_of_two_radii_matches_grid_mode(void **st
     nbep_test_scene_free(&c), nbep_test_scene_free(&g);
 }
 
-/* A longer run of the same fluid (many cell exits, rebuilds at every frame): still exact. */
+/* A longer run of the same fluid (many list expiries, each placing its sphere in a cell anew;
+ * rebuilds at every frame): still exact. */
 static void test_cells_predictive_dense_fluid_keeps_energy_over_a_longer_run(void **state)
 {
     (void)state;

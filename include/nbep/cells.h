@@ -1,30 +1,30 @@
-/* Cell lists kept up to date event by event, for the cells engine (evloop.c): the box is cut
- * into cells at least `reach` (the largest contact distance) wide, each sphere belongs to one
- * cell, and two spheres that touch always belong to the same or adjacent cells (the 27-cell
- * block around either), so a re-prediction tests only that block.
- *
- * Membership has hysteresis: a sphere stays a member of its cell until its centre leaves the
- * cell grown by a margin of (h - reach)/4 on every interior face (nbep_cells_exit_time gives
- * when), and is then moved to the cell its centre is in. Members of two cells two apart are
- * then still more than reach apart, with (h - reach)/2 to spare for round-off, and a sphere
- * that grazes a face does not flip between cells. The outer faces of the box have no margin
- * and no exit: spheres beyond them (walls keep them in) are clamped into the edge cells, which
- * keeps the adjacency property.
+/* Cell lists for the cells engine (evloop.c): the box is cut into cells at least `reach` wide
+ * (the largest distance at which the caller looks for partners), and each sphere is a member
+ * of exactly one cell, the one its place lies in. A place is the point the caller last
+ * assigned or placed the sphere at (the engine: the centre of its neighbour list, which stays
+ * put between the list's rebuilds); the cells never move a member by themselves. Two places
+ * within reach of each other therefore lie in the same or adjacent cells (the 27-cell block
+ * around either), so a search for a place's partners tests only that block. That holds up to
+ * the rounding of locating a place (a few units in the last place of its cell coordinate,
+ * nbep_cells_gap2): a caller that must find every pair within d lays the cells out for a reach
+ * a hair above d (the engine's cutoff carries CUT_SLACK). Places past an outer face of an
+ * axis that is not periodic (a list centre that leads its sphere past a wall, a sphere past
+ * the extent the cells were fitted to) are clamped into the edge cells, which keeps the
+ * adjacency.
  *
  * Periodic axes (box.periodic): the cells wrap around, so the first and last cells of such an
- * axis are neighbours and every face is interior (it has a margin and an exit). There are at
- * least three cells along a periodic axis, so that a neighbouring cell is one copy of the box
- * only: a block names each neighbour cell with the period it lies in (-1, 0, +1), and the
- * sphere a re-prediction tests is at its position plus that many box lengths. The caller keeps
- * positions wrapped consistently: a sphere moved into a cell across a periodic face is first
- * wrapped into the box (periodic.h), so a member's centre always lies in its grown cell.
+ * axis are neighbours. There are at least three cells along a periodic axis, so that a
+ * neighbouring cell is one copy of the box only: a block names each neighbour cell with the
+ * period it lies in (-1, 0, +1), and the sphere a search tests is at its place plus that many
+ * box lengths. The caller wraps a place into the box along periodic axes before assigning or
+ * placing it (periodic.h), as clamping would break the adjacency across the wrapped faces.
  *
  * Lists are doubly linked through per-sphere arrays (no allocation after init). A member's
- * place (the point its cell was chosen by), its link to the next member and its cell share one
- * 32-byte record, so that walking a cell and testing its members' places touches one cache
- * line half per member. Building is split so that the heavy part runs in parallel:
- * nbep_cells_assign is pure per sphere (any index range on any thread), nbep_cells_link one
- * O(n + cells) pass. Memory: 36 bytes per sphere plus 4 per cell, cells at most 2n + 8. */
+ * place, its link to the next member and its cell share one 32-byte record, so that walking a
+ * cell and testing its members' places touches one cache line half per member. Building is
+ * split so that the heavy part runs in parallel: nbep_cells_assign is pure per sphere (any
+ * index range on any thread), nbep_cells_link one O(n + cells) pass. Memory: 36 bytes per
+ * sphere plus 4 per cell, cells at most 2n + 8. */
 #ifndef NBEP_CELLS_H
 #define NBEP_CELLS_H
 
@@ -48,7 +48,6 @@ typedef struct nbep_cells_member {
 typedef struct nbep_cells {
     nbep_vec3 lo, hi;      /* the box */
     double h[3];           /* cell side per axis */
-    double margin[3];      /* how far a member may stray past an interior face */
     size_t dim[3];         /* cells per axis */
     size_t n_cells, n;
     size_t cap_cells;      /* the cells head has room for */
@@ -58,11 +57,11 @@ typedef struct nbep_cells {
     uint32_t *prev;        /* owned, n: the backward links */
 } nbep_cells;
 
-/* Cells over the box [lo, hi] (hi > lo) for n spheres whose contacts happen within `reach` of
+/* Cells over the box [lo, hi] (hi > lo) for n spheres whose partners lie within `reach` of
  * each other (reach <= 0, as with no spheres: one cell): as many as fit with sides of at least
- * reach (1 + 1/8) (so that the margin is at least reach/32), at most 2n + 8 in all but never
- * fewer than three along a periodic axis (periodic: NULL for none; such an axis must be at least
- * 3 reach (1 + 1/8) long, which the deck check ensures). NBEP_ENOMEM with a message. */
+ * reach, at most 2n + 8 in all but never fewer than three along a periodic axis (periodic:
+ * NULL for none; such an axis must be at least 3 reach long, which the deck check ensures).
+ * NBEP_ENOMEM with a message. */
 NBEP_MUST_CHECK nbep_status nbep_cells_init(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi,
                                             double reach, size_t n, const bool *periodic,
                                             nbep_diag *d);
@@ -82,18 +81,10 @@ size_t nbep_cells_locate(const nbep_cells *g, nbep_vec3 p);
 void nbep_cells_assign(nbep_cells *g, const nbep_vec3 *pos, size_t lo, size_t hi);
 /* Links every sphere into its assigned cell's list (ascending ids within a cell). One thread. */
 void nbep_cells_link(nbep_cells *g);
-/* Moves sphere i into cell c. O(1). */
-void nbep_cells_move(nbep_cells *g, uint32_t i, size_t c);
 /* Gives sphere i the place p, whose cell c = nbep_cells_locate(g, p) the caller has found (the
  * cells engine locates a rebuilt list's centre for its walk, then places it at the commit),
  * moving it into c if that is another. O(1). */
 void nbep_cells_place(nbep_cells *g, uint32_t i, nbep_vec3 p, size_t c);
-
-/* Time from now until the centre of sphere i (at p, flying with v and a) leaves its cell's
- * box grown by the margin, through a face that has a neighbour cell; NBEP_NEVER when it does
- * not (no interior faces, or it never reaches one). */
-double nbep_cells_exit_time(const nbep_cells *g, uint32_t i, nbep_vec3 p, nbep_vec3 v,
-                            nbep_vec3 a);
 
 /* The block around cell c: per axis k, cnt[k] (1 to 3) cell coordinates idx[k][] (c's and its
  * neighbours', clamped at walls, wrapped on periodic axes) and the period each lies in,
@@ -129,9 +120,9 @@ static inline size_t nbep_cells_index(const nbep_cells *g, size_t x, size_t y, s
 }
 
 /* Invariant check for tests: each sphere is listed once, in the cell it is assigned to, and
- * its centre pos[i] (NULL: its place) lies within its cell grown by the margin (plus tol) on
- * interior faces. Returns the number of violations. */
-size_t nbep_cells_check(const nbep_cells *g, const nbep_vec3 *pos, double tol);
+ * that cell is the one its place lies in (nbep_cells_locate). Returns the number of
+ * violations. */
+size_t nbep_cells_check(const nbep_cells *g);
 
 /* Bytes nbep_cells_init takes at most for n spheres. */
 size_t nbep_cells_bytes(size_t n);
