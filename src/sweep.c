@@ -44,12 +44,15 @@
 /* Run files are named with at least this many digits: run-0007.h5. */
 #define RUN_DIGITS_MIN 4
 
-/* The summary's columns in the sweep table: numeric ones (all but algorithm, a text) and, of
- * those, nullable ones (they need a per-row missing flag of their own). */
+/* The summary's columns in the sweep table: numeric ones (all but algorithm, a text, and
+ * status, which has no column: the table's own `status` says how each run ended, runs without
+ * a summary too) and, of those, nullable ones (they need a per-row missing flag of their
+ * own). */
 enum {
     NUMERIC_TEXT = 0, NUMERIC_INT = 1, NUMERIC_UINT = 1, NUMERIC_REAL = 1, NUMERIC_NULLABLE = 1,
+    NUMERIC_STATUS = 0, NUMERIC_COUNT = 1,
     NULLABLE_TEXT = 0, NULLABLE_INT = 0, NULLABLE_UINT = 0, NULLABLE_REAL = 0,
-    NULLABLE_NULLABLE = 1,
+    NULLABLE_NULLABLE = 1, NULLABLE_STATUS = 0, NULLABLE_COUNT = 1,
 };
 #define X_NUMERIC(field, kind) +NUMERIC_##kind
 #define X_NULLABLE(field, kind) +NULLABLE_##kind
@@ -732,9 +735,19 @@ nbep_status nbep_sweep_write_summary(const nbep_sweep_plan *p, const nbep_sweep_
                  null_col);                                                                  \
         null_col += n;                                                                       \
     } while (0)
+#define X_COL_COUNT(field)                                                                   \
+    do {                                                                                     \
+        for (size_t r = 0; r < n; r++)                                                       \
+            null_col[r] = !results[r].has_summary || !results[r].summary.field.known;        \
+        INT_COL(#field, res->summary.field.value, null_col);                                 \
+        null_col += n;                                                                       \
+    } while (0)
+#define X_COL_STATUS(field) (void)0 /* the table's `status` column, above */
 #define X_COL(field, kind) X_COL_##kind(field);
     NBEP_SUMMARY_FIELDS(X_COL)
 #undef X_COL
+#undef X_COL_STATUS
+#undef X_COL_COUNT
 #undef X_COL_NULLABLE
 #undef X_COL_REAL
 #undef X_COL_UINT

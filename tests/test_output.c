@@ -97,7 +97,9 @@ static nbep_summary known_summary(void)
                       .energy_rel_drift = 0.25 / -1234.5,
                       .max_overlap = 3.0e-14,
                       .max_overlap_rel = 6.0e-13,
-                      .peak_rss_bytes = 52428800};
+                      .peak_rss_bytes = 52428800,
+                      .status = NBEP_SUMMARY_TERMINATED,
+                      .steps_requested = {.known = true, .value = 2500}};
     return s;
 }
 
@@ -1110,7 +1112,8 @@ static const char known_json[] =
     "\"plane_collisions\": 242, \"quiet_steps\": 950, \"energy_initial\": -1234.5, "
     "\"energy_final\": -1234.25, \"energy_rel_drift\": -0.0002025111381125962, "
     "\"max_overlap\": 3e-14, \"max_overlap_rel\": 6e-13, "
-    "\"peak_rss_bytes\": 52428800, \"pressure\": null}\n";
+    "\"peak_rss_bytes\": 52428800, \"pressure\": null, \"status\": \"terminated\", "
+    "\"steps_requested\": 2500}\n";
 
 static void test_json_of_a_known_summary_is_the_expected_text(void **state)
 {
@@ -1149,7 +1152,8 @@ static void test_json_parses_with_spec_keys_in_spec_order(void **state)
     assert_non_null(f);
     assert_true(nbep_summary_write_json(&s, f) > 0);
     fclose(f);
-    /* An independent JSON parser; the keys as SPEC's "JSON summary" lists them. */
+    /* An independent JSON parser; the keys as SPEC's "JSON summary" lists them, then those
+     * added since (contract 2's pressure; status and steps_requested, README). */
     snprintf(cmd, sizeof cmd,
              "python3 -c 'import json, sys; d = json.load(open(sys.argv[1])); "
              "sys.exit(list(d) != [\"format\", \"version\", \"algorithm\", \"threads\", "
@@ -1158,8 +1162,9 @@ static void test_json_parses_with_spec_keys_in_spec_order(void **state)
              "\"collisions\", \"sphere_collisions\", \"plane_collisions\", "
              "\"quiet_steps\", \"energy_initial\", \"energy_final\", "
              "\"energy_rel_drift\", \"max_overlap\", \"max_overlap_rel\", "
-             "\"peak_rss_bytes\", \"pressure\"] or d[\"steps_per_second\"] != 1000 / 1.5 "
-             "or d[\"pressure\"] is not None)' %s",
+             "\"peak_rss_bytes\", \"pressure\", \"status\", \"steps_requested\"] "
+             "or d[\"steps_per_second\"] != 1000 / 1.5 or d[\"pressure\"] is not None "
+             "or d[\"status\"] != \"terminated\" or d[\"steps_requested\"] != 2500)' %s",
              path);
     assert_int_equal(system(cmd), 0);
 }

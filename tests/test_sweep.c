@@ -533,8 +533,12 @@ static void test_a_failing_combination_spares_the_other_runs(void **state)
                      deck, line);
             assert_string_equal(res[run].error, want);
         }
-        else
+        else {
             assert_int_equal(res[run].summary.steps, 20);
+            assert_int_equal(res[run].summary.status, NBEP_SUMMARY_COMPLETED);
+            assert_true(res[run].summary.steps_requested.known);
+            assert_int_equal(res[run].summary.steps_requested.value, 20);
+        }
         char *path = nbep_sweep_run_path(&p, run);
         assert_int_equal(access(path, F_OK) == 0, !bad);
         free(path);
@@ -650,7 +654,7 @@ static void test_summary_csv_has_a_row_per_run_in_run_order(void **state)
                         "wall_seconds,steps_per_second,checks,predictions,collisions,"
                         "sphere_collisions,plane_collisions,quiet_steps,energy_initial,"
                         "energy_final,energy_rel_drift,max_overlap,max_overlap_rel,"
-                        "peak_rss_bytes,pressure,error");
+                        "peak_rss_bytes,pressure,steps_requested,error");
     static const char *const restitution[3] = {"1.0", "1.5", "0.5"};
     char f[128], want[64];
     for (size_t run = 0; run < 6; run++) {
@@ -677,6 +681,7 @@ static void test_summary_csv_has_a_row_per_run_in_run_order(void **state)
         else
             assert_int_equal(row[strlen(row) - 1], ',');   /* empty error */
         assert_string_equal(csv_field(row, 31, f, sizeof f), "");   /* pressure: null */
+        assert_string_equal(csv_field(row, 32, f, sizeof f), bad ? "" : "20"); /* requested */
     }
     for (size_t k = 0; k < n; k++)
         free(lines[k]);
@@ -713,14 +718,14 @@ static void test_summary_h5_holds_the_same_table(void **state)
     hsize_t rows;
     assert_int_equal(H5Sget_simple_extent_dims(space, &rows, NULL), 1);
     assert_int_equal(rows, 6);
-    assert_int_equal(H5Tget_nmembers(type), 33);   /* the CSV's 33 columns */
+    assert_int_equal(H5Tget_nmembers(type), 34);   /* the CSV's 34 columns */
     char *m0 = H5Tget_member_name(type, 0), *m4 = H5Tget_member_name(type, 4);
     assert_string_equal(m0, "run");
     assert_string_equal(m4, "physics.restitution");
     H5free_memory(m0);
     H5free_memory(m4);
 
-    int64_t run[6], steps[6], seed[6];
+    int64_t run[6], steps[6], seed[6], requested[6];
     double drift[6];
     char *status[6], *value[6];
     hid_t str = H5Tcopy(H5T_C_S1);
@@ -728,6 +733,7 @@ static void test_summary_h5_holds_the_same_table(void **state)
     read_member(ds, "run", H5T_NATIVE_INT64, run);
     read_member(ds, "seed", H5T_NATIVE_INT64, seed);
     read_member(ds, "steps", H5T_NATIVE_INT64, steps);
+    read_member(ds, "steps_requested", H5T_NATIVE_INT64, requested);
     read_member(ds, "energy_rel_drift", H5T_NATIVE_DOUBLE, drift);
     read_member(ds, "status", str, status);
     read_member(ds, "physics.restitution", str, value);
@@ -737,6 +743,7 @@ static void test_summary_h5_holds_the_same_table(void **state)
         assert_int_equal(run[r], (int64_t)r);
         assert_int_equal(seed[r], 11 + (int64_t)r / 3);
         assert_int_equal(steps[r], bad ? 0 : 20);
+        assert_int_equal(requested[r], bad ? 0 : 20);
         assert_true(bad ? isnan(drift[r]) : drift[r] == res[r].summary.energy_rel_drift);
         assert_string_equal(status[r], bad ? "failed" : "ok");
         assert_string_equal(value[r], restitution[r % 3]);

@@ -157,7 +157,8 @@ NBEP_MUST_CHECK nbep_status nbep_sweep_execute(const nbep_sweep_plan *p,
 /* Writes DIR/summary.csv and DIR/summary.h5 from the results of every run (n_runs entries),
  * each replaced atomically (written aside, then renamed). Columns, in order: run, replica,
  * seed, rank, one per axis (its key; the value as deck text, strings without quotes), status,
- * exit_code, reused, seconds, file, the JSON summary's fields in SPEC order, error. n_ranks
+ * exit_code, reused, seconds, file, the JSON summary's fields in order (but its `status`: the
+ * column `status` says how each run ended in the table's words), error. n_ranks
  * and wall_seconds go into summary.h5's root attributes. NBEP_EIO, NBEP_ENOMEM. */
 NBEP_MUST_CHECK nbep_status nbep_sweep_write_summary(const nbep_sweep_plan *p,
                                                      const nbep_sweep_result *results,
