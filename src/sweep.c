@@ -6,8 +6,9 @@
  * - Every rank builds the same plan from the same deck and command line, so run indices,
  *   overrides and file names agree without communication; the only messages are rank 0's
  *   gather of results and its broadcast of the final status.
- * - A run's file is either complete (its /summary says all its steps, its overrides are this
- *   run's: it is reused) or replaced: a restarted sweep never mixes an old run into a new one.
+ * - A run's file is either complete (its /summary says it completed all its steps, its
+ *   overrides are this run's: it is reused) or replaced: a restarted sweep never mixes an old
+ *   run into a new one.
  * - Runs are independent processes of the simulation library: one run's failure (a deck error
  *   for one combination, a numerical failure) is recorded in its row and the others go on.
  * - MPI calls happen only on the main thread, outside any run's parallel region (the thread
@@ -378,6 +379,17 @@ static char *join_lines(char *const *lines, size_t n)
     return out;
 }
 
+/* Whether a run's summary says it completed all `steps`: status "completed", or no status at
+ * all (an nbep before 2026-11-30 wrote none, and all the steps done was complete then). Any
+ * other status is run again, even with every step done: a signal during the last step (exit
+ * 143, its row said interrupted, and reusing it would turn that into ok), or a failure whose
+ * summary counts every step (a close that failed after the summary was written). */
+static bool says_completed(const nbep_summary *s, uint64_t steps)
+{
+    return s->steps == steps &&
+           (s->status == NBEP_SUMMARY_COMPLETED || s->status == NBEP_SUMMARY_UNKNOWN);
+}
+
 bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_overrides,
                              uint64_t steps, nbep_summary *sum)
 {
@@ -390,7 +402,7 @@ bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_
     nbep_summary s;
     bool complete = wanted && nbep_output_sweep_read_run(path, &stored, &json, &d) == NBEP_OK &&
                     json && same_overrides(stored, wanted) &&
-                    nbep_summary_from_json(json, &s) && s.steps == steps;
+                    nbep_summary_from_json(json, &s) && says_completed(&s, steps);
     if (complete && sum)
         *sum = s;
     free(stored);
