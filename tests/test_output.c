@@ -939,8 +939,23 @@ static void test_info_reports_the_settings_frames_stats_and_summary(void **state
     assert_has_line(text, "             run.steps=20");
     assert_has_line(text, "frames:      3 (last: step 20, time 0.025)");
     assert_has_line(text, "stats rows:  20");
+    assert_has_line(text, "status:      terminated (SIGTERM): step 1000 of 2500");
     assert_has_line(text, summary_line);
     free(json);
+    free(text);
+    /* a summary without a status (an nbep before 2026-11-30 wrote none; null here) is shown
+     * as it is, the status unknown, against the file's own run.steps */
+    sum.status = NBEP_SUMMARY_UNKNOWN;
+    sum.steps_requested = (nbep_summary_count){.known = false};
+    write_run(fx, nbep_test_tmp("output_info_older.h5", path, sizeof path), &sum);
+    text = info_text(path, &fx->d);
+    assert_has_line(text, "status:      unknown (the summary is older than its status key): "
+                          "step 1000 of 20");
+    free(text);
+    sum.status = NBEP_SUMMARY_COMPLETED;
+    write_run(fx, nbep_test_tmp("output_info_done.h5", path, sizeof path), &sum);
+    text = info_text(path, &fx->d);
+    assert_has_line(text, "status:      completed: step 1000 of 20");
     free(text);
 }
 
@@ -976,7 +991,10 @@ static void test_info_on_a_killed_run_says_it_has_no_summary(void **state)
     run_crashing_child(fx, nbep_test_tmp("output_info_kill9.h5", path, sizeof path), true);
     char *text = info_text(path, &fx->d);
     assert_has_line(text, "frames:      3 (last: step 20, time 0.025)");
-    assert_has_line(text, "summary:     none (run interrupted or still running)");
+    assert_has_line(text, "status:      unknown (no summary: the run was killed, stopped by a "
+                          "write error, or is still running)");
+    assert_has_line(text, "summary:     none (run killed, stopped by a write error, or still "
+                          "running)");
     free(text);
 }
 
@@ -1031,7 +1049,8 @@ static void test_info_reads_a_run_while_it_is_being_written(void **state)
         assert_ok(live_st, &fx->d);
     }
     assert_has_line(live, "frames:      2 (last: step 10, time 0.0125)");
-    assert_has_line(live, "summary:     none (run interrupted or still running)");
+    assert_has_line(live, "summary:     none (run killed, stopped by a write error, or still "
+                          "running)");
     free(live);
     char *text = info_text(path, &fx->d);
     assert_has_line(text, "frames:      3 (last: step 20, time 0.025)");
