@@ -237,7 +237,8 @@ check "--dt=-1 and --set run.steps=0.5: each message names what was typed (got $
     "[ $rc = 2 ] && grep -qxF -- '--dt=-1: run.dt must be > 0 (got -1)' '$tmp/stderr' &&
      grep -qxF -- '--set run.steps=0.5: run.steps must be an integer (got 0.5)' '$tmp/stderr'"
 
-# ---- --summary - writes the summary to stdout, one JSON object with SPEC's keys in SPEC's order,
+# ---- --summary - writes the summary to stdout, one JSON object with SPEC's keys in SPEC's order
+# and those added since after them (a run to its end: completed, its steps those requested),
 # and nothing else there (a coverage run showed no test took this path) ----------------------
 run_nbep run inputs/two-spheres.deck -n 3 --quiet --summary - -o "$tmp/stdout-summary.h5"
 check "--summary -: exit 0, SPEC's keys in order on stdout, stderr empty (got $rc)" \
@@ -250,7 +251,9 @@ spec = [\"format\", \"version\", \"algorithm\", \"threads\", \"spheres\", \"plan
         \"collisions\", \"sphere_collisions\", \"plane_collisions\", \"quiet_steps\",
         \"energy_initial\", \"energy_final\", \"energy_rel_drift\", \"max_overlap\",
         \"max_overlap_rel\", \"peak_rss_bytes\"]
-sys.exit(not (list(d)[:len(spec)] == spec and d[\"steps\"] == 3 and d[\"spheres\"] == 2))
+later = [\"pressure\", \"status\", \"steps_requested\"]   # contract 2; added 2026-11-30
+sys.exit(not (list(d) == spec + later and d[\"steps\"] == 3 and d[\"spheres\"] == 2 and
+              d[\"status\"] == \"completed\" and d[\"steps_requested\"] == 3))
 ' '$tmp/stdout'"
 
 # ---- help: nbep --help, -h, help and a command's --help print the usage on stdout, exit 0,
@@ -478,13 +481,16 @@ EOF
 run_nbep run "$tmp/grow.deck" -a naive --quiet -o "$tmp/grow.h5" --summary "$tmp/grow.json"
 check "an overflow at step 2: exit 1 (got $rc); the file's stats rows are the summary's steps and checks" \
     "[ $rc = 1 ] && /usr/bin/python3 -c 'import h5py,json,sys; f=h5py.File(sys.argv[1],\"r\"); s=json.load(open(sys.argv[2])); sys.exit(not (s[\"steps\"] == 1 and len(f[\"stats/step\"]) == 1 and int(f[\"stats/checks\"][:].sum()) == s[\"checks\"]))' '$tmp/grow.h5' '$tmp/grow.json'"
+check "... the summary says failed at step 1 of the 20 requested, and so does the file's" \
+    "grep -q '\"steps\": 1,.*\"status\": \"failed\", \"steps_requested\": 20}' '$tmp/grow.json' &&
+     '$nbep' info '$tmp/grow.h5' | grep -Eqx 'status: +failed: step 1 of 20'"
 for algo in naive seminaive predictive; do
     rm -f "$tmp/fall.h5" "$tmp/fall.json"
     run_nbep run "$tmp/fall.deck" -a $algo --dt 1e200 --quiet -o "$tmp/fall.h5" --summary "$tmp/fall.json"
     check "$algo: an energy that overflows while it runs: exit 1 (got $rc)" "[ $rc = 1 ]"
     check "$algo: ... one line saying so" "one_line && grep -q 'energy became non-finite at step 1' '$tmp/stderr'"
-    check "$algo: ... a summary of finite numbers, 0 steps" \
-        "/usr/bin/python3 -c 'import json,math,sys; s=json.load(open(sys.argv[1])); sys.exit(not (s[\"steps\"] == 0 and all(math.isfinite(v) for v in s.values() if isinstance(v, float))))' '$tmp/fall.json'"
+    check "$algo: ... a summary of finite numbers, 0 steps of the 3 requested, failed" \
+        "/usr/bin/python3 -c 'import json,math,sys; s=json.load(open(sys.argv[1])); sys.exit(not (s[\"steps\"] == 0 and s[\"steps_requested\"] == 3 and s[\"status\"] == \"failed\" and all(math.isfinite(v) for v in s.values() if isinstance(v, float))))' '$tmp/fall.json'"
     check "$algo: ... the file readable, frame 0 and no stats row" \
         "'$nbep' info '$tmp/fall.h5' >'$tmp/info' && grep -Eq '^frames: +1 ' '$tmp/info' && grep -Eq '^stats rows: +0' '$tmp/info'"
 done
