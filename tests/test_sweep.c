@@ -790,6 +790,53 @@ static void test_summary_csv_has_a_row_per_run_in_run_order(void **state)
     nbep_sweep_plan_fini(&p);
 }
 
+/* A run an older nbep finished (its summary without status and steps_requested) is reused, and
+ * its row shows what that summary says: steps_requested empty, as for any key a row lacks,
+ * not 0; the status column says ok. */
+static void test_an_older_nbeps_finished_run_is_reused_with_steps_requested_empty(void **state)
+{
+    (void)state;
+    char deck[256];
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_older", "", deck, sizeof deck), NULL, 0, &p);
+    free(execute(&p, NULL, NBEP_OK));
+    /* its summary as an older nbep wrote it: everything up to pressure */
+    char *path = nbep_sweep_run_path(&p, 0), **ov;
+    size_t n;
+    nbep_summary sum;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_sweep_run_overrides(&p, 0, &ov, &n, &d), NBEP_OK);
+    assert_true(nbep_sweep_run_complete(path, ov, n, 20, &sum));
+    char *json = nbep_summary_to_json(&sum);
+    assert_non_null(json);
+    strcpy(strstr(json, ", \"status\": "), "}\n");
+    set_summary_json(path, json);
+    free(json);
+    nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
+    assert_int_equal(res[0].outcome, NBEP_SWEEP_OK);
+    assert_int_equal(res[0].reused, 1);
+    assert_int_equal(res[0].summary.status, NBEP_SUMMARY_UNKNOWN);
+    assert_false(res[0].summary.steps_requested.known);
+    assert_int_equal(nbep_sweep_write_summary(&p, res, 1, 1.0, &d), NBEP_OK);
+    char *lines[16];
+    assert_int_equal(read_lines(TMP "sweep_older.sweep/summary.csv", lines), 2);
+    char f[64];
+    assert_string_equal(csv_field(lines[0], 4, f, sizeof f), "status");
+    assert_string_equal(csv_field(lines[1], 4, f, sizeof f), "ok");
+    assert_string_equal(csv_field(lines[0], 13, f, sizeof f), "steps");
+    assert_string_equal(csv_field(lines[1], 13, f, sizeof f), "20");
+    assert_string_equal(csv_field(lines[0], 31, f, sizeof f), "steps_requested");
+    assert_string_equal(csv_field(lines[1], 31, f, sizeof f), "");
+    free(lines[0]);
+    free(lines[1]);
+    nbep_diag_fini(&d);
+    free(res);
+    free(path);
+    nbep_sweep_overrides_free(ov, n);
+    nbep_sweep_plan_fini(&p);
+}
+
 /* Reads member `name` of every row of /runs as `type` into buf (n rows of size each). */
 static void read_member(hid_t ds, const char *name, hid_t type, void *buf)
 {
@@ -927,6 +974,7 @@ int main(void)
         cmocka_unit_test(test_thread_count_and_output_name_do_not_make_a_run_different),
         cmocka_unit_test(test_a_run_killed_before_its_summary_is_not_complete),
         cmocka_unit_test(test_a_run_is_complete_only_when_its_summary_says_it_completed),
+        cmocka_unit_test(test_an_older_nbeps_finished_run_is_reused_with_steps_requested_empty),
         cmocka_unit_test(test_a_failing_combination_spares_the_other_runs),
         cmocka_unit_test(test_a_failing_value_from_the_command_line_names_no_deck_line),
         cmocka_unit_test(test_a_restarted_sweep_reuses_complete_runs),
