@@ -125,6 +125,29 @@ static int gather_info(hid_t file, const char *path, run_info *r, nbep_diag *d)
     return 0;
 }
 
+/* How the run ended, by its summary's `status`, and the step it reached of those it was to
+ * reach ("terminated (SIGTERM): step 37 of 100"); unknown where the summary has no status (an
+ * nbep before 2026-11-30) or there is no summary. */
+static void print_status(FILE *f, const run_info *r)
+{
+    nbep_summary s;
+    if (!r->summary || !nbep_summary_from_json(r->summary, &s)) {
+        fprintf(f, "%-13sunknown (%s)\n", "status:",
+                r->summary ? "the summary cannot be read"
+                           : "no summary: the run was killed, stopped by a write error, or is "
+                             "still running");
+        return;
+    }
+    const char *how = s.status == NBEP_SUMMARY_INTERRUPTED  ? " (SIGINT)"
+                      : s.status == NBEP_SUMMARY_TERMINATED ? " (SIGTERM)"
+                      : s.status == NBEP_SUMMARY_UNKNOWN
+                          ? " (the summary is older than its status key)"
+                          : "";
+    const char *text = nbep_summary_status_text(s.status);
+    fprintf(f, "%-13s%s%s: step %" PRIu64 " of %" PRIu64 "\n", "status:", text ? text : "unknown",
+            how, s.steps, s.steps_requested.known ? s.steps_requested.value : r->steps);
+}
+
 nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
 {
     hid_t file = H5I_INVALID_HID;
@@ -189,10 +212,12 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
                     r.stats_more ? ", and incomplete ones after them" : "");
         else
             fprintf(f, "%-13snone (not recorded)\n", "stats rows:");
+        print_status(f, &r);
         if (r.summary)
             print_lines(f, "summary:", r.summary);
         else
-            fprintf(f, "%-13snone (run interrupted or still running)\n", "summary:");
+            fprintf(f, "%-13snone (run killed, stopped by a write error, or still running)\n",
+                    "summary:");
     }
     run_info_fini(&r);
     return rc == 0 ? NBEP_OK : NBEP_EIO;

@@ -108,6 +108,9 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
 {
     nbep_status st = nbep_sim_run(sim, d);
     nbep_sim_summary(sim, &res->summary);
+    /* the file's /summary says how the simulation ended; a close that then fails makes the
+     * run's status, and the --summary file's, failed (below) */
+    res->summary.status = nbep_summary_status_of(st);
     res->simulated = true;
     /* after a write failure closing fails the same way: keep only the first error */
     nbep_diag quiet;
@@ -118,6 +121,7 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
     nbep_diag_fini(&quiet);
     if (st == NBEP_OK || st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
         st = cst == NBEP_OK ? st : cst;
+    res->summary.status = nbep_summary_status_of(st);
     if (rq->verbose)
         print_human_summary(&res->summary, file, st, from);
     if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)

@@ -550,6 +550,7 @@ void nbep_sim_summary(const nbep_sim *sim, nbep_summary *s)
     s->spheres = sim->st.n;
     s->planes = sim->st.n_planes;
     s->steps = sim->steps_done; /* the step reached (a resumed run counts from the start) */
+    s->steps_requested = (nbep_summary_count){true, sim->step_end}; /* run.steps */
     s->dt = sim->dt;
     s->setup_seconds = sim->setup_seconds;
     s->wall_seconds = sim->wall_seconds;

@@ -52,6 +52,43 @@ static json_t *value_NULLABLE(nbep_summary_nullable v)
     return v.known ? value_REAL(v.value) : json_null();
 }
 
+static json_t *value_STATUS(nbep_summary_status v)
+{
+    const char *text = nbep_summary_status_text(v);
+    return text ? json_string(text) : json_null();
+}
+
+static json_t *value_COUNT(nbep_summary_count v)
+{
+    return v.known ? value_UINT(v.value) : json_null();
+}
+
+nbep_summary_status nbep_summary_status_of(nbep_status st)
+{
+    switch (st) {
+    case NBEP_OK:
+        return NBEP_SUMMARY_COMPLETED;
+    case NBEP_ESIGINT:
+        return NBEP_SUMMARY_INTERRUPTED;
+    case NBEP_ESIGTERM:
+        return NBEP_SUMMARY_TERMINATED;
+    default:
+        return NBEP_SUMMARY_FAILED;
+    }
+}
+
+const char *nbep_summary_status_text(nbep_summary_status s)
+{
+    switch (s) {
+#define X_TEXT(name, text)                                                                   \
+    case NBEP_SUMMARY_##name:                                                                \
+        return text;
+        NBEP_SUMMARY_STATUS_LIST(X_TEXT)
+#undef X_TEXT
+    }
+    return NULL;
+}
+
 /* The summary as a jansson object, or NULL (out of memory, or a value without JSON form). */
 static json_t *summary_object(const nbep_summary *s)
 {
@@ -202,6 +239,37 @@ static bool get_NULLABLE(const json_t *v, nbep_summary_nullable *out)
     return get_REAL(v, &out->value);
 }
 
+/* Keys added later (STATUS and COUNT kinds) may be missing: a summary written before them. */
+static bool get_STATUS(const json_t *v, nbep_summary_status *out)
+{
+    if (!v || json_is_null(v)) {
+        *out = NBEP_SUMMARY_UNKNOWN;
+        return true;
+    }
+    const char *text = json_string_value(v);
+#define X_ONE(name, text) +1
+    enum { N_STATUS = 0 NBEP_SUMMARY_STATUS_LIST(X_ONE) };
+#undef X_ONE
+    for (int k = 0; text && k < N_STATUS; k++) {
+        const char *name = nbep_summary_status_text((nbep_summary_status)k);
+        if (name && strcmp(text, name) == 0) {
+            *out = (nbep_summary_status)k;
+            return true;
+        }
+    }
+    return false; /* a number, or a text that is no status: not a summary nbep wrote */
+}
+
+static bool get_COUNT(const json_t *v, nbep_summary_count *out)
+{
+    if (!v || json_is_null(v)) {
+        *out = (nbep_summary_count){.known = false};
+        return true;
+    }
+    out->known = true;
+    return get_UINT(v, &out->value);
+}
+
 bool nbep_summary_from_json(const char *json, nbep_summary *sum)
 {
     if (!json)
@@ -217,6 +285,8 @@ bool nbep_summary_from_json(const char *json, nbep_summary *sum)
 #define X_GET_UINT(field) X_GET_OTHER(field, UINT)
 #define X_GET_REAL(field) X_GET_OTHER(field, REAL)
 #define X_GET_NULLABLE(field) X_GET_OTHER(field, NULLABLE)
+#define X_GET_STATUS(field) X_GET_OTHER(field, STATUS)
+#define X_GET_COUNT(field) X_GET_OTHER(field, COUNT)
 #define X_GET(field, kind) ok = ok && X_GET_##kind(field);
     NBEP_SUMMARY_FIELDS(X_GET)
 #undef X_GET

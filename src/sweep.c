@@ -6,8 +6,9 @@
  * - Every rank builds the same plan from the same deck and command line, so run indices,
  *   overrides and file names agree without communication; the only messages are rank 0's
  *   gather of results and its broadcast of the final status.
- * - A run's file is either complete (its /summary says all its steps, its overrides are this
- *   run's: it is reused) or replaced: a restarted sweep never mixes an old run into a new one.
+ * - A run's file is either complete (its /summary says it completed all its steps, its
+ *   overrides are this run's: it is reused) or replaced: a restarted sweep never mixes an old
+ *   run into a new one.
  * - Runs are independent processes of the simulation library: one run's failure (a deck error
  *   for one combination, a numerical failure) is recorded in its row and the others go on.
  * - MPI calls happen only on the main thread, outside any run's parallel region (the thread
@@ -44,12 +45,15 @@
 /* Run files are named with at least this many digits: run-0007.h5. */
 #define RUN_DIGITS_MIN 4
 
-/* The summary's columns in the sweep table: numeric ones (all but algorithm, a text) and, of
- * those, nullable ones (they need a per-row missing flag of their own). */
+/* The summary's columns in the sweep table: numeric ones (all but algorithm, a text, and
+ * status, which has no column: the table's own `status` says how each run ended, runs without
+ * a summary too) and, of those, nullable ones (they need a per-row missing flag of their
+ * own). */
 enum {
     NUMERIC_TEXT = 0, NUMERIC_INT = 1, NUMERIC_UINT = 1, NUMERIC_REAL = 1, NUMERIC_NULLABLE = 1,
+    NUMERIC_STATUS = 0, NUMERIC_COUNT = 1,
     NULLABLE_TEXT = 0, NULLABLE_INT = 0, NULLABLE_UINT = 0, NULLABLE_REAL = 0,
-    NULLABLE_NULLABLE = 1,
+    NULLABLE_NULLABLE = 1, NULLABLE_STATUS = 0, NULLABLE_COUNT = 1,
 };
 #define X_NUMERIC(field, kind) +NUMERIC_##kind
 #define X_NULLABLE(field, kind) +NULLABLE_##kind
@@ -375,6 +379,17 @@ static char *join_lines(char *const *lines, size_t n)
     return out;
 }
 
+/* Whether a run's summary says it completed all `steps`: status "completed", or no status at
+ * all (an nbep before 2026-11-30 wrote none, and all the steps done was complete then). Any
+ * other status is run again, even with every step done: a signal during the last step (exit
+ * 143, its row said interrupted, and reusing it would turn that into ok), or a failure whose
+ * summary counts every step (a close that failed after the summary was written). */
+static bool says_completed(const nbep_summary *s, uint64_t steps)
+{
+    return s->steps == steps &&
+           (s->status == NBEP_SUMMARY_COMPLETED || s->status == NBEP_SUMMARY_UNKNOWN);
+}
+
 bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_overrides,
                              uint64_t steps, nbep_summary *sum)
 {
@@ -387,7 +402,7 @@ bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_
     nbep_summary s;
     bool complete = wanted && nbep_output_sweep_read_run(path, &stored, &json, &d) == NBEP_OK &&
                     json && same_overrides(stored, wanted) &&
-                    nbep_summary_from_json(json, &s) && s.steps == steps;
+                    nbep_summary_from_json(json, &s) && says_completed(&s, steps);
     if (complete && sum)
         *sum = s;
     free(stored);
@@ -732,9 +747,19 @@ nbep_status nbep_sweep_write_summary(const nbep_sweep_plan *p, const nbep_sweep_
                  null_col);                                                                  \
         null_col += n;                                                                       \
     } while (0)
+#define X_COL_COUNT(field)                                                                   \
+    do {                                                                                     \
+        for (size_t r = 0; r < n; r++)                                                       \
+            null_col[r] = !results[r].has_summary || !results[r].summary.field.known;        \
+        INT_COL(#field, res->summary.field.value, null_col);                                 \
+        null_col += n;                                                                       \
+    } while (0)
+#define X_COL_STATUS(field) (void)0 /* the table's `status` column, above */
 #define X_COL(field, kind) X_COL_##kind(field);
     NBEP_SUMMARY_FIELDS(X_COL)
 #undef X_COL
+#undef X_COL_STATUS
+#undef X_COL_COUNT
 #undef X_COL_NULLABLE
 #undef X_COL_REAL
 #undef X_COL_UINT

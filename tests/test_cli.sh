@@ -256,7 +256,8 @@ for cmd in check run; do
         "[ $rc = 2 ] && cmp -s '$tmp/reversed.want' '$tmp/stderr'"
 done
 
-# ---- --summary - writes the summary to stdout, one JSON object with SPEC's keys in SPEC's order,
+# ---- --summary - writes the summary to stdout, one JSON object with SPEC's keys in SPEC's order
+# and those added since after them (a run to its end: completed, its steps those requested),
 # and nothing else there (a coverage run showed no test took this path) ----------------------
 run_nbep run inputs/two-spheres.deck -n 3 --quiet --summary - -o "$tmp/stdout-summary.h5"
 check "--summary -: exit 0, SPEC's keys in order on stdout, stderr empty (got $rc)" \
@@ -269,7 +270,9 @@ spec = [\"format\", \"version\", \"algorithm\", \"threads\", \"spheres\", \"plan
         \"collisions\", \"sphere_collisions\", \"plane_collisions\", \"quiet_steps\",
         \"energy_initial\", \"energy_final\", \"energy_rel_drift\", \"max_overlap\",
         \"max_overlap_rel\", \"peak_rss_bytes\"]
-sys.exit(not (list(d)[:len(spec)] == spec and d[\"steps\"] == 3 and d[\"spheres\"] == 2))
+later = [\"pressure\", \"status\", \"steps_requested\"]   # contract 2; added 2026-11-30
+sys.exit(not (list(d) == spec + later and d[\"steps\"] == 3 and d[\"spheres\"] == 2 and
+              d[\"status\"] == \"completed\" and d[\"steps_requested\"] == 3))
 ' '$tmp/stdout'"
 
 # ---- help: nbep --help, -h, help and a command's --help print the usage on stdout, exit 0,

@@ -15,7 +15,10 @@ fail=0
 check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
 # 4096 spheres: a frame with positions, velocities and event slots is about 270 kB, so 3 MB
 # fill up after about ten frames of the 41 asked for
-bin/nbep run inputs/paper-box.deck --quiet -n 400 -o "$mnt/full.h5" 2>"$mnt/../diskfull.err"
+# (the JSON summary goes beside the small disk, where there is room for it)
+rm -f "$mnt/../diskfull.json"
+bin/nbep run inputs/paper-box.deck --quiet -n 400 -o "$mnt/full.h5" \
+    --summary "$mnt/../diskfull.json" 2>"$mnt/../diskfull.err"
 rc=$?
 err=$mnt/../diskfull.err
 check "a full disk ends the run with exit 1 (got $rc)" "[ $rc = 1 ]"
@@ -26,6 +29,11 @@ bin/nbep info "$mnt/full.h5" >"$mnt/../diskfull.info" 2>&1
 check "the file still opens" "[ \$? = 0 ]"
 check "with the frames written before the disk filled" \
     "grep -Eq '^frames: +([2-9]|[1-9][0-9])' '$mnt/../diskfull.info'"
+# a script reading the summaries of many runs tells this one from a complete one
+check "the JSON summary says failed, its steps fewer than the 400 requested" \
+    "/usr/bin/python3 -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == \"failed\" and s[\"steps_requested\"] == 400 and s[\"steps\"] < 400))' '$mnt/../diskfull.json'"
+check "the file has no summary (the disk had no room), and nbep info says the status is unknown" \
+    "grep -Eq '^status: +unknown \\(no summary' '$mnt/../diskfull.info'"
 /usr/bin/python3 - "$mnt/full.h5" <<'PYEOF' && echo "ok   every counted frame reads back" || { echo "FAIL every counted frame reads back"; fail=1; }
 import sys, h5py, numpy as np
 f = h5py.File(sys.argv[1], "r")

@@ -97,7 +97,9 @@ static nbep_summary known_summary(void)
                       .energy_rel_drift = 0.25 / -1234.5,
                       .max_overlap = 3.0e-14,
                       .max_overlap_rel = 6.0e-13,
-                      .peak_rss_bytes = 52428800};
+                      .peak_rss_bytes = 52428800,
+                      .status = NBEP_SUMMARY_TERMINATED,
+                      .steps_requested = {.known = true, .value = 2500}};
     return s;
 }
 
@@ -937,8 +939,23 @@ static void test_info_reports_the_settings_frames_stats_and_summary(void **state
     assert_has_line(text, "             run.steps=20");
     assert_has_line(text, "frames:      3 (last: step 20, time 0.025)");
     assert_has_line(text, "stats rows:  20");
+    assert_has_line(text, "status:      terminated (SIGTERM): step 1000 of 2500");
     assert_has_line(text, summary_line);
     free(json);
+    free(text);
+    /* a summary without a status (an nbep before 2026-11-30 wrote none; null here) is shown
+     * as it is, the status unknown, against the file's own run.steps */
+    sum.status = NBEP_SUMMARY_UNKNOWN;
+    sum.steps_requested = (nbep_summary_count){.known = false};
+    write_run(fx, nbep_test_tmp("output_info_older.h5", path, sizeof path), &sum);
+    text = info_text(path, &fx->d);
+    assert_has_line(text, "status:      unknown (the summary is older than its status key): "
+                          "step 1000 of 20");
+    free(text);
+    sum.status = NBEP_SUMMARY_COMPLETED;
+    write_run(fx, nbep_test_tmp("output_info_done.h5", path, sizeof path), &sum);
+    text = info_text(path, &fx->d);
+    assert_has_line(text, "status:      completed: step 1000 of 20");
     free(text);
 }
 
@@ -974,7 +991,10 @@ static void test_info_on_a_killed_run_says_it_has_no_summary(void **state)
     run_crashing_child(fx, nbep_test_tmp("output_info_kill9.h5", path, sizeof path), true);
     char *text = info_text(path, &fx->d);
     assert_has_line(text, "frames:      3 (last: step 20, time 0.025)");
-    assert_has_line(text, "summary:     none (run interrupted or still running)");
+    assert_has_line(text, "status:      unknown (no summary: the run was killed, stopped by a "
+                          "write error, or is still running)");
+    assert_has_line(text, "summary:     none (run killed, stopped by a write error, or still "
+                          "running)");
     free(text);
 }
 
@@ -1029,7 +1049,8 @@ static void test_info_reads_a_run_while_it_is_being_written(void **state)
         assert_ok(live_st, &fx->d);
     }
     assert_has_line(live, "frames:      2 (last: step 10, time 0.0125)");
-    assert_has_line(live, "summary:     none (run interrupted or still running)");
+    assert_has_line(live, "summary:     none (run killed, stopped by a write error, or still "
+                          "running)");
     free(live);
     char *text = info_text(path, &fx->d);
     assert_has_line(text, "frames:      3 (last: step 20, time 0.025)");
@@ -1110,7 +1131,8 @@ static const char known_json[] =
     "\"plane_collisions\": 242, \"quiet_steps\": 950, \"energy_initial\": -1234.5, "
     "\"energy_final\": -1234.25, \"energy_rel_drift\": -0.0002025111381125962, "
     "\"max_overlap\": 3e-14, \"max_overlap_rel\": 6e-13, "
-    "\"peak_rss_bytes\": 52428800, \"pressure\": null}\n";
+    "\"peak_rss_bytes\": 52428800, \"pressure\": null, \"status\": \"terminated\", "
+    "\"steps_requested\": 2500}\n";
 
 static void test_json_of_a_known_summary_is_the_expected_text(void **state)
 {
@@ -1149,7 +1171,8 @@ static void test_json_parses_with_spec_keys_in_spec_order(void **state)
     assert_non_null(f);
     assert_true(nbep_summary_write_json(&s, f) > 0);
     fclose(f);
-    /* An independent JSON parser; the keys as SPEC's "JSON summary" lists them. */
+    /* An independent JSON parser; the keys as SPEC's "JSON summary" lists them, then those
+     * added since (contract 2's pressure; status and steps_requested, README). */
     snprintf(cmd, sizeof cmd,
              "python3 -c 'import json, sys; d = json.load(open(sys.argv[1])); "
              "sys.exit(list(d) != [\"format\", \"version\", \"algorithm\", \"threads\", "
@@ -1158,8 +1181,9 @@ static void test_json_parses_with_spec_keys_in_spec_order(void **state)
              "\"collisions\", \"sphere_collisions\", \"plane_collisions\", "
              "\"quiet_steps\", \"energy_initial\", \"energy_final\", "
              "\"energy_rel_drift\", \"max_overlap\", \"max_overlap_rel\", "
-             "\"peak_rss_bytes\", \"pressure\"] or d[\"steps_per_second\"] != 1000 / 1.5 "
-             "or d[\"pressure\"] is not None)' %s",
+             "\"peak_rss_bytes\", \"pressure\", \"status\", \"steps_requested\"] "
+             "or d[\"steps_per_second\"] != 1000 / 1.5 or d[\"pressure\"] is not None "
+             "or d[\"status\"] != \"terminated\" or d[\"steps_requested\"] != 2500)' %s",
              path);
     assert_int_equal(system(cmd), 0);
 }

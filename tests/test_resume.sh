@@ -266,11 +266,19 @@ wait $pid 2>/dev/null
 check "SIGTERM stops the long run with 143" "[ $? = 143 ]"
 last=$(bin/nbep info $tmp/killed.h5 | sed -n 's/^frames: .*last: step \([0-9]*\).*/\1/p')
 check "it got somewhere (step $last)" "[ -n '$last' ] && [ '$last' -gt 0 ]"
+check "its summary says terminated, short of the 100000000 steps requested" \
+    "bin/nbep info $tmp/killed.h5 | grep -Eqx 'status: +terminated \\(SIGTERM\\): step $last of 100000000'"
 end=$(( ${last:-0} + 200 ))
 bin/nbep run $deck "${args[@]}" -n $end -o $tmp/whole.h5
-bin/nbep run $deck "${args[@]}" -n $end --resume $tmp/killed.h5 2>/dev/null
+bin/nbep run $deck "${args[@]}" -n $end --resume $tmp/killed.h5 --summary $tmp/resumed.json \
+    2>/dev/null
 check "resumed after SIGTERM, every frame equals the uninterrupted run's" \
     "same_frames $tmp/whole.h5 $tmp/killed.h5"
+# the resumed run's summary (the file's, and --summary's) is its own: completed, the step
+# reached being the one requested
+check "the resumed run's summary says completed, step $end of $end" \
+    "bin/nbep info $tmp/killed.h5 | grep -Eqx 'status: +completed: step $end of $end' &&
+     $PY -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == \"completed\" and s[\"steps\"] == s[\"steps_requested\"] == int(sys.argv[2])))' $tmp/resumed.json $end"
 
 # a deck that does not match the file is refused, naming both
 bin/nbep run $deck --quiet --set spheres.[0].count=401 --set box.max=[2,2,2] -n 80 \

@@ -28,6 +28,12 @@ for sig in TERM INT; do
     check "SIG$sig file holds the summary of the steps done" \
         "grep -q '\"steps\": [1-9]' '$tmp/info-$sig'"
     check "SIG$sig writes the JSON summary" "grep -q nbep-summary-1 '$tmp/summary-$sig.json'"
+    ended=$([ $sig = TERM ] && echo terminated || echo interrupted)
+    check "SIG$sig: the summary says $ended, its steps fewer than the 100000000 requested" \
+        "/usr/bin/python3 -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == sys.argv[2] and s[\"steps_requested\"] == 100000000 and 0 < s[\"steps\"] < s[\"steps_requested\"]))' '$tmp/summary-$sig.json' $ended"
+    check "SIG$sig: so does the file's, as nbep info shows it" \
+        "grep -Eq '^status: +$ended \\(SIG$sig\\): step [1-9][0-9]* of 100000000\$' '$tmp/info-$sig' &&
+         grep -q '\"status\": \"$ended\", \"steps_requested\": 100000000}' '$tmp/info-$sig'"
     check "SIG$sig says so on stderr" "grep -q 'stopped after' '$tmp/stderr-$sig' || grep -qi 'interrupt\\|terminat' '$tmp/stderr-$sig'"
     lines=$(wc -l < "$tmp/stderr-$sig")
     check "SIG$sig: that is the only line on stderr (got $lines)" "[ $lines = 1 ]"
@@ -105,6 +111,9 @@ check "after step 0, in one line" \
     "[ \$(wc -l < '$tmp/stderr-setup') = 1 ] && grep -q 'after step 0;' '$tmp/stderr-setup'"
 check "with frame 0 readable and no step run" \
     "bin/nbep info '$out' > '$tmp/info-setup' && grep -q '^frames: *1 (last: step 0' '$tmp/info-setup' && grep -q '\"steps\": 0' '$tmp/summary-setup.json'"
+check "and a summary that says terminated, 0 of the deck's 1000 steps" \
+    "grep -q '\"status\": \"terminated\", \"steps_requested\": 1000}' '$tmp/summary-setup.json' &&
+     grep -Eq '^status: +terminated \\(SIGTERM\\): step 0 of 1000\$' '$tmp/info-setup'"
 
 [ $fail = 0 ] && echo "signals: all passed"
 exit $fail

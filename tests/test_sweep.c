@@ -505,6 +505,103 @@ static void test_a_run_killed_before_its_summary_is_not_complete(void **state)
     nbep_sweep_plan_fini(&p);
 }
 
+/* Replaces the /summary json attribute of the run file at path with text. */
+static void set_summary_json(const char *path, const char *text)
+{
+    hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+    assert_true(f >= 0);
+    hid_t g = H5Gopen2(f, "/summary", H5P_DEFAULT);
+    assert_true(g >= 0);
+    assert_true(H5Adelete(g, "json") >= 0);
+    hid_t type = H5Tcopy(H5T_C_S1), space = H5Screate(H5S_SCALAR);
+    assert_true(H5Tset_size(type, H5T_VARIABLE) >= 0);
+    hid_t a = H5Acreate2(g, "json", type, space, H5P_DEFAULT, H5P_DEFAULT);
+    assert_true(a >= 0);
+    assert_true(H5Awrite(a, type, &text) >= 0);
+    H5Aclose(a);
+    H5Sclose(space);
+    H5Tclose(type);
+    H5Gclose(g);
+    assert_true(H5Fclose(f) >= 0);
+}
+
+/* A run's file whose summary counts all its steps is complete only when it says it completed:
+ * one stopped by a signal in its last step (exit 143 or 130, its row said interrupted) or one
+ * that failed is run again. A summary of an nbep before the status key (no status, no
+ * steps_requested) is judged as then, by its steps. */
+static void test_a_run_is_complete_only_when_its_summary_says_it_completed(void **state)
+{
+    (void)state;
+    char deck[256];
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_status", "", deck, sizeof deck), NULL, 0, &p);
+    assert_int_equal(make_dir(p.dir), 0);
+    char **ov;
+    size_t n;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_sweep_run_overrides(&p, 0, &ov, &n, &d), NBEP_OK);
+    nbep_scene sc;
+    assert_int_equal(nbep_scene_load(deck, (const char *const *)ov, n, &sc, &d), NBEP_OK);
+    char *path = nbep_sweep_run_path(&p, 0);
+    static const struct {
+        nbep_summary_status status;
+        uint64_t steps;
+        bool complete;
+    } cases[] = {
+        {NBEP_SUMMARY_COMPLETED, 20, true},    {NBEP_SUMMARY_TERMINATED, 20, false},
+        {NBEP_SUMMARY_INTERRUPTED, 20, false}, {NBEP_SUMMARY_FAILED, 20, false},
+        {NBEP_SUMMARY_COMPLETED, 19, false},   {NBEP_SUMMARY_UNKNOWN, 20, true},
+        {NBEP_SUMMARY_UNKNOWN, 19, false},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof *cases; k++) {
+        nbep_summary sum = {.algorithm = "predictive", .threads = 1, .spheres = 8,
+                            .planes = 6, .steps = cases[k].steps, .dt = 1e-3,
+                            .status = cases[k].status,
+                            .steps_requested = {.known = true, .value = 20}};
+        nbep_output *o;
+        assert_int_equal(nbep_output_create(path, &sc, 1, &o, &d), NBEP_OK);
+        assert_int_equal(nbep_output_frame(o, 0, sc.dt, &sc.state, &d), NBEP_OK);
+        assert_int_equal(nbep_output_close(&o, &sum, &d), NBEP_OK);
+        if (cases[k].status == NBEP_SUMMARY_UNKNOWN) {
+            /* as an older nbep wrote it: the same keys up to pressure, the last then */
+            char *json = nbep_summary_to_json(&sum);
+            assert_non_null(json);
+            char *tail = strstr(json, ", \"status\": ");
+            assert_non_null(tail);
+            strcpy(tail, "}\n");
+            set_summary_json(path, json);
+            free(json);
+        }
+        nbep_summary got;
+        memset(&got, 0, sizeof got);
+        if (nbep_sweep_run_complete(path, ov, n, 20, &got) != cases[k].complete)
+            fail_msg("case %zu (status %d, %llu steps): complete is not %d", k,
+                     (int)cases[k].status, (unsigned long long)cases[k].steps,
+                     (int)cases[k].complete);
+        if (cases[k].complete)
+            assert_int_equal(got.status, cases[k].status);
+    }
+    /* the sweep runs a terminated one again, and its row is then ok and its own */
+    nbep_summary sum = {.algorithm = "predictive", .threads = 1, .spheres = 8, .planes = 6,
+                        .steps = 20, .dt = 1e-3, .status = NBEP_SUMMARY_TERMINATED};
+    nbep_output *o;
+    assert_int_equal(nbep_output_create(path, &sc, 1, &o, &d), NBEP_OK);
+    assert_int_equal(nbep_output_frame(o, 0, sc.dt, &sc.state, &d), NBEP_OK);
+    assert_int_equal(nbep_output_close(&o, &sum, &d), NBEP_OK);
+    nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
+    assert_int_equal(res[0].outcome, NBEP_SWEEP_OK);
+    assert_int_equal(res[0].reused, 0);
+    assert_int_equal(res[0].summary.status, NBEP_SUMMARY_COMPLETED);
+    assert_true(nbep_sweep_run_complete(path, ov, n, 20, NULL));
+    free(res);
+    free(path);
+    nbep_scene_fini(&sc);
+    nbep_sweep_overrides_free(ov, n);
+    nbep_diag_fini(&d);
+    nbep_sweep_plan_fini(&p);
+}
+
 /* ---- running and the summary --------------------------------------------------------------- */
 
 static const char with_bad_value[] =
@@ -533,8 +630,12 @@ static void test_a_failing_combination_spares_the_other_runs(void **state)
                      deck, line);
             assert_string_equal(res[run].error, want);
         }
-        else
+        else {
             assert_int_equal(res[run].summary.steps, 20);
+            assert_int_equal(res[run].summary.status, NBEP_SUMMARY_COMPLETED);
+            assert_true(res[run].summary.steps_requested.known);
+            assert_int_equal(res[run].summary.steps_requested.value, 20);
+        }
         char *path = nbep_sweep_run_path(&p, run);
         assert_int_equal(access(path, F_OK) == 0, !bad);
         free(path);
@@ -579,8 +680,11 @@ static void test_a_restarted_sweep_reuses_complete_runs(void **state)
         bool bad = run % 3 == 1;
         assert_int_equal(res[run].outcome, bad ? NBEP_SWEEP_FAILED : NBEP_SWEEP_OK);
         assert_int_equal(res[run].reused, !bad);
-        if (!bad)
+        if (!bad) { /* the file's summary, read back */
             assert_int_equal(res[run].summary.steps, 20);
+            assert_int_equal(res[run].summary.status, NBEP_SUMMARY_COMPLETED);
+            assert_int_equal(res[run].summary.steps_requested.value, 20);
+        }
     }
     free(res);
     nbep_sweep_plan_fini(&p);
@@ -650,7 +754,7 @@ static void test_summary_csv_has_a_row_per_run_in_run_order(void **state)
                         "wall_seconds,steps_per_second,checks,predictions,collisions,"
                         "sphere_collisions,plane_collisions,quiet_steps,energy_initial,"
                         "energy_final,energy_rel_drift,max_overlap,max_overlap_rel,"
-                        "peak_rss_bytes,pressure,error");
+                        "peak_rss_bytes,pressure,steps_requested,error");
     static const char *const restitution[3] = {"1.0", "1.5", "0.5"};
     char f[128], want[64];
     for (size_t run = 0; run < 6; run++) {
@@ -677,11 +781,59 @@ static void test_summary_csv_has_a_row_per_run_in_run_order(void **state)
         else
             assert_int_equal(row[strlen(row) - 1], ',');   /* empty error */
         assert_string_equal(csv_field(row, 31, f, sizeof f), "");   /* pressure: null */
+        assert_string_equal(csv_field(row, 32, f, sizeof f), bad ? "" : "20"); /* requested */
     }
     for (size_t k = 0; k < n; k++)
         free(lines[k]);
     free(res);
     nbep_diag_fini(&d);
+    nbep_sweep_plan_fini(&p);
+}
+
+/* A run an older nbep finished (its summary without status and steps_requested) is reused, and
+ * its row shows what that summary says: steps_requested empty, as for any key a row lacks,
+ * not 0; the status column says ok. */
+static void test_an_older_nbeps_finished_run_is_reused_with_steps_requested_empty(void **state)
+{
+    (void)state;
+    char deck[256];
+    nbep_sweep_plan p;
+    plan_of(write_deck("sweep_older", "", deck, sizeof deck), NULL, 0, &p);
+    free(execute(&p, NULL, NBEP_OK));
+    /* its summary as an older nbep wrote it: everything up to pressure */
+    char *path = nbep_sweep_run_path(&p, 0), **ov;
+    size_t n;
+    nbep_summary sum;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_sweep_run_overrides(&p, 0, &ov, &n, &d), NBEP_OK);
+    assert_true(nbep_sweep_run_complete(path, ov, n, 20, &sum));
+    char *json = nbep_summary_to_json(&sum);
+    assert_non_null(json);
+    strcpy(strstr(json, ", \"status\": "), "}\n");
+    set_summary_json(path, json);
+    free(json);
+    nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
+    assert_int_equal(res[0].outcome, NBEP_SWEEP_OK);
+    assert_int_equal(res[0].reused, 1);
+    assert_int_equal(res[0].summary.status, NBEP_SUMMARY_UNKNOWN);
+    assert_false(res[0].summary.steps_requested.known);
+    assert_int_equal(nbep_sweep_write_summary(&p, res, 1, 1.0, &d), NBEP_OK);
+    char *lines[16];
+    assert_int_equal(read_lines(TMP "sweep_older.sweep/summary.csv", lines), 2);
+    char f[64];
+    assert_string_equal(csv_field(lines[0], 4, f, sizeof f), "status");
+    assert_string_equal(csv_field(lines[1], 4, f, sizeof f), "ok");
+    assert_string_equal(csv_field(lines[0], 13, f, sizeof f), "steps");
+    assert_string_equal(csv_field(lines[1], 13, f, sizeof f), "20");
+    assert_string_equal(csv_field(lines[0], 31, f, sizeof f), "steps_requested");
+    assert_string_equal(csv_field(lines[1], 31, f, sizeof f), "");
+    free(lines[0]);
+    free(lines[1]);
+    nbep_diag_fini(&d);
+    free(res);
+    free(path);
+    nbep_sweep_overrides_free(ov, n);
     nbep_sweep_plan_fini(&p);
 }
 
@@ -713,14 +865,14 @@ static void test_summary_h5_holds_the_same_table(void **state)
     hsize_t rows;
     assert_int_equal(H5Sget_simple_extent_dims(space, &rows, NULL), 1);
     assert_int_equal(rows, 6);
-    assert_int_equal(H5Tget_nmembers(type), 33);   /* the CSV's 33 columns */
+    assert_int_equal(H5Tget_nmembers(type), 34);   /* the CSV's 34 columns */
     char *m0 = H5Tget_member_name(type, 0), *m4 = H5Tget_member_name(type, 4);
     assert_string_equal(m0, "run");
     assert_string_equal(m4, "physics.restitution");
     H5free_memory(m0);
     H5free_memory(m4);
 
-    int64_t run[6], steps[6], seed[6];
+    int64_t run[6], steps[6], seed[6], requested[6];
     double drift[6];
     char *status[6], *value[6];
     hid_t str = H5Tcopy(H5T_C_S1);
@@ -728,6 +880,7 @@ static void test_summary_h5_holds_the_same_table(void **state)
     read_member(ds, "run", H5T_NATIVE_INT64, run);
     read_member(ds, "seed", H5T_NATIVE_INT64, seed);
     read_member(ds, "steps", H5T_NATIVE_INT64, steps);
+    read_member(ds, "steps_requested", H5T_NATIVE_INT64, requested);
     read_member(ds, "energy_rel_drift", H5T_NATIVE_DOUBLE, drift);
     read_member(ds, "status", str, status);
     read_member(ds, "physics.restitution", str, value);
@@ -737,6 +890,7 @@ static void test_summary_h5_holds_the_same_table(void **state)
         assert_int_equal(run[r], (int64_t)r);
         assert_int_equal(seed[r], 11 + (int64_t)r / 3);
         assert_int_equal(steps[r], bad ? 0 : 20);
+        assert_int_equal(requested[r], bad ? 0 : 20);
         assert_true(bad ? isnan(drift[r]) : drift[r] == res[r].summary.energy_rel_drift);
         assert_string_equal(status[r], bad ? "failed" : "ok");
         assert_string_equal(value[r], restitution[r % 3]);
@@ -819,6 +973,8 @@ int main(void)
         cmocka_unit_test(test_a_run_is_complete_only_with_its_overrides_and_all_its_steps),
         cmocka_unit_test(test_thread_count_and_output_name_do_not_make_a_run_different),
         cmocka_unit_test(test_a_run_killed_before_its_summary_is_not_complete),
+        cmocka_unit_test(test_a_run_is_complete_only_when_its_summary_says_it_completed),
+        cmocka_unit_test(test_an_older_nbeps_finished_run_is_reused_with_steps_requested_empty),
         cmocka_unit_test(test_a_failing_combination_spares_the_other_runs),
         cmocka_unit_test(test_a_failing_value_from_the_command_line_names_no_deck_line),
         cmocka_unit_test(test_a_restarted_sweep_reuses_complete_runs),

@@ -28,7 +28,8 @@ typedef struct nbep_run_request {
 
 typedef struct nbep_run_result {
     bool simulated;                /* stepping began: `summary` says what was done */
-    nbep_summary summary;
+    nbep_summary summary;          /* its `status` is the returned status's
+                                    * (nbep_summary_status_of), close included */
 } nbep_run_result;
 
 /* The files a command writes, against the deck and each other: an output file (the run's, or

@@ -54,7 +54,9 @@ void nbep_sim_destroy(nbep_sim **sim);
  * frame written first). */
 NBEP_MUST_CHECK nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d);
 
-/* The run's summary so far (valid after create; complete after run). */
+/* The run's summary so far (valid after create; complete after run), but for `status`, left
+ * unknown: how the run ended is the caller's to say (nbep_run: the simulation's status, then
+ * the closing file's). */
 void nbep_sim_summary(const nbep_sim *sim, nbep_summary *s);
 /* A counter's total so far (enum nbep_counter from stats.h). */
 uint64_t nbep_sim_counter(const nbep_sim *sim, int counter);

@@ -119,12 +119,13 @@ typedef struct nbep_sweep_result {
 } nbep_sweep_result;
 
 /* Whether the file at path holds a complete run with these overrides: its /summary json
- * exists and says `steps` steps, and its root `overrides` attribute (one per line, as the
- * scene stores them) lists the same overrides in the same order, ignoring those of run.threads
- * and output.file on both sides (a run's frames do not depend on them). On true, *sum (may be
- * NULL) gets the stored summary. A missing, unreadable, interrupted or different file is
- * simply not complete. Edits to the deck file itself are not detected: start such a study in
- * a fresh directory. */
+ * exists and says status "completed" (or no status, as an nbep before 2026-11-30 wrote it)
+ * and `steps` steps, and its root `overrides` attribute (one per line, as the scene stores
+ * them) lists the same overrides in the same order, ignoring those of run.threads and
+ * output.file on both sides (a run's frames do not depend on them). On true, *sum (may be
+ * NULL) gets the stored summary. A missing, unreadable, interrupted, failed or different file
+ * is simply not complete. Edits to the deck file itself are not detected: start such a study
+ * in a fresh directory. */
 bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_overrides,
                              uint64_t steps, nbep_summary *sum);
 
@@ -157,7 +158,8 @@ NBEP_MUST_CHECK nbep_status nbep_sweep_execute(const nbep_sweep_plan *p,
 /* Writes DIR/summary.csv and DIR/summary.h5 from the results of every run (n_runs entries),
  * each replaced atomically (written aside, then renamed). Columns, in order: run, replica,
  * seed, rank, one per axis (its key; the value as deck text, strings without quotes), status,
- * exit_code, reused, seconds, file, the JSON summary's fields in SPEC order, error. n_ranks
+ * exit_code, reused, seconds, file, the JSON summary's fields in order (but its `status`: the
+ * column `status` says how each run ended in the table's words), error. n_ranks
  * and wall_seconds go into summary.h5's root attributes. NBEP_EIO, NBEP_ENOMEM. */
 NBEP_MUST_CHECK nbep_status nbep_sweep_write_summary(const nbep_sweep_plan *p,
                                                      const nbep_sweep_result *results,
