@@ -888,10 +888,8 @@ static void pred_run(nbep_sim *sim, void *p)
                 if (round % STALL_ROUNDS == STALL_ROUNDS - 1 &&
                     !(t_min - t_check > STALL_FRACTION * sim->dt)) {
                     if (tid == 0) {
-                        nbep_diag_add(sim->diag, __FILE__, __LINE__,
-                                      "nbep: step %llu: events at t = %.17g do not resolve "
-                                      "(endless zero-time reactions); stopping",
-                                      (unsigned long long)step, t_min);
+                        nbep_diag_add(sim->diag, __FILE__, __LINE__, STALL_MESSAGE,
+                                      (unsigned long long)step, t_min, STALL_ROUNDS, "rounds");
                         sim->status = NBEP_ENUMERIC;
                     }
                     quit = true;

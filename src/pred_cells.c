@@ -512,10 +512,8 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
     } else if (fail && (jammed = cells_jammed(c, sim->st.n, step)) != 0) {
         nbep__pred_jam_fail(sim, step, jammed - 1, t_stuck);
     } else if (fail) {
-        nbep_diag_add(sim->diag, __FILE__, __LINE__,
-                      "nbep: step %llu: events at t = %.17g do not resolve "
-                      "(endless zero-time reactions); stopping",
-                      (unsigned long long)step, t_stuck);
+        nbep_diag_add(sim->diag, __FILE__, __LINE__, STALL_MESSAGE, (unsigned long long)step,
+                      t_stuck, STALL_EVENTS, "events");
         sim->status = NBEP_ENUMERIC;
     }
 }

@@ -34,6 +34,14 @@
  * is a contact the model cannot resolve. */
 #define STALL_ROUNDS 100000u
 #define STALL_FRACTION 1e-12
+/* The stall's message (printf: step, time, "rounds" or "events", their count). A step whose
+ * real events are far shorter than it (a review's 27 spheres at 1e18 times their radius a
+ * time unit, dt = 1: 1e18 list expiries a sphere a step) stalls by this measure too, and will
+ * not end either: the message names both causes. */
+#define STALL_MESSAGE                                                                              \
+    "nbep: step %llu: events at t = %.17g do not resolve (time advanced less than 1e-12 of a "    \
+    "step over %u %s: endless zero-time reactions, or a time step far too long for the scene's " \
+    "events); stopping"
 /* Sphere-sphere contacts that different accelerations press together (a sphere on one that
  * rests on a floor, a pile) would bounce ever faster (inelastic collapse: infinitely many
  * collisions in finite time) or, with e = 1, forever at a vanishing height. Such a pair leaves

@@ -143,7 +143,8 @@ static bool in_scale(double magnitude)
 static double scaled_norm(nbep_vec3 v)
 {
     const double m = fmax(fabs(v.x), fmax(fabs(v.y), fabs(v.z)));
-    return m > 0.0 ? m * nbep_vec3_norm(nbep_vec3_scale(v, 1.0 / m)) : 0.0;
+    /* divided by m, not multiplied by 1 / m, which overflows for a subnormal m */
+    return m > 0.0 ? m * nbep_vec3_norm(nbep_vec3_make(v.x / m, v.y / m, v.z / m)) : 0.0;
 }
 
 static got get_float(load *L, const config_setting_t *parent, const char *prefix, int id,
@@ -520,6 +521,8 @@ static void check_periodic(load *L, const config_setting_t *at, const nbep_scene
 typedef struct plane {
     nbep_vec3 normal;   /* unit */
     double offset;
+    nbep_vec3 point;    /* as given, and its setting (check_span) */
+    const config_setting_t *point_at;
 } plane;
 
 /* Parses `planes` into *out (owned, *n of them). */
@@ -545,20 +548,22 @@ static void parse_planes(load *L, const config_setting_t *root, plane **out, siz
             continue;
         }
         nbep_vec3 normal, point;
+        const config_setting_t *point_at = NULL;
         if (get_vec3(L, e, prefix, S_PLANE_NORMAL, &normal, &at) != GOT ||
-            get_vec3(L, e, prefix, S_PLANE_POINT, &point, NULL) != GOT)
+            get_vec3(L, e, prefix, S_PLANE_POINT, &point, &point_at) != GOT)
             continue;
-        /* Scaled by its largest component first, so that tiny or huge normals normalize
-         * without underflow or overflow. */
+        /* Divided by its largest component first, so that tiny or huge normals normalize
+         * without underflow or overflow (divided: 1 / a subnormal component is inf, and a
+         * normal [0, 0, 1e-320] became NaN, which a run then asserted on) */
         double scale = fmax(fabs(normal.x), fmax(fabs(normal.y), fabs(normal.z)));
         if (!(scale > 0.0)) {
             ERR(L, at, "%s.normal must not be zero (got [%g, %g, %g])", prefix, normal.x,
                 normal.y, normal.z);
             continue;
         }
-        normal = nbep_vec3_scale(normal, 1.0 / scale);
+        normal = nbep_vec3_make(normal.x / scale, normal.y / scale, normal.z / scale);
         normal = nbep_vec3_scale(normal, 1.0 / nbep_vec3_norm(normal));
-        p[k] = (plane){normal, nbep_vec3_dot(normal, point)};
+        p[k] = (plane){normal, nbep_vec3_dot(normal, point), point, point_at};
     }
     *out = p;
     *n = len;
@@ -698,6 +703,64 @@ static void parse_spheres(load *L, const config_setting_t *root, const nbep_scen
     }
     *out = e;
     *n = len;
+}
+
+/* One point of the deck against NBEP_DECK_SPAN_MAX smallest radii (rmin) from the origin. */
+static void span_one(load *L, const config_setting_t *at, const char *what, nbep_vec3 v,
+                     double rmin)
+{
+    const double c[3] = {v.x, v.y, v.z};
+    int far = 0; /* the coordinate farthest out */
+    for (int k = 1; k < 3; k++)
+        far = fabs(c[k]) > fabs(c[far]) ? k : far;
+    const double m = fabs(c[far]);
+    if (m > NBEP_DECK_SPAN_MAX * rmin)
+        ERR(L, at,
+            "%s lies %.3g smallest radii (%g) from the origin, beyond 2^40 = 1.1e12 (a "
+            "coordinate of %g: positions there round by more than 2^-12 of a radius); move "
+            "the origin nearer the scene (README, The deck: units)",
+            what, m / rmin, rmin, c[far]);
+}
+
+/* Every coordinate the deck gives within NBEP_DECK_SPAN_MAX of its smallest radius from the
+ * origin: sphere positions, box and region corners, plane points (a deck without spheres
+ * has no scale to hold them to). */
+static void check_span(load *L, const config_setting_t *root, const nbep_scene *sc,
+                       const plane *planes, size_t n_planes, const nbep__scene_entry *e,
+                       size_t n_entries)
+{
+    double rmin = INFINITY;
+    for (size_t k = 0; k < n_entries; k++)
+        if (e[k].count > 0 && e[k].radius > 0.0)
+            rmin = fmin(rmin, e[k].radius);
+    if (!(rmin < INFINITY))
+        return;
+    const config_setting_t *box = config_setting_get_member(root, "box");
+    if (sc->has_box && box) {
+        span_one(L, config_setting_get_member(box, "min"), "box.min", sc->box_min, rmin);
+        span_one(L, config_setting_get_member(box, "max"), "box.max", sc->box_max, rmin);
+    }
+    char what[PATH_LEN + 16];
+    for (size_t k = 0; k < n_planes; k++)
+        if (planes[k].point_at) {
+            snprintf(what, sizeof what, "planes.[%zu].point", k);
+            span_one(L, planes[k].point_at, what, planes[k].point, rmin);
+        }
+    for (size_t k = 0; k < n_entries; k++) {
+        if (!e[k].setting || e[k].count == 0)
+            continue;
+        const config_setting_t *region = config_setting_get_member(e[k].setting, "region");
+        if (e[k].place == NBEP__PLACE_ONE) {
+            snprintf(what, sizeof what, "spheres.[%zu].position", k);
+            span_one(L, config_setting_get_member(e[k].setting, "position"), what,
+                     e[k].position, rmin);
+        } else if (region) {
+            snprintf(what, sizeof what, "spheres.[%zu].region.min", k);
+            span_one(L, config_setting_get_member(region, "min"), what, e[k].lo, rmin);
+            snprintf(what, sizeof what, "spheres.[%zu].region.max", k);
+            span_one(L, config_setting_get_member(region, "max"), what, e[k].hi, rmin);
+        }
+    }
 }
 
 static char *dup_string(load *L, const char *s)
@@ -1158,6 +1221,7 @@ nbep_status nbep_scene_load_from(const char *deck_path, const char *const *overr
     parse_spheres(&L, root, &sc, &entries, &n_entries);
     if (periodic_at)
         check_periodic(&L, periodic_at, &sc, entries, n_entries);
+    check_span(&L, root, &sc, planes, n_planes, entries, n_entries);
     const bool geometry_ok = seed_ok && d->n_errors == geometry0 && !L.c.oom;
     parse_output(&L, root, &sc);
     parse_sweep(&L, root, &sc);
@@ -1178,8 +1242,6 @@ nbep_status nbep_scene_load_from(const char *deck_path, const char *const *overr
             st = nbep__scene_check_overlaps(&L.c, &sc.state, entries, n_entries,
                                             sc.has_box ? sc.periodic : NULL, sc.box_min,
                                             sc.box_max);
-        if (st == NBEP_OK && d->n_errors == fill0)
-            nbep__scene_check_energy(&L.c, &sc.state, entries, n_entries);
         if (st != NBEP_OK)
             goto done;
     }

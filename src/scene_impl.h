@@ -152,11 +152,4 @@ NBEP_MUST_CHECK nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const
                                                        const bool *box_periodic, nbep_vec3 lo,
                                                        nbep_vec3 hi);
 
-/* Reports (at its entry) the first sphere of s whose kinetic m v.v/2 or potential -m a.p
- * energy (nbep_physics_energy) is not finite in doubles: a run could not report its energy,
- * nor keep it. (A total beyond doubles from finite terms is nbep_sim_create's to refuse: it
- * sums them in its own order.) The error goes to the diag. */
-void nbep__scene_check_energy(nbep__scene_ctx *c, const nbep_state *s,
-                              const nbep__scene_entry *e, size_t n_entries);
-
 #endif

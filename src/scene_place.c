@@ -705,23 +705,3 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                       c->deck, o.found - OVERLAP_REPORT_MAX);
     return NBEP_OK;
 }
-
-void nbep__scene_check_energy(nbep__scene_ctx *c, const nbep_state *s,
-                              const nbep__scene_entry *e, size_t n_entries)
-{
-    for (size_t k = 0; k < n_entries; k++) {
-        const size_t lo = e[k].first, hi = lo + (size_t)e[k].count;
-        for (size_t i = lo; i < hi; i++) {
-            double ke, pe;
-            nbep_physics_energy(s, i, i + 1, &ke, &pe);
-            if (!isfinite(ke) || !isfinite(pe)) {
-                NBEP__SCENE_ERR(c, e[k].setting,
-                                "spheres.[%zu] (sphere %zu): its energy (kinetic %g, potential "
-                                "%g) is beyond doubles: a speed, mass, acceleration or position "
-                                "too large",
-                                k, i, ke, pe);
-                return;
-            }
-        }
-    }
-}

@@ -257,8 +257,9 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
     double ke, pe;
     energy_total(sim, &ke, &pe);
     sim->energy_initial = sim->energy_final = ke + pe;
-    if (!isfinite(sim->energy_initial)) { /* each sphere's is finite (the deck's check): their
-                                           * sum is not */
+    /* no deck within the window of magnitudes and the span (scene.h) gets here: a resumed
+     * file's state or a scene built otherwise can */
+    if (!isfinite(sim->energy_initial)) {
         nbep_sim_destroy(&sim);
         NBEP_FAIL(d, NBEP_EDECK,
                   "nbep: the spheres' total energy (kinetic %g, potential %g) is beyond doubles: "

@@ -1328,6 +1328,35 @@ static void test_an_energy_that_overflows_stops_the_run_at_the_step_before(void 
         }
 }
 
+/* A state whose energy is beyond doubles (no deck within the window and the span holds one; a
+ * resumed file's state or a scene built otherwise can): refused before the run, one sphere's
+ * energy (a speed of 1e160) or the total of four finite ones (5e307 each) */
+static void test_an_energy_beyond_doubles_is_refused_before_the_run(void **state)
+{
+    fixture *f = *state;
+    const struct {
+        size_t n;
+        double speed;
+    } cases[] = {{1, 1e160}, {4, 1e154}};
+    for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
+        nbep_scene *sc = scene_new(f, cases[c].n, 0, "predictive", 3, 1e-3);
+        for (size_t i = 0; i < cases[c].n; i++)
+            nbep_test_set_sphere(sc, i, (nbep_vec3){(double)i, 0.0, 0.0},
+                                 (nbep_vec3){cases[c].speed, 0.0, 0.0}, 0.1, 1.0, ZERO);
+        nbep_diag d;
+        nbep_diag_init(&d);
+        nbep_sim_options opt = {.threads = 1};
+        nbep_sim *sim = NULL;
+        const nbep_status st = nbep_sim_create(sc, &opt, &sim, &d);
+        const bool said = d.n_errors == 1 && strstr(d.msg[0], "total energy") &&
+                          strstr(d.msg[0], "is beyond doubles");
+        if (st != NBEP_EDECK || sim || !said)
+            fail_msg("%zu spheres at %g: status %d, \"%s\"", cases[c].n, cases[c].speed, (int)st,
+                     d.n_errors ? d.msg[0] : "");
+        nbep_diag_fini(&d);
+    }
+}
+
 int main(void)
 {
 #define T(name) cmocka_unit_test_setup_teardown(name, setup, teardown)
@@ -1361,6 +1390,7 @@ int main(void)
         T(test_hair_overlap_receding_or_at_rest_has_no_event),
         T(test_scenes_in_units_at_the_window_corners_give_the_same_results_scaled),
         T(test_an_energy_that_overflows_stops_the_run_at_the_step_before),
+        T(test_an_energy_beyond_doubles_is_refused_before_the_run),
     };
 #undef T
     return cmocka_run_group_tests_name("extremes", tests, NULL, NULL);

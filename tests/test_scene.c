@@ -416,6 +416,72 @@ static void test_sphere_entries_must_be_one_sphere_or_one_group(void **state)
  * 2026-11-30 the random placement said it could place none, and the lattice listed every sphere
  * against a wall). A region partly outside is taken: its spheres land in the box (a lattice
  * fills the part inside, which until then listed every sphere outside against a wall). */
+/* A normal with a subnormal largest component: divided by it, it is [0, 0, 1] exactly
+ * (multiplied by its inverse, inf, it was NaN, and a run asserted on the plane's gap); a
+ * vector's length for the window of magnitudes likewise (it printed "length -nan") */
+static void test_subnormal_normals_and_vectors_are_scaled_by_division(void **state)
+{
+    fixture *f = *state;
+    char path[256];
+    const char *deck = write_deck("scene_subnormal.deck",
+                                  "planes = ( { normal = [0.0, 0.0, 1e-320]; "
+                                  "point = [0.0, 0.0, -1.0]; } );\n"
+                                  "spheres = ( { position = [0.0, 0.0, 1.0]; radius = 0.5; "
+                                  "mass = 1.0; } );\n",
+                                  path, sizeof path);
+    LOAD_OK(f, deck);
+    assert_true(f->sc.state.plane_normal[0].x == 0.0 && f->sc.state.plane_normal[0].y == 0.0 &&
+                f->sc.state.plane_normal[0].z == 1.0);
+    assert_true(f->sc.state.plane_offset[0] == -1.0);
+    nbep_scene_fini(&f->sc);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "physics.gravity=[1e-320, 0, 0]");
+    ASSERT_DIAG(&f->d, "--set physics.gravity=[1e-320, 0, 0]: physics.gravity must be 0 or 1e-40 "
+                       "to 1e40 in length (got [9.99989e-321, 0, 0], length 9.99989e-321); "
+                       "choose units that bring it within (README, The deck: units)");
+}
+
+/* Coordinates within 2^40 smallest radii of the origin (NBEP_DECK_SPAN_MAX): each kind of
+ * point beyond it is an error at its setting, one at the edge is taken */
+static void test_coordinates_far_beyond_the_smallest_radius_are_errors(void **state)
+{
+    fixture *f = *state;
+    char path[256];
+    const char *deck = write_deck("scene_span.deck",
+                                  "box: { min = [0.0, 0.0, 0.0]; max = [1e12, 2e12, 1e12]; };\n"
+                                  "planes = ( { normal = [0.0, 0.0, 1.0]; "
+                                  "point = [0.0, 0.0, -1e300]; } );\n"
+                                  "spheres = ( { position = [5.0, 5.0, 5.0]; radius = 1.0; mass = 1.0; },\n"
+                                  "  { count = 2; radius = 2.0; mass = 1.0;\n"
+                                  "    region = { min = [-3e12, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; }; } );\n",
+                                  path, sizeof path);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    char e1[512], e2[512], e3[512];
+    snprintf(e1, sizeof e1, "%s:1: box.max lies 2e+12 smallest radii (1) from the origin, beyond "
+             "2^40 = 1.1e12 (a coordinate of 2e+12: positions there round by more than 2^-12 of "
+             "a radius); move the origin nearer the scene (README, The deck: units)", deck);
+    snprintf(e2, sizeof e2, "%s:2: planes.[0].point lies 1e+300 smallest radii (1) from the "
+             "origin, beyond 2^40 = 1.1e12 (a coordinate of -1e+300: positions there round by "
+             "more than 2^-12 of a radius); move the origin nearer the scene (README, The deck: "
+             "units)", deck);
+    snprintf(e3, sizeof e3, "%s:5: spheres.[1].region.min lies 3e+12 smallest radii (1) from the "
+             "origin, beyond 2^40 = 1.1e12 (a coordinate of -3e+12: positions there round by "
+             "more than 2^-12 of a radius); move the origin nearer the scene (README, The deck: "
+             "units)", deck);
+    ASSERT_DIAG(&f->d, e1, e2, e3);
+    /* the edge itself, 2^40 radii, is taken; a sphere's own position is held to it too */
+    nbep_scene_fini(&f->sc);
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_OK(f, deck, "box.max=[1099511627776.0, 1e12, 1e12]", "planes.[0].point=[0, 0, 0]",
+            "spheres.[1].region.min=[0.0, 0.0, 0.0]");
+    nbep_scene_fini(&f->sc);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.max=[1099511627776.0, 1e12, 1e12]",
+               "planes.[0].point=[0, 0, 0]", "spheres.[1].region.min=[0.0, 0.0, 0.0]",
+               "spheres.[0].position=[1099511627777.0, 5.0, 5.0]");
+    assert_int_equal(f->d.n_errors, 1); /* (outside the box too, checked once this holds) */
+    assert_non_null(strstr(f->d.msg[0], "spheres.[0].position lies 1.1e+12 smallest radii"));
+}
+
 static void test_a_region_outside_the_box_is_an_error(void **state)
 {
     fixture *f = *state;
@@ -1414,6 +1480,8 @@ int main(void)
         T(test_threads_take_up_to_their_limit_and_no_more),
         T(test_sphere_entries_must_be_one_sphere_or_one_group),
         T(test_a_region_outside_the_box_is_an_error),
+        T(test_subnormal_normals_and_vectors_are_scaled_by_division),
+        T(test_coordinates_far_beyond_the_smallest_radius_are_errors),
         T(test_too_many_spheres_for_32_bit_ids_is_an_error),
         T(test_too_many_spheres_for_the_cells_mode_is_an_error),
         T(test_integer_beyond_64_bits_is_an_error),

@@ -35,6 +35,15 @@
 #define NBEP_DECK_SCALE_MIN 1e-40
 #define NBEP_DECK_SCALE_MAX 1e40
 
+/* How far from the origin a deck's coordinates (sphere positions, box and region corners,
+ * plane points) may lie, in units of the smallest radius: 2^40 (1.1e12). A position carries
+ * 16 digits, so its rounding is 2^-52 of its size: at 2^40 radii from the origin that is 2^-12
+ * of a radius, and contacts there are placed to a few of those. Farther out a review found
+ * overlaps of 129 radii (a box of 1e17 around spheres of radius 1) and a plane 1e300 away
+ * that stopped a falling sphere dead at t = 0 (its contact time's discriminant overflowed):
+ * deck errors now. The window of magnitudes alone bounds each quantity, not their ratio. */
+#define NBEP_DECK_SPAN_MAX 0x1p40
+
 /* One `vary` entry of the sweep group: a deck path and the values it takes, each kept as the
  * libconfig text of the value so that it can be applied as "key=value" like --set. */
 typedef struct nbep_sweep_axis {
