@@ -1181,6 +1181,27 @@ MUTANTS = [
      "(o->kept[j].rank == o->kept[o->last].rank && o->kept[j].seq > o->kept[o->last].seq)",
      "(o->kept[j].rank == o->kept[o->last].rank && o->kept[j].seq < o->kept[o->last].seq)",
      ["test_scene"], None),
+    # ---- what a deck error is blamed on: the --set (or sweep axis) that caused it, not a deck
+    # line the user did not touch ----
+    # an overlap: any member of the entries that places its spheres, the first typed
+    ("blame-overlap-position-only", "src/scene_place.c",
+     "        const char *ov = m ? nbep__scene_origin(m, true, &line) : NULL;",
+     "        const char *ov = m && strcmp(placing[k][0], \"position\") == 0\n"
+     "                             ? nbep__scene_origin(m, true, &line) : NULL;",
+     ["test_scene", "test_sweep"], None),
+    ("blame-overlap-first-member-found", "src/scene_place.c",
+     "        if (ov && nbep__scene_rank(c, ov, 0) < b.rank)",
+     "        if (ov && !b.label)", ["test_scene"], None),
+    ("blame-overlap-region-corners-unasked", "src/scene_place.c",
+     "{\"region\", \"min\"}, {\"region\", \"max\"}};",
+     "{\"region\", NULL}, {\"region\", NULL}};", ["test_scene"], None),
+    ("blame-overlap-later-sphere-first", "src/scene_place.c",
+     "        if (bb.label && bb.rank < at.rank) /* a deck line's rank is past every option's */",
+     "        if (bb.label && !at.label) /* a deck line's rank is past every option's */",
+     ["test_scene"], None),
+    ("blame-overlap-entry-line", "src/scene_place.c",
+     "    (void)nbep__scene_origin(pos ? pos : g, false, &b.line);",
+     "    (void)nbep__scene_origin(g, false, &b.line);", ["test_scene"], None),
     # ---- how a run ended: the summary's status and steps_requested, the sweep's reuse of them,
     # nbep info's line (README "JSON summary") ----
     ("status-sigterm-as-interrupted", "src/summary.c",

@@ -1008,8 +1008,11 @@ static void test_overlaps_with_spheres_and_planes_are_named(void **state)
 }
 
 /* An overlap made by a --set of a position is blamed on that --set, not on the deck's line of
- * the sphere (a user looked for it there), whichever of the two it moved; one that the deck's
- * positions make (here with a radius set larger), on the line of the position. */
+ * the sphere (a user looked for it there), whichever of the two it moved; so is one that a
+ * --set of a radius makes (until 2026-11-30 blamed on the deck's line of the position, which
+ * the user had not touched, and listed there, after every option's message), and one that a
+ * --set of one element of a position makes. Where both spheres' placements came from a --set,
+ * or two members of one entry's, the first typed is named: the list puts it there. */
 static void test_an_overlap_a_set_made_names_the_set(void **state)
 {
     fixture *f = *state;
@@ -1032,10 +1035,109 @@ static void test_an_overlap_a_set_made_names_the_set(void **state)
     nbep_diag_fini(&f->d);
     nbep_diag_init(&f->d);
     LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[1].radius=3");
+    ASSERT_DIAG(&f->d, "--set spheres.[1].radius=3: spheres.[1] (sphere 1) overlaps spheres.[0] "
+                       "(sphere 0) by 0.5");
+    /* the other sphere's radius, between two options' errors: in the order typed */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "run.steps=-1", "spheres.[0].radius=2.75", "run.dt=0");
+    ASSERT_DIAG(&f->d, "--set run.steps=-1: run.steps must be >= 0 (got -1)",
+                "--set spheres.[0].radius=2.75: spheres.[1] (sphere 1) overlaps spheres.[0] "
+                "(sphere 0) by 0.25",
+                "--set run.dt=0: run.dt must be > 0 (got 0)");
+    /* one element of a position; a mass and a velocity, typed first, place nothing */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].mass=3", "spheres.[1].velocity=[1,0,0]",
+               "spheres.[0].position.[0]=2.25");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].position.[0]=2.25: spheres.[1] (sphere 1) overlaps "
+                       "spheres.[0] (sphere 0) by 0.25");
+    /* both spheres' radii: the first typed, either way round */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[1].radius=1.5", "spheres.[0].radius=1.75");
+    ASSERT_DIAG(&f->d, "--set spheres.[1].radius=1.5: spheres.[1] (sphere 1) overlaps "
+                       "spheres.[0] (sphere 0) by 0.25");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].radius=1.75", "spheres.[1].radius=1.5");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].radius=1.75: spheres.[1] (sphere 1) overlaps "
+                       "spheres.[0] (sphere 0) by 0.25");
+    /* one sphere's radius and position: the first typed, either way round */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[1].radius=0.75", "spheres.[1].position=[1,0,0]");
+    ASSERT_DIAG(&f->d, "--set spheres.[1].radius=0.75: spheres.[1] (sphere 1) overlaps "
+                       "spheres.[0] (sphere 0) by 0.25");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[1].position=[1,0,0]", "spheres.[1].radius=0.75");
+    ASSERT_DIAG(&f->d, "--set spheres.[1].position=[1,0,0]: spheres.[1] (sphere 1) overlaps "
+                       "spheres.[0] (sphere 0) by 0.25");
+    /* the deck's own overlap, with --sets that place nothing: the line of the later sphere's
+     * position, not of its entry */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    deck = write_deck("scene_overlap_deck.deck",
+                      "spheres = (\n"
+                      "  { position = [0.0, 0.0, 0.0]; radius = 0.5; mass = 1.0; },\n"
+                      "  { radius = 0.5; mass = 1.0;\n"
+                      "    position = [0.75, 0.0, 0.0]; }\n"
+                      ");\n",
+                      buf, sizeof buf);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].mass=3", "spheres.[1].velocity=[1,0,0]",
+               "spheres.[1].acceleration=[0,0,-1]");
     char want[300];
-    snprintf(want, sizeof want, "%.200s:4: spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) by 0.5",
-             deck);
+    snprintf(want, sizeof want,
+             "%.200s:4: spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) by 0.25", deck);
     ASSERT_DIAG(&f->d, want);
+}
+
+/* An overlap that a --set of a group's count, place or region makes (a lattice spread over a
+ * single sphere) names that --set (the first typed of several), not the deck's line of the
+ * single sphere; with a --set that places nothing, the deck's own overlap keeps that line. */
+static void test_an_overlap_a_set_of_a_group_made_names_the_set(void **state)
+{
+    fixture *f = *state;
+    /* 8 on the box's corners at 0.5 and 9.5; 27 at 0.5, 5 and 9.5: sphere 26 under the single
+     * sphere 27, 0.5 apart */
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_overlap_group.deck", "spheres.[0].count=27");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].count=27: spheres.[1] (sphere 27) overlaps "
+                       "spheres.[0] (sphere 26) by 0.5");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_overlap_group.deck", "spheres.[0].speed=2",
+               "spheres.[1].mass=2");
+    ASSERT_DIAG(&f->d, DATA "scene_overlap_group.deck:5: spheres.[1] (sphere 8) overlaps "
+                            "spheres.[0] (sphere 7) by 0.5");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    char buf[256];
+    /* a random group in [0, 5]^3 clear of the single sphere at (9.25, 4.5, 0.5); as a lattice
+     * in [0, 10] x [0, 5]^2 (spacing 4: 3 x 2 x 2 sites) its sphere 5 is at (8.5, 4.5, 0.5) */
+    const char *deck = write_deck(
+        "scene_overlap_region_set.deck",
+        "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; };\n"
+        "spheres = (\n"
+        "  { count = 8; radius = 0.5; mass = 1.0; place = \"random\";\n"
+        "    region = { min = [0.0, 0.0, 0.0]; max = [5.0, 5.0, 5.0]; }; },\n"
+        "  { position = [9.25, 4.5, 0.5]; radius = 0.5; mass = 1.0; }\n"
+        ");\n",
+        buf, sizeof buf);
+    LOAD_OK(f, deck, "spheres.[0].region.max.[0]=10");
+    nbep_scene_fini(&f->sc);
+    LOAD_OK(f, deck, "spheres.[0].place=\"lattice\"");
+    nbep_scene_fini(&f->sc);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].place=\"lattice\"",
+               "spheres.[0].region.max.[0]=10");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].place=\"lattice\": spheres.[1] (sphere 8) overlaps "
+                       "spheres.[0] (sphere 5) by 0.25");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].region.max.[0]=10",
+               "spheres.[0].place=\"lattice\"");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].region.max.[0]=10: spheres.[1] (sphere 8) overlaps "
+                       "spheres.[0] (sphere 5) by 0.25");
 }
 
 static void test_overlap_names_entries_and_sphere_ids(void **state)
@@ -1450,6 +1552,7 @@ int main(void)
         T(test_lattice_fill_that_cannot_fit_names_its_capacity),
         T(test_overlaps_with_spheres_and_planes_are_named),
         T(test_an_overlap_a_set_made_names_the_set),
+        T(test_an_overlap_a_set_of_a_group_made_names_the_set),
         T(test_overlap_names_entries_and_sphere_ids),
         T(test_many_overlaps_list_twenty_then_count_the_rest),
         T(test_many_overlaps_list_the_first_twenty_by_line),
