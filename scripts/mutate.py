@@ -1181,6 +1181,13 @@ MUTANTS = [
      "(o->kept[j].rank == o->kept[o->last].rank && o->kept[j].seq > o->kept[o->last].seq)",
      "(o->kept[j].rank == o->kept[o->last].rank && o->kept[j].seq < o->kept[o->last].seq)",
      ["test_scene"], None),
+    ("order-overlaps-count-unranked", "src/scene_place.c",
+     "        nbep_diag_add_ranked(c->d, last_rank, __FILE__, __LINE__,",
+     "        nbep_diag_add_ranked(c->d, NBEP_DIAG_UNRANKED, __FILE__, __LINE__,", ["test_scene"],
+     None),
+    ("order-overlaps-count-at-last-found", "src/scene_place.c",
+     "        last_rank = o.kept[k].rank > last_rank ? o.kept[k].rank : last_rank;",
+     "        last_rank = o.kept[k].rank;", ["test_scene"], None),
     # ---- what a deck error is blamed on: the --set (or sweep axis) that caused it, not a deck
     # line the user did not touch ----
     # an overlap: any member of the entries that places its spheres, the first typed

@@ -31,7 +31,8 @@ typedef struct nbep__scene_ctx {
 /* A message's rank in the load's list (nbep_diag_add_ranked; the load sorts its messages when
  * it ends): the command line's options first, in the order given (label, one of c->labels),
  * then the deck's lines from the top (label NULL, line >= 1); messages that name neither are
- * added unranked (nbep_diag_add) and come last. Of one rank, messages keep the order of the
+ * added unranked (nbep_diag_add) and come last, but for the count of overlaps not listed,
+ * which follows the last listed (at its rank). Of one rank, messages keep the order of the
  * checks. In scene_text.c. */
 uint64_t nbep__scene_rank(const nbep__scene_ctx *c, const char *label, uint64_t line);
 
@@ -143,7 +144,7 @@ NBEP_MUST_CHECK nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s,
                                               uint64_t seed);
 /* Reports every pair of spheres, and every sphere and plane, that overlap by more than
  * round-off (the first few in the load's order, nbep__scene_rank, by name, then how many
- * more). Each is blamed on what placed its spheres (and ranked there): a --set (or
+ * more, ranked with the last named). Each is blamed on what placed its spheres: a --set (or
  * sweep axis) of a member of their entry that decides where they go or how big they are, else
  * the deck's line of the position or entry. box_periodic is NULL without a box, else the
  * box's periodic axes: the box's walls (two per other axis) come first and are named

@@ -744,9 +744,15 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
     list_kept(&o);
     if (!ok)
         NBEP_FAIL(c->d, NBEP_ENOMEM, "nbep: no memory to check %zu spheres for overlaps", s->n);
+    /* the count goes right after the overlaps listed: at the last one's rank, added after it
+     * (the sort is stable), not among the messages that name no line, after later lines' */
+    uint64_t last_rank = 0;
+    for (size_t k = 0; k < o.n_kept; k++)
+        last_rank = o.kept[k].rank > last_rank ? o.kept[k].rank : last_rank;
     if (o.found > OVERLAP_REPORT_MAX)
-        nbep_diag_add(c->d, __FILE__, __LINE__, "nbep: %s: %" PRIu64 " more overlaps not listed",
-                      c->deck, o.found - OVERLAP_REPORT_MAX);
+        nbep_diag_add_ranked(c->d, last_rank, __FILE__, __LINE__,
+                             "nbep: %s: %" PRIu64 " more overlaps not listed", c->deck,
+                             o.found - OVERLAP_REPORT_MAX);
     return NBEP_OK;
 }
 

@@ -1205,6 +1205,39 @@ static void test_many_overlaps_list_the_first_twenty_by_line(void **state)
     assert_diag(&f->d, lines, 21);
 }
 
+/* The count of the overlaps not listed follows the last one listed, before a later line's
+ * message (until 2026-11-30 it named no line and came after every line's, here line 9's). */
+static void test_the_overlaps_not_listed_are_counted_right_after_the_listed(void **state)
+{
+    fixture *f = *state;
+    char path[256], want[23][400];
+    const char *deck = write_deck(
+        "scene_overlap_more.deck",
+        "# 27 spheres under a plane (line 6) and one pair of spheres (line 5) that overlap\n"
+        "planes = ( { normal = [0.0, 0.0, 1.0]; point = [0.0, 0.0, 5.0]; } );\n"
+        "spheres = (\n"
+        "  { position = [20.0, 20.0, 20.0]; radius = 0.5; mass = 1.0; },\n"
+        "  { position = [20.5, 20.0, 20.0]; radius = 0.5; mass = 1.0; },\n"
+        "  { count = 27; radius = 0.1; mass = 1.0; place = \"lattice\";\n"
+        "    region = { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; }; }\n"
+        ");\n"
+        "output: { every = 0; };\n",
+        path, sizeof path);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "run.dt=0");
+    snprintf(want[0], sizeof want[0], "--set run.dt=0: run.dt must be > 0 (got 0)");
+    snprintf(want[1], sizeof want[1],
+             "%s:5: spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) by 0.5", deck);
+    for (int k = 2; k < 21; k++)
+        snprintf(want[k], sizeof want[k], "%s:6: spheres.[2] (sphere %d) overlaps planes.[0] by %g",
+                 deck, k, k < 11 ? 5.0 : k < 20 ? 4.6 : 4.2);
+    snprintf(want[21], sizeof want[21], "nbep: %s: 8 more overlaps not listed", deck);
+    snprintf(want[22], sizeof want[22], "%s:9: output.every must be >= 1 (got 0)", deck);
+    const char *lines[23];
+    for (int k = 0; k < 23; k++)
+        lines[k] = want[k];
+    assert_diag(&f->d, lines, 23);
+}
+
 static void test_overlaps_between_radius_levels_are_each_found_once(void **state)
 {
     fixture *f = *state;
@@ -1556,6 +1589,7 @@ int main(void)
         T(test_overlap_names_entries_and_sphere_ids),
         T(test_many_overlaps_list_twenty_then_count_the_rest),
         T(test_many_overlaps_list_the_first_twenty_by_line),
+        T(test_the_overlaps_not_listed_are_counted_right_after_the_listed),
         T(test_overlaps_between_radius_levels_are_each_found_once),
         T(test_large_random_group_is_placed_without_overlap),
         T(test_random_spheres_avoid_a_big_single_sphere),
