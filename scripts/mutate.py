@@ -1209,6 +1209,14 @@ MUTANTS = [
     ("blame-overlap-entry-line", "src/scene_place.c",
      "    (void)nbep__scene_origin(pos ? pos : g, false, &b.line);",
      "    (void)nbep__scene_origin(g, false, &b.line);", ["test_scene"], None),
+    # a check of two corners: the one a --set gave, the first typed; else max's deck line
+    ("blame-corners-always-max", "src/scene.c", "    if (ov_min &&\n        (!ov_max ||",
+     "    if (0 && ov_min &&\n        (!ov_max ||", ["test_scene", "tests/test_cli.sh"], None),
+    ("blame-corners-min-over-first-typed", "src/scene.c",
+     "(!ov_max || nbep__scene_rank(&L->c, ov_min, 0) < nbep__scene_rank(&L->c, ov_max, 0)))",
+     "(1))", ["test_scene"], None),
+    ("blame-corners-deck-min", "src/scene.c", "        return min;\n    return max;\n}",
+     "        return min;\n    return ov_max ? max : min;\n}", ["test_scene"], None),
     # ---- how a run ended: the summary's status and steps_requested, the sweep's reuse of them,
     # nbep info's line (README "JSON summary") ----
     ("status-sigterm-as-interrupted", "src/summary.c",

@@ -759,6 +759,76 @@ static void test_a_vector_broken_by_an_element_override_is_reported_at_the_overr
                 "--set box.max.[2]=-5: box.min must be < box.max on every axis (got z: -3 >= -5)");
 }
 
+/* A check of a box's or a region's two corners names the corner that a --set gave, the first
+ * typed where both were, else the deck's line of max (until 2026-11-30 always max: a --set of
+ * box.min was blamed on the deck's line of box.max, which the user had not touched). */
+static void test_a_corner_check_names_the_corner_a_set_gave(void **state)
+{
+    fixture *f = *state;
+    char buf[256], want[400];
+    const char *deck = write_deck("scene_corners_set.deck",
+                                  "# box and region corners on lines of their own\n"
+                                  "box: { min = [0.0, 0.0, 0.0];\n"
+                                  "       max = [10.0, 10.0, 10.0]; };\n"
+                                  "spheres = ( { count = 8; radius = 0.5; mass = 1.0;\n"
+                                  "    region = { min = [1.0, 1.0, 1.0];\n"
+                                  "               max = [9.0, 9.0, 9.0]; }; } );\n",
+                                  buf, sizeof buf);
+    LOAD_OK(f, deck);
+    nbep_scene_fini(&f->sc);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.min=[-1e41,0,0]");
+    ASSERT_DIAG(&f->d, "--set box.min=[-1e41,0,0]: box: every side must be 1e-40 to 1e40 long "
+                       "(got x: 1e+41); choose units that bring it within (README, The deck: "
+                       "units)");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.min.[1]=12");
+    ASSERT_DIAG(&f->d, "--set box.min.[1]=12: box.min must be < box.max on every axis "
+                       "(got y: 12 >= 10)");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.min.[0]=12", "box.max.[0]=-1");
+    ASSERT_DIAG(&f->d, "--set box.min.[0]=12: box.min must be < box.max on every axis "
+                       "(got x: 12 >= -1)");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.max.[0]=-1", "box.min.[0]=12");
+    ASSERT_DIAG(&f->d, "--set box.max.[0]=-1: box.min must be < box.max on every axis "
+                       "(got x: 12 >= -1)");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].region.min.[2]=9.5");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].region.min.[2]=9.5: spheres.[0].region.min must be < "
+                       "spheres.[0].region.max on every axis (got z: 9.5 >= 9)");
+    /* the region's check against the box names the same corner */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].region.min=[11,0,0]",
+               "spheres.[0].region.max=[12,9,9]");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].region.min=[11,0,0]: spheres.[0].region lies outside "
+                       "the box (x: region [11, 12], box [0, 10])");
+    /* the deck's own corners: max's line, not min's */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    deck = write_deck("scene_corners_deck.deck",
+                      "# the box's min past its max on z\n"
+                      "box: { min = [0.0, 0.0, 20.0];\n"
+                      "       max = [10.0, 10.0, 10.0]; };\n"
+                      "spheres = ( { count = 8; radius = 0.5; mass = 1.0;\n"
+                      "    region = { min = [1.0, 1.0, 9.5];\n"
+                      "               max = [9.0, 9.0, 9.0]; }; } );\n",
+                      buf, sizeof buf);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    char want2[400];
+    snprintf(want, sizeof want, "%s:3: box.min must be < box.max on every axis (got z: 20 >= 10)",
+             deck);
+    snprintf(want2, sizeof want2,
+             "%s:6: spheres.[0].region.min must be < spheres.[0].region.max on every axis "
+             "(got z: 9.5 >= 9)",
+             deck);
+    ASSERT_DIAG(&f->d, want, want2);
+}
+
 static void test_bad_override_value_is_reported_at_the_override(void **state)
 {
     fixture *f = *state;
@@ -1565,6 +1635,7 @@ int main(void)
         T(test_override_can_replace_and_append_list_entries),
         T(test_unknown_override_path_is_an_error_with_a_suggestion),
         T(test_suggestions_are_writable_paths_a_typo_away),
+        T(test_a_corner_check_names_the_corner_a_set_gave),
         T(test_bad_override_value_is_reported_at_the_override),
         T(test_a_vector_broken_by_an_element_override_is_reported_at_the_override),
         T(test_override_messages_name_their_origin),
