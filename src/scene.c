@@ -413,7 +413,25 @@ static void parse_physics(load *L, const config_setting_t *root, nbep_scene *sc)
     (void)get_float(L, physics, "physics", S_PHYSICS_CARRY_DROP, &sc->carry_drop);
 }
 
-/* min < max on every axis, else one error at max naming each failing axis. */
+/* What a message about both corners of a box or region (min at min, max at max) is blamed on:
+ * a corner that an override gave (a --set or sweep axis of it, or of one of its elements, as
+ * its own messages are named), the one typed first where both were (the list ranks the message
+ * there); else max, at its deck line. (The deck having min but not max leaves max missing, or
+ * an override's.) Until 2026-11-30 always max: a --set of box.min was blamed on the deck's
+ * line of box.max, which the user had not touched. */
+static const config_setting_t *corners_at(const load *L, const config_setting_t *min,
+                                          const config_setting_t *max)
+{
+    unsigned line;
+    const char *ov_min = nbep__scene_origin(min, config_setting_is_array(min), &line);
+    const char *ov_max = nbep__scene_origin(max, config_setting_is_array(max), &line);
+    if (ov_min &&
+        (!ov_max || nbep__scene_rank(&L->c, ov_min, 0) < nbep__scene_rank(&L->c, ov_max, 0)))
+        return min;
+    return max;
+}
+
+/* min < max on every axis, else one error at `at` (corners_at) naming each failing axis. */
 static bool check_corners(load *L, const config_setting_t *at, const char *prefix, nbep_vec3 lo,
                           nbep_vec3 hi)
 {
@@ -468,13 +486,14 @@ static bool check_region_meets_box(load *L, const config_setting_t *at, const ch
 static void parse_box(load *L, const config_setting_t *root, nbep_scene *sc,
                       const config_setting_t **periodic_at)
 {
-    const config_setting_t *box = NULL, *at = NULL, *per = NULL;
+    const config_setting_t *box = NULL, *min = NULL, *max = NULL, *per = NULL;
     *periodic_at = NULL;
     if (get_aggregate(L, root, "", S_BOX, &box) != GOT)
         return;
-    got g_min = get_vec3(L, box, "box", S_BOX_MIN, &sc->box_min, NULL);
-    got g_max = get_vec3(L, box, "box", S_BOX_MAX, &sc->box_max, &at);
-    if (g_min == GOT && g_max == GOT && check_corners(L, at, "box", sc->box_min, sc->box_max))
+    got g_min = get_vec3(L, box, "box", S_BOX_MIN, &sc->box_min, &min);
+    got g_max = get_vec3(L, box, "box", S_BOX_MAX, &sc->box_max, &max);
+    if (g_min == GOT && g_max == GOT &&
+        check_corners(L, corners_at(L, min, max), "box", sc->box_min, sc->box_max))
         sc->has_box = true;
     if (get_bool3(L, box, "box", S_BOX_PERIODIC, sc->periodic, &per) == GOT &&
         (sc->periodic[0] || sc->periodic[1] || sc->periodic[2]))
@@ -639,8 +658,10 @@ static bool parse_entry(load *L, const config_setting_t *e, const char *prefix,
     g = get_aggregate(L, e, prefix, S_SPH_REGION, &region);
     if (g == GOT) {
         path_join(path, prefix, "region");
-        got g_min = get_vec3(L, region, path, S_SPH_REGION_MIN, &out->lo, NULL);
-        got g_max = get_vec3(L, region, path, S_SPH_REGION_MAX, &out->hi, &at);
+        const config_setting_t *min = NULL, *max = NULL;
+        got g_min = get_vec3(L, region, path, S_SPH_REGION_MIN, &out->lo, &min);
+        got g_max = get_vec3(L, region, path, S_SPH_REGION_MAX, &out->hi, &max);
+        at = g_min == GOT && g_max == GOT ? corners_at(L, min, max) : NULL;
         ok = g_min == GOT && g_max == GOT && check_corners(L, at, path, out->lo, out->hi) &&
              (!sc->has_box || check_region_meets_box(L, at, path, sc, out->lo, out->hi)) && ok;
         if (ok && sc->has_box && out->place == NBEP__PLACE_LATTICE) {

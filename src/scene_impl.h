@@ -31,12 +31,10 @@ typedef struct nbep__scene_ctx {
 /* A message's rank in the load's list (nbep_diag_add_ranked; the load sorts its messages when
  * it ends): the command line's options first, in the order given (label, one of c->labels),
  * then the deck's lines from the top (label NULL, line >= 1); messages that name neither are
- * added unranked (nbep_diag_add) and come last. Of one rank, messages keep the order of the
+ * added unranked (nbep_diag_add) and come last, but for the count of overlaps not listed,
+ * which follows the last listed (at its rank). Of one rank, messages keep the order of the
  * checks. In scene_text.c. */
 uint64_t nbep__scene_rank(const nbep__scene_ctx *c, const char *label, uint64_t line);
-/* The rank of a message about setting s (nbep__scene_error's), for a check that chooses which
- * of its messages to list. In scene_text.c. */
-uint64_t nbep__scene_rank_of(const nbep__scene_ctx *c, const config_setting_t *s);
 
 /* Adds "WHERE: message" for setting s, WHERE being "deck:line" or, for a setting an override
  * made (its libconfig hook holds the override text), "--set PATH=VALUE". file/line are ours.
@@ -48,6 +46,10 @@ void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char
  * what changed it), or a group above it that an override made or replaced; else NULL and
  * *line the deck's line (0 where there is none). In scene_text.c. */
 const char *nbep__scene_origin(const config_setting_t *s, bool elements, unsigned *line);
+/* nbep__scene_error for a message whose origin was found already (nbep__scene_origin's answer:
+ * the override's label, else NULL and the deck's line at, 1 where 0). In scene_text.c. */
+void nbep__scene_error_from(nbep__scene_ctx *c, const char *label, unsigned at, const char *file,
+                            int line, const char *fmt, ...) NBEP_PRINTF(6, 7);
 #define NBEP__SCENE_ERR(c, s, ...) nbep__scene_error((c), (s), __FILE__, __LINE__, __VA_ARGS__)
 
 /* ---- growable strings ----------------------------------------------------------------------- */
@@ -142,10 +144,13 @@ NBEP_MUST_CHECK nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s,
                                               uint64_t seed);
 /* Reports every pair of spheres, and every sphere and plane, that overlap by more than
  * round-off (the first few in the load's order, nbep__scene_rank, by name, then how many
- * more). box_periodic is NULL without a box, else the box's periodic axes: the box's walls
- * (two per other axis) come first and are named "box x-min" ..., the rest "planes.[k]"; pairs
- * that overlap across a periodic face of the box [lo, hi] are found too (spheres as placed,
- * whose centres are inside the box). O(n) expected time. */
+ * more, ranked with the last named). Each is blamed on what placed its spheres: a --set (or
+ * sweep axis) of a member of their entry that decides where they go or how big they are, else
+ * the deck's line of the position or entry. box_periodic is NULL without a box, else the
+ * box's periodic axes: the box's walls (two per other axis) come first and are named
+ * "box x-min" ..., the rest "planes.[k]"; pairs that overlap across a periodic face of the box
+ * [lo, hi] are found too (spheres as placed, whose centres are inside the box). O(n) expected
+ * time. */
 NBEP_MUST_CHECK nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                                                        const nbep__scene_entry *e,
                                                        size_t n_entries,

@@ -501,11 +501,19 @@ nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s, const nbep__sce
 
 /* ---- the overlap check ---------------------------------------------------------------------- */
 
+/* What an overlap is blamed on: an override's label (nbep__scene_origin's), or else the deck's
+ * line; and the rank its message takes (nbep__scene_rank). */
+typedef struct blame {
+    const char *label;    /* borrowed: one of the load's labels, or NULL */
+    unsigned line;        /* where label is NULL: >= 1 */
+    uint64_t rank;
+} blame;
+
 /* An overlap to be listed by name. */
 typedef struct listed {
-    uint64_t rank;                  /* its message's (nbep__scene_rank_of) */
+    uint64_t rank;                  /* its message's (its blame's) */
     uint64_t seq;                   /* how many were found before it */
-    const config_setting_t *at;     /* borrowed: what it is blamed on */
+    blame at;                       /* what it is blamed on */
     size_t entry, a;                /* sphere a, of that entry, */
     char other[96];                 /* overlaps this */
     double by;
@@ -516,6 +524,7 @@ typedef struct overlaps {
     const nbep_state *s;
     const nbep__scene_entry *e;
     size_t n_entries;
+    const blame *placed;  /* per entry: what placed its spheres (entry_blame) */
     size_t i;             /* the sphere whose neighbours are visited */
     nbep_vec3 shift;      /* at its position plus this (a copy across periodic faces) */
     bool same_level;      /* they are in its level: only smaller ids count */
@@ -542,24 +551,52 @@ static size_t entry_of(const nbep__scene_entry *e, size_t n, size_t id)
     return lo;
 }
 
-/* The setting an overlap of sphere id is blamed on: its group's `position` where the group
- * gives one (its deck line, or the --set that gave it: its own label), else the group. */
-static const config_setting_t *placed_by(const overlaps *o, size_t id)
+/* The members of an entry that decide where its spheres go and how big they are: a --set of
+ * any of them (or a sweep axis, which is one) can make an overlap the deck alone did not have.
+ * A region's corners are asked one by one: a --set of one of their elements hooks only that
+ * element (nbep__scene_origin looks one level down). Velocity, speed, mass and acceleration
+ * move nothing at t0. */
+static const char *const placing[][2] = {{"position", NULL}, {"radius", NULL}, {"count", NULL},
+                                          {"place", NULL},    {"region", "min"}, {"region", "max"}};
+
+/* What placed the spheres of entry g: the override of a member in `placing` (the one typed
+ * first where several were: the list ranks the message with it), else the deck's line of its
+ * position (a single sphere) or of the entry (a group). */
+static blame entry_blame(const nbep__scene_ctx *c, const config_setting_t *g)
 {
-    const config_setting_t *g = o->e[entry_of(o->e, o->n_entries, id)].setting;
+    blame b = {NULL, 0, NBEP_DIAG_UNRANKED};
+    for (size_t k = 0; k < sizeof placing / sizeof *placing; k++) {
+        const config_setting_t *m = config_setting_get_member(g, placing[k][0]);
+        if (m && placing[k][1])
+            m = config_setting_get_member(m, placing[k][1]);
+        unsigned line;
+        const char *ov = m ? nbep__scene_origin(m, true, &line) : NULL;
+        if (ov && nbep__scene_rank(c, ov, 0) < b.rank)
+            b = (blame){ov, 0, nbep__scene_rank(c, ov, 0)};
+    }
+    if (b.label)
+        return b;
     const config_setting_t *pos = config_setting_get_member(g, "position");
-    return pos ? pos : g;
+    (void)nbep__scene_origin(pos ? pos : g, false, &b.line);
+    b.line = b.line ? b.line : 1;
+    b.rank = nbep__scene_rank(c, NULL, b.line);
+    return b;
 }
 
-/* Sphere a overlaps `other` (sphere b, or SIZE_MAX for a plane) by `by`; blamed on a's
- * placement, or on b's where only b's came from a --set (the change that made it). */
+/* Sphere a overlaps `other` (sphere b, or SIZE_MAX for a plane) by `by`. A pair is blamed on
+ * whichever of the two entries an override placed, the one typed first where both were (the
+ * list ranks the message there), else on a's deck line (a, the later sphere, as before): the
+ * change that made the overlap, not the deck line the user did not touch. */
 static void report(overlaps *o, size_t a, size_t b, const char *other, double by)
 {
     const uint64_t seq = o->found++;
-    const config_setting_t *at = placed_by(o, a);
-    if (b != SIZE_MAX && !config_setting_get_hook(at) && config_setting_get_hook(placed_by(o, b)))
-        at = placed_by(o, b);
-    const uint64_t rank = nbep__scene_rank_of(o->c, at);
+    blame at = o->placed[entry_of(o->e, o->n_entries, a)];
+    if (b != SIZE_MAX) {
+        const blame bb = o->placed[entry_of(o->e, o->n_entries, b)];
+        if (bb.label && bb.rank < at.rank) /* a deck line's rank is past every option's */
+            at = bb;
+    }
+    const uint64_t rank = at.rank;
     size_t k;
     if (o->n_kept < OVERLAP_REPORT_MAX)
         k = o->n_kept++;
@@ -591,8 +628,9 @@ static void list_kept(overlaps *o)
 {
     qsort(o->kept, o->n_kept, sizeof *o->kept, cmp_seq);
     for (size_t k = 0; k < o->n_kept; k++)
-        NBEP__SCENE_ERR(o->c, o->kept[k].at, "spheres.[%zu] (sphere %zu) overlaps %s by %g",
-                        o->kept[k].entry, o->kept[k].a, o->kept[k].other, o->kept[k].by);
+        nbep__scene_error_from(o->c, o->kept[k].at.label, o->kept[k].at.line, __FILE__, __LINE__,
+                               "spheres.[%zu] (sphere %zu) overlaps %s by %g", o->kept[k].entry,
+                               o->kept[k].a, o->kept[k].other, o->kept[k].by);
 }
 
 static void check_pair(overlaps *o, size_t i, size_t j)
@@ -639,7 +677,12 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
             names[n_box++] = box_names[2 * a];
             names[n_box++] = box_names[2 * a + 1];
         }
-    overlaps o = {.c = c, .s = s, .e = e, .n_entries = n_entries};
+    blame *placed = malloc((n_entries ? n_entries : 1) * sizeof *placed);
+    if (!placed)
+        NBEP_FAIL(c->d, NBEP_ENOMEM, "nbep: no memory to check %zu spheres for overlaps", s->n);
+    for (size_t k = 0; k < n_entries; k++)
+        placed[k] = entry_blame(c, e[k].setting);
+    overlaps o = {.c = c, .s = s, .e = e, .n_entries = n_entries, .placed = placed};
     const double blo[3] = {box_lo.x, box_lo.y, box_lo.z}, bhi[3] = {box_hi.x, box_hi.y, box_hi.z};
     for (size_t i = 0; i < s->n; i++)
         for (size_t p = 0; p < s->n_planes; p++) {
@@ -697,11 +740,18 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
         }
     }
     grid_fini(&g);
+    free(placed);
     list_kept(&o);
     if (!ok)
         NBEP_FAIL(c->d, NBEP_ENOMEM, "nbep: no memory to check %zu spheres for overlaps", s->n);
+    /* the count goes right after the overlaps listed: at the last one's rank, added after it
+     * (the sort is stable), not among the messages that name no line, after later lines' */
+    uint64_t last_rank = 0;
+    for (size_t k = 0; k < o.n_kept; k++)
+        last_rank = o.kept[k].rank > last_rank ? o.kept[k].rank : last_rank;
     if (o.found > OVERLAP_REPORT_MAX)
-        nbep_diag_add(c->d, __FILE__, __LINE__, "nbep: %s: %" PRIu64 " more overlaps not listed",
-                      c->deck, o.found - OVERLAP_REPORT_MAX);
+        nbep_diag_add_ranked(c->d, last_rank, __FILE__, __LINE__,
+                             "nbep: %s: %" PRIu64 " more overlaps not listed", c->deck,
+                             o.found - OVERLAP_REPORT_MAX);
     return NBEP_OK;
 }

@@ -465,26 +465,36 @@ static const char *named_by(const config_setting_t *s, unsigned *at)
     return ov;
 }
 
-uint64_t nbep__scene_rank_of(const nbep__scene_ctx *c, const config_setting_t *s)
+static void error_from(nbep__scene_ctx *c, const char *ov, unsigned at, const char *file,
+                       int line, const char *fmt, va_list ap)
 {
-    unsigned at;
-    const char *ov = named_by(s, &at);
-    return nbep__scene_rank(c, ov, at);
-}
-
-void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char *file, int line,
-                       const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
     char msg[1024];
     vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
-    unsigned at;
-    const char *ov = named_by(s, &at);
+    if (!ov && !at)
+        at = 1;
     const uint64_t rank = nbep__scene_rank(c, ov, at);
     if (ov) /* the override's label (scene_override.c) */
         nbep_diag_add_ranked(c->d, rank, file, line, "%s: %s", ov, msg);
     else
         nbep_diag_add_ranked(c->d, rank, file, line, "%s:%u: %s", c->deck, at, msg);
+}
+
+void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char *file, int line,
+                       const char *fmt, ...)
+{
+    unsigned at;
+    const char *ov = named_by(s, &at);
+    va_list ap;
+    va_start(ap, fmt);
+    error_from(c, ov, at, file, line, fmt, ap);
+    va_end(ap);
+}
+
+void nbep__scene_error_from(nbep__scene_ctx *c, const char *label, unsigned at, const char *file,
+                            int line, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    error_from(c, label, at, file, line, fmt, ap);
+    va_end(ap);
 }

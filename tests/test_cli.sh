@@ -461,7 +461,8 @@ fi
 # A quantity with units outside 1e-40 .. 1e40 (0 allowed where it is allowed at all) is a deck
 # error at its line or option, for check and run alike, nothing written: scaled by 2^-300 a
 # fluid lost its collisions without a word. Each kind: a number, a vector (by its length, tiny
-# components and all), a box's side; the window's own edges are taken.
+# components and all), a box's side (by either corner: a --set of box.min was blamed on the
+# deck's line of box.max until 2026-11-30); the window's own edges are taken.
 cat >"$tmp/window.deck" <<'EOF'
 run: { steps = 2; threads = 1; dt = 1.0e-3; };
 box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };
@@ -474,7 +475,8 @@ for bad in "run.dt=1e-41|run.dt must be 1e-40 to 1e40 in magnitude (got 1e-41)" 
     "physics.tc=1e-45|physics.tc must be 0 or 1e-40 to 1e40" \
     "physics.gravity=[6e-41, 0, -6e-41]|physics.gravity must be 0 or 1e-40 to 1e40 in length (got .*length 8.48528e-41)" \
     "physics.gravity=[1e-300, 1e-300, 0]|physics.gravity must be 0 or 1e-40 to 1e40 in length" \
-    "box.max=[1.0, 1e41, 1.0]|box: every side must be 1e-40 to 1e40 long (got y: 1e+41)"; do
+    "box.max=[1.0, 1e41, 1.0]|box: every side must be 1e-40 to 1e40 long (got y: 1e+41)" \
+    "box.min=[-1e41, 0.0, 0.0]|box: every side must be 1e-40 to 1e40 long (got x: 1e+41)"; do
     set_arg=${bad%%|*}
     want=${bad#*|}
     for cmd in check run; do

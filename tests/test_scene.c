@@ -825,6 +825,76 @@ static void test_a_vector_broken_by_an_element_override_is_reported_at_the_overr
                 "--set box.max.[2]=-5: box.min must be < box.max on every axis (got z: -3 >= -5)");
 }
 
+/* A check of a box's or a region's two corners names the corner that a --set gave, the first
+ * typed where both were, else the deck's line of max (until 2026-11-30 always max: a --set of
+ * box.min was blamed on the deck's line of box.max, which the user had not touched). */
+static void test_a_corner_check_names_the_corner_a_set_gave(void **state)
+{
+    fixture *f = *state;
+    char buf[256], want[400];
+    const char *deck = write_deck("scene_corners_set.deck",
+                                  "# box and region corners on lines of their own\n"
+                                  "box: { min = [0.0, 0.0, 0.0];\n"
+                                  "       max = [10.0, 10.0, 10.0]; };\n"
+                                  "spheres = ( { count = 8; radius = 0.5; mass = 1.0;\n"
+                                  "    region = { min = [1.0, 1.0, 1.0];\n"
+                                  "               max = [9.0, 9.0, 9.0]; }; } );\n",
+                                  buf, sizeof buf);
+    LOAD_OK(f, deck);
+    nbep_scene_fini(&f->sc);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.min=[-1e41,0,0]");
+    ASSERT_DIAG(&f->d, "--set box.min=[-1e41,0,0]: box: every side must be 1e-40 to 1e40 long "
+                       "(got x: 1e+41); choose units that bring it within (README, The deck: "
+                       "units)");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.min.[1]=12");
+    ASSERT_DIAG(&f->d, "--set box.min.[1]=12: box.min must be < box.max on every axis "
+                       "(got y: 12 >= 10)");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.min.[0]=12", "box.max.[0]=-1");
+    ASSERT_DIAG(&f->d, "--set box.min.[0]=12: box.min must be < box.max on every axis "
+                       "(got x: 12 >= -1)");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.max.[0]=-1", "box.min.[0]=12");
+    ASSERT_DIAG(&f->d, "--set box.max.[0]=-1: box.min must be < box.max on every axis "
+                       "(got x: 12 >= -1)");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].region.min.[2]=9.5");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].region.min.[2]=9.5: spheres.[0].region.min must be < "
+                       "spheres.[0].region.max on every axis (got z: 9.5 >= 9)");
+    /* the region's check against the box names the same corner */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].region.min=[11,0,0]",
+               "spheres.[0].region.max=[12,9,9]");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].region.min=[11,0,0]: spheres.[0].region lies outside "
+                       "the box (x: region [11, 12], box [0, 10])");
+    /* the deck's own corners: max's line, not min's */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    deck = write_deck("scene_corners_deck.deck",
+                      "# the box's min past its max on z\n"
+                      "box: { min = [0.0, 0.0, 20.0];\n"
+                      "       max = [10.0, 10.0, 10.0]; };\n"
+                      "spheres = ( { count = 8; radius = 0.5; mass = 1.0;\n"
+                      "    region = { min = [1.0, 1.0, 9.5];\n"
+                      "               max = [9.0, 9.0, 9.0]; }; } );\n",
+                      buf, sizeof buf);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    char want2[400];
+    snprintf(want, sizeof want, "%s:3: box.min must be < box.max on every axis (got z: 20 >= 10)",
+             deck);
+    snprintf(want2, sizeof want2,
+             "%s:6: spheres.[0].region.min must be < spheres.[0].region.max on every axis "
+             "(got z: 9.5 >= 9)",
+             deck);
+    ASSERT_DIAG(&f->d, want, want2);
+}
+
 static void test_bad_override_value_is_reported_at_the_override(void **state)
 {
     fixture *f = *state;
@@ -1074,8 +1144,11 @@ static void test_overlaps_with_spheres_and_planes_are_named(void **state)
 }
 
 /* An overlap made by a --set of a position is blamed on that --set, not on the deck's line of
- * the sphere (a user looked for it there), whichever of the two it moved; one that the deck's
- * positions make (here with a radius set larger), on the line of the position. */
+ * the sphere (a user looked for it there), whichever of the two it moved; so is one that a
+ * --set of a radius makes (until 2026-11-30 blamed on the deck's line of the position, which
+ * the user had not touched, and listed there, after every option's message), and one that a
+ * --set of one element of a position makes. Where both spheres' placements came from a --set,
+ * or two members of one entry's, the first typed is named: the list puts it there. */
 static void test_an_overlap_a_set_made_names_the_set(void **state)
 {
     fixture *f = *state;
@@ -1098,10 +1171,109 @@ static void test_an_overlap_a_set_made_names_the_set(void **state)
     nbep_diag_fini(&f->d);
     nbep_diag_init(&f->d);
     LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[1].radius=3");
+    ASSERT_DIAG(&f->d, "--set spheres.[1].radius=3: spheres.[1] (sphere 1) overlaps spheres.[0] "
+                       "(sphere 0) by 0.5");
+    /* the other sphere's radius, between two options' errors: in the order typed */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "run.steps=-1", "spheres.[0].radius=2.75", "run.dt=0");
+    ASSERT_DIAG(&f->d, "--set run.steps=-1: run.steps must be >= 0 (got -1)",
+                "--set spheres.[0].radius=2.75: spheres.[1] (sphere 1) overlaps spheres.[0] "
+                "(sphere 0) by 0.25",
+                "--set run.dt=0: run.dt must be > 0 (got 0)");
+    /* one element of a position; a mass and a velocity, typed first, place nothing */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].mass=3", "spheres.[1].velocity=[1,0,0]",
+               "spheres.[0].position.[0]=2.25");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].position.[0]=2.25: spheres.[1] (sphere 1) overlaps "
+                       "spheres.[0] (sphere 0) by 0.25");
+    /* both spheres' radii: the first typed, either way round */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[1].radius=1.5", "spheres.[0].radius=1.75");
+    ASSERT_DIAG(&f->d, "--set spheres.[1].radius=1.5: spheres.[1] (sphere 1) overlaps "
+                       "spheres.[0] (sphere 0) by 0.25");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].radius=1.75", "spheres.[1].radius=1.5");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].radius=1.75: spheres.[1] (sphere 1) overlaps "
+                       "spheres.[0] (sphere 0) by 0.25");
+    /* one sphere's radius and position: the first typed, either way round */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[1].radius=0.75", "spheres.[1].position=[1,0,0]");
+    ASSERT_DIAG(&f->d, "--set spheres.[1].radius=0.75: spheres.[1] (sphere 1) overlaps "
+                       "spheres.[0] (sphere 0) by 0.25");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[1].position=[1,0,0]", "spheres.[1].radius=0.75");
+    ASSERT_DIAG(&f->d, "--set spheres.[1].position=[1,0,0]: spheres.[1] (sphere 1) overlaps "
+                       "spheres.[0] (sphere 0) by 0.25");
+    /* the deck's own overlap, with --sets that place nothing: the line of the later sphere's
+     * position, not of its entry */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    deck = write_deck("scene_overlap_deck.deck",
+                      "spheres = (\n"
+                      "  { position = [0.0, 0.0, 0.0]; radius = 0.5; mass = 1.0; },\n"
+                      "  { radius = 0.5; mass = 1.0;\n"
+                      "    position = [0.75, 0.0, 0.0]; }\n"
+                      ");\n",
+                      buf, sizeof buf);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].mass=3", "spheres.[1].velocity=[1,0,0]",
+               "spheres.[1].acceleration=[0,0,-1]");
     char want[300];
-    snprintf(want, sizeof want, "%.200s:4: spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) by 0.5",
-             deck);
+    snprintf(want, sizeof want,
+             "%.200s:4: spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) by 0.25", deck);
     ASSERT_DIAG(&f->d, want);
+}
+
+/* An overlap that a --set of a group's count, place or region makes (a lattice spread over a
+ * single sphere) names that --set (the first typed of several), not the deck's line of the
+ * single sphere; with a --set that places nothing, the deck's own overlap keeps that line. */
+static void test_an_overlap_a_set_of_a_group_made_names_the_set(void **state)
+{
+    fixture *f = *state;
+    /* 8 on the box's corners at 0.5 and 9.5; 27 at 0.5, 5 and 9.5: sphere 26 under the single
+     * sphere 27, 0.5 apart */
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_overlap_group.deck", "spheres.[0].count=27");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].count=27: spheres.[1] (sphere 27) overlaps "
+                       "spheres.[0] (sphere 26) by 0.5");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_overlap_group.deck", "spheres.[0].speed=2",
+               "spheres.[1].mass=2");
+    ASSERT_DIAG(&f->d, DATA "scene_overlap_group.deck:5: spheres.[1] (sphere 8) overlaps "
+                            "spheres.[0] (sphere 7) by 0.5");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    char buf[256];
+    /* a random group in [0, 5]^3 clear of the single sphere at (9.25, 4.5, 0.5); as a lattice
+     * in [0, 10] x [0, 5]^2 (spacing 4: 3 x 2 x 2 sites) its sphere 5 is at (8.5, 4.5, 0.5) */
+    const char *deck = write_deck(
+        "scene_overlap_region_set.deck",
+        "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; };\n"
+        "spheres = (\n"
+        "  { count = 8; radius = 0.5; mass = 1.0; place = \"random\";\n"
+        "    region = { min = [0.0, 0.0, 0.0]; max = [5.0, 5.0, 5.0]; }; },\n"
+        "  { position = [9.25, 4.5, 0.5]; radius = 0.5; mass = 1.0; }\n"
+        ");\n",
+        buf, sizeof buf);
+    LOAD_OK(f, deck, "spheres.[0].region.max.[0]=10");
+    nbep_scene_fini(&f->sc);
+    LOAD_OK(f, deck, "spheres.[0].place=\"lattice\"");
+    nbep_scene_fini(&f->sc);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].place=\"lattice\"",
+               "spheres.[0].region.max.[0]=10");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].place=\"lattice\": spheres.[1] (sphere 8) overlaps "
+                       "spheres.[0] (sphere 5) by 0.25");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].region.max.[0]=10",
+               "spheres.[0].place=\"lattice\"");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].region.max.[0]=10: spheres.[1] (sphere 8) overlaps "
+                       "spheres.[0] (sphere 5) by 0.25");
 }
 
 static void test_overlap_names_entries_and_sphere_ids(void **state)
@@ -1167,6 +1339,39 @@ static void test_many_overlaps_list_the_first_twenty_by_line(void **state)
     for (int k = 0; k < 21; k++)
         lines[k] = want[k];
     assert_diag(&f->d, lines, 21);
+}
+
+/* The count of the overlaps not listed follows the last one listed, before a later line's
+ * message (until 2026-11-30 it named no line and came after every line's, here line 9's). */
+static void test_the_overlaps_not_listed_are_counted_right_after_the_listed(void **state)
+{
+    fixture *f = *state;
+    char path[256], want[23][400];
+    const char *deck = write_deck(
+        "scene_overlap_more.deck",
+        "# 27 spheres under a plane (line 6) and one pair of spheres (line 5) that overlap\n"
+        "planes = ( { normal = [0.0, 0.0, 1.0]; point = [0.0, 0.0, 5.0]; } );\n"
+        "spheres = (\n"
+        "  { position = [20.0, 20.0, 20.0]; radius = 0.5; mass = 1.0; },\n"
+        "  { position = [20.5, 20.0, 20.0]; radius = 0.5; mass = 1.0; },\n"
+        "  { count = 27; radius = 0.1; mass = 1.0; place = \"lattice\";\n"
+        "    region = { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; }; }\n"
+        ");\n"
+        "output: { every = 0; };\n",
+        path, sizeof path);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "run.dt=0");
+    snprintf(want[0], sizeof want[0], "--set run.dt=0: run.dt must be > 0 (got 0)");
+    snprintf(want[1], sizeof want[1],
+             "%s:5: spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) by 0.5", deck);
+    for (int k = 2; k < 21; k++)
+        snprintf(want[k], sizeof want[k], "%s:6: spheres.[2] (sphere %d) overlaps planes.[0] by %g",
+                 deck, k, k < 11 ? 5.0 : k < 20 ? 4.6 : 4.2);
+    snprintf(want[21], sizeof want[21], "nbep: %s: 8 more overlaps not listed", deck);
+    snprintf(want[22], sizeof want[22], "%s:9: output.every must be >= 1 (got 0)", deck);
+    const char *lines[23];
+    for (int k = 0; k < 23; k++)
+        lines[k] = want[k];
+    assert_diag(&f->d, lines, 23);
 }
 
 static void test_overlaps_between_radius_levels_are_each_found_once(void **state)
@@ -1498,6 +1703,7 @@ int main(void)
         T(test_override_can_replace_and_append_list_entries),
         T(test_unknown_override_path_is_an_error_with_a_suggestion),
         T(test_suggestions_are_writable_paths_a_typo_away),
+        T(test_a_corner_check_names_the_corner_a_set_gave),
         T(test_bad_override_value_is_reported_at_the_override),
         T(test_a_vector_broken_by_an_element_override_is_reported_at_the_override),
         T(test_override_messages_name_their_origin),
@@ -1518,9 +1724,11 @@ int main(void)
         T(test_lattice_fill_that_cannot_fit_names_its_capacity),
         T(test_overlaps_with_spheres_and_planes_are_named),
         T(test_an_overlap_a_set_made_names_the_set),
+        T(test_an_overlap_a_set_of_a_group_made_names_the_set),
         T(test_overlap_names_entries_and_sphere_ids),
         T(test_many_overlaps_list_twenty_then_count_the_rest),
         T(test_many_overlaps_list_the_first_twenty_by_line),
+        T(test_the_overlaps_not_listed_are_counted_right_after_the_listed),
         T(test_overlaps_between_radius_levels_are_each_found_once),
         T(test_large_random_group_is_placed_without_overlap),
         T(test_random_spheres_avoid_a_big_single_sphere),

@@ -668,6 +668,41 @@ static void test_a_failing_value_from_the_command_line_names_no_deck_line(void *
     nbep_sweep_plan_fini(&p);
 }
 
+/* A value that makes spheres overlap at t0 (a radius) fails its run naming the axis, as any
+ * value the run rejects: until 2026-11-30 the overlap named the deck's line of the sphere's
+ * position, which holds no value of the sweep's. */
+static void test_an_overlap_a_value_makes_names_the_axis(void **state)
+{
+    (void)state;
+    const char *deck = TMP "sweep_fail_overlap.deck";
+    FILE *f = fopen(deck, "w");
+    assert_non_null(f);
+    fputs("run: { steps = 20; dt = 1.0e-3; threads = 1; };\n"
+          "spheres = ( { position = [0.0, 0.0, 0.0]; radius = 0.5; mass = 1.0; },\n"
+          "            { position = [1.2, 0.0, 0.0]; radius = 0.5; mass = 1.0; } );\n"
+          "output: { file = \"" TMP "sweep_fail_overlap.h5\"; every = 10; };\n"
+          "sweep: { vary = ( { key = \"spheres.[0].radius\";\n"
+          "                    values = [0.5, 0.8]; } ); };\n",
+          f);
+    assert_int_equal(fclose(f), 0);
+    assert_int_equal(system("rm -rf '" TMP "sweep_fail_overlap.sweep'"), 0);
+    nbep_sweep_plan p;
+    plan_of(deck, NULL, 0, &p);
+    nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
+    assert_int_equal(res[0].outcome, NBEP_SWEEP_OK);
+    assert_int_equal(res[1].outcome, NBEP_SWEEP_FAILED);
+    assert_int_equal(res[1].exit_code, 2);
+    char want[512];
+    const unsigned line = line_of(deck, "values = [0.5, 0.8]");
+    assert_int_equal(line, 6);
+    snprintf(want, sizeof want,
+             "%s:%u: sweep.vary.[0]: spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) by 0.1",
+             deck, line);
+    assert_string_equal(res[1].error, want);
+    free(res);
+    nbep_sweep_plan_fini(&p);
+}
+
 static void test_a_restarted_sweep_reuses_complete_runs(void **state)
 {
     (void)state;
@@ -977,6 +1012,7 @@ int main(void)
         cmocka_unit_test(test_an_older_nbeps_finished_run_is_reused_with_steps_requested_empty),
         cmocka_unit_test(test_a_failing_combination_spares_the_other_runs),
         cmocka_unit_test(test_a_failing_value_from_the_command_line_names_no_deck_line),
+        cmocka_unit_test(test_an_overlap_a_value_makes_names_the_axis),
         cmocka_unit_test(test_a_restarted_sweep_reuses_complete_runs),
         cmocka_unit_test(test_a_stop_signal_before_a_run_leaves_it_not_run),
         cmocka_unit_test(test_summary_csv_has_a_row_per_run_in_run_order),
