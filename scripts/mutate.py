@@ -1090,8 +1090,9 @@ MUTANTS = [
      "sc->seed > (uint64_t)INT64_MAX - sc->sweep_replicas)", ["test_scene", "tests/test_sweep_cli.sh"], None),
     ("ui-sweep-runs-max-off-by-one", "src/scene.c", "    if (runs > NBEP_SWEEP_RUNS_MAX)\n        ERR(",
      "    if (runs >= NBEP_SWEEP_RUNS_MAX)\n        ERR(", ["test_scene", "tests/test_sweep_cli.sh"], None),
-    ("ui-sweep-steps-axis-zero-refused", "src/scene.c", "config_setting_get_int64(x) >= 0)\n            continue;",
-     "config_setting_get_int64(x) > 0)\n            continue;", ["test_scene", "test_sweep", "tests/test_sweep_cli.sh"], None),
+    # a run.steps axis value of 0 is taken: since 2026-11-30 checked as run.steps is
+    ("ui-sweep-steps-axis-zero-refused", "src/scene.c", "if (((f & F_GE0) && v < 0) ||",
+     "if (((f & F_GE0) && v <= 0) ||", ["test_scene", "test_sweep", "tests/test_sweep_cli.sh"], None),
     ("ui-override-entry-plural", "src/scene_override.c", "len == 1 ? \"y\" : \"ies\"",
      "len <= 1 ? \"y\" : \"ies\"", ["test_scene", "tests/test_cli.sh"], None),
     ("ui-override-array-aggregate-unchecked", "src/scene_override.c",

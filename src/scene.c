@@ -51,9 +51,16 @@ enum { WORKSPACE_BYTES_PER_SPHERE = 200 };
 
 /* ---- typed getters -------------------------------------------------------------------------- */
 
+/* A sweep axis as the deck gives it: its entry's index in sweep.vary, and its values. */
+typedef struct axis_at {
+    size_t index;
+    const config_setting_t *values;   /* borrowed */
+} axis_at;
+
 typedef struct load {
     nbep__scene_ctx c;
     const config_setting_t *def[S_COUNT];   /* borrowed: parsed literal defaults */
+    axis_at *axes;                          /* owned: per entry of the scene's sweep_axes */
 } load;
 
 typedef enum got { GOT, NONE, BAD } got;
@@ -875,24 +882,6 @@ static const char *axis_key_refused(const char *key)
     return NULL;
 }
 
-/* The values of a run.steps axis are integers >= 0: the sweep compares a finished run's steps
- * with them to reuse it. */
-static void check_steps_values(load *L, const config_setting_t *values, const char *prefix)
-{
-    for (int v = 0; v < config_setting_length(values); v++) {
-        const config_setting_t *x = config_setting_get_elem(values, (unsigned)v);
-        const int t = config_setting_type(x);
-        if ((t == CONFIG_TYPE_INT || t == CONFIG_TYPE_INT64) && config_setting_get_int64(x) >= 0)
-            continue;
-        nbep__strbuf b = {0};
-        nbep__scene_value_text(x, &b);
-        L->c.oom = L->c.oom || b.oom;
-        ERR(L, x, "%s.values.[%d]: run.steps must be an integer >= 0 (got %s)", prefix, v,
-            b.p ? b.p : "?");
-        nbep__strbuf_fini(&b);
-    }
-}
-
 /* The axes of the sweep group: sweep.vary's entries, each checked. */
 static void parse_axes(load *L, const config_setting_t *sweep, nbep_scene *sc)
 {
@@ -905,7 +894,8 @@ static void parse_axes(load *L, const config_setting_t *sweep, nbep_scene *sc)
     const config_setting_t *root = sweep; /* the deck's root, where an axis's path starts */
     while (config_setting_parent(root))
         root = config_setting_parent(root);
-    if (!(sc->sweep_axes = calloc(n, sizeof *sc->sweep_axes))) {
+    if (!(sc->sweep_axes = calloc(n, sizeof *sc->sweep_axes)) ||
+        !(L->axes = calloc(n, sizeof *L->axes))) {
         L->c.oom = true;
         return;
     }
@@ -965,8 +955,9 @@ static void parse_axes(load *L, const config_setting_t *sweep, nbep_scene *sc)
         }
         if (g_key != GOT || g_values != GOT)
             continue;
-        if (strcmp(key, "run.steps") == 0)
-            check_steps_values(L, values, prefix);
+        /* each value is checked by check_axis_values, once the deck is (run.steps too: the
+         * sweep compares a finished run's steps with its value to reuse it) */
+        L->axes[sc->sweep_n_axes] = (axis_at){.index = k, .values = values};
         nbep_sweep_axis *axis = &sc->sweep_axes[sc->sweep_n_axes++];
         axis->key = dup_string(L, key);
         /* its line, for the messages of runs that reject a value (sweep.c); none where an
@@ -1182,9 +1173,118 @@ static char *override_label(const char *const *overrides, const char *const *ori
     return b.p;
 }
 
+/* What a load does (load_deck). */
+typedef enum load_mode {
+    LOAD_DECK,    /* everything, every sweep axis value checked on its own (nbep check, run) */
+    LOAD_VALUE    /* one axis value's check (check_axis_values): no sweep group, no spheres */
+} load_mode;
+
+static nbep_status load_deck(const char *deck_path, const char *deck_text,
+                             const char *const *overrides, const char *const *origins,
+                             size_t n_overrides, load_mode mode, nbep_scene *out, nbep_diag *d);
+
+/* Whether d holds message msg among its messages from the first'th on. */
+static bool diag_has(const nbep_diag *d, size_t first, const char *msg)
+{
+    for (size_t k = first; k < d->n_errors; k++)
+        if (d->msg && d->msg[k] && strcmp(d->msg[k], msg) == 0)
+            return true;
+    return false;
+}
+
+/* Checks every value of every sweep axis on its own against the base deck (the deck's text
+ * and the command line's overrides, labels), so that a value no run can take is a deck error
+ * of nbep check, nbep run and the sweep's plan, not a run that fails after the others have
+ * run (until 2026-11-30 such a study passed the check and nbep sweep exited 1).
+ *
+ * A value is loaded as its runs load it, the base plus KEY=VALUE, in LOAD_VALUE mode: the
+ * deck's text parsed again and every type, range and cross check made (a box.max below the
+ * deck's min, a radius the periodic box cannot take, counts past memory), so that a value
+ * gets exactly the message a --set of it gets; but without the sweep group, and without
+ * allocating or placing spheres, so each value costs a parse of the deck, not the placement
+ * of millions of spheres. (Checking the value against the schema alone, its type and range
+ * flags, would be cheaper but miss the cross checks and word its messages anew.) What only
+ * placement finds (an overlap at t0, a group that does not fit) and what two axes do together
+ * (a radius on one, a box on another) stay the runs' to find.
+ *
+ * The value's messages are named as the value, "DECK:LINE: sweep.vary.[k].values.[v]" (the
+ * element's line) or "--set ...: sweep.vary.[k].values.[v]" where a --set gave it; a message
+ * about something else the value broke says which value, "...values.[v]: with KEY=VALUE, ";
+ * messages the base load has too (d's from errors0 on, a problem of the deck itself) are not
+ * repeated. */
+static void check_axis_values(load *L, const nbep_scene *sc, const char *deck_text,
+                              const char *const *overrides, const char *const *labels,
+                              size_t n_overrides, size_t errors0)
+{
+    const char **ov = calloc(n_overrides + 1, sizeof *ov);
+    const char **origin = calloc(n_overrides + 1, sizeof *origin);
+    if (!ov || !origin) {
+        L->c.oom = true;
+        goto out;
+    }
+    for (size_t k = 0; k < n_overrides; k++) {
+        ov[k] = overrides[k];
+        origin[k] = labels[k];
+    }
+    for (size_t a = 0; a < sc->sweep_n_axes && !L->c.oom; a++) {
+        const nbep_sweep_axis *axis = &sc->sweep_axes[a];
+        for (size_t v = 0; v < axis->n_values && !L->c.oom; v++) {
+            unsigned line;
+            const char *by = nbep__scene_origin(
+                config_setting_get_elem(L->axes[a].values, (unsigned)v), false, &line);
+            nbep__strbuf set = {0}, label = {0};
+            nbep__strbuf_add(&set, "%s=%s", axis->key, axis->values[v]);
+            if (by)
+                nbep__strbuf_add(&label, "%s: ", by);
+            else
+                nbep__strbuf_add(&label, "%s:%u: ", L->c.deck, line ? line : 1);
+            nbep__strbuf_add(&label, "sweep.vary.[%zu].values.[%zu]", L->axes[a].index, v);
+            nbep_diag one;
+            nbep_diag_init(&one);
+            nbep_scene value;
+            nbep_status st = NBEP_ENOMEM;
+            if (!set.oom && !label.oom) {
+                ov[n_overrides] = set.p;
+                origin[n_overrides] = label.p;
+                st = load_deck(L->c.deck, deck_text, ov, origin, n_overrides + 1, LOAD_VALUE,
+                               &value, &one);
+            }
+            if (st == NBEP_OK)
+                nbep_scene_fini(&value);
+            L->c.oom = L->c.oom || st == NBEP_ENOMEM;
+            const uint64_t rank = nbep__scene_rank(&L->c, by, by ? 0 : line);
+            const size_t n_label = strlen(nbep__strbuf_str(&label));
+            for (size_t k = 0; st == NBEP_EDECK && k < one.n_errors; k++) {
+                const char *msg = one.msg ? one.msg[k] : NULL;
+                if (!msg || diag_has(L->c.d, errors0, msg))
+                    continue;
+                if (strncmp(msg, label.p, n_label) == 0 && msg[n_label] == ':')
+                    nbep_diag_add_ranked(L->c.d, rank, __FILE__, __LINE__, "%s", msg);
+                else
+                    nbep_diag_add_ranked(L->c.d, rank, __FILE__, __LINE__, "%s: with %s, %s",
+                                         label.p, set.p, msg);
+            }
+            nbep_diag_fini(&one);
+            nbep__strbuf_fini(&set);
+            nbep__strbuf_fini(&label);
+        }
+    }
+out:
+    free(ov);
+    free(origin);
+}
+
 nbep_status nbep_scene_load_from(const char *deck_path, const char *const *overrides,
                                  const char *const *origins, size_t n_overrides,
                                  nbep_scene *out, nbep_diag *d)
+{
+    return load_deck(deck_path, NULL, overrides, origins, n_overrides, LOAD_DECK, out, d);
+}
+
+/* The deck at deck_path (its text deck_text, or NULL to read it) loaded as mode says. */
+static nbep_status load_deck(const char *deck_path, const char *deck_text,
+                             const char *const *overrides, const char *const *origins,
+                             size_t n_overrides, load_mode mode, nbep_scene *out, nbep_diag *d)
 {
     load L = {.c = {.deck = deck_path, .d = d}};
     nbep_scene sc;
@@ -1202,13 +1302,16 @@ nbep_status nbep_scene_load_from(const char *deck_path, const char *const *overr
     L.c.n_labels = n_overrides;
     const size_t errors0 = d->n_errors;
 
-    nbep_status st = read_text(deck_path, &sc.deck_text, d);
-    if (st != NBEP_OK)
-        goto done;
+    nbep_status st = NBEP_OK;
+    if (!deck_text) {
+        if ((st = read_text(deck_path, &sc.deck_text, d)) != NBEP_OK)
+            goto done;
+        deck_text = sc.deck_text;
+    }
     sc.deck_path = dup_string(&L, deck_path);
     sc.overrides = join_overrides(&L, overrides, n_overrides);
     size_t n_bad;
-    if (!(text = nbep__scene_widen(&L.c, sc.deck_text, NULL, &n_bad))) {
+    if (!(text = nbep__scene_widen(&L.c, deck_text, NULL, &n_bad))) {
         L.c.oom = true;
         goto finish;
     }
@@ -1245,10 +1348,15 @@ nbep_status nbep_scene_load_from(const char *deck_path, const char *const *overr
     check_span(&L, root, &sc, planes, n_planes, entries, n_entries);
     const bool geometry_ok = seed_ok && d->n_errors == geometry0 && !L.c.oom;
     parse_output(&L, root, &sc);
-    parse_sweep(&L, root, &sc);
+    if (mode != LOAD_VALUE)
+        parse_sweep(&L, root, &sc);
+    if (mode == LOAD_DECK && sc.sweep_n_axes && !L.c.oom)
+        check_axis_values(&L, &sc, deck_text, overrides, (const char *const *)labels,
+                          n_overrides, errors0);
 
     size_t total, n_all_planes = n_planes + (sc.has_box ? box_walls(&sc) : 0);
-    if (geometry_ok && check_counts(&L, &sc, entries, n_entries, n_all_planes, &total)) {
+    if (geometry_ok && check_counts(&L, &sc, entries, n_entries, n_all_planes, &total) &&
+        mode != LOAD_VALUE) {
         st = nbep_state_init(&sc.state, total, n_all_planes, d);
         if (st != NBEP_OK)
             goto done;
@@ -1279,6 +1387,7 @@ done:
     nbep_diag_sort(d, errors0);
     free(entries);
     free(planes);
+    free(L.axes);
     free(text);
     config_destroy(&defaults);
     config_destroy(&cfg);

@@ -128,15 +128,15 @@ enum {
       "per-sphere fields of each frame: \"position\", \"velocity\"")                               \
     X(OUTPUT_STATS, "output.stats", BOOL, 0, "true", NULL, "per-step counters in /stats")          \
     X(SWEEP, "sweep", GROUP, 0, NULL, "none",                                                      \
-      "parameter study for `nbep sweep`; run and check validate it, then take the deck as one "    \
-      "run without it")                                                                            \
+      "parameter study for `nbep sweep`; run and check validate it, each axis value with the "     \
+      "deck, then take the deck as one run without it")                                            \
     X(SWEEP_REPLICAS, "sweep.replicas", INT, F_GE1, "1", NULL,                                     \
       "runs of every combination of values")                                                       \
     X(SWEEP_VARY, "sweep.vary", LIST, 0, NULL, "none", "the axes of the study")                    \
     X(SWEEP_KEY, "sweep.vary.[].key", STRING, F_REQUIRED, NULL, "required",                        \
       "a deck path, as --set takes it")                                                            \
     X(SWEEP_VALUES, "sweep.vary.[].values", VALUES, F_REQUIRED, NULL, "required",                  \
-      "the values it takes (array or list)")
+      "the values it takes (array or list); each must pass with the deck as a --set of it")
 
 enum schema_id {
 #define X_ENUM(id, path, kind, flags, def, def_doc, meaning) S_##id,

@@ -1538,7 +1538,7 @@ static void test_sweep_bounds_take_their_edge_values(void **state)
              deck);
     ASSERT_DIAG(&f->d,
                 "--set sweep.vary=({ key = \"run.steps\"; values = [0, -1]; }): "
-                "sweep.vary.[0].values.[1]: run.steps must be an integer >= 0 (got -1)",
+                "sweep.vary.[0].values.[1]: run.steps must be >= 0 (got -1)",
                 too_many);
 }
 

@@ -261,16 +261,16 @@ static void test_varying_the_seed_or_a_key_twice_is_a_deck_error(void **state)
         TMP "sweep_bad_axes.deck:8: sweep.vary.[2].key: physics.restitution is already varied "
             "by sweep.vary.[1]"};
     assert_refused(deck, NULL, 0, 2, axes);
-    /* a run.steps axis takes integers >= 0 only, each checked on its line */
+    /* a run.steps axis takes integers >= 0 only, each checked on its line, as run.steps (since
+     * 2026-11-30 by the check of every value, in its words; before, by a check of its own) */
     write_deck("sweep_bad_steps",
                "sweep: { vary = ( { key = \"run.steps\";\n"
                "  values = ( 7, -2, 1.5 ); } ); };\n",
                deck, sizeof deck);
     const char *const steps[] = {
-        TMP "sweep_bad_steps.deck:7: sweep.vary.[0].values.[1]: run.steps must be an integer "
-            ">= 0 (got -2)",
+        TMP "sweep_bad_steps.deck:7: sweep.vary.[0].values.[1]: run.steps must be >= 0 (got -2)",
         TMP "sweep_bad_steps.deck:7: sweep.vary.[0].values.[2]: run.steps must be an integer "
-            ">= 0 (got 1.5)"};
+            "(got 1.5)"};
     assert_refused(deck, NULL, 0, 2, steps);
     /* an axis whose path indexes an entry the deck lacks (each run would append one with that
      * setting alone: until 2026-11-30 every run failed, exit 1, and the check passed); an
@@ -297,6 +297,70 @@ static void test_varying_the_seed_or_a_key_twice_is_a_deck_error(void **state)
     assert_int_equal(p.n_axes, 3);
     nbep_sweep_plan_fini(&p);
     nbep_diag_fini(&d);
+}
+
+/* Every axis value is checked on its own against the deck and the command line, as a --set of
+ * it, when the deck is (nbep check, nbep run, the sweep's plan): a value no run can take is a
+ * deck error at the value's line, not a failed run after the others (until 2026-11-30 the
+ * check passed and the sweep exited 1). Out of range, out of the window of magnitudes, of the
+ * wrong type, against the deck's other settings (a box.max below its min, an algorithm a
+ * periodic box cannot take), or given by a --set, which is then named; a problem of the deck
+ * itself is said once, not once per value. */
+static void test_a_bad_axis_value_is_refused_before_any_run(void **state)
+{
+    (void)state;
+    char deck[256];
+    write_deck("sweep_bad_values",
+               "sweep: { vary = ( { key = \"run.dt\"; values = [1e-3, 1e-45]; },\n"
+               "  { key = \"physics.restitution\"; values = ( 1.0,\n"
+               "      1.5, \"x\" ); },\n"
+               "  { key = \"box.max\"; values = ( [1.0, 1.0, 1.0], [2.0, -1.0, 1.0] ); } ); };\n",
+               deck, sizeof deck);
+    const char *const values[] = {
+        TMP "sweep_bad_values.deck:6: sweep.vary.[0].values.[1]: run.dt must be 1e-40 to 1e40 "
+            "in magnitude (got 1e-45); choose units that bring it within (README, The deck: "
+            "units)",
+        TMP "sweep_bad_values.deck:8: sweep.vary.[1].values.[1]: physics.restitution must be in "
+            "[0, 1] (got 1.5)",
+        TMP "sweep_bad_values.deck:8: sweep.vary.[1].values.[2]: physics.restitution must be a "
+            "number (got \"x\")",
+        TMP "sweep_bad_values.deck:9: sweep.vary.[2].values.[1]: box.min must be < box.max on "
+            "every axis (got y: 0 >= -1)"};
+    assert_refused(deck, NULL, 0, 4, values);
+    /* good values pass: the same axes with the bad ones replaced */
+    const char *const good[] = {"sweep.vary.[0].values.[1]=1e-4",
+                                "sweep.vary.[1].values=[1.0, 0.5]",
+                                "sweep.vary.[2].values.[1]=[2.0, 1.0, 1.0]"};
+    nbep_sweep_plan p;
+    plan_of(deck, good, 3, &p);
+    assert_int_equal(p.n_runs, 2 * 2 * 2);
+    nbep_sweep_plan_fini(&p);
+    /* values a --set gave are named by it; the deck's own problem (here the command line's
+     * restitution, which no axis replaces) is said once, not once per value */
+    const char *const by_set[] = {"sweep.vary.[0].values=[1e-3, 1e-45]",
+                                  "sweep.vary.[1].values.[2]=0.5", "run.steps=-1"};
+    const char *const named[] = {
+        "--set sweep.vary.[0].values=[1e-3, 1e-45]: sweep.vary.[0].values.[1]: run.dt must be "
+        "1e-40 to 1e40 in magnitude (got 1e-45); choose units that bring it within (README, "
+        "The deck: units)",
+        "--set run.steps=-1: run.steps must be >= 0 (got -1)",
+        TMP "sweep_bad_values.deck:8: sweep.vary.[1].values.[1]: physics.restitution must be in "
+            "[0, 1] (got 1.5)",
+        TMP "sweep_bad_values.deck:9: sweep.vary.[2].values.[1]: box.min must be < box.max on "
+            "every axis (got y: 0 >= -1)"};
+    assert_refused(deck, by_set, 3, 4, named);
+    /* a value that breaks another setting of the deck says which value did */
+    write_deck("sweep_bad_combination",
+               "sweep: { vary = ( { key = \"run.algorithm\"; values = [\"predictive\", "
+               "\"naive\"]; } ); };\n",
+               deck, sizeof deck);
+    const char *const periodic[] = {"box.periodic=[true, true, true]"};
+    const char *const other[] = {
+        TMP "sweep_bad_combination.deck:6: sweep.vary.[0].values.[1]: with "
+            "run.algorithm=\"naive\", --set box.periodic=[true, true, true]: box.periodic needs "
+            "run.algorithm = \"predictive\" with run.neighbors = \"cells\" or \"all\" (got "
+            "\"naive\"): the other modes do not handle periodic images"};
+    assert_refused(deck, periodic, 1, 1, other);
 }
 
 /* More runs than a sweep takes (10^7) is a deck error at the sweep group's line, or at the
@@ -604,30 +668,33 @@ static void test_a_run_is_complete_only_when_its_summary_says_it_completed(void 
 
 /* ---- running and the summary --------------------------------------------------------------- */
 
-static const char with_bad_value[] =
+/* A study whose middle value fails its runs, and only at run time: a radius of 0.45 passes the
+ * deck's check of each value (test_a_bad_axis_value_is_refused_before_any_run), but 8 such
+ * spheres do not fit in the unit box, which only placing them finds. Until 2026-11-30 a
+ * restitution of 1.5 served, which that check now refuses. */
+static const char with_failing_value[] =
     "sweep: { replicas = 2;\n"
-    "  vary = ( { key = \"physics.restitution\"; values = [1.0, 1.5, 0.5]; } ); };\n";
+    "  vary = ( { key = \"spheres.[0].radius\"; values = [0.05, 0.45, 0.04]; } ); };\n";
+/* what its failing runs say (the group's line in deck_body) */
+#define FAILING_VALUE_ERROR                                                                    \
+    "spheres.[0]: could not place 8 spheres of radius 0.45 in the region: placed 1 (packing "  \
+    "fraction 0.38)"
 
 static void test_a_failing_combination_spares_the_other_runs(void **state)
 {
     (void)state;
     char deck[256];
     nbep_sweep_plan p;
-    plan_of(write_deck("sweep_fail", with_bad_value, deck, sizeof deck), NULL, 0, &p);
+    plan_of(write_deck("sweep_fail", with_failing_value, deck, sizeof deck), NULL, 0, &p);
     nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
     for (size_t run = 0; run < 6; run++) {
-        bool bad = run % 3 == 1; /* restitution 1.5 */
+        bool bad = run % 3 == 1; /* radius 0.45 */
         assert_int_equal(res[run].outcome, bad ? NBEP_SWEEP_FAILED : NBEP_SWEEP_OK);
         assert_int_equal(res[run].exit_code, bad ? 2 : 0);
         assert_int_equal(res[run].has_summary, !bad);
-        if (bad) { /* named as the deck's axis and its line (it was --set KEY=VALUE, typed by
-                    * nobody; until 2026-11-30 without the line) */
+        if (bad) {
             char want[512];
-            const unsigned line = line_of(deck, "values = [1.0, 1.5, 0.5]");
-            assert_true(line > 1);
-            snprintf(want, sizeof want,
-                     "%s:%u: sweep.vary.[0]: physics.restitution must be in [0, 1] (got 1.5)",
-                     deck, line);
+            snprintf(want, sizeof want, "%s:4: " FAILING_VALUE_ERROR, deck);
             assert_string_equal(res[run].error, want);
         }
         else {
@@ -644,25 +711,47 @@ static void test_a_failing_combination_spares_the_other_runs(void **state)
     nbep_sweep_plan_fini(&p);
 }
 
-/* An axis value that a --set gave (sweep.vary.[0].values.[1]=1.5, the deck's list kept) is
- * named without the deck's line, which holds another value: the label says the axis only. */
+/* Two single spheres 1.2 apart, radius 0.5: a radius of 0.8 (an axis value) makes them overlap,
+ * which only their placement at run time finds. */
+static const char *write_overlap_deck(const char *name, const char *values, char *path,
+                                      size_t len)
+{
+    snprintf(path, len, TMP "%s.deck", name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f,
+            "run: { steps = 20; dt = 1.0e-3; threads = 1; };\n"
+            "spheres = ( { position = [0.0, 0.0, 0.0]; radius = 0.5; mass = 1.0; },\n"
+            "            { position = [1.2, 0.0, 0.0]; radius = 0.5; mass = 1.0; } );\n"
+            "output: { file = \"" TMP "%s.h5\"; every = 10; };\n"
+            "sweep: { vary = ( { key = \"spheres.[0].radius\";\n"
+            "                    values = %s; } ); };\n",
+            name, values);
+    assert_int_equal(fclose(f), 0);
+    char cmd[512];
+    snprintf(cmd, sizeof cmd, "rm -rf '" TMP "%s.sweep'", name);
+    assert_int_equal(system(cmd), 0);
+    return path;
+}
+
+/* An axis value that a --set gave (sweep.vary.[0].values.[1]=0.8, the deck's list kept) and
+ * that fails its run is named without the deck's line, which holds another value: the label
+ * says the axis only. (Until 2026-11-30 a restitution of 1.5 served, which the deck's check
+ * now refuses before any run.) */
 static void test_a_failing_value_from_the_command_line_names_no_deck_line(void **state)
 {
     (void)state;
     char deck[256];
     nbep_sweep_plan p;
-    const char *const ov[] = {"sweep.vary.[0].values.[1]=1.5"};
-    plan_of(write_deck("sweep_fail_set",
-                       "sweep: { vary = ( { key = \"physics.restitution\";\n"
-                       "  values = [1.0, 0.5]; } ); };\n",
-                       deck, sizeof deck),
-            ov, 1, &p);
+    const char *const ov[] = {"sweep.vary.[0].values.[1]=0.8"};
+    plan_of(write_overlap_deck("sweep_fail_set", "[0.5, 0.4]", deck, sizeof deck), ov, 1, &p);
     nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
     assert_int_equal(res[0].outcome, NBEP_SWEEP_OK);
     assert_int_equal(res[1].outcome, NBEP_SWEEP_FAILED);
     char want[512];
     snprintf(want, sizeof want,
-             "%s: sweep.vary.[0]: physics.restitution must be in [0, 1] (got 1.5)", deck);
+             "%s: sweep.vary.[0]: spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) by 0.1",
+             deck);
     assert_string_equal(res[1].error, want);
     free(res);
     nbep_sweep_plan_fini(&p);
@@ -674,18 +763,8 @@ static void test_a_failing_value_from_the_command_line_names_no_deck_line(void *
 static void test_an_overlap_a_value_makes_names_the_axis(void **state)
 {
     (void)state;
-    const char *deck = TMP "sweep_fail_overlap.deck";
-    FILE *f = fopen(deck, "w");
-    assert_non_null(f);
-    fputs("run: { steps = 20; dt = 1.0e-3; threads = 1; };\n"
-          "spheres = ( { position = [0.0, 0.0, 0.0]; radius = 0.5; mass = 1.0; },\n"
-          "            { position = [1.2, 0.0, 0.0]; radius = 0.5; mass = 1.0; } );\n"
-          "output: { file = \"" TMP "sweep_fail_overlap.h5\"; every = 10; };\n"
-          "sweep: { vary = ( { key = \"spheres.[0].radius\";\n"
-          "                    values = [0.5, 0.8]; } ); };\n",
-          f);
-    assert_int_equal(fclose(f), 0);
-    assert_int_equal(system("rm -rf '" TMP "sweep_fail_overlap.sweep'"), 0);
+    char deck[256];
+    write_overlap_deck("sweep_fail_overlap", "[0.5, 0.8]", deck, sizeof deck);
     nbep_sweep_plan p;
     plan_of(deck, NULL, 0, &p);
     nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
@@ -708,7 +787,7 @@ static void test_a_restarted_sweep_reuses_complete_runs(void **state)
     (void)state;
     char deck[256];
     nbep_sweep_plan p;
-    plan_of(write_deck("sweep_restart", with_bad_value, deck, sizeof deck), NULL, 0, &p);
+    plan_of(write_deck("sweep_restart", with_failing_value, deck, sizeof deck), NULL, 0, &p);
     free(execute(&p, NULL, NBEP_OK));
     nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
     for (size_t run = 0; run < 6; run++) {
@@ -730,7 +809,7 @@ static void test_a_stop_signal_before_a_run_leaves_it_not_run(void **state)
     (void)state;
     char deck[256];
     nbep_sweep_plan p;
-    plan_of(write_deck("sweep_stop", with_bad_value, deck, sizeof deck), NULL, 0, &p);
+    plan_of(write_deck("sweep_stop", with_failing_value, deck, sizeof deck), NULL, 0, &p);
     atomic_int stop;
     atomic_init(&stop, SIGINT);
     nbep_sweep_result *res = execute(&p, &stop, NBEP_ESIGINT);
@@ -775,7 +854,7 @@ static void test_summary_csv_has_a_row_per_run_in_run_order(void **state)
     (void)state;
     char deck[256];
     nbep_sweep_plan p;
-    plan_of(write_deck("sweep_csv", with_bad_value, deck, sizeof deck), NULL, 0, &p);
+    plan_of(write_deck("sweep_csv", with_failing_value, deck, sizeof deck), NULL, 0, &p);
     nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
     nbep_diag d;
     nbep_diag_init(&d);
@@ -784,13 +863,13 @@ static void test_summary_csv_has_a_row_per_run_in_run_order(void **state)
     size_t n = read_lines(TMP "sweep_csv.sweep/summary.csv", lines);
     assert_int_equal(n, 1 + 6);
     assert_string_equal(lines[0],
-                        "run,replica,seed,rank,physics.restitution,status,exit_code,reused,"
+                        "run,replica,seed,rank,spheres.[0].radius,status,exit_code,reused,"
                         "seconds,file,algorithm,threads,spheres,planes,steps,dt,setup_seconds,"
                         "wall_seconds,steps_per_second,checks,predictions,collisions,"
                         "sphere_collisions,plane_collisions,quiet_steps,energy_initial,"
                         "energy_final,energy_rel_drift,max_overlap,max_overlap_rel,"
                         "peak_rss_bytes,pressure,steps_requested,error");
-    static const char *const restitution[3] = {"1.0", "1.5", "0.5"};
+    static const char *const radius[3] = {"0.05", "0.45", "0.04"};
     char f[128], want[64];
     for (size_t run = 0; run < 6; run++) {
         const char *row = lines[1 + run];
@@ -802,7 +881,7 @@ static void test_summary_csv_has_a_row_per_run_in_run_order(void **state)
         snprintf(want, sizeof want, "%zu", 11 + run / 3);
         assert_string_equal(csv_field(row, 2, f, sizeof f), want);
         assert_string_equal(csv_field(row, 3, f, sizeof f), "0");
-        assert_string_equal(csv_field(row, 4, f, sizeof f), restitution[run % 3]);
+        assert_string_equal(csv_field(row, 4, f, sizeof f), radius[run % 3]);
         assert_string_equal(csv_field(row, 5, f, sizeof f), bad ? "failed" : "ok");
         assert_string_equal(csv_field(row, 6, f, sizeof f), bad ? "2" : "0");
         snprintf(want, sizeof want, "run-%04zu.h5", run);
@@ -810,9 +889,8 @@ static void test_summary_csv_has_a_row_per_run_in_run_order(void **state)
         assert_string_equal(csv_field(row, 10, f, sizeof f), bad ? "" : "predictive");
         assert_string_equal(csv_field(row, 12, f, sizeof f), bad ? "" : "8");
         assert_string_equal(csv_field(row, 14, f, sizeof f), bad ? "" : "20");
-        if (bad)   /* the error is quoted: it holds a comma */
-            assert_non_null(strstr(row, ": sweep.vary.[0]: physics.restitution "
-                                        "must be in [0, 1] (got 1.5)\""));
+        if (bad)
+            assert_non_null(strstr(row, ".deck:4: " FAILING_VALUE_ERROR));
         else
             assert_int_equal(row[strlen(row) - 1], ',');   /* empty error */
         assert_string_equal(csv_field(row, 31, f, sizeof f), "");   /* pressure: null */
@@ -887,7 +965,7 @@ static void test_summary_h5_holds_the_same_table(void **state)
     (void)state;
     char deck[256];
     nbep_sweep_plan p;
-    plan_of(write_deck("sweep_h5", with_bad_value, deck, sizeof deck), NULL, 0, &p);
+    plan_of(write_deck("sweep_h5", with_failing_value, deck, sizeof deck), NULL, 0, &p);
     nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
     nbep_diag d;
     nbep_diag_init(&d);
@@ -903,7 +981,7 @@ static void test_summary_h5_holds_the_same_table(void **state)
     assert_int_equal(H5Tget_nmembers(type), 34);   /* the CSV's 34 columns */
     char *m0 = H5Tget_member_name(type, 0), *m4 = H5Tget_member_name(type, 4);
     assert_string_equal(m0, "run");
-    assert_string_equal(m4, "physics.restitution");
+    assert_string_equal(m4, "spheres.[0].radius");
     H5free_memory(m0);
     H5free_memory(m4);
 
@@ -918,8 +996,8 @@ static void test_summary_h5_holds_the_same_table(void **state)
     read_member(ds, "steps_requested", H5T_NATIVE_INT64, requested);
     read_member(ds, "energy_rel_drift", H5T_NATIVE_DOUBLE, drift);
     read_member(ds, "status", str, status);
-    read_member(ds, "physics.restitution", str, value);
-    static const char *const restitution[3] = {"1.0", "1.5", "0.5"};
+    read_member(ds, "spheres.[0].radius", str, value);
+    static const char *const radius[3] = {"0.05", "0.45", "0.04"};
     for (size_t r = 0; r < 6; r++) {
         bool bad = r % 3 == 1;
         assert_int_equal(run[r], (int64_t)r);
@@ -928,7 +1006,7 @@ static void test_summary_h5_holds_the_same_table(void **state)
         assert_int_equal(requested[r], bad ? 0 : 20);
         assert_true(bad ? isnan(drift[r]) : drift[r] == res[r].summary.energy_rel_drift);
         assert_string_equal(status[r], bad ? "failed" : "ok");
-        assert_string_equal(value[r], restitution[r % 3]);
+        assert_string_equal(value[r], radius[r % 3]);
         H5free_memory(status[r]);
         H5free_memory(value[r]);
     }
@@ -953,7 +1031,7 @@ static void test_the_command_reports_failed_runs_and_exits_1(void **state)
 {
     (void)state;
     char deck[256];
-    write_deck("sweep_main", with_bad_value, deck, sizeof deck);
+    write_deck("sweep_main", with_failing_value, deck, sizeof deck);
     nbep_cli cli = {.cmd = NBEP_CMD_SWEEP, .path = deck, .quiet = true,
                     .summary = TMP "sweep_main.json"};
     nbep_diag d;
@@ -1001,6 +1079,7 @@ int main(void)
         cmocka_unit_test(test_the_sweep_directory_is_the_output_name_with_sweep),
         cmocka_unit_test(test_run_files_have_four_digits_or_as_many_as_the_last_run_needs),
         cmocka_unit_test(test_varying_the_seed_or_a_key_twice_is_a_deck_error),
+        cmocka_unit_test(test_a_bad_axis_value_is_refused_before_any_run),
         cmocka_unit_test(test_too_many_runs_is_a_deck_error_at_the_sweep_group),
         cmocka_unit_test(test_a_steps_axis_sets_each_runs_expected_steps),
         cmocka_unit_test(test_ranks_take_runs_in_rounds_of_alternating_direction),

@@ -157,5 +157,34 @@ for f in summary.csv run-0001.h5; do
          [ \"\$(md5sum < '$tmp/own.sweep/$f')\" = '$sum' ]"
 done
 
+# ---- an axis value no run can take: refused by check, run and sweep, exit 2, nothing written ----
+# (until 2026-11-30 check and run passed it, and the sweep ran the other runs and exited 1)
+for bad in "run.dt|1e-45|run.dt must be 1e-40 to 1e40 in magnitude (got 1e-45)" \
+           "physics.restitution|1.5|physics.restitution must be in \\[0, 1\\] (got 1.5)" \
+           "physics.restitution|\"x\"|physics.restitution must be a number (got \"x\")"; do
+    IFS='|' read -r key value msg <<<"$bad"
+    name=$(echo "$key$value" | tr -dc 'a-z0-9')
+    sed -e "s/^sweep: .*/sweep: { vary = ( { key = \"$key\";\\n  values = ( 0.001, $value ); } ); };/" \
+        -e 's/^\(sweep: .*\)\\n/\1\n/' "$tmp/s.deck" >"$tmp/$name.deck"
+    line="$tmp/$name.deck:8: sweep.vary.\\[0\\].values.\\[1\\]: $msg"
+    for cmd in check run sweep; do
+        timeout -k 5 120 "$nbep" $cmd "$tmp/$name.deck" -o "$tmp/$name-$cmd.h5" --quiet \
+            >"$tmp/stdout" 2>"$tmp/stderr"
+        rc=$?
+        check "$key = $value on an axis: nbep $cmd exits 2 (got $rc), one line at the value's, nothing written" \
+            "[ $rc = 2 ] && one_line && grep -q '^$line' '$tmp/stderr' &&
+             [ ! -e '$tmp/$name-$cmd.h5' ] && [ ! -e '$tmp/$name-$cmd.sweep' ]"
+    done
+done
+# a value given to the axis by a --set is named by that --set; good values pass
+run_sweep "$tmp/s.deck" -o "$tmp/set-values.h5" --quiet --set 'sweep.vary.[0].values=[1.0, 1.5]'
+check "--set sweep.vary.[0].values=[1.0, 1.5]: exit 2 (got $rc), the line names the --set, no folder" \
+    "[ $rc = 2 ] && one_line &&
+     grep -q '^--set sweep.vary.\[0\].values=\[1.0, 1.5\]: sweep.vary.\[0\].values.\[1\]: physics.restitution must be in' '$tmp/stderr' &&
+     [ ! -e '$tmp/set-values.sweep' ]"
+timeout 30 "$nbep" check "$tmp/s.deck" --set 'sweep.vary.[0].values=[0.5, 0.25]' >/dev/null 2>"$tmp/stderr"
+rc=$?
+check "good values given by a --set pass nbep check (exit $rc)" "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ]"
+
 [ $fail = 0 ] && echo "sweep_cli: all passed"
 exit $fail

@@ -115,7 +115,9 @@ typedef struct nbep_scene {
  * --set takes them; n_overrides may be 0), places generated groups and fills *out.
  * Reports every problem it finds, one line each as "deck:line: message", then returns
  * NBEP_EDECK (NBEP_ENOMEM for counts that cannot be allocated, NBEP_EIO when the deck cannot
- * be read). *out is written only on success; release it with nbep_scene_fini. */
+ * be read). A sweep group's axis values are each checked on their own against the deck and
+ * the overrides, as a --set of the value (scene.c, check_axis_values). *out is written only on
+ * success; release it with nbep_scene_fini. */
 NBEP_MUST_CHECK nbep_status nbep_scene_load(const char *deck_path,
                                             const char *const *overrides, size_t n_overrides,
                                             nbep_scene *out, nbep_diag *d);
