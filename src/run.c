@@ -198,8 +198,8 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     const double t_begin = nbep_now(); /* setup_seconds counts the deck and placement (SPEC) */
     nbep_peak_rss_reset(); /* peak_rss_bytes: this run's, not an earlier run's of a sweep */
     nbep_scene sc;
-    nbep_status st = nbep_scene_load_from(rq->deck_path, rq->overrides, rq->override_origins,
-                                          rq->n_overrides, &sc, d);
+    nbep_status st = (rq->sweep_run ? nbep_scene_load_run : nbep_scene_load_from)(
+        rq->deck_path, rq->overrides, rq->override_origins, rq->n_overrides, &sc, d);
     if (st != NBEP_OK)
         return st;
     /* a signal while the deck was read and the spheres placed (seconds for millions): stop

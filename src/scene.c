@@ -1176,6 +1176,7 @@ static char *override_label(const char *const *overrides, const char *const *ori
 /* What a load does (load_deck). */
 typedef enum load_mode {
     LOAD_DECK,    /* everything, every sweep axis value checked on its own (nbep check, run) */
+    LOAD_RUN,     /* everything but the axis values: a sweep's run, whose plan checked them */
     LOAD_VALUE    /* one axis value's check (check_axis_values): no sweep group, no spheres */
 } load_mode;
 
@@ -1279,6 +1280,13 @@ nbep_status nbep_scene_load_from(const char *deck_path, const char *const *overr
                                  nbep_scene *out, nbep_diag *d)
 {
     return load_deck(deck_path, NULL, overrides, origins, n_overrides, LOAD_DECK, out, d);
+}
+
+nbep_status nbep_scene_load_run(const char *deck_path, const char *const *overrides,
+                                const char *const *origins, size_t n_overrides,
+                                nbep_scene *out, nbep_diag *d)
+{
+    return load_deck(deck_path, NULL, overrides, origins, n_overrides, LOAD_RUN, out, d);
 }
 
 /* The deck at deck_path (its text deck_text, or NULL to read it) loaded as mode says. */

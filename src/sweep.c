@@ -457,7 +457,8 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
                                      .override_origins = (const char *const *)p->base_origins,
                                      .n_overrides = n_ov,
                                      .output_path = path,
-                                     .stop_signal = ex->stop_signal};
+                                     .stop_signal = ex->stop_signal,
+                                     .sweep_run = true};
         nbep_run_result rr;
         st = nbep_run(&rq, &rr, &d);
         has_summary = rr.simulated;

@@ -24,6 +24,8 @@ typedef struct nbep_run_request {
     const char *summary_path;      /* NULL, "-" (stdout) or a file for the JSON summary */
     const atomic_int *stop_signal; /* borrowed, may be NULL: nonzero = SIGINT/SIGTERM number */
     bool verbose;                  /* progress lines and a one-line human summary on stderr */
+    bool sweep_run;                /* one run of a sweep, whose plan checked its axes' values
+                                    * (nbep_scene_load_run) */
 } nbep_run_request;
 
 typedef struct nbep_run_result {

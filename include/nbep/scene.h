@@ -128,6 +128,13 @@ NBEP_MUST_CHECK nbep_status nbep_scene_load_from(const char *deck_path,
                                                  const char *const *overrides,
                                                  const char *const *origins, size_t n_overrides,
                                                  nbep_scene *out, nbep_diag *d);
+/* nbep_scene_load_from for one run of a sweep (sweep.c): the same checks but one, that of
+ * each sweep axis value on its own against the base deck, which the sweep's plan made once
+ * for all its runs (it parses the deck once per value). */
+NBEP_MUST_CHECK nbep_status nbep_scene_load_run(const char *deck_path,
+                                                const char *const *overrides,
+                                                const char *const *origins, size_t n_overrides,
+                                                nbep_scene *out, nbep_diag *d);
 void nbep_scene_fini(nbep_scene *sc);
 
 /* run.neighbors as the deck spells it: "all", "grid" or "cells" (predictive's setting). */
