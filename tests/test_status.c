@@ -1,7 +1,7 @@
 /* Tests of the diag's order: nbep_diag_sort puts messages by rank, those of one rank in the
  * order they were added, unranked ones (nbep_diag_add) last, and leaves the messages before the
- * first it is given where they were; also when it has no memory for its quick way (it sorts in
- * place then), which this test makes happen with its own copy of src/status.c whose malloc
+ * first it is given where they were; also when no memory can be had (it sorts in place and
+ * needs none), which this test makes happen with its own copy of src/status.c whose malloc
  * fails on demand. The scene's load sorts its messages so (test_scene). */
 #include <stdbool.h>
 #include <stdlib.h>
@@ -84,7 +84,7 @@ static void test_sort_orders_many_messages(void **state)
     nbep_diag_fini(&d);
 }
 
-/* Without memory for its copy of the list, the sort orders the list in place, as stably. */
+/* Without memory to be had, the sort orders the list in place, as stably. */
 static void test_sort_without_memory_orders_in_place(void **state)
 {
     (void)state;
