@@ -511,9 +511,8 @@ typedef struct blame {
 
 /* An overlap to be listed by name. */
 typedef struct listed {
-    uint64_t rank;                  /* its message's (its blame's) */
     uint64_t seq;                   /* how many were found before it */
-    blame at;                       /* what it is blamed on */
+    blame at;                       /* what it is blamed on, and its message's rank */
     size_t entry, a;                /* sphere a, of that entry, */
     char other[96];                 /* overlaps this */
     double by;
@@ -596,24 +595,24 @@ static void report(overlaps *o, size_t a, size_t b, const char *other, double by
         if (bb.label && bb.rank < at.rank) /* a deck line's rank is past every option's */
             at = bb;
     }
-    const uint64_t rank = at.rank;
     size_t k;
     if (o->n_kept < OVERLAP_REPORT_MAX)
         k = o->n_kept++;
-    else if (rank < o->kept[o->last].rank) /* found later: before the last only by rank */
+    else if (at.rank < o->kept[o->last].at.rank) /* found later: before the last only by rank */
         k = o->last;
     else
         return;
     listed *l = &o->kept[k];
-    *l = (listed){.rank = rank, .seq = seq, .at = at, .entry = entry_of(o->e, o->n_entries, a),
+    *l = (listed){.seq = seq, .at = at, .entry = entry_of(o->e, o->n_entries, a),
                   .a = a, .by = by};
     snprintf(l->other, sizeof l->other, "%s", other);
     if (o->n_kept < OVERLAP_REPORT_MAX)
         return;
     o->last = 0;
     for (size_t j = 1; j < o->n_kept; j++)
-        if (o->kept[j].rank > o->kept[o->last].rank ||
-            (o->kept[j].rank == o->kept[o->last].rank && o->kept[j].seq > o->kept[o->last].seq))
+        if (o->kept[j].at.rank > o->kept[o->last].at.rank ||
+            (o->kept[j].at.rank == o->kept[o->last].at.rank &&
+             o->kept[j].seq > o->kept[o->last].seq))
             o->last = j;
 }
 
@@ -748,7 +747,7 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
      * (the sort is stable), not among the messages that name no line, after later lines' */
     uint64_t last_rank = 0;
     for (size_t k = 0; k < o.n_kept; k++)
-        last_rank = o.kept[k].rank > last_rank ? o.kept[k].rank : last_rank;
+        last_rank = o.kept[k].at.rank > last_rank ? o.kept[k].at.rank : last_rank;
     if (o.found > OVERLAP_REPORT_MAX)
         nbep_diag_add_ranked(c->d, last_rank, __FILE__, __LINE__,
                              "nbep: %s: %" PRIu64 " more overlaps not listed", c->deck,
