@@ -146,12 +146,22 @@ static bool in_scale(double magnitude)
            (magnitude >= NBEP_DECK_SCALE_MIN && magnitude <= NBEP_DECK_SCALE_MAX);
 }
 
+/* v divided by its largest component's magnitude *m (v finite, not zero): within [-1, 1],
+ * so that its squares neither overflow nor underflow. Divided, not multiplied by 1 / *m,
+ * which is inf for a subnormal *m (a plane normal [0, 0, 1e-320] became NaN, and its run
+ * asserted). */
+static nbep_vec3 by_largest(nbep_vec3 v, double *m)
+{
+    *m = fmax(fabs(v.x), fmax(fabs(v.y), fabs(v.z)));
+    return nbep_vec3_make(v.x / *m, v.y / *m, v.z / *m);
+}
+
 /* |v| without overflow or underflow of the squares (v finite) */
 static double scaled_norm(nbep_vec3 v)
 {
-    const double m = fmax(fabs(v.x), fmax(fabs(v.y), fabs(v.z)));
-    /* divided by m, not multiplied by 1 / m, which overflows for a subnormal m */
-    return m > 0.0 ? m * nbep_vec3_norm(nbep_vec3_make(v.x / m, v.y / m, v.z / m)) : 0.0;
+    double m;
+    const nbep_vec3 u = by_largest(v, &m);
+    return m > 0.0 ? m * nbep_vec3_norm(u) : 0.0;
 }
 
 static got get_float(load *L, const config_setting_t *parent, const char *prefix, int id,
@@ -578,17 +588,16 @@ static void parse_planes(load *L, const config_setting_t *root, plane **out, siz
         if (get_vec3(L, e, prefix, S_PLANE_NORMAL, &normal, &at) != GOT ||
             get_vec3(L, e, prefix, S_PLANE_POINT, &point, &point_at) != GOT)
             continue;
-        /* Divided by its largest component first, so that tiny or huge normals normalize
-         * without underflow or overflow (divided: 1 / a subnormal component is inf, and a
-         * normal [0, 0, 1e-320] became NaN, which a run then asserted on) */
-        double scale = fmax(fabs(normal.x), fmax(fabs(normal.y), fabs(normal.z)));
+        /* divided by its largest component first (by_largest), so that tiny or huge normals
+         * normalize without underflow or overflow */
+        double scale;
+        const nbep_vec3 u = by_largest(normal, &scale);
         if (!(scale > 0.0)) {
             ERR(L, at, "%s.normal must not be zero (got [%g, %g, %g])", prefix, normal.x,
                 normal.y, normal.z);
             continue;
         }
-        normal = nbep_vec3_make(normal.x / scale, normal.y / scale, normal.z / scale);
-        normal = nbep_vec3_scale(normal, 1.0 / nbep_vec3_norm(normal));
+        normal = nbep_vec3_scale(u, 1.0 / nbep_vec3_norm(u));
         p[k] = (plane){normal, nbep_vec3_dot(normal, point), point, point_at};
     }
     *out = p;

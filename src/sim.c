@@ -449,10 +449,11 @@ int nbep__sim_end_step(nbep_sim *sim, uint64_t step)
         sim->tmax[par][t].overlap = sim->tmax[par][t].overlap_rel = 0.0;
     }
     energy_total(sim, &row.kinetic_energy, &row.potential_energy);
-    /* A step whose energy or sums overflowed (no deck within the units' window, scene.h
-     * NBEP_DECK_SCALE_MIN and _MAX, gets here; a scene built otherwise can): the run stops, with its message and status, as at the end of the step
-     * before: no row, no frame and no totals of this step, so that nothing non-finite reaches
-     * the file or the summary (which reports the last step written). */
+    /* A step whose energy or sums overflowed (no deck within the window of magnitudes and
+     * the span, scene.h, gets here; a resumed file's state or a scene built otherwise can):
+     * the run stops, with its message and status, as at the end of the step before: no row,
+     * no frame and no totals of this step, so that nothing non-finite reaches the file or the
+     * summary (which reports the last step written). */
     bool finite = isfinite(row.kinetic_energy + row.potential_energy) && isfinite(row.virial);
     for (size_t p = 0; p < np; p++)
         finite = finite && isfinite(wall[p]);
