@@ -391,6 +391,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         if (c->order_step)
             atomic_init(&c->tclaim[i], KEY_FREE);
     }
+    atomic_init(&c->round_stop, 0);
     for (int t = 0; t < sim->nt; t++) {
         const size_t own = plan_own(&p, t);
         thread_ws *w = &c->ws[t];
@@ -859,6 +860,11 @@ static void pred_run(nbep_sim *sim, void *p)
                 }
                 redo_phase(c, s, share, tid, k_all, b_all, T0, T_end, w, cnt, NULL);
                 w->t_min = cand_t_min(c, w);
+                /* thread 0 looks at the stop signal; the crew reads what it found past the
+                 * barrier (relaxed: the barrier orders it) */
+                const bool look = round % STOP_ROUNDS == STOP_ROUNDS - 1;
+                if (look && tid == 0 && nbep_sim_stop_status(sim->opt.stop_signal) != NBEP_OK)
+                    atomic_store_explicit(&c->round_stop, 1, memory_order_relaxed);
                 nbep_barrier_wait(b_all);
                 /* the threads out of the crew are done: the rest of the step's rounds is the
                  * crew's (each t_min is read here by the crew alone, before its next write) */
@@ -884,6 +890,16 @@ static void pred_run(nbep_sim *sim, void *p)
                     memcpy(w->cand, w->redo, w->n_redo * sizeof *w->cand);
                     w->n_cand = w->n_redo;
                     w->n_redo = 0;
+                }
+                if (look && atomic_load_explicit(&c->round_stop, memory_order_relaxed)) {
+                    /* a signal during the step's rounds: the step is abandoned (no row,
+                     * frame or counts of it), the run ends after the step before */
+                    if (tid == 0) {
+                        sim->status = nbep_sim_stop_status(sim->opt.stop_signal);
+                        sim->abandoned = true;
+                    }
+                    quit = true;
+                    break;
                 }
                 if (round % STALL_ROUNDS == STALL_ROUNDS - 1 &&
                     !(t_min - t_check > STALL_FRACTION * sim->dt)) {

@@ -204,7 +204,9 @@ static inline bool nbep__evloop_commit_sets(const evl_ws *w, uint32_t j)
 #endif
 
 /* Counts one event at time t towards the stall check: false when st->events events in a row
- * have not advanced time by more than st->dt. */
+ * have not advanced time by more than st->dt, or at a look at the stop signal that finds one
+ * (st->stopped set). The look is relaxed: the signal's handler stores it with no other data
+ * to pass. */
 static inline bool nbep__evloop_advances(nbep_evloop_stall *st, double t)
 {
     NBEP_EVLOOP_STALL_HOOK(st, t);
@@ -213,6 +215,13 @@ static inline bool nbep__evloop_advances(nbep_evloop_stall *st, double t)
             return false;
         st->t_mark = t;
         st->since = 0;
+    }
+    if (++st->looks >= NBEP_EVLOOP_STOP_EVERY) {
+        st->looks = 0;
+        if (st->stop && atomic_load_explicit(st->stop, memory_order_relaxed) != 0) {
+            st->stopped = true;
+            return false;
+        }
     }
     return true;
 }

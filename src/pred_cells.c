@@ -504,7 +504,12 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
     u->cnt->c[NBEP_COUNTER_CHECKS] += tally.events;
     u->cnt->c[NBEP_COUNTER_AHEAD] += tally.ahead;
     u->cnt->c[NBEP_COUNTER_UNDONE] += tally.undone;
-    if (fail && nbep_evloop_failed(c->ev)) {
+    if (fail && stall->stopped) {
+        /* a signal during a step's events: the step is abandoned (its rows, frame and counts
+         * never made), the run ends after the step before (nbep_sim_run) */
+        sim->status = nbep_sim_stop_status(sim->opt.stop_signal);
+        sim->abandoned = true;
+    } else if (fail && nbep_evloop_failed(c->ev)) {
         nbep_diag_add(sim->diag, __FILE__, __LINE__,
                       "nbep: step %llu: no memory for the neighbour lists; stopping",
                       (unsigned long long)step);
@@ -581,7 +586,8 @@ void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own,
         /* the step's events, on the threads of its way; a probe of another way first runs
          * those of the step's first part (pred_ways.c), behind a barrier: its threads have
          * left the team loop before the rest's enter it */
-        nbep_evloop_stall stall = NBEP_EVLOOP_STALL(STALL_EVENTS, STALL_FRACTION * sim->dt);
+        nbep_evloop_stall stall =
+            NBEP_EVLOOP_STALL(STALL_EVENTS, STALL_FRACTION * sim->dt, sim->opt.stop_signal);
         const int probe = c->ways.probe[step & 1];
         if (probe >= 0) {
             cells_part(sim, c, tid, &u, us, ops, probe, true, 2 * step,

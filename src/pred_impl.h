@@ -34,6 +34,10 @@
  * is a contact the model cannot resolve. */
 #define STALL_ROUNDS 100000u
 #define STALL_FRACTION 1e-12
+/* Every this many rounds of one step, thread 0 looks at the stop signal: a step of the paper's
+ * box has a few rounds and never looks; a step of many (a long dt over a crowded scene: a
+ * round costs microseconds to a millisecond) is abandoned within a second of a SIGTERM. */
+#define STOP_ROUNDS 1024u
 /* The stall's message (printf: step, time, "rounds" or "events", their count). A step whose
  * real events are far shorter than it (a review's 27 spheres at 1e18 times their radius a
  * time unit, dt = 1: 1e18 list expiries a sphere a step) stalls by this measure too, and will
@@ -246,6 +250,9 @@ typedef struct pred_ctx {
     /* thread 0, where the crew is smaller than the run's threads, for the others after the
      * barrier that ends the rounds: whether the rounds stopped the run */
     bool crew_quit;
+    /* set by thread 0 (for good) when a look at the stop signal, every STOP_ROUNDS rounds of a
+     * step, finds one; read by the crew past the barrier that follows */
+    atomic_int round_stop;
     uint64_t rounds_before; /* thread 0's: the rounds of the steps before this one */
     uint64_t seen_before;   /* thread 0's: seen_woken where the step before's rounds ended */
     nbep_counters *help_cnt;      /* owned when team, team_size NBEP_EVLOOP_RING: each place's

@@ -124,12 +124,21 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
     res->summary.status = nbep_summary_status_of(st);
     if (rq->verbose)
         print_human_summary(&res->summary, file, st, from);
-    if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
+    uint64_t frame_step;
+    const bool abandoned = nbep_sim_abandoned(sim, &frame_step);
+    const char *how = st == NBEP_ESIGINT ? "interrupted" : "terminated";
+    const char *sig = st == NBEP_ESIGINT ? "INT" : "TERM";
+    if ((st == NBEP_ESIGINT || st == NBEP_ESIGTERM) && abandoned)
         nbep_diag_add(d, __FILE__, __LINE__,
-                      "nbep: %s by SIG%s after step %llu; every frame up to it is in %s",
-                      st == NBEP_ESIGINT ? "interrupted" : "terminated",
-                      st == NBEP_ESIGINT ? "INT" : "TERM",
-                      (unsigned long long)res->summary.steps, file);
+                      "nbep: %s by SIG%s during step %llu, which is abandoned; the run ends "
+                      "after step %llu, and its frames up to step %llu are in %s",
+                      how, sig, (unsigned long long)res->summary.steps + 1,
+                      (unsigned long long)res->summary.steps, (unsigned long long)frame_step,
+                      file);
+    else if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s by SIG%s after step %llu; every frame up to it is in %s", how,
+                      sig, (unsigned long long)res->summary.steps, file);
     return st;
 }
 

@@ -338,6 +338,8 @@ static nbep_status emit_frame(nbep_sim *sim, uint64_t step)
     }
     if (st == NBEP_OK && sim->opt.on_frame)
         st = sim->opt.on_frame(sim->opt.on_frame_ctx, (int64_t)step, &sim->st, sim->diag);
+    if (st == NBEP_OK)
+        sim->frame_last = step;
     return st;
 }
 
@@ -525,7 +527,8 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
     nbep_status st = sim->resumed ? NBEP_OK : emit_frame(sim, 0);
     if (st != NBEP_OK)
         return st;
-    sim->steps_done = sim->step_first - 1;
+    sim->steps_done = sim->frame_last = sim->step_first - 1;
+    sim->abandoned = false;
     /* a signal since the run began (the steps poll it at their ends; a run of 0 steps has
      * none): it stops here, with frame 0 written */
     sim->status = nbep_sim_stop_status(sim->opt.stop_signal);
@@ -542,6 +545,12 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
             sim->status = st;
     }
     return sim->status;
+}
+
+bool nbep_sim_abandoned(const nbep_sim *sim, uint64_t *frame_step)
+{
+    *frame_step = sim->frame_last;
+    return sim->abandoned;
 }
 
 void nbep_sim_summary(const nbep_sim *sim, nbep_summary *s)

@@ -81,6 +81,10 @@ struct nbep_sim {
     uint64_t totals[NBEP_COUNTER_COUNT];
     uint64_t quiet_steps;
     uint64_t steps_done;
+    /* the step of the last frame written (or resumed from); whether a signal abandoned a
+     * step in its events (thread 0: nbep_sim_abandoned) */
+    uint64_t frame_last;
+    bool abandoned;
     double energy_initial, energy_final;
     double max_overlap, max_overlap_rel;
     double setup_seconds, wall_seconds;

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # SIGTERM and SIGINT (a batch job at its time limit, or Ctrl-C) finish the current step,
-# write its frame, close the file and exit 143 or 130; the file opens with every frame.
+# write its frame, close the file and exit 143 or 130; the file opens with every frame. A step
+# far too long to wait for is abandoned instead (below).
 set -u
 cd "$(dirname "$0")/.."
 tmp=build/tests/tmp/signals
@@ -114,6 +115,45 @@ check "with frame 0 readable and no step run" \
 check "and a summary that says terminated, 0 of the deck's 1000 steps" \
     "grep -q '\"status\": \"terminated\", \"steps_requested\": 1000}' '$tmp/summary-setup.json' &&
      grep -Eq '^status: +terminated \\(SIGTERM\\): step 0 of 1000\$' '$tmp/info-setup'"
+
+# a signal during a step far longer than a job's grace between SIGTERM and SIGKILL (dt = 1000:
+# about 1e8 events a step, minutes): the predictive loops look at the signal every 65536 events
+# (cells mode) or 1024 rounds (all-pairs and grid modes) and abandon the step, so the run ends
+# after the step before, with its summary, within a fraction of a second (20 s allowed here);
+# until 2026-11-30 the step ran on to its end, and a job's KILL took the summary and the stats
+# rows not yet written. One line says which step was abandoned and up to which frame the file
+# holds the run. Each case: a name, then the deck and its options.
+abandon() {
+    local name=$1 out=$tmp/abandon-$1.h5
+    shift
+    bin/nbep run "$@" --quiet -n 3 --set run.dt=1000 -o "$out" \
+        --summary "$tmp/summary-abandon-$name.json" 2>"$tmp/stderr-abandon-$name" &
+    local pid=$! stopped=0 rc
+    for _ in $(seq 300); do [ -s "$out" ] && break; sleep 0.1; done
+    sleep 0.5
+    kill -TERM $pid
+    for _ in $(seq 200); do
+        if ! kill -0 $pid 2>/dev/null; then stopped=1; break; fi
+        sleep 0.1
+    done
+    [ $stopped = 1 ] || kill -KILL $pid
+    wait $pid
+    rc=$?
+    check "$name: SIGTERM during a step of minutes ends the run within 20 s" "[ $stopped = 1 ]"
+    check "$name: exit 143 (got $rc)" "[ $rc = 143 ]"
+    check "$name: one line, naming the step abandoned and the last frame" \
+        "[ \$(wc -l < '$tmp/stderr-abandon-$name') = 1 ] && grep -q 'terminated by SIGTERM during step 1, which is abandoned; the run ends after step 0, and its frames up to step 0 are in ' '$tmp/stderr-abandon-$name'"
+    check "$name: the summary says terminated after 0 of 3 steps, with no collision counted" \
+        "/usr/bin/python3 -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == \"terminated\" and s[\"steps\"] == 0 and s[\"steps_requested\"] == 3 and s[\"collisions\"] == 0))' '$tmp/summary-abandon-$name.json'"
+    check "$name: the file is readable, with frame 0 and no stats row" \
+        "bin/nbep info '$out' > '$tmp/info-abandon-$name' && grep -q '^frames: *1 (last: step 0' '$tmp/info-abandon-$name' && grep -Eq '^stats rows: +0\$' '$tmp/info-abandon-$name' && grep -Eq '^status: +terminated \\(SIGTERM\\): step 0 of 3\$' '$tmp/info-abandon-$name'"
+}
+abandon cells-1-thread inputs/hard-sphere-fluid.deck -t 1
+abandon cells-team inputs/hard-sphere-fluid.deck -t 2 --set 'spheres.[0].count=4000' \
+    --set 'box.max=[19.1122779605, 19.1122779605, 19.1122779605]'
+abandon all-pairs inputs/paper-box.deck -t 2 --set 'physics.gravity=[0.0, 0.0, 0.0]'
+abandon grid inputs/paper-box.deck -t 1 --set 'run.neighbors="grid"' \
+    --set 'physics.gravity=[0.0, 0.0, 0.0]'
 
 [ $fail = 0 ] && echo "signals: all passed"
 exit $fail

@@ -9,6 +9,8 @@
  * bit for bit (the places after the stopping one undone, the stopping one as the one thread left
  * it: not handled at a stall, handled but not committed at a failed walk). */
 #include <math.h>
+#include <signal.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 
 struct nbep_evloop_stall;
@@ -37,12 +39,21 @@ static double oom_from = INFINITY;
  * though the events there stood still. */
 static double stall_from = INFINITY;
 #define STALL_LOOK 64
+/* From this time on the run's stop signal is raised (SIGTERM), and the loop looks at it at
+ * every event (it looks every NBEP_EVLOOP_STOP_EVERY events, more than a step of these scenes
+ * holds): as though a job's time limit came then. */
+static double signal_from = INFINITY;
+static atomic_int test_signal;
 
 static void stall_hook(nbep_evloop_stall *st, double t)
 {
     st->events = STALL_LOOK;
     if (t >= stall_from)
         st->dt = INFINITY;
+    if (t >= signal_from) {
+        atomic_store_explicit(&test_signal, SIGTERM, memory_order_relaxed);
+        st->looks = NBEP_EVLOOP_STOP_EVERY - 1;
+    }
 }
 
 /* An elastic periodic fluid at phi = 0.45 (the team handles most of its events ahead, undoing
@@ -98,9 +109,77 @@ static void test_the_team_stops_at_a_failed_walk_as_one_thread_does(void **state
     team_stops_as_one_thread(&oom_from, NBEP_ENOMEM, "no memory for the neighbour lists");
 }
 
+/* sc run on nt threads with test_signal as its stop signal (lowered first): its status, its
+ * summary, whether a step was abandoned, and its final state in *fin; the step of its last frame
+ * must be frame_step. */
+static nbep_status run_signalled(const nbep_scene *sc, int nt, nbep_summary *sum, bool *abandoned,
+                                 nbep_state *fin, uint64_t frame_step)
+{
+    atomic_store_explicit(&test_signal, 0, memory_order_relaxed);
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_sim_options opt = {.threads = nt, .stop_signal = &test_signal};
+    nbep_sim *sim = NULL;
+    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
+    const nbep_status st = nbep_sim_run(sim, &d);
+    assert_int_equal(d.n_errors, 0); /* a signal's line is nbep_run's to write */
+    nbep_sim_summary(sim, sum);
+    uint64_t last;
+    *abandoned = nbep_sim_abandoned(sim, &last);
+    assert_int_equal(last, frame_step);
+    assert_int_equal(nbep_state_copy(fin, nbep_sim_state(sim), &d), NBEP_OK);
+    nbep_sim_destroy(&sim);
+    nbep_diag_fini(&d);
+    return st;
+}
+
+/* A signal in the middle of a step's events (a job's time limit during a step far too long to
+ * wait for): the loop abandons the step at the event where it looks (README, Faults), and the
+ * run ends after the step before, as a run of that many steps ends (its collisions, checks and
+ * predictions, none of the abandoned step's; its last frame the one before the signal), on one thread and in the team, where the events
+ * handled ahead are undone and the state is the one thread's bit for bit. */
+static void test_a_signal_abandons_the_step_on_any_thread_count(void **state)
+{
+    (void)state;
+    nbep_scene *sc = nbep_test_periodic_fluid(nbep_test_scaled(12, 10), 0.45, 6, 0.03, 7);
+    sc->output_every = 2; /* frames at steps 0, 2, 4, 6: the last before the signal, 2 */
+    setenv("NBEP_TEAM", "always", 1);
+    nbep_summary two, ref, sum;
+    bool abandoned;
+    nbep_state fin1, fin;
+    sc->steps = 2; /* the run that ends where the signalled one must */
+    assert_int_equal(run_signalled(sc, 1, &two, &abandoned, &fin, 2), NBEP_OK);
+    assert_false(abandoned);
+    nbep_state_fini(&fin);
+    sc->steps = 6;
+    signal_from = 0.075; /* in the third step */
+    assert_int_equal(run_signalled(sc, 1, &ref, &abandoned, &fin1, 2), NBEP_ESIGTERM);
+    assert_true(abandoned);
+    assert_int_equal(ref.steps, 2);
+    assert_int_equal(ref.collisions, two.collisions);
+    assert_int_equal(ref.checks, two.checks);
+    assert_int_equal(ref.predictions, two.predictions);
+    assert_true(two.collisions > 0);
+    for (int nt = 2; nt <= 4; nt++) {
+        assert_int_equal(run_signalled(sc, nt, &sum, &abandoned, &fin, 2), NBEP_ESIGTERM);
+        assert_true(abandoned);
+        assert_int_equal(sum.steps, 2);
+        assert_int_equal(sum.collisions, two.collisions);
+        assert_int_equal(sum.checks, two.checks);
+        assert_memory_equal(fin.pos, fin1.pos, fin1.n * sizeof *fin1.pos);
+        assert_memory_equal(fin.vel, fin1.vel, fin1.n * sizeof *fin1.vel);
+        nbep_state_fini(&fin);
+    }
+    signal_from = INFINITY;
+    unsetenv("NBEP_TEAM");
+    nbep_state_fini(&fin1);
+    nbep_test_scene_free(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_a_signal_abandons_the_step_on_any_thread_count),
         cmocka_unit_test(test_the_team_stops_at_a_stall_as_one_thread_does),
         cmocka_unit_test(test_the_team_stops_at_a_failed_walk_as_one_thread_does),
     };

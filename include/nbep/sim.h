@@ -50,9 +50,15 @@ void nbep_sim_destroy(nbep_sim **sim);
 
 /* Simulates sc->steps steps (frames and stats as the scene asks). Returns NBEP_OK, the I/O
  * status of a failing write, NBEP_ENUMERIC when a non-finite value appears, or
- * NBEP_ESIGINT/NBEP_ESIGTERM when *stop_signal was raised (the current step is finished and its
- * frame written first). */
+ * NBEP_ESIGINT/NBEP_ESIGTERM when *stop_signal was raised: the current step is finished and its
+ * frame written first, unless the signal came while the step's events ran in a loop that looks
+ * at it (the predictive algorithm's: every 65536 events in cells mode, 1024 rounds in the
+ * others), which abandons the step (nbep_sim_abandoned). */
 NBEP_MUST_CHECK nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d);
+/* After nbep_sim_run: whether a signal abandoned a step (the run ends after the step before,
+ * nbep_sim_summary's `steps`, with no frame for it unless one was due), and the step of the
+ * last frame written, or resumed from, in *frame_step. */
+bool nbep_sim_abandoned(const nbep_sim *sim, uint64_t *frame_step);
 
 /* The run's summary so far (valid after create; complete after run), but for `status`, left
  * unknown: how the run ended is the caller's to say (nbep_run: the simulation's status, then
