@@ -23,6 +23,7 @@
 #include <errno.h>
 #include <inttypes.h>
 #include <limits.h>
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
@@ -751,12 +752,14 @@ static void span_one(load *L, const config_setting_t *at, const char *what, nbep
     for (int k = 1; k < 3; k++)
         far = fabs(c[k]) > fabs(c[far]) ? k : far;
     const double m = fabs(c[far]);
+    /* the limit and the rounding it allows, from the constant (2^40: 2^-12 of a radius) */
+    const int span_log2 = ilogb(NBEP_DECK_SPAN_MAX), ulp_log2 = span_log2 - (DBL_MANT_DIG - 1);
     if (m > NBEP_DECK_SPAN_MAX * rmin)
         ERR(L, at,
-            "%s lies %.3g smallest radii (%g) from the origin, beyond 2^40 = 1.1e12 (a "
-            "coordinate of %g: positions there round by more than 2^-12 of a radius); move "
+            "%s lies %.3g smallest radii (%g) from the origin, beyond 2^%d = %.2g (a "
+            "coordinate of %g: positions there round by more than 2^%d of a radius); move "
             "the origin nearer the scene (README, The deck: units)",
-            what, m / rmin, rmin, c[far]);
+            what, m / rmin, rmin, span_log2, NBEP_DECK_SPAN_MAX, c[far], ulp_log2);
 }
 
 /* Every coordinate the deck gives within NBEP_DECK_SPAN_MAX of its smallest radius from the

@@ -457,14 +457,14 @@ static void test_coordinates_far_beyond_the_smallest_radius_are_errors(void **st
     LOAD_FAILS(f, NBEP_EDECK, deck);
     char e1[512], e2[512], e3[512];
     snprintf(e1, sizeof e1, "%s:1: box.max lies 2e+12 smallest radii (1) from the origin, beyond "
-             "2^40 = 1.1e12 (a coordinate of 2e+12: positions there round by more than 2^-12 of "
+             "2^40 = 1.1e+12 (a coordinate of 2e+12: positions there round by more than 2^-12 of "
              "a radius); move the origin nearer the scene (README, The deck: units)", deck);
     snprintf(e2, sizeof e2, "%s:2: planes.[0].point lies 1e+300 smallest radii (1) from the "
-             "origin, beyond 2^40 = 1.1e12 (a coordinate of -1e+300: positions there round by "
+             "origin, beyond 2^40 = 1.1e+12 (a coordinate of -1e+300: positions there round by "
              "more than 2^-12 of a radius); move the origin nearer the scene (README, The deck: "
              "units)", deck);
     snprintf(e3, sizeof e3, "%s:5: spheres.[1].region.min lies 3e+12 smallest radii (1) from the "
-             "origin, beyond 2^40 = 1.1e12 (a coordinate of -3e+12: positions there round by "
+             "origin, beyond 2^40 = 1.1e+12 (a coordinate of -3e+12: positions there round by "
              "more than 2^-12 of a radius); move the origin nearer the scene (README, The deck: "
              "units)", deck);
     ASSERT_DIAG(&f->d, e1, e2, e3);
