@@ -560,6 +560,7 @@ typedef struct plane {
     double offset;
     nbep_vec3 point;    /* as given, and its setting (check_span) */
     const config_setting_t *point_at;
+    const config_setting_t *group; /* its entry in `planes` (planes_placed_by) */
 } plane;
 
 /* Parses `planes` into *out (owned, *n of them). */
@@ -599,7 +600,7 @@ static void parse_planes(load *L, const config_setting_t *root, plane **out, siz
             continue;
         }
         normal = nbep_vec3_scale(u, 1.0 / nbep_vec3_norm(u));
-        p[k] = (plane){normal, nbep_vec3_dot(normal, point), point, point_at};
+        p[k] = (plane){normal, nbep_vec3_dot(normal, point), point, point_at, e};
     }
     *out = p;
     *n = len;
@@ -1095,6 +1096,32 @@ static void fill_planes(nbep_state *s, const nbep_scene *sc, const plane *p, siz
     }
 }
 
+/* What decides where each of the scene's n_all planes lies, in fill_planes's order (malloc'd,
+ * NULL without memory): a box wall's element of box.min or box.max along its axis, a deck
+ * plane's group (its point and normal), NULL where the deck has none (nbep__scene_check_overlaps
+ * blames an overlap with a plane that a --set moved on that --set). */
+static const config_setting_t **planes_placed_by(const config_setting_t *root,
+                                                 const nbep_scene *sc, const plane *p,
+                                                 size_t n_p, size_t n_all)
+{
+    const config_setting_t **at = calloc(n_all ? n_all : 1, sizeof *at);
+    if (!at)
+        return NULL;
+    size_t k = 0;
+    const config_setting_t *box = config_setting_get_member(root, "box");
+    const config_setting_t *lo = box ? config_setting_get_member(box, "min") : NULL;
+    const config_setting_t *hi = box ? config_setting_get_member(box, "max") : NULL;
+    for (int axis = 0; sc->has_box && axis < 3; axis++) {
+        if (sc->periodic[axis])
+            continue;
+        at[k++] = lo ? config_setting_get_elem(lo, (unsigned)axis) : NULL;
+        at[k++] = hi ? config_setting_get_elem(hi, (unsigned)axis) : NULL;
+    }
+    for (size_t j = 0; j < n_p && k < n_all; j++, k++)
+        at[k] = p[j].group;
+    return at;
+}
+
 /* ---- reading the deck ----------------------------------------------------------------------- */
 
 static nbep_status read_text(const char *path, char **out, nbep_diag *d)
@@ -1387,10 +1414,19 @@ static nbep_status load_deck(const char *deck_path, const char *deck_text,
             sc.state.period[k] = sc.has_box && sc.periodic[k] ? side[k] : 0.0;
         const size_t fill0 = d->n_errors;
         st = nbep__scene_place(&L.c, &sc.state, entries, n_entries, sc.seed);
+        const config_setting_t **plane_at = NULL;
+        if (st == NBEP_OK && d->n_errors == fill0) {
+            plane_at = planes_placed_by(root, &sc, planes, n_planes, n_all_planes);
+            st = plane_at ? NBEP_OK : NBEP_ENOMEM;
+            if (!plane_at)
+                nbep_diag_add(d, __FILE__, __LINE__, "nbep: out of memory while loading %s",
+                              deck_path);
+        }
         if (st == NBEP_OK && d->n_errors == fill0)
             st = nbep__scene_check_overlaps(&L.c, &sc.state, entries, n_entries,
                                             sc.has_box ? sc.periodic : NULL, sc.box_min,
-                                            sc.box_max);
+                                            sc.box_max, plane_at);
+        free(plane_at);
         if (st != NBEP_OK)
             goto done;
     }

@@ -149,12 +149,16 @@ NBEP_MUST_CHECK nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s,
  * the deck's line of the position or entry. box_periodic is NULL without a box, else the
  * box's periodic axes: the box's walls (two per other axis) come first and are named
  * "box x-min" ..., the rest "planes.[k]"; pairs that overlap across a periodic face of the box
- * [lo, hi] are found too (spheres as placed, whose centres are inside the box). O(n) expected
- * time. */
+ * [lo, hi] are found too (spheres as placed, whose centres are inside the box). An overlap
+ * with a plane is blamed on a --set that moved the plane, where one did and was typed before
+ * whatever placed the sphere: plane_at (s->n_planes, each may be NULL) holds what decides
+ * where each plane lies, a box wall's element of box.min or box.max, a deck plane's group
+ * (its point and normal). O(n) expected time. */
 NBEP_MUST_CHECK nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                                                        const nbep__scene_entry *e,
                                                        size_t n_entries,
                                                        const bool *box_periodic, nbep_vec3 lo,
-                                                       nbep_vec3 hi);
+                                                       nbep_vec3 hi,
+                                                       const config_setting_t *const *plane_at);
 
 #endif

@@ -524,6 +524,7 @@ typedef struct overlaps {
     const nbep__scene_entry *e;
     size_t n_entries;
     const blame *placed;  /* per entry: what placed its spheres (entry_blame) */
+    const blame *walls;   /* per plane: what moved it (plane_blame) */
     size_t i;             /* the sphere whose neighbours are visited */
     nbep_vec3 shift;      /* at its position plus this (a copy across periodic faces) */
     bool same_level;      /* they are in its level: only smaller ids count */
@@ -558,9 +559,21 @@ static size_t entry_of(const nbep__scene_entry *e, size_t n, size_t id)
 static const char *const placing[][2] = {{"position", NULL}, {"radius", NULL}, {"count", NULL},
                                           {"place", NULL},    {"region", "min"}, {"region", "max"}};
 
+/* *b becomes the override that made setting m (may be NULL; one of its elements too where
+ * `elements`, nbep__scene_origin) when one did and was typed before *b's: of several, the list
+ * ranks the message with the first typed. */
+static void blame_first(const nbep__scene_ctx *c, blame *b, const config_setting_t *m,
+                        bool elements)
+{
+    unsigned line;
+    const char *ov = m ? nbep__scene_origin(m, elements, &line) : NULL;
+    if (ov && nbep__scene_rank(c, ov, 0) < b->rank)
+        *b = (blame){ov, 0, nbep__scene_rank(c, ov, 0)};
+}
+
 /* What placed the spheres of entry g: the override of a member in `placing` (the one typed
- * first where several were: the list ranks the message with it), else the deck's line of its
- * position (a single sphere) or of the entry (a group). */
+ * first where several were), else the deck's line of its position (a single sphere) or of the
+ * entry (a group). */
 static blame entry_blame(const nbep__scene_ctx *c, const config_setting_t *g)
 {
     blame b = {NULL, 0, NBEP_DIAG_UNRANKED};
@@ -568,10 +581,7 @@ static blame entry_blame(const nbep__scene_ctx *c, const config_setting_t *g)
         const config_setting_t *m = config_setting_get_member(g, placing[k][0]);
         if (m && placing[k][1])
             m = config_setting_get_member(m, placing[k][1]);
-        unsigned line;
-        const char *ov = m ? nbep__scene_origin(m, true, &line) : NULL;
-        if (ov && nbep__scene_rank(c, ov, 0) < b.rank)
-            b = (blame){ov, 0, nbep__scene_rank(c, ov, 0)};
+        blame_first(c, &b, m, true);
     }
     if (b.label)
         return b;
@@ -582,19 +592,33 @@ static blame entry_blame(const nbep__scene_ctx *c, const config_setting_t *g)
     return b;
 }
 
-/* Sphere a overlaps `other` (sphere b, or SIZE_MAX for a plane) by `by`. A pair is blamed on
- * whichever of the two entries an override placed, the one typed first where both were (the
- * list ranks the message there), else on a's deck line (a, the later sphere, as before): the
- * change that made the overlap, not the deck line the user did not touch. */
-static void report(overlaps *o, size_t a, size_t b, const char *other, double by)
+/* What moved a plane (plane_at: a box wall's element of box.min or box.max, a deck plane's
+ * group): the override of it, or of the group's point or normal (the one typed first), else
+ * none (label NULL: an overlap with it stays its sphere's). */
+static blame plane_blame(const nbep__scene_ctx *c, const config_setting_t *at)
+{
+    blame b = {NULL, 0, NBEP_DIAG_UNRANKED};
+    if (at && config_setting_is_group(at)) {
+        blame_first(c, &b, config_setting_get_member(at, "point"), true);
+        blame_first(c, &b, config_setting_get_member(at, "normal"), true);
+    } else {
+        blame_first(c, &b, at, false);
+    }
+    return b;
+}
+
+/* Sphere a overlaps `other` (sphere b, or the plane `wall` when b is SIZE_MAX) by `by`. The
+ * overlap is blamed on whichever of the two an override placed or moved, the one typed first
+ * where both were (the list ranks the message there), else on a's deck line (a, the later
+ * sphere, as before): the change that made the overlap, not the deck line the user did not
+ * touch. */
+static void report(overlaps *o, size_t a, size_t b, size_t wall, const char *other, double by)
 {
     const uint64_t seq = o->found++;
     blame at = o->placed[entry_of(o->e, o->n_entries, a)];
-    if (b != SIZE_MAX) {
-        const blame bb = o->placed[entry_of(o->e, o->n_entries, b)];
-        if (bb.label && bb.rank < at.rank) /* a deck line's rank is past every option's */
-            at = bb;
-    }
+    const blame bb = b != SIZE_MAX ? o->placed[entry_of(o->e, o->n_entries, b)] : o->walls[wall];
+    if (bb.label && bb.rank < at.rank) /* a deck line's rank is past every option's */
+        at = bb;
     size_t k;
     if (o->n_kept < OVERLAP_REPORT_MAX)
         k = o->n_kept++;
@@ -646,7 +670,7 @@ static void check_pair(overlaps *o, size_t i, size_t j)
                  entry_of(o->e, o->n_entries, b), b,
                  nbep_vec3_equal(o->shift, (nbep_vec3){0.0, 0.0, 0.0}) ? ""
                                                                        : " across a periodic face");
-        report(o, a, b, other, by);
+        report(o, a, b, SIZE_MAX, other, by);
     }
 }
 
@@ -666,7 +690,7 @@ static const char *const box_names[6] = {"box x-min", "box x-max", "box y-min",
 nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                                        const nbep__scene_entry *e, size_t n_entries,
                                        const bool *box_periodic, nbep_vec3 box_lo,
-                                       nbep_vec3 box_hi)
+                                       nbep_vec3 box_hi, const config_setting_t *const *plane_at)
 {
     /* the box's walls in fill_planes's order: the two of each axis that is not periodic */
     const char *names[6];
@@ -676,12 +700,16 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
             names[n_box++] = box_names[2 * a];
             names[n_box++] = box_names[2 * a + 1];
         }
-    blame *placed = malloc((n_entries ? n_entries : 1) * sizeof *placed);
+    blame *placed = malloc((n_entries + s->n_planes + 1) * sizeof *placed);
     if (!placed)
         NBEP_FAIL(c->d, NBEP_ENOMEM, "nbep: no memory to check %zu spheres for overlaps", s->n);
+    blame *walls = placed + n_entries;
     for (size_t k = 0; k < n_entries; k++)
         placed[k] = entry_blame(c, e[k].setting);
-    overlaps o = {.c = c, .s = s, .e = e, .n_entries = n_entries, .placed = placed};
+    for (size_t p = 0; p < s->n_planes; p++)
+        walls[p] = plane_blame(c, plane_at[p]);
+    overlaps o = {.c = c, .s = s, .e = e, .n_entries = n_entries, .placed = placed,
+                  .walls = walls};
     const double blo[3] = {box_lo.x, box_lo.y, box_lo.z}, bhi[3] = {box_hi.x, box_hi.y, box_hi.z};
     for (size_t i = 0; i < s->n; i++)
         for (size_t p = 0; p < s->n_planes; p++) {
@@ -695,7 +723,7 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                     snprintf(name, sizeof name, "%s", names[p]);
                 else
                     snprintf(name, sizeof name, "planes.[%zu]", p - n_box);
-                report(&o, i, SIZE_MAX, name, by);
+                report(&o, i, SIZE_MAX, p, name, by);
             }
         }
 

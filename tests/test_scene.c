@@ -1229,6 +1229,57 @@ static void test_an_overlap_a_set_made_names_the_set(void **state)
     ASSERT_DIAG(&f->d, want);
 }
 
+/* An overlap with a box wall or a plane that a --set moved is blamed on that --set (until
+ * 2026-11-30 on the deck's line of the sphere, which the user had not touched): one element of
+ * box.max, the whole vector, the whole box, a plane's point or normal; a --set of another
+ * wall's element moves nothing here. Where the sphere was placed by a --set too, the first
+ * typed is named. The walls of an axis that is not periodic come first, in the box's order:
+ * with x periodic, the y wall is the first. */
+static void test_an_overlap_with_a_wall_a_set_moved_names_the_set(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *deck = write_deck("scene_overlap_wall.deck",
+                                  "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0];\n"
+                                  "       periodic = [true, false, false]; };\n"
+                                  "planes = ( { normal = [0.0, 0.0, 1.0]; point = [0.0, 0.0, 1.0]; } );\n"
+                                  "spheres = (\n"
+                                  "  { radius = 0.5; mass = 1.0; position = [5.0, 9.25, 5.0]; }\n"
+                                  ");\n",
+                                  buf, sizeof buf);
+    struct {
+        const char *set[2], *want;
+    } cases[] = {
+        {{"box.max.[1]=9.5"}, "--set box.max.[1]=9.5: spheres.[0] (sphere 0) overlaps box y-max by 0.25"},
+        {{"box.max=[10.0, 9.5, 10.0]"},
+         "--set box.max=[10.0, 9.5, 10.0]: spheres.[0] (sphere 0) overlaps box y-max by 0.25"},
+        {{"box={min=[0.0,0.0,0.0];max=[10.0,9.5,10.0];periodic=[true,false,false];}"},
+         "--set box={min=[0.0,0.0,0.0];max=[10.0,9.5,10.0];periodic=[true,false,false];}: "
+         "spheres.[0] (sphere 0) overlaps box y-max by 0.25"},
+        {{"planes.[0].point=[0.0,0.0,4.75]"},
+         "--set planes.[0].point=[0.0,0.0,4.75]: spheres.[0] (sphere 0) overlaps planes.[0] by 0.25"},
+        {{"planes.[0].normal=[0.0,0.0,-1.0]"},
+         "--set planes.[0].normal=[0.0,0.0,-1.0]: spheres.[0] (sphere 0) overlaps planes.[0] by 4.5"},
+        /* the position typed first, then the wall: the position; and the other way round */
+        {{"spheres.[0].position=[5.0,9.75,5.0]", "box.max.[1]=10.1"},
+         "--set spheres.[0].position=[5.0,9.75,5.0]: spheres.[0] (sphere 0) overlaps box y-max by 0.15"},
+        {{"box.max.[1]=10.1", "spheres.[0].position=[5.0,9.75,5.0]"},
+         "--set box.max.[1]=10.1: spheres.[0] (sphere 0) overlaps box y-max by 0.15"},
+        /* another wall's element, typed first, moved nothing the sphere meets */
+        {{"box.max.[2]=10.0", "spheres.[0].position=[5.0,9.75,5.0]"},
+         "--set spheres.[0].position=[5.0,9.75,5.0]: spheres.[0] (sphere 0) overlaps box y-max by 0.25"},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof *cases; k++) {
+        nbep_diag_fini(&f->d);
+        nbep_diag_init(&f->d);
+        if (cases[k].set[1])
+            LOAD_FAILS(f, NBEP_EDECK, deck, cases[k].set[0], cases[k].set[1]);
+        else
+            LOAD_FAILS(f, NBEP_EDECK, deck, cases[k].set[0]);
+        ASSERT_DIAG(&f->d, cases[k].want);
+    }
+}
+
 /* An overlap that a --set of a group's count, place or region makes (a lattice spread over a
  * single sphere) names that --set (the first typed of several), not the deck's line of the
  * single sphere; with a --set that places nothing, the deck's own overlap keeps that line. */
@@ -1724,6 +1775,7 @@ int main(void)
         T(test_lattice_fill_that_cannot_fit_names_its_capacity),
         T(test_overlaps_with_spheres_and_planes_are_named),
         T(test_an_overlap_a_set_made_names_the_set),
+        T(test_an_overlap_with_a_wall_a_set_moved_names_the_set),
         T(test_an_overlap_a_set_of_a_group_made_names_the_set),
         T(test_overlap_names_entries_and_sphere_ids),
         T(test_many_overlaps_list_twenty_then_count_the_rest),
