@@ -20,6 +20,7 @@
 #include <float.h>
 #include <inttypes.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -306,6 +307,76 @@ static bool grid_near(const grid *g, nbep_vec3 p, double r, grid_visit visit, vo
 
 /* ---- placement ------------------------------------------------------------------------------ */
 
+/* What an overlap is blamed on: an override's label (nbep__scene_origin's), or else the deck's
+ * line; and the rank its message takes (nbep__scene_rank). */
+typedef struct blame {
+    const char *label;    /* borrowed: one of the load's labels, or NULL */
+    unsigned line;        /* where label is NULL: >= 1 */
+    uint64_t rank;
+} blame;
+
+/* The members of an entry that decide where its spheres go and how big they are: a --set of
+ * any of them (or a sweep axis, which is one) can make an overlap the deck alone did not have.
+ * A region's corners are asked one by one: a --set of one of their elements hooks only that
+ * element (nbep__scene_origin looks one level down). Velocity, speed, mass and acceleration
+ * move nothing at t0. */
+static const char *const placing[][2] = {{"position", NULL}, {"radius", NULL}, {"count", NULL},
+                                          {"place", NULL},    {"region", "min"}, {"region", "max"}};
+
+/* *b becomes the override that made setting m (may be NULL; one of its elements too where
+ * `elements`, nbep__scene_origin) when one did and was typed before *b's: of several, the list
+ * ranks the message with the first typed. */
+static void blame_first(const nbep__scene_ctx *c, blame *b, const config_setting_t *m,
+                        bool elements)
+{
+    unsigned line;
+    const char *ov = m ? nbep__scene_origin(m, elements, &line) : NULL;
+    if (ov && nbep__scene_rank(c, ov, 0) < b->rank)
+        *b = (blame){ov, 0, nbep__scene_rank(c, ov, 0)};
+}
+
+/* What placed the spheres of entry g: the override of a member in `placing` (the one typed
+ * first where several were), else the deck's line of its position (a single sphere) or of the
+ * entry (a group). */
+static blame entry_blame(const nbep__scene_ctx *c, const config_setting_t *g)
+{
+    blame b = {NULL, 0, NBEP_DIAG_UNRANKED};
+    for (size_t k = 0; k < sizeof placing / sizeof *placing; k++) {
+        const config_setting_t *m = config_setting_get_member(g, placing[k][0]);
+        if (m && placing[k][1])
+            m = config_setting_get_member(m, placing[k][1]);
+        blame_first(c, &b, m, true);
+    }
+    if (b.label)
+        return b;
+    const config_setting_t *pos = config_setting_get_member(g, "position");
+    (void)nbep__scene_origin(pos ? pos : g, false, &b.line);
+    b.line = b.line ? b.line : 1;
+    b.rank = nbep__scene_rank(c, NULL, b.line);
+    return b;
+}
+
+
+/* A group whose spheres cannot be placed: the message is blamed as an overlap is (entry_blame:
+ * the --set or sweep axis of what places them, the first typed), else put at the deck's line
+ * of its count. */
+static void fill_failed(nbep__scene_ctx *c, const nbep__scene_entry *e, const char *fmt, ...)
+    NBEP_PRINTF(3, 4);
+static void fill_failed(nbep__scene_ctx *c, const nbep__scene_entry *e, const char *fmt, ...)
+{
+    char msg[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    const blame b = entry_blame(c, e->setting);
+    if (b.label)
+        nbep__scene_error_from(c, b.label, 0, __FILE__, __LINE__, "%s", msg);
+    else
+        NBEP__SCENE_ERR(c, e->count_at, "%s", msg);
+}
+
+
 typedef struct probe {
     const nbep_state *s;
     nbep_vec3 p;
@@ -378,7 +449,7 @@ static bool place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep_
             placed = clear_of_planes(s, pr.p, r) && !grid_near(g, pr.p, r, probe_hits, &pr);
         }
         if (!placed) {
-            NBEP__SCENE_ERR(c, e->count_at,
+            fill_failed(c, e,
                             "spheres.[%zu]: could not place %" PRIu64
                             " spheres of radius %g in the region: placed %" PRIu64
                             " (packing fraction %.2f)",
@@ -449,7 +520,7 @@ static bool place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep
     double spacing = lattice_spacing(len, r, e->count);
     if (spacing == 0.0) {
         double most = lattice_capacity(len, 2.0 * r);
-        NBEP__SCENE_ERR(c, e->count_at,
+        fill_failed(c, e,
                         "spheres.[%zu]: could not place %" PRIu64
                         " spheres of radius %g in the region: a simple cubic lattice holds at "
                         "most %.0f (packing fraction %.2f)",
@@ -501,14 +572,6 @@ nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s, const nbep__sce
 
 /* ---- the overlap check ---------------------------------------------------------------------- */
 
-/* What an overlap is blamed on: an override's label (nbep__scene_origin's), or else the deck's
- * line; and the rank its message takes (nbep__scene_rank). */
-typedef struct blame {
-    const char *label;    /* borrowed: one of the load's labels, or NULL */
-    unsigned line;        /* where label is NULL: >= 1 */
-    uint64_t rank;
-} blame;
-
 /* An overlap to be listed by name. */
 typedef struct listed {
     uint64_t seq;                   /* how many were found before it */
@@ -549,47 +612,6 @@ static size_t entry_of(const nbep__scene_entry *e, size_t n, size_t id)
             hi = mid;
     }
     return lo;
-}
-
-/* The members of an entry that decide where its spheres go and how big they are: a --set of
- * any of them (or a sweep axis, which is one) can make an overlap the deck alone did not have.
- * A region's corners are asked one by one: a --set of one of their elements hooks only that
- * element (nbep__scene_origin looks one level down). Velocity, speed, mass and acceleration
- * move nothing at t0. */
-static const char *const placing[][2] = {{"position", NULL}, {"radius", NULL}, {"count", NULL},
-                                          {"place", NULL},    {"region", "min"}, {"region", "max"}};
-
-/* *b becomes the override that made setting m (may be NULL; one of its elements too where
- * `elements`, nbep__scene_origin) when one did and was typed before *b's: of several, the list
- * ranks the message with the first typed. */
-static void blame_first(const nbep__scene_ctx *c, blame *b, const config_setting_t *m,
-                        bool elements)
-{
-    unsigned line;
-    const char *ov = m ? nbep__scene_origin(m, elements, &line) : NULL;
-    if (ov && nbep__scene_rank(c, ov, 0) < b->rank)
-        *b = (blame){ov, 0, nbep__scene_rank(c, ov, 0)};
-}
-
-/* What placed the spheres of entry g: the override of a member in `placing` (the one typed
- * first where several were), else the deck's line of its position (a single sphere) or of the
- * entry (a group). */
-static blame entry_blame(const nbep__scene_ctx *c, const config_setting_t *g)
-{
-    blame b = {NULL, 0, NBEP_DIAG_UNRANKED};
-    for (size_t k = 0; k < sizeof placing / sizeof *placing; k++) {
-        const config_setting_t *m = config_setting_get_member(g, placing[k][0]);
-        if (m && placing[k][1])
-            m = config_setting_get_member(m, placing[k][1]);
-        blame_first(c, &b, m, true);
-    }
-    if (b.label)
-        return b;
-    const config_setting_t *pos = config_setting_get_member(g, "position");
-    (void)nbep__scene_origin(pos ? pos : g, false, &b.line);
-    b.line = b.line ? b.line : 1;
-    b.rank = nbep__scene_rank(c, NULL, b.line);
-    return b;
 }
 
 /* What moved a plane (plane_at: a box wall's element of box.min or box.max, a deck plane's

@@ -137,15 +137,14 @@ static bool parse_steps(const char *text, uint64_t *steps)
     return true;
 }
 
-/* nbep_sweep_plan_create, with what was typed for each override (nbep_scene_load_from). */
-static nbep_status plan_create(const char *deck_path, const char *const *overrides,
-                               const char *const *origins, size_t n_overrides,
-                               nbep_sweep_plan *out, nbep_diag *d)
+/* The plan of scene *scene, loaded from deck_path with the overrides (what was typed for each
+ * in origins, may be NULL: nbep_scene_load_from): its axes and deck text move into it (the
+ * scene keeps the rest, the caller's to release). */
+static nbep_status plan_of_scene(const char *deck_path, const char *const *overrides,
+                                 const char *const *origins, size_t n_overrides,
+                                 nbep_scene *scene, nbep_sweep_plan *out, nbep_diag *d)
 {
-    nbep_scene sc;
-    nbep_status st = nbep_scene_load_from(deck_path, overrides, origins, n_overrides, &sc, d);
-    if (st != NBEP_OK)
-        return st;
+    nbep_scene sc = *scene;
     nbep_sweep_plan p = {0};
     bool oom = !(p.deck_path = strdup(deck_path)) || !(p.dir = sweep_dir_of(sc.output_file)) ||
                !(p.base = calloc(n_overrides ? n_overrides : 1, sizeof *p.base)) ||
@@ -156,16 +155,15 @@ static nbep_status plan_create(const char *deck_path, const char *const *overrid
               (origins && origins[k] && !(p.base_origins[k] = strdup(origins[k])));
     if (oom) {
         nbep_sweep_plan_fini(&p);
-        nbep_scene_fini(&sc);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory planning the sweep of %s", deck_path);
     }
     /* The scene's axes and deck text move into the plan. */
     p.deck_text = sc.deck_text;
-    sc.deck_text = NULL;
+    scene->deck_text = NULL;
     p.axes = sc.sweep_axes;
     p.n_axes = sc.sweep_n_axes;
-    sc.sweep_axes = NULL;
-    sc.sweep_n_axes = 0;
+    scene->sweep_axes = NULL;
+    scene->sweep_n_axes = 0;
     /* an axis value a run rejects is named as the deck's axis, not as a --set nobody typed */
     for (size_t k = 0; !oom && k < p.n_axes; k++) {
         const size_t len = strlen(deck_path) + 48;
@@ -177,14 +175,12 @@ static nbep_status plan_create(const char *deck_path, const char *const *overrid
         p.base_origins[p.n_base + k] = label;
     }
     if (oom) {
-        nbep_sweep_plan_fini(&p);
-        nbep_scene_fini(&sc);
+        nbep_sweep_plan_fini(&p); /* (the axes and deck text with it) */
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory planning the sweep of %s", deck_path);
     }
     p.replicas = sc.sweep_replicas;
     p.seed = sc.seed;
     p.steps = sc.steps;
-    nbep_scene_fini(&sc);
 
     /* at most NBEP_SWEEP_RUNS_MAX runs: the deck check refused more */
     p.n_combos = 1;
@@ -193,6 +189,20 @@ static nbep_status plan_create(const char *deck_path, const char *const *overrid
     p.n_runs = (size_t)p.replicas * p.n_combos;
     *out = p;
     return NBEP_OK;
+}
+
+/* nbep_sweep_plan_create, with what was typed for each override (nbep_scene_load_from). */
+static nbep_status plan_create(const char *deck_path, const char *const *overrides,
+                               const char *const *origins, size_t n_overrides,
+                               nbep_sweep_plan *out, nbep_diag *d)
+{
+    nbep_scene sc;
+    nbep_status st = nbep_scene_load_from(deck_path, overrides, origins, n_overrides, &sc, d);
+    if (st != NBEP_OK)
+        return st;
+    st = plan_of_scene(deck_path, overrides, origins, n_overrides, &sc, out, d);
+    nbep_scene_fini(&sc);
+    return st;
 }
 
 nbep_status nbep_sweep_plan_create(const char *deck_path, const char *const *overrides,
@@ -316,6 +326,65 @@ static void describe_run(const nbep_sweep_plan *p, size_t run, char *buf, size_t
     }
     if (used < len)
         snprintf(buf + used, len - used, "seed=%" PRIu64, nbep_sweep_run_seed(p, run));
+}
+
+/* ---- checking a study's runs before it runs (nbep check) --------------------------------- */
+
+nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides,
+                             const char *const *origins, size_t n_overrides, nbep_scene *sc,
+                             double budget_s, nbep_sweep_check_report *rep, nbep_diag *d)
+{
+    memset(rep, 0, sizeof *rep);
+    nbep_sweep_plan p;
+    nbep_status st = plan_of_scene(deck_path, overrides, origins, n_overrides, sc, &p, d);
+    if (st != NBEP_OK)
+        return st;
+    rep->n_runs = p.n_runs;
+    rep->n_combos = p.n_combos;
+    rep->replicas = p.replicas;
+    snprintf(rep->dir, sizeof rep->dir, "%s", p.dir);
+    const double t0 = nbep_now();
+    for (size_t run = 0; st == NBEP_OK && run < p.n_runs; run++) {
+        if (run > 0 && !(nbep_now() - t0 < budget_s)) {
+            rep->out_of_time = true;
+            break;
+        }
+        char **ov = NULL;
+        size_t n_ov = 0;
+        st = nbep_sweep_run_overrides(&p, run, &ov, &n_ov, d);
+        if (st != NBEP_OK)
+            break;
+        /* as the run loads it (nbep_run, sweep_run) */
+        nbep_diag dr;
+        nbep_diag_init(&dr);
+        nbep_scene rs;
+        const nbep_status rst = nbep_scene_load_run(p.deck_path, (const char *const *)ov,
+                                                     (const char *const *)p.base_origins, n_ov,
+                                                     &rs, &dr);
+        rep->checked++;
+        if (rst == NBEP_OK) {
+            rep->output_bytes += nbep_output_bytes(&rs, nbep_sim_keeps_events(&rs));
+            rep->memory_max = fmax(rep->memory_max, (double)nbep_sim_memory_estimate(
+                                                        &rs, nbep_sim_resolve_threads(rs.threads)));
+            nbep_scene_fini(&rs);
+        } else if (rst == NBEP_ENOMEM) {
+            st = rst;
+            nbep_diag_add(d, __FILE__, __LINE__, "nbep: out of memory checking sweep run %zu",
+                          run);
+        } else if (rep->failed++ < NBEP_SWEEP_CHECK_LISTED) {
+            char what[256];
+            describe_run(&p, run, what, sizeof what);
+            nbep_diag_add(d, __FILE__, __LINE__, "nbep: sweep run %zu (%s) cannot run: %s", run,
+                          what, dr.n_errors ? dr.msg[0] : "its deck is refused");
+        }
+        nbep_diag_fini(&dr);
+        nbep_sweep_overrides_free(ov, n_ov);
+    }
+    if (st == NBEP_OK && rep->failed > NBEP_SWEEP_CHECK_LISTED)
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %zu more sweep runs cannot run",
+                      rep->failed - NBEP_SWEEP_CHECK_LISTED);
+    nbep_sweep_plan_fini(&p);
+    return st != NBEP_OK ? st : rep->failed ? NBEP_EDECK : NBEP_OK;
 }
 
 /* ---- reusing finished runs --------------------------------------------------------------- */

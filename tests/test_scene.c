@@ -1131,6 +1131,41 @@ static void test_lattice_fill_that_cannot_fit_names_its_capacity(void **state)
                             "at most 1000 (packing fraction 0.52)");
 }
 
+/* A group that a --set keeps from being placed (its radius, its count, its region) names that
+ * --set, the first typed of them, as an overlap does (until 2026-11-30 the deck's line of the
+ * count, which the user had not touched); one that the deck alone keeps out stays at its count's
+ * line (test_lattice_fill_that_cannot_fit_names_its_capacity). */
+static void test_a_group_a_set_keeps_from_fitting_names_the_set(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *deck = write_deck("scene_fill_set.deck",
+                                  "box: { min = [0.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0]; };\n"
+                                  "spheres = (\n"
+                                  "  { count = 8; radius = 0.3; mass = 1.0; place = \"lattice\"; },\n"
+                                  "  { count = 4; radius = 0.1; mass = 1.0; place = \"random\";\n"
+                                  "    region = { min = [0.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0]; }; }\n"
+                                  ");\n",
+                                  buf, sizeof buf);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "run.steps=3", "spheres.[0].radius=0.6");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].radius=0.6: spheres.[0]: could not place 8 spheres of "
+                       "radius 0.6 in the region: a simple cubic lattice holds at most 1 (packing "
+                       "fraction 0.11)");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].count=9", "spheres.[0].radius=0.45");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].count=9: spheres.[0]: could not place 9 spheres of "
+                       "radius 0.45 in the region: a simple cubic lattice holds at most 8 "
+                       "(packing fraction 0.38)");
+    /* a random group's region, one corner's element */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[1].region.max.[0]=0.15");
+    assert_int_equal(f->d.n_errors, 1);
+    assert_non_null(strstr(f->d.msg[0], "--set spheres.[1].region.max.[0]=0.15: spheres.[1]: "
+                                        "could not place 4 spheres of radius 0.1 in the region"));
+}
+
 static void test_overlaps_with_spheres_and_planes_are_named(void **state)
 {
     fixture *f = *state;
@@ -1776,6 +1811,7 @@ int main(void)
         T(test_overlaps_with_spheres_and_planes_are_named),
         T(test_an_overlap_a_set_made_names_the_set),
         T(test_an_overlap_with_a_wall_a_set_moved_names_the_set),
+        T(test_a_group_a_set_keeps_from_fitting_names_the_set),
         T(test_an_overlap_a_set_of_a_group_made_names_the_set),
         T(test_overlap_names_entries_and_sphere_ids),
         T(test_many_overlaps_list_twenty_then_count_the_rest),

@@ -186,5 +186,56 @@ timeout 30 "$nbep" check "$tmp/s.deck" --set 'sweep.vary.[0].values=[0.5, 0.25]'
 rc=$?
 check "good values given by a --set pass nbep check (exit $rc)" "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ]"
 
+# ---- nbep check of a study loads every run's scene as nbep sweep will (2026-11-30) --------
+# a combination of two axes that each pass alone (a radius of 0.45 with 8 spheres, 27 spheres
+# of 0.3) cannot place 27 spheres of 0.45 on the lattice: refused before the job, exit 2, a line
+# for each such run (3 and 7: both replicas) naming it and its values, nothing on stdout. Until
+# then nbep check passed it and nbep sweep failed those runs after the others had run.
+cat >"$tmp/combo.deck" <<'EOF'
+run: { steps = 10; threads = 1; };
+box: { min = [0.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0]; };
+spheres = ( { count = 8; radius = 0.3; mass = 1.0; place = "lattice"; } );
+output: { file = "combo.h5"; every = 5; };
+sweep: {
+  replicas = 2;
+  vary = ( { key = "spheres.[0].radius"; values = [0.3, 0.45]; },
+           { key = "spheres.[0].count"; values = [8, 27]; } );
+};
+EOF
+timeout 60 "$nbep" check "$tmp/combo.deck" >"$tmp/stdout" 2>"$tmp/stderr"
+rc=$?
+check "a study with a combination that cannot be placed: nbep check exits 2 (got $rc), nothing on stdout" \
+    "[ $rc = 2 ] && [ ! -s '$tmp/stdout' ]"
+check "... one line for each run that cannot run, 3 and 7, naming its values and the error" \
+    "[ \$(wc -l < '$tmp/stderr') = 2 ] &&
+     grep -q '^nbep: sweep run 3 (spheres.\[0\].radius=0.45 spheres.\[0\].count=27 seed=1) cannot run: .*could not place 27 spheres of radius 0.45' '$tmp/stderr' &&
+     grep -q '^nbep: sweep run 7 (spheres.\[0\].radius=0.45 spheres.\[0\].count=27 seed=2) cannot run: ' '$tmp/stderr'"
+# more runs that cannot run than are listed: the first 10, then a count of the rest
+timeout 60 "$nbep" check "$tmp/combo.deck" --set sweep.replicas=12 >"$tmp/stdout" 2>"$tmp/stderr"
+rc=$?
+check "12 such runs: exit 2 (got $rc), 10 listed, then '2 more sweep runs cannot run'" \
+    "[ $rc = 2 ] && [ \$(grep -c 'cannot run: ' '$tmp/stderr') = 10 ] &&
+     [ \$(wc -l < '$tmp/stderr') = 11 ] && tail -1 '$tmp/stderr' | grep -qx 'nbep: 2 more sweep runs cannot run'"
+# a study whose runs all load: its runs, its folder, and its output in all, which is the sum
+# of what nbep check says of each run's own scene (the run's values as --set)
+timeout 60 "$nbep" check "$tmp/combo.deck" --set 'sweep.vary.[1].values=[1, 8]' >"$tmp/stdout" 2>"$tmp/stderr"
+rc=$?
+check "a study whose runs all load: exit 0 (got $rc), its 8 runs and folder named" \
+    "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] &&
+     grep -qx 'sweep:           8 runs (2 replicas x 4 combinations) into combo.sweep/' '$tmp/stdout' &&
+     grep -q '^sweep runs:      all 8 loaded and placed as nbep sweep will; the largest needs about' '$tmp/stdout'"
+total=0
+for r in 0.3 0.45; do
+    for c in 1 8; do
+        mb=$("$nbep" check "$tmp/combo.deck" --set "spheres.[0].radius=$r" --set "spheres.[0].count=$c" \
+                 --set 'sweep={replicas=1;}' |
+             sed -n 's/^output: .*about \([0-9.e+-]*\) MB$/\1/p')
+        total=$(awk -v t="$total" -v m="$mb" 'BEGIN { print t + 2 * m }') # 2 replicas
+    done
+done
+got=$(sed -n 's/^sweep output:    about \([0-9.e+-]*\) MB in all.*/\1/p' "$tmp/stdout")
+check "... its output in all ($got MB) is the sum of its runs' own ($total MB), to 3 digits" \
+    "awk -v a='$got' -v b='$total' 'BEGIN { exit !(a > 0 && (a - b) ^ 2 <= (0.006 * b) ^ 2) }'"
+
 [ $fail = 0 ] && echo "sweep_cli: all passed"
 exit $fail

@@ -166,6 +166,35 @@ NBEP_MUST_CHECK nbep_status nbep_sweep_write_summary(const nbep_sweep_plan *p,
                                                      int n_ranks, double wall_seconds,
                                                      nbep_diag *d);
 
+/* What `nbep check` found of a study's runs (nbep_sweep_check). */
+typedef struct nbep_sweep_check_report {
+    size_t n_runs, n_combos;
+    uint64_t replicas;
+    char dir[4096];               /* the sweep directory, as nbep sweep makes it */
+    size_t checked;               /* runs whose scene was loaded (first runs first) */
+    size_t failed;                /* of those, runs whose scene a deck error refused */
+    double output_bytes;          /* the output files of the checked runs that load, in all */
+    double memory_max;            /* the most memory one of them needs (nbep_sim_memory_estimate) */
+    bool out_of_time;             /* stopped after budget_s: the runs past `checked` unchecked */
+} nbep_sweep_check_report;
+
+/* The most runs' deck errors nbep_sweep_check lists (one line each); the rest are counted. */
+#define NBEP_SWEEP_CHECK_LISTED 10
+
+/* `nbep check` of a deck with a sweep group: sc is the deck's scene as nbep_scene_load_from
+ * loaded it from deck_path with the overrides (origins as there, may be NULL); its axes and
+ * deck text move out of it (the caller releases it). Loads every run's scene as `nbep sweep`
+ * would (its overrides, its spheres placed and checked for overlaps), in run order, until
+ * budget_s seconds have passed (at least one run): the axes' combinations and each replica's
+ * placement, which a check of each value alone does not see, fail here instead of in the job.
+ * A run refused is named in d, "nbep: sweep run K (KEY=VALUE ... seed=S) cannot run: " and its
+ * first error, the first NBEP_SWEEP_CHECK_LISTED of them, then how many more; the result is
+ * then NBEP_EDECK. NBEP_ENOMEM. */
+NBEP_MUST_CHECK nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides,
+                                             const char *const *origins, size_t n_overrides,
+                                             nbep_scene *sc, double budget_s,
+                                             nbep_sweep_check_report *rep, nbep_diag *d);
+
 /* `nbep sweep DECK [options]`: plans the sweep from cli (path, overrides, summary, quiet),
  * creates the sweep directory, runs every run (split over the ranks when started by an MPI
  * launcher: mpirun, or srun with PMI/PMIx; NBEP_MPI=0 in the environment forces a serial
