@@ -8,6 +8,24 @@ tmp=build/tests/tmp/signals
 rm -rf "$tmp" && mkdir -p "$tmp"
 fail=0
 check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+# term_within PID FILE DELAY TENTHS: once FILE is written (60 s at most), waits DELAY seconds,
+# sends SIGTERM to PID and waits up to TENTHS tenths of a second for it to end (then SIGKILL, so
+# that a run that ignores the signal fails the check instead of hanging): sets stopped (1 when
+# it ended in time) and rc (its exit status).
+term_within() {
+    local pid=$1 file=$2
+    for _ in $(seq 600); do [ -s "$file" ] && break; sleep 0.1; done
+    sleep "$3"
+    kill -TERM "$pid"
+    stopped=0
+    for _ in $(seq "$4"); do
+        if ! kill -0 "$pid" 2>/dev/null; then stopped=1; break; fi
+        sleep 0.1
+    done
+    [ $stopped = 1 ] || kill -KILL "$pid"
+    wait "$pid"
+    rc=$?
+}
 
 for sig in TERM INT; do
     want=$([ $sig = TERM ] && echo 143 || echo 130)
@@ -94,18 +112,7 @@ out=$tmp/setup.h5
 bin/nbep run inputs/paper-box.deck --quiet -t 1 --set spheres.[0].count=65536 \
     --set 'output.fields=["position"]' -o "$out" --summary "$tmp/summary-setup.json" \
     2>"$tmp/stderr-setup" &
-pid=$!
-for _ in $(seq 600); do [ -s "$out" ] && break; sleep 0.1; done
-sleep 1
-kill -TERM $pid
-stopped=0
-for _ in $(seq 600); do
-    if ! kill -0 $pid 2>/dev/null; then stopped=1; break; fi
-    sleep 0.1
-done
-[ $stopped = 1 ] || kill -KILL $pid
-wait $pid
-rc=$?
+term_within $! "$out" 1 600
 check "SIGTERM during the initial predictions stops the run within 60 s" "[ $stopped = 1 ]"
 check "and exits 143 (got $rc)" "[ $rc = 143 ]"
 check "after step 0, in one line" \
@@ -128,17 +135,7 @@ abandon() {
     shift
     bin/nbep run "$@" --quiet -n 3 --set run.dt=1000 -o "$out" \
         --summary "$tmp/summary-abandon-$name.json" 2>"$tmp/stderr-abandon-$name" &
-    local pid=$! stopped=0 rc
-    for _ in $(seq 300); do [ -s "$out" ] && break; sleep 0.1; done
-    sleep 0.5
-    kill -TERM $pid
-    for _ in $(seq 200); do
-        if ! kill -0 $pid 2>/dev/null; then stopped=1; break; fi
-        sleep 0.1
-    done
-    [ $stopped = 1 ] || kill -KILL $pid
-    wait $pid
-    rc=$?
+    term_within $! "$out" 0.5 200
     check "$name: SIGTERM during a step of minutes ends the run within 20 s" "[ $stopped = 1 ]"
     check "$name: exit 143 (got $rc)" "[ $rc = 143 ]"
     check "$name: one line, naming the step abandoned and the last frame" \
