@@ -205,6 +205,16 @@ MUTANTS = [
     ("periodic-near-shift-one-side", "include/nbep/periodic.h",
      "d.y > pb->half[1] ? -pb->len[1] : d.y < -pb->half[1] ? pb->len[1] : 0.0,",
      "d.y > pb->half[1] ? -pb->len[1] : 0.0,", ["test_periodic"] + CELLS + LISTS, None),
+    # random placement in a periodic box (scene_place.c): a region past a face wraps its places
+    # into the box, so a random sphere keeps clear by the nearest image, looked up wrapped and
+    # across the faces it is near
+    ("place-periodic-plain-distance", "src/scene_place.c",
+     "    if (q->pb)\n        d = nbep_periodic_image(q->pb, d);\n", "", ["test_scene"], None),
+    ("place-periodic-no-copies", "src/scene_place.c", "    for (int m = 0; m < 8; m++) {\n        if (((m & 1) && near[0] == 0.0)",
+     "    for (int m = 0; m < 1; m++) {\n        if (((m & 1) && near[0] == 0.0)", ["test_scene"], None),
+    ("place-periodic-cells-unwrapped", "src/scene_place.c",
+     "    if (g->pb) {\n        int32_t image[3] = {0, 0, 0};\n        nbep_periodic_wrap(g->pb, &p, image);\n    }\n",
+     "", ["test_scene"], None),
     # ---- grid reach ----
     ("grid-no-partner-travel", "src/pred_find.c", "0.5 * nbep_vec3_norm(ai) * H * H + V * H + 0.5 * c->amax * H * H;",
      "0.5 * nbep_vec3_norm(ai) * H * H + 0.5 * c->amax * H * H;", SIM, None),

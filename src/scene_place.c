@@ -15,6 +15,7 @@
  * another sphere drew, and the placement is the same for a seed whatever else changes. */
 #include "scene_impl.h"
 
+#include "nbep/periodic.h"
 #include "nbep/physics.h"
 
 #include <float.h>
@@ -99,6 +100,8 @@ typedef struct level {
 
 typedef struct grid {
     const nbep_state *s;   /* borrowed: positions and radii of inserted spheres */
+    const nbep_periodic *pb; /* borrowed, or NULL: a sphere's cell is that of its position
+                              * wrapped into the box along these periodic axes (placement) */
     nbep_vec3 origin;      /* cell coordinates count from here */
     double r_min;
     level lv[LEVELS_MAX];
@@ -212,6 +215,10 @@ static bool grid_insert(grid *g, size_t id)
 {
     level *L = &g->lv[level_of(g, g->s->radius[id])];
     nbep_vec3 p = g->s->pos[id];
+    if (g->pb) {
+        int32_t image[3] = {0, 0, 0};
+        nbep_periodic_wrap(g->pb, &p, image);
+    }
     const uint32_t c[3] = {cell_coord(p.x, g->origin.x, L->inv_h),
                            cell_coord(p.y, g->origin.y, L->inv_h),
                            cell_coord(p.z, g->origin.z, L->inv_h)};
@@ -379,6 +386,7 @@ static void fill_failed(nbep__scene_ctx *c, const nbep__scene_entry *e, const ch
 
 typedef struct probe {
     const nbep_state *s;
+    const nbep_periodic *pb; /* NULL, or the periodic axes: distances by the nearest image */
     nbep_vec3 p;
     double r;
 } probe;
@@ -388,7 +396,42 @@ static bool probe_hits(void *arg, size_t id)
 {
     const probe *q = arg;
     double sigma = q->r + q->s->radius[id];
-    return nbep_vec3_norm2(nbep_vec3_sub(q->s->pos[id], q->p)) < sigma * sigma;
+    nbep_vec3 d = nbep_vec3_sub(q->s->pos[id], q->p);
+    if (q->pb)
+        d = nbep_periodic_image(q->pb, d);
+    return nbep_vec3_norm2(d) < sigma * sigma;
+}
+
+/* Whether the probe sphere overlaps one in the grid. Along periodic axes (q->pb, the grid's
+ * too) its position is wrapped into the box and looked up there and, near a face, across it
+ * (within reach, the largest contact distance; a periodic side exceeds twice the largest
+ * diameter, so one face per axis at most, alone and in combination: edges, corners), as the
+ * overlap check of the deck looks (nbep__scene_check_overlaps). */
+static bool probe_near(const grid *g, probe *q, double reach)
+{
+    if (!q->pb)
+        return grid_near(g, q->p, q->r, probe_hits, q);
+    nbep_vec3 w = q->p;
+    int32_t image[3] = {0, 0, 0};
+    nbep_periodic_wrap(q->pb, &w, image);
+    const double x[3] = {w.x, w.y, w.z};
+    double near[3] = {0.0, 0.0, 0.0};
+    for (int a = 0; a < 3; a++) {
+        if (q->pb->axis[a] && x[a] - q->pb->lo[a] < reach)
+            near[a] = q->pb->len[a];
+        else if (q->pb->axis[a] && q->pb->lo[a] + q->pb->len[a] - x[a] < reach)
+            near[a] = -q->pb->len[a];
+    }
+    for (int m = 0; m < 8; m++) {
+        if (((m & 1) && near[0] == 0.0) || ((m & 2) && near[1] == 0.0) ||
+            ((m & 4) && near[2] == 0.0))
+            continue;
+        const nbep_vec3 shift = nbep_vec3_make(m & 1 ? near[0] : 0.0, m & 2 ? near[1] : 0.0,
+                                               m & 4 ? near[2] : 0.0);
+        if (grid_near(g, nbep_vec3_add(w, shift), q->r, probe_hits, q))
+            return true;
+    }
+    return false;
 }
 
 static bool clear_of_planes(const nbep_state *s, nbep_vec3 p, double r)
@@ -431,22 +474,26 @@ static void set_sphere(nbep_state *s, const nbep__scene_entry *e, size_t id, nbe
 }
 
 /* Uniform in the region shrunk by the radius, rejecting overlaps with every sphere placed so
- * far and with the planes. Returns false when out of memory. */
+ * far (by the nearest image along periodic axes, g->pb) and with the planes. Returns false
+ * when out of memory. */
 static bool place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep__scene_entry *e,
                          size_t k, uint64_t seed)
 {
     const double r = e->radius;
+    double reach = 0.0; /* r and the largest radius placed: the largest contact distance */
+    for (int l = 0; l < LEVELS_MAX; l++)
+        reach = fmax(reach, r + g->lv[l].rmax);
     const nbep_vec3 lo = nbep_vec3_make(e->lo.x + r, e->lo.y + r, e->lo.z + r);
     const nbep_vec3 hi = nbep_vec3_make(e->hi.x - r, e->hi.y - r, e->hi.z - r);
     const bool room = lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z;
     for (uint64_t q = 0; q < e->count; q++) {
-        probe pr = {s, {0.0, 0.0, 0.0}, r};
+        probe pr = {s, g->pb, {0.0, 0.0, 0.0}, r};
         bool placed = false;
         for (uint64_t a = 0; room && !placed && a < RANDOM_ATTEMPTS; a++) {
             pr.p.x = lo.x + uniform(seed, k, q, PURPOSE_X, a) * (hi.x - lo.x);
             pr.p.y = lo.y + uniform(seed, k, q, PURPOSE_Y, a) * (hi.y - lo.y);
             pr.p.z = lo.z + uniform(seed, k, q, PURPOSE_Z, a) * (hi.z - lo.z);
-            placed = clear_of_planes(s, pr.p, r) && !grid_near(g, pr.p, r, probe_hits, &pr);
+            placed = clear_of_planes(s, pr.p, r) && !probe_near(g, &pr, reach);
         }
         if (!placed) {
             fill_failed(c, e,
@@ -544,13 +591,19 @@ static bool place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep
 }
 
 nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s, const nbep__scene_entry *e,
-                              size_t n_entries, uint64_t seed)
+                              size_t n_entries, uint64_t seed, const bool *box_periodic,
+                              nbep_vec3 box_lo, nbep_vec3 box_hi)
 {
     grid g;
     if (!grid_init(&g, s, e, n_entries)) {
         grid_fini(&g);
         NBEP_FAIL(c->d, NBEP_ENOMEM, "nbep: no memory to place %zu spheres", s->n);
     }
+    /* periodic axes: a group's places wrap into the box (README, The deck), so the random
+     * ones keep clear across the faces too (until 2026-11-30 they measured plain distances,
+     * and a region past a face gave overlaps the deck check then refused) */
+    const nbep_periodic pb = nbep_periodic_make(box_periodic, box_lo, box_hi);
+    g.pb = pb.any ? &pb : NULL;
     bool ok = true;
     /* Single spheres first, wherever they are in the deck, so that no group lands on one. */
     for (size_t k = 0; ok && k < n_entries; k++)

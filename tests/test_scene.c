@@ -1039,6 +1039,41 @@ static void test_random_spheres_lie_in_their_region_and_do_not_overlap(void **st
     }
 }
 
+/* SPEC: "random" is non-overlapping, and on a periodic axis region and placement work as
+ * before. A group whose region reaches past a periodic face has its places wrapped into the
+ * box (README, The deck), so they must keep clear of what lies across the face too: a single
+ * sphere straddling the face and a group filling the box. Until 2026-11-30 the placement
+ * measured plain distances, and such a deck was refused for overlaps "across a periodic face"
+ * that nbep had made itself. */
+static void test_random_spheres_keep_clear_across_periodic_faces(void **state)
+{
+    fixture *f = *state;
+    char path[256];
+    LOAD_OK(f, write_deck("scene_random_periodic.deck",
+                          "box: { min = [0.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0];\n"
+                          "  periodic = [true, false, true]; };\n"
+                          "spheres = ( { position = [0.05, 1.0, 1.0]; radius = 0.1; mass = 1.0; },\n"
+                          "  { count = 300; radius = 0.1; mass = 1.0; },\n"
+                          "  { count = 40; radius = 0.1; mass = 1.0;\n"
+                          "    region = { min = [1.6, 0.0, 1.6]; max = [2.4, 2.0, 2.4]; }; } );\n",
+                          path, sizeof path));
+    const nbep_state *s = &f->sc.state;
+    assert_int_equal(s->n, 341);
+    bool past_face = false;
+    for (size_t i = 0; i < s->n; i++) {
+        past_face = past_face || s->pos[i].x > 2.0 || s->pos[i].z > 2.0;
+        for (size_t j = 0; j < i; j++) {
+            nbep_vec3 d = nbep_vec3_sub(s->pos[i], s->pos[j]);
+            d.x -= 2.0 * round(d.x / 2.0); /* the nearest image along x and z */
+            d.z -= 2.0 * round(d.z / 2.0);
+            const double dist = nbep_vec3_norm(d);
+            if (!(dist >= 0.2 * (1.0 - 1e-15)))
+                fail_msg("spheres %zu and %zu overlap: nearest-image distance %.17g", i, j, dist);
+        }
+    }
+    assert_true(past_face); /* the last group's places were taken as drawn, past the face */
+}
+
 static void test_speed_gives_every_sphere_that_speed_in_all_directions(void **state)
 {
     fixture *f = *state;
@@ -1801,6 +1836,7 @@ int main(void)
         T(test_random_placement_differs_for_another_seed),
         T(test_random_sphere_does_not_depend_on_its_group_size),
         T(test_random_spheres_lie_in_their_region_and_do_not_overlap),
+        T(test_random_spheres_keep_clear_across_periodic_faces),
         T(test_speed_gives_every_sphere_that_speed_in_all_directions),
         T(test_group_acceleration_replaces_gravity),
         T(test_lattice_fills_x_fastest_at_the_largest_spacing),
