@@ -1295,6 +1295,12 @@ MUTANTS = [
      "    if (bb.label && bb.rank < at.rank) /* a deck line's rank is past every option's */",
      "    if (bb.label && !at.label) /* a deck line's rank is past every option's */",
      ["test_scene"], None),
+    # libconfig's @include, refused at its line and never read
+    ("include-accepted", "src/scene_text.c", "        } else if (ch == '@' && !label && is_include(text, i)) {",
+     "        } else if (0) {", ["test_scene"], None),
+    ("include-parsed-anyway", "src/scene.c",
+     "    if (n_include) /* refused, each at its line: libconfig must not read the file */\n        goto finish;",
+     "", ["test_scene"], None),
     # a group that cannot be placed: the --set (or axis) of what places it, typed first
     ("blame-fill-count-line", "src/scene_place.c",
      "    const blame b = entry_blame(c, e->setting);\n    if (b.label)",

@@ -1357,11 +1357,13 @@ static nbep_status load_deck(const char *deck_path, const char *deck_text,
     }
     sc.deck_path = dup_string(&L, deck_path);
     sc.overrides = join_overrides(&L, overrides, n_overrides);
-    size_t n_bad;
-    if (!(text = nbep__scene_widen(&L.c, deck_text, NULL, &n_bad))) {
+    size_t n_bad, n_include;
+    if (!(text = nbep__scene_widen(&L.c, deck_text, NULL, &n_bad, &n_include))) {
         L.c.oom = true;
         goto finish;
     }
+    if (n_include) /* refused, each at its line: libconfig must not read the file */
+        goto finish;
     if (!config_read_string(&cfg, text)) {
         /* libconfig 1.5's most common text is just "syntax error": not said twice. */
         const char *what = config_error_text(&cfg);

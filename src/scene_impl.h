@@ -71,8 +71,12 @@ void nbep__strbuf_fini(nbep__strbuf *b);
 /* Copy of libconfig text rewritten so that libconfig 1.5 reads what the user meant (see the
  * definition): the deck's text (label NULL) or an override's value (label, one of c->labels).
  * Integers beyond 64 bits are reported as "DECK:LINE: ..." or "LABEL: ..." and counted in
- * *n_bad. NULL when out of memory. */
-char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label, size_t *n_bad);
+ * *n_bad. In the deck's text, an `@include` directive (libconfig's: `@include "file"` at the
+ * start of a line) is refused, "DECK:LINE: @include is not supported ...", and counted in
+ * *n_bad and in *n_include (the deck must not be parsed: libconfig would read the file).
+ * NULL when out of memory. */
+char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label, size_t *n_bad,
+                        size_t *n_include);
 /* Appends the libconfig text of a value: 0.9, 8192, 5000000000L, "text", [0.0, 1.0], (...),
  * { a = 1; }. Floats keep a '.' or an exponent so that they read back as floats. */
 void nbep__scene_value_text(const config_setting_t *s, nbep__strbuf *b);

@@ -184,7 +184,8 @@ static const config_setting_t *parse_value(nbep__scene_ctx *c, const char *label
         nbep__strbuf b = {0};
         nbep__strbuf_add(&b, "v = %s;", value);
         size_t n_bad = 0;
-        char *text = b.oom ? NULL : nbep__scene_widen(c, nbep__strbuf_str(&b), label, &n_bad);
+        char *text =
+            b.oom ? NULL : nbep__scene_widen(c, nbep__strbuf_str(&b), label, &n_bad, NULL);
         nbep__strbuf_fini(&b);
         if (!text) {
             c->oom = true;

@@ -161,13 +161,27 @@ static int hex_digit(char ch)
     return tolower((unsigned char)ch) - 'a' + 10;
 }
 
-char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label, size_t *n_bad)
+/* Whether text[i] (an '@') starts libconfig's include directive: "@include" with only blanks
+ * before it on its line and a blank after it (its scanner's `^[ \t]*@include[ \t]+\"`). */
+static bool is_include(const char *text, size_t i)
+{
+    if (strncmp(text + i, "@include", 8) != 0 || (text[i + 8] != ' ' && text[i + 8] != '\t'))
+        return false;
+    while (i > 0 && (text[i - 1] == ' ' || text[i - 1] == '\t'))
+        i--;
+    return i == 0 || text[i - 1] == '\n';
+}
+
+char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label, size_t *n_bad,
+                        size_t *n_include)
 {
     widen w = {0};
     const size_t n = strlen(text);
     size_t i = 0, line = 1;
     bool in_array = false, array_float = false;
     *n_bad = 0;
+    if (n_include)
+        *n_include = 0;
 
     while (i < n) {
         char ch = text[i];
@@ -189,6 +203,19 @@ char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label,
                 line += text[i] == '\n';
             }
             i++;
+        } else if (ch == '@' && !label && is_include(text, i)) {
+            /* A run keeps its deck's text (SPEC: the root's `deck`, the full text) and names
+             * errors by its lines; an included file's text is in neither, and libconfig 1.5
+             * reads it without this rewrite (a seed of 4294967297 there became 1) */
+            (*n_bad)++;
+            if (n_include)
+                (*n_include)++;
+            nbep_diag_add_ranked(c->d, nbep__scene_rank(c, NULL, line), __FILE__, __LINE__,
+                                 "%s:%zu: @include is not supported: a run keeps its deck's "
+                                 "text and names errors by its lines; put the included settings "
+                                 "in the deck",
+                                 c->deck, line);
+            i += 8;
         } else if (is_name_start(ch)) {
             while (i < n && is_name_char(text[i]))
                 i++;

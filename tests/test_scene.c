@@ -1156,6 +1156,34 @@ static void test_random_fill_that_cannot_fit_names_its_packing_fraction(void **s
     assert_string_equal(msg, expected);
 }
 
+/* libconfig's @include is refused at its line (a run keeps its deck's text, SPEC's `deck`
+ * attribute, and names errors by its lines; the included file's text is in neither, and was read
+ * without nbep's rewrite for libconfig 1.5: a seed of 4294967297 there silently became 1), one
+ * line per directive, the file not read even where it exists; the word in a comment, in a string
+ * or after other text on its line is no directive. */
+static void test_include_is_refused_at_its_line(void **state)
+{
+    fixture *f = *state;
+    char inc[256], buf[256], text[1024];
+    write_deck("scene_include_part.cfg", "run: { seed = 4294967297; };\n", inc, sizeof inc);
+    snprintf(text, sizeof text,
+             "# @include \"nothing.cfg\" in a comment\n"
+             "spheres = ( { position = [0.0, 0.0, 0.0]; radius = 0.5; mass = 1.0; } );\n"
+             "  @include \"%s\"\n"
+             "output: { file = \"@include x.h5\"; };\n"
+             "@include \"missing.cfg\"\n",
+             inc);
+    const char *deck = write_deck("scene_include.deck", text, buf, sizeof buf);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    char want[2][512];
+    for (int k = 0; k < 2; k++)
+        snprintf(want[k], sizeof want[k],
+                 "%s:%d: @include is not supported: a run keeps its deck's text and names errors "
+                 "by its lines; put the included settings in the deck",
+                 deck, k == 0 ? 3 : 5);
+    ASSERT_DIAG(&f->d, want[0], want[1]);
+}
+
 static void test_lattice_fill_that_cannot_fit_names_its_capacity(void **state)
 {
     fixture *f = *state;
@@ -1844,6 +1872,7 @@ int main(void)
         T(test_touching_spheres_and_planes_are_legal),
         T(test_random_fill_that_cannot_fit_names_its_packing_fraction),
         T(test_lattice_fill_that_cannot_fit_names_its_capacity),
+        T(test_include_is_refused_at_its_line),
         T(test_overlaps_with_spheres_and_planes_are_named),
         T(test_an_overlap_a_set_made_names_the_set),
         T(test_an_overlap_with_a_wall_a_set_moved_names_the_set),
