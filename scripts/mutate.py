@@ -1272,18 +1272,23 @@ MUTANTS = [
      ["test_scene"], None),
     ("blame-wall-min-max-swapped", "src/scene.c",
      "        at[k++] = lo ? config_setting_get_elem(lo, (unsigned)axis) : NULL;\n"
+     "        at[k++] = walled;\n"
      "        at[k++] = hi ? config_setting_get_elem(hi, (unsigned)axis) : NULL;",
      "        at[k++] = hi ? config_setting_get_elem(hi, (unsigned)axis) : NULL;\n"
+     "        at[k++] = walled;\n"
      "        at[k++] = lo ? config_setting_get_elem(lo, (unsigned)axis) : NULL;",
      ["test_scene"], None),
     ("blame-wall-periodic-counted", "src/scene.c",
-     "    for (int axis = 0; sc->has_box && axis < 3; axis++) {\n        if (sc->periodic[axis])\n            continue;\n        at[k++]",
-     "    for (int axis = 0; sc->has_box && axis < 3; axis++) {\n        at[k++]", ["test_scene"], None),
+     "    for (int axis = 0; sc->has_box && axis < 3; axis++) {\n        if (sc->periodic[axis])\n            continue;\n",
+     "    for (int axis = 0; sc->has_box && axis < 3; axis++) {\n", ["test_scene"], None),
+    # a --set of box.periodic that walls an axis made its walls
+    ("blame-wall-periodic-unasked", "src/scene_place.c",
+     "        blame_first(c, &b, at[1], false);", "", ["test_scene"], None),
     ("blame-plane-normal-unasked", "src/scene_place.c",
-     "        blame_first(c, &b, config_setting_get_member(at, \"normal\"), true);", "", ["test_scene"],
+     "        blame_first(c, &b, config_setting_get_member(at[0], \"normal\"), true);", "", ["test_scene"],
      None),
     ("blame-plane-point-unasked", "src/scene_place.c",
-     "        blame_first(c, &b, config_setting_get_member(at, \"point\"), true);", "", ["test_scene"],
+     "        blame_first(c, &b, config_setting_get_member(at[0], \"point\"), true);", "", ["test_scene"],
      None),
     ("blame-overlap-entry-line", "src/scene_place.c",
      "    (void)nbep__scene_origin(pos ? pos : g, false, &b.line);",
