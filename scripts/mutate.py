@@ -778,6 +778,9 @@ MUTANTS = [
      "                if (look && atomic_load_explicit(&c->round_stop, memory_order_relaxed)) {",
      "                if (look && tid == 0 && atomic_load_explicit(&c->round_stop, memory_order_relaxed)) {",
      ["tests/test_signals.sh"], None),
+    ("stop-progress-left-open", "src/sim.c",
+     "    if (sim->abandoned)\n        progress(sim, sim->steps_done, true);", "",
+     ["tests/test_signals.sh"], None),
     ("stop-frame-last-unset", "src/sim.c", "    if (st == NBEP_OK)\n        sim->frame_last = step;",
      "    (void)0;", FAULTS, None),
     # ---- the ways a step's events run (pred_ways.c): the schedule for given costs ----

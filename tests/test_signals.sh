@@ -155,5 +155,25 @@ abandon all-pairs inputs/paper-box.deck -t 2 --set 'physics.gravity=[0.0, 0.0, 0
 abandon grid inputs/paper-box.deck -t 1 --set 'run.neighbors="grid"' \
     --set 'physics.gravity=[0.0, 0.0, 0.0]'
 
+# not --quiet: the progress ends with a line for the step the run ends after, as a stop at a
+# step's end ends it (until 2026-11-30 an abandoned step left it open: on a terminal the run's
+# last lines followed on the progress line)
+out=$tmp/abandon-progress.h5
+bin/nbep run inputs/hard-sphere-fluid.deck -t 1 -n 3 --set run.dt=1000 -o "$out" \
+    2>"$tmp/stderr-abandon-progress" &
+pid=$!
+for _ in $(seq 300); do [ -s "$out" ] && break; sleep 0.1; done
+sleep 0.5
+kill -TERM $pid
+for _ in $(seq 200); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
+kill -0 $pid 2>/dev/null && kill -KILL $pid
+wait $pid
+rc=$?
+check "a step abandoned, not --quiet: exit 143 (got $rc), the progress's last line for step 0 of 3, then the end lines" \
+    "[ $rc = 143 ] && [ \$(wc -l < '$tmp/stderr-abandon-progress') = 3 ] &&
+     sed -n 1p '$tmp/stderr-abandon-progress' | grep -q '^step 0/3 ' &&
+     sed -n 2p '$tmp/stderr-abandon-progress' | grep -q '^nbep: stopped after 0 steps' &&
+     sed -n 3p '$tmp/stderr-abandon-progress' | grep -q 'during step 1, which is abandoned'"
+
 [ $fail = 0 ] && echo "signals: all passed"
 exit $fail
