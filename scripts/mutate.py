@@ -788,6 +788,9 @@ MUTANTS = [
      "                if (look && atomic_load_explicit(&c->round_stop, memory_order_relaxed)) {",
      "                if (look && tid == 0 && atomic_load_explicit(&c->round_stop, memory_order_relaxed)) {",
      ["tests/test_signals.sh"], None),
+    ("stop-progress-left-open", "src/sim.c",
+     "    if (sim->abandoned)\n        progress(sim, sim->steps_done, true);", "",
+     ["tests/test_signals.sh"], None),
     ("stop-frame-last-unset", "src/sim.c", "    if (st == NBEP_OK)\n        sim->frame_last = step;",
      "    (void)0;", FAULTS, None),
     # ---- the ways a step's events run (pred_ways.c): the schedule for given costs ----
@@ -1312,18 +1315,23 @@ MUTANTS = [
      ["test_scene"], None),
     ("blame-wall-min-max-swapped", "src/scene.c",
      "        at[k++] = lo ? config_setting_get_elem(lo, (unsigned)axis) : NULL;\n"
+     "        at[k++] = walled;\n"
      "        at[k++] = hi ? config_setting_get_elem(hi, (unsigned)axis) : NULL;",
      "        at[k++] = hi ? config_setting_get_elem(hi, (unsigned)axis) : NULL;\n"
+     "        at[k++] = walled;\n"
      "        at[k++] = lo ? config_setting_get_elem(lo, (unsigned)axis) : NULL;",
      ["test_scene"], None),
     ("blame-wall-periodic-counted", "src/scene.c",
-     "    for (int axis = 0; sc->has_box && axis < 3; axis++) {\n        if (sc->periodic[axis])\n            continue;\n        at[k++]",
-     "    for (int axis = 0; sc->has_box && axis < 3; axis++) {\n        at[k++]", ["test_scene"], None),
+     "    for (int axis = 0; sc->has_box && axis < 3; axis++) {\n        if (sc->periodic[axis])\n            continue;\n",
+     "    for (int axis = 0; sc->has_box && axis < 3; axis++) {\n", ["test_scene"], None),
+    # a --set of box.periodic that walls an axis made its walls
+    ("blame-wall-periodic-unasked", "src/scene_place.c",
+     "        blame_first(c, &b, at[1], false);", "", ["test_scene"], None),
     ("blame-plane-normal-unasked", "src/scene_place.c",
-     "        blame_first(c, &b, config_setting_get_member(at, \"normal\"), true);", "", ["test_scene"],
+     "        blame_first(c, &b, config_setting_get_member(at[0], \"normal\"), true);", "", ["test_scene"],
      None),
     ("blame-plane-point-unasked", "src/scene_place.c",
-     "        blame_first(c, &b, config_setting_get_member(at, \"point\"), true);", "", ["test_scene"],
+     "        blame_first(c, &b, config_setting_get_member(at[0], \"point\"), true);", "", ["test_scene"],
      None),
     ("blame-overlap-entry-line", "src/scene_place.c",
      "    (void)nbep__scene_origin(pos ? pos : g, false, &b.line);",

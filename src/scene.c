@@ -1096,28 +1096,34 @@ static void fill_planes(nbep_state *s, const nbep_scene *sc, const plane *p, siz
     }
 }
 
-/* What decides where each of the scene's n_all planes lies, in fill_planes's order (malloc'd,
- * NULL without memory): a box wall's element of box.min or box.max along its axis, a deck
- * plane's group (its point and normal), NULL where the deck has none (nbep__scene_check_overlaps
- * blames an overlap with a plane that a --set moved on that --set). */
+/* What decides where each of the scene's n_all planes lies, two settings a plane in
+ * fill_planes's order (malloc'd, NULL without memory): a box wall's element of box.min or
+ * box.max along its axis and the element of box.periodic that walls the axis (a --set of it
+ * to false makes the wall); a deck plane's group (its point and normal) and NULL; NULL where
+ * the deck has none (nbep__scene_check_overlaps blames an overlap with a plane that a --set
+ * moved or made on that --set). */
 static const config_setting_t **planes_placed_by(const config_setting_t *root,
                                                  const nbep_scene *sc, const plane *p,
                                                  size_t n_p, size_t n_all)
 {
-    const config_setting_t **at = calloc(n_all ? n_all : 1, sizeof *at);
+    const config_setting_t **at = calloc(2 * (n_all ? n_all : 1), sizeof *at);
     if (!at)
         return NULL;
     size_t k = 0;
     const config_setting_t *box = config_setting_get_member(root, "box");
     const config_setting_t *lo = box ? config_setting_get_member(box, "min") : NULL;
     const config_setting_t *hi = box ? config_setting_get_member(box, "max") : NULL;
+    const config_setting_t *per = box ? config_setting_get_member(box, "periodic") : NULL;
     for (int axis = 0; sc->has_box && axis < 3; axis++) {
         if (sc->periodic[axis])
             continue;
+        const config_setting_t *walled = per ? config_setting_get_elem(per, (unsigned)axis) : NULL;
         at[k++] = lo ? config_setting_get_elem(lo, (unsigned)axis) : NULL;
+        at[k++] = walled;
         at[k++] = hi ? config_setting_get_elem(hi, (unsigned)axis) : NULL;
+        at[k++] = walled;
     }
-    for (size_t j = 0; j < n_p && k < n_all; j++, k++)
+    for (size_t j = 0; j < n_p && k < 2 * n_all; j++, k += 2)
         at[k] = p[j].group;
     return at;
 }

@@ -667,17 +667,19 @@ static size_t entry_of(const nbep__scene_entry *e, size_t n, size_t id)
     return lo;
 }
 
-/* What moved a plane (plane_at: a box wall's element of box.min or box.max, a deck plane's
- * group): the override of it, or of the group's point or normal (the one typed first), else
- * none (label NULL: an overlap with it stays its sphere's). */
-static blame plane_blame(const nbep__scene_ctx *c, const config_setting_t *at)
+/* What moved or made a plane (plane_at's two settings: a box wall's element of box.min or
+ * box.max and of box.periodic, a deck plane's group): the override of either, or of the
+ * group's point or normal (the one typed first), else none (label NULL: an overlap with it
+ * stays its sphere's). */
+static blame plane_blame(const nbep__scene_ctx *c, const config_setting_t *const *at)
 {
     blame b = {NULL, 0, NBEP_DIAG_UNRANKED};
-    if (at && config_setting_is_group(at)) {
-        blame_first(c, &b, config_setting_get_member(at, "point"), true);
-        blame_first(c, &b, config_setting_get_member(at, "normal"), true);
+    if (at[0] && config_setting_is_group(at[0])) {
+        blame_first(c, &b, config_setting_get_member(at[0], "point"), true);
+        blame_first(c, &b, config_setting_get_member(at[0], "normal"), true);
     } else {
-        blame_first(c, &b, at, false);
+        blame_first(c, &b, at[0], false);
+        blame_first(c, &b, at[1], false);
     }
     return b;
 }
@@ -782,7 +784,7 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
     for (size_t k = 0; k < n_entries; k++)
         placed[k] = entry_blame(c, e[k].setting);
     for (size_t p = 0; p < s->n_planes; p++)
-        walls[p] = plane_blame(c, plane_at[p]);
+        walls[p] = plane_blame(c, &plane_at[2 * p]);
     overlaps o = {.c = c, .s = s, .e = e, .n_entries = n_entries, .placed = placed,
                   .walls = walls};
     const double blo[3] = {box_lo.x, box_lo.y, box_lo.z}, bhi[3] = {box_hi.x, box_hi.y, box_hi.z};

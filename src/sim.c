@@ -534,6 +534,11 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
     sim->status = nbep_sim_stop_status(sim->opt.stop_signal);
     if (sim->status == NBEP_OK && sim->step_end >= sim->step_first)
         sim->algo->run(sim, sim->algo_ctx);
+    /* a step abandoned by a signal: the progress ends at the step before, with its last line,
+     * as at a stop at a step's end (a terminal's line was left open, and the run's last lines
+     * followed on it) */
+    if (sim->abandoned)
+        progress(sim, sim->steps_done, true);
     sim->wall_seconds = nbep_now() - sim->t_start;
     /* after a failed write the file gets nothing more: one error, not a cascade; a run stopped
      * by an energy beyond doubles keeps its rows up to the step before (all finite), which

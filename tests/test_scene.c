@@ -1330,9 +1330,10 @@ static void test_an_overlap_a_set_made_names_the_set(void **state)
 /* An overlap with a box wall or a plane that a --set moved is blamed on that --set (until
  * 2026-11-30 on the deck's line of the sphere, which the user had not touched): one element of
  * box.max, the whole vector, the whole box, a plane's point or normal; a --set of another
- * wall's element moves nothing here. Where the sphere was placed by a --set too, the first
- * typed is named. The walls of an axis that is not periodic come first, in the box's order:
- * with x periodic, the y wall is the first. */
+ * wall's element moves nothing here; a --set of box.periodic that walls an axis (until
+ * 2026-11-30 on the sphere's line) made its walls. Where the sphere was placed by a --set too,
+ * the first typed is named. The walls of an axis that is not periodic come first, in the box's
+ * order: with x periodic, the y wall is the first. */
 static void test_an_overlap_with_a_wall_a_set_moved_names_the_set(void **state)
 {
     fixture *f = *state;
@@ -1366,6 +1367,14 @@ static void test_an_overlap_with_a_wall_a_set_moved_names_the_set(void **state)
         /* another wall's element, typed first, moved nothing the sphere meets */
         {{"box.max.[2]=10.0", "spheres.[0].position=[5.0,9.75,5.0]"},
          "--set spheres.[0].position=[5.0,9.75,5.0]: spheres.[0] (sphere 0) overlaps box y-max by 0.25"},
+        /* a --set of box.periodic that walls the x axis made the wall: named where typed
+         * first (the whole vector, or its element); typed after the position, the position */
+        {{"box.periodic=[false,false,false]", "spheres.[0].position=[9.75,5.0,5.0]"},
+         "--set box.periodic=[false,false,false]: spheres.[0] (sphere 0) overlaps box x-max by 0.25"},
+        {{"box.periodic.[0]=false", "spheres.[0].position=[9.75,5.0,5.0]"},
+         "--set box.periodic.[0]=false: spheres.[0] (sphere 0) overlaps box x-max by 0.25"},
+        {{"spheres.[0].position=[9.75,5.0,5.0]", "box.periodic.[0]=false"},
+         "--set spheres.[0].position=[9.75,5.0,5.0]: spheres.[0] (sphere 0) overlaps box x-max by 0.25"},
     };
     for (size_t k = 0; k < sizeof cases / sizeof *cases; k++) {
         nbep_diag_fini(&f->d);

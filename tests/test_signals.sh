@@ -129,11 +129,16 @@ check "and a summary that says terminated, 0 of the deck's 1000 steps" \
 # after the step before, with its summary, within a fraction of a second (20 s allowed here);
 # until 2026-11-30 the step ran on to its end, and a job's KILL took the summary and the stats
 # rows not yet written. One line says which step was abandoned and up to which frame the file
-# holds the run. Each case: a name, then the deck and its options.
+# holds the run. Each case: a name, then the deck and its options (after dt = 1000: they may
+# set another). The signal comes 0.5 s after the file appears, past the set-up's predictions
+# (a signal there ends the run at step 0, above): all-pairs mode's take n^2, so its case has
+# 1000 spheres (milliseconds; the paper box's 4096 took 0.35 s on an idle machine, so close to
+# the 0.5 s that a loaded one's signal could come within them) and a dt of 10000 (a step of
+# minutes).
 abandon() {
     local name=$1 out=$tmp/abandon-$1.h5
     shift
-    bin/nbep run "$@" --quiet -n 3 --set run.dt=1000 -o "$out" \
+    bin/nbep run --set run.dt=1000 "$@" --quiet -n 3 -o "$out" \
         --summary "$tmp/summary-abandon-$name.json" 2>"$tmp/stderr-abandon-$name" &
     term_within $! "$out" 0.5 200
     check "$name: SIGTERM during a step of minutes ends the run within 20 s" "[ $stopped = 1 ]"
@@ -148,9 +153,30 @@ abandon() {
 abandon cells-1-thread inputs/hard-sphere-fluid.deck -t 1
 abandon cells-team inputs/hard-sphere-fluid.deck -t 2 --set 'spheres.[0].count=4000' \
     --set 'box.max=[19.1122779605, 19.1122779605, 19.1122779605]'
-abandon all-pairs inputs/paper-box.deck -t 2 --set 'physics.gravity=[0.0, 0.0, 0.0]'
+abandon all-pairs inputs/paper-box.deck -t 2 --set 'physics.gravity=[0.0, 0.0, 0.0]' \
+    --set 'spheres.[0].count=1000' --set run.dt=10000
 abandon grid inputs/paper-box.deck -t 1 --set 'run.neighbors="grid"' \
     --set 'physics.gravity=[0.0, 0.0, 0.0]'
+
+# not --quiet: the progress ends with a line for the step the run ends after, as a stop at a
+# step's end ends it (until 2026-11-30 an abandoned step left it open: on a terminal the run's
+# last lines followed on the progress line)
+out=$tmp/abandon-progress.h5
+bin/nbep run inputs/hard-sphere-fluid.deck -t 1 -n 3 --set run.dt=1000 -o "$out" \
+    2>"$tmp/stderr-abandon-progress" &
+pid=$!
+for _ in $(seq 300); do [ -s "$out" ] && break; sleep 0.1; done
+sleep 0.5
+kill -TERM $pid
+for _ in $(seq 200); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
+kill -0 $pid 2>/dev/null && kill -KILL $pid
+wait $pid
+rc=$?
+check "a step abandoned, not --quiet: exit 143 (got $rc), the progress's last line for step 0 of 3, then the end lines" \
+    "[ $rc = 143 ] && [ \$(wc -l < '$tmp/stderr-abandon-progress') = 3 ] &&
+     sed -n 1p '$tmp/stderr-abandon-progress' | grep -q '^step 0/3 ' &&
+     sed -n 2p '$tmp/stderr-abandon-progress' | grep -q '^nbep: stopped after 0 steps' &&
+     sed -n 3p '$tmp/stderr-abandon-progress' | grep -q 'during step 1, which is abandoned'"
 
 [ $fail = 0 ] && echo "signals: all passed"
 exit $fail
