@@ -21,7 +21,9 @@
 #include "nbep/sweep.h"
 
 /* The one mutable global (STYLE 2): the signal that asked the run to stop, 0 if none. The
- * handler only sets it; the run polls it at the end of every step. The first signal wins: a
+ * handler only sets it; the run polls it at the end of every step, and the predictive
+ * algorithm's loops also within a step (every 65536 events or 1024 rounds, abandoning a step too
+ * long to wait for: nbep_sim_run). The first signal wins: a
  * SIGINT then a SIGTERM (a job's Ctrl-C, then its time limit) exits as interrupted, 130,
  * whichever the handlers stored last (a review saw 130 or 143 by the race). */
 static atomic_int stop_signal;
@@ -179,7 +181,8 @@ int main(int argc, char **argv)
     gsl_set_error_handler_off();
     nbep_output_library_init();
     /* Before anything is read or written: a job's SIGTERM at any moment ends the run at the
-     * next step's end with every frame so far saved (or, before stepping, with nothing). */
+     * next step's end with every frame so far saved (or within a long step, after the step
+     * before; before stepping, with nothing written). */
     install_signal_handlers();
     nbep_diag d;
     nbep_diag_init(&d);
