@@ -767,6 +767,10 @@ MUTANTS = [
      "        tally->events++;\n        if (!nbep__evloop_advances(stall, t)) {\n            *t_stuck = t;\n            return false;\n        }\n        nbep__evloop_handle(e, w, ops, u, i, &ev, t);",
      "        tally->events++;\n        nbep__evloop_handle(e, w, ops, u, i, &ev, t);\n        if (!nbep__evloop_advances(stall, t)) {\n            *t_stuck = t;\n            return false;\n        }",
      FAULTS, None),
+    # a resume from frame 0 predicts afresh, as the uninterrupted run did (its step 1 row)
+    ("resume-zero-imported", "src/sim.c",
+     "opt->resume->has_events && opt->resume->step > 0 && algo->import_events)",
+     "opt->resume->has_events && algo->import_events)", ["tests/test_resume.sh"], None),
     # a signal during a step's events abandons the step (test_team_faults: raised at a time,
     # on every thread count; test_signals.sh: a step of minutes, SIGTERM, every loop)
     ("stop-never-looked", "src/evloop_impl.h",

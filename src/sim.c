@@ -240,7 +240,10 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
             return st;
         }
     }
-    if (opt->resume && opt->resume->has_events && algo->import_events)
+    /* a frame at step 0 holds the slots of the first predictions, which the run makes again
+     * from the same state as the uninterrupted run did, counting them in step 1's row as it
+     * did (imported, step 1's checks and predictions came out n and n - 1 short) */
+    if (opt->resume && opt->resume->has_events && opt->resume->step > 0 && algo->import_events)
         algo->import_events(sim->algo_ctx, opt->resume);
     sim->opt.resume = NULL; /* read: borrowed for nbep_sim_create only */
     if (opt->out && algo->export_events) {

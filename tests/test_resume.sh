@@ -268,6 +268,20 @@ check "resumed after the abandoned step, every frame equals the uninterrupted ru
 check "and so does every stats row" \
     "h5diff -q $tmp/abandoned-whole.h5 $tmp/abandoned.h5 /stats"
 
+# a file whose last frame is step 0 (a run of 0 steps, or one whose first step a signal
+# abandoned) resumes as the uninterrupted run: frames and every stats row, step 1's counts too
+# (all-pairs mode imported frame 0's slots and skipped the first predictions, which the
+# uninterrupted run counts in step 1's row: n checks and n - 1 predictions short until
+# 2026-11-30), in all-pairs, grid and cells modes
+for mode in all grid cells; do
+    bin/nbep run $deck "${args[@]}" --set "run.neighbors=\"$mode\"" -n 10 -o $tmp/zero-whole-$mode.h5
+    bin/nbep run $deck "${args[@]}" --set "run.neighbors=\"$mode\"" -n 0 -o $tmp/zero-$mode.h5
+    bin/nbep run $deck "${args[@]}" --set "run.neighbors=\"$mode\"" -n 10 --resume $tmp/zero-$mode.h5
+    check "$mode: resumed from frame 0, every frame and stats row equals the uninterrupted run's" \
+        "same_frames $tmp/zero-whole-$mode.h5 $tmp/zero-$mode.h5 &&
+         h5diff -q $tmp/zero-whole-$mode.h5 $tmp/zero-$mode.h5 /stats"
+done
+
 # nothing to resume: run.steps at or before the file's last frame is refused with exit 2, the
 # file left as it was (it was given a zero-step summary, and its root `steps` the smaller count)
 sum=$(md5sum < $tmp/predictive-whole.h5)
