@@ -39,4 +39,35 @@ for t in test_sim test_periodic test_barrier test_extremes test_order test_granu
         echo "FAIL tsan $t (see $log)"; grep -m5 "SUMMARY" "$log" || tail -n 5 "$log"; fail=1
     fi
 done
+# the binary itself, stopped by SIGTERM within a step of minutes (dt = 10000) on 4 threads:
+# the all-pairs and grid modes' crews (thread 0 looks at the signal and the crew reads what it
+# found past a barrier) and cells mode's team abandon the step; TSan must see no race on the
+# way out, and the run must end as terminated (143)
+# shellcheck disable=SC2086
+clang $cflags $(ls src/*.c) -o "$out/nbep" $libs
+for mode in all grid cells; do
+    log=$out/nbep-abandon-$mode.log
+    rm -f "$out/abandon-$mode.h5"
+    OMP_TOOL_LIBRARIES=$archer TSAN_OPTIONS="ignore_noninstrumented_modules=1 exitcode=66" \
+        "$out/nbep" run inputs/paper-box.deck --quiet -t 4 -n 3 --set run.dt=10000 \
+        --set 'spheres.[0].count=1000' --set 'physics.gravity=[0.0, 0.0, 0.0]' \
+        --set "run.neighbors=\"$mode\"" -o "$out/abandon-$mode.h5" >"$log" 2>&1 &
+    pid=$!
+    for _ in $(seq 600); do [ -s "$out/abandon-$mode.h5" ] && break; sleep 0.1; done
+    sleep 2
+    kill -TERM $pid
+    stopped=0
+    for _ in $(seq 600); do
+        if ! kill -0 $pid 2>/dev/null; then stopped=1; break; fi
+        sleep 0.1
+    done
+    [ $stopped = 1 ] || kill -KILL $pid
+    rc=0
+    wait $pid || rc=$?
+    if [ $rc = 143 ] && ! grep -q "ThreadSanitizer" "$log" && grep -q 'which is abandoned' "$log"; then
+        echo "ok   tsan nbep: SIGTERM abandons a step in $mode mode"
+    else
+        echo "FAIL tsan nbep: $mode mode, exit $rc (see $log)"; grep -m5 "SUMMARY" "$log" || tail -n 5 "$log"; fail=1
+    fi
+done
 exit $fail
