@@ -764,8 +764,8 @@ MUTANTS = [
     ("evloop-failed-walk-committed", "src/evloop.c", "    if (w->oom)\n        e->failed = true;",
      "    (void)0;", FAULTS, None),
     ("evloop-stall-after-handling", "src/evloop.c",
-     "        tally->events++;\n        if (!nbep__evloop_advances(stall, t)) {\n            *t_stuck = t;\n            return false;\n        }\n        nbep__evloop_handle(e, w, ops, u, i, &ev, t);",
-     "        tally->events++;\n        nbep__evloop_handle(e, w, ops, u, i, &ev, t);\n        if (!nbep__evloop_advances(stall, t)) {\n            *t_stuck = t;\n            return false;\n        }",
+     "        tally->events++;\n        if (!nbep__evloop_advances(stall, t)) {\n            *t_stuck = t;\n            return false;\n        }\n        nbep__evloop_handle(e, w, ops, u, i, &ev, t, true);",
+     "        tally->events++;\n        nbep__evloop_handle(e, w, ops, u, i, &ev, t, true);\n        if (!nbep__evloop_advances(stall, t)) {\n            *t_stuck = t;\n            return false;\n        }",
      FAULTS, None),
     # a resume from frame 0 predicts afresh, as the uninterrupted run did (its step 1 row)
     ("resume-zero-imported", "src/sim.c",

@@ -144,9 +144,11 @@ _Static_assert(offsetof(evl_ws, next_key) + sizeof((evl_ws *)0)->next_key <= NBE
 /* Handles the event of sphere i (its slot ev, at absolute time t) on workspace w: reacts if
  * the slot is fresh and predicts the spheres it changed, writing their motion and slots only;
  * a list expiry walks the cells for the new list. What the calendar, the lists and the cells
- * need is left on w for nbep__evloop_commit. */
+ * need is left on w for nbep__evloop_commit. `commits`: this thread commits it next (the one
+ * thread's loop), so an expiry requests the lists its commit changes while it predicts (a
+ * team's handler leaves that to the leader, which commits on its own core). */
 void nbep__evloop_handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, void *u,
-                         uint32_t i, const nbep_event *ev, double t);
+                         uint32_t i, const nbep_event *ev, double t, bool commits);
 /* What nbep__evloop_handle left waiting on w: the new list entered, the changed spheres'
  * calendar entries set. */
 void nbep__evloop_commit(nbep_evloop *e, const evl_ws *w);

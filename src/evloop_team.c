@@ -394,7 +394,7 @@ static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *own, void
     if (!e->batch_first[k]) /* every other place may be undone */
         keep(e, w, k, ops, us[k]);
     ops->clear(us[k]); /* its counts from zero, on this thread */
-    nbep__evloop_handle(e, w, ops, us[k], e->batch[k], &ev, ev.time);
+    nbep__evloop_handle(e, w, ops, us[k], e->batch[k], &ev, ev.time, false);
     w->pending = true;
     atomic_store_explicit(&w->place, v, memory_order_release);
     return true;
