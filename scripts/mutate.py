@@ -767,6 +767,14 @@ MUTANTS = [
      "        tally->events++;\n        if (!nbep__evloop_advances(stall, t)) {\n            *t_stuck = t;\n            return false;\n        }\n        nbep__evloop_handle(e, w, ops, u, i, &ev, t, true);",
      "        tally->events++;\n        nbep__evloop_handle(e, w, ops, u, i, &ev, t, true);\n        if (!nbep__evloop_advances(stall, t)) {\n            *t_stuck = t;\n            return false;\n        }",
      FAULTS, None),
+    # the progress within a long step (live on a terminal: test_signals.sh under script(1))
+    ("progress-within-cells-unlooked", "src/evloop_impl.h",
+     "        if (st->on_look)\n            st->on_look(st->look_ctx, t);", "", ["tests/test_signals.sh"], None),
+    ("progress-within-rounds-unlooked", "src/algo_predictive.c",
+     "                if (look && tid == 0) /* the progress within a long step */",
+     "                if (0) /* the progress within a long step */", ["tests/test_signals.sh"], None),
+    ("progress-within-part-dropped", "src/sim.c", "    const double at = (double)(step - 1) + part;",
+     "    const double at = (double)(step - 1);", ["tests/test_signals.sh"], None),
     # a resume from frame 0 predicts afresh, as the uninterrupted run did (its step 1 row)
     ("resume-zero-imported", "src/sim.c",
      "opt->resume->has_events && opt->resume->step > 0 && algo->import_events)",

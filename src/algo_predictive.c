@@ -901,6 +901,8 @@ static void pred_run(nbep_sim *sim, void *p)
                     quit = true;
                     break;
                 }
+                if (look && tid == 0) /* the progress within a long step */
+                    nbep__sim_progress_within(sim, step, (t_min - T0) / sim->dt);
                 if (round % STALL_ROUNDS == STALL_ROUNDS - 1 &&
                     !(t_min - t_check > STALL_FRACTION * sim->dt)) {
                     if (tid == 0) {

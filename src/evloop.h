@@ -157,7 +157,8 @@ typedef struct nbep_evloop_tally {
  * on other threads) checks them as one call would. With it, every NBEP_EVLOOP_STOP_EVERY
  * events, a look at the run's stop signal (`stop`, may be NULL): a signal ends the call as a
  * stall does, with `stopped` set, so that a step far longer than a job's grace after its
- * SIGTERM is abandoned instead of killed (README, Faults). */
+ * SIGTERM is abandoned instead of killed (README, Faults); else `on_look` (may be NULL) is
+ * called with the event's time, for the run's progress within a long step. */
 typedef struct nbep_evloop_stall {
     uint64_t events;
     double dt;
@@ -166,9 +167,11 @@ typedef struct nbep_evloop_stall {
     const atomic_int *stop; /* borrowed, may be NULL: nonzero = SIGINT/SIGTERM number */
     uint64_t looks;         /* events since the last look at stop */
     bool stopped;           /* the call ended at a look that found a signal */
+    void (*on_look)(void *ctx, double t);
+    void *look_ctx;
 } nbep_evloop_stall;
-#define NBEP_EVLOOP_STALL(events, dt, stop)                                                        \
-    ((nbep_evloop_stall){(events), (dt), 0, -INFINITY, (stop), 0, false})
+#define NBEP_EVLOOP_STALL(events, dt, stop, on_look, look_ctx)                                    \
+    ((nbep_evloop_stall){(events), (dt), 0, -INFINITY, (stop), 0, false, (on_look), (look_ctx)})
 /* A look at the stop signal every this many events: a relaxed load, a few tenths of a
  * nanosecond an event, and at about a million events a second on one core a signal is seen
  * within a tenth of a second. */

@@ -523,6 +523,20 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
     }
 }
 
+/* The step a loop's look (nbep_evloop_stall) is in, for the progress within it. */
+typedef struct cells_look {
+    nbep_sim *sim;
+    uint64_t step;
+    double T0;
+} cells_look;
+
+/* Thread 0 (the loop's, or the team's leader), at an event at time t of a look's step. */
+static void cells_on_look(void *ctx, double t)
+{
+    const cells_look *l = ctx;
+    nbep__sim_progress_within(l->sim, l->step, (t - l->T0) / l->sim->dt);
+}
+
 /* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's
  * event loop, with threads 1.. in a team where the scene allows it (c->team, pred_ways.c); all
  * threads share the rebuilds, the update to the step's end and the energy. A step that probes
@@ -586,8 +600,9 @@ void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own,
         /* the step's events, on the threads of its way; a probe of another way first runs
          * those of the step's first part (pred_ways.c), behind a barrier: its threads have
          * left the team loop before the rest's enter it */
-        nbep_evloop_stall stall =
-            NBEP_EVLOOP_STALL(STALL_EVENTS, STALL_FRACTION * sim->dt, sim->opt.stop_signal);
+        cells_look look = {sim, step, u.T0};
+        nbep_evloop_stall stall = NBEP_EVLOOP_STALL(STALL_EVENTS, STALL_FRACTION * sim->dt,
+                                                    sim->opt.stop_signal, cells_on_look, &look);
         const int probe = c->ways.probe[step & 1];
         if (probe >= 0) {
             cells_part(sim, c, tid, &u, us, ops, probe, true, 2 * step,

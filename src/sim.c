@@ -350,7 +350,7 @@ static nbep_status emit_frame(nbep_sim *sim, uint64_t step)
 static void clock_start(nbep_sim *sim, double now)
 {
     sim->t_start = sim->t_last_progress = sim->t_mark = now;
-    sim->done_mark = 0;
+    sim->done_mark = 0.0;
     sim->rate_recent = 0.0;
 }
 
@@ -361,7 +361,9 @@ void nbep__sim_setup_done(nbep_sim *sim)
     clock_start(sim, now);
 }
 
-static void progress(nbep_sim *sim, uint64_t step, bool last)
+/* The progress line at `at` steps of the run (a whole step at a step's end; within one, the
+ * step before plus the part of its time gone, shown with two decimals: `step 2.47/100`). */
+static void progress_at(nbep_sim *sim, double at, bool last)
 {
     if (!sim->opt.progress)
         return;
@@ -373,27 +375,45 @@ static void progress(nbep_sim *sim, uint64_t step, bool last)
     sim->t_last_progress = now;
     double el = now - sim->t_start;
     /* steps done in this session (a resumed run started at step_first) */
-    const uint64_t done = step + 1 - sim->step_first;
-    double rate = el > 0.0 ? (double)done / el : 0.0;
+    const double done = at + 1.0 - (double)sim->step_first;
+    double rate = el > 0.0 ? done / el : 0.0;
     /* the rate and ETA from the last PROGRESS_LOG_SECONDS or more once there are such, not
      * the whole run's mean: a pile that settles slows tenfold, and the mean's ETA said 13 s
      * with over 5 minutes to go (a user's review) */
     if (now - sim->t_mark >= PROGRESS_LOG_SECONDS) {
-        sim->rate_recent = (double)(done - sim->done_mark) / (now - sim->t_mark);
+        sim->rate_recent = (done - sim->done_mark) / (now - sim->t_mark);
         sim->t_mark = now;
         sim->done_mark = done;
     }
     if (sim->rate_recent > 0.0)
         rate = sim->rate_recent;
-    double pct = sim->step_end ? 100.0 * (double)step / (double)sim->step_end : 100.0;
-    double eta = rate > 0.0 ? (double)(sim->step_end - step) / rate : 0.0;
+    double pct = sim->step_end ? 100.0 * at / (double)sim->step_end : 100.0;
+    double eta = rate > 0.0 ? ((double)sim->step_end - at) / rate : 0.0;
+    char where[48];
+    if (at == floor(at))
+        snprintf(where, sizeof where, "%llu", (unsigned long long)at);
+    else /* (never shown as the next step's whole number: at most the step's end less 0.01) */
+        snprintf(where, sizeof where, "%.2f", fmin(at, ceil(at) - 0.01));
     if (tty)
-        fprintf(stderr, "\rstep %llu/%llu  %5.1f%%  %.4g steps/s  ETA %.0f s   %s",
-                (unsigned long long)step, (unsigned long long)sim->step_end, pct, rate, eta,
-                last ? "\n" : "");
+        fprintf(stderr, "\rstep %s/%llu  %5.1f%%  %.4g steps/s  ETA %.0f s   %s", where,
+                (unsigned long long)sim->step_end, pct, rate, eta, last ? "\n" : "");
     else
-        fprintf(stderr, "step %llu/%llu  %.1f%%  %.4g steps/s  ETA %.0f s\n",
-                (unsigned long long)step, (unsigned long long)sim->step_end, pct, rate, eta);
+        fprintf(stderr, "step %s/%llu  %.1f%%  %.4g steps/s  ETA %.0f s\n", where,
+                (unsigned long long)sim->step_end, pct, rate, eta);
+}
+
+static void progress(nbep_sim *sim, uint64_t step, bool last)
+{
+    progress_at(sim, (double)step, last);
+}
+
+void nbep__sim_progress_within(nbep_sim *sim, uint64_t step, double part)
+{
+    /* a part from the events' times: kept inside the step, so that the line never shows the
+     * step's end (or a NaN) before the step has ended */
+    part = part > 0.0 ? fmin(part, 1.0) : 0.0;
+    const double at = (double)(step - 1) + part;
+    progress_at(sim, at < (double)step ? at : (double)(step - 1), false);
 }
 
 bool nbep__sim_frame_due(const nbep_sim *sim, uint64_t step)

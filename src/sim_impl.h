@@ -93,7 +93,7 @@ struct nbep_sim {
      * mark, and the rate between the two marks before (0: none yet); set with t_start
      * (clock_start in sim.c) */
     double t_mark, rate_recent;
-    uint64_t done_mark;
+    double done_mark;  /* steps done at t_mark: a step's part counts (nbep__sim_progress_within) */
     /* stop request: written by thread 0 in the hook, read by all after the next barrier */
     atomic_int stop;
     nbep_status status;              /* thread 0 only */
@@ -151,5 +151,9 @@ void nbep__sim_frame_overlap(nbep_sim *sim, uint64_t step, int tid, nbep_range o
  * prints progress, and sets sim->stop when the run must end (signal, error, last step).
  * Returns the value of stop. */
 int nbep__sim_end_step(nbep_sim *sim, uint64_t step);
+/* Thread 0, within step `step`, `part` (0 .. 1) of its time gone: the progress line, when one
+ * is due (a step of minutes otherwise showed none until its end; SPEC: a line about every 10 s
+ * in a log, a live one on a terminal). */
+void nbep__sim_progress_within(nbep_sim *sim, uint64_t step, double part);
 
 #endif
