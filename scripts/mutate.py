@@ -422,6 +422,11 @@ MUTANTS = [
     ("mass-all-any", "src/algo_predictive.c", "same_mass &= sim->st.mass[i] == sim->st.mass[0];",
      "same_mass &= true;", SIM, None),
     # ---- cells mode without a box: the cells fitted to the spheres' extent ----
+    # a long step in a periodic box: all-pairs mode's reactions take the touching image of
+    # stored positions periods apart
+    ("allpairs-sep-near-image", "src/pred_impl.h",
+     "return c->image_horizon ? nbep_periodic_image(&c->pb, d) : nbep_periodic_near_image(&c->pb, d);",
+     "return nbep_periodic_near_image(&c->pb, d);", ["test_periodic"], None),
     ("fit-never-outgrown", "src/pred_cells.c",
      "    return lo.x < c->fit_lo.x || lo.y < c->fit_lo.y || lo.z < c->fit_lo.z ||",
      "    return false;\n    return lo.x < c->fit_lo.x || lo.y < c->fit_lo.y || lo.z < c->fit_lo.z ||",

@@ -277,12 +277,18 @@ static inline nbep_vec3 effective_acc(const pred_ctx *c, const nbep_state *s, si
 }
 
 /* The separation from sphere a to sphere b, by the minimum image in a periodic box (a pair in
- * contact is closer than half a period, so this is the image that touches; stored positions
- * are never more than a period apart, so the comparing form serves). */
+ * contact is closer than half a period, so this is the image that touches). Cells mode keeps
+ * stored positions in their cells, never more than a period apart, so the comparing form
+ * serves; all-pairs mode (c->image_horizon) wraps them only at a step's end, and within a long
+ * step two spheres drift any number of periods apart, past the comparing form's one and a
+ * half: the general one then (until 2026-11-30 the comparing one there gave an image a period
+ * away, the pair was not turned apart, and the step stalled). */
 static inline nbep_vec3 sep(const pred_ctx *c, const nbep_state *s, size_t a, size_t b)
 {
     nbep_vec3 d = nbep_vec3_sub(s->pos[b], s->pos[a]);
-    return c->pb.any ? nbep_periodic_near_image(&c->pb, d) : d;
+    if (!c->pb.any)
+        return d;
+    return c->image_horizon ? nbep_periodic_image(&c->pb, d) : nbep_periodic_near_image(&c->pb, d);
 }
 
 /* The minimum bounce's time (MIN_BOUNCE_STEP_FRACTION) for radius r pressed by an acceleration

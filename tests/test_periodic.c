@@ -653,6 +653,44 @@ static void test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference(void 
     }
 }
 
+/* The same pair in one step of 10 time units (all-pairs mode): positions are wrapped only at a
+ * step's end, so within the step the spheres' stored positions drift periods apart (their
+ * relative travel is 24, ten periods), and a collision's separation must still be taken at the
+ * touching image. Until 2026-11-30 the reactions took it by the comparing form, which reaches
+ * one and a half periods: past that the response used an image a period or more away, the
+ * pair was not turned apart, and the step stalled (a fluid of 500 spheres in the 38-diameter
+ * box of hard-sphere-fluid.deck stopped with "events ... do not resolve" at t = 19.8 of a step
+ * of 20, where cells mode ran the step in 0.1 s). */
+static void test_all_pairs_mode_takes_the_touching_image_within_a_long_step(void **state)
+{
+    (void)state;
+    const double L = 2.5, t_end = 10.0;
+    const nbep_vec3 p0 = {0.4, 0.7, 1.9}, p1 = {1.7, 2.1, 0.6};
+    const nbep_vec3 v0 = {0.31, -1.17, 0.53}, v1 = {-0.9, 0.27, 1.41};
+    nbep_vec3 u;
+    int hits = reference_pair(nbep_vec3_sub(p1, p0), nbep_vec3_sub(v1, v0), L, t_end, &u);
+    assert_true(hits >= 3);
+    cells_mode = false;
+    nbep_scene *sc = periodic_scene(2, L, 1, t_end);
+    cells_mode = true;
+    nbep_test_set_sphere(sc, 0, p0, v0, 0.5, 1.0, ZERO);
+    nbep_test_set_sphere(sc, 1, p1, v1, 0.5, 1.0, ZERO);
+    /* more than one and a half periods of relative travel in the step */
+    assert_true(nbep_vec3_norm(nbep_vec3_sub(v1, v0)) * t_end > 1.5 * L);
+    nbep_state fin;
+    frames ref = {0};
+    nbep_summary s = run(sc, 1, &fin, &ref);
+    assert_int_equal(s.steps, 1);
+    assert_int_equal(s.sphere_collisions, (uint64_t)hits);
+    nbep_vec3 du = nbep_vec3_sub(nbep_vec3_sub(fin.vel[1], fin.vel[0]), u);
+    assert_true(nbep_vec3_norm(du) < 1e-6);
+    assert_close(s.energy_final, s.energy_initial, 1e-13, 0.0);
+    assert_true(s.max_overlap_rel < 1e-9);
+    same_frames_on_2_and_4_threads(sc, &ref, s.collisions);
+    nbep_state_fini(&fin);
+    nbep_test_scene_free(&sc);
+}
+
 /* The all-pairs mode (the paper's, nearest images and image horizons) on periodic_fluid(side,
  * 0.30, steps, dt, seed) finds the cells mode's collisions (more than `least`; before
  * round-off differences could reorder events), with no overlap and the energy kept, and its
@@ -1352,6 +1390,7 @@ int main(void)
         cmocka_unit_test(test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box),
         cmocka_unit_test(test_all_pairs_mode_reacts_to_image_horizons_inside_a_step),
         cmocka_unit_test(test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference),
+        cmocka_unit_test(test_all_pairs_mode_takes_the_touching_image_within_a_long_step),
         cmocka_unit_test(test_periodic_fluid_pressure_and_collision_rate_match_theory),
         cmocka_unit_test(test_cooling_gas_follows_haffs_law),
         cmocka_unit_test(test_wall_impulse_of_a_sphere_between_two_walls),
