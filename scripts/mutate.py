@@ -423,10 +423,14 @@ MUTANTS = [
      "same_mass &= true;", SIM, None),
     # ---- cells mode without a box: the cells fitted to the spheres' extent ----
     # a long step in a periodic box: all-pairs mode's reactions take the touching image of
-    # stored positions periods apart
+    # stored positions periods apart; cells mode's expiries keep stored positions current
     ("allpairs-sep-near-image", "src/pred_impl.h",
      "return c->image_horizon ? nbep_periodic_image(&c->pb, d) : nbep_periodic_near_image(&c->pb, d);",
      "return nbep_periodic_near_image(&c->pb, d);", ["test_periodic"], None),
+    ("cells-expiry-not-brought", "src/pred_cells.c",
+     "    x->s->pos[i] = *p;\n    x->s->vel[i] = *v;\n    x->c->tau[i] = t - x->T0;\n    if (!nbep_periodic_inside(&x->c->pb, *p)) {",
+     "    if (!nbep_periodic_inside(&x->c->pb, *p)) {\n    x->s->pos[i] = *p;\n    x->s->vel[i] = *v;\n    x->c->tau[i] = t - x->T0;",
+     ["test_periodic"], None),
     ("fit-never-outgrown", "src/pred_cells.c",
      "    return lo.x < c->fit_lo.x || lo.y < c->fit_lo.y || lo.z < c->fit_lo.z ||",
      "    return false;\n    return lo.x < c->fit_lo.x || lo.y < c->fit_lo.y || lo.z < c->fit_lo.z ||",
@@ -483,14 +487,14 @@ MUTANTS = [
      "in &= !pb->axis[k] || (u >= 0.0 && u < pb->len[k]);",
      "in &= (u >= 0.0 && u < pb->len[k]);", TEAM, None),
     ("cells-wrap-centre-unwrapped", "src/pred_cells.c",
-     "    *p = x->s->pos[i];\n    *v = x->s->vel[i];\n}", "    *v = x->s->vel[i];\n}",
+     "        *p = x->s->pos[i];\n    }\n}", "    }\n}",
      LISTS + TEAM,
      "the flight returned is the expiring list's new centre only, and list_centre (evloop.c) "
      "wraps that centre into the box itself: an unwrapped flight gives the same centre but for "
      "the rounding of one period's shift, below what any list or event resolves"),
     ("cells-wrap-never", "src/pred_cells.c",
-     "    if (nbep_periodic_inside(&x->c->pb, *p))\n        return;",
-     "    if (true)\n        return;", TEAM, None),
+     "    if (!nbep_periodic_inside(&x->c->pb, *p)) {\n        nbep_periodic_wrap(",
+     "    if (false) {\n        nbep_periodic_wrap(", TEAM, None),
     ("evloop-walk-no-images", "src/evloop.c",
      "a[k][q] = b.per[k][q] ? c[k] - b.per[k][q] * e->pb.len[k] : c[k];",
      "a[k][q] = c[k];", LISTS + TEAM, None),

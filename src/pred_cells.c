@@ -368,27 +368,30 @@ static void cells_flight(void *u, uint32_t i, double t, nbep_vec3 *p, nbep_vec3 
         nbep_physics_drift(p, v, *a, h);
 }
 
-/* Sphere i leaves its cell at absolute time t: when its centre is then outside the box on a
- * periodic axis, it is brought to t and wrapped (image counted), so that its position stays
- * in its cell (cells.h); its flight at t either way (cells_flight's, bit for bit: a sphere
- * brought to t flies for no time). */
+/* Sphere i's list expires at absolute time t in a periodic box: it is brought to t, and
+ * wrapped (image counted) when its centre is then outside the box on a periodic axis, so that
+ * its position stays in its cell (cells.h); its flight at t (cells_flight's, bit for bit: a
+ * sphere brought to t flies for no time). Brought to t even inside: a pair near a periodic face
+ * is taken at the image nearest by the stored positions (pair_bounds_with, neighbour_shift),
+ * which a sphere flying without a collision left behind by as much as it flew; brought at each
+ * expiry, they stay within a list's reach of the spheres' own (until 2026-11-30 only a sphere
+ * that left the box was: within a step of a period's flight, a pair was taken at another image
+ * and passed through, tests/test_periodic.c). Not noted for settling (advance_to's
+ * settle_note): a speed at an expiry is no event's. */
 static void cells_wrap(void *u, uint32_t i, double t, nbep_vec3 *p, nbep_vec3 *v, nbep_vec3 *a)
 {
     const cells_user *x = u;
     cells_flight(u, i, t, p, v, a);
-    if (nbep_periodic_inside(&x->c->pb, *p))
+    /* a non-finite position stays as it is (the wrap leaves it too) */
+    if (!(isfinite(p->x) && isfinite(p->y) && isfinite(p->z)))
         return;
-    /* outside: wrapped, unless the wrap leaves it too (a non-finite or runaway position, which
-     * is then not brought to t either, as before the inline test) */
-    nbep_vec3 q = *p;
-    int32_t img[3] = {0, 0, 0};
-    nbep_periodic_wrap(&x->c->pb, &q, img);
-    if (img[0] == 0 && img[1] == 0 && img[2] == 0)
-        return;
-    advance_to(x->c, x->s, i, t - x->T0);
-    nbep_periodic_wrap(&x->c->pb, &x->s->pos[i], &x->s->image[3 * (size_t)i]);
-    *p = x->s->pos[i];
-    *v = x->s->vel[i];
+    x->s->pos[i] = *p;
+    x->s->vel[i] = *v;
+    x->c->tau[i] = t - x->T0;
+    if (!nbep_periodic_inside(&x->c->pb, *p)) {
+        nbep_periodic_wrap(&x->c->pb, &x->s->pos[i], &x->s->image[3 * (size_t)i]);
+        *p = x->s->pos[i];
+    }
 }
 
 static void cells_save(void *u, uint32_t i, nbep_evloop_motion *m)

@@ -691,6 +691,35 @@ static void test_all_pairs_mode_takes_the_touching_image_within_a_long_step(void
     nbep_test_scene_free(&sc);
 }
 
+/* A dilute periodic gas (512 spheres at phi = 0.005, a box 37 diameters wide, a sphere's free
+ * path about 25) in cells mode, 20 time units as one step and as 200: a sphere flies some 35,
+ * about a period, without a collision within the long step. Its stored position is where its
+ * last collision left it, and a pair near a periodic face is taken at the image nearest by the
+ * stored positions: a list's expiry brings its sphere to the expiry's time, so that the stored
+ * positions stay within a list's reach of the spheres' own. Until 2026-11-30 it brought only
+ * a sphere that had left the box: the stored positions of two spheres drifted half a period
+ * from theirs, the pair was taken at another image, and the spheres passed through each other
+ * (the step of 20 ended with overlaps of 0.14 radii, where 200 steps of 0.1 had none; a
+ * user's run of hard-sphere-fluid.deck with 500 spheres and run.dt = 10). */
+static void test_cells_mode_takes_the_touching_image_within_a_long_step(void **state)
+{
+    (void)state;
+    nbep_summary sum[2];
+    const uint64_t steps[2] = {1, 200};
+    for (int k = 0; k < 2; k++) {
+        nbep_scene *sc = nbep_test_periodic_fluid(8, 0.005, steps[k], 20.0 / (double)steps[k], 7);
+        assert_true(sc->state.period[0] > 30.0);
+        sum[k] = run(sc, 1, NULL, NULL);
+        assert_int_equal(sum[k].steps, steps[k]);
+        assert_true(sum[k].max_overlap_rel < 1e-9);
+        assert_close(sum[k].energy_final, sum[k].energy_initial, 1e-12, 0.0);
+        nbep_test_scene_free(&sc);
+    }
+    /* the same collisions: a few hundred, too few for round-off to reorder them */
+    assert_true(sum[1].sphere_collisions > 100);
+    assert_int_equal(sum[0].sphere_collisions, sum[1].sphere_collisions);
+}
+
 /* The all-pairs mode (the paper's, nearest images and image horizons) on periodic_fluid(side,
  * 0.30, steps, dt, seed) finds the cells mode's collisions (more than `least`; before
  * round-off differences could reorder events), with no overlap and the energy kept, and its
@@ -1391,6 +1420,7 @@ int main(void)
         cmocka_unit_test(test_all_pairs_mode_reacts_to_image_horizons_inside_a_step),
         cmocka_unit_test(test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference),
         cmocka_unit_test(test_all_pairs_mode_takes_the_touching_image_within_a_long_step),
+        cmocka_unit_test(test_cells_mode_takes_the_touching_image_within_a_long_step),
         cmocka_unit_test(test_periodic_fluid_pressure_and_collision_rate_match_theory),
         cmocka_unit_test(test_cooling_gas_follows_haffs_law),
         cmocka_unit_test(test_wall_impulse_of_a_sphere_between_two_walls),
