@@ -1306,8 +1306,8 @@ MUTANTS = [
     # line the user did not touch ----
     # an overlap: any member of the entries that places its spheres, the first typed
     ("blame-overlap-position-only", "src/scene_place.c",
-     "        blame_first(c, &b, m, true);",
-     "        blame_first(c, &b, strcmp(placing[k][0], \"position\") == 0 ? m : NULL, true);",
+     "        blame_first(c, b, m, true);",
+     "        blame_first(c, b, strcmp(placing[k][0], \"position\") == 0 ? m : NULL, true);",
      ["test_scene", "test_sweep"], None),
     ("blame-overlap-first-member-found", "src/scene_place.c",
      "    if (ov && nbep__scene_rank(c, ov, 0) < b->rank)",
@@ -1327,8 +1327,21 @@ MUTANTS = [
      "", ["test_scene"], None),
     # a group that cannot be placed: the --set (or axis) of what places it, typed first
     ("blame-fill-count-line", "src/scene_place.c",
-     "    const blame b = entry_blame(c, e->setting);\n    if (b.label)",
-     "    const blame b = entry_blame(c, e->setting);\n    if (0)", ["test_scene", "test_sweep"], None),
+     "    const blame b = fill_blame(c, s, e, plane_at);\n    if (b.label)",
+     "    const blame b = fill_blame(c, s, e, plane_at);\n    if (0)", ["test_scene", "test_sweep"], None),
+    # ... and of what bounds its room: the box (no region), the planes at or inside its region
+    ("blame-fill-box-unasked", "src/scene_place.c",
+     "    if (!config_setting_get_member(e->setting, \"region\")) {\n        /* the entry's list's",
+     "    if (0) {\n        /* the entry's list's", ["test_scene"], None),
+    ("blame-fill-planes-unasked", "src/scene_place.c",
+     "    for (size_t p = 0; plane_at && p < s->n_planes; p++) {\n        const config_setting_t *at = plane_at[2 * p];",
+     "    for (size_t p = 0; plane_at && p < 0; p++) {\n        const config_setting_t *at = plane_at[2 * p];",
+     ["test_scene"], None),
+    ("blame-fill-lattice-sees-planes", "src/scene_place.c",
+     "        if ((!wall && e->place == NBEP__PLACE_LATTICE) || !plane_reaches(s, p, e->lo, e->hi))",
+     "        if (!plane_reaches(s, p, e->lo, e->hi))", ["test_scene"], None),
+    ("blame-fill-planes-anywhere", "src/scene_place.c",
+     "    return !(least > s->plane_offset[p]);", "    return true;", ["test_scene"], None),
     # an overlap with a wall or plane: the --set that moved it, where typed first
     ("blame-wall-ignored", "src/scene_place.c",
      "b != SIZE_MAX ? o->placed[entry_of(o->e, o->n_entries, b)] : o->walls[wall];",

@@ -1421,16 +1421,17 @@ static nbep_status load_deck(const char *deck_path, const char *deck_text,
         for (int k = 0; k < 3; k++)
             sc.state.period[k] = sc.has_box && sc.periodic[k] ? side[k] : 0.0;
         const size_t fill0 = d->n_errors;
-        st = nbep__scene_place(&L.c, &sc.state, entries, n_entries, sc.seed,
-                               sc.has_box ? sc.periodic : NULL, sc.box_min, sc.box_max);
-        const config_setting_t **plane_at = NULL;
-        if (st == NBEP_OK && d->n_errors == fill0) {
-            plane_at = planes_placed_by(root, &sc, planes, n_planes, n_all_planes);
-            st = plane_at ? NBEP_OK : NBEP_ENOMEM;
-            if (!plane_at)
-                nbep_diag_add(d, __FILE__, __LINE__, "nbep: out of memory while loading %s",
-                              deck_path);
-        }
+        /* what moved each plane: a group that finds no room, or an overlap, is blamed on it */
+        const config_setting_t **plane_at =
+            planes_placed_by(root, &sc, planes, n_planes, n_all_planes);
+        st = plane_at ? NBEP_OK : NBEP_ENOMEM;
+        if (!plane_at)
+            nbep_diag_add(d, __FILE__, __LINE__, "nbep: out of memory while loading %s",
+                          deck_path);
+        if (st == NBEP_OK)
+            st = nbep__scene_place(&L.c, &sc.state, entries, n_entries, sc.seed,
+                                   sc.has_box ? sc.periodic : NULL, sc.box_min, sc.box_max,
+                                   plane_at);
         if (st == NBEP_OK && d->n_errors == fill0)
             st = nbep__scene_check_overlaps(&L.c, &sc.state, entries, n_entries,
                                             sc.has_box ? sc.periodic : NULL, sc.box_min,

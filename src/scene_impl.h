@@ -141,14 +141,16 @@ typedef struct nbep__scene_entry {
 
 /* Fills the spheres of s (allocated, planes set) from the entries in deck order: single
  * spheres as given, groups by random or lattice placement (deterministic for seed). Reports
- * each group that does not fit. box_periodic is NULL without a box, else the box's periodic
+ * each group that does not fit, blamed on the --set typed first of what places it or bounds
+ * its room (the box, the planes: plane_at, as nbep__scene_check_overlaps takes it). box_periodic is NULL without a box, else the box's periodic
  * axes: a random sphere keeps clear of the others by the nearest image along them, across
  * the faces of [box_lo, box_hi] too. Returns NBEP_ENOMEM on allocation failure, else NBEP_OK
  * (fill failures are counted in the diag). */
 NBEP_MUST_CHECK nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s,
                                               const nbep__scene_entry *e, size_t n_entries,
                                               uint64_t seed, const bool *box_periodic,
-                                              nbep_vec3 box_lo, nbep_vec3 box_hi);
+                                              nbep_vec3 box_lo, nbep_vec3 box_hi,
+                                              const config_setting_t *const *plane_at);
 /* Reports every pair of spheres, and every sphere and plane, that overlap by more than
  * round-off (the first few in the load's order, nbep__scene_rank, by name, then how many
  * more, ranked with the last named). Each is blamed on what placed its spheres: a --set (or

@@ -342,18 +342,24 @@ static void blame_first(const nbep__scene_ctx *c, blame *b, const config_setting
         *b = (blame){ov, 0, nbep__scene_rank(c, ov, 0)};
 }
 
+/* The override of a member of entry g in `placing` that was typed first, into *b. */
+static void members_blame(const nbep__scene_ctx *c, blame *b, const config_setting_t *g)
+{
+    for (size_t k = 0; k < sizeof placing / sizeof *placing; k++) {
+        const config_setting_t *m = config_setting_get_member(g, placing[k][0]);
+        if (m && placing[k][1])
+            m = config_setting_get_member(m, placing[k][1]);
+        blame_first(c, b, m, true);
+    }
+}
+
 /* What placed the spheres of entry g: the override of a member in `placing` (the one typed
  * first where several were), else the deck's line of its position (a single sphere) or of the
  * entry (a group). */
 static blame entry_blame(const nbep__scene_ctx *c, const config_setting_t *g)
 {
     blame b = {NULL, 0, NBEP_DIAG_UNRANKED};
-    for (size_t k = 0; k < sizeof placing / sizeof *placing; k++) {
-        const config_setting_t *m = config_setting_get_member(g, placing[k][0]);
-        if (m && placing[k][1])
-            m = config_setting_get_member(m, placing[k][1]);
-        blame_first(c, &b, m, true);
-    }
+    members_blame(c, &b, g);
     if (b.label)
         return b;
     const config_setting_t *pos = config_setting_get_member(g, "position");
@@ -363,20 +369,70 @@ static blame entry_blame(const nbep__scene_ctx *c, const config_setting_t *g)
     return b;
 }
 
+/* Whether plane p of s lies at or inside the box [lo, hi]: some corner of it is not on the
+ * plane's free side. */
+static bool plane_reaches(const nbep_state *s, size_t p, nbep_vec3 lo, nbep_vec3 hi)
+{
+    const nbep_vec3 n = s->plane_normal[p];
+    const double least = n.x * (n.x > 0.0 ? lo.x : hi.x) + n.y * (n.y > 0.0 ? lo.y : hi.y) +
+                         n.z * (n.z > 0.0 ? lo.z : hi.z);
+    return !(least > s->plane_offset[p]);
+}
 
-/* A group whose spheres cannot be placed: the message is blamed as an overlap is (entry_blame:
- * the --set or sweep axis of what places them, the first typed), else put at the deck's line
- * of its count. */
-static void fill_failed(nbep__scene_ctx *c, const nbep__scene_entry *e, const char *fmt, ...)
-    NBEP_PRINTF(3, 4);
-static void fill_failed(nbep__scene_ctx *c, const nbep__scene_entry *e, const char *fmt, ...)
+/* What a group that cannot be placed is blamed on: the override typed first of what places
+ * its spheres (members_blame) and of what bounds the room they go in: the box's corners where
+ * the group has no region (the box is its region), and each plane at or inside its region
+ * (plane_at's settings: a wall's element of box.min or box.max, a deck plane's point and
+ * normal), every plane for random places (they keep clear of each), the box's walls alone for
+ * a lattice (they clip its region; it does not look at the others). Label NULL where none was
+ * typed. (Until 2026-11-30 a --set or sweep axis of the box or of a plane that left a group no
+ * room was not named: the message stood at the group's count.) */
+static blame fill_blame(const nbep__scene_ctx *c, const nbep_state *s,
+                        const nbep__scene_entry *e, const config_setting_t *const *plane_at)
+{
+    blame b = {NULL, 0, NBEP_DIAG_UNRANKED};
+    members_blame(c, &b, e->setting);
+    if (!config_setting_get_member(e->setting, "region")) {
+        /* the entry's list's parent: the deck's root, which holds the box */
+        const config_setting_t *list = config_setting_parent(e->setting);
+        const config_setting_t *root = list ? config_setting_parent(list) : NULL;
+        const config_setting_t *box = root ? config_setting_get_member(root, "box") : NULL;
+        if (box) {
+            blame_first(c, &b, config_setting_get_member(box, "min"), true);
+            blame_first(c, &b, config_setting_get_member(box, "max"), true);
+        }
+    }
+    for (size_t p = 0; plane_at && p < s->n_planes; p++) {
+        const config_setting_t *at = plane_at[2 * p];
+        const bool wall = !(at && config_setting_is_group(at));
+        if ((!wall && e->place == NBEP__PLACE_LATTICE) || !plane_reaches(s, p, e->lo, e->hi))
+            continue;
+        if (wall) {
+            blame_first(c, &b, at, false);
+        } else {
+            blame_first(c, &b, config_setting_get_member(at, "point"), true);
+            blame_first(c, &b, config_setting_get_member(at, "normal"), true);
+        }
+    }
+    return b;
+}
+
+
+/* A group whose spheres cannot be placed: the message is blamed as fill_blame says (the --set
+ * or sweep axis typed first of what places them and of what bounds their room), else put at
+ * the deck's line of its count. */
+static void fill_failed(nbep__scene_ctx *c, const nbep_state *s, const nbep__scene_entry *e,
+                        const config_setting_t *const *plane_at, const char *fmt, ...)
+    NBEP_PRINTF(5, 6);
+static void fill_failed(nbep__scene_ctx *c, const nbep_state *s, const nbep__scene_entry *e,
+                        const config_setting_t *const *plane_at, const char *fmt, ...)
 {
     char msg[512];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    const blame b = entry_blame(c, e->setting);
+    const blame b = fill_blame(c, s, e, plane_at);
     if (b.label)
         nbep__scene_error_from(c, b.label, 0, __FILE__, __LINE__, "%s", msg);
     else
@@ -477,7 +533,7 @@ static void set_sphere(nbep_state *s, const nbep__scene_entry *e, size_t id, nbe
  * far (by the nearest image along periodic axes, g->pb) and with the planes. Returns false
  * when out of memory. */
 static bool place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep__scene_entry *e,
-                         size_t k, uint64_t seed)
+                         size_t k, uint64_t seed, const config_setting_t *const *plane_at)
 {
     const double r = e->radius;
     double reach = 0.0; /* r and the largest radius placed: the largest contact distance */
@@ -496,7 +552,7 @@ static bool place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep_
             placed = clear_of_planes(s, pr.p, r) && !probe_near(g, &pr, reach);
         }
         if (!placed) {
-            fill_failed(c, e,
+            fill_failed(c, s, e, plane_at,
                             "spheres.[%zu]: could not place %" PRIu64
                             " spheres of radius %g in the region: placed %" PRIu64
                             " (packing fraction %.2f)",
@@ -556,7 +612,7 @@ static double lattice_spacing(const double len[3], double r, uint64_t count)
 }
 
 static bool place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep__scene_entry *e,
-                          size_t k, uint64_t seed)
+                          size_t k, uint64_t seed, const config_setting_t *const *plane_at)
 {
     const double r = e->radius;
     const double lo[3] = {e->lo.x + r, e->lo.y + r, e->lo.z + r};
@@ -567,7 +623,7 @@ static bool place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep
     double spacing = lattice_spacing(len, r, e->count);
     if (spacing == 0.0) {
         double most = lattice_capacity(len, 2.0 * r);
-        fill_failed(c, e,
+        fill_failed(c, s, e, plane_at,
                         "spheres.[%zu]: could not place %" PRIu64
                         " spheres of radius %g in the region: a simple cubic lattice holds at "
                         "most %.0f (packing fraction %.2f)",
@@ -592,7 +648,8 @@ static bool place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep
 
 nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s, const nbep__scene_entry *e,
                               size_t n_entries, uint64_t seed, const bool *box_periodic,
-                              nbep_vec3 box_lo, nbep_vec3 box_hi)
+                              nbep_vec3 box_lo, nbep_vec3 box_hi,
+                              const config_setting_t *const *plane_at)
 {
     grid g;
     if (!grid_init(&g, s, e, n_entries)) {
@@ -613,9 +670,9 @@ nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s, const nbep__sce
         }
     for (size_t k = 0; ok && k < n_entries; k++) {
         if (e[k].place == NBEP__PLACE_RANDOM)
-            ok = place_random(c, &g, s, &e[k], k, seed);
+            ok = place_random(c, &g, s, &e[k], k, seed, plane_at);
         else if (e[k].place == NBEP__PLACE_LATTICE)
-            ok = place_lattice(c, &g, s, &e[k], k, seed);
+            ok = place_lattice(c, &g, s, &e[k], k, seed, plane_at);
     }
     grid_fini(&g);
     if (!ok)

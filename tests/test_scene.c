@@ -1229,6 +1229,76 @@ static void test_a_group_a_set_keeps_from_fitting_names_the_set(void **state)
                                         "could not place 4 spheres of radius 0.1 in the region"));
 }
 
+/* A group that a --set of the box or of a plane leaves no room names that --set, as an overlap
+ * with a wall or plane it moved does (until 2026-11-30 the deck's line of the group's count,
+ * which the user had not touched: `nbep check paper-box.deck --set box.max.[0]=0.05`, and a
+ * sweep axis of box.max that shrank the box named the group's line, not the axis): the box's
+ * corners for a group without a region (the box is its region), a wall that clips a region,
+ * a plane that cuts a random group's region; not a plane a lattice never looks at, nor a wall
+ * away from a region inside the box. */
+static void test_a_group_a_set_of_the_box_or_a_plane_keeps_from_fitting_names_the_set(
+    void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *deck = write_deck("scene_fill_box.deck",
+                                  "box: { min = [0.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0]; };\n"
+                                  "planes = ( { normal = [0.0, 0.0, 1.0]; point = [0.0, 0.0, 0.0]; } );\n"
+                                  "spheres = (\n"
+                                  "  { count = 8; radius = 0.3; mass = 1.0; place = \"lattice\"; },\n"
+                                  "  { count = 4; radius = 0.1; mass = 1.0; place = \"random\";\n"
+                                  "    region = { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; }; }\n"
+                                  ");\n",
+                                  buf, sizeof buf);
+    /* the box whole, then one element of a corner: the lattice (no region) has no room */
+    LOAD_FAILS(f, NBEP_EDECK, deck, "run.steps=3", "box.max=[0.8, 0.8, 2.0]");
+    ASSERT_DIAG(&f->d, "--set box.max=[0.8, 0.8, 2.0]: spheres.[0]: could not place 8 spheres of "
+                       "radius 0.3 in the region: a simple cubic lattice holds at most 3 (packing "
+                       "fraction 0.27)");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.max.[0]=0.5");
+    assert_int_equal(f->d.n_errors, 1);
+    assert_non_null(strstr(f->d.msg[0], "--set box.max.[0]=0.5: spheres.[0]: could not place 8 "
+                                        "spheres of radius 0.3"));
+    /* a deck plane moved up through the random group's region (the lattice, which never looks
+     * at the deck's planes, overlaps it: that is the overlap check's, named at the same --set) */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].count=1", "planes.[0].point=[0.0, 0.0, 0.95]");
+    assert_int_equal(f->d.n_errors, 1);
+    assert_non_null(strstr(f->d.msg[0], "--set planes.[0].point=[0.0, 0.0, 0.95]: spheres.[1]: "
+                                        "could not place 4 spheres of radius 0.1 in the region"));
+    /* the random group's region inside the box: a --set of the far corner is not what keeps
+     * its 1000 spheres out, its count is (typed after it) */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.max.[0]=2.5", "spheres.[1].count=1000");
+    assert_int_equal(f->d.n_errors, 1);
+    assert_non_null(strstr(f->d.msg[0], "--set spheres.[1].count=1000: spheres.[1]: could not "
+                                        "place 1000 spheres of radius 0.1 in the region"));
+    /* a lattice that the deck alone keeps out stays at its count's line though a plane was
+     * moved (inside the box, where the lattice goes): the lattice does not look at it */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "planes.[0].normal=[0.0, 0.0, 1.0]", "spheres.[0].radius=0.6");
+    assert_int_equal(f->d.n_errors, 1);
+    assert_non_null(strstr(f->d.msg[0], "--set spheres.[0].radius=0.6: spheres.[0]: could not "
+                                        "place 8 spheres of radius 0.6"));
+    /* a periodic box has no walls: its corners still bound a group without a region */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    const char *per = write_deck("scene_fill_periodic.deck",
+                                 "box: { min = [0.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0];\n"
+                                 "       periodic = [true, true, true]; };\n"
+                                 "spheres = ( { count = 27; radius = 0.3; mass = 1.0; place = \"lattice\"; } );\n",
+                                 buf, sizeof buf);
+    LOAD_FAILS(f, NBEP_EDECK, per, "box.max.[1]=1.3");
+    assert_int_equal(f->d.n_errors, 1);
+    assert_non_null(strstr(f->d.msg[0], "--set box.max.[1]=1.3: spheres.[0]: could not place 27 "
+                                        "spheres of radius 0.3"));
+}
+
 static void test_overlaps_with_spheres_and_planes_are_named(void **state)
 {
     fixture *f = *state;
@@ -1886,6 +1956,7 @@ int main(void)
         T(test_an_overlap_a_set_made_names_the_set),
         T(test_an_overlap_with_a_wall_a_set_moved_names_the_set),
         T(test_a_group_a_set_keeps_from_fitting_names_the_set),
+        T(test_a_group_a_set_of_the_box_or_a_plane_keeps_from_fitting_names_the_set),
         T(test_an_overlap_a_set_of_a_group_made_names_the_set),
         T(test_overlap_names_entries_and_sphere_ids),
         T(test_many_overlaps_list_twenty_then_count_the_rest),

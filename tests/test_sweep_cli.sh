@@ -237,5 +237,22 @@ got=$(sed -n 's/^sweep output:    about \([0-9.e+-]*\) MB in all.*/\1/p' "$tmp/s
 check "... its output in all ($got MB) is the sum of its runs' own ($total MB), to 3 digits" \
     "awk -v a='$got' -v b='$total' 'BEGIN { exit !(a > 0 && (a - b) ^ 2 <= (0.006 * b) ^ 2) }'"
 
+# an axis of the box that leaves a group no room names the axis, as an axis of the group's own
+# radius does (until 2026-11-30 the group's deck line, which the study did not vary)
+cat >"$tmp/box-axis.deck" <<'EOF'
+run: { steps = 10; threads = 1; };
+box: { min = [0.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0]; };
+spheres = ( { count = 27; radius = 0.1; mass = 1.0; place = "random"; } );
+output: { file = "box-axis.h5"; every = 5; };
+sweep: {
+  vary = ( { key = "box.max"; values = ([2.0, 2.0, 2.0], [0.3, 0.3, 0.3]); } );
+};
+EOF
+timeout 60 "$nbep" check "$tmp/box-axis.deck" >"$tmp/stdout" 2>"$tmp/stderr"
+rc=$?
+check "an axis of box.max that leaves the group no room: exit 2 (got $rc), named at the axis's line" \
+    "[ $rc = 2 ] && [ ! -s '$tmp/stdout' ] && one_line &&
+     grep -q '^nbep: sweep run 1 (box.max=\\[0.3, 0.3, 0.3\\] seed=1) cannot run: .*box-axis.deck:6: sweep.vary.\\[0\\]: spheres.\\[0\\]: could not place 27 spheres' '$tmp/stderr'"
+
 [ $fail = 0 ] && echo "sweep_cli: all passed"
 exit $fail
