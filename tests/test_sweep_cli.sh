@@ -206,9 +206,9 @@ timeout 60 "$nbep" check "$tmp/combo.deck" >"$tmp/stdout" 2>"$tmp/stderr"
 rc=$?
 check "a study with a combination that cannot be placed: nbep check exits 2 (got $rc), nothing on stdout" \
     "[ $rc = 2 ] && [ ! -s '$tmp/stdout' ]"
-check "... one line for each run that cannot run, 3 and 7, naming its values and the error" \
+check "... one line for each run that cannot run, 3 and 7, naming its values and the error at the first axis that places the group (README's example)" \
     "[ \$(wc -l < '$tmp/stderr') = 2 ] &&
-     grep -q '^nbep: sweep run 3 (spheres.\[0\].radius=0.45 spheres.\[0\].count=27 seed=1) cannot run: .*could not place 27 spheres of radius 0.45' '$tmp/stderr' &&
+     grep -q '^nbep: sweep run 3 (spheres.\[0\].radius=0.45 spheres.\[0\].count=27 seed=1) cannot run: .*combo.deck:7: sweep.vary.\[0\]: spheres.\[0\]: could not place 27 spheres of radius 0.45' '$tmp/stderr' &&
      grep -q '^nbep: sweep run 7 (spheres.\[0\].radius=0.45 spheres.\[0\].count=27 seed=2) cannot run: ' '$tmp/stderr'"
 # more runs that cannot run than are listed: the first 10, then a count of the rest
 timeout 60 "$nbep" check "$tmp/combo.deck" --set sweep.replicas=12 >"$tmp/stdout" 2>"$tmp/stderr"
