@@ -115,24 +115,6 @@ static void print_check(const nbep_scene *sc, int threads)
  * so for a million): a login node's minute at most; the runs past it are checked as they run. */
 #define CHECK_SWEEP_SECONDS 60.0
 
-/* `nbep check` of a study: its runs, what was checked of them, and their output in all. */
-static void print_sweep_check(const nbep_sweep_check_report *r)
-{
-    printf("sweep:           %zu runs (%llu replica%s x %zu combination%s) into %s/\n", r->n_runs,
-           (unsigned long long)r->replicas, r->replicas == 1 ? "" : "s", r->n_combos,
-           r->n_combos == 1 ? "" : "s", r->dir);
-    if (r->out_of_time)
-        printf("sweep runs:      the first %zu of %zu loaded and placed in %g s (the others are "
-               "when they run); the largest needs about %.3g MB\n",
-               r->checked, r->n_runs, CHECK_SWEEP_SECONDS, r->memory_max / 1e6);
-    else
-        printf("sweep runs:      all %zu loaded and placed as nbep sweep will; the largest "
-               "needs about %.3g MB\n",
-               r->checked, r->memory_max / 1e6);
-    printf("sweep output:    about %.3g MB in all%s (the runs' files)\n", r->output_bytes / 1e6,
-           r->out_of_time ? " for those" : "");
-}
-
 static nbep_status cmd_run(const nbep_cli *cli, nbep_diag *d)
 {
     const nbep_run_request rq = {.deck_path = cli->path,
@@ -171,7 +153,7 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
     if (st == NBEP_OK)
         print_check(&sc, nbep_sim_resolve_threads(sc.threads));
     if (st == NBEP_OK && study)
-        print_sweep_check(&rep);
+        nbep_sweep_check_print(stdout, &rep);
     nbep_scene_fini(&sc);
     return st;
 }

@@ -340,6 +340,7 @@ nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides
     if (st != NBEP_OK)
         return st;
     rep->n_runs = p.n_runs;
+    rep->budget_s = budget_s;
     rep->n_combos = p.n_combos;
     rep->replicas = p.replicas;
     snprintf(rep->dir, sizeof rep->dir, "%s", p.dir);
@@ -385,6 +386,25 @@ nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides
                       rep->failed - NBEP_SWEEP_CHECK_LISTED);
     nbep_sweep_plan_fini(&p);
     return st != NBEP_OK ? st : rep->failed ? NBEP_EDECK : NBEP_OK;
+}
+
+void nbep_sweep_check_print(FILE *f, const nbep_sweep_check_report *r)
+{
+    fprintf(f, "sweep:           %zu runs (%llu replica%s x %zu combination%s) into %s/\n",
+            r->n_runs, (unsigned long long)r->replicas, r->replicas == 1 ? "" : "s", r->n_combos,
+            r->n_combos == 1 ? "" : "s", r->dir);
+    if (r->out_of_time)
+        fprintf(f,
+                "sweep runs:      the first %zu of %zu loaded and placed in %g s (the others "
+                "are checked when they run); the largest needs about %.3g MB\n",
+                r->checked, r->n_runs, r->budget_s, r->memory_max / 1e6);
+    else
+        fprintf(f,
+                "sweep runs:      all %zu loaded and placed as nbep sweep will; the largest "
+                "needs about %.3g MB\n",
+                r->checked, r->memory_max / 1e6);
+    fprintf(f, "sweep output:    about %.3g MB in all%s (the runs' files)\n",
+            r->output_bytes / 1e6, r->out_of_time ? " for those" : "");
 }
 
 /* ---- reusing finished runs --------------------------------------------------------------- */

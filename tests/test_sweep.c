@@ -138,6 +138,20 @@ static void test_a_check_of_a_study_loads_every_run(void **state)
     assert_int_equal(rep.checked, 1);
     assert_true(rep.out_of_time);
     assert_true(fabs(rep.output_bytes - each) <= 1e-9 * each);
+    /* nbep check's line says so, and that the others are checked as they run (until
+     * 2026-11-30 it read "the others are when they run") */
+    char *text = NULL;
+    size_t len = 0;
+    FILE *m = open_memstream(&text, &len);
+    assert_non_null(m);
+    nbep_sweep_check_print(m, &rep);
+    assert_int_equal(fclose(m), 0);
+    assert_non_null(strstr(text, "\nsweep runs:      the first 1 of 18 loaded and placed in 0 s "
+                                 "(the others are checked when they run); the largest needs "
+                                 "about "));
+    assert_non_null(strstr(text, "\nsweep output:    about "));
+    assert_non_null(strstr(text, " MB in all for those (the runs' files)\n"));
+    free(text);
     /* 8 spheres of radius 0.1 fit the unit box, so does 1 of 0.45; 8 of 0.45 do not: runs 3
      * and 7 (radius 0.45, count 8, each replica: seeds 11 and 12) */
     write_deck("sweep_check_combo",

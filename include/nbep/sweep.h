@@ -25,6 +25,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "nbep/cli.h"
 #include "nbep/compiler.h"
@@ -176,6 +177,7 @@ typedef struct nbep_sweep_check_report {
     double output_bytes;          /* the output files of the checked runs that load, in all */
     double memory_max;            /* the most memory one of them needs (nbep_sim_memory_estimate) */
     bool out_of_time;             /* stopped after budget_s: the runs past `checked` unchecked */
+    double budget_s;              /* the time it was given */
 } nbep_sweep_check_report;
 
 /* The most runs' deck errors nbep_sweep_check lists (one line each); the rest are counted. */
@@ -194,6 +196,11 @@ NBEP_MUST_CHECK nbep_status nbep_sweep_check(const char *deck_path, const char *
                                              const char *const *origins, size_t n_overrides,
                                              nbep_scene *sc, double budget_s,
                                              nbep_sweep_check_report *rep, nbep_diag *d);
+
+/* nbep check's lines about a study (after the deck's own): its runs and folder, what was
+ * checked of them and the most memory one needs, their output in all (README, Parameter
+ * studies). */
+void nbep_sweep_check_print(FILE *f, const nbep_sweep_check_report *r);
 
 /* `nbep sweep DECK [options]`: plans the sweep from cli (path, overrides, summary, quiet),
  * creates the sweep directory, runs every run (split over the ranks when started by an MPI
