@@ -203,18 +203,26 @@ char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label,
                 line += text[i] == '\n';
             }
             i++;
-        } else if (ch == '@' && !label && is_include(text, i)) {
+        } else if (ch == '@' && is_include(text, i)) {
             /* A run keeps its deck's text (SPEC: the root's `deck`, the full text) and names
              * errors by its lines; an included file's text is in neither, and libconfig 1.5
-             * reads it without this rewrite (a seed of 4294967297 there became 1) */
+             * reads it without this rewrite (a seed of 4294967297 there became 1). An
+             * override's value is libconfig text too, kept as typed in the run's file: one
+             * that spans lines can hold the directive (until 2026-11-30 it was read) */
             (*n_bad)++;
             if (n_include)
                 (*n_include)++;
-            nbep_diag_add_ranked(c->d, nbep__scene_rank(c, NULL, line), __FILE__, __LINE__,
-                                 "%s:%zu: @include is not supported: a run keeps its deck's "
-                                 "text and names errors by its lines; put the included settings "
-                                 "in the deck",
-                                 c->deck, line);
+            if (!label)
+                nbep_diag_add_ranked(c->d, nbep__scene_rank(c, NULL, line), __FILE__, __LINE__,
+                                     "%s:%zu: @include is not supported: a run keeps its deck's "
+                                     "text and names errors by its lines; put the included "
+                                     "settings in the deck",
+                                     c->deck, line);
+            else
+                nbep_diag_add_ranked(c->d, nbep__scene_rank(c, label, 0), __FILE__, __LINE__,
+                                     "%s: @include is not supported: a run keeps its overrides "
+                                     "as typed; give the included settings themselves",
+                                     label);
             i += 8;
         } else if (is_name_start(ch)) {
             while (i < n && is_name_char(text[i]))

@@ -1184,6 +1184,28 @@ static void test_include_is_refused_at_its_line(void **state)
     ASSERT_DIAG(&f->d, want[0], want[1]);
 }
 
+/* The same directive in a --set's value, which is libconfig text kept as typed in the run's
+ * file (a value that spans lines can hold one): refused at that --set, the file not read (until
+ * 2026-11-30 it was read: its seed of 4294967297 became 1, and the run's overrides said
+ * nothing of what it set). */
+static void test_include_in_a_set_is_refused(void **state)
+{
+    fixture *f = *state;
+    char inc[256], buf[256], ov[512], want[768];
+    write_deck("scene_include_set.cfg", "seed = 4294967297;\n", inc, sizeof inc);
+    const char *deck = write_deck("scene_include_set.deck",
+                                  "spheres = ( { position = [0.0, 0.0, 0.0]; radius = 0.5; "
+                                  "mass = 1.0; } );\n",
+                                  buf, sizeof buf);
+    snprintf(ov, sizeof ov, "run={ steps = 3;\n@include \"%s\"\n}", inc);
+    LOAD_FAILS(f, NBEP_EDECK, deck, ov);
+    snprintf(want, sizeof want,
+             "--set %s: @include is not supported: a run keeps its overrides as typed; give the "
+             "included settings themselves",
+             ov);
+    ASSERT_DIAG(&f->d, want);
+}
+
 static void test_lattice_fill_that_cannot_fit_names_its_capacity(void **state)
 {
     fixture *f = *state;
@@ -1952,6 +1974,7 @@ int main(void)
         T(test_random_fill_that_cannot_fit_names_its_packing_fraction),
         T(test_lattice_fill_that_cannot_fit_names_its_capacity),
         T(test_include_is_refused_at_its_line),
+        T(test_include_in_a_set_is_refused),
         T(test_overlaps_with_spheres_and_planes_are_named),
         T(test_an_overlap_a_set_made_names_the_set),
         T(test_an_overlap_with_a_wall_a_set_moved_names_the_set),
