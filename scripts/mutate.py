@@ -1319,6 +1319,14 @@ MUTANTS = [
      "    if (bb.label && bb.rank < at.rank) /* a deck line's rank is past every option's */",
      "    if (bb.label && !at.label) /* a deck line's rank is past every option's */",
      ["test_scene"], None),
+    # a region the box was moved off: the --set of the box's corner, where typed first
+    ("blame-region-box-unasked", "src/scene.c",
+     "        if (ov && (!ov_at || nbep__scene_rank(&L->c, ov, 0) < nbep__scene_rank(&L->c, ov_at, 0)))",
+     "        if (0 && (!ov_at || nbep__scene_rank(&L->c, ov, 0) < nbep__scene_rank(&L->c, ov_at, 0)))",
+     ["test_scene"], None),
+    ("blame-region-box-over-first", "src/scene.c",
+     "        if (ov && (!ov_at || nbep__scene_rank(&L->c, ov, 0) < nbep__scene_rank(&L->c, ov_at, 0)))",
+     "        if (ov)", ["test_scene"], None),
     # libconfig's @include, refused at its line and never read
     ("include-accepted", "src/scene_text.c", "        } else if (ch == '@' && is_include(text, i)) {",
      "        } else if (0) {", ["test_scene"], None),

@@ -480,10 +480,28 @@ static bool check_corners(load *L, const config_setting_t *at, const char *prefi
  * places nothing: the random placement said it could place no sphere, the lattice listed every
  * sphere against a wall). One that lies partly outside is taken: its spheres land in the part
  * inside. Along a periodic axis any region is taken: its places wrap into the box (SPEC:
- * region and placement work as before there). */
-static bool check_region_meets_box(load *L, const config_setting_t *at, const char *prefix,
+ * region and placement work as before there). The message is blamed as corners_at blames the
+ * region's (at), or on a corner of the box (entry e's deck's) that an override gave and that
+ * was typed before: a --set or sweep axis of box.min or box.max that moved the box off the
+ * region is what made it (until 2026-11-30 the region's deck line was named). */
+static bool check_region_meets_box(load *L, const config_setting_t *e,
+                                   const config_setting_t *at, const char *prefix,
                                    const nbep_scene *sc, nbep_vec3 lo, nbep_vec3 hi)
 {
+    const config_setting_t *list = config_setting_parent(e);
+    const config_setting_t *root = list ? config_setting_parent(list) : NULL;
+    const config_setting_t *box = root ? config_setting_get_member(root, "box") : NULL;
+    if (box) {
+        unsigned line;
+        const char *ov_at = nbep__scene_origin(at, config_setting_is_array(at), &line);
+        const config_setting_t *corner = corners_at(L, config_setting_get_member(box, "min"),
+                                                    config_setting_get_member(box, "max"));
+        const char *ov = corner ? nbep__scene_origin(corner, config_setting_is_array(corner),
+                                                     &line)
+                                : NULL;
+        if (ov && (!ov_at || nbep__scene_rank(&L->c, ov, 0) < nbep__scene_rank(&L->c, ov_at, 0)))
+            at = corner;
+    }
     const double l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};
     const double bl[3] = {sc->box_min.x, sc->box_min.y, sc->box_min.z};
     const double bh[3] = {sc->box_max.x, sc->box_max.y, sc->box_max.z};
@@ -681,7 +699,7 @@ static bool parse_entry(load *L, const config_setting_t *e, const char *prefix,
         got g_max = get_vec3(L, region, path, S_SPH_REGION_MAX, &out->hi, &max);
         at = g_min == GOT && g_max == GOT ? corners_at(L, min, max) : NULL;
         ok = g_min == GOT && g_max == GOT && check_corners(L, at, path, out->lo, out->hi) &&
-             (!sc->has_box || check_region_meets_box(L, at, path, sc, out->lo, out->hi)) && ok;
+             (!sc->has_box || check_region_meets_box(L, e, at, path, sc, out->lo, out->hi)) && ok;
         if (ok && sc->has_box && out->place == NBEP__PLACE_LATTICE) {
             /* a lattice fills the part of its region inside the box, as random placement
              * keeps inside it (until 2026-11-30 the lattice filled the whole region and every

@@ -551,6 +551,22 @@ static void test_a_region_outside_the_box_is_an_error(void **state)
     snprintf(want, sizeof want, "%s:5: spheres.[0].region lies outside the box (y: region [5, 6], "
                                 "box [0, 2])", path);
     ASSERT_DIAG(&f->d, want);
+    /* a --set of the box that moves it off a region the deck gave names that --set, typed
+     * before one of the region's own (until 2026-11-30 the region's deck line: the user had
+     * changed the box, not the region) */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_region_outside.deck", "box.min.[0]=1.5",
+               "spheres.[0].region.max.[0]=4.5");
+    assert_true(f->d.n_errors >= 1);
+    assert_non_null(strstr(f->d.msg[0], "--set box.min.[0]=1.5: spheres.[0].region lies outside "
+                                        "the box (x: region [3, 4.5], box [1.5, 2])"));
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_region_outside.deck", "spheres.[0].region.max.[0]=4.5",
+               "box.min.[0]=1.5");
+    assert_non_null(strstr(f->d.msg[0], "--set spheres.[0].region.max.[0]=4.5: spheres.[0].region "
+                                        "lies outside the box (x: region [3, 4.5], box [1.5, 2])"));
 }
 
 /* A bound a message states is the bound taken: run.threads "must be <= 1024"
