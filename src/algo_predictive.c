@@ -894,15 +894,13 @@ static void pred_run(nbep_sim *sim, void *p)
                 if (look && atomic_load_explicit(&c->round_stop, memory_order_relaxed)) {
                     /* a signal during the step's rounds: the step is abandoned (no row,
                      * frame or counts of it), the run ends after the step before */
-                    if (tid == 0) {
-                        sim->status = nbep_sim_stop_status(sim->opt.stop_signal);
-                        sim->abandoned = true;
-                    }
+                    if (tid == 0)
+                        nbep__sim_abandon(sim);
                     quit = true;
                     break;
                 }
                 if (look && tid == 0) /* the progress within a long step */
-                    nbep__sim_progress_within(sim, step, (t_min - T0) / sim->dt);
+                    nbep__sim_progress_within(sim, step, t_min);
                 if (round % STALL_ROUNDS == STALL_ROUNDS - 1 &&
                     !(t_min - t_check > STALL_FRACTION * sim->dt)) {
                     if (tid == 0) {

@@ -207,8 +207,8 @@ static inline bool nbep__evloop_commit_sets(const evl_ws *w, uint32_t j)
 
 /* Counts one event at time t towards the stall check: false when st->events events in a row
  * have not advanced time by more than st->dt, or at a look at the stop signal that finds one
- * (st->stopped set; a look that finds none calls st->on_look). The look is relaxed: the signal's handler stores it with no other data
- * to pass. */
+ * (st->stopped set; a look that finds none calls st->on_look). The look is relaxed: the
+ * signal's handler stores it with no other data to pass. */
 static inline bool nbep__evloop_advances(nbep_evloop_stall *st, double t)
 {
     NBEP_EVLOOP_STALL_HOOK(st, t);

@@ -510,8 +510,7 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
     if (fail && stall->stopped) {
         /* a signal during a step's events: the step is abandoned (its rows, frame and counts
          * never made), the run ends after the step before (nbep_sim_run) */
-        sim->status = nbep_sim_stop_status(sim->opt.stop_signal);
-        sim->abandoned = true;
+        nbep__sim_abandon(sim);
     } else if (fail && nbep_evloop_failed(c->ev)) {
         nbep_diag_add(sim->diag, __FILE__, __LINE__,
                       "nbep: step %llu: no memory for the neighbour lists; stopping",
@@ -530,14 +529,13 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
 typedef struct cells_look {
     nbep_sim *sim;
     uint64_t step;
-    double T0;
 } cells_look;
 
 /* Thread 0 (the loop's, or the team's leader), at an event at time t of a look's step. */
 static void cells_on_look(void *ctx, double t)
 {
     const cells_look *l = ctx;
-    nbep__sim_progress_within(l->sim, l->step, (t - l->T0) / l->sim->dt);
+    nbep__sim_progress_within(l->sim, l->step, t);
 }
 
 /* The steps of the cells mode, inside pred_run's parallel region. Thread 0 runs each step's
@@ -603,7 +601,7 @@ void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own,
         /* the step's events, on the threads of its way; a probe of another way first runs
          * those of the step's first part (pred_ways.c), behind a barrier: its threads have
          * left the team loop before the rest's enter it */
-        cells_look look = {sim, step, u.T0};
+        cells_look look = {sim, step};
         nbep_evloop_stall stall = NBEP_EVLOOP_STALL(STALL_EVENTS, STALL_FRACTION * sim->dt,
                                                     sim->opt.stop_signal, cells_on_look, &look);
         const int probe = c->ways.probe[step & 1];

@@ -392,8 +392,8 @@ static void progress_at(nbep_sim *sim, double at, bool last)
     char where[48];
     if (at == floor(at))
         snprintf(where, sizeof where, "%llu", (unsigned long long)at);
-    else /* (never shown as the next step's whole number: at most the step's end less 0.01) */
-        snprintf(where, sizeof where, "%.2f", fmin(at, ceil(at) - 0.01));
+    else
+        snprintf(where, sizeof where, "%.2f", at);
     if (tty)
         fprintf(stderr, "\rstep %s/%llu  %5.1f%%  %.4g steps/s  ETA %.0f s   %s", where,
                 (unsigned long long)sim->step_end, pct, rate, eta, last ? "\n" : "");
@@ -407,13 +407,19 @@ static void progress(nbep_sim *sim, uint64_t step, bool last)
     progress_at(sim, (double)step, last);
 }
 
-void nbep__sim_progress_within(nbep_sim *sim, uint64_t step, double part)
+void nbep__sim_progress_within(nbep_sim *sim, uint64_t step, double t)
 {
-    /* a part from the events' times: kept inside the step, so that the line never shows the
-     * step's end (or a NaN) before the step has ended */
-    part = part > 0.0 ? fmin(part, 1.0) : 0.0;
-    const double at = (double)(step - 1) + part;
-    progress_at(sim, at < (double)step ? at : (double)(step - 1), false);
+    /* the part of the step gone, at most 0.99: the line never shows the step's end (nor a
+     * NaN) before the step has ended, and "%.2f" never rounds it up to it */
+    const double part = (t - (double)(step - 1) * sim->dt) / sim->dt;
+    const double at = (double)(step - 1) + (part > 0.0 ? fmin(part, 0.99) : 0.0);
+    progress_at(sim, at, false);
+}
+
+void nbep__sim_abandon(nbep_sim *sim)
+{
+    sim->status = nbep_sim_stop_status(sim->opt.stop_signal);
+    sim->abandoned = true;
 }
 
 bool nbep__sim_frame_due(const nbep_sim *sim, uint64_t step)

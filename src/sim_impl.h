@@ -151,9 +151,12 @@ void nbep__sim_frame_overlap(nbep_sim *sim, uint64_t step, int tid, nbep_range o
  * prints progress, and sets sim->stop when the run must end (signal, error, last step).
  * Returns the value of stop. */
 int nbep__sim_end_step(nbep_sim *sim, uint64_t step);
-/* Thread 0, within step `step`, `part` (0 .. 1) of its time gone: the progress line, when one
- * is due (a step of minutes otherwise showed none until its end; SPEC: a line about every 10 s
- * in a log, a live one on a terminal). */
-void nbep__sim_progress_within(nbep_sim *sim, uint64_t step, double part);
+/* Thread 0, at an event at absolute time t within step `step`: the progress line, when one is
+ * due (a step of minutes otherwise showed none until its end; SPEC: a line about every 10 s in
+ * a log, a live one on a terminal). */
+void nbep__sim_progress_within(nbep_sim *sim, uint64_t step, double t);
+/* Thread 0, when a look within step `step`'s events found the stop signal: the run ends with
+ * the signal's status after the step before, the step abandoned (nbep_sim_abandoned). */
+void nbep__sim_abandon(nbep_sim *sim);
 
 #endif
