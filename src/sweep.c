@@ -144,12 +144,11 @@ static nbep_status plan_of_scene(const char *deck_path, const char *const *overr
                                  const char *const *origins, size_t n_overrides,
                                  nbep_scene *scene, nbep_sweep_plan *out, nbep_diag *d)
 {
-    nbep_scene sc = *scene;
     nbep_sweep_plan p = {0};
-    bool oom = !(p.deck_path = strdup(deck_path)) || !(p.dir = sweep_dir_of(sc.output_file)) ||
+    bool oom = !(p.deck_path = strdup(deck_path)) || !(p.dir = sweep_dir_of(scene->output_file)) ||
                !(p.base = calloc(n_overrides ? n_overrides : 1, sizeof *p.base)) ||
                !(p.base_origins =
-                     calloc(n_overrides + sc.sweep_n_axes + 1, sizeof *p.base_origins));
+                     calloc(n_overrides + scene->sweep_n_axes + 1, sizeof *p.base_origins));
     for (size_t k = 0; !oom && k < n_overrides; k++, p.n_base++)
         oom = !(p.base[k] = strdup(overrides[k])) ||
               (origins && origins[k] && !(p.base_origins[k] = strdup(origins[k])));
@@ -158,10 +157,10 @@ static nbep_status plan_of_scene(const char *deck_path, const char *const *overr
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory planning the sweep of %s", deck_path);
     }
     /* The scene's axes and deck text move into the plan. */
-    p.deck_text = sc.deck_text;
+    p.deck_text = scene->deck_text;
     scene->deck_text = NULL;
-    p.axes = sc.sweep_axes;
-    p.n_axes = sc.sweep_n_axes;
+    p.axes = scene->sweep_axes;
+    p.n_axes = scene->sweep_n_axes;
     scene->sweep_axes = NULL;
     scene->sweep_n_axes = 0;
     /* an axis value a run rejects is named as the deck's axis, not as a --set nobody typed */
@@ -178,9 +177,9 @@ static nbep_status plan_of_scene(const char *deck_path, const char *const *overr
         nbep_sweep_plan_fini(&p); /* (the axes and deck text with it) */
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory planning the sweep of %s", deck_path);
     }
-    p.replicas = sc.sweep_replicas;
-    p.seed = sc.seed;
-    p.steps = sc.steps;
+    p.replicas = scene->sweep_replicas;
+    p.seed = scene->seed;
+    p.steps = scene->steps;
 
     /* at most NBEP_SWEEP_RUNS_MAX runs: the deck check refused more */
     p.n_combos = 1;
