@@ -440,13 +440,10 @@ static void parse_physics(load *L, const config_setting_t *root, nbep_scene *sc)
 static const config_setting_t *corners_at(const load *L, const config_setting_t *min,
                                           const config_setting_t *max)
 {
-    unsigned line;
-    const char *ov_min = nbep__scene_origin(min, config_setting_is_array(min), &line);
-    const char *ov_max = nbep__scene_origin(max, config_setting_is_array(max), &line);
-    if (ov_min &&
-        (!ov_max || nbep__scene_rank(&L->c, ov_min, 0) < nbep__scene_rank(&L->c, ov_max, 0)))
-        return min;
-    return max;
+    uint64_t r_min, r_max;
+    (void)nbep__scene_set_by(&L->c, min, &r_min);
+    (void)nbep__scene_set_by(&L->c, max, &r_max);
+    return r_min < r_max ? min : max;
 }
 
 /* min < max on every axis, else one error at `at` (corners_at) naming each failing axis. */
@@ -492,14 +489,12 @@ static bool check_region_meets_box(load *L, const config_setting_t *e,
     const config_setting_t *root = list ? config_setting_parent(list) : NULL;
     const config_setting_t *box = root ? config_setting_get_member(root, "box") : NULL;
     if (box) {
-        unsigned line;
-        const char *ov_at = nbep__scene_origin(at, config_setting_is_array(at), &line);
         const config_setting_t *corner = corners_at(L, config_setting_get_member(box, "min"),
                                                     config_setting_get_member(box, "max"));
-        const char *ov = corner ? nbep__scene_origin(corner, config_setting_is_array(corner),
-                                                     &line)
-                                : NULL;
-        if (ov && (!ov_at || nbep__scene_rank(&L->c, ov, 0) < nbep__scene_rank(&L->c, ov_at, 0)))
+        uint64_t r_at, r_corner;
+        (void)nbep__scene_set_by(&L->c, at, &r_at);
+        (void)nbep__scene_set_by(&L->c, corner, &r_corner);
+        if (r_corner < r_at)
             at = corner;
     }
     const double l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};

@@ -46,6 +46,12 @@ void nbep__scene_error(nbep__scene_ctx *c, const config_setting_t *s, const char
  * what changed it), or a group above it that an override made or replaced; else NULL and
  * *line the deck's line (0 where there is none). In scene_text.c. */
 const char *nbep__scene_origin(const config_setting_t *s, bool elements, unsigned *line);
+/* The override that made setting s (may be NULL), or one of its elements for an array
+ * (nbep__scene_origin), NULL where none did; *rank its rank in the load's list
+ * (nbep__scene_rank), NBEP_DIAG_UNRANKED where none: of several settings, a message about them
+ * is blamed on the one with the least rank, the option typed first. In scene_text.c. */
+const char *nbep__scene_set_by(const nbep__scene_ctx *c, const config_setting_t *s,
+                               uint64_t *rank);
 /* nbep__scene_error for a message whose origin was found already (nbep__scene_origin's answer:
  * the override's label, else NULL and the deck's line at, 1 where 0). In scene_text.c. */
 void nbep__scene_error_from(nbep__scene_ctx *c, const char *label, unsigned at, const char *file,

@@ -330,17 +330,29 @@ typedef struct blame {
 static const char *const placing[][2] = {{"position", NULL}, {"radius", NULL}, {"count", NULL},
                                           {"place", NULL},    {"region", "min"}, {"region", "max"}};
 
-/* *b becomes the override that made setting m (may be NULL; one of its elements too where
- * `elements`, nbep__scene_origin) when one did and was typed before *b's: of several, the list
- * ranks the message with the first typed. */
-static void blame_first(const nbep__scene_ctx *c, blame *b, const config_setting_t *m,
-                        bool elements)
+/* *b becomes the override that made setting m (may be NULL; nbep__scene_set_by) when one did
+ * and was typed before *b's: of several, the list ranks the message with the first typed. */
+static void blame_first(const nbep__scene_ctx *c, blame *b, const config_setting_t *m)
 {
-    unsigned line;
-    const char *ov = m ? nbep__scene_origin(m, elements, &line) : NULL;
-    if (ov && nbep__scene_rank(c, ov, 0) < b->rank)
-        *b = (blame){ov, 0, nbep__scene_rank(c, ov, 0)};
+    uint64_t rank;
+    const char *ov = nbep__scene_set_by(c, m, &rank);
+    if (rank < b->rank)
+        *b = (blame){ov, 0, rank};
 }
+
+/* blame_first of what moved or made a plane (plane_at's two settings: a box wall's element of
+ * box.min or box.max and of box.periodic, a deck plane's group: its point or normal). */
+static void plane_blame(const nbep__scene_ctx *c, blame *b, const config_setting_t *const *at)
+{
+    if (at[0] && config_setting_is_group(at[0])) {
+        blame_first(c, b, config_setting_get_member(at[0], "point"));
+        blame_first(c, b, config_setting_get_member(at[0], "normal"));
+    } else {
+        blame_first(c, b, at[0]);
+        blame_first(c, b, at[1]);
+    }
+}
+
 
 /* The override of a member of entry g in `placing` that was typed first, into *b. */
 static void members_blame(const nbep__scene_ctx *c, blame *b, const config_setting_t *g)
@@ -349,7 +361,7 @@ static void members_blame(const nbep__scene_ctx *c, blame *b, const config_setti
         const config_setting_t *m = config_setting_get_member(g, placing[k][0]);
         if (m && placing[k][1])
             m = config_setting_get_member(m, placing[k][1]);
-        blame_first(c, b, m, true);
+        blame_first(c, b, m);
     }
 }
 
@@ -398,8 +410,8 @@ static blame fill_blame(const nbep__scene_ctx *c, const nbep_state *s,
         const config_setting_t *root = list ? config_setting_parent(list) : NULL;
         const config_setting_t *box = root ? config_setting_get_member(root, "box") : NULL;
         if (box) {
-            blame_first(c, &b, config_setting_get_member(box, "min"), true);
-            blame_first(c, &b, config_setting_get_member(box, "max"), true);
+            blame_first(c, &b, config_setting_get_member(box, "min"));
+            blame_first(c, &b, config_setting_get_member(box, "max"));
         }
     }
     for (size_t p = 0; plane_at && p < s->n_planes; p++) {
@@ -407,12 +419,7 @@ static blame fill_blame(const nbep__scene_ctx *c, const nbep_state *s,
         const bool wall = !(at && config_setting_is_group(at));
         if ((!wall && e->place == NBEP__PLACE_LATTICE) || !plane_reaches(s, p, e->lo, e->hi))
             continue;
-        if (wall) {
-            blame_first(c, &b, at, false);
-        } else {
-            blame_first(c, &b, config_setting_get_member(at, "point"), true);
-            blame_first(c, &b, config_setting_get_member(at, "normal"), true);
-        }
+        plane_blame(c, &b, &plane_at[2 * p]);
     }
     return b;
 }
@@ -724,23 +731,6 @@ static size_t entry_of(const nbep__scene_entry *e, size_t n, size_t id)
     return lo;
 }
 
-/* What moved or made a plane (plane_at's two settings: a box wall's element of box.min or
- * box.max and of box.periodic, a deck plane's group): the override of either, or of the
- * group's point or normal (the one typed first), else none (label NULL: an overlap with it
- * stays its sphere's). */
-static blame plane_blame(const nbep__scene_ctx *c, const config_setting_t *const *at)
-{
-    blame b = {NULL, 0, NBEP_DIAG_UNRANKED};
-    if (at[0] && config_setting_is_group(at[0])) {
-        blame_first(c, &b, config_setting_get_member(at[0], "point"), true);
-        blame_first(c, &b, config_setting_get_member(at[0], "normal"), true);
-    } else {
-        blame_first(c, &b, at[0], false);
-        blame_first(c, &b, at[1], false);
-    }
-    return b;
-}
-
 /* Sphere a overlaps `other` (sphere b, or the plane `wall` when b is SIZE_MAX) by `by`. The
  * overlap is blamed on whichever of the two an override placed or moved, the one typed first
  * where both were (the list ranks the message there), else on a's deck line (a, the later
@@ -840,8 +830,10 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
     blame *walls = placed + n_entries;
     for (size_t k = 0; k < n_entries; k++)
         placed[k] = entry_blame(c, e[k].setting);
-    for (size_t p = 0; p < s->n_planes; p++)
-        walls[p] = plane_blame(c, &plane_at[2 * p]);
+    for (size_t p = 0; p < s->n_planes; p++) {
+        walls[p] = (blame){NULL, 0, NBEP_DIAG_UNRANKED}; /* none: an overlap stays its sphere's */
+        plane_blame(c, &walls[p], &plane_at[2 * p]);
+    }
     overlaps o = {.c = c, .s = s, .e = e, .n_entries = n_entries, .placed = placed,
                   .walls = walls};
     const double blo[3] = {box_lo.x, box_lo.y, box_lo.z}, bhi[3] = {box_hi.x, box_hi.y, box_hi.z};

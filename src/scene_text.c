@@ -476,6 +476,15 @@ const char *nbep__scene_origin(const config_setting_t *s, bool elements, unsigne
     return ov;
 }
 
+const char *nbep__scene_set_by(const nbep__scene_ctx *c, const config_setting_t *s,
+                               uint64_t *rank)
+{
+    unsigned line;
+    const char *ov = s ? nbep__scene_origin(s, config_setting_is_array(s), &line) : NULL;
+    *rank = ov ? nbep__scene_rank(c, ov, 0) : NBEP_DIAG_UNRANKED;
+    return ov;
+}
+
 uint64_t nbep__scene_rank(const nbep__scene_ctx *c, const char *label, uint64_t line)
 {
     if (label) { /* a label not among them (none is) would go after the others */
