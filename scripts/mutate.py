@@ -1435,6 +1435,20 @@ MUTANTS = [
     ("info-status-requested-from-root", "src/output_info.c",
      "s.steps_requested.known ? s.steps_requested.value : r->steps);", "r->steps);",
      ["test_output"], None),
+    # ---- nbep check --summary: the JSON report ----
+    ("check-json-beside-human", "src/main.c",
+     "FILE *human = cli->summary && cli->quiet ? NULL : json_out ? stderr : stdout;",
+     "FILE *human = cli->summary && cli->quiet ? NULL : stdout;", ["tests/test_cli.sh"], None),
+    ("check-json-quiet-ignored", "src/main.c",
+     "FILE *human = cli->summary && cli->quiet ? NULL : json_out ? stderr : stdout;",
+     "FILE *human = json_out ? stderr : stdout;", ["tests/test_cli.sh"], None),
+    ("check-json-study-max-is-output", "src/check.c", "\"memory_bytes_max\", bytes(r->memory_max)",
+     "\"memory_bytes_max\", bytes(r->output_bytes)", ["tests/test_sweep_cli.sh"], None),
+    ("check-json-bytes-megabytes", "src/check.c", "json_integer((json_int_t)llround(v))",
+     "json_integer((json_int_t)llround(v / 1e6))", ["tests/test_cli.sh"], None),
+    ("check-json-paths-unchecked", "src/main.c",
+     "st = nbep_run_check_paths(cli->path, sc.output_file, cli->summary, d);",
+     "st = nbep_run_check_paths(cli->path, sc.output_file, NULL, d);", ["tests/test_cli.sh"], None),
 ]
 
 

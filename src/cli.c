@@ -25,10 +25,11 @@ static const char HELP[] =
     "      --dt X             time step (run.dt)\n"
     "      --set PATH=VALUE   override any deck setting, repeatable, e.g.\n"
     "                         --set physics.restitution=0.9 --set spheres.[0].count=8192\n"
-    "      --summary FILE     (run, sweep) write the JSON summary there (- = stdout)\n"
+    "      --summary FILE     write the JSON summary there (- = stdout); check: a JSON\n"
+    "                         report of what the run needs (memory_bytes, output.bytes)\n"
     "      --resume RUN.h5    (run) continue RUN.h5 from its last complete frame up to\n"
     "                         run.steps, appending to it; frames equal an uninterrupted run's\n"
-    "      --quiet            no progress output\n"
+    "      --quiet            no progress output (check with --summary: no report)\n"
     "a short option's value may follow it attached: -n500, -ofile.h5\n"
     "\n"
     "sweep writes OUTPUT.sweep/run-NNNN.h5 (OUTPUT = output.file or -o without .h5) and\n"
@@ -236,7 +237,5 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: info takes only a run file");
     if (cli->resume && cli->cmd != NBEP_CMD_RUN)
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: --resume goes with run only");
-    if (cli->summary && cli->cmd == NBEP_CMD_CHECK) /* it was taken and nothing written */
-        NBEP_FAIL(d, NBEP_EUSAGE, "nbep: --summary goes with run and sweep (check runs nothing)");
     return NBEP_OK;
 }

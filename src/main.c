@@ -12,6 +12,7 @@
 #include <gsl/gsl_errno.h>
 
 #include "build_info.h"
+#include "nbep/check.h"
 #include "nbep/cli.h"
 #include "nbep/nblist.h"
 #include "nbep/output.h"
@@ -46,71 +47,6 @@ static void install_signal_handlers(void)
     sigaction(SIGTERM, &sa, NULL);
 }
 
-/* `nbep check`: what the scene needs and nothing more, on stdout. */
-static void print_check(const nbep_scene *sc, int threads)
-{
-    uint64_t quad = 0, quart = 0;
-    nbep_scene_count_pairs(&sc->state, &quad, &quart);
-    printf("deck:            %s\n", sc->deck_path);
-    if (strcmp(sc->algorithm, "predictive") == 0) /* run.neighbors and run.order act there */
-        printf("algorithm:       predictive (neighbors %s, order %s), %d thread%s\n",
-               nbep_scene_neighbors_name(sc), nbep_scene_order_name(sc), threads,
-               threads == 1 ? "" : "s");
-    else
-        printf("algorithm:       %s, %d thread%s\n", sc->algorithm, threads,
-               threads == 1 ? "" : "s");
-    char use[256];
-    nbep_sim_threads_use(sc, threads, use, sizeof use);
-    printf("threads:         %s\n", use);
-    printf("steps:           %llu of dt = %g (t = 0 .. %g), seed %llu\n",
-           (unsigned long long)sc->steps, sc->dt, (double)sc->steps * sc->dt,
-           (unsigned long long)sc->seed);
-    printf("physics:         restitution %g, gravity [%g, %g, %g]", sc->restitution,
-           sc->gravity.x, sc->gravity.y, sc->gravity.z);
-    if (sc->restitution < 1.0) /* the TC model and the carry rule act on dissipative scenes */
-        printf(", tc %g, carry_drop %g", sc->tc, sc->carry_drop);
-    printf("\n");
-    if (sc->has_box)
-        printf("box:             [%g, %g, %g] .. [%g, %g, %g]\n", sc->box_min.x, sc->box_min.y,
-               sc->box_min.z, sc->box_max.x, sc->box_max.y, sc->box_max.z);
-    else
-        printf("box:             none\n");
-    printf("spheres:         %zu\n", sc->state.n);
-    int walls = 2 * (!sc->periodic[0] + !sc->periodic[1] + !sc->periodic[2]);
-    if (sc->has_box)
-        printf("planes:          %zu (%d from the box)\n", sc->state.n_planes, walls);
-    else
-        printf("planes:          %zu\n", sc->state.n_planes);
-    if (sc->periodic[0] || sc->periodic[1] || sc->periodic[2])
-        printf("periodic:        %s%s%s\n", sc->periodic[0] ? "x" : "", sc->periodic[1] ? "y" : "",
-               sc->periodic[2] ? "z" : "");
-    printf("pairs:           %llu need a quadratic (equal accelerations), %llu the quartic\n",
-           (unsigned long long)quad, (unsigned long long)quart);
-    double pf = nbep_scene_packing_fraction(sc, &sc->state);
-    if (isnan(pf))
-        printf("packing:         n/a (no box)\n");
-    else
-        printf("packing:         %.4g of the box volume\n", pf);
-    if (nbep_scene_cells_engine(sc)) {
-        const double asked = nbep_scene_list_skin(sc, &sc->state);
-        const double taken = nbep_scene_list_skin_taken(sc, &sc->state);
-        if (taken < asked)
-            printf("lists:           skin %.3g of the largest diameter (%.3g by the packing, cut "
-                   "down so that three cells fit across the periodic box)\n",
-                   taken, asked);
-        else
-            printf("lists:           skin %.3g of the largest diameter (when nothing "
-                   "accelerates, %g at packing %g or below, %g from %g)\n",
-                   taken, NBEP_NBLIST_SKIN_DILUTE, NBEP_NBLIST_PHI_DILUTE, NBEP_NBLIST_SKIN,
-                   NBEP_NBLIST_PHI_DENSE);
-    }
-    printf("memory:          about %.3g MB\n", (double)nbep_sim_memory_estimate(sc, threads) / 1e6);
-    printf("output:          %s: %llu frames (every %llu steps), about %.3g MB\n",
-           sc->output_file, (unsigned long long)nbep_output_frames(sc),
-           (unsigned long long)sc->output_every,
-           nbep_output_bytes(sc, nbep_sim_keeps_events(sc)) / 1e6);
-}
-
 /* How long `nbep check` spends loading a study's runs (each run's spheres placed: a second or
  * so for a million): a login node's minute at most; the runs past it are checked as they run. */
 #define CHECK_SWEEP_SECONDS 60.0
@@ -137,7 +73,8 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
                                           &sc, d);
     if (st != NBEP_OK)
         return st;
-    st = nbep_run_check_paths(cli->path, sc.output_file, NULL, d); /* as nbep run would */
+    /* as nbep run would: the run's file, and the report's, against the deck and each other */
+    st = nbep_run_check_paths(cli->path, sc.output_file, cli->summary, d);
     if (st != NBEP_OK) {
         nbep_scene_fini(&sc);
         return st;
@@ -150,10 +87,24 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
         st = nbep_sweep_check(cli->path, (const char *const *)cli->overrides,
                               (const char *const *)cli->origins, cli->n_overrides, &sc,
                               CHECK_SWEEP_SECONDS, &rep, d);
-    if (st == NBEP_OK)
-        print_check(&sc, nbep_sim_resolve_threads(sc.threads));
-    if (st == NBEP_OK && study)
-        nbep_sweep_check_print(stdout, &rep);
+    if (st == NBEP_OK) {
+        nbep_check_facts facts;
+        nbep_check_gather(&sc, &facts);
+        /* --summary -: stdout is the JSON's alone, and the human report goes to stderr, as a
+         * run's end lines do; --quiet leaves the human report out where a JSON is written */
+        const bool json_out = cli->summary && strcmp(cli->summary, "-") == 0;
+        FILE *human = cli->summary && cli->quiet ? NULL : json_out ? stderr : stdout;
+        if (cli->summary) { /* first: a report it cannot write is the check's failure */
+            char *line = nbep_check_to_json(&sc, &facts, study ? &rep : NULL);
+            st = nbep_run_write_summary_text(cli->summary, line, d);
+            free(line);
+        }
+        if (st == NBEP_OK && human) {
+            nbep_check_print(human, &sc, &facts);
+            if (study)
+                nbep_sweep_check_print(human, &rep);
+        }
+    }
     nbep_scene_fini(&sc);
     return st;
 }

@@ -52,15 +52,15 @@ static void drop_summary(const char *where, FILE *f)
     free(tmp);
 }
 
-/* Writes and closes (stdout: flushes) f, then puts it at `where`; NULL f: nothing asked for.
- * On failure the temporary file goes and an older summary stays. */
-static nbep_status write_summary(const nbep_summary *s, const char *where, FILE *f, nbep_diag *d)
+/* Writes text to f and closes it (stdout: flushes), then puts it at `where`; NULL f: nothing
+ * asked for. On failure the temporary file goes and an older file there stays. */
+static nbep_status finish_text(const char *text, const char *where, FILE *f, nbep_diag *d)
 {
     if (!f)
         return NBEP_OK;
     errno = 0;
-    int bad = nbep_summary_write_json(s, f) < 0;
-    int err = errno;
+    int bad = !text || fputs(text, f) == EOF || ferror(f);
+    int err = text ? errno : ENOMEM;
     if (f == stdout) {
         bad |= fflush(f) != 0;
     } else {
@@ -79,6 +79,23 @@ static nbep_status write_summary(const nbep_summary *s, const char *where, FILE 
         NBEP_FAIL(d, NBEP_EIO, "nbep: cannot write the summary to %s: %s", where,
                   err ? strerror(err) : "write failed");
     return NBEP_OK;
+}
+
+static nbep_status write_summary(const nbep_summary *s, const char *where, FILE *f, nbep_diag *d)
+{
+    if (!f)
+        return NBEP_OK;
+    char *line = nbep_summary_to_json(s);
+    const nbep_status st = finish_text(line, where, f, d);
+    free(line);
+    return st;
+}
+
+nbep_status nbep_run_write_summary_text(const char *where, const char *text, nbep_diag *d)
+{
+    FILE *f;
+    const nbep_status st = open_summary(where, &f, d);
+    return st != NBEP_OK ? st : finish_text(text, where, f, d);
 }
 
 /* The end line; a resumed run (from its frame at step `from`, else from < 0) counts the steps

@@ -1,5 +1,6 @@
 /* The JSON summary (summary.h): writer and parser, both driven by NBEP_SUMMARY_FIELDS, on
- * jansson (README "Build" says why jansson). The only file that includes jansson.h. */
+ * jansson (README "Build" says why jansson). jansson.h is included here and in check.c (the
+ * check report), which writes its line through nbep_summary_dump_line. */
 #include "nbep/summary.h"
 
 #include <assert.h>
@@ -164,11 +165,9 @@ static char *shorten_reals(const char *text)
     return out;
 }
 
-char *nbep_summary_to_json(const nbep_summary *s)
+char *nbep_summary_dump_line(json_t *o)
 {
-    json_t *o = summary_object(s);
-    char *dumped = o ? json_dumps(o, DUMP_FLAGS) : NULL;
-    json_decref(o);
+    char *dumped = json_dumps(o, DUMP_FLAGS);
     char *text = dumped ? shorten_reals(dumped) : NULL;
     free(dumped);
     char *line = text ? malloc(strlen(text) + 2) : NULL;
@@ -177,6 +176,14 @@ char *nbep_summary_to_json(const nbep_summary *s)
         strcat(line, "\n");
     }
     free(text);
+    return line;
+}
+
+char *nbep_summary_to_json(const nbep_summary *s)
+{
+    json_t *o = summary_object(s);
+    char *line = o ? nbep_summary_dump_line(o) : NULL;
+    json_decref(o);
     return line;
 }
 

@@ -337,10 +337,45 @@ check "nbep sweep --summary DECK: exit 2, one line (got $rc)" \
     "[ $rc = 2 ] && one_line && grep -q 'summary file .* is the deck .* itself' '$tmp/stderr'"
 check "the deck is kept, and no run file made" \
     "cmp -s inputs/two-spheres.deck '$tmp/self.deck' && [ ! -e '$tmp/self.h5' ]"
-# ---- check simulates nothing, so it takes no --summary (it took one and wrote nothing) ---------
-run_nbep check "$tmp/group.deck" --summary "$tmp/check.json"
-check "nbep check --summary: exit 2, one line (got $rc)" \
-    "[ $rc = 2 ] && one_line && grep -q 'summary goes with run and sweep' '$tmp/stderr'"
+# ---- nbep check --summary: the JSON report ("nbep-check-1") of what the scene needs ------------
+# (README, "nbep check --summary"). Its figures are the human report's (one source), its file is
+# written whole or not at all, and stdout holds the JSON alone where it is "-".
+json_get() { python3 -c 'import json,sys; o=json.load(open(sys.argv[1]))
+for k in sys.argv[2].split("."): o = o[k]
+print(json.dumps(o))' "$1" "$2"; }
+run_nbep check "$tmp/group.deck" --set 'run.neighbors="cells"'
+cp "$tmp/stdout" "$tmp/check-human.txt"
+run_nbep check "$tmp/group.deck" --set 'run.neighbors="cells"' --summary -
+cp "$tmp/stdout" "$tmp/check-stdout.json"
+check "check --summary -: exit 0, stdout one JSON line, the human report on stderr (got $rc)" \
+    "[ $rc = 0 ] && [ \$(wc -l <'$tmp/check-stdout.json') = 1 ] &&
+     [ \$(json_get '$tmp/check-stdout.json' format) = '\"nbep-check-1\"' ] &&
+     cmp -s '$tmp/stderr' '$tmp/check-human.txt'"
+mem_mb=$(sed -n 's/^memory: *about \([0-9.e+]*\) MB$/\1/p' "$tmp/check-human.txt")
+out_mb=$(sed -n 's/^output: .* about \([0-9.e+]*\) MB$/\1/p' "$tmp/check-human.txt")
+check "check --summary: memory_bytes and output.bytes are the report's ($mem_mb MB, $out_mb MB)" \
+    "python3 -c 'import json,sys; o=json.load(open(sys.argv[1]))
+m, b = o[\"memory_bytes\"], o[\"output\"][\"bytes\"]
+assert isinstance(m, int) and isinstance(b, int)
+assert float(\"%.3g\" % (m / 1e6)) == float(sys.argv[2]) and float(\"%.3g\" % (b / 1e6)) == float(sys.argv[3])
+assert o[\"spheres\"] == 64 and o[\"neighbors\"] == \"cells\" and o[\"study\"] is None
+assert o[\"box\"][\"max\"] == [10.0, 10.0, 10.0] and o[\"box\"][\"periodic\"] == [False] * 3
+assert o[\"output\"][\"frames\"] == 1000001 and o[\"threads\"] == 1' '$tmp/check-stdout.json' '$mem_mb' '$out_mb'"
+run_nbep check "$tmp/group.deck" --summary "$tmp/check.json" --quiet
+check "check --summary FILE --quiet: exit 0, nothing on stdout, the file's spheres (got $rc)" \
+    "[ $rc = 0 ] && [ ! -s '$tmp/stdout' ] && [ \$(json_get '$tmp/check.json' spheres) = 64 ]"
+run_nbep check "$tmp/group.deck" --summary "$tmp/check.json" --set spheres.[0].radius=-1
+check "check --summary of a deck error: exit 2, one line, the older report kept (got $rc)" \
+    "[ $rc = 2 ] && one_line && [ \$(json_get '$tmp/check.json' spheres) = 64 ] &&
+     [ ! -e '$tmp/check.json.partial' ]"
+run_nbep check "$tmp/group.deck" --summary "$tmp/plain-file/check.json"
+check "check --summary unwritable: exit 2, one line naming it, nothing on stdout (got $rc)" \
+    "[ $rc = 2 ] && one_line && grep -qF '$tmp/plain-file/check.json' '$tmp/stderr' &&
+     [ ! -s '$tmp/stdout' ]"
+cp "$tmp/group.deck" "$tmp/self-check.deck"
+run_nbep check "$tmp/self-check.deck" --summary "$tmp/self-check.deck"
+check "check --summary DECK: exit 2, the deck unchanged (got $rc)" \
+    "[ $rc = 2 ] && one_line && cmp -s '$tmp/group.deck' '$tmp/self-check.deck'"
 
 # ---- -o FILE takes the name as typed: quotes, spaces and backslashes are part of it (a name that
 # began with a quote was read as libconfig text: "bad value") --------------------------------------

@@ -237,6 +237,32 @@ got=$(sed -n 's/^sweep output:    about \([0-9.e+-]*\) MB in all.*/\1/p' "$tmp/s
 check "... its output in all ($got MB) is the sum of its runs' own ($total MB), to 3 digits" \
     "awk -v a='$got' -v b='$total' 'BEGIN { exit !(a > 0 && (a - b) ^ 2 <= (0.006 * b) ^ 2) }'"
 
+# the same as JSON (nbep check --summary, README "nbep check --summary"): the study's runs and
+# its output in all, the sum of each run's own report's output.bytes, byte for byte
+timeout 60 "$nbep" check "$tmp/combo.deck" --set 'sweep.vary.[1].values=[1, 8]' --quiet \
+    --summary "$tmp/combo-check.json" >"$tmp/stdout" 2>"$tmp/stderr"
+rc=$?
+for r in 0.3 0.45; do
+    for c in 1 8; do
+        "$nbep" check "$tmp/combo.deck" --set "spheres.[0].radius=$r" --set "spheres.[0].count=$c" \
+            --set 'sweep={replicas=1;}' --quiet --summary "$tmp/combo-$r-$c.json"
+    done
+done
+check "check --summary of a study: exit 0 (got $rc), 8 runs all checked, output the sum of its runs'" \
+    "[ $rc = 0 ] && [ ! -s '$tmp/stdout' ] && python3 -c 'import json,sys
+st = json.load(open(sys.argv[1]))[\"study\"]
+runs = [json.load(open(f)) for f in sys.argv[2:]]
+assert st[\"runs\"] == 8 and st[\"runs_checked\"] == 8 and st[\"replicas\"] == 2
+assert st[\"combinations\"] == 4 and st[\"dir\"] == \"combo.sweep\" and not st[\"out_of_time\"]
+assert st[\"output_bytes\"] == sum(2 * o[\"output\"][\"bytes\"] for o in runs), st
+assert st[\"memory_bytes_max\"] == max(o[\"memory_bytes\"] for o in runs), st' \
+     '$tmp/combo-check.json' '$tmp'/combo-0.*-*.json"
+timeout 60 "$nbep" check "$tmp/combo.deck" --quiet --summary "$tmp/combo-check.json" \
+    >"$tmp/stdout" 2>"$tmp/stderr"
+rc=$?
+check "check --summary of a study with runs that cannot run: exit 2 (got $rc), the older report kept" \
+    "[ $rc = 2 ] && python3 -c 'import json,sys; assert json.load(open(sys.argv[1]))[\"study\"][\"runs\"] == 8' '$tmp/combo-check.json'"
+
 # an axis of the box that leaves a group no room names the axis, as an axis of the group's own
 # radius does (until 2026-11-30 the group's deck line, which the study did not vary)
 cat >"$tmp/box-axis.deck" <<'EOF'

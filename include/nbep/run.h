@@ -34,6 +34,13 @@ typedef struct nbep_run_result {
                                     * (nbep_summary_status_of), close included */
 } nbep_run_result;
 
+/* Writes text (a JSON line) as the summary file `where` is written: "-" is stdout; a file is
+ * written as WHERE.partial and renamed to WHERE once complete, so an older file there stays
+ * when anything fails. NBEP_EUSAGE for a missing directory, NBEP_EIO for a write error, each
+ * one line "nbep: cannot write the summary to WHERE: ...". A NULL text (out of memory) fails. */
+NBEP_MUST_CHECK nbep_status nbep_run_write_summary_text(const char *where, const char *text,
+                                                        nbep_diag *d);
+
 /* The files a command writes, against the deck and each other: an output file (the run's, or
  * the one resumed) or a summary file that is the deck would replace it, and a summary file
  * that is the run's file would empty it before the run opens it. NBEP_EUSAGE with one line

@@ -109,6 +109,11 @@ const char *nbep_format_real(double v, bool mark_real, char buf[NBEP_REAL_TEXT_M
 int nbep_summary_write_json(const nbep_summary *s, FILE *f);
 /* The same into a malloc'd string (caller frees); NULL on allocation failure. */
 char *nbep_summary_to_json(const nbep_summary *s);
+/* Any jansson value as one line of text as the summary's is written (SPEC's separators, keys
+ * in insertion order, reals as nbep_format_real writes them) and a newline, malloc'd; NULL
+ * when out of memory (check.c's report; the value stays the caller's). */
+struct json_t;
+char *nbep_summary_dump_line(struct json_t *o);
 /* Parses a summary as nbep_summary_write_json writes it (format "nbep-summary-1", any
  * version) into *sum. false when the text is not such a summary, a key of the table is of the
  * wrong type (a status none of the texts above), or a required key is missing; *sum is then

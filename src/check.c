@@ -1,0 +1,168 @@
+/* `nbep check`'s two reports (check.h), from one nbep_check_facts. The JSON on jansson, as the
+ * summary's (summary.c), with its reals written by the same rule. */
+#include "nbep/check.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <jansson.h>
+
+#include "build_info.h"
+#include "nbep/nblist.h"
+#include "nbep/output.h"
+#include "nbep/sim.h"
+#include "nbep/summary.h"
+
+#define CHECK_FORMAT_NAME "nbep-check-1"
+
+void nbep_check_gather(const nbep_scene *sc, nbep_check_facts *f)
+{
+    memset(f, 0, sizeof *f);
+    f->threads = nbep_sim_resolve_threads(sc->threads);
+    nbep_sim_threads_use(sc, f->threads, f->threads_use, sizeof f->threads_use);
+    nbep_scene_count_pairs(&sc->state, &f->pairs_quadratic, &f->pairs_quartic);
+    f->packing = nbep_scene_packing_fraction(sc, &sc->state);
+    f->lists = nbep_scene_cells_engine(sc);
+    if (f->lists) {
+        f->skin_asked = nbep_scene_list_skin(sc, &sc->state);
+        f->skin_taken = nbep_scene_list_skin_taken(sc, &sc->state);
+    }
+    f->memory_bytes = (double)nbep_sim_memory_estimate(sc, f->threads);
+    f->frames = nbep_output_frames(sc);
+    f->output_bytes = nbep_output_bytes(sc, nbep_sim_keeps_events(sc));
+}
+
+void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f)
+{
+    const int threads = f->threads;
+    fprintf(out, "deck:            %s\n", sc->deck_path);
+    if (strcmp(sc->algorithm, "predictive") == 0) /* run.neighbors and run.order act there */
+        fprintf(out, "algorithm:       predictive (neighbors %s, order %s), %d thread%s\n",
+                nbep_scene_neighbors_name(sc), nbep_scene_order_name(sc), threads,
+                threads == 1 ? "" : "s");
+    else
+        fprintf(out, "algorithm:       %s, %d thread%s\n", sc->algorithm, threads,
+                threads == 1 ? "" : "s");
+    fprintf(out, "threads:         %s\n", f->threads_use);
+    fprintf(out, "steps:           %llu of dt = %g (t = 0 .. %g), seed %llu\n",
+            (unsigned long long)sc->steps, sc->dt, (double)sc->steps * sc->dt,
+            (unsigned long long)sc->seed);
+    fprintf(out, "physics:         restitution %g, gravity [%g, %g, %g]", sc->restitution,
+            sc->gravity.x, sc->gravity.y, sc->gravity.z);
+    if (sc->restitution < 1.0) /* the TC model and the carry rule act on dissipative scenes */
+        fprintf(out, ", tc %g, carry_drop %g", sc->tc, sc->carry_drop);
+    fprintf(out, "\n");
+    if (sc->has_box)
+        fprintf(out, "box:             [%g, %g, %g] .. [%g, %g, %g]\n", sc->box_min.x,
+                sc->box_min.y, sc->box_min.z, sc->box_max.x, sc->box_max.y, sc->box_max.z);
+    else
+        fprintf(out, "box:             none\n");
+    fprintf(out, "spheres:         %zu\n", sc->state.n);
+    const int walls = 2 * (!sc->periodic[0] + !sc->periodic[1] + !sc->periodic[2]);
+    if (sc->has_box)
+        fprintf(out, "planes:          %zu (%d from the box)\n", sc->state.n_planes, walls);
+    else
+        fprintf(out, "planes:          %zu\n", sc->state.n_planes);
+    if (sc->periodic[0] || sc->periodic[1] || sc->periodic[2])
+        fprintf(out, "periodic:        %s%s%s\n", sc->periodic[0] ? "x" : "",
+                sc->periodic[1] ? "y" : "", sc->periodic[2] ? "z" : "");
+    fprintf(out, "pairs:           %llu need a quadratic (equal accelerations), %llu the quartic\n",
+            (unsigned long long)f->pairs_quadratic, (unsigned long long)f->pairs_quartic);
+    if (isnan(f->packing))
+        fprintf(out, "packing:         n/a (no box)\n");
+    else
+        fprintf(out, "packing:         %.4g of the box volume\n", f->packing);
+    if (f->lists) {
+        if (f->skin_taken < f->skin_asked)
+            fprintf(out,
+                    "lists:           skin %.3g of the largest diameter (%.3g by the packing, "
+                    "cut down so that three cells fit across the periodic box)\n",
+                    f->skin_taken, f->skin_asked);
+        else
+            fprintf(out,
+                    "lists:           skin %.3g of the largest diameter (when nothing "
+                    "accelerates, %g at packing %g or below, %g from %g)\n",
+                    f->skin_taken, NBEP_NBLIST_SKIN_DILUTE, NBEP_NBLIST_PHI_DILUTE,
+                    NBEP_NBLIST_SKIN, NBEP_NBLIST_PHI_DENSE);
+    }
+    fprintf(out, "memory:          about %.3g MB\n", f->memory_bytes / 1e6);
+    fprintf(out, "output:          %s: %llu frames (every %llu steps), about %.3g MB\n",
+            sc->output_file, (unsigned long long)f->frames,
+            (unsigned long long)sc->output_every, f->output_bytes / 1e6);
+}
+
+/* ---- the JSON report ------------------------------------------------------------------------ */
+
+/* Each returns a new reference, or NULL when out of memory. */
+static json_t *vec3_array(nbep_vec3 v)
+{
+    return json_pack("[fff]", v.x, v.y, v.z);
+}
+
+/* A figure that may be NaN (no box): JSON has no NaN, so null. */
+static json_t *real_or_null(double v)
+{
+    return isfinite(v) ? json_real(v) : json_null();
+}
+
+/* A size in bytes (an estimate, held as a double) as a whole number: what a job script passes
+ * on (`--mem`), and jq and Python read it as an integer. */
+static json_t *bytes(double v)
+{
+    return isfinite(v) && v >= 0.0 && v < 9e18 ? json_integer((json_int_t)llround(v))
+                                               : json_null();
+}
+
+static json_t *study_object(const nbep_sweep_check_report *r)
+{
+    return json_pack("{s:I, s:I, s:I, s:s, s:I, s:b, s:o, s:o}", "runs", (json_int_t)r->n_runs,
+                     "combinations", (json_int_t)r->n_combos, "replicas",
+                     (json_int_t)r->replicas, "dir", r->dir, "runs_checked",
+                     (json_int_t)r->checked, "out_of_time", r->out_of_time,
+                     "memory_bytes_max", bytes(r->memory_max), "output_bytes",
+                     bytes(r->output_bytes));
+}
+
+/* jansson's json_pack builds the object in one call (keys in this order with
+ * JSON_PRESERVE_ORDER); "o" steals each nested reference, also on failure. */
+static json_t *check_object(const nbep_scene *sc, const nbep_check_facts *f,
+                            const nbep_sweep_check_report *study)
+{
+    const bool predictive = strcmp(sc->algorithm, "predictive") == 0;
+    json_t *o = json_pack(
+        "{s:s, s:s, s:s, s:s, s:o, s:o, s:i, s:I, s:I, s:I, s:f, s:I, s:f, s:o, s:o, s:o, s:o, "
+        "s:I, s:I, s:o, s:o}",
+        "format", CHECK_FORMAT_NAME, "version", NBEP_VERSION, "deck", sc->deck_path,
+        "algorithm", sc->algorithm, "neighbors",
+        predictive ? json_string(nbep_scene_neighbors_name(sc)) : json_null(), "order",
+        predictive ? json_string(nbep_scene_order_name(sc)) : json_null(), "threads",
+        f->threads, "spheres", (json_int_t)sc->state.n, "planes", (json_int_t)sc->state.n_planes,
+        "steps", (json_int_t)sc->steps, "dt", sc->dt, "seed", (json_int_t)sc->seed,
+        "restitution", sc->restitution, "gravity", vec3_array(sc->gravity), "box",
+        sc->has_box ? json_pack("{s:o, s:o, s:[bbb]}", "min", vec3_array(sc->box_min), "max",
+                                vec3_array(sc->box_max), "periodic", sc->periodic[0],
+                                sc->periodic[1], sc->periodic[2])
+                    : json_null(),
+        "packing_fraction", real_or_null(f->packing), "skin",
+        f->lists ? json_real(f->skin_taken) : json_null(), "pairs_quadratic",
+        (json_int_t)f->pairs_quadratic, "pairs_quartic", (json_int_t)f->pairs_quartic,
+        "memory_bytes", bytes(f->memory_bytes), "output",
+        json_pack("{s:s, s:I, s:I, s:o}", "file", sc->output_file, "frames",
+                  (json_int_t)f->frames, "every", (json_int_t)sc->output_every, "bytes",
+                  bytes(f->output_bytes)));
+    if (o && json_object_set_new(o, "study", study ? study_object(study) : json_null()) != 0) {
+        json_decref(o);
+        return NULL;
+    }
+    return o;
+}
+
+char *nbep_check_to_json(const nbep_scene *sc, const nbep_check_facts *f,
+                         const nbep_sweep_check_report *study)
+{
+    json_t *o = check_object(sc, f, study);
+    char *line = o ? nbep_summary_dump_line(o) : NULL;
+    json_decref(o);
+    return line;
+}
