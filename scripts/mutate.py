@@ -1435,6 +1435,14 @@ MUTANTS = [
     ("info-status-requested-from-root", "src/output_info.c",
      "s.steps_requested.known ? s.steps_requested.value : r->steps);", "r->steps);",
      ["test_output"], None),
+    # ---- the warning of an exact run that ended in overlaps ----
+    ("overlap-warn-threshold-inverted", "src/run.c", "if (exact && s->max_overlap_rel > EXACT_OVERLAP_WARN)",
+     "if (exact && s->max_overlap_rel < EXACT_OVERLAP_WARN)", ["tests/test_resume.sh"], None),
+    ("overlap-warn-naive-too", "src/run.c",
+     "const bool exact = strcmp(sc->algorithm, \"predictive\") == 0 && !sc->order_step;",
+     "const bool exact = !sc->order_step;", ["tests/test_resume.sh"], None),
+    ("overlap-warn-never", "src/run.c", "        warn_overlap(&sc, &res->summary, file);\n", "",
+     ["tests/test_resume.sh"], None),
     # ---- nbep check --summary: the JSON report ----
     ("check-json-beside-human", "src/main.c",
      "FILE *human = cli->summary && cli->quiet ? NULL : json_out ? stderr : stdout;",

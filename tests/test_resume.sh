@@ -405,5 +405,26 @@ bin/nbep run $deck --quiet --set spheres.[0].count=400 --set box.max=[2,2,2] \
     --set physics.restitution=0.9 -n 90 --resume $tmp/predictive-part.h5
 rc=$?
 check "a deck with another restitution resumes (got $rc)" "[ $rc = 0 ]"
+
+# an exact run that ends with overlaps far past round-off says so, also with --quiet, and
+# completes (README, Checking a run): the two spheres of the example, one moved into the other
+# in the file's last frame (0.38 deep, 1.9 of the smaller radius) and the run resumed from it
+# (no collision: they were already past contact). The same run unchanged, and naive's run of
+# the paper's box at a coarse dt (overlaps of 0.4 radii, by design), say nothing.
+bin/nbep run inputs/two-spheres.deck --quiet -n 10 -o $tmp/moved.h5
+"$PY" -c "import h5py, sys; p = h5py.File(sys.argv[1], 'r+')['frames/position']; a = p[-1]
+a[0] = [a[1][0] - 0.3, a[1][1], 0.0]; p[-1] = a" $tmp/moved.h5
+bin/nbep run inputs/two-spheres.deck --quiet -n 100 --resume $tmp/moved.h5 2>$tmp/moved.err
+rc=$?
+check "an exact run ending in overlaps: exit 0 (got $rc), one warning line naming the overlap" \
+    "[ $rc = 0 ] && [ \$(wc -l <$tmp/moved.err) = 1 ] &&
+     grep -q '^nbep: warning: spheres overlapped by up to 1.9 of the smaller radius .* in $tmp/moved.h5' $tmp/moved.err"
+bin/nbep run inputs/two-spheres.deck --quiet -n 10 -o $tmp/kept.h5
+bin/nbep run inputs/two-spheres.deck --quiet -n 100 --resume $tmp/kept.h5 2>$tmp/kept.err
+bin/nbep run $deck --quiet -a naive -n 20 --dt 0.01 --set spheres.[0].count=1000 \
+    -o $tmp/coarse.h5 --summary $tmp/coarse.json 2>$tmp/coarse.err
+check "no warning for the file unchanged, nor for naive's overlaps by design" \
+    "[ ! -s $tmp/kept.err ] && [ ! -s $tmp/coarse.err ] &&
+     grep -q '\"max_overlap_rel\": 0\.[1-9]' $tmp/coarse.json"
 [ $fail = 0 ] && echo "resume: all passed"
 exit $fail
