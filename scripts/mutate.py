@@ -1443,6 +1443,15 @@ MUTANTS = [
      "const bool exact = !sc->order_step;", ["tests/test_resume.sh"], None),
     ("overlap-warn-never", "src/run.c", "        warn_overlap(&sc, &res->summary, file);\n", "",
      ["tests/test_resume.sh"], None),
+    # ---- nbep check: where the run's file goes ----
+    ("check-output-dir-unchecked", "src/main.c",
+     "    if (st == NBEP_OK && !study)\n        st = nbep_run_check_output_dir(sc.output_file, d);\n", "",
+     ["tests/test_cli.sh"], None),
+    ("check-output-dir-directory-passes", "src/run.c",
+     "    if (stat(output, &sb) == 0 && S_ISDIR(sb.st_mode))\n        err = EISDIR;",
+     "    if (0)\n        err = EISDIR;", ["tests/test_cli.sh"], None),
+    ("check-output-dir-file-on-way-passes", "src/run.c",
+     "    else if (!S_ISDIR(sb.st_mode))\n        err = ENOTDIR;", "", ["tests/test_cli.sh"], None),
     # ---- nbep check --summary: the JSON report ----
     ("check-json-beside-human", "src/main.c",
      "FILE *human = cli->summary && cli->quiet ? NULL : json_out ? stderr : stdout;",

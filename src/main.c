@@ -73,15 +73,19 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
                                           &sc, d);
     if (st != NBEP_OK)
         return st;
-    /* as nbep run would: the run's file, and the report's, against the deck and each other */
+    /* as nbep run would: the run's file, and the report's, against the deck and each other,
+     * and (for a single run; a study's goes into a folder of its own) where the run's file
+     * goes: nbep run fails at once there (exit 2), and check passed it until 2026-11-30 */
+    const bool study = sc.sweep_replicas > 1 || sc.sweep_n_axes > 0;
     st = nbep_run_check_paths(cli->path, sc.output_file, cli->summary, d);
+    if (st == NBEP_OK && !study)
+        st = nbep_run_check_output_dir(sc.output_file, d);
     if (st != NBEP_OK) {
         nbep_scene_fini(&sc);
         return st;
     }
     /* a study: every run's scene loaded as nbep sweep will load it, before anything is
      * printed (a run it refuses is a deck error: exit 2, as the deck's own) */
-    const bool study = sc.sweep_replicas > 1 || sc.sweep_n_axes > 0;
     nbep_sweep_check_report rep;
     if (study)
         st = nbep_sweep_check(cli->path, (const char *const *)cli->overrides,

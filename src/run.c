@@ -7,6 +7,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "nbep/output.h"
 #include "nbep/output_xdmf.h"
@@ -239,6 +241,30 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
             NBEP_FAIL(d, NBEP_EUSAGE, "nbep: the summary file %s is the run's %s; choose another",
                       summary, run ? "file itself" : "XDMF sidecar");
     }
+    return NBEP_OK;
+}
+
+nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
+{
+    const char *slash = strrchr(output, '/');
+    char *dir = slash ? strndup(output, slash == output ? 1 : (size_t)(slash - output))
+                      : strdup(".");
+    if (!dir)
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory");
+    struct stat sb;
+    int err = 0;
+    if (stat(output, &sb) == 0 && S_ISDIR(sb.st_mode))
+        err = EISDIR; /* the run's rename onto it fails */
+    else if (stat(dir, &sb) != 0)
+        err = errno; /* ENOENT, or ENOTDIR for a file on the way */
+    else if (!S_ISDIR(sb.st_mode))
+        err = ENOTDIR;
+    else if (access(dir, W_OK | X_OK) != 0)
+        err = errno; /* EACCES; EROFS, a run-time failure (exit 1) as the run's own */
+    free(dir);
+    if (err) /* the words of the run's own failure (output.c) */
+        NBEP_FAIL(d, nbep_status_of_open(err), "nbep: %s: cannot create the output file: %s",
+                  output, strerror(err));
     return NBEP_OK;
 }
 

@@ -116,6 +116,12 @@ for out in "$tmp/plain-file/run.h5" "$tmp/a-directory" "$tmp/no-such-dir/run.h5"
     run_nbep run "$tmp/group.deck" --quiet -o "$out"
     check "output $out: exit 2 (the user's to fix, as a missing deck) before simulating (got $rc)" \
         "[ $rc = 2 ]"
+    cp "$tmp/stderr" "$tmp/run-stderr"
+    # nbep check says so too, in the run's words (it passed such paths until 2026-11-30)
+    run_nbep check "$tmp/group.deck" -o "$out"
+    check "output $out: nbep check exits 2 (got $rc), nothing on stdout, the run's line" \
+        "[ $rc = 2 ] && [ ! -s '$tmp/stdout' ] && cmp -s '$tmp/stderr' '$tmp/run-stderr'"
+    run_nbep run "$tmp/group.deck" --quiet -o "$out"
     check "output $out: one line on stderr that names the path" \
         "one_line && grep -qF '$out' '$tmp/stderr'"
     check "output $out: nothing left behind" \

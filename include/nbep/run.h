@@ -34,6 +34,12 @@ typedef struct nbep_run_result {
                                     * (nbep_summary_status_of), close included */
 } nbep_run_result;
 
+/* For `nbep check`: whether `nbep run` could create its output file at `output`, looked at
+ * without writing anything: its directory exists, is one and may be written, and `output` is
+ * not a directory. NBEP_EUSAGE (NBEP_EIO for a read-only file system), one line in the words
+ * of the run's own failure, "nbep: OUTPUT: cannot create the output file: REASON". */
+NBEP_MUST_CHECK nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d);
+
 /* Writes text (a JSON line) as the summary file `where` is written: "-" is stdout; a file is
  * written as WHERE.partial and renamed to WHERE once complete, so an older file there stays
  * when anything fails. NBEP_EUSAGE for a missing directory, NBEP_EIO for a write error, each
