@@ -147,11 +147,12 @@ typedef struct nbep__scene_entry {
 
 /* Fills the spheres of s (allocated, planes set) from the entries in deck order: single
  * spheres as given, groups by random or lattice placement (deterministic for seed). Reports
- * each group that does not fit, blamed on the --set typed first of what places it or bounds
- * its room (the box, the planes: plane_at, as nbep__scene_check_overlaps takes it). box_periodic is NULL without a box, else the box's periodic
- * axes: a random sphere keeps clear of the others by the nearest image along them, across
- * the faces of [box_lo, box_hi] too. Returns NBEP_ENOMEM on allocation failure, else NBEP_OK
- * (fill failures are counted in the diag). */
+ * each group that does not fit, blamed on the --set typed first of what places it, of what
+ * placed the spheres its random tries met (another group's count, say) or of what bounds its
+ * room (the box, the planes: plane_at, as nbep__scene_check_overlaps takes it). box_periodic
+ * is NULL without a box, else the box's periodic axes: a random sphere keeps clear of the
+ * others by the nearest image along them, across the faces of [box_lo, box_hi] too. Returns
+ * NBEP_ENOMEM on allocation failure, else NBEP_OK (fill failures are counted in the diag). */
 NBEP_MUST_CHECK nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s,
                                               const nbep__scene_entry *e, size_t n_entries,
                                               uint64_t seed, const bool *box_periodic,

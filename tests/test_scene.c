@@ -1300,7 +1300,9 @@ static void test_a_group_a_set_of_the_box_or_a_plane_keeps_from_fitting_names_th
     assert_non_null(strstr(f->d.msg[0], "--set box.max.[0]=0.5: spheres.[0]: could not place 8 "
                                         "spheres of radius 0.3"));
     /* a deck plane moved up through the random group's region (the lattice, which never looks
-     * at the deck's planes, overlaps it: that is the overlap check's, named at the same --set) */
+     * at the deck's planes, overlaps it: that is the overlap check's, named at the same --set);
+     * the lattice's count, typed first, is not named though its sphere lies in the region: the
+     * plane kept out every try, whatever sphere the try met too */
     nbep_diag_fini(&f->d);
     nbep_diag_init(&f->d);
     LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].count=1", "planes.[0].point=[0.0, 0.0, 0.95]");
@@ -1335,6 +1337,61 @@ static void test_a_group_a_set_of_the_box_or_a_plane_keeps_from_fitting_names_th
     assert_int_equal(f->d.n_errors, 1);
     assert_non_null(strstr(f->d.msg[0], "--set box.max.[1]=1.3: spheres.[0]: could not place 27 "
                                         "spheres of radius 0.3"));
+}
+
+/* A group that an earlier group's --set leaves no room (its count or radius: its spheres take
+ * the room) names that --set, as an overlap between the two groups would (until 2026-11-30 the
+ * later group's count's line, which the user had not touched: `nbep check deck --set
+ * spheres.[0].count=3000`), the first typed where the group's own was typed too; a --set of a
+ * group whose spheres are nowhere in its way (a region apart) is not named. */
+static void test_a_group_an_earlier_groups_set_leaves_no_room_names_that_set(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    /* 500 small spheres all over the box, 8 in its left part, 50 in its right part */
+    const char *deck = write_deck("scene_fill_taken.deck",
+                                  "box: { min = [0.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0]; };\n"
+                                  "spheres = (\n"
+                                  "  { count = 500; radius = 0.05; mass = 1.0; place = \"random\"; },\n"
+                                  "  { count = 8; radius = 0.1; mass = 1.0; place = \"random\";\n"
+                                  "    region = { min = [0.0, 0.0, 0.0]; max = [0.9, 2.0, 2.0]; }; },\n"
+                                  "  { count = 50; radius = 0.1; mass = 1.0; place = \"random\";\n"
+                                  "    region = { min = [1.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0]; }; }\n"
+                                  ");\n",
+                                  buf, sizeof buf);
+    LOAD_OK(f, deck);
+    nbep_scene_fini(&f->sc);
+    /* the first group's radius: the third finds no room (the second still does) */
+    LOAD_FAILS(f, NBEP_EDECK, deck, "run.steps=3", "spheres.[0].radius=0.1");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].radius=0.1: spheres.[2]: could not place 50 spheres of "
+                       "radius 0.1 in the region: placed 17 (packing fraction 0.02)");
+    /* its count: neither of the others finds room */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].count=3000");
+    ASSERT_DIAG(&f->d,
+                "--set spheres.[0].count=3000: spheres.[1]: could not place 8 spheres of radius "
+                "0.1 in the region: placed 0 (packing fraction 0.00)",
+                "--set spheres.[0].count=3000: spheres.[2]: could not place 50 spheres of radius "
+                "0.1 in the region: placed 0 (packing fraction 0.00)");
+    /* with the group's own count: the first typed, either way round */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[2].count=100", "spheres.[0].radius=0.1");
+    ASSERT_DIAG(&f->d, "--set spheres.[2].count=100: spheres.[2]: could not place 100 spheres of "
+                       "radius 0.1 in the region: placed 17 (packing fraction 0.02)");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].radius=0.1", "spheres.[2].count=100");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].radius=0.1: spheres.[2]: could not place 100 spheres of "
+                       "radius 0.1 in the region: placed 17 (packing fraction 0.02)");
+    /* the second group's spheres lie left of every place the third tries: its --set, typed
+     * first, took none of the third's room */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[1].count=2", "spheres.[2].count=5000");
+    ASSERT_DIAG(&f->d, "--set spheres.[2].count=5000: spheres.[2]: could not place 5000 spheres "
+                       "of radius 0.1 in the region: placed 188 (packing fraction 0.20)");
 }
 
 static void test_overlaps_with_spheres_and_planes_are_named(void **state)
@@ -1996,6 +2053,7 @@ int main(void)
         T(test_an_overlap_with_a_wall_a_set_moved_names_the_set),
         T(test_a_group_a_set_keeps_from_fitting_names_the_set),
         T(test_a_group_a_set_of_the_box_or_a_plane_keeps_from_fitting_names_the_set),
+        T(test_a_group_an_earlier_groups_set_leaves_no_room_names_that_set),
         T(test_an_overlap_a_set_of_a_group_made_names_the_set),
         T(test_overlap_names_entries_and_sphere_ids),
         T(test_many_overlaps_list_twenty_then_count_the_rest),
