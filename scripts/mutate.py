@@ -1367,9 +1367,21 @@ MUTANTS = [
      "    return !(least > s->plane_offset[p]);", "    return true;", ["test_scene"], None),
     # an overlap with a wall or plane: the --set that moved it, where typed first
     ("blame-wall-ignored", "src/scene_place.c",
-     "b != SIZE_MAX ? o->placed[entry_of(o->e, o->n_entries, b)] : o->walls[wall];",
-     "b != SIZE_MAX ? o->placed[entry_of(o->e, o->n_entries, b)] : (blame){NULL, 0, NBEP_DIAG_UNRANKED};",
+     "                report(&o, i, walls[p], name, by);",
+     "                report(&o, i, (blame){NULL, 0, NBEP_DIAG_UNRANKED}, name, by);",
      ["test_scene"], None),
+    # an overlap across a periodic face: the --set of the box that moved or made the faces
+    ("blame-face-ignored", "src/scene_place.c",
+     "                blame_first(o->c, &bb, v ? config_setting_get_elem(v, (unsigned)axis) : NULL);",
+     "", ["test_scene"], None),
+    ("blame-face-every-axis", "src/scene_place.c",
+     "            if (shift[axis] == 0.0)\n                continue;\n", "", ["test_scene"], None),
+    ("blame-face-min-unasked", "src/scene_place.c",
+     "face_corners[3] = {\"min\", \"max\", \"periodic\"};",
+     "face_corners[3] = {\"max\", \"max\", \"periodic\"};", ["test_scene"], None),
+    ("blame-face-periodic-unasked", "src/scene_place.c",
+     "face_corners[3] = {\"min\", \"max\", \"periodic\"};",
+     "face_corners[3] = {\"min\", \"max\", \"max\"};", ["test_scene"], None),
     ("blame-wall-min-max-swapped", "src/scene.c",
      "        at[k++] = lo ? config_setting_get_elem(lo, (unsigned)axis) : NULL;\n"
      "        at[k++] = walled;\n"

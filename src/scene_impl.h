@@ -165,12 +165,13 @@ NBEP_MUST_CHECK nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s,
  * the deck's line of the position or entry. box_periodic is NULL without a box, else the
  * box's periodic axes: the box's walls (two per other axis) come first and are named
  * "box x-min" ..., the rest "planes.[k]"; pairs that overlap across a periodic face of the box
- * [lo, hi] are found too (spheres as placed, whose centres are inside the box). An overlap
- * with a plane is blamed on a --set that moved or made the plane, where one did and was typed
- * before whatever placed the sphere: plane_at (2 s->n_planes, each may be NULL) holds what
- * decides where each plane lies, two a plane: a box wall's element of box.min or box.max and
- * of box.periodic, a deck plane's group (its point and normal) and NULL. O(n) expected
- * time. */
+ * [lo, hi] are found too (spheres as placed, whose centres are inside the box), and blamed
+ * on a --set of the box's min, max or periodic along the axes they meet across too, where
+ * typed first (it moved or made those faces). An overlap with a plane is blamed on a --set
+ * that moved or made the plane, where one did and was typed before whatever placed the
+ * sphere: plane_at (2 s->n_planes, each may be NULL) holds what decides where each plane lies,
+ * two a plane: a box wall's element of box.min or box.max and of box.periodic, a deck plane's
+ * group (its point and normal) and NULL. O(n) expected time. */
 NBEP_MUST_CHECK nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                                                        const nbep__scene_entry *e,
                                                        size_t n_entries,

@@ -780,7 +780,7 @@ typedef struct overlaps {
     const nbep__scene_entry *e;
     size_t n_entries;
     const blame *placed;  /* per entry: what placed its spheres (entry_blame) */
-    const blame *walls;   /* per plane: what moved it (plane_blame) */
+    const config_setting_t *box; /* the deck's box (box_of), for what moved a periodic face */
     size_t i;             /* the sphere whose neighbours are visited */
     nbep_vec3 shift;      /* at its position plus this (a copy across periodic faces) */
     bool same_level;      /* they are in its level: only smaller ids count */
@@ -793,16 +793,15 @@ typedef struct overlaps {
     size_t last;          /* once all are kept: the one last by rank (then found) */
 } overlaps;
 
-/* Sphere a overlaps `other` (sphere b, or the plane `wall` when b is SIZE_MAX) by `by`. The
- * overlap is blamed on whichever of the two an override placed or moved, the one typed first
- * where both were (the list ranks the message there), else on a's deck line (a, the later
- * sphere, as before): the change that made the overlap, not the deck line the user did not
- * touch. */
-static void report(overlaps *o, size_t a, size_t b, size_t wall, const char *other, double by)
+/* Sphere a overlaps `other` (a sphere or a plane, which bb blames: what placed the sphere and
+ * moved the faces between them, or what moved the plane) by `by`. The overlap is blamed on
+ * whichever of the two an override placed or moved, the one typed first where both were (the
+ * list ranks the message there), else on a's deck line (a, the later sphere, as before): the
+ * change that made the overlap, not the deck line the user did not touch. */
+static void report(overlaps *o, size_t a, blame bb, const char *other, double by)
 {
     const uint64_t seq = o->found++;
     blame at = o->placed[entry_of(o->e, o->n_entries, a)];
-    const blame bb = b != SIZE_MAX ? o->placed[entry_of(o->e, o->n_entries, b)] : o->walls[wall];
     if (bb.label && bb.rank < at.rank) /* a deck line's rank is past every option's */
         at = bb;
     size_t k;
@@ -842,6 +841,10 @@ static void list_kept(overlaps *o)
                                o->kept[k].a, o->kept[k].other, o->kept[k].by);
 }
 
+/* The elements of the box along an axis that put its periodic faces where they are: a copy of
+ * a sphere across them lies a period, max - min, away, and periodic made them faces. */
+static const char *const face_corners[3] = {"min", "max", "periodic"};
+
 static void check_pair(overlaps *o, size_t i, size_t j)
 {
     const nbep_state *s = o->s;
@@ -856,7 +859,20 @@ static void check_pair(overlaps *o, size_t i, size_t j)
                  entry_of(o->e, o->n_entries, b), b,
                  nbep_vec3_equal(o->shift, (nbep_vec3){0.0, 0.0, 0.0}) ? ""
                                                                        : " across a periodic face");
-        report(o, a, b, SIZE_MAX, other, by);
+        /* what placed b, and what moved the faces the pair meets across (the axes of the
+         * copy's shift): a --set of box.max, say, that brought the faces' two sides together
+         * (until 2026-11-30 the overlap was blamed on the spheres' lines) */
+        blame bb = o->placed[entry_of(o->e, o->n_entries, b)];
+        const double shift[3] = {o->shift.x, o->shift.y, o->shift.z};
+        for (int axis = 0; o->box && axis < 3; axis++) {
+            if (shift[axis] == 0.0)
+                continue;
+            for (int m = 0; m < 3; m++) {
+                const config_setting_t *v = config_setting_get_member(o->box, face_corners[m]);
+                blame_first(o->c, &bb, v ? config_setting_get_elem(v, (unsigned)axis) : NULL);
+            }
+        }
+        report(o, a, bb, other, by);
     }
 }
 
@@ -897,7 +913,7 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
         plane_blame(c, &walls[p], &plane_at[2 * p]);
     }
     overlaps o = {.c = c, .s = s, .e = e, .n_entries = n_entries, .placed = placed,
-                  .walls = walls};
+                  .box = n_entries ? box_of(e[0].setting) : NULL};
     const double blo[3] = {box_lo.x, box_lo.y, box_lo.z}, bhi[3] = {box_hi.x, box_hi.y, box_hi.z};
     for (size_t i = 0; i < s->n; i++)
         for (size_t p = 0; p < s->n_planes; p++) {
@@ -911,7 +927,7 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                     snprintf(name, sizeof name, "%s", names[p]);
                 else
                     snprintf(name, sizeof name, "planes.[%zu]", p - n_box);
-                report(&o, i, SIZE_MAX, p, name, by);
+                report(&o, i, walls[p], name, by);
             }
         }
 

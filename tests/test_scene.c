@@ -1552,6 +1552,74 @@ static void test_an_overlap_with_a_wall_a_set_moved_names_the_set(void **state)
     }
 }
 
+/* Two spheres that overlap across a periodic face that a --set of the box moved (box.min or
+ * box.max along that axis: an element, the vector, the whole box) or made (box.periodic) name
+ * that --set, as an overlap with a wall it moved does (until 2026-11-30 the later sphere's
+ * line, which the user had not touched); a --set of another axis's corner moves no face they
+ * meet across; of the box's and a sphere's --set, the first typed is named. */
+static void test_an_overlap_across_a_face_a_set_of_the_box_moved_names_the_set(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    /* 0.6 + (10 - 9.2) = 1.4 apart across the x faces */
+    const char *deck = write_deck("scene_overlap_face.deck",
+                                  "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0];\n"
+                                  "       periodic = [true, false, false]; };\n"
+                                  "spheres = (\n"
+                                  "  { radius = 0.5; mass = 1.0; position = [0.6, 5.0, 5.0]; },\n"
+                                  "  { radius = 0.5; mass = 1.0; position = [9.2, 5.0, 5.0]; }\n"
+                                  ");\n",
+                                  buf, sizeof buf);
+    LOAD_OK(f, deck);
+    nbep_scene_fini(&f->sc);
+    const char *across = "spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) across a "
+                         "periodic face by";
+    struct {
+        const char *set[2], *by;
+    } cases[] = {
+        {{"box.max.[0]=9.5"}, "--set box.max.[0]=9.5: %s 0.1"},
+        {{"box.min.[0]=0.5"}, "--set box.min.[0]=0.5: %s 0.1"},
+        {{"box.max=[9.5, 10.0, 10.0]"}, "--set box.max=[9.5, 10.0, 10.0]: %s 0.1"},
+        {{"box={min=[0.0,0.0,0.0];max=[9.5,10.0,10.0];periodic=[true,false,false];}"},
+         "--set box={min=[0.0,0.0,0.0];max=[9.5,10.0,10.0];periodic=[true,false,false];}: %s 0.1"},
+        /* the box and a sphere's position: the first typed, either way round */
+        {{"box.max.[0]=9.9", "spheres.[1].position=[9.7,5.0,5.0]"},
+         "--set box.max.[0]=9.9: %s 0.2"},
+        {{"spheres.[1].position=[9.7,5.0,5.0]", "box.max.[0]=9.9"},
+         "--set spheres.[1].position=[9.7,5.0,5.0]: %s 0.2"},
+        /* the y axis's corner, typed first: the x faces did not move */
+        {{"box.max.[1]=9.9", "spheres.[1].position=[9.7,5.0,5.0]"},
+         "--set spheres.[1].position=[9.7,5.0,5.0]: %s 0.1"},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof *cases; k++) {
+        nbep_diag_fini(&f->d);
+        nbep_diag_init(&f->d);
+        if (cases[k].set[1])
+            LOAD_FAILS(f, NBEP_EDECK, deck, cases[k].set[0], cases[k].set[1]);
+        else
+            LOAD_FAILS(f, NBEP_EDECK, deck, cases[k].set[0]);
+        char want[300];
+        snprintf(want, sizeof want, cases[k].by, across);
+        ASSERT_DIAG(&f->d, want);
+    }
+    /* a --set of box.periodic that makes the x axis periodic made the faces (the deck's own
+     * error was a sphere in the x-min wall, which is gone) */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    deck = write_deck("scene_overlap_face_made.deck",
+                      "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0];\n"
+                      "       periodic = [false, false, false]; };\n"
+                      "spheres = (\n"
+                      "  { radius = 0.5; mass = 1.0; position = [0.3, 5.0, 5.0]; },\n"
+                      "  { radius = 0.5; mass = 1.0; position = [9.4, 5.0, 5.0]; }\n"
+                      ");\n",
+                      buf, sizeof buf);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.periodic.[0]=true");
+    char want[300];
+    snprintf(want, sizeof want, "--set box.periodic.[0]=true: %s 0.1", across);
+    ASSERT_DIAG(&f->d, want);
+}
+
 /* An overlap that a --set of a group's count, place or region makes (a lattice spread over a
  * single sphere) names that --set (the first typed of several), not the deck's line of the
  * single sphere; with a --set that places nothing, the deck's own overlap keeps that line. */
@@ -2054,6 +2122,7 @@ int main(void)
         T(test_a_group_a_set_keeps_from_fitting_names_the_set),
         T(test_a_group_a_set_of_the_box_or_a_plane_keeps_from_fitting_names_the_set),
         T(test_a_group_an_earlier_groups_set_leaves_no_room_names_that_set),
+        T(test_an_overlap_across_a_face_a_set_of_the_box_moved_names_the_set),
         T(test_an_overlap_a_set_of_a_group_made_names_the_set),
         T(test_overlap_names_entries_and_sphere_ids),
         T(test_many_overlaps_list_twenty_then_count_the_rest),
