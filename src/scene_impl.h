@@ -147,11 +147,12 @@ typedef struct nbep__scene_entry {
 
 /* Fills the spheres of s (allocated, planes set) from the entries in deck order: single
  * spheres as given, groups by random or lattice placement (deterministic for seed). Reports
- * each group that does not fit, blamed on the --set typed first of what places it or bounds
- * its room (the box, the planes: plane_at, as nbep__scene_check_overlaps takes it). box_periodic is NULL without a box, else the box's periodic
- * axes: a random sphere keeps clear of the others by the nearest image along them, across
- * the faces of [box_lo, box_hi] too. Returns NBEP_ENOMEM on allocation failure, else NBEP_OK
- * (fill failures are counted in the diag). */
+ * each group that does not fit, blamed on the --set typed first of what places it, of what
+ * placed the spheres its random tries met (another group's count, say) or of what bounds its
+ * room (the box, the planes: plane_at, as nbep__scene_check_overlaps takes it). box_periodic
+ * is NULL without a box, else the box's periodic axes: a random sphere keeps clear of the
+ * others by the nearest image along them, across the faces of [box_lo, box_hi] too. Returns
+ * NBEP_ENOMEM on allocation failure, else NBEP_OK (fill failures are counted in the diag). */
 NBEP_MUST_CHECK nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s,
                                               const nbep__scene_entry *e, size_t n_entries,
                                               uint64_t seed, const bool *box_periodic,
@@ -164,12 +165,13 @@ NBEP_MUST_CHECK nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s,
  * the deck's line of the position or entry. box_periodic is NULL without a box, else the
  * box's periodic axes: the box's walls (two per other axis) come first and are named
  * "box x-min" ..., the rest "planes.[k]"; pairs that overlap across a periodic face of the box
- * [lo, hi] are found too (spheres as placed, whose centres are inside the box). An overlap
- * with a plane is blamed on a --set that moved or made the plane, where one did and was typed
- * before whatever placed the sphere: plane_at (2 s->n_planes, each may be NULL) holds what
- * decides where each plane lies, two a plane: a box wall's element of box.min or box.max and
- * of box.periodic, a deck plane's group (its point and normal) and NULL. O(n) expected
- * time. */
+ * [lo, hi] are found too (spheres as placed, whose centres are inside the box), and blamed
+ * on a --set of the box's min, max or periodic along the axes they meet across too, where
+ * typed first (it moved or made those faces). An overlap with a plane is blamed on a --set
+ * that moved or made the plane, where one did and was typed before whatever placed the
+ * sphere: plane_at (2 s->n_planes, each may be NULL) holds what decides where each plane lies,
+ * two a plane: a box wall's element of box.min or box.max and of box.periodic, a deck plane's
+ * group (its point and normal) and NULL. O(n) expected time. */
 NBEP_MUST_CHECK nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                                                        const nbep__scene_entry *e,
                                                        size_t n_entries,

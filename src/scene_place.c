@@ -82,6 +82,20 @@ static double max_abs(nbep_vec3 p)
     return fmax(fabs(p.x), fmax(fabs(p.y), fabs(p.z)));
 }
 
+/* The entry holding sphere id: the last one starting at or before it. */
+static size_t entry_of(const nbep__scene_entry *e, size_t n, size_t id)
+{
+    size_t lo = 0, hi = n;
+    while (hi - lo > 1) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (e[mid].first <= id)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
 /* ---- the grid ------------------------------------------------------------------------------- */
 
 typedef struct slot {
@@ -100,6 +114,8 @@ typedef struct level {
 
 typedef struct grid {
     const nbep_state *s;   /* borrowed: positions and radii of inserted spheres */
+    const nbep__scene_entry *e; /* borrowed: the entries they come from (entry_of) */
+    size_t n_entries;
     const nbep_periodic *pb; /* borrowed, or NULL: a sphere's cell is that of its position
                               * wrapped into the box along these periodic axes (placement) */
     nbep_vec3 origin;      /* cell coordinates count from here */
@@ -132,6 +148,8 @@ static bool grid_init(grid *g, const nbep_state *s, const nbep__scene_entry *e, 
 {
     memset(g, 0, sizeof *g);
     g->s = s;
+    g->e = e;
+    g->n_entries = n;
     g->r_min = INFINITY;
     g->origin = nbep_vec3_make(INFINITY, INFINITY, INFINITY);
     for (size_t k = 0; k < n; k++) {
@@ -391,24 +409,34 @@ static bool plane_reaches(const nbep_state *s, size_t p, nbep_vec3 lo, nbep_vec3
     return !(least > s->plane_offset[p]);
 }
 
+/* The deck's box (its root's `box`), from entry g's setting: the entry's list's parent is the
+ * root. NULL where the deck has none. */
+static const config_setting_t *box_of(const config_setting_t *g)
+{
+    const config_setting_t *list = config_setting_parent(g);
+    const config_setting_t *root = list ? config_setting_parent(list) : NULL;
+    return root ? config_setting_get_member(root, "box") : NULL;
+}
+
 /* What a group that cannot be placed is blamed on: the override typed first of what places
- * its spheres (members_blame) and of what bounds the room they go in: the box's corners where
+ * its spheres (members_blame), of what placed the spheres in its way (`in_way`: kept_out_by's,
+ * the placing overrides of the other entries whose spheres its tries met; none for a lattice,
+ * which looks at no sphere) and of what bounds the room they go in: the box's corners where
  * the group has no region (the box is its region), and each plane at or inside its region
  * (plane_at's settings: a wall's element of box.min or box.max, a deck plane's point and
  * normal), every plane for random places (they keep clear of each), the box's walls alone for
  * a lattice (they clip its region; it does not look at the others). Label NULL where none was
  * typed. (Until 2026-11-30 a --set or sweep axis of the box or of a plane that left a group no
- * room was not named: the message stood at the group's count.) */
+ * room was not named: the message stood at the group's count; nor was one of an earlier
+ * group's count or radius whose spheres took the room.) */
 static blame fill_blame(const nbep__scene_ctx *c, const nbep_state *s,
-                        const nbep__scene_entry *e, const config_setting_t *const *plane_at)
+                        const nbep__scene_entry *e, const config_setting_t *const *plane_at,
+                        blame in_way)
 {
-    blame b = {NULL, 0, NBEP_DIAG_UNRANKED};
+    blame b = in_way;
     members_blame(c, &b, e->setting);
     if (!config_setting_get_member(e->setting, "region")) {
-        /* the entry's list's parent: the deck's root, which holds the box */
-        const config_setting_t *list = config_setting_parent(e->setting);
-        const config_setting_t *root = list ? config_setting_parent(list) : NULL;
-        const config_setting_t *box = root ? config_setting_get_member(root, "box") : NULL;
+        const config_setting_t *box = box_of(e->setting);
         if (box) {
             blame_first(c, &b, config_setting_get_member(box, "min"));
             blame_first(c, &b, config_setting_get_member(box, "max"));
@@ -426,20 +454,21 @@ static blame fill_blame(const nbep__scene_ctx *c, const nbep_state *s,
 
 
 /* A group whose spheres cannot be placed: the message is blamed as fill_blame says (the --set
- * or sweep axis typed first of what places them and of what bounds their room), else put at
- * the deck's line of its count. */
+ * or sweep axis typed first of what places them, of what placed the spheres in their way,
+ * in_way, and of what bounds their room), else put at the deck's line of its count. */
 static void fill_failed(nbep__scene_ctx *c, const nbep_state *s, const nbep__scene_entry *e,
-                        const config_setting_t *const *plane_at, const char *fmt, ...)
-    NBEP_PRINTF(5, 6);
+                        const config_setting_t *const *plane_at, blame in_way,
+                        const char *fmt, ...) NBEP_PRINTF(6, 7);
 static void fill_failed(nbep__scene_ctx *c, const nbep_state *s, const nbep__scene_entry *e,
-                        const config_setting_t *const *plane_at, const char *fmt, ...)
+                        const config_setting_t *const *plane_at, blame in_way,
+                        const char *fmt, ...)
 {
     char msg[512];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    const blame b = fill_blame(c, s, e, plane_at);
+    const blame b = fill_blame(c, s, e, plane_at, in_way);
     if (b.label)
         nbep__scene_error_from(c, b.label, 0, __FILE__, __LINE__, "%s", msg);
     else
@@ -452,9 +481,13 @@ typedef struct probe {
     const nbep_periodic *pb; /* NULL, or the periodic axes: distances by the nearest image */
     nbep_vec3 p;
     double r;
+    const grid *g;           /* with met: the grid, whose entries (entry_of) are marked */
+    bool *met;               /* NULL: the first sphere it overlaps ends the look; else every
+                              * one's entry is marked here and the look goes on (kept_out_by) */
 } probe;
 
-/* True when sphere id and the probe sphere overlap (touching is fine). */
+/* True when sphere id and the probe sphere overlap (touching is fine); with q->met, marks its
+ * entry and returns false, so that every sphere it overlaps is seen. */
 static bool probe_hits(void *arg, size_t id)
 {
     const probe *q = arg;
@@ -462,7 +495,12 @@ static bool probe_hits(void *arg, size_t id)
     nbep_vec3 d = nbep_vec3_sub(q->s->pos[id], q->p);
     if (q->pb)
         d = nbep_periodic_image(q->pb, d);
-    return nbep_vec3_norm2(d) < sigma * sigma;
+    const bool hit = nbep_vec3_norm2(d) < sigma * sigma;
+    if (hit && q->met) {
+        q->met[entry_of(q->g->e, q->g->n_entries, id)] = true;
+        return false;
+    }
+    return hit;
 }
 
 /* Whether the probe sphere overlaps one in the grid. Along periodic axes (q->pb, the grid's
@@ -536,6 +574,42 @@ static void set_sphere(nbep_state *s, const nbep__scene_entry *e, size_t id, nbe
     s->mass[id] = e->mass;
 }
 
+/* Try a at sphere q of group k: uniform in [lo, hi], the region shrunk by the radius. */
+static nbep_vec3 try_at(uint64_t seed, size_t k, uint64_t q, uint64_t a, nbep_vec3 lo,
+                        nbep_vec3 hi)
+{
+    return nbep_vec3_make(lo.x + uniform(seed, k, q, PURPOSE_X, a) * (hi.x - lo.x),
+                          lo.y + uniform(seed, k, q, PURPOSE_Y, a) * (hi.y - lo.y),
+                          lo.z + uniform(seed, k, q, PURPOSE_Z, a) * (hi.z - lo.z));
+}
+
+/* What placed the spheres that kept sphere q of group k out, every try of it having failed
+ * (`tries` of them, made again): the placing overrides (members_blame) of each entry with a
+ * sphere that a try clear of the planes overlapped (every one, not the first found), into *b.
+ * A try a plane kept out is the plane's (fill_blame: a --set that moved a plane over the
+ * whole region is named, not a group's spheres there too), and an entry whose spheres no try
+ * met took none of the room, whatever a --set did to it. Returns false when out of memory. */
+static bool kept_out_by(const nbep__scene_ctx *c, const grid *g, probe *pr, double reach,
+                        size_t k, uint64_t q, uint64_t seed, nbep_vec3 lo, nbep_vec3 hi,
+                        uint64_t tries, blame *b)
+{
+    bool *met = calloc(g->n_entries ? g->n_entries : 1, sizeof *met);
+    if (!met)
+        return false;
+    pr->g = g;
+    pr->met = met;
+    for (uint64_t a = 0; a < tries; a++) {
+        pr->p = try_at(seed, k, q, a, lo, hi);
+        if (clear_of_planes(g->s, pr->p, pr->r))
+            (void)probe_near(g, pr, reach);
+    }
+    for (size_t j = 0; j < g->n_entries; j++)
+        if (met[j])
+            members_blame(c, b, g->e[j].setting);
+    free(met);
+    return true;
+}
+
 /* Uniform in the region shrunk by the radius, rejecting overlaps with every sphere placed so
  * far (by the nearest image along periodic axes, g->pb) and with the planes. Returns false
  * when out of memory. */
@@ -550,16 +624,18 @@ static bool place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep_
     const nbep_vec3 hi = nbep_vec3_make(e->hi.x - r, e->hi.y - r, e->hi.z - r);
     const bool room = lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z;
     for (uint64_t q = 0; q < e->count; q++) {
-        probe pr = {s, g->pb, {0.0, 0.0, 0.0}, r};
+        probe pr = {s, g->pb, {0.0, 0.0, 0.0}, r, NULL, NULL};
         bool placed = false;
-        for (uint64_t a = 0; room && !placed && a < RANDOM_ATTEMPTS; a++) {
-            pr.p.x = lo.x + uniform(seed, k, q, PURPOSE_X, a) * (hi.x - lo.x);
-            pr.p.y = lo.y + uniform(seed, k, q, PURPOSE_Y, a) * (hi.y - lo.y);
-            pr.p.z = lo.z + uniform(seed, k, q, PURPOSE_Z, a) * (hi.z - lo.z);
+        uint64_t a = 0;
+        for (; room && !placed && a < RANDOM_ATTEMPTS; a++) {
+            pr.p = try_at(seed, k, q, a, lo, hi);
             placed = clear_of_planes(s, pr.p, r) && !probe_near(g, &pr, reach);
         }
         if (!placed) {
-            fill_failed(c, s, e, plane_at,
+            blame in_way = {NULL, 0, NBEP_DIAG_UNRANKED};
+            if (!kept_out_by(c, g, &pr, reach, k, q, seed, lo, hi, a, &in_way))
+                return false;
+            fill_failed(c, s, e, plane_at, in_way,
                             "spheres.[%zu]: could not place %" PRIu64
                             " spheres of radius %g in the region: placed %" PRIu64
                             " (packing fraction %.2f)",
@@ -630,7 +706,7 @@ static bool place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep
     double spacing = lattice_spacing(len, r, e->count);
     if (spacing == 0.0) {
         double most = lattice_capacity(len, 2.0 * r);
-        fill_failed(c, s, e, plane_at,
+        fill_failed(c, s, e, plane_at, (blame){NULL, 0, NBEP_DIAG_UNRANKED},
                         "spheres.[%zu]: could not place %" PRIu64
                         " spheres of radius %g in the region: a simple cubic lattice holds at "
                         "most %.0f (packing fraction %.2f)",
@@ -704,7 +780,7 @@ typedef struct overlaps {
     const nbep__scene_entry *e;
     size_t n_entries;
     const blame *placed;  /* per entry: what placed its spheres (entry_blame) */
-    const blame *walls;   /* per plane: what moved it (plane_blame) */
+    const config_setting_t *box; /* the deck's box (box_of), for what moved a periodic face */
     size_t i;             /* the sphere whose neighbours are visited */
     nbep_vec3 shift;      /* at its position plus this (a copy across periodic faces) */
     bool same_level;      /* they are in its level: only smaller ids count */
@@ -717,30 +793,15 @@ typedef struct overlaps {
     size_t last;          /* once all are kept: the one last by rank (then found) */
 } overlaps;
 
-/* The entry holding sphere id: the last one starting at or before it. */
-static size_t entry_of(const nbep__scene_entry *e, size_t n, size_t id)
-{
-    size_t lo = 0, hi = n;
-    while (hi - lo > 1) {
-        size_t mid = lo + (hi - lo) / 2;
-        if (e[mid].first <= id)
-            lo = mid;
-        else
-            hi = mid;
-    }
-    return lo;
-}
-
-/* Sphere a overlaps `other` (sphere b, or the plane `wall` when b is SIZE_MAX) by `by`. The
- * overlap is blamed on whichever of the two an override placed or moved, the one typed first
- * where both were (the list ranks the message there), else on a's deck line (a, the later
- * sphere, as before): the change that made the overlap, not the deck line the user did not
- * touch. */
-static void report(overlaps *o, size_t a, size_t b, size_t wall, const char *other, double by)
+/* Sphere a overlaps `other` (a sphere or a plane, which bb blames: what placed the sphere and
+ * moved the faces between them, or what moved the plane) by `by`. The overlap is blamed on
+ * whichever of the two an override placed or moved, the one typed first where both were (the
+ * list ranks the message there), else on a's deck line (a, the later sphere, as before): the
+ * change that made the overlap, not the deck line the user did not touch. */
+static void report(overlaps *o, size_t a, blame bb, const char *other, double by)
 {
     const uint64_t seq = o->found++;
     blame at = o->placed[entry_of(o->e, o->n_entries, a)];
-    const blame bb = b != SIZE_MAX ? o->placed[entry_of(o->e, o->n_entries, b)] : o->walls[wall];
     if (bb.label && bb.rank < at.rank) /* a deck line's rank is past every option's */
         at = bb;
     size_t k;
@@ -780,6 +841,10 @@ static void list_kept(overlaps *o)
                                o->kept[k].a, o->kept[k].other, o->kept[k].by);
 }
 
+/* The elements of the box along an axis that put its periodic faces where they are: a copy of
+ * a sphere across them lies a period, max - min, away, and periodic made them faces. */
+static const char *const face_corners[3] = {"min", "max", "periodic"};
+
 static void check_pair(overlaps *o, size_t i, size_t j)
 {
     const nbep_state *s = o->s;
@@ -794,7 +859,20 @@ static void check_pair(overlaps *o, size_t i, size_t j)
                  entry_of(o->e, o->n_entries, b), b,
                  nbep_vec3_equal(o->shift, (nbep_vec3){0.0, 0.0, 0.0}) ? ""
                                                                        : " across a periodic face");
-        report(o, a, b, SIZE_MAX, other, by);
+        /* what placed b, and what moved the faces the pair meets across (the axes of the
+         * copy's shift): a --set of box.max, say, that brought the faces' two sides together
+         * (until 2026-11-30 the overlap was blamed on the spheres' lines) */
+        blame bb = o->placed[entry_of(o->e, o->n_entries, b)];
+        const double shift[3] = {o->shift.x, o->shift.y, o->shift.z};
+        for (int axis = 0; o->box && axis < 3; axis++) {
+            if (shift[axis] == 0.0)
+                continue;
+            for (int m = 0; m < 3; m++) {
+                const config_setting_t *v = config_setting_get_member(o->box, face_corners[m]);
+                blame_first(o->c, &bb, v ? config_setting_get_elem(v, (unsigned)axis) : NULL);
+            }
+        }
+        report(o, a, bb, other, by);
     }
 }
 
@@ -835,7 +913,7 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
         plane_blame(c, &walls[p], &plane_at[2 * p]);
     }
     overlaps o = {.c = c, .s = s, .e = e, .n_entries = n_entries, .placed = placed,
-                  .walls = walls};
+                  .box = n_entries ? box_of(e[0].setting) : NULL};
     const double blo[3] = {box_lo.x, box_lo.y, box_lo.z}, bhi[3] = {box_hi.x, box_hi.y, box_hi.z};
     for (size_t i = 0; i < s->n; i++)
         for (size_t p = 0; p < s->n_planes; p++) {
@@ -849,7 +927,7 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                     snprintf(name, sizeof name, "%s", names[p]);
                 else
                     snprintf(name, sizeof name, "planes.[%zu]", p - n_box);
-                report(&o, i, SIZE_MAX, p, name, by);
+                report(&o, i, walls[p], name, by);
             }
         }
 

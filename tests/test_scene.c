@@ -1300,7 +1300,9 @@ static void test_a_group_a_set_of_the_box_or_a_plane_keeps_from_fitting_names_th
     assert_non_null(strstr(f->d.msg[0], "--set box.max.[0]=0.5: spheres.[0]: could not place 8 "
                                         "spheres of radius 0.3"));
     /* a deck plane moved up through the random group's region (the lattice, which never looks
-     * at the deck's planes, overlaps it: that is the overlap check's, named at the same --set) */
+     * at the deck's planes, overlaps it: that is the overlap check's, named at the same --set);
+     * the lattice's count, typed first, is not named though its sphere lies in the region: the
+     * plane kept out every try, whatever sphere the try met too */
     nbep_diag_fini(&f->d);
     nbep_diag_init(&f->d);
     LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].count=1", "planes.[0].point=[0.0, 0.0, 0.95]");
@@ -1335,6 +1337,61 @@ static void test_a_group_a_set_of_the_box_or_a_plane_keeps_from_fitting_names_th
     assert_int_equal(f->d.n_errors, 1);
     assert_non_null(strstr(f->d.msg[0], "--set box.max.[1]=1.3: spheres.[0]: could not place 27 "
                                         "spheres of radius 0.3"));
+}
+
+/* A group that an earlier group's --set leaves no room (its count or radius: its spheres take
+ * the room) names that --set, as an overlap between the two groups would (until 2026-11-30 the
+ * later group's count's line, which the user had not touched: `nbep check deck --set
+ * spheres.[0].count=3000`), the first typed where the group's own was typed too; a --set of a
+ * group whose spheres are nowhere in its way (a region apart) is not named. */
+static void test_a_group_an_earlier_groups_set_leaves_no_room_names_that_set(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    /* 500 small spheres all over the box, 8 in its left part, 50 in its right part */
+    const char *deck = write_deck("scene_fill_taken.deck",
+                                  "box: { min = [0.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0]; };\n"
+                                  "spheres = (\n"
+                                  "  { count = 500; radius = 0.05; mass = 1.0; place = \"random\"; },\n"
+                                  "  { count = 8; radius = 0.1; mass = 1.0; place = \"random\";\n"
+                                  "    region = { min = [0.0, 0.0, 0.0]; max = [0.9, 2.0, 2.0]; }; },\n"
+                                  "  { count = 50; radius = 0.1; mass = 1.0; place = \"random\";\n"
+                                  "    region = { min = [1.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0]; }; }\n"
+                                  ");\n",
+                                  buf, sizeof buf);
+    LOAD_OK(f, deck);
+    nbep_scene_fini(&f->sc);
+    /* the first group's radius: the third finds no room (the second still does) */
+    LOAD_FAILS(f, NBEP_EDECK, deck, "run.steps=3", "spheres.[0].radius=0.1");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].radius=0.1: spheres.[2]: could not place 50 spheres of "
+                       "radius 0.1 in the region: placed 17 (packing fraction 0.02)");
+    /* its count: neither of the others finds room */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].count=3000");
+    ASSERT_DIAG(&f->d,
+                "--set spheres.[0].count=3000: spheres.[1]: could not place 8 spheres of radius "
+                "0.1 in the region: placed 0 (packing fraction 0.00)",
+                "--set spheres.[0].count=3000: spheres.[2]: could not place 50 spheres of radius "
+                "0.1 in the region: placed 0 (packing fraction 0.00)");
+    /* with the group's own count: the first typed, either way round */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[2].count=100", "spheres.[0].radius=0.1");
+    ASSERT_DIAG(&f->d, "--set spheres.[2].count=100: spheres.[2]: could not place 100 spheres of "
+                       "radius 0.1 in the region: placed 17 (packing fraction 0.02)");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].radius=0.1", "spheres.[2].count=100");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].radius=0.1: spheres.[2]: could not place 100 spheres of "
+                       "radius 0.1 in the region: placed 17 (packing fraction 0.02)");
+    /* the second group's spheres lie left of every place the third tries: its --set, typed
+     * first, took none of the third's room */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[1].count=2", "spheres.[2].count=5000");
+    ASSERT_DIAG(&f->d, "--set spheres.[2].count=5000: spheres.[2]: could not place 5000 spheres "
+                       "of radius 0.1 in the region: placed 188 (packing fraction 0.20)");
 }
 
 static void test_overlaps_with_spheres_and_planes_are_named(void **state)
@@ -1493,6 +1550,74 @@ static void test_an_overlap_with_a_wall_a_set_moved_names_the_set(void **state)
             LOAD_FAILS(f, NBEP_EDECK, deck, cases[k].set[0]);
         ASSERT_DIAG(&f->d, cases[k].want);
     }
+}
+
+/* Two spheres that overlap across a periodic face that a --set of the box moved (box.min or
+ * box.max along that axis: an element, the vector, the whole box) or made (box.periodic) name
+ * that --set, as an overlap with a wall it moved does (until 2026-11-30 the later sphere's
+ * line, which the user had not touched); a --set of another axis's corner moves no face they
+ * meet across; of the box's and a sphere's --set, the first typed is named. */
+static void test_an_overlap_across_a_face_a_set_of_the_box_moved_names_the_set(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    /* 0.6 + (10 - 9.2) = 1.4 apart across the x faces */
+    const char *deck = write_deck("scene_overlap_face.deck",
+                                  "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0];\n"
+                                  "       periodic = [true, false, false]; };\n"
+                                  "spheres = (\n"
+                                  "  { radius = 0.5; mass = 1.0; position = [0.6, 5.0, 5.0]; },\n"
+                                  "  { radius = 0.5; mass = 1.0; position = [9.2, 5.0, 5.0]; }\n"
+                                  ");\n",
+                                  buf, sizeof buf);
+    LOAD_OK(f, deck);
+    nbep_scene_fini(&f->sc);
+    const char *across = "spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) across a "
+                         "periodic face by";
+    struct {
+        const char *set[2], *by;
+    } cases[] = {
+        {{"box.max.[0]=9.5"}, "--set box.max.[0]=9.5: %s 0.1"},
+        {{"box.min.[0]=0.5"}, "--set box.min.[0]=0.5: %s 0.1"},
+        {{"box.max=[9.5, 10.0, 10.0]"}, "--set box.max=[9.5, 10.0, 10.0]: %s 0.1"},
+        {{"box={min=[0.0,0.0,0.0];max=[9.5,10.0,10.0];periodic=[true,false,false];}"},
+         "--set box={min=[0.0,0.0,0.0];max=[9.5,10.0,10.0];periodic=[true,false,false];}: %s 0.1"},
+        /* the box and a sphere's position: the first typed, either way round */
+        {{"box.max.[0]=9.9", "spheres.[1].position=[9.7,5.0,5.0]"},
+         "--set box.max.[0]=9.9: %s 0.2"},
+        {{"spheres.[1].position=[9.7,5.0,5.0]", "box.max.[0]=9.9"},
+         "--set spheres.[1].position=[9.7,5.0,5.0]: %s 0.2"},
+        /* the y axis's corner, typed first: the x faces did not move */
+        {{"box.max.[1]=9.9", "spheres.[1].position=[9.7,5.0,5.0]"},
+         "--set spheres.[1].position=[9.7,5.0,5.0]: %s 0.1"},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof *cases; k++) {
+        nbep_diag_fini(&f->d);
+        nbep_diag_init(&f->d);
+        if (cases[k].set[1])
+            LOAD_FAILS(f, NBEP_EDECK, deck, cases[k].set[0], cases[k].set[1]);
+        else
+            LOAD_FAILS(f, NBEP_EDECK, deck, cases[k].set[0]);
+        char want[300];
+        snprintf(want, sizeof want, cases[k].by, across);
+        ASSERT_DIAG(&f->d, want);
+    }
+    /* a --set of box.periodic that makes the x axis periodic made the faces (the deck's own
+     * error was a sphere in the x-min wall, which is gone) */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    deck = write_deck("scene_overlap_face_made.deck",
+                      "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0];\n"
+                      "       periodic = [false, false, false]; };\n"
+                      "spheres = (\n"
+                      "  { radius = 0.5; mass = 1.0; position = [0.3, 5.0, 5.0]; },\n"
+                      "  { radius = 0.5; mass = 1.0; position = [9.4, 5.0, 5.0]; }\n"
+                      ");\n",
+                      buf, sizeof buf);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.periodic.[0]=true");
+    char want[300];
+    snprintf(want, sizeof want, "--set box.periodic.[0]=true: %s 0.1", across);
+    ASSERT_DIAG(&f->d, want);
 }
 
 /* An overlap that a --set of a group's count, place or region makes (a lattice spread over a
@@ -1996,6 +2121,8 @@ int main(void)
         T(test_an_overlap_with_a_wall_a_set_moved_names_the_set),
         T(test_a_group_a_set_keeps_from_fitting_names_the_set),
         T(test_a_group_a_set_of_the_box_or_a_plane_keeps_from_fitting_names_the_set),
+        T(test_a_group_an_earlier_groups_set_leaves_no_room_names_that_set),
+        T(test_an_overlap_across_a_face_a_set_of_the_box_moved_names_the_set),
         T(test_an_overlap_a_set_of_a_group_made_names_the_set),
         T(test_overlap_names_entries_and_sphere_ids),
         T(test_many_overlaps_list_twenty_then_count_the_rest),
