@@ -104,11 +104,12 @@ static void print_check(const nbep_scene *sc, int threads)
                    taken, NBEP_NBLIST_SKIN_DILUTE, NBEP_NBLIST_PHI_DILUTE, NBEP_NBLIST_SKIN,
                    NBEP_NBLIST_PHI_DENSE);
     }
-    printf("memory:          about %.3g MB\n", (double)nbep_sim_memory_estimate(sc, threads) / 1e6);
-    printf("output:          %s: %llu frames (every %llu steps), about %.3g MB\n",
-           sc->output_file, (unsigned long long)nbep_output_frames(sc),
-           (unsigned long long)sc->output_every,
-           nbep_output_bytes(sc, nbep_sim_keeps_events(sc)) / 1e6);
+    char size[NBEP_BYTES_TEXT_MAX];
+    printf("memory:          about %s\n",
+           nbep_format_bytes((double)nbep_sim_memory_estimate(sc, threads), size));
+    printf("output:          %s: %llu frames (every %llu steps), about %s\n", sc->output_file,
+           (unsigned long long)nbep_output_frames(sc), (unsigned long long)sc->output_every,
+           nbep_format_bytes(nbep_output_bytes(sc, nbep_sim_keeps_events(sc)), size));
 }
 
 /* How long `nbep check` spends loading a study's runs (each run's spheres placed: a second or

@@ -392,18 +392,19 @@ void nbep_sweep_check_print(FILE *f, const nbep_sweep_check_report *r)
     fprintf(f, "sweep:           %zu runs (%llu replica%s x %zu combination%s) into %s/\n",
             r->n_runs, (unsigned long long)r->replicas, r->replicas == 1 ? "" : "s", r->n_combos,
             r->n_combos == 1 ? "" : "s", r->dir);
+    char size[NBEP_BYTES_TEXT_MAX];
     if (r->out_of_time)
         fprintf(f,
                 "sweep runs:      the first %zu of %zu loaded and placed in %g s (the others "
-                "are checked when they run); the largest needs about %.3g MB\n",
-                r->checked, r->n_runs, r->budget_s, r->memory_max / 1e6);
+                "are checked when they run); the largest needs about %s\n",
+                r->checked, r->n_runs, r->budget_s, nbep_format_bytes(r->memory_max, size));
     else
         fprintf(f,
                 "sweep runs:      all %zu loaded and placed as nbep sweep will; the largest "
-                "needs about %.3g MB\n",
-                r->checked, r->memory_max / 1e6);
-    fprintf(f, "sweep output:    about %.3g MB in all%s (the runs' files)\n",
-            r->output_bytes / 1e6, r->out_of_time ? " for those" : "");
+                "needs about %s\n",
+                r->checked, nbep_format_bytes(r->memory_max, size));
+    fprintf(f, "sweep output:    about %s in all%s (the runs' files)\n",
+            nbep_format_bytes(r->output_bytes, size), r->out_of_time ? " for those" : "");
 }
 
 /* ---- reusing finished runs --------------------------------------------------------------- */

@@ -31,6 +31,14 @@ run_nbep() {
 # One line on stderr (SPEC: "Every error is one line on stderr that says where and what").
 one_line() { [ "$(wc -l <"$tmp/stderr")" -eq 1 ]; }
 
+# The bytes of a size as nbep prints it on stdin ("1.82 MB", "682 kB": powers of 1000); nothing
+# for anything else.
+bytes_of() {
+    awk 'NF == 2 && $1 ~ /^[0-9.]+$/ {
+        m = $2 == "B" ? 1 : $2 == "kB" ? 1e3 : $2 == "MB" ? 1e6 : $2 == "GB" ? 1e9 : $2 == "TB" ? 1e12 : 0
+        if (m) printf "%.17g\n", $1 * m }'
+}
+
 # A deck of one group and a long run (10^9 steps: simulating it would not end in time).
 cat >"$tmp/group.deck" <<'EOF'
 run: { algorithm = "predictive"; steps = 1000000000; dt = 1.0e-3; threads = 1; };
@@ -157,25 +165,39 @@ sed 's/count = 32000/count = 180000/; s/38.2245559209/67.8823/g' inputs/hard-sph
 for deck in inputs/hard-sphere-fluid.deck "$tmp/big-fluid.deck"; do
     name=$(basename "$deck" .deck)
     run_nbep check "$deck" -n 2 --set output.every=1 -o "$tmp/$name.h5"
-    est=$(sed -n 's/^output: .* frames.*, about \([0-9.e+]*\) MB$/\1/p' "$tmp/stdout")
+    est=$(sed -n 's/^output: .* frames.*, about \(.*\)$/\1/p' "$tmp/stdout" | bytes_of)
     guard=300 run_nbep run "$deck" -n 2 --set output.every=1 -o "$tmp/$name.h5" --quiet
     size=$(stat -c %s "$tmp/$name.h5" 2>/dev/null || echo 0)
-    check "nbep check's size of $name.h5 ($est MB) is the file's ($size bytes) within 1 %" \
-        "[ $rc = 0 ] && [ -n '$est' ] && awk -v e='$est' -v s='$size' 'BEGIN { r = e * 1e6 / s; exit !(r > 0.99 && r < 1.01) }'"
+    check "nbep check's size of $name.h5 ($est bytes) is the file's ($size bytes) within 1 %" \
+        "[ $rc = 0 ] && [ -n '$est' ] && awk -v e='$est' -v s='$size' 'BEGIN { r = e / s; exit !(r > 0.99 && r < 1.01) }'"
 done
 # small decks with many frames (the chunk index and the file's own headers count there: the
 # estimate was 30 % low for the two-spheres example before it counted them), within 3 %
 for deck in inputs/two-spheres.deck inputs/bounce.deck; do
     name=$(basename "$deck" .deck)
     run_nbep check "$deck" -o "$tmp/$name.h5"
-    est=$(sed -n 's/^output: .* frames.*, about \([0-9.e+]*\) MB$/\1/p' "$tmp/stdout")
+    est=$(sed -n 's/^output: .* frames.*, about \(.*\)$/\1/p' "$tmp/stdout" | bytes_of)
     guard=300 run_nbep run "$deck" -o "$tmp/$name.h5" --quiet
     size=$(stat -c %s "$tmp/$name.h5" 2>/dev/null || echo 0)
-    check "nbep check's size of $name.h5 ($est MB) is the file's ($size bytes) within 3 %" \
-        "[ $rc = 0 ] && [ -n '$est' ] && awk -v e='$est' -v s='$size' 'BEGIN { r = e * 1e6 / s; exit !(r > 0.97 && r < 1.03) }'"
+    check "nbep check's size of $name.h5 ($est bytes) is the file's ($size bytes) within 3 %" \
+        "[ $rc = 0 ] && [ -n '$est' ] && awk -v e='$est' -v s='$size' 'BEGIN { r = e / s; exit !(r > 0.97 && r < 1.03) }'"
 done
 check "the big fluid's frames are stored without padding (equal chunks)" \
     "h5ls -v '$tmp/big-fluid.h5/frames/position' | grep -q '100.00% utilization'"
+
+# ---- nbep check's sizes read as sizes ---------------------------------------------------------
+# 3 figures in the unit that fits (kB, MB, GB, TB: powers of 1000): a million spheres' 2001
+# frames are "about 154 GB" (until 2026-11-30 "about 1.54e+05 MB"), their memory "about 531 MB"
+run_nbep check inputs/hard-sphere-fluid.deck --set 'spheres.[0].count=1000000' \
+    --set 'spheres.[0].radius=0.1' --set run.steps=20000 -o "$tmp/huge.h5"
+check "nbep check of a million spheres' 2001 frames: memory and output in MB and GB, 3 figures (exit $rc)" \
+    "[ $rc = 0 ] &&
+     grep -Eqx 'memory: +about [1-9][0-9]{2} MB' '$tmp/stdout' &&
+     grep -Eqx 'output: +$tmp/huge.h5: 2001 frames \(every 10 steps\), about 1[0-9]{2} GB' '$tmp/stdout'"
+run_nbep check inputs/two-spheres.deck -o "$tmp/small.h5"
+check "... and a small deck's in kB (exit $rc)" \
+    "[ $rc = 0 ] && grep -Eqx 'memory: +about [0-9.]+ kB' '$tmp/stdout' &&
+     grep -Eq '^output: .*, about [0-9]{3} kB$' '$tmp/stdout'"
 
 # ---- nbep check's memory: what a run's own arrays take, against its peak RSS --------------------
 # The estimate leaves out the libraries (HDF5, the C runtime: 16 to 17 MB here), so it is held
@@ -196,7 +218,7 @@ for spec in granular-cells:inputs/pile.deck:50000:cells granular-grid:inputs/pil
         args+=(--set 'spheres.[0].radius=0.0125' --set 'spheres.[0].place="lattice"') ;;
     esac
     run_nbep check "$deck" "${args[@]}" --set "spheres.[0].count=$count"
-    est=$(sed -n 's/^memory: *about \([0-9.e+]*\) MB$/\1/p' "$tmp/stdout")
+    est=$(sed -n 's/^memory: *about \(.*\)$/\1/p' "$tmp/stdout" | bytes_of)
     for c in 8 "$count"; do
         guard=300 run_nbep run "$deck" "${args[@]}" --set "spheres.[0].count=$c" -n 2 --quiet \
             -o "$tmp/mem-$name.h5" --summary "$tmp/mem-$name-$c.json"
@@ -204,8 +226,8 @@ for spec in granular-cells:inputs/pile.deck:50000:cells granular-grid:inputs/pil
     peak=$(sed -n 's/.*"peak_rss_bytes": \([0-9]*\).*/\1/p' "$tmp/mem-$name-$count.json")
     base=$(sed -n 's/.*"peak_rss_bytes": \([0-9]*\).*/\1/p' "$tmp/mem-$name-8.json")
     ratio=$(awk -v e="$est" -v p="$peak" -v b="$base" \
-        'BEGIN { if (e > 0 && p > b) printf "%.2f", e * 1e6 / (p - b); else print 0 }')
-    check "nbep check's memory of $name ($est MB) / its peak RSS less 8 spheres' ($peak - $base bytes) = $ratio, in (0.9, 1.35)" \
+        'BEGIN { if (e > 0 && p > b) printf "%.2f", e / (p - b); else print 0 }')
+    check "nbep check's memory of $name ($est bytes) / its peak RSS less 8 spheres' ($peak - $base bytes) = $ratio, in (0.9, 1.35)" \
         "awk -v r='$ratio' 'BEGIN { exit !(r > 0.9 && r < 1.35) }'"
 done
 

@@ -150,7 +150,12 @@ static void test_a_check_of_a_study_loads_every_run(void **state)
                                  "(the others are checked when they run); the largest needs "
                                  "about "));
     assert_non_null(strstr(text, "\nsweep output:    about "));
-    assert_non_null(strstr(text, " MB in all for those (the runs' files)\n"));
+    /* a size as people read it (test_util): "29.1 MB", not "2.91e+01 MB" */
+    char size[NBEP_BYTES_TEXT_MAX], line[128];
+    snprintf(line, sizeof line, "\nsweep output:    about %s in all for those (the runs' files)\n",
+             nbep_format_bytes(rep.output_bytes, size));
+    assert_non_null(strstr(text, line));
+    assert_null(strstr(text, "e+"));
     free(text);
     /* 8 spheres of radius 0.1 fit the unit box, so does 1 of 0.45; 8 of 0.45 do not: runs 3
      * and 7 (radius 0.45, count 8, each replica: seeds 11 and 12) */

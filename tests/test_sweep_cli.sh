@@ -23,6 +23,13 @@ run_sweep() {
     rc=$?
 }
 one_line() { [ "$(wc -l <"$tmp/stderr")" -eq 1 ]; }
+# The bytes of a size as nbep prints it on stdin ("1.82 MB", "682 kB": powers of 1000); nothing
+# for anything else.
+bytes_of() {
+    awk 'NF == 2 && $1 ~ /^[0-9.]+$/ {
+        m = $2 == "B" ? 1 : $2 == "kB" ? 1e3 : $2 == "MB" ? 1e6 : $2 == "GB" ? 1e9 : $2 == "TB" ? 1e12 : 0
+        if (m) printf "%.17g\n", $1 * m }'
+}
 
 cat >"$tmp/s.deck" <<'EOF'
 # 2 replicas x 2 restitutions = 4 short runs of 8 spheres
@@ -227,14 +234,14 @@ check "a study whose runs all load: exit 0 (got $rc), its 8 runs and folder name
 total=0
 for r in 0.3 0.45; do
     for c in 1 8; do
-        mb=$("$nbep" check "$tmp/combo.deck" --set "spheres.[0].radius=$r" --set "spheres.[0].count=$c" \
+        b=$("$nbep" check "$tmp/combo.deck" --set "spheres.[0].radius=$r" --set "spheres.[0].count=$c" \
                  --set 'sweep={replicas=1;}' |
-             sed -n 's/^output: .*about \([0-9.e+-]*\) MB$/\1/p')
-        total=$(awk -v t="$total" -v m="$mb" 'BEGIN { print t + 2 * m }') # 2 replicas
+             sed -n 's/^output: .*, about \(.*\)$/\1/p' | bytes_of)
+        total=$(awk -v t="$total" -v b="$b" 'BEGIN { print t + 2 * b }') # 2 replicas
     done
 done
-got=$(sed -n 's/^sweep output:    about \([0-9.e+-]*\) MB in all.*/\1/p' "$tmp/stdout")
-check "... its output in all ($got MB) is the sum of its runs' own ($total MB), to 3 digits" \
+got=$(sed -n 's/^sweep output:    about \(.*\) in all.*/\1/p' "$tmp/stdout" | bytes_of)
+check "... its output in all ($got bytes) is the sum of its runs' own ($total bytes), to 3 digits" \
     "awk -v a='$got' -v b='$total' 'BEGIN { exit !(a > 0 && (a - b) ^ 2 <= (0.006 * b) ^ 2) }'"
 
 # an axis of the box that leaves a group no room names the axis, as an axis of the group's own
