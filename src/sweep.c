@@ -1054,6 +1054,7 @@ static bool launched_by_mpi(bool *many)
 
 typedef struct sweep_totals {
     size_t ok, failed, interrupted, not_run, reused;
+    size_t ended;         /* the runs that ran to their end now: ok and not reused, or failed */
     double sim_seconds;   /* setup + stepping of the runs simulated now */
 } sweep_totals;
 
@@ -1067,10 +1068,21 @@ static sweep_totals count(const nbep_sweep_plan *p, const nbep_sweep_result *res
         s.interrupted += x->outcome == NBEP_SWEEP_INTERRUPTED;
         s.not_run += x->outcome == NBEP_SWEEP_NOT_RUN;
         s.reused += x->reused != 0;
+        s.ended += (x->outcome == NBEP_SWEEP_OK && !x->reused) || x->outcome == NBEP_SWEEP_FAILED;
         if (x->has_summary && !x->reused)
             s.sim_seconds += x->summary.setup_seconds + x->summary.wall_seconds;
     }
     return s;
+}
+
+/* The sweep's pace, in the closing line and the JSON: the runs that ran to their end in this
+ * sweep, per minute of its wall time. A reused run did not run, a run cut short by a signal did
+ * not end, and one never started did neither: until 2026-11-30 every run of the study counted,
+ * so an interrupted sweep (or one continued, its finished runs reused) claimed a pace it never
+ * had, runs that never ran included. */
+static double runs_per_minute(const sweep_totals *s, double wall)
+{
+    return wall > 0.0 ? 60.0 * (double)s->ended / wall : 0.0;
 }
 
 /* The --summary JSON of the whole sweep. */
@@ -1095,7 +1107,7 @@ static nbep_status write_sweep_json(const char *where, const nbep_sweep_plan *p,
             "\"runs_per_minute\": %s, \"sim_seconds\": %s, \"overhead_seconds_per_run\": %s}\n",
             p->n_runs, s->ok, s->failed, s->interrupted, s->not_run, s->reused, n_ranks,
             nbep_format_real(wall, true, r[0]),
-            nbep_format_real(wall > 0.0 ? 60.0 * n / wall : 0.0, true, r[1]),
+            nbep_format_real(runs_per_minute(s, wall), true, r[1]),
             nbep_format_real(s->sim_seconds, true, r[2]),
             nbep_format_real(n > 0.0 ? ((double)n_ranks * wall - s->sim_seconds) / n : 0.0, true,
                              r[3]));
@@ -1116,11 +1128,12 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
     sweep_totals s = count(p, results);
     if (!cli->quiet)
         fprintf(stderr,
-                "nbep sweep: %zu runs on %d rank%s in %.3g s (%.3g runs/min): %zu ok (%zu "
-                "reused), %zu failed, %zu interrupted, %zu not run; %s/summary.csv\n",
-                p->n_runs, n_ranks, n_ranks == 1 ? "" : "s", wall,
-                wall > 0.0 ? 60.0 * (double)p->n_runs / wall : 0.0, s.ok, s.reused, s.failed,
-                s.interrupted, s.not_run, p->dir);
+                "nbep sweep: %zu runs on %d rank%s in %.3g s (%zu ran to %s end: %.3g "
+                "runs/min): %zu ok (%zu reused), %zu failed, %zu interrupted, %zu not run; "
+                "%s/summary.csv\n",
+                p->n_runs, n_ranks, n_ranks == 1 ? "" : "s", wall, s.ended,
+                s.ended == 1 ? "its" : "their", runs_per_minute(&s, wall), s.ok, s.reused, s.failed, s.interrupted, s.not_run,
+                p->dir);
     if (cli->summary) {
         nbep_status jst = write_sweep_json(cli->summary, p, &s, n_ranks, wall, d);
         if (st == NBEP_OK)
