@@ -7,6 +7,8 @@
 #     gave exit 1);
 #   - a sweep killed outright (SIGKILL) leaves no summary table of the sweep before it, which
 #     its run files would contradict;
+#   - a sweep stopped by SIGTERM counts in its pace (runs per minute, closing line and JSON) only
+#     the runs that ran to their end, not those reused or never run (it counted every run);
 #   - srun without a PMI plugin (each task alone, SLURM_PROCID and the step's task count set):
 #     refused with exit 2 and one line saying how to launch, nothing run;
 #   - each run's row has its own peak memory, not the largest of the runs before it.
