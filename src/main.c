@@ -15,6 +15,7 @@
 #include "nbep/cli.h"
 #include "nbep/nblist.h"
 #include "nbep/output.h"
+#include "nbep/output_xdmf.h"
 #include "nbep/run.h"
 #include "nbep/scene.h"
 #include "nbep/sim.h"
@@ -107,9 +108,14 @@ static void print_check(const nbep_scene *sc, int threads)
     char size[NBEP_BYTES_TEXT_MAX];
     printf("memory:          about %s\n",
            nbep_format_bytes((double)nbep_sim_memory_estimate(sc, threads), size));
-    printf("output:          %s: %llu frames (every %llu steps), about %s\n", sc->output_file,
-           (unsigned long long)nbep_output_frames(sc), (unsigned long long)sc->output_every,
-           nbep_format_bytes(nbep_output_bytes(sc, nbep_sim_keeps_events(sc)), size));
+    /* what the run writes: its file and, beside it, the XDMF sidecar */
+    const double sidecar = nbep_output_sidecar_bytes(sc, sc->output_file);
+    char *xmf = sidecar > 0.0 ? nbep_xdmf_path(sc->output_file) : NULL;
+    printf("output:          %s%s%s: %llu frames (every %llu steps), about %s\n", sc->output_file,
+           xmf ? " and " : "", xmf ? xmf : "", (unsigned long long)nbep_output_frames(sc),
+           (unsigned long long)sc->output_every,
+           nbep_format_bytes(nbep_output_bytes(sc, nbep_sim_keeps_events(sc)) + sidecar, size));
+    free(xmf);
 }
 
 /* How long `nbep check` spends loading a study's runs (each run's spheres placed: a second or
