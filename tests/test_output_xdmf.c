@@ -1,5 +1,6 @@
 /* Tests of the XDMF sidecar: its name, its text (one grid per frame with the frame's time and
- * hyperslab), XML escaping of the run file's name, the atomic rewrite, the error line, and
+ * hyperslab), its size known before the run (nbep check), XML escaping of the run file's name,
+ * the atomic rewrite, the error line, and
  * (when /usr/bin/python3 is there) that the XML is well-formed and, with h5py, that every
  * reference resolves in a real run file: scripts/check_xdmf.py is what a reader does; with
  * ParaView's pvpython installed, ParaView's XDMF reader itself reads the run. */
