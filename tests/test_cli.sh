@@ -191,6 +191,25 @@ for deck in inputs/two-spheres.deck inputs/bounce.deck; do
     check "nbep check's size of $name.h5 and .xmf ($est bytes) is the files' ($size bytes) within 3 %" \
         "[ $rc = 0 ] && [ -n '$est' ] && awk -v e='$est' -v s='$size' 'BEGIN { r = e / s; exit !(r > 0.97 && r < 1.03) }'"
 done
+# frames of positions alone (a sidecar without velocity), and of velocities alone (no sidecar:
+# it places points by their positions, so the run writes none and the line names none)
+for fields in position velocity; do
+    run_nbep check inputs/two-spheres.deck -o "$tmp/only-$fields.h5" --set "output.fields=[\"$fields\"]"
+    est=$(sed -n 's/^output: .* frames.*, about \(.*\)$/\1/p' "$tmp/stdout" | bytes_of)
+    names=$(sed -n 's/^output: *\(.*\): [0-9]* frames.*/\1/p' "$tmp/stdout")
+    guard=300 run_nbep run inputs/two-spheres.deck -o "$tmp/only-$fields.h5" --quiet \
+        --set "output.fields=[\"$fields\"]"
+    size=$(written "$tmp/only-$fields.h5")
+    if [ $fields = position ]; then
+        want="$tmp/only-$fields.h5 and $tmp/only-$fields.xmf"
+    else
+        want="$tmp/only-$fields.h5"
+    fi
+    check "output.fields = [\"$fields\"]: nbep check names $want, and its size ($est bytes) is the files' ($size bytes) within 3 %" \
+        "[ $rc = 0 ] && [ '$names' = '$want' ] && [ -n '$est' ] &&
+         awk -v e='$est' -v s='$size' 'BEGIN { r = e / s; exit !(r > 0.97 && r < 1.03) }'"
+done
+check "... and a run of velocities alone writes no sidecar" "[ ! -e '$tmp/only-velocity.xmf' ]"
 check "the big fluid's frames are stored without padding (equal chunks)" \
     "h5ls -v '$tmp/big-fluid.h5/frames/position' | grep -q '100.00% utilization'"
 
