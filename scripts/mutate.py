@@ -1276,8 +1276,12 @@ MUTANTS = [
      ["tests/test_sweep_cli.sh"], None),
     ("pace-interrupted-counted", "src/sweep.c",
      "s.ended += (x->outcome == NBEP_SWEEP_OK && !x->reused) || x->outcome == NBEP_SWEEP_FAILED;",
-     "s.ended += (x->outcome == NBEP_SWEEP_OK && !x->reused) || x->outcome == NBEP_SWEEP_INTERRUPTED;",
+     "s.ended += (x->outcome == NBEP_SWEEP_OK && !x->reused) || x->outcome == NBEP_SWEEP_FAILED ||\n"
+     "                   x->outcome == NBEP_SWEEP_INTERRUPTED;",
      ["tests/test_sweep_cli.sh"], None),
+    ("pace-failed-uncounted", "src/sweep.c",
+     "s.ended += (x->outcome == NBEP_SWEEP_OK && !x->reused) || x->outcome == NBEP_SWEEP_FAILED;",
+     "s.ended += x->outcome == NBEP_SWEEP_OK && !x->reused;", ["tests/test_sweep_cli.sh"], None),
     ("pace-json-every-run", "src/sweep.c", "nbep_format_real(runs_per_minute(s, wall), true, r[1]),",
      "nbep_format_real(wall > 0.0 ? 60.0 * n / wall : 0.0, true, r[1]),",
      ["tests/test_sweep_cli.sh"], None),

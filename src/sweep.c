@@ -716,7 +716,7 @@ static double csv_text_bytes(const char *s)
  * 2 to 1000 runs of 8 spheres and of 16 runs of 512 (inputs/sweep-restitution.deck), all ok.
  * summary.csv: the header but for the axes' keys is 341 bytes; a row but for its axis values
  * and file name 226 bytes for 8 spheres, 270 for 512 (its seconds and energies at up to 17
- * digits, its counts). summary.h5: 3.7 kB of HDF5's headers and the root attributes but for
+ * digits, its counts: 240 taken for all). summary.h5: 3.7 kB of HDF5's headers and the root attributes but for
  * the deck's text; a row's record, 8 bytes a number and 16 a string; each string in HDF5's
  * global heap, 16 bytes and its text rounded up to 8, in collections of 4 kB (20 runs took
  * 14432 bytes, as counted so; 200 runs 8 % more, 1000 runs 1 % more). */
@@ -1206,8 +1206,8 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
                 "runs/min): %zu ok (%zu reused), %zu failed, %zu interrupted, %zu not run; "
                 "%s/summary.csv\n",
                 p->n_runs, n_ranks, n_ranks == 1 ? "" : "s", wall, s.ended,
-                s.ended == 1 ? "its" : "their", runs_per_minute(&s, wall), s.ok, s.reused, s.failed, s.interrupted, s.not_run,
-                p->dir);
+                s.ended == 1 ? "its" : "their", runs_per_minute(&s, wall), s.ok, s.reused,
+                s.failed, s.interrupted, s.not_run, p->dir);
     if (cli->summary) {
         nbep_status jst = write_sweep_json(cli->summary, p, &s, n_ranks, wall, d);
         if (st == NBEP_OK)

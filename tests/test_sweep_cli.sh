@@ -93,40 +93,42 @@ check "killed outright: the last sweep's summary.csv and summary.h5 are gone" \
     "[ ! -e '$tmp/s.sweep/summary.csv' ] && [ ! -e '$tmp/s.sweep/summary.h5' ]"
 
 # ---- an interrupted sweep's pace counts the runs that ran to their end ------------------------
-# 5 runs by run.steps: 20, 30 (both finished by a sweep before: reused), 40 (runs to its end),
-# 5000000 (stopped by SIGTERM once its file is there) and 50 (not run). The closing line's and
-# the JSON's runs per minute are of the one run that ran to its end: until 2026-11-30 all 5
-# counted, those reused and never run too.
+# 6 runs by run.steps: 20, 30 (both finished by a sweep before: reused), 40 (runs to its end),
+# 60 (fails: a folder where its file goes), 5000000 (stopped by SIGTERM once its file is there)
+# and 50 (not run). The closing line's and the JSON's runs per minute are of the two runs that
+# ran to their end, the one ok and the one failed: until 2026-11-30 all 6 counted, those
+# reused and never run too.
 cat >"$tmp/pace.deck" <<'EOF'
 run: { steps = 20; threads = 1; };
 physics: { gravity = [0.0, 0.0, -9.81]; };
 box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };
 spheres = ( { count = 8; radius = 0.05; mass = 1.0; place = "random"; speed = 1.0; } );
 output: { file = "pace.h5"; every = 10; };
-sweep: { vary = ( { key = "run.steps"; values = [20, 30, 40, 5000000, 50]; } ); };
+sweep: { vary = ( { key = "run.steps"; values = [20, 30, 40, 60, 5000000, 50]; } ); };
 EOF
 run_sweep "$tmp/pace.deck" -o "$tmp/pace" --quiet --set 'sweep.vary.[0].values=[20, 30]'
 check "the pace study's first two runs (exit $rc)" "[ $rc = 0 ]"
+mkdir -p "$tmp/pace.sweep/run-0003.h5/in-the-way"
 timeout -k 5 120 "$nbep" sweep "$tmp/pace.deck" -o "$tmp/pace" --summary "$tmp/pace.json" \
     >"$tmp/stdout" 2>"$tmp/stderr" &
 pid=$!
 for _ in $(seq 300); do
-    [ -e "$tmp/pace.sweep/run-0003.h5" ] && break
+    [ -f "$tmp/pace.sweep/run-0004.h5" ] && break
     sleep 0.1
 done
 sleep 0.3
 kill -TERM $pid 2>/dev/null
 wait $pid
 rc=$?
-line=$(grep '^nbep sweep: 5 runs on ' "$tmp/stderr")
+line=$(grep '^nbep sweep: 6 runs on ' "$tmp/stderr")
 # the runs that ran to their end, by the table: ok and not reused, or failed
 ended=$(/usr/bin/python3 -c "
 import csv, sys
 print(sum(1 for r in csv.DictReader(open(sys.argv[1]))
           if (r['status'] == 'ok' and r['reused'] == '0') or r['status'] == 'failed'))" \
     "$tmp/pace.sweep/summary.csv" 2>/dev/null)
-check "SIGTERM during run 3: exit 143 (got $rc), 3 ok (2 reused), 1 interrupted, 1 not run" \
-    "[ $rc = 143 ] && echo '$line' | grep -q ': 3 ok (2 reused), 0 failed, 1 interrupted, 1 not run; '"
+check "SIGTERM during run 4: exit 143 (got $rc), 3 ok (2 reused), 1 failed, 1 interrupted, 1 not run" \
+    "[ $rc = 143 ] && echo '$line' | grep -q ': 3 ok (2 reused), 1 failed, 1 interrupted, 1 not run; '"
 # "in S s (K ran to its end: R runs/min)": K the table's, R = 60 K / S to the 3 figures each
 # is printed to (two roundings of up to 0.5 %)
 pace_agrees() {
@@ -135,8 +137,8 @@ pace_agrees() {
         split(substr($0, RSTART, RLENGTH), w, " "); s = w[2]; k = substr(w[4], 2) + 0; r = w[9] + 0
         exit !(k == n && s > 0 && (r - 60 * k / s) ^ 2 <= (0.015 * r) ^ 2) }' <<<"$line"
 }
-check "... the closing line counts the $ended run that ran to its end, at 60 / its seconds a minute: $line" \
-    "[ '$ended' = 1 ] && pace_agrees"
+check "... the closing line counts the $ended runs that ran to their end, at 60 x $ended / its seconds a minute: $line" \
+    "[ '$ended' = 2 ] && pace_agrees"
 check "... and so does the JSON's runs_per_minute, of its wall_seconds" \
     "/usr/bin/python3 -c 'import json, sys
 j = json.load(open(sys.argv[1]))
