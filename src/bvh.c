@@ -130,8 +130,9 @@ nbep_status nbep_bvh_create(size_t n_max, nbep_bvh **out, nbep_diag *d)
         !(b->order_tmp = nbep_alloc_aligned(n_max, sizeof *b->order_tmp)) ||
         !(b->hist = nbep_alloc_aligned(RADIX_PASSES * RADIX_BUCKETS, sizeof *b->hist))) {
         nbep_bvh_destroy(&b);
-        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for a BVH of %zu spheres (%.3g GB)", n_max,
-                  (double)nbep_bvh_bytes(n_max) / 1e9);
+        char size[NBEP_BYTES_TEXT_MAX];
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for a BVH of %zu spheres (%s)", n_max,
+                  nbep_format_bytes((double)nbep_bvh_bytes(n_max), size));
     }
     b->n_max = n_max;
     *out = b;

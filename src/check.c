@@ -11,6 +11,7 @@
 #include "build_info.h"
 #include "nbep/nblist.h"
 #include "nbep/output.h"
+#include "nbep/output_xdmf.h"
 #include "nbep/sim.h"
 #include "nbep/summary.h"
 
@@ -30,7 +31,9 @@ void nbep_check_gather(const nbep_scene *sc, nbep_check_facts *f)
     }
     f->memory_bytes = (double)nbep_sim_memory_estimate(sc, f->threads);
     f->frames = nbep_output_frames(sc);
-    f->output_bytes = nbep_output_bytes(sc, nbep_sim_keeps_events(sc));
+    /* what the run writes: its file and, beside it, the XDMF sidecar */
+    f->sidecar_bytes = nbep_output_sidecar_bytes(sc, sc->output_file);
+    f->output_bytes = nbep_output_bytes(sc, nbep_sim_keeps_events(sc)) + f->sidecar_bytes;
 }
 
 void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f)
@@ -86,10 +89,13 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
                     f->skin_taken, NBEP_NBLIST_SKIN_DILUTE, NBEP_NBLIST_PHI_DILUTE,
                     NBEP_NBLIST_SKIN, NBEP_NBLIST_PHI_DENSE);
     }
-    fprintf(out, "memory:          about %.3g MB\n", f->memory_bytes / 1e6);
-    fprintf(out, "output:          %s: %llu frames (every %llu steps), about %.3g MB\n",
-            sc->output_file, (unsigned long long)f->frames,
-            (unsigned long long)sc->output_every, f->output_bytes / 1e6);
+    char size[NBEP_BYTES_TEXT_MAX];
+    fprintf(out, "memory:          about %s\n", nbep_format_bytes(f->memory_bytes, size));
+    char *xmf = f->sidecar_bytes > 0.0 ? nbep_xdmf_path(sc->output_file) : NULL;
+    fprintf(out, "output:          %s%s%s: %llu frames (every %llu steps), about %s\n",
+            sc->output_file, xmf ? " and " : "", xmf ? xmf : "", (unsigned long long)f->frames,
+            (unsigned long long)sc->output_every, nbep_format_bytes(f->output_bytes, size));
+    free(xmf);
 }
 
 /* ---- the JSON report ------------------------------------------------------------------------ */
@@ -116,12 +122,15 @@ static json_t *bytes(double v)
 
 static json_t *study_object(const nbep_sweep_check_report *r)
 {
-    return json_pack("{s:I, s:I, s:I, s:s, s:I, s:b, s:o, s:o}", "runs", (json_int_t)r->n_runs,
-                     "combinations", (json_int_t)r->n_combos, "replicas",
-                     (json_int_t)r->replicas, "dir", r->dir, "runs_checked",
+    /* output_bytes as the human line's `sweep output`: the runs' files and sidecars and the
+     * sweep's tables, which tables_bytes gives apart */
+    return json_pack("{s:I, s:I, s:I, s:s, s:I, s:b, s:o, s:o, s:o}", "runs",
+                     (json_int_t)r->n_runs, "combinations", (json_int_t)r->n_combos,
+                     "replicas", (json_int_t)r->replicas, "dir", r->dir, "runs_checked",
                      (json_int_t)r->checked, "out_of_time", r->out_of_time,
                      "memory_bytes_max", bytes(r->memory_max), "output_bytes",
-                     bytes(r->output_bytes));
+                     bytes(r->output_bytes + r->tables_bytes), "tables_bytes",
+                     bytes(r->tables_bytes));
 }
 
 /* jansson's json_pack builds the object in one call (keys in this order with
@@ -130,6 +139,7 @@ static json_t *check_object(const nbep_scene *sc, const nbep_check_facts *f,
                             const nbep_sweep_check_report *study)
 {
     const bool predictive = strcmp(sc->algorithm, "predictive") == 0;
+    char *xmf = f->sidecar_bytes > 0.0 ? nbep_xdmf_path(sc->output_file) : NULL;
     json_t *o = json_pack(
         "{s:s, s:s, s:s, s:s, s:o, s:o, s:i, s:I, s:I, s:I, s:f, s:I, s:f, s:o, s:o, s:o, s:o, "
         "s:I, s:I, s:o, s:o}",
@@ -148,9 +158,10 @@ static json_t *check_object(const nbep_scene *sc, const nbep_check_facts *f,
         f->lists ? json_real(f->skin_taken) : json_null(), "pairs_quadratic",
         (json_int_t)f->pairs_quadratic, "pairs_quartic", (json_int_t)f->pairs_quartic,
         "memory_bytes", bytes(f->memory_bytes), "output",
-        json_pack("{s:s, s:I, s:I, s:o}", "file", sc->output_file, "frames",
-                  (json_int_t)f->frames, "every", (json_int_t)sc->output_every, "bytes",
-                  bytes(f->output_bytes)));
+        json_pack("{s:s, s:o, s:I, s:I, s:o}", "file", sc->output_file, "sidecar",
+                  xmf ? json_string(xmf) : json_null(), "frames", (json_int_t)f->frames,
+                  "every", (json_int_t)sc->output_every, "bytes", bytes(f->output_bytes)));
+    free(xmf);
     if (o && json_object_set_new(o, "study", study ? study_object(study) : json_null()) != 0) {
         json_decref(o);
         return NULL;

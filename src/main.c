@@ -1,6 +1,5 @@
 /* nbep's entry point: command line -> command (a run goes through run.h); maps a status to an
  * exit code. The only file that prints a status, installs signal handlers or calls exit. */
-#include <math.h>
 #include <assert.h>
 #include <signal.h>
 #include <stdatomic.h>
@@ -14,7 +13,6 @@
 #include "build_info.h"
 #include "nbep/check.h"
 #include "nbep/cli.h"
-#include "nbep/nblist.h"
 #include "nbep/output.h"
 #include "nbep/run.h"
 #include "nbep/scene.h"

@@ -394,6 +394,15 @@ double nbep_output_bytes(const nbep_scene *sc, bool events)
     return bytes;
 }
 
+double nbep_output_sidecar_bytes(const nbep_scene *sc, const char *path)
+{
+    /* as nbep_output_create_staged decides it (o->xmf) and the frames' velocity is written */
+    if (!sc->out_position)
+        return 0.0;
+    return nbep_xdmf_bytes(path, sc->state.n, sc->steps, sc->output_every, sc->dt,
+                           sc->out_velocity);
+}
+
 static int create_frames(nbep_output *o, const nbep_scene *sc, nbep_diag *d)
 {
     size_t n = sc->state.n;

@@ -18,6 +18,7 @@
 
 #include <errno.h>
 #include <inttypes.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -62,62 +63,128 @@ static char *xml_base_name(const char *path)
     return out;
 }
 
-/* One frame's slice of a (F, N, 3) dataset: start (k, 0, 0), stride 1, count (1, N, 3). */
-static void hyperslab(FILE *f, const char *indent, const char *h5, const char *dataset,
-                      size_t k, size_t n_frames, size_t n)
+/* Where the XML goes: a file, or (f NULL) nowhere, only counted: nbep_xdmf_bytes sizes the
+ * sidecar with the very calls that write it. */
+typedef struct xml_out {
+    FILE *f;
+    double bytes;
+} xml_out;
+
+static void out(xml_out *o, const char *fmt, ...) NBEP_PRINTF(2, 3);
+static void out(xml_out *o, const char *fmt, ...)
 {
-    fprintf(f, "%s<DataItem ItemType=\"HyperSlab\" Dimensions=\"1 %zu 3\" Type=\"HyperSlab\">\n",
-            indent, n);
-    fprintf(f, "%s  <DataItem Dimensions=\"3 3\" NumberType=\"Int\" Format=\"XML\">"
-               "%zu 0 0 1 1 1 1 %zu 3</DataItem>\n",
-            indent, k, n);
-    fprintf(f, "%s  <DataItem Dimensions=\"%zu %zu 3\" NumberType=\"Float\" Precision=\"8\" "
-               "Format=\"HDF\">%s:/frames/%s</DataItem>\n",
-            indent, n_frames, n, h5, dataset);
-    fprintf(f, "%s</DataItem>\n", indent);
+    va_list ap;
+    va_start(ap, fmt);
+    const int k = o->f ? vfprintf(o->f, fmt, ap) : vsnprintf(NULL, 0, fmt, ap);
+    va_end(ap);
+    if (k > 0)
+        o->bytes += k;
 }
 
-static void scalar(FILE *f, const char *h5, const char *name, size_t n)
+/* One frame's slice of a (F, N, 3) dataset: start (k, 0, 0), stride 1, count (1, N, 3). */
+static void hyperslab(xml_out *o, const char *indent, const char *h5, const char *dataset,
+                      size_t k, size_t n_frames, size_t n)
 {
-    fprintf(f, "        <Attribute Name=\"%s\" AttributeType=\"Scalar\" Center=\"Node\">\n", name);
-    fprintf(f, "          <DataItem Dimensions=\"%zu\" NumberType=\"Float\" Precision=\"8\" "
-               "Format=\"HDF\">%s:/spheres/%s</DataItem>\n",
-            n, h5, name);
-    fprintf(f, "        </Attribute>\n");
+    out(o, "%s<DataItem ItemType=\"HyperSlab\" Dimensions=\"1 %zu 3\" Type=\"HyperSlab\">\n",
+        indent, n);
+    out(o, "%s  <DataItem Dimensions=\"3 3\" NumberType=\"Int\" Format=\"XML\">"
+           "%zu 0 0 1 1 1 1 %zu 3</DataItem>\n",
+        indent, k, n);
+    out(o, "%s  <DataItem Dimensions=\"%zu %zu 3\" NumberType=\"Float\" Precision=\"8\" "
+           "Format=\"HDF\">%s:/frames/%s</DataItem>\n",
+        indent, n_frames, n, h5, dataset);
+    out(o, "%s</DataItem>\n", indent);
+}
+
+static void scalar(xml_out *o, const char *h5, const char *name, size_t n)
+{
+    out(o, "        <Attribute Name=\"%s\" AttributeType=\"Scalar\" Center=\"Node\">\n", name);
+    out(o, "          <DataItem Dimensions=\"%zu\" NumberType=\"Float\" Precision=\"8\" "
+           "Format=\"HDF\">%s:/spheres/%s</DataItem>\n",
+        n, h5, name);
+    out(o, "        </Attribute>\n");
+}
+
+static void xml_head(xml_out *o, const char *h5, size_t n, size_t n_frames)
+{
+    out(o, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
+           "<!-- nbep run %s: %zu spheres, %zu frames (written by nbep) -->\n"
+           "<Xdmf Version=\"2.0\">\n  <Domain>\n"
+           "    <Grid Name=\"spheres\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
+        h5, n, n_frames);
+}
+
+/* Frame k of n_frames, at step *step (NULL: named by its index) and time t. */
+static void xml_frame(xml_out *o, const char *h5, size_t n, size_t n_frames, size_t k,
+                      const int64_t *step, double t, bool has_velocity)
+{
+    if (step)
+        out(o, "      <Grid Name=\"step %" PRId64 "\" GridType=\"Uniform\">\n", *step);
+    else
+        out(o, "      <Grid Name=\"frame %zu\" GridType=\"Uniform\">\n", k);
+    /* %.17g: the exact double, so that readers order and label frames as the file does */
+    out(o, "        <Time Value=\"%.17g\"/>\n", t);
+    out(o, "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" "
+           "NodesPerElement=\"1\"/>\n",
+        n);
+    out(o, "        <Geometry GeometryType=\"XYZ\">\n");
+    hyperslab(o, "          ", h5, "position", k, n_frames, n);
+    out(o, "        </Geometry>\n");
+    scalar(o, h5, "radius", n);
+    scalar(o, h5, "mass", n);
+    if (has_velocity) {
+        out(o, "        <Attribute Name=\"velocity\" AttributeType=\"Vector\" "
+               "Center=\"Node\">\n");
+        hyperslab(o, "          ", h5, "velocity", k, n_frames, n);
+        out(o, "        </Attribute>\n");
+    }
+    out(o, "      </Grid>\n");
+}
+
+static void xml_tail(xml_out *o)
+{
+    out(o, "    </Grid>\n  </Domain>\n</Xdmf>\n");
 }
 
 static void write_xml(FILE *f, const char *h5, size_t n, size_t n_frames, const int64_t *steps,
                       const double *times, bool has_velocity)
 {
-    fprintf(f, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
-               "<!-- nbep run %s: %zu spheres, %zu frames (written by nbep) -->\n"
-               "<Xdmf Version=\"2.0\">\n  <Domain>\n"
-               "    <Grid Name=\"spheres\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
-            h5, n, n_frames);
-    for (size_t k = 0; k < n_frames; k++) {
-        if (steps)
-            fprintf(f, "      <Grid Name=\"step %" PRId64 "\" GridType=\"Uniform\">\n", steps[k]);
-        else
-            fprintf(f, "      <Grid Name=\"frame %zu\" GridType=\"Uniform\">\n", k);
-        /* %.17g: the exact double, so that readers order and label frames as the file does */
-        fprintf(f, "        <Time Value=\"%.17g\"/>\n", times[k]);
-        fprintf(f, "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%zu\" "
-                   "NodesPerElement=\"1\"/>\n",
-                n);
-        fprintf(f, "        <Geometry GeometryType=\"XYZ\">\n");
-        hyperslab(f, "          ", h5, "position", k, n_frames, n);
-        fprintf(f, "        </Geometry>\n");
-        scalar(f, h5, "radius", n);
-        scalar(f, h5, "mass", n);
-        if (has_velocity) {
-            fprintf(f, "        <Attribute Name=\"velocity\" AttributeType=\"Vector\" "
-                       "Center=\"Node\">\n");
-            hyperslab(f, "          ", h5, "velocity", k, n_frames, n);
-            fprintf(f, "        </Attribute>\n");
-        }
-        fprintf(f, "      </Grid>\n");
+    xml_out o = {.f = f};
+    xml_head(&o, h5, n, n_frames);
+    for (size_t k = 0; k < n_frames; k++)
+        xml_frame(&o, h5, n, n_frames, k, steps ? &steps[k] : NULL, times[k], has_velocity);
+    xml_tail(&o);
+}
+
+/* Frames measured one by one up to this many; past it, this many spread evenly over the run
+ * stand for all (a frame's text differs from the next only in the digits of its index, step
+ * and time: a few bytes of some 1500). */
+#define BYTES_SAMPLED_FRAMES 256
+
+double nbep_xdmf_bytes(const char *h5_path, size_t n_spheres, uint64_t steps, uint64_t every,
+                       double dt, bool has_velocity)
+{
+    if (every == 0)
+        return 0.0;
+    /* frames at steps 0, every, 2 every, ... and at the last step (nbep_output_frames) */
+    const uint64_t n_frames = steps / every + 1 + (steps % every ? 1 : 0);
+    char *escaped = xml_base_name(h5_path);
+    const char *slash = strrchr(h5_path, '/');
+    const char *h5 = escaped ? escaped : slash ? slash + 1 : h5_path; /* no memory: near enough */
+    xml_out o = {.f = NULL};
+    xml_head(&o, h5, n_spheres, (size_t)n_frames);
+    xml_tail(&o);
+    const uint64_t sampled = n_frames < BYTES_SAMPLED_FRAMES ? n_frames : BYTES_SAMPLED_FRAMES;
+    xml_out frames = {.f = NULL};
+    for (uint64_t i = 0; i < sampled; i++) {
+        const uint64_t k = sampled == 1 ? 0 : (uint64_t)((double)i * (double)(n_frames - 1) /
+                                                         (double)(sampled - 1));
+        const int64_t step = (int64_t)(k + 1 < n_frames ? k * every : steps);
+        xml_frame(&frames, h5, n_spheres, (size_t)n_frames, (size_t)k, &step,
+                  (double)step * dt, has_velocity);
     }
-    fprintf(f, "    </Grid>\n  </Domain>\n</Xdmf>\n");
+    free(escaped);
+    return o.bytes + (sampled ? frames.bytes / (double)sampled * (double)n_frames : 0.0);
 }
 
 /* Every frame while the sidecar is this short: the first frames are what users open first. */

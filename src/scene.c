@@ -1069,9 +1069,11 @@ static bool check_counts(load *L, const nbep_scene *sc, nbep__scene_entry *e, si
     double bytes = (double)nbep_state_bytes((size_t)total, n_planes) +
                    (double)WORKSPACE_BYTES_PER_SPHERE * (double)total;
     if (pages > 0 && page > 0 && largest != SIZE_MAX && bytes > (double)pages * (double)page) {
+        char need[NBEP_BYTES_TEXT_MAX], have[NBEP_BYTES_TEXT_MAX];
         ERR(L, e[largest].count_at,
-            "spheres.[%zu].count = %" PRIu64 " needs %.1f GB, more than this machine's %.1f GB",
-            largest, e[largest].count, bytes / 1e9, (double)pages * (double)page / 1e9);
+            "spheres.[%zu].count = %" PRIu64 " needs %s, more than this machine's %s", largest,
+            e[largest].count, nbep_format_bytes(bytes, need),
+            nbep_format_bytes((double)pages * (double)page, have));
         return false;
     }
     *total_out = (size_t)total;

@@ -30,8 +30,9 @@ nbep_status nbep_state_init(nbep_state *s, size_t n, size_t n_planes, nbep_diag 
     if (!s->pos || !s->vel || !s->acc || !s->radius || !s->mass || !s->image || !s->plane_normal ||
         !s->plane_offset) {
         nbep_state_fini(s);
-        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for %zu spheres (%.3g GB)", n,
-                  (double)nbep_state_bytes(n, n_planes) / 1e9);
+        char size[NBEP_BYTES_TEXT_MAX];
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for %zu spheres (%s)", n,
+                  nbep_format_bytes((double)nbep_state_bytes(n, n_planes), size));
     }
     memset(s->image, 0, 3 * n * sizeof *s->image);
     s->n = n;

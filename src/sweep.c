@@ -63,6 +63,10 @@ enum {
 };
 #undef X_NULLABLE
 #undef X_NUMERIC
+/* The table's own columns besides the axes and the summary's numbers: integers run, replica,
+ * seed, rank, exit_code, reused; texts status, file, algorithm (the summary's), error; and the
+ * real `seconds`. */
+enum { N_FIXED_INT = 6, N_FIXED_TEXT = 4 };
 
 const char *nbep_sweep_outcome_text(nbep_sweep_outcome o)
 {
@@ -339,6 +343,7 @@ nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides
     if (st != NBEP_OK)
         return st;
     rep->n_runs = p.n_runs;
+    rep->tables_bytes = nbep_sweep_tables_bytes(&p);
     rep->budget_s = budget_s;
     rep->n_combos = p.n_combos;
     rep->replicas = p.replicas;
@@ -363,7 +368,10 @@ nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides
                                                      &rs, &dr);
         rep->checked++;
         if (rst == NBEP_OK) {
-            rep->output_bytes += nbep_output_bytes(&rs, nbep_sim_keeps_events(&rs));
+            char *path = nbep_sweep_run_path(&p, run); /* the run's file, which its sidecar names */
+            rep->output_bytes += nbep_output_bytes(&rs, nbep_sim_keeps_events(&rs)) +
+                                 nbep_output_sidecar_bytes(&rs, path ? path : rs.output_file);
+            free(path);
             rep->memory_max = fmax(rep->memory_max, (double)nbep_sim_memory_estimate(
                                                         &rs, nbep_sim_resolve_threads(rs.threads)));
             nbep_scene_fini(&rs);
@@ -392,18 +400,22 @@ void nbep_sweep_check_print(FILE *f, const nbep_sweep_check_report *r)
     fprintf(f, "sweep:           %zu runs (%llu replica%s x %zu combination%s) into %s/\n",
             r->n_runs, (unsigned long long)r->replicas, r->replicas == 1 ? "" : "s", r->n_combos,
             r->n_combos == 1 ? "" : "s", r->dir);
+    char size[NBEP_BYTES_TEXT_MAX];
     if (r->out_of_time)
         fprintf(f,
                 "sweep runs:      the first %zu of %zu loaded and placed in %g s (the others "
-                "are checked when they run); the largest needs about %.3g MB\n",
-                r->checked, r->n_runs, r->budget_s, r->memory_max / 1e6);
+                "are checked when they run); the largest needs about %s\n",
+                r->checked, r->n_runs, r->budget_s, nbep_format_bytes(r->memory_max, size));
     else
         fprintf(f,
                 "sweep runs:      all %zu loaded and placed as nbep sweep will; the largest "
-                "needs about %.3g MB\n",
-                r->checked, r->memory_max / 1e6);
-    fprintf(f, "sweep output:    about %.3g MB in all%s (the runs' files)\n",
-            r->output_bytes / 1e6, r->out_of_time ? " for those" : "");
+                "needs about %s\n",
+                r->checked, nbep_format_bytes(r->memory_max, size));
+    fprintf(f,
+            "sweep output:    about %s in all%s (the runs' files and their sidecars, "
+            "summary.csv and summary.h5)\n",
+            nbep_format_bytes(r->output_bytes + r->tables_bytes, size),
+            r->out_of_time ? " for those" : "");
 }
 
 /* ---- reusing finished runs --------------------------------------------------------------- */
@@ -689,6 +701,71 @@ static nbep_status write_csv(const char *path, const nbep_table *t, nbep_diag *d
     return NBEP_OK;
 }
 
+/* The bytes csv_text writes for s. */
+static double csv_text_bytes(const char *s)
+{
+    if (!strpbrk(s, ",\"\r\n"))
+        return (double)strlen(s);
+    double n = 2.0; /* the quotes around it */
+    for (; *s; s++)
+        n += *s == '"' ? 2.0 : 1.0;
+    return n;
+}
+
+/* What a study's tables take, about (nbep_sweep_tables_bytes); measured 2026-11-30 on tables of
+ * 2 to 1000 runs of 8 spheres and of 16 runs of 512 (inputs/sweep-restitution.deck), all ok.
+ * summary.csv: the header but for the axes' keys is 341 bytes; a row but for its axis values
+ * and file name 226 bytes for 8 spheres, 270 for 512 (its seconds and energies at up to 17
+ * digits, its counts: 240 taken for all). summary.h5: 3.7 kB of HDF5's headers and the root attributes but for
+ * the deck's text; a row's record, 8 bytes a number and 16 a string; each string in HDF5's
+ * global heap, 16 bytes and its text rounded up to 8, in collections of 4 kB (20 runs took
+ * 14432 bytes, as counted so; 200 runs 8 % more, 1000 runs 1 % more). */
+#define TABLE_CSV_HEADER_BYTES 341.0
+#define TABLE_CSV_ROW_BYTES 240.0
+#define TABLE_H5_BYTES 3.7e3
+#define TABLE_H5_HEAP_COLLECTION 4096.0
+
+/* A string's room in summary.h5's global heap. */
+static double heap_bytes(double len)
+{
+    return 16.0 + 8.0 * ceil(len / 8.0);
+}
+
+double nbep_sweep_tables_bytes(const nbep_sweep_plan *p)
+{
+    const double runs = (double)p->n_runs;
+    const double numbers = N_FIXED_INT + 1 + N_SUMMARY_FIELDS, texts = N_FIXED_TEXT + p->n_axes;
+    char *path = p->n_runs ? nbep_sweep_run_path(p, p->n_runs - 1) : NULL;
+    /* every run's name has as many digits as the last run's */
+    const double file = path ? csv_text_bytes(path + strlen(p->dir) + 1) : 0.0;
+    free(path);
+    double csv_row = TABLE_CSV_ROW_BYTES + file;
+    /* a row's strings: status "ok", its file, its algorithm ("predictive", the default), no
+     * error; then its axis values */
+    double heap_row = heap_bytes(2.0) + heap_bytes(file) + heap_bytes(10.0) + heap_bytes(0.0);
+    double csv = TABLE_CSV_HEADER_BYTES;
+    for (size_t a = 0; a < p->n_axes; a++) {
+        const nbep_sweep_axis *x = &p->axes[a];
+        csv += 1.0 + csv_text_bytes(x->key);
+        double shown_csv = 0.0, shown_heap = 0.0; /* each value takes an equal share of runs */
+        for (size_t v = 0; v < x->n_values; v++) {
+            char *shown = display_value(x->values[v]);
+            const double len = shown ? (double)strlen(shown) : (double)strlen(x->values[v]);
+            shown_csv += 1.0 + (shown ? csv_text_bytes(shown) : len);
+            shown_heap += heap_bytes(len);
+            free(shown);
+        }
+        if (x->n_values) {
+            csv_row += shown_csv / (double)x->n_values;
+            heap_row += shown_heap / (double)x->n_values;
+        }
+    }
+    const double heap = TABLE_H5_HEAP_COLLECTION * ceil(runs * heap_row / TABLE_H5_HEAP_COLLECTION);
+    const double h5 = TABLE_H5_BYTES + (p->deck_text ? (double)strlen(p->deck_text) : 0.0) +
+                      runs * (8.0 * numbers + 16.0 * texts) + fmax(heap, TABLE_H5_HEAP_COLLECTION);
+    return csv + runs * csv_row + h5;
+}
+
 /* Every array the table's columns point into, owned here. */
 typedef struct table_data {
     size_t n_cols;
@@ -726,8 +803,6 @@ static bool keep(table_data *t, char *s, const char **slot)
 nbep_status nbep_sweep_write_summary(const nbep_sweep_plan *p, const nbep_sweep_result *results,
                                      int n_ranks, double wall_seconds, nbep_diag *d)
 {
-    enum { N_FIXED_INT = 6, N_FIXED_TEXT = 4 }; /* run replica seed rank exit_code reused;
-                                                   status file algorithm error */
     const size_t n = p->n_runs;
     const size_t n_int = N_FIXED_INT + N_SUMMARY_FIELDS, n_text = N_FIXED_TEXT + p->n_axes;
     /* per row and nullable summary column: no summary, or null in it */
@@ -1053,6 +1128,7 @@ static bool launched_by_mpi(bool *many)
 
 typedef struct sweep_totals {
     size_t ok, failed, interrupted, not_run, reused;
+    size_t ended;         /* the runs that ran to their end now: ok and not reused, or failed */
     double sim_seconds;   /* setup + stepping of the runs simulated now */
 } sweep_totals;
 
@@ -1066,10 +1142,21 @@ static sweep_totals count(const nbep_sweep_plan *p, const nbep_sweep_result *res
         s.interrupted += x->outcome == NBEP_SWEEP_INTERRUPTED;
         s.not_run += x->outcome == NBEP_SWEEP_NOT_RUN;
         s.reused += x->reused != 0;
+        s.ended += (x->outcome == NBEP_SWEEP_OK && !x->reused) || x->outcome == NBEP_SWEEP_FAILED;
         if (x->has_summary && !x->reused)
             s.sim_seconds += x->summary.setup_seconds + x->summary.wall_seconds;
     }
     return s;
+}
+
+/* The sweep's pace, in the closing line and the JSON: the runs that ran to their end in this
+ * sweep, per minute of its wall time. A reused run did not run, a run cut short by a signal did
+ * not end, and one never started did neither: until 2026-11-30 every run of the study counted,
+ * so an interrupted sweep (or one continued, its finished runs reused) claimed a pace it never
+ * had, runs that never ran included. */
+static double runs_per_minute(const sweep_totals *s, double wall)
+{
+    return wall > 0.0 ? 60.0 * (double)s->ended / wall : 0.0;
 }
 
 /* The --summary JSON of the whole sweep. */
@@ -1094,7 +1181,7 @@ static nbep_status write_sweep_json(const char *where, const nbep_sweep_plan *p,
             "\"runs_per_minute\": %s, \"sim_seconds\": %s, \"overhead_seconds_per_run\": %s}\n",
             p->n_runs, s->ok, s->failed, s->interrupted, s->not_run, s->reused, n_ranks,
             nbep_format_real(wall, true, r[0]),
-            nbep_format_real(wall > 0.0 ? 60.0 * n / wall : 0.0, true, r[1]),
+            nbep_format_real(runs_per_minute(s, wall), true, r[1]),
             nbep_format_real(s->sim_seconds, true, r[2]),
             nbep_format_real(n > 0.0 ? ((double)n_ranks * wall - s->sim_seconds) / n : 0.0, true,
                              r[3]));
@@ -1115,11 +1202,12 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
     sweep_totals s = count(p, results);
     if (!cli->quiet)
         fprintf(stderr,
-                "nbep sweep: %zu runs on %d rank%s in %.3g s (%.3g runs/min): %zu ok (%zu "
-                "reused), %zu failed, %zu interrupted, %zu not run; %s/summary.csv\n",
-                p->n_runs, n_ranks, n_ranks == 1 ? "" : "s", wall,
-                wall > 0.0 ? 60.0 * (double)p->n_runs / wall : 0.0, s.ok, s.reused, s.failed,
-                s.interrupted, s.not_run, p->dir);
+                "nbep sweep: %zu runs on %d rank%s in %.3g s (%zu ran to %s end: %.3g "
+                "runs/min): %zu ok (%zu reused), %zu failed, %zu interrupted, %zu not run; "
+                "%s/summary.csv\n",
+                p->n_runs, n_ranks, n_ranks == 1 ? "" : "s", wall, s.ended,
+                s.ended == 1 ? "its" : "their", runs_per_minute(&s, wall), s.ok, s.reused,
+                s.failed, s.interrupted, s.not_run, p->dir);
     if (cli->summary) {
         nbep_status jst = write_sweep_json(cli->summary, p, &s, n_ranks, wall, d);
         if (st == NBEP_OK)

@@ -1,4 +1,5 @@
-/* Aligned allocation, the spin-wait pause and sleeping on a word, shared by every module. */
+/* Aligned allocation, the spin-wait pause, sleeping on a word and the text of a byte count,
+ * shared by every module. */
 #define _DEFAULT_SOURCE /* syscall() for futexes */
 #include "nbep/compiler.h"
 
@@ -11,6 +12,7 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 #endif
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -44,6 +46,20 @@ char *nbep_partial_path(const char *path)
     if (p)
         strcat(strcpy(p, path), suffix);
     return p;
+}
+
+const char *nbep_format_bytes(double bytes, char buf[NBEP_BYTES_TEXT_MAX])
+{
+    static const char *const unit[] = {"B", "kB", "MB", "GB", "TB", "PB", "EB"};
+    const size_t last = sizeof unit / sizeof *unit - 1;
+    size_t u = 0;
+    /* 999.5 and above print as 1e+03 at 3 figures: the next unit's 1 */
+    while (u < last && fabs(bytes) >= 999.5) {
+        bytes /= 1000.0;
+        u++;
+    }
+    snprintf(buf, NBEP_BYTES_TEXT_MAX, "%.3g %s", bytes, unit[u]);
+    return buf;
 }
 
 double nbep_now(void)

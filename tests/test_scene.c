@@ -642,11 +642,11 @@ static void test_more_spheres_than_memory_holds_fail_before_allocating(void **st
     if (!(bytes > phys))
         skip();
     LOAD_FAILS(f, NBEP_EDECK, DATA "scene_huge.deck");
-    char expected[256];
+    char expected[256], need[NBEP_BYTES_TEXT_MAX], have[NBEP_BYTES_TEXT_MAX];
     snprintf(expected, sizeof expected,
-             DATA "scene_huge.deck:3: spheres.[0].count = 4000000000 needs %.1f GB, more than "
-                  "this machine's %.1f GB",
-             bytes / 1e9, phys / 1e9);
+             DATA "scene_huge.deck:3: spheres.[0].count = 4000000000 needs %s, more than "
+                  "this machine's %s",
+             nbep_format_bytes(bytes, need), nbep_format_bytes(phys, have));
     ASSERT_DIAG(&f->d, expected);
 }
 

@@ -125,11 +125,14 @@ static void test_a_check_of_a_study_loads_every_run(void **state)
     assert_false(rep.out_of_time);
     assert_string_equal(rep.dir, TMP "sweep_check.sweep");
     /* each run's file as nbep_output_bytes counts it for the deck itself (no axis changes
-     * what is written) */
+     * what is written), and its sidecar, which names the run's file (run-0000.h5 as long as
+     * any other) */
     nbep_scene one;
     assert_int_equal(nbep_scene_load_from(deck, NULL, NULL, 0, &one, &d), NBEP_OK);
-    const double each = nbep_output_bytes(&one, nbep_sim_keeps_events(&one));
+    const double sidecar = nbep_output_sidecar_bytes(&one, TMP "sweep_check.sweep/run-0000.h5");
+    const double each = nbep_output_bytes(&one, nbep_sim_keeps_events(&one)) + sidecar;
     nbep_scene_fini(&one);
+    assert_true(sidecar > 0.0);
     assert_true(each > 0.0);
     assert_true(fabs(rep.output_bytes - 18.0 * each) <= 1e-9 * rep.output_bytes);
     assert_true(rep.memory_max > 0.0);
@@ -150,7 +153,14 @@ static void test_a_check_of_a_study_loads_every_run(void **state)
                                  "(the others are checked when they run); the largest needs "
                                  "about "));
     assert_non_null(strstr(text, "\nsweep output:    about "));
-    assert_non_null(strstr(text, " MB in all for those (the runs' files)\n"));
+    /* a size as people read it (test_util): "29.1 MB", not "2.91e+01 MB" */
+    char size[NBEP_BYTES_TEXT_MAX], line[128];
+    snprintf(line, sizeof line,
+             "\nsweep output:    about %s in all for those (the runs' files and their "
+             "sidecars, summary.csv and summary.h5)\n",
+             nbep_format_bytes(rep.output_bytes + rep.tables_bytes, size));
+    assert_non_null(strstr(text, line));
+    assert_null(strstr(text, "e+"));
     free(text);
     /* 8 spheres of radius 0.1 fit the unit box, so does 1 of 0.45; 8 of 0.45 do not: runs 3
      * and 7 (radius 0.45, count 8, each replica: seeds 11 and 12) */
@@ -1114,6 +1124,45 @@ static void test_summary_h5_holds_the_same_table(void **state)
     nbep_sweep_plan_fini(&p);
 }
 
+/* nbep check's size of a study's tables (nbep_sweep_tables_bytes, in its `sweep output` line)
+ * against the summary.csv and summary.h5 written after its runs: within 15 %, for 18 runs of two
+ * axes (one of vectors, quoted in the CSV) and for 2 and 200 runs of none. Until 2026-11-30
+ * nbep check left the tables out. */
+static void test_the_tables_size_is_known_before_the_runs(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *name, *sweep;
+    } cases[] = {
+        {"sweep_tables_axes", three_by_two},
+        {"sweep_tables_two", "sweep: { replicas = 2; };\n"},
+        {"sweep_tables_many", "sweep: { replicas = 200; };\n"},
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        char deck[256], path[512];
+        nbep_sweep_plan p;
+        plan_of(write_deck(cases[c].name, cases[c].sweep, deck, sizeof deck), NULL, 0, &p);
+        nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
+        nbep_diag d;
+        nbep_diag_init(&d);
+        assert_int_equal(nbep_sweep_write_summary(&p, res, 1, 2.5, &d), NBEP_OK);
+        double written = 0.0;
+        for (int k = 0; k < 2; k++) {
+            struct stat st;
+            snprintf(path, sizeof path, "%s/summary.%s", p.dir, k ? "h5" : "csv");
+            assert_int_equal(stat(path, &st), 0);
+            written += (double)st.st_size;
+        }
+        const double est = nbep_sweep_tables_bytes(&p);
+        if (!(fabs(est - written) <= 0.15 * written))
+            fail_msg("%s: %zu runs: tables estimated at %.0f bytes, written %.0f", cases[c].name,
+                     p.n_runs, est, written);
+        free(res);
+        nbep_diag_fini(&d);
+        nbep_sweep_plan_fini(&p);
+    }
+}
+
 /* ---- the whole command --------------------------------------------------------------------- */
 
 static void test_the_command_reports_failed_runs_and_exits_1(void **state)
@@ -1186,6 +1235,7 @@ int main(void)
         cmocka_unit_test(test_a_stop_signal_before_a_run_leaves_it_not_run),
         cmocka_unit_test(test_summary_csv_has_a_row_per_run_in_run_order),
         cmocka_unit_test(test_summary_h5_holds_the_same_table),
+        cmocka_unit_test(test_the_tables_size_is_known_before_the_runs),
         cmocka_unit_test(test_the_command_reports_failed_runs_and_exits_1),
         cmocka_unit_test(test_a_bad_deck_stops_the_command_before_any_run),
     };

@@ -24,7 +24,8 @@ typedef struct nbep_check_facts {
     double skin_taken;          /* the skin taken (smaller where a small periodic box cuts it) */
     double memory_bytes;        /* nbep_sim_memory_estimate */
     uint64_t frames;            /* frames the output file will hold */
-    double output_bytes;        /* nbep_output_bytes */
+    double sidecar_bytes;       /* the XDMF sidecar's (0: none is written) */
+    double output_bytes;        /* what the run writes: nbep_output_bytes and the sidecar's */
 } nbep_check_facts;
 
 void nbep_check_gather(const nbep_scene *sc, nbep_check_facts *f);

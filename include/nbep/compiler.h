@@ -60,6 +60,14 @@ double nbep_now(void);
  * file at path nor removes an older one (the run's file, its summary, a sweep's tables). */
 char *nbep_partial_path(const char *path);
 
+/* A byte count as people read it (`nbep check`'s memory and output, the sweep's, the errors
+ * of a scene too large): 3 significant figures in decimal units, B, kB, MB, GB, TB, PB and EB
+ * (powers of 1000, as disks and `df -H` count), the unit chosen so that the figure is below
+ * 1000 once rounded ("86.1 GB", "999 kB", "1 MB", "512 B"). Writes buf and returns it; every
+ * size nbep prints goes through it. */
+#define NBEP_BYTES_TEXT_MAX 24
+const char *nbep_format_bytes(double bytes, char buf[NBEP_BYTES_TEXT_MAX]);
+
 /* The process's peak resident memory in bytes since the last nbep_peak_rss_reset (Linux:
  * VmHWM of /proc/self/status, which writing 5 to /proc/self/clear_refs resets), else since it
  * started (getrusage's ru_maxrss); 0 when neither can be read. A sweep's rank runs one run

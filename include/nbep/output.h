@@ -44,10 +44,14 @@ NBEP_MUST_CHECK nbep_status nbep_output_create_staged(const char *path, const nb
 NBEP_MUST_CHECK nbep_status nbep_output_publish(nbep_output *o, nbep_diag *d);
 /* The frames a run of sc writes (the first, every output.every-th step's and the last step's)
  * and the bytes of its file, about: the data of the frames, the checkpoints beside them when
- * `events` (a run that keeps event slots, nbep_sim_keeps_events) and the stats, without
- * HDF5's own few kilobytes (an estimate for `nbep check`). */
+ * `events` (a run that keeps event slots, nbep_sim_keeps_events), the stats and HDF5's own
+ * headers (an estimate for `nbep check`). */
 uint64_t nbep_output_frames(const nbep_scene *sc);
 double nbep_output_bytes(const nbep_scene *sc, bool events);
+/* The bytes of the XDMF sidecar (output_xdmf.h) a run of sc writes at its end beside its file
+ * at path (sc->output_file, or a sweep's run file: the sidecar names it): 0 when it writes none
+ * (no positions in its frames). nbep_output_bytes leaves it out. */
+double nbep_output_sidecar_bytes(const nbep_scene *sc, const char *path);
 
 /* Appends one frame (step, step*dt, and the fields the deck asked for) and flushes the file;
  * on NBEP_OK the frame and every stats row appended before it survive a kill -9. s is

@@ -33,6 +33,14 @@ NBEP_MUST_CHECK nbep_status nbep_xdmf_write(const char *h5_path, size_t n_sphere
                                             const double *times, bool has_velocity,
                                             nbep_diag *d);
 
+/* The bytes of the sidecar a run of n_spheres writes beside h5_path at its end: frames at steps
+ * 0, every, 2 every, ... and at `steps` (the last), frame k at time step * dt, as the run writes
+ * them (nbep_output_frame_events). Exact to the byte up to 256 frames (the text measured with
+ * the very calls that write it); past that, 256 frames spread over the run stand for the rest
+ * (within a few bytes a frame). 0 when every is 0. `nbep check` counts it in the run's output. */
+double nbep_xdmf_bytes(const char *h5_path, size_t n_spheres, uint64_t steps, uint64_t every,
+                       double dt, bool has_velocity);
+
 /* Seconds between rewrites of a growing sidecar once its frame count is past the first few:
  * a run killed at any moment has a sidecar at most this old. */
 #define NBEP_XDMF_REWRITE_SECONDS 30.0

@@ -167,6 +167,11 @@ NBEP_MUST_CHECK nbep_status nbep_sweep_write_summary(const nbep_sweep_plan *p,
                                                      int n_ranks, double wall_seconds,
                                                      nbep_diag *d);
 
+/* The bytes of DIR/summary.csv and DIR/summary.h5 that nbep_sweep_write_summary writes for
+ * the plan's runs, all ok, about (within some 15 %: a run's figures are not known before it
+ * runs): the header, the axes' values and files' names as they will be, the rest measured. */
+double nbep_sweep_tables_bytes(const nbep_sweep_plan *p);
+
 /* What `nbep check` found of a study's runs (nbep_sweep_check). */
 typedef struct nbep_sweep_check_report {
     size_t n_runs, n_combos;
@@ -174,7 +179,9 @@ typedef struct nbep_sweep_check_report {
     char dir[4096];               /* the sweep directory, as nbep sweep makes it */
     size_t checked;               /* runs whose scene was loaded (first runs first) */
     size_t failed;                /* of those, runs whose scene a deck error refused */
-    double output_bytes;          /* the output files of the checked runs that load, in all */
+    double output_bytes;          /* the files of the checked runs that load, in all: each run's
+                                   * and its XDMF sidecar */
+    double tables_bytes;          /* the sweep's own summary.csv and summary.h5, of all runs */
     double memory_max;            /* the most memory one of them needs (nbep_sim_memory_estimate) */
     bool out_of_time;             /* stopped after budget_s: the runs past `checked` unchecked */
     double budget_s;              /* the time it was given */
@@ -198,8 +205,8 @@ NBEP_MUST_CHECK nbep_status nbep_sweep_check(const char *deck_path, const char *
                                              nbep_sweep_check_report *rep, nbep_diag *d);
 
 /* nbep check's lines about a study (after the deck's own): its runs and folder, what was
- * checked of them and the most memory one needs, their output in all (README, Parameter
- * studies). */
+ * checked of them and the most memory one needs, its output in all: the runs' files and
+ * sidecars, and the summary tables (README, Parameter studies). */
 void nbep_sweep_check_print(FILE *f, const nbep_sweep_check_report *r);
 
 /* `nbep sweep DECK [options]`: plans the sweep from cli (path, overrides, summary, quiet),
