@@ -1,6 +1,7 @@
 /* The JSON summary (summary.h): writer and parser, both driven by NBEP_SUMMARY_FIELDS, on
- * jansson (README "Build" says why jansson). jansson.h is included here and in check.c (the
- * check report), which writes its line through nbep_summary_dump_line. */
+ * jansson (README "Build" says why jansson). jansson.h is included here and where the other
+ * JSON reports are made, check.c (nbep check's) and sweep.c (the sweep's totals), which write
+ * their lines through nbep_summary_dump_line. */
 #include "nbep/summary.h"
 
 #include <assert.h>

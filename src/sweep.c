@@ -31,6 +31,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <jansson.h>
+
 #include "build_info.h"
 #include "nbep/output_sweep.h"
 #include "nbep/output_xdmf.h"
@@ -1164,32 +1166,23 @@ static nbep_status write_sweep_json(const char *where, const nbep_sweep_plan *p,
                                     const sweep_totals *s, int n_ranks, double wall,
                                     nbep_diag *d)
 {
-    FILE *f = strcmp(where, "-") == 0 ? stdout : fopen(where, "w");
-    if (!f) /* a missing directory: the user's (exit 2), as for nbep run */
-        NBEP_FAIL(d, nbep_status_of_open(errno), "nbep: cannot write the summary to %s: %s",
-                  where, strerror(errno));
+    /* jansson escapes the folder's name whatever it holds (a quote or a newline made the
+     * hand-written text no JSON until 2026-11-30), and the line is written as a run's summary
+     * is, whole or not at all (an older file at `where` stays when writing fails) */
     const double n = (double)p->n_runs;
-    fprintf(f,
-            "{\"format\": \"nbep-sweep-summary-1\", \"version\": \"%s\", \"dir\": \"",
-            NBEP_VERSION);
-    for (const char *c = p->dir; *c; c++)
-        fprintf(f, *c == '"' || *c == '\\' ? "\\%c" : "%c", *c);
-    char r[4][NBEP_REAL_TEXT_MAX];
-    fprintf(f,
-            "\", \"runs\": %zu, \"ok\": %zu, \"failed\": %zu, \"interrupted\": %zu, "
-            "\"not_run\": %zu, \"reused\": %zu, \"ranks\": %d, \"wall_seconds\": %s, "
-            "\"runs_per_minute\": %s, \"sim_seconds\": %s, \"overhead_seconds_per_run\": %s}\n",
-            p->n_runs, s->ok, s->failed, s->interrupted, s->not_run, s->reused, n_ranks,
-            nbep_format_real(wall, true, r[0]),
-            nbep_format_real(runs_per_minute(s, wall), true, r[1]),
-            nbep_format_real(s->sim_seconds, true, r[2]),
-            nbep_format_real(n > 0.0 ? ((double)n_ranks * wall - s->sim_seconds) / n : 0.0, true,
-                             r[3]));
-    int bad = ferror(f);
-    bad |= f == stdout ? fflush(f) != 0 : fclose(f) != 0;
-    if (bad)
-        NBEP_FAIL(d, NBEP_EIO, "nbep: cannot write the summary to %s", where);
-    return NBEP_OK;
+    json_t *o = json_pack(
+        "{s:s, s:s, s:s, s:I, s:I, s:I, s:I, s:I, s:I, s:i, s:f, s:f, s:f, s:f}", "format",
+        "nbep-sweep-summary-1", "version", NBEP_VERSION, "dir", p->dir, "runs",
+        (json_int_t)p->n_runs, "ok", (json_int_t)s->ok, "failed", (json_int_t)s->failed,
+        "interrupted", (json_int_t)s->interrupted, "not_run", (json_int_t)s->not_run, "reused",
+        (json_int_t)s->reused, "ranks", n_ranks, "wall_seconds", wall, "runs_per_minute",
+        runs_per_minute(s, wall), "sim_seconds", s->sim_seconds, "overhead_seconds_per_run",
+        n > 0.0 ? ((double)n_ranks * wall - s->sim_seconds) / n : 0.0);
+    char *line = o ? nbep_summary_dump_line(o) : NULL;
+    json_decref(o);
+    const nbep_status st = nbep_run_write_summary_text(where, line, d);
+    free(line);
+    return st;
 }
 
 /* Rank 0's closing: the summary files, one line about the sweep, the status of the whole. */

@@ -60,6 +60,15 @@ check "... run 0's file untouched" "[ '$(md5sum <"$tmp/s.sweep/run-0000.h5")' = 
 run_sweep "$tmp/s.deck" -o "$tmp/s" --quiet --set sweep.replicas=3 --summary "$tmp/again.json"
 check "the same command again reuses all 6" "[ \"\$(json '$tmp/again.json' reused)\" = 6 ]"
 
+# the totals' JSON names the folder whatever it holds (a quote and a newline made the
+# hand-written line no JSON until 2026-11-30)
+odd="$tmp/we\"ird
+dir"
+mkdir -p "$odd"
+run_sweep "$tmp/s.deck" -o "$odd/s.h5" --quiet --summary "$tmp/odd.json"
+check "--summary of a study in a folder named with a quote and a newline: JSON, its dir (got $rc)" \
+    "[ $rc = 0 ] && [ \"\$(json '$tmp/odd.json' dir)\" = '$odd/s.sweep' ] && [ ! -e '$tmp/odd.json.partial' ]"
+
 # the table is no run: info says what it is and where to look
 timeout 30 "$nbep" info "$tmp/s.sweep/summary.h5" >/dev/null 2>"$tmp/stderr"
 rc=$?
