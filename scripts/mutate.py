@@ -1529,6 +1529,13 @@ MUTANTS = [
      "    if (0)\n        err = EISDIR;", ["tests/test_cli.sh"], None),
     ("check-output-dir-file-on-way-passes", "src/run.c",
      "    else if (!S_ISDIR(sb.st_mode))\n        err = ENOTDIR;", "", ["tests/test_cli.sh"], None),
+    ("check-sweep-dir-unchecked", "src/main.c",
+     "    if (st == NBEP_OK && study) /* where its runs go: nbep sweep makes the folder */\n        st = nbep_sweep_check_dir(rep.dir, d);\n",
+     "", ["tests/test_sweep_cli.sh"], None),
+    ("check-sweep-dir-made", "src/sweep.c", "const int r = look ? mkdir_looked(p, *made > 0) : mkdir(p, 0777);",
+     "const int r = mkdir(p, 0777);", ["tests/test_sweep_cli.sh"], None),
+    ("check-sweep-dir-below-looked", "src/sweep.c", "    if (below)\n        return 0;\n    struct stat sb;",
+     "    struct stat sb;", ["tests/test_sweep_cli.sh"], None),
     # ---- nbep check --summary: the JSON report ----
     ("check-json-beside-human", "src/main.c",
      "FILE *human = cli->summary && cli->quiet ? NULL : json_out ? stderr : stdout;",

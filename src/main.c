@@ -89,6 +89,8 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
         st = nbep_sweep_check(cli->path, (const char *const *)cli->overrides,
                               (const char *const *)cli->origins, cli->n_overrides, &sc,
                               CHECK_SWEEP_SECONDS, &rep, d);
+    if (st == NBEP_OK && study) /* where its runs go: nbep sweep makes the folder */
+        st = nbep_sweep_check_dir(rep.dir, d);
     if (st == NBEP_OK) {
         nbep_check_facts facts;
         nbep_check_gather(&sc, &facts);

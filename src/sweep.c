@@ -971,10 +971,37 @@ done:
 
 /* ---- the command ------------------------------------------------------------------------- */
 
+/* What mkdir(p) would do, without making it, for a check (`nbep check` of a study): -1 and
+ * errno EEXIST where something is at p, the error of a parent that cannot be written in,
+ * else 0; `below` (a folder above p would be made): 0, for the folders below one made are. */
+static int mkdir_looked(const char *p, bool below)
+{
+    if (below)
+        return 0;
+    struct stat sb;
+    if (stat(p, &sb) == 0) {
+        errno = EEXIST;
+        return -1;
+    }
+    if (errno != ENOENT)
+        return -1;
+    const char *slash = strrchr(p, '/');
+    char *parent = slash ? strndup(p, slash == p ? 1 : (size_t)(slash - p)) : strdup(".");
+    if (!parent) {
+        errno = ENOMEM;
+        return -1;
+    }
+    const int r = access(parent, W_OK | X_OK);
+    free(parent);
+    return r;
+}
+
 /* mkdir -p: every missing directory on the way. */
 /* Makes dir and the folders above it that are missing; *made: how many of its trailing
- * components it made (unmake_dir takes them away again). */
-static nbep_status make_dir(const char *dir, int *made, nbep_diag *d)
+ * components it made (unmake_dir takes them away again). `look`: makes nothing and says what
+ * making it would (*made: how many it would make), a folder already there that cannot be
+ * written in failing as its files would. */
+static nbep_status make_dir(const char *dir, bool look, int *made, nbep_diag *d)
 {
     *made = 0;
     char *p = strdup(dir);
@@ -987,7 +1014,7 @@ static nbep_status make_dir(const char *dir, int *made, nbep_diag *d)
         char c = *s;
         *s = '\0';
         struct stat sb;
-        const int r = mkdir(p, 0777);
+        const int r = look ? mkdir_looked(p, *made > 0) : mkdir(p, 0777);
         *made += r == 0; /* once one is made, every one below it is */
         if (r != 0 && (errno != EEXIST || stat(p, &sb) != 0 || !S_ISDIR(sb.st_mode))) {
             const int err = errno;
@@ -1002,8 +1029,20 @@ static nbep_status make_dir(const char *dir, int *made, nbep_diag *d)
         if (c == '\0')
             break;
     }
+    if (st == NBEP_OK && look && *made == 0 && access(dir, W_OK | X_OK) != 0) {
+        const int err = errno;
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: cannot write in the sweep directory %s: %s",
+                      dir, strerror(err));
+        st = nbep_status_of_open(err);
+    }
     free(p);
     return st;
+}
+
+nbep_status nbep_sweep_check_dir(const char *dir, nbep_diag *d)
+{
+    int would_make;
+    return make_dir(dir, true, &would_make, d);
 }
 
 /* Takes away the last `made` components of dir that make_dir made (empty: nothing in them). */
@@ -1497,7 +1536,7 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
     }
     int made = 0;
     if (st == NBEP_OK && rank == 0)
-        st = make_dir(p.dir, &made, dd);
+        st = make_dir(p.dir, false, &made, dd);
     /* after the sweep's folder, which may hold it (-o res/a --summary res/a.sweep/t.json); a
      * path it cannot take leaves nothing made */
     if (st == NBEP_OK && rank == 0 && (st = try_summary(cli->summary, dd)) != NBEP_OK)

@@ -86,6 +86,21 @@ touch "$tmp/infile.sweep"
 run_sweep "$tmp/s.deck" -o "$tmp/infile" --quiet
 check "a file where the sweep's directory goes: exit 2 (got $rc), one line" \
     "[ $rc = 2 ] && one_line && grep -q 'a file is in the way' '$tmp/stderr'"
+# nbep check of the study says so first, in the sweep's words (it passed until 2026-11-30),
+# for a file in the way above the folder too; a folder of new folders passes, none made
+cp "$tmp/stderr" "$tmp/sweep-stderr"
+timeout 30 "$nbep" check "$tmp/s.deck" -o "$tmp/infile" >"$tmp/stdout" 2>"$tmp/stderr"
+rc=$?
+check "nbep check: a file where the sweep's directory goes: exit 2 (got $rc), the sweep's line" \
+    "[ $rc = 2 ] && [ ! -s '$tmp/stdout' ] && cmp -s '$tmp/stderr' '$tmp/sweep-stderr'"
+timeout 30 "$nbep" check "$tmp/s.deck" -o "$tmp/infile.sweep/deeper/x" >"$tmp/stdout" 2>"$tmp/stderr"
+rc=$?
+check "nbep check: a file above it: exit 2 (got $rc), one line naming the file" \
+    "[ $rc = 2 ] && one_line && grep -q 'directory $tmp/infile.sweep: a file is in the way' '$tmp/stderr'"
+timeout 30 "$nbep" check "$tmp/s.deck" -o "$tmp/new2/deep/x" >"$tmp/stdout" 2>"$tmp/stderr"
+rc=$?
+check "nbep check: new folders on the way pass (got $rc), none made" \
+    "[ $rc = 0 ] && [ ! -e '$tmp/new2' ]"
 
 # ---- a sweep killed outright leaves no stale table -------------------------------------------
 # another study into the same directory (longer runs: other overrides, so nothing is reused),

@@ -204,6 +204,12 @@ NBEP_MUST_CHECK nbep_status nbep_sweep_check(const char *deck_path, const char *
                                              nbep_scene *sc, double budget_s,
                                              nbep_sweep_check_report *rep, nbep_diag *d);
 
+/* For `nbep check` of a study: whether `nbep sweep` could make its folder dir (as
+ * nbep_sweep_check_report's dir) and write in it, looked at without making anything: the
+ * sweep's own line where it could not ("nbep: cannot make the sweep directory D: REASON", a
+ * file in the way: NBEP_EUSAGE; a folder that cannot be written in: nbep_status_of_open's). */
+NBEP_MUST_CHECK nbep_status nbep_sweep_check_dir(const char *dir, nbep_diag *d);
+
 /* nbep check's lines about a study (after the deck's own): its runs and folder, what was
  * checked of them and the most memory one needs, its output in all: the runs' files and
  * sidecars, and the summary tables (README, Parameter studies). */
