@@ -811,8 +811,14 @@ MUTANTS = [
      "                if (look && tid == 0 && atomic_load_explicit(&c->round_stop, memory_order_relaxed)) {",
      ["tests/test_signals.sh"], None),
     ("stop-progress-left-open", "src/sim.c",
-     "    if (sim->abandoned)\n        progress(sim, sim->steps_done, true);", "",
+     "    if (sim->abandoned || sim->line_open)\n        progress(sim, sim->steps_done, true);", "",
      ["tests/test_signals.sh"], None),
+    # the first predictions' progress, and its live line ended by a signal among them
+    ("setup-progress-dropped", "src/algo_predictive.c",
+     "            nbep__sim_progress_setup(setup, (double)end / (double)total);", "            (void)0;",
+     ["tests/test_signals.sh"], None),
+    ("setup-progress-left-open", "src/sim.c", "    if (sim->abandoned || sim->line_open)",
+     "    if (sim->abandoned)", ["tests/test_signals.sh"], None),
     ("stop-frame-last-unset", "src/sim.c", "    if (st == NBEP_OK)\n        sim->frame_last = step;",
      "    (void)0;", FAULTS, None),
     # ---- the ways a step's events run (pred_ways.c): the schedule for given costs ----
