@@ -837,7 +837,11 @@ MUTANTS = [
      "nbep__sim_progress_part(sim, step, (double)done / (double)l->cost);",
      "nbep__sim_progress_part(sim, step, 0.0);", ["tests/test_signals.sh"], None),
     ("detect-overlap-not-kept", "src/algo_detect.c",
-     "            mx->overlap = fmax(mx->overlap, deep.overlap);", "", SIM, None),
+     "            mx->overlap = fmax(mx->overlap, deep.overlap);", "", ["test_detect_stop"] + SIM,
+     None),
+    ("detect-overlap-rel-not-kept", "src/algo_detect.c",
+     "            mx->overlap_rel = fmax(mx->overlap_rel, deep.overlap_rel);", "",
+     ["test_detect_stop"] + SIM, None),
     # the first predictions' progress, and its live line ended by a signal among them
     ("setup-progress-dropped", "src/algo_predictive.c",
      "            nbep__sim_progress_setup(setup, (double)end / (double)total);", "            (void)0;",

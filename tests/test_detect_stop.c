@@ -68,8 +68,9 @@ static nbep_status run_signalled(const nbep_scene *sc, int nt, nbep_summary *sum
     return st;
 }
 
-/* A closed-box fluid at phi = 0.35 (many collisions a step, with the walls too) run by algo for
- * 6 steps, frames every 2, the signal raised in its third step at a row near the start, the
+/* A closed-box fluid at phi = 0.35 under gravity (many collisions a step, with the walls too;
+ * gravity, so that a step's drift changes velocities too) run by algo for 6 steps, frames every
+ * 2, the signal raised in its third step at a row near the start, the
  * middle and the end of the pass (the first thread's rows, a later one's, the last one's): on
  * 1 to 4 threads the step is abandoned and the run ends as a run of 2 steps ends, its counts
  * (none of the abandoned step's), its last frame that of step 2, and its spheres where step 2
@@ -82,12 +83,18 @@ static void abandons_as_two_steps_end(const char *algo)
     snprintf(sc->algorithm, sizeof sc->algorithm, "%s", algo);
     sc->output_every = 2; /* frames at steps 0, 2, 4, 6: the last before the signal, 2 */
     const size_t n = sc->state.n;
+    for (size_t i = 0; i < n; i++)
+        sc->state.acc[i] = (nbep_vec3){0.0, 0.0, -9.81};
     nbep_summary two, sum;
     bool abandoned;
     nbep_state fin2, fin;
     assert_int_equal(run_signalled(sc, 1, &two, &abandoned, &fin2, 2), NBEP_OK);
     assert_false(abandoned);
     assert_true(two.collisions > 0);
+    /* the overlaps the pass measures reach the summary: every radius is 0.5, so the relative
+     * overlap is twice the absolute one, exactly */
+    assert_true(two.max_overlap > 0.0);
+    assert_true(two.max_overlap_rel == 2.0 * two.max_overlap);
     sc->steps = 6;
     const size_t rows[] = {0, n / 2, n - 2};
     for (size_t r = 0; r < sizeof rows / sizeof rows[0]; r++) {
