@@ -21,13 +21,15 @@ libs="$(pkg-config --libs gsl libconfig hdf5 jansson cmocka) -lm -lpthread -fope
 srcs=$(ls src/*.c | grep -v -e '^src/main.c$' -e '^src/sweep.c$')
 fail=0
 for t in test_sim test_periodic test_barrier test_extremes test_order test_granular \
-    test_evloop_apart test_team_faults; do
+    test_evloop_apart test_team_faults test_detect_stop; do
     [ -e tests/$t.c ] || continue
     # test_evloop_apart and test_team_faults compile their own copy of the cells engine (with
-    # their hooks)
+    # their hooks), test_detect_stop its own of the naive and seminaive algorithms
     these=$srcs
     grep -q '^#include "../src/evloop.c"' tests/$t.c &&
         these=$(echo "$srcs" | grep -v -e '^src/evloop.c$' -e '^src/evloop_team.c$')
+    grep -q '^#include "../src/algo_detect.c"' tests/$t.c &&
+        these=$(echo "$srcs" | grep -v -e '^src/algo_detect.c$')
     # shellcheck disable=SC2086
     clang $cflags $these tests/$t.c -o "$out/$t" $libs
     log=$out/$t.log
@@ -41,17 +43,24 @@ for t in test_sim test_periodic test_barrier test_extremes test_order test_granu
 done
 # the binary itself, stopped by SIGTERM within a step of minutes (dt = 10000) on 4 threads:
 # the all-pairs and grid modes' crews (thread 0 looks at the signal and the crew reads what it
-# found past a barrier) and cells mode's team abandon the step; TSan must see no race on the
-# way out, and the run must end as terminated (143)
+# found past a barrier) and cells mode's team abandon the step, and so does naive's pass over
+# the pairs of 16384 spheres (seconds a step here; every thread looks at the signal and all
+# read past a barrier whether one found it); TSan must see no race on the way out, and the run
+# must end as terminated (143)
 # shellcheck disable=SC2086
 clang $cflags $(ls src/*.c) -o "$out/nbep" $libs
-for mode in all grid cells; do
+for mode in all grid cells naive; do
     log=$out/nbep-abandon-$mode.log
     rm -f "$out/abandon-$mode.h5"
+    if [ $mode = naive ]; then
+        what=(-a naive --set 'spheres.[0].count=16384')
+    else
+        what=(--set run.dt=10000 --set 'spheres.[0].count=1000'
+              --set 'physics.gravity=[0.0, 0.0, 0.0]' --set "run.neighbors=\"$mode\"")
+    fi
     OMP_TOOL_LIBRARIES=$archer TSAN_OPTIONS="ignore_noninstrumented_modules=1 exitcode=66" \
-        "$out/nbep" run inputs/paper-box.deck --quiet -t 4 -n 3 --set run.dt=10000 \
-        --set 'spheres.[0].count=1000' --set 'physics.gravity=[0.0, 0.0, 0.0]' \
-        --set "run.neighbors=\"$mode\"" -o "$out/abandon-$mode.h5" >"$log" 2>&1 &
+        "$out/nbep" run inputs/paper-box.deck --quiet -t 4 -n 3 "${what[@]}" \
+        -o "$out/abandon-$mode.h5" >"$log" 2>&1 &
     pid=$!
     for _ in $(seq 600); do [ -s "$out/abandon-$mode.h5" ] && break; sleep 0.1; done
     sleep 2

@@ -12,7 +12,15 @@
  * bitwise the same for any thread count, and seminaive finds and answers exactly the pairs
  * naive does.
  *
- * Layout: one parallel region over all steps, phases separated by nbep_barrier. */
+ * Layout: one parallel region over all steps, phases separated by nbep_barrier.
+ *
+ * A signal within a step (a job's time limit during a pass of tens of seconds: naive over
+ * 100000 spheres, longer than Slurm's 30 s between SIGTERM and SIGKILL): every thread looks at
+ * the stop signal every LOOK_COST of its rows' cost, and one that finds it ends its rows and
+ * says so in the shared `quit`. Past the barrier that ends the pass every thread reads that
+ * one flag, so all abandon the step or none do: each puts its own spheres back where the step
+ * found them (the drift's writes, saved; the pass writes nothing else before responding), and
+ * the run ends after the step before, as the predictive algorithm's abandoned steps do. */
 #include <math.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -32,6 +40,7 @@ typedef struct contact_list {
     alignas(NBEP_CACHELINE) contact *c;   /* owned */
     size_t len, cap;
     size_t row_lo, row_hi;                /* detection rows of this thread */
+    uint64_t cost;                        /* their cost (row_cost), the progress's whole */
     /* seminaive: the row being queried and its hits, sorted before use */
     uint32_t *hits;                       /* owned */
     size_t n_hits, cap_hits;
@@ -43,7 +52,25 @@ typedef struct detect_ctx {
     nbep_barrier bar;
     contact_list *lists;   /* owned, one per thread */
     nbep_bvh *bvh;         /* owned, seminaive only */
+    nbep_vec3 *pos0, *vel0; /* owned, n each: every sphere as the step found it (before its
+                             * drift), what an abandoned step puts back */
+    /* set (for good) by a thread whose look in the pass found the stop signal; read by every
+     * thread past the barrier that ends the pass */
+    atomic_int quit;
 } detect_ctx;
+
+/* Every this many units of row cost (row_cost: about one pair or plane test each, some 0.1 ms
+ * of them), a thread of the pass looks at the stop signal, and thread 0 updates the progress
+ * line: a relaxed load and a clock read against the tests, and a signal is seen within a
+ * millisecond or so. A naive row of 65536 spheres is one look; seminaive looks every few
+ * thousand rows. */
+#define LOOK_COST 65536u
+
+/* Tests only (tests/test_detect_stop.c compiles its own copy with a hook that raises the
+ * signal): whether the pass looks at the stop signal after row `row` of step `step` too. */
+#ifndef NBEP_DETECT_LOOK_HOOK
+#define NBEP_DETECT_LOOK_HOOK(step, row) false
+#endif
 
 static void detect_destroy(void *p)
 {
@@ -57,27 +84,38 @@ static void detect_destroy(void *p)
         }
         nbep_free_aligned(ctx->lists);
     }
+    nbep_free_aligned(ctx->pos0);
+    nbep_free_aligned(ctx->vel0);
     nbep_bvh_destroy(&ctx->bvh);
     free(ctx);
 }
 
-/* Rows [lo, hi) per thread so that each thread makes about the same number of pair tests:
- * row i costs n_planes + (n - 1 - i) tests (naive); seminaive rows cost about the same. */
+/* The cost of detection row i of n spheres and n_planes planes, in pair tests: n_planes +
+ * (n - 1 - i) naive; seminaive rows cost about the same, the few partners a query finds. */
+static uint64_t row_cost(bool use_bvh, size_t n, size_t n_planes, size_t i)
+{
+    return n_planes + (use_bvh ? 8 : n - 1 - i);
+}
+
+/* Rows [lo, hi) per thread so that each thread makes about the same number of pair tests. */
 static void split_rows(detect_ctx *ctx, size_t n, size_t n_planes, int nt)
 {
     double total = 0.0;
     for (size_t i = 0; i < n; i++)
-        total += (double)(n_planes + (ctx->use_bvh ? 8 : n - 1 - i));
+        total += (double)row_cost(ctx->use_bvh, n, n_planes, i);
     size_t i = 0;
     double acc = 0.0;
     for (int t = 0; t < nt; t++) {
-        ctx->lists[t].row_lo = i;
+        contact_list *l = &ctx->lists[t];
+        l->row_lo = i;
+        l->cost = 0;
         double goal = total * (double)(t + 1) / (double)nt;
         while (i < n && (t == nt - 1 || acc < goal)) {
-            acc += (double)(n_planes + (ctx->use_bvh ? 8 : n - 1 - i));
+            acc += (double)row_cost(ctx->use_bvh, n, n_planes, i);
+            l->cost += row_cost(ctx->use_bvh, n, n_planes, i);
             i++;
         }
-        ctx->lists[t].row_hi = i;
+        l->row_hi = i;
     }
 }
 
@@ -89,15 +127,16 @@ static size_t list_room(size_t rows)
 }
 
 /* The bytes detect_create_common allocates for a run of sc on nt threads (nbep check's memory
- * estimate): the contact lists at their starting room and, with the BVH, a query's hits of
- * up to n + 1 spheres per thread and the hierarchy. */
+ * estimate): the contact lists at their starting room, the spheres as a step found them and,
+ * with the BVH, a query's hits of up to n + 1 spheres per thread and the hierarchy. */
 static size_t detect_bytes_common(const nbep_scene *sc, int nt, bool use_bvh)
 {
     const size_t n = sc->state.n;
     const contact_list *l = NULL; /* for element sizes only: sizeof does not evaluate */
     /* the threads' rows cover the n spheres once */
     size_t bytes = sizeof(detect_ctx) + (size_t)nt * sizeof *l +
-                   (list_room(n) + 64 * (size_t)(nt - 1)) * sizeof *l->c;
+                   (list_room(n) + 64 * (size_t)(nt - 1)) * sizeof *l->c +
+                   2 * n * sizeof(nbep_vec3);
     if (use_bvh)
         bytes += (size_t)nt * (n + 1) * sizeof *l->hits + nbep_bvh_bytes(n);
     return bytes;
@@ -120,8 +159,11 @@ static nbep_status detect_create_common(nbep_sim *sim, void **out, bool use_bvh,
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the %s algorithm", sim->algo->name);
     ctx->use_bvh = use_bvh;
     nbep_barrier_init(&ctx->bar, (unsigned)sim->nt);
+    atomic_init(&ctx->quit, 0);
     ctx->lists = nbep_alloc_aligned((size_t)sim->nt, sizeof *ctx->lists);
-    if (!ctx->lists) {
+    ctx->pos0 = nbep_alloc_aligned(sim->st.n, sizeof *ctx->pos0);
+    ctx->vel0 = nbep_alloc_aligned(sim->st.n, sizeof *ctx->vel0);
+    if (!ctx->lists || (sim->st.n && (!ctx->pos0 || !ctx->vel0))) {
         detect_destroy(ctx);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the %s algorithm", sim->algo->name);
     }
@@ -177,10 +219,15 @@ static void push_contact(contact_list *l, uint32_t i, uint32_t j)
     l->c[l->len++] = (contact){i, j};
 }
 
+/* The deepest overlap a thread's rows found in a step, absolute and relative to the smaller
+ * radius: the step's maxima take it once the pass is whole (an abandoned step's, never). */
+typedef struct deepest {
+    double overlap, overlap_rel;
+} deepest;
+
 /* Exact overlap test of spheres i < j; records a contact and the overlap when they overlap
  * (touching, distance == r_i + r_j, is not overlapping). */
-static void test_pair(const nbep_state *s, size_t i, size_t j, contact_list *l,
-                      nbep_thread_max *mx)
+static void test_pair(const nbep_state *s, size_t i, size_t j, contact_list *l, deepest *mx)
 {
     nbep_vec3 dp = nbep_vec3_sub(s->pos[j], s->pos[i]);
     double sigma = s->radius[i] + s->radius[j];
@@ -205,12 +252,17 @@ static int cmp_u32(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* Finds this thread's contacts among rows [row_lo, row_hi); returns the tests made. */
-static uint64_t detect_rows(const detect_ctx *ctx, const nbep_state *s, contact_list *l,
-                            nbep_thread_max *mx)
+/* Finds this thread's contacts among rows [row_lo, row_hi) of step `step`, the deepest
+ * overlap into *mx; returns the tests made. Every LOOK_COST of row cost it looks at the stop
+ * signal: one found ends the rows there, with ctx->quit set (detect_run then abandons the
+ * step); thread 0 (tid) also shows the part of its rows done on the progress line, the share
+ * of the pass it stands for (the rows are shared by cost). */
+static uint64_t detect_rows(detect_ctx *ctx, nbep_sim *sim, uint64_t step, int tid,
+                            contact_list *l, deepest *mx)
 {
+    const nbep_state *s = &sim->st;
     const size_t n = s->n, np = s->n_planes;
-    uint64_t checks = 0;
+    uint64_t checks = 0, done = 0, look = LOOK_COST;
     l->len = 0;
     for (size_t i = l->row_lo; i < l->row_hi; i++) {
         for (size_t p = 0; p < np; p++) {
@@ -235,6 +287,18 @@ static uint64_t detect_rows(const detect_ctx *ctx, const nbep_state *s, contact_
             for (size_t j = i + 1; j < n; j++)
                 test_pair(s, i, j, l, mx);
             checks += n - 1 - i;
+        }
+        done += row_cost(ctx->use_bvh, n, np, i);
+        if (done >= look || NBEP_DETECT_LOOK_HOOK(step, i)) {
+            look = done + LOOK_COST;
+            /* relaxed, as every look at it: the handler stores the signal with no other data
+             * to pass; and quit's readers are past the barrier that ends the pass */
+            if (nbep_sim_stop_status(sim->opt.stop_signal) != NBEP_OK) {
+                atomic_store_explicit(&ctx->quit, 1, memory_order_relaxed);
+                break;
+            }
+            if (tid == 0)
+                nbep__sim_progress_part(sim, step, (double)done / (double)l->cost);
         }
     }
     return checks;
@@ -298,18 +362,39 @@ static void detect_run(nbep_sim *sim, void *p)
         nbep_barrier_wait(&ctx->bar);
         for (uint64_t step = sim->step_first; step <= sim->step_end; step++) {
             const int par = (int)(step & 1);
-            /* update: free flight of own spheres */
-            for (size_t i = own.lo; i < own.hi; i++)
+            /* update: free flight of own spheres, each kept as it was first */
+            for (size_t i = own.lo; i < own.hi; i++) {
+                ctx->pos0[i] = s->pos[i];
+                ctx->vel0[i] = s->vel[i];
                 nbep_physics_drift(&s->pos[i], &s->vel[i], s->acc[i], sim->dt);
+            }
             nbep_barrier_wait(&ctx->bar);
             if (ctx->use_bvh) {
                 if (tid == 0)
                     nbep_bvh_build(ctx->bvh, s);
                 nbep_barrier_wait(&ctx->bar);
             }
-            sim->counters[par][tid].c[NBEP_COUNTER_CHECKS] +=
-                detect_rows(ctx, s, mine, &sim->tmax[par][tid]);
+            deepest deep = {0.0, 0.0};
+            const uint64_t checks = detect_rows(ctx, sim, step, tid, mine, &deep);
             nbep_barrier_wait(&ctx->bar);
+            /* relaxed: the barrier above ordered every store of quit, and none comes until
+             * the run ends, so every thread reads the same: all abandon the step, or none */
+            if (atomic_load_explicit(&ctx->quit, memory_order_relaxed)) {
+                /* a signal during the pass: the step is abandoned (no row, frame or counts of
+                 * it), the spheres as the step found them; the run ends after the step before
+                 * (the barrier after the steps publishes the puts back) */
+                for (size_t i = own.lo; i < own.hi; i++) {
+                    s->pos[i] = ctx->pos0[i];
+                    s->vel[i] = ctx->vel0[i];
+                }
+                if (tid == 0)
+                    nbep__sim_abandon(sim);
+                break;
+            }
+            nbep_thread_max *mx = &sim->tmax[par][tid];
+            mx->overlap = fmax(mx->overlap, deep.overlap);
+            mx->overlap_rel = fmax(mx->overlap_rel, deep.overlap_rel);
+            sim->counters[par][tid].c[NBEP_COUNTER_CHECKS] += checks;
             if (tid == 0)
                 respond_all(ctx, s, sim->scene->restitution, nt, &sim->counters[par][0],
                             &sim->tmax[par][0]);

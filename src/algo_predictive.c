@@ -550,7 +550,9 @@ static double cand_t_min(const pred_ctx *c, const thread_ws *w)
  * tests, minutes for 30000 spheres on one core, and a job's time limit may send its SIGTERM
  * meanwhile: thread 0 looks at the stop signal once a chunk, between the chunk's barriers,
  * and sets setup->stop; after the chunk's last barrier every thread sees it and returns (the
- * slots left unpredicted are never used: the run ends at step 0, whose frame is written). */
+ * slots left unpredicted are never used: the run ends at step 0, whose frame is written).
+ * Otherwise it updates the progress line with the part made (a line every 10 s in a log, a
+ * live one on a terminal, as the steps' own: they showed nothing for those 25 s). */
 static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid, int crew,
                        nbep_barrier *bar, double T0, double T_end, thread_ws *w,
                        nbep_counters *cnt, nbep_sim *setup)
@@ -611,6 +613,8 @@ static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid
         }
         if (setup && tid == 0 && nbep_sim_stop_status(setup->opt.stop_signal) != NBEP_OK)
             atomic_store_explicit(&setup->stop, 1, memory_order_relaxed);
+        else if (setup && tid == 0) /* chunks of equal cost: the part made is end / total */
+            nbep__sim_progress_setup(setup, (double)end / (double)total);
         nbep_barrier_wait(bar);
         /* relaxed: the barrier above ordered thread 0's store */
         if (setup && atomic_load_explicit(&setup->stop, memory_order_relaxed))

@@ -361,18 +361,41 @@ void nbep__sim_setup_done(nbep_sim *sim)
     clock_start(sim, now);
 }
 
+/* One progress line: on a terminal over the live one, padded to the widest line shown so far
+ * (a shorter one, as the ETA's digits go or the first predictions' line gives way to the
+ * steps', leaves nothing of it behind), ended only when last; otherwise a line of its own. */
+static void progress_print(nbep_sim *sim, const char *text, bool last)
+{
+    if (sim->tty) {
+        const int len = (int)strlen(text);
+        if (len > sim->tty_width)
+            sim->tty_width = len;
+        fprintf(stderr, "\r%-*s%s", sim->tty_width, text, last ? "\n" : "");
+        sim->line_open = !last;
+    } else {
+        fprintf(stderr, "%s\n", text);
+    }
+}
+
+/* Whether a progress line is due now (a last one always is); if so, its time is now. */
+static bool progress_due(nbep_sim *sim, double now, bool last)
+{
+    if (!sim->opt.progress)
+        return false;
+    double every = sim->tty ? PROGRESS_TTY_SECONDS : PROGRESS_LOG_SECONDS;
+    if (!last && now - sim->t_last_progress < every)
+        return false;
+    sim->t_last_progress = now;
+    return true;
+}
+
 /* The progress line at `at` steps of the run (a whole step at a step's end; within one, the
  * step before plus the part of its time gone, shown with two decimals: `step 2.47/100`). */
 static void progress_at(nbep_sim *sim, double at, bool last)
 {
-    if (!sim->opt.progress)
-        return;
     double now = nbep_now();
-    bool tty = isatty(STDERR_FILENO);
-    double every = tty ? PROGRESS_TTY_SECONDS : PROGRESS_LOG_SECONDS;
-    if (!last && now - sim->t_last_progress < every)
+    if (!progress_due(sim, now, last))
         return;
-    sim->t_last_progress = now;
     double el = now - sim->t_start;
     /* steps done in this session (a resumed run started at step_first) */
     const double done = at + 1.0 - (double)sim->step_first;
@@ -389,17 +412,18 @@ static void progress_at(nbep_sim *sim, double at, bool last)
         rate = sim->rate_recent;
     double pct = sim->step_end ? 100.0 * at / (double)sim->step_end : 100.0;
     double eta = rate > 0.0 ? ((double)sim->step_end - at) / rate : 0.0;
-    char where[48];
+    char where[48], line[160];
     if (at == floor(at))
         snprintf(where, sizeof where, "%llu", (unsigned long long)at);
     else
         snprintf(where, sizeof where, "%.2f", at);
-    if (tty)
-        fprintf(stderr, "\rstep %s/%llu  %5.1f%%  %.4g steps/s  ETA %.0f s   %s", where,
-                (unsigned long long)sim->step_end, pct, rate, eta, last ? "\n" : "");
+    if (sim->tty)
+        snprintf(line, sizeof line, "step %s/%llu  %5.1f%%  %.4g steps/s  ETA %.0f s", where,
+                 (unsigned long long)sim->step_end, pct, rate, eta);
     else
-        fprintf(stderr, "step %s/%llu  %.1f%%  %.4g steps/s  ETA %.0f s\n", where,
-                (unsigned long long)sim->step_end, pct, rate, eta);
+        snprintf(line, sizeof line, "step %s/%llu  %.1f%%  %.4g steps/s  ETA %.0f s", where,
+                 (unsigned long long)sim->step_end, pct, rate, eta);
+    progress_print(sim, line, last);
 }
 
 static void progress(nbep_sim *sim, uint64_t step, bool last)
@@ -407,13 +431,34 @@ static void progress(nbep_sim *sim, uint64_t step, bool last)
     progress_at(sim, (double)step, last);
 }
 
-void nbep__sim_progress_within(nbep_sim *sim, uint64_t step, double t)
+void nbep__sim_progress_part(nbep_sim *sim, uint64_t step, double part)
 {
-    /* the part of the step gone, at most 0.99: the line never shows the step's end (nor a
-     * NaN) before the step has ended, and "%.2f" never rounds it up to it */
-    const double part = (t - (double)(step - 1) * sim->dt) / sim->dt;
+    /* at most 0.99: the line never shows the step's end (nor a NaN) before the step has
+     * ended, and "%.2f" never rounds it up to it */
     const double at = (double)(step - 1) + (part > 0.0 ? fmin(part, 0.99) : 0.0);
     progress_at(sim, at, false);
+}
+
+void nbep__sim_progress_within(nbep_sim *sim, uint64_t step, double t)
+{
+    /* the part of the step's time gone */
+    nbep__sim_progress_part(sim, step, (t - (double)(step - 1) * sim->dt) / sim->dt);
+}
+
+void nbep__sim_progress_setup(nbep_sim *sim, double part)
+{
+    const double now = nbep_now();
+    if (!progress_due(sim, now, false))
+        return;
+    /* the run's clock started before them (nbep_sim_run; nbep__sim_setup_done restarts it) */
+    const double el = now - sim->t_start;
+    part = part > 0.0 ? fmin(part, 0.999) : 0.0; /* "%.1f": never 100 % before they are made */
+    const double eta = part > 0.0 ? el * (1.0 - part) / part : 0.0;
+    char line[96];
+    snprintf(line, sizeof line, sim->tty ? "first predictions %5.1f%%  ETA %.0f s"
+                                         : "first predictions %.1f%%  ETA %.0f s",
+             100.0 * part, eta);
+    progress_print(sim, line, false);
 }
 
 void nbep__sim_abandon(nbep_sim *sim)
@@ -551,6 +596,9 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
 {
     sim->diag = d;
     sim->status = NBEP_OK;
+    sim->tty = sim->opt.progress && isatty(STDERR_FILENO);
+    sim->line_open = false;
+    sim->tty_width = 0;
     clock_start(sim, nbep_now());
     /* A resumed run's first frame is already in the file. */
     nbep_status st = sim->resumed ? NBEP_OK : emit_frame(sim, 0);
@@ -565,8 +613,8 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
         sim->algo->run(sim, sim->algo_ctx);
     /* a step abandoned by a signal: the progress ends at the step before, with its last line,
      * as at a stop at a step's end (a terminal's line was left open, and the run's last lines
-     * followed on it) */
-    if (sim->abandoned)
+     * followed on it); so does a run stopped in its first predictions whose line was shown */
+    if (sim->abandoned || sim->line_open)
         progress(sim, sim->steps_done, true);
     sim->wall_seconds = nbep_now() - sim->t_start;
     /* after a failed write the file gets nothing more: one error, not a cascade; a run stopped

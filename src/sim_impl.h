@@ -94,6 +94,11 @@ struct nbep_sim {
      * (clock_start in sim.c) */
     double t_mark, rate_recent;
     double done_mark;  /* steps done at t_mark: a step's part counts (nbep__sim_progress_within) */
+    /* the progress line on a terminal: whether stderr is one (taken once, at the run's start),
+     * the widest line shown (a shorter one is padded over it) and whether the last line shown
+     * is still open (not ended by a newline) */
+    bool tty, line_open;
+    int tty_width;
     /* stop request: written by thread 0 in the hook, read by all after the next barrier */
     atomic_int stop;
     nbep_status status;              /* thread 0 only */
@@ -155,6 +160,12 @@ int nbep__sim_end_step(nbep_sim *sim, uint64_t step);
  * due (a step of minutes otherwise showed none until its end; SPEC: a line about every 10 s in
  * a log, a live one on a terminal). */
 void nbep__sim_progress_within(nbep_sim *sim, uint64_t step, double t);
+/* The same, with the part of step `step`'s work done (0 to 1), for an algorithm whose step is
+ * a pass over its pairs rather than a sequence of events in time (naive, seminaive). */
+void nbep__sim_progress_part(nbep_sim *sim, uint64_t step, double part);
+/* Thread 0, during the first predictions (all-pairs mode's n^2/2 pair tests: 25 s for 32000
+ * spheres), the part of them made (0 to 1): the progress line, when one is due. */
+void nbep__sim_progress_setup(nbep_sim *sim, double part);
 /* Thread 0, when a look within step `step`'s events found the stop signal: the run ends with
  * the signal's status after the step before, the step abandoned (nbep_sim_abandoned). */
 void nbep__sim_abandon(nbep_sim *sim);

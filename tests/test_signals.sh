@@ -8,13 +8,21 @@ tmp=build/tests/tmp/signals
 rm -rf "$tmp" && mkdir -p "$tmp"
 fail=0
 check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
-# term_within PID FILE DELAY TENTHS: once FILE is written (60 s at most), waits DELAY seconds,
-# sends SIGTERM to PID and waits up to TENTHS tenths of a second for it to end (then SIGKILL, so
-# that a run that ignores the signal fails the check instead of hanging): sets stopped (1 when
-# it ended in time) and rc (its exit status).
+# term_within PID FILE DELAY TENTHS: once FILE is written (60 s at most; with frame0=1, once it
+# holds frame 0 too: the run's steps come next), waits DELAY seconds, sends SIGTERM to PID and
+# waits up to TENTHS tenths of a second for it to end (then SIGKILL, so that a run that ignores
+# the signal fails the check instead of hanging): sets stopped (1 when it ended in time) and rc
+# (its exit status).
+frame0=0
 term_within() {
     local pid=$1 file=$2
     for _ in $(seq 600); do [ -s "$file" ] && break; sleep 0.1; done
+    if [ "$frame0" = 1 ]; then
+        for _ in $(seq 600); do
+            bin/nbep info "$file" 2>/dev/null | grep -q '^frames: *[1-9]' && break
+            sleep 0.1
+        done
+    fi
     sleep "$3"
     kill -TERM "$pid"
     stopped=0
@@ -57,23 +65,6 @@ for sig in TERM INT; do
     lines=$(wc -l < "$tmp/stderr-$sig")
     check "SIG$sig: that is the only line on stderr (got $lines)" "[ $lines = 1 ]"
 done
-# two signals, SIGINT then SIGTERM while the run finishes its step (a job's Ctrl-C, then its
-# time limit): the first wins, exit 130 (the handlers stored the last: 143). All-pairs naive
-# steps of 32768 spheres, about a second each, so that the second comes within the step.
-out=$tmp/run-two.h5
-bin/nbep run inputs/paper-box.deck --quiet -n 100000000 -t 1 --set spheres.[0].count=32768 \
-    --set 'run.algorithm="naive"' -o "$out" 2>"$tmp/stderr-two" &
-pid=$!
-for _ in $(seq 300); do [ -s "$out" ] && break; sleep 0.1; done
-sleep 0.3
-kill -INT $pid
-sleep 0.2
-kill -TERM $pid
-wait $pid
-rc=$?
-check "SIGINT then SIGTERM: the first wins, exit 130 (got $rc)" \
-    "[ $rc = 130 ] && grep -q 'interrupted by SIGINT' '$tmp/stderr-two'"
-
 # a signal while the deck is read and the spheres placed (600000 random spheres: about a second
 # here) ends the run before it begins, with nothing written: exit 130, no file, one line (it was
 # taken only after the first step, and a run of 0 steps ignored it and exited 0). The signal
@@ -101,6 +92,29 @@ if awk -v w="$wait_s" 'BEGIN { exit !(w >= 0.05) }'; then
         "[ \$(wc -l < '$tmp/stderr-place') = 1 ] && grep -q 'before the run began; nothing written' '$tmp/stderr-place'"
 else
     echo "skip SIGINT while placing: placement takes only ${wait_s}x4 s here"
+fi
+# two signals, SIGINT then SIGTERM 0.1 s later (a job's Ctrl-C, then its time limit): the first
+# wins, exit 130 (the handlers stored the last: 143). They come while the spheres are placed,
+# where nothing looks at the signal until the placement ends, so that both land in the run:
+# in its steps every algorithm now takes the first within milliseconds (since 2026-11-30 naive
+# and seminaive too, whose steps of a second this test used) and is gone before a second comes
+# 0.1 s later; and two sent back to back can be taken at once, the second's handler nested in
+# the first's and storing first (`kill -INT $pid; kill -TERM $pid` to naive on one thread
+# exited 143 in 5 of 6 tries, and in 6 of 6 before 2026-11-30). Skipped where the placement
+# takes under 0.4 s.
+if awk -v w="$wait_s" 'BEGIN { exit !(w >= 0.1) }'; then
+    bin/nbep run "$tmp/place.deck" --quiet -o "$tmp/two.h5" 2>"$tmp/stderr-two" &
+    pid=$!
+    sleep "$wait_s"
+    kill -INT $pid
+    sleep 0.1
+    kill -TERM $pid
+    wait $pid
+    rc=$?
+    check "SIGINT then SIGTERM: the first wins, exit 130 (got $rc)" \
+        "[ $rc = 130 ] && grep -q 'interrupted by SIGINT' '$tmp/stderr-two'"
+else
+    echo "skip SIGINT then SIGTERM: placement takes only ${wait_s}x4 s here"
 fi
 # a signal during all-pairs mode's initial predictions (n^2/2 pair tests: 65536 spheres take
 # minutes on one core) ends the run within a chunk of them, at step 0, its frame written: exit
@@ -134,14 +148,21 @@ check "and a summary that says terminated, 0 of the deck's 1000 steps" \
 # (a signal there ends the run at step 0, above): all-pairs mode's take n^2, so its case has
 # 1000 spheres (milliseconds; the paper box's 4096 took 0.35 s on an idle machine, so close to
 # the 0.5 s that a loaded one's signal could come within them) and a dt of 10000 (a step of
-# minutes).
+# minutes). The naive and seminaive cases' steps are long for their spheres (a pass over the
+# pairs: naive over 65536 to 100000 spheres, seconds; seminaive over 2 million, a few), which
+# they look at as the pass goes (until 2026-11-30 they finished the step: 15 s after the signal
+# for naive over 131072 spheres on one thread); they take their signal 0.2 s after frame 0 is
+# in the file (their first step begins then: set-up and frame 0 of 2 million spheres can take
+# longer than that after the file appears on a loaded machine), within the first step on a
+# machine far faster than this one.
+abandon_delay=0.5
 abandon() {
     local name=$1 out=$tmp/abandon-$1.h5
     shift
     bin/nbep run --set run.dt=1000 "$@" --quiet -n 3 -o "$out" \
         --summary "$tmp/summary-abandon-$name.json" 2>"$tmp/stderr-abandon-$name" &
-    term_within $! "$out" 0.5 200
-    check "$name: SIGTERM during a step of minutes ends the run within 20 s" "[ $stopped = 1 ]"
+    term_within $! "$out" "$abandon_delay" 200
+    check "$name: SIGTERM during a long step ends the run within 20 s" "[ $stopped = 1 ]"
     check "$name: exit 143 (got $rc)" "[ $rc = 143 ]"
     check "$name: one line, naming the step abandoned and the last frame" \
         "[ \$(wc -l < '$tmp/stderr-abandon-$name') = 1 ] && grep -q 'terminated by SIGTERM during step 1, which is abandoned; the run ends after step 0, and its frames up to step 0 are in ' '$tmp/stderr-abandon-$name'"
@@ -157,6 +178,15 @@ abandon all-pairs inputs/paper-box.deck -t 2 --set 'physics.gravity=[0.0, 0.0, 0
     --set 'spheres.[0].count=1000' --set run.dt=10000
 abandon grid inputs/paper-box.deck -t 1 --set 'run.neighbors="grid"' \
     --set 'physics.gravity=[0.0, 0.0, 0.0]'
+abandon_delay=0.2 frame0=1
+abandon naive-1-thread inputs/paper-box.deck -t 1 -a naive --set run.dt=1.0e-3 \
+    --set 'spheres.[0].count=65536' --set 'output.fields=["position"]'
+abandon naive-2-threads inputs/paper-box.deck -t 2 -a naive --set run.dt=1.0e-3 \
+    --set 'spheres.[0].count=100000' --set 'output.fields=["position"]'
+abandon seminaive inputs/paper-box.deck -t 1 -a seminaive --set run.dt=1.0e-3 \
+    --set 'spheres.[0].count=2000000' --set 'box.max=[40.0, 40.0, 40.0]' \
+    --set 'output.fields=["position"]'
+frame0=0
 
 # not --quiet: the progress ends with a line for the step the run ends after, as a stop at a
 # step's end ends it (until 2026-11-30 an abandoned step left it open: on a terminal the run's
@@ -173,15 +203,17 @@ check "a step abandoned, not --quiet: exit 143 (got $rc), the progress's last li
 
 # the progress within a step of minutes, on a terminal (script(1) gives the run one): the live
 # line shows the steps done with the step's part gone, `step 0.01/3`, as the loops look at the
-# signal (until 2026-11-30 it showed nothing until the step's end: minutes), in cells mode and
-# in all-pairs mode's rounds
+# signal (until 2026-11-30 it showed nothing until the step's end: minutes), in cells mode, in
+# all-pairs mode's rounds and in naive's pass over the pairs (the part of the pass made)
 if command -v script >/dev/null; then
-    for mode in cells all; do
+    for mode in cells all naive; do
         out=$tmp/live-$mode.h5
         if [ $mode = cells ]; then
             what="inputs/hard-sphere-fluid.deck -t 1 --set run.dt=1000"
-        else
+        elif [ $mode = all ]; then
             what="inputs/paper-box.deck -t 2 --set spheres.[0].count=1000 --set run.dt=10000 --set physics.gravity=[0.0,0.0,0.0]"
+        else
+            what="inputs/paper-box.deck -t 1 -a naive --set spheres.[0].count=65536"
         fi
         timeout -k 5 60 script -qc "bin/nbep run $what -n 3 -o $out & p=\$!;
             for _ in \$(seq 300); do [ -s $out ] && break; sleep 0.1; done; sleep 2;
@@ -189,6 +221,21 @@ if command -v script >/dev/null; then
         check "$mode: on a terminal, the progress shows a step of minutes as it goes (step 0.NN/3)" \
             "tr '\r' '\n' < '$tmp/typescript-$mode' | grep -Eq '^step 0\.[0-9]{2}/3 +[0-9.]+% +[0-9.e+-]+ steps/s +ETA [0-9]+ s'"
     done
+    # all-pairs mode's first predictions (65536 spheres: n^2/2 pair tests, a minute on one
+    # core) show the part made on the live line, `first predictions  12.5%  ETA 40 s` (until
+    # 2026-11-30 the line stayed empty until the first step); a SIGTERM among them ends that
+    # line with the progress's last one, for step 0, and the run's end lines follow on lines of
+    # their own (not on the live line)
+    out=$tmp/live-setup.h5
+    timeout -k 5 60 script -qc "bin/nbep run inputs/paper-box.deck -t 1 --set spheres.[0].count=65536 -o $out & p=\$!;
+        for _ in \$(seq 300); do [ -s $out ] && break; sleep 0.1; done; sleep 1;
+        kill -TERM \$p; wait \$p" "$tmp/typescript-setup" >/dev/null 2>&1
+    check "on a terminal, the first predictions show their part made (first predictions NN.N%)" \
+        "tr '\r' '\n' < '$tmp/typescript-setup' | grep -Eq '^first predictions +[0-9.]+%  ETA [0-9]+ s'"
+    check "a SIGTERM among them ends the live line with step 0's, the end lines on their own" \
+        "awk '/first predictions/ { n = split(\$0, seg, \"\\r\"); while (n > 1 && seg[n] == \"\") n--;
+              ok = seg[n] ~ /^step 0\/1000 /; getline; ok = ok && /^nbep: stopped after 0 steps/ }
+              END { exit !ok }' '$tmp/typescript-setup'"
 else
     echo "skip the progress within a step: no script(1) here"
 fi
