@@ -1571,6 +1571,9 @@ MUTANTS = [
      "const int r = mkdir(p, 0777);", ["tests/test_sweep_cli.sh"], None),
     ("check-sweep-dir-below-looked", "src/sweep.c", "    if (below)\n        return 0;\n    struct stat sb;",
      "    struct stat sb;", ["tests/test_sweep_cli.sh"], None),
+    ("signal-handler-nests", "src/main.c",
+     "    sigaddset(&sa.sa_mask, SIGINT);\n    sigaddset(&sa.sa_mask, SIGTERM);\n", "",
+     ["tests/test_signals.sh"], None),
     # ---- nbep check --summary: the JSON report ----
     ("check-json-beside-human", "src/main.c",
      "FILE *human = cli->summary && cli->quiet ? NULL : json_out ? stderr : stdout;",
