@@ -1574,6 +1574,12 @@ MUTANTS = [
     ("signal-handler-nests", "src/main.c",
      "    sigaddset(&sa.sa_mask, SIGINT);\n    sigaddset(&sa.sa_mask, SIGTERM);\n", "",
      ["tests/test_signals.sh"], None),
+    ("fill-packing-others-left-out", "src/scene_place.c",
+     "            const double before = placed_before_in(g, k, e->lo, e->hi);",
+     "            const double before = 0.0;", ["test_scene"], None),
+    ("fill-packing-region-x-ignored", "src/scene_place.c",
+     "if (within(g->pb, 0, p.x, lo.x, hi.x) && within(g->pb, 1, p.y, lo.y, hi.y) &&",
+     "if (within(g->pb, 1, p.y, lo.y, hi.y) &&", ["test_scene"], None),
     # ---- nbep check --summary: the JSON report ----
     ("check-json-beside-human", "src/main.c",
      "FILE *human = cli->summary && cli->quiet ? NULL : json_out ? stderr : stdout;",

@@ -610,6 +610,40 @@ static bool kept_out_by(const nbep__scene_ctx *c, const grid *g, probe *pr, doub
     return true;
 }
 
+/* Whether x lies in [lo, hi] along axis a, or (a periodic axis: places wrap into the box) one
+ * period either side of it. */
+static bool within(const nbep_periodic *pb, int a, double x, double lo, double hi)
+{
+    if (x >= lo && x <= hi)
+        return true;
+    return pb && pb->axis[a] &&
+           ((x + pb->len[a] >= lo && x + pb->len[a] <= hi) ||
+            (x - pb->len[a] >= lo && x - pb->len[a] <= hi));
+}
+
+/* The volume of the spheres placed before entry k's (single spheres, and the groups before it)
+ * whose centres lie in the region [lo, hi]: the room they took from it, for the message of a
+ * group that does not fit (its own packing alone read 0.00 where another group had filled its
+ * region). On that path only: O(n). */
+static double placed_before_in(const grid *g, size_t k, nbep_vec3 lo, nbep_vec3 hi)
+{
+    double v = 0.0;
+    for (size_t j = 0; j < g->n_entries; j++) {
+        const nbep__scene_entry *o = &g->e[j];
+        if (j == k || (o->place != NBEP__PLACE_ONE && j > k))
+            continue;
+        const uint64_t n = o->place == NBEP__PLACE_ONE ? 1 : o->count;
+        for (uint64_t q = 0; q < n; q++) {
+            const size_t i = o->first + (size_t)q;
+            const nbep_vec3 p = g->s->pos[i];
+            if (within(g->pb, 0, p.x, lo.x, hi.x) && within(g->pb, 1, p.y, lo.y, hi.y) &&
+                within(g->pb, 2, p.z, lo.z, hi.z))
+                v += ball_volume(g->s->radius[i]);
+        }
+    }
+    return v;
+}
+
 /* Uniform in the region shrunk by the radius, rejecting overlaps with every sphere placed so
  * far (by the nearest image along periodic axes, g->pb) and with the planes. Returns false
  * when out of memory. */
@@ -635,12 +669,18 @@ static bool place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep_
             blame in_way = {NULL, 0, NBEP_DIAG_UNRANKED};
             if (!kept_out_by(c, g, &pr, reach, k, q, seed, lo, hi, a, &in_way))
                 return false;
+            const double vol = box_volume(e->lo, e->hi);
+            const double before = placed_before_in(g, k, e->lo, e->hi);
+            char others[96] = "";
+            if (before > 0.0)
+                snprintf(others, sizeof others,
+                         "; %.2f with the spheres placed before it in the region",
+                         ((double)q * ball_volume(r) + before) / vol);
             fill_failed(c, s, e, plane_at, in_way,
-                            "spheres.[%zu]: could not place %" PRIu64
-                            " spheres of radius %g in the region: placed %" PRIu64
-                            " (packing fraction %.2f)",
-                            k, e->count, r, q,
-                            (double)q * ball_volume(r) / box_volume(e->lo, e->hi));
+                        "spheres.[%zu]: could not place %" PRIu64
+                        " spheres of radius %g in the region: placed %" PRIu64
+                        " (packing fraction %.2f%s)",
+                        k, e->count, r, q, (double)q * ball_volume(r) / vol, others);
             return true;
         }
         size_t id = e->first + (size_t)q;

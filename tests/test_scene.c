@@ -1361,37 +1361,47 @@ static void test_a_group_an_earlier_groups_set_leaves_no_room_names_that_set(voi
                                   buf, sizeof buf);
     LOAD_OK(f, deck);
     nbep_scene_fini(&f->sc);
+    /* The messages give the group's own packing and, with it, that of the spheres placed before
+     * it in its region (the first group's, about half of them in either part: 500 of radius 0.1
+     * put 250 x 4.19e-3 = 1.05 into the right part's volume of 4, which with 17 of its own
+     * makes 0.28; 3000 of radius 0.05, about 0.45 and 0.5 of them, 0.20 of either part; 500 of
+     * radius 0.05 and 188 of its own, 0.23) */
+#define W " with the spheres placed before it in the region)"
     /* the first group's radius: the third finds no room (the second still does) */
     LOAD_FAILS(f, NBEP_EDECK, deck, "run.steps=3", "spheres.[0].radius=0.1");
     ASSERT_DIAG(&f->d, "--set spheres.[0].radius=0.1: spheres.[2]: could not place 50 spheres of "
-                       "radius 0.1 in the region: placed 17 (packing fraction 0.02)");
+                       "radius 0.1 in the region: placed 17 (packing fraction 0.02; 0.28"
+                       W);
     /* its count: neither of the others finds room */
     nbep_diag_fini(&f->d);
     nbep_diag_init(&f->d);
     LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].count=3000");
     ASSERT_DIAG(&f->d,
                 "--set spheres.[0].count=3000: spheres.[1]: could not place 8 spheres of radius "
-                "0.1 in the region: placed 0 (packing fraction 0.00)",
+                "0.1 in the region: placed 0 (packing fraction 0.00; 0.20" W,
                 "--set spheres.[0].count=3000: spheres.[2]: could not place 50 spheres of radius "
-                "0.1 in the region: placed 0 (packing fraction 0.00)");
+                "0.1 in the region: placed 0 (packing fraction 0.00; 0.20" W);
     /* with the group's own count: the first typed, either way round */
     nbep_diag_fini(&f->d);
     nbep_diag_init(&f->d);
     LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[2].count=100", "spheres.[0].radius=0.1");
     ASSERT_DIAG(&f->d, "--set spheres.[2].count=100: spheres.[2]: could not place 100 spheres of "
-                       "radius 0.1 in the region: placed 17 (packing fraction 0.02)");
+                       "radius 0.1 in the region: placed 17 (packing fraction 0.02; 0.28"
+                       W);
     nbep_diag_fini(&f->d);
     nbep_diag_init(&f->d);
     LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].radius=0.1", "spheres.[2].count=100");
     ASSERT_DIAG(&f->d, "--set spheres.[0].radius=0.1: spheres.[2]: could not place 100 spheres of "
-                       "radius 0.1 in the region: placed 17 (packing fraction 0.02)");
+                       "radius 0.1 in the region: placed 17 (packing fraction 0.02; 0.28"
+                       W);
     /* the second group's spheres lie left of every place the third tries: its --set, typed
      * first, took none of the third's room */
     nbep_diag_fini(&f->d);
     nbep_diag_init(&f->d);
     LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[1].count=2", "spheres.[2].count=5000");
     ASSERT_DIAG(&f->d, "--set spheres.[2].count=5000: spheres.[2]: could not place 5000 spheres "
-                       "of radius 0.1 in the region: placed 188 (packing fraction 0.20)");
+                       "of radius 0.1 in the region: placed 188 (packing fraction 0.20; 0.23" W);
+#undef W
 }
 
 static void test_overlaps_with_spheres_and_planes_are_named(void **state)
