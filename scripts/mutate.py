@@ -1580,6 +1580,8 @@ MUTANTS = [
     ("fill-packing-region-x-ignored", "src/scene_place.c",
      "if (within(g->pb, 0, p.x, lo.x, hi.x) && within(g->pb, 1, p.y, lo.y, hi.y) &&",
      "if (within(g->pb, 1, p.y, lo.y, hi.y) &&", ["test_scene"], None),
+    ("pace-text-exponent", "src/sweep.c", "pace >= 999.5 ? \"%.0f\" : \"%.3g\"", "\"%.3g\"",
+     ["tests/test_sweep_cli.sh"], None),
     # ---- nbep check --summary: the JSON report ----
     ("check-json-beside-human", "src/main.c",
      "FILE *human = cli->summary && cli->quiet ? NULL : json_out ? stderr : stdout;",

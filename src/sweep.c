@@ -1232,14 +1232,19 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
     nbep_status st = nbep_sweep_write_summary(p, results, n_ranks, nbep_now() - t0, d);
     const double wall = nbep_now() - t0;
     sweep_totals s = count(p, results);
-    if (!cli->quiet)
+    if (!cli->quiet) {
+        /* three figures, a whole number from 1000 up (8160 runs/min, not 8.16e+03) */
+        const double pace = runs_per_minute(&s, wall);
+        char pace_text[32];
+        snprintf(pace_text, sizeof pace_text, pace >= 999.5 ? "%.0f" : "%.3g", pace);
         fprintf(stderr,
-                "nbep sweep: %zu runs on %d rank%s in %.3g s (%zu ran to %s end: %.3g "
+                "nbep sweep: %zu runs on %d rank%s in %.3g s (%zu ran to %s end: %s "
                 "runs/min): %zu ok (%zu reused), %zu failed, %zu interrupted, %zu not run; "
                 "%s/summary.csv\n",
                 p->n_runs, n_ranks, n_ranks == 1 ? "" : "s", wall, s.ended,
-                s.ended == 1 ? "its" : "their", runs_per_minute(&s, wall), s.ok, s.reused,
-                s.failed, s.interrupted, s.not_run, p->dir);
+                s.ended == 1 ? "its" : "their", pace_text, s.ok, s.reused, s.failed,
+                s.interrupted, s.not_run, p->dir);
+    }
     if (cli->summary) {
         nbep_status jst = write_sweep_json(cli->summary, p, &s, n_ranks, wall, d);
         if (st == NBEP_OK)

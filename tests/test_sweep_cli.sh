@@ -168,6 +168,20 @@ check "... and so does the JSON's runs_per_minute, of its wall_seconds" \
 j = json.load(open(sys.argv[1]))
 sys.exit(not abs(j[\"runs_per_minute\"] - 60.0 * $ended / j[\"wall_seconds\"]) <= 1e-9 * j[\"runs_per_minute\"])' '$tmp/pace.json'"
 
+# a fast pace reads as a whole number (20 runs of two spheres and one step take a few ms
+# each: thousands a minute, which printed as 8.16e+03 until 2026-11-30)
+cat >"$tmp/fast.deck" <<'DECK'
+run: { steps = 1; threads = 1; };
+spheres = ( { position = [0.0, 0.0, 0.0]; radius = 0.1; mass = 1.0; },
+            { position = [1.0, 0.0, 0.0]; radius = 0.1; mass = 1.0; } );
+output: { file = "fast.h5"; every = 1; };
+sweep: { replicas = 20; };
+DECK
+run_sweep "$tmp/fast.deck" -o "$tmp/fast.h5"
+line=$(grep '^nbep sweep: 20 runs' "$tmp/stderr")
+check "a pace of a thousand or more runs a minute reads as a whole number: $line" \
+    "[ $rc = 0 ] && echo '$line' | grep -Eq ': ([0-9]{4,}|[0-9]{1,3}(\.[0-9]+)?) runs/min\)'"
+
 # ---- srun without PMI ------------------------------------------------------------------------
 # the line that says how to launch: an MPI build names srun's PMI plugins, one built with MPI=0
 # (as scripts/mutate.py builds it) that it cannot split a study at all; this check expected the
