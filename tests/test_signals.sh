@@ -259,5 +259,34 @@ else
     echo "skip the progress within a step: no script(1) here"
 fi
 
+# ---- nbep check: Ctrl-C or a SIGTERM while it loads a study's runs (up to a minute) or places a
+# deck's spheres ends it at once, exit 130 or 143, one line, no report on stdout or in --summary
+# (until 2026-11-30 it went on for the whole minute and exited 0 with the report) ------------------
+for sig in TERM INT; do
+    want=$([ $sig = TERM ] && echo 143 || echo 130)
+    # 40 replicas x 4 runs of 500000 spheres: over a minute of placing, about a second a run
+    bin/nbep check inputs/sweep-restitution.deck --set spheres.[0].count=500000 \
+        --set spheres.[0].radius=0.005 --set sweep.replicas=40 --summary "$tmp/check-$sig.json" \
+        >"$tmp/check-stdout-$sig" 2>"$tmp/check-stderr-$sig" &
+    pid=$!
+    sleep 3
+    kill -$sig $pid
+    stopped=0
+    for _ in $(seq 150); do # 15 s: a run's placement at most, on a loaded machine
+        if ! kill -0 $pid 2>/dev/null; then stopped=1; break; fi
+        sleep 0.1
+    done
+    [ $stopped = 1 ] || kill -KILL $pid
+    wait $pid
+    rc=$?
+    check "check of a study, SIG$sig while it loads the runs: ends within 15 s, exit $want (got $rc)" \
+        "[ $stopped = 1 ] && [ $rc = $want ]"
+    check "check of a study, SIG$sig: one line, nothing on stdout, no report file" \
+        "[ \$(wc -l <'$tmp/check-stderr-$sig') = 1 ] &&
+         grep -q '^nbep: check .* by SIG$sig; nothing written\$' '$tmp/check-stderr-$sig' &&
+         [ ! -s '$tmp/check-stdout-$sig' ] && [ ! -e '$tmp/check-$sig.json' ] &&
+         [ ! -e '$tmp/check-$sig.json.partial' ]"
+done
+
 [ $fail = 0 ] && echo "signals: all passed"
 exit $fail
