@@ -219,6 +219,9 @@ check "a step abandoned, not --quiet: exit 143 (got $rc), the progress's last li
      sed -n 1p '$tmp/stderr-abandon-progress' | grep -q '^step 0/3 ' &&
      sed -n 2p '$tmp/stderr-abandon-progress' | grep -q '^nbep: stopped after 0 steps' &&
      sed -n 3p '$tmp/stderr-abandon-progress' | grep -q 'during step 1, which is abandoned'"
+# that line has no rate to go by (no step done): no ETA, not "ETA 0 s" with 3 steps to go
+check "a step abandoned at step 0: the progress's last line says ETA -, not ETA 0 s" \
+    "sed -n 1p '$tmp/stderr-abandon-progress' | grep -q ' 0 steps/s  ETA -\$'"
 
 # the progress within a step of minutes, on a terminal (script(1) gives the run one): the live
 # line shows the steps done with the step's part gone, `step 0.01/3`, as the loops look at the
