@@ -1596,6 +1596,22 @@ MUTANTS = [
     ("check-json-paths-unchecked", "src/main.c",
      "st = nbep_run_check_paths(cli->path, sc.output_file, cli->summary, d);",
      "st = nbep_run_check_paths(cli->path, sc.output_file, NULL, d);", ["tests/test_cli.sh"], None),
+    # a --summary naming a directory: refused before any step (it ran every step, then exit 1)
+    ("summary-dir-accepted", "src/run.c",
+     "    if (stat(where, &sb) == 0 && S_ISDIR(sb.st_mode))\n        NBEP_FAIL(d, nbep_status_of_open(EISDIR)",
+     "    if (0)\n        NBEP_FAIL(d, nbep_status_of_open(EISDIR)", ["tests/test_cli.sh"], None),
+    # a signal to nbep check: no report, exit 130/143; a study's loading stops at the next run
+    ("check-signal-ignored", "src/main.c",
+     "    const nbep_status sig = nbep_sim_stop_status(&stop_signal);\n    if (sig != NBEP_OK) {\n        nbep_scene_fini(&sc);",
+     "    const nbep_status sig = NBEP_OK;\n    if (sig != NBEP_OK) {\n        nbep_scene_fini(&sc);",
+     ["tests/test_signals.sh"], None),
+    ("check-study-signal-unlooked", "src/sweep.c",
+     "        if (nbep_sim_stop_status(stop) != NBEP_OK)\n            break; /* Ctrl-C",
+     "        if (0)\n            break; /* Ctrl-C", ["tests/test_signals.sh"], None),
+    # no pace yet: "ETA -", not "ETA 0 s" with every step to go
+    ("progress-eta-zero-without-rate", "src/sim.c",
+     "\"%s\", at >= (double)sim->step_end ? \"0 s\" : \"-\");", "\"%s\", \"0 s\");",
+     ["tests/test_signals.sh"], None),
 ]
 
 

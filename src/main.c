@@ -93,9 +93,19 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
     if (study)
         st = nbep_sweep_check(cli->path, (const char *const *)cli->overrides,
                               (const char *const *)cli->origins, cli->n_overrides, &sc,
-                              CHECK_SWEEP_SECONDS, &rep, d);
+                              CHECK_SWEEP_SECONDS, &stop_signal, &rep, d);
     if (st == NBEP_OK && study) /* where its runs go: nbep sweep makes the folder */
         st = nbep_sweep_check_dir(rep.dir, d);
+    /* Ctrl-C or a SIGTERM while the deck was read and the spheres placed, or between a study's
+     * runs: no report, as a run stopped before its first step writes nothing (until
+     * 2026-11-30 the check went on, for a study up to its minute, and exited 0) */
+    const nbep_status sig = nbep_sim_stop_status(&stop_signal);
+    if (sig != NBEP_OK) {
+        nbep_scene_fini(&sc);
+        NBEP_FAIL(d, sig, "nbep: check %s by SIG%s; nothing written",
+                  sig == NBEP_ESIGTERM ? "terminated" : "interrupted",
+                  sig == NBEP_ESIGTERM ? "TERM" : "INT");
+    }
     if (st == NBEP_OK) {
         nbep_check_facts facts;
         nbep_check_gather(&sc, &facts);

@@ -30,6 +30,13 @@ static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
         *out = stdout;
         return NBEP_OK;
     }
+    /* a directory there (or "dir/"): its ".partial" opens, and only the rename at the run's
+     * end failed, exit 1 after every step (README: a path that names a directory is bad
+     * usage, found before any step) */
+    struct stat sb;
+    if (stat(where, &sb) == 0 && S_ISDIR(sb.st_mode))
+        NBEP_FAIL(d, nbep_status_of_open(EISDIR), "nbep: cannot write the summary to %s: %s",
+                  where, strerror(EISDIR));
     char *tmp = nbep_partial_path(where);
     if (!tmp)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the summary's file name");

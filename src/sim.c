@@ -411,17 +411,22 @@ static void progress_at(nbep_sim *sim, double at, bool last)
     if (sim->rate_recent > 0.0)
         rate = sim->rate_recent;
     double pct = sim->step_end ? 100.0 * at / (double)sim->step_end : 100.0;
-    double eta = rate > 0.0 ? ((double)sim->step_end - at) / rate : 0.0;
-    char where[48], line[160];
+    /* no rate yet (nothing done: a run stopped during its first step) gives no ETA, "ETA -",
+     * not "ETA 0 s" for a run with all its steps to go */
+    char where[48], eta[40], line[200];
+    if (rate > 0.0)
+        snprintf(eta, sizeof eta, "%.0f s", ((double)sim->step_end - at) / rate);
+    else
+        snprintf(eta, sizeof eta, "%s", at >= (double)sim->step_end ? "0 s" : "-");
     if (at == floor(at))
         snprintf(where, sizeof where, "%llu", (unsigned long long)at);
     else
         snprintf(where, sizeof where, "%.2f", at);
     if (sim->tty)
-        snprintf(line, sizeof line, "step %s/%llu  %5.1f%%  %.4g steps/s  ETA %.0f s", where,
+        snprintf(line, sizeof line, "step %s/%llu  %5.1f%%  %.4g steps/s  ETA %s", where,
                  (unsigned long long)sim->step_end, pct, rate, eta);
     else
-        snprintf(line, sizeof line, "step %s/%llu  %.1f%%  %.4g steps/s  ETA %.0f s", where,
+        snprintf(line, sizeof line, "step %s/%llu  %.1f%%  %.4g steps/s  ETA %s", where,
                  (unsigned long long)sim->step_end, pct, rate, eta);
     progress_print(sim, line, last);
 }
@@ -453,10 +458,13 @@ void nbep__sim_progress_setup(nbep_sim *sim, double part)
     /* the run's clock started before them (nbep_sim_run; nbep__sim_setup_done restarts it) */
     const double el = now - sim->t_start;
     part = part > 0.0 ? fmin(part, 0.999) : 0.0; /* "%.1f": never 100 % before they are made */
-    const double eta = part > 0.0 ? el * (1.0 - part) / part : 0.0;
-    char line[96];
-    snprintf(line, sizeof line, sim->tty ? "first predictions %5.1f%%  ETA %.0f s"
-                                         : "first predictions %.1f%%  ETA %.0f s",
+    char eta[40], line[96];
+    if (part > 0.0)
+        snprintf(eta, sizeof eta, "%.0f s", el * (1.0 - part) / part);
+    else
+        snprintf(eta, sizeof eta, "-"); /* nothing made yet: no pace to go by */
+    snprintf(line, sizeof line, sim->tty ? "first predictions %5.1f%%  ETA %s"
+                                         : "first predictions %.1f%%  ETA %s",
              100.0 * part, eta);
     progress_print(sim, line, false);
 }

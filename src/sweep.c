@@ -337,7 +337,8 @@ static void describe_run(const nbep_sweep_plan *p, size_t run, char *buf, size_t
 
 nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides,
                              const char *const *origins, size_t n_overrides, nbep_scene *sc,
-                             double budget_s, nbep_sweep_check_report *rep, nbep_diag *d)
+                             double budget_s, const atomic_int *stop,
+                             nbep_sweep_check_report *rep, nbep_diag *d)
 {
     memset(rep, 0, sizeof *rep);
     nbep_sweep_plan p;
@@ -356,6 +357,8 @@ nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides
             rep->out_of_time = true;
             break;
         }
+        if (nbep_sim_stop_status(stop) != NBEP_OK)
+            break; /* Ctrl-C: the caller says so (it went on for the whole minute, exit 0) */
         char **ov = NULL;
         size_t n_ov = 0;
         st = nbep_sweep_run_overrides(&p, run, &ov, &n_ov, d);

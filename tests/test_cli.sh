@@ -150,6 +150,19 @@ check "--summary unwritable: exit 2 before simulating (got $rc)" "[ $rc = 2 ]"
 check "--summary unwritable: one line on stderr that names the path" \
     "one_line && grep -qF '$tmp/plain-file/summary.json' '$tmp/stderr'"
 check "--summary unwritable: no output file left" "[ ! -e '$tmp/with-summary.h5' ]"
+# a --summary that names a directory (as "dir" or "dir/"): its ".partial" could be opened, and
+# the run simulated every step before its rename failed, exit 1 (here: 10^9 steps, the guard's
+# 124); nbep check wrote its report and exited 1
+for sum in "$tmp/a-directory" "$tmp/a-directory/"; do
+    run_nbep run "$tmp/group.deck" --quiet -o "$tmp/with-summary.h5" --summary "$sum"
+    check "--summary $sum (a directory): exit 2 before simulating (got $rc)" "[ $rc = 2 ]"
+    check "--summary $sum (a directory): one line naming it, no output file left" \
+        "one_line && grep -qF 'summary to $sum: Is a directory' '$tmp/stderr' &&
+         [ ! -e '$tmp/with-summary.h5' ]"
+    run_nbep check "$tmp/group.deck" --quiet --summary "$sum"
+    check "check --summary $sum (a directory): exit 2, one line, nothing in it (got $rc)" \
+        "[ $rc = 2 ] && one_line && [ -z \"\$(ls -A '$tmp/a-directory')\" ]"
+done
 
 # ---- a deck without spheres ------------------------------------------------------------------
 : >"$tmp/empty.deck"

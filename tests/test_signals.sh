@@ -219,6 +219,9 @@ check "a step abandoned, not --quiet: exit 143 (got $rc), the progress's last li
      sed -n 1p '$tmp/stderr-abandon-progress' | grep -q '^step 0/3 ' &&
      sed -n 2p '$tmp/stderr-abandon-progress' | grep -q '^nbep: stopped after 0 steps' &&
      sed -n 3p '$tmp/stderr-abandon-progress' | grep -q 'during step 1, which is abandoned'"
+# that line has no rate to go by (no step done): no ETA, not "ETA 0 s" with 3 steps to go
+check "a step abandoned at step 0: the progress's last line says ETA -, not ETA 0 s" \
+    "sed -n 1p '$tmp/stderr-abandon-progress' | grep -q ' 0 steps/s  ETA -\$'"
 
 # the progress within a step of minutes, on a terminal (script(1) gives the run one): the live
 # line shows the steps done with the step's part gone, `step 0.01/3`, as the loops look at the
@@ -258,6 +261,35 @@ if command -v script >/dev/null; then
 else
     echo "skip the progress within a step: no script(1) here"
 fi
+
+# ---- nbep check: Ctrl-C or a SIGTERM while it loads a study's runs (up to a minute) or places a
+# deck's spheres ends it at once, exit 130 or 143, one line, no report on stdout or in --summary
+# (until 2026-11-30 it went on for the whole minute and exited 0 with the report) ------------------
+for sig in TERM INT; do
+    want=$([ $sig = TERM ] && echo 143 || echo 130)
+    # 40 replicas x 4 runs of 500000 spheres: over a minute of placing, about a second a run
+    bin/nbep check inputs/sweep-restitution.deck --set spheres.[0].count=500000 \
+        --set spheres.[0].radius=0.005 --set sweep.replicas=40 --summary "$tmp/check-$sig.json" \
+        >"$tmp/check-stdout-$sig" 2>"$tmp/check-stderr-$sig" &
+    pid=$!
+    sleep 3
+    kill -$sig $pid
+    stopped=0
+    for _ in $(seq 150); do # 15 s: a run's placement at most, on a loaded machine
+        if ! kill -0 $pid 2>/dev/null; then stopped=1; break; fi
+        sleep 0.1
+    done
+    [ $stopped = 1 ] || kill -KILL $pid
+    wait $pid
+    rc=$?
+    check "check of a study, SIG$sig while it loads the runs: ends within 15 s, exit $want (got $rc)" \
+        "[ $stopped = 1 ] && [ $rc = $want ]"
+    check "check of a study, SIG$sig: one line, nothing on stdout, no report file" \
+        "[ \$(wc -l <'$tmp/check-stderr-$sig') = 1 ] &&
+         grep -q '^nbep: check .* by SIG$sig; nothing written\$' '$tmp/check-stderr-$sig' &&
+         [ ! -s '$tmp/check-stdout-$sig' ] && [ ! -e '$tmp/check-$sig.json' ] &&
+         [ ! -e '$tmp/check-$sig.json.partial' ]"
+done
 
 [ $fail = 0 ] && echo "signals: all passed"
 exit $fail

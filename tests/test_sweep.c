@@ -97,7 +97,7 @@ static nbep_status check_study(const char *deck, double budget_s, nbep_sweep_che
 {
     nbep_scene sc;
     assert_int_equal(nbep_scene_load_from(deck, NULL, NULL, 0, &sc, d), NBEP_OK);
-    const nbep_status st = nbep_sweep_check(deck, NULL, NULL, 0, &sc, budget_s, rep, d);
+    const nbep_status st = nbep_sweep_check(deck, NULL, NULL, 0, &sc, budget_s, NULL, rep, d);
     assert_null(sc.sweep_axes); /* moved into the check's plan */
     nbep_scene_fini(&sc);
     return st;

@@ -198,10 +198,12 @@ typedef struct nbep_sweep_check_report {
  * placement, which a check of each value alone does not see, fail here instead of in the job.
  * A run refused is named in d, "nbep: sweep run K (KEY=VALUE ... seed=S) cannot run: " and its
  * first error, the first NBEP_SWEEP_CHECK_LISTED of them, then how many more; the result is
- * then NBEP_EDECK. NBEP_ENOMEM. */
+ * then NBEP_EDECK. NBEP_ENOMEM. A nonzero *stop (main.c's signal flag, borrowed, may be NULL)
+ * ends the loading before the next run, as the time does: the caller looks at it. */
 NBEP_MUST_CHECK nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides,
                                              const char *const *origins, size_t n_overrides,
                                              nbep_scene *sc, double budget_s,
+                                             const atomic_int *stop,
                                              nbep_sweep_check_report *rep, nbep_diag *d);
 
 /* For `nbep check` of a study: whether `nbep sweep` could make its folder dir (as

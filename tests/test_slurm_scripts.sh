@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# The Slurm job scripts (scripts/*.sbatch) as a cluster's shell runs them:
+#   - under `set -u`, an array that may be empty expands as ${a[@]+"${a[@]}"}: a plain
+#     "${a[@]}" of an empty array is an "unbound variable" error on bash before 4.4 (CentOS 7,
+#     RHEL 7, still on many clusters' nodes), so slurm-scaling.sbatch without extra options
+#     died at its first `nbep check` there (this machine's bash 5 cannot show it, hence the
+#     look at the text);
+#   - run by hand outside Slurm, as README says (Running on a cluster): slurm-run.sbatch
+#     runs the deck, slurm-scaling.sbatch writes its CSV (one thread, one rank: no mpirun).
+# Run from anywhere after `make`; exit status 1 when a check fails.
+set -u
+cd "$(dirname "$0")/.."
+tmp=build/tests/tmp/slurm_scripts
+rm -rf "$tmp" && mkdir -p "$tmp"
+fail=0
+check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+
+for s in scripts/*.sbatch; do
+    # code lines only (comments may show the bare form), "${name[@]}" not after a "+"
+    bare=$(grep -nE '(^|[^+])"\$\{[A-Za-z_][A-Za-z0-9_]*\[@\]\}"' "$s" | grep -vE '^[0-9]+:[[:space:]]*#')
+    check "$s: every array expansion guarded for bash before 4.4 under set -u${bare:+ (not: $bare)}" \
+        "[ -z \"\$bare\" ]"
+done
+
+NBEP=$PWD/bin/nbep timeout -k 5 60 bash scripts/slurm-run.sbatch inputs/two-spheres.deck \
+    -n 20 --quiet -o "$tmp/run.h5" >"$tmp/run.out" 2>&1
+rc=$?
+check "slurm-run.sbatch by hand: exit 0 and the run's file (got $rc)" \
+    "[ $rc = 0 ] && [ -s '$tmp/run.h5' ]"
+
+NBEP=$PWD/bin/nbep SPHERES=64 STEPS=5 RUNS=2 THREADS_LIST=1 RANKS_LIST=1 OUT="$tmp/scaling.csv" \
+    WORK="$tmp/work" timeout -k 5 120 bash scripts/slurm-scaling.sbatch >"$tmp/scaling.out" 2>&1
+rc=$?
+check "slurm-scaling.sbatch by hand, no extra options: exit 0, a header and 4 rows (got $rc)" \
+    "[ $rc = 0 ] && [ \$(wc -l <'$tmp/scaling.csv') = 5 ] &&
+     head -1 '$tmp/scaling.csv' | grep -q '^study,kind,ranks,threads,' &&
+     [ \$(grep -c '^threads,' '$tmp/scaling.csv') = 2 ] && [ \$(grep -c '^ranks,' '$tmp/scaling.csv') = 2 ]"
+
+exit $fail
