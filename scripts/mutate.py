@@ -1582,6 +1582,8 @@ MUTANTS = [
      "if (within(g->pb, 1, p.y, lo.y, hi.y) &&", ["test_scene"], None),
     ("pace-text-exponent", "src/sweep.c", "pace >= 999.5 ? \"%.0f\" : \"%.3g\"", "\"%.3g\"",
      ["tests/test_sweep_cli.sh"], None),
+    ("resume-fields-unchecked", "src/output_resume.c", "    if (!sc->out_position || !sc->out_velocity) {",
+     "    if (false) {", ["tests/test_resume.sh"], None),
     # ---- nbep check --summary: the JSON report ----
     ("check-json-beside-human", "src/main.c",
      "FILE *human = cli->summary && cli->quiet ? NULL : json_out ? stderr : stdout;",

@@ -333,6 +333,18 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
         st = NBEP_EDECK;
         goto fail;
     }
+    /* the file's frames hold both (above); a deck asking for fewer would have the resumed
+     * frames hold what the earlier ones do after all (until 2026-11-30 accepted, named in
+     * `resumed`, and ignored) */
+    if (!sc->out_position || !sc->out_velocity) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s has positions and velocities in its frames but the deck asks "
+                      "for %s (output.fields); resume with the deck (and --set options) that "
+                      "made it",
+                      path, sc->out_position ? "positions only" : sc->out_velocity ? "velocities only" : "neither");
+        st = NBEP_EDECK;
+        goto fail;
+    }
     /* every frame's step and time (the sidecar lists them all), which choose the frame */
     if (!nbep__output_xmf_room(o, (size_t)frames)) {
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: no memory to resume %s", path);

@@ -224,6 +224,20 @@ for want in false true; do
          [ \"\$(md5sum < $tmp/stats-$want.h5)\" = '$sum' ]"
 done
 
+# a deck that asks for fewer fields than the file's frames hold (they hold both: a resume
+# needs them): refused, the file as it was (until 2026-11-30 accepted, named in `resumed` and
+# ignored, the resumed frames holding both after all)
+bin/nbep run $deck "${args[@]}" -n 20 -o $tmp/fields.h5
+sum=$(md5sum < $tmp/fields.h5)
+for fields in '["position"]' '["velocity"]' '[]'; do
+    bin/nbep run $deck "${args[@]}" --set "output.fields=$fields" -n 40 --resume $tmp/fields.h5 \
+        2>$tmp/fields.err
+    rc=$?
+    check "a file resumed with output.fields = $fields: exit 2 (got $rc), one line, file kept" \
+        "[ $rc = 2 ] && [ \$(wc -l < $tmp/fields.err) = 1 ] && grep -q 'output.fields' $tmp/fields.err &&
+         [ \"\$(md5sum < $tmp/fields.h5)\" = '$sum' ]"
+done
+
 # cells mode stopped by SIGTERM at whatever step it reached, resumed to a fixed end past it
 bin/nbep run $deck "${args[@]}" "${cells[@]}" -n 100000000 -o $tmp/cells-killed.h5 2>/dev/null &
 pid=$!
