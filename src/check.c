@@ -92,9 +92,12 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
     char size[NBEP_BYTES_TEXT_MAX];
     fprintf(out, "memory:          about %s\n", nbep_format_bytes(f->memory_bytes, size));
     char *xmf = f->sidecar_bytes > 0.0 ? nbep_xdmf_path(sc->output_file) : NULL;
-    fprintf(out, "output:          %s%s%s: %llu frames (every %llu steps), about %s\n",
-            sc->output_file, xmf ? " and " : "", xmf ? xmf : "", (unsigned long long)f->frames,
-            (unsigned long long)sc->output_every, nbep_format_bytes(f->output_bytes, size));
+    char every[48] = "every step";
+    if (sc->output_every > 1)
+        snprintf(every, sizeof every, "every %llu steps", (unsigned long long)sc->output_every);
+    fprintf(out, "output:          %s%s%s: %llu frame%s (%s), about %s\n", sc->output_file,
+            xmf ? " and " : "", xmf ? xmf : "", (unsigned long long)f->frames,
+            f->frames == 1 ? "" : "s", every, nbep_format_bytes(f->output_bytes, size));
     free(xmf);
 }
 
