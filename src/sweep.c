@@ -1210,8 +1210,9 @@ static nbep_status write_sweep_json(const char *where, const nbep_sweep_plan *p,
      * is, whole or not at all (an older file at `where` stays when writing fails) */
     const double n = (double)p->n_runs;
     json_t *o = json_pack(
-        "{s:s, s:s, s:s, s:I, s:I, s:I, s:I, s:I, s:I, s:i, s:f, s:f, s:f, s:f}", "format",
-        "nbep-sweep-summary-1", "version", NBEP_VERSION, "dir", p->dir, "runs",
+        "{s:s, s:s, s:o, s:I, s:I, s:I, s:I, s:I, s:I, s:i, s:f, s:f, s:f, s:f}", "format",
+        "nbep-sweep-summary-1", "version", NBEP_VERSION, "dir", nbep_summary_json_text(p->dir),
+        "runs",
         (json_int_t)p->n_runs, "ok", (json_int_t)s->ok, "failed", (json_int_t)s->failed,
         "interrupted", (json_int_t)s->interrupted, "not_run", (json_int_t)s->not_run, "reused",
         (json_int_t)s->reused, "ranks", n_ranks, "wall_seconds", wall, "runs_per_minute",

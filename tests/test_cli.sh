@@ -438,6 +438,17 @@ cp "$tmp/group.deck" "$tmp/self-check.deck"
 run_nbep check "$tmp/self-check.deck" --summary "$tmp/self-check.deck"
 check "check --summary DECK: exit 2, the deck unchanged (got $rc)" \
     "[ $rc = 2 ] && one_line && cmp -s '$tmp/group.deck' '$tmp/self-check.deck'"
+# a deck and an output file named in Latin-1 (bytes that are no UTF-8, which JSON text must be):
+# the report is written, each such byte U+FFFD (until 2026-11-30 jansson refused the names and
+# the check failed with "cannot write the summary to -: Cannot allocate memory", exit 1)
+latin1=$(printf 'r\351sultat')
+cp "$tmp/group.deck" "$tmp/$latin1.deck"
+run_nbep check "$tmp/$latin1.deck" -o "$tmp/$latin1.h5" --summary - --quiet
+check "check --summary of a deck and -o named in Latin-1: exit 0 (got $rc), JSON naming them with U+FFFD" \
+    "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] && python3 -c 'import json,sys; o=json.load(open(sys.argv[1], encoding=\"utf-8\"))
+t = sys.argv[2] + \"/r\\ufffdsultat\"
+assert o[\"deck\"] == t + \".deck\" and o[\"output\"][\"file\"] == t + \".h5\", o
+assert o[\"output\"][\"sidecar\"] == t + \".xmf\", o' '$tmp/stdout' '$tmp'"
 
 # ---- -o FILE takes the name as typed: quotes, spaces and backslashes are part of it (a name that
 # began with a quote was read as libconfig text: "bad value") --------------------------------------

@@ -68,6 +68,14 @@ mkdir -p "$odd"
 run_sweep "$tmp/s.deck" -o "$odd/s.h5" --quiet --summary "$tmp/odd.json"
 check "--summary of a study in a folder named with a quote and a newline: JSON, its dir (got $rc)" \
     "[ $rc = 0 ] && [ \"\$(json '$tmp/odd.json' dir)\" = '$odd/s.sweep' ] && [ ! -e '$tmp/odd.json.partial' ]"
+# ... and one named in Latin-1 (no UTF-8, which JSON text must be): written, each such byte
+# U+FFFD (until 2026-11-30 jansson refused the name, and the sweep, its runs done, failed with
+# "cannot write the summary to ...: Cannot allocate memory", exit 1)
+latin1="$tmp/r$(printf '\351')sultat"
+run_sweep "$tmp/s.deck" -o "$latin1" --quiet --summary "$tmp/latin1.json"
+check "--summary of a study in a folder named in Latin-1: exit 0 (got $rc), its dir with U+FFFD" \
+    "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] && /usr/bin/python3 -c 'import json,sys
+assert json.load(open(sys.argv[1], encoding=\"utf-8\"))[\"dir\"] == sys.argv[2] + \"/r\\ufffdsultat.sweep\"' '$tmp/latin1.json' '$tmp'"
 
 # the table is no run: info says what it is and where to look
 timeout 30 "$nbep" info "$tmp/s.sweep/summary.h5" >/dev/null 2>"$tmp/stderr"
