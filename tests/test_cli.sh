@@ -136,6 +136,16 @@ for out in "$tmp/plain-file/run.h5" "$tmp/a-directory" "$tmp/no-such-dir/run.h5"
         "[ ! -e '$tmp/plain-file/run.h5' ] && [ ! -e '$tmp/no-such-dir' ] &&
          [ -z \"\$(ls -A '$tmp/a-directory')\" ]"
 done
+# a symbolic link to a directory at the output path is no directory in the way: the run's rename
+# replaces the link (the directory is left alone), so nbep check passes it as the run does (it
+# followed the link and refused it as "Is a directory" until 2026-11-30)
+mkdir -p "$tmp/link-target"
+ln -sfn link-target "$tmp/link.h5"
+run_nbep check "$tmp/group.deck" -o "$tmp/link.h5"
+check "output a link to a directory: nbep check exits 0 (got $rc)" "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ]"
+guard=120 run_nbep run inputs/two-spheres.deck --quiet -o "$tmp/link.h5"
+check "... and the run writes its file there (exit $rc), the link replaced" \
+    "[ $rc = 0 ] && [ -f '$tmp/link.h5' ] && [ ! -L '$tmp/link.h5' ] && [ -d '$tmp/link-target' ]"
 # the same path given in the deck rather than with -o
 sed "s|file = \"group.h5\"|file = \"$tmp/plain-file/deck.h5\"|" "$tmp/group.deck" \
     >"$tmp/bad-out.deck"
