@@ -1597,8 +1597,13 @@ MUTANTS = [
     ("json-text-sweep-dir-raw", "src/sweep.c", "nbep_summary_json_text(p->dir)",
      "json_string(p->dir)", ["tests/test_sweep_cli.sh"], None),
     ("check-json-paths-unchecked", "src/main.c",
+     "st = nbep_run_check_paths(cli->path, study ? NULL : sc.output_file, cli->summary, d);",
+     "st = nbep_run_check_paths(cli->path, study ? NULL : sc.output_file, NULL, d);",
+     ["tests/test_cli.sh"], None),
+    ("check-json-study-output-as-run", "src/main.c",
+     "st = nbep_run_check_paths(cli->path, study ? NULL : sc.output_file, cli->summary, d);",
      "st = nbep_run_check_paths(cli->path, sc.output_file, cli->summary, d);",
-     "st = nbep_run_check_paths(cli->path, sc.output_file, NULL, d);", ["tests/test_cli.sh"], None),
+     ["tests/test_sweep_cli.sh"], None),
 ]
 
 

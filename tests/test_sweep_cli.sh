@@ -110,6 +110,17 @@ rc=$?
 check "nbep check: new folders on the way pass (got $rc), none made" \
     "[ $rc = 0 ] && [ ! -e '$tmp/new2' ]"
 
+# a study's report named as its deck's output.file: no run writes that file (the runs' go into
+# the folder), so nbep check takes it as nbep sweep takes its --summary there (until 2026-11-30
+# check refused it as "the run's file itself", exit 2)
+timeout 30 "$nbep" check "$tmp/s.deck" -o "$tmp/named.h5" --quiet --summary "$tmp/named.h5" \
+    >"$tmp/stdout" 2>"$tmp/stderr"
+rc=$?
+check "nbep check of a study, --summary at output.file: exit 0 (got $rc), its report there" \
+    "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] && [ \"\$(json '$tmp/named.h5' format)\" = nbep-check-1 ]"
+run_sweep "$tmp/s.deck" -o "$tmp/named.h5" --quiet --summary "$tmp/named.h5"
+check "... as nbep sweep takes it (exit $rc)" "[ $rc = 0 ] && [ \"\$(json '$tmp/named.h5' runs)\" = 4 ]"
+
 # ---- a sweep killed outright leaves no stale table -------------------------------------------
 # another study into the same directory (longer runs: other overrides, so nothing is reused),
 # killed once its first run's file is there
