@@ -1569,6 +1569,8 @@ MUTANTS = [
     ("check-sweep-dir-unchecked", "src/main.c",
      "    if (st == NBEP_OK && study) /* where its runs go: nbep sweep makes the folder */\n        st = nbep_sweep_check_dir(rep.dir, d);\n",
      "", ["tests/test_sweep_cli.sh"], None),
+    ("check-sweep-dir-dangling-link-passes", "src/sweep.c", "    if (lstat(p, &sb) == 0) {\n        errno = EEXIST;",
+     "    if (stat(p, &sb) == 0) {\n        errno = EEXIST;", ["tests/test_sweep_cli.sh"], None),
     ("check-sweep-dir-made", "src/sweep.c", "const int r = look ? mkdir_looked(p, *made > 0) : mkdir(p, 0777);",
      "const int r = mkdir(p, 0777);", ["tests/test_sweep_cli.sh"], None),
     ("check-sweep-dir-below-looked", "src/sweep.c", "    if (below)\n        return 0;\n    struct stat sb;",

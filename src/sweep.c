@@ -979,7 +979,9 @@ static int mkdir_looked(const char *p, bool below)
     if (below)
         return 0;
     struct stat sb;
-    if (stat(p, &sb) == 0) {
+    /* lstat, as mkdir looks: a link there, even one to nothing, is something at p (mkdir
+     * fails with EEXIST and make_dir's stat then says what) */
+    if (lstat(p, &sb) == 0) {
         errno = EEXIST;
         return -1;
     }

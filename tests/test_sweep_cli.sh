@@ -105,6 +105,17 @@ timeout 30 "$nbep" check "$tmp/s.deck" -o "$tmp/infile.sweep/deeper/x" >"$tmp/st
 rc=$?
 check "nbep check: a file above it: exit 2 (got $rc), one line naming the file" \
     "[ $rc = 2 ] && one_line && grep -q 'directory $tmp/infile.sweep: a file is in the way' '$tmp/stderr'"
+# a link to nothing where the folder goes: mkdir finds something there and the sweep fails; so
+# does the check, with the sweep's line (it passed until 2026-11-30: it looked through the link)
+ln -sfn nowhere "$tmp/dangling.sweep"
+run_sweep "$tmp/s.deck" -o "$tmp/dangling" --quiet
+cp "$tmp/stderr" "$tmp/sweep-stderr"
+check "a link to nothing where the sweep's directory goes: exit 2 (got $rc), one line" \
+    "[ $rc = 2 ] && one_line && grep -q 'directory $tmp/dangling.sweep: ' '$tmp/stderr'"
+timeout 30 "$nbep" check "$tmp/s.deck" -o "$tmp/dangling" >"$tmp/stdout" 2>"$tmp/stderr"
+rc=$?
+check "nbep check: the same, exit 2 (got $rc), the sweep's line" \
+    "[ $rc = 2 ] && [ ! -s '$tmp/stdout' ] && cmp -s '$tmp/stderr' '$tmp/sweep-stderr'"
 timeout 30 "$nbep" check "$tmp/s.deck" -o "$tmp/new2/deep/x" >"$tmp/stdout" 2>"$tmp/stderr"
 rc=$?
 check "nbep check: new folders on the way pass (got $rc), none made" \
