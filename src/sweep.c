@@ -718,10 +718,10 @@ static double csv_text_bytes(const char *s)
  * 2 to 1000 runs of 8 spheres and of 16 runs of 512 (inputs/sweep-restitution.deck), all ok.
  * summary.csv: the header but for the axes' keys is 341 bytes; a row but for its axis values
  * and file name 226 bytes for 8 spheres, 270 for 512 (its seconds and energies at up to 17
- * digits, its counts: 240 taken for all). summary.h5: 3.7 kB of HDF5's headers and the root attributes but for
- * the deck's text; a row's record, 8 bytes a number and 16 a string; each string in HDF5's
- * global heap, 16 bytes and its text rounded up to 8, in collections of 4 kB (20 runs took
- * 14432 bytes, as counted so; 200 runs 8 % more, 1000 runs 1 % more). */
+ * digits, its counts: 240 taken for all). summary.h5: 3.7 kB of HDF5's headers and the root
+ * attributes but for the deck's text; a row's record, 8 bytes a number and 16 a string; each
+ * string in HDF5's global heap, 16 bytes and its text rounded up to 8, in collections of 4 kB
+ * (20 runs took 14432 bytes, as counted so; 200 runs 8 % more, 1000 runs 1 % more). */
 #define TABLE_CSV_HEADER_BYTES 341.0
 #define TABLE_CSV_ROW_BYTES 240.0
 #define TABLE_H5_BYTES 3.7e3
