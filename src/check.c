@@ -127,9 +127,10 @@ static json_t *study_object(const nbep_sweep_check_report *r)
 {
     /* output_bytes as the human line's `sweep output`: the runs' files and sidecars and the
      * sweep's tables, which tables_bytes gives apart */
-    return json_pack("{s:I, s:I, s:I, s:s, s:I, s:b, s:o, s:o, s:o}", "runs",
+    return json_pack("{s:I, s:I, s:I, s:o, s:I, s:b, s:o, s:o, s:o}", "runs",
                      (json_int_t)r->n_runs, "combinations", (json_int_t)r->n_combos,
-                     "replicas", (json_int_t)r->replicas, "dir", r->dir, "runs_checked",
+                     "replicas", (json_int_t)r->replicas, "dir", nbep_summary_json_text(r->dir),
+                     "runs_checked",
                      (json_int_t)r->checked, "out_of_time", r->out_of_time,
                      "memory_bytes_max", bytes(r->memory_max), "output_bytes",
                      bytes(r->output_bytes + r->tables_bytes), "tables_bytes",
@@ -144,9 +145,10 @@ static json_t *check_object(const nbep_scene *sc, const nbep_check_facts *f,
     const bool predictive = strcmp(sc->algorithm, "predictive") == 0;
     char *xmf = f->sidecar_bytes > 0.0 ? nbep_xdmf_path(sc->output_file) : NULL;
     json_t *o = json_pack(
-        "{s:s, s:s, s:s, s:s, s:o, s:o, s:i, s:I, s:I, s:I, s:f, s:I, s:f, s:o, s:o, s:o, s:o, "
+        "{s:s, s:s, s:o, s:s, s:o, s:o, s:i, s:I, s:I, s:I, s:f, s:I, s:f, s:o, s:o, s:o, s:o, "
         "s:I, s:I, s:o, s:o}",
-        "format", CHECK_FORMAT_NAME, "version", NBEP_VERSION, "deck", sc->deck_path,
+        "format", CHECK_FORMAT_NAME, "version", NBEP_VERSION, "deck",
+        nbep_summary_json_text(sc->deck_path),
         "algorithm", sc->algorithm, "neighbors",
         predictive ? json_string(nbep_scene_neighbors_name(sc)) : json_null(), "order",
         predictive ? json_string(nbep_scene_order_name(sc)) : json_null(), "threads",
@@ -161,8 +163,9 @@ static json_t *check_object(const nbep_scene *sc, const nbep_check_facts *f,
         f->lists ? json_real(f->skin_taken) : json_null(), "pairs_quadratic",
         (json_int_t)f->pairs_quadratic, "pairs_quartic", (json_int_t)f->pairs_quartic,
         "memory_bytes", bytes(f->memory_bytes), "output",
-        json_pack("{s:s, s:o, s:I, s:I, s:o}", "file", sc->output_file, "sidecar",
-                  xmf ? json_string(xmf) : json_null(), "frames", (json_int_t)f->frames,
+        json_pack("{s:o, s:o, s:I, s:I, s:o}", "file", nbep_summary_json_text(sc->output_file),
+                  "sidecar", xmf ? nbep_summary_json_text(xmf) : json_null(), "frames",
+                  (json_int_t)f->frames,
                   "every", (json_int_t)sc->output_every, "bytes", bytes(f->output_bytes)));
     free(xmf);
     if (o && json_object_set_new(o, "study", study ? study_object(study) : json_null()) != 0) {

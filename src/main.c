@@ -78,9 +78,12 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
         return st;
     /* as nbep run would: the run's file, and the report's, against the deck and each other,
      * and (for a single run; a study's goes into a folder of its own) where the run's file
-     * goes: nbep run fails at once there (exit 2), and check passed it until 2026-11-30 */
+     * goes: nbep run fails at once there (exit 2), and check passed it until 2026-11-30. A
+     * study's runs write no output.file (their files are DIR/run-NNNN.h5): its report against
+     * the deck alone, as nbep sweep takes its --summary (until 2026-11-30 a report named as
+     * output.file was refused as "the run's file itself", which nbep sweep takes) */
     const bool study = sc.sweep_replicas > 1 || sc.sweep_n_axes > 0;
-    st = nbep_run_check_paths(cli->path, sc.output_file, cli->summary, d);
+    st = nbep_run_check_paths(cli->path, study ? NULL : sc.output_file, cli->summary, d);
     if (st == NBEP_OK && !study)
         st = nbep_run_check_output_dir(sc.output_file, d);
     if (st != NBEP_OK) {

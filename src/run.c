@@ -260,7 +260,8 @@ nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory");
     struct stat sb;
     int err = 0;
-    if (stat(output, &sb) == 0 && S_ISDIR(sb.st_mode))
+    /* lstat: the run's rename replaces a symbolic link at `output`, to a directory too */
+    if (lstat(output, &sb) == 0 && S_ISDIR(sb.st_mode))
         err = EISDIR; /* the run's rename onto it fails */
     else if (stat(dir, &sb) != 0)
         err = errno; /* ENOENT, or ENOTDIR for a file on the way */

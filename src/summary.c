@@ -166,6 +166,60 @@ static char *shorten_reals(const char *text)
     return out;
 }
 
+/* The length of the valid UTF-8 sequence at s (RFC 3629: no overlong form, no surrogate,
+ * nothing past U+10FFFF), 0 where none starts there. */
+static size_t utf8_sequence(const unsigned char *s)
+{
+    if (s[0] < 0x80)
+        return 1;
+    size_t len;
+    unsigned lo = 0x80, hi = 0xBF; /* the second byte's range */
+    if (s[0] >= 0xC2 && s[0] <= 0xDF) {
+        len = 2;
+    } else if (s[0] >= 0xE0 && s[0] <= 0xEF) {
+        len = 3;
+        lo = s[0] == 0xE0 ? 0xA0 : 0x80;
+        hi = s[0] == 0xED ? 0x9F : 0xBF;
+    } else if (s[0] >= 0xF0 && s[0] <= 0xF4) {
+        len = 4;
+        lo = s[0] == 0xF0 ? 0x90 : 0x80;
+        hi = s[0] == 0xF4 ? 0x8F : 0xBF;
+    } else {
+        return 0;
+    }
+    if (s[1] < lo || s[1] > hi)
+        return 0;
+    for (size_t k = 2; k < len; k++)
+        if (s[k] < 0x80 || s[k] > 0xBF)
+            return 0;
+    return len;
+}
+
+json_t *nbep_summary_json_text(const char *s)
+{
+    /* each byte at most the three of U+FFFD */
+    char *valid = malloc(3 * strlen(s) + 1);
+    if (!valid)
+        return NULL;
+    char *w = valid;
+    for (const unsigned char *r = (const unsigned char *)s; *r;) {
+        const size_t len = utf8_sequence(r);
+        if (len) {
+            memcpy(w, r, len);
+            w += len;
+            r += len;
+        } else {
+            memcpy(w, "\xEF\xBF\xBD", 3);
+            w += 3;
+            r++;
+        }
+    }
+    *w = '\0';
+    json_t *o = json_string(valid);
+    free(valid);
+    return o;
+}
+
 char *nbep_summary_dump_line(json_t *o)
 {
     char *dumped = json_dumps(o, DUMP_FLAGS);

@@ -721,10 +721,10 @@ static double csv_text_bytes(const char *s)
  * 2 to 1000 runs of 8 spheres and of 16 runs of 512 (inputs/sweep-restitution.deck), all ok.
  * summary.csv: the header but for the axes' keys is 341 bytes; a row but for its axis values
  * and file name 226 bytes for 8 spheres, 270 for 512 (its seconds and energies at up to 17
- * digits, its counts: 240 taken for all). summary.h5: 3.7 kB of HDF5's headers and the root attributes but for
- * the deck's text; a row's record, 8 bytes a number and 16 a string; each string in HDF5's
- * global heap, 16 bytes and its text rounded up to 8, in collections of 4 kB (20 runs took
- * 14432 bytes, as counted so; 200 runs 8 % more, 1000 runs 1 % more). */
+ * digits, its counts: 240 taken for all). summary.h5: 3.7 kB of HDF5's headers and the root
+ * attributes but for the deck's text; a row's record, 8 bytes a number and 16 a string; each
+ * string in HDF5's global heap, 16 bytes and its text rounded up to 8, in collections of 4 kB
+ * (20 runs took 14432 bytes, as counted so; 200 runs 8 % more, 1000 runs 1 % more). */
 #define TABLE_CSV_HEADER_BYTES 341.0
 #define TABLE_CSV_ROW_BYTES 240.0
 #define TABLE_H5_BYTES 3.7e3
@@ -982,7 +982,9 @@ static int mkdir_looked(const char *p, bool below)
     if (below)
         return 0;
     struct stat sb;
-    if (stat(p, &sb) == 0) {
+    /* lstat, as mkdir looks: a link there, even one to nothing, is something at p (mkdir
+     * fails with EEXIST and make_dir's stat then says what) */
+    if (lstat(p, &sb) == 0) {
         errno = EEXIST;
         return -1;
     }
@@ -1213,8 +1215,9 @@ static nbep_status write_sweep_json(const char *where, const nbep_sweep_plan *p,
      * is, whole or not at all (an older file at `where` stays when writing fails) */
     const double n = (double)p->n_runs;
     json_t *o = json_pack(
-        "{s:s, s:s, s:s, s:I, s:I, s:I, s:I, s:I, s:I, s:i, s:f, s:f, s:f, s:f}", "format",
-        "nbep-sweep-summary-1", "version", NBEP_VERSION, "dir", p->dir, "runs",
+        "{s:s, s:s, s:o, s:I, s:I, s:I, s:I, s:I, s:I, s:i, s:f, s:f, s:f, s:f}", "format",
+        "nbep-sweep-summary-1", "version", NBEP_VERSION, "dir", nbep_summary_json_text(p->dir),
+        "runs",
         (json_int_t)p->n_runs, "ok", (json_int_t)s->ok, "failed", (json_int_t)s->failed,
         "interrupted", (json_int_t)s->interrupted, "not_run", (json_int_t)s->not_run, "reused",
         (json_int_t)s->reused, "ranks", n_ranks, "wall_seconds", wall, "runs_per_minute",

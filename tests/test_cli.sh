@@ -136,6 +136,16 @@ for out in "$tmp/plain-file/run.h5" "$tmp/a-directory" "$tmp/no-such-dir/run.h5"
         "[ ! -e '$tmp/plain-file/run.h5' ] && [ ! -e '$tmp/no-such-dir' ] &&
          [ -z \"\$(ls -A '$tmp/a-directory')\" ]"
 done
+# a symbolic link to a directory at the output path is no directory in the way: the run's rename
+# replaces the link (the directory is left alone), so nbep check passes it as the run does (it
+# followed the link and refused it as "Is a directory" until 2026-11-30)
+mkdir -p "$tmp/link-target"
+ln -sfn link-target "$tmp/link.h5"
+run_nbep check "$tmp/group.deck" -o "$tmp/link.h5"
+check "output a link to a directory: nbep check exits 0 (got $rc)" "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ]"
+guard=120 run_nbep run inputs/two-spheres.deck --quiet -o "$tmp/link.h5"
+check "... and the run writes its file there (exit $rc), the link replaced" \
+    "[ $rc = 0 ] && [ -f '$tmp/link.h5' ] && [ ! -L '$tmp/link.h5' ] && [ -d '$tmp/link-target' ]"
 # the same path given in the deck rather than with -o
 sed "s|file = \"group.h5\"|file = \"$tmp/plain-file/deck.h5\"|" "$tmp/group.deck" \
     >"$tmp/bad-out.deck"
@@ -451,6 +461,17 @@ cp "$tmp/group.deck" "$tmp/self-check.deck"
 run_nbep check "$tmp/self-check.deck" --summary "$tmp/self-check.deck"
 check "check --summary DECK: exit 2, the deck unchanged (got $rc)" \
     "[ $rc = 2 ] && one_line && cmp -s '$tmp/group.deck' '$tmp/self-check.deck'"
+# a deck and an output file named in Latin-1 (bytes that are no UTF-8, which JSON text must be):
+# the report is written, each such byte U+FFFD (until 2026-11-30 jansson refused the names and
+# the check failed with "cannot write the summary to -: Cannot allocate memory", exit 1)
+latin1=$(printf 'r\351sultat')
+cp "$tmp/group.deck" "$tmp/$latin1.deck"
+run_nbep check "$tmp/$latin1.deck" -o "$tmp/$latin1.h5" --summary - --quiet
+check "check --summary of a deck and -o named in Latin-1: exit 0 (got $rc), JSON naming them with U+FFFD" \
+    "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] && python3 -c 'import json,sys; o=json.load(open(sys.argv[1], encoding=\"utf-8\"))
+t = sys.argv[2] + \"/r\\ufffdsultat\"
+assert o[\"deck\"] == t + \".deck\" and o[\"output\"][\"file\"] == t + \".h5\", o
+assert o[\"output\"][\"sidecar\"] == t + \".xmf\", o' '$tmp/stdout' '$tmp'"
 
 # ---- -o FILE takes the name as typed: quotes, spaces and backslashes are part of it (a name that
 # began with a quote was read as libconfig text: "bad value") --------------------------------------

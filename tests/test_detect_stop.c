@@ -27,6 +27,7 @@ static bool look_hook(uint64_t step, size_t row);
 #include "nbep/sim.h"
 #include "nbep_test.h"
 #include "nbep_test_scene.h"
+#include "nbep_test_signalled.h"
 #include "nbep_test_watchdog.h"
 
 /* From row signal_row of step signal_step on, the run's stop signal is raised (SIGTERM) and the
@@ -44,28 +45,11 @@ static bool look_hook(uint64_t step, size_t row)
     return true;
 }
 
-/* sc run on nt threads with test_signal as its stop signal (lowered first): its status, its
- * summary, whether a step was abandoned, and its final state in *fin; the step of its last frame
- * must be frame_step. */
+/* sc run on nt threads with test_signal as its stop signal (nbep_test_run_signalled) */
 static nbep_status run_signalled(const nbep_scene *sc, int nt, nbep_summary *sum, bool *abandoned,
                                  nbep_state *fin, uint64_t frame_step)
 {
-    atomic_store_explicit(&test_signal, 0, memory_order_relaxed);
-    nbep_diag d;
-    nbep_diag_init(&d);
-    nbep_sim_options opt = {.threads = nt, .stop_signal = &test_signal};
-    nbep_sim *sim = NULL;
-    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
-    const nbep_status st = nbep_sim_run(sim, &d);
-    assert_int_equal(d.n_errors, 0); /* a signal's line is nbep_run's to write */
-    nbep_sim_summary(sim, sum);
-    uint64_t last;
-    *abandoned = nbep_sim_abandoned(sim, &last);
-    assert_int_equal(last, frame_step);
-    assert_int_equal(nbep_state_copy(fin, nbep_sim_state(sim), &d), NBEP_OK);
-    nbep_sim_destroy(&sim);
-    nbep_diag_fini(&d);
-    return st;
+    return nbep_test_run_signalled(sc, nt, &test_signal, sum, abandoned, fin, frame_step);
 }
 
 /* A closed-box fluid at phi = 0.35 under gravity (many collisions a step, with the walls too;

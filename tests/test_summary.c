@@ -16,6 +16,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <jansson.h>
+
 #include "nbep/summary.h"
 #include "nbep_test.h"
 
@@ -368,6 +370,44 @@ static void test_a_status_or_steps_requested_nbep_never_writes_is_refused(void *
     free(json);
 }
 
+/* A path as a JSON string (nbep check's and the sweep's reports): valid UTF-8 kept as it is,
+ * each byte outside a valid sequence U+FFFD (jansson refuses text that is not UTF-8: a deck
+ * named in Latin-1 made the whole report fail as out of memory), the text after it kept. */
+static void test_a_path_of_any_bytes_is_a_json_string(void **state)
+{
+    (void)state;
+    static const char *const cases[][2] = {
+        {"run.h5", "run.h5"},
+        {"", ""},
+        {"r\xc3\xa9s/\xe6\x97\xa5/\xf0\x9f\x98\x80.h5",                 /* 2, 3 and 4 bytes */
+         "r\xc3\xa9s/\xe6\x97\xa5/\xf0\x9f\x98\x80.h5"},
+        {"r\xe9sultats/a.h5", "r\xef\xbf\xbdsultats/a.h5"},  /* Latin-1 */
+        {"a\xc0\xaf" "b", "a\xef\xbf\xbd\xef\xbf\xbd" "b"},      /* overlong '/' */
+        {"a\xed\xa0\x80" "b", "a\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd" "b"}, /* a surrogate */
+        {"a\xf4\x90\x80\x80",                                   /* past U+10FFFF */
+         "a\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd"},
+        {"a\xe6\x97", "a\xef\xbf\xbd\xef\xbf\xbd"},          /* cut short at the end */
+        {"\xc3\xa9\xc3", "\xc3\xa9\xef\xbf\xbd"},
+        {"\x7f\x80", "\x7f\xef\xbf\xbd"},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof *cases; k++) {
+        json_t *o = nbep_summary_json_text(cases[k][0]);
+        assert_non_null(o);
+        assert_string_equal(json_string_value(o), cases[k][1]);
+        /* and the line written of it reads back as JSON, the same text */
+        json_t *obj = json_pack("{s:o}", "path", o);
+        assert_non_null(obj);
+        char *line = nbep_summary_dump_line(obj);
+        assert_non_null(line);
+        json_decref(obj);
+        json_t *back = json_loads(line, 0, NULL);
+        assert_non_null(back);
+        assert_string_equal(json_string_value(json_object_get(back, "path")), cases[k][1]);
+        json_decref(back);
+        free(line);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -381,6 +421,7 @@ int main(void)
         cmocka_unit_test(test_each_status_is_its_text_and_unknown_is_null),
         cmocka_unit_test(test_an_older_summary_without_status_reads_as_unknown),
         cmocka_unit_test(test_a_status_or_steps_requested_nbep_never_writes_is_refused),
+        cmocka_unit_test(test_a_path_of_any_bytes_is_a_json_string),
     };
     return cmocka_run_group_tests_name("summary", tests, NULL, NULL);
 }

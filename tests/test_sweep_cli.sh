@@ -68,6 +68,14 @@ mkdir -p "$odd"
 run_sweep "$tmp/s.deck" -o "$odd/s.h5" --quiet --summary "$tmp/odd.json"
 check "--summary of a study in a folder named with a quote and a newline: JSON, its dir (got $rc)" \
     "[ $rc = 0 ] && [ \"\$(json '$tmp/odd.json' dir)\" = '$odd/s.sweep' ] && [ ! -e '$tmp/odd.json.partial' ]"
+# ... and one named in Latin-1 (no UTF-8, which JSON text must be): written, each such byte
+# U+FFFD (until 2026-11-30 jansson refused the name, and the sweep, its runs done, failed with
+# "cannot write the summary to ...: Cannot allocate memory", exit 1)
+latin1="$tmp/r$(printf '\351')sultat"
+run_sweep "$tmp/s.deck" -o "$latin1" --quiet --summary "$tmp/latin1.json"
+check "--summary of a study in a folder named in Latin-1: exit 0 (got $rc), its dir with U+FFFD" \
+    "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] && /usr/bin/python3 -c 'import json,sys
+assert json.load(open(sys.argv[1], encoding=\"utf-8\"))[\"dir\"] == sys.argv[2] + \"/r\\ufffdsultat.sweep\"' '$tmp/latin1.json' '$tmp'"
 
 # the table is no run: info says what it is and where to look
 timeout 30 "$nbep" info "$tmp/s.sweep/summary.h5" >/dev/null 2>"$tmp/stderr"
@@ -97,10 +105,32 @@ timeout 30 "$nbep" check "$tmp/s.deck" -o "$tmp/infile.sweep/deeper/x" >"$tmp/st
 rc=$?
 check "nbep check: a file above it: exit 2 (got $rc), one line naming the file" \
     "[ $rc = 2 ] && one_line && grep -q 'directory $tmp/infile.sweep: a file is in the way' '$tmp/stderr'"
+# a link to nothing where the folder goes: mkdir finds something there and the sweep fails; so
+# does the check, with the sweep's line (it passed until 2026-11-30: it looked through the link)
+ln -sfn nowhere "$tmp/dangling.sweep"
+run_sweep "$tmp/s.deck" -o "$tmp/dangling" --quiet
+cp "$tmp/stderr" "$tmp/sweep-stderr"
+check "a link to nothing where the sweep's directory goes: exit 2 (got $rc), one line" \
+    "[ $rc = 2 ] && one_line && grep -q 'directory $tmp/dangling.sweep: ' '$tmp/stderr'"
+timeout 30 "$nbep" check "$tmp/s.deck" -o "$tmp/dangling" >"$tmp/stdout" 2>"$tmp/stderr"
+rc=$?
+check "nbep check: the same, exit 2 (got $rc), the sweep's line" \
+    "[ $rc = 2 ] && [ ! -s '$tmp/stdout' ] && cmp -s '$tmp/stderr' '$tmp/sweep-stderr'"
 timeout 30 "$nbep" check "$tmp/s.deck" -o "$tmp/new2/deep/x" >"$tmp/stdout" 2>"$tmp/stderr"
 rc=$?
 check "nbep check: new folders on the way pass (got $rc), none made" \
     "[ $rc = 0 ] && [ ! -e '$tmp/new2' ]"
+
+# a study's report named as its deck's output.file: no run writes that file (the runs' go into
+# the folder), so nbep check takes it as nbep sweep takes its --summary there (until 2026-11-30
+# check refused it as "the run's file itself", exit 2)
+timeout 30 "$nbep" check "$tmp/s.deck" -o "$tmp/named.h5" --quiet --summary "$tmp/named.h5" \
+    >"$tmp/stdout" 2>"$tmp/stderr"
+rc=$?
+check "nbep check of a study, --summary at output.file: exit 0 (got $rc), its report there" \
+    "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] && [ \"\$(json '$tmp/named.h5' format)\" = nbep-check-1 ]"
+run_sweep "$tmp/s.deck" -o "$tmp/named.h5" --quiet --summary "$tmp/named.h5"
+check "... as nbep sweep takes it (exit $rc)" "[ $rc = 0 ] && [ \"\$(json '$tmp/named.h5' runs)\" = 4 ]"
 
 # ---- a sweep killed outright leaves no stale table -------------------------------------------
 # another study into the same directory (longer runs: other overrides, so nothing is reused),

@@ -114,6 +114,12 @@ char *nbep_summary_to_json(const nbep_summary *s);
  * when out of memory (check.c's report; the value stays the caller's). */
 struct json_t;
 char *nbep_summary_dump_line(struct json_t *o);
+/* A path (or any text) as a JSON string, a new reference: JSON text is UTF-8, and jansson
+ * refuses a string that is not, so each byte of s that is not part of a valid UTF-8 sequence
+ * becomes U+FFFD (a file name of Latin-1 bytes, "r\xe9sultats"); NULL only when out of
+ * memory. (Until 2026-11-30 such a deck or folder name made nbep check's and the sweep's JSON
+ * fail as "Cannot allocate memory", exit 1, after the sweep's runs.) */
+struct json_t *nbep_summary_json_text(const char *s);
 /* Parses a summary as nbep_summary_write_json writes it (format "nbep-summary-1", any
  * version) into *sum. false when the text is not such a summary, a key of the table is of the
  * wrong type (a status none of the texts above), or a required key is missing; *sum is then
