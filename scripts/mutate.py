@@ -1588,6 +1588,10 @@ MUTANTS = [
      ["tests/test_sweep_cli.sh"], None),
     ("resume-fields-unchecked", "src/output_resume.c", "    if (!sc->out_position || !sc->out_velocity) {",
      "    if (false) {", ["tests/test_resume.sh"], None),
+    ("overlap-warn-detect-never", "src/run.c", "    else if (!exact && s->max_overlap_rel > DETECT_OVERLAP_WARN)",
+     "    else if (false)", ["tests/test_resume.sh"], None),
+    ("overlap-warn-detect-any-overlap", "src/run.c", "#define DETECT_OVERLAP_WARN 1.0", "#define DETECT_OVERLAP_WARN 0.0",
+     ["tests/test_resume.sh"], None),
     # ---- nbep check --summary: the JSON report ----
     ("check-json-beside-human", "src/main.c",
      "FILE *human = cli->summary && cli->quiet ? NULL : json_out ? stderr : stdout;",

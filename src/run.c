@@ -177,9 +177,16 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
  * find contacts after the overlap, and the paper's step order may shadow events: they
  * overlap by design (README, Accuracy), and get no warning. */
 #define EXACT_OVERLAP_WARN 1e-6
+/* The others' overlaps grow with run.dt (speed dt / r: README, Accuracy), by design; one of
+ * more than the smaller radius means spheres went halfway through each other within a step,
+ * and those that went all the way through were never found: the collisions are the step's
+ * artefact, whatever the user's trade of accuracy for speed meant to keep. */
+#define DETECT_OVERLAP_WARN 1.0
 
-/* A warning, also with --quiet (it says the results are wrong), when an exact run ended with
- * overlaps far past round-off; the run's status and exit stay those of a run that completed. */
+/* A warning, also with --quiet (it says the results are wrong), when a run ended with overlaps
+ * past what its algorithm allows: round-off for the exact one, the smaller radius for those
+ * that find contacts after they overlap; the run's status and exit stay those of a run that
+ * completed. */
 static void warn_overlap(const nbep_scene *sc, const nbep_summary *s, const char *file)
 {
     const bool exact = strcmp(sc->algorithm, "predictive") == 0 && !sc->order_step;
@@ -190,6 +197,14 @@ static void warn_overlap(const nbep_scene *sc, const nbep_summary *s, const char
                 "round-off (below 1e-9): its collisions are not to be trusted (README, Checking "
                 "a run)\n",
                 s->max_overlap_rel, file);
+    else if (!exact && s->max_overlap_rel > DETECT_OVERLAP_WARN)
+        fprintf(stderr,
+                "nbep: warning: spheres overlapped by up to %.3g of the smaller radius "
+                "(max_overlap_rel) in %s: %s finds contacts after they overlap, and at this "
+                "run.dt spheres passed into and through each other (collisions missed); a "
+                "smaller run.dt, or the predictive algorithm, avoids it (README, Accuracy)\n",
+                s->max_overlap_rel, file,
+                sc->order_step ? "run.order = \"step\"" : sc->algorithm);
 }
 
 /* path with its directory resolved (realpath) and its last name kept, malloc'd: two names of

@@ -463,5 +463,13 @@ bin/nbep run $deck --quiet -a naive -n 20 --dt 0.01 --set spheres.[0].count=1000
 check "no warning for the file unchanged, nor for naive's overlaps by design" \
     "[ ! -s $tmp/kept.err ] && [ ! -s $tmp/coarse.err ] &&
      grep -q '\"max_overlap_rel\": 0\.[1-9]' $tmp/coarse.json"
+# naive at a run.dt where spheres pass through each other (overlaps of several radii, no
+# gravity so that the overlaps' projection adds no energy): the other warning, exit 0
+bin/nbep run $deck --quiet -a naive -n 4 --dt 0.5 --set 'physics.gravity=[0,0,0]' \
+    -o $tmp/through.h5 2>$tmp/through.err
+rc=$?
+check "naive with overlaps past a radius: exit 0 (got $rc), one warning naming naive and run.dt" \
+    "[ $rc = 0 ] && [ \$(wc -l <$tmp/through.err) = 1 ] &&
+     grep -q '^nbep: warning: spheres overlapped by up to [0-9.]* of the smaller radius .* in $tmp/through.h5: naive finds contacts after they overlap, and at this run.dt' $tmp/through.err"
 [ $fail = 0 ] && echo "resume: all passed"
 exit $fail
