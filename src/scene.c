@@ -62,9 +62,30 @@ typedef struct load {
     nbep__scene_ctx c;
     const config_setting_t *def[S_COUNT];   /* borrowed: parsed literal defaults */
     axis_at *axes;                          /* owned: per entry of the scene's sweep_axes */
+    /* borrowed, or NULL: run.algorithm's and run.neighbors' settings, which a message about
+     * what goes with the run's mode (run.order, box.periodic) may be blamed on */
+    const config_setting_t *algorithm_at, *neighbors_at;
 } load;
 
 typedef enum got { GOT, NONE, BAD } got;
+
+/* Of the n settings s (NULL ones left out) that a message is about, the one an override gave
+ * (a --set, -a, -n ..., a sweep axis, or of one of its elements), the one typed first where
+ * several were: that is what the user changed; else `otherwise`, at its deck line. */
+static const config_setting_t *first_set(const load *L, const config_setting_t *const *s,
+                                         size_t n, const config_setting_t *otherwise)
+{
+    const config_setting_t *best = otherwise;
+    uint64_t best_rank = NBEP_DIAG_UNRANKED;
+    for (size_t k = 0; k < n; k++) {
+        uint64_t r;
+        if (s[k] && nbep__scene_set_by(&L->c, s[k], &r) && r < best_rank) {
+            best = s[k];
+            best_rank = r;
+        }
+    }
+    return best;
+}
 
 static void path_join(char *out, const char *prefix, const char *name)
 {
@@ -383,22 +404,27 @@ static void parse_run(load *L, const config_setting_t *root, nbep_scene *sc, boo
         run = NULL;
     const char *algorithm;
     if (get_string(L, run, "run", S_RUN_ALGORITHM, &algorithm, &at) == GOT &&
-        one_of(L, at, "run.algorithm", algorithm, algorithm_names, N_ALGORITHMS) >= 0)
+        one_of(L, at, "run.algorithm", algorithm, algorithm_names, N_ALGORITHMS) >= 0) {
         snprintf(sc->algorithm, sizeof sc->algorithm, "%s", algorithm);
+        L->algorithm_at = at;
+    }
     const char *neighbors;
     if (get_string(L, run, "run", S_RUN_NEIGHBORS, &neighbors, &at) == GOT) {
         int k = one_of(L, at, "run.neighbors", neighbors, neighbor_names, 3);
         sc->neighbors_grid = k == 1;
         sc->neighbors_cells = k == 2;
+        L->neighbors_at = at;
     }
     /* The paper's step (run.order = "step") is a way of running the predictive algorithm's
      * rounds ("all" and "grid"); the cells mode's event loop takes one event at a time and the
-     * detection algorithms have no events, so it means nothing there: refused, not ignored. */
+     * detection algorithms have no events, so it means nothing there: refused, not ignored.
+     * Blamed on what the user typed of the three (-a naive under a deck's step order named
+     * run.order's deck line until 2026-11-30), else run.order's line. */
     const char *order;
     if (get_string(L, run, "run", S_RUN_ORDER, &order, &at) == GOT &&
         (sc->order_step = one_of(L, at, "run.order", order, order_names, 2) == 1) &&
         (strcmp(sc->algorithm, "predictive") != 0 || sc->neighbors_cells))
-        ERR(L, at,
+        ERR(L, first_set(L, (const config_setting_t *const[]){at, L->algorithm_at, L->neighbors_at}, 3, at),
             "run.order = \"step\" needs run.algorithm = \"predictive\" with run.neighbors = "
             "\"all\" or \"grid\" (got \"%s\"%s): only their rounds can react to a step's "
             "events at once",
@@ -440,11 +466,10 @@ static void parse_physics(load *L, const config_setting_t *root, nbep_scene *sc)
 static const config_setting_t *corners_at(const load *L, const config_setting_t *min,
                                           const config_setting_t *max)
 {
-    uint64_t r_min, r_max;
-    (void)nbep__scene_set_by(&L->c, min, &r_min);
-    (void)nbep__scene_set_by(&L->c, max, &r_max);
-    return r_min < r_max ? min : max;
+    const config_setting_t *const both[2] = {min, max};
+    return first_set(L, both, 2, max);
 }
+
 
 /* min < max on every axis, else one error at `at` (corners_at) naming each failing axis. */
 static bool check_corners(load *L, const config_setting_t *at, const char *prefix, nbep_vec3 lo,
@@ -561,8 +586,10 @@ static void check_periodic(load *L, const config_setting_t *at, const nbep_scene
                 "least %.4g times the largest radius (%g), three cells across",
                 "xyz"[k], len[k], 2.0 * nbep_evloop_min_periodic_side(1.0), rmax);
     }
+    /* blamed as run.order's message is (parse_run): what the user typed of the three, else
+     * box.periodic's line (--set run.neighbors="grid" named the deck's box.periodic line) */
     if (strcmp(sc->algorithm, "predictive") != 0 || sc->neighbors_grid)
-        ERR(L, at,
+        ERR(L, first_set(L, (const config_setting_t *const[]){at, L->algorithm_at, L->neighbors_at}, 3, at),
             "box.periodic needs run.algorithm = \"predictive\" with run.neighbors = \"cells\" "
             "or \"all\" (got \"%s\"%s): the other modes do not handle periodic images",
             sc->algorithm, strcmp(sc->algorithm, "predictive") == 0 ? ", \"grid\"" : "");

@@ -83,10 +83,16 @@ check "nbep check prints restitution, gravity, the TC model's settings, seed and
 
 # ---- run.order = "step" (the paper's step) only where rounds run ---------------------------------
 sed 's/threads = 1;/threads = 1; order = "step";/' "$tmp/group.deck" >"$tmp/order.deck"
-run_nbep check "$tmp/order.deck" --set 'run.neighbors="cells"'
+sed 's/threads = 1;/threads = 1; order = "step"; neighbors = "cells";/' "$tmp/group.deck" \
+    >"$tmp/order-cells.deck"
+run_nbep check "$tmp/order-cells.deck"
 check "step order in cells mode: exit 2 (got $rc)" "[ $rc = 2 ]"
-check "step order in cells mode: one line naming deck:line and the setting" \
-    "one_line && grep -q 'order.deck:1: run.order = \"step\" needs run.algorithm' $tmp/stderr"
+check "step order in cells mode, both in the deck: one line naming deck:line and the setting" \
+    "one_line && grep -q 'order-cells.deck:1: run.order = \"step\" needs run.algorithm' $tmp/stderr"
+run_nbep check "$tmp/order.deck" --set 'run.neighbors="cells"'
+check "step order in cells mode, cells typed: exit 2 (got $rc), one line naming the --set" \
+    "[ $rc = 2 ] && one_line &&
+     grep -qF -- '--set run.neighbors=\"cells\": run.order = \"step\" needs run.algorithm' $tmp/stderr"
 run_nbep check "$tmp/order.deck" --set 'run.neighbors="grid"'
 check "step order in grid mode: accepted (got $rc)" "[ $rc = 0 ]"
 
@@ -704,6 +710,20 @@ EOF
 run_nbep run "$tmp/tiny.deck" --quiet -o "$tmp/tiny.h5" --summary "$tmp/tiny.json"
 check "a subnormal initial energy: exit 0 (got $rc), the drift the largest double, not inf" \
     "[ $rc = 0 ] && grep -q '\"energy_rel_drift\": -1.7976931348623157e+308' '$tmp/tiny.json'"
+
+# ---- a mode that does not go with the deck's periodic box: blamed on what was typed ------------
+# (of run.algorithm, run.neighbors and box.periodic, the first typed; until 2026-11-30 always the
+# deck's box.periodic line, which the user had not touched)
+run_nbep check inputs/hard-sphere-fluid.deck -a naive
+check "periodic fluid with -a naive: exit 2 (got $rc), one line naming -a naive" \
+    "[ $rc = 2 ] && one_line && grep -qF -- '-a naive: box.periodic needs run.algorithm' '$tmp/stderr'"
+run_nbep check inputs/hard-sphere-fluid.deck --set 'run.neighbors="grid"'
+check "periodic fluid with grid typed: exit 2 (got $rc), one line naming the --set" \
+    "[ $rc = 2 ] && one_line &&
+     grep -qF -- '--set run.neighbors=\"grid\": box.periodic needs run.algorithm' '$tmp/stderr'"
+run_nbep check inputs/paper-box.deck --set 'run.neighbors="grid"' --set 'box.periodic=[true,true,true]'
+check "both typed: the first, run.neighbors (got $rc)" \
+    "[ $rc = 2 ] && one_line && grep -qF -- '--set run.neighbors=\"grid\": box.periodic needs' '$tmp/stderr'"
 
 # ---- the README's deck table is --help-deck's, row for row -------------------------------------
 # (README: "prints this table from the same schema the parser uses, so it cannot drift")

@@ -97,30 +97,51 @@ static void test_order_defaults_to_time_and_step_is_taken_in_all_and_grid(void *
 }
 
 /* The cells mode's event loop and the detection algorithms have no rounds to react at once
- * in: "step" there is a deck error at the setting's line, not a silent no-op. */
+ * in: "step" there is a deck error, not a silent no-op, blamed on what the user typed of
+ * run.order, run.algorithm and run.neighbors (the first typed), else run.order's deck line
+ * (until 2026-11-30 always that line, a --set of run.neighbors or -a naive under a deck's step
+ * order included). */
 static void test_step_order_is_refused_with_cells_naive_and_seminaive_and_typos(void **state)
 {
     (void)state;
     char path[256], msg[512], want[768];
     bool step;
+    const char *tail = "only their rounds can react to a step's events at once";
+    /* all three in the deck (cells after the order, on its line): that line */
+    write_deck("order-refused-deck.deck", "step\"; neighbors = \"cells", path, sizeof path);
+    assert_int_equal(load(path, NULL, 0, &step, msg, sizeof msg), NBEP_EDECK);
+    snprintf(want, sizeof want,
+             "%s:2: run.order = \"step\" needs run.algorithm = \"predictive\" with "
+             "run.neighbors = \"all\" or \"grid\" (got \"predictive\", \"cells\"): %s",
+             path, tail);
+    assert_string_equal(msg, want);
+    /* the deck's step order, the mode typed: the --set */
     write_deck("order-refused.deck", "step", path, sizeof path);
     const char *cells[] = {"run.neighbors=\"cells\""};
     assert_int_equal(load(path, cells, 1, &step, msg, sizeof msg), NBEP_EDECK);
     snprintf(want, sizeof want,
-             "%s:2: run.order = \"step\" needs run.algorithm = \"predictive\" with "
-             "run.neighbors = \"all\" or \"grid\" (got \"predictive\", \"cells\"): only their "
-             "rounds can react to a step's events at once",
-             path);
+             "--set run.neighbors=\"cells\": run.order = \"step\" needs run.algorithm = "
+             "\"predictive\" with run.neighbors = \"all\" or \"grid\" (got \"predictive\", "
+             "\"cells\"): %s",
+             tail);
     assert_string_equal(msg, want);
     for (int k = 0; k < 2; k++) {
         const char *algo[] = {k ? "run.algorithm=\"seminaive\"" : "run.algorithm=\"naive\""};
         assert_int_equal(load(path, algo, 1, &step, msg, sizeof msg), NBEP_EDECK);
         snprintf(want, sizeof want,
-                 "%s:2: run.order = \"step\" needs run.algorithm = \"predictive\" with "
-                 "run.neighbors = \"all\" or \"grid\" (got \"%s\"): only their rounds can "
-                 "react to a step's events at once",
-                 path, k ? "seminaive" : "naive");
+                 "--set %s: run.order = \"step\" needs run.algorithm = \"predictive\" with "
+                 "run.neighbors = \"all\" or \"grid\" (got \"%s\"): %s",
+                 algo[0], k ? "seminaive" : "naive", tail);
         assert_string_equal(msg, want);
+    }
+    /* both typed: the first */
+    write_deck("order-refused-none.deck", NULL, path, sizeof path);
+    const char *both[][2] = {{"run.order=\"step\"", "run.algorithm=\"naive\""},
+                             {"run.algorithm=\"naive\"", "run.order=\"step\""}};
+    for (int k = 0; k < 2; k++) {
+        assert_int_equal(load(path, both[k], 2, &step, msg, sizeof msg), NBEP_EDECK);
+        snprintf(want, sizeof want, "--set %s: run.order = \"step\" needs", both[k][0]);
+        assert_true(strncmp(msg, want, strlen(want)) == 0);
     }
     /* "time" is what every mode does anyway: accepted with cells */
     assert_int_equal(load(write_deck("order-time.deck", "time", path, sizeof path), cells, 1,
