@@ -1601,6 +1601,10 @@ MUTANTS = [
      "        ERR(L, at,\n            \"box.periodic needs", ["tests/test_cli.sh"], None),
     ("first-set-last-typed", "src/scene.c", "            best = s[k];\n            best_rank = r;",
      "            best = s[k];", ["test_order", "tests/test_cli.sh", "test_scene"], None),
+    ("region-corner-default-other", "src/scene.c", "            if (g_min == NONE)\n                out->lo = sc->box_min;",
+     "            if (g_min == NONE)\n                out->lo = sc->box_max;", ["test_scene"], None),
+    ("region-corner-missing-refused", "src/scene.c", "        if ((g_min == NONE || g_max == NONE) && sc->has_box) {",
+     "        if ((g_min == NONE || g_max == NONE) && false) {", ["test_scene"], None),
     # ---- nbep check --summary: the JSON report ----
     ("check-json-beside-human", "src/main.c",
      "FILE *human = cli->summary && cli->quiet ? NULL : json_out ? stderr : stdout;",

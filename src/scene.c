@@ -719,7 +719,23 @@ static bool parse_entry(load *L, const config_setting_t *e, const char *prefix,
         const config_setting_t *min = NULL, *max = NULL;
         got g_min = get_vec3(L, region, path, S_SPH_REGION_MIN, &out->lo, &min);
         got g_max = get_vec3(L, region, path, S_SPH_REGION_MAX, &out->hi, &max);
-        at = g_min == GOT && g_max == GOT ? corners_at(L, min, max) : NULL;
+        /* a corner left out is the box's, as a group without a region takes the whole box
+         * (SPEC: region defaults to the box): `--set spheres.[0].region.max=[...]` on a group
+         * without one was refused, "region.min is missing", until 2026-11-30 */
+        if ((g_min == NONE || g_max == NONE) && sc->has_box) {
+            if (g_min == NONE)
+                out->lo = sc->box_min;
+            if (g_max == NONE)
+                out->hi = sc->box_max;
+            g_min = g_min == NONE ? GOT : g_min;
+            g_max = g_max == NONE ? GOT : g_max;
+        } else if ((g_min == NONE || g_max == NONE) &&
+                   !config_setting_get_member(config_setting_parent(config_setting_parent(e)),
+                                              "box")) { /* (a box given but bad: said already) */
+            ERR(L, region, "%s.%s is missing, and the deck has no box to take it from", path,
+                g_min == NONE ? "min" : "max");
+        }
+        at = g_min == GOT && g_max == GOT ? corners_at(L, min, max ? max : region) : NULL;
         ok = g_min == GOT && g_max == GOT && check_corners(L, at, path, out->lo, out->hi) &&
              (!sc->has_box || check_region_meets_box(L, e, at, path, sc, out->lo, out->hi)) && ok;
         if (ok && sc->has_box && out->place == NBEP__PLACE_LATTICE) {

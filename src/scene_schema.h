@@ -115,9 +115,9 @@ enum {
       "each sphere of a group moves at this speed in a random direction")                          \
     X(SPH_REGION, "spheres.[].region", GROUP, F_GROUP, NULL, "the box",                            \
       "where a group is placed")                                                                   \
-    X(SPH_REGION_MIN, "spheres.[].region.min", VEC3, F_REQUIRED, NULL, "required",                 \
+    X(SPH_REGION_MIN, "spheres.[].region.min", VEC3, 0, NULL, "box.min",                           \
       "lower corner")                                                                              \
-    X(SPH_REGION_MAX, "spheres.[].region.max", VEC3, F_REQUIRED, NULL, "required",                 \
+    X(SPH_REGION_MAX, "spheres.[].region.max", VEC3, 0, NULL, "box.max",                           \
       "upper corner, above min on every axis by " SCALE_RANGE)                                     \
     X(OUTPUT, "output", GROUP, 0, NULL, "-", "output")                                             \
     X(OUTPUT_FILE, "output.file", STRING, 0, NULL, "the deck's name with .h5",                     \

@@ -400,6 +400,45 @@ static void test_values_out_of_range_are_all_reported_in_one_pass(void **state)
 #undef R
 }
 
+/* A region's corner left out is the box's, as a group without a region takes the whole box
+ * (SPEC: region defaults to the box; until 2026-11-30 "region.min is missing"): a lattice of
+ * 8 in the box's lower half along x (max given) and one in its upper half (min given) fill
+ * their halves as the same regions written out in full do, to the bit. */
+static void test_a_regions_missing_corner_is_the_boxs(void **state)
+{
+    fixture *f = *state;
+    char buf[256], full[256];
+    const char *half = write_deck("scene_half_region.deck",
+                                  "box: { min = [0.0, 0.0, 0.0]; max = [2.0, 1.0, 1.0]; };\n"
+                                  "spheres = (\n"
+                                  "  { count = 8; radius = 0.1; mass = 1.0; place = \"lattice\";\n"
+                                  "    region = { max = [1.0, 1.0, 1.0]; }; },\n"
+                                  "  { count = 8; radius = 0.1; mass = 1.0; place = \"lattice\";\n"
+                                  "    region = { min = [1.0, 0.0, 0.0]; }; }\n"
+                                  ");\n",
+                                  buf, sizeof buf);
+    LOAD_OK(f, half);
+    nbep_state a = f->sc.state;
+    f->sc.state = (nbep_state){0};
+    nbep_scene_fini(&f->sc);
+    const char *whole = write_deck("scene_full_region.deck",
+                                   "box: { min = [0.0, 0.0, 0.0]; max = [2.0, 1.0, 1.0]; };\n"
+                                   "spheres = (\n"
+                                   "  { count = 8; radius = 0.1; mass = 1.0; place = \"lattice\";\n"
+                                   "    region = { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; }; },\n"
+                                   "  { count = 8; radius = 0.1; mass = 1.0; place = \"lattice\";\n"
+                                   "    region = { min = [1.0, 0.0, 0.0]; max = [2.0, 1.0, 1.0]; }; }\n"
+                                   ");\n",
+                                   full, sizeof full);
+    LOAD_OK(f, whole);
+    assert_int_equal(a.n, 16);
+    assert_int_equal(f->sc.state.n, 16);
+    assert_memory_equal(a.pos, f->sc.state.pos, 16 * sizeof *a.pos);
+    for (size_t i = 0; i < 16; i++) /* and each half holds its own */
+        assert_true(i < 8 ? a.pos[i].x < 1.0 : a.pos[i].x > 1.0);
+    nbep_state_fini(&a);
+}
+
 static void test_sphere_entries_must_be_one_sphere_or_one_group(void **state)
 {
     fixture *f = *state;
@@ -415,7 +454,8 @@ static void test_sphere_entries_must_be_one_sphere_or_one_group(void **state)
                   "(got \"hexagonal\")",
                 E "8: spheres.[4].region.min must be < spheres.[4].region.max on every axis "
                   "(got y: 0 >= -1)",
-                E "9: spheres.[5].radius is missing", E "9: spheres.[5].region.max is missing",
+                E "9: spheres.[5].radius is missing",
+                E "9: spheres.[5].region.max is missing, and the deck has no box to take it from",
                 E "10: spheres.[6] must be a group { ... } (got 42)");
 #undef E
 }
@@ -2083,6 +2123,7 @@ int main(void)
         T(test_numbers_beyond_double_range_are_not_finite),
         T(test_values_out_of_range_are_all_reported_in_one_pass),
         T(test_threads_take_up_to_their_limit_and_no_more),
+        T(test_a_regions_missing_corner_is_the_boxs),
         T(test_sphere_entries_must_be_one_sphere_or_one_group),
         T(test_a_region_outside_the_box_is_an_error),
         T(test_subnormal_normals_and_vectors_are_scaled_by_division),
