@@ -341,7 +341,10 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
                       "nbep: %s has positions and velocities in its frames but the deck asks "
                       "for %s (output.fields); resume with the deck (and --set options) that "
                       "made it",
-                      path, sc->out_position ? "positions only" : sc->out_velocity ? "velocities only" : "neither");
+                      path,
+                      sc->out_position   ? "positions only"
+                      : sc->out_velocity ? "velocities only"
+                                         : "neither");
         st = NBEP_EDECK;
         goto fail;
     }

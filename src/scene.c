@@ -87,6 +87,14 @@ static const config_setting_t *first_set(const load *L, const config_setting_t *
     return best;
 }
 
+/* What a message that setting `s` needs another mode is blamed on: of s, run.algorithm and
+ * run.neighbors, the first typed (first_set), else s at its deck line. */
+static const config_setting_t *mode_at(const load *L, const config_setting_t *s)
+{
+    const config_setting_t *const three[3] = {s, L->algorithm_at, L->neighbors_at};
+    return first_set(L, three, 3, s);
+}
+
 static void path_join(char *out, const char *prefix, const char *name)
 {
     cut_printf(out, PATH_LEN, "%s%s%s", prefix, *prefix ? "." : "", name);
@@ -424,7 +432,7 @@ static void parse_run(load *L, const config_setting_t *root, nbep_scene *sc, boo
     if (get_string(L, run, "run", S_RUN_ORDER, &order, &at) == GOT &&
         (sc->order_step = one_of(L, at, "run.order", order, order_names, 2) == 1) &&
         (strcmp(sc->algorithm, "predictive") != 0 || sc->neighbors_cells))
-        ERR(L, first_set(L, (const config_setting_t *const[]){at, L->algorithm_at, L->neighbors_at}, 3, at),
+        ERR(L, mode_at(L, at),
             "run.order = \"step\" needs run.algorithm = \"predictive\" with run.neighbors = "
             "\"all\" or \"grid\" (got \"%s\"%s): only their rounds can react to a step's "
             "events at once",
@@ -469,7 +477,6 @@ static const config_setting_t *corners_at(const load *L, const config_setting_t 
     const config_setting_t *const both[2] = {min, max};
     return first_set(L, both, 2, max);
 }
-
 
 /* min < max on every axis, else one error at `at` (corners_at) naming each failing axis. */
 static bool check_corners(load *L, const config_setting_t *at, const char *prefix, nbep_vec3 lo,
@@ -589,7 +596,7 @@ static void check_periodic(load *L, const config_setting_t *at, const nbep_scene
     /* blamed as run.order's message is (parse_run): what the user typed of the three, else
      * box.periodic's line (--set run.neighbors="grid" named the deck's box.periodic line) */
     if (strcmp(sc->algorithm, "predictive") != 0 || sc->neighbors_grid)
-        ERR(L, first_set(L, (const config_setting_t *const[]){at, L->algorithm_at, L->neighbors_at}, 3, at),
+        ERR(L, mode_at(L, at),
             "box.periodic needs run.algorithm = \"predictive\" with run.neighbors = \"cells\" "
             "or \"all\" (got \"%s\"%s): the other modes do not handle periodic images",
             sc->algorithm, strcmp(sc->algorithm, "predictive") == 0 ? ", \"grid\"" : "");

@@ -403,8 +403,8 @@ nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides
 void nbep_sweep_check_print(FILE *f, const nbep_sweep_check_report *r)
 {
     fprintf(f, "sweep:           %zu run%s (%llu replica%s x %zu combination%s) into %s/\n",
-            r->n_runs, r->n_runs == 1 ? "" : "s", (unsigned long long)r->replicas, r->replicas == 1 ? "" : "s", r->n_combos,
-            r->n_combos == 1 ? "" : "s", r->dir);
+            r->n_runs, r->n_runs == 1 ? "" : "s", (unsigned long long)r->replicas,
+            r->replicas == 1 ? "" : "s", r->n_combos, r->n_combos == 1 ? "" : "s", r->dir);
     char size[NBEP_BYTES_TEXT_MAX];
     if (r->out_of_time)
         fprintf(f,
@@ -1247,7 +1247,8 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
                 "nbep sweep: %zu run%s on %d rank%s in %.3g s (%zu ran to %s end: %s "
                 "runs/min): %zu ok (%zu reused), %zu failed, %zu interrupted, %zu not run; "
                 "%s/summary.csv\n",
-                p->n_runs, p->n_runs == 1 ? "" : "s", n_ranks, n_ranks == 1 ? "" : "s", wall, s.ended,
+                p->n_runs, p->n_runs == 1 ? "" : "s", n_ranks, n_ranks == 1 ? "" : "s", wall,
+                s.ended,
                 s.ended == 1 ? "its" : "their", pace_text, s.ok, s.reused, s.failed,
                 s.interrupted, s.not_run, p->dir);
     }
@@ -1559,7 +1560,8 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
         if (rank == 0 && !cli->quiet)
             fprintf(stderr, "nbep sweep: %s: %zu run%s (%" PRIu64 " replica%s x %zu "
                             "combination%s) on %d rank%s into %s/\n",
-                    p.deck_path, p.n_runs, p.n_runs == 1 ? "" : "s", p.replicas, p.replicas == 1 ? "" : "s", p.n_combos,
+                    p.deck_path, p.n_runs, p.n_runs == 1 ? "" : "s", p.replicas,
+                    p.replicas == 1 ? "" : "s", p.n_combos,
                     p.n_combos == 1 ? "" : "s", size, size == 1 ? "" : "s", p.dir);
         nbep_sweep_exec ex = {.rank = rank, .n_ranks = size, .stop_signal = stop_signal,
                               .quiet = cli->quiet};
