@@ -77,11 +77,14 @@ all: bin/nbep
 $(BUILD) $(BUILD)/tests $(BUILD)/bench bin:
 	@mkdir -p $@
 
-# Regenerated only when its text changes, so objects do not rebuild needlessly.
+# Regenerated only when its text changes, so objects do not rebuild needlessly. The commit gets
+# "-modified" when tracked files differ from it (a build of changed sources: --version and the
+# run file's build_commit say so, where they named the commit alone until 2026-11-30).
 $(BUILD_INFO): FORCE | $(BUILD)
-	@printf '#define NBEP_VERSION "%s"\n#define NBEP_BUILD_FLAGS "%s"\n#define NBEP_BUILD_COMMIT "%s"\n' \
-	  '$(VERSION)' '$(strip $(CC) $(OPT) $(CFLAGS)) OMP=$(OMP) MPI=$(MPI)' \
-	  "$$(git rev-parse --short HEAD 2>/dev/null || echo unknown)" > $@.tmp
+	@c=$$(git rev-parse --short HEAD 2>/dev/null) && \
+	  { git diff --quiet HEAD -- 2>/dev/null || c=$$c-modified; } || c=unknown; \
+	printf '#define NBEP_VERSION "%s"\n#define NBEP_BUILD_FLAGS "%s"\n#define NBEP_BUILD_COMMIT "%s"\n' \
+	  '$(VERSION)' '$(strip $(CC) $(OPT) $(CFLAGS)) OMP=$(OMP) MPI=$(MPI)' "$$c" > $@.tmp
 	@cmp -s $@.tmp $@ && rm -f $@.tmp || mv $@.tmp $@
 FORCE:
 

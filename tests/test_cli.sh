@@ -725,6 +725,15 @@ run_nbep check inputs/paper-box.deck --set 'run.neighbors="grid"' --set 'box.per
 check "both typed: the first, run.neighbors (got $rc)" \
     "[ $rc = 2 ] && one_line && grep -qF -- '--set run.neighbors=\"grid\": box.periodic needs' '$tmp/stderr'"
 
+# ---- --version names the commit, "-modified" where the tracked sources differ from it ----------
+# (make check builds bin/nbep first, so it was built from the tree as it is; outside a git
+# checkout, "unknown")
+if head=$(git rev-parse --short HEAD 2>/dev/null); then
+    git diff --quiet HEAD -- 2>/dev/null && want=$head || want=$head-modified
+    check "nbep --version names commit $want" \
+        "\"$nbep\" --version | grep -q ', commit $want)\$'"
+fi
+
 # ---- the README's deck table is --help-deck's, row for row -------------------------------------
 # (README: "prints this table from the same schema the parser uses, so it cannot drift")
 "$nbep" --help-deck | grep '^|' >"$tmp/help-deck.md"
