@@ -214,8 +214,7 @@ static char *canonical(const char *path)
 {
     const char *slash = strrchr(path, '/');
     const char *base = slash ? slash + 1 : path;
-    /* its directory: "." for a bare name, "/" for one in the root */
-    char *dir = slash ? strndup(path, slash == path ? 1 : (size_t)(slash - path)) : strdup(".");
+    char *dir = nbep_path_dir(path);
     if (!dir)
         return NULL;
     char *real = realpath(dir, NULL);
@@ -268,9 +267,7 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
 
 nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
 {
-    const char *slash = strrchr(output, '/');
-    char *dir = slash ? strndup(output, slash == output ? 1 : (size_t)(slash - output))
-                      : strdup(".");
+    char *dir = nbep_path_dir(output);
     if (!dir)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory");
     struct stat sb;

@@ -990,8 +990,7 @@ static int mkdir_looked(const char *p, bool below)
     }
     if (errno != ENOENT)
         return -1;
-    const char *slash = strrchr(p, '/');
-    char *parent = slash ? strndup(p, slash == p ? 1 : (size_t)(slash - p)) : strdup(".");
+    char *parent = nbep_path_dir(p);
     if (!parent) {
         errno = ENOMEM;
         return -1;

@@ -48,6 +48,12 @@ char *nbep_partial_path(const char *path)
     return p;
 }
 
+char *nbep_path_dir(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    return slash ? strndup(path, slash == path ? 1 : (size_t)(slash - path)) : strdup(".");
+}
+
 const char *nbep_format_bytes(double bytes, char buf[NBEP_BYTES_TEXT_MAX])
 {
     static const char *const unit[] = {"B", "kB", "MB", "GB", "TB", "PB", "EB"};

@@ -9,6 +9,7 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include <stdlib.h>
 
 #include "nbep/compiler.h"
 #include "nbep_test.h"
@@ -57,12 +58,27 @@ static void test_what_is_not_a_size_is_still_printed(void **state)
     assert_bytes(-2048.0, "-2.05 kB");
 }
 
+/* The directory of a path, as the run's and the sweep's path checks take it. */
+static void test_a_paths_directory(void **state)
+{
+    (void)state;
+    const char *cases[][2] = {{"a/b/c.h5", "a/b"}, {"c.h5", "."}, {"/c.h5", "/"},
+                              {"/x/y", "/x"}, {"d/", "d"}};
+    for (size_t k = 0; k < sizeof cases / sizeof *cases; k++) {
+        char *dir = nbep_path_dir(cases[k][0]);
+        assert_non_null(dir);
+        assert_string_equal(dir, cases[k][1]);
+        free(dir);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_sizes_read_in_decimal_units_to_three_figures),
         cmocka_unit_test(test_a_figure_that_rounds_to_1000_takes_the_next_unit),
         cmocka_unit_test(test_what_is_not_a_size_is_still_printed),
+        cmocka_unit_test(test_a_paths_directory),
     };
     return cmocka_run_group_tests_name("util", tests, NULL, NULL);
 }

@@ -60,6 +60,10 @@ double nbep_now(void);
  * file at path nor removes an older one (the run's file, its summary, a sweep's tables). */
 char *nbep_partial_path(const char *path);
 
+/* The directory part of path, malloc'd: "." for a bare name, "/" for a name in the root
+ * ("a/b/c.h5": "a/b"); NULL without memory. */
+char *nbep_path_dir(const char *path);
+
 /* A byte count as people read it (`nbep check`'s memory and output, the sweep's, the errors
  * of a scene too large): 3 significant figures in decimal units, B, kB, MB, GB, TB, PB and EB
  * (powers of 1000, as disks and `df -H` count), the unit chosen so that the figure is below
