@@ -1647,7 +1647,7 @@ MUTANTS = [
      "        if (0)\n            break; /* Ctrl-C", ["tests/test_signals.sh"], None),
     # no pace yet: "ETA -", not "ETA 0 s" with every step to go
     ("progress-eta-zero-without-rate", "src/sim.c",
-     "\"%s\", at >= (double)sim->step_end ? \"0 s\" : \"-\");", "\"%s\", \"0 s\");",
+     "rate > 0.0 || to_go <= 0.0, eta)", "true, eta)",
      ["tests/test_signals.sh"], None),
 ]
 

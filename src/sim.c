@@ -377,6 +377,14 @@ static void progress_print(nbep_sim *sim, const char *text, bool last)
     }
 }
 
+/* The ETA of a line into buf: `seconds` to go, or "-" where there is no pace yet to go by
+ * (known false: nothing done, which said "ETA 0 s" with every step to go). */
+static const char *eta_text(double seconds, bool known, char buf[40])
+{
+    snprintf(buf, 40, known ? "%.0f s" : "-", seconds);
+    return buf;
+}
+
 /* Whether a progress line is due now (a last one always is); if so, its time is now. */
 static bool progress_due(nbep_sim *sim, double now, bool last)
 {
@@ -414,20 +422,15 @@ static void progress_at(nbep_sim *sim, double at, bool last)
     /* no rate yet (nothing done: a run stopped during its first step) gives no ETA, "ETA -",
      * not "ETA 0 s" for a run with all its steps to go */
     char where[48], eta[40], line[200];
-    if (rate > 0.0)
-        snprintf(eta, sizeof eta, "%.0f s", ((double)sim->step_end - at) / rate);
-    else
-        snprintf(eta, sizeof eta, "%s", at >= (double)sim->step_end ? "0 s" : "-");
+    const double to_go = (double)sim->step_end - at;
     if (at == floor(at))
         snprintf(where, sizeof where, "%llu", (unsigned long long)at);
     else
         snprintf(where, sizeof where, "%.2f", at);
-    if (sim->tty)
-        snprintf(line, sizeof line, "step %s/%llu  %5.1f%%  %.4g steps/s  ETA %s", where,
-                 (unsigned long long)sim->step_end, pct, rate, eta);
-    else
-        snprintf(line, sizeof line, "step %s/%llu  %.1f%%  %.4g steps/s  ETA %s", where,
-                 (unsigned long long)sim->step_end, pct, rate, eta);
+    /* a live line keeps its columns (the percentage in 5 places), a log line has no need */
+    snprintf(line, sizeof line, "step %s/%llu  %*.1f%%  %.4g steps/s  ETA %s", where,
+             (unsigned long long)sim->step_end, sim->tty ? 5 : 0, pct, rate,
+             eta_text(rate > 0.0 ? to_go / rate : 0.0, rate > 0.0 || to_go <= 0.0, eta));
     progress_print(sim, line, last);
 }
 
@@ -459,13 +462,8 @@ void nbep__sim_progress_setup(nbep_sim *sim, double part)
     const double el = now - sim->t_start;
     part = part > 0.0 ? fmin(part, 0.999) : 0.0; /* "%.1f": never 100 % before they are made */
     char eta[40], line[96];
-    if (part > 0.0)
-        snprintf(eta, sizeof eta, "%.0f s", el * (1.0 - part) / part);
-    else
-        snprintf(eta, sizeof eta, "-"); /* nothing made yet: no pace to go by */
-    snprintf(line, sizeof line, sim->tty ? "first predictions %5.1f%%  ETA %s"
-                                         : "first predictions %.1f%%  ETA %s",
-             100.0 * part, eta);
+    snprintf(line, sizeof line, "first predictions %*.1f%%  ETA %s", sim->tty ? 5 : 0,
+             100.0 * part, eta_text(part > 0.0 ? el * (1.0 - part) / part : 0.0, part > 0.0, eta));
     progress_print(sim, line, false);
 }
 
