@@ -110,10 +110,10 @@ static void split_rows(detect_ctx *ctx, size_t n, size_t n_planes, int nt)
         l->row_lo = i;
         l->cost = 0;
         double goal = total * (double)(t + 1) / (double)nt;
-        while (i < n && (t == nt - 1 || acc < goal)) {
-            acc += (double)row_cost(ctx->use_bvh, n, n_planes, i);
-            l->cost += row_cost(ctx->use_bvh, n, n_planes, i);
-            i++;
+        for (; i < n && (t == nt - 1 || acc < goal); i++) {
+            const uint64_t c = row_cost(ctx->use_bvh, n, n_planes, i);
+            acc += (double)c;
+            l->cost += c;
         }
         l->row_hi = i;
     }
