@@ -1264,6 +1264,15 @@ MUTANTS = [
      ["test_output_xdmf", "test_output"], None),
     ("ui-xdmf-scalar-dims-off-by-one", "src/output_xdmf.c", "        n, h5, name);", "        n + 1, h5, name);",
      ["test_output_xdmf", "test_output"], None),
+    # ---- a progress line's time to go (nbep_format_duration) ----
+    ("eta-100-s", "src/util.c", "    if (seconds < 99.5)\n", "    if (seconds < 100.0)\n",
+     ["test_util"], None),
+    ("eta-hours-whole", "src/util.c", "\"%.1f h\", seconds / 3600.0", "\"%.0f h\", seconds / 3600.0",
+     ["test_util"], None),
+    ("eta-days-unbounded", "src/util.c", "    else if (seconds < 999.5 * 86400.0)",
+     "    else if (seconds < INFINITY)", ["test_util"], None),
+    ("eta-negative-printed", "src/util.c", "seconds > 0.0 ? seconds : 0.0", "seconds",
+     ["test_util"], None),
     # ---- sizes as printed (nbep_format_bytes) and what nbep check counts of a run's output ----
     ("size-binary-units", "src/util.c", "        bytes /= 1000.0;", "        bytes /= 1024.0;",
      ["test_util"], None),

@@ -379,10 +379,9 @@ static void progress_print(nbep_sim *sim, const char *text, bool last)
 
 /* The ETA of a line into buf: `seconds` to go, or "-" where there is no pace yet to go by
  * (known false: nothing done, which said "ETA 0 s" with every step to go). */
-static const char *eta_text(double seconds, bool known, char buf[40])
+static const char *eta_text(double seconds, bool known, char buf[NBEP_DURATION_TEXT_MAX])
 {
-    snprintf(buf, 40, known ? "%.0f s" : "-", seconds);
-    return buf;
+    return known ? nbep_format_duration(seconds, buf) : strcpy(buf, "-");
 }
 
 /* Whether a progress line is due now (a last one always is); if so, its time is now. */
@@ -421,7 +420,7 @@ static void progress_at(nbep_sim *sim, double at, bool last)
     double pct = sim->step_end ? 100.0 * at / (double)sim->step_end : 100.0;
     /* no rate yet (nothing done: a run stopped during its first step) gives no ETA, "ETA -",
      * not "ETA 0 s" for a run with all its steps to go */
-    char where[48], eta[40], line[200];
+    char where[48], eta[NBEP_DURATION_TEXT_MAX], line[200];
     const double to_go = (double)sim->step_end - at;
     if (at == floor(at))
         snprintf(where, sizeof where, "%llu", (unsigned long long)at);
@@ -461,7 +460,7 @@ void nbep__sim_progress_setup(nbep_sim *sim, double part)
     /* the run's clock started before them (nbep_sim_run; nbep__sim_setup_done restarts it) */
     const double el = now - sim->t_start;
     part = part > 0.0 ? fmin(part, 0.999) : 0.0; /* "%.1f": never 100 % before they are made */
-    char eta[40], line[96];
+    char eta[NBEP_DURATION_TEXT_MAX], line[96];
     snprintf(line, sizeof line, "first predictions %*.1f%%  ETA %s", sim->tty ? 5 : 0,
              100.0 * part, eta_text(part > 0.0 ? el * (1.0 - part) / part : 0.0, part > 0.0, eta));
     progress_print(sim, line, false);

@@ -68,6 +68,23 @@ const char *nbep_format_bytes(double bytes, char buf[NBEP_BYTES_TEXT_MAX])
     return buf;
 }
 
+const char *nbep_format_duration(double seconds, char buf[NBEP_DURATION_TEXT_MAX])
+{
+    /* each bound is where the rounded figure would print as the next unit's 100 (1000 days);
+     * a NaN fails every test and takes the last line */
+    if (seconds < 99.5)
+        snprintf(buf, NBEP_DURATION_TEXT_MAX, "%.0f s", seconds > 0.0 ? seconds : 0.0);
+    else if (seconds < 99.5 * 60.0)
+        snprintf(buf, NBEP_DURATION_TEXT_MAX, "%.0f min", seconds / 60.0);
+    else if (seconds < 99.95 * 3600.0)
+        snprintf(buf, NBEP_DURATION_TEXT_MAX, "%.1f h", seconds / 3600.0);
+    else if (seconds < 999.5 * 86400.0)
+        snprintf(buf, NBEP_DURATION_TEXT_MAX, "%.0f days", seconds / 86400.0);
+    else
+        snprintf(buf, NBEP_DURATION_TEXT_MAX, "over 1000 days");
+    return buf;
+}
+
 double nbep_now(void)
 {
     struct timespec ts;

@@ -241,7 +241,7 @@ if command -v script >/dev/null; then
             for _ in \$(seq 300); do [ -s $out ] && break; sleep 0.1; done; sleep 2;
             kill -TERM \$p; wait \$p" "$tmp/typescript-$mode" >/dev/null 2>&1
         check "$mode: on a terminal, the progress shows a step of minutes as it goes (step 0.NN/3)" \
-            "tr '\r' '\n' < '$tmp/typescript-$mode' | grep -Eq '^step 0\.[0-9]{2}/3 +[0-9.]+% +[0-9.e+-]+ steps/s +ETA [0-9]+ s'"
+            "tr '\r' '\n' < '$tmp/typescript-$mode' | grep -Eq '^step 0\.[0-9]{2}/3 +[0-9.]+% +[0-9.e+-]+ steps/s +ETA [0-9.]+ (s|min|h|days)'"
     done
     # all-pairs mode's first predictions (65536 spheres: n^2/2 pair tests, a minute on one
     # core) show the part made on the live line, `first predictions  12.5%  ETA 40 s` (until
@@ -253,7 +253,7 @@ if command -v script >/dev/null; then
         for _ in \$(seq 300); do [ -s $out ] && break; sleep 0.1; done; sleep 1;
         kill -TERM \$p; wait \$p" "$tmp/typescript-setup" >/dev/null 2>&1
     check "on a terminal, the first predictions show their part made (first predictions NN.N%)" \
-        "tr '\r' '\n' < '$tmp/typescript-setup' | grep -Eq '^first predictions +[0-9.]+%  ETA [0-9]+ s'"
+        "tr '\r' '\n' < '$tmp/typescript-setup' | grep -Eq '^first predictions +[0-9.]+%  ETA [0-9.]+ (s|min|h|days)'"
     check "a SIGTERM among them ends the live line with step 0's, the end lines on their own" \
         "awk '/first predictions/ { n = split(\$0, seg, \"\\r\"); while (n > 1 && seg[n] == \"\") n--;
               ok = seg[n] ~ /^step 0\/1000 /; getline; ok = ok && /^nbep: stopped after 0 steps/ }

@@ -1,7 +1,7 @@
 /* Tests of the shared helpers (compiler.h, util.c): the text of a byte count, which every size
  * nbep prints goes through (nbep check's memory and output lines printed "8.61e+04 MB" until
  * 2026-11-30): 3 significant figures in decimal units, the unit the one that keeps the rounded
- * figure below 1000. */
+ * figure below 1000; the text of a progress line's time to go; a path's directory. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -58,6 +58,45 @@ static void test_what_is_not_a_size_is_still_printed(void **state)
     assert_bytes(-2048.0, "-2.05 kB");
 }
 
+static void assert_duration(double seconds, const char *expected)
+{
+    char buf[NBEP_DURATION_TEXT_MAX];
+    const char *got = nbep_format_duration(seconds, buf);
+    assert_ptr_equal(got, buf);
+    assert_string_equal(got, expected);
+}
+
+/* A progress line's ETA: the unit that keeps the rounded figure below 100 (days below 1000),
+ * each unit taking over where the one before would print 100. */
+static void test_a_time_to_go_reads_in_the_unit_that_keeps_it_short(void **state)
+{
+    (void)state;
+    assert_duration(0.0, "0 s");
+    assert_duration(42.4, "42 s");
+    assert_duration(99.4, "99 s");
+    assert_duration(99.5, "2 min"); /* not "100 s" */
+    assert_duration(3100.0, "52 min");
+    assert_duration(99.4 * 60.0, "99 min");
+    assert_duration(99.5 * 60.0, "1.7 h"); /* not "100 min" */
+    assert_duration(27.3 * 3600.0, "27.3 h");
+    assert_duration(99.94 * 3600.0, "99.9 h");
+    assert_duration(99.95 * 3600.0, "4 days"); /* not "100.0 h" */
+    assert_duration(12.0 * 86400.0, "12 days");
+    assert_duration(999.4 * 86400.0, "999 days");
+    assert_duration(999.5 * 86400.0, "over 1000 days");
+    assert_duration(5.4e14, "over 1000 days"); /* a run at 1e-12 steps a second */
+}
+
+/* What is not a time to go still prints as words, never "nan s", "inf s" or "-0 s". */
+static void test_what_is_not_a_time_to_go_is_still_words(void **state)
+{
+    (void)state;
+    assert_duration(INFINITY, "over 1000 days");
+    assert_duration(NAN, "over 1000 days");
+    assert_duration(-0.0, "0 s");
+    assert_duration(-3.0, "0 s");
+}
+
 /* The directory of a path, as the run's and the sweep's path checks take it. */
 static void test_a_paths_directory(void **state)
 {
@@ -78,6 +117,8 @@ int main(void)
         cmocka_unit_test(test_sizes_read_in_decimal_units_to_three_figures),
         cmocka_unit_test(test_a_figure_that_rounds_to_1000_takes_the_next_unit),
         cmocka_unit_test(test_what_is_not_a_size_is_still_printed),
+        cmocka_unit_test(test_a_time_to_go_reads_in_the_unit_that_keeps_it_short),
+        cmocka_unit_test(test_what_is_not_a_time_to_go_is_still_words),
         cmocka_unit_test(test_a_paths_directory),
     };
     return cmocka_run_group_tests_name("util", tests, NULL, NULL);

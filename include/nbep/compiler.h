@@ -72,6 +72,13 @@ char *nbep_path_dir(const char *path);
 #define NBEP_BYTES_TEXT_MAX 24
 const char *nbep_format_bytes(double bytes, char buf[NBEP_BYTES_TEXT_MAX]);
 
+/* A time to go as people read it, the unit chosen so that the figure stays below 100 (days
+ * below 1000): "42 s", "52 min", "27.3 h", "12 days", and "over 1000 days" past that or for a
+ * NaN (a run stuck at 1e-12 steps a second said "ETA 540260248143089 s" until 2026-11-30).
+ * Writes buf and returns it. */
+#define NBEP_DURATION_TEXT_MAX 24
+const char *nbep_format_duration(double seconds, char buf[NBEP_DURATION_TEXT_MAX]);
+
 /* The process's peak resident memory in bytes since the last nbep_peak_rss_reset (Linux:
  * VmHWM of /proc/self/status, which writing 5 to /proc/self/clear_refs resets), else since it
  * started (getrusage's ru_maxrss); 0 when neither can be read. A sweep's rank runs one run
