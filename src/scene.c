@@ -40,9 +40,9 @@ static const schema_entry *const schema = nbep__scene_schema;
 static const char *const algorithm_names[] = {"naive", "seminaive", "predictive"};
 static const char *const neighbor_names[] = {"all", "grid", "cells"};
 static const char *const order_names[] = {"time", "step"};
-static const char *const place_names[] = {"random", "lattice"};
+static const char *const place_names[] = {"random", "lattice", "fcc"};
 static const char *const field_names[] = {"position", "velocity"};
-enum { N_ALGORITHMS = 3, N_PLACES = 2, N_FIELDS = 2 };
+enum { N_ALGORITHMS = 3, N_PLACES = 3, N_FIELDS = 2 };
 
 /* Spheres' own arrays plus what the algorithms allocate per sphere (event slot, reacted tag,
  * BVH leaf, frame buffers): a deliberately round upper estimate for the memory check. */
@@ -717,7 +717,7 @@ static bool parse_entry(load *L, const config_setting_t *e, const char *prefix,
     int k = -1;
     if (get_string(L, e, prefix, S_SPH_PLACE, &place, &at) == GOT)
         k = one_of(L, at, path, place, place_names, N_PLACES);
-    out->place = k == 1 ? NBEP__PLACE_LATTICE : NBEP__PLACE_RANDOM;
+    out->place = k == 2 ? NBEP__PLACE_FCC : k == 1 ? NBEP__PLACE_LATTICE : NBEP__PLACE_RANDOM;
     ok = k >= 0 && ok;
     ok = get_float(L, e, prefix, S_SPH_SPEED, &out->speed) == GOT && ok;
     g = get_aggregate(L, e, prefix, S_SPH_REGION, &region);
@@ -745,7 +745,7 @@ static bool parse_entry(load *L, const config_setting_t *e, const char *prefix,
         at = g_min == GOT && g_max == GOT ? corners_at(L, min, max ? max : region) : NULL;
         ok = g_min == GOT && g_max == GOT && check_corners(L, at, path, out->lo, out->hi) &&
              (!sc->has_box || check_region_meets_box(L, e, at, path, sc, out->lo, out->hi)) && ok;
-        if (ok && sc->has_box && out->place == NBEP__PLACE_LATTICE) {
+        if (ok && sc->has_box && nbep__place_is_lattice(out->place)) {
             /* a lattice fills the part of its region inside the box, as random placement
              * keeps inside it (until 2026-11-30 the lattice filled the whole region and every
              * sphere outside was reported against a wall) */

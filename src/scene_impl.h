@@ -130,7 +130,18 @@ bool nbep__scene_path_indices_exist(const config_setting_t *root, const char *pa
 
 /* ---- placement (scene_place.c) -------------------------------------------------------------- */
 
-typedef enum nbep__place { NBEP__PLACE_ONE, NBEP__PLACE_RANDOM, NBEP__PLACE_LATTICE } nbep__place;
+typedef enum nbep__place {
+    NBEP__PLACE_ONE,
+    NBEP__PLACE_RANDOM,
+    NBEP__PLACE_LATTICE, /* simple cubic */
+    NBEP__PLACE_FCC      /* face-centred cubic */
+} nbep__place;
+/* Whether a group's places are a lattice's sites (which fill the region inside the box and
+ * never look at other planes), not random ones. */
+static inline bool nbep__place_is_lattice(nbep__place p)
+{
+    return p == NBEP__PLACE_LATTICE || p == NBEP__PLACE_FCC;
+}
 
 /* One validated `spheres` entry: a single sphere or a generated group. */
 typedef struct nbep__scene_entry {

@@ -445,7 +445,7 @@ static blame fill_blame(const nbep__scene_ctx *c, const nbep_state *s,
     for (size_t p = 0; plane_at && p < s->n_planes; p++) {
         const config_setting_t *at = plane_at[2 * p];
         const bool wall = !(at && config_setting_is_group(at));
-        if ((!wall && e->place == NBEP__PLACE_LATTICE) || !plane_reaches(s, p, e->lo, e->hi))
+        if ((!wall && nbep__place_is_lattice(e->place)) || !plane_reaches(s, p, e->lo, e->hi))
             continue;
         plane_blame(c, &b, &plane_at[2 * p]);
     }
@@ -700,31 +700,52 @@ static double lattice_sites(double len, double spacing)
     return floor(len / spacing * (1.0 + LATTICE_SLACK)) + 1.0;
 }
 
-static double lattice_capacity(const double len[3], double spacing)
+/* A lattice's sites at spacing s in widths len (the region's, less a radius at each side):
+ * simple cubic, the points lo + (i, j, k) s; face-centred cubic, those of them with i + j + k
+ * even (a cube of side 2 s holds a conventional cell's 4; nearest neighbours s sqrt 2 apart,
+ * next ones 2 s), of which there are half, the corner (0, 0, 0) counted where all three
+ * counts are odd. */
+static double lattice_capacity(const double len[3], double spacing, bool fcc)
 {
-    return lattice_sites(len[0], spacing) * lattice_sites(len[1], spacing) *
-           lattice_sites(len[2], spacing);
+    const double n[3] = {lattice_sites(len[0], spacing), lattice_sites(len[1], spacing),
+                         lattice_sites(len[2], spacing)};
+    const double all = n[0] * n[1] * n[2];
+    if (!fcc)
+        return all;
+    const bool odd = fmod(n[0], 2.0) == 1.0 && fmod(n[1], 2.0) == 1.0 && fmod(n[2], 2.0) == 1.0;
+    return (all + (odd ? 1.0 : 0.0)) / 2.0;
 }
 
-/* The largest spacing s >= 2r at which count sites fit. The capacity only drops where s
- * passes len[a] / k for an axis a and integer k, so the answer is one of those: per axis,
- * the smallest k that still holds count, found by bisection; then the largest over axes.
- * Returns 0 when even s = 2r holds too few, INFINITY for at most one sphere. */
-static double lattice_spacing(const double len[3], double r, uint64_t count)
+/* The smallest spacing at which spheres of radius r on the sites touch: 2r for simple cubic,
+ * sqrt(2) r for face-centred cubic (its nearest neighbours are sqrt(2) spacings apart; their
+ * distance, rounded, may fall an ulp short of 2r: touching within round-off, which the
+ * overlap check allows). */
+static double lattice_min_spacing(double r, bool fcc)
 {
-    if (lattice_capacity(len, 2.0 * r) < (double)count)
+    return fcc ? sqrt(2.0) * r : 2.0 * r;
+}
+
+/* The largest spacing s >= lattice_min_spacing at which count sites fit. The capacity only
+ * drops where s passes len[a] / k for an axis a and integer k, so the answer is one of those:
+ * per axis, the smallest k that still holds count, found by bisection; then the largest over
+ * axes. Returns 0 when even the smallest spacing holds too few, INFINITY for at most one
+ * sphere. */
+static double lattice_spacing(const double len[3], double r, uint64_t count, bool fcc)
+{
+    const double least = lattice_min_spacing(r, fcc);
+    if (lattice_capacity(len, least, fcc) < (double)count)
         return 0.0;
     if (count <= 1)
         return INFINITY;
-    double best = 2.0 * r;
+    double best = least;
     for (int a = 0; a < 3; a++) {
-        double kmax = floor(len[a] / (2.0 * r) * (1.0 + LATTICE_SLACK));
-        if (!(kmax >= 1.0) || lattice_capacity(len, len[a] / kmax) < (double)count)
+        double kmax = floor(len[a] / least * (1.0 + LATTICE_SLACK));
+        if (!(kmax >= 1.0) || lattice_capacity(len, len[a] / kmax, fcc) < (double)count)
             continue;
         double lo = 1.0, hi = kmax;   /* integers, exact in a double */
         while (lo < hi) {
             double mid = floor((lo + hi) / 2.0);
-            if (lattice_capacity(len, len[a] / mid) >= (double)count)
+            if (lattice_capacity(len, len[a] / mid, fcc) >= (double)count)
                 hi = mid;
             else
                 lo = mid + 1.0;
@@ -734,29 +755,54 @@ static double lattice_spacing(const double len[3], double r, uint64_t count)
     return best;
 }
 
+/* The site after idx, x fastest (nx, ny: sites along x and y). */
+static void lattice_next(uint64_t idx[3], uint64_t nx, uint64_t ny)
+{
+    if (++idx[0] < nx)
+        return;
+    idx[0] = 0;
+    if (++idx[1] < ny)
+        return;
+    idx[1] = 0;
+    idx[2]++;
+}
+
 static bool place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep__scene_entry *e,
                           size_t k, uint64_t seed, const config_setting_t *const *plane_at)
 {
     const double r = e->radius;
+    const bool fcc = e->place == NBEP__PLACE_FCC;
     const double lo[3] = {e->lo.x + r, e->lo.y + r, e->lo.z + r};
     const double hi[3] = {e->hi.x - r, e->hi.y - r, e->hi.z - r};
     const double len[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
     if (e->count == 0)
         return true;
-    double spacing = lattice_spacing(len, r, e->count);
+    double spacing = lattice_spacing(len, r, e->count, fcc);
     if (spacing == 0.0) {
-        double most = lattice_capacity(len, 2.0 * r);
+        const double vol = box_volume(e->lo, e->hi);
+        const double most = lattice_capacity(len, lattice_min_spacing(r, fcc), fcc);
+        /* a simple cubic fill that fails names the face-centred one where that holds them
+         * (the densest simple cubic fill is 0.52, a hard-sphere fluid is studied to 0.58) */
+        const double most_fcc = lattice_capacity(len, lattice_min_spacing(r, true), true);
+        char hint[96] = "";
+        if (!fcc && most_fcc >= (double)e->count)
+            snprintf(hint, sizeof hint,
+                     "; place = \"fcc\" holds up to %.0f (packing fraction %.2f)", most_fcc,
+                     most_fcc * ball_volume(r) / vol);
         fill_failed(c, s, e, plane_at, (blame){NULL, 0, NBEP_DIAG_UNRANKED},
                         "spheres.[%zu]: could not place %" PRIu64
-                        " spheres of radius %g in the region: a simple cubic lattice holds at "
-                        "most %.0f (packing fraction %.2f)",
-                        k, e->count, r, most, most * ball_volume(r) / box_volume(e->lo, e->hi));
+                        " spheres of radius %g in the region: a %s lattice holds at "
+                        "most %.0f (packing fraction %.2f)%s",
+                        k, e->count, r, fcc ? "face-centred cubic" : "simple cubic", most,
+                        most * ball_volume(r) / vol, hint);
         return true;
     }
     const uint64_t nx = (uint64_t)lattice_sites(len[0], spacing);
     const uint64_t ny = (uint64_t)lattice_sites(len[1], spacing);
-    for (uint64_t q = 0; q < e->count; q++) {
-        const uint64_t idx[3] = {q % nx, q / nx % ny, q / nx / ny};
+    uint64_t idx[3] = {0, 0, 0};
+    for (uint64_t q = 0; q < e->count; q++, lattice_next(idx, nx, ny)) {
+        while (fcc && (idx[0] + idx[1] + idx[2]) % 2 != 0)
+            lattice_next(idx, nx, ny);
         double x[3];
         for (int a = 0; a < 3; a++)   /* never past the far side by rounding */
             x[a] = idx[a] == 0 ? lo[a] : fmin(lo[a] + (double)idx[a] * spacing, hi[a]);
@@ -794,7 +840,7 @@ nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s, const nbep__sce
     for (size_t k = 0; ok && k < n_entries; k++) {
         if (e[k].place == NBEP__PLACE_RANDOM)
             ok = place_random(c, &g, s, &e[k], k, seed, plane_at);
-        else if (e[k].place == NBEP__PLACE_LATTICE)
+        else if (nbep__place_is_lattice(e[k].place))
             ok = place_lattice(c, &g, s, &e[k], k, seed, plane_at);
     }
     grid_fini(&g);

@@ -109,7 +109,8 @@ enum {
       NULL, "physics.gravity",                                                                     \
       "own uniform acceleration, replacing physics.gravity")                                       \
     X(SPH_PLACE, "spheres.[].place", STRING, F_GROUP, "\"random\"", NULL,                          \
-      "\"random\" (uniform, non-overlapping) or \"lattice\" (simple cubic)")                       \
+      "\"random\" (uniform, non-overlapping), \"lattice\" (simple cubic) or \"fcc\" "              \
+      "(face-centred cubic, packing fractions up to 0.74)")                                       \
     X(SPH_SPEED, "spheres.[].speed", FLOAT, F_GE0 | F_GROUP | F_SCALE,                             \
       "0.0", NULL,                                                                                 \
       "each sphere of a group moves at this speed in a random direction")                          \

@@ -450,7 +450,7 @@ static void test_sphere_entries_must_be_one_sphere_or_one_group(void **state)
                 E "6: spheres.[3].place is only for a generated group (with count)",
                 E "6: spheres.[3].speed is only for a generated group (with count)",
                 E "7: spheres.[4].velocity is only for a single sphere (with position)",
-                E "7: spheres.[4].place must be one of \"random\", \"lattice\" "
+                E "7: spheres.[4].place must be one of \"random\", \"lattice\", \"fcc\" "
                   "(got \"hexagonal\")",
                 E "8: spheres.[4].region.min must be < spheres.[4].region.max on every axis "
                   "(got y: 0 >= -1)",
@@ -1278,7 +1278,74 @@ static void test_lattice_fill_that_cannot_fit_names_its_capacity(void **state)
     /* 10 sites per axis (0.5, 1.5, ..., 9.5): 1000 balls of volume pi/6 in 1000 is 0.52. */
     ASSERT_DIAG(&f->d, DATA "scene_fill_lattice.deck:3: spheres.[0]: could not place 1001 "
                             "spheres of radius 0.5 in the region: a simple cubic lattice holds "
-                            "at most 1000 (packing fraction 0.52)");
+                            "at most 1000 (packing fraction 0.52); place = \"fcc\" holds up to "
+                            "1099 (packing fraction 0.58)");
+}
+
+/* place = "fcc": the simple cubic sites whose indices add up to an even number, x fastest, at
+ * the largest spacing that holds the group. In [0, 10]^3 less a radius of 0.5 (widths 9): 2
+ * sites an axis (spacing 9) give 8 cubic sites, 4 of them even, a conventional cell's corner
+ * and face centres; a fifth sphere needs 3 an axis (spacing 4.5: 27 sites, 14 even). */
+static void test_fcc_takes_the_even_sites_x_fastest_at_the_largest_spacing(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_lattice.deck", "spheres.[0].place=\"fcc\"", "spheres.[0].count=4");
+    const nbep_state *s = &f->sc.state;
+    const double four[4][3] = {{0.5, 0.5, 0.5}, {9.5, 9.5, 0.5}, {9.5, 0.5, 9.5}, {0.5, 9.5, 9.5}};
+    for (size_t q = 0; q < 4; q++)
+        assert_vec3(s->pos[q], four[q][0], four[q][1], four[q][2], 0.0);
+    nbep_scene_fini(&f->sc);
+    LOAD_OK(f, DATA "scene_lattice.deck", "spheres.[0].place=\"fcc\"", "spheres.[0].count=6");
+    const double six[6][3] = {{0.5, 0.5, 0.5}, {9.5, 0.5, 0.5}, {5.0, 5.0, 0.5},
+                              {0.5, 9.5, 0.5}, {9.5, 9.5, 0.5}, {5.0, 0.5, 5.0}};
+    for (size_t q = 0; q < 6; q++)
+        assert_vec3(s->pos[q], six[q][0], six[q][1], six[q][2], 0.0);
+}
+
+/* At its densest an fcc fill puts nearest neighbours sqrt(2) spacings = 2r apart (touching,
+ * within round-off: the deck's overlap check passes it) and reaches packing fractions past the
+ * simple cubic lattice's 0.52: the 1001 spheres that lattice cannot hold
+ * (test_lattice_fill_that_cannot_fit_names_its_capacity), and a periodic box at 0.60. */
+static void test_fcc_packs_past_the_simple_cubic_lattice(void **state)
+{
+    fixture *f = *state;
+    LOAD_OK(f, DATA "scene_fill_lattice.deck", "spheres.[0].place=\"fcc\"");
+    assert_int_equal(f->sc.state.n, 1001);
+    double mx, rel;
+    assert_int_equal(nbep_state_max_overlap(&f->sc.state, NULL, &mx, &rel, NULL, NULL, &f->d),
+                     NBEP_OK);
+    assert_true(rel <= 1e-12); /* touching by round-off at most */
+    nbep_scene_fini(&f->sc);
+    /* 4000 spheres of radius 0.5 at 0.60: side (4000 pi / 6 / 0.6)^(1/3) */
+    char side[128];
+    const double L = cbrt(4000.0 * PI / 6.0 / 0.6);
+    snprintf(side, sizeof side, "box.max=[%.17g, %.17g, %.17g]", L, L, L);
+    LOAD_OK(f, DATA "scene_fill_lattice.deck", "spheres.[0].place=\"fcc\"",
+            "spheres.[0].count=4000", "box.periodic=[true, true, true]", side);
+    const nbep_state *s = &f->sc.state;
+    assert_int_equal(s->n, 4000);
+    assert_true(fabs(nbep_scene_packing_fraction(&f->sc, s) - 0.6) <= 1e-12);
+    assert_int_equal(nbep_state_max_overlap(s, NULL, &mx, &rel, NULL, NULL, &f->d), NBEP_OK);
+    assert_true(rel <= 1e-12);
+    /* 20 sites an axis (8000 cubic, 4000 even) at spacing (L - 2r) / 19: sphere 0's nearest
+     * neighbours in the box lie sqrt(2) spacings from it (across the faces, 2r: touching) */
+    double nearest = INFINITY;
+    for (size_t i = 1; i < s->n; i++)
+        nearest = fmin(nearest, nbep_vec3_norm(nbep_vec3_sub(s->pos[i], s->pos[0])));
+    const double want = sqrt(2.0) * (L - 1.0) / 19.0;
+    assert_true(fabs(nearest - want) <= 1e-12 * want);
+}
+
+/* An fcc fill that cannot fit names its own capacity, and no hint (blamed on the first --set
+ * typed of what places the group, as every fill is). */
+static void test_fcc_fill_that_cannot_fit_names_its_capacity(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_fill_lattice.deck", "spheres.[0].place=\"fcc\"",
+               "spheres.[0].count=1100");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].place=\"fcc\": spheres.[0]: could not place 1100 spheres "
+                       "of radius 0.5 in the region: a face-centred cubic lattice holds at most "
+                       "1099 (packing fraction 0.58)");
 }
 
 /* A group that a --set keeps from being placed (its radius, its count, its region) names that
@@ -2164,6 +2231,9 @@ int main(void)
         T(test_touching_spheres_and_planes_are_legal),
         T(test_random_fill_that_cannot_fit_names_its_packing_fraction),
         T(test_lattice_fill_that_cannot_fit_names_its_capacity),
+        T(test_fcc_takes_the_even_sites_x_fastest_at_the_largest_spacing),
+        T(test_fcc_packs_past_the_simple_cubic_lattice),
+        T(test_fcc_fill_that_cannot_fit_names_its_capacity),
         T(test_include_is_refused_at_its_line),
         T(test_include_in_a_set_is_refused),
         T(test_overlaps_with_spheres_and_planes_are_named),
