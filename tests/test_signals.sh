@@ -249,13 +249,17 @@ if command -v script >/dev/null; then
     # line with the progress's last one, for step 0, and the run's end lines follow on lines of
     # their own (not on the live line)
     out=$tmp/live-setup.h5
-    timeout -k 5 60 script -qc "bin/nbep run inputs/paper-box.deck -t 1 --set spheres.[0].count=65536 -o $out & p=\$!;
-        for _ in \$(seq 300); do [ -s $out ] && break; sleep 0.1; done; sleep 1;
+    # (the signal goes once the live line shows, or after 30 s: a fixed second after the file
+    # appeared could come before the first line on a loaded machine; -f: script writes as it
+    # goes, so that the line can be looked for; the patterns need a digit after the words, which
+    # the typescript's header, holding this command's text, does not have)
+    timeout -k 5 60 script -qfc "bin/nbep run inputs/paper-box.deck -t 1 --set spheres.[0].count=65536 -o $out & p=\$!;
+        for _ in \$(seq 300); do grep -Eq 'first predictions +[0-9]' '$tmp/typescript-setup' && break; sleep 0.1; done;
         kill -TERM \$p; wait \$p" "$tmp/typescript-setup" >/dev/null 2>&1
     check "on a terminal, the first predictions show their part made (first predictions NN.N%)" \
         "tr '\r' '\n' < '$tmp/typescript-setup' | grep -Eq '^first predictions +[0-9.]+%  ETA [0-9.]+ (s|min|h|days)'"
     check "a SIGTERM among them ends the live line with step 0's, the end lines on their own" \
-        "awk '/first predictions/ { n = split(\$0, seg, \"\\r\"); while (n > 1 && seg[n] == \"\") n--;
+        "awk '/first predictions +[0-9]/ { n = split(\$0, seg, \"\\r\"); while (n > 1 && seg[n] == \"\") n--;
               ok = seg[n] ~ /^step 0\/1000 /; getline; ok = ok && /^nbep: stopped after 0 steps/ }
               END { exit !ok }' '$tmp/typescript-setup'"
 else
