@@ -691,24 +691,35 @@ static bool place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep_
     return true;
 }
 
-static double lattice_sites(double len, double spacing)
+/* A lattice's axis: its width and whether it wraps. Along an axis that does not, the sites
+ * run from a radius past the region's low side to a radius short of its high side, the first
+ * and last on those bounds; along a periodic axis that an "fcc" group's region spans whole,
+ * they wrap, an even number of them evenly spaced from half a spacing past the box's low face,
+ * so that the crystal repeats across the face as inside (a simple cubic "lattice" keeps the
+ * bounds there too: its spheres touch across the face, a start that melts). */
+typedef struct lattice_axis {
+    double len;
+    bool wraps;
+} lattice_axis;
+
+static double lattice_sites(lattice_axis x, double spacing)
 {
-    if (len < 0.0)
+    if (x.len < 0.0)
         return 0.0;
     if (isinf(spacing))
         return 1.0;
-    return floor(len / spacing * (1.0 + LATTICE_SLACK)) + 1.0;
+    const double k = floor(x.len / spacing * (1.0 + LATTICE_SLACK));
+    return x.wraps ? 2.0 * floor(k / 2.0) : k + 1.0;
 }
 
-/* A lattice's sites at spacing s in widths len (the region's, less a radius at each side):
- * simple cubic, the points lo + (i, j, k) s; face-centred cubic, those of them with i + j + k
- * even (a cube of side 2 s holds a conventional cell's 4; nearest neighbours s sqrt 2 apart,
- * next ones 2 s), of which there are half, the corner (0, 0, 0) counted where all three
- * counts are odd. */
-static double lattice_capacity(const double len[3], double spacing, bool fcc)
+/* A lattice's sites at spacing s: simple cubic, the points (i, j, k) s from the first; face-
+ * centred cubic, those of them with i + j + k even (a cube of side 2 s holds a conventional
+ * cell's 4; nearest neighbours s sqrt 2 apart, next ones 2 s), of which there are half, the
+ * corner (0, 0, 0) counted where all three counts are odd. */
+static double lattice_capacity(const lattice_axis ax[3], double spacing, bool fcc)
 {
-    const double n[3] = {lattice_sites(len[0], spacing), lattice_sites(len[1], spacing),
-                         lattice_sites(len[2], spacing)};
+    const double n[3] = {lattice_sites(ax[0], spacing), lattice_sites(ax[1], spacing),
+                         lattice_sites(ax[2], spacing)};
     const double all = n[0] * n[1] * n[2];
     if (!fcc)
         return all;
@@ -730,27 +741,27 @@ static double lattice_min_spacing(double r, bool fcc)
  * per axis, the smallest k that still holds count, found by bisection; then the largest over
  * axes. Returns 0 when even the smallest spacing holds too few, INFINITY for at most one
  * sphere. */
-static double lattice_spacing(const double len[3], double r, uint64_t count, bool fcc)
+static double lattice_spacing(const lattice_axis ax[3], double r, uint64_t count, bool fcc)
 {
     const double least = lattice_min_spacing(r, fcc);
-    if (lattice_capacity(len, least, fcc) < (double)count)
+    if (lattice_capacity(ax, least, fcc) < (double)count)
         return 0.0;
     if (count <= 1)
         return INFINITY;
     double best = least;
     for (int a = 0; a < 3; a++) {
-        double kmax = floor(len[a] / least * (1.0 + LATTICE_SLACK));
-        if (!(kmax >= 1.0) || lattice_capacity(len, len[a] / kmax, fcc) < (double)count)
+        double kmax = floor(ax[a].len / least * (1.0 + LATTICE_SLACK));
+        if (!(kmax >= 1.0) || lattice_capacity(ax, ax[a].len / kmax, fcc) < (double)count)
             continue;
         double lo = 1.0, hi = kmax;   /* integers, exact in a double */
         while (lo < hi) {
             double mid = floor((lo + hi) / 2.0);
-            if (lattice_capacity(len, len[a] / mid, fcc) >= (double)count)
+            if (lattice_capacity(ax, ax[a].len / mid, fcc) >= (double)count)
                 hi = mid;
             else
                 lo = mid + 1.0;
         }
-        best = fmax(best, len[a] / lo);
+        best = fmax(best, ax[a].len / lo);
     }
     return best;
 }
@@ -768,22 +779,38 @@ static void lattice_next(uint64_t idx[3], uint64_t nx, uint64_t ny)
 }
 
 static bool place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep__scene_entry *e,
-                          size_t k, uint64_t seed, const config_setting_t *const *plane_at)
+                          size_t k, uint64_t seed, const config_setting_t *const *plane_at,
+                          const bool *box_periodic, nbep_vec3 box_lo, nbep_vec3 box_hi)
 {
     const double r = e->radius;
     const bool fcc = e->place == NBEP__PLACE_FCC;
-    const double lo[3] = {e->lo.x + r, e->lo.y + r, e->lo.z + r};
-    const double hi[3] = {e->hi.x - r, e->hi.y - r, e->hi.z - r};
-    const double len[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+    const double rlo[3] = {e->lo.x, e->lo.y, e->lo.z}, rhi[3] = {e->hi.x, e->hi.y, e->hi.z};
+    const double blo[3] = {box_lo.x, box_lo.y, box_lo.z}, bhi[3] = {box_hi.x, box_hi.y, box_hi.z};
+    double lo[3], hi[3];
+    lattice_axis ax[3];
+    for (int a = 0; a < 3; a++) {
+        ax[a].wraps = fcc && box_periodic && box_periodic[a] && rlo[a] == blo[a] &&
+                      rhi[a] == bhi[a];
+        lo[a] = ax[a].wraps ? rlo[a] : rlo[a] + r;
+        hi[a] = ax[a].wraps ? rhi[a] : rhi[a] - r;
+        ax[a].len = hi[a] - lo[a];
+    }
     if (e->count == 0)
         return true;
-    double spacing = lattice_spacing(len, r, e->count, fcc);
+    double spacing = lattice_spacing(ax, r, e->count, fcc);
     if (spacing == 0.0) {
         const double vol = box_volume(e->lo, e->hi);
-        const double most = lattice_capacity(len, lattice_min_spacing(r, fcc), fcc);
+        const double most = lattice_capacity(ax, lattice_min_spacing(r, fcc), fcc);
         /* a simple cubic fill that fails names the face-centred one where that holds them
-         * (the densest simple cubic fill is 0.52, a hard-sphere fluid is studied to 0.58) */
-        const double most_fcc = lattice_capacity(len, lattice_min_spacing(r, true), true);
+         * (the densest simple cubic fill is 0.52; hard-sphere crystals are studied to 0.74) */
+        lattice_axis fax[3];
+        for (int a = 0; a < 3; a++)
+            fax[a] = (lattice_axis){rhi[a] - rlo[a] - 2.0 * r, false};
+        if (!fcc) /* the axes "fcc" would take */
+            for (int a = 0; a < 3; a++)
+                if (box_periodic && box_periodic[a] && rlo[a] == blo[a] && rhi[a] == bhi[a])
+                    fax[a] = (lattice_axis){rhi[a] - rlo[a], true};
+        const double most_fcc = lattice_capacity(fax, lattice_min_spacing(r, true), true);
         char hint[96] = "";
         if (!fcc && most_fcc >= (double)e->count)
             snprintf(hint, sizeof hint,
@@ -797,15 +824,22 @@ static bool place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep
                         most * ball_volume(r) / vol, hint);
         return true;
     }
-    const uint64_t nx = (uint64_t)lattice_sites(len[0], spacing);
-    const uint64_t ny = (uint64_t)lattice_sites(len[1], spacing);
+    uint64_t n[3];
+    double step[3];
+    for (int a = 0; a < 3; a++) {
+        n[a] = (uint64_t)lattice_sites(ax[a], spacing);
+        /* a wrapping axis spaces its n sites evenly round the period (at least the spacing) */
+        step[a] = ax[a].wraps ? ax[a].len / (double)n[a] : spacing;
+    }
     uint64_t idx[3] = {0, 0, 0};
-    for (uint64_t q = 0; q < e->count; q++, lattice_next(idx, nx, ny)) {
+    for (uint64_t q = 0; q < e->count; q++, lattice_next(idx, n[0], n[1])) {
         while (fcc && (idx[0] + idx[1] + idx[2]) % 2 != 0)
-            lattice_next(idx, nx, ny);
+            lattice_next(idx, n[0], n[1]);
         double x[3];
         for (int a = 0; a < 3; a++)   /* never past the far side by rounding */
-            x[a] = idx[a] == 0 ? lo[a] : fmin(lo[a] + (double)idx[a] * spacing, hi[a]);
+            x[a] = ax[a].wraps ? lo[a] + ((double)idx[a] + 0.5) * step[a]
+                   : idx[a] == 0 ? lo[a]
+                                 : fmin(lo[a] + (double)idx[a] * spacing, hi[a]);
         size_t id = e->first + (size_t)q;
         set_sphere(s, e, id, nbep_vec3_make(x[0], x[1], x[2]),
                    random_velocity(seed, k, q, e->speed));
@@ -841,7 +875,8 @@ nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s, const nbep__sce
         if (e[k].place == NBEP__PLACE_RANDOM)
             ok = place_random(c, &g, s, &e[k], k, seed, plane_at);
         else if (nbep__place_is_lattice(e[k].place))
-            ok = place_lattice(c, &g, s, &e[k], k, seed, plane_at);
+            ok = place_lattice(c, &g, s, &e[k], k, seed, plane_at, box_periodic, box_lo,
+                               box_hi);
     }
     grid_fini(&g);
     if (!ok)

@@ -1300,12 +1300,25 @@ static void test_fcc_takes_the_even_sites_x_fastest_at_the_largest_spacing(void 
                               {0.5, 9.5, 0.5}, {9.5, 9.5, 0.5}, {5.0, 0.5, 5.0}};
     for (size_t q = 0; q < 6; q++)
         assert_vec3(s->pos[q], six[q][0], six[q][1], six[q][2], 0.0);
+    /* a periodic box of side 3 it fills whole: an even count of sites an axis, evenly round
+     * the period from half a spacing (3 sites of 1.0, which hold 8, would put spheres of the
+     * same parity side by side across the faces: a simple cubic row, no crystal), so 4 of
+     * 0.75 */
+    nbep_scene_fini(&f->sc);
+    LOAD_OK(f, DATA "scene_lattice.deck", "spheres.[0].place=\"fcc\"", "spheres.[0].count=8",
+            "box.max=[3.0, 3.0, 3.0]", "box.periodic=[true, true, true]");
+    assert_vec3(s->pos[0], 0.375, 0.375, 0.375, 0.0);
+    assert_vec3(s->pos[1], 1.875, 0.375, 0.375, 0.0);
+    assert_vec3(s->pos[2], 1.125, 1.125, 0.375, 0.0);
 }
 
 /* At its densest an fcc fill puts nearest neighbours sqrt(2) spacings = 2r apart (touching,
  * within round-off: the deck's overlap check passes it) and reaches packing fractions past the
  * simple cubic lattice's 0.52: the 1001 spheres that lattice cannot hold
- * (test_lattice_fill_that_cannot_fit_names_its_capacity), and a periodic box at 0.60. */
+ * (test_lattice_fill_that_cannot_fit_names_its_capacity). In a periodic box it fills whole it
+ * is a perfect crystal across the faces: 4000 spheres at 0.60 take 20 sites an axis, evenly
+ * spaced L / 20 from half a spacing, and every sphere has 12 nearest neighbours (by the nearest
+ * image) sqrt(2) L / 20 away, none nearer. */
 static void test_fcc_packs_past_the_simple_cubic_lattice(void **state)
 {
     fixture *f = *state;
@@ -1316,24 +1329,33 @@ static void test_fcc_packs_past_the_simple_cubic_lattice(void **state)
                      NBEP_OK);
     assert_true(rel <= 1e-12); /* touching by round-off at most */
     nbep_scene_fini(&f->sc);
-    /* 4000 spheres of radius 0.5 at 0.60: side (4000 pi / 6 / 0.6)^(1/3) */
     char side[128];
-    const double L = cbrt(4000.0 * PI / 6.0 / 0.6);
+    const double L = cbrt(4000.0 * PI / 6.0 / 0.6), a = L / 20.0, near = sqrt(2.0) * a;
     snprintf(side, sizeof side, "box.max=[%.17g, %.17g, %.17g]", L, L, L);
     LOAD_OK(f, DATA "scene_fill_lattice.deck", "spheres.[0].place=\"fcc\"",
             "spheres.[0].count=4000", "box.periodic=[true, true, true]", side);
     const nbep_state *s = &f->sc.state;
     assert_int_equal(s->n, 4000);
     assert_true(fabs(nbep_scene_packing_fraction(&f->sc, s) - 0.6) <= 1e-12);
-    assert_int_equal(nbep_state_max_overlap(s, NULL, &mx, &rel, NULL, NULL, &f->d), NBEP_OK);
-    assert_true(rel <= 1e-12);
-    /* 20 sites an axis (8000 cubic, 4000 even) at spacing (L - 2r) / 19: sphere 0's nearest
-     * neighbours in the box lie sqrt(2) spacings from it (across the faces, 2r: touching) */
-    double nearest = INFINITY;
-    for (size_t i = 1; i < s->n; i++)
-        nearest = fmin(nearest, nbep_vec3_norm(nbep_vec3_sub(s->pos[i], s->pos[0])));
-    const double want = sqrt(2.0) * (L - 1.0) / 19.0;
-    assert_true(fabs(nearest - want) <= 1e-12 * want);
+    assert_vec3(s->pos[0], 0.5 * a, 0.5 * a, 0.5 * a, 1e-15 * L);
+    assert_vec3(s->pos[1], 2.5 * a, 0.5 * a, 0.5 * a, 1e-15 * L);
+    for (size_t i = 0; i < s->n; i++) {
+        size_t twelve = 0;
+        double nearest = INFINITY;
+        for (size_t j = 0; j < s->n; j++) {
+            if (j == i)
+                continue;
+            nbep_vec3 d = nbep_vec3_sub(s->pos[j], s->pos[i]);
+            d.x -= L * round(d.x / L);
+            d.y -= L * round(d.y / L);
+            d.z -= L * round(d.z / L);
+            const double dist = nbep_vec3_norm(d);
+            nearest = fmin(nearest, dist);
+            twelve += dist <= near * (1.0 + 1e-9);
+        }
+        assert_true(fabs(nearest - near) <= 1e-12 * near);
+        assert_int_equal(twelve, 12);
+    }
 }
 
 /* An fcc fill that cannot fit names its own capacity, and no hint (blamed on the first --set
