@@ -1197,6 +1197,8 @@ MUTANTS = [
     ("sweep-whole-group-not-neutral", "src/sweep.c",
      "{\"run.threads\", \"output.file\", \"sweep\"};", "{\"run.threads\", \"output.file\"};",
      ["tests/test_sweep_cli.sh"], None),
+    ("info-sidecar-hint-none", "src/output_hdf5.c", "    if (!strstr(head, \"<Xdmf\"))\n        return;",
+     "    if (1)\n        return;", ["tests/test_cli.sh"], None),
     ("resume-granular-note-silent", "src/run.c",
      "        if (st == NBEP_OK && rq->resume && rq->verbose && granular)",
      "        if (0 && granular)", ["tests/test_resume.sh"], None),

@@ -548,6 +548,17 @@ for f in text other latest number folder cut; do
     done
     [ -f "$tmp/$f.h5" ] && check "$f.h5 untouched by the refused resume" "[ '$(md5sum <"$tmp/$f.h5")' = '$sum0' ]"
 done
+# the run's XDMF sidecar named instead of its run (they lie side by side): said so, with the
+# run file to pass (until 2026-11-30 "not an HDF5 file" alone)
+for cmd in resume info; do
+    if [ $cmd = resume ]; then
+        run_nbep run "$tmp/group.deck" -n 1 --quiet --resume "$tmp/whole.xmf"
+    else
+        run_nbep info "$tmp/whole.xmf"
+    fi
+    check "$cmd of a run's sidecar: exit 2, one line naming its run file (got $rc: $(head -c 200 "$tmp/stderr"))" \
+        "[ $rc = 2 ] && one_line && grep -q '$tmp/whole.xmf: cannot .*: not an HDF5 file: the XDMF sidecar of whole.h5, beside it; pass that file\$' '$tmp/stderr'"
+done
 
 # a file cut short that is whole again within a second (a run being written, caught between its
 # flushes: 12 of 30 opens failed while a run wrote 300 frames a second) is read: info tries again
