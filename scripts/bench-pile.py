@@ -105,7 +105,8 @@ def same_frames(p, q):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    # the docstring's first sentence (its first line alone stopped at "e = 0.5 against")
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     ap.add_argument("--threads", default="1,2")
     ap.add_argument("--restitution", default="0.5,1")
     ap.add_argument("--steps", type=int, default=0, help="default: the deck's")
