@@ -1204,6 +1204,8 @@ MUTANTS = [
      "    if 0:\n        print(f\"bench-cooling: takes no arguments", ["tests/test_bench_args.sh"], None),
     ("bench-hopper-count-unchecked", "scripts/bench-hopper.sh", "    ''|*[!0-9]*|0|00*)",
      "    ''|0|00*)", ["tests/test_bench_args.sh"], None),
+    ("check-skin-why-free-flight", "src/check.c", "                    !nbep_state_free_flight(&sc->state)\n",
+     "                    0\n", ["tests/test_cli.sh"], None),
     ("resume-granular-note-silent", "src/run.c",
      "        if (st == NBEP_OK && rq->resume && rq->verbose && granular)",
      "        if (0 && granular)", ["tests/test_resume.sh"], None),

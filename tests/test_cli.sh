@@ -62,11 +62,14 @@ run_nbep check "$tmp/group.deck" --set 'run.neighbors="cells"'
 check "cells with a box: accepted (got $rc)" "[ $rc = 0 ]"
 check "nbep check prints the resolved scene: the neighbour mode an override chose" \
     "grep -Eq '^algorithm: +predictive \(neighbors cells, order time\), 1 thread\$' $tmp/stdout"
-check "nbep check prints the lists' skin: a dilute scene that flies free takes the wider one" \
-    "grep -Eq '^lists: +skin 0.6 of the largest diameter' $tmp/stdout"
+check "nbep check prints the lists' skin: a dilute scene that flies free takes the wider one, by the packing" \
+    "grep -Eq '^lists: +skin 0.6 of the largest diameter \(by the packing: 0.6 at packing 0.35 or below' $tmp/stdout"
 run_nbep check "$tmp/group.deck" --set 'run.neighbors="cells"' --set 'physics.gravity=[0,-2,0]'
-check "nbep check prints the lists' skin: under gravity the thin one" \
-    "grep -Eq '^lists: +skin 0.4 of the largest diameter' $tmp/stdout"
+check "nbep check prints the lists' skin: under gravity the thin one, and why (not the packing's rule)" \
+    "grep -Eq '^lists: +skin 0.4 of the largest diameter \(something accelerates; only free flight goes by the packing: ' $tmp/stdout"
+run_nbep check inputs/two-spheres.deck --set 'run.neighbors="cells"'
+check "nbep check prints the lists' skin: without a box the thin one, and why" \
+    "grep -Eq '^lists: +skin 0.4 of the largest diameter \(no box to take the packing from; in a box: ' $tmp/stdout"
 run_nbep check inputs/hard-sphere-fluid.deck \
     --set 'box.max=[32.2398390803, 32.2398390803, 32.2398390803]'
 check "nbep check prints the lists' skin: a fluid at packing 0.5 the thin one" \
