@@ -248,9 +248,14 @@ if command -v script >/dev/null; then
     # 2026-11-30 the line stayed empty until the first step); a SIGTERM among them ends that
     # line with the progress's last one, for step 0, and the run's end lines follow on lines of
     # their own (not on the live line)
+    # (the signal waits for the line's first showing, up to 20 s, in the typescript script -f
+    # flushes as it goes, which also holds this command: hence the bracket, which keeps the
+    # command's own text from matching; a fixed second after the file appeared missed the line
+    # on a loaded machine, load average 10 on 2 cores, where it comes a second or more later)
     out=$tmp/live-setup.h5
-    timeout -k 5 60 script -qc "bin/nbep run inputs/paper-box.deck -t 1 --set spheres.[0].count=65536 -o $out & p=\$!;
-        for _ in \$(seq 300); do [ -s $out ] && break; sleep 0.1; done; sleep 1;
+    timeout -k 5 60 script -fqc "bin/nbep run inputs/paper-box.deck -t 1 --set spheres.[0].count=65536 -o $out & p=\$!;
+        for _ in \$(seq 300); do [ -s $out ] && break; sleep 0.1; done;
+        for _ in \$(seq 200); do grep -q 'first predict[i]ons' '$tmp/typescript-setup' && break; sleep 0.1; done;
         kill -TERM \$p; wait \$p" "$tmp/typescript-setup" >/dev/null 2>&1
     check "on a terminal, the first predictions show their part made (first predictions NN.N%)" \
         "tr '\r' '\n' < '$tmp/typescript-setup' | grep -Eq '^first predictions +[0-9.]+%  ETA [0-9]+ s'"
