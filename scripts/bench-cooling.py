@@ -93,6 +93,17 @@ def enskog_rate(phi):
 
 
 def main():
+    # settings come from the environment; --help prints them, and any argument else is refused
+    # before a run (until 2026-11-30 every argument, --help too, was ignored and the benchmark
+    # ran: minutes at the default N = 32000)
+    if sys.argv[1:] in (["-h"], ["--help"]):
+        print(__doc__)
+        return
+    if len(sys.argv) > 1:
+        print(f"bench-cooling: takes no arguments (got {' '.join(sys.argv[1:])}): its settings are "
+              "environment variables, NS, PHI, E, THREADS, REPS, S, NBEP and OUT; --help",
+              file=sys.stderr)
+        sys.exit(2)
     nbep = env("NBEP", os.path.join(ROOT, "bin", "nbep"))
     ns = [int(x) for x in env("NS", "32000").split()]
     phi = float(env("PHI", "0.30"))

@@ -12,7 +12,7 @@ lines (one every 10 s when stderr is not a terminal), each stamped when it arriv
 collisions per step and the held spheres (velocity exactly zero) from /stats and /frames. With
 --jobs 2 two configurations run at the same time (on a 2-core machine: one core each; the
 cells mode's event loop is one thread, so a 2-thread run's second thread mostly sleeps). One
-run per configuration (the deck takes over an hour on one core), so the times are one sample
+run per configuration (the deck's e = 0.5 run takes 25 to 80 minutes of one core), so the times are one sample
 each on whatever load the machine has.
 
 Prints one table row per configuration, checks that the thread counts of one restitution give
@@ -105,7 +105,8 @@ def same_frames(p, q):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    # the docstring's first sentence (its first line alone stopped at "e = 0.5 against")
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     ap.add_argument("--threads", default="1,2")
     ap.add_argument("--restitution", default="0.5,1")
     ap.add_argument("--steps", type=int, default=0, help="default: the deck's")

@@ -82,12 +82,19 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
                     "lists:           skin %.3g of the largest diameter (%.3g by the packing, "
                     "cut down so that three cells fit across the periodic box)\n",
                     f->skin_taken, f->skin_asked);
-        else
+        else /* why this skin (nbep_nblist_skin_for): until 2026-11-30 the line gave the
+              * rule of free flight alone, "(when nothing accelerates, ...)", also for a pile,
+              * whose skin it does not set */
             fprintf(out,
-                    "lists:           skin %.3g of the largest diameter (when nothing "
-                    "accelerates, %g at packing %g or below, %g from %g)\n",
-                    f->skin_taken, NBEP_NBLIST_SKIN_DILUTE, NBEP_NBLIST_PHI_DILUTE,
-                    NBEP_NBLIST_SKIN, NBEP_NBLIST_PHI_DENSE);
+                    "lists:           skin %.3g of the largest diameter (%s: %g at packing %g "
+                    "or below, %g from %g)\n",
+                    f->skin_taken,
+                    !nbep_state_free_flight(&sc->state)
+                        ? "something accelerates; only free flight goes by the packing"
+                    : isnan(f->packing) ? "no box to take the packing from; in a box"
+                                        : "by the packing",
+                    NBEP_NBLIST_SKIN_DILUTE, NBEP_NBLIST_PHI_DILUTE, NBEP_NBLIST_SKIN,
+                    NBEP_NBLIST_PHI_DENSE);
     }
     char size[NBEP_BYTES_TEXT_MAX];
     fprintf(out, "memory:          about %s\n", nbep_format_bytes(f->memory_bytes, size));

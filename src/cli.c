@@ -29,6 +29,7 @@ static const char HELP[] =
     "                         report of what the run needs (memory_bytes, output.bytes)\n"
     "      --resume RUN.h5    (run) continue RUN.h5 from its last complete frame up to\n"
     "                         run.steps, appending to it; frames equal an uninterrupted run's\n"
+    "                         (a granular pile's only until spheres rest: README, Faults)\n"
     "      --quiet            no progress output (check with --summary: no report)\n"
     "a short option's value may follow it attached: -n500, -ofile.h5\n"
     "\n"

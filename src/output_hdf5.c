@@ -336,6 +336,37 @@ static int is_run(hid_t file, const char *path, nbep_diag *d)
     return run;
 }
 
+/* For a file that is not HDF5: where it is an XDMF sidecar (what `nbep info` is most often
+ * handed instead of its run: the two lie side by side, RUN.xmf beside RUN.h5), ": " and what to
+ * pass instead into buf, the run file's name from the comment nbep writes at the sidecar's top
+ * (output_xdmf.c: "<!-- nbep run NAME: N spheres, ..."); else "". */
+static void sidecar_hint(const char *path, char *buf, size_t len)
+{
+    buf[0] = '\0';
+    char head[1024];
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return;
+    const size_t n = fread(head, 1, sizeof head - 1, f);
+    fclose(f);
+    head[n] = '\0';
+    if (!strstr(head, "<Xdmf"))
+        return;
+    const char *name = strstr(head, "<!-- nbep run ");
+    const char *end = name ? strstr(name, " spheres, ") : NULL;
+    if (name) {
+        name += strlen("<!-- nbep run ");
+        while (end && end > name && end[-1] >= '0' && end[-1] <= '9')
+            end--; /* back over the count to the ": " before it */
+    }
+    if (name && end && end - name >= 3 && end[-2] == ':' && end[-1] == ' ' &&
+        !memchr(name, '\n', (size_t)(end - name)))
+        snprintf(buf, len, ": the XDMF sidecar of %.*s, beside it; pass that file",
+                 (int)(end - 2 - name), name);
+    else
+        snprintf(buf, len, ": an XDMF sidecar; pass the run file beside it (RUN.h5 for RUN.xmf)");
+}
+
 nbep_status nbep__output_run_openable(const char *path, int mode, const char *what,
                                       hid_t *file_out, nbep_diag *d)
 {
@@ -355,8 +386,10 @@ nbep_status nbep__output_run_openable(const char *path, int mode, const char *wh
     const htri_t hdf5 = H5Fis_hdf5(path);
 #endif
     if (hdf5 == 0) {
-        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot %s: not an HDF5 file", path,
-                      what);
+        char hint[1200];
+        sidecar_hint(path, hint, sizeof hint);
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot %s: not an HDF5 file%s", path,
+                      what, hint);
         return NBEP_EUSAGE;
     }
     hid_t fapl = nbep__output_fapl(false);

@@ -644,6 +644,30 @@ static double placed_before_in(const grid *g, size_t k, nbep_vec3 lo, nbep_vec3 
     return v;
 }
 
+/* Why a group finds no room at all, for the end of its message (else ""): the axes along which
+ * its region [lo, hi] is narrower than a diameter 2r (until 2026-11-30 the message said only
+ * "placed 0 (packing fraction 0.00)", as if the region had filled up), or, every place tried
+ * having overlapped a plane (plane_out of tries), the planes. */
+static void no_room_why(nbep_vec3 lo, nbep_vec3 hi, double r, uint64_t plane_out, uint64_t tries,
+                        char *buf, size_t len)
+{
+    const double side[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
+    char axes[96] = "";
+    for (int a = 0; a < 3; a++)
+        if (side[a] < 2.0 * r) {
+            size_t used = strlen(axes);
+            snprintf(axes + used, sizeof axes - used, "%s%c (%g)", used ? ", " : "", "xyz"[a],
+                     side[a]);
+        }
+    if (axes[0])
+        snprintf(buf, len, ": the region is narrower than their diameter, %g, along %s", 2.0 * r,
+                 axes);
+    else if (tries > 0 && plane_out == tries)
+        snprintf(buf, len, ": every place tried in the region overlaps a plane");
+    else if (len)
+        buf[0] = '\0';
+}
+
 /* Uniform in the region shrunk by the radius, rejecting overlaps with every sphere placed so
  * far (by the nearest image along periodic axes, g->pb) and with the planes. Returns false
  * when out of memory. */
@@ -660,10 +684,12 @@ static bool place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep_
     for (uint64_t q = 0; q < e->count; q++) {
         probe pr = {s, g->pb, {0.0, 0.0, 0.0}, r, NULL, NULL};
         bool placed = false;
-        uint64_t a = 0;
+        uint64_t a = 0, plane_out = 0;
         for (; room && !placed && a < RANDOM_ATTEMPTS; a++) {
             pr.p = try_at(seed, k, q, a, lo, hi);
-            placed = clear_of_planes(s, pr.p, r) && !probe_near(g, &pr, reach);
+            const bool clear = clear_of_planes(s, pr.p, r);
+            plane_out += !clear;
+            placed = clear && !probe_near(g, &pr, reach);
         }
         if (!placed) {
             blame in_way = {NULL, 0, NBEP_DIAG_UNRANKED};
@@ -676,11 +702,13 @@ static bool place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep_
                 snprintf(others, sizeof others,
                          "; %.2f with the spheres placed before it in the region",
                          ((double)q * ball_volume(r) + before) / vol);
+            char why[160];
+            no_room_why(e->lo, e->hi, r, plane_out, a, why, sizeof why);
             fill_failed(c, s, e, plane_at, in_way,
                         "spheres.[%zu]: could not place %" PRIu64
                         " spheres of radius %g in the region: placed %" PRIu64
-                        " (packing fraction %.2f%s)",
-                        k, e->count, r, q, (double)q * ball_volume(r) / vol, others);
+                        " (packing fraction %.2f%s)%s",
+                        k, e->count, r, q, (double)q * ball_volume(r) / vol, others, why);
             return true;
         }
         size_t id = e->first + (size_t)q;
@@ -811,7 +839,8 @@ static bool place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep
                 if (box_periodic && box_periodic[a] && rlo[a] == blo[a] && rhi[a] == bhi[a])
                     fax[a] = (lattice_axis){rhi[a] - rlo[a], true};
         const double most_fcc = lattice_capacity(fax, lattice_min_spacing(r, true), true);
-        char hint[96] = "";
+        char hint[96] = "", why[160];
+        no_room_why(e->lo, e->hi, r, 0, 0, why, sizeof why);
         if (!fcc && most_fcc >= (double)e->count)
             snprintf(hint, sizeof hint,
                      "; place = \"fcc\" holds up to %.0f (packing fraction %.2f)", most_fcc,
@@ -819,9 +848,9 @@ static bool place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep
         fill_failed(c, s, e, plane_at, (blame){NULL, 0, NBEP_DIAG_UNRANKED},
                         "spheres.[%zu]: could not place %" PRIu64
                         " spheres of radius %g in the region: a %s lattice holds at "
-                        "most %.0f (packing fraction %.2f)%s",
+                        "most %.0f (packing fraction %.2f)%s%s",
                         k, e->count, r, fcc ? "face-centred cubic" : "simple cubic", most,
-                        most * ball_volume(r) / vol, hint);
+                        most * ball_volume(r) / vol, why, hint);
         return true;
     }
     uint64_t n[3];

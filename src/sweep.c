@@ -427,14 +427,15 @@ void nbep_sweep_check_print(FILE *f, const nbep_sweep_check_report *r)
 
 /* Whether an override changes nothing a run computes: the thread count (SPEC: frames are
  * bitwise identical for any thread count), the output file (the sweep names its files) and
- * the study's own settings (sweep.*: a run's combination and seed are in its other
- * overrides; README's way to add replicas, --set sweep.replicas=N, re-ran every finished run
- * while it counted). */
+ * the study's own settings (sweep.*, or the group whole, `--set sweep={...}` for a deck without
+ * one: a run's combination and seed are in its other overrides; README's way to add replicas,
+ * --set sweep.replicas=N, re-ran every finished run while it counted, and `sweep=` did until
+ * 2026-11-30). */
 static bool override_is_neutral(const char *ov, size_t len)
 {
     if (len > 6 && strncmp(ov, "sweep.", 6) == 0)
         return true;
-    static const char *const neutral[] = {"run.threads", "output.file"};
+    static const char *const neutral[] = {"run.threads", "output.file", "sweep"};
     for (size_t k = 0; k < sizeof neutral / sizeof neutral[0]; k++) {
         size_t n = strlen(neutral[k]);
         if (len > n && strncmp(ov, neutral[k], n) == 0) {

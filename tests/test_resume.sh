@@ -127,6 +127,17 @@ EOF2
         "same_frames $tmp/step-$mode-whole.h5 $tmp/step-$mode-part.h5"
 done
 
+# a granular scene (e < 1 under acceleration) resumes from the frame's motion, event slots and
+# one resting plane per sphere: which spheres are held, their other contacts and the settling
+# under way are found again, so its frames can leave the uninterrupted run's (a 300-sphere pour
+# resumed at step 1200 differed from step 1300 on): the resume says so in one line; an elastic
+# scene's resume (the end line's above) is exact and says nothing of it
+bin/nbep run inputs/bounce.deck --quiet -n 100 -o $tmp/granular.h5
+bin/nbep run inputs/bounce.deck -n 200 --resume $tmp/granular.h5 2>$tmp/granular.err
+check "a granular scene's resume says its frames can differ from an uninterrupted run's" \
+    "grep -q '^nbep: note: .*granular.h5 is a granular scene (e < 1 under acceleration): .*not which spheres are held.*from step 100; .*can differ from an uninterrupted run' $tmp/granular.err"
+check "an elastic scene's resume says nothing of it" "! grep -q 'granular' $tmp/end-line.err"
+
 # cells mode without a box (the hopper: its cells cover the spheres' extent, laid out afresh at
 # each rebuild and whenever the spheres leave it, which follows from the state): a resumed run
 # is bitwise the whole run too

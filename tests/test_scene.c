@@ -1370,6 +1370,49 @@ static void test_fcc_fill_that_cannot_fit_names_its_capacity(void **state)
                        "1099 (packing fraction 0.58)");
 }
 
+/* A group that finds no room at all says why (until 2026-11-30 "placed 0 (packing fraction
+ * 0.00)" alone, as if the region had filled up): a region narrower than a diameter along some
+ * axes names them with their widths, for random and lattice placement; a slot between two
+ * planes narrower than a diameter, over a region wide enough, says every place tried overlapped
+ * a plane. A region that merely fills up says neither
+ * (test_random_fill_that_cannot_fit_names_its_packing_fraction, and the lattice's above). */
+static void test_a_group_without_room_says_why(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *deck =
+        write_deck("scene_no_room.deck",
+                   "planes = ( { normal = [1.0, 0.0, 0.0]; point = [-0.04, 0.0, 0.0]; },\n"
+                   "           { normal = [-1.0, 0.0, 0.0]; point = [0.04, 0.0, 0.0]; } );\n"
+                   "spheres = ( { count = 10; radius = 0.05; mass = 1.0; place = \"random\";\n"
+                   "  region: { min = [-0.5, 0.0, 0.0]; max = [0.5, 1.0, 1.0]; }; } );\n",
+                   buf, sizeof buf);
+    char want[512];
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    snprintf(want, sizeof want,
+             "%s:3: spheres.[0]: could not place 10 spheres of radius 0.05 in the region: placed "
+             "0 (packing fraction 0.00): every place tried in the region overlaps a plane",
+             deck);
+    ASSERT_DIAG(&f->d, want);
+    /* the region 0.08 wide along x and 0.06 along z */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].region.min=[-0.04, 0.0, 0.0]",
+               "spheres.[0].region.max=[0.04, 1.0, 0.06]");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].region.min=[-0.04, 0.0, 0.0]: spheres.[0]: could not "
+                       "place 10 spheres of radius 0.05 in the region: placed 0 (packing fraction "
+                       "0.00): the region is narrower than their diameter, 0.1, along x (0.08), "
+                       "z (0.06)");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "spheres.[0].region.max.[2]=0.06",
+               "spheres.[0].place=\"lattice\"");
+    ASSERT_DIAG(&f->d, "--set spheres.[0].region.max.[2]=0.06: spheres.[0]: could not place 10 "
+                       "spheres of radius 0.05 in the region: a simple cubic lattice holds at most "
+                       "0 (packing fraction 0.00): the region is narrower than their diameter, "
+                       "0.1, along z (0.06)");
+}
+
 /* A group that a --set keeps from being placed (its radius, its count, its region) names that
  * --set, the first typed of them, as an overlap does (until 2026-11-30 the deck's line of the
  * count, which the user had not touched); one that the deck alone keeps out stays at its count's
@@ -2256,6 +2299,7 @@ int main(void)
         T(test_fcc_takes_the_even_sites_x_fastest_at_the_largest_spacing),
         T(test_fcc_packs_past_the_simple_cubic_lattice),
         T(test_fcc_fill_that_cannot_fit_names_its_capacity),
+        T(test_a_group_without_room_says_why),
         T(test_include_is_refused_at_its_line),
         T(test_include_in_a_set_is_refused),
         T(test_overlaps_with_spheres_and_planes_are_named),

@@ -59,6 +59,15 @@ check "--set sweep.replicas=3: 6 runs, the 4 finished reused (exit $rc, $(json "
 check "... run 0's file untouched" "[ '$(md5sum <"$tmp/s.sweep/run-0000.h5")' = '$md5_0' ]"
 run_sweep "$tmp/s.deck" -o "$tmp/s" --quiet --set sweep.replicas=3 --summary "$tmp/again.json"
 check "the same command again reuses all 6" "[ \"\$(json '$tmp/again.json' reused)\" = 6 ]"
+# the study given whole on the command line (a deck without a sweep group: `--set sweep={...}`)
+# is the study's setting as much as `sweep.vary=...`: either spelling reuses the other's runs
+# (until 2026-11-30 `sweep=` was compared as a run's own, and every finished run ran again)
+grep -v '^sweep:' "$tmp/s.deck" >"$tmp/nosweep.deck"
+vary='vary = ( { key = "physics.restitution"; values = [1.0, 0.9]; } )'
+run_sweep "$tmp/nosweep.deck" -o "$tmp/whole" --quiet --set "sweep.$vary" --summary "$tmp/w1.json"
+run_sweep "$tmp/nosweep.deck" -o "$tmp/whole" --quiet --set "sweep={ $vary; }" --summary "$tmp/w2.json"
+check "--set sweep={...} after --set sweep.vary=...: both runs reused (exit $rc, $(json "$tmp/w2.json" reused) reused)" \
+    "[ $rc = 0 ] && [ \"\$(json '$tmp/w1.json' runs)\" = 2 ] && [ \"\$(json '$tmp/w2.json' reused)\" = 2 ]"
 
 # the totals' JSON names the folder whatever it holds (a quote and a newline made the
 # hand-written line no JSON until 2026-11-30)
