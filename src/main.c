@@ -68,12 +68,22 @@ static nbep_status cmd_run(const nbep_cli *cli, nbep_diag *d)
     return nbep_run(&rq, &res, d);
 }
 
+/* The line of a check stopped by signal st, which writes no report. */
+static nbep_status check_stopped(nbep_status st, nbep_diag *d)
+{
+    NBEP_FAIL(d, st, "nbep: check %s by SIG%s; nothing written",
+              st == NBEP_ESIGTERM ? "terminated" : "interrupted",
+              st == NBEP_ESIGTERM ? "TERM" : "INT");
+}
+
 static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
 {
     nbep_scene sc;
     nbep_status st = nbep_scene_load_from(cli->path, (const char *const *)cli->overrides,
                                           (const char *const *)cli->origins, cli->n_overrides,
-                                          &sc, d);
+                                          &stop_signal, &sc, d);
+    if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM) /* one in the placement ends it there */
+        return check_stopped(st, d);
     if (st != NBEP_OK)
         return st;
     /* as nbep run would: the run's file, and the report's, against the deck and each other,
@@ -105,9 +115,7 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
     const nbep_status sig = nbep_sim_stop_status(&stop_signal);
     if (sig != NBEP_OK) {
         nbep_scene_fini(&sc);
-        NBEP_FAIL(d, sig, "nbep: check %s by SIG%s; nothing written",
-                  sig == NBEP_ESIGTERM ? "terminated" : "interrupted",
-                  sig == NBEP_ESIGTERM ? "TERM" : "INT");
+        return check_stopped(sig, d);
     }
     if (st == NBEP_OK) {
         nbep_check_facts facts;

@@ -202,7 +202,8 @@ static nbep_status plan_create(const char *deck_path, const char *const *overrid
                                nbep_sweep_plan *out, nbep_diag *d)
 {
     nbep_scene sc;
-    nbep_status st = nbep_scene_load_from(deck_path, overrides, origins, n_overrides, &sc, d);
+    nbep_status st =
+        nbep_scene_load_from(deck_path, overrides, origins, n_overrides, NULL, &sc, d);
     if (st != NBEP_OK)
         return st;
     st = plan_of_scene(deck_path, overrides, origins, n_overrides, &sc, out, d);
@@ -370,7 +371,13 @@ nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides
         nbep_scene rs;
         const nbep_status rst = nbep_scene_load_run(p.deck_path, (const char *const *)ov,
                                                      (const char *const *)p.base_origins, n_ov,
-                                                     &rs, &dr);
+                                                     stop, &rs, &dr);
+        if (rst == NBEP_ESIGINT || rst == NBEP_ESIGTERM) {
+            /* Ctrl-C among its spheres (a second or so a million): the caller says so */
+            nbep_diag_fini(&dr);
+            nbep_sweep_overrides_free(ov, n_ov);
+            break;
+        }
         rep->checked++;
         if (rst == NBEP_OK) {
             char *path = nbep_sweep_run_path(&p, run); /* the run's file, which its sidecar names */
