@@ -354,6 +354,10 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                                 .take_state = &sc.state, /* nothing reads the scene's again */
                                 .t_begin = t_begin};
         st = nbep_sim_create(&sc, &opt, &sim, d);
+        /* a signal while the run's memory was made (up to a second for millions of spheres):
+         * as during the load, the file not changed yet (it was taken after frame 0) */
+        if (st == NBEP_OK && (st = nbep_sim_stop_status(rq->stop_signal)) != NBEP_OK)
+            st = not_begun(st, d);
         /* only now is the file changed: a resumed one appended to, a new one put at its path
          * (an older file there survives a deck that sim_create refuses) */
         if (st == NBEP_OK)
