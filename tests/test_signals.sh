@@ -65,56 +65,85 @@ for sig in TERM INT; do
     lines=$(wc -l < "$tmp/stderr-$sig")
     check "SIG$sig: that is the only line on stderr (got $lines)" "[ $lines = 1 ]"
 done
-# a signal while the deck is read and the spheres placed (600000 random spheres: about a second
-# here) ends the run before it begins, with nothing written: exit 130, no file, one line (it was
-# taken only after the first step, and a run of 0 steps ignored it and exited 0). The signal
-# comes at a quarter of the time `nbep check` takes to place them; skipped where that is under
-# 0.2 s (a machine too fast for the signal to land inside the placement)
+# a signal while the deck is read and the spheres placed (1.5 million random spheres: a few
+# seconds here, placement and the overlap check at t0 alike) ends the run before it begins,
+# with nothing written: exit 130, no file, one line (it was taken only after the first step,
+# and a run of 0 steps ignored it and exited 0). The signal comes at a quarter of the time
+# `nbep check` takes to place and check them, and the run must end within a third of that time
+# after it: placement and the check look at the signal every 4096 spheres (until 2026-11-30
+# only once both had ended, three quarters of that time later). Skipped where that time is
+# under 0.2 s (a machine too fast for the signal to land inside the placement)
 cat >"$tmp/place.deck" <<'EOF'
 run: { algorithm = "predictive"; steps = 0; dt = 1.0e-3; seed = 1; };
-box: { min = [0.0, 0.0, 0.0]; max = [80.0, 80.0, 80.0]; };
-spheres = ( { count = 600000; radius = 0.05; mass = 1.0; place = "random"; } );
+box: { min = [0.0, 0.0, 0.0]; max = [100.0, 100.0, 100.0]; };
+spheres = ( { count = 1500000; radius = 0.05; mass = 1.0; place = "random"; } );
 EOF
 t0=$(date +%s.%N)
 bin/nbep check "$tmp/place.deck" >/dev/null
 t1=$(date +%s.%N)
-wait_s=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.3f", (b - a) / 4 }')
-if awk -v w="$wait_s" 'BEGIN { exit !(w >= 0.05) }'; then
-    bin/nbep run "$tmp/place.deck" --quiet -o "$tmp/place.h5" 2>"$tmp/stderr-place" &
+load_s=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.3f", b - a }')
+wait_s=$(awk -v w="$load_s" 'BEGIN { printf "%.3f", w / 4 }')
+# stop_placing SIG STDOUT STDERR NBEP-ARGS...: starts nbep, sends SIG wait_s later and waits
+# for it to end (a hang fails the checks, not the suite: KILL after twice the load's time and
+# more); sets rc and took, the seconds from the signal to the end
+stop_placing() {
+    local sig=$1 so=$2 se=$3 pid guard t0 t1
+    shift 3
+    bin/nbep "$@" >"$so" 2>"$se" &
     pid=$!
     sleep "$wait_s"
-    kill -INT $pid
+    t0=$(date +%s.%N)
+    kill -"$sig" $pid
+    ( sleep "$(awk -v w="$load_s" 'BEGIN { print 2 * w + 10 }')"; kill -KILL $pid 2>/dev/null ) &
+    guard=$!
     wait $pid
     rc=$?
+    t1=$(date +%s.%N)
+    kill $guard 2>/dev/null
+    wait $guard 2>/dev/null
+    took=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.3f", b - a }')
+}
+# whether took is under a third of the load's time
+quick() { awk -v t="$took" -v w="$load_s" 'BEGIN { exit !(t < w / 3) }'; }
+if awk -v w="$wait_s" 'BEGIN { exit !(w >= 0.05) }'; then
+    stop_placing INT /dev/null "$tmp/stderr-place" run "$tmp/place.deck" --quiet -o "$tmp/place.h5"
     check "SIGINT while placing the spheres exits 130 (got $rc)" "[ $rc = 130 ]"
+    check "within a third of the load's time after it (took $took s of ${load_s} s)" \
+        quick
     check "and writes nothing" "[ ! -e '$tmp/place.h5' ] && [ ! -e '$tmp/place.xmf' ]"
     check "and says so in one line" \
         "[ \$(wc -l < '$tmp/stderr-place') = 1 ] && grep -q 'before the run began; nothing written' '$tmp/stderr-place'"
+    # nbep check stops there the same way: one line, no report (until 2026-11-30 after the
+    # placement and the check)
+    stop_placing TERM "$tmp/check-place-stdout" "$tmp/check-place-stderr" check "$tmp/place.deck"
+    check "nbep check, SIGTERM while placing: exit 143 (got $rc) as soon (took $took s)" \
+        "[ $rc = 143 ] && quick"
+    check "nbep check, SIGTERM while placing: one line, no report" \
+        "[ \$(wc -l < '$tmp/check-place-stderr') = 1 ] && [ ! -s '$tmp/check-place-stdout' ] &&
+         grep -q '^nbep: check terminated by SIGTERM; nothing written\$' '$tmp/check-place-stderr'"
 else
-    echo "skip SIGINT while placing: placement takes only ${wait_s}x4 s here"
+    echo "skip SIGINT while placing: placement takes only ${load_s} s here"
 fi
-# two signals, SIGINT then SIGTERM 0.1 s later (a job's Ctrl-C, then its time limit): the first
-# wins, exit 130 (the handlers stored the last: 143). They come while the spheres are placed,
-# where nothing looks at the signal until the placement ends, so that both land in the run:
-# in its steps every algorithm now takes the first within milliseconds (since 2026-11-30 naive
-# and seminaive too, whose steps of a second this test used) and is gone before a second comes
-# 0.1 s later; and two sent back to back can be taken at once, the second's handler nested in
-# the first's and storing first (`kill -INT $pid; kill -TERM $pid` to naive on one thread
-# exited 143 in 5 of 6 tries, and in 6 of 6 before 2026-11-30). Skipped where the placement
-# takes under 0.4 s.
+# two signals, SIGINT then SIGTERM (a job's Ctrl-C, then its time limit): the first wins, exit
+# 130 (the handlers stored the last: 143). They are sent back to back while the spheres are
+# placed, on the one thread the process has then: the second's handler waits for the first's
+# (both pending: the kernel hands it SIGINT first), and the run ends within milliseconds of the
+# first (since 2026-11-30 placement looks at it; before, this test sent the second 0.1 s
+# after the first, and both landed in the placement, which did not). Two sent back to back to
+# a run of several threads can be taken by two threads at once, in either order (README).
+# Skipped where the placement takes under 0.4 s.
 if awk -v w="$wait_s" 'BEGIN { exit !(w >= 0.1) }'; then
     bin/nbep run "$tmp/place.deck" --quiet -o "$tmp/two.h5" 2>"$tmp/stderr-two" &
     pid=$!
     sleep "$wait_s"
     kill -INT $pid
-    sleep 0.1
-    kill -TERM $pid
+    kill -TERM $pid 2>/dev/null
     wait $pid
     rc=$?
     check "SIGINT then SIGTERM: the first wins, exit 130 (got $rc)" \
         "[ $rc = 130 ] && grep -q 'interrupted by SIGINT' '$tmp/stderr-two'"
 else
-    echo "skip SIGINT then SIGTERM: placement takes only ${wait_s}x4 s here"
+    echo "skip SIGINT then SIGTERM: placement takes only ${load_s} s here"
 fi
 # the two at once to a run on one thread, within a naive step: sent while the process is
 # stopped, both are pending when it goes on, and the kernel hands the thread SIGINT's handler
