@@ -35,9 +35,9 @@ enum {
     BLOCK_CELLS = BLOCK_SIDE * BLOCK_SIDE * BLOCK_SIDE,
     /* spheres between two looks at the stop signal, in placement and the overlap check: a few
      * milliseconds of either (about 1 us a sphere), so a job's SIGTERM among tens of millions
-     * of spheres ends the load at once (it was taken once both had ended: 9 s after it for 2
-     * million random spheres on a loaded machine here), for a relaxed load every few thousand
-     * spheres' hashing and grid walks */
+     * of spheres ends the load at once (until 2026-11-30 it was taken once both had ended: 6 s
+     * after it for 2 million random spheres signalled 1 s into their load here), for a relaxed
+     * load every few thousand spheres' hashing and grid walks */
     PLACE_LOOK = 4096
 };
 
@@ -978,8 +978,7 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
     overlaps o = {.c = c, .s = s, .e = e, .n_entries = n_entries, .placed = placed,
                   .box = n_entries ? box_of(e[0].setting) : NULL};
     const double blo[3] = {box_lo.x, box_lo.y, box_lo.z}, bhi[3] = {box_hi.x, box_hi.y, box_hi.z};
-    nbep_status stop = NBEP_OK;
-    for (size_t i = 0; i < s->n && (stop = look(c, i)) == NBEP_OK; i++)
+    for (size_t i = 0; i < s->n; i++)
         for (size_t p = 0; p < s->n_planes; p++) {
             double by = s->radius[i] - (nbep_vec3_dot(s->plane_normal[p], s->pos[i]) -
                                         s->plane_offset[p]);
@@ -997,7 +996,7 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
 
     grid g;
     bool ok = grid_init(&g, s, e, n_entries);
-    for (size_t i = 0; ok && stop == NBEP_OK && i < s->n; i++)
+    for (size_t i = 0; ok && i < s->n; i++)
         ok = grid_insert(&g, i);
     /* Each pair once: a sphere looks at its own level (partners of smaller id) and at the
      * levels of larger spheres (all partners), never at smaller spheres, whose cells would be
@@ -1005,8 +1004,9 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
     double rmax_all = 0.0;
     for (int l = 0; ok && l < LEVELS_MAX; l++)
         rmax_all = fmax(rmax_all, g.lv[l].rmax);
-    for (size_t i = 0; ok && stop == NBEP_OK && i < s->n && (stop = look(c, i)) == NBEP_OK;
-         i++) {
+    /* the check's time (the planes' and the grid's loops above are a few per cent of it) */
+    nbep_status stop = NBEP_OK;
+    for (size_t i = 0; ok && i < s->n && (stop = look(c, i)) == NBEP_OK; i++) {
         o.i = i;
         int own = level_of(&g, s->radius[i]);
         /* periodic faces: the copies of i across each face it is near (within the largest
