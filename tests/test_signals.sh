@@ -157,7 +157,7 @@ if command -v gdb >/dev/null; then
         -ex 'break nbep_sim_create' -ex run -ex delete -ex 'signal SIGTERM' \
         --args bin/nbep run inputs/paper-box.deck --quiet -n 3 --set 'spheres.[0].count=1000' \
         -o "$tmp/create.h5" --summary "$tmp/create.json" >"$tmp/gdb-create" 2>&1
-    if grep -q '^Breakpoint 1, ' "$tmp/gdb-create"; then
+    if grep -q 'Breakpoint 1, ' "$tmp/gdb-create"; then
         check "SIGTERM while the run's memory is made: exit 143, one line, nothing written" \
             "grep -q 'exited with code 0217' '$tmp/gdb-create' &&
              [ \$(grep -c '^nbep: ' '$tmp/gdb-create') = 1 ] &&
@@ -168,6 +168,42 @@ if command -v gdb >/dev/null; then
     fi
 else
     echo "skip SIGTERM while the run's memory is made: no gdb here"
+fi
+# cells mode's rebuilds (every slot predicted afresh: about n/2 collisions' cost, a second of
+# the first step's set-up for 2 million spheres) look at the signal every 16384 spheres of
+# their predictions and abandon the step there, before any event: a SIGTERM as the first
+# rebuild's predictions began ended a run of 2 million spheres 0.06 to 0.1 s after it, where
+# until 2026-11-30 the rebuild ran on and the step's events took it (1.6 to 1.9 s). gdb sends
+# the signal as the first chunk's predictions begin (the fluid's 32000 spheres on one thread:
+# two chunks; 64000 on two threads, two each), at the first rebuild and at step 2's
+# (output.every = 1), and the run must end before the slots are scheduled; skipped without gdb
+rebuild_stop() {
+    local name=$1 skip=$2 want=$3
+    shift 3
+    rm -f "$tmp/rebuild-$name.h5"
+    timeout -k 5 120 gdb -q -batch -ex 'handle SIGTERM nostop noprint pass' \
+        -ex 'break nbep_evloop_predict' -ex "ignore 1 $skip" -ex run -ex delete \
+        -ex 'break nbep_evloop_schedule' -ex 'signal SIGTERM' -ex 'continue' \
+        --args bin/nbep run inputs/hard-sphere-fluid.deck --quiet -n 3 --set output.every=1 "$@" \
+        -o "$tmp/rebuild-$name.h5" >"$tmp/gdb-rebuild-$name" 2>&1
+    if grep -q 'Breakpoint 1, ' "$tmp/gdb-rebuild-$name"; then
+        check "cells mode, SIGTERM within the $name rebuild's predictions: exit 143 before they are scheduled, one line: ${want}FILE" \
+            "grep -q 'exited with code 0217' '$tmp/gdb-rebuild-$name' &&
+             ! grep -q 'Breakpoint 2, ' '$tmp/gdb-rebuild-$name' &&
+             [ \$(grep -c '^nbep: ' '$tmp/gdb-rebuild-$name') = 1 ] &&
+             grep -q '^nbep: terminated by SIGTERM $want' '$tmp/gdb-rebuild-$name'"
+    else
+        echo "skip SIGTERM within a cells rebuild: gdb could not stop the run here"
+    fi
+}
+if command -v gdb >/dev/null; then
+    first="during step 1, which is abandoned; the run ends after step 0, and its frames up to step 0 are in "
+    rebuild_stop first 0 "$first" -t 1
+    rebuild_stop step-2 2 "during step 2, which is abandoned; the run ends after step 1, and its frames up to step 1 are in " -t 1
+    rebuild_stop first-of-two-threads 0 "$first" -t 2 --set 'spheres.[0].count=64000' \
+        --set 'box.max=[48.1605, 48.1605, 48.1605]'
+else
+    echo "skip SIGTERM within a cells rebuild: no gdb here"
 fi
 # the two at once to a run on one thread, within a naive step: sent while the process is
 # stopped, both are pending when it goes on, and the kernel hands the thread SIGINT's handler
