@@ -876,6 +876,22 @@ MUTANTS = [
     ("check-study-run-stop-refused", "src/sweep.c",
      "        if (rst == NBEP_ESIGINT || rst == NBEP_ESIGTERM) {\n            /* Ctrl-C among",
      "        if (0) {\n            /* Ctrl-C among", ["tests/test_signals.sh"], None),
+    # a signal within a cells rebuild's predictions (pred_cells.c; test_signals.sh: gdb sends
+    # it as the first chunk begins, at the first rebuild and at step 2's, on 1 and 2 threads)
+    ("cells-rebuild-stop-never-looked", "src/pred_cells.c",
+     "                if (nbep_sim_stop_status(sim->opt.stop_signal) != NBEP_OK) {\n                    atomic_store_explicit(&c->rebuild_stop",
+     "                if (0) {\n                    atomic_store_explicit(&c->rebuild_stop",
+     ["tests/test_signals.sh"], None),
+    ("cells-rebuild-stop-one-chunk", "src/pred_cells.c",
+     "own.hi - lo > PREDICT_LOOK ? lo + PREDICT_LOOK : own.hi,", "own.hi,",
+     ["tests/test_signals.sh"], None),
+    ("cells-rebuild-stop-thread0-alone", "src/pred_cells.c",
+     "            if (atomic_load_explicit(&c->rebuild_stop, memory_order_relaxed)) {",
+     "            if (tid == 0 && atomic_load_explicit(&c->rebuild_stop, memory_order_relaxed)) {",
+     ["tests/test_signals.sh"], None),
+    ("cells-rebuild-stop-abandon-unsaid", "src/pred_cells.c",
+     "                if (tid == 0)\n                    nbep__sim_abandon(sim);\n                return;",
+     "                return;", ["tests/test_signals.sh"], None),
     # the first predictions' progress, and its live line ended by a signal among them
     ("setup-progress-dropped", "src/algo_predictive.c",
      "            nbep__sim_progress_setup(setup, (double)end / (double)total);", "            (void)0;",

@@ -22,8 +22,9 @@
 /* The one mutable global (STYLE 2): the signal that asked the run to stop, 0 if none. The
  * handler only sets it; the run polls it at the end of every step, and the algorithms' loops
  * also within a step (the predictive's every 65536 events or 1024 rounds, naive's and
- * seminaive's every 65536 pair tests or so, abandoning a step too long to wait for:
- * nbep_sim_run). The first signal wins: a
+ * seminaive's every 65536 pair tests or so, cells mode's rebuilds every 16384 predictions,
+ * abandoning a step too long to wait for: nbep_sim_run), and the deck's placement and overlap
+ * check every 4096 spheres (nbep_scene_load_from, nothing written). The first signal wins: a
  * SIGINT then a SIGTERM (a job's Ctrl-C, then its time limit) exits as interrupted, 130,
  * whichever the handlers stored last (a review saw 130 or 143 by the race). */
 static atomic_int stop_signal;
