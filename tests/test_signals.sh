@@ -199,6 +199,10 @@ rebuild_stop() {
 if command -v gdb >/dev/null; then
     first="during step 1, which is abandoned; the run ends after step 0, and its frames up to step 0 are in "
     rebuild_stop first 0 "$first" -t 1
+    # (the chunks' size, which no outcome shows: a chunk of the whole range would look only
+    # before it, and then once the predictions were all made)
+    check "cells mode: a rebuild predicts 16384 spheres of a thread's range at a time" \
+        "grep -Eq 'Breakpoint 1, .* lo=(lo@entry=)?0, hi=(hi@entry=)?16384, ' '$tmp/gdb-rebuild-first'"
     rebuild_stop step-2 2 "during step 2, which is abandoned; the run ends after step 1, and its frames up to step 1 are in " -t 1
     rebuild_stop first-of-two-threads 0 "$first" -t 2 --set 'spheres.[0].count=64000' \
         --set 'box.max=[48.1605, 48.1605, 48.1605]'
