@@ -868,6 +868,13 @@ MUTANTS = [
      "its first sphere's pairs and stops there with the same status and no message: only its "
      "loops over the planes and into its grid (a few per cent of the check, on spheres not yet "
      "placed, whose overlaps it never lists) come between, which no test can time"),
+    ("sweep-plan-never-looked", "src/sweep.c",
+     "                                 stop_signal, &p, dd);",
+     "                                 NULL, &p, dd);", ["tests/test_signals.sh"], None),
+    ("sweep-plan-stop-unsaid", "src/sweep.c",
+     "    if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)\n        nbep_diag_add(dd, __FILE__, __LINE__,\n                      \"nbep: sweep %s",
+     "    if (0)\n        nbep_diag_add(dd, __FILE__, __LINE__,\n                      \"nbep: sweep %s",
+     ["tests/test_signals.sh"], None),
     ("stop-sigterm-as-sigint", "src/status.c",
      "return !sig ? NBEP_OK : sig == SIGTERM ? NBEP_ESIGTERM : NBEP_ESIGINT;",
      "return !sig ? NBEP_OK : NBEP_ESIGINT;", ["test_scene", "tests/test_signals.sh"], None),

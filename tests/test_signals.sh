@@ -122,6 +122,16 @@ if awk -v w="$wait_s" 'BEGIN { exit !(w >= 0.05) }'; then
     check "nbep check, SIGTERM while placing: one line, no report" \
         "[ \$(wc -l < '$tmp/check-place-stderr') = 1 ] && [ ! -s '$tmp/check-place-stdout' ] &&
          grep -q '^nbep: check terminated by SIGTERM; nothing written\$' '$tmp/check-place-stderr'"
+    # and nbep sweep, which places the deck's spheres once to plan its runs: nothing made, not
+    # even its folder (until 2026-11-30 the plan went on, and the folder and its tables of
+    # runs not run were made before the signal was taken)
+    stop_placing TERM /dev/null "$tmp/sweep-place-stderr" sweep "$tmp/place.deck" \
+        --set sweep.replicas=2 -o "$tmp/sweep-place"
+    check "nbep sweep, SIGTERM while placing its deck's spheres: exit 143 (got $rc) as soon (took $took s)" \
+        "[ $rc = 143 ] && quick"
+    check "nbep sweep, SIGTERM while placing: one line, nothing made" \
+        "[ \$(wc -l < '$tmp/sweep-place-stderr') = 1 ] && [ ! -e '$tmp/sweep-place.sweep' ] &&
+         grep -q '^nbep: sweep terminated by SIGTERM before its first run; nothing written\$' '$tmp/sweep-place-stderr'"
 else
     echo "skip SIGINT while placing: placement takes only ${load_s} s here"
 fi
