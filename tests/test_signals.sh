@@ -351,14 +351,14 @@ if command -v script >/dev/null; then
     # 2026-11-30 the line stayed empty until the first step); a SIGTERM among them ends that
     # line with the progress's last one, for step 0, and the run's end lines follow on lines of
     # their own (not on the live line)
-    # (the signal 1 s after frame 0 is in the file, when the predictions begin: 1 s after the
-    # file appeared, a loaded machine had not yet written frame 0, and the run stopped at
-    # step 0 before a prediction, its line never shown)
+    # (the signal 3 s after frame 0 is in the file, when the predictions begin: 1 s after the
+    # file appeared, a loaded machine, 8 to 14 runnable processes on 2 cores, had not yet
+    # shown the first chunk's line, and the run stopped at step 0 without it)
     out=$tmp/live-setup.h5
     timeout -k 5 60 script -qc "bin/nbep run inputs/paper-box.deck -t 1 --set spheres.[0].count=65536 -o $out & p=\$!;
         for _ in \$(seq 300); do [ -s $out ] && break; sleep 0.1; done;
         for _ in \$(seq 300); do bin/nbep info $out 2>/dev/null | grep -q '^frames: *[1-9]' && break; sleep 0.1; done;
-        sleep 1; kill -TERM \$p; wait \$p" "$tmp/typescript-setup" >/dev/null 2>&1
+        sleep 3; kill -TERM \$p; wait \$p" "$tmp/typescript-setup" >/dev/null 2>&1
     check "on a terminal, the first predictions show their part made (first predictions NN.N%)" \
         "tr '\r' '\n' < '$tmp/typescript-setup' | grep -Eq '^first predictions +[0-9.]+%  ETA [0-9]+ s'"
     check "a SIGTERM among them ends the live line with step 0's, the end lines on their own" \
