@@ -842,6 +842,67 @@ MUTANTS = [
     ("detect-overlap-rel-not-kept", "src/algo_detect.c",
      "            mx->overlap_rel = fmax(mx->overlap_rel, deep.overlap_rel);", "",
      ["test_detect_stop"] + SIM, None),
+    # a signal while the spheres are placed and checked (scene_place.c; test_scene: a flag
+    # raised before, each loop's look alone on its deck; test_signals.sh: SIGINT into 1.5
+    # million random spheres, timed), and after the run's memory is made (run.c)
+    ("place-stop-random-never-looked", "src/scene_place.c",
+     "        const nbep_status stop = look(c, q);\n        if (stop != NBEP_OK)\n            return stop;\n        probe pr",
+     "        probe pr", ["test_scene", "tests/test_signals.sh"], None),
+    ("place-stop-lattice-never-looked", "src/scene_place.c",
+     "        const nbep_status stop = look(c, q);\n        if (stop != NBEP_OK)\n            return stop;\n        while (fcc &&",
+     "        while (fcc &&", ["test_scene"], None),
+    ("place-stop-looks-once", "src/scene_place.c",
+     "    return q % PLACE_LOOK == 0 ? nbep_status_of_stop(c->stop) : NBEP_OK;",
+     "    return q == 0 ? nbep_status_of_stop(c->stop) : NBEP_OK;", ["tests/test_signals.sh"], None),
+    ("place-stop-overlap-check-never-looked", "src/scene_place.c",
+     "for (size_t i = 0; ok && i < s->n && (stop = look(c, i)) == NBEP_OK; i++) {",
+     "for (size_t i = 0; ok && i < s->n; i++) {", ["test_scene"], None),
+    ("place-stop-overlaps-listed", "src/scene_place.c",
+     "    if (stop != NBEP_OK) /* the overlaps found so far are not all: none is listed */\n        return stop;\n",
+     "", ["test_scene"], None),
+    ("place-stop-status-dropped", "src/scene_place.c",
+     "    if (st == NBEP_ENOMEM)\n        NBEP_FAIL(c->d, NBEP_ENOMEM, \"nbep: no memory to place %zu spheres\", s->n);\n    return st;",
+     "    if (st == NBEP_ENOMEM)\n        NBEP_FAIL(c->d, NBEP_ENOMEM, \"nbep: no memory to place %zu spheres\", s->n);\n    return NBEP_OK;",
+     ["test_scene", "tests/test_signals.sh"],
+     "a placement that stopped then reads as done, and the overlap check that follows looks at "
+     "its first sphere's pairs and stops there with the same status and no message: only its "
+     "loops over the planes and into its grid (a few per cent of the check, on spheres not yet "
+     "placed, whose overlaps it never lists) come between, which no test can time"),
+    ("sweep-plan-never-looked", "src/sweep.c",
+     "                                 stop_signal, &p, dd);",
+     "                                 NULL, &p, dd);", ["tests/test_signals.sh"], None),
+    ("sweep-plan-stop-unsaid", "src/sweep.c",
+     "    if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)\n        nbep_diag_add(dd, __FILE__, __LINE__,\n                      \"nbep: sweep %s",
+     "    if (0)\n        nbep_diag_add(dd, __FILE__, __LINE__,\n                      \"nbep: sweep %s",
+     ["tests/test_signals.sh"], None),
+    ("stop-sigterm-as-sigint", "src/status.c",
+     "return !sig ? NBEP_OK : sig == SIGTERM ? NBEP_ESIGTERM : NBEP_ESIGINT;",
+     "return !sig ? NBEP_OK : NBEP_ESIGINT;", ["test_scene", "tests/test_signals.sh"], None),
+    ("run-placement-stop-unsaid", "src/run.c",
+     "    if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)\n        return not_begun(st, d);",
+     "", ["tests/test_signals.sh"], None),
+    ("check-placement-stop-unsaid", "src/main.c",
+     "    if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM) /* one in the placement ends it there */\n        return check_stopped(st, d);\n",
+     "", ["tests/test_signals.sh"], None),
+    ("check-study-run-stop-refused", "src/sweep.c",
+     "        if (rst == NBEP_ESIGINT || rst == NBEP_ESIGTERM) {\n            /* Ctrl-C among",
+     "        if (0) {\n            /* Ctrl-C among", ["tests/test_signals.sh"], None),
+    # a signal within a cells rebuild's predictions (pred_cells.c; test_signals.sh: gdb sends
+    # it as the first chunk begins, at the first rebuild and at step 2's, on 1 and 2 threads)
+    ("cells-rebuild-stop-never-looked", "src/pred_cells.c",
+     "                if (nbep_sim_stop_status(sim->opt.stop_signal) != NBEP_OK) {\n                    atomic_store_explicit(&c->rebuild_stop",
+     "                if (0) {\n                    atomic_store_explicit(&c->rebuild_stop",
+     ["tests/test_signals.sh"], None),
+    ("cells-rebuild-stop-one-chunk", "src/pred_cells.c",
+     "own.hi - lo > PREDICT_LOOK ? lo + PREDICT_LOOK : own.hi,", "own.hi,",
+     ["tests/test_signals.sh"], None),
+    ("cells-rebuild-stop-thread0-alone", "src/pred_cells.c",
+     "            if (atomic_load_explicit(&c->rebuild_stop, memory_order_relaxed)) {",
+     "            if (tid == 0 && atomic_load_explicit(&c->rebuild_stop, memory_order_relaxed)) {",
+     ["tests/test_signals.sh"], None),
+    ("cells-rebuild-stop-abandon-unsaid", "src/pred_cells.c",
+     "                if (tid == 0)\n                    nbep__sim_abandon(sim);\n                return;",
+     "                return;", ["tests/test_signals.sh"], None),
     # the first predictions' progress, and its live line ended by a signal among them
     ("setup-progress-dropped", "src/algo_predictive.c",
      "            nbep__sim_progress_setup(setup, (double)end / (double)total);", "            (void)0;",
@@ -1056,8 +1117,16 @@ MUTANTS = [
     ("resume-line-changes-unsaid", "src/output_resume.c",
      "    if (strcmp(algo, sc->algorithm) != 0)\n        snprintf(changed, sizeof changed, \", algorithm %s\", sc->algorithm);",
      "", ["tests/test_resume.sh"], None),
-    ("run-signal-while-placing-ignored", "src/run.c", "    if (sig != NBEP_OK) {\n        nbep_scene_fini(&sc);",
-     "    if (0) {\n        nbep_scene_fini(&sc);", ["tests/test_signals.sh"], None),
+    ("run-signal-while-placing-ignored", "src/run.c",
+     "    if (st == NBEP_OK && (st = nbep_sim_stop_status(rq->stop_signal)) != NBEP_OK)\n        nbep_scene_fini(&sc);",
+     "    if (0)\n        nbep_scene_fini(&sc);", ["tests/test_signals.sh"],
+     "since 2026-11-30 placement and the overlap check look at the signal themselves, and the look "
+     "after nbep_sim_create takes one that came after their last look the same way (the same line, "
+     "exit and nothing written): this look only spares that signal the making of the run's memory, "
+     "a second at most, which no test can time"),
+    ("run-signal-while-creating-ignored", "src/run.c",
+     "        if (st == NBEP_OK && (st = nbep_sim_stop_status(rq->stop_signal)) != NBEP_OK)\n            st = not_begun(st, d);",
+     "", ["tests/test_signals.sh"], None),
     # nbep check of a study: every run's scene loaded as nbep sweep will load it
     ("check-sweep-first-run-only", "src/sweep.c",
      "    for (size_t run = 0; st == NBEP_OK && run < p.n_runs; run++) {\n        if (run > 0 &&",
@@ -1691,7 +1760,10 @@ MUTANTS = [
      ["tests/test_signals.sh"], None),
     ("check-study-signal-unlooked", "src/sweep.c",
      "        if (nbep_sim_stop_status(stop) != NBEP_OK)\n            break; /* Ctrl-C",
-     "        if (0)\n            break; /* Ctrl-C", ["tests/test_signals.sh"], None),
+     "        if (0)\n            break; /* Ctrl-C", ["tests/test_signals.sh"],
+     "since 2026-11-30 the next run's load looks at the signal itself, before its first sphere "
+     "is placed (or checked), and the check ends there the same way (the same line, exit and no "
+     "report): this look only spares that run's deck a parse, which no test can time"),
     # no pace yet: "ETA -", not "ETA 0 s" with every step to go
     ("progress-eta-zero-without-rate", "src/sim.c",
      "rate > 0.0 || to_go <= 0.0, eta)", "true, eta)",

@@ -45,25 +45,39 @@ done
 # the all-pairs and grid modes' crews (thread 0 looks at the signal and the crew reads what it
 # found past a barrier) and cells mode's team abandon the step, and so does naive's pass over
 # the pairs of 16384 spheres (seconds a step here; every thread looks at the signal and all
-# read past a barrier whether one found it); TSan must see no race on the way out, and the run
-# must end as terminated (143)
+# read past a barrier whether one found it), and cells mode's first rebuild, signalled as soon
+# as frame 0 is in the file (the fluid at 256000 spheres, whose rebuild takes seconds under
+# TSan: every thread looks at the signal between chunks of its predictions, and all read past
+# a barrier whether one found it; on a machine fast enough to be past it, the step's events,
+# minutes at dt = 1000, abandon it); TSan must see no race on the way out, and the run must
+# end as terminated (143)
 # shellcheck disable=SC2086
 clang $cflags $(ls src/*.c) -o "$out/nbep" $libs
-for mode in all grid cells naive; do
+for mode in all grid cells naive rebuild; do
     log=$out/nbep-abandon-$mode.log
     rm -f "$out/abandon-$mode.h5"
+    deck=inputs/paper-box.deck wait_s=2
     if [ $mode = naive ]; then
         what=(-a naive --set 'spheres.[0].count=16384')
+    elif [ $mode = rebuild ]; then
+        deck=inputs/hard-sphere-fluid.deck wait_s=0
+        what=(--set run.dt=1000 --set 'spheres.[0].count=256000'
+              --set 'box.max=[76.4491118418, 76.4491118418, 76.4491118418]')
     else
         what=(--set run.dt=10000 --set 'spheres.[0].count=1000'
               --set 'physics.gravity=[0.0, 0.0, 0.0]' --set "run.neighbors=\"$mode\"")
     fi
     OMP_TOOL_LIBRARIES=$archer TSAN_OPTIONS="ignore_noninstrumented_modules=1 exitcode=66" \
-        "$out/nbep" run inputs/paper-box.deck --quiet -t 4 -n 3 "${what[@]}" \
+        "$out/nbep" run "$deck" --quiet -t 4 -n 3 "${what[@]}" \
         -o "$out/abandon-$mode.h5" >"$log" 2>&1 &
     pid=$!
     for _ in $(seq 600); do [ -s "$out/abandon-$mode.h5" ] && break; sleep 0.1; done
-    sleep 2
+    # frame 0 in the file: the steps (the rebuild first) come next
+    for _ in $(seq 600); do
+        "$out/nbep" info "$out/abandon-$mode.h5" 2>/dev/null | grep -q '^frames: *[1-9]' && break
+        sleep 0.1
+    done
+    sleep $wait_s
     kill -TERM $pid
     stopped=0
     for _ in $(seq 600); do

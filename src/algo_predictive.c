@@ -392,6 +392,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
             atomic_init(&c->tclaim[i], KEY_FREE);
     }
     atomic_init(&c->round_stop, 0);
+    atomic_init(&c->rebuild_stop, 0);
     for (int t = 0; t < sim->nt; t++) {
         const size_t own = plan_own(&p, t);
         thread_ws *w = &c->ws[t];

@@ -22,8 +22,9 @@
 /* The one mutable global (STYLE 2): the signal that asked the run to stop, 0 if none. The
  * handler only sets it; the run polls it at the end of every step, and the algorithms' loops
  * also within a step (the predictive's every 65536 events or 1024 rounds, naive's and
- * seminaive's every 65536 pair tests or so, abandoning a step too long to wait for:
- * nbep_sim_run). The first signal wins: a
+ * seminaive's every 65536 pair tests or so, cells mode's rebuilds every 16384 predictions,
+ * abandoning a step too long to wait for: nbep_sim_run), and the deck's placement and overlap
+ * check every 4096 spheres (nbep_scene_load_from, nothing written). The first signal wins: a
  * SIGINT then a SIGTERM (a job's Ctrl-C, then its time limit) exits as interrupted, 130,
  * whichever the handlers stored last (a review saw 130 or 143 by the race). */
 static atomic_int stop_signal;
@@ -68,12 +69,22 @@ static nbep_status cmd_run(const nbep_cli *cli, nbep_diag *d)
     return nbep_run(&rq, &res, d);
 }
 
+/* The line of a check stopped by signal st, which writes no report. */
+static nbep_status check_stopped(nbep_status st, nbep_diag *d)
+{
+    NBEP_FAIL(d, st, "nbep: check %s by SIG%s; nothing written",
+              st == NBEP_ESIGTERM ? "terminated" : "interrupted",
+              st == NBEP_ESIGTERM ? "TERM" : "INT");
+}
+
 static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
 {
     nbep_scene sc;
     nbep_status st = nbep_scene_load_from(cli->path, (const char *const *)cli->overrides,
                                           (const char *const *)cli->origins, cli->n_overrides,
-                                          &sc, d);
+                                          &stop_signal, &sc, d);
+    if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM) /* one in the placement ends it there */
+        return check_stopped(st, d);
     if (st != NBEP_OK)
         return st;
     /* as nbep run would: the run's file, and the report's, against the deck and each other,
@@ -105,9 +116,7 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
     const nbep_status sig = nbep_sim_stop_status(&stop_signal);
     if (sig != NBEP_OK) {
         nbep_scene_fini(&sc);
-        NBEP_FAIL(d, sig, "nbep: check %s by SIG%s; nothing written",
-                  sig == NBEP_ESIGTERM ? "terminated" : "interrupted",
-                  sig == NBEP_ESIGTERM ? "TERM" : "INT");
+        return check_stopped(sig, d);
     }
     if (st == NBEP_OK) {
         nbep_check_facts facts;

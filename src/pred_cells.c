@@ -73,6 +73,14 @@ static bool cells_outgrown(const pred_ctx *c)
  * a step (as for rounds, STALL_ROUNDS): otherwise the loop is a cascade that does not resolve. */
 #define STALL_EVENTS 1000000u
 
+/* A rebuild's predictions (about the cost of n/2 collisions: 0.5 s of the first step's second
+ * of set-up for 2 million spheres on one thread here) are made this many spheres of a
+ * thread's range at a time, each after a look at the stop signal: a few milliseconds' worth,
+ * so a job's SIGTERM during the first predictions of tens of millions of spheres, seconds,
+ * ends the run at once. A prediction reads only its own sphere's list, so the chunks predict
+ * what one call over the range does. */
+#define PREDICT_LOOK 16384u
+
 /* What the callbacks need: one per thread, T0 the current step's start. */
 typedef struct cells_user {
     pred_ctx *c;
@@ -578,9 +586,30 @@ void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own,
             if (tid == 0)
                 nbep_evloop_layout(c->ev);
             nbep_barrier_wait(&c->bar);
-            nbep_evloop_predict(c->ev, ops, &u, own.lo, own.hi, u.T0);
+            for (size_t lo = own.lo; lo < own.hi; lo += PREDICT_LOOK) {
+                /* relaxed, as every look at it: the handler passes no other data */
+                if (nbep_sim_stop_status(sim->opt.stop_signal) != NBEP_OK) {
+                    atomic_store_explicit(&c->rebuild_stop, 1, memory_order_relaxed);
+                    break;
+                }
+                nbep_evloop_predict(c->ev, ops, &u, lo,
+                                    own.hi - lo > PREDICT_LOOK ? lo + PREDICT_LOOK : own.hi,
+                                    u.T0);
+            }
             u.cnt->c[NBEP_COUNTER_CHECKS] += own.hi - own.lo;
             nbep_barrier_wait(&c->bar);
+            /* a signal among them: the step is abandoned, as a signal among its events
+             * abandons it (cells_part), before any event (the spheres as the step before left
+             * them, wrapped as its frame has them); the run ends after the step before, which
+             * at the first step is step 0. relaxed: the barrier above ordered every store of
+             * rebuild_stop, and none comes until the run ends, so all threads leave or none */
+            if (atomic_load_explicit(&c->rebuild_stop, memory_order_relaxed)) {
+                if (tid == 0 && step == sim->step_first)
+                    nbep__sim_setup_done(sim);
+                if (tid == 0)
+                    nbep__sim_abandon(sim);
+                return;
+            }
             if (tid == 0) {
                 nbep_evloop_schedule(c->ev, u.T0);
                 if (step == sim->step_first) /* SPEC: first predictions are set-up time */

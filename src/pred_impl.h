@@ -253,6 +253,9 @@ typedef struct pred_ctx {
     /* set by thread 0 (for good) when a look at the stop signal, every STOP_ROUNDS rounds of a
      * step, finds one; read by the crew past the barrier that follows */
     atomic_int round_stop;
+    /* cells mode: set (for good) by a thread whose look at the stop signal within a rebuild's
+     * predictions found one; read by every thread past the barrier that ends them */
+    atomic_int rebuild_stop;
     uint64_t rounds_before; /* thread 0's: the rounds of the steps before this one */
     uint64_t seen_before;   /* thread 0's: seen_woken where the step before's rounds ended */
     nbep_counters *help_cnt;      /* owned when team, team_size NBEP_EVLOOP_RING: each place's

@@ -288,6 +288,14 @@ nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
     return NBEP_OK;
 }
 
+/* The line of a run stopped by signal st before its first frame, with nothing written. */
+static nbep_status not_begun(nbep_status st, nbep_diag *d)
+{
+    NBEP_FAIL(d, st, "nbep: %s by SIG%s before the run began; nothing written",
+              st == NBEP_ESIGTERM ? "terminated" : "interrupted",
+              st == NBEP_ESIGTERM ? "TERM" : "INT");
+}
+
 nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag *d)
 {
     memset(res, 0, sizeof *res);
@@ -295,19 +303,18 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     nbep_peak_rss_reset(); /* peak_rss_bytes: this run's, not an earlier run's of a sweep */
     nbep_scene sc;
     nbep_status st = (rq->sweep_run ? nbep_scene_load_run : nbep_scene_load_from)(
-        rq->deck_path, rq->overrides, rq->override_origins, rq->n_overrides, &sc, d);
+        rq->deck_path, rq->overrides, rq->override_origins, rq->n_overrides, rq->stop_signal,
+        &sc, d);
+    /* a signal while the deck was read and the spheres placed (seconds for millions, which
+     * look at it every few thousand spheres and stop there: until 2026-11-30 only once all
+     * were placed and checked): stop now, with nothing written (the step loop would only see
+     * it after its first step, and a run of 0 steps never) */
+    if (st == NBEP_OK && (st = nbep_sim_stop_status(rq->stop_signal)) != NBEP_OK)
+        nbep_scene_fini(&sc);
+    if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
+        return not_begun(st, d);
     if (st != NBEP_OK)
         return st;
-    /* a signal while the deck was read and the spheres placed (seconds for millions): stop
-     * now, with nothing written (the step loop would only see it after its first step, and a
-     * run of 0 steps never) */
-    const nbep_status sig = nbep_sim_stop_status(rq->stop_signal);
-    if (sig != NBEP_OK) {
-        nbep_scene_fini(&sc);
-        NBEP_FAIL(d, sig, "nbep: %s by SIG%s before the run began; nothing written",
-                  sig == NBEP_ESIGTERM ? "terminated" : "interrupted",
-                  sig == NBEP_ESIGTERM ? "TERM" : "INT");
-    }
     const int threads = nbep_sim_resolve_threads(sc.threads);
     nbep_output *out = NULL;
     nbep_sim *sim = NULL;
@@ -354,6 +361,10 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                                 .take_state = &sc.state, /* nothing reads the scene's again */
                                 .t_begin = t_begin};
         st = nbep_sim_create(&sc, &opt, &sim, d);
+        /* a signal while the run's memory was made (up to a second for millions of spheres):
+         * as during the load, the file not changed yet (it was taken after frame 0) */
+        if (st == NBEP_OK && (st = nbep_sim_stop_status(rq->stop_signal)) != NBEP_OK)
+            st = not_begun(st, d);
         /* only now is the file changed: a resumed one appended to, a new one put at its path
          * (an older file there survives a deck that sim_create refuses) */
         if (st == NBEP_OK)

@@ -1268,7 +1268,7 @@ static void load_defaults(load *L, config_t *defaults)
 nbep_status nbep_scene_load(const char *deck_path, const char *const *overrides,
                             size_t n_overrides, nbep_scene *out, nbep_diag *d)
 {
-    return nbep_scene_load_from(deck_path, overrides, NULL, n_overrides, out, d);
+    return nbep_scene_load_from(deck_path, overrides, NULL, n_overrides, NULL, out, d);
 }
 
 /* Override k's label for messages (nbep_scene_load_from); NULL when out of memory. */
@@ -1292,7 +1292,8 @@ typedef enum load_mode {
 
 static nbep_status load_deck(const char *deck_path, const char *deck_text,
                              const char *const *overrides, const char *const *origins,
-                             size_t n_overrides, load_mode mode, nbep_scene *out, nbep_diag *d);
+                             size_t n_overrides, load_mode mode, const atomic_int *stop,
+                             nbep_scene *out, nbep_diag *d);
 
 /* Whether d holds message msg among its messages from the first'th on. */
 static bool diag_has(const nbep_diag *d, size_t first, const char *msg)
@@ -1358,7 +1359,7 @@ static void check_axis_values(load *L, const nbep_scene *sc, const char *deck_te
                 ov[n_overrides] = set.p;
                 origin[n_overrides] = label.p;
                 st = load_deck(L->c.deck, deck_text, ov, origin, n_overrides + 1, LOAD_VALUE,
-                               &value, &one);
+                               NULL, &value, &one);
             }
             if (st == NBEP_OK)
                 nbep_scene_fini(&value);
@@ -1387,24 +1388,26 @@ out:
 
 nbep_status nbep_scene_load_from(const char *deck_path, const char *const *overrides,
                                  const char *const *origins, size_t n_overrides,
-                                 nbep_scene *out, nbep_diag *d)
+                                 const atomic_int *stop, nbep_scene *out, nbep_diag *d)
 {
-    return load_deck(deck_path, NULL, overrides, origins, n_overrides, LOAD_DECK, out, d);
+    return load_deck(deck_path, NULL, overrides, origins, n_overrides, LOAD_DECK, stop, out, d);
 }
 
 nbep_status nbep_scene_load_run(const char *deck_path, const char *const *overrides,
                                 const char *const *origins, size_t n_overrides,
-                                nbep_scene *out, nbep_diag *d)
+                                const atomic_int *stop, nbep_scene *out, nbep_diag *d)
 {
-    return load_deck(deck_path, NULL, overrides, origins, n_overrides, LOAD_RUN, out, d);
+    return load_deck(deck_path, NULL, overrides, origins, n_overrides, LOAD_RUN, stop, out, d);
 }
 
-/* The deck at deck_path (its text deck_text, or NULL to read it) loaded as mode says. */
+/* The deck at deck_path (its text deck_text, or NULL to read it) loaded as mode says; stop as
+ * nbep_scene_load_from takes it (an axis value's load places nothing, and takes NULL). */
 static nbep_status load_deck(const char *deck_path, const char *deck_text,
                              const char *const *overrides, const char *const *origins,
-                             size_t n_overrides, load_mode mode, nbep_scene *out, nbep_diag *d)
+                             size_t n_overrides, load_mode mode, const atomic_int *stop,
+                             nbep_scene *out, nbep_diag *d)
 {
-    load L = {.c = {.deck = deck_path, .d = d}};
+    load L = {.c = {.deck = deck_path, .d = d, .stop = stop}};
     nbep_scene sc;
     memset(&sc, 0, sizeof sc);
     config_t cfg, defaults;

@@ -8,6 +8,7 @@
 #define NBEP_SCENE_IMPL_H
 
 #include <libconfig.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -26,6 +27,7 @@ typedef struct nbep__scene_ctx {
     const char *const *labels;   /* borrowed: the overrides' labels in the order given (n_labels
                                   * of them, NULL where not made yet), for nbep__scene_rank */
     size_t n_labels;
+    const atomic_int *stop;      /* borrowed, may be NULL: the signal flag placement looks at */
 } nbep__scene_ctx;
 
 /* A message's rank in the load's list (nbep_diag_add_ranked; the load sorts its messages when
@@ -163,7 +165,9 @@ typedef struct nbep__scene_entry {
  * room (the box, the planes: plane_at, as nbep__scene_check_overlaps takes it). box_periodic
  * is NULL without a box, else the box's periodic axes: a random sphere keeps clear of the
  * others by the nearest image along them, across the faces of [box_lo, box_hi] too. Returns
- * NBEP_ENOMEM on allocation failure, else NBEP_OK (fill failures are counted in the diag). */
+ * NBEP_ENOMEM on allocation failure, NBEP_ESIGINT or NBEP_ESIGTERM (no message) when it found
+ * c->stop raised, looking every PLACE_LOOK spheres of a group, else NBEP_OK (fill failures are
+ * counted in the diag). Looking changes no place: they depend on (seed, group, sphere) only. */
 NBEP_MUST_CHECK nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s,
                                               const nbep__scene_entry *e, size_t n_entries,
                                               uint64_t seed, const bool *box_periodic,
@@ -182,7 +186,9 @@ NBEP_MUST_CHECK nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s,
  * that moved or made the plane, where one did and was typed before whatever placed the
  * sphere: plane_at (2 s->n_planes, each may be NULL) holds what decides where each plane lies,
  * two a plane: a box wall's element of box.min or box.max and of box.periodic, a deck plane's
- * group (its point and normal) and NULL. O(n) expected time. */
+ * group (its point and normal) and NULL. O(n) expected time (a second or so per million
+ * spheres): like nbep__scene_place it looks at c->stop every PLACE_LOOK spheres, and returns
+ * NBEP_ESIGINT or NBEP_ESIGTERM (no message, nothing reported) when it found it raised. */
 NBEP_MUST_CHECK nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                                                        const nbep__scene_entry *e,
                                                        size_t n_entries,

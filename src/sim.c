@@ -6,7 +6,6 @@
 #include <assert.h>
 #include <float.h>
 #include <math.h>
-#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -87,8 +86,7 @@ static const nbep_algo *find_algo(const char *name)
 
 nbep_status nbep_sim_stop_status(const atomic_int *stop)
 {
-    const int sig = stop ? atomic_load_explicit(stop, memory_order_relaxed) : 0;
-    return !sig ? NBEP_OK : sig == SIGTERM ? NBEP_ESIGTERM : NBEP_ESIGINT;
+    return nbep_status_of_stop(stop);
 }
 
 bool nbep_sim_keeps_events(const nbep_scene *sc)

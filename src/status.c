@@ -2,6 +2,7 @@
 #include "nbep/status.h"
 
 #include <errno.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -24,6 +25,13 @@ nbep_status nbep_status_of_open(int err)
                    err == ENAMETOOLONG || err == ELOOP
                ? NBEP_EUSAGE
                : NBEP_EIO;
+}
+
+nbep_status nbep_status_of_stop(const atomic_int *stop)
+{
+    /* relaxed: the handler stores the signal with no other data to pass */
+    const int sig = stop ? atomic_load_explicit(stop, memory_order_relaxed) : 0;
+    return !sig ? NBEP_OK : sig == SIGTERM ? NBEP_ESIGTERM : NBEP_ESIGINT;
 }
 
 const char *nbep_status_text(nbep_status s)

@@ -196,13 +196,16 @@ static nbep_status plan_of_scene(const char *deck_path, const char *const *overr
     return NBEP_OK;
 }
 
-/* nbep_sweep_plan_create, with what was typed for each override (nbep_scene_load_from). */
+/* nbep_sweep_plan_create, with what was typed for each override and the signal flag stop
+ * (nbep_scene_load_from: a signal while the deck's spheres are placed ends it, NBEP_ESIGINT or
+ * NBEP_ESIGTERM without a message). */
 static nbep_status plan_create(const char *deck_path, const char *const *overrides,
                                const char *const *origins, size_t n_overrides,
-                               nbep_sweep_plan *out, nbep_diag *d)
+                               const atomic_int *stop, nbep_sweep_plan *out, nbep_diag *d)
 {
     nbep_scene sc;
-    nbep_status st = nbep_scene_load_from(deck_path, overrides, origins, n_overrides, &sc, d);
+    nbep_status st =
+        nbep_scene_load_from(deck_path, overrides, origins, n_overrides, stop, &sc, d);
     if (st != NBEP_OK)
         return st;
     st = plan_of_scene(deck_path, overrides, origins, n_overrides, &sc, out, d);
@@ -213,7 +216,7 @@ static nbep_status plan_create(const char *deck_path, const char *const *overrid
 nbep_status nbep_sweep_plan_create(const char *deck_path, const char *const *overrides,
                                    size_t n_overrides, nbep_sweep_plan *out, nbep_diag *d)
 {
-    return plan_create(deck_path, overrides, NULL, n_overrides, out, d);
+    return plan_create(deck_path, overrides, NULL, n_overrides, NULL, out, d);
 }
 
 uint64_t nbep_sweep_run_replica(const nbep_sweep_plan *p, size_t run)
@@ -370,7 +373,13 @@ nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides
         nbep_scene rs;
         const nbep_status rst = nbep_scene_load_run(p.deck_path, (const char *const *)ov,
                                                      (const char *const *)p.base_origins, n_ov,
-                                                     &rs, &dr);
+                                                     stop, &rs, &dr);
+        if (rst == NBEP_ESIGINT || rst == NBEP_ESIGTERM) {
+            /* Ctrl-C among its spheres (a second or so a million): the caller says so */
+            nbep_diag_fini(&dr);
+            nbep_sweep_overrides_free(ov, n_ov);
+            break;
+        }
         rep->checked++;
         if (rst == NBEP_OK) {
             char *path = nbep_sweep_run_path(&p, run); /* the run's file, which its sidecar names */
@@ -1529,7 +1538,16 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
     nbep_sweep_plan p = {0};
     nbep_sweep_result *results = NULL;
     nbep_status st = plan_create(cli->path, (const char *const *)cli->overrides,
-                                 (const char *const *)cli->origins, cli->n_overrides, &p, dd);
+                                 (const char *const *)cli->origins, cli->n_overrides,
+                                 stop_signal, &p, dd);
+    /* a signal while the deck's spheres were placed for the plan (seconds for millions: until
+     * 2026-11-30 it was taken once they were, and the sweep's folder and tables made, before
+     * its first run): nothing is made */
+    if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
+        nbep_diag_add(dd, __FILE__, __LINE__,
+                      "nbep: sweep %s by SIG%s before its first run; nothing written",
+                      st == NBEP_ESIGTERM ? "terminated" : "interrupted",
+                      st == NBEP_ESIGTERM ? "TERM" : "INT");
     if (st == NBEP_OK) /* its JSON would replace the deck, as for nbep run */
         st = nbep_run_check_paths(cli->path, NULL, cli->summary, dd);
     if (st == NBEP_OK && cli->summary && strcmp(cli->summary, "-") != 0)

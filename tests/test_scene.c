@@ -10,6 +10,8 @@
 
 #include <errno.h>
 #include <math.h>
+#include <signal.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -982,7 +984,8 @@ static void test_override_messages_name_their_origin(void **state)
     const char *const ov[] = {"run.steps=many", "physics.restitution=1.5",
                               "spheres.[2]={radius=0.1;}", "physics.gravity=[0,0"};
     const char *const origins[] = {"-n many", NULL, "--add-a-sphere", "-g [0,0"};
-    assert_int_equal(nbep_scene_load_from(DATA "scene_good.deck", ov, origins, 4, &f->sc, &f->d),
+    assert_int_equal(nbep_scene_load_from(DATA "scene_good.deck", ov, origins, 4, NULL, &f->sc,
+                                          &f->d),
                      NBEP_EDECK);
     ASSERT_DIAG(&f->d, "-n many: run.steps must be an integer (got \"many\")",
                 "--set physics.restitution=1.5: physics.restitution must be in [0, 1] (got 1.5)",
@@ -1051,6 +1054,84 @@ static void test_random_placement_is_the_same_for_the_same_seed(void **state)
     memset(&f->sc, 0, sizeof f->sc);
     LOAD_OK(f, DATA "scene_random.deck");
     size_t n = first.state.n;
+    assert_int_equal(f->sc.state.n, n);
+    assert_memory_equal(first.state.pos, f->sc.state.pos, n * sizeof(nbep_vec3));
+    assert_memory_equal(first.state.vel, f->sc.state.vel, n * sizeof(nbep_vec3));
+    nbep_scene_fini(&first);
+}
+
+/* ---- a stop signal while the spheres are placed ---------------------------------------------- */
+
+/* Loads deck with main.c's stop flag holding sig (the signal its handler stored; 0: none). */
+static nbep_status load_signalled(fixture *f, const char *deck, int sig)
+{
+    atomic_int stop;
+    atomic_init(&stop, sig);
+    return nbep_scene_load_from(deck, NULL, NULL, 0, &stop, &f->sc, &f->d);
+}
+
+/* A load that a signal stopped: no message of its own (the caller says what stopped), and no
+ * scene written. */
+static void assert_stopped_quietly(const fixture *f)
+{
+    if (f->d.n_errors)
+        print_diag(&f->d);
+    assert_int_equal(f->d.n_errors, 0);
+    assert_null(f->sc.deck_path);
+    assert_null(f->sc.state.pos);
+}
+
+/* A job's SIGTERM or a Ctrl-C while the spheres are placed (random placement takes a second or
+ * so a million) ends the load at placement's next look, every few thousand spheres, with the
+ * signal's status; until 2026-11-30 only once every sphere was placed and checked. Here the
+ * signal came before: a random group that does not fit, which placement would report (EDECK)
+ * had it not looked before its first sphere. */
+static void test_a_signal_ends_random_placement_with_its_status_and_no_message(void **state)
+{
+    fixture *f = *state;
+    assert_int_equal(load_signalled(f, DATA "scene_fill_random.deck", SIGTERM), NBEP_ESIGTERM);
+    assert_stopped_quietly(f);
+    assert_int_equal(load_signalled(f, DATA "scene_fill_random.deck", SIGINT), NBEP_ESIGINT);
+    assert_stopped_quietly(f);
+}
+
+/* The same for a lattice: the first group's placement looks before its first sphere, so the
+ * second, which cannot fit (a message, EDECK), is never reached. */
+static void test_a_signal_ends_lattice_placement(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *deck = write_deck(
+        "scene_stop_lattice.deck",
+        "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; };\n"
+        "spheres = (\n"
+        "  { count = 8; radius = 0.1; mass = 1.0; place = \"lattice\";\n"
+        "    region = { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; }; },\n"
+        "  { count = 1001; radius = 0.5; mass = 1.0; place = \"lattice\"; }\n"
+        ");\n",
+        buf, sizeof buf);
+    assert_int_equal(load_signalled(f, deck, SIGTERM), NBEP_ESIGTERM);
+    assert_stopped_quietly(f);
+}
+
+/* The overlap check at t0 (as long as random placement) looks too: a deck of single spheres,
+ * which placement sets without looking, stops there before any overlap is reported. */
+static void test_a_signal_ends_the_overlap_check(void **state)
+{
+    fixture *f = *state;
+    assert_int_equal(load_signalled(f, DATA "scene_overlap.deck", SIGINT), NBEP_ESIGINT);
+    assert_stopped_quietly(f);
+}
+
+/* Looking changes no place: a flag that holds no signal loads what a load without one does. */
+static void test_a_stop_flag_never_raised_changes_no_sphere(void **state)
+{
+    fixture *f = *state;
+    assert_int_equal(load_signalled(f, DATA "scene_random.deck", 0), NBEP_OK);
+    nbep_scene first = f->sc;
+    memset(&f->sc, 0, sizeof f->sc);
+    LOAD_OK(f, DATA "scene_random.deck");
+    const size_t n = first.state.n;
     assert_int_equal(f->sc.state.n, n);
     assert_memory_equal(first.state.pos, f->sc.state.pos, n * sizeof(nbep_vec3));
     assert_memory_equal(first.state.vel, f->sc.state.vel, n * sizeof(nbep_vec3));
@@ -2286,6 +2367,10 @@ int main(void)
         T(test_an_aggregate_in_place_of_a_vector_element_is_a_deck_error),
         T(test_random_placement_is_the_same_for_the_same_seed),
         T(test_random_placement_differs_for_another_seed),
+        T(test_a_signal_ends_random_placement_with_its_status_and_no_message),
+        T(test_a_signal_ends_lattice_placement),
+        T(test_a_signal_ends_the_overlap_check),
+        T(test_a_stop_flag_never_raised_changes_no_sphere),
         T(test_random_sphere_does_not_depend_on_its_group_size),
         T(test_random_spheres_lie_in_their_region_and_do_not_overlap),
         T(test_random_spheres_keep_clear_across_periodic_faces),

@@ -65,56 +65,159 @@ for sig in TERM INT; do
     lines=$(wc -l < "$tmp/stderr-$sig")
     check "SIG$sig: that is the only line on stderr (got $lines)" "[ $lines = 1 ]"
 done
-# a signal while the deck is read and the spheres placed (600000 random spheres: about a second
-# here) ends the run before it begins, with nothing written: exit 130, no file, one line (it was
-# taken only after the first step, and a run of 0 steps ignored it and exited 0). The signal
-# comes at a quarter of the time `nbep check` takes to place them; skipped where that is under
-# 0.2 s (a machine too fast for the signal to land inside the placement)
+# a signal while the deck is read and the spheres placed (1.5 million random spheres: a few
+# seconds here, placement and the overlap check at t0 alike) ends the run before it begins,
+# with nothing written: exit 130, no file, one line (it was taken only after the first step,
+# and a run of 0 steps ignored it and exited 0). The signal comes at an eighth of the time
+# `nbep check` takes to place and check them (placement takes the first half or so), and the
+# run must end within a sixth of that time after it: placement and the check look at the
+# signal every 4096 spheres (0.03 to 0.06 s after it of a 2 s load here; until 2026-11-30 only
+# once both had ended, seven eighths of the load later). Skipped where that time is under
+# 0.4 s (a machine too fast for the signal to land inside the placement)
 cat >"$tmp/place.deck" <<'EOF'
 run: { algorithm = "predictive"; steps = 0; dt = 1.0e-3; seed = 1; };
-box: { min = [0.0, 0.0, 0.0]; max = [80.0, 80.0, 80.0]; };
-spheres = ( { count = 600000; radius = 0.05; mass = 1.0; place = "random"; } );
+box: { min = [0.0, 0.0, 0.0]; max = [100.0, 100.0, 100.0]; };
+spheres = ( { count = 1500000; radius = 0.05; mass = 1.0; place = "random"; } );
 EOF
 t0=$(date +%s.%N)
 bin/nbep check "$tmp/place.deck" >/dev/null
 t1=$(date +%s.%N)
-wait_s=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.3f", (b - a) / 4 }')
-if awk -v w="$wait_s" 'BEGIN { exit !(w >= 0.05) }'; then
-    bin/nbep run "$tmp/place.deck" --quiet -o "$tmp/place.h5" 2>"$tmp/stderr-place" &
+load_s=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.3f", b - a }')
+wait_s=$(awk -v w="$load_s" 'BEGIN { printf "%.3f", w / 8 }')
+# stop_placing SIG STDOUT STDERR NBEP-ARGS...: starts nbep, sends SIG wait_s later and waits
+# for it to end (a hang fails the checks, not the suite: KILL after twice the load's time and
+# more); sets rc and took, the seconds from the signal to the end
+stop_placing() {
+    local sig=$1 so=$2 se=$3 pid guard t0 t1
+    shift 3
+    bin/nbep "$@" >"$so" 2>"$se" &
     pid=$!
     sleep "$wait_s"
-    kill -INT $pid
+    t0=$(date +%s.%N)
+    kill -"$sig" $pid
+    ( sleep "$(awk -v w="$load_s" 'BEGIN { print 2 * w + 10 }')"; kill -KILL $pid 2>/dev/null ) &
+    guard=$!
     wait $pid
     rc=$?
+    t1=$(date +%s.%N)
+    kill $guard 2>/dev/null
+    wait $guard 2>/dev/null
+    took=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.3f", b - a }')
+}
+# whether took is under a sixth of the load's time
+quick() { awk -v t="$took" -v w="$load_s" 'BEGIN { exit !(t < w / 6) }'; }
+if awk -v w="$wait_s" 'BEGIN { exit !(w >= 0.05) }'; then
+    stop_placing INT /dev/null "$tmp/stderr-place" run "$tmp/place.deck" --quiet -o "$tmp/place.h5"
     check "SIGINT while placing the spheres exits 130 (got $rc)" "[ $rc = 130 ]"
+    check "within a sixth of the load's time after it (took $took s of ${load_s} s)" \
+        quick
     check "and writes nothing" "[ ! -e '$tmp/place.h5' ] && [ ! -e '$tmp/place.xmf' ]"
     check "and says so in one line" \
         "[ \$(wc -l < '$tmp/stderr-place') = 1 ] && grep -q 'before the run began; nothing written' '$tmp/stderr-place'"
+    # nbep check stops there the same way: one line, no report (until 2026-11-30 after the
+    # placement and the check)
+    stop_placing TERM "$tmp/check-place-stdout" "$tmp/check-place-stderr" check "$tmp/place.deck"
+    check "nbep check, SIGTERM while placing: exit 143 (got $rc) as soon (took $took s)" \
+        "[ $rc = 143 ] && quick"
+    check "nbep check, SIGTERM while placing: one line, no report" \
+        "[ \$(wc -l < '$tmp/check-place-stderr') = 1 ] && [ ! -s '$tmp/check-place-stdout' ] &&
+         grep -q '^nbep: check terminated by SIGTERM; nothing written\$' '$tmp/check-place-stderr'"
+    # and nbep sweep, which places the deck's spheres once to plan its runs: nothing made, not
+    # even its folder (until 2026-11-30 the plan went on, and the folder and its tables of
+    # runs not run were made before the signal was taken)
+    stop_placing TERM /dev/null "$tmp/sweep-place-stderr" sweep "$tmp/place.deck" \
+        --set sweep.replicas=2 -o "$tmp/sweep-place"
+    check "nbep sweep, SIGTERM while placing its deck's spheres: exit 143 (got $rc) as soon (took $took s)" \
+        "[ $rc = 143 ] && quick"
+    check "nbep sweep, SIGTERM while placing: one line, nothing made" \
+        "[ \$(wc -l < '$tmp/sweep-place-stderr') = 1 ] && [ ! -e '$tmp/sweep-place.sweep' ] &&
+         grep -q '^nbep: sweep terminated by SIGTERM before its first run; nothing written\$' '$tmp/sweep-place-stderr'"
 else
-    echo "skip SIGINT while placing: placement takes only ${wait_s}x4 s here"
+    echo "skip SIGINT while placing: placement takes only ${load_s} s here"
 fi
-# two signals, SIGINT then SIGTERM 0.1 s later (a job's Ctrl-C, then its time limit): the first
-# wins, exit 130 (the handlers stored the last: 143). They come while the spheres are placed,
-# where nothing looks at the signal until the placement ends, so that both land in the run:
-# in its steps every algorithm now takes the first within milliseconds (since 2026-11-30 naive
-# and seminaive too, whose steps of a second this test used) and is gone before a second comes
-# 0.1 s later; and two sent back to back can be taken at once, the second's handler nested in
-# the first's and storing first (`kill -INT $pid; kill -TERM $pid` to naive on one thread
-# exited 143 in 5 of 6 tries, and in 6 of 6 before 2026-11-30). Skipped where the placement
-# takes under 0.4 s.
+# two signals, SIGINT then SIGTERM (a job's Ctrl-C, then its time limit): the first wins, exit
+# 130 (the handlers stored the last: 143). They are sent back to back while the spheres are
+# placed, on the one thread the process has then: the second's handler waits for the first's
+# (both pending: the kernel hands it SIGINT first), and the run ends within milliseconds of the
+# first (since 2026-11-30 placement looks at it; before, this test sent the second 0.1 s
+# after the first, and both landed in the placement, which did not). Two sent back to back to
+# a run of several threads can be taken by two threads at once, in either order (README).
+# Skipped where the load takes under 0.8 s.
 if awk -v w="$wait_s" 'BEGIN { exit !(w >= 0.1) }'; then
     bin/nbep run "$tmp/place.deck" --quiet -o "$tmp/two.h5" 2>"$tmp/stderr-two" &
     pid=$!
     sleep "$wait_s"
     kill -INT $pid
-    sleep 0.1
-    kill -TERM $pid
+    kill -TERM $pid 2>/dev/null
     wait $pid
     rc=$?
     check "SIGINT then SIGTERM: the first wins, exit 130 (got $rc)" \
         "[ $rc = 130 ] && grep -q 'interrupted by SIGINT' '$tmp/stderr-two'"
 else
-    echo "skip SIGINT then SIGTERM: placement takes only ${wait_s}x4 s here"
+    echo "skip SIGINT then SIGTERM: placement takes only ${load_s} s here"
+fi
+# a signal while the run's memory is made (nbep_sim_create: up to a second for millions of
+# spheres, after the load's last look) ends it the same way, before its file is published:
+# until 2026-11-30 it was taken after frame 0 had been written. gdb stops the run as it enters
+# nbep_sim_create and sends SIGTERM there, where no timing could; skipped without gdb, or where
+# it cannot trace
+if command -v gdb >/dev/null; then
+    rm -f "$tmp/create.h5" "$tmp/create.json"
+    timeout -k 5 120 gdb -q -batch -ex 'handle SIGTERM nostop noprint pass' \
+        -ex 'break nbep_sim_create' -ex run -ex delete -ex 'signal SIGTERM' \
+        --args bin/nbep run inputs/paper-box.deck --quiet -n 3 --set 'spheres.[0].count=1000' \
+        -o "$tmp/create.h5" --summary "$tmp/create.json" >"$tmp/gdb-create" 2>&1
+    if grep -q 'Breakpoint 1, ' "$tmp/gdb-create"; then
+        check "SIGTERM while the run's memory is made: exit 143, one line, nothing written" \
+            "grep -q 'exited with code 0217' '$tmp/gdb-create' &&
+             [ \$(grep -c '^nbep: ' '$tmp/gdb-create') = 1 ] &&
+             grep -q '^nbep: terminated by SIGTERM before the run began; nothing written\$' '$tmp/gdb-create' &&
+             [ ! -e '$tmp/create.h5' ] && [ ! -e '$tmp/create.h5.partial' ] && [ ! -e '$tmp/create.json' ]"
+    else
+        echo "skip SIGTERM while the run's memory is made: gdb could not stop the run here"
+    fi
+else
+    echo "skip SIGTERM while the run's memory is made: no gdb here"
+fi
+# cells mode's rebuilds (every slot predicted afresh: about n/2 collisions' cost, a second of
+# the first step's set-up for 2 million spheres) look at the signal every 16384 spheres of
+# their predictions and abandon the step there, before any event: a SIGTERM as the first
+# rebuild's predictions began ended a run of 2 million spheres 0.06 to 0.1 s after it, where
+# until 2026-11-30 the rebuild ran on and the step's events took it (1.6 to 1.9 s). gdb sends
+# the signal as the first chunk's predictions begin (the fluid's 32000 spheres on one thread:
+# two chunks; 64000 on two threads, two each), at the first rebuild and at step 2's
+# (output.every = 1), and the run must end before the slots are scheduled; skipped without gdb
+rebuild_stop() {
+    local name=$1 skip=$2 want=$3
+    shift 3
+    rm -f "$tmp/rebuild-$name.h5"
+    timeout -k 5 120 gdb -q -batch -ex 'handle SIGTERM nostop noprint pass' \
+        -ex 'break nbep_evloop_predict' -ex "ignore 1 $skip" -ex run -ex delete \
+        -ex 'break nbep_evloop_schedule' -ex 'signal SIGTERM' -ex 'continue' \
+        --args bin/nbep run inputs/hard-sphere-fluid.deck --quiet -n 3 --set output.every=1 "$@" \
+        -o "$tmp/rebuild-$name.h5" >"$tmp/gdb-rebuild-$name" 2>&1
+    if grep -q 'Breakpoint 1, ' "$tmp/gdb-rebuild-$name"; then
+        check "cells mode, SIGTERM within the $name rebuild's predictions: exit 143 before they are scheduled, one line: ${want}FILE" \
+            "grep -q 'exited with code 0217' '$tmp/gdb-rebuild-$name' &&
+             ! grep -q 'Breakpoint 2, ' '$tmp/gdb-rebuild-$name' &&
+             [ \$(grep -c '^nbep: ' '$tmp/gdb-rebuild-$name') = 1 ] &&
+             grep -q '^nbep: terminated by SIGTERM $want' '$tmp/gdb-rebuild-$name'"
+    else
+        echo "skip SIGTERM within a cells rebuild: gdb could not stop the run here"
+    fi
+}
+if command -v gdb >/dev/null; then
+    first="during step 1, which is abandoned; the run ends after step 0, and its frames up to step 0 are in "
+    rebuild_stop first 0 "$first" -t 1
+    # (the chunks' size, which no outcome shows: a chunk of the whole range would look only
+    # before it, and then once the predictions were all made)
+    check "cells mode: a rebuild predicts 16384 spheres of a thread's range at a time" \
+        "grep -Eq 'Breakpoint 1, .* lo=(lo@entry=)?0, hi=(hi@entry=)?16384, ' '$tmp/gdb-rebuild-first'"
+    rebuild_stop step-2 2 "during step 2, which is abandoned; the run ends after step 1, and its frames up to step 1 are in " -t 1
+    rebuild_stop first-of-two-threads 0 "$first" -t 2 --set 'spheres.[0].count=64000' \
+        --set 'box.max=[48.1605, 48.1605, 48.1605]'
+else
+    echo "skip SIGTERM within a cells rebuild: no gdb here"
 fi
 # the two at once to a run on one thread, within a naive step: sent while the process is
 # stopped, both are pending when it goes on, and the kernel hands the thread SIGINT's handler

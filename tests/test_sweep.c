@@ -96,7 +96,7 @@ static nbep_status check_study(const char *deck, double budget_s, nbep_sweep_che
                                nbep_diag *d)
 {
     nbep_scene sc;
-    assert_int_equal(nbep_scene_load_from(deck, NULL, NULL, 0, &sc, d), NBEP_OK);
+    assert_int_equal(nbep_scene_load_from(deck, NULL, NULL, 0, NULL, &sc, d), NBEP_OK);
     const nbep_status st = nbep_sweep_check(deck, NULL, NULL, 0, &sc, budget_s, NULL, rep, d);
     assert_null(sc.sweep_axes); /* moved into the check's plan */
     nbep_scene_fini(&sc);
@@ -128,7 +128,7 @@ static void test_a_check_of_a_study_loads_every_run(void **state)
      * what is written), and its sidecar, which names the run's file (run-0000.h5 as long as
      * any other) */
     nbep_scene one;
-    assert_int_equal(nbep_scene_load_from(deck, NULL, NULL, 0, &one, &d), NBEP_OK);
+    assert_int_equal(nbep_scene_load_from(deck, NULL, NULL, 0, NULL, &one, &d), NBEP_OK);
     const double sidecar = nbep_output_sidecar_bytes(&one, TMP "sweep_check.sweep/run-0000.h5");
     const double each = nbep_output_bytes(&one, nbep_sim_keeps_events(&one)) + sidecar;
     nbep_scene_fini(&one);

@@ -4,6 +4,7 @@
 #ifndef NBEP_SCENE_H
 #define NBEP_SCENE_H
 
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -123,18 +124,24 @@ NBEP_MUST_CHECK nbep_status nbep_scene_load(const char *deck_path,
                                             nbep_scene *out, nbep_diag *d);
 /* The same, with what the user typed for each override, for its messages: origins[k] (say
  * "-n abc" for `-n abc`, which gives the override "run.steps=abc"), or, where origins or
- * origins[k] is NULL, "--set PATH=VALUE". */
+ * origins[k] is NULL, "--set PATH=VALUE". stop (borrowed, may be NULL) is main.c's signal
+ * flag: the placement of the spheres and the overlap check, a second or so per million
+ * spheres each, look at it every PLACE_LOOK spheres (scene_place.c), and one raised ends the
+ * load there with NBEP_ESIGINT or NBEP_ESIGTERM (nbep_status_of_stop) and no message of its
+ * own (the caller says what stopped; the deck's problems found before stay in d). */
 NBEP_MUST_CHECK nbep_status nbep_scene_load_from(const char *deck_path,
                                                  const char *const *overrides,
                                                  const char *const *origins, size_t n_overrides,
-                                                 nbep_scene *out, nbep_diag *d);
+                                                 const atomic_int *stop, nbep_scene *out,
+                                                 nbep_diag *d);
 /* nbep_scene_load_from for one run of a sweep (sweep.c): the same checks but one, that of
  * each sweep axis value on its own against the base deck, which the sweep's plan made once
  * for all its runs (it parses the deck once per value). */
 NBEP_MUST_CHECK nbep_status nbep_scene_load_run(const char *deck_path,
                                                 const char *const *overrides,
                                                 const char *const *origins, size_t n_overrides,
-                                                nbep_scene *out, nbep_diag *d);
+                                                const atomic_int *stop, nbep_scene *out,
+                                                nbep_diag *d);
 void nbep_scene_fini(nbep_scene *sc);
 
 /* run.neighbors as the deck spells it: "all", "grid" or "cells" (predictive's setting). */

@@ -3,6 +3,7 @@
 #ifndef NBEP_STATUS_H
 #define NBEP_STATUS_H
 
+#include <stdatomic.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -31,6 +32,11 @@ int nbep_status_exit_code(nbep_status s);
  * named: a name that is no file to read (no such file, a directory, no permission) is the
  * user's mistake, NBEP_EUSAGE (exit 2, as a bad deck); anything else is an I/O error. */
 nbep_status nbep_status_of_open(int err);
+/* What the stop flag *stop asks for (main.c's: the signal number its handler stored, 0 for
+ * none; stop may be NULL): NBEP_OK, NBEP_ESIGTERM for SIGTERM, else NBEP_ESIGINT. A relaxed
+ * load, cheap enough for a loop to make every few thousand iterations; any thread may call
+ * it. */
+nbep_status nbep_status_of_stop(const atomic_int *stop);
 /* A short human text for a status; never NULL. */
 const char *nbep_status_text(nbep_status s);
 

@@ -199,7 +199,8 @@ typedef struct nbep_sweep_check_report {
  * A run refused is named in d, "nbep: sweep run K (KEY=VALUE ... seed=S) cannot run: " and its
  * first error, the first NBEP_SWEEP_CHECK_LISTED of them, then how many more; the result is
  * then NBEP_EDECK. NBEP_ENOMEM. A nonzero *stop (main.c's signal flag, borrowed, may be NULL)
- * ends the loading before the next run, as the time does: the caller looks at it. */
+ * ends the loading before the next run, as the time does, or within a run's placement
+ * (nbep_scene_load_run), that run not counted: the caller looks at it. */
 NBEP_MUST_CHECK nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides,
                                              const char *const *origins, size_t n_overrides,
                                              nbep_scene *sc, double budget_s,

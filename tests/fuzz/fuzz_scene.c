@@ -101,7 +101,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     nbep_diag_init(&d);
     nbep_scene sc;
     memset(&sc, 0xA5, sizeof sc); /* *out must be written only on success */
-    nbep_status st = nbep_scene_load_from(deck_path, ov, origins, n_ov, &sc, &d);
+    nbep_status st = nbep_scene_load_from(deck_path, ov, origins, n_ov, NULL, &sc, &d);
     switch (st) {
     case NBEP_OK:
         if (d.n_errors != 0)
