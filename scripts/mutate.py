@@ -273,6 +273,13 @@ MUTANTS = [
      "if (++j->n > c->jam_max + 1 &&", ["tests/test_jam.sh"],
      "one reaction later on a jammed sphere changes nothing a test can see: the line names the limit, not the count"),
     # ---- granular: cages, round-off grazing, rest speed (issue 9) ----
+    # a plane the faces it rests on press it into (a ramp into a wall): rested on as under gravity
+    ("wedge-rest-gravity-only", "src/pred_react.c",
+     "            an = fmin(an, nbep_vec3_dot(c->aeff[lo], n));", "            (void)0;",
+     ["test_granular"], None),
+    ("wedge-rest-larger-part", "src/pred_react.c",
+     "            an = fmin(an, nbep_vec3_dot(c->aeff[lo], n));",
+     "            an = fmax(an, nbep_vec3_dot(c->aeff[lo], n));", ["test_granular"], None),
     ("cage-never", "src/pred_react.c", "    if (!opposed)\n        return false;",
      "    if (1)\n        return false;", GRAN, None),
     ("cage-no-time-window", "src/pred_react.c", "        if (f[j].who != who && t_abs - f[j].t <= tc &&",
