@@ -280,6 +280,8 @@ MUTANTS = [
     ("wedge-rest-larger-part", "src/pred_react.c",
      "            an = fmin(an, nbep_vec3_dot(c->aeff[lo], n));",
      "            an = fmax(an, nbep_vec3_dot(c->aeff[lo], n));", ["test_granular"], None),
+    ("check-json-tc-as-restitution", "src/check.c", "\"tc\", sc->tc,", "\"tc\", sc->restitution,",
+     ["tests/test_cli.sh"], None),
     ("cage-never", "src/pred_react.c", "    if (!opposed)\n        return false;",
      "    if (1)\n        return false;", GRAN, None),
     ("cage-no-time-window", "src/pred_react.c", "        if (f[j].who != who && t_abs - f[j].t <= tc &&",

@@ -455,6 +455,13 @@ assert o[\"output\"][\"sidecar\"] == \"group.xmf\"
 assert o[\"spheres\"] == 64 and o[\"neighbors\"] == \"cells\" and o[\"study\"] is None
 assert o[\"box\"][\"max\"] == [10.0, 10.0, 10.0] and o[\"box\"][\"periodic\"] == [False] * 3
 assert o[\"output\"][\"frames\"] == 1000001 and o[\"threads\"] == 1' '$tmp/check-stdout.json' '$mem' '$out'"
+# the TC model's time and the carry rule's drop, which the human report gives for e < 1 (until
+# 2026-11-30 the JSON left them out)
+run_nbep check "$tmp/group.deck" --summary - --quiet --set physics.tc=2.5e-6 \
+    --set physics.carry_drop=0.03
+check "check --summary: tc and carry_drop as set (got $rc)" \
+    "[ $rc = 0 ] && [ \$(json_get '$tmp/stdout' tc) = 2.5e-06 ] &&
+     [ \$(json_get '$tmp/stdout' carry_drop) = 0.03 ]"
 run_nbep check "$tmp/group.deck" --summary "$tmp/check.json" --quiet
 check "check --summary FILE --quiet: exit 0, nothing on stdout, the file's spheres (got $rc)" \
     "[ $rc = 0 ] && [ ! -s '$tmp/stdout' ] && [ \$(json_get '$tmp/check.json' spheres) = 64 ]"
