@@ -103,7 +103,8 @@ struct nbep_output {
         bool pending;              /* (the frames kept, up to the one resumed from: n_frames) */
         uint64_t stats_keep;       /* the /stats rows kept (stats: the file has /stats) */
         bool image, checkpoint, stats, wall; /* the series the file has that a run appends to */
-        bool dropped;              /* complete frames after it are dropped (cells mode) */
+        bool dropped;              /* complete frames after the kept ones are dropped */
+        int64_t from;              /* the step of the frame resumed from (kept or not) */
     } resume;
 };
 

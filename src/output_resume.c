@@ -373,6 +373,16 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     hsize_t last = frames - 1;
     res.step = o->xmf_step[last];
     res.last_step = o->xmf_step[complete - 1];
+    /* The frame resumed from is kept where the uninterrupted run writes one too: at a
+     * multiple of output.every (run.steps lies past it, below). A stop's own frame off that
+     * grid (SIGTERM's, or a shorter run's last) is read, and the run continues from it, but it
+     * is dropped from the file, which then ends as the uninterrupted run's (until 2026-11-30
+     * it stayed outside cells mode: one frame more than that run's, and h5diff told them
+     * apart). Only the last frame can be off the grid: each resume drops the one before. */
+    hsize_t kept = frames;
+    while (kept > 1 && o->xmf_step[kept - 1] % (int64_t)sc->output_every != 0)
+        kept--;
+    res.kept_step = o->xmf_step[kept - 1];
     /* past the file's last frame, not only the one resumed from: a cells run resumed from an
      * earlier frame to a step before its last would cut the frames it already has */
     if (res.step < 0 || res.last_step < 0 || sc->steps <= (uint64_t)res.last_step) {
@@ -463,8 +473,9 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     /* nothing is written until nbep_output_resume_begin: a run refused after this (its
      * algorithm's own checks) leaves the file as it was */
     o->resume.pending = true;
-    o->resume.dropped = frames < complete;
-    o->n_frames = frames;
+    o->resume.dropped = kept < complete;
+    o->resume.from = res.step;
+    o->n_frames = kept;
     *out = o;
     *r = res;
     return NBEP_OK;
@@ -532,9 +543,9 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
         return NBEP_EIO;
     }
     nbep__output_close_id(&steps_attr);
-    if (note_resume(o->file, path, sc, threads, o->xmf_step[frames - 1], d) < 0 ||
+    if (note_resume(o->file, path, sc, threads, o->resume.from, d) < 0 ||
         nbep__output_commit(o, frames, d) < 0)
         return NBEP_EIO;
-    /* frames dropped (cells mode): the sidecar listed them; it lists what the file holds */
+    /* frames dropped: the sidecar listed them; it lists what the file holds */
     return o->resume.dropped ? nbep__output_xmf_write(o, d) : NBEP_OK;
 }

@@ -358,6 +358,12 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                     "output.every (run.neighbors = \"cells\" continues bit for bit from those "
                     "only); the frames after it, to step %lld, are dropped\n",
                     file, (long long)resume.step, (long long)resume.last_step);
+        else if (st == NBEP_OK && rq->resume && rq->verbose && resume.kept_step != resume.step)
+            fprintf(stderr,
+                    "nbep: %s continues from its frame at step %lld, which is off output.every's "
+                    "grid (a stop's own frame) and is dropped: the file keeps the frames the "
+                    "uninterrupted run writes\n",
+                    file, (long long)resume.step);
         from = rq->resume ? resume.step : -1;
         nbep_resume_fini(&resume); /* the run has its event slots now */
         if (st != NBEP_OK) { /* nothing was simulated: a new file, never published, goes */
