@@ -1598,6 +1598,8 @@ MUTANTS = [
      ["tests/test_sweep_cli.sh"], None),
     ("resume-fields-unchecked", "src/output_resume.c", "    if (!sc->out_position || !sc->out_velocity) {",
      "    if (false) {", ["tests/test_resume.sh"], None),
+    ("resume-eoa-not-raised", "src/output_resume.c", "    if (H5Fincrement_filesize(o->file, 0) < 0) {",
+     "    if (0) {", ["tests/test_resume.sh"], None),
     ("resume-off-grid-frame-kept", "src/output_resume.c",
      "    while (kept > 1 && o->xmf_step[kept - 1] % (int64_t)sc->output_every != 0)",
      "    while (0 && kept > 1)", ["tests/test_resume.sh"], None),

@@ -493,6 +493,16 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
     const char *path = o->path;
     const hsize_t frames = o->n_frames;
     const uint64_t keep = o->resume.stats_keep;
+    /* A run killed while it wrote a frame can leave that frame's chunks past the file's end
+     * of allocation (the superblock's, written at each flush): the extents and chunk indexes
+     * that name them reached the disk, the new end of allocation did not. Cutting the rows
+     * below frees those chunks, which HDF5 then refused as lying outside the file ("addr
+     * overflow" at the next flush, exit 1, until 2026-11-30). The end of allocation is first
+     * raised to the file's size, so they lie inside it. */
+    if (H5Fincrement_filesize(o->file, 0) < 0) {
+        HDF5_FAIL(d, path, "take in the space a cut-short write left past its end");
+        return NBEP_EIO;
+    }
     /* The counts first, made durable, then the rows cut: a kill between the two leaves counts
      * at or below the rows (readable, as any file whose last write was cut short), where the
      * other order left counts above them (a file nothing could read: frames kept in cells
