@@ -364,6 +364,13 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                     "grid (a stop's own frame) and is dropped: the file keeps the frames the "
                     "uninterrupted run writes\n",
                     file, (long long)resume.step);
+        if (st == NBEP_OK && resume.state_lost)
+            fprintf(stderr,
+                    "nbep: warning: %s continues a predictive run at e < 1 from step %lld, whose "
+                    "TC clocks, held spheres and lasting contacts no frame keeps: they start "
+                    "afresh, and the frames after it follow the same physics but not the "
+                    "uninterrupted run's bits\n",
+                    file, (long long)resume.step);
         from = rq->resume ? resume.step : -1;
         nbep_resume_fini(&resume); /* the run has its event slots now */
         if (st != NBEP_OK) { /* nothing was simulated: a new file, never published, goes */
