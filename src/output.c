@@ -251,6 +251,35 @@ done:
     return rc;
 }
 
+/* Rows [first, end) of /checkpoint as stale slots (kind none, no resting plane: a resume from
+ * such a frame predicts every sphere afresh), for the frames of a part that keeps no event
+ * slots (naive or seminaive resuming a predictive file), so that /checkpoint keeps a row for
+ * every frame (until 2026-11-30 it fell behind /frames, and a predictive resume from a later
+ * frame failed, exit 1, "has no row"). */
+int nbep__output_ck_stale(nbep_output *o, hsize_t first, hsize_t end, nbep_diag *d)
+{
+    const size_t n = o->n_spheres;
+    double *zeros = calloc(n ? n : 1, sizeof *zeros); /* 8 bytes: time, partner and kind */
+    int32_t *none = malloc((n ? n : 1) * sizeof *none);
+    hsize_t row[2] = {1, n};
+    hid_t row_space = H5Screate_simple(2, row, NULL);
+    int rc = zeros && none && row_space >= 0 ? 0 : -1;
+    if (rc < 0)
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: no memory for the checkpoint rows",
+                      o->path);
+    for (size_t i = 0; none && i < n; i++)
+        none[i] = -1;
+    const void *cols[N_CK_COLUMNS] = {zeros, zeros, zeros, none};
+    for (hsize_t f = first; f < end && rc == 0; f++)
+        for (int c = 0; c < N_CK_COLUMNS && rc == 0; c++)
+            rc = append_rows(o, o->ck[c], nbep__ck_columns[c].name, 2, f, row,
+                             *nbep__ck_columns[c].mem_type, row_space, cols[c], d);
+    nbep__output_close_id(&row_space);
+    free(zeros);
+    free(none);
+    return rc;
+}
+
 /* ---- create -------------------------------------------------------------------------------- */
 
 static int write_root_attrs(nbep_output *o, const nbep_scene *sc, int threads, nbep_diag *d)
@@ -752,6 +781,8 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
                                          H5T_NATIVE_DOUBLE, vec_space, s->vel, d) < 0)
         goto done;
     if (ev && o->ck[0] < 0 && o->ck_allowed && f == 0 && create_checkpoint(o, d) < 0)
+        goto done;
+    if (!ev && o->ck[0] >= 0 && nbep__output_ck_stale(o, f, f + 1, d) < 0)
         goto done;
     if (ev && o->ck[0] >= 0) {
         hsize_t row[2] = {1, s->n};

@@ -105,6 +105,8 @@ struct nbep_output {
         bool image, checkpoint, stats, wall; /* the series the file has that a run appends to */
         bool dropped;              /* complete frames after the kept ones are dropped */
         int64_t from;              /* the step of the frame resumed from (kept or not) */
+        hsize_t ck_rows;           /* /checkpoint rows the file holds for its kept frames (fewer
+                                    * where a part without event slots wrote the rest) */
     } resume;
 };
 
@@ -119,6 +121,9 @@ void nbep__output_release(nbep_output **op);
 /* Makes the first `frames` frames and the stats rows so far durable and counted; -1 with the
  * reason in d on failure. */
 int nbep__output_commit(nbep_output *o, hsize_t frames, nbep_diag *d);
+/* Writes rows [first, end) of /checkpoint (o->ck open) as stale slots: kind none, rest -1; -1
+ * with the reason in d on failure. */
+int nbep__output_ck_stale(nbep_output *o, hsize_t first, hsize_t end, nbep_diag *d);
 /* Room for frame row f in the sidecar's lists; false when memory runs out. */
 bool nbep__output_xmf_room(nbep_output *o, size_t f);
 /* Rewrites the sidecar (RUN.xmf) for o's frames so far; NBEP_EIO, NBEP_ENOMEM. */

@@ -451,6 +451,17 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     htri_t has_ck = H5Lexists(o->file, "/checkpoint", H5P_DEFAULT);
     o->resume.checkpoint = has_ck > 0;
     if (has_ck > 0) {
+        /* a file that a part without event slots continued before 2026-11-30 holds fewer rows
+         * than frames: where the frame resumed from has none, the run starts from positions
+         * and velocities, as from a file without /checkpoint, and the missing rows are
+         * written as stale slots (nbep_output_resume_begin) */
+        hsize_t rows = 0;
+        if (nbep__output_dataset_rows(o->file, path, nbep__ck_columns[0].name, &rows, d) < 0)
+            goto fail;
+        o->resume.ck_rows = rows < kept ? rows : kept;
+        has_ck = last < rows;
+    }
+    if (has_ck > 0) {
         res.has_events = true;
         res.event_time = malloc((n ? n : 1) * sizeof *res.event_time);
         res.event_partner = malloc((n ? n : 1) * sizeof *res.event_partner);
@@ -538,10 +549,14 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
         open_cut(o, "/frames/position", frames, &o->frame_pos, d) < 0 ||
         open_cut(o, "/frames/velocity", frames, &o->frame_vel, d) < 0)
         return NBEP_EIO;
-    if (o->resume.checkpoint)
+    if (o->resume.checkpoint) {
         for (int c = 0; c < N_CK_COLUMNS; c++)
             if (open_cut(o, nbep__ck_columns[c].name, frames, &o->ck[c], d) < 0)
                 return NBEP_EIO;
+        if (o->resume.ck_rows < frames &&
+            nbep__output_ck_stale(o, o->resume.ck_rows, frames, d) < 0)
+            return NBEP_EIO;
+    }
     o->xmf = true; /* resumed runs have positions */
     if (o->resume.stats) {
         for (int c = 0; c < STATS_N_COLUMNS; c++)
