@@ -103,8 +103,11 @@ struct nbep_output {
         bool pending;              /* (the frames kept, up to the one resumed from: n_frames) */
         uint64_t stats_keep;       /* the /stats rows kept (stats: the file has /stats) */
         bool image, checkpoint, stats, wall; /* the series the file has that a run appends to */
-        bool dropped;              /* complete frames after the kept ones are dropped */
-        int64_t from;              /* the step of the frame resumed from (kept or not) */
+        bool dropped;              /* complete frames after it are dropped (cells mode) */
+        int64_t from;              /* the step of the frame resumed from */
+        hsize_t trim;              /* frames kept once the run writes one: those before the
+                                    * frames off output.every's grid that end the file (the
+                                    * stop's own, which the first frame written replaces) */
         hsize_t ck_rows;           /* /checkpoint rows the file holds for its kept frames (fewer
                                     * where a part without event slots wrote the rest) */
     } resume;

@@ -373,12 +373,13 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     hsize_t last = frames - 1;
     res.step = o->xmf_step[last];
     res.last_step = o->xmf_step[complete - 1];
-    /* The frame resumed from is kept where the uninterrupted run writes one too: at a
-     * multiple of output.every (run.steps lies past it, below). A stop's own frame off that
-     * grid (SIGTERM's, or a shorter run's last) is read, and the run continues from it, but it
-     * is dropped from the file, which then ends as the uninterrupted run's (until 2026-11-30
-     * it stayed outside cells mode: one frame more than that run's, and h5diff told them
-     * apart). Only the last frame can be off the grid: each resume drops the one before. */
+    /* The frame resumed from stays where the uninterrupted run writes one too: at a multiple
+     * of output.every (run.steps lies past it, below). A stop's own frame off that grid
+     * (SIGTERM's, or a shorter run's last) is the run's checkpoint until the resumed run writes
+     * its first frame, which takes its row (nbep_output_frame_events: a kill before then
+     * finds it in place), so the file ends as the uninterrupted run's (until 2026-11-30 it
+     * stayed outside cells mode: one frame more than that run's, and h5diff told them apart).
+     * Only the last frame can be off the grid (a file before then may have more in a row). */
     hsize_t kept = frames;
     while (kept > 1 && o->xmf_step[kept - 1] % (int64_t)sc->output_every != 0)
         kept--;
@@ -458,7 +459,7 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
         hsize_t rows = 0;
         if (nbep__output_dataset_rows(o->file, path, nbep__ck_columns[0].name, &rows, d) < 0)
             goto fail;
-        o->resume.ck_rows = rows < kept ? rows : kept;
+        o->resume.ck_rows = rows < frames ? rows : frames;
         has_ck = last < rows;
     }
     if (has_ck > 0) {
@@ -498,9 +499,10 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     /* nothing is written until nbep_output_resume_begin: a run refused after this (its
      * algorithm's own checks) leaves the file as it was */
     o->resume.pending = true;
-    o->resume.dropped = kept < complete;
+    o->resume.dropped = frames < complete;
     o->resume.from = res.step;
-    o->n_frames = kept;
+    o->resume.trim = kept;
+    o->n_frames = frames;
     *out = o;
     *r = res;
     return NBEP_OK;

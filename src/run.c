@@ -361,8 +361,8 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         else if (st == NBEP_OK && rq->resume && rq->verbose && resume.kept_step != resume.step)
             fprintf(stderr,
                     "nbep: %s continues from its frame at step %lld, which is off output.every's "
-                    "grid (a stop's own frame) and is dropped: the file keeps the frames the "
-                    "uninterrupted run writes\n",
+                    "grid (a stop's own frame): the next frame written takes its place, and the "
+                    "file keeps the frames the uninterrupted run writes\n",
                     file, (long long)resume.step);
         if (st == NBEP_OK && resume.state_lost)
             fprintf(stderr,

@@ -173,6 +173,18 @@ check "naive with run.neighbors = cells resumes from its last frame, step 42 (go
 # for frame: a stop's own frame off output.every's grid (step 42 of every 5: a shorter run's
 # last, or SIGTERM's) is read and dropped (until 2026-11-30 only cells mode dropped it, and
 # the others' files held one frame more than the uninterrupted run's: h5diff told them apart)
+# ... the stop's frame stays the run's checkpoint until the resumed run writes its first frame
+# (a resumed run killed before then, here with no frame due for 10^8 steps, must leave it: the
+# run continues from it, not from step 0)
+bin/nbep run $deck "${args[@]}" --set output.every=100000000 -n 42 -o $tmp/stop-frame.h5
+bin/nbep run $deck "${args[@]}" --set output.every=100000000 -n 100000000 \
+    --resume $tmp/stop-frame.h5 2>/dev/null &
+pid=$!
+sleep 0.5
+kill -KILL $pid
+wait $pid 2>/dev/null
+check "a resumed run killed before its first frame leaves the stop's frame, step 42, in place" \
+    "bin/nbep info $tmp/stop-frame.h5 | grep -q '^frames: *2 (last: step 42,'"
 for run in "naive all" "seminaive grid" "predictive all" "predictive grid"; do
     set -- $run
     a=$1 m=$2
