@@ -759,6 +759,20 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
         HDF5_FAIL(d, o->path, "make the dataspaces of frame %llu", (unsigned long long)f);
         goto done;
     }
+    /* A resumed file's stop frame off output.every's grid (nbep_output_open_resume) gives way
+     * to this one: the count lowered and made durable first, then the rows cut by the appends
+     * below, the image rows' first among them (each sets its dataset's extent to f + 1), so a
+     * kill between leaves a readable file ending at the frame before. */
+    if (o->resume.trim > 0 && o->resume.trim < f) { /* 0: nothing to replace */
+        const uint64_t n_frames = o->resume.trim;
+        if (H5Awrite(o->frames_count, H5T_NATIVE_UINT64, &n_frames) < 0 ||
+            H5Fflush(o->file, H5F_SCOPE_GLOBAL) < 0) {
+            HDF5_FAIL(d, o->path, "drop the stop's frame off output.every's grid");
+            goto done;
+        }
+        o->n_frames = f = o->resume.trim;
+    }
+    o->resume.trim = 0;
     /* A periodic box: positions wrapped into it, the periods removed added to the images
      * (the algorithm may hold positions a little outside, see cells.h) */
     const nbep_vec3 *pos = s->pos;
@@ -772,20 +786,6 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
                                              H5T_NATIVE_INT32, vec_space, o->wrap_img, d) < 0)
             goto done;
     }
-    /* A resumed file's stop frame off output.every's grid (nbep_output_open_resume) gives way
-     * to this one: the count lowered and made durable first, then the rows cut by the appends
-     * below (each sets its dataset's extent to f + 1), so a kill between leaves a readable
-     * file ending at the frame before. */
-    if (o->resume.trim > 0 && o->resume.trim < f) { /* 0: nothing to replace */
-        const uint64_t n_frames = o->resume.trim;
-        if (H5Awrite(o->frames_count, H5T_NATIVE_UINT64, &n_frames) < 0 ||
-            H5Fflush(o->file, H5F_SCOPE_GLOBAL) < 0) {
-            HDF5_FAIL(d, o->path, "drop the stop's frame off output.every's grid");
-            goto done;
-        }
-        o->n_frames = f = o->resume.trim;
-    }
-    o->resume.trim = 0;
     /* Which rows are complete is said by the count attributes (see commit), not by the
      * datasets' lengths, so the order of these appends does not matter for crash safety. */
     if (o->frame_pos >= 0 && append_rows(o, o->frame_pos, "/frames/position", 3, f, vec,
