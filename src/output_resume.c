@@ -375,13 +375,19 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     res.last_step = o->xmf_step[complete - 1];
     /* The frame resumed from stays where the uninterrupted run writes one too: at a multiple
      * of output.every (run.steps lies past it, below). A stop's own frame off that grid
-     * (SIGTERM's, or a shorter run's last) is the run's checkpoint until the resumed run writes
+     * (SIGTERM's, or a shorter run's last; one on the grid of the file's own output.every, where
+     * the deck changes it, stays) is the run's checkpoint until the resumed run writes
      * its first frame, which takes its row (nbep_output_frame_events: a kill before then
      * finds it in place), so the file ends as the uninterrupted run's (until 2026-11-30 it
      * stayed outside cells mode: one frame more than that run's, and h5diff told them apart).
      * Only the last frame can be off the grid (a file before then may have more in a row). */
+    uint64_t every = sc->output_every; /* the file's, where it says (a deck may change it) */
+    if (H5Aexists(o->file, "output_every") > 0 &&
+        nbep__output_read_attr(o->file, path, "output_every", H5T_NATIVE_UINT64, &every, d) < 0)
+        goto fail;
     hsize_t kept = frames;
-    while (kept > 1 && o->xmf_step[kept - 1] % (int64_t)sc->output_every != 0)
+    while (kept > 1 && o->xmf_step[kept - 1] % (int64_t)sc->output_every != 0 &&
+           o->xmf_step[kept - 1] % (int64_t)(every ? every : 1) != 0)
         kept--;
     res.kept_step = o->xmf_step[kept - 1];
     /* past the file's last frame, not only the one resumed from: a cells run resumed from an

@@ -200,6 +200,13 @@ for run in "naive all" "seminaive grid" "predictive all" "predictive grid"; do
     check "and its sidecar lists those frames" \
         "cmp -s $tmp/off-$a-$m-whole.xmf <(sed 's/off-$a-$m\.h5/off-$a-$m-whole.h5/g' $tmp/off-$a-$m.xmf)"
 done
+# a frame on the grid of the file's own output.every is no stop's frame: a deck that changes
+# output.every (naive and all-pairs may) keeps it, frame 40 of every 5 resumed with every 7
+bin/nbep run $deck "${args[@]}" -n 40 -o $tmp/every-changed.h5
+bin/nbep run $deck "${args[@]}" --set output.every=7 -n 50 --resume $tmp/every-changed.h5
+check "a file of every 5 resumed at step 40 with every 7 keeps its frame at step 40" \
+    "\"\$PY\" -c \"import h5py, sys; s = h5py.File(sys.argv[1], 'r')['frames/step'][:].tolist(); \
+     sys.exit(s != list(range(0, 45, 5)) + [42, 49, 50])\" $tmp/every-changed.h5"
 # the same in a periodic box, whose frames' image rows are cut and written as the others are
 # (they were written past the stop's frame, at first: its image counts stayed, under the next
 # frame's positions)
