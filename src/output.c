@@ -251,6 +251,35 @@ done:
     return rc;
 }
 
+/* Rows [first, end) of /checkpoint as stale slots (kind none, no resting plane: a resume from
+ * such a frame predicts every sphere afresh), for the frames of a part that keeps no event
+ * slots (naive or seminaive resuming a predictive file), so that /checkpoint keeps a row for
+ * every frame (until 2026-11-30 it fell behind /frames, and a predictive resume from a later
+ * frame failed, exit 1, "has no row"). */
+int nbep__output_ck_stale(nbep_output *o, hsize_t first, hsize_t end, nbep_diag *d)
+{
+    const size_t n = o->n_spheres;
+    double *zeros = calloc(n ? n : 1, sizeof *zeros); /* 8 bytes: time, partner and kind */
+    int32_t *none = malloc((n ? n : 1) * sizeof *none);
+    hsize_t row[2] = {1, n};
+    hid_t row_space = H5Screate_simple(2, row, NULL);
+    int rc = zeros && none && row_space >= 0 ? 0 : -1;
+    if (rc < 0)
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: no memory for the checkpoint rows",
+                      o->path);
+    for (size_t i = 0; none && i < n; i++)
+        none[i] = -1;
+    const void *cols[N_CK_COLUMNS] = {zeros, zeros, zeros, none};
+    for (hsize_t f = first; f < end && rc == 0; f++)
+        for (int c = 0; c < N_CK_COLUMNS && rc == 0; c++)
+            rc = append_rows(o, o->ck[c], nbep__ck_columns[c].name, 2, f, row,
+                             *nbep__ck_columns[c].mem_type, row_space, cols[c], d);
+    nbep__output_close_id(&row_space);
+    free(zeros);
+    free(none);
+    return rc;
+}
+
 /* ---- create -------------------------------------------------------------------------------- */
 
 static int write_root_attrs(nbep_output *o, const nbep_scene *sc, int threads, nbep_diag *d)
@@ -730,6 +759,20 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
         HDF5_FAIL(d, o->path, "make the dataspaces of frame %llu", (unsigned long long)f);
         goto done;
     }
+    /* A resumed file's stop frame off output.every's grid (nbep_output_open_resume) gives way
+     * to this one: the count lowered and made durable first, then the rows cut by the appends
+     * below, the image rows' first among them (each sets its dataset's extent to f + 1), so a
+     * kill between leaves a readable file ending at the frame before. */
+    if (o->resume.trim > 0 && o->resume.trim < f) { /* 0: nothing to replace */
+        const uint64_t n_frames = o->resume.trim;
+        if (H5Awrite(o->frames_count, H5T_NATIVE_UINT64, &n_frames) < 0 ||
+            H5Fflush(o->file, H5F_SCOPE_GLOBAL) < 0) {
+            HDF5_FAIL(d, o->path, "drop the stop's frame off output.every's grid");
+            goto done;
+        }
+        o->n_frames = f = o->resume.trim;
+    }
+    o->resume.trim = 0;
     /* A periodic box: positions wrapped into it, the periods removed added to the images
      * (the algorithm may hold positions a little outside, see cells.h) */
     const nbep_vec3 *pos = s->pos;
@@ -752,6 +795,8 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
                                          H5T_NATIVE_DOUBLE, vec_space, s->vel, d) < 0)
         goto done;
     if (ev && o->ck[0] < 0 && o->ck_allowed && f == 0 && create_checkpoint(o, d) < 0)
+        goto done;
+    if (!ev && o->ck[0] >= 0 && nbep__output_ck_stale(o, f, f + 1, d) < 0)
         goto done;
     if (ev && o->ck[0] >= 0) {
         hsize_t row[2] = {1, s->n};

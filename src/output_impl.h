@@ -104,6 +104,12 @@ struct nbep_output {
         uint64_t stats_keep;       /* the /stats rows kept (stats: the file has /stats) */
         bool image, checkpoint, stats, wall; /* the series the file has that a run appends to */
         bool dropped;              /* complete frames after it are dropped (cells mode) */
+        int64_t from;              /* the step of the frame resumed from */
+        hsize_t trim;              /* frames kept once the run writes one: those before the
+                                    * frames off output.every's grid that end the file (the
+                                    * stop's own, which the first frame written replaces) */
+        hsize_t ck_rows;           /* /checkpoint rows the file holds for its kept frames (fewer
+                                    * where a part without event slots wrote the rest) */
     } resume;
 };
 
@@ -118,6 +124,9 @@ void nbep__output_release(nbep_output **op);
 /* Makes the first `frames` frames and the stats rows so far durable and counted; -1 with the
  * reason in d on failure. */
 int nbep__output_commit(nbep_output *o, hsize_t frames, nbep_diag *d);
+/* Writes rows [first, end) of /checkpoint (o->ck open) as stale slots: kind none, rest -1; -1
+ * with the reason in d on failure. */
+int nbep__output_ck_stale(nbep_output *o, hsize_t first, hsize_t end, nbep_diag *d);
 /* Room for frame row f in the sidecar's lists; false when memory runs out. */
 bool nbep__output_xmf_room(nbep_output *o, size_t f);
 /* Rewrites the sidecar (RUN.xmf) for o's frames so far; NBEP_EIO, NBEP_ENOMEM. */

@@ -373,6 +373,23 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     hsize_t last = frames - 1;
     res.step = o->xmf_step[last];
     res.last_step = o->xmf_step[complete - 1];
+    /* The frame resumed from stays where the uninterrupted run writes one too: at a multiple
+     * of output.every (run.steps lies past it, below). A stop's own frame off that grid
+     * (SIGTERM's, or a shorter run's last; one on the grid of the file's own output.every, where
+     * the deck changes it, stays) is the run's checkpoint until the resumed run writes
+     * its first frame, which takes its row (nbep_output_frame_events: a kill before then
+     * finds it in place), so the file ends as the uninterrupted run's (until 2026-11-30 it
+     * stayed outside cells mode: one frame more than that run's, and h5diff told them apart).
+     * Only the last frame can be off the grid (a file before then may have more in a row). */
+    uint64_t every = sc->output_every; /* the file's, where it says (a deck may change it) */
+    if (H5Aexists(o->file, "output_every") > 0 &&
+        nbep__output_read_attr(o->file, path, "output_every", H5T_NATIVE_UINT64, &every, d) < 0)
+        goto fail;
+    hsize_t kept = frames;
+    while (kept > 1 && o->xmf_step[kept - 1] % (int64_t)sc->output_every != 0 &&
+           o->xmf_step[kept - 1] % (int64_t)(every ? every : 1) != 0)
+        kept--;
+    res.kept_step = o->xmf_step[kept - 1];
     /* past the file's last frame, not only the one resumed from: a cells run resumed from an
      * earlier frame to a step before its last would cut the frames it already has */
     if (res.step < 0 || res.last_step < 0 || sc->steps <= (uint64_t)res.last_step) {
@@ -383,6 +400,20 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
         st = NBEP_EDECK;
         goto fail;
     }
+    /* A predictive run at e < 1 carries state that no frame keeps: each sphere's last
+     * collision (physics.tc's clock), and under accelerations the held spheres, their lasting
+     * contacts past one plane, their response counts and the settling windows (algo_predictive.c,
+     * pred_import). Resumed from a frame past step 0 it starts them afresh, and its frames part
+     * from the uninterrupted run's (a 300-sphere pile resumed at step 1000 with 55 spheres
+     * held, from step 1001 on; a cooling gas with physics.tc = 0.3, from its first step). Said
+     * (run.c), not refused: the physics stays right, and long granular runs are resumed for it.
+     * Where the deck changes the restitution there is no uninterrupted run to match. */
+    double e_file = sc->restitution;
+    if (nbep__output_read_attr(o->file, path, "restitution", H5T_NATIVE_DOUBLE, &e_file, d) < 0)
+        goto fail;
+    res.state_lost = res.step > 0 && strcmp(sc->algorithm, "predictive") == 0 &&
+                     sc->restitution < 1.0 && e_file == sc->restitution &&
+                     (sc->tc > 0.0 || !nbep_state_free_flight(&sc->state));
     res.n = n;
     res.pos = malloc((n ? n : 1) * sizeof *res.pos);
     res.vel = malloc((n ? n : 1) * sizeof *res.vel);
@@ -427,6 +458,17 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     htri_t has_ck = H5Lexists(o->file, "/checkpoint", H5P_DEFAULT);
     o->resume.checkpoint = has_ck > 0;
     if (has_ck > 0) {
+        /* a file that a part without event slots continued before 2026-11-30 holds fewer rows
+         * than frames: where the frame resumed from has none, the run starts from positions
+         * and velocities, as from a file without /checkpoint, and the missing rows are
+         * written as stale slots (nbep_output_resume_begin) */
+        hsize_t rows = 0;
+        if (nbep__output_dataset_rows(o->file, path, nbep__ck_columns[0].name, &rows, d) < 0)
+            goto fail;
+        o->resume.ck_rows = rows < frames ? rows : frames;
+        has_ck = last < rows;
+    }
+    if (has_ck > 0) {
         res.has_events = true;
         res.event_time = malloc((n ? n : 1) * sizeof *res.event_time);
         res.event_partner = malloc((n ? n : 1) * sizeof *res.event_partner);
@@ -464,6 +506,8 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
      * algorithm's own checks) leaves the file as it was */
     o->resume.pending = true;
     o->resume.dropped = frames < complete;
+    o->resume.from = res.step;
+    o->resume.trim = kept;
     o->n_frames = frames;
     *out = o;
     *r = res;
@@ -482,6 +526,16 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
     const char *path = o->path;
     const hsize_t frames = o->n_frames;
     const uint64_t keep = o->resume.stats_keep;
+    /* A run killed while it wrote a frame can leave that frame's chunks past the file's end
+     * of allocation (the superblock's, written at each flush): the extents and chunk indexes
+     * that name them reached the disk, the new end of allocation did not. Cutting the rows
+     * below frees those chunks, which HDF5 then refused as lying outside the file ("addr
+     * overflow" at the next flush, exit 1, until 2026-11-30). The end of allocation is first
+     * raised to the file's size, so they lie inside it. */
+    if (H5Fincrement_filesize(o->file, 0) < 0) {
+        HDF5_FAIL(d, path, "take in the space a cut-short write left past its end");
+        return NBEP_EIO;
+    }
     /* The counts first, made durable, then the rows cut: a kill between the two leaves counts
      * at or below the rows (readable, as any file whose last write was cut short), where the
      * other order left counts above them (a file nothing could read: frames kept in cells
@@ -503,10 +557,14 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
         open_cut(o, "/frames/position", frames, &o->frame_pos, d) < 0 ||
         open_cut(o, "/frames/velocity", frames, &o->frame_vel, d) < 0)
         return NBEP_EIO;
-    if (o->resume.checkpoint)
+    if (o->resume.checkpoint) {
         for (int c = 0; c < N_CK_COLUMNS; c++)
             if (open_cut(o, nbep__ck_columns[c].name, frames, &o->ck[c], d) < 0)
                 return NBEP_EIO;
+        if (o->resume.ck_rows < frames &&
+            nbep__output_ck_stale(o, o->resume.ck_rows, frames, d) < 0)
+            return NBEP_EIO;
+    }
     o->xmf = true; /* resumed runs have positions */
     if (o->resume.stats) {
         for (int c = 0; c < STATS_N_COLUMNS; c++)
@@ -532,9 +590,9 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
         return NBEP_EIO;
     }
     nbep__output_close_id(&steps_attr);
-    if (note_resume(o->file, path, sc, threads, o->xmf_step[frames - 1], d) < 0 ||
+    if (note_resume(o->file, path, sc, threads, o->resume.from, d) < 0 ||
         nbep__output_commit(o, frames, d) < 0)
         return NBEP_EIO;
-    /* frames dropped (cells mode): the sidecar listed them; it lists what the file holds */
+    /* frames dropped: the sidecar listed them; it lists what the file holds */
     return o->resume.dropped ? nbep__output_xmf_write(o, d) : NBEP_OK;
 }

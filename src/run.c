@@ -345,16 +345,9 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     if (st == NBEP_OK)
         st = rq->resume ? nbep_output_open_resume(file, &sc, &out, &resume, d)
                         : nbep_output_create_staged(file, &sc, threads, &out, d);
-    /* a granular scene (predictive, e < 1, something accelerating) resumes from the frame's
-     * motion, event slots and one resting plane per sphere; held spheres, their other contacts
-     * and the settling windows are found again, so its frames can leave the uninterrupted
-     * run's (README, Faults: Resuming) */
-    bool granular = false;
     if (st == NBEP_OK) {
         if (rq->resume)
             nbep_resume_apply(&resume, &sc.state);
-        granular = strcmp(sc.algorithm, "predictive") == 0 && sc.restitution < 1.0 &&
-                   !nbep_state_free_flight(&sc.state);
         nbep_sim_options opt = {.threads = threads, .out = out,
                                 .stop_signal = rq->stop_signal, .progress = rq->verbose,
                                 .resume = rq->resume ? &resume : NULL,
@@ -376,13 +369,18 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                     "output.every (run.neighbors = \"cells\" continues bit for bit from those "
                     "only); the frames after it, to step %lld, are dropped\n",
                     file, (long long)resume.step, (long long)resume.last_step);
-        if (st == NBEP_OK && rq->resume && rq->verbose && granular)
+        else if (st == NBEP_OK && rq->resume && rq->verbose && resume.kept_step != resume.step)
             fprintf(stderr,
-                    "nbep: note: %s is a granular scene (e < 1 under acceleration): the file "
-                    "keeps each sphere's motion, next event and one resting plane, not which "
-                    "spheres are held, their other contacts or the settling under way, which "
-                    "the resumed run finds again from step %lld; once spheres rest or settle, "
-                    "its frames can differ from an uninterrupted run's\n",
+                    "nbep: %s continues from its frame at step %lld, which is off output.every's "
+                    "grid (a stop's own frame): the next frame written takes its place, and the "
+                    "file keeps the frames the uninterrupted run writes\n",
+                    file, (long long)resume.step);
+        if (st == NBEP_OK && resume.state_lost)
+            fprintf(stderr,
+                    "nbep: warning: %s continues a predictive run at e < 1 from step %lld, whose "
+                    "TC clocks, held spheres and lasting contacts no frame keeps: they start "
+                    "afresh, and the frames after it follow the same physics but not the "
+                    "uninterrupted run's bits\n",
                     file, (long long)resume.step);
         from = rq->resume ? resume.step : -1;
         nbep_resume_fini(&resume); /* the run has its event slots now */

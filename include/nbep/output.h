@@ -84,6 +84,12 @@ typedef struct nbep_resume {
     int64_t step;                 /* the frame's step */
     int64_t last_step;            /* the file's last complete frame's step (later than step
                                    * where cells mode resumes from an earlier frame) */
+    int64_t kept_step;            /* the file's last frame kept: step, or the frame before it
+                                   * where step is off output.every's grid (a stop's own
+                                   * frame, which the uninterrupted run does not write) */
+    bool state_lost;              /* the run it continues kept state no frame holds (a
+                                   * predictive run at e < 1: TC clocks, held spheres, lasting
+                                   * contacts), which the resumed run starts afresh */
     size_t n;
     nbep_vec3 *pos, *vel;         /* owned, n each, until nbep_resume_apply moves them */
     bool has_events;              /* the file has /checkpoint rows for this frame */
