@@ -13,22 +13,9 @@
 # grid mode takes several times longer. The table also gives the spheres held at the end
 # (velocity exactly zero) and the last step with a collision.
 set -eu
-# --help prints the comment above; anything but up to three positive integers is refused
-# before any run (until 2026-11-30 `--help` went to nbep as COUNT, which refused it as a deck
-# error after the table's set-up)
-case "${1:-}" in
-  -h|--help) sed -n '2,/^set -eu/p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
-esac
-if [ $# -gt 3 ]; then
-  echo "bench-granular.sh: at most COUNT STEPS REPEATS (got $# arguments); --help" >&2
-  exit 2
-fi
-for a in "$@"; do
-  case $a in
-    ''|*[!0-9]*|0|00*) echo "bench-granular.sh: COUNT, STEPS and REPEATS are positive integers (got '$a'); --help" >&2
-                       exit 2 ;;
-  esac
-done
+# --help, and the arguments' check (scripts/bench-count-args.sh)
+. "$(dirname "$0")/bench-count-args.sh"
+bench_count_args "$0" "$@"
 count=${1:-300}
 steps=${2:-450}
 reps=${3:-3}
