@@ -545,14 +545,18 @@ mkdir -p "$tmp/folder.h5"
 # opens (exit 1 before: an I/O failure)
 run_nbep run "$tmp/group.deck" -n 20 --set output.every=1 --quiet -o "$tmp/whole.h5"
 head -c $(($(stat -c %s "$tmp/whole.h5") / 2)) "$tmp/whole.h5" >"$tmp/cut.h5"
+# nbep run --resume FILE (resume) or nbep info FILE (info)
+resume_or_info() {
+    if [ "$1" = resume ]; then
+        run_nbep run "$tmp/group.deck" -n 1 --quiet --resume "$2"
+    else
+        run_nbep info "$2"
+    fi
+}
 for f in text other latest number folder cut; do
     sum0=$([ -f "$tmp/$f.h5" ] && md5sum <"$tmp/$f.h5")
     for cmd in resume info; do
-        if [ $cmd = resume ]; then
-            run_nbep run "$tmp/group.deck" -n 1 --quiet --resume "$tmp/$f.h5"
-        else
-            run_nbep info "$tmp/$f.h5"
-        fi
+        resume_or_info $cmd "$tmp/$f.h5"
         check "$cmd of $f.h5 (no nbep run): exit 2, one line saying what it is (got $rc: $(head -c 200 "$tmp/stderr"))" \
             "[ $rc = 2 ] && one_line && grep -qE '$tmp/$f.h5: (cannot .*: (not an HDF5 file|Is a directory|truncated file: .*)|not an nbep-1 file \(root attribute format is (\"other-1\"|not a string)\))\$' '$tmp/stderr'"
     done
@@ -561,11 +565,7 @@ done
 # the run's XDMF sidecar named instead of its run (they lie side by side): said so, with the
 # run file to pass (until 2026-11-30 "not an HDF5 file" alone)
 for cmd in resume info; do
-    if [ $cmd = resume ]; then
-        run_nbep run "$tmp/group.deck" -n 1 --quiet --resume "$tmp/whole.xmf"
-    else
-        run_nbep info "$tmp/whole.xmf"
-    fi
+    resume_or_info $cmd "$tmp/whole.xmf"
     check "$cmd of a run's sidecar: exit 2, one line naming its run file (got $rc: $(head -c 200 "$tmp/stderr"))" \
         "[ $rc = 2 ] && one_line && grep -q '$tmp/whole.xmf: cannot .*: not an HDF5 file: the XDMF sidecar of whole.h5, beside it; pass that file\$' '$tmp/stderr'"
 done
