@@ -1301,6 +1301,8 @@ MUTANTS = [
      "    if 0:\n        print(f\"bench-cooling: takes no arguments", ["tests/test_bench_args.sh"], None),
     ("bench-hopper-count-unchecked", "scripts/bench-count-args.sh", "        ''|*[!0-9]*|0|00*)",
      "        ''|0|00*)", ["tests/test_bench_args.sh"], None),
+    ("render-short-axis-ticked", "scripts/render.py", "        if span[k] < 0.1 * span.max():",
+     "        if span[k] < 0.0 * span.max():", ["tests/test_viz.sh"], None),
     ("check-skin-why-free-flight", "src/check.c", "                    !nbep_state_free_flight(&sc->state)\n",
      "                    0\n", ["tests/test_cli.sh"], None),
     ("real-text-17-digits", "src/summary.c", "    for (int digits = 1; digits <= 17; digits++) {",

@@ -129,6 +129,14 @@ def draw_3d(fig, pos, radius, c, lo, hi, boxed, args):
     ax.set_xlabel("x")
     ax.set_ylabel("y")
     ax.set_zlabel("z")
+    # an axis far shorter than the longest (the hopper's groove: 0.16 across, 7 long) is a few
+    # pixels long, where its tick labels fell on one another: no ticks; its extent goes under
+    # the title (ax.short, which main reads)
+    ax.short = []
+    for k, name in enumerate("xyz"):
+        if span[k] < 0.1 * span.max():
+            (ax.xaxis, ax.yaxis, ax.zaxis)[k].set_ticks([])
+            ax.short.append("%s %.3g .. %.3g" % (name, lo[k], hi[k]))
     return ax, sc
 
 
@@ -207,8 +215,10 @@ def main():
             ax, mappable = draw(fig, pos, radius, c, lo, hi, boxed, args)
             if c is not None and mappable is not None:
                 fig.colorbar(mappable, ax=ax, shrink=0.7, pad=0.1, label=label)
-            ax.set_title("%s: step %d, t = %.4g, %d spheres" % (stem, step, t, len(radius)),
-                         fontsize=10)
+            title = "%s: step %d, t = %.4g, %d spheres" % (stem, step, t, len(radius))
+            if getattr(ax, "short", None):
+                title += "\n" + ", ".join(ax.short) + " (too short to tick)"
+            ax.set_title(title, fontsize=10)
             view = "" if args.view == "3d" else "-" + args.view
             path = os.path.join(out, "%s-step-%06d%s.png" % (stem, step, view))
             fig.savefig(path, dpi=args.dpi, bbox_inches="tight")

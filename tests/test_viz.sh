@@ -59,6 +59,25 @@ lo, hi, boxed = render.box_of(f, f['frames/position'][0], f['spheres/radius'][:]
 assert boxed and list(lo) == [-1.0, 0.0, 0.0] and list(hi) == [5.0, 7.0, 6.5], (lo, hi, boxed)
 PYEOF"
 
+# an axis far shorter than the longest (the hopper's groove, 0.16 across and 7 long) gets no
+# ticks, whose labels fell on one another, and its extent under the title; the others keep them
+check "render.py's 3-d view: no ticks on an axis a tenth of the longest or less" \
+    "MPLBACKEND=Agg '$py' - <<'PYEOF'
+import sys, types
+import numpy as np
+import matplotlib.pyplot as plt
+sys.path.insert(0, 'scripts')
+import render
+lo, hi = np.array([-0.08, -7.0, 0.0]), np.array([0.08, 0.0, 0.16])
+fig = plt.figure()
+args = types.SimpleNamespace(size=6.0)
+ax, _ = render.draw_3d(fig, np.array([[0.0, -1.0, 0.1]]), np.array([0.03]), None, lo, hi,
+                       False, args)
+assert len(ax.get_xticks()) == 0 and len(ax.get_zticks()) == 0, (ax.get_xticks(), ax.get_zticks())
+assert len(ax.get_yticks()) > 2
+assert ax.short == ['x -0.08 .. 0.08', 'z 0 .. 0.16'], ax.short
+PYEOF"
+
 # every run writes RUN.xmf beside RUN.h5 (ParaView and VisIt open it as animated spheres)
 check "a run writes its XDMF sidecar" "[ -s '$tmp/viz.xmf' ]"
 check "the sidecar resolves in a reader" "'$py' scripts/check_xdmf.py '$tmp/viz.xmf' >/dev/null"
