@@ -1301,6 +1301,8 @@ MUTANTS = [
      "    if 0:\n        print(f\"bench-cooling: takes no arguments", ["tests/test_bench_args.sh"], None),
     ("bench-hopper-count-unchecked", "scripts/bench-count-args.sh", "        ''|*[!0-9]*|0|00*)",
      "        ''|0|00*)", ["tests/test_bench_args.sh"], None),
+    ("resume-line-ways-unsaid", "src/output_resume.c", "            if (!root || strcmp(root, now[k]) != 0) {",
+     "            if (0) {", ["tests/test_resume.sh"], None),
     ("render-short-axis-ticked", "scripts/render.py", "        if span[k] < 0.1 * span.max():",
      "        if span[k] < 0.0 * span.max():", ["tests/test_viz.sh"], None),
     ("check-skin-why-free-flight", "src/check.c", "                    !nbep_state_free_flight(&sc->state)\n",

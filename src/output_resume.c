@@ -204,8 +204,8 @@ static int same_run(hid_t file, const char *path, const nbep_scene *sc, nbep_dia
 }
 
 /* Adds this resume's line to the root attribute `resumed` (made with the first): the step it
- * continues from, the threads, this build, the algorithm and restitution where they are not
- * the root's (a deck edited in place may change them: the root says how the first part was
+ * continues from, the threads, this build, the algorithm, restitution, neighbors and order
+ * where they are not the root's (a deck edited in place may change them: the root says how the first part was
  * made) and the overrides, so that `nbep info` tells the parts of a run apart (the root's
  * `threads` and `overrides` stay the first part's: a sweep knows its runs by those
  * overrides). */
@@ -237,6 +237,29 @@ static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int t
                  nbep_format_real(sc->restitution, false, e));
     }
     free(algo);
+    /* a predictive part's way of finding pairs and reacting (run.neighbors, run.order), where
+     * the root (a predictive first part's) says another or none (until 2026-11-30 a part that
+     * switched to grid or step order said nothing of it) */
+    if (strcmp(sc->algorithm, "predictive") == 0) {
+        const char *now[2] = {nbep_scene_neighbors_name(sc), nbep_scene_order_name(sc)};
+        static const char *const key[2] = {"neighbors", "order"};
+        for (int k = 0; k < 2; k++) {
+            char *root = NULL;
+            const htri_t has = H5Aexists(file, key[k]);
+            if (has < 0 ||
+                (has && nbep__output_read_string_attr(file, path, key[k], &root, d) < 0)) {
+                if (has < 0)
+                    HDF5_FAIL(d, path, "read the root attribute %s", key[k]);
+                free(was);
+                return -1;
+            }
+            if (!root || strcmp(root, now[k]) != 0) {
+                const size_t at = strlen(changed);
+                snprintf(changed + at, sizeof changed - at, ", %s %s", key[k], now[k]);
+            }
+            free(root);
+        }
+    }
     const char *ov = sc->overrides ? sc->overrides : "";
     const size_t len = (was ? strlen(was) : 0) + 2 * strlen(ov) + strlen(NBEP_VERSION) +
                        strlen(NBEP_BUILD_COMMIT) + strlen(changed) + 128;

@@ -257,6 +257,15 @@ bin/nbep info $tmp/edited.h5 >$tmp/edited.info
 check "a resume with a deck edited in place: its line names the algorithm and restitution" \
     "grep -q '^resumed: .*step 20: .*, algorithm naive, restitution 0.5' $tmp/edited.info &&
      grep -q '^algorithm: *predictive' $tmp/edited.info"
+# a part with another run.neighbors or run.order (which a resume may change): named in its line
+# as the algorithm is (until 2026-11-30 nothing said the later frames were found another way)
+bin/nbep run $deck "${args[@]}" -n 20 -o $tmp/ways.h5
+bin/nbep run $deck "${args[@]}" -n 30 --set 'run.neighbors="grid"' --set 'run.order="step"' \
+    --resume $tmp/ways.h5
+bin/nbep info $tmp/ways.h5 >$tmp/ways.info
+check "a resume in another neighbors mode and order: its line names them" \
+    "grep -q '^resumed: .*step 20: .*, neighbors grid, order step' $tmp/ways.info &&
+     ! grep '^resumed:' $tmp/ways.info | grep -q 'algorithm\|restitution'"
 # the algorithm may change at a resume: a predictive file continued by naive, then by predictive
 # again. /checkpoint keeps a row for every frame, naive's frames' rows stale (kind 0: every
 # sphere predicted afresh; no resting plane), so the last resume reads the row of its frame
