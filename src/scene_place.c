@@ -823,6 +823,20 @@ static void lattice_next(uint64_t idx[3], uint64_t nx, uint64_t ny)
     idx[2]++;
 }
 
+/* The axes of a lattice in the region [rlo, rhi] of spheres of radius r (wrap: an "fcc" fill,
+ * which wraps along the periodic axes the region spans whole, spans), with the first and last
+ * sites' bounds lo and hi (lattice_axis). */
+static void lattice_axes(const double rlo[3], const double rhi[3], double r, const bool spans[3],
+                         bool wrap, lattice_axis ax[3], double lo[3], double hi[3])
+{
+    for (int a = 0; a < 3; a++) {
+        ax[a].wraps = wrap && spans[a];
+        lo[a] = ax[a].wraps ? rlo[a] : rlo[a] + r;
+        hi[a] = ax[a].wraps ? rhi[a] : rhi[a] - r;
+        ax[a].len = hi[a] - lo[a];
+    }
+}
+
 /* A lattice filling the region (simple cubic, or face-centred cubic for "fcc"); returns as
  * place_random does. */
 static nbep_status place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s,
@@ -834,15 +848,12 @@ static nbep_status place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s,
     const bool fcc = e->place == NBEP__PLACE_FCC;
     const double rlo[3] = {e->lo.x, e->lo.y, e->lo.z}, rhi[3] = {e->hi.x, e->hi.y, e->hi.z};
     const double blo[3] = {box_lo.x, box_lo.y, box_lo.z}, bhi[3] = {box_hi.x, box_hi.y, box_hi.z};
+    bool spans[3]; /* a periodic axis the region spans whole */
+    for (int a = 0; a < 3; a++)
+        spans[a] = box_periodic && box_periodic[a] && rlo[a] == blo[a] && rhi[a] == bhi[a];
     double lo[3], hi[3];
     lattice_axis ax[3];
-    for (int a = 0; a < 3; a++) {
-        ax[a].wraps = fcc && box_periodic && box_periodic[a] && rlo[a] == blo[a] &&
-                      rhi[a] == bhi[a];
-        lo[a] = ax[a].wraps ? rlo[a] : rlo[a] + r;
-        hi[a] = ax[a].wraps ? rhi[a] : rhi[a] - r;
-        ax[a].len = hi[a] - lo[a];
-    }
+    lattice_axes(rlo, rhi, r, spans, fcc, ax, lo, hi);
     if (e->count == 0)
         return NBEP_OK;
     double spacing = lattice_spacing(ax, r, e->count, fcc);
@@ -851,13 +862,9 @@ static nbep_status place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s,
         const double most = lattice_capacity(ax, lattice_min_spacing(r, fcc), fcc);
         /* a simple cubic fill that fails names the face-centred one where that holds them
          * (the densest simple cubic fill is 0.52; hard-sphere crystals are studied to 0.74) */
-        lattice_axis fax[3];
-        for (int a = 0; a < 3; a++)
-            fax[a] = (lattice_axis){rhi[a] - rlo[a] - 2.0 * r, false};
-        if (!fcc) /* the axes "fcc" would take */
-            for (int a = 0; a < 3; a++)
-                if (box_periodic && box_periodic[a] && rlo[a] == blo[a] && rhi[a] == bhi[a])
-                    fax[a] = (lattice_axis){rhi[a] - rlo[a], true};
+        lattice_axis fax[3]; /* the axes "fcc" would take */
+        double flo[3], fhi[3];
+        lattice_axes(rlo, rhi, r, spans, true, fax, flo, fhi);
         const double most_fcc = lattice_capacity(fax, lattice_min_spacing(r, true), true);
         char hint[96] = "", why[160];
         no_room_why(e->lo, e->hi, r, 0, 0, why, sizeof why);
