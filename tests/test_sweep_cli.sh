@@ -24,6 +24,11 @@ run_sweep() {
     timeout -k 5 120 "$nbep" sweep "$@" >"$tmp/stdout" 2>"$tmp/stderr"
     rc=$?
 }
+# nbep check of a study: its output in $tmp/stdout and $tmp/stderr, its status in rc
+run_check() {
+    timeout -k 5 60 "$nbep" check "$@" >"$tmp/stdout" 2>"$tmp/stderr"
+    rc=$?
+}
 one_line() { [ "$(wc -l <"$tmp/stderr")" -eq 1 ]; }
 # The bytes of a size as nbep prints it on stdin ("1.82 MB", "682 kB": powers of 1000); nothing
 # for anything else.
@@ -106,12 +111,10 @@ check "a file where the sweep's directory goes: exit 2 (got $rc), one line" \
 # nbep check of the study says so first, in the sweep's words (it passed until 2026-11-30),
 # for a file in the way above the folder too; a folder of new folders passes, none made
 cp "$tmp/stderr" "$tmp/sweep-stderr"
-timeout 30 "$nbep" check "$tmp/s.deck" -o "$tmp/infile" >"$tmp/stdout" 2>"$tmp/stderr"
-rc=$?
+run_check "$tmp/s.deck" -o "$tmp/infile"
 check "nbep check: a file where the sweep's directory goes: exit 2 (got $rc), the sweep's line" \
     "[ $rc = 2 ] && [ ! -s '$tmp/stdout' ] && cmp -s '$tmp/stderr' '$tmp/sweep-stderr'"
-timeout 30 "$nbep" check "$tmp/s.deck" -o "$tmp/infile.sweep/deeper/x" >"$tmp/stdout" 2>"$tmp/stderr"
-rc=$?
+run_check "$tmp/s.deck" -o "$tmp/infile.sweep/deeper/x"
 check "nbep check: a file above it: exit 2 (got $rc), one line naming the file" \
     "[ $rc = 2 ] && one_line && grep -q 'directory $tmp/infile.sweep: a file is in the way' '$tmp/stderr'"
 # a link to nothing where the folder goes: mkdir finds something there and the sweep fails; so
@@ -121,12 +124,10 @@ run_sweep "$tmp/s.deck" -o "$tmp/dangling" --quiet
 cp "$tmp/stderr" "$tmp/sweep-stderr"
 check "a link to nothing where the sweep's directory goes: exit 2 (got $rc), one line" \
     "[ $rc = 2 ] && one_line && grep -q 'directory $tmp/dangling.sweep: ' '$tmp/stderr'"
-timeout 30 "$nbep" check "$tmp/s.deck" -o "$tmp/dangling" >"$tmp/stdout" 2>"$tmp/stderr"
-rc=$?
+run_check "$tmp/s.deck" -o "$tmp/dangling"
 check "nbep check: the same, exit 2 (got $rc), the sweep's line" \
     "[ $rc = 2 ] && [ ! -s '$tmp/stdout' ] && cmp -s '$tmp/stderr' '$tmp/sweep-stderr'"
-timeout 30 "$nbep" check "$tmp/s.deck" -o "$tmp/new2/deep/x" >"$tmp/stdout" 2>"$tmp/stderr"
-rc=$?
+run_check "$tmp/s.deck" -o "$tmp/new2/deep/x"
 check "nbep check: new folders on the way pass (got $rc), none made" \
     "[ $rc = 0 ] && [ ! -e '$tmp/new2' ]"
 
@@ -340,8 +341,7 @@ sweep: {
            { key = "spheres.[0].count"; values = [8, 27]; } );
 };
 EOF
-timeout 60 "$nbep" check "$tmp/combo.deck" >"$tmp/stdout" 2>"$tmp/stderr"
-rc=$?
+run_check "$tmp/combo.deck"
 check "a study with a combination that cannot be placed: nbep check exits 2 (got $rc), nothing on stdout" \
     "[ $rc = 2 ] && [ ! -s '$tmp/stdout' ]"
 check "... one line for each run that cannot run, 3 and 7, naming its values and the error at the first axis that places the group (README's example)" \
@@ -349,16 +349,14 @@ check "... one line for each run that cannot run, 3 and 7, naming its values and
      grep -q '^nbep: sweep run 3 (spheres.\[0\].radius=0.45 spheres.\[0\].count=27 seed=1) cannot run: .*combo.deck:7: sweep.vary.\[0\]: spheres.\[0\]: could not place 27 spheres of radius 0.45' '$tmp/stderr' &&
      grep -q '^nbep: sweep run 7 (spheres.\[0\].radius=0.45 spheres.\[0\].count=27 seed=2) cannot run: ' '$tmp/stderr'"
 # more runs that cannot run than are listed: the first 10, then a count of the rest
-timeout 60 "$nbep" check "$tmp/combo.deck" --set sweep.replicas=12 >"$tmp/stdout" 2>"$tmp/stderr"
-rc=$?
+run_check "$tmp/combo.deck" --set sweep.replicas=12
 check "12 such runs: exit 2 (got $rc), 10 listed, then '2 more sweep runs cannot run'" \
     "[ $rc = 2 ] && [ \$(grep -c 'cannot run: ' '$tmp/stderr') = 10 ] &&
      [ \$(wc -l < '$tmp/stderr') = 11 ] && tail -1 '$tmp/stderr' | grep -qx 'nbep: 2 more sweep runs cannot run'"
 # a study whose runs all load: its runs, its folder, and its output in all: the sum of what
 # nbep check says of each run's own scene (the run's values as --set: its file and sidecar),
 # and the sweep's summary.csv and summary.h5
-timeout 60 "$nbep" check "$tmp/combo.deck" --set 'sweep.vary.[1].values=[1, 8]' >"$tmp/stdout" 2>"$tmp/stderr"
-rc=$?
+run_check "$tmp/combo.deck" --set 'sweep.vary.[1].values=[1, 8]'
 check "a study whose runs all load: exit 0 (got $rc), its 8 runs and folder named" \
     "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] &&
      grep -qx 'sweep:           8 runs (2 replicas x 4 combinations) into combo.sweep/' '$tmp/stdout' &&
@@ -434,8 +432,7 @@ sweep: {
   vary = ( { key = "box.max"; values = ([2.0, 2.0, 2.0], [0.3, 0.3, 0.3]); } );
 };
 EOF
-timeout 60 "$nbep" check "$tmp/box-axis.deck" >"$tmp/stdout" 2>"$tmp/stderr"
-rc=$?
+run_check "$tmp/box-axis.deck"
 check "an axis of box.max that leaves the group no room: exit 2 (got $rc), named at the axis's line" \
     "[ $rc = 2 ] && [ ! -s '$tmp/stdout' ] && one_line &&
      grep -q '^nbep: sweep run 1 (box.max=\\[0.3, 0.3, 0.3\\] seed=1) cannot run: .*box-axis.deck:6: sweep.vary.\\[0\\]: spheres.\\[0\\]: could not place 27 spheres' '$tmp/stderr'"
