@@ -274,12 +274,9 @@ MUTANTS = [
      "one reaction later on a jammed sphere changes nothing a test can see: the line names the limit, not the count"),
     # ---- granular: cages, round-off grazing, rest speed (issue 9) ----
     # a plane the faces it rests on press it into (a ramp into a wall): rested on as under gravity
-    ("wedge-rest-gravity-only", "src/pred_react.c",
-     "            an = fmin(an, nbep_vec3_dot(c->aeff[lo], n));", "            (void)0;",
-     ["test_granular"], None),
-    ("wedge-rest-larger-part", "src/pred_react.c",
-     "            an = fmin(an, nbep_vec3_dot(c->aeff[lo], n));",
-     "            an = fmax(an, nbep_vec3_dot(c->aeff[lo], n));", ["test_granular"], None),
+    ("wedge-rest-own-acceleration", "src/pred_react.c",
+     "        double an = nbep_vec3_dot(r && r->n > 0 ? c->aeff[lo] : s->acc[lo], n),",
+     "        double an = nbep_vec3_dot(s->acc[lo], n),", ["test_granular"], None),
     ("check-json-tc-as-restitution", "src/check.c", "\"tc\", sc->tc,", "\"tc\", sc->restitution,",
      ["tests/test_cli.sh"], None),
     ("cage-never", "src/pred_react.c", "    if (!opposed)\n        return false;",

@@ -591,18 +591,16 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
         /* SPEC /stats/wall_impulse: the normal momentum the plane received, pushed outward */
         nbep_xsum_add(&mx->wall[p], s->mass[lo] * (nbep_vec3_dot(n, s->vel[lo]) - vn0));
         update_rest(c, s, lo, dt);
-        double an = nbep_vec3_dot(s->acc[lo], n), vn = nbep_vec3_dot(s->vel[lo], n);
         rest_set *r = c->rest ? &c->rest[lo] : NULL; /* NULL: nothing accelerates */
-        /* pressed into p by the faces it rests on, not by its own acceleration: a ball sliding
-         * down a ramp into a wall across its foot, which gravity does not push it into but the
-         * ramp does (its effective acceleration, as it flies). Its bounces shorten as they do
-         * under gravity, so the same rule rests it; with only gravity's part, none (0) on the
-         * wall, it never rested there, and the cage took each bounce back at zero time (65
-         * million collisions in 1.5 s). Taken only where gravity's part does not already press
-         * it: faces at right angles (a box's floor and walls, the hopper's groove) give the same
-         * part either way, and keep their bits. */
-        if (r && r->n > 0 && !(an < 0.0))
-            an = fmin(an, nbep_vec3_dot(c->aeff[lo], n));
+        /* the part against p of the acceleration it flies with (its own, less what the faces
+         * it rests on take): a ball sliding down a ramp into a wall across its foot is pressed
+         * into the wall by the ramp's push, though gravity has no part against it. Until
+         * 2026-11-30 its own acceleration's part: 0 there, so the ball never rested on the wall
+         * and the cage took each bounce back at zero time (65 million collisions in 1.5 s).
+         * Faces at right angles (a box's floor and walls, the hopper's groove) give the same
+         * part either way (the frames of the pile, hopper and bounce decks kept their bits). */
+        double an = nbep_vec3_dot(r && r->n > 0 ? c->aeff[lo] : s->acc[lo], n),
+               vn = nbep_vec3_dot(s->vel[lo], n);
         /* a bounce shorter than tc would be elastic (TC) and never shrink: rest; and one that
          * the TC model made elastic (the sphere is squeezed: it met something within tc) rests
          * no faster than the rest speed, what the minimum bounce of its neighbours leaves it
