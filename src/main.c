@@ -72,9 +72,7 @@ static nbep_status cmd_run(const nbep_cli *cli, nbep_diag *d)
 /* The line of a check stopped by signal st, which writes no report. */
 static nbep_status check_stopped(nbep_status st, nbep_diag *d)
 {
-    NBEP_FAIL(d, st, "nbep: check %s by SIG%s; nothing written",
-              st == NBEP_ESIGTERM ? "terminated" : "interrupted",
-              st == NBEP_ESIGTERM ? "TERM" : "INT");
+    NBEP_FAIL(d, st, "nbep: check %s; nothing written", nbep_status_stop_text(st));
 }
 
 static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)

@@ -205,8 +205,8 @@ static int same_run(hid_t file, const char *path, const nbep_scene *sc, nbep_dia
 
 /* Adds this resume's line to the root attribute `resumed` (made with the first): the step it
  * continues from, the threads, this build, the algorithm, restitution, neighbors and order
- * where they are not the root's (a deck edited in place may change them: the root says how the first part was
- * made) and the overrides, so that `nbep info` tells the parts of a run apart (the root's
+ * where they are not the root's (a deck edited in place may change them: the root says how
+ * the first part was made) and the overrides, so that `nbep info` tells the parts of a run apart (the root's
  * `threads` and `overrides` stay the first part's: a sweep knows its runs by those
  * overrides). */
 static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int threads,

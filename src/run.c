@@ -152,19 +152,18 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
         print_human_summary(&res->summary, file, st, from);
     uint64_t frame_step;
     const bool abandoned = nbep_sim_abandoned(sim, &frame_step);
-    const char *how = st == NBEP_ESIGINT ? "interrupted" : "terminated";
-    const char *sig = st == NBEP_ESIGINT ? "INT" : "TERM";
+    const char *how = nbep_status_stop_text(st);
     if ((st == NBEP_ESIGINT || st == NBEP_ESIGTERM) && abandoned)
         nbep_diag_add(d, __FILE__, __LINE__,
-                      "nbep: %s by SIG%s during step %llu, which is abandoned; the run ends "
+                      "nbep: %s during step %llu, which is abandoned; the run ends "
                       "after step %llu, and its frames up to step %llu are in %s",
-                      how, sig, (unsigned long long)res->summary.steps + 1,
+                      how, (unsigned long long)res->summary.steps + 1,
                       (unsigned long long)res->summary.steps, (unsigned long long)frame_step,
                       file);
     else if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
         nbep_diag_add(d, __FILE__, __LINE__,
-                      "nbep: %s by SIG%s after step %llu; every frame up to it is in %s", how,
-                      sig, (unsigned long long)res->summary.steps, file);
+                      "nbep: %s after step %llu; every frame up to it is in %s", how,
+                      (unsigned long long)res->summary.steps, file);
     return st;
 }
 
@@ -291,9 +290,8 @@ nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
 /* The line of a run stopped by signal st before its first frame, with nothing written. */
 static nbep_status not_begun(nbep_status st, nbep_diag *d)
 {
-    NBEP_FAIL(d, st, "nbep: %s by SIG%s before the run began; nothing written",
-              st == NBEP_ESIGTERM ? "terminated" : "interrupted",
-              st == NBEP_ESIGTERM ? "TERM" : "INT");
+    NBEP_FAIL(d, st, "nbep: %s before the run began; nothing written",
+              nbep_status_stop_text(st));
 }
 
 nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag *d)

@@ -34,6 +34,11 @@ nbep_status nbep_status_of_stop(const atomic_int *stop)
     return !sig ? NBEP_OK : sig == SIGTERM ? NBEP_ESIGTERM : NBEP_ESIGINT;
 }
 
+const char *nbep_status_stop_text(nbep_status st)
+{
+    return st == NBEP_ESIGTERM ? "terminated by SIGTERM" : "interrupted by SIGINT";
+}
+
 const char *nbep_status_text(nbep_status s)
 {
     switch (s) {

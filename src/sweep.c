@@ -1284,10 +1284,9 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
     }
     if (run_st == NBEP_ESIGINT || run_st == NBEP_ESIGTERM) {
         nbep_diag_add(d, __FILE__, __LINE__,
-                      "nbep: sweep %s by SIG%s: %zu of %zu runs complete; the same command "
+                      "nbep: sweep %s: %zu of %zu runs complete; the same command "
                       "again runs the others",
-                      run_st == NBEP_ESIGINT ? "interrupted" : "terminated",
-                      run_st == NBEP_ESIGINT ? "INT" : "TERM", s.ok, p->n_runs);
+                      nbep_status_stop_text(run_st), s.ok, p->n_runs);
         return run_st;
     }
     if (st != NBEP_OK)
@@ -1545,9 +1544,8 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
      * its first run): nothing is made */
     if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
         nbep_diag_add(dd, __FILE__, __LINE__,
-                      "nbep: sweep %s by SIG%s before its first run; nothing written",
-                      st == NBEP_ESIGTERM ? "terminated" : "interrupted",
-                      st == NBEP_ESIGTERM ? "TERM" : "INT");
+                      "nbep: sweep %s before its first run; nothing written",
+                      nbep_status_stop_text(st));
     if (st == NBEP_OK) /* its JSON would replace the deck, as for nbep run */
         st = nbep_run_check_paths(cli->path, NULL, cli->summary, dd);
     if (st == NBEP_OK && cli->summary && strcmp(cli->summary, "-") != 0)

@@ -37,6 +37,9 @@ nbep_status nbep_status_of_open(int err);
  * load, cheap enough for a loop to make every few thousand iterations; any thread may call
  * it. */
 nbep_status nbep_status_of_stop(const atomic_int *stop);
+/* How a stop status reads in the one line that says so: "terminated by SIGTERM" for
+ * NBEP_ESIGTERM, else "interrupted by SIGINT". */
+const char *nbep_status_stop_text(nbep_status st);
 /* A short human text for a status; never NULL. */
 const char *nbep_status_text(nbep_status s);
 
