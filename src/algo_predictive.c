@@ -391,8 +391,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         if (c->order_step)
             atomic_init(&c->tclaim[i], KEY_FREE);
     }
-    atomic_init(&c->round_stop, 0);
-    atomic_init(&c->rebuild_stop, 0);
+    atomic_init(&c->stop_seen, 0);
     for (int t = 0; t < sim->nt; t++) {
         const size_t own = plan_own(&p, t);
         thread_ws *w = &c->ws[t];
@@ -869,7 +868,7 @@ static void pred_run(nbep_sim *sim, void *p)
                  * barrier (relaxed: the barrier orders it) */
                 const bool look = round % STOP_ROUNDS == STOP_ROUNDS - 1;
                 if (look && tid == 0 && nbep_sim_stop_status(sim->opt.stop_signal) != NBEP_OK)
-                    atomic_store_explicit(&c->round_stop, 1, memory_order_relaxed);
+                    atomic_store_explicit(&c->stop_seen, 1, memory_order_relaxed);
                 nbep_barrier_wait(b_all);
                 /* the threads out of the crew are done: the rest of the step's rounds is the
                  * crew's (each t_min is read here by the crew alone, before its next write) */
@@ -896,7 +895,7 @@ static void pred_run(nbep_sim *sim, void *p)
                     w->n_cand = w->n_redo;
                     w->n_redo = 0;
                 }
-                if (look && atomic_load_explicit(&c->round_stop, memory_order_relaxed)) {
+                if (look && atomic_load_explicit(&c->stop_seen, memory_order_relaxed)) {
                     /* a signal during the step's rounds: the step is abandoned (no row,
                      * frame or counts of it), the run ends after the step before */
                     if (tid == 0)

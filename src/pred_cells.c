@@ -589,7 +589,7 @@ void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own,
             for (size_t lo = own.lo; lo < own.hi; lo += PREDICT_LOOK) {
                 /* relaxed, as every look at it: the handler passes no other data */
                 if (nbep_sim_stop_status(sim->opt.stop_signal) != NBEP_OK) {
-                    atomic_store_explicit(&c->rebuild_stop, 1, memory_order_relaxed);
+                    atomic_store_explicit(&c->stop_seen, 1, memory_order_relaxed);
                     break;
                 }
                 nbep_evloop_predict(c->ev, ops, &u, lo,
@@ -602,8 +602,8 @@ void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own,
              * abandons it (cells_part), before any event (the spheres as the step before left
              * them, wrapped as its frame has them); the run ends after the step before, which
              * at the first step is step 0. relaxed: the barrier above ordered every store of
-             * rebuild_stop, and none comes until the run ends, so all threads leave or none */
-            if (atomic_load_explicit(&c->rebuild_stop, memory_order_relaxed)) {
+             * stop_seen, and none comes until the run ends, so all threads leave or none */
+            if (atomic_load_explicit(&c->stop_seen, memory_order_relaxed)) {
                 if (tid == 0 && step == sim->step_first)
                     nbep__sim_setup_done(sim);
                 if (tid == 0)

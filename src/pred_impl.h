@@ -250,12 +250,11 @@ typedef struct pred_ctx {
     /* thread 0, where the crew is smaller than the run's threads, for the others after the
      * barrier that ends the rounds: whether the rounds stopped the run */
     bool crew_quit;
-    /* set by thread 0 (for good) when a look at the stop signal, every STOP_ROUNDS rounds of a
-     * step, finds one; read by the crew past the barrier that follows */
-    atomic_int round_stop;
-    /* cells mode: set (for good) by a thread whose look at the stop signal within a rebuild's
-     * predictions found one; read by every thread past the barrier that ends them */
-    atomic_int rebuild_stop;
+    /* set (for good) by a look at the stop signal within a step that finds one: thread 0's,
+     * every STOP_ROUNDS rounds (rounds modes), read by the crew past the barrier that follows;
+     * any thread's, within a rebuild's predictions (cells mode), read by every thread past the
+     * barrier that ends them */
+    atomic_int stop_seen;
     uint64_t rounds_before; /* thread 0's: the rounds of the steps before this one */
     uint64_t seen_before;   /* thread 0's: seen_woken where the step before's rounds ended */
     nbep_counters *help_cnt;      /* owned when team, team_size NBEP_EVLOOP_RING: each place's
