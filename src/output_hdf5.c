@@ -15,6 +15,7 @@
 
 #include <hdf5.h>
 
+#include "nbep/output_xdmf.h"
 #include "output_impl.h"
 
 /* Longest HDF5 error description kept (they are one line; longer ones are cut). */
@@ -336,33 +337,16 @@ static int is_run(hid_t file, const char *path, nbep_diag *d)
     return run;
 }
 
-/* For a file that is not HDF5: where it is an XDMF sidecar (what `nbep info` is most often
- * handed instead of its run: the two lie side by side, RUN.xmf beside RUN.h5), ": " and what to
- * pass instead into buf, the run file's name from the comment nbep writes at the sidecar's top
- * (output_xdmf.c: "<!-- nbep run NAME: N spheres, ..."); else "". */
+/* For a file that is not HDF5: where it is an XDMF sidecar, ": " and what to pass instead into
+ * buf (nbep_xdmf_run_of); else "". */
 static void sidecar_hint(const char *path, char *buf, size_t len)
 {
+    char run[1024];
     buf[0] = '\0';
-    char head[1024];
-    FILE *f = fopen(path, "rb");
-    if (!f)
+    if (!nbep_xdmf_run_of(path, run, sizeof run))
         return;
-    const size_t n = fread(head, 1, sizeof head - 1, f);
-    fclose(f);
-    head[n] = '\0';
-    if (!strstr(head, "<Xdmf"))
-        return;
-    const char *name = strstr(head, "<!-- nbep run ");
-    const char *end = name ? strstr(name, " spheres, ") : NULL;
-    if (name) {
-        name += strlen("<!-- nbep run ");
-        while (end && end > name && end[-1] >= '0' && end[-1] <= '9')
-            end--; /* back over the count to the ": " before it */
-    }
-    if (name && end && end - name >= 3 && end[-2] == ':' && end[-1] == ' ' &&
-        !memchr(name, '\n', (size_t)(end - name)))
-        snprintf(buf, len, ": the XDMF sidecar of %.*s, beside it; pass that file",
-                 (int)(end - 2 - name), name);
+    if (run[0])
+        snprintf(buf, len, ": the XDMF sidecar of %s, beside it; pass that file", run);
     else
         snprintf(buf, len, ": an XDMF sidecar; pass the run file beside it (RUN.h5 for RUN.xmf)");
 }

@@ -23,6 +23,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The comment at a sidecar's top that names its run (xml_head writes it, nbep_xdmf_run_of
+ * reads it): RUN_NOTE, the run file's name, ": N spheres, ...". */
+#define RUN_NOTE "<!-- nbep run "
+#define RUN_NOTE_SPHERES " spheres, "
+
 char *nbep_xdmf_path(const char *h5_path)
 {
     size_t len = strlen(h5_path);
@@ -34,6 +39,31 @@ char *nbep_xdmf_path(const char *h5_path)
         memcpy(p + stem, ".xmf", sizeof ".xmf");
     }
     return p;
+}
+
+bool nbep_xdmf_run_of(const char *path, char *name, size_t len)
+{
+    name[0] = '\0';
+    char head[1024];
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return false;
+    const size_t n = fread(head, 1, sizeof head - 1, f);
+    fclose(f);
+    head[n] = '\0';
+    if (!strstr(head, "<Xdmf"))
+        return false;
+    const char *at = strstr(head, RUN_NOTE);
+    const char *end = at ? strstr(at, RUN_NOTE_SPHERES) : NULL;
+    if (!end)
+        return true;
+    at += strlen(RUN_NOTE);
+    while (end > at && end[-1] >= '0' && end[-1] <= '9')
+        end--; /* back over the count to the ": " before it */
+    if (end - at >= 3 && end[-2] == ':' && end[-1] == ' ' &&
+        !memchr(at, '\n', (size_t)(end - at)))
+        snprintf(name, len, "%.*s", (int)(end - 2 - at), at);
+    return true;
 }
 
 /* The base name of a path, XML-escaped for an element's text, into a malloc'd string. */
@@ -108,7 +138,7 @@ static void scalar(xml_out *o, const char *h5, const char *name, size_t n)
 static void xml_head(xml_out *o, const char *h5, size_t n, size_t n_frames)
 {
     out(o, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
-           "<!-- nbep run %s: %zu spheres, %zu frames (written by nbep) -->\n"
+           RUN_NOTE "%s: %zu" RUN_NOTE_SPHERES "%zu frames (written by nbep) -->\n"
            "<Xdmf Version=\"2.0\">\n  <Domain>\n"
            "    <Grid Name=\"spheres\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
         h5, n, n_frames);

@@ -21,6 +21,12 @@
  * appended when h5_path does not end in ".h5"). malloc'd; NULL when out of memory. */
 char *nbep_xdmf_path(const char *h5_path);
 
+/* Whether the file at path is an XDMF sidecar (what `nbep info` and `--resume` are often
+ * handed instead of their run: the two lie side by side), and the run file it describes, its
+ * name as nbep's sidecar records it at its top, into name ("" where the sidecar does not say:
+ * one not written by nbep). */
+bool nbep_xdmf_run_of(const char *path, char *name, size_t len);
+
 /* Writes the sidecar of the run file h5_path describing its first n_frames frames: frame k
  * (row k of /frames/position) is at step steps[k] and time times[k] (both borrowed, n_frames
  * entries; steps may be NULL, then frames are named by their index). n_spheres is the row
