@@ -1020,15 +1020,99 @@ static void pred_export(const void *p, const nbep_state *s, double *time, uint32
     }
 }
 
+/* Whether the run carries lasting state that no frame holds (nbep_contact_rec): the TC clocks
+ * (e < 1, physics.tc > 0) or settling (e < 1 under accelerations), and with them the contacts
+ * that hold spheres. An elastic run finds its contacts again from one plane a sphere (an
+ * elastic sphere is never held: its bounces stay). */
+static bool pred_keeps_contacts(const nbep_scene *sc, const nbep_state *st)
+{
+    const pred_plan p = plan_of(sc, st, 1, 0);
+    return p.tc_model || p.settle_model; /* pred_create's t_last and settle */
+}
+
+_Static_assert(sizeof(nbep_vec3) == 3 * sizeof(double), "a record's vectors are nbep_vec3's");
+
+/* At a frame (pred_export's moment): spheres [lo, hi)'s lasting state. A support's response
+ * count is kept as whether it has changed since the support took the load: a resumed run
+ * starts every count at 0 (pred_import). */
+static void pred_contacts(const void *p, size_t lo, size_t hi, nbep_contact_rec *out)
+{
+    const pred_ctx *c = p;
+    for (size_t i = lo; i < hi; i++) {
+        nbep_contact_rec *x = &out[i - lo];
+        *x = (nbep_contact_rec){.face_who = {INT32_MIN, INT32_MIN, INT32_MIN}};
+        if (c->t_last && c->t_last[i] > -INFINITY) {
+            x->t_last = c->t_last[i];
+            x->has_last = 1;
+        }
+        for (int f = 0; c->face && f < CAGE_FACES; f++) {
+            const face_met *m = &c->face[i * CAGE_FACES + f];
+            if (m->t == -INFINITY) /* none yet (who INT32_MIN) */
+                continue;
+            x->face_t[f] = m->t;
+            memcpy(x->face_n[f], &m->n, sizeof x->face_n[f]);
+            memcpy(x->face_p[f], &m->p, sizeof x->face_p[f]);
+            x->face_who[f] = m->who;
+        }
+        if (c->rest) {
+            const rest_set *r = &c->rest[i];
+            memcpy(x->aeff, &c->aeff[i], sizeof x->aeff);
+            x->rest_n = r->n;
+            x->rest_still = r->still;
+            for (int k = 0; k < r->n; k++) {
+                x->rest_who[k] = r->who[k];
+                x->rest_current[k] = r->who[k] < 0 && r->ver[k] == c->ver[-1 - r->who[k]];
+            }
+        }
+        if (c->settle) {
+            x->peak2 = c->settle[i].peak2;
+            x->slow = c->settle[i].slow;
+        }
+    }
+}
+
+/* Sphere i's lasting state from a file's record: the inverse of pred_contacts, counts at 0. A
+ * support that had changed gets a count no response reaches, so it stays changed. */
+static void import_contacts(pred_ctx *c, size_t i, const nbep_contact_rec *x)
+{
+    if (c->t_last)
+        c->t_last[i] = x->has_last ? x->t_last : -INFINITY;
+    for (int f = 0; c->face && f < CAGE_FACES; f++) {
+        face_met *m = &c->face[i * CAGE_FACES + f];
+        *m = (face_met){.t = -INFINITY, .who = INT32_MIN};
+        if (x->face_who[f] == INT32_MIN)
+            continue;
+        m->t = x->face_t[f];
+        memcpy(&m->n, x->face_n[f], sizeof m->n);
+        memcpy(&m->p, x->face_p[f], sizeof m->p);
+        m->who = x->face_who[f];
+    }
+    if (c->rest) {
+        rest_set *r = &c->rest[i];
+        *r = (rest_set){.n = x->rest_n < NBEP_CONTACT_MAX ? x->rest_n : NBEP_CONTACT_MAX,
+                        .still = x->rest_still != 0};
+        for (int k = 0; k < r->n; k++) {
+            r->who[k] = x->rest_who[k];
+            r->ver[k] = r->who[k] >= 0 || x->rest_current[k] ? 0 : UINT64_MAX;
+        }
+        memcpy(&c->aeff[i], x->aeff, sizeof c->aeff[i]);
+    }
+    if (c->settle)
+        c->settle[i] = (settle_rec){.peak2 = x->peak2, .slow = x->slow};
+}
+
 /* A resumed run starts with every response count at 0, so the saved events are stored with
  * counts 0: fresh exactly where they were fresh when saved. */
 static void pred_import(void *p, const nbep_resume *r)
 {
     pred_ctx *c = p;
     for (size_t i = 0; i < r->n; i++) {
-        /* A resumed run gets back one resting plane per sphere; other contacts (a second plane,
-         * held spheres) are found again by zero-time events in its first step. */
-        if (c->rest) { /* NULL: nothing accelerates, nothing rests (a file says -1) */
+        if (r->contacts) {
+            import_contacts(c, i, &r->contacts[i]);
+        } else if (c->rest) { /* NULL: nothing accelerates, nothing rests (a file says -1) */
+            /* A file without the lasting state (an elastic run's, or one made before
+             * 2026-11-30) gives back one resting plane per sphere; other contacts (a second
+             * plane, held spheres) are found again by zero-time events in its first step. */
             c->rest[i] = (rest_set){.n = 0};
             if (r->rest[i] >= 0) {
                 c->rest[i].who[0] = r->rest[i];
@@ -1079,4 +1163,6 @@ const nbep_algo nbep__algo_predictive = {.name = "predictive",
                                          .bytes = pred_bytes,
                                          .threads_use = pred_threads_use,
                                          .export_events = pred_export,
+                                         .keeps_contacts = pred_keeps_contacts,
+                                         .export_contacts = pred_contacts,
                                          .import_events = pred_import};

@@ -33,7 +33,9 @@ void nbep_check_gather(const nbep_scene *sc, nbep_check_facts *f)
     f->frames = nbep_output_frames(sc);
     /* what the run writes: its file and, beside it, the XDMF sidecar */
     f->sidecar_bytes = nbep_output_sidecar_bytes(sc, sc->output_file);
-    f->output_bytes = nbep_output_bytes(sc, nbep_sim_keeps_events(sc)) + f->sidecar_bytes;
+    f->output_bytes =
+        nbep_output_bytes(sc, nbep_sim_keeps_events(sc), nbep_sim_keeps_contacts(sc)) +
+        f->sidecar_bytes;
 }
 
 void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f)

@@ -394,7 +394,7 @@ static double whole_chunks(uint64_t rows, uint64_t chunk)
     return (double)((rows + chunk - 1) / chunk * chunk);
 }
 
-double nbep_output_bytes(const nbep_scene *sc, bool events)
+double nbep_output_bytes(const nbep_scene *sc, bool events, bool contacts)
 {
     const double n = (double)sc->state.n, np = (double)sc->state.n_planes;
     const bool periodic = sc->has_box && (sc->periodic[0] || sc->periodic[1] || sc->periodic[2]);
@@ -419,6 +419,8 @@ double nbep_output_bytes(const nbep_scene *sc, bool events)
         bytes += 8.0 * STATS_N_COLUMNS * whole_chunks(sc->steps, STATS_CHUNK_ROWS) +
                  8.0 * np * whole_chunks(sc->steps, wrows);
     }
+    if (events && contacts)
+        bytes += nbep__output_contacts_bytes(sc->state.n);
     bytes += FILE_META_BYTES;
     return bytes;
 }
@@ -530,6 +532,7 @@ nbep_output *nbep__output_new(const char *path, size_t n_spheres, nbep_diag *d)
         o->stats[c] = H5I_INVALID_HID;
     for (int c = 0; c < N_CK_COLUMNS; c++)
         o->ck[c] = H5I_INVALID_HID;
+    o->contacts[0] = o->contacts[1] = H5I_INVALID_HID;
     return o;
 }
 
@@ -548,6 +551,9 @@ void nbep__output_release(nbep_output **op)
         nbep__output_close_id(&o->stats[c]);
     for (int c = 0; c < N_CK_COLUMNS; c++)
         nbep__output_close_id(&o->ck[c]);
+    nbep__output_close_id(&o->contacts[0]);
+    nbep__output_close_id(&o->contacts[1]);
+    free(o->contacts_buf);
     nbep__output_close_id(&o->frames_count);
     nbep__output_close_id(&o->stats_count);
     nbep__output_close_id(&o->summary);
@@ -810,6 +816,8 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
         if (bad)
             goto done;
     }
+    if (o->ck[0] >= 0 && nbep__output_contacts_write(o, f, ev, d) < 0)
+        goto done;
     if (append_rows(o, o->frame_time, "/frames/time", 1, f, one, H5T_NATIVE_DOUBLE, one_space,
                     &t, d) < 0 ||
         append_rows(o, o->frame_step, "/frames/step", 1, f, one, H5T_NATIVE_INT64, one_space,

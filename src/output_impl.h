@@ -87,6 +87,8 @@ struct nbep_output {
     hsize_t n_frames, n_stats;     /* rows written */
     hid_t ck[N_CK_COLUMNS];        /* /checkpoint series (runs that keep event slots) */
     bool ck_allowed;               /* a new file: the first frame with events may add them */
+    hid_t contacts[2];             /* /checkpoint/contacts and contacts_frame, once used */
+    nbep_contact_rec *contacts_buf; /* owned, once used: a batch of records to write */
     /* the XDMF sidecar (RUN.xmf) that lets ParaView and VisIt open the run: rewritten as
      * frames come (nbep_xdmf_due) and at close; needs positions */
     bool xmf;
@@ -127,6 +129,19 @@ int nbep__output_commit(nbep_output *o, hsize_t frames, nbep_diag *d);
 /* Writes rows [first, end) of /checkpoint (o->ck open) as stale slots: kind none, rest -1; -1
  * with the reason in d on failure. */
 int nbep__output_ck_stale(nbep_output *o, hsize_t first, hsize_t end, nbep_diag *d);
+/* ---- the lasting state of dissipative runs (output_contacts.c) --------------------------- */
+
+/* Frame row f's lasting state (ev->contacts), into /checkpoint/contacts (made when the file
+ * has none); a frame without it (ev or ev->contacts NULL) marks its row as holding none
+ * where the file has the datasets. 0, or -1 with the reason in d. */
+int nbep__output_contacts_write(nbep_output *o, hsize_t f, const nbep_events_view *ev,
+                                nbep_diag *d);
+/* Frame row f's lasting state into a malloc'd *out (n_spheres records), or *out NULL when the
+ * file keeps none for that frame. 0, or -1 with the reason in d. */
+int nbep__output_contacts_read(nbep_output *o, hsize_t f, nbep_contact_rec **out, nbep_diag *d);
+/* The bytes the datasets take in a file of n spheres (nbep_output_bytes). */
+double nbep__output_contacts_bytes(size_t n);
+
 /* Room for frame row f in the sidecar's lists; false when memory runs out. */
 bool nbep__output_xmf_room(nbep_output *o, size_t f);
 /* Rewrites the sidecar (RUN.xmf) for o's frames so far; NBEP_EIO, NBEP_ENOMEM. */

@@ -25,6 +25,7 @@ void nbep_resume_fini(nbep_resume *r)
     free(r->event_kind);
     free(r->rest);
     free(r->image);
+    free(r->contacts);
     memset(r, 0, sizeof *r);
 }
 
@@ -426,17 +427,17 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     /* A predictive run at e < 1 carries state that no frame keeps: each sphere's last
      * collision (physics.tc's clock), and under accelerations the held spheres, their lasting
      * contacts past one plane, their response counts and the settling windows (algo_predictive.c,
-     * pred_import). Resumed from a frame past step 0 it starts them afresh, and its frames part
-     * from the uninterrupted run's (a 300-sphere pile resumed at step 1000 with 55 spheres
-     * held, from step 1001 on; a cooling gas with physics.tc = 0.3, from its first step). Said
-     * (run.c), not refused: the physics stays right, and long granular runs are resumed for it.
-     * Where the deck changes the restitution there is no uninterrupted run to match. */
+     * pred_contacts). Files made since 2026-11-30 keep it for their last two frames
+     * (/checkpoint/contacts, read below); from one without it for the frame (made before) a
+     * resume starts them afresh, and its frames part from the uninterrupted run's (a
+     * 300-sphere pile resumed at step 1000 with 55 spheres held, from step 1001 on; a cooling
+     * gas with physics.tc = 0.3, from its first step). Said (run.c), not refused: the physics
+     * stays right, and long granular runs are resumed for it. Where the deck changes the
+     * restitution there is no uninterrupted run to match. */
     double e_file = sc->restitution;
     if (nbep__output_read_attr(o->file, path, "restitution", H5T_NATIVE_DOUBLE, &e_file, d) < 0)
         goto fail;
-    res.state_lost = res.step > 0 && strcmp(sc->algorithm, "predictive") == 0 &&
-                     sc->restitution < 1.0 && e_file == sc->restitution &&
-                     (sc->tc > 0.0 || !nbep_state_free_flight(&sc->state));
+    res.restitution_kept = e_file == sc->restitution;
     res.n = n;
     res.pos = malloc((n ? n : 1) * sizeof *res.pos);
     res.vel = malloc((n ? n : 1) * sizeof *res.vel);
@@ -507,6 +508,8 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
             if (nbep__output_read_row(o->file, path, nbep__ck_columns[c].name, last, n,
                                  *nbep__ck_columns[c].mem_type, cols[c], d) < 0)
                 goto fail;
+        if (nbep__output_contacts_read(o, last, &res.contacts, d) < 0)
+            goto fail;
     }
     o->resume.stats = H5Lexists(o->file, "/stats", H5P_DEFAULT) > 0;
     if (o->resume.stats != sc->out_stats) { /* rows for every step, or none: not half */

@@ -144,6 +144,7 @@ typedef struct face_met {
  * at a time each leave it a velocity of round-off size heading into the third (measured: a
  * million zero-time reactions in one step of a 300-sphere pour, seed 3, step 618). */
 #define CAGE_FACES (NBEP_CONTACT_MAX - 1)
+_Static_assert(CAGE_FACES == NBEP_CONTACT_FACES, "the file keeps every face remembered");
 
 /* A sphere's reactions in the step `step` (low bits; zeroed memory: none, steps start at 1). */
 typedef struct jam_count {

@@ -18,7 +18,8 @@
  * before a reaction, fire after it) or at its ends (the update). Only dissipative scenes
  * (e < 1) with accelerations settle: an elastic pile keeps its energy. Energy: at most
  * m v_s^2 / 2 per hold (1.9e-6 J for 1 kg under gravity at dt = 1e-3), the model's, besides
- * restitution. A resumed run starts its windows afresh (it re-finds held spheres anyway). */
+ * restitution. A resumed run continues its windows where they were (pred_contacts, the file's
+ * /checkpoint/contacts). */
 #include "pred_impl.h"
 
 /* The update, own sphere i at the step's end: counts the step if its highest speed stayed at or

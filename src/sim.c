@@ -95,6 +95,12 @@ bool nbep_sim_keeps_events(const nbep_scene *sc)
     return algo && algo->export_events;
 }
 
+bool nbep_sim_keeps_contacts(const nbep_scene *sc)
+{
+    const nbep_algo *algo = find_algo(sc->algorithm);
+    return algo && algo->keeps_contacts && algo->keeps_contacts(sc, &sc->state);
+}
+
 /* The bytes nbep_sim_create allocates beside the state and the algorithm's part, for a run of
  * n spheres and np planes on nt threads with algo, out: with an output file (keep in step with
  * nbep_sim_create): counters and sums per thread, energies per block, a batch of stats rows,
@@ -330,7 +336,10 @@ static nbep_status emit_frame(nbep_sim *sim, uint64_t step)
                   (unsigned long long)step);
     nbep_status st = flush_rows(sim);
     if (st == NBEP_OK && sim->opt.out) {
-        nbep_events_view ev = {sim->ev_time, sim->ev_partner, sim->ev_kind, sim->ev_rest};
+        const nbep_algo *a = sim->algo;
+        const bool lasting = a->keeps_contacts && a->keeps_contacts(sim->scene, &sim->st);
+        nbep_events_view ev = {sim->ev_time, sim->ev_partner, sim->ev_kind, sim->ev_rest,
+                               lasting ? a->export_contacts : NULL, sim->algo_ctx};
         if (sim->ev_time)
             sim->algo->export_events(sim->algo_ctx, &sim->st, sim->ev_time, sim->ev_partner,
                                      sim->ev_kind, sim->ev_rest);

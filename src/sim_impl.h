@@ -127,6 +127,11 @@ struct nbep_algo {
     void (*export_events)(const void *ctx, const nbep_state *s, double *time,
                           uint32_t *partner, uint8_t *kind, int32_t *rest);
     void (*import_events)(void *ctx, const nbep_resume *r);
+    /* optional (NULL), with export_events: whether a run of sc with the spheres st keeps
+     * lasting state beside its slots (nbep_contact_rec; st: the run takes the scene's state
+     * over), and spheres [lo, hi)'s at a frame (as export_events) */
+    bool (*keeps_contacts)(const nbep_scene *sc, const nbep_state *st);
+    void (*export_contacts)(const void *ctx, size_t lo, size_t hi, nbep_contact_rec *out);
 };
 
 extern const nbep_algo nbep__algo_naive;

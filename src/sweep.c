@@ -383,8 +383,9 @@ nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides
         rep->checked++;
         if (rst == NBEP_OK) {
             char *path = nbep_sweep_run_path(&p, run); /* the run's file, which its sidecar names */
-            rep->output_bytes += nbep_output_bytes(&rs, nbep_sim_keeps_events(&rs)) +
-                                 nbep_output_sidecar_bytes(&rs, path ? path : rs.output_file);
+            rep->output_bytes +=
+                nbep_output_bytes(&rs, nbep_sim_keeps_events(&rs), nbep_sim_keeps_contacts(&rs)) +
+                nbep_output_sidecar_bytes(&rs, path ? path : rs.output_file);
             free(path);
             rep->memory_max = fmax(rep->memory_max, (double)nbep_sim_memory_estimate(
                                                         &rs, nbep_sim_resolve_threads(rs.threads)));

@@ -201,11 +201,12 @@ check "spheres = (); asks for an empty scene: it runs (exit 0, got $rc)" \
 # of the bounce example's 3.9 MB, 0.06 % of a fluid's).
 # written FILE.h5: the bytes of FILE.h5 and FILE.xmf
 written() { stat -c %s "$1" "${1%.h5}.xmf" 2>/dev/null | awk '{ s += $1 } END { print s + 0 }'; }
-# a periodic fluid (image counts, checkpoints, stats) and one whose frames take two chunks each
+# a periodic fluid (image counts, checkpoints, stats), one whose frames take two chunks each
 # (more than 174762 spheres: HDF5 stores a frame's last chunk whole, so chunks must be equal)
+# and a pile (the lasting state of two frames beside its three: a third of the file)
 sed 's/count = 32000/count = 180000/; s/38.2245559209/67.8823/g' inputs/hard-sphere-fluid.deck \
     >"$tmp/big-fluid.deck"
-for deck in inputs/hard-sphere-fluid.deck "$tmp/big-fluid.deck"; do
+for deck in inputs/hard-sphere-fluid.deck "$tmp/big-fluid.deck" inputs/pile.deck; do
     name=$(basename "$deck" .deck)
     run_nbep check "$deck" -n 2 --set output.every=1 -o "$tmp/$name.h5"
     est=$(sed -n "s|^output: *$tmp/$name.h5 and $tmp/$name.xmf: .* frames.*, about \(.*\)\$|\1|p" \

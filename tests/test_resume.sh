@@ -433,11 +433,17 @@ check "and ends as the uninterrupted run's file: frames, stats and slots equal u
      h5diff -q $tmp/predictive-whole.h5 $tmp/cut-short.h5 /checkpoint"
 
 # a predictive run at e < 1 keeps state no frame holds (TC clocks; under gravity the held
-# spheres, their lasting contacts and settling windows), started afresh by a resume: its frames
-# then part from the uninterrupted run's (a cooling gas with physics.tc = 0.3 below, from its
-# first resumed step; a 300-sphere pile resumed at step 1000 with 55 spheres held, from step
-# 1001). The resume says so in one warning line, also with --quiet (until 2026-11-30 nothing
-# was said, and README promised bit-for-bit frames for every run); e = 1 and naive say nothing
+# spheres, their lasting contacts, caged faces and settling windows): /checkpoint/contacts keeps
+# it for the file's last two frames, and the resume continues bit for bit (until 2026-11-30 it
+# started them afresh and its frames parted from the uninterrupted run's: a cooling gas from
+# its first resumed step, a 300-sphere pile resumed at step 1000 from step 1001; one warning
+# line said so). A cooling gas with physics.tc = 0.3, and a small pile in each neighbour mode
+# stopped where spheres are held, rest, are slow and were caged (held_at checks there are), on
+# output.every's grid and off it (a stop's own frame: cells mode continues from the frame
+# before, whose state lies in the other row)
+ck_same() { # A B: the uninterrupted run's file and the resumed one end alike
+    h5diff -q "$1" "$2" /frames && h5diff -q "$1" "$2" /stats && h5diff -q "$1" "$2" /checkpoint
+}
 cool=(inputs/hard-sphere-fluid.deck --quiet --set spheres.[0].count=2000
       --set 'box.max=[15.05,15.05,15.05]' --set run.dt=0.5 --set output.every=5
       --set physics.restitution=0.1 --set physics.tc=0.3)
@@ -445,22 +451,93 @@ bin/nbep run "${cool[@]}" -n 40 -o $tmp/cool-whole.h5
 bin/nbep run "${cool[@]}" -n 20 -o $tmp/cool.h5
 timeout 60 bin/nbep run "${cool[@]}" -n 40 --resume $tmp/cool.h5 2>$tmp/cool.err
 rc=$?
-check "predictive at e < 1 resumed from step 20: exit 0 (got $rc), one warning line saying its frames are not the uninterrupted run's bits" \
-    "[ $rc = 0 ] && [ \$(wc -l < $tmp/cool.err) = 1 ] &&
-     grep -q '^nbep: warning: $tmp/cool.h5 continues a predictive run at e < 1 from step 20, .*TC clocks.* not the uninterrupted run.s bits' $tmp/cool.err"
-check "(and they are not: the warning is no formality)" \
-    "! h5diff -q $tmp/cool-whole.h5 $tmp/cool.h5 /frames >/dev/null 2>&1"
+check "a cooling gas (e = 0.1, tc = 0.3) resumed from step 20: exit 0 (got $rc), nothing said, the uninterrupted run's file" \
+    "[ $rc = 0 ] && [ ! -s $tmp/cool.err ] && ck_same $tmp/cool-whole.h5 $tmp/cool.h5"
+# held_at FILE STEP [window]: the file's lasting state for the frame at STEP has spheres held
+# (on spheres too), resting, caged and with TC clocks, and with `window` free ones partway
+# through their settling windows (so that the comparisons above prove something)
+held_at() {
+    "$PY" - "$@" <<'PYEOF'
+import sys, h5py, numpy as np
+f = h5py.File(sys.argv[1], "r")
+rows = list(f["frames/step"][: int(f["frames"].attrs["count"])])
+row = rows.index(int(sys.argv[2]))
+tags = list(f["checkpoint/contacts_frame"][:])
+assert tags[row % 2] == row, f"no state kept for step {sys.argv[2]}: {tags}"
+r = f["checkpoint/contacts"][row % 2]
+held = r["rest_still"] > 0
+got = dict(held=int(held.sum()), on_spheres=int((held & (r["rest_who"] < 0).any(axis=1)).sum()),
+           resting=int((r["rest_n"] > 0).sum()), clocks=int(r["has_last"].sum()),
+           caged=int((r["face_who"][:, 0] != -2**31).sum()))
+if len(sys.argv) > 3:
+    got["window"] = int((~held & (r["slow"] > 0)).sum())
+assert min(got.values()) > 0, got
+PYEOF
+}
+pile=(inputs/pile.deck --quiet -t 1 --set 'box.max=[0.3,0.3,0.5]' --set spheres.[0].count=60
+      --set output.every=50)
+# stop:from:window, the frame resumed from and whether free spheres are partway through their
+# settling windows there (this scene's, in each mode)
+for mode in cells grid all; do
+    nb=(--set "run.neighbors=\"$mode\"")
+    bin/nbep run "${pile[@]}" "${nb[@]}" -n 950 -o $tmp/pile-$mode-whole.h5
+    case $mode in
+        cells) stops="750:750:window 737:700:window" ;;
+        grid) stops="750:750:window 737:737" ;;
+        all) stops="800:800:window" ;; # all pairs: a slow mode on a pile (8 s for the 950 steps)
+    esac
+    for spec in $stops; do
+        IFS=: read -r stop from window <<<"$spec"
+        bin/nbep run "${pile[@]}" "${nb[@]}" -n $stop -o $tmp/pile-$mode-$stop.h5
+        held_at $tmp/pile-$mode-$stop.h5 $from $window 2>$tmp/pile-held.err
+        check "$mode: the pile stopped at step $stop has held spheres (on spheres too), resting, caged${window:+, settling} ones at step $from ($(tail -n 1 $tmp/pile-held.err))" \
+            "[ ! -s $tmp/pile-held.err ]"
+        timeout 120 bin/nbep run "${pile[@]}" "${nb[@]}" -n 950 --resume $tmp/pile-$mode-$stop.h5 \
+            2>$tmp/pile-$mode.err
+        rc=$?
+        check "$mode: the pile resumed from step $from: exit 0 (got $rc), nothing said, the uninterrupted run's file" \
+            "[ $rc = 0 ] && [ ! -s $tmp/pile-$mode.err ] &&
+             ck_same $tmp/pile-$mode-whole.h5 $tmp/pile-$mode-$stop.h5"
+    done
+done
+# a file without that state for its frame (made before 2026-11-30: the datasets deleted here)
+# resumes as then: the state afresh, one warning line, also with --quiet, frames that part;
+# e = 1 and naive say nothing, nor does a deck that changes e (no uninterrupted run to match)
+bin/nbep run "${pile[@]}" -n 450 -o $tmp/pile-old.h5
+"$PY" -c "
+import h5py
+with h5py.File('$tmp/pile-old.h5', 'a') as f:
+    del f['checkpoint/contacts'], f['checkpoint/contacts_frame']"
+cp $tmp/pile-old.h5 $tmp/pile-other.h5
+timeout 120 bin/nbep run "${pile[@]}" -n 950 --resume $tmp/pile-old.h5 2>$tmp/pile-old.err
+rc=$?
+check "a file without the state resumed from step 450: exit 0 (got $rc), one warning line saying its frames are not the uninterrupted run's bits" \
+    "[ $rc = 0 ] && [ \$(wc -l < $tmp/pile-old.err) = 1 ] &&
+     grep -q '^nbep: warning: $tmp/pile-old.h5 continues a predictive run at e < 1 from step 450, .*TC clocks.* not the uninterrupted run.s bits' $tmp/pile-old.err"
+check "(and they are not: the state is no formality)" \
+    "! h5diff -q $tmp/pile-cells-whole.h5 $tmp/pile-old.h5 /frames >/dev/null 2>&1"
+check "(and the resumed part keeps the state again for its frames)" \
+    "held_at $tmp/pile-old.h5 950"
+# a naive part keeps no such state: its frames' rows say so, and a predictive resume from one
+# of them starts the state afresh, saying so, rather than take an older frame's (here the stop's
+# own at step 437, in the row that the naive part's frame at step 450 then took)
+bin/nbep run "${pile[@]}" -n 437 -o $tmp/pile-naive.h5
+bin/nbep run "${pile[@]}" -a naive -n 450 --resume $tmp/pile-naive.h5
+timeout 120 bin/nbep run "${pile[@]}" -n 600 --resume $tmp/pile-naive.h5 2>$tmp/pile-naive.err
+rc=$?
+check "a pile resumed from a naive part's frame at step 450: exit 0 (got $rc), the warning" \
+    "[ $rc = 0 ] && grep -q '^nbep: warning: .* from step 450, .*TC clocks' $tmp/pile-naive.err"
 bin/nbep run "${cool[@]}" --set physics.restitution=1.0 -n 20 -o $tmp/cool-elastic.h5
 bin/nbep run "${cool[@]}" --set physics.restitution=1.0 -n 40 --resume $tmp/cool-elastic.h5 \
     2>$tmp/cool-elastic.err
 bin/nbep run $deck "${args[@]}" -a naive --set physics.restitution=0.5 -n 20 -o $tmp/cool-naive.h5
 bin/nbep run $deck "${args[@]}" -a naive --set physics.restitution=0.5 -n 40 \
     --resume $tmp/cool-naive.h5 2>$tmp/cool-naive.err
-bin/nbep run "${cool[@]}" -n 20 -o $tmp/cool-other.h5
-bin/nbep run "${cool[@]}" --set physics.restitution=0.2 -n 40 --resume $tmp/cool-other.h5 \
+bin/nbep run "${pile[@]}" --set physics.restitution=0.2 -n 600 --resume $tmp/pile-other.h5 \
     2>$tmp/cool-other.err
 check "no warning at e = 1, nor for naive at e < 1 (which keeps no such state), nor where the deck changes e (no uninterrupted run to match)" \
-    "[ ! -s $tmp/cool-elastic.err ] && [ ! -s $tmp/cool-naive.err ] && [ ! -s $tmp/cool-other.err ]"
+    "[ ! -s $tmp/cool-elastic.err ] && [ ! -s $tmp/cool-naive.err ] && [ ! -s $tmp/cool-other.err ] &&
+     ! h5ls $tmp/cool-elastic.h5/checkpoint/contacts >/dev/null 2>&1"
 
 # nothing to resume: run.steps at or before the file's last frame is refused with exit 2, the
 # file left as it was (it was given a zero-step summary, and its root `steps` the smaller count)

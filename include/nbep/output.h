@@ -16,6 +16,7 @@
 #include <stdio.h>
 
 #include "nbep/compiler.h"
+#include "nbep/contact.h"
 #include "nbep/scene.h"
 #include "nbep/state.h"
 #include "nbep/stats.h"
@@ -44,10 +45,11 @@ NBEP_MUST_CHECK nbep_status nbep_output_create_staged(const char *path, const nb
 NBEP_MUST_CHECK nbep_status nbep_output_publish(nbep_output *o, nbep_diag *d);
 /* The frames a run of sc writes (the first, every output.every-th step's and the last step's)
  * and the bytes of its file, about: the data of the frames, the checkpoints beside them when
- * `events` (a run that keeps event slots, nbep_sim_keeps_events), the stats and HDF5's own
- * headers (an estimate for `nbep check`). */
+ * `events` (a run that keeps event slots, nbep_sim_keeps_events) and the lasting state of two
+ * frames when also `contacts` (nbep_sim_keeps_contacts), the stats and HDF5's own headers (an
+ * estimate for `nbep check`). */
 uint64_t nbep_output_frames(const nbep_scene *sc);
-double nbep_output_bytes(const nbep_scene *sc, bool events);
+double nbep_output_bytes(const nbep_scene *sc, bool events, bool contacts);
 /* The bytes of the XDMF sidecar (output_xdmf.h) a run of sc writes at its end beside its file
  * at path (sc->output_file, or a sweep's run file: the sidecar names it): 0 when it writes none
  * (no positions in its frames). nbep_output_bytes leaves it out. */
@@ -60,14 +62,41 @@ double nbep_output_sidecar_bytes(const nbep_scene *sc, const char *path);
 NBEP_MUST_CHECK nbep_status nbep_output_frame(nbep_output *o, int64_t step, double dt,
                                               const nbep_state *s, nbep_diag *d);
 
+/* One sphere's lasting state in a dissipative predictive run (e < 1 with physics.tc > 0, or
+ * anything accelerating), which no frame holds and without which a resumed run parts from the
+ * uninterrupted one (/checkpoint/contacts, beyond SPEC): the TC clock, the acceleration it
+ * flies with, its settling window, the immobile faces it met last (caged) and the contacts
+ * holding it. No NaN or inf: times that are -inf in the run (none yet) are flagged instead. */
+#define NBEP_CONTACT_FACES (NBEP_CONTACT_MAX - 1) /* faces remembered per sphere (CAGE_FACES, pred_impl.h) */
+typedef struct nbep_contact_rec {
+    double t_last;                          /* last sphere collision (when has_last) */
+    double aeff[3];                         /* the acceleration it flies with */
+    double peak2;                           /* settling: highest speed^2 since the step began */
+    double face_t[NBEP_CONTACT_FACES];      /* faces met, newest first: when (0 for none) */
+    double face_n[NBEP_CONTACT_FACES][3];   /* the face's normal towards the sphere */
+    double face_p[NBEP_CONTACT_FACES][3];   /* the sphere's centre then */
+    int32_t face_who[NBEP_CONTACT_FACES];   /* plane p, held sphere j as -1 - j, INT32_MIN none */
+    int32_t rest_who[NBEP_CONTACT_MAX];                  /* contacts holding it, as face_who (rest_n of them) */
+    uint32_t slow;                          /* settling: whole steps slow in a row */
+    uint8_t has_last;                       /* t_last is a collision's time (else none yet) */
+    uint8_t rest_n;
+    uint8_t rest_still;                     /* held still */
+    uint8_t rest_current[NBEP_CONTACT_MAX];              /* a sphere contact's support has not reacted since
+                                             * it took the load (1; planes 0) */
+} nbep_contact_rec;
+
 /* What a predictive run keeps beside each frame so that `--resume` continues exactly as an
  * uninterrupted run would: every sphere's event slot (kind NONE where the slot was stale) and
- * the plane it rests on (-1 for none). Arrays of N, borrowed. */
+ * the plane it rests on (-1 for none). Arrays of N, borrowed. A dissipative run also keeps
+ * its spheres' lasting state (contacts, not NULL): contacts(ctx, lo, hi, out) writes spheres
+ * [lo, hi)'s records into out; the file keeps those of its last two frames. */
 typedef struct nbep_events_view {
     const double *time;
     const uint32_t *partner;
     const uint8_t *kind;
     const int32_t *rest;
+    void (*contacts)(const void *ctx, size_t lo, size_t hi, nbep_contact_rec *out);
+    const void *contacts_ctx;
 } nbep_events_view;
 
 /* nbep_output_frame plus, when ev is not NULL, the frame's row of
@@ -87,9 +116,9 @@ typedef struct nbep_resume {
     int64_t kept_step;            /* the file's last frame kept: step, or the frame before it
                                    * where step is off output.every's grid (a stop's own
                                    * frame, which the uninterrupted run does not write) */
-    bool state_lost;              /* the run it continues kept state no frame holds (a
-                                   * predictive run at e < 1: TC clocks, held spheres, lasting
-                                   * contacts), which the resumed run starts afresh */
+    bool restitution_kept;        /* the deck's restitution is the file's (a dissipative run
+                                   * resumed without its lasting state, contacts NULL, then
+                                   * parts from the uninterrupted run: run.c says so) */
     size_t n;
     nbep_vec3 *pos, *vel;         /* owned, n each, until nbep_resume_apply moves them */
     bool has_events;              /* the file has /checkpoint rows for this frame */
@@ -98,6 +127,8 @@ typedef struct nbep_resume {
     uint8_t *event_kind;
     int32_t *rest;
     int32_t *image;               /* owned when the box is periodic: 3n image counts */
+    nbep_contact_rec *contacts;   /* owned: the frame's lasting state, n (NULL: the file has
+                                   * none for it) */
 } nbep_resume;
 void nbep_resume_fini(nbep_resume *r);
 /* Puts r's positions, velocities and image counts into s (a state of r's n spheres, the scene

@@ -83,6 +83,9 @@ size_t nbep_sim_memory_estimate(const nbep_scene *sc, int threads);
 void nbep_sim_threads_use(const nbep_scene *sc, int threads, char *buf, size_t len);
 /* Whether a run of sc keeps every sphere's event slot beside each frame (/checkpoint). */
 bool nbep_sim_keeps_events(const nbep_scene *sc);
+/* Whether it also keeps its spheres' lasting state for its last two frames
+ * (/checkpoint/contacts: a dissipative predictive run's TC clocks, contacts and settling). */
+bool nbep_sim_keeps_contacts(const nbep_scene *sc);
 /* What a stop signal asks of a run (stop may be NULL): NBEP_OK (none yet), NBEP_ESIGINT or
  * NBEP_ESIGTERM. */
 nbep_status nbep_sim_stop_status(const atomic_int *stop);
