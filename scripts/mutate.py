@@ -1326,6 +1326,15 @@ MUTANTS = [
     ("bench-dense-failure-ignored", "scripts/bench-dense.sh",
      "                run_nbep \"$n\" \"$phi\" \"$nt\" \"$rep\" || exit 1",
      "                run_nbep \"$n\" \"$phi\" \"$nt\" \"$rep\"", ["tests/test_bench_dense.sh"], None),
+    # scripts/hard-sphere.py: the MSD of unwrapped centres, less the centre of mass's flight
+    # (tests/test_hard_sphere.sh's file made with known answers)
+    ("hard-sphere-images-ignored", "scripts/hard-sphere.py", "                u = pos + img * side\n",
+     "                u = pos + 0 * img * side\n", ["tests/test_hard_sphere.sh"], None),
+    ("hard-sphere-centre-of-mass-kept", "scripts/hard-sphere.py",
+     "                u = u - u.mean(axis=1, keepdims=True)\n", "", ["tests/test_hard_sphere.sh"], None),
+    ("hard-sphere-window-ignored", "scripts/hard-sphere.py",
+     "            keep = (step - 1) * dt >= t0 * (1 - 1e-12) - 1e-12 * dt\n",
+     "            keep = step > 0\n", ["tests/test_hard_sphere.sh"], None),
     ("bench-cooling-args-ignored", "scripts/bench-cooling.py",
      "    if len(sys.argv) > 1:\n        print(f\"bench-cooling: takes no arguments",
      "    if 0:\n        print(f\"bench-cooling: takes no arguments", ["tests/test_bench_args.sh"], None),
