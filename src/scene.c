@@ -578,7 +578,10 @@ static void check_periodic(load *L, const config_setting_t *at, const nbep_scene
             rmax = fmax(rmax, e[k].radius);
     const double len[3] = {sc->box_max.x - sc->box_min.x, sc->box_max.y - sc->box_min.y,
                            sc->box_max.z - sc->box_min.z};
-    for (int k = 0; k < 3; k++) {
+    /* a box whose corners were refused (said already) has no sides to measure: until
+     * 2026-11-30 a box.max of two numbers added "the box's x side (0) must be longer ..." for
+     * each periodic axis */
+    for (int k = 0; k < 3 && sc->has_box; k++) {
         if (!sc->periodic[k])
             continue;
         if (!(len[k] > 4.0 * rmax))
@@ -608,6 +611,8 @@ typedef struct plane {
     nbep_vec3 point;    /* as given, and its setting (check_span) */
     const config_setting_t *point_at;
     const config_setting_t *group; /* its entry in `planes` (planes_placed_by) */
+    nbep_vec3 typed;    /* the normal as given, and its setting (check_periodic_planes) */
+    const config_setting_t *normal_at;
 } plane;
 
 /* Parses `planes` into *out (owned, *n of them). */
@@ -646,11 +651,47 @@ static void parse_planes(load *L, const config_setting_t *root, plane **out, siz
                 normal.y, normal.z);
             continue;
         }
-        normal = nbep_vec3_scale(u, 1.0 / nbep_vec3_norm(u));
-        p[k] = (plane){normal, nbep_vec3_dot(normal, point), point, point_at, e};
+        const nbep_vec3 unit = nbep_vec3_scale(u, 1.0 / nbep_vec3_norm(u));
+        p[k] = (plane){unit, nbep_vec3_dot(unit, point), point, point_at, e, normal, at};
     }
     *out = p;
     *n = len;
+}
+
+/* A plane must lie along every periodic axis: its normal without a part there. Its half-space
+ * does not repeat along an axis it crosses, so a sphere that leaves through that axis's
+ * periodic face comes back behind the plane (a plane x = 0 in a box periodic along x: the
+ * sphere wrapped from x = L to 0 overlaps it, and the run went on with overlaps of a fifth of a
+ * radius, exit 0, until 2026-11-30). A wall across that axis is the box's own: the axis not
+ * periodic. One line per plane, blamed on its normal or on the element of box.periodic (`per`)
+ * that made an axis it crosses periodic, the one an override gave first (first_set), else the
+ * normal's deck line. */
+static void check_periodic_planes(load *L, const config_setting_t *per, const nbep_scene *sc,
+                                  const plane *p, size_t n)
+{
+    for (size_t k = 0; k < n; k++) {
+        if (!p[k].normal_at) /* a bad plane: said already */
+            continue;
+        const double part[3] = {p[k].normal.x, p[k].normal.y, p[k].normal.z};
+        char axes[16] = "";
+        int crossed = 0;
+        /* the normal, and box.periodic's element of each axis it crosses */
+        const config_setting_t *by[4] = {p[k].normal_at, NULL, NULL, NULL};
+        for (int a = 0; a < 3; a++)
+            if (sc->periodic[a] && part[a] != 0.0) {
+                by[1 + a] = config_setting_get_elem(per, (unsigned)a);
+                snprintf(axes + strlen(axes), sizeof axes - strlen(axes), "%s%c",
+                         crossed++ ? " and " : "", "xyz"[a]);
+            }
+        if (!crossed)
+            continue;
+        ERR(L, first_set(L, by, 4, p[k].normal_at),
+            "planes.[%zu].normal [%g, %g, %g] crosses the periodic %s %s: a plane must lie "
+            "along every periodic axis (a sphere leaving through a periodic face would come "
+            "back behind it); wall %s (box.periodic) or give the normal no part along %s",
+            k, p[k].typed.x, p[k].typed.y, p[k].typed.z, crossed > 1 ? "axes" : "axis", axes,
+            crossed > 1 ? "them" : "it", crossed > 1 ? "them" : "it");
+    }
 }
 
 /* Every per-entry setting that belongs only to the other kind of entry is an error. */
@@ -1466,8 +1507,10 @@ static nbep_status load_deck(const char *deck_path, const char *deck_text,
     parse_box(&L, root, &sc, &periodic_at);
     parse_planes(&L, root, &planes, &n_planes);
     parse_spheres(&L, root, &sc, &entries, &n_entries);
-    if (periodic_at)
+    if (periodic_at) {
         check_periodic(&L, periodic_at, &sc, entries, n_entries);
+        check_periodic_planes(&L, periodic_at, &sc, planes, n_planes);
+    }
     check_span(&L, root, &sc, planes, n_planes, entries, n_entries);
     const bool geometry_ok = seed_ok && d->n_errors == geometry0 && !L.c.oom;
     parse_output(&L, root, &sc);

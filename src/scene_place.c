@@ -497,17 +497,32 @@ typedef struct probe {
     const grid *g;           /* with met: the grid, whose entries (entry_of) are marked */
     bool *met;               /* NULL: the first sphere it overlaps ends the look; else every
                               * one's entry is marked here and the look goes on (kept_out_by) */
+    /* own_hi > own_lo: only spheres own_lo .. own_hi - 1 (a lattice's own, lattice_wraps_onto),
+     * touching within round-off as the overlap check takes it, the first overlap's sphere and
+     * depth written to hit_id, hit_by */
+    size_t own_lo, own_hi, hit_id;
+    double hit_by;
 } probe;
 
 /* True when sphere id and the probe sphere overlap (touching is fine); with q->met, marks its
  * entry and returns false, so that every sphere it overlaps is seen. */
 static bool probe_hits(void *arg, size_t id)
 {
-    const probe *q = arg;
+    probe *q = arg;
     double sigma = q->r + q->s->radius[id];
     nbep_vec3 d = nbep_vec3_sub(q->s->pos[id], q->p);
     if (q->pb)
         d = nbep_periodic_image(q->pb, d);
+    if (q->own_hi > q->own_lo) {
+        if (id < q->own_lo || id >= q->own_hi)
+            return false;
+        const double by = sigma - nbep_vec3_norm(d);
+        if (!(by > TOUCH_ULPS * DBL_EPSILON * (max_abs(q->s->pos[id]) + max_abs(q->p) + sigma)))
+            return false;
+        q->hit_id = id;
+        q->hit_by = by;
+        return true;
+    }
     const bool hit = nbep_vec3_norm2(d) < sigma * sigma;
     if (hit && q->met) {
         q->met[entry_of(q->g->e, q->g->n_entries, id)] = true;
@@ -699,7 +714,7 @@ static nbep_status place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, cons
         const nbep_status stop = look(c, q);
         if (stop != NBEP_OK)
             return stop;
-        probe pr = {s, g->pb, {0.0, 0.0, 0.0}, r, NULL, NULL};
+        probe pr = {s, g->pb, {0.0, 0.0, 0.0}, r, NULL, NULL, 0, 0, 0, 0.0};
         bool placed = false;
         uint64_t a = 0, plane_out = 0;
         for (; room && !placed && a < RANDOM_ATTEMPTS; a++) {
@@ -837,6 +852,30 @@ static void lattice_axes(const double rlo[3], const double rhi[3], double r, con
     }
 }
 
+/* Whether sphere id, a lattice site of entry e (radius r), lands on one of e's earlier sites
+ * where the places wrap into a periodic box (along `longer`, the periodic axes its region is
+ * longer than a period along: a region within one period keeps its sites apart across the
+ * faces, and is not looked at); then its message, one line at the group, is given. A region
+ * one period long that rounding made an ulp longer places sites that touch within round-off,
+ * which are taken, as the overlap check takes them. Until 2026-11-30 the overlap check listed
+ * such sites as 20 overlaps "across a periodic face" of spheres nbep had placed itself, and
+ * 20 more not listed. */
+static bool lattice_wraps_onto(nbep__scene_ctx *c, const grid *g, const nbep_state *s,
+                               const nbep__scene_entry *e, size_t k, size_t id, double r,
+                               const char *longer, const config_setting_t *const *plane_at)
+{
+    probe pr = {s, g->pb, s->pos[id], r, NULL, NULL, e->first, id, 0, 0.0};
+    if (!probe_near(g, &pr, 2.0 * r))
+        return false;
+    fill_failed(c, s, e, plane_at, (blame){NULL, 0, NBEP_DIAG_UNRANKED},
+                "spheres.[%zu]: could not place %" PRIu64 " spheres of radius %g in the region: "
+                "it is longer than the periodic box along %s, and the lattice's places wrap "
+                "into the box onto one another (sphere %zu on sphere %zu, by %g); keep a "
+                "lattice's region within one period along a periodic axis",
+                k, e->count, r, longer, id, pr.hit_id, pr.hit_by);
+    return true;
+}
+
 /* A lattice filling the region (simple cubic, or face-centred cubic for "fcc"); returns as
  * place_random does. */
 static nbep_status place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s,
@@ -880,6 +919,13 @@ static nbep_status place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s,
                         most * ball_volume(r) / vol, why, hint);
         return NBEP_OK;
     }
+    char longer[160] = ""; /* the periodic axes its region is longer than a period along */
+    for (int a = 0; a < 3; a++)
+        if (box_periodic && box_periodic[a] && rhi[a] - rlo[a] > bhi[a] - blo[a]) {
+            const size_t used = strlen(longer);
+            snprintf(longer + used, sizeof longer - used, "%s%c (%g > %g)", used ? ", " : "",
+                     "xyz"[a], rhi[a] - rlo[a], bhi[a] - blo[a]);
+        }
     uint64_t n[3];
     double step[3];
     for (int a = 0; a < 3; a++) {
@@ -902,6 +948,8 @@ static nbep_status place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s,
         size_t id = e->first + (size_t)q;
         set_sphere(s, e, id, nbep_vec3_make(x[0], x[1], x[2]),
                    random_velocity(seed, k, q, e->speed));
+        if (longer[0] && lattice_wraps_onto(c, g, s, e, k, id, r, longer, plane_at))
+            return NBEP_OK;
         if (!grid_insert(g, id))
             return NBEP_ENOMEM;
     }
@@ -962,6 +1010,10 @@ typedef struct overlaps {
     size_t n_entries;
     const blame *placed;  /* per entry: what placed its spheres (entry_blame) */
     const config_setting_t *box; /* the deck's box (box_of), for what moved a periodic face */
+    /* the positions measured: s->pos, or in a periodic box those wrapped into it, with the
+     * periods removed (image, else NULL) */
+    const nbep_vec3 *pos;
+    const int32_t (*image)[3];
     size_t i;             /* the sphere whose neighbours are visited */
     nbep_vec3 shift;      /* at its position plus this (a copy across periodic faces) */
     bool same_level;      /* they are in its level: only smaller ids count */
@@ -1029,24 +1081,31 @@ static const char *const face_corners[3] = {"min", "max", "periodic"};
 static void check_pair(overlaps *o, size_t i, size_t j)
 {
     const nbep_state *s = o->s;
-    double dist = nbep_vec3_norm(nbep_vec3_sub(nbep_vec3_add(s->pos[i], o->shift), s->pos[j]));
+    const nbep_vec3 *pos = o->pos;
+    double dist = nbep_vec3_norm(nbep_vec3_sub(nbep_vec3_add(pos[i], o->shift), pos[j]));
     double by = s->radius[i] + s->radius[j] - dist;
     double tol = TOUCH_ULPS * DBL_EPSILON *
-                 (max_abs(s->pos[i]) + max_abs(s->pos[j]) + s->radius[i] + s->radius[j]);
+                 (max_abs(pos[i]) + max_abs(pos[j]) + s->radius[i] + s->radius[j]);
     if (by > tol) {
         size_t a = i > j ? i : j, b = i > j ? j : i;
+        /* the axes the pair meets across: the copy's shift, or the two given a period or
+         * more apart there (wrapped by different counts of periods) */
+        const double shift[3] = {o->shift.x, o->shift.y, o->shift.z};
+        bool across[3], any = false;
+        for (int axis = 0; axis < 3; axis++) {
+            across[axis] = shift[axis] != 0.0 ||
+                           (o->image && o->image[i][axis] != o->image[j][axis]);
+            any = any || across[axis];
+        }
         char other[96];
         snprintf(other, sizeof other, "spheres.[%zu] (sphere %zu)%s",
-                 entry_of(o->e, o->n_entries, b), b,
-                 nbep_vec3_equal(o->shift, (nbep_vec3){0.0, 0.0, 0.0}) ? ""
-                                                                       : " across a periodic face");
-        /* what placed b, and what moved the faces the pair meets across (the axes of the
-         * copy's shift): a --set of box.max, say, that brought the faces' two sides together
-         * (until 2026-11-30 the overlap was blamed on the spheres' lines) */
+                 entry_of(o->e, o->n_entries, b), b, any ? " across a periodic face" : "");
+        /* what placed b, and what moved the faces the pair meets across: a --set of box.max,
+         * say, that brought the faces' two sides together (until 2026-11-30 the overlap was
+         * blamed on the spheres' lines) */
         blame bb = o->placed[entry_of(o->e, o->n_entries, b)];
-        const double shift[3] = {o->shift.x, o->shift.y, o->shift.z};
         for (int axis = 0; o->box && axis < 3; axis++) {
-            if (shift[axis] == 0.0)
+            if (!across[axis])
                 continue;
             for (int m = 0; m < 3; m++) {
                 const config_setting_t *v = config_setting_get_member(o->box, face_corners[m]);
@@ -1093,8 +1152,31 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
         walls[p] = (blame){NULL, 0, NBEP_DIAG_UNRANKED}; /* none: an overlap stays its sphere's */
         plane_blame(c, &walls[p], &plane_at[2 * p]);
     }
+    /* Along periodic axes the spheres are measured where the run puts them, wrapped into the
+     * box: a single sphere's position or a lattice's region may lie periods away (until
+     * 2026-11-30 the grid and the faces' copies took the positions as given, and spheres at
+     * x = 15 and 5.2 in a period of 10 passed, to overlap by 0.8 of a diameter in the run). */
+    const nbep_periodic pb = nbep_periodic_make(box_periodic, box_lo, box_hi);
+    nbep_vec3 *wrapped = NULL;
+    int32_t(*image)[3] = NULL;
+    if (pb.any) {
+        wrapped = malloc((s->n ? s->n : 1) * sizeof *wrapped);
+        image = calloc(s->n ? s->n : 1, sizeof *image);
+        if (!wrapped || !image) {
+            free(wrapped);
+            free(image);
+            free(placed);
+            NBEP_FAIL(c->d, NBEP_ENOMEM, "nbep: no memory to check %zu spheres for overlaps",
+                      s->n);
+        }
+        for (size_t i = 0; i < s->n; i++) {
+            wrapped[i] = s->pos[i];
+            nbep_periodic_wrap(&pb, &wrapped[i], image[i]);
+        }
+    }
     overlaps o = {.c = c, .s = s, .e = e, .n_entries = n_entries, .placed = placed,
-                  .box = n_entries ? box_of(e[0].setting) : NULL};
+                  .box = n_entries ? box_of(e[0].setting) : NULL,
+                  .pos = pb.any ? wrapped : s->pos, .image = (const int32_t(*)[3])image};
     const double blo[3] = {box_lo.x, box_lo.y, box_lo.z}, bhi[3] = {box_hi.x, box_hi.y, box_hi.z};
     for (size_t i = 0; i < s->n; i++)
         for (size_t p = 0; p < s->n_planes; p++) {
@@ -1114,6 +1196,7 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
 
     grid g;
     bool ok = grid_init(&g, s, e, n_entries);
+    g.pb = pb.any ? &pb : NULL; /* cells of the wrapped positions, o.pos */
     for (size_t i = 0; ok && i < s->n; i++)
         ok = grid_insert(&g, i);
     /* Each pair once: a sphere looks at its own level (partners of smaller id) and at the
@@ -1130,7 +1213,7 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
         /* periodic faces: the copies of i across each face it is near (within the largest
          * contact distance), alone and in combination (edges, corners); a pair is near in one
          * copy only, since a periodic side exceeds twice the largest diameter */
-        const double x[3] = {s->pos[i].x, s->pos[i].y, s->pos[i].z};
+        const double x[3] = {o.pos[i].x, o.pos[i].y, o.pos[i].z};
         double near[3] = {0.0, 0.0, 0.0};
         for (int a = 0; box_periodic && a < 3; a++) {
             double reach = s->radius[i] + rmax_all;
@@ -1148,13 +1231,15 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
             for (int l = own; l < LEVELS_MAX; l++) {
                 o.same_level = l == own;
                 if (g.lv[l].rmax > 0.0)
-                    (void)level_near(&g, &g.lv[l], nbep_vec3_add(s->pos[i], o.shift),
+                    (void)level_near(&g, &g.lv[l], nbep_vec3_add(o.pos[i], o.shift),
                                      s->radius[i] + g.lv[l].rmax, pair_visit, &o);
             }
         }
     }
     grid_fini(&g);
     free(placed);
+    free(wrapped);
+    free(image);
     if (stop != NBEP_OK) /* the overlaps found so far are not all: none is listed */
         return stop;
     list_kept(&o);

@@ -85,10 +85,11 @@ enum {
     X(BOX_PERIODIC, "box.periodic", BOOL3, 0, "[false, false, false]", NULL,                       \
       "per axis: the box repeats along it (no walls there; contacts by the minimum image; "    \
       "positions wrapped, /frames/image counts the periods); a periodic side must exceed "      \
-      "twice the largest diameter; predictive \"all\" or \"cells\" only")                      \
+      "twice the largest diameter (\"cells\": 6.75 largest radii, three cells across); "       \
+      "planes must lie along a periodic axis; predictive \"all\" or \"cells\" only")          \
     X(PLANES, "planes", LIST, 0, NULL, "none", "extra static planes, after the box's walls")       \
     X(PLANE_NORMAL, "planes.[].normal", VEC3, F_REQUIRED, NULL, "required",                        \
-      "points to where spheres live; normalized; not zero")                                        \
+      "points to where spheres live; normalized; not zero; no part along a periodic axis")      \
     X(PLANE_POINT, "planes.[].point", VEC3, F_REQUIRED, NULL, "required",                          \
       "a point of the plane")                                                                      \
     X(SPHERES, "spheres", LIST, 0, NULL, "required",                                               \

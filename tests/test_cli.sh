@@ -377,6 +377,15 @@ for ask in "--help" "-h" "help" "run inputs/two-spheres.deck --help"; do
     check "nbep $ask: exit 0, the usage on stdout with every command and option (got $rc; missing:$missing)" \
         "[ $rc = 0 ] && [ -z '$missing' ] && [ ! -s '$tmp/stderr' ]"
 done
+# a hard-sphere user's settings and tools, which the usage named nowhere until 2026-11-30
+run_nbep run inputs/hard-sphere-fluid.deck --help
+missing=""
+for word in 'run.neighbors = "cells"' box.periodic 'place = "fcc"' inputs/hard-sphere-fluid.deck \
+    scripts/hard-sphere.py; do
+    grep -qF -- "$word" "$tmp/stdout" || missing="$missing $word"
+done
+check "nbep run --help names cells mode, periodic boxes, fcc, the example and hard-sphere.py (missing:$missing)" \
+    "[ $rc = 0 ] && [ -z '$missing' ]"
 
 # ---- nbep check names an algorithm other than predictive plainly -------------------------------
 run_nbep check inputs/two-spheres.deck -a naive -t 1

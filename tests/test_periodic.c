@@ -1417,6 +1417,159 @@ static void test_periodic_deck_errors_name_the_line(void **state)
     expect_deck_error(text, 2, "box.periodic must be 3 booleans");
 }
 
+/* Loads `text` (as bad-periodic.deck) with n --set overrides and expects exactly one message,
+ * the whole line `where`: `message` (where: "DECK:LINE" with the deck's path, or the --set). */
+static void expect_one_line(const char *text, const char *const *sets, size_t n, int line,
+                            const char *message)
+{
+    char deck[256], want[1024];
+    write_deck("bad-periodic.deck", text, deck, sizeof deck);
+    if (line > 0)
+        snprintf(want, sizeof want, "%s:%d: %s\n", deck, line, message);
+    else
+        snprintf(want, sizeof want, "--set %s: %s\n", sets[n - 1], message);
+    nbep_scene sc;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_scene_load(deck, sets, n, &sc, &d), NBEP_EDECK);
+    char *msg = NULL;
+    size_t len = 0;
+    FILE *m = open_memstream(&msg, &len);
+    nbep_diag_print(&d, m);
+    fclose(m);
+    if (strcmp(msg, want) != 0)
+        fail_msg("expected:\n%sgot:\n%s", want, msg);
+    free(msg);
+    nbep_diag_fini(&d);
+}
+
+/* A plane must lie along every periodic axis: its half-space does not repeat along an axis it
+ * crosses, so a sphere leaving through that axis's face came back behind it (a plane x = 0 in
+ * a box periodic along x: the run ended with overlaps of 0.22 of a radius, exit 0, until
+ * 2026-11-30). A floor in a box periodic along x and y (a chute's) is fine. The message is at
+ * the normal's line, or at the --set that made a crossed axis periodic, and only that one. */
+static void test_a_plane_across_a_periodic_axis_is_a_deck_error(void **state)
+{
+    (void)state;
+    const char *deck = "run: { neighbors = \"cells\"; };\n"
+                       "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; periodic = [true, true, false]; };\n"
+                       "planes = ( { normal = [0.0, 0.0, 1.0]; point = [0.0, 0.0, 2.0]; },\n"
+                       "           { normal = [1.0, 0.0, 0.0]; point = [0.0, 0.0, 0.0]; } );\n"
+                       "spheres = ( { count = 8; radius = 0.5; mass = 1.0; place = \"random\";\n"
+                       "              region = { min = [1.0, 1.0, 3.0]; max = [9.0, 9.0, 9.0]; }; } );\n";
+    expect_one_line(deck, NULL, 0, 4,
+                    "planes.[1].normal [1, 0, 0] crosses the periodic axis x: a plane must lie "
+                    "along every periodic axis (a sphere leaving through a periodic face would "
+                    "come back behind it); wall it (box.periodic) or give the normal no part "
+                    "along it");
+    /* the floor alone loads */
+    const char *floor_only[] = {"planes.[1].normal=[0,0,1]"};
+    nbep_scene sc;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    char path[256];
+    write_deck("bad-periodic.deck", deck, path, sizeof path);
+    assert_int_equal(nbep_scene_load(path, floor_only, 1, &sc, &d), NBEP_OK);
+    assert_int_equal(sc.state.n_planes, 4); /* z's two walls, the floor and the other */
+    nbep_scene_fini(&sc);
+    nbep_diag_fini(&d);
+    /* a tilted plane crossing two periodic axes: one line naming both */
+    const char *tilted[] = {"planes.[1].normal=[1,2,3]"};
+    expect_one_line(deck, tilted, 1, 0,
+                    "planes.[1].normal [1, 2, 3] crosses the periodic axes x and y: a plane must "
+                    "lie along every periodic axis (a sphere leaving through a periodic face "
+                    "would come back behind it); wall them (box.periodic) or give the normal no "
+                    "part along them");
+    /* the floor made to cross z by making z periodic: blamed on that element's --set, not on
+     * one of an axis the plane lies along; the walled x no longer crossed */
+    const char *sets[] = {"box.periodic.[1]=false", "box.periodic.[0]=false",
+                          "box.periodic.[2]=true"};
+    expect_one_line(deck, sets, 3, 0,
+                    "planes.[0].normal [0, 0, 1] crosses the periodic axis z: a plane must lie "
+                    "along every periodic axis (a sphere leaving through a periodic face would "
+                    "come back behind it); wall it (box.periodic) or give the normal no part "
+                    "along it");
+}
+
+/* A box whose corners were refused says so once: the periodic sides' checks measure no box
+ * (until 2026-11-30 a box.max of two numbers added "the box's x side (0) must be longer than
+ * twice the largest sphere diameter (1)" for each periodic axis). */
+static void test_a_bad_periodic_box_is_one_line(void **state)
+{
+    (void)state;
+    const char *sph = "spheres = ( { count = 8; radius = 0.5; mass = 1.0; place = \"lattice\"; } );\n";
+    char text[1024];
+    snprintf(text, sizeof text,
+             "run: { neighbors = \"cells\"; };\n"
+             "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0]; periodic = [true, true, true]; };\n%s",
+             sph);
+    expect_one_line(text, NULL, 0, 2, "box.max must be 3 numbers [x, y, z] (got [10.0, 10.0])");
+    snprintf(text, sizeof text,
+             "run: { neighbors = \"cells\"; };\n"
+             "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, -1.0]; periodic = [true, true, true]; };\n%s",
+             sph);
+    expect_one_line(text, NULL, 0, 2, "box.min must be < box.max on every axis (got z: 0 >= -1)");
+}
+
+/* A lattice's region longer than the period along a periodic axis: its places can wrap onto
+ * one another, which the overlap check listed as 20 overlaps "across a periodic face" of
+ * spheres nbep had placed, and 20 more not listed (until 2026-11-30); one line at the group
+ * now, naming the first site that lands on an earlier one. Here the sites are 0.8 apart (the
+ * widest spacing at which 100 fit: x over [-1.6, 0.8], 4 sites; y cut to the box, [2.5, 6.2],
+ * 5; z over [-0.4, 3.9], 6), x fastest: sphere 60, the fourth layer at z = 2.0, meets sphere 0
+ * at -0.4 + 2.9 = 2.5, 0.5 apart, an overlap of 0.1. A sparse lattice in such a region whose
+ * wrapped places keep apart is taken (test_scene), and so is one a period long that rounding
+ * made an ulp longer ([-0.7, 2.2] in a period of 2.9: spheres touching across the face), or
+ * shifted a period along ([0.3, 10.3] in 10), as a simple cubic and a face-centred fill. */
+static void test_a_lattice_region_that_wraps_onto_itself_is_one_line(void **state)
+{
+    (void)state;
+    const char *deck = "run: { neighbors = \"all\"; };\n"
+                       "box: { min = [0.0, 0.0, 0.0]; max = [6.4, 6.5, 2.9]; periodic = [true, false, true]; };\n"
+                       "spheres = ( { count = 100; radius = 0.3; mass = 1.0; place = \"lattice\";\n"
+                       "              region = { min = [-1.9, 2.2, -0.7]; max = [1.1, 11.2, 4.2]; }; } );\n";
+    expect_one_line(deck, NULL, 0, 3,
+                    "spheres.[0]: could not place 100 spheres of radius 0.3 in the region: it is "
+                    "longer than the periodic box along z (4.9 > 2.9), and the lattice's places "
+                    "wrap into the box onto one another (sphere 60 on sphere 0, by 0.1); keep a "
+                    "lattice's region within one period along a periodic axis");
+    const char *const box10 = "run: { neighbors = \"all\"; };\n"
+                              "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 2.9]; periodic = [true, false, true]; };\n"
+                              "spheres = ( { count = 100; radius = 0.3; mass = 1.0; place = \"lattice\";\n"
+                              "              region = { min = [0.3, 2.2, -0.7]; max = [10.3, 9.2, 2.2]; }; } );\n";
+    const char *const places[] = {"spheres.[0].place=\"lattice\"", "spheres.[0].place=\"fcc\""};
+    assert_true(2.2 - -0.7 > 2.9); /* one period, an ulp more */
+    for (int k = 0; k < 2; k++) {
+        char path[256];
+        write_deck("bad-periodic.deck", box10, path, sizeof path);
+        nbep_scene sc;
+        nbep_diag d;
+        nbep_diag_init(&d);
+        assert_int_equal(nbep_scene_load(path, &places[k], 1, &sc, &d), NBEP_OK);
+        assert_int_equal(d.n_errors, 0);
+        nbep_scene_fini(&sc);
+        nbep_diag_fini(&d);
+    }
+}
+
+/* Spheres are measured for overlaps at t0 where the run puts them, wrapped into the box along
+ * a periodic axis: single spheres at x = 15 and 5.2 in a period of 10 (0.2 apart, radius 0.5)
+ * overlap by 0.8, as at 25 and 5.2 (until 2026-11-30 both decks passed the check, which took
+ * the positions as given, and the run began with the pair overlapping). */
+static void test_spheres_a_period_apart_are_measured_wrapped(void **state)
+{
+    (void)state;
+    const char *deck = "run: { neighbors = \"cells\"; };\n"
+                       "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; periodic = [true, true, true]; };\n"
+                       "spheres = ( { position = [15.0, 5.0, 5.0]; radius = 0.5; mass = 1.0; },\n"
+                       "            { position = [5.2, 5.0, 5.0]; radius = 0.5; mass = 1.0; } );\n";
+    const char *msg = "spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) across a periodic "
+                      "face by 0.8";
+    expect_one_line(deck, NULL, 0, 4, msg);
+    const char *two[] = {"spheres.[0].position=[25.0,5.0,5.0]"};
+    expect_one_line(deck, two, 1, 0, msg);
+}
+
 /* A periodic deck loads without the walls of its periodic axes. */
 static void test_periodic_axes_have_no_walls(void **state)
 {
@@ -1475,6 +1628,10 @@ int main(void)
         cmocka_unit_test(test_team_loop_keeps_one_threads_wall_impulses_and_virial),
         cmocka_unit_test(test_team_loop_waits_for_an_intruder_through_a_cradle),
         cmocka_unit_test(test_periodic_deck_errors_name_the_line),
+        cmocka_unit_test(test_a_plane_across_a_periodic_axis_is_a_deck_error),
+        cmocka_unit_test(test_a_bad_periodic_box_is_one_line),
+        cmocka_unit_test(test_a_lattice_region_that_wraps_onto_itself_is_one_line),
+        cmocka_unit_test(test_spheres_a_period_apart_are_measured_wrapped),
         cmocka_unit_test(test_periodic_axes_have_no_walls),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# make bench-dense's nbep side on a tiny fluid (README, Benchmarks: Dense fluids): the melt and
+# the timed runs that resume it succeed and give the table a row of collisions a second, for
+# one thread and the team of two; an nbep run that fails ends the benchmark with exit 1. Until
+# 2026-11-30 every timed run failed (a resume refuses a deck with other output.fields than
+# the file's, and the timed deck asked for none) and the script printed EDMD's rows alone,
+# exit 0. EDMD is left out (EDMD_DIR unset): its checkout is no part of the tree.
+# Run from anywhere; exit status 1 when a check fails.
+set -u
+cd "$(dirname "$0")/.."
+tmp=build/tests/tmp/bench_dense
+rm -rf "$tmp" && mkdir -p "$tmp"
+fail=0
+check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+PY=/usr/bin/python3
+if ! "$PY" -c 'import h5py' 2>/dev/null; then
+    echo "skipped: $PY with h5py not found (scripts/install-deps.sh installs it)"
+    exit 77
+fi
+[ -x bin/nbep ] || { echo "FAIL bin/nbep not built"; exit 1; }
+# 500 spheres (a side of 9.5 at phi = 0.30, 7.1 at 0.50: three cells across), a stretch of
+# 192 * 0.002 * 4 = 1.5 time units at phi = 0.30: about 8000 collisions, well under a second
+export NS=500 PHIS="0.30 0.50" THREADS="1 2" REPS=1 SCALE=0.002
+unset EDMD_DIR COUNT
+
+OUT="$tmp/good" timeout 120 bash scripts/bench-dense.sh >"$tmp/good.txt" 2>&1
+rc=$?
+check "bench-dense.sh on 500 spheres: exit 0 (got $rc), no nbep failure" \
+    "[ $rc = 0 ] && ! grep -q 'nbep failed' '$tmp/good.txt'"
+for phi in 0.30 0.50; do
+    for nt in 1 2; do
+        check "a table row for nbep, phi $phi, $nt thread(s), with collisions a second" \
+            "grep -q '^| nbep | 500 | $phi | $nt | [0-9.]* k |' '$tmp/good.txt'"
+        check "its raw row: collisions and seconds above 0" \
+            "awk -F, '\$1 == \"nbep\" && \$3 == \"$phi\" && \$4 == \"$nt\" && \$6 > 0 && \$7 > 0 { ok = 1 } END { exit !ok }' '$tmp/good/rows.csv'"
+    done
+done
+
+# an nbep that melts the fluid but fails each resumed run: the benchmark stops, exit 1
+cat >"$tmp/nbep-fails-resume" <<EOF
+#!/bin/sh
+for a in "\$@"; do [ "\$a" = --resume ] && { echo "nbep: made to fail" >&2; exit 1; }; done
+exec "$PWD/bin/nbep" "\$@"
+EOF
+chmod +x "$tmp/nbep-fails-resume"
+NBEP="$tmp/nbep-fails-resume" OUT="$tmp/bad" timeout 120 bash scripts/bench-dense.sh \
+    >"$tmp/bad.txt" 2>&1
+rc=$?
+check "a timed nbep run that fails: exit 1 (got $rc), its deck named, no table" \
+    "[ $rc = 1 ] && grep -q '^nbep failed: ' '$tmp/bad.txt' && ! grep -q '^| engine' '$tmp/bad.txt'"
+
+[ $fail = 0 ] && echo "bench_dense: all passed"
+exit $fail
