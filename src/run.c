@@ -21,6 +21,16 @@
  * left it empty). */
 /* Opens the summary's temporary file before anything is simulated, so that an unwritable
  * path fails at once (stdout for "-", NULL when not asked for). */
+/* A summary path that names a device or a pipe (/dev/null, /dev/stderr, a FIFO a script reads)
+ * is written in place: no temporary file beside it (none can be made in /dev) and nothing to
+ * rename, and no older summary to keep (until 2026-11-30 `--summary /dev/null` failed, "cannot
+ * write the summary to /dev/null"). */
+static bool summary_in_place(const char *where)
+{
+    struct stat sb;
+    return stat(where, &sb) == 0 && !S_ISREG(sb.st_mode) && !S_ISDIR(sb.st_mode);
+}
+
 static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
 {
     *out = NULL;
@@ -37,10 +47,11 @@ static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
     if (stat(where, &sb) == 0 && S_ISDIR(sb.st_mode))
         NBEP_FAIL(d, nbep_status_of_open(EISDIR), "nbep: cannot write the summary to %s: %s",
                   where, strerror(EISDIR));
-    char *tmp = nbep_partial_path(where);
-    if (!tmp)
+    const bool in_place = summary_in_place(where);
+    char *tmp = in_place ? NULL : nbep_partial_path(where);
+    if (!in_place && !tmp)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the summary's file name");
-    *out = fopen(tmp, "w");
+    *out = fopen(in_place ? where : tmp, "w");
     const int err = errno;
     free(tmp);
     if (!*out) /* a missing directory: the user's (exit 2), as for the output file */
@@ -55,6 +66,8 @@ static void drop_summary(const char *where, FILE *f)
     if (!f || f == stdout)
         return;
     fclose(f);
+    if (summary_in_place(where))
+        return;
     char *tmp = nbep_partial_path(where);
     if (tmp)
         remove(tmp);
@@ -72,6 +85,9 @@ static nbep_status finish_text(const char *text, const char *where, FILE *f, nbe
     int err = text ? errno : ENOMEM;
     if (f == stdout) {
         bad |= fflush(f) != 0;
+    } else if (summary_in_place(where)) {
+        bad |= fclose(f) != 0;
+        err = err ? err : errno;
     } else {
         bad |= fclose(f) != 0;
         err = err ? err : errno;

@@ -183,6 +183,24 @@ for sum in "$tmp/a-directory" "$tmp/a-directory/"; do
         "[ $rc = 2 ] && one_line && [ -z \"\$(ls -A '$tmp/a-directory')\" ]"
 done
 
+# a --summary that names a device or a pipe is written in place: /dev/null takes it (until
+# 2026-11-30: "cannot write the summary to /dev/null", its temporary file could not be made),
+# and a FIFO passes the JSON to its reader, in run, check and sweep
+run_nbep run "$tmp/group.deck" --quiet -n 3 -o "$tmp/to-null.h5" --summary /dev/null
+check "--summary /dev/null: exit 0 (got $rc), nothing said" "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ]"
+run_nbep check "$tmp/group.deck" --quiet --summary /dev/null
+check "check --summary /dev/null: exit 0 (got $rc), nothing said" "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ]"
+rm -f "$tmp/fifo" && mkfifo "$tmp/fifo"
+for cmd in run check; do
+    timeout 30 cat "$tmp/fifo" >"$tmp/fifo.out" &
+    reader=$!
+    run_nbep $cmd "$tmp/group.deck" --quiet -n 3 -o "$tmp/to-fifo.h5" --summary "$tmp/fifo"
+    wait $reader
+    check "$cmd --summary FIFO: exit 0 (got $rc), its reader gets the JSON" \
+        "[ $rc = 0 ] && /usr/bin/python3 -c 'import json, sys; json.load(open(sys.argv[1]))' '$tmp/fifo.out' &&
+         [ ! -e '$tmp/fifo.partial' ]"
+done
+
 # ---- a deck without spheres ------------------------------------------------------------------
 : >"$tmp/empty.deck"
 run_nbep run "$tmp/empty.deck" --quiet -o "$tmp/empty.h5" --summary "$tmp/empty.json"
