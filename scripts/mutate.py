@@ -1803,6 +1803,14 @@ MUTANTS = [
      "    if (tags[slot] != (int64_t)f) {", "    if (0) {", ["tests/test_resume.sh"], None),
     ("contacts-naive-frame-untagged", "src/output_contacts.c",
      "        return tag_slot(o, slot, -1, d);", "        return 0;", ["tests/test_resume.sh"], None),
+    # the row a frame's state overwrites, unnamed on disk first (a cells resume may reach it)
+    ("contacts-row-overwritten-named", "src/output_contacts.c",
+     "    if (tag_slot(o, slot, -1, d) < 0)\n        return -1;", "    if (0)\n        return -1;",
+     ["tests/test_resume.sh"], None),
+    # a stop's own frame's overlap check kept out of its step's row (which a resume keeps)
+    ("overlap-stop-frame-in-row", "src/sim.c",
+     "            if (step % sim->scene->output_every == 0) { /* on the grid, not shared */",
+     "            if (1) {", ["tests/test_resume.sh"], None),
     ("contacts-not-read", "src/output_resume.c",
      "        if (nbep__output_contacts_read(o, last, &res.contacts, d) < 0)",
      "        if (0)", ["tests/test_resume.sh"], None),

@@ -6,11 +6,16 @@
  * are nbep_contact_rec's, and /checkpoint/contacts_frame, i64 (2): the frame row each of its
  * two rows holds, -1 for none. Frame row f goes to row f % 2. Two, not one a frame: the state
  * is some 250 bytes a sphere, five times a frame's positions and velocities, and a resume
- * only ever starts from the file's last frame or, in cells mode, from the one before it
+ * mostly starts from the file's last frame or, in cells mode, from the one before it
  * (the last frame is then a stop's own, off output.every's grid, and that frame and its
- * predecessor lie in different rows). Writing frame f overwrites the row of frame f - 2,
- * which no resume reads once frame f - 1 is complete: a kill while it is written leaves
- * frame f - 1 and its row whole (the count attribute, output.c). A frame written without
+ * predecessor lie in different rows). Writing frame f overwrites the row of frame f - 2: a
+ * kill while it is written leaves frame f - 1 and its row whole (the count attribute,
+ * output.c), and the row of f - 2 is first marked -1 and that mark flushed, since a cells
+ * resume can reach back past f - 1 (to the last frame at a multiple of output.every, two or
+ * more back where an earlier part ran with another output.every): until 2026-11-30 the row
+ * kept frame f - 2's tag while frame f's records reached the disk, and a cells resume from
+ * f - 2 after a kill there took that mixture for frame f - 2's state, silently (a 300-sphere
+ * pile then overlapped by 4 % of a radius). A frame written without
  * that state (a naive part, or a part whose deck made it elastic) marks its row -1. A resume
  * takes a row only where contacts_frame names the frame it starts from; otherwise (a file
  * made before this existed) it starts the state afresh and says so (run.c). */
@@ -153,6 +158,14 @@ int nbep__output_contacts_write(nbep_output *o, hsize_t f, const nbep_events_vie
     const int has = contacts_exist(o, d);
     if (has < 0 || contacts_open(o, has == 0, d) < 0)
         return -1;
+    /* the row's old frame unnamed, on disk, before any record of this one can reach it (see
+     * the top: a resume may still look for that frame) */
+    if (tag_slot(o, slot, -1, d) < 0)
+        return -1;
+    if (H5Dflush(o->contacts[1]) < 0) {
+        HDF5_FAIL(d, o->path, "flush %s", CONTACTS_FRAME);
+        return -1;
+    }
     if (!o->contacts_buf && !(o->contacts_buf = malloc(CONTACT_BATCH * sizeof *o->contacts_buf))) {
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: no memory for the contacts' rows",
                       o->path);

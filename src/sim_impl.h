@@ -150,7 +150,7 @@ bool nbep__sim_frame_due(const nbep_sim *sim, uint64_t step);
 void nbep__sim_setup_done(nbep_sim *sim);
 
 /* Every thread, all spheres at the end of step `step`, before nbep__sim_end_step: at a frame
- * due (nbep__sim_frame_due) of an algorithm whose overlap is not exact, the frame's overlap
+ * at a multiple of output.every of an algorithm whose overlap is not exact, the frame's overlap
  * check shared (thread 0 sorts the centres between two waits on bar, then each thread checks
  * its own spheres into its step's maxima), which end_step then does not repeat. */
 void nbep__sim_frame_overlap(nbep_sim *sim, uint64_t step, int tid, nbep_range own,
