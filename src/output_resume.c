@@ -3,6 +3,7 @@
  * slots) back; the writer (output.c) then goes on as after nbep_output_create. */
 #include <assert.h>
 #include <inttypes.h>
+#include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -12,6 +13,7 @@
 #include <hdf5.h>
 
 #include "build_info.h"
+#include "nbep/feq.h"
 #include "output_impl.h"
 
 void nbep_resume_fini(nbep_resume *r)
@@ -27,6 +29,66 @@ void nbep_resume_fini(nbep_resume *r)
     free(r->image);
     free(r->contacts);
     memset(r, 0, sizeof *r);
+}
+
+/* Whether `who` names a face sphere i can meet in a scene of n spheres and np planes: plane
+ * who, or sphere -1 - who, not i itself (none: INT32_MIN, where none_ok). */
+static bool face_named(int32_t who, size_t i, size_t n, size_t np, bool none_ok)
+{
+    if (who == INT32_MIN)
+        return none_ok;
+    if (who >= 0)
+        return (size_t)who < np;
+    const size_t j = (size_t)(-1 - (int64_t)who);
+    return j < n && j != i;
+}
+
+/* The first thing in r's checkpoint (event slots, lasting state) that no run of n spheres and
+ * np planes writes, in `what` for sphere *at (a partner, plane or contact out of range, a
+ * kind unknown, a time not finite): a file damaged or made by hand, whose indices the run
+ * would follow out of its arrays. False when all is well. */
+static bool checkpoint_fault(const nbep_resume *r, size_t np, size_t *at, const char **what)
+{
+    const size_t n = r->n;
+    for (size_t i = 0; i < n; i++) {
+        const uint8_t kind = r->event_kind[i];
+        const bool timed = kind == NBEP_EVENT_SPHERE || kind == NBEP_EVENT_PLANE ||
+                           kind == NBEP_EVENT_HORIZON;
+        *at = i;
+        if (kind > NBEP_EVENT_HORIZON)
+            *what = "an event of no kind there is";
+        else if (timed && !isfinite(r->event_time[i]))
+            *what = "an event time that is not finite";
+        else if (kind == NBEP_EVENT_SPHERE && (r->event_partner[i] >= n || r->event_partner[i] == i))
+            *what = "an event with a sphere that is not there";
+        else if (kind == NBEP_EVENT_PLANE && r->event_partner[i] >= np)
+            *what = "an event with a plane that is not there";
+        else if (r->rest[i] != -1 && !(r->rest[i] >= 0 && (size_t)r->rest[i] < np))
+            *what = "a resting plane that is not there";
+        else
+            *what = NULL;
+        const nbep_contact_rec *x = r->contacts ? &r->contacts[i] : NULL;
+        bool finite = true;
+        for (int k = 0; x && k < 3; k++)
+            finite = finite && isfinite(x->aeff[k]);
+        for (int f = 0; x && f < NBEP_CONTACT_FACES; f++)
+            for (int k = 0; k < 3; k++)
+                finite = finite && isfinite(x->face_t[f]) && isfinite(x->face_n[f][k]) &&
+                         isfinite(x->face_p[f][k]);
+        if (!*what && x && !(finite && isfinite(x->t_last) && isfinite(x->peak2)))
+            *what = "lasting state that is not finite";
+        for (int k = 0; !*what && x && k < NBEP_CONTACT_FACES; k++)
+            if (!face_named(x->face_who[k], i, n, np, true))
+                *what = "a face met that is not there";
+        if (!*what && x && x->rest_n > NBEP_CONTACT_MAX)
+            *what = "more contacts than a sphere holds";
+        for (int k = 0; !*what && x && k < x->rest_n; k++)
+            if (!face_named(x->rest_who[k], i, n, np, false))
+                *what = "a contact that is not there";
+        if (*what)
+            return true;
+    }
+    return false;
 }
 
 void nbep_resume_apply(nbep_resume *r, nbep_state *s)
@@ -510,6 +572,17 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
                 goto fail;
         if (nbep__output_contacts_read(o, last, &res.contacts, d) < 0)
             goto fail;
+        size_t at;
+        const char *what;
+        if (checkpoint_fault(&res, sc->state.n_planes, &at, &what)) {
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: %s: its checkpoint at step %lld gives sphere %zu %s: the file "
+                          "is damaged, or no run of this deck wrote it (run without --resume to "
+                          "start afresh)",
+                          path, (long long)res.step, at, what);
+            st = NBEP_EDECK;
+            goto fail;
+        }
     }
     o->resume.stats = H5Lexists(o->file, "/stats", H5P_DEFAULT) > 0;
     if (o->resume.stats != sc->out_stats) { /* rows for every step, or none: not half */

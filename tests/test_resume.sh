@@ -582,6 +582,39 @@ timeout 120 bin/nbep run "${pile[@]}" -n 600 --resume $tmp/pile-naive.h5 2>$tmp/
 rc=$?
 check "a pile resumed from a naive part's frame at step 450: exit 0 (got $rc), the warning" \
     "[ $rc = 0 ] && grep -q '^nbep: warning: .* from step 450, .*TC clocks' $tmp/pile-naive.err"
+# a checkpoint no run wrote (a damaged file, or one edited by hand): an index out of range
+# (an event's partner sphere or plane, a resting plane, a contact, a face met) or a time that
+# is not finite is refused, exit 2, one line naming the sphere and what, the file as it was
+# (until 2026-11-30 the run followed the index out of its arrays)
+bin/nbep run "${pile[@]}" -n 750 -o $tmp/pile-stop.h5
+damage() { # NAME PYTHON: a copy of the pile stopped at 750, changed by PYTHON (f, row r)
+    cp $tmp/pile-stop.h5 $tmp/bad-$1.h5
+    "$PY" -c "
+import h5py, numpy as np
+with h5py.File('$tmp/bad-$1.h5', 'a') as f:
+    r = int(f['frames'].attrs['count']) - 1
+    k = np.flatnonzero(f['checkpoint/event_kind'][r] == 1)[0]
+    $2"
+}
+damage partner "p = f['checkpoint/event_partner']; row = p[r]; row[k] = 60; p[r] = row"
+damage plane "f['checkpoint/event_kind'][r, 5] = 2; f['checkpoint/event_partner'][r, 5] = 6"
+damage rest "f['checkpoint/rest'][r, 7] = 9"
+damage kind "f['checkpoint/event_kind'][r, 3] = 9"
+damage time "f['checkpoint/event_time'][r, k] = np.nan"
+damage contact "c = f['checkpoint/contacts']; x = c[r % 2]; i = np.flatnonzero(x['rest_n'] > 0)[0]; x['rest_who'][i, 0] = -1 - i; c[r % 2] = x"
+damage face "c = f['checkpoint/contacts']; x = c[r % 2]; x['face_who'][2, 1] = 17; c[r % 2] = x"
+for what in partner:'an event with a sphere' plane:'an event with a plane' rest:'a resting plane' \
+            kind:'an event of no kind' time:'an event time that is not finite' \
+            contact:'a contact that is not there' face:'a face met that is not there'; do
+    name=${what%%:*} text=${what#*:}
+    sum=$(md5sum < $tmp/bad-$name.h5)
+    timeout 60 bin/nbep run "${pile[@]}" -n 950 --resume $tmp/bad-$name.h5 2>$tmp/bad.err
+    rc=$?
+    check "a checkpoint giving $text: exit 2 (got $rc), one line naming it, the file as it was" \
+        "[ $rc = 2 ] && [ \$(wc -l < $tmp/bad.err) = 1 ] &&
+         grep -q '^nbep: $tmp/bad-$name.h5: its checkpoint at step 750 gives sphere [0-9]* $text' $tmp/bad.err &&
+         [ \"\$(md5sum < $tmp/bad-$name.h5)\" = '$sum' ]"
+done
 bin/nbep run "${cool[@]}" --set physics.restitution=1.0 -n 20 -o $tmp/cool-elastic.h5
 bin/nbep run "${cool[@]}" --set physics.restitution=1.0 -n 40 --resume $tmp/cool-elastic.h5 \
     2>$tmp/cool-elastic.err
