@@ -1040,14 +1040,15 @@ static void pred_contacts(const void *p, size_t lo, size_t hi, nbep_contact_rec 
     const pred_ctx *c = p;
     for (size_t i = lo; i < hi; i++) {
         nbep_contact_rec *x = &out[i - lo];
-        *x = (nbep_contact_rec){.face_who = {INT32_MIN, INT32_MIN, INT32_MIN}};
+        *x = (nbep_contact_rec){0};
         if (c->t_last && c->t_last[i] > -INFINITY) {
             x->t_last = c->t_last[i];
             x->has_last = 1;
         }
-        for (int f = 0; c->face && f < CAGE_FACES; f++) {
-            const face_met *m = &c->face[i * CAGE_FACES + f];
-            if (m->t == -INFINITY) /* none yet (who INT32_MIN) */
+        for (int f = 0; f < CAGE_FACES; f++) {
+            const face_met *m = c->face ? &c->face[i * CAGE_FACES + f] : NULL;
+            x->face_who[f] = INT32_MIN;
+            if (!m || m->t == -INFINITY) /* none (yet) */
                 continue;
             x->face_t[f] = m->t;
             memcpy(x->face_n[f], &m->n, sizeof x->face_n[f]);

@@ -73,8 +73,6 @@ static hid_t contact_type(void)
 /* Opens (or, when make, creates) the two datasets into o->contacts[0..1]; -1 on failure. */
 static int contacts_open(nbep_output *o, bool make, nbep_diag *d)
 {
-    if (o->contacts[0] >= 0)
-        return 0;
     hid_t type = contact_type();
     if (type < 0) {
         HDF5_FAIL(d, o->path, "make the type of %s", CONTACTS);
@@ -115,13 +113,20 @@ done:
     return rc;
 }
 
-/* Whether the file has the datasets: 1, 0, or -1 with HDF5's reason in d. */
-static int contacts_exist(nbep_output *o, nbep_diag *d)
+/* The two datasets open: 1 (made first where the file has none and `make`), 0 where the file
+ * has none (and not make), or -1 with HDF5's reason in d. Looks at the file once a handle. */
+static int contacts_ready(nbep_output *o, bool make, nbep_diag *d)
 {
+    if (o->contacts[0] >= 0)
+        return 1;
     const htri_t has = H5Lexists(o->file, CONTACTS, H5P_DEFAULT);
-    if (has < 0)
+    if (has < 0) {
         HDF5_FAIL(d, o->path, "look for %s", CONTACTS);
-    return has < 0 ? -1 : has > 0;
+        return -1;
+    }
+    if (!has && !make)
+        return 0;
+    return contacts_open(o, !has, d) < 0 ? -1 : 1;
 }
 
 /* contacts_frame[slot] = row. */
@@ -145,19 +150,12 @@ int nbep__output_contacts_write(nbep_output *o, hsize_t f, const nbep_events_vie
                                 nbep_diag *d)
 {
     const hsize_t slot = f % 2;
-    if (!ev || !ev->contacts) { /* a frame without the state: its row holds none */
-        if (o->contacts[0] < 0) {
-            const int has = contacts_exist(o, d);
-            if (has <= 0)
-                return has;
-            if (contacts_open(o, false, d) < 0)
-                return -1;
-        }
+    const bool lasting = ev && ev->contacts;
+    const int ready = contacts_ready(o, lasting, d);
+    if (ready <= 0)
+        return ready;
+    if (!lasting) /* a frame without the state: its row holds none */
         return tag_slot(o, slot, -1, d);
-    }
-    const int has = contacts_exist(o, d);
-    if (has < 0 || contacts_open(o, has == 0, d) < 0)
-        return -1;
     /* the row's old frame unnamed, on disk, before any record of this one can reach it (see
      * the top: a resume may still look for that frame) */
     if (tag_slot(o, slot, -1, d) < 0)
@@ -195,11 +193,9 @@ int nbep__output_contacts_write(nbep_output *o, hsize_t f, const nbep_events_vie
 int nbep__output_contacts_read(nbep_output *o, hsize_t f, nbep_contact_rec **out, nbep_diag *d)
 {
     *out = NULL;
-    const int has = contacts_exist(o, d);
-    if (has <= 0)
-        return has;
-    if (contacts_open(o, false, d) < 0)
-        return -1;
+    const int ready = contacts_ready(o, false, d);
+    if (ready <= 0)
+        return ready;
     int64_t tags[2];
     hid_t file = H5Dget_space(o->contacts[0]);
     hsize_t dims[2] = {0, 0};

@@ -43,48 +43,64 @@ static bool face_named(int32_t who, size_t i, size_t n, size_t np, bool none_ok)
     return j < n && j != i;
 }
 
-/* The first thing in r's checkpoint (event slots, lasting state) that no run of n spheres and
- * np planes writes, in `what` for sphere *at (a partner, plane or contact out of range, a
- * kind unknown, a time not finite): a file damaged or made by hand, whose indices the run
- * would follow out of its arrays. False when all is well. */
+static bool all_finite(const double *v, size_t k)
+{
+    for (size_t m = 0; m < k; m++)
+        if (!isfinite(v[m]))
+            return false;
+    return true;
+}
+
+/* What in sphere i's event slot and resting plane no run of n spheres and np planes writes
+ * (a partner, plane or kind out of range, a time not finite), or NULL. */
+static const char *slot_fault(const nbep_resume *r, size_t i, size_t np)
+{
+    const uint8_t kind = r->event_kind[i];
+    const uint32_t partner = r->event_partner[i];
+    if (kind > NBEP_EVENT_HORIZON)
+        return "an event of no kind there is";
+    if ((kind == NBEP_EVENT_SPHERE || kind == NBEP_EVENT_PLANE || kind == NBEP_EVENT_HORIZON) &&
+        !isfinite(r->event_time[i]))
+        return "an event time that is not finite";
+    if (kind == NBEP_EVENT_SPHERE && (partner >= r->n || partner == i))
+        return "an event with a sphere that is not there";
+    if (kind == NBEP_EVENT_PLANE && partner >= np)
+        return "an event with a plane that is not there";
+    if (r->rest[i] != -1 && !(r->rest[i] >= 0 && (size_t)r->rest[i] < np))
+        return "a resting plane that is not there";
+    return NULL;
+}
+
+/* The same for sphere i's lasting state x: a contact or a face met out of range, more
+ * contacts than a sphere holds, a value not finite. */
+static const char *contact_fault(const nbep_contact_rec *x, size_t i, size_t n, size_t np)
+{
+    if (!all_finite(x->aeff, 3) || !all_finite(x->face_t, NBEP_CONTACT_FACES) ||
+        !all_finite(&x->face_n[0][0], 3 * NBEP_CONTACT_FACES) ||
+        !all_finite(&x->face_p[0][0], 3 * NBEP_CONTACT_FACES) || !isfinite(x->t_last) ||
+        !isfinite(x->peak2))
+        return "lasting state that is not finite";
+    for (int k = 0; k < NBEP_CONTACT_FACES; k++)
+        if (!face_named(x->face_who[k], i, n, np, true))
+            return "a face met that is not there";
+    if (x->rest_n > NBEP_CONTACT_MAX)
+        return "more contacts than a sphere holds";
+    for (int k = 0; k < x->rest_n; k++)
+        if (!face_named(x->rest_who[k], i, n, np, false))
+            return "a contact that is not there";
+    return NULL;
+}
+
+/* The first thing in r's checkpoint (event slots, lasting state) that no run of its spheres
+ * and np planes writes: a file damaged or made by hand, whose indices the run would follow
+ * out of its arrays. Its sphere in *at and what in *what; false when all is well. */
 static bool checkpoint_fault(const nbep_resume *r, size_t np, size_t *at, const char **what)
 {
-    const size_t n = r->n;
-    for (size_t i = 0; i < n; i++) {
-        const uint8_t kind = r->event_kind[i];
-        const bool timed = kind == NBEP_EVENT_SPHERE || kind == NBEP_EVENT_PLANE ||
-                           kind == NBEP_EVENT_HORIZON;
+    for (size_t i = 0; i < r->n; i++) {
         *at = i;
-        if (kind > NBEP_EVENT_HORIZON)
-            *what = "an event of no kind there is";
-        else if (timed && !isfinite(r->event_time[i]))
-            *what = "an event time that is not finite";
-        else if (kind == NBEP_EVENT_SPHERE && (r->event_partner[i] >= n || r->event_partner[i] == i))
-            *what = "an event with a sphere that is not there";
-        else if (kind == NBEP_EVENT_PLANE && r->event_partner[i] >= np)
-            *what = "an event with a plane that is not there";
-        else if (r->rest[i] != -1 && !(r->rest[i] >= 0 && (size_t)r->rest[i] < np))
-            *what = "a resting plane that is not there";
-        else
-            *what = NULL;
-        const nbep_contact_rec *x = r->contacts ? &r->contacts[i] : NULL;
-        bool finite = true;
-        for (int k = 0; x && k < 3; k++)
-            finite = finite && isfinite(x->aeff[k]);
-        for (int f = 0; x && f < NBEP_CONTACT_FACES; f++)
-            for (int k = 0; k < 3; k++)
-                finite = finite && isfinite(x->face_t[f]) && isfinite(x->face_n[f][k]) &&
-                         isfinite(x->face_p[f][k]);
-        if (!*what && x && !(finite && isfinite(x->t_last) && isfinite(x->peak2)))
-            *what = "lasting state that is not finite";
-        for (int k = 0; !*what && x && k < NBEP_CONTACT_FACES; k++)
-            if (!face_named(x->face_who[k], i, n, np, true))
-                *what = "a face met that is not there";
-        if (!*what && x && x->rest_n > NBEP_CONTACT_MAX)
-            *what = "more contacts than a sphere holds";
-        for (int k = 0; !*what && x && k < x->rest_n; k++)
-            if (!face_named(x->rest_who[k], i, n, np, false))
-                *what = "a contact that is not there";
+        *what = slot_fault(r, i, np);
+        if (!*what && r->contacts)
+            *what = contact_fault(&r->contacts[i], i, r->n, np);
         if (*what)
             return true;
     }

@@ -19,8 +19,6 @@
  * complete, as the run's file is: an older summary there survives a run refused or killed
  * before its end (a resume refused for a deck that does not match removed it, and a full disk
  * left it empty). */
-/* Opens the summary's temporary file before anything is simulated, so that an unwritable
- * path fails at once (stdout for "-", NULL when not asked for). */
 /* A summary path that names a device or a pipe (/dev/null, /dev/stderr, a FIFO a script reads)
  * is written in place: no temporary file beside it (none can be made in /dev) and nothing to
  * rename, and no older summary to keep (until 2026-11-30 `--summary /dev/null` failed, "cannot
@@ -31,6 +29,8 @@ static bool summary_in_place(const char *where)
     return stat(where, &sb) == 0 && !S_ISREG(sb.st_mode) && !S_ISDIR(sb.st_mode);
 }
 
+/* Opens the summary's temporary file before anything is simulated, so that an unwritable
+ * path fails at once (stdout for "-", NULL when not asked for). */
 static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
 {
     *out = NULL;
@@ -85,20 +85,19 @@ static nbep_status finish_text(const char *text, const char *where, FILE *f, nbe
     int err = text ? errno : ENOMEM;
     if (f == stdout) {
         bad |= fflush(f) != 0;
-    } else if (summary_in_place(where)) {
-        bad |= fclose(f) != 0;
-        err = err ? err : errno;
     } else {
         bad |= fclose(f) != 0;
         err = err ? err : errno;
-        char *tmp = nbep_partial_path(where);
-        if (!tmp || bad || rename(tmp, where) != 0) {
-            err = err ? err : errno;
-            if (tmp)
-                remove(tmp);
-            bad = 1;
+        if (!summary_in_place(where)) { /* the temporary file put in place, or removed */
+            char *tmp = nbep_partial_path(where);
+            if (!tmp || bad || rename(tmp, where) != 0) {
+                err = err ? err : errno;
+                if (tmp)
+                    remove(tmp);
+                bad = 1;
+            }
+            free(tmp);
         }
-        free(tmp);
     }
     if (bad)
         NBEP_FAIL(d, NBEP_EIO, "nbep: cannot write the summary to %s: %s", where,

@@ -250,6 +250,7 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
     if (opt->resume && opt->resume->has_events && opt->resume->step > 0 && algo->import_events)
         algo->import_events(sim->algo_ctx, opt->resume);
     sim->opt.resume = NULL; /* read: borrowed for nbep_sim_create only */
+    sim->lasting = algo->keeps_contacts && algo->keeps_contacts(sc, &sim->st);
     if (opt->out && algo->export_events) {
         sim->ev_time = nbep_alloc_aligned(n, sizeof *sim->ev_time);
         sim->ev_partner = nbep_alloc_aligned(n, sizeof *sim->ev_partner);
@@ -336,10 +337,9 @@ static nbep_status emit_frame(nbep_sim *sim, uint64_t step)
                   (unsigned long long)step);
     nbep_status st = flush_rows(sim);
     if (st == NBEP_OK && sim->opt.out) {
-        const nbep_algo *a = sim->algo;
-        const bool lasting = a->keeps_contacts && a->keeps_contacts(sim->scene, &sim->st);
         nbep_events_view ev = {sim->ev_time, sim->ev_partner, sim->ev_kind, sim->ev_rest,
-                               lasting ? a->export_contacts : NULL, sim->algo_ctx};
+                               sim->lasting ? sim->algo->export_contacts : NULL,
+                               sim->algo_ctx};
         if (sim->ev_time)
             sim->algo->export_events(sim->algo_ctx, &sim->st, sim->ev_time, sim->ev_partner,
                                      sim->ev_kind, sim->ev_rest);

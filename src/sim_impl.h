@@ -67,6 +67,8 @@ struct nbep_sim {
     uint32_t *ev_partner;            /* the algorithm has them and there is an output */
     uint8_t *ev_kind;
     int32_t *ev_rest;
+    bool lasting;                    /* frames also keep the algorithm's lasting state
+                                      * (keeps_contacts, decided at create) */
     nbep_grid overlap_grid;          /* owned when the algorithm's overlap is not exact: the
                                       * frame-step overlap check's workspace */
     double overlap_rmax;             /* its largest radius (nbep__sim_frame_overlap) */
