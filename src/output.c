@@ -410,7 +410,8 @@ double nbep_output_bytes(const nbep_scene *sc, bool events, bool contacts)
     const double stored = whole_chunks(sc->state.n, per_chunk);
     const double chunks = stored / (double)per_chunk; /* a frame's chunks in each series */
     double bytes = n * 40.0 + np * 32.0 +                           /* /spheres, /planes */
-                   16.0 * whole_chunks(frames, SERIES_CHUNK_ROWS) + /* step and time */
+                   (16.0 + (double)sizeof(nbep_run_totals)) *   /* step, time, totals */
+                       whole_chunks(frames, SERIES_CHUNK_ROWS) +
                    (double)frames * stored * sphere +               /* frames, whole chunks */
                    (double)frames * chunks * series * CHUNK_INDEX_BYTES;
     if (sc->out_stats) { /* the columns, and wall_impulse in chunks of as many values (create_stats) */
@@ -454,7 +455,15 @@ static int create_frames(nbep_output *o, const nbep_scene *sc, nbep_diag *d)
     if (o->pb.any && create_series(o, "/frames/image", H5T_STD_I32LE, 3, tail, chunk,
                                    &o->frame_img, d) < 0)
         return -1;
-    return 0;
+    hid_t tt = nbep__output_totals_type();
+    const int rc = tt < 0 ? -1
+                          : create_series(o, "/frames/totals", tt, 1, NULL, series,
+                                          &o->frame_tot, d);
+    if (tt < 0)
+        HDF5_FAIL(d, o->path, "make the type of /frames/totals");
+    else
+        H5Tclose(tt);
+    return rc;
 }
 
 /* /checkpoint, made with a new file's first frame when that frame comes with event slots:
@@ -469,6 +478,32 @@ static int create_checkpoint(nbep_output *o, nbep_diag *d)
                           ck_tail, ck_chunk, &o->ck[c], d) < 0)
             return -1;
     return 0;
+}
+
+hid_t nbep__output_totals_type(void)
+{
+    hid_t t = H5Tcreate(H5T_COMPOUND, sizeof(nbep_run_totals));
+    bool ok = t >= 0;
+#define TOTAL(name, type) ok = ok && H5Tinsert(t, #name, HOFFSET(nbep_run_totals, name), (type)) >= 0
+    TOTAL(checks, H5T_NATIVE_UINT64);
+    TOTAL(predictions, H5T_NATIVE_UINT64);
+    TOTAL(sphere_collisions, H5T_NATIVE_UINT64);
+    TOTAL(plane_collisions, H5T_NATIVE_UINT64);
+    TOTAL(quiet_steps, H5T_NATIVE_UINT64);
+    TOTAL(energy_initial, H5T_NATIVE_DOUBLE);
+    TOTAL(max_overlap, H5T_NATIVE_DOUBLE);
+    TOTAL(max_overlap_rel, H5T_NATIVE_DOUBLE);
+    TOTAL(virial, H5T_NATIVE_DOUBLE);
+    TOTAL(kinetic_energy, H5T_NATIVE_DOUBLE);
+#undef TOTAL
+    if (!ok && t >= 0)
+        H5Tclose(t);
+    return ok ? t : H5I_INVALID_HID;
+}
+
+void nbep_output_totals(nbep_output *o, const nbep_run_totals *t)
+{
+    o->tot = *t;
 }
 
 static hid_t column_file_type(enum column_type t)
@@ -526,7 +561,7 @@ nbep_output *nbep__output_new(const char *path, size_t n_spheres, nbep_diag *d)
     o->n_spheres = n_spheres;
     o->file = o->summary = H5I_INVALID_HID;
     o->frame_step = o->frame_time = o->frame_pos = o->frame_vel = H5I_INVALID_HID;
-    o->frame_img = o->stats_wall = H5I_INVALID_HID;
+    o->frame_img = o->frame_tot = o->stats_wall = H5I_INVALID_HID;
     o->frames_count = o->stats_count = H5I_INVALID_HID;
     for (int c = 0; c < STATS_N_COLUMNS; c++)
         o->stats[c] = H5I_INVALID_HID;
@@ -546,6 +581,7 @@ void nbep__output_release(nbep_output **op)
     nbep__output_close_id(&o->frame_pos);
     nbep__output_close_id(&o->frame_vel);
     nbep__output_close_id(&o->frame_img);
+    nbep__output_close_id(&o->frame_tot);
     nbep__output_close_id(&o->stats_wall);
     for (int c = 0; c < STATS_N_COLUMNS; c++)
         nbep__output_close_id(&o->stats[c]);
@@ -818,6 +854,17 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
     }
     if (o->ck[0] >= 0 && nbep__output_contacts_write(o, f, ev, d) < 0)
         goto done;
+    if (o->frame_tot >= 0) {
+        hid_t tt = nbep__output_totals_type();
+        const int bad = tt < 0 || append_rows(o, o->frame_tot, "/frames/totals", 1, f, one, tt,
+                                              one_space, &o->tot, d) < 0;
+        if (tt < 0)
+            HDF5_FAIL(d, o->path, "make the type of /frames/totals");
+        else
+            H5Tclose(tt);
+        if (bad)
+            goto done;
+    }
     if (append_rows(o, o->frame_time, "/frames/time", 1, f, one, H5T_NATIVE_DOUBLE, one_space,
                     &t, d) < 0 ||
         append_rows(o, o->frame_step, "/frames/step", 1, f, one, H5T_NATIVE_INT64, one_space,
@@ -945,6 +992,7 @@ nbep_status nbep_output_close(nbep_output **op, const nbep_summary *s, nbep_diag
     rc |= checked_close(&o->frame_pos, o->path, "/frames/position", d);
     rc |= checked_close(&o->frame_vel, o->path, "/frames/velocity", d);
     rc |= checked_close(&o->frame_img, o->path, "/frames/image", d);
+    rc |= checked_close(&o->frame_tot, o->path, "/frames/totals", d);
     rc |= checked_close(&o->stats_wall, o->path, "/stats/wall_impulse", d);
     for (int c = 0; c < STATS_N_COLUMNS; c++)
         rc |= checked_close(&o->stats[c], o->path, nbep__stats_columns[c].name, d);

@@ -65,6 +65,10 @@ struct nbep__ck_column {
 };
 extern const struct nbep__ck_column nbep__ck_columns[N_CK_COLUMNS];
 
+/* /frames/totals's compound type, nbep_run_totals field by field (the file's and memory's):
+ * a new id to close; H5I_INVALID_HID on failure. */
+hid_t nbep__output_totals_type(void);
+
 /* Invariants of an open nbep_output: every id field is a valid HDF5 id or H5I_INVALID_HID, so
  * one release path closes them all; n_frames rows of each /frames dataset and n_stats rows of
  * each /stats dataset are written; /frames@count = n_frames on disk once a frame returned. */
@@ -76,6 +80,9 @@ struct nbep_output {
     hid_t frame_step, frame_time;  /* /frames/step, /frames/time */
     hid_t frame_pos, frame_vel;    /* H5I_INVALID_HID when the deck did not ask for them */
     hid_t frame_img;               /* /frames/image, when the box has a periodic axis */
+    hid_t frame_tot;               /* /frames/totals (a resumed file made before 2026-11-30 has
+                                    * none, and gets none) */
+    nbep_run_totals tot;           /* the row the next frame writes there (nbep_output_totals) */
     hid_t stats_wall;              /* /stats/wall_impulse (S, P), with stats and P > 0 */
     size_t n_planes;
     nbep_periodic pb;              /* the box's periodic axes: frames are written wrapped */
@@ -104,7 +111,8 @@ struct nbep_output {
     struct {
         bool pending;              /* (the frames kept, up to the one resumed from: n_frames) */
         uint64_t stats_keep;       /* the /stats rows kept (stats: the file has /stats) */
-        bool image, checkpoint, stats, wall; /* the series the file has that a run appends to */
+        bool image, checkpoint, stats, wall, totals; /* the series the file has that a run
+                                    * appends to */
         bool dropped;              /* complete frames after it are dropped (cells mode) */
         int64_t from;              /* the step of the frame resumed from */
         hsize_t trim;              /* frames kept once the run writes one: those before the

@@ -554,6 +554,45 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
         st = NBEP_ENOMEM;
         goto fail;
     }
+    /* The run's totals at that frame, for its summary (a file made before 2026-11-30 has
+     * none: the resumed run's summary then counts its own part, as it did) */
+    const htri_t has_tot = H5Lexists(o->file, "/frames/totals", H5P_DEFAULT);
+    if (has_tot < 0) {
+        HDF5_FAIL(d, path, "look for /frames/totals");
+        goto fail;
+    }
+    if (has_tot > 0) {
+        hsize_t rows = 0;
+        if (nbep__output_dataset_rows(o->file, path, "/frames/totals", &rows, d) < 0)
+            goto fail;
+        o->resume.totals = rows >= frames; /* a row for each frame kept: the run appends */
+        res.has_totals = last < rows;
+    }
+    if (res.has_totals) {
+        hid_t tt = nbep__output_totals_type();
+        const int bad = tt < 0 || nbep__output_read_row(o->file, path, "/frames/totals", last, 1,
+                                                        tt, &res.totals, d) < 0;
+        if (tt < 0)
+            HDF5_FAIL(d, path, "make the type of /frames/totals");
+        else
+            H5Tclose(tt);
+        if (bad)
+            goto fail;
+        const nbep_run_totals *t = &res.totals;
+        const double sums[] = {t->energy_initial, t->max_overlap, t->max_overlap_rel, t->virial,
+                               t->kinetic_energy};
+        if (!all_finite(sums, sizeof sums / sizeof *sums) || !(t->max_overlap >= 0.0) ||
+            !(t->max_overlap_rel >= 0.0) || t->quiet_steps > (uint64_t)res.step) {
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: %s: its totals at step %lld are not a run's (a sum not finite, "
+                          "an overlap below 0 or more quiet steps than steps): the file is "
+                          "damaged, or no run of this deck wrote it (run without --resume to "
+                          "start afresh)",
+                          path, (long long)res.step);
+            st = NBEP_EDECK;
+            goto fail;
+        }
+    }
     /* The event slots, where the file has them; the run uses them only when its algorithm
      * imports event slots (the algorithm table, sim.c), so a deck of another algorithm
      * continues from positions and velocities alone. */
@@ -670,7 +709,8 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
         open_cut(o, "/frames/step", frames, &o->frame_step, d) < 0 ||
         open_cut(o, "/frames/time", frames, &o->frame_time, d) < 0 ||
         open_cut(o, "/frames/position", frames, &o->frame_pos, d) < 0 ||
-        open_cut(o, "/frames/velocity", frames, &o->frame_vel, d) < 0)
+        open_cut(o, "/frames/velocity", frames, &o->frame_vel, d) < 0 ||
+        (o->resume.totals && open_cut(o, "/frames/totals", frames, &o->frame_tot, d) < 0))
         return NBEP_EIO;
     if (o->resume.checkpoint) {
         for (int c = 0; c < N_CK_COLUMNS; c++)

@@ -177,6 +177,38 @@ static void energy_total(const nbep_sim *sim, double *ke, double *pe)
     *pe = p;
 }
 
+/* The run's totals as a frame keeps them (/frames/totals), and back: the counters and sums the
+ * summary reports, from step 0 (take_totals, a resumed run's from its frame's). */
+static nbep_run_totals give_totals(const nbep_sim *sim)
+{
+    return (nbep_run_totals){
+        .checks = sim->totals[NBEP_COUNTER_CHECKS],
+        .predictions = sim->totals[NBEP_COUNTER_PREDICTIONS],
+        .sphere_collisions = sim->totals[NBEP_COUNTER_SPHERE_COLLISIONS],
+        .plane_collisions = sim->totals[NBEP_COUNTER_PLANE_COLLISIONS],
+        .quiet_steps = sim->quiet_steps,
+        .energy_initial = sim->energy_initial,
+        .max_overlap = sim->max_overlap,
+        .max_overlap_rel = sim->max_overlap_rel,
+        .virial = sim->virial_total,
+        .kinetic_energy = sim->ke_total,
+    };
+}
+
+static void take_totals(nbep_sim *sim, const nbep_run_totals *t)
+{
+    sim->totals[NBEP_COUNTER_CHECKS] = t->checks;
+    sim->totals[NBEP_COUNTER_PREDICTIONS] = t->predictions;
+    sim->totals[NBEP_COUNTER_SPHERE_COLLISIONS] = t->sphere_collisions;
+    sim->totals[NBEP_COUNTER_PLANE_COLLISIONS] = t->plane_collisions;
+    sim->quiet_steps = t->quiet_steps;
+    sim->energy_initial = t->energy_initial;
+    sim->max_overlap = t->max_overlap;
+    sim->max_overlap_rel = t->max_overlap_rel;
+    sim->virial_total = t->virial;
+    sim->ke_total = t->kinetic_energy;
+}
+
 nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, nbep_sim **out,
                             nbep_diag *d)
 {
@@ -249,6 +281,10 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
      * did (imported, step 1's checks and predictions came out n and n - 1 short) */
     if (opt->resume && opt->resume->has_events && opt->resume->step > 0 && algo->import_events)
         algo->import_events(sim->algo_ctx, opt->resume);
+    const bool go_on = opt->resume && opt->resume->has_totals;
+    if (go_on) /* the summary goes on from the frame's totals (energy_initial below) */
+        take_totals(sim, &opt->resume->totals);
+    sim->sums_first = go_on ? 1 : sim->step_first;
     sim->opt.resume = NULL; /* read: borrowed for nbep_sim_create only */
     sim->lasting = algo->keeps_contacts && algo->keeps_contacts(sc, &sim->st);
     if (opt->out && algo->export_events) {
@@ -264,7 +300,9 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
     nbep__sim_block_energy(sim, (nbep_range){0, n});
     double ke, pe;
     energy_total(sim, &ke, &pe);
-    sim->energy_initial = sim->energy_final = ke + pe;
+    sim->energy_final = ke + pe;
+    if (!go_on)
+        sim->energy_initial = sim->energy_final;
     /* no deck within the window of magnitudes and the span (scene.h) gets here: a resumed
      * file's state or a scene built otherwise can */
     if (!isfinite(sim->energy_initial)) {
@@ -337,6 +375,8 @@ static nbep_status emit_frame(nbep_sim *sim, uint64_t step)
                   (unsigned long long)step);
     nbep_status st = flush_rows(sim);
     if (st == NBEP_OK && sim->opt.out) {
+        const nbep_run_totals t = give_totals(sim);
+        nbep_output_totals(sim->opt.out, &t);
         nbep_events_view ev = {sim->ev_time, sim->ev_partner, sim->ev_kind, sim->ev_rest,
                                sim->lasting ? sim->algo->export_contacts : NULL,
                                sim->algo_ctx};
@@ -695,14 +735,16 @@ void nbep_sim_summary(const nbep_sim *sim, nbep_summary *s)
     s->max_overlap_rel = sim->max_overlap_rel;
     s->peak_rss_bytes = nbep_peak_rss();
     /* SPEC contract 2: for a fully periodic box, P = (N kT + W / (3 T)) / V with kT = 2 <KE> /
-     * (3 N) over this session's steps (a resumed run measures its own part), W their summed
-     * virial and T their simulated time; null otherwise or before any step */
+     * (3 N) over the run's steps (a resumed run's from step 1 where its file had the totals,
+     * else its own part's), W their summed virial and T their simulated time; null otherwise
+     * or before any step */
+    const double summed = (double)(sim->steps_done + 1 - sim->sums_first);
     const nbep_scene *sc = sim->scene;
-    if (sc->has_box && sc->periodic[0] && sc->periodic[1] && sc->periodic[2] && stepped > 0.0 &&
+    if (sc->has_box && sc->periodic[0] && sc->periodic[1] && sc->periodic[2] && summed > 0.0 &&
         sim->st.n > 0) {
         double V = (sc->box_max.x - sc->box_min.x) * (sc->box_max.y - sc->box_min.y) *
                    (sc->box_max.z - sc->box_min.z);
-        double T = stepped * sim->dt, ke = sim->ke_total / stepped;
+        double T = summed * sim->dt, ke = sim->ke_total / summed;
         double P = (2.0 * ke / 3.0 + sim->virial_total / (3.0 * T)) / V;
         if (isfinite(P))
             s->pressure = (nbep_summary_nullable){true, P};

@@ -76,8 +76,11 @@ struct nbep_sim {
     nbep_step_stats *rows;           /* owned: stats rows not yet written */
     double *wall_rows;               /* owned: their /stats/wall_impulse rows, n_planes each */
     nbep_xsum *wall_buf[2];          /* owned: per parity, nt x n_planes (nbep_thread_max.wall) */
-    double virial_total;             /* summary pressure: the virial summed over this session */
+    double virial_total;             /* summary pressure: the virial summed over the steps from
+                                      * sums_first on */
     double ke_total;                 /* and the kinetic energy at each step's end, summed */
+    uint64_t sums_first;             /* 1, or a resumed run's step_first where its file had no
+                                      * totals to go on from (/frames/totals) */
     size_t n_rows, cap_rows;
     /* totals and summary */
     uint64_t totals[NBEP_COUNTER_COUNT];

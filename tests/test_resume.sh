@@ -30,14 +30,50 @@ assert sb[-1] == sa[-1]
 PYEOF
 }
 
+# same_summary A.json B.json: the two JSON summaries agree on every key but the part's own
+# seconds, speed, memory and threads: a resumed run's summary is the whole run's (its counts,
+# energies, overlaps and pressure from step 0, /frames/totals), as the uninterrupted run's
+same_summary() {
+    "$PY" - "$1" "$2" <<'PYEOF'
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+own = {"setup_seconds", "wall_seconds", "steps_per_second", "peak_rss_bytes", "threads"}
+assert a["collisions"] > 0, "no collisions: the comparison would prove little"
+diff = {k: (a[k], b.get(k)) for k in a if k not in own and a[k] != b.get(k)}
+assert not diff, diff
+PYEOF
+}
+
 for algo in predictive naive seminaive; do
-    bin/nbep run $deck "${args[@]}" -a $algo -n 80 -o $tmp/$algo-whole.h5
+    bin/nbep run $deck "${args[@]}" -a $algo -n 80 -o $tmp/$algo-whole.h5 \
+        --summary $tmp/$algo-whole.json
     # planned stop at step 40, then resume to 80
     bin/nbep run $deck "${args[@]}" -a $algo -n 40 -o $tmp/$algo-part.h5
-    bin/nbep run $deck "${args[@]}" -a $algo -n 80 --resume $tmp/$algo-part.h5
+    bin/nbep run $deck "${args[@]}" -a $algo -n 80 --resume $tmp/$algo-part.h5 \
+        --summary $tmp/$algo-resumed.json
     check "$algo: resumed after a planned stop, frames equal the whole run's" \
         "same_frames $tmp/$algo-whole.h5 $tmp/$algo-part.h5"
+    check "$algo: and its summary is the whole run's (collisions, energies, overlaps from step 0)" \
+        "same_summary $tmp/$algo-whole.json $tmp/$algo-resumed.json"
 done
+# a file made before 2026-11-30 has no /frames/totals: its resumed run's summary counts its own
+# part (the stats rows after the frame), and its energy_initial is the frame's
+bin/nbep run $deck "${args[@]}" -n 40 -o $tmp/no-totals-a.h5
+cp $tmp/no-totals-a.h5 $tmp/no-totals.h5
+"$PY" -c "
+import h5py, sys
+with h5py.File(sys.argv[1], 'a') as f:
+    del f['frames/totals']" $tmp/no-totals.h5
+bin/nbep run $deck "${args[@]}" -n 80 --resume $tmp/no-totals.h5 --summary $tmp/no-totals.json
+check "without /frames/totals (an older file): the summary counts the resumed part's collisions, and the file gets no totals" \
+    "$PY -c '
+import h5py, json, sys
+s, f = json.load(open(sys.argv[1])), h5py.File(sys.argv[2], \"r\")
+part = int(f[\"stats/collisions\"][40:].sum())
+assert 0 < part < int(f[\"stats/collisions\"][:].sum()), part
+assert s[\"collisions\"] == part, (s[\"collisions\"], part)
+assert \"totals\" not in f[\"frames\"]
+' $tmp/no-totals.json $tmp/no-totals.h5"
 
 # the end line of a resumed run counts the steps it ran and names the step reached (the
 # summary's `steps`), as the JSON summary's steps_per_second counts the steps run
@@ -210,13 +246,18 @@ check "a file of every 5 resumed at step 40 with every 7 keeps its frame at step
 # the same in a periodic box, whose frames' image rows are cut and written as the others are
 # (they were written past the stop's frame, at first: its image counts stayed, under the next
 # frame's positions)
-bin/nbep run $tmp/periodic-all.deck --quiet -n 80 -o $tmp/off-periodic-whole.h5
+bin/nbep run $tmp/periodic-all.deck --quiet -n 80 -o $tmp/off-periodic-whole.h5 \
+    --summary $tmp/off-periodic-whole.json
 bin/nbep run $tmp/periodic-all.deck --quiet -n 42 -o $tmp/off-periodic.h5
 bin/nbep run $tmp/periodic-all.deck --quiet -n 61 -t 1 --resume $tmp/off-periodic.h5
-bin/nbep run $tmp/periodic-all.deck --quiet -n 80 --resume $tmp/off-periodic.h5
+bin/nbep run $tmp/periodic-all.deck --quiet -n 80 --resume $tmp/off-periodic.h5 \
+    --summary $tmp/off-periodic.json
 check "periodic, all pairs: stopped at 42 and 61, resumed to 80: h5diff finds the whole run's frames (images too)" \
     "h5diff -q $tmp/off-periodic-whole.h5 $tmp/off-periodic.h5 /frames &&
      h5diff -q $tmp/off-periodic-whole.h5 $tmp/off-periodic.h5 /checkpoint"
+check "and the whole run's summary, its pressure over all 80 steps ($(grep -o '\"pressure\": [^,]*' $tmp/off-periodic.json))" \
+    "grep -q '\"pressure\": [0-9]' $tmp/off-periodic.json &&
+     same_summary $tmp/off-periodic-whole.json $tmp/off-periodic.json"
 # the summary file given as the run's own file: refused before it is opened (it emptied the
 # run file, and the failed resume then removed it)
 cp $tmp/cells-short.h5 $tmp/victim.h5
@@ -480,7 +521,8 @@ pile=(inputs/pile.deck --quiet -t 1 --set 'box.max=[0.3,0.3,0.5]' --set spheres.
 # settling windows there (this scene's, in each mode)
 for mode in cells grid all; do
     nb=(--set "run.neighbors=\"$mode\"")
-    bin/nbep run "${pile[@]}" "${nb[@]}" -n 950 -o $tmp/pile-$mode-whole.h5
+    bin/nbep run "${pile[@]}" "${nb[@]}" -n 950 -o $tmp/pile-$mode-whole.h5 \
+        --summary $tmp/pile-$mode-whole.json
     case $mode in
         cells) stops="750:750:window 737:700:window" ;;
         grid) stops="750:750:window 737:737" ;;
@@ -493,11 +535,13 @@ for mode in cells grid all; do
         check "$mode: the pile stopped at step $stop has held spheres (on spheres too), resting, caged${window:+, settling} ones at step $from ($(tail -n 1 $tmp/pile-held.err))" \
             "[ ! -s $tmp/pile-held.err ]"
         timeout 120 bin/nbep run "${pile[@]}" "${nb[@]}" -n 950 --resume $tmp/pile-$mode-$stop.h5 \
-            2>$tmp/pile-$mode.err
+            --summary $tmp/pile-$mode-$stop.json 2>$tmp/pile-$mode.err
         rc=$?
         check "$mode: the pile resumed from step $from: exit 0 (got $rc), nothing said, the uninterrupted run's file" \
             "[ $rc = 0 ] && [ ! -s $tmp/pile-$mode.err ] &&
              ck_same $tmp/pile-$mode-whole.h5 $tmp/pile-$mode-$stop.h5"
+        check "$mode: and the uninterrupted run's summary (the energy lost from step 0, plane collisions too)" \
+            "same_summary $tmp/pile-$mode-whole.json $tmp/pile-$mode-$stop.json"
     done
 done
 # writing a frame's state overwrites the row of the frame two before, from which a cells resume
@@ -615,6 +659,18 @@ for what in partner:'an event with a sphere' plane:'an event with a plane' rest:
          grep -q '^nbep: $tmp/bad-$name.h5: its checkpoint at step 750 gives sphere [0-9]* $text' $tmp/bad.err &&
          [ \"\$(md5sum < $tmp/bad-$name.h5)\" = '$sum' ]"
 done
+# totals no run wrote (a sum not finite, more quiet steps than steps): refused the same way
+for what in energy:"t['energy_initial'] = np.nan" quiet:"t['quiet_steps'] = 751"; do
+    name=${what%%:*}
+    damage totals-$name "t = f['frames/totals'][r]; ${what#*:}; f['frames/totals'][r] = t"
+    sum=$(md5sum < $tmp/bad-totals-$name.h5)
+    timeout 60 bin/nbep run "${pile[@]}" -n 950 --resume $tmp/bad-totals-$name.h5 2>$tmp/bad.err
+    rc=$?
+    check "totals damaged ($name): exit 2 (got $rc), one line, the file as it was" \
+        "[ $rc = 2 ] && [ \$(wc -l < $tmp/bad.err) = 1 ] &&
+         grep -q '^nbep: $tmp/bad-totals-$name.h5: its totals at step 750 are not a run.s' $tmp/bad.err &&
+         [ \"\$(md5sum < $tmp/bad-totals-$name.h5)\" = '$sum' ]"
+done
 bin/nbep run "${cool[@]}" --set physics.restitution=1.0 -n 20 -o $tmp/cool-elastic.h5
 bin/nbep run "${cool[@]}" --set physics.restitution=1.0 -n 40 --resume $tmp/cool-elastic.h5 \
     2>$tmp/cool-elastic.err
@@ -655,13 +711,14 @@ check "it got somewhere (step $last)" "[ -n '$last' ] && [ '$last' -gt 0 ]"
 check "its summary says terminated, short of the 100000000 steps requested" \
     "bin/nbep info $tmp/killed.h5 | grep -Eqx 'status: +terminated \\(SIGTERM\\): step $last of 100000000'"
 end=$(( ${last:-0} + 200 ))
-bin/nbep run $deck "${args[@]}" -n $end -o $tmp/whole.h5
+bin/nbep run $deck "${args[@]}" -n $end -o $tmp/whole.h5 --summary $tmp/whole.json
 bin/nbep run $deck "${args[@]}" -n $end --resume $tmp/killed.h5 --summary $tmp/resumed.json \
     2>/dev/null
 check "resumed after SIGTERM, every frame equals the uninterrupted run's" \
     "same_frames $tmp/whole.h5 $tmp/killed.h5"
-# the resumed run's summary (the file's, and --summary's) is its own: completed, the step
-# reached being the one requested
+check "and its summary is the uninterrupted run's" "same_summary $tmp/whole.json $tmp/resumed.json"
+# the resumed run's summary (the file's, and --summary's) says how it ended: completed, the
+# step reached being the one requested
 check "the resumed run's summary says completed, step $end of $end" \
     "bin/nbep info $tmp/killed.h5 | grep -Eqx 'status: +completed: step $end of $end' &&
      $PY -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == \"completed\" and s[\"steps\"] == s[\"steps_requested\"] == int(sys.argv[2])))' $tmp/resumed.json $end"

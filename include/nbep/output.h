@@ -108,6 +108,24 @@ NBEP_MUST_CHECK nbep_status nbep_output_frame_events(nbep_output *o, int64_t ste
                                                      const nbep_state *s,
                                                      const nbep_events_view *ev, nbep_diag *d);
 
+/* The run's totals from its step 0 up to a frame (/frames/totals, a compound dataset of one
+ * row a frame, beyond SPEC): what its summary counts and sums over the steps, so that a
+ * resumed run's summary is the whole run's, as the uninterrupted run's (until 2026-11-30 it
+ * counted the resumed part alone: a granular run stopped by a job's time limit reported the
+ * energy it lost since the resume, and a sweep could not continue such a run). */
+typedef struct nbep_run_totals {
+    uint64_t checks, predictions;           /* the summary's counters */
+    uint64_t sphere_collisions, plane_collisions;
+    uint64_t quiet_steps;
+    double energy_initial;                  /* at step 0 */
+    double max_overlap, max_overlap_rel;    /* the largest so far */
+    double virial, kinetic_energy;          /* /stats/virial and kinetic_energy summed over
+                                             * the steps (the summary's pressure) */
+} nbep_run_totals;
+/* The totals the next frame's row of /frames/totals holds (a run sets them before each
+ * frame; a frame written without is a row of zeros). */
+void nbep_output_totals(nbep_output *o, const nbep_run_totals *t);
+
 /* Where a run continues from: its last complete frame. */
 typedef struct nbep_resume {
     int64_t step;                 /* the frame's step */
@@ -129,6 +147,8 @@ typedef struct nbep_resume {
     int32_t *image;               /* owned when the box is periodic: 3n image counts */
     nbep_contact_rec *contacts;   /* owned: the frame's lasting state, n (NULL: the file has
                                    * none for it) */
+    bool has_totals;              /* the file has /frames/totals for this frame */
+    nbep_run_totals totals;       /* then the run's totals at it */
 } nbep_resume;
 void nbep_resume_fini(nbep_resume *r);
 /* Puts r's positions, velocities and image counts into s (a state of r's n spheres, the scene
