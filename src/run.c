@@ -153,6 +153,7 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
      * run's status, and the --summary file's, failed (below) */
     res->summary.status = nbep_summary_status_of(st);
     res->simulated = true;
+    res->resumed_from = from;
     /* after a write failure closing fails the same way: keep only the first error */
     nbep_diag quiet;
     nbep_diag_init(&quiet);
@@ -340,8 +341,11 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     const char *file = rq->resume        ? rq->resume
                        : rq->output_path ? rq->output_path
                                          : sc.output_file;
+    /* the file the command line named (a sweep's run names its own: output_path, the file
+     * it resumes) */
+    const char *named = rq->output_path ? rq->output_path : sc.output_file;
     const char *other = rq->resume && sc.output_file_origin &&
-                                !nbep_run_same_path(sc.output_file, rq->resume)
+                                !nbep_run_same_path(named, rq->resume)
                             ? sc.output_file_origin
                             : NULL;
     st = other ? NBEP_EUSAGE : nbep_run_check_paths(rq->deck_path, file, rq->summary_path, d);

@@ -506,26 +506,41 @@ static bool says_completed(const nbep_summary *s, uint64_t steps)
            (s->status == NBEP_SUMMARY_COMPLETED || s->status == NBEP_SUMMARY_UNKNOWN);
 }
 
-bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_overrides,
-                             uint64_t steps, nbep_summary *sum)
+nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
+                                      size_t n_overrides, uint64_t steps, nbep_summary *sum)
 {
     struct stat sb;
     if (stat(path, &sb) != 0)
-        return false; /* the usual case: not run yet; no HDF5 call, no message */
+        return NBEP_SWEEP_FOUND_NONE; /* the usual case: not run yet; no HDF5 call, no message */
     nbep_diag d;
     nbep_diag_init(&d);
     char *stored = NULL, *json = NULL, *wanted = join_lines(overrides, n_overrides);
     nbep_summary s;
-    bool complete = wanted && nbep_output_sweep_read_run(path, &stored, &json, &d) == NBEP_OK &&
-                    json && same_overrides(stored, wanted) &&
-                    nbep_summary_from_json(json, &s) && says_completed(&s, steps);
-    if (complete && sum)
+    nbep_sweep_found found = NBEP_SWEEP_FOUND_NONE;
+    if (wanted && nbep_output_sweep_read_run(path, &stored, &json, &d) == NBEP_OK &&
+        same_overrides(stored, wanted)) {
+        /* no summary: killed outright (kill -9, a node lost), its frames up to then kept */
+        const bool read = json && nbep_summary_from_json(json, &s);
+        if (read && says_completed(&s, steps))
+            found = NBEP_SWEEP_FOUND_COMPLETE;
+        else if (!json || (read && (s.status == NBEP_SUMMARY_INTERRUPTED ||
+                                    s.status == NBEP_SUMMARY_TERMINATED)))
+            found = NBEP_SWEEP_FOUND_PARTIAL;
+    }
+    if (found == NBEP_SWEEP_FOUND_COMPLETE && sum)
         *sum = s;
     free(stored);
     free(json);
     free(wanted);
     nbep_diag_fini(&d);
-    return complete;
+    return found;
+}
+
+bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_overrides,
+                             uint64_t steps, nbep_summary *sum)
+{
+    return nbep_sweep_run_found(path, overrides, n_overrides, steps, sum) ==
+           NBEP_SWEEP_FOUND_COMPLETE;
 }
 
 /* ---- running ----------------------------------------------------------------------------- */
@@ -557,29 +572,47 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
     char **ov = NULL, *path = NULL;
     size_t n_ov = 0;
     bool has_summary = false, reused = false;
+    int64_t resumed_from = -1;
     nbep_status st = nbep_sweep_run_overrides(p, run, &ov, &n_ov, &d);
     if (st == NBEP_OK && !(path = nbep_sweep_run_path(p, run))) {
         nbep_diag_add(&d, __FILE__, __LINE__, "nbep: out of memory naming run %zu", run);
         st = NBEP_ENOMEM;
     }
-    if (st == NBEP_OK && nbep_sweep_run_complete(path, ov, n_ov, nbep_sweep_run_steps(p, run),
-                                                 &res->summary)) {
+    const nbep_sweep_found found =
+        st == NBEP_OK ? nbep_sweep_run_found(path, ov, n_ov, nbep_sweep_run_steps(p, run),
+                                             &res->summary)
+                      : NBEP_SWEEP_FOUND_NONE;
+    if (found == NBEP_SWEEP_FOUND_COMPLETE) {
         has_summary = reused = true;
     } else if (st == NBEP_OK) {
         /* as `nbep run` does it, but quiet and into the sweep's file; the command line's
-         * overrides named as typed */
-        const nbep_run_request rq = {.deck_path = p->deck_path,
-                                     .overrides = (const char *const *)ov,
-                                     .override_origins = (const char *const *)p->base_origins,
-                                     .n_overrides = n_ov,
-                                     .output_path = path,
-                                     .stop_signal = ex->stop_signal,
-                                     .sweep_run = true};
+         * overrides named as typed. A run an earlier sweep left cut short (a signal, a job's
+         * time limit, a kill) goes on from its last frame, as `nbep run --resume` (its summary
+         * the whole run's: /frames/totals); where its file cannot be resumed (damaged, or cut
+         * before any step, say), it runs afresh, as every such run did until 2026-11-30. */
+        nbep_run_request rq = {.deck_path = p->deck_path,
+                               .overrides = (const char *const *)ov,
+                               .override_origins = (const char *const *)p->base_origins,
+                               .n_overrides = n_ov,
+                               .output_path = path,
+                               .resume = found == NBEP_SWEEP_FOUND_PARTIAL ? path : NULL,
+                               .stop_signal = ex->stop_signal,
+                               .sweep_run = true};
         nbep_run_result rr;
         st = nbep_run(&rq, &rr, &d);
+        resumed_from = rq.resume && rr.simulated ? rr.resumed_from : -1;
+        if (rq.resume && !rr.simulated && st != NBEP_ESIGINT && st != NBEP_ESIGTERM) {
+            nbep_diag_fini(&d); /* the refusal is no failure of the run: it runs afresh */
+            nbep_diag_init(&d);
+            rq.resume = NULL;
+            st = nbep_run(&rq, &rr, &d);
+        }
         has_summary = rr.simulated;
         res->summary = rr.summary;
-        if (!has_summary) { /* a stale file of an earlier sweep must not pass for this run */
+        /* a stale file of an earlier sweep must not pass for this run (a run cut short that a
+         * signal kept from resuming stays for the next sweep: a refused resume changes
+         * nothing) */
+        if (!has_summary && !rq.resume) {
             remove(path);
             char *xmf = nbep_xdmf_path(path);
             if (xmf)
@@ -604,12 +637,16 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
     else if (!ex->quiet && reused)
         fprintf(stderr, "nbep sweep: rank %d: run %zu (of %zu; %s): complete already, reused\n",
                 ex->rank, run, p->n_runs, what);
-    else if (!ex->quiet)
+    else if (!ex->quiet) {
+        char from[64] = "";
+        if (resumed_from >= 0)
+            snprintf(from, sizeof from, ", resumed from step %lld", (long long)resumed_from);
         fprintf(stderr,
                 "nbep sweep: rank %d: run %zu (of %zu; %s): %s in %.3g s (%" PRIu64
-                " steps, %.4g steps/s)\n",
+                " steps%s, %.4g steps/s)\n",
                 ex->rank, run, p->n_runs, what, nbep_sweep_outcome_text(res->outcome),
-                res->seconds, res->summary.steps, res->summary.steps_per_second);
+                res->seconds, res->summary.steps, from, res->summary.steps_per_second);
+    }
     nbep_sweep_overrides_free(ov, n_ov);
     free(path);
     nbep_diag_fini(&d);
@@ -1286,7 +1323,7 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
     if (run_st == NBEP_ESIGINT || run_st == NBEP_ESIGTERM) {
         nbep_diag_add(d, __FILE__, __LINE__,
                       "nbep: sweep %s: %zu of %zu runs complete; the same command "
-                      "again runs the others",
+                      "again runs the others, those cut short from their last frames",
                       nbep_status_stop_text(run_st), s.ok, p->n_runs);
         return run_st;
     }

@@ -222,6 +222,71 @@ line=$(grep '^nbep sweep: 20 runs' "$tmp/stderr")
 check "a pace of a thousand or more runs a minute reads as a whole number: $line" \
     "[ $rc = 0 ] && echo '$line' | grep -Eq ': ([0-9]{4,}|[0-9]{1,3}(\.[0-9]+)?) runs/min\)'"
 
+# ---- a run cut short goes on from its last frame -------------------------------------------
+# A run that a signal (a job's time limit) or a kill stopped is continued by the same command
+# from its file's last frame, as `nbep run --resume` does (until 2026-11-30 it ran again from
+# its start): its frames and its row are the uninterrupted run's, but for the part's own
+# seconds. 8 spheres settling at e = 0.9 for 2 million steps (about 3 s here); a sweep stopped
+# 0.5 s into it by SIGTERM (its last frame the stop's own), another by SIGKILL (no summary in
+# its file, its last frame on output.every's grid), a third whose file no run could have
+# written (a damaged checkpoint), which runs afresh.
+cat >"$tmp/go.deck" <<'EOF'
+run: { steps = 2000000; threads = 1; };
+physics: { gravity = [0.0, 0.0, -9.81]; restitution = 0.9; };
+box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };
+spheres = ( { count = 8; radius = 0.05; mass = 1.0; place = "random"; speed = 1.0; } );
+output: { file = "go.h5"; every = 1000; };
+sweep: { replicas = 1; };
+EOF
+run_sweep "$tmp/go.deck" -o "$tmp/go-whole" --quiet
+check "the uninterrupted study (exit $rc)" "[ $rc = 0 ]"
+# cut NAME SIGNAL: the study into $tmp/NAME.sweep, stopped by SIGNAL 0.5 s after its file appears
+cut() {
+    # (not under timeout, whose own pid would take the SIGKILL and leave nbep running on)
+    "$nbep" sweep "$tmp/go.deck" -o "$tmp/$1" >/dev/null 2>"$tmp/stderr-$1" &
+    local pid=$!
+    for _ in $(seq 300); do [ -s "$tmp/$1.sweep/run-0000.h5" ] && break; sleep 0.1; done
+    sleep 0.5
+    kill -"$2" $pid 2>/dev/null
+    wait $pid
+    rc=$?
+}
+cut go TERM
+check "SIGTERM during the run: exit 143 (got $rc), its row interrupted" \
+    "[ $rc = 143 ] && grep -q ',interrupted,143,' '$tmp/go.sweep/summary.csv'"
+cp -r "$tmp/go.sweep" "$tmp/go-bad.sweep"
+cut go9 KILL
+check "SIGKILL during another: its file has frames and no summary" \
+    "[ $rc = 137 ] && \"$nbep\" info '$tmp/go9.sweep/run-0000.h5' | grep -q '^frames: *[1-9]' &&
+     \"$nbep\" info '$tmp/go9.sweep/run-0000.h5' | grep -q '^status: *unknown (no summary'"
+# same_run NAME: the run's frames (and their totals) and its row are the uninterrupted study's
+same_run() {
+    h5diff -q "$tmp/go-whole.sweep/run-0000.h5" "$tmp/$1.sweep/run-0000.h5" /frames &&
+        h5diff -q "$tmp/go-whole.sweep/run-0000.h5" "$tmp/$1.sweep/run-0000.h5" /stats &&
+        /usr/bin/python3 -c '
+import csv, sys
+a, b = (next(csv.DictReader(open(p))) for p in sys.argv[1:3])
+own = {"seconds", "setup_seconds", "wall_seconds", "steps_per_second", "peak_rss_bytes", "error"}
+diff = {k: (a[k], b[k]) for k in a if k not in own and a[k] != b[k]}
+assert a["status"] == "ok" and int(a["collisions"]) > 0 and not diff, diff' \
+            "$tmp/go-whole.sweep/summary.csv" "$tmp/$1.sweep/summary.csv"
+}
+for name in go go9; do
+    run_sweep "$tmp/go.deck" -o "$tmp/$name"
+    check "$name: the same command again: exit 0 (got $rc), the run resumed from its last frame" \
+        "[ $rc = 0 ] && grep -q 'run 0 (of 1; seed=1): ok in .* (2000000 steps, resumed from step [1-9][0-9]*, ' '$tmp/stderr'"
+    check "$name: its frames, stats and row are the uninterrupted study's" "same_run $name"
+done
+/usr/bin/python3 -c "
+import h5py, sys
+with h5py.File(sys.argv[1], 'a') as f:
+    r = int(f['frames'].attrs['count']) - 1
+    f['checkpoint/event_kind'][r, 0] = 9" "$tmp/go-bad.sweep/run-0000.h5"
+run_sweep "$tmp/go.deck" -o "$tmp/go-bad"
+check "a damaged run file: it runs afresh, exit 0 (got $rc), not resumed, nothing said of the refusal" \
+    "[ $rc = 0 ] && grep -q 'run 0 (of 1; seed=1): ok in .* (2000000 steps, [0-9.e+]* steps/s)' '$tmp/stderr' &&
+     ! grep -q 'damaged' '$tmp/stderr' && same_run go-bad"
+
 # ---- srun without PMI ------------------------------------------------------------------------
 # the line that says how to launch: an MPI build names srun's PMI plugins, one built with MPI=0
 # (as scripts/mutate.py builds it) that it cannot split a study at all; this check expected the

@@ -30,6 +30,8 @@ typedef struct nbep_run_request {
 
 typedef struct nbep_run_result {
     bool simulated;                /* stepping began: `summary` says what was done */
+    int64_t resumed_from;          /* when simulated: the step of the frame a resume went on
+                                    * from, -1 for a run from its start */
     nbep_summary summary;          /* its `status` is the returned status's
                                     * (nbep_summary_status_of), close included */
 } nbep_run_result;

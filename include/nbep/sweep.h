@@ -130,6 +130,19 @@ typedef struct nbep_sweep_result {
 bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_overrides,
                              uint64_t steps, nbep_summary *sum);
 
+/* What a sweep finds at a run's path (nbep_sweep_run_found): nothing it can use (no file, an
+ * unreadable one, other overrides, a failed run), the run complete (reused), or the run cut
+ * short by a signal or a kill (its summary says interrupted or terminated, or it has none):
+ * continued from its last frame, as `nbep run --resume` does. */
+typedef enum nbep_sweep_found {
+    NBEP_SWEEP_FOUND_NONE,
+    NBEP_SWEEP_FOUND_COMPLETE,
+    NBEP_SWEEP_FOUND_PARTIAL,
+} nbep_sweep_found;
+/* nbep_sweep_run_complete's look, telling a run cut short from one of no use. */
+nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
+                                      size_t n_overrides, uint64_t steps, nbep_summary *sum);
+
 /* How a process runs its share of a sweep. */
 typedef struct nbep_sweep_exec {
     int rank, n_ranks;               /* this process runs the runs nbep_sweep_run_owner gives */
