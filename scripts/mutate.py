@@ -1194,8 +1194,8 @@ MUTANTS = [
      "    if (geometry_ok && check_counts(&L, &sc, entries, n_entries, n_all_planes, &total) &&\n        mode != LOAD_VALUE) {",
      "    if (geometry_ok && check_counts(&L, &sc, entries, n_entries, n_all_planes, &total)) {",
      ["test_sweep"], None),
-    ("sweep-run-rechecks-values", "src/sweep.c", "                                     .sweep_run = true};",
-     "                                     .sweep_run = false};", ["test_sweep"],
+    ("sweep-run-rechecks-values", "src/sweep.c", "                               .sweep_run = true};",
+     "                               .sweep_run = false};", ["test_sweep"],
      "a sweep's run would check its axes' values again, which its plan checked from the same "
      "deck and command line: the same answers, only the cost of a parse of the deck per value "
      "per run"),
