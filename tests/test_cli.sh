@@ -10,13 +10,9 @@
 # A run that did simulate would take hours here (10^9 steps), so "fails before simulating" is
 # checked by the run ending at all (under a 30 s guard, status 124 if it did not).
 # Run from anywhere after `make`; exit status 1 when a check fails.
-set -u
-cd "$(dirname "$0")/.."
+. "$(dirname "$0")/lib.sh"
 nbep=bin/nbep
-tmp=build/tests/tmp/cli
-rm -rf "$tmp" && mkdir -p "$tmp"
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+test_tmp cli
 
 # Runs nbep with a guard; leaves its status in $rc and its stderr in $tmp/stderr. The guard is
 # 30 s (guard=S before the call sets another): enough for a run that must fail before
@@ -790,5 +786,4 @@ sed -n '/^| path | type | default | meaning |/,/^$/p' README.md | grep '^|' >"$t
 check "README's deck table equals nbep --help-deck's ($(wc -l <"$tmp/help-deck.md") rows)" \
     "[ -s '$tmp/help-deck.md' ] && cmp -s '$tmp/help-deck.md' '$tmp/readme-deck.md'"
 
-[ $fail = 0 ] && echo "cli: all passed"
-exit $fail
+test_end cli

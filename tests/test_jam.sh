@@ -9,12 +9,8 @@
 # and 2 threads, with the frames written before it readable; twice the limit must stop later
 # (the count rises through the wedge); and a setting above what the scene needs must not stop
 # a run. A run that hangs instead is killed by the time limit and fails.
-set -u
-cd "$(dirname "$0")/.."
-tmp=build/tests/tmp/jam
-rm -rf "$tmp" && mkdir -p "$tmp"
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+. "$(dirname "$0")/lib.sh"
+test_tmp jam
 
 cat >"$tmp/jam.deck" <<'DECK'
 run: { algorithm = "predictive"; steps = 800; dt = 1.0e-3; seed = 1; neighbors = "grid";

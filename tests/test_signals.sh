@@ -2,12 +2,8 @@
 # SIGTERM and SIGINT (a batch job at its time limit, or Ctrl-C) finish the current step,
 # write its frame, close the file and exit 143 or 130; the file opens with every frame. A step
 # far too long to wait for is abandoned instead (below).
-set -u
-cd "$(dirname "$0")/.."
-tmp=build/tests/tmp/signals
-rm -rf "$tmp" && mkdir -p "$tmp"
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+. "$(dirname "$0")/lib.sh"
+test_tmp signals
 # term_within PID FILE DELAY TENTHS: once FILE is written (60 s at most; with frame0=1, once it
 # holds frame 0 too: the run's steps come next), waits DELAY seconds, sends SIGTERM to PID and
 # waits up to TENTHS tenths of a second for it to end (then SIGKILL, so that a run that ignores
@@ -398,5 +394,4 @@ for sig in TERM INT; do
          [ ! -e '$tmp/check-$sig.json.partial' ]"
 done
 
-[ $fail = 0 ] && echo "signals: all passed"
-exit $fail
+test_end signals

@@ -13,13 +13,9 @@
 #     refused with exit 2 and one line saying how to launch, nothing run;
 #   - each run's row has its own peak memory, not the largest of the runs before it.
 # Run from anywhere after `make`; exit status 1 when a check fails.
-set -u
-cd "$(dirname "$0")/.."
+. "$(dirname "$0")/lib.sh"
 nbep=bin/nbep
-tmp=build/tests/tmp/sweep_cli
-rm -rf "$tmp" && mkdir -p "$tmp"
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+test_tmp sweep_cli
 run_sweep() {
     timeout -k 5 120 "$nbep" sweep "$@" >"$tmp/stdout" 2>"$tmp/stderr"
     rc=$?
@@ -437,5 +433,4 @@ check "an axis of box.max that leaves the group no room: exit 2 (got $rc), named
     "[ $rc = 2 ] && [ ! -s '$tmp/stdout' ] && one_line &&
      grep -q '^nbep: sweep run 1 (box.max=\\[0.3, 0.3, 0.3\\] seed=1) cannot run: .*box-axis.deck:6: sweep.vary.\\[0\\]: spheres.\\[0\\]: could not place 27 spheres' '$tmp/stderr'"
 
-[ $fail = 0 ] && echo "sweep_cli: all passed"
-exit $fail
+test_end sweep_cli

@@ -1,0 +1,51 @@
+# What the shell tests (tests/test_*.sh) share, sourced as each one's first command:
+#     . "$(dirname "$0")/lib.sh"
+# so that the way a test finds its files, names its scratch folder and counts its failures is
+# written once. Not a test itself (make check runs tests/test_*.sh only).
+
+# An unset variable is a mistake in the test, not an empty string. The tests run from the
+# repository's root wherever they are started from (make check, scripts/mutate.py's scratch
+# copy, by hand), so that bin/nbep, inputs/ and build/tests/tmp/ are the same paths in each.
+set -u
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+# The Python the tests run: the system's, where scripts/install-deps.sh installs h5py, numpy and
+# matplotlib, not whichever python3 comes first on PATH (a virtual environment's may lack them).
+PY=/usr/bin/python3
+
+# check NAME CONDITION: evaluates CONDITION (values put in when the line is made, or escaped to
+# be read at the check) and prints "ok   NAME" or "FAIL NAME". A failure does not end the test:
+# the checks after it still run and report, and test_end makes the exit status 1.
+fail=0
+check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+
+# test_tmp NAME: $tmp is the test's scratch folder, build/tests/tmp/NAME, made afresh. Tests run
+# side by side (scripts/run-tests.sh), so each keeps to a folder of its own; afresh, so that a
+# file an earlier run left there cannot pass for one this run should have written.
+test_tmp() {
+    tmp=build/tests/tmp/$1
+    rm -rf "$tmp" && mkdir -p "$tmp"
+}
+
+# need_py STATUS MODULE...: unless $PY imports every MODULE, says which are wanted in one line
+# and ends the test with STATUS (77: scripts/run-tests.sh counts it as a skip, never a pass).
+need_py() {
+    local status=$1 list
+    shift
+    list=$(IFS=,; echo "$*")
+    "$PY" -c "import $list" 2>/dev/null && return
+    list=${list//,/, }
+    if [ $# = 1 ]; then
+        echo "skipped: $PY with $1 not found (scripts/install-deps.sh installs it)"
+    else
+        echo "skipped: $PY with ${list%, *} and ${!#} not found (scripts/install-deps.sh installs them)"
+    fi
+    exit "$status"
+}
+
+# test_end NAME: the closing line "NAME: all passed" when no check failed, and the exit status,
+# 1 when one did.
+test_end() {
+    [ $fail = 0 ] && echo "$1: all passed"
+    exit $fail
+}
