@@ -193,7 +193,7 @@ for cmd in run check; do
     run_nbep $cmd "$tmp/group.deck" --quiet -n 3 -o "$tmp/to-fifo.h5" --summary "$tmp/fifo"
     wait $reader
     check "$cmd --summary FIFO: exit 0 (got $rc), its reader gets the JSON" \
-        "[ $rc = 0 ] && /usr/bin/python3 -c 'import json, sys; json.load(open(sys.argv[1]))' '$tmp/fifo.out' &&
+        "[ $rc = 0 ] && $PY -c 'import json, sys; json.load(open(sys.argv[1]))' '$tmp/fifo.out' &&
          [ ! -e '$tmp/fifo.partial' ]"
 done
 
@@ -365,7 +365,7 @@ done
 run_nbep run inputs/two-spheres.deck -n 3 --quiet --summary - -o "$tmp/stdout-summary.h5"
 check "--summary -: exit 0, SPEC's keys in order on stdout, stderr empty (got $rc)" \
     "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] && [ \$(wc -l <'$tmp/stdout') = 1 ] &&
-     /usr/bin/python3 -c '
+     $PY -c '
 import json, sys
 d = json.load(open(sys.argv[1]))
 spec = [\"format\", \"version\", \"algorithm\", \"threads\", \"spheres\", \"planes\", \"steps\", \"dt\",
@@ -559,7 +559,7 @@ check "--resume FILE with -o naming FILE another way: resumed, appended to FILE 
 # the wrong file named (not HDF5; HDF5 but no nbep run, in the newest format too, or with a
 # format that is no string; a directory): bad usage too, and left as it was
 printf 'not a run\n' >"$tmp/text.h5"
-/usr/bin/python3 -c "
+"$PY" -c "
 import h5py
 h5py.File('$tmp/other.h5', 'w').attrs['format'] = 'other-1'
 h5py.File('$tmp/latest.h5', 'w', libver='latest').attrs['format'] = 'other-1'

@@ -28,10 +28,10 @@ check "with the frames written before the disk filled" \
     "grep -Eq '^frames: +([2-9]|[1-9][0-9])' '$mnt/../diskfull.info'"
 # a script reading the summaries of many runs tells this one from a complete one
 check "the JSON summary says failed, its steps fewer than the 400 requested" \
-    "/usr/bin/python3 -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == \"failed\" and s[\"steps_requested\"] == 400 and s[\"steps\"] < 400))' '$mnt/../diskfull.json'"
+    "$PY -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == \"failed\" and s[\"steps_requested\"] == 400 and s[\"steps\"] < 400))' '$mnt/../diskfull.json'"
 check "the file has no summary (the disk had no room), and nbep info says the status is unknown" \
     "grep -Eq '^status: +unknown \\(no summary' '$mnt/../diskfull.info'"
-/usr/bin/python3 - "$mnt/full.h5" <<'PYEOF' && echo "ok   every counted frame reads back" || { echo "FAIL every counted frame reads back"; fail=1; }
+"$PY" - "$mnt/full.h5" <<'PYEOF' && echo "ok   every counted frame reads back" || { echo "FAIL every counted frame reads back"; fail=1; }
 import sys, h5py, numpy as np
 f = h5py.File(sys.argv[1], "r")
 n = int(f["frames"].attrs["count"])

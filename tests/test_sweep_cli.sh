@@ -43,7 +43,7 @@ spheres = ( { count = 8; radius = 0.05; mass = 1.0; place = "random"; speed = 1.
 output: { file = "s.h5"; every = 10; };
 sweep: { replicas = 2; vary = ( { key = "physics.restitution"; values = [1.0, 0.9]; } ); };
 EOF
-json() { /usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$@"; }
+json() { "$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$@"; }
 
 # ---- a --summary inside the sweep's own new folder: taken (the folder is made first) --------
 run_sweep "$tmp/s.deck" -o "$tmp/res/study.h5" --quiet --summary "$tmp/res/study.sweep/totals.json"
@@ -84,7 +84,7 @@ check "--summary of a study in a folder named with a quote and a newline: JSON, 
 latin1="$tmp/r$(printf '\351')sultat"
 run_sweep "$tmp/s.deck" -o "$latin1" --quiet --summary "$tmp/latin1.json"
 check "--summary of a study in a folder named in Latin-1: exit 0 (got $rc), its dir with U+FFFD" \
-    "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] && /usr/bin/python3 -c 'import json,sys
+    "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] && $PY -c 'import json,sys
 assert json.load(open(sys.argv[1], encoding=\"utf-8\"))[\"dir\"] == sys.argv[2] + \"/r\\ufffdsultat.sweep\"' '$tmp/latin1.json' '$tmp'"
 
 # the table is no run: info says what it is and where to look
@@ -182,7 +182,7 @@ wait $pid
 rc=$?
 line=$(grep '^nbep sweep: 6 runs on ' "$tmp/stderr")
 # the runs that ran to their end, by the table: ok and not reused, or failed
-ended=$(/usr/bin/python3 -c "
+ended=$("$PY" -c "
 import csv, sys
 print(sum(1 for r in csv.DictReader(open(sys.argv[1]))
           if (r['status'] == 'ok' and r['reused'] == '0') or r['status'] == 'failed'))" \
@@ -200,7 +200,7 @@ pace_agrees() {
 check "... the closing line counts the $ended runs that ran to their end, at 60 x $ended / its seconds a minute: $line" \
     "[ '$ended' = 2 ] && pace_agrees"
 check "... and so does the JSON's runs_per_minute, of its wall_seconds" \
-    "/usr/bin/python3 -c 'import json, sys
+    "$PY -c 'import json, sys
 j = json.load(open(sys.argv[1]))
 sys.exit(not abs(j[\"runs_per_minute\"] - 60.0 * $ended / j[\"wall_seconds\"]) <= 1e-9 * j[\"runs_per_minute\"])' '$tmp/pace.json'"
 
@@ -258,7 +258,7 @@ output: { file = "rss.h5"; every = 10; };
 sweep: { vary = ( { key = "spheres.[0].count"; values = [40000, 64]; } ); };
 EOF
 run_sweep "$tmp/rss.deck" -o "$tmp/rss" --quiet
-/usr/bin/python3 -c "
+"$PY" -c "
 import csv, sys
 r = list(csv.DictReader(open(sys.argv[1])))
 print(r[0]['peak_rss_bytes'], r[1]['peak_rss_bytes'])" "$tmp/rss.sweep/summary.csv" >"$tmp/rss.txt"
