@@ -43,6 +43,19 @@ need_py() {
     exit "$status"
 }
 
+# one_line: $tmp/stderr, where a test's nbep runs leave their errors (test_cli.sh's run_nbep,
+# test_sweep_cli.sh's run_sweep and run_check) is one line (SPEC: "Every error is one line on
+# stderr that says where and what").
+one_line() { [ "$(wc -l <"$tmp/stderr")" -eq 1 ]; }
+
+# bytes_of: the bytes of a size as nbep prints it ("1.82 MB", "682 kB": powers of 1000), read on
+# stdin; nothing for anything else.
+bytes_of() {
+    awk 'NF == 2 && $1 ~ /^[0-9.]+$/ {
+        m = $2 == "B" ? 1 : $2 == "kB" ? 1e3 : $2 == "MB" ? 1e6 : $2 == "GB" ? 1e9 : $2 == "TB" ? 1e12 : 0
+        if (m) printf "%.17g\n", $1 * m }'
+}
+
 # test_end NAME: the closing line "NAME: all passed" when no check failed, and the exit status,
 # 1 when one did.
 test_end() {

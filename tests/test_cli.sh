@@ -24,17 +24,6 @@ run_nbep() {
     rc=$?
 }
 
-# One line on stderr (SPEC: "Every error is one line on stderr that says where and what").
-one_line() { [ "$(wc -l <"$tmp/stderr")" -eq 1 ]; }
-
-# The bytes of a size as nbep prints it on stdin ("1.82 MB", "682 kB": powers of 1000); nothing
-# for anything else.
-bytes_of() {
-    awk 'NF == 2 && $1 ~ /^[0-9.]+$/ {
-        m = $2 == "B" ? 1 : $2 == "kB" ? 1e3 : $2 == "MB" ? 1e6 : $2 == "GB" ? 1e9 : $2 == "TB" ? 1e12 : 0
-        if (m) printf "%.17g\n", $1 * m }'
-}
-
 # A deck of one group and a long run (10^9 steps: simulating it would not end in time).
 cat >"$tmp/group.deck" <<'EOF'
 run: { algorithm = "predictive"; steps = 1000000000; dt = 1.0e-3; threads = 1; };

@@ -25,14 +25,6 @@ run_check() {
     timeout -k 5 60 "$nbep" check "$@" >"$tmp/stdout" 2>"$tmp/stderr"
     rc=$?
 }
-one_line() { [ "$(wc -l <"$tmp/stderr")" -eq 1 ]; }
-# The bytes of a size as nbep prints it on stdin ("1.82 MB", "682 kB": powers of 1000); nothing
-# for anything else.
-bytes_of() {
-    awk 'NF == 2 && $1 ~ /^[0-9.]+$/ {
-        m = $2 == "B" ? 1 : $2 == "kB" ? 1e3 : $2 == "MB" ? 1e6 : $2 == "GB" ? 1e9 : $2 == "TB" ? 1e12 : 0
-        if (m) printf "%.17g\n", $1 * m }'
-}
 
 cat >"$tmp/s.deck" <<'EOF'
 # 2 replicas x 2 restitutions = 4 short runs of 8 spheres
