@@ -1,7 +1,9 @@
+# shellcheck shell=bash
 # What the shell tests (tests/test_*.sh) share, sourced as each one's first command:
 #     . "$(dirname "$0")/lib.sh"
 # so that the way a test finds its files, names its scratch folder and counts its failures is
-# written once. Not a test itself (make check runs tests/test_*.sh only).
+# written once. Not a test itself (make check runs tests/test_*.sh only); bash, as the tests
+# are (the directive above tells shellcheck, which cannot see a shebang here).
 
 # An unset variable is a mistake in the test, not an empty string. The tests run from the
 # repository's root wherever they are started from (make check, scripts/mutate.py's scratch
