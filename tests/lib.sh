@@ -30,7 +30,8 @@ test_tmp() {
 }
 
 # need_py STATUS MODULE...: unless $PY imports every MODULE, says which are wanted in one line
-# and ends the test with STATUS (77: scripts/run-tests.sh counts it as a skip, never a pass).
+# and ends the test with STATUS: 77, which scripts/run-tests.sh counts as a skip, never a pass,
+# or 0 (test_settle.sh and test_viz.sh), counted as a pass.
 need_py() {
     local status=$1 list
     shift
