@@ -7,17 +7,9 @@
 # nbep as the sphere count; bench-pile.py's --help cut its description at "e = 0.5 against").
 # NBEP names a program that fails, so that any run a script starts shows.
 # Run from anywhere; exit status 1 when a check fails.
-set -u
-cd "$(dirname "$0")/.."
-tmp=build/tests/tmp/bench_args
-rm -rf "$tmp" && mkdir -p "$tmp"
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
-PY=/usr/bin/python3
-if ! "$PY" -c 'import h5py, numpy' 2>/dev/null; then
-    echo "skipped: $PY with h5py and numpy not found (scripts/install-deps.sh installs them)"
-    exit 77
-fi
+. "$(dirname "$0")/lib.sh"
+test_tmp bench_args
+need_py 77 h5py numpy
 export NBEP=/bin/false OUT="$tmp/out"
 
 for s in bench-hopper.sh bench-granular.sh; do
@@ -55,5 +47,4 @@ rc=$?
 check "bench-pile.py --help: exit 0 (got $rc), its description whole" \
     "[ $rc = 0 ] && tr '\n' ' ' <'$tmp/out.txt' | grep -q 'e = 0.5 against *e = 1, on 1 and 2 threads'"
 
-[ $fail = 0 ] && echo "bench_args: all passed"
-exit $fail
+test_end bench_args

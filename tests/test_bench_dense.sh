@@ -6,17 +6,9 @@
 # the file's, and the timed deck asked for none) and the script printed EDMD's rows alone,
 # exit 0. EDMD is left out (EDMD_DIR unset): its checkout is no part of the tree.
 # Run from anywhere; exit status 1 when a check fails.
-set -u
-cd "$(dirname "$0")/.."
-tmp=build/tests/tmp/bench_dense
-rm -rf "$tmp" && mkdir -p "$tmp"
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
-PY=/usr/bin/python3
-if ! "$PY" -c 'import h5py' 2>/dev/null; then
-    echo "skipped: $PY with h5py not found (scripts/install-deps.sh installs it)"
-    exit 77
-fi
+. "$(dirname "$0")/lib.sh"
+test_tmp bench_dense
+need_py 77 h5py
 [ -x bin/nbep ] || { echo "FAIL bin/nbep not built"; exit 1; }
 # 500 spheres (a side of 9.5 at phi = 0.30, 7.1 at 0.50: three cells across), a stretch of
 # 192 * 0.002 * 4 = 1.5 time units at phi = 0.30: about 8000 collisions, well under a second
@@ -49,5 +41,4 @@ rc=$?
 check "a timed nbep run that fails: exit 1 (got $rc), its deck named, no table" \
     "[ $rc = 1 ] && grep -q '^nbep failed: ' '$tmp/bad.txt' && ! grep -q '^| engine' '$tmp/bad.txt'"
 
-[ $fail = 0 ] && echo "bench_dense: all passed"
-exit $fail
+test_end bench_dense

@@ -10,13 +10,9 @@
 # A run that did simulate would take hours here (10^9 steps), so "fails before simulating" is
 # checked by the run ending at all (under a 30 s guard, status 124 if it did not).
 # Run from anywhere after `make`; exit status 1 when a check fails.
-set -u
-cd "$(dirname "$0")/.."
+. "$(dirname "$0")/lib.sh"
 nbep=bin/nbep
-tmp=build/tests/tmp/cli
-rm -rf "$tmp" && mkdir -p "$tmp"
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+test_tmp cli
 
 # Runs nbep with a guard; leaves its status in $rc and its stderr in $tmp/stderr. The guard is
 # 30 s (guard=S before the call sets another): enough for a run that must fail before
@@ -26,17 +22,6 @@ check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
 run_nbep() {
     timeout -k 5 "${guard:-30}" "$nbep" "$@" >"$tmp/stdout" 2>"$tmp/stderr"
     rc=$?
-}
-
-# One line on stderr (SPEC: "Every error is one line on stderr that says where and what").
-one_line() { [ "$(wc -l <"$tmp/stderr")" -eq 1 ]; }
-
-# The bytes of a size as nbep prints it on stdin ("1.82 MB", "682 kB": powers of 1000); nothing
-# for anything else.
-bytes_of() {
-    awk 'NF == 2 && $1 ~ /^[0-9.]+$/ {
-        m = $2 == "B" ? 1 : $2 == "kB" ? 1e3 : $2 == "MB" ? 1e6 : $2 == "GB" ? 1e9 : $2 == "TB" ? 1e12 : 0
-        if (m) printf "%.17g\n", $1 * m }'
 }
 
 # A deck of one group and a long run (10^9 steps: simulating it would not end in time).
@@ -197,7 +182,7 @@ for cmd in run check; do
     run_nbep $cmd "$tmp/group.deck" --quiet -n 3 -o "$tmp/to-fifo.h5" --summary "$tmp/fifo"
     wait $reader
     check "$cmd --summary FIFO: exit 0 (got $rc), its reader gets the JSON" \
-        "[ $rc = 0 ] && /usr/bin/python3 -c 'import json, sys; json.load(open(sys.argv[1]))' '$tmp/fifo.out' &&
+        "[ $rc = 0 ] && $PY -c 'import json, sys; json.load(open(sys.argv[1]))' '$tmp/fifo.out' &&
          [ ! -e '$tmp/fifo.partial' ]"
 done
 
@@ -369,7 +354,7 @@ done
 run_nbep run inputs/two-spheres.deck -n 3 --quiet --summary - -o "$tmp/stdout-summary.h5"
 check "--summary -: exit 0, SPEC's keys in order on stdout, stderr empty (got $rc)" \
     "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] && [ \$(wc -l <'$tmp/stdout') = 1 ] &&
-     /usr/bin/python3 -c '
+     $PY -c '
 import json, sys
 d = json.load(open(sys.argv[1]))
 spec = [\"format\", \"version\", \"algorithm\", \"threads\", \"spheres\", \"planes\", \"steps\", \"dt\",
@@ -563,7 +548,7 @@ check "--resume FILE with -o naming FILE another way: resumed, appended to FILE 
 # the wrong file named (not HDF5; HDF5 but no nbep run, in the newest format too, or with a
 # format that is no string; a directory): bad usage too, and left as it was
 printf 'not a run\n' >"$tmp/text.h5"
-/usr/bin/python3 -c "
+"$PY" -c "
 import h5py
 h5py.File('$tmp/other.h5', 'w').attrs['format'] = 'other-1'
 h5py.File('$tmp/latest.h5', 'w', libver='latest').attrs['format'] = 'other-1'
@@ -790,5 +775,4 @@ sed -n '/^| path | type | default | meaning |/,/^$/p' README.md | grep '^|' >"$t
 check "README's deck table equals nbep --help-deck's ($(wc -l <"$tmp/help-deck.md") rows)" \
     "[ -s '$tmp/help-deck.md' ] && cmp -s '$tmp/help-deck.md' '$tmp/readme-deck.md'"
 
-[ $fail = 0 ] && echo "cli: all passed"
-exit $fail
+test_end cli

@@ -4,12 +4,8 @@
 # exit status, each run's summary must hold what the deck's opening comment promises: energy
 # kept to round-off for the elastic decks, energy lost for the dissipative ones, and contacts
 # placed exactly (predictive: overlap at round-off of the radius).
-set -u
-cd "$(dirname "$0")/.."
-tmp=build/tests/tmp/decks
-rm -rf "$tmp" && mkdir -p "$tmp"
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+. "$(dirname "$0")/lib.sh"
+test_tmp decks
 # summary field of a JSON summary file (flat object of numbers and strings)
 field() { sed -n "s/.*\"$2\": \([^,}]*\).*/\1/p" "$1"; }
 # awk comparisons on numbers written by the summary

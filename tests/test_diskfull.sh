@@ -2,8 +2,7 @@
 # A disk that fills up during a run: one clear line naming the file, exit status 1, and every
 # frame written before it still readable. Uses a small tmpfs, so it needs root (CI runs as
 # root); elsewhere it says so and exits 77, which scripts/run-tests.sh counts as a skip.
-set -u
-cd "$(dirname "$0")/.."
+. "$(dirname "$0")/lib.sh"
 mnt=build/tests/tmp/diskfull
 mkdir -p "$mnt"
 if [ "$(id -u)" != 0 ] || ! mount -t tmpfs -o size=3m tmpfs "$mnt" 2>/dev/null; then
@@ -11,8 +10,6 @@ if [ "$(id -u)" != 0 ] || ! mount -t tmpfs -o size=3m tmpfs "$mnt" 2>/dev/null; 
     exit 77  # counted as a skip by scripts/run-tests.sh, never as a pass
 fi
 trap 'umount "$mnt" 2>/dev/null' EXIT
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
 # 4096 spheres: a frame with positions, velocities and event slots is about 270 kB, so 3 MB
 # fill up after about ten frames of the 41 asked for
 # (the JSON summary goes beside the small disk, where there is room for it)
@@ -31,10 +28,10 @@ check "with the frames written before the disk filled" \
     "grep -Eq '^frames: +([2-9]|[1-9][0-9])' '$mnt/../diskfull.info'"
 # a script reading the summaries of many runs tells this one from a complete one
 check "the JSON summary says failed, its steps fewer than the 400 requested" \
-    "/usr/bin/python3 -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == \"failed\" and s[\"steps_requested\"] == 400 and s[\"steps\"] < 400))' '$mnt/../diskfull.json'"
+    "$PY -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == \"failed\" and s[\"steps_requested\"] == 400 and s[\"steps\"] < 400))' '$mnt/../diskfull.json'"
 check "the file has no summary (the disk had no room), and nbep info says the status is unknown" \
     "grep -Eq '^status: +unknown \\(no summary' '$mnt/../diskfull.info'"
-/usr/bin/python3 - "$mnt/full.h5" <<'PYEOF' && echo "ok   every counted frame reads back" || { echo "FAIL every counted frame reads back"; fail=1; }
+"$PY" - "$mnt/full.h5" <<'PYEOF' && echo "ok   every counted frame reads back" || { echo "FAIL every counted frame reads back"; fail=1; }
 import sys, h5py, numpy as np
 f = h5py.File(sys.argv[1], "r")
 n = int(f["frames"].attrs["count"])
@@ -55,5 +52,4 @@ check "a sweep run on a full disk fails the sweep (exit 1, got $rc)" "[ $rc = 1 
 check "its row names the run's file and the reason" \
     "echo \"\$line\" | grep -q 's.sweep/run-0000.h5: .*No space left'"
 check "with that one error, as nbep run reports it" "! echo \"\$line\" | grep -q '; nbep:'"
-[ $fail = 0 ] && echo "diskfull: all passed"
-exit $fail
+test_end diskfull

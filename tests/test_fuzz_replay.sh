@@ -4,8 +4,7 @@
 # with overrides after "#@set" (as scripts/fuzz.sh seeds them): each load keeps the harness's
 # contract, and the harness links from tests/fuzz/sources, the list scripts/fuzz.sh builds from
 # (build/tests/fuzz_replay, made by make check).
-set -u
-cd "$(dirname "$0")/.."
+. "$(dirname "$0")/lib.sh"
 bin=build/tests/fuzz_replay
 [ -x "$bin" ] || { echo "FAIL $bin missing: make check builds it"; exit 1; }
 tmp=$(mktemp -d)

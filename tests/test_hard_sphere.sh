@@ -10,17 +10,9 @@
 # measured 1.36 D_E here and 1.27 with 32000 spheres), and the figures of the whole run equal
 # the summary's pressure. Last, errors: one line, exit 2.
 # Run from anywhere; exit status 1 when a check fails.
-set -u
-cd "$(dirname "$0")/.."
-tmp=build/tests/tmp/hard_sphere
-rm -rf "$tmp" && mkdir -p "$tmp"
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
-PY=/usr/bin/python3
-if ! "$PY" -c 'import h5py, numpy' 2>/dev/null; then
-    echo "skipped: $PY with h5py and numpy not found (scripts/install-deps.sh installs them)"
-    exit 77
-fi
+. "$(dirname "$0")/lib.sh"
+test_tmp hard_sphere
+need_py 77 h5py numpy
 [ -x bin/nbep ] || { echo "FAIL bin/nbep not built"; exit 1; }
 HS=scripts/hard-sphere.py
 
@@ -118,5 +110,4 @@ for c in "$tmp/closed.h5:not a fully periodic box" "$tmp/none.h5:no such file" \
         "[ $rc = 2 ] && [ \$(wc -l <'$tmp/err.txt') = 1 ] && grep -q -- '$want' '$tmp/err.txt' && [ ! -s '$tmp/out.txt' ]"
 done
 
-[ $fail = 0 ] && echo "hard_sphere: all passed"
-exit $fail
+test_end hard_sphere

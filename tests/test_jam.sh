@@ -9,12 +9,8 @@
 # and 2 threads, with the frames written before it readable; twice the limit must stop later
 # (the count rises through the wedge); and a setting above what the scene needs must not stop
 # a run. A run that hangs instead is killed by the time limit and fails.
-set -u
-cd "$(dirname "$0")/.."
-tmp=build/tests/tmp/jam
-rm -rf "$tmp" && mkdir -p "$tmp"
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+. "$(dirname "$0")/lib.sh"
+test_tmp jam
 
 cat >"$tmp/jam.deck" <<'DECK'
 run: { algorithm = "predictive"; steps = 800; dt = 1.0e-3; seed = 1; neighbors = "grid";
@@ -38,7 +34,7 @@ for mode in grid cells; do
         rc=$?
         check "$mode, $t thread(s): a jam stops the run with exit 1 (got $rc)" "[ $rc -eq 1 ]"
         check "$mode, $t thread(s): its summary says failed, short of the 800 steps requested" \
-            "/usr/bin/python3 -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == \"failed\" and s[\"steps_requested\"] == 800 and s[\"steps\"] < 800))' '$out.json'"
+            "$PY -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == \"failed\" and s[\"steps_requested\"] == 800 and s[\"steps\"] < 800))' '$out.json'"
         check "$mode, $t thread(s): one line naming step, sphere and run.max_reactions" \
             "[ \$(wc -l <'$out.err') -eq 1 ] &&
              grep -Eq '^nbep: step [0-9]+: sphere [0-9]+ reacted over 300 times in one step .*run.max_reactions.*jammed' '$out.err'"

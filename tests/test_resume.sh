@@ -2,13 +2,8 @@
 # `nbep run DECK --resume RUN.h5` continues a run from its last complete frame; its frames
 # equal an uninterrupted run's bit for bit, for every algorithm, whether the first part
 # stopped at its planned end or was killed by SIGTERM at an arbitrary step.
-set -u
-cd "$(dirname "$0")/.."
-tmp=build/tests/tmp/resume
-rm -rf "$tmp" && mkdir -p "$tmp"
-PY=/usr/bin/python3
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+. "$(dirname "$0")/lib.sh"
+test_tmp resume
 deck=inputs/paper-box.deck
 # a dense small box: plenty of collisions in 80 steps
 args=(--quiet --set spheres.[0].count=400 --set box.max=[2,2,2] --set output.every=5)
@@ -836,5 +831,4 @@ rc=$?
 check "naive with overlaps past a radius: exit 0 (got $rc), one warning naming naive and run.dt" \
     "[ $rc = 0 ] && [ \$(wc -l <$tmp/through.err) = 1 ] &&
      grep -q '^nbep: warning: spheres overlapped by up to [0-9.]* of the smaller radius .* in $tmp/through.h5: naive finds contacts after they overlap, and at this run.dt' $tmp/through.err"
-[ $fail = 0 ] && echo "resume: all passed"
-exit $fail
+test_end resume

@@ -12,22 +12,14 @@
 # jam stops the run at run.max_reactions = 20000 (the busiest sphere now reacts under 5000
 # times in a step), so a regression fails fast instead of hanging. Frames are identical for 1
 # and 2 threads. Skipped when /usr/bin/python3 lacks h5py.
-set -u
-cd "$(dirname "$0")/.."
-py=/usr/bin/python3
-if ! "$py" -c 'import h5py, numpy' 2>/dev/null; then
-    echo "skipped: $py with h5py not found (scripts/install-deps.sh installs it)"
-    exit 0
-fi
-tmp=build/tests/tmp/settle
-rm -rf "$tmp" && mkdir -p "$tmp"
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+. "$(dirname "$0")/lib.sh"
+need_py 0 h5py numpy
+test_tmp settle
 # collisions of a run from its JSON summary
 collisions() { sed -n 's/.*"collisions": \([0-9]*\).*/\1/p' "$1"; }
 # spheres with exactly zero velocity in the last frame
 held() {
-    "$py" -c 'import sys, h5py, numpy as np
+    "$PY" -c 'import sys, h5py, numpy as np
 v = h5py.File(sys.argv[1], "r")["/frames/velocity"][-1]
 print(int((np.abs(v).sum(axis=1) == 0.0).sum()))' "$1"
 }
@@ -87,7 +79,7 @@ for mode in grid cells all; do
         "[ -n '$c' ] && [ '$c' -lt 120000 ]"
 done
 for mode in grid all; do
-    last=$("$py" -c 'import sys, h5py, numpy as np
+    last=$("$PY" -c 'import sys, h5py, numpy as np
 c = h5py.File(sys.argv[1], "r")["/stats/collisions"][:]
 print(int(np.nonzero(c)[0][-1]) + 1)' "$tmp/box-$mode.h5")
     check "12 spheres in a 0.33 m box, $mode: settled, no collision after step 1500 (last: ${last:-none})" \

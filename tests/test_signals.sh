@@ -2,12 +2,8 @@
 # SIGTERM and SIGINT (a batch job at its time limit, or Ctrl-C) finish the current step,
 # write its frame, close the file and exit 143 or 130; the file opens with every frame. A step
 # far too long to wait for is abandoned instead (below).
-set -u
-cd "$(dirname "$0")/.."
-tmp=build/tests/tmp/signals
-rm -rf "$tmp" && mkdir -p "$tmp"
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+. "$(dirname "$0")/lib.sh"
+test_tmp signals
 # term_within PID FILE DELAY TENTHS: once FILE is written (60 s at most; with frame0=1, once it
 # holds frame 0 too: the run's steps come next), waits DELAY seconds, sends SIGTERM to PID and
 # waits up to TENTHS tenths of a second for it to end (then SIGKILL, so that a run that ignores
@@ -57,7 +53,7 @@ for sig in TERM INT; do
     check "SIG$sig writes the JSON summary" "grep -q nbep-summary-1 '$tmp/summary-$sig.json'"
     ended=$([ $sig = TERM ] && echo terminated || echo interrupted)
     check "SIG$sig: the summary says $ended, its steps fewer than the 100000000 requested" \
-        "/usr/bin/python3 -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == sys.argv[2] and s[\"steps_requested\"] == 100000000 and 0 < s[\"steps\"] < s[\"steps_requested\"]))' '$tmp/summary-$sig.json' $ended"
+        "$PY -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == sys.argv[2] and s[\"steps_requested\"] == 100000000 and 0 < s[\"steps\"] < s[\"steps_requested\"]))' '$tmp/summary-$sig.json' $ended"
     check "SIG$sig: so does the file's, as nbep info shows it" \
         "grep -Eq '^status: +$ended \\(SIG$sig\\): step [1-9][0-9]* of 100000000\$' '$tmp/info-$sig' &&
          grep -q '\"status\": \"$ended\", \"steps_requested\": 100000000}' '$tmp/info-$sig'"
@@ -291,7 +287,7 @@ abandon() {
     check "$name: one line, naming the step abandoned and the last frame" \
         "[ \$(wc -l < '$tmp/stderr-abandon-$name') = 1 ] && grep -q 'terminated by SIGTERM during step 1, which is abandoned; the run ends after step 0, and its frames up to step 0 are in ' '$tmp/stderr-abandon-$name'"
     check "$name: the summary says terminated after 0 of 3 steps, with no collision counted" \
-        "/usr/bin/python3 -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == \"terminated\" and s[\"steps\"] == 0 and s[\"steps_requested\"] == 3 and s[\"collisions\"] == 0))' '$tmp/summary-abandon-$name.json'"
+        "$PY -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == \"terminated\" and s[\"steps\"] == 0 and s[\"steps_requested\"] == 3 and s[\"collisions\"] == 0))' '$tmp/summary-abandon-$name.json'"
     check "$name: the file is readable, with frame 0 and no stats row" \
         "bin/nbep info '$out' > '$tmp/info-abandon-$name' && grep -q '^frames: *1 (last: step 0' '$tmp/info-abandon-$name' && grep -Eq '^stats rows: +0\$' '$tmp/info-abandon-$name' && grep -Eq '^status: +terminated \\(SIGTERM\\): step 0 of 3\$' '$tmp/info-abandon-$name'"
 }
@@ -400,5 +396,4 @@ for sig in TERM INT; do
          [ ! -e '$tmp/check-$sig.json.partial' ]"
 done
 
-[ $fail = 0 ] && echo "signals: all passed"
-exit $fail
+test_end signals

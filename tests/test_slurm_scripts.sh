@@ -8,12 +8,8 @@
 #   - run by hand outside Slurm, as README says (Running on a cluster): slurm-run.sbatch
 #     runs the deck, slurm-scaling.sbatch writes its CSV (one thread, one rank: no mpirun).
 # Run from anywhere after `make`; exit status 1 when a check fails.
-set -u
-cd "$(dirname "$0")/.."
-tmp=build/tests/tmp/slurm_scripts
-rm -rf "$tmp" && mkdir -p "$tmp"
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+. "$(dirname "$0")/lib.sh"
+test_tmp slurm_scripts
 
 for s in scripts/*.sbatch; do
     # code lines only (comments may show the bare form), "${name[@]}" not after a "+"

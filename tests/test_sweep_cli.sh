@@ -13,13 +13,9 @@
 #     refused with exit 2 and one line saying how to launch, nothing run;
 #   - each run's row has its own peak memory, not the largest of the runs before it.
 # Run from anywhere after `make`; exit status 1 when a check fails.
-set -u
-cd "$(dirname "$0")/.."
+. "$(dirname "$0")/lib.sh"
 nbep=bin/nbep
-tmp=build/tests/tmp/sweep_cli
-rm -rf "$tmp" && mkdir -p "$tmp"
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+test_tmp sweep_cli
 run_sweep() {
     timeout -k 5 120 "$nbep" sweep "$@" >"$tmp/stdout" 2>"$tmp/stderr"
     rc=$?
@@ -28,14 +24,6 @@ run_sweep() {
 run_check() {
     timeout -k 5 60 "$nbep" check "$@" >"$tmp/stdout" 2>"$tmp/stderr"
     rc=$?
-}
-one_line() { [ "$(wc -l <"$tmp/stderr")" -eq 1 ]; }
-# The bytes of a size as nbep prints it on stdin ("1.82 MB", "682 kB": powers of 1000); nothing
-# for anything else.
-bytes_of() {
-    awk 'NF == 2 && $1 ~ /^[0-9.]+$/ {
-        m = $2 == "B" ? 1 : $2 == "kB" ? 1e3 : $2 == "MB" ? 1e6 : $2 == "GB" ? 1e9 : $2 == "TB" ? 1e12 : 0
-        if (m) printf "%.17g\n", $1 * m }'
 }
 
 cat >"$tmp/s.deck" <<'EOF'
@@ -47,7 +35,7 @@ spheres = ( { count = 8; radius = 0.05; mass = 1.0; place = "random"; speed = 1.
 output: { file = "s.h5"; every = 10; };
 sweep: { replicas = 2; vary = ( { key = "physics.restitution"; values = [1.0, 0.9]; } ); };
 EOF
-json() { /usr/bin/python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$@"; }
+json() { "$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$@"; }
 
 # ---- a --summary inside the sweep's own new folder: taken (the folder is made first) --------
 run_sweep "$tmp/s.deck" -o "$tmp/res/study.h5" --quiet --summary "$tmp/res/study.sweep/totals.json"
@@ -88,7 +76,7 @@ check "--summary of a study in a folder named with a quote and a newline: JSON, 
 latin1="$tmp/r$(printf '\351')sultat"
 run_sweep "$tmp/s.deck" -o "$latin1" --quiet --summary "$tmp/latin1.json"
 check "--summary of a study in a folder named in Latin-1: exit 0 (got $rc), its dir with U+FFFD" \
-    "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] && /usr/bin/python3 -c 'import json,sys
+    "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] && $PY -c 'import json,sys
 assert json.load(open(sys.argv[1], encoding=\"utf-8\"))[\"dir\"] == sys.argv[2] + \"/r\\ufffdsultat.sweep\"' '$tmp/latin1.json' '$tmp'"
 
 # the table is no run: info says what it is and where to look
@@ -186,7 +174,7 @@ wait $pid
 rc=$?
 line=$(grep '^nbep sweep: 6 runs on ' "$tmp/stderr")
 # the runs that ran to their end, by the table: ok and not reused, or failed
-ended=$(/usr/bin/python3 -c "
+ended=$("$PY" -c "
 import csv, sys
 print(sum(1 for r in csv.DictReader(open(sys.argv[1]))
           if (r['status'] == 'ok' and r['reused'] == '0') or r['status'] == 'failed'))" \
@@ -204,7 +192,7 @@ pace_agrees() {
 check "... the closing line counts the $ended runs that ran to their end, at 60 x $ended / its seconds a minute: $line" \
     "[ '$ended' = 2 ] && pace_agrees"
 check "... and so does the JSON's runs_per_minute, of its wall_seconds" \
-    "/usr/bin/python3 -c 'import json, sys
+    "$PY -c 'import json, sys
 j = json.load(open(sys.argv[1]))
 sys.exit(not abs(j[\"runs_per_minute\"] - 60.0 * $ended / j[\"wall_seconds\"]) <= 1e-9 * j[\"runs_per_minute\"])' '$tmp/pace.json'"
 
@@ -327,7 +315,7 @@ output: { file = "rss.h5"; every = 10; };
 sweep: { vary = ( { key = "spheres.[0].count"; values = [40000, 64]; } ); };
 EOF
 run_sweep "$tmp/rss.deck" -o "$tmp/rss" --quiet
-/usr/bin/python3 -c "
+"$PY" -c "
 import csv, sys
 r = list(csv.DictReader(open(sys.argv[1])))
 print(r[0]['peak_rss_bytes'], r[1]['peak_rss_bytes'])" "$tmp/rss.sweep/summary.csv" >"$tmp/rss.txt"
@@ -502,5 +490,4 @@ check "an axis of box.max that leaves the group no room: exit 2 (got $rc), named
     "[ $rc = 2 ] && [ ! -s '$tmp/stdout' ] && one_line &&
      grep -q '^nbep: sweep run 1 (box.max=\\[0.3, 0.3, 0.3\\] seed=1) cannot run: .*box-axis.deck:6: sweep.vary.\\[0\\]: spheres.\\[0\\]: could not place 27 spheres' '$tmp/stderr'"
 
-[ $fail = 0 ] && echo "sweep_cli: all passed"
-exit $fail
+test_end sweep_cli

@@ -3,8 +3,7 @@
 # 0's summary has every run, each run's file exists, and the same command again reuses them
 # all. A build without MPI (make MPI=0) must refuse to run as one of several MPI processes
 # (each would run the whole sweep) instead. Skipped only when mpirun is not installed.
-set -u
-cd "$(dirname "$0")/.."
+. "$(dirname "$0")/lib.sh"
 # Under `make asan` the ranks would report Open MPI's own allocations, kept until exit (many
 # from components it loads and unloads, which LeakSanitizer cannot even name); nbep's sweep
 # code is leak-checked by test_sweep, which runs it without MPI.
@@ -13,10 +12,7 @@ if ! command -v mpirun >/dev/null 2>&1; then
     echo "skipped: mpirun not found"
     exit 0
 fi
-tmp=build/tests/tmp/sweep_mpi
-rm -rf "$tmp" && mkdir -p "$tmp"
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+test_tmp sweep_mpi
 # rank_pid DECK RANK: the pid of that rank of the sweep of DECK (its environment says which),
 # nothing while it has not started
 rank_pid() {
@@ -221,5 +217,4 @@ check "rank 0 waited, done with its runs, while rank 1 ran its first (pid '$r0':
 check "... SIGTERM to it alone: exit 143 (got $rc), rank 1 started no other run ($statuses)" \
     "[ $rc = 143 ] && [ $not_run -ge 2 ]"
 
-[ $fail = 0 ] && echo "sweep_mpi: all passed"
-exit $fail
+test_end sweep_mpi

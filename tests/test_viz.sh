@@ -4,17 +4,9 @@
 # and, when the build writes XDMF sidecars, RUN.xmf beside RUN.h5 resolves in a reader
 # (scripts/check_xdmf.py; with ParaView's pvpython installed, ParaView itself reads it).
 # Skipped when /usr/bin/python3 lacks h5py or matplotlib.
-set -u
-cd "$(dirname "$0")/.."
-py=/usr/bin/python3
-if ! "$py" -c 'import h5py, matplotlib' 2>/dev/null; then
-    echo "skipped: $py with h5py and matplotlib not found (scripts/install-deps.sh installs them)"
-    exit 0
-fi
-tmp=build/tests/tmp/viz
-rm -rf "$tmp" && mkdir -p "$tmp"
-fail=0
-check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
+. "$(dirname "$0")/lib.sh"
+need_py 0 h5py matplotlib
+test_tmp viz
 is_png() { [ -s "$1" ] && [ "$(head -c 8 "$1" | od -An -tx1 | tr -d ' \n')" = 89504e470d0a1a0a ]; }
 
 cat >"$tmp/viz.deck" <<'EOF'
@@ -28,15 +20,15 @@ EOF
 bin/nbep run "$tmp/viz.deck" --quiet
 check "the run writes its file" "[ -s '$tmp/viz.h5' ]"
 
-"$py" scripts/render.py "$tmp/viz.h5" --frames 0,2,-1 --out "$tmp/png" >"$tmp/render.out" 2>&1
+"$PY" scripts/render.py "$tmp/viz.h5" --frames 0,2,-1 --out "$tmp/png" >"$tmp/render.out" 2>&1
 check "render.py draws frames 0, 2 and the last (steps 0, 20, 50)" \
     "is_png '$tmp/png/viz-step-000000.png' && is_png '$tmp/png/viz-step-000020.png' &&
      is_png '$tmp/png/viz-step-000050.png'"
 check "render.py prints each image's path" "[ \$(wc -l <'$tmp/render.out') = 3 ]"
-"$py" scripts/render.py "$tmp/viz.h5" --frames -1 --view xz --color height --out "$tmp/png" \
+"$PY" scripts/render.py "$tmp/viz.h5" --frames -1 --view xz --color height --out "$tmp/png" \
     >/dev/null 2>&1
 check "render.py draws a projection to scale" "is_png '$tmp/png/viz-step-000050-xz.png'"
-"$py" scripts/render.py "$tmp/viz.h5" --frames 6 --out "$tmp/png" >"$tmp/bad.out" 2>&1
+"$PY" scripts/render.py "$tmp/viz.h5" --frames 6 --out "$tmp/png" >"$tmp/bad.out" 2>&1
 rc=$?
 check "a frame past the last is refused (exit $rc)" \
     "[ $rc != 0 ] && grep -q 'frame 6 is outside the 6 complete frames' '$tmp/bad.out'"
@@ -50,7 +42,7 @@ output: { file = "build/tests/tmp/viz/periodic.h5"; every = 2; };
 EOF
 bin/nbep run "$tmp/periodic.deck" --quiet
 check "render.py takes a periodic run's box from the file" \
-    "'$py' - '$tmp/periodic.h5' <<'PYEOF'
+    "'$PY' - '$tmp/periodic.h5' <<'PYEOF'
 import sys, h5py
 sys.path.insert(0, 'scripts')
 import render
@@ -62,7 +54,7 @@ PYEOF"
 # an axis far shorter than the longest (the hopper's groove, 0.16 across and 7 long) gets no
 # ticks, whose labels fell on one another, and its extent under the title; the others keep them
 check "render.py's 3-d view: no ticks on an axis a tenth of the longest or less" \
-    "MPLBACKEND=Agg '$py' - <<'PYEOF'
+    "MPLBACKEND=Agg '$PY' - <<'PYEOF'
 import sys, types
 import numpy as np
 import matplotlib.pyplot as plt
@@ -80,10 +72,9 @@ PYEOF"
 
 # every run writes RUN.xmf beside RUN.h5 (ParaView and VisIt open it as animated spheres)
 check "a run writes its XDMF sidecar" "[ -s '$tmp/viz.xmf' ]"
-check "the sidecar resolves in a reader" "'$py' scripts/check_xdmf.py '$tmp/viz.xmf' >/dev/null"
+check "the sidecar resolves in a reader" "'$PY' scripts/check_xdmf.py '$tmp/viz.xmf' >/dev/null"
 if [ -x /usr/bin/pvpython ]; then
     check "ParaView reads the sidecar" \
         "/usr/bin/pvpython scripts/check_xdmf.py --paraview '$tmp/viz.xmf' >/dev/null 2>&1"
 fi
-[ $fail = 0 ] && echo "viz: all passed"
-exit $fail
+test_end viz
