@@ -11,7 +11,10 @@
 #     the runs that ran to their end, not those reused or never run (it counted every run);
 #   - srun without a PMI plugin (each task alone, SLURM_PROCID and the step's task count set):
 #     refused with exit 2 and one line saying how to launch, nothing run;
-#   - each run's row has its own peak memory, not the largest of the runs before it.
+#   - each run's row has its own peak memory, not the largest of the runs before it;
+#   - a run cut short (SIGTERM, SIGKILL) goes on from its last frame when the command is given
+#     again, and ends as the uninterrupted study's run (it ran again from step 0); a file that
+#     cannot be resumed runs afresh.
 # Run from anywhere after `make`; exit status 1 when a check fails.
 . "$(dirname "$0")/lib.sh"
 nbep=bin/nbep
@@ -251,7 +254,7 @@ check "SIGKILL during another: its file has frames and no summary" \
 same_run() {
     h5diff -q "$tmp/go-whole.sweep/run-0000.h5" "$tmp/$1.sweep/run-0000.h5" /frames &&
         h5diff -q "$tmp/go-whole.sweep/run-0000.h5" "$tmp/$1.sweep/run-0000.h5" /stats &&
-        /usr/bin/python3 -c '
+        "$PY" -c '
 import csv, sys
 a, b = (next(csv.DictReader(open(p))) for p in sys.argv[1:3])
 own = {"seconds", "setup_seconds", "wall_seconds", "steps_per_second", "peak_rss_bytes", "error"}
@@ -265,7 +268,7 @@ for name in go go9; do
         "[ $rc = 0 ] && grep -q 'run 0 (of 1; seed=1): ok in .* (2000000 steps, resumed from step [1-9][0-9]*, ' '$tmp/stderr'"
     check "$name: its frames, stats and row are the uninterrupted study's" "same_run $name"
 done
-/usr/bin/python3 -c "
+"$PY" -c "
 import h5py, sys
 with h5py.File(sys.argv[1], 'a') as f:
     r = int(f['frames'].attrs['count']) - 1
