@@ -642,29 +642,28 @@ damage kind "f['checkpoint/event_kind'][r, 3] = 9"
 damage time "f['checkpoint/event_time'][r, k] = np.nan"
 damage contact "c = f['checkpoint/contacts']; x = c[r % 2]; i = np.flatnonzero(x['rest_n'] > 0)[0]; x['rest_who'][i, 0] = -1 - i; c[r % 2] = x"
 damage face "c = f['checkpoint/contacts']; x = c[r % 2]; x['face_who'][2, 1] = 17; c[r % 2] = x"
+# refused NAME LABEL TEXT: the resume of bad-NAME.h5 exits 2 with one line, "its TEXT", and
+# leaves the file as it was
+refused() {
+    local sum
+    sum=$(md5sum < $tmp/bad-$1.h5)
+    timeout 60 bin/nbep run "${pile[@]}" -n 950 --resume $tmp/bad-$1.h5 2>$tmp/bad.err
+    rc=$?
+    check "$2: exit 2 (got $rc), one line naming it, the file as it was" \
+        "[ $rc = 2 ] && [ \$(wc -l < $tmp/bad.err) = 1 ] &&
+         grep -q '^nbep: $tmp/bad-$1.h5: its $3' $tmp/bad.err &&
+         [ \"\$(md5sum < $tmp/bad-$1.h5)\" = '$sum' ]"
+}
 for what in partner:'an event with a sphere' plane:'an event with a plane' rest:'a resting plane' \
             kind:'an event of no kind' time:'an event time that is not finite' \
             contact:'a contact that is not there' face:'a face met that is not there'; do
-    name=${what%%:*} text=${what#*:}
-    sum=$(md5sum < $tmp/bad-$name.h5)
-    timeout 60 bin/nbep run "${pile[@]}" -n 950 --resume $tmp/bad-$name.h5 2>$tmp/bad.err
-    rc=$?
-    check "a checkpoint giving $text: exit 2 (got $rc), one line naming it, the file as it was" \
-        "[ $rc = 2 ] && [ \$(wc -l < $tmp/bad.err) = 1 ] &&
-         grep -q '^nbep: $tmp/bad-$name.h5: its checkpoint at step 750 gives sphere [0-9]* $text' $tmp/bad.err &&
-         [ \"\$(md5sum < $tmp/bad-$name.h5)\" = '$sum' ]"
+    refused "${what%%:*}" "a checkpoint giving ${what#*:}" \
+        "checkpoint at step 750 gives sphere [0-9]* ${what#*:}"
 done
 # totals no run wrote (a sum not finite, more quiet steps than steps): refused the same way
 for what in energy:"t['energy_initial'] = np.nan" quiet:"t['quiet_steps'] = 751"; do
-    name=${what%%:*}
-    damage totals-$name "t = f['frames/totals'][r]; ${what#*:}; f['frames/totals'][r] = t"
-    sum=$(md5sum < $tmp/bad-totals-$name.h5)
-    timeout 60 bin/nbep run "${pile[@]}" -n 950 --resume $tmp/bad-totals-$name.h5 2>$tmp/bad.err
-    rc=$?
-    check "totals damaged ($name): exit 2 (got $rc), one line, the file as it was" \
-        "[ $rc = 2 ] && [ \$(wc -l < $tmp/bad.err) = 1 ] &&
-         grep -q '^nbep: $tmp/bad-totals-$name.h5: its totals at step 750 are not a run.s' $tmp/bad.err &&
-         [ \"\$(md5sum < $tmp/bad-totals-$name.h5)\" = '$sum' ]"
+    damage totals-${what%%:*} "t = f['frames/totals'][r]; ${what#*:}; f['frames/totals'][r] = t"
+    refused totals-${what%%:*} "totals damaged (${what%%:*})" "totals at step 750 are not a run.s"
 done
 bin/nbep run "${cool[@]}" --set physics.restitution=1.0 -n 20 -o $tmp/cool-elastic.h5
 bin/nbep run "${cool[@]}" --set physics.restitution=1.0 -n 40 --resume $tmp/cool-elastic.h5 \
