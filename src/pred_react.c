@@ -46,8 +46,10 @@
  * jam. The limit is kept below UINT32_MAX, so a count never wraps before it trips. */
 /* A sphere that has reacted this many times in one step is held where it is when it next
  * meets a held sphere slowly (along the line of centres no faster than the rest speed:
- * land_on_held; jam_hold), or any sphere while its planes carry it (react: a row of spheres
- * that fits a box exactly, a Newton's cradle without gaps). Bounced between a held sphere and
+ * land_on_held; jam_hold) or faster (react), or any sphere while its planes carry it (react: a
+ * row of spheres that fits a box exactly, a Newton's cradle without gaps; under gravity tilted
+ * along the row its planes do not carry it, the next sphere does, and the row is held from the
+ * sphere at its end, which its planes carry, each sphere on the one held before). Bounced between a held sphere and
  * a face across from it (a slot a diameter wide between a wall and a held sphere a hair lower
  * than it, so that its weight
  * presses it on that sphere's curve as it slides along the slot), a sphere re-meets the held
@@ -641,13 +643,17 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
             return;
         }
     }
-    /* a jammed sphere that its planes carry is held where it is (JAM_HOLD: a row of spheres
-     * that fits a box exactly passes its momentum to and fro at zero time); the other takes
-     * no response and, unless held (as land_on_held leaves the held sphere), is predicted
-     * again against it */
+    /* a jammed sphere that its planes carry, or that meets a held sphere however fast (not
+     * one resting on it), is held where it is, on the held one too (JAM_HOLD: a row of spheres
+     * that fits a box exactly passes its momentum to and fro at zero time; with gravity tilted
+     * along the row, the row's planes carry only its end sphere: a faster meeting would wake
+     * each held sphere again); the other takes no response and, unless held (as land_on_held
+     * leaves the held sphere), is predicted again against it */
     for (int q = 0; c->rest && q < 2; q++) {
         const size_t k = q ? hi : lo, o = q ? lo : hi;
-        if (!c->rest[k].still && supported(c, k) && jam_hold(c, s, w, k, NO_SPHERE, dt)) {
+        const bool on_held = c->rest[o].still && !leans_on(c, o, k);
+        if (!c->rest[k].still && (supported(c, k) || on_held) &&
+            jam_hold(c, s, w, k, on_held ? o : NO_SPHERE, dt)) {
             if (!c->rest[o].still)
                 fire(c, w, s, o, false);
             return;

@@ -112,4 +112,44 @@ done
 check "120 spheres poured at e = 0.9, grid: frames identical for 1 and 2 threads" \
     "h5diff -q '$tmp/pour-1.h5' '$tmp/pour-2.h5' /frames /frames >/dev/null 2>&1"
 
+# A row that fits its edge exactly, under gravity tilted into the edge's end (a pile poured into
+# a box's corner): five held spheres on the floor along the y-max wall, 0.3 m long, gravity
+# [2, 1, -9] pressing them towards the x-max wall, and a sixth dropped onto the middle one. The
+# impact wakes the row, which passes its momentum to and fro at zero time (elastic by the TC
+# model). Its spheres' planes do not carry them (gravity's x part is carried by the next sphere),
+# so the jam hold took none, and the run stopped at run.max_reactions (step 217, every mode; a
+# 100-sphere pour into a 0.3 m box with this gravity stopped so at step 505). Now a jammed sphere
+# that meets a held one, however fast, is held on it too, and the row is held in turn.
+cat >"$tmp/row.deck" <<'DECK'
+run: { algorithm = "predictive"; steps = 300; dt = 1.0e-3; seed = 1; neighbors = "cells";
+       max_reactions = 20000; };
+physics: { gravity = [2.0, 1.0, -9.0]; restitution = 0.5; };
+box: { min = [0.0, 0.0, 0.0]; max = [0.3, 0.3, 0.6]; };
+spheres = ( { position = [0.03, 0.27, 0.03]; radius = 0.03; mass = 1.0; },
+            { position = [0.09, 0.27, 0.03]; radius = 0.03; mass = 1.0; },
+            { position = [0.15, 0.27, 0.03]; radius = 0.03; mass = 1.0; },
+            { position = [0.21, 0.27, 0.03]; radius = 0.03; mass = 1.0; },
+            { position = [0.27, 0.27, 0.03]; radius = 0.03; mass = 1.0; },
+            { position = [0.10, 0.25, 0.3]; radius = 0.03; mass = 1.0; } );
+output: { file = "row.h5"; every = 50; fields = ["position", "velocity"]; };
+DECK
+for mode in cells grid all; do
+    timeout -k 5 60 bin/nbep run "$tmp/row.deck" --quiet -t 1 -o "$tmp/row-$mode.h5" \
+        --set "run.neighbors=\"$mode\"" 2>"$tmp/row-$mode.err"
+    rc=$?
+    check "a row that fits its edge, tilted gravity, $mode: exit 0 (got $rc; before: run.max_reactions at step 217)" \
+        "[ $rc -eq 0 ] && [ ! -s '$tmp/row-$mode.err' ]"
+    h=$("$py" -c 'import sys, h5py, numpy as np
+f = h5py.File(sys.argv[1], "r")
+v = f["/frames/velocity"][-1][:5]
+print(int((np.abs(v).sum(axis=1) == 0.0).sum()) if f["/frames/step"][-1] == 300 else -1)' \
+        "$tmp/row-$mode.h5" 2>/dev/null)
+    check "a row that fits its edge, tilted gravity, $mode: the 5 of the row held at step 300 (got ${h:-none})" \
+        "[ '${h:-0}' -eq 5 ]"
+done
+timeout -k 5 60 bin/nbep run "$tmp/row.deck" --quiet -t 2 --set 'run.neighbors="grid"' \
+    -o "$tmp/row-grid-2.h5" 2>/dev/null
+check "a row that fits its edge, tilted gravity, grid: frames identical for 1 and 2 threads" \
+    "h5diff -q '$tmp/row-grid.h5' '$tmp/row-grid-2.h5' /frames /frames >/dev/null 2>&1"
+
 exit $fail

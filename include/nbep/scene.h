@@ -60,8 +60,8 @@ typedef struct nbep_sweep_axis {
 #define NBEP_SWEEP_RUNS_MAX ((uint64_t)10000000)
 
 /* The jam hold (algo_predictive.c, JAM_HOLD): with e < 1 and accelerations, a sphere that has
- * reacted this many times in one step is held where it is at its next slow meeting with a
- * held sphere or, carried by planes, any sphere. Here because --help-deck names it. */
+ * reacted this many times in one step is held where it is at its next meeting with a held
+ * sphere (any speed) or, carried by planes, any sphere. Here because --help-deck names it. */
 #define NBEP_JAM_HOLD 10000
 
 /* physics.carry_drop's default (algo_predictive.c, carried): a held sphere struck no faster
