@@ -310,8 +310,8 @@ MUTANTS = [
     ("carry-no-planes", "src/pred_react.c",
      "    pocket_planes(s, j, reach, &r);\n    return faces_take", "    return faces_take", GRAN, None),
     ("jam-hold-pairs-off", "src/pred_react.c",
-     "        if (!c->rest[k].still && supported(c, k) && jam_hold(c, s, w, k, NO_SPHERE, dt)) {",
-     "        if (0) {", GRAN, None),
+     "        if (!c->rest[k].still && (supported(c, k) || on_held) &&",
+     "        if (0 &&", GRAN, None),
     ("hold-slope-exact", "src/pred_react.c", "(spheres ? HOLD_SLOPE : NBEP_CONTACT_TOL) * amag",
      "NBEP_CONTACT_TOL * amag", GRAN, None),
     ("hold-slope-planes-too", "src/pred_react.c", "(spheres ? HOLD_SLOPE : NBEP_CONTACT_TOL) * amag",
@@ -1824,6 +1824,14 @@ MUTANTS = [
     ("checkpoint-contact-unchecked", "src/output_resume.c",
      "        if (!face_named(x->rest_who[k], i, n, np, false))",
      "        if (0)", ["tests/test_resume.sh"], None),
+    # the jam hold on a held sphere met however fast (a row that fits a box's edge under
+    # gravity tilted along it, 2026-11-30)
+    ("jam-hold-on-held-fast-not", "src/pred_react.c",
+     "        const bool on_held = c->rest[o].still && !leans_on(c, o, k);",
+     "        const bool on_held = false;", ["tests/test_settle.sh"], None),
+    ("jam-hold-on-leaning-held", "src/pred_react.c",
+     "        const bool on_held = c->rest[o].still && !leans_on(c, o, k);",
+     "        const bool on_held = c->rest[o].still;", ["tests/test_settle.sh", "test_granular"], None),
     # a resumed run's summary goes on from its frame's totals (/frames/totals, 2026-11-30)
     ("totals-not-taken", "src/sim.c",
      "    if (go_on) /* the summary goes on from the frame's totals (energy_initial below) */",
