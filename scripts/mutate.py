@@ -1857,6 +1857,9 @@ MUTANTS = [
      "        if (!all_finite(sums, sizeof sums / sizeof *sums) || !(t->max_overlap >= 0.0) ||",
      "        if (0 && !all_finite(sums, sizeof sums / sizeof *sums) || !(t->max_overlap >= 0.0) ||",
      ["tests/test_resume.sh"], None),
+    ("totals-end-line-part", "src/run.c",
+     "            s->steps_per_second, from >= 0 && whole ? \"since step 0: \" : \"\",",
+     "            s->steps_per_second, \"\",", ["tests/test_resume.sh"], None),
     # a sweep continues a run cut short from its last frame (2026-11-30)
     ("sweep-partial-run-afresh", "src/sweep.c",
      "                               .resume = found == NBEP_SWEEP_FOUND_PARTIAL ? path : NULL,",

@@ -123,9 +123,10 @@ nbep_status nbep_run_write_summary_text(const char *where, const char *text, nbe
 }
 
 /* The end line; a resumed run (from its frame at step `from`, else from < 0) counts the steps
- * it ran and names the step reached, which is the summary's `steps`. */
+ * it ran and names the step reached, which is the summary's `steps`, and says where its
+ * collisions, drift and overlap are the whole run's (its file's totals went on: `whole`). */
 static void print_human_summary(const nbep_summary *s, const char *file, nbep_status st,
-                                int64_t from)
+                                int64_t from, bool whole)
 {
     const uint64_t ran = from >= 0 && s->steps >= (uint64_t)from ? s->steps - (uint64_t)from
                                                                   : s->steps;
@@ -134,18 +135,19 @@ static void print_human_summary(const nbep_summary *s, const char *file, nbep_st
         snprintf(reached, sizeof reached, " (to step %llu)", (unsigned long long)s->steps);
     fprintf(stderr,
             "nbep: %s %llu step%s%s of %llu sphere%s (%s, %d thread%s) in %.3g s (%.4g steps/s); "
-            "%llu collision%s; energy drift %.3g; max overlap / r %.3g; %s\n",
+            "%s%llu collision%s; energy drift %.3g; max overlap / r %.3g; %s\n",
             st == NBEP_OK ? "ran" : "stopped after", (unsigned long long)ran, ran == 1 ? "" : "s",
             reached, (unsigned long long)s->spheres, s->spheres == 1 ? "" : "s",
             s->algorithm, s->threads, s->threads == 1 ? "" : "s", s->wall_seconds,
-            s->steps_per_second, (unsigned long long)s->collisions,
+            s->steps_per_second, from >= 0 && whole ? "since step 0: " : "",
+            (unsigned long long)s->collisions,
             s->collisions == 1 ? "" : "s", s->energy_rel_drift, s->max_overlap_rel, file);
 }
 
 /* Steps sim, closes out (with the summary unless writing already failed) and reports. */
 static nbep_status step_and_close(const nbep_run_request *rq, const char *file, nbep_sim *sim,
-                                  int64_t from, nbep_output **out, nbep_run_result *res,
-                                  nbep_diag *d)
+                                  int64_t from, bool whole, nbep_output **out,
+                                  nbep_run_result *res, nbep_diag *d)
 {
     nbep_status st = nbep_sim_run(sim, d);
     nbep_sim_summary(sim, &res->summary);
@@ -165,7 +167,7 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
         st = cst == NBEP_OK ? st : cst;
     res->summary.status = nbep_summary_status_of(st);
     if (rq->verbose)
-        print_human_summary(&res->summary, file, st, from);
+        print_human_summary(&res->summary, file, st, from, whole);
     uint64_t frame_step;
     const bool abandoned = nbep_sim_abandoned(sim, &frame_step);
     const char *how = nbep_status_stop_text(st);
@@ -334,6 +336,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     nbep_sim *sim = NULL;
     nbep_resume resume = {0};
     int64_t from = -1; /* the resumed frame's step */
+    bool whole = true;  /* the summary counts from step 0 (a resume's file had the totals) */
     FILE *summary = NULL;
     /* A resumed run appends to the file it continues; output.file does not apply, and one
      * given on the command line (-o, --set) that names another file is refused (until
@@ -404,6 +407,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                     "uninterrupted run's bits\n",
                     file, (long long)resume.step);
         from = rq->resume ? resume.step : -1;
+        whole = !rq->resume || resume.has_totals;
         nbep_resume_fini(&resume); /* the run has its event slots now */
         if (st != NBEP_OK) { /* nothing was simulated: a new file, never published, goes */
             nbep_status ignored = nbep_output_close(&out, NULL, d);
@@ -411,7 +415,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         }
     }
     if (st == NBEP_OK) {
-        st = step_and_close(rq, file, sim, from, &out, res, d);
+        st = step_and_close(rq, file, sim, from, whole, &out, res, d);
         warn_overlap(&sc, &res->summary, file);
         nbep_status sst = write_summary(&res->summary, rq->summary_path, summary, d);
         summary = NULL;

@@ -75,8 +75,8 @@ assert \"totals\" not in f[\"frames\"]
 loud=("${args[@]:1}") # args without --quiet
 bin/nbep run $deck "${loud[@]}" -n 30 -o $tmp/end-line.h5 2>/dev/null
 bin/nbep run $deck "${loud[@]}" -n 55 --resume $tmp/end-line.h5 2>$tmp/end-line.err
-check "a resumed run's end line: 'ran 25 steps (to step 55) of 400 spheres' ($(tail -n 1 $tmp/end-line.err))" \
-    "tail -n 1 $tmp/end-line.err | grep -q '^nbep: ran 25 steps (to step 55) of 400 spheres'"
+check "a resumed run's end line: 'ran 25 steps (to step 55) of 400 spheres', its collisions since step 0 ($(tail -n 1 $tmp/end-line.err))" \
+    "tail -n 1 $tmp/end-line.err | grep -q '^nbep: ran 25 steps (to step 55) of 400 spheres .*; since step 0: [0-9]* collisions*; energy drift'"
 # each resume adds a line to the root attribute `resumed`, which nbep info prints: the step it
 # continued from, its threads, the build and its overrides (the root's own stay the first
 # part's, by which a sweep knows its runs)
