@@ -123,6 +123,8 @@ def main():
             os.remove(melt)
         run(nbep, ["run", DECK, "-t", "1", "-o", melt, "--set", f"run.steps={MELT_STEPS}",
                    "--set", f"output.every={MELT_STEPS}"] + base)
+        with h5py.File(melt, "r") as h:
+            melt_collisions = json.loads(h["summary"].attrs["json"])["collisions"]
         rates = {t: [] for t in threads}
         pairs = []  # per repeat and thread count > 1: (t, ratio to one thread's, handover ns)
         ref_last = None
@@ -138,7 +140,8 @@ def main():
                            "--set", f"physics.restitution={e}"] + base)
                 with open(sj) as fh:
                     sm = json.load(fh)
-                rates[t].append(sm["collisions"] / sm["wall_seconds"])
+                # the collisions since the melt (a resumed run's summary counts from step 0)
+                rates[t].append((sm["collisions"] - melt_collisions) / sm["wall_seconds"])
                 if t > 1 and threads[0] == 1:
                     pairs.append((t, rates[t][-1] / rates[1][-1], ho))
                 with h5py.File(f, "r") as h:

@@ -32,9 +32,10 @@
 # Both engines are timed on the equilibrium fluid, not on their starts: nbep starts from a
 # simple cubic lattice (speed sqrt(3) in random directions), which melts within a time unit,
 # run once to T1 = 1 (the melt); each timed run resumes that file (--resume, on a copy) and
-# steps on to T1 + S: its summary counts its own collisions and its stepping loop alone (the
-# resumed run's set-up, reading the frame and the first predictions, is outside wall_seconds),
-# so the rate is one run's collisions / wall_seconds. (Until fe29f48 it was the difference of
+# steps on to T1 + S: its summary counts the whole run's collisions (since 2026-11-30: from
+# step 0, the melt's too, which are taken off) and times its stepping loop alone (the resumed
+# run's set-up, reading the frame and the first predictions, is outside wall_seconds), so the
+# rate is the run's collisions since the melt / wall_seconds. (Until fe29f48 it was the difference of
 # two runs from the lattice, to T1 and to T1 + S: twice the runs, and one slow short run could
 # give an impossible ratio.) EDMD starts from nbep's fluid at T1 (written as its
 # init.sph; its own FCC start would stay crystalline at phi = 0.50, a different scene with a
@@ -150,6 +151,8 @@ PYEOF
 }
 
 summary_field() { sed -n "s/.*\"$1\": *\([0-9.e+-]*\).*/\1/p"; }
+# the collisions of the melt of n phi, up to its last frame, where the timed runs resume
+melt_collisions() { "$NBEP" info "$OUT/melt-$1-$2.h5" | summary_field collisions; }
 
 # timed CMD...: runs it (stdout kept) and records its CPU time and peak RSS, which cpu_of
 # (user + system, seconds) and rss_of (bytes) read back; minus A B prints B - A. Without GNU
@@ -169,7 +172,7 @@ minus() { awk -v a="$1" -v b="$2" 'BEGIN { print b - a }'; }
 probe() { [ -n "$handover" ] && "$handover"; } # the hand-over now, or nothing
 
 run_nbep() { # n phi threads rep
-    local out="$OUT/run.h5" d u s h1="" h2="" ho=""
+    local out="$OUT/run.h5" d u s c h1="" h2="" ho=""
     # to T1 + S, resuming the melt's frame at T1: a frame each T1, since a cells run resumes
     # only from a frame at a multiple of output.every, with the melt's fields (a resume takes
     # the deck that made the file: fields = [] is refused since 2c91e16, and every nbep run
@@ -183,7 +186,9 @@ run_nbep() { # n phi threads rep
     # CPU seconds less the set-up's wall seconds (0 where GNU time did not measure)
     u=$(awk -v c="$(cpu_of)" -v w="$(echo "$s" | summary_field setup_seconds)" 'BEGIN { print (c > 0 ? c - w : 0) }')
     [ "$3" -gt 1 ] && h2=$(probe) && ho="$h1 $h2"
-    echo "nbep,$1,$2,$3,$4,$(echo "$s" | summary_field collisions),$(echo "$s" | summary_field wall_seconds),$(echo "$s" | summary_field peak_rss_bytes),$u,$ho" >>"$rows"
+    # the collisions since the melt's frame: the summary counts from step 0 (the melt's too)
+    c=$(minus "$(melt_collisions "$1" "$2")" "$(echo "$s" | summary_field collisions)")
+    echo "nbep,$1,$2,$3,$4,$c,$(echo "$s" | summary_field wall_seconds),$(echo "$s" | summary_field peak_rss_bytes),$u,$ho" >>"$rows"
 }
 
 edmd_once() { # dir -> "collisions seconds rss cpu_seconds"

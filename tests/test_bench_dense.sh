@@ -28,6 +28,17 @@ for phi in 0.30 0.50; do
     done
 done
 
+# a row counts the collisions of the stretch timed, since the melt's frame, not the melt's too
+# (a resumed run's summary counts from step 0 since 2026-11-30): the last run's row (phi 0.50,
+# 2 threads) is its file's totals at its end less those at the frame it resumed
+check "the row's collisions are the stretch's own, the melt's taken off" \
+    "\"\$PY\" -c '
+import csv, h5py, sys
+row = [r for r in csv.reader(open(sys.argv[1])) if r[0] == \"nbep\"][-1]
+t = h5py.File(sys.argv[2], \"r\")[\"frames/totals\"]
+c = lambda k: int(t[k][\"sphere_collisions\"]) + int(t[k][\"plane_collisions\"])
+assert int(row[5]) == c(-1) - c(-2) > 0, (row, c(-1), c(-2))' '$tmp/good/rows.csv' '$tmp/good/run.h5'"
+
 # an nbep that melts the fluid but fails each resumed run: the benchmark stops, exit 1
 cat >"$tmp/nbep-fails-resume" <<EOF
 #!/bin/sh
