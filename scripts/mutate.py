@@ -1832,6 +1832,16 @@ MUTANTS = [
     ("jam-hold-on-leaning-held", "src/pred_react.c",
      "        const bool on_held = c->rest[o].still && !leans_on(c, o, k);",
      "        const bool on_held = c->rest[o].still;", ["tests/test_settle.sh", "test_granular"], None),
+    # a random fill too dense for random places names the lattice that holds it (2026-11-30)
+    ("fill-hint-past-fcc", "src/scene_place.c",
+     "            if (!why[0] && before == 0.0 && asked <= 0.74)",
+     "            if (!why[0] && before == 0.0)", ["test_scene"], None),
+    ("fill-hint-lattice-past-052", "src/scene_place.c",
+     "                         asked <= 0.52 ? ", "                         asked <= 0.74 ? ",
+     ["test_scene"], None),
+    ("fill-hint-with-why", "src/scene_place.c",
+     "            if (!why[0] && before == 0.0 && asked <= 0.74)",
+     "            if (before == 0.0 && asked <= 0.74)", ["test_scene"], None),
     # a resumed run's summary goes on from its frame's totals (/frames/totals, 2026-11-30)
     ("totals-not-taken", "src/sim.c",
      "    if (go_on) /* the summary goes on from the frame's totals (energy_initial below) */",

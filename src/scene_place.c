@@ -734,13 +734,26 @@ static nbep_status place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, cons
                 snprintf(others, sizeof others,
                          "; %.2f with the spheres placed before it in the region",
                          ((double)q * ball_volume(r) + before) / vol);
-            char why[160];
+            char why[160], hint[160] = "";
             no_room_why(e->lo, e->hi, r, plane_out, a, why, sizeof why);
+            /* random placement jams near a packing fraction of 0.3 (random sequential
+             * addition's limit is 0.38); where the region alone asks for no more than a lattice
+             * holds (simple cubic 0.52, face-centred 0.74, less at its walls), say so: a dense
+             * pile or fluid starts from one (until 2026-11-30 the line gave no way on) */
+            const double asked = (double)e->count * ball_volume(r) / vol;
+            if (!why[0] && before == 0.0 && asked <= 0.74)
+                snprintf(hint, sizeof hint,
+                         "; random places jam near a packing fraction of 0.3 and %.2f is asked: "
+                         "try place = %s",
+                         asked,
+                         asked <= 0.52 ? "\"lattice\" (up to 0.52) or \"fcc\" (up to 0.74)"
+                                       : "\"fcc\" (up to 0.74)");
             fill_failed(c, s, e, plane_at, in_way,
                         "spheres.[%zu]: could not place %" PRIu64
                         " spheres of radius %g in the region: placed %" PRIu64
-                        " (packing fraction %.2f%s)%s",
-                        k, e->count, r, q, (double)q * ball_volume(r) / vol, others, why);
+                        " (packing fraction %.2f%s)%s%s",
+                        k, e->count, r, q, (double)q * ball_volume(r) / vol, others, why,
+                        hint);
             return NBEP_OK;
         }
         size_t id = e->first + (size_t)q;

@@ -1302,6 +1302,38 @@ static void test_random_fill_that_cannot_fit_names_its_packing_fraction(void **s
     assert_string_equal(msg, expected);
 }
 
+/* A random fill that asks for more than random places reach (they jam near 0.3) but no more
+ * than a lattice holds names the lattice (simple cubic up to 0.52, fcc up to 0.74) and the
+ * fraction asked; beyond 0.74 (above), or where something else stops the fill, it does not.
+ * 802 and 1146 spheres of radius 0.05 in a unit box ask for 0.42 and 0.60. */
+static void test_random_fill_too_dense_names_the_lattice(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *deck = write_deck("scene_fill_dense.deck",
+                                  "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+                                  "spheres = ( { count = 802; radius = 0.05; mass = 1.0; } );\n",
+                                  buf, sizeof buf);
+    const char *const sc[2] = {"spheres.[0].count=802", NULL};
+    load_fails_sets(f, deck, sc);
+    assert_int_equal(f->d.n_errors, 1);
+    const char *lattice = "); random places jam near a packing fraction of 0.3 and 0.42 is asked: "
+                          "try place = \"lattice\" (up to 0.52) or \"fcc\" (up to 0.74)";
+    const char *msg = f->d.msg[0];
+    assert_true(strlen(msg) > strlen(lattice));
+    assert_string_equal(msg + strlen(msg) - strlen(lattice), lattice);
+    const char *const fcc[2] = {"spheres.[0].count=1146", NULL};
+    load_fails_sets(f, deck, fcc);
+    assert_non_null(strstr(f->d.msg[0], "and 0.60 is asked: try place = \"fcc\" (up to 0.74)"));
+    assert_null(strstr(f->d.msg[0], "\"lattice\""));
+    /* a region narrower than a diameter: that is why, and no lattice is named */
+    const char *const thin[2] = {"spheres.[0].region={min=[0.0, 0.0, 0.0]; max=[1.0, 1.0, 0.09];}",
+                                 NULL};
+    load_fails_sets(f, deck, thin);
+    assert_non_null(strstr(f->d.msg[0], "narrower than their diameter"));
+    assert_null(strstr(f->d.msg[0], "try place"));
+}
+
 /* libconfig's @include is refused at its line (a run keeps its deck's text, SPEC's `deck`
  * attribute, and names errors by its lines; the included file's text is in neither, and was read
  * without nbep's rewrite for libconfig 1.5: a seed of 4294967297 there silently became 1), one
@@ -2380,6 +2412,7 @@ int main(void)
         T(test_lattice_in_a_long_region_takes_the_spacing_of_its_short_sides),
         T(test_touching_spheres_and_planes_are_legal),
         T(test_random_fill_that_cannot_fit_names_its_packing_fraction),
+        T(test_random_fill_too_dense_names_the_lattice),
         T(test_lattice_fill_that_cannot_fit_names_its_capacity),
         T(test_fcc_takes_the_even_sites_x_fastest_at_the_largest_spacing),
         T(test_fcc_packs_past_the_simple_cubic_lattice),
