@@ -139,7 +139,7 @@ for mode in cells grid all; do
     rc=$?
     check "a row that fits its edge, tilted gravity, $mode: exit 0 (got $rc; before: run.max_reactions at step 217)" \
         "[ $rc -eq 0 ] && [ ! -s '$tmp/row-$mode.err' ]"
-    h=$("$py" -c 'import sys, h5py, numpy as np
+    h=$("$PY" -c 'import sys, h5py, numpy as np
 f = h5py.File(sys.argv[1], "r")
 v = f["/frames/velocity"][-1][:5]
 print(int((np.abs(v).sum(axis=1) == 0.0).sum()) if f["/frames/step"][-1] == 300 else -1)' \
