@@ -581,13 +581,20 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
         const nbep_run_totals *t = &res.totals;
         const double sums[] = {t->energy_initial, t->max_overlap, t->max_overlap_rel, t->virial,
                                t->kinetic_energy};
+        /* a count past 2^62 no run reaches (centuries of stepping), and the summary's JSON
+         * integers (signed 64-bit) could not hold it once added to: until 2026-11-30 a count
+         * of 2^63 ran the whole resumed part and then failed at its summary, exit 1 */
+        const uint64_t counts_max = UINT64_C(1) << 62;
+        const bool counts_ok = t->checks <= counts_max && t->predictions <= counts_max &&
+                               t->sphere_collisions <= counts_max &&
+                               t->plane_collisions <= counts_max;
         if (!all_finite(sums, sizeof sums / sizeof *sums) || !(t->max_overlap >= 0.0) ||
-            !(t->max_overlap_rel >= 0.0) || t->quiet_steps > (uint64_t)res.step) {
+            !(t->max_overlap_rel >= 0.0) || t->quiet_steps > (uint64_t)res.step || !counts_ok) {
             nbep_diag_add(d, __FILE__, __LINE__,
                           "nbep: %s: its totals at step %lld are not a run's (a sum not finite, "
-                          "an overlap below 0 or more quiet steps than steps): the file is "
-                          "damaged, or no run of this deck wrote it (run without --resume to "
-                          "start afresh)",
+                          "an overlap below 0, more quiet steps than steps or a count past "
+                          "2^62): the file is damaged, or no run of this deck wrote it (run "
+                          "without --resume to start afresh)",
                           path, (long long)res.step);
             st = NBEP_EDECK;
             goto fail;
