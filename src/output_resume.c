@@ -569,7 +569,35 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
         res.has_totals = last < rows;
     }
     if (res.has_totals) {
+        /* every field of ours, of its class, in the file's type: HDF5 reads the fields both
+         * have and leaves the others as they were (until 2026-11-30 a compound without
+         * energy_initial resumed with 0 there, and the summary's drift read 0, exit 0) */
         hid_t tt = nbep__output_totals_type();
+        hid_t ds = tt < 0 ? H5I_INVALID_HID : H5Dopen2(o->file, "/frames/totals", H5P_DEFAULT);
+        hid_t ft = ds < 0 ? H5I_INVALID_HID : H5Dget_type(ds);
+        const int n_fields = tt < 0 ? 0 : H5Tget_nmembers(tt);
+        char missing[32] = "";
+        const bool compound = ft >= 0 && H5Tget_class(ft) == H5T_COMPOUND;
+        for (int k = 0; ft >= 0 && k < n_fields && !missing[0]; k++) {
+            char *name = H5Tget_member_name(tt, (unsigned)k);
+            const int i = name && compound ? H5Tget_member_index(ft, name) : -1;
+            if (!name || i < 0 ||
+                H5Tget_member_class(ft, (unsigned)i) != H5Tget_member_class(tt, (unsigned)k))
+                snprintf(missing, sizeof missing, "%s", name ? name : "?");
+            H5free_memory(name);
+        }
+        nbep__output_close_id(&ft);
+        nbep__output_close_id(&ds);
+        if (tt >= 0 && missing[0]) {
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: %s: its /frames/totals has no field %s of a run's (a field "
+                          "missing or of another type): the file is damaged, or no run of this "
+                          "deck wrote it (run without --resume to start afresh)",
+                          path, missing);
+            H5Tclose(tt);
+            st = NBEP_EDECK;
+            goto fail;
+        }
         const int bad = tt < 0 || nbep__output_read_row(o->file, path, "/frames/totals", last, 1,
                                                         tt, &res.totals, d) < 0;
         if (tt < 0)
@@ -581,13 +609,20 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
         const nbep_run_totals *t = &res.totals;
         const double sums[] = {t->energy_initial, t->max_overlap, t->max_overlap_rel, t->virial,
                                t->kinetic_energy};
+        /* a count past 2^62 no run reaches (centuries of stepping), and the summary's JSON
+         * integers (signed 64-bit) could not hold it once added to: until 2026-11-30 a count
+         * of 2^63 ran the whole resumed part and then failed at its summary, exit 1 */
+        const uint64_t counts_max = UINT64_C(1) << 62;
+        const bool counts_ok = t->checks <= counts_max && t->predictions <= counts_max &&
+                               t->sphere_collisions <= counts_max &&
+                               t->plane_collisions <= counts_max;
         if (!all_finite(sums, sizeof sums / sizeof *sums) || !(t->max_overlap >= 0.0) ||
-            !(t->max_overlap_rel >= 0.0) || t->quiet_steps > (uint64_t)res.step) {
+            !(t->max_overlap_rel >= 0.0) || t->quiet_steps > (uint64_t)res.step || !counts_ok) {
             nbep_diag_add(d, __FILE__, __LINE__,
                           "nbep: %s: its totals at step %lld are not a run's (a sum not finite, "
-                          "an overlap below 0 or more quiet steps than steps): the file is "
-                          "damaged, or no run of this deck wrote it (run without --resume to "
-                          "start afresh)",
+                          "an overlap below 0, more quiet steps than steps or a count past "
+                          "2^62): the file is damaged, or no run of this deck wrote it (run "
+                          "without --resume to start afresh)",
                           path, (long long)res.step);
             st = NBEP_EDECK;
             goto fail;
