@@ -1831,7 +1831,11 @@ MUTANTS = [
      "        const bool on_held = false;", ["tests/test_settle.sh"], None),
     ("jam-hold-on-leaning-held", "src/pred_react.c",
      "        const bool on_held = c->rest[o].still && !leans_on(c, o, k);",
-     "        const bool on_held = c->rest[o].still;", ["tests/test_settle.sh", "test_granular"], None),
+     "        const bool on_held = c->rest[o].still;", ["tests/test_settle.sh", "test_granular"],
+     "equivalent: a sphere is held only on planes and on spheres held still, and any reaction of "
+     "a support lets go of the spheres held on it, so a held o that leans on k has k held still, "
+     "which the condition's first term (k not still) already excludes; kept so that a later "
+     "change to those orders cannot hold two spheres on each other"),
     # a random fill too dense for random places names the lattice that holds it (2026-11-30)
     ("fill-hint-past-fcc", "src/scene_place.c",
      "            if (!why[0] && before == 0.0 && asked <= 0.74)",
