@@ -1874,6 +1874,12 @@ MUTANTS = [
     ("totals-end-line-part", "src/run.c",
      "            s->steps_per_second, from >= 0 && whole ? \"since step 0: \" : \"\",",
      "            s->steps_per_second, \"\",", ["tests/test_resume.sh"], None),
+    ("totals-fields-unchecked", "src/output_resume.c",
+     "        if (tt >= 0 && missing[0]) {", "        if (0) {", ["tests/test_resume.sh"], None),
+    ("totals-count-cap-off", "src/output_resume.c",
+     "        const bool counts_ok = t->checks <= counts_max && t->predictions <= counts_max &&",
+     "        const bool counts_ok = 1 || t->predictions <= counts_max ||",
+     ["tests/test_resume.sh"], None),
     # a sweep continues a run cut short from its last frame (2026-11-30)
     ("sweep-partial-run-afresh", "src/sweep.c",
      "                               .resume = found == NBEP_SWEEP_FOUND_PARTIAL ? path : NULL,",
