@@ -143,6 +143,30 @@ static int open_cut(nbep_output *o, const char *name, hsize_t rows, hid_t *out, 
     return 0;
 }
 
+/* Whether the file's /summary says its run completed: 1, also where it says nothing of how the
+ * run ended (a summary before 2026-11-30: taken as completed, as a sweep takes it) or cannot
+ * be read as a summary; 0 where it has none (killed) or says interrupted, terminated or
+ * failed; -1 on a read error. */
+static int run_ended(hid_t file, const char *path, nbep_diag *d)
+{
+    const htri_t has = H5Aexists_by_name(file, "/summary", "json", H5P_DEFAULT);
+    if (has <= 0) /* no /summary group (killed early) reads as < 0: no summary either */
+        return 0;
+    hid_t g = H5Gopen2(file, "/summary", H5P_DEFAULT);
+    char *json = NULL;
+    int rc = -1;
+    if (g < 0)
+        HDF5_FAIL(d, path, "open /summary");
+    else if (nbep__output_read_string_attr(g, path, "json", &json, d) >= 0) {
+        nbep_summary s;
+        rc = !nbep_summary_from_json(json, &s) || s.status == NBEP_SUMMARY_COMPLETED ||
+             s.status == NBEP_SUMMARY_UNKNOWN;
+    }
+    free(json);
+    nbep__output_close_id(&g);
+    return rc;
+}
+
 /* Opens the `count` attribute of group into *out (kept open for the writer). */
 static int open_count(nbep_output *o, const char *group, hid_t *out, nbep_diag *d)
 {
@@ -493,8 +517,16 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
         kept--;
     res.kept_step = o->xmf_step[kept - 1];
     /* past the file's last frame, not only the one resumed from: a cells run resumed from an
-     * earlier frame to a step before its last would cut the frames it already has */
-    if (res.step < 0 || res.last_step < 0 || sc->steps <= (uint64_t)res.last_step) {
+     * earlier frame to a step before its last would cut the frames it already has. A run that
+     * reached run.steps but did not end as completed (a signal during its last step, which it
+     * finished; a kill before its summary) resumes to that step, at no step where it resumes
+     * from it, so that its summary says completed (until 2026-11-30 it was refused, and a
+     * sweep ran such a run again from step 0) */
+    const int ended = run_ended(o->file, path, d);
+    if (ended < 0)
+        goto fail;
+    if (res.step < 0 || res.last_step < 0 || sc->steps < (uint64_t)res.last_step ||
+        (sc->steps == (uint64_t)res.last_step && ended)) {
         nbep_diag_add(d, __FILE__, __LINE__,
                       "nbep: %s: nothing to resume: its last frame is at step %lld and "
                       "run.steps is %llu (ask for more steps: -n, --set run.steps=)",

@@ -685,6 +685,28 @@ check "no warning at e = 1, nor for naive at e < 1 (which keeps no such state), 
     "[ ! -s $tmp/cool-elastic.err ] && [ ! -s $tmp/cool-naive.err ] && [ ! -s $tmp/cool-other.err ] &&
      ! h5ls $tmp/cool-elastic.h5/checkpoint/contacts >/dev/null 2>&1"
 
+# a run that reached run.steps but did not end as completed (a signal during its last step,
+# which it finished: its summary says terminated; a kill before its summary was written)
+# resumes at no step and ends as completed, its frames and stats as they were, its summary the
+# uninterrupted run's (until 2026-11-30 refused, "nothing to resume", and a sweep ran it again
+# from step 0). The signal's timing cannot be placed in the last step by a test, so the
+# summary is made so by hand.
+for how in terminated:"j = json.loads(f['summary'].attrs['json']); j['status'] = 'terminated'; f['summary'].attrs['json'] = json.dumps(j)" \
+           killed:"del f['summary'].attrs['json']"; do
+    cp $tmp/predictive-whole.h5 $tmp/last-${how%%:*}.h5
+    "$PY" -c "
+import h5py, json
+with h5py.File('$tmp/last-${how%%:*}.h5', 'a') as f:
+    ${how#*:}"
+    bin/nbep run $deck "${args[@]}" -n 80 --resume $tmp/last-${how%%:*}.h5 \
+        --summary $tmp/last-${how%%:*}.json 2>$tmp/last.err
+    rc=$?
+    check "a run at its last step, ${how%%:*}: resumed at no step, exit 0 (got $rc), completed, the uninterrupted run's summary, frames and stats" \
+        "[ $rc = 0 ] && grep -q '\"status\": \"completed\"' $tmp/last-${how%%:*}.json &&
+         same_summary $tmp/predictive-whole.json $tmp/last-${how%%:*}.json &&
+         h5diff -q $tmp/predictive-whole.h5 $tmp/last-${how%%:*}.h5 /frames &&
+         h5diff -q $tmp/predictive-whole.h5 $tmp/last-${how%%:*}.h5 /stats"
+done
 # nothing to resume: run.steps at or before the file's last frame is refused with exit 2, the
 # file left as it was (it was given a zero-step summary, and its root `steps` the smaller count)
 sum=$(md5sum < $tmp/predictive-whole.h5)

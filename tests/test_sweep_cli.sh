@@ -268,6 +268,19 @@ for name in go go9; do
         "[ $rc = 0 ] && grep -q 'run 0 (of 1; seed=1): ok in .* (2000000 steps, resumed from step [1-9][0-9]*, ' '$tmp/stderr'"
     check "$name: its frames, stats and row are the uninterrupted study's" "same_run $name"
 done
+# a run a signal reached in its last step (which it finished: every step done, its summary
+# terminated; made so by hand, as no test can place the signal there) is resumed at no step,
+# not run again from step 0
+cp -r "$tmp/go-whole.sweep" "$tmp/go-last.sweep"
+"$PY" -c "
+import h5py, json, sys
+with h5py.File(sys.argv[1], 'a') as f:
+    j = json.loads(f['summary'].attrs['json']); j['status'] = 'terminated'
+    f['summary'].attrs['json'] = json.dumps(j)" "$tmp/go-last.sweep/run-0000.h5"
+run_sweep "$tmp/go.deck" -o "$tmp/go-last"
+check "a run cut short in its last step: resumed at step 2000000, not run again (exit $rc)" \
+    "[ $rc = 0 ] && grep -q 'run 0 (of 1; seed=1): ok in .* (2000000 steps, resumed from step 2000000, ' '$tmp/stderr' &&
+     same_run go-last"
 "$PY" -c "
 import h5py, sys
 with h5py.File(sys.argv[1], 'a') as f:
