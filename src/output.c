@@ -455,15 +455,11 @@ static int create_frames(nbep_output *o, const nbep_scene *sc, nbep_diag *d)
     if (o->pb.any && create_series(o, "/frames/image", H5T_STD_I32LE, 3, tail, chunk,
                                    &o->frame_img, d) < 0)
         return -1;
-    hid_t tt = nbep__output_totals_type();
-    const int rc = tt < 0 ? -1
-                          : create_series(o, "/frames/totals", tt, 1, NULL, series,
-                                          &o->frame_tot, d);
-    if (tt < 0)
+    if ((o->tot_type = nbep__output_totals_type()) < 0) {
         HDF5_FAIL(d, o->path, "make the type of /frames/totals");
-    else
-        H5Tclose(tt);
-    return rc;
+        return -1;
+    }
+    return create_series(o, "/frames/totals", o->tot_type, 1, NULL, series, &o->frame_tot, d);
 }
 
 /* /checkpoint, made with a new file's first frame when that frame comes with event slots:
@@ -561,7 +557,7 @@ nbep_output *nbep__output_new(const char *path, size_t n_spheres, nbep_diag *d)
     o->n_spheres = n_spheres;
     o->file = o->summary = H5I_INVALID_HID;
     o->frame_step = o->frame_time = o->frame_pos = o->frame_vel = H5I_INVALID_HID;
-    o->frame_img = o->frame_tot = o->stats_wall = H5I_INVALID_HID;
+    o->frame_img = o->frame_tot = o->tot_type = o->stats_wall = H5I_INVALID_HID;
     o->frames_count = o->stats_count = H5I_INVALID_HID;
     for (int c = 0; c < STATS_N_COLUMNS; c++)
         o->stats[c] = H5I_INVALID_HID;
@@ -582,6 +578,7 @@ void nbep__output_release(nbep_output **op)
     nbep__output_close_id(&o->frame_vel);
     nbep__output_close_id(&o->frame_img);
     nbep__output_close_id(&o->frame_tot);
+    nbep__output_close_id(&o->tot_type);
     nbep__output_close_id(&o->stats_wall);
     for (int c = 0; c < STATS_N_COLUMNS; c++)
         nbep__output_close_id(&o->stats[c]);
@@ -854,17 +851,9 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
     }
     if (o->ck[0] >= 0 && nbep__output_contacts_write(o, f, ev, d) < 0)
         goto done;
-    if (o->frame_tot >= 0) {
-        hid_t tt = nbep__output_totals_type();
-        const int bad = tt < 0 || append_rows(o, o->frame_tot, "/frames/totals", 1, f, one, tt,
-                                              one_space, &o->tot, d) < 0;
-        if (tt < 0)
-            HDF5_FAIL(d, o->path, "make the type of /frames/totals");
-        else
-            H5Tclose(tt);
-        if (bad)
-            goto done;
-    }
+    if (o->frame_tot >= 0 && append_rows(o, o->frame_tot, "/frames/totals", 1, f, one,
+                                         o->tot_type, one_space, &o->tot, d) < 0)
+        goto done;
     if (append_rows(o, o->frame_time, "/frames/time", 1, f, one, H5T_NATIVE_DOUBLE, one_space,
                     &t, d) < 0 ||
         append_rows(o, o->frame_step, "/frames/step", 1, f, one, H5T_NATIVE_INT64, one_space,
@@ -993,6 +982,7 @@ nbep_status nbep_output_close(nbep_output **op, const nbep_summary *s, nbep_diag
     rc |= checked_close(&o->frame_vel, o->path, "/frames/velocity", d);
     rc |= checked_close(&o->frame_img, o->path, "/frames/image", d);
     rc |= checked_close(&o->frame_tot, o->path, "/frames/totals", d);
+    nbep__output_close_id(&o->tot_type);
     rc |= checked_close(&o->stats_wall, o->path, "/stats/wall_impulse", d);
     for (int c = 0; c < STATS_N_COLUMNS; c++)
         rc |= checked_close(&o->stats[c], o->path, nbep__stats_columns[c].name, d);

@@ -83,6 +83,7 @@ struct nbep_output {
     hid_t frame_tot;               /* /frames/totals (a resumed file made before 2026-11-30 has
                                     * none, and gets none) */
     nbep_run_totals tot;           /* the row the next frame writes there (nbep_output_totals) */
+    hid_t tot_type;                /* its type (nbep__output_totals_type), with frame_tot */
     hid_t stats_wall;              /* /stats/wall_impulse (S, P), with stats and P > 0 */
     size_t n_planes;
     nbep_periodic pb;              /* the box's periodic axes: frames are written wrapped */

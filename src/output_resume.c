@@ -779,6 +779,10 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
         open_cut(o, "/frames/velocity", frames, &o->frame_vel, d) < 0 ||
         (o->resume.totals && open_cut(o, "/frames/totals", frames, &o->frame_tot, d) < 0))
         return NBEP_EIO;
+    if (o->resume.totals && (o->tot_type = nbep__output_totals_type()) < 0) {
+        HDF5_FAIL(d, path, "make the type of /frames/totals");
+        return NBEP_EIO;
+    }
     if (o->resume.checkpoint) {
         for (int c = 0; c < N_CK_COLUMNS; c++)
             if (open_cut(o, nbep__ck_columns[c].name, frames, &o->ck[c], d) < 0)
