@@ -9,7 +9,7 @@
 # Run from anywhere; exit status 1 when a check fails.
 . "$(dirname "$0")/lib.sh"
 test_tmp bench_args
-need_py 77 h5py numpy
+need_py h5py numpy
 export NBEP=/bin/false OUT="$tmp/out"
 
 for s in bench-hopper.sh bench-granular.sh; do

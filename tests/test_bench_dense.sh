@@ -8,7 +8,7 @@
 # Run from anywhere; exit status 1 when a check fails.
 . "$(dirname "$0")/lib.sh"
 test_tmp bench_dense
-need_py 77 h5py
+need_py h5py
 [ -x bin/nbep ] || { echo "FAIL bin/nbep not built"; exit 1; }
 # 500 spheres (a side of 9.5 at phi = 0.30, 7.1 at 0.50: three cells across), a stretch of
 # 192 * 0.002 * 4 = 1.5 time units at phi = 0.30: about 8000 collisions, well under a second

@@ -12,7 +12,7 @@
 # Run from anywhere; exit status 1 when a check fails.
 . "$(dirname "$0")/lib.sh"
 test_tmp hard_sphere
-need_py 77 h5py numpy
+need_py h5py numpy
 [ -x bin/nbep ] || { echo "FAIL bin/nbep not built"; exit 1; }
 HS=scripts/hard-sphere.py
 

@@ -13,7 +13,7 @@
 # times in a step), so a regression fails fast instead of hanging. Frames are identical for 1
 # and 2 threads. Skipped when /usr/bin/python3 lacks h5py.
 . "$(dirname "$0")/lib.sh"
-need_py 0 h5py numpy
+need_py h5py numpy
 test_tmp settle
 # collisions of a run from its JSON summary
 collisions() { sed -n 's/.*"collisions": \([0-9]*\).*/\1/p' "$1"; }

@@ -5,7 +5,7 @@
 # (scripts/check_xdmf.py; with ParaView's pvpython installed, ParaView itself reads it).
 # Skipped when /usr/bin/python3 lacks h5py or matplotlib.
 . "$(dirname "$0")/lib.sh"
-need_py 0 h5py matplotlib
+need_py h5py matplotlib
 test_tmp viz
 is_png() { [ -s "$1" ] && [ "$(head -c 8 "$1" | od -An -tx1 | tr -d ' \n')" = 89504e470d0a1a0a ]; }
 
