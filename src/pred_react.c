@@ -49,9 +49,9 @@
  * land_on_held; jam_hold) or faster (react), or any sphere while its planes carry it (react: a
  * row of spheres that fits a box exactly, a Newton's cradle without gaps; under gravity tilted
  * along the row its planes do not carry it, the next sphere does, and the row is held from the
- * sphere at its end, which its planes carry, each sphere on the one held before). Bounced between a held sphere and
- * a face across from it (a slot a diameter wide between a wall and a held sphere a hair lower
- * than it, so that its weight
+ * sphere at its end, which its planes carry, each sphere on the one held before). Bounced
+ * between a held sphere and a face across from it (a slot a diameter wide between a wall and a
+ * held sphere a hair lower than it, so that its weight
  * presses it on that sphere's curve as it slides along the slot), a sphere re-meets the held
  * one 1e-10 to 1e-12 s after each minimum bounce (the cage takes the bounce back), a million
  * times before the step ends (a 300-sphere pour, seed 1, steps 892 and 898, sliding at 1.3
