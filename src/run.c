@@ -365,8 +365,6 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     if (st == NBEP_OK)
         st = rq->resume ? nbep_output_open_resume(file, &sc, &out, &resume, d)
                         : nbep_output_create_staged(file, &sc, threads, &out, d);
-    /* the scene's state, which the run takes over, decides it */
-    const bool lasting = nbep_sim_keeps_contacts(&sc);
     if (st == NBEP_OK) {
         if (rq->resume)
             nbep_resume_apply(&resume, &sc.state);
@@ -399,7 +397,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                     file, (long long)resume.step);
         /* (a file made before 2026-11-30, or the frame of a part that kept no such state) */
         if (st == NBEP_OK && rq->resume && resume.step > 0 && !resume.contacts &&
-            resume.restitution_kept && lasting)
+            resume.restitution_kept && nbep_sim_lasting(sim))
             fprintf(stderr,
                     "nbep: warning: %s continues a predictive run at e < 1 from step %lld, whose "
                     "TC clocks, held spheres and lasting contacts no frame keeps: they start "

@@ -101,6 +101,11 @@ bool nbep_sim_keeps_contacts(const nbep_scene *sc)
     return algo && algo->keeps_contacts && algo->keeps_contacts(sc, &sc->state);
 }
 
+bool nbep_sim_lasting(const nbep_sim *sim)
+{
+    return sim->lasting;
+}
+
 /* The bytes nbep_sim_create allocates beside the state and the algorithm's part, for a run of
  * n spheres and np planes on nt threads with algo, out: with an output file (keep in step with
  * nbep_sim_create): counters and sums per thread, energies per block, a batch of stats rows,

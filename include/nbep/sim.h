@@ -86,6 +86,8 @@ bool nbep_sim_keeps_events(const nbep_scene *sc);
 /* Whether it also keeps its spheres' lasting state for its last two frames
  * (/checkpoint/contacts: a dissipative predictive run's TC clocks, contacts and settling). */
 bool nbep_sim_keeps_contacts(const nbep_scene *sc);
+/* The same for the run sim, as decided when it was made. */
+bool nbep_sim_lasting(const nbep_sim *sim);
 /* What a stop signal asks of a run (stop may be NULL): NBEP_OK (none yet), NBEP_ESIGINT or
  * NBEP_ESIGTERM. */
 nbep_status nbep_sim_stop_status(const atomic_int *stop);
