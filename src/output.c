@@ -563,7 +563,7 @@ nbep_output *nbep__output_new(const char *path, size_t n_spheres, nbep_diag *d)
         o->stats[c] = H5I_INVALID_HID;
     for (int c = 0; c < N_CK_COLUMNS; c++)
         o->ck[c] = H5I_INVALID_HID;
-    o->contacts[0] = o->contacts[1] = H5I_INVALID_HID;
+    o->contacts[0] = o->contacts[1] = o->contacts_type = H5I_INVALID_HID;
     return o;
 }
 
@@ -586,6 +586,7 @@ void nbep__output_release(nbep_output **op)
         nbep__output_close_id(&o->ck[c]);
     nbep__output_close_id(&o->contacts[0]);
     nbep__output_close_id(&o->contacts[1]);
+    nbep__output_close_id(&o->contacts_type);
     free(o->contacts_buf);
     nbep__output_close_id(&o->frames_count);
     nbep__output_close_id(&o->stats_count);

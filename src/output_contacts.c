@@ -70,10 +70,11 @@ static hid_t contact_type(void)
     return t;
 }
 
-/* Opens (or, when make, creates) the two datasets into o->contacts[0..1]; -1 on failure. */
+/* Opens (or, when make, creates) the two datasets into o->contacts[0..1], and their record's
+ * type into o->contacts_type; -1 on failure. */
 static int contacts_open(nbep_output *o, bool make, nbep_diag *d)
 {
-    hid_t type = contact_type();
+    hid_t type = o->contacts_type = contact_type();
     if (type < 0) {
         HDF5_FAIL(d, o->path, "make the type of %s", CONTACTS);
         return -1;
@@ -105,10 +106,10 @@ static int contacts_open(nbep_output *o, bool make, nbep_diag *d)
     nbep__output_close_id(&space);
     nbep__output_close_id(&tags);
 done:
-    nbep__output_close_id(&type);
     if (rc < 0) {
         nbep__output_close_id(&o->contacts[0]);
         nbep__output_close_id(&o->contacts[1]);
+        nbep__output_close_id(&o->contacts_type);
     }
     return rc;
 }
@@ -169,8 +170,8 @@ int nbep__output_contacts_write(nbep_output *o, hsize_t f, const nbep_events_vie
                       o->path);
         return -1;
     }
-    hid_t type = contact_type(), file = H5Dget_space(o->contacts[0]), mem = H5I_INVALID_HID;
-    int rc = type >= 0 && file >= 0 ? 0 : -1;
+    hid_t file = H5Dget_space(o->contacts[0]), mem = H5I_INVALID_HID;
+    int rc = file >= 0 ? 0 : -1;
     if (rc < 0)
         HDF5_FAIL(d, o->path, "write %s", CONTACTS);
     for (size_t lo = 0; rc == 0 && lo < o->n_spheres; lo += CONTACT_BATCH) {
@@ -179,14 +180,14 @@ int nbep__output_contacts_write(nbep_output *o, hsize_t f, const nbep_events_vie
         hsize_t start[2] = {slot, lo}, count[2] = {1, hi - lo};
         mem = H5Screate_simple(2, count, NULL);
         if (mem < 0 || H5Sselect_hyperslab(file, H5S_SELECT_SET, start, NULL, count, NULL) < 0 ||
-            H5Dwrite(o->contacts[0], type, mem, file, H5P_DEFAULT, o->contacts_buf) < 0) {
+            H5Dwrite(o->contacts[0], o->contacts_type, mem, file, H5P_DEFAULT,
+                     o->contacts_buf) < 0) {
             HDF5_FAIL(d, o->path, "write row %llu of %s", (unsigned long long)slot, CONTACTS);
             rc = -1;
         }
         nbep__output_close_id(&mem);
     }
     nbep__output_close_id(&file);
-    nbep__output_close_id(&type);
     return rc == 0 ? tag_slot(o, slot, (int64_t)f, d) : -1;
 }
 
@@ -211,8 +212,22 @@ int nbep__output_contacts_read(nbep_output *o, hsize_t f, nbep_contact_rec **out
         nbep__output_close_id(&file);
         return 0;
     }
+    char missing[NBEP_FIELD_NAME_MAX];
+    if (nbep__output_fields_missing(o->file, o->path, CONTACTS, o->contacts_type, missing, d) <
+            0 ||
+        missing[0]) {
+        nbep__output_close_id(&file);
+        if (!missing[0])
+            return -1;
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s: its %s has no field %s of a run's (a field missing or of "
+                      "another type): the file is damaged, or no run of this deck wrote it (run "
+                      "without --resume to start afresh)",
+                      o->path, CONTACTS, missing);
+        return -2;
+    }
     nbep_contact_rec *rec = malloc((o->n_spheres ? o->n_spheres : 1) * sizeof *rec);
-    hid_t type = contact_type(), mem = H5I_INVALID_HID;
+    hid_t mem = H5I_INVALID_HID;
     hsize_t start[2] = {slot, 0}, count[2] = {1, o->n_spheres};
     int rc = -1;
     if (!rec) {
@@ -220,15 +235,14 @@ int nbep__output_contacts_read(nbep_output *o, hsize_t f, nbep_contact_rec **out
                       CONTACTS);
     } else if (o->n_spheres == 0) {
         rc = 0;
-    } else if (type < 0 || (mem = H5Screate_simple(2, count, NULL)) < 0 ||
+    } else if ((mem = H5Screate_simple(2, count, NULL)) < 0 ||
                H5Sselect_hyperslab(file, H5S_SELECT_SET, start, NULL, count, NULL) < 0 ||
-               H5Dread(o->contacts[0], type, mem, file, H5P_DEFAULT, rec) < 0) {
+               H5Dread(o->contacts[0], o->contacts_type, mem, file, H5P_DEFAULT, rec) < 0) {
         HDF5_FAIL(d, o->path, "read row %llu of %s", (unsigned long long)slot, CONTACTS);
     } else {
         rc = 0;
     }
     nbep__output_close_id(&mem);
-    nbep__output_close_id(&type);
     nbep__output_close_id(&file);
     if (rc < 0) {
         free(rec);

@@ -135,6 +135,52 @@ hid_t nbep__output_fapl(bool writer)
     return fapl;
 }
 
+int nbep__output_fields_missing(hid_t file, const char *path, const char *name, hid_t want,
+                                char missing[NBEP_FIELD_NAME_MAX], nbep_diag *d)
+{
+    missing[0] = '\0';
+    hid_t ds = H5Dopen2(file, name, H5P_DEFAULT);
+    hid_t type = ds < 0 ? H5I_INVALID_HID : H5Dget_type(ds);
+    nbep__output_close_id(&ds);
+    if (type < 0) {
+        HDF5_FAIL(d, path, "read the type of %s", name);
+        return -1;
+    }
+    const bool compound = H5Tget_class(type) == H5T_COMPOUND;
+    const int n = H5Tget_nmembers(want);
+    for (int k = 0; k < n && !missing[0]; k++) {
+        char *field = H5Tget_member_name(want, (unsigned)k);
+        const int i = field && compound ? H5Tget_member_index(type, field) : -1;
+        if (!field || i < 0 ||
+            H5Tget_member_class(type, (unsigned)i) != H5Tget_member_class(want, (unsigned)k))
+            snprintf(missing, NBEP_FIELD_NAME_MAX, "%s", field ? field : "?");
+        H5free_memory(field);
+    }
+    nbep__output_close_id(&type);
+    return 0;
+}
+
+int nbep__output_summary_json(hid_t file, const char *path, char **json, nbep_diag *d)
+{
+    *json = NULL;
+    const htri_t group = H5Lexists(file, "/summary", H5P_DEFAULT);
+    const htri_t has = group > 0 ? H5Aexists_by_name(file, "/summary", "json", H5P_DEFAULT) : 0;
+    if (group < 0 || has < 0) {
+        HDF5_FAIL(d, path, "look for the /summary json attribute");
+        return -1;
+    }
+    if (!has)
+        return 0;
+    hid_t g = H5Gopen2(file, "/summary", H5P_DEFAULT);
+    if (g < 0) {
+        HDF5_FAIL(d, path, "open /summary");
+        return -1;
+    }
+    const int rc = nbep__output_read_string_attr(g, path, "json", json, d);
+    nbep__output_close_id(&g);
+    return rc < 0 ? -1 : 0;
+}
+
 int nbep__output_read_string_attr(hid_t loc, const char *path, const char *name, char **out,
                                   nbep_diag *d)
 {

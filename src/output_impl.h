@@ -96,6 +96,7 @@ struct nbep_output {
     hid_t ck[N_CK_COLUMNS];        /* /checkpoint series (runs that keep event slots) */
     bool ck_allowed;               /* a new file: the first frame with events may add them */
     hid_t contacts[2];             /* /checkpoint/contacts and contacts_frame, once used */
+    hid_t contacts_type;           /* with them: a record's type (output_contacts.c) */
     nbep_contact_rec *contacts_buf; /* owned, once used: a batch of records to write */
     /* the XDMF sidecar (RUN.xmf) that lets ParaView and VisIt open the run: rewritten as
      * frames come (nbep_xdmf_due) and at close; needs positions */
@@ -146,7 +147,8 @@ int nbep__output_ck_stale(nbep_output *o, hsize_t first, hsize_t end, nbep_diag 
 int nbep__output_contacts_write(nbep_output *o, hsize_t f, const nbep_events_view *ev,
                                 nbep_diag *d);
 /* Frame row f's lasting state into a malloc'd *out (n_spheres records), or *out NULL when the
- * file keeps none for that frame. 0, or -1 with the reason in d. */
+ * file keeps none for that frame. 0, -1 with the reason in d, or -2 (one line in d) where the
+ * dataset's records lack a field of a run's (nbep__output_fields_missing). */
 int nbep__output_contacts_read(nbep_output *o, hsize_t f, nbep_contact_rec **out, nbep_diag *d);
 /* The bytes the datasets take in a file of n spheres (nbep_output_bytes). */
 double nbep__output_contacts_bytes(size_t n);
@@ -193,6 +195,18 @@ int nbep__output_write_string_attr(hid_t loc, const char *path, const char *name
 /* A scalar string attribute (variable or fixed length) into a malloc'd *out. */
 int nbep__output_read_string_attr(hid_t loc, const char *path, const char *name, char **out,
                                   nbep_diag *d);
+/* Whether dataset name's type holds every field of the compound type want, each of its class:
+ * the first that it lacks into missing ("" when none). HDF5 reads the fields both types have
+ * and leaves the others as they were, so a file whose type lacks one (damaged, or edited by
+ * hand) would pass for one that holds it: until 2026-11-30 totals without energy_initial
+ * resumed with it 0. 0, or -1 with HDF5's reason in d. */
+#define NBEP_FIELD_NAME_MAX 32
+int nbep__output_fields_missing(hid_t file, const char *path, const char *name, hid_t want,
+                                char missing[NBEP_FIELD_NAME_MAX], nbep_diag *d);
+/* The run's JSON summary (the /summary group's json attribute) into a malloc'd *json, NULL
+ * where the file has none (a run killed before its end; before its first frame, without the
+ * group too). 0, or -1 with HDF5's reason in d. */
+int nbep__output_summary_json(hid_t file, const char *path, char **json, nbep_diag *d);
 /* A numeric attribute as mem_type into buf. */
 int nbep__output_read_attr(hid_t loc, const char *path, const char *name, hid_t mem_type,
                            void *buf, nbep_diag *d);

@@ -106,22 +106,8 @@ static int gather_info(hid_t file, const char *path, run_info *r, nbep_diag *d)
         nbep__output_complete_rows(file, path, "/stats", "/stats/step", &r->stats_rows,
                                    &r->stats_more, d) < 0)
         return -1;
-    htri_t summary = H5Aexists_by_name(file, "/summary", "json", H5P_DEFAULT);
-    if (summary < 0) {
-        HDF5_FAIL(d, path, "look for the /summary json attribute");
+    if (nbep__output_summary_json(file, path, &r->summary, d) < 0)
         return -1;
-    }
-    if (summary > 0) {
-        hid_t g = H5Gopen2(file, "/summary", H5P_DEFAULT);
-        if (g < 0) {
-            HDF5_FAIL(d, path, "open /summary");
-            return -1;
-        }
-        int rc = nbep__output_read_string_attr(g, path, "json", &r->summary, d);
-        nbep__output_close_id(&g);
-        if (rc < 0)
-            return -1;
-    }
     return 0;
 }
 

@@ -149,22 +149,79 @@ static int open_cut(nbep_output *o, const char *name, hsize_t rows, hid_t *out, 
  * failed; -1 on a read error. */
 static int run_ended(hid_t file, const char *path, nbep_diag *d)
 {
-    const htri_t has = H5Aexists_by_name(file, "/summary", "json", H5P_DEFAULT);
-    if (has <= 0) /* no /summary group (killed early) reads as < 0: no summary either */
-        return 0;
-    hid_t g = H5Gopen2(file, "/summary", H5P_DEFAULT);
-    char *json = NULL;
-    int rc = -1;
-    if (g < 0)
-        HDF5_FAIL(d, path, "open /summary");
-    else if (nbep__output_read_string_attr(g, path, "json", &json, d) >= 0) {
-        nbep_summary s;
-        rc = !nbep_summary_from_json(json, &s) || s.status == NBEP_SUMMARY_COMPLETED ||
-             s.status == NBEP_SUMMARY_UNKNOWN;
-    }
+    char *json;
+    if (nbep__output_summary_json(file, path, &json, d) < 0)
+        return -1;
+    nbep_summary s;
+    const int rc = json && (!nbep_summary_from_json(json, &s) || nbep_summary_ended(&s));
     free(json);
-    nbep__output_close_id(&g);
     return rc;
+}
+
+/* What in a frame's totals at step `step` no run writes (a sum not finite, an overlap below 0,
+ * more quiet steps than steps, a count past 2^62), or NULL. A count past 2^62 no run reaches
+ * (centuries of stepping), and the summary's JSON integers (signed 64-bit) could not hold it
+ * once added to: until 2026-11-30 a count of 2^63 ran the whole resumed part and then failed
+ * at its summary, exit 1. */
+static const char *totals_fault(const nbep_run_totals *t, int64_t step)
+{
+    const double sums[] = {t->energy_initial, t->max_overlap, t->max_overlap_rel, t->virial,
+                           t->kinetic_energy};
+    const uint64_t counts_max = UINT64_C(1) << 62;
+    if (!all_finite(sums, sizeof sums / sizeof *sums))
+        return "a sum not finite";
+    if (!(t->max_overlap >= 0.0) || !(t->max_overlap_rel >= 0.0))
+        return "an overlap below 0";
+    if (t->quiet_steps > (uint64_t)step)
+        return "more quiet steps than steps";
+    if (t->checks > counts_max || t->predictions > counts_max ||
+        t->sphere_collisions > counts_max || t->plane_collisions > counts_max)
+        return "a count past 2^62";
+    return NULL;
+}
+
+/* The run's totals at frame row `last` (/frames/totals) into r (has_totals), where the file has
+ * them, and whether the run appends to them (o->resume.totals: a row for each of the `frames`
+ * kept). NBEP_EDECK (one line) for totals no run wrote: a field missing, or totals_fault. */
+static nbep_status read_totals(nbep_output *o, const char *path, hsize_t frames, hsize_t last,
+                               nbep_resume *r, nbep_diag *d)
+{
+    const htri_t has = H5Lexists(o->file, "/frames/totals", H5P_DEFAULT);
+    hsize_t rows = 0;
+    if (has < 0)
+        HDF5_FAIL(d, path, "look for /frames/totals");
+    if (has < 0 ||
+        (has && nbep__output_dataset_rows(o->file, path, "/frames/totals", &rows, d) < 0))
+        return NBEP_EIO;
+    o->resume.totals = has && rows >= frames; /* a row for each frame kept: the run appends */
+    r->has_totals = has && last < rows;
+    if (!r->has_totals)
+        return NBEP_OK;
+    hid_t type = nbep__output_totals_type();
+    char missing[NBEP_FIELD_NAME_MAX] = "";
+    int rc = type < 0 ? -1 : nbep__output_fields_missing(o->file, path, "/frames/totals", type,
+                                                         missing, d);
+    if (type < 0)
+        HDF5_FAIL(d, path, "make the type of /frames/totals");
+    if (rc == 0)
+        rc = nbep__output_read_row(o->file, path, "/frames/totals", last, 1, type, &r->totals, d);
+    nbep__output_close_id(&type);
+    if (rc < 0)
+        return NBEP_EIO;
+    const char *fault = missing[0] ? NULL : totals_fault(&r->totals, r->step);
+    if (missing[0])
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s: its /frames/totals has no field %s of a run's (a field "
+                      "missing or of another type): the file is damaged, or no run of this "
+                      "deck wrote it (run without --resume to start afresh)",
+                      path, missing);
+    else if (fault)
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s: its totals at step %lld are not a run's (%s): the file is "
+                      "damaged, or no run of this deck wrote it (run without --resume to start "
+                      "afresh)",
+                      path, (long long)r->step, fault);
+    return missing[0] || fault ? NBEP_EDECK : NBEP_OK;
 }
 
 /* Opens the `count` attribute of group into *out (kept open for the writer). */
@@ -588,78 +645,9 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     }
     /* The run's totals at that frame, for its summary (a file made before 2026-11-30 has
      * none: the resumed run's summary then counts its own part, as it did) */
-    const htri_t has_tot = H5Lexists(o->file, "/frames/totals", H5P_DEFAULT);
-    if (has_tot < 0) {
-        HDF5_FAIL(d, path, "look for /frames/totals");
+    st = read_totals(o, path, frames, last, &res, d);
+    if (st != NBEP_OK)
         goto fail;
-    }
-    if (has_tot > 0) {
-        hsize_t rows = 0;
-        if (nbep__output_dataset_rows(o->file, path, "/frames/totals", &rows, d) < 0)
-            goto fail;
-        o->resume.totals = rows >= frames; /* a row for each frame kept: the run appends */
-        res.has_totals = last < rows;
-    }
-    if (res.has_totals) {
-        /* every field of ours, of its class, in the file's type: HDF5 reads the fields both
-         * have and leaves the others as they were (until 2026-11-30 a compound without
-         * energy_initial resumed with 0 there, and the summary's drift read 0, exit 0) */
-        hid_t tt = nbep__output_totals_type();
-        hid_t ds = tt < 0 ? H5I_INVALID_HID : H5Dopen2(o->file, "/frames/totals", H5P_DEFAULT);
-        hid_t ft = ds < 0 ? H5I_INVALID_HID : H5Dget_type(ds);
-        const int n_fields = tt < 0 ? 0 : H5Tget_nmembers(tt);
-        char missing[32] = "";
-        const bool compound = ft >= 0 && H5Tget_class(ft) == H5T_COMPOUND;
-        for (int k = 0; ft >= 0 && k < n_fields && !missing[0]; k++) {
-            char *name = H5Tget_member_name(tt, (unsigned)k);
-            const int i = name && compound ? H5Tget_member_index(ft, name) : -1;
-            if (!name || i < 0 ||
-                H5Tget_member_class(ft, (unsigned)i) != H5Tget_member_class(tt, (unsigned)k))
-                snprintf(missing, sizeof missing, "%s", name ? name : "?");
-            H5free_memory(name);
-        }
-        nbep__output_close_id(&ft);
-        nbep__output_close_id(&ds);
-        if (tt >= 0 && missing[0]) {
-            nbep_diag_add(d, __FILE__, __LINE__,
-                          "nbep: %s: its /frames/totals has no field %s of a run's (a field "
-                          "missing or of another type): the file is damaged, or no run of this "
-                          "deck wrote it (run without --resume to start afresh)",
-                          path, missing);
-            H5Tclose(tt);
-            st = NBEP_EDECK;
-            goto fail;
-        }
-        const int bad = tt < 0 || nbep__output_read_row(o->file, path, "/frames/totals", last, 1,
-                                                        tt, &res.totals, d) < 0;
-        if (tt < 0)
-            HDF5_FAIL(d, path, "make the type of /frames/totals");
-        else
-            H5Tclose(tt);
-        if (bad)
-            goto fail;
-        const nbep_run_totals *t = &res.totals;
-        const double sums[] = {t->energy_initial, t->max_overlap, t->max_overlap_rel, t->virial,
-                               t->kinetic_energy};
-        /* a count past 2^62 no run reaches (centuries of stepping), and the summary's JSON
-         * integers (signed 64-bit) could not hold it once added to: until 2026-11-30 a count
-         * of 2^63 ran the whole resumed part and then failed at its summary, exit 1 */
-        const uint64_t counts_max = UINT64_C(1) << 62;
-        const bool counts_ok = t->checks <= counts_max && t->predictions <= counts_max &&
-                               t->sphere_collisions <= counts_max &&
-                               t->plane_collisions <= counts_max;
-        if (!all_finite(sums, sizeof sums / sizeof *sums) || !(t->max_overlap >= 0.0) ||
-            !(t->max_overlap_rel >= 0.0) || t->quiet_steps > (uint64_t)res.step || !counts_ok) {
-            nbep_diag_add(d, __FILE__, __LINE__,
-                          "nbep: %s: its totals at step %lld are not a run's (a sum not finite, "
-                          "an overlap below 0, more quiet steps than steps or a count past "
-                          "2^62): the file is damaged, or no run of this deck wrote it (run "
-                          "without --resume to start afresh)",
-                          path, (long long)res.step);
-            st = NBEP_EDECK;
-            goto fail;
-        }
-    }
     /* The event slots, where the file has them; the run uses them only when its algorithm
      * imports event slots (the algorithm table, sim.c), so a deck of another algorithm
      * continues from positions and velocities alone. */
@@ -692,8 +680,11 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
             if (nbep__output_read_row(o->file, path, nbep__ck_columns[c].name, last, n,
                                  *nbep__ck_columns[c].mem_type, cols[c], d) < 0)
                 goto fail;
-        if (nbep__output_contacts_read(o, last, &res.contacts, d) < 0)
+        const int rc = nbep__output_contacts_read(o, last, &res.contacts, d);
+        if (rc < 0) {
+            st = rc == -2 ? NBEP_EDECK : st;
             goto fail;
+        }
         size_t at;
         const char *what;
         if (checkpoint_fault(&res, sc->state.n_planes, &at, &what)) {

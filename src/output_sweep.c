@@ -198,7 +198,7 @@ nbep_status nbep_output_sweep_read_run(const char *path, char **overrides, char 
 {
     char *ov = NULL, *json = NULL;
     nbep_status st = NBEP_EIO;
-    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), file = H5I_INVALID_HID, g = H5I_INVALID_HID;
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), file = H5I_INVALID_HID;
 #if H5_VERSION_GE(1, 12, 1) || (H5_VERS_MAJOR == 1 && H5_VERS_MINOR == 10 && H5_VERS_RELEASE >= 7)
     /* No lock: the check must work on file systems without locks, and takes one look. */
     if (fapl >= 0 && H5Pset_file_locking(fapl, false, true) < 0)
@@ -210,16 +210,8 @@ nbep_status nbep_output_sweep_read_run(const char *path, char **overrides, char 
     }
     if (nbep__output_read_string_attr(file, path, "overrides", &ov, d) < 0)
         goto done;
-    htri_t has = H5Aexists_by_name(file, "/summary", "json", H5P_DEFAULT);
-    if (has > 0) {
-        if ((g = H5Gopen2(file, "/summary", H5P_DEFAULT)) < 0) {
-            HDF5_FAIL(d, path, "open /summary");
-            goto done;
-        }
-        if (nbep__output_read_string_attr(g, path, "json", &json, d) < 0)
-            goto done;
-    }
-    /* has < 0: no /summary group at all, which is what a run killed early leaves. */
+    if (nbep__output_summary_json(file, path, &json, d) < 0)
+        goto done;
     *overrides = ov;
     *summary_json = json;
     ov = json = NULL;
@@ -227,7 +219,6 @@ nbep_status nbep_output_sweep_read_run(const char *path, char **overrides, char 
 done:
     free(ov);
     free(json);
-    nbep__output_close_id(&g);
     nbep__output_close_id(&file);
     nbep__output_close_id(&fapl);
     return st;

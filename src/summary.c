@@ -79,6 +79,11 @@ nbep_summary_status nbep_summary_status_of(nbep_status st)
     }
 }
 
+bool nbep_summary_ended(const nbep_summary *s)
+{
+    return s->status == NBEP_SUMMARY_COMPLETED || s->status == NBEP_SUMMARY_UNKNOWN;
+}
+
 const char *nbep_summary_status_text(nbep_summary_status s)
 {
     switch (s) {

@@ -502,8 +502,7 @@ static char *join_lines(char *const *lines, size_t n)
  * summary counts every step (a close that failed after the summary was written). */
 static bool says_completed(const nbep_summary *s, uint64_t steps)
 {
-    return s->steps == steps &&
-           (s->status == NBEP_SUMMARY_COMPLETED || s->status == NBEP_SUMMARY_UNKNOWN);
+    return s->steps == steps && nbep_summary_ended(s);
 }
 
 nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,

@@ -673,6 +673,9 @@ done
 # the rest 0, and the resumed run's summary said energy_initial 0 and energy_rel_drift 0, exit 0)
 damage totals-fields "t = f['frames/totals'][:]; del f['frames/totals']; keep = ['checks', 'predictions', 'sphere_collisions', 'plane_collisions', 'quiet_steps']; x = np.zeros(len(t), dtype=[(k, '<u8') for k in keep]); [x.__setitem__(k, t[k]) for k in keep]; f.create_dataset('frames/totals', data=x, maxshape=(None,), chunks=True)"
 refused totals-fields "totals without energy_initial" "/frames/totals has no field energy_initial"
+# the same for the lasting state: its records without the TC clocks' field
+damage contacts-fields "c = f['checkpoint/contacts'][:]; t = f['checkpoint/contacts_frame'][:]; del f['checkpoint/contacts']; keep = [k for k in c.dtype.names if k != 't_last']; x = np.zeros(c.shape, dtype=[(k, c.dtype[k]) for k in keep]); [x.__setitem__(k, c[k]) for k in keep]; f.create_dataset('checkpoint/contacts', data=x)"
+refused contacts-fields "lasting state without t_last" "/checkpoint/contacts has no field t_last"
 bin/nbep run "${cool[@]}" --set physics.restitution=1.0 -n 20 -o $tmp/cool-elastic.h5
 bin/nbep run "${cool[@]}" --set physics.restitution=1.0 -n 40 --resume $tmp/cool-elastic.h5 \
     2>$tmp/cool-elastic.err

@@ -92,6 +92,10 @@ typedef struct nbep_summary {
 /* The status of a run that ended with st: NBEP_OK completed, NBEP_ESIGINT interrupted,
  * NBEP_ESIGTERM terminated, any other failed. */
 nbep_summary_status nbep_summary_status_of(nbep_status st);
+/* Whether s says its run ended as completed, or says nothing of how it ended (a summary before
+ * the status key, taken as completed: a sweep reuses such a run, a resume finds nothing to
+ * do). */
+bool nbep_summary_ended(const nbep_summary *s);
 /* The status's JSON text ("completed", ...); NULL for NBEP_SUMMARY_UNKNOWN (JSON null). */
 const char *nbep_summary_status_text(nbep_summary_status s);
 
