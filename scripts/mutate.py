@@ -1222,7 +1222,7 @@ MUTANTS = [
      "        if (0 && lattice_wraps_onto(c, g, s, e, k, id, r, longer, plane_at))",
      ["test_periodic"], None),
     ("lattice-wrap-touch-refused", "src/scene_place.c",
-     "        if (!(by > TOUCH_ULPS * DBL_EPSILON * (max_abs(q->s->pos[id]) + max_abs(q->p) + sigma)))",
+     "        if (!(by > touch_tol(max_abs(q->s->pos[id]), max_abs(q->p), sigma)))",
      "        if (!(by > 0.0))", ["test_periodic"], None),
     ("overlap-check-positions-as-given", "src/scene_place.c",
      "            nbep_periodic_wrap(&pb, &wrapped[i], image[i]);", "            (void)0;",

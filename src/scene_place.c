@@ -95,6 +95,13 @@ static double max_abs(nbep_vec3 p)
     return fmax(fabs(p.x), fmax(fabs(p.y), fabs(p.z)));
 }
 
+/* How far two bodies may overlap by round-off and still touch (TOUCH_ULPS): ulps of the
+ * coordinates' magnitudes a and b and their contact distance sigma. */
+static double touch_tol(double a, double b, double sigma)
+{
+    return TOUCH_ULPS * DBL_EPSILON * (a + b + sigma);
+}
+
 /* The entry holding sphere id: the last one starting at or before it. */
 static size_t entry_of(const nbep__scene_entry *e, size_t n, size_t id)
 {
@@ -517,7 +524,7 @@ static bool probe_hits(void *arg, size_t id)
         if (id < q->own_lo || id >= q->own_hi)
             return false;
         const double by = sigma - nbep_vec3_norm(d);
-        if (!(by > TOUCH_ULPS * DBL_EPSILON * (max_abs(q->s->pos[id]) + max_abs(q->p) + sigma)))
+        if (!(by > touch_tol(max_abs(q->s->pos[id]), max_abs(q->p), sigma)))
             return false;
         q->hit_id = id;
         q->hit_by = by;
@@ -1097,8 +1104,7 @@ static void check_pair(overlaps *o, size_t i, size_t j)
     const nbep_vec3 *pos = o->pos;
     double dist = nbep_vec3_norm(nbep_vec3_sub(nbep_vec3_add(pos[i], o->shift), pos[j]));
     double by = s->radius[i] + s->radius[j] - dist;
-    double tol = TOUCH_ULPS * DBL_EPSILON *
-                 (max_abs(pos[i]) + max_abs(pos[j]) + s->radius[i] + s->radius[j]);
+    double tol = touch_tol(max_abs(pos[i]), max_abs(pos[j]), s->radius[i] + s->radius[j]);
     if (by > tol) {
         size_t a = i > j ? i : j, b = i > j ? j : i;
         /* the axes the pair meets across: the copy's shift, or the two given a period or
@@ -1195,8 +1201,7 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
         for (size_t p = 0; p < s->n_planes; p++) {
             double by = s->radius[i] - (nbep_vec3_dot(s->plane_normal[p], s->pos[i]) -
                                         s->plane_offset[p]);
-            double tol = TOUCH_ULPS * DBL_EPSILON *
-                         (max_abs(s->pos[i]) + fabs(s->plane_offset[p]) + s->radius[i]);
+            double tol = touch_tol(max_abs(s->pos[i]), fabs(s->plane_offset[p]), s->radius[i]);
             if (by > tol) {
                 char name[48];
                 if (p < n_box)
