@@ -1979,6 +1979,23 @@ MUTANTS = [
     ("progress-eta-zero-without-rate", "src/sim.c",
      "rate > 0.0 || to_go <= 0.0, eta)", "true, eta)",
      ["tests/test_signals.sh"], None),
+    # jammed spheres that meet move on as one body, in cells mode (jam_lock, 2026-11-30)
+    ("jam-lock-off", "src/pred_react.c",
+     "    if (jam_lock(c, s, w, lo, hi, dt, t_local))\n        return;\n", "",
+     ["tests/test_settle.sh"], None),
+    ("jam-lock-pair-only", "src/pred_react.c",
+     "    for (x.at = 0; x.at < x.n && !x.full; x.at++)",
+     "    for (x.at = 0; x.at < 0; x.at++)", ["tests/test_settle.sh"], None),
+    ("jam-lock-own-planes", "src/pred_react.c",
+     "        c->rest[m] = planes;\n", "", ["tests/test_settle.sh"], None),
+    ("jam-lock-into-planes", "src/pred_react.c",
+     "    const nbep_vec3 v = nbep_contact_project(nbep_vec3_scale(mom, 1.0 / mass), n, planes.n, &act);",
+     "    const nbep_vec3 v = nbep_vec3_scale(mom, 1.0 / mass);", ["tests/test_settle.sh"], None),
+    ("jam-lock-mean-of-two", "src/pred_react.c",
+     "        mass += s->mass[m];\n    }", "        mass += s->mass[m];\n        if (i == 1) break;\n    }",
+     ["tests/test_settle.sh"], None),
+    ("jam-lock-no-tolerance", "src/pred_react.c",
+     "> x->tol)\n        return;", "> 0.0)\n        return;", ["tests/test_settle.sh"], None),
 ]
 
 
