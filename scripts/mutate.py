@@ -1988,14 +1988,28 @@ MUTANTS = [
      "    for (x.at = 0; x.at < 0; x.at++)", ["tests/test_settle.sh"], None),
     ("jam-lock-own-planes", "src/pred_react.c",
      "        c->rest[m] = planes;\n", "", ["tests/test_settle.sh"], None),
-    ("jam-lock-into-planes", "src/pred_react.c",
-     "    const nbep_vec3 v = nbep_contact_project(nbep_vec3_scale(mom, 1.0 / mass), n, planes.n, &act);",
-     "    const nbep_vec3 v = nbep_vec3_scale(mom, 1.0 / mass);", ["tests/test_settle.sh"], None),
     ("jam-lock-mean-of-two", "src/pred_react.c",
      "        mass += s->mass[m];\n    }", "        mass += s->mass[m];\n        if (i == 1) break;\n    }",
      ["tests/test_settle.sh"], None),
     ("jam-lock-no-tolerance", "src/pred_react.c",
-     "> x->tol)\n        return;", "> 0.0)\n        return;", ["tests/test_settle.sh"], None),
+     "> x->tol)\n        return;", "> 0.0)\n        return;", ["tests/test_settle.sh"],
+     "equivalent on every scene measured: the rows of test_settle, the 18 corner pours of README "
+     "(Jammed bodies) and rows with gaps of 1e-10 and 1e-8 m between their spheres (which never "
+     "jam: their meetings take time) all ran the same with a body of spheres that touch to 0 and "
+     "to the settle tolerance; kept, as the pockets' tolerance, for a sphere a minimum bounce's "
+     "hop from the body"),
+    ("jam-lock-leaves-fast-kept", "src/pred_react.c",
+     "        if (fabs(nbep_vec3_dot(v, n[q])) <= v_rest) {", "        if (1) {",
+     ["tests/test_settle.sh"], None),
+    ("jam-lock-leaves-slow-dropped", "src/pred_react.c",
+     "        if (fabs(nbep_vec3_dot(v, n[q])) <= v_rest) {",
+     "        if (fabs(nbep_vec3_dot(v, n[q])) <= 0.0) {", ["tests/test_settle.sh"], None),
+    ("mobility-roundoff-kept", "src/pred_react.c",
+     "    return nbep_vec3_norm(d) <= NBEP_CONTACT_TOL ? ZERO3 : d;", "    return d;",
+     ["tests/test_settle.sh"], None),
+    ("jam-lock-not-along", "src/pred_react.c",
+     "    v = nbep_contact_tangent(v, n, planes.n, (1u << planes.n) - 1u);\n", "",
+     ["tests/test_settle.sh"], None),
 ]
 
 

@@ -182,7 +182,14 @@ static nbep_vec3 plane_mobility(const pred_ctx *c, const nbep_state *s, size_t i
             n[k++] = s->plane_normal[r->who[j]];
     unsigned act;
     *leans |= k > 0;
-    return k == 0 ? u : nbep_contact_project(u, n, k, &act);
+    if (k == 0)
+        return u;
+    /* where the planes take u whole, the projection leaves round-off (a few 1e-17 of the unit
+     * u): nothing. Two spheres that lean each on a plane across from the other (a jammed body's
+     * sphere on the wall at its far end, and the sphere at that end on the wall there) would
+     * otherwise share an impulse divided by that round-off squared: they flew off at 1.5e5 m/s */
+    const nbep_vec3 d = nbep_contact_project(u, n, k, &act);
+    return nbep_vec3_norm(d) <= NBEP_CONTACT_TOL ? ZERO3 : d;
 }
 
 /* After a response, a sphere leaves every contact along whose normal it now moves (and its
@@ -521,14 +528,15 @@ static void lock_one(void *u, uint32_t q)
 /* Jammed bodies (README, granular scenes): jammed spheres lo and hi meet, neither held (cells
  * mode, whose loop is serial and reads the neighbour lists: a round of the other modes
  * reacts elsewhere at once). With every jammed sphere that touches them, contact after contact
- * (lock_walk), they move on as one body: each takes the body's mean velocity (by mass) and its
- * acceleration, both projected onto the planes that any of them rests on or touches (e = 0
- * against them), which every one's contacts then hold. The limit of the inelastic collapse
- * that the TC model stops short of: a row spanning a box exactly, in mid-air and pressed into
- * one wall by tilted gravity, met itself at zero time for ever, fed by the minimum bounce at
- * the pressed end (test_settle.sh). False, changing nothing, where the body has more than
- * LOCK_MAX spheres or touches more than NBEP_CONTACT_MAX planes, or where those planes carry it
- * (jam_hold holds such a body, from a sphere its own planes carry). */
+ * (lock_walk), they move on as one body: each takes the body's velocity (its spheres' mean by
+ * mass, along its contacts), its contacts (the planes any of them rests on or touches, less
+ * any it moves to or from faster than the rest speed) and its acceleration on them (its
+ * spheres' mean). The
+ * limit of the inelastic collapse that the TC model stops short of: a row spanning a box
+ * exactly, in mid-air and pressed into one wall by tilted gravity, met itself at zero time for
+ * ever, fed by the minimum bounce at the pressed end (test_settle.sh). Where its contacts carry
+ * it, it stops on them (settling holds it). False, changing no sphere's motion, where the body
+ * has more than LOCK_MAX spheres or touches more than NBEP_CONTACT_MAX planes. */
 static bool jam_lock(pred_ctx *c, nbep_state *s, thread_ws *w, size_t lo, size_t hi, double dt,
                      double t_local)
 {
@@ -563,14 +571,29 @@ static bool jam_lock(pred_ctx *c, nbep_state *s, thread_ws *w, size_t lo, size_t
         force = nbep_vec3_add(force, nbep_vec3_scale(s->acc[m], s->mass[m]));
         mass += s->mass[m];
     }
+    /* the contacts: the planes it moves to or from no faster than the rest speed, its motion
+     * along them. One that it leaves faster is no contact (held as one, the body would strike
+     * a sphere as a wall moving off it, and give it that speed twice over at each strike: a
+     * sphere between the body and a wall was sped up so, 0.03 m/s a round trip, until the
+     * stall check stopped the run), nor one it heads into faster (it meets it, as any plane);
+     * one it leaves slower is (a body leaving a wall at 5e-324 m/s, dropped from its contacts,
+     * fell back into the wall at once, and its lock took it off again, a million times) */
     nbep_vec3 n[NBEP_CONTACT_MAX];
     for (int q = 0; q < planes.n; q++)
         n[q] = s->plane_normal[planes.who[q]];
+    nbep_vec3 v = nbep_vec3_scale(mom, 1.0 / mass);
+    const double v_rest = rest_speed(s, lo, nbep_vec3_norm(s->acc[lo]), dt);
+    rest_set along = {.n = 0};
+    for (int q = 0; q < planes.n; q++)
+        if (fabs(nbep_vec3_dot(v, n[q])) <= v_rest) {
+            n[along.n] = n[q];
+            along.who[along.n] = planes.who[q];
+            along.ver[along.n++] = 0;
+        }
+    planes = along;
+    v = nbep_contact_tangent(v, n, planes.n, (1u << planes.n) - 1u);
     unsigned act;
     const nbep_vec3 a = nbep_contact_project(nbep_vec3_scale(force, 1.0 / mass), n, planes.n, &act);
-    if (is_zero(a))
-        return false;
-    const nbep_vec3 v = nbep_contact_project(nbep_vec3_scale(mom, 1.0 / mass), n, planes.n, &act);
     for (size_t i = 0; i < x.n; i++) {
         const uint32_t m = x.m[i];
         c->rest[m] = planes;
