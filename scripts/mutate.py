@@ -1992,7 +1992,7 @@ MUTANTS = [
      "        mass += s->mass[m];\n    }", "        mass += s->mass[m];\n        if (i == 1) break;\n    }",
      ["tests/test_settle.sh"], None),
     ("jam-lock-no-tolerance", "src/pred_react.c",
-     "> x->tol)\n        return;", "> 0.0)\n        return;", ["tests/test_settle.sh"],
+     "<= x->tol))\n        return;", "<= 0.0))\n        return;", ["tests/test_settle.sh"],
      "equivalent on every scene measured: the rows of test_settle, the 18 corner pours of README "
      "(Jammed bodies) and rows with gaps of 1e-10 and 1e-8 m between their spheres (which never "
      "jam: their meetings take time) all ran the same with a body of spheres that touch to 0 and "

@@ -516,7 +516,7 @@ static void lock_one(void *u, uint32_t q)
             return;
     const uint32_t a = x->m[x->at];
     advance_to(x->c, x->s, q, x->t_local); /* (its motion as it was: only its clock moves) */
-    if (nbep_vec3_norm(sep(x->c, x->s, a, q)) - (x->s->radius[a] + x->s->radius[q]) > x->tol)
+    if (!(nbep_vec3_norm(sep(x->c, x->s, a, q)) - (x->s->radius[a] + x->s->radius[q]) <= x->tol))
         return;
     if (x->n == LOCK_MAX) {
         x->full = true;
@@ -543,9 +543,11 @@ static bool jam_lock(pred_ctx *c, nbep_state *s, thread_ws *w, size_t lo, size_t
     if (!c->ev || !c->settle || c->rest[lo].still || c->rest[hi].still || !jammed(c, w, lo) ||
         !jammed(c, w, hi))
         return false;
-    const double vs = settle_speed(s, lo, dt);
+    /* (a sphere without acceleration of its own, in a scene where others have one: touching
+     * to 0, not 0/0, which would join every jammed sphere of the block) */
+    const double vs = settle_speed(s, lo, dt), amag = nbep_vec3_norm(s->acc[lo]);
     lock_walk x = {.c = c, .s = s, .w = w, .t_local = t_local,
-                   .tol = vs * vs / nbep_vec3_norm(s->acc[lo]),
+                   .tol = amag > 0.0 ? vs * vs / amag : 0.0,
                    .m = {(uint32_t)lo, (uint32_t)hi}, .n = 2};
     for (x.at = 0; x.at < x.n && !x.full; x.at++)
         nbep_evloop_visit_block(c->ev, x.m[x.at], lock_one, &x);
