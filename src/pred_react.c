@@ -529,14 +529,13 @@ static void lock_one(void *u, uint32_t q)
  * mode, whose loop is serial and reads the neighbour lists: a round of the other modes
  * reacts elsewhere at once). With every jammed sphere that touches them, contact after contact
  * (lock_walk), they move on as one body: each takes the body's velocity (its spheres' mean by
- * mass, along its contacts), its contacts (the planes any of them rests on or touches, less
- * any it moves to or from faster than the rest speed) and its acceleration on them (its
- * spheres' mean). The
+ * mass, along its contacts), its contacts (the planes any of them touches, less any it moves
+ * to or from faster than the rest speed) and its acceleration on them (its spheres' mean). The
  * limit of the inelastic collapse that the TC model stops short of: a row spanning a box
  * exactly, in mid-air and pressed into one wall by tilted gravity, met itself at zero time for
  * ever, fed by the minimum bounce at the pressed end (test_settle.sh). Where its contacts carry
  * it, it stops on them (settling holds it). False, changing no sphere's motion, where the body
- * has more than LOCK_MAX spheres or touches more than NBEP_CONTACT_MAX planes. */
+ * has more than LOCK_MAX spheres. */
 static bool jam_lock(pred_ctx *c, nbep_state *s, thread_ws *w, size_t lo, size_t hi, double dt,
                      double t_local)
 {
@@ -553,22 +552,13 @@ static bool jam_lock(pred_ctx *c, nbep_state *s, thread_ws *w, size_t lo, size_t
         nbep_evloop_visit_block(c->ev, x.m[x.at], lock_one, &x);
     if (x.full)
         return false;
-    rest_set planes = {.n = 0};
+    rest_set planes = {.n = 0}; /* those its spheres touch (a contact kept from an earlier
+                                 * body need not be: its sphere that touched it may be gone) */
     nbep_vec3 mom = ZERO3, force = ZERO3;
     double mass = 0.0;
     for (size_t i = 0; i < x.n; i++) {
         const uint32_t m = x.m[i];
-        for (size_t p = 0; p < s->n_planes; p++) {
-            if (rest_has_plane(&planes, p) ||
-                !(rest_has_plane(&c->rest[m], p) ||
-                  nbep_physics_plane_gap(s->plane_normal[p], s->plane_offset[p], s->pos[m],
-                                         s->radius[m]) <= x.tol))
-                continue;
-            if (planes.n == NBEP_CONTACT_MAX)
-                return false;
-            planes.who[planes.n] = (int32_t)p;
-            planes.ver[planes.n++] = 0;
-        }
+        pocket_planes(s, m, x.tol, &planes);
         mom = nbep_vec3_add(mom, nbep_vec3_scale(s->vel[m], s->mass[m]));
         force = nbep_vec3_add(force, nbep_vec3_scale(s->acc[m], s->mass[m]));
         mass += s->mass[m];
@@ -584,7 +574,7 @@ static bool jam_lock(pred_ctx *c, nbep_state *s, thread_ws *w, size_t lo, size_t
     for (int q = 0; q < planes.n; q++)
         n[q] = s->plane_normal[planes.who[q]];
     nbep_vec3 v = nbep_vec3_scale(mom, 1.0 / mass);
-    const double v_rest = rest_speed(s, lo, nbep_vec3_norm(s->acc[lo]), dt);
+    const double v_rest = rest_speed(s, lo, amag, dt);
     rest_set along = {.n = 0};
     for (int q = 0; q < planes.n; q++)
         if (fabs(nbep_vec3_dot(v, n[q])) <= v_rest) {

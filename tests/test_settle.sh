@@ -158,7 +158,7 @@ check "a row that fits its edge, tilted gravity, grid: frames identical for 1 an
 # at zero time for ever (the TC model makes the meetings elastic, the minimum bounce feeds them),
 # and the run stopped at run.max_reactions in step 1 in every mode (a 100-sphere pour into a
 # 0.3 x 0.3 x 1.2 box stopped so at step 887 in cells mode). Now, in cells mode, jammed spheres
-# that meet move on as one body (JAM_LOCK, README: granular scenes): the row falls whole, lands,
+# that meet move on as one body (jam_lock; README, granular scenes): the row falls whole, lands,
 # bounces and is held on the floor, every sphere where the walls keep it in y and x.
 cat >"$tmp/fall.deck" <<'DECK'
 run: { algorithm = "predictive"; steps = 600; dt = 1.0e-3; seed = 1; neighbors = "cells";
