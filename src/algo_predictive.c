@@ -85,6 +85,8 @@ static void pred_destroy(void *p)
     nbep_free_aligned(c->face);
     nbep_free_aligned(c->settle);
     nbep_free_aligned(c->jam);
+    free(c->jam_list);
+    free(c->lock_mark);
     nbep_free_aligned(c->flags);
     nbep_free_aligned((void *)c->claim[0]);
     nbep_free_aligned((void *)c->claim[1]);
@@ -96,6 +98,7 @@ static void pred_destroy(void *p)
             free(c->ws[t].redo);
             free(c->ws[t].fired);
             free(c->ws[t].rel);
+            free(c->ws[t].lock);
             free(c->ws[t].claimed);
             free(c->ws[t].tclaimed);
             nbep_free_aligned(c->ws[t].part);
@@ -200,10 +203,17 @@ static size_t plan_own(const pred_plan *p, int t)
 /* The room of thread t's list of fired spheres: 2 per reaction, 1 per let-go; cells mode: one
  * reaction's 3 and every held sphere letting go after it, on the thread that runs the event
  * loop (and a team's helper, whose reactions change their own two spheres only). */
+/* Rounds modes that settle, in time order: jammed bodies, made at a round's end on thread 0
+ * (lock_phase). */
+static bool plan_lock(const pred_plan *p)
+{
+    return p->rounds && p->settle_model && !p->order_step;
+}
+
 static size_t plan_fired(const pred_plan *p, int t)
 {
-    if (p->rounds)
-        return 3 * plan_own(p, t);
+    if (p->rounds) /* thread 0: and every sphere, for the bodies of a lock_phase */
+        return 3 * plan_own(p, t) + (t == 0 && plan_lock(p) ? p->n : 0);
     return t == 0 ? p->n + 3 : p->team && t < p->team_size ? 3 : 1;
 }
 
@@ -232,6 +242,9 @@ static size_t pred_bytes(const nbep_scene *sc, int nt)
                       sizeof *c->reacted);
     if (p.order_step)
         bytes += n * sizeof *c->tclaim;
+    const bool lock = plan_lock(&p); /* jammed bodies */
+    if (lock)
+        bytes += n * (sizeof *c->jam_list + sizeof *c->lock_mark);
     bytes += (size_t)nt * sizeof *c->ws;
     for (int t = 0; t < nt; t++) {
         const size_t own = plan_own(&p, t);
@@ -239,6 +252,8 @@ static size_t pred_bytes(const nbep_scene *sc, int nt)
         if (p.rounds)
             bytes += own * (sizeof *w->cand + sizeof *w->redo + sizeof *w->rel +
                             2 * sizeof *w->claimed);
+        if (lock)
+            bytes += own * sizeof *w->lock;
         if (p.order_step)
             bytes += 2 * own * sizeof *w->tclaimed;
     }
@@ -299,7 +314,12 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     if (c->order_step)
         c->tclaim = nbep_alloc_aligned(n, sizeof *c->tclaim);
     c->ws = nbep_alloc_aligned((size_t)sim->nt, sizeof *c->ws);
+    if (plan_lock(&p)) { /* jammed bodies (lock_phase) */
+        c->jam_list = malloc((n ? n : 1) * sizeof *c->jam_list);
+        c->lock_mark = calloc(n ? n : 1, sizeof *c->lock_mark);
+    }
     if (!c->ver || !c->tau || (!p.free_flight && (!c->rest || !c->aeff)) ||
+        (plan_lock(&p) && (!c->jam_list || !c->lock_mark)) ||
         (p.tc_model && !c->t_last) || (p.cage_model && !c->face) || (p.jam_model && !c->jam) ||
         (p.settle_model && !c->settle) ||
         !c->ws ||
@@ -402,11 +422,14 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
             w->redo = malloc(own * sizeof *w->redo);
             w->rel = malloc(own * sizeof *w->rel);
             w->claimed = malloc(2 * own * sizeof *w->claimed);
+            if (c->jam_list)
+                w->lock = malloc((own ? own : 1) * sizeof *w->lock);
         }
         if (c->order_step)
             w->tclaimed = malloc(2 * own * sizeof *w->tclaimed);
         if (!w->fired || !w->part ||
             (rounds && (!w->cand || !w->redo || !w->rel || !w->claimed)) ||
+            (c->jam_list && !w->lock) ||
             (c->order_step && !w->tclaimed)) {
             pred_destroy(c);
             NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm");
@@ -724,6 +747,7 @@ static void react_phase(pred_ctx *c, nbep_state *s, const nbep_scene *sc, int pa
                         nbep_thread_max *mx)
 {
     w->n_fired = 0;
+    w->n_lock = 0;
     w->par = par;
     for (size_t k = 0; k < w->n_cand; k++) {
         size_t i = w->cand[k];
@@ -925,6 +949,17 @@ static void pred_run(nbep_sim *sim, void *p)
                 nbep_barrier_wait(bar);
                 react_phase(c, s, sim->scene, par, T0, t_min, stamp0 + round + 1, w, cnt, mx);
                 nbep_barrier_wait(bar);
+                /* pairs of jammed spheres that met: their bodies, by thread 0 alone (a body
+                 * reaches spheres other threads own), the same decision on every thread of
+                 * the crew (the others' lists are empty: reset at each react phase) */
+                size_t locks = 0;
+                for (int t = 0; t < crew; t++)
+                    locks += c->ws[t].n_lock;
+                if (locks) {
+                    if (tid == 0)
+                        nbep__pred_lock_phase(c, s, sim->dt, t_min - T0, w);
+                    nbep_barrier_wait(bar);
+                }
                 /* a limit passed by this round's reactions, or by the let-go after them (seen
                  * here, in the step it happened: found at the next reaction, it was reported
                  * 37 steps late in a review's scene) */

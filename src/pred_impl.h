@@ -97,6 +97,9 @@ typedef struct thread_ws {
     size_t n_fired;
     uint32_t *rel;            /* owned: own held spheres to let go this round */
     size_t n_rel;
+    uint64_t *lock;           /* owned, rounds modes with settling: the keys of pairs of jammed
+                               * spheres that met this round, whose body lock_phase makes */
+    size_t n_lock;
     uint64_t woken;           /* held spheres this thread changed so far (react, let_go) */
     size_t n_settle;          /* own settle candidates at the last step's end (settle_count) */
     size_t n_settled;         /* own spheres settle_phases held in the last step */
@@ -183,6 +186,10 @@ typedef struct pred_ctx {
      * (free_flight: no contact can rest or hold, every sphere flies with a = 0), t_last when
      * the TC model cannot change a restitution (e = 1 or tc = 0) */
     rest_set *rest;               /* owned: the contacts holding each sphere */
+    uint32_t *jam_list;           /* owned, rounds modes with settling: lock_phase's spheres
+                                   * in the jam (in_jam), not held */
+    uint8_t *lock_mark;           /* owned, with jam_list: 1 for a sphere in a body of the
+                                   * lock_phase under way, else 0 */
     nbep_vec3 *aeff;              /* owned: acceleration each sphere flies with (rest_solve) */
     double *t_last;               /* owned: time of each sphere's last sphere collision (TC) */
     face_met *face;               /* owned with t_last when something accelerates: each
@@ -421,6 +428,10 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
                       thread_ws *w, nbep_counters *cnt, nbep_thread_max *mx);
 /* Sphere i is held and a sphere it rests on has reacted since it took the load. */
 bool nbep__pred_held_on_changed(const pred_ctx *c, size_t i);
+/* Rounds modes, thread 0 between barriers after a react phase whose pairs of jammed spheres
+ * were noted (thread_ws.lock): each pair's body, in the order of their keys. */
+void nbep__pred_lock_phase(pred_ctx *c, nbep_state *s, double dt, double t_local, thread_ws *w);
+
 /* Held sphere i lets go of the supports that reacted, at local time t_local. */
 void nbep__pred_let_go(pred_ctx *c, nbep_state *s, size_t i, double dt, double t_local,
                        thread_ws *w);

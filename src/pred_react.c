@@ -470,6 +470,22 @@ static bool jammed(const pred_ctx *c, const thread_ws *w, size_t k)
     return c->jam && c->jam[k].step == w->jam_step && c->jam[k].n >= JAM_HOLD;
 }
 
+/* Whether sphere k takes part in a jam: JAM_JOIN reactions in this step. A jammed body
+ * (jam_lock) takes in such spheres, not only jammed ones: the spheres of a jam react in
+ * proportion to their contacts, so a row's ends (a wall and one neighbour) had an eighth to a
+ * fifth of its middle's reactions when the middle pair first locked, and left out of the body
+ * they fed it the momentum of their minimum bounces again at once (a row of five in a corner
+ * pour, its middle pair locked 7597 times in one step until run.max_reactions = 20000 stopped
+ * it; the falling row of test_settle.sh at run.max_reactions = 11000). A tenth of JAM_HOLD is
+ * no more than the busiest spheres of the pile and hopper decks reach in a step (200 to 2000:
+ * README, granular scenes), but it is read only where a lock is made, which those decks never
+ * do. */
+#define JAM_JOIN (JAM_HOLD / 10)
+static bool in_jam(const pred_ctx *c, const thread_ws *w, size_t k)
+{
+    return c->jam && c->jam[k].step == w->jam_step && c->jam[k].n >= JAM_JOIN;
+}
+
 static bool jam_hold(pred_ctx *c, nbep_state *s, thread_ws *w, size_t k, size_t j, double dt)
 {
     if (!c->settle || !jammed(c, w, k))
@@ -492,8 +508,8 @@ static bool jam_hold(pred_ctx *c, nbep_state *s, thread_ws *w, size_t k, size_t 
 }
 
 /* A jammed body (jam_lock): its spheres, found one contact after another from the pair that
- * met, every one jammed, none held, each touching one found before to within tol (the settle
- * tolerance, as the pockets of the jam hold). 64: the bodies of the pours measured had 2 to
+ * met, every one in the jam (in_jam), none held, each touching one found before to within tol
+ * (the settle tolerance, as the pockets of the jam hold). 64: the bodies of the pours measured had 2 to
  * 7, and each lock walks every member's block. */
 #define LOCK_MAX 64
 typedef struct lock_walk {
@@ -509,7 +525,7 @@ typedef struct lock_walk {
 static void lock_one(void *u, uint32_t q)
 {
     lock_walk *x = u;
-    if (x->full || x->c->rest[q].still || !jammed(x->c, x->w, q))
+    if (x->full || x->c->rest[q].still || !in_jam(x->c, x->w, q))
         return;
     for (size_t i = 0; i < x->n; i++)
         if (x->m[i] == q)
@@ -525,31 +541,42 @@ static void lock_one(void *u, uint32_t q)
     x->m[x->n++] = q;
 }
 
+/* Whether lo and hi, which meet, make a jammed body (jam_lock): both jammed, neither held, in
+ * a dissipative scene that settles, in time order (the paper's step reacts at many times in
+ * one round). */
+static bool lockable(const pred_ctx *c, const thread_ws *w, size_t lo, size_t hi)
+{
+    return c->settle && !c->order_step && !c->rest[lo].still && !c->rest[hi].still &&
+           jammed(c, w, lo) && jammed(c, w, hi);
+}
+
 /* Jammed bodies (README, granular scenes): jammed spheres lo and hi meet, neither held (cells
- * mode, whose loop is serial and reads the neighbour lists: a round of the other modes
- * reacts elsewhere at once). With every jammed sphere that touches them, contact after contact
- * (lock_walk), they move on as one body: each takes the body's velocity (its spheres' mean by
- * mass, along its contacts), its contacts (the planes any of them touches, less any it moves
- * to or from faster than the rest speed) and its acceleration on them (its spheres' mean). The
+ * mode, whose loop is serial: in the reaction, walking the neighbour lists; the rounds modes:
+ * at the round's end, walking jam_list, nbep__pred_lock_phase). With every sphere in the jam that
+ * touches them, contact after contact (lock_walk), they move on as one body: each takes the
+ * body's velocity (its spheres' mean by mass, along its contacts), its contacts (the planes any
+ * of them touches, less any it moves to or from faster than the rest speed) and its
+ * acceleration on them (its spheres' mean). The
  * limit of the inelastic collapse that the TC model stops short of: a row spanning a box
  * exactly, in mid-air and pressed into one wall by tilted gravity, met itself at zero time for
  * ever, fed by the minimum bounce at the pressed end (test_settle.sh). Where its contacts carry
  * it, it stops on them (settling holds it). False, changing no sphere's motion, where the body
  * has more than LOCK_MAX spheres. */
 static bool jam_lock(pred_ctx *c, nbep_state *s, thread_ws *w, size_t lo, size_t hi, double dt,
-                     double t_local)
+                     double t_local, const uint32_t *jam_list, size_t n_jam)
 {
-    if (!c->ev || !c->settle || c->rest[lo].still || c->rest[hi].still || !jammed(c, w, lo) ||
-        !jammed(c, w, hi))
-        return false;
     /* (a sphere without acceleration of its own, in a scene where others have one: touching
-     * to 0, not 0/0, which would join every jammed sphere of the block) */
+     * to 0, not 0/0, which would join every sphere of the block in the jam) */
     const double vs = settle_speed(s, lo, dt), amag = nbep_vec3_norm(s->acc[lo]);
     lock_walk x = {.c = c, .s = s, .w = w, .t_local = t_local,
                    .tol = amag > 0.0 ? vs * vs / amag : 0.0,
                    .m = {(uint32_t)lo, (uint32_t)hi}, .n = 2};
     for (x.at = 0; x.at < x.n && !x.full; x.at++)
-        nbep_evloop_visit_block(c->ev, x.m[x.at], lock_one, &x);
+        if (c->ev) /* cells mode: the spheres that can touch it */
+            nbep_evloop_visit_block(c->ev, x.m[x.at], lock_one, &x);
+        else /* rounds modes: every sphere in the jam (lock_phase) */
+            for (size_t k = 0; k < n_jam; k++)
+                lock_one(&x, jam_list[k]);
     if (x.full)
         return false;
     rest_set planes = {.n = 0}; /* those its spheres touch (a contact kept from an earlier
@@ -776,8 +803,17 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
             return;
         }
     }
-    if (jam_lock(c, s, w, lo, hi, dt, t_local))
-        return;
+    if (lockable(c, w, lo, hi)) {
+        if (!c->ev) { /* rounds modes: at the round's end, on one thread (lock_phase); the
+                       * pair is predicted again after it */
+            w->lock[w->n_lock++] = (uint64_t)lo << 32 | hi;
+            fire(c, w, s, lo, false);
+            fire(c, w, s, hi, false);
+            return;
+        }
+        if (jam_lock(c, s, w, lo, hi, dt, t_local, NULL, 0))
+            return;
+    }
     /* hi's image that touches lo (the same as pos[hi] without periodic axes) */
     const nbep_vec3 p_hi = c->pb.any ? nbep_vec3_add(s->pos[lo], r12) : s->pos[hi];
     const nbep_vec3 v_hi = s->vel[hi];
@@ -851,4 +887,34 @@ void nbep__pred_jam_fail(nbep_sim *sim, uint64_t step, size_t i, double t)
                   "still (README, granular scenes: not solved yet); stopping",
                   (unsigned long long)step, i, (unsigned long long)sim->scene->max_reactions, t);
     sim->status = NBEP_ENUMERIC;
+}
+
+void nbep__pred_lock_phase(pred_ctx *c, nbep_state *s, double dt, double t_local, thread_ws *w)
+{
+    size_t n_jam = 0;
+    for (size_t i = 0; i < s->n; i++)
+        if (!c->rest[i].still && in_jam(c, w, i))
+            c->jam_list[n_jam++] = (uint32_t)i;
+    const size_t first = w->n_fired;
+    /* the pairs in the order of their keys, whichever thread met them: the same bodies for any
+     * thread count (a pair's key names it; each met once in a round); a sphere joins one body
+     * a phase (lock_mark), so the bodies fire at most n spheres, the room kept for them */
+    for (uint64_t last = 0;;) {
+        uint64_t key = UINT64_MAX;
+        for (int t = 0; t < c->nt; t++)
+            for (size_t k = 0; k < c->ws[t].n_lock; k++)
+                if (c->ws[t].lock[k] > last && c->ws[t].lock[k] < key)
+                    key = c->ws[t].lock[k];
+        if (key == UINT64_MAX)
+            break;
+        last = key;
+        const size_t lo = (size_t)(key >> 32), hi = (size_t)(key & UINT32_MAX);
+        const size_t before = w->n_fired;
+        if (!c->lock_mark[lo] && !c->lock_mark[hi] && lockable(c, w, lo, hi) &&
+            jam_lock(c, s, w, lo, hi, dt, t_local, c->jam_list, n_jam))
+            for (size_t k = before; k < w->n_fired; k++)
+                c->lock_mark[w->fired[k]] = 1;
+    }
+    for (size_t k = first; k < w->n_fired; k++)
+        c->lock_mark[w->fired[k]] = 0;
 }

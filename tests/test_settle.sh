@@ -157,9 +157,9 @@ check "a row that fits its edge, tilted gravity, grid: frames identical for 1 an
 # it, so neither holding rule applies; pressed into the y-max wall, its spheres met one another
 # at zero time for ever (the TC model makes the meetings elastic, the minimum bounce feeds them),
 # and the run stopped at run.max_reactions in step 1 in every mode (a 100-sphere pour into a
-# 0.3 x 0.3 x 1.2 box stopped so at step 887 in cells mode). Now, in cells mode, jammed spheres
-# that meet move on as one body (jam_lock; README, granular scenes): the row falls whole, lands,
-# bounces and is held on the floor, every sphere where the walls keep it in y and x.
+# 0.3 x 0.3 x 1.2 box stopped so at step 887 in cells mode). Now jammed spheres that meet move
+# on as one body (jam_lock; README, granular scenes): the row falls whole, lands, bounces and
+# is held on the floor, every sphere where the walls keep it in y and x.
 cat >"$tmp/fall.deck" <<'DECK'
 run: { algorithm = "predictive"; steps = 600; dt = 1.0e-3; seed = 1; neighbors = "cells";
        max_reactions = 20000; };
@@ -199,6 +199,43 @@ check "a falling row, cells: all 5 held on the floor at step 600 (got $3 held, h
 timeout -k 5 60 bin/nbep run "$tmp/fall.deck" --quiet -t 2 -o "$tmp/fall-2.h5" 2>/dev/null
 check "a falling row, cells: frames identical for 1 and 2 threads" \
     "h5diff -q '$tmp/fall.h5' '$tmp/fall-2.h5' /frames /frames >/dev/null 2>&1"
+# grid and all-pairs modes make the bodies at a round's end, on one thread, the pairs in the
+# order of their keys (lock_phase): the same row; and the same frames on 1, 2 and 3 threads to
+# step 200, past the locks of step 1 and the landing (each run of the step-1 jam is some 10^4
+# rounds: on 3 threads sharing 2 busy cores one took 100 s for 600 steps, so 200 here)
+for mode in grid all; do
+    timeout -k 5 60 bin/nbep run "$tmp/fall.deck" --quiet -t 1 --set "run.neighbors=\"$mode\"" \
+        -o "$tmp/fall-$mode.h5" 2>"$tmp/fall-$mode.err"
+    rc=$?
+    f=$("$PY" -c 'import sys, h5py, numpy as np
+f = h5py.File(sys.argv[1], "r")
+p, v = f["/frames/position"][:], f["/frames/velocity"][:]
+line = np.abs(p[:, :, 1] - np.array([0.03, 0.09, 0.15, 0.21, 0.27])).max() <= 1e-12
+print(int(line), int((np.abs(v[-1]).sum(axis=1) == 0.0).sum()), f["/frames/step"][-1])' \
+        "$tmp/fall-$mode.h5" 2>/dev/null)
+    set -- ${f:-0 0 0}
+    check "a falling row, $mode: exit 0, in its line, all 5 held at step 600 (exit $rc; in line $1, $2 held, step $3; before: run.max_reactions at step 1)" \
+        "[ $rc -eq 0 ] && [ ! -s '$tmp/fall-$mode.err' ] && [ '$1' = 1 ] && [ '$2' = 5 ] && [ '$3' = 600 ]"
+    for t in 1 2 3; do
+        timeout -k 5 120 bin/nbep run "$tmp/fall.deck" --quiet -t "$t" -n 200 \
+            --set "run.neighbors=\"$mode\"" -o "$tmp/fall-$mode-$t.h5" 2>/dev/null
+    done
+    check "a falling row, $mode: frames identical for 1, 2 and 3 threads to step 200" \
+        "h5diff -q '$tmp/fall-$mode-1.h5' '$tmp/fall-$mode-2.h5' /frames /frames >/dev/null 2>&1 &&
+         h5diff -q '$tmp/fall-$mode-1.h5' '$tmp/fall-$mode-3.h5' /frames /frames >/dev/null 2>&1"
+done
+
+# A body takes in every sphere in the jam (in_jam: a tenth of JAM_HOLD reactions in the step),
+# not only the jammed ones: the row's ends react less often than its middle, and left out of
+# the body they fed it their minimum bounces again at once; the middle pair, locked again and
+# again, stopped at run.max_reactions = 11000 in step 1 in every mode.
+for mode in cells grid all; do
+    timeout -k 5 60 bin/nbep run "$tmp/fall.deck" --quiet -t 1 -n 100 --set "run.neighbors=\"$mode\"" \
+        --set run.max_reactions=11000 -o "$tmp/fall11-$mode.h5" 2>"$tmp/fall11-$mode.err"
+    rc=$?
+    check "a falling row at run.max_reactions = 11000, $mode: its ends join the body, 100 steps run (exit $rc; before: run.max_reactions at step 1)" \
+        "[ $rc -eq 0 ] && [ ! -s '$tmp/fall11-$mode.err' ]"
+done
 
 # The falling row with its spheres rising and falling at different speeds ([0.02, 0, 0.01,
 # 0.03, -0.01] m/s), all leaving the x-max wall at 0.1 m/s: the body each lock makes takes its
