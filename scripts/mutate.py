@@ -2023,6 +2023,10 @@ MUTANTS = [
     ("lock-list-jammed-only", "src/pred_react.c",
      "        if (!c->rest[i].still && in_jam(c, w, i))",
      "        if (!c->rest[i].still && jammed(c, w, i))", ["tests/test_settle.sh"], None),
+    # a response along the planes never adds energy (2026-12-01)
+    ("pair-along-energy-unguarded", "src/physics.c",
+     "    if (ke1 > ke0 * (1.0 + 1e-9)) {", "    if (0) {",
+     ["test_granular", "tests/test_settle.sh"], None),
     ("jam-lock-not-along", "src/pred_react.c",
      "    v = nbep_contact_tangent(v, n, planes.n, (1u << planes.n) - 1u);\n", "",
      ["tests/test_settle.sh"], None),

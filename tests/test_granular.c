@@ -1584,6 +1584,42 @@ static void test_pair_on_a_floor_responds_along_it(void **state)
     }
 }
 
+/* A response never adds energy: the pair of the bouncing row (test_settle.sh), sphere 1 at
+ * y = 0.21 keeping the y-min wall (normal +y) through its body, sphere 2 at y = 0.27 on the
+ * y-max wall (-y), their line of centres y but for 3e-9 along x, sphere 1 still moving across
+ * its wall at 1e-8 m/s. Along the mobilities the walls leave (3e-9 of the line each) the
+ * formula shot sphere 2 off at 1.9 m/s; the pair now responds as a free one, which with e <= 1
+ * adds none, and the pair leaves receding. Where the velocities lie along the planes (sphere 1
+ * not moving across its wall), the mobilities stand and the energy is kept (e = 1). */
+static void test_pair_between_walls_never_gains_energy(void **state)
+{
+    (void)state;
+    const double es[] = {1.0, 0.5};
+    nbep_vec3 walls[2] = {{0, 1, 0}, {0, -1, 0}};
+    for (size_t k = 0; k < 2; k++)
+        for (int across = 0; across < 2; across++) {
+            nbep_vec3 p1 = {0.27, 0.21, 0.18875}, p2 = {0.27 + 1.8e-10, 0.27, 0.18875};
+            nbep_vec3 v1 = {-0.0187, across ? 1.06e-8 : 0.0, -0.45}, v2 = {-0.025, 0.0, -0.45};
+            nbep_vec3 d = nbep_vec3_sub(p2, p1);
+            nbep_vec3 n = nbep_vec3_scale(d, 1.0 / nbep_vec3_norm(d));
+            unsigned act;
+            nbep_vec3 d1 = nbep_contact_project(nbep_vec3_scale(n, -1.0), &walls[0], 1, &act);
+            nbep_vec3 d2 = nbep_contact_project(n, &walls[1], 1, &act);
+            assert_true(nbep_vec3_norm(d1) < 1e-8 && nbep_vec3_norm(d2) < 1e-8);
+            if (!across) /* closing by sphere 2's x speed across the 3e-9 of the line */
+                v2.x = -0.0187 - 1e-3;
+            double ke0 = nbep_vec3_dot(v1, v1) + nbep_vec3_dot(v2, v2);
+            assert_true(nbep_vec3_dot(d, nbep_vec3_sub(v2, v1)) < 0.0);
+            assert_true(nbep_physics_respond_pair_along(p1, p2, &v1, &v2, 1.0, 1.0, es[k], d1, d2));
+            double ke1 = nbep_vec3_dot(v1, v1) + nbep_vec3_dot(v2, v2);
+            /* a few roundings of energies ~0.4 */
+            assert_true(ke1 <= ke0 * (1.0 + 1e-14));
+            assert_true(nbep_vec3_norm(nbep_vec3_sub(v2, (nbep_vec3){-0.025, 0.0, -0.45})) < 0.01 ||
+                        !across);
+            assert_false(nbep_vec3_dot(d, nbep_vec3_sub(v2, v1)) < 0.0);
+        }
+}
+
 /* The same in a run (issue 9): a sphere at rest on the floor of a box, struck from above at a
  * slant, slides off along the floor, its centre at the height of resting in every frame (the
  * floor took the normal part of the impulse on it), while the striker bounces up and away. With
@@ -1625,6 +1661,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_contact_projection),
         cmocka_unit_test(test_pair_on_a_floor_responds_along_it),
+        cmocka_unit_test(test_pair_between_walls_never_gains_energy),
         cmocka_unit_test(test_struck_sphere_on_a_floor_slides_along_it),
         cmocka_unit_test(test_stack_stays_put_predictive),
         cmocka_unit_test(test_stack_does_not_sink_naive_seminaive),
