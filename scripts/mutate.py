@@ -2023,6 +2023,9 @@ MUTANTS = [
     ("lock-list-jammed-only", "src/pred_react.c",
      "        if (!c->rest[i].still && in_jam(c, w, i))",
      "        if (!c->rest[i].still && jammed(c, w, i))", ["tests/test_settle.sh"], None),
+    ("lock-needs-both-jammed", "src/pred_react.c",
+     "((jammed(c, w, lo) && in_jam(c, w, hi)) || (jammed(c, w, hi) && in_jam(c, w, lo)));",
+     "jammed(c, w, lo) && jammed(c, w, hi);", ["tests/test_settle.sh"], None),
     # a response along the planes never adds energy (2026-12-01)
     ("pair-along-energy-unguarded", "src/physics.c",
      "    if (ke1 > ke0 * (1.0 + 1e-9)) {", "    if (0) {",

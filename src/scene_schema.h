@@ -61,8 +61,9 @@ enum {
       "scenes): the run stops with exit 1, its frames kept, instead of never ending the step "    \
       "(with e < 1 and gravity a sphere is first held where it is after "                        \
       NBEP_SCHEMA_XSTR(NBEP_JAM_HOLD) " reactions in a "                                          \
-      "step, at its next meeting with a held sphere or, carried by planes, any sphere; two "   \
-      "such spheres that meet move on as one body with those touching them)")                  \
+      "step, at its next meeting with a held sphere or, carried by planes, any sphere; such "  \
+      "a sphere that meets one with " NBEP_SCHEMA_XSTR(NBEP_JAM_JOIN) " reactions in the step "  \
+      "moves on as one body with it and every such sphere touching them)")                       \
     X(PHYSICS, "physics", GROUP, 0, NULL, "-", "physics")                                          \
     X(PHYSICS_GRAVITY, "physics.gravity", VEC3, F_SCALE,                                           \
       "[0.0, 0.0, 0.0]", NULL,                                                                     \

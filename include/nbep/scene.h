@@ -63,6 +63,9 @@ typedef struct nbep_sweep_axis {
  * reacted this many times in one step is held where it is at its next meeting with a held
  * sphere (any speed) or, carried by planes, any sphere. Here because --help-deck names it. */
 #define NBEP_JAM_HOLD 10000
+/* A sphere in the jam (pred_react.c, in_jam): this many reactions in the step; a jammed
+ * sphere that meets one moves on as one body with it (jam_lock). Here for --help-deck. */
+#define NBEP_JAM_JOIN 1000
 
 /* physics.carry_drop's default (algo_predictive.c, carried): a held sphere struck no faster
  * than a fall from this fraction of its radius stays held when its faces take the push. Here
