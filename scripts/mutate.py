@@ -2006,13 +2006,18 @@ MUTANTS = [
      "        if (fabs(nbep_vec3_dot(v, n[q])) <= 0.0) {", ["tests/test_settle.sh"], None),
     ("mobility-roundoff-kept", "src/pred_react.c",
      "    return nbep_vec3_norm(d) <= NBEP_CONTACT_TOL ? ZERO3 : d;", "    return d;",
-     ["tests/test_settle.sh"], None),
+     ["tests/test_settle.sh"],
+     "equivalent since responses never add energy (2026-12-01): a mobility of round-off along "
+     "the line either adds energy, and the pair then takes the free response, which is what "
+     "zero mobilities give, or adds none and reflects the sphere along its planes, as the "
+     "formula means to; the bouncing row that killed it (1.5e5 m/s) is now caught by the "
+     "energy test. Kept: it spares the response a division by round-off squared"),
     # grid and all-pairs modes: the bodies at a round's end, on thread 0 (lock_phase)
     ("lock-phase-off", "src/algo_predictive.c",
      "                        nbep__pred_lock_phase(c, s, sim->dt, t_min - T0, w);",
      "                        (void)0;", ["tests/test_settle.sh"], None),
     ("lock-phase-pair-only", "src/pred_react.c",
-     "            c->jam_list[n_jam++] = (uint32_t)i;", "            (void)0;",
+     "                lock_one(&x, (uint32_t)k);", "                (void)k;",
      ["tests/test_settle.sh"], None),
     ("lock-rounds-in-reaction", "src/pred_react.c",
      "        if (!c->ev) { /* rounds modes", "        if (0) { /* rounds modes",
@@ -2020,15 +2025,12 @@ MUTANTS = [
     # a body takes in the spheres in the jam, not the jammed alone (in_jam, 2026-12-01)
     ("jam-join-jammed-only", "src/pred_react.c",
      "c->jam[k].n >= JAM_JOIN;", "c->jam[k].n >= JAM_HOLD;", ["tests/test_settle.sh"], None),
-    ("lock-list-jammed-only", "src/pred_react.c",
-     "        if (!c->rest[i].still && in_jam(c, w, i))",
-     "        if (!c->rest[i].still && jammed(c, w, i))", ["tests/test_settle.sh"], None),
     ("lock-needs-both-jammed", "src/pred_react.c",
      "((jammed(c, w, lo) && in_jam(c, w, hi)) || (jammed(c, w, hi) && in_jam(c, w, lo)));",
      "jammed(c, w, lo) && jammed(c, w, hi);", ["tests/test_settle.sh"], None),
     # a response along the planes never adds energy (2026-12-01)
     ("pair-along-energy-unguarded", "src/physics.c",
-     "    if (ke1 > ke0 * (1.0 + 1e-9)) {", "    if (0) {",
+     "    if (!(ke1 <= ke0 * (1.0 + 1e-9))) {", "    if (0) {",
      ["test_granular", "tests/test_settle.sh"], None),
     ("jam-lock-not-along", "src/pred_react.c",
      "    v = nbep_contact_tangent(v, n, planes.n, (1u << planes.n) - 1u);\n", "",

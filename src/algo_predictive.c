@@ -85,7 +85,6 @@ static void pred_destroy(void *p)
     nbep_free_aligned(c->face);
     nbep_free_aligned(c->settle);
     nbep_free_aligned(c->jam);
-    free(c->jam_list);
     free(c->lock_mark);
     nbep_free_aligned(c->flags);
     nbep_free_aligned((void *)c->claim[0]);
@@ -244,7 +243,7 @@ static size_t pred_bytes(const nbep_scene *sc, int nt)
         bytes += n * sizeof *c->tclaim;
     const bool lock = plan_lock(&p); /* jammed bodies */
     if (lock)
-        bytes += n * (sizeof *c->jam_list + sizeof *c->lock_mark);
+        bytes += n * sizeof *c->lock_mark;
     bytes += (size_t)nt * sizeof *c->ws;
     for (int t = 0; t < nt; t++) {
         const size_t own = plan_own(&p, t);
@@ -314,12 +313,10 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     if (c->order_step)
         c->tclaim = nbep_alloc_aligned(n, sizeof *c->tclaim);
     c->ws = nbep_alloc_aligned((size_t)sim->nt, sizeof *c->ws);
-    if (plan_lock(&p)) { /* jammed bodies (lock_phase) */
-        c->jam_list = malloc((n ? n : 1) * sizeof *c->jam_list);
+    if (plan_lock(&p)) /* jammed bodies (lock_phase) */
         c->lock_mark = calloc(n ? n : 1, sizeof *c->lock_mark);
-    }
     if (!c->ver || !c->tau || (!p.free_flight && (!c->rest || !c->aeff)) ||
-        (plan_lock(&p) && (!c->jam_list || !c->lock_mark)) ||
+        (plan_lock(&p) && !c->lock_mark) ||
         (p.tc_model && !c->t_last) || (p.cage_model && !c->face) || (p.jam_model && !c->jam) ||
         (p.settle_model && !c->settle) ||
         !c->ws ||
@@ -422,14 +419,14 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
             w->redo = malloc(own * sizeof *w->redo);
             w->rel = malloc(own * sizeof *w->rel);
             w->claimed = malloc(2 * own * sizeof *w->claimed);
-            if (c->jam_list)
+            if (c->lock_mark)
                 w->lock = malloc((own ? own : 1) * sizeof *w->lock);
         }
         if (c->order_step)
             w->tclaimed = malloc(2 * own * sizeof *w->tclaimed);
         if (!w->fired || !w->part ||
             (rounds && (!w->cand || !w->redo || !w->rel || !w->claimed)) ||
-            (c->jam_list && !w->lock) ||
+            (c->lock_mark && !w->lock) ||
             (c->order_step && !w->tclaimed)) {
             pred_destroy(c);
             NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the predictive algorithm");

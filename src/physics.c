@@ -128,7 +128,7 @@ bool nbep_physics_respond_pair_along(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, 
      * and far below a gain that matters. */
     const double ke0 = m1 * nbep_vec3_dot(a1, a1) + m2 * nbep_vec3_dot(a2, a2),
                  ke1 = m1 * nbep_vec3_dot(*v1, *v1) + m2 * nbep_vec3_dot(*v2, *v2);
-    if (ke1 > ke0 * (1.0 + 1e-9)) {
+    if (!(ke1 <= ke0 * (1.0 + 1e-9))) { /* (NaN too) */
         *v1 = a1;
         *v2 = a2;
         return nbep_physics_respond_pair(p1, p2, v1, v2, m1, m2, e);

@@ -186,10 +186,9 @@ typedef struct pred_ctx {
      * (free_flight: no contact can rest or hold, every sphere flies with a = 0), t_last when
      * the TC model cannot change a restitution (e = 1 or tc = 0) */
     rest_set *rest;               /* owned: the contacts holding each sphere */
-    uint32_t *jam_list;           /* owned, rounds modes with settling: lock_phase's spheres
-                                   * in the jam (in_jam), not held */
-    uint8_t *lock_mark;           /* owned, with jam_list: 1 for a sphere in a body of the
-                                   * lock_phase under way, else 0 */
+    uint8_t *lock_mark;           /* owned, rounds modes with settling: 1 for a sphere in a
+                                   * body of the lock_phase under way (no other body takes
+                                   * it), else 0 */
     nbep_vec3 *aeff;              /* owned: acceleration each sphere flies with (rest_solve) */
     double *t_last;               /* owned: time of each sphere's last sphere collision (TC) */
     face_met *face;               /* owned with t_last when something accelerates: each

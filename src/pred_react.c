@@ -525,7 +525,8 @@ typedef struct lock_walk {
 static void lock_one(void *u, uint32_t q)
 {
     lock_walk *x = u;
-    if (x->full || x->c->rest[q].still || !in_jam(x->c, x->w, q))
+    if (x->full || x->c->rest[q].still || !in_jam(x->c, x->w, q) ||
+        (x->c->lock_mark && x->c->lock_mark[q])) /* (rounds modes: in a body of this phase) */
         return;
     for (size_t i = 0; i < x->n; i++)
         if (x->m[i] == q)
@@ -555,7 +556,7 @@ static bool lockable(const pred_ctx *c, const thread_ws *w, size_t lo, size_t hi
 
 /* Jammed bodies (README, granular scenes): jammed spheres lo and hi meet, neither held (cells
  * mode, whose loop is serial: in the reaction, walking the neighbour lists; the rounds modes:
- * at the round's end, walking jam_list, nbep__pred_lock_phase). With every sphere in the jam that
+ * at the round's end, walking every sphere, nbep__pred_lock_phase). With every sphere in the jam that
  * touches them, contact after contact (lock_walk), they move on as one body: each takes the
  * body's velocity (its spheres' mean by mass, along its contacts), its contacts (the planes any
  * of them touches, less any it moves to or from faster than the rest speed) and its
@@ -566,7 +567,7 @@ static bool lockable(const pred_ctx *c, const thread_ws *w, size_t lo, size_t hi
  * it, it stops on them (settling holds it). False, changing no sphere's motion, where the body
  * has more than LOCK_MAX spheres. */
 static bool jam_lock(pred_ctx *c, nbep_state *s, thread_ws *w, size_t lo, size_t hi, double dt,
-                     double t_local, const uint32_t *jam_list, size_t n_jam)
+                     double t_local)
 {
     /* (a sphere without acceleration of its own, in a scene where others have one: touching
      * to 0, not 0/0, which would join every sphere of the block in the jam) */
@@ -577,9 +578,9 @@ static bool jam_lock(pred_ctx *c, nbep_state *s, thread_ws *w, size_t lo, size_t
     for (x.at = 0; x.at < x.n && !x.full; x.at++)
         if (c->ev) /* cells mode: the spheres that can touch it */
             nbep_evloop_visit_block(c->ev, x.m[x.at], lock_one, &x);
-        else /* rounds modes: every sphere in the jam (lock_phase) */
-            for (size_t k = 0; k < n_jam; k++)
-                lock_one(&x, jam_list[k]);
+        else /* rounds modes: every sphere (lock_phase; lock_one takes those in the jam) */
+            for (size_t k = 0; k < s->n; k++)
+                lock_one(&x, (uint32_t)k);
     if (x.full)
         return false;
     rest_set planes = {.n = 0}; /* those its spheres touch (a contact kept from an earlier
@@ -814,7 +815,7 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
             fire(c, w, s, hi, false);
             return;
         }
-        if (jam_lock(c, s, w, lo, hi, dt, t_local, NULL, 0))
+        if (jam_lock(c, s, w, lo, hi, dt, t_local))
             return;
     }
     /* hi's image that touches lo (the same as pos[hi] without periodic axes) */
@@ -894,10 +895,6 @@ void nbep__pred_jam_fail(nbep_sim *sim, uint64_t step, size_t i, double t)
 
 void nbep__pred_lock_phase(pred_ctx *c, nbep_state *s, double dt, double t_local, thread_ws *w)
 {
-    size_t n_jam = 0;
-    for (size_t i = 0; i < s->n; i++)
-        if (!c->rest[i].still && in_jam(c, w, i))
-            c->jam_list[n_jam++] = (uint32_t)i;
     const size_t first = w->n_fired;
     /* the pairs in the order of their keys, whichever thread met them: the same bodies for any
      * thread count (a pair's key names it; each met once in a round); a sphere joins one body
@@ -914,7 +911,7 @@ void nbep__pred_lock_phase(pred_ctx *c, nbep_state *s, double dt, double t_local
         const size_t lo = (size_t)(key >> 32), hi = (size_t)(key & UINT32_MAX);
         const size_t before = w->n_fired;
         if (!c->lock_mark[lo] && !c->lock_mark[hi] && lockable(c, w, lo, hi) &&
-            jam_lock(c, s, w, lo, hi, dt, t_local, c->jam_list, n_jam))
+            jam_lock(c, s, w, lo, hi, dt, t_local))
             for (size_t k = before; k < w->n_fired; k++)
                 c->lock_mark[w->fired[k]] = 1;
     }
