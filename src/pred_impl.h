@@ -186,6 +186,9 @@ typedef struct pred_ctx {
      * (free_flight: no contact can rest or hold, every sphere flies with a = 0), t_last when
      * the TC model cannot change a restitution (e = 1 or tc = 0) */
     rest_set *rest;               /* owned: the contacts holding each sphere */
+    bool locking;                 /* rounds modes: thread 0 is in nbep__pred_lock_phase, the
+                                   * others waiting at its barrier (jam_lock's walk reads and
+                                   * writes any sphere: nowhere else) */
     uint8_t *lock_mark;           /* owned, rounds modes with settling: 1 for a sphere in a
                                    * body of the lock_phase under way (no other body takes
                                    * it), else 0 */

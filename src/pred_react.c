@@ -4,6 +4,7 @@
  * model. Every mode reacts here (the rounds' react_phase, cells mode's cells_react). */
 #include "pred_impl.h"
 
+#include <assert.h>
 #include <float.h>
 #include <string.h>
 
@@ -578,9 +579,12 @@ static bool jam_lock(pred_ctx *c, nbep_state *s, thread_ws *w, size_t lo, size_t
     for (x.at = 0; x.at < x.n && !x.full; x.at++)
         if (c->ev) /* cells mode: the spheres that can touch it */
             nbep_evloop_visit_block(c->ev, x.m[x.at], lock_one, &x);
-        else /* rounds modes: every sphere (lock_phase; lock_one takes those in the jam) */
+        else { /* rounds modes: every sphere (lock_phase; lock_one takes those in the jam),
+                * while no other thread runs: never in a reaction, which runs beside others */
+            assert(c->locking);
             for (size_t k = 0; k < s->n; k++)
                 lock_one(&x, (uint32_t)k);
+        }
     if (x.full)
         return false;
     rest_set planes = {.n = 0}; /* those its spheres touch (a contact kept from an earlier
@@ -896,6 +900,7 @@ void nbep__pred_jam_fail(nbep_sim *sim, uint64_t step, size_t i, double t)
 void nbep__pred_lock_phase(pred_ctx *c, nbep_state *s, double dt, double t_local, thread_ws *w)
 {
     const size_t first = w->n_fired;
+    c->locking = true;
     /* the pairs in the order of their keys, whichever thread met them: the same bodies for any
      * thread count (a pair's key names it; each met once in a round); a sphere joins one body
      * a phase (lock_mark), so the bodies fire at most n spheres, the room kept for them */
@@ -917,4 +922,5 @@ void nbep__pred_lock_phase(pred_ctx *c, nbep_state *s, double dt, double t_local
     }
     for (size_t k = first; k < w->n_fired; k++)
         c->lock_mark[w->fired[k]] = 0;
+    c->locking = false;
 }
