@@ -2024,7 +2024,8 @@ MUTANTS = [
      ["tests/test_settle.sh"], None),
     # a body takes in the spheres in the jam, not the jammed alone (in_jam, 2026-12-01)
     ("jam-join-jammed-only", "src/pred_react.c",
-     "c->jam[k].n >= JAM_JOIN;", "c->jam[k].n >= JAM_HOLD;", ["tests/test_settle.sh"], None),
+     "return step_reactions(c, w, k) >= JAM_JOIN;", "return step_reactions(c, w, k) >= JAM_HOLD;",
+     ["tests/test_settle.sh"], None),
     ("lock-needs-both-jammed", "src/pred_react.c",
      "((jammed(c, w, lo) && in_jam(c, w, hi)) || (jammed(c, w, hi) && in_jam(c, w, lo)));",
      "jammed(c, w, lo) && jammed(c, w, hi);", ["tests/test_settle.sh"], None),

@@ -199,9 +199,6 @@ static size_t plan_own(const pred_plan *p, int t)
     return own;
 }
 
-/* The room of thread t's list of fired spheres: 2 per reaction, 1 per let-go; cells mode: one
- * reaction's 3 and every held sphere letting go after it, on the thread that runs the event
- * loop (and a team's helper, whose reactions change their own two spheres only). */
 /* Rounds modes that settle, in time order: jammed bodies, made at a round's end on thread 0
  * (lock_phase). */
 static bool plan_lock(const pred_plan *p)
@@ -209,6 +206,9 @@ static bool plan_lock(const pred_plan *p)
     return p->rounds && p->settle_model && !p->order_step;
 }
 
+/* The room of thread t's list of fired spheres: 2 per reaction, 1 per let-go; cells mode: one
+ * reaction's 3 and every held sphere letting go after it, on the thread that runs the event
+ * loop (and a team's helper, whose reactions change their own two spheres only). */
 static size_t plan_fired(const pred_plan *p, int t)
 {
     if (p->rounds) /* thread 0: and every sphere, for the bodies of a lock_phase */
@@ -946,7 +946,7 @@ static void pred_run(nbep_sim *sim, void *p)
                 nbep_barrier_wait(bar);
                 react_phase(c, s, sim->scene, par, T0, t_min, stamp0 + round + 1, w, cnt, mx);
                 nbep_barrier_wait(bar);
-                /* pairs of jammed spheres that met: their bodies, by thread 0 alone (a body
+                /* pairs that lock (lockable) that met: their bodies, by thread 0 alone (a body
                  * reaches spheres other threads own), the same decision on every thread of
                  * the crew (the others' lists are empty: reset at each react phase) */
                 size_t locks = 0;

@@ -97,8 +97,9 @@ typedef struct thread_ws {
     size_t n_fired;
     uint32_t *rel;            /* owned: own held spheres to let go this round */
     size_t n_rel;
-    uint64_t *lock;           /* owned, rounds modes with settling: the keys of pairs of jammed
-                               * spheres that met this round, whose body lock_phase makes */
+    uint64_t *lock;           /* owned, rounds modes with settling: the keys of pairs that
+                               * lock (a jammed sphere and one in the jam) that met this
+                               * round, whose body lock_phase makes */
     size_t n_lock;
     uint64_t woken;           /* held spheres this thread changed so far (react, let_go) */
     size_t n_settle;          /* own settle candidates at the last step's end (settle_count) */
@@ -430,8 +431,8 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
                       thread_ws *w, nbep_counters *cnt, nbep_thread_max *mx);
 /* Sphere i is held and a sphere it rests on has reacted since it took the load. */
 bool nbep__pred_held_on_changed(const pred_ctx *c, size_t i);
-/* Rounds modes, thread 0 between barriers after a react phase whose pairs of jammed spheres
- * were noted (thread_ws.lock): each pair's body, in the order of their keys. */
+/* Rounds modes, thread 0 between barriers after a react phase whose pairs that lock were
+ * noted (thread_ws.lock): each pair's body, in the order of their keys. */
 void nbep__pred_lock_phase(pred_ctx *c, nbep_state *s, double dt, double t_local, thread_ws *w);
 
 /* Held sphere i lets go of the supports that reacted, at local time t_local. */

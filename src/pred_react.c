@@ -466,9 +466,15 @@ static void leave_held(const pred_ctx *c, nbep_state *s, size_t k, size_t j, dou
  * where it is, on its planes, j and what it touches (pocket_gather, pocket_planes, within
  * the settle tolerance). See JAM_HOLD. */
 #define NO_SPHERE SIZE_MAX
+/* Sphere k's reactions in this step (run.max_reactions counts them: fire). */
+static uint32_t step_reactions(const pred_ctx *c, const thread_ws *w, size_t k)
+{
+    return c->jam && c->jam[k].step == w->jam_step ? c->jam[k].n : 0;
+}
+
 static bool jammed(const pred_ctx *c, const thread_ws *w, size_t k)
 {
-    return c->jam && c->jam[k].step == w->jam_step && c->jam[k].n >= JAM_HOLD;
+    return step_reactions(c, w, k) >= JAM_HOLD;
 }
 
 /* Whether sphere k takes part in a jam: JAM_JOIN reactions in this step. A jammed body
@@ -484,7 +490,7 @@ static bool jammed(const pred_ctx *c, const thread_ws *w, size_t k)
 #define JAM_JOIN ((uint32_t)NBEP_JAM_JOIN) /* nbep/scene.h: --help-deck names it */
 static bool in_jam(const pred_ctx *c, const thread_ws *w, size_t k)
 {
-    return c->jam && c->jam[k].step == w->jam_step && c->jam[k].n >= JAM_JOIN;
+    return step_reactions(c, w, k) >= JAM_JOIN;
 }
 
 static bool jam_hold(pred_ctx *c, nbep_state *s, thread_ws *w, size_t k, size_t j, double dt)
@@ -510,8 +516,9 @@ static bool jam_hold(pred_ctx *c, nbep_state *s, thread_ws *w, size_t k, size_t 
 
 /* A jammed body (jam_lock): its spheres, found one contact after another from the pair that
  * met, every one in the jam (in_jam), none held, each touching one found before to within tol
- * (the settle tolerance, as the pockets of the jam hold). 64: the bodies of the pours measured had 2 to
- * 7, and each lock walks every member's block. */
+ * (the settle tolerance, as the pockets of the jam hold). 64: the bodies of the pours measured
+ * had 2 to 7, and each lock walks, for every member, its block (cells mode) or every sphere
+ * (the rounds modes). */
 #define LOCK_MAX 64
 typedef struct lock_walk {
     pred_ctx *c;
@@ -520,7 +527,7 @@ typedef struct lock_walk {
     double t_local, tol;
     uint32_t m[LOCK_MAX];
     size_t n, at;
-    bool full; /* a jammed sphere touches the body past LOCK_MAX: no lock */
+    bool full; /* a sphere in the jam touches the body past LOCK_MAX: no lock */
 } lock_walk;
 
 static void lock_one(void *u, uint32_t q)
@@ -555,14 +562,13 @@ static bool lockable(const pred_ctx *c, const thread_ws *w, size_t lo, size_t hi
            ((jammed(c, w, lo) && in_jam(c, w, hi)) || (jammed(c, w, hi) && in_jam(c, w, lo)));
 }
 
-/* Jammed bodies (README, granular scenes): jammed spheres lo and hi meet, neither held (cells
- * mode, whose loop is serial: in the reaction, walking the neighbour lists; the rounds modes:
- * at the round's end, walking every sphere, nbep__pred_lock_phase). With every sphere in the jam that
- * touches them, contact after contact (lock_walk), they move on as one body: each takes the
- * body's velocity (its spheres' mean by mass, along its contacts), its contacts (the planes any
- * of them touches, less any it moves to or from faster than the rest speed) and its
- * acceleration on them (its spheres' mean). The
- * limit of the inelastic collapse that the TC model stops short of: a row spanning a box
+/* Jammed bodies (README, granular scenes): lo and hi, lockable, meet (cells mode, whose loop
+ * is serial: in the reaction, walking the neighbour lists; the rounds modes: at the round's
+ * end, walking every sphere, nbep__pred_lock_phase). With every sphere in the jam that touches
+ * them, contact after contact (lock_walk), they move on as one body: each takes the body's
+ * velocity (its spheres' mean by mass, along its contacts), its contacts (the planes any of
+ * them touches, less any it moves to or from faster than the rest speed) and its acceleration
+ * on them (its spheres' mean). The limit of the inelastic collapse that the TC model stops short of: a row spanning a box
  * exactly, in mid-air and pressed into one wall by tilted gravity, met itself at zero time for
  * ever, fed by the minimum bounce at the pressed end (test_settle.sh). Where its contacts carry
  * it, it stops on them (settling holds it). False, changing no sphere's motion, where the body
