@@ -948,13 +948,15 @@ static void pred_run(nbep_sim *sim, void *p)
                 nbep_barrier_wait(bar);
                 /* pairs that lock (lockable) that met: their bodies, by thread 0 alone (a body
                  * reaches spheres other threads own), the same decision on every thread of
-                 * the crew (the others' lists are empty: reset at each react phase) */
+                 * the crew; the crew's lists only, each reset at this round's react phase (a
+                 * thread out of the crew keeps the list of its last round in an earlier step's
+                 * crew) */
                 size_t locks = 0;
                 for (int t = 0; t < crew; t++)
                     locks += c->ws[t].n_lock;
                 if (locks) {
                     if (tid == 0)
-                        nbep__pred_lock_phase(c, s, sim->dt, t_min - T0, w);
+                        nbep__pred_lock_phase(c, s, crew, sim->dt, t_min - T0, w);
                     nbep_barrier_wait(bar);
                 }
                 /* a limit passed by this round's reactions, or by the let-go after them (seen

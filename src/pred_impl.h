@@ -432,8 +432,10 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
 /* Sphere i is held and a sphere it rests on has reacted since it took the load. */
 bool nbep__pred_held_on_changed(const pred_ctx *c, size_t i);
 /* Rounds modes, thread 0 between barriers after a react phase whose pairs that lock were
- * noted (thread_ws.lock): each pair's body, in the order of their keys. */
-void nbep__pred_lock_phase(pred_ctx *c, nbep_state *s, double dt, double t_local, thread_ws *w);
+ * noted (thread_ws.lock of the crew's threads, 0 .. crew - 1, the threads that ran it): each
+ * pair's body, in the order of their keys. */
+void nbep__pred_lock_phase(pred_ctx *c, nbep_state *s, int crew, double dt, double t_local,
+                           thread_ws *w);
 
 /* Held sphere i lets go of the supports that reacted, at local time t_local. */
 void nbep__pred_let_go(pred_ctx *c, nbep_state *s, size_t i, double dt, double t_local,

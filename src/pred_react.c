@@ -903,16 +903,23 @@ void nbep__pred_jam_fail(nbep_sim *sim, uint64_t step, size_t i, double t)
     sim->status = NBEP_ENUMERIC;
 }
 
-void nbep__pred_lock_phase(pred_ctx *c, nbep_state *s, double dt, double t_local, thread_ws *w)
+void nbep__pred_lock_phase(pred_ctx *c, nbep_state *s, int crew, double dt, double t_local,
+                           thread_ws *w)
 {
     const size_t first = w->n_fired;
     c->locking = true;
     /* the pairs in the order of their keys, whichever thread met them: the same bodies for any
      * thread count (a pair's key names it; each met once in a round); a sphere joins one body
-     * a phase (lock_mark), so the bodies fire at most n spheres, the room kept for them */
+     * a phase (lock_mark), so the bodies fire at most n spheres, the room kept for them. The
+     * crew's lists alone: a thread that the step's crew leaves out still holds the pairs of
+     * its last react phase, maybe steps before, and a body made of such a pair would depend on
+     * the crews, which the run picks by timing (a corner pour on 2 threads, grid mode, the
+     * ways in turn: a pair kept so from the step before was read in 603 lock phases of one
+     * step, in 12 of them lockable and not met; a body of a pair met had taken it in each
+     * time, so the frames stayed the one thread's) */
     for (uint64_t last = 0;;) {
         uint64_t key = UINT64_MAX;
-        for (int t = 0; t < c->nt; t++)
+        for (int t = 0; t < crew; t++)
             for (size_t k = 0; k < c->ws[t].n_lock; k++)
                 if (c->ws[t].lock[k] > last && c->ws[t].lock[k] < key)
                     key = c->ws[t].lock[k];
