@@ -141,6 +141,7 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
 int main(int argc, char **argv)
 {
     gsl_set_error_handler_off();
+    nbep_memory_init();
     nbep_output_library_init();
     /* Before anything is read or written: a job's SIGTERM at any moment ends the run at the
      * next step's end with every frame so far saved (or within a long step, after the step

@@ -11,7 +11,7 @@ nbep_status nbep_nblist_init(nbep_nblist *l, size_t n, nbep_diag *d)
     memset(l, 0, sizeof *l);
     if (n < UINT32_MAX) {
         l->n = n;
-        l->sp = calloc(n ? n : 1, sizeof *l->sp);
+        l->sp = nbep_alloc_aligned(n ? n : 1, sizeof *l->sp);
     }
     if (!l->sp) {
         nbep_nblist_fini(l);
@@ -22,7 +22,7 @@ nbep_status nbep_nblist_init(nbep_nblist *l, size_t n, nbep_diag *d)
 
 void nbep_nblist_fini(nbep_nblist *l)
 {
-    free(l->sp);
+    nbep_free_aligned(l->sp);
     free(l->pool);
     memset(l, 0, sizeof *l);
 }
@@ -37,6 +37,7 @@ static bool reserve(nbep_nblist *l, size_t need, size_t spare_div)
     uint32_t *p = realloc(l->pool, cap * sizeof *p);
     if (!p)
         return false;
+    nbep_huge_pages(p, cap * sizeof *p); /* read at random, as the spheres' arrays are */
     l->pool = p;
     l->pool_cap = cap;
     return true;

@@ -18,6 +18,9 @@
 #include <string.h>
 #include <sys/resource.h>
 #include <time.h>
+#ifdef __linux__
+#include <sys/mman.h>
+#endif
 
 void *nbep_alloc_aligned(size_t n, size_t size)
 {
@@ -28,10 +31,43 @@ void *nbep_alloc_aligned(size_t n, size_t size)
     bytes = (bytes + NBEP_CACHELINE - 1) / NBEP_CACHELINE * NBEP_CACHELINE;
     if (bytes == 0)
         bytes = NBEP_CACHELINE;
-    void *p = aligned_alloc(NBEP_CACHELINE, bytes);
+    /* a large array: from a huge page's start, its room a whole number of them; on huge
+     * pages (nbep_huge_pages) those it fills, and its last too where that makes at most a
+     * sixteenth of it more resident (an array of n doubles at n = 256000 is 2048000 bytes,
+     * 49 kB short of a huge page); the rest of its room is never touched, never resident */
+    const size_t room = (bytes + NBEP_HUGE - 1) / NBEP_HUGE * NBEP_HUGE;
+    const size_t huge = room - bytes <= bytes / 16 ? room : bytes / NBEP_HUGE * NBEP_HUGE;
+    void *p = huge ? aligned_alloc(NBEP_HUGE, room) : aligned_alloc(NBEP_CACHELINE, bytes);
+    if (p && huge)
+        nbep_huge_pages(p, huge);
     if (p)
         memset(p, 0, bytes);
     return p;
+}
+
+void nbep_memory_init(void)
+{
+#if defined(__GLIBC__) && defined(M_MMAP_THRESHOLD)
+    /* glibc serves a large allocation from a fresh mapping only up to a threshold that it
+     * raises when such a mapping is freed (the HDF5 library frees some as a run resumes): past
+     * it, from its heap, whose pages the freed blocks left resident as small pages, where a
+     * request for huge ones comes too late. A fixed threshold also gives the freed ones back
+     * at once. */
+    (void)mallopt(M_MMAP_THRESHOLD, (int)(NBEP_HUGE / 2));
+#endif
+}
+
+void nbep_huge_pages(void *p, size_t bytes)
+{
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    const uintptr_t lo = ((uintptr_t)p + NBEP_HUGE - 1) / NBEP_HUGE * NBEP_HUGE,
+                    hi = ((uintptr_t)p + bytes) / NBEP_HUGE * NBEP_HUGE;
+    if (hi > lo) /* a refusal (no such pages here) leaves small pages, which work as well */
+        (void)madvise((void *)lo, hi - lo, MADV_HUGEPAGE);
+#else
+    (void)p;
+    (void)bytes;
+#endif
 }
 
 void nbep_free_aligned(void *p)

@@ -1,7 +1,8 @@
 /* Tests of the shared helpers (compiler.h, util.c): the text of a byte count, which every size
  * nbep prints goes through (nbep check's memory and output lines printed "8.61e+04 MB" until
  * 2026-11-30): 3 significant figures in decimal units, the unit the one that keeps the rounded
- * figure below 1000; the text of a progress line's time to go; a path's directory. */
+ * figure below 1000; the text of a progress line's time to go; a path's directory; the
+ * engines' arrays, zeroed, aligned, and on huge pages where they fill them. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -9,7 +10,10 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
 
 #include "nbep/compiler.h"
 #include "nbep_test.h"
@@ -111,6 +115,81 @@ static void test_a_paths_directory(void **state)
     }
 }
 
+/* The arrays nbep_alloc_aligned makes, small and large: zero-filled, aligned to a cache line,
+ * and the large ones to a huge page. */
+static const size_t ARRAY_BYTES[] = {1, 100 * sizeof(double), 256000 * sizeof(double),
+                                     3 << 20, 8 << 20};
+
+static void test_arrays_are_zeroed_and_aligned(void **state)
+{
+    (void)state;
+    nbep_memory_init();
+    for (size_t k = 0; k < sizeof ARRAY_BYTES / sizeof *ARRAY_BYTES; k++) {
+        const size_t n = ARRAY_BYTES[k];
+        unsigned char *p = nbep_alloc_aligned(n, 1);
+        assert_non_null(p);
+        assert_int_equal((uintptr_t)p % NBEP_CACHELINE, 0);
+        if (n >= NBEP_HUGE - NBEP_HUGE / 16)
+            assert_int_equal((uintptr_t)p % NBEP_HUGE, 0);
+        size_t nonzero = 0;
+        for (size_t i = 0; i < n; i++)
+            nonzero += p[i] != 0;
+        assert_int_equal(nonzero, 0);
+        memset(p, 0xff, n); /* all of it is ours */
+        nbep_free_aligned(p);
+    }
+    assert_null(nbep_alloc_aligned(SIZE_MAX / 2, 4)); /* overflow */
+}
+
+/* Whether the kernel's mapping of address a asks for huge pages (the "hg" of its VmFlags in
+ * /proc/self/smaps): 1 yes, 0 no, -1 not found. */
+static int asks_huge(const void *a)
+{
+    FILE *f = fopen("/proc/self/smaps", "r");
+    if (!f)
+        return -1;
+    char line[512];
+    int in = 0, found = -1;
+    while (found < 0 && fgets(line, sizeof line, f)) {
+        unsigned long lo, hi;
+        if (sscanf(line, "%lx-%lx ", &lo, &hi) == 2) /* a mapping's first line ("Key:" the
+                                                       * others: none is hex then "-") */
+            in = (uintptr_t)a >= lo && (uintptr_t)a < hi;
+        else if (in && strncmp(line, "VmFlags:", 8) == 0)
+            found = strstr(line, " hg") != NULL;
+    }
+    fclose(f);
+    return found;
+}
+
+/* An array read at random is on huge pages where they are to be had (Linux's transparent huge
+ * pages): those it fills, and the last where at most a sixteenth of it more becomes resident,
+ * no other (an array of 256000 doubles: its one page; 3 MB: its first page, not its second,
+ * which would make a third more resident). */
+static void test_large_arrays_ask_for_huge_pages(void **state)
+{
+    (void)state;
+    if (access("/sys/kernel/mm/transparent_hugepage/enabled", R_OK) != 0 ||
+        access("/proc/self/smaps", R_OK) != 0)
+        skip(); /* no transparent huge pages here: small pages, which work as well */
+    nbep_memory_init();
+    unsigned char *d = nbep_alloc_aligned(256000, sizeof(double));
+    unsigned char *m3 = nbep_alloc_aligned(3 << 20, 1);
+    unsigned char *m8 = nbep_alloc_aligned(8 << 20, 1);
+    unsigned char *small = nbep_alloc_aligned(100, sizeof(double));
+    assert_true(d && m3 && m8 && small);
+    assert_int_equal(asks_huge(d), 1);
+    assert_int_equal(asks_huge(d + 256000 * sizeof(double) - 1), 1);
+    assert_int_equal(asks_huge(m3), 1);
+    assert_int_equal(asks_huge(m3 + (3 << 20) - 1), 0);
+    assert_int_equal(asks_huge(m8), 1);
+    assert_int_equal(asks_huge(m8 + (8 << 20) - 1), 1);
+    nbep_free_aligned(d);
+    nbep_free_aligned(m3);
+    nbep_free_aligned(m8);
+    nbep_free_aligned(small);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -120,6 +199,8 @@ int main(void)
         cmocka_unit_test(test_a_time_to_go_reads_in_the_unit_that_keeps_it_short),
         cmocka_unit_test(test_what_is_not_a_time_to_go_is_still_words),
         cmocka_unit_test(test_a_paths_directory),
+        cmocka_unit_test(test_arrays_are_zeroed_and_aligned),
+        cmocka_unit_test(test_large_arrays_ask_for_huge_pages),
     };
     return cmocka_run_group_tests_name("util", tests, NULL, NULL);
 }

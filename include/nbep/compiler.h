@@ -48,9 +48,20 @@
 #endif
 
 /* Allocates n * size bytes aligned to a cache line, zero-filled; NULL on failure or overflow.
- * Free with nbep_free_aligned (NULL-safe). */
+ * Free with nbep_free_aligned (NULL-safe). An array that fills a huge page (NBEP_HUGE) or
+ * nearly is aligned to one and asks for them (nbep_huge_pages). */
 void *nbep_alloc_aligned(size_t n, size_t size);
 void nbep_free_aligned(void *p);
+
+/* Asks the kernel to back the whole huge pages within [p, p + bytes) by huge pages
+ * (transparent huge pages, madvise mode; nothing where it has none): the engines' arrays are
+ * read at random, one sphere here and one there, and with small pages nearly each miss of the
+ * caches at N = 256000 was also a miss of the TLB. No effect on results. */
+#define NBEP_HUGE ((size_t)2 << 20)
+void nbep_huge_pages(void *p, size_t bytes);
+/* Once, before the run's arrays are made (main): every allocation of NBEP_HUGE / 2 bytes or
+ * more from a fresh mapping (glibc), whose pages nbep_huge_pages can still ask for. */
+void nbep_memory_init(void);
 
 /* Seconds on the monotonic clock (for durations only). */
 double nbep_now(void);
