@@ -27,6 +27,8 @@ void *nbep_alloc_aligned(size_t n, size_t size)
     if (size != 0 && n > SIZE_MAX / size)
         return NULL;
     size_t bytes = n * size;
+    if (bytes > SIZE_MAX - NBEP_HUGE) /* no such memory; the roundings below would wrap */
+        return NULL;
     /* aligned_alloc wants a multiple of the alignment; never ask for 0 bytes. */
     bytes = (bytes + NBEP_CACHELINE - 1) / NBEP_CACHELINE * NBEP_CACHELINE;
     if (bytes == 0)

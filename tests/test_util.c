@@ -139,6 +139,11 @@ static void test_arrays_are_zeroed_and_aligned(void **state)
         nbep_free_aligned(p);
     }
     assert_null(nbep_alloc_aligned(SIZE_MAX / 2, 4)); /* overflow */
+    /* sizes that fit a size_t but whose roundings would not (a request of SIZE_MAX bytes
+     * returned a block of 64 before 2026-12-01) */
+    assert_null(nbep_alloc_aligned(SIZE_MAX, 1));
+    assert_null(nbep_alloc_aligned(SIZE_MAX - 10, 1));
+    assert_null(nbep_alloc_aligned(1, SIZE_MAX - (1u << 20)));
 }
 
 /* Whether the kernel's mapping of address a asks for huge pages (the "hg" of its VmFlags in
