@@ -18,6 +18,14 @@
 #   OUT          where the raw rows and the scratch builds go (default build/bench-dense)
 #   NBEP         the nbep binary (default bin/nbep; a wrapper script for a node that lacks the
 #                libraries, for example)
+#   PAIRED       1: nbep's one-thread run and EDMD's measured run at the same time, one on each
+#                of the first two CPUs (taskset; they swap CPUs each repeat), so that both meet
+#                the same load, as scripts/ab-pair.sh pairs two builds of nbep; the table adds
+#                the median of the repeats' own ratios. On this project's shared 2-core machine
+#                one engine's repeats, run one after the other, differed by up to 1.6 times
+#                (2026-12-01), and so did the ratios of medians. The two share the caches and
+#                the memory while they run, as they do not when run apart. EDMD's set-up run
+#                (to 0.1) runs alone, before the pair. Other thread counts run as without it.
 #   COUNT        1: instead of timing, count (make bench-dense-count). Each engine runs under
 #                valgrind's cachegrind on the same melt for two lengths of simulated time, and
 #                the table gives per collision of the difference: instructions, first-level data
@@ -158,6 +166,9 @@ melt_collisions() { "$NBEP" info "$OUT/melt-$1-$2.h5" | summary_field collisions
 # (user + system, seconds) and rss_of (bytes) read back; minus A B prints B - A. Without GNU
 # time (GNU_TIME, default /usr/bin/time) the command runs untimed and those columns are 0.
 TIME_OUT="$(cd "$OUT" && pwd)/time.txt"
+PAIRED=${PAIRED:-0}
+# PIN, where set (PAIRED): the CPU a timed run is held to
+pinned() { if [ -n "${PIN:-}" ]; then echo taskset -c "$PIN"; fi; }
 GNU_TIME=${GNU_TIME:-/usr/bin/time}
 if [ -x "$GNU_TIME" ]; then
     timed() { "$GNU_TIME" -f "%U %S %M" -o "$TIME_OUT" "$@"; }
@@ -182,7 +193,8 @@ run_nbep() { # n phi threads rep
         "$DT" "$3" "$out" "$FIELDS" "$STEPS1")
     cp "$OUT/melt-$1-$2.h5" "$out"
     [ "$3" -gt 1 ] && h1=$(probe)
-    s=$(timed "$NBEP" run "$d" --resume "$out" --quiet --summary -) || { echo "nbep failed: $d" >&2; return 1; }
+    # shellcheck disable=SC2046
+    s=$(timed $(pinned) "$NBEP" run "$d" --resume "$out" --quiet --summary -) || { echo "nbep failed: $d" >&2; return 1; }
     # CPU seconds less the set-up's wall seconds (0 where GNU time did not measure)
     u=$(awk -v c="$(cpu_of)" -v w="$(echo "$s" | summary_field setup_seconds)" 'BEGIN { print (c > 0 ? c - w : 0) }')
     [ "$3" -gt 1 ] && h2=$(probe) && ho="$h1 $h2"
@@ -194,7 +206,8 @@ run_nbep() { # n phi threads rep
 edmd_once() { # dir -> "collisions seconds rss cpu_seconds"
     local t0 t1 col
     t0=$(date +%s.%N)
-    (cd "$1" && timed ./md >run.log 2>&1)
+    # shellcheck disable=SC2046
+    (cd "$1" && timed $(pinned) ./md >run.log 2>&1)
     t1=$(date +%s.%N)
     col=$(sed -n 's/^Simtime: .*Collisions: \([0-9]*\),.*/\1/p' "$1/run.log" | tail -1)
     echo "$col $(minus "$t0" "$t1") $(rss_of) $(cpu_of)"
@@ -208,6 +221,28 @@ run_edmd() { # n phi rep
     read -r ca wa _ ua < <(edmd_once "$e1")
     read -r cb wb rb ub < <(edmd_once "$e2")
     echo "edmd,$1,$2,1,$3,$((cb - ca)),$(minus "$wa" "$wb"),$rb,$(minus "$ua" "$ub")," >>"$rows"
+}
+
+run_pair() { # n phi rep: EDMD's set-up run alone, then nbep's one-thread run and EDMD's
+    # measured run at once, each held to one of CPUs 0 and 1, which they swap each repeat
+    local S e1 e2 ca cb pn pe
+    S=$(stretch "$1" "$2")
+    e1=$(edmd_build "$1" "$2" 0.1) || return 1
+    e2=$(edmd_build "$1" "$2" "$(awk -v s="$S" 'BEGIN { print 0.1 + s }')") || return 1
+    if [ $(($3 % 2)) = 1 ]; then ca=0 cb=1; else ca=1 cb=0; fi
+    read -r c1 w1 _ u1 < <(PIN=$cb TIME_OUT="$TIME_OUT.edmd" edmd_once "$e1")
+    PIN=$ca TIME_OUT="$TIME_OUT.nbep" run_nbep "$1" "$2" 1 "$3" &
+    pn=$!
+    PIN=$cb TIME_OUT="$TIME_OUT.edmd" edmd_once "$e2" >"$OUT/pair-edmd.txt" &
+    pe=$!
+    wait "$pn" || { wait "$pe"; return 1; }
+    wait "$pe" || return 1
+    read -r c2 w2 r2 u2 <"$OUT/pair-edmd.txt"
+    if [ -z "$c1" ] || [ -z "$c2" ]; then
+        echo "EDMD failed: $e1 or $e2" >&2
+        return 1
+    fi
+    echo "edmd,$1,$2,1,$3,$((c2 - c1)),$(minus "$w1" "$w2"),$r2,$(minus "$u1" "$u2")," >>"$rows"
 }
 
 for n in $NS; do
@@ -291,10 +326,16 @@ for rep in $(seq "$REPS"); do
         for phi in $PHIS; do
             # a run that fails ends the benchmark, exit 1 (until 2026-11-30 the table was
             # printed without it, exit 0: every nbep run failing left EDMD's rows alone)
+            paired=0
+            if [ "$PAIRED" = 1 ] && [ -n "$edmd_src" ] && [[ " $THREADS " == *" 1 "* ]]; then
+                run_pair "$n" "$phi" "$rep" || exit 1
+                paired=1
+            fi
             for nt in $THREADS; do
+                [ "$paired" = 1 ] && [ "$nt" = 1 ] && continue
                 run_nbep "$n" "$phi" "$nt" "$rep" || exit 1
             done
-            if [ -n "$edmd_src" ]; then run_edmd "$n" "$phi" "$rep" || exit 1; fi
+            if [ -n "$edmd_src" ] && [ "$paired" = 0 ]; then run_edmd "$n" "$phi" "$rep" || exit 1; fi
         done
     done
     echo "repeat $rep of $REPS done"
@@ -344,9 +385,23 @@ for (eng, n, phi, nt), (rate, *_rest) in sorted(med.items()):
         parts.append(f"{nt} threads / 1 thread = {rate / c1[0]:.2f}")
     print("  " + "; ".join(parts))
 
+# each repeat's one-thread rate over the same repeat's EDMD rate (with PAIRED=1, the two ran
+# at once), and their median
+one = {(r["n"], r["phi"], r["rep"]): r for r in rows if r["engine"] == "nbep" and r["threads"] == "1"}
+rate = lambda r: int(r["collisions"]) / float(r["seconds"])
+edmd = {(r["n"], r["phi"], r["rep"]): r for r in rows if r["engine"] == "edmd"
+        and float(r["seconds"] or 0) > 0}
+if edmd:
+    print("\nper repeat: nbep, 1 thread / EDMD (median of the repeats' own ratios)")
+    for n, phi in sorted({(k[1], k[2]) for k in groups if k[0] == "nbep" and k[3] == 1}):
+        rs = [rate(one[k]) / rate(edmd[k]) for k in sorted(one, key=lambda k: int(k[2]))
+              if k[:2] == (str(n), phi) and k in edmd and float(one[k]["seconds"]) > 0]
+        if rs:
+            print(f"  N {n}, phi {phi}: " + ", ".join(f"{x:.2f}" for x in rs) +
+                  f" (median {statistics.median(rs):.2f})")
+
 # each repeat's multi-thread rate over the same repeat's one-thread rate, with the cores'
 # hand-over time (ns, before and after the run)
-one = {(r["n"], r["phi"], r["rep"]): r for r in rows if r["engine"] == "nbep" and r["threads"] == "1"}
 print("\nper repeat: threads / 1 thread (hand-over ns before, after)")
 for key in sorted(k for k in groups if k[0] == "nbep" and k[3] != 1):
     parts = []

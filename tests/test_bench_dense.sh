@@ -52,4 +52,62 @@ rc=$?
 check "a timed nbep run that fails: exit 1 (got $rc), its deck named, no table" \
     "[ $rc = 1 ] && grep -q '^nbep failed: ' '$tmp/bad.txt' && ! grep -q '^| engine' '$tmp/bad.txt'"
 
+# PAIRED=1 (2026-12-01): nbep's one-thread run and EDMD's measured run at once, each held to
+# one of CPUs 0 and 1, swapped each repeat. EDMD is a stand-in here (its checkout is no part of
+# the tree): a Single/ folder whose mdSingle.c has the globals the script sets and prints the
+# line it reads, 10^5 collisions a time unit, after a wait of a time unit's tenth of a second;
+# it and an nbep wrapper note the CPUs they may run on.
+mkdir -p "$tmp/edmd/Single"
+cat >"$tmp/edmd/Single/mdSingle.c" <<'EOF2'
+#define _GNU_SOURCE
+#include <sched.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+double maxtime = 100;
+double writeinterval = 1;
+double snapshotinterval = 1;
+int initialconfig = 1;
+const int usethermostat = 1;
+int main(void)
+{
+    cpu_set_t s;
+    FILE *f = fopen(getenv("CPU_LOG"), "a");
+    if (f && sched_getaffinity(0, sizeof s, &s) == 0) {
+        fprintf(f, "edmd %g:", maxtime);
+        for (int c = 0; c < 64; c++)
+            if (CPU_ISSET(c, &s))
+                fprintf(f, " %d", c);
+        fprintf(f, "\n");
+        fclose(f);
+    }
+    struct timespec w = {0, (long)(maxtime * 1e8)};
+    nanosleep(&w, NULL);
+    printf("Simtime: %g, Collisions: %ld, Walls: 0\n", maxtime, (long)(maxtime * 1e5));
+    return 0;
+}
+EOF2
+printf 'md: mdSingle.c\n\tcc -O2 -march=native -o md mdSingle.c\n' >"$tmp/edmd/Single/Makefile"
+cat >"$tmp/nbep-cpus" <<EOF2
+#!/bin/sh
+for a in "\$@"; do [ "\$a" = --resume ] && echo "nbep \$(grep Cpus_allowed_list /proc/self/status | cut -f2)" >>"$PWD/$tmp/cpus.log"; done
+exec "$PWD/bin/nbep" "\$@"
+EOF2
+chmod +x "$tmp/nbep-cpus"
+CPU_LOG="$PWD/$tmp/cpus.log" PAIRED=1 EDMD_DIR="$tmp/edmd" NBEP="$tmp/nbep-cpus" PHIS=0.30 REPS=2 \
+    OUT="$tmp/paired" timeout 120 bash scripts/bench-dense.sh >"$tmp/paired.txt" 2>&1
+rc=$?
+check "PAIRED=1 with a stand-in EDMD: exit 0 (got $rc), rows for EDMD and nbep on 1 and 2 threads" \
+    "[ $rc = 0 ] && grep -q '^| edmd | 500 | 0.30 | 1 | [0-9.]* k |' '$tmp/paired.txt' &&
+     grep -q '^| nbep | 500 | 0.30 | 1 | [0-9.]* k |' '$tmp/paired.txt' &&
+     grep -q '^| nbep | 500 | 0.30 | 2 | [0-9.]* k |' '$tmp/paired.txt'"
+# (the stretch at phi = 0.30: 4 * 96000 / 500 * SCALE = 1.536 time units, 153600 collisions)
+check "PAIRED=1: EDMD's row is its measured run less its set-up run (the stretch's 10^5 a time unit)" \
+    "awk -F, '\$1 == \"edmd\" { n++; ok += \$6 == 153600 } END { exit !(n == 2 && ok == 2) }' '$tmp/paired/rows.csv'"
+check "PAIRED=1: each repeat's own ratio of nbep on one thread to EDMD, and their median" \
+    "grep -Eq '^  N 500, phi 0.30: [0-9.]+, [0-9.]+ \\(median [0-9.]+\\)\$' '$tmp/paired.txt'"
+# repeat 1: nbep on CPU 0 and EDMD's runs on 1, repeat 2 the other way; the two-thread runs free
+check "PAIRED=1: nbep's one-thread run and EDMD's runs held to CPUs 0 and 1, swapped each repeat, the two-thread runs not held" \
+    "tr '\\n' '|' <'$tmp/cpus.log' | grep -Eq '^edmd 0.1: 1\\|(nbep 0|edmd 1.636: 1)\\|(nbep 0|edmd 1.636: 1)\\|nbep 0-1\\|edmd 0.1: 0\\|(nbep 1|edmd 1.636: 0)\\|(nbep 1|edmd 1.636: 0)\\|nbep 0-1\\|\$'"
+
 test_end bench_dense
