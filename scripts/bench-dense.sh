@@ -402,8 +402,10 @@ if edmd:
 
 # each repeat's multi-thread rate over the same repeat's one-thread rate, with the cores'
 # hand-over time (ns, before and after the run)
-print("\nper repeat: threads / 1 thread (hand-over ns before, after)")
-for key in sorted(k for k in groups if k[0] == "nbep" and k[3] != 1):
+multi = sorted(k for k in groups if k[0] == "nbep" and k[3] != 1)
+if multi:
+    print("\nper repeat: threads / 1 thread (hand-over ns before, after)")
+for key in multi:
     parts = []
     for r in sorted(groups[key], key=lambda r: int(r["rep"])):
         o = one.get((r["n"], r["phi"], r["rep"]))
