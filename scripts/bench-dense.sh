@@ -213,31 +213,23 @@ edmd_once() { # dir -> "collisions seconds rss cpu_seconds"
     echo "$col $(minus "$t0" "$t1") $(rss_of) $(cpu_of)"
 }
 
-run_edmd() { # n phi rep
-    local S e1 e2
+run_edmd() { # n phi rep [pair]: EDMD's set-up run (to 0.1) and measured run (to 0.1 + S);
+    # with pair, the measured run and nbep's one-thread run at once, each held to one of CPUs
+    # 0 and 1, which they swap each repeat (PAIRED)
+    local S e1 e2 ca="" cb="" pn=""
     S=$(stretch "$1" "$2")
     e1=$(edmd_build "$1" "$2" 0.1) || return 1
     e2=$(edmd_build "$1" "$2" "$(awk -v s="$S" 'BEGIN { print 0.1 + s }')") || return 1
-    read -r ca wa _ ua < <(edmd_once "$e1")
-    read -r cb wb rb ub < <(edmd_once "$e2")
-    echo "edmd,$1,$2,1,$3,$((cb - ca)),$(minus "$wa" "$wb"),$rb,$(minus "$ua" "$ub")," >>"$rows"
-}
-
-run_pair() { # n phi rep: EDMD's set-up run alone, then nbep's one-thread run and EDMD's
-    # measured run at once, each held to one of CPUs 0 and 1, which they swap each repeat
-    local S e1 e2 ca cb pn pe
-    S=$(stretch "$1" "$2")
-    e1=$(edmd_build "$1" "$2" 0.1) || return 1
-    e2=$(edmd_build "$1" "$2" "$(awk -v s="$S" 'BEGIN { print 0.1 + s }')") || return 1
-    if [ $(($3 % 2)) = 1 ]; then ca=0 cb=1; else ca=1 cb=0; fi
+    if [ -n "${4:-}" ]; then
+        if [ $(($3 % 2)) = 1 ]; then ca=0 cb=1; else ca=1 cb=0; fi
+    fi
     read -r c1 w1 _ u1 < <(PIN=$cb TIME_OUT="$TIME_OUT.edmd" edmd_once "$e1")
-    PIN=$ca TIME_OUT="$TIME_OUT.nbep" run_nbep "$1" "$2" 1 "$3" &
-    pn=$!
-    PIN=$cb TIME_OUT="$TIME_OUT.edmd" edmd_once "$e2" >"$OUT/pair-edmd.txt" &
-    pe=$!
-    wait "$pn" || { wait "$pe"; return 1; }
-    wait "$pe" || return 1
-    read -r c2 w2 r2 u2 <"$OUT/pair-edmd.txt"
+    if [ -n "${4:-}" ]; then
+        PIN=$ca TIME_OUT="$TIME_OUT.nbep" run_nbep "$1" "$2" 1 "$3" &
+        pn=$!
+    fi
+    read -r c2 w2 r2 u2 < <(PIN=$cb TIME_OUT="$TIME_OUT.edmd" edmd_once "$e2")
+    if [ -n "$pn" ]; then wait "$pn" || return 1; fi
     if [ -z "$c1" ] || [ -z "$c2" ]; then
         echo "EDMD failed: $e1 or $e2" >&2
         return 1
@@ -326,16 +318,17 @@ for rep in $(seq "$REPS"); do
         for phi in $PHIS; do
             # a run that fails ends the benchmark, exit 1 (until 2026-11-30 the table was
             # printed without it, exit 0: every nbep run failing left EDMD's rows alone)
-            paired=0
+            # PAIRED: EDMD first, with nbep's one-thread run beside its measured run
+            pair=""
             if [ "$PAIRED" = 1 ] && [ -n "$edmd_src" ] && [[ " $THREADS " == *" 1 "* ]]; then
-                run_pair "$n" "$phi" "$rep" || exit 1
-                paired=1
+                pair=1
+                run_edmd "$n" "$phi" "$rep" pair || exit 1
             fi
             for nt in $THREADS; do
-                [ "$paired" = 1 ] && [ "$nt" = 1 ] && continue
+                [ -n "$pair" ] && [ "$nt" = 1 ] && continue
                 run_nbep "$n" "$phi" "$nt" "$rep" || exit 1
             done
-            if [ -n "$edmd_src" ] && [ "$paired" = 0 ]; then run_edmd "$n" "$phi" "$rep" || exit 1; fi
+            if [ -n "$edmd_src" ] && [ -z "$pair" ]; then run_edmd "$n" "$phi" "$rep" || exit 1; fi
         done
     done
     echo "repeat $rep of $REPS done"
