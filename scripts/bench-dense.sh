@@ -19,7 +19,8 @@
 #   NBEP         the nbep binary (default bin/nbep; a wrapper script for a node that lacks the
 #                libraries, for example)
 #   PAIRED       1: nbep's one-thread run and EDMD's measured run at the same time, one on each
-#                of the first two CPUs (taskset; they swap CPUs each repeat), so that both meet
+#                of the first two CPUs this process may use (taskset; they swap CPUs each
+#                repeat; fewer than two: exit 2), so that both meet
 #                the same load, as scripts/ab-pair.sh pairs two builds of nbep; the table adds
 #                the median of the repeats' own ratios. On this project's shared 2-core machine
 #                one engine's repeats, run one after the other, differed by up to 1.6 times
@@ -73,6 +74,17 @@ SCALE=${SCALE:-1}
 OUT=${OUT:-build/bench-dense}
 NBEP=${NBEP:-bin/nbep}
 PY=${PYTHON:-/usr/bin/python3}
+PAIRED=${PAIRED:-0}
+# PAIRED's two CPUs: the first two this process may run on (Cpus_allowed_list, "0-15" or
+# "2,5-7"), not 0 and 1, which a job's cpuset may not hold; fewer than two, or no taskset: refused
+if [ "$PAIRED" = 1 ]; then
+    read -r CPU_A CPU_B _ < <(sed -n 's/^Cpus_allowed_list:[[:space:]]*//p' /proc/self/status |
+        awk -F, '{ for (i = 1; i <= NF; i++) { n = split($i, r, "-"); for (c = r[1]; c <= r[n]; c++) printf "%d ", c } }')
+    if [ -z "${CPU_B:-}" ] || ! command -v taskset >/dev/null; then
+        echo "bench-dense.sh: PAIRED=1 needs two CPUs to run on and taskset (util-linux); this process may use CPUs ${CPU_A:-none}" >&2
+        exit 2
+    fi
+fi
 mkdir -p "$OUT"
 rows="$OUT/rows.csv"
 echo "engine,n,phi,threads,rep,collisions,seconds,rss_bytes,cpu_seconds,handover_ns" >"$rows"
@@ -166,7 +178,6 @@ melt_collisions() { "$NBEP" info "$OUT/melt-$1-$2.h5" | summary_field collisions
 # (user + system, seconds) and rss_of (bytes) read back; minus A B prints B - A. Without GNU
 # time (GNU_TIME, default /usr/bin/time) the command runs untimed and those columns are 0.
 TIME_OUT="$(cd "$OUT" && pwd)/time.txt"
-PAIRED=${PAIRED:-0}
 # PIN, where set (PAIRED): the CPU a timed run is held to
 pinned() { if [ -n "${PIN:-}" ]; then echo taskset -c "$PIN"; fi; }
 GNU_TIME=${GNU_TIME:-/usr/bin/time}
@@ -210,18 +221,21 @@ edmd_once() { # dir -> "collisions seconds rss cpu_seconds"
     (cd "$1" && timed $(pinned) ./md >run.log 2>&1)
     t1=$(date +%s.%N)
     col=$(sed -n 's/^Simtime: .*Collisions: \([0-9]*\),.*/\1/p' "$1/run.log" | tail -1)
-    echo "$col $(minus "$t0" "$t1") $(rss_of) $(cpu_of)"
+    # no count (a run that failed, or printed no line): a word that run_edmd refuses (the
+    # fields must not shift: until 2026-12-01 the wall time was read as the count, and the
+    # difference's arithmetic error ended the loop, a partial table, exit 0)
+    echo "${col:-none} $(minus "$t0" "$t1") $(rss_of) $(cpu_of)"
 }
 
 run_edmd() { # n phi rep [pair]: EDMD's set-up run (to 0.1) and measured run (to 0.1 + S);
-    # with pair, the measured run and nbep's one-thread run at once, each held to one of CPUs
-    # 0 and 1, which they swap each repeat (PAIRED)
+    # with pair, the measured run and nbep's one-thread run at once, each held to one of
+    # CPU_A and CPU_B, which they swap each repeat (PAIRED)
     local S e1 e2 ca="" cb="" pn=""
     S=$(stretch "$1" "$2")
     e1=$(edmd_build "$1" "$2" 0.1) || return 1
     e2=$(edmd_build "$1" "$2" "$(awk -v s="$S" 'BEGIN { print 0.1 + s }')") || return 1
     if [ -n "${4:-}" ]; then
-        if [ $(($3 % 2)) = 1 ]; then ca=0 cb=1; else ca=1 cb=0; fi
+        if [ $(($3 % 2)) = 1 ]; then ca=$CPU_A cb=$CPU_B; else ca=$CPU_B cb=$CPU_A; fi
     fi
     read -r c1 w1 _ u1 < <(PIN=$cb TIME_OUT="$TIME_OUT.edmd" edmd_once "$e1")
     if [ -n "${4:-}" ]; then
@@ -230,8 +244,8 @@ run_edmd() { # n phi rep [pair]: EDMD's set-up run (to 0.1) and measured run (to
     fi
     read -r c2 w2 r2 u2 < <(PIN=$cb TIME_OUT="$TIME_OUT.edmd" edmd_once "$e2")
     if [ -n "$pn" ]; then wait "$pn" || return 1; fi
-    if [ -z "$c1" ] || [ -z "$c2" ]; then
-        echo "EDMD failed: $e1 or $e2" >&2
+    if ! [[ $c1 =~ ^[0-9]+$ && $c2 =~ ^[0-9]+$ ]]; then
+        echo "EDMD failed: $e1 or $e2 (its run.log)" >&2
         return 1
     fi
     echo "edmd,$1,$2,1,$3,$((c2 - c1)),$(minus "$w1" "$w2"),$r2,$(minus "$u1" "$u2")," >>"$rows"

@@ -53,7 +53,8 @@ check "a timed nbep run that fails: exit 1 (got $rc), its deck named, no table" 
     "[ $rc = 1 ] && grep -q '^nbep failed: ' '$tmp/bad.txt' && ! grep -q '^| engine' '$tmp/bad.txt'"
 
 # PAIRED=1 (2026-12-01): nbep's one-thread run and EDMD's measured run at once, each held to
-# one of CPUs 0 and 1, swapped each repeat. EDMD is a stand-in here (its checkout is no part of
+# one of the first two CPUs the process may use, swapped each repeat (skipped where it may use
+# one: then it is refused, the last check). EDMD is a stand-in here (its checkout is no part of
 # the tree): a Single/ folder whose mdSingle.c has the globals the script sets and prints the
 # line it reads, 10^5 collisions a time unit, after a wait of a time unit's tenth of a second;
 # it and an nbep wrapper note the CPUs they may run on.
@@ -81,6 +82,9 @@ int main(void)
         fprintf(f, "\n");
         fclose(f);
     }
+    /* EDMD_FAIL_PAST set: a run past the set-up's time fails, printing no collision line */
+    if (getenv("EDMD_FAIL_PAST") && maxtime > 1)
+        return 1;
     struct timespec w = {0, (long)(maxtime * 1e8)};
     nanosleep(&w, NULL);
     printf("Simtime: %g, Collisions: %ld, Walls: 0\n", maxtime, (long)(maxtime * 1e5));
@@ -94,20 +98,45 @@ for a in "\$@"; do [ "\$a" = --resume ] && echo "nbep \$(grep Cpus_allowed_list 
 exec "$PWD/bin/nbep" "\$@"
 EOF2
 chmod +x "$tmp/nbep-cpus"
-CPU_LOG="$PWD/$tmp/cpus.log" PAIRED=1 EDMD_DIR="$tmp/edmd" NBEP="$tmp/nbep-cpus" PHIS=0.30 REPS=2 \
-    OUT="$tmp/paired" timeout 120 bash scripts/bench-dense.sh >"$tmp/paired.txt" 2>&1
+read -r a b < <("$PY" -c 'import os; print(*sorted(os.sched_getaffinity(0))[:2])')
+free=$(sed -n 's/^Cpus_allowed_list:[[:space:]]*//p' /proc/self/status)
+if [ -z "$b" ]; then
+    echo "skip PAIRED=1 runs: this test may use one CPU ($a)"
+else
+    CPU_LOG="$PWD/$tmp/cpus.log" PAIRED=1 EDMD_DIR="$tmp/edmd" NBEP="$tmp/nbep-cpus" PHIS=0.30 REPS=2 \
+        OUT="$tmp/paired" timeout 120 bash scripts/bench-dense.sh >"$tmp/paired.txt" 2>&1
+    rc=$?
+    check "PAIRED=1 with a stand-in EDMD: exit 0 (got $rc), rows for EDMD and nbep on 1 and 2 threads" \
+        "[ $rc = 0 ] && grep -q '^| edmd | 500 | 0.30 | 1 | [0-9.]* k |' '$tmp/paired.txt' &&
+         grep -q '^| nbep | 500 | 0.30 | 1 | [0-9.]* k |' '$tmp/paired.txt' &&
+         grep -q '^| nbep | 500 | 0.30 | 2 | [0-9.]* k |' '$tmp/paired.txt'"
+    # (the stretch at phi = 0.30: 4 * 96000 / 500 * SCALE = 1.536 time units, 153600 collisions)
+    check "PAIRED=1: EDMD's row is its measured run less its set-up run (the stretch's 10^5 a time unit)" \
+        "awk -F, '\$1 == \"edmd\" { n++; ok += \$6 == 153600 } END { exit !(n == 2 && ok == 2) }' '$tmp/paired/rows.csv'"
+    check "PAIRED=1: each repeat's own ratio of nbep on one thread to EDMD, and their median" \
+        "grep -Eq '^  N 500, phi 0.30: [0-9.]+, [0-9.]+ \\(median [0-9.]+\\)\$' '$tmp/paired.txt'"
+    # repeat 1: nbep on the first CPU this test may use (a and b above: 0 and 1 on a machine of
+    # its own, others in a job's cpuset; until 2026-12-01 the script took 0 and 1 whatever it was
+    # given) and EDMD's runs on the second, repeat 2 the other way; the two-thread runs as given
+    check "PAIRED=1: nbep's one-thread run and EDMD's runs held to CPUs $a and $b, swapped each repeat, the two-thread runs on $free as given" \
+        "tr '\\n' '|' <'$tmp/cpus.log' | grep -Eq '^edmd 0.1: $b\\|(nbep $a|edmd 1.636: $b)\\|(nbep $a|edmd 1.636: $b)\\|nbep $free\\|edmd 0.1: $a\\|(nbep $b|edmd 1.636: $a)\\|(nbep $b|edmd 1.636: $a)\\|nbep $free\\|\$'"
+fi
+
+# an EDMD whose measured run fails (no collision line): the benchmark stops, exit 1, EDMD named
+# (run apart, not paired: the same read of its count)
+# (until 2026-12-01 the wall time was read as its count, bash's arithmetic error ended the
+# loop after one repeat, and the script printed a partial table with exit 0)
+CPU_LOG=/dev/null EDMD_FAIL_PAST=1 EDMD_DIR="$tmp/edmd" PHIS=0.30 REPS=2 \
+    THREADS=1 OUT="$tmp/edmd-fails" timeout 120 bash scripts/bench-dense.sh >"$tmp/edmd-fails.txt" 2>&1
 rc=$?
-check "PAIRED=1 with a stand-in EDMD: exit 0 (got $rc), rows for EDMD and nbep on 1 and 2 threads" \
-    "[ $rc = 0 ] && grep -q '^| edmd | 500 | 0.30 | 1 | [0-9.]* k |' '$tmp/paired.txt' &&
-     grep -q '^| nbep | 500 | 0.30 | 1 | [0-9.]* k |' '$tmp/paired.txt' &&
-     grep -q '^| nbep | 500 | 0.30 | 2 | [0-9.]* k |' '$tmp/paired.txt'"
-# (the stretch at phi = 0.30: 4 * 96000 / 500 * SCALE = 1.536 time units, 153600 collisions)
-check "PAIRED=1: EDMD's row is its measured run less its set-up run (the stretch's 10^5 a time unit)" \
-    "awk -F, '\$1 == \"edmd\" { n++; ok += \$6 == 153600 } END { exit !(n == 2 && ok == 2) }' '$tmp/paired/rows.csv'"
-check "PAIRED=1: each repeat's own ratio of nbep on one thread to EDMD, and their median" \
-    "grep -Eq '^  N 500, phi 0.30: [0-9.]+, [0-9.]+ \\(median [0-9.]+\\)\$' '$tmp/paired.txt'"
-# repeat 1: nbep on CPU 0 and EDMD's runs on 1, repeat 2 the other way; the two-thread runs free
-check "PAIRED=1: nbep's one-thread run and EDMD's runs held to CPUs 0 and 1, swapped each repeat, the two-thread runs not held" \
-    "tr '\\n' '|' <'$tmp/cpus.log' | grep -Eq '^edmd 0.1: 1\\|(nbep 0|edmd 1.636: 1)\\|(nbep 0|edmd 1.636: 1)\\|nbep 0-1\\|edmd 0.1: 0\\|(nbep 1|edmd 1.636: 0)\\|(nbep 1|edmd 1.636: 0)\\|nbep 0-1\\|\$'"
+check "an EDMD run that fails: exit 1 (got $rc), 'EDMD failed' said, no table" \
+    "[ $rc = 1 ] && grep -q '^EDMD failed: ' '$tmp/edmd-fails.txt' && ! grep -q '^| engine' '$tmp/edmd-fails.txt'"
+
+# PAIRED=1 where this process may use one CPU: refused before anything runs, exit 2
+taskset -c "$a" env PAIRED=1 EDMD_DIR="$tmp/edmd" PHIS=0.30 REPS=1 OUT="$tmp/one-cpu" \
+    timeout 60 bash scripts/bench-dense.sh >"$tmp/one-cpu.txt" 2>&1
+rc=$?
+check "PAIRED=1 on one CPU: exit 2 (got $rc), one line that says why, nothing run" \
+    "[ $rc = 2 ] && grep -q 'PAIRED=1 needs two CPUs' '$tmp/one-cpu.txt' && [ ! -e '$tmp/one-cpu/rows.csv' ]"
 
 test_end bench_dense
