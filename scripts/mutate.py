@@ -1440,6 +1440,8 @@ MUTANTS = [
     ("alloc-huge-unaligned", "src/util.c",
      "huge ? aligned_alloc(NBEP_HUGE, room)", "huge ? aligned_alloc(NBEP_CACHELINE, room)",
      ["test_util"], None),
+    ("alloc-not-zeroed", "src/util.c", "    if (p)\n        memset(p, 0, bytes);\n", "",
+     ["test_util"], None),
     ("alloc-wrap-unchecked", "src/util.c",
      "    if (bytes > SIZE_MAX - NBEP_HUGE) /* no such memory; the roundings below would wrap */\n        return NULL;\n",
      "", ["test_util"], None),
