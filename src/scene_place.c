@@ -896,6 +896,89 @@ static bool lattice_wraps_onto(nbep__scene_ctx *c, const grid *g, const nbep_sta
     return true;
 }
 
+/* Whether a lattice of entry e that moves (speed > 0; radius r, n sites along each axis at
+ * `spacing`, x fastest; ax its axes) is jammed, packed so tight that nothing in it can move,
+ * when a speed along its rows is passed to and fro at zero time for ever and the run stalls at
+ * t = 0 (a simple cubic 1000 of radius 0.05 in a unit box ran for more than ten minutes without
+ * a step in all-pairs mode, and cells mode past a minute, time creeping by round-off; 27
+ * stopped on the stall check after two seconds; a close-packed "fcc" of 63 did not pass a step
+ * in half a minute); then its message is given, at the group. Its ends are held by the box's
+ * walls where its region meets them, or by itself across the faces of a periodic axis that its
+ * region spans whole (a simple cubic lattice keeps a radius from those faces, so a row that
+ * spans a period touches across them; "fcc" spaces its sites round the period). "Tight" is
+ * within the round-off of the coordinates, as the overlap check takes touching: 16 ulps of the
+ * region's corners.
+ *   simple cubic: some axis's rows whole (not the last, partly filled), their spheres touching
+ *     one another and both held ends: what the row's diameters leave of the region's length
+ *     (of the period, across it), none;
+ *   "fcc": nearest neighbours touching, every site filled, and the sites reaching both held
+ *     ends along two axes or three (each plane of those two is a square of touching spheres
+ *     from end to end; measured with the stalls above: 63 close-packed with room along z
+ *     alone, or 40 of them filling its lower layers, stalled; with room along y and z, or 20
+ *     spheres at a wider spacing, they ran). Partly filled crystals at touching spacing (the
+ *     40) are not looked at: which of them jam depends on which planes the fill completes.
+ * Planes (which may lie anywhere) are not looked at: a region clear of a wall has room. */
+static bool lattice_jams(nbep__scene_ctx *c, const nbep_state *s, const nbep__scene_entry *e,
+                         size_t k, const lattice_axis ax[3], double spacing, const uint64_t n[3],
+                         const bool *box_periodic, const bool spans[3], const double blo[3],
+                         const double bhi[3], const config_setting_t *const *plane_at)
+{
+    if (!box_periodic || !(e->speed > 0.0)) /* no box: nothing holds the ends */
+        return false;
+    const bool fcc = e->place == NBEP__PLACE_FCC;
+    const double r = e->radius;
+    const double rlo[3] = {e->lo.x, e->lo.y, e->lo.z}, rhi[3] = {e->hi.x, e->hi.y, e->hi.z};
+    /* the spheres a whole row along each axis needs placed first (x fastest) */
+    const uint64_t whole[3] = {n[0], n[0] * (n[1] - 1) + 1, n[0] * n[1] * (n[2] - 1) + 1};
+    int tight[3], n_tight = 0, first = -1;
+    for (int a = 0; a < 3; a++) {
+        const double tol = 16.0 * DBL_EPSILON * (fabs(rlo[a]) + fabs(rhi[a]));
+        const bool held = box_periodic[a] ? spans[a]
+                                          : rlo[a] <= blo[a] + tol && rhi[a] >= bhi[a] - tol;
+        /* the room the sites leave along a: simple cubic, what the row's diameters leave of
+         * the region (and of the period across it); "fcc", past its last site (round the
+         * period where it wraps) */
+        const double room = !fcc        ? (rhi[a] - rlo[a]) - 2.0 * r * (double)n[a]
+                            : ax[a].wraps ? ax[a].len - spacing * (double)n[a]
+                                          : ax[a].len - spacing * (double)(n[a] - 1);
+        tight[a] = held && n[a] > 0 && room <= tol && (fcc || e->count >= whole[a]);
+        n_tight += tight[a];
+        if (tight[a] && first < 0)
+            first = a;
+    }
+    const bool touch = spacing <= lattice_min_spacing(r, true) * (1.0 + 4.0 * LATTICE_SLACK);
+    if (fcc ? !(n_tight >= 2 && touch && (double)e->count >= lattice_capacity(ax, spacing, true))
+            : n_tight == 0)
+        return false;
+    const char *ends = box_periodic[first] ? "close round the periodic box" : "both walls";
+    if (fcc) {
+        char axes[16] = "";
+        for (int a = 0, m = 0; a < 3; a++)
+            if (tight[a]) {
+                const size_t used = strlen(axes);
+                snprintf(axes + used, sizeof axes - used, "%s%c",
+                         m == 0 ? "" : ++m == n_tight ? " and " : ", ", "xyz"[a]);
+                m += m == 0;
+            }
+        fill_failed(c, s, e, plane_at, (blame){NULL, 0, NBEP_DIAG_UNRANKED},
+                    "spheres.[%zu]: this face-centred cubic lattice is packed tight along %s: "
+                    "each sphere touches its neighbours, every site is filled, and the crystal "
+                    "reaches its region's ends along them, so with speed %g no sphere can move, "
+                    "and the run would not pass t = 0 (endless collisions at zero time); give "
+                    "the region room along all but one axis, fewer spheres, or speed = 0",
+                    k, axes, e->speed);
+    } else
+        fill_failed(c, s, e, plane_at, (blame){NULL, 0, NBEP_DIAG_UNRANKED},
+                    "spheres.[%zu]: this simple cubic lattice is packed tight along %c: rows of "
+                    "%" PRIu64 " spheres of radius %g touch one another and %s, so with speed %g "
+                    "no sphere can move along %c, and the run would not pass t = 0 (endless "
+                    "collisions at zero time); give the region more room along %c than %" PRIu64
+                    " diameters (%g), fewer spheres, or speed = 0",
+                    k, "xyz"[first], n[first], r, ends, e->speed, "xyz"[first], "xyz"[first],
+                    n[first], 2.0 * r * (double)n[first]);
+    return true;
+}
+
 /* A lattice filling the region (simple cubic, or face-centred cubic for "fcc"); returns as
  * place_random does. */
 static nbep_status place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s,
@@ -953,6 +1036,8 @@ static nbep_status place_lattice(nbep__scene_ctx *c, grid *g, nbep_state *s,
         /* a wrapping axis spaces its n sites evenly round the period (at least the spacing) */
         step[a] = ax[a].wraps ? ax[a].len / (double)n[a] : spacing;
     }
+    if (lattice_jams(c, s, e, k, ax, spacing, n, box_periodic, spans, blo, bhi, plane_at))
+        return NBEP_OK;
     uint64_t idx[3] = {0, 0, 0};
     for (uint64_t q = 0; q < e->count; q++, lattice_next(idx, n[0], n[1])) {
         const nbep_status stop = look(c, q);

@@ -1526,6 +1526,103 @@ static void test_a_group_without_room_says_why(void **state)
                        "0.1, along z (0.06)");
 }
 
+/* A simple cubic lattice packed tight along an axis (rows touching one another and what holds
+ * their ends) that moves cannot pass t = 0: refused at the group's count, naming the axis
+ * (2026-12-01: a new user's 1000 spheres of radius 0.05 in a unit box ran for ten minutes
+ * without a step). Not where it does not move, nor where a row has room: its region clear of a
+ * wall, or its rows along that axis not whole (the last layer, partly filled). */
+static void test_a_lattice_packed_tight_that_moves_is_refused(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *deck =
+        write_deck("scene_jam.deck",
+                   "box: { min = [0.0, 0.0, 0.0]; max = [3.0, 3.0, 3.0]; };\n"
+                   "spheres = (\n"
+                   "  { count = 27; radius = 0.5; mass = 1.0; place = \"lattice\"; speed = 1.0; }\n"
+                   ");\n",
+                   buf, sizeof buf);
+    char want[768];
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    snprintf(want, sizeof want,
+             "%s:3: spheres.[0]: this simple cubic lattice is packed tight along x: rows of 3 "
+             "spheres of radius 0.5 touch one another and both walls, so with speed 1 no sphere "
+             "can move along x, and the run would not pass t = 0 (endless collisions at zero "
+             "time); give the region more room along x than 3 diameters (3), fewer spheres, or "
+             "speed = 0",
+             deck);
+    ASSERT_DIAG(&f->d, want);
+    /* room along x and z, none along y */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.max=[3.5, 3.0, 3.5]");
+    assert_int_equal(f->d.n_errors, 1);
+    assert_non_null(strstr(f->d.msg[0], "is packed tight along y: rows of 3 spheres of radius "
+                                        "0.5 touch one another and both walls"));
+    /* a periodic box: the rows close round it */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.periodic=[true, true, true]");
+    assert_int_equal(f->d.n_errors, 1);
+    assert_non_null(strstr(f->d.msg[0], "is packed tight along x: rows of 3 spheres of radius "
+                                        "0.5 touch one another and close round the periodic "
+                                        "box, so with speed 1"));
+    /* at rest: legal (touching spheres are); 8 spheres on sites that reach the walls, a
+     * diameter of room between them: legal */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_OK(f, deck, "spheres.[0].speed=0.0");
+    nbep_scene_fini(&f->sc);
+    LOAD_OK(f, deck, "spheres.[0].count=8");
+    nbep_scene_fini(&f->sc);
+    /* rows clear of the walls along x and y, whole along z only from 262 spheres on (9 columns
+     * of 30 sites, x fastest: the first column is whole at the 9 * 29 + 1st) */
+    const char *clear[] = {"box.max=[3.5, 3.5, 30.0]",
+                           "spheres.[0].region={min=[0.0, 0.0, 0.0]; max=[3.0, 3.0, 30.0];}",
+                           "spheres.[0].count=261"};
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    assert_int_equal(load(f, deck, clear, 3), NBEP_OK);
+    nbep_scene_fini(&f->sc);
+    const char *whole[] = {clear[0], clear[1], "spheres.[0].count=262"};
+    assert_int_equal(load(f, deck, whole, 3), NBEP_EDECK);
+    assert_int_equal(f->d.n_errors, 1);
+    assert_non_null(strstr(f->d.msg[0], "is packed tight along z: rows of 30 spheres"));
+    /* "fcc": 63 close-packed (5 sites an axis 0.5 sqrt 2 apart, a radius from the walls) */
+    const char *fcc_deck =
+        write_deck("scene_jam_fcc.deck",
+                   "box: { min = [0.0, 0.0, 0.0];\n"
+                   "       max = [3.8284271247461903, 3.8284271247461903, 3.8284271247461903]; };\n"
+                   "spheres = (\n"
+                   "  { count = 63; radius = 0.5; mass = 1.0; place = \"fcc\"; speed = 2.0; }\n"
+                   ");\n",
+                   buf, sizeof buf);
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, fcc_deck);
+    snprintf(want, sizeof want,
+             "%s:4: spheres.[0]: this face-centred cubic lattice is packed tight along x, y and "
+             "z: each sphere touches its neighbours, every site is filled, and the crystal "
+             "reaches its region's ends along them, so with speed 2 no sphere can move, and the "
+             "run would not pass t = 0 (endless collisions at zero time); give the region room "
+             "along all but one axis, fewer spheres, or speed = 0",
+             fcc_deck);
+    ASSERT_DIAG(&f->d, want);
+    /* room along z alone: its xy planes still touch from wall to wall */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, fcc_deck, "box.max.[2]=3.9");
+    assert_int_equal(f->d.n_errors, 1);
+    assert_non_null(strstr(f->d.msg[0], "face-centred cubic lattice is packed tight along x and "
+                                        "y: each sphere"));
+    /* room along y and z (it ran), or a site left empty (not looked at): loaded */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_OK(f, fcc_deck, "box.max.[1]=3.9", "box.max.[2]=3.9");
+    nbep_scene_fini(&f->sc);
+    LOAD_OK(f, fcc_deck, "spheres.[0].count=62");
+}
+
 /* A group that a --set keeps from being placed (its radius, its count, its region) names that
  * --set, the first typed of them, as an overlap does (until 2026-11-30 the deck's line of the
  * count, which the user had not touched); one that the deck alone keeps out stays at its count's
@@ -2423,6 +2520,7 @@ int main(void)
         T(test_overlaps_with_spheres_and_planes_are_named),
         T(test_an_overlap_a_set_made_names_the_set),
         T(test_an_overlap_with_a_wall_a_set_moved_names_the_set),
+        T(test_a_lattice_packed_tight_that_moves_is_refused),
         T(test_a_group_a_set_keeps_from_fitting_names_the_set),
         T(test_a_group_a_set_of_the_box_or_a_plane_keeps_from_fitting_names_the_set),
         T(test_a_group_an_earlier_groups_set_leaves_no_room_names_that_set),
