@@ -1240,6 +1240,10 @@ MUTANTS = [
      "    return all;", ["test_scene"], None),
     ("fcc-odd-corner-uncounted", "src/scene_place.c", "(all + (odd ? 1.0 : 0.0)) / 2.0",
      "(all + 0.0) / 2.0", ["test_scene"], None),
+    # a periodic side too short for the spheres is blamed on the --set that made it so (2026-12-01)
+    ("periodic-side-blames-deck", "src/scene.c",
+     "    const config_setting_t *blame = first_set(L, by, 3, at);",
+     "    const config_setting_t *blame = at;", ["test_periodic"], None),
     # a lattice packed tight that moves is refused (lattice_jams, 2026-12-01)
     ("lattice-jam-unchecked", "src/scene_place.c",
      "    if (lattice_jams(c, s, e, k, ax, spacing, n, box_periodic, spans, blo, bhi, plane_at))\n"

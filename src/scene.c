@@ -581,17 +581,24 @@ static void check_periodic(load *L, const config_setting_t *at, const nbep_scene
     /* a box whose corners were refused (said already) has no sides to measure: until
      * 2026-11-30 a box.max of two numbers added "the box's x side (0) must be longer ..." for
      * each periodic axis */
+    /* blamed on what the user typed first of the box's periodic axes and corners, else
+     * box.periodic's line (until 2026-12-01 always that line: a --set of box.max that made the
+     * box too small named the deck's box.periodic) */
+    const config_setting_t *box = config_setting_parent(at);
+    const config_setting_t *const by[3] = {at, box ? config_setting_get_member(box, "min") : NULL,
+                                           box ? config_setting_get_member(box, "max") : NULL};
+    const config_setting_t *blame = first_set(L, by, 3, at);
     for (int k = 0; k < 3 && sc->has_box; k++) {
         if (!sc->periodic[k])
             continue;
         if (!(len[k] > 4.0 * rmax))
-            ERR(L, at,
-                "box.periodic: the box's %c side (%g) must be longer than twice the largest "
+            ERR(L, blame,
+                "box.periodic: the box's %c side (%g) must be longer than %g, twice the largest "
                 "sphere diameter (%g)",
-                "xyz"[k], len[k], 2.0 * rmax);
+                "xyz"[k], len[k], 4.0 * rmax, 2.0 * rmax);
         /* three cells of the neighbour lists' cutoff across (evloop.h) */
         else if (sc->neighbors_cells && !(len[k] >= nbep_evloop_min_periodic_side(2.0 * rmax)))
-            ERR(L, at,
+            ERR(L, blame,
                 "box.periodic: run.neighbors = \"cells\" needs the box's %c side (%g) to be at "
                 "least %.4g times the largest radius (%g), three cells across",
                 "xyz"[k], len[k], 2.0 * nbep_evloop_min_periodic_side(1.0), rmax);

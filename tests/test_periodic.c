@@ -1384,7 +1384,24 @@ static void test_periodic_deck_errors_name_the_line(void **state)
              "run: { neighbors = \"cells\"; };\n"
              "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 2.0, 10.0]; periodic = [true, true, false]; };\n%s",
              sph);
-    expect_deck_error(text, 2, "y side (2) must be longer than twice the largest sphere diameter");
+    expect_deck_error(text, 2, "y side (2) must be longer than 2, twice the largest sphere "
+                               "diameter (1)");
+    /* made so by a --set of the box's corner: that is named, not the deck's box.periodic
+     * (until 2026-12-01) */
+    {
+        char deck[256];
+        write_deck("bad-periodic.deck", text, deck, sizeof deck);
+        const char *ov[] = {"box.max=[10.0, 1.5, 10.0]"};
+        nbep_scene sc;
+        nbep_diag d;
+        nbep_diag_init(&d);
+        assert_int_equal(nbep_scene_load(deck, ov, 1, &sc, &d), NBEP_EDECK);
+        assert_int_equal(d.n_errors, 1);
+        assert_string_equal(d.msg[0], "--set box.max=[10.0, 1.5, 10.0]: box.periodic: the box's y "
+                                      "side (1.5) must be longer than 2, twice the largest sphere "
+                                      "diameter (1)");
+        nbep_diag_fini(&d);
+    }
     /* a mode that does not handle images */
     snprintf(text, sizeof text,
              "run: { algorithm = \"naive\"; };\n"
