@@ -563,6 +563,43 @@ static void parse_box(load *L, const config_setting_t *root, nbep_scene *sc,
         *periodic_at = per;
 }
 
+/* libconfig's syntax error in the deck's text, at its line `at`, with what libconfig says
+ * beyond "syntax error" (its most common text: not said twice) and what helps find it (until
+ * 2026-12-01 that line and text alone: a new user's `steps = = 10;` read "deck:1: syntax
+ * error", and a group left open "deck:3: syntax error" in a deck of two lines):
+ *   - the deck ended (the line past its last) inside a group, list or array: that one's line,
+ *     "this '{' is never closed";
+ *   - else the line's own text, up to LINE_SHOWN characters. */
+#define LINE_SHOWN 60
+static void syntax_error(load *L, const char *deck, const char *text, const char *what, int at)
+{
+    const bool plain = strcmp(what, "syntax error") == 0;
+    size_t lines = 1, open_line;
+    char opener;
+    for (const char *p = text; *p; p++)
+        lines += *p == '\n';
+    if (plain && at > 0 && (size_t)at >= lines && nbep__scene_unclosed(text, &open_line, &opener)) {
+        nbep_diag_add_ranked(L->c.d, nbep__scene_rank(&L->c, NULL, open_line), __FILE__, __LINE__,
+                             "%s:%zu: syntax error: this '%c' is never closed (the deck ends "
+                             "inside it)",
+                             deck, open_line, opener);
+        return;
+    }
+    const char *p = text; /* the line's text, less its leading and trailing blanks */
+    for (int k = 1; k < at && *p; p++)
+        k += *p == '\n';
+    while (*p == ' ' || *p == '\t')
+        p++;
+    size_t len = strcspn(p, "\r\n");
+    while (len > 0 && (p[len - 1] == ' ' || p[len - 1] == '\t'))
+        len--;
+    nbep_diag_add_ranked(L->c.d, nbep__scene_rank(&L->c, NULL, at > 0 ? (uint64_t)at : 0),
+                         __FILE__, __LINE__, "%s:%d: syntax error%s%s%s%.*s%s%s", deck, at,
+                         plain ? "" : ": ", plain ? "" : what, len ? " (the line: " : "",
+                         (int)(len > LINE_SHOWN ? LINE_SHOWN : len), p,
+                         len > LINE_SHOWN ? " ..." : "", len ? ")" : "");
+}
+
 /* Periodic axes (SPEC contract 2): each longer than twice the largest diameter (the minimum
  * image needs it), and a run mode that supports them: the predictive algorithm's all-pairs
  * mode (nearest images with an image horizon, algo_predictive.c) and cells mode, whose cell
@@ -1487,13 +1524,7 @@ static nbep_status load_deck(const char *deck_path, const char *deck_text,
     if (n_include) /* refused, each at its line: libconfig must not read the file */
         goto finish;
     if (!config_read_string(&cfg, text)) {
-        /* libconfig 1.5's most common text is just "syntax error": not said twice. */
-        const char *what = config_error_text(&cfg);
-        const int at = config_error_line(&cfg);
-        nbep_diag_add_ranked(d, nbep__scene_rank(&L.c, NULL, at > 0 ? (uint64_t)at : 0),
-                             __FILE__, __LINE__, "%s:%d: syntax error%s%s", deck_path, at,
-                             strcmp(what, "syntax error") ? ": " : "",
-                             strcmp(what, "syntax error") ? what : "");
+        syntax_error(&L, deck_path, deck_text, config_error_text(&cfg), config_error_line(&cfg));
         goto finish;
     }
     for (size_t k = 0; k < n_overrides && !L.c.oom; k++) {

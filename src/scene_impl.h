@@ -85,6 +85,9 @@ void nbep__strbuf_fini(nbep__strbuf *b);
  * NULL when out of memory. */
 char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label, size_t *n_bad,
                         size_t *n_include);
+/* Whether libconfig text leaves a group, list or array open at its end ({, ( or [ outside
+ * strings and comments): then the line of the innermost one left open, and which it is. */
+bool nbep__scene_unclosed(const char *text, size_t *line, char *opener);
 /* Appends the libconfig text of a value: 0.9, 8192, 5000000000L, "text", [0.0, 1.0], (...),
  * { a = 1; }. Floats keep a '.' or an exponent so that they read back as floats. */
 void nbep__scene_value_text(const config_setting_t *s, nbep__strbuf *b);

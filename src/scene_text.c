@@ -172,6 +172,63 @@ static bool is_include(const char *text, size_t i)
     return i == 0 || text[i - 1] == '\n';
 }
 
+/* Past what carries no value at text[*i] (n its length): a newline, a comment (#, // or
+ * / * ... * /, as libconfig reads them) or a string (its escapes too), counting the lines it
+ * passes in *line. False, nothing moved, at anything else. */
+static bool skip_quiet(const char *text, size_t n, size_t *i, size_t *line)
+{
+    const char ch = text[*i];
+    if (ch == '\n') {
+        (*line)++;
+        (*i)++;
+    } else if (ch == '#' || (ch == '/' && text[*i + 1] == '/')) {
+        while (*i < n && text[*i] != '\n')
+            (*i)++;
+    } else if (ch == '/' && text[*i + 1] == '*') {
+        *i += 2;
+        while (*i < n && !(text[*i] == '*' && text[*i + 1] == '/'))
+            *line += text[(*i)++] == '\n';
+        *i = *i + 2 < n ? *i + 2 : n;
+    } else if (ch == '"') {
+        for ((*i)++; *i < n && text[*i] != '"'; (*i)++) {
+            if (text[*i] == '\\' && *i + 1 < n)
+                (*i)++;
+            *line += text[*i] == '\n';
+        }
+        (*i)++;
+    } else {
+        return false;
+    }
+    return true;
+}
+
+bool nbep__scene_unclosed(const char *text, size_t *line, char *opener)
+{
+    enum { DEPTH = 64 };
+    char open[DEPTH];
+    size_t at[DEPTH], depth = 0, ln = 1;
+    const size_t n = strlen(text);
+    for (size_t i = 0; i < n;) {
+        if (skip_quiet(text, n, &i, &ln))
+            continue;
+        const char ch = text[i++];
+        if (ch == '{' || ch == '(' || ch == '[') {
+            if (depth < DEPTH) {
+                open[depth] = ch;
+                at[depth] = ln;
+            }
+            depth++;
+        } else if ((ch == '}' || ch == ')' || ch == ']') && depth > 0) {
+            depth--;
+        }
+    }
+    if (depth == 0 || depth > DEPTH) /* (deeper than any deck: not said) */
+        return false;
+    *line = at[depth - 1];
+    *opener = open[depth - 1];
+    return true;
+}
+
 char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label, size_t *n_bad,
                         size_t *n_include)
 {
@@ -185,24 +242,8 @@ char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label,
 
     while (i < n) {
         char ch = text[i];
-        if (ch == '\n') {
-            line++;
-            i++;
-        } else if (ch == '#' || (ch == '/' && text[i + 1] == '/')) {
-            while (i < n && text[i] != '\n')
-                i++;
-        } else if (ch == '/' && text[i + 1] == '*') {
-            i += 2;
-            while (i < n && !(text[i] == '*' && text[i + 1] == '/'))
-                line += text[i++] == '\n';
-            i = i + 2 < n ? i + 2 : n;
-        } else if (ch == '"') {
-            for (i++; i < n && text[i] != '"'; i++) {
-                if (text[i] == '\\' && i + 1 < n)
-                    i++;
-                line += text[i] == '\n';
-            }
-            i++;
+        if (skip_quiet(text, n, &i, &line)) {
+            continue;
         } else if (ch == '@' && is_include(text, i)) {
             /* A run keeps its deck's text (SPEC: the root's `deck`, the full text) and names
              * errors by its lines; an included file's text is in neither, and libconfig 1.5
