@@ -1240,6 +1240,9 @@ MUTANTS = [
      "    return all;", ["test_scene"], None),
     ("fcc-odd-corner-uncounted", "src/scene_place.c", "(all + (odd ? 1.0 : 0.0)) / 2.0",
      "(all + 0.0) / 2.0", ["test_scene"], None),
+    # nbep info --help: info's own help (2026-12-01)
+    ("help-info-is-the-usage", "src/cli.c", "    fputs(of == NBEP_CMD_INFO ? HELP_INFO : HELP, f);",
+     "    fputs(HELP, f);", ["tests/test_cli.sh"], None),
     # a syntax error says what is never closed, or shows its line (2026-12-01)
     ("syntax-unclosed-unsaid", "src/scene.c",
      "(size_t)at >= lines && nbep__scene_unclosed(text, &open_line, &opener)",

@@ -52,9 +52,28 @@ static const char HELP[] =
     "nbep --help-deck prints every deck setting with its type, default and meaning;\n"
     "README.md describes the output layout and the algorithms.\n";
 
+/* nbep info --help: info takes no options, so the usage's list of them is not its help (until
+ * 2026-12-01 it printed that whole usage, options and all, which info then refused). */
+static const char HELP_INFO[] =
+    "usage: nbep info RUN.h5\n"
+    "\n"
+    "prints what a run file holds: its format and the build that wrote it, the scene (algorithm,\n"
+    "spheres, planes, steps asked, dt, threads, seed, physics, box), the --set overrides it ran\n"
+    "with, the frames complete on disk (the last one's step and time), the stats rows, the run's\n"
+    "status and its JSON summary. It reads the file only (a run still being written, or cut\n"
+    "short, too: what is complete on disk), and takes no options.\n"
+    "\n"
+    "exit status: 0 done, 2 bad usage or a file that is not a readable nbep run.\n"
+    "nbep --help gives the other commands and their options.\n";
+
 void nbep_cli_print_help(FILE *f)
 {
     fputs(HELP, f);
+}
+
+void nbep_cli_print_command_help(FILE *f, nbep_command of)
+{
+    fputs(of == NBEP_CMD_INFO ? HELP_INFO : HELP, f);
 }
 
 void nbep_cli_fini(nbep_cli *cli)
@@ -143,6 +162,7 @@ static nbep_status parse_command(const char *word, nbep_command *cmd, nbep_diag 
 nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
 {
     memset(cli, 0, sizeof *cli);
+    cli->help_of = NBEP_CMD_HELP;
     if (argc < 2)
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: no command given (try nbep --help)");
     nbep_status st = parse_command(argv[1], &cli->cmd, d);
@@ -171,6 +191,7 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
             continue;
         }
         if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+            cli->help_of = cli->cmd;
             cli->cmd = NBEP_CMD_HELP;
             return NBEP_OK;
         }

@@ -380,6 +380,16 @@ for ask in "--help" "-h" "help" "run inputs/two-spheres.deck --help"; do
     check "nbep $ask: exit 0, the usage on stdout with every command and option (got $rc; missing:$missing)" \
         "[ $rc = 0 ] && [ -z '$missing' ] && [ ! -s '$tmp/stderr' ]"
 done
+# info's own: it takes no options, and until 2026-12-01 its --help listed those of run, check
+# and sweep, which it then refused
+for ask in "info --help" "info run.h5 -h"; do
+    # shellcheck disable=SC2086
+    run_nbep $ask
+    check "nbep $ask: exit 0, info's usage, no lines of options (got $rc)" \
+        "[ $rc = 0 ] && head -1 '$tmp/stdout' | grep -qxF 'usage: nbep info RUN.h5' &&
+         grep -qF 'takes no options' '$tmp/stdout' && ! grep -qE '^ +-' '$tmp/stdout' &&
+         [ ! -s '$tmp/stderr' ]"
+done
 # a hard-sphere user's settings and tools, which the usage named nowhere until 2026-11-30
 run_nbep run inputs/hard-sphere-fluid.deck --help
 missing=""

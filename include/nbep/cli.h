@@ -31,6 +31,8 @@ typedef struct nbep_cli {
     const char *summary;      /* borrowed: --summary FILE, "-" = stdout, NULL = none */
     const char *resume;       /* borrowed: --resume RUN.h5, NULL = none */
     bool quiet;
+    nbep_command help_of;     /* cmd NBEP_CMD_HELP: the command it was asked of (nbep run
+                               * --help), else NBEP_CMD_HELP (nbep --help) */
 } nbep_cli;
 
 /* Parses argv into *cli (zeroed on entry). NBEP_EUSAGE with one line naming the problem. */
@@ -38,5 +40,7 @@ NBEP_MUST_CHECK nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli,
 void nbep_cli_fini(nbep_cli *cli);
 /* The --help text. */
 void nbep_cli_print_help(FILE *f);
+/* A command's --help: info's own (it takes no options), else the --help text. */
+void nbep_cli_print_command_help(FILE *f, nbep_command of);
 
 #endif
