@@ -930,7 +930,8 @@ static void pred_run(nbep_sim *sim, void *p)
                     !(t_min - t_check > STALL_FRACTION * sim->dt)) {
                     if (tid == 0) {
                         nbep_diag_add(sim->diag, __FILE__, __LINE__, STALL_MESSAGE,
-                                      (unsigned long long)step, t_min, STALL_ROUNDS, "rounds");
+                                      (unsigned long long)step, t_min, STALL_FRACTION,
+                                      STALL_ROUNDS, "rounds");
                         sim->status = NBEP_ENUMERIC;
                     }
                     quit = true;

@@ -38,13 +38,14 @@
  * box has a few rounds and never looks; a step of many (a long dt over a crowded scene: a
  * round costs microseconds to a millisecond) is abandoned within a second of a SIGTERM. */
 #define STOP_ROUNDS 1024u
-/* The stall's message (printf: step, time, "rounds" or "events", their count). A step whose
+/* The stall's message (printf: step, time, the fraction of a step, "rounds" or "events", their
+ * count). A step whose
  * real events are far shorter than it (a review's 27 spheres at 1e18 times their radius a
  * time unit, dt = 1: 1e18 list expiries a sphere a step) stalls by this measure too, and will
  * not end either: the message names both causes. */
 #define STALL_MESSAGE                                                                              \
-    "nbep: step %llu: events at t = %.17g do not resolve (time advanced less than 1e-12 of a "    \
-    "step over %u %s: endless zero-time reactions, or a time step far too long for the scene's " \
+    "nbep: step %llu: events at t = %.17g do not resolve (time advanced less than %g of a step " \
+    "over %u %s: endless zero-time reactions, or a time step far too long for the scene's "      \
     "events); stopping"
 /* Sphere-sphere contacts that different accelerations press together (a sphere on one that
  * rests on a floor, a pile) would bounce ever faster (inelastic collapse: infinitely many

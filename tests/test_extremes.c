@@ -1328,6 +1328,40 @@ static void test_an_energy_that_overflows_stops_the_run_at_the_step_before(void 
         }
 }
 
+/* ---- a block packed tight that moves ------------------------------------------------------ */
+
+/* 64 spheres packed tight in a closed box (4 a row along each axis, touching one another and
+ * the walls), each moving at 1 in its own direction, elastic: nothing can move, and each speed
+ * is passed to and fro at zero time for ever. Time creeps on by round-off (about 1e-19 an
+ * event), so until 2026-12-01 cells mode's stall check (time to advance by 1e-12 of the step
+ * each million events) never stopped it and the step never ended (a new user's 1000 ran for
+ * ten minutes; the deck check now refuses such a lattice, not such a block of single
+ * spheres). The check asks 1e-6 of the step now: the run stops within its first step, one
+ * line, exit status NBEP_ENUMERIC, in about 2 s here. (Not under valgrind: a million events.) */
+static void test_a_block_packed_tight_that_moves_stops_on_the_stall_check(void **state)
+{
+    fixture *f = *state;
+    if (small_scale())
+        skip();
+    const double r = 0.15;
+    nbep_scene *sc = scene_new(f, 64, 6, "predictive", 5, 1e-3);
+    sc->neighbors_cells = true;
+    set_box(sc, 0, ZERO, (nbep_vec3){8 * r, 8 * r, 8 * r});
+    for (size_t q = 0; q < 64; q++) {
+        const double i = (double)(q % 4), j = (double)(q / 4 % 4), k = (double)(q / 16);
+        const nbep_vec3 u = {sin(1.1 * (double)q + 0.3), cos(2.3 * (double)q), sin(3.7 * (double)q + 1.0)};
+        nbep_test_set_sphere(sc, q, (nbep_vec3){r * (1 + 2 * i), r * (1 + 2 * j), r * (1 + 2 * k)},
+                             nbep_vec3_scale(u, 1.0 / nbep_vec3_norm(u)), r, 1.0, ZERO);
+    }
+    const outcome *o = run(f, 1);
+    if (o->status != NBEP_ENUMERIC || !strstr(o->message, "do not resolve (time advanced less "
+                                                          "than 1e-06 of a step over 1000000 "
+                                                          "events"))
+        fail_msg("status %d, \"%s\"", (int)o->status, o->message);
+    assert_int_equal(o->sum.steps, 0);
+    assert_true(o->w.finite);
+}
+
 /* A state whose energy is beyond doubles (no deck within the window and the span holds one; a
  * resumed file's state or a scene built otherwise can): refused before the run, one sphere's
  * energy (a speed of 1e160) or the total of four finite ones (5e307 each) */
@@ -1390,6 +1424,7 @@ int main(void)
         T(test_hair_overlap_receding_or_at_rest_has_no_event),
         T(test_scenes_in_units_at_the_window_corners_give_the_same_results_scaled),
         T(test_an_energy_that_overflows_stops_the_run_at_the_step_before),
+        T(test_a_block_packed_tight_that_moves_stops_on_the_stall_check),
         T(test_an_energy_beyond_doubles_is_refused_before_the_run),
     };
 #undef T
