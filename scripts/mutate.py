@@ -1243,6 +1243,8 @@ MUTANTS = [
     # cells mode's stall check catches a block that creeps on by round-off (2026-12-01)
     ("stall-events-creep-allowed", "src/pred_cells.c", "#define STALL_EVENTS_FRACTION 1e-6",
      "#define STALL_EVENTS_FRACTION 1e-12", ["test_extremes"], None),
+    ("stall-rounds-creep-allowed", "src/pred_impl.h", "#define STALL_FRACTION 1e-6",
+     "#define STALL_FRACTION 1e-12", ["test_extremes"], None),
     # nbep info --help: info's own help (2026-12-01)
     ("help-info-is-the-usage", "src/cli.c", "    fputs(of == NBEP_CMD_INFO ? HELP_INFO : HELP, f);",
      "    fputs(HELP, f);", ["tests/test_cli.sh"], None),

@@ -1333,33 +1333,41 @@ static void test_an_energy_that_overflows_stops_the_run_at_the_step_before(void 
 /* 64 spheres packed tight in a closed box (4 a row along each axis, touching one another and
  * the walls), each moving at 1 in its own direction, elastic: nothing can move, and each speed
  * is passed to and fro at zero time for ever. Time creeps on by round-off (about 1e-19 an
- * event), so until 2026-12-01 cells mode's stall check (time to advance by 1e-12 of the step
- * each million events) never stopped it and the step never ended (a new user's 1000 ran for
- * ten minutes; the deck check now refuses such a lattice, not such a block of single
- * spheres). The check asks 1e-6 of the step now: the run stops within its first step, one
- * line, exit status NBEP_ENUMERIC, in about 2 s here. (Not under valgrind: a million events.) */
+ * event), so until 2026-12-01 the stall checks (time to advance by 1e-12 of the step each
+ * million events in cells mode, each 100000 rounds in all-pairs and grid mode) never stopped
+ * it and the step never ended (a new user's 1000 ran for ten minutes; the deck check now
+ * refuses such a lattice, not such a block of single spheres). They ask 1e-6 of the step now:
+ * the run stops within its first step, one line, NBEP_ENUMERIC, in about a second here in
+ * each mode. (Not under valgrind: a million events, or 100000 rounds.) */
 static void test_a_block_packed_tight_that_moves_stops_on_the_stall_check(void **state)
 {
     fixture *f = *state;
     if (small_scale())
         skip();
     const double r = 0.15;
-    nbep_scene *sc = scene_new(f, 64, 6, "predictive", 5, 1e-3);
-    sc->neighbors_cells = true;
-    set_box(sc, 0, ZERO, (nbep_vec3){8 * r, 8 * r, 8 * r});
-    for (size_t q = 0; q < 64; q++) {
-        const double i = (double)(q % 4), j = (double)(q / 4 % 4), k = (double)(q / 16);
-        const nbep_vec3 u = {sin(1.1 * (double)q + 0.3), cos(2.3 * (double)q), sin(3.7 * (double)q + 1.0)};
-        nbep_test_set_sphere(sc, q, (nbep_vec3){r * (1 + 2 * i), r * (1 + 2 * j), r * (1 + 2 * k)},
-                             nbep_vec3_scale(u, 1.0 / nbep_vec3_norm(u)), r, 1.0, ZERO);
+    for (int mode = 0; mode < 3; mode++) { /* all pairs, grid, cells */
+        nbep_scene *sc = scene_new(f, 64, 6, "predictive", 5, 1e-3);
+        sc->neighbors_grid = mode == 1;
+        sc->neighbors_cells = mode == 2;
+        set_box(sc, 0, ZERO, (nbep_vec3){8 * r, 8 * r, 8 * r});
+        for (size_t q = 0; q < 64; q++) {
+            const double i = (double)(q % 4), j = (double)(q / 4 % 4), k = (double)(q / 16);
+            const nbep_vec3 u = {sin(1.1 * (double)q + 0.3), cos(2.3 * (double)q),
+                                 sin(3.7 * (double)q + 1.0)};
+            nbep_test_set_sphere(sc, q,
+                                 (nbep_vec3){r * (1 + 2 * i), r * (1 + 2 * j), r * (1 + 2 * k)},
+                                 nbep_vec3_scale(u, 1.0 / nbep_vec3_norm(u)), r, 1.0, ZERO);
+        }
+        const outcome *o = run(f, 1);
+        const char *want = mode == 2 ? "do not resolve (time advanced less than 1e-06 of a step "
+                                       "over 1000000 events"
+                                     : "do not resolve (time advanced less than 1e-06 of a step "
+                                       "over 100000 rounds";
+        if (o->status != NBEP_ENUMERIC || !strstr(o->message, want))
+            fail_msg("mode %d: status %d, \"%s\"", mode, (int)o->status, o->message);
+        assert_int_equal(o->sum.steps, 0);
+        assert_true(o->w.finite);
     }
-    const outcome *o = run(f, 1);
-    if (o->status != NBEP_ENUMERIC || !strstr(o->message, "do not resolve (time advanced less "
-                                                          "than 1e-06 of a step over 1000000 "
-                                                          "events"))
-        fail_msg("status %d, \"%s\"", (int)o->status, o->message);
-    assert_int_equal(o->sum.steps, 0);
-    assert_true(o->w.finite);
 }
 
 /* A state whose energy is beyond doubles (no deck within the window and the span holds one; a
