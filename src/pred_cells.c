@@ -69,15 +69,10 @@ static bool cells_outgrown(const pred_ctx *c)
 
 /* ---- run.neighbors = "cells": the algorithm's side of the event loop (evloop.h) ---------- */
 
-/* Every this many events of one step, time must have advanced by more than STALL_EVENTS_FRACTION
- * of a step (as for rounds, STALL_ROUNDS): otherwise the loop is a cascade that does not
- * resolve, or one that creeps. A step that advances less needs over 10^12 events, days of a
- * core's time, which no scene that can run asks; until 2026-12-01 it was STALL_FRACTION, 1e-12,
- * and 1000 spheres packed tight, each given a speed, crept on for ever: time advanced by
- * round-off, 9.3e-14 for each million events (1e-19 an event), past 1e-12 of the step of 1e-3
- * but 10^16 events from its end (a review's deck, README: the deck). */
+/* Every this many events of one step, time must have advanced by more than STALL_FRACTION of
+ * a step (as for rounds, STALL_ROUNDS, pred_impl.h): otherwise the loop is a cascade that does
+ * not resolve, or one that creeps on by round-off. */
 #define STALL_EVENTS 1000000u
-#define STALL_EVENTS_FRACTION 1e-6
 
 /* A rebuild's predictions (about the cost of n/2 collisions: 0.5 s of the first step's second
  * of set-up for 2 million spheres on one thread here) are made this many spheres of a
@@ -534,7 +529,7 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
         nbep__pred_jam_fail(sim, step, jammed - 1, t_stuck);
     } else if (fail) {
         nbep_diag_add(sim->diag, __FILE__, __LINE__, STALL_MESSAGE, (unsigned long long)step,
-                      t_stuck, STALL_EVENTS_FRACTION, STALL_EVENTS, "events");
+                      t_stuck, STALL_FRACTION, STALL_EVENTS, "events");
         sim->status = NBEP_ENUMERIC;
     }
 }
@@ -637,7 +632,7 @@ void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own,
          * those of the step's first part (pred_ways.c), behind a barrier: its threads have
          * left the team loop before the rest's enter it */
         cells_look look = {sim, step};
-        nbep_evloop_stall stall = NBEP_EVLOOP_STALL(STALL_EVENTS, STALL_EVENTS_FRACTION * sim->dt,
+        nbep_evloop_stall stall = NBEP_EVLOOP_STALL(STALL_EVENTS, STALL_FRACTION * sim->dt,
                                                     sim->opt.stop_signal, cells_on_look, &look);
         const int probe = c->ways.probe[step & 1];
         if (probe >= 0) {

@@ -28,24 +28,25 @@
 #include "evloop.h"
 #include "sim_impl.h"
 
-/* Every this many rounds of one step, time must have advanced by more than STALL_FRACTION of
- * a step, or the run stops as a numerical failure: a step may hold any number of real events
- * (a fast sphere between close walls: thousands), but a cascade that no longer advances time
- * is a contact the model cannot resolve, and so is one whose time creeps on by round-off. A
- * step that advances less needs over 10^11 rounds, days of a core's time, which no scene that
- * can run asks; until 2026-12-01 it was 1e-12, which 64 spheres packed tight, each given a
- * speed, passed, creeping on at 8e-14 each 100000 rounds for ever (tests/test_extremes.c). */
+/* Every this many rounds of one step (cells mode: every STALL_EVENTS events, pred_cells.c),
+ * time must have advanced by more than STALL_FRACTION of a step, or the run stops as a
+ * numerical failure: a step may hold any number of real events (a fast sphere between close
+ * walls: thousands), but a cascade that no longer advances time is a contact the model cannot
+ * resolve, and so is one whose time creeps on by round-off. A step that advances less needs
+ * over 10^11 rounds or 10^12 events, days of a core's time, which no scene that can run asks.
+ * Until 2026-12-01 it was 1e-12, which 64 spheres packed tight, each given a speed, passed,
+ * creeping on by about 1e-19 an event for ever in every mode (tests/test_extremes.c; a new
+ * user's 1000 on a lattice ran ten minutes without a step). */
 #define STALL_ROUNDS 100000u
 #define STALL_FRACTION 1e-6
 /* Every this many rounds of one step, thread 0 looks at the stop signal: a step of the paper's
  * box has a few rounds and never looks; a step of many (a long dt over a crowded scene: a
  * round costs microseconds to a millisecond) is abandoned within a second of a SIGTERM. */
 #define STOP_ROUNDS 1024u
-/* The stall's message (printf: step, time, the fraction of a step, "rounds" or "events", their
- * count). A step whose
- * real events are far shorter than it (a review's 27 spheres at 1e18 times their radius a
- * time unit, dt = 1: 1e18 list expiries a sphere a step) stalls by this measure too, and will
- * not end either: the message names both causes. */
+/* The stall's message (printf: step, time, STALL_FRACTION, their count, "rounds" or "events").
+ * A step whose real events are far shorter than it (a review's 27 spheres at 1e18 times their
+ * radius a time unit, dt = 1: 1e18 list expiries a sphere a step) stalls by this measure too,
+ * and will not end either: the message names both causes. */
 #define STALL_MESSAGE                                                                              \
     "nbep: step %llu: events at t = %.17g do not resolve (time advanced less than %g of a step " \
     "over %u %s: endless zero-time reactions, or a time step far too long for the scene's "      \
