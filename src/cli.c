@@ -66,12 +66,7 @@ static const char HELP_INFO[] =
     "exit status: 0 done, 2 bad usage or a file that is not a readable nbep run.\n"
     "nbep --help gives the other commands and their options.\n";
 
-void nbep_cli_print_help(FILE *f)
-{
-    fputs(HELP, f);
-}
-
-void nbep_cli_print_command_help(FILE *f, nbep_command of)
+void nbep_cli_print_help(FILE *f, nbep_command of)
 {
     fputs(of == NBEP_CMD_INFO ? HELP_INFO : HELP, f);
 }

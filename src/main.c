@@ -154,7 +154,7 @@ int main(int argc, char **argv)
     if (st == NBEP_OK) {
         switch (cli.cmd) {
         case NBEP_CMD_HELP:
-            nbep_cli_print_command_help(stdout, cli.help_of);
+            nbep_cli_print_help(stdout, cli.help_of);
             break;
         case NBEP_CMD_HELP_DECK:
             nbep_scene_print_reference(stdout);

@@ -38,9 +38,8 @@ typedef struct nbep_cli {
 /* Parses argv into *cli (zeroed on entry). NBEP_EUSAGE with one line naming the problem. */
 NBEP_MUST_CHECK nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d);
 void nbep_cli_fini(nbep_cli *cli);
-/* The --help text. */
-void nbep_cli_print_help(FILE *f);
-/* A command's --help: info's own (it takes no options), else the --help text. */
-void nbep_cli_print_command_help(FILE *f, nbep_command of);
+/* The --help text asked of command `of` (cli.help_of): info's own (it takes no options), else
+ * the whole usage. */
+void nbep_cli_print_help(FILE *f, nbep_command of);
 
 #endif
