@@ -946,19 +946,19 @@ static bool lattice_jams(nbep__scene_ctx *c, const nbep_state *s, const nbep__sc
         if (tight[a] && first < 0)
             first = a;
     }
-    const bool touch = spacing <= lattice_min_spacing(r, true) * (1.0 + 4.0 * LATTICE_SLACK);
-    if (fcc ? !(n_tight >= 2 && touch && (double)e->count >= lattice_capacity(ax, spacing, true))
+    if (fcc ? !(n_tight >= 2 &&
+                spacing <= lattice_min_spacing(r, true) * (1.0 + 4.0 * LATTICE_SLACK) &&
+                (double)e->count >= lattice_capacity(ax, spacing, true))
             : n_tight == 0)
         return false;
-    const char *ends = box_periodic[first] ? "close round the periodic box" : "both walls";
     if (fcc) {
-        char axes[16] = "";
+        char axes[16] = ""; /* "x and y", "x, y and z" */
         for (int a = 0, m = 0; a < 3; a++)
             if (tight[a]) {
                 const size_t used = strlen(axes);
                 snprintf(axes + used, sizeof axes - used, "%s%c",
-                         m == 0 ? "" : ++m == n_tight ? " and " : ", ", "xyz"[a]);
-                m += m == 0;
+                         m == 0 ? "" : m == n_tight - 1 ? " and " : ", ", "xyz"[a]);
+                m++;
             }
         fill_failed(c, s, e, plane_at, (blame){NULL, 0, NBEP_DIAG_UNRANKED},
                     "spheres.[%zu]: this face-centred cubic lattice is packed tight along %s: "
@@ -974,7 +974,9 @@ static bool lattice_jams(nbep__scene_ctx *c, const nbep_state *s, const nbep__sc
                     "no sphere can move along %c, and the run would not pass t = 0 (endless "
                     "collisions at zero time); give the region more room along %c than %" PRIu64
                     " diameters (%g), fewer spheres, or speed = 0",
-                    k, "xyz"[first], n[first], r, ends, e->speed, "xyz"[first], "xyz"[first],
+                    k, "xyz"[first], n[first], r,
+                    box_periodic[first] ? "close round the periodic box" : "both walls", e->speed,
+                    "xyz"[first], "xyz"[first],
                     n[first], 2.0 * r * (double)n[first]);
     return true;
 }
