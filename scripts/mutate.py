@@ -1162,6 +1162,13 @@ MUTANTS = [
     ("sweep-seed-unbounded", "src/scene.c",
      "    if (sc->sweep_replicas > 1 && sc->seed > (uint64_t)INT64_MAX - (sc->sweep_replicas - 1))",
      "    if (0)", ["tests/test_sweep_cli.sh"], None),
+    # a setting and a part of it are not both axes, whichever comes first
+    ("sweep-axis-nested-allowed", "src/scene.c",
+     "            } else if (key_within(kj, key) || key_within(key, kj)) {",
+     "            } else if (0) {", ["test_sweep"], None),
+    ("sweep-axis-nested-one-way", "src/scene.c",
+     "            } else if (key_within(kj, key) || key_within(key, kj)) {",
+     "            } else if (key_within(kj, key)) {", ["test_sweep"], None),
     # an axis's path must name entries the deck has; a run's failure names the axis's line
     ("sweep-axis-index-appends", "src/scene_override.c", "            if (s->idx >= have) {",
      "            if (s->idx > have) {", ["test_sweep"], None),

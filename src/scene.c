@@ -1022,6 +1022,15 @@ static void parse_output(load *L, const config_setting_t *root, nbep_scene *sc)
     }
 }
 
+/* Whether setting path `inner` lies inside setting path `outer` (physics.gravity.[2] inside
+ * physics.gravity, spheres.[0].radius inside spheres.[0]): a run that sets outer sets inner
+ * too. */
+static bool key_within(const char *outer, const char *inner)
+{
+    const size_t n = strlen(outer);
+    return strncmp(outer, inner, n) == 0 && inner[n] == '.';
+}
+
 /* Why key cannot be a sweep axis, or NULL if it can: settings the sweep itself sets per run,
  * the groups that hold them, and the names of the sweep's table's own columns (an axis's
  * column is named by its key: a `spheres` axis gave the table two `spheres` columns, and
@@ -1098,9 +1107,17 @@ static void parse_axes(load *L, const config_setting_t *sweep, nbep_scene *sc)
         for (size_t j = 0; g_key == GOT && j < k; j++) {
             const char *kj;
             if (config_setting_lookup_string(config_setting_get_elem(vary, (unsigned)j), "key",
-                                             &kj) == CONFIG_TRUE &&
-                strcmp(kj, key) == 0) {
+                                             &kj) != CONFIG_TRUE)
+                continue;
+            if (strcmp(kj, key) == 0) {
                 ERR(L, at, "%s.key: %s is already varied by sweep.vary.[%zu]", prefix, key, j);
+                g_key = BAD;
+            } else if (key_within(kj, key) || key_within(key, kj)) {
+                /* the axis of the whole would overwrite the part in every run, whose rows
+                 * would then name values that never ran */
+                ERR(L, at, "%s.key: %s and %s (sweep.vary.[%zu]) vary the same setting, one "
+                    "inside the other; vary one of them",
+                    prefix, key, kj, j);
                 g_key = BAD;
             }
         }

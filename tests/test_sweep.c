@@ -349,7 +349,7 @@ static void assert_refused(const char *deck, const char *const *set, size_t n_se
     nbep_diag_fini(&d);
 }
 
-static void test_varying_the_seed_or_a_key_twice_is_a_deck_error(void **state)
+static void test_varying_the_seed_a_key_twice_or_a_key_and_its_part_is_a_deck_error(void **state)
 {
     (void)state;
     char deck[256];
@@ -364,6 +364,23 @@ static void test_varying_the_seed_or_a_key_twice_is_a_deck_error(void **state)
         TMP "sweep_bad_axes.deck:8: sweep.vary.[2].key: physics.restitution is already varied "
             "by sweep.vary.[1]"};
     assert_refused(deck, NULL, 0, 2, axes);
+    /* a setting and a part of it (either first): every run would take the whole's value, and
+     * the rows would name the part's values, which never ran (until 2026-12-01 both passed) */
+    write_deck("sweep_nested_axes",
+               "sweep: { vary = ( { key = \"physics.gravity.[2]\"; values = [-1.0, -2.0]; },\n"
+               "  { key = \"physics.gravity\"; values = ( [0.0, 0.0, -9.81] ); },\n"
+               "  { key = \"spheres.[0]\";\n"
+               "    values = ( { count = 2; radius = 0.04; mass = 1.0; } ); },\n"
+               "  { key = \"spheres.[0].radius\"; values = [0.04]; },\n"
+               "  { key = \"physics.restitution\"; values = [1.0]; } ); };\n",
+               deck, sizeof deck);
+    const char *const nested[] = {
+        TMP "sweep_nested_axes.deck:7: sweep.vary.[1].key: physics.gravity and "
+            "physics.gravity.[2] (sweep.vary.[0]) vary the same setting, one inside the other; "
+            "vary one of them",
+        TMP "sweep_nested_axes.deck:10: sweep.vary.[3].key: spheres.[0].radius and spheres.[0] "
+            "(sweep.vary.[2]) vary the same setting, one inside the other; vary one of them"};
+    assert_refused(deck, NULL, 0, 2, nested);
     /* a run.steps axis takes integers >= 0 only, each checked on its line, as run.steps (since
      * 2026-11-30 by the check of every value, in its words; before, by a check of its own) */
     write_deck("sweep_bad_steps",
@@ -1224,7 +1241,7 @@ int main(void)
         cmocka_unit_test(test_a_deck_without_a_sweep_group_is_one_run),
         cmocka_unit_test(test_the_sweep_directory_is_the_output_name_with_sweep),
         cmocka_unit_test(test_run_files_have_four_digits_or_as_many_as_the_last_run_needs),
-        cmocka_unit_test(test_varying_the_seed_or_a_key_twice_is_a_deck_error),
+        cmocka_unit_test(test_varying_the_seed_a_key_twice_or_a_key_and_its_part_is_a_deck_error),
         cmocka_unit_test(test_a_bad_axis_value_is_refused_before_any_run),
         cmocka_unit_test(test_too_many_runs_is_a_deck_error_at_the_sweep_group),
         cmocka_unit_test(test_a_steps_axis_sets_each_runs_expected_steps),
