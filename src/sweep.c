@@ -1111,16 +1111,29 @@ static void unmake_dir(const char *dir, int made)
     free(p);
 }
 
-/* A --summary that is one of the study's own files (its tables or a run's file) would replace
- * it: the table, or a run the next sweep then runs again (a review's find). NBEP_EUSAGE. */
+/* Whether name ends with suffix. */
+static bool ends_with(const char *name, const char *suffix)
+{
+    const size_t n = strlen(name), k = strlen(suffix);
+    return n >= k && strcmp(name + n - k, suffix) == 0;
+}
+
+/* A --summary that is one of the study's own files (its tables, a run's file or its sidecar)
+ * would replace it: the table, or a run the next sweep then runs again (a review's find).
+ * NBEP_EUSAGE. Called once the study's folder is there: the two names are compared with their
+ * folders resolved (nbep_run_same_path), and a folder not yet made resolves to nothing, so that
+ * ./S.sweep/summary.csv or an absolute path passed a fresh study's check and the JSON took the
+ * table's place (until 2026-12-01). */
 static nbep_status summary_not_in_study(const nbep_sweep_plan *p, const char *summary,
                                         nbep_diag *d)
 {
+    if (!summary || strcmp(summary, "-") == 0)
+        return NBEP_OK;
     const char *slash = strrchr(summary, '/');
     const char *base = slash ? slash + 1 : summary;
     const size_t len = strlen(base);
     const bool run_file =
-        strncmp(base, "run-", 4) == 0 && len > 7 && strcmp(base + len - 3, ".h5") == 0;
+        strncmp(base, "run-", 4) == 0 && (ends_with(base, ".h5") || ends_with(base, ".xmf"));
     if (!(strcmp(base, "summary.csv") == 0 || strcmp(base, "summary.h5") == 0 || run_file))
         return NBEP_OK;
     /* a study file's name: is it that file of this study? */
@@ -1585,8 +1598,6 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
                       nbep_status_stop_text(st));
     if (st == NBEP_OK) /* its JSON would replace the deck, as for nbep run */
         st = nbep_run_check_paths(cli->path, NULL, cli->summary, dd);
-    if (st == NBEP_OK && cli->summary && strcmp(cli->summary, "-") != 0)
-        st = summary_not_in_study(&p, cli->summary, dd);
     if (st == NBEP_OK && many && size == 1) {
         nbep_diag_add(dd, __FILE__, __LINE__,
                       "nbep: started as one of several processes but MPI sees one: launch "
@@ -1604,7 +1615,9 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
         st = make_dir(p.dir, false, &made, dd);
     /* after the sweep's folder, which may hold it (-o res/a --summary res/a.sweep/t.json); a
      * path it cannot take leaves nothing made */
-    if (st == NBEP_OK && rank == 0 && (st = try_summary(cli->summary, dd)) != NBEP_OK)
+    if (st == NBEP_OK && rank == 0 &&
+        ((st = summary_not_in_study(&p, cli->summary, dd)) != NBEP_OK ||
+         (st = try_summary(cli->summary, dd)) != NBEP_OK))
         unmake_dir(p.dir, made);
     if (st == NBEP_OK && rank == 0)
         st = remove_tables(&p, dd);

@@ -355,14 +355,24 @@ check "run.seed = 2^63 - 1 with 2 replicas: exit 2 (got $rc), one line, no folde
     "[ $rc = 2 ] && one_line && grep -q 'the last replica.s seed would pass' '$tmp/stderr' &&
      [ ! -e '$tmp/seed.sweep' ]"
 # a --summary that is one of the study's own files: its table, or a run the next sweep would
-# run again
+# run again, or a run's sidecar
 run_sweep "$tmp/s.deck" -o "$tmp/own.h5" --quiet
-for f in summary.csv run-0001.h5; do
+for f in summary.csv run-0001.h5 run-0001.xmf; do
     sum=$(md5sum < "$tmp/own.sweep/$f")
     run_sweep "$tmp/s.deck" -o "$tmp/own.h5" --quiet --summary "$tmp/./own.sweep/$f"
     check "--summary own.sweep/$f: exit 2 (got $rc), one line, the file as it was" \
         "[ $rc = 2 ] && one_line && grep -q 'one of the study.s own files' '$tmp/stderr' &&
          [ \"\$(md5sum < '$tmp/own.sweep/$f')\" = '$sum' ]"
+done
+# ... before the study's folder is made, by another name of it (until 2026-12-01 only the name
+# as the study spells it was refused then, and the JSON took the table's place)
+for f in summary.csv run-0000.h5; do
+    (bin="$PWD/$nbep" && cd "$tmp" && timeout -k 5 120 "$bin" sweep s.deck -o fresh.h5 --quiet \
+        --summary "./fresh.sweep/$f" >stdout 2>stderr)
+    rc=$?
+    check "a fresh study's --summary ./fresh.sweep/$f: exit 2 (got $rc), one line, no folder" \
+        "[ $rc = 2 ] && one_line && grep -q 'one of the study.s own files' '$tmp/stderr' &&
+         [ ! -e '$tmp/fresh.sweep' ]"
 done
 
 # ---- an axis value no run can take: refused by check, run and sweep, exit 2, nothing written ----
