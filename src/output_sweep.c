@@ -139,11 +139,12 @@ nbep_status nbep_output_sweep_write(const char *path, const nbep_table *t,
         HDF5_FAIL(d, path, "set up file access");
         goto done;
     }
+    /* a create that fails may leave the file made, empty (a full disk): it goes too */
+    made = true;
     if ((file = H5Fcreate(tmp, H5F_ACC_TRUNC, H5P_DEFAULT, fapl)) < 0) {
         HDF5_FAIL(d, tmp, "create the file");
         goto done;
     }
-    made = true;
     const nbep_table_attr format = {.name = "format", .kind = NBEP_TABLE_TEXT,
                                     .s = SWEEP_FORMAT_NAME};
     const nbep_table_attr version = {.name = "version", .kind = NBEP_TABLE_TEXT,

@@ -1305,11 +1305,12 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
         fprintf(stderr,
                 "nbep sweep: %zu run%s on %d rank%s in %.3g s (%zu ran to %s end: %s "
                 "runs/min): %zu ok (%zu reused), %zu failed, %zu interrupted, %zu not run; "
-                "%s/summary.csv\n",
+                "%s%s\n",
                 p->n_runs, p->n_runs == 1 ? "" : "s", n_ranks, n_ranks == 1 ? "" : "s", wall,
                 s.ended,
                 s.ended == 1 ? "its" : "their", pace_text, s.ok, s.reused, s.failed,
-                s.interrupted, s.not_run, p->dir);
+                s.interrupted, s.not_run, st == NBEP_OK ? p->dir : "no summary table could be written",
+                st == NBEP_OK ? "/summary.csv" : "");
     }
     if (cli->summary) {
         nbep_status jst = write_sweep_json(cli->summary, p, &s, n_ranks, wall, d);
@@ -1327,10 +1328,18 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
             }
         if (shown < s.failed)
             snprintf(list + used, sizeof list - used, ", ...");
-        nbep_diag_add(d, __FILE__, __LINE__,
-                      "nbep: sweep: %zu of %zu runs failed (run %s); the others are complete; "
-                      "errors in %s/summary.csv",
-                      s.failed, p->n_runs, list, p->dir);
+        /* the table that has the errors, if it was written (a full disk: only the lines
+         * said as each run failed have them) */
+        if (st == NBEP_OK)
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: sweep: %zu of %zu runs failed (run %s); the others are "
+                          "complete; errors in %s/summary.csv",
+                          s.failed, p->n_runs, list, p->dir);
+        else
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: sweep: %zu of %zu runs failed (run %s); the others are "
+                          "complete; errors above (no summary table could be written)",
+                          s.failed, p->n_runs, list);
     }
     if (run_st == NBEP_ESIGINT || run_st == NBEP_ESIGTERM) {
         nbep_diag_add(d, __FILE__, __LINE__,

@@ -52,4 +52,10 @@ check "a sweep run on a full disk fails the sweep (exit 1, got $rc)" "[ $rc = 1 
 check "its row names the run's file and the reason" \
     "echo \"\$line\" | grep -q 's.sweep/run-0000.h5: .*No space left'"
 check "with that one error, as nbep run reports it" "! echo \"\$line\" | grep -q '; nbep:'"
+# the disk is full for the study's tables too: the one made empty is not left, and the last
+# line does not send the user to a table that is not there (until 2026-12-01 it did, and
+# summary.h5.partial stayed)
+check "no summary table left half-made" "[ -z \"\$(ls '$mnt/s.sweep' | grep summary)\" ]"
+check "the last line says the failed runs' errors are above" \
+    "tail -n 1 '$mnt/../diskfull-sweep.err' | grep -q 'errors above (no summary table could be written)'"
 test_end diskfull
