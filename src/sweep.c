@@ -436,17 +436,20 @@ void nbep_sweep_check_print(FILE *f, const nbep_sweep_check_report *r)
 /* ---- reusing finished runs --------------------------------------------------------------- */
 
 /* Whether an override changes nothing a run computes: the thread count (SPEC: frames are
- * bitwise identical for any thread count), the output file (the sweep names its files) and
+ * bitwise identical for any thread count; unless threads_axis, below), the output file (the sweep names its files) and
  * the study's own settings (sweep.*, or the group whole, `--set sweep={...}` for a deck without
  * one: a run's combination and seed are in its other overrides; README's way to add replicas,
  * --set sweep.replicas=N, re-ran every finished run while it counted, and `sweep=` did until
  * 2026-11-30). */
-static bool override_is_neutral(const char *ov, size_t len)
+static bool override_is_neutral(const char *ov, size_t len, bool threads_axis)
 {
     if (len > 6 && strncmp(ov, "sweep.", 6) == 0)
         return true;
-    static const char *const neutral[] = {"run.threads", "output.file", "sweep"};
-    for (size_t k = 0; k < sizeof neutral / sizeof neutral[0]; k++) {
+    static const char *const neutral[] = {"output.file", "sweep", "run.threads"};
+    /* but a study of thread counts (run.threads an axis) compares them: its rows' timings are
+     * its results (until 2026-12-01 a 2-thread run was reused for the row of 4) */
+    const size_t n_neutral = sizeof neutral / sizeof neutral[0] - threads_axis;
+    for (size_t k = 0; k < n_neutral; k++) {
         size_t n = strlen(neutral[k]);
         if (len > n && strncmp(ov, neutral[k], n) == 0) {
             const char *q = ov + n;
@@ -460,15 +463,15 @@ static bool override_is_neutral(const char *ov, size_t len)
 }
 
 /* Whether two override lists (newline-separated) are equal but for neutral overrides. */
-static bool same_overrides(const char *a, const char *b)
+static bool same_overrides(const char *a, const char *b, bool threads_axis)
 {
     for (;;) {
         size_t la = strcspn(a, "\n"), lb = strcspn(b, "\n");
-        if (la && override_is_neutral(a, la)) {
+        if (la && override_is_neutral(a, la, threads_axis)) {
             a += la + (a[la] != '\0');
             continue;
         }
-        if (lb && override_is_neutral(b, lb)) {
+        if (lb && override_is_neutral(b, lb, threads_axis)) {
             b += lb + (b[lb] != '\0');
             continue;
         }
@@ -506,7 +509,8 @@ static bool says_completed(const nbep_summary *s, uint64_t steps)
 }
 
 nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
-                                      size_t n_overrides, uint64_t steps, nbep_summary *sum)
+                                      size_t n_overrides, uint64_t steps, bool threads_axis,
+                                      nbep_summary *sum)
 {
     struct stat sb;
     if (stat(path, &sb) != 0)
@@ -517,7 +521,7 @@ nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
     nbep_summary s;
     nbep_sweep_found found = NBEP_SWEEP_FOUND_NONE;
     if (wanted && nbep_output_sweep_read_run(path, &stored, &json, &d) == NBEP_OK &&
-        same_overrides(stored, wanted)) {
+        same_overrides(stored, wanted, threads_axis)) {
         /* no summary: killed outright (kill -9, a node lost), its frames up to then kept */
         const bool read = json && nbep_summary_from_json(json, &s);
         if (read && says_completed(&s, steps))
@@ -538,7 +542,7 @@ nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
 bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_overrides,
                              uint64_t steps, nbep_summary *sum)
 {
-    return nbep_sweep_run_found(path, overrides, n_overrides, steps, sum) ==
+    return nbep_sweep_run_found(path, overrides, n_overrides, steps, false, sum) ==
            NBEP_SWEEP_FOUND_COMPLETE;
 }
 
@@ -562,6 +566,15 @@ static nbep_status stop_status(const nbep_sweep_exec *ex)
     return nbep_sim_stop_status(ex->stop_signal);
 }
 
+/* Whether run.threads is one of the study's axes. */
+static bool varies_threads(const nbep_sweep_plan *p)
+{
+    for (size_t k = 0; k < p->n_axes; k++)
+        if (strcmp(p->axes[k].key, "run.threads") == 0)
+            return true;
+    return false;
+}
+
 static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec *ex,
                     nbep_sweep_result *res)
 {
@@ -579,7 +592,7 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
     }
     const nbep_sweep_found found =
         st == NBEP_OK ? nbep_sweep_run_found(path, ov, n_ov, nbep_sweep_run_steps(p, run),
-                                             &res->summary)
+                                             varies_threads(p), &res->summary)
                       : NBEP_SWEEP_FOUND_NONE;
     if (found == NBEP_SWEEP_FOUND_COMPLETE) {
         has_summary = reused = true;

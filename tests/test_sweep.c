@@ -655,6 +655,31 @@ static void test_thread_count_and_output_name_do_not_make_a_run_different(void *
     nbep_sweep_plan_fini(&p);
 }
 
+/* ... but where run.threads is an axis (a study of thread counts, whose rows' timings are its
+ * results) the thread count makes a run different: a study run again with another value
+ * reuses only the runs whose count it kept (until 2026-12-01 the 2-thread run was reused for
+ * the row of 4, its threads column 2). */
+static void test_a_thread_count_axis_makes_a_run_different(void **state)
+{
+    (void)state;
+    char deck[256];
+    write_deck("sweep_threads_axis",
+               "sweep: { vary = ( { key = \"run.threads\"; values = [1, 2]; } ); };\n", deck,
+               sizeof deck);
+    nbep_sweep_plan p;
+    plan_of(deck, NULL, 0, &p);
+    free(execute(&p, NULL, NBEP_OK));
+    nbep_sweep_plan_fini(&p);
+    const char *cli[] = {"sweep.vary.[0].values=[1, 4]"};
+    plan_of(deck, cli, 1, &p);
+    nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
+    assert_int_equal(res[0].reused, 1);
+    assert_int_equal(res[1].reused, 0);
+    assert_int_equal(res[1].summary.threads, 4);
+    free(res);
+    nbep_sweep_plan_fini(&p);
+}
+
 static void test_a_run_killed_before_its_summary_is_not_complete(void **state)
 {
     (void)state;
@@ -1249,6 +1274,7 @@ int main(void)
         cmocka_unit_test(test_a_summary_reads_back_field_by_field),
         cmocka_unit_test(test_a_run_is_complete_only_with_its_overrides_and_all_its_steps),
         cmocka_unit_test(test_thread_count_and_output_name_do_not_make_a_run_different),
+        cmocka_unit_test(test_a_thread_count_axis_makes_a_run_different),
         cmocka_unit_test(test_a_run_killed_before_its_summary_is_not_complete),
         cmocka_unit_test(test_a_run_is_complete_only_when_its_summary_says_it_completed),
         cmocka_unit_test(test_an_older_nbeps_finished_run_is_reused_with_steps_requested_empty),

@@ -139,9 +139,12 @@ typedef enum nbep_sweep_found {
     NBEP_SWEEP_FOUND_COMPLETE,
     NBEP_SWEEP_FOUND_PARTIAL,
 } nbep_sweep_found;
-/* nbep_sweep_run_complete's look, telling a run cut short from one of no use. */
+/* nbep_sweep_run_complete's look, telling a run cut short from one of no use; threads_axis:
+ * run.threads is one of the study's axes, so a run with another thread count is of no use
+ * (nbep_sweep_run_complete passes false). */
 nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
-                                      size_t n_overrides, uint64_t steps, nbep_summary *sum);
+                                      size_t n_overrides, uint64_t steps, bool threads_axis,
+                                      nbep_summary *sum);
 
 /* How a process runs its share of a sweep. */
 typedef struct nbep_sweep_exec {
