@@ -127,7 +127,10 @@ enum {
     X(OUTPUT_FILE, "output.file", STRING, 0, NULL, "the deck's name with .h5",                     \
       "HDF5 file (nbep-1 format)")                                                                 \
     X(OUTPUT_EVERY, "output.every", INT, F_GE1, "10", NULL,                                        \
-      "a frame at step 0, every `every` steps, and the last step")                                 \
+      "a frame at step 0, every `every` steps, and the last step (run.neighbors = \"cells\": "        \
+      "each brings every sphere to the frame's time, rebuilds the cells and lists and predicts "    \
+      "afresh, so that a run resumes from it bit for bit; another `every` changes the "            \
+      "round-off, and a chaotic scene's trajectory with it)")                                     \
     X(OUTPUT_FIELDS, "output.fields", STRINGS, 0, "[\"position\", \"velocity\"]", NULL,            \
       "per-sphere fields of each frame: \"position\", \"velocity\"")                               \
     X(OUTPUT_STATS, "output.stats", BOOL, 0, "true", NULL, "per-step counters in /stats")          \
