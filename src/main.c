@@ -133,6 +133,10 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
             if (study)
                 nbep_sweep_check_print(human, &rep);
         }
+        char warn[512];
+        const char *tc_warning = nbep_scene_tc_warning(&sc, warn, sizeof warn);
+        if (st == NBEP_OK && human && tc_warning)
+            fprintf(stderr, "%s\n", tc_warning);
     }
     nbep_scene_fini(&sc);
     return st;

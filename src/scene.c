@@ -462,6 +462,7 @@ static void parse_physics(load *L, const config_setting_t *root, nbep_scene *sc)
     (void)get_vec3(L, physics, "physics", S_PHYSICS_GRAVITY, &sc->gravity, NULL);
     (void)get_float(L, physics, "physics", S_PHYSICS_RESTITUTION, &sc->restitution);
     (void)get_float(L, physics, "physics", S_PHYSICS_TC, &sc->tc);
+    sc->tc_given = physics && config_setting_get_member(physics, "tc"); /* not the default */
     (void)get_float(L, physics, "physics", S_PHYSICS_CARRY_DROP, &sc->carry_drop);
 }
 
@@ -1675,6 +1676,27 @@ const char *nbep_scene_neighbors_name(const nbep_scene *sc)
 const char *nbep_scene_order_name(const nbep_scene *sc)
 {
     return sc->order_step ? "step" : "time";
+}
+
+/* The default tc (1e-6) is a time for grains in SI units, where a step is about 1e-3 s and
+ * the TC model's window a thousandth of it. A default over a tenth of the step says the deck's
+ * time unit is another (a micron-scale gas at dt = 1e-7: the window 10 steps wide, and most
+ * collisions of its cooling elastic, twice the energy kept against the same gas in unit
+ * scale; a new user's find): a warning, not an error, since such a window may be meant. */
+#define TC_DEFAULT_STEP_SHARE 0.1
+
+const char *nbep_scene_tc_warning(const nbep_scene *sc, char *buf, size_t len)
+{
+    if (sc->tc_given || !(sc->tc > 0.0 && sc->restitution < 1.0) ||
+        strcmp(sc->algorithm, "predictive") != 0 || !(sc->tc > TC_DEFAULT_STEP_SHARE * sc->dt))
+        return NULL;
+    snprintf(buf, len,
+             "nbep: warning: %s: physics.tc is at its default, %g, %.3g times run.dt (%g): the "
+             "TC model makes a collision within tc of a sphere's last elastic, and the default "
+             "is a time for grains in SI units (dt about 1e-3); in this deck's units set "
+             "physics.tc (0: off)",
+             sc->deck_path, sc->tc, sc->tc / sc->dt, sc->dt);
+    return buf;
 }
 
 bool nbep_scene_cells_engine(const nbep_scene *sc)

@@ -73,7 +73,8 @@ enum {
     X(PHYSICS_TC, "physics.tc", FLOAT, F_GE0 | F_SCALE,                                            \
       "1.0e-6", NULL,                                                                              \
       "TC model: a collision within tc seconds of the sphere's previous one is elastic (stops "  \
-      "inelastic collapse); 0: off")                                                               \
+      "inelastic collapse); 0: off; the default is a time for grains in SI units (dt about "       \
+      "1e-3): run and check warn when it is over a tenth of run.dt, as in other units")            \
     X(PHYSICS_CARRY_DROP, "physics.carry_drop", FLOAT, F_GE0, NBEP_SCHEMA_XSTR(NBEP_CARRY_DROP),   \
       NULL, "a held sphere (e < 1, accelerated) struck no faster than a fall from carry_drop of "  \
       "its radius (sqrt(2 a carry_drop r), a its acceleration) stays held when the faces that "    \

@@ -785,4 +785,23 @@ sed -n '/^| path | type | default | meaning |/,/^$/p' README.md | grep '^|' >"$t
 check "README's deck table equals nbep --help-deck's ($(wc -l <"$tmp/help-deck.md") rows)" \
     "[ -s '$tmp/help-deck.md' ] && cmp -s '$tmp/help-deck.md' '$tmp/readme-deck.md'"
 
+# ---- the default physics.tc in a deck of other units: one warning line, run and check ----------
+# (a micron-scale granular gas: the default tc, 1e-6, is 10 steps of 1e-7; its value set, none)
+cat >"$tmp/micron.deck" <<'EOF'
+run: { steps = 2; dt = 1.0e-7; threads = 1; };
+physics: { restitution = 0.5; };
+box: { min = [0.0, 0.0, 0.0]; max = [1.0e-4, 1.0e-4, 1.0e-4]; };
+spheres = ( { count = 20; radius = 3.0e-6; mass = 1.0; place = "random"; speed = 1.0; } );
+output: { file = "micron.h5"; every = 1; };
+EOF
+tc_line='micron.deck: physics.tc is at its default, 1e-06, 10 times run.dt (1e-07)'
+run_nbep check "$tmp/micron.deck"
+check "check of a micron-scale deck at the default tc: exit 0 (got $rc), the warning on stderr" \
+    "[ $rc = 0 ] && [ \$(wc -l < $tmp/stderr) = 1 ] && grep -q '$tc_line' $tmp/stderr"
+run_nbep run "$tmp/micron.deck" -o "$tmp/micron.h5"
+check "its run: exit 0 (got $rc), the warning on stderr" \
+    "[ $rc = 0 ] && grep -q '$tc_line' $tmp/stderr"
+run_nbep run "$tmp/micron.deck" -o "$tmp/micron.h5" --set physics.tc=1e-12
+check "with physics.tc set: no warning (exit $rc)" "[ $rc = 0 ] && ! grep -q warning $tmp/stderr"
+
 test_end cli

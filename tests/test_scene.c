@@ -231,6 +231,42 @@ static void test_output_file_defaults_to_the_deck_name_with_h5_here(void **state
     }
 }
 
+/* The default physics.tc (a time for grains in SI units) more than a tenth of run.dt: the
+ * TC model then makes a good part of a dissipative scene's collisions elastic, as in a deck
+ * in other units, and a warning says so (run, check); none where tc is the deck's own, where
+ * the model is off (e = 1, tc = 0, the paper's loops) or the default is small against the
+ * step (a new user's micron-scale gas kept twice the energy of the same gas in unit scale). */
+static void test_a_default_tc_long_against_the_step_is_warned_of(void **state)
+{
+    fixture *f = *state;
+    char buf[256], warn[512];
+    const char *deck = write_deck("scene_tc.deck",
+                                  "run: { dt = 1.0e-7; };\nphysics: { restitution = 0.5; };\n"
+                                  "box: { min = [0.0, 0.0, 0.0];\n"
+                                  "  max = [1.0e-4, 1.0e-4, 1.0e-4]; };\nspheres = ();\n",
+                                  buf, sizeof buf);
+    LOAD_OK(f, deck);
+    const char *w = nbep_scene_tc_warning(&f->sc, warn, sizeof warn);
+    assert_non_null(w);
+    assert_non_null(strstr(w, "physics.tc is at its default, 1e-06, 10 times run.dt (1e-07)"));
+    nbep_scene_fini(&f->sc);
+    /* the window a tenth of the step, exactly (0.1 dt rounds to 1e-6 at this dt): no warning */
+    LOAD_OK(f, deck, "run.dt=9.999999999999999e-06");
+    assert_null(nbep_scene_tc_warning(&f->sc, warn, sizeof warn));
+    nbep_scene_fini(&f->sc);
+    LOAD_OK(f, deck, "run.dt=9.0e-6");
+    assert_non_null(nbep_scene_tc_warning(&f->sc, warn, sizeof warn));
+    const char *const quiet[][2] = {{"physics.tc=1.0e-6", NULL},
+                                    {"physics.restitution=1.0", NULL},
+                                    {"physics.tc=0.0", NULL},
+                                    {"run.algorithm=\"naive\"", NULL}};
+    for (size_t k = 0; k < sizeof quiet / sizeof *quiet; k++) {
+        nbep_scene_fini(&f->sc);
+        LOAD_OK(f, deck, quiet[k][0]);
+        assert_null(nbep_scene_tc_warning(&f->sc, warn, sizeof warn));
+    }
+}
+
 static void test_box_gives_six_inward_planes_first_in_axis_order(void **state)
 {
     fixture *f = *state;
@@ -2484,7 +2520,8 @@ int main(void)
         T(test_good_deck_resolves_every_setting),
         T(test_absent_settings_take_their_defaults),
         T(test_output_file_defaults_to_the_deck_name_with_h5_here),
-        T(test_box_gives_six_inward_planes_first_in_axis_order),
+        T(test_a_default_tc_long_against_the_step_is_warned_of),
+    T(test_box_gives_six_inward_planes_first_in_axis_order),
         T(test_extra_plane_is_normalized_with_offset_n_dot_point),
         T(test_deck_text_is_kept_whole_and_overrides_one_per_line),
         T(test_missing_deck_is_a_usage_error),

@@ -93,6 +93,7 @@ typedef struct nbep_scene {
     nbep_vec3 gravity;
     double restitution;
     double tc;                /* TC model: collisions within tc of the last are elastic */
+    bool tc_given;            /* physics.tc was set (deck or override), not its default */
     double carry_drop;        /* held spheres carry impacts no faster than a fall from
                                * carry_drop of their radius (0: off) */
     /* box (optional) */
@@ -155,6 +156,11 @@ const char *nbep_scene_order_name(const nbep_scene *sc);
  * predictive cells mode only those at a multiple of output.every (its rebuild points,
  * algo_predictive.c cells_steps). */
 bool nbep_scene_resume_point(const nbep_scene *sc, int64_t step);
+/* A warning's line (no newline) when sc's TC model runs with its default physics.tc, a time
+ * in the deck's units, that is more than TC_DEFAULT_STEP_SHARE of run.dt, as in a deck in
+ * other units than SI grains' (the default's); NULL when not (tc set, the model off, or the
+ * default small against the step); the line is written into buf (len bytes). */
+const char *nbep_scene_tc_warning(const nbep_scene *sc, char *buf, size_t len);
 /* Whether sc runs on the cells engine (predictive, run.neighbors = "cells"): its lists are
  * rebuilt at the multiples of output.every, and their skin is nbep_scene_list_skin_taken's. */
 bool nbep_scene_cells_engine(const nbep_scene *sc);
