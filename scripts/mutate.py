@@ -1391,7 +1391,7 @@ MUTANTS = [
     ("no-room-planes-unsaid", "src/scene_place.c", "    else if (tries > 0 && plane_out == tries)",
      "    else if (0)", ["test_scene"], None),
     ("sweep-whole-group-not-neutral", "src/sweep.c",
-     "{\"run.threads\", \"output.file\", \"sweep\"};", "{\"run.threads\", \"output.file\"};",
+     "{\"output.file\", \"sweep\", \"run.threads\"};", "{\"output.file\", \"run.threads\"};",
      ["tests/test_sweep_cli.sh"], None),
     ("info-sidecar-hint-none", "src/output_xdmf.c", "    if (!strstr(head, \"<Xdmf\"))\n        return false;",
      "    if (1)\n        return false;", ["tests/test_cli.sh"], None),
