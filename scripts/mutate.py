@@ -309,10 +309,13 @@ MUTANTS = [
      "nbep_vec3_scale(d, -1.0), NBEP_CARRY_DROP, dt)) {", GRAN, None),
     ("carry-no-planes", "src/pred_react.c",
      "    pocket_planes(s, j, reach, &r);\n    return faces_take", "    return faces_take", GRAN, None),
-    # a plane is left only beyond the round-off of the speeds the sphere had (|a| dt a step)
+    # a plane is left only beyond the round-off of the speeds the sphere had (a fall through r)
     ("rest-plane-left-by-speed-alone", "src/pred_react.c",
-     "NBEP_CONTACT_TOL * fmax(nbep_vec3_norm(s->vel[i]),\n                                                         nbep_vec3_norm(s->acc[i]) * dt)",
-     "NBEP_CONTACT_TOL * nbep_vec3_norm(s->vel[i])", ["tests/test_settle.sh"], None),
+     "                                     fmax(nbep_vec3_norm(s->vel[i]),\n                                          sqrt(2.0 * nbep_vec3_norm(s->acc[i]) * s->radius[i]))",
+     "                                     nbep_vec3_norm(s->vel[i])", ["tests/test_settle.sh"], None),
+    ("rest-plane-left-by-a-step-of-speed", "src/pred_react.c",
+     "                                          sqrt(2.0 * nbep_vec3_norm(s->acc[i]) * s->radius[i]))",
+     "                                          nbep_vec3_norm(s->acc[i]) * dt)", ["tests/test_settle.sh"], None),
     ("jam-hold-pairs-off", "src/pred_react.c",
      "        if (!c->rest[k].still && (supported(c, k) || on_held) &&",
      "        if (0 &&", GRAN, None),

@@ -196,12 +196,16 @@ static nbep_vec3 plane_mobility(const pred_ctx *c, const nbep_state *s, size_t i
 /* After a response, a sphere leaves every contact along whose normal it now moves (and its
  * sphere contacts if it moves at all); the rest are solved again. A plane counts as left only
  * beyond round-off: a response along a tilted plane leaves v.n at a few ulps of |v|, and of
- * the speeds v had since, which its acceleration changes by up to |a| dt a step. Against |v|
- * alone, a sphere that slowed to a stop in the edge of two planes (sliding up it, gravity
- * pulling it back) at 3e-6 m/s still had the 5e-16 m/s left across each plane from when it
- * was fast: it left each plane as it met the other, and met them in turn at zero time, a
- * million reactions in the step (an inverted square pyramid of four planes, a new user's
- * hopper: run.max_reactions stopped it, and a pour of 60 into it, in every mode). */
+ * the speeds v had before, which a sphere that slows keeps across its planes. So the round-off
+ * is reckoned against the larger of |v| and the speed of a fall through its own radius,
+ * sqrt(2 |a| r), the scale of a settling sphere's speeds (as carry_drop's): 1e-12 of it covers
+ * the round-off of speeds up to 1e4 times it, falls of 1e8 radii, and is a drift of 1e-12 r
+ * in the time of that fall. Against |v| alone, a sphere that slowed to a stop in the edge of
+ * two planes (sliding up it, gravity pulling it back) at 3e-6 m/s still had the 5e-16 m/s
+ * left across each plane from when it was fast: it left each plane as it met the other, and
+ * met them in turn at zero time, a million reactions in the step (an inverted square pyramid
+ * of four planes, a new user's hopper: run.max_reactions stopped it, and a pour of 60 into
+ * it, in every mode). |a| dt, the first mend, held at dt = 1e-3 but not at 3e-5 (a review). */
 static void update_rest(pred_ctx *c, nbep_state *s, size_t i, double dt)
 {
     if (!c->rest || c->rest[i].n == 0)
@@ -212,8 +216,9 @@ static void update_rest(pred_ctx *c, nbep_state *s, size_t i, double dt)
     rest_set k = {.n = 0};
     for (int j = 0; j < r->n; j++)
         if (r->who[j] >= 0 ? fabs(nbep_vec3_dot(s->vel[i], n[j])) <=
-                                 NBEP_CONTACT_TOL * fmax(nbep_vec3_norm(s->vel[i]),
-                                                         nbep_vec3_norm(s->acc[i]) * dt)
+                                 NBEP_CONTACT_TOL *
+                                     fmax(nbep_vec3_norm(s->vel[i]),
+                                          sqrt(2.0 * nbep_vec3_norm(s->acc[i]) * s->radius[i]))
                            : nbep_vec3_dot(s->vel[i], n[j]) == 0.0 && is_zero(s->vel[i])) {
             k.who[k.n] = r->who[j];
             k.ver[k.n++] = r->ver[j];
