@@ -1186,11 +1186,14 @@ MUTANTS = [
      ["tests/test_cli.sh"], None),
     # a setting and a part of it are not both axes, whichever comes first
     ("sweep-axis-nested-allowed", "src/scene.c",
-     "            } else if (key_within(kj, key) || key_within(key, kj)) {",
+     "            } else if (key_within(a, b) || key_within(b, a)) {",
      "            } else if (0) {", ["test_sweep"], None),
     ("sweep-axis-nested-one-way", "src/scene.c",
-     "            } else if (key_within(kj, key) || key_within(key, kj)) {",
-     "            } else if (key_within(kj, key)) {", ["test_sweep"], None),
+     "            } else if (key_within(a, b) || key_within(b, a)) {",
+     "            } else if (key_within(a, b)) {", ["test_sweep"], None),
+    ("sweep-axis-index-spelling", "src/scene.c",
+     "            while (p[1] == '0' && isdigit((unsigned char)p[2]))",
+     "            while (0)", ["test_sweep"], None),
     # an axis's path must name entries the deck has; a run's failure names the axis's line
     ("sweep-axis-index-appends", "src/scene_override.c", "            if (s->idx >= have) {",
      "            if (s->idx > have) {", ["test_sweep"], None),

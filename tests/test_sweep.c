@@ -381,6 +381,15 @@ static void test_varying_the_seed_a_key_twice_or_a_key_and_its_part_is_a_deck_er
         TMP "sweep_nested_axes.deck:10: sweep.vary.[3].key: spheres.[0].radius and spheres.[0] "
             "(sweep.vary.[2]) vary the same setting, one inside the other; vary one of them"};
     assert_refused(deck, NULL, 0, 2, nested);
+    /* ... whatever the spelling of an index (the overrides take [02] as [2]) */
+    write_deck("sweep_index_spelling",
+               "sweep: { vary = ( { key = \"physics.gravity.[2]\"; values = [-1.0, -2.0]; },\n"
+               "  { key = \"physics.gravity.[02]\"; values = [-5.0]; } ); };\n",
+               deck, sizeof deck);
+    const char *const spelt[] = {
+        TMP "sweep_index_spelling.deck:7: sweep.vary.[1].key: physics.gravity.[02] is already "
+            "varied by sweep.vary.[0]"};
+    assert_refused(deck, NULL, 0, 1, spelt);
     /* a run.steps axis takes integers >= 0 only, each checked on its line, as run.steps (since
      * 2026-11-30 by the check of every value, in its words; before, by a check of its own) */
     write_deck("sweep_bad_steps",
