@@ -435,43 +435,76 @@ void nbep_sweep_check_print(FILE *f, const nbep_sweep_check_report *r)
 
 /* ---- reusing finished runs --------------------------------------------------------------- */
 
+/* The value of override ov (len bytes, "name = value") if it sets `name`, else NULL. */
+static const char *override_value(const char *ov, size_t len, const char *name)
+{
+    const size_t n = strlen(name);
+    if (len <= n || strncmp(ov, name, n) != 0)
+        return NULL;
+    const char *q = ov + n;
+    while (*q == ' ')
+        q++;
+    return *q == '=' ? q + 1 : NULL;
+}
+
 /* Whether an override changes nothing a run computes: the thread count (SPEC: frames are
- * bitwise identical for any thread count; unless threads_axis, below), the output file (the sweep names its files) and
- * the study's own settings (sweep.*, or the group whole, `--set sweep={...}` for a deck without
- * one: a run's combination and seed are in its other overrides; README's way to add replicas,
- * --set sweep.replicas=N, re-ran every finished run while it counted, and `sweep=` did until
- * 2026-11-30). */
-static bool override_is_neutral(const char *ov, size_t len, bool threads_axis)
+ * bitwise identical for any thread count; but see same_overrides), the output file (the sweep
+ * names its files) and the study's own settings (sweep.*, or the group whole, `--set
+ * sweep={...}` for a deck without one: a run's combination and seed are in its other
+ * overrides; README's way to add replicas, --set sweep.replicas=N, re-ran every finished run
+ * while it counted, and `sweep=` did until 2026-11-30). */
+static bool override_is_neutral(const char *ov, size_t len)
 {
     if (len > 6 && strncmp(ov, "sweep.", 6) == 0)
         return true;
     static const char *const neutral[] = {"output.file", "sweep", "run.threads"};
-    /* but a study of thread counts (run.threads an axis) compares them: its rows' timings are
-     * its results (until 2026-12-01 a 2-thread run was reused for the row of 4) */
-    const size_t n_neutral = sizeof neutral / sizeof neutral[0] - threads_axis;
-    for (size_t k = 0; k < n_neutral; k++) {
-        size_t n = strlen(neutral[k]);
-        if (len > n && strncmp(ov, neutral[k], n) == 0) {
-            const char *q = ov + n;
-            while (*q == ' ')
-                q++;
-            if (*q == '=')
-                return true;
-        }
-    }
+    for (size_t k = 0; k < sizeof neutral / sizeof neutral[0]; k++)
+        if (override_value(ov, len, neutral[k]))
+            return true;
     return false;
 }
 
-/* Whether two override lists (newline-separated) are equal but for neutral overrides. */
+/* The thread count an override list (newline-separated) runs with: the value text of its last
+ * run.threads override (the axis's comes after the command line's, and wins), "" for none;
+ * its length in *len. */
+static const char *threads_of(const char *list, size_t *len)
+{
+    const char *v = "";
+    *len = 0;
+    for (const char *p = list; *p;) {
+        const size_t l = strcspn(p, "\n");
+        const char *x = override_value(p, l, "run.threads");
+        if (x) {
+            while (*x == ' ')
+                x++;
+            v = x;
+            *len = (size_t)(p + l - x);
+        }
+        p += l + (p[l] != '\0');
+    }
+    return v;
+}
+
+/* Whether two override lists (newline-separated) are equal but for neutral overrides; and,
+ * in a study of thread counts (threads_axis: run.threads an axis, whose rows' timings are its
+ * results), with the same thread count (until 2026-12-01 a 2-thread run was reused for the
+ * row of 4; the count that runs is compared, so that a --set of run.threads, which the axis
+ * overrides, changes nothing). */
 static bool same_overrides(const char *a, const char *b, bool threads_axis)
 {
+    if (threads_axis) {
+        size_t na, nb;
+        const char *ta = threads_of(a, &na), *tb = threads_of(b, &nb);
+        if (na != nb || strncmp(ta, tb, na) != 0)
+            return false;
+    }
     for (;;) {
         size_t la = strcspn(a, "\n"), lb = strcspn(b, "\n");
-        if (la && override_is_neutral(a, la, threads_axis)) {
+        if (la && override_is_neutral(a, la)) {
             a += la + (a[la] != '\0');
             continue;
         }
-        if (lb && override_is_neutral(b, lb, threads_axis)) {
+        if (lb && override_is_neutral(b, lb)) {
             b += lb + (b[lb] != '\0');
             continue;
         }
