@@ -1184,6 +1184,9 @@ MUTANTS = [
     ("tc-warning-unsaid-by-check", "src/main.c",
      "        if (st == NBEP_OK && human && tc_warning)", "        if (0)",
      ["tests/test_cli.sh"], None),
+    ("tc-warning-study-unsaid", "src/main.c",
+     "        if (!tc_warning && study && rep.tc_warning[0])", "        if (0)",
+     ["tests/test_cli.sh"], None),
     # a setting and a part of it are not both axes, whichever comes first
     ("sweep-axis-nested-allowed", "src/scene.c",
      "            } else if (key_within(a, b) || key_within(b, a)) {",

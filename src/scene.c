@@ -1712,8 +1712,8 @@ const char *nbep_scene_tc_warning(const nbep_scene *sc, char *buf, size_t len)
     snprintf(buf, len,
              "nbep: warning: %s: physics.tc is at its default, %g, %.3g times run.dt (%g): the "
              "TC model makes a collision within tc of a sphere's last elastic, and the default "
-             "is a time for grains in SI units (dt about 1e-3); in this deck's units set "
-             "physics.tc (0: off)",
+             "is a contact time in seconds (SI grains, dt about 1e-3); where the deck's time "
+             "unit is another, or its contacts are shorter, set physics.tc (0: off)",
              sc->deck_path, sc->tc, sc->tc / sc->dt, sc->dt);
     return buf;
 }

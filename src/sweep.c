@@ -389,6 +389,10 @@ nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides
             free(path);
             rep->memory_max = fmax(rep->memory_max, (double)nbep_sim_memory_estimate(
                                                         &rs, nbep_sim_resolve_threads(rs.threads)));
+            char warn[512];
+            if (!rep->tc_warning[0] && nbep_scene_tc_warning(&rs, warn, sizeof warn))
+                snprintf(rep->tc_warning, sizeof rep->tc_warning, "%s (sweep run %zu)", warn,
+                         run);
             nbep_scene_fini(&rs);
         } else if (rst == NBEP_ENOMEM) {
             st = rst;

@@ -803,5 +803,12 @@ check "its run: exit 0 (got $rc), the warning on stderr" \
     "[ $rc = 0 ] && grep -q '$tc_line' $tmp/stderr"
 run_nbep run "$tmp/micron.deck" -o "$tmp/micron.h5" --set physics.tc=1e-12
 check "with physics.tc set: no warning (exit $rc)" "[ $rc = 0 ] && ! grep -q warning $tmp/stderr"
+# a study whose deck is elastic and whose axis makes a run dissipative: check names the run
+sed 's/restitution = 0.5;/restitution = 1.0;/' "$tmp/micron.deck" >"$tmp/micron-study.deck"
+echo 'sweep: { vary = ( { key = "physics.restitution"; values = [1.0, 0.7]; } ); };' \
+    >>"$tmp/micron-study.deck"
+run_nbep check "$tmp/micron-study.deck"
+check "check of such a study, its deck elastic, run 1 at e = 0.7: exit 0 (got $rc), the warning names run 1" \
+    "[ $rc = 0 ] && grep -q 'physics.tc is at its default.*(sweep run 1)$' $tmp/stderr"
 
 test_end cli

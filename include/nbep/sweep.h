@@ -201,6 +201,9 @@ typedef struct nbep_sweep_check_report {
     double memory_max;            /* the most memory one of them needs (nbep_sim_memory_estimate) */
     bool out_of_time;             /* stopped after budget_s: the runs past `checked` unchecked */
     double budget_s;              /* the time it was given */
+    char tc_warning[640];         /* the first checked run's nbep_scene_tc_warning, naming the
+                                   * run ("" for none): a run's e or dt may differ from the
+                                   * deck's */
 } nbep_sweep_check_report;
 
 /* The most runs' deck errors nbep_sweep_check lists (one line each); the rest are counted. */
