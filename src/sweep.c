@@ -1346,6 +1346,12 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
 {
     nbep_status st = nbep_sweep_write_summary(p, results, n_ranks, nbep_now() - t0, d);
     const double wall = nbep_now() - t0;
+    /* the CSV table is there whole or not at all (written aside, then renamed), and the old
+     * tables were removed before the runs: there, it was written (a disk that filled up may
+     * have left room for it and not for summary.h5) */
+    char csv[4200];
+    snprintf(csv, sizeof csv, "%s/summary.csv", p->dir);
+    const bool csv_written = st == NBEP_OK || access(csv, F_OK) == 0;
     sweep_totals s = count(p, results);
     if (!cli->quiet) {
         /* three figures, a whole number from 1000 up (8160 runs/min, not 8.16e+03) */
@@ -1359,8 +1365,8 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
                 p->n_runs, p->n_runs == 1 ? "" : "s", n_ranks, n_ranks == 1 ? "" : "s", wall,
                 s.ended,
                 s.ended == 1 ? "its" : "their", pace_text, s.ok, s.reused, s.failed,
-                s.interrupted, s.not_run, st == NBEP_OK ? p->dir : "no summary table could be written",
-                st == NBEP_OK ? "/summary.csv" : "");
+                s.interrupted, s.not_run, csv_written ? csv : "no summary table could be written",
+                csv_written && st != NBEP_OK ? " (summary.h5 could not be written)" : "");
     }
     if (cli->summary) {
         nbep_status jst = write_sweep_json(cli->summary, p, &s, n_ranks, wall, d);
@@ -1380,11 +1386,11 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
             snprintf(list + used, sizeof list - used, ", ...");
         /* the table that has the errors, if it was written (a full disk: only the lines
          * said as each run failed have them) */
-        if (st == NBEP_OK)
+        if (csv_written)
             nbep_diag_add(d, __FILE__, __LINE__,
                           "nbep: sweep: %zu of %zu runs failed (run %s); the others are "
-                          "complete; errors in %s/summary.csv",
-                          s.failed, p->n_runs, list, p->dir);
+                          "complete; errors in %s",
+                          s.failed, p->n_runs, list, csv);
         else
             nbep_diag_add(d, __FILE__, __LINE__,
                           "nbep: sweep: %zu of %zu runs failed (run %s); the others are "

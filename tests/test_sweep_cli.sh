@@ -375,6 +375,16 @@ for f in summary.csv run-0000.h5; do
          [ ! -e '$tmp/fresh.sweep' ]"
 done
 
+# summary.h5 cannot be made (a folder in the way of its partial file) but summary.csv is: the
+# closing line names the CSV and says the HDF5 table is missing (until 2026-12-01, for a day,
+# it said no table had been written)
+run_sweep "$tmp/s.deck" -o "$tmp/h5fail.h5" --quiet
+mkdir -p "$tmp/h5fail.sweep/summary.h5.partial/in-the-way"
+run_sweep "$tmp/s.deck" -o "$tmp/h5fail.h5"
+check "summary.h5 not made, summary.csv made: exit 1 (got $rc), the closing line names the CSV" \
+    "[ $rc = 1 ] && [ -s '$tmp/h5fail.sweep/summary.csv' ] &&
+     grep -q 'h5fail.sweep/summary.csv (summary.h5 could not be written)$' '$tmp/stderr'"
+
 # ---- an axis value no run can take: refused by check, run and sweep, exit 2, nothing written ----
 # (until 2026-11-30 check and run passed it, and the sweep ran the other runs and exited 1)
 for bad in "run.dt|1e-45|run.dt must be 1e-40 to 1e40 in magnitude (got 1e-45)" \
