@@ -20,7 +20,6 @@
 #include "nbep/nblist.h"
 
 #include <assert.h>
-#include <ctype.h>
 #include <errno.h>
 #include <inttypes.h>
 #include <limits.h>
@@ -1026,26 +1025,12 @@ static void parse_output(load *L, const config_setting_t *root, nbep_scene *sc)
 
 /* Whether setting path `inner` lies inside setting path `outer` (physics.gravity.[2] inside
  * physics.gravity, spheres.[0].radius inside spheres.[0]): a run that sets outer sets inner
- * too. Both as key_canon writes them. */
+ * too. Both as nbep__scene_path_canon writes them (indices by number: "[02]" beside "[2]"
+ * varied one setting twice, unseen; a review). */
 static bool key_within(const char *outer, const char *inner)
 {
     const size_t n = strlen(outer);
     return strncmp(outer, inner, n) == 0 && inner[n] == '.';
-}
-
-/* key with each list index's leading zeros dropped (spheres.[00] as spheres.[0]: the
- * overrides take both, so "[02]" beside "[2]" varied one setting twice, unseen; a review),
- * into out (len bytes, cut to fit). */
-static void key_canon(const char *key, char *out, size_t len)
-{
-    size_t w = 0;
-    for (const char *p = key; *p && w + 1 < len; p++) {
-        out[w++] = *p;
-        if (*p == '[')
-            while (p[1] == '0' && isdigit((unsigned char)p[2]))
-                p++;
-    }
-    out[w] = '\0';
 }
 
 /* Why key cannot be a sweep axis, or NULL if it can: settings the sweep itself sets per run,
@@ -1127,8 +1112,8 @@ static void parse_axes(load *L, const config_setting_t *sweep, nbep_scene *sc)
             if (config_setting_lookup_string(config_setting_get_elem(vary, (unsigned)j), "key",
                                              &kj) != CONFIG_TRUE)
                 continue;
-            key_canon(kj, a, sizeof a);
-            key_canon(key, b, sizeof b);
+            nbep__scene_path_canon(kj, a, sizeof a);
+            nbep__scene_path_canon(key, b, sizeof b);
             if (strcmp(a, b) == 0) {
                 ERR(L, at, "%s.key: %s is already varied by sweep.vary.[%zu]", prefix, key, j);
                 g_key = BAD;

@@ -126,6 +126,10 @@ void nbep__scene_unknown_text(const char *path, nbep__strbuf *b);
 void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *ov,
                                 const char *label);
 
+/* path as an override names it (split_path: indices by number, "[02]" as "[2]", each after a
+ * dot) into canon (len bytes); path itself, cut to fit, when it is no path. */
+void nbep__scene_path_canon(const char *path, char *canon, size_t len);
+
 /* Whether every list index of path (a schema path, "spheres.[5].radius") names an entry the
  * tree root has: false with the first list that lacks one (its path into list, list_len
  * bytes) and its length. An override there would append an entry instead (a sweep's axis:

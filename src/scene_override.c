@@ -232,6 +232,14 @@ static void path_append(char *sofar, size_t cap, const seg *s)
         snprintf(sofar + used, cap - used, "%s%s", used ? "." : "", s->name);
 }
 
+void nbep__scene_path_canon(const char *path, char *canon, size_t len)
+{
+    seg segs[SEG_MAX];
+    size_t n = 0;
+    if (!split_path(path, segs, &n, canon, len))
+        snprintf(canon, len, "%s", path);
+}
+
 bool nbep__scene_path_indices_exist(const config_setting_t *root, const char *path,
                                     char *list, size_t list_len, unsigned *len)
 {
