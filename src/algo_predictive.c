@@ -150,7 +150,7 @@ static pred_plan plan_of(const nbep_scene *sc, const nbep_state *st, int nt, int
 {
     pred_plan p = {.n = st->n, .n_planes = st->n_planes, .nt = nt,
                    .free_flight = nbep_state_free_flight(st)};
-    p.tc_model = sc->tc > 0.0 && sc->restitution < 1.0;
+    p.tc_model = nbep_scene_tc_model(sc);
     p.cage_model = p.tc_model && !p.free_flight;
     p.settle_model = !p.free_flight && sc->restitution < 1.0;
     p.jam_model = !p.free_flight || sc->restitution < 1.0;

@@ -1689,10 +1689,15 @@ const char *nbep_scene_order_name(const nbep_scene *sc)
  * scale; a new user's find): a warning, not an error, since such a window may be meant. */
 #define TC_DEFAULT_STEP_SHARE 0.1
 
+bool nbep_scene_tc_model(const nbep_scene *sc)
+{
+    return sc->tc > 0.0 && sc->restitution < 1.0;
+}
+
 const char *nbep_scene_tc_warning(const nbep_scene *sc, char *buf, size_t len)
 {
-    if (sc->tc_given || !(sc->tc > 0.0 && sc->restitution < 1.0) ||
-        strcmp(sc->algorithm, "predictive") != 0 || !(sc->tc > TC_DEFAULT_STEP_SHARE * sc->dt))
+    if (sc->tc_given || !nbep_scene_tc_model(sc) || strcmp(sc->algorithm, "predictive") != 0 ||
+        !(sc->tc > TC_DEFAULT_STEP_SHARE * sc->dt))
         return NULL;
     snprintf(buf, len,
              "nbep: warning: %s: physics.tc is at its default, %g, %.3g times run.dt (%g): the "

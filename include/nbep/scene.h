@@ -156,6 +156,9 @@ const char *nbep_scene_order_name(const nbep_scene *sc);
  * predictive cells mode only those at a multiple of output.every (its rebuild points,
  * algo_predictive.c cells_steps). */
 bool nbep_scene_resume_point(const nbep_scene *sc, int64_t step);
+/* Whether the TC model acts in sc's predictive runs: tc > 0 and e < 1 (its window makes a
+ * collision elastic; at e = 1 every collision is). */
+bool nbep_scene_tc_model(const nbep_scene *sc);
 /* A warning's line (no newline) when sc's TC model runs with its default physics.tc, a time
  * in the deck's units, that is more than TC_DEFAULT_STEP_SHARE of run.dt, as in a deck in
  * other units than SI grains' (the default's); NULL when not (tc set, the model off, or the
