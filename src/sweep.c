@@ -903,8 +903,10 @@ static bool keep(table_data *t, char *s, const char **slot)
 }
 
 nbep_status nbep_sweep_write_summary(const nbep_sweep_plan *p, const nbep_sweep_result *results,
-                                     int n_ranks, double wall_seconds, nbep_diag *d)
+                                     int n_ranks, double wall_seconds, bool *csv_written,
+                                     nbep_diag *d)
 {
+    bool csv_ok = false;
     const size_t n = p->n_runs;
     const size_t n_int = N_FIXED_INT + N_SUMMARY_FIELDS, n_text = N_FIXED_TEXT + p->n_axes;
     /* per row and nullable summary column: no summary, or null in it */
@@ -1051,6 +1053,7 @@ nbep_status nbep_sweep_write_summary(const nbep_sweep_plan *p, const nbep_sweep_
         {.name = "build_flags", .kind = NBEP_TABLE_TEXT, .s = NBEP_BUILD_FLAGS},
     };
     st = write_csv(csv, &table, d);
+    csv_ok = st == NBEP_OK;
     nbep_status hst = nbep_output_sweep_write(h5, &table, attrs, sizeof attrs / sizeof *attrs, d);
     if (st == NBEP_OK)
         st = hst;
@@ -1060,6 +1063,8 @@ oom:
                   p->dir);
     st = NBEP_ENOMEM;
 done:
+    if (csv_written)
+        *csv_written = csv_ok;
     table_data_fini(&t);
     free(null_cells);
     free(csv);
@@ -1344,15 +1349,16 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
                           nbep_status run_st, const nbep_cli *cli, int n_ranks, double t0,
                           nbep_diag *d)
 {
-    nbep_status st = nbep_sweep_write_summary(p, results, n_ranks, nbep_now() - t0, d);
+    bool csv_written;
+    nbep_status st = nbep_sweep_write_summary(p, results, n_ranks, nbep_now() - t0,
+                                              &csv_written, d);
     const double wall = nbep_now() - t0;
-    /* the CSV table is there whole or not at all (written aside, then renamed), and the old
-     * tables were removed before the runs: there, it was written (a disk that filled up may
-     * have left room for it and not for summary.h5) */
-    char csv[4200];
-    snprintf(csv, sizeof csv, "%s/summary.csv", p->dir);
-    const bool csv_written = st == NBEP_OK || access(csv, F_OK) == 0;
     sweep_totals s = count(p, results);
+    /* where the table is: the CSV, which a disk that filled up may have had room for when
+     * summary.h5 had none */
+    const char *table = !csv_written   ? ""
+                        : st == NBEP_OK ? "/summary.csv"
+                                        : "/summary.csv (summary.h5 could not be written)";
     if (!cli->quiet) {
         /* three figures, a whole number from 1000 up (8160 runs/min, not 8.16e+03) */
         const double pace = runs_per_minute(&s, wall);
@@ -1365,8 +1371,8 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
                 p->n_runs, p->n_runs == 1 ? "" : "s", n_ranks, n_ranks == 1 ? "" : "s", wall,
                 s.ended,
                 s.ended == 1 ? "its" : "their", pace_text, s.ok, s.reused, s.failed,
-                s.interrupted, s.not_run, csv_written ? csv : "no summary table could be written",
-                csv_written && st != NBEP_OK ? " (summary.h5 could not be written)" : "");
+                s.interrupted, s.not_run, csv_written ? p->dir : "no summary table could be written",
+                table);
     }
     if (cli->summary) {
         nbep_status jst = write_sweep_json(cli->summary, p, &s, n_ranks, wall, d);
@@ -1389,8 +1395,8 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
         if (csv_written)
             nbep_diag_add(d, __FILE__, __LINE__,
                           "nbep: sweep: %zu of %zu runs failed (run %s); the others are "
-                          "complete; errors in %s",
-                          s.failed, p->n_runs, list, csv);
+                          "complete; errors in %s/summary.csv",
+                          s.failed, p->n_runs, list, p->dir);
         else
             nbep_diag_add(d, __FILE__, __LINE__,
                           "nbep: sweep: %zu of %zu runs failed (run %s); the others are "

@@ -1024,7 +1024,7 @@ static void test_summary_csv_has_a_row_per_run_in_run_order(void **state)
     nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
     nbep_diag d;
     nbep_diag_init(&d);
-    assert_int_equal(nbep_sweep_write_summary(&p, res, 1, 2.5, &d), NBEP_OK);
+    assert_int_equal(nbep_sweep_write_summary(&p, res, 1, 2.5, NULL, &d), NBEP_OK);
     char *lines[16];
     size_t n = read_lines(TMP "sweep_csv.sweep/summary.csv", lines);
     assert_int_equal(n, 1 + 6);
@@ -1097,7 +1097,7 @@ static void test_an_older_nbeps_finished_run_is_reused_with_steps_requested_empt
     assert_int_equal(res[0].reused, 1);
     assert_int_equal(res[0].summary.status, NBEP_SUMMARY_UNKNOWN);
     assert_false(res[0].summary.steps_requested.known);
-    assert_int_equal(nbep_sweep_write_summary(&p, res, 1, 1.0, &d), NBEP_OK);
+    assert_int_equal(nbep_sweep_write_summary(&p, res, 1, 1.0, NULL, &d), NBEP_OK);
     char *lines[16];
     assert_int_equal(read_lines(TMP "sweep_older.sweep/summary.csv", lines), 2);
     char f[64];
@@ -1135,7 +1135,7 @@ static void test_summary_h5_holds_the_same_table(void **state)
     nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
     nbep_diag d;
     nbep_diag_init(&d);
-    assert_int_equal(nbep_sweep_write_summary(&p, res, 3, 2.5, &d), NBEP_OK);
+    assert_int_equal(nbep_sweep_write_summary(&p, res, 3, 2.5, NULL, &d), NBEP_OK);
     hid_t file = H5Fopen(TMP "sweep_h5.sweep/summary.h5", H5F_ACC_RDONLY, H5P_DEFAULT);
     assert_true(file >= 0);
     hid_t ds = H5Dopen2(file, "/runs", H5P_DEFAULT);
@@ -1212,7 +1212,7 @@ static void test_the_tables_size_is_known_before_the_runs(void **state)
         nbep_sweep_result *res = execute(&p, NULL, NBEP_OK);
         nbep_diag d;
         nbep_diag_init(&d);
-        assert_int_equal(nbep_sweep_write_summary(&p, res, 1, 2.5, &d), NBEP_OK);
+        assert_int_equal(nbep_sweep_write_summary(&p, res, 1, 2.5, NULL, &d), NBEP_OK);
         double written = 0.0;
         for (int k = 0; k < 2; k++) {
             struct stat st;

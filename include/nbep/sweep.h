@@ -177,11 +177,13 @@ NBEP_MUST_CHECK nbep_status nbep_sweep_execute(const nbep_sweep_plan *p,
  * seed, rank, one per axis (its key; the value as deck text, strings without quotes), status,
  * exit_code, reused, seconds, file, the JSON summary's fields in order (but its `status`: the
  * column `status` says how each run ended in the table's words), error. n_ranks
- * and wall_seconds go into summary.h5's root attributes. NBEP_EIO, NBEP_ENOMEM. */
+ * and wall_seconds go into summary.h5's root attributes. NBEP_EIO, NBEP_ENOMEM; *csv_written
+ * (may be NULL): whether summary.csv was written, which it may be when summary.h5 is not (a
+ * disk that filled up between them). */
 NBEP_MUST_CHECK nbep_status nbep_sweep_write_summary(const nbep_sweep_plan *p,
                                                      const nbep_sweep_result *results,
                                                      int n_ranks, double wall_seconds,
-                                                     nbep_diag *d);
+                                                     bool *csv_written, nbep_diag *d);
 
 /* The bytes of DIR/summary.csv and DIR/summary.h5 that nbep_sweep_write_summary writes for
  * the plan's runs, all ok, about (within some 15 %: a run's figures are not known before it
