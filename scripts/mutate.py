@@ -1183,10 +1183,11 @@ MUTANTS = [
     ("tc-warning-unsaid-by-run", "src/run.c", "    if (rq->verbose && tc_warning)",
      "    if (0)", ["tests/test_cli.sh"], None),
     ("tc-warning-unsaid-by-check", "src/main.c",
-     "        if (st == NBEP_OK && human && tc_warning)", "        if (0)",
+     "            if (tc_warning)\n                fprintf(stderr, \"%s\\n\", tc_warning);",
+     "            if (0)\n                fprintf(stderr, \"%s\\n\", tc_warning);",
      ["tests/test_cli.sh"], None),
     ("tc-warning-study-unsaid", "src/main.c",
-     "        if (!tc_warning && study && rep.tc_warning[0])", "        if (0)",
+     "            if (!tc_warning && study && rep.tc_warning[0])", "            if (0)",
      ["tests/test_cli.sh"], None),
     # a setting and a part of it are not both axes, whichever comes first
     ("sweep-axis-nested-allowed", "src/scene.c",

@@ -132,14 +132,14 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
             nbep_check_print(human, &sc, &facts);
             if (study)
                 nbep_sweep_check_print(human, &rep);
+            /* the deck's own, or a study's first run's (its e or dt may be an axis's) */
+            char warn[512];
+            const char *tc_warning = nbep_scene_tc_warning(&sc, warn, sizeof warn);
+            if (!tc_warning && study && rep.tc_warning[0])
+                tc_warning = rep.tc_warning;
+            if (tc_warning)
+                fprintf(stderr, "%s\n", tc_warning);
         }
-        /* the deck's own, or a study's first run's (its e or dt may be an axis's) */
-        char warn[512];
-        const char *tc_warning = nbep_scene_tc_warning(&sc, warn, sizeof warn);
-        if (!tc_warning && study && rep.tc_warning[0])
-            tc_warning = rep.tc_warning;
-        if (st == NBEP_OK && human && tc_warning)
-            fprintf(stderr, "%s\n", tc_warning);
     }
     nbep_scene_fini(&sc);
     return st;
