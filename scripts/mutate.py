@@ -1960,6 +1960,19 @@ MUTANTS = [
     ("fill-hint-with-why", "src/scene_place.c",
      "            if (!why[0] && before == 0.0 && asked <= 0.74)",
      "            if (before == 0.0 && asked <= 0.74)", ["test_scene"], None),
+    # random places over a whole period along a periodic axis the region spans (2026-12-01)
+    ("random-periodic-span-shrunk", "src/scene_place.c",
+     "        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {",
+     "        if (0) {", ["test_scene"], None),
+    ("random-periodic-span-longer-only", "src/scene_place.c",
+     "        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {",
+     "        if (g->pb && g->pb->axis[a] && span[a] > g->pb->len[a]) {", ["test_scene"], None),
+    ("random-periodic-span-walled-too", "src/scene_place.c",
+     "        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {",
+     "        if (g->pb && span[a] >= g->pb->len[a]) {", ["test_scene"],
+     "a walled axis has its two walls as planes, and every place within a radius of a plane "
+     "is tried again (clear_of_planes): the places differ draw by draw, never in where they "
+     "may lie"),
     # a resumed run's summary goes on from its frame's totals (/frames/totals, 2026-11-30)
     ("totals-not-taken", "src/sim.c",
      "    if (go_on) /* the summary goes on from the frame's totals (energy_initial below) */",

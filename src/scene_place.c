@@ -704,9 +704,11 @@ static void no_room_why(nbep_vec3 lo, nbep_vec3 hi, double r, uint64_t plane_out
 }
 
 /* Uniform in the region shrunk by the radius, rejecting overlaps with every sphere placed so
- * far (by the nearest image along periodic axes, g->pb) and with the planes. Returns
- * NBEP_ENOMEM when out of memory (no message), the stop status where it looked (look), else
- * NBEP_OK. */
+ * far (by the nearest image along periodic axes, g->pb) and with the planes; along a periodic
+ * axis that the region spans whole (a period or more: the box's own extent, the default, too),
+ * uniform over the period, not shrunk: there the faces are no walls, and the shrink left an
+ * empty slab a diameter thick at them (until 2026-12-01). Returns NBEP_ENOMEM when out of
+ * memory (no message), the stop status where it looked (look), else NBEP_OK. */
 static nbep_status place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, const nbep__scene_entry *e,
                          size_t k, uint64_t seed, const config_setting_t *const *plane_at)
 {
@@ -714,8 +716,17 @@ static nbep_status place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, cons
     double reach = 0.0; /* r and the largest radius placed: the largest contact distance */
     for (int l = 0; l < LEVELS_MAX; l++)
         reach = fmax(reach, r + g->lv[l].rmax);
-    const nbep_vec3 lo = nbep_vec3_make(e->lo.x + r, e->lo.y + r, e->lo.z + r);
-    const nbep_vec3 hi = nbep_vec3_make(e->hi.x - r, e->hi.y - r, e->hi.z - r);
+    double l[3] = {e->lo.x + r, e->lo.y + r, e->lo.z + r};
+    double h[3] = {e->hi.x - r, e->hi.y - r, e->hi.z - r};
+    const double span[3] = {e->hi.x - e->lo.x, e->hi.y - e->lo.y, e->hi.z - e->lo.z};
+    for (int a = 0; a < 3; a++)
+        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {
+            /* a place at the high face (by rounding) is the low face's: set-up wraps it */
+            l[a] = g->pb->lo[a];
+            h[a] = g->pb->lo[a] + g->pb->len[a];
+        }
+    const nbep_vec3 lo = nbep_vec3_make(l[0], l[1], l[2]);
+    const nbep_vec3 hi = nbep_vec3_make(h[0], h[1], h[2]);
     const bool room = lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z;
     for (uint64_t q = 0; q < e->count; q++) {
         const nbep_status stop = look(c, q);

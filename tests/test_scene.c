@@ -1287,6 +1287,42 @@ static void test_random_spheres_keep_clear_across_periodic_faces(void **state)
     assert_true(past_face); /* the last group's places were taken as drawn, past the face */
 }
 
+/* Along a periodic axis the faces are no walls: a random group whose region spans the period
+ * (the box itself, the default, or a region a period long anywhere) is uniform over the whole
+ * period, its centres as near the faces as anywhere. Until 2026-12-01 the places kept a radius
+ * off the region's ends there too, which left an empty slab a diameter thick at the faces of a
+ * periodic fluid (a new user's histogram), or, for a region offset by half a period, in the
+ * middle of the box. Along a walled axis they keep clear of the walls as before. */
+static void test_random_spheres_fill_a_periodic_axis_to_its_faces(void **state)
+{
+    fixture *f = *state;
+    char path[256];
+    LOAD_OK(f, write_deck("scene_random_span.deck",
+                          "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0];\n"
+                          "  periodic = [true, true, false]; };\n"
+                          "spheres = ( { count = 400; radius = 0.2; mass = 1.0; },\n"
+                          "  { count = 400; radius = 0.2; mass = 1.0;\n"
+                          "    region = { min = [-5.0, 0.0, 0.0]; max = [5.0, 10.0, 10.0]; }; } );\n",
+                          path, sizeof path));
+    const nbep_state *s = &f->sc.state;
+    assert_int_equal(s->n, 800);
+    /* centres within a radius of a face of x (both groups) and of y: 4 % of 800 each, 32 on
+     * average; none while the places kept off the ends; and for the second group, whose ends
+     * were at x = 5, none within a radius of the box's middle */
+    int near_x = 0, near_y = 0, mid_x = 0;
+    for (size_t i = 0; i < s->n; i++) {
+        const nbep_vec3 p = s->pos[i];
+        assert_true(p.x >= 0.0 && p.x <= 10.0 && p.y >= 0.0 && p.y <= 10.0);
+        assert_true(p.z >= 0.2 && p.z <= 9.8); /* walled: clear of the walls */
+        near_x += p.x < 0.2 || p.x > 9.8;
+        near_y += p.y < 0.2 || p.y > 9.8;
+        mid_x += i >= 400 && fabs(p.x - 5.0) < 0.2;
+    }
+    assert_in_range(near_x, 12, 60);
+    assert_in_range(near_y, 12, 60);
+    assert_in_range(mid_x, 4, 40);
+}
+
 static void test_speed_gives_every_sphere_that_speed_in_all_directions(void **state)
 {
     fixture *f = *state;
@@ -2573,6 +2609,7 @@ int main(void)
         T(test_random_sphere_does_not_depend_on_its_group_size),
         T(test_random_spheres_lie_in_their_region_and_do_not_overlap),
         T(test_random_spheres_keep_clear_across_periodic_faces),
+        T(test_random_spheres_fill_a_periodic_axis_to_its_faces),
         T(test_speed_gives_every_sphere_that_speed_in_all_directions),
         T(test_group_acceleration_replaces_gravity),
         T(test_lattice_fills_x_fastest_at_the_largest_spacing),
