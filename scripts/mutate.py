@@ -1960,6 +1960,14 @@ MUTANTS = [
     ("fill-hint-with-why", "src/scene_place.c",
      "            if (!why[0] && before == 0.0 && asked <= 0.74)",
      "            if (before == 0.0 && asked <= 0.74)", ["test_scene"], None),
+    # a deck that plans more frames than memory holds (2026-12-01, a review)
+    ("xmf-reserve-uncapped", "src/output.c",
+     "    const uint64_t reserve = planned_frames(sc) < XMF_RESERVE_MAX ? planned_frames(sc)\n"
+     "                                                                  : XMF_RESERVE_MAX;",
+     "    const uint64_t reserve = planned_frames(sc);", ["tests/test_cli.sh"], None),
+    ("check-frames-negative", "src/check.c",
+     "    return v <= (uint64_t)INT64_MAX ? json_integer((json_int_t)v) : json_real((double)v);",
+     "    return json_integer((json_int_t)v);", ["tests/test_cli.sh"], None),
     # random places over a whole period along a periodic axis the region spans (2026-12-01)
     ("random-periodic-span-shrunk", "src/scene_place.c",
      "        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {",

@@ -132,6 +132,13 @@ static json_t *bytes(double v)
                                                : json_null();
 }
 
+/* A count as a JSON integer, or as a number where it passes the integers' range (a deck of
+ * 2^63 - 1 steps plans 2^63 frames: it read -9223372036854775808 until 2026-12-01). */
+static json_t *count(uint64_t v)
+{
+    return v <= (uint64_t)INT64_MAX ? json_integer((json_int_t)v) : json_real((double)v);
+}
+
 static json_t *study_object(const nbep_sweep_check_report *r)
 {
     /* output_bytes as the human line's `sweep output`: the runs' files and sidecars and the
@@ -173,9 +180,9 @@ static json_t *check_object(const nbep_scene *sc, const nbep_check_facts *f,
         f->lists ? json_real(f->skin_taken) : json_null(), "pairs_quadratic",
         (json_int_t)f->pairs_quadratic, "pairs_quartic", (json_int_t)f->pairs_quartic,
         "memory_bytes", bytes(f->memory_bytes), "output",
-        json_pack("{s:o, s:o, s:I, s:I, s:o}", "file", nbep_summary_json_text(sc->output_file),
+        json_pack("{s:o, s:o, s:o, s:I, s:o}", "file", nbep_summary_json_text(sc->output_file),
                   "sidecar", xmf ? nbep_summary_json_text(xmf) : json_null(), "frames",
-                  (json_int_t)f->frames,
+                  count(f->frames),
                   "every", (json_int_t)sc->output_every, "bytes", bytes(f->output_bytes)));
     free(xmf);
     if (o && json_object_set_new(o, "study", study ? study_object(study) : json_null()) != 0) {

@@ -90,6 +90,11 @@ bool nbep__output_xmf_room(nbep_output *o, size_t f)
 {
     if (f < o->xmf_cap)
         return true;
+    /* a list of f + 1 entries of 8 bytes must be addressable: past that no doubling would
+     * reach it (until 2026-12-01 cap * 8 wrapped to 0 for a deck of 2^60 planned frames, and
+     * the loop never ended for 2^63) */
+    if (f >= SIZE_MAX / (2 * sizeof(double)))
+        return false;
     size_t cap = o->xmf_cap ? 2 * o->xmf_cap : 64;
     while (cap <= f)
         cap *= 2;
@@ -604,6 +609,10 @@ void nbep__output_release(nbep_output **op)
     *op = NULL;
 }
 
+/* The sidecar's frame list made before the first step: at most this many frames (16 bytes
+ * each, 1 MiB), the rest as they come. */
+#define XMF_RESERVE_MAX ((uint64_t)1 << 16)
+
 /* The frames the deck plans: step 0, every output_every-th step, and the last step. */
 static uint64_t planned_frames(const nbep_scene *sc)
 {
@@ -689,7 +698,13 @@ nbep_status nbep_output_create_staged(const char *path, const nbep_scene *sc, in
         goto fail;
     }
     o->xmf = sc->out_position;
-    if (o->xmf && !nbep__output_xmf_room(o, (size_t)planned_frames(sc))) {
+    /* the frame list's room for the planned frames, up to XMF_RESERVE_MAX of them: a frame past
+     * it grows the list as it is written (a deck may plan more frames than memory holds, a run
+     * meant to end on its job's time limit; until 2026-12-01 the whole list was made here, and
+     * 2^40 planned frames failed for memory before the first step) */
+    const uint64_t reserve = planned_frames(sc) < XMF_RESERVE_MAX ? planned_frames(sc)
+                                                                  : XMF_RESERVE_MAX;
+    if (o->xmf && !nbep__output_xmf_room(o, (size_t)reserve)) {
         nbep__output_release(&o);
         remove(tmp);
         free(tmp);

@@ -811,4 +811,24 @@ run_nbep check "$tmp/micron-study.deck"
 check "check of such a study, its deck elastic, run 1 at e = 0.7: exit 0 (got $rc), the warning names run 1" \
     "[ $rc = 0 ] && grep -q 'physics.tc is at its default.*(sweep run 1)$' $tmp/stderr"
 
+# ---- a deck that plans more frames than memory holds (a run meant to end on its job's limit) --
+# run.steps near 2^63 with a frame every step: the sidecar's frame list was made whole before
+# the first step, and its size wrapped (2^60 frames: a 0-byte list written past, a crash), its
+# doubling never ended (2^63: a hang that SIGTERM did not end), or it failed for memory (2^40 to
+# 2^60: exit 1 for a deck nbep check passed). Now the run starts, and SIGTERM ends it with its
+# frames readable; nbep check --summary counts the 2^63 frames as a number, not a negative one.
+for steps in 9223372036854775807 1152921504606846976 1099511627776; do
+    sed "s/steps = 1000000000;/steps = $steps;/; s/every = 1000;/every = 1;/" "$tmp/group.deck" \
+        >"$tmp/frames-$steps.deck"
+    timeout -k 5 -s TERM 3 "$nbep" run "$tmp/frames-$steps.deck" --quiet -o "$tmp/frames-$steps.h5" \
+        >"$tmp/stdout" 2>"$tmp/stderr"
+    rc=$?
+    n=$(h5dump -H -d /frames/step "$tmp/frames-$steps.h5" 2>/dev/null | grep -o 'DATASPACE  SIMPLE { ( [0-9]*' | grep -o '[0-9]*$')
+    check "run.steps = $steps, a frame a step: runs until SIGTERM ends it (exit 124 from timeout, got $rc: $(head -c 160 "$tmp/stderr")), frames readable (${n:-none})" \
+        "[ $rc = 124 ] && grep -q 'terminated by SIGTERM' $tmp/stderr && [ \"\${n:-0}\" -gt 1 ]"
+done
+run_nbep check "$tmp/frames-9223372036854775807.deck" --quiet --summary -
+check "nbep check --summary of 2^63 planned frames: a positive number (got $(grep -o '"frames": [^,]*' "$tmp/stdout"))" \
+    "[ $rc = 0 ] && grep -Eq '\"frames\": 9\.22[0-9]*e\+18,' $tmp/stdout"
+
 test_end cli
