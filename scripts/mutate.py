@@ -1968,6 +1968,8 @@ MUTANTS = [
     ("check-frames-negative", "src/check.c",
      "    return v <= (uint64_t)INT64_MAX ? json_integer((json_int_t)v) : json_real((double)v);",
      "    return json_integer((json_int_t)v);", ["tests/test_cli.sh"], None),
+    ("info-part-missing-is-io", "src/output_info.c", "    nbep_status fail = NBEP_EUSAGE;",
+     "    nbep_status fail = NBEP_EIO;", ["test_output"], None),
     # random places over a whole period along a periodic axis the region spans (2026-12-01)
     ("random-periodic-span-shrunk", "src/scene_place.c",
      "        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {",

@@ -142,9 +142,14 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
         return open_st;
     run_info r = {0};
     int rc = gather_info(file, path, &r, d);
+    /* a file of format nbep-1 without a part every run writes (its attributes, /spheres, the
+     * frames' datasets) is no readable nbep run, as a foreign file is: exit 2, as --help says
+     * (until 2026-12-01 exit 1, as for a failed write) */
+    nbep_status fail = NBEP_EUSAGE;
     if (H5Fclose(file) < 0 && rc == 0) {
         HDF5_FAIL(d, path, "close the file");
         rc = -1;
+        fail = NBEP_EIO;
     }
     if (rc == 0) {
         fprintf(f, "%-13s%s\n", "file:", path);
@@ -206,6 +211,6 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
                     "summary:");
     }
     run_info_fini(&r);
-    return rc == 0 ? NBEP_OK : NBEP_EIO;
+    return rc == 0 ? NBEP_OK : fail;
 }
 

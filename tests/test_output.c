@@ -1108,6 +1108,29 @@ static void test_info_rejects_an_hdf5_file_without_the_nbep_1_format(void **stat
     assert_non_null(strstr(fx->d.msg[0], "not an nbep-1 file (root attribute format is missing)"));
 }
 
+/* An nbep-1 file without a part every run writes (its /spheres, or a root attribute) is no
+ * readable run either: exit 2 as --help says, one line naming the file (until 2026-12-01 exit
+ * 1, the status of a failed write; a review). */
+static void test_info_rejects_an_nbep_1_file_missing_a_part(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    nbep_test_tmp("output_no_spheres.h5", path, sizeof path);
+    hid_t f = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    assert_true(f >= 0);
+    hid_t type = H5Tcopy(H5T_C_S1);
+    assert_true(type >= 0 && H5Tset_size(type, 6) >= 0);
+    hid_t space = H5Screate(H5S_SCALAR);
+    hid_t a = H5Acreate2(f, "format", type, space, H5P_DEFAULT, H5P_DEFAULT);
+    assert_true(a >= 0 && H5Awrite(a, type, "nbep-1") >= 0);
+    H5Aclose(a);
+    H5Sclose(space);
+    H5Tclose(type);
+    H5Fclose(f);
+    assert_int_equal(nbep_output_info(path, stdout, &fx->d), NBEP_EUSAGE);
+    assert_one_line_naming(&fx->d, path);
+}
+
 /* a name that is no file is the user's mistake (exit 2), said with the system's reason */
 static void test_info_on_a_missing_file_fails_naming_it(void **state)
 {
@@ -1425,6 +1448,7 @@ int main(void)
         T(test_info_rejects_a_file_that_is_not_hdf5),
         T(test_info_rejects_an_hdf5_file_without_the_nbep_1_format),
         T(test_info_on_a_missing_file_fails_naming_it),
+        T(test_info_rejects_an_nbep_1_file_missing_a_part),
         T(test_json_of_a_known_summary_is_the_expected_text),
         T(test_json_written_to_a_stream_is_one_line_and_counts_its_bytes),
         T(test_json_parses_with_spec_keys_in_spec_order),
