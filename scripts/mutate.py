@@ -1970,6 +1970,9 @@ MUTANTS = [
      "    return json_integer((json_int_t)v);", ["tests/test_cli.sh"], None),
     ("info-part-missing-is-io", "src/output_info.c", "    nbep_status fail = NBEP_EUSAGE;",
      "    nbep_status fail = NBEP_EIO;", ["test_output"], None),
+    ("region-cut-lattice-only", "src/scene.c", "        if (ok && sc->has_box) {\n            /* a group fills the part of its region inside the box",
+     "        if (ok && sc->has_box && nbep__place_is_lattice(out->place)) {\n            /* a group fills the part of its region inside the box",
+     ["test_scene"], None),
     # random places over a whole period along a periodic axis the region spans (2026-12-01)
     ("random-periodic-span-shrunk", "src/scene_place.c",
      "        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {",

@@ -831,10 +831,12 @@ static bool parse_entry(load *L, const config_setting_t *e, const char *prefix,
         at = g_min == GOT && g_max == GOT ? corners_at(L, min, max ? max : region) : NULL;
         ok = g_min == GOT && g_max == GOT && check_corners(L, at, path, out->lo, out->hi) &&
              (!sc->has_box || check_region_meets_box(L, e, at, path, sc, out->lo, out->hi)) && ok;
-        if (ok && sc->has_box && nbep__place_is_lattice(out->place)) {
-            /* a lattice fills the part of its region inside the box, as random placement
-             * keeps inside it (until 2026-11-30 the lattice filled the whole region and every
-             * sphere outside was reported against a wall) */
+        if (ok && sc->has_box) {
+            /* a group fills the part of its region inside the box (until 2026-11-30 a lattice
+             * filled the whole region and every sphere outside was reported against a wall;
+             * until 2026-12-01 random places were drawn over the whole region, and a region
+             * mostly outside used up a sphere's tries against the walls: 4 of 100 placed at a
+             * packing of 0.004 inside; the message's packing was the whole region's too) */
             double lo[3] = {out->lo.x, out->lo.y, out->lo.z}, hi[3] = {out->hi.x, out->hi.y,
                                                                        out->hi.z};
             const double bl[3] = {sc->box_min.x, sc->box_min.y, sc->box_min.z};

@@ -529,11 +529,6 @@ static void test_sphere_entries_must_be_one_sphere_or_one_group(void **state)
 #undef E
 }
 
-/* A group's region that does not meet the box places nothing: a deck error naming the axes,
- * for random and lattice placement alike and for a region that only touches a face (until
- * 2026-11-30 the random placement said it could place none, and the lattice listed every sphere
- * against a wall). A region partly outside is taken: its spheres land in the box (a lattice
- * fills the part inside, which until then listed every sphere outside against a wall). */
 /* A normal with a subnormal largest component: divided by it, it is [0, 0, 1] exactly
  * (multiplied by its inverse, inf, it was NaN, and a run asserted on the plane's gap); a
  * vector's length for the window of magnitudes likewise (it printed "length -nan") */
@@ -570,7 +565,7 @@ static void test_coordinates_far_beyond_the_smallest_radius_are_errors(void **st
                                   "point = [0.0, 0.0, -1e300]; } );\n"
                                   "spheres = ( { position = [5.0, 5.0, 5.0]; radius = 1.0; mass = 1.0; },\n"
                                   "  { count = 2; radius = 2.0; mass = 1.0;\n"
-                                  "    region = { min = [-3e12, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; }; } );\n",
+                                  "    region = { min = [0.0, 0.0, 0.0]; max = [10.0, 1.5e12, 10.0]; }; } );\n",
                                   path, sizeof path);
     LOAD_FAILS(f, NBEP_EDECK, deck);
     char e1[512], e2[512], e3[512];
@@ -581,8 +576,8 @@ static void test_coordinates_far_beyond_the_smallest_radius_are_errors(void **st
              "origin, beyond 2^40 = 1.1e+12 (a coordinate of -1e+300: positions there round by "
              "more than 2^-12 of a radius); move the origin nearer the scene (README, The deck: "
              "units)", deck);
-    snprintf(e3, sizeof e3, "%s:5: spheres.[1].region.min lies 3e+12 smallest radii (1) from the "
-             "origin, beyond 2^40 = 1.1e+12 (a coordinate of -3e+12: positions there round by "
+    snprintf(e3, sizeof e3, "%s:5: spheres.[1].region.max lies 1.5e+12 smallest radii (1) from "
+             "the origin, beyond 2^40 = 1.1e+12 (a coordinate of 1.5e+12: positions there round by "
              "more than 2^-12 of a radius); move the origin nearer the scene (README, The deck: "
              "units)", deck);
     ASSERT_DIAG(&f->d, e1, e2, e3);
@@ -591,15 +586,21 @@ static void test_coordinates_far_beyond_the_smallest_radius_are_errors(void **st
     nbep_diag_fini(&f->d);
     nbep_diag_init(&f->d);
     LOAD_OK(f, deck, "box.max=[1099511627776.0, 1e12, 1e12]", "planes.[0].point=[0, 0, 0]",
-            "spheres.[1].region.min=[0.0, 0.0, 0.0]");
+            "spheres.[1].region.max=[10.0, 10.0, 10.0]");
     nbep_scene_fini(&f->sc);
     LOAD_FAILS(f, NBEP_EDECK, deck, "box.max=[1099511627776.0, 1e12, 1e12]",
-               "planes.[0].point=[0, 0, 0]", "spheres.[1].region.min=[0.0, 0.0, 0.0]",
+               "planes.[0].point=[0, 0, 0]", "spheres.[1].region.max=[10.0, 10.0, 10.0]",
                "spheres.[0].position=[1099511627777.0, 5.0, 5.0]");
     assert_int_equal(f->d.n_errors, 1); /* (outside the box too, checked once this holds) */
     assert_non_null(strstr(f->d.msg[0], "spheres.[0].position lies 1.1e+12 smallest radii"));
 }
 
+/* A group's region that does not meet the box places nothing: a deck error naming the axes,
+ * for random and lattice placement alike and for a region that only touches a face (until
+ * 2026-11-30 the random placement said it could place none, and the lattice listed every sphere
+ * against a wall). A region partly outside is taken: its spheres land in the box (a lattice
+ * fills the part inside, which until then listed every sphere outside against a wall; random places were drawn over the whole region until 2026-12-01, and a region
+ * mostly outside used up a sphere's tries against the walls: 4 of 100 placed, a review). */
 static void test_a_region_outside_the_box_is_an_error(void **state)
 {
     fixture *f = *state;
@@ -634,6 +635,30 @@ static void test_a_region_outside_the_box_is_an_error(void **state)
     }
     assert_vec3(st->pos[20], 0.05, 0.05, 0.05, 1e-15);
     assert_vec3(st->pos[46], 0.85, 0.85, 0.85, 1e-15);
+    /* a random group in a region of which the box is a thousandth: every sphere placed, in
+     * the box; and a packing asked of the part inside the box, not of the whole region */
+    nbep_scene_fini(&f->sc);
+    const char *wide = write_deck("scene_region_wide.deck",
+                                  "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; };\n"
+                                  "spheres = ( { count = 100; radius = 0.1; mass = 1.0;\n"
+                                  "  region = { min = [-45.0, -45.0, -45.0]; "
+                                  "max = [55.0, 55.0, 55.0]; }; } );\n",
+                                  path, sizeof path);
+    LOAD_OK(f, wide);
+    st = &f->sc.state;
+    assert_int_equal(st->n, 100);
+    for (size_t i = 0; i < st->n; i++) {
+        const double p[3] = {st->pos[i].x, st->pos[i].y, st->pos[i].z};
+        for (int k = 0; k < 3; k++)
+            assert_true(p[k] >= 0.1 && p[k] <= 9.9);
+    }
+    nbep_scene_fini(&f->sc);
+    LOAD_FAILS(f, NBEP_EDECK, wide, "spheres.[0].count=100000");
+    assert_int_equal(f->d.n_errors, 1);
+    assert_non_null(strstr(f->d.msg[0], "random places jam near a packing fraction of 0.3 and "
+                                        "0.42 is asked"));
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
     /* along a periodic axis any region is taken and not cut to the box: its places wrap in
      * (SPEC: region and placement work as before there), a lattice's too; the wall axes are
      * still checked and cut */
