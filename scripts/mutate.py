@@ -1973,6 +1973,8 @@ MUTANTS = [
     ("region-cut-lattice-only", "src/scene.c", "        if (ok && sc->has_box) {\n            /* a group fills the part of its region inside the box",
      "        if (ok && sc->has_box && nbep__place_is_lattice(out->place)) {\n            /* a group fills the part of its region inside the box",
      ["test_scene"], None),
+    ("plane-offset-unchecked", "src/scene.c", "        if (!isfinite(offset)) {\n            ERR(L, point_at,",
+     "        if (0) {\n            ERR(L, point_at,", ["test_scene"], None),
     # random places over a whole period along a periodic axis the region spans (2026-12-01)
     ("random-periodic-span-shrunk", "src/scene_place.c",
      "        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {",

@@ -697,7 +697,17 @@ static void parse_planes(load *L, const config_setting_t *root, plane **out, siz
             continue;
         }
         const nbep_vec3 unit = nbep_vec3_scale(u, 1.0 / nbep_vec3_norm(u));
-        p[k] = (plane){unit, nbep_vec3_dot(unit, point), point, point_at, e, normal, at};
+        const double offset = nbep_vec3_dot(unit, point);
+        /* a point near the doubles' end can make n . point overflow; a deck without spheres
+         * has no radius for check_span to hold it to, and inf reached /planes/offset (until
+         * 2026-12-01, a review) */
+        if (!isfinite(offset)) {
+            ERR(L, point_at, "%s.point [%g, %g, %g] is too far from the origin: the plane's "
+                "offset (normal . point) is not a finite number",
+                prefix, point.x, point.y, point.z);
+            continue;
+        }
+        p[k] = (plane){unit, offset, point, point_at, e, normal, at};
     }
     *out = p;
     *n = len;

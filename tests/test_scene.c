@@ -553,6 +553,31 @@ static void test_subnormal_normals_and_vectors_are_scaled_by_division(void **sta
                        "choose units that bring it within (README, The deck: units)");
 }
 
+/* A plane's point near the doubles' end makes its offset, n . point, overflow: a deck error at
+ * the point, also where no sphere gives the span check a radius (inf reached /planes/offset
+ * until 2026-12-01, a review) */
+static void test_a_plane_whose_offset_overflows_is_an_error(void **state)
+{
+    fixture *f = *state;
+    char path[256];
+    const char *deck = write_deck("scene_plane_inf.deck",
+                                  "run: { steps = 2; };\n"
+                                  "planes = ( { normal = [1.0, 1.0, 1.0];\n"
+                                  "  point = [1.7e308, 1.7e308, 1.7e308]; } );\n"
+                                  "spheres = ();\n",
+                                  path, sizeof path);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    char e1[512];
+    snprintf(e1, sizeof e1, "%s:3: planes.[0].point [1.7e+308, 1.7e+308, 1.7e+308] is too far "
+             "from the origin: the plane's offset (normal . point) is not a finite number", deck);
+    ASSERT_DIAG(&f->d, e1);
+    nbep_scene_fini(&f->sc);
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_OK(f, deck, "planes.[0].point=[1e307, 1e307, 1e307]"); /* 1.7e307: finite */
+    assert_true(isfinite(f->sc.state.plane_offset[0]));
+}
+
 /* Coordinates within 2^40 smallest radii of the origin (NBEP_DECK_SPAN_MAX): each kind of
  * point beyond it is an error at its setting, one at the edge is taken */
 static void test_coordinates_far_beyond_the_smallest_radius_are_errors(void **state)
@@ -2600,6 +2625,7 @@ int main(void)
         T(test_sphere_entries_must_be_one_sphere_or_one_group),
         T(test_a_region_outside_the_box_is_an_error),
         T(test_subnormal_normals_and_vectors_are_scaled_by_division),
+        T(test_a_plane_whose_offset_overflows_is_an_error),
         T(test_coordinates_far_beyond_the_smallest_radius_are_errors),
         T(test_too_many_spheres_for_32_bit_ids_is_an_error),
         T(test_too_many_spheres_for_the_cells_mode_is_an_error),
