@@ -1552,7 +1552,7 @@ MUTANTS = [
      "snprintf(buf, NBEP_BYTES_TEXT_MAX, \"%.2g %s\", bytes, unit[u]);",
      ["test_util", "tests/test_cli.sh"], None),
     ("size-xdmf-head-uncounted", "src/output_xdmf.c",
-     "    xml_head(&o, h5, n_spheres, (size_t)n_frames);\n", "", ["test_output_xdmf"], None),
+     "    xml_head(&o, note ? note : h5, n_spheres, (size_t)n_frames);\n", "", ["test_output_xdmf"], None),
     ("size-xdmf-last-step-on-grid", "src/output_xdmf.c",
      "(int64_t)(k + 1 < n_frames ? k * every : steps);", "(int64_t)(k * every);",
      ["test_output_xdmf"], None),
@@ -1975,6 +1975,13 @@ MUTANTS = [
      ["test_scene"], None),
     ("plane-offset-unchecked", "src/scene.c", "        if (!isfinite(offset)) {\n            ERR(L, point_at,",
      "        if (0) {\n            ERR(L, point_at,", ["test_scene"], None),
+    # the run's name in the sidecar's comment: no "--" (2026-12-01, a review)
+    ("xdmf-note-dashes-kept", "src/output_xdmf.c",
+     "        if (*r == '%' || (*r == '-' && r > base && r[-1] == '-')) {",
+     "        if (*r == '%') {", ["test_output_xdmf"], None),
+    ("xdmf-note-not-decoded", "src/output_xdmf.c",
+     "                (hex == '%' || hex == '-')) {", "                0) {",
+     ["test_output_xdmf"], None),
     # random places over a whole period along a periodic axis the region spans (2026-12-01)
     ("random-periodic-span-shrunk", "src/scene_place.c",
      "        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {",

@@ -24,7 +24,10 @@
 #include <string.h>
 
 /* The comment at a sidecar's top that names its run (xml_head writes it, nbep_xdmf_run_of
- * reads it): RUN_NOTE, the run file's name, ": N spheres, ...". */
+ * reads it): RUN_NOTE, the run file's name, ": N spheres, ...". The name as it is, but for
+ * '%' written "%25" and a '-' after a '-' written "%2D" (note_name): "--" may not stand in an
+ * XML comment, and entities are not read in one (until 2026-12-01 the name was XML-escaped
+ * there, "a&amp;b.h5", and a run named run--e0.9.h5 had a sidecar that XML parsers refuse). */
 #define RUN_NOTE "<!-- nbep run "
 #define RUN_NOTE_SPHERES " spheres, "
 
@@ -61,9 +64,43 @@ bool nbep_xdmf_run_of(const char *path, char *name, size_t len)
     while (end > at && end[-1] >= '0' && end[-1] <= '9')
         end--; /* back over the count to the ": " before it */
     if (end - at >= 3 && end[-2] == ':' && end[-1] == ' ' &&
-        !memchr(at, '\n', (size_t)(end - at)))
-        snprintf(name, len, "%.*s", (int)(end - 2 - at), at);
+        !memchr(at, '\n', (size_t)(end - at))) {
+        const char *stop = end - 2;
+        size_t w = 0;
+        for (const char *r = at; r < stop && w + 1 < len; r++) {
+            unsigned hex = 0;
+            if (*r == '%' && stop - r >= 3 && sscanf(r + 1, "%2x", &hex) == 1 &&
+                (hex == '%' || hex == '-')) {
+                name[w++] = (char)hex;
+                r += 2;
+            } else {
+                name[w++] = *r;
+            }
+        }
+        name[w] = '\0';
+    }
     return true;
+}
+
+/* The base name of a path for the comment that names the run (RUN_NOTE), into a malloc'd
+ * string. */
+static char *note_name(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    char *out = malloc(3 * strlen(base) + 1);
+    if (!out)
+        return NULL;
+    char *w = out;
+    for (const char *r = base; *r; r++) {
+        if (*r == '%' || (*r == '-' && r > base && r[-1] == '-')) {
+            w += sprintf(w, "%%%02X", (unsigned)(unsigned char)*r);
+        } else {
+            *w++ = *r;
+        }
+    }
+    *w = '\0';
+    return out;
 }
 
 /* The base name of a path, XML-escaped for an element's text, into a malloc'd string. */
@@ -135,13 +172,13 @@ static void scalar(xml_out *o, const char *h5, const char *name, size_t n)
     out(o, "        </Attribute>\n");
 }
 
-static void xml_head(xml_out *o, const char *h5, size_t n, size_t n_frames)
+static void xml_head(xml_out *o, const char *note, size_t n, size_t n_frames)
 {
     out(o, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
            RUN_NOTE "%s: %zu" RUN_NOTE_SPHERES "%zu frames (written by nbep) -->\n"
            "<Xdmf Version=\"2.0\">\n  <Domain>\n"
            "    <Grid Name=\"spheres\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
-        h5, n, n_frames);
+        note, n, n_frames);
 }
 
 /* Frame k of n_frames, at step *step (NULL: named by its index) and time t. */
@@ -176,11 +213,11 @@ static void xml_tail(xml_out *o)
     out(o, "    </Grid>\n  </Domain>\n</Xdmf>\n");
 }
 
-static void write_xml(FILE *f, const char *h5, size_t n, size_t n_frames, const int64_t *steps,
-                      const double *times, bool has_velocity)
+static void write_xml(FILE *f, const char *h5, const char *note, size_t n, size_t n_frames,
+                      const int64_t *steps, const double *times, bool has_velocity)
 {
     xml_out o = {.f = f};
-    xml_head(&o, h5, n, n_frames);
+    xml_head(&o, note, n, n_frames);
     for (size_t k = 0; k < n_frames; k++)
         xml_frame(&o, h5, n, n_frames, k, steps ? &steps[k] : NULL, times[k], has_velocity);
     xml_tail(&o);
@@ -198,11 +235,11 @@ double nbep_xdmf_bytes(const char *h5_path, size_t n_spheres, uint64_t steps, ui
         return 0.0;
     /* frames at steps 0, every, 2 every, ... and at the last step (nbep_output_frames) */
     const uint64_t n_frames = steps / every + 1 + (steps % every ? 1 : 0);
-    char *escaped = xml_base_name(h5_path);
+    char *escaped = xml_base_name(h5_path), *note = note_name(h5_path);
     const char *slash = strrchr(h5_path, '/');
     const char *h5 = escaped ? escaped : slash ? slash + 1 : h5_path; /* no memory: near enough */
     xml_out o = {.f = NULL};
-    xml_head(&o, h5, n_spheres, (size_t)n_frames);
+    xml_head(&o, note ? note : h5, n_spheres, (size_t)n_frames);
     xml_tail(&o);
     const uint64_t sampled = n_frames < BYTES_SAMPLED_FRAMES ? n_frames : BYTES_SAMPLED_FRAMES;
     xml_out frames = {.f = NULL};
@@ -214,6 +251,7 @@ double nbep_xdmf_bytes(const char *h5_path, size_t n_spheres, uint64_t steps, ui
                   (double)step * dt, has_velocity);
     }
     free(escaped);
+    free(note);
     return o.bytes + (sampled ? frames.bytes / (double)sampled * (double)n_frames : 0.0);
 }
 
@@ -232,9 +270,9 @@ nbep_status nbep_xdmf_write(const char *h5_path, size_t n_spheres, size_t n_fram
 {
     char *xmf = nbep_xdmf_path(h5_path);
     char *tmp = xmf ? malloc(strlen(xmf) + sizeof ".tmp") : NULL;
-    char *h5 = xml_base_name(h5_path);
+    char *h5 = xml_base_name(h5_path), *note = note_name(h5_path);
     nbep_status st = NBEP_ENOMEM;
-    if (!xmf || !tmp || !h5) {
+    if (!xmf || !tmp || !h5 || !note) {
         nbep_diag_add(d, __FILE__, __LINE__,
                       "nbep: %s: no memory for the XDMF sidecar of %zu frames", h5_path,
                       n_frames);
@@ -248,7 +286,7 @@ nbep_status nbep_xdmf_write(const char *h5_path, size_t n_spheres, size_t n_fram
                       strerror(errno));
         goto done;
     }
-    write_xml(f, h5, n_spheres, n_frames, steps, times, has_velocity);
+    write_xml(f, h5, note, n_spheres, n_frames, steps, times, has_velocity);
     int err = ferror(f) ? (errno ? errno : EIO) : 0;
     if (fclose(f) != 0 && !err)
         err = errno ? errno : EIO;
@@ -261,6 +299,7 @@ nbep_status nbep_xdmf_write(const char *h5_path, size_t n_spheres, size_t n_fram
     st = NBEP_OK;
 done:
     free(h5);
+    free(note);
     free(tmp);
     free(xmf);
     return st;
