@@ -1982,6 +1982,15 @@ MUTANTS = [
     ("xdmf-note-not-decoded", "src/output_xdmf.c",
      "                (hex == '%' || hex == '-')) {", "                0) {",
      ["test_output_xdmf"], None),
+    # decks read only in part: a NUL byte, a comment never closed, an HDF5 file (2026-12-01)
+    ("deck-nul-read", "src/scene.c", "    if (nul) {\n        size_t line = 1;",
+     "    if (0) {\n        size_t line = 1;", ["tests/test_cli.sh"], None),
+    ("deck-hdf5-unsaid", "src/scene.c",
+     "    if (nul && len >= 8 && memcmp(text,", "    if (0 && len >= 8 && memcmp(text,",
+     ["tests/test_cli.sh"], None),
+    ("deck-comment-unclosed-read", "src/scene_text.c",
+     "        if (ch == '/' && text[i + 1] == '*' && !strstr(text + i + 2, \"*/\")) {",
+     "        if (0) {", ["tests/test_cli.sh"], None),
     # random places over a whole period along a periodic axis the region spans (2026-12-01)
     ("random-periodic-span-shrunk", "src/scene_place.c",
      "        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {",

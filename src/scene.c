@@ -1345,6 +1345,24 @@ static nbep_status read_text(const char *path, char **out, nbep_diag *d)
         NBEP_FAIL(d, nbep_status_of_open(err), "nbep: cannot read %s: %s", path, strerror(err));
     }
     text[len] = '\0';
+    /* a deck is text: what follows a NUL byte was read by no one (libconfig stops there, and
+     * the run's `deck` attribute kept the text up to it; until 2026-12-01, a review) */
+    const char *nul = memchr(text, '\0', len);
+    if (nul && len >= 8 && memcmp(text, "\x89HDF\r\n\x1a\n", 8) == 0) { /* HDF5's signature */
+        free(text);
+        NBEP_FAIL(d, NBEP_EDECK,
+                  "%s: an HDF5 file, not a deck (a run's file: nbep info reads it, and it holds "
+                  "the deck that made it)",
+                  path);
+    }
+    if (nul) {
+        size_t line = 1;
+        for (const char *c = text; c < nul; c++)
+            line += *c == '\n';
+        free(text);
+        NBEP_FAIL(d, NBEP_EDECK, "%s:%zu: a NUL byte: a deck is text (is this the deck?)", path,
+                  line);
+    }
     *out = text;
     return NBEP_OK;
 }

@@ -242,6 +242,20 @@ char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label,
 
     while (i < n) {
         char ch = text[i];
+        if (ch == '/' && text[i + 1] == '*' && !strstr(text + i + 2, "*/")) {
+            /* libconfig reads an unclosed block comment to the end of the text, and every
+             * setting after it was dropped without a word (until 2026-12-01, a review) */
+            (*n_bad)++;
+            if (!label)
+                nbep_diag_add_ranked(c->d, nbep__scene_rank(c, NULL, line), __FILE__, __LINE__,
+                                     "%s:%zu: this /* comment is never closed with */: every "
+                                     "line after it would be read as the comment",
+                                     c->deck, line);
+            else
+                nbep_diag_add_ranked(c->d, nbep__scene_rank(c, label, 0), __FILE__, __LINE__,
+                                     "%s: a /* comment is never closed with */", label);
+            break;
+        }
         if (skip_quiet(text, n, &i, &line)) {
             continue;
         } else if (ch == '@' && is_include(text, i)) {

@@ -831,4 +831,26 @@ run_nbep check "$tmp/frames-9223372036854775807.deck" --quiet --summary -
 check "nbep check --summary of 2^63 planned frames: a positive number (got $(grep -o '"frames": [^,]*' "$tmp/stdout"))" \
     "[ $rc = 0 ] && grep -Eq '\"frames\": 9\.22[0-9]*e\+18,' $tmp/stdout"
 
+# ---- decks whose text would be read only in part (a review, 2026-12-01) ----------------------
+# a NUL byte (libconfig stopped there: the settings after it, a typo among them, were dropped),
+# a block comment never closed (libconfig read it to the end), an HDF5 file given as the deck
+printf 'spheres = ();\n\0run: { stepz = 5; };\n' >"$tmp/nul.deck"
+run_nbep run "$tmp/nul.deck" -o "$tmp/nul.h5"
+check "a deck with a NUL byte: exit 2, one line at its line, no file (got $rc: $(cat "$tmp/stderr"))" \
+    "[ $rc = 2 ] && [ \$(wc -l <$tmp/stderr) = 1 ] &&
+     grep -qx '$tmp/nul.deck:2: a NUL byte: a deck is text (is this the deck?)' $tmp/stderr &&
+     [ ! -e $tmp/nul.h5 ]"
+printf 'run: { steps = 5; };\nspheres = ();\n/* comment never closed\nfoo = 1;\n' >"$tmp/comment.deck"
+run_nbep check "$tmp/comment.deck"
+check "a block comment never closed: exit 2, one line at the comment (got $rc: $(cat "$tmp/stderr"))" \
+    "[ $rc = 2 ] && [ \$(wc -l <$tmp/stderr) = 1 ] &&
+     grep -qx '$tmp/comment.deck:3: this /\* comment is never closed with \*/: every line after it would be read as the comment' $tmp/stderr"
+run_nbep check inputs/two-spheres.deck --set 'run.steps=5 /* x'
+check "... and in a --set: exit 2, named by the --set (got $rc: $(cat "$tmp/stderr"))" \
+    "[ $rc = 2 ] && grep -qF -- '--set run.steps=5 /* x: a /* comment is never closed with */' $tmp/stderr"
+run_nbep run inputs/two-spheres.deck --quiet -n 2 -o "$tmp/asdeck.h5"
+run_nbep check "$tmp/asdeck.h5"
+check "an HDF5 file as the deck: exit 2, said so (got $rc: $(cat "$tmp/stderr"))" \
+    "[ $rc = 2 ] && grep -qx '$tmp/asdeck.h5: an HDF5 file, not a deck (a run.s file: nbep info reads it, and it holds the deck that made it)' $tmp/stderr"
+
 test_end cli
