@@ -195,7 +195,8 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
             fprintf(f, " (last: step %" PRId64 ", time %s)", r.last_step,
                     nbep_format_real(r.last_time, false, b0));
         if (r.frames_more)
-            fprintf(f, ", and %llu incomplete (its write was cut short: a kill, or a full disk)",
+            fprintf(f, ", and %llu incomplete (being written, or its write was cut short: a kill, or "
+                    "a full disk)",
                     (unsigned long long)r.frames_more);
         fprintf(f, "\n");
         if (r.has_stats)

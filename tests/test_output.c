@@ -1075,8 +1075,8 @@ static void test_info_counts_only_the_complete_frames_of_a_run_killed_mid_frame(
     }
     H5Fclose(f);
     char *text = info_text(path, &fx->d);
-    assert_has_line(text, "frames:      3 (last: step 20, time 0.025), and 1 incomplete (its "
-                          "write was cut short: a kill, or a full disk)");
+    assert_has_line(text, "frames:      3 (last: step 20, time 0.025), and 1 incomplete (being "
+                          "written, or its write was cut short: a kill, or a full disk)");
     assert_has_line(text, "stats rows:  20, and incomplete ones after them");
     free(text);
 }
