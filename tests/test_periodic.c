@@ -1418,7 +1418,16 @@ static void test_periodic_deck_errors_name_the_line(void **state)
              "run: { neighbors = \"cells\"; };\n"
              "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 3.0]; periodic = [false, false, true]; };\n%s",
              sph);
-    expect_deck_error(text, 2, "needs the box's z side (3) to be at least 6.75 times the largest radius");
+    expect_deck_error(text, 2, "needs the box's z side (3) to be at least 3.375003375, 6.75 times "
+                               "the largest radius (0.5) and a millionth more, three cells across");
+    /* a side short of the least by less than the 6.75 radii's %g digits show: the message
+     * tells the two apart (it said "side (3.375) ... at least 6.75 times (0.5)" for 3.375001,
+     * a new user's find) */
+    snprintf(text, sizeof text,
+             "run: { neighbors = \"cells\"; };\n"
+             "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 3.375001]; periodic = [false, false, true]; };\n%s",
+             sph);
+    expect_deck_error(text, 2, "needs the box's z side (3.375001) to be at least 3.375003375,");
     /* spheres overlapping across a periodic face (0.3 + 10 - 9.6 = 0.7 apart, x and z) */
     snprintf(text, sizeof text,
              "run: { neighbors = \"cells\"; };\n"
