@@ -1991,6 +1991,14 @@ MUTANTS = [
     ("deck-comment-unclosed-read", "src/scene_text.c",
      "        if (ch == '/' && text[i + 1] == '*' && !strstr(text + i + 2, \"*/\")) {",
      "        if (0) {", ["tests/test_cli.sh"], None),
+    # nbep check's mixture line: the partners a list holds, sized by the largest pair
+    ("check-mixture-partners-smallest", "src/check.c",
+     "        const double cut = 2.0 * f->radius_max * (1.0 + f->skin_taken);",
+     "        const double cut = 2.0 * f->radius_min * (1.0 + f->skin_taken);",
+     ["tests/test_cli.sh"], None),
+    ("check-mixture-ratio-3", "src/check.c",
+     "f->radius_max >= 2.0 * f->radius_min &&", "f->radius_max >= 3.0 * f->radius_min &&",
+     ["tests/test_cli.sh"], None),
     # random places over a whole period along a periodic axis the region spans (2026-12-01)
     ("random-periodic-span-shrunk", "src/scene_place.c",
      "        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {",

@@ -29,6 +29,22 @@ void nbep_check_gather(const nbep_scene *sc, nbep_check_facts *f)
         f->skin_asked = nbep_scene_list_skin(sc, &sc->state);
         f->skin_taken = nbep_scene_list_skin_taken(sc, &sc->state);
     }
+    for (size_t i = 0; i < sc->state.n; i++) {
+        const double r = sc->state.radius[i];
+        f->radius_min = i == 0 || r < f->radius_min ? r : f->radius_min;
+        f->radius_max = fmax(f->radius_max, r);
+    }
+    /* every list reaches the largest pair's contact and the skin (evloop.c), whatever the
+     * pair: a mixture's small spheres list as many partners as the largest would */
+    f->partners = f->partners_smallest = NAN;
+    if (f->lists && sc->has_box && sc->state.n > 0) {
+        const nbep_vec3 b = nbep_vec3_sub(sc->box_max, sc->box_min);
+        const double density = (double)sc->state.n / (b.x * b.y * b.z);
+        const double cut = 2.0 * f->radius_max * (1.0 + f->skin_taken);
+        const double cut_min = 2.0 * f->radius_min * (1.0 + f->skin_taken);
+        f->partners = density * 4.0 / 3.0 * 3.14159265358979323846 * cut * cut * cut;
+        f->partners_smallest = density * 4.0 / 3.0 * 3.14159265358979323846 * cut_min * cut_min * cut_min;
+    }
     f->memory_bytes = (double)nbep_sim_memory_estimate(sc, f->threads);
     f->frames = nbep_output_frames(sc);
     /* what the run writes: its file and, beside it, the XDMF sidecar */
@@ -98,6 +114,16 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
                     NBEP_NBLIST_SKIN_DILUTE, NBEP_NBLIST_PHI_DILUTE, NBEP_NBLIST_SKIN,
                     NBEP_NBLIST_PHI_DENSE);
     }
+    /* a mixture twice as wide as its smallest spheres or wider: its lists, sized by the
+     * largest pair, hold (ratio)^3 the partners (a new user's colloids: 3000 of radius 0.25
+     * and 2 of radius 2 took 2400 predictions a collision, 50 times the small ones' alone) */
+    if (f->lists && f->radius_min > 0.0 && f->radius_max >= 2.0 * f->radius_min &&
+        isfinite(f->partners))
+        fprintf(out,
+                "mixture:         radii %g to %g: every list reaches the largest pair's contact "
+                "and the skin, so it holds about %.0f partners (%.0f within the smallest pair's reach and the skin); "
+                "an event's cost grows with them (README, Algorithms: What it costs)\n",
+                f->radius_min, f->radius_max, f->partners, f->partners_smallest);
     char size[NBEP_BYTES_TEXT_MAX];
     fprintf(out, "memory:          about %s\n", nbep_format_bytes(f->memory_bytes, size));
     char *xmf = f->sidecar_bytes > 0.0 ? nbep_xdmf_path(sc->output_file) : NULL;

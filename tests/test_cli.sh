@@ -853,4 +853,27 @@ run_nbep check "$tmp/asdeck.h5"
 check "an HDF5 file as the deck: exit 2, said so (got $rc: $(cat "$tmp/stderr"))" \
     "[ $rc = 2 ] && grep -qx '$tmp/asdeck.h5: an HDF5 file, not a deck (a run.s file: nbep info reads it, and it holds the deck that made it)' $tmp/stderr"
 
+# ---- a mixture of sizes in cells mode: nbep check says what its lists cost (a new user's find) ---
+# every list reaches the largest pair's contact and the skin: 3000 spheres of radius 0.25 and
+# two of radius 2 in a periodic box of 14 (a colloid in its solvent) list about 466 partners
+# each, where the small ones alone would list one; the run took 2400 predictions a collision
+cat >"$tmp/colloid.deck" <<'EOF'
+run: { algorithm = "predictive"; neighbors = "cells"; steps = 10; dt = 0.05; seed = 11; };
+box: { min = [0.0, 0.0, 0.0]; max = [14.0, 14.0, 14.0]; periodic = [true, true, true]; };
+spheres = ( { position = [7.0, 7.0, 7.0]; radius = 2.0; mass = 64.0; },
+            { position = [1.0, 1.0, 1.0]; radius = 2.0; mass = 64.0; },
+            { count = 3000; radius = 0.25; mass = 0.125; place = "random"; speed = 4.9; } );
+EOF
+run_nbep check "$tmp/colloid.deck"
+skin=$(sed -n 's/^lists: *skin \([0-9.]*\) of the largest diameter.*/\1/p' "$tmp/stdout")
+want=$(awk -v s="${skin:-0}" 'BEGIN { c = 4 * (1 + s); printf "%.0f", 3002 / 14^3 * 4 / 3 * 3.141592653589793 * c^3 }')
+check "nbep check of a mixture of radii 0.25 and 2 in cells mode: a mixture line with the partners a list holds (skin ${skin:-none}: $want)" \
+    "[ $rc = 0 ] && grep -q '^mixture: *radii 0.25 to 2: every list reaches the largest pair.s contact and the skin, so it holds about $want partners' $tmp/stdout"
+run_nbep check "$tmp/colloid.deck" --set 'spheres.[0].radius=0.4' --set 'spheres.[1].radius=0.4'
+check "... and none where the largest radius is under twice the smallest (got $rc)" \
+    "[ $rc = 0 ] && ! grep -q '^mixture:' $tmp/stdout"
+run_nbep check "$tmp/colloid.deck" --set 'spheres.[0].radius=0.5' --set 'spheres.[1].radius=0.5'
+check "... and one where it is twice (got $rc)" \
+    "[ $rc = 0 ] && grep -q '^mixture: *radii 0.25 to 0.5: ' $tmp/stdout"
+
 test_end cli

@@ -22,6 +22,11 @@ typedef struct nbep_check_facts {
     bool lists;                 /* the cells engine's neighbour lists are used: */
     double skin_asked;          /* the skin the packing asks for (of the largest diameter) */
     double skin_taken;          /* the skin taken (smaller where a small periodic box cuts it) */
+    double radius_min;          /* the smallest and largest radius (0 without spheres) */
+    double radius_max;
+    double partners;            /* with lists in a box: the mean partners a list holds (its
+                                 * cutoff's ball times the spheres' density), else NaN */
+    double partners_smallest;   /* ... and what a scene of the smallest spheres alone would */
     double memory_bytes;        /* nbep_sim_memory_estimate */
     uint64_t frames;            /* frames the output file will hold */
     double sidecar_bytes;       /* the XDMF sidecar's (0: none is written) */
