@@ -1999,6 +1999,9 @@ MUTANTS = [
     ("check-mixture-ratio-3", "src/check.c",
      "f->radius_max >= 2.0 * f->radius_min &&", "f->radius_max >= 3.0 * f->radius_min &&",
      ["tests/test_cli.sh"], None),
+    ("resume-periodic-said-as-planes", "src/output_resume.c",
+     "    if (n == s->n && np != s->n_planes && has_per > 0 &&", "    if (0 && has_per > 0 &&",
+     ["tests/test_resume.sh"], None),
     # random places over a whole period along a periodic axis the region spans (2026-12-01)
     ("random-periodic-span-shrunk", "src/scene_place.c",
      "        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {",

@@ -139,6 +139,14 @@ PYEOF"
         "[ $rc = 2 ] && grep -q 'was run in another box than' $tmp/periodic-box.err"
     check "the refused resume leaves the file as it was" \
         "[ \"\$(md5sum < $tmp/periodic-$mode-part.h5)\" = '$sum' ]"
+    # another periodic axis: refused as such, not as planes the deck never wrote (it said
+    # "holds 8000 spheres and 0 planes but ... makes 8000 and 2", a new user's find)
+    bin/nbep run $tmp/periodic-$mode.deck --quiet -n 90 --set 'box.periodic=[true,true,false]' \
+        --resume $tmp/periodic-$mode-part.h5 2>$tmp/periodic-axes.err
+    rc=$?
+    check "predictive $mode, periodic: a resume with another periodic axis is refused with exit 2, naming box.periodic (got $rc: $(cat $tmp/periodic-axes.err))" \
+        "[ $rc = 2 ] && grep -q 'was run with box.periodic = \[true, true, true\] but .* makes \[true, true, false\]; resume with the deck' $tmp/periodic-axes.err &&
+         [ \"\$(md5sum < $tmp/periodic-$mode-part.h5)\" = '$sum' ]"
 done
 
 # the paper's step (run.order = "step"): its rounds start from the saved slots as time
