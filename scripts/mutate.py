@@ -2002,6 +2002,8 @@ MUTANTS = [
     ("resume-periodic-said-as-planes", "src/output_resume.c",
      "    if (n == s->n && np != s->n_planes && has_per > 0 &&", "    if (0 && has_per > 0 &&",
      ["tests/test_resume.sh"], None),
+    ("deck-bom-kept", "src/scene.c", "    if (len >= 3 && memcmp(text, \"\\xef\\xbb\\xbf\", 3) == 0) {",
+     "    if (0) {", ["tests/test_cli.sh"], None),
     # random places over a whole period along a periodic axis the region spans (2026-12-01)
     ("random-periodic-span-shrunk", "src/scene_place.c",
      "        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {",

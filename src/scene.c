@@ -1347,6 +1347,12 @@ static nbep_status read_text(const char *path, char **out, nbep_diag *d)
         NBEP_FAIL(d, nbep_status_of_open(err), "nbep: cannot read %s: %s", path, strerror(err));
     }
     text[len] = '\0';
+    /* a UTF-8 byte order mark (an editor's on some systems) is no part of the deck: libconfig
+     * took it for a syntax error at line 1, shown as an invisible character (a review) */
+    if (len >= 3 && memcmp(text, "\xef\xbb\xbf", 3) == 0) {
+        memmove(text, text + 3, len - 2);
+        len -= 3;
+    }
     /* a deck is text: what follows a NUL byte was read by no one (libconfig stops there, and
      * the run's `deck` attribute kept the text up to it; until 2026-12-01, a review) */
     const char *nul = memchr(text, '\0', len);

@@ -848,6 +848,12 @@ check "a block comment never closed: exit 2, one line at the comment (got $rc: $
 run_nbep check inputs/two-spheres.deck --set 'run.steps=5 /* x'
 check "... and in a --set: exit 2, named by the --set (got $rc: $(cat "$tmp/stderr"))" \
     "[ $rc = 2 ] && grep -qF -- '--set run.steps=5 /* x: a /* comment is never closed with */' $tmp/stderr"
+# a UTF-8 byte order mark before the deck (some editors write one) is read past, and the run's
+# deck attribute keeps the text without it
+{ printf '\xef\xbb\xbf'; cat inputs/two-spheres.deck; } >"$tmp/bom.deck"
+run_nbep run "$tmp/bom.deck" --quiet -n 2 -o "$tmp/bom.h5"
+check "a deck after a UTF-8 byte order mark: runs, exit 0 (got $rc: $(head -c 200 "$tmp/stderr"))" \
+    "[ $rc = 0 ] && [ ! -s $tmp/stderr ] && h5dump -a /deck $tmp/bom.h5 | grep -q 'spheres'"
 run_nbep run inputs/two-spheres.deck --quiet -n 2 -o "$tmp/asdeck.h5"
 run_nbep check "$tmp/asdeck.h5"
 check "an HDF5 file as the deck: exit 2, said so (got $rc: $(cat "$tmp/stderr"))" \
