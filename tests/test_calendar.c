@@ -358,6 +358,70 @@ static void test_a_retune_is_not_led_by_one_far_entry(void **state)
     nbep_calendar_destroy(&c);
 }
 
+/* Run as an event loop runs it, `ops` times: the earliest entry, at t, moved to t + pace u
+ * (u uniform in [0, 2)). Returns the time of the last top. */
+static double run_at_pace(nbep_calendar *c, double pace, int ops, uint64_t *x)
+{
+    double t = 0.0;
+    for (int op = 0; op < ops; op++) {
+        uint32_t top;
+        assert_true(nbep_calendar_top(c, &top, &t));
+        nbep_calendar_set(c, top, t + pace * (double)(lcg(x) % 4096) / 2048.0, lcg(x) % 3);
+    }
+    return t;
+}
+
+/* A pace that changes is followed by the calendar's own laps: once every entry moves 1000
+ * times as far (nearly every bucket empty: fewer than one in 64 holds anything) or 32 times as
+ * near (a bucket holds far more than 16 times the 4 entries it was sized for), laps retune,
+ * and the width is then within 4 times of the width a retune from that moment gives (it was
+ * 1000 or 32 times off), measured from where time stands after a long run at the first pace
+ * (not from the origin of the width before: t = 0). */
+static void test_a_lap_retunes_the_width_to_a_changed_pace(void **state)
+{
+    (void)state;
+    enum { N = 256 };
+    const double paces[2] = {1000.0, 1.0 / 32.0};
+    const int ops[2] = {20000, 200000}; /* laps of 256 buckets: some 30 and 6 */
+    for (int k = 0; k < 2; k++) {
+        nbep_calendar *c = make(N);
+        uint64_t x = 99 + (uint64_t)k;
+        for (uint32_t i = 0; i < N; i++)
+            nbep_calendar_set(c, i, (double)(lcg(&x) % 4096) / 2048.0, 0);
+        nbep_calendar_retune(c, 0.0);
+        /* a long run at the pace it was tuned for: time moves far from the origin */
+        const double t_far = run_at_pace(c, 1.0, 100000, &x);
+        assert_true(t_far > 100.0);
+        const double w_before = nbep_calendar_width(c);
+        const double t_now = run_at_pace(c, paces[k], ops[k], &x);
+        const double w_lap = nbep_calendar_width(c);
+        assert_int_equal(nbep_calendar_check(c), 0);
+        nbep_calendar_retune(c, t_now);
+        const double w_fresh = nbep_calendar_width(c);
+        if (!(w_lap > w_fresh / 4.0 && w_lap < 4.0 * w_fresh))
+            fail_msg("pace %g: width %g after the laps, %g from a retune now (%g before)",
+                     paces[k], w_lap, w_fresh, w_before);
+        nbep_calendar_destroy(&c);
+    }
+}
+
+/* Entries at +inf (spheres with nothing ahead) are no distance ahead a bucket can be sized
+ * for: a retune of 2000 entries spread over [0, 1) and 2000 at +inf gives the width of the
+ * 2000 alone (0.002, as above), not the width it had (1, a new calendar's). */
+static void test_a_retune_leaves_out_entries_at_infinity(void **state)
+{
+    (void)state;
+    enum { N = 4000 };
+    nbep_calendar *c = make(N);
+    assert_true(nbep_calendar_width(c) == 1.0);
+    for (uint32_t i = 0; i < N; i++)
+        nbep_calendar_set(c, i, i % 2 ? INFINITY : ((double)(i / 2) + 0.5) / (double)(N / 2), 0);
+    nbep_calendar_retune(c, 0.0);
+    assert_close(nbep_calendar_width(c), 0.002, 0.1, 0.0);
+    assert_int_equal(nbep_calendar_check(c), 0);
+    nbep_calendar_destroy(&c);
+}
+
 /* More items than the 32-bit links hold: refused with a message of its own (not blamed on
  * memory), before anything is allocated (the request would be for gigabytes). */
 static void test_more_items_than_the_links_hold_is_refused(void **state)
@@ -379,6 +443,8 @@ int main(void)
         cmocka_unit_test(test_top_is_the_brute_force_minimum_under_random_operations),
         cmocka_unit_test(test_an_entry_set_after_the_last_buckets_are_drawn_comes_first),
         cmocka_unit_test(test_a_retune_is_not_led_by_one_far_entry),
+        cmocka_unit_test(test_a_retune_leaves_out_entries_at_infinity),
+        cmocka_unit_test(test_a_lap_retunes_the_width_to_a_changed_pace),
         cmocka_unit_test(test_more_items_than_the_links_hold_is_refused),
         cmocka_unit_test(test_drain_order_is_time_then_key_then_item_for_any_insert_order),
         cmocka_unit_test(test_remove_of_an_absent_item_and_an_empty_calendar_are_harmless),
