@@ -238,6 +238,75 @@ static void test_carries_are_passed_on_without_loss(void **state)
     }
 }
 
+/* The sticky bit reaches the lowest limb: 2^53 + 1 + 2^-1074 is past the tie by the least
+ * subnormal alone, so it rounds up to 2^53 + 2 (and its negative down), not to the even 2^53. */
+static void test_the_sticky_bit_sees_the_least_subnormal(void **state)
+{
+    (void)state;
+    const double two53 = 9007199254740992.0, tiny = ldexp(1.0, -1074);
+    const double up[] = {two53, 1.0, tiny};
+    assert_same(sum_of(up, 3), two53 + 2.0);
+    const double down[] = {-two53, -1.0, -tiny};
+    assert_same(sum_of(down, 3), -(two53 + 2.0));
+    /* and a term that cancels it is gone from the sticky bit too */
+    const double gone[] = {two53, 1.0, tiny, -tiny};
+    assert_same(sum_of(gone, 4), two53);
+}
+
+/* A sum cleared and used again is the empty sum whatever it held: its highest limb and its
+ * infinities too. Each term x then x and -x again over the limbs it wrote before: 1 exactly;
+ * after an infinity, 2. */
+static void test_a_cleared_sum_keeps_nothing_of_what_it_held(void **state)
+{
+    (void)state;
+    uint64_t st = 777;
+    for (int trial = 0; trial < 200; trial++) {
+        const double x = rng_double(&st, 1000);
+        nbep_xsum s = {0};
+        nbep_xsum_add(&s, x);
+        nbep_xsum_add(&s, 3.0 * x);
+        nbep_xsum_clear(&s);
+        assert_same(nbep_xsum_value(&s), 0.0);
+        nbep_xsum_add(&s, 1.0);
+        nbep_xsum_add(&s, x);
+        nbep_xsum_add(&s, -x);
+        assert_same(nbep_xsum_value(&s), 1.0);
+    }
+    nbep_xsum s = {0};
+    nbep_xsum_add(&s, HUGE_VAL);
+    nbep_xsum_add(&s, 1.0);
+    nbep_xsum_clear(&s);
+    nbep_xsum_add(&s, 2.0);
+    assert_same(nbep_xsum_value(&s), 2.0);
+    nbep_xsum_add(&s, NAN);
+    nbep_xsum_clear(&s);
+    assert_same(nbep_xsum_value(&s), 0.0);
+}
+
+/* A thread's part that met an infinity or NaN passes it on when merged, also a part that holds
+ * nothing else (no limb written) and into a sum that holds nothing. */
+static void test_a_merged_infinity_or_nan_is_the_sum(void **state)
+{
+    (void)state;
+    nbep_xsum a = {0}, b = {0}, e = {0};
+    nbep_xsum_add(&a, 1.0);
+    nbep_xsum_add(&b, -HUGE_VAL);
+    nbep_xsum_merge(&a, &b);
+    assert_same(nbep_xsum_value(&a), -HUGE_VAL);
+    nbep_xsum_merge(&e, &b); /* nothing into nothing but the infinity */
+    assert_same(nbep_xsum_value(&e), -HUGE_VAL);
+    nbep_xsum c = {0};
+    nbep_xsum_add(&c, 2.0);
+    nbep_xsum_add(&c, HUGE_VAL);
+    nbep_xsum_merge(&a, &c); /* -inf + inf */
+    assert_true(isnan(nbep_xsum_value(&a)));
+    nbep_xsum n = {0}, m = {0};
+    nbep_xsum_add(&n, NAN);
+    nbep_xsum_add(&m, 5.0);
+    nbep_xsum_merge(&m, &n);
+    assert_true(isnan(nbep_xsum_value(&m)));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -247,6 +316,9 @@ int main(void)
         cmocka_unit_test(test_infinities_and_nan_are_the_sum),
         cmocka_unit_test(test_every_order_and_split_gives_the_same_bits),
         cmocka_unit_test(test_carries_are_passed_on_without_loss),
+        cmocka_unit_test(test_the_sticky_bit_sees_the_least_subnormal),
+        cmocka_unit_test(test_a_cleared_sum_keeps_nothing_of_what_it_held),
+        cmocka_unit_test(test_a_merged_infinity_or_nan_is_the_sum),
     };
     return cmocka_run_group_tests_name("xsum", tests, NULL, NULL);
 }
