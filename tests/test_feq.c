@@ -348,6 +348,31 @@ static void test_a_queue_too_large_for_sphere_ids_is_refused(void **state)
     nbep_diag_fini(&d);
 }
 
+/* "Nothing ahead" (nbep_feq_set_never): a valid slot of kind NEVER at +inf that carries the
+ * sphere's own count, by which the predictive loop knows it is still fresh (a slot without
+ * it would be predicted again every step); find never reports it, however late t_end, nor
+ * find_invalid; any event inserted after it replaces it; check accepts it. */
+static void test_a_never_slot_is_valid_carries_the_count_and_gives_way(void **state)
+{
+    nbep_feq *q = *state;
+    nbep_feq_set_never(q, 4, 37);
+    const nbep_event *s = nbep_feq_slot(q, 4);
+    assert_int_equal(s->kind, NBEP_EVENT_NEVER);
+    assert_true(s->time == INFINITY);
+    assert_int_equal(s->ver_self, 37);
+    uint32_t ids[N_SPHERES];
+    assert_int_equal(nbep_feq_find(q, 0, N_SPHERES, INFINITY, ids), 0);
+    assert_int_equal(nbep_feq_find_invalid(q, 4, 5, ids), 0);
+    assert_int_equal(nbep_feq_check(q, 1.0, N_PLANES, NULL), 0);
+    nbep_event late = plane_event(1.0e300, 1);
+    assert_true(nbep_feq_insert(q, 4, late));
+    assert_slot_is(q, 4, late);
+    /* and set again over an event */
+    nbep_feq_set_never(q, 4, 38);
+    assert_int_equal(nbep_feq_slot(q, 4)->kind, NBEP_EVENT_NEVER);
+    assert_int_equal(nbep_feq_slot(q, 4)->ver_self, 38);
+}
+
 #define QUEUE_TEST(f) cmocka_unit_test_setup_teardown(f, setup_queue, teardown_queue)
 
 int main(void)
@@ -363,6 +388,7 @@ int main(void)
         cmocka_unit_test(test_the_same_contact_predicted_later_keeps_the_newer_counts),
         QUEUE_TEST(test_an_event_that_never_happens_is_not_stored),
         QUEUE_TEST(test_a_nan_time_is_not_stored),
+        QUEUE_TEST(test_a_never_slot_is_valid_carries_the_count_and_gives_way),
         QUEUE_TEST(test_a_removed_slot_is_found_invalid),
         QUEUE_TEST(test_find_invalid_looks_only_inside_its_range),
         QUEUE_TEST(test_an_event_exactly_at_the_step_end_is_not_found),
