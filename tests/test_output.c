@@ -444,11 +444,12 @@ static void test_frame_and_stats_datasets_are_chunked_and_extendable(void **stat
     H5Fclose(f);
 }
 
-static void test_a_huge_frame_is_split_into_equal_chunks_of_at_most_4_mib(void **state)
+/* 4 MiB / (3 doubles) spheres per chunk at most: 174762; 200000 spheres take two chunks,
+ * of 100000 each (HDF5 stores a last chunk whole: chunks of 174762 would store 349524); an odd
+ * count, 200001, two of 100001 (chunks of 100000 would be three, the last of one sphere
+ * stored as 100000). */
+static void huge_frame_in_equal_chunks(void **state, size_t n, size_t per_chunk)
 {
-    /* 4 MiB / (3 doubles) spheres per chunk at most: 174762; 200000 spheres take two chunks,
-     * of 100000 each (HDF5 stores a last chunk whole: chunks of 174762 would store 349524) */
-    const size_t n = 200000, per_chunk = 100000;
     nbep_diag d;
     nbep_diag_init(&d);
     fixture *fx = *state;
@@ -473,6 +474,12 @@ static void test_a_huge_frame_is_split_into_equal_chunks_of_at_most_4_mib(void *
     H5Fclose(f);
     nbep_state_fini(&sc.state);
     nbep_diag_fini(&d);
+}
+
+static void test_a_huge_frame_is_split_into_equal_chunks_of_at_most_4_mib(void **state)
+{
+    huge_frame_in_equal_chunks(state, 200000, 100000);
+    huge_frame_in_equal_chunks(state, 200001, 100001);
 }
 
 static void test_stats_rows_read_back_in_order_across_batches(void **state)
