@@ -1088,6 +1088,34 @@ static void test_info_counts_only_the_complete_frames_of_a_run_killed_mid_frame(
     free(text);
 }
 
+/* A count attribute past its dataset's rows (a damaged file: no writer leaves one) is said as
+ * such, one line naming the file, the group, its count and the rows there are, instead of a
+ * read of a row that is not there. */
+static void test_info_refuses_a_count_past_the_rows_naming_both(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    write_run(fx, nbep_test_tmp("output_info_overcount.h5", path, sizeof path), NULL);
+    /* the count stays N_FRAMES, the rows it counts are cut to one fewer */
+    hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+    assert_true(f >= 0);
+    hid_t ds = H5Dopen2(f, "/frames/step", H5P_DEFAULT);
+    hsize_t rows = N_FRAMES - 1;
+    assert_true(ds >= 0 && H5Dset_extent(ds, &rows) >= 0);
+    H5Dclose(ds);
+    H5Fclose(f);
+    nbep_status st;
+    char *text = info_try(path, &st, &fx->d);
+    free(text);
+    assert_true(st != NBEP_OK);
+    assert_one_line_naming(&fx->d, path);
+    char want[128];
+    snprintf(want, sizeof want, "/frames counts %d rows but /frames/step has %d", N_FRAMES,
+             N_FRAMES - 1);
+    if (!strstr(fx->d.msg[0], want))
+        fail_msg("message \"%s\" does not say \"%s\"", fx->d.msg[0], want);
+}
+
 /* the wrong file named is the user's mistake too (exit 2), said as what the file is not */
 static void test_info_rejects_a_file_that_is_not_hdf5(void **state)
 {
@@ -1452,6 +1480,7 @@ int main(void)
         T(test_info_on_a_killed_run_says_it_has_no_summary),
         T(test_info_reads_a_run_while_it_is_being_written),
         T(test_info_counts_only_the_complete_frames_of_a_run_killed_mid_frame),
+        T(test_info_refuses_a_count_past_the_rows_naming_both),
         T(test_info_rejects_a_file_that_is_not_hdf5),
         T(test_info_rejects_an_hdf5_file_without_the_nbep_1_format),
         T(test_info_on_a_missing_file_fails_naming_it),
