@@ -1143,6 +1143,31 @@ static void test_info_rejects_an_hdf5_file_without_the_nbep_1_format(void **stat
     assert_non_null(strstr(fx->d.msg[0], "not an nbep-1 file (root attribute format is missing)"));
 }
 
+/* A root attribute `format` of fixed length, as other tools write strings (h5py's numpy bytes:
+ * padded with nulls, no terminator), is read whole: the message quotes it to its last
+ * character. */
+static void test_info_reads_a_fixed_length_format_whole(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    nbep_test_tmp("output_fixed_format.h5", path, sizeof path);
+    hid_t f = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    assert_true(f >= 0);
+    const char value[] = "other-format-2";
+    hid_t t = H5Tcopy(H5T_C_S1), space = H5Screate(H5S_SCALAR);
+    assert_true(H5Tset_size(t, sizeof value - 1) >= 0);
+    assert_true(H5Tset_strpad(t, H5T_STR_NULLPAD) >= 0);
+    hid_t a = H5Acreate2(f, "format", t, space, H5P_DEFAULT, H5P_DEFAULT);
+    assert_true(a >= 0 && H5Awrite(a, t, value) >= 0);
+    H5Aclose(a);
+    H5Sclose(space);
+    H5Tclose(t);
+    H5Fclose(f);
+    assert_int_equal(nbep_output_info(path, stdout, &fx->d), NBEP_EUSAGE);
+    assert_one_line_naming(&fx->d, path);
+    assert_non_null(strstr(fx->d.msg[0], "(root attribute format is \"other-format-2\")"));
+}
+
 /* An nbep-1 file without a part every run writes (its /spheres, or a root attribute) is no
  * readable run either: exit 2 as --help says, one line naming the file (until 2026-12-01 exit
  * 1, the status of a failed write; a review). */
@@ -1481,6 +1506,7 @@ int main(void)
         T(test_info_reads_a_run_while_it_is_being_written),
         T(test_info_counts_only_the_complete_frames_of_a_run_killed_mid_frame),
         T(test_info_refuses_a_count_past_the_rows_naming_both),
+        T(test_info_reads_a_fixed_length_format_whole),
         T(test_info_rejects_a_file_that_is_not_hdf5),
         T(test_info_rejects_an_hdf5_file_without_the_nbep_1_format),
         T(test_info_on_a_missing_file_fails_naming_it),
