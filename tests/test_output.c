@@ -1454,6 +1454,56 @@ static void test_a_file_without_velocities_is_refused_as_a_deck_error(void **sta
                           "(output.fields)");
 }
 
+/* /frames/totals with every field of a run's, one of another type (energy_initial an integer,
+ * of the same size and place): HDF5 would convert it and read 0 without a word, and the
+ * resumed run's summary would say energy_initial 0 (as with a field missing, test_resume.sh);
+ * refused as a deck error naming the field, the file left as it was. */
+static void test_totals_with_a_field_of_another_type_are_refused_naming_it(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    nbep_test_tmp("output_resume_totals_type.h5", path, sizeof path);
+    const nbep_summary summary = known_summary();
+    write_run(fx, path, &summary);
+    hid_t f = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+    assert_true(f >= 0);
+    hid_t ds = H5Dopen2(f, "/frames/totals", H5P_DEFAULT), run_type = H5Dget_type(ds);
+    assert_true(ds >= 0 && run_type >= 0);
+    const size_t size = H5Tget_size(run_type);
+    const int n_fields = H5Tget_nmembers(run_type);
+    hid_t other = H5Tcreate(H5T_COMPOUND, size);
+    bool changed = false;
+    for (int k = 0; k < n_fields; k++) {
+        char *name = H5Tget_member_name(run_type, (unsigned)k);
+        hid_t ft = H5Tget_member_type(run_type, (unsigned)k);
+        const bool it = strcmp(name, "energy_initial") == 0;
+        changed |= it;
+        assert_true(H5Tinsert(other, name, H5Tget_member_offset(run_type, (unsigned)k),
+                              it ? H5T_STD_U64LE : ft) >= 0);
+        H5Tclose(ft);
+        H5free_memory(name);
+    }
+    assert_true(changed);
+    unsigned char *rows = calloc(N_FRAMES, size);
+    assert_non_null(rows);
+    assert_true(H5Dread(ds, run_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, rows) >= 0);
+    H5Dclose(ds);
+    assert_true(H5Ldelete(f, "/frames/totals", H5P_DEFAULT) >= 0);
+    hsize_t dims[1] = {N_FRAMES}, max[1] = {H5S_UNLIMITED}, chunk[1] = {16};
+    hid_t space = H5Screate_simple(1, dims, max), dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    assert_true(H5Pset_chunk(dcpl, 1, chunk) >= 0);
+    ds = H5Dcreate2(f, "/frames/totals", other, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+    assert_true(ds >= 0 && H5Dwrite(ds, other, H5S_ALL, H5S_ALL, H5P_DEFAULT, rows) >= 0);
+    H5Dclose(ds);
+    H5Pclose(dcpl);
+    H5Sclose(space);
+    H5Tclose(other);
+    H5Tclose(run_type);
+    H5Fclose(f);
+    free(rows);
+    assert_resume_refused(fx, path, NBEP_EDECK, "/frames/totals has no field energy_initial");
+}
+
 static int make_dirs(void)
 {
     const char *dirs[] = {"build", "build/tests", "build/tests/tmp"};
@@ -1502,6 +1552,7 @@ int main(void)
         T(test_a_resume_closed_before_it_begins_leaves_the_file_as_it_was),
         T(test_a_file_without_a_complete_frame_is_refused_as_bad_usage),
         T(test_a_file_without_velocities_is_refused_as_a_deck_error),
+        T(test_totals_with_a_field_of_another_type_are_refused_naming_it),
         T(test_info_on_a_killed_run_says_it_has_no_summary),
         T(test_info_reads_a_run_while_it_is_being_written),
         T(test_info_counts_only_the_complete_frames_of_a_run_killed_mid_frame),
