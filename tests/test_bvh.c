@@ -463,6 +463,41 @@ static void test_queries_on_a_sparse_lattice_examine_few_nodes(void **state)
     assert_true(examined * 8 < nbep_bvh_node_count(f->b) * n);
 }
 
+/* A query on a lattice of spheres whose boxes touch nothing (spacing 1, radius 0.3) follows
+ * one path down: the Morton splits cut space into aligned cells, so a sibling's box (the
+ * exact union of the boxes in its cell) stays 0.4 away from the query's, and each level
+ * examines the two children of the one node it descends from: at most 1 + 2 depth nodes, for
+ * every sphere, whichever axes the lattice spans (codes that lost an axis, or whose cells
+ * are coarser than the spacing, split space along the wrong lines and examine more). */
+static void test_a_query_on_a_sparse_lattice_examines_one_path_down(void **state)
+{
+    fixture *f = *state;
+    const size_t side = scaled(12, 6), flat = scaled(40, 12);
+    const size_t shapes[][3] = {{side, side, side}, {flat, flat, 1}, {flat, 1, flat},
+                                {1, flat, flat}};
+    for (size_t k = 0; k < sizeof shapes / sizeof *shapes; k++) {
+        const size_t nx = shapes[k][0], ny = shapes[k][1], n = nx * ny * shapes[k][2];
+        new_scene(f, n);
+        for (size_t i = 0; i < n; i++) {
+            f->s.pos[i] = nbep_vec3_make((double)(i % nx), (double)(i / nx % ny),
+                                         (double)(i / nx / ny));
+            f->s.radius[i] = 0.3;
+        }
+        nbep_bvh_destroy(&f->b);
+        build(f, n);
+        const size_t bound = 1 + 2 * nbep_bvh_depth(f->b);
+        memset(f->stamp, 0, f->cap_stamp * sizeof *f->stamp);
+        for (size_t i = 0; i < n; i++) {
+            const size_t examined = query(f, i);
+            assert_int_equal(f->n_got, 0);
+            if (examined > bound)
+                fail_msg("lattice %zux%zux%zu: sphere %zu examined %zu nodes, more than 1 + 2 "
+                         "depth = %zu",
+                         nx, ny, shapes[k][2], i, examined, bound);
+        }
+    }
+}
+
 static void test_check_finds_a_tree_built_from_another_state(void **state)
 {
     fixture *f = *state;
@@ -567,6 +602,8 @@ int main(void)
                                         teardown),
         cmocka_unit_test_setup_teardown(test_queries_on_a_sparse_lattice_examine_few_nodes,
                                         setup, teardown),
+        cmocka_unit_test_setup_teardown(
+            test_a_query_on_a_sparse_lattice_examines_one_path_down, setup, teardown),
         cmocka_unit_test_setup_teardown(test_check_finds_a_tree_built_from_another_state,
                                         setup, teardown),
         cmocka_unit_test_setup_teardown(test_create_refuses_more_spheres_than_it_can_index,
