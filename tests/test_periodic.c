@@ -400,6 +400,38 @@ static void test_overlap_check_sees_pairs_across_a_periodic_face(void **state)
     nbep_diag_fini(&d);
 }
 
+/* The overlap check's relative depth (the summary's max_overlap_rel) is the largest overlap
+ * over the smaller radius of its own pair, which another pair than the deepest can set: radii
+ * 1 and 1 overlapping by 0.05 (the deepest: 0.05 of a radius), 0.5 and 0.01 by 0.004 (0.4 of
+ * the small one), and a sphere of radius 0.25 into a plane by 0.02 (0.08 of its radius). */
+static void test_overlap_check_takes_the_relative_depth_from_the_smaller_radius(void **state)
+{
+    (void)state;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_state s;
+    assert_int_equal(nbep_state_init(&s, 5, 1, &d), NBEP_OK);
+    const nbep_vec3 p[5] = {{0.0, 0.0, 5.0}, {1.95, 0.0, 5.0},     /* 2 - 0.05 apart */
+                            {10.0, 0.0, 5.0}, {10.0, 0.506, 5.0},  /* 0.51 - 0.004 apart */
+                            {20.0, 0.0, 0.23}};                    /* 0.25 - 0.02 above z = 0 */
+    const double r[5] = {1.0, 1.0, 0.5, 0.01, 0.25};
+    for (size_t i = 0; i < 5; i++) {
+        s.pos[i] = p[i];
+        s.radius[i] = r[i];
+        s.mass[i] = 1.0;
+    }
+    s.plane_normal[0] = (nbep_vec3){0.0, 0.0, 1.0};
+    s.plane_offset[0] = 0.0;
+    double worst = 0.0, rel = 0.0;
+    size_t wi = 0, wj = 0;
+    assert_int_equal(nbep_state_max_overlap(&s, NULL, &worst, &rel, &wi, &wj, &d), NBEP_OK);
+    assert_close(worst, 0.05, 1e-12, 0.0);
+    assert_true(wi == 0 && wj == 1);
+    assert_close(rel, 0.4, 1e-12, 0.0);
+    nbep_state_fini(&s);
+    nbep_diag_fini(&d);
+}
+
 /* 1000 spheres (diameter 1) at rest on a lattice of spacing 2 at odd coordinates, in a
  * periodic cube of side 20, for `steps` steps of 0.1: nothing ever happens. */
 static nbep_scene *lattice_at_rest(uint64_t steps)
@@ -1631,6 +1663,7 @@ int main(void)
         cmocka_unit_test(test_near_image_and_shift_agree_with_the_general_ones),
         cmocka_unit_test(test_reach_is_the_stray_that_keeps_the_nearest_image),
         cmocka_unit_test(test_overlap_check_sees_pairs_across_a_periodic_face),
+        cmocka_unit_test(test_overlap_check_takes_the_relative_depth_from_the_smaller_radius),
         cmocka_unit_test(test_frames_overlap_check_is_shared_by_the_threads),
         cmocka_unit_test(test_spheres_collide_across_a_periodic_face_at_the_analytic_time),
         cmocka_unit_test(test_a_free_flight_wraps_and_counts_its_images),
