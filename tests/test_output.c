@@ -991,6 +991,58 @@ static void test_periodic_axes_are_the_attribute_and_info_names_them(void **stat
     free(text);
 }
 
+/* A periodic box's frames hold each position wrapped into the box and the state's image
+ * counts plus the periods the wrap removed, frame by frame (the state's images are not the
+ * frame's: the algorithm keeps positions a little outside at times). Periodic in x (period 5,
+ * from -1) and z (6.25, from 0): sphere i of frame k at a point of the box (dyadic, so the
+ * shifts are exact) moved m = (i + k) % 3 - 1 periods in x and -m in z, its state images
+ * (k - i, 7, 2 k): the frame has the point and (k - i + m, 7, 2 k - m). */
+static void test_periodic_frames_hold_wrapped_positions_and_the_images_added(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    fx->sc.periodic[0] = fx->sc.periodic[2] = true;
+    fx->sc.out_stats = false;
+    nbep_output *o = NULL;
+    assert_ok(nbep_output_create(nbep_test_tmp("output_images.h5", path, sizeof path), &fx->sc,
+                                 1, &o, &fx->d),
+              &fx->d);
+    nbep_state *s = &fx->sc.state;
+    const nbep_vec3 lo = fx->sc.box_min;
+    const double len_x = fx->sc.box_max.x - lo.x, len_z = fx->sc.box_max.z - lo.z;
+    nbep_vec3 want_pos[N_FRAMES][N_SPHERES];
+    int32_t want_img[N_FRAMES][N_SPHERES][3];
+    for (int k = 0; k < N_FRAMES; k++) {
+        for (size_t i = 0; i < N_SPHERES; i++) {
+            const nbep_vec3 in = {lo.x + 0.25 + 0.75 * (double)i, 1.5 - 0.5 * (double)k,
+                                  lo.z + 0.125 + 1.25 * (double)i};
+            const int m = (int)((i + (size_t)k) % 3) - 1;
+            s->pos[i] = nbep_vec3_make(in.x + m * len_x, in.y, in.z - m * len_z);
+            const int32_t img[3] = {k - (int32_t)i, 7, 2 * k};
+            memcpy(&s->image[3 * i], img, sizeof img);
+            want_pos[k][i] = in;
+            want_img[k][i][0] = img[0] + m;
+            want_img[k][i][1] = img[1];
+            want_img[k][i][2] = img[2] - m;
+        }
+        assert_ok(nbep_output_frame(o, (int64_t)k * FRAME_EVERY, DT, s, &fx->d), &fx->d);
+    }
+    assert_ok(nbep_output_close(&o, NULL, &fx->d), &fx->d);
+    nbep_vec3 pos[N_FRAMES][N_SPHERES];
+    int32_t img[N_FRAMES][N_SPHERES][3];
+    hid_t f = open_ro(path);
+    read_dataset(f, "/frames/position", H5T_NATIVE_DOUBLE, pos);
+    read_dataset(f, "/frames/image", H5T_NATIVE_INT32, img);
+    H5Fclose(f);
+    assert_bits_equal(pos, want_pos, sizeof pos, "/frames/position");
+    for (int k = 0; k < N_FRAMES; k++)
+        for (size_t i = 0; i < N_SPHERES; i++)
+            for (int a = 0; a < 3; a++)
+                if (img[k][i][a] != want_img[k][i][a])
+                    fail_msg("frame %d sphere %zu axis %d: image %d, not %d", k, i, a,
+                             (int)img[k][i][a], (int)want_img[k][i][a]);
+}
+
 static void test_info_on_a_killed_run_says_it_has_no_summary(void **state)
 {
     fixture *fx = *state;
@@ -1549,6 +1601,7 @@ int main(void)
         T(test_h5dump_reads_the_file_of_a_killed_run),
         T(test_info_reports_the_settings_frames_stats_and_summary),
         T(test_periodic_axes_are_the_attribute_and_info_names_them),
+        T(test_periodic_frames_hold_wrapped_positions_and_the_images_added),
         T(test_a_resume_closed_before_it_begins_leaves_the_file_as_it_was),
         T(test_a_file_without_a_complete_frame_is_refused_as_bad_usage),
         T(test_a_file_without_velocities_is_refused_as_a_deck_error),
