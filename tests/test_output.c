@@ -1556,6 +1556,41 @@ static void test_totals_with_a_field_of_another_type_are_refused_naming_it(void 
     assert_resume_refused(fx, path, NBEP_EDECK, "/frames/totals has no field energy_initial");
 }
 
+/* The sidecar, rewritten while the run goes at its first 8 frames, its doublings and every
+ * 30 s, lists every frame once the file is closed: 9 frames written at once (the ninth not
+ * due) are 9 grids, the last step 80's. */
+static void test_the_closed_runs_sidecar_lists_every_frame(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    enum { FRAMES = 9 };
+    fx->sc.steps = (FRAMES - 1) * FRAME_EVERY;
+    fx->sc.out_stats = false;
+    nbep_output *o = NULL;
+    assert_ok(nbep_output_create(nbep_test_tmp("output_sidecar_all.h5", path, sizeof path),
+                                 &fx->sc, 1, &o, &fx->d),
+              &fx->d);
+    for (int k = 0; k < FRAMES; k++) {
+        fill_frame(&fx->sc.state, k);
+        assert_ok(nbep_output_frame(o, (int64_t)k * FRAME_EVERY, DT, &fx->sc.state, &fx->d),
+                  &fx->d);
+    }
+    assert_ok(nbep_output_close(&o, NULL, &fx->d), &fx->d);
+    size_t len;
+    unsigned char *bytes = slurp(nbep_test_tmp("output_sidecar_all.xmf", path, sizeof path), &len);
+    assert_non_null(bytes);
+    char *x = calloc(len + 1, 1); /* the text, terminated */
+    assert_non_null(x);
+    memcpy(x, bytes, len);
+    free(bytes);
+    size_t grids = 0;
+    for (const char *p = x; (p = strstr(p, "<Grid Name=\"step ")) != NULL; p++)
+        grids++;
+    assert_int_equal(grids, FRAMES);
+    assert_non_null(strstr(x, "<Grid Name=\"step 80\""));
+    free(x);
+}
+
 static int make_dirs(void)
 {
     const char *dirs[] = {"build", "build/tests", "build/tests/tmp"};
@@ -1602,6 +1637,7 @@ int main(void)
         T(test_info_reports_the_settings_frames_stats_and_summary),
         T(test_periodic_axes_are_the_attribute_and_info_names_them),
         T(test_periodic_frames_hold_wrapped_positions_and_the_images_added),
+        T(test_the_closed_runs_sidecar_lists_every_frame),
         T(test_a_resume_closed_before_it_begins_leaves_the_file_as_it_was),
         T(test_a_file_without_a_complete_frame_is_refused_as_bad_usage),
         T(test_a_file_without_velocities_is_refused_as_a_deck_error),
