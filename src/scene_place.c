@@ -752,7 +752,7 @@ static nbep_status place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, cons
                 snprintf(others, sizeof others,
                          "; %.2f with the spheres placed before it in the region",
                          ((double)q * ball_volume(r) + before) / vol);
-            char why[160], hint[160] = "";
+            char why[160], hint[256] = "";
             no_room_why(e->lo, e->hi, r, plane_out, a, why, sizeof why);
             /* random placement jams near a packing fraction of 0.3 (random sequential
              * addition's limit is 0.38); where the region alone asks for no more than a lattice
@@ -765,7 +765,8 @@ static nbep_status place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, cons
                          "try place = %s",
                          asked,
                          asked <= 0.52 ? "\"lattice\" (up to 0.52) or \"fcc\" (up to 0.74)"
-                                       : "\"fcc\" (up to 0.74)");
+                                       : "\"fcc\" (up to 0.74), a crystal: a fluid this dense "
+                                         "is made by compressing one, which nbep does not do");
             fill_failed(c, s, e, plane_at, in_way,
                         "spheres.[%zu]: could not place %" PRIu64
                         " spheres of radius %g in the region: placed %" PRIu64

@@ -1477,7 +1477,9 @@ static void test_random_fill_too_dense_names_the_lattice(void **state)
     assert_string_equal(msg + strlen(msg) - strlen(lattice), lattice);
     const char *const fcc[2] = {"spheres.[0].count=1146", NULL};
     load_fails_sets(f, deck, fcc);
-    assert_non_null(strstr(f->d.msg[0], "and 0.60 is asked: try place = \"fcc\" (up to 0.74)"));
+    assert_non_null(strstr(f->d.msg[0], "and 0.60 is asked: try place = \"fcc\" (up to 0.74), a "
+                                        "crystal: a fluid this dense is made by compressing "
+                                        "one, which nbep does not do"));
     assert_null(strstr(f->d.msg[0], "\"lattice\""));
     /* a region narrower than a diameter: that is why, and no lattice is named */
     const char *const thin[2] = {"spheres.[0].region={min=[0.0, 0.0, 0.0]; max=[1.0, 1.0, 0.09];}",
