@@ -875,16 +875,18 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
         append_rows(o, o->frame_step, "/frames/step", 1, f, one, H5T_NATIVE_INT64, one_space,
                     &step, d) < 0)
         goto done;
+    /* the sidecar's list has room for the frame before the frame counts: a frame counted
+     * without it was listed at close from past the list's end (until 2026-12-01, a review;
+     * a run of more than the 2^16 frames made room for up front grows it here) */
+    if (o->xmf && !nbep__output_xmf_room(o, (size_t)f)) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: no memory for the frame list", o->path);
+        st = NBEP_ENOMEM;
+        goto done;
+    }
     if (nbep__output_commit(o, f + 1, d) < 0)
         goto done;
     st = NBEP_OK;
     if (o->xmf) {
-        if (!nbep__output_xmf_room(o, (size_t)f)) {
-            nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: no memory for the frame list",
-                          o->path);
-            st = NBEP_ENOMEM;
-            goto done;
-        }
         o->xmf_step[f] = step;
         o->xmf_time[f] = t;
         if (nbep_xdmf_due((size_t)o->n_frames, nbep_now() - o->xmf_last))

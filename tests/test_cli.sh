@@ -882,4 +882,45 @@ run_nbep check "$tmp/colloid.deck" --set 'spheres.[0].radius=0.5' --set 'spheres
 check "... and one where it is twice (got $rc)" \
     "[ $rc = 0 ] && grep -q '^mixture: *radii 0.25 to 0.5: ' $tmp/stdout"
 
+# ---- the sidecar's frame list that cannot grow: no frame counted that it does not list --------
+# past the frames made room for at the start, the list grows as frames come; where it could not
+# (a realloc made to fail by a preloaded shim), the frame was counted all the same and the
+# sidecar listed it at close from past the list's end: "step 0" at a time of 2.6e-321 (a review,
+# 2026-12-01). Now the frame is not counted: the sidecar lists exactly the file's frames.
+cat >"$tmp/shim.c" <<'EOF'
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <stdlib.h>
+static void *(*real_realloc)(void *, size_t);
+void *realloc(void *p, size_t n)
+{
+    if (!real_realloc)
+        real_realloc = (void *(*)(void *, size_t))dlsym(RTLD_NEXT, "realloc");
+    const char *e = getenv("NBEP_TEST_FAIL_REALLOC");
+    if (e && n == (size_t)strtoull(e, NULL, 10))
+        return NULL;
+    return real_realloc(p, n);
+}
+EOF
+if cc -shared -fPIC -o "$tmp/shim.so" "$tmp/shim.c" -ldl 2>/dev/null; then
+    cat >"$tmp/grow.deck" <<'EOF'
+run: { algorithm = "naive"; steps = 100; dt = 0.001; threads = 1; seed = 3; };
+box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; };
+spheres = ( { position = [5.0, 5.0, 5.0]; velocity = [0.1, 0.0, 0.0]; radius = 0.5; mass = 1.0; } );
+output: { every = 1; stats = false; };
+EOF
+    run_nbep run "$tmp/grow.deck" --quiet -n 10 -o "$tmp/grow.h5"
+    # resumed: room for its 11 frames (64 entries of 8 bytes); the 65th needs 128: 1024 bytes
+    NBEP_TEST_FAIL_REALLOC=1024 LD_PRELOAD="$tmp/shim.so" run_nbep run "$tmp/grow.deck" --quiet \
+        --resume "$tmp/grow.h5" -o "$tmp/grow.h5"
+    info=$(bin/nbep info "$tmp/grow.h5" | sed -n 's/^frames: *\([0-9]*\) (last: step \([0-9]*\),.*/\1 \2/p')
+    set -- ${info:-0 x}
+    grids=$(grep -c '<Grid Name="step ' "$tmp/grow.xmf")
+    lastgrid=$(grep -o '<Grid Name="step [0-9]*"' "$tmp/grow.xmf" | tail -1 | grep -o '[0-9]*')
+    check "a frame list that cannot grow: exit 1, said (got $rc: $(head -c 120 "$tmp/stderr")); the sidecar lists the file's $1 frames ($grids), the last at its step $2 ($lastgrid)" \
+        "[ $rc = 1 ] && grep -q 'no memory for the frame list' $tmp/stderr && [ '$grids' = '$1' ] && [ '$lastgrid' = '$2' ] && [ '$1' -gt 11 ]"
+else
+    echo "skip the frame list that cannot grow: no C compiler for the realloc shim"
+fi
+
 test_end cli
