@@ -2008,6 +2008,9 @@ MUTANTS = [
      "    if (o->xmf && !nbep__output_xmf_room(o, (size_t)f)) {\n        nbep_diag_add(d, __FILE__, __LINE__, \"nbep: %s: no memory for the frame list\", o->path);\n        st = NBEP_ENOMEM;\n        goto done;\n    }\n    if (nbep__output_commit(o, f + 1, d) < 0)\n        goto done;",
      "    if (nbep__output_commit(o, f + 1, d) < 0)\n        goto done;\n    if (o->xmf && !nbep__output_xmf_room(o, (size_t)f)) {\n        nbep_diag_add(d, __FILE__, __LINE__, \"nbep: %s: no memory for the frame list\", o->path);\n        st = NBEP_ENOMEM;\n        goto done;\n    }",
      ["tests/test_cli.sh"], None),
+    ("random-fill-volume-of-region", "src/scene_place.c",
+     "                vol *= g->pb && g->pb->axis[ax] && span[ax] >= g->pb->len[ax] ? g->pb->len[ax]\n                                                                           : span[ax];",
+     "                vol *= span[ax];", ["test_scene"], None),
     # random places over a whole period along a periodic axis the region spans (2026-12-01)
     ("random-periodic-span-shrunk", "src/scene_place.c",
      "        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {",

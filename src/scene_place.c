@@ -745,7 +745,13 @@ static nbep_status place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, cons
             blame in_way = {NULL, 0, NBEP_DIAG_UNRANKED};
             if (!kept_out_by(c, g, &pr, reach, k, q, seed, lo, hi, a, &in_way))
                 return NBEP_ENOMEM;
-            const double vol = box_volume(e->lo, e->hi);
+            /* the room the places were drawn in: a period along an axis the region spans (a
+             * region three periods long had three periods' volume, and the message a third of
+             * the packing: until 2026-12-01, a review) */
+            double vol = 1.0;
+            for (int ax = 0; ax < 3; ax++)
+                vol *= g->pb && g->pb->axis[ax] && span[ax] >= g->pb->len[ax] ? g->pb->len[ax]
+                                                                           : span[ax];
             const double before = placed_before_in(g, k, e->lo, e->hi);
             char others[96] = "";
             if (before > 0.0)

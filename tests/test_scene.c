@@ -1371,6 +1371,17 @@ static void test_random_spheres_fill_a_periodic_axis_to_its_faces(void **state)
     assert_in_range(near_x, 12, 60);
     assert_in_range(near_y, 12, 60);
     assert_in_range(mid_x, 4, 40);
+    /* a fill that does not fit, its region three periods long: the packing asked is the
+     * period's, where the places were drawn (1000 of radius 0.5 in 10^3: 0.52), not the
+     * region's (0.17, until 2026-12-01, a review) */
+    nbep_scene_fini(&f->sc);
+    LOAD_FAILS(f, NBEP_EDECK, path, "spheres.[0].count=1000", "spheres.[0].radius=0.5",
+               "spheres.[0].region={min=[-10.0, 0.0, 0.0]; max=[20.0, 10.0, 10.0];}",
+               "spheres.[1].count=0");
+    assert_int_equal(f->d.n_errors, 1);
+    assert_non_null(strstr(f->d.msg[0], "and 0.52 is asked: try place = \"fcc\""));
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
 }
 
 static void test_speed_gives_every_sphere_that_speed_in_all_directions(void **state)
