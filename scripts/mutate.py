@@ -2011,6 +2011,9 @@ MUTANTS = [
     ("random-fill-volume-of-region", "src/scene_place.c",
      "                vol *= g->pb && g->pb->axis[ax] && span[ax] >= g->pb->len[ax] ? g->pb->len[ax]\n                                                                           : span[ax];",
      "                vol *= span[ax];", ["test_scene"], None),
+    ("deck-comment-unclosed-parsed", "src/scene_text.c",
+     "            if (n_unread) /* nothing after it to read: libconfig's errors would be its own */\n                (*n_unread)++;",
+     "", ["tests/test_cli.sh"], None),
     # random places over a whole period along a periodic axis the region spans (2026-12-01)
     ("random-periodic-span-shrunk", "src/scene_place.c",
      "        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {",

@@ -1576,12 +1576,12 @@ static nbep_status load_deck(const char *deck_path, const char *deck_text,
     }
     sc.deck_path = dup_string(&L, deck_path);
     sc.overrides = join_overrides(&L, overrides, n_overrides);
-    size_t n_bad, n_include;
-    if (!(text = nbep__scene_widen(&L.c, deck_text, NULL, &n_bad, &n_include))) {
+    size_t n_bad, n_unread;
+    if (!(text = nbep__scene_widen(&L.c, deck_text, NULL, &n_bad, &n_unread))) {
         L.c.oom = true;
         goto finish;
     }
-    if (n_include) /* refused, each at its line: libconfig must not read the file */
+    if (n_unread) /* refused, each at its line: libconfig must not read the file */
         goto finish;
     if (!config_read_string(&cfg, text)) {
         syntax_error(&L, deck_path, deck_text, config_error_text(&cfg), config_error_line(&cfg));

@@ -81,10 +81,11 @@ void nbep__strbuf_fini(nbep__strbuf *b);
  * Integers beyond 64 bits are reported as "DECK:LINE: ..." or "LABEL: ..." and counted in
  * *n_bad. In the deck's text, an `@include` directive (libconfig's: `@include "file"` at the
  * start of a line) is refused, "DECK:LINE: @include is not supported ...", and counted in
- * *n_bad and in *n_include (the deck must not be parsed: libconfig would read the file).
- * NULL when out of memory. */
+ * *n_bad and in *n_unread (the deck must not be parsed: libconfig would read the file); so is a
+ * block comment never closed (libconfig would read it to the end, and what it then finds
+ * missing is no mistake of the user's). NULL when out of memory. */
 char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label, size_t *n_bad,
-                        size_t *n_include);
+                        size_t *n_unread);
 /* Whether libconfig text leaves a group, list or array open at its end ({, ( or [ outside
  * strings and comments): then the line of the innermost one left open, and which it is. */
 bool nbep__scene_unclosed(const char *text, size_t *line, char *opener);

@@ -230,15 +230,15 @@ bool nbep__scene_unclosed(const char *text, size_t *line, char *opener)
 }
 
 char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label, size_t *n_bad,
-                        size_t *n_include)
+                        size_t *n_unread)
 {
     widen w = {0};
     const size_t n = strlen(text);
     size_t i = 0, line = 1;
     bool in_array = false, array_float = false;
     *n_bad = 0;
-    if (n_include)
-        *n_include = 0;
+    if (n_unread)
+        *n_unread = 0;
 
     while (i < n) {
         char ch = text[i];
@@ -246,6 +246,8 @@ char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label,
             /* libconfig reads an unclosed block comment to the end of the text, and every
              * setting after it was dropped without a word (until 2026-12-01, a review) */
             (*n_bad)++;
+            if (n_unread) /* nothing after it to read: libconfig's errors would be its own */
+                (*n_unread)++;
             if (!label)
                 nbep_diag_add_ranked(c->d, nbep__scene_rank(c, NULL, line), __FILE__, __LINE__,
                                      "%s:%zu: this /* comment is never closed with */: every "
@@ -265,8 +267,8 @@ char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label,
              * override's value is libconfig text too, kept as typed in the run's file: one
              * that spans lines can hold the directive (until 2026-11-30 it was read) */
             (*n_bad)++;
-            if (n_include)
-                (*n_include)++;
+            if (n_unread)
+                (*n_unread)++;
             if (!label)
                 nbep_diag_add_ranked(c->d, nbep__scene_rank(c, NULL, line), __FILE__, __LINE__,
                                      "%s:%zu: @include is not supported: a run keeps its deck's "

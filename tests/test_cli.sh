@@ -845,6 +845,12 @@ run_nbep check "$tmp/comment.deck"
 check "a block comment never closed: exit 2, one line at the comment (got $rc: $(cat "$tmp/stderr"))" \
     "[ $rc = 2 ] && [ \$(wc -l <$tmp/stderr) = 1 ] &&
      grep -qx '$tmp/comment.deck:3: this /\* comment is never closed with \*/: every line after it would be read as the comment' $tmp/stderr"
+# ... and alone where the comment hides what libconfig then misses (the spheres, a brace): it
+# said "no spheres" and "this '{' is never closed" too (a review)
+printf 'run: { steps = 5; /* never closed\n};\nspheres = ();\n' >"$tmp/comment2.deck"
+run_nbep check "$tmp/comment2.deck"
+check "a block comment never closed before the spheres and a closing brace: one line, at it (got $rc: $(cat "$tmp/stderr"))" \
+    "[ $rc = 2 ] && [ \$(wc -l <$tmp/stderr) = 1 ] && grep -q '^$tmp/comment2.deck:1: this /\* comment is never closed' $tmp/stderr"
 run_nbep check inputs/two-spheres.deck --set 'run.steps=5 /* x'
 check "... and in a --set: exit 2, named by the --set (got $rc: $(cat "$tmp/stderr"))" \
     "[ $rc = 2 ] && grep -qF -- '--set run.steps=5 /* x: a /* comment is never closed with */' $tmp/stderr"
