@@ -1707,7 +1707,7 @@ MUTANTS = [
     ("include-accepted-in-a-set", "src/scene_text.c", "        } else if (ch == '@' && is_include(text, i)) {",
      "        } else if (ch == '@' && !label && is_include(text, i)) {", ["test_scene"], None),
     ("include-parsed-anyway", "src/scene.c",
-     "    if (n_include) /* refused, each at its line: libconfig must not read the file */\n        goto finish;",
+     "    if (n_unread) /* refused, each at its line: libconfig must not read the file */\n        goto finish;",
      "", ["test_scene"], None),
     # a group that cannot be placed: the --set (or axis) of what places it, typed first
     ("blame-fill-count-line", "src/scene_place.c",
