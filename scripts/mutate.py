@@ -2000,7 +2000,7 @@ MUTANTS = [
      "f->radius_max >= 2.0 * f->radius_min &&", "f->radius_max >= 3.0 * f->radius_min &&",
      ["tests/test_cli.sh"], None),
     ("resume-periodic-said-as-planes", "src/output_resume.c",
-     "    if (n == s->n && np != s->n_planes && has_per > 0 &&", "    if (0 && has_per > 0 &&",
+     "    if (n == s->n && has_per > 0 &&", "    if (0 && has_per > 0 &&",
      ["tests/test_resume.sh"], None),
     ("deck-bom-kept", "src/scene.c", "    if (len >= 3 && memcmp(text, \"\\xef\\xbb\\xbf\", 3) == 0) {",
      "    if (0) {", ["tests/test_cli.sh"], None),
@@ -2014,6 +2014,9 @@ MUTANTS = [
     ("deck-comment-unclosed-parsed", "src/scene_text.c",
      "            if (n_unread) /* nothing after it to read: libconfig's errors would be its own */\n                (*n_unread)++;",
      "", ["tests/test_cli.sh"], None),
+    ("check-mixture-partners-uncapped", "src/check.c",
+     "        f->partners = fmin(others, density", "        f->partners = fmax(others, density",
+     ["tests/test_cli.sh"], None),
     # random places over a whole period along a periodic axis the region spans (2026-12-01)
     ("random-periodic-span-shrunk", "src/scene_place.c",
      "        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {",

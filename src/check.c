@@ -42,8 +42,11 @@ void nbep_check_gather(const nbep_scene *sc, nbep_check_facts *f)
         const double density = (double)sc->state.n / (b.x * b.y * b.z);
         const double cut = 2.0 * f->radius_max * (1.0 + f->skin_taken);
         const double cut_min = 2.0 * f->radius_min * (1.0 + f->skin_taken);
-        f->partners = density * 4.0 / 3.0 * 3.14159265358979323846 * cut * cut * cut;
-        f->partners_smallest = density * 4.0 / 3.0 * 3.14159265358979323846 * cut_min * cut_min * cut_min;
+        /* (no list holds more than the other spheres: a small box's cutoff can hold it all) */
+        const double others = (double)(sc->state.n - 1);
+        f->partners = fmin(others, density * 4.0 / 3.0 * 3.14159265358979323846 * cut * cut * cut);
+        f->partners_smallest =
+            fmin(others, density * 4.0 / 3.0 * 3.14159265358979323846 * cut_min * cut_min * cut_min);
     }
     f->memory_bytes = (double)nbep_sim_memory_estimate(sc, f->threads);
     f->frames = nbep_output_frames(sc);

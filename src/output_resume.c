@@ -256,12 +256,13 @@ static int same_run(hid_t file, const char *path, const nbep_scene *sc, nbep_dia
         return -1;
     int32_t per[3] = {0, 0, 0};
     const htri_t has_per = H5Aexists(file, "periodic");
-    if (n == s->n && np != s->n_planes && has_per > 0 &&
+    if (n == s->n && has_per > 0 &&
         nbep__output_read_attr(file, path, "periodic", H5T_NATIVE_INT32, per, d) == 0 &&
         ((per[0] != 0) != sc->periodic[0] || (per[1] != 0) != sc->periodic[1] ||
          (per[2] != 0) != sc->periodic[2])) {
         /* the walls differ because the periodic axes do: said so, not as planes the user never
-         * wrote (until 2026-12-01, a new user's find) */
+         * wrote, nor as other normals where as many walls stand on other axes (until
+         * 2026-12-01, a new user's find and a review) */
         static const char *const tf[2] = {"false", "true"};
         nbep_diag_add(d, __FILE__, __LINE__,
                       "nbep: %s was run with box.periodic = [%s, %s, %s] but %s makes [%s, %s, "

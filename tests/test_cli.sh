@@ -881,6 +881,12 @@ skin=$(sed -n 's/^lists: *skin \([0-9.]*\) of the largest diameter.*/\1/p' "$tmp
 want=$(awk -v s="${skin:-0}" 'BEGIN { c = 4 * (1 + s); printf "%.0f", 3002 / 14^3 * 4 / 3 * 3.141592653589793 * c^3 }')
 check "nbep check of a mixture of radii 0.25 and 2 in cells mode: a mixture line with the partners a list holds (skin ${skin:-none}: $want)" \
     "[ $rc = 0 ] && grep -q '^mixture: *radii 0.25 to 2: every list reaches the largest pair.s contact and the skin, so it holds about $want partners' $tmp/stdout"
+# in a box so small that the cutoff's ball holds more than the box: no more than the others
+run_nbep check "$tmp/colloid.deck" --set 'spheres.[2].count=10' --set 'box.periodic=[false,false,false]' \
+    --set 'spheres.[1].position=[2.0, 2.0, 2.0]' --set 'box.max=[14.0, 14.0, 14.0]' \
+    --set 'spheres.[0].radius=5.0' --set 'spheres.[0].mass=1.0'
+check "... at most the other spheres, 11 (got $rc: $(grep '^mixture:' $tmp/stdout | head -c 120))" \
+    "[ $rc = 0 ] && grep -q '^mixture: *radii 0.25 to 5: .* so it holds about 11 partners' $tmp/stdout"
 run_nbep check "$tmp/colloid.deck" --set 'spheres.[0].radius=0.4' --set 'spheres.[1].radius=0.4'
 check "... and none where the largest radius is under twice the smallest (got $rc)" \
     "[ $rc = 0 ] && ! grep -q '^mixture:' $tmp/stdout"

@@ -149,6 +149,18 @@ PYEOF"
          [ \"\$(md5sum < $tmp/periodic-$mode-part.h5)\" = '$sum' ]"
 done
 
+# ... and where as many walls stand on another axis (z walled, then y): named as box.periodic,
+# not as planes of other normals (a review)
+bin/nbep run $tmp/periodic-cells.deck --quiet -n 40 --set 'box.periodic=[true,true,false]' \
+    -o $tmp/periodic-slit.h5
+sum=$(md5sum < $tmp/periodic-slit.h5)
+bin/nbep run $tmp/periodic-cells.deck --quiet -n 90 --set 'box.periodic=[true,false,true]' \
+    --resume $tmp/periodic-slit.h5 2>$tmp/periodic-slit.err
+rc=$?
+check "a slit resumed walled on another axis: refused with exit 2, naming box.periodic (got $rc: $(cat $tmp/periodic-slit.err))" \
+    "[ $rc = 2 ] && grep -q 'was run with box.periodic = \[true, true, false\] but .* makes \[true, false, true\]; resume' $tmp/periodic-slit.err &&
+     [ \"\$(md5sum < $tmp/periodic-slit.h5)\" = '$sum' ]"
+
 # the paper's step (run.order = "step"): its rounds start from the saved slots as time
 # order's do, so a resumed run is bitwise the whole run too (periodic all pairs, closed grid)
 for mode in all grid; do
