@@ -1993,8 +1993,8 @@ MUTANTS = [
      "        if (0) {", ["tests/test_cli.sh"], None),
     # nbep check's mixture line: the partners a list holds, sized by the largest pair
     ("check-mixture-partners-smallest", "src/check.c",
-     "        const double cut = 2.0 * f->radius_max * (1.0 + f->skin_taken);",
-     "        const double cut = 2.0 * f->radius_min * (1.0 + f->skin_taken);",
+     "    f->partners = partners_within(sc, 2.0 * f->radius_max * (1.0 + f->skin_taken), f->lists);",
+     "    f->partners = partners_within(sc, 2.0 * f->radius_min * (1.0 + f->skin_taken), f->lists);",
      ["tests/test_cli.sh"], None),
     ("check-mixture-ratio-3", "src/check.c",
      "f->radius_max >= 2.0 * f->radius_min &&", "f->radius_max >= 3.0 * f->radius_min &&",
@@ -2015,7 +2015,7 @@ MUTANTS = [
      "            if (n_unread) /* nothing after it to read: libconfig's errors would be its own */\n                (*n_unread)++;",
      "", ["tests/test_cli.sh"], None),
     ("check-mixture-partners-uncapped", "src/check.c",
-     "        f->partners = fmin(others, density", "        f->partners = fmax(others, density",
+     "    return fmin((double)(sc->state.n - 1), density * ball);", "    return density * ball;",
      ["tests/test_cli.sh"], None),
     # random places over a whole period along a periodic axis the region spans (2026-12-01)
     ("random-periodic-span-shrunk", "src/scene_place.c",

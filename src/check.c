@@ -17,6 +17,19 @@
 
 #define CHECK_FORMAT_NAME "nbep-check-1"
 
+/* The mean count of spheres within cut of a sphere's centre, the box's density times the
+ * ball's volume, and no more than the other spheres (a small box's ball can hold it all); NaN
+ * without lists, a box or spheres. */
+static double partners_within(const nbep_scene *sc, double cut, bool lists)
+{
+    if (!lists || !sc->has_box || sc->state.n == 0)
+        return NAN;
+    const nbep_vec3 b = nbep_vec3_sub(sc->box_max, sc->box_min);
+    const double density = (double)sc->state.n / (b.x * b.y * b.z);
+    const double ball = 4.0 / 3.0 * 3.14159265358979323846 * cut * cut * cut;
+    return fmin((double)(sc->state.n - 1), density * ball);
+}
+
 void nbep_check_gather(const nbep_scene *sc, nbep_check_facts *f)
 {
     memset(f, 0, sizeof *f);
@@ -29,25 +42,15 @@ void nbep_check_gather(const nbep_scene *sc, nbep_check_facts *f)
         f->skin_asked = nbep_scene_list_skin(sc, &sc->state);
         f->skin_taken = nbep_scene_list_skin_taken(sc, &sc->state);
     }
-    for (size_t i = 0; i < sc->state.n; i++) {
-        const double r = sc->state.radius[i];
-        f->radius_min = i == 0 || r < f->radius_min ? r : f->radius_min;
-        f->radius_max = fmax(f->radius_max, r);
-    }
+    f->radius_max = nbep_state_max_radius(&sc->state);
+    f->radius_min = f->radius_max;
+    for (size_t i = 0; i < sc->state.n; i++)
+        f->radius_min = fmin(f->radius_min, sc->state.radius[i]);
     /* every list reaches the largest pair's contact and the skin (evloop.c), whatever the
      * pair: a mixture's small spheres list as many partners as the largest would */
-    f->partners = f->partners_smallest = NAN;
-    if (f->lists && sc->has_box && sc->state.n > 0) {
-        const nbep_vec3 b = nbep_vec3_sub(sc->box_max, sc->box_min);
-        const double density = (double)sc->state.n / (b.x * b.y * b.z);
-        const double cut = 2.0 * f->radius_max * (1.0 + f->skin_taken);
-        const double cut_min = 2.0 * f->radius_min * (1.0 + f->skin_taken);
-        /* (no list holds more than the other spheres: a small box's cutoff can hold it all) */
-        const double others = (double)(sc->state.n - 1);
-        f->partners = fmin(others, density * 4.0 / 3.0 * 3.14159265358979323846 * cut * cut * cut);
-        f->partners_smallest =
-            fmin(others, density * 4.0 / 3.0 * 3.14159265358979323846 * cut_min * cut_min * cut_min);
-    }
+    f->partners = partners_within(sc, 2.0 * f->radius_max * (1.0 + f->skin_taken), f->lists);
+    f->partners_smallest =
+        partners_within(sc, 2.0 * f->radius_min * (1.0 + f->skin_taken), f->lists);
     f->memory_bytes = (double)nbep_sim_memory_estimate(sc, f->threads);
     f->frames = nbep_output_frames(sc);
     /* what the run writes: its file and, beside it, the XDMF sidecar */
@@ -124,8 +127,9 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
         isfinite(f->partners))
         fprintf(out,
                 "mixture:         radii %g to %g: every list reaches the largest pair's contact "
-                "and the skin, so it holds about %.0f partners (%.0f within the smallest pair's reach and the skin); "
-                "an event's cost grows with them (README, Algorithms: What it costs)\n",
+                "and the skin, so it holds about %.0f partners (%.0f within the smallest "
+                "pair's reach and the skin); an event's cost grows with them (README, "
+                "Algorithms: What it costs)\n",
                 f->radius_min, f->radius_max, f->partners, f->partners_smallest);
     char size[NBEP_BYTES_TEXT_MAX];
     fprintf(out, "memory:          about %s\n", nbep_format_bytes(f->memory_bytes, size));
