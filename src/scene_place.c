@@ -718,12 +718,14 @@ static nbep_status place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, cons
         reach = fmax(reach, r + g->lv[l].rmax);
     double l[3] = {e->lo.x + r, e->lo.y + r, e->lo.z + r};
     double h[3] = {e->hi.x - r, e->hi.y - r, e->hi.z - r};
-    const double span[3] = {e->hi.x - e->lo.x, e->hi.y - e->lo.y, e->hi.z - e->lo.z};
+    /* the room the places are drawn in, along each axis: the region's extent, or a period */
+    double room_of[3] = {e->hi.x - e->lo.x, e->hi.y - e->lo.y, e->hi.z - e->lo.z};
     for (int a = 0; a < 3; a++)
-        if (g->pb && g->pb->axis[a] && span[a] >= g->pb->len[a]) {
+        if (g->pb && g->pb->axis[a] && room_of[a] >= g->pb->len[a]) {
             /* a place at the high face (by rounding) is the low face's: set-up wraps it */
             l[a] = g->pb->lo[a];
             h[a] = g->pb->lo[a] + g->pb->len[a];
+            room_of[a] = g->pb->len[a];
         }
     const nbep_vec3 lo = nbep_vec3_make(l[0], l[1], l[2]);
     const nbep_vec3 hi = nbep_vec3_make(h[0], h[1], h[2]);
@@ -745,13 +747,9 @@ static nbep_status place_random(nbep__scene_ctx *c, grid *g, nbep_state *s, cons
             blame in_way = {NULL, 0, NBEP_DIAG_UNRANKED};
             if (!kept_out_by(c, g, &pr, reach, k, q, seed, lo, hi, a, &in_way))
                 return NBEP_ENOMEM;
-            /* the room the places were drawn in: a period along an axis the region spans (a
-             * region three periods long had three periods' volume, and the message a third of
-             * the packing: until 2026-12-01, a review) */
-            double vol = 1.0;
-            for (int ax = 0; ax < 3; ax++)
-                vol *= g->pb && g->pb->axis[ax] && span[ax] >= g->pb->len[ax] ? g->pb->len[ax]
-                                                                           : span[ax];
+            /* the room the places were drawn in (a region three periods long had three
+             * periods' volume, and the message a third of the packing: until 2026-12-01) */
+            const double vol = room_of[0] * room_of[1] * room_of[2];
             const double before = placed_before_in(g, k, e->lo, e->hi);
             char others[96] = "";
             if (before > 0.0)
