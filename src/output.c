@@ -702,8 +702,8 @@ nbep_status nbep_output_create_staged(const char *path, const nbep_scene *sc, in
      * it grows the list as it is written (a deck may plan more frames than memory holds, a run
      * meant to end on its job's time limit; until 2026-12-01 the whole list was made here, and
      * 2^40 planned frames failed for memory before the first step) */
-    const uint64_t reserve = planned_frames(sc) < XMF_RESERVE_MAX ? planned_frames(sc)
-                                                                  : XMF_RESERVE_MAX;
+    const uint64_t planned = planned_frames(sc);
+    const uint64_t reserve = planned < XMF_RESERVE_MAX ? planned : XMF_RESERVE_MAX;
     if (o->xmf && !nbep__output_xmf_room(o, (size_t)reserve)) {
         nbep__output_release(&o);
         remove(tmp);

@@ -82,12 +82,18 @@ bool nbep_xdmf_run_of(const char *path, char *name, size_t len)
     return true;
 }
 
+/* The part of a path after its last '/'. */
+static const char *base_name(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    return slash ? slash + 1 : path;
+}
+
 /* The base name of a path for the comment that names the run (RUN_NOTE), into a malloc'd
  * string. */
 static char *note_name(const char *path)
 {
-    const char *slash = strrchr(path, '/');
-    const char *base = slash ? slash + 1 : path;
+    const char *base = base_name(path);
     char *out = malloc(3 * strlen(base) + 1);
     if (!out)
         return NULL;
@@ -106,8 +112,7 @@ static char *note_name(const char *path)
 /* The base name of a path, XML-escaped for an element's text, into a malloc'd string. */
 static char *xml_base_name(const char *path)
 {
-    const char *slash = strrchr(path, '/');
-    const char *base = slash ? slash + 1 : path;
+    const char *base = base_name(path);
     char *out = malloc(6 * strlen(base) + 1);   /* "&quot;" is the longest escape */
     if (!out)
         return NULL;
@@ -236,8 +241,7 @@ double nbep_xdmf_bytes(const char *h5_path, size_t n_spheres, uint64_t steps, ui
     /* frames at steps 0, every, 2 every, ... and at the last step (nbep_output_frames) */
     const uint64_t n_frames = steps / every + 1 + (steps % every ? 1 : 0);
     char *escaped = xml_base_name(h5_path), *note = note_name(h5_path);
-    const char *slash = strrchr(h5_path, '/');
-    const char *h5 = escaped ? escaped : slash ? slash + 1 : h5_path; /* no memory: near enough */
+    const char *h5 = escaped ? escaped : base_name(h5_path); /* no memory: near enough */
     xml_out o = {.f = NULL};
     xml_head(&o, note ? note : h5, n_spheres, (size_t)n_frames);
     xml_tail(&o);
