@@ -1195,19 +1195,14 @@ static void test_info_rejects_an_hdf5_file_without_the_nbep_1_format(void **stat
     assert_non_null(strstr(fx->d.msg[0], "not an nbep-1 file (root attribute format is missing)"));
 }
 
-/* A root attribute `format` of fixed length, as other tools write strings (h5py's numpy bytes:
- * padded with nulls, no terminator), is read whole: the message quotes it to its last
- * character. */
-static void test_info_reads_a_fixed_length_format_whole(void **state)
+/* A new HDF5 file at path holding only a root attribute `format` = value, a string of fixed
+ * length padded with nulls, as other tools write strings (h5py's numpy bytes: no terminator). */
+static void file_with_format(const char *path, const char *value)
 {
-    fixture *fx = *state;
-    char path[256];
-    nbep_test_tmp("output_fixed_format.h5", path, sizeof path);
     hid_t f = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
     assert_true(f >= 0);
-    const char value[] = "other-format-2";
     hid_t t = H5Tcopy(H5T_C_S1), space = H5Screate(H5S_SCALAR);
-    assert_true(H5Tset_size(t, sizeof value - 1) >= 0);
+    assert_true(H5Tset_size(t, strlen(value)) >= 0);
     assert_true(H5Tset_strpad(t, H5T_STR_NULLPAD) >= 0);
     hid_t a = H5Acreate2(f, "format", t, space, H5P_DEFAULT, H5P_DEFAULT);
     assert_true(a >= 0 && H5Awrite(a, t, value) >= 0);
@@ -1215,6 +1210,15 @@ static void test_info_reads_a_fixed_length_format_whole(void **state)
     H5Sclose(space);
     H5Tclose(t);
     H5Fclose(f);
+}
+
+/* A root attribute `format` of fixed length is read whole: the message quotes it to its last
+ * character. */
+static void test_info_reads_a_fixed_length_format_whole(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    file_with_format(nbep_test_tmp("output_fixed_format.h5", path, sizeof path), "other-format-2");
     assert_int_equal(nbep_output_info(path, stdout, &fx->d), NBEP_EUSAGE);
     assert_one_line_naming(&fx->d, path);
     assert_non_null(strstr(fx->d.msg[0], "(root attribute format is \"other-format-2\")"));
@@ -1227,18 +1231,7 @@ static void test_info_rejects_an_nbep_1_file_missing_a_part(void **state)
 {
     fixture *fx = *state;
     char path[256];
-    nbep_test_tmp("output_no_spheres.h5", path, sizeof path);
-    hid_t f = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-    assert_true(f >= 0);
-    hid_t type = H5Tcopy(H5T_C_S1);
-    assert_true(type >= 0 && H5Tset_size(type, 6) >= 0);
-    hid_t space = H5Screate(H5S_SCALAR);
-    hid_t a = H5Acreate2(f, "format", type, space, H5P_DEFAULT, H5P_DEFAULT);
-    assert_true(a >= 0 && H5Awrite(a, type, "nbep-1") >= 0);
-    H5Aclose(a);
-    H5Sclose(space);
-    H5Tclose(type);
-    H5Fclose(f);
+    file_with_format(nbep_test_tmp("output_no_spheres.h5", path, sizeof path), "nbep-1");
     assert_int_equal(nbep_output_info(path, stdout, &fx->d), NBEP_EUSAGE);
     assert_one_line_naming(&fx->d, path);
 }
