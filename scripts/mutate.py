@@ -2022,7 +2022,7 @@ MUTANTS = [
      "        if (0) {", ["test_scene"], None),
     ("random-periodic-span-longer-only", "src/scene_place.c",
      "        if (g->pb && g->pb->axis[a] && room_of[a] >= g->pb->len[a]) {",
-     "        if (g->pb && g->pb->axis[a] && span[a] > g->pb->len[a]) {", ["test_scene"], None),
+     "        if (g->pb && g->pb->axis[a] && room_of[a] > g->pb->len[a]) {", ["test_scene"], None),
     ("random-periodic-span-walled-too", "src/scene_place.c",
      "        if (g->pb && g->pb->axis[a] && room_of[a] >= g->pb->len[a]) {",
      "        if (g->pb && room_of[a] >= g->pb->len[a]) {", ["test_scene"],
