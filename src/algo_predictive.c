@@ -368,6 +368,8 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
         const double skin = nbep_scene_list_skin(sim->scene, &sim->st);
         st = nbep_evloop_create(n, sim->scene->box_min, sim->scene->box_max, 2.0 * c->rmax,
                                 skin, c->pb.axis, c->team_size, c->q, c->ver, &c->ev, d);
+        if (st == NBEP_OK && !mono) /* a mixture: each pair's list reach its own */
+            nbep_evloop_set_radii(c->ev, sim->st.radius);
         c->team = st == NBEP_OK && p.team;
         if (c->team) {
             const size_t np = sim->st.n_planes, rows = (size_t)c->team_size * NBEP_EVLOOP_RING;

@@ -46,11 +46,12 @@ void nbep_check_gather(const nbep_scene *sc, nbep_check_facts *f)
     f->radius_min = f->radius_max;
     for (size_t i = 0; i < sc->state.n; i++)
         f->radius_min = fmin(f->radius_min, sc->state.radius[i]);
-    /* every list reaches the largest pair's contact and the skin (evloop.c), whatever the
-     * pair: a mixture's small spheres list as many partners as the largest would */
-    f->partners = partners_within(sc, 2.0 * f->radius_max * (1.0 + f->skin_taken), f->lists);
-    f->partners_smallest =
-        partners_within(sc, 2.0 * f->radius_min * (1.0 + f->skin_taken), f->lists);
+    /* a list reaches its pair's contact and the skin (evloop.c), the skin a fraction of the
+     * largest diameter; the cells are as wide as the largest pair's reach, and a smallest
+     * sphere's new list is looked for as far as the largest could be listed */
+    const double skin = 2.0 * f->radius_max * f->skin_taken;
+    f->partners = partners_within(sc, 2.0 * f->radius_min + skin, f->lists);
+    f->walk_reads = partners_within(sc, f->radius_min + f->radius_max + skin, f->lists);
     f->memory_bytes = (double)nbep_sim_memory_estimate(sc, f->threads);
     f->frames = nbep_output_frames(sc);
     /* what the run writes: its file and, beside it, the XDMF sidecar */
@@ -120,17 +121,19 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
                     NBEP_NBLIST_SKIN_DILUTE, NBEP_NBLIST_PHI_DILUTE, NBEP_NBLIST_SKIN,
                     NBEP_NBLIST_PHI_DENSE);
     }
-    /* a mixture twice as wide as its smallest spheres or wider: its lists, sized by the
-     * largest pair, hold (ratio)^3 the partners (a new user's colloids: 3000 of radius 0.25
-     * and 2 of radius 2 took 2400 predictions a collision, 50 times the small ones' alone) */
+    /* a mixture twice as wide as its smallest spheres or wider: its cells, sized by the
+     * largest pair, make a small sphere's new list read (ratio)^3 the spheres it keeps (a
+     * new user's colloids: 3000 of radius 0.25 and 2 of radius 2 ran 3.4 times the small ones'
+     * alone, 50 times until each pair's list had its own reach) */
     if (f->lists && f->radius_min > 0.0 && f->radius_max >= 2.0 * f->radius_min &&
         isfinite(f->partners))
         fprintf(out,
-                "mixture:         radii %g to %g: every list reaches the largest pair's contact "
-                "and the skin, so it holds about %.0f partners (%.0f within the smallest "
-                "pair's reach and the skin); an event's cost grows with them (README, "
-                "Algorithms: What it costs)\n",
-                f->radius_min, f->radius_max, f->partners, f->partners_smallest);
+                "mixture:         radii %g to %g: a list reaches its pair's contact and the "
+                "skin, about %.0f partners for the smallest spheres, but the cells are sized "
+                "by the largest pair: each new list of a smallest sphere reads about %.0f "
+                "spheres or more; an event's cost grows with them (README, Algorithms: What "
+                "it costs)\n",
+                f->radius_min, f->radius_max, f->partners, f->walk_reads);
     char size[NBEP_BYTES_TEXT_MAX];
     fprintf(out, "memory:          about %s\n", nbep_format_bytes(f->memory_bytes, size));
     char *xmf = f->sidecar_bytes > 0.0 ? nbep_xdmf_path(sc->output_file) : NULL;

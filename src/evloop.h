@@ -108,6 +108,12 @@ NBEP_MUST_CHECK nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3
                                                const uint64_t *ver,
                                                nbep_evloop **out, nbep_diag *d);
 void nbep_evloop_destroy(nbep_evloop **e);
+/* Each list to hold only the partners within its pair's own cutoff, the pair's contact
+ * distance r_i + r_j plus the skin (radius: n, borrowed, unchanged while the engine lives; no
+ * radius above half the reach): in a mixture a small sphere's list then holds its own kind's
+ * neighbours, not every sphere within the largest pair's reach. Before the first rebuild;
+ * NULL (as created): one cutoff, the largest pair's, for every pair. */
+void nbep_evloop_set_radii(nbep_evloop *e, const double *radius);
 /* The lists' skin that the engine takes when asked for skin_frac of `reach`: cut
  * down in a small periodic box (its sides hi - lo along the axes that periodic names; NULL:
  * none) so that three cells, sides of the cutoff, fit across. Below NBEP_NBLIST_SKIN_MIN the

@@ -91,6 +91,11 @@ struct nbep_evloop {
     nbep_periodic pb;     /* the box's periodic geometry */
     double cut;           /* the list cutoff: contact distance plus skin, plus slack */
     double stray;         /* half the skin: how far a sphere goes before its list expires */
+    const double *rad;    /* borrowed, n: the radii where each pair's own cutoff is taken
+                           * (nbep_evloop_set_radii); NULL: every pair's is `cut` */
+    double reach;         /* twice the largest radius (create) */
+    double skin;          /* the skin, twice stray: a pair's cutoff is its contact distance
+                           * plus the skin, plus slack (pair_cut) */
     double face_reach;    /* cut + stray, and a margin: see near_face */
     double face_lo[3], face_hi[3]; /* near_face's faces: a periodic axis's low and high
                                     * sides, -inf and +inf on any other */

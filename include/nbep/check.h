@@ -24,9 +24,11 @@ typedef struct nbep_check_facts {
     double skin_taken;          /* the skin taken (smaller where a small periodic box cuts it) */
     double radius_min;          /* the smallest and largest radius (0 without spheres) */
     double radius_max;
-    double partners;            /* with lists in a box: the mean partners a list holds (its
-                                 * cutoff's ball times the spheres' density), else NaN */
-    double partners_smallest;   /* ... and what a scene of the smallest spheres alone would */
+    double partners;            /* with lists in a box: the mean partners a smallest
+                                 * sphere's list holds (its own kind's cutoff's ball times
+                                 * the spheres' density), else NaN */
+    double walk_reads;          /* ... and the spheres its list's rebuild reads at least:
+                                 * those within its cutoff with the largest sphere */
     double memory_bytes;        /* nbep_sim_memory_estimate */
     uint64_t frames;            /* frames the output file will hold */
     double sidecar_bytes;       /* the XDMF sidecar's (0: none is written) */
