@@ -1056,6 +1056,16 @@ MUTANTS = [
     ("contact-tangent-third-test", "src/contact.c",
      "} else if (fabs(nbep_vec3_dot(t, n[j])) > NBEP_CONTACT_TOL) {",
      "} else if (fabs(nbep_vec3_dot(t, n[j])) < NBEP_CONTACT_TOL) {", ["test_contact"] + GRAN, None),
+    # the minimum bounce: shared by mass, or along the mobilities where planes lean (2026-12-01)
+    ("min-bounce-off", "src/pred_react.c", "    if (u >= want)\n        return;\n    const double du",
+     "    if (1)\n        return;\n    const double du", GRAN, None),
+    ("min-bounce-leans-by-mass", "src/pred_react.c", "    const double du = want - u;\n    if (leans) {",
+     "    const double du = want - u;\n    if (0) {", GRAN, None),
+    ("min-bounce-leans-impulse-whole", "src/pred_react.c", "        const double J = du / w;",
+     "        const double J = du;", GRAN, None),
+    ("min-bounce-leans-lo-only", "src/pred_react.c",
+     "        s->vel[hi] = nbep_vec3_axpy(s->vel[hi], J / s->mass[hi], d_hi);\n        return;",
+     "        return;", GRAN, None),
     ("tc-off", "src/pred_react.c", "return recent ? 1.0 : e;", "return e;", SIM + GRAN, None),
     # a restitution a little off in the bulk of a gas (0.9 taken as 0.89): Haff's law
     ("restitution-off-by-a-hundredth", "src/pred_react.c", "return recent ? 1.0 : e;",

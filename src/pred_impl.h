@@ -59,10 +59,10 @@
  * smaller radius takes (so the jitter stays far below the geometry at any dt). Between two free
  * spheres the kick keeps momentum and adds at most mu (a t_min)^2 / 8 of energy (mu the reduced
  * mass, a the pressing acceleration): about 6e-8 J for two 1 kg spheres under gravity at
- * dt = 1e-3. When one of them rests on planes, the other takes the whole kick du and the planes
- * the momentum, so it changes the energy by m (v.n) du + m du^2 / 2: either sign, and larger
- * when the pair moves along n (measured on a 300-sphere pile at e = 0: 1492 kicks, 1408 of them
- * removing energy, the largest adding 4.9e-5 J; README, granular). */
+ * dt = 1e-3. Where either leans on planes, the kick is shared along the two spheres'
+ * mobilities (min_bounce, pred_react.c) and adds at most the same, mu then the pair's mass
+ * along n. (Until 2026-12-01 a sphere on planes took none of it, and the energy changed by
+ * m (v.n) du + m du^2 / 2: up to 5e-4 J in a step of a pile; README, granular.) */
 #define MIN_BOUNCE_STEP_FRACTION 0.1
 #define MIN_BOUNCE_REL_HEIGHT 1e-6
 /* Settling (pred_settle.c): a sphere whose speed stayed at or below SETTLE_SPEED_FACTOR times

@@ -237,8 +237,20 @@ static void note_overlap(nbep_thread_max *mx, double ov, double r)
 
 /* See MIN_BOUNCE_STEP_FRACTION: a pair pressed together by its accelerations leaves with at
  * least the separating speed that keeps it apart for t_min, given as an impulse along the line
- * of centres shared by mass like a response (momentum is kept). */
-static void min_bounce(const pred_ctx *c, nbep_state *s, double dt, uint32_t lo, uint32_t hi)
+ * of centres shared by mass like a response (momentum is kept), or, where either sphere leans
+ * on planes (leans: d_lo and d_hi are their mobilities along -n and n, plane_mobility), along
+ * those as respond_pair_along's impulse is: the planes take their part. Either way the kick
+ * adds (want^2 - u^2) / (2 w) of energy, w the pair's inverse mass along n, at most
+ * mu (a t_min)^2 / 8 (MIN_BOUNCE_STEP_FRACTION). Until 2026-12-01 a sphere whose planes carry
+ * its weight took no share at all, the other the whole kick: that changed the energy by
+ * m (v.n) du, of either sign and as large as the speed the pair slides with along n (a new
+ * user's e = 0.5 pile of 60: a kick added 5e-5 J, 400 times the bound, and the pile's energy
+ * rose by 3e-6 of itself in a step). The projection keeps what that rule was for: a sphere
+ * sitting on a floor under one that leans on it straight from above takes nothing (its
+ * mobility along the vertical is none), so no kick drives the bottom of a pile into its floor
+ * (a settled pile heated up when it took a share along n). */
+static void min_bounce(const pred_ctx *c, nbep_state *s, double dt, uint32_t lo, uint32_t hi,
+                       bool leans, nbep_vec3 d_lo, nbep_vec3 d_hi)
 {
     if (!c->aeff)
         return; /* nothing accelerates: nothing presses a pair together */
@@ -256,16 +268,22 @@ static void min_bounce(const pred_ctx *c, nbep_state *s, double dt, uint32_t lo,
     double u = nbep_vec3_dot(nbep_vec3_sub(s->vel[hi], s->vel[lo]), n);
     if (u >= want)
         return;
-    double m = s->mass[lo] + s->mass[hi], du = want - u;
-    /* a sphere whose planes carry its weight takes no share: the kick would otherwise pump
-     * energy into the bottom of a pile, kick after kick (measured: a settled pile heats up) */
-    double share_lo = s->mass[hi] / m, share_hi = s->mass[lo] / m;
-    if (supported(c, lo) != supported(c, hi)) {
-        share_lo = supported(c, lo) ? 0.0 : 1.0;
-        share_hi = 1.0 - share_lo;
+    const double du = want - u;
+    if (leans) {
+        /* an impulse J along the mobilities parts the pair by J w along n (a mobility is n
+         * projected onto a cone, whose dot with n is its square) */
+        const double w = nbep_vec3_dot(d_lo, d_lo) / s->mass[lo] +
+                         nbep_vec3_dot(d_hi, d_hi) / s->mass[hi];
+        if (!(w > 0.0))
+            return; /* the planes take the whole kick: they keep the pair apart */
+        const double J = du / w;
+        s->vel[lo] = nbep_vec3_axpy(s->vel[lo], J / s->mass[lo], d_lo);
+        s->vel[hi] = nbep_vec3_axpy(s->vel[hi], J / s->mass[hi], d_hi);
+        return;
     }
-    s->vel[lo] = nbep_vec3_axpy(s->vel[lo], -du * share_lo, n);
-    s->vel[hi] = nbep_vec3_axpy(s->vel[hi], du * share_hi, n);
+    const double m = s->mass[lo] + s->mass[hi];
+    s->vel[lo] = nbep_vec3_axpy(s->vel[lo], -du * s->mass[hi] / m, n);
+    s->vel[hi] = nbep_vec3_axpy(s->vel[hi], du * s->mass[lo] / m, n);
 }
 
 /* A sphere k without support pressed onto a held sphere j (n from j to k) leaves it with at
@@ -864,7 +882,7 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
               : nbep_physics_respond_pair(s->pos[lo], p_hi, &s->vel[lo], &s->vel[hi], m_lo,
                                           m_hi, e_pair))
         cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
-    min_bounce(c, s, dt, lo, hi);
+    min_bounce(c, s, dt, lo, hi, leans, d_lo, d_hi);
     /* SPEC /stats/virial: r12 . dp2, dp2 the momentum hi received */
     nbep_xsum_add(&mx->virial,
                   nbep_vec3_dot(r12, nbep_vec3_scale(nbep_vec3_sub(s->vel[hi], v_hi), m_hi)));

@@ -825,9 +825,12 @@ static bool held_spheres_grounded(const nbep_vec3 *p, const nbep_vec3 *v, size_t
  * candidate, B then slid off A, and C hung still at z = 0.5 for the whole run (B, never held,
  * let go of nothing when it reacted): every case failed from the frame at step 10 on. At every
  * frame after the start, in every neighbour mode, every sphere held still rests on the floor
- * or on held spheres down to it, nothing overlaps, the energy never rises from one frame to
- * the next (from step 10: the first steps' minimum bounces of spheres set touching may add
- * some, README), and the top sphere falls: it ends at least a radius lower. The same frames on
+ * or on held spheres down to it, nothing overlaps, the energy rises from one frame to the next
+ * (from step 10) by no more than four minimum bounces add (each at most 6e-8 J; the chain's
+ * pressed pairs jitter, a kick in a few steps each: measured 7.8e-8 J of 21.6 in all-pairs mode
+ * with D, since 2026-12-01, when A took its share of the kicks that part B from it; before, B
+ * took them all and the rises stayed under 1e-12 of the energy here, but reached 4e-6 of it in
+ * a pile: test_pile_kicks_add_no_energy_beyond_their_bound), and the top sphere falls: it ends at least a radius lower. The same frames on
  * 2 threads, each sphere's support on the other thread: the chain alternates between spheres
  * 0, 1 and 8, 9, the first two of the two blocks of NBEP_BLOCK = 8 that 2 threads share out,
  * and the rest are spheres at rest on the floor well away from it. */
@@ -835,6 +838,9 @@ static void test_settling_supports_must_settle_too(void **state)
 {
     (void)state;
     const double r = 0.1, tol = 4e-6; /* tol: the settle tolerance at dt = 1e-3, with margin */
+    /* the most a minimum bounce adds, mu (a t_min)^2 / 8 (pred_impl.h): masses 1 (mu = 0.5),
+     * a = g, t_min = 0.1 dt (the smaller: 1e-6 r / a gives 2.9e-4 s) */
+    const double kick = 0.5 * (9.81 * 1e-4) * (9.81 * 1e-4) / 8.0;
     const size_t n_all = 10, chain[4] = {0, 8, 1, 9}; /* A, B, C, D */
     for (int k = 0; k < 6; k++) { /* all pairs, grid, cells; A and 2 or 3 spheres on it */
         const int mode = k % 3;
@@ -860,7 +866,7 @@ static void test_settling_supports_must_settle_too(void **state)
             double e = 0.0; /* masses 1 */
             for (size_t i = 0; i < t.n; i++)
                 e += 0.5 * nbep_vec3_norm2(v[i]) - nbep_vec3_dot(DOWN, p[i]);
-            assert_true(e - e_before <= 1e-12 * e);
+            assert_true(e - e_before <= 4.0 * kick);
             e_before = e;
             assert_true(clear_of_floor_and_each_other(p, t.n, r, 1e-12));
         }
@@ -1341,9 +1347,9 @@ static void test_e0_plane_stops_at_first_contact(void **state)
 
 /* n spheres of radius r on a jittered lattice in a box [0, L]^2 x [0, H], at rest, falling.
  * The jitter comes from a fixed linear congruential sequence (no dependence on libc). */
-static nbep_scene *pile(size_t n, double e, uint64_t steps, const char *algo)
+static nbep_scene *pile_in(size_t n, double e, uint64_t steps, const char *algo, double r,
+                           double L, double H)
 {
-    const double r = 0.05, L = 0.5, H = 3.0;
     nbep_scene *sc = scene(n, 6, algo, steps, e);
     box(sc, L, L, H);
     size_t per = (size_t)(L / (3.0 * r));
@@ -1364,10 +1370,46 @@ static nbep_scene *pile(size_t n, double e, uint64_t steps, const char *algo)
     return sc;
 }
 
+static nbep_scene *pile(size_t n, double e, uint64_t steps, const char *algo)
+{
+    return pile_in(n, e, steps, algo, 0.05, 0.5, 3.0);
+}
+
+/* A pile of 60 (radius 0.03 in a box 0.3 wide and 0.6 high, e = 0.5) falls, bounces and
+ * jitters on its floor: from about step 600 spheres slide on the floor with others leaning on
+ * them, pressed together, and the minimum bounce kicks such pairs apart (MIN_BOUNCE_STEP_
+ * FRACTION). Its energy never rises beyond the round-off (1e-12 of it, as the pile above) with
+ * e = 0.5, and with e = 0, whose every pressed response ends in a kick, by no more than 1e-8 of
+ * it from one step to the next (measured 2.1e-9 and 1.4e-9 in grid and cells mode over 1000
+ * steps: each kick adds at most mu (a t_min)^2 / 8, 6e-8 J). Until 2026-12-01 a sliding sphere
+ * on the floor took none of the kick and the other all of it, which changed the energy by as
+ * much as m (v.n) du: rises of 2e-7 to 4e-6 of the energy in a step at e = 0.5 and 0 (a new
+ * user's find), 1e-16 after. In grid and cells mode; fewer steps under valgrind (the sliding
+ * has not begun by then: the bound is checked, not met). */
+static void test_pile_kicks_add_no_energy_beyond_their_bound(void **state)
+{
+    (void)state;
+    const double es[] = {0.5, 0.5, 0.0};
+    for (int k = 0; k < 3; k++) {
+        nbep_scene *sc = pile_in(60, es[k], nbep_test_scaled(800, 150), "predictive", 0.03, 0.3,
+                                 0.6);
+        neighbor_mode(sc, k == 1 ? 2 : 1);
+        trace t = {0};
+        (void)run(sc, 1, &t);
+        assert_true(t.max_rise <= (es[k] > 0.0 ? 1e-12 : 1e-8) * t.e_first);
+        assert_true(t.e_last < 0.3 * t.e_first); /* it fell and bounced: the kicks had work */
+        assert_true(t.min_z_minus_r >= -1e-12);
+        free(t.data);
+        nbep_test_scene_free(&sc);
+    }
+}
+
 /* A falling, colliding pile with e = 0.5: energy may only fall, frame after frame (measured
  * rise: 6e-14 J of 133 J, the round-off of summing the energy; the bound is 1e-12 of it).
  * With e = 0 the run must finish (before: 300 spheres died at step 2) and lose energy; its
- * frame-to-frame energy can rise by up to 4.5e-4 J of 133 (a known defect, see README). */
+ * frame-to-frame energy rises by no more than the minimum bounces' kicks add (until
+ * 2026-12-01 it rose by up to 4.5e-4 J of 133, a sphere on the floor taking no share of a
+ * kick: README). */
 static void test_pile_energy_never_rises(void **state)
 {
     (void)state;
@@ -1378,8 +1420,10 @@ static void test_pile_energy_never_rises(void **state)
         sc->neighbors_cells = k == 2;
         trace t = {0};
         (void)run(sc, 2, &t);
-        if (es[k] > 0.0)
-            assert_true(t.max_rise <= 1e-12 * t.e_first);
+        /* e = 0: each pressed response ends in a minimum bounce, whose kicks add at most
+         * mu (a t_min)^2 / 8 each (measured 1.4e-9 and 2.1e-9 of the energy in a pile of 60:
+         * test_pile_kicks_add_no_energy_beyond_their_bound) */
+        assert_true(t.max_rise <= (es[k] > 0.0 ? 1e-12 : 1e-8) * t.e_first);
         assert_true(t.e_last < t.e_first);
         assert_true(t.min_z_minus_r >= -1e-12);
         free(t.data);
@@ -1695,6 +1739,7 @@ int main(void)
         cmocka_unit_test(test_groove_ball_ends_at_the_bottom_of_the_v),
         cmocka_unit_test(test_e0_pair_keeps_momentum_and_loses_energy),
         cmocka_unit_test(test_e0_plane_stops_at_first_contact),
+        cmocka_unit_test(test_pile_kicks_add_no_energy_beyond_their_bound),
         cmocka_unit_test(test_pile_energy_never_rises),
         cmocka_unit_test(test_pile_frames_equal_for_1_2_4_threads),
         cmocka_unit_test(test_step_sums_equal_for_1_2_4_threads),
