@@ -20,6 +20,7 @@
 #include "nbep/sweep.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <inttypes.h>
 #include <math.h>
 #include <signal.h>
@@ -622,6 +623,7 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
     size_t n_ov = 0;
     bool has_summary = false, reused = false;
     int64_t resumed_from = -1;
+    char refused[320] = ""; /* why the file left cut short could not be resumed */
     nbep_status st = nbep_sweep_run_overrides(p, run, &ov, &n_ov, &d);
     if (st == NBEP_OK && !(path = nbep_sweep_run_path(p, run))) {
         nbep_diag_add(&d, __FILE__, __LINE__, "nbep: out of memory naming run %zu", run);
@@ -651,6 +653,9 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
         st = nbep_run(&rq, &rr, &d);
         resumed_from = rq.resume && rr.simulated ? rr.resumed_from : -1;
         if (rq.resume && !rr.simulated && st != NBEP_ESIGINT && st != NBEP_ESIGTERM) {
+            /* said on its line below, so that a user paying for the run again knows why (a
+             * file whose frames lack the velocities, say: until 2026-12-01 nothing said it) */
+            error_text(&d, refused, sizeof refused);
             nbep_diag_fini(&d); /* the refusal is no failure of the run: it runs afresh */
             nbep_diag_init(&d);
             rq.resume = NULL;
@@ -687,9 +692,12 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
         fprintf(stderr, "nbep sweep: rank %d: run %zu (of %zu; %s): complete already, reused\n",
                 ex->rank, run, p->n_runs, what);
     else if (!ex->quiet) {
-        char from[64] = "";
+        char from[400] = "";
         if (resumed_from >= 0)
             snprintf(from, sizeof from, ", resumed from step %lld", (long long)resumed_from);
+        else if (refused[0])
+            snprintf(from, sizeof from, ", from step 0: its file could not be resumed (%s)",
+                     refused);
         fprintf(stderr,
                 "nbep sweep: rank %d: run %zu (of %zu; %s): %s in %.3g s (%" PRIu64
                 " steps%s, %.4g steps/s)\n",
@@ -1166,6 +1174,42 @@ static void unmake_dir(const char *dir, int made)
     free(p);
 }
 
+/* One study at a time in a folder: a second `nbep sweep` into it (a job resubmitted while the
+ * first still runs) resumed the runs the first was writing and rewrote its tables, both ending
+ * with exit 0 and "ok" for files of neither (a user's find: /stats rows of zeros, a checkpoint
+ * of another run's; the run files are written without HDF5's own locks, so that readers may
+ * look while they grow). Rank 0 holds a write lock on DIR/.lock (fcntl, which NFS passes on;
+ * the kernel lets it go however the process ends) for the study's life, in *fd. Held by
+ * another: NBEP_EUSAGE (exit 2), a line naming it. A lock that cannot be had for another
+ * reason (a file system without locks, a folder that takes no new file: the study's own
+ * writes fail there anyway) leaves *fd at -1 and the study runs, unguarded. */
+static nbep_status lock_dir(const char *dir, int *fd, nbep_diag *d)
+{
+    *fd = -1;
+    const size_t len = strlen(dir) + sizeof "/.lock";
+    char *path = malloc(len);
+    if (!path)
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory");
+    snprintf(path, len, "%s/.lock", dir);
+    int f = open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+    struct flock fl = {.l_type = F_WRLCK, .l_whence = SEEK_SET, .l_start = 0, .l_len = 0};
+    nbep_status st = NBEP_OK;
+    if (f >= 0 && fcntl(f, F_SETLK, &fl) != 0) {
+        if (errno == EACCES || errno == EAGAIN) {
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: %s: another nbep sweep is running in this folder (it holds "
+                          "%s); wait for it to end, or give this study another output",
+                          dir, path);
+            st = NBEP_EUSAGE;
+        }
+        close(f);
+        f = -1;
+    }
+    free(path);
+    *fd = f;
+    return st;
+}
+
 /* Whether name ends with suffix. */
 static bool ends_with(const char *name, const char *suffix)
 {
@@ -1379,10 +1423,10 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
         if (st == NBEP_OK)
             st = jst;
     }
+    char list[256];
+    list[0] = '\0';
     if (s.failed) {
-        char list[256];
         size_t used = 0, shown = 0;
-        list[0] = '\0';
         for (size_t r = 0; r < p->n_runs && used < sizeof list - 8; r++)
             if (results[r].outcome == NBEP_SWEEP_FAILED) {
                 int k = snprintf(list + used, sizeof list - used, "%s%zu", shown++ ? ", " : "", r);
@@ -1390,26 +1434,29 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
             }
         if (shown < s.failed)
             snprintf(list + used, sizeof list - used, ", ...");
-        /* the table that has the errors, if it was written (a full disk: only the lines
-         * said as each run failed have them) */
-        if (csv_written)
-            nbep_diag_add(d, __FILE__, __LINE__,
-                          "nbep: sweep: %zu of %zu runs failed (run %s); the others are "
-                          "complete; errors in %s/summary.csv",
-                          s.failed, p->n_runs, list, p->dir);
-        else
-            nbep_diag_add(d, __FILE__, __LINE__,
-                          "nbep: sweep: %zu of %zu runs failed (run %s); the others are "
-                          "complete; errors above (no summary table could be written)",
-                          s.failed, p->n_runs, list);
     }
-    if (run_st == NBEP_ESIGINT || run_st == NBEP_ESIGTERM) {
+    /* One line (SPEC: every error one line): the runs complete, those failed and where their
+     * errors are (the table, if it was written; a full disk: only the lines said as each run
+     * failed have them), and after a signal what the same command does again. Until 2026-12-01
+     * a failure said "the others are complete" whatever the others were (runs interrupted or
+     * never run, or none at all), and a signal added a second line. */
+    const bool stopped = run_st == NBEP_ESIGINT || run_st == NBEP_ESIGTERM;
+    char failed[400] = "";
+    if (s.failed)
+        snprintf(failed, sizeof failed, "%s%zu failed (run %s; errors %s%s%s)",
+                 stopped ? ", " : "", s.failed, list,
+                 csv_written ? "in " : "above: no summary table could be written",
+                 csv_written ? p->dir : "", csv_written ? "/summary.csv" : "");
+    if (stopped) {
         nbep_diag_add(d, __FILE__, __LINE__,
-                      "nbep: sweep %s: %zu of %zu runs complete; the same command "
+                      "nbep: sweep %s: %zu of %zu runs complete%s; the same command "
                       "again runs the others, those cut short from their last frames",
-                      nbep_status_stop_text(run_st), s.ok, p->n_runs);
+                      nbep_status_stop_text(run_st), s.ok, p->n_runs, failed);
         return run_st;
     }
+    if (s.failed)
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: sweep: %zu of %zu runs complete, %s",
+                      s.ok, p->n_runs, failed);
     if (st != NBEP_OK)
         return st;
     /* Some runs failed: exit status 1 (status.h has no code of its own for it). */
@@ -1690,6 +1737,9 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
         ((st = summary_not_in_study(&p, cli->summary, dd)) != NBEP_OK ||
          (st = try_summary(cli->summary, dd)) != NBEP_OK))
         unmake_dir(p.dir, made);
+    int lock = -1;
+    if (st == NBEP_OK && rank == 0)
+        st = lock_dir(p.dir, &lock, dd);
     if (st == NBEP_OK && rank == 0)
         st = remove_tables(&p, dd);
     st = agree(st, mpi); /* every rank stops here, or none: the collectives below need all */
@@ -1728,6 +1778,8 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
             st = finish(&p, results, run_st, cli, size, t0, dd);
         st = agree(st, mpi);
     }
+    if (lock >= 0)
+        close(lock); /* the study is over: another may take the folder */
     free(results);
     nbep_sweep_plan_fini(&p);
     nbep_diag_fini(&quiet_diag);

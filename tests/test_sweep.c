@@ -1244,8 +1244,8 @@ static void test_the_command_reports_failed_runs_and_exits_1(void **state)
     nbep_status st = nbep_sweep_main(&cli, NULL, &d);
     assert_int_equal(nbep_status_exit_code(st), 1);
     assert_int_equal(d.n_errors, 1);
-    assert_string_equal(d.msg[0], "nbep: sweep: 2 of 6 runs failed (run 1, 4); the others are "
-                                  "complete; errors in " TMP "sweep_main.sweep/summary.csv");
+    assert_string_equal(d.msg[0], "nbep: sweep: 4 of 6 runs complete, 2 failed (run 1, 4; "
+                                  "errors in " TMP "sweep_main.sweep/summary.csv)");
     char *lines[16];
     size_t n = read_lines(TMP "sweep_main.json", lines);
     assert_int_equal(n, 1);

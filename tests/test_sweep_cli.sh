@@ -14,7 +14,8 @@
 #   - each run's row has its own peak memory, not the largest of the runs before it;
 #   - a run cut short (SIGTERM, SIGKILL) goes on from its last frame when the command is given
 #     again, and ends as the uninterrupted study's run (it ran again from step 0); a file that
-#     cannot be resumed runs afresh.
+#     cannot be resumed runs afresh;
+#   - a second sweep into a folder that a sweep is writing is refused (exit 2, one line).
 # Run from anywhere after `make`; exit status 1 when a check fails.
 . "$(dirname "$0")/lib.sh"
 nbep=bin/nbep
@@ -184,6 +185,11 @@ print(sum(1 for r in csv.DictReader(open(sys.argv[1]))
     "$tmp/pace.sweep/summary.csv" 2>/dev/null)
 check "SIGTERM during run 4: exit 143 (got $rc), 3 ok (2 reused), 1 failed, 1 interrupted, 1 not run" \
     "[ $rc = 143 ] && echo '$line' | grep -q ': 3 ok (2 reused), 1 failed, 1 interrupted, 1 not run; '"
+# one closing line for the stop and the failure, its counts the table's (until 2026-12-01 a
+# second line before it said that "the others are complete", of runs interrupted and not run)
+check "... one closing line: 3 of 6 complete, 1 failed (run 3), the same command runs the others: $(grep -E '^nbep: sweep(:| terminated)' "$tmp/stderr" | head -c 400)" \
+    "[ \"\$(grep -cE '^nbep: sweep(:| terminated)' '$tmp/stderr')\" = 1 ] &&
+     grep -qx 'nbep: sweep terminated by SIGTERM: 3 of 6 runs complete, 1 failed (run 3; errors in $tmp/pace.sweep/summary.csv); the same command again runs the others, those cut short from their last frames' '$tmp/stderr'"
 # "in S s (K ran to its end: R runs/min)": K the table's, R = 60 K / S to the 3 figures each
 # is printed to (two roundings of up to 0.5 %)
 pace_agrees() {
@@ -220,7 +226,7 @@ check "a pace of a thousand or more runs a minute reads as a whole number: $line
 # seconds. 8 spheres settling at e = 0.9 for 2 million steps (about 3 s here); a sweep stopped
 # 0.5 s into it by SIGTERM (its last frame the stop's own), another by SIGKILL (no summary in
 # its file, its last frame on output.every's grid), a third whose file no run could have
-# written (a damaged checkpoint), which runs afresh.
+# written (a damaged checkpoint), which runs afresh, its line saying why (since 2026-12-01).
 cat >"$tmp/go.deck" <<'EOF'
 run: { steps = 2000000; threads = 1; };
 physics: { gravity = [0.0, 0.0, -9.81]; restitution = 0.9; };
@@ -287,9 +293,9 @@ with h5py.File(sys.argv[1], 'a') as f:
     r = int(f['frames'].attrs['count']) - 1
     f['checkpoint/event_kind'][r, 0] = 9" "$tmp/go-bad.sweep/run-0000.h5"
 run_sweep "$tmp/go.deck" -o "$tmp/go-bad"
-check "a damaged run file: it runs afresh, exit 0 (got $rc), not resumed, nothing said of the refusal" \
-    "[ $rc = 0 ] && grep -q 'run 0 (of 1; seed=1): ok in .* (2000000 steps, [0-9.e+]* steps/s)' '$tmp/stderr' &&
-     ! grep -q 'damaged' '$tmp/stderr' && same_run go-bad"
+check "a damaged run file: it runs afresh, exit 0 (got $rc), its line saying why it ran from step 0, no error: $(grep 'run 0 (of 1' "$tmp/stderr" | head -c 400)" \
+    "[ $rc = 0 ] && grep -q 'run 0 (of 1; seed=1): ok in .* (2000000 steps, from step 0: its file could not be resumed (nbep: .*damaged.*), [0-9.e+]* steps/s)' '$tmp/stderr' &&
+     ! grep -q '^nbep: sweep' '$tmp/stderr' && same_run go-bad"
 
 # ---- srun without PMI ------------------------------------------------------------------------
 # the line that says how to launch: an MPI build names srun's PMI plugins, one built with MPI=0
@@ -525,5 +531,30 @@ run_check "$tmp/box-axis.deck"
 check "an axis of box.max that leaves the group no room: exit 2 (got $rc), named at the axis's line" \
     "[ $rc = 2 ] && [ ! -s '$tmp/stdout' ] && one_line &&
      grep -q '^nbep: sweep run 1 (box.max=\\[0.3, 0.3, 0.3\\] seed=1) cannot run: .*box-axis.deck:6: sweep.vary.\\[0\\]: spheres.\\[0\\]: could not place 27 spheres' '$tmp/stderr'"
+
+
+# ---- one study at a time in a folder ----------------------------------------------------------
+# a second sweep into a folder another sweep is writing (a job resubmitted while the first still
+# runs): refused with exit 2 and one line naming the folder, nothing of the first's touched;
+# until 2026-12-01 it resumed the runs the first was writing and rewrote its tables, both exit 0
+# with files of neither. Once the first has ended (here by SIGTERM) the folder is free again.
+timeout -k 5 120 "$nbep" sweep "$tmp/pace.deck" -o "$tmp/busy" --quiet \
+    --set 'sweep.vary.[0].values=[5000000]' >/dev/null 2>&1 &
+pid=$!
+for _ in $(seq 300); do
+    [ -f "$tmp/busy.sweep/run-0000.h5" ] && break
+    sleep 0.1
+done
+run_sweep "$tmp/pace.deck" -o "$tmp/busy" --quiet --set 'sweep.vary.[0].values=[20]'
+check "a second sweep into a folder a sweep is writing: exit 2 (got $rc), one line naming the folder: $(head -c 300 "$tmp/stderr")" \
+    "[ $rc = 2 ] && one_line && grep -qx 'nbep: $tmp/busy.sweep: another nbep sweep is running in this folder (it holds $tmp/busy.sweep/.lock); wait for it to end, or give this study another output' '$tmp/stderr'"
+check "... the first sweep runs on, no table made in its folder" \
+    "kill -0 $pid 2>/dev/null && [ ! -e '$tmp/busy.sweep/summary.csv' ] && [ ! -e '$tmp/busy.sweep/summary.h5' ]"
+kill -TERM $pid 2>/dev/null
+wait $pid
+rc1=$?
+run_sweep "$tmp/pace.deck" -o "$tmp/busy" --quiet --set 'sweep.vary.[0].values=[20]'
+check "... ended (exit $rc1), the folder takes the next study (exit $rc)" \
+    "[ $rc1 = 143 ] && [ $rc = 0 ] && grep -q ',ok,' '$tmp/busy.sweep/summary.csv'"
 
 test_end sweep_cli
