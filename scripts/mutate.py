@@ -1372,6 +1372,14 @@ MUTANTS = [
     ("sweep-failed-names-unwritten-table", "src/sweep.c",
      "                 csv_written ? \"in \" : \"above: no summary table could be written\",",
      "                 \"in \",", ["tests/test_diskfull.sh"], None),
+    # /summary made as the file closes, with its json: none in a file whose run never got there
+    ("summary-resume-kept", "src/output_resume.c",
+     "    if (had < 0 || (had > 0 && H5Ldelete(o->file, \"/summary\", H5P_DEFAULT) < 0)) {",
+     "    if (had < 0) {", ["tests/test_resume.sh"], None),
+    ("summary-group-without-json", "src/output.c",
+     "    if (s && rc == 0) {\n        char *json = nbep_summary_to_json(s);",
+     "    if (!s && rc == 0)\n        rc = make_group(o, \"/summary\", &o->summary, d);\n    if (s && rc == 0) {\n        char *json = nbep_summary_to_json(s);",
+     ["test_output"], None),
     # one closing line for a stop and a failure (2026-12-01)
     ("sweep-stop-line-drops-failures", "src/sweep.c",
      "                      nbep_status_stop_text(run_st), s.ok, p->n_runs, failed);",
