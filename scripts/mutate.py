@@ -1380,6 +1380,9 @@ MUTANTS = [
      "    if (s && rc == 0) {\n        char *json = nbep_summary_to_json(s);",
      "    if (!s && rc == 0)\n        rc = make_group(o, \"/summary\", &o->summary, d);\n    if (s && rc == 0) {\n        char *json = nbep_summary_to_json(s);",
      ["test_output"], None),
+    # a read-only file system is the user's path (exit 2), as no permission (2026-12-01)
+    ("open-read-only-run-time", "src/status.c", "err == EACCES ||\n                   err == EROFS ||",
+     "err == EACCES ||\n                   0 ||", ["test_status"], None),
     # one closing line for a stop and a failure (2026-12-01)
     ("sweep-stop-line-drops-failures", "src/sweep.c",
      "                      nbep_status_stop_text(run_st), s.ok, p->n_runs, failed);",

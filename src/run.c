@@ -297,7 +297,7 @@ nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
     else if (!S_ISDIR(sb.st_mode))
         err = ENOTDIR;
     else if (access(dir, W_OK | X_OK) != 0)
-        err = errno; /* EACCES; EROFS, a run-time failure (exit 1) as the run's own */
+        err = errno; /* EACCES, EROFS: the user's path (exit 2), as the run's own */
     free(dir);
     if (err) /* the words of the run's own failure (output.c) */
         NBEP_FAIL(d, nbep_status_of_open(err), "nbep: %s: cannot create the output file: %s",

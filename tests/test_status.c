@@ -3,6 +3,7 @@
  * first it is given where they were; also when no memory can be had (it sorts in place and
  * needs none), which this test makes happen with its own copy of src/status.c whose malloc
  * fails on demand. The scene's load sorts its messages so (test_scene). */
+#include <errno.h>
 #include <stdbool.h>
 #include <stdlib.h>
 
@@ -126,6 +127,20 @@ static void test_sort_leaves_the_messages_before_first_alone(void **state)
     nbep_diag_fini(&d);
 }
 
+/* A path the command line names that cannot be opened: the user's (exit 2) where it names
+ * nothing there, a directory, or a place that takes no writes (no permission, a read-only
+ * file system: exit 1 until 2026-12-01); a full disk or a failing device is run time's. */
+static void test_open_failures_are_the_users_or_run_times(void **state)
+{
+    (void)state;
+    const int users[] = {ENOENT, ENOTDIR, EISDIR, EACCES, EROFS, ENAMETOOLONG, ELOOP};
+    for (size_t k = 0; k < sizeof users / sizeof *users; k++)
+        assert_int_equal(nbep_status_exit_code(nbep_status_of_open(users[k])), 2);
+    const int run_time[] = {ENOSPC, EIO, EDQUOT, ENOMEM};
+    for (size_t k = 0; k < sizeof run_time / sizeof *run_time; k++)
+        assert_int_equal(nbep_status_exit_code(nbep_status_of_open(run_time[k])), 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -133,6 +148,7 @@ int main(void)
         cmocka_unit_test(test_sort_orders_many_messages),
         cmocka_unit_test(test_sort_without_memory_orders_in_place),
         cmocka_unit_test(test_sort_leaves_the_messages_before_first_alone),
+        cmocka_unit_test(test_open_failures_are_the_users_or_run_times),
     };
     return cmocka_run_group_tests_name("status", tests, NULL, NULL);
 }

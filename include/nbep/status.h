@@ -29,8 +29,9 @@ typedef enum nbep_status {
 /* The process exit code for a status (0, 1, 2, 130 or 143). */
 int nbep_status_exit_code(nbep_status s);
 /* The status of a failure (errno err) to open a file that the command line or the deck
- * named: a name that is no file to read (no such file, a directory, no permission) is the
- * user's mistake, NBEP_EUSAGE (exit 2, as a bad deck); anything else is an I/O error. */
+ * named: a name that is no file to read or write (no such file, a directory, no permission, a
+ * read-only file system) is the user's mistake, NBEP_EUSAGE (exit 2, as a bad deck); anything
+ * else (a full disk, a failing device) is an I/O error. */
 nbep_status nbep_status_of_open(int err);
 /* What the stop flag *stop asks for (main.c's: the signal number its handler stored, 0 for
  * none; stop may be NULL): NBEP_OK, NBEP_ESIGTERM for SIGTERM, else NBEP_ESIGINT. A relaxed
