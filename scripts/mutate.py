@@ -1383,6 +1383,9 @@ MUTANTS = [
     # a read-only file system is the user's path (exit 2), as no permission (2026-12-01)
     ("open-read-only-run-time", "src/status.c", "err == EACCES ||\n                   err == EROFS ||",
      "err == EACCES ||\n                   0 ||", ["test_status"], None),
+    ("check-tc-for-naive", "src/check.c",
+     "    if (sc->restitution < 1.0 && strcmp(sc->algorithm, \"predictive\") == 0)",
+     "    if (sc->restitution < 1.0)", ["tests/test_cli.sh"], None),
     # one closing line for a stop and a failure (2026-12-01)
     ("sweep-stop-line-drops-failures", "src/sweep.c",
      "                      nbep_status_stop_text(run_st), s.ok, p->n_runs, failed);",

@@ -78,8 +78,13 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
             (unsigned long long)sc->seed);
     fprintf(out, "physics:         restitution %g, gravity [%g, %g, %g]", sc->restitution,
             sc->gravity.x, sc->gravity.y, sc->gravity.z);
-    if (sc->restitution < 1.0) /* the TC model and the carry rule act on dissipative scenes */
+    /* the TC model and the carry rule act on the predictive algorithm's dissipative scenes;
+     * naive and seminaive apply SPEC's law alone (a new user read "tc 0.5" for naive as taken) */
+    if (sc->restitution < 1.0 && strcmp(sc->algorithm, "predictive") == 0)
         fprintf(out, ", tc %g, carry_drop %g", sc->tc, sc->carry_drop);
+    else if (sc->restitution < 1.0)
+        fprintf(out, " (physics.tc and carry_drop: predictive only, unused by %s)",
+                sc->algorithm);
     fprintf(out, "\n");
     if (sc->has_box)
         fprintf(out, "box:             [%g, %g, %g] .. [%g, %g, %g]\n", sc->box_min.x,

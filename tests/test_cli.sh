@@ -68,6 +68,11 @@ check "nbep check prints restitution, gravity, the TC model's settings, seed and
     "grep -Eq '^physics: +restitution 0.25, gravity \[0, -2, 0\], tc [^,]+, carry_drop ' $tmp/stdout &&
      grep -Eq '^steps: .*, seed 7\$' $tmp/stdout &&
      grep -Eq '^box: +\[0, 0, 0\] \.\. \[10, 10, 10\]\$' $tmp/stdout"
+# naive applies SPEC's law alone: the TC model's settings named as unused (until 2026-12-01 the
+# line gave "tc 0.5" as though naive took it: a new user's find)
+run_nbep check "$tmp/group.deck" --set physics.restitution=0.25 --set physics.tc=0.5 -a naive
+check "nbep check of a naive run at e < 1: tc and carry_drop said unused (got $rc: $(grep '^physics' $tmp/stdout))" \
+    "[ $rc = 0 ] && grep -qx 'physics: *restitution 0.25, gravity \[0, 0, 0\] (physics.tc and carry_drop: predictive only, unused by naive)' $tmp/stdout"
 
 # ---- run.order = "step" (the paper's step) only where rounds run ---------------------------------
 sed 's/threads = 1;/threads = 1; order = "step";/' "$tmp/group.deck" >"$tmp/order.deck"
