@@ -686,8 +686,11 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
 
     char what[256];
     describe_run(p, run, what, sizeof what);
+    /* the run's own words without their "nbep: " (a deck error has none): the line has it
+     * (until 2026-12-01 an I/O error read "failed: nbep: PATH: ...") */
+    const char *why = strncmp(res->error, "nbep: ", 6) == 0 ? res->error + 6 : res->error;
     if (res->outcome == NBEP_SWEEP_FAILED)
-        fprintf(stderr, "nbep: sweep run %zu (%s) failed: %s\n", run, what, res->error);
+        fprintf(stderr, "nbep: sweep run %zu (%s) failed: %s\n", run, what, why);
     else if (!ex->quiet && reused)
         fprintf(stderr, "nbep sweep: rank %d: run %zu (of %zu; %s): complete already, reused\n",
                 ex->rank, run, p->n_runs, what);

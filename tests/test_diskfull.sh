@@ -51,7 +51,8 @@ line=$(grep 'sweep run 0' "$mnt/../diskfull-sweep.err")
 check "a sweep run on a full disk fails the sweep (exit 1, got $rc)" "[ $rc = 1 ]"
 check "its row names the run's file and the reason" \
     "echo \"\$line\" | grep -q 's.sweep/run-0000.h5: .*No space left'"
-check "with that one error, as nbep run reports it" "! echo \"\$line\" | grep -q '; nbep:'"
+check "with that one error, as nbep run reports it, under the line's one prefix: $line" \
+    "! echo \"\$line\" | grep -q '; nbep:' && echo \"\$line\" | grep -q '^nbep: sweep run 0 (run.steps=400 seed=1) failed: [^n]'"
 # the disk is full for the study's tables too: the one made empty is not left, and the last
 # line does not send the user to a table that is not there (until 2026-12-01 it did, and
 # summary.h5.partial stayed)
