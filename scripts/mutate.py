@@ -1386,6 +1386,8 @@ MUTANTS = [
     ("check-tc-for-naive", "src/check.c",
      "    if (sc->restitution < 1.0 && strcmp(sc->algorithm, \"predictive\") == 0)",
      "    if (sc->restitution < 1.0)", ["tests/test_cli.sh"], None),
+    ("info-contacts-unread", "src/output_info.c", "        if (r.has_tc)\n", "        if (0)\n",
+     ["test_output"], None),
     # one closing line for a stop and a failure (2026-12-01)
     ("sweep-stop-line-drops-failures", "src/sweep.c",
      "                      nbep_status_stop_text(run_st), s.ok, p->n_runs, failed);",

@@ -323,6 +323,14 @@ static int write_root_attrs(nbep_output *o, const nbep_scene *sc, int threads, n
                                         d) < 0 ||
          nbep__output_write_string_attr(root, p, "order", nbep_scene_order_name(sc), d) < 0))
         return -1;
+    /* and at e < 1 the collision model's settings, which change a granular run's outcome as
+     * much as e does (nbep info prints them; a new user found them only in the deck text) */
+    if (strcmp(sc->algorithm, "predictive") == 0 && sc->restitution < 1.0 &&
+        (nbep__output_write_attr(root, p, "tc", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 0, &sc->tc,
+                                 d) < 0 ||
+         nbep__output_write_attr(root, p, "carry_drop", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 0,
+                                 &sc->carry_drop, d) < 0))
+        return -1;
     const int32_t periodic[3] = {sc->has_box && sc->periodic[0], sc->has_box && sc->periodic[1],
                                  sc->has_box && sc->periodic[2]};
     if (nbep__output_write_attr(root, p, "periodic", H5T_STD_I32LE, H5T_NATIVE_INT32, 3,

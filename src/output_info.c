@@ -23,6 +23,8 @@ typedef struct run_info {
     uint64_t steps, seed;
     int64_t threads;
     double dt, restitution, gravity[3];
+    bool has_tc;                           /* predictive at e < 1, since 2026-12-01 */
+    double tc, carry_drop;
     int32_t periodic[3];                   /* 0 0 0 for files made before contract 2 */
     bool has_box;                          /* false too for files made before 2026-11-27 */
     double box_min[3], box_max[3];
@@ -85,6 +87,10 @@ static int gather_info(hid_t file, const char *path, run_info *r, nbep_diag *d)
          nbep__output_read_string_attr(file, path, "neighbors", &r->neighbors, d) < 0) ||
         (H5Aexists(file, "order") > 0 &&
          nbep__output_read_string_attr(file, path, "order", &r->order, d) < 0) ||
+        ((r->has_tc = H5Aexists(file, "tc") > 0) &&
+         (nbep__output_read_attr(file, path, "tc", H5T_NATIVE_DOUBLE, &r->tc, d) < 0 ||
+          nbep__output_read_attr(file, path, "carry_drop", H5T_NATIVE_DOUBLE, &r->carry_drop,
+                                 d) < 0)) ||
         nbep__output_dataset_rows(file, path, "/spheres/radius", &r->spheres, d) < 0 ||
         nbep__output_dataset_rows(file, path, "/planes/offset", &r->planes, d) < 0 ||
         nbep__output_complete_rows(file, path, "/frames", "/frames/step", &r->frames,
@@ -169,6 +175,10 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
         fprintf(f, "%-13s%" PRId64 "\n", "threads:", r.threads);
         fprintf(f, "%-13s%" PRIu64 "\n", "seed:", r.seed);
         fprintf(f, "%-13s%s\n", "restitution:", nbep_format_real(r.restitution, false, b0));
+        if (r.has_tc)
+            fprintf(f, "%-13stc %s, carry_drop %s\n", "contacts:",
+                    nbep_format_real(r.tc, false, b0),
+                    nbep_format_real(r.carry_drop, false, b1));
         fprintf(f, "%-13s[%s, %s, %s]\n", "gravity:",
                 nbep_format_real(r.gravity[0], false, b0),
                 nbep_format_real(r.gravity[1], false, b1),

@@ -929,6 +929,8 @@ static void test_info_reports_the_settings_frames_stats_and_summary(void **state
     fixture *fx = *state;
     char path[256];
     nbep_summary sum = known_summary();
+    fx->sc.tc = 2.5e-6; /* the collision model's settings at e < 1 (since 2026-12-01) */
+    fx->sc.carry_drop = 0.03;
     write_run(fx, nbep_test_tmp("output_info.h5", path, sizeof path), &sum);
     char *text = info_text(path, &fx->d);
     char *json = nbep_summary_to_json(&sum);
@@ -944,6 +946,7 @@ static void test_info_reports_the_settings_frames_stats_and_summary(void **state
     assert_has_line(text, "threads:     3");
     assert_has_line(text, "seed:        424242");
     assert_has_line(text, "restitution: 0.85");
+    assert_has_line(text, "contacts:    tc 2.5e-06, carry_drop 0.03");
     assert_has_line(text, "gravity:     [0.25, -1.5, -9.81]");
     assert_has_line(text, "box:         [-1, -2, 0] to [4, 5.5, 6.25]");
     assert_has_line(text, "overrides:   physics.restitution=0.85");
@@ -964,9 +967,11 @@ static void test_info_reports_the_settings_frames_stats_and_summary(void **state
                           "step 1000 of 20");
     free(text);
     sum.status = NBEP_SUMMARY_COMPLETED;
+    fx->sc.restitution = 1.0; /* elastic: the model has nothing to say, and no line */
     write_run(fx, nbep_test_tmp("output_info_done.h5", path, sizeof path), &sum);
     text = info_text(path, &fx->d);
     assert_has_line(text, "status:      completed: step 1000 of 20");
+    assert_null(strstr(text, "contacts:"));
     free(text);
 }
 
