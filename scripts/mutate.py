@@ -1388,6 +1388,12 @@ MUTANTS = [
      "    if (sc->restitution < 1.0)", ["tests/test_cli.sh"], None),
     ("info-contacts-unread", "src/output_info.c", "        if (r.has_tc)\n", "        if (0)\n",
      ["test_output"], None),
+    ("sweep-tables-read-only-run-time", "src/sweep.c",
+     "            NBEP_FAIL(d, nbep_status_of_open(err), \"nbep: cannot remove the last sweep's",
+     "            NBEP_FAIL(d, NBEP_EIO, \"nbep: cannot remove the last sweep's",
+     ["tests/test_diskfull.sh"], None),
+    ("sweep-summary-at-lock-taken", "src/sweep.c", "          strcmp(base, \".lock\") == 0))",
+     "          0))", ["tests/test_sweep_cli.sh"], None),
     # one closing line for a stop and a failure (2026-12-01)
     ("sweep-stop-line-drops-failures", "src/sweep.c",
      "                      nbep_status_stop_text(run_st), s.ok, p->n_runs, failed);",

@@ -1236,7 +1236,9 @@ static nbep_status summary_not_in_study(const nbep_sweep_plan *p, const char *su
     const size_t len = strlen(base);
     const bool run_file =
         strncmp(base, "run-", 4) == 0 && (ends_with(base, ".h5") || ends_with(base, ".xmf"));
-    if (!(strcmp(base, "summary.csv") == 0 || strcmp(base, "summary.h5") == 0 || run_file))
+    /* .lock too: a JSON written there would close the lock's file, which lets the lock go */
+    if (!(strcmp(base, "summary.csv") == 0 || strcmp(base, "summary.h5") == 0 || run_file ||
+          strcmp(base, ".lock") == 0))
         return NBEP_OK;
     /* a study file's name: is it that file of this study? */
     char *own = malloc(strlen(p->dir) + 1 + len + 1);
@@ -1285,9 +1287,9 @@ static nbep_status remove_tables(const nbep_sweep_plan *p, nbep_diag *d)
         const int gone = remove(path) == 0 || errno == ENOENT;
         const int err = errno;
         free(path);
-        if (!gone)
-            NBEP_FAIL(d, NBEP_EIO, "nbep: cannot remove the last sweep's %s/%s: %s", p->dir,
-                      tables[k], strerror(err));
+        if (!gone) /* a read-only file system, no permission: the user's path (exit 2) */
+            NBEP_FAIL(d, nbep_status_of_open(err), "nbep: cannot remove the last sweep's %s/%s: %s",
+                      p->dir, tables[k], strerror(err));
     }
     return NBEP_OK;
 }

@@ -59,4 +59,24 @@ check "with that one error, as nbep run reports it, under the line's one prefix:
 check "no summary table left half-made" "[ -z \"\$(ls '$mnt/s.sweep' | grep summary)\" ]"
 check "the last line says the failed runs' errors are above: $(tail -n 1 "$mnt/../diskfull-sweep.err")" \
     "tail -n 1 '$mnt/../diskfull-sweep.err' | grep -q '^nbep: sweep: 0 of [0-9]* runs complete, [0-9]* failed (run 0.*; errors above: no summary table could be written)\$'"
+# a read-only file system is the user's path, as one without permission: a run into it and a
+# sweep over a study on it (whose last tables it cannot remove) exit 2 with one line (until
+# 2026-12-01 both gave 1, a run-time failure)
+umount "$mnt" && mount -t tmpfs -o size=3m tmpfs "$mnt"
+{ cat inputs/two-spheres.deck
+  echo 'sweep: { replicas = 1; vary = ( { key = "run.steps"; values = [10]; } ); };'
+} >"$mnt/../ro-sweep.deck"
+bin/nbep sweep "$mnt/../ro-sweep.deck" --quiet -o "$mnt/ro.h5" 2>/dev/null
+rc0=$?
+mount -o remount,ro "$mnt"
+bin/nbep run inputs/two-spheres.deck --quiet -o "$mnt/x.h5" 2>"$mnt/../ro-run.err"
+rc1=$?
+bin/nbep sweep "$mnt/../ro-sweep.deck" --quiet -o "$mnt/ro.h5" 2>"$mnt/../ro-sweep.err"
+rc2=$?
+check "a read-only file system: a run into it exits 2 (got $rc1), one line: $(cat "$mnt/../ro-run.err")" \
+    "[ $rc0 = 0 ] && [ $rc1 = 2 ] && [ \$(wc -l < '$mnt/../ro-run.err') = 1 ] &&
+     grep -qi 'read-only file system' '$mnt/../ro-run.err'"
+check "... and a sweep over a study on it exits 2 (got $rc2), one line: $(cat "$mnt/../ro-sweep.err")" \
+    "[ $rc2 = 2 ] && [ \$(wc -l < '$mnt/../ro-sweep.err') = 1 ] &&
+     grep -q 'cannot remove the last sweep.s .*summary.csv: Read-only file system' '$mnt/../ro-sweep.err'"
 test_end diskfull

@@ -361,9 +361,9 @@ check "run.seed = 2^63 - 1 with 2 replicas: exit 2 (got $rc), one line, no folde
     "[ $rc = 2 ] && one_line && grep -q 'the last replica.s seed would pass' '$tmp/stderr' &&
      [ ! -e '$tmp/seed.sweep' ]"
 # a --summary that is one of the study's own files: its table, or a run the next sweep would
-# run again, or a run's sidecar
+# run again, or a run's sidecar, or the lock (a JSON written there would let the lock go)
 run_sweep "$tmp/s.deck" -o "$tmp/own.h5" --quiet
-for f in summary.csv run-0001.h5 run-0001.xmf; do
+for f in summary.csv run-0001.h5 run-0001.xmf .lock; do
     sum=$(md5sum < "$tmp/own.sweep/$f")
     run_sweep "$tmp/s.deck" -o "$tmp/own.h5" --quiet --summary "$tmp/./own.sweep/$f"
     check "--summary own.sweep/$f: exit 2 (got $rc), one line, the file as it was" \
