@@ -1405,6 +1405,34 @@ static void test_pile_kicks_add_no_energy_beyond_their_bound(void **state)
     }
 }
 
+/* A sphere sliding on the floor under one resting on it straight above: the pair is pressed
+ * together by gravity, and each minimum bounce that parts them is shared along the spheres'
+ * mobilities, of which the sliding sphere has none along the vertical (its floor takes it):
+ * it never leaves the floor, so it never meets it (no plane collision in 300 steps), in every
+ * neighbour mode. A kick shared by mass along the line of centres would drive it into the
+ * floor, which bounces it (a settled pile heated up so, README). */
+static void test_a_sliding_sphere_under_another_takes_no_kick_into_its_floor(void **state)
+{
+    (void)state;
+    const double r = 0.1;
+    for (int mode = 0; mode < 3; mode++) {
+        nbep_scene *sc = scene(2, 1, "predictive", 300, 0.5);
+        neighbor_mode(sc, mode);
+        nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){0.0, 0.0, r}, (nbep_vec3){5e-3, 0.0, 0.0}, r,
+                             1.0, DOWN);
+        nbep_test_set_sphere(sc, 1, (nbep_vec3){0.0, 0.0, 3.0 * r + 1e-9},
+                             (nbep_vec3){5e-3, 0.0, 0.0}, r, 1.0, DOWN);
+        trace t = {0};
+        const nbep_summary sum = run(sc, 1, &t);
+        assert_true(sum.sphere_collisions > 10); /* the pair was pressed: kicks were given */
+        assert_int_equal(sum.plane_collisions, 0);
+        assert_true(fabs(last_pos(&t)[0].z - r) <= 1e-12);
+        free(t.data);
+        nbep_test_scene_free(&sc);
+    }
+}
+
 /* A falling, colliding pile with e = 0.5: energy may only fall, frame after frame (measured
  * rise: 6e-14 J of 133 J, the round-off of summing the energy; the bound is 1e-12 of it).
  * With e = 0 the run must finish (before: 300 spheres died at step 2) and lose energy; its
@@ -1741,6 +1769,7 @@ int main(void)
         cmocka_unit_test(test_e0_pair_keeps_momentum_and_loses_energy),
         cmocka_unit_test(test_e0_plane_stops_at_first_contact),
         cmocka_unit_test(test_pile_kicks_add_no_energy_beyond_their_bound),
+        cmocka_unit_test(test_a_sliding_sphere_under_another_takes_no_kick_into_its_floor),
         cmocka_unit_test(test_pile_energy_never_rises),
         cmocka_unit_test(test_pile_frames_equal_for_1_2_4_threads),
         cmocka_unit_test(test_step_sums_equal_for_1_2_4_threads),
