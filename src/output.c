@@ -577,7 +577,32 @@ nbep_output *nbep__output_new(const char *path, size_t n_spheres, nbep_diag *d)
     for (int c = 0; c < N_CK_COLUMNS; c++)
         o->ck[c] = H5I_INVALID_HID;
     o->contacts[0] = o->contacts[1] = o->contacts_type = H5I_INVALID_HID;
+    o->lock_fd = -1;
     return o;
+}
+
+/* Two runs into one file (a job resubmitted while the first still runs, an array job whose
+ * tasks all name out.h5) wrote over each other: the second's file was renamed over the
+ * first's, which went on writing a file no longer there and ended with exit 0, or both
+ * resumed one file and interleaved their frames (until 2026-12-01). The lock is a file of its
+ * own beside the output, not the output: readers take HDF5's locks (flock) on the output, which
+ * on NFS are byte-range locks of the whole file and would meet a writer's there. */
+nbep_status nbep__output_lock(nbep_output *o, nbep_diag *d)
+{
+    if (!(o->lock_path = nbep_lock_path(o->path)))
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: %s: no memory for the output handle", o->path);
+    bool busy;
+    o->lock_fd = nbep_lock_take(o->lock_path, &busy);
+    if (busy) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s: another nbep run is writing this file (it holds %s); wait "
+                      "for it to end, or give this run another output",
+                      o->path, o->lock_path);
+        free(o->lock_path); /* not ours to remove */
+        o->lock_path = NULL;
+        return NBEP_EUSAGE;
+    }
+    return NBEP_OK;
 }
 
 void nbep__output_release(nbep_output **op)
@@ -612,6 +637,8 @@ void nbep__output_release(nbep_output **op)
     if (o->staged) /* never published: the temporary file goes, whatever is at path stays */
         remove(o->staged);
     free(o->staged);
+    nbep_lock_drop(o->lock_fd, o->lock_fd >= 0 ? o->lock_path : NULL); /* last: all written */
+    free(o->lock_path);
     free(o->path);
     free(o);
     *op = NULL;
@@ -662,6 +689,12 @@ nbep_status nbep_output_create_staged(const char *path, const nbep_scene *sc, in
     }
     o->ck_allowed = true;
     o->n_planes = sc->state.n_planes;
+    nbep_status lock_st = nbep__output_lock(o, d); /* before PATH.partial is made afresh */
+    if (lock_st != NBEP_OK) {
+        free(tmp);
+        nbep__output_release(&o);
+        return lock_st;
+    }
     if (nbep__output_periodic(o, sc, d) < 0) {
         free(tmp);
         nbep__output_release(&o);

@@ -108,6 +108,9 @@ struct nbep_output {
     /* a new file not yet renamed to path (nbep_output_create_staged): its temporary name,
      * owned, until nbep_output_publish; NULL once published or for a resumed file */
     char *staged;
+    /* PATH.lock, held while the handle is open (nbep__output_lock), or -1 and NULL */
+    int lock_fd;
+    char *lock_path;
     /* a run opened to be resumed (nbep_output_open_resume), not yet changed: pending until
      * nbep_output_resume_begin, and closing it then writes nothing */
     struct {
@@ -127,6 +130,11 @@ struct nbep_output {
 
 /* A handle for path with every id invalid; NULL (and NBEP_ENOMEM in d) when out of memory. */
 nbep_output *nbep__output_new(const char *path, size_t n_spheres, nbep_diag *d);
+/* One writer of a path at a time: takes the lock on PATH.lock for the handle's life (released,
+ * and the file removed, with the handle). Another process's run writing path holds it:
+ * NBEP_EUSAGE and a line naming both. A lock that cannot be had for another reason (a file
+ * system without locks, a folder that takes no new file) is done without. */
+nbep_status nbep__output_lock(nbep_output *o, nbep_diag *d);
 /* Sets o's periodic geometry from sc and, when it has a periodic axis, the buffers frames are
  * wrapped in; -1 (NBEP_ENOMEM's message in d) when out of memory. */
 int nbep__output_periodic(nbep_output *o, const nbep_scene *sc, nbep_diag *d);

@@ -495,6 +495,9 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     nbep_output *o = nbep__output_new(path, n, d);
     if (!o)
         return NBEP_ENOMEM;
+    if ((st = nbep__output_lock(o, d)) != NBEP_OK)
+        goto fail;
+    st = NBEP_EIO;
 
     hid_t fapl = nbep__output_fapl(true);
     o->file = fapl < 0 ? H5I_INVALID_HID : H5Fopen(path, H5F_ACC_RDWR, fapl);

@@ -270,14 +270,17 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
                   over == output ? "output" : "summary", over, deck);
     if (summary && output && strcmp(summary, "-") != 0) {
         /* the run's file and its sidecar are written by rename: a summary at either name
-         * would be replaced, or would replace it */
-        char *xmf = nbep_xdmf_path(output);
+         * would be replaced, or would replace it; at its lock's, it would take the lock
+         * file's place and another run would lock that one */
+        char *xmf = nbep_xdmf_path(output), *lock = nbep_lock_path(output);
         const bool run = nbep_run_same_path(summary, output);
         const bool side = xmf && nbep_run_same_path(summary, xmf);
+        const bool held = lock && nbep_run_same_path(summary, lock);
         free(xmf);
-        if (run || side)
+        free(lock);
+        if (run || side || held)
             NBEP_FAIL(d, NBEP_EUSAGE, "nbep: the summary file %s is the run's %s; choose another",
-                      summary, run ? "file itself" : "XDMF sidecar");
+                      summary, run ? "file itself" : side ? "XDMF sidecar" : "lock file");
     }
     return NBEP_OK;
 }

@@ -1194,19 +1194,15 @@ static nbep_status lock_dir(const char *dir, int *fd, nbep_diag *d)
     if (!path)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory");
     snprintf(path, len, "%s/.lock", dir);
-    int f = open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
-    struct flock fl = {.l_type = F_WRLCK, .l_whence = SEEK_SET, .l_start = 0, .l_len = 0};
+    bool busy;
+    const int f = nbep_lock_take(path, &busy);
     nbep_status st = NBEP_OK;
-    if (f >= 0 && fcntl(f, F_SETLK, &fl) != 0) {
-        if (errno == EACCES || errno == EAGAIN) {
-            nbep_diag_add(d, __FILE__, __LINE__,
-                          "nbep: %s: another nbep sweep is running in this folder (it holds "
-                          "%s); wait for it to end, or give this study another output",
-                          dir, path);
-            st = NBEP_EUSAGE;
-        }
-        close(f);
-        f = -1;
+    if (busy) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s: another nbep sweep is running in this folder (it holds %s); "
+                      "wait for it to end, or give this study another output",
+                      dir, path);
+        st = NBEP_EUSAGE;
     }
     free(path);
     *fd = f;
@@ -1236,7 +1232,8 @@ static nbep_status summary_not_in_study(const nbep_sweep_plan *p, const char *su
     const size_t len = strlen(base);
     const bool run_file =
         strncmp(base, "run-", 4) == 0 && (ends_with(base, ".h5") || ends_with(base, ".xmf"));
-    /* .lock too: a JSON written there would close the lock's file, which lets the lock go */
+    /* .lock too: a JSON written there would take the lock file's place, and the next sweep
+     * would lock that one */
     if (!(strcmp(base, "summary.csv") == 0 || strcmp(base, "summary.h5") == 0 || run_file ||
           strcmp(base, ".lock") == 0))
         return NBEP_OK;
@@ -1783,8 +1780,7 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
             st = finish(&p, results, run_st, cli, size, t0, dd);
         st = agree(st, mpi);
     }
-    if (lock >= 0)
-        close(lock); /* the study is over: another may take the folder */
+    nbep_lock_drop(lock, NULL); /* the study is over: another may take the folder */
     free(results);
     nbep_sweep_plan_fini(&p);
     nbep_diag_fini(&quiet_diag);

@@ -1,7 +1,11 @@
 /* Aligned allocation, the spin-wait pause, sleeping on a word and the text of a byte count,
  * shared by every module. */
-#define _DEFAULT_SOURCE /* syscall() for futexes */
+#define _GNU_SOURCE /* syscall() for futexes, F_OFD_SETLK */
 #include "nbep/compiler.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <sys/stat.h>
 
 #include <sched.h>
 #include <stdbool.h>
@@ -77,13 +81,71 @@ void nbep_free_aligned(void *p)
     free(p);
 }
 
-char *nbep_partial_path(const char *path)
+static char *suffixed(const char *path, const char *suffix)
 {
-    static const char suffix[] = ".partial";
-    char *p = malloc(strlen(path) + sizeof suffix);
+    char *p = malloc(strlen(path) + strlen(suffix) + 1);
     if (p)
         strcat(strcpy(p, path), suffix);
     return p;
+}
+
+char *nbep_partial_path(const char *path)
+{
+    return suffixed(path, ".partial");
+}
+
+char *nbep_lock_path(const char *path)
+{
+    return suffixed(path, ".lock");
+}
+
+/* Open file description locks (Linux 3.15) belong to the descriptor, not the process: closing
+ * another descriptor of the same file (HDF5's, a summary's) does not let them go, and two in
+ * one process exclude each other. Elsewhere the process's own (POSIX) locks. */
+#ifdef F_OFD_SETLK
+#define LOCK_CMD F_OFD_SETLK
+#else
+#define LOCK_CMD F_SETLK
+#endif
+
+bool nbep_lock_names(int fd, const char *path)
+{
+    struct stat held, named;
+    return fstat(fd, &held) == 0 && stat(path, &named) == 0 && held.st_dev == named.st_dev &&
+           held.st_ino == named.st_ino;
+}
+
+int nbep_lock_take(const char *path, bool *busy)
+{
+    *busy = false;
+    /* A holder that ends removes the name (nbep_lock_drop with remove): a descriptor opened on
+     * the old file before that and locked after holds a file no one else will open, so the
+     * lock stands only if the name still leads to the file it holds; otherwise again (a few
+     * times: each retry follows a holder's end). */
+    for (int tries = 0; tries < 16; tries++) {
+        const int fd = open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+        if (fd < 0)
+            return -1;
+        struct flock fl = {.l_type = F_WRLCK, .l_whence = SEEK_SET, .l_start = 0, .l_len = 0};
+        if (fcntl(fd, LOCK_CMD, &fl) != 0) {
+            *busy = errno == EACCES || errno == EAGAIN;
+            close(fd);
+            return -1;
+        }
+        if (nbep_lock_names(fd, path))
+            return fd;
+        close(fd);
+    }
+    return -1;
+}
+
+void nbep_lock_drop(int fd, const char *remove_path)
+{
+    if (fd < 0)
+        return;
+    if (remove_path) /* while still held: whoever opens the name next opens a new file */
+        unlink(remove_path);
+    close(fd);
 }
 
 char *nbep_path_dir(const char *path)

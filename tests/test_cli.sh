@@ -590,6 +590,12 @@ for f in text other latest number folder cut; do
     done
     [ -f "$tmp/$f.h5" ] && check "$f.h5 untouched by the refused resume" "[ '$(md5sum <"$tmp/$f.h5")' = '$sum0' ]"
 done
+# a --summary at the run's lock (OUT.h5.lock, held while it writes) would take the lock file's
+# place, and a second run would lock that one: refused, nothing written
+run_nbep run inputs/two-spheres.deck --quiet -o "$tmp/locked.h5" --summary "$tmp/locked.h5.lock"
+check "--summary at the run's lock file: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr"))" \
+    "[ $rc = 2 ] && one_line && grep -qx 'nbep: the summary file $tmp/locked.h5.lock is the run.s lock file; choose another' '$tmp/stderr' &&
+     [ ! -e '$tmp/locked.h5' ] && [ ! -e '$tmp/locked.h5.lock' ]"
 # the run's XDMF sidecar named instead of its run (they lie side by side): said so, with the
 # run file to pass (until 2026-11-30 "not an HDF5 file" alone)
 for cmd in resume info; do

@@ -1473,6 +1473,76 @@ static void assert_resume_refused(fixture *fx, const char *path, nbep_status wan
     free(after);
 }
 
+/* One writer of a file at a time (a job resubmitted while the first still runs, an array job
+ * whose tasks all name one file): while another holds PATH.lock, a new file there and a resume
+ * of it are refused as bad usage (exit 2) with one line naming both, and nothing is made or
+ * changed: an older file stays byte for byte, no PATH.partial. Until 2026-12-01 the second run
+ * renamed its file over the first's, both ending with exit 0. */
+static void test_a_file_another_writer_holds_is_neither_made_nor_resumed(void **state)
+{
+    fixture *fx = *state;
+    char path[256], lock[300], partial[300];
+    nbep_test_tmp("output_held.h5", path, sizeof path);
+    snprintf(lock, sizeof lock, "%s.lock", path);
+    snprintf(partial, sizeof partial, "%s.partial", path);
+    const nbep_summary summary = known_summary();
+    write_run(fx, path, &summary);
+    assert_no_file(lock); /* the writer's lock went with it */
+    size_t len0, len1;
+    unsigned char *before = slurp(path, &len0);
+    assert_non_null(before);
+
+    bool busy = true;
+    const int held = nbep_lock_take(lock, &busy); /* "another run" */
+    assert_true(held >= 0);
+    assert_false(busy);
+    nbep_output *o = NULL;
+    assert_int_equal(nbep_output_create(path, &fx->sc, 1, &o, &fx->d), NBEP_EUSAGE);
+    assert_null(o);
+    assert_one_line_naming(&fx->d, path);
+    char says[700];
+    snprintf(says, sizeof says,
+             "nbep: %s: another nbep run is writing this file (it holds %s); wait for it to "
+             "end, or give this run another output",
+             path, lock);
+    assert_string_equal(fx->d.msg[0], says);
+    assert_no_file(partial);
+    nbep_diag_clear(&fx->d);
+    assert_resume_refused(fx, path, NBEP_EUSAGE, "another nbep run is writing this file");
+    unsigned char *after = slurp(path, &len1);
+    assert_true(len1 == len0 && memcmp(after, before, len0) == 0);
+    free(after);
+    struct stat st;
+    assert_int_equal(stat(lock, &st), 0); /* the holder's, not removed by those refused */
+    nbep_lock_drop(held, lock);
+
+    /* free again: a writer holds the lock for the handle's life and removes it at the end */
+    assert_ok(nbep_output_create(path, &fx->sc, 1, &o, &fx->d), &fx->d);
+    busy = false;
+    assert_int_equal(nbep_lock_take(lock, &busy), -1);
+    assert_true(busy);
+    assert_ok(nbep_output_close(&o, NULL, &fx->d), &fx->d);
+    assert_no_file(lock);
+    free(before);
+}
+
+/* A lock file a killed run left (SIGKILL, the OOM killer: no one removed it) holds nothing:
+ * the next run takes it. */
+static void test_a_lock_file_left_by_a_killed_run_does_not_hold_the_file(void **state)
+{
+    fixture *fx = *state;
+    char path[256], lock[300];
+    nbep_test_tmp("output_stale_lock.h5", path, sizeof path);
+    snprintf(lock, sizeof lock, "%s.lock", path);
+    FILE *f = fopen(lock, "w");
+    assert_non_null(f);
+    fclose(f);
+    nbep_output *o = NULL;
+    assert_ok(nbep_output_create(path, &fx->sc, 1, &o, &fx->d), &fx->d);
+    assert_ok(nbep_output_close(&o, NULL, &fx->d), &fx->d);
+    assert_no_file(lock);
+}
+
 /* A file closed (or killed) before its first frame was complete (its /frames count 0) has
  * nothing to resume from: refused as bad usage (exit 2, as a file cut short before HDF5 could
  * open it), with a line that says so and how to go on, and the file left as it was. */
@@ -1631,6 +1701,8 @@ int main(void)
         T(test_a_path_naming_a_directory_fails_and_leaves_the_directory),
         T(test_a_failure_after_the_file_was_created_leaves_no_file),
         T(test_a_failed_create_keeps_an_older_file_at_the_path),
+        T(test_a_file_another_writer_holds_is_neither_made_nor_resumed),
+        T(test_a_lock_file_left_by_a_killed_run_does_not_hold_the_file),
         T(test_a_frame_with_a_non_finite_position_is_refused),
         T(test_a_run_killed_between_frames_leaves_every_frame_written),
         T(test_a_process_exiting_without_closing_leaves_three_frames),

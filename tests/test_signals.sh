@@ -396,4 +396,35 @@ for sig in TERM INT; do
          [ ! -e '$tmp/check-$sig.json.partial' ]"
 done
 
+# ---- one run at a time into a file ------------------------------------------------------------
+# a second run into a file a run is writing (a job resubmitted while the first still runs), fresh
+# or resumed: refused with exit 2 and one line naming the file and its lock, the first running
+# on and its file whole; until 2026-12-01 the second's file was renamed over the first's, which
+# went on writing a file no longer there, both exit 0. A run killed outright (SIGKILL: the OOM
+# killer, scancel's last word) leaves its lock file, which holds nothing: the next run resumes.
+out=$tmp/held.h5
+bin/nbep run inputs/paper-box.deck --quiet -n 100000000 --set spheres.[0].count=512 \
+    -o "$out" 2>"$tmp/held-first" &
+pid=$!
+for _ in $(seq 300); do [ -s "$out" ] && break; sleep 0.1; done
+for how in "-o $out" "-o $out --resume $out"; do
+    bin/nbep run inputs/paper-box.deck --quiet -n 10 --set spheres.[0].count=512 $how \
+        >"$tmp/held-stdout" 2>"$tmp/held-stderr"
+    rc=$?
+    check "a second run ($how) into a file a run is writing: exit 2 (got $rc), one line: $(head -c 300 "$tmp/held-stderr")" \
+        "[ $rc = 2 ] && [ ! -s '$tmp/held-stdout' ] && [ \$(wc -l <'$tmp/held-stderr') = 1 ] &&
+         grep -qx 'nbep: $out: another nbep run is writing this file (it holds $out.lock); wait for it to end, or give this run another output' '$tmp/held-stderr'"
+done
+sleep 0.5
+{ kill -KILL $pid; wait $pid; } 2>/dev/null # (bash's "Killed" line)
+check "... the first ran on until killed, its file readable with frames, its lock file left" \
+    "bin/nbep info '$out' | grep -q '^frames: *[1-9]' && [ -e '$out.lock' ] && [ ! -e '$out.partial' ]"
+bin/nbep run inputs/paper-box.deck --quiet -n 100000000 --set spheres.[0].count=512 \
+    --resume "$out" 2>"$tmp/held-stderr" &
+pid=$!
+frame0=0
+term_within $pid "$out" 1 600
+check "... a left lock file holds nothing: the next run resumes the file (exit $rc: $(head -c 300 "$tmp/held-stderr")), and removes the lock at its end" \
+    "[ $rc = 143 ] && bin/nbep info '$out' | grep -q '^status: *terminated' && [ ! -e '$out.lock' ]"
+
 test_end signals

@@ -217,6 +217,61 @@ static void test_large_arrays_ask_for_huge_pages(void **state)
     nbep_free_aligned(m8);
 }
 
+/* A lock excludes every other descriptor (in this process too) until dropped; dropped with
+ * its name, the file goes, and the next taker makes a new one. */
+static void test_a_lock_excludes_every_other_taker_until_dropped(void **state)
+{
+    (void)state;
+    char path[256];
+    nbep_test_tmp("util.lock", path, sizeof path);
+    unlink(path);
+    bool busy = true;
+    const int a = nbep_lock_take(path, &busy);
+    assert_true(a >= 0);
+    assert_false(busy);
+    assert_int_equal(nbep_lock_take(path, &busy), -1);
+    assert_true(busy);
+    nbep_lock_drop(a, NULL); /* the file stays (a sweep's folder keeps its .lock) */
+    assert_int_equal(access(path, F_OK), 0);
+    const int b = nbep_lock_take(path, &busy);
+    assert_true(b >= 0);
+    assert_false(busy);
+    nbep_lock_drop(b, path);
+    assert_int_equal(access(path, F_OK), -1);
+    nbep_lock_drop(-1, path); /* nothing */
+}
+
+/* A lock that cannot be made (no such folder) is no one else's: -1, not busy. */
+static void test_a_lock_that_cannot_be_made_is_no_one_elses(void **state)
+{
+    (void)state;
+    bool busy = true;
+    assert_int_equal(nbep_lock_take("/nonexistent-dir/x.lock", &busy), -1);
+    assert_false(busy);
+}
+
+/* A lock stands only while its name leads to the file it holds: not once the name is removed
+ * (its holder ended) nor once it leads to a new file (the next holder's). */
+static void test_a_lock_names_its_file_only_while_the_name_leads_there(void **state)
+{
+    (void)state;
+    char path[256];
+    nbep_test_tmp("util_names.lock", path, sizeof path);
+    unlink(path);
+    bool busy;
+    const int a = nbep_lock_take(path, &busy);
+    assert_true(a >= 0);
+    assert_true(nbep_lock_names(a, path));
+    unlink(path);
+    assert_false(nbep_lock_names(a, path));
+    const int b = nbep_lock_take(path, &busy); /* a new file: a's lock is not on it */
+    assert_true(b >= 0);
+    assert_false(nbep_lock_names(a, path));
+    assert_true(nbep_lock_names(b, path));
+    nbep_lock_drop(a, NULL);
+    nbep_lock_drop(b, path);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -228,6 +283,9 @@ int main(void)
         cmocka_unit_test(test_a_paths_directory),
         cmocka_unit_test(test_arrays_are_zeroed_and_aligned),
         cmocka_unit_test(test_large_arrays_ask_for_huge_pages),
+        cmocka_unit_test(test_a_lock_excludes_every_other_taker_until_dropped),
+        cmocka_unit_test(test_a_lock_that_cannot_be_made_is_no_one_elses),
+        cmocka_unit_test(test_a_lock_names_its_file_only_while_the_name_leads_there),
     };
     return cmocka_run_group_tests_name("util", tests, NULL, NULL);
 }

@@ -2,6 +2,7 @@
 #ifndef NBEP_COMPILER_H
 #define NBEP_COMPILER_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -70,6 +71,22 @@ double nbep_now(void);
  * is renamed to path once complete, so that a kill or a refusal never leaves a half-written
  * file at path nor removes an older one (the run's file, its summary, a sweep's tables). */
 char *nbep_partial_path(const char *path);
+/* "PATH.lock" (malloc'd; NULL without memory): the lock a run holds while it writes the file at
+ * path (nbep_lock_take), removed at its end. */
+char *nbep_lock_path(const char *path);
+
+/* An exclusive lock on the file at path (made if missing, left in place), for a writer that
+ * must be the only one (a sweep's folder, a run's output): its descriptor, which holds the
+ * lock until nbep_lock_drop or the process's end, however it ends. -1 without it: *busy when
+ * another descriptor holds it (in this process or another), else false (a file system without
+ * locks, a folder that takes no new file: the caller goes on unguarded). */
+int nbep_lock_take(const char *path, bool *busy);
+/* Lets the lock go: removes the file at remove_path first, when not NULL (the lock's name,
+ * for a lock beside a file of the user's), and closes fd. Nothing for fd < 0. */
+void nbep_lock_drop(int fd, const char *remove_path);
+/* Whether path names the file open on fd (a lock taken on a file whose name its holder has
+ * since removed guards nothing: nbep_lock_take tries again). */
+bool nbep_lock_names(int fd, const char *path);
 
 /* The directory part of path, malloc'd: "." for a bare name, "/" for a name in the root
  * ("a/b/c.h5": "a/b"); NULL without memory. */
