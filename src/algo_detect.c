@@ -28,6 +28,7 @@
 
 #include "nbep/barrier.h"
 #include "nbep/bvh.h"
+#include "nbep/periodic.h"
 #include "nbep/physics.h"
 #include "sim_impl.h"
 
@@ -54,6 +55,12 @@ typedef struct detect_ctx {
     nbep_bvh *bvh;         /* owned, seminaive only */
     nbep_vec3 *pos0, *vel0; /* owned, n each: every sphere as the step found it (before its
                              * drift), what an abandoned step puts back */
+    /* a periodic box (SPEC contract 2): its geometry, the largest radius (how near a face a
+     * sphere's partners may lie across it) and every sphere's images as the step found them
+     * (img0, owned, 3n; NULL without periodic axes), put back with pos0 */
+    nbep_periodic pb;
+    double rmax;
+    int32_t *img0;
     /* set (for good) by a thread whose look in the pass found the stop signal; read by every
      * thread past the barrier that ends the pass */
     atomic_int quit;
@@ -86,6 +93,7 @@ static void detect_destroy(void *p)
     }
     nbep_free_aligned(ctx->pos0);
     nbep_free_aligned(ctx->vel0);
+    nbep_free_aligned(ctx->img0);
     nbep_bvh_destroy(&ctx->bvh);
     free(ctx);
 }
@@ -137,6 +145,8 @@ static size_t detect_bytes_common(const nbep_scene *sc, int nt, bool use_bvh)
     size_t bytes = sizeof(detect_ctx) + (size_t)nt * sizeof *l +
                    (list_room(n) + 64 * (size_t)(nt - 1)) * sizeof *l->c +
                    2 * n * sizeof(nbep_vec3);
+    if (sc->has_box && (sc->periodic[0] || sc->periodic[1] || sc->periodic[2]))
+        bytes += 3 * n * sizeof(int32_t); /* img0 */
     if (use_bvh)
         bytes += (size_t)nt * (n + 1) * sizeof *l->hits + nbep_bvh_bytes(n);
     return bytes;
@@ -163,7 +173,13 @@ static nbep_status detect_create_common(nbep_sim *sim, void **out, bool use_bvh,
     ctx->lists = nbep_alloc_aligned((size_t)sim->nt, sizeof *ctx->lists);
     ctx->pos0 = nbep_alloc_aligned(sim->st.n, sizeof *ctx->pos0);
     ctx->vel0 = nbep_alloc_aligned(sim->st.n, sizeof *ctx->vel0);
-    if (!ctx->lists || (sim->st.n && (!ctx->pos0 || !ctx->vel0))) {
+    ctx->pb = nbep_periodic_make(sim->scene->has_box ? sim->scene->periodic : NULL,
+                                 sim->scene->box_min, sim->scene->box_max);
+    for (size_t i = 0; i < sim->st.n; i++)
+        ctx->rmax = fmax(ctx->rmax, sim->st.radius[i]);
+    if (ctx->pb.any)
+        ctx->img0 = nbep_alloc_aligned(3 * sim->st.n, sizeof *ctx->img0);
+    if (!ctx->lists || (sim->st.n && (!ctx->pos0 || !ctx->vel0 || (ctx->pb.any && !ctx->img0)))) {
         detect_destroy(ctx);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the %s algorithm", sim->algo->name);
     }
@@ -225,11 +241,15 @@ typedef struct deepest {
     double overlap, overlap_rel;
 } deepest;
 
-/* Exact overlap test of spheres i < j; records a contact and the overlap when they overlap
- * (touching, distance == r_i + r_j, is not overlapping). */
-static void test_pair(const nbep_state *s, size_t i, size_t j, contact_list *l, deepest *mx)
+/* Exact overlap test of spheres i < j, by the minimum image in a periodic box (the places are
+ * wrapped into it, so one period at most apart); records a contact and the overlap when they
+ * overlap (touching, distance == r_i + r_j, is not overlapping). */
+static void test_pair(const nbep_periodic *pb, const nbep_state *s, size_t i, size_t j,
+                      contact_list *l, deepest *mx)
 {
     nbep_vec3 dp = nbep_vec3_sub(s->pos[j], s->pos[i]);
+    if (pb->any)
+        dp = nbep_periodic_near_image(pb, dp);
     double sigma = s->radius[i] + s->radius[j];
     double d2 = nbep_vec3_norm2(dp);
     if (d2 < sigma * sigma) {
@@ -250,6 +270,37 @@ static int cmp_u32(const void *a, const void *b)
 {
     uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
     return (x > y) - (x < y);
+}
+
+/* Seminaive in a periodic box: the later spheres whose boxes touch the copies of i's across
+ * the faces it lies near (within its radius and the largest of a face: a partner across it lies
+ * within the largest radius of the other face), added to l's hits. One copy at most per axis
+ * (a side is longer than two largest diameters), and a partner touches at most one copy of i
+ * (the copies lie a side apart, more than two diameters), so no sphere is reported twice. */
+static void query_images(const detect_ctx *ctx, const nbep_state *s, size_t i, contact_list *l)
+{
+    const nbep_periodic *pb = &ctx->pb;
+    const double p[3] = {s->pos[i].x, s->pos[i].y, s->pos[i].z};
+    const double reach = s->radius[i] + ctx->rmax;
+    double shift[3][2];
+    int cnt[3];
+    for (int k = 0; k < 3; k++) {
+        shift[k][0] = 0.0;
+        cnt[k] = 1;
+        if (!pb->axis[k])
+            continue;
+        if (p[k] + reach >= pb->lo[k] + pb->len[k]) /* near the upper face: the copy below */
+            shift[k][cnt[k]++] = -pb->len[k];
+        else if (p[k] - reach <= pb->lo[k]) /* near the lower face: the copy above */
+            shift[k][cnt[k]++] = pb->len[k];
+    }
+    for (int a = 0; a < cnt[0]; a++)
+        for (int b = 0; b < cnt[1]; b++)
+            for (int c = 0; c < cnt[2]; c++)
+                if (a || b || c) /* (the copy in place: the plain query) */
+                    nbep_bvh_query_later_shifted(
+                        ctx->bvh, s, i, nbep_vec3_make(shift[0][a], shift[1][b], shift[2][c]),
+                        collect_hit, l);
 }
 
 /* Finds this thread's contacts among rows [row_lo, row_hi) of step `step`, the deepest
@@ -278,14 +329,16 @@ static uint64_t detect_rows(detect_ctx *ctx, nbep_sim *sim, uint64_t step, int t
         if (ctx->use_bvh) {
             l->n_hits = 0;
             nbep_bvh_query_later(ctx->bvh, s, i, collect_hit, l);
+            if (ctx->pb.any)
+                query_images(ctx, s, i, l);
             /* the paper's loop meets partners in index order; so do we */
             qsort(l->hits, l->n_hits, sizeof *l->hits, cmp_u32);
             for (size_t k = 0; k < l->n_hits; k++)
-                test_pair(s, i, l->hits[k], l, mx);
+                test_pair(&ctx->pb, s, i, l->hits[k], l, mx);
             checks += l->n_hits;
         } else {
             for (size_t j = i + 1; j < n; j++)
-                test_pair(s, i, j, l, mx);
+                test_pair(&ctx->pb, s, i, j, l, mx);
             checks += n - 1 - i;
         }
         done += row_cost(ctx->use_bvh, n, np, i);
@@ -317,6 +370,7 @@ static void respond_all(const detect_ctx *ctx, nbep_state *s, double e, int nt,
                         nbep_counters *cnt, nbep_thread_max *mx)
 {
     const size_t n = s->n;
+    const nbep_periodic *pb = &ctx->pb;
     for (int t = 0; t < nt; t++) {
         const contact_list *l = &ctx->lists[t];
         for (size_t k = 0; k < l->len; k++) {
@@ -333,16 +387,30 @@ static void respond_all(const detect_ctx *ctx, nbep_state *s, double e, int nt,
                                             &s->pos[i], s->radius[i]);
             } else {
                 const nbep_vec3 vj = s->vel[j];
-                if (nbep_physics_respond_pair(s->pos[i], s->pos[j], &s->vel[i], &s->vel[j],
+                /* j's copy nearest i in a periodic box (test_pair's minimum image) */
+                const nbep_vec3 pj0 = pb->any ? nbep_vec3_add(s->pos[i], nbep_periodic_near_image(
+                                                    pb, nbep_vec3_sub(s->pos[j], s->pos[i])))
+                                              : s->pos[j];
+                if (nbep_physics_respond_pair(s->pos[i], pj0, &s->vel[i], &s->vel[j],
                                               s->mass[i], s->mass[j], e))
                     cnt->c[NBEP_COUNTER_SPHERE_COLLISIONS]++;
-                /* SPEC /stats/virial: r12 . dp2 (r12 as found, after the step's flight) */
+                /* SPEC /stats/virial: r12 . dp2 (r12 as found, after the step's flight, the
+                 * minimum image in a periodic box) */
                 nbep_xsum_add(&mx->virial,
-                              nbep_vec3_dot(nbep_vec3_sub(s->pos[j], s->pos[i]),
+                              nbep_vec3_dot(nbep_vec3_sub(pj0, s->pos[i]),
                                             nbep_vec3_scale(nbep_vec3_sub(s->vel[j], vj),
                                                             s->mass[j])));
-                nbep_physics_separate_pair(&s->pos[i], &s->pos[j], s->radius[i], s->radius[j],
-                                           s->mass[i], s->mass[j]);
+                if (!pb->any) {
+                    nbep_physics_separate_pair(&s->pos[i], &s->pos[j], s->radius[i],
+                                               s->radius[j], s->mass[i], s->mass[j]);
+                } else { /* j moves as its copy does, and both are wrapped again */
+                    nbep_vec3 pj = pj0;
+                    nbep_physics_separate_pair(&s->pos[i], &pj, s->radius[i], s->radius[j],
+                                               s->mass[i], s->mass[j]);
+                    s->pos[j] = nbep_vec3_add(s->pos[j], nbep_vec3_sub(pj, pj0));
+                    nbep_periodic_wrap(pb, &s->pos[i], &s->image[3 * i]);
+                    nbep_periodic_wrap(pb, &s->pos[j], &s->image[3 * j]);
+                }
             }
         }
     }
@@ -368,6 +436,11 @@ static void detect_run(nbep_sim *sim, void *p)
                 ctx->vel0[i] = s->vel[i];
                 nbep_physics_drift(&s->pos[i], &s->vel[i], s->acc[i], sim->dt);
             }
+            if (ctx->pb.any) /* back into the box, the periods crossed counted */
+                for (size_t i = own.lo; i < own.hi; i++) {
+                    memcpy(&ctx->img0[3 * i], &s->image[3 * i], 3 * sizeof *ctx->img0);
+                    nbep_periodic_wrap(&ctx->pb, &s->pos[i], &s->image[3 * i]);
+                }
             nbep_barrier_wait(&ctx->bar);
             if (ctx->use_bvh) {
                 if (tid == 0)
@@ -386,6 +459,8 @@ static void detect_run(nbep_sim *sim, void *p)
                 for (size_t i = own.lo; i < own.hi; i++) {
                     s->pos[i] = ctx->pos0[i];
                     s->vel[i] = ctx->vel0[i];
+                    if (ctx->pb.any)
+                        memcpy(&s->image[3 * i], &ctx->img0[3 * i], 3 * sizeof *ctx->img0);
                 }
                 if (tid == 0)
                     nbep__sim_abandon(sim);

@@ -362,13 +362,12 @@ void nbep_bvh_build(nbep_bvh *b, const nbep_state *s)
 
 /* ---- query ------------------------------------------------------------------------------ */
 
-size_t nbep_bvh_query_later(const nbep_bvh *b, const nbep_state *s, size_t i,
-                            void (*visit)(void *ctx, uint32_t j), void *ctx)
+/* The later spheres' boxes that touch q, sphere i's own box or a copy of it. */
+static size_t query_box(const nbep_bvh *b, size_t i, bvh_box q,
+                        void (*visit)(void *ctx, uint32_t j), void *ctx)
 {
-    assert(i < b->n && b->n == s->n);
     if (b->n_nodes == 0)
         return 0;
-    const bvh_box q = sphere_box(s, i);
     uint32_t stack[NBEP_BVH_MAX_DEPTH + 1];
     size_t top = 0, examined = 0;
     stack[top++] = 0;
@@ -391,6 +390,30 @@ size_t nbep_bvh_query_later(const nbep_bvh *b, const nbep_state *s, size_t i,
         }
     }
     return examined;
+}
+
+size_t nbep_bvh_query_later(const nbep_bvh *b, const nbep_state *s, size_t i,
+                            void (*visit)(void *ctx, uint32_t j), void *ctx)
+{
+    assert(i < b->n && b->n == s->n);
+    return query_box(b, i, sphere_box(s, i), visit, ctx);
+}
+
+size_t nbep_bvh_query_later_shifted(const nbep_bvh *b, const nbep_state *s, size_t i,
+                                    nbep_vec3 shift, void (*visit)(void *ctx, uint32_t j),
+                                    void *ctx)
+{
+    assert(i < b->n && b->n == s->n);
+    const nbep_vec3 p = nbep_vec3_add(s->pos[i], shift);
+    /* widened by a few units in the last place of the coordinates involved: the shifted
+     * place is rounded once more than the stored one, and the exact test that follows (on
+     * the minimum image of the separation) must meet every pair it would find */
+    const double r = s->radius[i], c = 0x1p-48;
+    const nbep_vec3 w = {r + (fabs(p.x) + fabs(shift.x) + r) * c,
+                         r + (fabs(p.y) + fabs(shift.y) + r) * c,
+                         r + (fabs(p.z) + fabs(shift.z) + r) * c};
+    const bvh_box q = {nbep_vec3_sub(p, w), nbep_vec3_add(p, w)};
+    return query_box(b, i, q, visit, ctx);
 }
 
 /* ---- invariant check -------------------------------------------------------------------- */

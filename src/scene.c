@@ -602,11 +602,13 @@ static void syntax_error(load *L, const char *deck, const char *text, const char
 }
 
 /* Periodic axes (SPEC contract 2): each longer than twice the largest diameter (the minimum
- * image needs it), and a run mode that supports them: the predictive algorithm's all-pairs
- * mode (nearest images with an image horizon, algo_predictive.c) and cells mode, whose cell
- * blocks wrap around the box (three cells at least per periodic axis, so that a neighbour is
- * one image only). naive, seminaive and grid mode would need their own image handling; they
- * are refused rather than run wrong. */
+ * image needs it), and a run mode that supports them: naive and seminaive (the minimum image
+ * of every pair they test, the hierarchy queried for the copies of a sphere near a face too,
+ * algo_detect.c; since 2026-12-01, as SPEC has them take any deck), the predictive
+ * algorithm's all-pairs mode (nearest images with an image horizon, algo_predictive.c) and
+ * cells mode, whose cell blocks wrap around the box (three cells at least per periodic axis,
+ * so that a neighbour is one image only). Grid mode would need its own image handling; it is
+ * refused rather than run wrong. */
 static void check_periodic(load *L, const config_setting_t *at, const nbep_scene *sc,
                            const nbep__scene_entry *e, size_t n_entries)
 {
@@ -645,11 +647,10 @@ static void check_periodic(load *L, const config_setting_t *at, const nbep_scene
     }
     /* blamed as run.order's message is (parse_run): what the user typed of the three, else
      * box.periodic's line (--set run.neighbors="grid" named the deck's box.periodic line) */
-    if (strcmp(sc->algorithm, "predictive") != 0 || sc->neighbors_grid)
+    if (strcmp(sc->algorithm, "predictive") == 0 && sc->neighbors_grid)
         ERR(L, mode_at(L, at),
-            "box.periodic needs run.algorithm = \"predictive\" with run.neighbors = \"cells\" "
-            "or \"all\" (got \"%s\"%s): the other modes do not handle periodic images",
-            sc->algorithm, strcmp(sc->algorithm, "predictive") == 0 ? ", \"grid\"" : "");
+            "box.periodic needs run.neighbors = \"cells\" or \"all\" with the predictive "
+            "algorithm (got \"grid\"): grid mode does not handle periodic images");
 }
 
 typedef struct plane {

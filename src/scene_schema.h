@@ -89,7 +89,7 @@ enum {
       "per axis: the box repeats along it (no walls there; contacts by the minimum image; "    \
       "positions wrapped, /frames/image counts the periods); a periodic side must exceed "      \
       "twice the largest diameter (\"cells\": 6.75 largest radii, three cells across); "       \
-      "planes must lie along a periodic axis; predictive \"all\" or \"cells\" only")          \
+      "planes must lie along a periodic axis; every algorithm, predictive \"grid\" mode excepted")          \
     X(PLANES, "planes", LIST, 0, NULL, "none", "extra static planes, after the box's walls")       \
     X(PLANE_NORMAL, "planes.[].normal", VEC3, F_REQUIRED, NULL, "required",                        \
       "points to where spheres live; normalized; not zero; no part along a periodic axis")      \

@@ -243,6 +243,62 @@ static void test_random_scenes_report_exactly_the_pairs_of_the_double_loop(void 
         }
 }
 
+/* A copy of a sphere moved by a shift (seminaive in a periodic box: a sphere near a face and
+ * its partners across it) pairs with every later sphere whose box touches the copy's, itself
+ * reported once, and with no earlier one: random spheres of radii 0.2 to 0.5 in [0, 6)^3,
+ * every sphere's copies a period (6) away along each axis and diagonal, against a double loop
+ * of the boxes moved by the shift. The query widens the copy by a few roundings, so a box that
+ * misses by more than that is not reported (a loose margin would only cost tests). */
+static void test_a_shifted_query_pairs_with_the_boxes_its_copy_touches(void **state)
+{
+    fixture *f = *state;
+    const size_t n = scaled(400, 120);
+    const double L = 6.0;
+    new_scene(f, n);
+    uint64_t x = 0x1234567u;
+    for (size_t i = 0; i < n; i++) {
+        f->s.pos[i] = (nbep_vec3){L * rng_unit(&x), L * rng_unit(&x), L * rng_unit(&x)};
+        f->s.radius[i] = 0.2 + 0.3 * rng_unit(&x);
+    }
+    nbep_bvh_destroy(&f->b);
+    build(f, n);
+    const double shifts[][3] = {{L, 0, 0}, {-L, 0, 0}, {0, L, 0}, {0, 0, -L}, {L, -L, 0},
+                                {-L, L, L}};
+    size_t found = 0;
+    for (size_t a = 0; a < sizeof shifts / sizeof *shifts; a++) {
+        const nbep_vec3 sh = {shifts[a][0], shifts[a][1], shifts[a][2]};
+        memset(f->stamp, 0, f->cap_stamp * sizeof *f->stamp);
+        for (size_t i = 0; i < n; i++) {
+            f->n_got = 0;
+            (void)nbep_bvh_query_later_shifted(f->b, &f->s, i, sh, collect, f);
+            for (size_t k = 0; k < f->n_got; k++) {
+                const uint32_t j = f->got[k];
+                if (!(j > i && j < n) || f->stamp[j] == i + 1)
+                    fail_msg("shifted query %zu reported %u out of (i, n) or twice", i, (unsigned)j);
+                f->stamp[j] = (uint32_t)(i + 1);
+            }
+            const nbep_vec3 c = nbep_vec3_add(f->s.pos[i], sh);
+            for (size_t j = i + 1; j < n; j++) {
+                const double *pc = &c.x, *pj = &f->s.pos[j].x;
+                const double rs = f->s.radius[i] + f->s.radius[j];
+                bool touch = true, far = false;
+                for (int ax = 0; ax < 3; ax++) {
+                    const double gap = fabs(pc[ax] - pj[ax]) - rs;
+                    touch &= gap <= 0.0;
+                    far |= gap > 1e-12; /* past the query's few roundings */
+                }
+                const bool reported = f->stamp[j] == i + 1;
+                if (touch && !reported)
+                    fail_msg("shift %zu: copy of %zu touches %zu, not reported", a, i, j);
+                if (far && reported)
+                    fail_msg("shift %zu: copy of %zu reported %zu, whose box it misses", a, i, j);
+                found += reported;
+            }
+        }
+    }
+    assert_true(found > n / 4); /* spheres near the faces have partners across them */
+}
+
 static void test_rebuilding_after_spheres_move_reports_the_new_pairs(void **state)
 {
     fixture *f = *state;
@@ -583,6 +639,8 @@ int main(void)
             test_random_scenes_report_exactly_the_pairs_of_the_double_loop, setup, teardown),
         cmocka_unit_test_setup_teardown(
             test_rebuilding_after_spheres_move_reports_the_new_pairs, setup, teardown),
+        cmocka_unit_test_setup_teardown(
+            test_a_shifted_query_pairs_with_the_boxes_its_copy_touches, setup, teardown),
         cmocka_unit_test_setup_teardown(test_one_sphere_has_no_partner, setup, teardown),
         cmocka_unit_test_setup_teardown(test_an_empty_scene_builds_an_empty_tree, setup,
                                         teardown),

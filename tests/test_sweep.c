@@ -480,15 +480,15 @@ static void test_a_bad_axis_value_is_refused_before_any_run(void **state)
     assert_refused(deck, by_set, 3, 4, named);
     /* a value that breaks another setting of the deck says which value did */
     write_deck("sweep_bad_combination",
-               "sweep: { vary = ( { key = \"run.algorithm\"; values = [\"predictive\", "
-               "\"naive\"]; } ); };\n",
+               "sweep: { vary = ( { key = \"run.neighbors\"; values = [\"cells\", "
+               "\"grid\"]; } ); };\n",
                deck, sizeof deck);
     const char *const periodic[] = {"box.periodic=[true, true, true]"};
     const char *const other[] = {
         TMP "sweep_bad_combination.deck:6: sweep.vary.[0].values.[1]: with "
-            "run.algorithm=\"naive\", --set box.periodic=[true, true, true]: box.periodic needs "
-            "run.algorithm = \"predictive\" with run.neighbors = \"cells\" or \"all\" (got "
-            "\"naive\"): the other modes do not handle periodic images"};
+            "run.neighbors=\"grid\", --set box.periodic=[true, true, true]: box.periodic needs "
+            "run.neighbors = \"cells\" or \"all\" with the predictive algorithm (got "
+            "\"grid\"): grid mode does not handle periodic images"};
     assert_refused(deck, periodic, 1, 1, other);
 }
 

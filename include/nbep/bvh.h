@@ -48,6 +48,13 @@ void nbep_bvh_build(nbep_bvh *b, const nbep_state *s);
 size_t nbep_bvh_query_later(const nbep_bvh *b, const nbep_state *s, size_t i,
                             void (*visit)(void *ctx, uint32_t j), void *ctx);
 
+/* The same for sphere i's box moved by shift (a periodic box's copy of i, whose partners
+ * across a face lie within reach of it), widened by a few roundings so that no pair within
+ * touch of the copy is missed. */
+size_t nbep_bvh_query_later_shifted(const nbep_bvh *b, const nbep_state *s, size_t i,
+                                    nbep_vec3 shift, void (*visit)(void *ctx, uint32_t j),
+                                    void *ctx);
+
 /* Edges from the root to the deepest leaf of the last build (0 for a single leaf or an empty
  * tree); never above NBEP_BVH_MAX_DEPTH. */
 size_t nbep_bvh_depth(const nbep_bvh *b);
