@@ -1204,8 +1204,10 @@ MUTANTS = [
      "    if (sc->tc_given || !nbep_scene_tc_model(sc) || strcmp(sc->algorithm, \"predictive\") != 0 ||",
      "    if (sc->tc_given || !(sc->tc > 0.0) || strcmp(sc->algorithm, \"predictive\") != 0 ||",
      ["test_scene"], None),
-    ("tc-warning-unsaid-by-run", "src/run.c", "    if (rq->verbose && tc_warning)",
-     "    if (0)", ["tests/test_cli.sh"], None),
+    ("tc-warning-unsaid-by-run", "src/run.c", "    if (tc_warning) /* --quiet too",
+     "    if (0) /* --quiet too", ["tests/test_cli.sh"], None),
+    ("tc-warning-quiet-again", "src/run.c", "    if (tc_warning) /* --quiet too",
+     "    if (rq->verbose && tc_warning) /* --quiet too", ["tests/test_cli.sh"], None),
     ("tc-warning-unsaid-by-check", "src/main.c",
      "            if (tc_warning)\n                fprintf(stderr, \"%s\\n\", tc_warning);",
      "            if (0)\n                fprintf(stderr, \"%s\\n\", tc_warning);",
@@ -1406,8 +1408,6 @@ MUTANTS = [
      "    free(path);\n    *fd = f;\n    return st;",
      "    free(path);\n    if (f >= 0)\n        close(f);\n    *fd = -1;\n    return st;",
      ["tests/test_sweep_cli.sh"], None),
-    # one writer of a run's file at a time: PATH.lock (2026-12-01)
-    ("lock-never-taken", "src/util.c",
     # naive and seminaive in a periodic box (2026-12-01)
     ("detect-pair-no-image", "src/algo_detect.c",
      "    if (pb->any)\n        dp = nbep_periodic_near_image(pb, dp);", "",
@@ -1445,6 +1445,8 @@ MUTANTS = [
      "    if (strcmp(sc->algorithm, \"predictive\") == 0 && sc->neighbors_grid)",
      "    if (strcmp(sc->algorithm, \"predictive\") != 0 || sc->neighbors_grid)",
      ["tests/test_cli.sh", "test_periodic"], None),
+    # one writer of a run's file at a time: PATH.lock (2026-12-01)
+    ("lock-never-taken", "src/util.c",
      "        if (fcntl(fd, LOCK_CMD, &fl) != 0) {", "        if (0) {",
      ["test_util", "test_output", "tests/test_signals.sh"], None),
     ("lock-busy-never-said", "src/util.c",

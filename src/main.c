@@ -132,7 +132,10 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
             nbep_check_print(human, &sc, &facts);
             if (study)
                 nbep_sweep_check_print(human, &rep);
-            /* the deck's own, or a study's first run's (its e or dt may be an axis's) */
+        }
+        if (st == NBEP_OK) {
+            /* the deck's own, or a study's first run's (its e or dt may be an axis's); with
+             * --quiet too, as the run's overlap warning: it says the results change */
             char warn[512];
             const char *tc_warning = nbep_scene_tc_warning(&sc, warn, sizeof warn);
             if (!tc_warning && study && rep.tc_warning[0])

@@ -336,7 +336,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         return st;
     char warn[512];
     const char *tc_warning = nbep_scene_tc_warning(&sc, warn, sizeof warn);
-    if (rq->verbose && tc_warning)
+    if (tc_warning) /* --quiet too, as the overlap warning: the results change */
         fprintf(stderr, "%s\n", tc_warning);
     const int threads = nbep_sim_resolve_threads(sc.threads);
     nbep_output *out = NULL;

@@ -1740,8 +1740,9 @@ const char *nbep_scene_tc_warning(const nbep_scene *sc, char *buf, size_t len)
         return NULL;
     snprintf(buf, len,
              "nbep: warning: %s: physics.tc is at its default, %g, %.3g times run.dt (%g): the "
-             "TC model makes a collision within tc of a sphere's last elastic, and the default "
-             "is a contact time in seconds (SI grains, dt about 1e-3); where the deck's time "
+             "TC model makes a collision within tc of a sphere's last elastic and ends a bounce "
+             "shorter than tc at rest, and the default is a contact time in seconds (SI grains, "
+             "dt about 1e-3); where the deck's time "
              "unit is another, or its contacts are shorter, set physics.tc (0: off)",
              sc->deck_path, sc->tc, sc->tc / sc->dt, sc->dt);
     return buf;
