@@ -25,6 +25,7 @@
  *   flock support. The price: nothing stops two runs from writing one file.
  *
  * Errors: see output_hdf5.c. */
+#define _XOPEN_SOURCE 700 /* realpath() */
 #include "nbep/output.h"
 
 #include "nbep/output_xdmf.h"
@@ -587,9 +588,19 @@ nbep_output *nbep__output_new(const char *path, size_t n_spheres, nbep_diag *d)
  * resumed one file and interleaved their frames (until 2026-12-01). The lock is a file of its
  * own beside the output, not the output: readers take HDF5's locks (flock) on the output, which
  * on NFS are byte-range locks of the whole file and would meet a writer's there. */
-nbep_status nbep__output_lock(nbep_output *o, nbep_diag *d)
+nbep_status nbep__output_lock(nbep_output *o, bool resume, nbep_diag *d)
 {
-    if (!(o->lock_path = nbep_lock_path(o->path)))
+    /* A resume writes the file the path leads to: through a symbolic link (link.h5 to
+     * out.h5), the lock is that file's (out.h5.lock), which its own writer holds. A new file
+     * replaces a link at its path, and the lock is the path's. (A link to the folder leads to
+     * the same lock file: nothing to resolve.) */
+    char *target = NULL;
+    struct stat sb;
+    if (resume && lstat(o->path, &sb) == 0 && S_ISLNK(sb.st_mode))
+        target = realpath(o->path, NULL);
+    o->lock_path = nbep_lock_path(target ? target : o->path);
+    free(target);
+    if (!o->lock_path)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: %s: no memory for the output handle", o->path);
     bool busy;
     o->lock_fd = nbep_lock_take(o->lock_path, &busy);
@@ -689,7 +700,7 @@ nbep_status nbep_output_create_staged(const char *path, const nbep_scene *sc, in
     }
     o->ck_allowed = true;
     o->n_planes = sc->state.n_planes;
-    nbep_status lock_st = nbep__output_lock(o, d); /* before PATH.partial is made afresh */
+    nbep_status lock_st = nbep__output_lock(o, false, d); /* before PATH.partial is made afresh */
     if (lock_st != NBEP_OK) {
         free(tmp);
         nbep__output_release(&o);

@@ -130,11 +130,12 @@ struct nbep_output {
 
 /* A handle for path with every id invalid; NULL (and NBEP_ENOMEM in d) when out of memory. */
 nbep_output *nbep__output_new(const char *path, size_t n_spheres, nbep_diag *d);
-/* One writer of a path at a time: takes the lock on PATH.lock for the handle's life (released,
+/* One writer of a path at a time: takes the lock on PATH.lock (a resume through a symbolic
+ * link to a file: the file's) for the handle's life (released,
  * and the file removed, with the handle). Another process's run writing path holds it:
  * NBEP_EUSAGE and a line naming both. A lock that cannot be had for another reason (a file
  * system without locks, a folder that takes no new file) is done without. */
-nbep_status nbep__output_lock(nbep_output *o, nbep_diag *d);
+nbep_status nbep__output_lock(nbep_output *o, bool resume, nbep_diag *d);
 /* Sets o's periodic geometry from sc and, when it has a periodic axis, the buffers frames are
  * wrapped in; -1 (NBEP_ENOMEM's message in d) when out of memory. */
 int nbep__output_periodic(nbep_output *o, const nbep_scene *sc, nbep_diag *d);

@@ -495,7 +495,7 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     nbep_output *o = nbep__output_new(path, n, d);
     if (!o)
         return NBEP_ENOMEM;
-    if ((st = nbep__output_lock(o, d)) != NBEP_OK)
+    if ((st = nbep__output_lock(o, true, d)) != NBEP_OK)
         goto fail;
     st = NBEP_EIO;
 

@@ -415,6 +415,14 @@ for how in "-o $out" "-o $out --resume $out"; do
         "[ $rc = 2 ] && [ ! -s '$tmp/held-stdout' ] && [ \$(wc -l <'$tmp/held-stderr') = 1 ] &&
          grep -qx 'nbep: $out: another nbep run is writing this file (it holds $out.lock); wait for it to end, or give this run another output' '$tmp/held-stderr'"
 done
+# through a symbolic link to the file, a resume writes the same file: its writer's lock holds it
+ln -sf held.h5 "$tmp/held-link.h5"
+bin/nbep run inputs/paper-box.deck --quiet -n 10 --set spheres.[0].count=512 \
+    --resume "$tmp/held-link.h5" >"$tmp/held-stdout" 2>"$tmp/held-stderr"
+rc=$?
+check "a resume through a symbolic link to a file a run is writing: exit 2 (got $rc), naming its lock: $(head -c 300 "$tmp/held-stderr")" \
+    "[ $rc = 2 ] && [ \$(wc -l <'$tmp/held-stderr') = 1 ] &&
+     grep -qx 'nbep: $tmp/held-link.h5: another nbep run is writing this file (it holds $(realpath "$tmp")/held.h5.lock); wait for it to end, or give this run another output' '$tmp/held-stderr'"
 sleep 0.5
 { kill -KILL $pid; wait $pid; } 2>/dev/null # (bash's "Killed" line)
 check "... the first ran on until killed, its file readable with frames, its lock file left" \
