@@ -266,17 +266,41 @@ static void collect_hit(void *p, uint32_t j)
     l->hits[l->n_hits++] = j; /* cap_hits = n: never full */
 }
 
+/* A periodic box's query, through one copy of sphere i (i moved by -want): a partner is kept
+ * only where that copy is the nearest way to it (the shift that brings its separation from i
+ * to the minimum image is `want`), so that no partner is kept twice, through the copy in place
+ * and another (a periodic side within a rounding of two diameters: until 2026-12-01 the pair
+ * was tested twice, and nine of them wrote past the hits' room), and the exact test takes that
+ * image. A pair that touches does so by its minimum image, whose copy is queried. */
+typedef struct image_hits {
+    contact_list *l;
+    const nbep_state *s;
+    const nbep_periodic *pb;
+    size_t i;
+    nbep_vec3 want;
+} image_hits;
+
+static void collect_image_hit(void *p, uint32_t j)
+{
+    image_hits *h = p;
+    const nbep_vec3 ns =
+        nbep_periodic_near_shift(h->pb, nbep_vec3_sub(h->s->pos[j], h->s->pos[h->i]));
+    if (ns.x == h->want.x && ns.y == h->want.y && ns.z == h->want.z &&
+        h->l->n_hits < h->l->cap_hits)
+        h->l->hits[h->l->n_hits++] = j;
+}
+
 static int cmp_u32(const void *a, const void *b)
 {
     uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
     return (x > y) - (x < y);
 }
 
-/* Seminaive in a periodic box: the later spheres whose boxes touch the copies of i's across
- * the faces it lies near (within its radius and the largest of a face: a partner across it lies
- * within the largest radius of the other face), added to l's hits. One copy at most per axis
- * (a side is longer than two largest diameters), and a partner touches at most one copy of i
- * (the copies lie a side apart, more than two diameters), so no sphere is reported twice. */
+/* Seminaive in a periodic box: the later spheres whose boxes touch i's, or those of its copies
+ * across the faces it lies near (within its radius and the largest of a face: a partner across
+ * it lies within the largest radius of the other face), each through the copy that is the
+ * nearest way to it (collect_image_hit), into l's hits. One copy at most per axis (a side is
+ * longer than two largest diameters). */
 static void query_images(const detect_ctx *ctx, const nbep_state *s, size_t i, contact_list *l)
 {
     const nbep_periodic *pb = &ctx->pb;
@@ -294,13 +318,17 @@ static void query_images(const detect_ctx *ctx, const nbep_state *s, size_t i, c
         else if (p[k] - reach <= pb->lo[k]) /* near the lower face: the copy above */
             shift[k][cnt[k]++] = pb->len[k];
     }
+    image_hits h = {.l = l, .s = s, .pb = pb, .i = i};
     for (int a = 0; a < cnt[0]; a++)
         for (int b = 0; b < cnt[1]; b++)
-            for (int c = 0; c < cnt[2]; c++)
-                if (a || b || c) /* (the copy in place: the plain query) */
-                    nbep_bvh_query_later_shifted(
-                        ctx->bvh, s, i, nbep_vec3_make(shift[0][a], shift[1][b], shift[2][c]),
-                        collect_hit, l);
+            for (int c = 0; c < cnt[2]; c++) {
+                const nbep_vec3 sh = nbep_vec3_make(shift[0][a], shift[1][b], shift[2][c]);
+                h.want = nbep_vec3_make(-sh.x, -sh.y, -sh.z);
+                if (a || b || c)
+                    nbep_bvh_query_later_shifted(ctx->bvh, s, i, sh, collect_image_hit, &h);
+                else /* the copy in place */
+                    nbep_bvh_query_later(ctx->bvh, s, i, collect_image_hit, &h);
+            }
 }
 
 /* Finds this thread's contacts among rows [row_lo, row_hi) of step `step`, the deepest
@@ -328,9 +356,10 @@ static uint64_t detect_rows(detect_ctx *ctx, nbep_sim *sim, uint64_t step, int t
         checks += np;
         if (ctx->use_bvh) {
             l->n_hits = 0;
-            nbep_bvh_query_later(ctx->bvh, s, i, collect_hit, l);
             if (ctx->pb.any)
                 query_images(ctx, s, i, l);
+            else
+                nbep_bvh_query_later(ctx->bvh, s, i, collect_hit, l);
             /* the paper's loop meets partners in index order; so do we */
             qsort(l->hits, l->n_hits, sizeof *l->hits, cmp_u32);
             for (size_t k = 0; k < l->n_hits; k++)

@@ -887,6 +887,57 @@ static void test_detection_collides_across_a_periodic_face(void **state)
     detect_across_a_face("seminaive");
 }
 
+/* A periodic side within a rounding of two diameters (x: 4 + 1e-15, radius 1, allowed): a
+ * sphere near the lower face has nine partners 2 - 1e-14 away in x inside the box (a 3 by 3
+ * grid in y and z, 2 apart, y and z closed), whose boxes its copy a period up touches as well,
+ * within the query's widening. Seminaive keeps each partner once, through the nearest way
+ * (until 2026-12-01 twice: each pair tested twice, and the nine ran past the hits' room,
+ * `free(): invalid size`): its checks a step are the pairs whose boxes touch by the minimum
+ * image, counted here apart; its frames naive's. */
+static void test_seminaive_keeps_a_partner_once_when_a_side_is_two_diameters(void **state)
+{
+    (void)state;
+    const double L = 4.000000000000001;
+    nbep_state fin[2];
+    nbep_summary sum[2];
+    frames f[2] = {{0}};
+    size_t touching = 0;
+    for (int a = 0; a < 2; a++) {
+        nbep_scene *sc = nbep_test_scene_new(10, 0, a ? "seminaive" : "naive", 3, 0.01);
+        nbep_test_set_periodic_box(sc, L);
+        sc->box_max = (nbep_vec3){L, 10.0, 10.0};
+        sc->periodic[1] = sc->periodic[2] = false;
+        sc->state.period[1] = sc->state.period[2] = 0.0;
+        sc->output_every = 1;
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){0.5, 5.0, 5.0}, ZERO, 1.0, 1.0, ZERO);
+        for (size_t k = 1; k < 10; k++)
+            nbep_test_set_sphere(sc, k,
+                                 (nbep_vec3){2.49999999999999, 3.0 + 2.0 * (double)((k - 1) / 3),
+                                             3.0 + 2.0 * (double)((k - 1) % 3)},
+                                 ZERO, 1.0, 1.0, ZERO);
+        if (a == 0) { /* the pairs whose boxes touch by the minimum image */
+            const nbep_periodic pb = nbep_periodic_make(sc->periodic, ZERO, sc->box_max);
+            for (size_t i = 0; i < 10; i++)
+                for (size_t j = i + 1; j < 10; j++) {
+                    const nbep_vec3 d = nbep_periodic_image(
+                        &pb, nbep_vec3_sub(sc->state.pos[j], sc->state.pos[i]));
+                    touching += fabs(d.x) <= 2.0 && fabs(d.y) <= 2.0 && fabs(d.z) <= 2.0;
+                }
+        }
+        sum[a] = run(sc, 1, &fin[a], &f[a]);
+        nbep_test_scene_free(&sc);
+    }
+    assert_int_equal(sum[0].checks, 3 * 45);
+    assert_true(touching >= 9);
+    assert_int_equal(sum[1].checks, 3 * touching);
+    assert_true(sum[1].max_overlap == sum[0].max_overlap);
+    assert_memory_equal(f[1].data, f[0].data, f[0].n_frames * 2 * 10 * sizeof *f[0].data);
+    for (int a = 0; a < 2; a++) {
+        nbep_state_fini(&fin[a]);
+        nbep_test_frames_free(&f[a]);
+    }
+}
+
 /* The largest overlap (SPEC's, the nearest way round) over every kept frame of f. */
 static double frames_max_overlap_rel(const frames *f, const nbep_scene *sc)
 {
@@ -1784,6 +1835,7 @@ int main(void)
         cmocka_unit_test(test_falling_through_a_periodic_axis_keeps_the_energy),
         cmocka_unit_test(test_periodic_fluid_is_exact_and_thread_independent),
         cmocka_unit_test(test_detection_collides_across_a_periodic_face),
+        cmocka_unit_test(test_seminaive_keeps_a_partner_once_when_a_side_is_two_diameters),
         cmocka_unit_test(test_detection_in_a_periodic_fluid_is_thread_independent_and_finds_every_image),
         cmocka_unit_test(test_team_loop_handles_events_ahead_and_undoes_some_bit_for_bit),
         cmocka_unit_test(test_team_loop_on_a_cooling_fluid_is_bit_for_bit),
