@@ -268,6 +268,14 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
     if (over)
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: the %s file %s is the deck %s itself; choose another",
                   over == output ? "output" : "summary", over, deck);
+    /* a run's lock is OUT.lock beside its file (nbep_lock_path): an output there would be
+     * renamed over another run's lock, which that run then removes with it at its end */
+    const size_t len = output ? strlen(output) : 0;
+    if (len >= 5 && strcmp(output + len - 5, ".lock") == 0)
+        NBEP_FAIL(d, NBEP_EUSAGE,
+                  "nbep: the output file %s ends in .lock, the name of a run's lock beside its "
+                  "file; choose another",
+                  output);
     if (summary && output && strcmp(summary, "-") != 0) {
         /* the run's file and its sidecar are written by rename: a summary at either name
          * would be replaced, or would replace it; at its lock's, it would take the lock
@@ -336,7 +344,9 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         return st;
     char warn[512];
     const char *tc_warning = nbep_scene_tc_warning(&sc, warn, sizeof warn);
-    if (tc_warning) /* --quiet too, as the overlap warning: the results change */
+    /* --quiet too, as the overlap warning: the results change; a sweep's run, never (its
+     * check said it once) */
+    if (tc_warning && !rq->sweep_run)
         fprintf(stderr, "%s\n", tc_warning);
     const int threads = nbep_sim_resolve_threads(sc.threads);
     nbep_output *out = NULL;
@@ -368,10 +378,17 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         nbep_scene_fini(&sc);
         return st;
     }
-    st = open_summary(rq->summary_path, &summary, d);
-    if (st == NBEP_OK)
-        st = rq->resume ? nbep_output_open_resume(file, &sc, &out, &resume, d)
-                        : nbep_output_create_staged(file, &sc, threads, &out, d);
+    /* the output first: it takes the file's lock, and a run refused there (another writes the
+     * file) must not open the summary, whose SUMMARY.partial is the other run's when both
+     * name one (a resubmitted job: fopen emptied it, the refusal removed it, and the first
+     * run failed at its end, until 2026-12-01) */
+    st = rq->resume ? nbep_output_open_resume(file, &sc, &out, &resume, d)
+                    : nbep_output_create_staged(file, &sc, threads, &out, d);
+    if (st == NBEP_OK && (st = open_summary(rq->summary_path, &summary, d)) != NBEP_OK) {
+        nbep_status ignored = nbep_output_close(&out, NULL, d); /* nothing written yet */
+        (void)ignored;
+        nbep_resume_fini(&resume);
+    }
     if (st == NBEP_OK) {
         if (rq->resume)
             nbep_resume_apply(&resume, &sc.state);

@@ -143,7 +143,11 @@ void nbep_lock_drop(int fd, const char *remove_path)
 {
     if (fd < 0)
         return;
-    if (remove_path) /* while still held: whoever opens the name next opens a new file */
+    /* while still held: whoever opens the name next opens a new file. Only the lock's own
+     * file, empty as the lock left it: a file put at its name since (another run's output
+     * renamed there) or a user's file it found there is not the lock's to remove */
+    struct stat sb;
+    if (remove_path && nbep_lock_names(fd, remove_path) && fstat(fd, &sb) == 0 && sb.st_size == 0)
         unlink(remove_path);
     close(fd);
 }

@@ -596,6 +596,18 @@ run_nbep run inputs/two-spheres.deck --quiet -o "$tmp/locked.h5" --summary "$tmp
 check "--summary at the run's lock file: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr"))" \
     "[ $rc = 2 ] && one_line && grep -qx 'nbep: the summary file $tmp/locked.h5.lock is the run.s lock file; choose another' '$tmp/stderr' &&
      [ ! -e '$tmp/locked.h5' ] && [ ! -e '$tmp/locked.h5.lock' ]"
+# an output named like a run's lock (OUT.lock) would be renamed over that run's lock, which the
+# run then removed with it at its end (until 2026-12-01): refused, nothing written
+run_nbep run inputs/two-spheres.deck --quiet -o "$tmp/other.h5.lock"
+check "an output ending in .lock: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr"))" \
+    "[ $rc = 2 ] && one_line && grep -qx 'nbep: the output file $tmp/other.h5.lock ends in .lock, the name of a run.s lock beside its file; choose another' '$tmp/stderr' &&
+     [ ! -e '$tmp/other.h5.lock' ]"
+# a file of the user's already at OUT.h5.lock (not empty, so no run's lock): the run locks it
+# and leaves it as it was
+echo 'notes of mine' >"$tmp/mine.h5.lock"
+run_nbep run inputs/two-spheres.deck --quiet -o "$tmp/mine.h5"
+check "a file of the user's at the lock's name: the run (exit $rc) leaves it as it was" \
+    "[ $rc = 0 ] && grep -qx 'notes of mine' '$tmp/mine.h5.lock'"
 # the run's XDMF sidecar named instead of its run (they lie side by side): said so, with the
 # run file to pass (until 2026-11-30 "not an HDF5 file" alone)
 for cmd in resume info; do
@@ -832,6 +844,11 @@ echo 'sweep: { vary = ( { key = "physics.restitution"; values = [1.0, 0.7]; } );
 run_nbep check "$tmp/micron-study.deck"
 check "check of such a study, its deck elastic, run 1 at e = 0.7: exit 0 (got $rc), the warning names run 1" \
     "[ $rc = 0 ] && grep -q 'physics.tc is at its default.*(sweep run 1)$' $tmp/stderr"
+# the sweep itself runs quiet: its check said it once (until a first mend of 2026-12-01 every run
+# at e < 1 said it again, --quiet or not)
+run_nbep sweep "$tmp/micron-study.deck" --quiet -o "$tmp/micron-study"
+check "the sweep of that study, --quiet: exit 0 (got $rc), nothing on stderr" \
+    "[ $rc = 0 ] && [ ! -s $tmp/stderr ]"
 
 # ---- a deck that plans more frames than memory holds (a run meant to end on its job's limit) --
 # run.steps near 2^63 with a frame every step: the sidecar's frame list was made whole before

@@ -427,12 +427,23 @@ sleep 0.5
 { kill -KILL $pid; wait $pid; } 2>/dev/null # (bash's "Killed" line)
 check "... the first ran on until killed, its file readable with frames, its lock file left" \
     "bin/nbep info '$out' | grep -q '^frames: *[1-9]' && [ -e '$out.lock' ] && [ ! -e '$out.partial' ]"
+rm -f "$tmp/held.json"
 bin/nbep run inputs/paper-box.deck --quiet -n 100000000 --set spheres.[0].count=512 \
-    --resume "$out" 2>"$tmp/held-stderr" &
+    --resume "$out" --summary "$tmp/held.json" 2>"$tmp/held-stderr" &
 pid=$!
+for _ in $(seq 300); do bin/nbep info "$out" 2>/dev/null | grep -q '^resumed' && break; sleep 0.1; done
+# the same command again (a resubmitted job, its --summary too): refused before it opens the
+# summary, whose SUMMARY.partial is the first's (until 2026-12-01 it emptied and removed it,
+# and the first failed at its end for want of it)
+bin/nbep run inputs/paper-box.deck --quiet -n 100000000 --set spheres.[0].count=512 \
+    --resume "$out" --summary "$tmp/held.json" >"$tmp/held-stdout" 2>"$tmp/held-stderr2"
+rc=$?
+check "... the same resume and --summary again while it runs: exit 2 (got $rc)" "[ $rc = 2 ]"
 frame0=0
 term_within $pid "$out" 1 600
 check "... a left lock file holds nothing: the next run resumes the file (exit $rc: $(head -c 300 "$tmp/held-stderr")), and removes the lock at its end" \
     "[ $rc = 143 ] && bin/nbep info '$out' | grep -q '^status: *terminated' && [ ! -e '$out.lock' ]"
+check "... and writes its summary whole, the refused run's notwithstanding" \
+    "grep -q '\"status\": \"terminated\"' '$tmp/held.json' && [ ! -e '$tmp/held.json.partial' ]"
 
 test_end signals

@@ -82,7 +82,8 @@ char *nbep_lock_path(const char *path);
  * locks, a folder that takes no new file: the caller goes on unguarded). */
 int nbep_lock_take(const char *path, bool *busy);
 /* Lets the lock go: removes the file at remove_path first, when not NULL (the lock's name,
- * for a lock beside a file of the user's), and closes fd. Nothing for fd < 0. */
+ * for a lock beside a file of the user's) and it is still the lock's own, empty file, and
+ * closes fd. Nothing for fd < 0. */
 void nbep_lock_drop(int fd, const char *remove_path);
 /* Whether path names the file open on fd (a lock taken on a file whose name its holder has
  * since removed guards nothing: nbep_lock_take tries again). */
