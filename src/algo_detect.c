@@ -145,7 +145,7 @@ static size_t detect_bytes_common(const nbep_scene *sc, int nt, bool use_bvh)
     size_t bytes = sizeof(detect_ctx) + (size_t)nt * sizeof *l +
                    (list_room(n) + 64 * (size_t)(nt - 1)) * sizeof *l->c +
                    2 * n * sizeof(nbep_vec3);
-    if (sc->has_box && (sc->periodic[0] || sc->periodic[1] || sc->periodic[2]))
+    if (nbep_scene_any_periodic(sc))
         bytes += 3 * n * sizeof(int32_t); /* img0 */
     if (use_bvh)
         bytes += (size_t)nt * (n + 1) * sizeof *l->hits + nbep_bvh_bytes(n);
@@ -175,10 +175,11 @@ static nbep_status detect_create_common(nbep_sim *sim, void **out, bool use_bvh,
     ctx->vel0 = nbep_alloc_aligned(sim->st.n, sizeof *ctx->vel0);
     ctx->pb = nbep_periodic_make(sim->scene->has_box ? sim->scene->periodic : NULL,
                                  sim->scene->box_min, sim->scene->box_max);
-    for (size_t i = 0; i < sim->st.n; i++)
-        ctx->rmax = fmax(ctx->rmax, sim->st.radius[i]);
-    if (ctx->pb.any)
+    if (ctx->pb.any) {
         ctx->img0 = nbep_alloc_aligned(3 * sim->st.n, sizeof *ctx->img0);
+        for (size_t i = 0; i < sim->st.n; i++)
+            ctx->rmax = fmax(ctx->rmax, sim->st.radius[i]);
+    }
     if (!ctx->lists || (sim->st.n && (!ctx->pos0 || !ctx->vel0 || (ctx->pb.any && !ctx->img0)))) {
         detect_destroy(ctx);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the %s algorithm", sim->algo->name);

@@ -20,9 +20,10 @@
  *   a kill inside the first can leave a half-written last row, never a counted one.
  * - A chunk-index node that splits in a flush cut short can take old frames with it; K is
  *   raised so that the index does not split for the planned frames (CHUNK_INDEX_K_MIN).
- * - The writer takes no file lock, so `nbep info` and HDF5 tools can look at a run while it
- *   runs (they see the last flushed frame), and runs work on parallel file systems without
- *   flock support. The price: nothing stops two runs from writing one file.
+ * - The writer takes no HDF5 file lock, so `nbep info` and HDF5 tools can look at a run while
+ *   it runs (they see the last flushed frame), and runs work on parallel file systems without
+ *   flock support. Two runs into one file are kept apart by a lock of its own beside it,
+ *   PATH.lock (nbep__output_lock).
  *
  * Errors: see output_hdf5.c. */
 #define _XOPEN_SOURCE 700 /* realpath() */
@@ -411,7 +412,7 @@ static double whole_chunks(uint64_t rows, uint64_t chunk)
 double nbep_output_bytes(const nbep_scene *sc, bool events, bool contacts)
 {
     const double n = (double)sc->state.n, np = (double)sc->state.n_planes;
-    const bool periodic = sc->has_box && (sc->periodic[0] || sc->periodic[1] || sc->periodic[2]);
+    const bool periodic = nbep_scene_any_periodic(sc);
     const uint64_t frames = nbep_output_frames(sc);
     double sphere = 24.0 * (sc->out_position + sc->out_velocity) + (periodic ? 12.0 : 0.0);
     /* the series stored a chunk (or more) a frame: each chunk costs its index entry too */
@@ -648,7 +649,7 @@ void nbep__output_release(nbep_output **op)
     if (o->staged) /* never published: the temporary file goes, whatever is at path stays */
         remove(o->staged);
     free(o->staged);
-    nbep_lock_drop(o->lock_fd, o->lock_fd >= 0 ? o->lock_path : NULL); /* last: all written */
+    nbep_lock_drop(o->lock_fd, o->lock_path); /* last: all written */
     free(o->lock_path);
     free(o->path);
     free(o);

@@ -639,7 +639,7 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
                               H5T_NATIVE_DOUBLE, res.vel, d) < 0)
         goto fail;
     /* A periodic box: the image counts of that frame (SPEC /frames/image) */
-    o->resume.image = sc->has_box && (sc->periodic[0] || sc->periodic[1] || sc->periodic[2]);
+    o->resume.image = nbep_scene_any_periodic(sc);
     if (o->resume.image) {
         res.image = malloc((n ? 3 * n : 1) * sizeof *res.image);
         if (!res.image) {

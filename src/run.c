@@ -387,7 +387,6 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     if (st == NBEP_OK && (st = open_summary(rq->summary_path, &summary, d)) != NBEP_OK) {
         nbep_status ignored = nbep_output_close(&out, NULL, d); /* nothing written yet */
         (void)ignored;
-        nbep_resume_fini(&resume);
     }
     if (st == NBEP_OK) {
         if (rq->resume)

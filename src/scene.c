@@ -1733,6 +1733,11 @@ bool nbep_scene_tc_model(const nbep_scene *sc)
     return sc->tc > 0.0 && sc->restitution < 1.0;
 }
 
+bool nbep_scene_any_periodic(const nbep_scene *sc)
+{
+    return sc->has_box && (sc->periodic[0] || sc->periodic[1] || sc->periodic[2]);
+}
+
 const char *nbep_scene_tc_warning(const nbep_scene *sc, char *buf, size_t len)
 {
     if (sc->tc_given || !nbep_scene_tc_model(sc) || strcmp(sc->algorithm, "predictive") != 0 ||

@@ -159,6 +159,9 @@ bool nbep_scene_resume_point(const nbep_scene *sc, int64_t step);
 /* Whether the TC model acts in sc's predictive runs: tc > 0 and e < 1 (its window makes a
  * collision elastic; at e = 1 every collision is). */
 bool nbep_scene_tc_model(const nbep_scene *sc);
+/* Whether the scene's box repeats along some axis (box.periodic): a frame's image counts, a
+ * detection's minimum image. */
+bool nbep_scene_any_periodic(const nbep_scene *sc);
 /* A warning's line (no newline) when sc's TC model runs with its default physics.tc, a time
  * in the deck's units, that is more than TC_DEFAULT_STEP_SHARE of run.dt, as in a deck in
  * other units than SI grains' (the default's); NULL when not (tc set, the model off, or the
