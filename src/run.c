@@ -51,8 +51,28 @@ static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
     char *tmp = in_place ? NULL : nbep_partial_path(where);
     if (!in_place && !tmp)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the summary's file name");
-    *out = fopen(in_place ? where : tmp, "w");
+    /* The temporary file is locked while this run writes it (nbep_lock_take: the lock stands
+     * only on the file its name leads to), and put at WHERE before the lock goes: a second run
+     * naming the same summary (a job resubmitted with another output) is refused rather than
+     * emptying the first's half-written SUMMARY.partial, or having it renamed from under it
+     * (until 2026-12-01 both wrote one file). A file system without locks: unguarded. */
+    bool busy = false;
+    const int fd = in_place ? -1 : nbep_lock_take(tmp, &busy);
+    if (fd >= 0 && ftruncate(fd, 0) == 0)
+        *out = fdopen(fd, "w");
+    else if (fd >= 0)
+        close(fd);
+    else if (!busy)
+        *out = fopen(in_place ? where : tmp, "w");
     const int err = errno;
+    if (!*out && busy) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: cannot write the summary to %s: another nbep run is writing it (it "
+                      "holds %s); wait for it to end, or give this run another --summary",
+                      where, tmp);
+        free(tmp);
+        return NBEP_EUSAGE;
+    }
     free(tmp);
     if (!*out) /* a missing directory: the user's (exit 2), as for the output file */
         NBEP_FAIL(d, nbep_status_of_open(err), "nbep: cannot write the summary to %s: %s",
@@ -65,13 +85,11 @@ static void drop_summary(const char *where, FILE *f)
 {
     if (!f || f == stdout)
         return;
-    fclose(f);
-    if (summary_in_place(where))
-        return;
-    char *tmp = nbep_partial_path(where);
-    if (tmp)
+    char *tmp = summary_in_place(where) ? NULL : nbep_partial_path(where);
+    if (tmp) /* while the lock holds: the file is this run's */
         remove(tmp);
     free(tmp);
+    fclose(f);
 }
 
 /* Writes text to f and closes it (stdout: flushes), then puts it at `where`; NULL f: nothing
@@ -85,19 +103,27 @@ static nbep_status finish_text(const char *text, const char *where, FILE *f, nbe
     int err = text ? errno : ENOMEM;
     if (f == stdout) {
         bad |= fflush(f) != 0;
-    } else {
+    } else if (summary_in_place(where)) {
         bad |= fclose(f) != 0;
         err = err ? err : errno;
-        if (!summary_in_place(where)) { /* the temporary file put in place, or removed */
-            char *tmp = nbep_partial_path(where);
-            if (!tmp || bad || rename(tmp, where) != 0) {
-                err = err ? err : errno;
-                if (tmp)
-                    remove(tmp);
-                bad = 1;
-            }
-            free(tmp);
+    } else { /* the temporary file put in place, or removed, before its lock goes with f */
+        bad |= fflush(f) != 0;
+        err = err ? err : errno;
+        char *tmp = nbep_partial_path(where);
+        if (!tmp || bad || rename(tmp, where) != 0) {
+            err = err ? err : errno;
+            if (tmp)
+                remove(tmp);
+            bad = 1;
         }
+        /* a write that fails only as the file closes (NFS): its text is not whole, and it
+         * stands at WHERE already */
+        if (fclose(f) != 0 && !bad) {
+            err = errno;
+            remove(where);
+            bad = 1;
+        }
+        free(tmp);
     }
     if (bad)
         NBEP_FAIL(d, NBEP_EIO, "nbep: cannot write the summary to %s: %s", where,

@@ -446,4 +446,32 @@ check "... a left lock file holds nothing: the next run resumes the file (exit $
 check "... and writes its summary whole, the refused run's notwithstanding" \
     "grep -q '\"status\": \"terminated\"' '$tmp/held.json' && [ ! -e '$tmp/held.json.partial' ]"
 
+# two runs with outputs of their own and one --summary (a job resubmitted under another
+# output): the second is refused before anything, for the first holds SUMMARY.partial (until
+# 2026-12-01 the second emptied it and the first's rename took the second's text, or failed)
+rm -f "$tmp/shared.json" "$tmp/own-a.h5" "$tmp/own-b.h5"
+bin/nbep run inputs/paper-box.deck --quiet -n 100000000 --set spheres.[0].count=512 \
+    -o "$tmp/own-a.h5" --summary "$tmp/shared.json" 2>"$tmp/own-stderr" &
+pid=$!
+for _ in $(seq 300); do [ -e "$tmp/shared.json.partial" ] && [ -s "$tmp/own-a.h5" ] && break; sleep 0.1; done
+bin/nbep run inputs/paper-box.deck --quiet -n 5 --set spheres.[0].count=512 \
+    -o "$tmp/own-b.h5" --summary "$tmp/shared.json" >"$tmp/own-stdout" 2>"$tmp/own-stderr2"
+rc=$?
+check "a second run writing the summary another is writing: exit 2 (got $rc), one line: $(head -c 300 "$tmp/own-stderr2")" \
+    "[ $rc = 2 ] && [ ! -s '$tmp/own-stdout' ] && [ \$(wc -l <'$tmp/own-stderr2') = 1 ] &&
+     grep -qx 'nbep: cannot write the summary to $tmp/shared.json: another nbep run is writing it (it holds $tmp/shared.json.partial); wait for it to end, or give this run another --summary' '$tmp/own-stderr2'"
+check "... and leaves nothing of its own: no file, no partial file, no lock" \
+    "[ ! -e '$tmp/own-b.h5' ] && [ ! -e '$tmp/own-b.h5.partial' ] && [ ! -e '$tmp/own-b.h5.lock' ]"
+frame0=0
+term_within $pid "$tmp/own-a.h5" 0.5 600
+check "... the first ends on TERM (exit $rc) with its summary whole at the path, no partial file left" \
+    "[ $rc = 143 ] && $PY -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(s[\"status\"] != \"terminated\")' '$tmp/shared.json' &&
+     [ ! -e '$tmp/shared.json.partial' ]"
+bin/nbep run inputs/paper-box.deck --quiet -n 5 --set spheres.[0].count=512 \
+    -o "$tmp/own-b.h5" --summary "$tmp/shared.json" 2>"$tmp/own-stderr2"
+rc=$?
+check "... after which the second runs (exit $rc) and its summary replaces the first's" \
+    "[ $rc = 0 ] && $PY -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == \"completed\" and s[\"steps\"] == 5))' '$tmp/shared.json' &&
+     [ ! -e '$tmp/shared.json.partial' ]"
+
 test_end signals
