@@ -1485,6 +1485,17 @@ MUTANTS = [
      "    if (tc_warning)", ["tests/test_cli.sh"], None),
     ("lock-summary-at-lock-taken", "src/run.c", "        if (run || side || held)",
      "        if (run || side)", ["tests/test_cli.sh"], None),
+    # one writer of a summary at a time: the lock on SUMMARY.partial (2026-12-01)
+    ("lock-summary-busy-ignored", "src/run.c", "    else if (!busy)\n        *out = fopen(",
+     "    else\n        *out = fopen(", ["tests/test_signals.sh"], None),
+    ("lock-summary-not-taken", "src/run.c",
+     "    const int fd = in_place ? -1 : nbep_lock_take(tmp, &busy);",
+     "    const int fd = -1;", ["tests/test_signals.sh"], None),
+    ("sweep-held-run-removed", "src/sweep.c", "        if (!has_summary && !rq.resume && st != NBEP_EBUSY) {",
+     "        if (!has_summary && !rq.resume) {", ["tests/test_sweep_cli.sh"], None),
+    ("output-partial-named-taken", "src/run.c",
+     "    if (len >= 8 && strcmp(output + len - 8, \".partial\") == 0)", "    if (0)",
+     ["tests/test_cli.sh"], None),
     # a run file's refusal to resume said on its line (2026-12-01)
     ("sweep-afresh-unsaid", "src/sweep.c", "        else if (refused[0])\n",
      "        else if (0)\n", ["tests/test_sweep_cli.sh"], None),

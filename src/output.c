@@ -612,7 +612,7 @@ nbep_status nbep__output_lock(nbep_output *o, bool resume, nbep_diag *d)
                       o->path, o->lock_path);
         free(o->lock_path); /* not ours to remove */
         o->lock_path = NULL;
-        return NBEP_EUSAGE;
+        return NBEP_EBUSY;
     }
     return NBEP_OK;
 }
@@ -756,19 +756,18 @@ nbep_status nbep_output_create_staged(const char *path, const nbep_scene *sc, in
      * 2^40 planned frames failed for memory before the first step) */
     const uint64_t planned = planned_frames(sc);
     const uint64_t reserve = planned < XMF_RESERVE_MAX ? planned : XMF_RESERVE_MAX;
+    o->staged = tmp; /* renamed to path by nbep_output_publish; removed if it never is */
     if (o->xmf && !nbep__output_xmf_room(o, (size_t)reserve)) {
         nbep__output_release(&o);
-        remove(tmp);
-        free(tmp);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: %s: no memory for the frame list", path);
     }
-    o->staged = tmp; /* renamed to path by nbep_output_publish; removed if it never is */
     *out = o;
     return NBEP_OK;
 fail:
+    /* bad output leaves no file behind (STYLE 4): the release removes PATH.partial while it
+     * still holds the lock (removed after, until 2026-12-01, it could be the next run's) */
+    o->staged = tmp;
     nbep__output_release(&o);
-    remove(tmp);   /* bad output leaves no file behind (STYLE 4) */
-    free(tmp);
     return create_st;
 fail_uncreated:
     nbep__output_release(&o);

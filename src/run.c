@@ -71,7 +71,7 @@ static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
                       "holds %s); wait for it to end, or give this run another --summary",
                       where, tmp);
         free(tmp);
-        return NBEP_EUSAGE;
+        return NBEP_EBUSY;
     }
     free(tmp);
     if (!*out) /* a missing directory: the user's (exit 2), as for the output file */
@@ -295,12 +295,20 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: the %s file %s is the deck %s itself; choose another",
                   over == output ? "output" : "summary", over, deck);
     /* a run's lock is OUT.lock beside its file (nbep_lock_path): an output there would be
-     * renamed over another run's lock, which that run then removes with it at its end */
+     * renamed over another run's lock, which that run then removes with it at its end. A new
+     * file is made as OUT.partial (nbep_partial_path) under OUT's lock: an output there was
+     * emptied by a run into OUT, under another lock, and renamed from under its writer (until
+     * 2026-12-01) */
     const size_t len = output ? strlen(output) : 0;
     if (len >= 5 && strcmp(output + len - 5, ".lock") == 0)
         NBEP_FAIL(d, NBEP_EUSAGE,
                   "nbep: the output file %s ends in .lock, the name of a run's lock beside its "
                   "file; choose another",
+                  output);
+    if (len >= 8 && strcmp(output + len - 8, ".partial") == 0)
+        NBEP_FAIL(d, NBEP_EUSAGE,
+                  "nbep: the output file %s ends in .partial, the name a run's file is made "
+                  "under until it is whole; choose another",
                   output);
     if (summary && output && strcmp(summary, "-") != 0) {
         /* the run's file and its sidecar are written by rename: a summary at either name

@@ -651,7 +651,12 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
         nbep_run_result rr;
         st = nbep_run(&rq, &rr, &d);
         resumed_from = rq.resume && rr.simulated ? rr.resumed_from : -1;
-        if (rq.resume && !rr.simulated && st != NBEP_ESIGINT && st != NBEP_ESIGTERM) {
+        /* a run file another process holds (an `nbep run --resume` of it, a second sweep
+         * of the study's folder on another node) is neither run afresh nor removed: it is
+         * that process's (until 2026-12-01 the refused resume ran afresh, was refused again,
+         * and the file was removed from under its writer) */
+        if (rq.resume && !rr.simulated && st != NBEP_ESIGINT && st != NBEP_ESIGTERM &&
+            st != NBEP_EBUSY) {
             /* said on its line below, so that a user paying for the run again knows why (a
              * file whose frames lack the velocities, say: until 2026-12-01 nothing said it) */
             error_text(&d, refused, sizeof refused);
@@ -665,7 +670,7 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
         /* a stale file of an earlier sweep must not pass for this run (a run cut short that a
          * signal kept from resuming stays for the next sweep: a refused resume changes
          * nothing) */
-        if (!has_summary && !rq.resume) {
+        if (!has_summary && !rq.resume && st != NBEP_EBUSY) {
             remove(path);
             char *xmf = nbep_xdmf_path(path);
             if (xmf)

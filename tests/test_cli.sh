@@ -602,6 +602,12 @@ run_nbep run inputs/two-spheres.deck --quiet -o "$tmp/other.h5.lock"
 check "an output ending in .lock: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr"))" \
     "[ $rc = 2 ] && one_line && grep -qx 'nbep: the output file $tmp/other.h5.lock ends in .lock, the name of a run.s lock beside its file; choose another' '$tmp/stderr' &&
      [ ! -e '$tmp/other.h5.lock' ]"
+# an output named like a run's file while it is made (OUT.partial): a run into OUT emptied it
+# under another lock and renamed it from under its writer (until 2026-12-01): refused
+run_nbep run inputs/two-spheres.deck --quiet -o "$tmp/other.h5.partial"
+check "an output ending in .partial: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr"))" \
+    "[ $rc = 2 ] && one_line && grep -qx 'nbep: the output file $tmp/other.h5.partial ends in .partial, the name a run.s file is made under until it is whole; choose another' '$tmp/stderr' &&
+     [ ! -e '$tmp/other.h5.partial' ] && [ ! -e '$tmp/other.h5.partial.lock' ]"
 # a file of the user's already at OUT.h5.lock (not empty, so no run's lock): the run locks it
 # and leaves it as it was
 echo 'notes of mine' >"$tmp/mine.h5.lock"

@@ -557,4 +557,27 @@ run_sweep "$tmp/pace.deck" -o "$tmp/busy" --quiet --set 'sweep.vary.[0].values=[
 check "... ended (exit $rc1), the folder takes the next study (exit $rc)" \
     "[ $rc1 = 143 ] && [ $rc = 0 ] && grep -q ',ok,' '$tmp/busy.sweep/summary.csv'"
 
+# a run file another process writes (`nbep run --resume` of a study's run by hand): the sweep's
+# run is refused, said on its line, and the file is neither run afresh nor removed (until
+# 2026-12-01 the sweep removed it from under its writer, whose frames went with it)
+mkdir -p "$tmp/held.sweep"
+timeout -k 5 120 "$nbep" run "$tmp/pace.deck" --quiet -n 5000000 -o "$tmp/held.sweep/run-0000.h5" \
+    2>/dev/null &
+pid=$!
+for _ in $(seq 300); do
+    "$nbep" info "$tmp/held.sweep/run-0000.h5" 2>/dev/null | grep -q '^frames: *[1-9]' && break
+    sleep 0.1
+done
+run_sweep "$tmp/pace.deck" -o "$tmp/held" --quiet --set 'sweep.vary.[0].values=[20, 30]'
+check "a sweep whose run file another run writes: exit 1 (got $rc), its run failed with the holder named: $(head -c 300 "$tmp/stderr")" \
+    "[ $rc = 1 ] && grep -q '^nbep: sweep run 0 (run.steps=20 seed=1) failed: $tmp/held.sweep/run-0000.h5: another nbep run is writing this file' '$tmp/stderr' &&
+     grep -q '^1,0,1,0,30,ok,' '$tmp/held.sweep/summary.csv'"
+check "... the other run's file left in place, its writer running on" \
+    "kill -0 $pid 2>/dev/null && [ -e '$tmp/held.sweep/run-0000.h5' ] && [ -e '$tmp/held.sweep/run-0000.h5.lock' ]"
+kill -TERM $pid 2>/dev/null
+wait $pid
+rc1=$?
+check "... which ends on TERM (exit $rc1) with its frames readable" \
+    "[ $rc1 = 143 ] && '$nbep' info '$tmp/held.sweep/run-0000.h5' | grep -q '^status: *terminated'"
+
 test_end sweep_cli

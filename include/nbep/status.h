@@ -14,6 +14,7 @@
     X(OK, 0, "success")                                                                      \
     X(EUSAGE, 2, "bad command line")                                                         \
     X(EDECK, 2, "bad deck")                                                                  \
+    X(EBUSY, 2, "file held by another run")                                                  \
     X(ENOMEM, 1, "out of memory")                                                            \
     X(EIO, 1, "I/O error")                                                                   \
     X(ENUMERIC, 1, "numerical failure")                                                      \
