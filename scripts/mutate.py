@@ -1496,6 +1496,10 @@ MUTANTS = [
     ("output-partial-named-taken", "src/run.c",
      "    if (len >= 8 && strcmp(output + len - 8, \".partial\") == 0)", "    if (0)",
      ["tests/test_cli.sh"], None),
+    ("lock-readonly-unguarded", "src/util.c", "        if (fd < 0 && (errno == EACCES || errno == EPERM)) {",
+     "        if (0) {", ["test_util"], None),
+    ("lock-readonly-write-lock", "src/util.c", "            type = F_RDLCK;", "            type = F_WRLCK;",
+     ["test_util"], None),
     # a run file's refusal to resume said on its line (2026-12-01)
     ("sweep-afresh-unsaid", "src/sweep.c", "        else if (refused[0])\n",
      "        else if (0)\n", ["tests/test_sweep_cli.sh"], None),

@@ -123,10 +123,20 @@ int nbep_lock_take(const char *path, bool *busy)
      * lock stands only if the name still leads to the file it holds; otherwise again (a few
      * times: each retry follows a holder's end). */
     for (int tries = 0; tries < 16; tries++) {
-        const int fd = open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+        int fd = open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+        short type = F_WRLCK;
+        /* another user's lock file (0644 under umask 022, in a folder a group shares): read
+         * only, a read lock, which a holder's write lock excludes and which excludes a writer
+         * (until 2026-12-01 the run went on unguarded, and replaced a file another user's run
+         * was writing). Two such readers do not exclude each other: the file's owner's lock is
+         * the one that guards. */
+        if (fd < 0 && (errno == EACCES || errno == EPERM)) {
+            fd = open(path, O_RDONLY | O_CLOEXEC);
+            type = F_RDLCK;
+        }
         if (fd < 0)
             return -1;
-        struct flock fl = {.l_type = F_WRLCK, .l_whence = SEEK_SET, .l_start = 0, .l_len = 0};
+        struct flock fl = {.l_type = type, .l_whence = SEEK_SET, .l_start = 0, .l_len = 0};
         if (fcntl(fd, LOCK_CMD, &fl) != 0) {
             *busy = errno == EACCES || errno == EAGAIN;
             close(fd);

@@ -13,6 +13,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "nbep/compiler.h"
@@ -272,6 +274,94 @@ static void test_a_lock_names_its_file_only_while_the_name_leads_there(void **st
     nbep_lock_drop(b, path);
 }
 
+/* In a child that cannot write the lock file (another user's, 0644: as root, the child becomes
+ * nobody; else the file is made read-only): 0 when it met what `want` says, 77 when it cannot
+ * reach the file at all, 1 otherwise. want 'b': busy; want 'h': holds the lock until told
+ * (one byte on `go`), after saying so on `said`. */
+static int lock_as_another(const char *path, char want, int said, int go)
+{
+    alarm(30); /* a hang is a failure */
+    if (geteuid() == 0 && (setgid(65534) != 0 || setuid(65534) != 0))
+        return 77;
+    if (access(path, R_OK) != 0)
+        return 77;
+    if (access(path, W_OK) == 0)
+        return 1; /* the case under test is a file this user cannot write */
+    bool busy;
+    const int fd = nbep_lock_take(path, &busy);
+    if (want == 'b')
+        return fd < 0 && busy ? 0 : 1;
+    if (fd < 0)
+        return 1;
+    char c = 'h';
+    if (write(said, &c, 1) != 1 || read(go, &c, 1) != 1)
+        return 1;
+    nbep_lock_drop(fd, NULL);
+    return 0;
+}
+
+static int child_status(pid_t pid)
+{
+    int ws;
+    if (waitpid(pid, &ws, 0) != pid || !WIFEXITED(ws))
+        return -1;
+    return WEXITSTATUS(ws);
+}
+
+/* A lock file this user cannot write (another user's, in a folder a group shares) still
+ * guards: its holder's lock makes the other user busy, and the other user's read lock makes
+ * the holder busy (until 2026-12-01 the other user's run went on unguarded). */
+static void test_a_lock_file_another_user_cannot_write_still_guards(void **state)
+{
+    (void)state;
+    /* a folder of its own in /tmp, open to every user (the test's own folder may lie in one
+     * closed to others: a mutation run's copy of the tree, say) */
+    char dir[] = "/tmp/nbep-util-XXXXXX", path[64];
+    assert_non_null(mkdtemp(dir));
+    assert_int_equal(chmod(dir, 0755), 0);
+    snprintf(path, sizeof path, "%s/shared.lock", dir);
+    bool busy;
+    const int a = nbep_lock_take(path, &busy);
+    assert_true(a >= 0);
+    assert_int_equal(fchmod(a, geteuid() == 0 ? 0644 : 0444), 0);
+    fflush(NULL);
+    pid_t pid = fork();
+    if (pid == 0)
+        _exit(lock_as_another(path, 'b', -1, -1));
+    const int first = child_status(pid);
+    if (first == 77) {
+        nbep_lock_drop(a, path);
+        rmdir(dir);
+        skip(); /* the folder is closed to the other user */
+    }
+    assert_int_equal(first, 0);
+    nbep_lock_drop(a, NULL); /* the file stays, no one's lock on it */
+    int said[2], go[2];
+    assert_int_equal(pipe(said), 0);
+    assert_int_equal(pipe(go), 0);
+    pid = fork();
+    if (pid == 0) {
+        close(said[0]);
+        close(go[1]);
+        _exit(lock_as_another(path, 'h', said[1], go[0]));
+    }
+    close(said[1]);
+    close(go[0]);
+    char c = 0;
+    assert_int_equal(read(said[0], &c, 1), 1); /* the other user holds it now */
+    assert_int_equal(nbep_lock_take(path, &busy), -1);
+    assert_true(busy);
+    assert_int_equal(write(go[1], &c, 1), 1);
+    assert_int_equal(child_status(pid), 0);
+    close(said[0]);
+    close(go[1]);
+    const int b = nbep_lock_take(path, &busy); /* let go: the owner's again */
+    assert_true(b >= 0);
+    nbep_lock_drop(b, path);
+    assert_int_equal(access(path, F_OK), -1);
+    assert_int_equal(rmdir(dir), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -286,6 +376,7 @@ int main(void)
         cmocka_unit_test(test_a_lock_excludes_every_other_taker_until_dropped),
         cmocka_unit_test(test_a_lock_that_cannot_be_made_is_no_one_elses),
         cmocka_unit_test(test_a_lock_names_its_file_only_while_the_name_leads_there),
+        cmocka_unit_test(test_a_lock_file_another_user_cannot_write_still_guards),
     };
     return cmocka_run_group_tests_name("util", tests, NULL, NULL);
 }
