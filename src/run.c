@@ -282,9 +282,48 @@ bool nbep_run_same_path(const char *a, const char *b)
     return same;
 }
 
+/* Whether the name path's file is written under, `path` with `suffix` (".partial": a new
+ * run file, a summary), fits its folder's file system: 0, else ENAMETOOLONG (a name of 248
+ * to 255 characters passed `nbep check` and failed the run, until 2026-12-01). */
+static int staged_name_fits(const char *path, const char *suffix)
+{
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    char *dir = nbep_path_dir(path);
+    long max = dir ? pathconf(dir, _PC_NAME_MAX) : -1;
+    free(dir);
+    if (max <= 0)
+        max = 255; /* the common limit, where the folder does not say */
+    return strlen(base) + strlen(suffix) > (size_t)max ? ENAMETOOLONG : 0;
+}
+
 nbep_status nbep_run_check_paths(const char *deck, const char *output, const char *summary,
                                  nbep_diag *d)
 {
+    if (summary && !*summary)
+        NBEP_FAIL(d, NBEP_EUSAGE,
+                  "nbep: --summary names no file (an empty path); name one, or - for standard "
+                  "output");
+    if (summary && strcmp(summary, "-") != 0 && !summary_in_place(summary) &&
+        staged_name_fits(summary, ".partial") != 0)
+        NBEP_FAIL(d, NBEP_EUSAGE, "nbep: cannot write the summary to %s: %s (its .partial, "
+                  "written first, is longer than the folder allows)", summary,
+                  strerror(ENAMETOOLONG));
+    if (output && staged_name_fits(output, ".partial") != 0)
+        NBEP_FAIL(d, NBEP_EUSAGE,
+                  "nbep: %s: cannot create the output file: %s (its .partial, made first, is "
+                  "longer than the folder allows)",
+                  output, strerror(ENAMETOOLONG));
+    /* the sidecar is written beside the run's file by rename: at the deck's path it replaced
+     * the deck (until 2026-12-01) */
+    char *sidecar = output && deck ? nbep_xdmf_path(output) : NULL;
+    const bool side_deck = sidecar && nbep_output_same_file(sidecar, deck);
+    free(sidecar);
+    if (side_deck)
+        NBEP_FAIL(d, NBEP_EUSAGE,
+                  "nbep: the output file %s's XDMF sidecar is the deck %s itself; choose "
+                  "another output",
+                  output, deck);
     /* -o DECK replaced the deck with the run's file, --summary DECK with the JSON; --summary
      * RUN.h5 emptied the run file (its fopen comes first) and, a resume then failing,
      * removed it */
@@ -327,6 +366,17 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
     return NBEP_OK;
 }
 
+#define NOT_A_FILE "not a regular file (a device, a pipe or a socket)"
+
+bool nbep_run_output_not_file(const char *output)
+{
+    /* a new run file is made beside it and renamed over it: a FIFO, a device (/dev/null, as
+     * root) was replaced by the run's file (until 2026-12-01). A link is replaced itself. */
+    struct stat sb;
+    return lstat(output, &sb) == 0 && !S_ISREG(sb.st_mode) && !S_ISLNK(sb.st_mode) &&
+           !S_ISDIR(sb.st_mode);
+}
+
 nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
 {
     char *dir = nbep_path_dir(output);
@@ -337,6 +387,8 @@ nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
     /* lstat: the run's rename replaces a symbolic link at `output`, to a directory too */
     if (lstat(output, &sb) == 0 && S_ISDIR(sb.st_mode))
         err = EISDIR; /* the run's rename onto it fails */
+    else if (nbep_run_output_not_file(output))
+        err = EINVAL; /* said as "not a regular file", as nbep info and a resume say it */
     else if (stat(dir, &sb) != 0)
         err = errno; /* ENOENT, or ENOTDIR for a file on the way */
     else if (!S_ISDIR(sb.st_mode))
@@ -345,8 +397,9 @@ nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
         err = errno; /* EACCES, EROFS: the user's path (exit 2), as the run's own */
     free(dir);
     if (err) /* the words of the run's own failure (output.c) */
-        NBEP_FAIL(d, nbep_status_of_open(err), "nbep: %s: cannot create the output file: %s",
-                  output, strerror(err));
+        NBEP_FAIL(d, err == EINVAL ? NBEP_EUSAGE : nbep_status_of_open(err),
+                  "nbep: %s: cannot create the output file: %s", output,
+                  err == EINVAL ? NOT_A_FILE : strerror(err));
     return NBEP_OK;
 }
 
@@ -403,6 +456,11 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                             ? sc.output_file_origin
                             : NULL;
     st = other ? NBEP_EUSAGE : nbep_run_check_paths(rq->deck_path, file, rq->summary_path, d);
+    if (st == NBEP_OK && !rq->resume && nbep_run_output_not_file(file)) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot create the output file: %s",
+                      file, NOT_A_FILE);
+        st = NBEP_EUSAGE;
+    }
     if (other)
         nbep_diag_add(d, __FILE__, __LINE__,
                       "nbep: %s does not go with --resume: a resumed run appends to %s (drop "

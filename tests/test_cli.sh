@@ -608,6 +608,43 @@ run_nbep run inputs/two-spheres.deck --quiet -o "$tmp/other.h5.partial"
 check "an output ending in .partial: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr"))" \
     "[ $rc = 2 ] && one_line && grep -qx 'nbep: the output file $tmp/other.h5.partial ends in .partial, the name a run.s file is made under until it is whole; choose another' '$tmp/stderr' &&
      [ ! -e '$tmp/other.h5.partial' ] && [ ! -e '$tmp/other.h5.partial.lock' ]"
+# a pipe (or a device: /dev/null, as root) at the output path: the run's file was renamed over
+# it (until 2026-12-01): refused by run and check, the pipe left as it was
+mkfifo "$tmp/pipe.h5"
+for cmd in run check; do
+    run_nbep $cmd inputs/two-spheres.deck --quiet -o "$tmp/pipe.h5"
+    check "$cmd -o at a pipe: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr"))" \
+        "[ $rc = 2 ] && one_line && grep -qx 'nbep: $tmp/pipe.h5: cannot create the output file: not a regular file (a device, a pipe or a socket)' '$tmp/stderr' &&
+         [ -p '$tmp/pipe.h5' ] && [ ! -e '$tmp/pipe.xmf' ] && [ ! -e '$tmp/pipe.h5.partial' ]"
+done
+# --summary '' ran every step and then failed, exit 1 (until 2026-12-01): refused before
+for cmd in run check; do
+    run_nbep $cmd inputs/two-spheres.deck --quiet -o "$tmp/empty-summary.h5" --summary ''
+    check "$cmd --summary '': exit 2 before any step, one line (got $rc: $(head -c 200 "$tmp/stderr"))" \
+        "[ $rc = 2 ] && one_line && grep -qx 'nbep: --summary names no file (an empty path); name one, or - for standard output' '$tmp/stderr' &&
+         [ ! -e '$tmp/empty-summary.h5' ]"
+done
+# the run's XDMF sidecar at the deck's path (deck side.xmf, output side.h5) replaced the deck
+cp inputs/two-spheres.deck "$tmp/side.xmf"
+run_nbep run "$tmp/side.xmf" --quiet -o "$tmp/side.h5"
+check "an output whose sidecar is the deck: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr")), the deck kept" \
+    "[ $rc = 2 ] && one_line && grep -qx 'nbep: the output file $tmp/side.h5.s XDMF sidecar is the deck $tmp/side.xmf itself; choose another output' '$tmp/stderr' &&
+     cmp -s inputs/two-spheres.deck '$tmp/side.xmf' && [ ! -e '$tmp/side.h5' ]"
+# a name that fits the folder, but not with .partial after it (the name the file is made
+# under): check passed it and the run failed (until 2026-12-01); both refuse it now
+long=$(printf 'a%.0s' $(seq 248)).h5
+for cmd in run check; do
+    run_nbep $cmd inputs/two-spheres.deck --quiet -o "$tmp/$long"
+    check "$cmd -o NAME of 251 characters: exit 2, one line (got $rc: $(head -c 120 "$tmp/stderr"))" \
+        "[ $rc = 2 ] && one_line && grep -qx 'nbep: $tmp/$long: cannot create the output file: File name too long (its .partial, made first, is longer than the folder allows)' '$tmp/stderr'"
+    run_nbep $cmd inputs/two-spheres.deck --quiet -o "$tmp/long-summary.h5" --summary "$tmp/$long"
+    check "$cmd --summary NAME of 251 characters: exit 2, one line (got $rc: $(head -c 120 "$tmp/stderr"))" \
+        "[ $rc = 2 ] && one_line && grep -qx 'nbep: cannot write the summary to $tmp/$long: File name too long (its .partial, written first, is longer than the folder allows)' '$tmp/stderr' &&
+         [ ! -e '$tmp/long-summary.h5' ]"
+done
+run_nbep run inputs/two-spheres.deck --quiet -o "$tmp/$(printf 'a%.0s' $(seq 244)).h5" \
+    --summary "$tmp/$(printf 'b%.0s' $(seq 242)).json"
+check "... and names of 247 and 247 characters run (exit $rc)" "[ $rc = 0 ]"
 # a file of the user's already at OUT.h5.lock (not empty, so no run's lock): the run locks it
 # and leaves it as it was
 echo 'notes of mine' >"$tmp/mine.h5.lock"
