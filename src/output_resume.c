@@ -51,6 +51,25 @@ static bool all_finite(const double *v, size_t k)
     return true;
 }
 
+/* The first sphere whose position or velocity read from a frame is not finite, or whose
+ * position lies farther from the origin than NBEP_DECK_SPAN_MAX smallest radii of the deck's
+ * spheres (s), or n when none. */
+static size_t resumed_state_fault(const nbep_state *s, const nbep_vec3 *pos, const nbep_vec3 *vel,
+                                  size_t n)
+{
+    double rmin = INFINITY;
+    for (size_t i = 0; i < n && i < s->n; i++)
+        rmin = fmin(rmin, s->radius[i]);
+    const double far = NBEP_DECK_SPAN_MAX * rmin;
+    for (size_t i = 0; i < n; i++) {
+        if (!all_finite(&pos[i].x, 3) || !all_finite(&vel[i].x, 3))
+            return i;
+        if (fabs(pos[i].x) > far || fabs(pos[i].y) > far || fabs(pos[i].z) > far)
+            return i;
+    }
+    return n;
+}
+
 /* What in sphere i's event slot and resting plane no run of n spheres and np planes writes
  * (a partner, plane or kind out of range, a time not finite), or NULL. */
 static const char *slot_fault(const nbep_resume *r, size_t i, size_t np)
@@ -638,6 +657,22 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
         nbep__output_read_row(o->file, path, "/frames/velocity", last, 3 * (hsize_t)n,
                               H5T_NATIVE_DOUBLE, res.vel, d) < 0)
         goto fail;
+    /* No run writes a position or velocity that is not finite, nor a position farther from
+     * the origin than a deck may place one (NBEP_DECK_SPAN_MAX smallest radii: a run's frames
+     * stay near its box). A file that holds one was changed or damaged: until 2026-12-01 a NaN
+     * there aborted the resumed run at its summary's assertion, and left the file without its
+     * /summary. */
+    const size_t bad = resumed_state_fault(&sc->state, res.pos, res.vel, n);
+    if (bad < n) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s: its frame at step %lld holds sphere %zu at (%g, %g, %g) moving "
+                      "at (%g, %g, %g), which no run writes: the file was changed or damaged; "
+                      "resume a copy made before, or run afresh",
+                      path, (long long)res.step, bad, res.pos[bad].x, res.pos[bad].y,
+                      res.pos[bad].z, res.vel[bad].x, res.vel[bad].y, res.vel[bad].z);
+        st = NBEP_EDECK;
+        goto fail;
+    }
     /* A periodic box: the image counts of that frame (SPEC /frames/image) */
     o->resume.image = nbep_scene_any_periodic(sc);
     if (o->resume.image) {

@@ -310,7 +310,7 @@ nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim_options *opt, n
         sim->energy_initial = sim->energy_final;
     /* no deck within the window of magnitudes and the span (scene.h) gets here: a resumed
      * file's state or a scene built otherwise can */
-    if (!isfinite(sim->energy_initial)) {
+    if (!isfinite(sim->energy_initial) || !isfinite(sim->energy_final)) {
         nbep_sim_destroy(&sim);
         NBEP_FAIL(d, NBEP_EDECK,
                   "nbep: the spheres' total energy (kinetic %g, potential %g) is beyond doubles: "

@@ -683,6 +683,24 @@ for what in partner:'an event with a sphere' plane:'an event with a plane' rest:
     refused "${what%%:*}" "a checkpoint giving ${what#*:}" \
         "checkpoint at step 750 gives sphere [0-9]* ${what#*:}"
 done
+# a frame no run wrote: a position or velocity not finite, a position farther from the origin
+# than a deck may place one (until 2026-12-01 a NaN aborted the resumed run at its summary's
+# assertion, exit 134, and left the file without its /summary); refused the same way
+for what in pos-nan:"position'][r]; x[3, 0] = np.nan" vel-inf:"velocity'][r]; x[4, 2] = -np.inf" \
+            pos-far:"position'][r]; x[5, 1] = 1e13"; do
+    field=${what#*:}; field=${field%%\'*}
+    damage frame-${what%%:*} "x = f['frames/${what#*:}; f['frames/$field'][r] = x"
+    refused frame-${what%%:*} "a frame's ${what%%:*}" "frame at step 750 holds sphere [345] at .* which no run writes"
+done
+# a velocity whose energy is beyond doubles: refused before the run, the file as it was
+damage frame-vel-huge "x = f['frames/velocity'][r]; x[3, 0] = 1e300; f['frames/velocity'][r] = x"
+sum=$(md5sum < $tmp/bad-frame-vel-huge.h5)
+timeout 60 bin/nbep run "${pile[@]}" -n 950 --resume $tmp/bad-frame-vel-huge.h5 2>$tmp/bad.err
+rc=$?
+check "a frame's speed whose energy is beyond doubles: exit 2 (got $rc), one line, the file as it was" \
+    "[ $rc = 2 ] && [ \$(wc -l < $tmp/bad.err) = 1 ] &&
+     grep -q '^nbep: the spheres. total energy (kinetic inf, .* is beyond doubles' $tmp/bad.err &&
+     [ \"\$(md5sum < $tmp/bad-frame-vel-huge.h5)\" = '$sum' ]"
 # totals no run wrote (a sum not finite, more quiet steps than steps, a count past 2^62, which
 # no run reaches and which the JSON summary's signed 64-bit integers cannot hold once added to:
 # until 2026-11-30 a count of 2^63 ran the whole resumed part and then failed, exit 1, two
