@@ -6,7 +6,10 @@
 #
 # DIR/nbep is a wrapper that starts the binary through the packed loader with the packed
 # libraries only, so the node's own versions (if any) are not mixed in. Same processor
-# architecture only (x86-64 here); about 30 MB with Open MPI's libraries.
+# architecture only (x86-64 here); about 30 MB with Open MPI's libraries. Not for MPI sweeps
+# (`mpirun DIR/nbep sweep`): Open MPI loads its plugins from the build machine's install folder
+# and its launcher is the node's own, so ranks need the same Open MPI installed where it was
+# (README, Running on a cluster).
 set -eu
 [ $# = 1 ] || { echo "usage: scripts/pack-kit.sh DIR" >&2; exit 2; }
 dir=$1

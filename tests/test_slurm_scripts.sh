@@ -24,6 +24,10 @@ rc=$?
 check "slurm-run.sbatch by hand: exit 0 and the run's file (got $rc)" \
     "[ $rc = 0 ] && [ -s '$tmp/run.h5' ]"
 
+# WORK a folder of the user's (WORK=$SCRATCH): the script works in a folder of its own inside
+# it and deletes only that (until 2026-12-01 it deleted WORK whole, the user's files too)
+mkdir -p "$tmp/work"
+echo keep >"$tmp/work/mine.txt"
 NBEP=$PWD/bin/nbep SPHERES=64 STEPS=5 RUNS=2 THREADS_LIST=1 RANKS_LIST=1 OUT="$tmp/scaling.csv" \
     WORK="$tmp/work" timeout -k 5 120 bash scripts/slurm-scaling.sbatch >"$tmp/scaling.out" 2>&1
 rc=$?
@@ -31,5 +35,7 @@ check "slurm-scaling.sbatch by hand, no extra options: exit 0, a header and 4 ro
     "[ $rc = 0 ] && [ \$(wc -l <'$tmp/scaling.csv') = 5 ] &&
      head -1 '$tmp/scaling.csv' | grep -q '^study,kind,ranks,threads,' &&
      [ \$(grep -c '^threads,' '$tmp/scaling.csv') = 2 ] && [ \$(grep -c '^ranks,' '$tmp/scaling.csv') = 2 ]"
+check "... WORK kept with the user's file in it, nothing of the script's left there" \
+    "grep -qx keep '$tmp/work/mine.txt' && [ \"\$(ls -A '$tmp/work')\" = mine.txt ]"
 
 exit $fail
