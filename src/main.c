@@ -1,6 +1,7 @@
 /* nbep's entry point: command line -> command (a run goes through run.h); maps a status to an
  * exit code. The only file that prints a status, installs signal handlers or calls exit. */
 #include <assert.h>
+#include <errno.h>
 #include <signal.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -186,6 +187,14 @@ int main(int argc, char **argv)
             st = nbep_sweep_main(&cli, &stop_signal, &d);
             break;
         }
+    }
+    /* a report that never reached its reader (stdout a full disk, a closed file) is a failure
+     * (exit 1): until 2026-12-01 check, info and --help said 0 with their report lost */
+    errno = 0;
+    if ((fflush(stdout) != 0 || ferror(stdout)) && st == NBEP_OK) {
+        nbep_diag_add(&d, __FILE__, __LINE__, "nbep: cannot write to standard output: %s",
+                      errno ? strerror(errno) : "write failed");
+        st = NBEP_EIO;
     }
     nbep_diag_print(&d, stderr);
     nbep_diag_fini(&d);

@@ -435,6 +435,13 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
      * check said it once) */
     if (tc_warning && !rq->sweep_run)
         fprintf(stderr, "%s\n", tc_warning);
+    /* a user who meant the study (a new user ran `nbep run` on a study's deck and took its
+     * one run for the study, 2026-12-01) */
+    if (rq->verbose && !rq->sweep_run && (sc.sweep_n_axes > 0 || sc.sweep_replicas > 1))
+        fprintf(stderr,
+                "nbep: note: %s has a sweep group, which nbep run leaves aside: this is one run "
+                "of the deck's own values (`nbep sweep %s` runs the study)\n",
+                rq->deck_path, rq->deck_path);
     const int threads = nbep_sim_resolve_threads(sc.threads);
     nbep_output *out = NULL;
     nbep_sim *sim = NULL;
