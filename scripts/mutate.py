@@ -1541,6 +1541,8 @@ MUTANTS = [
     ("stdout-failure-unsaid", "src/main.c",
      "    if ((fflush(stdout) != 0 || ferror(stdout)) && st == NBEP_OK) {",
      "    if (0) {", ["tests/test_cli.sh"], None),
+    ("sweep-replaced-unsaid", "src/sweep.c", "        else if (replaced[0])\n", "        else if (0)\n",
+     ["tests/test_sweep_cli.sh"], None),
     # a run file's refusal to resume said on its line (2026-12-01)
     ("sweep-afresh-unsaid", "src/sweep.c", "        else if (refused[0])\n",
      "        else if (0)\n", ["tests/test_sweep_cli.sh"], None),

@@ -547,7 +547,7 @@ static bool says_completed(const nbep_summary *s, uint64_t steps)
 
 nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
                                       size_t n_overrides, uint64_t steps, bool threads_axis,
-                                      nbep_summary *sum)
+                                      nbep_summary *sum, char *why, size_t why_len)
 {
     struct stat sb;
     if (stat(path, &sb) != 0)
@@ -556,17 +556,27 @@ nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
     nbep_diag_init(&d);
     char *stored = NULL, *json = NULL, *wanted = join_lines(overrides, n_overrides);
     nbep_summary s;
-    nbep_sweep_found found = NBEP_SWEEP_FOUND_NONE;
-    if (wanted && nbep_output_sweep_read_run(path, &stored, &json, &d) == NBEP_OK &&
-        same_overrides(stored, wanted, threads_axis)) {
-        /* no summary: killed outright (kill -9, a node lost), its frames up to then kept */
-        const bool read = json && nbep_summary_from_json(json, &s);
-        if (read && says_completed(&s, steps))
-            found = NBEP_SWEEP_FOUND_COMPLETE;
-        else if (!json || (read && (s.status == NBEP_SUMMARY_INTERRUPTED ||
-                                    s.status == NBEP_SUMMARY_TERMINATED)))
-            found = NBEP_SWEEP_FOUND_PARTIAL;
+    /* what is said of a file replaced (a new user took a silent replacement of an earlier
+     * study's run for a reuse, 2026-12-01) */
+    const char *held = "no run nbep can read";
+    nbep_sweep_found found = NBEP_SWEEP_FOUND_OTHER;
+    if (wanted && nbep_output_sweep_read_run(path, &stored, &json, &d) == NBEP_OK) {
+        held = "a run of other settings";
+        if (same_overrides(stored, wanted, threads_axis)) {
+            /* no summary: killed outright (kill -9, a node lost), its frames up to then kept */
+            const bool read = json && nbep_summary_from_json(json, &s);
+            held = "a run that failed";
+            if (read && says_completed(&s, steps))
+                found = NBEP_SWEEP_FOUND_COMPLETE;
+            else if (!json || (read && (s.status == NBEP_SUMMARY_INTERRUPTED ||
+                                        s.status == NBEP_SUMMARY_TERMINATED)))
+                found = NBEP_SWEEP_FOUND_PARTIAL;
+            else if (read && s.status == NBEP_SUMMARY_COMPLETED)
+                held = "a run complete at another step count";
+        }
     }
+    if (found == NBEP_SWEEP_FOUND_OTHER && why)
+        snprintf(why, why_len, "%s", held);
     if (found == NBEP_SWEEP_FOUND_COMPLETE && sum)
         *sum = s;
     free(stored);
@@ -579,7 +589,7 @@ nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
 bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_overrides,
                              uint64_t steps, nbep_summary *sum)
 {
-    return nbep_sweep_run_found(path, overrides, n_overrides, steps, false, sum) ==
+    return nbep_sweep_run_found(path, overrides, n_overrides, steps, false, sum, NULL, 0) ==
            NBEP_SWEEP_FOUND_COMPLETE;
 }
 
@@ -628,10 +638,12 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
         nbep_diag_add(&d, __FILE__, __LINE__, "nbep: out of memory naming run %zu", run);
         st = NBEP_ENOMEM;
     }
+    char replaced[64] = ""; /* what the file there held, when this run replaces it */
     const nbep_sweep_found found =
         st == NBEP_OK ? nbep_sweep_run_found(path, ov, n_ov, nbep_sweep_run_steps(p, run),
-                                             varies_threads(p), &res->summary)
-                      : NBEP_SWEEP_FOUND_NONE;
+                                             varies_threads(p), &res->summary, replaced,
+                                             sizeof replaced)
+                      : NBEP_SWEEP_FOUND_NONE; /* replaced: "" unless OTHER */
     if (found == NBEP_SWEEP_FOUND_COMPLETE) {
         has_summary = reused = true;
     } else if (st == NBEP_OK) {
@@ -705,6 +717,8 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
         else if (refused[0])
             snprintf(from, sizeof from, ", from step 0: its file could not be resumed (%s)",
                      refused);
+        else if (replaced[0])
+            snprintf(from, sizeof from, ", from step 0: its file, %s, replaced", replaced);
         fprintf(stderr,
                 "nbep sweep: rank %d: run %zu (of %zu; %s): %s in %.3g s (%" PRIu64
                 " steps%s, %.4g steps/s)\n",

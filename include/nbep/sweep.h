@@ -138,13 +138,15 @@ typedef enum nbep_sweep_found {
     NBEP_SWEEP_FOUND_NONE,
     NBEP_SWEEP_FOUND_COMPLETE,
     NBEP_SWEEP_FOUND_PARTIAL,
+    NBEP_SWEEP_FOUND_OTHER, /* a file of no use: the run replaces it (NONE: no file at all) */
 } nbep_sweep_found;
 /* nbep_sweep_run_complete's look, telling a run cut short from one of no use; threads_axis:
  * run.threads is one of the study's axes, so a run with another thread count is of no use
- * (nbep_sweep_run_complete passes false). */
+ * (nbep_sweep_run_complete passes false). For NBEP_SWEEP_FOUND_OTHER, why (when not NULL, of
+ * why_len bytes) says what the file held, in a few words. */
 nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
                                       size_t n_overrides, uint64_t steps, bool threads_axis,
-                                      nbep_summary *sum);
+                                      nbep_summary *sum, char *why, size_t why_len);
 
 /* How a process runs its share of a sweep. */
 typedef struct nbep_sweep_exec {
