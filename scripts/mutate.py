@@ -1543,6 +1543,8 @@ MUTANTS = [
      "    if (0) {", ["tests/test_cli.sh"], None),
     ("sweep-replaced-unsaid", "src/sweep.c", "        else if (replaced[0])\n", "        else if (0)\n",
      ["tests/test_sweep_cli.sh"], None),
+    ("fmt-exact-six-digits", "src/util.c", "    for (int digits = 6; digits <= 17; digits++) {",
+     "    for (int digits = 6; digits <= 6; digits++) {", ["tests/test_cli.sh"], None),
     # a run file's refusal to resume said on its line (2026-12-01)
     ("sweep-afresh-unsaid", "src/sweep.c", "        else if (refused[0])\n",
      "        else if (0)\n", ["tests/test_sweep_cli.sh"], None),

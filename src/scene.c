@@ -210,24 +210,24 @@ static got get_float(load *L, const config_setting_t *parent, const char *prefix
     double v = number_of(s);
     unsigned f = schema[id].flags;
     if (!isfinite(v)) {
-        ERR(L, s, "%s must be finite (got %g)", path, v);
+        ERR(L, s, "%s must be finite (got %s)", path, NBEP_G(v));
         return BAD;
     }
     if ((f & F_GT0) && !(v > 0.0)) {
-        ERR(L, s, "%s must be > 0 (got %g)", path, v);
+        ERR(L, s, "%s must be > 0 (got %s)", path, NBEP_G(v));
         return BAD;
     }
     if ((f & F_GE0) && !(v >= 0.0)) {
-        ERR(L, s, "%s must be >= 0 (got %g)", path, v);
+        ERR(L, s, "%s must be >= 0 (got %s)", path, NBEP_G(v));
         return BAD;
     }
     if ((f & F_IN01) && !(v >= 0.0 && v <= 1.0)) {
-        ERR(L, s, "%s must be in [0, 1] (got %g)", path, v);
+        ERR(L, s, "%s must be in [0, 1] (got %s)", path, NBEP_G(v));
         return BAD;
     }
     if ((f & F_SCALE) && !in_scale(fabs(v))) {
-        ERR(L, s, "%s must be %s" SCALE_RANGE " in magnitude (got %g)%s", path,
-            f & F_GT0 ? "" : "0 or ", v, SCALE_HINT);
+        ERR(L, s, "%s must be %s" SCALE_RANGE " in magnitude (got %s)%s", path,
+            f & F_GT0 ? "" : "0 or ", NBEP_G(v), SCALE_HINT);
         return BAD;
     }
     *out = v;
@@ -259,8 +259,8 @@ static got get_vec3(load *L, const config_setting_t *parent, const char *prefix,
         return BAD;
     }
     if ((schema[id].flags & F_SCALE) && !in_scale(scaled_norm(v))) {
-        ERR(L, s, "%s must be 0 or " SCALE_RANGE " in length (got [%g, %g, %g], length %g)%s",
-            path, v.x, v.y, v.z, scaled_norm(v), SCALE_HINT);
+        ERR(L, s, "%s must be 0 or " SCALE_RANGE " in length (got [%s, %s, %s], length %g)%s",
+            path, NBEP_G(v.x), NBEP_G(v.y), NBEP_G(v.z), scaled_norm(v), SCALE_HINT);
         return BAD;
     }
     *out = v;
@@ -488,8 +488,8 @@ static bool check_corners(load *L, const config_setting_t *at, const char *prefi
     size_t used = 0;
     for (int k = 0; k < 3; k++)
         if (!(l[k] < h[k]))
-            used += (size_t)snprintf(axes + used, sizeof axes - used, "%s%c: %g >= %g",
-                                     used ? ", " : "", "xyz"[k], l[k], h[k]);
+            used += (size_t)snprintf(axes + used, sizeof axes - used, "%s%c: %s >= %s",
+                                     used ? ", " : "", "xyz"[k], NBEP_G(l[k]), NBEP_G(h[k]));
     if (used) {
         ERR(L, at, "%s.min must be < %s.max on every axis (got %s)", prefix, prefix, axes);
         return false;
@@ -497,8 +497,8 @@ static bool check_corners(load *L, const config_setting_t *at, const char *prefi
     /* a side is a length (NBEP_DECK_SCALE_MIN, _MAX), a region's too */
     for (int k = 0; k < 3; k++)
         if (!in_scale(h[k] - l[k]))
-            used += (size_t)snprintf(axes + used, sizeof axes - used, "%s%c: %g",
-                                     used ? ", " : "", "xyz"[k], h[k] - l[k]);
+            used += (size_t)snprintf(axes + used, sizeof axes - used, "%s%c: %s",
+                                     used ? ", " : "", "xyz"[k], NBEP_G(h[k] - l[k]));
     if (!used)
         return true;
     ERR(L, at, "%s: every side must be " SCALE_RANGE " long (got %s)%s", prefix, axes,
@@ -633,9 +633,9 @@ static void check_periodic(load *L, const config_setting_t *at, const nbep_scene
             continue;
         if (!(len[k] > 4.0 * rmax))
             ERR(L, blame,
-                "box.periodic: the box's %c side (%g) must be longer than %g, twice the largest "
-                "sphere diameter (%g)",
-                "xyz"[k], len[k], 4.0 * rmax, 2.0 * rmax);
+                "box.periodic: the box's %c side (%s) must be longer than %s, twice the largest "
+                "sphere diameter (%s)",
+                "xyz"[k], NBEP_G(len[k]), NBEP_G(4.0 * rmax), NBEP_G(2.0 * rmax));
         /* three cells of the neighbour lists' cutoff across (evloop.h) */
         else if (sc->neighbors_cells && !(len[k] >= nbep_evloop_min_periodic_side(2.0 * rmax)))
             ERR(L, blame,

@@ -89,6 +89,16 @@ static char *suffixed(const char *path, const char *suffix)
     return p;
 }
 
+const char *nbep_fmt_exact(double v, char *buf)
+{
+    for (int digits = 6; digits <= 17; digits++) {
+        snprintf(buf, 32, "%.*g", digits, v);
+        if (!isfinite(v) || strtod(buf, NULL) == v)
+            break;
+    }
+    return buf;
+}
+
 char *nbep_partial_path(const char *path)
 {
     return suffixed(path, ".partial");

@@ -665,6 +665,14 @@ if [ -w /dev/full ]; then
             "[ $rc = 1 ] && one_line && grep -qx 'nbep: cannot write to standard output: No space left on device' '$tmp/stderr'"
     done
 fi
+# a value named in an error in the digits that tell it from the limit (until 2026-12-01 %g's
+# six: "must be in [0, 1] (got 1)" of 1.0000000001)
+run_nbep check inputs/two-spheres.deck --set physics.restitution=1.0000000001
+check "a restitution a hair above 1: exit 2, the value as given (got $rc: $(head -c 200 "$tmp/stderr"))" \
+    "[ $rc = 2 ] && one_line && grep -qx -- '--set physics.restitution=1.0000000001: physics.restitution must be in \[0, 1\] (got 1.0000000001)' '$tmp/stderr'"
+run_nbep check inputs/two-spheres.deck --set 'box.min=[1.0000001,0,0]' --set 'box.max=[1.00000001,1,1]'
+check "box corners that differ past six digits: both named apart (got $rc: $(head -c 200 "$tmp/stderr"))" \
+    "[ $rc = 2 ] && grep -q 'box.min must be < box.max on every axis (got x: 1.0000001 >= 1.00000001)' '$tmp/stderr'"
 # a file of the user's already at OUT.h5.lock (not empty, so no run's lock): the run locks it
 # and leaves it as it was
 echo 'notes of mine' >"$tmp/mine.h5.lock"

@@ -67,6 +67,13 @@ void nbep_memory_init(void);
 /* Seconds on the monotonic clock (for durations only). */
 double nbep_now(void);
 
+/* v in the fewest significant digits (6 at least, as %g, up to 17) that read back as v, in
+ * buf (32 bytes), which it returns: a deck's value named in an error as %g rounded it, and
+ * "must be in [0, 1] (got 1)" was said of 1.0000000001 (until 2026-12-01). */
+const char *nbep_fmt_exact(double v, char *buf);
+/* nbep_fmt_exact into a buffer of the enclosing statement's block: for printf's arguments */
+#define NBEP_G(v) nbep_fmt_exact((v), (char[32]){0})
+
 /* "PATH.partial" (malloc'd; NULL without memory): the name a file is written under before it
  * is renamed to path once complete, so that a kill or a refusal never leaves a half-written
  * file at path nor removes an older one (the run's file, its summary, a sweep's tables). */
