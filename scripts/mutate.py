@@ -1545,6 +1545,12 @@ MUTANTS = [
      ["tests/test_sweep_cli.sh"], None),
     ("fmt-exact-six-digits", "src/util.c", "    for (int digits = 6; digits <= 17; digits++) {",
      "    for (int digits = 6; digits <= 6; digits++) {", ["tests/test_cli.sh"], None),
+    ("check-hint-never", "src/check.c", "        sc->state.n >= 100 && !nbep_scene_any_periodic(sc))",
+     "        0)", ["tests/test_cli.sh"], None),
+    ("check-hint-cells-too", "src/check.c",
+     "    if (strcmp(sc->algorithm, \"predictive\") == 0 && !sc->neighbors_grid && !sc->neighbors_cells &&",
+     "    if (strcmp(sc->algorithm, \"predictive\") == 0 && !sc->neighbors_grid &&",
+     ["tests/test_cli.sh"], None),
     # a run file's refusal to resume said on its line (2026-12-01)
     ("sweep-afresh-unsaid", "src/sweep.c", "        else if (refused[0])\n",
      "        else if (0)\n", ["tests/test_sweep_cli.sh"], None),

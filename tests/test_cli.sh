@@ -673,6 +673,14 @@ check "a restitution a hair above 1: exit 2, the value as given (got $rc: $(head
 run_nbep check inputs/two-spheres.deck --set 'box.min=[1.0000001,0,0]' --set 'box.max=[1.00000001,1,1]'
 check "box corners that differ past six digits: both named apart (got $rc: $(head -c 200 "$tmp/stderr"))" \
     "[ $rc = 2 ] && grep -q 'box.min must be < box.max on every axis (got x: 1.0000001 >= 1.00000001)' '$tmp/stderr'"
+# check points an all-pairs predictive deck of 100 spheres or more to cells mode, once
+run_nbep check inputs/pile.deck --set 'run.neighbors="all"'
+check "check of a pile in all-pairs mode: one hint line naming cells mode (exit $rc)" \
+    "[ $rc = 0 ] && [ \$(grep -c '^hint: *run.neighbors = \"cells\" predicts each sphere against its neighbours only' '$tmp/stdout') = 1 ]"
+run_nbep check inputs/pile.deck
+check "... none in cells mode (exit $rc)" "[ $rc = 0 ] && ! grep -q '^hint:' '$tmp/stdout'"
+run_nbep check inputs/two-spheres.deck
+check "... none for two spheres (exit $rc)" "[ $rc = 0 ] && ! grep -q '^hint:' '$tmp/stdout'"
 # a file of the user's already at OUT.h5.lock (not empty, so no run's lock): the run locks it
 # and leaves it as it was
 echo 'notes of mine' >"$tmp/mine.h5.lock"
