@@ -282,6 +282,15 @@ def main():
     if not (math.isfinite(args.t0) and args.t0 >= 0):
         fail(f"--from must be a time >= 0 (got {args.t0:g})")
     res = analyse(args.run, args.t0)
+    # on stderr, so that --json stays one object: a window from the start takes in its
+    # transient (a lattice melting: a new user read D/D_E = 0.90 off a 5-step run, 2026-12-01)
+    if args.t0 == 0:
+        print("hard-sphere.py: note: the window starts at t = 0, with the run's start in it (a "
+              "lattice melting, say): pass --from T0 past it for the fluid's own figures",
+              file=sys.stderr)
+    if res.get("diffusion") is not None and res["frames"] < 6:
+        print(f"hard-sphere.py: note: only {res['frames']} frames in the window: D is a rough "
+              "figure (more frames: a longer run, or a smaller output.every)", file=sys.stderr)
     if args.json:
         print(json.dumps(res))
     else:

@@ -57,6 +57,9 @@ def dense_series(path):
 def main():
     if len(sys.argv) < 2:
         sys.exit(__doc__)
+    if sys.argv[1] in ("-h", "--help"):  # (it took --help for a folder, 2026-12-01)
+        print(__doc__)
+        return
     out = sys.argv[1]
     fig_path = sys.argv[2] if len(sys.argv) > 2 else os.path.join(out, "threads.png")
     title = sys.argv[3] if len(sys.argv) > 3 else "nbep: speed-up over one thread"

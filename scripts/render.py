@@ -5,8 +5,9 @@
                              [--size 6] [--dpi 150] [--color speed|height|none]
 
 Each frame becomes DIR/RUN-step-000120.png with --view 3d and DIR/RUN-step-000120-xz.png
-(-xy, -xz or -yz: the view) for a projection, 000120 being the frame's step; DIR defaults to
-the run file's folder. Frames are indices into /frames (negative ones count from the last
+(-xy, -xz or -yz: the view) for a projection, 000120 being the frame's step, with -height or
+-none after it for those colourings (RUN-step-000120-xz-height.png); DIR defaults to the run
+file's folder. Frames are indices into /frames (negative ones count from the last
 complete frame: -1 is the last); only complete frames are used (the `count` attribute of
 /frames), so a run still being written or killed can be drawn. --view 3d draws a perspective
 scatter whose marker sizes follow the radii approximately; xy, xz and yz draw an orthographic
@@ -220,6 +221,9 @@ def main():
                 title += "\n" + ", ".join(ax.short) + " (too short to tick)"
             ax.set_title(title, fontsize=10)
             view = "" if args.view == "3d" else "-" + args.view
+            # another colouring, another name: --color height wrote over the speed picture of
+            # the same frame and view (a new user's, 2026-12-01)
+            view += "" if args.color == "speed" else "-" + args.color
             path = os.path.join(out, "%s-step-%06d%s.png" % (stem, step, view))
             fig.savefig(path, dpi=args.dpi, bbox_inches="tight")
             plt.close(fig)

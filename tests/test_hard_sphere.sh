@@ -82,8 +82,14 @@ rc=$?
 check "hard-sphere.py on it: exit 0 (got $rc), its four lines" \
     "[ $rc = 0 ] && grep -q '^pressure: ' '$tmp/fluid.txt' && grep -q '^collisions: ' '$tmp/fluid.txt' &&
      grep -q '^diffusion:  D = ' '$tmp/fluid.txt' && grep -q '^window:     t = 2 .. 20 (180 steps of 0.1)' '$tmp/fluid.txt'"
+check "... and nothing on stderr (a window past the start, 180 frames)" "[ ! -s '$tmp/err.txt' ]"
 "$PY" $HS "$tmp/fluid.h5" --from 2 --json >"$tmp/fluid-w.json"
-"$PY" $HS "$tmp/fluid.h5" --json >"$tmp/fluid-all.json"
+"$PY" $HS "$tmp/fluid.h5" --json >"$tmp/fluid-all.json" 2>"$tmp/err.txt"
+check "a window from t = 0: a note on stderr that the start is in it, the JSON alone on stdout" \
+    "grep -q '^hard-sphere.py: note: the window starts at t = 0' '$tmp/err.txt' && [ \$(wc -l <'$tmp/err.txt') = 1 ]"
+"$PY" $HS "$tmp/fluid.h5" --from 16 >/dev/null 2>"$tmp/err.txt"
+check "a window of 5 frames: a note that D is rough" \
+    "grep -q '^hard-sphere.py: note: only 5 frames in the window: D is a rough figure' '$tmp/err.txt'"
 "$PY" - "$tmp/fluid-w.json" "$tmp/fluid-all.json" "$tmp/fluid.json" >"$tmp/fluid-check.txt" <<'PYEOF'
 import json, sys
 w, a, s = (json.load(open(p)) for p in sys.argv[1:4])

@@ -27,7 +27,7 @@ check "render.py draws frames 0, 2 and the last (steps 0, 20, 50)" \
 check "render.py prints each image's path" "[ \$(wc -l <'$tmp/render.out') = 3 ]"
 "$PY" scripts/render.py "$tmp/viz.h5" --frames -1 --view xz --color height --out "$tmp/png" \
     >/dev/null 2>&1
-check "render.py draws a projection to scale" "is_png '$tmp/png/viz-step-000050-xz.png'"
+check "render.py draws a projection to scale, named for its colouring" "is_png '$tmp/png/viz-step-000050-xz-height.png' && [ ! -e '$tmp/png/viz-step-000050-xz.png' ]"
 "$PY" scripts/render.py "$tmp/viz.h5" --frames 6 --out "$tmp/png" >"$tmp/bad.out" 2>&1
 rc=$?
 check "a frame past the last is refused (exit $rc)" \
