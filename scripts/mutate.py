@@ -1551,6 +1551,10 @@ MUTANTS = [
      "    if (strcmp(sc->algorithm, \"predictive\") == 0 && !sc->neighbors_grid && !sc->neighbors_cells &&",
      "    if (strcmp(sc->algorithm, \"predictive\") == 0 && !sc->neighbors_grid &&",
      ["tests/test_cli.sh"], None),
+    ("cli-near-option-never", "src/cli.c", "            if (near)\n                NBEP_FAIL", "            if (0)\n                NBEP_FAIL",
+     ["tests/test_cli.sh"], None),
+    ("cli-near-option-too-far", "src/cli.c", "            size_t best = 3; /* at most 2 edits",
+     "            size_t best = 9; /* at most 2 edits", ["tests/test_cli.sh"], None),
     # a run file's refusal to resume said on its line (2026-12-01)
     ("sweep-afresh-unsaid", "src/sweep.c", "        else if (refused[0])\n",
      "        else if (0)\n", ["tests/test_sweep_cli.sh"], None),

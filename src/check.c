@@ -61,6 +61,14 @@ void nbep_check_gather(const nbep_scene *sc, nbep_check_facts *f)
         f->sidecar_bytes;
 }
 
+/* Whether x prints as "1" under %.0f: one partner, not "1 partners". */
+static bool prints_as_one(double x)
+{
+    char text[32];
+    snprintf(text, sizeof text, "%.0f", x);
+    return strcmp(text, "1") == 0;
+}
+
 void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f)
 {
     const int threads = f->threads;
@@ -142,11 +150,12 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
         isfinite(f->partners))
         fprintf(out,
                 "mixture:         radii %g to %g: a list reaches its pair's contact and the "
-                "skin, about %.0f partners for the smallest spheres, but the cells are sized "
+                "skin, about %.0f partner%s for the smallest spheres, but the cells are sized "
                 "by the largest pair: each new list of a smallest sphere reads about %.0f "
                 "spheres or more; an event's cost grows with them (README, Algorithms: What "
                 "it costs)\n",
-                f->radius_min, f->radius_max, f->partners, f->walk_reads);
+                f->radius_min, f->radius_max, f->partners,
+                prints_as_one(f->partners) ? "" : "s", f->walk_reads);
     char size[NBEP_BYTES_TEXT_MAX];
     fprintf(out, "memory:          about %s\n", nbep_format_bytes(f->memory_bytes, size));
     char *xmf = f->sidecar_bytes > 0.0 ? nbep_xdmf_path(sc->output_file) : NULL;

@@ -6,6 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "scene_impl.h" /* nbep__scene_edit_distance */
+
 static const char HELP[] =
     "nbep - N-Body Event Prediction: colliding spheres and static planes\n"
     "\n"
@@ -249,8 +251,26 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
             }
             continue;
         }
-        if (a[0] == '-' && a[1] != '\0')
+        if (a[0] == '-' && a[1] != '\0') {
+            /* the nearest long option, for a slip of a letter or two (--stpes: a new user's,
+             * 2026-12-01), as the deck's keys get */
+            static const char *const longs[] = {"--quiet",  "--help",      "--output", "--algorithm",
+                                                "--threads", "--steps",    "--dt",     "--summary",
+                                                "--resume",  "--set"};
+            const char *near = NULL;
+            size_t best = 3; /* at most 2 edits, and fewer than the name's own length */
+            for (size_t i = 0; i < sizeof longs / sizeof longs[0]; i++) {
+                const size_t dist = nbep__scene_edit_distance(name, longs[i]);
+                if (dist < best && dist < strlen(name) - 2) {
+                    best = dist;
+                    near = longs[i];
+                }
+            }
+            if (near)
+                NBEP_FAIL(d, NBEP_EUSAGE, "nbep: unknown option '%s' (did you mean %s? nbep "
+                          "--help lists them)", a, near);
             NBEP_FAIL(d, NBEP_EUSAGE, "nbep: unknown option '%s' (try nbep --help)", a);
+        }
         if (cli->path)
             NBEP_FAIL(d, NBEP_EUSAGE, "nbep: unexpected argument '%s' (one %s only)", a,
                       cli->cmd == NBEP_CMD_INFO ? "run file" : "deck");

@@ -681,6 +681,14 @@ run_nbep check inputs/pile.deck
 check "... none in cells mode (exit $rc)" "[ $rc = 0 ] && ! grep -q '^hint:' '$tmp/stdout'"
 run_nbep check inputs/two-spheres.deck
 check "... none for two spheres (exit $rc)" "[ $rc = 0 ] && ! grep -q '^hint:' '$tmp/stdout'"
+# an unknown option: exit 2, one line, the nearest long option named where a slip of a letter
+# or two makes it (until 2026-12-01 "--stpes" got only "try nbep --help")
+for pair in "--stpes|did you mean --steps? nbep --help lists them" "--sumary=x.json|did you mean --summary? nbep --help lists them" \
+            "--xyz|try nbep --help" "-x|try nbep --help" "--stepsize|try nbep --help"; do
+    run_nbep run inputs/two-spheres.deck "${pair%%|*}" 3
+    check "run ${pair%%|*}: exit 2, one line: $(head -c 120 "$tmp/stderr")" \
+        "[ $rc = 2 ] && one_line && grep -qxF -- \"nbep: unknown option '${pair%%|*}' (${pair#*|})\" '$tmp/stderr'"
+done
 # a file of the user's already at OUT.h5.lock (not empty, so no run's lock): the run locks it
 # and leaves it as it was
 echo 'notes of mine' >"$tmp/mine.h5.lock"
