@@ -1555,6 +1555,18 @@ MUTANTS = [
      ["tests/test_cli.sh"], None),
     ("cli-near-option-too-far", "src/cli.c", "            size_t best = 3; /* at most 2 edits",
      "            size_t best = 9; /* at most 2 edits", ["tests/test_cli.sh"], None),
+    # each sphere's image reach its own pair's (2026-12-01)
+    ("image-reach-largest-pair", "src/pred_find.c",
+     "    const double D = nbep_periodic_reach(&c->pb, s->radius[i] + (i == c->big ? c->rmax_other\n                                                                                 : c->rmax));",
+     "    const double D = nbep_periodic_reach(&c->pb, 2.0 * c->rmax);", ["test_periodic"], None),
+    ("image-reach-big-takes-own", "src/pred_find.c", "(i == c->big ? c->rmax_other", "(i == c->big ? c->rmax",
+     ["test_periodic"], None),
+    ("image-reach-too-long", "src/pred_find.c",
+     "    const double D = nbep_periodic_reach(&c->pb, s->radius[i] + (i == c->big ? c->rmax_other\n",
+     "    const double D = nbep_periodic_reach(&c->pb, 0.5 * s->radius[i] + (i == c->big ? c->rmax_other\n",
+     ["test_periodic"], None),
+    ("image-reach-big-two", "src/algo_predictive.c", "            c->big = c->big == SIZE_MAX ? i : SIZE_MAX - 1;",
+     "            c->big = i;", ["test_periodic"], None),
     # a run file's refusal to resume said on its line (2026-12-01)
     ("sweep-afresh-unsaid", "src/sweep.c", "        else if (refused[0])\n",
      "        else if (0)\n", ["tests/test_sweep_cli.sh"], None),

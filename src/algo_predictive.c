@@ -349,7 +349,16 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     c->sigma_all = n > 0 && mono ? sim->st.radius[0] + sim->st.radius[0] : 0.0;
     c->mass_all = n > 0 && same_mass ? sim->st.mass[0] : 0.0;
     c->image_horizon = c->pb.any && !c->use_grid && !sim->scene->neighbors_cells;
-    c->image_reach = nbep_periodic_reach(&c->pb, 2.0 * c->rmax);
+    c->big = SIZE_MAX;
+    c->rmax_other = 0.0;
+    for (size_t i = 0; i < n; i++) { /* the largest sphere, when alone so large */
+        if (sim->st.radius[i] == c->rmax)
+            c->big = c->big == SIZE_MAX ? i : SIZE_MAX - 1;
+        else
+            c->rmax_other = fmax(c->rmax_other, sim->st.radius[i]);
+    }
+    if (c->big == SIZE_MAX - 1) /* two or more of the largest: every sphere meets one */
+        c->big = SIZE_MAX;
     if (p.cells) {
         /* see cells_steps: only those frames are rebuild points of the uninterrupted run
          * (nbep_output_open_resume picks such a frame; a caller of its own may not) */

@@ -132,12 +132,14 @@ void nbep__pred_keep_pairs(nbep_event *best, const pred_ctx *c, const nbep_state
 }
 
 /* All-pairs mode in a periodic box: when sphere i (at its local time) will have strayed
- * image_reach from here along a periodic axis (kind HORIZON, partner n_planes so that it ranks
+ * its reach (pred_impl.h) from here along a periodic axis (kind HORIZON, partner n_planes so that it ranks
  * after the planes); NBEP_NEVER when it does not move. */
 static nbep_event image_horizon(const pred_ctx *c, const nbep_state *s, size_t i, nbep_vec3 ai,
                                 double T0)
 {
-    const double D = c->image_reach;
+    /* r_i and the largest radius of the others (pred_impl.h) */
+    const double D = nbep_periodic_reach(&c->pb, s->radius[i] + (i == c->big ? c->rmax_other
+                                                                                 : c->rmax));
     const double v[3] = {s->vel[i].x, s->vel[i].y, s->vel[i].z}, a[3] = {ai.x, ai.y, ai.z};
     double t = NBEP_NEVER;
     for (int k = 0; k < 3; k++)

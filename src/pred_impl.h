@@ -234,10 +234,16 @@ typedef struct pred_ctx {
     nbep_vec3 fit_lo, fit_hi;     /* the region the cells cover now */
     nbep_periodic pb;             /* the box's periodic axes (scene.c: cells and all-pairs) */
     /* all-pairs mode in a periodic box: partners are compared at their nearest image, which
-     * stays the touching one while no sphere strays farther than image_reach from where it
-     * was last predicted (periodic.h); an image-horizon event re-predicts it there */
+     * stays the touching one while no sphere strays farther than its reach from where it was
+     * last predicted (periodic.h); an image-horizon event re-predicts it there. Sphere i's
+     * reach is that of its own largest contact distance, r_i plus the largest radius among
+     * the others (pred_find.c, image_horizon): a pair's two reaches then add to at most the
+     * pair's own, and a small sphere does not take the reach of two large ones, which a box a
+     * hair past two large diameters makes vanish (one large and one small sphere there made
+     * 1602 predictions and no collision in a step, hours a time unit, until 2026-12-01) */
     bool image_horizon;
-    double image_reach;
+    size_t big;        /* the largest sphere when no other is as large, else SIZE_MAX */
+    double rmax_other; /* the largest radius of the others, for `big` */
     bool ev_failed;               /* thread 0: the loop stalled this step */
     bool part_failed;             /* thread 0: the loop stalled in this step's first part
                                    * (a probe's; read while thread 0 runs the second) */

@@ -593,16 +593,18 @@ static nbep_scene *periodic_fluid(size_t side, double phi, uint64_t steps, doubl
     return sc;
 }
 
-/* A reference for two equal spheres (diameter 1) in a fully periodic cube of side L: their
- * relative motion r(t) = r + u t, each collision reflecting u along the touching image's
- * normal. Written apart from nbep's code: time advances in windows short enough (half a
- * diameter of relative travel) that only the 125 images around the nearest can be touched,
+/* A reference for two spheres of contact distance sigma in a fully periodic cube of side L:
+ * their relative motion r(t) = r + u t, each collision reflecting u along the touching image's
+ * normal (elastic: whatever the masses, the relative velocity's normal part turns round).
+ * Written apart from nbep's code: time advances in windows short enough (half a contact
+ * distance of relative travel) that only the 125 images around the nearest can be touched,
  * every one of which is tested. Returns the collision count before t_end and the final u. */
-static int reference_pair(nbep_vec3 r, nbep_vec3 u, double L, double t_end, nbep_vec3 *u_out)
+static int reference_pair_sigma(nbep_vec3 r, nbep_vec3 u, double sigma, double L, double t_end,
+                                nbep_vec3 *u_out)
 {
     int hits = 0;
     double t = 0.0;
-    const double window = 0.5 / nbep_vec3_norm(u);
+    const double window = 0.5 * sigma / nbep_vec3_norm(u);
     while (t < t_end) {
         r = (nbep_vec3){r.x - L * round(r.x / L), r.y - L * round(r.y / L),
                         r.z - L * round(r.z / L)};
@@ -613,7 +615,7 @@ static int reference_pair(nbep_vec3 r, nbep_vec3 u, double L, double t_end, nbep
                 for (int k = -2; k <= 2; k++) {
                     nbep_vec3 d = {r.x + i * L, r.y + j * L, r.z + k * L};
                     double b = nbep_vec3_dot(d, u), uu = nbep_vec3_dot(u, u);
-                    double disc = b * b - uu * (nbep_vec3_dot(d, d) - 1.0);
+                    double disc = b * b - uu * (nbep_vec3_dot(d, d) - sigma * sigma);
                     if (b >= 0.0 || disc < 0.0)
                         continue;
                     double tc = (-b - sqrt(disc)) / uu;
@@ -639,6 +641,12 @@ static int reference_pair(nbep_vec3 r, nbep_vec3 u, double L, double t_end, nbep
     }
     *u_out = u;
     return hits;
+}
+
+/* Two equal spheres of diameter 1 (reference_pair_sigma). */
+static int reference_pair(nbep_vec3 r, nbep_vec3 u, double L, double t_end, nbep_vec3 *u_out)
+{
+    return reference_pair_sigma(r, u, 1.0, L, t_end, u_out);
 }
 
 /* Two spheres in a periodic box only 2.5 diameters wide, all-pairs mode, 10 time units: the
@@ -684,6 +692,48 @@ static void test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference(void 
         nbep_state_fini(&fin);
         nbep_test_scene_free(&sc);
     }
+}
+
+/* A large sphere (radius 1) and a small one (0.1) in a periodic cube a hair past two large
+ * diameters (4 + 1e-9), all-pairs mode: each sphere's image reach is its own pair's, (L/2 -
+ * 1.1) / 4 = 0.225, not the (L/2 - 2) / 4 = 2.5e-10 of two large spheres that are not there,
+ * which re-predicted them some 1e8 times a step (until 2026-12-01: a step took minutes, the
+ * run hours). The collisions and final relative velocity are the reference's, and the
+ * predictions a few a step. */
+static void test_all_pairs_mode_gives_a_small_sphere_its_own_image_reach(void **state)
+{
+    (void)state;
+    const double L = 4.0 + 1e-9, t_end = 40.0, dt = 0.01;
+    const nbep_vec3 p0 = {0.4, 0.7, 1.9}, p1 = {2.7, 3.1, 0.6};
+    const nbep_vec3 v0 = {0.31, -1.17, 0.53}, v1 = {-0.9, 0.27, 1.41};
+    nbep_vec3 u;
+    int hits = reference_pair_sigma(nbep_vec3_sub(p1, p0), nbep_vec3_sub(v1, v0), 1.1, L, t_end,
+                                    &u);
+    if (hits < 4)
+        fail_msg("the reference meets %d collisions: too few to tell", hits);
+    const uint64_t steps = (uint64_t)llround(t_end / dt);
+    cells_mode = false;
+    nbep_scene *sc = periodic_scene(2, L, steps, dt);
+    cells_mode = true;
+    sc->output_every = 100;
+    nbep_test_set_sphere(sc, 0, p0, v0, 1.0, 1.0, ZERO);
+    nbep_test_set_sphere(sc, 1, p1, v1, 0.1, 0.5, ZERO);
+    nbep_state fin;
+    frames ref = {0};
+    nbep_summary s = run(sc, 1, &fin, &ref);
+    assert_int_equal(s.sphere_collisions, (uint64_t)hits);
+    nbep_vec3 du = nbep_vec3_sub(nbep_vec3_sub(fin.vel[1], fin.vel[0]), u);
+    assert_true(nbep_vec3_norm(du) < 1e-6); /* a dispersing billiard, as above */
+    assert_close(s.energy_final, s.energy_initial, 1e-13, 0.0);
+    assert_true(s.max_overlap_rel < 1e-9);
+    /* each sphere strays some 0.02 a step, a tenth of its reach: a horizon every few
+     * steps, a collision's and a step's predictions (a sphere's partner and six planes) */
+    if (!(s.predictions < 40 * steps))
+        fail_msg("%llu predictions in %llu steps", (unsigned long long)s.predictions,
+                 (unsigned long long)steps);
+    same_frames_on_2_and_4_threads(sc, &ref, s.collisions);
+    nbep_state_fini(&fin);
+    nbep_test_scene_free(&sc);
 }
 
 /* The same pair in one step of 10 time units (all-pairs mode): positions are wrapped only at a
@@ -1845,6 +1895,7 @@ int main(void)
         cmocka_unit_test(test_all_pairs_mode_agrees_with_cells_mode_in_a_periodic_box),
         cmocka_unit_test(test_all_pairs_mode_reacts_to_image_horizons_inside_a_step),
         cmocka_unit_test(test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference),
+        cmocka_unit_test(test_all_pairs_mode_gives_a_small_sphere_its_own_image_reach),
         cmocka_unit_test(test_all_pairs_mode_takes_the_touching_image_within_a_long_step),
         cmocka_unit_test(test_cells_mode_takes_the_touching_image_within_a_long_step),
         cmocka_unit_test(test_periodic_fluid_pressure_and_collision_rate_match_theory),
