@@ -359,6 +359,11 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     }
     if (c->big == SIZE_MAX - 1) /* two or more of the largest: every sphere meets one */
         c->big = SIZE_MAX;
+    /* 27 images a partner cost 27 predictions; worth it where the nearest image's reach is
+     * under a 27th of the wide one (only near SPEC's limit of two diameters: (L/2 - 2 r) <
+     * (1.5 L - 2 r) / 27 for L < 2.15 diameters) */
+    c->image_wide = c->image_horizon && nbep_periodic_reach(&c->pb, 2.0 * c->rmax) <
+                                            nbep_periodic_reach_wide(&c->pb, 2.0 * c->rmax) / 27.0;
     if (p.cells) {
         /* see cells_steps: only those frames are rebuild points of the uninterrupted run
          * (nbep_output_open_resume picks such a frame; a caller of its own may not) */

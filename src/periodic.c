@@ -96,6 +96,18 @@ double nbep_periodic_reach(const nbep_periodic *pb, double sigma)
     return r;
 }
 
+/* The same with the 27 images around the nearest compared (each axis's -1, 0 and +1 periods
+ * from it): a touching image lies a period or more from the nearest only once the two have
+ * moved 1.5 len - sigma apart, 4 D together. */
+double nbep_periodic_reach_wide(const nbep_periodic *pb, double sigma)
+{
+    double r = INFINITY;
+    for (int k = 0; k < 3; k++)
+        if (pb->axis[k])
+            r = fmin(r, (1.5 * pb->len[k] - sigma) / 4.0);
+    return r;
+}
+
 nbep_vec3 nbep_periodic_shift(const nbep_periodic *pb, const int cells[3])
 {
     return nbep_vec3_make(pb->axis[0] ? cells[0] * pb->len[0] : 0.0,

@@ -131,6 +131,33 @@ void nbep__pred_keep_pairs(nbep_event *best, const pred_ctx *c, const nbep_state
     }
 }
 
+/* keep_earlier of the earliest contact of i with j at the images `nearest` + -1, 0 or +1 period
+ * along each periodic axis (one along the others), in a fixed order: 27 predictions, counted
+ * beyond the pair's one. */
+static void wide_images(nbep_event *best, const pred_ctx *c, const nbep_state *s, size_t i,
+                        nbep_vec3 ai, size_t j, const int nearest[3], double T0, thread_ws *w,
+                        nbep_counters *cnt)
+{
+    int cells[3];
+    uint64_t made = 0;
+    for (int ox = -1; ox <= 1; ox++)
+        for (int oy = -1; oy <= 1; oy++)
+            for (int oz = -1; oz <= 1; oz++) {
+                const int o[3] = {ox, oy, oz};
+                bool off_axis = false;
+                for (int k = 0; k < 3; k++) {
+                    off_axis |= o[k] != 0 && !c->pb.axis[k];
+                    cells[k] = nearest[k] + o[k];
+                }
+                if (off_axis)
+                    continue;
+                keep_earlier(best, pair_event(c, s, i, ai, j, nbep_periodic_shift(&c->pb, cells),
+                                              T0, w));
+                made++;
+            }
+    cnt->c[NBEP_COUNTER_PREDICTIONS] += made - 1;
+}
+
 /* All-pairs mode in a periodic box: when sphere i (at its local time) will have strayed
  * its reach (pred_impl.h) from here along a periodic axis (kind HORIZON, partner n_planes so that it ranks
  * after the planes); NBEP_NEVER when it does not move. */
@@ -138,8 +165,9 @@ static nbep_event image_horizon(const pred_ctx *c, const nbep_state *s, size_t i
                                 double T0)
 {
     /* r_i and the largest radius of the others (pred_impl.h) */
-    const double D = nbep_periodic_reach(&c->pb, s->radius[i] + (i == c->big ? c->rmax_other
-                                                                                 : c->rmax));
+    const double sigma_i = s->radius[i] + (i == c->big ? c->rmax_other : c->rmax);
+    const double D = c->image_wide ? nbep_periodic_reach_wide(&c->pb, sigma_i)
+                                   : nbep_periodic_reach(&c->pb, sigma_i);
     const double v[3] = {s->vel[i].x, s->vel[i].y, s->vel[i].z}, a[3] = {ai.x, ai.y, ai.z};
     double t = NBEP_NEVER;
     for (int k = 0; k < 3; k++)
@@ -183,6 +211,10 @@ nbep_event nbep__pred_predict_some(const pred_ctx *c, const nbep_state *s, size_
         if (c->pb.any) { /* all-pairs in a periodic box: j's nearest image */
             int cells[3];
             nbep_periodic_nearest(&c->pb, nbep_vec3_sub(s->pos[j], s->pos[i]), cells);
+            if (c->image_wide) { /* and the 26 around it (pred_impl.h) */
+                wide_images(&best, c, s, i, ai, j, cells, T0, w, cnt);
+                continue;
+            }
             shift = nbep_periodic_shift(&c->pb, cells);
         }
         keep_earlier(&best, pair_event(c, s, i, ai, j, shift, T0, w));

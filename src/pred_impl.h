@@ -242,6 +242,11 @@ typedef struct pred_ctx {
      * hair past two large diameters makes vanish (one large and one small sphere there made
      * 1602 predictions and no collision in a step, hours a time unit, until 2026-12-01) */
     bool image_horizon;
+    /* each partner compared at the 27 images around its nearest, for a far longer reach
+     * (nbep_periodic_reach_wide), where the nearest image's reach is under 1/27 of that: a
+     * box near two largest diameters, whose nearest-image reach goes to 0 (two spheres of
+     * radius 1 in a box of side 4 + 1e-6 made 1.6e5 predictions a step, until 2026-12-01) */
+    bool image_wide;
     size_t big;        /* the largest sphere when no other is as large, else SIZE_MAX */
     double rmax_other; /* the largest radius of the others, for `big` */
     bool ev_failed;               /* thread 0: the loop stalled this step */

@@ -736,6 +736,49 @@ static void test_all_pairs_mode_gives_a_small_sphere_its_own_image_reach(void **
     nbep_test_scene_free(&sc);
 }
 
+/* Two spheres of radius 1 in a periodic cube a hair past two diameters (4 + 1e-9), all-pairs
+ * mode: the nearest image's reach, (L/2 - 2) / 4, is 2.5e-10, so each partner is compared at
+ * the 27 images around its nearest, whose reach is (1.5 L - 2) / 4 = 1 (until 2026-12-01 the
+ * pair was re-predicted some 1e8 times a step). The collisions and final relative velocity are
+ * the reference's, its 125 images each tested, on 1, 2 and 4 threads alike, and the
+ * predictions a few dozen a step. */
+static void test_all_pairs_mode_compares_wide_images_in_a_box_near_two_diameters(void **state)
+{
+    (void)state;
+    const double L = 4.0 + 1e-9, t_end = 10.0, dts[2] = {0.01, 0.5};
+    const nbep_vec3 p0 = {0.4, 0.7, 1.9}, p1 = {2.7, 3.1, 3.6};
+    const nbep_vec3 v0 = {0.31, -1.17, 0.53}, v1 = {-0.9, 0.27, 1.41};
+    nbep_vec3 u;
+    int hits = reference_pair_sigma(nbep_vec3_sub(p1, p0), nbep_vec3_sub(v1, v0), 2.0, L, t_end,
+                                    &u);
+    if (hits < 4)
+        fail_msg("the reference meets %d collisions: too few to tell", hits);
+    for (int k = 0; k < 2; k++) { /* steps shorter than the reach, and (0.5) longer */
+        const uint64_t steps = (uint64_t)llround(t_end / dts[k]);
+        cells_mode = false;
+        nbep_scene *sc = periodic_scene(2, L, steps, dts[k]);
+        cells_mode = true;
+        sc->output_every = k == 0 ? 100 : 2;
+        nbep_test_set_sphere(sc, 0, p0, v0, 1.0, 1.0, ZERO);
+        nbep_test_set_sphere(sc, 1, p1, v1, 1.0, 2.0, ZERO);
+        nbep_state fin;
+        frames ref = {0};
+        nbep_summary s = run(sc, 1, &fin, &ref);
+        assert_int_equal(s.sphere_collisions, (uint64_t)hits);
+        nbep_vec3 du = nbep_vec3_sub(nbep_vec3_sub(fin.vel[1], fin.vel[0]), u);
+        if (!(nbep_vec3_norm(du) < 1e-6)) /* a dispersing billiard, as above (7e-11 seen) */
+            fail_msg("dt %g: %d collisions, |du| %g", dts[k], hits, nbep_vec3_norm(du));
+        assert_close(s.energy_final, s.energy_initial, 1e-13, 0.0);
+        assert_true(s.max_overlap_rel < 1e-9);
+        if (!(s.predictions < 200 * (uint64_t)(t_end / 0.01)))
+            fail_msg("%llu predictions in %.0f time units", (unsigned long long)s.predictions,
+                     t_end);
+        same_frames_on_2_and_4_threads(sc, &ref, s.collisions);
+        nbep_state_fini(&fin);
+        nbep_test_scene_free(&sc);
+    }
+}
+
 /* The same pair in one step of 10 time units (all-pairs mode): positions are wrapped only at a
  * step's end, so within the step the spheres' stored positions drift periods apart (their
  * relative travel is 24, ten periods), and a collision's separation must still be taken at the
@@ -1896,6 +1939,7 @@ int main(void)
         cmocka_unit_test(test_all_pairs_mode_reacts_to_image_horizons_inside_a_step),
         cmocka_unit_test(test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference),
         cmocka_unit_test(test_all_pairs_mode_gives_a_small_sphere_its_own_image_reach),
+        cmocka_unit_test(test_all_pairs_mode_compares_wide_images_in_a_box_near_two_diameters),
         cmocka_unit_test(test_all_pairs_mode_takes_the_touching_image_within_a_long_step),
         cmocka_unit_test(test_cells_mode_takes_the_touching_image_within_a_long_step),
         cmocka_unit_test(test_periodic_fluid_pressure_and_collision_rate_match_theory),

@@ -84,6 +84,10 @@ static inline nbep_vec3 nbep_periodic_near_image(const nbep_periodic *pb, nbep_v
  * one that can touch (contact distance up to sigma): (min over periodic sides of len/2 - sigma)
  * / 4; INFINITY without periodic axes. */
 double nbep_periodic_reach(const nbep_periodic *pb, double sigma);
+/* nbep_periodic_reach where each partner is compared at its 27 images around the nearest (the
+ * nearest shifted by -1, 0 or +1 period along each periodic axis): (min over periodic sides of
+ * 1.5 len - sigma) / 4. */
+double nbep_periodic_reach_wide(const nbep_periodic *pb, double sigma);
 
 /* The displacement of the copy of the box `cells` periods away: cells[k] * len[k] per axis
  * (0 on non-periodic axes). */
