@@ -1576,6 +1576,8 @@ MUTANTS = [
      "            for (int oz = 0; oz <= 0; oz++) {", ["test_periodic"], None),
     ("image-wide-reach-too-long", "src/periodic.c", "            r = fmin(r, (1.5 * pb->len[k] - sigma) / 4.0);",
      "            r = fmin(r, (3.5 * pb->len[k] - sigma) / 4.0);", ["test_periodic"], None),
+    ("lock-output-busy-as-usage", "src/output.c", "        o->lock_path = NULL;\n        return NBEP_EBUSY;",
+     "        o->lock_path = NULL;\n        return NBEP_EUSAGE;", ["test_output", "tests/test_sweep_cli.sh"], None),
     # a run file's refusal to resume said on its line (2026-12-01)
     ("sweep-afresh-unsaid", "src/sweep.c", "        else if (refused[0])\n",
      "        else if (0)\n", ["tests/test_sweep_cli.sh"], None),
