@@ -694,16 +694,15 @@ static void test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference(void 
     }
 }
 
-/* A large sphere (radius 1) and a small one (0.1) in a periodic cube a hair past two large
- * diameters (4 + 1e-9), all-pairs mode: each sphere's image reach is its own pair's, (L/2 -
- * 1.1) / 4 = 0.225, not the (L/2 - 2) / 4 = 2.5e-10 of two large spheres that are not there,
- * which re-predicted them some 1e8 times a step (until 2026-12-01: a step took minutes, the
- * run hours). The collisions and final relative velocity are the reference's, and the
- * predictions a few a step. */
+/* A large sphere (radius 1) and a small one (0.1) in a periodic cube of 2.2 large diameters,
+ * all-pairs mode: each sphere's image reach is its own pair's, (L/2 - 1.1) / 4 = 0.275, not the
+ * (L/2 - 2) / 4 = 0.05 of two large spheres that are not there (until 2026-12-01; a hair past
+ * two large diameters that reach was 2.5e-10, and a step took minutes). The collisions and
+ * final relative velocity are the reference's, and the predictions a few a step. */
 static void test_all_pairs_mode_gives_a_small_sphere_its_own_image_reach(void **state)
 {
     (void)state;
-    const double L = 4.0 + 1e-9, t_end = 40.0, dt = 0.01;
+    const double L = 4.4, t_end = 40.0, dt = 0.01;
     const nbep_vec3 p0 = {0.4, 0.7, 1.9}, p1 = {2.7, 3.1, 0.6};
     const nbep_vec3 v0 = {0.31, -1.17, 0.53}, v1 = {-0.9, 0.27, 1.41};
     nbep_vec3 u;
@@ -726,14 +725,65 @@ static void test_all_pairs_mode_gives_a_small_sphere_its_own_image_reach(void **
     assert_true(nbep_vec3_norm(du) < 1e-6); /* a dispersing billiard, as above */
     assert_close(s.energy_final, s.energy_initial, 1e-13, 0.0);
     assert_true(s.max_overlap_rel < 1e-9);
-    /* each sphere strays some 0.02 a step, a tenth of its reach: a horizon every few
-     * steps, a collision's and a step's predictions (a sphere's partner and six planes) */
-    if (!(s.predictions < 40 * steps))
+    /* each sphere strays some 0.02 a step, a fourteenth of its reach: a horizon every dozen
+     * steps or so, one prediction each (394 in the 4000 steps; with the large pair's reach,
+     * 0.05, 2467) */
+    if (!(s.predictions < steps / 4))
         fail_msg("%llu predictions in %llu steps", (unsigned long long)s.predictions,
                  (unsigned long long)steps);
     same_frames_on_2_and_4_threads(sc, &ref, s.collisions);
     nbep_state_fini(&fin);
     nbep_test_scene_free(&sc);
+}
+
+/* A sphere flying straight through a fully periodic cube of side 6 beside one at rest that it
+ * never meets (all-pairs mode): its slot's image horizon re-predicts it each time it has strayed
+ * its reach D = (L/2 - sigma_i) / 4, sigma_i its radius and the largest radius of the others, so
+ * the run's predictions are the two at the start and one at each horizon: 2 + floor(v T / D).
+ * Four scenes: a large sphere (1) flying beside a small one (0.1), D = 0.475; the small one
+ * flying, D the same; one of two large spheres flying, D = 0.25 (the largest pair's); and
+ * two large spheres in a side of 4.2, compared at 27 images. */
+static void test_image_horizons_come_at_each_spheres_own_reach(void **state)
+{
+    (void)state;
+    const double v = 1.0, dt = 0.01;
+    const uint64_t steps = 1005;
+    const double T = (double)steps * dt; /* 10.05: no horizon at the run's end itself */
+    const struct {
+        double L, r0, r1;
+        int flying;
+    } cases[] = {{6.0, 1.0, 0.1, 0}, {6.0, 1.0, 0.1, 1}, {6.0, 1.0, 1.0, 1}, {4.2, 1.0, 1.0, 0}};
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        const double L = cases[c].L;
+        cells_mode = false;
+        nbep_scene *sc = periodic_scene(2, L, steps, dt);
+        cells_mode = true;
+        sc->output_every = 1000;
+        /* apart by half a side along y and z whatever the flight along x: L / sqrt(2) (4.2,
+         * 2.97) past any contact */
+        const nbep_vec3 still = ZERO, fly = {v, 0.0, 0.0};
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){1.0, 0.5, 0.5}, cases[c].flying == 0 ? fly : still,
+                             cases[c].r0, 1.0, ZERO);
+        nbep_test_set_sphere(sc, 1, (nbep_vec3){4.0, 0.5 + 0.5 * L, 0.5 + 0.5 * L},
+                             cases[c].flying == 1 ? fly : still, cases[c].r1, 1.0, ZERO);
+        const double r_own = cases[c].flying == 0 ? cases[c].r0 : cases[c].r1;
+        const double r_other = cases[c].flying == 0 ? cases[c].r1 : cases[c].r0;
+        const double sigma = r_own + r_other;
+        /* under 2.15 largest diameters (4.2) each partner is compared at 27 images (27
+         * predictions each), for the reach (1.5 L - sigma) / 4 (1.075): the nearest image's
+         * would be 0.025 */
+        const bool wide = L < 2.15 * 2.0 * fmax(cases[c].r0, cases[c].r1);
+        const double D = wide ? (1.5 * L - sigma) / 4.0 : (0.5 * L - sigma) / 4.0;
+        nbep_state fin;
+        nbep_summary s = run(sc, 1, &fin, NULL);
+        assert_int_equal(s.collisions, 0);
+        const uint64_t want = (wide ? 27 : 1) * (2 + (uint64_t)floor(v * T / D));
+        if (s.predictions != want)
+            fail_msg("case %zu: %llu predictions, not 2 + floor(%g / %g) = %llu", c,
+                     (unsigned long long)s.predictions, v * T, D, (unsigned long long)want);
+        nbep_state_fini(&fin);
+        nbep_test_scene_free(&sc);
+    }
 }
 
 /* Two spheres of radius 1 in a periodic cube a hair past two diameters (4 + 1e-9), all-pairs
@@ -1939,6 +1989,7 @@ int main(void)
         cmocka_unit_test(test_all_pairs_mode_reacts_to_image_horizons_inside_a_step),
         cmocka_unit_test(test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference),
         cmocka_unit_test(test_all_pairs_mode_gives_a_small_sphere_its_own_image_reach),
+        cmocka_unit_test(test_image_horizons_come_at_each_spheres_own_reach),
         cmocka_unit_test(test_all_pairs_mode_compares_wide_images_in_a_box_near_two_diameters),
         cmocka_unit_test(test_all_pairs_mode_takes_the_touching_image_within_a_long_step),
         cmocka_unit_test(test_cells_mode_takes_the_touching_image_within_a_long_step),
