@@ -51,22 +51,14 @@ static bool all_finite(const double *v, size_t k)
     return true;
 }
 
-/* The first sphere whose position or velocity read from a frame is not finite, or whose
- * position lies farther from the origin than NBEP_DECK_SPAN_MAX smallest radii of the deck's
- * spheres (s), or n when none. */
-static size_t resumed_state_fault(const nbep_state *s, const nbep_vec3 *pos, const nbep_vec3 *vel,
-                                  size_t n)
+/* The first sphere whose position or velocity read from a frame is not finite, or n when
+ * none. (Not the deck's span: a run's spheres fly past it, in an open scene or along an axis
+ * with no walls, and such a file was refused for a day.) */
+static size_t resumed_state_fault(const nbep_vec3 *pos, const nbep_vec3 *vel, size_t n)
 {
-    double rmin = INFINITY;
-    for (size_t i = 0; i < n && i < s->n; i++)
-        rmin = fmin(rmin, s->radius[i]);
-    const double far = NBEP_DECK_SPAN_MAX * rmin;
-    for (size_t i = 0; i < n; i++) {
+    for (size_t i = 0; i < n; i++)
         if (!all_finite(&pos[i].x, 3) || !all_finite(&vel[i].x, 3))
             return i;
-        if (fabs(pos[i].x) > far || fabs(pos[i].y) > far || fabs(pos[i].z) > far)
-            return i;
-    }
     return n;
 }
 
@@ -657,12 +649,11 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
         nbep__output_read_row(o->file, path, "/frames/velocity", last, 3 * (hsize_t)n,
                               H5T_NATIVE_DOUBLE, res.vel, d) < 0)
         goto fail;
-    /* No run writes a position or velocity that is not finite, nor a position farther from
-     * the origin than a deck may place one (NBEP_DECK_SPAN_MAX smallest radii: a run's frames
-     * stay near its box). A file that holds one was changed or damaged: until 2026-12-01 a NaN
-     * there aborted the resumed run at its summary's assertion, and left the file without its
-     * /summary. */
-    const size_t bad = resumed_state_fault(&sc->state, res.pos, res.vel, n);
+    /* No run writes a position or velocity that is not finite: a file that holds one was
+     * changed or damaged (until 2026-12-01 a NaN there aborted the resumed run at its
+     * summary's assertion, and left the file without its /summary). A finite state whose
+     * energy is beyond doubles is refused by nbep_sim_create. */
+    const size_t bad = resumed_state_fault(res.pos, res.vel, n);
     if (bad < n) {
         nbep_diag_add(d, __FILE__, __LINE__,
                       "nbep: %s: its frame at step %lld holds sphere %zu at (%g, %g, %g) moving "

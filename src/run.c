@@ -3,6 +3,7 @@
 #include "nbep/run.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -57,14 +58,25 @@ static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
      * emptying the first's half-written SUMMARY.partial, or having it renamed from under it
      * (until 2026-12-01 both wrote one file). A file system without locks: unguarded. */
     bool busy = false;
-    const int fd = in_place ? -1 : nbep_lock_take(tmp, &busy);
-    if (fd >= 0 && ftruncate(fd, 0) == 0)
-        *out = fdopen(fd, "w");
-    else if (fd >= 0)
+    int fd = in_place ? -1 : nbep_lock_take(tmp, &busy);
+    int err = 0;
+    /* a lock taken read-only (another user's SUMMARY.partial, left by a run of theirs: the
+     * read-lock way of nbep_lock_take) is no file this run may write: EACCES, as fopen said
+     * (until a review, "Invalid argument" from ftruncate, exit 1) */
+    if (fd >= 0 && (fcntl(fd, F_GETFL) & O_ACCMODE) == O_RDONLY) {
         close(fd);
-    else if (!busy)
+        fd = -1;
+        err = EACCES;
+    }
+    if (fd >= 0 && ftruncate(fd, 0) == 0 && (*out = fdopen(fd, "w")) != NULL)
+        fd = -1; /* f's now */
+    else if (fd >= 0)
+        err = errno;
+    else if (!busy && !err)
         *out = fopen(in_place ? where : tmp, "w");
-    const int err = errno;
+    if (fd >= 0)
+        close(fd);
+    err = err ? err : errno;
     if (!*out && busy) {
         nbep_diag_add(d, __FILE__, __LINE__,
                       "nbep: cannot write the summary to %s: another nbep run is writing it (it "
@@ -309,11 +321,6 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: cannot write the summary to %s: %s (its .partial, "
                   "written first, is longer than the folder allows)", summary,
                   strerror(ENAMETOOLONG));
-    if (output && staged_name_fits(output, ".partial") != 0)
-        NBEP_FAIL(d, NBEP_EUSAGE,
-                  "nbep: %s: cannot create the output file: %s (its .partial, made first, is "
-                  "longer than the folder allows)",
-                  output, strerror(ENAMETOOLONG));
     /* the sidecar is written beside the run's file by rename: at the deck's path it replaced
      * the deck (until 2026-12-01) */
     char *sidecar = output && deck ? nbep_xdmf_path(output) : NULL;
@@ -367,6 +374,8 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
 }
 
 #define NOT_A_FILE "not a regular file (a device, a pipe or a socket)"
+#define NAME_TOO_LONG_FOR_PARTIAL                                                              \
+    "File name too long (its .partial, made first, is longer than the folder allows)"
 
 bool nbep_run_output_not_file(const char *output)
 {
@@ -389,6 +398,8 @@ nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
         err = EISDIR; /* the run's rename onto it fails */
     else if (nbep_run_output_not_file(output))
         err = EINVAL; /* said as "not a regular file", as nbep info and a resume say it */
+    else if (staged_name_fits(output, ".partial") != 0)
+        err = ENAMETOOLONG;
     else if (stat(dir, &sb) != 0)
         err = errno; /* ENOENT, or ENOTDIR for a file on the way */
     else if (!S_ISDIR(sb.st_mode))
@@ -396,6 +407,9 @@ nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
     else if (access(dir, W_OK | X_OK) != 0)
         err = errno; /* EACCES, EROFS: the user's path (exit 2), as the run's own */
     free(dir);
+    if (err == ENAMETOOLONG)
+        NBEP_FAIL(d, NBEP_EUSAGE, "nbep: %s: cannot create the output file: %s", output,
+                  NAME_TOO_LONG_FOR_PARTIAL);
     if (err) /* the words of the run's own failure (output.c) */
         NBEP_FAIL(d, err == EINVAL ? NBEP_EUSAGE : nbep_status_of_open(err),
                   "nbep: %s: cannot create the output file: %s", output,
@@ -466,6 +480,14 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     if (st == NBEP_OK && !rq->resume && nbep_run_output_not_file(file)) {
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot create the output file: %s",
                       file, NOT_A_FILE);
+        st = NBEP_EUSAGE;
+    }
+    /* a new file is made as FILE.partial; a resumed one needs only FILE.lock, whose name its
+     * first run's FILE.partial, longer, already fitted (a resume of a name of 248 to 250
+     * characters was refused for a .partial it never makes, for a day) */
+    if (st == NBEP_OK && !rq->resume && staged_name_fits(file, ".partial") != 0) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot create the output file: %s",
+                      file, NAME_TOO_LONG_FOR_PARTIAL);
         st = NBEP_EUSAGE;
     }
     if (other)

@@ -645,6 +645,11 @@ done
 run_nbep run inputs/two-spheres.deck --quiet -o "$tmp/$(printf 'a%.0s' $(seq 244)).h5" \
     --summary "$tmp/$(printf 'b%.0s' $(seq 242)).json"
 check "... and names of 247 and 247 characters run (exit $rc)" "[ $rc = 0 ]"
+# a resume makes no .partial, only NAME.lock: a run file of 248 characters resumes (refused for
+# a day, a review's find)
+cp "$tmp/$(printf 'a%.0s' $(seq 244)).h5" "$tmp/$(printf 'c%.0s' $(seq 245)).h5"
+run_nbep run inputs/two-spheres.deck --quiet -n 3000 --resume "$tmp/$(printf 'c%.0s' $(seq 245)).h5"
+check "... and a run file of 248 characters resumes (exit $rc: $(head -c 120 "$tmp/stderr"))" "[ $rc = 0 ]"
 # `nbep run` of a study's deck runs the deck's own values once: said (not with --quiet)
 run_nbep run inputs/sweep-restitution.deck -n 2 -o "$tmp/study-once.h5"
 check "run of a deck with a sweep group: exit 0 (got $rc), a note pointing to nbep sweep" \
@@ -689,6 +694,27 @@ for pair in "--stpes|did you mean --steps? nbep --help lists them" "--sumary=x.j
     check "run ${pair%%|*}: exit 2, one line: $(head -c 120 "$tmp/stderr")" \
         "[ $rc = 2 ] && one_line && grep -qxF -- \"nbep: unknown option '${pair%%|*}' (${pair#*|})\" '$tmp/stderr'"
 done
+# another user's SUMMARY.partial left in a shared folder (0644, root's) is no file this user's
+# run may write: exit 2, "Permission denied", as before its lock (a review found "Invalid
+# argument", exit 1, from truncating the read-only descriptor that the lock's read-lock way
+# gives). In a folder of its own under /tmp, open to nobody, with the binary copied there.
+if [ "$(id -u)" = 0 ] && command -v setpriv >/dev/null; then
+    shared=$(mktemp -d /tmp/nbep-cli-XXXXXX)
+    chmod 777 "$shared"
+    cp "$nbep" "$shared/nbep"
+    cp inputs/two-spheres.deck "$shared/d.deck"
+    chmod 644 "$shared/d.deck"
+    : >"$shared/s.json.partial"
+    chmod 644 "$shared/s.json.partial"
+    timeout -k 5 30 setpriv --reuid=65534 --regid=65534 --clear-groups "$shared/nbep" run \
+        "$shared/d.deck" -n 2 -o "$shared/x.h5" --summary "$shared/s.json" --quiet \
+        >"$tmp/stdout" 2>"$tmp/stderr"
+    rc=$?
+    check "another user's SUMMARY.partial: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr")), nothing made" \
+        "[ $rc = 2 ] && one_line && grep -qx 'nbep: cannot write the summary to $shared/s.json: Permission denied' '$tmp/stderr' &&
+         [ ! -e '$shared/x.h5' ] && [ ! -e '$shared/s.json' ]"
+    rm -rf "$shared"
+fi
 # a file of the user's already at OUT.h5.lock (not empty, so no run's lock): the run locks it
 # and leaves it as it was
 echo 'notes of mine' >"$tmp/mine.h5.lock"
