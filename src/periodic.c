@@ -84,28 +84,30 @@ void nbep_periodic_nearest(const nbep_periodic *pb, nbep_vec3 d, int cells[3])
         cells[k] = pb->axis[k] ? -(int)round(x[k] / pb->len[k]) : 0;
 }
 
-/* Two spheres each within D of its anchor move at most 2 D each between their comparison and a
- * contact, 4 D together; the touching image is within sigma then, so within sigma + 4 D at the
- * comparison, which is the nearest one while that is at most len/2. */
-double nbep_periodic_reach(const nbep_periodic *pb, double sigma)
+/* (min over periodic sides of f len - sigma) / 4, INFINITY without periodic axes: the reach
+ * when a touching image must stay within f len of the images compared. Two spheres each within
+ * D of its anchor move at most 2 D each between their comparison and a contact, 4 D together;
+ * the touching image is within sigma then, so within sigma + 4 D at the comparison. */
+static double reach_within(const nbep_periodic *pb, double f, double sigma)
 {
     double r = INFINITY;
     for (int k = 0; k < 3; k++)
         if (pb->axis[k])
-            r = fmin(r, (0.5 * pb->len[k] - sigma) / 4.0);
+            r = fmin(r, (f * pb->len[k] - sigma) / 4.0);
     return r;
 }
 
-/* The same with the 27 images around the nearest compared (each axis's -1, 0 and +1 periods
- * from it): a touching image lies a period or more from the nearest only once the two have
- * moved 1.5 len - sigma apart, 4 D together. */
+/* The nearest image is the touching one while that is at most len/2 away. */
+double nbep_periodic_reach(const nbep_periodic *pb, double sigma)
+{
+    return reach_within(pb, 0.5, sigma);
+}
+
+/* With the 27 images around the nearest compared (each axis's -1, 0 and +1 periods from it), a
+ * touching image lies a period or more from the nearest only past 1.5 len. */
 double nbep_periodic_reach_wide(const nbep_periodic *pb, double sigma)
 {
-    double r = INFINITY;
-    for (int k = 0; k < 3; k++)
-        if (pb->axis[k])
-            r = fmin(r, (1.5 * pb->len[k] - sigma) / 4.0);
-    return r;
+    return reach_within(pb, 1.5, sigma);
 }
 
 nbep_vec3 nbep_periodic_shift(const nbep_periodic *pb, const int cells[3])
