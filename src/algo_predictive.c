@@ -342,23 +342,22 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     }
     bool mono = true, same_mass = true;
     c->rmax = nbep_state_max_radius(&sim->st);
+    c->rmax_other = 0.0;
+    size_t n_big = 0, big = SIZE_MAX; /* the spheres of the largest radius, and the last */
     for (size_t i = 0; i < n; i++) {
         mono &= sim->st.radius[i] == sim->st.radius[0];
         same_mass &= sim->st.mass[i] == sim->st.mass[0];
+        if (sim->st.radius[i] == c->rmax) {
+            n_big++;
+            big = i;
+        } else {
+            c->rmax_other = fmax(c->rmax_other, sim->st.radius[i]);
+        }
     }
     c->sigma_all = n > 0 && mono ? sim->st.radius[0] + sim->st.radius[0] : 0.0;
     c->mass_all = n > 0 && same_mass ? sim->st.mass[0] : 0.0;
     c->image_horizon = c->pb.any && !c->use_grid && !sim->scene->neighbors_cells;
-    c->big = SIZE_MAX;
-    c->rmax_other = 0.0;
-    for (size_t i = 0; i < n; i++) { /* the largest sphere, when alone so large */
-        if (sim->st.radius[i] == c->rmax)
-            c->big = c->big == SIZE_MAX ? i : SIZE_MAX - 1;
-        else
-            c->rmax_other = fmax(c->rmax_other, sim->st.radius[i]);
-    }
-    if (c->big == SIZE_MAX - 1) /* two or more of the largest: every sphere meets one */
-        c->big = SIZE_MAX;
+    c->big = n_big == 1 ? big : SIZE_MAX; /* two or more: every sphere meets one as large */
     /* 27 images a partner cost 27 predictions; worth it where the nearest image's reach is
      * under a 27th of the wide one (only near SPEC's limit of two diameters: (L/2 - 2 r) <
      * (1.5 L - 2 r) / 27 for L < 2.15 diameters) */

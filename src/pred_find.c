@@ -138,19 +138,14 @@ static void wide_images(nbep_event *best, const pred_ctx *c, const nbep_state *s
                         nbep_vec3 ai, size_t j, const int nearest[3], double T0, thread_ws *w,
                         nbep_counters *cnt)
 {
-    int cells[3];
+    int d[3]; /* -1 .. d along a periodic axis, 0 along another */
+    for (int k = 0; k < 3; k++)
+        d[k] = c->pb.axis[k] ? 1 : 0;
     uint64_t made = 0;
-    for (int ox = -1; ox <= 1; ox++)
-        for (int oy = -1; oy <= 1; oy++)
-            for (int oz = -1; oz <= 1; oz++) {
-                const int o[3] = {ox, oy, oz};
-                bool off_axis = false;
-                for (int k = 0; k < 3; k++) {
-                    off_axis |= o[k] != 0 && !c->pb.axis[k];
-                    cells[k] = nearest[k] + o[k];
-                }
-                if (off_axis)
-                    continue;
+    for (int ox = -d[0]; ox <= d[0]; ox++)
+        for (int oy = -d[1]; oy <= d[1]; oy++)
+            for (int oz = -d[2]; oz <= d[2]; oz++) {
+                const int cells[3] = {nearest[0] + ox, nearest[1] + oy, nearest[2] + oz};
                 keep_earlier(best, pair_event(c, s, i, ai, j, nbep_periodic_shift(&c->pb, cells),
                                               T0, w));
                 made++;
