@@ -373,17 +373,21 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
     return NBEP_OK;
 }
 
-#define NOT_A_FILE "not a regular file (a device, a pipe or a socket)"
-#define NAME_TOO_LONG_FOR_PARTIAL                                                              \
-    "File name too long (its .partial, made first, is longer than the folder allows)"
-
-bool nbep_run_output_not_file(const char *output)
+/* Why no new run file can be made at `output` by the name it is made under and renamed from,
+ * in the words of "nbep: OUTPUT: cannot create the output file: REASON", or NULL: something
+ * other than a file, a link or a folder there (a FIFO, a device: /dev/null, as root, was
+ * replaced by the run's file until 2026-12-01; a link is replaced itself), or OUTPUT.partial
+ * longer than the folder allows (a name of 248 to 255 characters passed `nbep check` and failed
+ * the run). Shared by run (a new file; a resume makes no .partial) and check. */
+static const char *new_output_fault(const char *output)
 {
-    /* a new run file is made beside it and renamed over it: a FIFO, a device (/dev/null, as
-     * root) was replaced by the run's file (until 2026-12-01). A link is replaced itself. */
     struct stat sb;
-    return lstat(output, &sb) == 0 && !S_ISREG(sb.st_mode) && !S_ISLNK(sb.st_mode) &&
-           !S_ISDIR(sb.st_mode);
+    if (lstat(output, &sb) == 0 && !S_ISREG(sb.st_mode) && !S_ISLNK(sb.st_mode) &&
+        !S_ISDIR(sb.st_mode))
+        return "not a regular file (a device, a pipe or a socket)";
+    if (staged_name_fits(output, ".partial") != 0)
+        return "File name too long (its .partial, made first, is longer than the folder allows)";
+    return NULL;
 }
 
 nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
@@ -396,10 +400,6 @@ nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
     /* lstat: the run's rename replaces a symbolic link at `output`, to a directory too */
     if (lstat(output, &sb) == 0 && S_ISDIR(sb.st_mode))
         err = EISDIR; /* the run's rename onto it fails */
-    else if (nbep_run_output_not_file(output))
-        err = EINVAL; /* said as "not a regular file", as nbep info and a resume say it */
-    else if (staged_name_fits(output, ".partial") != 0)
-        err = ENAMETOOLONG;
     else if (stat(dir, &sb) != 0)
         err = errno; /* ENOENT, or ENOTDIR for a file on the way */
     else if (!S_ISDIR(sb.st_mode))
@@ -407,13 +407,10 @@ nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
     else if (access(dir, W_OK | X_OK) != 0)
         err = errno; /* EACCES, EROFS: the user's path (exit 2), as the run's own */
     free(dir);
-    if (err == ENAMETOOLONG)
-        NBEP_FAIL(d, NBEP_EUSAGE, "nbep: %s: cannot create the output file: %s", output,
-                  NAME_TOO_LONG_FOR_PARTIAL);
-    if (err) /* the words of the run's own failure (output.c) */
-        NBEP_FAIL(d, err == EINVAL ? NBEP_EUSAGE : nbep_status_of_open(err),
-                  "nbep: %s: cannot create the output file: %s", output,
-                  err == EINVAL ? NOT_A_FILE : strerror(err));
+    const char *fault = err ? strerror(err) : new_output_fault(output);
+    if (fault) /* the words of the run's own failure (output.c, nbep_run) */
+        NBEP_FAIL(d, err ? nbep_status_of_open(err) : NBEP_EUSAGE,
+                  "nbep: %s: cannot create the output file: %s", output, fault);
     return NBEP_OK;
 }
 
@@ -477,17 +474,12 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                             ? sc.output_file_origin
                             : NULL;
     st = other ? NBEP_EUSAGE : nbep_run_check_paths(rq->deck_path, file, rq->summary_path, d);
-    if (st == NBEP_OK && !rq->resume && nbep_run_output_not_file(file)) {
+    /* a resume writes the file in place and makes no FILE.partial (a resume of a name of 248
+     * to 250 characters was refused for one, for a day) */
+    const char *fault = st == NBEP_OK && !rq->resume ? new_output_fault(file) : NULL;
+    if (fault) {
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot create the output file: %s",
-                      file, NOT_A_FILE);
-        st = NBEP_EUSAGE;
-    }
-    /* a new file is made as FILE.partial; a resumed one needs only FILE.lock, whose name its
-     * first run's FILE.partial, longer, already fitted (a resume of a name of 248 to 250
-     * characters was refused for a .partial it never makes, for a day) */
-    if (st == NBEP_OK && !rq->resume && staged_name_fits(file, ".partial") != 0) {
-        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: cannot create the output file: %s",
-                      file, NAME_TOO_LONG_FOR_PARTIAL);
+                      file, fault);
         st = NBEP_EUSAGE;
     }
     if (other)

@@ -41,9 +41,6 @@ typedef struct nbep_run_result {
  * not a directory. NBEP_EUSAGE (NBEP_EIO for a read-only file system), one line in the words
  * of the run's own failure, "nbep: OUTPUT: cannot create the output file: REASON". */
 NBEP_MUST_CHECK nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d);
-/* Whether something other than a file, a link or a folder is at `output` (a device, a pipe, a
- * socket): no run file can be made there. */
-bool nbep_run_output_not_file(const char *output);
 
 /* Writes text (a JSON line) as the summary file `where` is written: "-" is stdout; a file is
  * written as WHERE.partial and renamed to WHERE once complete, so an older file there stays
