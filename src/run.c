@@ -58,25 +58,20 @@ static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
      * emptying the first's half-written SUMMARY.partial, or having it renamed from under it
      * (until 2026-12-01 both wrote one file). A file system without locks: unguarded. */
     bool busy = false;
-    int fd = in_place ? -1 : nbep_lock_take(tmp, &busy);
+    const int fd = in_place ? -1 : nbep_lock_take(tmp, &busy);
     int err = 0;
-    /* a lock taken read-only (another user's SUMMARY.partial, left by a run of theirs: the
-     * read-lock way of nbep_lock_take) is no file this run may write: EACCES, as fopen said
-     * (until a review, "Invalid argument" from ftruncate, exit 1) */
-    if (fd >= 0 && (fcntl(fd, F_GETFL) & O_ACCMODE) == O_RDONLY) {
-        close(fd);
-        fd = -1;
-        err = EACCES;
-    }
-    if (fd >= 0 && ftruncate(fd, 0) == 0 && (*out = fdopen(fd, "w")) != NULL)
-        fd = -1; /* f's now */
-    else if (fd >= 0)
-        err = errno;
-    else if (!busy && !err)
+    if (fd < 0 && !busy)
         *out = fopen(in_place ? where : tmp, "w");
-    if (fd >= 0)
-        close(fd);
-    err = err ? err : errno;
+    else if (fd >= 0 && (fcntl(fd, F_GETFL) & O_ACCMODE) == O_RDONLY)
+        err = EACCES; /* locked read-only: another user's SUMMARY.partial (nbep_lock_take;
+                       * "Invalid argument" from ftruncate, exit 1, until a review) */
+    else if (fd >= 0 && ftruncate(fd, 0) == 0)
+        *out = fdopen(fd, "w");
+    if (!*out) {
+        err = err ? err : errno;
+        if (fd >= 0)
+            close(fd);
+    }
     if (!*out && busy) {
         nbep_diag_add(d, __FILE__, __LINE__,
                       "nbep: cannot write the summary to %s: another nbep run is writing it (it "
