@@ -649,6 +649,54 @@ static int reference_pair(nbep_vec3 r, nbep_vec3 u, double L, double t_end, nbep
     return reference_pair_sigma(r, u, 1.0, L, t_end, u_out);
 }
 
+/* Two spheres (radii r0 and r1, masses 1 and m1) in a periodic cube of side L, all-pairs mode:
+ * the reference's collisions and final relative velocity (reference_pair_sigma, met before
+ * t_end), computed once into *pc. */
+typedef struct pair_case {
+    double L, r0, r1, m1;
+    nbep_vec3 p0, p1, v0, v1;
+    int hits;    /* the reference's collisions */
+    nbep_vec3 u; /* and its final relative velocity */
+} pair_case;
+
+static void pair_reference(pair_case *pc, double t_end, int at_least)
+{
+    pc->hits = reference_pair_sigma(nbep_vec3_sub(pc->p1, pc->p0), nbep_vec3_sub(pc->v1, pc->v0),
+                                    pc->r0 + pc->r1, pc->L, t_end, &pc->u);
+    if (pc->hits < at_least)
+        fail_msg("the reference meets %d collisions: too few to tell", pc->hits);
+}
+
+/* The case run to t_end in steps of dt (frames every `every` steps), checked against its
+ * reference: the collisions, the final relative velocity (a dispersing billiard: a difference
+ * grows about tenfold per collision, from round-off, 1e-16, to some 1e-9 after six), energy
+ * to 1e-13, overlaps at round-off; with `threads`, the frames on 2 and 4 threads one thread's.
+ * Returns the run's summary. */
+static nbep_summary pair_against_reference(const pair_case *pc, double t_end, double dt,
+                                           uint64_t every, bool threads)
+{
+    cells_mode = false;
+    nbep_scene *sc = periodic_scene(2, pc->L, (uint64_t)llround(t_end / dt), dt);
+    cells_mode = true;
+    sc->output_every = every;
+    nbep_test_set_sphere(sc, 0, pc->p0, pc->v0, pc->r0, 1.0, ZERO);
+    nbep_test_set_sphere(sc, 1, pc->p1, pc->v1, pc->r1, pc->m1, ZERO);
+    nbep_state fin;
+    frames ref = {0};
+    nbep_summary s = run(sc, 1, &fin, threads ? &ref : NULL);
+    assert_int_equal(s.sphere_collisions, (uint64_t)pc->hits);
+    const nbep_vec3 du = nbep_vec3_sub(nbep_vec3_sub(fin.vel[1], fin.vel[0]), pc->u);
+    if (!(nbep_vec3_norm(du) < 1e-6))
+        fail_msg("dt %g: %d collisions, |du| %g", dt, pc->hits, nbep_vec3_norm(du));
+    assert_close(s.energy_final, s.energy_initial, 1e-13, 0.0);
+    assert_true(s.max_overlap_rel < 1e-9);
+    if (threads)
+        same_frames_on_2_and_4_threads(sc, &ref, s.collisions);
+    nbep_state_fini(&fin);
+    nbep_test_scene_free(&sc);
+    return s;
+}
+
 /* Two spheres in a periodic box only 2.5 diameters wide, all-pairs mode, 10 time units: the
  * nearest image changes all the time, so the image horizons must re-predict them in time;
  * the collisions and the final relative velocity are the reference's. With steps of 0.01 a
@@ -660,37 +708,15 @@ static int reference_pair(nbep_vec3 r, nbep_vec3 u, double L, double t_end, nbep
 static void test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference(void **state)
 {
     (void)state;
-    const double L = 2.5, t_end = 10.0, dts[2] = {0.01, 0.25};
-    const nbep_vec3 p0 = {0.4, 0.7, 1.9}, p1 = {1.7, 2.1, 0.6};
-    const nbep_vec3 v0 = {0.31, -1.17, 0.53}, v1 = {-0.9, 0.27, 1.41};
-    nbep_vec3 u;
-    int hits = reference_pair(nbep_vec3_sub(p1, p0), nbep_vec3_sub(v1, v0), L, t_end, &u);
-    assert_true(hits >= 3);
+    const double t_end = 10.0, dts[2] = {0.01, 0.25};
+    pair_case pc = {.L = 2.5, .r0 = 0.5, .r1 = 0.5, .m1 = 1.0, .p0 = {0.4, 0.7, 1.9},
+                    .p1 = {1.7, 2.1, 0.6}, .v0 = {0.31, -1.17, 0.53}, .v1 = {-0.9, 0.27, 1.41}};
+    pair_reference(&pc, t_end, 3);
     for (int k = 0; k < 2; k++) {
-        const uint64_t steps = (uint64_t)llround(t_end / dts[k]);
-        cells_mode = false;
-        nbep_scene *sc = periodic_scene(2, L, steps, dts[k]);
-        cells_mode = true;
-        sc->output_every = k == 0 ? 2000 : 4;
-        nbep_test_set_sphere(sc, 0, p0, v0, 0.5, 1.0, ZERO);
-        nbep_test_set_sphere(sc, 1, p1, v1, 0.5, 1.0, ZERO);
         /* the reach (nbep_periodic_reach): (L / 2 - sigma) / 4 */
-        const double reach = (0.5 * L - 1.0) / 4.0, stray = nbep_vec3_norm(v0) * dts[k];
+        const double reach = (0.5 * pc.L - 1.0) / 4.0, stray = nbep_vec3_norm(pc.v0) * dts[k];
         assert_true(k == 0 ? stray < reach : stray > 4.0 * reach);
-        nbep_state fin;
-        frames ref = {0};
-        nbep_summary s = run(sc, 1, &fin, k == 0 ? NULL : &ref);
-        assert_int_equal(s.sphere_collisions, (uint64_t)hits);
-        nbep_vec3 du = nbep_vec3_sub(nbep_vec3_sub(fin.vel[1], fin.vel[0]), u);
-        /* a dispersing billiard: a difference grows about tenfold per collision, from round-off
-         * (1e-16) to some 1e-9 after the six collisions of these 10 time units */
-        assert_true(nbep_vec3_norm(du) < 1e-6);
-        assert_close(s.energy_final, s.energy_initial, 1e-13, 0.0);
-        assert_true(s.max_overlap_rel < 1e-9);
-        if (k == 1)
-            same_frames_on_2_and_4_threads(sc, &ref, s.collisions);
-        nbep_state_fini(&fin);
-        nbep_test_scene_free(&sc);
+        pair_against_reference(&pc, t_end, dts[k], k == 0 ? 2000 : 4, k == 1);
     }
 }
 
@@ -702,38 +728,18 @@ static void test_all_pairs_mode_in_a_tiny_periodic_box_matches_a_reference(void 
 static void test_all_pairs_mode_gives_a_small_sphere_its_own_image_reach(void **state)
 {
     (void)state;
-    const double L = 4.4, t_end = 40.0, dt = 0.01;
-    const nbep_vec3 p0 = {0.4, 0.7, 1.9}, p1 = {2.7, 3.1, 0.6};
-    const nbep_vec3 v0 = {0.31, -1.17, 0.53}, v1 = {-0.9, 0.27, 1.41};
-    nbep_vec3 u;
-    int hits = reference_pair_sigma(nbep_vec3_sub(p1, p0), nbep_vec3_sub(v1, v0), 1.1, L, t_end,
-                                    &u);
-    if (hits < 4)
-        fail_msg("the reference meets %d collisions: too few to tell", hits);
-    const uint64_t steps = (uint64_t)llround(t_end / dt);
-    cells_mode = false;
-    nbep_scene *sc = periodic_scene(2, L, steps, dt);
-    cells_mode = true;
-    sc->output_every = 100;
-    nbep_test_set_sphere(sc, 0, p0, v0, 1.0, 1.0, ZERO);
-    nbep_test_set_sphere(sc, 1, p1, v1, 0.1, 0.5, ZERO);
-    nbep_state fin;
-    frames ref = {0};
-    nbep_summary s = run(sc, 1, &fin, &ref);
-    assert_int_equal(s.sphere_collisions, (uint64_t)hits);
-    nbep_vec3 du = nbep_vec3_sub(nbep_vec3_sub(fin.vel[1], fin.vel[0]), u);
-    assert_true(nbep_vec3_norm(du) < 1e-6); /* a dispersing billiard, as above */
-    assert_close(s.energy_final, s.energy_initial, 1e-13, 0.0);
-    assert_true(s.max_overlap_rel < 1e-9);
+    const double t_end = 40.0, dt = 0.01;
+    pair_case pc = {.L = 4.4, .r0 = 1.0, .r1 = 0.1, .m1 = 0.5, .p0 = {0.4, 0.7, 1.9},
+                    .p1 = {2.7, 3.1, 0.6}, .v0 = {0.31, -1.17, 0.53}, .v1 = {-0.9, 0.27, 1.41}};
+    pair_reference(&pc, t_end, 4);
+    const nbep_summary s = pair_against_reference(&pc, t_end, dt, 100, true);
     /* each sphere strays some 0.02 a step, a fourteenth of its reach: a horizon every dozen
      * steps or so, one prediction each (394 in the 4000 steps; with the large pair's reach,
      * 0.05, 2467) */
+    const uint64_t steps = (uint64_t)llround(t_end / dt);
     if (!(s.predictions < steps / 4))
         fail_msg("%llu predictions in %llu steps", (unsigned long long)s.predictions,
                  (unsigned long long)steps);
-    same_frames_on_2_and_4_threads(sc, &ref, s.collisions);
-    nbep_state_fini(&fin);
-    nbep_test_scene_free(&sc);
 }
 
 /* A sphere flying straight through a fully periodic cube of side 6 beside one at rest that it
@@ -790,42 +796,20 @@ static void test_image_horizons_come_at_each_spheres_own_reach(void **state)
  * mode: the nearest image's reach, (L/2 - 2) / 4, is 2.5e-10, so each partner is compared at
  * the 27 images around its nearest, whose reach is (1.5 L - 2) / 4 = 1 (until 2026-12-01 the
  * pair was re-predicted some 1e8 times a step). The collisions and final relative velocity are
- * the reference's, its 125 images each tested, on 1, 2 and 4 threads alike, and the
- * predictions a few dozen a step. */
+ * the reference's, its 125 images each tested (7e-11 apart seen), on 1, 2 and 4 threads alike,
+ * and the predictions a few dozen a step. */
 static void test_all_pairs_mode_compares_wide_images_in_a_box_near_two_diameters(void **state)
 {
     (void)state;
-    const double L = 4.0 + 1e-9, t_end = 10.0, dts[2] = {0.01, 0.5};
-    const nbep_vec3 p0 = {0.4, 0.7, 1.9}, p1 = {2.7, 3.1, 3.6};
-    const nbep_vec3 v0 = {0.31, -1.17, 0.53}, v1 = {-0.9, 0.27, 1.41};
-    nbep_vec3 u;
-    int hits = reference_pair_sigma(nbep_vec3_sub(p1, p0), nbep_vec3_sub(v1, v0), 2.0, L, t_end,
-                                    &u);
-    if (hits < 4)
-        fail_msg("the reference meets %d collisions: too few to tell", hits);
+    const double t_end = 10.0, dts[2] = {0.01, 0.5};
+    pair_case pc = {.L = 4.0 + 1e-9, .r0 = 1.0, .r1 = 1.0, .m1 = 2.0, .p0 = {0.4, 0.7, 1.9},
+                    .p1 = {2.7, 3.1, 3.6}, .v0 = {0.31, -1.17, 0.53}, .v1 = {-0.9, 0.27, 1.41}};
+    pair_reference(&pc, t_end, 4);
     for (int k = 0; k < 2; k++) { /* steps shorter than the reach, and (0.5) longer */
-        const uint64_t steps = (uint64_t)llround(t_end / dts[k]);
-        cells_mode = false;
-        nbep_scene *sc = periodic_scene(2, L, steps, dts[k]);
-        cells_mode = true;
-        sc->output_every = k == 0 ? 100 : 2;
-        nbep_test_set_sphere(sc, 0, p0, v0, 1.0, 1.0, ZERO);
-        nbep_test_set_sphere(sc, 1, p1, v1, 1.0, 2.0, ZERO);
-        nbep_state fin;
-        frames ref = {0};
-        nbep_summary s = run(sc, 1, &fin, &ref);
-        assert_int_equal(s.sphere_collisions, (uint64_t)hits);
-        nbep_vec3 du = nbep_vec3_sub(nbep_vec3_sub(fin.vel[1], fin.vel[0]), u);
-        if (!(nbep_vec3_norm(du) < 1e-6)) /* a dispersing billiard, as above (7e-11 seen) */
-            fail_msg("dt %g: %d collisions, |du| %g", dts[k], hits, nbep_vec3_norm(du));
-        assert_close(s.energy_final, s.energy_initial, 1e-13, 0.0);
-        assert_true(s.max_overlap_rel < 1e-9);
+        const nbep_summary s = pair_against_reference(&pc, t_end, dts[k], k == 0 ? 100 : 2, true);
         if (!(s.predictions < 200 * (uint64_t)(t_end / 0.01)))
             fail_msg("%llu predictions in %.0f time units", (unsigned long long)s.predictions,
                      t_end);
-        same_frames_on_2_and_4_threads(sc, &ref, s.collisions);
-        nbep_state_fini(&fin);
-        nbep_test_scene_free(&sc);
     }
 }
 
