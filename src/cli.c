@@ -50,7 +50,7 @@ static const char HELP[] =
     "\n"
     "exit status: 0 done, 1 run-time failure (I/O, numerical; sweep: some runs failed),\n"
     "2 bad usage or deck, 130/143 interrupted by SIGINT/SIGTERM after saving every frame\n"
-    "so far.\n"
+    "so far (SIGHUP, SIGUSR1 and SIGUSR2 stop a run as SIGTERM does: 143).\n"
     "nbep --help-deck prints every deck setting with its type, default and meaning;\n"
     "README.md describes the output layout and the algorithms.\n";
 

@@ -38,6 +38,15 @@ static void on_signal(int sig)
                                             memory_order_relaxed);
 }
 
+/* The signals that stop a run at a step's end with its frames saved. SIGINT (Ctrl-C) and
+ * SIGTERM (a job's time limit: SPEC), and three that by default would kill it outright with
+ * the step's work lost: SIGHUP (its terminal closed) and SIGUSR1 and SIGUSR2 (the warning a
+ * batch system sends before its time limit where so set: Slurm's --signal, LSF's job
+ * warning action). Those three are taken as SIGTERM (exit 143, status terminated; the line
+ * names the signal: nbep_status_stop_text). */
+static const int stop_signals[] = {SIGINT, SIGTERM, SIGHUP, SIGUSR1, SIGUSR2};
+#define N_STOP_SIGNALS (sizeof stop_signals / sizeof stop_signals[0])
+
 static void install_signal_handlers(void)
 {
     struct sigaction sa;
@@ -46,10 +55,17 @@ static void install_signal_handlers(void)
     /* each stop signal blocked while the handler runs: a second one taken by the same thread
      * waits until the first is stored, so it cannot nest in it and store first */
     sigemptyset(&sa.sa_mask);
-    sigaddset(&sa.sa_mask, SIGINT);
-    sigaddset(&sa.sa_mask, SIGTERM);
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
+    for (size_t k = 0; k < N_STOP_SIGNALS; k++)
+        sigaddset(&sa.sa_mask, stop_signals[k]);
+    for (size_t k = 0; k < N_STOP_SIGNALS; k++) {
+        /* a signal the run was started ignoring stays ignored: `nohup nbep run` must outlive
+         * its terminal (SIGINT and SIGTERM are taken whatever, as always) */
+        struct sigaction was;
+        if (stop_signals[k] != SIGINT && stop_signals[k] != SIGTERM &&
+            sigaction(stop_signals[k], NULL, &was) == 0 && was.sa_handler == SIG_IGN)
+            continue;
+        sigaction(stop_signals[k], &sa, NULL);
+    }
 }
 
 /* How long `nbep check` spends loading a study's runs (each run's spheres placed: a second or
@@ -73,7 +89,7 @@ static nbep_status cmd_run(const nbep_cli *cli, nbep_diag *d)
 /* The line of a check stopped by signal st, which writes no report. */
 static nbep_status check_stopped(nbep_status st, nbep_diag *d)
 {
-    NBEP_FAIL(d, st, "nbep: check %s; nothing written", nbep_status_stop_text(st));
+    NBEP_FAIL(d, st, "nbep: check %s; nothing written", nbep_status_stop_text(st, &stop_signal));
 }
 
 static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)

@@ -118,7 +118,8 @@ static int gather_info(hid_t file, const char *path, run_info *r, nbep_diag *d)
 }
 
 /* How the run ended, by its summary's `status`, and the step it reached of those it was to
- * reach ("terminated (SIGTERM): step 37 of 100"); unknown where the summary has no status (an
+ * reach ("interrupted (SIGINT): step 37 of 100"; the summary does not say which of the
+ * signals that terminate a run did); unknown where the summary has no status (an
  * nbep before 2026-11-30) or there is no summary. */
 static void print_status(FILE *f, const run_info *r)
 {
@@ -131,7 +132,8 @@ static void print_status(FILE *f, const run_info *r)
         return;
     }
     const char *how = s.status == NBEP_SUMMARY_INTERRUPTED  ? " (SIGINT)"
-                      : s.status == NBEP_SUMMARY_TERMINATED ? " (SIGTERM)"
+                      : s.status == NBEP_SUMMARY_TERMINATED
+                          ? " (SIGTERM, SIGHUP, SIGUSR1 or SIGUSR2)"
                       : s.status == NBEP_SUMMARY_UNKNOWN
                           ? " (the summary is older than its status key)"
                           : "";

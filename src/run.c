@@ -203,7 +203,7 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
         print_human_summary(&res->summary, file, st, from, whole);
     uint64_t frame_step;
     const bool abandoned = nbep_sim_abandoned(sim, &frame_step);
-    const char *how = nbep_status_stop_text(st);
+    const char *how = nbep_status_stop_text(st, rq->stop_signal);
     if ((st == NBEP_ESIGINT || st == NBEP_ESIGTERM) && abandoned)
         nbep_diag_add(d, __FILE__, __LINE__,
                       "nbep: %s during step %llu, which is abandoned; the run ends "
@@ -410,10 +410,10 @@ nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
 }
 
 /* The line of a run stopped by signal st before its first frame, with nothing written. */
-static nbep_status not_begun(nbep_status st, nbep_diag *d)
+static nbep_status not_begun(nbep_status st, const nbep_run_request *rq, nbep_diag *d)
 {
     NBEP_FAIL(d, st, "nbep: %s before the run began; nothing written",
-              nbep_status_stop_text(st));
+              nbep_status_stop_text(st, rq->stop_signal));
 }
 
 nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag *d)
@@ -432,7 +432,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     if (st == NBEP_OK && (st = nbep_sim_stop_status(rq->stop_signal)) != NBEP_OK)
         nbep_scene_fini(&sc);
     if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
-        return not_begun(st, d);
+        return not_begun(st, rq, d);
     if (st != NBEP_OK)
         return st;
     char warn[512];
@@ -508,7 +508,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         /* a signal while the run's memory was made (up to a second for millions of spheres):
          * as during the load, the file not changed yet (it was taken after frame 0) */
         if (st == NBEP_OK && (st = nbep_sim_stop_status(rq->stop_signal)) != NBEP_OK)
-            st = not_begun(st, d);
+            st = not_begun(st, rq, d);
         /* only now is the file changed: a resumed one appended to, a new one put at its path
          * (an older file there survives a deck that sim_create refuses) */
         if (st == NBEP_OK)

@@ -33,12 +33,20 @@ nbep_status nbep_status_of_stop(const atomic_int *stop)
 {
     /* relaxed: the handler stores the signal with no other data to pass */
     const int sig = stop ? atomic_load_explicit(stop, memory_order_relaxed) : 0;
-    return !sig ? NBEP_OK : sig == SIGTERM ? NBEP_ESIGTERM : NBEP_ESIGINT;
+    return !sig ? NBEP_OK : sig == SIGINT ? NBEP_ESIGINT : NBEP_ESIGTERM;
 }
 
-const char *nbep_status_stop_text(nbep_status st)
+const char *nbep_status_stop_text(nbep_status st, const atomic_int *stop)
 {
-    return st == NBEP_ESIGTERM ? "terminated by SIGTERM" : "interrupted by SIGINT";
+    if (st != NBEP_ESIGTERM)
+        return "interrupted by SIGINT";
+    /* the signal that asked for it, where this process took it (in an MPI sweep another
+     * rank's may have: then SIGTERM's words, which every stop signal but SIGINT's share) */
+    const int sig = stop ? atomic_load_explicit(stop, memory_order_relaxed) : 0;
+    return sig == SIGHUP    ? "terminated by SIGHUP"
+           : sig == SIGUSR1 ? "terminated by SIGUSR1"
+           : sig == SIGUSR2 ? "terminated by SIGUSR2"
+                            : "terminated by SIGTERM";
 }
 
 const char *nbep_status_text(nbep_status s)

@@ -1410,8 +1410,8 @@ static nbep_status write_sweep_json(const char *where, const nbep_sweep_plan *p,
 
 /* Rank 0's closing: the summary files, one line about the sweep, the status of the whole. */
 static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *results,
-                          nbep_status run_st, const nbep_cli *cli, int n_ranks, double t0,
-                          nbep_diag *d)
+                          nbep_status run_st, const atomic_int *stop_signal, const nbep_cli *cli,
+                          int n_ranks, double t0, nbep_diag *d)
 {
     bool csv_written;
     nbep_status st = nbep_sweep_write_summary(p, results, n_ranks, nbep_now() - t0,
@@ -1471,7 +1471,7 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
         nbep_diag_add(d, __FILE__, __LINE__,
                       "nbep: sweep %s: %zu of %zu runs complete%s; the same command "
                       "again runs the others, those cut short from their last frames",
-                      nbep_status_stop_text(run_st), s.ok, p->n_runs, failed);
+                      nbep_status_stop_text(run_st, stop_signal), s.ok, p->n_runs, failed);
         return run_st;
     }
     if (s.failed)
@@ -1733,7 +1733,7 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
     if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
         nbep_diag_add(dd, __FILE__, __LINE__,
                       "nbep: sweep %s before its first run; nothing written",
-                      nbep_status_stop_text(st));
+                      nbep_status_stop_text(st, stop_signal));
     if (st == NBEP_OK) /* its JSON would replace the deck, as for nbep run */
         st = nbep_run_check_paths(cli->path, NULL, cli->summary, dd);
     if (st == NBEP_OK && many && size == 1) {
@@ -1795,7 +1795,7 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
             st = agree(gather(&p, rank, size, results, dd), mpi);
 #endif
         if (st == NBEP_OK && rank == 0)
-            st = finish(&p, results, run_st, cli, size, t0, dd);
+            st = finish(&p, results, run_st, stop_signal, cli, size, t0, dd);
         st = agree(st, mpi);
     }
     nbep_lock_drop(lock, NULL); /* the study is over: another may take the folder */

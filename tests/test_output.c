@@ -953,7 +953,8 @@ static void test_info_reports_the_settings_frames_stats_and_summary(void **state
     assert_has_line(text, "             run.steps=20");
     assert_has_line(text, "frames:      3 (last: step 20, time 0.025)");
     assert_has_line(text, "stats rows:  20");
-    assert_has_line(text, "status:      terminated (SIGTERM): step 1000 of 2500");
+    assert_has_line(text, "status:      terminated (SIGTERM, SIGHUP, SIGUSR1 or SIGUSR2): step "
+                          "1000 of 2500");
     assert_has_line(text, summary_line);
     free(json);
     free(text);

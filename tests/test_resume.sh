@@ -786,7 +786,7 @@ check "SIGTERM stops the long run with 143" "[ $? = 143 ]"
 last=$(bin/nbep info $tmp/killed.h5 | sed -n 's/^frames: .*last: step \([0-9]*\).*/\1/p')
 check "it got somewhere (step $last)" "[ -n '$last' ] && [ '$last' -gt 0 ]"
 check "its summary says terminated, short of the 100000000 steps requested" \
-    "bin/nbep info $tmp/killed.h5 | grep -Eqx 'status: +terminated \\(SIGTERM\\): step $last of 100000000'"
+    "bin/nbep info $tmp/killed.h5 | grep -Eqx 'status: +terminated \\(SIGTERM, SIGHUP, SIGUSR1 or SIGUSR2\\): step $last of 100000000'"
 end=$(( ${last:-0} + 200 ))
 bin/nbep run $deck "${args[@]}" -n $end -o $tmp/whole.h5 --summary $tmp/whole.json
 bin/nbep run $deck "${args[@]}" -n $end --resume $tmp/killed.h5 --summary $tmp/resumed.json \

@@ -52,15 +52,55 @@ for sig in TERM INT; do
         "grep -q '\"steps\": [1-9]' '$tmp/info-$sig'"
     check "SIG$sig writes the JSON summary" "grep -q nbep-summary-1 '$tmp/summary-$sig.json'"
     ended=$([ $sig = TERM ] && echo terminated || echo interrupted)
+    # (the summary does not say which signal terminated a run: SIGHUP, SIGUSR1 and SIGUSR2 do
+    # as SIGTERM, below)
+    how=$([ $sig = TERM ] && echo 'SIGTERM, SIGHUP, SIGUSR1 or SIGUSR2' || echo SIGINT)
     check "SIG$sig: the summary says $ended, its steps fewer than the 100000000 requested" \
         "$PY -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == sys.argv[2] and s[\"steps_requested\"] == 100000000 and 0 < s[\"steps\"] < s[\"steps_requested\"]))' '$tmp/summary-$sig.json' $ended"
     check "SIG$sig: so does the file's, as nbep info shows it" \
-        "grep -Eq '^status: +$ended \\(SIG$sig\\): step [1-9][0-9]* of 100000000\$' '$tmp/info-$sig' &&
+        "grep -Eq '^status: +$ended \\($how\\): step [1-9][0-9]* of 100000000\$' '$tmp/info-$sig' &&
          grep -q '\"status\": \"$ended\", \"steps_requested\": 100000000}' '$tmp/info-$sig'"
     check "SIG$sig says so on stderr" "grep -q 'stopped after' '$tmp/stderr-$sig' || grep -qi 'interrupt\\|terminat' '$tmp/stderr-$sig'"
     lines=$(wc -l < "$tmp/stderr-$sig")
     check "SIG$sig: that is the only line on stderr (got $lines)" "[ $lines = 1 ]"
 done
+# SIGHUP (a closed terminal) and SIGUSR1 and SIGUSR2 (a batch system's warning before its time
+# limit, where so set) stop a run as SIGTERM does: exit 143, status terminated, the line naming
+# the signal, every frame kept (until 2026-12-02 they killed it outright: no summary, the step
+# under way lost). The same wait as SIGTERM's above (term_within sends TERM, so not used here).
+for sig in HUP USR1 USR2; do
+    out=$tmp/run-$sig.h5
+    bin/nbep run inputs/paper-box.deck --quiet -n 100000000 --set spheres.[0].count=512 \
+        -o "$out" --summary "$tmp/summary-$sig.json" 2>"$tmp/stderr-$sig" &
+    pid=$!
+    for _ in $(seq 300); do [ -s "$out" ] && break; sleep 0.1; done
+    sleep 0.3
+    kill -$sig $pid
+    for _ in $(seq 300); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
+    kill -KILL $pid 2>/dev/null
+    wait $pid
+    rc=$?
+    check "SIG$sig stops the run as SIGTERM does: exit 143 (got $rc)" "[ $rc = 143 ]"
+    check "SIG$sig: one line that names it, and the file readable with its frames" \
+        "[ \$(wc -l < '$tmp/stderr-$sig') = 1 ] &&
+         grep -q '^nbep: terminated by SIG$sig after step [1-9][0-9]*; every frame up to it is in ' '$tmp/stderr-$sig' &&
+         bin/nbep info '$out' > '$tmp/info-$sig' && grep -q '^frames: *[1-9]' '$tmp/info-$sig' &&
+         grep -Eq '^status: +terminated \(SIGTERM, SIGHUP, SIGUSR1 or SIGUSR2\): step [1-9]' '$tmp/info-$sig'"
+    check "SIG$sig: the summary says terminated" \
+        "grep -q '\"status\": \"terminated\"' '$tmp/summary-$sig.json'"
+done
+# a run started with SIGHUP ignored (nohup, or `trap '' HUP` in a script) keeps it ignored:
+# it must outlive its terminal, and ends as it would have (exit 0, every step)
+( trap '' HUP; exec bin/nbep run inputs/paper-box.deck --quiet -n 40 --set spheres.[0].count=512 \
+    -o "$tmp/nohup.h5" --summary "$tmp/summary-nohup.json" 2>"$tmp/stderr-nohup" ) &
+pid=$!
+for _ in $(seq 300); do [ -s "$tmp/nohup.h5" ] && break; sleep 0.1; done
+kill -HUP $pid 2>/dev/null
+wait $pid
+rc=$?
+check "SIGHUP to a run started ignoring it: ignored, the run ends with exit 0 (got $rc)" \
+    "[ $rc = 0 ] && grep -q '\"status\": \"completed\"' '$tmp/summary-nohup.json' &&
+     grep -q '\"steps\": 40,' '$tmp/summary-nohup.json'"
 # a signal while the deck is read and the spheres placed (1.5 million random spheres: a few
 # seconds here, placement and the overlap check at t0 alike) ends the run before it begins,
 # with nothing written: exit 130, no file, one line (it was taken only after the first step,
@@ -253,7 +293,7 @@ check "with frame 0 readable and no step run" \
     "bin/nbep info '$out' > '$tmp/info-setup' && grep -q '^frames: *1 (last: step 0' '$tmp/info-setup' && grep -q '\"steps\": 0' '$tmp/summary-setup.json'"
 check "and a summary that says terminated, 0 of the deck's 1000 steps" \
     "grep -q '\"status\": \"terminated\", \"steps_requested\": 1000}' '$tmp/summary-setup.json' &&
-     grep -Eq '^status: +terminated \\(SIGTERM\\): step 0 of 1000\$' '$tmp/info-setup'"
+     grep -Eq '^status: +terminated \\(SIGTERM, SIGHUP, SIGUSR1 or SIGUSR2\\): step 0 of 1000\$' '$tmp/info-setup'"
 
 # a signal during a step far longer than a job's grace between SIGTERM and SIGKILL (dt = 1000:
 # about 1e8 events a step, minutes): the predictive loops look at the signal every 65536 events
@@ -289,7 +329,7 @@ abandon() {
     check "$name: the summary says terminated after 0 of 3 steps, with no collision counted" \
         "$PY -c 'import json, sys; s = json.load(open(sys.argv[1])); sys.exit(not (s[\"status\"] == \"terminated\" and s[\"steps\"] == 0 and s[\"steps_requested\"] == 3 and s[\"collisions\"] == 0))' '$tmp/summary-abandon-$name.json'"
     check "$name: the file is readable, with frame 0 and no stats row" \
-        "bin/nbep info '$out' > '$tmp/info-abandon-$name' && grep -q '^frames: *1 (last: step 0' '$tmp/info-abandon-$name' && grep -Eq '^stats rows: +0\$' '$tmp/info-abandon-$name' && grep -Eq '^status: +terminated \\(SIGTERM\\): step 0 of 3\$' '$tmp/info-abandon-$name'"
+        "bin/nbep info '$out' > '$tmp/info-abandon-$name' && grep -q '^frames: *1 (last: step 0' '$tmp/info-abandon-$name' && grep -Eq '^stats rows: +0\$' '$tmp/info-abandon-$name' && grep -Eq '^status: +terminated \\(SIGTERM, SIGHUP, SIGUSR1 or SIGUSR2\\): step 0 of 3\$' '$tmp/info-abandon-$name'"
 }
 abandon cells-1-thread inputs/hard-sphere-fluid.deck -t 1
 abandon cells-team inputs/hard-sphere-fluid.deck -t 2 --set 'spheres.[0].count=4000' \

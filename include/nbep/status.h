@@ -35,13 +35,15 @@ int nbep_status_exit_code(nbep_status s);
  * else (a full disk, a failing device) is an I/O error. */
 nbep_status nbep_status_of_open(int err);
 /* What the stop flag *stop asks for (main.c's: the signal number its handler stored, 0 for
- * none; stop may be NULL): NBEP_OK, NBEP_ESIGTERM for SIGTERM, else NBEP_ESIGINT. A relaxed
+ * none; stop may be NULL): NBEP_OK, NBEP_ESIGINT for SIGINT, else NBEP_ESIGTERM (SIGTERM, and
+ * SIGHUP, SIGUSR1 and SIGUSR2, which ask the same: main.c). A relaxed
  * load, cheap enough for a loop to make every few thousand iterations; any thread may call
  * it. */
 nbep_status nbep_status_of_stop(const atomic_int *stop);
-/* How a stop status reads in the one line that says so: "terminated by SIGTERM" for
- * NBEP_ESIGTERM, else "interrupted by SIGINT". */
-const char *nbep_status_stop_text(nbep_status st);
+/* How a stop status reads in the one line that says so: "interrupted by SIGINT" for
+ * NBEP_ESIGINT; for NBEP_ESIGTERM "terminated by SIGTERM", or by the signal the stop flag
+ * *stop holds (SIGHUP, SIGUSR1, SIGUSR2; stop may be NULL). */
+const char *nbep_status_stop_text(nbep_status st, const atomic_int *stop);
 /* A short human text for a status; never NULL. */
 const char *nbep_status_text(nbep_status s);
 
