@@ -221,6 +221,20 @@ static void test_energy_of_a_known_configuration_is_summed_by_hand(void **state)
     assert_close(u, 0.7 * 9.81 * 4.0, 1e-15, 0.0);
     nbep_physics_energy(&s, 2, 2, &k, &u);
     assert_true(k == 0.0 && u == 0.0);
+    /* in a periodic box the field acts on the unwrapped centre, pos + image * period, each
+     * axis its own period (a box of sides 2, 5 and 7; one image along each of the spheres'
+     * field axes, the third sphere's along y, where its field is) */
+    s.period[0] = 2.0;
+    s.period[1] = 5.0;
+    s.period[2] = 7.0;
+    const int32_t im[3][3] = {{1, 0, 0}, {0, 0, -1}, {0, 3, 2}};
+    for (int i = 0; i < 3; i++)
+        for (int k3 = 0; k3 < 3; k3++)
+            s.image[3 * i + k3] = im[i][k3];
+    nbep_physics_energy(&s, 0, 3, &k, &u);
+    assert_close(k, ke, 1e-14, 0.0);
+    assert_close(u, 1.3 * 9.81 * 2.5 + 0.7 * 9.81 * (4.0 - 7.0) + 2.1 * (-2.0 + 3 * 5.0), 1e-14,
+                 0.0);
     nbep_state_fini(&s);
     nbep_diag_fini(&d);
 }

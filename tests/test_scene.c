@@ -984,15 +984,17 @@ static void test_unknown_override_path_is_an_error_with_a_suggestion(void **stat
 /* A suggestion is a path the user could write and likely meant: never a list entry's schema
  * path with its "[]" (radius alone has no one entry to point to), and not a sibling with half
  * its letters different (box.mass is no typo of box.max: at most a third, one for short
- * names; box.mx is one). */
+ * names; box.mx is one). A name cut short counts only from 3 letters (phys for physics): box.m
+ * starts box.min and box.max alike, and ph is no more physics than a guess. */
 static void test_suggestions_are_writable_paths_a_typo_away(void **state)
 {
     fixture *f = *state;
     LOAD_FAILS(f, NBEP_EDECK, DATA "scene_defaults.deck", "radius=1", "box.mass=1",
-               "box.mx=[1,1,1]");
+               "box.mx=[1,1,1]", "box.m=[1,1,1]", "ph=1");
     ASSERT_DIAG(&f->d, "--set radius=1: unknown setting radius",
                 "--set box.mass=1: unknown setting box.mass",
-                "--set box.mx=[1,1,1]: unknown setting box.mx (did you mean box.max?)");
+                "--set box.mx=[1,1,1]: unknown setting box.mx (did you mean box.max?)",
+                "--set box.m=[1,1,1]: unknown setting box.m", "--set ph=1: unknown setting ph");
 }
 
 /* An element of a deck's vector that a --set replaced: the vector's message names the --set,

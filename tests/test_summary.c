@@ -383,12 +383,21 @@ static void test_a_path_of_any_bytes_is_a_json_string(void **state)
          "r\xc3\xa9s/\xe6\x97\xa5/\xf0\x9f\x98\x80.h5"},
         {"r\xe9sultats/a.h5", "r\xef\xbf\xbdsultats/a.h5"},  /* Latin-1 */
         {"a\xc0\xaf" "b", "a\xef\xbf\xbd\xef\xbf\xbd" "b"},      /* overlong '/' */
+        {"a\xe0\x80\xaf" "b",                                 /* overlong, 3 bytes */
+         "a\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd" "b"},
+        {"a\xf0\x80\x80\xaf",                                 /* overlong, 4 bytes */
+         "a\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd"},
         {"a\xed\xa0\x80" "b", "a\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd" "b"}, /* a surrogate */
         {"a\xf4\x90\x80\x80",                                   /* past U+10FFFF */
          "a\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd"},
         {"a\xe6\x97", "a\xef\xbf\xbd\xef\xbf\xbd"},          /* cut short at the end */
         {"\xc3\xa9\xc3", "\xc3\xa9\xef\xbf\xbd"},
         {"\x7f\x80", "\x7f\xef\xbf\xbd"},
+        /* a quote and a backslash within the text, then what reads as a number: the line's
+         * numbers are shortened (1.50 to 1.5) only outside strings, whose escapes it steps
+         * over (a deck named x"1.50.deck came out as x\"1.5deck) */
+        {"x\"1.50.deck", "x\"1.50.deck"},
+        {"x\\\"2.50e+00\\", "x\\\"2.50e+00\\"},
     };
     for (size_t k = 0; k < sizeof cases / sizeof *cases; k++) {
         json_t *o = nbep_summary_json_text(cases[k][0]);
