@@ -20,6 +20,7 @@
 #include "nbep/sweep.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <inttypes.h>
 #include <math.h>
 #include <signal.h>
@@ -1277,14 +1278,19 @@ static nbep_status try_summary(const char *summary, nbep_diag *d)
 {
     if (!summary || strcmp(summary, "-") == 0)
         return NBEP_OK;
-    const bool there = access(summary, F_OK) == 0;
-    FILE *f = fopen(summary, "a");
-    if (!f)
+    /* made here (O_EXCL), so removed as ours; or there already, opened to append without
+     * being made. Until 2026-12-02 the probe looked first and opened after: a file another
+     * process made in between was taken for the probe's own and removed. */
+    int fd = open(summary, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    const bool made = fd >= 0;
+    if (!made && errno == EEXIST)
+        fd = open(summary, O_WRONLY | O_APPEND | O_CLOEXEC);
+    if (fd < 0)
         NBEP_FAIL(d, nbep_status_of_open(errno), "nbep: cannot write the summary to %s: %s",
                   summary, strerror(errno));
-    fclose(f);
-    if (!there)
-        remove(summary);
+    close(fd);
+    if (made)
+        unlink(summary);
     return NBEP_OK;
 }
 

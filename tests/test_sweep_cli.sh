@@ -556,9 +556,19 @@ for _ in $(seq 300); do
     [ -f "$tmp/busy.sweep/run-0000.h5" ] && break
     sleep 0.1
 done
-run_sweep "$tmp/pace.deck" -o "$tmp/busy" --quiet --set 'sweep.vary.[0].values=[20]'
+echo 'a summary of before' > "$tmp/busy-kept.json"
+run_sweep "$tmp/pace.deck" -o "$tmp/busy" --quiet --set 'sweep.vary.[0].values=[20]' \
+    --summary "$tmp/busy-kept.json"
 check "a second sweep into a folder a sweep is writing: exit 2 (got $rc), one line naming the folder: $(head -c 300 "$tmp/stderr")" \
     "[ $rc = 2 ] && one_line && grep -qx 'nbep: $tmp/busy.sweep: another nbep sweep is running in this folder (it holds $tmp/busy.sweep/.lock); wait for it to end, or give this study another output' '$tmp/stderr'"
+# its --summary, tried for writing before the folder's lock, is left as it was: a file that
+# was there keeps its text, and one that was not is not left behind
+check "... its --summary file, there before, keeps its text" \
+    "[ \"\$(cat '$tmp/busy-kept.json')\" = 'a summary of before' ]"
+run_sweep "$tmp/pace.deck" -o "$tmp/busy" --quiet --set 'sweep.vary.[0].values=[20]' \
+    --summary "$tmp/busy-new.json"
+check "... and one that was not there is not made (exit $rc)" \
+    "[ $rc = 2 ] && [ ! -e '$tmp/busy-new.json' ]"
 check "... the first sweep runs on, no table made in its folder" \
     "kill -0 $pid 2>/dev/null && [ ! -e '$tmp/busy.sweep/summary.csv' ] && [ ! -e '$tmp/busy.sweep/summary.h5' ]"
 kill -TERM $pid 2>/dev/null
