@@ -924,6 +924,8 @@ MUTANTS = [
      "    unlink(summary);", ["tests/test_sweep_cli.sh"], None),
     ("summary-probe-leaves-its-own", "src/sweep.c", "    if (made)\n        unlink(summary);",
      "", ["tests/test_sweep_cli.sh"], None),
+    ("summary-end-looks-at-path-again", "src/run.c", "    } else if (opened_in_place(f)) {",
+     "    } else if (summary_in_place(where)) {", ["tests/test_cli.sh"], None),
     ("stop-sigterm-as-sigint", "src/status.c",
      "return !sig ? NBEP_OK : sig == SIGINT ? NBEP_ESIGINT : NBEP_ESIGTERM;",
      "return !sig ? NBEP_OK : NBEP_ESIGINT;", ["test_scene", "tests/test_signals.sh"], None),

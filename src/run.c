@@ -87,12 +87,22 @@ static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
     return NBEP_OK;
 }
 
+/* Whether f, as open_summary opened it, writes the summary in place (a device, a pipe:
+ * summary_in_place) rather than into its temporary file, a regular one. Read off the file
+ * opened, not the path again: what stands at the path may have changed during the run (a
+ * review's find: a device put there since left the temporary file behind, unrenamed). */
+static bool opened_in_place(FILE *f)
+{
+    struct stat sb;
+    return fstat(fileno(f), &sb) == 0 && !S_ISREG(sb.st_mode);
+}
+
 /* Nothing to write after all: the temporary file goes, an older summary stays. */
 static void drop_summary(const char *where, FILE *f)
 {
     if (!f || f == stdout)
         return;
-    char *tmp = summary_in_place(where) ? NULL : nbep_partial_path(where);
+    char *tmp = opened_in_place(f) ? NULL : nbep_partial_path(where);
     if (tmp) /* while the lock holds: the file is this run's */
         remove(tmp);
     free(tmp);
@@ -110,7 +120,7 @@ static nbep_status finish_text(const char *text, const char *where, FILE *f, nbe
     int err = text ? errno : ENOMEM;
     if (f == stdout) {
         bad |= fflush(f) != 0;
-    } else if (summary_in_place(where)) {
+    } else if (opened_in_place(f)) {
         bad |= fclose(f) != 0;
         err = err ? err : errno;
     } else { /* the temporary file put in place, or removed, before its lock goes with f */

@@ -191,6 +191,23 @@ for cmd in run check; do
          [ ! -e '$tmp/fifo.partial' ]"
 done
 
+# what the run opened decides how its summary is put in place, not what stands at the path by
+# the end: a link to /dev/null put at a new summary's path during the run is replaced by the
+# summary (until 2026-12-02 the end looked at the path again, took it for a device and left
+# the run's SUMMARY.partial behind, the summary in neither)
+rm -f "$tmp/late.json" "$tmp/late.h5"
+bin/nbep run inputs/paper-box.deck --quiet -n 100000000 --set spheres.[0].count=512 \
+    -o "$tmp/late.h5" --summary "$tmp/late.json" 2>"$tmp/stderr" &
+pid=$!
+for _ in $(seq 300); do [ -e "$tmp/late.json.partial" ] && [ -s "$tmp/late.h5" ] && break; sleep 0.1; done
+ln -s /dev/null "$tmp/late.json"
+kill -TERM $pid
+wait $pid
+rc=$?
+check "a link to /dev/null put at the summary's path during the run: replaced by the summary (exit $rc)" \
+    "[ $rc = 143 ] && [ ! -L '$tmp/late.json' ] && [ ! -e '$tmp/late.json.partial' ] &&
+     $PY -c 'import json, sys; assert json.load(open(sys.argv[1]))[\"status\"] == \"terminated\"' '$tmp/late.json'"
+
 # ---- a deck without spheres ------------------------------------------------------------------
 : >"$tmp/empty.deck"
 run_nbep run "$tmp/empty.deck" --quiet -o "$tmp/empty.h5" --summary "$tmp/empty.json"
