@@ -566,7 +566,7 @@ nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
         if (same_overrides(stored, wanted, threads_axis)) {
             /* no summary: killed outright (kill -9, a node lost), its frames up to then kept */
             const bool read = json && nbep_summary_from_json(json, &s);
-            held = "a run that failed";
+            held = json && !read ? "a run whose summary cannot be read" : "a run that failed";
             if (read && says_completed(&s, steps))
                 found = NBEP_SWEEP_FOUND_COMPLETE;
             else if (!json || (read && (s.status == NBEP_SUMMARY_INTERRUPTED ||

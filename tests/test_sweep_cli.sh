@@ -57,16 +57,22 @@ check "... run 0's file untouched" "[ '$(md5sum <"$tmp/s.sweep/run-0000.h5")' = 
 run_sweep "$tmp/s.deck" -o "$tmp/s" --quiet --set sweep.replicas=3 --summary "$tmp/again.json"
 check "the same command again reuses all 6" "[ \"\$(json '$tmp/again.json' reused)\" = 6 ]"
 # a run whose file holds another run (an earlier study's other value, here e = 0.9 where the
-# axis now says 0.6; or a file nbep cannot read) is run from step 0 over it: said on its line
+# axis now says 0.6; a file nbep cannot read; one whose summary is damaged, which until
+# 2026-12-02 was said to be "a run that failed") is run from step 0 over it: said on its line
 # (until 2026-12-01 the file was replaced without a word, and a new user took it for reused)
 cp -r "$tmp/s.sweep" "$tmp/other.sweep"
 echo junk >"$tmp/other.sweep/run-0003.h5"
+"$PY" -c "
+import h5py, sys
+with h5py.File(sys.argv[1], 'a') as f:
+    f['summary'].attrs['json'] = '{\"format\": \"nbep-summary-1\", \"steps\": '" "$tmp/other.sweep/run-0002.h5"
 run_sweep "$tmp/s.deck" -o "$tmp/other" --set 'sweep.vary.[0].values=[1.0, 0.6]'
 check "a study over another's files: exit $rc, the other value's runs say their files were replaced: $(grep -m1 'replaced' "$tmp/stderr" | head -c 300)" \
     "[ $rc = 0 ] && grep -q '^nbep sweep: rank 0: run 0 (of 4; physics.restitution=1.0 seed=1): complete already, reused$' '$tmp/stderr' &&
      grep -q '^nbep sweep: rank 0: run 1 (of 4; physics.restitution=0.6 seed=1): ok in .* (20 steps, from step 0: its file, a run of other settings, replaced, ' '$tmp/stderr' &&
+     grep -q '^nbep sweep: rank 0: run 2 (of 4; physics.restitution=1.0 seed=2): ok in .* (20 steps, from step 0: its file, a run whose summary cannot be read, replaced, ' '$tmp/stderr' &&
      grep -q '^nbep sweep: rank 0: run 3 (of 4; physics.restitution=0.6 seed=2): ok in .* (20 steps, from step 0: its file, no run nbep can read, replaced, ' '$tmp/stderr' &&
-     [ \$(grep -c replaced '$tmp/stderr') = 2 ]"
+     [ \$(grep -c replaced '$tmp/stderr') = 3 ]"
 # the study given whole on the command line (a deck without a sweep group: `--set sweep={...}`)
 # is the study's setting as much as `sweep.vary=...`: either spelling reuses the other's runs
 # (until 2026-11-30 `sweep=` was compared as a run's own, and every finished run ran again)
