@@ -794,10 +794,15 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
         /* a bounce shorter than tc would be elastic (TC) and never shrink: rest; and one that
          * the TC model made elastic (the sphere is squeezed: it met something within tc) rests
          * no faster than the rest speed, what the minimum bounce of its neighbours leaves it
-         * with. A lone sphere's bounces are all kept down to the first rule. */
+         * with. A lone sphere's bounces are all kept down to the first rule. Only where the
+         * TC model acts (e < 1): at e = 1 a bounce is elastic whatever tc, and kept down to
+         * 1e-9 of a step (until 2026-12-02 tc counted there too, and a nanometre sphere's
+         * bounces, shorter than the default tc, ended at rest: 91 % of its energy lost) */
+        const double rest_below = nbep_scene_tc_model(sc)
+                                      ? fmax(NBEP_REST_FRACTION * dt, sc->tc)
+                                      : NBEP_REST_FRACTION * dt;
         if (r && an < 0.0 && vn >= 0.0 &&
-            (2.0 * vn <= -an * fmax(NBEP_REST_FRACTION * dt, sc->tc) ||
-             (e_pl != e && vn <= rest_speed(s, lo, -an, dt))) &&
+            (2.0 * vn <= -an * rest_below || (e_pl != e && vn <= rest_speed(s, lo, -an, dt))) &&
             r->n < NBEP_CONTACT_MAX) {
             r->who[r->n] = (int32_t)p;
             r->ver[r->n++] = 0;
