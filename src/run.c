@@ -261,8 +261,9 @@ static void warn_overlap(const nbep_scene *sc, const nbep_summary *s, const char
         fprintf(stderr,
                 "nbep: warning: spheres overlapped by up to %.3g of the smaller radius "
                 "(max_overlap_rel) in %s: %s finds contacts after they overlap, and at this "
-                "run.dt spheres passed into and through each other or the planes (collisions missed); a "
-                "smaller run.dt, or the predictive algorithm, avoids it (README, Accuracy)\n",
+                "run.dt spheres passed into and through each other or the planes (collisions "
+                "missed); a smaller run.dt, or the predictive algorithm, avoids it (README, "
+                "Accuracy)\n",
                 s->max_overlap_rel, file,
                 sc->order_step ? "run.order = \"step\"" : sc->algorithm);
 }
