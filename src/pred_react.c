@@ -13,6 +13,13 @@
  * sphere is indistinguishable from resting at the step's resolution, and the kinetic energy
  * removed, m (a t/2)^2 / 2 with t = 1e-9 dt, is far below round-off of the total. */
 #define NBEP_REST_FRACTION 1e-9
+/* At e = 1 (no TC model) a bounce off a plane whose top would be below this fraction of the
+ * sphere's radius ends in resting contact too: such a hop is within the precision the
+ * predictive algorithm keeps its contacts to (round-off overlaps, up to about 1e-9 r at the
+ * scales README's accuracy tables cover), so it is a resting sphere's jitter, not a flight;
+ * kept, a sphere placed 1e-14 above a floor (a deck generator's round-off) bounced 22 million
+ * times in 2 s (a review's find, 2026-12-02). The energy removed is below m |a| 1e-9 r. */
+#define NBEP_ELASTIC_REST_HEIGHT 1e-9
 /* Lasting sphere-sphere contacts (issue 9). A sphere whose contacts (planes, and spheres that
  * are themselves held still) leave it no acceleration is "held still": velocity and effective
  * acceleration exactly zero, so it costs no events and can carry others in turn; a settled
@@ -801,8 +808,12 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
         const double rest_below = nbep_scene_tc_model(sc)
                                       ? fmax(NBEP_REST_FRACTION * dt, sc->tc)
                                       : NBEP_REST_FRACTION * dt;
+        /* at e = 1, and a top below NBEP_ELASTIC_REST_HEIGHT of the radius: vn^2 / (2 |an|) */
+        const bool hop =
+            e >= 1.0 && vn * vn <= -2.0 * an * NBEP_ELASTIC_REST_HEIGHT * s->radius[lo];
         if (r && an < 0.0 && vn >= 0.0 &&
-            (2.0 * vn <= -an * rest_below || (e_pl != e && vn <= rest_speed(s, lo, -an, dt))) &&
+            (2.0 * vn <= -an * rest_below || hop ||
+             (e_pl != e && vn <= rest_speed(s, lo, -an, dt))) &&
             r->n < NBEP_CONTACT_MAX) {
             r->who[r->n] = (int32_t)p;
             r->ver[r->n++] = 0;

@@ -809,6 +809,43 @@ static void test_predictive_elastic_bounce_shorter_than_tc_goes_on_at_the_nanome
     }
 }
 
+/* ... but a hop below 1e-9 of the radius (NBEP_ELASTIC_REST_HEIGHT) is a resting sphere's
+ * jitter: a sphere (r 0.1) placed 1e-12 above a floor (1e-11 r: a deck generator's round-off)
+ * lands once and rests, having lost m g h (here 1e-11 of its energy), where it bounced 2.2
+ * million times in 2 s; one placed 1e-9 above (1e-8 r, ten times the limit) bounces on, its
+ * energy kept to round-off, in each neighbour mode. */
+static void test_predictive_elastic_hop_below_1e_9_of_the_radius_rests(void **state)
+{
+    fixture *f = *state;
+    const double r = 0.1, g = 9.81, dt = 1e-3;
+    const uint64_t steps = 2000;
+    const double hs[2] = {1e-12, 1e-9};
+    for (int k = 0; k < 2; k++)
+        for (int mode = 0; mode < 3; mode++) {
+            nbep_scene *sc = scene_new(f, 1, 1, "predictive", steps, dt);
+            sc->restitution = 1.0;
+            sc->tc = 1e-6;
+            sc->neighbors_grid = mode == 1;
+            sc->neighbors_cells = mode == 2;
+            nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+            nbep_test_set_sphere(sc, 0, (nbep_vec3){0, 0, r + hs[k]}, ZERO, r, 1.0,
+                                 (nbep_vec3){0, 0, -g});
+            const outcome *o = run(f, 1);
+            assert_clean(o, "predictive");
+            const double T = dt * (double)steps, P = 2.0 * sqrt(2.0 * hs[k] / g);
+            if (k == 0) {
+                assert_int_equal(o->sum.plane_collisions, 1);
+                /* m g h of m g (r + h), less a few roundings */
+                assert_close(o->sum.energy_rel_drift, -hs[k] / (r + hs[k]), 1e-3, 0.0);
+            } else {
+                /* one bounce per period P from the landing at P / 2, give or take one */
+                const double n = floor((T - 0.5 * P) / P) + 1.0;
+                assert_true(fabs((double)o->sum.plane_collisions - n) <= 1.0);
+                assert_true(fabs(o->sum.energy_rel_drift) < 1e-12);
+            }
+        }
+}
+
 /* Detection with dt = 1e-9: the bounce is seen at most one step late, so the height lags by
  * at most one step's travel at the landing speed. */
 static void test_detection_bounce_with_dt_1e_9_is_within_one_step(void **state)
@@ -1451,6 +1488,7 @@ int main(void)
         T(test_detection_fast_sphere_leaves_a_thin_box_between_frames_by_design),
         T(test_predictive_bounce_is_exact_for_dt_from_1e_9_to_1),
         T(test_predictive_elastic_bounce_shorter_than_tc_goes_on_at_the_nanometre_scale),
+        T(test_predictive_elastic_hop_below_1e_9_of_the_radius_rests),
         T(test_detection_bounce_with_dt_1e_9_is_within_one_step),
         T(test_newtons_cradle_passes_the_speed_to_the_last_sphere),
         T(test_predictive_cradle_across_thread_ranges_is_the_same_on_1_2_4_threads),
