@@ -234,5 +234,11 @@ bool nbep__pred_settle_phases(nbep_sim *sim, pred_ctx *c, nbep_range own, thread
             r->ver[k] = r->who[k] < 0 ? c->ver[-1 - r->who[k]] : 0;
         c->settle[i].held_now = false;
     }
+    /* every thread's supports recorded before any reads them: thread 0 writes the step's
+     * frame next, whose lasting state (pred_contacts) reads every sphere's (until 2026-12-02
+     * it could read one another thread had not yet written: on 2 threads a settled pile's
+     * checkpoint said a support had changed where 1 thread's said not, and a run extended
+     * from its file went another way; a new user's find) */
+    nbep_barrier_wait(&c->bar);
     return true;
 }
