@@ -31,8 +31,11 @@ static bool summary_in_place(const char *where)
 }
 
 /* Opens the summary's temporary file before anything is simulated, so that an unwritable
- * path fails at once (stdout for "-", NULL when not asked for). */
-static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
+ * path fails at once (stdout for "-", NULL when not asked for). An open that a stop signal
+ * interrupted (a FIFO waiting for its reader: the handlers do not restart calls) returns that
+ * signal's status, with no line: the caller says the run stopped (stop may be NULL). */
+static nbep_status open_summary(const char *where, const atomic_int *stop, FILE **out,
+                                nbep_diag *d)
 {
     *out = NULL;
     if (!where)
@@ -81,6 +84,8 @@ static nbep_status open_summary(const char *where, FILE **out, nbep_diag *d)
         return NBEP_EBUSY;
     }
     free(tmp);
+    if (!*out && err == EINTR && nbep_status_of_stop(stop) != NBEP_OK)
+        return nbep_status_of_stop(stop); /* until 2026-12-02: "Interrupted system call", 1 */
     if (!*out) /* a missing directory: the user's (exit 2), as for the output file */
         NBEP_FAIL(d, nbep_status_of_open(err), "nbep: cannot write the summary to %s: %s",
                   where, strerror(err));
@@ -161,7 +166,7 @@ static nbep_status write_summary(const nbep_summary *s, const char *where, FILE 
 nbep_status nbep_run_write_summary_text(const char *where, const char *text, nbep_diag *d)
 {
     FILE *f;
-    const nbep_status st = open_summary(where, &f, d);
+    const nbep_status st = open_summary(where, NULL, &f, d);
     return st != NBEP_OK ? st : finish_text(text, where, f, d);
 }
 
@@ -503,9 +508,12 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
      * run failed at its end, until 2026-12-01) */
     st = rq->resume ? nbep_output_open_resume(file, &sc, &out, &resume, d)
                     : nbep_output_create_staged(file, &sc, threads, &out, d);
-    if (st == NBEP_OK && (st = open_summary(rq->summary_path, &summary, d)) != NBEP_OK) {
+    if (st == NBEP_OK &&
+        (st = open_summary(rq->summary_path, rq->stop_signal, &summary, d)) != NBEP_OK) {
         nbep_status ignored = nbep_output_close(&out, NULL, d); /* nothing written yet */
         (void)ignored;
+        if (st == NBEP_ESIGINT || st == NBEP_ESIGTERM)
+            st = not_begun(st, rq, d);
     }
     if (st == NBEP_OK) {
         if (rq->resume)

@@ -100,6 +100,24 @@ check "--summary of a study in a folder named in Latin-1: exit 0 (got $rc), its 
     "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] && $PY -c 'import json,sys
 assert json.load(open(sys.argv[1], encoding=\"utf-8\"))[\"dir\"] == sys.argv[2] + \"/r\\ufffdsultat.sweep\"' '$tmp/latin1.json' '$tmp'"
 
+# a --summary that is a FIFO with a reader: the reader gets the JSON (until 2026-12-02 the
+# check before the runs opened and closed it, its reader took that for the end, and the sweep
+# waited for ever at its end for another); one that is a link to no file: the summary takes
+# the link's place, as nbep run's does (it was refused, "No such file or directory", exit 2)
+rm -f "$tmp/sw-fifo" && mkfifo "$tmp/sw-fifo"
+timeout 60 cat "$tmp/sw-fifo" >"$tmp/sw-fifo.out" &
+reader=$!
+timeout -k 5 120 "$nbep" sweep "$tmp/s.deck" -o "$tmp/s" --quiet --summary "$tmp/sw-fifo" \
+    >/dev/null 2>"$tmp/stderr"
+rc=$?
+wait $reader
+check "--summary a FIFO with a reader: exit 0 (got $rc), the reader gets the sweep's JSON" \
+    "[ $rc = 0 ] && [ \"\$(json '$tmp/sw-fifo.out' runs)\" = 4 ]"
+rm -f "$tmp/dangling.json" "$tmp/nowhere.json" && ln -s "$tmp/nowhere.json" "$tmp/dangling.json"
+run_sweep "$tmp/s.deck" -o "$tmp/s" --quiet --summary "$tmp/dangling.json"
+check "--summary a link to no file: exit 0 (got $rc), the summary in the link's place" \
+    "[ $rc = 0 ] && [ ! -L '$tmp/dangling.json' ] && [ \"\$(json '$tmp/dangling.json' runs)\" = 4 ]"
+
 # the table is no run: info says what it is and where to look
 timeout 30 "$nbep" info "$tmp/s.sweep/summary.h5" >/dev/null 2>"$tmp/stderr"
 rc=$?
