@@ -162,9 +162,14 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
     char every[48] = "every step";
     if (sc->output_every > 1)
         snprintf(every, sizeof every, "every %llu steps", (unsigned long long)sc->output_every);
-    fprintf(out, "output:          %s%s%s: %llu frame%s (%s), about %s\n", sc->output_file,
+    /* a study's deck: the file is what `nbep run` of it writes; a sweep writes each run into
+     * its folder, said on the sweep lines after (a new user looked for this file after a
+     * sweep) */
+    const bool study = sc->sweep_n_axes > 0 || sc->sweep_replicas > 1;
+    fprintf(out, "output:          %s%s%s: %llu frame%s (%s), about %s%s\n", sc->output_file,
             xmf ? " and " : "", xmf ? xmf : "", (unsigned long long)f->frames,
-            f->frames == 1 ? "" : "s", every, nbep_format_bytes(f->output_bytes, size));
+            f->frames == 1 ? "" : "s", every, nbep_format_bytes(f->output_bytes, size),
+            study ? " (nbep run's; nbep sweep's runs: below)" : "");
     free(xmf);
 }
 

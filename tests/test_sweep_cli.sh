@@ -521,6 +521,15 @@ written=$(find "$tmp/combo-frames.sweep" -type f -printf '%s\n' | awk '{ s += $1
 check "... its output in all ($got bytes) is what nbep sweep writes ($written bytes: 8 runs' files and sidecars of 201 frames, the tables) within 3 % (sweep exit $rc)" \
     "[ $rc = 0 ] && [ -n '$got' ] && awk -v e='$got' -v s='$written' 'BEGIN { r = e / s; exit !(r > 0.97 && r < 1.03) }'"
 
+# a study's deck: its output line is what nbep run of it writes, and says so (a new user looked
+# for that file after a sweep); a deck of one run says nothing more
+"$nbep" check "$tmp/combo.deck" -o "$tmp/combo-one.h5" --set 'sweep.vary.[1].values=[1, 8]' \
+    >"$tmp/stdout" 2>&1
+"$nbep" check "$tmp/combo.deck" -o "$tmp/combo-one.h5" --set 'sweep={replicas=1;}' >"$tmp/stdout-one" 2>&1
+check "nbep check of a study: its output line is nbep run's, the sweep's runs below" \
+    "grep -Eqx 'output: +$tmp/combo-one.h5 and $tmp/combo-one.xmf: .* \(nbep run.s; nbep sweep.s runs: below\)' '$tmp/stdout' &&
+     grep -Eq '^output: +$tmp/combo-one.h5 and .*B\$' '$tmp/stdout-one'"
+
 # the same as JSON (nbep check --summary, README "nbep check --summary"): the study's runs and
 # its output in all, the sum of each run's own report's output.bytes, byte for byte
 timeout 60 "$nbep" check "$tmp/combo.deck" --set 'sweep.vary.[1].values=[1, 8]' --quiet \
