@@ -170,6 +170,20 @@ nbep_status nbep_run_write_summary_text(const char *where, const char *text, nbe
     return st != NBEP_OK ? st : finish_text(text, where, f, d);
 }
 
+nbep_status nbep_run_try_summary(const char *where, nbep_diag *d)
+{
+    if (where && strcmp(where, "-") != 0 && summary_in_place(where)) {
+        if (access(where, W_OK) != 0)
+            NBEP_FAIL(d, nbep_status_of_open(errno), "nbep: cannot write the summary to %s: %s",
+                      where, strerror(errno));
+        return NBEP_OK;
+    }
+    FILE *f;
+    const nbep_status st = open_summary(where, NULL, &f, d);
+    drop_summary(where, f); /* (nothing for NULL or stdout) */
+    return st;
+}
+
 /* The end line; a resumed run (from its frame at step `from`, else from < 0) counts the steps
  * it ran and names the step reached, which is the summary's `steps`, and says where its
  * collisions, drift and overlap are the whole run's (its file's totals went on: `whole`). */

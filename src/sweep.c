@@ -20,7 +20,6 @@
 #include "nbep/sweep.h"
 
 #include <errno.h>
-#include <fcntl.h>
 #include <inttypes.h>
 #include <math.h>
 #include <signal.h>
@@ -1271,43 +1270,6 @@ static nbep_status summary_not_in_study(const nbep_sweep_plan *p, const char *su
     return NBEP_OK;
 }
 
-/* Rank 0, before any run: whether the --summary path can be written (a typo in a job
- * script's path was found only after every run), without changing a file that is there or
- * leaving one that was not. */
-static nbep_status try_summary(const char *summary, nbep_diag *d)
-{
-    if (!summary || strcmp(summary, "-") == 0)
-        return NBEP_OK;
-    /* a device or a pipe, which the summary is written into in place at the end (run.c): only
-     * asked whether it may be written, not opened (a FIFO's reader took the probe's close for
-     * its end of file, and the sweep's summary then waited for ever for another) */
-    struct stat sb;
-    if (stat(summary, &sb) == 0 && !S_ISREG(sb.st_mode) && !S_ISDIR(sb.st_mode)) {
-        if (access(summary, W_OK) != 0)
-            NBEP_FAIL(d, nbep_status_of_open(errno), "nbep: cannot write the summary to %s: %s",
-                      summary, strerror(errno));
-        return NBEP_OK;
-    }
-    /* made here (O_EXCL), so removed as ours; or there already, opened to append without
-     * being made. Until 2026-12-02 the probe looked first and opened after: a file another
-     * process made in between was taken for the probe's own and removed. A link to no file
-     * is there and opens nothing: the summary's rename replaces the link, as in nbep run. */
-    int fd = open(summary, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    const bool made = fd >= 0;
-    if (!made && errno == EEXIST) {
-        fd = open(summary, O_WRONLY | O_APPEND | O_CLOEXEC);
-        if (fd < 0 && errno == ENOENT && lstat(summary, &sb) == 0 && S_ISLNK(sb.st_mode))
-            return NBEP_OK;
-    }
-    if (fd < 0)
-        NBEP_FAIL(d, nbep_status_of_open(errno), "nbep: cannot write the summary to %s: %s",
-                  summary, strerror(errno));
-    close(fd);
-    if (made)
-        unlink(summary);
-    return NBEP_OK;
-}
-
 /* Rank 0, before any run: the last sweep's summary.csv and summary.h5 go, so that a sweep
  * killed outright (kill -9, a node lost, mpirun's SIGKILL) leaves no table that the run files
  * contradict: the same command again reuses the finished runs and writes it. */
@@ -1775,7 +1737,7 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
      * path it cannot take leaves nothing made */
     if (st == NBEP_OK && rank == 0 &&
         ((st = summary_not_in_study(&p, cli->summary, dd)) != NBEP_OK ||
-         (st = try_summary(cli->summary, dd)) != NBEP_OK))
+         (st = nbep_run_try_summary(cli->summary, dd)) != NBEP_OK))
         unmake_dir(p.dir, made);
     int lock = -1;
     if (st == NBEP_OK && rank == 0)

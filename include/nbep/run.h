@@ -48,6 +48,12 @@ NBEP_MUST_CHECK nbep_status nbep_run_check_output_dir(const char *output, nbep_d
  * one line "nbep: cannot write the summary to WHERE: ...". A NULL text (out of memory) fails. */
 NBEP_MUST_CHECK nbep_status nbep_run_write_summary_text(const char *where, const char *text,
                                                         nbep_diag *d);
+/* Whether the summary file `where` can be written as nbep_run_write_summary_text will write it,
+ * tried before any run (a typo in a job script's path found at once), leaving nothing behind:
+ * a file's WHERE.partial is made (and its lock taken) and removed, WHERE untouched; a device
+ * or a pipe is only asked whether it may be written (opened and closed, a FIFO's reader would
+ * take that for its end). The errors of nbep_run_write_summary_text's opening. */
+NBEP_MUST_CHECK nbep_status nbep_run_try_summary(const char *where, nbep_diag *d);
 
 /* The files a command writes, against the deck and each other: an output file (the run's, or
  * the one resumed) or a summary file that is the deck would replace it, and a summary file
