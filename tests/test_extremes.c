@@ -777,6 +777,24 @@ static void test_predictive_bounce_is_exact_for_dt_from_1e_9_to_1(void **state)
     }
 }
 
+/* An elastic sphere (radius r, mass 1) released at rest h above a floor under gravity g, with
+ * the default physics.tc, in neighbour mode `mode` (0 all-pairs, 1 grid, 2 cells): the run's
+ * outcome, clean. */
+static const outcome *elastic_drop(fixture *f, int mode, double r, double h, double g, double dt,
+                                   uint64_t steps)
+{
+    nbep_scene *sc = scene_new(f, 1, 1, "predictive", steps, dt);
+    sc->restitution = 1.0;
+    sc->tc = 1e-6;
+    sc->neighbors_grid = mode == 1;
+    sc->neighbors_cells = mode == 2;
+    nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+    nbep_test_set_sphere(sc, 0, (nbep_vec3){0, 0, r + h}, ZERO, r, 1.0, (nbep_vec3){0, 0, -g});
+    const outcome *o = run(f, 1);
+    assert_clean(o, "predictive");
+    return o;
+}
+
 /* The TC model's window (physics.tc, default 1e-6) acts only at e < 1: at e = 1 a bounce is
  * elastic however short, so a nanometre sphere (r 1 nm, dropped 10 nm at g = 1e12: bounces of
  * 2.8e-10, far under the default tc) bounces on, in each neighbour mode, with the bounces the
@@ -793,16 +811,7 @@ static void test_predictive_elastic_bounce_shorter_than_tc_goes_on_at_the_nanome
     const uint64_t bounces = 1 + (uint64_t)floor((T - t1) / P);
     assert_true(bounces >= 4 && P < 1e-6); /* several, each far shorter than the default tc */
     for (int mode = 0; mode < 3; mode++) {
-        nbep_scene *sc = scene_new(f, 1, 1, "predictive", steps, dt);
-        sc->restitution = 1.0;
-        sc->tc = 1e-6;
-        sc->neighbors_grid = mode == 1;
-        sc->neighbors_cells = mode == 2;
-        nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
-        nbep_test_set_sphere(sc, 0, (nbep_vec3){0, 0, r + h0}, ZERO, r, 1.0,
-                             (nbep_vec3){0, 0, -g});
-        const outcome *o = run(f, 1);
-        assert_clean(o, "predictive");
+        const outcome *o = elastic_drop(f, mode, r, h0, g, dt, steps);
         assert_int_equal(o->sum.plane_collisions, bounces);
         /* the drift: a few roundings of the energy per bounce */
         assert_true(fabs(o->sum.energy_rel_drift) < 1e-13);
@@ -822,16 +831,7 @@ static void test_predictive_elastic_hop_below_1e_9_of_the_radius_rests(void **st
     const double hs[2] = {1e-12, 1e-9};
     for (int k = 0; k < 2; k++)
         for (int mode = 0; mode < 3; mode++) {
-            nbep_scene *sc = scene_new(f, 1, 1, "predictive", steps, dt);
-            sc->restitution = 1.0;
-            sc->tc = 1e-6;
-            sc->neighbors_grid = mode == 1;
-            sc->neighbors_cells = mode == 2;
-            nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
-            nbep_test_set_sphere(sc, 0, (nbep_vec3){0, 0, r + hs[k]}, ZERO, r, 1.0,
-                                 (nbep_vec3){0, 0, -g});
-            const outcome *o = run(f, 1);
-            assert_clean(o, "predictive");
+            const outcome *o = elastic_drop(f, mode, r, hs[k], g, dt, steps);
             const double T = dt * (double)steps, P = 2.0 * sqrt(2.0 * hs[k] / g);
             if (k == 0) {
                 assert_int_equal(o->sum.plane_collisions, 1);

@@ -31,20 +31,30 @@ term_within() {
     rc=$?
 }
 
-for sig in TERM INT; do
-    want=$([ $sig = TERM ] && echo 143 || echo 130)
+# signal_long_run SIG: a run far too long to finish (it can only end by the signal) into
+# $tmp/run-SIG.h5, its summary $tmp/summary-SIG.json and stderr $tmp/stderr-SIG, sent SIG 0.3 s
+# after its file appears (the file is created after the deck is read and before the first
+# step; signal handlers are installed before either; bounded wait, 30 s at most), then waited
+# for up to 30 s (then SIGKILL: a run that ignores the signal fails, never hangs): sets out and
+# rc (its exit status)
+signal_long_run() {
+    local sig=$1 pid
     out=$tmp/run-$sig.h5
-    # a run far too long to finish: it can only end by the signal
     bin/nbep run inputs/paper-box.deck --quiet -n 100000000 --set spheres.[0].count=512 \
         -o "$out" --summary "$tmp/summary-$sig.json" 2>"$tmp/stderr-$sig" &
     pid=$!
-    # the output file is created after the deck is read and before the first step; signal
-    # handlers are installed before either (bounded wait, 30 s at most)
     for _ in $(seq 300); do [ -s "$out" ] && break; sleep 0.1; done
     sleep 0.3
-    kill -$sig $pid
+    kill -"$sig" $pid
+    for _ in $(seq 300); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
+    kill -KILL $pid 2>/dev/null
     wait $pid
     rc=$?
+}
+
+for sig in TERM INT; do
+    want=$([ $sig = TERM ] && echo 143 || echo 130)
+    signal_long_run $sig
     check "SIG$sig exits $want (got $rc)" "[ $rc = $want ]"
     check "SIG$sig leaves a readable file with frames" \
         "bin/nbep info '$out' > '$tmp/info-$sig' && grep -q '^frames: *[1-9]' '$tmp/info-$sig'"
@@ -67,7 +77,7 @@ done
 # SIGHUP (a closed terminal) and SIGUSR1 and SIGUSR2 (a batch system's warning before its time
 # limit, where so set) stop a run as SIGTERM does: exit 143, status terminated, the line naming
 # the signal, every frame kept (until 2026-12-02 they killed it outright: no summary, the step
-# under way lost). The same wait as SIGTERM's above (term_within sends TERM, so not used here).
+# under way lost).
 # (a suite started with SIGHUP ignored, `nohup make check`, passes it on to every run, which
 # keeps it ignored as it should: SIGHUP is then left out here)
 stop_sigs="HUP USR1 USR2"
@@ -77,17 +87,7 @@ if (( 16#${sigign:-0} & 1 )); then
     stop_sigs="USR1 USR2"
 fi
 for sig in $stop_sigs; do
-    out=$tmp/run-$sig.h5
-    bin/nbep run inputs/paper-box.deck --quiet -n 100000000 --set spheres.[0].count=512 \
-        -o "$out" --summary "$tmp/summary-$sig.json" 2>"$tmp/stderr-$sig" &
-    pid=$!
-    for _ in $(seq 300); do [ -s "$out" ] && break; sleep 0.1; done
-    sleep 0.3
-    kill -$sig $pid
-    for _ in $(seq 300); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
-    kill -KILL $pid 2>/dev/null
-    wait $pid
-    rc=$?
+    signal_long_run $sig
     check "SIG$sig stops the run as SIGTERM does: exit 143 (got $rc)" "[ $rc = 143 ]"
     check "SIG$sig: one line that names it, and the file readable with its frames" \
         "[ \$(wc -l < '$tmp/stderr-$sig') = 1 ] &&
