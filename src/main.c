@@ -170,14 +170,19 @@ int main(int argc, char **argv)
     gsl_set_error_handler_off();
     nbep_memory_init();
     nbep_output_library_init();
-    /* Before anything is read or written: a job's SIGTERM at any moment ends the run at the
-     * next step's end with every frame so far saved (or within a long step, after the step
-     * before; before stepping, with nothing written). */
-    install_signal_handlers();
     nbep_diag d;
     nbep_diag_init(&d);
     nbep_cli cli;
     nbep_status st = nbep_cli_parse(argc, argv, &cli, &d);
+    /* Before the deck or any file is read: a job's SIGTERM at any moment ends the run at the
+     * next step's end with every frame so far saved (or within a long step, after the step
+     * before; before stepping, with nothing written). Only the commands that look at the flag:
+     * --help, --version and info keep the signals' defaults, so a signal ends them at once
+     * (until 2026-12-02 taken, it was ignored, or failed a write waiting on a full pipe:
+     * "Interrupted system call", exit 1) */
+    if (st == NBEP_OK &&
+        (cli.cmd == NBEP_CMD_RUN || cli.cmd == NBEP_CMD_CHECK || cli.cmd == NBEP_CMD_SWEEP))
+        install_signal_handlers();
     if (st == NBEP_OK) {
         switch (cli.cmd) {
         case NBEP_CMD_HELP:

@@ -677,8 +677,8 @@ run_nbep run inputs/paper-box.deck -n 2 -o "$tmp/no-study.h5"
 check "... nor for a deck without one (exit $rc)" "[ $rc = 0 ] && ! grep -q 'sweep group' '$tmp/stderr'"
 # a report that cannot be written (stdout a full disk): exit 1 and one line, not 0 with the
 # report lost (until 2026-12-01 for check, info and --help)
+bin/nbep run inputs/two-spheres.deck --quiet -n 5 -o "$tmp/full-info.h5"
 if [ -w /dev/full ]; then
-    bin/nbep run inputs/two-spheres.deck --quiet -n 5 -o "$tmp/full-info.h5"
     for args in "check inputs/two-spheres.deck" "info $tmp/full-info.h5" "--help" "--version"; do
         # shellcheck disable=SC2086 # the words are the command's
         timeout -k 5 30 "$nbep" $args >/dev/full 2>"$tmp/stderr"
@@ -687,6 +687,34 @@ if [ -w /dev/full ]; then
             "[ $rc = 1 ] && one_line && grep -qx 'nbep: cannot write to standard output: No space left on device' '$tmp/stderr'"
     done
 fi
+# --help, --version and info keep the signals' defaults: a SIGTERM while their output waits on
+# a full pipe ends them at once (until 2026-12-02 they took it as a run's stop, which they never
+# look at, and failed the write: exit 1, "Interrupted system call"). The pipe is filled before they start, and the signal comes
+# after they have had time to reach their write (a signal before it ends them the same way).
+for args in "--help" "--version" "info $tmp/full-info.h5"; do
+    got=$(timeout -k 5 30 python3 - "$nbep" "$args" <<'PY'
+import os, signal, subprocess, sys, time
+r, w = os.pipe()
+os.set_blocking(w, False)
+try:
+    while True:
+        os.write(w, b"x" * 4096)
+except BlockingIOError:
+    pass
+os.set_blocking(w, True)
+p = subprocess.Popen([sys.argv[1]] + sys.argv[2].split(), stdout=w, stderr=subprocess.DEVNULL)
+time.sleep(1.0)
+p.send_signal(signal.SIGTERM)
+try:
+    print(p.wait(timeout=10))
+except subprocess.TimeoutExpired:
+    p.kill()
+    print("hung")
+PY
+)
+    check "nbep $args blocked on a full pipe, SIGTERM: ended by the signal (got ${got:-nothing})" \
+        "[ '$got' = -15 ]"
+done
 # a value named in an error in the digits that tell it from the limit (until 2026-12-01 %g's
 # six: "must be in [0, 1] (got 1)" of 1.0000000001)
 run_nbep check inputs/two-spheres.deck --set physics.restitution=1.0000000001
