@@ -14,7 +14,9 @@ scatter whose marker sizes follow the radii approximately; xy, xz and yz draw an
 projection with every sphere a disc of its true radius (nearest drawn last). Spheres are
 coloured by speed when the run wrote velocities (--color height colours by the coordinate
 along the hidden or vertical axis). The box, from the file's box_min and box_max (a periodic
-one too), or where an older file's planes form one, is drawn as an outline. An error (a missing or unreadable file, a frame out of range) is one line on stderr
+one too), or where an older file's planes form one, is drawn as an outline; in a projection,
+each plane seen edge-on (its normal across the view: the hopper's groove in --view xz) is
+drawn as a line. An error (a missing or unreadable file, a frame out of range) is one line on stderr
 and exit status 2.
 
 Needs h5py and matplotlib (Debian: python3-h5py python3-matplotlib)."""
@@ -109,7 +111,28 @@ def colours(args, pos, vel, view):
     return pos[:, AXES[hidden]], "%s (height)" % hidden if view == "3d" else "%s (depth)" % hidden
 
 
-def draw_3d(fig, pos, radius, c, lo, hi, boxed, args):
+def planes_of(f):
+    """The run's planes as (normals (P, 3), offsets (P)): plane k is {x : n_k.x = offset_k}."""
+    if "planes" in f and "normal" in f["planes"] and "offset" in f["planes"]:
+        return np.asarray(f["planes/normal"][:], float), np.asarray(f["planes/offset"][:], float)
+    return np.zeros((0, 3)), np.zeros(0)
+
+
+def edge_on(planes, i, j):
+    """The planes a projection onto axes i, j sees edge-on, as lines a u + b v = offset (u, v:
+    coordinates i, j): those whose normal has no component along the hidden axis, to a
+    billionth of its length (a deck's normal of [1, 0, 1] is exact; one of a rotated groove
+    computed in a script is not, and a plane a hair off edge-on still shows as its line)."""
+    if planes is None:
+        return
+    normals, offsets = planes
+    hidden = 3 - i - j
+    for n, off in zip(normals, offsets):
+        if abs(n[hidden]) <= 1e-9 * np.linalg.norm(n) and np.hypot(n[i], n[j]) > 0:
+            yield n[i], n[j], off
+
+
+def draw_3d(fig, pos, radius, c, lo, hi, boxed, args, planes=None):
     ax = fig.add_subplot(projection="3d")
     span = hi - lo
     ax.set_box_aspect(span / span.max())
@@ -130,6 +153,10 @@ def draw_3d(fig, pos, radius, c, lo, hi, boxed, args):
     ax.set_xlabel("x")
     ax.set_ylabel("y")
     ax.set_zlabel("z")
+    # at most 5 ticks an axis: matplotlib's default put 7 on the hopper's 0.66 of x, their
+    # labels overlapping in the perspective's foreshortening (a new user's, 2026-12-01)
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        axis.set_major_locator(matplotlib.ticker.MaxNLocator(nbins=4))
     # an axis far shorter than the longest (the hopper's groove: 0.16 across, 7 long) is a few
     # pixels long, where its tick labels fell on one another: no ticks; its extent goes under
     # the title (ax.short, which main reads)
@@ -141,7 +168,7 @@ def draw_3d(fig, pos, radius, c, lo, hi, boxed, args):
     return ax, sc
 
 
-def draw_2d(fig, pos, radius, c, lo, hi, boxed, args):
+def draw_2d(fig, pos, radius, c, lo, hi, boxed, args, planes=None):
     ax = fig.add_subplot()
     i, j = AXES[args.view[0]], AXES[args.view[1]]
     depth = "xyz".replace(args.view[0], "").replace(args.view[1], "")
@@ -162,6 +189,11 @@ def draw_2d(fig, pos, radius, c, lo, hi, boxed, args):
     ax.set_xlim(lo[i] - pad, hi[i] + pad)
     ax.set_ylim(lo[j] - pad, hi[j] + pad)
     ax.set_aspect("equal")
+    # each plane seen edge-on as a line across the view (until 2026-12-02 none: the hopper's
+    # groove in --view xz was spheres over nothing)
+    for a, b, off in edge_on(planes, i, j):
+        at = np.array([a, b]) * off / (a * a + b * b)   # the line's point nearest the origin
+        ax.axline(at, at + np.array([-b, a]), color="0.3", linewidth=1.0)
     ax.set_xlabel(args.view[0])
     ax.set_ylabel(args.view[1])
     return ax, ec if c is not None else None
@@ -201,6 +233,7 @@ def main():
         frames = parse_frames(args.frames, count)
         radius = f["spheres/radius"][:]
         has_vel = "frames/velocity" in f
+        planes = planes_of(f)
         out = args.out or os.path.dirname(os.path.abspath(args.run))
         os.makedirs(out, exist_ok=True)
         stem = os.path.splitext(os.path.basename(args.run))[0]
@@ -213,7 +246,7 @@ def main():
             c, label = colours(args, pos, vel, args.view)
             fig = plt.figure(figsize=(args.size, args.size * (0.85 if args.view == "3d" else 0.8)))
             draw = draw_3d if args.view == "3d" else draw_2d
-            ax, mappable = draw(fig, pos, radius, c, lo, hi, boxed, args)
+            ax, mappable = draw(fig, pos, radius, c, lo, hi, boxed, args, planes)
             if c is not None and mappable is not None:
                 fig.colorbar(mappable, ax=ax, shrink=0.7, pad=0.1, label=label)
             title = "%s: step %d, t = %.4g, %d spheres" % (stem, step, t, len(radius))

@@ -52,7 +52,8 @@ assert boxed and list(lo) == [-1.0, 0.0, 0.0] and list(hi) == [5.0, 7.0, 6.5], (
 PYEOF"
 
 # an axis far shorter than the longest (the hopper's groove, 0.16 across and 7 long) gets no
-# ticks, whose labels fell on one another, and its extent under the title; the others keep them
+# ticks, whose labels fell on one another, and its extent under the title; the others keep a
+# few
 check "render.py's 3-d view: no ticks on an axis a tenth of the longest or less" \
     "MPLBACKEND=Agg '$PY' - <<'PYEOF'
 import sys, types
@@ -67,7 +68,38 @@ ax, _ = render.draw_3d(fig, np.array([[0.0, -1.0, 0.1]]), np.array([0.03]), None
                        False, args)
 assert len(ax.get_xticks()) == 0 and len(ax.get_zticks()) == 0, (ax.get_xticks(), ax.get_zticks())
 assert len(ax.get_yticks()) > 2
+# and at most 5 ticks on the others (the default put 8 on this y, 7 on the hopper's x, their
+# labels overlapping)
+assert len([t for t in ax.get_yticks() if -7.0 <= t <= 0.0]) <= 5, ax.get_yticks()
 assert ax.short == ['x -0.08 .. 0.08', 'z 0 .. 0.16'], ax.short
+PYEOF"
+
+# a projection draws each plane it sees edge-on as a line (the hopper's groove in xz), and no
+# other: a plane whose normal has a part along the hidden axis is no line in that view
+check "render.py's projections: the planes seen edge-on, as lines through their points" \
+    "MPLBACKEND=Agg '$PY' - <<'PYEOF'
+import sys, types
+import numpy as np
+import matplotlib.pyplot as plt
+sys.path.insert(0, 'scripts')
+import render
+s = np.sqrt(0.5)
+planes = (np.array([[s, 0.0, s], [-s, 0.0, s], [0.0, 1.0, 0.0], [0.0, 0.6, 0.8]]),
+          np.array([0.0, 0.1, -2.0, 0.5]))
+def lines(view):
+    fig = plt.figure()
+    args = types.SimpleNamespace(view=view)
+    ax, _ = render.draw_2d(fig, np.array([[0.0, 0.0, 1.0]]), np.array([0.1]), None,
+                           np.array([-1.0, -1.0, 0.0]), np.array([1.0, 1.0, 2.0]), False,
+                           args, planes)
+    got = ax.get_lines()
+    plt.close(fig)
+    return got
+xz, yz, xy = lines('xz'), lines('yz'), lines('xy')
+assert (len(xz), len(yz), len(xy)) == (2, 2, 1), (len(xz), len(yz), len(xy))
+for line, (n, off) in zip(xz, [((s, s), 0.0), ((-s, s), 0.1)]):
+    for p in line._xy1, line._xy2:  # both points it was drawn through lie on the plane
+        assert abs(n[0] * p[0] + n[1] * p[1] - off) < 1e-12, (n, off, p)
 PYEOF"
 
 # every run writes RUN.xmf beside RUN.h5 (ParaView and VisIt open it as animated spheres)
