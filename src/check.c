@@ -93,6 +93,8 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
     else if (sc->restitution < 1.0)
         fprintf(out, " (physics.tc and carry_drop: predictive only, unused by %s)",
                 sc->algorithm);
+    if (sc->zero_momentum)
+        fprintf(out, ", total momentum zeroed");
     fprintf(out, "\n");
     if (sc->has_box)
         fprintf(out, "box:             [%g, %g, %g] .. [%g, %g, %g]\n", sc->box_min.x,
@@ -224,8 +226,8 @@ static json_t *check_object(const nbep_scene *sc, const nbep_check_facts *f,
     const bool predictive = strcmp(sc->algorithm, "predictive") == 0;
     char *xmf = f->sidecar_bytes > 0.0 ? nbep_xdmf_path(sc->output_file) : NULL;
     json_t *o = json_pack(
-        "{s:s, s:s, s:o, s:s, s:o, s:o, s:i, s:I, s:I, s:I, s:f, s:I, s:f, s:f, s:f, s:o, s:o, "
-        "s:o, s:o, s:I, s:I, s:o, s:o}",
+        "{s:s, s:s, s:o, s:s, s:o, s:o, s:i, s:I, s:I, s:I, s:f, s:I, s:f, s:f, s:f, s:b, s:o, "
+        "s:o, s:o, s:o, s:I, s:I, s:o, s:o}",
         "format", CHECK_FORMAT_NAME, "version", NBEP_VERSION, "deck",
         nbep_summary_json_text(sc->deck_path),
         "algorithm", sc->algorithm, "neighbors",
@@ -233,7 +235,8 @@ static json_t *check_object(const nbep_scene *sc, const nbep_check_facts *f,
         predictive ? json_string(nbep_scene_order_name(sc)) : json_null(), "threads",
         f->threads, "spheres", (json_int_t)sc->state.n, "planes", (json_int_t)sc->state.n_planes,
         "steps", (json_int_t)sc->steps, "dt", sc->dt, "seed", (json_int_t)sc->seed,
-        "restitution", sc->restitution, "tc", sc->tc, "carry_drop", sc->carry_drop, "gravity",
+        "restitution", sc->restitution, "tc", sc->tc, "carry_drop", sc->carry_drop,
+        "zero_momentum", (int)sc->zero_momentum, "gravity",
         vec3_array(sc->gravity), "box",
         sc->has_box ? json_pack("{s:o, s:o, s:[bbb]}", "min", vec3_array(sc->box_min), "max",
                                 vec3_array(sc->box_max), "periodic", sc->periodic[0],

@@ -170,6 +170,31 @@ void nbep_physics_separate_pair(nbep_vec3 *p1, nbep_vec3 *p2, double r1, double 
     *p2 = nbep_vec3_axpy(*p2, ov * m1 / m, n);
 }
 
+void nbep_physics_zero_momentum(nbep_state *s)
+{
+    double mass = 0.0;
+    nbep_vec3 p = nbep_vec3_make(0.0, 0.0, 0.0);
+    for (size_t i = 0; i < s->n; i++) {
+        mass += s->mass[i];
+        p = nbep_vec3_axpy(p, s->mass[i], s->vel[i]);
+    }
+    if (!(mass > 0.0))
+        return;
+    const nbep_vec3 vc = nbep_vec3_scale(p, 1.0 / mass);
+    double before, after, pe;
+    nbep_physics_energy(s, 0, s->n, &before, &pe);
+    for (size_t i = 0; i < s->n; i++)
+        s->vel[i] = nbep_vec3_sub(s->vel[i], vc);
+    nbep_physics_energy(s, 0, s->n, &after, &pe);
+    /* after = before - M |vc|^2 / 2 > 0 unless every sphere moved with vc (then none moves now,
+     * and no factor brings the energy back) */
+    if (!(after > 0.0) || after == before)
+        return;
+    const double f = sqrt(before / after);
+    for (size_t i = 0; i < s->n; i++)
+        s->vel[i] = nbep_vec3_scale(s->vel[i], f);
+}
+
 void nbep_physics_energy(const nbep_state *s, size_t lo, size_t hi, double *kinetic,
                          double *potential)
 {

@@ -18,6 +18,7 @@
 
 #include "nbep/calendar.h"
 #include "nbep/nblist.h"
+#include "nbep/physics.h"
 
 #include <assert.h>
 #include <errno.h>
@@ -464,6 +465,7 @@ static void parse_physics(load *L, const config_setting_t *root, nbep_scene *sc)
     (void)get_float(L, physics, "physics", S_PHYSICS_TC, &sc->tc);
     sc->tc_given = physics && config_setting_get_member(physics, "tc"); /* not the default */
     (void)get_float(L, physics, "physics", S_PHYSICS_CARRY_DROP, &sc->carry_drop);
+    (void)get_bool(L, physics, "physics", S_PHYSICS_ZERO_MOMENTUM, &sc->zero_momentum);
 }
 
 /* What a message about both corners of a box or region (min at min, max at max) is blamed on:
@@ -1646,6 +1648,8 @@ static nbep_status load_deck(const char *deck_path, const char *deck_text,
             st = nbep__scene_check_overlaps(&L.c, &sc.state, entries, n_entries,
                                             sc.has_box ? sc.periodic : NULL, sc.box_min,
                                             sc.box_max, plane_at);
+        if (st == NBEP_OK && d->n_errors == fill0 && sc.zero_momentum)
+            nbep_physics_zero_momentum(&sc.state);
         free(plane_at);
         if (st != NBEP_OK)
             goto done;

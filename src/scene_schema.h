@@ -80,6 +80,10 @@ enum {
       "its radius (sqrt(2 a carry_drop r), a its acceleration) stays held when the faces that "    \
       "hold it take the push, and the striker bounces off it as off a wall, so a settling pile "  \
       "does not wake at every touch; a faster impact wakes it and what it carries; 0: off")        \
+    X(PHYSICS_ZERO_MOMENTUM, "physics.zero_momentum", BOOL, 0, "false", NULL,                      \
+      "after placing, take the centre of mass's velocity off every sphere's and scale them all "  \
+      "to keep the kinetic energy the speeds gave: the total momentum is zero (random "            \
+      "directions leave about sqrt(N) m speed, whose kinetic energy counts in kT and pressure)")   \
     X(BOX, "box", GROUP, 0, NULL, "none",                                                          \
       "optional: inward planes bounding [min, max], two per axis that is not periodic")          \
     X(BOX_MIN, "box.min", VEC3, F_REQUIRED, NULL, "required", "lower corner")                      \

@@ -507,9 +507,15 @@ run_nbep check "$tmp/group.deck" --summary - --quiet --set physics.tc=2.5e-6 \
 check "check --summary: tc and carry_drop as set (got $rc)" \
     "[ $rc = 0 ] && [ \$(json_get '$tmp/stdout' tc) = 2.5e-06 ] &&
      [ \$(json_get '$tmp/stdout' carry_drop) = 0.03 ]"
+# physics.zero_momentum: said on the physics line and in the JSON (false by default: below)
+run_nbep check "$tmp/group.deck" --summary "$tmp/zm.json" --set physics.zero_momentum=true
+check "check: physics.zero_momentum said on the physics line and in the JSON (got $rc)" \
+    "[ $rc = 0 ] && grep -Eq '^physics: .*, total momentum zeroed\$' $tmp/stdout &&
+     [ \$(json_get '$tmp/zm.json' zero_momentum) = true ]"
 run_nbep check "$tmp/group.deck" --summary "$tmp/check.json" --quiet
 check "check --summary FILE --quiet: exit 0, nothing on stdout, the file's spheres (got $rc)" \
-    "[ $rc = 0 ] && [ ! -s '$tmp/stdout' ] && [ \$(json_get '$tmp/check.json' spheres) = 64 ]"
+    "[ $rc = 0 ] && [ ! -s '$tmp/stdout' ] && [ \$(json_get '$tmp/check.json' spheres) = 64 ] &&
+     [ \$(json_get '$tmp/check.json' zero_momentum) = false ]"
 run_nbep check "$tmp/group.deck" --summary "$tmp/check.json" --set spheres.[0].radius=-1
 check "check --summary of a deck error: exit 2, one line, the older report kept (got $rc)" \
     "[ $rc = 2 ] && one_line && [ \$(json_get '$tmp/check.json' spheres) = 64 ] &&

@@ -12,6 +12,7 @@
 
 #include "nbep/physics.h"
 #include "nbep_test.h"
+#include "nbep_test_scene.h"
 
 static nbep_vec3 unit(nbep_vec3 a)
 {
@@ -239,6 +240,76 @@ static void test_energy_of_a_known_configuration_is_summed_by_hand(void **state)
     nbep_diag_fini(&d);
 }
 
+/* physics.zero_momentum: by hand, three spheres of masses 1, 2 and 1 moving along x at 3, 0
+ * and -1 have momentum 2 over mass 4, a centre of mass at 0.5; less it, 2.5, -0.5 and -1.5,
+ * kinetic energy 3.125 + 0.25 + 1.125 = 4.5 against 5 before, so each velocity is scaled by
+ * sqrt(5 / 4.5). The velocities' other components, zero, stay zero; relative velocities keep
+ * their directions. Round-off: a few ulps of the largest term (1e-15 relative). */
+static void test_zero_momentum_takes_off_the_centre_of_mass_and_keeps_the_energy(void **state)
+{
+    (void)state;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_state s;
+    assert_int_equal(nbep_state_init(&s, 3, 0, &d), NBEP_OK);
+    const double m[3] = {1.0, 2.0, 1.0}, vx[3] = {3.0, 0.0, -1.0}, u[3] = {2.5, -0.5, -1.5};
+    for (int i = 0; i < 3; i++) {
+        s.mass[i] = m[i];
+        s.vel[i] = nbep_vec3_make(vx[i], 0.0, 0.0);
+    }
+    nbep_physics_zero_momentum(&s);
+    const double f = sqrt(5.0 / 4.5);
+    for (int i = 0; i < 3; i++)
+        assert_vec_close(s.vel[i], nbep_vec3_make(u[i] * f, 0.0, 0.0), 1e-15 * 3.0);
+    double k = NAN, pe = NAN;
+    nbep_physics_energy(&s, 0, 3, &k, &pe);
+    assert_close(k, 5.0, 1e-15, 0.0);
+
+    /* every sphere moving with the centre of mass: none moves after, and no factor is applied
+     * to nothing (no NaN from 0/0) */
+    for (int i = 0; i < 3; i++)
+        s.vel[i] = nbep_vec3_make(1.0, -2.0, 0.5);
+    nbep_physics_zero_momentum(&s);
+    for (int i = 0; i < 3; i++)
+        assert_vec_close(s.vel[i], nbep_vec3_make(0.0, 0.0, 0.0), 1e-15 * 2.0);
+    /* none moving: unchanged */
+    nbep_physics_zero_momentum(&s);
+    for (int i = 0; i < 3; i++)
+        assert_true(isfinite(s.vel[i].x) && isfinite(s.vel[i].y) && isfinite(s.vel[i].z));
+    nbep_state_fini(&s);
+
+    /* a gas of 1000 of mixed masses in random directions: total momentum at round-off of the
+     * momenta summed (1e-13 of sum m |v|), energy kept (1e-13), and relative velocities
+     * v_i - v_0 all scaled by one factor from the originals' */
+    const size_t n = 1000;
+    assert_int_equal(nbep_state_init(&s, n, 0, &d), NBEP_OK);
+    nbep_vec3 *v0 = test_malloc(n * sizeof *v0);
+    uint64_t x = 7;
+    double e0 = 0.0, scale = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        s.mass[i] = 0.5 + 1.5 * nbep_test_uniform(&x);
+        v0[i] = s.vel[i] = nbep_test_random_velocity(&x, 1.0 + nbep_test_uniform(&x));
+        e0 += 0.5 * s.mass[i] * nbep_vec3_dot(v0[i], v0[i]);
+        scale += s.mass[i] * nbep_vec3_norm(v0[i]);
+    }
+    nbep_physics_zero_momentum(&s);
+    nbep_vec3 p = nbep_vec3_make(0.0, 0.0, 0.0);
+    for (size_t i = 0; i < n; i++)
+        p = nbep_vec3_axpy(p, s.mass[i], s.vel[i]);
+    assert_true(nbep_vec3_norm(p) <= 1e-13 * scale);
+    nbep_physics_energy(&s, 0, n, &k, &pe);
+    assert_close(k, e0, 1e-13, 0.0);
+    const nbep_vec3 r0 = nbep_vec3_sub(v0[1], v0[0]), r = nbep_vec3_sub(s.vel[1], s.vel[0]);
+    const double g = nbep_vec3_norm(r) / nbep_vec3_norm(r0);
+    assert_true(g > 1.0); /* the centre of mass's energy given back to the rest */
+    for (size_t i = 1; i < n; i++)
+        assert_vec_close(nbep_vec3_sub(s.vel[i], s.vel[0]),
+                         nbep_vec3_scale(nbep_vec3_sub(v0[i], v0[0]), g), 1e-13 * 4.0);
+    test_free(v0);
+    nbep_state_fini(&s);
+    nbep_diag_fini(&d);
+}
+
 /* Free flight under constant acceleration, checked by kinematic identities rather than the
  * position formula: v - v0 = a h (the definition of constant acceleration), p - p0 = h (v0 + v)/2
  * (the displacement is the mean velocity times the time, exact for constant acceleration),
@@ -293,6 +364,7 @@ int main(void)
         cmocka_unit_test(test_plane_response_reverses_the_normal_component_times_e),
         cmocka_unit_test(test_plane_response_leaves_a_leaving_or_sliding_sphere_alone),
         cmocka_unit_test(test_energy_of_a_known_configuration_is_summed_by_hand),
+        cmocka_unit_test(test_zero_momentum_takes_off_the_centre_of_mass_and_keeps_the_energy),
         cmocka_unit_test(test_free_flight_follows_the_kinematic_formula_and_keeps_energy),
         cmocka_unit_test(test_plane_gap_is_signed_distance_less_radius),
     };

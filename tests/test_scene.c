@@ -200,6 +200,7 @@ static void test_absent_settings_take_their_defaults(void **state)
     assert_close(sc->restitution, 1.0, 0.0, 0.0);
     assert_close(sc->tc, 1e-6, 0.0, 0.0);
     assert_close(sc->carry_drop, NBEP_CARRY_DROP, 0.0, 0.0);
+    assert_false(sc->zero_momentum);
     assert_int_equal(sc->output_every, 10);
     assert_true(sc->out_position);
     assert_true(sc->out_velocity);
@@ -211,6 +212,51 @@ static void test_absent_settings_take_their_defaults(void **state)
     assert_int_equal(sc->state.n, 1);
     assert_vec3(sc->state.vel[0], 0.0, 0.0, 0.0, 0.0);
     assert_vec3(sc->state.acc[0], 0.0, 0.0, 0.0, 0.0);
+}
+
+/* physics.zero_momentum: the same places, and velocities whose total momentum is zero (at the
+ * round-off of summing the momenta: 1e-13 of sum m |v|) with the kinetic energy the speeds
+ * gave (two groups, N m speed^2 / 2 each, to 1e-13); off, random directions leave a momentum
+ * of about sqrt(N) m speed (here more than 1 % of sum m |v|, which is about 3 / sqrt(N)). */
+static void test_zero_momentum_keeps_the_places_and_the_energy(void **state)
+{
+    (void)state;
+    char path[512];
+    write_deck("zero-momentum.deck",
+               "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0];"
+               " periodic = [true, true, true]; };\n"
+               "spheres = ( { count = 150; radius = 0.5; mass = 1.0; speed = 1.5; },\n"
+               "            { count = 50; radius = 0.7; mass = 2.5; speed = 0.5; } );\n",
+               path, sizeof path);
+    const char *const on[] = {"physics.zero_momentum=true"};
+    nbep_scene sc[2];
+    for (int k = 0; k < 2; k++) {
+        nbep_diag d;
+        nbep_diag_init(&d);
+        if (nbep_scene_load(path, on, (size_t)k, &sc[k], &d) != NBEP_OK) {
+            print_diag(&d);
+            fail();
+        }
+        nbep_diag_fini(&d);
+    }
+    assert_false(sc[0].zero_momentum);
+    assert_true(sc[1].zero_momentum);
+    const nbep_state *s0 = &sc[0].state, *s1 = &sc[1].state;
+    assert_int_equal(s1->n, 200);
+    nbep_vec3 p[2] = {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
+    double scale = 0.0, k1 = 0.0;
+    for (size_t i = 0; i < s1->n; i++) {
+        assert_memory_equal(&s0->pos[i], &s1->pos[i], sizeof s0->pos[i]);
+        p[0] = nbep_vec3_axpy(p[0], s0->mass[i], s0->vel[i]);
+        p[1] = nbep_vec3_axpy(p[1], s1->mass[i], s1->vel[i]);
+        scale += s0->mass[i] * nbep_vec3_norm(s0->vel[i]);
+        k1 += 0.5 * s1->mass[i] * nbep_vec3_dot(s1->vel[i], s1->vel[i]);
+    }
+    assert_true(nbep_vec3_norm(p[0]) > 1e-2 * scale);
+    assert_true(nbep_vec3_norm(p[1]) <= 1e-13 * scale);
+    assert_close(k1, 150 * 1.0 * 1.5 * 1.5 / 2 + 50 * 2.5 * 0.5 * 0.5 / 2, 1e-13, 0.0);
+    nbep_scene_fini(&sc[0]);
+    nbep_scene_fini(&sc[1]);
 }
 
 static void test_output_file_defaults_to_the_deck_name_with_h5_here(void **state)
@@ -2620,6 +2666,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         T(test_good_deck_resolves_every_setting),
         T(test_absent_settings_take_their_defaults),
+        T(test_zero_momentum_keeps_the_places_and_the_energy),
         T(test_output_file_defaults_to_the_deck_name_with_h5_here),
         T(test_a_default_tc_long_against_the_step_is_warned_of),
     T(test_box_gives_six_inward_planes_first_in_axis_order),

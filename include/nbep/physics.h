@@ -71,4 +71,10 @@ void nbep_physics_separate_pair(nbep_vec3 *p1, nbep_vec3 *p2, double r1, double 
 void nbep_physics_energy(const nbep_state *s, size_t lo, size_t hi, double *kinetic,
                          double *potential);
 
+/* Makes the spheres' total momentum zero: the centre of mass's velocity (sum m v / sum m) is
+ * taken off every sphere's, and then all velocities are scaled by one factor to give back the
+ * kinetic energy they had (a scaled set of velocities whose momentum is zero keeps it zero).
+ * Nothing changes where no sphere moves. Sums in index order: the same bits every time. */
+void nbep_physics_zero_momentum(nbep_state *s);
+
 #endif

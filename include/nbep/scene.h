@@ -96,6 +96,8 @@ typedef struct nbep_scene {
     bool tc_given;            /* physics.tc was set (deck or override), not its default */
     double carry_drop;        /* held spheres carry impacts no faster than a fall from
                                * carry_drop of their radius (0: off) */
+    bool zero_momentum;       /* placed spheres' total momentum taken off, kinetic energy kept
+                               * (nbep_physics_zero_momentum) */
     /* box (optional) */
     bool has_box;
     nbep_vec3 box_min, box_max;
