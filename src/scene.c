@@ -643,9 +643,9 @@ static void check_periodic(load *L, const config_setting_t *at, const nbep_scene
             ERR(L, blame,
                 "box.periodic: run.neighbors = \"cells\" needs the box's %c side (%.10g) to be "
                 "at least %.10g, %.4g times the largest radius (%g) and a millionth more, three "
-                "cells across",
+                "cells across (run.neighbors = \"all\" takes a side longer than %s)",
                 "xyz"[k], len[k], nbep_evloop_min_periodic_side(2.0 * rmax),
-                2.0 * nbep_evloop_min_periodic_side(1.0), rmax);
+                2.0 * nbep_evloop_min_periodic_side(1.0), rmax, NBEP_G(4.0 * rmax));
     }
     /* blamed as run.order's message is (parse_run): what the user typed of the three, else
      * box.periodic's line (--set run.neighbors="grid" named the deck's box.periodic line) */

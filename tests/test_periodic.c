@@ -1743,7 +1743,8 @@ static void test_periodic_deck_errors_name_the_line(void **state)
              "box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 3.0]; periodic = [false, false, true]; };\n%s",
              sph);
     expect_deck_error(text, 2, "needs the box's z side (3) to be at least 3.375003375, 6.75 times "
-                               "the largest radius (0.5) and a millionth more, three cells across");
+                               "the largest radius (0.5) and a millionth more, three cells across "
+                               "(run.neighbors = \"all\" takes a side longer than 2)");
     /* a side short of the least by less than the 6.75 radii's %g digits show: the message
      * tells the two apart (it said "side (3.375) ... at least 6.75 times (0.5)" for 3.375001,
      * a new user's find) */
