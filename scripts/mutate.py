@@ -1171,6 +1171,8 @@ MUTANTS = [
     ("order-step-time-claim-lo-only", "src/algo_predictive.c",
      "            claim_min(&c->tclaim[hi], t);\n", "", ORDER, None),
     # ---- resuming ----
+    ("resume-read-fail-ok", "src/output_resume.c", "     * exit 134, a sweep at each try: a file missing /stats/step, say) */\n    st = NBEP_EIO;",
+     "     * exit 134, a sweep at each try: a file missing /stats/step, say) */", ["tests/test_resume.sh"], None),
     ("resume-dt-unchecked", "src/output_resume.c",
      "    if (memcmp(&dt, &sc->dt, sizeof dt) != 0) {", "    if (0) {", ["tests/test_resume.sh"],
      None),

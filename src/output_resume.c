@@ -694,6 +694,10 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     st = read_totals(o, path, frames, last, &res, d);
     if (st != NBEP_OK)
         goto fail;
+    /* a read that fails below is an I/O error, said by it (until 2026-12-02 these paths
+     * returned read_totals's OK with the resume emptied, and the run aborted on an assertion,
+     * exit 134, a sweep at each try: a file missing /stats/step, say) */
+    st = NBEP_EIO;
     /* The event slots, where the file has them; the run uses them only when its algorithm
      * imports event slots (the algorithm table, sim.c), so a deck of another algorithm
      * continues from positions and velocities alone. */

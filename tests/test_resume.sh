@@ -70,6 +70,20 @@ assert s[\"collisions\"] == part, (s[\"collisions\"], part)
 assert \"totals\" not in f[\"frames\"]
 ' $tmp/no-totals.json $tmp/no-totals.h5"
 
+# a file missing a dataset the resume reads after the totals (a hand-edited or damaged file):
+# one line naming it, exit 1, the file as it was (until 2026-12-02 an assertion, exit 134)
+for ds in stats/step checkpoint/event_kind; do
+    cp $tmp/no-totals-a.h5 $tmp/missing.h5
+    "$PY" -c "import h5py, sys; del h5py.File(sys.argv[1], 'r+')[sys.argv[2]]" $tmp/missing.h5 $ds
+    cp $tmp/missing.h5 $tmp/missing-before.h5
+    timeout 60 bin/nbep run $deck "${args[@]}" -n 80 --resume $tmp/missing.h5 2>$tmp/missing.err
+    rc=$?
+    check "a file without /$ds: exit 1, one line naming it, the file unchanged (got $rc: $(head -c 200 $tmp/missing.err))" \
+        "[ $rc = 1 ] && [ \$(wc -l <$tmp/missing.err) = 1 ] &&
+         grep -q '^nbep: $tmp/missing.h5: cannot read the shape of /$ds' $tmp/missing.err &&
+         cmp -s $tmp/missing.h5 $tmp/missing-before.h5"
+done
+
 # the end line of a resumed run counts the steps it ran and names the step reached (the
 # summary's `steps`), as the JSON summary's steps_per_second counts the steps run
 loud=("${args[@]:1}") # args without --quiet
