@@ -40,6 +40,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 
 #include <hdf5.h>
@@ -441,6 +442,81 @@ double nbep_output_bytes(const nbep_scene *sc, bool events, bool contacts)
     return bytes;
 }
 
+/* The room beyond a frame's estimated growth (nbep__output_room): a frame's flush may move a
+ * chunk index's node or a heap's block past the file's end (a few kB), and a run stopped for
+ * room writes its summary (a few kB). */
+#define ROOM_SLACK_BYTES ((int64_t)256 << 10)
+
+int64_t nbep__output_room(const nbep_scene *sc)
+{
+    /* A frame: its rows of every series it may write (positions, velocities, images, event
+     * slots: more room than needed costs disk blocks held for a while, not data), in whole
+     * chunks with their index entries; a new chunk of step, time and totals; and at e < 1 the
+     * lasting contacts' records (the predictive algorithm's, two frames' worth at most). */
+    double sphere = 24.0 * 2.0 + 12.0, series = 3.0;
+    for (int c = 0; c < N_CK_COLUMNS; c++) {
+        sphere += (double)H5Tget_size(*nbep__ck_columns[c].file_type);
+        series += 1.0;
+    }
+    const hsize_t per_chunk = frame_chunk_spheres(sc->state.n);
+    const double stored = whole_chunks(sc->state.n, per_chunk);
+    double frame = stored * sphere + stored / (double)per_chunk * series * CHUNK_INDEX_BYTES +
+                   (16.0 + (double)sizeof(nbep_run_totals)) * SERIES_CHUNK_ROWS;
+    if (sc->restitution < 1.0)
+        frame += nbep__output_contacts_bytes(sc->state.n);
+    /* The /stats rows of a frame's interval: a new chunk of each column and of wall_impulse
+     * (STATS_CHUNK_ROWS values each) where the interval's rows reach into one. Counted twice:
+     * a run stopped for room commits the rows since its last frame at its close, after that
+     * frame took its own. */
+    double stats = 0.0;
+    if (sc->out_stats)
+        stats = 8.0 * (STATS_N_COLUMNS + 1) *
+                (whole_chunks(sc->output_every, STATS_CHUNK_ROWS) +
+                 (sc->output_every > STATS_CHUNK_ROWS ? STATS_CHUNK_ROWS : 0));
+    return (int64_t)(frame + 2.0 * stats) + ROOM_SLACK_BYTES;
+}
+
+int nbep__output_reserve(nbep_output *o, const char *what, nbep_diag *d)
+{
+    if (o->room <= 0)
+        return 0;
+    /* the descriptor HDF5 writes through: its default (sec2) driver's, an int */
+    hid_t fapl = H5Fget_access_plist(o->file);
+    const bool sec2 = fapl >= 0 && H5Pget_driver(fapl) == H5FD_SEC2;
+    nbep__output_close_id(&fapl);
+    int *fd = NULL;
+    struct stat sb;
+    if (!sec2 || H5Fget_vfd_handle(o->file, H5P_DEFAULT, (void **)&fd) < 0 || !fd ||
+        fstat(*fd, &sb) != 0) {
+        o->room = 0;
+        return 0;
+    }
+    const int64_t end = (int64_t)sb.st_size;
+    /* a file-size limit is not met by a reservation (the size does not change): said as the
+     * write past it would (EFBIG), which by default ends the process with SIGXFSZ mid-write */
+    struct rlimit limit;
+    int err = getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY &&
+                      (uint64_t)(end + o->room) > (uint64_t)limit.rlim_cur
+                  ? EFBIG
+                  : nbep_file_reserve(*fd, end, o->room);
+    if (err == 0) {
+        if (end + o->room > o->reserved_end)
+            o->reserved_end = end + o->room;
+        return 0;
+    }
+    if (err != ENOSPC && err != EDQUOT && err != EFBIG) { /* cannot reserve here: as before */
+        o->room = 0;
+        return 0;
+    }
+    char room[NBEP_BYTES_TEXT_MAX];
+    nbep_diag_add(d, __FILE__, __LINE__,
+                  "nbep: %s: no room for %s (%s kept free ahead of the file, for a frame to "
+                  "be written whole): %s%s; the frames before it are kept",
+                  o->path, what, nbep_format_bytes((double)o->room, room), strerror(err),
+                  err == EFBIG ? " (the file-size limit, ulimit -f)" : "");
+    return -1;
+}
+
 double nbep_output_sidecar_bytes(const nbep_scene *sc, const char *path)
 {
     /* as nbep_output_create_staged decides it (o->xmf) and the frames' velocity is written */
@@ -750,6 +826,7 @@ nbep_status nbep_output_create_staged(const char *path, const nbep_scene *sc, in
         goto fail;
     }
     o->xmf = sc->out_position;
+    o->room = nbep__output_room(sc);
     /* the frame list's room for the planned frames, up to XMF_RESERVE_MAX of them: a frame past
      * it grows the list as it is written (a deck may plan more frames than memory holds, a run
      * meant to end on its job's time limit; until 2026-12-01 the whole list was made here, and
@@ -854,6 +931,11 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
                   "nbep: %s: step %" PRId64 " has a non-finite position or velocity; frame not "
                   "written",
                   o->path, step);
+    char what[64];
+    snprintf(what, sizeof what, "frame %llu (step %" PRId64 ")", (unsigned long long)o->n_frames,
+             step);
+    if (nbep__output_reserve(o, what, d) < 0)
+        return NBEP_EIO;
     double t = (double)step * dt;
     /* memory spaces of the file selection's shape: a flat one made HDF5 map each element
      * to its chunk apart (a sixth of a frame step's time at N = 256000) */
@@ -1067,6 +1149,8 @@ nbep_status nbep_output_close(nbep_output **op, const nbep_summary *s, nbep_diag
     rc |= checked_close(&o->stats_count, o->path, "attribute count of /stats", d);
     rc |= checked_close(&o->summary, o->path, "/summary", d);
     rc |= checked_close(&o->file, o->path, "the file", d);
+    if (o->reserved_end > 0) /* what no frame took goes back to the disk */
+        nbep_file_unreserve(o->path, o->reserved_end);
     nbep__output_release(op);
     return rc ? NBEP_EIO : NBEP_OK;
 }

@@ -111,6 +111,13 @@ struct nbep_output {
     /* PATH.lock, held while the handle is open (nbep__output_lock), or -1 and NULL */
     int lock_fd;
     char *lock_path;
+    /* Room kept on the disk ahead of the file (nbep__output_reserve): each frame first
+     * reserves `room` bytes past the file's end, so that a disk, quota or file-size limit
+     * that runs out is met there, before anything of the frame is written, with room left
+     * for the close. room 0: none kept (a file system that cannot reserve, an HDF5 file
+     * driver without a descriptor); reserved_end: the farthest offset reserved, given back
+     * at close. */
+    int64_t room, reserved_end;
     /* a run opened to be resumed (nbep_output_open_resume), not yet changed: pending until
      * nbep_output_resume_begin, and closing it then writes nothing */
     struct {
@@ -127,6 +134,16 @@ struct nbep_output {
                                     * where a part without event slots wrote the rest) */
     } resume;
 };
+
+/* The room a run of sc keeps ahead of its file (o->room): two frames' growth, each with its
+ * interval's /stats rows and the event slots' columns, and a mebibyte for HDF5's metadata and
+ * the summary. */
+int64_t nbep__output_room(const nbep_scene *sc);
+/* Reserves o->room bytes past the file's end (once o->file is open) before `what` is written:
+ * -1 with a line when the disk, the quota or the process's file-size limit (ulimit -f) has no
+ * room, the file as its last flush left it; 0 otherwise (a file system that cannot reserve
+ * turns the room off: the run goes on as without it). */
+int nbep__output_reserve(nbep_output *o, const char *what, nbep_diag *d);
 
 /* A handle for path with every id invalid; NULL (and NBEP_ENOMEM in d) when out of memory. */
 nbep_output *nbep__output_new(const char *path, size_t n_spheres, nbep_diag *d);

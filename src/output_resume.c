@@ -771,6 +771,7 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     o->resume.from = res.step;
     o->resume.trim = kept;
     o->n_frames = frames;
+    o->room = nbep__output_room(sc);
     *out = o;
     *r = res;
     return NBEP_OK;
@@ -786,6 +787,9 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
     if (!o->resume.pending)
         return NBEP_OK;
     const char *path = o->path;
+    /* the room first: a disk with none left refuses the resume before it changes the file */
+    if (nbep__output_reserve(o, "the resume", d) < 0)
+        return NBEP_EIO;
     const hsize_t frames = o->n_frames;
     const uint64_t keep = o->resume.stats_keep;
     /* A run killed while it wrote a frame can leave that frame's chunks past the file's end

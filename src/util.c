@@ -159,6 +159,24 @@ int nbep_lock_take(const char *path, bool *busy)
     return -1;
 }
 
+int nbep_file_reserve(int fd, int64_t from, int64_t len)
+{
+    return fallocate(fd, FALLOC_FL_KEEP_SIZE, (off_t)from, (off_t)len) == 0 ? 0 : errno;
+}
+
+void nbep_file_unreserve(const char *path, int64_t end)
+{
+    int fd = open(path, O_WRONLY | O_CLOEXEC);
+    struct stat sb;
+    if (fd < 0)
+        return;
+    /* cut to its own size: the blocks past it go (a hole punched there frees nothing on
+     * ext4, which punches within the size only) */
+    if (fstat(fd, &sb) == 0 && S_ISREG(sb.st_mode) && end > (int64_t)sb.st_size)
+        (void)ftruncate(fd, sb.st_size);
+    close(fd);
+}
+
 void nbep_lock_drop(int fd, const char *remove_path)
 {
     if (fd < 0)

@@ -20,8 +20,8 @@ rc=$?
 err=$mnt/../diskfull.err
 check "a full disk ends the run with exit 1 (got $rc)" "[ $rc = 1 ]"
 check "with one line on stderr" "[ \$(wc -l < '$err') = 1 ]"
-check "that names the file and the reason" \
-    "grep -q '$mnt/full.h5' '$err' && grep -qi 'no space left' '$err'"
+check "that names the file and the reason: the frame it kept room for ($(cat "$err"))" \
+    "grep -q '$mnt/full.h5: no room for frame [0-9]* (step [0-9]*) (.*): No space left on device; the frames before it are kept' '$err'"
 bin/nbep info "$mnt/full.h5" >"$mnt/../diskfull.info" 2>&1
 check "the file still opens" "[ \$? = 0 ]"
 check "with the frames written before the disk filled" \
@@ -53,12 +53,26 @@ check "its row names the run's file and the reason" \
     "echo \"\$line\" | grep -q 's.sweep/run-0000.h5: .*No space left'"
 check "with that one error, as nbep run reports it, under the line's one prefix: $line" \
     "! echo \"\$line\" | grep -q '; nbep:' && echo \"\$line\" | grep -q '^nbep: sweep run 0 (run.steps=400 seed=1) failed: [^n]'"
-# the disk is full for the study's tables too: the one made empty is not left, and the last
-# line does not send the user to a table that is not there (until 2026-12-01 it did, and
-# summary.h5.partial stayed)
+# the room the run kept ahead of its file goes back at its close (reserve_room, output.c): the
+# study's tables fit there, and they hold the failed run's error
+check "the study's tables are written, the run's row naming its error" \
+    "grep -q 'No space left on device' '$mnt/s.sweep/summary.csv' && [ -s '$mnt/s.sweep/summary.h5' ]"
+check "the last line points to them: $(tail -n 1 "$mnt/../diskfull-sweep.err")" \
+    "tail -n 1 '$mnt/../diskfull-sweep.err' | grep -q '^nbep: sweep: 0 of 1 runs complete, 1 failed (run 0; errors in $mnt/s.sweep/summary.csv)\$'"
+# a disk full to its last byte before the study starts: no room for its tables either, and the
+# one made empty is not left, nor does the last line send the user to a table that is not
+# there (until 2026-12-01 it did, and summary.h5.partial stayed)
+rm -rf "$mnt/s.sweep" "$mnt/full.h5" "$mnt/full.xmf"
+mkdir -p "$mnt/s.sweep"
+dd if=/dev/zero of="$mnt/filler" bs=64k 2>/dev/null
+dd if=/dev/zero of="$mnt/filler2" bs=1 2>/dev/null
+bin/nbep sweep "$mnt/../diskfull-sweep.deck" --quiet -o "$mnt/s.h5" 2>"$mnt/../diskfull-sweep.err"
+rc=$?
+check "a sweep on a disk full from the start fails (exit 1, got $rc)" "[ $rc = 1 ]"
 check "no summary table left half-made" "[ -z \"\$(ls '$mnt/s.sweep' | grep summary)\" ]"
 check "the last line says the failed runs' errors are above: $(tail -n 1 "$mnt/../diskfull-sweep.err")" \
     "tail -n 1 '$mnt/../diskfull-sweep.err' | grep -q '^nbep: sweep: 0 of [0-9]* runs complete, [0-9]* failed (run 0.*; errors above: no summary table could be written)\$'"
+rm -f "$mnt/filler" "$mnt/filler2"
 # a read-only file system is the user's path, as one without permission: a run into it and a
 # sweep over a study on it (whose last tables it cannot remove) exit 2 with one line (until
 # 2026-12-01 both gave 1, a run-time failure)

@@ -70,6 +70,37 @@ assert s[\"collisions\"] == part, (s[\"collisions\"], part)
 assert \"totals\" not in f[\"frames\"]
 ' $tmp/no-totals.json $tmp/no-totals.h5"
 
+# a file-size limit (ulimit -f; a batch system's per-process file limit): the run keeps room
+# ahead of its file (output.c, nbep__output_reserve) and stops at the frame that would pass the
+# limit, before writing any of it: exit 1, one line saying so, the JSON summary failed, every
+# counted frame readable, and a resume without the limit ends as the uninterrupted run (until
+# 2026-12-02 SIGXFSZ killed it mid-write, exit 153, no summary, its lock and .partial left).
+# 1400 KiB hold 4 of the 17 frames of 400 spheres (80 steps, 5 apart) with their room (932 kB).
+rm -f $tmp/fsize.*
+(ulimit -f 1400; exec bin/nbep run $deck "${args[@]}" -n 80 -o $tmp/fsize.h5 \
+    --summary $tmp/fsize.json 2>$tmp/fsize.err)
+rc=$?
+check "a run meeting ulimit -f: exit 1, one line (got $rc: $(head -c 300 $tmp/fsize.err))" \
+    "[ $rc = 1 ] && [ \$(wc -l <$tmp/fsize.err) = 1 ] &&
+     grep -q '^nbep: $tmp/fsize.h5: no room for frame [0-9]* (step [0-9]*) (.* kept free ahead of the file, for a frame to be written whole): File too large (the file-size limit, ulimit -f); the frames before it are kept\$' $tmp/fsize.err"
+check "... its summary failed, no lock or .partial left, its counted frames (some, not all) readable" \
+    "\"\$PY\" -c 'import json, sys, h5py, numpy as np
+s = json.load(open(sys.argv[1]))
+assert s[\"status\"] == \"failed\", s[\"status\"]
+f = h5py.File(sys.argv[2], \"r\")
+n = int(f[\"frames\"].attrs[\"count\"])
+assert 2 <= n < 17, n
+assert np.isfinite(f[\"frames/position\"][:n]).all()' $tmp/fsize.json $tmp/fsize.h5 &&
+     [ ! -e $tmp/fsize.h5.lock ] && [ ! -e $tmp/fsize.json.partial ]"
+bin/nbep run $deck "${args[@]}" -n 80 --resume $tmp/fsize.h5
+check "... and resumed without the limit, it ends as the uninterrupted run" \
+    "same_frames $tmp/predictive-whole.h5 $tmp/fsize.h5 &&
+     h5diff -q $tmp/predictive-whole.h5 $tmp/fsize.h5 /stats"
+# the room a run kept ahead of its file goes back to the disk when it ends: the file holds no
+# more blocks than its size needs (a file system that cannot reserve keeps none)
+check "a finished run's file holds its size in blocks, no room kept past its end ($(stat -c '%b blocks of %B for %s bytes' $tmp/predictive-whole.h5))" \
+    "[ \$(( \$(stat -c '%b * %B' $tmp/predictive-whole.h5) )) -le \$(( \$(stat -c %s $tmp/predictive-whole.h5) + 65536 )) ]"
+
 # a file missing a dataset the resume reads after the totals (a hand-edited or damaged file):
 # one line naming it, exit 1, the file as it was (until 2026-12-02 an assertion, exit 134)
 for ds in stats/step checkpoint/event_kind; do

@@ -88,6 +88,15 @@ char *nbep_lock_path(const char *path);
  * another descriptor holds it (in this process or another), else false (a file system without
  * locks, a folder that takes no new file: the caller goes on unguarded). */
 int nbep_lock_take(const char *path, bool *busy);
+/* Reserves on its disk the len bytes of file fd from offset `from`, its size unchanged
+ * (fallocate's FALLOC_FL_KEEP_SIZE): writes that later extend the file into them find room.
+ * 0, else the errno: ENOSPC or EDQUOT where the disk or the quota has no room, EOPNOTSUPP,
+ * ENOSYS or EINVAL where the file system cannot reserve (NFS, some parallel ones). */
+int nbep_file_reserve(int fd, int64_t from, int64_t len);
+/* Gives back what nbep_file_reserve reserved past the end of the file at path (up to offset
+ * `end`; the file cut to its own size, its bytes unchanged). Nothing where end is not past
+ * it. */
+void nbep_file_unreserve(const char *path, int64_t end);
 /* Lets the lock go: removes the file at remove_path first, when not NULL (the lock's name,
  * for a lock beside a file of the user's) and it is still the lock's own, empty file, and
  * closes fd. Nothing for fd < 0. */
