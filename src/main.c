@@ -66,6 +66,17 @@ static void install_signal_handlers(void)
             continue;
         sigaction(stop_signals[k], &sa, NULL);
     }
+    /* SIGPIPE, whose default kills a run that could go on: stderr a pipe whose reader has
+     * gone (`nbep run ... 2>&1 | head`). Ignored, the progress line's write fails alone, and
+     * a --summary - into it fails the run with its line, exit 1 (until 2026-12-02 the run
+     * ended at once, exit 141, no summary, its lock left). SIGXFSZ (a file-size limit) keeps
+     * its default: the writer keeps within the limit itself (output.c, reserve_room), and a
+     * write past it ends the run before HDF5 records a file end beyond what it could write. */
+    struct sigaction ign;
+    memset(&ign, 0, sizeof ign);
+    ign.sa_handler = SIG_IGN;
+    sigemptyset(&ign.sa_mask);
+    sigaction(SIGPIPE, &ign, NULL);
 }
 
 /* How long `nbep check` spends loading a study's runs (each run's spheres placed: a second or

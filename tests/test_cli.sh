@@ -721,6 +721,22 @@ PY
     check "nbep $args blocked on a full pipe, SIGTERM: ended by the signal (got ${got:-nothing})" \
         "[ '$got' = -15 ]"
 done
+# SIGPIPE: a run whose stderr is a pipe with no reader (`nbep run ... 2>&1 | head` once head
+# has gone) goes on to its end and writes its summary (until 2026-12-02 its first progress
+# line killed it, exit 141, no summary, its lock left)
+got=$(timeout -k 5 60 python3 - "$nbep" "$tmp/nopipe" <<'PY'
+import os, subprocess, sys
+r, w = os.pipe()
+os.close(r)
+p = subprocess.run([sys.argv[1], "run", "inputs/two-spheres.deck", "-n", "50", "-o",
+                    sys.argv[2] + ".h5", "--summary", sys.argv[2] + ".json"],
+                   stdout=subprocess.DEVNULL, stderr=w)
+print(p.returncode)
+PY
+)
+check "a run whose stderr has no reader: exit 0 (got ${got:-nothing}), its summary completed, no lock left" \
+    "[ '$got' = 0 ] && [ \$(json_get '$tmp/nopipe.json' status) = '\"completed\"' ] &&
+     [ ! -e '$tmp/nopipe.h5.lock' ]"
 # a value named in an error in the digits that tell it from the limit (until 2026-12-01 %g's
 # six: "must be in [0, 1] (got 1)" of 1.0000000001)
 run_nbep check inputs/two-spheres.deck --set physics.restitution=1.0000000001
