@@ -1319,11 +1319,16 @@ static const config_setting_t **planes_placed_by(const config_setting_t *root,
 
 /* ---- reading the deck ----------------------------------------------------------------------- */
 
-static nbep_status read_text(const char *path, char **out, nbep_diag *d)
+/* A deck read from a pipe or a FIFO waits for its writer: a stop signal then interrupts the
+ * read (EINTR), and the load stops there as it does while placing, with no message of its own
+ * (until 2026-12-02 "cannot read /dev/fd/63: Interrupted system call", exit 1). */
+static nbep_status read_text(const char *path, const atomic_int *stop, char **out, nbep_diag *d)
 {
     FILE *f = fopen(path, "rb");
     if (!f) {
         const int err = errno;
+        if (err == EINTR && nbep_status_of_stop(stop) != NBEP_OK)
+            return nbep_status_of_stop(stop);
         NBEP_FAIL(d, nbep_status_of_open(err), "nbep: cannot read %s: %s", path, strerror(err));
     }
     size_t len = 0, cap = 4096;
@@ -1347,6 +1352,8 @@ static nbep_status read_text(const char *path, char **out, nbep_diag *d)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory to read %s", path);
     if (failed) {
         free(text);
+        if (err == EINTR && nbep_status_of_stop(stop) != NBEP_OK)
+            return nbep_status_of_stop(stop);
         NBEP_FAIL(d, nbep_status_of_open(err), "nbep: cannot read %s: %s", path, strerror(err));
     }
     text[len] = '\0';
@@ -1573,7 +1580,7 @@ static nbep_status load_deck(const char *deck_path, const char *deck_text,
 
     nbep_status st = NBEP_OK;
     if (!deck_text) {
-        if ((st = read_text(deck_path, &sc.deck_text, d)) != NBEP_OK)
+        if ((st = read_text(deck_path, stop, &sc.deck_text, d)) != NBEP_OK)
             goto done;
         deck_text = sc.deck_text;
     }

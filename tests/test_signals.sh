@@ -133,6 +133,25 @@ check "a stop signal while the summary's FIFO waits for a reader: exit 143 (got 
     "[ $rc = 143 ] && [ \$(wc -l < '$tmp/stderr-wait') = 1 ] &&
      grep -qx 'nbep: terminated by SIGUSR1 before the run began; nothing written' '$tmp/stderr-wait' &&
      [ ! -e '$tmp/wait.h5' ] && [ ! -e '$tmp/wait.h5.partial' ]"
+# ... and while the deck itself is read from a pipe or FIFO whose writer has not written
+# (`nbep run <(generate-deck)`, a FIFO no writer has opened): run, check and sweep stop with
+# their line, exit 143 (until 2026-12-02 "cannot read ...: Interrupted system call", exit 1)
+rm -f "$tmp/deck-fifo" && mkfifo "$tmp/deck-fifo"
+for cmd in "run|nbep: terminated by SIGTERM before the run began; nothing written" \
+           "check|nbep: check terminated by SIGTERM; nothing written" \
+           "sweep|nbep: sweep terminated by SIGTERM before its first run; nothing written"; do
+    bin/nbep "${cmd%%|*}" "$tmp/deck-fifo" --quiet -o "$tmp/deck-fifo.h5" 2>"$tmp/stderr-deck" &
+    pid=$!
+    sleep 0.5
+    kill -TERM $pid
+    for _ in $(seq 100); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
+    kill -KILL $pid 2>/dev/null
+    wait $pid
+    rc=$?
+    check "nbep ${cmd%%|*} of a deck FIFO no writer opened, SIGTERM: exit 143 (got $rc), its line ($(head -c 200 "$tmp/stderr-deck"))" \
+        "[ $rc = 143 ] && [ \$(wc -l < '$tmp/stderr-deck') = 1 ] &&
+         grep -qx '${cmd#*|}' '$tmp/stderr-deck' && [ ! -e '$tmp/deck-fifo.h5' ]"
+done
 # a signal while the deck is read and the spheres placed (1.5 million random spheres: a few
 # seconds here, placement and the overlap check at t0 alike) ends the run before it begins,
 # with nothing written: exit 130, no file, one line (it was taken only after the first step,
