@@ -334,6 +334,18 @@ static int staged_name_fits(const char *path, const char *suffix)
     return strlen(base) + strlen(suffix) > (size_t)max ? ENAMETOOLONG : 0;
 }
 
+/* Whether the file at path begins with HDF5's signature (nbep's files have no user block). */
+static bool is_hdf5_file(const char *path)
+{
+    char head[8];
+    FILE *f = fopen(path, "rb");
+    const bool hdf5 = f && fread(head, 1, sizeof head, f) == sizeof head &&
+                      memcmp(head, "\x89HDF\r\n\x1a\n", sizeof head) == 0;
+    if (f)
+        fclose(f);
+    return hdf5;
+}
+
 nbep_status nbep_run_check_paths(const char *deck, const char *output, const char *summary,
                                  nbep_diag *d)
 {
@@ -394,6 +406,26 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
         if (run || side || held)
             NBEP_FAIL(d, NBEP_EUSAGE, "nbep: the summary file %s is the run's %s; choose another",
                       summary, run ? "file itself" : side ? "XDMF sidecar" : "lock file");
+    }
+    /* ... nor another run's: a summary replaced an HDF5 file at its path (another run's file,
+     * which went on writing a file no longer there and ended with exit 0), and at a name
+     * ending in .lock or .xmf it took another run's lock (a third run then wrote into the
+     * file it guarded) or sidecar (until 2026-12-02, a review) */
+    if (summary && strcmp(summary, "-") != 0 && !summary_in_place(summary)) {
+        const size_t sl = strlen(summary);
+        const char *name = sl >= 5 && strcmp(summary + sl - 5, ".lock") == 0   ? "lock"
+                           : sl >= 4 && strcmp(summary + sl - 4, ".xmf") == 0 ? "XDMF sidecar"
+                                                                              : NULL;
+        if (name)
+            NBEP_FAIL(d, NBEP_EUSAGE,
+                      "nbep: the summary file %s has the name of a run's %s, which the summary "
+                      "would replace; choose another",
+                      summary, name);
+        if (is_hdf5_file(summary))
+            NBEP_FAIL(d, NBEP_EUSAGE,
+                      "nbep: the summary file %s is an HDF5 file (a run's?), which the summary "
+                      "would replace; choose another",
+                      summary);
     }
     return NBEP_OK;
 }

@@ -619,6 +619,21 @@ run_nbep run inputs/two-spheres.deck --quiet -o "$tmp/locked.h5" --summary "$tmp
 check "--summary at the run's lock file: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr"))" \
     "[ $rc = 2 ] && one_line && grep -qx 'nbep: the summary file $tmp/locked.h5.lock is the run.s lock file; choose another' '$tmp/stderr' &&
      [ ! -e '$tmp/locked.h5' ] && [ ! -e '$tmp/locked.h5.lock' ]"
+# ... nor another run's: a summary at an HDF5 file (another run's, running or done) replaced
+# it, and at a name ending in .lock or .xmf took another run's lock or sidecar (until
+# 2026-12-02): refused in run and check, the file there untouched, nothing written
+bin/nbep run inputs/two-spheres.deck --quiet -n 5 -o "$tmp/theirs.h5"
+sum0=$(md5sum <"$tmp/theirs.h5")
+for pair in "theirs.h5|is an HDF5 file (a run.s?)" "theirs.h5.lock|has the name of a run.s lock" \
+            "theirs.xmf|has the name of a run.s XDMF sidecar"; do
+    for cmd in run check; do
+        run_nbep $cmd inputs/two-spheres.deck --quiet -n 5 -o "$tmp/mine.h5" --summary "$tmp/${pair%%|*}"
+        check "$cmd --summary at another run's ${pair%%|*}: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr"))" \
+            "[ $rc = 2 ] && one_line &&
+             grep -qx 'nbep: the summary file $tmp/${pair%%|*} ${pair#*|}, which the summary would replace; choose another' '$tmp/stderr' &&
+             [ ! -e '$tmp/mine.h5' ] && [ '$(md5sum <"$tmp/theirs.h5")' = '$sum0' ]"
+    done
+done
 # an output named like a run's lock (OUT.lock) would be renamed over that run's lock, which the
 # run then removed with it at its end (until 2026-12-01): refused, nothing written
 run_nbep run inputs/two-spheres.deck --quiet -o "$tmp/other.h5.lock"
