@@ -903,6 +903,12 @@ MUTANTS = [
      "its first sphere's pairs and stops there with the same status and no message: only its "
      "loops over the planes and into its grid (a few per cent of the check, on spheres not yet "
      "placed, whose overlaps it never lists) come between, which no test can time"),
+    ("sweep-steps-identify-runs", "src/sweep.c", "\"run.threads\", \"run.steps\"};",
+     "\"run.threads\"};", ["tests/test_sweep_cli.sh"], None),
+    ("sweep-shorter-run-replaced", "src/sweep.c", "            else if (read && s.status == NBEP_SUMMARY_COMPLETED && s.steps < steps)\n                found = NBEP_SWEEP_FOUND_PARTIAL;",
+     "            else if (0)\n                found = NBEP_SWEEP_FOUND_PARTIAL;", ["tests/test_sweep_cli.sh"], None),
+    ("sweep-resumed-change-ignored", "src/sweep.c", "        if (resumed && nbep_output_resumed_changed(resumed))",
+     "        if (0)", ["tests/test_sweep_cli.sh"], None),
     ("sweep-plan-never-looked", "src/sweep.c",
      "                                 stop_signal, &p, dd);",
      "                                 NULL, &p, dd);", ["tests/test_signals.sh"], None),
@@ -1737,7 +1743,7 @@ MUTANTS = [
     ("no-room-planes-unsaid", "src/scene_place.c", "    else if (tries > 0 && plane_out == tries)",
      "    else if (0)", ["test_scene"], None),
     ("sweep-whole-group-not-neutral", "src/sweep.c",
-     "{\"output.file\", \"sweep\", \"run.threads\"};", "{\"output.file\", \"run.threads\"};",
+     "{\"output.file\", \"sweep\", \"run.threads\", \"run.steps\"};", "{\"output.file\", \"run.threads\", \"run.steps\"};",
      ["tests/test_sweep_cli.sh"], None),
     ("info-sidecar-hint-none", "src/output_xdmf.c", "    if (!strstr(head, \"<Xdmf\"))\n        return false;",
      "    if (1)\n        return false;", ["tests/test_cli.sh"], None),

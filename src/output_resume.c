@@ -397,6 +397,28 @@ static int same_run(hid_t file, const char *path, const nbep_scene *sc, nbep_dia
  * the first part was made) and the overrides, so that `nbep info` tells the parts of a run apart (the root's
  * `threads` and `overrides` stay the first part's: a sweep knows its runs by those
  * overrides). */
+/* The words note_resume puts after a line's build for what a part changed: ", KEY VALUE" (the
+ * overrides that may follow are ", a=1; b=2", with an '=' in their first word). */
+static const char *const changed_keys[] = {"algorithm", "restitution", "neighbors", "order"};
+
+bool nbep_output_resumed_changed(const char *resumed)
+{
+    for (const char *line = resumed; line && *line;) {
+        const size_t len = strcspn(line, "\n");
+        const char *build = strstr(line, " (commit ");
+        const char *end =
+            build && build < line + len ? memchr(build, ')', (size_t)(line + len - build)) : NULL;
+        if (end && strncmp(end + 1, ", ", 2) == 0)
+            for (size_t k = 0; k < sizeof changed_keys / sizeof *changed_keys; k++) {
+                const size_t kl = strlen(changed_keys[k]);
+                if (strncmp(end + 3, changed_keys[k], kl) == 0 && end[3 + kl] == ' ')
+                    return true;
+            }
+        line += len + (line[len] != '\0');
+    }
+    return false;
+}
+
 static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int threads,
                        int64_t step, nbep_diag *d)
 {

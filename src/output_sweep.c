@@ -195,9 +195,9 @@ done:
 }
 
 nbep_status nbep_output_sweep_read_run(const char *path, char **overrides, char **summary_json,
-                                       nbep_diag *d)
+                                       char **resumed, nbep_diag *d)
 {
-    char *ov = NULL, *json = NULL;
+    char *ov = NULL, *json = NULL, *res = NULL;
     nbep_status st = NBEP_EIO;
     hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), file = H5I_INVALID_HID;
 #if H5_VERSION_GE(1, 12, 1) || (H5_VERS_MAJOR == 1 && H5_VERS_MINOR == 10 && H5_VERS_RELEASE >= 7)
@@ -213,13 +213,18 @@ nbep_status nbep_output_sweep_read_run(const char *path, char **overrides, char 
         goto done;
     if (nbep__output_summary_json(file, path, &json, d) < 0)
         goto done;
+    const htri_t has = H5Aexists(file, "resumed");
+    if (has < 0 || (has > 0 && nbep__output_read_string_attr(file, path, "resumed", &res, d) < 0))
+        goto done;
     *overrides = ov;
     *summary_json = json;
-    ov = json = NULL;
+    *resumed = res;
+    ov = json = res = NULL;
     st = NBEP_OK;
 done:
     free(ov);
     free(json);
+    free(res);
     nbep__output_close_id(&file);
     nbep__output_close_id(&fapl);
     return st;

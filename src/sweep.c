@@ -456,12 +456,16 @@ static const char *override_value(const char *ov, size_t len, const char *name)
  * names its files) and the study's own settings (sweep.*, or the group whole, `--set
  * sweep={...}` for a deck without one: a run's combination and seed are in its other
  * overrides; README's way to add replicas, --set sweep.replicas=N, re-ran every finished run
- * while it counted, and `sweep=` did until 2026-11-30). */
+ * while it counted, and `sweep=` did until 2026-11-30); and the step count, which says how far
+ * a run goes, not how (a run's frames up to a step are the same whatever steps it was asked
+ * for: resumed, a shorter run becomes the longer one bit for bit), and which its summary's
+ * steps judge (nbep_sweep_run_found: until 2026-12-02 another -n ran every run again from step
+ * 0, and runs extended by hand with nbep run --resume -n were replaced). */
 static bool override_is_neutral(const char *ov, size_t len)
 {
     if (len > 6 && strncmp(ov, "sweep.", 6) == 0)
         return true;
-    static const char *const neutral[] = {"output.file", "sweep", "run.threads"};
+    static const char *const neutral[] = {"output.file", "sweep", "run.threads", "run.steps"};
     for (size_t k = 0; k < sizeof neutral / sizeof neutral[0]; k++)
         if (override_value(ov, len, neutral[k]))
             return true;
@@ -560,9 +564,15 @@ nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
      * study's run for a reuse, 2026-12-01) */
     const char *held = "no run nbep can read";
     nbep_sweep_found found = NBEP_SWEEP_FOUND_OTHER;
-    if (wanted && nbep_output_sweep_read_run(path, &stored, &json, &d) == NBEP_OK) {
+    char *resumed = NULL;
+    if (wanted && nbep_output_sweep_read_run(path, &stored, &json, &resumed, &d) == NBEP_OK) {
         held = "a run of other settings";
-        if (same_overrides(stored, wanted, threads_axis)) {
+        /* a part resumed by hand with other physics or another way (the root's overrides
+         * are the first part's: until 2026-12-02 a run of the study's e = 0.95 continued at
+         * the deck's e = 1 was reused as the study's) */
+        if (resumed && nbep_output_resumed_changed(resumed))
+            held = "a run a resume continued with other settings";
+        else if (same_overrides(stored, wanted, threads_axis)) {
             /* no summary: killed outright (kill -9, a node lost), its frames up to then kept */
             const bool read = json && nbep_summary_from_json(json, &s);
             held = json && !read ? "a run whose summary cannot be read" : "a run that failed";
@@ -571,8 +581,10 @@ nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
             else if (!json || (read && (s.status == NBEP_SUMMARY_INTERRUPTED ||
                                         s.status == NBEP_SUMMARY_TERMINATED)))
                 found = NBEP_SWEEP_FOUND_PARTIAL;
+            else if (read && s.status == NBEP_SUMMARY_COMPLETED && s.steps < steps)
+                found = NBEP_SWEEP_FOUND_PARTIAL; /* extended: resumed to the steps asked */
             else if (read && s.status == NBEP_SUMMARY_COMPLETED)
-                held = "a run complete at another step count";
+                held = "a run complete at more steps";
         }
     }
     if (found == NBEP_SWEEP_FOUND_OTHER && why)
@@ -581,6 +593,7 @@ nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
         *sum = s;
     free(stored);
     free(json);
+    free(resumed);
     free(wanted);
     nbep_diag_fini(&d);
     return found;

@@ -73,6 +73,28 @@ check "a study over another's files: exit $rc, the other value's runs say their 
      grep -q '^nbep sweep: rank 0: run 2 (of 4; physics.restitution=1.0 seed=2): ok in .* (20 steps, from step 0: its file, a run whose summary cannot be read, replaced, ' '$tmp/stderr' &&
      grep -q '^nbep sweep: rank 0: run 3 (of 4; physics.restitution=0.6 seed=2): ok in .* (20 steps, from step 0: its file, no run nbep can read, replaced, ' '$tmp/stderr' &&
      [ \$(grep -c replaced '$tmp/stderr') = 3 ]"
+# another -n extends the study: each finished run goes on from its last frame to the new step
+# count and ends as a study run that long from the start (until 2026-12-02 every run ran again
+# from step 0); fewer steps replace it; a run a hand resume continued with other physics (the
+# deck's e = 1 where the study's run had 0.9) is not the study's: replaced, said why (it was
+# reused as the study's run)
+cp -r "$tmp/s.sweep" "$tmp/ext.sweep"
+run_sweep "$tmp/s.deck" -o "$tmp/ext" -n 30 --set sweep.replicas=2
+check "a study again with -n 30: every run resumed from step 20 (exit $rc: $(grep -m1 'run 0 ' "$tmp/stderr" | head -c 200))" \
+    "[ $rc = 0 ] && [ \$(grep -c ': ok in .* (30 steps, resumed from step 20, ' '$tmp/stderr') = 4 ]"
+run_sweep "$tmp/s.deck" -o "$tmp/ext30" -n 30 --set sweep.replicas=2 --quiet
+check "... each run's frames and stats those of the study run 30 steps from the start" \
+    "for r in 0 1 2 3; do h5diff -q $tmp/ext.sweep/run-000\$r.h5 $tmp/ext30.sweep/run-000\$r.h5 /frames &&
+     h5diff -q $tmp/ext.sweep/run-000\$r.h5 $tmp/ext30.sweep/run-000\$r.h5 /stats || exit 1; done"
+"$nbep" run "$tmp/s.deck" --quiet -n 40 --resume "$tmp/ext.sweep/run-0001.h5"
+run_sweep "$tmp/s.deck" -o "$tmp/ext" -n 40 --set sweep.replicas=2
+check "a run continued by hand at the deck's restitution: replaced, said why (exit $rc: $(grep -m1 'run 1 ' "$tmp/stderr" | head -c 250))" \
+    "[ $rc = 0 ] && grep -q '^nbep sweep: rank 0: run 1 (of 4; physics.restitution=0.9 seed=1): ok in .* (40 steps, from step 0: its file, a run a resume continued with other settings, replaced, ' '$tmp/stderr' &&
+     grep -q '^nbep sweep: rank 0: run 0 (of 4; physics.restitution=1.0 seed=1): ok in .* (40 steps, resumed from step 30, ' '$tmp/stderr'"
+run_sweep "$tmp/s.deck" -o "$tmp/ext" -n 25 --set sweep.replicas=2
+check "fewer steps than a run has: replaced, said why (exit $rc)" \
+    "[ $rc = 0 ] && [ \$(grep -c 'from step 0: its file, a run complete at more steps, replaced' '$tmp/stderr') = 4 ]"
+
 # the study given whole on the command line (a deck without a sweep group: `--set sweep={...}`)
 # is the study's setting as much as `sweep.vary=...`: either spelling reuses the other's runs
 # (until 2026-11-30 `sweep=` was compared as a run's own, and every finished run ran again)
@@ -396,13 +418,16 @@ check "run.seed = 2^63 - 1 with 2 replicas: exit 2 (got $rc), one line, no folde
     "[ $rc = 2 ] && one_line && grep -q 'the last replica.s seed would pass' '$tmp/stderr' &&
      [ ! -e '$tmp/seed.sweep' ]"
 # a --summary that is one of the study's own files: its table, or a run the next sweep would
-# run again, or a run's sidecar, or the lock (a JSON written there would let the lock go)
+# run again, or a run's sidecar, or the lock (a JSON written there would let the lock go); the
+# run file, sidecar and lock by the rule of every run's (an HDF5 file, a name ending in .xmf or
+# .lock: run.c), the table by the study's
 run_sweep "$tmp/s.deck" -o "$tmp/own.h5" --quiet
 for f in summary.csv run-0001.h5 run-0001.xmf .lock; do
     sum=$(md5sum < "$tmp/own.sweep/$f")
     run_sweep "$tmp/s.deck" -o "$tmp/own.h5" --quiet --summary "$tmp/./own.sweep/$f"
     check "--summary own.sweep/$f: exit 2 (got $rc), one line, the file as it was" \
-        "[ $rc = 2 ] && one_line && grep -q 'one of the study.s own files' '$tmp/stderr' &&
+        "[ $rc = 2 ] && one_line &&
+         grep -Eq 'one of the study.s own files|(is an HDF5 file \(a run.s\?\)|has the name of a run.s (lock|XDMF sidecar)), which the summary would replace' '$tmp/stderr' &&
          [ \"\$(md5sum < '$tmp/own.sweep/$f')\" = '$sum' ]"
 done
 # ... before the study's folder is made, by another name of it (until 2026-12-01 only the name

@@ -201,4 +201,9 @@ NBEP_MUST_CHECK nbep_status nbep_output_info(const char *path, FILE *f, nbep_dia
 /* Disables HDF5's automatic error printing; call once in main before any thread starts. */
 void nbep_output_library_init(void);
 
+/* Whether a run file's root attribute `resumed` (its lines as nbep_output_resume_begin writes
+ * them) says a part ran with another algorithm, restitution, neighbour mode or order than the
+ * file's first part (a sweep then takes the file for another run's). */
+bool nbep_output_resumed_changed(const char *resumed);
+
 #endif

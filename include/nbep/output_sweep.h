@@ -61,10 +61,12 @@ NBEP_MUST_CHECK nbep_status nbep_output_sweep_write(const char *path, const nbep
                                                     size_t n_attrs, nbep_diag *d);
 
 /* Reads from an nbep-1 run file the root attribute `overrides` and, when present, the /summary
- * json attribute. *overrides and *summary_json are malloc'd (the caller frees them);
- * *summary_json is NULL when the run wrote no summary (killed, or still running). NBEP_EIO
- * when the file cannot be opened or lacks the attribute; nothing is then written out. */
+ * json attribute and the root attribute `resumed`. *overrides, *summary_json and *resumed are
+ * malloc'd (the caller frees them); *summary_json is NULL when the run wrote no summary
+ * (killed, or still running), *resumed when no part was resumed. NBEP_EIO when the file
+ * cannot be opened or lacks the overrides; nothing is then written out. */
 NBEP_MUST_CHECK nbep_status nbep_output_sweep_read_run(const char *path, char **overrides,
-                                                       char **summary_json, nbep_diag *d);
+                                                       char **summary_json, char **resumed,
+                                                       nbep_diag *d);
 
 #endif
