@@ -33,7 +33,7 @@ static const char HELP[] =
     "                         run.steps, appending to it; frames and summary equal an\n"
     "                         uninterrupted run's bit for bit, but for its own seconds\n"
     "                         (README, Faults)\n"
-    "      --quiet            no progress output (check with --summary: no report)\n"
+    "  -q, --quiet            no progress output (check with --summary: no report)\n"
     "a short option's value may follow it attached: -n500, -ofile.h5\n"
     "\n"
     "sweep writes OUTPUT.sweep/run-NNNN.h5 (OUTPUT = output.file or -o without .h5) and\n"

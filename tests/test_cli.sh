@@ -752,6 +752,44 @@ PY
 check "a run whose stderr has no reader: exit 0 (got ${got:-nothing}), its summary completed, no lock left" \
     "[ '$got' = 0 ] && [ \$(json_get '$tmp/nopipe.json' status) = '\"completed\"' ] &&
      [ ! -e '$tmp/nopipe.h5.lock' ]"
+# ---- what a test-gap hunt found unchecked (2026-12-02) ------------------------------------------
+# a rerun into the same file without positions removes the old sidecar, which would point at
+# /frames/position no longer there
+run_nbep run inputs/two-spheres.deck -n 5 -o "$tmp/side.h5" --quiet
+run_nbep run inputs/two-spheres.deck -n 5 -o "$tmp/side.h5" --quiet --set 'output.fields=["velocity"]'
+check "a rerun without positions: exit 0 (got $rc), the first run's sidecar gone" \
+    "[ $rc = 0 ] && [ -s '$tmp/side.h5' ] && [ ! -e '$tmp/side.xmf' ]"
+# info of a device or a FIFO: the user's path, exit 2, one line
+mkfifo "$tmp/info-fifo.h5"
+for f in /dev/null "$tmp/info-fifo.h5"; do
+    run_nbep info "$f"
+    check "nbep info $f: exit 2 (got $rc), one line" \
+        "[ $rc = 2 ] && one_line && grep -qx 'nbep: $f: cannot open it: not a regular file' '$tmp/stderr'"
+done
+# a file from before the count attributes (written by hand, or by an older nbep): its rows count
+bin/nbep run inputs/two-spheres.deck -n 20 -o "$tmp/nocount.h5" --quiet --set output.every=10
+"$PY" -c "import h5py, sys
+f = h5py.File(sys.argv[1], 'r+')
+del f['frames'].attrs['count']
+del f['stats'].attrs['count']" "$tmp/nocount.h5"
+run_nbep info "$tmp/nocount.h5"
+check "nbep info of a file without count attributes: its 3 frames and 20 stats rows (got $rc)" \
+    "[ $rc = 0 ] && grep -Eq '^frames: +3 \(last: step 20' '$tmp/stdout' && grep -Eq '^stats rows: +20' '$tmp/stdout'"
+# a path with a trailing dot is no path; --resume goes with run only; one deck, one run file
+for args in "check inputs/two-spheres.deck --set run.steps.=5|--set run.steps.=5: bad path \"run.steps.\": names and \[N\] indices joined by dots, e.g. spheres.\[0\].count" \
+            "check inputs/two-spheres.deck --resume x.h5|nbep: --resume goes with run only" \
+            "sweep inputs/sweep-restitution.deck --resume x.h5|nbep: --resume goes with run only" \
+            "run inputs/two-spheres.deck inputs/bounce.deck|nbep: unexpected argument .inputs/bounce.deck. (one deck only)" \
+            "info a.h5 b.h5|nbep: unexpected argument .b.h5. (one run file only)"; do
+    # shellcheck disable=SC2086 # the words are the command's
+    run_nbep ${args%%|*}
+    check "nbep ${args%%|*}: exit 2 (got $rc), one line" \
+        "[ $rc = 2 ] && one_line && grep -qx -- '${args#*|}' '$tmp/stderr'"
+done
+# -o takes a name as typed, a backslash too (it is no escape); -q is --quiet
+run_nbep run inputs/two-spheres.deck -n 2 -q -o "$tmp/back\\slash.h5"
+check "-o with a backslash, -q: exit 0 (got $rc), the file and sidecar by that name, nothing on stderr" \
+    "[ $rc = 0 ] && [ -s '$tmp/back\\slash.h5' ] && [ -s '$tmp/back\\slash.xmf' ] && [ ! -s '$tmp/stderr' ]"
 # a value named in an error in the digits that tell it from the limit (until 2026-12-01 %g's
 # six: "must be in [0, 1] (got 1)" of 1.0000000001)
 run_nbep check inputs/two-spheres.deck --set physics.restitution=1.0000000001

@@ -655,11 +655,15 @@ static void test_thread_count_and_output_name_do_not_make_a_run_different(void *
     free(execute(&p, NULL, NBEP_OK));
     char *path = nbep_sweep_run_path(&p, 0);
     char *same[] = {"run.threads = 2", "run.seed=11"};
-    char *other[] = {"run.threads=1", "run.steps=20", "run.seed=11"};
+    char *other[] = {"run.threads=1", "physics.restitution=0.5", "run.seed=11"};
     char *reordered[] = {"run.seed=11", "output.file=\"" TMP "sweep_neutral.sweep\""};
+    /* the step count says how far a run goes, not how: judged by the summary's steps */
+    char *steps[] = {"run.steps=20", "run.seed=11"};
     assert_true(nbep_sweep_run_complete(path, same, 2, 20, NULL));
     assert_true(nbep_sweep_run_complete(path, same + 1, 1, 20, NULL));
     assert_true(nbep_sweep_run_complete(path, reordered, 2, 20, NULL));
+    assert_true(nbep_sweep_run_complete(path, steps, 2, 20, NULL));
+    assert_false(nbep_sweep_run_complete(path, steps, 2, 30, NULL));
     assert_false(nbep_sweep_run_complete(path, other, 3, 20, NULL));
     free(path);
     nbep_sweep_plan_fini(&p);
@@ -1188,6 +1192,15 @@ static void test_summary_h5_holds_the_same_table(void **state)
     assert_string_equal(m4, "spheres.[0].radius");
     H5free_memory(m0);
     H5free_memory(m4);
+    /* whole columns stored as 64-bit integers: counts past 2^31 (a run's checks, collisions)
+     * must not be clamped */
+    for (unsigned k = 0; k < 2; k++) {
+        static const char *const whole[2] = {"run", "seed"};
+        hid_t mt = H5Tget_member_type(type, (unsigned)H5Tget_member_index(type, whole[k]));
+        assert_int_equal(H5Tget_class(mt), H5T_INTEGER);
+        assert_int_equal(H5Tget_size(mt), 8);
+        H5Tclose(mt);
+    }
 
     int64_t run[6], steps[6], seed[6], requested[6];
     double drift[6];
@@ -1226,6 +1239,7 @@ static void test_summary_h5_holds_the_same_table(void **state)
     assert_true(wall == 2.5);
     H5Aclose(a);
     text_attr_is(file, "format", "nbep-sweep-1");
+    text_attr_is(file, "version", NBEP_VERSION);
     text_attr_is(file, "deck_path", deck);
     text_attr_is(file, "deck", p.deck_text);
     text_attr_is(file, "overrides", "");
