@@ -787,9 +787,9 @@ for args in "check inputs/two-spheres.deck --set run.steps.=5|--set run.steps.=5
         "[ $rc = 2 ] && one_line && grep -qx -- '${args#*|}' '$tmp/stderr'"
 done
 # -o takes a name as typed, a backslash too (it is no escape); -q is --quiet
-run_nbep run inputs/two-spheres.deck -n 2 -q -o "$tmp/back\\slash.h5"
+run_nbep run inputs/two-spheres.deck -n 2 -q -o "$tmp/back\\nslash.h5"
 check "-o with a backslash, -q: exit 0 (got $rc), the file and sidecar by that name, nothing on stderr" \
-    "[ $rc = 0 ] && [ -s '$tmp/back\\slash.h5' ] && [ -s '$tmp/back\\slash.xmf' ] && [ ! -s '$tmp/stderr' ]"
+    "[ $rc = 0 ] && [ -s '$tmp/back\\nslash.h5' ] && [ -s '$tmp/back\\nslash.xmf' ] && [ ! -s '$tmp/stderr' ]"
 # a value named in an error in the digits that tell it from the limit (until 2026-12-01 %g's
 # six: "must be in [0, 1] (got 1)" of 1.0000000001)
 run_nbep check inputs/two-spheres.deck --set physics.restitution=1.0000000001
