@@ -70,7 +70,7 @@ static void install_signal_handlers(void)
      * gone (`nbep run ... 2>&1 | head`). Ignored, the progress line's write fails alone, and
      * a --summary - into it fails the run with its line, exit 1 (until 2026-12-02 the run
      * ended at once, exit 141, no summary, its lock left). SIGXFSZ (a file-size limit) keeps
-     * its default: the writer keeps within the limit itself (output.c, reserve_room), and a
+     * its default: the writer keeps within the limit itself (nbep__output_reserve), and a
      * write past it ends the run before HDF5 records a file end beyond what it could write. */
     struct sigaction ign;
     memset(&ign, 0, sizeof ign);

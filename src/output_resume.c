@@ -391,12 +391,6 @@ static int same_run(hid_t file, const char *path, const nbep_scene *sc, nbep_dia
     return rc;
 }
 
-/* Adds this resume's line to the root attribute `resumed` (made with the first): the step it
- * continues from, the threads, this build, the algorithm, restitution, neighbors and order
- * where they are not the root's (a deck edited in place may change them: the root says how
- * the first part was made) and the overrides, so that `nbep info` tells the parts of a run apart (the root's
- * `threads` and `overrides` stay the first part's: a sweep knows its runs by those
- * overrides). */
 /* The words note_resume puts after a line's build for what a part changed: ", KEY VALUE" (the
  * overrides that may follow are ", a=1; b=2", with an '=' in their first word). */
 static const char *const changed_keys[] = {"algorithm", "restitution", "neighbors", "order"};
@@ -419,6 +413,12 @@ bool nbep_output_resumed_changed(const char *resumed)
     return false;
 }
 
+/* Adds this resume's line to the root attribute `resumed` (made with the first): the step it
+ * continues from, the threads, this build, the algorithm, restitution, neighbors and order
+ * where they are not the root's (a deck edited in place may change them: the root says how
+ * the first part was made) and the overrides, so that `nbep info` tells the parts of a run apart (the root's
+ * `threads` and `overrides` stay the first part's: a sweep knows its runs by those
+ * overrides). */
 static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int threads,
                        int64_t step, nbep_diag *d)
 {
@@ -439,11 +439,11 @@ static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int t
         return -1;
     }
     if (strcmp(algo, sc->algorithm) != 0)
-        snprintf(changed, sizeof changed, ", algorithm %s", sc->algorithm);
+        snprintf(changed, sizeof changed, ", %s %s", changed_keys[0], sc->algorithm);
     if (memcmp(&e0, &sc->restitution, sizeof e0) != 0) {
         char e[NBEP_REAL_TEXT_MAX];
         const size_t at = strlen(changed);
-        snprintf(changed + at, sizeof changed - at, ", restitution %s",
+        snprintf(changed + at, sizeof changed - at, ", %s %s", changed_keys[1],
                  nbep_format_real(sc->restitution, false, e));
     }
     free(algo);
@@ -452,7 +452,7 @@ static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int t
      * switched to grid or step order said nothing of it) */
     if (strcmp(sc->algorithm, "predictive") == 0) {
         const char *now[2] = {nbep_scene_neighbors_name(sc), nbep_scene_order_name(sc)};
-        static const char *const key[2] = {"neighbors", "order"};
+        const char *const *key = changed_keys + 2; /* neighbors, order */
         for (int k = 0; k < 2; k++) {
             char *root = NULL;
             const htri_t has = H5Aexists(file, key[k]);

@@ -334,13 +334,13 @@ static int staged_name_fits(const char *path, const char *suffix)
     return strlen(base) + strlen(suffix) > (size_t)max ? ENAMETOOLONG : 0;
 }
 
-/* Whether the file at path begins with HDF5's signature (nbep's files have no user block). */
+/* Whether the file at path begins with HDF5's signature. */
 static bool is_hdf5_file(const char *path)
 {
-    char head[8];
+    char head[NBEP_HDF5_SIGNATURE_LEN];
     FILE *f = fopen(path, "rb");
     const bool hdf5 = f && fread(head, 1, sizeof head, f) == sizeof head &&
-                      memcmp(head, "\x89HDF\r\n\x1a\n", sizeof head) == 0;
+                      memcmp(head, NBEP_HDF5_SIGNATURE, sizeof head) == 0;
     if (f)
         fclose(f);
     return hdf5;

@@ -1366,7 +1366,8 @@ static nbep_status read_text(const char *path, const atomic_int *stop, char **ou
     /* a deck is text: what follows a NUL byte was read by no one (libconfig stops there, and
      * the run's `deck` attribute kept the text up to it; until 2026-12-01, a review) */
     const char *nul = memchr(text, '\0', len);
-    if (nul && len >= 8 && memcmp(text, "\x89HDF\r\n\x1a\n", 8) == 0) { /* HDF5's signature */
+    if (nul && len >= NBEP_HDF5_SIGNATURE_LEN &&
+        memcmp(text, NBEP_HDF5_SIGNATURE, NBEP_HDF5_SIGNATURE_LEN) == 0) {
         free(text);
         NBEP_FAIL(d, NBEP_EDECK,
                   "%s: an HDF5 file, not a deck (a run's file: nbep info reads it, and it holds "

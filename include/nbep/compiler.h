@@ -74,6 +74,11 @@ const char *nbep_fmt_exact(double v, char *buf);
 /* nbep_fmt_exact into a buffer of the enclosing statement's block: for printf's arguments */
 #define NBEP_G(v) nbep_fmt_exact((v), (char[32]){0})
 
+/* The 8 bytes an HDF5 file begins with (nbep's files have no user block before them): a deck
+ * that is one is refused as such, and a summary is not written over one. */
+#define NBEP_HDF5_SIGNATURE "\x89HDF\r\n\x1a\n"
+#define NBEP_HDF5_SIGNATURE_LEN 8
+
 /* "PATH.partial" (malloc'd; NULL without memory): the name a file is written under before it
  * is renamed to path once complete, so that a kill or a refusal never leaves a half-written
  * file at path nor removes an older one (the run's file, its summary, a sweep's tables). */
