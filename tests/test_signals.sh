@@ -31,6 +31,16 @@ term_within() {
     rc=$?
 }
 
+# signal_and_reap PID SIG: sends SIG to PID and waits for it for up to 30 s, then SIGKILL (a run
+# that ignores the signal fails, never hangs); sets rc (its exit status)
+signal_and_reap() {
+    kill -"$2" "$1" 2>/dev/null
+    for _ in $(seq 300); do kill -0 "$1" 2>/dev/null || break; sleep 0.1; done
+    kill -KILL "$1" 2>/dev/null
+    wait "$1"
+    rc=$?
+}
+
 # signal_long_run SIG: a run far too long to finish (it can only end by the signal) into
 # $tmp/run-SIG.h5, its summary $tmp/summary-SIG.json and stderr $tmp/stderr-SIG, sent SIG 0.3 s
 # after its file appears (the file is created after the deck is read and before the first
@@ -45,11 +55,7 @@ signal_long_run() {
     pid=$!
     for _ in $(seq 300); do [ -s "$out" ] && break; sleep 0.1; done
     sleep 0.3
-    kill -"$sig" $pid
-    for _ in $(seq 300); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
-    kill -KILL $pid 2>/dev/null
-    wait $pid
-    rc=$?
+    signal_and_reap $pid "$sig"
 }
 
 for sig in TERM INT; do
@@ -109,11 +115,7 @@ kill -HUP $pid 2>/dev/null
 sleep 0.5
 alive=0
 kill -0 $pid 2>/dev/null && alive=1
-kill -TERM $pid 2>/dev/null
-for _ in $(seq 300); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
-kill -KILL $pid 2>/dev/null
-wait $pid
-rc=$?
+signal_and_reap $pid TERM
 check "SIGHUP to a run started ignoring it: ignored, the run goes on (alive $alive) to the SIGTERM after it (exit $rc)" \
     "[ $alive = 1 ] && [ $rc = 143 ] && grep -q '^nbep: terminated by SIGTERM after step' '$tmp/stderr-nohup'"
 # a signal while the run waits to open its --summary (a FIFO no reader has opened yet) stops it
@@ -124,11 +126,7 @@ bin/nbep run inputs/two-spheres.deck --quiet -o "$tmp/wait.h5" --summary "$tmp/w
     2>"$tmp/stderr-wait" &
 pid=$!
 sleep 0.5
-kill -USR1 $pid
-for _ in $(seq 100); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
-kill -KILL $pid 2>/dev/null
-wait $pid
-rc=$?
+signal_and_reap $pid USR1
 check "a stop signal while the summary's FIFO waits for a reader: exit 143 (got $rc), one line, nothing written" \
     "[ $rc = 143 ] && [ \$(wc -l < '$tmp/stderr-wait') = 1 ] &&
      grep -qx 'nbep: terminated by SIGUSR1 before the run began; nothing written' '$tmp/stderr-wait' &&
@@ -143,11 +141,7 @@ for cmd in "run|nbep: terminated by SIGTERM before the run began; nothing writte
     bin/nbep "${cmd%%|*}" "$tmp/deck-fifo" --quiet -o "$tmp/deck-fifo.h5" 2>"$tmp/stderr-deck" &
     pid=$!
     sleep 0.5
-    kill -TERM $pid
-    for _ in $(seq 100); do kill -0 $pid 2>/dev/null || break; sleep 0.1; done
-    kill -KILL $pid 2>/dev/null
-    wait $pid
-    rc=$?
+    signal_and_reap $pid TERM
     check "nbep ${cmd%%|*} of a deck FIFO no writer opened, SIGTERM: exit 143 (got $rc), its line ($(head -c 200 "$tmp/stderr-deck"))" \
         "[ $rc = 143 ] && [ \$(wc -l < '$tmp/stderr-deck') = 1 ] &&
          grep -qx '${cmd#*|}' '$tmp/stderr-deck' && [ ! -e '$tmp/deck-fifo.h5' ]"
