@@ -447,7 +447,7 @@ double nbep_output_bytes(const nbep_scene *sc, bool events, bool contacts)
  * room writes its summary (a few kB). */
 #define ROOM_SLACK_BYTES ((int64_t)256 << 10)
 
-int64_t nbep__output_room(const nbep_scene *sc)
+void nbep__output_room(nbep_output *o, const nbep_scene *sc)
 {
     /* A frame: its rows of every series it may write (positions, velocities, images, event
      * slots: more room than needed costs disk blocks held for a while, not data), in whole
@@ -473,21 +473,24 @@ int64_t nbep__output_room(const nbep_scene *sc)
         stats = 8.0 * (STATS_N_COLUMNS + 1) *
                 (whole_chunks(sc->output_every, STATS_CHUNK_ROWS) +
                  (sc->output_every > STATS_CHUNK_ROWS ? STATS_CHUNK_ROWS : 0));
-    return (int64_t)(frame + 2.0 * stats) + ROOM_SLACK_BYTES;
-}
-
-int nbep__output_reserve(nbep_output *o, const char *what, nbep_diag *d)
-{
-    if (o->room <= 0)
-        return 0;
+    o->room = (int64_t)(frame + 2.0 * stats) + ROOM_SLACK_BYTES;
     /* the descriptor HDF5 writes through: its default (sec2) driver's, an int */
     hid_t fapl = H5Fget_access_plist(o->file);
     const bool sec2 = fapl >= 0 && H5Pget_driver(fapl) == H5FD_SEC2;
     nbep__output_close_id(&fapl);
     int *fd = NULL;
+    if (!sec2 || H5Fget_vfd_handle(o->file, H5P_DEFAULT, (void **)&fd) < 0 || !fd)
+        o->room = 0;
+    else
+        o->room_fd = *fd;
+}
+
+int nbep__output_reserve(nbep_output *o, const char *what, nbep_diag *d)
+{
     struct stat sb;
-    if (!sec2 || H5Fget_vfd_handle(o->file, H5P_DEFAULT, (void **)&fd) < 0 || !fd ||
-        fstat(*fd, &sb) != 0) {
+    if (o->room <= 0)
+        return 0;
+    if (fstat(o->room_fd, &sb) != 0) {
         o->room = 0;
         return 0;
     }
@@ -498,7 +501,7 @@ int nbep__output_reserve(nbep_output *o, const char *what, nbep_diag *d)
     int err = getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY &&
                       (uint64_t)(end + o->room) > (uint64_t)limit.rlim_cur
                   ? EFBIG
-                  : nbep_file_reserve(*fd, end, o->room);
+                  : nbep_file_reserve(o->room_fd, end, o->room);
     if (err == 0) {
         if (end + o->room > o->reserved_end)
             o->reserved_end = end + o->room;
@@ -655,7 +658,7 @@ nbep_output *nbep__output_new(const char *path, size_t n_spheres, nbep_diag *d)
     for (int c = 0; c < N_CK_COLUMNS; c++)
         o->ck[c] = H5I_INVALID_HID;
     o->contacts[0] = o->contacts[1] = o->contacts_type = H5I_INVALID_HID;
-    o->lock_fd = -1;
+    o->lock_fd = o->room_fd = -1;
     return o;
 }
 
@@ -826,7 +829,7 @@ nbep_status nbep_output_create_staged(const char *path, const nbep_scene *sc, in
         goto fail;
     }
     o->xmf = sc->out_position;
-    o->room = nbep__output_room(sc);
+    nbep__output_room(o, sc);
     /* the frame list's room for the planned frames, up to XMF_RESERVE_MAX of them: a frame past
      * it grows the list as it is written (a deck may plan more frames than memory holds, a run
      * meant to end on its job's time limit; until 2026-12-01 the whole list was made here, and

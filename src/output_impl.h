@@ -118,6 +118,7 @@ struct nbep_output {
      * driver without a descriptor); reserved_end: the farthest offset reserved, given back
      * at close. */
     int64_t room, reserved_end;
+    int room_fd;                   /* the descriptor HDF5 writes the file through, with room */
     /* a run opened to be resumed (nbep_output_open_resume), not yet changed: pending until
      * nbep_output_resume_begin, and closing it then writes nothing */
     struct {
@@ -135,10 +136,11 @@ struct nbep_output {
     } resume;
 };
 
-/* The room a run of sc keeps ahead of its file (o->room): two frames' growth, each with its
- * interval's /stats rows and the event slots' columns, and a mebibyte for HDF5's metadata and
- * the summary. */
-int64_t nbep__output_room(const nbep_scene *sc);
+/* Sets the room a run of sc keeps ahead of o's open file (o->room, o->room_fd): a frame's rows
+ * of every series, two intervals' /stats chunks, at e < 1 the contacts' records, and slack for
+ * HDF5's metadata and the summary; none where HDF5 writes through no descriptor of its own
+ * (another file driver than its default). */
+void nbep__output_room(nbep_output *o, const nbep_scene *sc);
 /* Reserves o->room bytes past the file's end (once o->file is open) before `what` is written:
  * -1 with a line when the disk, the quota or the process's file-size limit (ulimit -f) has no
  * room, the file as its last flush left it; 0 otherwise (a file system that cannot reserve

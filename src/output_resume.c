@@ -793,7 +793,7 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     o->resume.from = res.step;
     o->resume.trim = kept;
     o->n_frames = frames;
-    o->room = nbep__output_room(sc);
+    nbep__output_room(o, sc);
     *out = o;
     *r = res;
     return NBEP_OK;
