@@ -382,13 +382,12 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
      * file is made as OUT.partial (nbep_partial_path) under OUT's lock: an output there was
      * emptied by a run into OUT, under another lock, and renamed from under its writer (until
      * 2026-12-01) */
-    const size_t len = output ? strlen(output) : 0;
-    if (len >= 5 && strcmp(output + len - 5, ".lock") == 0)
+    if (output && nbep_ends_with(output, ".lock"))
         NBEP_FAIL(d, NBEP_EUSAGE,
                   "nbep: the output file %s ends in .lock, the name of a run's lock beside its "
                   "file; choose another",
                   output);
-    if (len >= 8 && strcmp(output + len - 8, ".partial") == 0)
+    if (output && nbep_ends_with(output, ".partial"))
         NBEP_FAIL(d, NBEP_EUSAGE,
                   "nbep: the output file %s ends in .partial, the name a run's file is made "
                   "under until it is whole; choose another",
@@ -412,10 +411,9 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
      * ending in .lock or .xmf it took another run's lock (a third run then wrote into the
      * file it guarded) or sidecar (until 2026-12-02, a review) */
     if (summary && strcmp(summary, "-") != 0 && !summary_in_place(summary)) {
-        const size_t sl = strlen(summary);
-        const char *name = sl >= 5 && strcmp(summary + sl - 5, ".lock") == 0   ? "lock"
-                           : sl >= 4 && strcmp(summary + sl - 4, ".xmf") == 0 ? "XDMF sidecar"
-                                                                              : NULL;
+        const char *name = nbep_ends_with(summary, ".lock")  ? "lock"
+                           : nbep_ends_with(summary, ".xmf") ? "XDMF sidecar"
+                                                             : NULL;
         if (name)
             NBEP_FAIL(d, NBEP_EUSAGE,
                       "nbep: the summary file %s has the name of a run's %s, which the summary "

@@ -1240,13 +1240,6 @@ static nbep_status lock_dir(const char *dir, int *fd, nbep_diag *d)
     return st;
 }
 
-/* Whether name ends with suffix. */
-static bool ends_with(const char *name, const char *suffix)
-{
-    const size_t n = strlen(name), k = strlen(suffix);
-    return n >= k && strcmp(name + n - k, suffix) == 0;
-}
-
 /* A --summary that is one of the study's own files (its tables, a run's file or its sidecar)
  * would replace it: the table, or a run the next sweep then runs again (a review's find).
  * NBEP_EUSAGE. Called once the study's folder is there: the two names are compared with their
@@ -1262,7 +1255,7 @@ static nbep_status summary_not_in_study(const nbep_sweep_plan *p, const char *su
     const char *base = slash ? slash + 1 : summary;
     const size_t len = strlen(base);
     const bool run_file =
-        strncmp(base, "run-", 4) == 0 && (ends_with(base, ".h5") || ends_with(base, ".xmf"));
+        strncmp(base, "run-", 4) == 0 && (nbep_ends_with(base, ".h5") || nbep_ends_with(base, ".xmf"));
     /* .lock too: a JSON written there would take the lock file's place, and the next sweep
      * would lock that one */
     if (!(strcmp(base, "summary.csv") == 0 || strcmp(base, "summary.h5") == 0 || run_file ||

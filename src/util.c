@@ -104,6 +104,12 @@ char *nbep_partial_path(const char *path)
     return suffixed(path, ".partial");
 }
 
+bool nbep_ends_with(const char *name, const char *suffix)
+{
+    const size_t n = strlen(name), k = strlen(suffix);
+    return n >= k && strcmp(name + n - k, suffix) == 0;
+}
+
 char *nbep_lock_path(const char *path)
 {
     return suffixed(path, ".lock");

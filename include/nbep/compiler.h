@@ -79,6 +79,9 @@ const char *nbep_fmt_exact(double v, char *buf);
 #define NBEP_HDF5_SIGNATURE "\x89HDF\r\n\x1a\n"
 #define NBEP_HDF5_SIGNATURE_LEN 8
 
+/* Whether name ends with suffix. */
+bool nbep_ends_with(const char *name, const char *suffix);
+
 /* "PATH.partial" (malloc'd; NULL without memory): the name a file is written under before it
  * is renamed to path once complete, so that a kill or a refusal never leaves a half-written
  * file at path nor removes an older one (the run's file, its summary, a sweep's tables). */
