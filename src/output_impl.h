@@ -69,6 +69,9 @@ extern const struct nbep__ck_column nbep__ck_columns[N_CK_COLUMNS];
  * a new id to close; H5I_INVALID_HID on failure. */
 hid_t nbep__output_totals_type(void);
 
+/* The room for what a resumed part changed (note_resume): the four keys and their values. */
+#define RESUME_CHANGED_MAX 128
+
 /* Invariants of an open nbep_output: every id field is a valid HDF5 id or H5I_INVALID_HID, so
  * one release path closes them all; n_frames rows of each /frames dataset and n_stats rows of
  * each /stats dataset are written; /frames@count = n_frames on disk once a frame returned. */
@@ -133,6 +136,8 @@ struct nbep_output {
                                     * stop's own, which the first frame written replaces) */
         hsize_t ck_rows;           /* /checkpoint rows the file holds for its kept frames (fewer
                                     * where a part without event slots wrote the rest) */
+        char changed[RESUME_CHANGED_MAX]; /* what this part runs with that the first part did not
+                                    * (note_resume's ", restitution 0.9, order step"), or "" */
     } resume;
 };
 

@@ -395,6 +395,11 @@ static int same_run(hid_t file, const char *path, const nbep_scene *sc, nbep_dia
  * overrides that may follow are ", a=1; b=2", with an '=' in their first word). */
 static const char *const changed_keys[] = {"algorithm", "restitution", "neighbors", "order"};
 
+const char *nbep_output_resume_changes(const nbep_output *o)
+{
+    return o->resume.changed[0] ? o->resume.changed + 2 : NULL; /* past its ", " */
+}
+
 bool nbep_output_resumed_changed(const char *resumed)
 {
     for (const char *line = resumed; line && *line;) {
@@ -420,7 +425,7 @@ bool nbep_output_resumed_changed(const char *resumed)
  * `threads` and `overrides` stay the first part's: a sweep knows its runs by those
  * overrides). */
 static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int threads,
-                       int64_t step, nbep_diag *d)
+                       int64_t step, char changed[static RESUME_CHANGED_MAX], nbep_diag *d)
 {
     char *was = NULL;
     const htri_t had = H5Aexists(file, "resumed");
@@ -430,7 +435,8 @@ static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int t
         return -1;
     }
     /* what the first part ran with, where this part differs */
-    char *algo = NULL, changed[128] = "";
+    char *algo = NULL;
+    changed[0] = '\0';
     double e0 = sc->restitution;
     if (nbep__output_read_string_attr(file, path, "algorithm", &algo, d) < 0 ||
         nbep__output_read_attr(file, path, "restitution", H5T_NATIVE_DOUBLE, &e0, d) < 0) {
@@ -439,11 +445,11 @@ static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int t
         return -1;
     }
     if (strcmp(algo, sc->algorithm) != 0)
-        snprintf(changed, sizeof changed, ", %s %s", changed_keys[0], sc->algorithm);
+        snprintf(changed, RESUME_CHANGED_MAX, ", %s %s", changed_keys[0], sc->algorithm);
     if (memcmp(&e0, &sc->restitution, sizeof e0) != 0) {
         char e[NBEP_REAL_TEXT_MAX];
         const size_t at = strlen(changed);
-        snprintf(changed + at, sizeof changed - at, ", %s %s", changed_keys[1],
+        snprintf(changed + at, RESUME_CHANGED_MAX - at, ", %s %s", changed_keys[1],
                  nbep_format_real(sc->restitution, false, e));
     }
     free(algo);
@@ -465,7 +471,7 @@ static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int t
             }
             if (!root || strcmp(root, now[k]) != 0) {
                 const size_t at = strlen(changed);
-                snprintf(changed + at, sizeof changed - at, ", %s %s", key[k], now[k]);
+                snprintf(changed + at, RESUME_CHANGED_MAX - at, ", %s %s", key[k], now[k]);
             }
             free(root);
         }
@@ -883,7 +889,7 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
         return NBEP_EIO;
     }
     nbep__output_close_id(&steps_attr);
-    if (note_resume(o->file, path, sc, threads, o->resume.from, d) < 0 ||
+    if (note_resume(o->file, path, sc, threads, o->resume.from, o->resume.changed, d) < 0 ||
         nbep__output_commit(o, frames, d) < 0)
         return NBEP_EIO;
     /* frames dropped: the sidecar listed them; it lists what the file holds */

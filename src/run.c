@@ -589,6 +589,15 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                     "grid (a stop's own frame): the next frame written takes its place, and the "
                     "file keeps the frames the uninterrupted run writes\n",
                     file, (long long)resume.step);
+        /* a part with another restitution, algorithm, neighbour mode or order than the file's
+         * first part: said at the time, not only in the file's `resumed` (a sweep replaces
+         * such a file; a hand resume may mean it, as a cooling gas resumed from its melt) */
+        const char *changes = st == NBEP_OK && rq->resume ? nbep_output_resume_changes(out) : NULL;
+        if (changes && rq->verbose)
+            fprintf(stderr,
+                    "nbep: %s continues from step %lld with %s, which its first part did not "
+                    "run with (the root attribute `resumed` keeps it: nbep info)\n",
+                    file, (long long)resume.step, changes);
         /* (a file made before 2026-11-30, or the frame of a part that kept no such state) */
         if (st == NBEP_OK && rq->resume && resume.step > 0 && !resume.contacts &&
             resume.restitution_kept && nbep_sim_lasting(sim))

@@ -367,6 +367,16 @@ bin/nbep info $tmp/ways.h5 >$tmp/ways.info
 check "a resume in another neighbors mode and order: its line names them" \
     "grep -q '^resumed: .*step 20: .*, neighbors grid, order step' $tmp/ways.info &&
      ! grep '^resumed:' $tmp/ways.info | grep -q 'algorithm\|restitution'"
+# ... and says so at the time, not --quiet (since 2026-12-02 only the file said it), one line
+# naming what changed; a part that runs as the first did says nothing of it
+no_quiet=("${args[@]:1}")
+bin/nbep run $deck "${no_quiet[@]}" -n 40 --set 'run.neighbors="grid"' \
+    --set physics.restitution=0.75 --resume $tmp/ways.h5 2>$tmp/ways.err >/dev/null
+bin/nbep run $deck "${no_quiet[@]}" -n 50 --resume $tmp/ways.h5 2>$tmp/same.err >/dev/null
+check "a hand resume with another restitution and neighbors mode says so on stderr" \
+    "[ \"\$(grep -c 'with ' $tmp/ways.err)\" = 1 ] &&
+     grep -q '^nbep: .*ways.h5 continues from step 30 with restitution 0.75, neighbors grid, which its first part did not run with' $tmp/ways.err &&
+     ! grep -q 'first part' $tmp/same.err"
 # the algorithm may change at a resume: a predictive file continued by naive, then by predictive
 # again. /checkpoint keeps a row for every frame, naive's frames' rows stale (kind 0: every
 # sphere predicted afresh; no resting plane), so the last resume reads the row of its frame

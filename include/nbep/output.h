@@ -181,6 +181,10 @@ NBEP_MUST_CHECK nbep_status nbep_output_open_resume(const char *path, const nbep
  * begun already; NBEP_EIO when the file cannot be written. */
 NBEP_MUST_CHECK nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc,
                                                      int threads, nbep_diag *d);
+/* What the part that nbep_output_resume_begin began runs with that the file's first part did
+ * not ("restitution 0.9, order step": the words its line in `resumed` ends with), or NULL
+ * (none, or not a resumed run). Valid until the handle is closed. */
+const char *nbep_output_resume_changes(const nbep_output *o);
 /* Appends count rows (borrowed) to /stats, and their rows of /stats/wall_impulse from wall
  * (count x n_planes, row by row; NULL: zeros); they reach the disk with the next frame or
  * close. Only when the scene asked for stats. NBEP_EIO on failure. */
