@@ -22,6 +22,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 /* The comment at a sidecar's top that names its run (xml_head writes it, nbep_xdmf_run_of
  * reads it): RUN_NOTE, the run file's name, ": N spheres, ...". The name as it is, but for
@@ -87,6 +88,26 @@ static const char *base_name(const char *path)
 {
     const char *slash = strrchr(path, '/');
     return slash ? slash + 1 : path;
+}
+
+char *nbep_xdmf_other_run(const char *h5_path)
+{
+    char *xmf = nbep_xdmf_path(h5_path), name[1024], *other = NULL;
+    if (xmf && nbep_xdmf_run_of(xmf, name, sizeof name) && name[0] && !strchr(name, '/') &&
+        strcmp(name, base_name(h5_path)) != 0) {
+        const size_t dir = (size_t)(base_name(xmf) - xmf);
+        other = malloc(dir + strlen(name) + 1);
+        if (other) {
+            memcpy(other, xmf, dir);
+            strcpy(other + dir, name);
+            if (access(other, F_OK) != 0) { /* its run is gone: the sidecar is stale */
+                free(other);
+                other = NULL;
+            }
+        }
+    }
+    free(xmf);
+    return other;
 }
 
 /* The base name of a path for the comment that names the run (RUN_NOTE), into a malloc'd

@@ -368,6 +368,17 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
                   "nbep: the output file %s's XDMF sidecar is the deck %s itself; choose "
                   "another output",
                   output, deck);
+    /* `-o x` and `-o x.h5` have one sidecar, x.xmf: the second run replaced the first's (until
+     * 2026-12-02) */
+    char *owner = output ? nbep_xdmf_other_run(output) : NULL;
+    if (owner) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: the output file %s's XDMF sidecar would replace that of the run %s "
+                      "beside it; choose another output",
+                      output, owner);
+        free(owner);
+        return NBEP_EUSAGE;
+    }
     /* -o DECK replaced the deck with the run's file, --summary DECK with the JSON; --summary
      * RUN.h5 emptied the run file (its fopen comes first) and, a resume then failing,
      * removed it */

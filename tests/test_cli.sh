@@ -668,6 +668,24 @@ run_nbep run "$tmp/side.xmf" --quiet -o "$tmp/side.h5"
 check "an output whose sidecar is the deck: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr")), the deck kept" \
     "[ $rc = 2 ] && one_line && grep -qx 'nbep: the output file $tmp/side.h5.s XDMF sidecar is the deck $tmp/side.xmf itself; choose another output' '$tmp/stderr' &&
      cmp -s inputs/two-spheres.deck '$tmp/side.xmf' && [ ! -e '$tmp/side.h5' ]"
+# `-o x` and `-o x.h5` have one sidecar, x.xmf: the second run replaced the first's (until
+# 2026-12-02); refused by run and check, either way round, the first run's files unchanged;
+# a sidecar whose run is gone is no one's
+mkdir -p "$tmp/twin"
+run_nbep run inputs/two-spheres.deck --quiet -n 50 -o "$tmp/twin/x.h5"
+twin_sum=$(cat "$tmp/twin/x.h5" "$tmp/twin/x.xmf" | md5sum)
+for cmd in run check; do
+    run_nbep $cmd inputs/two-spheres.deck --quiet -n 50 -o "$tmp/twin/x"
+    check "$cmd -o x beside x.h5 and its x.xmf: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr")), x.h5's files unchanged" \
+        "[ $rc = 2 ] && one_line && grep -qx 'nbep: the output file $tmp/twin/x.s XDMF sidecar would replace that of the run $tmp/twin/x.h5 beside it; choose another output' '$tmp/stderr' &&
+         [ ! -e '$tmp/twin/x' ] && [ \"\$(cat '$tmp/twin/x.h5' '$tmp/twin/x.xmf' | md5sum)\" = '$twin_sum' ]"
+done
+rm "$tmp/twin/x.h5"
+run_nbep run inputs/two-spheres.deck --quiet -n 50 -o "$tmp/twin/x"
+run_nbep run inputs/two-spheres.deck --quiet -n 50 -o "$tmp/twin/x.h5"
+check "a sidecar whose run is gone is replaced (x); then x.h5 beside x is refused (got $rc)" \
+    "[ $rc = 2 ] && grep -q 'that of the run $tmp/twin/x beside it' '$tmp/stderr' && [ ! -e '$tmp/twin/x.h5' ] &&
+     grep -q '<!-- nbep run x: ' '$tmp/twin/x.xmf'"
 # a name that fits the folder, but not with .partial after it (the name the file is made
 # under): check passed it and the run failed (until 2026-12-01); both refuse it now
 long=$(printf 'a%.0s' $(seq 248)).h5

@@ -27,6 +27,12 @@ char *nbep_xdmf_path(const char *h5_path);
  * one not written by nbep). */
 bool nbep_xdmf_run_of(const char *path, char *name, size_t len);
 
+/* Another run's file that the sidecar of h5_path belongs to, when one is there: the sidecar
+ * names it (nbep_xdmf_run_of), it is not h5_path, and it stands beside the sidecar (`-o x`
+ * and `-o x.h5` have one sidecar, x.xmf: a run at x would replace x.h5's). malloc'd (its path
+ * beside the sidecar); NULL when none, or out of memory. */
+char *nbep_xdmf_other_run(const char *h5_path);
+
 /* Writes the sidecar of the run file h5_path describing its first n_frames frames: frame k
  * (row k of /frames/position) is at step steps[k] and time times[k] (both borrowed, n_frames
  * entries; steps may be NULL, then frames are named by their index). n_spheres is the row
