@@ -291,6 +291,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     if (!p.free_flight) {
         c->rest = nbep_alloc_aligned(n, sizeof *c->rest);
         c->aeff = nbep_alloc_aligned(n, sizeof *c->aeff);
+        c->hold_slow = sim->scene->restitution < 1.0;
     }
     if (p.tc_model)
         c->t_last = nbep_alloc_aligned(n, sizeof *c->t_last);

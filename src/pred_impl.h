@@ -192,6 +192,11 @@ typedef struct pred_ctx {
      * (free_flight: no contact can rest or hold, every sphere flies with a = 0), t_last when
      * the TC model cannot change a restitution (e = 1 or tc = 0) */
     rest_set *rest;               /* owned: the contacts holding each sphere */
+    /* e < 1: a supported sphere slower than the rest speed may be held still, its speed taken
+     * (the model's dissipation, as restitution's); at e = 1 only a sphere whose contacts leave
+     * it no velocity at all rests still (until 2026-12-02 an elastic sphere sliding on a floor
+     * at 0.5 mm/s stopped, and a slow elastic collision with a sliding sphere stopped both) */
+    bool hold_slow;
     bool locking;                 /* rounds modes: thread 0 is in nbep__pred_lock_phase, the
                                    * others waiting at its barrier (jam_lock's walk reads and
                                    * writes any sphere: nowhere else) */

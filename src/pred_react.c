@@ -159,7 +159,7 @@ bool nbep__pred_rest_solve(const pred_ctx *c, const nbep_state *s, size_t i, res
         double amag = nbep_vec3_norm(s->acc[i]);
         if (r->n > 0 && nbep_vec3_norm(*a) <= (spheres ? HOLD_SLOPE : NBEP_CONTACT_TOL) * amag) {
             *a = nbep_vec3_make(0.0, 0.0, 0.0);
-            if (nbep_vec3_norm(*v) <= rest_speed(s, i, amag, dt))
+            if (c->hold_slow && nbep_vec3_norm(*v) <= rest_speed(s, i, amag, dt))
                 *v = nbep_vec3_make(0.0, 0.0, 0.0);
         }
         r->still = r->n > 0 && is_zero(*a) && is_zero(*v);
@@ -349,7 +349,7 @@ static void fire(pred_ctx *c, thread_ws *w, const nbep_state *s, size_t i, bool 
 /* Holds a supported sphere still when slower than the rest speed (see rest_speed). */
 static bool try_hold(pred_ctx *c, nbep_state *s, size_t i, double dt)
 {
-    if (!supported(c, i) ||
+    if (!c->hold_slow || !supported(c, i) ||
         !(nbep_vec3_norm(s->vel[i]) <= rest_speed(s, i, nbep_vec3_norm(s->acc[i]), dt)))
         return false;
     s->vel[i] = nbep_vec3_make(0.0, 0.0, 0.0);
