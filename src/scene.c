@@ -1177,7 +1177,9 @@ static void parse_axes(load *L, const config_setting_t *sweep, nbep_scene *sc)
     }
 }
 
-static void parse_sweep(load *L, const config_setting_t *root, nbep_scene *sc)
+/* The deck's sweep group; `run`: a sweep's run (nbep_scene_load_run), whose run.seed is its
+ * replica's, base + r, checked with the base seed by the study's own load. */
+static void parse_sweep(load *L, const config_setting_t *root, nbep_scene *sc, bool run)
 {
     const config_setting_t *sweep = NULL;
     sc->sweep_replicas = 1;
@@ -1188,8 +1190,11 @@ static void parse_sweep(load *L, const config_setting_t *root, nbep_scene *sc)
         sc->sweep_replicas = (uint64_t)replicas;
     parse_axes(L, sweep, sc);
     /* replica r runs with run.seed + r, which must still be a deck's integer (a run past it
-     * failed with a message about a --set nobody typed) */
-    if (sc->sweep_replicas > 1 && sc->seed > (uint64_t)INT64_MAX - (sc->sweep_replicas - 1))
+     * failed with a message about a --set nobody typed); not again in a run, whose seed is
+     * its replica's (until 2026-12-02 a study with the last seed exactly 2^63 - 1 passed,
+     * and every run of a later replica failed on this check) */
+    if (!run && sc->sweep_replicas > 1 &&
+        sc->seed > (uint64_t)INT64_MAX - (sc->sweep_replicas - 1))
         ERR(L, sweep,
             "sweep.replicas = %" PRIu64 " with run.seed = %" PRIu64 ": the last replica's seed "
             "would pass %" PRId64,
@@ -1480,12 +1485,51 @@ static bool diag_has(const nbep_diag *d, size_t first, const char *msg)
  * about something else the value broke says which value, "...values.[v]: with KEY=VALUE, ";
  * messages the base load has too (d's from errors0 on, a problem of the deck itself) are not
  * repeated. */
+/* Whether the value set (axis a's, labelled label) that the deck refuses alone is taken with
+ * some value of another axis: a box.min on one axis and a box.max on another, each past the
+ * deck's other corner, make a box in every run (until 2026-12-02 such a study was refused,
+ * each value checked against the deck's own corners only). ov and origin hold the overrides
+ * (n_overrides) with room for two more. One value of one other axis at a time: what needs
+ * three axes together, and which combinations fail, stay the runs' to find. */
+static bool value_with_another(load *L, const nbep_scene *sc, const char *deck_text,
+                               const char **ov, const char **origin, size_t n_overrides,
+                               size_t a, const char *set, const char *label)
+{
+    for (size_t b = 0; b < sc->sweep_n_axes && !L->c.oom; b++) {
+        const nbep_sweep_axis *other = &sc->sweep_axes[b];
+        for (size_t w = 0; b != a && w < other->n_values && !L->c.oom; w++) {
+            nbep__strbuf with = {0};
+            nbep__strbuf_add(&with, "%s=%s", other->key, other->values[w]);
+            nbep_diag quiet;
+            nbep_diag_init(&quiet);
+            nbep_scene both;
+            nbep_status st = NBEP_ENOMEM;
+            if (!with.oom) {
+                ov[n_overrides] = set;
+                origin[n_overrides] = label;
+                ov[n_overrides + 1] = with.p;
+                origin[n_overrides + 1] = label;
+                st = load_deck(L->c.deck, deck_text, ov, origin, n_overrides + 2, LOAD_VALUE,
+                               NULL, &both, &quiet);
+            }
+            if (st == NBEP_OK)
+                nbep_scene_fini(&both);
+            L->c.oom = L->c.oom || st == NBEP_ENOMEM;
+            nbep_diag_fini(&quiet);
+            nbep__strbuf_fini(&with);
+            if (st == NBEP_OK)
+                return true;
+        }
+    }
+    return false;
+}
+
 static void check_axis_values(load *L, const nbep_scene *sc, const char *deck_text,
                               const char *const *overrides, const char *const *labels,
                               size_t n_overrides, size_t errors0)
 {
-    const char **ov = calloc(n_overrides + 1, sizeof *ov);
-    const char **origin = calloc(n_overrides + 1, sizeof *origin);
+    const char **ov = calloc(n_overrides + 2, sizeof *ov); /* and value_with_another's two */
+    const char **origin = calloc(n_overrides + 2, sizeof *origin);
     if (!ov || !origin) {
         L->c.oom = true;
         goto out;
@@ -1519,6 +1563,9 @@ static void check_axis_values(load *L, const nbep_scene *sc, const char *deck_te
             }
             if (st == NBEP_OK)
                 nbep_scene_fini(&value);
+            if (st == NBEP_EDECK && value_with_another(L, sc, deck_text, ov, origin,
+                                                       n_overrides, a, set.p, label.p))
+                st = NBEP_OK; /* a run's combination takes it */
             L->c.oom = L->c.oom || st == NBEP_ENOMEM;
             const uint64_t rank = nbep__scene_rank(&L->c, by, by ? 0 : line);
             const size_t n_label = strlen(nbep__strbuf_str(&label));
@@ -1624,7 +1671,7 @@ static nbep_status load_deck(const char *deck_path, const char *deck_text,
     const bool geometry_ok = seed_ok && d->n_errors == geometry0 && !L.c.oom;
     parse_output(&L, root, &sc);
     if (mode != LOAD_VALUE)
-        parse_sweep(&L, root, &sc);
+        parse_sweep(&L, root, &sc, mode == LOAD_RUN);
     if (mode == LOAD_DECK && sc.sweep_n_axes && !L.c.oom)
         check_axis_values(&L, &sc, deck_text, overrides, (const char *const *)labels,
                           n_overrides, errors0);

@@ -439,9 +439,22 @@ void nbep_sweep_check_print(FILE *f, const nbep_sweep_check_report *r)
 
 /* ---- reusing finished runs --------------------------------------------------------------- */
 
+/* Override ov (len bytes) past the blanks before its name, which --set reads past too
+ * (`--set ' sweep.replicas=3'` set the replicas, and until 2026-12-02 was not neutral: every
+ * finished run was run again). */
+static const char *override_name(const char *ov, size_t *len)
+{
+    while (*len > 0 && (*ov == ' ' || *ov == '\t')) {
+        ov++;
+        --*len;
+    }
+    return ov;
+}
+
 /* The value of override ov (len bytes, "name = value") if it sets `name`, else NULL. */
 static const char *override_value(const char *ov, size_t len, const char *name)
 {
+    ov = override_name(ov, &len);
     const size_t n = strlen(name);
     if (len <= n || strncmp(ov, name, n) != 0)
         return NULL;
@@ -463,6 +476,7 @@ static const char *override_value(const char *ov, size_t len, const char *name)
  * 0, and runs extended by hand with nbep run --resume -n were replaced). */
 static bool override_is_neutral(const char *ov, size_t len)
 {
+    ov = override_name(ov, &len);
     if (len > 6 && strncmp(ov, "sweep.", 6) == 0)
         return true;
     static const char *const neutral[] = {"output.file", "sweep", "run.threads", "run.steps"};
@@ -608,17 +622,41 @@ bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_
 
 /* ---- running ----------------------------------------------------------------------------- */
 
-/* The diag's lines joined by "; " into a fixed buffer (cut when longer). */
+/* The diag's lines joined by "; " into a fixed buffer (len >= 64). Where they do not fit,
+ * their start and their end, with " ... " between, each cut between characters: the end holds
+ * the reason ("nbep: PATH: cannot ...: REASON"), and a cut inside a character left the tables
+ * invalid UTF-8 (until 2026-12-02: the first 511 bytes, which a long path filled). */
 static void error_text(const nbep_diag *d, char *buf, size_t len)
 {
-    size_t used = 0;
-    buf[0] = '\0';
-    for (size_t k = 0; k < d->n_errors && used + 1 < len; k++) {
-        if (!d->msg || !d->msg[k])
-            continue;
-        int n = snprintf(buf + used, len - used, "%s%s", used ? "; " : "", d->msg[k]);
-        used += n > 0 ? (size_t)n : 0;
+    static const char gap[] = " ... ";
+    size_t total = 0;
+    for (size_t k = 0; k < d->n_errors; k++)
+        if (d->msg && d->msg[k])
+            total += (total ? 2 : 0) + strlen(d->msg[k]);
+    char *all = malloc(total + 1);
+    if (!all) {
+        snprintf(buf, len, "nbep: out of memory for the run's error");
+        return;
     }
+    size_t used = 0;
+    all[0] = '\0';
+    for (size_t k = 0; k < d->n_errors; k++)
+        if (d->msg && d->msg[k])
+            used += (size_t)sprintf(all + used, "%s%s", used ? "; " : "", d->msg[k]);
+    if (used < len) {
+        memcpy(buf, all, used + 1);
+    } else { /* a continuation byte is 10xxxxxx: no character starts there */
+        const size_t room = len - 1 - (sizeof gap - 1);
+        size_t head = room / 3, from = used - (room - head);
+        while (head > 0 && ((unsigned char)all[head] & 0xC0) == 0x80)
+            head--; /* the head ends before the character that would not fit */
+        while (from < used && ((unsigned char)all[from] & 0xC0) == 0x80)
+            from++; /* the tail starts at a character */
+        memcpy(buf, all, head);
+        memcpy(buf + head, gap, sizeof gap - 1);
+        memcpy(buf + head + sizeof gap - 1, all + from, used - from + 1);
+    }
+    free(all);
 }
 
 static nbep_status stop_status(const nbep_sweep_exec *ex)

@@ -37,5 +37,17 @@ check "slurm-scaling.sbatch by hand, no extra options: exit 0, a header and 4 ro
      [ \$(grep -c '^threads,' '$tmp/scaling.csv') = 2 ] && [ \$(grep -c '^ranks,' '$tmp/scaling.csv') = 2 ]"
 check "... WORK kept with the user's file in it, nothing of the script's left there" \
     "grep -qx keep '$tmp/work/mine.txt' && [ \"\$(ls -A '$tmp/work')\" = mine.txt ]"
+# the options the script sets for each run, among the user's: refused before any run (a user's
+# -n won over STEPS and the CSV's steps were wrong; -o and --summary were overridden silently)
+for opt in -n --steps=7 -o --summary; do
+    NBEP=$PWD/bin/nbep SPHERES=64 STEPS=5 RUNS=2 THREADS_LIST=1 RANKS_LIST=1 \
+        OUT="$tmp/refused.csv" WORK="$tmp/work" timeout -k 5 60 \
+        bash scripts/slurm-scaling.sbatch inputs/paper-box.deck --quiet $opt 7 \
+        >"$tmp/refused.out" 2>&1
+    rc=$?
+    check "slurm-scaling.sbatch with the user's $opt: exit 2 (got $rc), one line naming it, no CSV" \
+        "[ $rc = 2 ] && [ \$(wc -l <'$tmp/refused.out') = 1 ] &&
+         grep -q '^slurm-scaling.sbatch: ${opt%%=*}' '$tmp/refused.out' && [ ! -e '$tmp/refused.csv' ]"
+done
 
 exit $fail

@@ -417,6 +417,68 @@ run_sweep "$tmp/s.deck" -o "$tmp/seed.h5" --quiet --set run.seed=922337203685477
 check "run.seed = 2^63 - 1 with 2 replicas: exit 2 (got $rc), one line, no folder" \
     "[ $rc = 2 ] && one_line && grep -q 'the last replica.s seed would pass' '$tmp/stderr' &&
      [ ! -e '$tmp/seed.sweep' ]"
+# ... and one whose last replica's seed is exactly 2^63 - 1: taken, every run ok (until
+# 2026-12-02 each run of the later replica checked its own seed as the base, and failed),
+# and nbep check loads every run
+run_sweep "$tmp/s.deck" -o "$tmp/seed-max.h5" --quiet --set run.seed=9223372036854775806
+check "run.seed = 2^63 - 2 with 2 replicas: exit 0 (got $rc), 4 runs ok: $(head -c 300 "$tmp/stderr")" \
+    "[ $rc = 0 ] && [ \"\$(grep -c ',ok,' '$tmp/seed-max.sweep/summary.csv')\" = 4 ] &&
+     grep -q ',9223372036854775807,' '$tmp/seed-max.sweep/summary.csv'"
+run_check "$tmp/s.deck" --set run.seed=9223372036854775806
+check "... and nbep check takes it (got $rc)" "[ $rc = 0 ]"
+# two corners of the box on two axes, each past the deck's other corner alone, a box in every
+# run: taken (until 2026-12-02 each value was checked against the deck's corners only, and
+# the study refused); a value no other axis's value rescues is still refused before any run
+cat >"$tmp/corners.deck" <<'EOF'
+run: { steps = 10; threads = 1; };
+box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };
+spheres = ( { count = 4; radius = 0.1; mass = 1.0; place = "random"; speed = 1.0; } );
+output: { every = 10; };
+sweep: { vary = ( { key = "box.min"; values = ([2.0, 2.0, 2.0], [3.0, 3.0, 3.0]); },
+                  { key = "box.max"; values = ([5.0, 5.0, 5.0], [6.0, 6.0, 6.0]); } ); };
+EOF
+run_check "$tmp/corners.deck"
+check "box.min and box.max on two axes, each alone past the deck's other corner: nbep check exit 0 (got $rc: $(head -c 300 "$tmp/stderr"))" \
+    "[ $rc = 0 ]"
+run_sweep "$tmp/corners.deck" -o "$tmp/corners.h5" --quiet
+check "... and the sweep runs all 4 (exit $rc)" \
+    "[ $rc = 0 ] && [ \"\$(grep -c ',ok,' '$tmp/corners.sweep/summary.csv')\" = 4 ]"
+run_check "$tmp/corners.deck" --set 'sweep.vary.[1].values=([5.0, 5.0, 5.0], [-1.0, -1.0, -1.0])'
+check "... a box.max below every box.min of the other axis: refused (exit $rc), naming the value: $(head -c 300 "$tmp/stderr")" \
+    "[ $rc = 2 ] && one_line && grep -q 'sweep.vary.\[1\].values.\[1\]: box.min must be < box.max' '$tmp/stderr'"
+# a run's error longer than the table keeps (512 bytes; a path of multi-byte characters): its
+# start and its end, the reason, cut between characters, so that both tables stay UTF-8
+# (until 2026-12-02 the first 511 bytes, cut inside a character: summary.csv and summary.h5
+# no longer read as UTF-8, and the reason was lost); three lengths of the name, so that the
+# cuts fall at each byte of a character
+euro=$(printf '\xe2\x82\xac')
+for k in 0 1 2; do
+    long="$tmp/$(printf "$euro%.0s" $(seq 70))/$(printf "$euro%.0s" $(seq 70))$(printf 'a%.0s' $(seq 0 $k))"
+    mkdir -p "$long"
+    cat >"$long/f.deck" <<'EOF'
+run: { steps = 10; threads = 1; };
+box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };
+spheres = ( { count = 64; radius = 0.05; mass = 1.0; place = "random"; speed = 1.0; } );
+output: { every = 10; };
+sweep: { vary = ( { key = "spheres.[0].radius"; values = [0.05, 0.3, 0.1]; } ); };
+EOF
+    run_sweep "$long/f.deck" -o "$long/f.h5" --quiet
+    check "a failed run's long error ($k): exit 1 (got $rc), both tables UTF-8, the reason kept" \
+        "[ $rc = 1 ] && '$PY' - '$long/f.sweep/summary.csv' '$long/f.sweep/summary.h5' <<'PYEND'
+import csv, sys, h5py
+rows = list(csv.reader(open(sys.argv[1], encoding='utf-8')))
+err = [r for r in rows if 'failed' in r][0][rows[0].index('error')]
+assert ' ... ' in err and 'could not place' in err and len(err.encode()) <= 511, err
+[e.decode('utf-8') for e in h5py.File(sys.argv[2], 'r')['runs']['error']]
+PYEND"
+done
+# an override typed with blanks before its name is the setting --set reads: neutral as it is
+# (until 2026-12-02 ' sweep.replicas=3' and ' run.threads=1' re-ran every finished run)
+run_sweep "$tmp/s.deck" -o "$tmp/blank.h5" --quiet
+run_sweep "$tmp/s.deck" -o "$tmp/blank.h5" --quiet --set ' sweep.replicas=3' --set ' run.threads=1' \
+    --summary "$tmp/blank.json"
+check "--set ' sweep.replicas=3': the 4 finished runs reused (exit $rc, $(json "$tmp/blank.json" reused) reused)" \
+    "[ $rc = 0 ] && [ \"\$(json '$tmp/blank.json' runs)\" = 6 ] && [ \"\$(json '$tmp/blank.json' reused)\" = 4 ]"
 # a --summary that is one of the study's own files: its table, or a run the next sweep would
 # run again, or a run's sidecar, or the lock (a JSON written there would let the lock go); the
 # run file, sidecar and lock by the rule of every run's (an HDF5 file, a name ending in .xmf or
