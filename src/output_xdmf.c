@@ -22,6 +22,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 /* The comment at a sidecar's top that names its run (xml_head writes it, nbep_xdmf_run_of
@@ -93,17 +94,25 @@ static const char *base_name(const char *path)
 char *nbep_xdmf_other_run(const char *h5_path)
 {
     char *xmf = nbep_xdmf_path(h5_path), name[1024], *other = NULL;
-    if (xmf && nbep_xdmf_run_of(xmf, name, sizeof name) && name[0] && !strchr(name, '/') &&
+    struct stat sb;
+    /* a regular file only: a FIFO there would block the read (a review, 2026-12-02) */
+    if (xmf && stat(xmf, &sb) == 0 && S_ISREG(sb.st_mode) &&
+        nbep_xdmf_run_of(xmf, name, sizeof name) && name[0] && !strchr(name, '/') &&
         strcmp(name, base_name(h5_path)) != 0) {
         const size_t dir = (size_t)(base_name(xmf) - xmf);
         other = malloc(dir + strlen(name) + 1);
         if (other) {
             memcpy(other, xmf, dir);
             strcpy(other + dir, name);
-            if (access(other, F_OK) != 0) { /* its run is gone: the sidecar is stale */
+            /* its run is gone (the sidecar is stale), or the sidecar is not its own: a copy
+             * of a run's pair, b.h5 and b.xmf from a.h5 and a.xmf, names a.h5, whose own
+             * sidecar a.xmf no run here writes (a review: such a copy was refused) */
+            char *own = nbep_xdmf_path(other);
+            if (!own || strcmp(own, xmf) != 0 || access(other, F_OK) != 0) {
                 free(other);
                 other = NULL;
             }
+            free(own);
         }
     }
     free(xmf);

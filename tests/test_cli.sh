@@ -686,6 +686,18 @@ run_nbep run inputs/two-spheres.deck --quiet -n 50 -o "$tmp/twin/x.h5"
 check "a sidecar whose run is gone is replaced (x); then x.h5 beside x is refused (got $rc)" \
     "[ $rc = 2 ] && grep -q 'that of the run $tmp/twin/x beside it' '$tmp/stderr' && [ ! -e '$tmp/twin/x.h5' ] &&
      grep -q '<!-- nbep run x: ' '$tmp/twin/x.xmf'"
+# a copy of a run and its sidecar (b.h5 and b.xmf from a.h5 and a.xmf: b.xmf names a.h5,
+# whose own sidecar is a.xmf) is no other run's sidecar: resumed, the sidecar rewritten (a
+# review: refused, exit 2); a FIFO at the sidecar's name is not read (run and check hung)
+mkdir -p "$tmp/twin2"
+run_nbep run inputs/two-spheres.deck --quiet -n 50 -o "$tmp/twin2/a.h5"
+cp "$tmp/twin2/a.h5" "$tmp/twin2/b.h5" && cp "$tmp/twin2/a.xmf" "$tmp/twin2/b.xmf"
+run_nbep run inputs/two-spheres.deck --quiet -n 80 --resume "$tmp/twin2/b.h5"
+check "a copied run and sidecar resume (got $rc: $(head -c 200 "$tmp/stderr")), the sidecar its own now" \
+    "[ $rc = 0 ] && grep -q '<!-- nbep run b.h5: ' '$tmp/twin2/b.xmf' && grep -q '<!-- nbep run a.h5: ' '$tmp/twin2/a.xmf'"
+mkfifo "$tmp/twin2/f.xmf"
+guard=10 run_nbep check inputs/two-spheres.deck --quiet -o "$tmp/twin2/f.h5"
+check "a FIFO at the sidecar's name: check ends (got $rc), not blocked on it" "[ $rc = 0 ]"
 # a name that fits the folder, but not with .partial after it (the name the file is made
 # under): check passed it and the run failed (until 2026-12-01); both refuse it now
 long=$(printf 'a%.0s' $(seq 248)).h5
