@@ -446,7 +446,7 @@ static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int t
     }
     if (strcmp(algo, sc->algorithm) != 0)
         snprintf(changed, RESUME_CHANGED_MAX, ", %s %s", changed_keys[0], sc->algorithm);
-    if (memcmp(&e0, &sc->restitution, sizeof e0) != 0) {
+    if (e0 != sc->restitution) { /* (not memcmp: -0 is 0, the same physics) */
         char e[NBEP_REAL_TEXT_MAX];
         const size_t at = strlen(changed);
         snprintf(changed + at, RESUME_CHANGED_MAX - at, ", %s %s", changed_keys[1],

@@ -1017,36 +1017,42 @@ static void test_slow_slider_is_held_fast_one_slides_on(void **state)
 /* At e = 1 nothing is held by its speed (an elastic scene keeps its energy): a ball sliding on
  * the floor at 0.5 mm/s, half the rest speed, slides on at that speed, and a floating ball
  * (no acceleration of its own) that catches it at 0.6 mm/s trades speeds with it, as an
- * elastic head-on collision of equal masses does, momentum and energy kept. Until 2026-12-02
- * the slider stopped at its first resting contact (held as at e < 1) and the catch left
- * the two at 0.6 mm/s and 0, momentum from nothing. All three neighbour modes. */
+ * elastic head-on collision of equal masses does, momentum and energy kept; and so does a
+ * ball lying still on the floor, caught by one sliding along the floor at 0.6 mm/s. Until
+ * 2026-12-02 the slider stopped at its first resting contact (held as at e < 1) and the catch
+ * left the two at 0.6 mm/s and 0, momentum from nothing; and the ball lying still (held: its
+ * velocity is zero) sent the one that caught it back as off a wall. All three neighbour
+ * modes. */
 static void test_elastic_slow_slider_slides_on_and_trades_its_speed(void **state)
 {
     (void)state;
-    const double r = 0.1, slow = 5e-4, fast = 6e-4, T = 0.5;
-    for (int mode = 0; mode < 3; mode++) {
-        nbep_scene *sc = scene(2, 1, "predictive", 500, 1.0);
-        neighbor_mode(sc, mode);
-        nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
-        /* the catch at 0.1 s: 0.1 (fast - slow) = 1e-5 m of gap */
-        nbep_test_set_sphere(sc, 0, (nbep_vec3){0.0, 0.0, r}, (nbep_vec3){slow, 0.0, 0.0}, r,
-                             1.0, DOWN);
-        nbep_test_set_sphere(sc, 1, (nbep_vec3){-2.0 * r - 1e-5, 0.0, r},
-                             (nbep_vec3){fast, 0.0, 0.0}, r, 1.0, ZERO);
-        trace t = {0};
-        const nbep_summary sm = run(sc, 1, &t);
-        const nbep_vec3 *v = last_vel(&t), *p = last_pos(&t);
-        assert_int_equal(sm.collisions, 1);
-        /* the exchange, to round-off of the speeds (1e-19 m/s of 6e-4) */
-        assert_true(fabs(v[0].x - fast) <= 1e-15 && fabs(v[1].x - slow) <= 1e-15);
-        assert_true(v[0].y == 0.0 && v[0].z == 0.0 && v[1].y == 0.0 && v[1].z == 0.0);
-        /* where they are: the slider at slow until the catch, fast after it */
-        assert_true(fabs(p[0].x - (0.1 * slow + (T - 0.1) * fast)) <= 1e-12);
-        assert_true(fabs(p[1].x - (-2.0 * r - 1e-5 + 0.1 * fast + (T - 0.1) * slow)) <= 1e-12);
-        assert_true(p[0].z == r);
-        free(t.data);
-        nbep_test_scene_free(&sc);
-    }
+    const double r = 0.1, fast = 6e-4, T = 0.5;
+    for (int still = 0; still < 2; still++)
+        for (int mode = 0; mode < 3; mode++) {
+            const double slow = still ? 0.0 : 5e-4;
+            nbep_scene *sc = scene(2, 1, "predictive", 500, 1.0);
+            neighbor_mode(sc, mode);
+            nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+            /* the catch at 1e-5 / (fast - slow): 0.1 s, or 1/60 s for the still ball */
+            const double tc = 1e-5 / (fast - slow);
+            nbep_test_set_sphere(sc, 0, (nbep_vec3){0.0, 0.0, r}, (nbep_vec3){slow, 0.0, 0.0},
+                                 r, 1.0, DOWN);
+            nbep_test_set_sphere(sc, 1, (nbep_vec3){-2.0 * r - 1e-5, 0.0, r},
+                                 (nbep_vec3){fast, 0.0, 0.0}, r, 1.0, still ? DOWN : ZERO);
+            trace t = {0};
+            const nbep_summary sm = run(sc, 1, &t);
+            const nbep_vec3 *v = last_vel(&t), *p = last_pos(&t);
+            assert_int_equal(sm.collisions, 1);
+            /* the exchange, to round-off of the speeds (1e-19 m/s of 6e-4) */
+            assert_true(fabs(v[0].x - fast) <= 1e-15 && fabs(v[1].x - slow) <= 1e-15);
+            assert_true(v[0].y == 0.0 && v[0].z == 0.0 && v[1].y == 0.0 && v[1].z == 0.0);
+            /* where they are: the slider at slow until the catch, fast after it */
+            assert_true(fabs(p[0].x - (tc * slow + (T - tc) * fast)) <= 1e-12);
+            assert_true(fabs(p[1].x - (-2.0 * r - 1e-5 + tc * fast + (T - tc) * slow)) <= 1e-12);
+            assert_true(p[0].z == r && p[1].z == r);
+            free(t.data);
+            nbep_test_scene_free(&sc);
+        }
 }
 
 /* Impacts the pile carries (physics.carry_drop): a ball sliding along the floor at speed v hits
