@@ -1465,26 +1465,6 @@ static bool diag_has(const nbep_diag *d, size_t first, const char *msg)
     return false;
 }
 
-/* Checks every value of every sweep axis on its own against the base deck (the deck's text
- * and the command line's overrides, labels), so that a value no run can take is a deck error
- * of nbep check, nbep run and the sweep's plan, not a run that fails after the others have
- * run (until 2026-11-30 such a study passed the check and nbep sweep exited 1).
- *
- * A value is loaded as its runs load it, the base plus KEY=VALUE, in LOAD_VALUE mode: the
- * deck's text parsed again and every type, range and cross check made (a box.max below the
- * deck's min, a radius the periodic box cannot take, counts past memory), so that a value
- * gets exactly the message a --set of it gets; but without the sweep group, and without
- * allocating or placing spheres, so each value costs a parse of the deck, not the placement
- * of millions of spheres. (Checking the value against the schema alone, its type and range
- * flags, would be cheaper but miss the cross checks and word its messages anew.) What only
- * placement finds (an overlap at t0, a group that does not fit) and what two axes do together
- * (a radius on one, a box on another) stay the runs' to find.
- *
- * The value's messages are named as the value, "DECK:LINE: sweep.vary.[k].values.[v]" (the
- * element's line) or "--set ...: sweep.vary.[k].values.[v]" where a --set gave it; a message
- * about something else the value broke says which value, "...values.[v]: with KEY=VALUE, ";
- * messages the base load has too (d's from errors0 on, a problem of the deck itself) are not
- * repeated. */
 /* Whether the value set (axis a's, labelled label) that the deck refuses alone is taken with
  * some value of another axis: a box.min on one axis and a box.max on another, each past the
  * deck's other corner, make a box in every run (until 2026-12-02 such a study was refused,
@@ -1524,6 +1504,27 @@ static bool value_with_another(load *L, const nbep_scene *sc, const char *deck_t
     return false;
 }
 
+/* Checks every value of every sweep axis on its own against the base deck (the deck's text
+ * and the command line's overrides, labels), so that a value no run can take is a deck error
+ * of nbep check, nbep run and the sweep's plan, not a run that fails after the others have
+ * run (until 2026-11-30 such a study passed the check and nbep sweep exited 1).
+ *
+ * A value is loaded as its runs load it, the base plus KEY=VALUE, in LOAD_VALUE mode: the
+ * deck's text parsed again and every type, range and cross check made (a box.max below the
+ * deck's min, a radius the periodic box cannot take, counts past memory), so that a value
+ * gets exactly the message a --set of it gets; but without the sweep group, and without
+ * allocating or placing spheres, so each value costs a parse of the deck, not the placement
+ * of millions of spheres. (Checking the value against the schema alone, its type and range
+ * flags, would be cheaper but miss the cross checks and word its messages anew.) What only
+ * placement finds (an overlap at t0, a group that does not fit) and what two axes do together
+ * (a radius on one, a box on another) stay the runs' to find; a value refused alone is tried
+ * with each value of each other axis (value_with_another) before it counts as refused.
+ *
+ * The value's messages are named as the value, "DECK:LINE: sweep.vary.[k].values.[v]" (the
+ * element's line) or "--set ...: sweep.vary.[k].values.[v]" where a --set gave it; a message
+ * about something else the value broke says which value, "...values.[v]: with KEY=VALUE, ";
+ * messages the base load has too (d's from errors0 on, a problem of the deck itself) are not
+ * repeated. */
 static void check_axis_values(load *L, const nbep_scene *sc, const char *deck_text,
                               const char *const *overrides, const char *const *labels,
                               size_t n_overrides, size_t errors0)

@@ -459,9 +459,9 @@ static const char *override_value(const char *ov, size_t len, const char *name)
     if (len <= n || strncmp(ov, name, n) != 0)
         return NULL;
     const char *q = ov + n;
-    while (*q == ' ')
+    while (q < ov + len && (*q == ' ' || *q == '\t'))
         q++;
-    return *q == '=' ? q + 1 : NULL;
+    return q < ov + len && *q == '=' ? q + 1 : NULL;
 }
 
 /* Whether an override changes nothing a run computes: the thread count (SPEC: frames are

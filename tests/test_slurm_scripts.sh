@@ -39,15 +39,26 @@ check "... WORK kept with the user's file in it, nothing of the script's left th
     "grep -qx keep '$tmp/work/mine.txt' && [ \"\$(ls -A '$tmp/work')\" = mine.txt ]"
 # the options the script sets for each run, among the user's: refused before any run (a user's
 # -n won over STEPS and the CSV's steps were wrong; -o and --summary were overridden silently)
-for opt in -n --steps=7 -o --summary; do
+# (attached forms and the --set keys they stand for too: a review found -n7, -t3 and --set
+# run.steps=7 passed)
+for opt in "-n 7" --steps=7 "-o x.h5" "--summary x.json" -n7 -t3 "--set run.steps=7" \
+    "--set output.file=x.h5" "--set sweep.replicas=2"; do
+    # shellcheck disable=SC2086 # the option's words
     NBEP=$PWD/bin/nbep SPHERES=64 STEPS=5 RUNS=2 THREADS_LIST=1 RANKS_LIST=1 \
         OUT="$tmp/refused.csv" WORK="$tmp/work" timeout -k 5 60 \
-        bash scripts/slurm-scaling.sbatch inputs/paper-box.deck --quiet $opt 7 \
+        bash scripts/slurm-scaling.sbatch inputs/paper-box.deck --quiet $opt \
         >"$tmp/refused.out" 2>&1
     rc=$?
+    case $opt in "--set "*) last=${opt#--set } ;; *) last=${opt%% *} ;; esac
     check "slurm-scaling.sbatch with the user's $opt: exit 2 (got $rc), one line naming it, no CSV" \
         "[ $rc = 2 ] && [ \$(wc -l <'$tmp/refused.out') = 1 ] &&
-         grep -q '^slurm-scaling.sbatch: ${opt%%=*}' '$tmp/refused.out' && [ ! -e '$tmp/refused.csv' ]"
+         grep -qF 'slurm-scaling.sbatch: $last is the script' '$tmp/refused.out' && [ ! -e '$tmp/refused.csv' ]"
 done
+NBEP=$PWD/bin/nbep SPHERES=64 STEPS=5 RUNS=2 THREADS_LIST=1 RANKS_LIST=1 OUT="$tmp/taken.csv" \
+    WORK="$tmp/work" timeout -k 5 120 bash scripts/slurm-scaling.sbatch inputs/paper-box.deck \
+    --set physics.restitution=0.9 --dt 0.002 >"$tmp/taken.out" 2>&1
+rc=$?
+check "... and other options taken (--set physics.restitution=0.9 --dt 0.002: exit $rc, 4 rows)" \
+    "[ $rc = 0 ] && [ \$(wc -l <'$tmp/taken.csv') = 5 ]"
 
 exit $fail
