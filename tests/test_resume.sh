@@ -373,6 +373,13 @@ no_quiet=("${args[@]:1}")
 bin/nbep run $deck "${no_quiet[@]}" -n 40 --set 'run.neighbors="grid"' \
     --set physics.restitution=0.75 --resume $tmp/ways.h5 2>$tmp/ways.err >/dev/null
 bin/nbep run $deck "${no_quiet[@]}" -n 50 --resume $tmp/ways.h5 2>$tmp/same.err >/dev/null
+# -0 is 0: a file made at e = 0 resumed with -0.0 runs the same physics, and says nothing
+bin/nbep run $deck "${no_quiet[@]}" -n 20 --set physics.restitution=0 -o $tmp/zero.h5 \
+    2>/dev/null >/dev/null
+bin/nbep run $deck "${no_quiet[@]}" -n 30 --set physics.restitution=-0.0 --resume $tmp/zero.h5 \
+    2>$tmp/zero.err >/dev/null
+check "a resume with restitution -0.0 of a file made at 0 says nothing of a change: $(head -c 200 $tmp/zero.err)" \
+    "! grep -q 'first part' $tmp/zero.err && ! bin/nbep info $tmp/zero.h5 | grep -q 'restitution -0'"
 check "a hand resume with another restitution and neighbors mode says so on stderr" \
     "[ \"\$(grep -c 'with ' $tmp/ways.err)\" = 1 ] &&
      grep -q '^nbep: .*ways.h5 continues from step 30 with restitution 0.75, neighbors grid, which its first part did not run with' $tmp/ways.err &&
