@@ -453,7 +453,7 @@ check "... a box.max below every box.min of the other axis: refused (exit $rc), 
 # cuts fall at each byte of a character
 euro=$(printf '\xe2\x82\xac')
 for k in 0 1 2; do
-    long="$tmp/$(printf "$euro%.0s" $(seq 70))/$(printf "$euro%.0s" $(seq 70))$(printf 'a%.0s' $(seq 0 $k))"
+    long="$tmp/$(printf "$euro%.0s" $(seq 80))/$(printf "$euro%.0s" $(seq 80))$(printf 'a%.0s' $(seq 0 $k))"
     mkdir -p "$long"
     cat >"$long/f.deck" <<'EOF'
 run: { steps = 10; threads = 1; };
