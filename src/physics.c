@@ -94,9 +94,10 @@ static bool vec3_lex_less(nbep_vec3 a, nbep_vec3 b)
 }
 
 /* The paper's formula with sphere "1" fixed by the caller: n = (p2 - p1)/|p2 - p1|,
- * c = n.(v1 - v2); when c > 0, v1 -= m2 c (1+e) n/(m1+m2), v2 += m1 c (1+e) n/(m1+m2). */
-NBEP_FMA_CLONES static bool respond_ordered(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, nbep_vec3 *v2,
-                            double m1, double m2, double e)
+ * c = n.(v1 - v2); when c > 0, v1 -= m2 c (1+e) n/(m1+m2), v2 += m1 c (1+e) n/(m1+m2), each
+ * times (1 - excess) for the rounded n's excess over unit length (unit_excess, axpy_unit). */
+NBEP_FMA_CLONES static bool respond_ordered(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1,
+                                            nbep_vec3 *v2, double m1, double m2, double e)
 {
     nbep_vec3 d = nbep_vec3_sub(p2, p1);
     double len = nbep_vec3_norm(d);
