@@ -93,29 +93,29 @@ static const char *base_name(const char *path)
 
 char *nbep_xdmf_other_run(const char *h5_path)
 {
-    char *xmf = nbep_xdmf_path(h5_path), name[1024], *other = NULL;
-    struct stat sb;
-    /* a regular file only: a FIFO there would block the read (a review, 2026-12-02) */
-    if (xmf && stat(xmf, &sb) == 0 && S_ISREG(sb.st_mode) &&
-        nbep_xdmf_run_of(xmf, name, sizeof name) && name[0] && !strchr(name, '/') &&
-        strcmp(name, base_name(h5_path)) != 0) {
-        const size_t dir = (size_t)(base_name(xmf) - xmf);
-        other = malloc(dir + strlen(name) + 1);
-        if (other) {
-            memcpy(other, xmf, dir);
-            strcpy(other + dir, name);
-            /* its run is gone (the sidecar is stale), or the sidecar is not its own: a copy
-             * of a run's pair, b.h5 and b.xmf from a.h5 and a.xmf, names a.h5, whose own
-             * sidecar a.xmf no run here writes (a review: such a copy was refused) */
-            char *own = nbep_xdmf_path(other);
-            if (!own || strcmp(own, xmf) != 0 || access(other, F_OK) != 0) {
-                free(other);
-                other = NULL;
-            }
-            free(own);
-        }
+    /* the one other name whose sidecar this is: x for x.h5, x.h5 for x */
+    const size_t len = strlen(h5_path);
+    char *other = malloc(len + sizeof ".h5"), *xmf = nbep_xdmf_path(h5_path), name[1024];
+    if (other && nbep_ends_with(h5_path, ".h5")) {
+        memcpy(other, h5_path, len - 3);
+        other[len - 3] = '\0';
+    } else if (other) {
+        memcpy(other, h5_path, len);
+        memcpy(other + len, ".h5", sizeof ".h5");
     }
+    /* there, and the sidecar names it (not a stale one whose run is gone, nor this run's own
+     * beside a folder x); read only as a regular file: a FIFO there would block the read (a
+     * review, 2026-12-02) */
+    struct stat sb;
+    const bool theirs = other && xmf && *base_name(other) && access(other, F_OK) == 0 &&
+                        stat(xmf, &sb) == 0 && S_ISREG(sb.st_mode) &&
+                        nbep_xdmf_run_of(xmf, name, sizeof name) &&
+                        strcmp(name, base_name(other)) == 0;
     free(xmf);
+    if (!theirs) {
+        free(other);
+        return NULL;
+    }
     return other;
 }
 

@@ -695,6 +695,13 @@ cp "$tmp/twin2/a.h5" "$tmp/twin2/b.h5" && cp "$tmp/twin2/a.xmf" "$tmp/twin2/b.xm
 run_nbep run inputs/two-spheres.deck --quiet -n 80 --resume "$tmp/twin2/b.h5"
 check "a copied run and sidecar resume (got $rc: $(head -c 200 "$tmp/stderr")), the sidecar its own now" \
     "[ $rc = 0 ] && grep -q '<!-- nbep run b.h5: ' '$tmp/twin2/b.xmf' && grep -q '<!-- nbep run a.h5: ' '$tmp/twin2/a.xmf'"
+# a folder named as the run without .h5 beside it (run.h5 and run/) is no run: its sidecar names
+# run.h5, which goes on
+run_nbep run inputs/two-spheres.deck --quiet -n 50 -o "$tmp/twin2/c.h5"
+mkdir "$tmp/twin2/c"
+run_nbep run inputs/two-spheres.deck --quiet -n 80 --resume "$tmp/twin2/c.h5"
+check "a run beside a folder of its name without .h5 resumes (got $rc: $(head -c 200 "$tmp/stderr"))" \
+    "[ $rc = 0 ]"
 mkfifo "$tmp/twin2/f.xmf"
 guard=10 run_nbep check inputs/two-spheres.deck --quiet -o "$tmp/twin2/f.h5"
 check "a FIFO at the sidecar's name: check ends (got $rc), not blocked on it" "[ $rc = 0 ]"

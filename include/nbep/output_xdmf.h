@@ -27,10 +27,9 @@ char *nbep_xdmf_path(const char *h5_path);
  * one not written by nbep). */
 bool nbep_xdmf_run_of(const char *path, char *name, size_t len);
 
-/* Another run's file that the sidecar of h5_path belongs to, when one is there: the sidecar
- * names it (nbep_xdmf_run_of), it is not h5_path, and it stands beside the sidecar (`-o x`
- * and `-o x.h5` have one sidecar, x.xmf: a run at x would replace x.h5's). malloc'd (its path
- * beside the sidecar); NULL when none, or out of memory. */
+/* The other run file whose sidecar is h5_path's, when it is there and the sidecar names it
+ * (nbep_xdmf_run_of): `-o x` and `-o x.h5` have one sidecar, x.xmf, so a run at x would
+ * replace x.h5's. malloc'd; NULL when none, or out of memory. */
 char *nbep_xdmf_other_run(const char *h5_path);
 
 /* Writes the sidecar of the run file h5_path describing its first n_frames frames: frame k
