@@ -1465,15 +1465,29 @@ static bool diag_has(const nbep_diag *d, size_t first, const char *msg)
     return false;
 }
 
-/* Whether the value set (axis a's, labelled label) that the deck refuses alone is taken with
- * some value of another axis: a box.min on one axis and a box.max on another, each past the
- * deck's other corner, make a box in every run (until 2026-12-02 such a study was refused,
- * each value checked against the deck's own corners only). ov and origin hold the overrides
- * (n_overrides) with room for two more. One value of one other axis at a time: what needs
- * three axes together, and which combinations fail, stay the runs' to find. */
+/* The deck loaded as one axis value's check (LOAD_VALUE) with the n overrides ov (labelled
+ * origin), its scene let go: whether it takes them, its messages in d. */
+static nbep_status load_value(const load *L, const char *deck_text, const char **ov,
+                              const char **origin, size_t n, nbep_diag *d)
+{
+    nbep_scene value;
+    const nbep_status st =
+        load_deck(L->c.deck, deck_text, ov, origin, n, LOAD_VALUE, NULL, &value, d);
+    if (st == NBEP_OK)
+        nbep_scene_fini(&value);
+    return st;
+}
+
+/* Whether the value of axis a that the deck refuses alone (ov[n_overrides], as
+ * check_axis_values set it, labelled label) is taken with some value of another axis: a
+ * box.min on one axis and a box.max on another, each past the deck's other corner, make a box
+ * in every run (until 2026-12-02 such a study was refused, each value checked against the
+ * deck's own corners only). ov and origin have room for one more override. One value of one
+ * other axis at a time: what needs three axes together, and which combinations fail, stay the
+ * runs' to find. */
 static bool value_with_another(load *L, const nbep_scene *sc, const char *deck_text,
                                const char **ov, const char **origin, size_t n_overrides,
-                               size_t a, const char *set, const char *label)
+                               size_t a, const char *label)
 {
     for (size_t b = 0; b < sc->sweep_n_axes && !L->c.oom; b++) {
         const nbep_sweep_axis *other = &sc->sweep_axes[b];
@@ -1482,18 +1496,12 @@ static bool value_with_another(load *L, const nbep_scene *sc, const char *deck_t
             nbep__strbuf_add(&with, "%s=%s", other->key, other->values[w]);
             nbep_diag quiet;
             nbep_diag_init(&quiet);
-            nbep_scene both;
             nbep_status st = NBEP_ENOMEM;
             if (!with.oom) {
-                ov[n_overrides] = set;
-                origin[n_overrides] = label;
                 ov[n_overrides + 1] = with.p;
                 origin[n_overrides + 1] = label;
-                st = load_deck(L->c.deck, deck_text, ov, origin, n_overrides + 2, LOAD_VALUE,
-                               NULL, &both, &quiet);
+                st = load_value(L, deck_text, ov, origin, n_overrides + 2, &quiet);
             }
-            if (st == NBEP_OK)
-                nbep_scene_fini(&both);
             L->c.oom = L->c.oom || st == NBEP_ENOMEM;
             nbep_diag_fini(&quiet);
             nbep__strbuf_fini(&with);
@@ -1554,19 +1562,15 @@ static void check_axis_values(load *L, const nbep_scene *sc, const char *deck_te
             nbep__strbuf_add(&label, "sweep.vary.[%zu].values.[%zu]", L->axes[a].index, v);
             nbep_diag one;
             nbep_diag_init(&one);
-            nbep_scene value;
             nbep_status st = NBEP_ENOMEM;
             if (!set.oom && !label.oom) {
                 ov[n_overrides] = set.p;
                 origin[n_overrides] = label.p;
-                st = load_deck(L->c.deck, deck_text, ov, origin, n_overrides + 1, LOAD_VALUE,
-                               NULL, &value, &one);
+                st = load_value(L, deck_text, ov, origin, n_overrides + 1, &one);
+                if (st == NBEP_EDECK &&
+                    value_with_another(L, sc, deck_text, ov, origin, n_overrides, a, label.p))
+                    st = NBEP_OK; /* a run's combination takes it */
             }
-            if (st == NBEP_OK)
-                nbep_scene_fini(&value);
-            if (st == NBEP_EDECK && value_with_another(L, sc, deck_text, ov, origin,
-                                                       n_overrides, a, set.p, label.p))
-                st = NBEP_OK; /* a run's combination takes it */
             L->c.oom = L->c.oom || st == NBEP_ENOMEM;
             const uint64_t rank = nbep__scene_rank(&L->c, by, by ? 0 : line);
             const size_t n_label = strlen(nbep__strbuf_str(&label));
