@@ -688,7 +688,8 @@ check "a sidecar whose run is gone is replaced (x); then x.h5 beside x is refuse
      grep -q '<!-- nbep run x: ' '$tmp/twin/x.xmf'"
 # a copy of a run and its sidecar (b.h5 and b.xmf from a.h5 and a.xmf: b.xmf names a.h5,
 # whose own sidecar is a.xmf) is no other run's sidecar: resumed, the sidecar rewritten (a
-# review: refused, exit 2); a FIFO at the sidecar's name is not read (run and check hung)
+# review: refused, exit 2); a FIFO at the sidecar's name is not read (run and check hung), the
+# other name (f beside f.h5) there
 mkdir -p "$tmp/twin2"
 run_nbep run inputs/two-spheres.deck --quiet -n 50 -o "$tmp/twin2/a.h5"
 cp "$tmp/twin2/a.h5" "$tmp/twin2/b.h5" && cp "$tmp/twin2/a.xmf" "$tmp/twin2/b.xmf"
@@ -703,6 +704,7 @@ run_nbep run inputs/two-spheres.deck --quiet -n 80 --resume "$tmp/twin2/c.h5"
 check "a run beside a folder of its name without .h5 resumes (got $rc: $(head -c 200 "$tmp/stderr"))" \
     "[ $rc = 0 ]"
 mkfifo "$tmp/twin2/f.xmf"
+: >"$tmp/twin2/f" # the other name there, so that the sidecar would be read
 guard=10 run_nbep check inputs/two-spheres.deck --quiet -o "$tmp/twin2/f.h5"
 check "a FIFO at the sidecar's name: check ends (got $rc), not blocked on it" "[ $rc = 0 ]"
 # a name that fits the folder, but not with .partial after it (the name the file is made
