@@ -1171,7 +1171,8 @@ static void pred_import(void *p, const nbep_resume *r)
                 c->rest[i].n = 1;
             }
             nbep_vec3 v = c->st->vel[i]; /* the frame's (nbep_resume_apply) */
-            nbep__pred_rest_solve(c, c->st, i, &c->rest[i], &v, &c->aeff[i], 0.0, false);
+            nbep__pred_rest_solve(c, c->st, i, &c->rest[i], &v, &c->aeff[i], 0.0, false,
+                                  c->hold_slow);
         }
         nbep_feq_remove(c->q, i);
         if (r->event_kind[i] == NBEP_EVENT_NEVER)

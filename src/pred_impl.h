@@ -441,10 +441,10 @@ nbep_event nbep__pred_predict_grid(const pred_ctx *c, const nbep_state *s, size_
 
 /* ---- pred_react.c: a reaction and the lasting contacts ------------------------------------ */
 
-/* Solves sphere i's contacts r with velocity *v (writes the acceleration left in *a); returns
- * whether they hold it still. */
+/* Solves sphere i's contacts r with velocity *v (writes the acceleration left in *a; hold: a
+ * speed below the rest speed stops); returns whether they hold it still. */
 bool nbep__pred_rest_solve(const pred_ctx *c, const nbep_state *s, size_t i, rest_set *r,
-                           nbep_vec3 *v, nbep_vec3 *a, double dt, bool tangent);
+                           nbep_vec3 *v, nbep_vec3 *a, double dt, bool tangent, bool hold);
 /* The reaction to event ev of spheres lo and hi (hi: UINT32_MAX - plane for a plane) at
  * absolute time t_abs, t_local into the step; the spheres it changed in w->fired. */
 void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t_abs,

@@ -540,14 +540,14 @@ static void test_sphere_stopped_at_a_held_crest_under_an_overhang(void **state)
 }
 
 /* A groove that tilts by less than the contacts resolve (HOLD_SLOPE): B lies in the groove
- * between A1 and A2 on the floor, against a wall at one end, under an overhang at 45 degrees
- * that touches it from the side of A2; A2 sits `tilt` radii further from the wall than A1, so
- * the groove falls away from the wall by about tilt / 3 (towards it for a negative tilt: the
- * wall then holds B exactly). Held by A1 and A2 (once they are held), B is left that slope's
- * share of its weight along the groove, an acceleration that the contacts' gaps do not
- * resolve; it is held where it lies. Not held, the minimum bounce off A1 drives it into the
- * overhang and the cage takes it back, at zero time, for ever (a 300-sphere pour jammed so,
- * seed 3 at step 1429, a slope of 3e-7). */
+ * between A1 and A2 on the floor (each against a wall behind it), against a wall at one end,
+ * under an overhang at 45 degrees that touches it from the side of A2; A2 sits `tilt` radii
+ * further from the wall than A1, so the groove falls away from the wall by about tilt / 3
+ * (towards it for a negative tilt: the wall then holds B exactly). Held by A1 and A2 (once they
+ * are held), B is left that slope's share of its weight along the groove, an acceleration that
+ * the contacts' gaps do not resolve; it is held where it lies. Not held, the minimum bounce off
+ * A1 drives it into the overhang and the cage takes it back, at zero time, for ever (a
+ * 300-sphere pour jammed so, seed 3 at step 1429, a slope of 3e-7). */
 static void test_sphere_in_a_groove_tilted_below_resolution_is_held(void **state)
 {
     (void)state;
@@ -555,7 +555,7 @@ static void test_sphere_in_a_groove_tilted_below_resolution_is_held(void **state
     const double tilts[] = {1e-7, -1e-7, 1e-6};
     for (int mode = 0; mode < 3; mode++) /* all pairs, grid, cells */
         for (size_t k = 0; k < 3; k++) {
-            nbep_scene *sc = scene(3, 3, "predictive", 300, 0.5);
+            nbep_scene *sc = scene(3, 5, "predictive", 300, 0.5);
             neighbor_mode(sc, mode);
             sc->max_reactions = 100000;
             nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
@@ -563,6 +563,10 @@ static void test_sphere_in_a_groove_tilted_below_resolution_is_held(void **state
             const nbep_vec3 b = {0.0, w - r, r + h};
             const nbep_vec3 over = {-1.0 / sqrt(2.0), 0.0, -1.0 / sqrt(2.0)};
             nbep_test_set_plane(sc, 2, over, nbep_vec3_dot(over, b) - r);
+            /* walls behind A1 and A2: on the frictionless floor alone, B's weight would push
+             * them apart (test_pyramid_on_a_frictionless_floor_spreads) */
+            nbep_test_set_plane(sc, 3, (nbep_vec3){1, 0, 0}, -h - r);
+            nbep_test_set_plane(sc, 4, (nbep_vec3){-1, 0, 0}, -h - r);
             nbep_test_set_sphere(sc, 0, (nbep_vec3){-h, w - r, r}, ZERO, r, 1.0, DOWN);
             nbep_test_set_sphere(sc, 1, (nbep_vec3){h, w - r - tilts[k] * r, r}, ZERO, r, 1.0,
                                  DOWN);
@@ -634,13 +638,13 @@ static void test_ball_along_a_wall_rebounds_off_a_wall_across_its_way(void **sta
     nbep_test_scene_free(&sc);
 }
 
-/* A slot a diameter wide between a wall and a held sphere H, with a sphere B in it a hair
- * (dz) higher than H and a hair (dy) along the slot off H's crest, sliding on along the slot
- * away from the crest (at 1.3 and 3.9 mm/s, the rest speed 1 mm/s): its weight presses it on
- * H's curve, and each minimum bounce off H heads into the wall, whose cage takes it back; B met
- * H again 1e-10 s later, a million times in a step (a 300-sphere pour, seed 1, steps 892 and
- * 898). Having reacted ten thousand times in a step (JAM_HOLD), B is held where it is, in
- * every neighbour mode: the run goes on, nothing moves, B stays in the slot. */
+/* A slot a diameter wide between a wall and a held sphere H (a wall behind H), with a sphere B
+ * in it a hair (dz) higher than H and a hair (dy) along the slot off H's crest, sliding on
+ * along the slot away from the crest (at 1.3 and 3.9 mm/s, the rest speed 1 mm/s): its weight
+ * presses it on H's curve, and each minimum bounce off H heads into the wall, whose cage takes
+ * it back; B met H again 1e-10 s later, a million times in a step (a 300-sphere pour, seed 1,
+ * steps 892 and 898). Having reacted ten thousand times in a step (JAM_HOLD), B is held where
+ * it is, in every neighbour mode: the run goes on, nothing moves, B stays in the slot. */
 static void test_sphere_sliding_in_a_slot_on_a_held_curve_is_held(void **state)
 {
     (void)state;
@@ -648,11 +652,14 @@ static void test_sphere_sliding_in_a_slot_on_a_held_curve_is_held(void **state)
     const double x = sqrt(4.0 * r * r - dy * dy - dz * dz);
     for (int mode = 0; mode < 6; mode++) { /* all pairs, grid, cells; two speeds */
         const double v0 = mode < 3 ? 1.32e-3 : 3.89e-3;
-        nbep_scene *sc = scene(2, 2, "predictive", 100, 0.5);
+        nbep_scene *sc = scene(2, 3, "predictive", 100, 0.5);
         neighbor_mode(sc, mode % 3);
         sc->max_reactions = 100000;
         nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
         nbep_test_set_plane(sc, 1, (nbep_vec3){-1, 0, 0}, -(x + r));
+        /* a wall behind H: alone on the frictionless floor, H would be pushed off by B's
+         * weight, and B drop to the floor (test_pyramid_on_a_frictionless_floor_spreads) */
+        nbep_test_set_plane(sc, 2, (nbep_vec3){1, 0, 0}, -r);
         nbep_test_set_sphere(sc, 0, (nbep_vec3){0.0, 0.0, r}, ZERO, r, 1.0, DOWN);
         const nbep_vec3 b = {x, -dy, r + dz};
         nbep_test_set_sphere(sc, 1, b, (nbep_vec3){0.0, -v0, 0.0}, r, 1.0, DOWN);
@@ -1053,6 +1060,153 @@ static void test_elastic_slow_slider_slides_on_and_trades_its_speed(void **state
             free(t.data);
             nbep_test_scene_free(&sc);
         }
+}
+
+/* A frictionless floor takes no push along it, and neither does a sphere it holds. A sphere
+ * held on the floor, another set on it 2 cm off-centre (radius 0.1, e = 0.5), 0.1 um or 10 nm
+ * above where it would touch: the top one slides off, pressing the bottom one sideways at every
+ * minimum bounce, each push slower than the rest speed. Until 2026-12-02 each was taken as
+ * a wall takes it (the bottom sphere held): it never moved, and the pair left with 0.76
+ * kg m/s that nothing gave it (static friction). Now they part as when both start free
+ * (about -0.43 and 0.43 m/s, the naive algorithm -0.46 and 0.46), with no momentum along
+ * the floor in any frame beyond round-off of those speeds, in every neighbour mode. */
+static void test_sphere_sliding_off_a_held_one_pushes_it_along_the_floor(void **state)
+{
+    (void)state;
+    const double r = 0.1, dx = 0.02, z0 = r + 1e-9;
+    for (int k = 0; k < 6; k++) {
+        const int mode = k % 3;
+        /* the top one meets it first at 1.4 mm/s (1e-7 above: faster than the rest speed, an
+         * ordinary collision) or at 0.44 mm/s (1e-8 above: a slow meeting) */
+        const double gap = k < 3 ? 1e-7 : 1e-8;
+        nbep_scene *sc = scene(2, 1, "predictive", 1500, 0.5);
+        sc->output_every = 50;
+        neighbor_mode(sc, mode);
+        nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+        /* the bottom sphere lands at once (1e-9 above the floor) and is held */
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){0.0, 0.0, z0}, ZERO, r, 1.0, DOWN);
+        nbep_test_set_sphere(sc, 1,
+                             (nbep_vec3){dx, 0.0, z0 + sqrt(4.0 * r * r - dx * dx) + gap},
+                             ZERO, r, 1.0, DOWN);
+        trace t = {0};
+        (void)run(sc, 1, &t);
+        for (size_t f = 0; f < t.n_frames; f++) {
+            const nbep_vec3 *v = t.data + f * 2 * t.n + t.n;
+            /* round-off of speeds below 1 m/s */
+            assert_true(fabs(v[0].x + v[1].x) <= 1e-14 && v[0].y == 0.0 && v[1].y == 0.0);
+        }
+        const nbep_vec3 *v = last_vel(&t), *p = last_pos(&t);
+        assert_true(v[0].x < -0.4 && v[1].x > 0.4 && p[0].x < -0.5 && p[1].x > 0.5);
+        assert_true(fabs(p[0].z - r) <= 1e-12 && fabs(p[1].z - r) <= 1e-12);
+        free(t.data);
+        nbep_test_scene_free(&sc);
+    }
+}
+
+/* Three spheres in a pyramid on a frictionless floor: A1 and A2 on it (a gap of 0.083 between
+ * them), B on both, all set at rest (B 1e-7 above them). B's weight pushes A1 and A2 apart,
+ * which nothing on the floor can take: they slide apart, B drops between them to the floor,
+ * and no momentum along the floor appears (the floor and gravity give none) but what a hold
+ * takes (B's last slide on the floor, stopped). Until 2026-12-02
+ * A1 and A2, held on the floor, took B's weight as walls would, and the pyramid stood. Every
+ * neighbour mode; the same frames on 2 threads. */
+static void test_pyramid_on_a_frictionless_floor_spreads(void **state)
+{
+    (void)state;
+    const double r = 0.1, h = sqrt(2.0) * r;
+    for (int mode = 0; mode < 3; mode++) {
+        nbep_scene *sc = scene(3, 1, "predictive", 1000, 0.5);
+        sc->output_every = 50;
+        neighbor_mode(sc, mode);
+        nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){-h, 0.0, r}, ZERO, r, 1.0, DOWN);
+        nbep_test_set_sphere(sc, 1, (nbep_vec3){h, 0.0, r}, ZERO, r, 1.0, DOWN);
+        nbep_test_set_sphere(sc, 2, (nbep_vec3){0.0, 0.0, r + h + 1e-7}, ZERO, r, 1.0, DOWN);
+        trace t = {0};
+        const uint64_t coll = run(sc, 1, &t).collisions;
+        if (mode == 2)
+            assert_same_on_threads(sc, 2, &t, coll);
+        for (size_t f = 0; f < t.n_frames; f++) {
+            const nbep_vec3 *p = t.data + f * 2 * t.n, *v = p + t.n;
+            /* round-off while B falls; once it rests on the floor, the hold that stops its
+             * last slide takes at most m times the rest speed, |a| t_min = 9.8e-4 m/s
+             * (measured: 7.9e-5) */
+            const double px = v[0].x + v[1].x + v[2].x;
+            assert_true(fabs(px) <= (p[2].z > r + 1e-9 ? 1e-14 : 9.8e-4));
+        }
+        const nbep_vec3 *p = last_pos(&t);
+        assert_true(p[0].x < -h - 0.1 && p[1].x > h + 0.1);
+        assert_true(fabs(p[2].z - r) <= 1e-9); /* B on the floor */
+        free(t.data);
+        nbep_test_scene_free(&sc);
+    }
+}
+
+/* What a held sphere H's pile takes is what its own contacts take with the planes and the held
+ * spheres it touches, together (pile_takes). Two scenes, each struck at 5 cm/s (below the
+ * carry speed) along a line that only three faces of different kinds take together; in each,
+ * H and its neighbours never move (not a bit) and the striker rebounds, in every neighbour
+ * mode:
+ * - a corner: H on the floor against a wall (x = 0), a held neighbour N beside it along y, a
+ *   ball sliding on the floor into H along (-1, 1, 0): the floor, the wall and N take it,
+ *   neither the wall nor N alone with the floor;
+ * - a V groove (planes at 45 degrees, an end wall at y = 0, gravity tilted towards it): S, H
+ *   and N in a row along its bottom, each resting on the one before, a ball falling onto H
+ *   at 20 degrees from the vertical, towards N. H's own contacts (the groove's two planes and
+ *   S) and N take it; its contact set holds four, so N must not be crowded out by S again. */
+static void test_held_sphere_carries_a_push_its_planes_and_neighbours_take_together(void **state)
+{
+    (void)state;
+    const double v = 0.05;
+    for (int k = 0; k < 6; k++) {
+        const int mode = k % 3;
+        const bool groove = k >= 3;
+        const double r = groove ? 0.05 : 0.1, zg = r * sqrt(2.0);
+        nbep_scene *sc = scene(4, 3, "predictive", 200, 0.5);
+        sc->dt = 1e-4; /* held within 10 steps (settling), struck at about 1.5 ms */
+        sc->output_every = 5;
+        neighbor_mode(sc, mode);
+        nbep_vec3 h, n, u, a = DOWN, s0 = {0, 0, 0};
+        if (!groove) {
+            nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+            nbep_test_set_plane(sc, 1, (nbep_vec3){1, 0, 0}, 0.0);
+            nbep_test_set_plane(sc, 2, (nbep_vec3){0, 1, 0}, -5.0); /* far away */
+            h = (nbep_vec3){r, 0.5, r};
+            n = (nbep_vec3){r, 0.5 + 2.0 * r, r};
+            s0 = (nbep_vec3){1.0, 0.5, r}; /* a fourth sphere, far off */
+            u = (nbep_vec3){-1.0 / sqrt(2.0), 1.0 / sqrt(2.0), 0.0};
+        } else {
+            nbep_test_set_plane(sc, 0, (nbep_vec3){1.0 / sqrt(2.0), 0, 1.0 / sqrt(2.0)}, 0.0);
+            nbep_test_set_plane(sc, 1, (nbep_vec3){-1.0 / sqrt(2.0), 0, 1.0 / sqrt(2.0)}, 0.0);
+            nbep_test_set_plane(sc, 2, (nbep_vec3){0, 1, 0}, 0.0);
+            a = (nbep_vec3){0.0, -1.7, -9.66};
+            s0 = (nbep_vec3){0.0, r, zg};
+            h = (nbep_vec3){0.0, 3.0 * r, zg};
+            n = (nbep_vec3){0.0, 5.0 * r, zg};
+            u = (nbep_vec3){0.0, sin(20.0 / 180.0 * acos(-1.0)), -cos(20.0 / 180.0 * acos(-1.0))};
+        }
+        /* the striker, 0.075 mm before it touches H along u (1.5 ms at v) */
+        const nbep_vec3 b = nbep_vec3_axpy(h, -(2.0 * r + 7.5e-5), u);
+        nbep_test_set_sphere(sc, 0, s0, ZERO, r, 1.0, a);
+        nbep_test_set_sphere(sc, 1, h, ZERO, r, 1.0, a);
+        nbep_test_set_sphere(sc, 2, n, ZERO, r, 1.0, a);
+        nbep_test_set_sphere(sc, 3, b, nbep_vec3_scale(u, v), r, 1.0, groove ? ZERO : a);
+        trace t = {0};
+        (void)run(sc, 1, &t);
+        /* held where they were set, to round-off (the groove's planes place its spheres to
+         * an ulp), from the first frame after the start (0.5 ms, before the strike) on */
+        const nbep_vec3 *held = t.data + 1 * 2 * t.n, set[3] = {s0, h, n};
+        for (size_t i = 0; i < 3; i++)
+            assert_true(nbep_vec3_norm(nbep_vec3_sub(held[i], set[i])) <= 1e-15);
+        for (size_t f = 1; f < t.n_frames; f++)
+            for (size_t i = 0; i < 3; i++) {
+                const nbep_vec3 *p = t.data + f * 2 * t.n;
+                assert_true(nbep_vec3_equal(p[t.n + i], ZERO) && nbep_vec3_equal(p[i], held[i]));
+            }
+        assert_true(nbep_vec3_dot(last_vel(&t)[3], u) < -0.4 * v); /* rebounds, e = 0.5 */
+        free(t.data);
+        nbep_test_scene_free(&sc);
+    }
 }
 
 /* Impacts the pile carries (physics.carry_drop): a ball sliding along the floor at speed v hits
@@ -1826,6 +1980,9 @@ int main(void)
         cmocka_unit_test(test_settling_gathers_again_when_kept_supports_fail),
         cmocka_unit_test(test_slow_slider_is_held_fast_one_slides_on),
         cmocka_unit_test(test_elastic_slow_slider_slides_on_and_trades_its_speed),
+        cmocka_unit_test(test_sphere_sliding_off_a_held_one_pushes_it_along_the_floor),
+        cmocka_unit_test(test_pyramid_on_a_frictionless_floor_spreads),
+        cmocka_unit_test(test_held_sphere_carries_a_push_its_planes_and_neighbours_take_together),
         cmocka_unit_test(test_groove_ball_ends_at_the_bottom_of_the_v),
         cmocka_unit_test(test_e0_pair_keeps_momentum_and_loses_energy),
         cmocka_unit_test(test_e0_plane_stops_at_first_contact),

@@ -4,7 +4,8 @@
 # jam, or cost hundreds of thousands of collisions with nothing held, before those rules:
 # - a closed V groove: 6 spheres (e = 0.5) dropped into a 45-degree V with an end wall, gravity
 #   tilted towards it; before: 110559 collisions in 2000 steps, one sphere held at the end;
-#   now about 11000, all six held and no collision in the last 100 steps;
+#   now about 6600, all six held by step 2400 (2026-12-02: a held sphere that its pile cannot
+#   hold against a push now moves, and the run settled at step 1400 before that, with 13400);
 # - 12 spheres poured into a 0.33 m box: before, the stall check stopped the run at step 949;
 #   now it settles, in every neighbour mode (see below).
 # "Held" is read off the last frame: a held sphere's velocity is exactly zero. The limits
@@ -25,7 +26,7 @@ print(int((np.abs(v).sum(axis=1) == 0.0).sum()))' "$1"
 }
 
 cat >"$tmp/groove.deck" <<'DECK'
-run: { algorithm = "predictive"; steps = 2000; dt = 1.0e-3; seed = 1; neighbors = "grid";
+run: { algorithm = "predictive"; steps = 3000; dt = 1.0e-3; seed = 1; neighbors = "grid";
        max_reactions = 20000; };
 physics: { gravity = [0.0, -1.7, -9.66]; restitution = 0.5; };
 planes = ( { normal = [1.0, 0.0, 1.0]; point = [0.0, 0.0, 0.0]; },
@@ -45,7 +46,7 @@ done
 # (11217 at 2026-11-27; 25817 with the rest of a plane bounce that the TC model made elastic
 # taken out, which 30000 let pass once the quartic search's changes moved the trajectories)
 c=$(collisions "$tmp/groove-1.json")
-check "groove: under 20000 collisions (got ${c:-none}; before the rest speed: 110559)" \
+check "groove: under 20000 collisions in 3000 steps (got ${c:-none}; before the rest speed: 110559 in 2000)" \
     "[ -n '$c' ] && [ '$c' -lt 20000 ]"
 h=$(held "$tmp/groove-1.h5")
 check "groove: all 6 spheres held at the end (got ${h:-none})" "[ '${h:-0}' -eq 6 ]"
@@ -93,10 +94,12 @@ check "12 spheres in a 0.33 m box, grid: frames identical for 1 and 2 threads (s
 # Two held spheres that rested on each other (each had gathered the other, already held, into
 # its pocket) held each other: each one's landing let the other go, which landed again at the
 # same instant, 100000 times, and the run stopped ("events do not resolve": seed 3 at step 117,
-# this seed at step 123 with the pocket's check alone taken out). A held sphere that rests on
+# seed 2 at step 123 with the pocket's check alone taken out; since held spheres move under
+# pushes their pile cannot take, 2026-12-02, seeds 4, 5 and 8 at steps 121 to 124, and this is
+# seed 4). A held sphere that rests on
 # the sphere landing is no longer gathered into its pocket, nor landed on.
 cat >"$tmp/pour.deck" <<'DECK'
-run: { algorithm = "predictive"; steps = 125; dt = 2.0e-2; seed = 2; neighbors = "grid"; };
+run: { algorithm = "predictive"; steps = 125; dt = 2.0e-2; seed = 4; neighbors = "grid"; };
 physics: { gravity = [0.0, 0.0, -9.81]; restitution = 0.9; };
 box: { min = [0.0, 0.0, 0.0]; max = [0.53, 0.53, 3.0]; };
 spheres = ( { count = 120; radius = 0.05; mass = 1.0; place = "random"; speed = 0.0; } );
@@ -106,7 +109,7 @@ for t in 1 2; do
     timeout -k 5 120 bin/nbep run "$tmp/pour.deck" --quiet -t "$t" -o "$tmp/pour-$t.h5" \
         2>"$tmp/pour-$t.err"
     rc=$?
-    check "120 spheres poured at e = 0.9, grid, $t thread(s): 125 steps, exit 0 (got $rc; without the pocket's check: stopped at step 123)" \
+    check "120 spheres poured at e = 0.9, grid, $t thread(s): 125 steps, exit 0 (got $rc; without the pocket's check: stopped at step 121)" \
         "[ $rc -eq 0 ] && [ ! -s '$tmp/pour-$t.err' ]"
 done
 check "120 spheres poured at e = 0.9, grid: frames identical for 1 and 2 threads" \
