@@ -1142,14 +1142,56 @@ static void test_pyramid_on_a_frictionless_floor_spreads(void **state)
     }
 }
 
+/* The load a held sphere's planes must take is its weight with the press of the sphere on it.
+ * J lies in a wide V groove (planes 30 degrees from the floor, taking loads within 30 degrees
+ * of the vertical); K is set on J's shoulder, 50 degrees from J's top towards one plane, and
+ * slides down J into the pocket between J and that plane, where it is held. K's press on J
+ * alone points 50 to 60 degrees from the vertical, which the groove does not take; with J's
+ * weight it is within 20 degrees, which it does: J never moves, in every neighbour mode, and
+ * K ends held against the plane. */
+static void test_sphere_in_a_wide_groove_carries_one_sliding_off_its_shoulder(void **state)
+{
+    (void)state;
+    const double r = 0.1, a = 30.0 / 180.0 * acos(-1.0), th = 50.0 / 180.0 * acos(-1.0);
+    for (int mode = 0; mode < 3; mode++) {
+        nbep_scene *sc = scene(2, 2, "predictive", 300, 0.5);
+        sc->output_every = 10;
+        neighbor_mode(sc, mode);
+        const nbep_vec3 n1 = {sin(a), 0, cos(a)}, n2 = {-sin(a), 0, cos(a)};
+        nbep_test_set_plane(sc, 0, n1, 0.0);
+        nbep_test_set_plane(sc, 1, n2, 0.0);
+        const nbep_vec3 j = {0.0, 0.0, r / cos(a)};
+        nbep_test_set_sphere(sc, 0, j, ZERO, r, 1.0, DOWN);
+        nbep_test_set_sphere(
+            sc, 1, nbep_vec3_axpy(j, 2.0 * r + 1e-8, (nbep_vec3){sin(th), 0.0, cos(th)}), ZERO, r,
+            1.0, DOWN);
+        trace t = {0};
+        (void)run(sc, 1, &t);
+        const nbep_vec3 held = t.data[1 * 2 * t.n]; /* J at 10 ms */
+        assert_true(nbep_vec3_norm(nbep_vec3_sub(held, j)) <= 1e-15);
+        for (size_t f = 1; f < t.n_frames; f++) {
+            const nbep_vec3 *p = t.data + f * 2 * t.n;
+            assert_true(nbep_vec3_equal(p[0], held) && nbep_vec3_equal(p[t.n], ZERO));
+        }
+        const nbep_vec3 *p = last_pos(&t);
+        assert_true(nbep_vec3_equal(last_vel(&t)[1], ZERO));
+        /* on the plane, to within the reach a sphere is held at (twice the highest hop of the
+         * minimum bounce, 8 MIN_BOUNCE_REL_HEIGHT of the radius; measured 7.3e-7) */
+        const double gap = nbep_vec3_dot(n2, p[1]) - r;
+        assert_true(gap >= -1e-12 * r && gap <= 8e-6 * r);
+        free(t.data);
+        nbep_test_scene_free(&sc);
+    }
+}
+
 /* What a held sphere H's pile takes is what its own contacts take with the planes and the held
  * spheres it touches, together (pile_takes). Two scenes, each struck at 5 cm/s (below the
  * carry speed) along a line that only three faces of different kinds take together; in each,
  * H and its neighbours never move (not a bit) and the striker rebounds, in every neighbour
  * mode:
- * - a corner: H on the floor against a wall (x = 0), a held neighbour N beside it along y, a
- *   ball sliding on the floor into H along (-1, 1, 0): the floor, the wall and N take it,
- *   neither the wall nor N alone with the floor;
+ * - a corner: H on the floor against a wall (x = 0), a held neighbour N beside it along y
+ *   (against a wall behind it), a ball sliding on the floor into H along (-1, 1, 0): the
+ *   floor, the wall and N take it, neither the wall nor N alone with the floor;
  * - a V groove (planes at 45 degrees, an end wall at y = 0, gravity tilted towards it): S, H
  *   and N in a row along its bottom, each resting on the one before, a ball falling onto H
  *   at 20 degrees from the vertical, towards N. H's own contacts (the groove's two planes and
@@ -1170,7 +1212,9 @@ static void test_held_sphere_carries_a_push_its_planes_and_neighbours_take_toget
         if (!groove) {
             nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
             nbep_test_set_plane(sc, 1, (nbep_vec3){1, 0, 0}, 0.0);
-            nbep_test_set_plane(sc, 2, (nbep_vec3){0, 1, 0}, -5.0); /* far away */
+            /* a wall behind N: a held sphere alone on a bare floor takes no push along it, but
+             * the model counts it as immobile all the same (README, held spheres) */
+            nbep_test_set_plane(sc, 2, (nbep_vec3){0, -1, 0}, -(0.5 + 3.0 * r));
             h = (nbep_vec3){r, 0.5, r};
             n = (nbep_vec3){r, 0.5 + 2.0 * r, r};
             s0 = (nbep_vec3){1.0, 0.5, r}; /* a fourth sphere, far off */
@@ -1983,6 +2027,7 @@ int main(void)
         cmocka_unit_test(test_sphere_sliding_off_a_held_one_pushes_it_along_the_floor),
         cmocka_unit_test(test_pyramid_on_a_frictionless_floor_spreads),
         cmocka_unit_test(test_held_sphere_carries_a_push_its_planes_and_neighbours_take_together),
+        cmocka_unit_test(test_sphere_in_a_wide_groove_carries_one_sliding_off_its_shoulder),
         cmocka_unit_test(test_groove_ball_ends_at_the_bottom_of_the_v),
         cmocka_unit_test(test_e0_pair_keeps_momentum_and_loses_energy),
         cmocka_unit_test(test_e0_plane_stops_at_first_contact),

@@ -90,6 +90,22 @@ timeout -k 5 90 bin/nbep run "$tmp/box.deck" --quiet -t 2 -o "$tmp/box-grid-2.h5
 check "12 spheres in a 0.33 m box, grid: frames identical for 1 and 2 threads (settling included)" \
     "h5diff -q '$tmp/box-grid.h5' '$tmp/box-grid-2.h5' /frames /frames >/dev/null 2>&1"
 
+# A deeper pile: the pile deck's pour with 100 spheres on a floor 0.212 m square (its
+# density), seed 2. A held sphere that rests on spheres takes every push as its pile would
+# (pred_react.c: the loads through a pile's network are not resolved); asked whether its own
+# supports take its weight and the pressing sphere's (as a sphere held on planes is, since
+# 2026-12-02), the upper layers woke each other for ever: 4.5 million collisions in the last
+# 500 of 2500 steps, where the pile now settles by step 1900 (one sphere slides on).
+timeout -k 5 120 bin/nbep run inputs/pile.deck --quiet --set 'spheres.[0].count=100' \
+    --set 'box.max=[0.212, 0.212, 1.2]' -n 2500 --set run.seed=2 --set output.every=100 \
+    -o "$tmp/pile100.h5" 2>"$tmp/pile100.err"
+rc=$?
+last=$("$PY" -c 'import sys, h5py, numpy as np
+c = h5py.File(sys.argv[1], "r")["/stats/collisions"][:]
+print(int(np.nonzero(c)[0][-1]) + 1)' "$tmp/pile100.h5" 2>/dev/null)
+check "100 spheres poured, cells: exit 0 (got $rc), settled, no collision after step 2000 (last: ${last:-none}; held spheres on spheres asked: 4.5 M collisions in the last 500 steps)" \
+    "[ $rc -eq 0 ] && [ -n '$last' ] && [ '$last' -le 2000 ]"
+
 # A bouncier pour: 120 spheres (e = 0.9, steps of 20 ms) into a 0.53 m box, run to step 125.
 # Two held spheres that rested on each other (each had gathered the other, already held, into
 # its pocket) held each other: each one's landing let the other go, which landed again at the
