@@ -37,9 +37,10 @@
  * (its planes, that sphere, and the other held spheres it touches: a pocket, pocket_gather)
  * leave it no motion, else bounces off it as off a wall (the held sphere, carried by the pile,
  * takes no momentum); a faster impact is an ordinary response and wakes what the held sphere
- * carried, unless the pile carries it (carried, below). Both the hold and the slow landing
- * need the held sphere's pile to take its load (pile_takes, in react): else the meeting is an
- * ordinary response, which moves it however slowly. The kinetic energy removed by
+ * carried, unless the pile carries it (carried, below). Of a sphere held on planes alone,
+ * both the hold and the slow landing need the pile to take its load (pile_takes, in react):
+ * else the meeting is an ordinary response, which moves it however slowly; a sphere held on
+ * spheres takes every push as its pile would. The kinetic energy removed by
  * holding, at most m (rest speed)^2 / 2 per hold (4.8e-7 J for 1 kg under gravity at
  * dt = 1e-3), is the model's, besides restitution. A held
  * sphere is let go (time-ordered, at the instant its support changed) as soon as any of its
