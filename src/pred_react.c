@@ -876,14 +876,12 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
      * with its weight and k's alone the upper layers of a pour woke each other for ever (600
      * spheres, cells: 348 held at step 2500 and 55000 collisions a step, where all were held
      * by step 2276 with the pile taking every push, and are again by step 2318). */
-    size_t sj = NO_SPHERE, sk = NO_SPHERE;
-    if (c->rest && supported(c, lo) != supported(c, hi)) {
+    size_t sj = NO_SPHERE;
+    if (c->rest && supported(c, lo) != supported(c, hi))
         sj = supported(c, lo) ? lo : hi;
-        sk = sj == lo ? hi : lo;
-    } else if (c->rest && c->rest[lo].still != c->rest[hi].still) {
-        sj = c->rest[lo].still ? lo : hi; /* held on spheres, met by one on planes */
-        sk = sj == lo ? hi : lo;
-    }
+    else if (c->rest && c->rest[lo].still != c->rest[hi].still)
+        sj = c->rest[lo].still ? lo : hi; /* held, met by one sliding on its planes */
+    const size_t sk = sj == lo ? hi : lo; /* (read only when sj is one of them) */
     bool taken = true; /* by sj's pile */
     if (sj != NO_SPHERE) {
         const nbep_vec3 d = sep(c, s, sj, sk); /* from j to k */
