@@ -32,8 +32,7 @@
  * below it (1e-3 |a| dt, before) is never met
  * in a crowd: a 300-sphere pour had no sphere held at all after 0.8 s, and every jittering
  * impact on a held sphere knocked it loose again. So a supported sphere slower than the rest
- * speed is held when a partner pressed onto it meets it (two sliding on a floor part freely);
- * a sphere that meets a held one no faster than the
+ * speed is held when a partner meets it; a sphere that meets a held one no faster than the
  * rest speed (along the line of centres, and in all) joins it if the contacts it then has
  * (its planes, that sphere, and the other held spheres it touches: a pocket, pocket_gather)
  * leave it no motion, else bounces off it as off a wall (the held sphere, carried by the pile,
@@ -41,8 +40,7 @@
  * carried, unless the pile carries it (carried, below). Of a sphere held on planes alone,
  * both the hold and the slow landing need the pile to take its load (pile_takes, in react):
  * else the meeting is an ordinary response, which moves it however slowly; a sphere held on
- * spheres takes every push as its pile would; a held neighbour is a face only where it passes
- * the push on (braced_only). The kinetic energy removed by
+ * spheres takes every push as its pile would. The kinetic energy removed by
  * holding, at most m (rest speed)^2 / 2 per hold (4.8e-7 J for 1 kg under gravity at
  * dt = 1e-3), is the model's, besides restitution. A held
  * sphere is let go (time-ordered, at the instant its support changed) as soon as any of its
@@ -759,53 +757,14 @@ static bool faces_take(const pred_ctx *c, const nbep_state *s, size_t i, const r
            HOLD_SLOPE * nbep_vec3_norm(m);
 }
 
-/* How far a push is followed through held neighbours that sit on planes alone (pile_takes,
- * braced_only): sphere j's held neighbours count as faces if their piles take the push, asked
- * with their neighbours in turn, BRACE_DEPTH levels deep; at the last level a neighbour counts
- * only if its planes take it. So a row of held spheres on a floor, pushed at one end towards
- * a wall, takes the push where at most BRACE_DEPTH + 1 of them stand behind the one pushed,
- * and gives way where more do. The sphere that pushes j is asked one level short of j's
- * depth, so at 0 (a neighbour's planes alone) a 200-sphere pour (seed 1) jittered for ever
- * in a corner: a sphere rolling on two others pushed one into a third, which was held back
- * there (its pile, asked, took the push) and at once pushed off again (asked of the one
- * pushing, the same pile did not take it), 2000 collisions a step. Each level multiplies the
- * neighbours asked by up to NBEP_CONTACT_MAX, on the path of pushes a pile may refuse. */
-#define BRACE_DEPTH 2
-
-static bool pile_takes_at(const pred_ctx *c, const nbep_state *s, const thread_ws *w, size_t j,
-                          size_t k, nbep_vec3 m, double dt, int depth);
-
-/* Of r's faces from the first'th on (held spheres gathered round sphere j), those that pass on
- * a push from j: a held sphere that rests on spheres (its pile takes every push, as the model
- * has it), or one whose pile takes the push along the line from j to it (pile_takes_at, one
- * level deeper; at the last level, its planes alone). A sphere held on a bare floor beside j
- * is no face for a push into it: counted as one, two held spheres side by side, a third
- * sliding off the first away from the second, made a wall of the pair, and the three left
- * with 0.76 kg m/s that nothing gave them (until 2026-12-02). */
-static void braced_only(const pred_ctx *c, const nbep_state *s, const thread_ws *w, size_t j,
-                        int first, rest_set *r, double dt, int depth)
-{
-    int n = first;
-    for (int q = first; q < r->n; q++) {
-        const size_t m = (size_t)(-1 - r->who[q]);
-        if (rests_on_spheres(c, m) ||
-            pile_takes_at(c, s, w, m, j, sep(c, s, j, m), dt, depth - 1)) {
-            r->who[n] = r->who[q];
-            r->ver[n++] = r->ver[q];
-        }
-    }
-    r->n = n;
-}
-
 /* Whether the pile takes a push along m on sphere j (held, or carried by its planes) from
  * sphere k: the faces that hold j take it, its own contacts first, then with the planes it
- * touches, then with the held spheres that pass it on (braced_only; not at depth < 0), then
- * with both (within settle_gather's reach: the rest of the held pile is immobile). A contact
- * set holds NBEP_CONTACT_MAX faces, so the planes are tried before the spheres fill it: a
- * sphere in a box's floor corner touches two walls and two held neighbours, and a push into
- * the corner is taken by the walls. */
-static bool pile_takes_at(const pred_ctx *c, const nbep_state *s, const thread_ws *w, size_t j,
-                          size_t k, nbep_vec3 m, double dt, int depth)
+ * touches, then with the held spheres, then with both (within settle_gather's reach: the rest
+ * of the held pile is immobile). A contact set holds NBEP_CONTACT_MAX faces, so the planes are
+ * tried before the spheres fill it: a sphere in a box's floor corner touches two walls and two
+ * held neighbours, and a push into the corner is taken by the walls. */
+static bool pile_takes(const pred_ctx *c, const nbep_state *s, const thread_ws *w, size_t j,
+                       size_t k, nbep_vec3 m, double dt)
 {
     rest_set r = c->rest[j];
     if (faces_take(c, s, j, &r, m))
@@ -818,21 +777,12 @@ static bool pile_takes_at(const pred_ctx *c, const nbep_state *s, const thread_w
     pocket_planes(s, j, reach, &p);
     if (p.n > r.n && faces_take(c, s, j, &p, m))
         return true;
-    if (depth < 0)
-        return false;
     pocket_gather(c, s, w, j, k, reach, false, &r);
-    braced_only(c, s, w, j, c->rest[j].n, &r, dt, depth);
     const int spheres = r.n;
     if (spheres > c->rest[j].n && faces_take(c, s, j, &r, m))
         return true;
     pocket_planes(s, j, reach, &r);
     return r.n > spheres && faces_take(c, s, j, &r, m);
-}
-
-static bool pile_takes(const pred_ctx *c, const nbep_state *s, const thread_ws *w, size_t j,
-                       size_t k, nbep_vec3 m, double dt)
-{
-    return pile_takes_at(c, s, w, j, k, m, dt, BRACE_DEPTH);
 }
 
 /* Held sphere j carries the impact of free sphere k, closing at speed u along m (their line of
@@ -925,11 +875,7 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
      * not resolved by the model, which takes a held sphere's supports as immobile, and asked
      * with its weight and k's alone the upper layers of a pour woke each other for ever (600
      * spheres, cells: 348 held at step 2500 and 55000 collisions a step, where all were held
-     * by step 2276 with the pile taking every push, and are again by step 2318). A held
-     * neighbour counts as a face only if it passes the push on (braced_only), and an impact
-     * by a k not pressed onto j must be taken in its own direction too: a sphere held on a
-     * bare floor beside another, both met from the side, is no wall (until 2026-12-02 the
-     * pair stood as one while a third slid off the first: 0.76 kg m/s from nothing). */
+     * by step 2276 with the pile taking every push, and are again by step 2318). */
     size_t sj = NO_SPHERE;
     if (c->rest && supported(c, lo) != supported(c, hi))
         sj = supported(c, lo) ? lo : hi;
@@ -945,21 +891,13 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
         nbep_vec3 load = nbep_vec3_scale(s->acc[sj], s->mass[sj]);
         if (an < 0.0)
             load = nbep_vec3_axpy(load, s->mass[sk] * an / (len * len), d);
-        /* k's speed along d, closing where negative: the impact's push on j is along -d. A k
-         * pressed onto j (an < 0) meets it in minimum bounces, whose push the load above
-         * stands for; a k that is not (sliding on its floor) pushes along -d alone, which the
-         * pile must take too (without the test the slow pushes that a sphere held beside j
-         * passed on, as a third slid off it, were taken by j as by a wall) */
-        const double u = nbep_vec3_dot(s->vel[sk], d) / len;
-        taken = !c->hold_slow || rests_on_spheres(c, sj) ||
-                (pile_takes(c, s, w, sj, sk, load, dt) &&
-                 (an < 0.0 || u >= 0.0 ||
-                  pile_takes(c, s, w, sj, sk, nbep_vec3_scale(d, -1.0), dt)));
+        taken = !c->hold_slow || rests_on_spheres(c, sj) || pile_takes(c, s, w, sj, sk, load, dt);
         if (taken && !c->rest[sj].still && try_hold(c, s, sj, dt))
             fire(c, w, s, sj, false);
         /* one of them held, the other not (free, or sliding on planes): a slow meeting lands
          * on the held one, and so does one its pile carries (carried); any other is an
          * ordinary response below, which wakes it */
+        const double u = nbep_vec3_dot(s->vel[sk], d) / len;
         /* (not by its speed at e = 1, hold_slow: a sphere lying still on a floor, caught at
          * 0.6 mm/s by one sliding along it, sent it back as off a wall, momentum reversed,
          * until 2026-12-02; what its pile carries, it still lands) */
@@ -1026,20 +964,10 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
     /* SPEC /stats/virial: r12 . dp2, dp2 the momentum hi received */
     nbep_xsum_add(&mx->virial,
                   nbep_vec3_dot(r12, nbep_vec3_scale(nbep_vec3_sub(s->vel[hi], v_hi), m_hi)));
-    /* Held by their speed (the rest speed) only where the pile takes the push (j, pushed
-     * where its pile cannot take it, keeps the push however slow: a hold would take it back,
-     * and the push's momentum with it), and only where their accelerations press them
-     * together, the pair that would jitter in minimum bounces for ever: two spheres sliding
-     * on a frictionless floor that meet slowly part at their own speeds. Holding those too
-     * stopped them as static friction would (until 2026-12-02: two spheres side by side on a
-     * floor, a third sliding off the first, pushed the pair ten times a step, each slow
-     * meeting held, and the three left with 0.51 kg m/s from nothing; now they slide off
-     * together at 0.27 m/s, as the naive algorithm has them). */
-    const bool pressed =
-        c->rest && nbep_vec3_dot(nbep_vec3_sub(effective_acc(c, s, hi), effective_acc(c, s, lo)),
-                                 r12) < 0.0;
-    update_rest(c, s, lo, dt, c->hold_slow && taken && pressed);
-    update_rest(c, s, hi, dt, c->hold_slow && taken && pressed);
+    /* j, pushed where its pile cannot take it, keeps the push however slow (a hold would
+     * take it back, and the push's momentum with it) */
+    update_rest(c, s, lo, dt, c->hold_slow && (taken || lo != sj));
+    update_rest(c, s, hi, dt, c->hold_slow && (taken || hi != sj));
     fire(c, w, s, lo, still_lo);
     fire(c, w, s, hi, still_hi);
 }
