@@ -4,8 +4,7 @@
 # jam, or cost hundreds of thousands of collisions with nothing held, before those rules:
 # - a closed V groove: 6 spheres (e = 0.5) dropped into a 45-degree V with an end wall, gravity
 #   tilted towards it; before: 110559 collisions in 2000 steps, one sphere held at the end;
-#   now about 6600, all six held by step 2400 (2026-12-02: a held sphere that its pile cannot
-#   hold against a push now moves, and the run settled at step 1400 before that, with 13400);
+#   now 13220, all six held, the last collision at step 1805 (measured 2026-12-02, 4e9fcea);
 # - 12 spheres poured into a 0.33 m box: before, the stall check stopped the run at step 949;
 #   now it settles, in every neighbour mode (see below).
 # "Held" is read off the last frame: a held sphere's velocity is exactly zero. The limits
