@@ -116,6 +116,8 @@ bool nbep__output_xmf_room(nbep_output *o, size_t f)
 nbep_status nbep__output_xmf_write(nbep_output *o, nbep_diag *d)
 {
     o->xmf_last = nbep_now();
+    if (!nbep_xdmf_can_name(o->path)) /* no sidecar (the run said so as it began) */
+        return NBEP_OK;
     return nbep_xdmf_write(o->path, o->n_spheres, (size_t)o->n_frames, o->xmf_step, o->xmf_time,
                            o->frame_vel >= 0, d);
 }
@@ -523,7 +525,7 @@ int nbep__output_reserve(nbep_output *o, const char *what, nbep_diag *d)
 double nbep_output_sidecar_bytes(const nbep_scene *sc, const char *path)
 {
     /* as nbep_output_create_staged decides it (o->xmf) and the frames' velocity is written */
-    if (!sc->out_position)
+    if (!sc->out_position || !nbep_xdmf_can_name(path))
         return 0.0;
     return nbep_xdmf_bytes(path, sc->state.n, sc->steps, sc->output_every, sc->dt,
                            sc->out_velocity);
@@ -867,7 +869,8 @@ nbep_status nbep_output_publish(nbep_output *o, nbep_diag *d)
     }
     free(o->staged);
     o->staged = NULL;
-    if (!o->xmf) { /* a sidecar of an older run at this path would describe frames not here */
+    if (!o->xmf || !nbep_xdmf_can_name(o->path)) { /* a sidecar of an older run at this path
+                                                      * would describe frames not here */
         char *x = nbep_xdmf_path(o->path);
         if (x)
             remove(x);

@@ -15,6 +15,7 @@
  * The sidecar is rewritten whole at every call (its size grows by about 1.5 kB per frame), to
  * "SIDECAR.tmp" then renamed: readers never see a half-written file. */
 #include "nbep/output_xdmf.h"
+#include "nbep/summary.h"
 
 #include <errno.h>
 #include <inttypes.h>
@@ -89,6 +90,15 @@ static const char *base_name(const char *path)
 {
     const char *slash = strrchr(path, '/');
     return slash ? slash + 1 : path;
+}
+
+bool nbep_xdmf_can_name(const char *h5_path)
+{
+    const char *base = base_name(h5_path);
+    for (const unsigned char *r = (const unsigned char *)base; *r; r++)
+        if (*r < 0x20) /* XML 1.0 has no characters below the space but TAB, LF, CR */
+            return false;
+    return nbep_utf8_valid(base);
 }
 
 char *nbep_xdmf_other_run(const char *h5_path)

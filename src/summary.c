@@ -200,6 +200,17 @@ static size_t utf8_sequence(const unsigned char *s)
     return len;
 }
 
+bool nbep_utf8_valid(const char *s)
+{
+    for (const unsigned char *r = (const unsigned char *)s; *r;) {
+        const size_t len = utf8_sequence(r);
+        if (!len)
+            return false;
+        r += len;
+    }
+    return true;
+}
+
 json_t *nbep_summary_json_text(const char *s)
 {
     /* each byte at most the three of U+FFFD */

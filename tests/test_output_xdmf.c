@@ -249,6 +249,26 @@ static void test_the_run_file_name_is_escaped_for_xml(void **state)
     nbep_diag_fini(&d);
 }
 
+/* A sidecar names its run in XML, which is UTF-8 text without control characters: a run file
+ * whose base name is not (Latin-1 bytes, an overlong or cut sequence, a tab) has no sidecar
+ * (nbep_xdmf_can_name); its folder's name does not count (the sidecar names the file by its
+ * base name). */
+static void test_a_name_that_is_not_utf8_text_gets_no_sidecar(void **state)
+{
+    (void)state;
+    assert_true(nbep_xdmf_can_name("out.h5"));
+    assert_true(nbep_xdmf_can_name("dir/r\xc3\xa9sultat.h5"));       /* UTF-8 e acute */
+    assert_true(nbep_xdmf_can_name("r\xe9pertoire/resultat.h5"));     /* only the base name */
+    assert_true(nbep_xdmf_can_name("\xf0\x9f\x8c\x8d.h5"));           /* four bytes */
+    assert_false(nbep_xdmf_can_name("dir/r\xe9sultat.h5"));           /* Latin-1 */
+    assert_false(nbep_xdmf_can_name("\xc0\xaf.h5"));                  /* overlong '/' */
+    assert_false(nbep_xdmf_can_name("r\xc3.h5"));                      /* cut short */
+    assert_false(nbep_xdmf_can_name("\xed\xa0\x80.h5"));              /* a surrogate */
+    assert_false(nbep_xdmf_can_name("a\tb.h5"));                       /* a control character */
+    assert_false(nbep_xdmf_can_name("a\x1f.h5"));
+    assert_true(nbep_xdmf_can_name("a\x20\x7e.h5"));
+}
+
 static void test_an_unwritable_place_is_one_error_line(void **state)
 {
     (void)state;
@@ -339,6 +359,7 @@ int main(void)
         cmocka_unit_test(test_the_sidecars_size_is_known_before_the_run),
         cmocka_unit_test(test_a_rewrite_replaces_the_sidecar_and_can_drop_velocity),
         cmocka_unit_test(test_the_run_file_name_is_escaped_for_xml),
+        cmocka_unit_test(test_a_name_that_is_not_utf8_text_gets_no_sidecar),
         cmocka_unit_test(test_an_unwritable_place_is_one_error_line),
         cmocka_unit_test(test_a_growing_sidecar_is_rewritten_at_doublings_or_after_30_s),
         cmocka_unit_test(test_a_real_run_files_sidecar_resolves_in_a_reader),

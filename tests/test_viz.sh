@@ -109,4 +109,21 @@ if [ -x /usr/bin/pvpython ]; then
     check "ParaView reads the sidecar" \
         "/usr/bin/pvpython scripts/check_xdmf.py --paraview '$tmp/viz.xmf' >/dev/null 2>&1"
 fi
+
+# a run file named in Latin-1 bytes (r\xe9sultat.h5): XML cannot name it, so no sidecar (until
+# 2026-12-02 one that XML parsers refuse), one warning saying so, --quiet too, and the check's
+# report gives the sidecar as null; a sidecar an older run left at that path goes
+lat="$tmp/r"$'\xe9'"sultat"
+printf 'not a sidecar\n' >"$lat.xmf"
+bin/nbep run inputs/two-spheres.deck --quiet -o "$lat.h5" 2>"$tmp/lat.err"
+rc=$?
+check "a run into a Latin-1 name ends (exit 0, got $rc) with its file and no sidecar" \
+    "[ $rc = 0 ] && [ -s '$lat.h5' ] && [ ! -e '$lat.xmf' ]"
+check "... and one warning line naming the file and why" \
+    "[ \$(wc -l <'$tmp/lat.err') = 1 ] && grep -aq 'sultat.h5: its name is not UTF-8 text' '$tmp/lat.err' &&
+     grep -q 'no sidecar is written' '$tmp/lat.err'"
+bin/nbep check inputs/two-spheres.deck -o "$lat.h5" --quiet --summary - >"$tmp/lat.json" 2>/dev/null
+check "nbep check's report gives its sidecar as null" "grep -q '\"sidecar\": null' '$tmp/lat.json'"
+bin/nbep run inputs/two-spheres.deck --quiet -o "$tmp/plain.h5" 2>"$tmp/plain.err"
+check "a UTF-8 name gets its sidecar and no warning" "[ -s '$tmp/plain.xmf' ] && [ ! -s '$tmp/plain.err' ]"
 test_end viz

@@ -21,6 +21,12 @@
  * appended when h5_path does not end in ".h5"). malloc'd; NULL when out of memory. */
 char *nbep_xdmf_path(const char *h5_path);
 
+/* Whether a sidecar can name the run file h5_path: its base name is UTF-8 without control
+ * characters, as XML text must be. A name of other bytes (Latin-1, "r\xe9sultat.h5") cannot
+ * be written into XML, and the file it would name is not the one a reader's UTF-8 opens: such
+ * a run writes no sidecar (until 2026-12-02 it wrote one that XML parsers refuse). */
+bool nbep_xdmf_can_name(const char *h5_path);
+
 /* Whether the file at path is an XDMF sidecar (what `nbep info` and `--resume` are often
  * handed instead of their run: the two lie side by side), and the run file it describes, its
  * name as nbep's sidecar records it at its top, into name ("" where the sidecar does not say:

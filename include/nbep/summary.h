@@ -124,6 +124,8 @@ char *nbep_summary_dump_line(struct json_t *o);
  * memory. (Until 2026-11-30 such a deck or folder name made nbep check's and the sweep's JSON
  * fail as "Cannot allocate memory", exit 1, after the sweep's runs.) */
 struct json_t *nbep_summary_json_text(const char *s);
+/* Whether s is valid UTF-8 throughout (RFC 3629, as nbep_summary_json_text reads it). */
+bool nbep_utf8_valid(const char *s);
 /* Parses a summary as nbep_summary_write_json writes it (format "nbep-summary-1", any
  * version) into *sum. false when the text is not such a summary, a key of the table is of the
  * wrong type (a status none of the texts above), or a required key is missing; *sum is then
