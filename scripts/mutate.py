@@ -1316,7 +1316,7 @@ MUTANTS = [
      "    if (!sc->out_position || !nbep_xdmf_can_name(path))", "    if (!sc->out_position)",
      ["tests/test_viz.sh"], None),
     ("xdmf-unnameable-unsaid", "src/run.c",
-     "(sc.out_position || rq->resume) && !nbep_xdmf_can_name(file))", "(sc.out_position || rq->resume) && 0)",
+     "(sc.out_position || rq->resume) &&\n            !nbep_xdmf_can_name(file))", "(sc.out_position || rq->resume) &&\n            0)",
      ["tests/test_viz.sh"], None),
     ("xdmf-other-run-never", "src/run.c",
      "    char *owner = output ? nbep_xdmf_other_run(output) : NULL;",

@@ -116,7 +116,7 @@ bool nbep__output_xmf_room(nbep_output *o, size_t f)
 nbep_status nbep__output_xmf_write(nbep_output *o, nbep_diag *d)
 {
     o->xmf_last = nbep_now();
-    if (!nbep_xdmf_can_name(o->path)) /* no sidecar (the run said so as it began) */
+    if (!nbep_xdmf_can_name(o->path)) /* no sidecar (nbep_run says so as the run begins) */
         return NBEP_OK;
     return nbep_xdmf_write(o->path, o->n_spheres, (size_t)o->n_frames, o->xmf_step, o->xmf_time,
                            o->frame_vel >= 0, d);

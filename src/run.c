@@ -557,14 +557,6 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         nbep_scene_fini(&sc);
         return st;
     }
-    /* --quiet too: a user who looks for the sidecar should learn why there is none (a
-     * sweep's runs, never: its check's report gives their sidecars as null) */
-    if (!rq->sweep_run && (sc.out_position || rq->resume) && !nbep_xdmf_can_name(file))
-        fprintf(stderr,
-                "nbep: warning: %s: its name is not UTF-8 text, which the XDMF sidecar (XML) "
-                "must name it in: no sidecar is written (ParaView and VisIt read the run "
-                "through one; give the output a UTF-8 name for it)\n",
-                file);
     /* the output first: it takes the file's lock, and a run refused there (another writes the
      * file) must not open the summary, whose SUMMARY.partial is the other run's when both
      * name one (a resubmitted job: fopen emptied it, the refusal removed it, and the first
@@ -596,6 +588,16 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         if (st == NBEP_OK)
             st = rq->resume ? nbep_output_resume_begin(out, &sc, threads, d)
                             : nbep_output_publish(out, d);
+        /* --quiet too: a user who looks for the sidecar should learn why there is none (a
+         * sweep's runs, never: its check's report gives their sidecars as null); once the
+         * file is there (a refused run says only why) */
+        if (st == NBEP_OK && !rq->sweep_run && (sc.out_position || rq->resume) &&
+            !nbep_xdmf_can_name(file))
+            fprintf(stderr,
+                    "nbep: warning: %s: its name is not UTF-8 text, which the XDMF sidecar (XML) "
+                    "must name it in: no sidecar is written (ParaView and VisIt read the run "
+                    "through one; give the output a UTF-8 name for it)\n",
+                    file);
         if (st == NBEP_OK && rq->resume && rq->verbose && resume.last_step != resume.step)
             fprintf(stderr,
                     "nbep: %s continues from its frame at step %lld, the last at a multiple of "
