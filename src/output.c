@@ -113,10 +113,20 @@ bool nbep__output_xmf_room(nbep_output *o, size_t f)
     return true;
 }
 
+bool nbep__output_writes_sidecar(bool positions, const char *path)
+{
+    return positions && nbep_xdmf_can_name(path);
+}
+
+bool nbep_output_sidecar_unnamed(const nbep_output *o)
+{
+    return o->xmf && !o->sidecar;
+}
+
 nbep_status nbep__output_xmf_write(nbep_output *o, nbep_diag *d)
 {
     o->xmf_last = nbep_now();
-    if (!nbep_xdmf_can_name(o->path)) /* no sidecar (nbep_run says so as the run begins) */
+    if (!o->sidecar) /* its name is not UTF-8 text (nbep_run says so as the run begins) */
         return NBEP_OK;
     return nbep_xdmf_write(o->path, o->n_spheres, (size_t)o->n_frames, o->xmf_step, o->xmf_time,
                            o->frame_vel >= 0, d);
@@ -524,8 +534,8 @@ int nbep__output_reserve(nbep_output *o, const char *what, nbep_diag *d)
 
 double nbep_output_sidecar_bytes(const nbep_scene *sc, const char *path)
 {
-    /* as nbep_output_create_staged decides it (o->xmf) and the frames' velocity is written */
-    if (!sc->out_position || !nbep_xdmf_can_name(path))
+    /* as nbep_output_create_staged decides it and the frames' velocity is written */
+    if (!nbep__output_writes_sidecar(sc->out_position, path))
         return 0.0;
     return nbep_xdmf_bytes(path, sc->state.n, sc->steps, sc->output_every, sc->dt,
                            sc->out_velocity);
@@ -831,6 +841,7 @@ nbep_status nbep_output_create_staged(const char *path, const nbep_scene *sc, in
         goto fail;
     }
     o->xmf = sc->out_position;
+    o->sidecar = nbep__output_writes_sidecar(o->xmf, path);
     nbep__output_room(o, sc);
     /* the frame list's room for the planned frames, up to XMF_RESERVE_MAX of them: a frame past
      * it grows the list as it is written (a deck may plan more frames than memory holds, a run
@@ -869,14 +880,18 @@ nbep_status nbep_output_publish(nbep_output *o, nbep_diag *d)
     }
     free(o->staged);
     o->staged = NULL;
-    if (!o->xmf || !nbep_xdmf_can_name(o->path)) { /* a sidecar of an older run at this path
-                                                      * would describe frames not here */
-        char *x = nbep_xdmf_path(o->path);
-        if (x)
-            remove(x);
-        free(x);
-    }
+    nbep__output_sidecar_stale(o);
     return NBEP_OK;
+}
+
+void nbep__output_sidecar_stale(const nbep_output *o)
+{
+    if (o->sidecar)
+        return;
+    char *x = nbep_xdmf_path(o->path);
+    if (x)
+        remove(x);
+    free(x);
 }
 
 nbep_status nbep_output_create(const char *path, const nbep_scene *sc, int threads,

@@ -103,7 +103,9 @@ struct nbep_output {
     nbep_contact_rec *contacts_buf; /* owned, once used: a batch of records to write */
     /* the XDMF sidecar (RUN.xmf) that lets ParaView and VisIt open the run: rewritten as
      * frames come (nbep_xdmf_due) and at close; needs positions */
-    bool xmf;
+    bool xmf;                      /* the frames have positions: their steps and times listed */
+    bool sidecar;                  /* and the sidecar written: decided once, as the handle opens
+                                    * (nbep__output_writes_sidecar) */
     int64_t *xmf_step;             /* owned, xmf_cap: every frame's step and time so far */
     double *xmf_time;
     size_t xmf_cap;
@@ -188,6 +190,12 @@ double nbep__output_contacts_bytes(size_t n);
 
 /* Room for frame row f in the sidecar's lists; false when memory runs out. */
 bool nbep__output_xmf_room(nbep_output *o, size_t f);
+/* Whether a run whose frames have positions (or not) writes the sidecar of its file at path:
+ * the one place that decides it (the name must be UTF-8 text, nbep_xdmf_can_name). */
+bool nbep__output_writes_sidecar(bool positions, const char *path);
+/* Removes the sidecar at o's path where o writes none: one an older run (or build) left there
+ * would describe frames not in the file. As a new file is published and a resumed one begun. */
+void nbep__output_sidecar_stale(const nbep_output *o);
 /* Rewrites the sidecar (RUN.xmf) for o's frames so far; NBEP_EIO, NBEP_ENOMEM. */
 nbep_status nbep__output_xmf_write(nbep_output *o, nbep_diag *d);
 

@@ -865,6 +865,7 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
             return NBEP_EIO;
     }
     o->xmf = true; /* resumed runs have positions */
+    o->sidecar = nbep__output_writes_sidecar(o->xmf, path);
     if (o->resume.stats) {
         for (int c = 0; c < STATS_N_COLUMNS; c++)
             if (open_cut(o, nbep__stats_columns[c].name, keep, &o->stats[c], d) < 0)
@@ -892,6 +893,7 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
     if (note_resume(o->file, path, sc, threads, o->resume.from, o->resume.changed, d) < 0 ||
         nbep__output_commit(o, frames, d) < 0)
         return NBEP_EIO;
+    nbep__output_sidecar_stale(o);
     /* frames dropped: the sidecar listed them; it lists what the file holds */
     return o->resume.dropped ? nbep__output_xmf_write(o, d) : NBEP_OK;
 }

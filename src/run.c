@@ -591,8 +591,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         /* --quiet too: a user who looks for the sidecar should learn why there is none (a
          * sweep's runs, never: its check's report gives their sidecars as null); once the
          * file is there (a refused run says only why) */
-        if (st == NBEP_OK && !rq->sweep_run && (sc.out_position || rq->resume) &&
-            !nbep_xdmf_can_name(file))
+        if (st == NBEP_OK && !rq->sweep_run && nbep_output_sidecar_unnamed(out))
             fprintf(stderr,
                     "nbep: warning: %s: its name is not UTF-8 text, which the XDMF sidecar (XML) "
                     "must name it in: no sidecar is written (ParaView and VisIt read the run "

@@ -126,4 +126,19 @@ bin/nbep check inputs/two-spheres.deck -o "$lat.h5" --quiet --summary - >"$tmp/l
 check "nbep check's report gives its sidecar as null" "grep -q '\"sidecar\": null' '$tmp/lat.json'"
 bin/nbep run inputs/two-spheres.deck --quiet -o "$tmp/plain.h5" 2>"$tmp/plain.err"
 check "a UTF-8 name gets its sidecar and no warning" "[ -s '$tmp/plain.xmf' ] && [ ! -s '$tmp/plain.err' ]"
+# a resumed run decides it as a new one does: a Latin-1 file continued to more steps writes no
+# sidecar, removes one left there (until 2026-12-02 a resume kept it) and says why; frames without positions would have none anyway, so a run of those is
+# not warned of
+printf 'not a sidecar\n' >"$lat.xmf"
+bin/nbep run inputs/two-spheres.deck --quiet --resume "$lat.h5" --set run.steps=2500 \
+    2>"$tmp/lat-resume.err"
+rc=$?
+check "a Latin-1 run resumed (exit 0, got $rc) writes no sidecar and warns once" \
+    "[ $rc = 0 ] && [ ! -e '$lat.xmf' ] && [ \$(wc -l <'$tmp/lat-resume.err') = 1 ] &&
+     grep -q 'no sidecar is written' '$tmp/lat-resume.err'"
+bin/nbep run inputs/two-spheres.deck --quiet -o "$lat-v.h5" --set 'output.fields=["velocity"]' \
+    2>"$tmp/lat-v.err"
+rc=$?
+check "a Latin-1 run without positions (exit 0, got $rc) is not warned of a sidecar" \
+    "[ $rc = 0 ] && [ -s '$lat-v.h5' ] && [ ! -e '$lat-v.xmf' ] && [ ! -s '$tmp/lat-v.err' ]"
 test_end viz

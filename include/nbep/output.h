@@ -54,6 +54,9 @@ double nbep_output_bytes(const nbep_scene *sc, bool events, bool contacts);
  * at path (sc->output_file, or a sweep's run file: the sidecar names it): 0 when it writes none
  * (no positions in its frames). nbep_output_bytes leaves it out. */
 double nbep_output_sidecar_bytes(const nbep_scene *sc, const char *path);
+/* Whether o's frames have positions but its file's name cannot be written in the sidecar (not
+ * UTF-8 text, nbep_xdmf_can_name), so that no sidecar is written: a run warns of it. */
+bool nbep_output_sidecar_unnamed(const nbep_output *o);
 
 /* Appends one frame (step, step*dt, and the fields the deck asked for) and flushes the file;
  * on NBEP_OK the frame and every stats row appended before it survive a kill -9. s is
