@@ -115,8 +115,7 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
     /* the paper's all-pairs mode predicts each sphere against every other: a new user ran a
      * 150-sphere pile 20 to 50 times slower so, with no word of the cells mode (2026-12-01).
      * (A periodic box may be too small for cells: no hint there.) */
-    if (strcmp(sc->algorithm, "predictive") == 0 && !sc->neighbors_grid && !sc->neighbors_cells &&
-        sc->state.n >= 100 && !nbep_scene_any_periodic(sc))
+    if (nbep_scene_all_pairs(sc) && sc->state.n >= 100 && !nbep_scene_any_periodic(sc))
         fprintf(out,
                 "hint:            run.neighbors = \"cells\" predicts each sphere against its "
                 "neighbours only, the fast mode for crowded scenes (\"all\" is the paper's)\n");

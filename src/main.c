@@ -120,10 +120,13 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
      * the deck alone, as nbep sweep takes its --summary (until 2026-11-30 a report named as
      * output.file was refused as "the run's file itself", which nbep sweep takes) */
     const bool study = sc.sweep_replicas > 1 || sc.sweep_n_axes > 0;
+    const size_t first_error = d->n_errors;
     st = nbep_run_check_paths(cli->path, study ? NULL : sc.output_file, cli->summary, d);
     if (st == NBEP_OK && !study)
         st = nbep_run_check_output_dir(sc.output_file, d);
     if (st != NBEP_OK) {
+        nbep_run_blame_deck_output(&sc, cli->path, study ? NULL : sc.output_file, d,
+                                   first_error);
         nbep_scene_fini(&sc);
         return st;
     }

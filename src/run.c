@@ -480,6 +480,35 @@ nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
     return NBEP_OK;
 }
 
+void nbep_run_blame_deck_output(const nbep_scene *sc, const char *deck, const char *output,
+                                nbep_diag *d, size_t first)
+{
+    if (!sc->output_file_line || !output || strcmp(output, sc->output_file) != 0)
+        return;
+    static const char tail[] = ": cannot create the output file";
+    const size_t n = strlen(output), stored = d->n_errors < d->cap ? d->n_errors : d->cap;
+    for (size_t i = first; i < stored; i++) {
+        const char *m = d->msg[i]; /* "nbep: OUTPUT: cannot create the output file..." */
+        if (!m || strncmp(m, "nbep: ", 6) != 0 || strncmp(m + 6, output, n) != 0 ||
+            strncmp(m + 6 + n, tail, sizeof tail - 1) != 0)
+            continue;
+        const int len = snprintf(NULL, 0, "%s:%u: output.file: %s", deck, sc->output_file_line,
+                                 m + 6);
+        char *b = len > 0 ? malloc((size_t)len + 1) : NULL;
+        if (!b)
+            continue; /* without memory the message stays as it was */
+        snprintf(b, (size_t)len + 1, "%s:%u: output.file: %s", deck, sc->output_file_line, m + 6);
+        free(d->msg[i]);
+        d->msg[i] = b;
+    }
+}
+
+/* The pair tests before the first step from which a run of the paper's all-pairs mode says, as
+ * it begins, that the cells mode exists: 2^30, from 46342 spheres, whose first predictions alone
+ * take a minute or more of one core (65536 spheres: minutes, README). A new user ran 400000
+ * spheres so (2026-12-02) and waited 10 minutes for a first step that took hours. */
+#define ALL_PAIRS_NOTE_PAIRS 1073741824.0
+
 /* The line of a run stopped by signal st before its first frame, with nothing written. */
 static nbep_status not_begun(nbep_status st, const nbep_run_request *rq, nbep_diag *d)
 {
@@ -519,6 +548,15 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                 "nbep: note: %s has a sweep group, which nbep run leaves aside: this is one run "
                 "of the deck's own values (`nbep sweep %s` runs the study)\n",
                 rq->deck_path, rq->deck_path);
+    const double pairs = 0.5 * (double)sc.state.n * ((double)sc.state.n - 1.0);
+    if (rq->verbose && !rq->sweep_run && nbep_scene_all_pairs(&sc) &&
+        pairs >= ALL_PAIRS_NOTE_PAIRS)
+        fprintf(stderr,
+                "nbep: note: %s: run.neighbors = \"all\" (the paper's mode, the default) tests "
+                "each of its %zu spheres against every other: %.3g pair tests before the first "
+                "step, and %zu at each collision; run.neighbors = \"cells\" tests neighbours "
+                "only, the fast mode for crowded scenes\n",
+                rq->deck_path, sc.state.n, pairs, sc.state.n - 1);
     const int threads = nbep_sim_resolve_threads(sc.threads);
     nbep_output *out = NULL;
     nbep_sim *sim = NULL;
@@ -539,6 +577,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                                 !nbep_run_same_path(named, rq->resume)
                             ? sc.output_file_origin
                             : NULL;
+    const size_t first_error = d->n_errors;
     st = other ? NBEP_EUSAGE : nbep_run_check_paths(rq->deck_path, file, rq->summary_path, d);
     /* a resume writes the file in place and makes no FILE.partial (a resume of a name of 248
      * to 250 characters was refused for one, for a day) */
@@ -554,6 +593,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                       "it, or name that file)",
                       other, rq->resume);
     if (st != NBEP_OK) {
+        nbep_run_blame_deck_output(&sc, rq->deck_path, file, d, first_error);
         nbep_scene_fini(&sc);
         return st;
     }
@@ -563,6 +603,8 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
      * run failed at its end, until 2026-12-01) */
     st = rq->resume ? nbep_output_open_resume(file, &sc, &out, &resume, d)
                     : nbep_output_create_staged(file, &sc, threads, &out, d);
+    if (st != NBEP_OK && !rq->resume)
+        nbep_run_blame_deck_output(&sc, rq->deck_path, file, d, first_error);
     if (st == NBEP_OK &&
         (st = open_summary(rq->summary_path, rq->stop_signal, &summary, d)) != NBEP_OK) {
         nbep_status ignored = nbep_output_close(&out, NULL, d); /* nothing written yet */
@@ -588,6 +630,8 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         if (st == NBEP_OK)
             st = rq->resume ? nbep_output_resume_begin(out, &sc, threads, d)
                             : nbep_output_publish(out, d);
+        if (st != NBEP_OK && !rq->resume)
+            nbep_run_blame_deck_output(&sc, rq->deck_path, file, d, first_error);
         /* --quiet too: a user who looks for the sidecar should learn why there is none (a
          * sweep's runs, never: its check's report gives their sidecars as null); once the
          * file is there (a refused run says only why) */

@@ -132,11 +132,6 @@ static void type_error(load *L, const config_setting_t *s, const char *path, con
     nbep__strbuf_fini(&b);
 }
 
-static bool is_int(const config_setting_t *s)
-{
-    return config_setting_type(s) == CONFIG_TYPE_INT || config_setting_type(s) == CONFIG_TYPE_INT64;
-}
-
 static double number_of(const config_setting_t *s)
 {
     return config_setting_type(s) == CONFIG_TYPE_FLOAT ? config_setting_get_float(s)
@@ -152,8 +147,9 @@ static got get_int(load *L, const config_setting_t *parent, const char *prefix, 
         return g;
     char path[PATH_LEN];
     path_join(path, prefix, leaf_of(schema[id].path));
-    if (!is_int(s)) {
-        type_error(L, s, path, "an integer");
+    const char *words;
+    if (!nbep__scene_kind_holds(NBEP__K_INT, false, s, &words)) {
+        type_error(L, s, path, words);
         return BAD;
     }
     int64_t v = config_setting_get_int64(s);
@@ -204,8 +200,9 @@ static got get_float(load *L, const config_setting_t *parent, const char *prefix
         return g;
     char path[PATH_LEN];
     path_join(path, prefix, leaf_of(schema[id].path));
-    if (!config_setting_is_number(s)) {
-        type_error(L, s, path, "a number");
+    const char *words;
+    if (!nbep__scene_kind_holds(NBEP__K_FLOAT, false, s, &words)) {
+        type_error(L, s, path, words);
         return BAD;
     }
     double v = number_of(s);
@@ -244,12 +241,9 @@ static got get_vec3(load *L, const config_setting_t *parent, const char *prefix,
         return g;
     char path[PATH_LEN];
     path_join(path, prefix, leaf_of(schema[id].path));
-    bool ok = (config_setting_is_array(s) || config_setting_is_list(s)) &&
-              config_setting_length(s) == 3;
-    for (unsigned k = 0; ok && k < 3; k++)
-        ok = config_setting_is_number(config_setting_get_elem(s, k));
-    if (!ok) {
-        type_error(L, s, path, "3 numbers [x, y, z]");
+    const char *words;
+    if (!nbep__scene_kind_holds(NBEP__K_VEC3, false, s, &words)) {
+        type_error(L, s, path, words);
         return BAD;
     }
     nbep_vec3 v = {number_of(config_setting_get_elem(s, 0)),
@@ -277,10 +271,11 @@ static got get_string(load *L, const config_setting_t *parent, const char *prefi
     got g = find(L, parent, prefix, id, &s);
     if (g != GOT)
         return g;
-    if (config_setting_type(s) != CONFIG_TYPE_STRING) {
+    const char *words;
+    if (!nbep__scene_kind_holds(NBEP__K_STRING, false, s, &words)) {
         char path[PATH_LEN];
         path_join(path, prefix, leaf_of(schema[id].path));
-        type_error(L, s, path, "a string");
+        type_error(L, s, path, words);
         return BAD;
     }
     *out = config_setting_get_string(s);
@@ -296,10 +291,11 @@ static got get_bool(load *L, const config_setting_t *parent, const char *prefix,
     got g = find(L, parent, prefix, id, &s);
     if (g != GOT)
         return g;
-    if (config_setting_type(s) != CONFIG_TYPE_BOOL) {
+    const char *words;
+    if (!nbep__scene_kind_holds(NBEP__K_BOOL, false, s, &words)) {
         char path[PATH_LEN];
         path_join(path, prefix, leaf_of(schema[id].path));
-        type_error(L, s, path, "true or false");
+        type_error(L, s, path, words);
         return BAD;
     }
     *out = config_setting_get_bool(s) != 0;
@@ -313,14 +309,11 @@ static got get_bool3(load *L, const config_setting_t *parent, const char *prefix
     got g = find(L, parent, prefix, id, &s);
     if (g != GOT)
         return g;
-    bool ok = (config_setting_is_array(s) || config_setting_is_list(s)) &&
-              config_setting_length(s) == 3;
-    for (unsigned k = 0; ok && k < 3; k++)
-        ok = config_setting_type(config_setting_get_elem(s, k)) == CONFIG_TYPE_BOOL;
-    if (!ok) {
+    const char *words;
+    if (!nbep__scene_kind_holds(NBEP__K_BOOL3, false, s, &words)) {
         char path[PATH_LEN];
         path_join(path, prefix, leaf_of(schema[id].path));
-        type_error(L, s, path, "3 booleans [x, y, z]");
+        type_error(L, s, path, words);
         return BAD;
     }
     for (unsigned k = 0; k < 3; k++)
@@ -338,15 +331,11 @@ static got get_aggregate(load *L, const config_setting_t *parent, const char *pr
     got g = find(L, parent, prefix, id, &s);
     if (g != GOT)
         return g;
-    bool ok = schema[id].kind == NBEP__K_GROUP
-                  ? config_setting_is_group(s)
-                  : config_setting_is_list(s) ||
-                        (config_setting_is_array(s) && config_setting_length(s) == 0);
-    if (!ok) {
+    const char *words;
+    if (!nbep__scene_kind_holds(schema[id].kind, false, s, &words)) {
         char path[PATH_LEN];
         path_join(path, prefix, leaf_of(schema[id].path));
-        type_error(L, s, path, schema[id].kind == NBEP__K_GROUP ? "a group { ... }"
-                                                                : "a list ( {...}, ... )");
+        type_error(L, s, path, words);
         return BAD;
     }
     *out = s;
@@ -1014,6 +1003,8 @@ static void parse_output(load *L, const config_setting_t *root, nbep_scene *sc)
         const char *label = nbep__scene_origin(at, false, &line);
         if (label)
             sc->output_file_origin = dup_string(L, label);
+        else
+            sc->output_file_line = line;
     } else if (g == NONE)
         sc->output_file = default_output(L, L->c.deck);
     int64_t every;
@@ -1023,11 +1014,9 @@ static void parse_output(load *L, const config_setting_t *root, nbep_scene *sc)
 
     if (find(L, output, "output", S_OUTPUT_FIELDS, &at) != GOT)
         return;
-    bool ok = config_setting_is_array(at) || config_setting_is_list(at);
-    for (int k = 0; ok && k < config_setting_length(at); k++)
-        ok = config_setting_type(config_setting_get_elem(at, (unsigned)k)) == CONFIG_TYPE_STRING;
-    if (!ok) {
-        type_error(L, at, "output.fields", "an array of strings");
+    const char *words;
+    if (!nbep__scene_kind_holds(NBEP__K_STRINGS, false, at, &words)) {
+        type_error(L, at, "output.fields", words);
         return;
     }
     for (int k = 0; k < config_setting_length(at); k++) {
@@ -1145,12 +1134,11 @@ static void parse_axes(load *L, const config_setting_t *sweep, nbep_scene *sc)
         }
         const config_setting_t *values;
         got g_values = find(L, e, prefix, S_SWEEP_VALUES, &values);
-        if (g_values == GOT && !((config_setting_is_array(values) ||
-                                  config_setting_is_list(values)) &&
-                                 config_setting_length(values) > 0)) {
+        const char *words;
+        if (g_values == GOT && !nbep__scene_kind_holds(NBEP__K_VALUES, false, values, &words)) {
             char path[PATH_LEN];
             path_join(path, prefix, "values");
-            type_error(L, values, path, "a non-empty array or list of values");
+            type_error(L, values, path, words);
             g_values = BAD;
         }
         if (g_key != GOT || g_values != GOT)
@@ -1795,6 +1783,12 @@ const char *nbep_scene_order_name(const nbep_scene *sc)
 bool nbep_scene_tc_model(const nbep_scene *sc)
 {
     return sc->tc > 0.0 && sc->restitution < 1.0;
+}
+
+bool nbep_scene_all_pairs(const nbep_scene *sc)
+{
+    return strcmp(sc->algorithm, "predictive") == 0 && !sc->neighbors_grid &&
+           !sc->neighbors_cells;
 }
 
 bool nbep_scene_any_periodic(const nbep_scene *sc)

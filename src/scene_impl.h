@@ -116,6 +116,12 @@ typedef enum nbep__scene_kind {
  * path that indexes into a list or array entry ("spheres.[0]", "physics.gravity.[2]") is
  * known, with *element set. Returns false for a path outside the schema. */
 bool nbep__scene_schema_kind(const char *path, nbep__scene_kind *kind, bool *element);
+/* Whether setting s has the type of a setting of kind k (an element of one when `element`:
+ * a number of a [x, y, z], a group of a list, ...; any value of a sweep's values), and in
+ * *words what that type is ("an integer", "3 numbers [x, y, z]", ...): the one rule of types
+ * that the deck's check (scene.c) and an override's replaced setting (scene_override.c) ask. */
+bool nbep__scene_kind_holds(nbep__scene_kind k, bool element, const config_setting_t *s,
+                            const char **words);
 /* Writes "unknown setting PATH" plus " (did you mean P?)" when a close known path exists. */
 void nbep__scene_unknown_text(const char *path, nbep__strbuf *b);
 

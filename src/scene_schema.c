@@ -21,6 +21,74 @@ const schema_entry nbep__scene_schema[S_COUNT] = {
 /* The table, by its short name (as scene.c reads it). */
 static const schema_entry *const schema = nbep__scene_schema;
 
+/* ---- types -------------------------------------------------------------------------------- */
+
+/* Whether s is an array or list of n entries (n < 0: any number) each of kind e. */
+static bool all_of(const config_setting_t *s, int n, nbep__scene_kind e)
+{
+    if (!config_setting_is_array(s) && !config_setting_is_list(s))
+        return false;
+    const int len = config_setting_length(s);
+    if (n >= 0 && len != n)
+        return false;
+    const char *ignored;
+    for (int k = 0; k < len; k++)
+        if (!nbep__scene_kind_holds(e, false, config_setting_get_elem(s, (unsigned)k), &ignored))
+            return false;
+    return true;
+}
+
+bool nbep__scene_kind_holds(nbep__scene_kind k, bool element, const config_setting_t *s,
+                            const char **words)
+{
+    if (element) { /* the kind of an element of a container of kind k */
+        switch (k) {
+        case NBEP__K_LIST: k = NBEP__K_GROUP; break;
+        case NBEP__K_VEC3: k = NBEP__K_FLOAT; break;
+        case NBEP__K_BOOL3: k = NBEP__K_BOOL; break;
+        case NBEP__K_STRINGS: k = NBEP__K_STRING; break;
+        default: *words = "a value"; return true; /* a sweep's values: each checked as a --set */
+        }
+    }
+    const int t = config_setting_type(s);
+    switch (k) {
+    case NBEP__K_GROUP:
+        *words = "a group { ... }";
+        return config_setting_is_group(s);
+    case NBEP__K_LIST: /* an empty [] counts as an empty list */
+        *words = "a list ( {...}, ... )";
+        return config_setting_is_list(s) ||
+               (config_setting_is_array(s) && config_setting_length(s) == 0);
+    case NBEP__K_STRING:
+        *words = "a string";
+        return t == CONFIG_TYPE_STRING;
+    case NBEP__K_INT:
+        *words = "an integer";
+        return t == CONFIG_TYPE_INT || t == CONFIG_TYPE_INT64;
+    case NBEP__K_FLOAT:
+        *words = "a number";
+        return config_setting_is_number(s);
+    case NBEP__K_BOOL:
+        *words = "true or false";
+        return t == CONFIG_TYPE_BOOL;
+    case NBEP__K_VEC3:
+        *words = "3 numbers [x, y, z]";
+        return all_of(s, 3, NBEP__K_FLOAT);
+    case NBEP__K_BOOL3:
+        *words = "3 booleans [x, y, z]";
+        return all_of(s, 3, NBEP__K_BOOL);
+    case NBEP__K_STRINGS:
+        *words = "an array of strings";
+        return all_of(s, -1, NBEP__K_STRING);
+    case NBEP__K_VALUES:
+        *words = "a non-empty array or list of values";
+        return (config_setting_is_array(s) || config_setting_is_list(s)) &&
+               config_setting_length(s) > 0;
+    }
+    *words = "?";
+    return false;
+}
+
 /* ---- path queries ------------------------------------------------------------------------- */
 
 int nbep__scene_schema_find(const char *abstract)

@@ -484,6 +484,28 @@ static void test_wrong_types_are_errors_but_integers_pass_for_numbers(void **sta
                      "(got { normal = [0.0, 0.0, 1.0]; })");
 }
 
+/* The kinds' rule at its edges (nbep__scene_kind_holds): an empty [] is an empty list, an array
+ * of values is not a list of groups, and a study's values must not be empty */
+static void test_an_array_is_no_list_and_a_studys_values_are_not_empty(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *deck = write_deck("scene_kinds.deck",
+                                  "spheres = [];\n"
+                                  "planes = [1.0, 2.0];\n"
+                                  "sweep: { vary = ( { key = \"physics.restitution\";\n"
+                                  "  values = []; } ); };\n",
+                                  buf, sizeof buf);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    char want[2][512];
+    snprintf(want[0], sizeof want[0],
+             "%s:2: planes must be a list ( {...}, ... ) (got [1.0, 2.0])", deck);
+    snprintf(want[1], sizeof want[1],
+             "%s:4: sweep.vary.[0].values must be a non-empty array or list of values (got [])",
+             deck);
+    ASSERT_DIAG(&f->d, want[0], want[1]);
+}
+
 static void test_numbers_beyond_double_range_are_not_finite(void **state)
 {
     fixture *f = *state;
@@ -1156,6 +1178,53 @@ static void test_override_messages_name_their_origin(void **state)
                 "--set physics.restitution=1.5: physics.restitution must be in [0, 1] (got 1.5)",
                 "--add-a-sphere: spheres.[2] needs position (one sphere) or count (a group)",
                 "-g [0,0: bad value: syntax error");
+}
+
+/* A deck value of the wrong type that an override replaces is still the deck's error, at its
+ * line (until 2026-12-02 `-n 5` over `steps = "1000"` ran, and the deck failed without it):
+ * a leaf, an element of a vector, a whole vector and a list's entry; a value of the right type
+ * but out of range is the override's to mend, and one that an earlier override made is not the
+ * deck's */
+static void test_a_replaced_deck_value_of_the_wrong_type_is_the_decks_error(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *deck = write_deck("scene_replaced.deck",
+                                  "run: { steps = \"1000\"; dt = 1.0e-3; };\n"
+                                  "physics: { gravity = ( 0.0, \"down\", -9.8 );\n"
+                                  "  restitution = [0.9]; };\n"
+                                  "spheres = ( { position = [0.0, 0.0, 0.0]; radius = 0.1;\n"
+                                  "  mass = 1.0; },\n"
+                                  "  7 );\n",
+                                  buf, sizeof buf);
+    const char *const ov[] = {"run.steps=5", "physics.gravity.[1]=0", "physics.restitution=0.5",
+                              "spheres.[1]={position=[1.0,0.0,0.0];radius=0.1;mass=1.0;}"};
+    const char *const origins[] = {"-n 5", NULL, NULL, NULL};
+    assert_int_equal(nbep_scene_load_from(deck, ov, origins, 4, NULL, &f->sc, &f->d),
+                     NBEP_EDECK);
+    char want[4][512];
+    snprintf(want[0], sizeof want[0], "%s:1: run.steps must be an integer (got \"1000\"; -n 5 "
+             "replaces it, but the deck must be right without it)", deck);
+    snprintf(want[1], sizeof want[1], "%s:2: physics.gravity.[1] must be a number (got "
+             "\"down\"; --set physics.gravity.[1]=0 replaces it, but the deck must be right "
+             "without it)", deck);
+    snprintf(want[2], sizeof want[2], "%s:3: physics.restitution must be a number (got [0.9]; "
+             "--set physics.restitution=0.5 replaces it, but the deck must be right "
+             "without it)", deck);
+    snprintf(want[3], sizeof want[3], "%s:6: spheres.[1] must be a group { ... } (got 7; --set "
+             "spheres.[1]={position=[1.0,0.0,0.0];radius=0.1;mass=1.0;} replaces it, but the "
+             "deck must "
+             "be right without it)", deck);
+    ASSERT_DIAG(&f->d, want[0], want[1], want[2], want[3]);
+    nbep_diag_clear(&f->d);
+    /* right types, a value out of range and one an override made: the overrides mend them */
+    deck = write_deck("scene_replaced.deck",
+                      "run: { steps = -5; dt = 1.0e-3; };\n"
+                      "spheres = ( { position = [0.0, 0.0, 0.0]; radius = 0.1; mass = 1.0; } );\n",
+                      buf, sizeof buf);
+    LOAD_OK(f, deck, "run.steps=5", "run.dt=fast", "run.dt=2.0e-3");
+    assert_int_equal(f->sc.steps, 5);
+    assert_true(f->sc.dt == 2.0e-3);
 }
 
 static void test_malformed_overrides_are_one_line_each(void **state)
@@ -2680,6 +2749,7 @@ int main(void)
         T(test_a_syntax_error_comes_before_a_later_line_s_too_big_integer),
         T(test_unknown_settings_are_named_with_the_closest_known_one),
         T(test_wrong_types_are_errors_but_integers_pass_for_numbers),
+        T(test_an_array_is_no_list_and_a_studys_values_are_not_empty),
         T(test_numbers_beyond_double_range_are_not_finite),
         T(test_values_out_of_range_are_all_reported_in_one_pass),
         T(test_threads_take_up_to_their_limit_and_no_more),
@@ -2709,6 +2779,7 @@ int main(void)
         T(test_bad_override_value_is_reported_at_the_override),
         T(test_a_vector_broken_by_an_element_override_is_reported_at_the_override),
         T(test_override_messages_name_their_origin),
+        T(test_a_replaced_deck_value_of_the_wrong_type_is_the_decks_error),
         T(test_malformed_overrides_are_one_line_each),
         T(test_override_making_half_a_box_reports_the_other_half_missing),
         T(test_an_index_past_an_empty_list_says_0_entries),

@@ -721,4 +721,14 @@ rc1=$?
 check "... which ends on TERM (exit $rc1) with its frames readable" \
     "[ $rc1 = 143 ] && '$nbep' info '$tmp/held.sweep/run-0000.h5' | grep -q '^status: *terminated'"
 
+# a run file that cannot be made (a directory in its place) fails that run in the path's words:
+# its deck's output.file names the study's folder, not that file, so no deck line is blamed
+rm -rf "$tmp/blocked.sweep"
+mkdir -p "$tmp/blocked.sweep/run-0001.h5"
+sed "s|file = \"s.h5\"|file = \"$tmp/blocked.h5\"|" "$tmp/s.deck" >"$tmp/blocked.deck"
+run_sweep "$tmp/blocked.deck" --quiet --set 'sweep.vary.[0].values=[1.0]'
+
+check "a sweep run whose file is a directory fails in the path's words (exit $rc): $(head -c 300 "$tmp/stderr")" \
+    "[ $rc = 1 ] && grep -qx 'nbep: sweep run 1 (physics.restitution=1.0 seed=2) failed: $tmp/blocked.sweep/run-0001.h5: cannot create the output file: Is a directory' '$tmp/stderr'"
+
 test_end sweep_cli

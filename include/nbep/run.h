@@ -41,6 +41,12 @@ typedef struct nbep_run_result {
  * not a directory. NBEP_EUSAGE (NBEP_EIO for a read-only file system), one line in the words
  * of the run's own failure, "nbep: OUTPUT: cannot create the output file: REASON". */
 NBEP_MUST_CHECK nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d);
+/* Where the run file `output` that cannot be made is sc's output.file as the deck set it (not
+ * -o or a --set, whose messages name the path typed), rewords the messages from d's message
+ * `first` on that say so ("nbep: OUTPUT: cannot create the output file: REASON") to name the
+ * deck's line: "DECK:LINE: output.file: OUTPUT: cannot create the output file: REASON". */
+void nbep_run_blame_deck_output(const nbep_scene *sc, const char *deck, const char *output,
+                                nbep_diag *d, size_t first);
 
 /* Writes text (a JSON line) as the summary file `where` is written: "-" is stdout; a file is
  * written as WHERE.partial and renamed to WHERE once complete, so an older file there stays

@@ -107,6 +107,7 @@ typedef struct nbep_scene {
     char *output_file_origin; /* owned: the command line's option that set output.file (-o
                                * FILE, --set ..., as typed), NULL where the deck did or the
                                * default holds (a resumed run refuses another file) */
+    unsigned output_file_line; /* the deck's line that set output.file, 0 where none did */
     uint64_t output_every;    /* >= 1 */
     bool out_position, out_velocity;
     bool out_stats;
@@ -164,6 +165,10 @@ bool nbep_scene_tc_model(const nbep_scene *sc);
 /* Whether the scene's box repeats along some axis (box.periodic): a frame's image counts, a
  * detection's minimum image. */
 bool nbep_scene_any_periodic(const nbep_scene *sc);
+/* Whether sc runs the paper's all-pairs mode: the predictive algorithm with run.neighbors =
+ * "all", which predicts each sphere against every other (n^2 / 2 pair tests before the first
+ * step, n - 1 at each event). */
+bool nbep_scene_all_pairs(const nbep_scene *sc);
 /* A warning's line (no newline) when sc's TC model runs with its default physics.tc, a time
  * in the deck's units, that is more than TC_DEFAULT_STEP_SHARE of run.dt, as in a deck in
  * other units than SI grains' (the default's); NULL when not (tc set, the model off, or the
