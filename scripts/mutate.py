@@ -1644,9 +1644,6 @@ MUTANTS = [
     ("sweep-summary-in-study", "src/sweep.c",
      "        ((st = summary_not_in_study(&p, cli->summary, dd)) != NBEP_OK ||",
      "        ((st = NBEP_OK) != NBEP_OK ||", ["tests/test_sweep_cli.sh"], None),
-    ("sweep-summary-sidecar-allowed", "src/sweep.c",
-     "(nbep_ends_with(base, \".h5\") || nbep_ends_with(base, \".xmf\"));",
-     "nbep_ends_with(base, \".h5\");", ["tests/test_sweep_cli.sh"], None),
     # a study's tables on a full disk: none left half-made, none named that is not there
     ("sweep-table-create-leftover", "src/output_sweep.c",
      "    made = true;\n    if ((file = H5Fcreate(tmp, H5F_ACC_TRUNC, H5P_DEFAULT, fapl)) < 0) {",
@@ -1675,8 +1672,6 @@ MUTANTS = [
      "            NBEP_FAIL(d, nbep_status_of_open(err), \"nbep: cannot remove the last sweep's",
      "            NBEP_FAIL(d, NBEP_EIO, \"nbep: cannot remove the last sweep's",
      ["tests/test_diskfull.sh"], None),
-    ("sweep-summary-at-lock-taken", "src/sweep.c", "          strcmp(base, \".lock\") == 0))",
-     "          0))", ["tests/test_sweep_cli.sh"], None),
     # one closing line for a stop and a failure (2026-12-01)
     ("sweep-stop-line-drops-failures", "src/sweep.c",
      "                      nbep_status_stop_text(run_st, stop_signal), s.ok, p->n_runs, failed);",
