@@ -603,8 +603,6 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
      * run failed at its end, until 2026-12-01) */
     st = rq->resume ? nbep_output_open_resume(file, &sc, &out, &resume, d)
                     : nbep_output_create_staged(file, &sc, threads, &out, d);
-    if (st != NBEP_OK && !rq->resume)
-        nbep_run_blame_deck_output(&sc, rq->deck_path, file, d, first_error);
     if (st == NBEP_OK &&
         (st = open_summary(rq->summary_path, rq->stop_signal, &summary, d)) != NBEP_OK) {
         nbep_status ignored = nbep_output_close(&out, NULL, d); /* nothing written yet */
@@ -630,8 +628,6 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         if (st == NBEP_OK)
             st = rq->resume ? nbep_output_resume_begin(out, &sc, threads, d)
                             : nbep_output_publish(out, d);
-        if (st != NBEP_OK && !rq->resume)
-            nbep_run_blame_deck_output(&sc, rq->deck_path, file, d, first_error);
         /* --quiet too: a user who looks for the sidecar should learn why there is none (a
          * sweep's runs, never: its check's report gives their sidecars as null); once the
          * file is there (a refused run says only why) */
@@ -688,6 +684,8 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
             st = sst;
     }
     drop_summary(rq->summary_path, summary); /* never simulated: no summary file either */
+    if (st != NBEP_OK) /* the file made, or published, as the deck named it */
+        nbep_run_blame_deck_output(&sc, rq->deck_path, file, d, first_error);
     nbep_sim_destroy(&sim);
     nbep_resume_fini(&resume);
     nbep_scene_fini(&sc);
