@@ -358,41 +358,6 @@ static int one_of(load *L, const config_setting_t *at, const char *path, const c
     return -1;
 }
 
-/* ---- unknown settings ----------------------------------------------------------------------- */
-
-static void check_known(load *L, const config_setting_t *group, const char *prefix_c,
-                        const char *prefix_a)
-{
-    int n = config_setting_length(group);
-    for (int i = 0; i < n; i++) {
-        const config_setting_t *m = config_setting_get_elem(group, (unsigned)i);
-        char path_c[PATH_LEN], path_a[PATH_LEN];
-        path_join(path_c, prefix_c, config_setting_name(m));
-        path_join(path_a, prefix_a, config_setting_name(m));
-        int id = nbep__scene_schema_find(path_a);
-        if (id < 0) {
-            nbep__strbuf b = {0};
-            nbep__scene_unknown_text(path_c, &b);
-            ERR(L, m, "%s", nbep__strbuf_str(&b));
-            L->c.oom = L->c.oom || b.oom;
-            nbep__strbuf_fini(&b);
-            continue;
-        }
-        if (schema[id].kind == NBEP__K_GROUP && config_setting_is_group(m))
-            check_known(L, m, path_c, path_a);
-        if (schema[id].kind == NBEP__K_LIST && config_setting_is_list(m)) {
-            char elem_c[PATH_LEN], elem_a[PATH_LEN];
-            for (int k = 0; k < config_setting_length(m); k++) {
-                const config_setting_t *e = config_setting_get_elem(m, (unsigned)k);
-                cut_printf(elem_c, sizeof elem_c, "%s.[%d]", path_c, k);
-                cut_printf(elem_a, sizeof elem_a, "%s.[]", path_a);
-                if (config_setting_is_group(e))
-                    check_known(L, e, elem_c, elem_a);
-            }
-        }
-    }
-}
-
 /* ---- sections ------------------------------------------------------------------------------- */
 
 static void parse_run(load *L, const config_setting_t *root, nbep_scene *sc, bool *seed_ok)
@@ -1647,7 +1612,7 @@ static nbep_status load_deck(const char *deck_path, const char *deck_text,
     load_defaults(&L, &defaults);
 
     const config_setting_t *root = config_root_setting(&cfg);
-    check_known(&L, root, "", "");
+    nbep__scene_check_known(&L.c, root);
     bool seed_ok;
     parse_run(&L, root, &sc, &seed_ok);
     const size_t geometry0 = d->n_errors;

@@ -124,6 +124,14 @@ bool nbep__scene_kind_holds(nbep__scene_kind k, bool element, const config_setti
                             const char **words);
 /* Writes "unknown setting PATH" plus " (did you mean P?)" when a close known path exists. */
 void nbep__scene_unknown_text(const char *path, nbep__strbuf *b);
+/* Reports each setting of the tree under root that the schema does not know, "DECK:LINE:
+ * unknown setting PATH (did you mean P?)", walking every group and every group of a list. */
+void nbep__scene_check_known(nbep__scene_ctx *c, const config_setting_t *root);
+/* The deck's setting old (may be NULL), at concrete path canon, which the override `label`
+ * replaces: it and everything under it must be known and of its kind's type (the deck, run
+ * without the override, fails there otherwise), each fault reported at its deck line. */
+void nbep__scene_check_replaced(nbep__scene_ctx *c, const config_setting_t *old,
+                                const char *canon, const char *label);
 
 /* ---- overrides (scene_override.c) ----------------------------------------------------------- */
 

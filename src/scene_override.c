@@ -38,27 +38,6 @@ static void ov_error(nbep__scene_ctx *c, const char *label, const char *file, in
     nbep_diag_add_ranked(c->d, nbep__scene_rank(c, label, 0), file, line, "%s: %s", label, msg);
 }
 
-/* A setting of the deck's own that this override replaces must still have its kind's type:
- * the run goes on the override's value, but the deck, run without it, fails there (until
- * 2026-12-02 `steps = "1000"` under `-n 5` passed run and check). Its value is not checked
- * further: a --set may mend a value out of range. A setting an earlier override made has no
- * line of the deck (copy_value makes it), and is that override's. */
-static void replaced_type(nbep__scene_ctx *c, const config_setting_t *old, nbep__scene_kind kind,
-                          bool element, const char *canon, const char *label)
-{
-    const char *words;
-    if (!old || config_setting_source_line(old) == 0 ||
-        nbep__scene_kind_holds(kind, element, old, &words))
-        return;
-    nbep__strbuf got = {0};
-    nbep__scene_describe(old, &got);
-    NBEP__SCENE_ERR(c, old, "%s must be %s (got %s; %s replaces it, but the deck must be right "
-                    "without it)",
-                    canon, words, nbep__strbuf_str(&got), label);
-    c->oom = c->oom || got.oom;
-    nbep__strbuf_fini(&got);
-}
-
 static bool is_name_start(char ch)
 {
     return isalpha((unsigned char)ch) || ch == '*';
@@ -379,7 +358,7 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
             OVERR(c, label, "%s is not a group", sofar);
             goto out;
         }
-        replaced_type(c, config_setting_get_member(node, last->name), kind, element, canon, label);
+        nbep__scene_check_replaced(c, config_setting_get_member(node, last->name), canon, label);
         if (config_setting_get_member(node, last->name))
             config_setting_remove(node, last->name);
         if (!copy_value(node, last->name, v, label))
@@ -397,8 +376,8 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
     unsigned len = (unsigned)config_setting_length(node);
     bool ok = true;
     if (last->idx < len) {
-        replaced_type(c, config_setting_get_elem(node, (unsigned)last->idx), kind, element, canon,
-                      label);
+        nbep__scene_check_replaced(c, config_setting_get_elem(node, (unsigned)last->idx), canon,
+                                   label);
         ok = replace_elem(node, (unsigned)last->idx, v, label);
     } else if (last->idx == len) {
         ok = copy_value(node, NULL, v, label) != NULL;

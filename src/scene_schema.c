@@ -1,6 +1,7 @@
 /* The deck's schema table (scene_schema.h) and what only reads it: the schema kind of a
- * concrete path, the "did you mean" suggestion for an unknown one, and the reference that
- * `nbep --help-deck` prints. */
+ * concrete path, the "did you mean" suggestion for an unknown one, the check of a deck's
+ * settings against it (unknown names; the types of what an override replaces), and the
+ * reference that `nbep --help-deck` prints. */
 #include "nbep/scene.h"
 
 #include <stdbool.h>
@@ -237,6 +238,96 @@ void nbep__scene_unknown_text(const char *path, nbep__strbuf *b)
     nbep__strbuf_add(b, "unknown setting %s", path);
     if (suggest(path, s, sizeof s))
         nbep__strbuf_add(b, " (did you mean %s?)", s);
+}
+
+/* ---- the deck's settings against the schema ----------------------------------------------- */
+
+/* The words every message about a setting an override replaces ends with: the run goes on the
+ * override's value, but the deck, run without it, must be right. */
+#define REPLACED_WORDS "%s replaces it, but the deck must be right without it"
+
+static void check_members(nbep__scene_ctx *c, const config_setting_t *group, const char *prefix_c,
+                          const char *prefix_a, const char *replaced_by);
+
+/* Setting s, known, of kind k (an element of a container of kind k when `element`), at
+ * concrete path path_c and schema path path_a. The deck's own load (replaced_by NULL) checks
+ * its types later, setting by setting, where it reads them: here only the groups under it are
+ * walked. A setting that the override replaced_by removes is never read: its type is held here,
+ * under it too (until 2026-12-02 `--set output={file="x.h5";}` dropped a deck's
+ * `every = "x";` unchecked). Its value is not checked further: a --set may mend a value out of
+ * range. A setting an earlier override made has no line of the deck (copy_value makes it),
+ * and is that override's. */
+static void check_setting(nbep__scene_ctx *c, const config_setting_t *s, const char *path_c,
+                          const char *path_a, nbep__scene_kind k, bool element,
+                          const char *replaced_by)
+{
+    if (replaced_by) {
+        const char *words;
+        if (config_setting_source_line(s) == 0)
+            return;
+        if (!nbep__scene_kind_holds(k, element, s, &words)) {
+            nbep__strbuf got = {0};
+            nbep__scene_describe(s, &got);
+            NBEP__SCENE_ERR(c, s, "%s must be %s (got %s; " REPLACED_WORDS ")", path_c, words,
+                            nbep__strbuf_str(&got), replaced_by);
+            c->oom = c->oom || got.oom;
+            nbep__strbuf_fini(&got);
+            return;
+        }
+    }
+    if ((element ? k == NBEP__K_LIST : k == NBEP__K_GROUP) && config_setting_is_group(s))
+        check_members(c, s, path_c, path_a, replaced_by);
+    if (!element && k == NBEP__K_LIST && config_setting_is_list(s)) {
+        char elem_c[PATH_LEN], elem_a[PATH_LEN];
+        cut_printf(elem_a, sizeof elem_a, "%s.[]", path_a);
+        for (int i = 0; i < config_setting_length(s); i++) {
+            cut_printf(elem_c, sizeof elem_c, "%s.[%d]", path_c, i);
+            check_setting(c, config_setting_get_elem(s, (unsigned)i), elem_c, elem_a, k, true,
+                          replaced_by);
+        }
+    }
+}
+
+/* Each member of group (at concrete path prefix_c, schema path prefix_a; "" at the root):
+ * unknown ones reported at their lines, known ones walked by check_setting. */
+static void check_members(nbep__scene_ctx *c, const config_setting_t *group, const char *prefix_c,
+                          const char *prefix_a, const char *replaced_by)
+{
+    for (int i = 0; i < config_setting_length(group); i++) {
+        const config_setting_t *m = config_setting_get_elem(group, (unsigned)i);
+        const char *name = config_setting_name(m);
+        char path_c[PATH_LEN], path_a[PATH_LEN];
+        cut_printf(path_c, sizeof path_c, "%s%s%s", prefix_c, *prefix_c ? "." : "", name);
+        cut_printf(path_a, sizeof path_a, "%s%s%s", prefix_a, *prefix_a ? "." : "", name);
+        const int id = nbep__scene_schema_find(path_a);
+        if (id >= 0) {
+            check_setting(c, m, path_c, path_a, schema[id].kind, false, replaced_by);
+            continue;
+        }
+        nbep__strbuf b = {0}; /* (no override makes an unknown setting: it is refused) */
+        nbep__scene_unknown_text(path_c, &b);
+        if (replaced_by)
+            nbep__strbuf_add(&b, " (" REPLACED_WORDS ")", replaced_by);
+        NBEP__SCENE_ERR(c, m, "%s", nbep__strbuf_str(&b));
+        c->oom = c->oom || b.oom;
+        nbep__strbuf_fini(&b);
+    }
+}
+
+void nbep__scene_check_known(nbep__scene_ctx *c, const config_setting_t *root)
+{
+    check_members(c, root, "", "", NULL);
+}
+
+void nbep__scene_check_replaced(nbep__scene_ctx *c, const config_setting_t *old,
+                                const char *canon, const char *label)
+{
+    char abstract[PATH_LEN];
+    nbep__scene_kind k;
+    bool element;
+    if (old && abstract_of(canon, abstract, sizeof abstract) &&
+        schema_kind_abstract(abstract, &k, &element))
+        check_setting(c, old, canon, abstract, k, element, label);
 }
 
 /* ---- the reference (--help-deck) ---------------------------------------------------------- */

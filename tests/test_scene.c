@@ -1227,6 +1227,54 @@ static void test_a_replaced_deck_value_of_the_wrong_type_is_the_decks_error(void
     assert_true(f->sc.dt == 2.0e-3);
 }
 
+/* An override that replaces a whole group or list holds everything of the deck's under it to
+ * the same rule (until 2026-12-02 `--set output={file="x.h5";}` dropped `every = "x";` and
+ * an unknown name unchecked): unknown names and wrong types, in a group, a list's entry and a
+ * group of that entry, each at its line; a member that an earlier override made is that
+ * override's, and a replaced group whose settings are right loads. */
+static void test_a_replaced_deck_group_is_checked_inside(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *deck = write_deck("scene_replaced_group.deck",
+                                  "run: { steps = 5; dt = 1.0e-3; };\n"
+                                  "spheres = ( { position = [0.0, 0.0, 0.0]; radius = 0.1;\n"
+                                  "  mass = 1.0; colour = 1; },\n"
+                                  "  { position = [1.0, 0.0]; radius = 0.1; mass = 1.0; } );\n"
+                                  "output: { file = \"b.h5\"; evrey = 10;\n"
+                                  "  every = \"x\"; };\n",
+                                  buf, sizeof buf);
+    const char *const ov[] = {"output.stats=false", "output={file=\"c.h5\";}",
+                              "spheres=({position=[0.0,0.0,0.0];radius=0.1;mass=1.0;})"};
+    assert_int_equal(nbep_scene_load_from(deck, ov, NULL, 3, NULL, &f->sc, &f->d), NBEP_EDECK);
+    const char *const by_output = "--set output={file=\"c.h5\";} replaces it, but the deck "
+                                  "must be right without it";
+    const char *const by_spheres = "--set spheres=({position=[0.0,0.0,0.0];radius=0.1;"
+                                   "mass=1.0;}) replaces it, but the deck must be right without "
+                                   "it";
+    char want[4][512];
+    snprintf(want[0], sizeof want[0], "%s:3: unknown setting spheres.[0].colour (%s)", deck,
+             by_spheres);
+    snprintf(want[1], sizeof want[1], "%s:4: spheres.[1].position must be 3 numbers [x, y, z] "
+             "(got [1.0, 0.0]; %s)", deck, by_spheres);
+    snprintf(want[2], sizeof want[2], "%s:5: unknown setting output.evrey (did you mean "
+             "output.every?) (%s)", deck, by_output);
+    snprintf(want[3], sizeof want[3], "%s:6: output.every must be an integer (got \"x\"; %s)",
+             deck, by_output);
+    ASSERT_DIAG(&f->d, want[0], want[1], want[2], want[3]);
+    nbep_diag_clear(&f->d);
+    /* the deck's replaced settings right: the overrides' values are what runs */
+    deck = write_deck("scene_replaced_group.deck",
+                      "run: { steps = 5; dt = 1.0e-3; };\n"
+                      "spheres = ( { position = [0.0, 0.0, 0.0]; radius = 0.1; mass = 1.0; } );\n"
+                      "output: { file = \"b.h5\"; every = 10; };\n",
+                      buf, sizeof buf);
+    LOAD_OK(f, deck, "output={file=\"c.h5\";}", "spheres=({position=[0.0,0.0,0.0];radius=0.2;"
+            "mass=1.0;})");
+    assert_string_equal(f->sc.output_file, "c.h5");
+    assert_true(f->sc.state.radius[0] == 0.2);
+}
+
 static void test_malformed_overrides_are_one_line_each(void **state)
 {
     fixture *f = *state;
@@ -2779,6 +2827,7 @@ int main(void)
         T(test_bad_override_value_is_reported_at_the_override),
         T(test_a_vector_broken_by_an_element_override_is_reported_at_the_override),
         T(test_override_messages_name_their_origin),
+        T(test_a_replaced_deck_group_is_checked_inside),
         T(test_a_replaced_deck_value_of_the_wrong_type_is_the_decks_error),
         T(test_malformed_overrides_are_one_line_each),
         T(test_override_making_half_a_box_reports_the_other_half_missing),
