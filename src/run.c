@@ -123,8 +123,9 @@ static nbep_status finish_text(const char *text, const char *where, FILE *f, nbe
     errno = 0;
     int bad = !text || fputs(text, f) == EOF || ferror(f);
     int err = text ? errno : ENOMEM;
-    if (f == stdout) {
+    if (f == stdout) { /* the write fails as it is flushed (a full disk): its reason too */
         bad |= fflush(f) != 0;
+        err = err ? err : errno;
     } else if (opened_in_place(f)) {
         bad |= fclose(f) != 0;
         err = err ? err : errno;

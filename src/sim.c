@@ -467,13 +467,15 @@ static void progress_at(nbep_sim *sim, double at, bool last)
         sim->t_mark = now;
         sim->done_mark = done;
     }
-    if (sim->rate_recent > 0.0)
+    /* the finished run's line gives its mean, the rate its summary gives (it gave the rate of
+     * the last whole window, up to PROGRESS_LOG_SECONDS old, and the two differed: a review) */
+    const double to_go = (double)sim->step_end - at;
+    if (sim->rate_recent > 0.0 && !(last && to_go <= 0.0))
         rate = sim->rate_recent;
     double pct = sim->step_end ? 100.0 * at / (double)sim->step_end : 100.0;
     /* no rate yet (nothing done: a run stopped during its first step) gives no ETA, "ETA -",
      * not "ETA 0 s" for a run with all its steps to go */
     char where[48], eta[NBEP_DURATION_TEXT_MAX], line[200];
-    const double to_go = (double)sim->step_end - at;
     if (at == floor(at))
         snprintf(where, sizeof where, "%llu", (unsigned long long)at);
     else

@@ -813,6 +813,12 @@ if [ -w /dev/full ]; then
         check "nbep $args with stdout full: exit 1, one line (got $rc: $(head -c 200 "$tmp/stderr"))" \
             "[ $rc = 1 ] && one_line && grep -qx 'nbep: cannot write to standard output: No space left on device' '$tmp/stderr'"
     done
+    # a run's --summary - there: its reason too (until 2026-12-02 "write failed")
+    timeout -k 5 30 "$nbep" run inputs/two-spheres.deck --quiet -n 5 -o "$tmp/full-summary.h5" \
+        --summary - >/dev/full 2>"$tmp/stderr"
+    rc=$?
+    check "a run's --summary - with stdout full: exit 1, its reason (got $rc: $(head -c 200 "$tmp/stderr"))" \
+        "[ $rc = 1 ] && one_line && grep -qx 'nbep: cannot write the summary to -: No space left on device' '$tmp/stderr'"
 fi
 # --help, --version and info keep the signals' defaults: a SIGTERM while their output waits on
 # a full pipe ends them at once (until 2026-12-02 they took it as a run's stop, which they never
