@@ -16,6 +16,7 @@ packages=(
     clang libomp-dev                            # make tsan: ThreadSanitizer with an OpenMP it can see
     python3 python3-numpy python3-matplotlib python3-h5py   # benchmark plots and renderer
     python3-mpmath                              # make accuracy: 60-digit reference check
+    procps                                      # pgrep in the sweep tests (a minimal image lacks it)
 )
 
 export DEBIAN_FRONTEND=noninteractive
