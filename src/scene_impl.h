@@ -119,7 +119,7 @@ bool nbep__scene_schema_kind(const char *path, nbep__scene_kind *kind, bool *ele
 /* Whether setting s has the type of a setting of kind k (an element of one when `element`:
  * a number of a [x, y, z], a group of a list, ...; any value of a sweep's values), and in
  * *words what that type is ("an integer", "3 numbers [x, y, z]", ...): the one rule of types
- * that the deck's check (scene.c) and an override's replaced setting (scene_override.c) ask. */
+ * that the deck's getters (scene.c) and the check of what an override replaces (below) ask. */
 bool nbep__scene_kind_holds(nbep__scene_kind k, bool element, const config_setting_t *s,
                             const char **words);
 /* Writes "unknown setting PATH" plus " (did you mean P?)" when a close known path exists. */
