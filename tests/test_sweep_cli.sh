@@ -208,10 +208,13 @@ wait $pid 2>/dev/null
 rc=$?
 check "killed outright (exit $rc): the last sweep's summary.csv and summary.h5 are gone" \
     "[ $rc = 137 ] && [ ! -e '$tmp/s.sweep/summary.csv' ] && [ ! -e '$tmp/s.sweep/summary.h5' ]"
-# and nothing of it runs on (pgrep: a process of this deck's study still there)
-sleep 0.2
-check "... and no process of that study is left running" \
-    "! pgrep -f -- '-o $tmp/s --quiet -n 200000' >/dev/null"
+# and nothing of it runs on: no process of this study in this tree (another tree's run of this
+# test, as mutate.py's jobs run side by side, has the same relative paths: told apart by cwd)
+left=""
+for p in $(pgrep -f -- "-o $tmp/s --quiet -n 200000"); do
+    [ "$(readlink "/proc/$p/cwd")" = "$PWD" ] && left="$left $p"
+done
+check "... and no process of that study is left running (got:${left:- none})" "[ -z '$left' ]"
 
 # ---- an interrupted sweep's pace counts the runs that ran to their end ------------------------
 # 6 runs by run.steps: 20, 30 (both finished by a sweep before: reused), 40 (runs to its end),
