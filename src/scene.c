@@ -132,6 +132,23 @@ static void type_error(load *L, const config_setting_t *s, const char *path, con
     nbep__strbuf_fini(&b);
 }
 
+/* find, and the setting's kind checked (a type error at its line: BAD); path gets its dotted
+ * name for the caller's own messages. */
+static got find_kind(load *L, const config_setting_t *parent, const char *prefix, int id,
+                     nbep__scene_kind kind, const config_setting_t **out, char path[PATH_LEN])
+{
+    got g = find(L, parent, prefix, id, out);
+    if (g != GOT)
+        return g;
+    path_join(path, prefix, leaf_of(schema[id].path));
+    const char *words;
+    if (!nbep__scene_kind_holds(kind, false, *out, &words)) {
+        type_error(L, *out, path, words);
+        return BAD;
+    }
+    return GOT;
+}
+
 static double number_of(const config_setting_t *s)
 {
     return config_setting_type(s) == CONFIG_TYPE_FLOAT ? config_setting_get_float(s)
@@ -142,16 +159,10 @@ static got get_int(load *L, const config_setting_t *parent, const char *prefix, 
                    int64_t *out, const config_setting_t **at)
 {
     const config_setting_t *s;
-    got g = find(L, parent, prefix, id, &s);
+    char path[PATH_LEN];
+    got g = find_kind(L, parent, prefix, id, NBEP__K_INT, &s, path);
     if (g != GOT)
         return g;
-    char path[PATH_LEN];
-    path_join(path, prefix, leaf_of(schema[id].path));
-    const char *words;
-    if (!nbep__scene_kind_holds(NBEP__K_INT, false, s, &words)) {
-        type_error(L, s, path, words);
-        return BAD;
-    }
     int64_t v = config_setting_get_int64(s);
     unsigned f = schema[id].flags;
     if (((f & F_GE0) && v < 0) || ((f & F_GE1) && v < 1)) {
@@ -195,16 +206,10 @@ static got get_float(load *L, const config_setting_t *parent, const char *prefix
                      double *out)
 {
     const config_setting_t *s;
-    got g = find(L, parent, prefix, id, &s);
+    char path[PATH_LEN];
+    got g = find_kind(L, parent, prefix, id, NBEP__K_FLOAT, &s, path);
     if (g != GOT)
         return g;
-    char path[PATH_LEN];
-    path_join(path, prefix, leaf_of(schema[id].path));
-    const char *words;
-    if (!nbep__scene_kind_holds(NBEP__K_FLOAT, false, s, &words)) {
-        type_error(L, s, path, words);
-        return BAD;
-    }
     double v = number_of(s);
     unsigned f = schema[id].flags;
     if (!isfinite(v)) {
@@ -236,16 +241,10 @@ static got get_vec3(load *L, const config_setting_t *parent, const char *prefix,
                     nbep_vec3 *out, const config_setting_t **at)
 {
     const config_setting_t *s;
-    got g = find(L, parent, prefix, id, &s);
+    char path[PATH_LEN];
+    got g = find_kind(L, parent, prefix, id, NBEP__K_VEC3, &s, path);
     if (g != GOT)
         return g;
-    char path[PATH_LEN];
-    path_join(path, prefix, leaf_of(schema[id].path));
-    const char *words;
-    if (!nbep__scene_kind_holds(NBEP__K_VEC3, false, s, &words)) {
-        type_error(L, s, path, words);
-        return BAD;
-    }
     nbep_vec3 v = {number_of(config_setting_get_elem(s, 0)),
                    number_of(config_setting_get_elem(s, 1)),
                    number_of(config_setting_get_elem(s, 2))};
@@ -268,16 +267,10 @@ static got get_string(load *L, const config_setting_t *parent, const char *prefi
                       const char **out, const config_setting_t **at)
 {
     const config_setting_t *s;
-    got g = find(L, parent, prefix, id, &s);
+    char path[PATH_LEN];
+    got g = find_kind(L, parent, prefix, id, NBEP__K_STRING, &s, path);
     if (g != GOT)
         return g;
-    const char *words;
-    if (!nbep__scene_kind_holds(NBEP__K_STRING, false, s, &words)) {
-        char path[PATH_LEN];
-        path_join(path, prefix, leaf_of(schema[id].path));
-        type_error(L, s, path, words);
-        return BAD;
-    }
     *out = config_setting_get_string(s);
     if (at)
         *at = s;
@@ -288,16 +281,10 @@ static got get_bool(load *L, const config_setting_t *parent, const char *prefix,
                     bool *out)
 {
     const config_setting_t *s;
-    got g = find(L, parent, prefix, id, &s);
+    char path[PATH_LEN];
+    got g = find_kind(L, parent, prefix, id, NBEP__K_BOOL, &s, path);
     if (g != GOT)
         return g;
-    const char *words;
-    if (!nbep__scene_kind_holds(NBEP__K_BOOL, false, s, &words)) {
-        char path[PATH_LEN];
-        path_join(path, prefix, leaf_of(schema[id].path));
-        type_error(L, s, path, words);
-        return BAD;
-    }
     *out = config_setting_get_bool(s) != 0;
     return GOT;
 }
@@ -306,16 +293,10 @@ static got get_bool3(load *L, const config_setting_t *parent, const char *prefix
                      bool out[3], const config_setting_t **at)
 {
     const config_setting_t *s;
-    got g = find(L, parent, prefix, id, &s);
+    char path[PATH_LEN];
+    got g = find_kind(L, parent, prefix, id, NBEP__K_BOOL3, &s, path);
     if (g != GOT)
         return g;
-    const char *words;
-    if (!nbep__scene_kind_holds(NBEP__K_BOOL3, false, s, &words)) {
-        char path[PATH_LEN];
-        path_join(path, prefix, leaf_of(schema[id].path));
-        type_error(L, s, path, words);
-        return BAD;
-    }
     for (unsigned k = 0; k < 3; k++)
         out[k] = config_setting_get_bool(config_setting_get_elem(s, k)) != 0;
     if (at)
@@ -328,16 +309,10 @@ static got get_aggregate(load *L, const config_setting_t *parent, const char *pr
                          const config_setting_t **out)
 {
     const config_setting_t *s;
-    got g = find(L, parent, prefix, id, &s);
+    char path[PATH_LEN];
+    got g = find_kind(L, parent, prefix, id, schema[id].kind, &s, path);
     if (g != GOT)
         return g;
-    const char *words;
-    if (!nbep__scene_kind_holds(schema[id].kind, false, s, &words)) {
-        char path[PATH_LEN];
-        path_join(path, prefix, leaf_of(schema[id].path));
-        type_error(L, s, path, words);
-        return BAD;
-    }
     *out = s;
     return GOT;
 }
