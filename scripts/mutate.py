@@ -200,11 +200,23 @@ MUTANTS = [
     # its unit tests are the first of test_periodic's (the geometry module)
     ("periodic-image-floor", "src/periodic.c", "double m = round(d / len);",
      "double m = floor(d / len);", ["test_periodic"], None),
-    ("periodic-wrap-image-sign", "src/periodic.c", "*image += (int32_t)m;", "*image -= (int32_t)m;",
-     ["test_periodic"], None),
+    ("periodic-wrap-image-sign", "src/periodic.c", "const double count = (double)*image + m;",
+     "const double count = (double)*image - m;", ["test_periodic"], None),
     ("periodic-wrap-image-wrong-axis", "src/periodic.c",
-     "wrap_1(&p->z, pb->lo[2], pb->len[2], &image[2]);",
-     "wrap_1(&p->z, pb->lo[2], pb->len[2], &image[1]);", ["test_periodic"], None),
+     "wrap_1(&p->z, pb->lo[2], pb->len[2], &image[2])",
+     "wrap_1(&p->z, pb->lo[2], pb->len[2], &image[1])", ["test_periodic"], None),
+    # a count beyond int32 (/frames/image): taken anyway (overflow), the refusal unsaid, or the
+    # frame's writer not asking (tests/test_cli.sh: a sphere at 3e9 a step)
+    ("periodic-wrap-count-unbounded", "src/periodic.c",
+     "    if (!(count >= (double)INT32_MIN && count <= (double)INT32_MAX))\n        return false;\n",
+     "", ["test_periodic", "tests/test_cli.sh"], None),
+    ("periodic-wrap-refusal-unsaid", "src/periodic.c",
+     "ok = wrap_1(&p->x, pb->lo[0], pb->len[0], &image[0]) && ok;",
+     "(void)wrap_1(&p->x, pb->lo[0], pb->len[0], &image[0]);", ["test_periodic"], None),
+    ("frame-wrap-refusal-ignored", "src/output.c",
+     "            if (!nbep_periodic_wrap(&o->pb, &o->wrap_pos[i], &o->wrap_img[3 * i]))",
+     "            if (!nbep_periodic_wrap(&o->pb, &o->wrap_pos[i], &o->wrap_img[3 * i]) && 0)",
+     ["tests/test_cli.sh"], None),
     # the two corrections of a floor that rounding put one period off: the step taken, the count not
     ("periodic-wrap-high-fix-uncounted", "src/periodic.c", "        y -= len;\n        m += 1.0;",
      "        y -= len;", ["test_periodic"], None),

@@ -952,6 +952,21 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
                   "nbep: %s: step %" PRId64 " has a non-finite position or velocity; frame not "
                   "written",
                   o->path, step);
+    /* A periodic box: positions wrapped into it, the periods removed added to the images
+     * (the algorithm may hold positions a little outside, see cells.h); a sphere whose count
+     * of periods crossed leaves /frames/image's int32 cannot be written (nbep_periodic_wrap) */
+    if (o->pb.any) {
+        memcpy(o->wrap_pos, s->pos, s->n * sizeof *o->wrap_pos);
+        memcpy(o->wrap_img, s->image, 3 * s->n * sizeof *o->wrap_img);
+        for (size_t i = 0; i < s->n; i++)
+            if (!nbep_periodic_wrap(&o->pb, &o->wrap_pos[i], &o->wrap_img[3 * i]))
+                NBEP_FAIL(d, NBEP_ENUMERIC,
+                          "nbep: %s: step %" PRId64 ": sphere %zu has crossed the periodic box "
+                          "more than 2^31 times along an axis, beyond what /frames/image (int32) "
+                          "counts (its speed %.3g, the box's sides %g, %g, %g); frame not written",
+                          o->path, step, i, nbep_vec3_norm(s->vel[i]), o->pb.len[0],
+                          o->pb.len[1], o->pb.len[2]);
+    }
     char what[64];
     snprintf(what, sizeof what, "frame %llu (step %" PRId64 ")", (unsigned long long)o->n_frames,
              step);
@@ -982,14 +997,8 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
         o->n_frames = f = o->resume.trim;
     }
     o->resume.trim = 0;
-    /* A periodic box: positions wrapped into it, the periods removed added to the images
-     * (the algorithm may hold positions a little outside, see cells.h) */
     const nbep_vec3 *pos = s->pos;
-    if (o->pb.any) {
-        memcpy(o->wrap_pos, s->pos, s->n * sizeof *o->wrap_pos);
-        memcpy(o->wrap_img, s->image, 3 * s->n * sizeof *o->wrap_img);
-        for (size_t i = 0; i < s->n; i++)
-            nbep_periodic_wrap(&o->pb, &o->wrap_pos[i], &o->wrap_img[3 * i]);
+    if (o->pb.any) { /* wrapped above */
         pos = o->wrap_pos;
         if (o->frame_img >= 0 && append_rows(o, o->frame_img, "/frames/image", 3, f, vec,
                                              H5T_NATIVE_INT32, vec_space, o->wrap_img, d) < 0)

@@ -42,15 +42,16 @@ nbep_vec3 nbep_periodic_image(const nbep_periodic *pb, nbep_vec3 d)
  * result a hair outside [lo, lo + len): one more step either way fixes that. A step up that
  * rounds onto lo + len (the point lay within half an ulp below a face) is at the upper face,
  * which belongs to the next copy: it becomes lo, one more period removed (set to lo alone, the
- * count kept, the point it stood for moved a whole period down). */
-static void wrap_1(double *x, double lo, double len, int32_t *image)
+ * count kept, the point it stood for moved a whole period down). A count that would leave
+ * int32 (SPEC's /frames/image; until 2026-12-03 it overflowed, undefined behaviour, and a move
+ * of 1e9 periods or more was left unwrapped without a word) leaves x and the count as they
+ * were, which still give the same unwrapped point: false. */
+static bool wrap_1(double *x, double lo, double len, int32_t *image)
 {
     double u = *x - lo;
     if (!isfinite(u) || (u >= 0.0 && u < len))
-        return;
+        return true;
     double m = floor(u / len);
-    if (!(fabs(m) < 1e9)) /* beyond any image count: a position that has run away */
-        return;
     double y = *x - m * len;
     if (y >= lo + len) {
         y -= len;
@@ -63,18 +64,24 @@ static void wrap_1(double *x, double lo, double len, int32_t *image)
         y = lo;
         m += 1.0;
     }
+    const double count = (double)*image + m; /* exact while |m| < 2^52; else far out anyway */
+    if (!(count >= (double)INT32_MIN && count <= (double)INT32_MAX))
+        return false;
     *x = y;
-    *image += (int32_t)m;
+    *image = (int32_t)count;
+    return true;
 }
 
-void nbep_periodic_wrap(const nbep_periodic *pb, nbep_vec3 *p, int32_t image[3])
+bool nbep_periodic_wrap(const nbep_periodic *pb, nbep_vec3 *p, int32_t image[3])
 {
+    bool ok = true;
     if (pb->axis[0])
-        wrap_1(&p->x, pb->lo[0], pb->len[0], &image[0]);
+        ok = wrap_1(&p->x, pb->lo[0], pb->len[0], &image[0]) && ok;
     if (pb->axis[1])
-        wrap_1(&p->y, pb->lo[1], pb->len[1], &image[1]);
+        ok = wrap_1(&p->y, pb->lo[1], pb->len[1], &image[1]) && ok;
     if (pb->axis[2])
-        wrap_1(&p->z, pb->lo[2], pb->len[2], &image[2]);
+        ok = wrap_1(&p->z, pb->lo[2], pb->len[2], &image[2]) && ok;
+    return ok;
 }
 
 void nbep_periodic_nearest(const nbep_periodic *pb, nbep_vec3 d, int cells[3])

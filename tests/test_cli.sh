@@ -1006,6 +1006,26 @@ fi
 # whose energy, or spheres whose total, is beyond doubles, nor one whose energy overflows while
 # it runs; test_extremes drives those refusals and stops directly.
 
+# ---- a periodic count beyond /frames/image's int32 ----------------------------------------------
+# A sphere at 3e9 a step across a periodic side of 10 crosses it 3e8 times a step: step 8's
+# count would leave int32 (SPEC's /frames/image). The run fails there (exit 1, one line naming
+# the step and the sphere) and the file holds frames 0 to 7, readable; until 2026-12-03 the
+# count overflowed (undefined behaviour; it read -1894967296) and a move of 1e9 periods or
+# more was written unwrapped.
+cat >"$tmp/fast.deck" <<'EOF'
+run: { steps = 10; dt = 1.0; threads = 1; };
+box: { min = [0.0, 0.0, 0.0]; max = [10.0, 10.0, 10.0]; periodic = [true, true, true]; };
+spheres = ( { position = [5.0, 5.0, 5.0]; velocity = [3e9, 0.0, 0.0]; radius = 1.0; mass = 1.0; } );
+output: { every = 1; };
+EOF
+for algo in naive seminaive; do
+    run_nbep run "$tmp/fast.deck" -a $algo -q -o "$tmp/fast.h5"
+    check "$algo, a periodic count past int32: exit 1 (got $rc), one line naming step 8 and sphere 0, frames 0 to 7 readable" \
+        "[ $rc = 1 ] && one_line &&
+         grep -q 'step 8: sphere 0 has crossed the periodic box more than 2^31 times' '$tmp/stderr' &&
+         '$nbep' info '$tmp/fast.h5' | grep -q '^frames: *8 .*last: step 7,'"
+done
+
 # ---- the window of magnitudes (scene.h NBEP_DECK_SCALE_MIN, _MAX) -------------------------------
 # A quantity with units outside 1e-40 .. 1e40 (0 allowed where it is allowed at all) is a deck
 # error at its line or option, for check and run alike, nothing written: scaled by 2^-300 a

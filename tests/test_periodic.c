@@ -100,8 +100,37 @@ static void test_wrap_moves_into_the_box_and_counts_the_periods(void **state)
     /* non-finite coordinates are left alone (the run reports them) */
     nbep_vec3 t = {NAN, INFINITY, 0.5};
     int32_t it[3] = {0, 0, 0};
-    nbep_periodic_wrap(&unit, &t, it);
+    assert_true(nbep_periodic_wrap(&unit, &t, it));
     assert_true(isnan(t.x) && isinf(t.y) && it[0] == 0 && it[1] == 0);
+}
+
+/* SPEC's /frames/image is int32: a count that would leave it is refused, that axis left as it
+ * was (its unwrapped point the same), the others wrapped; the last counts that fit are taken,
+ * on both sides (until 2026-12-03 the sum overflowed, and a move of 1e9 periods or more was
+ * left unwrapped with a true count's silence). */
+static void test_wrap_refuses_an_image_count_beyond_int32(void **state)
+{
+    (void)state;
+    nbep_periodic unit = nbep_periodic_make(ALL3, ZERO, (nbep_vec3){1.0, 1.0, 1.0});
+    nbep_vec3 p = {1.5, 2.25, 0.5};
+    int32_t img[3] = {INT32_MAX, 0, 0};
+    assert_false(nbep_periodic_wrap(&unit, &p, img));
+    assert_true(p.x == 1.5 && img[0] == INT32_MAX); /* left */
+    assert_true(p.y == 0.25 && img[1] == 2);        /* wrapped */
+    nbep_vec3 q = {-0.5, 0.5, 0.5};
+    int32_t iq[3] = {INT32_MIN, 0, 0};
+    assert_false(nbep_periodic_wrap(&unit, &q, iq));
+    assert_true(q.x == -0.5 && iq[0] == INT32_MIN);
+    nbep_vec3 r = {1.5, 0.5, -0.5};
+    int32_t ir[3] = {INT32_MAX - 1, 0, INT32_MIN + 1};
+    assert_true(nbep_periodic_wrap(&unit, &r, ir));
+    assert_true(r.x == 0.5 && ir[0] == INT32_MAX && r.z == 0.5 && ir[2] == INT32_MIN);
+    /* 3e9 periods in one move, from a count of 0: beyond, where 2e9 is taken */
+    nbep_vec3 far = {3e9 + 0.5, 2e9 + 0.5, 0.5};
+    int32_t ifar[3] = {0, 0, 0};
+    assert_false(nbep_periodic_wrap(&unit, &far, ifar));
+    assert_true(far.x == 3e9 + 0.5 && ifar[0] == 0);
+    assert_true(far.y == 0.5 && ifar[1] == 2000000000);
 }
 
 /* The wrap at every face of many copies, on boxes whose corners and sides are not whole numbers
@@ -1949,6 +1978,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_minimum_image_picks_the_nearest_copy_on_periodic_axes_only),
         cmocka_unit_test(test_wrap_moves_into_the_box_and_counts_the_periods),
+        cmocka_unit_test(test_wrap_refuses_an_image_count_beyond_int32),
         cmocka_unit_test(test_wrap_near_every_face_keeps_the_unwrapped_point),
         cmocka_unit_test(test_inside_is_where_the_wrap_leaves_a_position),
         cmocka_unit_test(test_shift_is_whole_periods_on_periodic_axes),

@@ -31,8 +31,11 @@ nbep_vec3 nbep_periodic_image(const nbep_periodic *pb, nbep_vec3 d);
 
 /* Wraps *p into [lo, lo + len) on each periodic axis and adds to image[k] the number of
  * periods removed, so that p + image * len is unchanged (up to the rounding of p's shift).
- * Idempotent: a position already inside is not touched. Non-finite coordinates are left. */
-void nbep_periodic_wrap(const nbep_periodic *pb, nbep_vec3 *p, int32_t image[3]);
+ * Idempotent: a position already inside is not touched. Non-finite coordinates are left.
+ * False where an axis's count would leave int32 (a sphere that crossed the box 2^31 times):
+ * that axis is left as it was, outside the box, the unwrapped point the same; the frame's
+ * writer refuses it (nbep_output_frame), and the algorithms carry it on meanwhile. */
+bool nbep_periodic_wrap(const nbep_periodic *pb, nbep_vec3 *p, int32_t image[3]);
 
 /* Whether p lies inside [lo, lo + len) on every periodic axis, by nbep_periodic_wrap's own test
  * (so that it would leave p as it is): the common case, tested inline without a call. False
