@@ -2387,8 +2387,19 @@ MUTANTS = [
      "s.steps_requested.known ? s.steps_requested.value : r->steps);", "r->steps);",
      ["test_output"], None),
     # ---- the warning of an exact run that ended in overlaps ----
-    ("overlap-warn-threshold-inverted", "src/run.c", "if (exact && s->max_overlap_rel > EXACT_OVERLAP_WARN)",
-     "if (exact && s->max_overlap_rel < EXACT_OVERLAP_WARN)", ["tests/test_resume.sh"], None),
+    ("overlap-warn-threshold-inverted", "src/run.c",
+     "if (exact && s->max_overlap_rel > fmax(EXACT_OVERLAP_WARN, coords))",
+     "if (exact && s->max_overlap_rel < fmax(EXACT_OVERLAP_WARN, coords))", ["tests/test_resume.sh"], None),
+    # far from the origin: the coordinates' round-off not allowed for (a floor 1e11 radii out
+    # warned), allowed for too freely (a wall 5e11 out, overlapped by 0.24 radii, silent), or
+    # the deck's farthest coordinate not kept (tests/test_scene.c asserts it too)
+    ("overlap-warn-coords-ignored", "src/run.c",
+     "if (exact && s->max_overlap_rel > fmax(EXACT_OVERLAP_WARN, coords))",
+     "if (exact && s->max_overlap_rel > EXACT_OVERLAP_WARN)", ["tests/test_resume.sh"], None),
+    ("overlap-warn-coords-lax", "src/run.c", "#define EXACT_OVERLAP_ULPS 64.0",
+     "#define EXACT_OVERLAP_ULPS 1e6", ["tests/test_resume.sh"], None),
+    ("span-not-kept", "src/scene.c", "    *far_radii = fmax(*far_radii, radii);\n", "",
+     ["test_scene", "tests/test_resume.sh"], None),
     ("overlap-warn-naive-too", "src/run.c",
      "const bool exact = strcmp(sc->algorithm, \"predictive\") == 0 && !sc->order_step;",
      "const bool exact = !sc->order_step;", ["tests/test_resume.sh"], None),

@@ -4,6 +4,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -257,6 +258,15 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
  * find contacts after the overlap, and the paper's step order may shadow events: they
  * overlap by design (README, Accuracy), and get no warning. */
 #define EXACT_OVERLAP_WARN 1e-6
+/* Far from the origin, round-off is the coordinates': a position rounds to 2^-53 of its size,
+ * span 2^-53 of a radius at the deck's farthest coordinate (scene.h span; up to 2^-13 at
+ * NBEP_DECK_SPAN_MAX), and a contact there is placed to a few of those, its flights to the
+ * contact, response and slot each rounding it once, and a sphere that flies many steps to it
+ * in all-pairs and grid mode carries half of one a step (README, Checking a run). A floor at
+ * 1e11 radii overlapped by 1 to 4 of them in every predictive mode, and got this warning
+ * until 2026-12-03; 64 leave room for those, and the warning is for overlaps beyond what
+ * the coordinates can hold (0.24 of a radius at 5e11 radii after 1e5 steps of flight). */
+#define EXACT_OVERLAP_ULPS 64.0
 /* The others' overlaps grow with run.dt (speed dt / r: README, Accuracy), by design; one of
  * more than the smaller radius means spheres went halfway through each other within a step,
  * and those that went all the way through were never found: the collisions are the step's
@@ -270,13 +280,19 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
 static void warn_overlap(const nbep_scene *sc, const nbep_summary *s, const char *file)
 {
     const bool exact = strcmp(sc->algorithm, "predictive") == 0 && !sc->order_step;
-    if (exact && s->max_overlap_rel > EXACT_OVERLAP_WARN)
+    const double coords = EXACT_OVERLAP_ULPS * sc->span * 0x1p-53; /* of a radius */
+    if (exact && s->max_overlap_rel > fmax(EXACT_OVERLAP_WARN, coords)) {
+        char far[96] = "";
+        if (coords > 1e-9)
+            snprintf(far, sizeof far, "; with coordinates this far from the origin, below %.2g",
+                     coords);
         fprintf(stderr,
                 "nbep: warning: spheres overlapped by up to %.3g of the smaller radius "
                 "(max_overlap_rel) in %s, where the predictive algorithm's overlaps are "
-                "round-off (below 1e-9): its collisions are not to be trusted (README, Checking "
-                "a run)\n",
-                s->max_overlap_rel, file);
+                "round-off (below 1e-9%s): its collisions are not to be trusted (README, "
+                "Checking a run)\n",
+                s->max_overlap_rel, file, far);
+    }
     else if (!exact && s->max_overlap_rel > DETECT_OVERLAP_WARN)
         fprintf(stderr,
                 "nbep: warning: spheres overlapped by up to %.3g of the smaller radius "

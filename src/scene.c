@@ -839,9 +839,10 @@ static void parse_spheres(load *L, const config_setting_t *root, const nbep_scen
     *n = len;
 }
 
-/* One point of the deck against NBEP_DECK_SPAN_MAX smallest radii (rmin) from the origin. */
+/* One point of the deck against NBEP_DECK_SPAN_MAX smallest radii (rmin) from the origin;
+ * *far raised to how many smallest radii it lies from it, along its farthest axis. */
 static void span_one(load *L, const config_setting_t *at, const char *what, nbep_vec3 v,
-                     double rmin)
+                     double rmin, double *far_radii)
 {
     const double c[3] = {v.x, v.y, v.z};
     int far = 0; /* the coordinate farthest out */
@@ -850,18 +851,21 @@ static void span_one(load *L, const config_setting_t *at, const char *what, nbep
     const double m = fabs(c[far]);
     /* the limit and the rounding it allows, from the constant (2^40: 2^-12 of a radius) */
     const int span_log2 = ilogb(NBEP_DECK_SPAN_MAX), ulp_log2 = span_log2 - (DBL_MANT_DIG - 1);
+    const double radii = m / rmin; /* inf past DBL_MAX: said as "more than" that */
     if (m > NBEP_DECK_SPAN_MAX * rmin)
         ERR(L, at,
-            "%s lies %.3g smallest radii (%g) from the origin, beyond 2^%d = %.2g (a "
+            "%s lies %s%.3g smallest radii (%g) from the origin, beyond 2^%d = %.2g (a "
             "coordinate of %g: positions there round by more than 2^%d of a radius); move "
             "the origin nearer the scene (README, The deck: units)",
-            what, m / rmin, rmin, span_log2, NBEP_DECK_SPAN_MAX, c[far], ulp_log2);
+            what, isfinite(radii) ? "" : "more than ", isfinite(radii) ? radii : DBL_MAX, rmin,
+            span_log2, NBEP_DECK_SPAN_MAX, c[far], ulp_log2);
+    *far_radii = fmax(*far_radii, radii);
 }
 
 /* Every coordinate the deck gives within NBEP_DECK_SPAN_MAX of its smallest radius from the
  * origin: sphere positions, box and region corners, plane points (a deck without spheres
  * has no scale to hold them to). */
-static void check_span(load *L, const config_setting_t *root, const nbep_scene *sc,
+static void check_span(load *L, const config_setting_t *root, nbep_scene *sc,
                        const plane *planes, size_t n_planes, const nbep__scene_entry *e,
                        size_t n_entries)
 {
@@ -873,14 +877,16 @@ static void check_span(load *L, const config_setting_t *root, const nbep_scene *
         return;
     const config_setting_t *box = config_setting_get_member(root, "box");
     if (sc->has_box && box) {
-        span_one(L, config_setting_get_member(box, "min"), "box.min", sc->box_min, rmin);
-        span_one(L, config_setting_get_member(box, "max"), "box.max", sc->box_max, rmin);
+        span_one(L, config_setting_get_member(box, "min"), "box.min", sc->box_min, rmin,
+                 &sc->span);
+        span_one(L, config_setting_get_member(box, "max"), "box.max", sc->box_max, rmin,
+                 &sc->span);
     }
     char what[PATH_LEN + 16];
     for (size_t k = 0; k < n_planes; k++)
         if (planes[k].point_at) {
             snprintf(what, sizeof what, "planes.[%zu].point", k);
-            span_one(L, planes[k].point_at, what, planes[k].point, rmin);
+            span_one(L, planes[k].point_at, what, planes[k].point, rmin, &sc->span);
         }
     for (size_t k = 0; k < n_entries; k++) {
         if (!e[k].setting || e[k].count == 0)
@@ -889,12 +895,14 @@ static void check_span(load *L, const config_setting_t *root, const nbep_scene *
         if (e[k].place == NBEP__PLACE_ONE) {
             snprintf(what, sizeof what, "spheres.[%zu].position", k);
             span_one(L, config_setting_get_member(e[k].setting, "position"), what,
-                     e[k].position, rmin);
+                     e[k].position, rmin, &sc->span);
         } else if (region) {
             snprintf(what, sizeof what, "spheres.[%zu].region.min", k);
-            span_one(L, config_setting_get_member(region, "min"), what, e[k].lo, rmin);
+            span_one(L, config_setting_get_member(region, "min"), what, e[k].lo, rmin,
+                     &sc->span);
             snprintf(what, sizeof what, "spheres.[%zu].region.max", k);
-            span_one(L, config_setting_get_member(region, "max"), what, e[k].hi, rmin);
+            span_one(L, config_setting_get_member(region, "max"), what, e[k].hi, rmin,
+                     &sc->span);
         }
     }
 }

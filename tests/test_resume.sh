@@ -983,6 +983,39 @@ bin/nbep run $deck --quiet -a naive -n 20 --dt 0.01 --set spheres.[0].count=1000
 check "no warning for the file unchanged, nor for naive's overlaps by design" \
     "[ ! -s $tmp/kept.err ] && [ ! -s $tmp/coarse.err ] &&
      grep -q '\"max_overlap_rel\": 0\.[1-9]' $tmp/coarse.json"
+# Far from the origin, round-off is the coordinates' (run.c EXACT_OVERLAP_ULPS): a sphere
+# dropped onto a floor 1e11 radii out overlaps it by 1 to 4 of their ulps (1.5e-5 to 6.1e-5
+# of a radius) in each neighbour mode, and gets no warning (until 2026-12-03 it did); a
+# sphere that flies 11 radii to a wall 5e11 radii out in all-pairs mode (11000 steps, each
+# rounding its position) overlaps it by 0.24 of a radius, past the 0.0036 its coordinates
+# explain, and does, the bound named.
+cat >$tmp/far-floor.deck <<'EOF'
+run: { steps = 1000; dt = 0.001; threads = 1; };
+physics: { gravity = [0.0, 0.0, -9.81]; restitution = 0.5; };
+planes = ( { normal = [0.0, 0.0, 1.0]; point = [0.0, 0.0, 1e11]; } );
+spheres = ( { position = [0.0, 0.0, 100000000001.5]; velocity = [0.0, 0.0, 0.0]; radius = 1.0; mass = 1.0; } );
+output: { every = 1000; };
+EOF
+cat >$tmp/far-wall.deck <<'EOF'
+run: { steps = 12000; dt = 0.001; threads = 1; };
+planes = ( { normal = [-1.0, 0.0, 0.0]; point = [500000000011.0, 0.0, 0.0]; } );
+spheres = ( { position = [500000000000.0, 0.0, 0.0]; velocity = [1.01318, 0.0, 0.0]; radius = 1.0; mass = 1.0; } );
+output: { every = 12000; };
+EOF
+for mode in all grid cells; do
+    bin/nbep run $tmp/far-floor.deck --quiet --set "run.neighbors=\"$mode\"" \
+        -o $tmp/far-floor.h5 --summary $tmp/far-floor.json 2>$tmp/far-floor.err
+    rc=$?
+    check "$mode: a floor 1e11 radii out, overlaps of its coordinates' round-off: exit 0 (got $rc), no warning" \
+        "[ $rc = 0 ] && [ ! -s $tmp/far-floor.err ] &&
+         grep -q '\"plane_collisions\": [1-9]' $tmp/far-floor.json &&
+         grep -q '\"max_overlap_rel\": [1-9][.0-9]*e-05' $tmp/far-floor.json"
+done
+bin/nbep run $tmp/far-wall.deck --quiet -o $tmp/far-wall.h5 2>$tmp/far-wall.err
+rc=$?
+check "a wall 5e11 radii out, reached after 11000 steps: exit 0 (got $rc), one warning with the coordinates' bound" \
+    "[ $rc = 0 ] && [ \$(wc -l <$tmp/far-wall.err) = 1 ] &&
+     grep -q '^nbep: warning: spheres overlapped by up to 0.2[0-9]* of the smaller radius .* in $tmp/far-wall.h5, .*(below 1e-9; with coordinates this far from the origin, below 0.0036)' $tmp/far-wall.err"
 # naive at a run.dt where spheres pass through each other (overlaps of several radii, no
 # gravity so that the overlaps' projection adds no energy): the other warning, exit 0
 bin/nbep run $deck --quiet -a naive -n 4 --dt 0.5 --set 'physics.gravity=[0,0,0]' \

@@ -680,7 +680,19 @@ static void test_coordinates_far_beyond_the_smallest_radius_are_errors(void **st
     nbep_diag_init(&f->d);
     LOAD_OK(f, deck, "box.max=[1099511627776.0, 1e12, 1e12]", "planes.[0].point=[0, 0, 0]",
             "spheres.[1].region.max=[10.0, 10.0, 10.0]");
+    assert_true(f->sc.span == 0x1p40); /* the farthest, kept for the overlap warning (run.c) */
     nbep_scene_fini(&f->sc);
+    /* a distance in radii beyond doubles is said as such (it read "inf" until 2026-12-03) */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.max=[1e11, 1e11, 1e11]", "planes.[0].point=[0, 0, 1e308]",
+               "spheres.[1].region.max=[10.0, 10.0, 10.0]", "spheres.[0].radius=0.5");
+    assert_int_equal(f->d.n_errors, 1);
+    assert_non_null(strstr(f->d.msg[0], "planes.[0].point lies more than 1.8e+308 smallest radii "
+                                        "(0.5) from the origin"));
+    nbep_scene_fini(&f->sc);
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
     LOAD_FAILS(f, NBEP_EDECK, deck, "box.max=[1099511627776.0, 1e12, 1e12]",
                "planes.[0].point=[0, 0, 0]", "spheres.[1].region.max=[10.0, 10.0, 10.0]",
                "spheres.[0].position=[1099511627777.0, 5.0, 5.0]");

@@ -98,6 +98,10 @@ typedef struct nbep_scene {
                                * carry_drop of their radius (0: off) */
     bool zero_momentum;       /* placed spheres' total momentum taken off, kinetic energy kept
                                * (nbep_physics_zero_momentum) */
+    double span;              /* the deck's farthest coordinate from the origin (sphere
+                               * positions, box and region corners, plane points) in smallest
+                               * radii, at most NBEP_DECK_SPAN_MAX: a position's rounding there
+                               * is span * 2^-53 of a radius (0: no coordinate, or no sphere) */
     /* box (optional) */
     bool has_box;
     nbep_vec3 box_min, box_max;
