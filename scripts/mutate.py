@@ -216,7 +216,7 @@ MUTANTS = [
     ("frame-wrap-refusal-ignored", "src/output.c",
      "            if (!nbep_periodic_wrap(&o->pb, &o->wrap_pos[i], &o->wrap_img[3 * i]))",
      "            if (!nbep_periodic_wrap(&o->pb, &o->wrap_pos[i], &o->wrap_img[3 * i]) && 0)",
-     ["tests/test_cli.sh"], None),
+     ["test_output", "tests/test_cli.sh"], None),
     # the two corrections of a floor that rounding put one period off: the step taken, the count not
     ("periodic-wrap-high-fix-uncounted", "src/periodic.c", "        y -= len;\n        m += 1.0;",
      "        y -= len;", ["test_periodic"], None),

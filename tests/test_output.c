@@ -781,6 +781,31 @@ static void test_a_frame_with_a_non_finite_position_is_refused(void **state)
     H5Fclose(f);
 }
 
+/* A periodic axis's count of periods crossed beyond /frames/image's int32 (a sphere run away
+ * to DBL_MAX along z, 3e307 periods out): the frame is refused, one line naming the file and
+ * the sphere, and the file keeps the frames before it (until 2026-12-03 the wrap left such a
+ * position unwrapped, written as it was) */
+static void test_a_frame_beyond_the_image_count_is_refused(void **state)
+{
+    fixture *fx = *state;
+    char path[256];
+    nbep_output *o = NULL;
+    fx->sc.periodic[2] = true;
+    nbep_test_tmp("output_far_image.h5", path, sizeof path);
+    assert_ok(nbep_output_create(path, &fx->sc, 1, &o, &fx->d), &fx->d);
+    assert_ok(nbep_output_frame(o, 0, DT, &fx->sc.state, &fx->d), &fx->d);
+    fx->sc.state.pos[2].z = DBL_MAX;
+    assert_int_equal(nbep_output_frame(o, 10, DT, &fx->sc.state, &fx->d), NBEP_ENUMERIC);
+    assert_one_line_naming(&fx->d, path);
+    assert_non_null(strstr(fx->d.msg[0], "step 10: sphere 2 has crossed the periodic box more "
+                                         "than 2^31 times along an axis"));
+    assert_ok(nbep_output_close(&o, NULL, &fx->d), &fx->d);
+    hid_t f = open_ro(path);
+    assert_int_equal(read_count(f, "/frames"), 1);
+    assert_dataset(f, "/frames/position", H5T_IEEE_F64LE, 3, 1, N_SPHERES, 3);
+    H5Fclose(f);
+}
+
 /* ---- crashes ------------------------------------------------------------------------------- */
 
 /* Child codes: which step failed (the child cannot use cmocka's asserts). */
@@ -984,7 +1009,15 @@ static void test_periodic_axes_are_the_attribute_and_info_names_them(void **stat
     fixture *fx = *state;
     char path[256];
     fx->sc.periodic[0] = fx->sc.periodic[2] = true;
-    write_run(fx, nbep_test_tmp("output_periodic_xz.h5", path, sizeof path), NULL);
+    /* one frame: write_run's second puts a sphere at z = DBL_MAX, a count of periods no
+     * frame can hold (test_a_frame_beyond_the_image_count_is_refused) */
+    nbep_output *o = NULL;
+    assert_ok(nbep_output_create(nbep_test_tmp("output_periodic_xz.h5", path, sizeof path),
+                                 &fx->sc, 1, &o, &fx->d),
+              &fx->d);
+    fill_frame(&fx->sc.state, 0);
+    assert_ok(nbep_output_frame(o, 0, DT, &fx->sc.state, &fx->d), &fx->d);
+    assert_ok(nbep_output_close(&o, NULL, &fx->d), &fx->d);
     hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
     assert_true(f >= 0);
     hid_t a = H5Aopen(f, "periodic", H5P_DEFAULT);
@@ -1706,6 +1739,7 @@ int main(void)
         T(test_a_file_another_writer_holds_is_neither_made_nor_resumed),
         T(test_a_lock_file_left_by_a_killed_run_does_not_hold_the_file),
         T(test_a_frame_with_a_non_finite_position_is_refused),
+        T(test_a_frame_beyond_the_image_count_is_refused),
         T(test_a_run_killed_between_frames_leaves_every_frame_written),
         T(test_a_process_exiting_without_closing_leaves_three_frames),
         T(test_the_chunk_index_holds_every_planned_frame_without_splitting),
