@@ -168,11 +168,22 @@ def draw_3d(fig, pos, radius, c, lo, hi, boxed, args, planes=None):
     return ax, sc
 
 
+def colour_range(mappable, c, label):
+    """Speeds from 0: with every sphere at rest (a settled pile) matplotlib's range for
+    constant data ran from -0.1 to 0.1, negative speeds on the bar (until 2026-12-03)."""
+    if label == "speed" and not np.any(c > 0.0):
+        mappable.set_clim(0.0, 1.0)
+
+
 def draw_2d(fig, pos, radius, c, lo, hi, boxed, args, planes=None):
     ax = fig.add_subplot()
     i, j = AXES[args.view[0]], AXES[args.view[1]]
-    depth = "xyz".replace(args.view[0], "").replace(args.view[1], "")
-    order = np.argsort(pos[:, AXES[depth]])   # far first, nearest drawn last
+    depth = AXES["xyz".replace(args.view[0], "").replace(args.view[1], "")]
+    # far first, nearest drawn last: the viewer looks from the side the right-handed normal of
+    # the view (its first axis across, its second up) points to, -y for xz (until 2026-12-03
+    # every view sorted by the coordinate itself, and xz drew the back spheres over the front)
+    toward = np.cross(np.eye(3)[i], np.eye(3)[j])[depth]
+    order = np.argsort(toward * pos[:, depth], kind="stable")
     ec = EllipseCollection(2 * radius[order], 2 * radius[order], np.zeros(len(order)),
                            units="xy", offsets=pos[order][:, [i, j]],
                            offset_transform=ax.transData, cmap="viridis",
@@ -248,6 +259,7 @@ def main():
             draw = draw_3d if args.view == "3d" else draw_2d
             ax, mappable = draw(fig, pos, radius, c, lo, hi, boxed, args, planes)
             if c is not None and mappable is not None:
+                colour_range(mappable, c, label)
                 fig.colorbar(mappable, ax=ax, shrink=0.7, pad=0.1, label=label)
             title = "%s: step %d, t = %.4g, %d spheres" % (stem, step, t, len(radius))
             if getattr(ax, "short", None):

@@ -102,6 +102,34 @@ for line, (n, off) in zip(xz, [((s, s), 0.0), ((-s, s), 0.1)]):
         assert abs(n[0] * p[0] + n[1] * p[1] - off) < 1e-12, (n, off, p)
 PYEOF"
 
+check "render.py's projections: the nearest sphere drawn last, from the side each view looks from" \
+    "MPLBACKEND=Agg '$PY' - <<'PYEOF'
+import sys, types
+import numpy as np
+import matplotlib.pyplot as plt
+sys.path.insert(0, 'scripts')
+import render
+lo, hi = np.array([-2.0, -2.0, -2.0]), np.array([2.0, 2.0, 2.0])
+# each view: a sphere in front (across 0) and one behind it (across 0.5): the viewer looks
+# from +z for xy, from -y for xz (x across, z up), from +x for yz
+for view, front, back in (('xy', [0.0, 0.0, 1.0], [0.5, 0.0, -1.0]),
+                          ('xz', [0.0, -1.0, 0.0], [0.5, 1.0, 0.0]),
+                          ('yz', [1.0, 0.0, 0.0], [-1.0, 0.5, 0.0])):
+    fig = plt.figure()
+    for pos in (np.array([front, back]), np.array([back, front])):
+        _, ec = render.draw_2d(fig, pos, np.array([0.1, 0.1]), np.array([1.0, 2.0]), lo, hi,
+                               False, types.SimpleNamespace(view=view))
+        across = ec.get_offsets()[:, 0]
+        assert list(across) == [0.5, 0.0], (view, pos.tolist(), across)
+    plt.close(fig)
+# a pile at rest: its speed bar from 0
+fig = plt.figure()
+_, ec = render.draw_2d(fig, np.zeros((2, 3)), np.array([0.1, 0.1]), np.zeros(2), lo, hi, False,
+                       types.SimpleNamespace(view='xy'))
+render.colour_range(ec, np.zeros(2), 'speed')
+assert ec.get_clim() == (0.0, 1.0), ec.get_clim()
+PYEOF"
+
 # every run writes RUN.xmf beside RUN.h5 (ParaView and VisIt open it as animated spheres)
 check "a run writes its XDMF sidecar" "[ -s '$tmp/viz.xmf' ]"
 check "the sidecar resolves in a reader" "'$PY' scripts/check_xdmf.py '$tmp/viz.xmf' >/dev/null"
