@@ -259,13 +259,13 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
  * overlap by design (README, Accuracy), and get no warning. */
 #define EXACT_OVERLAP_WARN 1e-6
 /* Far from the origin, round-off is the coordinates': a position rounds to 2^-53 of its size,
- * span 2^-53 of a radius at the deck's farthest coordinate (scene.h span; up to 2^-13 at
+ * span * 2^-53 of a radius at the deck's farthest coordinate (scene.h span; up to 2^-13 at
  * NBEP_DECK_SPAN_MAX), and a contact there is placed to a few of those, its flights to the
  * contact, response and slot each rounding it once, and a sphere that flies many steps to it
- * in all-pairs and grid mode carries half of one a step (README, Checking a run). A floor at
- * 1e11 radii overlapped by 1 to 4 of them in every predictive mode, and got this warning
- * until 2026-12-03; 64 leave room for those, and the warning is for overlaps beyond what
- * the coordinates can hold (0.24 of a radius at 5e11 radii after 1e5 steps of flight). */
+ * in all-pairs and grid mode carries half of one a step (README, The deck: the span). A floor
+ * at 1e11 radii overlapped by 1 to 4 of them in every predictive mode, and got this warning
+ * until 2026-12-03; 64 leave room for those, and the warning is for overlaps beyond what the
+ * coordinates can hold (0.24 of a radius at 5e11 radii after 1.1e4 steps of flight). */
 #define EXACT_OVERLAP_ULPS 64.0
 /* The others' overlaps grow with run.dt (speed dt / r: README, Accuracy), by design; one of
  * more than the smaller radius means spheres went halfway through each other within a step,
