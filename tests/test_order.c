@@ -20,6 +20,7 @@
 #include "nbep/scene.h"
 #include "nbep/sim.h"
 #include "nbep_test.h"
+#include "nbep_test_h5.h"
 #include "nbep_test_scene.h"
 
 static const nbep_vec3 ZERO = {0.0, 0.0, 0.0};
@@ -165,7 +166,10 @@ static void test_step_order_is_refused_with_cells_naive_and_seminaive_and_typos(
  * 3.5 - 4 x 0.45 = 1.7, overlapping a by 0.3 (0.6 of a radius) and closing, so they react
  * there (swap: a -4, b stops at 1.7); round 3: a at 1.0 touches d at 0.0 and catches it
  * (swap: d -4, a -1). At t = 1: d -2.0, a 0.5, b 1.7, c 4.5; the same velocities and count,
- * b and d 0.3 off, max_overlap_rel 0.6. */
+ * b and d 0.3 off, max_overlap_rel 0.6.
+ * /stats/virial (SPEC: r12 . dp2, r12 at contact; on a line, sigma |dp| a collision): time
+ * order 4 (c-b) + 3 (b-a) + 4 (a-d) + 1 (b-a) = 12; step order 4 (c-b) + 1 (a-d) + 4 (b-a,
+ * found 0.7 apart: taken at the touching distance, 0.7 x 4 = 2.8 if not) + 3 (a-d) = 12. */
 static nbep_scene *shadow_scene(bool step)
 {
     nbep_scene *sc = nbep_test_scene_new(4, 0, "predictive", 1, 1.0);
@@ -180,9 +184,19 @@ static nbep_scene *shadow_scene(bool step)
 static void check_shadow(bool step, const double *want_x, double want_overlap)
 {
     nbep_scene *sc = shadow_scene(step);
+    sc->out_stats = true;
     nbep_state fin;
-    uint64_t reactions = 0;
-    nbep_summary sum = nbep_test_run(sc, 1, NULL, NULL, &fin, &reactions);
+    uint64_t counts[NBEP_COUNTER_COUNT];
+    char path[256];
+    nbep_test_tmp(step ? "shadow-step.h5" : "shadow-time.h5", path, sizeof path);
+    nbep_summary sum = nbep_test_run_to(sc, 1, NULL, NULL, path, &fin, counts);
+    const uint64_t reactions = counts[NBEP_COUNTER_REACTIONS];
+    size_t rows = 0;
+    double *virial = nbep_test_h5_doubles(path, "/stats/virial", &rows);
+    assert_int_equal(rows, 1);
+    assert_close(virial[0], 12.0, 1e-14, 0.0); /* sums of small integers, to round-off */
+    free(virial);
+    remove(path);
     const double want_v[4] = {-4.0, -1.0, 0.0, 0.0};
     for (size_t i = 0; i < 4; i++) {
         assert_close(fin.pos[i].x, want_x[i], 0.0, 1e-12);

@@ -46,6 +46,19 @@ bool nbep_physics_respond_pair_along(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, 
                                      double m1, double m2, double e, nbep_vec3 d1,
                                      nbep_vec3 d2);
 
+/* SPEC /stats/virial's term for one pair's response, r12 . dp2 with r12 at contact: r12 the
+ * line of centres from sphere 1 to sphere 2 as the response found it, dp2 the momentum sphere 2
+ * received, sigma = r1 + r2. A response that happened overlapped (naive and seminaive find
+ * contacts after the step's flight; the paper's step, run.order = "step", reacts to a shadowed
+ * pair where it finds it) is taken at the touching distance, where it happens in SPEC's model:
+ * r12 scaled to length sigma (the overlapped |r12| biases the pressure low, by the overlap).
+ * 0 when p1 == p2 (no line of centres; the response did nothing). */
+static inline double nbep_physics_virial_at_touch(nbep_vec3 r12, nbep_vec3 dp2, double sigma)
+{
+    const double dist = nbep_vec3_norm(r12);
+    return dist > 0.0 ? nbep_vec3_dot(r12, dp2) * (sigma / dist) : 0.0;
+}
+
 /* Sphere-plane response: n is the plane's unit normal (into the live side); when v.n < 0,
  * v -= (1+e)(v.n) n and true is returned, else false. Afterwards v.n >= 0 exactly (a
  * round-off residual is pushed out, as for pairs). */
