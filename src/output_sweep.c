@@ -194,21 +194,41 @@ done:
     return st;
 }
 
+/* Opens a run file to read, without HDF5's lock (the look must work on file systems without
+ * locks, and takes one look); *fapl and the file's id to close; < 0 (a message in d) when it
+ * cannot. */
+static hid_t open_run(const char *path, hid_t *fapl, nbep_diag *d)
+{
+    hid_t file = H5I_INVALID_HID;
+    *fapl = H5Pcreate(H5P_FILE_ACCESS);
+#if H5_VERSION_GE(1, 12, 1) || (H5_VERS_MAJOR == 1 && H5_VERS_MINOR == 10 && H5_VERS_RELEASE >= 7)
+    if (*fapl >= 0 && H5Pset_file_locking(*fapl, false, true) < 0)
+        nbep__output_close_id(fapl);
+#endif
+    if (*fapl < 0 || (file = H5Fopen(path, H5F_ACC_RDONLY, *fapl)) < 0)
+        HDF5_FAIL(d, path, "open the file");
+    return file;
+}
+
+nbep_status nbep_output_sweep_read_deck(const char *path, char **deck, nbep_diag *d)
+{
+    hid_t fapl, file = open_run(path, &fapl, d);
+    const nbep_status st =
+        file >= 0 && nbep__output_read_string_attr(file, path, "deck", deck, d) >= 0 ? NBEP_OK
+                                                                                     : NBEP_EIO;
+    nbep__output_close_id(&file);
+    nbep__output_close_id(&fapl);
+    return st;
+}
+
 nbep_status nbep_output_sweep_read_run(const char *path, char **overrides, char **summary_json,
                                        char **resumed, nbep_diag *d)
 {
     char *ov = NULL, *json = NULL, *res = NULL;
     nbep_status st = NBEP_EIO;
-    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), file = H5I_INVALID_HID;
-#if H5_VERSION_GE(1, 12, 1) || (H5_VERS_MAJOR == 1 && H5_VERS_MINOR == 10 && H5_VERS_RELEASE >= 7)
-    /* No lock: the check must work on file systems without locks, and takes one look. */
-    if (fapl >= 0 && H5Pset_file_locking(fapl, false, true) < 0)
-        nbep__output_close_id(&fapl);
-#endif
-    if (fapl < 0 || (file = H5Fopen(path, H5F_ACC_RDONLY, fapl)) < 0) {
-        HDF5_FAIL(d, path, "open the file");
+    hid_t fapl, file = open_run(path, &fapl, d);
+    if (file < 0)
         goto done;
-    }
     if (nbep__output_read_string_attr(file, path, "overrides", &ov, d) < 0)
         goto done;
     if (nbep__output_summary_json(file, path, &json, d) < 0)

@@ -1826,3 +1826,89 @@ void nbep_scene_count_pairs(const nbep_state *s, uint64_t *quadratic, uint64_t *
     *quadratic = same;
     *quartic = all - same;
 }
+
+/* ---- decks alike (a sweep's reuse) ------------------------------------------------------------ */
+
+/* Whether member m of a group (parent's name pname, NULL at the root) is neutral for
+ * nbep_scene_decks_alike: as the sweep's neutral overrides (sweep.c, override_is_neutral). */
+static bool alike_neutral(const char *pname, const config_setting_t *parent,
+                          const config_setting_t *m)
+{
+    const char *name = config_setting_name(m);
+    if (!name || !config_setting_is_group(parent))
+        return false;
+    if (config_setting_is_root(parent))
+        return strcmp(name, "sweep") == 0;
+    if (!config_setting_is_root(config_setting_parent(parent)) || !pname)
+        return false;
+    return (strcmp(pname, "run") == 0 && (strcmp(name, "steps") == 0 || strcmp(name, "threads") == 0)) ||
+           (strcmp(pname, "output") == 0 && strcmp(name, "file") == 0);
+}
+
+/* The k-th member of aggregate s from *at on that is not neutral, or NULL; *at moves past it. */
+static const config_setting_t *alike_next(const config_setting_t *s, int *at)
+{
+    const char *pname = config_setting_name(s);
+    for (config_setting_t *m; (m = config_setting_get_elem(s, (unsigned)*at)) != NULL;) {
+        (*at)++;
+        if (!alike_neutral(pname, s, m))
+            return m;
+    }
+    return NULL;
+}
+
+static bool settings_alike(const config_setting_t *a, const config_setting_t *b)
+{
+    const char *na = config_setting_name(a), *nb = config_setting_name(b);
+    if (config_setting_type(a) != config_setting_type(b) || (!na) != (!nb) ||
+        (na && strcmp(na, nb) != 0))
+        return false;
+    switch (config_setting_type(a)) {
+    case CONFIG_TYPE_INT:
+    case CONFIG_TYPE_INT64:
+        return config_setting_get_int64(a) == config_setting_get_int64(b);
+    case CONFIG_TYPE_FLOAT: /* the same text gives the same double; -0.0 and 0.0 alike */
+        return config_setting_get_float(a) == config_setting_get_float(b);
+    case CONFIG_TYPE_BOOL:
+        return config_setting_get_bool(a) == config_setting_get_bool(b);
+    case CONFIG_TYPE_STRING:
+        return strcmp(config_setting_get_string(a), config_setting_get_string(b)) == 0;
+    default: { /* group, array, list: member by member, the neutral ones skipped */
+        int ia = 0, ib = 0;
+        for (;;) {
+            const config_setting_t *ma = alike_next(a, &ia), *mb = alike_next(b, &ib);
+            if (!ma || !mb)
+                return !ma && !mb;
+            if (!settings_alike(ma, mb))
+                return false;
+        }
+    }
+    }
+}
+
+/* Reads a deck's text into cfg as the load does (widened for libconfig 1.5); false when it
+ * cannot (a syntax error, an @include, out of memory: messages into a diag dropped here). */
+static bool alike_read(config_t *cfg, const char *text)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep__scene_ctx c = {.deck = "", .d = &d};
+    size_t n_bad = 0, n_unread = 0;
+    char *wide = nbep__scene_widen(&c, text, NULL, &n_bad, &n_unread);
+    const bool ok = wide && !n_bad && config_read_string(cfg, wide);
+    free(wide);
+    nbep_diag_fini(&d);
+    return ok;
+}
+
+bool nbep_scene_decks_alike(const char *a, const char *b)
+{
+    config_t ca, cb;
+    config_init(&ca);
+    config_init(&cb);
+    const bool alike = alike_read(&ca, a) && alike_read(&cb, b) &&
+                       settings_alike(config_root_setting(&ca), config_root_setting(&cb));
+    config_destroy(&ca);
+    config_destroy(&cb);
+    return alike;
+}

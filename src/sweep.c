@@ -8,7 +8,8 @@
  *   gather of results and its broadcast of the final status.
  * - A run's file is either complete (its /summary says it completed all its steps, its
  *   overrides are this run's: it is reused) or replaced: a restarted sweep never mixes an old
- *   run into a new one.
+ *   run into a new one; a folder holding a run of another deck is refused before any run
+ *   (runs_of_this_deck).
  * - Runs are independent processes of the simulation library: one run's failure (a deck error
  *   for one combination, a numerical failure) is recorded in its row and the others go on.
  * - MPI calls happen only on the main thread, outside any run's parallel region (the thread
@@ -162,6 +163,7 @@ static nbep_status plan_of_scene(const char *deck_path, const char *const *overr
         nbep_sweep_plan_fini(&p);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory planning the sweep of %s", deck_path);
     }
+    p.resumable = scene->out_position && scene->out_velocity;
     /* The scene's axes and deck text move into the plan. */
     p.deck_text = scene->deck_text;
     scene->deck_text = NULL;
@@ -1333,6 +1335,64 @@ static nbep_status remove_tables(const nbep_sweep_plan *p, nbep_diag *d)
     return NBEP_OK;
 }
 
+/* Rank 0, before any run: a run file in the study's folder made from another deck (its root
+ * attribute `deck` unlike this deck's, nbep_scene_decks_alike: the run.steps, run.threads,
+ * output.file and sweep settings aside, which the reuse judges apart) refuses the sweep, exit
+ * 2, nothing removed. Until 2026-12-03 only the overrides were compared: two decks sharing an
+ * output.file (a copied template) or a deck edited between two jobs took the other's finished
+ * runs as their own, the table labelled with the new deck and its rows from the old (an HPC
+ * user's review). A file that cannot be read is left to the run, which replaces it. */
+static nbep_status runs_of_this_deck(const nbep_sweep_plan *p, nbep_diag *d)
+{
+    for (size_t run = 0; run < p->n_runs; run++) {
+        char *path = nbep_sweep_run_path(p, run), *deck = NULL;
+        if (!path)
+            NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory naming run %zu", run);
+        struct stat sb;
+        nbep_diag quiet;
+        nbep_diag_init(&quiet);
+        const bool other = stat(path, &sb) == 0 &&
+                           nbep_output_sweep_read_deck(path, &deck, &quiet) == NBEP_OK &&
+                           !nbep_scene_decks_alike(deck, p->deck_text);
+        nbep_diag_fini(&quiet);
+        free(deck);
+        if (other) {
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: %s holds a run of another deck (its root attribute `deck` "
+                          "differs from %s's beyond run.steps, run.threads, output.file and "
+                          "the sweep group): this study would take it as its own; give this "
+                          "study a folder of its own (output.file or -o), or remove %s/",
+                          path, p->deck_path, p->dir);
+            free(path);
+            return NBEP_EUSAGE;
+        }
+        free(path);
+    }
+    return NBEP_OK;
+}
+
+/* A rank other than 0, once rank 0 has made the study's folder: whether it sees the folder.
+ * Ranks on nodes that do not share it (a node-local TMPDIR, a relative -o from another
+ * working directory) failed each of their runs with "cannot create the output file: No such
+ * file or directory" until 2026-12-03 (an HPC user's review); now the sweep stops before any
+ * run, this rank saying why in d (its own: each rank prints its messages). */
+static nbep_status sees_dir(const nbep_sweep_plan *p, int rank, nbep_diag *d)
+{
+    struct stat sb;
+    if (stat(p->dir, &sb) == 0 && S_ISDIR(sb.st_mode))
+        return NBEP_OK;
+    const int err = errno;
+    char host[256] = "";
+    if (gethostname(host, sizeof host) != 0)
+        snprintf(host, sizeof host, "?");
+    host[sizeof host - 1] = '\0';
+    NBEP_FAIL(d, NBEP_EUSAGE,
+              "nbep: sweep: rank %d (on %s) cannot see the study's folder %s, which rank 0 made "
+              "(%s): every rank must see it, on a file system all the nodes share (output.file "
+              "or -o, an absolute path)",
+              rank, host, p->dir, S_ISDIR(sb.st_mode) || err ? strerror(err) : "not a folder");
+}
+
 /* An integer from the environment, or -1. */
 static long env_long(const char *name)
 {
@@ -1494,8 +1554,11 @@ static nbep_status finish(const nbep_sweep_plan *p, const nbep_sweep_result *res
     if (stopped) {
         nbep_diag_add(d, __FILE__, __LINE__,
                       "nbep: sweep %s: %zu of %zu runs complete%s; the same command "
-                      "again runs the others, those cut short from their last frames",
-                      nbep_status_stop_text(run_st, stop_signal), s.ok, p->n_runs, failed);
+                      "again runs the others, those cut short %s",
+                      nbep_status_stop_text(run_st, stop_signal), s.ok, p->n_runs, failed,
+                      p->resumable ? "from their last frames"
+                                   : "from step 0 (their frames, without positions or "
+                                     "velocities, output.fields, cannot be resumed)");
         return run_st;
     }
     if (s.failed)
@@ -1785,9 +1848,38 @@ nbep_status nbep_sweep_main(const nbep_cli *cli, const atomic_int *stop_signal, 
     if (st == NBEP_OK && rank == 0)
         st = lock_dir(p.dir, &lock, dd);
     if (st == NBEP_OK && rank == 0)
+        st = runs_of_this_deck(&p, dd);
+    st = agree(st, mpi); /* the folder made, or not: every rank goes on, or none */
+    if (st == NBEP_OK && rank != 0)
+        st = sees_dir(&p, rank, d);
+    const nbep_status own = st;
+    st = agree(st, mpi);
+    if (rank == 0 && own == NBEP_OK && st != NBEP_OK) { /* what rank 0 made goes */
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: sweep: another rank cannot run the study (its line says why); "
+                      "nothing run");
+        if (made) {
+            char *at = malloc(strlen(p.dir) + sizeof "/.lock");
+            if (at)
+                sprintf(at, "%s/.lock", p.dir);
+            nbep_lock_drop(lock, at);
+            lock = -1;
+            free(at);
+            unmake_dir(p.dir, made);
+        }
+    }
+    if (st == NBEP_OK && rank == 0)
         st = remove_tables(&p, dd);
     st = agree(st, mpi); /* every rank stops here, or none: the collectives below need all */
     if (st == NBEP_OK) {
+        /* a job chain's time limit would start such runs again for ever (also with --quiet,
+         * as the run's warnings) */
+        if (rank == 0 && !p.resumable)
+            fprintf(stderr, "nbep: warning: %s: output.fields lacks \"position\" or "
+                            "\"velocity\": a run cut short (a signal, a job's time limit) cannot "
+                            "go on from its last frame, and the same command again runs it from "
+                            "step 0\n",
+                    p.deck_path);
         if (rank == 0 && !cli->quiet)
             fprintf(stderr, "nbep sweep: %s: %zu run%s (%" PRIu64 " replica%s x %zu "
                             "combination%s) on %d rank%s into %s/\n",

@@ -2776,6 +2776,75 @@ static void test_fini_is_safe_on_a_zeroed_scene_and_twice(void **state)
     nbep_scene_fini(&f->sc);
 }
 
+/* ---- decks alike (a sweep's reuse of its folder) ------------------------------------------------ */
+
+/* nbep_scene_decks_alike: comments, layout, run.steps, run.threads, output.file and the sweep
+ * group aside, any setting's value, type, name, order or count makes another deck; a text
+ * libconfig cannot read is never alike. */
+static void test_decks_alike_only_where_they_make_the_same_runs(void **state)
+{
+    (void)state;
+    const char *base = "run: { steps = 10; threads = 1; dt = 0.01; };\n"
+                       "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+                       "spheres = ( { count = 8; radius = 0.05; place = \"random\"; } );\n"
+                       "output: { file = \"a.h5\"; every = 5; };\n";
+    const char *alike[] = {
+        "# a comment\nrun: {steps=10;threads=1;dt=0.01;};\n"
+        "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+        "spheres = ( { count = 8; radius = 0.05; place = \"random\"; } );\n"
+        "output: { file = \"a.h5\"; every = 5; };\n",
+        "run: { steps = 99; dt = 0.01; };\n" /* steps, threads */
+        "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+        "spheres = ( { count = 8; radius = 0.05; place = \"random\"; } );\n"
+        "output: { file = \"b.h5\"; every = 5; };\n" /* output.file */
+        "sweep: { replicas = 3; };\n",
+        "run: { steps = 10; threads = 1; dt = 1.0e-2; };\n" /* the same double */
+        "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+        "spheres = ( { count = 8; radius = 0.05; place = \"random\"; } );\n"
+        "output: { file = \"a.h5\"; every = 5; };\n"};
+    const char *other[] = {
+        "run: { steps = 10; threads = 1; dt = 0.02; };\n" /* a value */
+        "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+        "spheres = ( { count = 8; radius = 0.05; place = \"random\"; } );\n"
+        "output: { file = \"a.h5\"; every = 5; };\n",
+        "run: { steps = 10; threads = 1; dt = 0.01; };\n"
+        "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 2.0]; };\n" /* an array's element */
+        "spheres = ( { count = 8; radius = 0.05; place = \"random\"; } );\n"
+        "output: { file = \"a.h5\"; every = 5; };\n",
+        "run: { steps = 10; threads = 1; dt = 0.01; };\n"
+        "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+        "spheres = ( { count = 9; radius = 0.05; place = \"random\"; } );\n" /* an integer */
+        "output: { file = \"a.h5\"; every = 5; };\n",
+        "run: { steps = 10; threads = 1; dt = 0.01; };\n"
+        "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+        "spheres = ( { count = 8; radius = 0.05; place = \"lattice\"; } );\n" /* a string */
+        "output: { file = \"a.h5\"; every = 5; };\n",
+        "run: { steps = 10; threads = 1; dt = 0.01; seed = 2; };\n" /* a setting more */
+        "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+        "spheres = ( { count = 8; radius = 0.05; place = \"random\"; } );\n"
+        "output: { file = \"a.h5\"; every = 5; };\n",
+        "run: { steps = 10; threads = 1; dt = 0.01; };\n"
+        "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+        "spheres = ( { count = 8; radius = 0.05; place = \"random\"; } );\n"
+        "output: { file = \"a.h5\"; every = 5; fields = [\"position\"]; };\n",
+        "run: { steps = 10; threads = 1; dt = 0.01; };\n"
+        "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+        "spheres = ( { count = 8; radius = 0.05; place = \"random\"; },\n"
+        "            { count = 1; radius = 0.05; place = \"random\"; } );\n" /* a list's */
+        "output: { file = \"a.h5\"; every = 5; };\n",
+        "run: { steps = 10; threads = 1; dt = 0.01;\n", /* unreadable */
+    };
+    assert_true(nbep_scene_decks_alike(base, base));
+    for (size_t k = 0; k < sizeof alike / sizeof alike[0]; k++) {
+        if (!nbep_scene_decks_alike(base, alike[k]) || !nbep_scene_decks_alike(alike[k], base))
+            fail_msg("alike deck %zu taken for another", k);
+    }
+    for (size_t k = 0; k < sizeof other / sizeof other[0]; k++) {
+        if (nbep_scene_decks_alike(base, other[k]) || nbep_scene_decks_alike(other[k], base))
+            fail_msg("other deck %zu taken for alike", k);
+    }
+}
+
 /* ---- found by fuzzing (scripts/fuzz.sh) ----------------------------------------------------- */
 
 /* A string where a setting name belongs: one syntax error at its line. (libconfig 1.5 leaks
@@ -2794,6 +2863,7 @@ int main(void)
 #define T(name) cmocka_unit_test_setup_teardown(name, setup, teardown)
     const struct CMUnitTest tests[] = {
         T(test_good_deck_resolves_every_setting),
+        T(test_decks_alike_only_where_they_make_the_same_runs),
         T(test_absent_settings_take_their_defaults),
         T(test_zero_momentum_keeps_the_places_and_the_energy),
         T(test_output_file_defaults_to_the_deck_name_with_h5_here),

@@ -56,6 +56,21 @@ check "--set sweep.replicas=3: 6 runs, the 4 finished reused (exit $rc, $(json "
 check "... run 0's file untouched" "[ '$(md5sum <"$tmp/s.sweep/run-0000.h5")' = '$md5_0' ]"
 run_sweep "$tmp/s.deck" -o "$tmp/s" --quiet --set sweep.replicas=3 --summary "$tmp/again.json"
 check "the same command again reuses all 6" "[ \"\$(json '$tmp/again.json' reused)\" = 6 ]"
+# a study's folder holding runs of another deck (two decks sharing output.file, a deck edited
+# between two jobs): refused, exit 2, one line naming the file, nothing removed (until
+# 2026-12-03 the finished runs were reused as this deck's, the table labelled with it); a
+# deck alike but for comments, layout, run.steps, run.threads and its sweep group reuses them
+sed 's/count = 8;/count = 9;/' "$tmp/s.deck" >"$tmp/big.deck"
+md5_csv=$(md5sum <"$tmp/s.sweep/summary.csv")
+run_sweep "$tmp/big.deck" -o "$tmp/s" --quiet
+check "a study over another deck's runs: exit 2 (got $rc), one line: $(head -c 300 "$tmp/stderr")" \
+    "[ $rc = 2 ] && [ \$(wc -l <'$tmp/stderr') = 1 ] &&
+     grep -q '^nbep: $tmp/s.sweep/run-0000.h5 holds a run of another deck (its root attribute .deck. differs from $tmp/big.deck.s beyond run.steps, run.threads, output.file and the sweep group)' '$tmp/stderr' &&
+     [ '$(md5sum <"$tmp/s.sweep/run-0000.h5")' = '$md5_0' ] && [ \"\$(md5sum <'$tmp/s.sweep/summary.csv')\" = '$md5_csv' ]"
+{ echo "# the same study, edited"; sed 's/steps = 20; threads = 1;/steps  =  20 ; threads = 2 ;/; s/replicas = 2;/replicas = 3;/' "$tmp/s.deck"; } >"$tmp/alike.deck"
+run_sweep "$tmp/alike.deck" -o "$tmp/s" --quiet --summary "$tmp/alike.json"
+check "a deck alike but for a comment, layout, run.threads and sweep.replicas: all 6 reused (exit $rc)" \
+    "[ $rc = 0 ] && [ \"\$(json '$tmp/alike.json' reused)\" = 6 ]"
 # a run whose file holds another run (an earlier study's other value, here e = 0.9 where the
 # axis now says 0.6; a file nbep cannot read; one whose summary is damaged, which until
 # 2026-12-02 was said to be "a run that failed") is run from step 0 over it: said on its line
@@ -319,6 +334,21 @@ cut() {
 cut go TERM
 check "SIGTERM during the run: exit 143 (got $rc), its row interrupted" \
     "[ $rc = 143 ] && grep -q ',interrupted,143,' '$tmp/go.sweep/summary.csv'"
+# frames without velocities (output.fields) cannot be resumed: the sweep says so as it starts
+# (also with --quiet) and its stop line says the runs cut short go again from step 0 (until
+# 2026-12-03 it said "from their last frames", and a job chain ran them from step 0 for ever)
+sed 's/every = 1000; };/every = 1000; fields = ["position"]; };/' "$tmp/go.deck" >"$tmp/pos.deck"
+"$nbep" sweep "$tmp/pos.deck" -o "$tmp/pos" --quiet >/dev/null 2>"$tmp/stderr-pos" &
+pid=$!
+for _ in $(seq 300); do [ -s "$tmp/pos.sweep/run-0000.h5" ] && break; sleep 0.1; done
+sleep 0.5
+kill -TERM $pid 2>/dev/null
+wait $pid
+rc=$?
+check "frames without velocities, SIGTERM: exit 143 (got $rc), warned at the start, the stop line says step 0: $(tail -1 "$tmp/stderr-pos")" \
+    "[ $rc = 143 ] && [ \$(wc -l <'$tmp/stderr-pos') = 2 ] &&
+     head -1 '$tmp/stderr-pos' | grep -qxF 'nbep: warning: $tmp/pos.deck: output.fields lacks \"position\" or \"velocity\": a run cut short (a signal, a job'\\''s time limit) cannot go on from its last frame, and the same command again runs it from step 0' &&
+     tail -1 '$tmp/stderr-pos' | grep -qF 'the same command again runs the others, those cut short from step 0 (their frames, without positions or velocities, output.fields, cannot be resumed)'"
 cp -r "$tmp/go.sweep" "$tmp/go-bad.sweep"
 cut go9 KILL
 check "SIGKILL during another: its file has frames and no summary" \

@@ -217,4 +217,19 @@ check "rank 0 waited, done with its runs, while rank 1 ran its first (pid '$r0':
 check "... SIGTERM to it alone: exit 143 (got $rc), rank 1 started no other run ($statuses)" \
     "[ $rc = 143 ] && [ $not_run -ge 2 ]"
 
+# a rank that cannot see the study's folder (here started in another working directory with a
+# relative -o: as a node whose TMPDIR is its own): the sweep stops before any run, exit 2, that
+# rank saying why and rank 0 that another rank cannot run it, the folder it made removed
+# (until 2026-12-03 each of that rank's runs failed, "cannot create the output file")
+mkdir -p "$tmp/r0" "$tmp/r1"
+at=$(cd "$tmp" && pwd)
+(cd "$tmp/r0" && timeout 120 mpirun --oversubscribe -np 1 "$OLDPWD/bin/nbep" sweep "$at/mpi.deck" \
+    -o rel/far.h5 --quiet : -np 1 --wdir "$at/r1" "$OLDPWD/bin/nbep" sweep "$at/mpi.deck" \
+    -o rel/far.h5 --quiet) >"$tmp/far.out" 2>&1
+rc=$?
+check "a rank that cannot see the folder: exit 2 (got $rc), its line, rank 0's: $(grep -m1 'cannot see' "$tmp/far.out" | head -c 300)" \
+    "[ $rc = 2 ] && grep -q '^nbep: sweep: rank 1 (on .*) cannot see the study.s folder rel/far.sweep, which rank 0 made (No such file or directory)' '$tmp/far.out' &&
+     grep -q '^nbep: sweep: another rank cannot run the study (its line says why); nothing run$' '$tmp/far.out'"
+check "... nothing left where rank 0 works: $(ls -A "$tmp/r0")" "[ -z \"\$(ls -A '$tmp/r0')\" ]"
+
 test_end sweep_mpi

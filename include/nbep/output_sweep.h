@@ -60,6 +60,11 @@ NBEP_MUST_CHECK nbep_status nbep_output_sweep_write(const char *path, const nbep
                                                     const nbep_table_attr *attrs,
                                                     size_t n_attrs, nbep_diag *d);
 
+/* Reads from an nbep-1 run file the root attribute `deck` (the deck's text it was made from)
+ * into *deck, malloc'd. NBEP_EIO when the file cannot be opened or lacks it. */
+NBEP_MUST_CHECK nbep_status nbep_output_sweep_read_deck(const char *path, char **deck,
+                                                        nbep_diag *d);
+
 /* Reads from an nbep-1 run file the root attribute `overrides` and, when present, the /summary
  * json attribute and the root attribute `resumed`. *overrides, *summary_json and *resumed are
  * malloc'd (the caller frees them); *summary_json is NULL when the run wrote no summary

@@ -155,6 +155,13 @@ NBEP_MUST_CHECK nbep_status nbep_scene_load_run(const char *deck_path,
                                                 nbep_diag *d);
 void nbep_scene_fini(nbep_scene *sc);
 
+/* Whether two decks' texts make the same runs (a sweep's reuse of its folder's files: a file
+ * made from another deck is not this study's run): the same settings, in the same order, with
+ * the same values, comments and layout aside, but for those that say how far a run goes or
+ * where it is written, which the sweep judges apart (run.steps, run.threads, output.file, and
+ * the sweep group: a run's combination and seed are its own overrides). False when either
+ * text cannot be read as a deck (libconfig's syntax) or memory runs out. */
+bool nbep_scene_decks_alike(const char *a, const char *b);
 /* run.neighbors as the deck spells it: "all", "grid" or "cells" (predictive's setting). */
 const char *nbep_scene_neighbors_name(const nbep_scene *sc);
 /* run.order as the deck spells it: "time" or "step". */

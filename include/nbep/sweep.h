@@ -69,6 +69,8 @@ typedef struct nbep_sweep_plan {
     uint64_t steps;               /* run.steps, unless an axis varies it */
     size_t n_combos, n_runs;      /* n_runs = replicas * n_combos; n_combos = 1 without axes */
     char *dir;                    /* owned: the sweep directory, without a trailing '/' */
+    bool resumable;               /* the deck's frames hold positions and velocities
+                                   * (output.fields): a run cut short can go on from them */
 } nbep_sweep_plan;
 
 /* Loads the deck with the command line's overrides (n_overrides may be 0; each string is
