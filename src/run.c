@@ -465,8 +465,11 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
 static const char *new_output_fault(const char *output)
 {
     struct stat sb;
-    if (lstat(output, &sb) == 0 && !S_ISREG(sb.st_mode) && !S_ISLNK(sb.st_mode) &&
-        !S_ISDIR(sb.st_mode))
+    if (lstat(output, &sb) == 0 && S_ISDIR(sb.st_mode))
+        return strerror(EISDIR); /* before anything is made: a folder given as "results/"
+                                  * made results/.partial and failed its rename, "Not a
+                                  * directory", until 2026-12-03 (an HPC user's review) */
+    if (lstat(output, &sb) == 0 && !S_ISREG(sb.st_mode) && !S_ISLNK(sb.st_mode))
         return "not a regular file (a device, a pipe or a socket)";
     if (staged_name_fits(output, ".partial") != 0)
         return "File name too long (its .partial, made first, is longer than the folder allows)";

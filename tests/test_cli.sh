@@ -169,6 +169,10 @@ sed "s|file = \"group.h5\"|file = \"$tmp/a-directory\"|" "$tmp/group.deck" >"$tm
 run_nbep run "$tmp/bad-out.deck" --quiet
 check "output.file a directory: exit 2 (got $rc), the deck's line" \
     "[ $rc = 2 ] && one_line && grep -qx '$tmp/bad-out.deck:4: output.file: $tmp/a-directory: cannot create the output file: Is a directory' '$tmp/stderr'"
+run_nbep run "$tmp/bad-out.deck" --quiet -o "$tmp/a-directory/"
+check "... -o a directory with its slash: exit 2 (got $rc), in the same words, nothing made in it" \
+    "[ $rc = 2 ] && one_line && grep -qx 'nbep: $tmp/a-directory/: cannot create the output file: Is a directory' '$tmp/stderr' &&
+     [ -z \"\$(ls -A '$tmp/a-directory')\" ]"
 run_nbep run "$tmp/bad-out.deck" --quiet --set "output.file=$tmp/no-such-dir/set.h5"
 check "... a --set of it names the path as typed (exit $rc)" \
     "[ $rc = 2 ] && one_line && grep -qx 'nbep: $tmp/no-such-dir/set.h5: cannot create the output file: No such file or directory' '$tmp/stderr'"
