@@ -37,6 +37,20 @@ check "slurm-scaling.sbatch by hand, no extra options: exit 0, a header and 4 ro
      [ \$(grep -c '^threads,' '$tmp/scaling.csv') = 2 ] && [ \$(grep -c '^ranks,' '$tmp/scaling.csv') = 2 ]"
 check "... WORK kept with the user's file in it, nothing of the script's left there" \
     "grep -qx keep '$tmp/work/mine.txt' && [ \"\$(ls -A '$tmp/work')\" = mine.txt ]"
+# a job on more than one node: the run files go in the submit folder, which every node sees,
+# not in TMPDIR, node-local on most clusters (until 2026-12-03: the sweep's ranks on other
+# nodes failed every run)
+mkdir -p "$tmp/submit" "$tmp/nodelocal"
+at=$(cd "$tmp" && pwd) # the script works in the submit folder: paths from the root
+NBEP=$PWD/bin/nbep SPHERES=64 STEPS=5 RUNS=2 THREADS_LIST=1 RANKS_LIST=1 OUT="$at/nodes.csv" \
+    SLURM_JOB_NUM_NODES=2 SLURM_SUBMIT_DIR="$at/submit" TMPDIR="$at/nodelocal" \
+    timeout -k 5 120 bash scripts/slurm-scaling.sbatch "$PWD/inputs/paper-box.deck" \
+    >"$tmp/nodes.out" 2>&1
+rc=$?
+check "slurm-scaling.sbatch on 2 nodes: exit 0 (got $rc), 4 rows, run files in the submit folder: $(head -1 "$tmp/nodes.out")" \
+    "[ $rc = 0 ] && [ \$(wc -l <'$tmp/nodes.csv') = 5 ] &&
+     grep -q '^slurm-scaling.sbatch: run files in $at/submit/nbep-scaling\.' '$tmp/nodes.out' &&
+     [ -z \"\$(ls -A '$tmp/submit')\" ]"
 # the options the script sets for each run, among the user's: refused before any run (a user's
 # -n won over STEPS and the CSV's steps were wrong; -o and --summary were overridden silently)
 # (attached forms and the --set keys they stand for too: a review found -n7, -t3 and --set
