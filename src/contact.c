@@ -34,10 +34,11 @@ static int bits(unsigned m)
     return c;
 }
 
-/* The motion under the contacts of mask, all held at x.n = 0; false if their forces would
- * have to pull (or the set is degenerate). */
+/* The motion under the contacts of mask, all held at x.n = 0, and their pushes (mu, in the
+ * order of the mask's bits: x = a + sum mu n); false if their forces would have to pull (or
+ * the set is degenerate). */
 static bool try_set(nbep_vec3 a, const nbep_vec3 *n, int k, unsigned mask, double tol,
-                    nbep_vec3 *x)
+                    nbep_vec3 *x, double mu[3])
 {
     int idx[3], m = 0;
     for (int j = 0; j < k; j++)
@@ -50,6 +51,7 @@ static bool try_set(nbep_vec3 a, const nbep_vec3 *n, int k, unsigned mask, doubl
         if (!(an < 0.0))
             return false;
         *x = nbep_vec3_axpy(a, -an, n[idx[0]]);
+        mu[0] = -an; /* > 0 by the test above */
     } else if (m == 2) {
         nbep_vec3 n1 = n[idx[0]], n2 = n[idx[1]], t;
         if (!edge(n1, n2, &t))
@@ -60,6 +62,9 @@ static bool try_set(nbep_vec3 a, const nbep_vec3 *n, int k, unsigned mask, doubl
         double den = 1.0 - g * g;
         if (!(r1 - g * r2 >= -tol * den) || !(r2 - g * r1 >= -tol * den))
             return false;
+        /* (>= -tol: a push that is zero to round-off counts as none) */
+        mu[0] = fmax(0.0, (r1 - g * r2) / den);
+        mu[1] = fmax(0.0, (r2 - g * r1) / den);
     } else {
         nbep_vec3 n1 = n[idx[0]], n2 = n[idx[1]], n3 = n[idx[2]];
         nbep_vec3 c23 = cross(n2, n3), c31 = cross(n3, n1), c12 = cross(n1, n2);
@@ -72,6 +77,9 @@ static bool try_set(nbep_vec3 a, const nbep_vec3 *n, int k, unsigned mask, doubl
             !(-nbep_vec3_dot(a, c31) * s >= -tol * fabs(det)) ||
             !(-nbep_vec3_dot(a, c12) * s >= -tol * fabs(det)))
             return false;
+        mu[0] = fmax(0.0, -nbep_vec3_dot(a, c23) / det);
+        mu[1] = fmax(0.0, -nbep_vec3_dot(a, c31) / det);
+        mu[2] = fmax(0.0, -nbep_vec3_dot(a, c12) / det);
         *x = nbep_vec3_make(0.0, 0.0, 0.0);
     }
     for (int j = 0; j < k; j++) {
@@ -86,7 +94,16 @@ static bool try_set(nbep_vec3 a, const nbep_vec3 *n, int k, unsigned mask, doubl
 
 nbep_vec3 nbep_contact_project(nbep_vec3 a, const nbep_vec3 *n, int k, unsigned *active)
 {
+    double mu[NBEP_CONTACT_MAX];
+    return nbep_contact_project_push(a, n, k, active, mu);
+}
+
+nbep_vec3 nbep_contact_project_push(nbep_vec3 a, const nbep_vec3 *n, int k, unsigned *active,
+                                    double mu[NBEP_CONTACT_MAX])
+{
     assert(k >= 0 && k <= NBEP_CONTACT_MAX);
+    for (int j = 0; j < NBEP_CONTACT_MAX; j++)
+        mu[j] = 0.0;
     const double tol = NBEP_CONTACT_TOL * nbep_vec3_norm(a);
     const unsigned all = (1u << k) - 1u;
     for (int size = 0; size <= (k < 3 ? k : 3); size++)
@@ -94,8 +111,12 @@ nbep_vec3 nbep_contact_project(nbep_vec3 a, const nbep_vec3 *n, int k, unsigned 
             if (bits(mask) != size)
                 continue;
             nbep_vec3 x;
-            if (try_set(a, n, k, mask, tol, &x)) {
+            double m[3] = {0.0, 0.0, 0.0};
+            if (try_set(a, n, k, mask, tol, &x, m)) {
                 *active = mask;
+                for (int j = 0, q = 0; j < k; j++)
+                    if (mask >> j & 1u)
+                        mu[j] = m[q++];
                 return x;
             }
         }

@@ -130,9 +130,10 @@ bool nbep_physics_respond_pair(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, nbep_v
 }
 
 bool nbep_physics_respond_pair_along(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, nbep_vec3 *v2,
-                                     double m1, double m2, double e, nbep_vec3 d1,
-                                     nbep_vec3 d2)
+                                     double m1, double m2, double e, nbep_vec3 d1, nbep_vec3 d2,
+                                     double *impulse)
 {
+    *impulse = 0.0;
     assert(nbep_vec3_isfinite(p1) && nbep_vec3_isfinite(p2));
     assert(nbep_vec3_isfinite(*v1) && nbep_vec3_isfinite(*v2));
     assert(m1 > 0.0 && m2 > 0.0 && e >= 0.0 && e <= 1.0);
@@ -156,8 +157,8 @@ bool nbep_physics_respond_pair_along(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, 
         *v1 = nbep_vec3_axpy(a1, J / m1, d1);
         *v2 = nbep_vec3_axpy(a2, J / m2, d2);
         u = nbep_vec3_dot(d, nbep_vec3_sub(*v2, *v1));
-        if (!(u < 0.0))
-            break;
+        if (!(u < 0.0) || k == TIE_TRIES - 1)
+            break; /* (J stays the one applied) */
         J += fmax(-u / len / w, dJ);
         dJ *= 2.0;
     }
@@ -177,6 +178,7 @@ bool nbep_physics_respond_pair_along(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, 
         *v2 = a2;
         return nbep_physics_respond_pair(p1, p2, v1, v2, m1, m2, e);
     }
+    *impulse = J;
     return true;
 }
 

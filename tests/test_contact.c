@@ -89,6 +89,46 @@ static void test_a_corner_holds_still_in_either_order_and_a_fourth_contact_carri
     }
 }
 
+/* What each contact pushes (nbep_contact_project_push): in the corner above, 9.81 by the floor,
+ * 1 and 2 by the walls (whichever order they come in), 0 by the fourth, pulled away from; in a
+ * V of two planes at 45 degrees, a = (0, 0, -g) is pushed back by g / sqrt(2) along each, and
+ * a = (-1, 0, -g) by (g + 1) / sqrt(2) along the one facing +x and (g - 1) / sqrt(2) along the
+ * other; on one floor, a = (3, 0, -g): g by the floor. Every answer rebuilds x = a + sum mu n. */
+static void check_push(nbep_vec3 a, const nbep_vec3 *n, int k, const double *want)
+{
+    unsigned act;
+    double mu[NBEP_CONTACT_MAX];
+    const nbep_vec3 x = nbep_contact_project_push(a, n, k, &act, mu);
+    nbep_vec3 back = a;
+    for (int j = 0; j < k; j++) {
+        /* relative to |a| ~ 10: a few roundings of the solve */
+        assert_close(mu[j], want[j], 0.0, 1e-14 * nbep_vec3_norm(a));
+        back = nbep_vec3_axpy(back, mu[j], n[j]);
+    }
+    assert_true(nbep_vec3_norm(nbep_vec3_sub(back, x)) <= 1e-14 * nbep_vec3_norm(a));
+}
+
+static void test_each_contact_pushes_its_share(void **state)
+{
+    (void)state;
+    const nbep_vec3 floor_n = {0, 0, 1}, wall_x = {1, 0, 0}, wall_y = {0, 1, 0};
+    const nbep_vec3 away = unit(-1, -1, -1), a = {-1, -2, -9.81};
+    const nbep_vec3 right[4] = {floor_n, wall_x, wall_y, away};
+    const nbep_vec3 left[4] = {floor_n, wall_y, wall_x, away};
+    check_push(a, right, 4, (double[]){9.81, 1.0, 2.0, 0.0});
+    check_push(a, left, 4, (double[]){9.81, 2.0, 1.0, 0.0});
+    const double g = 9.81, s = sqrt(0.5);
+    const nbep_vec3 vee[2] = {unit(1, 0, 1), unit(-1, 0, 1)};
+    check_push((nbep_vec3){0, 0, -g}, vee, 2, (double[]){g * s, g * s});
+    check_push((nbep_vec3){-1, 0, -g}, vee, 2, (double[]){(g + 1) * s, (g - 1) * s});
+    check_push((nbep_vec3){3, 0, -g}, &floor_n, 1, (double[]){g});
+    /* a contact pulled away from pushes nothing: the wall facing +x, a = (3, 0, -g) */
+    const nbep_vec3 floor_wall[2] = {floor_n, wall_x};
+    check_push((nbep_vec3){3, 0, -g}, floor_wall, 2, (double[]){g, 0.0});
+    const nbep_vec3 wall_floor[2] = {wall_x, floor_n}; /* the one that pushes comes second */
+    check_push((nbep_vec3){3, 0, -g}, wall_floor, 2, (double[]){0.0, g});
+}
+
 /* The velocity left to a sphere held by two contacts runs along their common edge: a floor
  * and a wall (edge along y) leave v = (1, 2, 3) its y part only, in either order; three
  * independent contacts leave nothing; a third whose normal is square to that edge (a slope
@@ -139,6 +179,7 @@ int main(void)
         cmocka_unit_test(test_an_edge_held_by_a_pulling_contact_is_not_the_answer),
         cmocka_unit_test(
             test_a_corner_holds_still_in_either_order_and_a_fourth_contact_carries_nothing),
+        cmocka_unit_test(test_each_contact_pushes_its_share),
         cmocka_unit_test(test_the_tangent_velocity_runs_along_the_edge_of_two_contacts),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1917,11 +1917,22 @@ static void test_pair_on_a_floor_responds_along_it(void **state)
         nbep_vec3 n = nbep_vec3_scale(d, 1.0 / nbep_vec3_norm(d));
         nbep_vec3 floor_n[1] = {{0, 0, 1}};
         unsigned act;
-        nbep_vec3 d1 = nbep_contact_project(nbep_vec3_scale(n, -1.0), floor_n, 1, &act);
+        double mu[NBEP_CONTACT_MAX];
+        nbep_vec3 d1 =
+            nbep_contact_project_push(nbep_vec3_scale(n, -1.0), floor_n, 1, &act, mu);
+        assert_true(act == 1u && mu[0] == n.z); /* the floor takes -n's part across it */
         double u0 = nbep_vec3_dot(nbep_vec3_sub(v2, v1), n);
         double ke0 = 0.5 * 2.0 * nbep_vec3_dot(v1, v1) + 0.5 * 1.0 * nbep_vec3_dot(v2, v2);
-        assert_true(nbep_physics_respond_pair_along(p1, p2, &v1, &v2, 2.0, 1.0, es[k], d1, n));
+        const nbep_vec3 v20 = v2;
+        double J;
+        assert_true(
+            nbep_physics_respond_pair_along(p1, p2, &v1, &v2, 2.0, 1.0, es[k], d1, n, &J));
         assert_true(v1.z == 0.0 && v1.y == 0.0 && v1.x < 0.0);
+        /* sphere 2 took J along n; sphere 1 J along its mobility (the floor took J mu[0]) */
+        assert_true(J > 0.0);
+        const nbep_vec3 dv2 = nbep_vec3_sub(v2, v20);
+        assert_true(nbep_vec3_norm(nbep_vec3_sub(dv2, nbep_vec3_scale(n, J))) <= 1e-15 * J);
+        assert_close(v1.x * 2.0, J * d1.x, 1e-15, 0.0);
         double u1 = nbep_vec3_dot(nbep_vec3_sub(v2, v1), n);
         /* relative to the speeds involved (~1): a few roundings */
         assert_true(fabs(u1 + es[k] * u0) <= 1e-14);
@@ -1961,7 +1972,11 @@ static void test_pair_between_walls_never_gains_energy(void **state)
                 v2.x = -0.0187 - 1e-3;
             double ke0 = nbep_vec3_dot(v1, v1) + nbep_vec3_dot(v2, v2);
             assert_true(nbep_vec3_dot(d, nbep_vec3_sub(v2, v1)) < 0.0);
-            assert_true(nbep_physics_respond_pair_along(p1, p2, &v1, &v2, 1.0, 1.0, es[k], d1, d2));
+            double J;
+            assert_true(
+                nbep_physics_respond_pair_along(p1, p2, &v1, &v2, 1.0, 1.0, es[k], d1, d2, &J));
+            /* responded freely (across) or along the mobilities, and says which */
+            assert_true(across ? J == 0.0 : J > 0.0);
             double ke1 = nbep_vec3_dot(v1, v1) + nbep_vec3_dot(v2, v2);
             /* a few roundings of energies ~0.4 */
             assert_true(ke1 <= ke0 * (1.0 + 1e-14));
@@ -2007,6 +2022,59 @@ static void test_struck_sphere_on_a_floor_slides_along_it(void **state)
         }
 }
 
+/* A sphere at rest on planes, struck from above: the planes take the impulse it cannot take
+ * (/stats/wall_impulse counts it, as it counts a bounce). Sphere 2 falls from 0.05 above
+ * sphere 1 at 1 m/s (r = 0.1, m = 1, g = 9.81), meeting it at v = sqrt(1 + 2 g 0.05), and
+ * bounces straight up off it at e v (sphere 1 cannot move down): the impulse is (1 + e) v. On
+ * a floor the floor takes it all; in a V of two planes at 45 degrees each takes (1 + e) v /
+ * sqrt(2) along its normal. Until 2026-12-03 predictive counted none of it (naive, which
+ * counts it as the struck sphere's bounce off its floor, did). Sphere 1's weight is not in it
+ * (README: resting weight is not a collision), and one collision happens in the 100 steps
+ * (sphere 2's flight back up and down lasts 2 e v / g = 0.26 s). All three neighbour modes. */
+static void test_struck_sphere_on_planes_passes_the_impulse_to_them(void **state)
+{
+    (void)state;
+    const double e = 0.9, g = 9.81, s2 = sqrt(0.5);
+    const double v = sqrt(1.0 + 2.0 * g * 0.05), J = (1.0 + e) * v;
+    for (int mode = 0; mode < 3; mode++)
+        for (int run_k = 0; run_k < 4; run_k++) {
+            /* the V or the floor; the struck sphere first or second (the pair's lo or hi) */
+            const int vee = run_k & 1, a = run_k >> 1, b = 1 - a;
+            nbep_scene *sc = scene(2, vee ? 2 : 1, "predictive", 100, e);
+            neighbor_mode(sc, mode);
+            sc->out_stats = true;
+            const double z1 = vee ? 0.1 / s2 : 0.1; /* touching its plane(s) */
+            if (vee) {
+                nbep_test_set_plane(sc, 0, (nbep_vec3){-s2, 0.0, s2}, 0.0);
+                nbep_test_set_plane(sc, 1, (nbep_vec3){s2, 0.0, s2}, 0.0);
+            } else {
+                nbep_test_set_plane(sc, 0, (nbep_vec3){0.0, 0.0, 1.0}, 0.0);
+            }
+            nbep_test_set_sphere(sc, (size_t)a, (nbep_vec3){0.0, 0.0, z1}, ZERO, 0.1, 1.0, DOWN);
+            nbep_test_set_sphere(sc, (size_t)b, (nbep_vec3){0.0, 0.0, z1 + 0.25},
+                                 (nbep_vec3){0.0, 0.0, -1.0}, 0.1, 1.0, DOWN);
+            trace t = {0};
+            double *sums[2];
+            size_t n[2];
+            nbep_summary sum = run_sums(sc, 1, "struck.h5", &t, sums, n);
+            assert_int_equal(sum.sphere_collisions, 1);
+            assert_int_equal(sum.plane_collisions, 0);
+            assert_int_equal(n[1], 100 * (size_t)(vee ? 2 : 1));
+            double wall[2] = {0.0, 0.0};
+            for (size_t k = 0; k < n[1]; k++)
+                wall[k % (vee ? 2 : 1)] += sums[1][k];
+            /* the fall's and the response's round-off: a few ulps of v, 1e-12 */
+            for (int p = 0; p < (vee ? 2 : 1); p++)
+                assert_close(wall[p], vee ? J * s2 : J, 1e-12, 0.0);
+            /* the striker went back up at e v less the flight since (g times it) */
+            assert_true(last_vel(&t)[b].z > 0.0);
+            free(sums[0]);
+            free(sums[1]);
+            free(t.data);
+            nbep_test_scene_free(&sc);
+        }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -2014,6 +2082,7 @@ int main(void)
         cmocka_unit_test(test_pair_on_a_floor_responds_along_it),
         cmocka_unit_test(test_pair_between_walls_never_gains_energy),
         cmocka_unit_test(test_struck_sphere_on_a_floor_slides_along_it),
+        cmocka_unit_test(test_struck_sphere_on_planes_passes_the_impulse_to_them),
         cmocka_unit_test(test_stack_stays_put_predictive),
         cmocka_unit_test(test_stack_does_not_sink_naive_seminaive),
         cmocka_unit_test(test_bounce_stays_above_the_floor_naive_seminaive),

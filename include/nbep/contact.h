@@ -26,6 +26,14 @@
  * independent ones x = 0 exactly. A contact pulled away from (a.n_j > 0) is not active. */
 nbep_vec3 nbep_contact_project(nbep_vec3 a, const nbep_vec3 *n, int k, unsigned *active);
 
+/* nbep_contact_project, and what each contact pushes: x = a + sum_j mu[j] n[j] with
+ * mu[j] >= 0 (to the tolerance above) on the active contacts and 0 on the others. Where
+ * only degenerate sets are left (x = 0, normals dependent to round-off) the split is not
+ * defined and every mu is 0. A sphere that leans on planes and is struck passes mu[j] times
+ * the impulse to plane j (/stats/wall_impulse). */
+nbep_vec3 nbep_contact_project_push(nbep_vec3 a, const nbep_vec3 *n, int k, unsigned *active,
+                                    double mu[NBEP_CONTACT_MAX]);
+
 /* v with its components along the contacts in mask removed (v tangent to every one of them):
  * v - (v.n) n for one, its part along the common edge for two, 0 for three or more
  * independent normals. */

@@ -41,10 +41,12 @@ bool nbep_physics_respond_pair(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, nbep_v
  * J = (1+e) c / (|d1|^2/m1 + |d2|^2/m2), since d1.n = -|d1|^2 and d2.n = |d2|^2 for a
  * projection onto a cone. With e = 1 kinetic energy is kept; momentum along the planes' normals
  * goes to them. Returns as nbep_physics_respond_pair; the same round-off tie rule applies
- * (along d1, d2). When both are zero (the pair cannot move along n at all) it responds freely. */
+ * (along d1, d2). When both are zero (the pair cannot move along n at all) it responds freely.
+ * *impulse is J as applied along d1 and d2 (so the planes took J (d1 + n) from sphere 1 and
+ * J (d2 - n) from sphere 2), 0 where the pair responded freely or not at all. */
 bool nbep_physics_respond_pair_along(nbep_vec3 p1, nbep_vec3 p2, nbep_vec3 *v1, nbep_vec3 *v2,
-                                     double m1, double m2, double e, nbep_vec3 d1,
-                                     nbep_vec3 d2);
+                                     double m1, double m2, double e, nbep_vec3 d1, nbep_vec3 d2,
+                                     double *impulse);
 
 /* SPEC /stats/virial's term for one pair's response, r12 . dp2 with r12 at contact: r12 the
  * line of centres from sphere 1 to sphere 2 as the response found it, dp2 the momentum sphere 2
