@@ -186,6 +186,19 @@ nbep_status nbep_run_try_summary(const char *where, nbep_diag *d)
     return st;
 }
 
+/* x with 3 significant digits, or more where 3 would round a magnitude below 1 up to 1: an
+ * energy drift of -0.9998 (a sphere dropped from 5000 radii at e = 0 keeps 2e-4 of its energy)
+ * printed as -1 said all of it was gone (a helper's review, 2026-12-03). */
+static const char *three_digits(double x, char buf[32])
+{
+    for (int digits = 3; digits <= 17; digits++) {
+        snprintf(buf, 32, "%.*g", digits, x);
+        if (!(fabs(x) < 1.0) || fabs(strtod(buf, NULL)) < 1.0)
+            break;
+    }
+    return buf;
+}
+
 /* The end line; a resumed run (from its frame at step `from`, else from < 0) counts the steps
  * it ran and names the step reached, which is the summary's `steps`, and says where its
  * collisions, drift and overlap are the whole run's (its file's totals went on: `whole`). */
@@ -199,13 +212,14 @@ static void print_human_summary(const nbep_summary *s, const char *file, nbep_st
         snprintf(reached, sizeof reached, " (to step %llu)", (unsigned long long)s->steps);
     fprintf(stderr,
             "nbep: %s %llu step%s%s of %llu sphere%s (%s, %d thread%s) in %.3g s (%.4g steps/s); "
-            "%s%llu collision%s; energy drift %.3g; max overlap / r %.3g; %s\n",
+            "%s%llu collision%s; energy drift %s; max overlap / r %.3g; %s\n",
             st == NBEP_OK ? "ran" : "stopped after", (unsigned long long)ran, ran == 1 ? "" : "s",
             reached, (unsigned long long)s->spheres, s->spheres == 1 ? "" : "s",
             s->algorithm, s->threads, s->threads == 1 ? "" : "s", s->wall_seconds,
             s->steps_per_second, from >= 0 && whole ? "since step 0: " : "",
             (unsigned long long)s->collisions,
-            s->collisions == 1 ? "" : "s", s->energy_rel_drift, s->max_overlap_rel, file);
+            s->collisions == 1 ? "" : "s", three_digits(s->energy_rel_drift, (char[32]){0}),
+            s->max_overlap_rel, file);
 }
 
 /* Steps sim, closes out (with the summary unless writing already failed) and reports. */
