@@ -74,6 +74,16 @@ typedef struct evl_ws {
     int n_kept;
 } evl_ws;
 
+/* A place of the team loop's window, as every thread reads it: its sphere, the other sphere
+ * its slot names and whether it was the calendar's earliest (nbep_evloop's batch). One record
+ * of a place on one line: a taker meets one line that the leader wrote, not one per field. */
+typedef struct evl_place {
+    uint32_t item;
+    uint32_t other;
+    uint32_t first;
+    uint32_t pad_;
+} evl_place;
+
 struct nbep_evloop {
     size_t n;
     nbep_calendar *cal;   /* owned */
@@ -107,9 +117,7 @@ struct nbep_evloop {
      * by both threads: each one's sphere, the other sphere its slot names (a pair's partner,
      * fresh or stale; NO_SPHERE for a plane or an expiry), and whether it was the calendar's
      * earliest when the window was empty (it stands, and is neither kept nor checked) */
-    alignas(NBEP_CACHELINE) uint32_t batch[NBEP_EVLOOP_RING];
-    uint32_t batch_other[NBEP_EVLOOP_RING];
-    bool batch_first[NBEP_EVLOOP_RING];
+    alignas(NBEP_CACHELINE) evl_place batch[NBEP_EVLOOP_RING];
     /* the leader's alone (a line that another core reads makes each write to it wait): the
      * list centres of the window's spheres as floats (place p's own at 2 (p % WINDOW), its
      * other's next; +inf for none), for the places that join (place_apart); whether each

@@ -124,11 +124,11 @@ static void cell_xyz(const nbep_evloop *e, uint32_t i, size_t *xyz)
 static void place_centres(const nbep_evloop *e, uint64_t s, float *own, float *other)
 {
     const size_t k = s % RING;
-    float_centre(e, e->cells.m[e->batch[k]].at, own);
+    float_centre(e, e->cells.m[e->batch[k].item].at, own);
     for (int q = 0; q < 3; q++)
         other[q] = own[q];
-    if (e->batch_other[k] != NO_SPHERE)
-        float_centre(e, e->cells.m[e->batch_other[k]].at, other);
+    if (e->batch[k].other != NO_SPHERE)
+        float_centre(e, e->cells.m[e->batch[k].other].at, other);
 }
 
 /* Whether the places at ring slots a and k are both list expiries whose cells are not apart
@@ -188,10 +188,9 @@ static void set_place(nbep_evloop *e, uint64_t s, nbep_calendar_entry c, bool fi
     const size_t k = s % RING;
     const uint32_t other = nbep__evloop_key_other(c.key, c.item);
     const bool walks = nbep__evloop_key_expiry(c.key, c.item);
-    e->batch[k] = c.item;
+    e->batch[k] = (evl_place){.item = c.item, .other = other < e->n ? other : NO_SPHERE,
+                              .first = first};
     e->batch_walks[k] = walks;
-    e->batch_first[k] = first;
-    e->batch_other[k] = other < e->n ? other : NO_SPHERE;
     e->batch_entry[k] = c;
     if (walks)
         cell_xyz(e, c.item, e->batch_cell[k]);
@@ -205,11 +204,11 @@ static void join(nbep_evloop *e, const float *own, const float *other)
 {
     const size_t k = e->tail % RING;
     NBEP_EVLOOP_JOIN_HOOK(e);
-    put_centres(e, e->tail, own, e->batch_other[k] != NO_SPHERE ? other : NULL);
+    put_centres(e, e->tail, own, e->batch[k].other != NO_SPHERE ? other : NULL);
     e->cur = e->batch_entry[k];
-    nbep_calendar_remove(e->cal, e->batch[k]);
-    if (e->batch_other[k] != NO_SPHERE)
-        nbep_calendar_remove(e->cal, e->batch_other[k]);
+    nbep_calendar_remove(e->cal, e->batch[k].item);
+    if (e->batch[k].other != NO_SPHERE)
+        nbep_calendar_remove(e->cal, e->batch[k].other);
     e->tail++;
 }
 
@@ -301,7 +300,7 @@ static inline NBEP_ALWAYS_INLINE void prefetch_place(const nbep_evloop *e,
                                                      void *const *us, uint64_t s, bool list)
 {
     const size_t k = s % RING;
-    const uint32_t x[2] = {e->batch[k], e->batch_other[k]};
+    const uint32_t x[2] = {e->batch[k].item, e->batch[k].other};
     for (int q = 0; q < 2; q++)
         if (x[q] != NO_SPHERE) {
             NBEP_PREFETCH_W(nbep_feq_slot(e->q, x[q]));
@@ -317,9 +316,9 @@ static inline NBEP_ALWAYS_INLINE void prefetch_place(const nbep_evloop *e,
 static void keep(nbep_evloop *e, evl_ws *w, size_t k, const nbep_evloop_ops *ops, void *u)
 {
     w->n_kept = 0;
-    w->kept_id[w->n_kept++] = e->batch[k];
-    if (e->batch_other[k] != NO_SPHERE)
-        w->kept_id[w->n_kept++] = e->batch_other[k];
+    w->kept_id[w->n_kept++] = e->batch[k].item;
+    if (e->batch[k].other != NO_SPHERE)
+        w->kept_id[w->n_kept++] = e->batch[k].other;
     for (int q = 0; q < w->n_kept; q++) {
         ops->save(u, w->kept_id[q], &w->kept_motion[q]);
         w->kept_slot[q] = *nbep_feq_slot(e->q, w->kept_id[q]);
@@ -385,16 +384,16 @@ static bool take_one(nbep_evloop *e, const nbep_evloop_ops *ops, void *own, void
     const size_t k = v % RING;
     /* its slot, as the calendar entry that made it a place was set from: no place in flight
      * writes it (the places are apart), so the copy is the taker's own, read here */
-    const nbep_event ev = *nbep_feq_slot(e->q, e->batch[k]);
+    const nbep_event ev = *nbep_feq_slot(e->q, e->batch[k].item);
     evl_ws *w = &e->ws[t][k];
     /* the place handled here before (v - RING at the latest) is committed or undone: v is
      * below *seen, a value of avail this thread read with acquire (maybe in an earlier take),
      * which the leader stored with release once that place had left the window */
     settle(ops, w, own, us[k]);
-    if (!e->batch_first[k]) /* every other place may be undone */
+    if (!e->batch[k].first) /* every other place may be undone */
         keep(e, w, k, ops, us[k]);
     ops->clear(us[k]); /* its counts from zero, on this thread */
-    nbep__evloop_handle(e, w, ops, us[k], e->batch[k], &ev, ev.time, false);
+    nbep__evloop_handle(e, w, ops, us[k], e->batch[k].item, &ev, ev.time, false);
     w->pending = true;
     atomic_store_explicit(&w->place, v, memory_order_release);
     return true;
@@ -480,9 +479,9 @@ static int wait_handled(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, voi
 static void put_back(nbep_evloop *e, uint64_t s)
 {
     const size_t k = s % RING;
-    nbep__evloop_schedule_one(e, e->batch[k]);
-    if (e->batch_other[k] != NO_SPHERE)
-        nbep__evloop_schedule_one(e, e->batch_other[k]);
+    nbep__evloop_schedule_one(e, e->batch[k].item);
+    if (e->batch[k].other != NO_SPHERE)
+        nbep__evloop_schedule_one(e, e->batch[k].other);
 }
 
 /* Places s.. of the window undone, and the window emptied (place s - 1, if in it, is the
@@ -551,7 +550,7 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
         const evl_ws *w_next = next_by >= 0 ? &e->ws[next_by][(s + 1) % RING] : NULL;
         if (w_next)
             prefetch_commit(e, w_next, false);
-        if (!e->batch_first[k]) {
+        if (!e->batch[k].first) {
             /* the calendar holds every entry but those of the window's places and their
              * others, which all come after this one: it is the earliest if the calendar's
              * earliest comes after it */
@@ -577,10 +576,10 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
                         * (nbep_evloop_run), its changes kept, nothing after it (a speculative
                         * place's stop that does not stand is undone with it, never seen here) */
             undo_from(e, ops, u, us, s + 1);
-            nbep_calendar_set(e->cal, e->batch[k], e->batch_entry[k].time,
+            nbep_calendar_set(e->cal, e->batch[k].item, e->batch_entry[k].time,
                               e->batch_entry[k].key); /* its entry back, as it was */
-            if (e->batch_other[k] != NO_SPHERE) /* and its other's, from its slot */
-                nbep__evloop_schedule_one(e, e->batch_other[k]);
+            if (e->batch[k].other != NO_SPHERE) /* and its other's, from its slot */
+                nbep__evloop_schedule_one(e, e->batch[k].other);
             *t_stuck = e->batch_entry[k].time; /* its slot's time */
             return false;
         }
@@ -596,9 +595,9 @@ static bool lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *cons
             return false;
         }
         /* its other's entry back if the reaction did not set it (a stale slot's other) */
-        if (e->batch_other[k] != NO_SPHERE && !nbep__evloop_commit_sets(w, e->batch_other[k]))
-            nbep__evloop_schedule_one(e, e->batch_other[k]);
-        tally->ahead += !e->batch_first[k];
+        if (e->batch[k].other != NO_SPHERE && !nbep__evloop_commit_sets(w, e->batch[k].other))
+            nbep__evloop_schedule_one(e, e->batch[k].other);
+        tally->ahead += !e->batch[k].first;
         if (w_next)
             prefetch_commit(e, w_next, true);
         drop_place(e, s);
