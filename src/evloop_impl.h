@@ -81,8 +81,9 @@ typedef struct evl_place {
     uint32_t item;
     uint32_t other;
     uint32_t first;
-    uint32_t pad_;
+    uint32_t pad_; /* to 16 bytes: four records a line, none across two */
 } evl_place;
+_Static_assert(sizeof(evl_place) == 16, "a place's record divides a cache line");
 
 struct nbep_evloop {
     size_t n;
