@@ -2832,7 +2832,8 @@ MUTANTS = [
      ["tests/test_settle.sh"],
      "equivalent in practice: a thread that grid mode's crew leaves out keeps the pairs of its "
      "last react phase, which this reads too; in a corner pour on 2 threads with the ways in turn "
-     "(README, Jammed bodies) such a pair was read in 603 lock phases of one step, lockable and "
+     "(docs/granular-history.md, Jammed bodies) such a pair was read in 603 lock phases of one "
+     "step, lockable and "
      "unmet in 12, and each time the body of a pair met had taken it in, so the frames stayed "
      "one thread's; which thread notes a pair straddling two shares is a race, so no scene "
      "makes it act on purpose. Mended (d0b92e4) because a body of it would hang on the crews"),
