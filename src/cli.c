@@ -34,6 +34,7 @@ static const char HELP[] =
     "                         uninterrupted run's bit for bit, but for its own seconds\n"
     "                         (README, Faults)\n"
     "  -q, --quiet            no progress output (check with --summary: no report)\n"
+    "  --                     the end of the options: what follows is the deck\n"
     "a short option's value may follow it attached: -n500, -ofile.h5\n"
     "\n"
     "run writes its output file (HDF5: README, Output) and, for RUN.h5, RUN.xmf beside it,\n"
@@ -68,7 +69,8 @@ static const char HELP_INFO[] =
     "status and its JSON summary. It reads the file only (a run still being written, or cut\n"
     "short, too: what is complete on disk), and takes no options.\n"
     "\n"
-    "exit status: 0 done, 2 bad usage or a file that is not a readable nbep run.\n"
+    "exit status: 0 done, 1 what it prints could not be written (a full disk), 2 bad usage\n"
+    "or a file that is not a readable nbep run.\n"
     "nbep --help gives the other commands and their options.\n";
 
 void nbep_cli_print_help(FILE *f, nbep_command of)
@@ -159,6 +161,16 @@ static nbep_status parse_command(const char *word, nbep_command *cmd, nbep_diag 
     NBEP_FAIL(d, NBEP_EUSAGE, "nbep: unknown command '%s' (try nbep --help)", word);
 }
 
+/* The command's one operand: the deck (run, check, sweep) or the run file (info). */
+static nbep_status take_operand(nbep_cli *cli, const char *a, nbep_diag *d)
+{
+    if (cli->path)
+        NBEP_FAIL(d, NBEP_EUSAGE, "nbep: unexpected argument '%s' (one %s only)", a,
+                  cli->cmd == NBEP_CMD_INFO ? "run file" : "deck");
+    cli->path = a;
+    return NBEP_OK;
+}
+
 nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
 {
     memset(cli, 0, sizeof *cli);
@@ -184,8 +196,20 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
         {"-t", "--threads", "run.threads", false}, {"-n", "--steps", "run.steps", false},
         {NULL, "--dt", "run.dt", false},
     };
+    bool operands = false; /* after `--`: every argument is the deck (run file), as getopt
+                            * takes it (a deck named -x.deck: nbep run -- -x.deck) */
     for (int k = 2; k < argc; k++) {
         const char *a = argv[k];
+        if (!operands && strcmp(a, "--") == 0) {
+            operands = true;
+            continue;
+        }
+        if (operands) {
+            st = take_operand(cli, a, d);
+            if (st != NBEP_OK)
+                return st;
+            continue;
+        }
         if (strcmp(a, "--quiet") == 0 || strcmp(a, "-q") == 0) {
             cli->quiet = true;
             continue;
@@ -274,10 +298,9 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
                           "--help lists them)", a, near);
             NBEP_FAIL(d, NBEP_EUSAGE, "nbep: unknown option '%s' (try nbep --help)", a);
         }
-        if (cli->path)
-            NBEP_FAIL(d, NBEP_EUSAGE, "nbep: unexpected argument '%s' (one %s only)", a,
-                      cli->cmd == NBEP_CMD_INFO ? "run file" : "deck");
-        cli->path = a;
+        st = take_operand(cli, a, d);
+        if (st != NBEP_OK)
+            return st;
     }
     if (!cli->path)
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: %s needs a %s (try nbep --help)", argv[1],

@@ -908,6 +908,15 @@ for args in "check inputs/two-spheres.deck --set run.steps.=5|--set run.steps.=5
     check "nbep ${args%%|*}: exit 2 (got $rc), one line" \
         "[ $rc = 2 ] && one_line && grep -qx -- '${args#*|}' '$tmp/stderr'"
 done
+# `--` ends the options, as getopt's does: a deck whose name starts with '-' is taken after it
+# (until 2026-12-04 `--` was an unknown option), and a second operand after it is still refused
+cp inputs/two-spheres.deck "$tmp/-dash.deck"
+abs="$PWD/$nbep"; (cd "$tmp" && "$abs" run -q -n 3 -o dash.h5 -- -dash.deck >stdout 2>stderr); rc=$?
+check "run -- -dash.deck: exit 0 (got $rc: $(head -c 200 "$tmp/stderr")), its file written" \
+    "[ $rc = 0 ] && [ -s '$tmp/dash.h5' ]"
+run_nbep run -q -n 3 -o "$tmp/dash2.h5" -- inputs/two-spheres.deck --quiet
+check "run -- DECK --quiet: '--quiet' after -- is a second deck: exit 2, one line (got $rc)" \
+    "[ $rc = 2 ] && one_line && grep -qx -- \"nbep: unexpected argument '--quiet' (one deck only)\" '$tmp/stderr' && [ ! -e '$tmp/dash2.h5' ]"
 # -o takes a name as typed, a backslash too (it is no escape); -q is --quiet
 run_nbep run inputs/two-spheres.deck -n 2 -q -o "$tmp/back\\nslash.h5"
 check "-o with a backslash, -q: exit 0 (got $rc), the file and sidecar by that name, nothing on stderr" \
