@@ -1123,7 +1123,12 @@ typedef struct listed {
     blame at;                       /* what it is blamed on, and its message's rank */
     size_t entry, a;                /* sphere a, of that entry, */
     char other[96];                 /* overlaps this */
-    double by;
+    double by;                      /* by this much; or, where past: its centre is this far
+                                     * past the plane `other` (a sphere outside the box, or
+                                     * behind a deck plane, overlaps it by more than its
+                                     * radius: a new user read "overlaps box x-max by 6.1" of
+                                     * a sphere 6 past the wall as a placement a hair off) */
+    bool past;
 } listed;
 
 typedef struct overlaps {
@@ -1154,7 +1159,7 @@ typedef struct overlaps {
  * whichever of the two an override placed or moved, the one typed first where both were (the
  * list ranks the message there), else on a's deck line (a, the later sphere, as before): the
  * change that made the overlap, not the deck line the user did not touch. */
-static void report(overlaps *o, size_t a, blame bb, const char *other, double by)
+static void report(overlaps *o, size_t a, blame bb, const char *other, double by, bool past)
 {
     const uint64_t seq = o->found++;
     blame at = o->placed[entry_of(o->e, o->n_entries, a)];
@@ -1169,7 +1174,7 @@ static void report(overlaps *o, size_t a, blame bb, const char *other, double by
         return;
     listed *l = &o->kept[k];
     *l = (listed){.seq = seq, .at = at, .entry = entry_of(o->e, o->n_entries, a),
-                  .a = a, .by = by};
+                  .a = a, .by = by, .past = past};
     snprintf(l->other, sizeof l->other, "%s", other);
     if (o->n_kept < OVERLAP_REPORT_MAX)
         return;
@@ -1191,10 +1196,24 @@ static int cmp_seq(const void *x, const void *y)
 static void list_kept(overlaps *o)
 {
     qsort(o->kept, o->n_kept, sizeof *o->kept, cmp_seq);
-    for (size_t k = 0; k < o->n_kept; k++)
-        nbep__scene_error_from(o->c, o->kept[k].at.label, o->kept[k].at.line, __FILE__, __LINE__,
-                               "spheres.[%zu] (sphere %zu) overlaps %s by %g", o->kept[k].entry,
-                               o->kept[k].a, o->kept[k].other, o->kept[k].by);
+    for (size_t k = 0; k < o->n_kept; k++) {
+        const listed *l = &o->kept[k];
+        const bool wall = strncmp(l->other, "box ", 4) == 0;
+        if (l->past && wall)
+            nbep__scene_error_from(o->c, l->at.label, l->at.line, __FILE__, __LINE__,
+                                   "spheres.[%zu] (sphere %zu) lies outside the box: its centre "
+                                   "is %g past %s",
+                                   l->entry, l->a, l->by, l->other);
+        else if (l->past)
+            nbep__scene_error_from(o->c, l->at.label, l->at.line, __FILE__, __LINE__,
+                                   "spheres.[%zu] (sphere %zu) lies behind %s: its centre is %g "
+                                   "past it",
+                                   l->entry, l->a, l->other, l->by);
+        else
+            nbep__scene_error_from(o->c, l->at.label, l->at.line, __FILE__, __LINE__,
+                                   "spheres.[%zu] (sphere %zu) overlaps %s by %g", l->entry,
+                                   l->a, l->other, l->by);
+    }
 }
 
 /* The elements of the box along an axis that put its periodic faces where they are: a copy of
@@ -1234,7 +1253,7 @@ static void check_pair(overlaps *o, size_t i, size_t j)
                 blame_first(o->c, &bb, v ? config_setting_get_elem(v, (unsigned)axis) : NULL);
             }
         }
-        report(o, a, bb, other, by);
+        report(o, a, bb, other, by, false);
     }
 }
 
@@ -1302,8 +1321,8 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
     const double blo[3] = {box_lo.x, box_lo.y, box_lo.z}, bhi[3] = {box_hi.x, box_hi.y, box_hi.z};
     for (size_t i = 0; i < s->n; i++)
         for (size_t p = 0; p < s->n_planes; p++) {
-            double by = s->radius[i] - (nbep_vec3_dot(s->plane_normal[p], s->pos[i]) -
-                                        s->plane_offset[p]);
+            const double d = nbep_vec3_dot(s->plane_normal[p], s->pos[i]) - s->plane_offset[p];
+            double by = s->radius[i] - d;
             double tol = touch_tol(max_abs(s->pos[i]), fabs(s->plane_offset[p]), s->radius[i]);
             if (by > tol) {
                 char name[48];
@@ -1311,7 +1330,9 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                     snprintf(name, sizeof name, "%s", names[p]);
                 else
                     snprintf(name, sizeof name, "planes.[%zu]", p - n_box);
-                report(&o, i, walls[p], name, by);
+                /* its centre past the plane by more than the touch tolerance: outside */
+                const bool past = -d > tol;
+                report(&o, i, walls[p], name, past ? -d : by, past);
             }
         }
 

@@ -2267,12 +2267,20 @@ static void test_an_overlap_with_a_wall_a_set_moved_names_the_set(void **state)
         {{"planes.[0].point=[0.0,0.0,4.75]"},
          "--set planes.[0].point=[0.0,0.0,4.75]: spheres.[0] (sphere 0) overlaps planes.[0] by 0.25"},
         {{"planes.[0].normal=[0.0,0.0,-1.0]"},
-         "--set planes.[0].normal=[0.0,0.0,-1.0]: spheres.[0] (sphere 0) overlaps planes.[0] by 4.5"},
+         "--set planes.[0].normal=[0.0,0.0,-1.0]: spheres.[0] (sphere 0) lies behind planes.[0]: its centre is 4 past it"},
         /* the position typed first, then the wall: the position; and the other way round */
         {{"spheres.[0].position=[5.0,9.75,5.0]", "box.max.[1]=10.1"},
          "--set spheres.[0].position=[5.0,9.75,5.0]: spheres.[0] (sphere 0) overlaps box y-max by 0.15"},
         {{"box.max.[1]=10.1", "spheres.[0].position=[5.0,9.75,5.0]"},
          "--set box.max.[1]=10.1: spheres.[0] (sphere 0) overlaps box y-max by 0.15"},
+        /* a sphere placed wholly outside the box: said so, with how far its centre is past
+         * the wall (0.5 past y-max at 10), not "overlaps box y-max by 1" */
+        {{"spheres.[0].position=[5.0,10.5,5.0]"},
+         "--set spheres.[0].position=[5.0,10.5,5.0]: spheres.[0] (sphere 0) lies outside the box: "
+         "its centre is 0.5 past box y-max"},
+        /* its centre on the wall: half in, an overlap of a radius */
+        {{"spheres.[0].position=[5.0,10.0,5.0]"},
+         "--set spheres.[0].position=[5.0,10.0,5.0]: spheres.[0] (sphere 0) overlaps box y-max by 0.5"},
         /* another wall's element, typed first, moved nothing the sphere meets */
         {{"box.max.[2]=10.0", "spheres.[0].position=[5.0,9.75,5.0]"},
          "--set spheres.[0].position=[5.0,9.75,5.0]: spheres.[0] (sphere 0) overlaps box y-max by 0.25"},
@@ -2453,12 +2461,15 @@ static void test_many_overlaps_list_the_first_twenty_by_line(void **state)
         ");\n",
         path, sizeof path);
     LOAD_FAILS(f, NBEP_EDECK, deck);
-    /* the lattice's 3 layers at z = 0.1, 0.5, 0.9: overlaps of 5, 4.6 and 4.2 */
+    /* the lattice's 3 layers at z = 0.1, 0.5, 0.9: centres 4.9, 4.5 and 4.1 behind the plane
+     * (said so, not "overlaps planes.[0] by 5": an overlap past the radius is a sphere on the
+     * wrong side) */
     snprintf(want[0], sizeof want[0],
              "%s:5: spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) by 0.5", deck);
     for (int k = 1; k < 20; k++)
-        snprintf(want[k], sizeof want[k], "%s:6: spheres.[2] (sphere %d) overlaps planes.[0] by %g",
-                 deck, k + 1, k + 1 < 11 ? 5.0 : k + 1 < 20 ? 4.6 : 4.2);
+        snprintf(want[k], sizeof want[k],
+                 "%s:6: spheres.[2] (sphere %d) lies behind planes.[0]: its centre is %g past it",
+                 deck, k + 1, k + 1 < 11 ? 4.9 : k + 1 < 20 ? 4.5 : 4.1);
     snprintf(want[20], sizeof want[20], "nbep: %s: 8 more overlaps not listed", deck);
     const char *lines[21];
     for (int k = 0; k < 21; k++)
@@ -2489,8 +2500,9 @@ static void test_the_overlaps_not_listed_are_counted_right_after_the_listed(void
     snprintf(want[1], sizeof want[1],
              "%s:5: spheres.[1] (sphere 1) overlaps spheres.[0] (sphere 0) by 0.5", deck);
     for (int k = 2; k < 21; k++)
-        snprintf(want[k], sizeof want[k], "%s:6: spheres.[2] (sphere %d) overlaps planes.[0] by %g",
-                 deck, k, k < 11 ? 5.0 : k < 20 ? 4.6 : 4.2);
+        snprintf(want[k], sizeof want[k],
+                 "%s:6: spheres.[2] (sphere %d) lies behind planes.[0]: its centre is %g past it",
+                 deck, k, k < 11 ? 4.9 : k < 20 ? 4.5 : 4.1);
     snprintf(want[21], sizeof want[21], "nbep: %s: 8 more overlaps not listed", deck);
     snprintf(want[22], sizeof want[22], "%s:9: output.every must be >= 1 (got 0)", deck);
     const char *lines[23];
