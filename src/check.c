@@ -12,6 +12,7 @@
 #include "nbep/nblist.h"
 #include "nbep/output.h"
 #include "nbep/output_xdmf.h"
+#include "nbep/run.h"
 #include "nbep/sim.h"
 #include "nbep/summary.h"
 
@@ -167,10 +168,16 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
      * its folder, said on the sweep lines after (a new user looked for this file after a
      * sweep) */
     const bool study = sc->sweep_n_axes > 0 || sc->sweep_replicas > 1;
+    /* and where nbep run of it could not make that file (its folder missing, say), why: a
+     * study's deck passes, as nbep sweep makes its folder, but nbep run of it would fail */
+    const char *fault = study ? nbep_run_output_fault(sc->output_file) : NULL;
+    char whose[256] = "";
+    if (study)
+        snprintf(whose, sizeof whose, " (nbep run's%s%s; nbep sweep's runs: below)",
+                 fault ? ", which it cannot create: " : "", fault ? fault : "");
     fprintf(out, "output:          %s%s%s: %llu frame%s (%s), about %s%s\n", sc->output_file,
             xmf ? " and " : "", xmf ? xmf : "", (unsigned long long)f->frames,
-            f->frames == 1 ? "" : "s", every, nbep_format_bytes(f->output_bytes, size),
-            study ? " (nbep run's; nbep sweep's runs: below)" : "");
+            f->frames == 1 ? "" : "s", every, nbep_format_bytes(f->output_bytes, size), whose);
     free(xmf);
 }
 

@@ -490,11 +490,10 @@ static const char *new_output_fault(const char *output)
     return NULL;
 }
 
-nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
+/* Why `nbep run` could not create its output file at `output` (its reason's words), or NULL;
+ * *err_out the errno behind it (0: none, or the reason is new_output_fault's). */
+static const char *output_dir_fault(const char *output, const char *dir, int *err_out)
 {
-    char *dir = nbep_path_dir(output);
-    if (!dir)
-        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory");
     struct stat sb;
     int err = 0;
     /* lstat: the run's rename replaces a symbolic link at `output`, to a directory too */
@@ -506,8 +505,27 @@ nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
         err = ENOTDIR;
     else if (access(dir, W_OK | X_OK) != 0)
         err = errno; /* EACCES, EROFS: the user's path (exit 2), as the run's own */
+    *err_out = err;
+    return err ? strerror(err) : new_output_fault(output);
+}
+
+const char *nbep_run_output_fault(const char *output)
+{
+    char *dir = nbep_path_dir(output);
+    int err = 0;
+    const char *fault = dir ? output_dir_fault(output, dir, &err) : strerror(ENOMEM);
     free(dir);
-    const char *fault = err ? strerror(err) : new_output_fault(output);
+    return fault;
+}
+
+nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d)
+{
+    char *dir = nbep_path_dir(output);
+    if (!dir)
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory");
+    int err = 0;
+    const char *fault = output_dir_fault(output, dir, &err);
+    free(dir);
     if (fault) /* the words of the run's own failure (output.c, nbep_run) */
         NBEP_FAIL(d, err ? nbep_status_of_open(err) : NBEP_EUSAGE,
                   "nbep: %s: cannot create the output file: %s", output, fault);

@@ -812,6 +812,15 @@ run_nbep run inputs/sweep-restitution.deck -n 2 -o "$tmp/study-once.h5" --quiet
 check "... and with --quiet nothing on stderr (exit $rc)" "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ]"
 run_nbep run inputs/paper-box.deck -n 2 -o "$tmp/no-study.h5"
 check "... nor for a deck without one (exit $rc)" "[ $rc = 0 ] && ! grep -q 'sweep group' '$tmp/stderr'"
+# check of a study's deck passes where nbep sweep makes its folder, and its output line says
+# that nbep run of the deck could not make its file there, and why (a new user's review: check
+# passed, then nbep run failed, "No such file or directory")
+run_nbep check inputs/sweep-restitution.deck -o "$tmp/no-such-folder/x.h5"
+check "check of a study into a missing folder: exit 0 (got $rc), the run's file said unmakeable" \
+    "[ $rc = 0 ] && grep -q '^output: .*(nbep run.s, which it cannot create: No such file or directory; nbep sweep.s runs: below)' '$tmp/stdout' && [ ! -e '$tmp/no-such-folder' ]"
+run_nbep check inputs/sweep-restitution.deck -o "$tmp/study-once.h5"
+check "... into a folder that is there: no such words (exit $rc)" \
+    "[ $rc = 0 ] && grep -q '^output: .*(nbep run.s; nbep sweep.s runs: below)' '$tmp/stdout'"
 # a report that cannot be written (stdout a full disk): exit 1 and one line, not 0 with the
 # report lost (until 2026-12-01 for check, info and --help)
 bin/nbep run inputs/two-spheres.deck --quiet -n 5 -o "$tmp/full-info.h5"

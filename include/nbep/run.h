@@ -41,6 +41,13 @@ typedef struct nbep_run_result {
  * not a directory. NBEP_EUSAGE (NBEP_EIO for a read-only file system), one line in the words
  * of the run's own failure, "nbep: OUTPUT: cannot create the output file: REASON". */
 NBEP_MUST_CHECK nbep_status nbep_run_check_output_dir(const char *output, nbep_diag *d);
+
+/* The same look, its reason alone ("No such file or directory"), or NULL where `nbep run`
+ * could create the file: for a study's deck, whose `nbep sweep` makes its own folder, so that
+ * `nbep check` says what `nbep run` of it would meet (a new user's review: check passed a
+ * study whose output.file's folder was missing, and nbep run of the deck then failed). The
+ * text is strerror's or static: valid until the next strerror. */
+const char *nbep_run_output_fault(const char *output);
 /* Where the run file `output` that cannot be made is sc's output.file as the deck set it (not
  * -o or a --set, whose messages name the path typed), rewords the messages from d's message
  * `first` on that say so ("nbep: OUTPUT: cannot create the output file: REASON") to name the
