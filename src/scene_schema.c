@@ -169,6 +169,14 @@ bool nbep__scene_schema_kind(const char *path, nbep__scene_kind *kind, bool *ele
            schema_kind_abstract(abstract, kind, element);
 }
 
+/* Whether a's letters appear in b in order (a prefix among them). */
+static bool subsequence(const char *a, const char *b)
+{
+    for (; *a && *b; b++)
+        a += *a == *b;
+    return *a == '\0';
+}
+
 /* A close known path for an unknown one: the first unknown name is compared with its known
  * siblings (a typo: physics.gravty -> physics.gravity), else, when it is the last name, with
  * every setting of that exact name elsewhere (a misplaced one: run.gravity -> physics.gravity). */
@@ -207,8 +215,10 @@ static bool suggest(const char *path, char *out, size_t len)
             if (parent_len != strlen(known_a) || strncmp(schema[id].path, known_a, parent_len))
                 continue;
             size_t dist = nbep__scene_edit_distance(seg, leaf);
-            /* A cut-short name (phys for physics) counts as a typo too. */
-            if (seg_len >= 3 && strncmp(leaf, seg, seg_len) == 0 && limit < dist)
+            /* A cut-short name (phys for physics) counts as a typo too, and so does a
+             * shorthand that keeps the name's first letter and drops others (vals for values,
+             * rads for radius: a new user's "vals" got no suggestion) */
+            if (seg_len >= 3 && seg[0] == leaf[0] && subsequence(seg, leaf) && limit < dist)
                 dist = limit;
             if (dist <= limit && dist < best) {
                 best = dist;

@@ -1070,11 +1070,23 @@ static void test_suggestions_are_writable_paths_a_typo_away(void **state)
 {
     fixture *f = *state;
     LOAD_FAILS(f, NBEP_EDECK, DATA "scene_defaults.deck", "radius=1", "box.mass=1",
-               "box.mx=[1,1,1]", "box.m=[1,1,1]", "ph=1");
+               "box.mx=[1,1,1]", "box.m=[1,1,1]", "ph=1", "spheres.[0].rads=1",
+               "spheres.[0].rdius=1", "box.mn=[0,0,0]", "physics.rstn=1", "physics.stn=1");
     ASSERT_DIAG(&f->d, "--set radius=1: unknown setting radius",
                 "--set box.mass=1: unknown setting box.mass",
                 "--set box.mx=[1,1,1]: unknown setting box.mx (did you mean box.max?)",
-                "--set box.m=[1,1,1]: unknown setting box.m", "--set ph=1: unknown setting ph");
+                "--set box.m=[1,1,1]: unknown setting box.m", "--set ph=1: unknown setting ph",
+                /* a shorthand from the name's first letter, its letters in order */
+                "--set spheres.[0].rads=1: unknown setting spheres.[0].rads "
+                "(did you mean spheres.[0].radius?)",
+                "--set spheres.[0].rdius=1: unknown setting spheres.[0].rdius "
+                "(did you mean spheres.[0].radius?)",
+                "--set box.mn=[0,0,0]: unknown setting box.mn (did you mean box.min?)",
+                "--set physics.rstn=1: unknown setting physics.rstn "
+                "(did you mean physics.restitution?)",
+                /* not from another first letter: stn's letters are in restitution's, in
+                 * order, but it is no shorthand of it */
+                "--set physics.stn=1: unknown setting physics.stn");
 }
 
 /* An element of a deck's vector that a --set replaced: the vector's message names the --set,
