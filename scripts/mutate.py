@@ -1069,6 +1069,11 @@ MUTANTS = [
      "            if (seg_len >= 3 && seg[0] == leaf[0] && subsequence(seg, leaf) && limit < dist)",
      "            if (seg_len >= 3 && subsequence(seg, leaf) && limit < dist)",
      ["test_scene"], None),
+    # a neighbour mode asked of naive or seminaive is said left aside
+    ("run-neighbors-aside-unsaid", "src/run.c",
+     "    if (rq->verbose && !rq->sweep_run && strcmp(sc.algorithm, \"predictive\") != 0 &&",
+     "    if (rq->verbose && !rq->sweep_run && strcmp(sc.algorithm, \"predictive\") == 0 &&",
+     ["tests/test_cli.sh"], None),
     # check of a study: the output line says why nbep run could not make the deck's file
     ("check-study-run-fault-unsaid", "src/check.c",
      "    const char *fault = study ? nbep_run_output_fault(sc->output_file) : NULL;",

@@ -600,6 +600,14 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                 "nbep: note: %s has a sweep group, which nbep run leaves aside: this is one run "
                 "of the deck's own values (`nbep sweep %s` runs the study)\n",
                 rq->deck_path, rq->deck_path);
+    /* a neighbour mode asked of naive or seminaive, which find pairs their own way (a new
+     * user's review: left aside without a word); a sweep's run, never (its check said it) */
+    if (rq->verbose && !rq->sweep_run && strcmp(sc.algorithm, "predictive") != 0 &&
+        (sc.neighbors_grid || sc.neighbors_cells))
+        fprintf(stderr,
+                "nbep: note: run.neighbors = \"%s\" is the predictive algorithm's, which %s "
+                "leaves aside (it finds pairs its own way)\n",
+                nbep_scene_neighbors_name(&sc), sc.algorithm);
     const double pairs = 0.5 * (double)sc.state.n * ((double)sc.state.n - 1.0);
     if (rq->verbose && !rq->sweep_run && nbep_scene_all_pairs(&sc) &&
         pairs >= ALL_PAIRS_NOTE_PAIRS)

@@ -812,6 +812,18 @@ run_nbep run inputs/sweep-restitution.deck -n 2 -o "$tmp/study-once.h5" --quiet
 check "... and with --quiet nothing on stderr (exit $rc)" "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ]"
 run_nbep run inputs/paper-box.deck -n 2 -o "$tmp/no-study.h5"
 check "... nor for a deck without one (exit $rc)" "[ $rc = 0 ] && ! grep -q 'sweep group' '$tmp/stderr'"
+# a neighbour mode asked of naive or seminaive, which find pairs their own way: said left aside,
+# by check on its algorithm line and by run in a note (not with --quiet), not for predictive
+run_nbep check inputs/two-spheres.deck -a seminaive --set 'run.neighbors="cells"'
+check "check of seminaive with run.neighbors = cells: exit 0 (got $rc), said left aside" \
+    "[ $rc = 0 ] && grep -qx 'algorithm: *seminaive, [0-9]* threads* (run.neighbors = \"cells\" is the predictive algorithm.s: left aside)' '$tmp/stdout'"
+run_nbep run inputs/two-spheres.deck -a naive --set 'run.neighbors="grid"' -n 2 -o "$tmp/naive-grid.h5"
+check "... run of naive with grid: exit 0 (got $rc), one note" \
+    "[ $rc = 0 ] && [ \$(grep -c '^nbep: note: run.neighbors = \"grid\" is the predictive algorithm.s, which naive leaves aside' '$tmp/stderr') = 1 ]"
+run_nbep run inputs/two-spheres.deck -a naive --set 'run.neighbors="grid"' -n 2 -q -o "$tmp/naive-grid.h5"
+check "... with --quiet nothing on stderr (exit $rc)" "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ]"
+run_nbep run inputs/two-spheres.deck --set 'run.neighbors="grid"' -n 2 -o "$tmp/pred-grid.h5"
+check "... nor a note for predictive (exit $rc)" "[ $rc = 0 ] && ! grep -q 'leaves aside' '$tmp/stderr'"
 # check of a study's deck passes where nbep sweep makes its folder, and its output line says
 # that nbep run of the deck could not make its file there, and why (a new user's review: check
 # passed, then nbep run failed, "No such file or directory")
