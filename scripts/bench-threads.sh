@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Thread scaling on one node: the paper's box in nbep's three predictive modes, and the dense
 # fluids of `make bench-dense` (nbep beside EDMD), on 1, 2, 4, ... threads up to the node's
-# cores. The README's figures for a 16-core node came from it (Benchmarks, Threads on dense
-# scenes).
+# cores. The README's figures for a 16-core node came from it (Benchmarks, Dense fluids and
+# Threads on dense scenes).
 #
 #   scripts/bench-threads.sh
 #   EDMD_DIR=/path/to/EDMD NBEP=kit/nbep scripts/bench-threads.sh   (kit: scripts/pack-kit.sh)

@@ -4,8 +4,8 @@
  * edges run from the last event that wrote what it reads or writes; the longest chain of
  * events (the critical path) is the least number of event times that any exact scheme, however
  * many threads it has and however it schedules them, needs for the run, so events / chain is
- * the most it could gain over one thread, at one event's cost a time (README, Threads on dense
- * scenes, *What the events allow*). Two bounds: with the edges of true dependences alone (a
+ * the most it could gain over one thread, at one event's cost a time (README, Benchmarks, Dense
+ * fluids, *What the events allow*). Two bounds: with the edges of true dependences alone (a
  * read after a write, a write after a write: a scheme that keeps versions of what it writes,
  * as an optimistic one may), and with a write after a read too (a scheme that writes in
  * place, as nbep's team does). Then the same with the box cut into regions, each region's
