@@ -136,6 +136,14 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
                     "lists:           skin %.3g of the largest diameter (%.3g by the packing, "
                     "cut down so that three cells fit across the periodic box)\n",
                     f->skin_taken, f->skin_asked);
+        else if (f->packing < NBEP_NBLIST_PHI_SPARSE_END && sc->restitution == 1.0)
+            /* sparse and elastic: accelerating or not */
+            fprintf(out,
+                    "lists:           skin %.3g of the largest diameter (sparse and elastic, by "
+                    "the packing: %g at packing %g or below, the denser scenes' rules from "
+                    "%g)\n",
+                    f->skin_taken, NBEP_NBLIST_SKIN_SPARSE, NBEP_NBLIST_PHI_SPARSE,
+                    NBEP_NBLIST_PHI_SPARSE_END);
         else /* why this skin (nbep_nblist_skin_for): until 2026-11-30 the line gave the
               * rule of free flight alone, "(when nothing accelerates, ...)", also for a pile,
               * whose skin it does not set */

@@ -1784,7 +1784,8 @@ double nbep_scene_packing_fraction(const nbep_scene *sc, const nbep_state *st)
 
 double nbep_scene_list_skin(const nbep_scene *sc, const nbep_state *st)
 {
-    return nbep_nblist_skin_for(nbep_scene_packing_fraction(sc, st), nbep_state_free_flight(st));
+    return nbep_nblist_skin_for(nbep_scene_packing_fraction(sc, st), nbep_state_free_flight(st),
+                                sc->restitution == 1.0);
 }
 
 double nbep_scene_list_skin_taken(const nbep_scene *sc, const nbep_state *st)

@@ -47,9 +47,23 @@ run_nbep check "$tmp/group.deck" --set 'run.neighbors="cells"'
 check "cells with a box: accepted (got $rc)" "[ $rc = 0 ]"
 check "nbep check prints the resolved scene: the neighbour mode an override chose" \
     "grep -Eq '^algorithm: +predictive \(neighbors cells, order time\), 1 thread\$' $tmp/stdout"
+check "nbep check prints the lists' skin: a sparse scene (packing 3.4e-5) the sparse one, by the packing" \
+    "grep -Eq '^lists: +skin 2 of the largest diameter \(sparse and elastic, by the packing: 2 at packing 0.01 or below' $tmp/stdout"
+run_nbep check "$tmp/group.deck" --set 'run.neighbors="cells"' --set 'physics.gravity=[0,-2,0]'
+check "... and under gravity the same (exit $rc)" \
+    "[ $rc = 0 ] && grep -Eq '^lists: +skin 2 of the largest diameter \(sparse' $tmp/stdout"
+run_nbep check "$tmp/group.deck" --set 'run.neighbors="cells"' --set physics.restitution=0.9 \
+    --set 'physics.gravity=[0,-2,0]'
+check "... but a dissipative one (e = 0.9, which may settle and crowd) the thin one (exit $rc)" \
+    "[ $rc = 0 ] && grep -Eq '^lists: +skin 0.4 of the largest diameter \(something accelerates' $tmp/stdout"
+run_nbep check "$tmp/group.deck" --set 'run.neighbors="cells"' --set 'box.max=[1.0,1.0,1.0]'
+check "... at packing 0.0335, between the sparse and the dilute skin (exit $rc)" \
+    "[ $rc = 0 ] && grep -Eq '^packing: +0.03351 ' $tmp/stdout && grep -Eq '^lists: +skin 1.18 of the largest diameter \(sparse' $tmp/stdout"
+run_nbep check "$tmp/group.deck" --set 'run.neighbors="cells"' --set 'box.max=[0.6,0.6,0.6]'
 check "nbep check prints the lists' skin: a dilute scene that flies free takes the wider one, by the packing" \
     "grep -Eq '^lists: +skin 0.6 of the largest diameter \(by the packing: 0.6 at packing 0.35 or below' $tmp/stdout"
-run_nbep check "$tmp/group.deck" --set 'run.neighbors="cells"' --set 'physics.gravity=[0,-2,0]'
+run_nbep check "$tmp/group.deck" --set 'run.neighbors="cells"' --set 'physics.gravity=[0,-2,0]' \
+    --set 'box.max=[0.6,0.6,0.6]'
 check "nbep check prints the lists' skin: under gravity the thin one, and why (not the packing's rule)" \
     "grep -Eq '^lists: +skin 0.4 of the largest diameter \(something accelerates; only free flight goes by the packing: ' $tmp/stdout"
 run_nbep check inputs/two-spheres.deck --set 'run.neighbors="cells"'

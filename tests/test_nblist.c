@@ -240,24 +240,61 @@ static void test_the_skin_follows_the_packing_fraction_of_a_free_scene(void **st
     (void)state;
     const double dense = NBEP_NBLIST_SKIN, dilute = NBEP_NBLIST_SKIN_DILUTE;
     assert_true(dilute > dense);
-    assert_true(nbep_nblist_skin_for(0.50, true) == dense);
-    assert_true(nbep_nblist_skin_for(NBEP_NBLIST_PHI_DENSE, true) == dense);
-    assert_true(nbep_nblist_skin_for(NBEP_NBLIST_PHI_DILUTE, true) == dilute);
-    assert_true(nbep_nblist_skin_for(0.30, true) == dilute);
-    assert_true(nbep_nblist_skin_for(0.0, true) == dilute);
-    assert_true(nbep_nblist_skin_for(NAN, true) == dense);
-    assert_true(nbep_nblist_skin_for(0.30, false) == dense);
+    assert_true(nbep_nblist_skin_for(0.50, true, true) == dense);
+    assert_true(nbep_nblist_skin_for(NBEP_NBLIST_PHI_DENSE, true, true) == dense);
+    assert_true(nbep_nblist_skin_for(NBEP_NBLIST_PHI_DILUTE, true, true) == dilute);
+    assert_true(nbep_nblist_skin_for(0.30, true, true) == dilute);
+    assert_true(nbep_nblist_skin_for(NAN, true, true) == dense);
+    assert_true(nbep_nblist_skin_for(0.30, false, true) == dense);
     const double mid = 0.5 * (NBEP_NBLIST_PHI_DILUTE + NBEP_NBLIST_PHI_DENSE);
-    assert_close(nbep_nblist_skin_for(mid, true), 0.5 * (dense + dilute), 1e-12, 0.0);
+    assert_close(nbep_nblist_skin_for(mid, true, true), 0.5 * (dense + dilute), 1e-12, 0.0);
     double last = dilute; /* falls steadily from the dilute skin to the dense one */
     for (int k = 0; k <= 100; k++) {
         const double phi = NBEP_NBLIST_PHI_DILUTE +
                            (NBEP_NBLIST_PHI_DENSE - NBEP_NBLIST_PHI_DILUTE) * k / 100.0;
-        const double skin = nbep_nblist_skin_for(phi, true);
+        const double skin = nbep_nblist_skin_for(phi, true, true);
         assert_true(skin <= last && last - skin < 0.02 * (dilute - dense) + 1e-12);
         last = skin;
     }
     assert_close(last, dense, 1e-12, 0.0);
+}
+
+/* A sparse elastic scene takes the sparse skin whether or not it accelerates: at and below
+ * NBEP_NBLIST_PHI_SPARSE, and a straight line from there to the rule of denser scenes at
+ * NBEP_NBLIST_PHI_SPARSE_END (the dilute skin in free flight, the dense one otherwise), so no
+ * fraction jumps; without a box (NAN) the dense one, as before; a dissipative one (e < 1),
+ * which may crowd later, the rules of denser scenes at any packing. */
+static void test_a_sparse_scene_takes_the_sparse_skin_and_no_fraction_jumps(void **state)
+{
+    (void)state;
+    const double sparse = NBEP_NBLIST_SKIN_SPARSE;
+    assert_true(sparse > NBEP_NBLIST_SKIN_DILUTE);
+    for (int free_flight = 0; free_flight < 2; free_flight++) {
+        const double denser = free_flight ? NBEP_NBLIST_SKIN_DILUTE : NBEP_NBLIST_SKIN;
+        assert_true(nbep_nblist_skin_for(0.0, free_flight, true) == sparse);
+        assert_true(nbep_nblist_skin_for(0.002, free_flight, true) == sparse);
+        assert_true(nbep_nblist_skin_for(NBEP_NBLIST_PHI_SPARSE, free_flight, true) == sparse);
+        assert_true(nbep_nblist_skin_for(NBEP_NBLIST_PHI_SPARSE_END, free_flight, true) ==
+                    denser);
+        /* pile.deck's pour (e = 0.5 there, so as a dissipative scene too) */
+        assert_true(nbep_nblist_skin_for(0.19, free_flight, true) == denser);
+        assert_true(nbep_nblist_skin_for(NAN, free_flight, true) == NBEP_NBLIST_SKIN);
+        const double mid = 0.5 * (NBEP_NBLIST_PHI_SPARSE + NBEP_NBLIST_PHI_SPARSE_END);
+        assert_close(nbep_nblist_skin_for(mid, free_flight, true), 0.5 * (sparse + denser),
+                     1e-12, 0.0);
+        double last = sparse;
+        for (int k = 0; k <= 100; k++) {
+            const double phi = NBEP_NBLIST_PHI_SPARSE +
+                               (NBEP_NBLIST_PHI_SPARSE_END - NBEP_NBLIST_PHI_SPARSE) * k / 100.0;
+            const double skin = nbep_nblist_skin_for(phi, free_flight, true);
+            assert_true(skin <= last && last - skin < 0.02 * (sparse - denser) + 1e-12);
+            last = skin;
+        }
+        assert_close(last, denser, 1e-12, 0.0);
+        assert_true(nbep_nblist_skin_for(0.0, free_flight, false) == denser);
+        assert_true(nbep_nblist_skin_for(0.002, free_flight, false) == denser);
+        assert_true(nbep_nblist_skin_for(mid, free_flight, false) == denser);
+    }
 }
 
 int main(void)
@@ -269,6 +306,7 @@ int main(void)
         cmocka_unit_test(test_set_is_clear_and_appends),
         cmocka_unit_test(test_check_catches_asymmetry_duplicates_and_self_entries),
         cmocka_unit_test(test_the_skin_follows_the_packing_fraction_of_a_free_scene),
+        cmocka_unit_test(test_a_sparse_scene_takes_the_sparse_skin_and_no_fraction_jumps),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

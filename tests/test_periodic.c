@@ -595,13 +595,14 @@ static void test_a_list_is_centred_ahead_of_a_straight_flight(void **state)
     nbep_test_set_sphere(sc, 0, (nbep_vec3){1.0, 2.0, 3.0}, (nbep_vec3){0.3, 0.4, 1.2}, 0.5,
                          1.0, ZERO);
     /* diameter 1; the box is wide enough that the skin is not cut down, and one sphere fills
-     * so little of it that it takes the dilute skin */
+     * so little of it that it takes the sparse skin */
     const double phi = nbep_scene_packing_fraction(sc, &sc->state);
-    assert_true(phi < NBEP_NBLIST_PHI_DILUTE);
+    assert_true(phi < NBEP_NBLIST_PHI_SPARSE);
+    assert_true(nbep_scene_list_skin_taken(sc, &sc->state) == NBEP_NBLIST_SKIN_SPARSE);
     uint64_t counts[NBEP_COUNTER_COUNT];
     nbep_state fin;
     nbep_summary s = nbep_test_run_counted(sc, 1, NULL, NULL, &fin, counts);
-    const double half_skin = 0.5 * 0.6; /* the dilute skin */
+    const double half_skin = 0.5 * NBEP_NBLIST_SKIN_SPARSE;
     const double lap = (1.0 + NBEP_NBLIST_LEAD) * half_skin;
     const double expect = floor((speed * T - half_skin) / lap) + 1.0;
     const double events = (double)(counts[NBEP_COUNTER_CHECKS] - 1);
