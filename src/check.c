@@ -78,15 +78,16 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
         fprintf(out, "algorithm:       predictive (neighbors %s, order %s), %d thread%s\n",
                 nbep_scene_neighbors_name(sc), nbep_scene_order_name(sc), threads,
                 threads == 1 ? "" : "s");
-    else /* a neighbour mode the deck asks of naive or seminaive, said left aside (a new
-          * user's review: run.neighbors = "cells" under seminaive passed without a word) */
-        fprintf(out, "algorithm:       %s, %d thread%s%s%s%s\n", sc->algorithm, threads,
-                threads == 1 ? "" : "s",
-                sc->neighbors_grid || sc->neighbors_cells ? " (run.neighbors = \"" : "",
-                sc->neighbors_grid || sc->neighbors_cells ? nbep_scene_neighbors_name(sc) : "",
-                sc->neighbors_grid || sc->neighbors_cells
-                    ? "\" is the predictive algorithm's: left aside)"
-                    : "");
+    else { /* a neighbour mode the deck asks of naive or seminaive, said left aside (a new
+            * user's review: run.neighbors = "cells" under seminaive passed without a word) */
+        char aside[96] = "";
+        if (nbep_scene_neighbors_aside(sc))
+            snprintf(aside, sizeof aside,
+                     " (run.neighbors = \"%s\" is the predictive algorithm's: left aside)",
+                     nbep_scene_neighbors_name(sc));
+        fprintf(out, "algorithm:       %s, %d thread%s%s\n", sc->algorithm, threads,
+                threads == 1 ? "" : "s", aside);
+    }
     fprintf(out, "threads:         %s\n", f->threads_use);
     fprintf(out, "steps:           %llu of dt = %g (t = 0 .. %g), seed %llu\n",
             (unsigned long long)sc->steps, sc->dt, (double)sc->steps * sc->dt,
@@ -136,8 +137,7 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
                     "lists:           skin %.3g of the largest diameter (%.3g by the packing, "
                     "cut down so that three cells fit across the periodic box)\n",
                     f->skin_taken, f->skin_asked);
-        else if (f->packing < NBEP_NBLIST_PHI_SPARSE_END && sc->restitution == 1.0)
-            /* sparse and elastic: accelerating or not */
+        else if (nbep_scene_list_sparse(sc, &sc->state)) /* accelerating or not */
             fprintf(out,
                     "lists:           skin %.3g of the largest diameter (sparse and elastic, by "
                     "the packing: %g at packing %g or below, the denser scenes' rules from "

@@ -602,8 +602,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
                 rq->deck_path, rq->deck_path);
     /* a neighbour mode asked of naive or seminaive, which find pairs their own way (a new
      * user's review: left aside without a word); a sweep's run, never (its check said it) */
-    if (rq->verbose && !rq->sweep_run && strcmp(sc.algorithm, "predictive") != 0 &&
-        (sc.neighbors_grid || sc.neighbors_cells))
+    if (rq->verbose && !rq->sweep_run && nbep_scene_neighbors_aside(&sc))
         fprintf(stderr,
                 "nbep: note: run.neighbors = \"%s\" is the predictive algorithm's, which %s "
                 "leaves aside (it finds pairs its own way)\n",

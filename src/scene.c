@@ -1782,10 +1782,26 @@ double nbep_scene_packing_fraction(const nbep_scene *sc, const nbep_state *st)
     return spheres / vol;
 }
 
+/* Nothing dissipates: no sparse start crowds later (nbep_nblist_skin_for). */
+static bool elastic(const nbep_scene *sc)
+{
+    return sc->restitution == 1.0;
+}
+
 double nbep_scene_list_skin(const nbep_scene *sc, const nbep_state *st)
 {
     return nbep_nblist_skin_for(nbep_scene_packing_fraction(sc, st), nbep_state_free_flight(st),
-                                sc->restitution == 1.0);
+                                elastic(sc));
+}
+
+bool nbep_scene_list_sparse(const nbep_scene *sc, const nbep_state *st)
+{
+    return nbep_nblist_sparse(nbep_scene_packing_fraction(sc, st), elastic(sc));
+}
+
+bool nbep_scene_neighbors_aside(const nbep_scene *sc)
+{
+    return strcmp(sc->algorithm, "predictive") != 0 && (sc->neighbors_grid || sc->neighbors_cells);
 }
 
 double nbep_scene_list_skin_taken(const nbep_scene *sc, const nbep_state *st)

@@ -1117,6 +1117,12 @@ nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s, const nbep__sce
 
 /* ---- the overlap check ---------------------------------------------------------------------- */
 
+/* Whether a sphere's centre lies past the plane it overlaps, and which: a sphere outside the
+ * box, or behind a deck plane, overlaps it by more than its radius, and is said to be on the
+ * wrong side (a new user read "overlaps box x-max by 6.1" of a sphere 6 past the wall as a
+ * placement a hair off). */
+typedef enum { PAST_NOT, PAST_BOX_WALL, PAST_PLANE } past_kind;
+
 /* An overlap to be listed by name. */
 typedef struct listed {
     uint64_t seq;                   /* how many were found before it */
@@ -1124,11 +1130,8 @@ typedef struct listed {
     size_t entry, a;                /* sphere a, of that entry, */
     char other[96];                 /* overlaps this */
     double by;                      /* by this much; or, where past: its centre is this far
-                                     * past the plane `other` (a sphere outside the box, or
-                                     * behind a deck plane, overlaps it by more than its
-                                     * radius: a new user read "overlaps box x-max by 6.1" of
-                                     * a sphere 6 past the wall as a placement a hair off) */
-    bool past;
+                                     * past the plane `other` */
+    past_kind past;
 } listed;
 
 typedef struct overlaps {
@@ -1159,7 +1162,8 @@ typedef struct overlaps {
  * whichever of the two an override placed or moved, the one typed first where both were (the
  * list ranks the message there), else on a's deck line (a, the later sphere, as before): the
  * change that made the overlap, not the deck line the user did not touch. */
-static void report(overlaps *o, size_t a, blame bb, const char *other, double by, bool past)
+static void report(overlaps *o, size_t a, blame bb, const char *other, double by,
+                   past_kind past)
 {
     const uint64_t seq = o->found++;
     blame at = o->placed[entry_of(o->e, o->n_entries, a)];
@@ -1198,21 +1202,17 @@ static void list_kept(overlaps *o)
     qsort(o->kept, o->n_kept, sizeof *o->kept, cmp_seq);
     for (size_t k = 0; k < o->n_kept; k++) {
         const listed *l = &o->kept[k];
-        const bool wall = strncmp(l->other, "box ", 4) == 0;
-        if (l->past && wall)
-            nbep__scene_error_from(o->c, l->at.label, l->at.line, __FILE__, __LINE__,
-                                   "spheres.[%zu] (sphere %zu) lies outside the box: its centre "
-                                   "is %g past %s",
-                                   l->entry, l->a, l->by, l->other);
-        else if (l->past)
-            nbep__scene_error_from(o->c, l->at.label, l->at.line, __FILE__, __LINE__,
-                                   "spheres.[%zu] (sphere %zu) lies behind %s: its centre is %g "
-                                   "past it",
-                                   l->entry, l->a, l->other, l->by);
+        char what[160];
+        if (l->past == PAST_BOX_WALL)
+            snprintf(what, sizeof what, "lies outside the box: its centre is %g past %s", l->by,
+                     l->other);
+        else if (l->past == PAST_PLANE)
+            snprintf(what, sizeof what, "lies behind %s: its centre is %g past it", l->other,
+                     l->by);
         else
-            nbep__scene_error_from(o->c, l->at.label, l->at.line, __FILE__, __LINE__,
-                                   "spheres.[%zu] (sphere %zu) overlaps %s by %g", l->entry,
-                                   l->a, l->other, l->by);
+            snprintf(what, sizeof what, "overlaps %s by %g", l->other, l->by);
+        nbep__scene_error_from(o->c, l->at.label, l->at.line, __FILE__, __LINE__,
+                               "spheres.[%zu] (sphere %zu) %s", l->entry, l->a, what);
     }
 }
 
@@ -1253,7 +1253,7 @@ static void check_pair(overlaps *o, size_t i, size_t j)
                 blame_first(o->c, &bb, v ? config_setting_get_elem(v, (unsigned)axis) : NULL);
             }
         }
-        report(o, a, bb, other, by, false);
+        report(o, a, bb, other, by, PAST_NOT);
     }
 }
 
@@ -1332,7 +1332,8 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                     snprintf(name, sizeof name, "planes.[%zu]", p - n_box);
                 /* its centre past the plane by more than the touch tolerance: outside */
                 const bool past = -d > tol;
-                report(&o, i, walls[p], name, past ? -d : by, past);
+                report(&o, i, walls[p], name, past ? -d : by,
+                       !past ? PAST_NOT : p < n_box ? PAST_BOX_WALL : PAST_PLANE);
             }
         }
 

@@ -235,6 +235,21 @@ static void test_check_catches_asymmetry_duplicates_and_self_entries(void **stat
  * box (NAN) and whenever the scene accelerates; the dilute one at and below
  * NBEP_NBLIST_PHI_DILUTE; a straight line between, so no fraction jumps from one to the
  * other. */
+/* The skin falls steadily from `from` at packing phi0 to `to` at phi1: never up, no step past
+ * a fiftieth of the fall, and ends at `to`. */
+static void assert_falls_steadily(double phi0, double from, double phi1, double to,
+                                  bool free_flight)
+{
+    double last = from;
+    for (int k = 0; k <= 100; k++) {
+        const double phi = phi0 + (phi1 - phi0) * k / 100.0;
+        const double skin = nbep_nblist_skin_for(phi, free_flight, true);
+        assert_true(skin <= last && last - skin < 0.02 * (from - to) + 1e-12);
+        last = skin;
+    }
+    assert_close(last, to, 1e-12, 0.0);
+}
+
 static void test_the_skin_follows_the_packing_fraction_of_a_free_scene(void **state)
 {
     (void)state;
@@ -248,15 +263,7 @@ static void test_the_skin_follows_the_packing_fraction_of_a_free_scene(void **st
     assert_true(nbep_nblist_skin_for(0.30, false, true) == dense);
     const double mid = 0.5 * (NBEP_NBLIST_PHI_DILUTE + NBEP_NBLIST_PHI_DENSE);
     assert_close(nbep_nblist_skin_for(mid, true, true), 0.5 * (dense + dilute), 1e-12, 0.0);
-    double last = dilute; /* falls steadily from the dilute skin to the dense one */
-    for (int k = 0; k <= 100; k++) {
-        const double phi = NBEP_NBLIST_PHI_DILUTE +
-                           (NBEP_NBLIST_PHI_DENSE - NBEP_NBLIST_PHI_DILUTE) * k / 100.0;
-        const double skin = nbep_nblist_skin_for(phi, true, true);
-        assert_true(skin <= last && last - skin < 0.02 * (dilute - dense) + 1e-12);
-        last = skin;
-    }
-    assert_close(last, dense, 1e-12, 0.0);
+    assert_falls_steadily(NBEP_NBLIST_PHI_DILUTE, dilute, NBEP_NBLIST_PHI_DENSE, dense, true);
 }
 
 /* A sparse elastic scene takes the sparse skin whether or not it accelerates: at and below
@@ -276,21 +283,14 @@ static void test_a_sparse_scene_takes_the_sparse_skin_and_no_fraction_jumps(void
         assert_true(nbep_nblist_skin_for(NBEP_NBLIST_PHI_SPARSE, free_flight, true) == sparse);
         assert_true(nbep_nblist_skin_for(NBEP_NBLIST_PHI_SPARSE_END, free_flight, true) ==
                     denser);
-        /* pile.deck's pour (e = 0.5 there, so as a dissipative scene too) */
+        /* pile.deck's pour packs 0.19: never sparse */
         assert_true(nbep_nblist_skin_for(0.19, free_flight, true) == denser);
         assert_true(nbep_nblist_skin_for(NAN, free_flight, true) == NBEP_NBLIST_SKIN);
         const double mid = 0.5 * (NBEP_NBLIST_PHI_SPARSE + NBEP_NBLIST_PHI_SPARSE_END);
         assert_close(nbep_nblist_skin_for(mid, free_flight, true), 0.5 * (sparse + denser),
                      1e-12, 0.0);
-        double last = sparse;
-        for (int k = 0; k <= 100; k++) {
-            const double phi = NBEP_NBLIST_PHI_SPARSE +
-                               (NBEP_NBLIST_PHI_SPARSE_END - NBEP_NBLIST_PHI_SPARSE) * k / 100.0;
-            const double skin = nbep_nblist_skin_for(phi, free_flight, true);
-            assert_true(skin <= last && last - skin < 0.02 * (sparse - denser) + 1e-12);
-            last = skin;
-        }
-        assert_close(last, denser, 1e-12, 0.0);
+        assert_falls_steadily(NBEP_NBLIST_PHI_SPARSE, sparse, NBEP_NBLIST_PHI_SPARSE_END, denser,
+                              free_flight);
         assert_true(nbep_nblist_skin_for(0.0, free_flight, false) == denser);
         assert_true(nbep_nblist_skin_for(0.002, free_flight, false) == denser);
         assert_true(nbep_nblist_skin_for(mid, free_flight, false) == denser);

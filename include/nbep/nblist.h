@@ -80,6 +80,20 @@
 #define NBEP_NBLIST_PHI_SPARSE 0.01
 #define NBEP_NBLIST_PHI_SPARSE_END 0.05
 
+/* The skin on the straight line from s0 at packing phi0 to s1 at phi1. */
+static inline double nbep_nblist_skin_between(double phi, double phi0, double s0, double phi1,
+                                              double s1)
+{
+    return s0 + (phi - phi0) / (phi1 - phi0) * (s1 - s0);
+}
+
+/* Whether a scene packing the fraction phi of its box, elastic or not, takes the sparse skin
+ * or a skin between it and the denser rules (NAN, no box: not). */
+static inline bool nbep_nblist_sparse(double phi, bool elastic)
+{
+    return elastic && phi < NBEP_NBLIST_PHI_SPARSE_END;
+}
+
 /* The skin (a fraction of the largest contact distance) for a scene whose spheres fill the
  * fraction phi of its box, fly free (flies_free: no acceleration anywhere) or not, and collide
  * elastically (restitution 1) or not. NBEP_NBLIST_SKIN when phi is not a number (no box), or
@@ -93,16 +107,14 @@ static inline double nbep_nblist_skin_for(double phi, bool flies_free, bool elas
     if (flies_free && phi <= NBEP_NBLIST_PHI_DILUTE)
         skin = NBEP_NBLIST_SKIN_DILUTE;
     else if (flies_free && phi < NBEP_NBLIST_PHI_DENSE)
-        skin = NBEP_NBLIST_SKIN_DILUTE + (phi - NBEP_NBLIST_PHI_DILUTE) /
-                                             (NBEP_NBLIST_PHI_DENSE - NBEP_NBLIST_PHI_DILUTE) *
-                                             (NBEP_NBLIST_SKIN - NBEP_NBLIST_SKIN_DILUTE);
-    if (elastic && phi <= NBEP_NBLIST_PHI_SPARSE)
+        skin = nbep_nblist_skin_between(phi, NBEP_NBLIST_PHI_DILUTE, NBEP_NBLIST_SKIN_DILUTE,
+                                        NBEP_NBLIST_PHI_DENSE, NBEP_NBLIST_SKIN);
+    if (!nbep_nblist_sparse(phi, elastic))
+        return skin;
+    if (phi <= NBEP_NBLIST_PHI_SPARSE)
         return NBEP_NBLIST_SKIN_SPARSE;
-    if (elastic && phi < NBEP_NBLIST_PHI_SPARSE_END)
-        skin = NBEP_NBLIST_SKIN_SPARSE + (phi - NBEP_NBLIST_PHI_SPARSE) /
-                                             (NBEP_NBLIST_PHI_SPARSE_END - NBEP_NBLIST_PHI_SPARSE) *
-                                             (skin - NBEP_NBLIST_SKIN_SPARSE);
-    return skin;
+    return nbep_nblist_skin_between(phi, NBEP_NBLIST_PHI_SPARSE, NBEP_NBLIST_SKIN_SPARSE,
+                                    NBEP_NBLIST_PHI_SPARSE_END, skin);
 }
 /* A list rebuilt at its expiry is centred this many strays (half skins) ahead of its sphere
  * along a straight flight (evloop.c, list_centre), so that the sphere flies 1 + LEAD strays

@@ -196,6 +196,11 @@ double nbep_scene_packing_fraction(const nbep_scene *sc, const nbep_state *st);
  * of the largest diameter (nbep_nblist_skin_for: from the packing fraction when nothing
  * accelerates), which the run asks its lists for. */
 double nbep_scene_list_skin(const nbep_scene *sc, const nbep_state *st);
+/* Whether that skin is by the rule of sparse elastic scenes (nbep_nblist_sparse). */
+bool nbep_scene_list_sparse(const nbep_scene *sc, const nbep_state *st);
+/* Whether sc asks a neighbour mode ("grid", "cells") of an algorithm that has none (naive,
+ * seminaive: they find pairs their own way), which leaves it aside. */
+bool nbep_scene_neighbors_aside(const nbep_scene *sc);
 /* The skin the run's lists then take, as a fraction of the largest diameter: the same, unless
  * a small periodic box cuts it down (nbep check prints this one). */
 double nbep_scene_list_skin_taken(const nbep_scene *sc, const nbep_state *st);
