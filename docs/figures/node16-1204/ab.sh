@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Prepared for a borrowed 16-core node on 2026-12-04 and NOT run there (no node was lent again
+# Prepared for a borrowed 16-core node on 2026-12-04 and NOT run there (run at the next loan:
+# docs/figures/node16-1204b; no node was lent again
 # that session; tried once here, one repeat): the team loop at 986178f (old) against 4268a25
 # (new: a place's record on one cache line), N = 256000,
 # phi = 0.30, resumed at T1 = 1 for 0.5 time units, NBEP_TEAM=always, 2, 4 and 16 threads,
