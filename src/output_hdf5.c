@@ -323,10 +323,12 @@ int nbep__output_complete_rows(hid_t file, const char *path, const char *group,
     nbep__output_close_id(&g);
     if (rc < 0)
         return -1;
-    if (count > rows) {
-        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: %s counts %" PRIu64 " rows but %s has %llu",
+    if (count > rows) { /* no run writes it so: a file damaged or edited (-2: exit 2) */
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s: %s counts %" PRIu64 " rows but %s has %llu: the file is "
+                      "damaged, or no run wrote it",
                       path, group, count, dataset, (unsigned long long)rows);
-        return -1;
+        return -2;
     }
     *complete = count;
     *more = rows - count;

@@ -259,7 +259,8 @@ int nbep__output_dataset_rows(hid_t file, const char *path, const char *name, hs
 int nbep__output_read_row(hid_t file, const char *path, const char *name, hsize_t row,
                           hsize_t per_row, hid_t mem_type, void *buf, nbep_diag *d);
 /* Complete rows of group's datasets (its count attribute; the length of dataset when a file
- * has no such attribute) and how many rows dataset holds past them. */
+ * has no such attribute) and how many rows dataset holds past them: 0; -1 after a failure,
+ * -2 where the count is past the rows (a damaged file), each after a message. */
 int nbep__output_complete_rows(hid_t file, const char *path, const char *group,
                                const char *dataset, uint64_t *complete, hsize_t *more,
                                nbep_diag *d);

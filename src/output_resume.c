@@ -554,8 +554,12 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     }
     uint64_t frames;
     hsize_t more;
-    if (nbep__output_complete_rows(o->file, path, "/frames", "/frames/step", &frames, &more, d) < 0)
+    int rows_rc = nbep__output_complete_rows(o->file, path, "/frames", "/frames/step", &frames,
+                                             &more, d);
+    if (rows_rc < 0) { /* -2: a count past its rows, a damaged file (exit 2, until 2026-12-04 1) */
+        st = rows_rc == -2 ? NBEP_EDECK : NBEP_EIO;
         goto fail;
+    }
     if (frames == 0) { /* killed before its first frame was complete: nothing to resume from,
                         * which a run without --resume starts afresh (bad usage, as a file cut
                         * short before HDF5 could open it) */
@@ -786,8 +790,12 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     }
     if (o->resume.stats) {
         uint64_t rows;
-        if (nbep__output_complete_rows(o->file, path, "/stats", "/stats/step", &rows, &more, d) < 0)
+        rows_rc = nbep__output_complete_rows(o->file, path, "/stats", "/stats/step", &rows,
+                                             &more, d);
+        if (rows_rc < 0) {
+            st = rows_rc == -2 ? NBEP_EDECK : NBEP_EIO;
             goto fail;
+        }
         /* one row per step from step 1: the rows up to the frame's step stay */
         o->resume.stats_keep = rows < (uint64_t)res.step ? rows : (uint64_t)res.step;
         o->resume.wall = H5Lexists(o->file, "/stats/wall_impulse", H5P_DEFAULT) > 0;

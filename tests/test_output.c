@@ -1202,7 +1202,7 @@ static void test_info_refuses_a_count_past_the_rows_naming_both(void **state)
     nbep_status st;
     char *text = info_try(path, &st, &fx->d);
     free(text);
-    assert_true(st != NBEP_OK);
+    assert_int_equal(st, NBEP_EUSAGE); /* exit 2: a file that is not what it should be */
     assert_one_line_naming(&fx->d, path);
     char want[128];
     snprintf(want, sizeof want, "/frames counts %d rows but /frames/step has %d", N_FRAMES,

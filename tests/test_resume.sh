@@ -114,6 +114,22 @@ for ds in stats/step checkpoint/event_kind; do
          grep -q '^nbep: $tmp/missing.h5: cannot read the shape of /$ds' $tmp/missing.err &&
          cmp -s $tmp/missing.h5 $tmp/missing-before.h5"
 done
+# a count attribute past its rows (no writer leaves one: a damaged or edited file) is refused
+# as such, exit 2 as the README's exit table has it for a --resume file that is not what it
+# should be, by info too (resume gave exit 1 until 2026-12-04, a review)
+for g in frames stats; do
+    cp $tmp/no-totals-a.h5 $tmp/overcount.h5
+    "$PY" -c "import h5py, sys, numpy as np; h5py.File(sys.argv[1], 'r+')[sys.argv[2]].attrs.modify('count', np.uint64(1000000))" $tmp/overcount.h5 $g
+    cp $tmp/overcount.h5 $tmp/overcount-before.h5
+    timeout 60 bin/nbep run $deck "${args[@]}" -n 80 --resume $tmp/overcount.h5 2>$tmp/overcount.err
+    rc=$?
+    timeout 60 bin/nbep info $tmp/overcount.h5 >/dev/null 2>$tmp/overcount-info.err
+    rc_info=$?
+    check "a /$g count past its rows: resume and info exit 2 (got $rc and $rc_info), one line naming it, the file unchanged ($(head -c 200 $tmp/overcount.err))" \
+        "[ $rc = 2 ] && [ $rc_info = 2 ] && [ \$(wc -l <$tmp/overcount.err) = 1 ] &&
+         grep -qx 'nbep: $tmp/overcount.h5: /$g counts 1000000 rows but /$g/step has [0-9]*: the file is damaged, or no run wrote it' $tmp/overcount.err &&
+         cmp -s $tmp/overcount.h5 $tmp/overcount-before.h5"
+done
 
 # the end line of a resumed run counts the steps it ran and names the step reached (the
 # summary's `steps`), as the JSON summary's steps_per_second counts the steps run
