@@ -1138,8 +1138,11 @@ static void parse_sweep(load *L, const config_setting_t *root, nbep_scene *sc, b
     uint64_t runs = sc->sweep_replicas;
     for (size_t k = 0; k < sc->sweep_n_axes && runs <= NBEP_SWEEP_RUNS_MAX; k++)
         runs *= sc->sweep_axes[k].n_values; /* at most 10^7 times a list length < 2^31 */
+    /* said at sweep.replicas where the deck or a --set gives it (a --set of a billion was
+     * put at the deck's sweep line, until 2026-12-04, a review), else at the group */
+    const config_setting_t *many = config_setting_get_member(sweep, "replicas");
     if (runs > NBEP_SWEEP_RUNS_MAX)
-        ERR(L, sweep,
+        ERR(L, many && sc->sweep_replicas > 1 ? many : sweep,
             "sweep: replicas times the product of the axes' lengths is more than %" PRIu64
             " runs",
             NBEP_SWEEP_RUNS_MAX);

@@ -511,6 +511,14 @@ static void test_too_many_runs_is_a_deck_error_at_the_sweep_group(void **state)
     const char *const by_set[] = {"--set sweep.replicas=10000001: sweep: replicas times the "
                                   "product of the axes' lengths is more than 10000000 runs"};
     assert_refused(deck, set, 1, 1, by_set);
+    /* a --set over the deck's own replicas: at the --set (until 2026-12-04 at the deck's sweep
+     * line, a review) */
+    write_deck("sweep_two", "sweep: { replicas = 2; };\n", deck, sizeof deck);
+    const char *set_over[] = {"sweep.replicas=1000000000"};
+    const char *const by_set_over[] = {"--set sweep.replicas=1000000000: sweep: replicas times "
+                                       "the product of the axes' lengths is more than 10000000 "
+                                       "runs"};
+    assert_refused(deck, set_over, 1, 1, by_set_over);
 }
 
 static void test_a_steps_axis_sets_each_runs_expected_steps(void **state)
