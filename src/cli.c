@@ -171,6 +171,39 @@ static nbep_status take_operand(nbep_cli *cli, const char *a, nbep_diag *d)
     return NBEP_OK;
 }
 
+/* Whether a is one of the options (as typed apart, or --name=value): the value an option
+ * takes from the next argument is never one. `-n -o x.h5` took -o as the count and was said
+ * as "unexpected argument 'x.h5'" (until 2026-12-04, a review). */
+static bool is_option(const char *a)
+{
+    static const char *const names[] = {"-o",    "--output",  "-a",    "--algorithm",
+                                        "-t",    "--threads", "-n",    "--steps",
+                                        "--dt",  "--summary", "--resume", "--set",
+                                        "-q",    "--quiet",   "-h",    "--help"};
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
+        const size_t n = strlen(names[i]);
+        if (strncmp(a, names[i], n) == 0 && (a[n] == '\0' || (names[i][1] == '-' && a[n] == '=')))
+            return true;
+    }
+    return false;
+}
+
+/* The value of option name from the argument after it (argv[*k + 1]), *k moved past it: NULL
+ * after a line where there is none, or the next argument is another option. */
+static const char *value_after(int argc, char **argv, int *k, const char *name, nbep_diag *d)
+{
+    if (*k + 1 >= argc) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: option %s needs a value", name);
+        return NULL;
+    }
+    if (is_option(argv[*k + 1])) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: option %s needs a value (got the option %s)",
+                      name, argv[*k + 1]);
+        return NULL;
+    }
+    return argv[++*k];
+}
+
 nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
 {
     memset(cli, 0, sizeof *cli);
@@ -241,11 +274,8 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
                 strcmp(name, opts[i].lng) == 0) {
                 known = true;
                 const bool apart = !value;
-                if (!value) {
-                    if (k + 1 >= argc)
-                        NBEP_FAIL(d, NBEP_EUSAGE, "nbep: option %s needs a value", name);
-                    value = argv[++k];
-                }
+                if (!value && !(value = value_after(argc, argv, &k, name, d)))
+                    return NBEP_EUSAGE;
                 st = add_override(cli, opts[i].path, value, opts[i].quote, a, apart, d);
                 if (st != NBEP_OK)
                     return st;
@@ -258,11 +288,8 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
                             : strcmp(name, "--set") == 0    ? &value
                                                             : NULL;
         if (slot) {
-            if (!value) {
-                if (k + 1 >= argc)
-                    NBEP_FAIL(d, NBEP_EUSAGE, "nbep: option %s needs a value", name);
-                value = argv[++k];
-            }
+            if (!value && !(value = value_after(argc, argv, &k, name, d)))
+                return NBEP_EUSAGE;
             if (strcmp(name, "--set") == 0) {
                 const char *e2 = strchr(value, '=');
                 if (!e2 || e2 == value)

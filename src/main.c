@@ -2,6 +2,7 @@
  * exit code. The only file that prints a status, installs signal handlers or calls exit. */
 #include <assert.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <signal.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -179,8 +180,23 @@ static nbep_status cmd_check(const nbep_cli *cli, nbep_diag *d)
     return st;
 }
 
+/* Standard input, output and error opened on /dev/null where the caller closed them (`2>&-`):
+ * the first file nbep opened took descriptor 2, its run's lock, and the progress lines went
+ * into it, which later runs then kept as a file of the user's (until 2026-12-04, a review); a
+ * data file there would take the error messages. */
+static void standard_streams_open(void)
+{
+    for (int fd = 0; fd <= 2; fd++)
+        if (fcntl(fd, F_GETFD) < 0 && errno == EBADF) {
+            const int got = open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
+            if (got >= 0 && got != fd) /* a lower one was closed too and took it first */
+                close(got);
+        }
+}
+
 int main(int argc, char **argv)
 {
+    standard_streams_open();
     gsl_set_error_handler_off();
     nbep_memory_init();
     nbep_output_library_init();

@@ -377,6 +377,26 @@ static bool is_hdf5_file(const char *path)
     return hdf5;
 }
 
+/* What stands at output's sidecar path (nbep_xdmf_path) when it is not a regular file
+ * holding XDMF (nbep_xdmf_run_of: an earlier run's sidecar, which a run may replace), in
+ * words; NULL when nothing stands there or a sidecar does. */
+static const char *sidecar_misfit(const char *output)
+{
+    char *xmf = nbep_xdmf_path(output), name[8];
+    struct stat sb;
+    const char *what = NULL;
+    if (xmf && stat(xmf, &sb) == 0) {
+        if (S_ISDIR(sb.st_mode))
+            what = "a folder";
+        else if (!S_ISREG(sb.st_mode))
+            what = "no regular file (a device, a pipe or a socket)";
+        else if (!nbep_xdmf_run_of(xmf, name, sizeof name))
+            what = "a file that is not XDMF (one of yours?)";
+    }
+    free(xmf);
+    return what;
+}
+
 nbep_status nbep_run_check_paths(const char *deck, const char *output, const char *summary,
                                  nbep_diag *d)
 {
@@ -408,6 +428,23 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
                       "beside it; choose another output",
                       output, owner);
         free(owner);
+        return NBEP_EUSAGE;
+    }
+    /* a run replaces (or, writing no positions, removes) the sidecar of an earlier run at
+     * RUN.xmf: what stands there must be one. A user's file there was replaced or removed
+     * without a word, and a folder there failed the run after its set-up and first frame
+     * (until 2026-12-04, a review) */
+    const char *not_side = output ? sidecar_misfit(output) : NULL;
+    if (not_side) {
+        char *xmf = nbep_xdmf_path(output);
+        /* worded as the output's other faults, which nbep_run_blame_deck_output puts at
+         * the deck's output.file line */
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s: cannot create the output file: its XDMF sidecar's place %s "
+                      "holds %s, which the run would replace; move it away or choose another "
+                      "output",
+                      output, xmf ? xmf : "RUN.xmf", not_side);
+        free(xmf);
         return NBEP_EUSAGE;
     }
     /* -o DECK replaced the deck with the run's file, --summary DECK with the JSON; --summary

@@ -400,6 +400,19 @@ for cmd in run check sweep; do
         "[ $rc = 2 ] && one_line && grep -qxF -- '-n abc: run.steps must be an integer (got \"abc\")' '$tmp/stderr'"
 done
 check "nbep run -n abc: no file written" "[ ! -e '$tmp/never-run.h5' ]"
+# an option whose value is missing, the next argument another option: said so (`-n -o x.h5`
+# took -o as the count and was said as "unexpected argument 'x.h5'" until 2026-12-04, a
+# review); a value that only starts with '-' is still a value (--dt -1, --summary -)
+for args in "-n|-o|$tmp/never-n.h5" "--summary|--quiet" "-o|--set=run.steps=3" "--resume|-q"; do
+    IFS='|' read -r -a argv <<<"$args"
+    run_nbep run "$tmp/group.deck" "${argv[@]}"
+    check "nbep run ${argv[*]}: exit 2, one line: option ${argv[0]} needs a value (got $rc: $(head -c 200 "$tmp/stderr"))" \
+        "[ $rc = 2 ] && one_line && grep -qxF -- 'nbep: option ${argv[0]} needs a value (got the option ${argv[1]})' '$tmp/stderr' &&
+         [ ! -e '$tmp/never-n.h5' ]"
+done
+run_nbep check "$tmp/group.deck" --dt -1
+check "--dt -1: still a value (got $rc: $(head -c 200 "$tmp/stderr"))" \
+    "[ $rc = 2 ] && grep -qxF -- '--dt -1: run.dt must be > 0 (got -1)' '$tmp/stderr'"
 run_nbep check "$tmp/group.deck" --dt=-1 --set run.steps=0.5
 check "--dt=-1 and --set run.steps=0.5: each message names what was typed (got $rc)" \
     "[ $rc = 2 ] && grep -qxF -- '--dt=-1: run.dt must be > 0 (got -1)' '$tmp/stderr' &&
@@ -797,7 +810,32 @@ check "a run beside a folder of its name without .h5 resumes (got $rc: $(head -c
 mkfifo "$tmp/twin2/f.xmf"
 : >"$tmp/twin2/f" # the other name there, so that the sidecar would be read
 guard=10 run_nbep check inputs/two-spheres.deck --quiet -o "$tmp/twin2/f.h5"
-check "a FIFO at the sidecar's name: check ends (got $rc), not blocked on it" "[ $rc = 0 ]"
+check "a FIFO at the sidecar's name: check ends, not blocked on it, refusing it as no sidecar (got $rc: $(head -c 200 "$tmp/stderr"))" \
+    "[ $rc = 2 ] && one_line && grep -q 'f.xmf holds no regular file' '$tmp/stderr'"
+# what stands at RUN.xmf must be an earlier run's sidecar, which the run replaces (or, writing
+# no positions, removes): a user's file there was replaced or removed without a word, and a
+# folder there failed the run after its set-up and first frame, check passing it (until
+# 2026-12-04, a review); refused by run and check before anything is made, at the deck's
+# output.file line where the deck named the file, the user's file kept byte for byte
+mkdir -p "$tmp/mine"
+echo "my notes" >"$tmp/mine/notes.xmf"
+mkdir "$tmp/mine/dir.xmf"
+sed "s|file = \"group.h5\"|file = \"$tmp/mine/notes.h5\"|" "$tmp/group.deck" >"$tmp/mine/notes.deck"
+for cmd in run check; do
+    for fields in '"position"' ''; do
+        run_nbep $cmd inputs/two-spheres.deck --quiet -n 5 -o "$tmp/mine/notes.h5" --set "output.fields=[$fields]"
+        check "$cmd, fields [$fields], a user's file at RUN.xmf: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr")), kept, no run file" \
+            "[ $rc = 2 ] && one_line && grep -qx 'nbep: $tmp/mine/notes.h5: cannot create the output file: its XDMF sidecar.s place $tmp/mine/notes.xmf holds a file that is not XDMF (one of yours?), which the run would replace; move it away or choose another output' '$tmp/stderr' &&
+             [ \"\$(cat '$tmp/mine/notes.xmf')\" = 'my notes' ] && [ ! -e '$tmp/mine/notes.h5' ]"
+    done
+    run_nbep $cmd inputs/two-spheres.deck --quiet -n 5 -o "$tmp/mine/dir.h5"
+    check "$cmd, a folder at RUN.xmf: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr")), no run file" \
+        "[ $rc = 2 ] && one_line && grep -q 'its XDMF sidecar.s place $tmp/mine/dir.xmf holds a folder, which the run would replace' '$tmp/stderr' &&
+         [ -d '$tmp/mine/dir.xmf' ] && [ ! -e '$tmp/mine/dir.h5' ]"
+    run_nbep $cmd "$tmp/mine/notes.deck" --quiet -n 5
+    check "$cmd, the deck's output.file with a user's file at its RUN.xmf: at the deck's line (got $rc: $(head -c 200 "$tmp/stderr"))" \
+        "[ $rc = 2 ] && one_line && grep -q '^$tmp/mine/notes.deck:4: output.file: $tmp/mine/notes.h5: cannot create the output file: its XDMF sidecar' '$tmp/stderr'"
+done
 # a name that fits the folder, but not with .partial after it (the name the file is made
 # under): check passed it and the run failed (until 2026-12-01); both refuse it now
 long=$(printf 'a%.0s' $(seq 248)).h5
@@ -909,13 +947,23 @@ PY
 check "a run whose stderr has no reader: exit 0 (got ${got:-nothing}), its summary completed, no lock left" \
     "[ '$got' = 0 ] && [ \$(json_get '$tmp/nopipe.json' status) = '\"completed\"' ] &&
      [ ! -e '$tmp/nopipe.h5.lock' ]"
+# a run with its standard streams closed (`2>&-`, `<&- >&- 2>&-`): its lock took descriptor 2
+# and the progress lines went into it, which later runs kept as a file of the user's (until
+# 2026-12-04, a review); now the streams are /dev/null: exit 0, no lock left
+for closing in '2>&-' '<&- >&- 2>&-'; do
+    rm -f "$tmp/closed.h5" "$tmp/closed.h5.lock"
+    eval "timeout 60 '$nbep' run inputs/two-spheres.deck -n 20 -o '$tmp/closed.h5' $closing"
+    rc=$?
+    check "a run with $closing: exit 0 (got $rc), its file whole, no lock left" \
+        "[ $rc = 0 ] && [ -s '$tmp/closed.h5' ] && [ ! -e '$tmp/closed.h5.lock' ]"
+done
 # ---- what a test-gap hunt found unchecked (2026-12-02) ------------------------------------------
 # a rerun into the same file without positions removes the old sidecar, which would point at
 # /frames/position no longer there
-run_nbep run inputs/two-spheres.deck -n 5 -o "$tmp/side.h5" --quiet
-run_nbep run inputs/two-spheres.deck -n 5 -o "$tmp/side.h5" --quiet --set 'output.fields=["velocity"]'
+run_nbep run inputs/two-spheres.deck -n 5 -o "$tmp/side2.h5" --quiet
+run_nbep run inputs/two-spheres.deck -n 5 -o "$tmp/side2.h5" --quiet --set 'output.fields=["velocity"]'
 check "a rerun without positions: exit 0 (got $rc), the first run's sidecar gone" \
-    "[ $rc = 0 ] && [ -s '$tmp/side.h5' ] && [ ! -e '$tmp/side.xmf' ]"
+    "[ $rc = 0 ] && [ -s '$tmp/side2.h5' ] && [ ! -e '$tmp/side2.xmf' ]"
 # info of a device or a FIFO: the user's path, exit 2, one line
 mkfifo "$tmp/info-fifo.h5"
 for f in /dev/null "$tmp/info-fifo.h5"; do
