@@ -3039,6 +3039,25 @@ MUTANTS = [
     ("totals-field-class-unchecked", "src/output_hdf5.c",
      "        if (!field || i < 0 ||\n            H5Tget_member_class(type, (unsigned)i) != H5Tget_member_class(want, (unsigned)k))",
      "        if (!field || i < 0)", ["test_output"], None),
+    # ---- 2026-12-04, a review: the sidecar's place, closed streams, a value that is an option,
+    # a damaged count's exit, the replicas' place ----
+    ("sidecar-place-user-file-replaced", "src/run.c",
+     "        else if (!nbep_xdmf_run_of(xmf, name, sizeof name))",
+     "        else if (0 && !nbep_xdmf_run_of(xmf, name, sizeof name))", ["tests/test_cli.sh"], None),
+    ("sidecar-place-folder-taken", "src/run.c", "        if (S_ISDIR(sb.st_mode))\n            what = \"a folder\";",
+     "        if (0)\n            what = \"a folder\";", ["tests/test_cli.sh"], None),
+    ("sidecar-place-unchecked", "src/run.c", "    const char *not_side = output ? sidecar_misfit(output) : NULL;",
+     "    const char *not_side = NULL;", ["tests/test_cli.sh"], None),
+    ("streams-closed-left", "src/main.c", "    standard_streams_open();\n", "\n", ["tests/test_cli.sh"], None),
+    ("cli-option-as-value", "src/cli.c", "    if (is_option(argv[*k + 1])) {", "    if (0) {",
+     ["tests/test_cli.sh"], None),
+    ("cli-dash-value-refused", "src/cli.c",
+     "        if (strncmp(a, names[i], n) == 0 && (a[n] == '\\0' || (names[i][1] == '-' && a[n] == '=')))",
+     "        if (strncmp(a, names[i], 1) == 0)", ["tests/test_cli.sh"], None),
+    ("overcount-exit-1", "src/output_hdf5.c", "        return -2;\n    }\n    *complete = count;",
+     "        return -1;\n    }\n    *complete = count;", ["tests/test_resume.sh"], None),
+    ("replicas-said-at-group", "src/scene.c", "        ERR(L, many && sc->sweep_replicas > 1 ? many : sweep,",
+     "        ERR(L, sweep,", ["test_sweep", "test_scene"], None),
 ]
 
 
