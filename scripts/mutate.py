@@ -3058,6 +3058,14 @@ MUTANTS = [
      "        return -1;\n    }\n    *complete = count;", ["tests/test_resume.sh"], None),
     ("replicas-said-at-group", "src/scene.c", "        ERR(L, many && sc->sweep_replicas > 1 ? many : sweep,",
      "        ERR(L, sweep,", ["test_sweep", "test_scene"], None),
+    ("missing-part-unchecked", "src/output_resume.c", "    const char *gap = missing_part(o->file, path, d);",
+     "    const char *gap = NULL;", ["tests/test_resume.sh"], None),
+    ("missing-part-group-unlooked", "src/output_resume.c",
+     "        htri_t has = len ? H5Lexists(file, group, H5P_DEFAULT) : 1;", "        htri_t has = 1;",
+     ["tests/test_resume.sh"], None),
+    ("missing-part-stats-skipped", "src/output_resume.c",
+     "    for (size_t k = 0; stats > 0 && k < STATS_N_COLUMNS; k++)",
+     "    for (size_t k = 0; 0 && stats > 0 && k < STATS_N_COLUMNS; k++)", ["tests/test_resume.sh"], None),
 ]
 
 

@@ -118,6 +118,50 @@ static bool checkpoint_fault(const nbep_resume *r, size_t np, size_t *at, const 
     return false;
 }
 
+/* The first dataset that every run file holds, or holds in a group that the file has (/stats,
+ * /checkpoint), and this file lacks: NULL when none is missing, "" after a failure to look (a
+ * message added). Such a file is damaged or edited by hand: a resume refuses it at once, exit 2
+ * as the README's exit table has it for a file that is not what it should be (until
+ * 2026-12-04 the read that met the gap failed it as an I/O fault, exit 1, a review). */
+static const char *missing_part(hid_t file, const char *path, nbep_diag *d)
+{
+    static const char *const always[] = {"/spheres/radius", "/planes/offset", "/frames/step",
+                                         "/frames/time"};
+    const char *names[4 + STATS_N_COLUMNS + N_CK_COLUMNS];
+    size_t n = 0;
+    for (size_t k = 0; k < sizeof always / sizeof always[0]; k++)
+        names[n++] = always[k];
+    const htri_t stats = H5Lexists(file, "/stats", H5P_DEFAULT),
+                 ck = H5Lexists(file, "/checkpoint", H5P_DEFAULT);
+    for (size_t k = 0; stats > 0 && k < STATS_N_COLUMNS; k++)
+        names[n++] = nbep__stats_columns[k].name;
+    for (size_t k = 0; ck > 0 && k < N_CK_COLUMNS; k++)
+        names[n++] = nbep__ck_columns[k].name;
+    if (stats < 0 || ck < 0) {
+        HDF5_FAIL(d, path, "look for /stats and /checkpoint");
+        return "";
+    }
+    for (size_t k = 0; k < n; k++) {
+        /* its group first: H5Lexists fails, not answers no, for a path through a missing one */
+        char group[64];
+        const char *slash = strrchr(names[k], '/');
+        const size_t len = (size_t)(slash - names[k]);
+        assert(slash && len < sizeof group);
+        memcpy(group, names[k], len);
+        group[len] = '\0';
+        htri_t has = len ? H5Lexists(file, group, H5P_DEFAULT) : 1;
+        if (has > 0)
+            has = H5Lexists(file, names[k], H5P_DEFAULT);
+        if (has < 0) {
+            HDF5_FAIL(d, path, "look for %s", names[k]);
+            return "";
+        }
+        if (has == 0)
+            return names[k];
+    }
+    return NULL;
+}
+
 void nbep_resume_apply(nbep_resume *r, nbep_state *s)
 {
     assert(r->n == s->n);
@@ -545,6 +589,17 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     nbep__output_close_id(&fapl);
     if (o->file < 0) { /* cut short, or another run's: bad usage, as a file of another kind */
         st = NBEP_EUSAGE;
+        goto fail;
+    }
+    const char *gap = missing_part(o->file, path, d);
+    if (gap && !*gap) /* the look failed */
+        goto fail;
+    if (gap) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s has no %s, which every run writes there: the file is damaged, "
+                      "or no run wrote it (run without --resume to start afresh)",
+                      path, gap);
+        st = NBEP_EDECK;
         goto fail;
     }
     int same = same_run(o->file, path, sc, d);
