@@ -13,7 +13,8 @@ SAN ?=
 VERSION := 0.1.0
 PKGS := gsl libconfig hdf5 jansson
 PKG_CFLAGS := $(shell pkg-config --cflags $(PKGS))
-PKG_LIBS := $(shell pkg-config --libs $(PKGS))
+# HDF5's high-level library (H5LT) comes with it but has no pkg-config entry of its own
+PKG_LIBS := $(shell pkg-config --libs $(PKGS)) -lhdf5_hl
 
 BUILD := build
 CSTD := -std=c11 -D_POSIX_C_SOURCE=200809L

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <hdf5.h>
+#include <hdf5_hl.h>
 
 #include "build_info.h"
 #include "nbep/feq.h"
@@ -118,12 +119,13 @@ static bool checkpoint_fault(const nbep_resume *r, size_t np, size_t *at, const 
     return false;
 }
 
-/* The first dataset that every run file holds, or holds in a group that the file has (/stats,
- * /checkpoint), and this file lacks: NULL when none is missing, "" after a failure to look (a
- * message added). Such a file is damaged or edited by hand: a resume refuses it at once, exit 2
- * as the README's exit table has it for a file that is not what it should be (until
- * 2026-12-04 the read that met the gap failed it as an I/O fault, exit 1, a review). */
-static const char *missing_part(hid_t file, const char *path, nbep_diag *d)
+/* NBEP_EDECK, one line naming it, for the first dataset that every run file holds (or holds
+ * in a group the file has: /stats, /checkpoint) and this file lacks; NBEP_EIO where the look
+ * fails; else NBEP_OK. Such a file is damaged or edited by hand: a resume refuses it at once,
+ * exit 2 as the README's exit table has it for a file that is not what it should be (until
+ * 2026-12-04 the read that met the gap failed it as an I/O fault, exit 1, a review).
+ * H5LTpath_valid checks each group along the path, where H5Lexists fails on a missing one. */
+static nbep_status missing_part(hid_t file, const char *path, nbep_diag *d)
 {
     static const char *const always[] = {"/spheres/radius", "/planes/offset", "/frames/step",
                                          "/frames/time"};
@@ -139,27 +141,21 @@ static const char *missing_part(hid_t file, const char *path, nbep_diag *d)
         names[n++] = nbep__ck_columns[k].name;
     if (stats < 0 || ck < 0) {
         HDF5_FAIL(d, path, "look for /stats and /checkpoint");
-        return "";
+        return NBEP_EIO;
     }
     for (size_t k = 0; k < n; k++) {
-        /* its group first: H5Lexists fails, not answers no, for a path through a missing one */
-        char group[64];
-        const char *slash = strrchr(names[k], '/');
-        const size_t len = (size_t)(slash - names[k]);
-        assert(slash && len < sizeof group);
-        memcpy(group, names[k], len);
-        group[len] = '\0';
-        htri_t has = len ? H5Lexists(file, group, H5P_DEFAULT) : 1;
-        if (has > 0)
-            has = H5Lexists(file, names[k], H5P_DEFAULT);
+        const htri_t has = H5LTpath_valid(file, names[k], 1);
         if (has < 0) {
             HDF5_FAIL(d, path, "look for %s", names[k]);
-            return "";
+            return NBEP_EIO;
         }
         if (has == 0)
-            return names[k];
+            NBEP_FAIL(d, NBEP_EDECK,
+                      "nbep: %s has no %s, which every run writes there: the file is damaged, "
+                      "or no run wrote it (run without --resume to start afresh)",
+                      path, names[k]);
     }
-    return NULL;
+    return NBEP_OK;
 }
 
 void nbep_resume_apply(nbep_resume *r, nbep_state *s)
@@ -591,15 +587,9 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
         st = NBEP_EUSAGE;
         goto fail;
     }
-    const char *gap = missing_part(o->file, path, d);
-    if (gap && !*gap) /* the look failed */
-        goto fail;
-    if (gap) {
-        nbep_diag_add(d, __FILE__, __LINE__,
-                      "nbep: %s has no %s, which every run writes there: the file is damaged, "
-                      "or no run wrote it (run without --resume to start afresh)",
-                      path, gap);
-        st = NBEP_EDECK;
+    const nbep_status part = missing_part(o->file, path, d);
+    if (part != NBEP_OK) {
+        st = part;
         goto fail;
     }
     int same = same_run(o->file, path, sc, d);
