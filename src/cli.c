@@ -171,18 +171,30 @@ static nbep_status take_operand(nbep_cli *cli, const char *a, nbep_diag *d)
     return NBEP_OK;
 }
 
+/* Every option, once: the short and long names, and for those that set a deck value the path
+ * they override (NULL: none; quote: the value is a string). is_option, the parse and the
+ * "did you mean" of an unknown option all read it. */
+static const struct cli_option {
+    const char *shrt, *lng, *path;
+    bool quote;
+} OPTIONS[] = {
+    {"-o", "--output", "output.file", true},   {"-a", "--algorithm", "run.algorithm", true},
+    {"-t", "--threads", "run.threads", false}, {"-n", "--steps", "run.steps", false},
+    {NULL, "--dt", "run.dt", false},           {NULL, "--summary", NULL, false},
+    {NULL, "--resume", NULL, false},           {NULL, "--set", NULL, false},
+    {"-q", "--quiet", NULL, false},            {"-h", "--help", NULL, false},
+};
+#define N_OPTIONS (sizeof OPTIONS / sizeof OPTIONS[0])
+
 /* Whether a is one of the options (as typed apart, or --name=value): the value an option
  * takes from the next argument is never one. `-n -o x.h5` took -o as the count and was said
  * as "unexpected argument 'x.h5'" (until 2026-12-04, a review). */
 static bool is_option(const char *a)
 {
-    static const char *const names[] = {"-o",    "--output",  "-a",    "--algorithm",
-                                        "-t",    "--threads", "-n",    "--steps",
-                                        "--dt",  "--summary", "--resume", "--set",
-                                        "-q",    "--quiet",   "-h",    "--help"};
-    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
-        const size_t n = strlen(names[i]);
-        if (strncmp(a, names[i], n) == 0 && (a[n] == '\0' || (names[i][1] == '-' && a[n] == '=')))
+    for (size_t i = 0; i < N_OPTIONS; i++) {
+        const size_t n = strlen(OPTIONS[i].lng);
+        if ((OPTIONS[i].shrt && strcmp(a, OPTIONS[i].shrt) == 0) ||
+            (strncmp(a, OPTIONS[i].lng, n) == 0 && (a[n] == '\0' || a[n] == '=')))
             return true;
     }
     return false;
@@ -220,15 +232,6 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
     if (cli->cmd == NBEP_CMD_HELP || cli->cmd == NBEP_CMD_VERSION ||
         cli->cmd == NBEP_CMD_HELP_DECK)
         return st;
-    /* Options that take a value, and the deck path each overrides (NULL: not a deck path). */
-    static const struct {
-        const char *shrt, *lng, *path;
-        bool quote;
-    } opts[] = {
-        {"-o", "--output", "output.file", true},  {"-a", "--algorithm", "run.algorithm", true},
-        {"-t", "--threads", "run.threads", false}, {"-n", "--steps", "run.steps", false},
-        {NULL, "--dt", "run.dt", false},
-    };
     bool operands = false; /* after `--`: every argument is the deck (run file), as getopt
                             * takes it (a deck named -x.deck: nbep run -- -x.deck) */
     for (int k = 2; k < argc; k++) {
@@ -255,9 +258,10 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
         const char *name = a, *value = NULL;
         char longname[32];
         /* -n5, -t2, -ofile.h5: a short option with its value attached (getopt's way) */
-        for (size_t i = 0; i < sizeof opts / sizeof opts[0] && !value; i++)
-            if (opts[i].shrt && strncmp(a, opts[i].shrt, 2) == 0 && a[2] != '\0') {
-                name = opts[i].shrt;
+        for (size_t i = 0; i < N_OPTIONS && !value; i++)
+            if (OPTIONS[i].path && OPTIONS[i].shrt && strncmp(a, OPTIONS[i].shrt, 2) == 0 &&
+                a[2] != '\0') {
+                name = OPTIONS[i].shrt;
                 value = a + 2;
             }
         /* --name=value form */
@@ -269,14 +273,14 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
             value = eq + 1;
         }
         bool known = false;
-        for (size_t i = 0; i < sizeof opts / sizeof opts[0] && !known; i++) {
-            if ((opts[i].shrt && strcmp(name, opts[i].shrt) == 0) ||
-                strcmp(name, opts[i].lng) == 0) {
+        for (size_t i = 0; i < N_OPTIONS && !known; i++) {
+            if (OPTIONS[i].path && ((OPTIONS[i].shrt && strcmp(name, OPTIONS[i].shrt) == 0) ||
+                                    strcmp(name, OPTIONS[i].lng) == 0)) {
                 known = true;
                 const bool apart = !value;
                 if (!value && !(value = value_after(argc, argv, &k, name, d)))
                     return NBEP_EUSAGE;
-                st = add_override(cli, opts[i].path, value, opts[i].quote, a, apart, d);
+                st = add_override(cli, OPTIONS[i].path, value, OPTIONS[i].quote, a, apart, d);
                 if (st != NBEP_OK)
                     return st;
             }
@@ -308,16 +312,13 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
         if (a[0] == '-' && a[1] != '\0') {
             /* the nearest long option, for a slip of a letter or two (--stpes: a new user's,
              * 2026-12-01), as the deck's keys get */
-            static const char *const longs[] = {"--quiet",  "--help",      "--output", "--algorithm",
-                                                "--threads", "--steps",    "--dt",     "--summary",
-                                                "--resume",  "--set"};
             const char *near = NULL;
             size_t best = 3; /* at most 2 edits, and fewer than the name's own length */
-            for (size_t i = 0; i < sizeof longs / sizeof longs[0]; i++) {
-                const size_t dist = nbep__scene_edit_distance(name, longs[i]);
+            for (size_t i = 0; i < N_OPTIONS; i++) {
+                const size_t dist = nbep__scene_edit_distance(name, OPTIONS[i].lng);
                 if (dist < best && dist < strlen(name) - 2) {
                     best = dist;
-                    near = longs[i];
+                    near = OPTIONS[i].lng;
                 }
             }
             if (near)

@@ -377,15 +377,15 @@ static bool is_hdf5_file(const char *path)
     return hdf5;
 }
 
-/* What stands at output's sidecar path (nbep_xdmf_path) when it is not a regular file
- * holding XDMF (nbep_xdmf_run_of: an earlier run's sidecar, which a run may replace), in
- * words; NULL when nothing stands there or a sidecar does. */
-static const char *sidecar_misfit(const char *output)
+/* What stands at a sidecar's path xmf when it is not a regular file holding XDMF
+ * (nbep_xdmf_run_of: an earlier run's sidecar, which a run may replace), in words; NULL when
+ * nothing stands there or a sidecar does. */
+static const char *sidecar_misfit(const char *xmf)
 {
-    char *xmf = nbep_xdmf_path(output), name[8];
+    char name[8];
     struct stat sb;
     const char *what = NULL;
-    if (xmf && stat(xmf, &sb) == 0) {
+    if (stat(xmf, &sb) == 0) {
         if (S_ISDIR(sb.st_mode))
             what = "a folder";
         else if (!S_ISREG(sb.st_mode))
@@ -393,8 +393,47 @@ static const char *sidecar_misfit(const char *output)
         else if (!nbep_xdmf_run_of(xmf, name, sizeof name))
             what = "a file that is not XDMF (one of yours?)";
     }
-    free(xmf);
     return what;
+}
+
+/* The place of output's XDMF sidecar, which a run writes by rename: not the deck (it replaced
+ * the deck, until 2026-12-01); not the sidecar of another run beside it (`-o x` and `-o x.h5`
+ * have one sidecar, x.xmf: the second run replaced the first's, until 2026-12-02); and holding
+ * nothing, or an earlier run's sidecar, which the run replaces (or, writing no positions,
+ * removes): a user's file there was replaced or removed without a word, and a folder there
+ * failed the run after its set-up and first frame (until 2026-12-04, a review). NBEP_EUSAGE
+ * with one line otherwise. */
+static nbep_status sidecar_place(const char *deck, const char *output, nbep_diag *d)
+{
+    char *xmf = nbep_xdmf_path(output), *owner = NULL;
+    const char *not_side = NULL;
+    nbep_status st = NBEP_EUSAGE;
+    if (!xmf) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: out of memory");
+        st = NBEP_ENOMEM;
+    } else if (deck && nbep_output_same_file(xmf, deck))
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: the output file %s's XDMF sidecar is the deck %s itself; choose "
+                      "another output",
+                      output, deck);
+    else if ((owner = nbep_xdmf_other_run(output)))
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: the output file %s's XDMF sidecar would replace that of the run %s "
+                      "beside it; choose another output",
+                      output, owner);
+    else if ((not_side = sidecar_misfit(xmf)))
+        /* worded as the output's other faults, which nbep_run_blame_deck_output puts at the
+         * deck's output.file line */
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s: cannot create the output file: its XDMF sidecar's place %s "
+                      "holds %s, which the run would replace; move it away or choose another "
+                      "output",
+                      output, xmf, not_side);
+    else
+        st = NBEP_OK;
+    free(owner);
+    free(xmf);
+    return st;
 }
 
 nbep_status nbep_run_check_paths(const char *deck, const char *output, const char *summary,
@@ -409,44 +448,9 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: cannot write the summary to %s: %s (its .partial, "
                   "written first, is longer than the folder allows)", summary,
                   strerror(ENAMETOOLONG));
-    /* the sidecar is written beside the run's file by rename: at the deck's path it replaced
-     * the deck (until 2026-12-01) */
-    char *sidecar = output && deck ? nbep_xdmf_path(output) : NULL;
-    const bool side_deck = sidecar && nbep_output_same_file(sidecar, deck);
-    free(sidecar);
-    if (side_deck)
-        NBEP_FAIL(d, NBEP_EUSAGE,
-                  "nbep: the output file %s's XDMF sidecar is the deck %s itself; choose "
-                  "another output",
-                  output, deck);
-    /* `-o x` and `-o x.h5` have one sidecar, x.xmf: the second run replaced the first's (until
-     * 2026-12-02) */
-    char *owner = output ? nbep_xdmf_other_run(output) : NULL;
-    if (owner) {
-        nbep_diag_add(d, __FILE__, __LINE__,
-                      "nbep: the output file %s's XDMF sidecar would replace that of the run %s "
-                      "beside it; choose another output",
-                      output, owner);
-        free(owner);
-        return NBEP_EUSAGE;
-    }
-    /* a run replaces (or, writing no positions, removes) the sidecar of an earlier run at
-     * RUN.xmf: what stands there must be one. A user's file there was replaced or removed
-     * without a word, and a folder there failed the run after its set-up and first frame
-     * (until 2026-12-04, a review) */
-    const char *not_side = output ? sidecar_misfit(output) : NULL;
-    if (not_side) {
-        char *xmf = nbep_xdmf_path(output);
-        /* worded as the output's other faults, which nbep_run_blame_deck_output puts at
-         * the deck's output.file line */
-        nbep_diag_add(d, __FILE__, __LINE__,
-                      "nbep: %s: cannot create the output file: its XDMF sidecar's place %s "
-                      "holds %s, which the run would replace; move it away or choose another "
-                      "output",
-                      output, xmf ? xmf : "RUN.xmf", not_side);
-        free(xmf);
-        return NBEP_EUSAGE;
-    }
+    nbep_status st = output ? sidecar_place(deck, output, d) : NBEP_OK;
+    if (st != NBEP_OK)
+        return st;
     /* -o DECK replaced the deck with the run's file, --summary DECK with the JSON; --summary
      * RUN.h5 emptied the run file (its fopen comes first) and, a resume then failing,
      * removed it */
