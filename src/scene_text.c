@@ -5,6 +5,7 @@
 
 #include <ctype.h>
 #include <inttypes.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -229,6 +230,21 @@ bool nbep__scene_unclosed(const char *text, size_t *line, char *opener)
     return true;
 }
 
+/* One line for a number the rewrite finds that libconfig would misread: at the deck's line,
+ * or at the override `label` */
+static void bad_number(nbep__scene_ctx *c, const char *label, size_t line, bool neg,
+                       const char *digits, size_t n_digits, const char *kind, const char *why)
+{
+    if (!label)
+        nbep_diag_add_ranked(c->d, nbep__scene_rank(c, NULL, line), __FILE__, __LINE__,
+                             "%s:%zu: %s %s%.*s %s", c->deck, line, kind, neg ? "-" : "",
+                             (int)n_digits, digits, why);
+    else
+        nbep_diag_add_ranked(c->d, nbep__scene_rank(c, label, 0), __FILE__, __LINE__,
+                             "%s: %s %s%.*s %s", label, kind, neg ? "-" : "", (int)n_digits,
+                             digits, why);
+}
+
 char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label, size_t *n_bad,
                         size_t *n_unread)
 {
@@ -328,6 +344,21 @@ char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label,
                 }
             }
             if (is_float) {
+                /* libconfig reads a float beyond a double's range as 0 (or as inf), and a run
+                 * said `run.dt must be > 0 (got 0)` of `dt = 1e-400;` (until 2026-12-04) */
+                bool nonzero = false;
+                for (size_t k = start; k < i && text[k] != 'e' && text[k] != 'E'; k++)
+                    nonzero = nonzero || (text[k] >= '1' && text[k] <= '9');
+                const double x = strtod(text + start, NULL);
+                if ((nonzero && x == 0.0) || isinf(x)) {
+                    (*n_bad)++;
+                    if (n_unread) /* not read on: its setting's check would say it again */
+                        (*n_unread)++;
+                    bad_number(c, label, line, neg, text + start, i - start, "number",
+                               x == 0.0 ? "is beyond the range of a double (it would read as 0)"
+                                        : "is beyond the range of a double (it would read as "
+                                          "inf)");
+                }
                 array_float = array_float || in_array;
                 continue;
             }
@@ -339,16 +370,8 @@ char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label,
             const uint64_t max32 = neg ? (uint64_t)INT32_MAX + 1 : (uint64_t)INT32_MAX;
             if (overflow || v > max64) {
                 (*n_bad)++;
-                if (!label)
-                    nbep_diag_add_ranked(c->d, nbep__scene_rank(c, NULL, line), __FILE__,
-                                         __LINE__, "%s:%zu: integer %s%.*s does not fit in 64 "
-                                         "bits", c->deck, line, neg ? "-" : "",
-                                         (int)(end - start), text + start);
-                else
-                    nbep_diag_add_ranked(c->d, nbep__scene_rank(c, label, 0), __FILE__,
-                                         __LINE__, "%s: integer %s%.*s does not fit in 64 bits",
-                                         label, neg ? "-" : "", (int)(end - start),
-                                         text + start);
+                bad_number(c, label, line, neg, text + start, end - start,
+                           "integer", "does not fit in 64 bits");
                 /* Then read as 64-bit, where libconfig saturates it: no second message. */
             }
             widen_int t = {end, overflow || v > max32, hex, has_l};

@@ -506,12 +506,19 @@ static void test_an_array_is_no_list_and_a_studys_values_are_not_empty(void **st
     ASSERT_DIAG(&f->d, want[0], want[1]);
 }
 
-static void test_numbers_beyond_double_range_are_not_finite(void **state)
+/* Said as written, once each: read on, they would be said again as `must be finite (got inf)`
+ * or `must be > 0 (got 0)`, where the user typed neither */
+static void test_numbers_beyond_double_range_are_said_as_written(void **state)
 {
     fixture *f = *state;
     LOAD_FAILS(f, NBEP_EDECK, DATA "scene_nonfinite.deck");
-    ASSERT_DIAG(&f->d, DATA "scene_nonfinite.deck:2: run.dt must be finite (got inf)",
-                DATA "scene_nonfinite.deck:3: physics.gravity must be finite (got [0, -inf, 0])");
+    ASSERT_DIAG(&f->d,
+                DATA "scene_nonfinite.deck:3: number 1e999 is beyond the range of a double "
+                     "(it would read as inf)",
+                DATA "scene_nonfinite.deck:4: number -1e999 is beyond the range of a double "
+                     "(it would read as inf)",
+                DATA "scene_nonfinite.deck:5: number 2.5e-400 is beyond the range of a double "
+                     "(it would read as 0)");
 }
 
 static void test_values_out_of_range_are_all_reported_in_one_pass(void **state)
@@ -950,7 +957,8 @@ static void test_command_line_errors_come_first_in_order_and_unplaced_ones_last(
                                   "output: { every = 0; };\n",
                                   path, sizeof path);
     LOAD_FAILS(f, NBEP_EDECK, deck, "run.threads=-1", "spheres..count=1",
-               "physics.gravty=[0,0,-1]", "run.seed=99999999999999999999");
+               "physics.gravty=[0,0,-1]", "run.seed=99999999999999999999",
+               "run.dt=[1.0, -7e-999]");
     snprintf(want[0], sizeof want[0], "%s:1: run.dt must be > 0 (got 0)", deck);
     snprintf(want[1], sizeof want[1], "%s:2: unknown setting sphere (did you mean spheres?)",
              deck);
@@ -964,6 +972,8 @@ static void test_command_line_errors_come_first_in_order_and_unplaced_ones_last(
                 "physics.gravity?)",
                 "--set run.seed=99999999999999999999: integer 99999999999999999999 does not fit "
                 "in 64 bits",
+                "--set run.dt=[1.0, -7e-999]: number -7e-999 is beyond the range of a double "
+                "(it would read as 0)",
                 want[0], want[1], want[2], none);
 }
 
@@ -2905,7 +2915,7 @@ int main(void)
         T(test_unknown_settings_are_named_with_the_closest_known_one),
         T(test_wrong_types_are_errors_but_integers_pass_for_numbers),
         T(test_an_array_is_no_list_and_a_studys_values_are_not_empty),
-        T(test_numbers_beyond_double_range_are_not_finite),
+        T(test_numbers_beyond_double_range_are_said_as_written),
         T(test_values_out_of_range_are_all_reported_in_one_pass),
         T(test_threads_take_up_to_their_limit_and_no_more),
         T(test_a_regions_missing_corner_is_the_boxs),
