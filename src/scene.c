@@ -630,7 +630,9 @@ static void parse_planes(load *L, const config_setting_t *root, plane **out, siz
                 normal.y, normal.z);
             continue;
         }
-        const nbep_vec3 unit = nbep_vec3_scale(u, 1.0 / nbep_vec3_norm(u));
+        /* + 0.0 turns a typed -0.0 into 0 (x + 0 is x otherwise), as the box's walls have */
+        const nbep_vec3 unit =
+            nbep_vec3_add(nbep_vec3_scale(u, 1.0 / nbep_vec3_norm(u)), nbep_vec3_make(0, 0, 0));
         const double offset = nbep_vec3_dot(unit, point);
         /* a point near the doubles' end can make n . point overflow; a deck without spheres
          * has no radius for check_span to hold it to, and inf reached /planes/offset (until
@@ -1219,7 +1221,8 @@ static void fill_planes(nbep_state *s, const nbep_scene *sc, const plane *p, siz
             u[axis] = 1.0;
             s->plane_normal[k] = nbep_vec3_make(u[0], u[1], u[2]);
             s->plane_offset[k++] = lo[axis];
-            s->plane_normal[k] = nbep_vec3_make(-u[0], -u[1], -u[2]);
+            u[axis] = -1.0; /* not -u, whose zeros are -0: /planes/normal held [-0, -1, -0] */
+            s->plane_normal[k] = nbep_vec3_make(u[0], u[1], u[2]);
             s->plane_offset[k++] = -hi[axis];
         }
     }

@@ -324,7 +324,17 @@ static void test_box_gives_six_inward_planes_first_in_axis_order(void **state)
     for (int p = 0; p < 6; p++) {
         assert_vec3(s->plane_normal[p], n[p][0], n[p][1], n[p][2], 0.0);
         assert_close(s->plane_offset[p], offset[p], 0.0, 0.0);
+        /* 0, not -0, which /planes/normal showed as [-0, -1, -0] (until 2026-12-04) */
+        assert_false(signbit(s->plane_normal[p].x) && s->plane_normal[p].x == 0.0);
+        assert_false(signbit(s->plane_normal[p].y) && s->plane_normal[p].y == 0.0);
+        assert_false(signbit(s->plane_normal[p].z) && s->plane_normal[p].z == 0.0);
     }
+    nbep_scene_fini(&f->sc);
+    /* a typed -0.0 too */
+    LOAD_OK(f, DATA "scene_good.deck", "planes.[0].normal=[-0.0, -0.0, -2.0]",
+            "planes.[0].point=[0.0, 0.0, 10.0]");
+    const nbep_vec3 typed = f->sc.state.plane_normal[6];
+    assert_true(typed.z == -1.0 && !signbit(typed.x) && !signbit(typed.y));
 }
 
 static void test_extra_plane_is_normalized_with_offset_n_dot_point(void **state)
