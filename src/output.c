@@ -123,13 +123,42 @@ bool nbep_output_sidecar_unnamed(const nbep_output *o)
     return o->xmf && !o->sidecar;
 }
 
-nbep_status nbep__output_xmf_write(nbep_output *o, nbep_diag *d)
+/* The sidecar's part of the room kept ahead (nbep__output_reserve): its rewrite listing one
+ * frame more than the file has, at any later frame or at the close */
+static int64_t sidecar_room(const nbep_output *o)
+{
+    if (!o->xmf || !o->sidecar)
+        return 0;
+    return (int64_t)nbep_xdmf_bytes_bound(o->path, o->n_spheres, (size_t)o->n_frames + 1,
+                                          o->frame_vel >= 0);
+}
+
+static int hold_room(nbep_output *o, const char *what, int64_t held_end, nbep_diag *d);
+
+nbep_status nbep__output_xmf_write(nbep_output *o, bool hold_again, nbep_diag *d)
 {
     o->xmf_last = nbep_now();
     if (!o->sidecar) /* its name is not UTF-8 text (nbep_run says so as the run begins) */
         return NBEP_OK;
-    return nbep_xdmf_write(o->path, o->n_spheres, (size_t)o->n_frames, o->xmf_step, o->xmf_time,
-                           o->frame_vel >= 0, d);
+    /* The room held past the file's end counts this rewrite: given back first, so that the
+     * rewrite finds it free. A full disk was met here, past the frame's room, as `cannot write
+     * the XDMF sidecar` (until 2026-12-04); it is met at the frame's reservation now, as `no
+     * room for frame N`, before anything of that frame is written. */
+    const int64_t held_end = o->room > 0 ? o->reserved_end : 0;
+    if (held_end > 0)
+        nbep_file_unreserve_fd(o->room_fd, held_end);
+    nbep_status st = nbep_xdmf_write(o->path, o->n_spheres, (size_t)o->n_frames, o->xmf_step,
+                                     o->xmf_time, o->frame_vel >= 0, d);
+    /* what was held for the steps to the next frame, held again: found free but for a race
+     * (the rewrite took at most the sidecar's part, and its old file went) */
+    if (st == NBEP_OK && hold_again && held_end > 0) {
+        char what[64];
+        snprintf(what, sizeof what, "the steps after frame %llu",
+                 (unsigned long long)o->n_frames - 1);
+        if (hold_room(o, what, held_end, d) < 0)
+            st = NBEP_EIO;
+    }
+    return st;
 }
 
 const struct nbep__ck_column nbep__ck_columns[N_CK_COLUMNS] = {
@@ -497,7 +526,10 @@ void nbep__output_room(nbep_output *o, const nbep_scene *sc)
         o->room_fd = *fd;
 }
 
-int nbep__output_reserve(nbep_output *o, const char *what, nbep_diag *d)
+/* Reserves the room past the file's end: o->room and the sidecar's next rewrite; or, where
+ * held_end > 0 (after a rewrite that gave the room back), what was held up to held_end less
+ * the rewrite's part */
+static int hold_room(nbep_output *o, const char *what, int64_t held_end, nbep_diag *d)
 {
     struct stat sb;
     if (o->room <= 0)
@@ -507,29 +539,40 @@ int nbep__output_reserve(nbep_output *o, const char *what, nbep_diag *d)
         return 0;
     }
     const int64_t end = (int64_t)sb.st_size;
+    const int64_t room = held_end > 0 ? held_end - end - sidecar_room(o)
+                                      : o->room + sidecar_room(o);
+    if (room <= 0)
+        return 0;
     /* a file-size limit is not met by a reservation (the size does not change): said as the
-     * write past it would (EFBIG), which by default ends the process with SIGXFSZ mid-write */
+     * write past it would (EFBIG), which by default ends the process with SIGXFSZ mid-write.
+     * The sidecar is another file: its part of the room counts against the disk only */
     struct rlimit limit;
     int err = getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY &&
-                      (uint64_t)(end + o->room) > (uint64_t)limit.rlim_cur
+                      (uint64_t)(end + (room < o->room ? room : o->room)) >
+                          (uint64_t)limit.rlim_cur
                   ? EFBIG
-                  : nbep_file_reserve(o->room_fd, end, o->room);
+                  : nbep_file_reserve(o->room_fd, end, room);
     if (err == 0) {
-        if (end + o->room > o->reserved_end)
-            o->reserved_end = end + o->room;
+        if (end + room > o->reserved_end)
+            o->reserved_end = end + room;
         return 0;
     }
     if (err != ENOSPC && err != EDQUOT && err != EFBIG) { /* cannot reserve here: as before */
         o->room = 0;
         return 0;
     }
-    char room[NBEP_BYTES_TEXT_MAX];
+    char room_text[NBEP_BYTES_TEXT_MAX];
     nbep_diag_add(d, __FILE__, __LINE__,
                   "nbep: %s: no room for %s (%s kept free ahead of the file, for a frame to "
                   "be written whole): %s%s; the frames before it are kept",
-                  o->path, what, nbep_format_bytes((double)o->room, room), strerror(err),
+                  o->path, what, nbep_format_bytes((double)room, room_text), strerror(err),
                   err == EFBIG ? " (the file-size limit, ulimit -f)" : "");
     return -1;
+}
+
+int nbep__output_reserve(nbep_output *o, const char *what, nbep_diag *d)
+{
+    return hold_room(o, what, 0, d);
 }
 
 double nbep_output_sidecar_bytes(const nbep_scene *sc, const char *path)
@@ -1053,7 +1096,7 @@ nbep_status nbep_output_frame_events(nbep_output *o, int64_t step, double dt,
         o->xmf_step[f] = step;
         o->xmf_time[f] = t;
         if (nbep_xdmf_due((size_t)o->n_frames, nbep_now() - o->xmf_last))
-            st = nbep__output_xmf_write(o, d);
+            st = nbep__output_xmf_write(o, true, d);
     }
 done:
     nbep__output_close_id(&one_space);
@@ -1144,7 +1187,7 @@ nbep_status nbep_output_close(nbep_output **op, const nbep_summary *s, nbep_diag
     }
     /* Stats rows appended after the last frame get counted too. */
     int rc = nbep__output_commit(o, o->n_frames, d);
-    if (rc == 0 && o->xmf && o->n_frames > 0 && nbep__output_xmf_write(o, d) != NBEP_OK)
+    if (rc == 0 && o->xmf && o->n_frames > 0 && nbep__output_xmf_write(o, false, d) != NBEP_OK)
         rc = -1;
     if (s && rc == 0) {
         char *json = nbep_summary_to_json(s);

@@ -196,8 +196,10 @@ bool nbep__output_writes_sidecar(bool positions, const char *path);
 /* Removes the sidecar at o's path where o writes none: one an older run (or build) left there
  * would describe frames not in the file. As a new file is published and a resumed one begun. */
 void nbep__output_sidecar_stale(const nbep_output *o);
-/* Rewrites the sidecar (RUN.xmf) for o's frames so far; NBEP_EIO, NBEP_ENOMEM. */
-nbep_status nbep__output_xmf_write(nbep_output *o, nbep_diag *d);
+/* Rewrites the sidecar (RUN.xmf) for o's frames so far in the room kept ahead for it, given
+ * back first; hold_again: then keeps the room again for the steps that follow (not at the
+ * close), NBEP_EIO where there is none. NBEP_EIO, NBEP_ENOMEM. */
+nbep_status nbep__output_xmf_write(nbep_output *o, bool hold_again, nbep_diag *d);
 
 /* ---- HDF5 helpers (output_hdf5.c) ------------------------------------------------------- */
 

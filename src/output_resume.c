@@ -948,5 +948,5 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
         return NBEP_EIO;
     nbep__output_sidecar_stale(o);
     /* frames dropped: the sidecar listed them; it lists what the file holds */
-    return o->resume.dropped ? nbep__output_xmf_write(o, d) : NBEP_OK;
+    return o->resume.dropped ? nbep__output_xmf_write(o, true, d) : NBEP_OK;
 }

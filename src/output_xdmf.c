@@ -299,6 +299,24 @@ double nbep_xdmf_bytes(const char *h5_path, size_t n_spheres, uint64_t steps, ui
     return o.bytes + (sampled ? frames.bytes / (double)sampled * (double)n_frames : 0.0);
 }
 
+double nbep_xdmf_bytes_bound(const char *h5_path, size_t n_spheres, size_t n_frames,
+                             bool has_velocity)
+{
+    char *escaped = xml_base_name(h5_path), *note = note_name(h5_path);
+    const char *h5 = escaped ? escaped : base_name(h5_path); /* no memory: near enough */
+    xml_out o = {.f = NULL}, frame = {.f = NULL};
+    xml_head(&o, note ? note : h5, n_spheres, n_frames);
+    xml_tail(&o);
+    /* the longest a frame's text can be: an index of n_frames' digits, a step of 20 characters
+     * and a time of 24 (%.17g of a negative double with a three-digit exponent) */
+    const int64_t longest_step = INT64_MIN;
+    xml_frame(&frame, h5, n_spheres, n_frames, n_frames, &longest_step,
+              -2.2250738585072014e-308, has_velocity);
+    free(escaped);
+    free(note);
+    return o.bytes + frame.bytes * (double)n_frames;
+}
+
 /* Every frame while the sidecar is this short: the first frames are what users open first. */
 #define EVERY_FRAME_UP_TO 8
 

@@ -170,16 +170,21 @@ int nbep_file_reserve(int fd, int64_t from, int64_t len)
     return fallocate(fd, FALLOC_FL_KEEP_SIZE, (off_t)from, (off_t)len) == 0 ? 0 : errno;
 }
 
-void nbep_file_unreserve(const char *path, int64_t end)
+void nbep_file_unreserve_fd(int fd, int64_t end)
 {
-    int fd = open(path, O_WRONLY | O_CLOEXEC);
     struct stat sb;
-    if (fd < 0)
-        return;
     /* cut to its own size: the blocks past it go (a hole punched there frees nothing on
      * ext4, which punches within the size only) */
     if (fstat(fd, &sb) == 0 && S_ISREG(sb.st_mode) && end > (int64_t)sb.st_size)
         (void)ftruncate(fd, sb.st_size);
+}
+
+void nbep_file_unreserve(const char *path, int64_t end)
+{
+    int fd = open(path, O_WRONLY | O_CLOEXEC);
+    if (fd < 0)
+        return;
+    nbep_file_unreserve_fd(fd, end);
     close(fd);
 }
 

@@ -73,6 +73,28 @@ check "no summary table left half-made" "[ -z \"\$(ls '$mnt/s.sweep' | grep summ
 check "the last line says the failed runs' errors are above: $(tail -n 1 "$mnt/../diskfull-sweep.err")" \
     "tail -n 1 '$mnt/../diskfull-sweep.err' | grep -q '^nbep: sweep: 0 of [0-9]* runs complete, [0-9]* failed (run 0.*; errors above: no summary table could be written)\$'"
 rm -f "$mnt/filler" "$mnt/filler2"
+# Few spheres and many frames: the sidecar (about 1.4 kB a frame, rewritten whole) outgrows the
+# file. The room kept ahead counts its next rewrite, so the disk is met at a frame's
+# reservation, as above, not at a rewrite (until 2026-12-04 the run ended with `cannot write
+# the XDMF sidecar: No space left on device` at frame 512), and the close's rewrite lists every
+# frame the file kept. The disk's 2.75 MB lie where a room without the sidecar's part would pass
+# frame 1024's reservation (the file 0.85 MB, the sidecar 0.71 MB, the room 0.9 MB) and then
+# fail the rewrite that lists those 1024 frames (1.42 MB beside the old sidecar).
+umount "$mnt" && mount -t tmpfs -o size=2816k tmpfs "$mnt"
+bin/nbep run inputs/two-spheres.deck --quiet --set output.every=1 -n 5000 -o "$mnt/xs.h5" \
+    2>"$mnt/../diskfull-xmf.err"
+rc=$?
+check "a full disk met by a run of many small frames: exit 1 (got $rc), one line: $(cat "$mnt/../diskfull-xmf.err")" \
+    "[ $rc = 1 ] && [ \$(wc -l < '$mnt/../diskfull-xmf.err') = 1 ] &&
+     grep -q '^nbep: $mnt/xs.h5: no room for frame [0-9]* (step [0-9]*) (.*): No space left on device; the frames before it are kept\$' '$mnt/../diskfull-xmf.err'"
+"$PY" - "$mnt/xs.h5" "$mnt/xs.xmf" <<'PYEOF' && echo "ok   the sidecar lists every frame the file kept" || { echo "FAIL the sidecar lists every frame the file kept"; fail=1; }
+import sys, h5py, xml.etree.ElementTree as ET
+f = h5py.File(sys.argv[1], "r")
+n = int(f["frames"].attrs["count"])
+grids = ET.parse(sys.argv[2]).getroot().findall(".//Grid/Grid")
+assert n >= 256 and len(grids) == n, (n, len(grids))
+assert [g.get("Name") for g in grids] == ["step %d" % s for s in f["frames/step"][:n]]
+PYEOF
 # a read-only file system is the user's path, as one without permission: a run into it and a
 # sweep over a study on it (whose last tables it cannot remove) exit 2 with one line (until
 # 2026-12-01 both gave 1, a run-time failure)

@@ -105,6 +105,8 @@ int nbep_file_reserve(int fd, int64_t from, int64_t len);
  * `end`; the file cut to its own size, its bytes unchanged). Nothing where end is not past
  * it. */
 void nbep_file_unreserve(const char *path, int64_t end);
+/* The same for the file open on fd (writable). */
+void nbep_file_unreserve_fd(int fd, int64_t end);
 /* Lets the lock go: removes the file at remove_path first, when not NULL (the lock's name,
  * for a lock beside a file of the user's) and it is still the lock's own, empty file, and
  * closes fd. Nothing for fd < 0. */

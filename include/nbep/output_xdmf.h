@@ -58,6 +58,12 @@ NBEP_MUST_CHECK nbep_status nbep_xdmf_write(const char *h5_path, size_t n_sphere
 double nbep_xdmf_bytes(const char *h5_path, size_t n_spheres, uint64_t steps, uint64_t every,
                        double dt, bool has_velocity);
 
+/* At least the bytes of a sidecar beside h5_path listing n_frames frames of n_spheres, whatever
+ * their steps and times (every frame counted at the longest text a step and a time can take:
+ * a few dozen bytes a frame over). O(1): the room a writer keeps ahead for its next rewrite. */
+double nbep_xdmf_bytes_bound(const char *h5_path, size_t n_spheres, size_t n_frames,
+                             bool has_velocity);
+
 /* Seconds between rewrites of a growing sidecar once its frame count is past the first few:
  * a run killed at any moment has a sidecar at most this old. */
 #define NBEP_XDMF_REWRITE_SECONDS 30.0
