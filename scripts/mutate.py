@@ -2191,6 +2191,8 @@ MUTANTS = [
      "equivalent in practice: two frames' text (about 3 kB) fewer in the room, within the 256 kB "
      "of its slack for HDF5's metadata; the test that kills the room without the sidecar "
      "(io-room-without-sidecar) is the one that can tell"),
+    ("status-eperm-run-time", "src/status.c", "err == EACCES || err == EPERM ||",
+     "err == EACCES ||", ["test_status"], None),
     ("ui-cli-output-unquoted", "src/cli.c", "{\"-o\", \"--output\", \"output.file\", true}",
      "{\"-o\", \"--output\", \"output.file\", false}", ["tests/test_cli.sh"], None),
     ("ui-cli-info-takes-resume", "src/cli.c", "(cli->n_overrides || cli->summary || cli->resume))",

@@ -22,8 +22,10 @@ int nbep_status_exit_code(nbep_status s)
 nbep_status nbep_status_of_open(int err)
 {
     /* EROFS: a path on a read-only file system is as unwritable as one without permission
-     * (README promises exit 2 for either; until 2026-12-01 it gave 1, a user's find) */
-    return err == ENOENT || err == ENOTDIR || err == EISDIR || err == EACCES ||
+     * (README promises exit 2 for either; until 2026-12-01 it gave 1, a user's find); EPERM
+     * too, a place that allows no new file (a sweep's folder under /sys gave 1 until
+     * 2026-12-04, a review) */
+    return err == ENOENT || err == ENOTDIR || err == EISDIR || err == EACCES || err == EPERM ||
                    err == EROFS || err == ENAMETOOLONG || err == ELOOP
                ? NBEP_EUSAGE
                : NBEP_EIO;

@@ -129,11 +129,12 @@ static void test_sort_leaves_the_messages_before_first_alone(void **state)
 
 /* A path the command line names that cannot be opened: the user's (exit 2) where it names
  * nothing there, a directory, or a place that takes no writes (no permission, a read-only
- * file system: exit 1 until 2026-12-01); a full disk or a failing device is run time's. */
+ * file system: exit 1 until 2026-12-01; a place that allows no new file, EPERM: until
+ * 2026-12-04); a full disk or a failing device is run time's. */
 static void test_open_failures_are_the_users_or_run_times(void **state)
 {
     (void)state;
-    const int users[] = {ENOENT, ENOTDIR, EISDIR, EACCES, EROFS, ENAMETOOLONG, ELOOP};
+    const int users[] = {ENOENT, ENOTDIR, EISDIR, EACCES, EPERM, EROFS, ENAMETOOLONG, ELOOP};
     for (size_t k = 0; k < sizeof users / sizeof *users; k++)
         assert_int_equal(nbep_status_exit_code(nbep_status_of_open(users[k])), 2);
     const int run_time[] = {ENOSPC, EIO, EDQUOT, ENOMEM};
