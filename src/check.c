@@ -155,7 +155,7 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
                         ? "something accelerates; only free flight goes by the packing"
                     : isnan(f->packing) ? "no box to take the packing from; in a box"
                                         : "by the packing",
-                    NBEP_NBLIST_SKIN_DILUTE, NBEP_NBLIST_PHI_DILUTE, NBEP_NBLIST_SKIN,
+                    NBEP_NBLIST_SKIN_DILUTE, NBEP_NBLIST_PHI_DILUTE, NBEP_NBLIST_SKIN_DENSE,
                     NBEP_NBLIST_PHI_DENSE);
     }
     /* a mixture twice as wide as its smallest spheres or wider: its cells, sized by the

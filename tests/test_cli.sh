@@ -71,8 +71,8 @@ check "nbep check prints the lists' skin: without a box the thin one, and why" \
     "grep -Eq '^lists: +skin 0.4 of the largest diameter \(no box to take the packing from; in a box: ' $tmp/stdout"
 run_nbep check inputs/hard-sphere-fluid.deck \
     --set 'box.max=[32.2398390803, 32.2398390803, 32.2398390803]'
-check "nbep check prints the lists' skin: a fluid at packing 0.5 the thin one" \
-    "grep -Eq '^packing: +0.5 of' $tmp/stdout && grep -Eq '^lists: +skin 0.4 of' $tmp/stdout"
+check "nbep check prints the lists' skin: a fluid at packing 0.5 the dense fluid's one" \
+    "grep -Eq '^packing: +0.5 of' $tmp/stdout && grep -Eq '^lists: +skin 0.5 of the largest diameter \(by the packing: 0.6 at packing 0.35 or below, 0.5 from 0.45\)' $tmp/stdout"
 run_nbep check inputs/hard-sphere-fluid.deck --set 'box.max=[4,4,4]' --set 'spheres.[0].count=8'
 check "nbep check prints the lists' skin the run takes: a small periodic box cuts it down" \
     "grep -Eq '^lists: +skin 0.333 of the largest diameter \(0.6 by the packing, cut down' $tmp/stdout"

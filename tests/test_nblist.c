@@ -253,14 +253,17 @@ static void assert_falls_steadily(double phi0, double from, double phi1, double 
 static void test_the_skin_follows_the_packing_fraction_of_a_free_scene(void **state)
 {
     (void)state;
-    const double dense = NBEP_NBLIST_SKIN, dilute = NBEP_NBLIST_SKIN_DILUTE;
-    assert_true(dilute > dense);
+    const double dense = NBEP_NBLIST_SKIN_DENSE, dilute = NBEP_NBLIST_SKIN_DILUTE;
+    assert_true(dilute > dense && dense > NBEP_NBLIST_SKIN);
     assert_true(nbep_nblist_skin_for(0.50, true, true) == dense);
+    assert_true(nbep_nblist_skin_for(0.64, true, false) == dense); /* a cooling gas too */
     assert_true(nbep_nblist_skin_for(NBEP_NBLIST_PHI_DENSE, true, true) == dense);
     assert_true(nbep_nblist_skin_for(NBEP_NBLIST_PHI_DILUTE, true, true) == dilute);
     assert_true(nbep_nblist_skin_for(0.30, true, true) == dilute);
-    assert_true(nbep_nblist_skin_for(NAN, true, true) == dense);
-    assert_true(nbep_nblist_skin_for(0.30, false, true) == dense);
+    /* what accelerates, or has no box to take a packing from: NBEP_NBLIST_SKIN, the pile's */
+    assert_true(nbep_nblist_skin_for(NAN, true, true) == NBEP_NBLIST_SKIN);
+    assert_true(nbep_nblist_skin_for(0.30, false, true) == NBEP_NBLIST_SKIN);
+    assert_true(nbep_nblist_skin_for(0.50, false, true) == NBEP_NBLIST_SKIN);
     const double mid = 0.5 * (NBEP_NBLIST_PHI_DILUTE + NBEP_NBLIST_PHI_DENSE);
     assert_close(nbep_nblist_skin_for(mid, true, true), 0.5 * (dense + dilute), 1e-12, 0.0);
     assert_falls_steadily(NBEP_NBLIST_PHI_DILUTE, dilute, NBEP_NBLIST_PHI_DENSE, dense, true);
