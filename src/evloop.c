@@ -31,9 +31,20 @@
 #define NBEP_EVLOOP_OOM_HOOK(i, t) false
 #endif
 
+/* The room a walk's workspace starts with, in lists' members, and a look at a walk as it has
+ * made room for i's old list of m members, from cap0: tests/test_evloop_lists.c compiles its
+ * own copy that starts with room for 2, so that its walks grow the room by more than one
+ * doubling, and checks each time that the list fits; a build of nbep has nothing here. */
+#ifndef NBEP_EVLOOP_WS_CAP0
+#define NBEP_EVLOOP_WS_CAP0 64
+#endif
+#ifndef NBEP_EVLOOP_WALK_HOOK
+#define NBEP_EVLOOP_WALK_HOOK(w, m, cap0) ((void)0)
+#endif
+
 static bool ws_init(evl_ws *w)
 {
-    w->cap = 64;
+    w->cap = NBEP_EVLOOP_WS_CAP0;
     w->near = malloc(w->cap * sizeof *w->near);
     w->was = malloc(w->cap * sizeof *w->was);
     w->kept = malloc(w->cap * sizeof *w->kept);
@@ -398,11 +409,14 @@ static void walk(const nbep_evloop *e, evl_ws *w, uint32_t i, nbep_vec3 c)
     size_t m;
     const uint32_t *old = nbep_nblist_of(&e->nl, i, &m);
     w->oom = false;
+    const size_t cap0 = w->cap;
     while (m > w->cap)
         if (!grow_ws(w)) {
             w->oom = true;
             return;
         }
+    NBEP_EVLOOP_WALK_HOOK(w, m, cap0);
+    (void)cap0;
     for (size_t k = 0; k < m; k++) {
         w->was[k] = old[k];
         w->kept[k] = 0;

@@ -23,6 +23,14 @@ static void audit_handled(const struct nbep_evloop *e, const struct evl_ws *w);
 /* the walk passes what it finds on in batches of this many (64 in the program): a batch that
  * fills is passed on mid-walk, which 3 makes happen in most walks here */
 #define NEAR_BATCH 3
+/* a walk's room starts at 2 members, so that a list of 5 or more needs two doublings or more
+ * at once (a walk that grew it once read a list of 260 past its room: a mutant) */
+#define NBEP_EVLOOP_WS_CAP0 2
+#include <stdint.h>
+static uint64_t walks_short;  /* walks whose room did not hold the old list */
+static uint64_t walks_grown2; /* walks that had to double their room twice or more */
+#define NBEP_EVLOOP_WALK_HOOK(w, m, cap0) \
+    (walks_short += (m) > (w)->cap, walks_grown2 += (m) > 2 * (cap0))
 #include "../src/evloop.c"
 #include "../src/evloop_team.c"
 
@@ -117,6 +125,7 @@ static void audit_handled(const nbep_evloop *e, const evl_ws *w)
 static void run_checked(nbep_scene *sc)
 {
     memset(&seen, 0, sizeof seen);
+    walks_short = walks_grown2 = 0;
     mark = calloc(sc->state.n, 1);
     radius = malloc(sc->state.n * sizeof *radius);
     assert_non_null(mark);
@@ -131,6 +140,8 @@ static void run_checked(nbep_scene *sc)
     free(radius);
     mark = NULL;
     radius = NULL;
+    assert_int_equal(walks_short, 0);
+    assert_true(walks_grown2 > 0);
     assert_true(s.sphere_collisions > s.spheres);
     assert_int_equal(seen.missing, 0);
     assert_int_equal(seen.extra, 0);
