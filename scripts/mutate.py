@@ -2636,6 +2636,22 @@ MUTANTS = [
     ("contacts-row-overwritten-named", "src/output_contacts.c",
      "    if (tag_slot(o, slot, -1, d) < 0)\n        return -1;", "    if (0)\n        return -1;",
      ["tests/test_resume.sh"], None),
+    # a frame's records written a batch (1024 spheres) at a time: where each batch lands, which
+    # spheres it holds, and the last, short one (test_output: 2085 spheres, read back whole)
+    ("contacts-batch-at-row-start", "src/output_contacts.c",
+     "hsize_t start[2] = {slot, lo}, count[2] = {1, hi - lo};",
+     "hsize_t start[2] = {slot, 0}, count[2] = {1, hi - lo};", ["test_output"], None),
+    ("contacts-batch-first-spheres", "src/output_contacts.c",
+     "ev->contacts(ev->contacts_ctx, lo, hi, o->contacts_buf);",
+     "ev->contacts(ev->contacts_ctx, 0, hi - lo, o->contacts_buf);", ["test_output"], None),
+    ("contacts-batch-last-short", "src/output_contacts.c",
+     "o->n_spheres - lo < CONTACT_BATCH ? o->n_spheres : lo + CONTACT_BATCH;",
+     "o->n_spheres - lo < CONTACT_BATCH ? o->n_spheres - 1 : lo + CONTACT_BATCH;",
+     ["test_output"], None),
+    ("contacts-read-row-short", "src/output_contacts.c",
+     "hsize_t start[2] = {slot, 0}, count[2] = {1, o->n_spheres};",
+     "hsize_t start[2] = {slot, 0}, count[2] = {1, o->n_spheres - o->n_spheres / 2};",
+     ["test_output"], None),
     # a stop's own frame's overlap check kept out of its step's row (which a resume keeps)
     ("overlap-stop-frame-in-row", "src/sim.c",
      "            if (step % sim->scene->output_every == 0) { /* on the grid, not shared */",

@@ -1484,6 +1484,154 @@ static void test_a_resume_closed_before_it_begins_leaves_the_file_as_it_was(void
     free(xbefore);
 }
 
+/* Sphere i's lasting state at frame k, every field a value of its own (the records compared
+ * bit for bit, padding included: zeroed first), and every index one a run of n spheres and
+ * N_PLANES planes writes (a resume refuses others): faces met and contacts are planes or
+ * other spheres. */
+static void contact_value(int k, size_t i, size_t n, nbep_contact_rec *x)
+{
+    memset(x, 0, sizeof *x);
+    const double u = (double)k + 1e-4 * (double)i;
+    x->t_last = 0.5 + u;
+    for (int c = 0; c < 3; c++)
+        x->aeff[c] = -9.81 * (c + 1) + u;
+    x->peak2 = 2.0 * u + 0.125;
+    for (int f = 0; f < NBEP_CONTACT_FACES; f++) {
+        x->face_t[f] = u - 0.01 * f;
+        for (int c = 0; c < 3; c++) {
+            x->face_n[f][c] = 0.1 * (f + 1) - 0.03 * c + 1e-7 * u;
+            x->face_p[f][c] = u * (c + 1) - f;
+        }
+        /* a plane, another sphere, or none */
+        x->face_who[f] = f == 0 ? (int32_t)((i + (size_t)k) % N_PLANES)
+                         : f == 1 ? (int32_t)(-1 - (int64_t)((i + 1 + (size_t)k) % n))
+                                  : INT32_MIN;
+    }
+    x->rest_n = (uint8_t)((i + (size_t)k) % (NBEP_CONTACT_MAX + 1));
+    for (int c = 0; c < x->rest_n; c++)
+        x->rest_who[c] = c % 2 ? (int32_t)(c % N_PLANES)
+                               : (int32_t)(-1 - (int64_t)((i + 2 + (size_t)c) % n));
+    x->slow = (uint32_t)(i * 3 + (size_t)k);
+    x->has_last = (uint8_t)((i + (size_t)k) & 1);
+    x->rest_still = (uint8_t)(i % 3 == 0);
+    for (int c = 0; c < NBEP_CONTACT_MAX; c++)
+        x->rest_current[c] = (uint8_t)((i >> c) & 1);
+}
+
+/* The events view's contacts: frame *ctx's records of spheres [lo, hi). */
+typedef struct contacts_of {
+    int frame;
+    size_t n;
+} contacts_of;
+
+static void contacts_at(const void *ctx, size_t lo, size_t hi, nbep_contact_rec *out)
+{
+    const contacts_of *c = ctx;
+    for (size_t i = lo; i < hi; i++)
+        contact_value(c->frame, i, c->n, &out[i - lo]);
+}
+
+/* Each frame's lasting state (/checkpoint/contacts, beyond SPEC) lands in the row of its
+ * frame's parity, whole, for more spheres than the writer takes a batch at a time (1024):
+ * after frames 0, 1 and 2 the rows hold frames 2 and 1 bit for bit and the tags name them;
+ * a frame written without the state (frame 3) leaves its row named by none, and a resume from
+ * frame 2 gets frame 2's records. */
+static void test_contact_rows_hold_the_last_two_frames_whole(void **state)
+{
+    fixture *fx = *state;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    const size_t n = 2 * 1024 + 37;
+    nbep_scene sc = fx->sc;
+    assert_int_equal(nbep_state_init(&sc.state, n, N_PLANES, &d), NBEP_OK);
+    nbep_state *s = &sc.state;
+    for (size_t i = 0; i < n; i++) {
+        s->acc[i] = sc.gravity;
+        s->radius[i] = 0.01;
+        s->mass[i] = 1.0;
+        s->pos[i] = nbep_vec3_make(0.1 + 1e-3 * (double)i, 0.2, 0.3);
+        s->vel[i] = nbep_vec3_make(0.0, 0.0, -1.0 + 1e-4 * (double)i);
+    }
+    for (size_t p = 0; p < N_PLANES; p++) {
+        s->plane_normal[p] = fx->sc.state.plane_normal[p];
+        s->plane_offset[p] = fx->sc.state.plane_offset[p];
+    }
+    sc.out_stats = false;
+    double *ev_time = calloc(n, sizeof *ev_time);
+    uint32_t *partner = calloc(n, sizeof *partner);
+    uint8_t *kind = calloc(n, sizeof *kind); /* NBEP_EVENT_NONE: a stale slot */
+    int32_t *rest = malloc(n * sizeof *rest);
+    assert_true(ev_time && partner && kind && rest);
+    for (size_t i = 0; i < n; i++)
+        rest[i] = -1;
+    char path[256];
+    nbep_test_tmp("output_contacts.h5", path, sizeof path);
+    nbep_output *o = NULL;
+    assert_ok(nbep_output_create(path, &sc, 1, &o, &d), &d);
+    contacts_of ctx = {0, n};
+    nbep_events_view ev = {ev_time, partner, kind, rest, contacts_at, &ctx};
+    for (int k = 0; k < 3; k++) {
+        ctx.frame = k;
+        assert_ok(nbep_output_frame_events(o, (int64_t)k * FRAME_EVERY, DT, s, &ev, &d), &d);
+    }
+    assert_ok(nbep_output_close(&o, NULL, &d), &d);
+    nbep_contact_rec *want = malloc(n * sizeof *want), *got = malloc(2 * n * sizeof *got);
+    assert_true(want && got);
+    hid_t f = open_ro(path);
+    int64_t tags[2] = {0, 0};
+    read_dataset(f, "/checkpoint/contacts_frame", H5T_NATIVE_INT64, tags);
+    assert_int_equal(tags[0], 2);
+    assert_int_equal(tags[1], 1);
+    /* the file's record type, as this machine lays it out: nbep_contact_rec's fields */
+    hid_t ds = H5Dopen2(f, "/checkpoint/contacts", H5P_DEFAULT);
+    hid_t ft = H5Dget_type(ds), mt = H5Tget_native_type(ft, H5T_DIR_ASCEND);
+    assert_true(ds >= 0 && ft >= 0 && mt >= 0);
+    assert_int_equal(H5Tget_size(mt), sizeof(nbep_contact_rec));
+    memset(got, 0, 2 * n * sizeof *got);
+    assert_true(H5Dread(ds, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, got) >= 0);
+    H5Tclose(mt);
+    H5Tclose(ft);
+    H5Dclose(ds);
+    H5Fclose(f);
+    for (int row = 0; row < 2; row++) {
+        ctx.frame = 2 - row; /* row 0 frame 2, row 1 frame 1 */
+        contacts_at(&ctx, 0, n, want);
+        for (size_t i = 0; i < n; i++)
+            if (memcmp(&got[(size_t)row * n + i], &want[i], sizeof *want) != 0)
+                fail_msg("contacts row %d (frame %d): sphere %zu differs", row, 2 - row, i);
+    }
+    /* resumed from its last frame (2): that frame's records */
+    sc.steps = 4 * FRAME_EVERY;
+    nbep_resume r;
+    assert_ok(nbep_output_open_resume(path, &sc, &o, &r, &d), &d);
+    assert_int_equal(r.step, 2 * FRAME_EVERY);
+    assert_non_null(r.contacts);
+    ctx.frame = 2;
+    contacts_at(&ctx, 0, n, want);
+    for (size_t i = 0; i < n; i++)
+        if (memcmp(&r.contacts[i], &want[i], sizeof *want) != 0)
+            fail_msg("resumed contacts: sphere %zu differs", i);
+    nbep_resume_fini(&r);
+    /* frame 3 without the state: its row (1) is no frame's, frame 2's stays */
+    assert_ok(nbep_output_resume_begin(o, &sc, 1, &d), &d);
+    ev.contacts = NULL;
+    assert_ok(nbep_output_frame_events(o, 3 * FRAME_EVERY, DT, s, &ev, &d), &d);
+    assert_ok(nbep_output_close(&o, NULL, &d), &d);
+    f = open_ro(path);
+    read_dataset(f, "/checkpoint/contacts_frame", H5T_NATIVE_INT64, tags);
+    H5Fclose(f);
+    assert_int_equal(tags[0], 2);
+    assert_int_equal(tags[1], -1);
+    free(want);
+    free(got);
+    free(ev_time);
+    free(partner);
+    free(kind);
+    free(rest);
+    nbep_state_fini(&sc.state);
+    nbep_diag_fini(&d);
+}
+
 /* A resume of path refused with status want and one line holding says, the file left byte for
  * byte as it was (the resume checks everything before it writes). */
 static void assert_resume_refused(fixture *fx, const char *path, nbep_status want,
@@ -1749,6 +1897,7 @@ int main(void)
         T(test_periodic_frames_hold_wrapped_positions_and_the_images_added),
         T(test_the_closed_runs_sidecar_lists_every_frame),
         T(test_a_resume_closed_before_it_begins_leaves_the_file_as_it_was),
+        T(test_contact_rows_hold_the_last_two_frames_whole),
         T(test_a_file_without_a_complete_frame_is_refused_as_bad_usage),
         T(test_a_file_without_velocities_is_refused_as_a_deck_error),
         T(test_totals_with_a_field_of_another_type_are_refused_naming_it),
