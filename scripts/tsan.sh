@@ -16,7 +16,7 @@ mkdir -p "$out" build/tests/tmp   # the tests write their files there (nbep_test
 make -s build/build_info.h
 cflags="-std=c11 -D_POSIX_C_SOURCE=200809L -O1 -g -fopenmp=libomp -fsanitize=thread
         -ffp-contract=off -Iinclude -Isrc -Itests -Ibuild $(pkg-config --cflags gsl libconfig hdf5 jansson)"
-libs="$(pkg-config --libs gsl libconfig hdf5 jansson cmocka) -lm -lpthread -fopenmp=libomp
+libs="$(pkg-config --libs gsl libconfig hdf5 jansson cmocka) -lhdf5_hl -lm -lpthread -fopenmp=libomp
       -fsanitize=thread -L${llvm}lib -Wl,-rpath,${llvm}lib"
 srcs=$(ls src/*.c | grep -v -e '^src/main.c$' -e '^src/sweep.c$')
 fail=0
