@@ -207,9 +207,11 @@ accuracy: bin/nbep $(BUILD)/bench/bench_contact
 # ThreadSanitizer needs an instrumented OpenMP runtime: clang + libomp + Archer (scripts/).
 tsan: $(BUILD_INFO)
 	bash scripts/tsan.sh
+# NBEP_TEST_SAN: the shell tests skip the checks that measure the sanitizer (tests/lib.sh);
+# a test runs about three times as long, so each gets valgrind's time limit.
 asan:
-	$(MAKE) clean && LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
-	  $(MAKE) SAN=address VALGRIND=0 check
+	$(MAKE) clean && LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 NBEP_TEST_SAN=address \
+	  NBEP_TEST_TIMEOUT=1800 $(MAKE) SAN=address VALGRIND=0 check
 
 install: bin/nbep
 	install -d $(DESTDIR)$(PREFIX)/bin

@@ -59,6 +59,17 @@ bytes_of() {
         if (m) printf "%.17g\n", $1 * m }'
 }
 
+# sanitized: true under `make asan` (which sets NBEP_TEST_SAN), where some checks measure the
+# sanitizer instead of nbep: peak RSS (AddressSanitizer's shadow memory and quarantine), a
+# limit on the address space (it reserves terabytes of it), a library put first with
+# LD_PRELOAD (it must come first itself). Those checks then print "skip NAME (why)" instead.
+sanitized() { [ -n "${NBEP_TEST_SAN:-}" ]; }
+
+# under_gdb COMMAND...: COMMAND (a gdb that runs bin/nbep) with LeakSanitizer off, which cannot
+# work under ptrace and would end the run with its own error (make asan; a plain build ignores
+# ASAN_OPTIONS).
+under_gdb() { ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0" "$@"; }
+
 # test_end NAME: the closing line "NAME: all passed" when no check failed, and the exit status,
 # 1 when one did.
 test_end() {

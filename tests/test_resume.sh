@@ -670,7 +670,7 @@ if command -v gdb >/dev/null; then
     pour=(inputs/pile.deck --quiet -t 1 --set spheres.[0].count=300)
     bin/nbep run "${pour[@]}" --set 'run.neighbors="grid"' --set output.every=50 -n 700 \
         -o $tmp/torn.h5
-    timeout -k 5 120 gdb -q -batch -ex 'break tag_slot if row == 18' -ex run -ex kill \
+    under_gdb timeout -k 5 120 gdb -q -batch -ex 'break tag_slot if row == 18' -ex run -ex kill \
         --args bin/nbep run "${pour[@]}" --set 'run.neighbors="grid"' --set output.every=30 \
         -n 1500 --resume $tmp/torn.h5 >$tmp/gdb-torn 2>&1
     if grep -q 'Breakpoint 1, ' $tmp/gdb-torn; then

@@ -244,7 +244,7 @@ fi
 # it cannot trace
 if command -v gdb >/dev/null; then
     rm -f "$tmp/create.h5" "$tmp/create.json"
-    timeout -k 5 120 gdb -q -batch -ex 'handle SIGTERM nostop noprint pass' \
+    under_gdb timeout -k 5 120 gdb -q -batch -ex 'handle SIGTERM nostop noprint pass' \
         -ex 'break nbep_sim_create' -ex run -ex delete -ex 'signal SIGTERM' \
         --args bin/nbep run inputs/paper-box.deck --quiet -n 3 --set 'spheres.[0].count=1000' \
         -o "$tmp/create.h5" --summary "$tmp/create.json" >"$tmp/gdb-create" 2>&1
@@ -272,7 +272,7 @@ rebuild_stop() {
     local name=$1 skip=$2 want=$3
     shift 3
     rm -f "$tmp/rebuild-$name.h5"
-    timeout -k 5 120 gdb -q -batch -ex 'handle SIGTERM nostop noprint pass' \
+    under_gdb timeout -k 5 120 gdb -q -batch -ex 'handle SIGTERM nostop noprint pass' \
         -ex 'break nbep_evloop_predict' -ex "ignore 1 $skip" -ex run -ex delete \
         -ex 'break nbep_evloop_schedule' -ex 'signal SIGTERM' -ex 'continue' \
         --args bin/nbep run inputs/hard-sphere-fluid.deck --quiet -n 3 --set output.every=1 "$@" \
