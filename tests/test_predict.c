@@ -204,6 +204,33 @@ static void test_sphere_on_a_plane_closing_by_round_off_slides(void **state)
                  nbep_predict_plane(1e-3, -1e-22, -9.81), 0.0, 0.0);
 }
 
+/* The three grazing tolerances sit where their constants say, not a factor away: a touching
+ * pair (or sphere on a plane) closing at twice its tolerance meets now, at half of it slides.
+ * The cosine between dp and dv is |dv_n| / |dv|; with the tangential speed 0.5 (pairs) or the
+ * speed 1 (the plane), the normal speed c |dv| gives a cosine within 1e-28 of c. The examples
+ * above sit 1e4 times from the tolerances and pass with a tolerance ten times as wide. */
+static void test_grazing_tolerances_lie_where_their_constants_say(void **state)
+{
+    (void)state;
+    const double g = NBEP_PREDICT_GRAZE;
+    const nbep_vec3 dp = {0.83, 0.0, 0.0};
+    assert_true(nbep_predict_pair_quadratic(dp, (nbep_vec3){-2.0 * g * 0.5, 0.5, 0.0}, 0.83) ==
+                0.0);
+    assert_true(
+        isinf(nbep_predict_pair_quadratic(dp, (nbep_vec3){-0.5 * g * 0.5, 0.5, 0.0}, 0.83)));
+    nbep_predict_ws *ws = NULL;
+    assert_int_equal(nbep_predict_ws_create(&ws, NULL), NBEP_OK);
+    const nbep_vec3 up = {0.0, 0.0, 0.2}, parting = {0.0, 0.0, 9.81};
+    assert_true(nbep_predict_pair(up, (nbep_vec3){0.3, 0.0, -2.0 * g * 0.3}, parting, 0.2, ws) ==
+                0.0);
+    assert_true(nbep_predict_pair(up, (nbep_vec3){0.3, 0.0, -0.5 * g * 0.3}, parting, 0.2, ws) >
+                0.0);
+    nbep_predict_ws_destroy(&ws);
+    const double gp = NBEP_PREDICT_GRAZE_PLANE;
+    assert_true(nbep_predict_plane_contact(0.0, -2.0 * gp, 0.0, 1.0) == 0.0);
+    assert_true(isinf(nbep_predict_plane_contact(0.0, -0.5 * gp, 0.0, 1.0)));
+}
+
 /* dp's components are multiples of 2^-20 below 2^5, so |dp|^2 is exact in integers (and in a
  * double); sigma sits 1e-12 below |dp|. The reference gap c = |dp|^2 - sigma^2 is formed
  * exactly: sigma^2 = s2 + e2 exactly (fma), |dp|^2 - s2 is exact (the two are within a factor
@@ -918,6 +945,7 @@ int main(void)
         cmocka_unit_test(test_touching_pair_closing_by_round_off_slides),
         cmocka_unit_test(test_touching_pair_with_accelerations_closing_by_round_off_slides),
         cmocka_unit_test(test_sphere_on_a_plane_closing_by_round_off_slides),
+        cmocka_unit_test(test_grazing_tolerances_lie_where_their_constants_say),
         cmocka_unit_test_setup_teardown(test_tiny_gap_gives_an_accurate_contact_time, ws_setup,
                                         ws_teardown),
         cmocka_unit_test(test_zero_relative_acceleration_gives_the_quadratic_bits),
