@@ -875,6 +875,42 @@ static void test_grazing_hits_by_1e_12_of_sigma_are_found_at_the_straight_line_t
     }
 }
 
+/* Thrown apart and pulled back, grazing the other sphere on the way back: dp = (b, 0, z0),
+ * dv = (0, 0, u), da = (0, 0, -a), with b inside sigma by 1e-10 to 1e-7 of it. The pair touches
+ * where z = h = sqrt(sigma^2 - b^2) on the way down, at t = (u + sqrt(u^2 + 2 a (z0 - h))) / a,
+ * some 2u/a after the start; with b outside by as much it never does. The acceleration is
+ * below the bound that sends a pair to the search (a |dp| < 1e-2 u^2), so GSL's roots decide:
+ * the return's entry and exit roots lie within 1e-8 of the largest root of each other and come
+ * back as a complex pair split by round-off, which must be looked at (IMAG_TOL); the truncated
+ * quadratic has no root there (the pair recedes). Inputs exact, in binary steps. */
+static void test_a_pair_pulled_back_that_grazes_on_its_return_meets_it(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    const double sigma = 1.0, pulls[3] = {1e-3, 1e-4, 1e-5}, inside[4] = {1e-10, 1e-9, 1e-8, 1e-7};
+    const double z0s[4] = {0.5, 0.25, 0.75, 0.375}, us[3] = {1.0, 0.5, 2.0};
+    int hits = 0;
+    for (int k = 0; k < 4; k++)
+        for (int l = 0; l < 3; l++)
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 4; j++)
+                    for (int side = -1; side <= 1; side += 2) {
+                        const double a = pulls[i], z0 = z0s[k], u = us[l];
+                        const double b = sigma * (1.0 + side * inside[j]);
+                        if (!(a * nbep_vec3_norm((nbep_vec3){b, 0.0, z0}) < 1e-2 * u * u))
+                            continue;
+                        const nbep_vec3 dp = {b, 0.0, z0}, dv = {0.0, 0.0, u}, da = {0.0, 0.0, -a};
+                        const double t = nbep_predict_pair(dp, dv, da, sigma, ws);
+                        if (side > 0) {
+                            assert_true(isinf(t));
+                            continue;
+                        }
+                        const double h = sqrt((sigma - b) * (sigma + b));
+                        assert_close(t, (u + sqrt(u * u + 2.0 * a * (z0 - h))) / a, 1e-11, 0.0);
+                        hits++;
+                    }
+    assert_true(hits > 100);
+}
+
 /* Zero vectors in every combination: never NaN, and never a negative time. */
 static void test_degenerate_inputs_give_a_time_or_never_but_not_nan(void **state)
 {
@@ -1020,6 +1056,8 @@ int main(void)
         cmocka_unit_test_setup_teardown(
             test_grazing_hits_by_1e_12_of_sigma_are_found_at_the_straight_line_time, ws_setup,
             ws_teardown),
+        cmocka_unit_test_setup_teardown(test_a_pair_pulled_back_that_grazes_on_its_return_meets_it,
+                                        ws_setup, ws_teardown),
         cmocka_unit_test_setup_teardown(test_fallback_search_agrees_with_the_gsl_path, ws_setup,
                                         ws_teardown),
         cmocka_unit_test_setup_teardown(test_degenerate_inputs_give_a_time_or_never_but_not_nan,
