@@ -304,6 +304,9 @@ static void test_an_entry_set_after_the_last_buckets_are_drawn_comes_first(void 
     nbep_calendar_set(c, 2, 1e6, 0);
     nbep_calendar_remove(c, 1);
     assert_true(nbep_calendar_top(c, &top, &t) && top == 2 && t == 1e6);
+    /* the jump past the ring took 1e6's bucket for the earliest, not the last (+inf) one: 1e6
+     * is drawn on its own, and 0 waits in the overflow */
+    assert_int_equal(nbep_calendar_check(c), 0);
     nbep_calendar_clear(c);
     nbep_calendar_retune(c, 0.0);
     nbep_calendar_set(c, 3, 1e30, 0);
