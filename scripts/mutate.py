@@ -403,6 +403,77 @@ MUTANTS = [
      "        q->t_start = 0.0;", PRED, None),
     ("graze-plane-off", "src/predict.c", "-vn <= NBEP_PREDICT_GRAZE_PLANE * speed)",
      "-vn <= 0.0 * speed)", PRED, None),
+    # ---- 2026-12-04, seventh session: predict.c's kernels, each rule's other half (a form
+    # chosen for accuracy, a tolerance's size, a root's side, a term left out) ----
+    # the grazing form of disc chosen where the plain one serves, and the plain one far out
+    ("quad-disc-forms-swapped", "src/predict.c", "    if (b * b < vs) {\n        disc = b * b - vv * c;",
+     "    if (b * b >= vs) {\n        disc = b * b - vv * c;", PRED, None),
+    ("quad-cross-z-sign", "src/predict.c", "                       dp.x * dv.y - dp.y * dv.x};",
+     "                       dp.x * dv.y + dp.y * dv.x};", PRED, None),
+    # the plain gap kept down to contact (the compensated one only once they overlap)
+    ("quad-gap-plain-near", "src/predict.c", "    if (!(c > 0.5 * pp))\n        c = gap2(dp, sigma);",
+     "    if (!(c > 0.0))\n        c = gap2(dp, sigma);", PRED, None),
+    # the grazing tolerances ten times as wide: real contacts that close slowly slide through
+    ("quad-graze-10x", "src/predict.c",
+     "return b * b > NBEP_PREDICT_GRAZE * NBEP_PREDICT_GRAZE * (pp * nbep_vec3_dot(dv, dv))",
+     "return b * b > 100.0 * NBEP_PREDICT_GRAZE * NBEP_PREDICT_GRAZE * (pp * nbep_vec3_dot(dv, dv))",
+     PRED, None),
+    ("quartic-graze-10x", "src/predict.c",
+     "    if (a[2] > 0.0 && a[1] * a[1] <= 4.0 * NBEP_PREDICT_GRAZE",
+     "    if (a[2] > 0.0 && a[1] * a[1] <= 400.0 * NBEP_PREDICT_GRAZE", PRED, None),
+    ("plane-graze-10x", "src/predict.c", "-vn <= NBEP_PREDICT_GRAZE_PLANE * speed)",
+     "-vn <= 10.0 * NBEP_PREDICT_GRAZE_PLANE * speed)", PRED, None),
+    # touching a plane at rest with no push: "now" (a zero-time meeting for ever)
+    ("plane-rest-unpushed-now", "src/predict.c", "if (vn < 0.0 || (vn == 0.0 && an < 0.0))",
+     "if (vn < 0.0 || (vn == 0.0 && an <= 0.0))", PRED, None),
+    ("plane-apart-either", "src/predict.c", "    } else if (!(vn < 0.0) && !(an < 0.0)) {",
+     "    } else if (!(vn < 0.0) || !(an < 0.0)) {", PRED, None),
+    ("plane-turn-doubled", "src/predict.c", "        return vn / -an;",
+     "        return 2.0 * vn / -an;", PRED, None),
+    ("plane-turn-disc-zero", "src/predict.c", "    if (!(disc > 0.0))\n        return vn / -an;",
+     "    if (!(disc >= 0.0))\n        return vn / -an;", PRED,
+     "differs only at disc == 0, where the comeback root (vn + sqrt(0)) / -an is vn / -an, the "
+     "turn's time: the same double either way"),
+    # the knots of the search out of order (the inflection points descending)
+    ("roots-in-descending", "src/predict.c", "    if (r[0] > r[1]) {", "    if (r[0] < r[1]) {",
+     PRED, None),
+    # a valley's entry polished from its far side: Newton finds the exit, which opens
+    ("valley-entry-from-right", "src/predict.c", "judge(m, polish(m, tc - 2.0 * d), best);",
+     "judge(m, polish(m, tc + 2.0 * d), best);", PRED, None),
+    # gap2's general sum without its accumulated errors: off by several ulps, not one
+    ("gap2-general-lost-dropped", "src/predict.c", "    return sum + lost;\n}", "    return sum;\n}",
+     PRED, None),
+    ("gap2-near-sigma-error-dropped", "src/predict.c", "(((ex + ey) + (ez + e1)) + (e2 - es));",
+     "(((ex + ey) + (ez + e1)) + e2);", PRED, None),
+    # f without the rounding of dp + w: near t = 0 a tiny gap's f keeps four digits
+    ("fval-sum-rounding-dropped", "src/predict.c",
+     "    return nbep__predict_gap2(hi, m->sigma) + 2.0 * nbep_vec3_dot(hi, lo);",
+     "    return nbep__predict_gap2(hi, m->sigma);", PRED, None),
+    ("quartic-a2-no-pa", "src/predict.c",
+     "    a[2] = nbep_vec3_dot(dv, dv) + nbep_vec3_dot(dp, da);",
+     "    a[2] = nbep_vec3_dot(dv, dv);", PRED, None),
+    # every root with any imaginary part dropped: a grazing double root split by round-off
+    ("quartic-split-roots-dropped", "src/predict.c",
+     "if (fabs(y) > IMAG_TOL * (1.0 + fabs(x)) || x < -SMALL_ROOT || y < 0.0)",
+     "if (fabs(y) > 0.0 * (1.0 + fabs(x)) || x < -SMALL_ROOT || y < 0.0)", PRED, None),
+    # a near contact left to GSL, whose roots are good only to eps of the largest
+    ("near-contact-to-gsl", "src/predict.c",
+     "    if (q.a[0] <= NEAR_CONTACT_REL * sigma * sigma)\n        return bracket_search(&q, t_max);",
+     "    if (q.a[0] <= 0.0 * sigma * sigma)\n        return bracket_search(&q, t_max);", PRED,
+     "in practice: where a contact this near is not already the search's (ACCEL_BENDS: a pair "
+     "resting or nearly so), the truncated quadratic's root estimates it to |da||dp|/|dv|^2 and "
+     "Newton polishes it, and an estimate that does not settle sends the pair to the search "
+     "anyway; 20000 random near contacts on GSL's path (gaps 1e-15 to 1e-7 sigma, |da| 1e-12 to "
+     "1e-3) agreed with the search with and without it (2026-12-04), so the rule costs or saves "
+     "only time"),
+    # the truncated quadratic's vertex (a valley, maybe grazing) not looked at
+    ("lower-vertex-skipped", "src/predict.c", "        if (n_lower == 0 && a[2] > 0.0 && a[1] < 0.0)",
+     "        if (0 && n_lower == 0 && a[2] > 0.0 && a[1] < 0.0)", PRED,
+     "in practice: the vertex is a second estimate of a valley that GSL's complex pair already "
+     "gives (consider, in_valley); 20000 random grazing approaches within 1e-16 to 1e-8 of "
+     "sigma under |da| 1e-14 to 1e-4 (time scales 1e4 to 1e14 apart) agreed with the search "
+     "with and without it (2026-12-04); an input where GSL's pair misses the valley and the "
+     "vertex does not was not found"),
     ("settle-off", "src/pred_settle.c", "    x->cand = !x->still && x->slow >= SETTLE_STEPS;",
      "    x->cand = false;", GRAN + ["tests/test_settle.sh"], None),
     ("settle-window-1", "src/pred_impl.h", "#define SETTLE_STEPS 10u", "#define SETTLE_STEPS 1u",
@@ -427,6 +498,52 @@ MUTANTS = [
     # that lost theirs instead of gathering again: a live support beyond the cut is never seen
     ("settle-recheck-no-regather", "src/pred_settle.c",
      "    if (x->more)\n        return settle_gather(c, s, i, dt, prev);\n", "", GRAN, None),
+    # ---- 2026-12-04, seventh session: pred_settle.c, the window's count, the gather's rules,
+    # the rounds' counts and what a hold writes ----
+    # the step's peak speed (at an event) forgotten: only the end's speed counts
+    ("settle-peak-ignored", "src/pred_settle.c", "vs > 0.0 && fmax(x->peak2, v2) <= vs * vs;",
+     "vs > 0.0 && v2 <= vs * vs;", GRAN + ["tests/test_settle.sh"], None),
+    # a fast step does not start the window again
+    ("settle-window-not-reset", "src/pred_settle.c",
+     "x->slow = slow ? (x->slow < SETTLE_STEPS ? x->slow + 1 : SETTLE_STEPS) : 0;",
+     "x->slow = slow ? (x->slow < SETTLE_STEPS ? x->slow + 1 : SETTLE_STEPS) : x->slow;",
+     GRAN + ["tests/test_settle.sh"], None),
+    ("settle-peak-not-restarted", "src/pred_settle.c", "    x->peak2 = v2;\n", "",
+     GRAN + ["tests/test_settle.sh"], None),
+    # a held sphere a candidate again at every step: held again on what it touches now
+    ("settle-held-candidate", "src/pred_settle.c",
+     "    x->cand = !x->still && x->slow >= SETTLE_STEPS;",
+     "    x->cand = x->slow >= SETTLE_STEPS;", GRAN + ["tests/test_settle.sh"], None),
+    # more supports than a record holds: the most nearly below replaced, not the least
+    ("settle-add-replaces-best", "src/pred_settle.c", "            if (g->score[m] > g->score[k])",
+     "            if (g->score[m] < g->score[k])", GRAN + ["tests/test_settle.sh"], None),
+    ("settle-add-more-unset", "src/pred_settle.c", "        g->more = true;\n", "",
+     GRAN + ["tests/test_settle.sh"], None),
+    # supports above it (along its acceleration) instead of below
+    ("settle-supports-above", "src/pred_settle.c", "    if (cosine < 0.0)\n        settle_add(",
+     "    if (cosine > 0.0)\n        settle_add(", GRAN + ["tests/test_settle.sh"], None),
+    ("settle-planes-above", "src/pred_settle.c",
+     "        if (nbep_vec3_dot(s->plane_normal[p], g.a) < 0.0 &&",
+     "        if (nbep_vec3_dot(s->plane_normal[p], g.a) > 0.0 &&", GRAN + ["tests/test_settle.sh"],
+     None),
+    # the touching distance ten times as far: held on what it does not touch
+    ("settle-tol-10x", "src/pred_settle.c", ".tol = vs * vs / amag, .par = par};",
+     ".tol = 10.0 * vs * vs / amag, .par = par};", GRAN + ["tests/test_settle.sh"], None),
+    # plane 0 taken for a sphere at a recheck (its index 0 read as a sphere's -1 - j)
+    ("settle-recheck-plane-0-dropped", "src/pred_settle.c",
+     "        if (who >= 0 || c->settle[-1 - who].still",
+     "        if (who > 0 || c->settle[-1 - who].still", GRAN + ["tests/test_settle.sh"], None),
+    # a candidate lost in an earlier round counted as lost again in each: the rounds never end
+    ("settle-lost-counted-again", "src/pred_settle.c", "        w->n_lost[cur] += x->live[prev] && !on;",
+     "        w->n_lost[cur] += !on;", GRAN + ["tests/test_settle.sh"], None),
+    # what a hold writes: its effective acceleration, its count, its block's energy
+    ("settle-hold-aeff-kept", "src/pred_settle.c", "        c->aeff[i] = ZERO3;\n", "",
+     GRAN + ["tests/test_settle.sh"], None),
+    ("settle-hold-count-kept", "src/pred_settle.c", "        x->held_now = true;\n        c->ver[i]++;",
+     "        x->held_now = true;", GRAN + ["tests/test_settle.sh"], None),
+    ("settle-hold-energy-stale", "src/pred_settle.c",
+     "    if (w->n_settled > 0)\n        nbep__sim_block_energy(sim, own);", "",
+     GRAN + ["tests/test_settle.sh"], None),
     ("cage-moved-off", "src/pred_react.c", "CAGE_TOUCH_REL * s->radius[k]) {",
      "INFINITY) {", GRAN, None),
     ("pocket-off", "src/pred_react.c", "        if (!held) { /* a pocket:", "        if (0) { /* a pocket:",
@@ -3016,6 +3133,55 @@ MUTANTS = [
      "turn steps onto it and drains it: one empty bucket more per jump, which only the lap's "
      "counts see (a retune a lap sooner at most, as far apart as the entries were: "
      "test_calendar's pace tests pass); the order is exact whatever the buckets hold"),
+    # ---- 2026-12-04, seventh session: calendar.c, the heap's index arithmetic, the ring's
+    # slot, the counts, the retune's width and sort, the runners-up ----
+    ("cal-sift-up-parent-half", "src/calendar.c", "        size_t parent = (k - 1) / 2;",
+     "        size_t parent = k / 2;", ["test_calendar"] + CELLS, None),
+    ("cal-delete-sift-from-root", "src/calendar.c", "    else\n        sift_down(c, k, last);",
+     "    else\n        sift_down(c, 0, last);", ["test_calendar"] + CELLS, None),
+    # bucket ab filed in the slot of ab - 1: drained a bucket early, or a lap late
+    ("cal-ring-slot-one-early", "src/calendar.c",
+     "    return (uint32_t)((uint64_t)ab & (c->nb - 1));",
+     "    return (uint32_t)(((uint64_t)ab - 1) & (c->nb - 1));", ["test_calendar"] + CELLS, None),
+    # the overflow's lower bound raised instead of lowered: a lap may leave its entries behind
+    ("cal-ovf-min-raised", "src/calendar.c", "        if (ab < c->ovf_min)\n            c->ovf_min = ab;",
+     "        if (ab > c->ovf_min)\n            c->ovf_min = ab;", ["test_calendar"] + CELLS, None),
+    ("cal-unfile-overflow-in-ring-count", "src/calendar.c",
+     "        c->ring_len -= x->where == WHERE_RING;", "        c->ring_len -= x->where != WHERE_HEAP;",
+     ["test_calendar"] + CELLS, None),
+    # a move of a held entry counted as a new one
+    ("cal-set-move-counted", "src/calendar.c", "        unfile(c, item);\n    else\n        c->size++;",
+     "        unfile(c, item);\n    c->size++;", ["test_calendar"] + CELLS, None),
+    # the overflow's first entry left out of the jump's minimum
+    ("cal-jump-first-unread", "src/calendar.c",
+     "            for (uint32_t item = OVERFLOW(c); item != NIL; item = c->node[item].next) {",
+     "            for (uint32_t item = OVERFLOW(c) == NIL ? NIL : c->node[OVERFLOW(c)].next; item != NIL; item = c->node[item].next) {",
+     ["test_calendar"] + CELLS, None),
+    ("cal-retune-width-halved", "src/calendar.c", "        w = 2.0 * (sum / (double)k) * BUCKET_ENTRIES",
+     "        w = (sum / (double)k) * BUCKET_ENTRIES", ["test_calendar"], None),
+    # the distances sorted descending: the nearer ones trimmed, the far one kept
+    ("cal-retune-sort-descending", "src/calendar.c", "    return (x > y) - (x < y);",
+     "    return (x < y) - (x > y);", ["test_calendar"], None),
+    # a lap's counts carried into the next: the averages of all laps so far, slow to follow
+    ("cal-lap-counts-carried", "src/calendar.c",
+     "            c->lap_steps = c->lap_full = c->lap_moved = 0;\n", "", ["test_calendar"], None),
+    # a retune that leaves cur where it was: every entry up to cur buckets from now in the heap
+    ("cal-refile-cur-kept", "src/calendar.c", "    c->inv_w = 1.0 / w;\n    c->cur = 0;\n",
+     "    c->inv_w = 1.0 / w;\n", ["test_calendar"],
+     "speed only: with cur left at C the retune files every entry within C buckets of its new "
+     "origin into the heap, which orders them exactly (the check's rule, bucket <= cur, holds), "
+     "so the order is the same; each operation then costs a heap of all of them, O(log n), until "
+     "time has passed C buckets: a benchmark's to measure (bench_parallelism runs the "
+     "cells mode), not a test's (as "
+     "bisect-newton-half-slope)"),
+    ("cal-runners-up-include-top", "src/calendar.c", "    for (size_t k = 1; k < 3 && k < c->heap_len; k++) {",
+     "    for (size_t k = 0; k < 2 && k < c->heap_len; k++) {", ["test_calendar"], None),
+    ("cal-runners-up-keys-of-top", "src/calendar.c", "            keys[*n] = c->node[c->heap[k]].key;",
+     "            keys[*n] = c->node[c->heap[0]].key;", ["test_calendar"], None),
+    ("cal-ring-takes-current", "src/calendar.c", "    return ab > c->cur && ab - c->cur <= (int64_t)c->nb;",
+     "    return ab >= c->cur && ab - c->cur <= (int64_t)c->nb;", ["test_calendar"] + CELLS,
+     "file sends ab <= cur to the heap before it asks in_ring, and prefetch_set only requests "
+     "memory: the current bucket's slot was drained, so its head is a request for nothing"),
     # ---- BVH ----
     ("bvh-inner-max-right-only", "src/bvh.c",
      "l->max_id > r->max_id ? l->max_id : r->max_id, right, 0,", "r->max_id, right, 0,",

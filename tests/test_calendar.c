@@ -187,6 +187,7 @@ static void test_top_is_the_minimum_over_many_laps_with_far_entries_and_changing
     nbep_calendar_retune(c, 0.0);
     assert_int_equal(nbep_calendar_check(c), 0);
     double pace = 1.0;
+    int with_next = 0; /* tops with runners-up: the current bucket held more than one */
     for (int op = 0; op < OPS; op++) {
         if (op == OPS / 3)
             pace = 1000.0; /* far too many empty buckets for the old width */
@@ -212,6 +213,19 @@ static void test_top_is_the_minimum_over_many_laps_with_far_entries_and_changing
         assert_int_equal(first.item, best);
         assert_int_equal(first.key, r[best].key);
         assert_true(first.time == t);
+        /* the runners-up a caller fetches ahead: held entries other than the top, distinct,
+         * each with its own key */
+        uint32_t next[2];
+        uint64_t next_key[2];
+        int n_next = -1;
+        nbep_calendar_runners_up(c, next, next_key, &n_next);
+        assert_true(n_next >= 0 && n_next <= 2);
+        for (int k = 0; k < n_next; k++) {
+            assert_true(next[k] < N && r[next[k]].has && next[k] != best);
+            assert_int_equal(next_key[k], r[next[k]].key);
+        }
+        assert_true(n_next < 2 || next[0] != next[1]);
+        with_next += n_next > 0;
         const uint32_t o = (uint32_t)(lcg(&x) % N);
         if (r[o].has && o != best) {
             const nbep_calendar_entry other = {r[o].time, r[o].key, o};
@@ -245,6 +259,7 @@ static void test_top_is_the_minimum_over_many_laps_with_far_entries_and_changing
         }
         assert_int_equal(nbep_calendar_check(c), 0);
     }
+    assert_true(with_next > 0);
     /* only +inf entries left: they still come out, in (key, item) order */
     for (uint32_t i = 0; i < N; i++) {
         nbep_calendar_remove(c, i);
@@ -289,6 +304,9 @@ static void test_an_entry_set_after_the_last_buckets_are_drawn_comes_first(void 
     nbep_calendar_set(c, 2, 1e6, 0);
     nbep_calendar_remove(c, 1);
     assert_true(nbep_calendar_top(c, &top, &t) && top == 2 && t == 1e6);
+    /* the jump past the ring took 1e6's bucket for the earliest, not the last (+inf) one: 1e6
+     * is drawn on its own, and 0 waits in the overflow */
+    assert_int_equal(nbep_calendar_check(c), 0);
     nbep_calendar_clear(c);
     nbep_calendar_retune(c, 0.0);
     nbep_calendar_set(c, 3, 1e30, 0);

@@ -204,6 +204,33 @@ static void test_sphere_on_a_plane_closing_by_round_off_slides(void **state)
                  nbep_predict_plane(1e-3, -1e-22, -9.81), 0.0, 0.0);
 }
 
+/* The three grazing tolerances sit where their constants say, not a factor away: a touching
+ * pair (or sphere on a plane) closing at twice its tolerance meets now, at half of it slides.
+ * The cosine between dp and dv is |dv_n| / |dv|; with the tangential speed 0.5 (pairs) or the
+ * speed 1 (the plane), the normal speed c |dv| gives a cosine within 1e-28 of c. The examples
+ * above sit 1e4 times from the tolerances and pass with a tolerance ten times as wide. */
+static void test_grazing_tolerances_lie_where_their_constants_say(void **state)
+{
+    (void)state;
+    const double g = NBEP_PREDICT_GRAZE;
+    const nbep_vec3 dp = {0.83, 0.0, 0.0};
+    assert_true(nbep_predict_pair_quadratic(dp, (nbep_vec3){-2.0 * g * 0.5, 0.5, 0.0}, 0.83) ==
+                0.0);
+    assert_true(
+        isinf(nbep_predict_pair_quadratic(dp, (nbep_vec3){-0.5 * g * 0.5, 0.5, 0.0}, 0.83)));
+    nbep_predict_ws *ws = NULL;
+    assert_int_equal(nbep_predict_ws_create(&ws, NULL), NBEP_OK);
+    const nbep_vec3 up = {0.0, 0.0, 0.2}, parting = {0.0, 0.0, 9.81};
+    assert_true(nbep_predict_pair(up, (nbep_vec3){0.3, 0.0, -2.0 * g * 0.3}, parting, 0.2, ws) ==
+                0.0);
+    assert_true(nbep_predict_pair(up, (nbep_vec3){0.3, 0.0, -0.5 * g * 0.3}, parting, 0.2, ws) >
+                0.0);
+    nbep_predict_ws_destroy(&ws);
+    const double gp = NBEP_PREDICT_GRAZE_PLANE;
+    assert_true(nbep_predict_plane_contact(0.0, -2.0 * gp, 0.0, 1.0) == 0.0);
+    assert_true(isinf(nbep_predict_plane_contact(0.0, -0.5 * gp, 0.0, 1.0)));
+}
+
 /* dp's components are multiples of 2^-20 below 2^5, so |dp|^2 is exact in integers (and in a
  * double); sigma sits 1e-12 below |dp|. The reference gap c = |dp|^2 - sigma^2 is formed
  * exactly: sigma^2 = s2 + e2 exactly (fma), |dp|^2 - s2 is exact (the two are within a factor
@@ -376,6 +403,52 @@ static double uniform(uint64_t *s, double lo, double hi)
 static nbep_vec3 uniform_vec(uint64_t *s, double half)
 {
     return (nbep_vec3){uniform(s, -half, half), uniform(s, -half, half), uniform(s, -half, half)};
+}
+
+/* nbep__predict_gap2 keeps its promise, the accuracy of twice the precision rounded once: within
+ * an ulp of the exact |r|^2 - sigma^2 (in fact of it rounded) over random inputs whose exact
+ * value is known. Every coordinate and sigma is k 2^-31 with |k| < 2^31 of 1 to 31 bits, so
+ * |r|^2 - sigma^2 is (sum k^2 - k_s^2) 2^-62, exact in 64-bit integers (below 3 2^62) and
+ * rounded once to a double. The squares of up to 62 bits do not fit a double, and the parts'
+ * sizes differ by up to 2^60: the plain sum of the parts is several ulps off in about one case
+ * in 500 far from contact, the near-contact form without sigma^2's rounding in most near cases.
+ * Half the cases put sigma within 2 of |r| (in units of 2^-31: a near contact, the short sum),
+ * half anywhere (the general one). */
+static void test_gap2_is_within_an_ulp_of_the_exact_value(void **state)
+{
+    (void)state;
+    uint64_t seed = 2026;
+    int near = 0, far = 0;
+    for (int n = 0; n < 50000; n++) {
+        int64_t k[4];
+        for (int i = 0; i < 4; i++) {
+            const int bits = 1 + (int)(uniform(&seed, 0.0, 31.0));
+            k[i] = (int64_t)uniform(&seed, 0.0, ldexp(1.0, bits));
+            if (uniform(&seed, 0.0, 1.0) < 0.5)
+                k[i] = -k[i];
+        }
+        uint64_t a[4];
+        for (int i = 0; i < 3; i++)
+            a[i] = (uint64_t)(k[i] < 0 ? -k[i] : k[i]);
+        const uint64_t rr = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+        if (n % 2)
+            k[3] = (int64_t)sqrt((double)rr) + (int64_t)uniform(&seed, -2.0, 3.0);
+        a[3] = k[3] < 0 ? (uint64_t)-k[3] : k[3] > 0 ? (uint64_t)k[3] : 1;
+        const uint64_t ss = a[3] * a[3]; /* a[3] < 2^32 */
+        const double exact = ldexp(rr >= ss ? (double)(rr - ss) : -(double)(ss - rr), -62);
+        const nbep_vec3 r = {ldexp((double)k[0], -31), ldexp((double)k[1], -31),
+                             ldexp((double)k[2], -31)};
+        const double sigma = ldexp((double)a[3], -31), got = nbep__predict_gap2(r, sigma);
+        const double mag = fabs(exact);
+        const double ulp = mag == 0.0 ? DBL_TRUE_MIN : nextafter(mag, INFINITY) - mag;
+        if (!(fabs(got - exact) <= ulp))
+            fail_msg("r = (%a, %a, %a), sigma = %a: gap2 %a, exact %a", r.x, r.y, r.z, sigma, got,
+                     exact);
+        const double rs = (double)rr, s2 = (double)ss;
+        near += rs >= 0.5 * s2 && rs <= 2.0 * s2;
+        far += !(rs >= 0.5 * s2 && rs <= 2.0 * s2);
+    }
+    assert_true(near > 15000 && far > 15000); /* both of gap2's sums were taken */
 }
 
 /* The root-free bound of the cells mode's pair loop (nbep_predict_pair_quadratic_bound), over
@@ -802,6 +875,42 @@ static void test_grazing_hits_by_1e_12_of_sigma_are_found_at_the_straight_line_t
     }
 }
 
+/* Thrown apart and pulled back, grazing the other sphere on the way back: dp = (b, 0, z0),
+ * dv = (0, 0, u), da = (0, 0, -a), with b inside sigma by 1e-10 to 1e-7 of it. The pair touches
+ * where z = h = sqrt(sigma^2 - b^2) on the way down, at t = (u + sqrt(u^2 + 2 a (z0 - h))) / a,
+ * some 2u/a after the start; with b outside by as much it never does. The acceleration is
+ * below the bound that sends a pair to the search (a |dp| < 1e-2 u^2), so GSL's roots decide:
+ * the return's entry and exit roots lie within 1e-8 of the largest root of each other and come
+ * back as a complex pair split by round-off, which must be looked at (IMAG_TOL); the truncated
+ * quadratic has no root there (the pair recedes). Inputs exact, in binary steps. */
+static void test_a_pair_pulled_back_that_grazes_on_its_return_meets_it(void **state)
+{
+    nbep_predict_ws *ws = *state;
+    const double sigma = 1.0, pulls[3] = {1e-3, 1e-4, 1e-5}, inside[4] = {1e-10, 1e-9, 1e-8, 1e-7};
+    const double z0s[4] = {0.5, 0.25, 0.75, 0.375}, us[3] = {1.0, 0.5, 2.0};
+    int hits = 0;
+    for (int k = 0; k < 4; k++)
+        for (int l = 0; l < 3; l++)
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 4; j++)
+                    for (int side = -1; side <= 1; side += 2) {
+                        const double a = pulls[i], z0 = z0s[k], u = us[l];
+                        const double b = sigma * (1.0 + side * inside[j]);
+                        if (!(a * nbep_vec3_norm((nbep_vec3){b, 0.0, z0}) < 1e-2 * u * u))
+                            continue;
+                        const nbep_vec3 dp = {b, 0.0, z0}, dv = {0.0, 0.0, u}, da = {0.0, 0.0, -a};
+                        const double t = nbep_predict_pair(dp, dv, da, sigma, ws);
+                        if (side > 0) {
+                            assert_true(isinf(t));
+                            continue;
+                        }
+                        const double h = sqrt((sigma - b) * (sigma + b));
+                        assert_close(t, (u + sqrt(u * u + 2.0 * a * (z0 - h))) / a, 1e-11, 0.0);
+                        hits++;
+                    }
+    assert_true(hits > 100);
+}
+
 /* Zero vectors in every combination: never NaN, and never a negative time. */
 static void test_degenerate_inputs_give_a_time_or_never_but_not_nan(void **state)
 {
@@ -918,6 +1027,8 @@ int main(void)
         cmocka_unit_test(test_touching_pair_closing_by_round_off_slides),
         cmocka_unit_test(test_touching_pair_with_accelerations_closing_by_round_off_slides),
         cmocka_unit_test(test_sphere_on_a_plane_closing_by_round_off_slides),
+        cmocka_unit_test(test_grazing_tolerances_lie_where_their_constants_say),
+        cmocka_unit_test(test_gap2_is_within_an_ulp_of_the_exact_value),
         cmocka_unit_test_setup_teardown(test_tiny_gap_gives_an_accurate_contact_time, ws_setup,
                                         ws_teardown),
         cmocka_unit_test(test_zero_relative_acceleration_gives_the_quadratic_bits),
@@ -945,6 +1056,8 @@ int main(void)
         cmocka_unit_test_setup_teardown(
             test_grazing_hits_by_1e_12_of_sigma_are_found_at_the_straight_line_time, ws_setup,
             ws_teardown),
+        cmocka_unit_test_setup_teardown(test_a_pair_pulled_back_that_grazes_on_its_return_meets_it,
+                                        ws_setup, ws_teardown),
         cmocka_unit_test_setup_teardown(test_fallback_search_agrees_with_the_gsl_path, ws_setup,
                                         ws_teardown),
         cmocka_unit_test_setup_teardown(test_degenerate_inputs_give_a_time_or_never_but_not_nan,
