@@ -1015,6 +1015,47 @@ static void test_settling_gathers_again_when_kept_supports_fail(void **state)
     }
 }
 
+/* The settle tolerance, (settle speed)^2 / |a| (pred_settle.c: the largest gap that counts as
+ * touching, 3.9e-7 m at dt = 1e-3 under g): X (radius 0.1, pulled along -x by g, no plane
+ * within reach) rests on a heavy slider on its -x side, never a candidate (it slides across
+ * the line of centres at 5 mm/s), and beside H, held on the floor from the start, at 75
+ * degrees from its acceleration, with a gap of a third of the tolerance or three times it. X is
+ * slow throughout (the slider moves it by 1e-8 m in the run), so at step SETTLE_STEPS = 10 it
+ * is held on H in the first case, and never in the second: H is then not touching it. In
+ * every neighbour mode. */
+static void test_a_support_counts_only_within_the_settle_tolerance(void **state)
+{
+    (void)state;
+    const double r = 0.1, g = 9.81, tol = 3.9e-7, slide = 5e-3, heavy = 1e6;
+    const double ps = 75.0 * acos(-1.0) / 180.0;
+    const uint64_t steps = 20, settle_step = 10; /* SETTLE_STEPS */
+    const size_t X = 2;
+    for (int mode = 0; mode < 3; mode++) /* all pairs, grid, cells */
+        for (int far = 0; far < 2; far++) {
+            const double gap = far ? 3.0 * tol : tol / 3.0;
+            nbep_scene *sc = scene(3, 1, "predictive", steps, 0.5);
+            neighbor_mode(sc, mode);
+            nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+            const nbep_vec3 dh = {-cos(ps), 0.0, -sin(ps)};
+            const nbep_vec3 p = {1.0, 1.0, r + (2.0 * r + gap) * sin(ps)};
+            nbep_test_set_sphere(sc, 0, nbep_vec3_axpy(p, 2.0 * r + gap, dh), ZERO, r, 1.0, DOWN);
+            nbep_test_set_sphere(sc, 1, nbep_vec3_add(p, (nbep_vec3){-2.0 * r, 0.0, 0.0}),
+                                 (nbep_vec3){0.0, 0.0, -slide}, r, heavy, ZERO);
+            nbep_test_set_sphere(sc, X, p, ZERO, r, 1.0, (nbep_vec3){-g, 0.0, 0.0});
+            trace t = {0};
+            (void)run(sc, 1, &t);
+            assert_int_equal(t.n_frames, steps + 1);
+            for (size_t f = 1; f < t.n_frames; f++) { /* frame f: the end of step f */
+                const nbep_vec3 *v = t.data + f * 2 * t.n + t.n;
+                if (nbep_vec3_equal(v[X], ZERO) != (!far && f >= settle_step))
+                    fail_msg("mode %d, gap %g m: X %s at step %zu", mode, gap,
+                             nbep_vec3_equal(v[X], ZERO) ? "held" : "not held", f);
+            }
+            free(t.data);
+            nbep_test_scene_free(&sc);
+        }
+}
+
 /* A frictionless sphere sliding on a floor at 1 mm/s (dt = 1e-3: half the settle speed) is
  * taken for resting after SETTLE_STEPS steps and held where it is (README, granular: what
  * settling gives up); one at 5 mm/s slides on at its speed. */
@@ -2112,6 +2153,7 @@ int main(void)
         cmocka_unit_test(test_settling_supports_must_settle_too),
         cmocka_unit_test(test_settling_keeps_a_ring_of_supports),
         cmocka_unit_test(test_settling_gathers_again_when_kept_supports_fail),
+        cmocka_unit_test(test_a_support_counts_only_within_the_settle_tolerance),
         cmocka_unit_test(test_slow_slider_is_held_fast_one_slides_on),
         cmocka_unit_test(test_elastic_slow_slider_slides_on_and_trades_its_speed),
         cmocka_unit_test(test_sphere_sliding_off_a_held_one_pushes_it_along_the_floor),
