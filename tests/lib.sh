@@ -62,8 +62,12 @@ bytes_of() {
 # sanitized: true under `make asan` (which sets NBEP_TEST_SAN), where some checks measure the
 # sanitizer instead of nbep: peak RSS (AddressSanitizer's shadow memory and quarantine), a
 # limit on the address space (it reserves terabytes of it), a library put first with
-# LD_PRELOAD (it must come first itself). Those checks then print "skip NAME (why)" instead.
-sanitized() { [ -n "${NBEP_TEST_SAN:-}" ]; }
+# LD_PRELOAD (it must come first itself). `sanitized NAME WHY` is true there, and prints
+# "skip NAME (under SANITIZER: WHY)" for the check it stands in for.
+sanitized() {
+    [ -n "${NBEP_TEST_SAN:-}" ] || return 1
+    echo "skip $1 (under $NBEP_TEST_SAN: $2)"
+}
 
 # under_gdb COMMAND...: COMMAND (a gdb that runs bin/nbep) with LeakSanitizer off, which cannot
 # work under ptrace and would end the run with its own error (make asan; a plain build ignores

@@ -353,6 +353,7 @@ check "... and a small deck's in kB (exit $rc)" \
 for spec in granular-cells:inputs/pile.deck:50000:cells granular-grid:inputs/pile.deck:50000:grid \
     fluid:inputs/hard-sphere-fluid.deck:32000:cells; do
     IFS=: read -r name deck count mode <<<"$spec"
+    sanitized "nbep check's memory of $name against its peak RSS" "its shadow memory" && continue
     args=(--set "run.neighbors=$mode" -t 1)
     case $name in granular-*)
         args+=(--set 'spheres.[0].radius=0.0125' --set 'spheres.[0].place="lattice"') ;;
@@ -367,10 +368,6 @@ for spec in granular-cells:inputs/pile.deck:50000:cells granular-grid:inputs/pil
     base=$(sed -n 's/.*"peak_rss_bytes": \([0-9]*\).*/\1/p' "$tmp/mem-$name-8.json")
     ratio=$(awk -v e="$est" -v p="$peak" -v b="$base" \
         'BEGIN { if (e > 0 && p > b) printf "%.2f", e / (p - b); else print 0 }')
-    if sanitized; then
-        echo "skip nbep check's memory of $name against its peak RSS (under $NBEP_TEST_SAN: its shadow memory)"
-        continue
-    fi
     check "nbep check's memory of $name ($est bytes) / its peak RSS less 8 spheres' ($peak - $base bytes) = $ratio, in (0.9, 1.35)" \
         "awk -v r='$ratio' 'BEGIN { exit !(r > 0.9 && r < 1.35) }'"
 done
@@ -1220,9 +1217,7 @@ box: { min = [0.0, 0.0, 0.0]; max = [320.0, 320.0, 320.0]; };
 spheres = ( { count = 4000000; radius = 0.5; mass = 1.0; place = "lattice"; speed = 1.0; } );
 output: { every = 1; fields = ["position"]; };
 EOF
-if sanitized; then
-    echo "skip a run the simulation refuses (under $NBEP_TEST_SAN: it reserves more address space than the limit)"
-else
+if ! sanitized "a run the simulation refuses" "it reserves more address space than the limit"; then
 (ulimit -v 850000 && run_nbep run "$tmp/keep-big.deck" --quiet -o "$tmp/keep.h5" --summary "$tmp/keep.json" &&
      echo "$rc" >"$tmp/keep.rc")
 check "a run the simulation refuses (no memory for it): exit 1 (got $(cat "$tmp/keep.rc")), the run file, sidecar and summary there kept" \
@@ -1431,8 +1426,8 @@ void *realloc(void *p, size_t n)
     return real_realloc(p, n);
 }
 EOF
-if sanitized; then
-    echo "skip the frame list that cannot grow (under $NBEP_TEST_SAN: the realloc shim cannot come first)"
+if sanitized "the frame list that cannot grow" "the realloc shim cannot come first"; then
+    :
 elif cc -shared -fPIC -o "$tmp/shim.so" "$tmp/shim.c" -ldl 2>/dev/null; then
     cat >"$tmp/grow.deck" <<'EOF'
 run: { algorithm = "naive"; steps = 100; dt = 0.001; threads = 1; seed = 3; };
