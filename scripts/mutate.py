@@ -31,6 +31,8 @@ TEAM = ["test_periodic"]  # the team loop's tests: one thread's frames, counts a
 # the window's apartness: checked at each place's joining (deterministic), then the results
 APART = ["test_evloop_apart", "test_periodic"]
 GRAN = ["test_granular"]
+# settling: its rules one by one on a hand-set context, then piles that come to rest
+SETTLE = ["test_pred_settle", "test_granular", "tests/test_settle.sh"]
 ORDER = ["test_order"]  # run.order = "step", the paper's step
 WAYS = ["test_pred_ways"]  # the schedule of the ways a step's events run, for given costs
 LISTS = ["test_evloop_lists"]  # the cells engine's lists against a search of every sphere
@@ -475,17 +477,17 @@ MUTANTS = [
      "with and without it (2026-12-04); an input where GSL's pair misses the valley and the "
      "vertex does not was not found"),
     ("settle-off", "src/pred_settle.c", "    x->cand = !x->still && x->slow >= SETTLE_STEPS;",
-     "    x->cand = false;", GRAN + ["tests/test_settle.sh"], None),
+     "    x->cand = false;", SETTLE, None),
     ("settle-window-1", "src/pred_impl.h", "#define SETTLE_STEPS 10u", "#define SETTLE_STEPS 1u",
-     GRAN + ["tests/test_settle.sh"], None),
+     SETTLE, None),
     ("settle-any-support", "src/pred_settle.c",
      "    if (j == g->i || !(y->still || (y->cand && (g->par < 0 || y->live[g->par]))))",
      "    if (j == g->i)",
-     GRAN + ["tests/test_settle.sh"], None),
+     SETTLE, None),
     ("settle-stamp-early", "src/pred_settle.c",
      "            r->ver[k] = r->who[k] < 0 ? c->ver[-1 - r->who[k]] : 0;",
      "            r->ver[k] = r->who[k] < 0 ? c->ver[-1 - r->who[k]] - 1 : 0;",
-     GRAN + ["tests/test_settle.sh"], None),
+     SETTLE, None),
     # a candidate held on candidates whose own supports do not settle (the rounds that drop
     # them never run, or keep them): a sphere on one that rests on a sliding sphere hangs in
     # the air once that one slides off
@@ -502,48 +504,48 @@ MUTANTS = [
     # the rounds' counts and what a hold writes ----
     # the step's peak speed (at an event) forgotten: only the end's speed counts
     ("settle-peak-ignored", "src/pred_settle.c", "vs > 0.0 && fmax(x->peak2, v2) <= vs * vs;",
-     "vs > 0.0 && v2 <= vs * vs;", GRAN + ["tests/test_settle.sh"], None),
+     "vs > 0.0 && v2 <= vs * vs;", SETTLE, None),
     # a fast step does not start the window again
     ("settle-window-not-reset", "src/pred_settle.c",
      "x->slow = slow ? (x->slow < SETTLE_STEPS ? x->slow + 1 : SETTLE_STEPS) : 0;",
      "x->slow = slow ? (x->slow < SETTLE_STEPS ? x->slow + 1 : SETTLE_STEPS) : x->slow;",
-     GRAN + ["tests/test_settle.sh"], None),
+     SETTLE, None),
     ("settle-peak-not-restarted", "src/pred_settle.c", "    x->peak2 = v2;\n", "",
-     GRAN + ["tests/test_settle.sh"], None),
+     SETTLE, None),
     # a held sphere a candidate again at every step: held again on what it touches now
     ("settle-held-candidate", "src/pred_settle.c",
      "    x->cand = !x->still && x->slow >= SETTLE_STEPS;",
-     "    x->cand = x->slow >= SETTLE_STEPS;", GRAN + ["tests/test_settle.sh"], None),
+     "    x->cand = x->slow >= SETTLE_STEPS;", SETTLE, None),
     # more supports than a record holds: the most nearly below replaced, not the least
     ("settle-add-replaces-best", "src/pred_settle.c", "            if (g->score[m] > g->score[k])",
-     "            if (g->score[m] < g->score[k])", GRAN + ["tests/test_settle.sh"], None),
+     "            if (g->score[m] < g->score[k])", SETTLE, None),
     ("settle-add-more-unset", "src/pred_settle.c", "        g->more = true;\n", "",
-     GRAN + ["tests/test_settle.sh"], None),
+     SETTLE, None),
     # supports above it (along its acceleration) instead of below
     ("settle-supports-above", "src/pred_settle.c", "    if (cosine < 0.0)\n        settle_add(",
-     "    if (cosine > 0.0)\n        settle_add(", GRAN + ["tests/test_settle.sh"], None),
+     "    if (cosine > 0.0)\n        settle_add(", SETTLE, None),
     ("settle-planes-above", "src/pred_settle.c",
      "        if (nbep_vec3_dot(s->plane_normal[p], g.a) < 0.0 &&",
-     "        if (nbep_vec3_dot(s->plane_normal[p], g.a) > 0.0 &&", GRAN + ["tests/test_settle.sh"],
+     "        if (nbep_vec3_dot(s->plane_normal[p], g.a) > 0.0 &&", SETTLE,
      None),
     # the touching distance ten times as far: held on what it does not touch
     ("settle-tol-10x", "src/pred_settle.c", ".tol = vs * vs / amag, .par = par};",
-     ".tol = 10.0 * vs * vs / amag, .par = par};", GRAN + ["tests/test_settle.sh"], None),
+     ".tol = 10.0 * vs * vs / amag, .par = par};", SETTLE, None),
     # plane 0 taken for a sphere at a recheck (its index 0 read as a sphere's -1 - j)
     ("settle-recheck-plane-0-dropped", "src/pred_settle.c",
      "        if (who >= 0 || c->settle[-1 - who].still",
-     "        if (who > 0 || c->settle[-1 - who].still", GRAN + ["tests/test_settle.sh"], None),
+     "        if (who > 0 || c->settle[-1 - who].still", SETTLE, None),
     # a candidate lost in an earlier round counted as lost again in each: the rounds never end
     ("settle-lost-counted-again", "src/pred_settle.c", "        w->n_lost[cur] += x->live[prev] && !on;",
-     "        w->n_lost[cur] += !on;", GRAN + ["tests/test_settle.sh"], None),
+     "        w->n_lost[cur] += !on;", SETTLE, None),
     # what a hold writes: its effective acceleration, its count, its block's energy
     ("settle-hold-aeff-kept", "src/pred_settle.c", "        c->aeff[i] = ZERO3;\n", "",
-     GRAN + ["tests/test_settle.sh"], None),
+     SETTLE, None),
     ("settle-hold-count-kept", "src/pred_settle.c", "        x->held_now = true;\n        c->ver[i]++;",
-     "        x->held_now = true;", GRAN + ["tests/test_settle.sh"], None),
+     "        x->held_now = true;", SETTLE, None),
     ("settle-hold-energy-stale", "src/pred_settle.c",
      "    if (w->n_settled > 0)\n        nbep__sim_block_energy(sim, own);", "",
-     GRAN + ["tests/test_settle.sh"], None),
+     SETTLE, None),
     ("cage-moved-off", "src/pred_react.c", "CAGE_TOUCH_REL * s->radius[k]) {",
      "INFINITY) {", GRAN, None),
     ("pocket-off", "src/pred_react.c", "        if (!held) { /* a pocket:", "        if (0) { /* a pocket:",
