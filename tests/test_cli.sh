@@ -394,6 +394,20 @@ run_nbep check inputs/bounce.deck --set 'planes.[3].normal=[0,0,1]'
 check "a --set index past a list of one says '1 entry' (exit $rc)" \
     "[ $rc = 2 ] && one_line && grep -qF 'planes has 1 entry: the index' '$tmp/stderr'"
 
+# ---- a command line without its command or operand: exit 2, one line that says what is missing
+# (none of these was run by a test until 2026-12-04, a coverage run found)
+for args in "|nbep: no command given (try nbep --help)" \
+    "frobnicate|nbep: unknown command 'frobnicate' (try nbep --help)" \
+    "run --quiet|nbep: run needs a deck file (try nbep --help)" \
+    "sweep|nbep: sweep needs a deck file (try nbep --help)" \
+    "info|nbep: info needs a run file (RUN.h5) (try nbep --help)"; do
+    want=${args#*|}
+    read -r -a argv <<<"${args%%|*}"
+    run_nbep "${argv[@]}"
+    check "nbep ${argv[*]}: exit 2, one line: $want (got $rc: $(head -c 200 "$tmp/stderr"))" \
+        "[ $rc = 2 ] && one_line && grep -qxF -- \"$want\" '$tmp/stderr' && [ ! -s '$tmp/stdout' ]"
+done
+
 # ---- a bad value given to an option names the option as typed, not the --set it becomes ------
 for cmd in run check sweep; do
     run_nbep $cmd "$tmp/group.deck" -n abc --quiet -o "$tmp/never-$cmd.h5"
