@@ -385,6 +385,11 @@ MUTANTS = [
     ("rest-plane-left-by-a-step-of-speed", "src/pred_react.c",
      "                                          sqrt(2.0 * nbep_vec3_norm(s->acc[i]) * s->radius[i]))",
      "                                          nbep_vec3_norm(s->acc[i]) * dt)", ["tests/test_settle.sh"], None),
+    # a jammed body's size: LOCK_MAX spheres at most, one more refused whole (no lock at all)
+    ("lock-max-63", "src/pred_react.c", "#define LOCK_MAX 64", "#define LOCK_MAX 63",
+     ["tests/test_settle.sh"], None),
+    ("lock-full-locks-part", "src/pred_react.c", "    if (x.full)\n        return false;\n", "",
+     ["tests/test_settle.sh"], None),
     ("jam-hold-pairs-off", "src/pred_react.c",
      "        if (!c->rest[k].still && (supported(c, k) || on_held) &&",
      "        if (0 &&", GRAN, None),
