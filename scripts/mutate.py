@@ -1209,6 +1209,11 @@ MUTANTS = [
      ["tests/test_cli.sh"], None),
     ("cli-second-deck-taken", "src/cli.c", "    if (cli->path)\n        NBEP_FAIL", "    if (0)\n        NBEP_FAIL",
      ["tests/test_cli.sh"], None),
+    # a command line without its command, or without its deck or run file
+    ("cli-no-command-unchecked", "src/cli.c", "    if (argc < 2)\n", "    if (argc < 1)\n",
+     ["tests/test_cli.sh"], None),
+    ("cli-operand-unchecked", "src/cli.c", "    if (!cli->path)\n        NBEP_FAIL", "    if (0)\n        NBEP_FAIL",
+     ["tests/test_cli.sh"], None),
     # a shorthand of a deck name (vals for values) gets its suggestion
     ("suggest-shorthand-none", "src/scene_schema.c",
      "            if (seg_len >= 3 && seg[0] == leaf[0] && subsequence(seg, leaf) && limit < dist)",
