@@ -340,12 +340,24 @@ static inline double rest_speed(const nbep_state *s, size_t i, double amag, doub
     return amag > 0.0 ? amag * min_bounce_time(s->radius[i], amag, dt) : 0.0;
 }
 
-static inline bool rest_has_plane(const rest_set *r, size_t p)
+/* Whether r names `who` among its contacts (rest_set's who: plane p, or -1 - j for sphere j). */
+static inline bool rest_names(const rest_set *r, int32_t who)
 {
     for (int k = 0; k < r->n; k++)
-        if (r->who[k] == (int32_t)p)
+        if (r->who[k] == who)
             return true;
     return false;
+}
+
+static inline bool rest_has_plane(const rest_set *r, size_t p)
+{
+    return rest_names(r, (int32_t)p);
+}
+
+/* Whether r (a held sphere's contacts) names sphere k among its supports. */
+static inline bool rest_has_sphere(const rest_set *r, size_t k)
+{
+    return rest_names(r, -1 - (int32_t)k);
 }
 
 static inline bool is_fresh(const pred_ctx *c, size_t i, const nbep_event *ev)

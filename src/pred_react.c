@@ -109,15 +109,6 @@ static bool rests_on_spheres(const pred_ctx *c, size_t i)
     return false;
 }
 
-/* Whether r (a held sphere's contacts) names sphere k among its supports. */
-static bool rest_has_sphere(const rest_set *r, size_t k)
-{
-    for (int q = 0; q < r->n; q++)
-        if (r->who[q] == -1 - (int32_t)k)
-            return true;
-    return false;
-}
-
 /* Unit normals of the contacts of r, from support to sphere i. */
 static void rest_normals(const pred_ctx *c, const nbep_state *s, size_t i, const rest_set *r,
                          nbep_vec3 *n)
