@@ -37,10 +37,10 @@ static void fix_scene(fix *f, size_t n)
     nbep_test_set_plane(f->sc, FLOOR, (nbep_vec3){0.0, 0.0, 1.0}, 0.0);
 }
 
-static void put(fix *f, size_t i, nbep_vec3 p, double r, double speed)
+/* Sphere i of mass 1 at p, at rest, under gravity. */
+static void put(fix *f, size_t i, nbep_vec3 p, double r)
 {
-    nbep_test_set_sphere(f->sc, i, p, (nbep_vec3){speed, 0.0, 0.0}, r, 1.0,
-                         (nbep_vec3){0.0, 0.0, -G});
+    nbep_test_set_sphere(f->sc, i, p, ZERO3, r, 1.0, (nbep_vec3){0.0, 0.0, -G});
 }
 
 static void fix_create(fix *f)
@@ -89,14 +89,6 @@ static bool phases(fix *f)
     return nbep__pred_settle_phases(f->sim, f->c, (nbep_range){0, f->sim->st.n}, &f->c->ws[0]);
 }
 
-static bool rest_names(const rest_set *r, int32_t who)
-{
-    for (int k = 0; k < r->n; k++)
-        if (r->who[k] == who)
-            return true;
-    return false;
-}
-
 /* A step counts as slow only if the sphere's highest speed inside it, not only its speed at the
  * step's end, stayed at or below the settle speed: a sphere that hops on the floor and is slow
  * at each step's end is no candidate. */
@@ -105,7 +97,7 @@ static void test_a_fast_moment_inside_a_step_starts_the_window_again(void **stat
     (void)state;
     fix f;
     fix_scene(&f, 1);
-    put(&f, 0, (nbep_vec3){0.0, 0.0, 0.01}, 0.01, 0.0);
+    put(&f, 0, (nbep_vec3){0.0, 0.0, 0.01}, 0.01);
     fix_create(&f);
     nbep_state *s = &f.sim->st;
     const double vs = settle_speed(s, 0, DT);
@@ -137,8 +129,8 @@ static void test_a_held_sphere_is_no_candidate_and_keeps_its_hold(void **state)
     fix f;
     fix_scene(&f, 2);
     const double r = 0.01;
-    put(&f, 0, (nbep_vec3){0.0, 0.0, r}, r, 0.0);
-    put(&f, 1, (nbep_vec3){0.0, 0.0, 3.0 * r}, r, 0.0);
+    put(&f, 0, (nbep_vec3){0.0, 0.0, r}, r);
+    put(&f, 1, (nbep_vec3){0.0, 0.0, 3.0 * r}, r);
     fix_create(&f);
     hold(&f, 0, FLOOR);
     f.c->rest[0].ver[0] = 7; /* any mark: a hold would set it from the floor's (0) */
@@ -177,11 +169,11 @@ static void test_of_more_supports_than_a_record_holds_the_most_nearly_below_are_
     const nbep_vec3 top = {0.0, 0.0, 5.0};
     /* polar angle from straight below and azimuth of each support 1..5, degrees */
     const double polar[6] = {0, 75, 0, 40, 40, 40}, azim[6] = {0, 60, 0, 0, 120, 240};
-    put(&f, 0, top, R, 0.0);
+    put(&f, 0, top, R);
     for (size_t j = 1; j < 6; j++) {
         const double th = polar[j] * deg, ph = azim[j] * deg;
         nbep_vec3 u = {sin(th) * cos(ph), sin(th) * sin(ph), -cos(th)};
-        put(&f, j, nbep_vec3_add(top, nbep_vec3_scale(u, d)), r, 0.0);
+        put(&f, j, nbep_vec3_add(top, nbep_vec3_scale(u, d)), r);
     }
     fix_create(&f);
     nbep_state *s = &f.sim->st;
@@ -203,9 +195,9 @@ static void test_of_more_supports_than_a_record_holds_the_most_nearly_below_are_
     assert_true(h->still);
     assert_true(f.c->settle[0].more);
     assert_int_equal(h->n, 4);
-    assert_false(rest_names(h, -1 - 1));
+    assert_false(rest_has_sphere(h, 1));
     for (size_t j = 2; j < 6; j++) {
-        assert_true(rest_names(h, -1 - (int32_t)j));
+        assert_true(rest_has_sphere(h, j));
         for (int k = 0; k < h->n; k++)
             if (h->who[k] == -1 - (int32_t)j)
                 assert_int_equal(h->ver[k], 10 + j);
@@ -232,8 +224,8 @@ static void test_plane_zero_stays_a_support_in_a_later_round(void **state)
     fix f;
     fix_scene(&f, 2);
     const double R = 1.0, r = 0.2, z = 0.5;
-    put(&f, 0, (nbep_vec3){0.0, 0.0, R}, R, 0.0);
-    put(&f, 1, (nbep_vec3){sqrt((R + r) * (R + r) - (R - z) * (R - z)), 0.0, z}, r, 0.0);
+    put(&f, 0, (nbep_vec3){0.0, 0.0, R}, R);
+    put(&f, 1, (nbep_vec3){sqrt((R + r) * (R + r) - (R - z) * (R - z)), 0.0, z}, r);
     fix_create(&f);
     settle_rec *own = f.c->settle, *guarded = calloc(3, sizeof *guarded);
     assert_non_null(guarded);

@@ -259,13 +259,14 @@ done
 # falling row, 64 and 65 spheres long, each spanning its box from y-min to y-max. Every sphere
 # is in the jam at step 1, so the 64 make one body, which falls freely as one until it lands
 # (near t = 0.19 s): in its line, against the x-max wall, at z = 0.2 - 4.5 t^2 (its gravity
-# along z is -9; the walls take the rest); the 65 make none (the walk stops at its 65th sphere: no lock, no sphere
-# moved) and meet as they would without locks: pressed together, at zero time, as the row of 5
-# did before the locks, until run.max_reactions stops the run within a microsecond of step 1's
-# start (2.4e-7 s; 3.3e-7 and 5.9e-7 s for rows of 70 and 130). A lock of the first 64 alone
-# moves them on as a body, and the 65th stops the run later (6.2e-5 s: under 1e-5 s says no
-# body moved). (Measured 2026-12-04: under 2 s each.)
-for n in 64 65; do
+# along z is -9; the walls take the rest). The 65 make none (the walk stops at its 65th sphere:
+# no lock, no sphere moved) and meet as they would without locks: pressed together, at zero
+# time, as the row of 5 did before the locks, until run.max_reactions stops the run within a
+# microsecond of step 1's start (2.4e-7 s; 3.3e-7 and 5.9e-7 s for rows of 70 and 130). A lock
+# of the first 64 alone moves them on as a body, and the 65th stops the run later (6.2e-5 s:
+# under 1e-5 s says no body moved). (Measured 2026-12-04: under 2 s each.)
+# long_row N: that row of N spheres run to step 150 in cells mode into $tmp/longN.{h5,err}, rc
+long_row() {
     "$PY" -c 'import sys
 n = int(sys.argv[1])
 print("run: { algorithm = \"predictive\"; steps = 150; dt = 1.0e-3; seed = 1; neighbors = \"cells\";")
@@ -274,31 +275,29 @@ print("physics: { gravity = [2.0, 1.0, -9.0]; restitution = 0.5; };")
 print("box: { min = [0.0, 0.0, 0.0]; max = [0.3, %r, 0.3]; };" % (n * 0.06))
 print("spheres = (" + ",\n".join("{ position = [0.27, %r, 0.2]; radius = 0.03; mass = 1.0; }"
                                  % (0.03 + 0.06 * k) for k in range(n)) + ");")
-print("output: { file = \"row.h5\"; every = 50; fields = [\"position\", \"velocity\"]; };")' \
-        "$n" >"$tmp/long$n.deck"
-    timeout -k 5 60 bin/nbep run "$tmp/long$n.deck" --quiet -t 1 -o "$tmp/long$n.h5" \
-        2>"$tmp/long$n.err"
+print("output: { file = \"row.h5\"; every = 50; fields = [\"position\"]; };")' "$1" >"$tmp/long$1.deck"
+    timeout -k 5 60 bin/nbep run "$tmp/long$1.deck" --quiet -t 1 -o "$tmp/long$1.h5" \
+        2>"$tmp/long$1.err"
     rc=$?
-    if [ "$n" = 64 ]; then
-        f=$("$PY" -c 'import sys, h5py, numpy as np
+}
+long_row 64
+f=$("$PY" -c 'import sys, h5py, numpy as np
 f = h5py.File(sys.argv[1], "r")
 t, p = f["/frames/time"][:], f["/frames/position"][:]
 line = np.abs(p[:, :, 1] - (0.03 + 0.06 * np.arange(64))).max()
 wall = np.abs(p[:, :, 0] - 0.27).max()
 fall = np.abs(p[:, :, 2] - (0.2 - 4.5 * t[:, None] ** 2)).max()
 print(len(t), "%.3g" % max(line, wall), "%.3g" % fall)' "$tmp/long64.h5" 2>/dev/null)
-        set -- ${f:-0 1 1}
-        check "a falling row of 64 (LOCK_MAX), cells: one body, exit 0, in its line and falling freely to step 150 ($1 frames, off the line by $2 m, the fall by $3 m; exit $rc)" \
-            "[ $rc -eq 0 ] && [ ! -s '$tmp/long64.err' ] && [ '$1' = 4 ] &&
-             awk 'BEGIN { exit !($2 <= 1e-12 && $3 <= 1e-9) }'"
-    else
-        at=$(sed -n 's/.* in one step (t = \([^,]*\), run.max_reactions).*/\1/p' "$tmp/long65.err")
-        check "a falling row of 65, one past LOCK_MAX, cells: no body; run.max_reactions stops it at step 1, t = ${at:-?} s, under 1e-5 s (exit $rc)" \
-            "[ $rc -eq 1 ] && [ \$(wc -l <'$tmp/long65.err') = 1 ] &&
-             grep -q '^nbep: step 1: sphere [0-9]* reacted over 20000 times in one step' '$tmp/long65.err' &&
-             awk 'BEGIN { exit !(${at:-1} < 1e-5) }'"
-    fi
-done
+set -- ${f:-0 1 1}
+check "a falling row of 64 (LOCK_MAX), cells: one body, exit 0, in its line and falling freely to step 150 ($1 frames, off the line by $2 m, the fall by $3 m; exit $rc)" \
+    "[ $rc -eq 0 ] && [ ! -s '$tmp/long64.err' ] && [ '$1' = 4 ] &&
+     awk 'BEGIN { exit !($2 <= 1e-12 && $3 <= 1e-9) }'"
+long_row 65
+at=$(sed -n 's/.* in one step (t = \([^,]*\), run.max_reactions).*/\1/p' "$tmp/long65.err")
+check "a falling row of 65, one past LOCK_MAX, cells: no body; run.max_reactions stops it at step 1, t = ${at:-?} s, under 1e-5 s (exit $rc)" \
+    "[ $rc -eq 1 ] && [ \$(wc -l <'$tmp/long65.err') = 1 ] &&
+     grep -q '^nbep: step 1: sphere [0-9]* reacted over 20000 times in one step' '$tmp/long65.err' &&
+     awk 'BEGIN { exit !(${at:-1} < 1e-5) }'"
 
 # The falling row with its spheres rising and falling at different speeds ([0.02, 0, 0.01,
 # 0.03, -0.01] m/s), all leaving the x-max wall at 0.1 m/s: the body each lock makes takes its
