@@ -1214,6 +1214,13 @@ MUTANTS = [
      ["tests/test_cli.sh"], None),
     ("cli-operand-unchecked", "src/cli.c", "    if (!cli->path)\n        NBEP_FAIL", "    if (0)\n        NBEP_FAIL",
      ["tests/test_cli.sh"], None),
+    # the check of a folder by access() alone: root passes it in /proc (2026-12-04)
+    ("dir-probe-skipped", "src/util.c", "    if (access(dir, W_OK | X_OK) != 0)\n        return errno;",
+     "    return access(dir, W_OK | X_OK) != 0 ? errno : 0;", ["tests/test_cli.sh", "tests/test_sweep_cli.sh"],
+     None),
+    ("dir-probe-error-dropped", "src/util.c",
+     "    const int err = fd >= 0 ? 0 : errno == ENAMETOOLONG ? 0 : errno;",
+     "    const int err = 0;", ["tests/test_cli.sh", "tests/test_sweep_cli.sh"], None),
     # a shorthand of a deck name (vals for values) gets its suggestion
     ("suggest-shorthand-none", "src/scene_schema.c",
      "            if (seg_len >= 3 && seg[0] == leaf[0] && subsequence(seg, leaf) && limit < dist)",

@@ -544,8 +544,9 @@ static const char *output_dir_fault(const char *output, const char *dir, int *er
         err = errno; /* ENOENT, or ENOTDIR for a file on the way */
     else if (!S_ISDIR(sb.st_mode))
         err = ENOTDIR;
-    else if (access(dir, W_OK | X_OK) != 0)
-        err = errno; /* EACCES, EROFS: the user's path (exit 2), as the run's own */
+    else
+        err = nbep_dir_takes_files(dir); /* EACCES, EROFS: the user's path (exit 2), as the
+                                          * run's own */
     *err_out = err;
     return err ? strerror(err) : new_output_fault(output);
 }

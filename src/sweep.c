@@ -1179,9 +1179,11 @@ static int mkdir_looked(const char *p, bool below)
         errno = ENOMEM;
         return -1;
     }
-    const int r = access(parent, W_OK | X_OK);
+    /* mkdir fails as a file made there would (in /proc, ENOENT for root too) */
+    const int err = nbep_dir_takes_files(parent);
     free(parent);
-    return r;
+    errno = err;
+    return err ? -1 : 0;
 }
 
 /* mkdir -p: every missing directory on the way. */
@@ -1217,8 +1219,8 @@ static nbep_status make_dir(const char *dir, bool look, int *made, nbep_diag *d)
         if (c == '\0')
             break;
     }
-    if (st == NBEP_OK && look && *made == 0 && access(dir, W_OK | X_OK) != 0) {
-        const int err = errno;
+    int err;
+    if (st == NBEP_OK && look && *made == 0 && (err = nbep_dir_takes_files(dir)) != 0) {
         nbep_diag_add(d, __FILE__, __LINE__, "nbep: cannot write in the sweep directory %s: %s",
                       dir, strerror(err));
         st = nbep_status_of_open(err);

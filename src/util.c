@@ -207,6 +207,29 @@ char *nbep_path_dir(const char *path)
     return slash ? strndup(path, slash == path ? 1 : (size_t)(slash - path)) : strdup(".");
 }
 
+int nbep_dir_takes_files(const char *dir)
+{
+    if (access(dir, W_OK | X_OK) != 0)
+        return errno;
+    static const char name[] = "/.nbep-probe-XXXXXX";
+    const size_t n = strlen(dir);
+    char *probe = malloc(n + sizeof name);
+    if (!probe)
+        return ENOMEM;
+    memcpy(probe, dir, n);
+    memcpy(probe + n, name, sizeof name);
+    const int fd = mkostemp(probe, O_CLOEXEC);
+    /* a probe's name too long for a folder near PATH_MAX says nothing of the run's own file,
+     * whose name staged_name_fits checks: access()'s answer stands */
+    const int err = fd >= 0 ? 0 : errno == ENAMETOOLONG ? 0 : errno;
+    if (fd >= 0) {
+        close(fd);
+        unlink(probe);
+    }
+    free(probe);
+    return err;
+}
+
 const char *nbep_format_bytes(double bytes, char buf[NBEP_BYTES_TEXT_MAX])
 {
     static const char *const unit[] = {"B", "kB", "MB", "GB", "TB", "PB", "EB"};

@@ -193,6 +193,18 @@ check "... a --set of it names the path as typed (exit $rc)" \
 run_nbep run "$tmp/bad-out.deck" --quiet -o "$tmp/no-such-dir/o.h5"
 check "... and so does -o (exit $rc)" \
     "[ $rc = 2 ] && one_line && grep -qx 'nbep: $tmp/no-such-dir/o.h5: cannot create the output file: No such file or directory' '$tmp/stderr'"
+# a folder that takes no new files whatever its permission bits say: /proc (root passes
+# access() there; nbep check passed what the run refused, ENOENT on its .partial, until
+# 2026-12-04). Run and check in the same line, exit 2, for any user
+if [ -d /proc/self ]; then
+    run_nbep run "$tmp/bad-out.deck" --quiet -o /proc/nbep-test.h5
+    cp "$tmp/stderr" "$tmp/run-stderr"
+    check "-o in /proc: exit 2 (got $rc), one line" \
+        "[ $rc = 2 ] && one_line && grep -q '^nbep: /proc/nbep-test.h5: cannot create the output file: ' '$tmp/stderr'"
+    run_nbep check "$tmp/bad-out.deck" -o /proc/nbep-test.h5
+    check "... and nbep check says so in the same line (exit $rc)" \
+        "[ $rc = 2 ] && cmp -s '$tmp/stderr' '$tmp/run-stderr'"
+fi
 mkfifo "$tmp/deck-pipe.h5"
 sed "s|file = \"group.h5\"|file = \"$tmp/deck-pipe.h5\"|" "$tmp/group.deck" >"$tmp/bad-out.deck"
 run_nbep run "$tmp/bad-out.deck" --quiet

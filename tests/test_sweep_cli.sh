@@ -191,6 +191,19 @@ check "a link to nothing where the sweep's directory goes: exit 2 (got $rc), one
 run_check "$tmp/s.deck" -o "$tmp/dangling"
 check "nbep check: the same, exit 2 (got $rc), the sweep's line" \
     "[ $rc = 2 ] && [ ! -s '$tmp/stdout' ] && cmp -s '$tmp/stderr' '$tmp/sweep-stderr'"
+# a folder in /proc, where root passes access() but mkdir fails (ENOENT): check passed it
+# until 2026-12-04. The sweep's line, exit 2, for any user, and the same for a new folder below
+if [ -d /proc/self ]; then
+    for o in /proc/nbep-study /proc/nbep-new/deep/x; do
+        run_sweep "$tmp/s.deck" -o "$o" --quiet
+        cp "$tmp/stderr" "$tmp/sweep-stderr"
+        check "a sweep into $o: exit 2 (got $rc), one line" \
+            "[ $rc = 2 ] && one_line && grep -q '^nbep: cannot make the sweep directory /proc/nbep-' '$tmp/stderr'"
+        run_check "$tmp/s.deck" -o "$o"
+        check "nbep check: the same, exit 2 (got $rc), the sweep's line" \
+            "[ $rc = 2 ] && [ ! -s '$tmp/stdout' ] && cmp -s '$tmp/stderr' '$tmp/sweep-stderr'"
+    done
+fi
 run_check "$tmp/s.deck" -o "$tmp/new2/deep/x"
 check "nbep check: new folders on the way pass (got $rc), none made" \
     "[ $rc = 0 ] && [ ! -e '$tmp/new2' ]"

@@ -119,6 +119,15 @@ bool nbep_lock_names(int fd, const char *path);
  * ("a/b/c.h5": "a/b"); NULL without memory. */
 char *nbep_path_dir(const char *path);
 
+/* 0 when a new file can be made in the folder dir, else the errno that making one fails with
+ * (EACCES, EROFS, ENOENT...), for the checks that say before a run or a sweep begins whether
+ * its files can be made. access() asks only the permission bits, which root passes in any
+ * folder: in /proc, or on a file system that takes no new files without being mounted
+ * read-only, `nbep check -o /proc/x.h5` passed what `nbep run` refused (ENOENT making its
+ * .partial) until 2026-12-04. So once access() passes, an empty file with a name of its own
+ * is made there and removed at once. */
+int nbep_dir_takes_files(const char *dir);
+
 /* A byte count as people read it (`nbep check`'s memory and output, the sweep's, the errors
  * of a scene too large): 3 significant figures in decimal units, B, kB, MB, GB, TB, PB and EB
  * (powers of 1000, as disks and `df -H` count), the unit chosen so that the figure is below
