@@ -1214,6 +1214,10 @@ MUTANTS = [
      ["tests/test_cli.sh"], None),
     ("cli-operand-unchecked", "src/cli.c", "    if (!cli->path)\n        NBEP_FAIL", "    if (0)\n        NBEP_FAIL",
      ["tests/test_cli.sh"], None),
+    # a physics error hides the placement's (until 2026-12-04)
+    ("physics-hides-placement", "src/scene.c",
+     "    parse_physics(&L, root, &sc);\n    const size_t geometry0 = d->n_errors;\n",
+     "    const size_t geometry0 = d->n_errors;\n    parse_physics(&L, root, &sc);\n", ["test_scene"], None),
     # the check of a folder by access() alone: root passes it in /proc (2026-12-04)
     ("dir-probe-skipped", "src/util.c", "    if (access(dir, W_OK | X_OK) != 0)\n        return errno;",
      "    return access(dir, W_OK | X_OK) != 0 ? errno : 0;", ["tests/test_cli.sh", "tests/test_sweep_cli.sh"],

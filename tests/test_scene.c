@@ -2180,6 +2180,22 @@ static void test_overlaps_with_spheres_and_planes_are_named(void **state)
                      "(sphere 0) by 0.25",
                 DATA "scene_overlap.deck:8: spheres.[3] (sphere 3) overlaps box x-max by 0.25",
                 DATA "scene_overlap.deck:9: spheres.[4] (sphere 4) overlaps planes.[0] by 0.25");
+    /* every problem at once: a physics value out of range or of the wrong type is listed
+     * with the overlaps, which need no physics (until 2026-12-04 it hid them all) */
+    const char *bad_physics[] = {"physics.restitution=1.8", "physics.tc=-1.0",
+                                 "physics.carry_drop=-1.0", "physics.gravity=\"down\"",
+                                 "physics.zero_momentum=3"};
+    for (size_t k = 0; k < sizeof bad_physics / sizeof *bad_physics; k++) {
+        nbep_diag_fini(&f->d);
+        nbep_diag_init(&f->d);
+        LOAD_FAILS(f, NBEP_EDECK, DATA "scene_overlap.deck", bad_physics[k]);
+        assert_int_equal(f->d.n_errors, 4);
+        assert_non_null(strstr(f->d.msg[0], bad_physics[k]));
+        assert_non_null(strstr(f->d.msg[1], "scene_overlap.deck:7: spheres.[2] (sphere 2) "
+                                            "overlaps spheres.[0] (sphere 0) by 0.25"));
+        assert_non_null(strstr(f->d.msg[3], "scene_overlap.deck:9: spheres.[4] (sphere 4) "
+                                            "overlaps planes.[0] by 0.25"));
+    }
 }
 
 /* An overlap made by a --set of a position is blamed on that --set, not on the deck's line of
