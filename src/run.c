@@ -291,7 +291,8 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
  * past what its algorithm allows: round-off for the exact one, the smaller radius for those
  * that find contacts after they overlap; the run's status and exit stay those of a run that
  * completed. */
-static void warn_overlap(const nbep_scene *sc, const nbep_summary *s, const char *file)
+static void warn_overlap(const nbep_scene *sc, const nbep_summary *s, const char *file,
+                         bool other_algorithm)
 {
     const bool exact = strcmp(sc->algorithm, "predictive") == 0 && !sc->order_step;
     const double coords = EXACT_OVERLAP_ULPS * sc->span * 0x1p-53; /* of a radius */
@@ -300,12 +301,18 @@ static void warn_overlap(const nbep_scene *sc, const nbep_summary *s, const char
         if (coords > 1e-9)
             snprintf(far, sizeof far, "; with coordinates this far from the origin, below %.2g",
                      coords);
+        /* a summary from step 0 counts the earlier parts too: one run by naive, say, left
+         * overlaps that the predictive part carries on from (a review's, 2026-12-04: the
+         * warning blamed the predictive algorithm for them) */
         fprintf(stderr,
                 "nbep: warning: spheres overlapped by up to %.3g of the smaller radius "
                 "(max_overlap_rel) in %s, where the predictive algorithm's overlaps are "
-                "round-off (below 1e-9%s): its collisions are not to be trusted (README, "
+                "round-off (below 1e-9%s)%s: its collisions are not to be trusted (README, "
                 "Checking a run)\n",
-                s->max_overlap_rel, file, far);
+                s->max_overlap_rel, file, far,
+                other_algorithm ? "; an earlier part of the run ran another algorithm, whose "
+                                  "overlaps this part starts from"
+                                : "");
     }
     else if (!exact && s->max_overlap_rel > DETECT_OVERLAP_WARN)
         fprintf(stderr,
@@ -664,6 +671,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     nbep_resume resume = {0};
     int64_t from = -1; /* the resumed frame's step */
     bool whole = true;  /* the summary counts from step 0 (a resume's file had the totals) */
+    bool other_algorithm = false; /* a resume with another algorithm than the first part's */
     FILE *summary = NULL;
     /* A resumed run appends to the file it continues; output.file does not apply, and one
      * given on the command line (-o, --set) that names another file is refused (until
@@ -754,6 +762,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
          * first part: said at the time, not only in the file's `resumed` (a sweep replaces
          * such a file; a hand resume may mean it, as a cooling gas resumed from its melt) */
         const char *changes = st == NBEP_OK && rq->resume ? nbep_output_resume_changes(out) : NULL;
+        other_algorithm = changes && strncmp(changes, "algorithm ", 10) == 0;
         if (changes && rq->verbose)
             fprintf(stderr,
                     "nbep: %s continues from step %lld with %s, which its first part did not "
@@ -763,9 +772,9 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         if (st == NBEP_OK && rq->resume && resume.step > 0 && !resume.contacts &&
             resume.restitution_kept && nbep_sim_lasting(sim))
             fprintf(stderr,
-                    "nbep: warning: %s continues a predictive run at e < 1 from step %lld, whose "
-                    "TC clocks, held spheres and lasting contacts no frame keeps: they start "
-                    "afresh, and the frames after it follow the same physics but not the "
+                    "nbep: warning: %s continues as a predictive run at e < 1 from step %lld, "
+                    "whose TC clocks, held spheres and lasting contacts no frame keeps: they "
+                    "start afresh, and the frames after it follow the same physics but not the "
                     "uninterrupted run's bits\n",
                     file, (long long)resume.step);
         from = rq->resume ? resume.step : -1;
@@ -778,7 +787,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     }
     if (st == NBEP_OK) {
         st = step_and_close(rq, file, sim, from, whole, &out, res, d);
-        warn_overlap(&sc, &res->summary, file);
+        warn_overlap(&sc, &res->summary, file, other_algorithm);
         nbep_status sst = write_summary(&res->summary, rq->summary_path, summary, d);
         summary = NULL;
         if (st == NBEP_OK)

@@ -728,7 +728,7 @@ timeout 120 bin/nbep run "${pile[@]}" -n 950 --resume $tmp/pile-old.h5 2>$tmp/pi
 rc=$?
 check "a file without the state resumed from step 600: exit 0 (got $rc), one warning line saying its frames are not the uninterrupted run's bits" \
     "[ $rc = 0 ] && [ \$(wc -l < $tmp/pile-old.err) = 1 ] &&
-     grep -q '^nbep: warning: $tmp/pile-old.h5 continues a predictive run at e < 1 from step 600, .*TC clocks.* not the uninterrupted run.s bits' $tmp/pile-old.err"
+     grep -q '^nbep: warning: $tmp/pile-old.h5 continues as a predictive run at e < 1 from step 600, .*TC clocks.* not the uninterrupted run.s bits' $tmp/pile-old.err"
 check "(and they are not: the state is no formality)" \
     "! h5diff -q $tmp/pile-cells-whole.h5 $tmp/pile-old.h5 /frames >/dev/null 2>&1"
 check "(and the resumed part keeps the state again for its frames)" \
@@ -1003,6 +1003,14 @@ bin/nbep run $deck --quiet -a naive -n 20 --dt 0.01 --set spheres.[0].count=1000
 check "no warning for the file unchanged, nor for naive's overlaps by design" \
     "[ ! -s $tmp/kept.err ] && [ ! -s $tmp/coarse.err ] &&
      grep -q '\"max_overlap_rel\": 0\.[1-9]' $tmp/coarse.json"
+# naive's file resumed by the exact algorithm: the overlaps are the naive part's, and the
+# warning says so rather than blame the predictive part (until 2026-12-04, a review's)
+bin/nbep run $deck --quiet -n 22 --dt 0.01 --set spheres.[0].count=1000 --resume $tmp/coarse.h5 \
+    2>$tmp/coarse-pred.err
+rc=$?
+check "naive's file resumed by predictive: exit 0 (got $rc), one warning naming the earlier part's algorithm" \
+    "[ $rc = 0 ] && [ \$(wc -l <$tmp/coarse-pred.err) = 1 ] &&
+     grep -q '^nbep: warning: spheres overlapped by up to 0\.[1-9].*; an earlier part of the run ran another algorithm, whose overlaps this part starts from: ' $tmp/coarse-pred.err"
 # Far from the origin, round-off is the coordinates' (run.c EXACT_OVERLAP_ULPS): a sphere
 # dropped onto a floor 1e11 radii out overlaps it by 1 to 4 of their ulps (1.5e-5 to 6.1e-5
 # of a radius) in each neighbour mode, and gets no warning (until 2026-12-03 it did); a
