@@ -333,7 +333,10 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
     if (!cli->path)
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: %s needs a %s (try nbep --help)", argv[1],
                   cli->cmd == NBEP_CMD_INFO ? "run file (RUN.h5)" : "deck file");
-    if (cli->cmd == NBEP_CMD_INFO && (cli->n_overrides || cli->summary || cli->resume))
+    /* --quiet too: info prints only what was asked for, and README says it takes no options
+     * (it was taken and did nothing until 2026-12-04, where -t 3 was refused) */
+    if (cli->cmd == NBEP_CMD_INFO &&
+        (cli->n_overrides || cli->summary || cli->resume || cli->quiet))
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: info takes only a run file");
     if (cli->resume && cli->cmd != NBEP_CMD_RUN)
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: --resume goes with run only");

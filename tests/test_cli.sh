@@ -680,7 +680,8 @@ check "-o with quotes, a space and a backslash: nbep check names that file (got 
     "[ $rc = 0 ] && cmp -s '$tmp/named' '$tmp/typed'"
 
 # ---- info prints a run file and takes nothing else (an ignored option would pass for applied) --
-for extra in "--resume $tmp/group.h5" "--summary $tmp/info.json" "--set run.steps=5" "-n 5"; do
+for extra in "--resume $tmp/group.h5" "--summary $tmp/info.json" "--set run.steps=5" "-n 5" -q \
+    --quiet; do
     run_nbep info "$tmp/no-such.h5" $extra
     check "nbep info RUN.h5 $extra: exit 2, one line (got $rc)" \
         "[ $rc = 2 ] && one_line && grep -qx 'nbep: info takes only a run file' '$tmp/stderr' &&
