@@ -1214,6 +1214,19 @@ MUTANTS = [
      ["tests/test_cli.sh"], None),
     ("cli-operand-unchecked", "src/cli.c", "    if (!cli->path)\n        NBEP_FAIL", "    if (0)\n        NBEP_FAIL",
      ["tests/test_cli.sh"], None),
+    # a trailing comma named (2026-12-04): a string's comma is none, nor one on another line
+    ("trailing-comma-string-counts", "src/scene_text.c", "            comma = comma && !string;",
+     "            comma = comma;", ["test_scene"], None),
+    ("trailing-comma-any-line", "src/scene_text.c",
+     "        if ((ch == ')' || ch == ']') && comma && ln == line) {",
+     "        if ((ch == ')' || ch == ']') && comma) {", ["test_scene"], None),
+    # nbep info takes no --quiet either (2026-12-04)
+    ("info-quiet-taken", "src/cli.c", "(cli->n_overrides || cli->summary || cli->resume || cli->quiet))",
+     "(cli->n_overrides || cli->summary || cli->resume))", ["tests/test_cli.sh"], None),
+    # the overlap warning names an earlier part's other algorithm (2026-12-04)
+    ("overlap-other-algorithm-unsaid", "src/run.c",
+     "        other_algorithm = changes && strncmp(changes, \"algorithm \", 10) == 0;",
+     "        other_algorithm = false;", ["tests/test_resume.sh"], None),
     # a physics error hides the placement's (until 2026-12-04)
     ("physics-hides-placement", "src/scene.c",
      "    parse_physics(&L, root, &sc);\n    const size_t geometry0 = d->n_errors;\n",
@@ -2341,8 +2354,8 @@ MUTANTS = [
      "err == EACCES ||", ["test_status"], None),
     ("ui-cli-output-unquoted", "src/cli.c", "{\"-o\", \"--output\", \"output.file\", true}",
      "{\"-o\", \"--output\", \"output.file\", false}", ["tests/test_cli.sh"], None),
-    ("ui-cli-info-takes-resume", "src/cli.c", "(cli->n_overrides || cli->summary || cli->resume))",
-     "(cli->n_overrides || cli->summary))", ["tests/test_cli.sh"], None),
+    ("ui-cli-info-takes-resume", "src/cli.c", "(cli->n_overrides || cli->summary || cli->resume || cli->quiet))",
+     "(cli->n_overrides || cli->summary || cli->quiet))", ["tests/test_cli.sh"], None),
     ("ui-xdmf-time-6-digits", "src/output_xdmf.c", "<Time Value=\\\"%.17g\\\"/>",
      "<Time Value=\\\"%g\\\"/>", ["test_output_xdmf", "test_output"], None),
     ("ui-xdmf-slab-count-frames", "src/output_xdmf.c",
@@ -2686,7 +2699,7 @@ MUTANTS = [
     ("overlap-warn-naive-too", "src/run.c",
      "const bool exact = strcmp(sc->algorithm, \"predictive\") == 0 && !sc->order_step;",
      "const bool exact = !sc->order_step;", ["tests/test_resume.sh"], None),
-    ("overlap-warn-never", "src/run.c", "        warn_overlap(&sc, &res->summary, file);\n", "",
+    ("overlap-warn-never", "src/run.c", "        warn_overlap(&sc, &res->summary, file, other_algorithm);\n", "",
      ["tests/test_resume.sh"], None),
     # ---- nbep check: where the run's file goes ----
     ("check-output-dir-unchecked", "src/main.c",

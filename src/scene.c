@@ -518,6 +518,14 @@ static void syntax_error(load *L, const char *deck, const char *text, const char
                              deck, open_line, opener);
         return;
     }
+    /* a comma after a list's last element, as JSON and Python take it (a review's): libconfig
+     * says only "syntax error" at the closer's line */
+    char closer;
+    const bool comma = plain && at > 0 && nbep__scene_trailing_comma(text, (size_t)at, &closer);
+    char hint[96] = "";
+    if (comma)
+        snprintf(hint, sizeof hint, ": a comma before this line's '%c' (a list or array takes "
+                 "none after its last element)", closer);
     const char *p = text; /* the line's text, less its leading and trailing blanks */
     for (int k = 1; k < at && *p; p++)
         k += *p == '\n';
@@ -527,8 +535,8 @@ static void syntax_error(load *L, const char *deck, const char *text, const char
     while (len > 0 && (p[len - 1] == ' ' || p[len - 1] == '\t'))
         len--;
     nbep_diag_add_ranked(L->c.d, nbep__scene_rank(&L->c, NULL, at > 0 ? (uint64_t)at : 0),
-                         __FILE__, __LINE__, "%s:%d: syntax error%s%s%s%.*s%s%s", deck, at,
-                         plain ? "" : ": ", plain ? "" : what, len ? " (the line: " : "",
+                         __FILE__, __LINE__, "%s:%d: syntax error%s%s%s%s%.*s%s%s", deck, at,
+                         plain ? "" : ": ", plain ? "" : what, hint, len ? " (the line: " : "",
                          (int)(len > LINE_SHOWN ? LINE_SHOWN : len), p,
                          len > LINE_SHOWN ? " ..." : "", len ? ")" : "");
 }

@@ -89,6 +89,9 @@ char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label,
 /* Whether libconfig text leaves a group, list or array open at its end ({, ( or [ outside
  * strings and comments): then the line of the innermost one left open, and which it is. */
 bool nbep__scene_unclosed(const char *text, size_t *line, char *opener);
+/* Whether a list's or array's closer on `line` follows a comma (strings and comments aside):
+ * `( a, b, )`, which libconfig calls a plain syntax error; *closer is it. */
+bool nbep__scene_trailing_comma(const char *text, size_t line, char *closer);
 /* Appends the libconfig text of a value: 0.9, 8192, 5000000000L, "text", [0.0, 1.0], (...),
  * { a = 1; }. Floats keep a '.' or an exponent so that they read back as floats. */
 void nbep__scene_value_text(const config_setting_t *s, nbep__strbuf *b);

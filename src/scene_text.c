@@ -230,6 +230,28 @@ bool nbep__scene_unclosed(const char *text, size_t *line, char *opener)
     return true;
 }
 
+bool nbep__scene_trailing_comma(const char *text, size_t line, char *closer)
+{
+    const size_t n = strlen(text);
+    size_t ln = 1;
+    bool comma = false; /* the last thing read, strings and comments aside, was a comma */
+    for (size_t i = 0; i < n;) {
+        const bool string = text[i] == '"'; /* a value: skip_quiet passes it as a comment */
+        if (skip_quiet(text, n, &i, &ln)) {
+            comma = comma && !string;
+            continue;
+        }
+        const char ch = text[i++];
+        if ((ch == ')' || ch == ']') && comma && ln == line) {
+            *closer = ch;
+            return true;
+        }
+        if (ch != ' ' && ch != '\t' && ch != '\r')
+            comma = ch == ',';
+    }
+    return false;
+}
+
 /* One line for a number the rewrite finds that libconfig would misread: at the deck's line,
  * or at the override `label` */
 static void bad_number(nbep__scene_ctx *c, const char *label, size_t line, bool neg,

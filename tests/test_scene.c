@@ -432,6 +432,47 @@ static void test_a_syntax_error_says_what_is_never_closed_or_shows_its_line(void
     ASSERT_DIAG(&f->d, want);
 }
 
+/* A comma after a list's or an array's last element (JSON and Python take one), which
+ * libconfig calls a plain syntax error at the closer's line, is named (a review's,
+ * 2026-12-04); a comma in a string or a comment before the closer is none. */
+static void test_a_trailing_comma_is_named(void **state)
+{
+    fixture *f = *state;
+    char path[256], want[512];
+    const char *deck = write_deck("scene_comma_list.deck",
+                                  "spheres = (\n"
+                                  "  { position = [0.5, 0.5, 0.5]; radius = 0.1;\n"
+                                  "    mass = 1.0; }, # x\n"
+                                  "  /* the last */\n"
+                                  ");\n",
+                                  path, sizeof path);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    snprintf(want, sizeof want, "%s:5: syntax error: a comma before this line's ')' (a list or "
+                                "array takes none after its last element) (the line: );)", deck);
+    ASSERT_DIAG(&f->d, want);
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    deck = write_deck("scene_comma_array.deck",
+                      "output: { fields = [\"position\", ]; };\n", path, sizeof path);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    snprintf(want, sizeof want, "%s:1: syntax error: a comma before this line's ']' (a list or "
+                                "array takes none after its last element) (the line: output: { "
+                                "fields = [\"position\", ]; };)", deck);
+    ASSERT_DIAG(&f->d, want);
+    /* a string ending in a comma, a comma before a string, a comment's comma: another error on
+     * that line, said as it was, though a later line has a trailing comma */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    deck = write_deck("scene_comma_none.deck",
+                      "output: { file = \"a,\"; fields = [\"position\", \"velocity\" /* , */ ] = ; };\n"
+                      "box: { min = [0.0, 0.0, 0.0,]; };\n", /* libconfig stops at line 1 */
+                      path, sizeof path);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    snprintf(want, sizeof want, "%s:1: syntax error (the line: output: { file = \"a,\"; fields "
+                                "= [\"position\", \"velocity\" /* , ...)", deck);
+    ASSERT_DIAG(&f->d, want);
+}
+
 static void test_syntax_error_carries_libconfig_text(void **state)
 {
     fixture *f = *state;
@@ -2937,6 +2978,7 @@ int main(void)
         T(test_syntax_error_names_the_deck_line),
         T(test_syntax_error_carries_libconfig_text),
         T(test_a_syntax_error_says_what_is_never_closed_or_shows_its_line),
+        T(test_a_trailing_comma_is_named),
         T(test_a_syntax_error_comes_before_a_later_line_s_too_big_integer),
         T(test_unknown_settings_are_named_with_the_closest_known_one),
         T(test_wrong_types_are_errors_but_integers_pass_for_numbers),
