@@ -1227,6 +1227,14 @@ MUTANTS = [
     ("overlap-other-algorithm-unsaid", "src/run.c",
      "        other_algorithm = changes && strncmp(changes, \"algorithm \", 10) == 0;",
      "        other_algorithm = false;", ["tests/test_resume.sh"], None),
+    # nbep check's settling line: the speeds over every sphere, none where nothing settles
+    ("check-settle-first-only", "src/algo_predictive.c",
+     "    for (size_t i = 0; i < sc->state.n; i++) {\n        const double v = settle_speed(&sc->state, i, sc->dt);",
+     "    for (size_t i = 0; i < 1; i++) {\n        const double v = settle_speed(&sc->state, i, sc->dt);",
+     ["tests/test_cli.sh"], None),
+    ("check-settle-always", "src/algo_predictive.c",
+     "    if (!plan_of(sc, &sc->state, 1, 0).settle_model)\n        return false;\n    *steps = SETTLE_STEPS;",
+     "    *steps = SETTLE_STEPS;", ["tests/test_cli.sh"], None),
     # a physics error hides the placement's (until 2026-12-04)
     ("physics-hides-placement", "src/scene.c",
      "    parse_physics(&L, root, &sc);\n    const size_t geometry0 = d->n_errors;\n",

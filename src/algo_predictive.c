@@ -1081,6 +1081,22 @@ static bool pred_keeps_contacts(const nbep_scene *sc, const nbep_state *st)
     return p.tc_model || p.settle_model; /* pred_create's t_last and settle */
 }
 
+/* settle_speed over the spheres, where the run settles (pred_create's settle) */
+static bool pred_settle_speeds(const nbep_scene *sc, double *lo, double *hi, unsigned *steps)
+{
+    if (!plan_of(sc, &sc->state, 1, 0).settle_model)
+        return false;
+    *steps = SETTLE_STEPS;
+    *lo = INFINITY;
+    *hi = 0.0;
+    for (size_t i = 0; i < sc->state.n; i++) {
+        const double v = settle_speed(&sc->state, i, sc->dt);
+        *lo = fmin(*lo, v);
+        *hi = fmax(*hi, v);
+    }
+    return sc->state.n > 0;
+}
+
 _Static_assert(sizeof(nbep_vec3) == 3 * sizeof(double), "a record's vectors are nbep_vec3's");
 
 /* At a frame (pred_export's moment): spheres [lo, hi)'s lasting state. A support's response
@@ -1218,4 +1234,5 @@ const nbep_algo nbep__algo_predictive = {.name = "predictive",
                                          .export_events = pred_export,
                                          .keeps_contacts = pred_keeps_contacts,
                                          .export_contacts = pred_contacts,
+                                         .settle_speeds = pred_settle_speeds,
                                          .import_events = pred_import};

@@ -104,6 +104,20 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
     if (sc->zero_momentum)
         fprintf(out, ", total momentum zeroed");
     fprintf(out, "\n");
+    /* a sphere stopped with no collision surprised a review's user (one sliding on a floor
+     * at 1.5 mm/s, e = 0.5, held from step 10): said before the run */
+    double slow_lo, slow_hi;
+    unsigned slow_steps;
+    if (nbep_sim_settle_speeds(sc, &slow_lo, &slow_hi, &slow_steps)) {
+        char range[48];
+        if (slow_lo == slow_hi)
+            snprintf(range, sizeof range, "%.3g", slow_hi);
+        else
+            snprintf(range, sizeof range, "%.3g to %.3g", slow_lo, slow_hi);
+        fprintf(out, "settling:        a sphere on what carries it that stays at or below a speed "
+                "of %s for %u whole steps is held still, its speed taken (e < 1 under an "
+                "acceleration: README, Held spheres)\n", range, slow_steps);
+    }
     if (sc->has_box)
         fprintf(out, "box:             [%g, %g, %g] .. [%g, %g, %g]\n", sc->box_min.x,
                 sc->box_min.y, sc->box_min.z, sc->box_max.x, sc->box_max.y, sc->box_max.z);

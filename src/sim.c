@@ -101,6 +101,12 @@ bool nbep_sim_keeps_contacts(const nbep_scene *sc)
     return algo && algo->keeps_contacts && algo->keeps_contacts(sc, &sc->state);
 }
 
+bool nbep_sim_settle_speeds(const nbep_scene *sc, double *lo, double *hi, unsigned *steps)
+{
+    const nbep_algo *algo = find_algo(sc->algorithm);
+    return algo && algo->settle_speeds && algo->settle_speeds(sc, lo, hi, steps);
+}
+
 bool nbep_sim_lasting(const nbep_sim *sim)
 {
     return sim->lasting;

@@ -137,6 +137,9 @@ struct nbep_algo {
      * over), and spheres [lo, hi)'s at a frame (as export_events) */
     bool (*keeps_contacts)(const nbep_scene *sc, const nbep_state *st);
     void (*export_contacts)(const void *ctx, size_t lo, size_t hi, nbep_contact_rec *out);
+    /* optional (NULL): whether a run of sc holds slow spheres still (settling), and then the
+     * least and the largest speed at or below which it does, and for how many whole steps */
+    bool (*settle_speeds)(const nbep_scene *sc, double *lo, double *hi, unsigned *steps);
 };
 
 extern const nbep_algo nbep__algo_naive;

@@ -69,6 +69,21 @@ check "nbep check prints the lists' skin: under gravity the thin one, and why (n
 run_nbep check inputs/two-spheres.deck --set 'run.neighbors="cells"'
 check "nbep check prints the lists' skin: without a box the thin one, and why" \
     "grep -Eq '^lists: +skin 0.4 of the largest diameter \(no box to take the packing from; in a box: ' $tmp/stdout"
+# the settle speed said before the run (a sphere stopped without a collision surprised a
+# review's user): 2 |a| min(dt / 10, sqrt(8e-6 r / |a|)), README's rest speed twice, for
+# 10 steps; a range over two radii; none where nothing settles (e = 1, naive, no gravity)
+settle_v() { awk -v r="$1" -v a="$2" -v dt="$3" 'BEGIN { t = sqrt(8e-6 * r / a); if (dt / 10 < t) t = dt / 10; printf "%.3g", 2 * a * t }'; }
+run_nbep check inputs/pile.deck --set 'spheres.[0].radius=0.01' --set 'physics.gravity=[0,0,-4]' --dt 0.002
+check "nbep check says the settle speed ($(settle_v 0.01 4 0.002)) and its steps" \
+    "[ $rc = 0 ] && grep -qx 'settling: *a sphere on what carries it that stays at or below a speed of $(settle_v 0.01 4 0.002) for 10 whole steps is held still, its speed taken (e < 1 under an acceleration: README, Held spheres)' $tmp/stdout"
+run_nbep check "$tmp/group.deck" --set 'physics.gravity=[0,0,-9.81]' --set physics.restitution=0.5 --set 'run.dt=0.01' \
+    --set 'spheres=({count=4;radius=0.05;mass=1.0;},{count=4;radius=0.0001;mass=1.0;})'
+check "... a range over the radii ($(settle_v 0.0001 9.81 0.01) to $(settle_v 0.05 9.81 0.01))" \
+    "[ $rc = 0 ] && grep -q '^settling: .* speed of $(settle_v 0.0001 9.81 0.01) to $(settle_v 0.05 9.81 0.01) for 10 ' $tmp/stdout"
+for other in "--set physics.restitution=1" "-a naive" "--set physics.gravity=[0,0,0]"; do
+    run_nbep check inputs/pile.deck $other
+    check "... and no such line for $other (exit $rc)" "[ $rc = 0 ] && ! grep -q '^settling' $tmp/stdout"
+done
 run_nbep check inputs/hard-sphere-fluid.deck \
     --set 'box.max=[32.2398390803, 32.2398390803, 32.2398390803]'
 check "nbep check prints the lists' skin: a fluid at packing 0.5 the dense fluid's one" \

@@ -88,6 +88,12 @@ bool nbep_sim_keeps_events(const nbep_scene *sc);
 bool nbep_sim_keeps_contacts(const nbep_scene *sc);
 /* The same for the run sim, as decided when it was made. */
 bool nbep_sim_lasting(const nbep_sim *sim);
+/* Whether a run of sc holds a supported sphere still once it has stayed slow for *steps whole
+ * steps (the predictive algorithm's settling, e < 1 under an acceleration: README, Held
+ * spheres), and then the least and the largest of the spheres' speeds at or below which it
+ * does (*lo, *hi; each depends on the sphere's radius and acceleration, and on run.dt).
+ * nbep check says it. */
+bool nbep_sim_settle_speeds(const nbep_scene *sc, double *lo, double *hi, unsigned *steps);
 /* What a stop signal asks of a run (stop may be NULL): NBEP_OK (none yet), NBEP_ESIGINT or
  * NBEP_ESIGTERM. */
 nbep_status nbep_sim_stop_status(const atomic_int *stop);
