@@ -403,6 +403,19 @@ static void test_syntax_error_names_the_deck_line(void **state)
                             "restitution = ; };)");
 }
 
+/* A deck of `text` (written as build/tests/tmp/NAME) refused with the one message
+ * "DECK:" `tail`, any earlier case's messages cleared first. */
+static void refused_saying(fixture *f, const char *name, const char *text, const char *tail)
+{
+    char path[256], want[512];
+    const char *deck = write_deck(name, text, path, sizeof path);
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    snprintf(want, sizeof want, "%s:%s", deck, tail);
+    ASSERT_DIAG(&f->d, want);
+}
+
 /* A group, list or array left open: the deck ends inside it, one line past its last, where
  * libconfig reports it; the message names the innermost one's line instead (until 2026-12-01
  * "deck:3: syntax error" for a deck of two lines). One found within a string or a comment
@@ -410,67 +423,41 @@ static void test_syntax_error_names_the_deck_line(void **state)
 static void test_a_syntax_error_says_what_is_never_closed_or_shows_its_line(void **state)
 {
     fixture *f = *state;
-    char path[256], want[512];
-    const char *deck = write_deck("scene_syntax_open.deck",
-                                  "run: { steps = 10; /* { */ # (\n"
-                                  "spheres = ( { count = 1; radius = 0.1; mass = 1.0; label = \"[\";\n"
-                                  "  position = [0.5, 0.5, 0.5]; }\n",
-                                  path, sizeof path);
-    LOAD_FAILS(f, NBEP_EDECK, deck);
-    snprintf(want, sizeof want, "%s:2: syntax error: this '(' is never closed (the deck ends "
-                                "inside it)", deck);
-    ASSERT_DIAG(&f->d, want);
-    nbep_diag_fini(&f->d);
-    nbep_diag_init(&f->d);
-    deck = write_deck("scene_syntax_long.deck",
-                      "run: { steps = 10; };\n"
-                      "   physics: { gravity = [0.0, 0.0, -9.81]; restitution = = 0.5; };  \n",
-                      path, sizeof path);
-    LOAD_FAILS(f, NBEP_EDECK, deck);
-    snprintf(want, sizeof want, "%s:2: syntax error (the line: physics: { gravity = [0.0, 0.0, "
-                                "-9.81]; restitution = = 0.5; ...)", deck);
-    ASSERT_DIAG(&f->d, want);
+    refused_saying(f, "scene_syntax_open.deck",
+                   "run: { steps = 10; /* { */ # (\n"
+                   "spheres = ( { count = 1; radius = 0.1; mass = 1.0; label = \"[\";\n"
+                   "  position = [0.5, 0.5, 0.5]; }\n",
+                   "2: syntax error: this '(' is never closed (the deck ends inside it)");
+    refused_saying(f, "scene_syntax_long.deck",
+                   "run: { steps = 10; };\n"
+                   "   physics: { gravity = [0.0, 0.0, -9.81]; restitution = = 0.5; };  \n",
+                   "2: syntax error (the line: physics: { gravity = [0.0, 0.0, -9.81]; "
+                   "restitution = = 0.5; ...)");
 }
 
 /* A comma after a list's or an array's last element (JSON and Python take one), which
  * libconfig calls a plain syntax error at the closer's line, is named (a review's,
- * 2026-12-04); a comma in a string or a comment before the closer is none. */
+ * 2026-12-04). A comma in a string, one before a string and one in a comment are none, nor
+ * is a later line's trailing comma, past where libconfig stopped. */
 static void test_a_trailing_comma_is_named(void **state)
 {
     fixture *f = *state;
-    char path[256], want[512];
-    const char *deck = write_deck("scene_comma_list.deck",
-                                  "spheres = (\n"
-                                  "  { position = [0.5, 0.5, 0.5]; radius = 0.1;\n"
-                                  "    mass = 1.0; }, # x\n"
-                                  "  /* the last */\n"
-                                  ");\n",
-                                  path, sizeof path);
-    LOAD_FAILS(f, NBEP_EDECK, deck);
-    snprintf(want, sizeof want, "%s:5: syntax error: a comma before this line's ')' (a list or "
-                                "array takes none after its last element) (the line: );)", deck);
-    ASSERT_DIAG(&f->d, want);
-    nbep_diag_fini(&f->d);
-    nbep_diag_init(&f->d);
-    deck = write_deck("scene_comma_array.deck",
-                      "output: { fields = [\"position\", ]; };\n", path, sizeof path);
-    LOAD_FAILS(f, NBEP_EDECK, deck);
-    snprintf(want, sizeof want, "%s:1: syntax error: a comma before this line's ']' (a list or "
-                                "array takes none after its last element) (the line: output: { "
-                                "fields = [\"position\", ]; };)", deck);
-    ASSERT_DIAG(&f->d, want);
-    /* a string ending in a comma, a comma before a string, a comment's comma: another error on
-     * that line, said as it was, though a later line has a trailing comma */
-    nbep_diag_fini(&f->d);
-    nbep_diag_init(&f->d);
-    deck = write_deck("scene_comma_none.deck",
-                      "output: { file = \"a,\"; fields = [\"position\", \"velocity\" /* , */ ] = ; };\n"
-                      "box: { min = [0.0, 0.0, 0.0,]; };\n", /* libconfig stops at line 1 */
-                      path, sizeof path);
-    LOAD_FAILS(f, NBEP_EDECK, deck);
-    snprintf(want, sizeof want, "%s:1: syntax error (the line: output: { file = \"a,\"; fields "
-                                "= [\"position\", \"velocity\" /* , ...)", deck);
-    ASSERT_DIAG(&f->d, want);
+    refused_saying(f, "scene_comma_list.deck",
+                   "spheres = (\n"
+                   "  { position = [0.5, 0.5, 0.5]; radius = 0.1;\n"
+                   "    mass = 1.0; }, # x\n"
+                   "  /* the last */\n"
+                   ");\n",
+                   "5: syntax error: a comma before this line's ')' (a list or array takes none "
+                   "after its last element) (the line: );)");
+    refused_saying(f, "scene_comma_array.deck", "output: { fields = [\"position\", ]; };\n",
+                   "1: syntax error: a comma before this line's ']' (a list or array takes none "
+                   "after its last element) (the line: output: { fields = [\"position\", ]; };)");
+    refused_saying(f, "scene_comma_none.deck",
+                   "output: { file = \"a,\"; fields = [\"position\", \"velocity\" /* , */ ] = ; };\n"
+                   "box: { min = [0.0, 0.0, 0.0,]; };\n",
+                   "1: syntax error (the line: output: { file = \"a,\"; fields = [\"position\", "
+                   "\"velocity\" /* , ...)");
 }
 
 static void test_syntax_error_carries_libconfig_text(void **state)
