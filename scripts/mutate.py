@@ -1235,6 +1235,8 @@ MUTANTS = [
     ("check-settle-always", "src/algo_predictive.c",
      "    if (!plan_of(sc, &sc->state, 1, 0).settle_model)\n        return false;\n    *steps = SETTLE_STEPS;",
      "    *steps = SETTLE_STEPS;", ["tests/test_cli.sh"], None),
+    ("check-json-settling-null", "src/check.c", "        settles ? json_pack(\"{s:f, s:f, s:I}\"",
+     "        false ? json_pack(\"{s:f, s:f, s:I}\"", ["tests/test_cli.sh"], None),
     # a physics error hides the placement's (until 2026-12-04)
     ("physics-hides-placement", "src/scene.c",
      "    parse_physics(&L, root, &sc);\n    const size_t geometry0 = d->n_errors;\n",

@@ -259,9 +259,12 @@ static json_t *check_object(const nbep_scene *sc, const nbep_check_facts *f,
 {
     const bool predictive = strcmp(sc->algorithm, "predictive") == 0;
     char *xmf = f->sidecar_bytes > 0.0 ? nbep_xdmf_path(sc->output_file) : NULL;
+    double slow_lo, slow_hi; /* the settling line's (nbep_check_print) */
+    unsigned slow_steps;
+    const bool settles = nbep_sim_settle_speeds(sc, &slow_lo, &slow_hi, &slow_steps);
     json_t *o = json_pack(
         "{s:s, s:s, s:o, s:s, s:o, s:o, s:i, s:I, s:I, s:I, s:f, s:I, s:f, s:f, s:f, s:b, s:o, "
-        "s:o, s:o, s:o, s:I, s:I, s:o, s:o}",
+        "s:o, s:o, s:o, s:o, s:I, s:I, s:o, s:o}",
         "format", CHECK_FORMAT_NAME, "version", NBEP_VERSION, "deck",
         nbep_summary_json_text(sc->deck_path),
         "algorithm", sc->algorithm, "neighbors",
@@ -271,7 +274,11 @@ static json_t *check_object(const nbep_scene *sc, const nbep_check_facts *f,
         "steps", (json_int_t)sc->steps, "dt", sc->dt, "seed", (json_int_t)sc->seed,
         "restitution", sc->restitution, "tc", sc->tc, "carry_drop", sc->carry_drop,
         "zero_momentum", (int)sc->zero_momentum, "gravity",
-        vec3_array(sc->gravity), "box",
+        vec3_array(sc->gravity), "settling",
+        settles ? json_pack("{s:f, s:f, s:I}", "speed_min", slow_lo, "speed_max", slow_hi,
+                            "steps", (json_int_t)slow_steps)
+                : json_null(),
+        "box",
         sc->has_box ? json_pack("{s:o, s:o, s:[bbb]}", "min", vec3_array(sc->box_min), "max",
                                 vec3_array(sc->box_max), "periodic", sc->periodic[0],
                                 sc->periodic[1], sc->periodic[2])
