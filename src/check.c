@@ -53,6 +53,7 @@ void nbep_check_gather(const nbep_scene *sc, nbep_check_facts *f)
     const double skin = 2.0 * f->radius_max * f->skin_taken;
     f->partners = partners_within(sc, 2.0 * f->radius_min + skin, f->lists);
     f->walk_reads = partners_within(sc, f->radius_min + f->radius_max + skin, f->lists);
+    f->settles = nbep_sim_settle_speeds(sc, &f->settle_lo, &f->settle_hi, &f->settle_steps);
     f->memory_bytes = (double)nbep_sim_memory_estimate(sc, f->threads);
     f->frames = nbep_output_frames(sc);
     /* what the run writes: its file and, beside it, the XDMF sidecar */
@@ -106,17 +107,15 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
     fprintf(out, "\n");
     /* a sphere stopped with no collision surprised a review's user (one sliding on a floor
      * at 1.5 mm/s, e = 0.5, held from step 10): said before the run */
-    double slow_lo, slow_hi;
-    unsigned slow_steps;
-    if (nbep_sim_settle_speeds(sc, &slow_lo, &slow_hi, &slow_steps)) {
+    if (f->settles) {
         char range[48];
-        if (slow_lo == slow_hi)
-            snprintf(range, sizeof range, "%.3g", slow_hi);
+        if (f->settle_lo == f->settle_hi)
+            snprintf(range, sizeof range, "%.3g", f->settle_hi);
         else
-            snprintf(range, sizeof range, "%.3g to %.3g", slow_lo, slow_hi);
+            snprintf(range, sizeof range, "%.3g to %.3g", f->settle_lo, f->settle_hi);
         fprintf(out, "settling:        a sphere on what carries it that stays at or below a speed "
                 "of %s for %u whole steps is held still, its speed taken (e < 1 under an "
-                "acceleration: README, Held spheres)\n", range, slow_steps);
+                "acceleration: README, Held spheres)\n", range, f->settle_steps);
     }
     if (sc->has_box)
         fprintf(out, "box:             [%g, %g, %g] .. [%g, %g, %g]\n", sc->box_min.x,
@@ -259,9 +258,6 @@ static json_t *check_object(const nbep_scene *sc, const nbep_check_facts *f,
 {
     const bool predictive = strcmp(sc->algorithm, "predictive") == 0;
     char *xmf = f->sidecar_bytes > 0.0 ? nbep_xdmf_path(sc->output_file) : NULL;
-    double slow_lo, slow_hi; /* the settling line's (nbep_check_print) */
-    unsigned slow_steps;
-    const bool settles = nbep_sim_settle_speeds(sc, &slow_lo, &slow_hi, &slow_steps);
     json_t *o = json_pack(
         "{s:s, s:s, s:o, s:s, s:o, s:o, s:i, s:I, s:I, s:I, s:f, s:I, s:f, s:f, s:f, s:b, s:o, "
         "s:o, s:o, s:o, s:o, s:I, s:I, s:o, s:o}",
@@ -275,8 +271,8 @@ static json_t *check_object(const nbep_scene *sc, const nbep_check_facts *f,
         "restitution", sc->restitution, "tc", sc->tc, "carry_drop", sc->carry_drop,
         "zero_momentum", (int)sc->zero_momentum, "gravity",
         vec3_array(sc->gravity), "settling",
-        settles ? json_pack("{s:f, s:f, s:I}", "speed_min", slow_lo, "speed_max", slow_hi,
-                            "steps", (json_int_t)slow_steps)
+        f->settles ? json_pack("{s:f, s:f, s:I}", "speed_min", f->settle_lo, "speed_max",
+                               f->settle_hi, "steps", (json_int_t)f->settle_steps)
                 : json_null(),
         "box",
         sc->has_box ? json_pack("{s:o, s:o, s:[bbb]}", "min", vec3_array(sc->box_min), "max",

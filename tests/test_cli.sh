@@ -76,20 +76,19 @@ settle_v() { awk -v r="$1" -v a="$2" -v dt="$3" 'BEGIN { t = sqrt(8e-6 * r / a);
 run_nbep check inputs/pile.deck --set 'spheres.[0].radius=0.01' --set 'physics.gravity=[0,0,-4]' --dt 0.002
 check "nbep check says the settle speed ($(settle_v 0.01 4 0.002)) and its steps" \
     "[ $rc = 0 ] && grep -qx 'settling: *a sphere on what carries it that stays at or below a speed of $(settle_v 0.01 4 0.002) for 10 whole steps is held still, its speed taken (e < 1 under an acceleration: README, Held spheres)' $tmp/stdout"
+# (--summary FILE: the report's JSON there, its lines on stdout, from one check)
+settling_json() { $PY -c 'import json, sys; s = json.load(open(sys.argv[1]))["settling"]
+print(s and "%.3g %.3g %d" % (s["speed_min"], s["speed_max"], s["steps"]))' "$tmp/settling.json"; }
 run_nbep check "$tmp/group.deck" --set 'physics.gravity=[0,0,-9.81]' --set physics.restitution=0.5 --set 'run.dt=0.01' \
-    --set 'spheres=({count=4;radius=0.05;mass=1.0;},{count=4;radius=0.0001;mass=1.0;})'
-check "... a range over the radii ($(settle_v 0.0001 9.81 0.01) to $(settle_v 0.05 9.81 0.01))" \
-    "[ $rc = 0 ] && grep -q '^settling: .* speed of $(settle_v 0.0001 9.81 0.01) to $(settle_v 0.05 9.81 0.01) for 10 ' $tmp/stdout"
-run_nbep check "$tmp/group.deck" --set 'physics.gravity=[0,0,-9.81]' --set physics.restitution=0.5 --set 'run.dt=0.01' \
-    --set 'spheres=({count=4;radius=0.05;mass=1.0;},{count=4;radius=0.0001;mass=1.0;})' --quiet --summary -
-check "... and the report's settling, the same range ($rc)" \
-    "[ $rc = 0 ] && [ \"\$($PY -c 'import json, sys; s = json.load(sys.stdin)[\"settling\"]; print(\"%.3g %.3g %d\" % (s[\"speed_min\"], s[\"speed_max\"], s[\"steps\"]))' <$tmp/stdout)\" = '$(settle_v 0.0001 9.81 0.01) $(settle_v 0.05 9.81 0.01) 10' ]"
+    --set 'spheres=({count=4;radius=0.05;mass=1.0;},{count=4;radius=0.0001;mass=1.0;})' \
+    --summary "$tmp/settling.json"
+check "... a range over the radii ($(settle_v 0.0001 9.81 0.01) to $(settle_v 0.05 9.81 0.01)), in the line and the report's settling" \
+    "[ $rc = 0 ] && grep -q '^settling: .* speed of $(settle_v 0.0001 9.81 0.01) to $(settle_v 0.05 9.81 0.01) for 10 ' $tmp/stdout &&
+     [ \"\$(settling_json)\" = '$(settle_v 0.0001 9.81 0.01) $(settle_v 0.05 9.81 0.01) 10' ]"
 for other in "--set physics.restitution=1" "-a naive" "--set physics.gravity=[0,0,0]"; do
-    run_nbep check inputs/pile.deck $other
-    check "... and no such line for $other (exit $rc)" "[ $rc = 0 ] && ! grep -q '^settling' $tmp/stdout"
-    run_nbep check inputs/pile.deck $other --quiet --summary -
-    check "... and the report's settling null ($rc)" \
-        "[ $rc = 0 ] && [ \"\$($PY -c 'import json, sys; print(json.load(sys.stdin)[\"settling\"])' <$tmp/stdout)\" = None ]"
+    run_nbep check inputs/pile.deck $other --summary "$tmp/settling.json"
+    check "... and no such line for $other, the report's settling null (exit $rc)" \
+        "[ $rc = 0 ] && ! grep -q '^settling' $tmp/stdout && [ \"\$(settling_json)\" = None ]"
 done
 run_nbep check inputs/hard-sphere-fluid.deck \
     --set 'box.max=[32.2398390803, 32.2398390803, 32.2398390803]'

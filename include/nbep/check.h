@@ -33,6 +33,10 @@ typedef struct nbep_check_facts {
     uint64_t frames;            /* frames the output file will hold */
     double sidecar_bytes;       /* the XDMF sidecar's (0: none is written) */
     double output_bytes;        /* what the run writes: nbep_output_bytes and the sidecar's */
+    bool settles;               /* nbep_sim_settle_speeds: the run holds slow spheres still, */
+    double settle_lo, settle_hi; /* at or below these speeds (least and largest of the
+                                  * spheres') */
+    unsigned settle_steps;      /* for this many whole steps */
 } nbep_check_facts;
 
 void nbep_check_gather(const nbep_scene *sc, nbep_check_facts *f);
