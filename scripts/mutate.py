@@ -1225,7 +1225,7 @@ MUTANTS = [
      "(cli->n_overrides || cli->summary || cli->resume))", ["tests/test_cli.sh"], None),
     # the overlap warning names an earlier part's other algorithm (2026-12-04)
     ("overlap-other-algorithm-unsaid", "src/run.c",
-     "        other_algorithm = changes && strncmp(changes, \"algorithm \", 10) == 0;",
+     "        other_algorithm = changes && nbep_output_resume_other_algorithm(out);",
      "        other_algorithm = false;", ["tests/test_resume.sh"], None),
     # nbep check's settling line: the speeds over every sphere, none where nothing settles
     ("check-settle-first-only", "src/algo_predictive.c",
@@ -1235,7 +1235,7 @@ MUTANTS = [
     ("check-settle-always", "src/algo_predictive.c",
      "    if (!plan_of(sc, &sc->state, 1, 0).settle_model)\n        return false;\n    *steps = SETTLE_STEPS;",
      "    *steps = SETTLE_STEPS;", ["tests/test_cli.sh"], None),
-    ("check-json-settling-null", "src/check.c", "        settles ? json_pack(\"{s:f, s:f, s:I}\"",
+    ("check-json-settling-null", "src/check.c", "        f->settles ? json_pack(\"{s:f, s:f, s:I}\"",
      "        false ? json_pack(\"{s:f, s:f, s:I}\"", ["tests/test_cli.sh"], None),
     # a physics error hides the placement's (until 2026-12-04)
     ("physics-hides-placement", "src/scene.c",
@@ -1498,7 +1498,7 @@ MUTANTS = [
      "    if (0 &&\n        (nbep__output_write_attr(root, p, \"box_min\"",
      ["test_output", "tests/test_resume.sh"], None),
     ("resume-not-noted", "src/output_resume.c",
-     "    if (note_resume(o->file, path, sc, threads, o->resume.from, o->resume.changed, d) < 0 ||\n        nbep__output_commit",
+     "    if (note_resume(o->file, path, sc, threads, o->resume.from, o->resume.changed,\n                    &o->resume.other_algorithm, d) < 0 ||\n        nbep__output_commit",
      "    if (nbep__output_commit", ["tests/test_resume.sh"], None),
     ("xdmf-other-run-fifo-read", "src/output_xdmf.c",
      "                        stat(xmf, &sb) == 0 && S_ISREG(sb.st_mode) &&",
@@ -1657,7 +1657,7 @@ MUTANTS = [
      "    (void)none;\n    atomic_store_explicit(&stop_signal, sig, memory_order_relaxed);",
      ["tests/test_signals.sh"], None),
     ("resume-line-changes-unsaid", "src/output_resume.c",
-     "    if (strcmp(algo, sc->algorithm) != 0)\n        snprintf(changed, RESUME_CHANGED_MAX, \", %s %s\", changed_keys[0], sc->algorithm);",
+     "    if (*other_algorithm)\n        snprintf(changed, RESUME_CHANGED_MAX, \", %s %s\", changed_keys[0], sc->algorithm);",
      "", ["tests/test_resume.sh"], None),
     ("run-signal-while-placing-ignored", "src/run.c",
      "    if (st == NBEP_OK && (st = nbep_sim_stop_status(rq->stop_signal)) != NBEP_OK)\n        nbep_scene_fini(&sc);",

@@ -440,6 +440,11 @@ const char *nbep_output_resume_changes(const nbep_output *o)
     return o->resume.changed[0] ? o->resume.changed + 2 : NULL; /* past its ", " */
 }
 
+bool nbep_output_resume_other_algorithm(const nbep_output *o)
+{
+    return o->resume.other_algorithm;
+}
+
 bool nbep_output_resumed_changed(const char *resumed)
 {
     for (const char *line = resumed; line && *line;) {
@@ -465,7 +470,8 @@ bool nbep_output_resumed_changed(const char *resumed)
  * `threads` and `overrides` stay the first part's: a sweep knows its runs by those
  * overrides). */
 static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int threads,
-                       int64_t step, char changed[static RESUME_CHANGED_MAX], nbep_diag *d)
+                       int64_t step, char changed[static RESUME_CHANGED_MAX],
+                       bool *other_algorithm, nbep_diag *d)
 {
     char *was = NULL;
     const htri_t had = H5Aexists(file, "resumed");
@@ -484,7 +490,8 @@ static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int t
         free(was);
         return -1;
     }
-    if (strcmp(algo, sc->algorithm) != 0)
+    *other_algorithm = strcmp(algo, sc->algorithm) != 0;
+    if (*other_algorithm)
         snprintf(changed, RESUME_CHANGED_MAX, ", %s %s", changed_keys[0], sc->algorithm);
     if (e0 != sc->restitution) { /* (not memcmp: -0 is 0, the same physics) */
         char e[NBEP_REAL_TEXT_MAX];
@@ -943,7 +950,8 @@ nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_scene *sc, int t
         return NBEP_EIO;
     }
     nbep__output_close_id(&steps_attr);
-    if (note_resume(o->file, path, sc, threads, o->resume.from, o->resume.changed, d) < 0 ||
+    if (note_resume(o->file, path, sc, threads, o->resume.from, o->resume.changed,
+                    &o->resume.other_algorithm, d) < 0 ||
         nbep__output_commit(o, frames, d) < 0)
         return NBEP_EIO;
     nbep__output_sidecar_stale(o);

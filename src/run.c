@@ -762,7 +762,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
          * first part: said at the time, not only in the file's `resumed` (a sweep replaces
          * such a file; a hand resume may mean it, as a cooling gas resumed from its melt) */
         const char *changes = st == NBEP_OK && rq->resume ? nbep_output_resume_changes(out) : NULL;
-        other_algorithm = changes && strncmp(changes, "algorithm ", 10) == 0;
+        other_algorithm = changes && nbep_output_resume_other_algorithm(out);
         if (changes && rq->verbose)
             fprintf(stderr,
                     "nbep: %s continues from step %lld with %s, which its first part did not "
