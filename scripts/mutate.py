@@ -1225,8 +1225,15 @@ MUTANTS = [
      "(cli->n_overrides || cli->summary || cli->resume))", ["tests/test_cli.sh"], None),
     # the overlap warning names an earlier part's other algorithm (2026-12-04)
     ("overlap-other-algorithm-unsaid", "src/run.c",
-     "        other_algorithm = changes && nbep_output_resume_other_algorithm(out);",
+     "        other_algorithm = st == NBEP_OK && rq->resume && nbep_output_resume_other_algorithm(out);",
      "        other_algorithm = false;", ["tests/test_resume.sh"], None),
+    ("overlap-other-algorithm-always", "src/run.c",
+     "        other_algorithm = st == NBEP_OK && rq->resume && nbep_output_resume_other_algorithm(out);",
+     "        other_algorithm = st == NBEP_OK && rq->resume;", ["tests/test_resume.sh"], None),
+    # a middle part's algorithm counts too, not only the first part's
+    ("overlap-middle-algorithm-unsaid", "src/output_resume.c",
+     "    *other_algorithm = first_other || resumed_notes(was, 0, 1);",
+     "    *other_algorithm = first_other;", ["tests/test_resume.sh"], None),
     # nbep check's settling line: the speeds over every sphere, none where nothing settles
     ("check-settle-first-only", "src/algo_predictive.c",
      "    for (size_t i = 0; i < sc->state.n; i++) {\n        const double v = settle_speed(&sc->state, i, sc->dt);",
@@ -1657,7 +1664,7 @@ MUTANTS = [
      "    (void)none;\n    atomic_store_explicit(&stop_signal, sig, memory_order_relaxed);",
      ["tests/test_signals.sh"], None),
     ("resume-line-changes-unsaid", "src/output_resume.c",
-     "    if (*other_algorithm)\n        snprintf(changed, RESUME_CHANGED_MAX, \", %s %s\", changed_keys[0], sc->algorithm);",
+     "    if (first_other)\n        snprintf(changed, RESUME_CHANGED_MAX, \", %s %s\", changed_keys[0], sc->algorithm);",
      "", ["tests/test_resume.sh"], None),
     ("run-signal-while-placing-ignored", "src/run.c",
      "    if (st == NBEP_OK && (st = nbep_sim_stop_status(rq->stop_signal)) != NBEP_OK)\n        nbep_scene_fini(&sc);",

@@ -140,7 +140,7 @@ struct nbep_output {
                                     * where a part without event slots wrote the rest) */
         char changed[RESUME_CHANGED_MAX]; /* what this part runs with that the first part did not
                                     * (note_resume's ", restitution 0.9, order step"), or "" */
-        bool other_algorithm;      /* this part's algorithm is not the first part's */
+        bool other_algorithm;      /* an earlier part ran another algorithm than this one */
     } resume;
 };
 

@@ -445,7 +445,10 @@ bool nbep_output_resume_other_algorithm(const nbep_output *o)
     return o->resume.other_algorithm;
 }
 
-bool nbep_output_resumed_changed(const char *resumed)
+/* Whether a line of `resumed` (the resumes' lines) notes a change among changed_keys[first]
+ * to changed_keys[last - 1]: its first change, past its build's ") , ", is one of them (a line
+ * names its changes in the order of changed_keys). */
+static bool resumed_notes(const char *resumed, size_t first, size_t last)
 {
     for (const char *line = resumed; line && *line;) {
         const size_t len = strcspn(line, "\n");
@@ -453,7 +456,7 @@ bool nbep_output_resumed_changed(const char *resumed)
         const char *end =
             build && build < line + len ? memchr(build, ')', (size_t)(line + len - build)) : NULL;
         if (end && strncmp(end + 1, ", ", 2) == 0)
-            for (size_t k = 0; k < sizeof changed_keys / sizeof *changed_keys; k++) {
+            for (size_t k = first; k < last; k++) {
                 const size_t kl = strlen(changed_keys[k]);
                 if (strncmp(end + 3, changed_keys[k], kl) == 0 && end[3 + kl] == ' ')
                     return true;
@@ -461,6 +464,11 @@ bool nbep_output_resumed_changed(const char *resumed)
         line += len + (line[len] != '\0');
     }
     return false;
+}
+
+bool nbep_output_resumed_changed(const char *resumed)
+{
+    return resumed_notes(resumed, 0, sizeof changed_keys / sizeof *changed_keys);
 }
 
 /* Adds this resume's line to the root attribute `resumed` (made with the first): the step it
@@ -490,8 +498,12 @@ static int note_resume(hid_t file, const char *path, const nbep_scene *sc, int t
         free(was);
         return -1;
     }
-    *other_algorithm = strcmp(algo, sc->algorithm) != 0;
-    if (*other_algorithm)
+    const bool first_other = strcmp(algo, sc->algorithm) != 0;
+    /* the first part's, or a resumed one's (a naive part between two predictive ones): a part
+     * whose line names its algorithm ran another than the first part, so one of the two is
+     * not this part's */
+    *other_algorithm = first_other || resumed_notes(was, 0, 1);
+    if (first_other)
         snprintf(changed, RESUME_CHANGED_MAX, ", %s %s", changed_keys[0], sc->algorithm);
     if (e0 != sc->restitution) { /* (not memcmp: -0 is 0, the same physics) */
         char e[NBEP_REAL_TEXT_MAX];

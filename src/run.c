@@ -671,7 +671,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
     nbep_resume resume = {0};
     int64_t from = -1; /* the resumed frame's step */
     bool whole = true;  /* the summary counts from step 0 (a resume's file had the totals) */
-    bool other_algorithm = false; /* a resume with another algorithm than the first part's */
+    bool other_algorithm = false; /* a resume after a part of another algorithm */
     FILE *summary = NULL;
     /* A resumed run appends to the file it continues; output.file does not apply, and one
      * given on the command line (-o, --set) that names another file is refused (until
@@ -762,7 +762,7 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
          * first part: said at the time, not only in the file's `resumed` (a sweep replaces
          * such a file; a hand resume may mean it, as a cooling gas resumed from its melt) */
         const char *changes = st == NBEP_OK && rq->resume ? nbep_output_resume_changes(out) : NULL;
-        other_algorithm = changes && nbep_output_resume_other_algorithm(out);
+        other_algorithm = st == NBEP_OK && rq->resume && nbep_output_resume_other_algorithm(out);
         if (changes && rq->verbose)
             fprintf(stderr,
                     "nbep: %s continues from step %lld with %s, which its first part did not "

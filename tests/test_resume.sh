@@ -1011,6 +1011,20 @@ rc=$?
 check "naive's file resumed by predictive: exit 0 (got $rc), one warning naming the earlier part's algorithm" \
     "[ $rc = 0 ] && [ \$(wc -l <$tmp/coarse-pred.err) = 1 ] &&
      grep -q '^nbep: warning: spheres overlapped by up to 0\.[1-9].*; an earlier part of the run ran another algorithm, whose overlaps this part starts from: ' $tmp/coarse-pred.err"
+# a predictive file with a naive part in the middle, resumed by predictive again: the
+# overlaps are still the naive part's (until 2026-12-05 only the first part's algorithm was
+# compared, and this warning blamed the predictive part)
+bin/nbep run $deck --quiet -n 2 --dt 0.01 --set spheres.[0].count=1000 -o $tmp/middle.h5 &&
+    bin/nbep run $deck --quiet -a naive -n 20 --dt 0.01 --set spheres.[0].count=1000 \
+        --resume $tmp/middle.h5 2>$tmp/middle-naive.err
+bin/nbep run $deck --quiet -n 22 --dt 0.01 --set spheres.[0].count=1000 --resume $tmp/middle.h5 \
+    2>$tmp/middle-pred.err
+rc=$?
+check "a naive part between predictive ones: exit 0 (got $rc), the warning names the earlier part's algorithm" \
+    "[ $rc = 0 ] && [ ! -s $tmp/middle-naive.err ] && [ \$(wc -l <$tmp/middle-pred.err) = 1 ] &&
+     grep -q '^nbep: warning: spheres overlapped by up to 0\.[1-9].*; an earlier part of the run ran another algorithm, whose overlaps this part starts from: ' $tmp/middle-pred.err"
+check "a file whose parts all ran predictive: the overlap warning names no other algorithm" \
+    "! grep -q 'another algorithm' $tmp/moved.err"
 # Far from the origin, round-off is the coordinates' (run.c EXACT_OVERLAP_ULPS): a sphere
 # dropped onto a floor 1e11 radii out overlaps it by 1 to 4 of their ulps (1.5e-5 to 6.1e-5
 # of a radius) in each neighbour mode, and gets no warning (until 2026-12-03 it did); a

@@ -188,8 +188,8 @@ NBEP_MUST_CHECK nbep_status nbep_output_resume_begin(nbep_output *o, const nbep_
  * not ("restitution 0.9, order step": the words its line in `resumed` ends with), or NULL
  * (none, or not a resumed run). Valid until the handle is closed. */
 const char *nbep_output_resume_changes(const nbep_output *o);
-/* Whether that part runs another algorithm than the file's first part (false where not
- * resumed). */
+/* Whether an earlier part of the file ran another algorithm than that part (the first or
+ * any resumed one; false where not resumed). */
 bool nbep_output_resume_other_algorithm(const nbep_output *o);
 /* Appends count rows (borrowed) to /stats, and their rows of /stats/wall_impulse from wall
  * (count x n_planes, row by row; NULL: zeros); they reach the disk with the next frame or
