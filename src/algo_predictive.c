@@ -86,6 +86,7 @@ static void pred_destroy(void *p)
     nbep_free_aligned(c->settle);
     nbep_free_aligned(c->jam);
     free(c->lock_mark);
+    free(c->unlocked);
     nbep_free_aligned(c->flags);
     nbep_free_aligned((void *)c->claim[0]);
     nbep_free_aligned((void *)c->claim[1]);
@@ -243,7 +244,7 @@ static size_t pred_bytes(const nbep_scene *sc, int nt)
         bytes += n * sizeof *c->tclaim;
     const bool lock = plan_lock(&p); /* jammed bodies */
     if (lock)
-        bytes += n * sizeof *c->lock_mark;
+        bytes += n * (sizeof *c->lock_mark + sizeof *c->unlocked);
     bytes += (size_t)nt * sizeof *c->ws;
     for (int t = 0; t < nt; t++) {
         const size_t own = plan_own(&p, t);
@@ -314,10 +315,12 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
     if (c->order_step)
         c->tclaim = nbep_alloc_aligned(n, sizeof *c->tclaim);
     c->ws = nbep_alloc_aligned((size_t)sim->nt, sizeof *c->ws);
-    if (plan_lock(&p)) /* jammed bodies (lock_phase) */
+    if (plan_lock(&p)) { /* jammed bodies (lock_phase) */
         c->lock_mark = calloc(n ? n : 1, sizeof *c->lock_mark);
+        c->unlocked = calloc(n ? n : 1, sizeof *c->unlocked);
+    }
     if (!c->ver || !c->tau || (!p.free_flight && (!c->rest || !c->aeff)) ||
-        (plan_lock(&p) && !c->lock_mark) ||
+        (plan_lock(&p) && (!c->lock_mark || !c->unlocked)) ||
         (p.tc_model && !c->t_last) || (p.cage_model && !c->face) || (p.jam_model && !c->jam) ||
         (p.settle_model && !c->settle) ||
         !c->ws ||

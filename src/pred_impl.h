@@ -203,6 +203,11 @@ typedef struct pred_ctx {
     uint8_t *lock_mark;           /* owned, rounds modes with settling: 1 for a sphere in a
                                    * body of the lock_phase under way (no other body takes
                                    * it), else 0 */
+    uint64_t *unlocked;           /* owned with lock_mark: for sphere lo, the step (low bits)
+                                   * << 32 | 1 + hi of a pair (lo, hi) whose body its lock_phase
+                                   * could not make (jam_lock: past LOCK_MAX), whose next
+                                   * meeting is an ordinary response, as in cells mode (react);
+                                   * else 0 */
     nbep_vec3 *aeff;              /* owned: acceleration each sphere flies with (rest_solve) */
     double *t_last;               /* owned: time of each sphere's last sphere collision (TC) */
     face_met *face;               /* owned with t_last when something accelerates: each

@@ -622,6 +622,12 @@ static void lock_one(void *u, uint32_t q)
  * neighbour meets each in turn, twice as often as the neighbour meets it, so it reached
  * run.max_reactions = 20000 when its neighbour had 9992 reactions (a corner pour, cells mode,
  * with responses that add no energy: those that did had shot such spheres apart). */
+/* pred_ctx's unlocked for a pair with hi, in w's step */
+static uint64_t unlocked_key(const thread_ws *w, size_t hi)
+{
+    return (uint64_t)w->jam_step << 32 | ((uint32_t)hi + 1u);
+}
+
 static bool lockable(const pred_ctx *c, const thread_ws *w, size_t lo, size_t hi)
 {
     return c->settle && !c->order_step && !c->rest[lo].still && !c->rest[hi].still &&
@@ -942,15 +948,17 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
         }
     }
     if (lockable(c, w, lo, hi)) {
-        if (!c->ev) { /* rounds modes: at the round's end, on one thread (lock_phase); the
-                       * pair is predicted again after it */
+        if (!c->ev && c->unlocked[lo] == unlocked_key(w, hi)) {
+            c->unlocked[lo] = 0; /* its body could not be made: it meets as any pair, below */
+        } else if (!c->ev) { /* rounds modes: at the round's end, on one thread (lock_phase);
+                              * the pair is predicted again after it, and meets again */
             w->lock[w->n_lock++] = (uint64_t)lo << 32 | hi;
             fire(c, w, s, lo, false);
             fire(c, w, s, hi, false);
             return;
-        }
-        if (jam_lock(c, s, w, lo, hi, dt, t_local))
+        } else if (jam_lock(c, s, w, lo, hi, dt, t_local)) {
             return;
+        }
     }
     /* hi's image that touches lo (the same as pos[hi] without periodic axes) */
     const nbep_vec3 p_hi = c->pb.any ? nbep_vec3_add(s->pos[lo], r12) : s->pos[hi];
@@ -1063,10 +1071,16 @@ void nbep__pred_lock_phase(pred_ctx *c, nbep_state *s, int crew, double dt, doub
         last = key;
         const size_t lo = (size_t)(key >> 32), hi = (size_t)(key & UINT32_MAX);
         const size_t before = w->n_fired;
-        if (!c->lock_mark[lo] && !c->lock_mark[hi] && lockable(c, w, lo, hi) &&
-            jam_lock(c, s, w, lo, hi, dt, t_local))
+        if (c->lock_mark[lo] || c->lock_mark[hi] || !lockable(c, w, lo, hi))
+            continue;
+        if (jam_lock(c, s, w, lo, hi, dt, t_local))
             for (size_t k = before; k < w->n_fired; k++)
                 c->lock_mark[w->fired[k]] = 1;
+        else /* no body (past LOCK_MAX): the pair's next meeting, at this time, is an ordinary
+              * response, as cells mode's is at once; until 2026-12-04 it had none, and met
+              * again at zero time until the stall check stopped the run (a pile of 100 at
+              * dt = 0.05, all pairs, step 14) */
+            c->unlocked[lo] = unlocked_key(w, hi);
     }
     for (size_t k = first; k < w->n_fired; k++)
         c->lock_mark[w->fired[k]] = 0;

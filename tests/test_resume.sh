@@ -1012,7 +1012,7 @@ check "naive's file resumed by predictive: exit 0 (got $rc), one warning naming 
     "[ $rc = 0 ] && [ \$(wc -l <$tmp/coarse-pred.err) = 1 ] &&
      grep -q '^nbep: warning: spheres overlapped by up to 0\.[1-9].*; an earlier part of the run ran another algorithm, whose overlaps this part starts from: ' $tmp/coarse-pred.err"
 # a predictive file with a naive part in the middle, resumed by predictive again: the
-# overlaps are still the naive part's (until 2026-12-05 only the first part's algorithm was
+# overlaps are still the naive part's (until 2026-12-04 only the first part's algorithm was
 # compared, and this warning blamed the predictive part)
 bin/nbep run $deck --quiet -n 2 --dt 0.01 --set spheres.[0].count=1000 -o $tmp/middle.h5 &&
     bin/nbep run $deck --quiet -a naive -n 20 --dt 0.01 --set spheres.[0].count=1000 \

@@ -424,4 +424,28 @@ timeout -k 5 120 bin/nbep run "$tmp/pyramid.deck" --quiet -t 1 --set 'run.neighb
 rc=$?
 check "the pyramid at dt = 3e-5, cells: to t = 1.8 (60000 steps), exit 0 (got $rc: $(head -c 160 "$tmp/pyramid-small-dt.err"))" \
     "[ $rc -eq 0 ] && [ ! -s '$tmp/pyramid-small-dt.err' ]"
+
+# A pair that would lock (lockable) whose body is past LOCK_MAX meets as any pair, in the
+# rounds modes as in cells mode (nbep__pred_react, lock_phase): a pile of 100 poured at
+# dt = 0.05 in grid mode (seed 2) jams at step 12 with more than 64 spheres in the jam. Until
+# 2026-12-04 the rounds modes gave such a pair no response at all, so it met again at the same
+# time for ever, and the stall check stopped the run at step 12 (`events at t = 0.5988 do not
+# resolve`, after 21 s; all pairs: a pile of 100 in a 0.3 m cube, step 14). Now it runs on,
+# the same frames on 1 and 2 threads. (Measured 2026-12-04: about 6 s each.)
+cat >"$tmp/coarse-pile.deck" <<'EOF'
+run: { algorithm = "predictive"; steps = 13; dt = 0.05; seed = 2; neighbors = "grid"; };
+physics: { gravity = [0.0, 0.0, -9.81]; restitution = 0.5; };
+box: { min = [0.0, 0.0, 0.0]; max = [0.3, 0.3, 0.6]; };
+spheres = ( { count = 100; radius = 0.03; mass = 1.0; place = "random"; speed = 0.0; } );
+output: { file = "coarse-pile.h5"; every = 1; fields = ["position", "velocity"]; };
+EOF
+for t in 1 2; do
+    timeout -k 5 120 bin/nbep run "$tmp/coarse-pile.deck" --quiet -t $t -o "$tmp/coarse-pile-$t.h5" \
+        2>"$tmp/coarse-pile-$t.err"
+    rc=$?
+    check "a pile of 100 at dt = 0.05, grid, $t thread(s): a jam past LOCK_MAX meets as any pair, 13 steps (exit $rc: $(head -c 160 "$tmp/coarse-pile-$t.err"))" \
+        "[ $rc -eq 0 ] && [ ! -s '$tmp/coarse-pile-$t.err' ]"
+done
+check "a pile of 100 at dt = 0.05, grid: the same frames on 1 and 2 threads" \
+    "h5diff -q '$tmp/coarse-pile-1.h5' '$tmp/coarse-pile-2.h5' /frames /frames >/dev/null 2>&1"
 exit $fail
