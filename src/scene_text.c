@@ -392,8 +392,13 @@ char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label,
             const uint64_t max32 = neg ? (uint64_t)INT32_MAX + 1 : (uint64_t)INT32_MAX;
             if (overflow || v > max64) {
                 (*n_bad)++;
-                bad_number(c, label, line, neg, text + start, end - start,
-                           "integer", "does not fit in 64 bits");
+                /* (libconfig's integers are signed: 2^64 - 1, a seed that fits 64 bits
+                 * unsigned, does not; a review read "64 bits" as wrong for it) */
+                bad_number(c, label, line, neg, text + start, end - start, "integer",
+                           neg ? "does not fit in a signed 64-bit integer (at least "
+                                 "-9223372036854775808)"
+                               : "does not fit in a signed 64-bit integer (at most "
+                                 "9223372036854775807)");
                 /* Then read as 64-bit, where libconfig saturates it: no second message. */
             }
             widen_int t = {end, overflow || v > max32, hex, has_l};

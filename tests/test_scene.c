@@ -473,7 +473,7 @@ static void test_syntax_error_carries_libconfig_text(void **state)
 static void test_a_syntax_error_comes_before_a_later_line_s_too_big_integer(void **state)
 {
     fixture *f = *state;
-    char path[256], want[2][320];
+    char path[256], want[2][400];
     const char *deck = write_deck("scene_syntax_then_int.deck",
                                   "physics: { restitution = ; };\n"
                                   "run: { steps = 99999999999999999999; };\n",
@@ -481,8 +481,9 @@ static void test_a_syntax_error_comes_before_a_later_line_s_too_big_integer(void
     LOAD_FAILS(f, NBEP_EDECK, deck);
     snprintf(want[0], sizeof want[0], "%s:1: syntax error (the line: physics: { restitution = ; "
                                       "};)", deck);
-    snprintf(want[1], sizeof want[1], "%s:2: integer 99999999999999999999 does not fit in 64 "
-                                      "bits", deck);
+    snprintf(want[1], sizeof want[1], "%s:2: integer 99999999999999999999 does not fit in a "
+                                      "signed 64-bit integer (at most 9223372036854775807)",
+             deck);
     ASSERT_DIAG(&f->d, want[0], want[1]);
 }
 
@@ -903,7 +904,7 @@ static void test_integer_beyond_64_bits_is_an_error(void **state)
     fixture *f = *state;
     LOAD_FAILS(f, NBEP_EDECK, DATA "scene_int64.deck");
     ASSERT_DIAG(&f->d, DATA "scene_int64.deck:2: integer 99999999999999999999 does not fit in "
-                            "64 bits");
+                            "a signed 64-bit integer (at most 9223372036854775807)");
 }
 
 /* The edges of 64 bits: -2^63 and 2^63 - 1 are integers the deck can hold (the first then
@@ -921,9 +922,9 @@ static void test_integers_at_the_edges_of_64_bits_are_read_whole(void **state)
                 "--set run.seed=-9223372036854775808: run.seed must be >= 0 "
                 "(got -9223372036854775808)",
                 "--set run.steps=-9223372036854775809: integer -9223372036854775809 does not "
-                "fit in 64 bits",
+                "fit in a signed 64-bit integer (at least -9223372036854775808)",
                 "--set run.max_reactions=9223372036854775808: integer 9223372036854775808 does "
-                "not fit in 64 bits");
+                "not fit in a signed 64-bit integer (at most 9223372036854775807)");
 }
 
 static void test_more_spheres_than_memory_holds_fail_before_allocating(void **state)
@@ -1009,7 +1010,7 @@ static void test_command_line_errors_come_first_in_order_and_unplaced_ones_last(
                 "--set physics.gravty=[0,0,-1]: unknown setting physics.gravty (did you mean "
                 "physics.gravity?)",
                 "--set run.seed=99999999999999999999: integer 99999999999999999999 does not fit "
-                "in 64 bits",
+                "in a signed 64-bit integer (at most 9223372036854775807)",
                 "--set run.dt=[1.0, -7e-999]: number -7e-999 is beyond the range of a double "
                 "(it would read as 0)",
                 want[0], want[1], want[2], none);
