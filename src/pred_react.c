@@ -616,18 +616,18 @@ static void lock_one(void *u, uint32_t q)
     x->m[x->n++] = q;
 }
 
-/* Whether lo and hi, which meet, make a jammed body (jam_lock): one jammed and the other in
- * the jam, neither held, in a dissipative scene that settles, in time order (the paper's step
- * reacts at many times in one round). Not both jammed: a sphere pressed between a wall and a
- * neighbour meets each in turn, twice as often as the neighbour meets it, so it reached
- * run.max_reactions = 20000 when its neighbour had 9992 reactions (a corner pour, cells mode,
- * with responses that add no energy: those that did had shot such spheres apart). */
 /* pred_ctx's unlocked for a pair with hi, in w's step */
 static uint64_t unlocked_key(const thread_ws *w, size_t hi)
 {
     return (uint64_t)w->jam_step << 32 | ((uint32_t)hi + 1u);
 }
 
+/* Whether lo and hi, which meet, make a jammed body (jam_lock): one jammed and the other in
+ * the jam, neither held, in a dissipative scene that settles, in time order (the paper's step
+ * reacts at many times in one round). Not both jammed: a sphere pressed between a wall and a
+ * neighbour meets each in turn, twice as often as the neighbour meets it, so it reached
+ * run.max_reactions = 20000 when its neighbour had 9992 reactions (a corner pour, cells mode,
+ * with responses that add no energy: those that did had shot such spheres apart). */
 static bool lockable(const pred_ctx *c, const thread_ws *w, size_t lo, size_t hi)
 {
     return c->settle && !c->order_step && !c->rest[lo].still && !c->rest[hi].still &&
