@@ -448,4 +448,23 @@ for t in 1 2; do
 done
 check "a pile of 100 at dt = 0.05, grid: the same frames on 1 and 2 threads" \
     "h5diff -q '$tmp/coarse-pile-1.h5' '$tmp/coarse-pile-2.h5' /frames /frames >/dev/null 2>&1"
+
+# A held sphere without contacts that a response moves is held no more (update_rest): a mixture
+# of radii 0.02 and 0.04 poured at dt = 0.05 under tilted gravity, e = 0, grid mode, seed 1
+# (a helper's sweep). Until 2026-12-04 such a sphere stayed held while moving, met two held
+# neighbours at zero time, each let go and held again in turn, and the stall check stopped the
+# run at step 17 (t = 0.8354, after 9 s). (Measured 2026-12-04: 8.5 s.)
+cat >"$tmp/coarse-mix.deck" <<'EOF'
+run: { algorithm = "predictive"; steps = 18; dt = 0.05; seed = 1; neighbors = "grid"; };
+physics: { gravity = [2.0, 1.0, -9.0]; restitution = 0.0; };
+box: { min = [0.0, 0.0, 0.0]; max = [0.358, 0.358, 0.6]; };
+spheres = ( { count = 40; radius = 0.02; mass = 0.3; place = "random"; speed = 0.0; },
+            { count = 40; radius = 0.04; mass = 2.4; place = "random"; speed = 0.0; } );
+output: { file = "coarse-mix.h5"; every = 18; fields = ["position"]; };
+EOF
+timeout -k 5 120 bin/nbep run "$tmp/coarse-mix.deck" --quiet -t 1 -o "$tmp/coarse-mix.h5" \
+    2>"$tmp/coarse-mix.err"
+rc=$?
+check "a tilted mixture at dt = 0.05, grid: a held sphere that a response moves is let go, 18 steps (exit $rc: $(head -c 160 "$tmp/coarse-mix.err"))" \
+    "[ $rc -eq 0 ] && [ ! -s '$tmp/coarse-mix.err' ]"
 exit $fail
