@@ -1234,6 +1234,20 @@ MUTANTS = [
     ("unlocked-never-read", "src/pred_react.c",
      "        if (!c->ev && c->unlocked[lo] == unlocked_key(w, hi)) {",
      "        if (0) {", ["tests/test_settle.sh"], None),
+    # no event is placed behind now (nbep_feq_not_before): a root a prediction finds behind the
+    # loop's time is taken at it
+    ("late-root-kept-behind-now", "src/evloop.c",
+     "    best.time = nbep_feq_not_before(best.time, t);",
+     "    (void)0;", ["test_late_roots"], None),
+    ("late-root-kept-behind-round", "src/algo_predictive.c",
+     "                best.time = nbep_feq_not_before(best.time, t_now);",
+     "                (void)0;", ["test_late_roots"], None),
+    ("round-floor-stays-at-step-start", "src/algo_predictive.c",
+     "                    t_round = t_min;",
+     "                    (void)0;", ["test_late_roots"], None),
+    ("late-root-floor-inverted", "include/nbep/feq.h",
+     "    return time < t_now ? t_now : time;",
+     "    return time > t_now ? t_now : time;", ["test_late_roots"], None),
     # a held sphere without contacts that a response moves is let go
     ("held-moved-stays-held", "src/pred_react.c",
      "        c->rest[i].still = c->rest[i].still && is_zero(s->vel[i]);",

@@ -57,6 +57,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* A look at each re-prediction of the rounds: the time found (raw), the time kept (kept) and
+ * the round's time (t_now); tests/test_late_roots.c counts the late roots and checks that
+ * none is kept behind the round (nbep_feq_not_before); a build of nbep has nothing here. */
+#ifndef NBEP_PRED_PREDICTED_HOOK
+#define NBEP_PRED_PREDICTED_HOOK(raw, kept, t_now) ((void)(raw), (void)(kept), (void)(t_now))
+#endif
+
 #define NO_PLANE (-1)
 /* Re-predictions are shared out in chunks of this many spheres: each thread finds the best
  * event of every sphere of the chunk among its own partners, then the owners merge. The
@@ -591,9 +598,11 @@ static double cand_t_min(const pred_ctx *c, const thread_ws *w)
  * and sets setup->stop; after the chunk's last barrier every thread sees it and returns (the
  * slots left unpredicted are never used: the run ends at step 0, whose frame is written).
  * Otherwise it updates the progress line with the part made (a line every 10 s in a log, a
- * live one on a terminal, as the steps' own: they showed nothing for those 25 s). */
+ * live one on a terminal, as the steps' own: they showed nothing for those 25 s).
+ * t_now: the time of the round whose reactions changed them (the step's start before its
+ * first round); no event is placed before it (nbep_feq_not_before). */
 static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid, int crew,
-                       nbep_barrier *bar, double T0, double T_end, thread_ws *w,
+                       nbep_barrier *bar, double T0, double T_end, double t_now, thread_ws *w,
                        nbep_counters *cnt, nbep_sim *setup)
 {
     size_t total = 0;
@@ -641,6 +650,9 @@ static void redo_phase(pred_ctx *c, const nbep_state *s, nbep_range own, int tid
             if (best.kind == NBEP_EVENT_NONE) {
                 nbep_feq_set_never(c->q, i, c->ver[i]);
             } else {
+                const double raw = best.time;
+                best.time = nbep_feq_not_before(best.time, t_now);
+                NBEP_PRED_PREDICTED_HOOK(raw, best.time, t_now);
                 nbep_feq_remove(c->q, i);
                 nbep_feq_insert(c->q, i, best);
             }
@@ -841,7 +853,7 @@ static void pred_run(nbep_sim *sim, void *p)
             find_phase(c, own, nt, true, T0, w, cnt0);
             w->n_cand = 0;
             nbep_barrier_wait(&c->bar);
-            redo_phase(c, s, own, tid, nt, &c->bar, T0, T0, w, cnt0, sim);
+            redo_phase(c, s, own, tid, nt, &c->bar, T0, T0, T0, w, cnt0, sim);
         }
         if (tid == 0) /* SPEC: the first predictions belong to the set-up time */
             nbep__sim_setup_done(sim);
@@ -880,6 +892,9 @@ static void pred_run(nbep_sim *sim, void *p)
              * parity, and past the rounds of the steps before (stamp0), a reaction's stamp */
             const uint64_t stamp0 = c->rounds_before;
             uint64_t round = 0;
+            /* the last round's time (step order reacts each event at its own time, in any
+             * order: no floor) */
+            double t_round = c->order_step ? -INFINITY : T0;
             for (bool first = true;; first = false, round++) {
                 const int par = (int)(round & 1);
                 /* this round's threads so far, their barrier and each one's share */
@@ -902,7 +917,7 @@ static void pred_run(nbep_sim *sim, void *p)
                     quit = true;
                     break;
                 }
-                redo_phase(c, s, share, tid, k_all, b_all, T0, T_end, w, cnt, NULL);
+                redo_phase(c, s, share, tid, k_all, b_all, T0, T_end, t_round, w, cnt, NULL);
                 w->t_min = cand_t_min(c, w);
                 /* thread 0 looks at the stop signal; the crew reads what it found past the
                  * barrier (relaxed: the barrier orders it) */
@@ -965,6 +980,8 @@ static void pred_run(nbep_sim *sim, void *p)
                 claim_phase(c, par, t_min, w);
                 nbep_barrier_wait(bar);
                 react_phase(c, s, sim->scene, par, T0, t_min, stamp0 + round + 1, w, cnt, mx);
+                if (!c->order_step)
+                    t_round = t_min;
                 nbep_barrier_wait(bar);
                 /* pairs that lock (lockable) that met: their bodies, by thread 0 alone (a body
                  * reaches spheres other threads own), the same decision on every thread of

@@ -23,6 +23,13 @@
 #define NBEP_EVLOOP_HANDLED_HOOK(e, w, ev) ((void)0)
 #endif
 
+/* A look at each prediction: the time found (raw), the time kept in the slot (kept) and now
+ * (t); tests/test_late_roots.c counts the late roots and checks that none is kept behind now
+ * (nbep_feq_not_before); a build of nbep has nothing here. */
+#ifndef NBEP_EVLOOP_PREDICTED_HOOK
+#define NBEP_EVLOOP_PREDICTED_HOOK(raw, kept, t) ((void)(raw), (void)(kept), (void)(t))
+#endif
+
 /* Whether the walk of sphere i's list expiry at time t runs out of memory as though its room
  * could not grow: tests/test_team_faults.c compiles its own copy of this file that makes every
  * walk past a time fail, so that the loops' way out of a failed walk is tested; a build of nbep
@@ -592,6 +599,9 @@ static void predict_with(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, ui
         ops->pairs(u, i, js, m, near_face(e, ci), &best);
     if (best.kind == NBEP_EVENT_NONE)
         best = (nbep_event){.time = INFINITY, .kind = NBEP_EVENT_NEVER, .ver_self = e->ver[i]};
+    const double raw = best.time;
+    best.time = nbep_feq_not_before(best.time, t);
+    NBEP_EVLOOP_PREDICTED_HOOK(raw, best.time, t);
     nbep_feq_put(e->q, i, best); /* from scratch: whatever the slot held goes */
 }
 
