@@ -8,6 +8,16 @@
 #include <float.h>
 #include <string.h>
 
+/* Looks at jam_hold: the contacts it found to hold a sphere on (n), and those of each sphere
+ * it held; tests/test_hold_contacts.c compiles its own copy of this file that counts the
+ * first and checks the second; a build of nbep has nothing here. */
+#ifndef NBEP_PRED_JAM_HOLD_HOOK
+#define NBEP_PRED_JAM_HOLD_HOOK(n) ((void)(n))
+#endif
+#ifndef NBEP_PRED_HELD_HOOK
+#define NBEP_PRED_HELD_HOOK(n) ((void)(n))
+#endif
+
 /* A bounce whose flight would last less than this fraction of a step ends in resting contact:
  * with restitution e the remaining bounces take 2 v/|a| / (1 - e) in all, so below this the
  * sphere is indistinguishable from resting at the step's resolution, and the kinetic energy
@@ -245,7 +255,9 @@ static void update_rest(pred_ctx *c, nbep_state *s, size_t i, double dt, bool ho
     if (c->rest[i].n == 0) { /* a held sphere without contacts that a response moved is held
                               * no more (until 2026-12-04 it stayed held, moving, and two held
                               * neighbours woke and held each other at zero time for ever: a
-                              * tilted mixture at dt = 0.05, grid mode, step 17) */
+                              * tilted mixture at dt = 0.05, grid mode, step 17). A guard since
+                              * 2026-12-05: that sphere had been held on nothing by jam_hold,
+                              * which holds only on contacts now, as rest_solve does */
         c->rest[i].still = c->rest[i].still && is_zero(s->vel[i]);
         return;
     }
@@ -579,8 +591,16 @@ static bool jam_hold(pred_ctx *c, nbep_state *s, thread_ws *w, size_t k, size_t 
     }
     pocket_gather(c, s, w, k, j, vs * vs / amag, true, &r);
     pocket_planes(s, k, vs * vs / amag, &r);
+    /* nothing to be held on (j rests on k, and nothing else touches it: a mixture poured at
+     * dt = 0.05, grid mode, held a sphere of radius 0.02 under one of 0.04 that rested on it,
+     * 0.1 m above the floor, with no contact at all, until 2026-12-05): its meeting is an
+     * ordinary one, as rest_solve holds only with contacts */
+    NBEP_PRED_JAM_HOLD_HOOK(r.n);
+    if (r.n == 0)
+        return false;
     r.still = true;
     c->rest[k] = r;
+    NBEP_PRED_HELD_HOOK(c->rest[k].n);
     s->vel[k] = ZERO3;
     c->aeff[k] = ZERO3;
     fire(c, w, s, k, false);
