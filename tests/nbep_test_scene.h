@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "nbep/output.h"
 #include "nbep/run.h"
@@ -300,6 +301,29 @@ static inline nbep_run_result nbep_test_run_deck(const char *deck_path, const ch
     assert_int_equal(st, NBEP_OK);
     nbep_diag_fini(&d);
     return res;
+}
+
+/* The deck `text` written to a temporary file NAME (build/tests/tmp), loaded into *sc (the
+ * caller's to nbep_scene_fini; it must load) and removed. */
+static inline void nbep_test_load_deck(const char *name, const char *text, nbep_scene *sc)
+{
+    char path[256];
+    mkdir("build", 0777);
+    mkdir("build/tests", 0777);
+    mkdir("build/tests/tmp", 0777);
+    nbep_test_tmp(name, path, sizeof path);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    assert_true(fputs(text, f) >= 0);
+    assert_int_equal(fclose(f), 0);
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_status st = nbep_scene_load(path, NULL, 0, sc, &d);
+    if (st != NBEP_OK)
+        nbep_diag_print(&d, stderr);
+    assert_int_equal(st, NBEP_OK);
+    nbep_diag_fini(&d);
+    remove(path);
 }
 
 #endif

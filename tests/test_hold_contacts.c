@@ -22,7 +22,6 @@ static uint64_t nothing_to_hold_on, jam_held, held_on_nothing;
 #include <cmocka.h>
 
 #include <stdio.h>
-#include <sys/stat.h>
 
 #include "nbep/scene.h"
 #include "nbep_test.h"
@@ -31,33 +30,19 @@ static uint64_t nothing_to_hold_on, jam_held, held_on_nothing;
 static void test_a_jammed_sphere_is_held_only_on_something(void **state)
 {
     (void)state;
-    char path[256];
-    mkdir("build", 0777);
-    mkdir("build/tests", 0777);
-    mkdir("build/tests/tmp", 0777);
-    nbep_test_tmp("hold-contacts.deck", path, sizeof path);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fprintf(f,
-            "run: { algorithm = \"predictive\"; steps = %d; dt = 0.05; seed = 1;\n"
-            "       neighbors = \"grid\"; };\n"
-            "physics: { gravity = [2.0, 1.0, -9.0]; restitution = 0.0; };\n"
-            "box: { min = [0.0, 0.0, 0.0]; max = [0.358, 0.358, 0.6]; };\n"
-            "spheres = ( { count = 40; radius = 0.02; mass = 0.3; place = \"random\";\n"
-            "              speed = 0.0; },\n"
-            "            { count = 40; radius = 0.04; mass = 2.4; place = \"random\";\n"
-            "              speed = 0.0; } );\n",
-            (int)nbep_test_scaled(17, 3));
-    assert_int_equal(fclose(f), 0);
-    nbep_diag d;
-    nbep_diag_init(&d);
+    char deck[640];
+    snprintf(deck, sizeof deck,
+             "run: { algorithm = \"predictive\"; steps = %d; dt = 0.05; seed = 1;\n"
+             "       neighbors = \"grid\"; };\n"
+             "physics: { gravity = [2.0, 1.0, -9.0]; restitution = 0.0; };\n"
+             "box: { min = [0.0, 0.0, 0.0]; max = [0.358, 0.358, 0.6]; };\n"
+             "spheres = ( { count = 40; radius = 0.02; mass = 0.3; place = \"random\";\n"
+             "              speed = 0.0; },\n"
+             "            { count = 40; radius = 0.04; mass = 2.4; place = \"random\";\n"
+             "              speed = 0.0; } );\n",
+             (int)nbep_test_scaled(17, 3));
     nbep_scene sc;
-    nbep_status st = nbep_scene_load(path, NULL, 0, &sc, &d);
-    if (st != NBEP_OK)
-        nbep_diag_print(&d, stderr);
-    assert_int_equal(st, NBEP_OK);
-    nbep_diag_fini(&d);
-    remove(path);
+    nbep_test_load_deck("hold-contacts.deck", deck, &sc);
     (void)nbep_test_run(&sc, 1, NULL, NULL, NULL, NULL);
     nbep_scene_fini(&sc);
     fprintf(stderr, "jammed spheres held: %llu, on nothing: %llu; nothing to be held on: %llu\n",

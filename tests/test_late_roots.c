@@ -36,7 +36,6 @@ static void look(double raw, double kept, double now)
 #include <cmocka.h>
 
 #include <stdio.h>
-#include <sys/stat.h>
 
 #include "nbep/scene.h"
 #include "nbep_test.h"
@@ -52,31 +51,17 @@ typedef struct pile {
 } pile;
 static void load_pile(const pile *p, nbep_scene *sc)
 {
-    char path[256];
-    mkdir("build", 0777);
-    mkdir("build/tests", 0777);
-    mkdir("build/tests/tmp", 0777);
-    nbep_test_tmp("late-roots.deck", path, sizeof path);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fprintf(f,
-            "run: { algorithm = \"predictive\"; steps = %d; dt = 0.05; seed = %d;\n"
-            "       neighbors = \"%s\"; };\n"
-            "physics: { gravity = [1.0, 0.5, -9.7]; restitution = 0.0; };\n"
-            "box: { min = [0.0, 0.0, 0.0]; max = [0.322, 0.322, %.17g]; };\n"
-            "spheres = ( { count = %d; radius = 0.03; mass = 1.0; place = \"random\";\n"
-            "              speed = 0.0; } );\n"
-            "output: { every = 1; };\n",
-            (int)nbep_test_scaled((size_t)p->steps, 3), p->seed, p->neighbors, p->height, p->n);
-    assert_int_equal(fclose(f), 0);
-    nbep_diag d;
-    nbep_diag_init(&d);
-    nbep_status st = nbep_scene_load(path, NULL, 0, sc, &d);
-    if (st != NBEP_OK)
-        nbep_diag_print(&d, stderr);
-    assert_int_equal(st, NBEP_OK);
-    nbep_diag_fini(&d);
-    remove(path);
+    char deck[640];
+    snprintf(deck, sizeof deck,
+             "run: { algorithm = \"predictive\"; steps = %d; dt = 0.05; seed = %d;\n"
+             "       neighbors = \"%s\"; };\n"
+             "physics: { gravity = [1.0, 0.5, -9.7]; restitution = 0.0; };\n"
+             "box: { min = [0.0, 0.0, 0.0]; max = [0.322, 0.322, %.17g]; };\n"
+             "spheres = ( { count = %d; radius = 0.03; mass = 1.0; place = \"random\";\n"
+             "              speed = 0.0; } );\n"
+             "output: { every = 1; };\n",
+             (int)nbep_test_scaled((size_t)p->steps, 3), p->seed, p->neighbors, p->height, p->n);
+    nbep_test_load_deck("late-roots.deck", deck, sc);
 }
 
 static void run_counted(const pile *p)
