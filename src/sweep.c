@@ -7,9 +7,10 @@
  *   overrides and file names agree without communication; the only messages are rank 0's
  *   gather of results and its broadcast of the final status.
  * - A run's file is either complete (its /summary says it completed all its steps, its
- *   overrides are this run's: it is reused) or replaced: a restarted sweep never mixes an old
- *   run into a new one; a folder holding a run of another deck is refused before any run
- *   (runs_of_this_deck).
+ *   overrides are this run's: it is reused), cut short or shorter (resumed from its last
+ *   frame), this run complete at more steps (kept: the run fails saying so) or replaced: a
+ *   restarted sweep never mixes an old run into a new one, nor throws a longer one away; a
+ *   folder holding a run of another deck is refused before any run (runs_of_this_deck).
  * - Runs are independent processes of the simulation library: one run's failure (a deck error
  *   for one combination, a numerical failure) is recorded in its row and the others go on.
  * - MPI calls happen only on the main thread, outside any run's parallel region (the thread
@@ -600,12 +601,12 @@ nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
             else if (read && s.status == NBEP_SUMMARY_COMPLETED && s.steps < steps)
                 found = NBEP_SWEEP_FOUND_PARTIAL; /* extended: resumed to the steps asked */
             else if (read && s.status == NBEP_SUMMARY_COMPLETED)
-                held = "a run complete at more steps";
+                found = NBEP_SWEEP_FOUND_LONGER; /* kept: run_one says so */
         }
     }
     if (found == NBEP_SWEEP_FOUND_OTHER && why)
         snprintf(why, why_len, "%s", held);
-    if (found == NBEP_SWEEP_FOUND_COMPLETE && sum)
+    if ((found == NBEP_SWEEP_FOUND_COMPLETE || found == NBEP_SWEEP_FOUND_LONGER) && sum)
         *sum = s;
     free(stored);
     free(json);
@@ -699,6 +700,18 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
                       : NBEP_SWEEP_FOUND_NONE; /* replaced: "" unless OTHER */
     if (found == NBEP_SWEEP_FOUND_COMPLETE) {
         has_summary = reused = true;
+    } else if (found == NBEP_SWEEP_FOUND_LONGER) {
+        /* the same run taken further: its steps are the study's work, which a run of fewer
+         * would replace (until 2026-12-05 it did, from step 0: a study asked again without
+         * the -n it ran with lost every run). Kept; the user says which they want. */
+        nbep_diag_add(&d, __FILE__, __LINE__,
+                      "nbep: %s holds this run complete at %" PRIu64 " steps, more than the %" PRIu64
+                      " asked: kept, not run again (-n %" PRIu64
+                      " reuses it; remove the file to run %" PRIu64 " steps)",
+                      path, res->summary.steps, nbep_sweep_run_steps(p, run),
+                      res->summary.steps, nbep_sweep_run_steps(p, run));
+        memset(&res->summary, 0, sizeof res->summary); /* not this run's: no summary */
+        st = NBEP_EUSAGE;
     } else if (st == NBEP_OK) {
         /* as `nbep run` does it, but quiet and into the sweep's file; the command line's
          * overrides named as typed. A run an earlier sweep left cut short (a signal, a job's

@@ -106,9 +106,18 @@ run_sweep "$tmp/s.deck" -o "$tmp/ext" -n 40 --set sweep.replicas=2
 check "a run continued by hand at the deck's restitution: replaced, said why (exit $rc: $(grep -m1 'run 1 ' "$tmp/stderr" | head -c 250))" \
     "[ $rc = 0 ] && grep -q '^nbep sweep: rank 0: run 1 (of 4; physics.restitution=0.9 seed=1): ok in .* (40 steps, from step 0: its file, a run a resume continued with other settings, replaced, ' '$tmp/stderr' &&
      grep -q '^nbep sweep: rank 0: run 0 (of 4; physics.restitution=1.0 seed=1): ok in .* (40 steps, resumed from step 30, ' '$tmp/stderr'"
+# fewer steps than the runs have: each longer run is kept, not thrown away for a shorter one
+# (until 2026-12-05 each was run again from step 0 and replaced), and said so; the exit is a
+# failed study's, and the same study at the runs' steps reuses them all
+md5sum "$tmp"/ext.sweep/run-000?.h5 >"$tmp/ext.md5"
 run_sweep "$tmp/s.deck" -o "$tmp/ext" -n 25 --set sweep.replicas=2
-check "fewer steps than a run has: replaced, said why (exit $rc)" \
-    "[ $rc = 0 ] && [ \$(grep -c 'from step 0: its file, a run complete at more steps, replaced' '$tmp/stderr') = 4 ]"
+check "fewer steps than a run has: kept, said why, exit 1 (exit $rc: $(grep -m1 'run 2 ' "$tmp/stderr" | head -c 250))" \
+    "[ $rc = 1 ] && [ \$(grep -c '^nbep: sweep run [0-3] (.*) failed: $tmp/ext.sweep/run-000[0-3].h5 holds this run complete at 40 steps, more than the 25 asked: kept, not run again (-n 40 reuses it; remove the file to run 25 steps)\$' '$tmp/stderr') = 4 ] &&
+     md5sum -c --quiet '$tmp/ext.md5' &&
+     [ \$(grep -c '^[0-3],.*,failed,2,0,.*holds this run complete at 40 steps' '$tmp/ext.sweep/summary.csv') = 4 ]"
+run_sweep "$tmp/s.deck" -o "$tmp/ext" -n 40 --set sweep.replicas=2 --quiet --summary "$tmp/ext40.json"
+check "... and at its 40 steps every run reused (exit $rc)" \
+    "[ $rc = 0 ] && [ \"\$(json '$tmp/ext40.json' reused)\" = 4 ]"
 
 # the study given whole on the command line (a deck without a sweep group: `--set sweep={...}`)
 # is the study's setting as much as `sweep.vary=...`: either spelling reuses the other's runs

@@ -133,19 +133,23 @@ bool nbep_sweep_run_complete(const char *path, char *const *overrides, size_t n_
                              uint64_t steps, nbep_summary *sum);
 
 /* What a sweep finds at a run's path (nbep_sweep_run_found): nothing it can use (no file, an
- * unreadable one, other overrides, a failed run), the run complete (reused), or the run cut
+ * unreadable one, other overrides, a failed run), the run complete (reused), the run cut
  * short by a signal or a kill (its summary says interrupted or terminated, or it has none):
- * continued from its last frame, as `nbep run --resume` does. */
+ * continued from its last frame, as `nbep run --resume` does, or the run complete at more
+ * steps than asked: kept, and the run fails saying so (a study asked again with a smaller -n,
+ * or a deck's steps without the -n that ran it, would otherwise throw its longer runs away). */
 typedef enum nbep_sweep_found {
     NBEP_SWEEP_FOUND_NONE,
     NBEP_SWEEP_FOUND_COMPLETE,
     NBEP_SWEEP_FOUND_PARTIAL,
     NBEP_SWEEP_FOUND_OTHER, /* a file of no use: the run replaces it (NONE: no file at all) */
+    NBEP_SWEEP_FOUND_LONGER, /* the same run complete at more steps: kept, never replaced */
 } nbep_sweep_found;
 /* nbep_sweep_run_complete's look, telling a run cut short from one of no use; threads_axis:
  * run.threads is one of the study's axes, so a run with another thread count is of no use
  * (nbep_sweep_run_complete passes false). For NBEP_SWEEP_FOUND_OTHER, why (when not NULL, of
- * why_len bytes) says what the file held, in a few words. */
+ * why_len bytes) says what the file held, in a few words. *sum (may be NULL) gets the stored
+ * summary for NBEP_SWEEP_FOUND_COMPLETE and NBEP_SWEEP_FOUND_LONGER (its steps). */
 nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
                                       size_t n_overrides, uint64_t steps, bool threads_axis,
                                       nbep_summary *sum, char *why, size_t why_len);
