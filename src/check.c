@@ -241,14 +241,16 @@ static json_t *study_object(const nbep_sweep_check_report *r)
 {
     /* output_bytes as the human line's `sweep output`: the runs' files and sidecars and the
      * sweep's tables, which tables_bytes gives apart */
-    return json_pack("{s:I, s:I, s:I, s:o, s:I, s:b, s:o, s:o, s:o}", "runs",
-                     (json_int_t)r->n_runs, "combinations", (json_int_t)r->n_combos,
+    return json_pack("{s:I, s:I, s:I, s:o, s:I, s:b, s:o, s:o, s:o, s:I, s:I, s:I, s:I}",
+                     "runs", (json_int_t)r->n_runs, "combinations", (json_int_t)r->n_combos,
                      "replicas", (json_int_t)r->replicas, "dir", nbep_summary_json_text(r->dir),
                      "runs_checked",
                      (json_int_t)r->checked, "out_of_time", r->out_of_time,
                      "memory_bytes_max", bytes(r->memory_max), "output_bytes",
                      bytes(r->output_bytes + r->tables_bytes), "tables_bytes",
-                     bytes(r->tables_bytes));
+                     bytes(r->tables_bytes), "files_reused", (json_int_t)r->files_complete,
+                     "files_resumed", (json_int_t)r->files_partial, "files_replaced",
+                     (json_int_t)r->files_other, "files_kept", (json_int_t)r->files_kept);
 }
 
 /* jansson's json_pack builds the object in one call (keys in this order with

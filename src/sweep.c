@@ -339,6 +339,29 @@ static void describe_run(const nbep_sweep_plan *p, size_t run, char *buf, size_t
         snprintf(buf + used, len - used, "seed=%" PRIu64, nbep_sweep_run_seed(p, run));
 }
 
+/* Whether run.threads is one of the study's axes. */
+static bool varies_threads(const nbep_sweep_plan *p)
+{
+    for (size_t k = 0; k < p->n_axes; k++)
+        if (strcmp(p->axes[k].key, "run.threads") == 0)
+            return true;
+    return false;
+}
+
+/* Why run `run` keeps the file at path, which holds it complete at `have` steps where the study
+ * asks fewer (NBEP_SWEEP_FOUND_LONGER): one text for the sweep's failed run and for nbep check,
+ * which says it before the job. */
+static void kept_text(const nbep_sweep_plan *p, size_t run, const char *path, uint64_t have,
+                      char *buf, size_t len)
+{
+    const uint64_t asked = nbep_sweep_run_steps(p, run);
+    snprintf(buf, len,
+             "%s holds this run complete at %" PRIu64 " steps, more than the %" PRIu64
+             " asked: kept, not run again (-n %" PRIu64 " reuses it; remove the file to run %"
+             PRIu64 " steps)",
+             path, have, asked, have, asked);
+}
+
 /* ---- checking a study's runs before it runs (nbep check) --------------------------------- */
 
 nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides,
@@ -386,6 +409,24 @@ nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides
         rep->checked++;
         if (rst == NBEP_OK) {
             char *path = nbep_sweep_run_path(&p, run); /* the run's file, which its sidecar names */
+            /* what the sweep will do with a file already there (a study run before), the one
+             * it would fail on (a run complete at more steps: kept) said now, before the job */
+            nbep_summary was;
+            const nbep_sweep_found found =
+                path ? nbep_sweep_run_found(path, ov, n_ov, nbep_sweep_run_steps(&p, run),
+                                            varies_threads(&p), &was, NULL, 0)
+                     : NBEP_SWEEP_FOUND_NONE;
+            rep->files_complete += found == NBEP_SWEEP_FOUND_COMPLETE;
+            rep->files_partial += found == NBEP_SWEEP_FOUND_PARTIAL;
+            rep->files_other += found == NBEP_SWEEP_FOUND_OTHER;
+            rep->files_kept += found == NBEP_SWEEP_FOUND_LONGER;
+            if (found == NBEP_SWEEP_FOUND_LONGER && rep->failed++ < NBEP_SWEEP_CHECK_LISTED) {
+                char what[256], kept[4096 + 256];
+                describe_run(&p, run, what, sizeof what);
+                kept_text(&p, run, path, was.steps, kept, sizeof kept);
+                nbep_diag_add(d, __FILE__, __LINE__, "nbep: sweep run %zu (%s) cannot run: %s",
+                              run, what, kept);
+            }
             rep->output_bytes +=
                 nbep_output_bytes(&rs, nbep_sim_keeps_events(&rs), nbep_sim_keeps_contacts(&rs)) +
                 nbep_output_sidecar_bytes(&rs, path ? path : rs.output_file);
@@ -433,6 +474,20 @@ void nbep_sweep_check_print(FILE *f, const nbep_sweep_check_report *r)
                 "sweep runs:      all %zu loaded and placed as nbep sweep will; the largest "
                 "needs about %s\n",
                 r->checked, nbep_format_bytes(r->memory_max, size));
+    /* the files there already, by what the sweep does with them (the kinds it finds) */
+    const size_t kinds[4] = {r->files_complete, r->files_partial, r->files_other, r->files_kept};
+    static const char *const kind_text[4] = {
+        "complete (reused)", "cut short or shorter (go on from their last frames)",
+        "replaced (other settings, failed or unreadable)",
+        "complete at more steps (kept: those runs fail)"};
+    const char *sep = "sweep files:     ";
+    for (int k = 0; k < 4; k++)
+        if (kinds[k]) {
+            fprintf(f, "%s%zu %s", sep, kinds[k], kind_text[k]);
+            sep = ", ";
+        }
+    if (sep[0] == ',')
+        fprintf(f, "%s\n", r->out_of_time ? " (of the runs loaded)" : "");
     fprintf(f,
             "sweep output:    about %s in all%s (the runs' files and their sidecars, "
             "summary.csv and summary.h5)\n",
@@ -667,15 +722,6 @@ static nbep_status stop_status(const nbep_sweep_exec *ex)
     return nbep_sim_stop_status(ex->stop_signal);
 }
 
-/* Whether run.threads is one of the study's axes. */
-static bool varies_threads(const nbep_sweep_plan *p)
-{
-    for (size_t k = 0; k < p->n_axes; k++)
-        if (strcmp(p->axes[k].key, "run.threads") == 0)
-            return true;
-    return false;
-}
-
 static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec *ex,
                     nbep_sweep_result *res)
 {
@@ -704,12 +750,9 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
         /* the same run taken further: its steps are the study's work, which a run of fewer
          * would replace (until 2026-12-05 it did, from step 0: a study asked again without
          * the -n it ran with lost every run). Kept; the user says which they want. */
-        nbep_diag_add(&d, __FILE__, __LINE__,
-                      "nbep: %s holds this run complete at %" PRIu64 " steps, more than the %" PRIu64
-                      " asked: kept, not run again (-n %" PRIu64
-                      " reuses it; remove the file to run %" PRIu64 " steps)",
-                      path, res->summary.steps, nbep_sweep_run_steps(p, run),
-                      res->summary.steps, nbep_sweep_run_steps(p, run));
+        char kept[4096 + 256];
+        kept_text(p, run, path, res->summary.steps, kept, sizeof kept);
+        nbep_diag_add(&d, __FILE__, __LINE__, "nbep: %s", kept);
         memset(&res->summary, 0, sizeof res->summary); /* not this run's: no summary */
         st = NBEP_EUSAGE;
     } else if (st == NBEP_OK) {

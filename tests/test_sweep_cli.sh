@@ -118,6 +118,21 @@ check "fewer steps than a run has: kept, said why, exit 1 (exit $rc: $(grep -m1 
 run_sweep "$tmp/s.deck" -o "$tmp/ext" -n 40 --set sweep.replicas=2 --quiet --summary "$tmp/ext40.json"
 check "... and at its 40 steps every run reused (exit $rc)" \
     "[ $rc = 0 ] && [ \"\$(json '$tmp/ext40.json' reused)\" = 4 ]"
+# nbep check says it before the job: the runs the sweep would fail on (exit 2, a line each),
+# and what it does with each file there (the human line and the JSON's study keys)
+run_check "$tmp/s.deck" -o "$tmp/ext" -n 25 --set sweep.replicas=2
+check "check of the study with fewer steps: exit 2, each kept run a line (exit $rc: $(head -c 250 "$tmp/stderr"))" \
+    "[ $rc = 2 ] && [ \$(grep -c '^nbep: sweep run [0-3] (.*) cannot run: $tmp/ext.sweep/run-000[0-3].h5 holds this run complete at 40 steps, more than the 25 asked: kept, not run again (-n 40 reuses it; remove the file to run 25 steps)\$' '$tmp/stderr') = 4 ] &&
+     md5sum -c --quiet '$tmp/ext.md5'"
+rm "$tmp/ext.sweep/run-0003.h5"
+echo 'not a run file' >"$tmp/ext.sweep/run-0002.h5"
+run_check "$tmp/s.deck" -o "$tmp/ext" -n 50 --set sweep.replicas=2 --summary "$tmp/ext-check.json"
+check "check of the study with more steps: exit 0, 2 files resumed and 1 replaced said (exit $rc: $(grep 'sweep files' "$tmp/stdout"))" \
+    "[ $rc = 0 ] && grep -qx 'sweep files:     2 cut short or shorter (go on from their last frames), 1 replaced (other settings, failed or unreadable)' '$tmp/stdout' &&
+     [ \"\$(\"$PY\" -c 'import json,sys; s = json.load(open(sys.argv[1]))[\"study\"]; print(s[\"files_reused\"], s[\"files_resumed\"], s[\"files_replaced\"], s[\"files_kept\"])' '$tmp/ext-check.json')\" = '0 2 1 0' ]"
+run_check "$tmp/s.deck" -o "$tmp/ext" -n 40 --set sweep.replicas=2
+check "... and at 40 steps: 2 reused" \
+    "[ $rc = 0 ] && grep -qx 'sweep files:     2 complete (reused), 1 replaced (other settings, failed or unreadable)' '$tmp/stdout'"
 
 # the study given whole on the command line (a deck without a sweep group: `--set sweep={...}`)
 # is the study's setting as much as `sweep.vary=...`: either spelling reuses the other's runs

@@ -204,13 +204,18 @@ typedef struct nbep_sweep_check_report {
     uint64_t replicas;
     char dir[4096];               /* the sweep directory, as nbep sweep makes it */
     size_t checked;               /* runs whose scene was loaded (first runs first) */
-    size_t failed;                /* of those, runs whose scene a deck error refused */
+    size_t failed;                /* of those, runs whose scene a deck error refused, or whose
+                                   * file holds the run complete at more steps (kept) */
     double output_bytes;          /* the files of the checked runs that load, in all: each run's
                                    * and its XDMF sidecar */
     double tables_bytes;          /* the sweep's own summary.csv and summary.h5, of all runs */
     double memory_max;            /* the most memory one of them needs (nbep_sim_memory_estimate) */
     bool out_of_time;             /* stopped after budget_s: the runs past `checked` unchecked */
     double budget_s;              /* the time it was given */
+    /* the files already at the checked runs' paths, as nbep sweep will find them
+     * (nbep_sweep_run_found): reused, resumed, replaced, and kept (each such run is also one
+     * of `failed`, its line in the diag: the sweep would fail it) */
+    size_t files_complete, files_partial, files_other, files_kept;
     char tc_warning[640];         /* the first checked run's nbep_scene_tc_warning, naming the
                                    * run ("" for none): a run's e or dt may differ from the
                                    * deck's */
