@@ -114,7 +114,8 @@ run_sweep "$tmp/s.deck" -o "$tmp/ext" -n 25 --set sweep.replicas=2
 check "fewer steps than a run has: kept, said why, exit 1 (exit $rc: $(grep -m1 'run 2 ' "$tmp/stderr" | head -c 250))" \
     "[ $rc = 1 ] && [ \$(grep -c '^nbep: sweep run [0-3] (.*) failed: $tmp/ext.sweep/run-000[0-3].h5 holds this run complete at 40 steps, more than the 25 asked: kept, not run again (-n 40 reuses it; remove the file to run 25 steps)\$' '$tmp/stderr') = 4 ] &&
      md5sum -c --quiet '$tmp/ext.md5' &&
-     [ \$(grep -c '^[0-3],.*,failed,2,0,.*holds this run complete at 40 steps' '$tmp/ext.sweep/summary.csv') = 4 ]"
+     [ \$(grep -c '^[0-3],.*,failed,2,0,.*holds this run complete at 40 steps' '$tmp/ext.sweep/summary.csv') = 4 ] &&
+     grep -q '^nbep sweep: 4 runs on 1 rank in .* (0 ran to their end: 0 runs/min): 0 ok (0 reused), 4 failed, ' '$tmp/stderr'"
 run_sweep "$tmp/s.deck" -o "$tmp/ext" -n 40 --set sweep.replicas=2 --quiet --summary "$tmp/ext40.json"
 check "... and at its 40 steps every run reused (exit $rc)" \
     "[ $rc = 0 ] && [ \"\$(json '$tmp/ext40.json' reused)\" = 4 ]"
@@ -297,11 +298,13 @@ kill -TERM $pid 2>/dev/null
 wait $pid
 rc=$?
 line=$(grep '^nbep sweep: 6 runs on ' "$tmp/stderr")
-# the runs that ran to their end, by the table: ok and not reused, or failed
+# the runs that ran to their end, by the table: ok and not reused, or failed with a summary
+# (run 3 failed before it began, its file a directory: no summary, no time, not counted)
 ended=$("$PY" -c "
 import csv, sys
 print(sum(1 for r in csv.DictReader(open(sys.argv[1]))
-          if (r['status'] == 'ok' and r['reused'] == '0') or r['status'] == 'failed'))" \
+          if (r['status'] == 'ok' and r['reused'] == '0')
+          or (r['status'] == 'failed' and r['steps'] != '')))" \
     "$tmp/pace.sweep/summary.csv" 2>/dev/null)
 check "SIGTERM during run 4: exit 143 (got $rc), 3 ok (2 reused), 1 failed, 1 interrupted, 1 not run" \
     "[ $rc = 143 ] && echo '$line' | grep -q ': 3 ok (2 reused), 1 failed, 1 interrupted, 1 not run; '"
@@ -319,11 +322,31 @@ pace_agrees() {
         exit !(k == n && s > 0 && (r - 60 * k / s) ^ 2 <= (0.015 * r) ^ 2) }' <<<"$line"
 }
 check "... the closing line counts the $ended runs that ran to their end, at 60 x $ended / its seconds a minute: $line" \
-    "[ '$ended' = 2 ] && pace_agrees"
+    "[ '$ended' = 1 ] && pace_agrees"
 check "... and so does the JSON's runs_per_minute, of its wall_seconds" \
     "$PY -c 'import json, sys
 j = json.load(open(sys.argv[1]))
 sys.exit(not abs(j[\"runs_per_minute\"] - 60.0 * $ended / j[\"wall_seconds\"]) <= 1e-9 * j[\"runs_per_minute\"])' '$tmp/pace.json'"
+
+# a run that fails once begun (a jam at run.max_reactions = 2, step 61) ran: the pace counts it
+# beside the run that completed; one that failed before it began (run 3 above) did not
+cat >"$tmp/jam.deck" <<'DECK'
+run: { algorithm = "predictive"; steps = 300; dt = 1.0e-3; seed = 1; neighbors = "grid";
+       max_reactions = 2; };
+physics: { gravity = [0.0, 0.0, -9.81]; restitution = 0.5; };
+box: { min = [0.0, 0.0, 0.0]; max = [0.4, 0.2, 0.3]; };
+spheres = (
+  { position = [0.2, 0.1, 0.02]; radius = 0.02; mass = 1.0; },
+  { position = [0.0382, 0.1, 0.02]; velocity = [2.0, 0.0, 0.0]; radius = 0.02; mass = 1.0; },
+  { position = [0.2, 0.1, 0.062]; radius = 0.02; mass = 1.0; },
+  { position = [0.37, 0.1, 0.02]; radius = 0.02; mass = 1.0; }
+);
+output: { file = "jam.h5"; every = 10; };
+sweep: { vary = ( { key = "run.max_reactions"; values = [2, 1000000]; } ); };
+DECK
+run_sweep "$tmp/jam.deck" -o "$tmp/jam"
+check "a run failed once begun counts in the pace: 2 ran to their end (exit $rc: $(grep '^nbep sweep: 2 runs' "$tmp/stderr"))" \
+    "[ $rc = 1 ] && grep -q '^nbep sweep: 2 runs on 1 rank in .* (2 ran to their end: .*): 1 ok (0 reused), 1 failed, ' '$tmp/stderr'"
 
 # a fast pace reads as a whole number (20 runs of two spheres and one step take a few ms
 # each: thousands a minute, which printed as 8.16e+03 until 2026-11-30)
