@@ -411,7 +411,7 @@ nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides
             char *path = nbep_sweep_run_path(&p, run); /* the run's file, which its sidecar names */
             /* what the sweep will do with a file already there (a study run before), the one
              * it would fail on (a run complete at more steps: kept) said now, before the job */
-            nbep_summary was;
+            nbep_summary was = {0};
             const nbep_sweep_found found =
                 path ? nbep_sweep_run_found(path, ov, n_ov, nbep_sweep_run_steps(&p, run),
                                             varies_threads(&p), &was, NULL, 0)
@@ -631,7 +631,7 @@ nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
     nbep_diag d;
     nbep_diag_init(&d);
     char *stored = NULL, *json = NULL, *wanted = join_lines(overrides, n_overrides);
-    nbep_summary s;
+    nbep_summary s = {0}; /* set where read: zeroed for the analysers, which cannot see it */
     /* what is said of a file replaced (a new user took a silent replacement of an earlier
      * study's run for a reuse, 2026-12-01) */
     const char *held = "no run nbep can read";
