@@ -60,19 +60,7 @@ done
 # last round (a review's scene, grid mode, a limit of 2): found at the same step and sphere on
 # 1 to 4 threads whatever crew takes each step's rounds, though the thread whose let-go passed
 # it may sit out the next step's rounds (NBEP_TEAM=cycle: every change of crew)
-cat >"$tmp/letgo.deck" <<'DECK'
-run: { algorithm = "predictive"; steps = 300; dt = 1.0e-3; seed = 1; neighbors = "grid";
-       max_reactions = 2; };
-physics: { gravity = [0.0, 0.0, -9.81]; restitution = 0.5; };
-box: { min = [0.0, 0.0, 0.0]; max = [0.4, 0.2, 0.3]; };
-spheres = (
-  { position = [0.2, 0.1, 0.02]; radius = 0.02; mass = 1.0; },
-  { position = [0.0382, 0.1, 0.02]; velocity = [2.0, 0.0, 0.0]; radius = 0.02; mass = 1.0; },
-  { position = [0.2, 0.1, 0.062]; radius = 0.02; mass = 1.0; },
-  { position = [0.37, 0.1, 0.02]; radius = 0.02; mass = 1.0; }
-);
-output: { file = "letgo.h5"; every = 1; };
-DECK
+cp tests/data/jam_letgo.deck "$tmp/letgo.deck"
 for c in 1 2n 2c 3c 4c; do
     team=; case $c in *n) team=never ;; *c) team=cycle ;; esac
     NBEP_TEAM=$team timeout -k 5 60 bin/nbep run "$tmp/letgo.deck" --quiet -t "${c%[nc]}" \

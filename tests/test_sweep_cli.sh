@@ -330,20 +330,8 @@ sys.exit(not abs(j[\"runs_per_minute\"] - 60.0 * $ended / j[\"wall_seconds\"]) <
 
 # a run that fails once begun (a jam at run.max_reactions = 2, step 61) ran: the pace counts it
 # beside the run that completed; one that failed before it began (run 3 above) did not
-cat >"$tmp/jam.deck" <<'DECK'
-run: { algorithm = "predictive"; steps = 300; dt = 1.0e-3; seed = 1; neighbors = "grid";
-       max_reactions = 2; };
-physics: { gravity = [0.0, 0.0, -9.81]; restitution = 0.5; };
-box: { min = [0.0, 0.0, 0.0]; max = [0.4, 0.2, 0.3]; };
-spheres = (
-  { position = [0.2, 0.1, 0.02]; radius = 0.02; mass = 1.0; },
-  { position = [0.0382, 0.1, 0.02]; velocity = [2.0, 0.0, 0.0]; radius = 0.02; mass = 1.0; },
-  { position = [0.2, 0.1, 0.062]; radius = 0.02; mass = 1.0; },
-  { position = [0.37, 0.1, 0.02]; radius = 0.02; mass = 1.0; }
-);
-output: { file = "jam.h5"; every = 10; };
-sweep: { vary = ( { key = "run.max_reactions"; values = [2, 1000000]; } ); };
-DECK
+{ cat tests/data/jam_letgo.deck
+  echo 'sweep: { vary = ( { key = "run.max_reactions"; values = [2, 1000000]; } ); };'; } >"$tmp/jam.deck"
 run_sweep "$tmp/jam.deck" -o "$tmp/jam"
 check "a run failed once begun counts in the pace: 2 ran to their end (exit $rc: $(grep '^nbep sweep: 2 runs' "$tmp/stderr"))" \
     "[ $rc = 1 ] && grep -q '^nbep sweep: 2 runs on 1 rank in .* (2 ran to their end: .*): 1 ok (0 reused), 1 failed, ' '$tmp/stderr'"
