@@ -1125,6 +1125,8 @@ MUTANTS = [
      "            rep->files_partial += found == NBEP_SWEEP_FOUND_OTHER;\n            rep->files_other += found == NBEP_SWEEP_FOUND_PARTIAL;", ["tests/test_sweep_cli.sh"], None),
     ("sweep-pace-counts-unbegun", "src/sweep.c", "(x->outcome == NBEP_SWEEP_FAILED && x->has_summary);",
      "(x->outcome == NBEP_SWEEP_FAILED);", ["tests/test_sweep_cli.sh"], None),
+    ("sweep-cut-longer-resumed", "src/sweep.c", "                found = read && s.steps > steps ? NBEP_SWEEP_FOUND_LONGER\n                                                : NBEP_SWEEP_FOUND_PARTIAL;",
+     "                found = NBEP_SWEEP_FOUND_PARTIAL;", ["tests/test_sweep_cli.sh"], None),
     ("sweep-resumed-change-ignored", "src/sweep.c", "        if (resumed && nbep_output_resumed_changed(resumed))",
      "        if (0)", ["tests/test_sweep_cli.sh"], None),
     ("sweep-plan-never-looked", "src/sweep.c",

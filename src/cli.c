@@ -43,7 +43,7 @@ static const char HELP[] =
     "sweep writes OUTPUT.sweep/run-NNNN.h5 (OUTPUT = output.file or -o without .h5) and\n"
     "summary.csv, summary.h5 there; --summary gets the sweep's totals; run again to finish\n"
     "an interrupted sweep (complete runs are reused, runs cut short or shorter go on from\n"
-    "their last frames; a run complete at more steps than asked is kept: its run fails).\n"
+    "their last frames; a run past the steps asked is kept: its run fails).\n"
     "\n"
     "dense and periodic scenes (a hard-sphere fluid or crystal): run.neighbors = \"cells\"\n"
     "(predictive: an event loop over cell lists, the fastest there), box.periodic =\n"

@@ -348,18 +348,26 @@ static bool varies_threads(const nbep_sweep_plan *p)
     return false;
 }
 
-/* Why run `run` keeps the file at path, which holds it complete at `have` steps where the study
- * asks fewer (NBEP_SWEEP_FOUND_LONGER): one text for the sweep's failed run and for nbep check,
- * which says it before the job. */
-static void kept_text(const nbep_sweep_plan *p, size_t run, const char *path, uint64_t have,
-                      char *buf, size_t len)
+/* Why run `run` keeps the file at path, which holds it past the steps the study asks
+ * (NBEP_SWEEP_FOUND_LONGER; was its summary): complete at more steps, or cut short by a signal
+ * after them. One text for the sweep's failed run and for nbep check, which says it before the
+ * job. */
+static void kept_text(const nbep_sweep_plan *p, size_t run, const char *path,
+                      const nbep_summary *was, char *buf, size_t len)
 {
-    const uint64_t asked = nbep_sweep_run_steps(p, run);
-    snprintf(buf, len,
-             "%s holds this run complete at %" PRIu64 " steps, more than the %" PRIu64
-             " asked: kept, not run again (-n %" PRIu64 " reuses it; remove the file to run %"
-             PRIu64 " steps)",
-             path, have, asked, have, asked);
+    const uint64_t asked = nbep_sweep_run_steps(p, run), have = was->steps;
+    if (nbep_summary_ended(was))
+        snprintf(buf, len,
+                 "%s holds this run complete at %" PRIu64 " steps, more than the %" PRIu64
+                 " asked: kept, not run again (-n %" PRIu64 " reuses it; remove the file to run %"
+                 PRIu64 " steps)",
+                 path, have, asked, have, asked);
+    else
+        snprintf(buf, len,
+                 "%s holds this run cut short at step %" PRIu64 ", past the %" PRIu64
+                 " asked: kept, not run again (a larger -n continues it; remove the file to run %"
+                 PRIu64 " steps)",
+                 path, have, asked, asked);
 }
 
 /* ---- checking a study's runs before it runs (nbep check) --------------------------------- */
@@ -423,7 +431,7 @@ nbep_status nbep_sweep_check(const char *deck_path, const char *const *overrides
             if (found == NBEP_SWEEP_FOUND_LONGER && rep->failed++ < NBEP_SWEEP_CHECK_LISTED) {
                 char what[256], kept[4096 + 256];
                 describe_run(&p, run, what, sizeof what);
-                kept_text(&p, run, path, was.steps, kept, sizeof kept);
+                kept_text(&p, run, path, &was, kept, sizeof kept);
                 nbep_diag_add(d, __FILE__, __LINE__, "nbep: sweep run %zu (%s) cannot run: %s",
                               run, what, kept);
             }
@@ -479,7 +487,7 @@ void nbep_sweep_check_print(FILE *f, const nbep_sweep_check_report *r)
     static const char *const kind_text[4] = {
         "complete (reused)", "cut short or shorter (go on from their last frames)",
         "replaced (other settings, failed or unreadable)",
-        "complete at more steps (kept: those runs fail)"};
+        "past the steps asked (kept: those runs fail)"};
     const char *sep = "sweep files:     ";
     for (int k = 0; k < 4; k++)
         if (kinds[k]) {
@@ -652,7 +660,9 @@ nbep_sweep_found nbep_sweep_run_found(const char *path, char *const *overrides,
                 found = NBEP_SWEEP_FOUND_COMPLETE;
             else if (!json || (read && (s.status == NBEP_SUMMARY_INTERRUPTED ||
                                         s.status == NBEP_SUMMARY_TERMINATED)))
-                found = NBEP_SWEEP_FOUND_PARTIAL;
+                /* cut short, past the steps asked: kept as a longer complete run is */
+                found = read && s.steps > steps ? NBEP_SWEEP_FOUND_LONGER
+                                                : NBEP_SWEEP_FOUND_PARTIAL;
             else if (read && s.status == NBEP_SUMMARY_COMPLETED && s.steps < steps)
                 found = NBEP_SWEEP_FOUND_PARTIAL; /* extended: resumed to the steps asked */
             else if (read && s.status == NBEP_SUMMARY_COMPLETED)
@@ -747,11 +757,12 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
     if (found == NBEP_SWEEP_FOUND_COMPLETE) {
         has_summary = reused = true;
     } else if (found == NBEP_SWEEP_FOUND_LONGER) {
-        /* the same run taken further: its steps are the study's work, which a run of fewer
-         * would replace (until 2026-12-05 it did, from step 0: a study asked again without
-         * the -n it ran with lost every run). Kept; the user says which they want. */
+        /* the same run taken further (complete, or cut short past the steps asked): its
+         * steps are the study's work, which a run of fewer would replace (until 2026-12-05 it
+         * did, from step 0: a study asked again without the -n it ran with lost every run).
+         * Kept; the user says which they want. */
         char kept[4096 + 256];
-        kept_text(p, run, path, res->summary.steps, kept, sizeof kept);
+        kept_text(p, run, path, &res->summary, kept, sizeof kept);
         nbep_diag_add(&d, __FILE__, __LINE__, "nbep: %s", kept);
         memset(&res->summary, 0, sizeof res->summary); /* not this run's: no summary */
         st = NBEP_EUSAGE;

@@ -119,6 +119,31 @@ check "fewer steps than a run has: kept, said why, exit 1 (exit $rc: $(grep -m1 
 run_sweep "$tmp/s.deck" -o "$tmp/ext" -n 40 --set sweep.replicas=2 --quiet --summary "$tmp/ext40.json"
 check "... and at its 40 steps every run reused (exit $rc)" \
     "[ $rc = 0 ] && [ \"\$(json '$tmp/ext40.json' reused)\" = 4 ]"
+# a run cut short by SIGTERM past the steps now asked is kept too (it would have been run again
+# from step 0 at the fewer steps): its run fails, said in check's words and the sweep's, and the
+# runs without a file run
+timeout -k 5 120 "$nbep" sweep "$tmp/s.deck" -o "$tmp/cut" -n 5000000 --set sweep.replicas=2 \
+    --quiet >"$tmp/stdout" 2>"$tmp/stderr" &
+pid=$!
+for _ in $(seq 300); do
+    [ -f "$tmp/cut.sweep/run-0000.h5" ] && break
+    sleep 0.1
+done
+sleep 0.5
+kill -TERM $pid 2>/dev/null
+wait $pid
+check "a study of 5000000 steps stopped by SIGTERM in its first run (exit $?)" \
+    "[ -f '$tmp/cut.sweep/run-0000.h5' ] && [ ! -e '$tmp/cut.sweep/run-0001.h5' ]"
+md5sum "$tmp/cut.sweep/run-0000.h5" >"$tmp/cut.md5"
+run_check "$tmp/s.deck" -o "$tmp/cut" -n 25 --set sweep.replicas=2
+check "check at 25 steps: exit 2, the run cut short past them named (exit $rc: $(head -c 250 "$tmp/stderr"))" \
+    "[ $rc = 2 ] && grep -Eqx 'nbep: sweep run 0 \\(physics.restitution=1.0 seed=1\\) cannot run: $tmp/cut.sweep/run-0000.h5 holds this run cut short at step [0-9]+, past the 25 asked: kept, not run again \\(a larger -n continues it; remove the file to run 25 steps\\)' '$tmp/stderr' &&
+     [ \$(wc -l <'$tmp/stderr') = 1 ]"
+run_sweep "$tmp/s.deck" -o "$tmp/cut" -n 25 --set sweep.replicas=2
+check "... the sweep at 25 steps keeps it, its run failed, the other three run (exit $rc)" \
+    "[ $rc = 1 ] && grep -Eq '^nbep: sweep run 0 \\(.*\\) failed: $tmp/cut.sweep/run-0000.h5 holds this run cut short at step [0-9]+, past the 25 asked' '$tmp/stderr' &&
+     md5sum -c --quiet '$tmp/cut.md5' && [ \$(grep -c ': ok in .* (25 steps, ' '$tmp/stderr') = 3 ]"
+
 # nbep check says it before the job: the runs the sweep would fail on (exit 2, a line each),
 # and what it does with each file there (the human line and the JSON's study keys)
 run_check "$tmp/s.deck" -o "$tmp/ext" -n 25 --set sweep.replicas=2
@@ -786,8 +811,12 @@ kill -TERM $pid 2>/dev/null
 wait $pid
 rc1=$?
 run_sweep "$tmp/pace.deck" -o "$tmp/busy" --quiet --set 'sweep.vary.[0].values=[20]'
+# (the lock is gone: the next study runs in the folder and writes its table; its one run, cut
+# short past its 20 steps by that SIGTERM, is kept and fails, exit 1, since 2026-12-05)
 check "... ended (exit $rc1), the folder takes the next study (exit $rc)" \
-    "[ $rc1 = 143 ] && [ $rc = 0 ] && grep -q ',ok,' '$tmp/busy.sweep/summary.csv'"
+    "[ $rc1 = 143 ] && [ $rc = 1 ] && ! grep -q 'another nbep sweep is running' '$tmp/stderr' &&
+     grep -q 'holds this run cut short at step [0-9]*, past the 20 asked: kept' '$tmp/stderr' &&
+     grep -q ',failed,2,' '$tmp/busy.sweep/summary.csv'"
 
 # a run file another process writes (`nbep run --resume` of a study's run by hand): the sweep's
 # run is refused, said on its line, and the file is neither run afresh nor removed (until

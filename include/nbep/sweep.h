@@ -143,7 +143,8 @@ typedef enum nbep_sweep_found {
     NBEP_SWEEP_FOUND_COMPLETE,
     NBEP_SWEEP_FOUND_PARTIAL,
     NBEP_SWEEP_FOUND_OTHER, /* a file of no use: the run replaces it (NONE: no file at all) */
-    NBEP_SWEEP_FOUND_LONGER, /* the same run complete at more steps: kept, never replaced */
+    NBEP_SWEEP_FOUND_LONGER, /* the same run past the steps asked (complete at more, or cut
+                              * short by a signal after them): kept, never replaced */
 } nbep_sweep_found;
 /* nbep_sweep_run_complete's look, telling a run cut short from one of no use; threads_axis:
  * run.threads is one of the study's axes, so a run with another thread count is of no use
