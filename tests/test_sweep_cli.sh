@@ -40,6 +40,21 @@ output: { file = "s.h5"; every = 10; };
 sweep: { replicas = 2; vary = ( { key = "physics.restitution"; values = [1.0, 0.9]; } ); };
 EOF
 json() { "$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$@"; }
+# signalled SIGNAL FILE STDERR ARGS...: `nbep sweep ARGS` (stdout to /dev/null, stderr to STDERR)
+# stopped by SIGNAL 0.5 s after FILE appears with bytes in it (30 s at most); its status in rc.
+# Not under timeout, whose own pid would take a SIGKILL and leave nbep running on; the test's
+# own time limit (scripts/run-tests.sh) ends it if the signal does not.
+signalled() {
+    local sig=$1 file=$2 err=$3
+    shift 3
+    "$nbep" sweep "$@" >/dev/null 2>"$err" &
+    local pid=$!
+    for _ in $(seq 300); do [ -s "$file" ] && break; sleep 0.1; done
+    sleep 0.5
+    kill -"$sig" $pid 2>/dev/null
+    wait $pid
+    rc=$?
+}
 
 # ---- a --summary inside the sweep's own new folder: taken (the folder is made first) --------
 run_sweep "$tmp/s.deck" -o "$tmp/res/study.h5" --quiet --summary "$tmp/res/study.sweep/totals.json"
@@ -122,18 +137,10 @@ check "... and at its 40 steps every run reused (exit $rc)" \
 # a run cut short by SIGTERM past the steps now asked is kept too (it would have been run again
 # from step 0 at the fewer steps): its run fails, said in check's words and the sweep's, and the
 # runs without a file run
-timeout -k 5 120 "$nbep" sweep "$tmp/s.deck" -o "$tmp/cut" -n 5000000 --set sweep.replicas=2 \
-    --quiet >"$tmp/stdout" 2>"$tmp/stderr" &
-pid=$!
-for _ in $(seq 300); do
-    [ -f "$tmp/cut.sweep/run-0000.h5" ] && break
-    sleep 0.1
-done
-sleep 0.5
-kill -TERM $pid 2>/dev/null
-wait $pid
-check "a study of 5000000 steps stopped by SIGTERM in its first run (exit $?)" \
-    "[ -f '$tmp/cut.sweep/run-0000.h5' ] && [ ! -e '$tmp/cut.sweep/run-0001.h5' ]"
+signalled TERM "$tmp/cut.sweep/run-0000.h5" "$tmp/stderr" \
+    "$tmp/s.deck" -o "$tmp/cut" -n 5000000 --set sweep.replicas=2 --quiet
+check "a study of 5000000 steps stopped by SIGTERM in its first run (exit $rc)" \
+    "[ $rc = 143 ] && [ -f '$tmp/cut.sweep/run-0000.h5' ] && [ ! -e '$tmp/cut.sweep/run-0001.h5' ]"
 md5sum "$tmp/cut.sweep/run-0000.h5" >"$tmp/cut.md5"
 run_check "$tmp/s.deck" -o "$tmp/cut" -n 25 --set sweep.replicas=2
 check "check at 25 steps: exit 2, the run cut short past them named (exit $rc: $(head -c 250 "$tmp/stderr"))" \
@@ -311,17 +318,8 @@ EOF
 run_sweep "$tmp/pace.deck" -o "$tmp/pace" --quiet --set 'sweep.vary.[0].values=[20, 30]'
 check "the pace study's first two runs (exit $rc)" "[ $rc = 0 ]"
 mkdir -p "$tmp/pace.sweep/run-0003.h5/in-the-way"
-timeout -k 5 120 "$nbep" sweep "$tmp/pace.deck" -o "$tmp/pace" --summary "$tmp/pace.json" \
-    >"$tmp/stdout" 2>"$tmp/stderr" &
-pid=$!
-for _ in $(seq 300); do
-    [ -f "$tmp/pace.sweep/run-0004.h5" ] && break
-    sleep 0.1
-done
-sleep 0.3
-kill -TERM $pid 2>/dev/null
-wait $pid
-rc=$?
+signalled TERM "$tmp/pace.sweep/run-0004.h5" "$tmp/stderr" \
+    "$tmp/pace.deck" -o "$tmp/pace" --summary "$tmp/pace.json"
 line=$(grep '^nbep sweep: 6 runs on ' "$tmp/stderr")
 # the runs that ran to their end, by the table: ok and not reused, or failed with a summary
 # (run 3 failed before it began, its file a directory: no summary, no time, not counted)
@@ -394,16 +392,7 @@ EOF
 run_sweep "$tmp/go.deck" -o "$tmp/go-whole" --quiet
 check "the uninterrupted study (exit $rc)" "[ $rc = 0 ]"
 # cut NAME SIGNAL: the study into $tmp/NAME.sweep, stopped by SIGNAL 0.5 s after its file appears
-cut() {
-    # (not under timeout, whose own pid would take the SIGKILL and leave nbep running on)
-    "$nbep" sweep "$tmp/go.deck" -o "$tmp/$1" >/dev/null 2>"$tmp/stderr-$1" &
-    local pid=$!
-    for _ in $(seq 300); do [ -s "$tmp/$1.sweep/run-0000.h5" ] && break; sleep 0.1; done
-    sleep 0.5
-    kill -"$2" $pid 2>/dev/null
-    wait $pid
-    rc=$?
-}
+cut() { signalled "$2" "$tmp/$1.sweep/run-0000.h5" "$tmp/stderr-$1" "$tmp/go.deck" -o "$tmp/$1"; }
 cut go TERM
 check "SIGTERM during the run: exit 143 (got $rc), its row interrupted" \
     "[ $rc = 143 ] && grep -q ',interrupted,143,' '$tmp/go.sweep/summary.csv'"
@@ -411,13 +400,7 @@ check "SIGTERM during the run: exit 143 (got $rc), its row interrupted" \
 # (also with --quiet) and its stop line says the runs cut short go again from step 0 (until
 # 2026-12-03 it said "from their last frames", and a job chain ran them from step 0 for ever)
 sed 's/every = 1000; };/every = 1000; fields = ["position"]; };/' "$tmp/go.deck" >"$tmp/pos.deck"
-"$nbep" sweep "$tmp/pos.deck" -o "$tmp/pos" --quiet >/dev/null 2>"$tmp/stderr-pos" &
-pid=$!
-for _ in $(seq 300); do [ -s "$tmp/pos.sweep/run-0000.h5" ] && break; sleep 0.1; done
-sleep 0.5
-kill -TERM $pid 2>/dev/null
-wait $pid
-rc=$?
+signalled TERM "$tmp/pos.sweep/run-0000.h5" "$tmp/stderr-pos" "$tmp/pos.deck" -o "$tmp/pos" --quiet
 check "frames without velocities, SIGTERM: exit 143 (got $rc), warned at the start, the stop line says step 0: $(tail -1 "$tmp/stderr-pos")" \
     "[ $rc = 143 ] && [ \$(wc -l <'$tmp/stderr-pos') = 2 ] &&
      head -1 '$tmp/stderr-pos' | grep -qxF 'nbep: warning: $tmp/pos.deck: output.fields lacks \"position\" or \"velocity\": a run cut short (a signal, a job'\\''s time limit) cannot go on from its last frame, and the same command again runs it from step 0' &&
