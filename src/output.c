@@ -508,12 +508,15 @@ void nbep__output_room(nbep_output *o, const nbep_scene *sc)
     /* The /stats rows of a frame's interval: a new chunk of each column and of wall_impulse
      * (STATS_CHUNK_ROWS values each) where the interval's rows reach into one. Counted twice:
      * a run stopped for room commits the rows since its last frame at its close, after that
-     * frame took its own. */
+     * frame took its own. An interval holds no more rows than the run has steps: every =
+     * 1e9 over 20 steps (the first and last frames only) held 144 GB for 20 rows, and a run
+     * on any disk stopped for room at its first frame (a review, 2026-12-05). */
+    const uint64_t rows = sc->output_every < sc->steps ? sc->output_every : sc->steps;
     double stats = 0.0;
     if (sc->out_stats)
         stats = 8.0 * (STATS_N_COLUMNS + 1) *
-                (whole_chunks(sc->output_every, STATS_CHUNK_ROWS) +
-                 (sc->output_every > STATS_CHUNK_ROWS ? STATS_CHUNK_ROWS : 0));
+                (whole_chunks(rows, STATS_CHUNK_ROWS) +
+                 (rows > STATS_CHUNK_ROWS ? STATS_CHUNK_ROWS : 0));
     o->room = (int64_t)(frame + 2.0 * stats) + ROOM_SLACK_BYTES;
     /* the descriptor HDF5 writes through: its default (sec2) driver's, an int */
     hid_t fapl = H5Fget_access_plist(o->file);

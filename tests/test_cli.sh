@@ -358,6 +358,14 @@ check "... and a run of velocities alone writes no sidecar" "[ ! -e '$tmp/only-v
 check "the big fluid's frames are stored without padding (equal chunks)" \
     "h5ls -v '$tmp/big-fluid.h5/frames/position' | grep -q '100.00% utilization'"
 
+# ---- output.every past run.steps: the first and last frames, room held for the run's rows ------
+# (until 2026-12-05 the room held ahead of the file for a frame's /stats rows was output.every's
+# rows, not the run's: every = 1e12 over 20 steps asked 144 TB, and the run stopped for room at
+# frame 0 on any disk, exit 1, its file without a frame)
+run_nbep run inputs/two-spheres.deck -n 20 --set output.every=1000000000000 -o "$tmp/sparse.h5" --quiet
+check "every = 1e12 over 20 steps: exit 0 (got $rc: $(head -c 200 "$tmp/stderr")), frames 0 and 20" \
+    "[ $rc = 0 ] && [ ! -s '$tmp/stderr' ] && \"$nbep\" info '$tmp/sparse.h5' | grep -Eq '^frames: +2 '"
+
 # ---- nbep check's sizes read as sizes ---------------------------------------------------------
 # 3 figures in the unit that fits (kB, MB, GB, TB: powers of 1000): a million spheres' 2001
 # frames are "about 154 GB" (until 2026-11-30 "about 1.54e+05 MB"), their memory "about 531 MB"
