@@ -914,6 +914,15 @@ fail_uncreated:
     return create_st;
 }
 
+/* Removes the sidecar of the run file at path, if there is one. */
+static void remove_sidecar(const char *path)
+{
+    char *x = nbep_xdmf_path(path);
+    if (x)
+        remove(x);
+    free(x);
+}
+
 nbep_status nbep_output_publish(nbep_output *o, nbep_diag *d)
 {
     if (!o->staged)
@@ -926,18 +935,19 @@ nbep_status nbep_output_publish(nbep_output *o, nbep_diag *d)
     }
     free(o->staged);
     o->staged = NULL;
-    nbep__output_sidecar_stale(o);
+    /* a sidecar at path is an older run's: it lists frames not in this file. Removed whether
+     * or not this run writes one (its own comes with its first frame): until 2026-12-05 it
+     * stayed where this run writes one, and a run stopped before its first frame (a full
+     * disk) left it beside the new file, naming 2 spheres' frames in a file of 32000 and
+     * none (a review) */
+    remove_sidecar(o->path);
     return NBEP_OK;
 }
 
 void nbep__output_sidecar_stale(const nbep_output *o)
 {
-    if (o->sidecar)
-        return;
-    char *x = nbep_xdmf_path(o->path);
-    if (x)
-        remove(x);
-    free(x);
+    if (!o->sidecar)
+        remove_sidecar(o->path);
 }
 
 nbep_status nbep_output_create(const char *path, const nbep_scene *sc, int threads,

@@ -195,7 +195,8 @@ bool nbep__output_xmf_room(nbep_output *o, size_t f);
  * the one place that decides it (the name must be UTF-8 text, nbep_xdmf_can_name). */
 bool nbep__output_writes_sidecar(bool positions, const char *path);
 /* Removes the sidecar at o's path where o writes none: one an older run (or build) left there
- * would describe frames not in the file. As a new file is published and a resumed one begun. */
+ * would describe frames not in the file. As a resumed one is begun (a new file published
+ * removes any, nbep_output_publish). */
 void nbep__output_sidecar_stale(const nbep_output *o);
 /* Rewrites the sidecar (RUN.xmf) for o's frames so far in the room kept ahead for it, given
  * back first; hold_again: then keeps the room again for the steps that follow (not at the

@@ -95,6 +95,18 @@ grids = ET.parse(sys.argv[2]).getroot().findall(".//Grid/Grid")
 assert n >= 256 and len(grids) == n, (n, len(grids))
 assert [g.get("Name") for g in grids] == ["step %d" % s for s in f["frames/step"][:n]]
 PYEOF
+# A new run into a file of an older run, stopped for room at its first frame (a fluid of 32000:
+# its layout, 1.3 MB, fits the disk, its first frame's room, 3.4 MB, does not): its file took
+# the older one's place as the run began, and the older one's sidecar, which names 2 spheres
+# and 21 frames, goes with it (until 2026-12-05 it stayed beside the new file)
+umount "$mnt" && mount -t tmpfs -o size=3m tmpfs "$mnt"
+bin/nbep run inputs/two-spheres.deck --quiet -n 20 --set output.every=1 -o "$mnt/old.h5"
+rc0=$?
+bin/nbep run inputs/hard-sphere-fluid.deck --quiet -n 20 -o "$mnt/old.h5" 2>"$mnt/../old.err"
+rc=$?
+check "a run stopped for room at its first frame: exit 1 (got $rc; the older run's $rc0), its sidecar gone with the older file: $(cat "$mnt/../old.err")" \
+    "[ $rc0 = 0 ] && [ $rc = 1 ] && grep -q '^nbep: $mnt/old.h5: no room for frame 0 ' '$mnt/../old.err' &&
+     [ ! -e '$mnt/old.xmf' ] && bin/nbep info '$mnt/old.h5' | grep -Eq '^spheres: +32000\$'"
 # a read-only file system is the user's path, as one without permission: a run into it and a
 # sweep over a study on it (whose last tables it cannot remove) exit 2 with one line (until
 # 2026-12-01 both gave 1, a run-time failure)
