@@ -740,12 +740,16 @@ nbep_status nbep_run(const nbep_run_request *rq, nbep_run_result *res, nbep_diag
         /* --quiet too: a user who looks for the sidecar should learn why there is none (a
          * sweep's runs, never: its check's report gives their sidecars as null); once the
          * file is there (a refused run says only why) */
-        if (st == NBEP_OK && !rq->sweep_run && nbep_output_sidecar_unnamed(out))
+        if (st == NBEP_OK && !rq->sweep_run && nbep_output_sidecar_unnamed(out)) {
+            char *shown = nbep_one_line(file); /* a newline in the name: still one line */
             fprintf(stderr,
-                    "nbep: warning: %s: its name is not UTF-8 text, which the XDMF sidecar (XML) "
-                    "must name it in: no sidecar is written (ParaView and VisIt read the run "
-                    "through one; give the output a UTF-8 name for it)\n",
-                    file);
+                    "nbep: warning: %s: its name is not UTF-8 text free of control characters, "
+                    "which the XDMF sidecar (XML) must name it in: no sidecar is written "
+                    "(ParaView and VisIt read the run through one; give the output such a name "
+                    "for it)\n",
+                    shown ? shown : file);
+            free(shown);
+        }
         if (st == NBEP_OK && rq->resume && rq->verbose && resume.last_step != resume.step)
             fprintf(stderr,
                     "nbep: %s continues from its frame at step %lld, the last at a multiple of "

@@ -113,6 +113,27 @@ static char *format(const char *fmt, ...)
     return s;
 }
 
+char *nbep_one_line(const char *s)
+{
+    size_t len = 0;
+    for (const unsigned char *r = (const unsigned char *)s; *r; r++)
+        len += *r < 0x20 || *r == 0x7f ? 4 : 1; /* \xNN at most */
+    char *out = malloc(len + 1), *w = out;
+    if (!out)
+        return NULL;
+    for (const unsigned char *r = (const unsigned char *)s; *r; r++) {
+        if (*r >= 0x20 && *r != 0x7f)
+            *w++ = (char)*r;
+        else if (*r == '\n' || *r == '\t' || *r == '\r') {
+            *w++ = '\\';
+            *w++ = *r == '\n' ? 'n' : *r == '\t' ? 't' : 'r';
+        } else
+            w += sprintf(w, "\\x%02x", *r);
+    }
+    *w = '\0';
+    return out;
+}
+
 static void diag_vadd(nbep_diag *d, uint64_t rank, const char *file, int line, const char *fmt,
                       va_list ap)
 {
@@ -138,7 +159,9 @@ static void diag_vadd(nbep_diag *d, uint64_t rank, const char *file, int line, c
             d->msg[k] = d->where[k] = NULL;
         d->cap = cap;
     }
-    d->msg[i] = vformat(fmt, ap);
+    char *m = vformat(fmt, ap);
+    d->msg[i] = m ? nbep_one_line(m) : NULL;
+    free(m);
     d->where[i] = format("%s:%d", file, line);
     d->rank[i] = rank;
 }

@@ -124,6 +124,17 @@ check "step order in cells mode, cells typed: exit 2 (got $rc), one line naming 
 run_nbep check "$tmp/order.deck" --set 'run.neighbors="grid"'
 check "step order in grid mode: accepted (got $rc)" "[ $rc = 0 ]"
 
+# ---- a control character in a string quoted back: the error stays one line ---------------------
+# (until 2026-12-05 a deck's "pre\ndictive" broke the error in two, and an escape sequence in a
+# deck's string or a --set reached the terminal)
+printf 'run: { algorithm = "pre\\ndictive"; };\nspheres = ();\n' >"$tmp/ctrl.deck"
+run_nbep run "$tmp/ctrl.deck"
+check "a newline in a deck's string: exit 2 (got $rc), one line, written as \\n" \
+    "[ $rc = 2 ] && one_line && grep -qxF '$tmp/ctrl.deck:1: run.algorithm must be one of \"naive\", \"seminaive\", \"predictive\" (got \"pre\\ndictive\")' '$tmp/stderr'"
+run_nbep check inputs/two-spheres.deck --set 'run.algorithm="a\x1b[31mb"'
+check "an escape in a --set's string: exit 2 (got $rc), one line, written as \\x1b" \
+    "[ $rc = 2 ] && one_line && grep -qF '(got \"a\\x1b[31mb\")' '$tmp/stderr' && ! grep -q \$'\\x1b' '$tmp/stderr'"
+
 # ---- huge counts ------------------------------------------------------------------------------
 sed 's/count = 64/count = 1000000000000/' "$tmp/group.deck" >"$tmp/huge.deck"
 run_nbep run "$tmp/huge.deck" -o "$tmp/huge.h5"

@@ -142,6 +142,26 @@ static void test_open_failures_are_the_users_or_run_times(void **state)
         assert_int_equal(nbep_status_exit_code(nbep_status_of_open(run_time[k])), 1);
 }
 
+/* A user's text quoted in a message keeps it one line: each control character (below the
+ * space, and DEL) written as C writes it, every other byte (UTF-8 too) as it is; and so does
+ * every message the diag holds. */
+static void test_control_characters_are_written_as_c_writes_them(void **state)
+{
+    (void)state;
+    char *s = nbep_one_line("a\nb\tc\rd\x1b[31m\x7f\x01\xc3\xa9 ok");
+    assert_non_null(s);
+    assert_string_equal(s, "a\\nb\\tc\\rd\\x1b[31m\\x7f\\x01\xc3\xa9 ok");
+    free(s);
+    s = nbep_one_line("");
+    assert_string_equal(s, "");
+    free(s);
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_diag_add(&d, __FILE__, __LINE__, "deck:1: x (got \"%s\")", "pre\ndictive");
+    assert_string_equal(d.msg[0], "deck:1: x (got \"pre\\ndictive\")");
+    nbep_diag_fini(&d);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -150,6 +170,7 @@ int main(void)
         cmocka_unit_test(test_sort_without_memory_orders_in_place),
         cmocka_unit_test(test_sort_leaves_the_messages_before_first_alone),
         cmocka_unit_test(test_open_failures_are_the_users_or_run_times),
+        cmocka_unit_test(test_control_characters_are_written_as_c_writes_them),
     };
     return cmocka_run_group_tests_name("status", tests, NULL, NULL);
 }

@@ -61,10 +61,18 @@ typedef struct nbep_diag {
 /* The rank of a message nbep_diag_add adds: after every message given a smaller one. */
 #define NBEP_DIAG_UNRANKED UINT64_MAX
 
+/* A copy of s (to free) with each control character (below the space, and DEL) written as C
+ * writes it in a string: \n, \t, \r, else \xNN; NULL where memory runs out. For a user's
+ * text (a deck's string, a file's name) in a one-line message: a newline in it broke the line,
+ * and an escape sequence reached the terminal (a review, 2026-12-05). */
+char *nbep_one_line(const char *s);
+
 void nbep_diag_init(nbep_diag *d);
 void nbep_diag_fini(nbep_diag *d);
-/* Appends one formatted line (no trailing newline needed). On allocation failure the message
- * is dropped but n_errors still counts it, so callers still fail. */
+/* Appends one formatted line (no trailing newline needed), its control characters written as
+ * nbep_one_line writes them: a deck's string or a file's name quoted in it cannot break the
+ * line. On allocation failure the message is dropped but n_errors still counts it, so callers
+ * still fail. */
 void nbep_diag_add(nbep_diag *d, const char *file, int line, const char *fmt, ...)
     NBEP_PRINTF(4, 5);
 /* nbep_diag_add with the message's rank: its place once nbep_diag_sort orders the list (a
