@@ -956,12 +956,27 @@ static bool lattice_jams(nbep__scene_ctx *c, const nbep_state *s, const nbep__sc
          * period where it wraps) */
         const double room = !fcc        ? (rhi[a] - rlo[a]) - 2.0 * r * (double)n[a]
                             : ax[a].wraps ? ax[a].len - spacing * (double)n[a]
+                            : n[a] == 1   ? ax[a].len /* (one sphere's spacing is inf) */
                                           : ax[a].len - spacing * (double)(n[a] - 1);
         tight[a] = held && n[a] > 0 && room <= tol && (fcc || e->count >= whole[a]);
         n_tight += tight[a];
         if (tight[a] && first < 0)
             first = a;
     }
+    /* "fcc" of one layer between the walls along an axis: each sphere spans them, as a simple
+     * cubic row of one (a review's one sphere of radius 0.5 in a box 1 wide passed the check
+     * and stalled at step 1, where "lattice" was refused) */
+    for (int a = 0; fcc && a < 3; a++)
+        if (tight[a] && n[a] == 1 && !ax[a].wraps) {
+            fill_failed(c, s, e, plane_at, (blame){NULL, 0, NBEP_DIAG_UNRANKED},
+                        "spheres.[%zu]: this face-centred cubic lattice has one layer along %c, "
+                        "each sphere of radius %g touching both walls, so with speed %g no "
+                        "sphere can move along %c, and the run would not pass t = 0 (endless "
+                        "collisions at zero time); give the region more room along %c than 1 "
+                        "diameter (%g), or speed = 0",
+                        k, "xyz"[a], r, e->speed, "xyz"[a], "xyz"[a], 2.0 * r);
+            return true;
+        }
     if (fcc ? !(n_tight >= 2 &&
                 spacing <= lattice_min_spacing(r, true) * (1.0 + 4.0 * LATTICE_SLACK) &&
                 (double)e->count >= lattice_capacity(ax, spacing, true))

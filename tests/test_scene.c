@@ -2025,6 +2025,26 @@ static void test_a_lattice_packed_tight_that_moves_is_refused(void **state)
     LOAD_OK(f, fcc_deck, "box.max.[1]=3.9", "box.max.[2]=3.9");
     nbep_scene_fini(&f->sc);
     LOAD_OK(f, fcc_deck, "spheres.[0].count=62");
+    nbep_scene_fini(&f->sc);
+    /* "fcc" of one layer along x, each sphere from wall to wall (one sphere, as a review's: its
+     * spacing is infinite; and three): refused as a simple cubic row of one is (until
+     * 2026-12-05 loaded, and the run stalled at step 1); a layer with a hair of room loads */
+    const char *one_x = "box.max=[1.0, 3.0, 5.0]";
+    for (int count = 1; count <= 3; count += 2) {
+        char n_set[64];
+        snprintf(n_set, sizeof n_set, "spheres.[0].count=%d", count);
+        nbep_diag_fini(&f->d);
+        nbep_diag_init(&f->d);
+        LOAD_FAILS(f, NBEP_EDECK, fcc_deck, one_x, n_set);
+        assert_int_equal(f->d.n_errors, 1);
+        assert_non_null(strstr(f->d.msg[0],
+                               "spheres.[0]: this face-centred cubic lattice has one layer along "
+                               "x, each sphere of radius 0.5 touching both walls, so with speed 2 "
+                               "no sphere can move along x"));
+    }
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_OK(f, fcc_deck, "box.max=[1.000001, 3.0, 5.0]", "spheres.[0].count=3");
 }
 
 /* A group that a --set keeps from being placed (its radius, its count, its region) names that
