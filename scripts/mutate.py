@@ -1584,8 +1584,8 @@ MUTANTS = [
      "    if (!o->sidecar) /* its name", "    if (0) /* its name",
      ["tests/test_viz.sh"], None),
     ("xdmf-unnameable-stale-kept", "src/output.c",
-     "void nbep__output_sidecar_stale(const nbep_output *o)\n{\n    if (o->sidecar)",
-     "void nbep__output_sidecar_stale(const nbep_output *o)\n{\n    if (o->sidecar || o->xmf)",
+     "void nbep__output_sidecar_stale(const nbep_output *o)\n{\n    if (!o->sidecar)",
+     "void nbep__output_sidecar_stale(const nbep_output *o)\n{\n    if (!o->sidecar && !o->xmf)",
      ["tests/test_viz.sh"], None),
     ("xdmf-unnameable-counted", "src/output.c",
      "    return positions && nbep_xdmf_can_name(path);", "    return positions;",
@@ -3392,6 +3392,26 @@ MUTANTS = [
     ("missing-part-stats-skipped", "src/output_resume.c",
      "    for (size_t k = 0; stats > 0 && k < STATS_N_COLUMNS; k++)",
      "    for (size_t k = 0; 0 && stats > 0 && k < STATS_N_COLUMNS; k++)", ["tests/test_resume.sh"], None),
+    # 2026-12-05 (twelfth session): a review's output.every past run.steps, and a run stopped
+    # before its first frame beside an older run's sidecar
+    ("room-stats-every-uncapped", "src/output.c",
+     "    const uint64_t rows = sc->output_every < sc->steps ? sc->output_every : sc->steps;",
+     "    const uint64_t rows = sc->output_every;", ["tests/test_cli.sh"], None),
+    ("publish-keeps-old-sidecar", "src/output.c", "    remove_sidecar(o->path);\n    return NBEP_OK;",
+     "    nbep__output_sidecar_stale(o);\n    return NBEP_OK;", ["tests/test_diskfull.sh"], None),
+    ("diag-controls-unescaped", "src/status.c",
+     "    d->msg[i] = m ? nbep_one_line(m) : NULL;\n    free(m);", "    d->msg[i] = m;",
+     ["tests/test_cli.sh", "test_status"], None),
+    ("one-line-newline-kept", "src/status.c", "        if (*r >= 0x20 && *r != 0x7f)",
+     "        if (*r >= 0x20 || *r == '\\n')", ["test_status"], None),
+    ("fcc-one-layer-passes", "src/scene_place.c",
+     "        if (tight[a] && n[a] == 1 && !ax[a].wraps) {",
+     "        if (tight[a] && n[a] == 1 && !ax[a].wraps && 0) {", ["test_scene"], None),
+    ("fcc-one-sphere-room-nan", "src/scene_place.c",
+     "                            : n[a] == 1   ? ax[a].len /* (one sphere's spacing is inf) */\n", "",
+     ["test_scene"], None),
+    ("override-made-kept", "src/scene_override.c", "    if (made && !placed)",
+     "    if (made && !placed && 0)", ["test_scene"], None),
 ]
 
 

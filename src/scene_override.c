@@ -284,6 +284,8 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
     seg segs[SEG_MAX];
     size_t n = 0;
     char canon[OV_PATH_LEN];
+    config_setting_t *made = NULL; /* the first setting the walk below makes */
+    bool placed = false;           /* the value in the deck */
     if (!path || !value) {
         c->oom = true;
         goto out;
@@ -309,7 +311,10 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
     if (!v)
         goto out;
 
-    /* Walk to the parent of the last segment, making what is missing. */
+    /* Walk to the parent of the last segment, making what is missing: the first setting made
+     * (made) goes again where the value is not placed, so that a --set refused names one
+     * problem (`--set physics.gravity.[3]=1.0` on a deck without gravity said its index, and
+     * then that the gravity it had made was not 3 numbers; a review, 2026-12-05). */
     config_setting_t *node = config_root_setting(cfg);
     char sofar[OV_PATH_LEN] = "";
     for (size_t k = 0; k + 1 < n; k++) {
@@ -324,8 +329,10 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
                 goto out;
             }
             child = config_setting_get_member(node, s->name);
-            if (!child)
+            if (!child) {
                 child = config_setting_add(node, s->name, container_type(sofar, &segs[k + 1]));
+                made = made ? made : child;
+            }
         } else {
             unsigned len = (unsigned)config_setting_length(node);
             if (!config_setting_is_list(node)) {
@@ -337,6 +344,7 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
                 child = config_setting_get_elem(node, (unsigned)s->idx);
             } else if (s->idx == len) {
                 child = config_setting_add(node, NULL, container_type(sofar, &segs[k + 1]));
+                made = made ? made : child;
             } else {
                 sofar[used] = '\0';
                 index_past_end(c, label, sofar, len);
@@ -361,8 +369,8 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
         nbep__scene_check_replaced(c, config_setting_get_member(node, last->name), canon, label);
         if (config_setting_get_member(node, last->name))
             config_setting_remove(node, last->name);
-        if (!copy_value(node, last->name, v, label))
-            c->oom = true;
+        placed = copy_value(node, last->name, v, label) != NULL;
+        c->oom = c->oom || !placed;
         goto out;
     }
     if (!config_setting_is_list(node) && !config_setting_is_array(node)) {
@@ -379,13 +387,18 @@ void nbep__scene_apply_override(nbep__scene_ctx *c, config_t *cfg, const char *o
         nbep__scene_check_replaced(c, config_setting_get_elem(node, (unsigned)last->idx), canon,
                                    label);
         ok = replace_elem(node, (unsigned)last->idx, v, label);
+        placed = ok;
     } else if (last->idx == len) {
         ok = copy_value(node, NULL, v, label) != NULL;
+        placed = ok;
     } else {
         index_past_end(c, label, sofar, len);
     }
     c->oom = c->oom || !ok;
 out:
+    if (made && !placed)
+        config_setting_remove_elem(config_setting_parent(made),
+                                   (unsigned)config_setting_index(made));
     config_destroy(&tmp);
     free(path);
     free(value);

@@ -1382,6 +1382,17 @@ static void test_an_index_past_an_empty_list_says_0_entries(void **state)
     LOAD_FAILS(f, NBEP_EDECK, DATA "scene_defaults.deck", "planes.[1].normal=[0,0,1]");
     ASSERT_DIAG(&f->d, "--set planes.[1].normal=[0,0,1]: planes has 0 entries: the index can "
                        "be at most 0 (to add one)");
+    /* what the override made on its way to the index goes again: one message, not a second for
+     * the gravity it had left empty, or for a plane without its point (until 2026-12-05) */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_defaults.deck", "physics.gravity.[3]=1.0",
+               "planes.[0].normal.[5]=1.0");
+    ASSERT_DIAG(&f->d,
+                "--set physics.gravity.[3]=1.0: physics.gravity has 0 entries: the index can be "
+                "at most 0 (to add one)",
+                "--set planes.[0].normal.[5]=1.0: planes.[0].normal has 0 entries: the index can "
+                "be at most 0 (to add one)");
 }
 
 /* A list or group where a vector's element goes is the user's mistake, said at the override
