@@ -1792,10 +1792,14 @@ static void test_include_in_a_set_is_refused(void **state)
                                   buf, sizeof buf);
     snprintf(ov, sizeof ov, "run={ steps = 3;\n@include \"%s\"\n}", inc);
     LOAD_FAILS(f, NBEP_EDECK, deck, ov);
+    /* the --set as typed, its newlines written \n: the message stays one line */
+    char *typed = nbep_one_line(ov);
+    assert_non_null(strstr(typed, ";\\n@include"));
     snprintf(want, sizeof want,
              "--set %s: @include is not supported: a run keeps its overrides as typed; give the "
              "included settings themselves",
-             ov);
+             typed);
+    free(typed);
     ASSERT_DIAG(&f->d, want);
 }
 
