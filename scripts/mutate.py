@@ -2285,6 +2285,17 @@ MUTANTS = [
     ("bench-dense-failure-ignored", "scripts/bench-dense.sh",
      "                run_nbep \"$n\" \"$phi\" \"$nt\" \"$rep\" || exit 1",
      "                run_nbep \"$n\" \"$phi\" \"$nt\" \"$rep\"", ["tests/test_bench_dense.sh"], None),
+    # slurm-scaling.sbatch: the user's options come before the script's own, so a --set of a
+    # whole group (run, spheres) cannot undo its steps and count (tests/test_slurm_scripts.sh)
+    ("scaling-user-options-last", "scripts/slurm-scaling.sbatch",
+     "                \"$NBEP\" run \"$deck\" ${user[@]+\"${user[@]}\"} --quiet -t \"$t\" -n \"$STEPS\" \\\n"
+     "                --set \"spheres.[0].count=$n\" ${extra[@]+\"${extra[@]}\"} \\\n",
+     "                \"$NBEP\" run \"$deck\" --quiet -t \"$t\" -n \"$STEPS\" \\\n"
+     "                --set \"spheres.[0].count=$n\" ${extra[@]+\"${extra[@]}\"} ${user[@]+\"${user[@]}\"} \\\n",
+     ["tests/test_slurm_scripts.sh"], None),
+    ("scaling-count-taken", "scripts/slurm-scaling.sbatch",
+     " | spheres.\\[0\\].count | spheres\\[0\\].count | sweep |", " | sweep |",
+     ["tests/test_slurm_scripts.sh"], None),
     # scripts/hard-sphere.py: the MSD of unwrapped centres, less the centre of mass's flight
     # (tests/test_hard_sphere.sh's file made with known answers)
     ("hard-sphere-images-ignored", "scripts/hard-sphere.py", "                u = pos + img * side\n",

@@ -56,7 +56,8 @@ check "slurm-scaling.sbatch on 2 nodes: exit 0 (got $rc), 4 rows, run files in t
 # (attached forms and the --set keys they stand for too: a review found -n7, -t3 and --set
 # run.steps=7 passed)
 for opt in "-n 7" --steps=7 "-o x.h5" "--summary x.json" -n7 -t3 "--set run.steps=7" \
-    "--set output.file=x.h5" "--set sweep.replicas=2"; do
+    "--set output.file=x.h5" "--set sweep.replicas=2" "--set spheres.[0].count=9" \
+    "--set spheres[0].count=9"; do
     # shellcheck disable=SC2086 # the option's words
     NBEP=$PWD/bin/nbep SPHERES=64 STEPS=5 RUNS=2 THREADS_LIST=1 RANKS_LIST=1 \
         OUT="$tmp/refused.csv" WORK="$tmp/work" timeout -k 5 60 \
@@ -74,5 +75,27 @@ NBEP=$PWD/bin/nbep SPHERES=64 STEPS=5 RUNS=2 THREADS_LIST=1 RANKS_LIST=1 OUT="$t
 rc=$?
 check "... and other options taken (--set physics.restitution=0.9 --dt 0.002: exit $rc, 4 rows)" \
     "[ $rc = 0 ] && [ \$(wc -l <'$tmp/taken.csv') = 5 ]"
+# a --set of a whole group holding one of the script's own settings: the script's still win, as
+# nbep takes options in order and the user's come first (until 2026-12-05 they came last, and
+# --set 'run={...}' put back the default 1000 steps where the CSV said STEPS). The wrapper
+# writes each run's steps and spheres, from its summary, beside the CSV's rows.
+cat >"$tmp/nbep-logged" <<END
+#!/usr/bin/env bash
+"$PWD/bin/nbep" "\$@"
+rc=\$?
+[ "\$1" = run ] || exit \$rc
+while [ \$# -gt 1 ] && [ "\$1" != --summary ]; do shift; done
+sed -n 's/.*"spheres": \([0-9]*\).*"steps": \([0-9]*\).*/\2 \1/p' "\$2" >>"$tmp/ran.log"
+exit \$rc
+END
+chmod +x "$tmp/nbep-logged"
+NBEP=$tmp/nbep-logged SPHERES=64 STEPS=5 RUNS=1 THREADS_LIST=1 RANKS_LIST=1 \
+    OUT="$tmp/group.csv" WORK="$tmp/work" timeout -k 5 120 bash scripts/slurm-scaling.sbatch \
+    inputs/paper-box.deck --set 'run={algorithm="predictive";}' \
+    --set 'spheres.[0]={count=3; radius=0.01; mass=1.0; place="random";}' >"$tmp/group.out" 2>&1
+rc=$?
+check "... and a user's --set of the run and spheres groups: exit 0 (got $rc), each run 5 steps of 64 spheres as the CSV says ($(tr '\n' ';' <"$tmp/ran.log"))" \
+    "[ $rc = 0 ] && [ \$(wc -l <'$tmp/ran.log') = 2 ] && [ \"\$(sort -u '$tmp/ran.log')\" = '5 64' ] &&
+     [ \$(cut -d, -f5,7 '$tmp/group.csv' | sort -u | grep -c '^64,5\$') = 1 ]"
 
 exit $fail
