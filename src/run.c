@@ -25,10 +25,30 @@
  * is written in place: no temporary file beside it (none can be made in /dev) and nothing to
  * rename, and no older summary to keep (until 2026-11-30 `--summary /dev/null` failed, "cannot
  * write the summary to /dev/null"). */
+/* ... and so is one in /dev or /proc (its folder resolved) that leads to a regular file:
+ * /dev/stdout, /dev/fd/1 or /proc/self/fd/1 with standard output sent to a file. Made beside it
+ * and renamed, the summary replaced the link /dev/stdout itself where the folder takes files
+ * (root, a container's /dev), and the file the shell had opened got nothing (until 2026-12-05).
+ * Opened for appending: whatever the run wrote to that file before stays. */
+static bool in_system_folder(const char *path)
+{
+    char *dir = nbep_path_dir(path);
+    char *real = dir ? realpath(dir, NULL) : NULL;
+    free(dir);
+    bool sys = false;
+    for (const char *const *f = (const char *const[]){"/dev", "/proc", NULL}; real && *f; f++) {
+        const size_t k = strlen(*f);
+        sys |= strncmp(real, *f, k) == 0 && (real[k] == '\0' || real[k] == '/');
+    }
+    free(real);
+    return sys;
+}
+
 static bool summary_in_place(const char *where)
 {
     struct stat sb;
-    return stat(where, &sb) == 0 && !S_ISREG(sb.st_mode) && !S_ISDIR(sb.st_mode);
+    return stat(where, &sb) == 0 && !S_ISDIR(sb.st_mode) &&
+           (!S_ISREG(sb.st_mode) || in_system_folder(where));
 }
 
 /* Opens the summary's temporary file before anything is simulated, so that an unwritable
@@ -65,7 +85,7 @@ static nbep_status open_summary(const char *where, const atomic_int *stop, FILE 
     const int fd = in_place ? -1 : nbep_lock_take(tmp, &busy);
     int err = 0;
     if (fd < 0 && !busy)
-        *out = fopen(in_place ? where : tmp, "w");
+        *out = fopen(in_place ? where : tmp, in_place ? "a" : "w");
     else if (fd >= 0 && (fcntl(fd, F_GETFL) & O_ACCMODE) == O_RDONLY)
         err = EACCES; /* locked read-only: another user's SUMMARY.partial (nbep_lock_take;
                        * "Invalid argument" from ftruncate, exit 1, until a review) */
@@ -93,14 +113,15 @@ static nbep_status open_summary(const char *where, const atomic_int *stop, FILE 
     return NBEP_OK;
 }
 
-/* Whether f, as open_summary opened it, writes the summary in place (a device, a pipe:
- * summary_in_place) rather than into its temporary file, a regular one. Read off the file
- * opened, not the path again: what stands at the path may have changed during the run (a
- * review's find: a device put there since left the temporary file behind, unrenamed). */
-static bool opened_in_place(FILE *f)
+/* Whether f, as open_summary opened it at where, writes the summary in place (a device, a
+ * pipe, a file through /dev or /proc: summary_in_place) rather than into its temporary file, a
+ * regular one. Read off the file opened, not the path again: what stands at the path may have
+ * changed during the run (a review's find: a device put there since left the temporary file
+ * behind, unrenamed); a folder stays in /dev or not. */
+static bool opened_in_place(FILE *f, const char *where)
 {
     struct stat sb;
-    return fstat(fileno(f), &sb) == 0 && !S_ISREG(sb.st_mode);
+    return fstat(fileno(f), &sb) == 0 && (!S_ISREG(sb.st_mode) || in_system_folder(where));
 }
 
 /* Nothing to write after all: the temporary file goes, an older summary stays. */
@@ -108,7 +129,7 @@ static void drop_summary(const char *where, FILE *f)
 {
     if (!f || f == stdout)
         return;
-    char *tmp = opened_in_place(f) ? NULL : nbep_partial_path(where);
+    char *tmp = opened_in_place(f, where) ? NULL : nbep_partial_path(where);
     if (tmp) /* while the lock holds: the file is this run's */
         remove(tmp);
     free(tmp);
@@ -127,7 +148,7 @@ static nbep_status finish_text(const char *text, const char *where, FILE *f, nbe
     if (f == stdout) { /* the write fails as it is flushed (a full disk): its reason too */
         bad |= fflush(f) != 0;
         err = err ? err : errno;
-    } else if (opened_in_place(f)) {
+    } else if (opened_in_place(f, where)) {
         bad |= fclose(f) != 0;
         err = err ? err : errno;
     } else { /* the temporary file put in place, or removed, before its lock goes with f */
@@ -527,6 +548,9 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
 static const char *new_output_fault(const char *output)
 {
     struct stat sb;
+    if (in_system_folder(output)) /* as root the run's rename replaced /dev/stdout, the link */
+        return "its folder is in /dev or /proc, which hold devices and processes' open files "
+               "(/dev/stdout), not run files: an HDF5 file is written by name and renamed";
     if (lstat(output, &sb) == 0 && S_ISDIR(sb.st_mode))
         return strerror(EISDIR); /* before anything is made: a folder given as "results/"
                                   * made results/.partial and failed its rename, "Not a
@@ -544,6 +568,8 @@ static const char *output_dir_fault(const char *output, const char *dir, int *er
 {
     struct stat sb;
     int err = 0;
+    if (in_system_folder(output)) /* before its folder's ENOENT (/proc) or none (root, /dev) */
+        return new_output_fault(output);
     /* lstat: the run's rename replaces a symbolic link at `output`, to a directory too */
     if (lstat(output, &sb) == 0 && S_ISDIR(sb.st_mode))
         err = EISDIR; /* the run's rename onto it fails */

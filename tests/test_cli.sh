@@ -827,6 +827,39 @@ for cmd in run check; do
         "[ $rc = 2 ] && one_line && grep -qx 'nbep: $tmp/pipe.h5: cannot create the output file: not a regular file (a device, a pipe or a socket)' '$tmp/stderr' &&
          [ -p '$tmp/pipe.h5' ] && [ ! -e '$tmp/pipe.xmf' ] && [ ! -e '$tmp/pipe.h5.partial' ]"
 done
+# /dev/stdout with standard output sent to a file (a job's log): the run's file was made in /dev
+# and renamed over the link itself where root may write there (a container), and a summary the
+# same way, its text lost (until 2026-12-05). The output is refused by run and check (exit 2, the
+# link kept); the summary goes to the log after what the run printed, through the link or fd 1.
+# (a nbep that replaced the link gets its failure, and the machine its link back)
+dev_stdout_kept() {
+    local kept=0
+    [ -L /dev/stdout ] && [ ! -e /dev/stdout.partial ] && [ ! -e /dev/stdout.xmf ] &&
+        [ ! -e /dev/stdout.lock ] && [ ! -e /dev/stdout.partial.lock ] && kept=1
+    if [ $kept = 0 ] && [ "$(id -u)" = 0 ]; then
+        rm -f /dev/stdout /dev/stdout.partial /dev/stdout.xmf /dev/stdout.lock /dev/stdout.partial.lock
+        ln -s /proc/self/fd/1 /dev/stdout
+    fi
+    [ $kept = 1 ]
+}
+for cmd in run check; do
+    run_nbep $cmd inputs/two-spheres.deck --quiet -n 5 -o /dev/stdout
+    kept=0 && dev_stdout_kept && kept=1
+    check "$cmd -o /dev/stdout into a file: exit 2, one line, the link kept (got $rc: $(head -c 200 "$tmp/stderr"))" \
+        "[ $rc = 2 ] && one_line && grep -qx 'nbep: /dev/stdout: cannot create the output file: its folder is in /dev or /proc, which hold devices and processes. open files (/dev/stdout), not run files: an HDF5 file is written by name and renamed' '$tmp/stderr' &&
+         [ $kept = 1 ]"
+done
+for s in /dev/stdout /dev/fd/1; do
+    { echo "the job's line"; timeout -k 5 30 "$nbep" run inputs/two-spheres.deck -n 5 --quiet \
+        -o "$tmp/to-stdout.h5" --summary $s; } >"$tmp/stdout" 2>"$tmp/stderr"
+    rc=$?
+    kept=0 && dev_stdout_kept && kept=1
+    check "run --summary $s into a file: exit 0 (got $rc: $(head -c 200 "$tmp/stderr")), the JSON after the log's line, /dev/stdout a link" \
+        "[ $rc = 0 ] && [ $kept = 1 ] && [ \$(wc -l <'$tmp/stdout') = 2 ] &&
+         head -n 1 '$tmp/stdout' | grep -qx \"the job's line\" &&
+         tail -n 1 '$tmp/stdout' | grep -q '^{\"format\": \"nbep-summary-1\", .*\"steps\": 5,' &&
+         [ ! -e '$s.partial' ]"
+done
 # --summary '' ran every step and then failed, exit 1 (until 2026-12-01): refused before
 for cmd in run check; do
     run_nbep $cmd inputs/two-spheres.deck --quiet -o "$tmp/empty-summary.h5" --summary ''
