@@ -187,7 +187,6 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
                 prints_as_one(f->partners) ? "" : "s", f->walk_reads);
     char size[NBEP_BYTES_TEXT_MAX];
     fprintf(out, "memory:          about %s\n", nbep_format_bytes(f->memory_bytes, size));
-    char *xmf = f->sidecar_bytes > 0.0 ? nbep_xdmf_path(sc->output_file) : NULL;
     char every[48] = "every step";
     if (sc->output_every > 1)
         snprintf(every, sizeof every, "every %llu steps", (unsigned long long)sc->output_every);
@@ -198,6 +197,8 @@ void nbep_check_print(FILE *out, const nbep_scene *sc, const nbep_check_facts *f
     /* and where nbep run of it could not make that file (its folder missing, say), why: a
      * study's deck passes, as nbep sweep makes its folder, but nbep run of it would fail */
     const char *fault = study ? nbep_run_output_fault(sc->output_file) : NULL;
+    /* no sidecar beside a file that cannot be made (`-o results/` named `results/.xmf`) */
+    char *xmf = f->sidecar_bytes > 0.0 && !fault ? nbep_xdmf_path(sc->output_file) : NULL;
     char whose[256] = "";
     if (study)
         snprintf(whose, sizeof whose, " (nbep run's%s%s; nbep sweep's runs: below)",

@@ -983,6 +983,12 @@ check "... nor a note for predictive (exit $rc)" "[ $rc = 0 ] && ! grep -q 'leav
 run_nbep check inputs/sweep-restitution.deck -o "$tmp/no-such-folder/x.h5"
 check "check of a study into a missing folder: exit 0 (got $rc), the run's file said unmakeable" \
     "[ $rc = 0 ] && grep -q '^output: .*(nbep run.s, which it cannot create: No such file or directory; nbep sweep.s runs: below)' '$tmp/stdout' && [ ! -e '$tmp/no-such-folder' ]"
+# ... and into a folder given as the output: no sidecar named for the file (it said "results/ and
+# results/.xmf" until 2026-12-05)
+mkdir -p "$tmp/results"
+run_nbep check inputs/sweep-restitution.deck -o "$tmp/results/"
+check "check of a study with -o a folder: exit 0 (got $rc), the run's file said unmakeable, no sidecar named" \
+    "[ $rc = 0 ] && grep -q '^output: *$tmp/results/: [0-9]* frames .*(nbep run.s, which it cannot create: Is a directory; nbep sweep.s runs: below)' '$tmp/stdout' && ! grep -q 'xmf' '$tmp/stdout'"
 run_nbep check inputs/sweep-restitution.deck -o "$tmp/study-once.h5"
 check "... into a folder that is there: no such words (exit $rc)" \
     "[ $rc = 0 ] && grep -q '^output: .*(nbep run.s; nbep sweep.s runs: below)' '$tmp/stdout'"
