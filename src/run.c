@@ -25,23 +25,44 @@
  * is written in place: no temporary file beside it (none can be made in /dev) and nothing to
  * rename, and no older summary to keep (until 2026-11-30 `--summary /dev/null` failed, "cannot
  * write the summary to /dev/null"). */
-/* ... and so is one in /dev or /proc (its folder resolved) that leads to a regular file:
- * /dev/stdout, /dev/fd/1 or /proc/self/fd/1 with standard output sent to a file. Made beside it
- * and renamed, the summary replaced the link /dev/stdout itself where the folder takes files
- * (root, a container's /dev), and the file the shell had opened got nothing (until 2026-12-05).
- * Opened for appending: whatever the run wrote to that file before stays. */
-static bool in_system_folder(const char *path)
+/* ... and so is one that leads into /proc, its folder resolved or through links: /dev/stdout,
+ * /dev/fd/1 or /proc/self/fd/1 with standard output sent to a file (a process's open file, not
+ * a name in a folder). Made beside it and renamed, the summary replaced the link /dev/stdout
+ * itself where its folder takes files (root, a container's /dev), and the file the shell had
+ * opened got nothing (until 2026-12-05). Opened for appending: whatever the run wrote to that
+ * file before stays. Not the rest of /dev: /dev/shm is node-local scratch (the first version
+ * of this took all of /dev, and a review found a summary there left at NAME.partial). */
+static bool in_proc(const char *path, int hops)
 {
     char *dir = nbep_path_dir(path);
     char *real = dir ? realpath(dir, NULL) : NULL;
-    free(dir);
-    bool sys = false;
-    for (const char *const *f = (const char *const[]){"/dev", "/proc", NULL}; real && *f; f++) {
-        const size_t k = strlen(*f);
-        sys |= strncmp(real, *f, k) == 0 && (real[k] == '\0' || real[k] == '/');
+    bool proc = real && strncmp(real, "/proc", 5) == 0 && (real[5] == '\0' || real[5] == '/');
+    char target[4096];
+    ssize_t k;
+    struct stat sb;
+    if (!proc && real && hops > 0 && lstat(path, &sb) == 0 && S_ISLNK(sb.st_mode) &&
+        (k = readlink(path, target, sizeof target - 1)) > 0) {
+        target[k] = '\0';
+        if (target[0] == '/') {
+            proc = in_proc(target, hops - 1);
+        } else { /* relative to the link's folder */
+            char *next = malloc(strlen(real) + (size_t)k + 2);
+            if (next) {
+                sprintf(next, "%s/%s", real, target);
+                proc = in_proc(next, hops - 1);
+            }
+            free(next);
+        }
     }
+    free(dir);
     free(real);
-    return sys;
+    return proc;
+}
+
+/* 8 links on the way at most (a loop ends there; Linux follows 40) */
+static bool in_system_folder(const char *path)
+{
+    return in_proc(path, 8);
 }
 
 static bool summary_in_place(const char *where)
@@ -549,8 +570,8 @@ static const char *new_output_fault(const char *output)
 {
     struct stat sb;
     if (in_system_folder(output)) /* as root the run's rename replaced /dev/stdout, the link */
-        return "its folder is in /dev or /proc, which hold devices and processes' open files "
-               "(/dev/stdout), not run files: an HDF5 file is written by name and renamed";
+        return "it leads into /proc, to a process's open file (/dev/stdout), not a name in a "
+               "folder: an HDF5 file is written by name and renamed";
     if (lstat(output, &sb) == 0 && S_ISDIR(sb.st_mode))
         return strerror(EISDIR); /* before anything is made: a folder given as "results/"
                                   * made results/.partial and failed its rename, "Not a
@@ -568,7 +589,7 @@ static const char *output_dir_fault(const char *output, const char *dir, int *er
 {
     struct stat sb;
     int err = 0;
-    if (in_system_folder(output)) /* before its folder's ENOENT (/proc) or none (root, /dev) */
+    if (in_system_folder(output)) /* before its folder's ENOENT (/proc) or none (root) */
         return new_output_fault(output);
     /* lstat: the run's rename replaces a symbolic link at `output`, to a directory too */
     if (lstat(output, &sb) == 0 && S_ISDIR(sb.st_mode))

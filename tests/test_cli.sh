@@ -846,7 +846,7 @@ for cmd in run check; do
     run_nbep $cmd inputs/two-spheres.deck --quiet -n 5 -o /dev/stdout
     kept=0 && dev_stdout_kept && kept=1
     check "$cmd -o /dev/stdout into a file: exit 2, one line, the link kept (got $rc: $(head -c 200 "$tmp/stderr"))" \
-        "[ $rc = 2 ] && one_line && grep -qx 'nbep: /dev/stdout: cannot create the output file: its folder is in /dev or /proc, which hold devices and processes. open files (/dev/stdout), not run files: an HDF5 file is written by name and renamed' '$tmp/stderr' &&
+        "[ $rc = 2 ] && one_line && grep -qx 'nbep: /dev/stdout: cannot create the output file: it leads into /proc, to a process.s open file (/dev/stdout), not a name in a folder: an HDF5 file is written by name and renamed' '$tmp/stderr' &&
          [ $kept = 1 ]"
 done
 for s in /dev/stdout /dev/fd/1; do
@@ -860,6 +860,17 @@ for s in /dev/stdout /dev/fd/1; do
          tail -n 1 '$tmp/stdout' | grep -q '^{\"format\": \"nbep-summary-1\", .*\"steps\": 5,' &&
          [ ! -e '$s.partial' ]"
 done
+# ... but the rest of /dev is a folder like any: /dev/shm, node-local scratch, takes a run's file
+# and its summary, renamed into place (a review found the first version of the rule, all of
+# /dev, left the summary at NAME.partial and refused the run's file there)
+if [ -d /dev/shm ] && [ -w /dev/shm ]; then
+    shm=$(mktemp -d /dev/shm/nbep-test.XXXXXX)
+    run_nbep run inputs/two-spheres.deck --quiet -n 5 -o "$shm/x.h5" --summary "$shm/y.json"
+    check "run into /dev/shm: exit 0 (got $rc: $(head -c 200 "$tmp/stderr")), the file and its summary in place" \
+        "[ $rc = 0 ] && [ -f '$shm/x.h5' ] && grep -q '^{\"format\": \"nbep-summary-1\"' '$shm/y.json' &&
+         [ ! -e '$shm/y.json.partial' ]"
+    rm -rf "$shm"
+fi
 # --summary '' ran every step and then failed, exit 1 (until 2026-12-01): refused before
 for cmd in run check; do
     run_nbep $cmd inputs/two-spheres.deck --quiet -o "$tmp/empty-summary.h5" --summary ''
