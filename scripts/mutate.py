@@ -3054,7 +3054,7 @@ MUTANTS = [
     # /dev/stdout into a file: the output refused (as root its rename replaced the link), the
     # summary written through it, appended after what the job wrote (tests/test_cli.sh)
     ("summary-dev-stdout-renamed", "src/run.c",
-     "           (!S_ISREG(sb.st_mode) || in_system_folder(where));",
+     "           (!S_ISREG(sb.st_mode) || leads_into_proc(where));",
      "           (!S_ISREG(sb.st_mode));", ["tests/test_cli.sh"], None),
     ("proc-links-not-followed", "src/run.c", "    if (!proc && real && hops > 0 && lstat(",
      "    if (!proc && real && 0 && lstat(", ["tests/test_cli.sh"], None),
@@ -3063,10 +3063,10 @@ MUTANTS = [
      "    bool proc = real && (strncmp(real, \"/proc\", 5) == 0 || strncmp(real, \"/dev/\", 5) == 0);",
      ["tests/test_cli.sh"], None),
     ("output-dev-stdout-taken", "src/run.c",
-     "    if (in_system_folder(output)) /* before its folder's ENOENT",
+     "    if (leads_into_proc(output)) /* before its folder's ENOENT",
      "    if (0) /* before its folder's ENOENT", ["tests/test_cli.sh"], None),
     ("output-dev-stdout-run-taken", "src/run.c",
-     "    if (in_system_folder(output)) /* as root the run's rename replaced /dev/stdout, the link */",
+     "    if (leads_into_proc(output)) /* as root the run's rename replaced /dev/stdout, the link */",
      "    if (0)", ["tests/test_cli.sh"], None),
 
     ("contacts-size-left-out", "src/output.c",

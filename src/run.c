@@ -60,16 +60,21 @@ static bool in_proc(const char *path, int hops)
 }
 
 /* 8 links on the way at most (a loop ends there; Linux follows 40) */
-static bool in_system_folder(const char *path)
+static bool leads_into_proc(const char *path)
 {
     return in_proc(path, 8);
 }
+
+/* The output's fault where it leads into /proc (leads_into_proc) */
+#define PROC_OUTPUT_FAULT                                                                      \
+    "it leads into /proc, to a process's open file (/dev/stdout), not a name in a folder: an "  \
+    "HDF5 file is written by name and renamed"
 
 static bool summary_in_place(const char *where)
 {
     struct stat sb;
     return stat(where, &sb) == 0 && !S_ISDIR(sb.st_mode) &&
-           (!S_ISREG(sb.st_mode) || in_system_folder(where));
+           (!S_ISREG(sb.st_mode) || leads_into_proc(where));
 }
 
 /* Opens the summary's temporary file before anything is simulated, so that an unwritable
@@ -135,14 +140,14 @@ static nbep_status open_summary(const char *where, const atomic_int *stop, FILE 
 }
 
 /* Whether f, as open_summary opened it at where, writes the summary in place (a device, a
- * pipe, a file through /dev or /proc: summary_in_place) rather than into its temporary file, a
- * regular one. Read off the file opened, not the path again: what stands at the path may have
- * changed during the run (a review's find: a device put there since left the temporary file
- * behind, unrenamed); a folder stays in /dev or not. */
+ * pipe, a file through a link into /proc: summary_in_place) rather than into its temporary
+ * file, a regular one. Read off the file opened, not the path again: what stands at the path
+ * may have changed during the run (a review's find: a device put there since left the
+ * temporary file behind, unrenamed); only the links into /proc are looked at again. */
 static bool opened_in_place(FILE *f, const char *where)
 {
     struct stat sb;
-    return fstat(fileno(f), &sb) == 0 && (!S_ISREG(sb.st_mode) || in_system_folder(where));
+    return fstat(fileno(f), &sb) == 0 && (!S_ISREG(sb.st_mode) || leads_into_proc(where));
 }
 
 /* Nothing to write after all: the temporary file goes, an older summary stays. */
@@ -569,9 +574,8 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
 static const char *new_output_fault(const char *output)
 {
     struct stat sb;
-    if (in_system_folder(output)) /* as root the run's rename replaced /dev/stdout, the link */
-        return "it leads into /proc, to a process's open file (/dev/stdout), not a name in a "
-               "folder: an HDF5 file is written by name and renamed";
+    if (leads_into_proc(output)) /* as root the run's rename replaced /dev/stdout, the link */
+        return PROC_OUTPUT_FAULT;
     if (lstat(output, &sb) == 0 && S_ISDIR(sb.st_mode))
         return strerror(EISDIR); /* before anything is made: a folder given as "results/"
                                   * made results/.partial and failed its rename, "Not a
@@ -589,8 +593,8 @@ static const char *output_dir_fault(const char *output, const char *dir, int *er
 {
     struct stat sb;
     int err = 0;
-    if (in_system_folder(output)) /* before its folder's ENOENT (/proc) or none (root) */
-        return new_output_fault(output);
+    if (leads_into_proc(output)) /* before its folder's ENOENT (/proc) or none (root) */
+        return PROC_OUTPUT_FAULT;
     /* lstat: the run's rename replaces a symbolic link at `output`, to a directory too */
     if (lstat(output, &sb) == 0 && S_ISDIR(sb.st_mode))
         err = EISDIR; /* the run's rename onto it fails */
