@@ -181,6 +181,135 @@ int nbep__output_summary_json(hid_t file, const char *path, char **json, nbep_di
     return rc < 0 ? -1 : 0;
 }
 
+/* Variable-length strings live in the file's global heap, and HDF5 (1.10) trusts the sizes
+ * written there: a damaged object size makes H5Aread copy past its buffer (SIGSEGV, found
+ * 2026-12-05 with one flipped byte). So before such a read nbep walks the heap collection
+ * the attribute points into, as HDF5 will, and refuses a collection whose objects do not
+ * tile it or whose object is not the string's length. The pointer (length, collection
+ * address, object index: the attribute's raw 4 + sizeof_addr + 4 bytes) is what HDF5 hands a
+ * conversion function, so a soft conversion from variable-length strings to an opaque type
+ * of that size reads it without touching the heap. */
+#define HEAP_ID_TAG "nbep global heap id"
+#define HEAP_ID_MAX 24 /* 4 + the widest address (16) + 4 */
+
+static herr_t heap_id_conv(hid_t src, hid_t dst, H5T_cdata_t *cdata, size_t n, size_t stride,
+                           size_t bkg_stride, void *buf, void *bkg, hid_t dxpl)
+{
+    (void)n, (void)stride, (void)bkg_stride, (void)buf, (void)bkg, (void)dxpl;
+    if (cdata->command == H5T_CONV_INIT) {
+        char *tag = H5Tget_class(dst) == H5T_OPAQUE ? H5Tget_tag(dst) : NULL;
+        const bool ours = tag && strcmp(tag, HEAP_ID_TAG) == 0 &&
+                          H5Tis_variable_str(src) > 0;
+        H5free_memory(tag);
+        return ours ? 0 : -1;
+    }
+    return 0; /* the raw bytes are already the answer: nothing to convert */
+}
+
+static uint64_t le_bytes(const unsigned char *p, size_t n)
+{
+    uint64_t v = 0;
+    for (size_t k = n; k-- > 0;)
+        v = v << 8 | p[k];
+    return v;
+}
+
+/* 0 when the attribute (a variable-length string) points at an object of its own length
+ * inside a well-formed heap collection, or when the file is not one nbep can read raw (not
+ * the sec2 driver): HDF5 then reads it as before; -2 after a line saying the file is
+ * damaged (exit 2, as for any file no run wrote), -1 when the check itself failed. */
+static int heap_object_ok(hid_t attr, const char *path, const char *name, nbep_diag *d)
+{
+    static bool registered;
+    hid_t file = H5Iget_file_id(attr), fcpl = H5I_INVALID_HID, fapl = H5I_INVALID_HID;
+    hid_t opaque = H5I_INVALID_HID;
+    unsigned char *heap = NULL;
+    int rc = -1;
+    size_t sizeof_addr = 0, sizeof_size = 0;
+    hsize_t base = 0;
+    if (file < 0 || (fcpl = H5Fget_create_plist(file)) < 0 ||
+        (fapl = H5Fget_access_plist(file)) < 0 ||
+        H5Pget_sizes(fcpl, &sizeof_addr, &sizeof_size) < 0 ||
+        H5Pget_userblock(fcpl, &base) < 0) {
+        HDF5_FAIL(d, path, "read the layout of the file for attribute %s", name);
+        goto done;
+    }
+    if (H5Pget_driver(fapl) != H5FD_SEC2) {
+        rc = 0;
+        goto done;
+    }
+    const size_t id_size = 8 + sizeof_addr; /* on disk; H5Tget_size says a pointer's */
+    if (id_size > HEAP_ID_MAX || sizeof_size > 8) {
+        rc = 0; /* a layout nbep never writes: left to HDF5 */
+        goto done;
+    }
+    unsigned char id[HEAP_ID_MAX];
+    if (!registered) {
+        hid_t vs = nbep__output_utf8_string_type(), op = H5Tcreate(H5T_OPAQUE, id_size);
+        registered = vs >= 0 && op >= 0 && H5Tset_tag(op, HEAP_ID_TAG) >= 0 &&
+                     H5Tregister(H5T_PERS_SOFT, "nbep heap id", vs, op, heap_id_conv) >= 0;
+        nbep__output_close_id(&vs);
+        nbep__output_close_id(&op);
+    }
+    opaque = H5Tcreate(H5T_OPAQUE, id_size);
+    if (!registered || opaque < 0 || H5Tset_tag(opaque, HEAP_ID_TAG) < 0 ||
+        H5Aread(attr, opaque, id) < 0) {
+        HDF5_FAIL(d, path, "read where attribute %s is stored", name);
+        goto done;
+    }
+    const uint64_t length = le_bytes(id, 4), index = le_bytes(id + 4 + sizeof_addr, 4);
+    const uint64_t at = le_bytes(id + 4, sizeof_addr);
+    void *handle = NULL;
+    struct stat st;
+    if (H5Fget_vfd_handle(file, fapl, &handle) < 0 || !handle ||
+        fstat(*(int *)handle, &st) != 0) {
+        HDF5_FAIL(d, path, "read where attribute %s is stored", name);
+        goto done;
+    }
+    const int fd = *(int *)handle;
+    const uint64_t eof = (uint64_t)st.st_size;
+    /* a collection: "GCOL", version 1, 3 reserved bytes, its size (sizeof_size bytes), then
+     * objects of a 2-byte index, 2-byte reference count, 4 reserved bytes and a size, their
+     * data padded to 8 bytes; index 0 is the free space, its size counting its header */
+    const size_t head = 8 + sizeof_size, obj_head = 8 + sizeof_size;
+    unsigned char top[16];
+    uint64_t size = 0;
+    bool ok = base <= eof && at <= eof - base && eof - base - at >= head &&
+              pread(fd, top, head, (off_t)(base + at)) == (ssize_t)head &&
+              memcmp(top, "GCOL", 4) == 0 && top[4] == 1 &&
+              (size = le_bytes(top + 8, sizeof_size)) >= head && size <= eof - base - at;
+    if (ok && !(heap = malloc(size))) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: no memory to read attribute %s", path,
+                      name);
+        goto done;
+    }
+    ok = ok && pread(fd, heap, size, (off_t)(base + at)) == (ssize_t)size;
+    bool found = false;
+    for (uint64_t p = head; ok && p + obj_head <= size;) {
+        const uint64_t k = le_bytes(heap + p, 2), n = le_bytes(heap + p + 8, sizeof_size);
+        const uint64_t need = n > size ? 0 : k ? obj_head + ((n + 7) & ~(uint64_t)7) : n;
+        ok = need >= obj_head && need <= size - p;
+        found = found || (ok && k == index && k && n == length);
+        p += need;
+    }
+    if (!ok || !found) {
+        nbep_diag_add(d, __FILE__, __LINE__,
+                      "nbep: %s: attribute %s points into a damaged part of the file (its "
+                      "global heap): the file is damaged, or no run wrote it",
+                      path, name);
+        rc = -2;
+        goto done;
+    }
+    rc = 0;
+done:
+    free(heap);
+    nbep__output_close_id(&opaque);
+    nbep__output_close_id(&fapl);
+    nbep__output_close_id(&fcpl);
+    nbep__output_close_id(&file);
+    return rc;
+}
+
 int nbep__output_read_string_attr(hid_t loc, const char *path, const char *name, char **out,
                                   nbep_diag *d)
 {
@@ -208,6 +337,9 @@ int nbep__output_read_string_attr(hid_t loc, const char *path, const char *name,
     }
     if (variable) {
         char *v = NULL;
+        if ((rc = heap_object_ok(attr, path, name, d)) < 0)
+            goto done;
+        rc = -1;
         if (H5Aread(attr, mtype, &v) < 0) {
             HDF5_FAIL(d, path, "read attribute %s", name);
             goto done;
@@ -344,7 +476,8 @@ void nbep_output_library_init(void)
 }
 
 /* 1 when the open file's root attribute `format` is the string FORMAT_NAME, 0 (after a line
- * saying what it is instead) when it is another, missing or no string, -1 after a failure. */
+ * saying what it is instead) when it is another, missing or no string, -2 when it cannot be
+ * read for damage, -1 after another failure. */
 static int is_run(hid_t file, const char *path, nbep_diag *d)
 {
     const htri_t has = H5Aexists(file, "format");
@@ -354,6 +487,7 @@ static int is_run(hid_t file, const char *path, nbep_diag *d)
     }
     char *format = NULL;
     const char *what = "missing";
+    int run;
     if (has) {
         hid_t attr = H5Aopen(file, "format", H5P_DEFAULT), type = H5I_INVALID_HID;
         const H5T_class_t cls = attr < 0 || (type = H5Aget_type(attr)) < 0
@@ -367,10 +501,10 @@ static int is_run(hid_t file, const char *path, nbep_diag *d)
             return -1;
         if (cls != H5T_STRING)
             what = "not a string";
-        else if (nbep__output_read_string_attr(file, path, "format", &format, d) < 0)
-            return -1;
+        else if ((run = nbep__output_read_string_attr(file, path, "format", &format, d)) < 0)
+            return run;
     }
-    const int run = format && strcmp(format, FORMAT_NAME) == 0;
+    run = format && strcmp(format, FORMAT_NAME) == 0;
     /* a sweep's table, the file most often taken for a run */
     const bool table = format && strcmp(format, SWEEP_FORMAT_NAME) == 0;
     if (!run)
@@ -451,5 +585,5 @@ nbep_status nbep__output_run_openable(const char *path, int mode, const char *wh
         *file_out = file;
     else
         nbep__output_close_id(&file);
-    return run > 0 ? NBEP_OK : run == 0 ? NBEP_EUSAGE : NBEP_EIO;
+    return run > 0 ? NBEP_OK : run == 0 || run == -2 ? NBEP_EUSAGE : NBEP_EIO;
 }

@@ -237,7 +237,9 @@ int nbep__output_write_attr(hid_t loc, const char *path, const char *name, hid_t
 /* A UTF-8 string attribute, variable length so that h5dump prints it as text; NULL is "". */
 int nbep__output_write_string_attr(hid_t loc, const char *path, const char *name,
                                    const char *value, nbep_diag *d);
-/* A scalar string attribute (variable or fixed length) into a malloc'd *out. */
+/* A scalar string attribute (variable or fixed length) into a malloc'd *out; 0, or -2 when a
+ * variable-length one points into a damaged global heap (which HDF5 would read past its
+ * buffer), -1 on another failure, with a line in d. */
 int nbep__output_read_string_attr(hid_t loc, const char *path, const char *name, char **out,
                                   nbep_diag *d);
 /* Whether dataset name's type holds every field of the compound type want, each of its class:
