@@ -1136,16 +1136,18 @@ nbep_status nbep__scene_place(nbep__scene_ctx *c, nbep_state *s, const nbep__sce
  * box, or behind a deck plane, overlaps it by more than its radius, and is said to be on the
  * wrong side (a new user read "overlaps box x-max by 6.1" of a sphere 6 past the wall as a
  * placement a hair off). */
-typedef enum { PAST_NOT, PAST_BOX_WALL, PAST_PLANE } past_kind;
+/* PAST_SPANS: no overlap, a sphere touching both walls of an axis while moving along it */
+typedef enum { PAST_NOT, PAST_BOX_WALL, PAST_PLANE, PAST_SPANS } past_kind;
 
 /* An overlap to be listed by name. */
 typedef struct listed {
     uint64_t seq;                   /* how many were found before it */
     blame at;                       /* what it is blamed on, and its message's rank */
     size_t entry, a;                /* sphere a, of that entry, */
-    char other[96];                 /* overlaps this */
+    char other[96];                 /* overlaps this; where it spans: the axis and sizes */
     double by;                      /* by this much; or, where past: its centre is this far
-                                     * past the plane `other` */
+                                     * past the plane `other`; where it spans: its velocity
+                                     * along the axis */
     past_kind past;
 } listed;
 
@@ -1224,6 +1226,16 @@ static void list_kept(overlaps *o)
         else if (l->past == PAST_PLANE)
             snprintf(what, sizeof what, "lies behind %s: its centre is %g past it", l->other,
                      l->by);
+        else if (l->past == PAST_SPANS) {
+            const char axis = l->other[0];
+            nbep__scene_error_from(
+                o->c, l->at.label, l->at.line, __FILE__, __LINE__,
+                "spheres.[%zu] (sphere %zu) touches both walls along %c (%s) while moving along "
+                "%c at %g, so the run would not pass t = 0 (endless collisions at zero time); "
+                "give the box more room along %c, or the sphere no velocity along %c",
+                l->entry, l->a, axis, l->other + 2, axis, l->by, axis, axis);
+            continue;
+        }
         else
             snprintf(what, sizeof what, "overlaps %s by %g", l->other, l->by);
         nbep__scene_error_from(o->c, l->at.label, l->at.line, __FILE__, __LINE__,
@@ -1351,6 +1363,32 @@ nbep_status nbep__scene_check_overlaps(nbep__scene_ctx *c, const nbep_state *s,
                        !past ? PAST_NOT : p < n_box ? PAST_BOX_WALL : PAST_PLANE);
             }
         }
+
+    /* A sphere as wide as the box between two walls, moving along their axis: each wall sends
+     * it into the other at the same instant, and a predictive run stalls at t = 0 (found
+     * 2026-12-05: random placement of one sphere, or one given by position, passed the check
+     * that refuses such a lattice, lattice_jams, and stopped at step 1 after 11 s). Touching
+     * is each wall's touch tolerance, as for an overlap; an overlap beyond it is reported
+     * above instead. Gravity alone presses it into one wall: resting contact, which runs. */
+    for (size_t i = 0; box_periodic && i < s->n; i++) {
+        const double r = s->radius[i];
+        const double x[3] = {s->pos[i].x, s->pos[i].y, s->pos[i].z};
+        const double v[3] = {s->vel[i].x, s->vel[i].y, s->vel[i].z};
+        for (int a = 0; a < 3; a++) {
+            if (box_periodic[a] || v[a] == 0.0)
+                continue;
+            const double lo = r - (x[a] - blo[a]), hi = r - (bhi[a] - x[a]);
+            const double tlo = touch_tol(fabs(x[a]), fabs(blo[a]), r);
+            const double thi = touch_tol(fabs(x[a]), fabs(bhi[a]), r);
+            if (fabs(lo) <= tlo && fabs(hi) <= thi) {
+                char what[96];
+                snprintf(what, sizeof what, "%c diameter %g, the box %g wide", "xyz"[a], 2.0 * r,
+                         bhi[a] - blo[a]);
+                report(&o, i, (blame){NULL, 0, NBEP_DIAG_UNRANKED}, what, v[a], PAST_SPANS);
+                break;
+            }
+        }
+    }
 
     grid g;
     bool ok = grid_init(&g, s, e, n_entries);

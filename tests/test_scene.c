@@ -2062,6 +2062,59 @@ static void test_a_lattice_packed_tight_that_moves_is_refused(void **state)
     LOAD_OK(f, fcc_deck, "box.max=[1.000001, 3.0, 5.0]", "spheres.[0].count=3");
 }
 
+/* A sphere touching both walls of an axis and moving along it (one sphere placed at random in
+ * a box its diameter wide, or one given by position) is refused, naming its line and the axis
+ * (until 2026-12-05 it passed the check and the run stopped at step 1 after 11 s: a review's
+ * find). Not where it moves only across that axis, nor where gravity alone presses it into a
+ * wall (resting contact, which runs), nor with a hair of room, nor along a periodic axis. */
+static void test_a_sphere_spanning_the_box_that_moves_across_is_refused(void **state)
+{
+    fixture *f = *state;
+    char buf[256];
+    const char *deck =
+        write_deck("scene_span.deck",
+                   "box: { min = [0.0, 0.0, 0.0]; max = [0.4, 2.0, 2.0]; };\n"
+                   "spheres = (\n"
+                   "  { position = [0.2, 1.0, 1.0]; velocity = [1.0, 1.0, 0.0]; radius = 0.2;\n"
+                   "    mass = 1.0; }\n"
+                   ");\n",
+                   buf, sizeof buf);
+    char want[768];
+    LOAD_FAILS(f, NBEP_EDECK, deck);
+    snprintf(want, sizeof want,
+             "%s:3: spheres.[0] (sphere 0) touches both walls along x (diameter 0.4, the box 0.4 "
+             "wide) while moving along x at 1, so the run would not pass t = 0 (endless "
+             "collisions at zero time); give the box more room along x, or the sphere no "
+             "velocity along x",
+             deck);
+    ASSERT_DIAG(&f->d, want);
+    /* along z, the box's last axis */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck, "box.max=[2.0, 2.0, 0.4]", "spheres.[0].position=[1.0, 1.0, 0.2]",
+               "spheres.[0].velocity=[0.0, 0.0, -3.0]");
+    assert_int_equal(f->d.n_errors, 1);
+    assert_non_null(strstr(f->d.msg[0], "touches both walls along z (diameter 0.4, the box 0.4 "
+                                        "wide) while moving along z at -3,"));
+    /* placed at random: one place it can be, and a random direction */
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_FAILS(f, NBEP_EDECK, deck,
+               "spheres=({count=1; radius=0.2; mass=1.0; place=\"random\"; speed=1.0;})");
+    assert_int_equal(f->d.n_errors, 1);
+    assert_non_null(strstr(f->d.msg[0], "touches both walls along x"));
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_OK(f, deck, "spheres.[0].velocity=[0.0, 1.0, 0.0]");
+    nbep_scene_fini(&f->sc);
+    LOAD_OK(f, deck, "spheres.[0].velocity=[0.0, 0.0, 0.0]", "physics.gravity=[-9.8, 0.0, 0.0]");
+    nbep_scene_fini(&f->sc);
+    LOAD_OK(f, deck, "box.max=[0.400001, 2.0, 2.0]");
+    nbep_scene_fini(&f->sc);
+    LOAD_OK(f, deck, "box.periodic=[true, false, false]");
+    nbep_scene_fini(&f->sc);
+}
+
 /* A group that a --set keeps from being placed (its radius, its count, its region) names that
  * --set, the first typed of them, as an overlap does (until 2026-11-30 the deck's line of the
  * count, which the user had not touched); one that the deck alone keeps out stays at its count's
@@ -3069,6 +3122,7 @@ int main(void)
         T(test_an_overlap_a_set_made_names_the_set),
         T(test_an_overlap_with_a_wall_a_set_moved_names_the_set),
         T(test_a_lattice_packed_tight_that_moves_is_refused),
+        T(test_a_sphere_spanning_the_box_that_moves_across_is_refused),
         T(test_a_group_a_set_keeps_from_fitting_names_the_set),
         T(test_a_group_a_set_of_the_box_or_a_plane_keeps_from_fitting_names_the_set),
         T(test_a_group_an_earlier_groups_set_leaves_no_room_names_that_set),
