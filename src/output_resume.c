@@ -1,7 +1,9 @@
 /* `nbep run DECK --resume RUN.h5` (output.h): reopens a run for appending after its last
  * complete frame, checking that deck and file agree, and reads that frame (and its event
  * slots) back; the writer (output.c) then goes on as after nbep_output_create. */
+#define _XOPEN_SOURCE 700 /* realpath() */
 #include <assert.h>
+#include <errno.h>
 #include <inttypes.h>
 #include <math.h>
 #include <stdbool.h>
@@ -9,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include <sys/stat.h>
 
 #include <hdf5.h>
 #include <hdf5_hl.h>
@@ -580,13 +583,41 @@ static hsize_t resume_frames(const nbep_scene *sc, const int64_t *steps, hsize_t
     return frames;
 }
 
+/* A resume writes beside its file as well as in it: the XDMF sidecar (a new one renamed over
+ * the old) and the lock, beside the file a link leads to. A folder that takes no new files
+ * is refused before the file is touched (exit 2 for EACCES or EROFS, as a new run's folder:
+ * until 2026-12-05 the frames were appended and /summary dropped, and the sidecar's failure
+ * at the end said exit 1). */
+static nbep_status resume_folder_takes_files(const char *path, nbep_diag *d)
+{
+    struct stat sb;
+    char *target = lstat(path, &sb) == 0 && S_ISLNK(sb.st_mode) ? realpath(path, NULL) : NULL;
+    const char *named[2] = {path, target};
+    for (int k = 0; k < 2 && named[k]; k++) {
+        char *dir = nbep_path_dir(named[k]);
+        const int err = dir ? nbep_dir_takes_files(dir) : ENOMEM;
+        if (err) {
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: %s: cannot resume it: its folder %s takes no new files (%s), "
+                          "and a resume writes its XDMF sidecar and lock there",
+                          path, dir ? dir : "?", strerror(err));
+            free(dir);
+            free(target);
+            return nbep_status_of_open(err);
+        }
+        free(dir);
+    }
+    free(target);
+    return NBEP_OK;
+}
+
 nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep_output **out,
                                     nbep_resume *r, nbep_diag *d)
 {
     nbep_resume res = {0};
     nbep_status st =
         nbep__output_run_openable(path, R_OK | W_OK, "open the run to resume it", NULL, d);
-    if (st != NBEP_OK)
+    if (st != NBEP_OK || (st = resume_folder_takes_files(path, d)) != NBEP_OK)
         return st;
     st = NBEP_EIO;
     const size_t n = sc->state.n;
@@ -670,6 +701,28 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
             nbep__output_read_row(o->file, path, "/frames/time", k, 1, H5T_NATIVE_DOUBLE,
                                   &o->xmf_time[k], d) < 0)
             goto fail;
+    /* Each frame's time is its step times dt, bitwise (nbep__output_frame writes it so, and
+     * the file's dt is the deck's: same_run), and the steps rise. A frame otherwise (a NaN
+     * time, a step edited) no run writes: refused as damaged (until 2026-12-05 resumed, its
+     * time kept in the file and the sidecar). */
+    for (hsize_t k = 0; k < frames; k++) {
+        const int64_t step = o->xmf_step[k];
+        const double t = (double)step * sc->dt;
+        if (step < 0 || (k > 0 && step <= o->xmf_step[k - 1]) ||
+            memcmp(&t, &o->xmf_time[k], sizeof t) != 0) {
+            char b0[NBEP_REAL_TEXT_MAX];
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: %s: its frame %llu is at step %lld, time %s, which no run "
+                          "writes%s: the file is damaged, or no run wrote it",
+                          path, (unsigned long long)k, (long long)step,
+                          nbep_format_real(o->xmf_time[k], false, b0),
+                          step < 0 || (k > 0 && step <= o->xmf_step[k - 1])
+                              ? " (the steps of its frames rise)"
+                              : " (the time of a frame is its step times run.dt)");
+            st = NBEP_EDECK;
+            goto fail;
+        }
+    }
     const uint64_t complete = frames;
     frames = resume_frames(sc, o->xmf_step, frames);
     if (frames == 0) {
@@ -860,8 +913,30 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
             st = rows_rc == -2 ? NBEP_EDECK : NBEP_EIO;
             goto fail;
         }
-        /* one row per step from step 1: the rows up to the frame's step stay */
-        o->resume.stats_keep = rows < (uint64_t)res.step ? rows : (uint64_t)res.step;
+        /* One row per step from step 1: the rows up to the frame's step stay. Every row of a
+         * counted frame's steps is on disk (the rows' flush returns before a count is
+         * written, nbep__output_commit), but a kill within the counts' flush can leave
+         * /frames's count written and /stats's not: such rows, past the count, are kept. Fewer
+         * rows than that, or a last row of another step, no run leaves: refused as damaged
+         * (until 2026-12-05 the missing rows were skipped, the table jumping a stretch of
+         * steps, and a review's edited count was resumed so). */
+        const uint64_t need = (uint64_t)res.step;
+        int64_t last_step = res.step;
+        if (rows + more >= need && need > 0 &&
+            nbep__output_read_row(o->file, path, "/stats/step", need - 1, 1, H5T_NATIVE_INT64,
+                                  &last_step, d) < 0)
+            goto fail;
+        if (rows + more < need || last_step != res.step) {
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: %s: its frame at step %lld follows %llu rows of /stats, but "
+                          "/stats holds %llu%s: the file is damaged, or no run wrote it",
+                          path, (long long)res.step, (unsigned long long)need,
+                          (unsigned long long)(rows + more),
+                          rows + more < need ? "" : ", the last of them of another step");
+            st = NBEP_EDECK;
+            goto fail;
+        }
+        o->resume.stats_keep = need;
         o->resume.wall = H5Lexists(o->file, "/stats/wall_impulse", H5P_DEFAULT) > 0;
     }
     /* nothing is written until nbep_output_resume_begin: a run refused after this (its

@@ -787,8 +787,11 @@ static void run_one(const nbep_sweep_plan *p, size_t run, const nbep_sweep_exec 
          * of the study's folder on another node) is neither run afresh nor removed: it is
          * that process's (until 2026-12-01 the refused resume ran afresh, was refused again,
          * and the file was removed from under its writer) */
+        /* A file the user may not write (chmod 444 to keep it, another user's) is no damage:
+         * the run fails, naming why, and the file stays (until 2026-12-05 it was replaced,
+         * from step 0, as the folder allowed). */
         if (rq.resume && !rr.simulated && st != NBEP_ESIGINT && st != NBEP_ESIGTERM &&
-            st != NBEP_EBUSY) {
+            st != NBEP_EBUSY && access(path, W_OK) == 0) {
             /* said on its line below, so that a user paying for the run again knows why (a
              * file whose frames lack the velocities, say: until 2026-12-01 nothing said it) */
             error_text(&d, refused, sizeof refused);

@@ -1167,6 +1167,49 @@ if [ "$(id -u)" = 0 ] && command -v setpriv >/dev/null; then
          [ ! -e '$shared/x.h5' ] && [ ! -e '$shared/s.json' ]"
     rm -rf "$shared"
 fi
+# what a user may not write is refused, never half-changed or replaced (found 2026-12-05 by a
+# review, as nobody): a resume whose folder takes no new files (chmod 555; the file itself
+# writable) appended its frames, dropped /summary and failed at the end on the XDMF sidecar
+# (exit 1): now exit 2 before the file is touched; a study's cut-short run file made read-only
+# (chmod 444) was replaced and run from step 0: now that run fails, naming why, and the file
+# stays (the study's other runs go on).
+if [ "$(id -u)" = 0 ] && command -v setpriv >/dev/null; then
+    shared=$(mktemp -d /tmp/nbep-cli-XXXXXX)
+    chmod 777 "$shared"
+    cp "$nbep" "$shared/nbep"
+    as_nobody() { timeout -k 5 60 setpriv --reuid=65534 --regid=65534 --clear-groups "$@"; }
+    cp inputs/two-spheres.deck "$shared/d.deck"
+    printf '%s\n' 'run: { algorithm = "predictive"; steps = 100; dt = 1.0e-3; };' \
+        'box: { min = [0.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0]; };' \
+        'spheres = ( { count = 8; radius = 0.1; mass = 1.0; place = "lattice"; speed = 1.0; } );' \
+        'sweep: { replicas = 2; };' >"$shared/s.deck"
+    chmod 644 "$shared/d.deck" "$shared/s.deck"
+    mkdir "$shared/out"
+    chown 65534 "$shared/out"
+    as_nobody "$shared/nbep" run "$shared/d.deck" -n 50 -o "$shared/out/x.h5" --quiet
+    chmod 555 "$shared/out"
+    cp "$shared/out/x.h5" "$tmp/x-before.h5"
+    as_nobody "$shared/nbep" run "$shared/d.deck" -n 100 --resume "$shared/out/x.h5" --quiet \
+        >"$tmp/stdout" 2>"$tmp/stderr"
+    rc=$?
+    check "a resume in a folder that takes no new files: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr")), the file unchanged" \
+        "[ $rc = 2 ] && one_line && grep -qx 'nbep: $shared/out/x.h5: cannot resume it: its folder $shared/out takes no new files (Permission denied), and a resume writes its XDMF sidecar and lock there' '$tmp/stderr' &&
+         cmp -s '$shared/out/x.h5' '$tmp/x-before.h5'"
+    chmod 755 "$shared/out"
+    as_nobody "$shared/nbep" run "$shared/d.deck" -n 100 --resume "$shared/out/x.h5" --quiet
+    rc=$?
+    check "... and with the folder writable again it resumes (exit $rc)" "[ $rc = 0 ]"
+    as_nobody "$shared/nbep" sweep "$shared/s.deck" -n 50 -o "$shared/st" --quiet
+    chmod 444 "$shared/st.sweep/run-0000.h5"
+    cp "$shared/st.sweep/run-0000.h5" "$tmp/r0-before.h5"
+    as_nobody "$shared/nbep" sweep "$shared/s.deck" -n 100 -o "$shared/st" >"$tmp/stdout" 2>"$tmp/stderr"
+    rc=$?
+    check "a study's read-only run file to go on from: that run fails naming why (exit $rc), the file kept, the other run resumed: $(grep 'run 0\|run 1 ' "$tmp/stderr" | head -c 300)" \
+        "[ $rc = 1 ] && grep -qx 'nbep: sweep run 0 (seed=1) failed: $shared/st.sweep/run-0000.h5: cannot open the run to resume it: Permission denied' '$tmp/stderr' &&
+         grep -q 'run 1 (of 2; seed=2): ok in .* (100 steps, resumed from step 50, ' '$tmp/stderr' &&
+         cmp -s '$shared/st.sweep/run-0000.h5' '$tmp/r0-before.h5'"
+    rm -rf "$shared"
+fi
 # a file of the user's already at OUT.h5.lock (not empty, so no run's lock): the run locks it
 # and leaves it as it was
 echo 'notes of mine' >"$tmp/mine.h5.lock"
