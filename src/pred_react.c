@@ -1065,11 +1065,25 @@ void nbep__pred_let_go(pred_ctx *c, nbep_state *s, size_t i, double dt, double t
 /* run.max_reactions: sphere i reacted too often in one step, at about time t; the run stops. */
 void nbep__pred_jam_fail(nbep_sim *sim, uint64_t step, size_t i, double t)
 {
-    nbep_diag_add(sim->diag, __FILE__, __LINE__,
-                  "nbep: step %llu: sphere %zu reacted over %llu times in one step (t = %.17g, "
-                  "run.max_reactions): jammed between walls and neighbours that nbep cannot hold "
-                  "still (README, granular scenes: not solved yet); stopping",
-                  (unsigned long long)step, i, (unsigned long long)sim->scene->max_reactions, t);
+    const nbep_scene *sc = sim->scene; /* its state is the run's now: sim->st */
+    /* Without planes nothing holds a sphere still: at e < 1 and physics.tc = 0 this is
+     * inelastic collapse, a row closing in ever faster collisions, which tc > 0 stops (until
+     * 2026-12-05 a periodic box's collapse was said to be jammed between walls) */
+    if (sim->st.n_planes == 0 && sc->restitution < 1.0 && sc->tc == 0.0)
+        nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                      "nbep: step %llu: sphere %zu reacted over %llu times in one step (t = "
+                      "%.17g, run.max_reactions): inelastic collapse, collisions at e = %g "
+                      "closing in ever faster, with physics.tc = 0; a tc > 0 (the TC model, "
+                      "README) stops it; stopping",
+                      (unsigned long long)step, i, (unsigned long long)sc->max_reactions, t,
+                      sc->restitution);
+    else
+        nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                      "nbep: step %llu: sphere %zu reacted over %llu times in one step (t = "
+                      "%.17g, run.max_reactions): jammed between %s that nbep cannot hold "
+                      "still (README, granular scenes: not solved yet); stopping",
+                      (unsigned long long)step, i, (unsigned long long)sc->max_reactions, t,
+                      sim->st.n_planes > 0 ? "walls and neighbours" : "neighbours");
     sim->status = NBEP_ENUMERIC;
 }
 

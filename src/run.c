@@ -361,15 +361,25 @@ static void warn_overlap(const nbep_scene *sc, const nbep_summary *s, const char
                                   "overlaps this part starts from"
                                 : "");
     }
-    else if (!exact && s->max_overlap_rel > DETECT_OVERLAP_WARN)
+    /* the cure named for what the run is: step order is the predictive algorithm already,
+     * whose exact order is run.order = "time" (until 2026-12-05 it was sent to "the
+     * predictive algorithm"); planes named only where the scene has some (a periodic box
+     * has none) */
+    else if (!exact && s->max_overlap_rel > DETECT_OVERLAP_WARN) {
+        char how[128];
+        if (sc->order_step)
+            snprintf(how, sizeof how, "run.order = \"step\" reacts to a step's events at once, "
+                                      "some shadowed by others");
+        else
+            snprintf(how, sizeof how, "%s finds contacts after they overlap", sc->algorithm);
         fprintf(stderr,
                 "nbep: warning: spheres overlapped by up to %.3g of the smaller radius "
-                "(max_overlap_rel) in %s: %s finds contacts after they overlap, and at this "
-                "run.dt spheres passed into and through each other or the planes (collisions "
-                "missed); a smaller run.dt, or the predictive algorithm, avoids it (README, "
-                "Accuracy)\n",
-                s->max_overlap_rel, file,
-                sc->order_step ? "run.order = \"step\"" : sc->algorithm);
+                "(max_overlap_rel) in %s: %s, and at this run.dt spheres passed into and "
+                "through each other%s (collisions missed); a smaller run.dt, or %s, avoids it "
+                "(README, Accuracy)\n",
+                s->max_overlap_rel, file, how, s->planes > 0 ? " or the planes" : "",
+                sc->order_step ? "run.order = \"time\" (exact)" : "the predictive algorithm");
+    }
 }
 
 /* path with its directory resolved (realpath) and its last name kept, malloc'd: two names of

@@ -101,6 +101,17 @@ for t in 1 2 3; do
 done
 check "a cooling gas past the limit stops on 1 thread (exit 1, the jam's line)" \
     "grep -Eq '^nbep: step 1: sphere [0-9]+ reacted over 31 times' '$tmp/gas-1.err' && grep -qx 'exit 1' '$tmp/gas-1.err'"
+# the same gas at e = 0 with physics.tc = 0, in the periodic box (no walls): inelastic
+# collapse, which the line names with its cure, tc > 0 (until 2026-12-05 it said "jammed
+# between walls and neighbours", a review's find); the gas at e = 0.9 has no such line
+timeout -k 5 60 bin/nbep run inputs/hard-sphere-fluid.deck --quiet -t 1 \
+    --set 'spheres.[0].count=4096' --set "box.max=[$L, $L, $L]" --set physics.restitution=0.0 \
+    --set physics.tc=0.0 --set run.steps=2 --set run.max_reactions=10000 \
+    -o "$tmp/collapse.h5" 2>"$tmp/collapse.err"
+rc=$?
+check "inelastic collapse in a periodic box (e = 0, tc = 0): exit 1 (got $rc), its line naming it and tc > 0: $(head -c 300 "$tmp/collapse.err")" \
+    "[ $rc = 1 ] && grep -Eq '^nbep: step 1: sphere [0-9]+ reacted over 10000 times in one step \(t = [0-9.e-]+, run.max_reactions\): inelastic collapse, collisions at e = 0 closing in ever faster, with physics.tc = 0; a tc > 0 \(the TC model, README\) stops it; stopping\$' '$tmp/collapse.err' &&
+     grep -q 'jammed between neighbours that nbep cannot hold still' '$tmp/gas-1.err'"
 for t in 2 3; do
     check "a cooling gas past the limit: the team of $t stops where 1 thread does, at the same time" \
         "cmp -s '$tmp/gas-1.err' '$tmp/gas-$t.err'"
