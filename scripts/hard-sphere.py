@@ -177,6 +177,12 @@ def analyse(path, t0):
             coll = int(np.sum(f["stats/collisions"][:rows][keep]))
             T = n * dt
             kT = 2 * float(np.mean(ke)) / (3 * N)
+            # spheres at rest (or a file whose energies are not numbers) have no temperature,
+            # and every reduced figure divides by it (until 2026-12-05 a ZeroDivisionError)
+            if not kT > 0 or not math.isfinite(kT):
+                fail(f"{path}: the spheres' mean kinetic energy from t = {t0:g} is {kT:g}: no "
+                     f"temperature to reduce the pressure and rates by (a fluid at rest, or "
+                     f"spheres given no speed)")
             tau = sigma * math.sqrt(m / kT)
             P = (N * kT + W / (3 * T)) / V
             res.update({"steps": n, "t_start": float((step[keep][0] - 1) * dt),

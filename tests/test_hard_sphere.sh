@@ -109,7 +109,11 @@ check "pressure and rate within 2 % of theory after t = 2, D/D_E in (1, 1.6) fit
 
 # ---- errors: one line, exit 2 ---------------------------------------------------------------
 bin/nbep run inputs/two-spheres.deck --quiet -o "$tmp/closed.h5" -n 10
+# spheres at rest: no temperature (until 2026-12-05 a ZeroDivisionError's traceback)
+cp "$tmp/made.h5" "$tmp/rest.h5"
+"$PY" -c "import h5py, sys; f = h5py.File(sys.argv[1], 'r+'); f['stats/kinetic_energy'][:] = 0.0" "$tmp/rest.h5"
 for c in "$tmp/closed.h5:not a fully periodic box" "$tmp/none.h5:no such file" \
+         "$tmp/rest.h5:mean kinetic energy from t = 0 is 0: no temperature to reduce the pressure and rates by" \
          "$tmp/fluid.h5 --from 30:no step of the run starts at t = 30 or later" \
          "$tmp/fluid.h5 --from -1:--from must be a time >= 0"; do
     args=${c%%:*} want=${c#*:}
