@@ -477,13 +477,16 @@ void nbep_output_library_init(void)
 
 /* 1 when the open file's root attribute `format` is the string FORMAT_NAME, 0 (after a line
  * saying what it is instead) when it is another, missing or no string, -2 when it cannot be
- * read for damage, -1 after another failure. */
+ * read (the file damaged), -1 after another failure. */
 static int is_run(hid_t file, const char *path, nbep_diag *d)
 {
+    /* HDF5 opened the file, so a root it cannot read is the file's fault (a damaged object
+     * header: "incorrect metadata checksum"), exit 2 as for any part of it (until 2026-12-05
+     * exit 1, while the same damage one object further on said 2) */
     const htri_t has = H5Aexists(file, "format");
     if (has < 0) {
         HDF5_FAIL(d, path, "read the root attributes");
-        return -1;
+        return -2;
     }
     char *format = NULL;
     const char *what = "missing";
@@ -498,7 +501,7 @@ static int is_run(hid_t file, const char *path, nbep_diag *d)
         nbep__output_close_id(&type);
         nbep__output_close_id(&attr);
         if (cls == H5T_NO_CLASS)
-            return -1;
+            return -2;
         if (cls != H5T_STRING)
             what = "not a string";
         else if ((run = nbep__output_read_string_attr(file, path, "format", &format, d)) < 0)

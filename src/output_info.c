@@ -49,15 +49,34 @@ static void run_info_fini(run_info *r)
     free(r->order);
 }
 
-/* Prints a multi-line value with every line after the first indented under the first. */
+/* Prints a multi-line value with every line after the first indented under the first; the
+ * other control characters in a line escaped (nbep_one_line: a file's text is anyone's, and
+ * an escape sequence in it reached the terminal raw until 2026-12-05, a review's find). */
 static void print_lines(FILE *f, const char *label, const char *text)
 {
     fprintf(f, "%-13s%s", label, text[0] ? "" : "\n");
     for (const char *line = text; *line;) {
         size_t len = strcspn(line, "\n");
-        fprintf(f, "%s%.*s\n", line == text ? "" : "             ", (int)len, line);
+        char *raw = strndup(line, len), *shown = raw ? nbep_one_line(raw) : NULL;
+        fprintf(f, "%s%s\n", line == text ? "" : "             ", shown ? shown : "?");
+        free(shown);
+        free(raw);
         line += len + (line[len] == '\n');
     }
+}
+
+/* *s, a one-line value of the file's, with its control characters escaped (print_lines);
+ * false without memory. */
+static bool one_line_in_place(char **s)
+{
+    if (!*s)
+        return true;
+    char *shown = nbep_one_line(*s);
+    if (!shown)
+        return false;
+    free(*s);
+    *s = shown;
+    return true;
 }
 
 /* 0 when read (a run file: nbep__output_run_openable said so); -1 after a message. */
@@ -154,6 +173,13 @@ nbep_status nbep_output_info(const char *path, FILE *f, nbep_diag *d)
      * frames' datasets) is no readable nbep run, as a foreign file is: exit 2, as --help says
      * (until 2026-12-01 exit 1, as for a failed write) */
     nbep_status fail = NBEP_EUSAGE;
+    if (rc == 0 && !(one_line_in_place(&r.version) && one_line_in_place(&r.build_flags) &&
+                     one_line_in_place(&r.build_commit) && one_line_in_place(&r.algorithm) &&
+                     one_line_in_place(&r.neighbors) && one_line_in_place(&r.order))) {
+        nbep_diag_add(d, __FILE__, __LINE__, "nbep: %s: no memory to show it", path);
+        rc = -1;
+        fail = NBEP_ENOMEM;
+    }
     if (H5Fclose(file) < 0 && rc == 0) {
         HDF5_FAIL(d, path, "close the file");
         rc = -1;

@@ -399,7 +399,12 @@ char *nbep__scene_widen(nbep__scene_ctx *c, const char *text, const char *label,
                                  "-9223372036854775808)"
                                : "does not fit in a signed 64-bit integer (at most "
                                  "9223372036854775807)");
-                /* Then read as 64-bit, where libconfig saturates it: no second message. */
+                /* Then read as 64-bit, where libconfig saturates a decimal: no second
+                 * message. A hex one it wraps (0xFFFFFFFFFFFFFFFFF reads as -1, and the
+                 * setting's check said "must be >= 0 (got -1)" after this line until
+                 * 2026-12-05): not read on, as a float out of range. */
+                if (hex && n_unread)
+                    (*n_unread)++;
             }
             widen_int t = {end, overflow || v > max32, hex, has_l};
             if (in_array)

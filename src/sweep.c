@@ -152,6 +152,21 @@ static nbep_status plan_of_scene(const char *deck_path, const char *const *overr
                                  const char *const *origins, size_t n_overrides,
                                  nbep_scene *scene, nbep_sweep_plan *out, nbep_diag *d)
 {
+    /* "." "..", "/" (or "dir/."): a folder, with no name of its own for OUT.sweep (they
+     * made "..sweep", "...sweep" and "/.sweep" until 2026-12-05) */
+    const char *out_file = scene->output_file;
+    size_t end = strlen(out_file);
+    while (end > 0 && out_file[end - 1] == '/')
+        end--;
+    size_t base = end;
+    while (base > 0 && out_file[base - 1] != '/')
+        base--;
+    if (end == base || (end - base == 1 && out_file[base] == '.') ||
+        (end - base == 2 && out_file[base] == '.' && out_file[base + 1] == '.'))
+        NBEP_FAIL(d, NBEP_EUSAGE,
+                  "nbep: %s: the output %s names a folder, where a study needs a name for its "
+                  "own folder NAME.sweep (say -o results, for results.sweep/)",
+                  deck_path, out_file);
     nbep_sweep_plan p = {0};
     bool oom = !(p.deck_path = strdup(deck_path)) || !(p.dir = sweep_dir_of(scene->output_file)) ||
                !(p.base = calloc(n_overrides ? n_overrides : 1, sizeof *p.base)) ||
@@ -1397,6 +1412,17 @@ static nbep_status remove_tables(const nbep_sweep_plan *p, nbep_diag *d)
         if (!path)
             NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory");
         sprintf(path, "%s/%s", p->dir, tables[k]);
+        /* a folder by the table's name is the user's: not removed (remove() took an empty one,
+         * and a full one gave "Directory not empty", exit 1, until 2026-12-05) */
+        struct stat sb;
+        if (lstat(path, &sb) == 0 && S_ISDIR(sb.st_mode)) {
+            nbep_diag_add(d, __FILE__, __LINE__,
+                          "nbep: %s is a folder, where the sweep writes its table: move it, or "
+                          "give the study another -o",
+                          path);
+            free(path);
+            return NBEP_EUSAGE;
+        }
         const int gone = remove(path) == 0 || errno == ENOENT;
         const int err = errno;
         free(path);

@@ -1224,6 +1224,20 @@ for cmd in resume info; do
         "[ $rc = 2 ] && one_line && grep -q '$tmp/whole.xmf: cannot .*: not an HDF5 file: the XDMF sidecar of whole.h5, beside it; pass that file\$' '$tmp/stderr'"
 done
 
+# info of a file whose text holds control characters (an edited file; anyone's file): each
+# escaped as in an error (\x1b), the lines of a multi-line value kept as lines (until
+# 2026-12-05 an escape sequence reached the terminal raw, a review's find)
+cp "$tmp/whole.h5" "$tmp/escapes.h5"
+"$PY" -c "import h5py, sys
+f = h5py.File(sys.argv[1], 'r+')
+f.attrs['algorithm'] = 'pred\x1b[31mictive'
+f.attrs['overrides'] = 'a=1\n\x1b[2Jb=2\tc'" "$tmp/escapes.h5"
+run_nbep info "$tmp/escapes.h5"
+check "info escapes a file's control characters (exit $rc): $(grep -a 'algorithm:\|overrides:' "$tmp/stdout" | cat -v | head -c 200)" \
+    "[ $rc = 0 ] && ! grep -q \$'\\x1b' '$tmp/stdout' &&
+     grep -qF 'algorithm:   pred\\x1b[31mictive (' '$tmp/stdout' &&
+     grep -qxF 'overrides:   a=1' '$tmp/stdout' && grep -qxF '             \\x1b[2Jb=2\\tc' '$tmp/stdout'"
+
 # a file cut short that is whole again within a second (a run being written, caught between its
 # flushes: 12 of 30 opens failed while a run wrote 300 frames a second) is read: info tries again
 cp "$tmp/cut.h5" "$tmp/live.h5"

@@ -163,6 +163,24 @@ open(sys.argv[1], 'wb').write(d)" $tmp/heap.h5 $how
          cmp -s $tmp/heap-info.err $tmp/heap.err && cmp -s $tmp/heap.h5 $tmp/heap-before.h5"
 done
 
+# the root's object header damaged (its checksum fails): exit 2 as for any other part of the
+# file (until 2026-12-05 exit 1 here, 2 one object further on), one line, the file unchanged
+cp $tmp/no-totals-a.h5 $tmp/root.h5
+"$PY" -c "import sys
+d = bytearray(open(sys.argv[1], 'rb').read())
+at = d.find(b'OHDR')
+d[at + 30] ^= 0x55
+open(sys.argv[1], 'wb').write(d)" $tmp/root.h5
+cp $tmp/root.h5 $tmp/root-before.h5
+timeout 60 bin/nbep run $deck "${args[@]}" -n 80 --resume $tmp/root.h5 2>$tmp/root.err
+rc=$?
+timeout 60 bin/nbep info $tmp/root.h5 >/dev/null 2>$tmp/root-info.err
+rc_info=$?
+check "the root's object header damaged: resume and info exit 2 (got $rc and $rc_info), one line, the file unchanged ($(head -c 200 $tmp/root.err))" \
+    "[ $rc = 2 ] && [ $rc_info = 2 ] && [ \$(wc -l <$tmp/root.err) = 1 ] &&
+     grep -qx 'nbep: $tmp/root.h5: cannot read the root attributes: incorrect metadata checksum.*' $tmp/root.err &&
+     cmp -s $tmp/root.h5 $tmp/root-before.h5"
+
 # /stats's count below the frame resumed from, its rows on disk (a kill within the flush of the
 # counts can leave /frames's written and /stats's not, nbep__output_commit): those rows are
 # kept and the run ends as the uninterrupted one (until 2026-12-05 they were skipped, the

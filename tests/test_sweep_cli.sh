@@ -834,4 +834,29 @@ run_sweep "$tmp/blocked.deck" --quiet --set 'sweep.vary.[0].values=[1.0]'
 check "a sweep run whose file is a directory fails in the path's words (exit $rc): $(head -c 300 "$tmp/stderr")" \
     "[ $rc = 1 ] && grep -qx 'nbep: sweep run 1 (physics.restitution=1.0 seed=2) failed: $tmp/blocked.sweep/run-0001.h5: cannot create the output file: Is a directory' '$tmp/stderr'"
 
+# a folder where the sweep writes its table (summary.csv, summary.h5), even an empty one: the
+# user's, not removed; refused before any run, exit 2, one line (until 2026-12-05 an empty one
+# was removed and a full one gave "Directory not empty", exit 1)
+for table in summary.csv summary.h5; do
+    rm -rf "$tmp/tablefolder.sweep"
+    mkdir -p "$tmp/tablefolder.sweep/$table"
+    run_sweep "$tmp/s.deck" -o "$tmp/tablefolder" --quiet
+    check "a folder at the study's $table: exit 2 (got $rc), one line, nothing run, the folder kept: $(head -c 200 "$tmp/stderr")" \
+        "[ $rc = 2 ] && one_line &&
+         grep -qx 'nbep: $tmp/tablefolder.sweep/$table is a folder, where the sweep writes its table: move it, or give the study another -o' '$tmp/stderr' &&
+         [ -d '$tmp/tablefolder.sweep/$table' ] && ! ls '$tmp/tablefolder.sweep' | grep -q run-"
+done
+
+# an output that names a folder ("dir/.", "dir/x/.."; "." and "/" alike): no name for the
+# study's own folder NAME.sweep, refused before any run, exit 2, one line (until 2026-12-05
+# they made "dir/..sweep" and "dir/x/...sweep")
+mkdir -p "$tmp/x"
+for o in "$tmp/." "$tmp/x/.."; do
+    run_sweep "$tmp/s.deck" -o "$o" --quiet
+    check "sweep -o $o: exit 2 (got $rc), one line, no folder made: $(head -c 200 "$tmp/stderr")" \
+        "[ $rc = 2 ] && one_line &&
+         grep -qxF 'nbep: $tmp/s.deck: the output $o names a folder, where a study needs a name for its own folder NAME.sweep (say -o results, for results.sweep/)' '$tmp/stderr' &&
+         [ ! -e '$o.sweep' ]"
+done
+
 test_end sweep_cli
