@@ -3523,6 +3523,20 @@ MUTANTS = [
     ("info-algorithm-raw", "src/output_info.c",
      "one_line_in_place(&r.build_commit) && one_line_in_place(&r.algorithm) &&",
      "one_line_in_place(&r.build_commit) && true &&", ["tests/test_cli.sh"], None),
+    ("help-extra-ignored", "src/cli.c",
+     "        if (!command)\n            NBEP_FAIL(d, NBEP_EUSAGE,", "        if (0)\n            NBEP_FAIL(d, NBEP_EUSAGE,",
+     ["tests/test_cli.sh"], None),
+    ("help-of-command-dropped", "src/cli.c",
+     "        cli->help_of = of;\n        return st;", "        return st;", ["tests/test_cli.sh"], None),
+    ("fields-twice-taken", "src/scene.c",
+     "        if ((which == 0 && sc->out_position) || (which == 1 && sc->out_velocity))",
+     "        if (0)", ["test_scene"], None),
+    ("decks-alike-number-types", "src/scene.c",
+     "    if ((int_a && tb == CONFIG_TYPE_FLOAT) || (ta == CONFIG_TYPE_FLOAT && int_b))\n        return numbers_alike(a, b);",
+     "", ["test_scene"], None),
+    ("decks-alike-numbers-any-value", "src/scene.c",
+     "    return x >= -0x1p63 && x < 0x1p63 && (long long)x == n && (double)n == x;",
+     "    return x >= -0x1p63 && x < 0x1p63;", ["test_scene"], None),
 ]
 
 

@@ -17,7 +17,7 @@ static const char HELP[] =
     "  nbep info RUN.h5            print a run's metadata and summary\n"
     "  nbep sweep DECK [options]   parameter study (the deck's sweep group): replicas x\n"
     "                              values; under mpirun the runs are split across ranks\n"
-    "  nbep --help | --help-deck | --version\n"
+    "  nbep --help [COMMAND] | --help-deck | --version\n"
     "\n"
     "options of run, check and sweep:\n"
     "  -o, --output FILE      output file (overrides output.file)\n"
@@ -229,6 +229,22 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
      * help may be asked of a command (nbep run --help), so nbep --help ignores the rest */
     if ((cli->cmd == NBEP_CMD_VERSION || cli->cmd == NBEP_CMD_HELP_DECK) && argc > 2)
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: %s takes no arguments (got '%s')", argv[1], argv[2]);
+    /* nbep --help CMD (nbep help run) is CMD's help, as nbep CMD --help; another word, or
+     * more, is refused (until 2026-12-05 ignored: `nbep --help extra` printed the usage,
+     * exit 0) */
+    if (cli->cmd == NBEP_CMD_HELP && argc > 2) {
+        nbep_command of = NBEP_CMD_HELP;
+        const bool command = argc == 3 && parse_command(argv[2], &of, NULL) == NBEP_OK &&
+                             of != NBEP_CMD_HELP && of != NBEP_CMD_VERSION &&
+                             of != NBEP_CMD_HELP_DECK;
+        if (!command)
+            NBEP_FAIL(d, NBEP_EUSAGE,
+                      "nbep: %s takes one command (run, check, info or sweep) or nothing (got "
+                      "'%s')",
+                      argv[1], argv[argc == 3 ? 2 : 3]);
+        cli->help_of = of;
+        return st;
+    }
     if (cli->cmd == NBEP_CMD_HELP || cli->cmd == NBEP_CMD_VERSION ||
         cli->cmd == NBEP_CMD_HELP_DECK)
         return st;

@@ -538,7 +538,7 @@ for ask in "--help" "-h" "help" "run inputs/two-spheres.deck --help"; do
 done
 # info's own: it takes no options, and until 2026-12-01 its --help listed those of run, check
 # and sweep, which it then refused
-for ask in "info --help" "info run.h5 -h"; do
+for ask in "info --help" "info run.h5 -h" "--help info" "help info"; do
     # shellcheck disable=SC2086
     run_nbep $ask
     check "nbep $ask: exit 0, info's usage, no lines of options (got $rc)" \
@@ -596,6 +596,20 @@ for cmd in --version --help-deck; do
     check "nbep $cmd extra: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr"))" \
         "[ $rc = 2 ] && one_line && grep -qxF -- 'nbep: $cmd takes no arguments (got '\''extra'\'')' '$tmp/stderr'"
 done
+# --help takes a command or nothing (until 2026-12-05 the rest was ignored: `nbep --help
+# extra`, exit 0); `nbep --help run` is run's help, as `nbep run --help`
+for extra in "extra" "run x" "--version"; do
+    # shellcheck disable=SC2086
+    run_nbep --help $extra
+    bad=${extra##* }
+    check "nbep --help $extra: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr"))" \
+        "[ $rc = 2 ] && one_line && grep -qxF -- 'nbep: --help takes one command (run, check, info or sweep) or nothing (got '\''$bad'\'')' '$tmp/stderr'"
+done
+run_nbep --help run
+cp "$tmp/stdout" "$tmp/help-run.txt"
+run_nbep run --help
+check "nbep --help run: exit 0, run's help as nbep run --help gives it (got $rc)" \
+    "[ $rc = 0 ] && [ -s '$tmp/help-run.txt' ] && cmp -s '$tmp/stdout' '$tmp/help-run.txt'"
 # ---- the end line's overlap is relative to the radius, as it says ---------------------------
 run_nbep run inputs/two-spheres.deck -n 1 -o "$tmp/end-line.h5"
 check "the end line names max overlap / r (exit $rc)" \

@@ -602,6 +602,21 @@ static void test_values_out_of_range_are_all_reported_in_one_pass(void **state)
 #undef R
 }
 
+/* A field listed twice in output.fields is a slip, said at its element (until 2026-12-05
+ * taken silently); each once, in either order, loads. */
+static void test_a_field_listed_twice_is_refused(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_good.deck", "output.fields=[\"velocity\", \"velocity\"]");
+    ASSERT_DIAG(&f->d, "--set output.fields=[\"velocity\", \"velocity\"]: output.fields.[1]: "
+                       "\"velocity\" is listed twice in output.fields");
+    nbep_diag_fini(&f->d);
+    nbep_diag_init(&f->d);
+    LOAD_OK(f, DATA "scene_good.deck", "output.fields=[\"velocity\", \"position\"]");
+    assert_true(f->sc.out_position && f->sc.out_velocity);
+    nbep_scene_fini(&f->sc);
+}
+
 /* A region's corner left out is the box's, as a group without a region takes the whole box
  * (SPEC: region defaults to the box; until 2026-11-30 "region.min is missing"): a lattice of
  * 8 in the box's lower half along x (max given) and one in its upper half (min given) fill
@@ -2975,37 +2990,50 @@ static void test_fini_is_safe_on_a_zeroed_scene_and_twice(void **state)
 /* ---- decks alike (a sweep's reuse of its folder) ------------------------------------------------ */
 
 /* nbep_scene_decks_alike: comments, layout, run.steps, run.threads, output.file and the sweep
- * group aside, any setting's value, type, name, order or count makes another deck; a text
- * libconfig cannot read is never alike. */
+ * group aside, any setting's value, type, name, order or count makes another deck, but for an
+ * integer and a float of one value (`mass = 1`, `mass = 1.0`, `count = 8L`: one number to the
+ * load, since 2026-12-05); a text libconfig cannot read is never alike. */
 static void test_decks_alike_only_where_they_make_the_same_runs(void **state)
 {
     (void)state;
     const char *base = "run: { steps = 10; threads = 1; dt = 0.01; };\n"
                        "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
-                       "spheres = ( { count = 8; radius = 0.05; place = \"random\"; } );\n"
+                       "spheres = ( { count = 8; radius = 0.05; mass = 1.0; place = \"random\"; } );\n"
                        "output: { file = \"a.h5\"; every = 5; };\n";
     const char *alike[] = {
         "# a comment\nrun: {steps=10;threads=1;dt=0.01;};\n"
         "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
-        "spheres = ( { count = 8; radius = 0.05; place = \"random\"; } );\n"
+        "spheres = ( { count = 8; radius = 0.05; mass = 1.0; place = \"random\"; } );\n"
         "output: { file = \"a.h5\"; every = 5; };\n",
         "run: { steps = 99; dt = 0.01; };\n" /* steps, threads */
         "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
-        "spheres = ( { count = 8; radius = 0.05; place = \"random\"; } );\n"
+        "spheres = ( { count = 8; radius = 0.05; mass = 1.0; place = \"random\"; } );\n"
         "output: { file = \"b.h5\"; every = 5; };\n" /* output.file */
         "sweep: { replicas = 3; };\n",
         "run: { steps = 10; threads = 1; dt = 1.0e-2; };\n" /* the same double */
         "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
-        "spheres = ( { count = 8; radius = 0.05; place = \"random\"; } );\n"
+        "spheres = ( { count = 8; radius = 0.05; mass = 1.0; place = \"random\"; } );\n"
+        "output: { file = \"a.h5\"; every = 5; };\n",
+        "run: { steps = 10; threads = 1; dt = 0.01; };\n"
+        "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+        "spheres = ( { count = 8L; radius = 0.05; mass = 1; place = \"random\"; } );\n" /* 1 */
         "output: { file = \"a.h5\"; every = 5; };\n"};
     const char *other[] = {
+        "run: { steps = 10; threads = 1; dt = 0.01; };\n"
+        "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+        "spheres = ( { count = 8; radius = 0.05; mass = 2; place = \"random\"; } );\n"
+        "output: { file = \"a.h5\"; every = 5; };\n",
+        "run: { steps = 10; threads = 1; dt = 0.01; };\n"
+        "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
+        "spheres = ( { count = 8; radius = 0.05; mass = \"1\"; place = \"random\"; } );\n"
+        "output: { file = \"a.h5\"; every = 5; };\n",
         "run: { steps = 10; threads = 1; dt = 0.02; };\n" /* a value */
         "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
-        "spheres = ( { count = 8; radius = 0.05; place = \"random\"; } );\n"
+        "spheres = ( { count = 8; radius = 0.05; mass = 1.0; place = \"random\"; } );\n"
         "output: { file = \"a.h5\"; every = 5; };\n",
         "run: { steps = 10; threads = 1; dt = 0.01; };\n"
         "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 2.0]; };\n" /* an array's element */
-        "spheres = ( { count = 8; radius = 0.05; place = \"random\"; } );\n"
+        "spheres = ( { count = 8; radius = 0.05; mass = 1.0; place = \"random\"; } );\n"
         "output: { file = \"a.h5\"; every = 5; };\n",
         "run: { steps = 10; threads = 1; dt = 0.01; };\n"
         "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
@@ -3017,15 +3045,15 @@ static void test_decks_alike_only_where_they_make_the_same_runs(void **state)
         "output: { file = \"a.h5\"; every = 5; };\n",
         "run: { steps = 10; threads = 1; dt = 0.01; seed = 2; };\n" /* a setting more */
         "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
-        "spheres = ( { count = 8; radius = 0.05; place = \"random\"; } );\n"
+        "spheres = ( { count = 8; radius = 0.05; mass = 1.0; place = \"random\"; } );\n"
         "output: { file = \"a.h5\"; every = 5; };\n",
         "run: { steps = 10; threads = 1; dt = 0.01; };\n"
         "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
-        "spheres = ( { count = 8; radius = 0.05; place = \"random\"; } );\n"
+        "spheres = ( { count = 8; radius = 0.05; mass = 1.0; place = \"random\"; } );\n"
         "output: { file = \"a.h5\"; every = 5; fields = [\"position\"]; };\n",
         "run: { steps = 10; threads = 1; dt = 0.01; };\n"
         "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0]; };\n"
-        "spheres = ( { count = 8; radius = 0.05; place = \"random\"; },\n"
+        "spheres = ( { count = 8; radius = 0.05; mass = 1.0; place = \"random\"; },\n"
         "            { count = 1; radius = 0.05; place = \"random\"; } );\n" /* a list's */
         "output: { file = \"a.h5\"; every = 5; };\n",
         "run: { steps = 10; threads = 1; dt = 0.01;\n", /* unreadable */
@@ -3075,6 +3103,7 @@ int main(void)
         T(test_a_trailing_comma_is_named),
         T(test_a_syntax_error_comes_before_a_later_line_s_too_big_integer),
         T(test_a_hex_integer_past_64_bits_is_one_error),
+        T(test_a_field_listed_twice_is_refused),
         T(test_unknown_settings_are_named_with_the_closest_known_one),
         T(test_wrong_types_are_errors_but_integers_pass_for_numbers),
         T(test_an_array_is_no_list_and_a_studys_values_are_not_empty),
