@@ -3537,6 +3537,9 @@ MUTANTS = [
     ("decks-alike-numbers-any-value", "src/scene.c",
      "    return x >= -0x1p63 && x < 0x1p63 && (long long)x == n && (double)n == x;",
      "    return x >= -0x1p63 && x < 0x1p63;", ["test_scene"], None),
+    ("choice-quoted-raw", "src/scene.c",
+     "    nbep__scene_value_text(at, &typed);", "    nbep__strbuf_add(&typed, \"\\\"%s\\\"\", s);",
+     ["test_scene"], None),
 ]
 
 

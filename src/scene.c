@@ -325,12 +325,17 @@ static int one_of(load *L, const config_setting_t *at, const char *path, const c
     for (int k = 0; k < n; k++)
         if (strcmp(s, names[k]) == 0)
             return k;
-    nbep__strbuf b = {0};
+    nbep__strbuf b = {0}, typed = {0};
     for (int k = 0; k < n; k++)
         nbep__strbuf_add(&b, "%s\"%s\"", k ? ", " : "", names[k]);
-    ERR(L, at, "%s must be one of %s (got \"%s\")", path, nbep__strbuf_str(&b), s);
-    L->c.oom = L->c.oom || b.oom;
+    /* what was typed as a libconfig literal, a quote in it escaped (until 2026-12-05 `(got
+     * "fa"st")`), as the deck text nbep stores writes it */
+    nbep__scene_value_text(at, &typed);
+    ERR(L, at, "%s must be one of %s (got %s)", path, nbep__strbuf_str(&b),
+        nbep__strbuf_str(&typed));
+    L->c.oom = L->c.oom || b.oom || typed.oom;
     nbep__strbuf_fini(&b);
+    nbep__strbuf_fini(&typed);
     return -1;
 }
 

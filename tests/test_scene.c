@@ -602,6 +602,16 @@ static void test_values_out_of_range_are_all_reported_in_one_pass(void **state)
 #undef R
 }
 
+/* A choice not among the names is quoted as a libconfig literal, a quote or control
+ * character in it escaped (until 2026-12-05 `(got "fa"st")`, ambiguous). */
+static void test_a_bad_choice_is_quoted_as_typed(void **state)
+{
+    fixture *f = *state;
+    LOAD_FAILS(f, NBEP_EDECK, DATA "scene_good.deck", "run.algorithm=\"fa\\\"st\\n\"");
+    ASSERT_DIAG(&f->d, "--set run.algorithm=\"fa\\\"st\\n\": run.algorithm must be one of "
+                       "\"naive\", \"seminaive\", \"predictive\" (got \"fa\\\"st\\n\")");
+}
+
 /* A field listed twice in output.fields is a slip, said at its element (until 2026-12-05
  * taken silently); each once, in either order, loads. */
 static void test_a_field_listed_twice_is_refused(void **state)
@@ -3104,6 +3114,7 @@ int main(void)
         T(test_a_syntax_error_comes_before_a_later_line_s_too_big_integer),
         T(test_a_hex_integer_past_64_bits_is_one_error),
         T(test_a_field_listed_twice_is_refused),
+        T(test_a_bad_choice_is_quoted_as_typed),
         T(test_unknown_settings_are_named_with_the_closest_known_one),
         T(test_wrong_types_are_errors_but_integers_pass_for_numbers),
         T(test_an_array_is_no_list_and_a_studys_values_are_not_empty),
