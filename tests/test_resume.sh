@@ -121,18 +121,28 @@ done
 # a count attribute past its rows (no writer leaves one: a damaged or edited file) is refused
 # as such, exit 2 as the README's exit table has it for a --resume file that is not what it
 # should be, by info too (resume gave exit 1 until 2026-12-04, a review)
-for g in frames stats; do
-    cp $tmp/no-totals-a.h5 $tmp/overcount.h5
-    "$PY" -c "import h5py, sys, numpy as np; h5py.File(sys.argv[1], 'r+')[sys.argv[2]].attrs.modify('count', np.uint64(1000000))" $tmp/overcount.h5 $g
-    cp $tmp/overcount.h5 $tmp/overcount-before.h5
-    timeout 60 bin/nbep run $deck "${args[@]}" -n 80 --resume $tmp/overcount.h5 2>$tmp/overcount.err
+# damaged NAME PYTHON [ARG]: the 40-step file copied to $tmp/NAME.h5 and edited by PYTHON (its
+# path in sys.argv[1], ARG in sys.argv[2]), the copy before the resume kept as NAME-before.h5;
+# then a resume to 80 steps and an info of it, their status in rc and rc_info, the resume's
+# stderr in NAME.err. refused NAME WANT: the resume exit 2, its one line WANT (a grep -x
+# pattern), the file unchanged.
+damaged() {
+    cp $tmp/no-totals-a.h5 $tmp/$1.h5
+    "$PY" -c "$2" $tmp/$1.h5 "${@:3}"
+    cp $tmp/$1.h5 $tmp/$1-before.h5
+    timeout 60 bin/nbep run $deck "${args[@]}" -n 80 --resume $tmp/$1.h5 2>$tmp/$1.err
     rc=$?
-    timeout 60 bin/nbep info $tmp/overcount.h5 >/dev/null 2>$tmp/overcount-info.err
+    timeout 60 bin/nbep info $tmp/$1.h5 >/dev/null 2>$tmp/$1-info.err
     rc_info=$?
+}
+refused() {
+    [ $rc = 2 ] && [ "$(wc -l <$tmp/$1.err)" = 1 ] &&
+        grep -qx -- "$2" $tmp/$1.err && cmp -s $tmp/$1.h5 $tmp/$1-before.h5
+}
+for g in frames stats; do
+    damaged overcount "import h5py, sys, numpy as np; h5py.File(sys.argv[1], 'r+')[sys.argv[2]].attrs.modify('count', np.uint64(1000000))" $g
     check "a /$g count past its rows: resume and info exit 2 (got $rc and $rc_info), one line naming it, the file unchanged ($(head -c 200 $tmp/overcount.err))" \
-        "[ $rc = 2 ] && [ $rc_info = 2 ] && [ \$(wc -l <$tmp/overcount.err) = 1 ] &&
-         grep -qx 'nbep: $tmp/overcount.h5: /$g counts 1000000 rows but /$g/step has [0-9]*: the file is damaged, or no run wrote it' $tmp/overcount.err &&
-         cmp -s $tmp/overcount.h5 $tmp/overcount-before.h5"
+        "[ $rc_info = 2 ] && refused overcount 'nbep: $tmp/overcount.h5: /$g counts 1000000 rows but /$g/step has [0-9]*: the file is damaged, or no run wrote it'"
 done
 
 # a damaged global heap (where HDF5 keeps the variable-length strings: the deck, the summary,
@@ -142,8 +152,7 @@ done
 # one line, the file unchanged. Three damages: an object's size (its high byte), an object's
 # index (the string is then nowhere), the collection's signature.
 for how in size index signature; do
-    cp $tmp/no-totals-a.h5 $tmp/heap.h5
-    "$PY" -c "import sys
+    damaged heap "import sys
 d = bytearray(open(sys.argv[1], 'rb').read())
 at = d.find(b'GCOL')
 assert at > 0 and d[at + 4] == 1, at
@@ -151,35 +160,21 @@ first = at + 16  # after GCOL, version, 3 reserved, the 8-byte collection size
 {'size': lambda: d.__setitem__(first + 14, d[first + 14] ^ 0xff),
  'index': lambda: d.__setitem__(first, d[first] ^ 0x40),
  'signature': lambda: d.__setitem__(at, ord('X'))}[sys.argv[2]]()
-open(sys.argv[1], 'wb').write(d)" $tmp/heap.h5 $how
-    cp $tmp/heap.h5 $tmp/heap-before.h5
-    timeout 60 bin/nbep run $deck "${args[@]}" -n 80 --resume $tmp/heap.h5 2>$tmp/heap.err
-    rc=$?
-    timeout 60 bin/nbep info $tmp/heap.h5 >/dev/null 2>$tmp/heap-info.err
-    rc_info=$?
+open(sys.argv[1], 'wb').write(d)" $how
     check "a global heap object's $how damaged: resume and info exit 2 (got $rc and $rc_info), one line saying so, the file unchanged ($(head -c 200 $tmp/heap.err))" \
-        "[ $rc = 2 ] && [ $rc_info = 2 ] && [ \$(wc -l <$tmp/heap.err) = 1 ] &&
-         grep -qx 'nbep: $tmp/heap.h5: attribute [a-z_]* points into a damaged part of the file (its global heap): the file is damaged, or no run wrote it' $tmp/heap.err &&
-         cmp -s $tmp/heap-info.err $tmp/heap.err && cmp -s $tmp/heap.h5 $tmp/heap-before.h5"
+        "[ $rc_info = 2 ] && refused heap 'nbep: $tmp/heap.h5: attribute [a-z_]* points into a damaged part of the file (its global heap): the file is damaged, or no run wrote it' &&
+         cmp -s $tmp/heap-info.err $tmp/heap.err"
 done
 
 # the root's object header damaged (its checksum fails): exit 2 as for any other part of the
 # file (until 2026-12-05 exit 1 here, 2 one object further on), one line, the file unchanged
-cp $tmp/no-totals-a.h5 $tmp/root.h5
-"$PY" -c "import sys
+damaged root "import sys
 d = bytearray(open(sys.argv[1], 'rb').read())
 at = d.find(b'OHDR')
 d[at + 30] ^= 0x55
-open(sys.argv[1], 'wb').write(d)" $tmp/root.h5
-cp $tmp/root.h5 $tmp/root-before.h5
-timeout 60 bin/nbep run $deck "${args[@]}" -n 80 --resume $tmp/root.h5 2>$tmp/root.err
-rc=$?
-timeout 60 bin/nbep info $tmp/root.h5 >/dev/null 2>$tmp/root-info.err
-rc_info=$?
+open(sys.argv[1], 'wb').write(d)"
 check "the root's object header damaged: resume and info exit 2 (got $rc and $rc_info), one line, the file unchanged ($(head -c 200 $tmp/root.err))" \
-    "[ $rc = 2 ] && [ $rc_info = 2 ] && [ \$(wc -l <$tmp/root.err) = 1 ] &&
-     grep -qx 'nbep: $tmp/root.h5: cannot read the root attributes: incorrect metadata checksum.*' $tmp/root.err &&
-     cmp -s $tmp/root.h5 $tmp/root-before.h5"
+    "[ $rc_info = 2 ] && refused root 'nbep: $tmp/root.h5: cannot read the root attributes: incorrect metadata checksum.*'"
 
 # /stats's count below the frame resumed from, its rows on disk (a kill within the flush of the
 # counts can leave /frames's written and /stats's not, nbep__output_commit): those rows are
@@ -199,17 +194,12 @@ for how in "stats-cut:/stats holds 30:f['stats'].attrs.modify('count', np.uint64
            "time-nan:its frame 8 is at step 40, time nan, which no run writes (the time of a frame is its step times run.dt):f['frames/time'][8] = np.nan" \
            "step-order:its frame 3 is at step 10, time 0.01, which no run writes (the steps of its frames rise):f['frames/step'][3] = 10; f['frames/time'][3] = 10 * f.attrs['dt']"; do
     name=${how%%:*}; rest=${how#*:}; want=${rest%%:*}; edit=${rest#*:}
-    cp $tmp/no-totals-a.h5 $tmp/$name.h5
-    "$PY" -c "import h5py, sys, numpy as np
+    damaged $name "import h5py, sys, numpy as np
 f = h5py.File(sys.argv[1], 'r+')
-$edit" $tmp/$name.h5
-    cp $tmp/$name.h5 $tmp/$name-before.h5
-    timeout 60 bin/nbep run $deck "${args[@]}" -n 80 --resume $tmp/$name.h5 2>$tmp/$name.err
-    rc=$?
+$edit"
     check "$name: resume exit 2 (got $rc), one line naming it, the file unchanged ($(head -c 250 $tmp/$name.err))" \
-        "[ $rc = 2 ] && [ \$(wc -l <$tmp/$name.err) = 1 ] &&
-         grep -qF '$want' $tmp/$name.err && grep -q 'the file is damaged, or no run wrote it\$' $tmp/$name.err &&
-         cmp -s $tmp/$name.h5 $tmp/$name-before.h5"
+        "refused $name '.*' && grep -qF '$want' $tmp/$name.err &&
+         grep -q 'the file is damaged, or no run wrote it\$' $tmp/$name.err"
 done
 
 # the end line of a resumed run counts the steps it ran and names the step reached (the
