@@ -2053,8 +2053,8 @@ MUTANTS = [
      "    if (0)", ["tests/test_cli.sh"], None),
     ("tc-warning-said-by-sweep-runs", "src/run.c", "    if (tc_warning && !rq->sweep_run)",
      "    if (tc_warning)", ["tests/test_cli.sh"], None),
-    ("lock-summary-at-lock-taken", "src/run.c", "        if (run || side || held)",
-     "        if (run || side)", ["tests/test_cli.sh"], None),
+    ("lock-summary-at-lock-taken", "src/run.c", "        if (run || side || held || built)",
+     "        if (run || side || built)", ["tests/test_cli.sh"], None),
     # one writer of a summary at a time: the lock on SUMMARY.partial (2026-12-01)
     ("lock-summary-busy-ignored", "src/run.c", "    if (fd < 0 && !busy)\n        *out = fopen(",
      "    if (fd < 0)\n        *out = fopen(", ["tests/test_signals.sh"], None),
@@ -3540,6 +3540,9 @@ MUTANTS = [
     ("choice-quoted-raw", "src/scene.c",
      "    nbep__scene_value_text(at, &typed);", "    nbep__strbuf_add(&typed, \"\\\"%s\\\"\", s);",
      ["test_scene"], None),
+    ("summary-at-staged-name-taken", "src/run.c",
+     "        if (run || side || held || built)", "        if (run || side || held)",
+     ["tests/test_cli.sh"], None),
 ]
 
 

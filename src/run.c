@@ -544,14 +544,25 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
          * would be replaced, or would replace it; at its lock's, it would take the lock
          * file's place and another run would lock that one */
         char *xmf = nbep_xdmf_path(output), *lock = nbep_lock_path(output);
+        /* and the name a new run's file is built under, OUT.partial, which a run that fails
+         * before its file is whole removes, a summary there with it (a review, 2026-12-05) */
+        char *staged = malloc(strlen(output) + sizeof ".partial");
+        if (staged)
+            sprintf(staged, "%s.partial", output);
         const bool run = nbep_run_same_path(summary, output);
         const bool side = xmf && nbep_run_same_path(summary, xmf);
         const bool held = lock && nbep_run_same_path(summary, lock);
+        const bool built = staged && nbep_run_same_path(summary, staged);
         free(xmf);
         free(lock);
-        if (run || side || held)
+        free(staged);
+        if (run || side || held || built)
             NBEP_FAIL(d, NBEP_EUSAGE, "nbep: the summary file %s is the run's %s; choose another",
-                      summary, run ? "file itself" : side ? "XDMF sidecar" : "lock file");
+                      summary,
+                      run    ? "file itself"
+                      : side ? "XDMF sidecar"
+                      : held ? "lock file"
+                             : "file as it is built (OUT.partial, renamed to OUT once whole)");
     }
     /* ... nor another run's: a summary replaced an HDF5 file at its path (another run's file,
      * which went on writing a file no longer there and ended with exit 0), and at a name

@@ -805,6 +805,12 @@ run_nbep run inputs/two-spheres.deck --quiet -o "$tmp/locked.h5" --summary "$tmp
 check "--summary at the run's lock file: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr"))" \
     "[ $rc = 2 ] && one_line && grep -qx 'nbep: the summary file $tmp/locked.h5.lock is the run.s lock file; choose another' '$tmp/stderr' &&
      [ ! -e '$tmp/locked.h5' ] && [ ! -e '$tmp/locked.h5.lock' ]"
+# a --summary at OUT.partial, the name the run's file is built under (which a run failing
+# before its file is whole removes, the summary with it): refused, nothing written
+run_nbep run inputs/two-spheres.deck --quiet -o "$tmp/built.h5" --summary "$tmp/built.h5.partial"
+check "--summary at the name the run's file is built under: exit 2, one line (got $rc: $(head -c 200 "$tmp/stderr"))" \
+    "[ $rc = 2 ] && one_line && grep -qxF 'nbep: the summary file $tmp/built.h5.partial is the run'\''s file as it is built (OUT.partial, renamed to OUT once whole); choose another' '$tmp/stderr' &&
+     [ ! -e '$tmp/built.h5' ] && [ ! -e '$tmp/built.h5.partial' ]"
 # ... nor another run's: a summary at an HDF5 file (another run's, running or done) replaced
 # it, and at a name ending in .lock or .xmf took another run's lock or sidecar (until
 # 2026-12-02): refused in run and check, the file there untouched, nothing written
