@@ -226,7 +226,7 @@ nbep_status nbep_cli_parse(int argc, char **argv, nbep_cli *cli, nbep_diag *d)
     if (st != NBEP_OK)
         return st;
     /* --version and --help-deck take nothing more (until 2026-11-30 the rest was ignored);
-     * help may be asked of a command (nbep run --help), so nbep --help ignores the rest */
+     * --help takes a command's name (below) */
     if ((cli->cmd == NBEP_CMD_VERSION || cli->cmd == NBEP_CMD_HELP_DECK) && argc > 2)
         NBEP_FAIL(d, NBEP_EUSAGE, "nbep: %s takes no arguments (got '%s')", argv[1], argv[2]);
     /* nbep --help CMD (nbep help run) is CMD's help, as nbep CMD --help; another word, or
