@@ -244,16 +244,14 @@ static int heap_object_ok(hid_t attr, const char *path, const char *name, nbep_d
         goto done;
     }
     unsigned char id[HEAP_ID_MAX];
-    if (!registered) {
-        hid_t vs = nbep__output_utf8_string_type(), op = H5Tcreate(H5T_OPAQUE, id_size);
-        registered = vs >= 0 && op >= 0 && H5Tset_tag(op, HEAP_ID_TAG) >= 0 &&
-                     H5Tregister(H5T_PERS_SOFT, "nbep heap id", vs, op, heap_id_conv) >= 0;
-        nbep__output_close_id(&vs);
-        nbep__output_close_id(&op);
-    }
     opaque = H5Tcreate(H5T_OPAQUE, id_size);
-    if (!registered || opaque < 0 || H5Tset_tag(opaque, HEAP_ID_TAG) < 0 ||
-        H5Aread(attr, opaque, id) < 0) {
+    if (opaque >= 0 && H5Tset_tag(opaque, HEAP_ID_TAG) >= 0 && !registered) {
+        hid_t vs = nbep__output_utf8_string_type();
+        registered = vs >= 0 &&
+                     H5Tregister(H5T_PERS_SOFT, "nbep heap id", vs, opaque, heap_id_conv) >= 0;
+        nbep__output_close_id(&vs);
+    }
+    if (!registered || H5Aread(attr, opaque, id) < 0) {
         HDF5_FAIL(d, path, "read where attribute %s is stored", name);
         goto done;
     }

@@ -708,17 +708,16 @@ nbep_status nbep_output_open_resume(const char *path, const nbep_scene *sc, nbep
     for (hsize_t k = 0; k < frames; k++) {
         const int64_t step = o->xmf_step[k];
         const double t = (double)step * sc->dt;
-        if (step < 0 || (k > 0 && step <= o->xmf_step[k - 1]) ||
-            memcmp(&t, &o->xmf_time[k], sizeof t) != 0) {
+        const bool unordered = step < 0 || (k > 0 && step <= o->xmf_step[k - 1]);
+        if (unordered || memcmp(&t, &o->xmf_time[k], sizeof t) != 0) {
             char b0[NBEP_REAL_TEXT_MAX];
             nbep_diag_add(d, __FILE__, __LINE__,
                           "nbep: %s: its frame %llu is at step %lld, time %s, which no run "
                           "writes%s: the file is damaged, or no run wrote it",
                           path, (unsigned long long)k, (long long)step,
                           nbep_format_real(o->xmf_time[k], false, b0),
-                          step < 0 || (k > 0 && step <= o->xmf_step[k - 1])
-                              ? " (the steps of its frames rise)"
-                              : " (the time of a frame is its step times run.dt)");
+                          unordered ? " (the steps of its frames rise)"
+                                    : " (the time of a frame is its step times run.dt)");
             st = NBEP_EDECK;
             goto fail;
         }

@@ -1069,21 +1069,21 @@ void nbep__pred_jam_fail(nbep_sim *sim, uint64_t step, size_t i, double t)
     /* Without planes nothing holds a sphere still: at e < 1 and physics.tc = 0 this is
      * inelastic collapse, a row closing in ever faster collisions, which tc > 0 stops (until
      * 2026-12-05 a periodic box's collapse was said to be jammed between walls) */
+    char why[160];
     if (sim->st.n_planes == 0 && sc->restitution < 1.0 && sc->tc == 0.0)
-        nbep_diag_add(sim->diag, __FILE__, __LINE__,
-                      "nbep: step %llu: sphere %zu reacted over %llu times in one step (t = "
-                      "%.17g, run.max_reactions): inelastic collapse, collisions at e = %g "
-                      "closing in ever faster, with physics.tc = 0; a tc > 0 (the TC model, "
-                      "README) stops it; stopping",
-                      (unsigned long long)step, i, (unsigned long long)sc->max_reactions, t,
-                      sc->restitution);
+        snprintf(why, sizeof why,
+                 "inelastic collapse, collisions at e = %g closing in ever faster, with "
+                 "physics.tc = 0; a tc > 0 (the TC model, README) stops it",
+                 sc->restitution);
     else
-        nbep_diag_add(sim->diag, __FILE__, __LINE__,
-                      "nbep: step %llu: sphere %zu reacted over %llu times in one step (t = "
-                      "%.17g, run.max_reactions): jammed between %s that nbep cannot hold "
-                      "still (README, granular scenes: not solved yet); stopping",
-                      (unsigned long long)step, i, (unsigned long long)sc->max_reactions, t,
-                      sim->st.n_planes > 0 ? "walls and neighbours" : "neighbours");
+        snprintf(why, sizeof why,
+                 "jammed between %s that nbep cannot hold still (README, granular scenes: not "
+                 "solved yet)",
+                 sim->st.n_planes > 0 ? "walls and neighbours" : "neighbours");
+    nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                  "nbep: step %llu: sphere %zu reacted over %llu times in one step (t = %.17g, "
+                  "run.max_reactions): %s; stopping",
+                  (unsigned long long)step, i, (unsigned long long)sc->max_reactions, t, why);
     sim->status = NBEP_ENUMERIC;
 }
 

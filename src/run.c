@@ -546,9 +546,7 @@ nbep_status nbep_run_check_paths(const char *deck, const char *output, const cha
         char *xmf = nbep_xdmf_path(output), *lock = nbep_lock_path(output);
         /* and the name a new run's file is built under, OUT.partial, which a run that fails
          * before its file is whole removes, a summary there with it (a review, 2026-12-05) */
-        char *staged = malloc(strlen(output) + sizeof ".partial");
-        if (staged)
-            sprintf(staged, "%s.partial", output);
+        char *staged = nbep_partial_path(output);
         const bool run = nbep_run_same_path(summary, output);
         const bool side = xmf && nbep_run_same_path(summary, xmf);
         const bool held = lock && nbep_run_same_path(summary, lock);
