@@ -72,7 +72,7 @@ ifeq ($(MAKELEVEL)$(filter -j%,$(MAKEFLAGS)),0)
 MAKEFLAGS += -j$(shell nproc 2>/dev/null || echo 1)
 endif
 
-.PHONY: all run check test valgrind bench bench-programs install clean tsan asan mutate check-programs pgo
+.PHONY: all run check test valgrind bench bench-programs install clean tsan asan mutate mutate-sample check-programs pgo
 all: bin/nbep
 
 $(BUILD) $(BUILD)/tests $(BUILD)/bench bin:
@@ -151,6 +151,11 @@ $(FUZZ_REPLAY): tests/fuzz/replay.c tests/fuzz/fuzz_scene.c tests/fuzz/sources $
 # tests that should catch it; not part of check (it takes tens of minutes).
 mutate:
 	python3 scripts/mutate.py $(MUTATE_ARGS)
+
+# A random sample of mechanical mutants of the core (an operator changed at a site drawn at
+# random), each against every unit test: the tests' kill rate on bugs nobody chose.
+mutate-sample:
+	python3 scripts/mutate-sample.py $(SAMPLE_ARGS)
 
 bench: bin/nbep $(BENCH_BIN)
 	bash scripts/bench.sh

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# scripts/mutate-sample.py, the random sample of mechanical mutants of the core, without its
+# long run: its site finder on a fixed C snippet (every operator it should mutate and none in
+# a comment, a macro, an assertion, a string, a shift, an arrow or a pointer's declaration;
+# the selftest), a draw that is the same for the same seed and names sites in the core's
+# sources only, and its one-line refusals of a bad source or count (exit 2).
+# Run from anywhere; exit status 1 when a check fails.
+. "$(dirname "$0")/lib.sh"
+test_tmp mutate_sample
+"$PY" scripts/mutate-sample.py --selftest >"$tmp/self.txt" 2>&1
+rc=$?
+check "mutate-sample.py --selftest: exit 0 (got $rc): $(tr '\n' ';' <"$tmp/self.txt" | head -c 400)" \
+    "[ $rc = 0 ] && grep -q '^selftest: ok$' '$tmp/self.txt'"
+"$PY" scripts/mutate-sample.py -n 25 --seed 3 --list >"$tmp/a.txt" 2>&1
+"$PY" scripts/mutate-sample.py -n 25 --seed 3 --list >"$tmp/b.txt" 2>&1
+"$PY" scripts/mutate-sample.py -n 25 --seed 4 --list >"$tmp/c.txt" 2>&1
+check "one seed, one draw" "cmp -s '$tmp/a.txt' '$tmp/b.txt'"
+check "another seed, another draw" "! cmp -s '$tmp/a.txt' '$tmp/c.txt'"
+check "the draw lists 25 sites, each a core source's line and a change" \
+    "[ \$(grep -cE \"^  src/[a-z_]+\\.c:[0-9]+  '[^']+' -> '[^']*'\$\" '$tmp/a.txt') = 25 ]"
+# each drawn site's line holds the text it changes
+bad=0
+while read -r where change; do
+    f=${where%%:*} line=${where##*:} from=${change#\'} from=${from%%\' ->*}
+    sed -n "${line}p" "$f" | grep -qF -- "$from" || bad=$((bad + 1))
+done < <(sed -n "s/^  \(src[^ ]*\)  \(.*\)$/\1 \2/p" "$tmp/a.txt")
+check "every drawn site's line holds the text it changes ($bad do not)" "[ $bad = 0 ]"
+"$PY" scripts/mutate-sample.py --files src/nope.c --list >"$tmp/out" 2>"$tmp/err"
+rc=$?
+check "a source that does not exist: exit 2 (got $rc), one line naming it" \
+    "[ $rc = 2 ] && [ \$(wc -l <'$tmp/err') = 1 ] && grep -q 'src/nope.c' '$tmp/err'"
+"$PY" scripts/mutate-sample.py -n 0 --list >"$tmp/out" 2>"$tmp/err"
+rc=$?
+check "-n 0: exit 2 (got $rc), one line" "[ $rc = 2 ] && [ \$(wc -l <'$tmp/err') = 1 ]"
+test_end mutate_sample
