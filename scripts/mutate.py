@@ -3544,6 +3544,23 @@ MUTANTS = [
     ("summary-at-staged-name-taken", "src/run.c",
      "        if (run || side || held || built)", "        if (run || side || held)",
      ["tests/test_cli.sh"], None),
+    # ---- 2026-12-05 (fifteenth session): survivors of a random sample of mechanical mutants
+    # (scripts/mutate-sample.py -n 40 --seed 1) against the unit tests, run here against the
+    # shell tests that should catch them, and the one a unit test now catches ----
+    ("respond-along-m2-times", "src/physics.c",
+     "        *v2 = nbep_vec3_axpy(a2, J / m2, d2);",
+     "        *v2 = nbep_vec3_axpy(a2, J * m2, d2);", GRAN, None),
+    ("rest-export-plane-0-dropped", "src/algo_predictive.c",
+     "            if (c->rest[i].who[k] >= 0)\n                rest[i] = c->rest[i].who[k];",
+     "            if (c->rest[i].who[k] > 0)\n                rest[i] = c->rest[i].who[k];",
+     ["tests/test_resume.sh"], None),
+    ("jam-fail-said-by-another-thread", "src/algo_predictive.c",
+     "                    if (tid == 0)\n                        nbep__pred_jam_fail(sim, step, jammed - 1, t_min);",
+     "                    if (tid != 0)\n                        nbep__pred_jam_fail(sim, step, jammed - 1, t_min);",
+     ["tests/test_jam.sh"], None),
+    ("progress-last-flag-inverted", "src/sim.c",
+     "progress(sim, step, step == sim->step_end || stop);",
+     "progress(sim, step, step != sim->step_end || stop);", ["tests/test_cli.sh"], None),
 ]
 
 

@@ -1643,4 +1643,15 @@ else
     echo "skip the frame list that cannot grow: no C compiler for the realloc shim"
 fi
 
+# a run's progress on a log (stderr not a terminal, no --quiet): a line at most every 10 s and
+# always the finished run's, so a short run prints exactly one, at its last step, before its
+# report (a mutant drawn at random on 2026-12-05 that printed every step but the last passed
+# every test)
+bin/nbep run inputs/pile.deck -n 5 -o $tmp/progress.h5 >/dev/null 2>$tmp/progress.err
+rc=$?
+check "a short run's progress on a log: one line, the last step's, then the report (exit $rc): $(head -c 300 $tmp/progress.err)" \
+    "[ $rc = 0 ] && [ \$(grep -c '^step ' $tmp/progress.err) = 1 ] &&
+     sed -n 1p $tmp/progress.err | grep -Eq '^step 5/5 +100\.0% +[0-9.e+-]+ steps/s +ETA 0 s\$' &&
+     sed -n 2p $tmp/progress.err | grep -q '^nbep: ran 5 steps'"
+
 test_end cli

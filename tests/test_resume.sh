@@ -501,6 +501,30 @@ for k, s in enumerate(steps):
 PYEOF"
 done
 
+# /checkpoint/rest names each sphere's resting plane, plane 0 too: an elastic run under
+# accelerations (no lasting contacts: a resume reads this column alone) with a sphere at rest on
+# the first deck plane, one on the second (pressed into it by its own acceleration) and one
+# falling free, in each neighbour mode (a mutant drawn at random on 2026-12-05 that skipped
+# plane 0 passed every test)
+cat >$tmp/rest.deck <<'EOF2'
+run: { algorithm = "predictive"; steps = 10; dt = 0.01; threads = 1; };
+physics: { gravity = [0.0, 0.0, -9.81]; restitution = 1.0; };
+planes = ( { normal = [0.0, 0.0, 1.0]; point = [0.0, 0.0, 0.0]; },
+           { normal = [1.0, 0.0, 0.0]; point = [0.0, 0.0, 0.0]; } );
+spheres = (
+  { position = [2.0, 0.0, 0.5]; velocity = [0.0, 0.0, 0.0]; radius = 0.5; mass = 1.0; },
+  { position = [0.5, 0.0, 3.0]; velocity = [0.0, 0.0, 0.0]; radius = 0.5; mass = 1.0;
+    acceleration = [-1.0, 0.0, 0.0]; },
+  { position = [5.0, 0.0, 3.0]; velocity = [0.0, 0.0, 0.0]; radius = 0.5; mass = 1.0; }
+);
+output: { every = 5; fields = ["position", "velocity"]; };
+EOF2
+for nb in all grid cells; do
+    bin/nbep run $tmp/rest.deck --quiet --set "run.neighbors=\"$nb\"" -o $tmp/rest-$nb.h5
+    check "$nb: /checkpoint/rest names plane 0 and plane 1 where spheres rest on them" \
+        "$PY -c \"import h5py, sys; r = h5py.File(sys.argv[1], 'r')['checkpoint/rest'][:].tolist(); assert r == [[-1, -1, -1], [0, 1, -1], [0, 1, -1]], r\" $tmp/rest-$nb.h5"
+done
+
 # a deck that asks for stats where the file has none, or the other way: refused, the file as it
 # was (a file without /stats resumed with stats aborted after it was changed; the other way
 # left /stats short of the frames)
