@@ -186,8 +186,7 @@ def main():
         base = {}
         for t in unit_tests(scratch):
             t0 = time.monotonic()
-            r = run(["timeout", "-k", "5", "600", os.path.join("build", "tests", t)], scratch,
-                    log=open(os.devnull, "w"))
+            r = run(["timeout", "-k", "5", "600", os.path.join("build", "tests", t)], scratch)
             if r != 0:
                 print(f"mutate-sample: {t} fails on the unmutated tree (exit {r})",
                       file=sys.stderr)
@@ -206,15 +205,13 @@ def main():
                 out.write(text[:off] + repl + text[off + ln:])
             t0 = time.monotonic()
             verdict, why = "survived", ""
-            if run(["make", f"-j{a.jobs}", "MPI=0", "bin/nbep", "check-programs"],
-                   scratch, log=open(os.devnull, "w")) != 0:
+            if run(["make", f"-j{a.jobs}", "MPI=0", "bin/nbep", "check-programs"], scratch) != 0:
                 verdict = "no build"
             else:
                 for t in order:
                     lim = max(20.0, a.timeout * base[t])
                     r = run(["timeout", "-k", "5", f"{lim:.0f}",
-                             os.path.join("build", "tests", t)], scratch,
-                            log=open(os.devnull, "w"))
+                             os.path.join("build", "tests", t)], scratch)
                     if r != 0:
                         verdict = "killed"
                         why = t + (" (hung)" if r in (124, 137) else f" (exit {r})")
@@ -224,7 +221,6 @@ def main():
             counts[verdict] += 1
             print(f"{where:28} {change:34} {verdict:9} {why} "
                   f"({time.monotonic() - t0:.0f} s)", flush=True)
-        run(["make", f"-j{a.jobs}", "MPI=0", "bin/nbep"], scratch, log=open(os.devnull, "w"))
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     print(f"sample: {counts['killed']} killed, {counts['survived']} survived, "
