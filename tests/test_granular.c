@@ -1954,11 +1954,10 @@ static void test_contact_projection(void **state)
 static void test_pair_on_a_floor_responds_along_it(void **state)
 {
     (void)state;
-    const double es[] = {1.0, 0.5, 0.0, 1.0, 0.5, 0.0};
-    const double masses[][2] = {{2.0, 1.0}, {2.0, 1.0}, {2.0, 1.0},
-                                {0.5, 3.0}, {0.5, 3.0}, {0.5, 3.0}};
-    for (size_t k = 0; k < 6; k++) {
-        const double m1 = masses[k][0], m2 = masses[k][1];
+    const double es[] = {1.0, 0.5, 0.0}, masses[][2] = {{2.0, 1.0}, {0.5, 3.0}};
+    for (size_t q = 0; q < 6; q++) {
+        const size_t k = q % 3;
+        const double m1 = masses[q / 3][0], m2 = masses[q / 3][1];
         nbep_vec3 p1 = {0, 0, 0.1}, p2 = {0.06, 0.0, 0.1 + sqrt(0.04 - 0.0036)};
         nbep_vec3 v1 = ZERO, v2 = {-0.3, 0.2, -1.0}, d = nbep_vec3_sub(p2, p1);
         nbep_vec3 n = nbep_vec3_scale(d, 1.0 / nbep_vec3_norm(d));
