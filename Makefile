@@ -107,7 +107,11 @@ $(BUILD)/nbep: $(BUILD)/main.o $(BUILD)/libnbep.a
 
 $(BUILD)/tests/%: tests/%.c tests/nbep_test.h $(BUILD)/libnbep.a | $(BUILD)/tests
 	$(CC) $(CFLAGS_ALL) -Itests $< $(BUILD)/libnbep.a -o $@ $(LDLIBS_ALL) \
-	  $(shell pkg-config --libs cmocka) -lpthread
+	  $(shell pkg-config --libs cmocka) -lpthread $(TEST_WRAP)
+
+# test_memory_plan counts what the code allocates: malloc and its kin wrapped in that binary
+$(BUILD)/tests/test_memory_plan: TEST_WRAP := $(foreach f,malloc calloc realloc free \
+  nbep_alloc_aligned,-Wl,--wrap=$(f))
 
 $(BUILD)/bench/%: tests/bench/%.c tests/bench/bench_util.h $(BUILD)/libnbep.a | $(BUILD)/bench
 	$(CC) $(CFLAGS_ALL) -Itests $< $(BUILD)/libnbep.a -o $@ $(LDLIBS_ALL)

@@ -615,8 +615,39 @@ MUTANTS = [
     ("cells-side-below-reach", "src/cells.c", "reach > 0.0 && isfinite(reach) ? reach :",
      "reach > 0.0 && isfinite(reach) ? 0.99 * reach :", ["test_cells"] + CELLS, None),
     # two cells along a periodic axis: the one neighbour is both below and above
-    ("cells-periodic-two-cells", "src/cells.c", "if (g->periodic[k] && cells < 3.0)\n            cells = 3.0;",
-     "if (g->periodic[k] && cells < 2.0)\n            cells = 2.0;", ["test_cells"] + CELLS, None),
+    ("cells-periodic-two-cells", "src/cells.c", "least[k] = g->periodic[k] ? 3.0 : 1.0;",
+     "least[k] = g->periodic[k] ? 2.0 : 1.0;", ["test_cells"] + CELLS, None),
+    # the cap's loop halves a periodic axis below its three: forced back after, the cells are
+    # up to 9 times the cap (a periodic cube of 7 tiny spheres: 36 cells, 22 the cap)
+    ("cells-cap-halves-the-least", "src/cells.c", "if (count[k] > least[k] && count[k] > most) {",
+     "if (count[k] > 1.0 && count[k] > most) {", ["test_memory_plan"], None),
+    # ---- memory estimates: each create against its plan (tests/test_memory_plan.c) ----
+    # the rounds' claim arrays subtracted (mutate-sample's seed 2 found it untested)
+    ("pred-bytes-claim-subtracted", "src/algo_predictive.c",
+     "sizeof *c->flags + sizeof *c->claim[0] + sizeof *c->claim[1] +",
+     "sizeof *c->flags + sizeof *c->claim[0] - sizeof *c->claim[1] +", ["test_memory_plan"], None),
+    ("pred-bytes-no-quartic-ws", "src/algo_predictive.c",
+     "CHUNK * sizeof *w->part +\n                 nbep_predict_ws_bytes();", "CHUNK * sizeof *w->part;",
+     ["test_memory_plan"], None),
+    ("evloop-bytes-no-team-ws", "src/evloop.c",
+     " + (size_t)team * NBEP_EVLOOP_RING * ws_bytes();", ";", ["test_memory_plan"], None),
+    ("cells-bytes-cap-short", "src/cells.c", "2 * n + 8 > 27 ? 2 * n + 8 : 27",
+     "2 * n + 8 > 27 ? 2 * n - 9 : 27", ["test_memory_plan"], None),
+    ("cells-bytes-periodic-floor-missed", "src/cells.c", "2 * n + 8 > 27 ? 2 * n + 8 : 27",
+     "2 * n + 8", ["test_memory_plan"], None),
+    ("sim-bytes-no-checkpoint-rest", "src/sim.c",
+     "sizeof *sim->ev_kind +\n                      sizeof *sim->ev_rest);", "sizeof *sim->ev_kind);",
+     ["test_memory_plan"], None),
+    # ---- creates that run out of memory (test_memory_plan refuses each allocation in turn) ----
+    # mutate-sample's seed 3 found the detection's check of its arrays untested
+    ("detect-oom-check-and", "src/algo_detect.c", "if (!ctx->lists || (sim->st.n && (!ctx->pos0",
+     "if (!ctx->lists && (sim->st.n && (!ctx->pos0", ["test_memory_plan"], None),
+    ("detect-destroy-keeps-images", "src/algo_detect.c",
+     "    nbep_free_aligned(ctx->vel0);\n    nbep_free_aligned(ctx->img0);",
+     "    nbep_free_aligned(ctx->vel0);", ["test_memory_plan"], None),
+    ("pred-create-ws-fail-leaks", "src/algo_predictive.c",
+     "(c->order_step && !w->tclaimed)) {\n            pred_destroy(c);\n",
+     "(c->order_step && !w->tclaimed)) {\n", ["test_memory_plan"], None),
     ("cells-clamp-past-last", "src/cells.c", "return c >= (double)dim ? dim - 1 : (size_t)c;",
      "return c > (double)dim ? dim - 1 : (size_t)c;", ["test_cells"] + CELLS, None),
     ("cells-place-no-move", "src/cells.c", "    if (c != g->m[i].cell)\n        move_member(g, i, c);", "",

@@ -226,7 +226,8 @@ static size_t plan_fired(const pred_plan *p, int t)
 
 /* The bytes pred_create allocates for a run of sc on nt threads, by the same plan: the
  * algorithm's part of nbep check's memory estimate (cells mode: lists of ESTIMATE_NEIGHBOURS;
- * each thread's quartic workspace, a few hundred bytes, left out). */
+ * GSL's part of each thread's quartic workspace, a few hundred bytes, left out), exact but
+ * for those (tests/test_memory_plan.c counts create's allocations against it). */
 static size_t pred_bytes(const nbep_scene *sc, int nt)
 {
     const pred_plan p = plan_of(sc, &sc->state, nt, team_forced());
@@ -255,7 +256,8 @@ static size_t pred_bytes(const nbep_scene *sc, int nt)
     bytes += (size_t)nt * sizeof *c->ws;
     for (int t = 0; t < nt; t++) {
         const size_t own = plan_own(&p, t);
-        bytes += plan_fired(&p, t) * sizeof *w->fired + CHUNK * sizeof *w->part;
+        bytes += plan_fired(&p, t) * sizeof *w->fired + CHUNK * sizeof *w->part +
+                 nbep_predict_ws_bytes();
         if (p.rounds)
             bytes += own * (sizeof *w->cand + sizeof *w->redo + sizeof *w->rel +
                             2 * sizeof *w->claimed);
@@ -267,7 +269,7 @@ static size_t pred_bytes(const nbep_scene *sc, int nt)
     if (p.use_grid)
         bytes += nbep_grid_bytes(n);
     if (p.cells)
-        bytes += nbep_evloop_bytes(n, ESTIMATE_NEIGHBOURS);
+        bytes += nbep_evloop_bytes(n, ESTIMATE_NEIGHBOURS, p.team_size);
     if (p.team) {
         const size_t rows = (size_t)p.team_size * NBEP_EVLOOP_RING;
         bytes += rows * (sizeof *c->help_cnt + sizeof *c->help_mx +

@@ -49,6 +49,9 @@
 #define NBEP_EVLOOP_WALK_HOOK(w, m, cap0) ((void)0)
 #endif
 
+/* A walk's workspace's first room: lists' members, and changed cells */
+#define WS_CHANGED0 8
+
 static bool ws_init(evl_ws *w)
 {
     w->cap = NBEP_EVLOOP_WS_CAP0;
@@ -56,9 +59,18 @@ static bool ws_init(evl_ws *w)
     w->was = malloc(w->cap * sizeof *w->was);
     w->kept = malloc(w->cap * sizeof *w->kept);
     w->gain = malloc(w->cap * sizeof *w->gain);
-    w->chg_cap = 8;
+    w->chg_cap = WS_CHANGED0;
     w->changed = malloc(w->chg_cap * sizeof *w->changed);
     return w->near && w->was && w->kept && w->gain && w->changed;
+}
+
+/* The bytes ws_init allocates (nbep_evloop_bytes) */
+static size_t ws_bytes(void)
+{
+    const evl_ws *w = NULL; /* for element sizes only: sizeof does not evaluate */
+    return NBEP_EVLOOP_WS_CAP0 * (sizeof *w->near + sizeof *w->was + sizeof *w->kept +
+                                  sizeof *w->gain) +
+           WS_CHANGED0 * sizeof *w->changed;
 }
 
 static void ws_fini(evl_ws *w)
@@ -226,11 +238,11 @@ void nbep_evloop_destroy(nbep_evloop **e)
     *e = NULL;
 }
 
-size_t nbep_evloop_bytes(size_t n, double neighbours)
+size_t nbep_evloop_bytes(size_t n, double neighbours, int team)
 {
     return sizeof(nbep_evloop) + nbep_calendar_bytes(n) + nbep_cells_bytes(n) +
            nbep_nblist_bytes(n, (size_t)(neighbours * (double)n)) +
-           n * sizeof(uint32_t);
+           (n ? n : 1) * sizeof(uint32_t) + (size_t)team * NBEP_EVLOOP_RING * ws_bytes();
 }
 
 bool nbep_evloop_failed(const nbep_evloop *e)

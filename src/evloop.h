@@ -231,8 +231,9 @@ void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void 
 void nbep_evloop_visit_block(const nbep_evloop *e, uint32_t i,
                              void (*visit)(void *u, uint32_t j), void *u);
 
-/* Bytes nbep_evloop_create(n, ...) allocates and its lists grow to with `neighbours` listed per
- * sphere on average (its own record, calendar, cells, lists, counts), for memory estimates. */
-size_t nbep_evloop_bytes(size_t n, double neighbours);
+/* Bytes nbep_evloop_create(n, ..., team, ...) allocates and its lists grow to with `neighbours`
+ * listed per sphere on average (its own record, calendar, cells, lists, counts, and the team's
+ * workspaces: one per thread per ring slot, at their first room), for memory estimates. */
+size_t nbep_evloop_bytes(size_t n, double neighbours, int team);
 
 #endif

@@ -100,6 +100,11 @@ nbep_status nbep_predict_ws_create(nbep_predict_ws **out, nbep_diag *d)
     return NBEP_OK;
 }
 
+size_t nbep_predict_ws_bytes(void)
+{
+    return sizeof(nbep_predict_ws);
+}
+
 void nbep_predict_ws_destroy(nbep_predict_ws **ws)
 {
     if (!ws || !*ws)

@@ -23,6 +23,9 @@
  * on success; destroy is NULL-safe and NULLs the pointer. */
 typedef struct nbep_predict_ws nbep_predict_ws;
 NBEP_MUST_CHECK nbep_status nbep_predict_ws_create(nbep_predict_ws **out, nbep_diag *d);
+/* Bytes nbep_predict_ws_create allocates itself (GSL's own workspace, a few hundred bytes in
+ * the library, left out), for memory estimates. */
+size_t nbep_predict_ws_bytes(void);
 void nbep_predict_ws_destroy(nbep_predict_ws **ws);
 
 /* All three return a time from now, t >= 0, finite or NBEP_NEVER, never NaN (inputs finite,

@@ -1,0 +1,465 @@
+/* nbep check's memory estimate, part by part, against what the code allocates. Each
+ * algorithm's `bytes` (the estimate's share for its workspaces) promises the bytes its `create`
+ * allocates for the same scene and thread count, and nbep_cells_bytes the most that
+ * nbep_cells_init takes. test_cli.sh holds the whole estimate to a run's peak RSS within a
+ * band; a term dropped, doubled or subtracted is tens of bytes a sphere, well inside it. Here
+ * the allocator counts instead: this binary is linked with malloc, calloc, realloc, free and
+ * nbep_alloc_aligned wrapped (Makefile: -Wl,--wrap), and while counting, each block's
+ * requested size is kept by its address, so the bytes a create leaves allocated are known
+ * exactly (blocks it frees again, and those of the shared libraries: GSL's root workspaces,
+ * HDF5's, which the estimate leaves out, are not counted).
+ *
+ * Exact for every algorithm and mode but the cells mode's neighbour lists, which the estimate
+ * sizes at ESTIMATE_NEIGHBOURS a sphere where a run sizes them to what it finds: there the
+ * test takes the lists' own bytes (nbep_nblist_bytes of the pool the run made) out of both. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "nbep/cells.h"
+#include "nbep/nblist.h"
+#include "nbep/vec3.h"
+#include "evloop_impl.h"
+#include "pred_impl.h"
+#include "sim_impl.h"
+#include "nbep_test.h"
+#include "nbep_test_scene.h"
+
+/* ---- the counting allocator ------------------------------------------------------------------ */
+
+void *__real_malloc(size_t size);
+void *__real_calloc(size_t n, size_t size);
+void *__real_realloc(void *p, size_t size);
+void __real_free(void *p);
+void *__real_nbep_alloc_aligned(size_t n, size_t size);
+void *__wrap_malloc(size_t size);
+void *__wrap_calloc(size_t n, size_t size);
+void *__wrap_realloc(void *p, size_t size);
+void __wrap_free(void *p);
+void *__wrap_nbep_alloc_aligned(size_t n, size_t size);
+
+/* Blocks made while counting, by address (a create makes a few dozen; the table's room is
+ * checked). nbep_alloc_aligned's own aligned_alloc is not wrapped, so each of its blocks is
+ * kept once, at the size asked for (its rounding to cache lines is the allocator's, not the
+ * plan's); nbep_free_aligned frees through free, which is. */
+#define MAX_BLOCKS 4096
+static struct {
+    void *p;
+    size_t bytes;
+    void *at; /* the caller's address */
+} blocks[MAX_BLOCKS];
+static size_t n_blocks;
+static int counting;
+/* While counting: the allocations asked for so far, and the one to refuse (0: none), as if
+ * memory ran out there */
+static size_t n_calls, fail_call;
+
+/* Whether this allocation is to be refused (counting it). */
+static bool refuse(void)
+{
+    return counting && ++n_calls == fail_call;
+}
+
+static void keep_at(void *p, size_t bytes, void *at)
+{
+    if (!counting || !p)
+        return;
+    assert_true(n_blocks < MAX_BLOCKS);
+    blocks[n_blocks].p = p;
+    blocks[n_blocks].bytes = bytes;
+    blocks[n_blocks].at = at;
+    n_blocks++;
+}
+
+#define keep(p, b) keep_at(p, b, __builtin_return_address(0))
+
+static void drop(void *p)
+{
+    for (size_t k = 0; counting && p && k < n_blocks; k++)
+        if (blocks[k].p == p) {
+            blocks[k] = blocks[--n_blocks];
+            return;
+        }
+}
+
+void *__wrap_malloc(size_t size)
+{
+    void *p = refuse() ? NULL : __real_malloc(size);
+    keep(p, size);
+    return p;
+}
+
+void *__wrap_calloc(size_t n, size_t size)
+{
+    void *p = refuse() ? NULL : __real_calloc(n, size);
+    keep(p, n * size);
+    return p;
+}
+
+void *__wrap_realloc(void *p, size_t size)
+{
+    void *q = refuse() ? NULL : __real_realloc(p, size);
+    if (q || size == 0)
+        drop(p);
+    keep(q, size);
+    return q;
+}
+
+void __wrap_free(void *p)
+{
+    drop(p);
+    __real_free(p);
+}
+
+void *__wrap_nbep_alloc_aligned(size_t n, size_t size)
+{
+    void *p = refuse() ? NULL : __real_nbep_alloc_aligned(n, size);
+    keep(p, n * size);
+    return p;
+}
+
+static void count_start(void)
+{
+    n_blocks = 0;
+    n_calls = 0;
+    counting = 1;
+}
+
+/* The bytes left allocated since count_start. */
+static size_t count_stop(void)
+{
+    counting = 0;
+    size_t bytes = 0;
+    for (size_t k = 0; k < n_blocks; k++)
+        bytes += blocks[k].bytes;
+    return bytes;
+}
+
+/* ---- scenes ---------------------------------------------------------------------------------- */
+
+/* 64 spheres of radius 0.05 placed at random in the unit box (80 for the rounds' shares to
+ * split unevenly over 3 threads: NBEP_BLOCK-sized blocks), with `physics` and `run`'s extra
+ * settings; periodic when `periodic`. */
+static void load(nbep_scene *sc, const char *algo, const char *neighbors, const char *run_extra,
+                 const char *physics, bool periodic)
+{
+    char text[1024];
+    snprintf(text, sizeof text,
+             "run: { algorithm = \"%s\"; steps = 2; dt = 0.01; seed = 3; %s%s%s %s };\n"
+             "physics: { %s };\n"
+             "box: { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0];%s };\n"
+             "spheres = ( { count = 80; radius = 0.05; mass = 1.0; place = \"random\";"
+             " speed = 1.0; } );\n"
+             "output: { every = 1; };\n",
+             algo, neighbors ? "neighbors = \"" : "", neighbors ? neighbors : "",
+             neighbors ? "\";" : "", run_extra, physics,
+             periodic ? " periodic = [true, true, true];" : "");
+    nbep_test_load_deck("memory-plan.deck", text, sc);
+}
+
+/* What the cells mode's lists and cells hold after create, where the estimate counts their
+ * most (ESTIMATE_NEIGHBOURS a sphere listed, 2 n + 8 cells: test_cell_lists_... below). */
+static size_t cells_own_bytes(const nbep_sim *sim)
+{
+    const pred_ctx *c = sim->algo_ctx;
+    const nbep_nblist *l = &c->ev->nl;
+    const nbep_cells *g = &c->ev->cells;
+    const size_t n = sim->st.n, m = n ? n : 1;
+    return n * sizeof *l->sp + l->pool_cap * sizeof *l->pool + g->n_cells * sizeof *g->head +
+           m * (sizeof *g->m + sizeof *g->prev);
+}
+
+/* sc's run on nt threads: the bytes its algorithm's create leaves allocated, against the
+ * algorithm's own estimate for sc and nt; in cells mode the lists' pool is each side's own. */
+static void check_plan(const nbep_scene *sc, int nt, const char *what)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_sim_options opt = {.threads = nt};
+    nbep_sim *sim = NULL;
+    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
+    /* the algorithm made again, counted: the same create on the same run */
+    sim->algo->destroy(sim->algo_ctx);
+    sim->algo_ctx = NULL;
+    count_start();
+    const nbep_status st = sim->algo->create(sim, &sim->algo_ctx, &d);
+    size_t made = count_stop();
+    assert_int_equal(st, NBEP_OK);
+    size_t planned = sim->algo->bytes(sc, nt);
+    if (sc->neighbors_cells) {
+        made -= cells_own_bytes(sim);
+        planned -= nbep_nblist_bytes(sim->st.n, (size_t)(24.0 * (double)sim->st.n)) +
+                   nbep_cells_bytes(sim->st.n);
+    }
+    /* NBEP_TEST_BLOCKS=1: each block kept and its caller's address, for addr2line (run under
+     * setarch -R, and subtract the program's load address, to find the allocation missed) */
+    if (made != planned && getenv("NBEP_TEST_BLOCKS"))
+        for (size_t k = 0; k < n_blocks; k++)
+            fprintf(stderr, "  block %zu: %zu %p\n", k, blocks[k].bytes, blocks[k].at);
+    if (made != planned)
+        fail_msg("%s, %d thread%s: create allocates %zu bytes, the estimate counts %zu", what,
+                 nt, nt == 1 ? "" : "s", made, planned);
+    nbep_sim_destroy(&sim);
+    nbep_diag_fini(&d);
+}
+
+/* The whole run: nbep_sim_create for sc on nt threads, writing to a file (opened first, not
+ * counted), against nbep check's estimate (nbep_sim_memory_estimate) less the frame it
+ * counts in HDF5's buffers, which the library allocates; in cells mode the lists and cells
+ * taken out of both as above. With refuse_each, each of its allocations is refused in turn
+ * instead: the create fails with NBEP_ENOMEM and one line, leaving nothing allocated. */
+static void check_run(const nbep_scene *sc, int nt, const char *what, bool refuse_each)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    char path[256];
+    nbep_test_tmp("memory-plan.h5", path, sizeof path);
+    nbep_output *out = NULL;
+    assert_int_equal(nbep_output_create(path, sc, nbep_sim_resolve_threads(nt), &out, &d),
+                     NBEP_OK);
+    nbep_sim_options opt = {.threads = nt, .out = out};
+    nbep_sim *sim = NULL;
+    count_start();
+    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
+    size_t made = count_stop();
+    const size_t calls = n_calls, n = sc->state.n;
+    size_t planned = nbep_sim_memory_estimate(sc, nt) - n * 2 * sizeof(nbep_vec3);
+    if (sc->neighbors_cells) {
+        made -= cells_own_bytes(sim);
+        planned -= nbep_nblist_bytes(n, (size_t)(24.0 * (double)n)) + nbep_cells_bytes(n);
+    }
+    if (!refuse_each && made != planned)
+        fail_msg("%s, %d thread%s: a run's create allocates %zu bytes, nbep check's estimate "
+                 "counts %zu", what, nt, nt == 1 ? "" : "s", made, planned);
+    for (size_t k = 1; refuse_each && k <= calls; k++) {
+        nbep_diag fd;
+        nbep_diag_init(&fd);
+        nbep_sim *again = NULL;
+        fail_call = k;
+        count_start();
+        const nbep_status st = nbep_sim_create(sc, &opt, &again, &fd);
+        fail_call = 0;
+        const size_t lines = fd.n_errors;
+        nbep_diag_fini(&fd);
+        const size_t left = count_stop();
+        if (st != NBEP_ENOMEM || lines != 1 || left != 0 || again)
+            fail_msg("%s, %d thread%s: a run's allocation %zu of %zu refused: status %d, %zu "
+                     "line%s, %zu bytes left allocated", what, nt, nt == 1 ? "" : "s", k, calls,
+                     (int)st, lines, lines == 1 ? "" : "s", left);
+    }
+    nbep_summary sum;
+    nbep_sim_summary(sim, &sum);
+    nbep_sim_destroy(&sim);
+    assert_int_equal(nbep_output_close(&out, &sum, &d), NBEP_OK);
+    remove(path);
+    nbep_diag_fini(&d);
+}
+
+static const char *const elastic = "restitution = 1.0;";
+static const char *const pile = "gravity = [0.0, 0.0, -9.81]; restitution = 0.5;";
+static const char *const caged = "gravity = [0.0, 0.0, -9.81]; restitution = 0.5; tc = 1.0e-4;";
+static const char *const cooling = "restitution = 0.8; tc = 1.0e-4;";
+
+static void plans_of(const char *algo, const char *neighbors, const char *run_extra,
+                     const char *physics, bool periodic)
+{
+    nbep_scene sc;
+    load(&sc, algo, neighbors, run_extra, physics, periodic);
+    char what[256];
+    snprintf(what, sizeof what, "%s%s%s %s%s, %s", algo, neighbors ? " " : "",
+             neighbors ? neighbors : "", run_extra, periodic ? " periodic" : "", physics);
+    for (int nt = 1; nt <= 3; nt++) {
+        check_plan(&sc, nt, what);
+        check_run(&sc, nt, what, false);
+    }
+    nbep_scene_fini(&sc);
+}
+
+/* ---- tests ----------------------------------------------------------------------------------- */
+
+static void test_the_detecting_algorithms_allocate_what_they_estimate(void **state)
+{
+    (void)state;
+    plans_of("naive", NULL, "", elastic, false);
+    plans_of("seminaive", NULL, "", elastic, false);
+    plans_of("seminaive", NULL, "", pile, false);
+}
+
+/* all pairs and grid: the rounds' bookkeeping (flags, claims, stamps, candidates) per thread
+ * share, and each model a scene needs: none in free flight, rest sets and settling under
+ * gravity at e < 1, the cage with the TC model, the time claims of run.order = "step", and
+ * grid mode's crews on 2 and 3 threads */
+static void test_the_rounds_modes_allocate_what_they_estimate(void **state)
+{
+    (void)state;
+    const char *const modes[] = {"all", "grid"};
+    for (int m = 0; m < 2; m++) {
+        plans_of("predictive", modes[m], "", elastic, false);
+        if (m == 0) /* grid mode refuses a periodic box */
+            plans_of("predictive", modes[m], "", elastic, true);
+        plans_of("predictive", modes[m], "", pile, false);
+        plans_of("predictive", modes[m], "", caged, false);
+        plans_of("predictive", modes[m], "", cooling, false);
+        plans_of("predictive", modes[m], "order = \"step\";", elastic, false);
+        plans_of("predictive", modes[m], "order = \"step\";", pile, false);
+    }
+}
+
+/* cells mode: the event loop (calendar, cells), the team's rows on 2 and 3 threads where the
+ * scene flies free, none where it accelerates */
+static void test_the_cells_mode_allocates_what_it_estimates_but_its_lists(void **state)
+{
+    (void)state;
+    plans_of("predictive", "cells", "", elastic, false);
+    plans_of("predictive", "cells", "", elastic, true);
+    plans_of("predictive", "cells", "", cooling, true);
+    plans_of("predictive", "cells", "", pile, false);
+    plans_of("predictive", "cells", "", caged, false);
+}
+
+/* sc's run on nt threads, its algorithm made again with each of its create's allocations
+ * refused in turn: every refusal fails the create with NBEP_ENOMEM and one line, leaves
+ * nothing of it allocated, and the run's own destroy then holds. */
+static void check_refusals(const nbep_scene *sc, int nt, const char *what)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_sim_options opt = {.threads = nt};
+    nbep_sim *sim = NULL;
+    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
+    sim->algo->destroy(sim->algo_ctx);
+    sim->algo_ctx = NULL;
+    count_start();
+    assert_int_equal(sim->algo->create(sim, &sim->algo_ctx, &d), NBEP_OK);
+    (void)count_stop();
+    const size_t calls = n_calls;
+    sim->algo->destroy(sim->algo_ctx);
+    sim->algo_ctx = NULL;
+    assert_true(calls > 1);
+    for (size_t k = 1; k <= calls; k++) {
+        nbep_diag fd;
+        nbep_diag_init(&fd);
+        fail_call = k;
+        count_start();
+        const nbep_status st = sim->algo->create(sim, &sim->algo_ctx, &fd);
+        fail_call = 0;
+        const size_t lines = fd.n_errors;
+        nbep_diag_fini(&fd); /* its line's bytes, counted: freed */
+        const size_t left = count_stop();
+        if (st != NBEP_ENOMEM || lines != 1 || left != 0 || sim->algo_ctx)
+            fail_msg("%s, %d thread%s: allocation %zu of %zu refused: status %d, %zu line%s, "
+                     "%zu bytes left allocated", what, nt, nt == 1 ? "" : "s", k, calls,
+                     (int)st, lines, lines == 1 ? "" : "s", left);
+    }
+    nbep_sim_destroy(&sim);
+    nbep_diag_fini(&d);
+}
+
+static void refusals_of(const char *algo, const char *neighbors, const char *physics,
+                        bool periodic, int nt)
+{
+    nbep_scene sc;
+    load(&sc, algo, neighbors, "", physics, periodic);
+    char what[256];
+    snprintf(what, sizeof what, "%s%s%s%s, %s", algo, neighbors ? " " : "",
+             neighbors ? neighbors : "", periodic ? " periodic" : "", physics);
+    check_refusals(&sc, nt, what);
+    check_run(&sc, nt, what, true);
+    nbep_scene_fini(&sc);
+}
+
+/* memory running out at any allocation of any algorithm's create: every mode and its models
+ * (the pile's settling and jams, the TC model's cage), detection's periodic images, the
+ * cells team and grid mode's crews on 2 threads */
+static void test_a_create_refused_memory_anywhere_fails_whole_and_leaks_nothing(void **state)
+{
+    (void)state;
+    refusals_of("naive", NULL, elastic, true, 1);
+    refusals_of("seminaive", NULL, pile, false, 2);
+    refusals_of("predictive", "all", caged, false, 2);
+    refusals_of("predictive", "grid", pile, false, 2);
+    refusals_of("predictive", "cells", elastic, true, 2);
+    refusals_of("predictive", "cells", caged, false, 1);
+}
+
+/* nbep_cells_init for n spheres over [0, side] with cells of reach (periodic along every axis
+ * or none): what it allocates, exactly its layout's heads and a member and link a sphere (one
+ * at least), never more than nbep_cells_bytes(n); *n_cells its cells */
+static size_t cells_made(size_t n, nbep_vec3 side, double reach, bool periodic, size_t *n_cells)
+{
+    const bool axes[3] = {periodic, periodic, periodic};
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_cells g;
+    count_start();
+    assert_int_equal(nbep_cells_init(&g, nbep_vec3_make(0.0, 0.0, 0.0), side, reach, n, axes, &d),
+                     NBEP_OK);
+    const size_t made = count_stop();
+    *n_cells = g.n_cells;
+    const size_t m = n ? n : 1;
+    assert_int_equal(made, g.n_cells * sizeof *g.head + m * (sizeof *g.m + sizeof *g.prev));
+    if (made > nbep_cells_bytes(n))
+        fail_msg("%zu spheres in %g x %g x %g, reach %g%s: %zu cells take %zu bytes, the "
+                 "estimate %zu", n, side.x, side.y, side.z, reach, periodic ? ", periodic" : "",
+                 g.n_cells, made, nbep_cells_bytes(n));
+    nbep_cells_fini(&g);
+    nbep_diag_fini(&d);
+    return made;
+}
+
+/* nbep_cells_bytes: the most nbep_cells_init takes for n spheres, whatever the box and reach:
+ * 2 n + 8 cells as cells.c's lay_out caps them, or 27 in a periodic box (three a periodic axis
+ * at least). Reached exactly where a box holds that many cells of the reach; never passed by
+ * boxes of every shape, a reach far below the spacing or above the box. */
+static void test_cell_lists_take_at_most_their_estimate_and_reach_it(void **state)
+{
+    (void)state;
+    const size_t counts[] = {0, 1, 2, 7, 9, 10, 100, 1000};
+    for (size_t k = 0; k < sizeof counts / sizeof counts[0]; k++) {
+        const size_t n = counts[k];
+        size_t cells;
+        /* at the bound: a row of 2 n + 8 cells, and a periodic cube of 3 x 3 x 3 */
+        const double row = (double)(2 * n + 8);
+        if (2 * n + 8 >= 27) {
+            assert_int_equal(cells_made(n, nbep_vec3_make(row, 1.0, 1.0), 1.0, false, &cells),
+                             nbep_cells_bytes(n));
+            assert_int_equal(cells, 2 * n + 8);
+        } else {
+            assert_int_equal(cells_made(n, nbep_vec3_make(3.0, 3.0, 3.0), 1.0, true, &cells),
+                             nbep_cells_bytes(n));
+            assert_int_equal(cells, 27);
+        }
+        /* under it: cubes, slabs and rods, fine cells and coarse ones, periodic or not (a
+         * periodic side at least 3 reaches: the cells mode refuses a shorter one) */
+        const double sides[][3] = {{1, 1, 1}, {10, 1, 1}, {7, 3, 5}, {3, 3, 100}, {40, 40, 3}};
+        const double reaches[] = {1e-4, 0.07, 1.0};
+        for (size_t b = 0; b < sizeof sides / sizeof sides[0]; b++)
+            for (size_t r = 0; r < sizeof reaches / sizeof reaches[0]; r++)
+                for (int per = 0; per < 2; per++) {
+                    const nbep_vec3 side = nbep_vec3_make(sides[b][0], sides[b][1], sides[b][2]);
+                    const double least = fmin(side.x, fmin(side.y, side.z));
+                    if (per && least < nbep_evloop_min_periodic_side(reaches[r]))
+                        continue;
+                    (void)cells_made(n, side, reaches[r], per, &cells);
+                }
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_the_detecting_algorithms_allocate_what_they_estimate),
+        cmocka_unit_test(test_the_rounds_modes_allocate_what_they_estimate),
+        cmocka_unit_test(test_the_cells_mode_allocates_what_it_estimates_but_its_lists),
+        cmocka_unit_test(test_cell_lists_take_at_most_their_estimate_and_reach_it),
+        cmocka_unit_test(test_a_create_refused_memory_anywhere_fails_whole_and_leaks_nothing),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
