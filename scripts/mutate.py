@@ -638,6 +638,16 @@ MUTANTS = [
     ("sim-bytes-no-checkpoint-rest", "src/sim.c",
      "sizeof *sim->ev_kind +\n                      sizeof *sim->ev_rest);", "sizeof *sim->ev_kind);",
      ["test_memory_plan"], None),
+    # a frame that fails to write at a signal's stop: the signal's status kept over the
+    # failure's (mutate-sample's seed 2 found it untested; test_run_contract)
+    ("frame-fail-after-sigterm-kept", "src/sim.c",
+     "sim->status == NBEP_ESIGINT ||\n                              sim->status == NBEP_ESIGTERM))",
+     "sim->status == NBEP_ESIGINT ||\n                              sim->status != NBEP_ESIGTERM))",
+     ["test_run_contract"], None),
+    ("frame-fail-after-sigint-kept", "src/sim.c",
+     "(sim->status == NBEP_OK || sim->status == NBEP_ESIGINT ||\n                              sim->status == NBEP_ESIGTERM))",
+     "(sim->status == NBEP_OK ||\n                              sim->status == NBEP_ESIGTERM))",
+     ["test_run_contract"], None),
     # ---- creates that run out of memory (test_memory_plan refuses each allocation in turn) ----
     # mutate-sample's seed 3 found the detection's check of its arrays untested
     ("detect-oom-check-and", "src/algo_detect.c", "if (!ctx->lists || (sim->st.n && (!ctx->pos0",

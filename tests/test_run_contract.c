@@ -10,6 +10,7 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -421,10 +422,73 @@ static void test_grid_mode_keeps_overlaps_at_round_off_with_equal_fast_speeds(vo
     assert_grid_overlaps_at_round_off(1.0, false, (int)nbep_test_scaled(80, 2));
 }
 
+/* The frame a signal's stop writes, failing (a full disk as SIGTERM comes at a job's time
+ * limit): the run reports the write's failure, whose line says what was lost, not the
+ * signal, whose status says the file holds the step it stopped at. A frame hook stands in for
+ * the file (its failure goes the same way as a write's: sim.c, emit_frame): step 1's frame
+ * raises the signal, which the predictive algorithm's step 2 (a few rounds, none of which
+ * looks at the signal) leaves to its end, and step 2's frame, the stop's, fails. */
+typedef struct signal_then_fail {
+    atomic_int *stop;
+    int sig;
+    size_t frames;
+} signal_then_fail;
+
+static nbep_status signal_then_fail_frame(void *ctx, int64_t step, const nbep_state *s,
+                                          nbep_diag *d)
+{
+    (void)s;
+    signal_then_fail *f = ctx;
+    f->frames++;
+    if (step == 1)
+        atomic_store_explicit(f->stop, f->sig, memory_order_relaxed);
+    if (step < 2)
+        return NBEP_OK;
+    NBEP_FAIL(d, NBEP_EIO, "test: no room for frame %lld", (long long)step);
+}
+
+static void test_a_frame_that_fails_at_a_signals_stop_reports_the_failure(void **state)
+{
+    (void)state;
+    const char *const modes[] = {"all", "grid", "cells"};
+    for (int m = 0; m < 3; m++)
+        for (int sig = 0; sig < 2; sig++) {
+            nbep_scene *sc = nbep_test_scene_new(2, 0, "predictive", 20, 0.01);
+            sc->neighbors_grid = m == 1;
+            sc->neighbors_cells = m == 2;
+            nbep_test_set_sphere(sc, 0, nbep_vec3_make(0.0, 0.0, 0.0),
+                                 nbep_vec3_make(1.0, 0.0, 0.0), 0.5, 1.0,
+                                 nbep_vec3_make(0.0, 0.0, 0.0));
+            nbep_test_set_sphere(sc, 1, nbep_vec3_make(3.0, 0.0, 0.0),
+                                 nbep_vec3_make(-1.0, 0.0, 0.0), 0.5, 1.0,
+                                 nbep_vec3_make(0.0, 0.0, 0.0));
+            sc->output_every = 1;
+            atomic_int stop;
+            atomic_init(&stop, 0);
+            signal_then_fail f = {.stop = &stop, .sig = sig ? 2 : 15}; /* SIGINT, SIGTERM */
+            nbep_diag d;
+            nbep_diag_init(&d);
+            nbep_sim_options opt = {.threads = 1, .stop_signal = &stop,
+                                    .on_frame = signal_then_fail_frame, .on_frame_ctx = &f};
+            nbep_sim *sim = NULL;
+            assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
+            const nbep_status st = nbep_sim_run(sim, &d);
+            if (st != NBEP_EIO || f.frames != 3 || d.n_errors != 1 ||
+                !strstr(d.msg[0], "no room for frame 2"))
+                fail_msg("%s, %s before a failing frame: status %d (I/O error: %d), %zu frames, "
+                         "%zu lines, %s", modes[m], sig ? "SIGINT" : "SIGTERM", (int)st,
+                         (int)NBEP_EIO, f.frames, d.n_errors, d.n_errors ? d.msg[0] : "");
+            nbep_sim_destroy(&sim);
+            nbep_diag_fini(&d);
+            nbep_test_scene_free(&sc);
+        }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_frames_come_at_zero_every_tenth_step_and_the_last),
+        cmocka_unit_test(test_a_frame_that_fails_at_a_signals_stop_reports_the_failure),
         cmocka_unit_test(test_energy_drift_is_recomputed_from_the_first_and_last_frames),
         cmocka_unit_test(test_quiet_steps_are_the_steps_where_no_velocity_changed),
         cmocka_unit_test(test_naive_checks_every_pair_and_every_sphere_plane_once_per_step),
