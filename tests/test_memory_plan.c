@@ -164,58 +164,55 @@ static void load(nbep_scene *sc, const char *algo, const char *neighbors, const 
     nbep_test_load_deck("memory-plan.deck", text, sc);
 }
 
-/* What the cells mode's lists and cells hold after create, where the estimate counts their
- * most (ESTIMATE_NEIGHBOURS a sphere listed, 2 n + 8 cells: test_cell_lists_... below). */
-static size_t cells_own_bytes(const nbep_sim *sim)
+/* In cells mode, what the lists and cells hold after create taken out of *made, and what the
+ * estimate counts for them at their most (ESTIMATE_NEIGHBOURS a sphere listed, 2 n + 8
+ * cells: test_cell_lists_... below) out of *planned; nothing in the other modes. */
+static void take_out_cells(const nbep_sim *sim, size_t *made, size_t *planned)
 {
+    if (!sim->scene->neighbors_cells)
+        return;
     const pred_ctx *c = sim->algo_ctx;
     const nbep_nblist *l = &c->ev->nl;
     const nbep_cells *g = &c->ev->cells;
     const size_t n = sim->st.n, m = n ? n : 1;
-    return n * sizeof *l->sp + l->pool_cap * sizeof *l->pool + g->n_cells * sizeof *g->head +
-           m * (sizeof *g->m + sizeof *g->prev);
+    *made -= n * sizeof *l->sp + l->pool_cap * sizeof *l->pool + g->n_cells * sizeof *g->head +
+             m * (sizeof *g->m + sizeof *g->prev);
+    *planned -= nbep_nblist_bytes(n, (size_t)(24.0 * (double)n)) + nbep_cells_bytes(n);
 }
 
-/* sc's run on nt threads: the bytes its algorithm's create leaves allocated, against the
- * algorithm's own estimate for sc and nt; in cells mode the lists' pool is each side's own. */
-static void check_plan(const nbep_scene *sc, int nt, const char *what)
+/* What a create is checked on: the algorithm's alone (on a run made first, its algorithm
+ * destroyed and made again), or the whole run's (nbep_sim_create, with a file opened first and
+ * not counted) */
+typedef enum { ALGORITHM, RUN } part;
+
+/* One create of `what` on sim (the run, which the algorithm's belongs to) or a new run of sc. */
+static nbep_status create(part what, const nbep_scene *sc, const nbep_sim_options *opt,
+                          nbep_sim *sim, nbep_sim **made, nbep_diag *d)
 {
-    nbep_diag d;
-    nbep_diag_init(&d);
-    nbep_sim_options opt = {.threads = nt};
-    nbep_sim *sim = NULL;
-    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
-    /* the algorithm made again, counted: the same create on the same run */
-    sim->algo->destroy(sim->algo_ctx);
-    sim->algo_ctx = NULL;
-    count_start();
-    const nbep_status st = sim->algo->create(sim, &sim->algo_ctx, &d);
-    size_t made = count_stop();
-    assert_int_equal(st, NBEP_OK);
-    size_t planned = sim->algo->bytes(sc, nt);
-    if (sc->neighbors_cells) {
-        made -= cells_own_bytes(sim);
-        planned -= nbep_nblist_bytes(sim->st.n, (size_t)(24.0 * (double)sim->st.n)) +
-                   nbep_cells_bytes(sim->st.n);
+    if (what == ALGORITHM) {
+        *made = sim;
+        return sim->algo->create(sim, &sim->algo_ctx, d);
     }
-    /* NBEP_TEST_BLOCKS=1: each block kept and its caller's address, for addr2line (run under
-     * setarch -R, and subtract the program's load address, to find the allocation missed) */
-    if (made != planned && getenv("NBEP_TEST_BLOCKS"))
-        for (size_t k = 0; k < n_blocks; k++)
-            fprintf(stderr, "  block %zu: %zu %p\n", k, blocks[k].bytes, blocks[k].at);
-    if (made != planned)
-        fail_msg("%s, %d thread%s: create allocates %zu bytes, the estimate counts %zu", what,
-                 nt, nt == 1 ? "" : "s", made, planned);
-    nbep_sim_destroy(&sim);
-    nbep_diag_fini(&d);
+    return nbep_sim_create(sc, opt, made, d);
 }
 
-/* The whole run: nbep_sim_create for sc on nt threads, writing to a file (opened first, not
- * counted), against nbep check's estimate (nbep_sim_memory_estimate) less the frame it
- * counts in HDF5's buffers, which the library allocates; in cells mode the lists and cells
- * taken out of both as above. With refuse_each, each of its allocations is refused in turn
- * instead: the create fails with NBEP_ENOMEM and one line, leaving nothing allocated. */
-static void check_run(const nbep_scene *sc, int nt, const char *what, bool refuse_each)
+/* Its undoing, but for the run an algorithm's create belongs to. */
+static void undo(part what, nbep_sim **made)
+{
+    if (what == ALGORITHM) {
+        (*made)->algo->destroy((*made)->algo_ctx);
+        (*made)->algo_ctx = NULL;
+    } else {
+        nbep_sim_destroy(made);
+    }
+}
+
+/* sc's run on nt threads: the bytes the create of `what` leaves allocated, against its
+ * estimate (the algorithm's bytes, or nbep check's: nbep_sim_memory_estimate less the frame
+ * it counts in HDF5's buffers, which the library allocates). With refuse_each, each of that
+ * create's allocations is refused in turn instead: every refusal fails it with NBEP_ENOMEM
+ * and one line, and leaves nothing of it allocated. */
+static void check(part what, const nbep_scene *sc, int nt, const char *name, bool refuse_each)
 {
     nbep_diag d;
     nbep_diag_init(&d);
@@ -226,32 +223,46 @@ static void check_run(const nbep_scene *sc, int nt, const char *what, bool refus
                      NBEP_OK);
     nbep_sim_options opt = {.threads = nt, .out = out};
     nbep_sim *sim = NULL;
-    count_start();
-    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
-    size_t made = count_stop();
-    const size_t calls = n_calls, n = sc->state.n;
-    size_t planned = nbep_sim_memory_estimate(sc, nt) - n * 2 * sizeof(nbep_vec3);
-    if (sc->neighbors_cells) {
-        made -= cells_own_bytes(sim);
-        planned -= nbep_nblist_bytes(n, (size_t)(24.0 * (double)n)) + nbep_cells_bytes(n);
+    if (what == ALGORITHM) { /* the run the algorithm's create is counted on */
+        assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
+        undo(ALGORITHM, &sim);
     }
-    if (!refuse_each && made != planned)
-        fail_msg("%s, %d thread%s: a run's create allocates %zu bytes, nbep check's estimate "
-                 "counts %zu", what, nt, nt == 1 ? "" : "s", made, planned);
+    nbep_sim *made = NULL;
+    count_start();
+    assert_int_equal(create(what, sc, &opt, sim, &made, &d), NBEP_OK);
+    size_t bytes = count_stop();
+    const size_t calls = n_calls, n = sc->state.n;
+    size_t planned = what == ALGORITHM
+                         ? made->algo->bytes(sc, nt)
+                         : nbep_sim_memory_estimate(sc, nt) - n * 2 * sizeof(nbep_vec3);
+    take_out_cells(made, &bytes, &planned);
+    const char *const whose = what == ALGORITHM ? "its algorithm's" : "a run's";
+    /* NBEP_TEST_BLOCKS=1: each block kept and its caller's address, for addr2line (run under
+     * setarch -R, and subtract the program's load address, to find the allocation missed) */
+    if (!refuse_each && bytes != planned && getenv("NBEP_TEST_BLOCKS"))
+        for (size_t k = 0; k < n_blocks; k++)
+            fprintf(stderr, "  block %zu: %zu %p\n", k, blocks[k].bytes, blocks[k].at);
+    if (!refuse_each && bytes != planned)
+        fail_msg("%s, %d thread%s: %s create allocates %zu bytes, its estimate counts %zu", name,
+                 nt, nt == 1 ? "" : "s", whose, bytes, planned);
+    sim = made; /* the run, destroyed at the end (an algorithm's with it) */
+    if (refuse_each && what == ALGORITHM) /* made again below, refused */
+        undo(ALGORITHM, &made);
     for (size_t k = 1; refuse_each && k <= calls; k++) {
         nbep_diag fd;
         nbep_diag_init(&fd);
         nbep_sim *again = NULL;
         fail_call = k;
         count_start();
-        const nbep_status st = nbep_sim_create(sc, &opt, &again, &fd);
+        const nbep_status st = create(what, sc, &opt, sim, &again, &fd);
         fail_call = 0;
         const size_t lines = fd.n_errors;
-        nbep_diag_fini(&fd);
+        nbep_diag_fini(&fd); /* its line's bytes, counted: freed */
         const size_t left = count_stop();
-        if (st != NBEP_ENOMEM || lines != 1 || left != 0 || again)
-            fail_msg("%s, %d thread%s: a run's allocation %zu of %zu refused: status %d, %zu "
-                     "line%s, %zu bytes left allocated", what, nt, nt == 1 ? "" : "s", k, calls,
+        const bool none = what == ALGORITHM ? !sim->algo_ctx : !again;
+        if (st != NBEP_ENOMEM || lines != 1 || left != 0 || !none)
+            fail_msg("%s, %d thread%s: %s allocation %zu of %zu refused: status %d, %zu line%s, "
+                     "%zu bytes left allocated", name, nt, nt == 1 ? "" : "s", whose, k, calls,
                      (int)st, lines, lines == 1 ? "" : "s", left);
     }
     nbep_summary sum;
@@ -276,8 +287,8 @@ static void plans_of(const char *algo, const char *neighbors, const char *run_ex
     snprintf(what, sizeof what, "%s%s%s %s%s, %s", algo, neighbors ? " " : "",
              neighbors ? neighbors : "", run_extra, periodic ? " periodic" : "", physics);
     for (int nt = 1; nt <= 3; nt++) {
-        check_plan(&sc, nt, what);
-        check_run(&sc, nt, what, false);
+        check(ALGORITHM, &sc, nt, what, false);
+        check(RUN, &sc, nt, what, false);
     }
     nbep_scene_fini(&sc);
 }
@@ -324,44 +335,6 @@ static void test_the_cells_mode_allocates_what_it_estimates_but_its_lists(void *
     plans_of("predictive", "cells", "", caged, false);
 }
 
-/* sc's run on nt threads, its algorithm made again with each of its create's allocations
- * refused in turn: every refusal fails the create with NBEP_ENOMEM and one line, leaves
- * nothing of it allocated, and the run's own destroy then holds. */
-static void check_refusals(const nbep_scene *sc, int nt, const char *what)
-{
-    nbep_diag d;
-    nbep_diag_init(&d);
-    nbep_sim_options opt = {.threads = nt};
-    nbep_sim *sim = NULL;
-    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
-    sim->algo->destroy(sim->algo_ctx);
-    sim->algo_ctx = NULL;
-    count_start();
-    assert_int_equal(sim->algo->create(sim, &sim->algo_ctx, &d), NBEP_OK);
-    (void)count_stop();
-    const size_t calls = n_calls;
-    sim->algo->destroy(sim->algo_ctx);
-    sim->algo_ctx = NULL;
-    assert_true(calls > 1);
-    for (size_t k = 1; k <= calls; k++) {
-        nbep_diag fd;
-        nbep_diag_init(&fd);
-        fail_call = k;
-        count_start();
-        const nbep_status st = sim->algo->create(sim, &sim->algo_ctx, &fd);
-        fail_call = 0;
-        const size_t lines = fd.n_errors;
-        nbep_diag_fini(&fd); /* its line's bytes, counted: freed */
-        const size_t left = count_stop();
-        if (st != NBEP_ENOMEM || lines != 1 || left != 0 || sim->algo_ctx)
-            fail_msg("%s, %d thread%s: allocation %zu of %zu refused: status %d, %zu line%s, "
-                     "%zu bytes left allocated", what, nt, nt == 1 ? "" : "s", k, calls,
-                     (int)st, lines, lines == 1 ? "" : "s", left);
-    }
-    nbep_sim_destroy(&sim);
-    nbep_diag_fini(&d);
-}
-
 static void refusals_of(const char *algo, const char *neighbors, const char *physics,
                         bool periodic, int nt)
 {
@@ -370,8 +343,8 @@ static void refusals_of(const char *algo, const char *neighbors, const char *phy
     char what[256];
     snprintf(what, sizeof what, "%s%s%s%s, %s", algo, neighbors ? " " : "",
              neighbors ? neighbors : "", periodic ? " periodic" : "", physics);
-    check_refusals(&sc, nt, what);
-    check_run(&sc, nt, what, true);
+    check(ALGORITHM, &sc, nt, what, true);
+    check(RUN, &sc, nt, what, true);
     nbep_scene_fini(&sc);
 }
 
