@@ -621,6 +621,20 @@ MUTANTS = [
     # up to 9 times the cap (a periodic cube of 7 tiny spheres: 36 cells, 22 the cap)
     ("cells-cap-halves-the-least", "src/cells.c", "if (count[k] > least[k] && count[k] > most) {",
      "if (count[k] > 1.0 && count[k] > most) {", ["test_memory_plan"], None),
+    # the BVH's self-check: a node's box containing what is below it, bound by bound
+    # (mutate-sample's seed 1 found the first && as || alive; test_bvh_check)
+    ("bvh-check-contains-any-bound", "src/bvh.c",
+     "return nd->lo.x <= lo.x && nd->lo.y <= lo.y", "return nd->lo.x <= lo.x || nd->lo.y <= lo.y",
+     ["test_bvh_check"], None),
+    ("bvh-check-contains-no-hi-z", "src/bvh.c",
+     "hi.y <= nd->hi.y && hi.z <= nd->hi.z;", "hi.y <= nd->hi.y;", ["test_bvh_check"], None),
+    # the detecting algorithms' overlap: sigma + distance (mutate-sample's seed 3 found it
+    # alive: only test_detect_stop looked at it, as positive; test_run_contract)
+    ("detect-overlap-sum", "src/algo_detect.c", "double ov = sigma - sqrt(d2);",
+     "double ov = sigma + sqrt(d2);", ["test_run_contract"], None),
+    ("detect-overlap-rel-larger-radius", "src/algo_detect.c",
+     "ov / fmin(s->radius[i], s->radius[j])", "ov / fmax(s->radius[i], s->radius[j])",
+     ["test_run_contract"], None),
     # ---- memory estimates: each create against its plan (tests/test_memory_plan.c) ----
     # the rounds' claim arrays subtracted (mutate-sample's seed 2 found it untested)
     ("pred-bytes-claim-subtracted", "src/algo_predictive.c",

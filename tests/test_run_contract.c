@@ -422,6 +422,39 @@ static void test_grid_mode_keeps_overlaps_at_round_off_with_equal_fast_speeds(vo
     assert_grid_overlaps_at_round_off(1.0, false, (int)nbep_test_scaled(80, 2));
 }
 
+/* The overlap the detecting algorithms find is the one there is: spheres of radii 0.5 and
+ * 0.3 closing head-on at 2, from 1.3 apart, are 0.7 apart after a step of 0.3, overlapping
+ * by 0.1 (relative to the smaller radius: 1/3) when naive and seminaive find them; in a
+ * periodic box, by the minimum image, the pair across a face. The summary's max_overlap (SPEC) and its
+ * relative form hold that to round-off (1e-12: the positions' few roundings at size 1). */
+static void test_naive_and_seminaive_report_the_overlap_they_find(void **state)
+{
+    (void)state;
+    const char *const algos[] = {"naive", "seminaive"};
+    for (int a = 0; a < 2; a++)
+        for (int periodic = 0; periodic < 2; periodic++) {
+            nbep_scene *sc = nbep_test_scene_new(2, 0, algos[a], 2, 0.3);
+            /* periodic: side 10, the pair 1.3 apart across the x faces (at 9.35 and 0.65) */
+            const double x0 = periodic ? 9.35 : 0.0, x1 = periodic ? 0.65 : 1.3;
+            nbep_test_set_sphere(sc, 0, nbep_vec3_make(x0, 5.0, 5.0),
+                                 nbep_vec3_make(1.0, 0.0, 0.0), 0.5, 1.0,
+                                 nbep_vec3_make(0.0, 0.0, 0.0));
+            nbep_test_set_sphere(sc, 1, nbep_vec3_make(x1, 5.0, 5.0),
+                                 nbep_vec3_make(-1.0, 0.0, 0.0), 0.3, 1.0,
+                                 nbep_vec3_make(0.0, 0.0, 0.0));
+            if (periodic)
+                nbep_test_set_periodic_box(sc, 10.0);
+            const nbep_summary sum = nbep_test_run(sc, 1, NULL, NULL, NULL, NULL);
+            if (sum.sphere_collisions != 1 || fabs(sum.max_overlap - 0.1) > 1e-12 ||
+                fabs(sum.max_overlap_rel - 1.0 / 3.0) > 1e-12)
+                fail_msg("%s%s: %llu collisions, max_overlap %.17g (want 0.1), relative %.17g "
+                         "(want 1/3)", algos[a], periodic ? ", periodic" : "",
+                         (unsigned long long)sum.sphere_collisions, sum.max_overlap,
+                         sum.max_overlap_rel);
+            nbep_test_scene_free(&sc);
+        }
+}
+
 /* The frame a signal's stop writes, failing (a full disk as SIGTERM comes at a job's time
  * limit): the run reports the write's failure, whose line says what was lost, not the
  * signal, whose status says the file holds the step it stopped at. A frame hook stands in for
@@ -489,6 +522,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_frames_come_at_zero_every_tenth_step_and_the_last),
         cmocka_unit_test(test_a_frame_that_fails_at_a_signals_stop_reports_the_failure),
+        cmocka_unit_test(test_naive_and_seminaive_report_the_overlap_they_find),
         cmocka_unit_test(test_energy_drift_is_recomputed_from_the_first_and_last_frames),
         cmocka_unit_test(test_quiet_steps_are_the_steps_where_no_velocity_changed),
         cmocka_unit_test(test_naive_checks_every_pair_and_every_sphere_plane_once_per_step),
