@@ -635,6 +635,10 @@ MUTANTS = [
     ("detect-overlap-rel-larger-radius", "src/algo_detect.c",
      "ov / fmin(s->radius[i], s->radius[j])", "ov / fmax(s->radius[i], s->radius[j])",
      ["test_run_contract"], None),
+    # a destroy that frees nothing: valgrind's to find, and test_memory_plan's, which counts
+    # what each create made and its destroy freed (mutate-sample's seed 3)
+    ("grid-fini-frees-nothing", "src/grid.c", "    if (!g)\n        return;\n    nbep_free_aligned(g->start);",
+     "    if (g)\n        return;\n    nbep_free_aligned(g->start);", ["test_memory_plan"], None),
     # ---- memory estimates: each create against its plan (tests/test_memory_plan.c) ----
     # the rounds' claim arrays subtracted (mutate-sample's seed 2 found it untested)
     ("pred-bytes-claim-subtracted", "src/algo_predictive.c",
