@@ -639,6 +639,18 @@ MUTANTS = [
     # what each create made and its destroy freed (mutate-sample's seed 3)
     ("grid-fini-frees-nothing", "src/grid.c", "    if (!g)\n        return;\n    nbep_free_aligned(g->start);",
      "    if (g)\n        return;\n    nbep_free_aligned(g->start);", ["test_memory_plan"], None),
+    # the calendar's self-check, invariant by invariant (mutate-sample's seed 3 found two of
+    # its || as && alive; test_calendar_check breaks each alone)
+    ("calendar-check-heap-both", "src/calendar.c",
+     "if (item >= c->n || c->node[item].where != WHERE_HEAP || c->node[item].loc != k)",
+     "if (item >= c->n || (c->node[item].where != WHERE_HEAP && c->node[item].loc != k))",
+     ["test_calendar_check"], None),
+    ("calendar-check-ring-both", "src/calendar.c",
+     "x->loc != s || x->prev != prev || ab <= c->cur ||", "x->loc != s || x->prev != prev && ab <= c->cur ||",
+     ["test_calendar_check"], None),
+    ("calendar-check-overflow-both", "src/calendar.c",
+     "if (x->where != WHERE_OVERFLOW || x->prev != prev ||", "if (x->where != WHERE_OVERFLOW && x->prev != prev ||",
+     ["test_calendar_check"], None),
     # ---- memory estimates: each create against its plan (tests/test_memory_plan.c) ----
     # the rounds' claim arrays subtracted (mutate-sample's seed 2 found it untested)
     ("pred-bytes-claim-subtracted", "src/algo_predictive.c",
