@@ -9,10 +9,13 @@ files named) outside comments, strings, preprocessor lines and assertions: a com
 (< <=, > >=, == !=), an arithmetic operator (+ -, * /), a logical one (&& ||), a negation
 dropped (!x to x), or a floating literal other than 0 doubled. Each is built in a scratch copy of the tree
 (make MPI=0 bin/nbep check-programs) and run against every C unit test program, the fastest
-first, each under a time limit (a hang is a kill), up to the first that fails.
+first, each under a time limit (a hang is a kill: one that passes the limit runs once more
+under ten times it, so that a machine busy elsewhere does not pass for a hang), up to the
+first that fails.
 
 Usage: python3 scripts/mutate-sample.py [-n N] [--seed S] [--files src/a.c,...] [--timeout S]
-       [--list] [--selftest]
+       [--lines src/a.c:L,...] [--list] [--selftest]
+(--lines: every site on those lines, no draw: a survivor or a doubtful kill run again.)
 Prints one row per mutant (file:line, the change, the verdict and the test that killed it)
 and ends with "sample: K killed, S survived, B did not build of N". A survivor is either a
 gap in the tests or an equivalent mutant (no observable change): each is for a person to
@@ -142,6 +145,9 @@ def main():
                     help="a test's limit as a multiple of its time on the unmutated tree, "
                          "at least 20 s (default 4)")
     ap.add_argument("--jobs", type=int, default=2, help="make -j per build (default 2)")
+    ap.add_argument("--lines", default="",
+                    help="comma-separated FILE:LINE: every site on those lines instead of a "
+                         "draw (to run a draw's survivors or doubtful kills again)")
     ap.add_argument("--list", action="store_true", help="print the draw and exit")
     ap.add_argument("--selftest", action="store_true",
                     help="check the site finder on a fixed snippet (make check) and exit")
@@ -160,17 +166,28 @@ def main():
     for f in files:
         texts[f], found = sites(f)
         pool += [(f,) + s for s in found]
-    rng = random.Random(a.seed)
-    draw = rng.sample(pool, min(a.n, len(pool)))
-
     def describe(m):
         f, off, ln, repl = m
         text = texts[f]
         line = text.count("\n", 0, off) + 1
         return f"{f}:{line}", f"'{text[off:off + ln]}' -> '{repl}'"
 
-    print(f"mutate-sample: {len(pool)} sites in {len(files)} files, seed {a.seed}, "
-          f"{len(draw)} drawn", flush=True)
+    if a.lines:
+        want = [w for w in a.lines.split(",") if w]
+        draw = [m for m in pool if describe(m)[0] in want]
+        found = {describe(m)[0] for m in draw}
+        for w in want:
+            if w not in found:
+                print(f"mutate-sample: no site at {w} (a core source's line, --files)",
+                      file=sys.stderr)
+                return 2
+        print(f"mutate-sample: {len(pool)} sites in {len(files)} files, "
+              f"{len(draw)} on {len(want)} lines", flush=True)
+    else:
+        rng = random.Random(a.seed)
+        draw = rng.sample(pool, min(a.n, len(pool)))
+        print(f"mutate-sample: {len(pool)} sites in {len(files)} files, seed {a.seed}, "
+              f"{len(draw)} drawn", flush=True)
     if a.list:
         for m in draw:
             print("  %s  %s" % describe(m))
@@ -212,6 +229,12 @@ def main():
                     lim = max(20.0, a.timeout * base[t])
                     r = run(["timeout", "-k", "5", f"{lim:.0f}",
                              os.path.join("build", "tests", t)], scratch)
+                    if r in (124, 137):
+                        # a hang, or a machine busy with something else (spinning barriers
+                        # on more threads than free cores slow down many times over): once
+                        # more, under ten times the limit, before it counts as a hang
+                        r = run(["timeout", "-k", "5", f"{10 * lim:.0f}",
+                                 os.path.join("build", "tests", t)], scratch)
                     if r != 0:
                         verdict = "killed"
                         why = t + (" (hung)" if r in (124, 137) else f" (exit {r})")
