@@ -554,7 +554,8 @@ size_t nbep_calendar_check(const nbep_calendar *c)
         uint32_t item = c->heap[k];
         if (item >= c->n || c->node[item].where != WHERE_HEAP || c->node[item].loc != k)
             bad++;
-        else if (k > 0 && before(c, item, c->heap[(k - 1) / 2]))
+        else if (k > 0 && c->heap[(k - 1) / 2] < c->n && /* a bad parent: counted at its slot */
+                 before(c, item, c->heap[(k - 1) / 2]))
             bad++;
         else if (!c->parked && bucket_of(c, c->node[item].time) > c->cur)
             bad++; /* a later bucket's entry in the heap (parked: only the last bucket's) */
