@@ -651,6 +651,10 @@ MUTANTS = [
     ("calendar-check-overflow-both", "src/calendar.c",
      "if (x->where != WHERE_OVERFLOW || x->prev != prev ||", "if (x->where != WHERE_OVERFLOW && x->prev != prev ||",
      ["test_calendar_check"], None),
+    # the jam lock's tolerance at a first sphere without acceleration: 0/0, NaN, takes in no
+    # sphere past the pair (mutate-sample's seed 1; test_pred_settle sets the case up)
+    ("jam-lock-tol-no-acceleration", "src/pred_react.c", ".tol = amag > 0.0 ? vs * vs / amag : 0.0,",
+     ".tol = amag >= 0.0 ? vs * vs / amag : 0.0,", ["test_pred_settle"], None),
     # ---- memory estimates: each create against its plan (tests/test_memory_plan.c) ----
     # the rounds' claim arrays subtracted (mutate-sample's seed 2 found it untested)
     ("pred-bytes-claim-subtracted", "src/algo_predictive.c",

@@ -248,6 +248,41 @@ static void test_plane_zero_stays_a_support_in_a_later_round(void **state)
     fix_free(&f);
 }
 
+/* A jammed body whose walk starts at a sphere without acceleration of its own (in a scene
+ * where the others fall): its settle speed is 0, so its touching tolerance is 0 (jam_lock:
+ * "touching to 0, not 0/0"), and a sphere in the jam that touches it exactly joins the body
+ * and moves on with it; at 0/0, NaN, no sphere past the pair would. Three spheres of radius
+ * 0.5 in a row, 1 apart (touching to the last bit), in mid-air; all three in the jam. */
+static void test_a_jam_from_a_sphere_without_acceleration_takes_in_one_touching_it(void **state)
+{
+    (void)state;
+    fix f;
+    fix_scene(&f, 3);
+    put(&f, 0, (nbep_vec3){0.0, 0.0, 5.0}, 0.5);
+    put(&f, 1, (nbep_vec3){1.0, 0.0, 5.0}, 0.5);
+    put(&f, 2, (nbep_vec3){-1.0, 0.0, 5.0}, 0.5);
+    f.sc->state.acc[0] = ZERO3;
+    f.sc->state.vel[0] = (nbep_vec3){1.0, 0.0, 0.0};
+    f.sc->state.vel[1] = (nbep_vec3){-1.0, 0.0, 0.0};
+    f.sc->state.vel[2] = (nbep_vec3){0.5, 0.0, 0.0};
+    fix_create(&f);
+    pred_ctx *c = f.c;
+    thread_ws *w = &c->ws[0];
+    for (size_t k = 0; k < 3; k++) /* jammed: the reactions that make a jam, this step */
+        c->jam[k] = (jam_count){.step = w->jam_step, .n = NBEP_JAM_HOLD};
+    w->lock[0] = (uint64_t)0 << 32 | 1u; /* the pair 0, 1 met (lo 0: no acceleration) */
+    w->n_lock = 1;
+    nbep_state *s = &f.sim->st;
+    nbep__pred_lock_phase(c, s, 1, DT, 0.0, w);
+    /* one body of the three: the mean velocity by mass, sphere 2's too */
+    const double v = (1.0 - 1.0 + 0.5) / 3.0;
+    for (size_t k = 0; k < 3; k++)
+        if (!(fabs(s->vel[k].x - v) <= 1e-15 && s->vel[k].y == 0.0))
+            fail_msg("sphere %zu after the lock: velocity (%.17g, %.17g, %.17g), the body's "
+                     "x %.17g", k, s->vel[k].x, s->vel[k].y, s->vel[k].z, v);
+    fix_free(&f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -255,6 +290,7 @@ int main(void)
         cmocka_unit_test(test_a_held_sphere_is_no_candidate_and_keeps_its_hold),
         cmocka_unit_test(test_of_more_supports_than_a_record_holds_the_most_nearly_below_are_kept),
         cmocka_unit_test(test_plane_zero_stays_a_support_in_a_later_round),
+        cmocka_unit_test(test_a_jam_from_a_sphere_without_acceleration_takes_in_one_touching_it),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
