@@ -615,7 +615,7 @@ MUTANTS = [
     ("cells-side-below-reach", "src/cells.c", "reach > 0.0 && isfinite(reach) ? reach :",
      "reach > 0.0 && isfinite(reach) ? 0.99 * reach :", ["test_cells"] + CELLS, None),
     # two cells along a periodic axis: the one neighbour is both below and above
-    ("cells-periodic-two-cells", "src/cells.c", "least[k] = g->periodic[k] ? 3.0 : 1.0;",
+    ("cells-periodic-two-cells", "src/cells.c", "least[k] = g->periodic[k] ? NBEP_CELLS_PERIODIC_MIN : 1.0;",
      "least[k] = g->periodic[k] ? 2.0 : 1.0;", ["test_cells"] + CELLS, None),
     # the cap's loop halves a periodic axis below its three: forced back after, the cells are
     # up to 9 times the cap (a periodic cube of 7 tiny spheres: 36 cells, 22 the cap)
@@ -665,9 +665,9 @@ MUTANTS = [
      ["test_memory_plan"], None),
     ("evloop-bytes-no-team-ws", "src/evloop.c",
      " + (size_t)team * NBEP_EVLOOP_RING * ws_bytes();", ";", ["test_memory_plan"], None),
-    ("cells-bytes-cap-short", "src/cells.c", "2 * n + 8 > 27 ? 2 * n + 8 : 27",
-     "2 * n + 8 > 27 ? 2 * n - 9 : 27", ["test_memory_plan"], None),
-    ("cells-bytes-periodic-floor-missed", "src/cells.c", "2 * n + 8 > 27 ? 2 * n + 8 : 27",
+    ("cells-bytes-cap-short", "src/cells.c", "2 * n + 8 > least ? 2 * n + 8 : least",
+     "2 * n + 8 > least ? 2 * n - 9 : least", ["test_memory_plan"], None),
+    ("cells-bytes-periodic-floor-missed", "src/cells.c", "2 * n + 8 > least ? 2 * n + 8 : least",
      "2 * n + 8", ["test_memory_plan"], None),
     ("sim-bytes-no-checkpoint-rest", "src/sim.c",
      "sizeof *sim->ev_kind +\n                      sizeof *sim->ev_rest);", "sizeof *sim->ev_kind);",

@@ -122,13 +122,6 @@ static int team_forced(void)
     return nbep__pred_ways_forced(getenv("NBEP_TEAM"));
 }
 
-/* The neighbours per sphere that nbep check counts in cells mode's lists (with their rooms
- * and the pool's growth, nbep_nblist_bytes): more than a dense scene lists (a fluid at phi
- * 0.30 to 0.50: 10 to 11, nblist.h; a settled pile at phi 0.6 about 14 by the same scaling),
- * so a dilute scene's estimate is high (a pour's start lists about one: README, nbep check);
- * spheres of mixed sizes may list more, as the cutoff is the largest diameter's. */
-#define ESTIMATE_NEIGHBOURS 24.0
-
 /* What pred_create makes for a run of a scene on nt threads: the models the scene needs
  * (each keeps arrays of its own per sphere), each mode's workspaces and each thread's share.
  * pred_create allocates by it and pred_bytes (nbep check's memory estimate) counts by it, so

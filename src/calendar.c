@@ -551,11 +551,10 @@ size_t nbep_calendar_check(const nbep_calendar *c)
 {
     size_t bad = 0, held = 0, in_heap = 0, in_ring = 0;
     for (size_t k = 0; k < c->heap_len; k++) {
-        uint32_t item = c->heap[k];
+        const uint32_t item = c->heap[k], parent = k > 0 ? c->heap[(k - 1) / 2] : NIL;
         if (item >= c->n || c->node[item].where != WHERE_HEAP || c->node[item].loc != k)
             bad++;
-        else if (k > 0 && c->heap[(k - 1) / 2] < c->n && /* a bad parent: counted at its slot */
-                 before(c, item, c->heap[(k - 1) / 2]))
+        else if (parent < c->n && before(c, item, parent)) /* (a bad parent: at its slot) */
             bad++;
         else if (!c->parked && bucket_of(c, c->node[item].time) > c->cur)
             bad++; /* a later bucket's entry in the heap (parked: only the last bucket's) */

@@ -7,9 +7,10 @@
 
 size_t nbep_cells_bytes(size_t n)
 {
-    /* lay_out's cells: at most 2 n + 8, or 27 where a periodic axis takes 3 (nbep_cells_init:
-     * the heads, a member and a link per sphere, one at least) */
-    const size_t cells = 2 * n + 8 > 27 ? 2 * n + 8 : 27, m = n ? n : 1;
+    /* lay_out's cells: at most 2 n + 8, or a periodic box's least, 3^3 (nbep_cells_init: the
+     * heads, a member and a link per sphere, one at least) */
+    const size_t p = NBEP_CELLS_PERIODIC_MIN, least = p * p * p;
+    const size_t cells = 2 * n + 8 > least ? 2 * n + 8 : least, m = n ? n : 1;
     return cells * sizeof(uint32_t) + m * (sizeof(nbep_cells_member) + sizeof(uint32_t));
 }
 
@@ -24,16 +25,15 @@ static void lay_out(nbep_cells *g, nbep_vec3 lo, nbep_vec3 hi, double reach)
     const double base =
         reach > 0.0 && isfinite(reach) ? reach : fmax(ext[0], fmax(ext[1], ext[2])) + 1.0;
     double side[3] = {base, base, base};
-    /* a periodic axis: three cells at least, so that a neighbour is one image only */
     double least[3];
     for (int k = 0; k < 3; k++)
-        least[k] = g->periodic[k] ? 3.0 : 1.0;
+        least[k] = g->periodic[k] ? NBEP_CELLS_PERIODIC_MIN : 1.0;
     /* too many cells: the side of the axis with the most doubles until they fit (at least
-     * halving the count each pass), or until no axis can take fewer (27 at most: the cap is
-     * then at most 2 n + 8 or 27, nbep_cells_bytes). Axis by axis, not all at once: a region
-     * stretched along one axis (a scene without a box, one sphere flown far off) keeps cells
-     * of the reach across the others, so the rest of its spheres do not all share a few
-     * coarse cells. */
+     * halving the count each pass), or until no axis can take fewer (a periodic box's least:
+     * the cells are then at most 2 n + 8 or that, nbep_cells_bytes). Axis by axis, not all at
+     * once: a region stretched along one axis (a scene without a box, one sphere flown far
+     * off) keeps cells of the reach across the others, so the rest of its spheres do not all
+     * share a few coarse cells. */
     double count[3];
     for (;;) {
         double cells = 1.0, most = 0.0;

@@ -153,6 +153,13 @@ typedef struct face_met {
  * at a time each leave it a velocity of round-off size heading into the third (measured: a
  * million zero-time reactions in one step of a 300-sphere pour, seed 3, step 618). */
 #define CAGE_FACES (NBEP_CONTACT_MAX - 1)
+
+/* The neighbours per sphere that nbep check counts in cells mode's lists (with their rooms
+ * and the pool's growth, nbep_nblist_bytes): more than a dense scene lists (a fluid at phi
+ * 0.30 to 0.50: 10 to 11, nblist.h; a settled pile at phi 0.6 about 14 by the same scaling),
+ * so a dilute scene's estimate is high (a pour's start lists about one: README, nbep check);
+ * spheres of mixed sizes may list more, as the cutoff is the largest diameter's. */
+#define ESTIMATE_NEIGHBOURS 24.0
 _Static_assert(CAGE_FACES == NBEP_CONTACT_FACES, "the file keeps every face remembered");
 
 /* A sphere's reactions in the step `step` (low bits; zeroed memory: none, steps start at 1). */

@@ -9,9 +9,11 @@
  * exactly (blocks it frees again, and those of the shared libraries: GSL's root workspaces,
  * HDF5's, which the estimate leaves out, are not counted).
  *
- * Exact for every algorithm and mode but the cells mode's neighbour lists, which the estimate
- * sizes at ESTIMATE_NEIGHBOURS a sphere where a run sizes them to what it finds: there the
- * test takes the lists' own bytes (nbep_nblist_bytes of the pool the run made) out of both. */
+ * Exact for every algorithm and mode but the cells mode's neighbour lists and cells, which the
+ * estimate counts at their most (ESTIMATE_NEIGHBOURS a sphere listed, nbep_cells_bytes) where a
+ * run sizes them to what it finds: there the test takes each side's own out of it. Each
+ * destroy must free all its create made, and each allocation of a create, refused in turn,
+ * must fail it whole. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -150,8 +152,8 @@ static size_t count_stop(void)
 
 /* ---- scenes ---------------------------------------------------------------------------------- */
 
-/* 64 spheres of radius 0.05 placed at random in the unit box (80 for the rounds' shares to
- * split unevenly over 3 threads: NBEP_BLOCK-sized blocks), with `physics` and `run`'s extra
+/* 80 spheres of radius 0.05 placed at random in the unit box (so that the rounds' shares split
+ * unevenly over 3 threads: NBEP_BLOCK-sized blocks), with `physics` and `run`'s extra
  * settings; periodic when `periodic`. */
 static void load(nbep_scene *sc, const char *algo, const char *neighbors, const char *run_extra,
                  const char *physics, bool periodic)
@@ -170,6 +172,12 @@ static void load(nbep_scene *sc, const char *algo, const char *neighbors, const 
     nbep_test_load_deck("memory-plan.deck", text, sc);
 }
 
+/* What cells g's layout takes: its heads, and a member and a link a sphere (one at least). */
+static size_t layout_bytes(const nbep_cells *g)
+{
+    return g->n_cells * sizeof *g->head + (g->n ? g->n : 1) * (sizeof *g->m + sizeof *g->prev);
+}
+
 /* In cells mode, what the lists and cells hold after create taken out of *made, and what the
  * estimate counts for them at their most (ESTIMATE_NEIGHBOURS a sphere listed, 2 n + 8
  * cells: test_cell_lists_... below) out of *planned; nothing in the other modes. */
@@ -179,11 +187,10 @@ static void take_out_cells(const nbep_sim *sim, size_t *made, size_t *planned)
         return;
     const pred_ctx *c = sim->algo_ctx;
     const nbep_nblist *l = &c->ev->nl;
-    const nbep_cells *g = &c->ev->cells;
-    const size_t n = sim->st.n, m = n ? n : 1;
-    *made -= n * sizeof *l->sp + l->pool_cap * sizeof *l->pool + g->n_cells * sizeof *g->head +
-             m * (sizeof *g->m + sizeof *g->prev);
-    *planned -= nbep_nblist_bytes(n, (size_t)(24.0 * (double)n)) + nbep_cells_bytes(n);
+    const size_t n = sim->st.n;
+    *made -= n * sizeof *l->sp + l->pool_cap * sizeof *l->pool + layout_bytes(&c->ev->cells);
+    *planned -= nbep_nblist_bytes(n, (size_t)(ESTIMATE_NEIGHBOURS * (double)n)) +
+                nbep_cells_bytes(n);
 }
 
 /* What a create is checked on: the algorithm's alone (on a run made first, its algorithm
@@ -288,19 +295,29 @@ static const char *const pile = "gravity = [0.0, 0.0, -9.81]; restitution = 0.5;
 static const char *const caged = "gravity = [0.0, 0.0, -9.81]; restitution = 0.5; tc = 1.0e-4;";
 static const char *const cooling = "restitution = 0.8; tc = 1.0e-4;";
 
-static void plans_of(const char *algo, const char *neighbors, const char *run_extra,
-                     const char *physics, bool periodic)
+/* The checks of the scene load() makes, on nt_first to nt_last threads: each create's bytes and
+ * destroy, and with refuse_each its refusals too. */
+static void checks_of(const char *algo, const char *neighbors, const char *run_extra,
+                      const char *physics, bool periodic, int nt_first, int nt_last,
+                      bool refuse_each)
 {
     nbep_scene sc;
     load(&sc, algo, neighbors, run_extra, physics, periodic);
     char what[256];
     snprintf(what, sizeof what, "%s%s%s %s%s, %s", algo, neighbors ? " " : "",
              neighbors ? neighbors : "", run_extra, periodic ? " periodic" : "", physics);
-    for (int nt = 1; nt <= 3; nt++) {
-        check(ALGORITHM, &sc, nt, what, false);
-        check(RUN, &sc, nt, what, false);
+    for (int nt = nt_first; nt <= nt_last; nt++) {
+        check(ALGORITHM, &sc, nt, what, refuse_each);
+        check(RUN, &sc, nt, what, refuse_each);
     }
     nbep_scene_fini(&sc);
+}
+
+/* On 1 to 3 threads, without refusals. */
+static void plans_of(const char *algo, const char *neighbors, const char *run_extra,
+                     const char *physics, bool periodic)
+{
+    checks_of(algo, neighbors, run_extra, physics, periodic, 1, 3, false);
 }
 
 /* ---- tests ----------------------------------------------------------------------------------- */
@@ -345,17 +362,11 @@ static void test_the_cells_mode_allocates_what_it_estimates_but_its_lists(void *
     plans_of("predictive", "cells", "", caged, false);
 }
 
+/* On nt threads, each allocation refused in turn. */
 static void refusals_of(const char *algo, const char *neighbors, const char *physics,
                         bool periodic, int nt)
 {
-    nbep_scene sc;
-    load(&sc, algo, neighbors, "", physics, periodic);
-    char what[256];
-    snprintf(what, sizeof what, "%s%s%s%s, %s", algo, neighbors ? " " : "",
-             neighbors ? neighbors : "", periodic ? " periodic" : "", physics);
-    check(ALGORITHM, &sc, nt, what, true);
-    check(RUN, &sc, nt, what, true);
-    nbep_scene_fini(&sc);
+    checks_of(algo, neighbors, "", physics, periodic, nt, nt, true);
 }
 
 /* memory running out at any allocation of any algorithm's create: every mode and its models
@@ -386,8 +397,7 @@ static size_t cells_made(size_t n, nbep_vec3 side, double reach, bool periodic, 
                      NBEP_OK);
     const size_t made = count_stop();
     *n_cells = g.n_cells;
-    const size_t m = n ? n : 1;
-    assert_int_equal(made, g.n_cells * sizeof *g.head + m * (sizeof *g.m + sizeof *g.prev));
+    assert_int_equal(made, layout_bytes(&g));
     if (made > nbep_cells_bytes(n))
         fail_msg("%zu spheres in %g x %g x %g, reach %g%s: %zu cells take %zu bytes, the "
                  "estimate %zu", n, side.x, side.y, side.z, reach, periodic ? ", periodic" : "",

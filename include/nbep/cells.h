@@ -124,6 +124,9 @@ static inline size_t nbep_cells_index(const nbep_cells *g, size_t x, size_t y, s
  * violations. */
 size_t nbep_cells_check(const nbep_cells *g);
 
+/* The fewest cells along a periodic axis, so that a neighbour is one image only. */
+#define NBEP_CELLS_PERIODIC_MIN 3
+
 /* Bytes nbep_cells_init takes at most for n spheres. */
 size_t nbep_cells_bytes(size_t n);
 
