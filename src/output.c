@@ -26,7 +26,6 @@
  *   PATH.lock (nbep__output_lock).
  *
  * Errors: see output_hdf5.c. */
-#define _XOPEN_SOURCE 700 /* realpath() */
 #include "nbep/output.h"
 
 #include "nbep/output_xdmf.h"
@@ -732,10 +731,7 @@ nbep_status nbep__output_lock(nbep_output *o, bool resume, nbep_diag *d)
      * out.h5), the lock is that file's (out.h5.lock), which its own writer holds. A new file
      * replaces a link at its path, and the lock is the path's. (A link to the folder leads to
      * the same lock file: nothing to resolve.) */
-    char *target = NULL;
-    struct stat sb;
-    if (resume && lstat(o->path, &sb) == 0 && S_ISLNK(sb.st_mode))
-        target = realpath(o->path, NULL);
+    char *target = resume ? nbep_link_target(o->path) : NULL;
     o->lock_path = nbep_lock_path(target ? target : o->path);
     free(target);
     if (!o->lock_path)

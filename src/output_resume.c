@@ -1,7 +1,6 @@
 /* `nbep run DECK --resume RUN.h5` (output.h): reopens a run for appending after its last
  * complete frame, checking that deck and file agree, and reads that frame (and its event
  * slots) back; the writer (output.c) then goes on as after nbep_output_create. */
-#define _XOPEN_SOURCE 700 /* realpath() */
 #include <assert.h>
 #include <errno.h>
 #include <inttypes.h>
@@ -590,8 +589,7 @@ static hsize_t resume_frames(const nbep_scene *sc, const int64_t *steps, hsize_t
  * at the end said exit 1). */
 static nbep_status resume_folder_takes_files(const char *path, nbep_diag *d)
 {
-    struct stat sb;
-    char *target = lstat(path, &sb) == 0 && S_ISLNK(sb.st_mode) ? realpath(path, NULL) : NULL;
+    char *target = nbep_link_target(path);
     const char *named[2] = {path, target};
     for (int k = 0; k < 2 && named[k]; k++) {
         char *dir = nbep_path_dir(named[k]);

@@ -207,6 +207,12 @@ char *nbep_path_dir(const char *path)
     return slash ? strndup(path, slash == path ? 1 : (size_t)(slash - path)) : strdup(".");
 }
 
+char *nbep_link_target(const char *path)
+{
+    struct stat sb;
+    return lstat(path, &sb) == 0 && S_ISLNK(sb.st_mode) ? realpath(path, NULL) : NULL;
+}
+
 int nbep_dir_takes_files(const char *dir)
 {
     if (access(dir, W_OK | X_OK) != 0)

@@ -118,6 +118,10 @@ bool nbep_lock_names(int fd, const char *path);
 /* The directory part of path, malloc'd: "." for a bare name, "/" for a name in the root
  * ("a/b/c.h5": "a/b"); NULL without memory. */
 char *nbep_path_dir(const char *path);
+/* The file a symbolic link at path leads to (realpath, malloc'd), for the files a run keeps
+ * beside the one it writes (a resume's lock and sidecar are the target's); NULL where path is
+ * no link, the link leads nowhere, or without memory: the caller then uses path itself. */
+char *nbep_link_target(const char *path);
 
 /* 0 when a new file can be made in the folder dir, else the errno that making one fails with
  * (EACCES, EROFS, ENOENT...), for the checks that say before a run or a sweep begins whether
