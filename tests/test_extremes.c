@@ -277,12 +277,17 @@ static void assert_overlap_within(const outcome *o, double rel_tol)
 
 /* Sphere 0 (r 0.3125) flies along x at u; sphere 1 (r 0.4375) rests at (D, b): the impact
  * parameter b is within 1e-12 of sigma = 0.75 (exact in binary). */
-static nbep_scene *grazing(fixture *f, const char *algo, double b)
+static nbep_scene *grazing_at(fixture *f, const char *algo, double x1, double b)
 {
     nbep_scene *sc = scene_new(f, 2, 0, algo, 100, 0.01);
     nbep_test_set_sphere(sc, 0, ZERO, (nbep_vec3){1.9, 0.0, 0.0}, 0.3125, 1.3, ZERO);
-    nbep_test_set_sphere(sc, 1, (nbep_vec3){1.1, b, 0.0}, ZERO, 0.4375, 0.9, ZERO);
+    nbep_test_set_sphere(sc, 1, (nbep_vec3){x1, b, 0.0}, ZERO, 0.4375, 0.9, ZERO);
     return sc;
+}
+
+static nbep_scene *grazing(fixture *f, const char *algo, double b)
+{
+    return grazing_at(f, algo, 1.1, b);
 }
 
 /* The deflection's direction is nx = sqrt(sigma^2 - b^2)/sigma ~ 1.4e-6, whose condition
@@ -318,22 +323,35 @@ static void test_predictive_grazing_hit_within_1e_12_deflects_by_the_analytic_ti
     assert_overlap_within(o, PREDICTIVE_OVERLAP_REL);
 }
 
-/* A miss by 1e-12 of sigma is a miss for every algorithm: the closest approach is 7.5e-13
- * wider than contact, far above round-off of the distance (1e-16 relative). */
+/* A miss by 1e-12 or 1e-13 of sigma is a miss for every algorithm and every neighbour mode:
+ * the closest approach is 7.5e-13 (7.5e-14) wider than contact, far above round-off of the
+ * distance (1e-16 relative). So close a miss passes the bound that screens pairs before their
+ * root (within 1e-12 of touching relative to the distance squared,
+ * nbep_predict_pair_quadratic_bound: at 1e-13 all the way), and the root then says never.
+ * The resting sphere's slot must say so too, not keep the passer-by as a partner at +inf
+ * (nbep_feq_put's assertion: such a slot reached /checkpoint/event_time as inf, a mutant of
+ * pred_cells.c's pair loop showed). The resting sphere is 1.1 ahead, or 0.3, where the cells
+ * mode's first rebuild predicts it against the passer-by already in its list. */
 static void test_grazing_miss_within_1e_12_leaves_both_spheres_untouched(void **state)
 {
     fixture *f = *state;
-    const double sigma = 0.75, b = sigma * (1.0 + 1e-12), u = 1.9;
-    for (size_t k = 0; k < N_ALGOS; k++) {
-        grazing(f, ALGOS[k], b);
-        const outcome *o = run(f, 1);
-        assert_clean(o, ALGOS[k]);
-        assert_int_equal(o->sum.collisions, 0);
-        assert_vec3_same(o->fin.vel[0], (nbep_vec3){u, 0, 0});
-        assert_vec3_same(o->fin.vel[1], ZERO);
-        assert_close(o->fin.pos[0].x, u * 1.0, 0.0, drift_tol(100, 2.0));
-        assert_vec3_same(o->fin.pos[1], (nbep_vec3){1.1, b, 0.0});
-    }
+    const double sigma = 0.75, u = 1.9, misses[2] = {1e-12, 1e-13}, ahead[2] = {1.1, 0.3};
+    for (int h = 0; h < 2; h++)
+        for (int l = 0; l < 2; l++)
+            for (size_t k = 0; k < N_ALGOS + 2; k++) { /* predictive's grid and cells too */
+                const double b = sigma * (1.0 + misses[l]);
+                const char *algo = k < N_ALGOS ? ALGOS[k] : "predictive";
+                nbep_scene *sc = grazing_at(f, algo, ahead[h], b);
+                sc->neighbors_grid = k == N_ALGOS;
+                sc->neighbors_cells = k == N_ALGOS + 1;
+                const outcome *o = run(f, 1);
+                assert_clean(o, algo);
+                assert_int_equal(o->sum.collisions, 0);
+                assert_vec3_same(o->fin.vel[0], (nbep_vec3){u, 0, 0});
+                assert_vec3_same(o->fin.vel[1], ZERO);
+                assert_close(o->fin.pos[0].x, u * 1.0, 0.0, drift_tol(100, 2.0));
+                assert_vec3_same(o->fin.pos[1], (nbep_vec3){ahead[h], b, 0.0});
+            }
 }
 
 /* ---- touching at t0 ----------------------------------------------------------------------- */
