@@ -655,6 +655,12 @@ MUTANTS = [
     # sphere past the pair (mutate-sample's seed 1; test_pred_settle sets the case up)
     ("jam-lock-tol-no-acceleration", "src/pred_react.c", ".tol = amag > 0.0 ? vs * vs / amag : 0.0,",
      ".tol = amag >= 0.0 ? vs * vs / amag : 0.0,", ["test_pred_settle"], None),
+    # the shifted query's widening turned into a narrowing (mutate-sample's seed 4): a copy
+    # that touches a box exactly is missed (test_bvh builds such pairs along each axis)
+    ("bvh-shifted-query-narrowed-x", "src/bvh.c", "{r + (fabs(p.x) + fabs(shift.x) + r) * c,",
+     "{r - (fabs(p.x) + fabs(shift.x) + r) * c,", ["test_bvh"], None),
+    ("bvh-shifted-query-narrowed-z", "src/bvh.c", " r + (fabs(p.z) + fabs(shift.z) + r) * c};",
+     " r - (fabs(p.z) + fabs(shift.z) + r) * c};", ["test_bvh"], None),
     # the cells mode's pair loop keeping a miss: a resting sphere's slot names the passer-by
     # at +inf, which reached /checkpoint/event_time as inf (mutate-sample's seed 4;
     # test_extremes' grazing miss, nbep_feq_put's assertion)

@@ -243,6 +243,49 @@ static void test_random_scenes_report_exactly_the_pairs_of_the_double_loop(void 
         }
 }
 
+/* A copy whose box touches a later box exactly, face to face along one axis, as the copy's
+ * own place (the position plus the shift, rounded once) and the boxes' sums give it: the
+ * query must report it. Its widening covers the roundings the tree's boxes and the copy's
+ * place add (a few ulps of the coordinates, 2^-48 of them); a query box narrower than the
+ * radius by as much (a sign flipped in the widening) misses these pairs by some 1e-14, which
+ * random places never come so near (the test above). Places and radii not dyadic, so that
+ * the sums round; the partner nudged by ulps until the copy's gap is at most 0 and the next
+ * ulp out would open it. */
+static void test_a_shifted_query_reports_a_box_its_copy_touches_exactly(void **state)
+{
+    fixture *f = *state;
+    const double L = 6.0;
+    const nbep_vec3 places[3] = {{0.3, 2.1, 5.7}, {5.9, 0.1, 3.3}, {1.7, 5.65, 0.2}};
+    const double shifts[3][3] = {{L, 0, 0}, {0, -L, 0}, {0, 0, L}};
+    for (int k = 0; k < 3; k++)
+        for (int ax = 0; ax < 3; ax++)
+            for (int side = -1; side <= 1; side += 2) {
+                new_scene(f, 2);
+                f->s.pos[0] = places[k];
+                f->s.radius[0] = 0.37;
+                f->s.radius[1] = 0.29;
+                const nbep_vec3 sh = {shifts[ax][0], shifts[ax][1], shifts[ax][2]};
+                const nbep_vec3 c = nbep_vec3_add(f->s.pos[0], sh); /* as the query places it */
+                const double rs = f->s.radius[0] + f->s.radius[1];
+                nbep_vec3 pj = c; /* overlapping along the other axes */
+                double *x = &pj.x + ax;
+                const double cx = (&c.x)[ax];
+                *x = cx + side * rs;
+                while (fabs(cx - *x) - rs > 0.0) /* in until touching */
+                    *x = nextafter(*x, cx);
+                while (fabs(cx - nextafter(*x, side * INFINITY)) - rs <= 0.0) /* out while so */
+                    *x = nextafter(*x, side * INFINITY);
+                f->s.pos[1] = pj;
+                nbep_bvh_destroy(&f->b);
+                build(f, 2);
+                f->n_got = 0;
+                (void)nbep_bvh_query_later_shifted(f->b, &f->s, 0, sh, collect, f);
+                if (!(f->n_got == 1 && f->got[0] == 1))
+                    fail_msg("place %d, axis %d, side %d: a box touching the copy exactly "
+                             "not reported (%zu reported)", k, ax, side, f->n_got);
+            }
+}
+
 /* A copy of a sphere moved by a shift (seminaive in a periodic box: a sphere near a face and
  * its partners across it) pairs with every later sphere whose box touches the copy's, itself
  * reported once, and with no earlier one: random spheres of radii 0.2 to 0.5 in [0, 6)^3,
@@ -642,6 +685,8 @@ int main(void)
             test_rebuilding_after_spheres_move_reports_the_new_pairs, setup, teardown),
         cmocka_unit_test_setup_teardown(
             test_a_shifted_query_pairs_with_the_boxes_its_copy_touches, setup, teardown),
+        cmocka_unit_test_setup_teardown(
+            test_a_shifted_query_reports_a_box_its_copy_touches_exactly, setup, teardown),
         cmocka_unit_test_setup_teardown(test_one_sphere_has_no_partner, setup, teardown),
         cmocka_unit_test_setup_teardown(test_an_empty_scene_builds_an_empty_tree, setup,
                                         teardown),
