@@ -661,6 +661,12 @@ MUTANTS = [
      "{r - (fabs(p.x) + fabs(shift.x) + r) * c,", ["test_bvh"], None),
     ("bvh-shifted-query-narrowed-z", "src/bvh.c", " r + (fabs(p.z) + fabs(shift.z) + r) * c};",
      " r - (fabs(p.z) + fabs(shift.z) + r) * c};", ["test_bvh"], None),
+    # every pair's overlap measured at every step, not at frame steps only: the rows between
+    # frames hold it (mutate-sample's seed 4; test_granular's stack with a frame every 5)
+    ("frame-overlap-every-step", "src/sim.c",
+     "if (sim->algo->exact_overlap || step % sim->scene->output_every != 0)",
+     "if (sim->algo->exact_overlap && step % sim->scene->output_every != 0)",
+     ["test_granular"], None),
     # the cells mode's pair loop keeping a miss: a resting sphere's slot names the passer-by
     # at +inf, which reached /checkpoint/event_time as inf (mutate-sample's seed 4;
     # test_extremes' grazing miss, nbep_feq_put's assertion)

@@ -168,6 +168,42 @@ static void test_stack_stays_put_predictive(void **state)
     }
 }
 
+/* The predictive algorithm measures every pair's overlap at the frame steps only, the steps
+ * between holding its reactions' (README, Output: max_overlap; the cell grid's pass over all
+ * pairs is a frame's cost, not every step's). The stack of three rests with its pairs
+ * overlapping by round-off (0.1 + 0.2 k is not exact) and reacts to nothing: with a frame
+ * every 5 steps, /stats/max_overlap is that overlap at the multiples of 5 (the summary's) and
+ * 0 at the steps between (the first step's row aside, which holds the start's check), in each
+ * neighbour mode. A pass at every step (a flipped test, a mutant of sim.c showed) writes the
+ * round-off at every row. */
+static void test_predictive_rows_between_frames_hold_only_the_reactions_overlaps(void **state)
+{
+    (void)state;
+    for (int mode = 0; mode < 3; mode++) {
+        nbep_scene *sc = stack("predictive", 40, 0.5);
+        sc->output_every = 5;
+        sc->out_stats = true;
+        neighbor_mode(sc, mode);
+        char path[256];
+        nbep_test_tmp("rows_between_frames.h5", path, sizeof path);
+        const nbep_summary sum = nbep_test_run_to(sc, 1, NULL, NULL, path, NULL, NULL);
+        size_t n = 0;
+        double *ov = nbep_test_h5_doubles(path, "/stats/max_overlap", &n);
+        remove(path);
+        assert_int_equal(sum.collisions, 0);
+        assert_int_equal(n, 40);
+        assert_true(sum.max_overlap > 0.0 && sum.max_overlap < 1e-15);
+        for (size_t k = 1; k < n; k++) { /* row k: step k + 1 */
+            const double want = (k + 1) % 5 == 0 ? sum.max_overlap : 0.0;
+            if (ov[k] != want)
+                fail_msg("mode %d, step %zu: max_overlap row %.17g, want %.17g", mode, k + 1,
+                         ov[k], want);
+        }
+        free(ov);
+        nbep_test_scene_free(&sc);
+    }
+}
+
 /* A stack of three on the floor of a box whose bottom sphere a fourth knocks away (a review's
  * scene): the spheres above lose their support one after the other, each let go once the one
  * below it has moved (a let-go wakes the next). All four end on the floor. In grid mode, where a
@@ -2130,6 +2166,7 @@ int main(void)
         cmocka_unit_test(test_struck_sphere_on_a_floor_slides_along_it),
         cmocka_unit_test(test_struck_sphere_on_planes_passes_the_impulse_to_them),
         cmocka_unit_test(test_stack_stays_put_predictive),
+        cmocka_unit_test(test_predictive_rows_between_frames_hold_only_the_reactions_overlaps),
         cmocka_unit_test(test_stack_does_not_sink_naive_seminaive),
         cmocka_unit_test(test_bounce_stays_above_the_floor_naive_seminaive),
         cmocka_unit_test(test_corner_ball_ends_at_rest_in_the_corner),
