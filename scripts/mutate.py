@@ -659,6 +659,8 @@ MUTANTS = [
     # that touches a box exactly is missed (test_bvh builds such pairs along each axis)
     ("bvh-shifted-query-narrowed-x", "src/bvh.c", "{r + (fabs(p.x) + fabs(shift.x) + r) * c,",
      "{r - (fabs(p.x) + fabs(shift.x) + r) * c,", ["test_bvh"], None),
+    ("bvh-shifted-query-less-the-shift-x", "src/bvh.c", "{r + (fabs(p.x) + fabs(shift.x) + r) * c,",
+     "{r + (fabs(p.x) - fabs(shift.x) + r) * c,", ["test_bvh"], None),
     ("bvh-shifted-query-narrowed-z", "src/bvh.c", " r + (fabs(p.z) + fabs(shift.z) + r) * c};",
      " r - (fabs(p.z) + fabs(shift.z) + r) * c};", ["test_bvh"], None),
     # every pair's overlap measured at every step, not at frame steps only: the rows between

@@ -249,22 +249,24 @@ static void test_random_scenes_report_exactly_the_pairs_of_the_double_loop(void 
  * place add (a few ulps of the coordinates, 2^-48 of them); a query box narrower than the
  * radius by as much (a sign flipped in the widening) misses these pairs by some 1e-14, which
  * random places never come so near (the test above). Places and radii not dyadic, so that
- * the sums round; the partner nudged by ulps until the copy's gap is at most 0 and the next
- * ulp out would open it. */
+ * the sums round; copies a period up and down each axis (a copy nearer the origin than its
+ * shift is long narrows a query that subtracts |shift|); the partner nudged by ulps until the
+ * copy's gap is at most 0 and the next ulp out would open it. */
 static void test_a_shifted_query_reports_a_box_its_copy_touches_exactly(void **state)
 {
     fixture *f = *state;
     const double L = 6.0;
     const nbep_vec3 places[3] = {{0.3, 2.1, 5.7}, {5.9, 0.1, 3.3}, {1.7, 5.65, 0.2}};
-    const double shifts[3][3] = {{L, 0, 0}, {0, -L, 0}, {0, 0, L}};
     for (int k = 0; k < 3; k++)
-        for (int ax = 0; ax < 3; ax++)
+        for (int a = 0; a < 6; a++) /* a period up and down each axis */
             for (int side = -1; side <= 1; side += 2) {
+                const int ax = a / 2;
                 new_scene(f, 2);
                 f->s.pos[0] = places[k];
                 f->s.radius[0] = 0.37;
                 f->s.radius[1] = 0.29;
-                const nbep_vec3 sh = {shifts[ax][0], shifts[ax][1], shifts[ax][2]};
+                nbep_vec3 sh = {0.0, 0.0, 0.0};
+                (&sh.x)[ax] = a % 2 ? -L : L;
                 const nbep_vec3 c = nbep_vec3_add(f->s.pos[0], sh); /* as the query places it */
                 const double rs = f->s.radius[0] + f->s.radius[1];
                 nbep_vec3 pj = c; /* overlapping along the other axes */
@@ -281,8 +283,8 @@ static void test_a_shifted_query_reports_a_box_its_copy_touches_exactly(void **s
                 f->n_got = 0;
                 (void)nbep_bvh_query_later_shifted(f->b, &f->s, 0, sh, collect, f);
                 if (!(f->n_got == 1 && f->got[0] == 1))
-                    fail_msg("place %d, axis %d, side %d: a box touching the copy exactly "
-                             "not reported (%zu reported)", k, ax, side, f->n_got);
+                    fail_msg("place %d, shift %d, side %d: a box touching the copy exactly "
+                             "not reported (%zu reported)", k, a, side, f->n_got);
             }
 }
 
