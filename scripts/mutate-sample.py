@@ -16,9 +16,9 @@ first that fails.
 Usage: python3 scripts/mutate-sample.py [-n N] [--seed S] [--files src/a.c,...] [--timeout S]
        [--lines src/a.c:L,...] [--list] [--selftest]
 (--lines: every site on those lines, no draw: a survivor or a doubtful kill run again.)
-Prints one row per mutant (file:line, the change, the verdict and the test that killed it)
-and ends with "sample: K killed, S survived, B did not build of N". A survivor is either a
-gap in the tests or an equivalent mutant (no observable change): each is for a person to
+Prints one row per mutant (file:line, the change and its column, the verdict and the test that
+killed it) and ends with "sample: K killed, S survived, B did not build of N". A survivor is
+either a gap in the tests or an equivalent mutant (no observable change): each is for a person to
 judge; docs/mutation-log.md keeps the judgements. Exit 0 always once the sample ran (a
 survivor is a finding, not a failure of the script), 2 on bad arguments.
 """
@@ -167,10 +167,13 @@ def main():
         texts[f], found = sites(f)
         pool += [(f,) + s for s in found]
     def describe(m):
+        """Where (FILE:LINE, as --lines takes it) and the change, with its column: a line
+        can hold several sites of one operator (bvh.c's widening has three '+')."""
         f, off, ln, repl = m
         text = texts[f]
         line = text.count("\n", 0, off) + 1
-        return f"{f}:{line}", f"'{text[off:off + ln]}' -> '{repl}'"
+        col = off - (text.rfind("\n", 0, off) + 1) + 1
+        return f"{f}:{line}", f"'{text[off:off + ln]}' -> '{repl}' at column {col}"
 
     if a.lines:
         want = [w for w in a.lines.split(",") if w]
@@ -242,7 +245,7 @@ def main():
             with open(target, "w") as out:
                 out.write(text)
             counts[verdict] += 1
-            print(f"{where:28} {change:34} {verdict:9} {why} "
+            print(f"{where:28} {change:46} {verdict:9} {why} "
                   f"({time.monotonic() - t0:.0f} s)", flush=True)
     finally:
         shutil.rmtree(scratch, ignore_errors=True)

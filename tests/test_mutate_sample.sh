@@ -3,7 +3,8 @@
 # long run: its site finder on a fixed C snippet (every operator it should mutate and none in
 # a comment, a macro, an assertion, a string, a shift, an arrow or a pointer's declaration;
 # the selftest), a draw that is the same for the same seed and names sites in the core's
-# sources only, --lines naming the sites of a line, and its one-line refusals of a bad source,
+# sources only (each line holding the text it changes at the column it names), --lines naming
+# the sites of a line, and its one-line refusals of a bad source,
 # count or line (exit 2).
 # Run from anywhere; exit status 1 when a check fails.
 . "$(dirname "$0")/lib.sh"
@@ -17,15 +18,16 @@ check "mutate-sample.py --selftest: exit 0 (got $rc): $(tr '\n' ';' <"$tmp/self.
 "$PY" scripts/mutate-sample.py -n 25 --seed 4 --list >"$tmp/c.txt" 2>&1
 check "one seed, one draw" "cmp -s '$tmp/a.txt' '$tmp/b.txt'"
 check "another seed, another draw" "! cmp -s '$tmp/a.txt' '$tmp/c.txt'"
-check "the draw lists 25 sites, each a core source's line and a change" \
-    "[ \$(grep -cE \"^  src/[a-z_]+\\.c:[0-9]+  '[^']+' -> '[^']*'\$\" '$tmp/a.txt') = 25 ]"
-# each drawn site's line holds the text it changes
+check "the draw lists 25 sites, each a core source's line and a change at a column" \
+    "[ \$(grep -cE \"^  src/[a-z_]+\\.c:[0-9]+  '[^']+' -> '[^']*' at column [0-9]+\$\" '$tmp/a.txt') = 25 ]"
+# each drawn site's line holds the text it changes, at the column named
 bad=0
 while read -r where change; do
-    f=${where%%:*} line=${where##*:} from=${change#\'} from=${from%%\' ->*}
-    sed -n "${line}p" "$f" | grep -qF -- "$from" || bad=$((bad + 1))
+    f=${where%%:*} line=${where##*:} from=${change#\'} from=${from%%\' ->*} col=${change##* }
+    text=$(sed -n "${line}p" "$f")
+    [ "${text:col-1:${#from}}" = "$from" ] || bad=$((bad + 1))
 done < <(sed -n "s/^  \(src[^ ]*\)  \(.*\)$/\1 \2/p" "$tmp/a.txt")
-check "every drawn site's line holds the text it changes ($bad do not)" "[ $bad = 0 ]"
+check "every drawn site's line holds the text it changes at its column ($bad do not)" "[ $bad = 0 ]"
 # --lines: every site on the lines named, no draw; a line without a site refused
 first=$(sed -n "s/^  \(src[^ ]*\)  .*$/\1/p" "$tmp/a.txt" | head -1)
 "$PY" scripts/mutate-sample.py --lines "$first" --list >"$tmp/l.txt" 2>&1
