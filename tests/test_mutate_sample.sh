@@ -4,8 +4,7 @@
 # a comment, a macro, an assertion, a string, a shift, an arrow or a pointer's declaration;
 # the selftest), a draw that is the same for the same seed and names sites in the core's
 # sources only (each line holding the text it changes at the column it names), --lines naming
-# the sites of a line, and its one-line refusals of a bad source,
-# count or line (exit 2).
+# the sites of a line, and its one-line refusals of a bad source, count or line (exit 2).
 # Run from anywhere; exit status 1 when a check fails.
 . "$(dirname "$0")/lib.sh"
 test_tmp mutate_sample
