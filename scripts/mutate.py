@@ -669,6 +669,13 @@ MUTANTS = [
      "if (sim->algo->exact_overlap || step % sim->scene->output_every != 0)",
      "if (sim->algo->exact_overlap && step % sim->scene->output_every != 0)",
      ["test_granular"], None),
+    # the cells' self-check miscounting (mutate-sample's seed 5): a broken list, a member in
+    # no list (test_cells breaks each alone and two at once)
+    ("cells-check-broken-list-less-one", "src/cells.c",
+     "return bad + 1; /* a broken list: stop before looping forever */",
+     "return bad - 1; /* a broken list: stop before looping forever */", ["test_cells"], None),
+    ("cells-check-unlisted-subtracted", "src/cells.c", "return bad + (listed != g->n);",
+     "return bad - (listed != g->n);", ["test_cells"], None),
     # the cells mode's pair loop keeping a miss: a resting sphere's slot names the passer-by
     # at +inf, which reached /checkpoint/event_time as inf (mutate-sample's seed 4;
     # test_extremes' grazing miss, nbep_feq_put's assertion)

@@ -340,10 +340,55 @@ static void test_placing_a_member_moves_it_to_the_cell_of_its_place(void **state
     nbep_cells_fini(&g);
 }
 
+/* Sphere i taken out of its cell's list (the links around it joined), as a lost member. */
+static void unlink_member(nbep_cells *g, uint32_t i)
+{
+    const uint32_t next = g->m[i].next, before = g->prev[i];
+    if (before == NBEP_CELLS_NONE)
+        g->head[g->m[i].cell] = next;
+    else
+        g->m[before].next = next;
+    if (next != NBEP_CELLS_NONE)
+        g->prev[next] = before;
+}
+
+/* The self-check counts each fault (the tests above rely on its 0): a member whose place lies
+ * in another cell, one listed in no cell, both (2: each is counted, neither hides the other),
+ * and a list whose backward link is broken. */
+static void test_the_check_counts_each_fault(void **state)
+{
+    (void)state;
+    enum { N = 27 };
+    nbep_vec3 pos[N];
+    for (size_t i = 0; i < N; i++) /* one a cell, at its centre */
+        pos[i] = (nbep_vec3){0.5 + (double)(i % 3), 0.5 + (double)(i / 3 % 3),
+                             0.5 + (double)(i / 9)};
+    nbep_cells g;
+    for (int fault = 0; fault < 4; fault++) {
+        init_cells(&g, (nbep_vec3){0, 0, 0}, (nbep_vec3){3, 3, 3}, 1.0, N);
+        assert_int_equal(g.n_cells, N);
+        nbep_cells_assign(&g, pos, 0, N);
+        nbep_cells_link(&g);
+        assert_int_equal(nbep_cells_check(&g), 0);
+        if (fault == 0 || fault == 2) /* sphere 4's place moved a cell along x */
+            g.m[4].at.x += 1.0;
+        if (fault == 1 || fault == 2) /* sphere 13 lost from its cell's list */
+            unlink_member(&g, 13);
+        if (fault == 3) /* sphere 20's backward link pointing at itself */
+            g.prev[20] = 20;
+        const size_t want = fault == 2 ? 2 : 1;
+        if (nbep_cells_check(&g) != want)
+            fail_msg("fault %d: the check counts %zu, want %zu", fault, nbep_cells_check(&g),
+                     want);
+        nbep_cells_fini(&g);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_geometry_sides_at_least_reach_and_cells_bounded),
+        cmocka_unit_test(test_the_check_counts_each_fault),
         cmocka_unit_test(test_a_build_in_two_ranges_on_two_threads_equals_a_serial_one),
         cmocka_unit_test(test_refit_lays_the_cells_out_as_a_fresh_init_would),
         cmocka_unit_test(test_placed_flights_keep_places_in_their_cells_and_contacts_adjacent),
