@@ -676,6 +676,11 @@ MUTANTS = [
      "return bad - 1; /* a broken list: stop before looping forever */", ["test_cells"], None),
     ("cells-check-unlisted-subtracted", "src/cells.c", "return bad + (listed != g->n);",
      "return bad - (listed != g->n);", ["test_cells"], None),
+    # a plane response at e = 0 pushed off by an ulp's speed (mutate-sample's seed 5)
+    ("plane-tie-push-at-zero", "src/physics.c",
+     "for (int k = 0; k < TIE_TRIES && nbep_vec3_dot(*v, n) < 0.0; k++, du *= 2.0)",
+     "for (int k = 0; k < TIE_TRIES && nbep_vec3_dot(*v, n) <= 0.0; k++, du *= 2.0)",
+     ["test_physics"], None),
     # the cells mode's pair loop keeping a miss: a resting sphere's slot names the passer-by
     # at +inf, which reached /checkpoint/event_time as inf (mutate-sample's seed 4;
     # test_extremes' grazing miss, nbep_feq_put's assertion)
