@@ -681,6 +681,14 @@ MUTANTS = [
      "for (int k = 0; k < TIE_TRIES && nbep_vec3_dot(*v, n) < 0.0; k++, du *= 2.0)",
      "for (int k = 0; k < TIE_TRIES && nbep_vec3_dot(*v, n) <= 0.0; k++, du *= 2.0)",
      ["test_physics"], None),
+    # the detection's periodic images' arrays miscounted in the estimate (mutate-sample's
+    # seed 5; test_memory_plan now plans naive and seminaive in a periodic box)
+    ("detect-bytes-img0-divided", "src/algo_detect.c", "bytes += 3 * n * sizeof(int32_t); /* img0 */",
+     "bytes += 3 * n / sizeof(int32_t); /* img0 */", ["test_memory_plan"], None),
+    # the BVH self-check passing a right child that is its left one (mutate-sample's seed 5;
+    # test_bvh_check puts the root's right child out of place)
+    ("bvh-check-right-child-equal-left", "src/bvh.c", "if (right <= left || right >= b->n_nodes) {",
+     "if (right < left || right >= b->n_nodes) {", ["test_bvh_check"], None),
     # the cells mode's pair loop keeping a miss: a resting sphere's slot names the passer-by
     # at +inf, which reached /checkpoint/event_time as inf (mutate-sample's seed 4;
     # test_extremes' grazing miss, nbep_feq_put's assertion)

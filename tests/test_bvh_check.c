@@ -3,7 +3,8 @@
  * a node and shrink its box. A node's box is the exact union of what lies below it, so each of
  * its six bounds is some child's or sphere's: moved inward by one ulp, that child or sphere
  * sticks out, and the check must say so, bound by bound (a containment test that looked at
- * fewer bounds, or at any one of them, would pass a broken tree whose queries miss pairs). */
+ * fewer bounds, or at any one of them, would pass a broken tree whose queries miss pairs); and
+ * an inner node's right child out of its place. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -89,10 +90,46 @@ static void test_a_node_box_shrunk_at_any_bound_is_found(void **state)
     nbep_test_scene_free(&sc);
 }
 
+/* An inner node's right child where it cannot be: its left one (the node after it: the same
+ * subtree walked twice), before it, or past the last node (a read out of the tree). The check
+ * must stop there with that line, the first it gives; put back, none. */
+static void test_a_right_child_out_of_place_is_found(void **state)
+{
+    (void)state;
+    const size_t n = 200;
+    nbep_scene *sc = scene(n);
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_bvh *b = NULL;
+    assert_int_equal(nbep_bvh_create(n, &b, &d), NBEP_OK);
+    nbep_bvh_build(b, &sc->state);
+    nbep_diag_fini(&d);
+    assert_int_equal(b->node[0].count, 0); /* the root is an inner node */
+    const uint32_t was = b->node[0].first;
+    const uint32_t wrong[3] = {1, 0, (uint32_t)b->n_nodes};
+    for (int k = 0; k < 3; k++) {
+        b->node[0].first = wrong[k];
+        nbep_diag_init(&d);
+        const size_t problems = nbep_bvh_check(b, &sc->state, &d);
+        if (problems == 0 || d.n_errors < 1 ||
+            !strstr(d.msg[0], "right child is not after the left one"))
+            fail_msg("the root's right child at %u: %zu problems, %s", (unsigned)wrong[k],
+                     problems, d.n_errors ? d.msg[0] : "no line");
+        nbep_diag_fini(&d);
+    }
+    b->node[0].first = was;
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_bvh_check(b, &sc->state, &d), 0);
+    nbep_diag_fini(&d);
+    nbep_bvh_destroy(&b);
+    nbep_test_scene_free(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_a_node_box_shrunk_at_any_bound_is_found),
+        cmocka_unit_test(test_a_right_child_out_of_place_is_found),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

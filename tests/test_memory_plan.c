@@ -326,7 +326,9 @@ static void test_the_detecting_algorithms_allocate_what_they_estimate(void **sta
 {
     (void)state;
     plans_of("naive", NULL, "", elastic, false);
+    plans_of("naive", NULL, "", elastic, true); /* the periodic images' arrays */
     plans_of("seminaive", NULL, "", elastic, false);
+    plans_of("seminaive", NULL, "", elastic, true);
     plans_of("seminaive", NULL, "", pile, false);
 }
 
