@@ -64,19 +64,28 @@ static void shrunk_is_found(nbep_bvh *b, const nbep_state *s, uint32_t node, con
     }
 }
 
-static void test_a_node_box_shrunk_at_any_bound_is_found(void **state)
+/* sc's tree, built and sound (its check finds nothing), its root an inner node. */
+static nbep_bvh *built(const nbep_scene *sc)
 {
-    (void)state;
-    const size_t n = 200;
-    nbep_scene *sc = scene(n);
+    const size_t n = sc->state.n;
     nbep_diag d;
     nbep_diag_init(&d);
     nbep_bvh *b = NULL;
     assert_int_equal(nbep_bvh_create(n, &b, &d), NBEP_OK);
     nbep_bvh_build(b, &sc->state);
     assert_int_equal(nbep_bvh_check(b, &sc->state, &d), 0);
-    /* the root (an inner node: 200 spheres, at most LEAF_MAX a leaf), and every leaf */
+    nbep_diag_fini(&d);
     assert_int_equal(b->node[0].count, 0);
+    return b;
+}
+
+static void test_a_node_box_shrunk_at_any_bound_is_found(void **state)
+{
+    (void)state;
+    const size_t n = 200;
+    nbep_scene *sc = scene(n);
+    nbep_bvh *b = built(sc);
+    /* the root (an inner node: 200 spheres, at most LEAF_MAX a leaf), and every leaf */
     shrunk_is_found(b, &sc->state, 0, "box does not contain a child's box");
     size_t leaves = 0;
     for (uint32_t k = 0; k < b->n_nodes; k++)
@@ -86,7 +95,6 @@ static void test_a_node_box_shrunk_at_any_bound_is_found(void **state)
         }
     assert_true(leaves >= n / LEAF_MAX);
     nbep_bvh_destroy(&b);
-    nbep_diag_fini(&d);
     nbep_test_scene_free(&sc);
 }
 
@@ -96,15 +104,9 @@ static void test_a_node_box_shrunk_at_any_bound_is_found(void **state)
 static void test_a_right_child_out_of_place_is_found(void **state)
 {
     (void)state;
-    const size_t n = 200;
-    nbep_scene *sc = scene(n);
+    nbep_scene *sc = scene(200);
+    nbep_bvh *b = built(sc);
     nbep_diag d;
-    nbep_diag_init(&d);
-    nbep_bvh *b = NULL;
-    assert_int_equal(nbep_bvh_create(n, &b, &d), NBEP_OK);
-    nbep_bvh_build(b, &sc->state);
-    nbep_diag_fini(&d);
-    assert_int_equal(b->node[0].count, 0); /* the root is an inner node */
     const uint32_t was = b->node[0].first;
     const uint32_t wrong[3] = {1, 0, (uint32_t)b->n_nodes};
     for (int k = 0; k < 3; k++) {
