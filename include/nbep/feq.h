@@ -84,8 +84,8 @@ static inline double nbep_feq_not_before(double time, double t_now)
 /* Stores e in sphere i's slot whatever was there: a fresh prediction from scratch (kind
  * SPHERE, PLANE or HORIZON with a finite time, or NEVER), or a slot put back as it was (the
  * team loop's undo). An event at +inf of a kind that names a partner would reach the frames'
- * /checkpoint/event_time as inf (a mutant of a pair loop that kept a miss did):
- * one compare an event, asserted. */
+ * /checkpoint/event_time as inf (a mutant of the cells mode's pair loop that kept a miss
+ * showed it): asserted, one compare an event. */
 static inline void nbep_feq_put(nbep_feq *q, size_t i, nbep_event e)
 {
     assert(isfinite(e.time) || e.kind == NBEP_EVENT_NEVER || e.kind == NBEP_EVENT_NONE);
