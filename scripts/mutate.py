@@ -689,6 +689,15 @@ MUTANTS = [
     # test_bvh_check puts the root's right child out of place)
     ("bvh-check-right-child-equal-left", "src/bvh.c", "if (right <= left || right >= b->n_nodes) {",
      "if (right < left || right >= b->n_nodes) {", ["test_bvh_check"], None),
+    # a let-go's version check reading before the versions (mutate-sample's seed 5), and one
+    # that keeps the support that reacted (test_pred_settle's tripod with one below)
+    ("let-go-version-index-flipped", "src/pred_react.c",
+     "if (r->who[j] >= 0 || r->ver[j] == c->ver[-1 - r->who[j]]) {",
+     "if (r->who[j] >= 0 || r->ver[j] == c->ver[-1 + r->who[j]]) {", ["test_pred_settle"], None),
+    ("let-go-keeps-every-support", "src/pred_react.c",
+     "if (r->who[j] >= 0 || r->ver[j] == c->ver[-1 - r->who[j]]) {",
+     "if (r->who[j] >= 0 || r->ver[j] != 0 || r->ver[j] == c->ver[-1 - r->who[j]]) {",
+     ["test_pred_settle"], None),
     # the cells mode's pair loop keeping a miss: a resting sphere's slot names the passer-by
     # at +inf, which reached /checkpoint/event_time as inf (mutate-sample's seed 4;
     # test_extremes' grazing miss, nbep_feq_put's assertion)

@@ -283,6 +283,52 @@ static void test_a_jam_from_a_sphere_without_acceleration_takes_in_one_touching_
     fix_free(&f);
 }
 
+/* A let-go keeps the supports that did not react: a large sphere held on four small held
+ * ones (three at 40 degrees all round, one straight below), whose one below reacted (its
+ * response count moved on). nbep__pred_let_go drops that one only; the three left carry the
+ * sphere's weight, so it stays held on them, their counts as they were. (The piles reach a
+ * let-go with a second sphere support too rarely to fail on a check that dropped them all.) */
+static void test_a_let_go_keeps_the_supports_that_did_not_react(void **state)
+{
+    (void)state;
+    fix f;
+    fix_scene(&f, 5);
+    const double R = 1.0, r = 0.25, d = R + r, deg = atan(1.0) / 45.0;
+    const nbep_vec3 top = {0.0, 0.0, 5.0};
+    const double polar[5] = {0, 40, 40, 40, 0}, azim[5] = {0, 0, 120, 240, 0};
+    put(&f, 0, top, R);
+    for (size_t j = 1; j < 5; j++) {
+        const double th = polar[j] * deg, ph = azim[j] * deg;
+        nbep_vec3 u = {sin(th) * cos(ph), sin(th) * sin(ph), -cos(th)};
+        put(&f, j, nbep_vec3_add(top, nbep_vec3_scale(u, d)), r);
+    }
+    fix_create(&f);
+    nbep_state *s = &f.sim->st;
+    rest_set held = {.n = 4, .still = true};
+    for (size_t j = 1; j < 5; j++) {
+        hold(&f, j, FLOOR);
+        f.c->ver[j] = 10 + j;
+        held.who[j - 1] = -1 - (int32_t)j;
+        held.ver[j - 1] = 10 + j;
+    }
+    hold(&f, 0, FLOOR);
+    f.c->rest[0] = held;
+    f.c->ver[4]++; /* the one below reacted */
+    nbep__pred_let_go(f.c, s, 0, DT, 0.0, &f.c->ws[0]);
+    const rest_set *h = &f.c->rest[0];
+    assert_true(h->still);
+    assert_int_equal(h->n, 3);
+    assert_false(rest_has_sphere(h, 4));
+    for (size_t j = 1; j < 4; j++) {
+        assert_true(rest_has_sphere(h, j));
+        for (int k = 0; k < h->n; k++)
+            if (h->who[k] == -1 - (int32_t)j)
+                assert_int_equal(h->ver[k], 10 + j);
+    }
+    assert_true(nbep_vec3_norm2(s->vel[0]) == 0.0);
+    fix_free(&f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -291,6 +337,7 @@ int main(void)
         cmocka_unit_test(test_of_more_supports_than_a_record_holds_the_most_nearly_below_are_kept),
         cmocka_unit_test(test_plane_zero_stays_a_support_in_a_later_round),
         cmocka_unit_test(test_a_jam_from_a_sphere_without_acceleration_takes_in_one_touching_it),
+        cmocka_unit_test(test_a_let_go_keeps_the_supports_that_did_not_react),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
