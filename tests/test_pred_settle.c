@@ -153,6 +153,31 @@ static void test_a_held_sphere_is_no_candidate_and_keeps_its_hold(void **state)
     fix_free(&f);
 }
 
+/* Sphere 0 (radius 1) at (0, 0, 5), touching spheres 1..n-1 (radius 0.25) below it, each at
+ * its polar angle from straight below and its azimuth (degrees). */
+static void put_on_supports(fix *f, size_t n, const double *polar, const double *azim)
+{
+    const double R = 1.0, r = 0.25, d = R + r, deg = atan(1.0) / 45.0;
+    const nbep_vec3 top = {0.0, 0.0, 5.0};
+    put(f, 0, top, R);
+    for (size_t j = 1; j < n; j++) {
+        const double th = polar[j] * deg, ph = azim[j] * deg;
+        nbep_vec3 u = {sin(th) * cos(ph), sin(th) * sin(ph), -cos(th)};
+        put(f, j, nbep_vec3_add(top, nbep_vec3_scale(u, d)), r);
+    }
+}
+
+/* h holds spheres from..to-1 as supports, each with its count as the tests set it (10 + j). */
+static void held_on(const rest_set *h, size_t from, size_t to)
+{
+    for (size_t j = from; j < to; j++) {
+        assert_true(rest_has_sphere(h, j));
+        for (int k = 0; k < h->n; k++)
+            if (h->who[k] == -1 - (int32_t)j)
+                assert_int_equal(h->ver[k], 10 + j);
+    }
+}
+
 /* A candidate touching more supports than a record holds (NBEP_CONTACT_MAX = 4) keeps the most
  * nearly below it: a large sphere on five small held ones, one of them far to the side and met
  * first (index 1), the others straight below and at 40 degrees all round. The side one goes;
@@ -165,16 +190,9 @@ static void test_of_more_supports_than_a_record_holds_the_most_nearly_below_are_
     assert_int_equal(NBEP_CONTACT_MAX, 4);
     fix f;
     fix_scene(&f, 6);
-    const double R = 1.0, r = 0.25, d = R + r, deg = atan(1.0) / 45.0;
-    const nbep_vec3 top = {0.0, 0.0, 5.0};
     /* polar angle from straight below and azimuth of each support 1..5, degrees */
     const double polar[6] = {0, 75, 0, 40, 40, 40}, azim[6] = {0, 60, 0, 0, 120, 240};
-    put(&f, 0, top, R);
-    for (size_t j = 1; j < 6; j++) {
-        const double th = polar[j] * deg, ph = azim[j] * deg;
-        nbep_vec3 u = {sin(th) * cos(ph), sin(th) * sin(ph), -cos(th)};
-        put(&f, j, nbep_vec3_add(top, nbep_vec3_scale(u, d)), r);
-    }
+    put_on_supports(&f, 6, polar, azim);
     fix_create(&f);
     nbep_state *s = &f.sim->st;
     /* sphere 0 slow but moving, so that its block energy changes when it is held */
@@ -196,12 +214,7 @@ static void test_of_more_supports_than_a_record_holds_the_most_nearly_below_are_
     assert_true(f.c->settle[0].more);
     assert_int_equal(h->n, 4);
     assert_false(rest_has_sphere(h, 1));
-    for (size_t j = 2; j < 6; j++) {
-        assert_true(rest_has_sphere(h, j));
-        for (int k = 0; k < h->n; k++)
-            if (h->who[k] == -1 - (int32_t)j)
-                assert_int_equal(h->ver[k], 10 + j);
-    }
+    held_on(h, 2, 6);
     assert_true(nbep_vec3_norm2(s->vel[0]) == 0.0);
     assert_true(nbep_vec3_norm2(f.c->aeff[0]) == 0.0);
     assert_int_equal(f.c->ver[0], ver0 + 1);
@@ -293,15 +306,8 @@ static void test_a_let_go_keeps_the_supports_that_did_not_react(void **state)
     (void)state;
     fix f;
     fix_scene(&f, 5);
-    const double R = 1.0, r = 0.25, d = R + r, deg = atan(1.0) / 45.0;
-    const nbep_vec3 top = {0.0, 0.0, 5.0};
     const double polar[5] = {0, 40, 40, 40, 0}, azim[5] = {0, 0, 120, 240, 0};
-    put(&f, 0, top, R);
-    for (size_t j = 1; j < 5; j++) {
-        const double th = polar[j] * deg, ph = azim[j] * deg;
-        nbep_vec3 u = {sin(th) * cos(ph), sin(th) * sin(ph), -cos(th)};
-        put(&f, j, nbep_vec3_add(top, nbep_vec3_scale(u, d)), r);
-    }
+    put_on_supports(&f, 5, polar, azim);
     fix_create(&f);
     nbep_state *s = &f.sim->st;
     rest_set held = {.n = 4, .still = true};
@@ -319,12 +325,7 @@ static void test_a_let_go_keeps_the_supports_that_did_not_react(void **state)
     assert_true(h->still);
     assert_int_equal(h->n, 3);
     assert_false(rest_has_sphere(h, 4));
-    for (size_t j = 1; j < 4; j++) {
-        assert_true(rest_has_sphere(h, j));
-        for (int k = 0; k < h->n; k++)
-            if (h->who[k] == -1 - (int32_t)j)
-                assert_int_equal(h->ver[k], 10 + j);
-    }
+    held_on(h, 1, 4);
     assert_true(nbep_vec3_norm2(s->vel[0]) == 0.0);
     fix_free(&f);
 }
