@@ -275,7 +275,7 @@ static void assert_overlap_within(const outcome *o, double rel_tol)
 
 /* ---- grazing contacts --------------------------------------------------------------------- */
 
-/* Sphere 0 (r 0.3125) flies along x at u; sphere 1 (r 0.4375) rests at (D, b): the impact
+/* Sphere 0 (r 0.3125) flies along x at u; sphere 1 (r 0.4375) rests at (x1, b): the impact
  * parameter b is within 1e-12 of sigma = 0.75 (exact in binary). */
 static nbep_scene *grazing_at(fixture *f, const char *algo, double x1, double b)
 {
@@ -283,11 +283,6 @@ static nbep_scene *grazing_at(fixture *f, const char *algo, double x1, double b)
     nbep_test_set_sphere(sc, 0, ZERO, (nbep_vec3){1.9, 0.0, 0.0}, 0.3125, 1.3, ZERO);
     nbep_test_set_sphere(sc, 1, (nbep_vec3){x1, b, 0.0}, ZERO, 0.4375, 0.9, ZERO);
     return sc;
-}
-
-static nbep_scene *grazing(fixture *f, const char *algo, double b)
-{
-    return grazing_at(f, algo, 1.1, b);
 }
 
 /* The deflection's direction is nx = sqrt(sigma^2 - b^2)/sigma ~ 1.4e-6, whose condition
@@ -301,7 +296,7 @@ static void test_predictive_grazing_hit_within_1e_12_deflects_by_the_analytic_ti
 {
     fixture *f = *state;
     const double sigma = 0.75, b = sigma * (1.0 - 1e-12), u = 1.9, m0 = 1.3, m1 = 0.9;
-    grazing(f, "predictive", b);
+    grazing_at(f, "predictive", 1.1, b);
     const outcome *o = run(f, 1);
     assert_clean(o, "predictive");
     assert_int_equal(o->sum.sphere_collisions, 1);
