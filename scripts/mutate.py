@@ -703,6 +703,11 @@ MUTANTS = [
     # test_extremes' grazing miss, nbep_feq_put's assertion)
     ("cells-pair-keeps-a-miss", "src/pred_cells.c", "if (t < NBEP_NEVER && (t < best_t ||",
      "if (t <= NBEP_NEVER && (t < best_t ||", ["test_extremes"], None),
+    # a tie of equal times kept by the last partner in list order, not the smallest: a middle
+    # sphere's slot names its outer partner (mutate-sample's seed 5, first judged equivalent;
+    # test_extremes' row of four meeting at one instant)
+    ("cells-pair-tie-keeps-the-last", "src/pred_cells.c", "(t < best_t || (t == best_t && j < tie_j))",
+     "(t <= best_t || (t == best_t && j < tie_j))", ["test_extremes"], None),
     # ---- memory estimates: each create against its plan (tests/test_memory_plan.c) ----
     # the rounds' claim arrays subtracted (mutate-sample's seed 2 found it untested)
     ("pred-bytes-claim-subtracted", "src/algo_predictive.c",

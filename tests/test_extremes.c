@@ -22,11 +22,13 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "nbep/feq.h"
 #include "nbep/physics.h"
 #include "nbep/sim.h"
 #include "nbep/stats.h"
 #include "nbep_test.h"
 #include "nbep_test_scene.h"
+#include "sim_impl.h" /* the event slots a frame exports (the tie rule's test) */
 
 /* ---- fixture: the scene and outcomes of the current test ------------------------------------ */
 
@@ -992,6 +994,57 @@ static void test_simultaneous_pairs_in_different_threads_react_once_each(void **
     }
 }
 
+/* A row of four whose three contacts come at bitwise the same instant, t = 1: sphere 0 (at
+ * -4.5, moving +1/2) and 1 (at 4.5, -1/2) close on each other, 2 (at -13.5, +3/2) on 0 from
+ * behind and 3 (at 13.5, -3/2) on 1; radii 4, so every gap is 1 closed at 1 (short binary
+ * fractions: each time is exact), and no sphere strays out of its cells-mode list before.
+ * The slot rule (nbep_feq_event_before: at equal times the smaller partner) makes 0's slot
+ * name 1, not 2, and 1's name 0, not 3: the middle pair's two slots both hold the smallest
+ * pair key, so it reacts first, whatever order a mode meets the partners in. A cells-mode
+ * pair loop that kept the last of equal times (a mutant) made sphere 1 name 3 here; where
+ * both middle spheres named their outer partners (a row like this one in a deck), the outer
+ * pairs reacted first, to another outcome altogether with these unequal masses. Read at
+ * t = 0.5, before anything meets, on 1 and 2 threads, in every neighbour mode. */
+static void test_a_slot_names_the_smallest_of_partners_met_at_the_same_instant(void **state)
+{
+    fixture *f = *state;
+    const double x[4] = {-4.5, 4.5, -13.5, 13.5}, v[4] = {0.5, -0.5, 1.5, -1.5};
+    const double m[4] = {1.0, 2.0, 3.0, 1.5};
+    const uint32_t want[4] = {1, 0, 0, 1};
+    static const char *const mode[3] = {"all-pairs", "grid", "cells"};
+    for (int k = 0; k < 3; k++)
+        for (int nt = 1; nt <= 2; nt++) {
+            nbep_scene *sc = scene_new(f, 4, 0, "predictive", 2, 0.25);
+            sc->neighbors_grid = k == 1;
+            sc->neighbors_cells = k == 2;
+            for (size_t i = 0; i < 4; i++)
+                nbep_test_set_sphere(sc, i, (nbep_vec3){x[i], 0.0, 0.0},
+                                     (nbep_vec3){v[i], 0.0, 0.0}, 4.0, m[i], ZERO);
+            nbep_diag d;
+            nbep_diag_init(&d);
+            nbep_sim_options opt = {.threads = nt};
+            nbep_sim *sim = NULL;
+            assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
+            alarm(small_scale() ? WATCHDOG_SECONDS_VALGRIND : WATCHDOG_SECONDS);
+            const nbep_status st = nbep_sim_run(sim, &d);
+            alarm(0);
+            double t[4];
+            uint32_t partner[4];
+            uint8_t kind[4];
+            int32_t rest[4];
+            sim->algo->export_events(sim->algo_ctx, nbep_sim_state(sim), t, partner, kind, rest);
+            nbep_sim_destroy(&sim);
+            nbep_diag_fini(&d);
+            assert_int_equal(st, NBEP_OK);
+            for (size_t i = 0; i < 4; i++)
+                if (kind[i] != NBEP_EVENT_SPHERE || t[i] != 1.0 || partner[i] != want[i])
+                    fail_msg("%s mode, %d threads: sphere %zu's slot kind %d, time %.17g, "
+                             "partner %u (want a sphere at 1, partner %u)",
+                             mode[k], nt, i, (int)kind[i], t[i], (unsigned)partner[i],
+                             (unsigned)want[i]);
+        }
+}
+
 /* A sphere at rest hit from both sides at the same instant by equal spheres at equal speeds
  * (e = 1): resolving the contacts pairwise in any order (A-B, then B-C, then B-A again, or
  * the mirror image) leaves the middle one at rest and sends both back at their speed. */
@@ -1506,6 +1559,7 @@ int main(void)
         T(test_newtons_cradle_passes_the_speed_to_the_last_sphere),
         T(test_predictive_cradle_across_thread_ranges_is_the_same_on_1_2_4_threads),
         T(test_simultaneous_pairs_in_different_threads_react_once_each),
+        T(test_a_slot_names_the_smallest_of_partners_met_at_the_same_instant),
         T(test_sphere_hit_from_both_sides_at_once_stays_and_both_rebound),
         T(test_predictive_sphere_comes_to_rest_on_a_floor_with_e_0_5),
         T(test_detection_sphere_settles_on_a_floor_with_e_0_5),
