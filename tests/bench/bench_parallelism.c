@@ -31,6 +31,12 @@
  * handles them ahead and undoes some): another count is refused. Not for production: every
  * event does the bookkeeping.
  *
+ * With NBEP_PAR_TRACE=FILE in the environment it also writes each event's record to FILE, for
+ * scripts/optimistic-model.py: its time (f64), its list centre's place across x in the cells'
+ * region (f64, 0 to 1), the count of events it depends on (u32) and their numbers (u32 each,
+ * from 0 in the order handled): the last writer of each object it reads or writes (true
+ * dependences: the writes after reads are left to versions, as an optimistic scheme keeps).
+ *
  * Left out, so that the figures are a little optimistic: what a run does outside the events,
  * every sphere brought to the end of each step and the full rebuild of lists, slots and cells
  * at each frame (a review that added them as nodes, on 2744 spheres at dt = 0.05 with a frame
@@ -71,6 +77,11 @@ static struct {
     uint32_t *wd_reg[N_MODELS], *rd_reg[N_MODELS], *last_reg[N_MODELS], depth_reg[N_MODELS];
     double t_first, t_last;
     bool started, failed;
+    /* NBEP_PAR_TRACE: the file, each object's last writer (event number + 1, 0 for none) and
+     * one event's distinct writers */
+    FILE *trace;
+    uint32_t *writer, *deps;
+    size_t n_deps;
 } dag;
 
 static void dag_report(void)
@@ -101,6 +112,10 @@ static void dag_report(void)
     free(dag.rd_war);
     free(dag.reads);
     free(dag.writes);
+    if (dag.trace && fclose(dag.trace) != 0)
+        fprintf(stderr, "bench_parallelism: the trace could not be written\n");
+    free(dag.writer);
+    free(dag.deps);
 }
 
 static void dag_start(const nbep_evloop *e)
@@ -120,6 +135,13 @@ static void dag_start(const nbep_evloop *e)
     dag.reads = malloc(dag.cap * sizeof *dag.reads);
     dag.writes = malloc(dag.cap * sizeof *dag.writes);
     atexit(dag_report);
+    const char *tr = getenv("NBEP_PAR_TRACE");
+    if (tr && *tr) {
+        dag.trace = fopen(tr, "wb");
+        dag.writer = calloc(dag.objects, sizeof *dag.writer);
+        dag.deps = malloc(dag.cap * 2 * sizeof *dag.deps);
+        dag.failed |= !dag.trace || !dag.writer || !dag.deps;
+    }
     dag.failed = !dag.wd || !dag.wd_war || !dag.rd_war || !dag.reads || !dag.writes;
     for (int m = 0; m < N_MODELS; m++) {
         dag.wd_reg[m] = calloc(dag.objects, sizeof *dag.wd_reg[m]);
@@ -177,6 +199,37 @@ static void read_list_of(const nbep_evloop *e, uint32_t k)
 static uint32_t cell_obj(size_t c)
 {
     return (uint32_t)(2 * dag.n + c);
+}
+
+/* One event's trace record (NBEP_PAR_TRACE): the distinct last writers of what it reads or
+ * writes, then it becomes the writer of what it writes. */
+static void trace_event(const nbep_evloop *e, uint32_t i, double t)
+{
+    const size_t need = dag.n_reads + dag.n_writes;
+    uint32_t *d = realloc(dag.deps, (need ? need : 1) * sizeof *d);
+    if (!d) {
+        dag.failed = true;
+        return;
+    }
+    dag.deps = d;
+    dag.n_deps = 0;
+    for (size_t k = 0; k < need; k++) {
+        const uint32_t x = k < dag.n_reads ? dag.reads[k] : dag.writes[k - dag.n_reads];
+        const uint32_t w = dag.writer[x];
+        bool seen = w == 0;
+        for (size_t q = 0; q < dag.n_deps && !seen; q++)
+            seen = d[q] == w - 1;
+        if (!seen)
+            d[dag.n_deps++] = w - 1;
+    }
+    const double at = (e->cells.m[i].at.x - e->cells.lo.x) / (e->cells.hi.x - e->cells.lo.x);
+    const uint32_t nd = (uint32_t)dag.n_deps;
+    if (fwrite(&t, sizeof t, 1, dag.trace) != 1 || fwrite(&at, sizeof at, 1, dag.trace) != 1 ||
+        fwrite(&nd, sizeof nd, 1, dag.trace) != 1 ||
+        fwrite(d, sizeof *d, dag.n_deps, dag.trace) != dag.n_deps)
+        dag.failed = true;
+    for (size_t k = 0; k < dag.n_writes; k++)
+        dag.writer[dag.writes[k]] = (uint32_t)dag.events + 1;
 }
 
 /* Event of sphere i in region model m (dag's reads and writes set). */
@@ -281,6 +334,8 @@ static void dag_event(const nbep_evloop *e, const evl_ws *w, const void *evp)
     }
     for (int m = 0; m < N_MODELS; m++)
         region_model(e, i, m);
+    if (dag.trace)
+        trace_event(e, i, ev->time);
     dag.depth = d > dag.depth ? d : dag.depth;
     dag.depth_war = dw > dag.depth_war ? dw : dag.depth_war;
     if (!dag.events)

@@ -1,0 +1,117 @@
+#!/usr/bin/env python3
+"""What an optimistic parallel event loop could gain on a dense fluid (README, *Why the team
+stops near two times one thread*): a model driven by a real run's events, not nbep.
+
+The scheme modelled is the one issue 8 still needs: the box cut into P slabs across x, one
+thread each; every slab handles its own events (those whose sphere's list centre lies in it)
+in time order, from its own calendar, without waiting for the others; the threads meet at a
+barrier every W of simulated time (a window), where what crossed a slab's faces is settled.
+An event that read what an event of another slab writes earlier in simulated time, but later
+in wall time, read too soon: its slab rolls back to it and handles it and everything after it
+in the window again (an optimistic scheme, as parallel discrete-event simulation's Time Warp,
+keeping old versions of what it writes). The results stay those of one thread, bit for bit,
+since every event finally reads what it reads in one thread's order.
+
+Input: the trace of `build/bench/bench_parallelism` (NBEP_PAR_TRACE=FILE): each event's
+time, its list centre's place across x (0 to 1) and the events whose writes it reads or
+overwrites. Costs, in units of one event handled: each event 1; each event undone `--undo`
+(default 0.3); each window's barrier `--barrier` (default 0.2). Within a window slab r's
+k-th event starts at k (from the window's start) and ends at k + 1; an event of slab a at
+place i that an event of slab b at place j depends on, with i + 1 > j, makes b roll back when
+a's event ends, at i + 1, to j: b ends the window at i + 1 + (n_b - j) at the earliest, having
+undone what it had handled past j by then. A window lasts as long as its slowest slab, plus
+the barrier. Left out, so that the figures are an upper bound: rollbacks that cause others
+(a slab rolled back may have fed a third; its second go is assumed clean), the bookkeeping
+an optimistic event does beyond one thread's (versions, messages), and cache effects. The
+speed-up printed is events / (sum over windows of the window's length).
+
+    build/bench/bench_parallelism run DECK --resume MELT.h5 -t 1 -n N  (NBEP_PAR_TRACE=FILE)
+    scripts/optimistic-model.py FILE [--slabs 2,4,8,16] [--windows ...] [--undo U] [--barrier B]
+"""
+import argparse
+import struct
+import sys
+from collections import defaultdict
+
+
+def read_trace(path):
+    """Lists of times, places across x, and each event's dependences (event numbers)."""
+    times, places, deps = [], [], []
+    with open(path, "rb") as f:
+        data = f.read()
+    off, head = 0, struct.Struct("<ddI")
+    while off < len(data):
+        t, x, n = head.unpack_from(data, off)
+        off += head.size
+        times.append(t)
+        places.append(x)
+        deps.append(struct.unpack_from(f"<{n}I", data, off) if n else ())
+        off += 4 * n
+    return times, places, deps
+
+
+def model(times, places, deps, slabs, window, undo, barrier):
+    """(speed-up over one thread, events handled again / events, windows) for one setting.
+
+    Each event's last (kept) handling, in the trace's order (a time order, so every event comes
+    after those it depends on): its slab has gone ahead to it at `ahead` (the end of its
+    previous event); a dependence on another slab's event of the same window that ends later,
+    at `late`, means the slab handled it too soon: it rolls back when that news comes (undoing
+    what it had handled since, about late - ahead events, at `undo` each) and handles it
+    again from there. Rollbacks so follow from rollbacks (cascades are in)."""
+    n = len(times)
+    t0 = times[0]
+    slab = [min(int(x * slabs), slabs - 1) if x >= 0 else 0 for x in places]
+    win = [int((t - t0) / window) for t in times]
+    end = [0.0] * n                      # each event's end, from its window's start
+    clock = [0.0] * slabs                # each slab's end of its last event in the window
+    length, redone, w_cur, windows = 0.0, 0.0, win[0], 1
+    for e in range(n):
+        if win[e] != w_cur:              # the barrier: every slab starts the next window at 0
+            length += max(clock) + barrier
+            clock = [0.0] * slabs
+            w_cur = win[e]
+            windows += 1
+        b = slab[e]
+        ahead = clock[b]
+        late = ahead
+        for s in deps[e]:
+            if win[s] == w_cur and slab[s] != b and end[s] > late:
+                late = end[s]
+        if late > ahead:                 # read too soon: undo what was handled since, again
+            redone += late - ahead
+            start = late + undo * (late - ahead)
+        else:
+            start = ahead
+        end[e] = start + 1.0
+        clock[b] = end[e]
+    length += max(clock) + barrier
+    return n / length, redone / n, windows
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("trace")
+    ap.add_argument("--slabs", default="2,4,8,16")
+    ap.add_argument("--windows", default="0.0003,0.001,0.003,0.01,0.03,0.1",
+                    help="window widths W in units of simulated time")
+    ap.add_argument("--undo", type=float, default=0.3)
+    ap.add_argument("--barrier", type=float, default=0.2)
+    a = ap.parse_args()
+    times, places, deps = read_trace(a.trace)
+    if not times:
+        sys.exit("optimistic-model: the trace holds no events")
+    span = times[-1] - times[0]
+    print(f"{len(times)} events over {span:.4g} of simulated time; undo {a.undo}, "
+          f"barrier {a.barrier} (units of one event)")
+    print("| slabs | window W | events a window and slab | handled again | speed-up bound |")
+    print("| --- | --- | --- | --- | --- |")
+    for p in (int(s) for s in a.slabs.split(",")):
+        for w in (float(s) for s in a.windows.split(",")):
+            sp, again, nw = model(times, places, deps, p, w, a.undo, a.barrier)
+            print(f"| {p} | {w:g} | {len(times) / nw / p:.0f} | {100 * again:.1f} % | "
+                  f"{sp:.2f} |")
+
+
+if __name__ == "__main__":
+    main()

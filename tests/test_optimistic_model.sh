@@ -1,0 +1,78 @@
+#!/usr/bin/env bash
+# scripts/optimistic-model.py, the model of an optimistic loop over slabs (README, Threads on
+# dense scenes), on traces made by hand whose figures follow from its rules: slabs with
+# nothing in common run side by side (2 slabs: 2 times one thread); an event that depends on
+# the other slab's event of the same window waits for it, rolled back (a chain across the
+# slabs: 1 time, half the events handled again); a dependence on an earlier window costs
+# nothing (the barrier settled it); the barrier's and the undo's costs counted as stated. Then
+# the trace bench_parallelism writes (NBEP_PAR_TRACE) of a small fluid: a record for each
+# event it counts, each depending on earlier events only. Exit status 1 when a check fails.
+. "$(dirname "$0")/lib.sh"
+test_tmp optimistic_model
+# trace NAME 'time place dep,dep;time place;...': a trace file of the records given
+trace() {
+    "$PY" - "$tmp/$1" "$2" <<'EOF'
+import struct, sys
+with open(sys.argv[1], "wb") as f:
+    for rec in sys.argv[2].split(";"):
+        parts = rec.split()
+        deps = [int(d) for d in parts[2].split(",")] if len(parts) > 2 else []
+        f.write(struct.pack("<ddI", float(parts[0]), float(parts[1]), len(deps)))
+        f.write(struct.pack(f"<{len(deps)}I", *deps))
+EOF
+}
+# row FILE SLABS W: the table's row for those slabs and window
+row() { grep -E "^\| $2 \| $3 \|" "$1"; }
+model() { "$PY" scripts/optimistic-model.py "$@"; }
+
+trace apart '0.125 0.25;0.125 0.75;0.25 0.25;0.25 0.75;0.375 0.25;0.375 0.75'
+model "$tmp/apart" --slabs 1,2 --windows 10 --barrier 0 >"$tmp/apart.txt" 2>&1
+check "two slabs with nothing in common: 2 times one thread, nothing handled again" \
+    "row '$tmp/apart.txt' 2 10 | grep -qF '| 0.0 % | 2.00 |' &&
+     row '$tmp/apart.txt' 1 10 | grep -qF '| 0.0 % | 1.00 |'"
+trace chain '0.125 0.25;0.25 0.75 0;0.375 0.25 1;0.5 0.75 2'
+model "$tmp/chain" --slabs 2 --windows 10 --barrier 0 --undo 0 >"$tmp/chain.txt" 2>&1
+check "a chain across the slabs: 1 time one thread, each event after the first handled again" \
+    "row '$tmp/chain.txt' 2 10 | grep -qF '| 75.0 % | 1.00 |'"
+model "$tmp/chain" --slabs 2 --windows 10 --barrier 0 --undo 1 >"$tmp/undo.txt" 2>&1
+# each late event waits for its cause and undoes what its slab did since: 1, 2, then 3 events
+check "the chain with an undo as dear as an event: 4 events in 10 (0.40)" \
+    "row '$tmp/undo.txt' 2 10 | grep -qF '| 0.40 |'"
+model "$tmp/chain" --slabs 2 --windows 0.125 --barrier 0 --undo 1 >"$tmp/windows.txt" 2>&1
+check "the chain one event a window: what the barrier settled costs nothing (1 time one thread)" \
+    "row '$tmp/windows.txt' 2 0.125 | grep -qF '| 0.0 % | 1.00 |'"
+model "$tmp/apart" --slabs 2 --windows 10 --barrier 1 >"$tmp/barrier.txt" 2>&1
+check "a barrier as dear as an event: 6 events in 4 (1.50)" \
+    "row '$tmp/barrier.txt' 2 10 | grep -qF '| 1.50 |'"
+
+# bench_parallelism's trace of a small periodic fluid, cells mode, one thread
+bench=build/bench/bench_parallelism
+cat >"$tmp/fluid.deck" <<'EOF'
+run: { algorithm = "predictive"; neighbors = "cells"; steps = 10; dt = 0.05; threads = 1; seed = 3; };
+box: { min = [0.0, 0.0, 0.0]; max = [8.0, 8.0, 8.0]; periodic = [true, true, true]; };
+spheres = ( { count = 216; radius = 0.5; mass = 1.0; place = "lattice"; speed = 1.7320508075688772; } );
+output: { file = "fluid.h5"; every = 10; };
+EOF
+NBEP_PAR_TRACE="$tmp/fluid.bin" "$bench" run "$tmp/fluid.deck" -o "$tmp/fluid.h5" -t 1 --quiet \
+    >"$tmp/bench.out" 2>"$tmp/bench.err"
+rc=$?
+events=$(sed -n 's/^bench_parallelism: \([0-9]*\) events from .*/\1/p' "$tmp/bench.err")
+"$PY" - "$tmp/fluid.bin" >"$tmp/read.txt" 2>&1 <<'EOF'
+import struct, sys
+data = open(sys.argv[1], "rb").read()
+off, n, bad, t_last = 0, 0, 0, -1.0
+while off < len(data):
+    t, x, k = struct.unpack_from("<ddI", data, off)
+    off += 20
+    deps = struct.unpack_from(f"<{k}I", data, off)
+    off += 4 * k
+    bad += t < t_last or not 0.0 <= x <= 1.0 or any(d >= n for d in deps) or len(set(deps)) != k
+    t_last, n = t, n + 1
+print(n, bad, off == len(data))
+EOF
+check "bench_parallelism's trace: exit 0 (got $rc), a record for each of its $events events, in time order, each depending on distinct earlier ones" \
+    "[ $rc = 0 ] && [ -n '$events' ] && [ '$events' -gt 100 ] &&
+     grep -qx '$events 0 True' '$tmp/read.txt'"
+model "$tmp/fluid.bin" --slabs 2 --windows 0.01 >"$tmp/fluid.txt" 2>&1
+check "the model reads it: a row for 2 slabs" "row '$tmp/fluid.txt' 2 0.01 | grep -qE '\| [0-9.]+ \|$'"
+test_end test_optimistic_model
