@@ -1594,6 +1594,15 @@ MUTANTS = [
     ("contact-edge-pushes", "src/contact.c",
      "if (!(r1 - g * r2 >= -tol * den) || !(r2 - g * r1 >= -tol * den))",
      "if (!(r1 - g * r2 >= -tol * den))", ["test_contact"] + GRAN, None),
+    # the same check of the first contact's push, and the pushes themselves, with the normals'
+    # cosine's sign flipped: tests whose pairs were square to each other (g = 0) could not
+    # tell (mutate-sample's seed 7; test_contact's floor and 45-degree slope, both orders)
+    ("contact-edge-first-push-check-flipped", "src/contact.c",
+     "if (!(r1 - g * r2 >= -tol * den)", "if (!(r1 + g * r2 >= -tol * den)", ["test_contact"], None),
+    ("contact-edge-first-push-flipped", "src/contact.c", "mu[0] = fmax(0.0, (r1 - g * r2) / den);",
+     "mu[0] = fmax(0.0, (r1 + g * r2) / den);", ["test_contact"], None),
+    ("contact-edge-second-push-flipped", "src/contact.c", "mu[1] = fmax(0.0, (r2 - g * r1) / den);",
+     "mu[1] = fmax(0.0, (r2 + g * r1) / den);", ["test_contact"], None),
     # three contacts of a left-handed order taken as right-handed: the forces' signs flipped
     ("contact-corner-det-sign", "src/contact.c", "double s = det > 0.0 ? 1.0 : -1.0;", "double s = 1.0;",
      ["test_contact"] + GRAN, None),

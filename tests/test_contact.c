@@ -43,25 +43,34 @@ static void test_a_wall_the_motion_only_grazes_carries_no_load(void **state)
  *   x - a = (2, 0, 10) = mu0 n0 + mu1 n1 needs mu1 = -2 sqrt2 < 0;
  * - floor and n2: along their edge t = (-1, 1, 0)/sqrt2, x = (a.t) t = (-1.5, 1.5, 0), and
  *   x - a = (0.5, 0.5, 10) = 10 n0 + (sqrt2 / 2) n2, both pushing; x leaves n1 (x.n1 > 0).
- * So x = (-1.5, 1.5, 0) with contacts 0 and 2 active. Round-off of the normals: 1e-12. */
+ * So x = (-1.5, 1.5, 0) with contacts 0 and 2 active. The floor and the sloped wall meet at
+ * 45 degrees (n0.n1 = 1/sqrt2), so the pulling contact's push is found by elimination; it is
+ * tried in both places of that pair (sloped wall second, then first: active contacts 0 and 2,
+ * then 1 and 2). Round-off of the normals: 1e-12. */
 static void test_an_edge_held_by_a_pulling_contact_is_not_the_answer(void **state)
 {
     (void)state;
-    const nbep_vec3 n[3] = {{0, 0, 1}, unit(-1, 0, 1), unit(1, 1, 0)};
+    const nbep_vec3 floor_n = {0, 0, 1}, sloped = unit(-1, 0, 1), wall = unit(1, 1, 0);
+    const nbep_vec3 orders[2][3] = {{floor_n, sloped, wall}, {sloped, floor_n, wall}};
+    const unsigned want[2] = {5u, 6u};
     const nbep_vec3 a = {-2, 1, -10};
-    unsigned act = 99;
-    nbep_vec3 x = nbep_contact_project(a, n, 3, &act);
-    assert_int_equal(act, 5u);
-    assert_close(x.x, -1.5, 0.0, 1e-12);
-    assert_close(x.y, 1.5, 0.0, 1e-12);
-    assert_close(x.z, 0.0, 0.0, 1e-12);
-    /* the KKT conditions for the answer: in the cone, and x - a pushes along n0 and n2 */
-    for (int j = 0; j < 3; j++)
-        assert_true(nbep_vec3_dot(x, n[j]) >= -1e-12);
-    nbep_vec3 r = nbep_vec3_sub(x, a);
-    assert_close(r.x, 0.5, 0.0, 1e-12);
-    assert_close(r.y, 0.5, 0.0, 1e-12);
-    assert_close(r.z, 10.0, 0.0, 1e-12);
+    for (int o = 0; o < 2; o++) {
+        const nbep_vec3 *n = orders[o];
+        unsigned act = 99;
+        nbep_vec3 x = nbep_contact_project(a, n, 3, &act);
+        assert_int_equal(act, want[o]);
+        assert_close(x.x, -1.5, 0.0, 1e-12);
+        assert_close(x.y, 1.5, 0.0, 1e-12);
+        assert_close(x.z, 0.0, 0.0, 1e-12);
+        /* the KKT conditions for the answer: in the cone, and x - a pushes along the floor
+         * and the vertical wall */
+        for (int j = 0; j < 3; j++)
+            assert_true(nbep_vec3_dot(x, n[j]) >= -1e-12);
+        nbep_vec3 r = nbep_vec3_sub(x, a);
+        assert_close(r.x, 0.5, 0.0, 1e-12);
+        assert_close(r.y, 0.5, 0.0, 1e-12);
+        assert_close(r.z, 10.0, 0.0, 1e-12);
+    }
 }
 
 /* A sphere pushed into a corner (floor and two walls) by a = (-1, -2, -9.81) is held still by
@@ -93,7 +102,12 @@ static void test_a_corner_holds_still_in_either_order_and_a_fourth_contact_carri
  * 1 and 2 by the walls (whichever order they come in), 0 by the fourth, pulled away from; in a
  * V of two planes at 45 degrees, a = (0, 0, -g) is pushed back by g / sqrt(2) along each, and
  * a = (-1, 0, -g) by (g + 1) / sqrt(2) along the one facing +x and (g - 1) / sqrt(2) along the
- * other; on one floor, a = (3, 0, -g): g by the floor. Every answer rebuilds x = a + sum mu n. */
+ * other; on one floor, a = (3, 0, -g): g by the floor; on a floor and a slope at 45 degrees to
+ * it, rising towards +x (normal (-1, 0, 1)/sqrt2; not square to the floor: n0.n1 = 1/sqrt2,
+ * the pushes found by elimination), a = (1, 0, -g) is held still, x = 0, the slope pushing 1
+ * back along x, sqrt2 along its normal, and the floor the g - 1 left (either order). Every
+ * answer rebuilds
+ * x = a + sum mu n. */
 static void check_push(nbep_vec3 a, const nbep_vec3 *n, int k, const double *want)
 {
     unsigned act;
@@ -122,6 +136,10 @@ static void test_each_contact_pushes_its_share(void **state)
     check_push((nbep_vec3){0, 0, -g}, vee, 2, (double[]){g * s, g * s});
     check_push((nbep_vec3){-1, 0, -g}, vee, 2, (double[]){(g + 1) * s, (g - 1) * s});
     check_push((nbep_vec3){3, 0, -g}, &floor_n, 1, (double[]){g});
+    const nbep_vec3 floor_slope[2] = {floor_n, unit(-1, 0, 1)};
+    const nbep_vec3 slope_floor[2] = {unit(-1, 0, 1), floor_n};
+    check_push((nbep_vec3){1, 0, -g}, floor_slope, 2, (double[]){g - 1.0, sqrt(2.0)});
+    check_push((nbep_vec3){1, 0, -g}, slope_floor, 2, (double[]){sqrt(2.0), g - 1.0});
     /* a contact pulled away from pushes nothing: the wall facing +x, a = (3, 0, -g) */
     const nbep_vec3 floor_wall[2] = {floor_n, wall_x};
     check_push((nbep_vec3){3, 0, -g}, floor_wall, 2, (double[]){g, 0.0});
