@@ -716,6 +716,12 @@ MUTANTS = [
     ("pred-bytes-no-quartic-ws", "src/algo_predictive.c",
      "CHUNK * sizeof *w->part +\n                 nbep_predict_ws_bytes();", "CHUNK * sizeof *w->part;",
      ["test_memory_plan"], None),
+    # a small periodic box's side read as hi + lo: the same at a corner at the origin, where
+    # every test's box lay (mutate-sample's seed 7; test_periodic's box away from the origin)
+    ("skin-in-side-as-sum-x", "src/evloop.c", "const double len[3] = {hi.x - lo.x,",
+     "const double len[3] = {hi.x + lo.x,", ["test_periodic"], None),
+    ("skin-in-side-as-sum-z", "src/evloop.c", "hi.y - lo.y, hi.z - lo.z};", "hi.y - lo.y, hi.z + lo.z};",
+     ["test_periodic"], None),
     ("evloop-bytes-no-team-ws", "src/evloop.c",
      " + (size_t)team * NBEP_EVLOOP_RING * ws_bytes();", ";", ["test_memory_plan"], None),
     ("cells-bytes-cap-short", "src/cells.c", "2 * n + 8 > least ? 2 * n + 8 : least",

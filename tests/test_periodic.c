@@ -586,6 +586,38 @@ static void test_a_free_flight_wraps_and_counts_its_images(void **state)
  * centre ahead is wrapped into the box while the sphere is not, so the expiry must take their
  * offset the nearest way round, or the sphere would seem to have strayed a box length at once
  * and the loop would stall). */
+/* The lists' skin in a small periodic box is cut down so that three cells fit across it
+ * (nbep_evloop_skin_in): the box's side decides, not where the box lies. Side 4.5, diameter 1,
+ * eight spheres: cut well below the skin a dense fluid takes, and the same with the box's
+ * corner at the origin, at -L/2 (the box centred on it), at 10 and at -7.75 (every corner
+ * and side exact in binary, so each side is 4.5 exactly). Until 2026-12-06 no test had a
+ * periodic box away from the origin (a mutant reading the side as hi + lo passed). */
+static void test_the_skin_a_small_periodic_box_cuts_does_not_depend_on_where_it_lies(
+    void **state)
+{
+    (void)state;
+    const double L = 4.5, shifts[4] = {0.0, -2.25, 10.0, -7.75};
+    nbep_scene *sc = periodic_scene(8, L, 1, 0.01);
+    for (size_t i = 0; i < 8; i++) { /* a cubic lattice 2.25 apart */
+        const nbep_vec3 p = {1.0 + 2.25 * (double)(i & 1), 1.0 + 2.25 * (double)(i >> 1 & 1),
+                             1.0 + 2.25 * (double)(i >> 2)};
+        nbep_test_set_sphere(sc, i, p, ZERO, 0.5, 1.0, ZERO);
+    }
+    const double uncut = nbep_scene_list_skin(sc, &sc->state);
+    double first = NAN;
+    for (int k = 0; k < 4; k++) {
+        sc->box_min = (nbep_vec3){shifts[k], shifts[k], shifts[k]};
+        sc->box_max = (nbep_vec3){shifts[k] + L, shifts[k] + L, shifts[k] + L};
+        const double taken = nbep_scene_list_skin_taken(sc, &sc->state);
+        if (k == 0)
+            first = taken;
+        if (!(taken > 0.0 && taken < 0.75 * uncut && taken == first))
+            fail_msg("box corner at %g: skin %.17g (at the origin %.17g, uncut %.17g)", shifts[k],
+                     taken, first, uncut);
+    }
+    nbep_test_scene_free(&sc);
+}
+
 static void test_a_list_is_centred_ahead_of_a_straight_flight(void **state)
 {
     (void)state;
@@ -1992,6 +2024,7 @@ int main(void)
         cmocka_unit_test(test_frames_overlap_check_is_shared_by_the_threads),
         cmocka_unit_test(test_spheres_collide_across_a_periodic_face_at_the_analytic_time),
         cmocka_unit_test(test_a_free_flight_wraps_and_counts_its_images),
+        cmocka_unit_test(test_the_skin_a_small_periodic_box_cuts_does_not_depend_on_where_it_lies),
         cmocka_unit_test(test_a_list_is_centred_ahead_of_a_straight_flight),
         cmocka_unit_test(test_falling_through_a_periodic_axis_keeps_the_energy),
         cmocka_unit_test(test_periodic_fluid_is_exact_and_thread_independent),
