@@ -13,8 +13,11 @@ keeping old versions of what it writes). The results stay those of one thread, b
 since every event finally reads what it reads in one thread's order.
 
 Input: the trace of `build/bench/bench_parallelism` (NBEP_PAR_TRACE=FILE): each event's
-time, its list centre's place across x (0 to 1) and the events whose writes it reads or
-overwrites. Costs, in units of one event handled: each event 1; each event undone `--undo`
+time, its list centre's place across x (0 to 1), how far across x its footprint reaches, its
+kind and the events whose writes it reads or overwrites. With `--expiries wait` a list expiry
+whose footprint reaches into another slab is not handled ahead: it waits until every slab it
+reaches has handled its events before it (the first step of docs/optimistic-design.md, which
+keeps versions of motion only). Costs, in units of one event handled: each event 1; each event undone `--undo`
 (default 0.3); each window's barrier `--barrier` (default 0.2). Within a window slab r's
 k-th event starts at k (from the window's start) and ends at k + 1; an event of slab a at
 place i that an event of slab b at place j depends on, with i + 1 > j, makes b roll back when
@@ -27,6 +30,7 @@ speed-up printed is events / (sum over windows of the window's length).
 
     build/bench/bench_parallelism run DECK --resume MELT.h5 -t 1 -n N  (NBEP_PAR_TRACE=FILE)
     scripts/optimistic-model.py FILE [--slabs 2,4,8,16] [--windows ...] [--undo U] [--barrier B]
+                                     [--expiries ahead|wait]
 """
 import argparse
 import struct
@@ -34,23 +38,35 @@ import sys
 from collections import defaultdict
 
 
+EXPIRY = 1  # an event's kind in the trace: 1 a list expiry, 2 a reaction, 0 a stale slot
+
+
 def read_trace(path):
-    """Lists of times, places across x, and each event's dependences (event numbers)."""
-    times, places, deps = [], [], []
+    """Each event's time, place across x, footprint's reach (down, up), kind and dependences
+    (event numbers), as lists."""
+    times, places, reach, kinds, deps = [], [], [], [], []
     with open(path, "rb") as f:
         data = f.read()
-    off, head = 0, struct.Struct("<ddI")
+    off, head = 0, struct.Struct("<ddddII")
     while off < len(data):
-        t, x, n = head.unpack_from(data, off)
+        t, x, lo, hi, kind, n = head.unpack_from(data, off)
         off += head.size
         times.append(t)
         places.append(x)
+        reach.append((lo, hi))
+        kinds.append(kind)
         deps.append(struct.unpack_from(f"<{n}I", data, off) if n else ())
         off += 4 * n
-    return times, places, deps
+    return times, places, reach, kinds, deps
 
 
-def model(times, places, deps, slabs, window, undo, barrier):
+def slab_of(x, slabs):
+    """The slab of place x (0 to 1; a place past either end wraps round, as a periodic x
+    does, and a footprint's reach may)."""
+    return int((x % 1.0) * slabs) % slabs
+
+
+def model(times, places, reach, kinds, deps, slabs, window, undo, barrier, wait):
     """(speed-up over one thread, events handled again / events, windows) for one setting.
 
     Each event's last (kept) handling, in the trace's order (a time order, so every event comes
@@ -58,10 +74,12 @@ def model(times, places, deps, slabs, window, undo, barrier):
     previous event); a dependence on another slab's event of the same window that ends later,
     at `late`, means the slab handled it too soon: it rolls back when that news comes (undoing
     what it had handled since, about late - ahead events, at `undo` each) and handles it
-    again from there. Rollbacks so follow from rollbacks (cascades are in)."""
+    again from there. Rollbacks so follow from rollbacks (cascades are in). With `wait`, an
+    expiry whose footprint reaches another slab starts only once each slab it reaches has
+    ended its events before it (their clocks now, in the trace's time order)."""
     n = len(times)
     t0 = times[0]
-    slab = [min(int(x * slabs), slabs - 1) if x >= 0 else 0 for x in places]
+    slab = [slab_of(x, slabs) for x in places]
     win = [int((t - t0) / window) for t in times]
     end = [0.0] * n                      # each event's end, from its window's start
     clock = [0.0] * slabs                # each slab's end of its last event in the window
@@ -83,6 +101,15 @@ def model(times, places, deps, slabs, window, undo, barrier):
             start = late + undo * (late - ahead)
         else:
             start = ahead
+        if wait and kinds[e] == EXPIRY:  # held until the slabs it reaches are past it
+            lo, hi = reach[e]
+            first, last = slab_of(places[e] + lo, slabs), slab_of(places[e] + hi, slabs)
+            r = first
+            while True:
+                start = max(start, clock[r])
+                if r == last:
+                    break
+                r = (r + 1) % slabs
         end[e] = start + 1.0
         clock[b] = end[e]
     length += max(clock) + barrier
@@ -97,18 +124,21 @@ def main():
                     help="window widths W in units of simulated time")
     ap.add_argument("--undo", type=float, default=0.3)
     ap.add_argument("--barrier", type=float, default=0.2)
+    ap.add_argument("--expiries", choices=("ahead", "wait"), default="ahead")
     a = ap.parse_args()
-    times, places, deps = read_trace(a.trace)
+    times, places, reach, kinds, deps = read_trace(a.trace)
     if not times:
         sys.exit("optimistic-model: the trace holds no events")
     span = times[-1] - times[0]
-    print(f"{len(times)} events over {span:.4g} of simulated time; undo {a.undo}, "
-          f"barrier {a.barrier} (units of one event)")
+    expiries = sum(k == EXPIRY for k in kinds)
+    print(f"{len(times)} events over {span:.4g} of simulated time ({expiries} list expiries, "
+          f"{a.expiries}); undo {a.undo}, barrier {a.barrier} (units of one event)")
     print("| slabs | window W | events a window and slab | handled again | speed-up bound |")
     print("| --- | --- | --- | --- | --- |")
     for p in (int(s) for s in a.slabs.split(",")):
         for w in (float(s) for s in a.windows.split(",")):
-            sp, again, nw = model(times, places, deps, p, w, a.undo, a.barrier)
+            sp, again, nw = model(times, places, reach, kinds, deps, p, w, a.undo, a.barrier,
+                                  a.expiries == "wait")
             print(f"| {p} | {w:g} | {len(times) / nw / p:.0f} | {100 * again:.1f} % | "
                   f"{sp:.2f} |")
 

@@ -4,20 +4,23 @@
 # nothing in common run side by side (2 slabs: 2 times one thread); an event that depends on
 # the other slab's event of the same window waits for it, rolled back (a chain across the
 # slabs: 1 time, half the events handled again); a dependence on an earlier window costs
-# nothing (the barrier settled it); the barrier's and the undo's costs counted as stated. Then
+# nothing (the barrier settled it); the barrier's and the undo's costs counted as stated; with
+# --expiries wait, an expiry whose footprint reaches the other slab waits for it. Then
 # the trace bench_parallelism writes (NBEP_PAR_TRACE) of a small fluid: a record for each
 # event it counts, each depending on earlier events only. Exit status 1 when a check fails.
 . "$(dirname "$0")/lib.sh"
 test_tmp optimistic_model
-# trace NAME 'time place dep,dep;time place;...': a trace file of the records given
+# trace NAME 'time place [dep,dep [reach-up kind]];...': a trace file of the records given
+# (no dependences: -; reach down 0; reach up and kind 0 unless given)
 trace() {
     "$PY" - "$tmp/$1" "$2" <<'EOF'
 import struct, sys
 with open(sys.argv[1], "wb") as f:
     for rec in sys.argv[2].split(";"):
-        parts = rec.split()
-        deps = [int(d) for d in parts[2].split(",")] if len(parts) > 2 else []
-        f.write(struct.pack("<ddI", float(parts[0]), float(parts[1]), len(deps)))
+        parts = rec.split() + ["-", "0", "0"][len(rec.split()) - 2:]
+        deps = [int(d) for d in parts[2].split(",")] if parts[2] != "-" else []
+        f.write(struct.pack("<ddddII", float(parts[0]), float(parts[1]), 0.0, float(parts[3]),
+                            int(parts[4]), len(deps)))
         f.write(struct.pack(f"<{len(deps)}I", *deps))
 EOF
 }
@@ -44,6 +47,16 @@ check "the chain one event a window: what the barrier settled costs nothing (1 t
 model "$tmp/apart" --slabs 2 --windows 10 --barrier 1 >"$tmp/barrier.txt" 2>&1
 check "a barrier as dear as an event: 6 events in 4 (1.50)" \
     "row '$tmp/barrier.txt' 2 10 | grep -qF '| 1.50 |'"
+# an expiry of slab 0 after two events of slab 1, then two more of slab 0: ahead, 6 events in 3
+# (2.00); waiting for slab 1 when its footprint reaches there, in 5 (1.20); not when it does not
+trace expiry '0.125 0.75;0.1875 0.75;0.25 0.25 - 0.3 1;0.375 0.75;0.5 0.25;0.625 0.25'
+trace inside '0.125 0.75;0.1875 0.75;0.25 0.25 - 0.2 1;0.375 0.75;0.5 0.25;0.625 0.25'
+model "$tmp/expiry" --slabs 2 --windows 10 --barrier 0 >"$tmp/ahead.txt" 2>&1
+model "$tmp/expiry" --slabs 2 --windows 10 --barrier 0 --expiries wait >"$tmp/wait.txt" 2>&1
+model "$tmp/inside" --slabs 2 --windows 10 --barrier 0 --expiries wait >"$tmp/inside.txt" 2>&1
+check "an expiry reaching the other slab: 2.00 handled ahead, 1.20 waiting; inside its own, 2.00" \
+    "row '$tmp/ahead.txt' 2 10 | grep -qF '| 2.00 |' && row '$tmp/wait.txt' 2 10 | grep -qF '| 1.20 |' &&
+     row '$tmp/inside.txt' 2 10 | grep -qF '| 2.00 |' && grep -q '(1 list expiries, wait)' '$tmp/wait.txt'"
 
 # bench_parallelism's trace of a small periodic fluid, cells mode, one thread
 bench=build/bench/bench_parallelism
@@ -61,18 +74,21 @@ events=$(sed -n 's/^bench_parallelism: \([0-9]*\) events from .*/\1/p' "$tmp/ben
 import struct, sys
 data = open(sys.argv[1], "rb").read()
 off, n, bad, t_last = 0, 0, 0, -1.0
+kinds = set()
 while off < len(data):
-    t, x, k = struct.unpack_from("<ddI", data, off)
-    off += 20
+    t, x, lo, hi, kind, k = struct.unpack_from("<ddddII", data, off)
+    off += 40
     deps = struct.unpack_from(f"<{k}I", data, off)
     off += 4 * k
-    bad += t < t_last or not 0.0 <= x <= 1.0 or any(d >= n for d in deps) or len(set(deps)) != k
+    bad += (t < t_last or not 0.0 <= x <= 1.0 or any(d >= n for d in deps) or
+            len(set(deps)) != k or not -0.5 <= lo <= 0.0 <= hi <= 0.5 or kind > 2)
+    kinds.add(kind)
     t_last, n = t, n + 1
-print(n, bad, off == len(data))
+print(n, bad, off == len(data), sorted(kinds))
 EOF
-check "bench_parallelism's trace: exit 0 (got $rc), a record for each of its $events events, in time order, each depending on distinct earlier ones" \
+check "bench_parallelism's trace: exit 0 (got $rc), a record for each of its $events events, in time order, each depending on distinct earlier ones, its footprint within half the box, all three kinds" \
     "[ $rc = 0 ] && [ -n '$events' ] && [ '$events' -gt 100 ] &&
-     grep -qx '$events 0 True' '$tmp/read.txt'"
+     grep -qxF '$events 0 True [0, 1, 2]' '$tmp/read.txt'"
 model "$tmp/fluid.bin" --slabs 2 --windows 0.01 >"$tmp/fluid.txt" 2>&1
 check "the model reads it: a row for 2 slabs" "row '$tmp/fluid.txt' 2 0.01 | grep -qE '\| [0-9.]+ \|$'"
 test_end test_optimistic_model

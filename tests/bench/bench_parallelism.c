@@ -33,9 +33,12 @@
  *
  * With NBEP_PAR_TRACE=FILE in the environment it also writes each event's record to FILE, for
  * scripts/optimistic-model.py: its time (f64), its list centre's place across x in the cells'
- * region (f64, 0 to 1), the count of events it depends on (u32) and their numbers (u32 each,
- * from 0 in the order handled): the last writer of each object it reads or writes (true
- * dependences: the writes after reads are left to versions, as an optimistic scheme keeps).
+ * region (f64, 0 to 1), how far its footprint reaches from there, down and up (f64 each, the
+ * list centres of the spheres whose motion or list it reads or writes, the nearest way round
+ * a periodic x, in the same unit), its kind (u32: 1 an expiry, 2 a reaction, 0 a stale
+ * slot), the count of events it depends on (u32) and their numbers (u32 each, from 0 in the
+ * order handled): the last writer of each object it reads or writes (true dependences: the
+ * writes after reads are left to versions, as an optimistic scheme keeps).
  *
  * Left out, so that the figures are a little optimistic: what a run does outside the events,
  * every sphere brought to the end of each step and the full rebuild of lists, slots and cells
@@ -203,7 +206,7 @@ static uint32_t cell_obj(size_t c)
 
 /* One event's trace record (NBEP_PAR_TRACE): the distinct last writers of what it reads or
  * writes, then it becomes the writer of what it writes. */
-static void trace_event(const nbep_evloop *e, uint32_t i, double t)
+static void trace_event(const nbep_evloop *e, const evl_ws *w, uint32_t i, double t)
 {
     const size_t need = dag.n_reads + dag.n_writes;
     uint32_t *d = realloc(dag.deps, (need ? need : 1) * sizeof *d);
@@ -215,16 +218,30 @@ static void trace_event(const nbep_evloop *e, uint32_t i, double t)
     dag.n_deps = 0;
     for (size_t k = 0; k < need; k++) {
         const uint32_t x = k < dag.n_reads ? dag.reads[k] : dag.writes[k - dag.n_reads];
-        const uint32_t w = dag.writer[x];
-        bool seen = w == 0;
+        const uint32_t by = dag.writer[x];
+        bool seen = by == 0;
         for (size_t q = 0; q < dag.n_deps && !seen; q++)
-            seen = d[q] == w - 1;
+            seen = d[q] == by - 1;
         if (!seen)
-            d[dag.n_deps++] = w - 1;
+            d[dag.n_deps++] = by - 1;
     }
-    const double at = (e->cells.m[i].at.x - e->cells.lo.x) / (e->cells.hi.x - e->cells.lo.x);
-    const uint32_t nd = (uint32_t)dag.n_deps;
+    const double width = e->cells.hi.x - e->cells.lo.x, ci = e->cells.m[i].at.x;
+    double reach[2] = {0.0, 0.0};
+    for (size_t k = 0; k < need; k++) {
+        const uint32_t x = k < dag.n_reads ? dag.reads[k] : dag.writes[k - dag.n_reads];
+        if (x >= 2 * dag.n)
+            continue; /* a cell: its members are among the spheres read */
+        double dx = e->cells.m[x % dag.n].at.x - ci;
+        if (e->pb.axis[0])
+            dx -= e->pb.len[0] * nearbyint(dx / e->pb.len[0]);
+        reach[0] = dx / width < reach[0] ? dx / width : reach[0];
+        reach[1] = dx / width > reach[1] ? dx / width : reach[1];
+    }
+    const double at = (ci - e->cells.lo.x) / width;
+    const uint32_t kind = w->rebuilt ? 1u : w->reacted ? 2u : 0u, nd = (uint32_t)dag.n_deps;
     if (fwrite(&t, sizeof t, 1, dag.trace) != 1 || fwrite(&at, sizeof at, 1, dag.trace) != 1 ||
+        fwrite(reach, sizeof reach, 1, dag.trace) != 1 ||
+        fwrite(&kind, sizeof kind, 1, dag.trace) != 1 ||
         fwrite(&nd, sizeof nd, 1, dag.trace) != 1 ||
         fwrite(d, sizeof *d, dag.n_deps, dag.trace) != dag.n_deps)
         dag.failed = true;
@@ -335,7 +352,7 @@ static void dag_event(const nbep_evloop *e, const evl_ws *w, const void *evp)
     for (int m = 0; m < N_MODELS; m++)
         region_model(e, i, m);
     if (dag.trace)
-        trace_event(e, i, ev->time);
+        trace_event(e, w, i, ev->time);
     dag.depth = d > dag.depth ? d : dag.depth;
     dag.depth_war = dw > dag.depth_war ? dw : dag.depth_war;
     if (!dag.events)
