@@ -17,16 +17,17 @@ time, its list centre's place across x (0 to 1), how far across x its footprint 
 kind and the events whose writes it reads or overwrites. With `--expiries wait` a list expiry
 whose footprint reaches into another slab is not handled ahead: it waits until every slab it
 reaches has handled its events before it (the first step of docs/optimistic-design.md, which
-keeps versions of motion only). Costs, in units of one event handled: each event 1; each event undone `--undo`
-(default 0.3); each window's barrier `--barrier` (default 0.2). Within a window slab r's
-k-th event starts at k (from the window's start) and ends at k + 1; an event of slab a at
-place i that an event of slab b at place j depends on, with i + 1 > j, makes b roll back when
-a's event ends, at i + 1, to j: b ends the window at i + 1 + (n_b - j) at the earliest, having
-undone what it had handled past j by then. A window lasts as long as its slowest slab, plus
-the barrier. Left out, so that the figures are an upper bound: rollbacks that cause others
-(a slab rolled back may have fed a third; its second go is assumed clean), the bookkeeping
-an optimistic event does beyond one thread's (versions, messages), and cache effects. The
-speed-up printed is events / (sum over windows of the window's length).
+keeps versions of motion only).
+
+Costs, in units of one event handled: each event 1; each event undone `--undo` (default
+0.3); each window's barrier `--barrier` (default 0.2). The events are replayed in the trace's
+order (model(): each event's kept handling starts when its slab has ended the one before
+and, where it depends on another slab's event of the same window that ends later, after
+that one, plus the undo of what its slab handled meanwhile); so rollbacks that follow from
+rollbacks are in. A window lasts as long as its slowest slab, plus the barrier; the speed-up
+printed is events / (sum over windows of the window's length). Left out, so that the
+figures are an upper bound: the bookkeeping an optimistic event does beyond one thread's
+(versions, messages), and cache effects.
 
     build/bench/bench_parallelism run DECK --resume MELT.h5 -t 1 -n N  (NBEP_PAR_TRACE=FILE)
     scripts/optimistic-model.py FILE [--slabs 2,4,8,16] [--windows ...] [--undo U] [--barrier B]
@@ -35,7 +36,6 @@ speed-up printed is events / (sum over windows of the window's length).
 import argparse
 import struct
 import sys
-from collections import defaultdict
 
 
 EXPIRY = 1  # an event's kind in the trace: 1 a list expiry, 2 a reaction, 0 a stale slot
