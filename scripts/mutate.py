@@ -1593,6 +1593,11 @@ MUTANTS = [
      "!(bb - vc < -1e-12 * (bb + vv * (fabs(c) + pp)))", "!(bb - vc < 1e-12 * (bb + vv * (fabs(c) + pp)))",
      ["test_predict"] + CELLS, None),
     # ---- lasting contacts, TC model, cells-mode let-go ----
+    # the TC model's rest rule with the step's share read as 1e-9 / dt: equal to the default
+    # tc at dt = 1e-3, where every test ran (mutate-sample's seed 8; test_extremes' bounces
+    # at dt = 1e-3, 1e-4 and 1e-5)
+    ("rest-below-step-share-divided", "src/pred_react.c", "? fmax(NBEP_REST_FRACTION * dt, sc->tc)",
+     "? fmax(NBEP_REST_FRACTION / dt, sc->tc)", ["test_extremes"], None),
     ("contact-one-pushes", "src/contact.c", "if (!(an < 0.0))\n            return false;",
      "if (!(an > 0.0))\n            return false;", ["test_contact"] + GRAN, None),
     ("contact-leaves-tol", "src/contact.c", "if (m == 0 ? !(xn >= 0.0) : !(xn >= -tol))",

@@ -1106,6 +1106,44 @@ static void test_predictive_sphere_comes_to_rest_on_a_floor_with_e_0_5(void **st
     assert_true(o->w.energy_max <= o->sum.energy_initial * (1.0 + FEW_ULPS));
 }
 
+/* Where the TC model acts (e < 1, physics.tc > 0), a sphere bouncing on a floor rests at the
+ * bounce whose next flight would last no longer than tc (or 1e-9 of a step, far less here):
+ * dropped 18 mm at e = 0.5 it lands at v0 = sqrt(2 g h) and leaves the k-th landing at
+ * v0 e^k, a flight of 2 v0 e^k / g, so it lands k times, k the first with that flight within
+ * tc: 17 with the deck's default tc of 1e-6 s, the 17th flight 8 % inside it, the 16th twice it.
+ * The same count at dt = 1e-3, 1e-4 and 1e-5: the step does not enter the rule (a mutant
+ * that read the step's share as 1e-9 / dt, equal to tc at dt = 1e-3 only, landed 14 and 11
+ * times). */
+static void test_predictive_bounces_end_where_the_next_flight_is_within_tc_at_any_dt(
+    void **state)
+{
+    fixture *f = *state;
+    const double e = 0.5, g = 9.81, r = 0.1, h = 0.018, tc = 1e-6, dts[3] = {1e-3, 1e-4, 1e-5};
+    const double v0 = sqrt(2.0 * g * h);
+    for (int k = 0; k < 3; k++) {
+        const uint64_t steps = (uint64_t)(0.3 / dts[k]); /* all over by 0.18 s */
+        nbep_scene *sc = scene_new(f, 1, 1, "predictive", steps, dts[k]);
+        sc->restitution = e;
+        sc->tc = tc;
+        sc->output_every = steps;
+        nbep_test_set_plane(sc, 0, (nbep_vec3){0, 0, 1}, 0.0);
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){0.0, 0.0, r + h}, ZERO, r, 1.0,
+                             (nbep_vec3){0, 0, -g});
+        uint64_t landings = 1;
+        while (2.0 * v0 * pow(e, (double)landings) / g > tc)
+            landings++;
+        /* far from the edge, so that the roundings of the speeds cannot move the count */
+        assert_true(2.0 * v0 * pow(e, (double)landings) / g < 0.95 * tc &&
+                    2.0 * v0 * pow(e, (double)landings - 1.0) / g > 1.05 * tc);
+        const outcome *o = run(f, 1);
+        assert_clean(o, "predictive");
+        if (o->sum.plane_collisions != landings)
+            fail_msg("dt %g: %llu landings, want %llu", dts[k],
+                     (unsigned long long)o->sum.plane_collisions, (unsigned long long)landings);
+        assert_close(o->fin.pos[0].z, r, 0.0, FEW_ULPS * (r + h));
+    }
+}
+
 /* Detection under the same drop: the sphere sinks into the floor by up to a step's travel at
  * the landing speed between detections, but the run ends, stays finite, settles within that
  * depth of resting, and never holds more energy than it started with plus the potential of
@@ -1562,6 +1600,7 @@ int main(void)
         T(test_a_slot_names_the_smallest_of_partners_met_at_the_same_instant),
         T(test_sphere_hit_from_both_sides_at_once_stays_and_both_rebound),
         T(test_predictive_sphere_comes_to_rest_on_a_floor_with_e_0_5),
+        T(test_predictive_bounces_end_where_the_next_flight_is_within_tc_at_any_dt),
         T(test_detection_sphere_settles_on_a_floor_with_e_0_5),
         T(test_predictive_sphere_pulled_onto_a_resting_sphere_from_a_hair_gap_reacts),
         T(test_sphere_falling_on_a_resting_sphere_with_e_0_5_ends),
