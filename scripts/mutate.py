@@ -1592,6 +1592,11 @@ MUTANTS = [
     ("bound-miss-margin-wrong-way", "include/nbep/predict.h",
      "!(bb - vc < -1e-12 * (bb + vv * (fabs(c) + pp)))", "!(bb - vc < 1e-12 * (bb + vv * (fabs(c) + pp)))",
      ["test_predict"] + CELLS, None),
+    # the search's start past a touching pair's round-off dip at -a1 * a2: later than -a1 / a2
+    # where a2 > 1, as in the test's pair, inside the dip below (mutate-sample's seed 8;
+    # test_predict's slower pair)
+    ("touching-dip-start-multiplied", "src/predict.c", "q->t_start = -a[1] / a[2];",
+     "q->t_start = -a[1] * a[2];", ["test_predict"], None),
     # ---- lasting contacts, TC model, cells-mode let-go ----
     # the TC model's rest rule with the step's share read as 1e-9 / dt: equal to the default
     # tc at dt = 1e-3, where every test ran (mutate-sample's seed 8; test_extremes' bounces
