@@ -104,12 +104,8 @@ def model(times, places, reach, kinds, deps, slabs, window, undo, barrier, wait)
         if wait and kinds[e] == EXPIRY:  # held until the slabs it reaches are past it
             lo, hi = reach[e]
             first, last = slab_of(places[e] + lo, slabs), slab_of(places[e] + hi, slabs)
-            r = first
-            while True:
-                start = max(start, clock[r])
-                if r == last:
-                    break
-                r = (r + 1) % slabs
+            for j in range((last - first) % slabs + 1):
+                start = max(start, clock[(first + j) % slabs])
         end[e] = start + 1.0
         clock[b] = end[e]
     length += max(clock) + barrier

@@ -89,6 +89,11 @@ EOF
 check "bench_parallelism's trace: exit 0 (got $rc), a record for each of its $events events, in time order, each depending on distinct earlier ones, its footprint within half the box, all three kinds" \
     "[ $rc = 0 ] && [ -n '$events' ] && [ '$events' -gt 100 ] &&
      grep -qxF '$events 0 True [0, 1, 2]' '$tmp/read.txt'"
+NBEP_PAR_TRACE="$tmp/none/fluid.bin" "$bench" run "$tmp/fluid.deck" -o "$tmp/fluid2.h5" -t 1 \
+    --quiet >/dev/null 2>"$tmp/none.err"
+rc=$?
+check "a trace that cannot be written: exit 2 (got $rc), the one line naming it" \
+    "[ $rc = 2 ] && grep -qx 'bench_parallelism: cannot write the trace $tmp/none/fluid.bin' '$tmp/none.err'"
 model "$tmp/fluid.bin" --slabs 2 --windows 0.01 >"$tmp/fluid.txt" 2>&1
 check "the model reads it: a row for 2 slabs" "row '$tmp/fluid.txt' 2 0.01 | grep -qE '\| [0-9.]+ \|$'"
 test_end test_optimistic_model

@@ -84,7 +84,7 @@ static struct {
      * one event's distinct writers */
     FILE *trace;
     uint32_t *writer, *deps;
-    size_t n_deps;
+    size_t n_deps, deps_cap;
 } dag;
 
 static void dag_report(void)
@@ -138,14 +138,17 @@ static void dag_start(const nbep_evloop *e)
     dag.reads = malloc(dag.cap * sizeof *dag.reads);
     dag.writes = malloc(dag.cap * sizeof *dag.writes);
     atexit(dag_report);
-    const char *tr = getenv("NBEP_PAR_TRACE");
-    if (tr && *tr) {
-        dag.trace = fopen(tr, "wb");
-        dag.writer = calloc(dag.objects, sizeof *dag.writer);
-        dag.deps = malloc(dag.cap * 2 * sizeof *dag.deps);
-        dag.failed |= !dag.trace || !dag.writer || !dag.deps;
-    }
     dag.failed = !dag.wd || !dag.wd_war || !dag.rd_war || !dag.reads || !dag.writes;
+    const char *tr = getenv("NBEP_PAR_TRACE");
+    if (tr && *tr) { /* after the line above, which would forget a failed open */
+        dag.trace = fopen(tr, "wb");
+        if (!dag.trace) {
+            fprintf(stderr, "bench_parallelism: cannot write the trace %s\n", tr);
+            exit(2);
+        }
+        dag.writer = calloc(dag.objects, sizeof *dag.writer);
+        dag.failed |= !dag.writer;
+    }
     for (int m = 0; m < N_MODELS; m++) {
         dag.wd_reg[m] = calloc(dag.objects, sizeof *dag.wd_reg[m]);
         dag.rd_reg[m] = calloc(dag.objects, sizeof *dag.rd_reg[m]);
@@ -205,17 +208,25 @@ static uint32_t cell_obj(size_t c)
 }
 
 /* One event's trace record (NBEP_PAR_TRACE): the distinct last writers of what it reads or
- * writes, then it becomes the writer of what it writes. */
+ * writes and how far across x their spheres' list centres lie (a cell's members are among
+ * the spheres read), then it becomes the writer of what it writes. */
 static void trace_event(const nbep_evloop *e, const evl_ws *w, uint32_t i, double t)
 {
     const size_t need = dag.n_reads + dag.n_writes;
-    uint32_t *d = realloc(dag.deps, (need ? need : 1) * sizeof *d);
-    if (!d) {
-        dag.failed = true;
-        return;
+    if (need > dag.deps_cap) {
+        uint32_t *d = realloc(dag.deps, 2 * need * sizeof *d);
+        if (!d) {
+            dag.failed = true;
+            return;
+        }
+        dag.deps = d;
+        dag.deps_cap = 2 * need;
     }
-    dag.deps = d;
+    uint32_t *d = dag.deps;
     dag.n_deps = 0;
+    const double width = e->cells.hi.x - e->cells.lo.x;
+    const nbep_vec3 ci = e->cells.m[i].at;
+    double reach[2] = {0.0, 0.0};
     for (size_t k = 0; k < need; k++) {
         const uint32_t x = k < dag.n_reads ? dag.reads[k] : dag.writes[k - dag.n_reads];
         const uint32_t by = dag.writer[x];
@@ -224,20 +235,14 @@ static void trace_event(const nbep_evloop *e, const evl_ws *w, uint32_t i, doubl
             seen = d[q] == by - 1;
         if (!seen)
             d[dag.n_deps++] = by - 1;
+        if (x < 2 * dag.n) { /* a sphere's motion or list */
+            const nbep_vec3 dc = nbep_vec3_sub(e->cells.m[x % dag.n].at, ci);
+            const double dx = nbep_periodic_image(&e->pb, dc).x / width;
+            reach[0] = dx < reach[0] ? dx : reach[0];
+            reach[1] = dx > reach[1] ? dx : reach[1];
+        }
     }
-    const double width = e->cells.hi.x - e->cells.lo.x, ci = e->cells.m[i].at.x;
-    double reach[2] = {0.0, 0.0};
-    for (size_t k = 0; k < need; k++) {
-        const uint32_t x = k < dag.n_reads ? dag.reads[k] : dag.writes[k - dag.n_reads];
-        if (x >= 2 * dag.n)
-            continue; /* a cell: its members are among the spheres read */
-        double dx = e->cells.m[x % dag.n].at.x - ci;
-        if (e->pb.axis[0])
-            dx -= e->pb.len[0] * nearbyint(dx / e->pb.len[0]);
-        reach[0] = dx / width < reach[0] ? dx / width : reach[0];
-        reach[1] = dx / width > reach[1] ? dx / width : reach[1];
-    }
-    const double at = (ci - e->cells.lo.x) / width;
+    const double at = (ci.x - e->cells.lo.x) / width;
     const uint32_t kind = w->rebuilt ? 1u : w->reacted ? 2u : 0u, nd = (uint32_t)dag.n_deps;
     if (fwrite(&t, sizeof t, 1, dag.trace) != 1 || fwrite(&at, sizeof at, 1, dag.trace) != 1 ||
         fwrite(reach, sizeof reach, 1, dag.trace) != 1 ||
