@@ -64,6 +64,9 @@ FUZZ_REPLAY := $(BUILD)/tests/fuzz_replay
 PARALLELISM := $(BUILD)/bench/bench_parallelism
 # the same with a copy whose leader notes where its time goes (README, Threads on dense scenes)
 LEADER := $(BUILD)/bench/bench_leader
+# the same with a copy whose events also do the optimistic scheme's bookkeeping (README,
+# Threads on dense scenes): tests/test_optimistic_model.sh checks its bound
+VERSIONS := $(BUILD)/bench/bench_versions
 
 # One job a core unless -j is given: a serial build takes over a minute on 2 cores (the slowest
 # file, evloop.c, 5 s alone), about half that in parallel. Only at the top: a make
@@ -130,7 +133,7 @@ pgo: $(BUILD)/nbep
 # (NBEP_TEST_JOBS), then with VALGRIND=1 the test binaries again under memcheck (make valgrind;
 # CI runs both, one after the other: memcheck alone takes longer than the 10 minutes a check
 # should take).
-check: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY) $(PARALLELISM) $(LEADER)
+check: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY) $(PARALLELISM) $(LEADER) $(VERSIONS)
 	@python3 scripts/mutate.py --stale
 	@bash scripts/run-tests.sh $(TEST_BIN) $(TEST_SH)
 ifeq ($(VALGRIND),1)
@@ -143,7 +146,7 @@ valgrind: $(TEST_BIN)
 	@bash scripts/run-tests.sh --valgrind $(TEST_BIN)
 
 # Every program make check runs, built but not run (scripts/mutate.py builds these per mutant).
-check-programs: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY) $(PARALLELISM) $(LEADER)
+check-programs: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY) $(PARALLELISM) $(LEADER) $(VERSIONS)
 
 $(FUZZ_REPLAY): tests/fuzz/replay.c tests/fuzz/fuzz_scene.c tests/fuzz/sources $(FUZZ_SRC) \
 		$(wildcard include/nbep/*.h src/*.h) | $(BUILD)/tests

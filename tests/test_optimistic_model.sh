@@ -96,4 +96,38 @@ check "a trace that cannot be written: exit 2 (got $rc), the one line naming it"
     "[ $rc = 2 ] && grep -qx 'bench_parallelism: cannot write the trace $tmp/none/fluid.bin' '$tmp/none.err'"
 model "$tmp/fluid.bin" --slabs 2 --windows 0.01 >"$tmp/fluid.txt" 2>&1
 check "the model reads it: a row for 2 slabs" "row '$tmp/fluid.txt' 2 0.01 | grep -qE '\| [0-9.]+ \|$'"
+
+# bench_versions (the scheme's bookkeeping on one thread) on a fluid long across x: with
+# NBEP_VER_VERIFY every list is read through, and no member of another slab may sit in a list
+# that the side's reach skips, nor be read from another slab with no record kept; no read
+# comes too soon in the serial order; the bookkeeping changes nothing the run writes
+versions=build/bench/bench_versions
+cat >"$tmp/long.deck" <<'EOF'
+run: { algorithm = "predictive"; neighbors = "cells"; steps = 10; dt = 0.05; threads = 1; seed = 5; };
+box: { min = [0.0, 0.0, 0.0]; max = [24.0, 8.0, 8.0]; periodic = [true, true, true]; };
+spheres = ( { count = 768; radius = 0.5; mass = 1.0; place = "lattice"; speed = 1.7320508075688772; } );
+output: { file = "long.h5"; every = 10; };
+EOF
+"$versions" run "$tmp/long.deck" -o "$tmp/long0.h5" -t 1 --quiet --summary "$tmp/long0.json" \
+    2>"$tmp/long0.err"
+rc0=$?
+for s in 2 3; do
+    NBEP_VER_VERIFY=1 NBEP_VER_SLABS=$s NBEP_VER_WINDOW=0.02 "$versions" run "$tmp/long.deck" \
+        -o "$tmp/long$s.h5" -t 1 --quiet --summary "$tmp/long$s.json" 2>"$tmp/long$s.err"
+    rc=$?
+    tally=$(cat "$tmp/long$s.err")
+    num() { echo "$tally" | sed -n "s/.* \([0-9][0-9]*\) $1.*/\1/p"; }
+    check "bench_versions, $s slabs: exit 0 (got $rc); lists near a side read, fewer than the versions; notes and messages; none skipped wrongly, none too soon: $tally" \
+        "[ $rc = 0 ] && [ $rc0 = 0 ] && [ '$(num 'lists near')' -gt 0 ] &&
+         [ '$(num 'lists near')' -lt '$(num versions)' ] && [ '$(num notes)' -gt 0 ] &&
+         [ '$(num messages)' -gt 0 ] && echo '$tally' | grep -q ', 0 reads too soon, 0 reads of another slab in lists skipped\$'"
+    check "bench_versions, $s slabs: the run's collisions and energy those of the run without" \
+        "[ \"\$(grep -o '\"collisions\": [0-9]*\|\"energy_final\": [^,]*' '$tmp/long$s.json')\" = \
+           \"\$(grep -o '\"collisions\": [0-9]*\|\"energy_final\": [^,]*' '$tmp/long0.json')\" ] &&
+         grep -q '\"collisions\": [1-9]' '$tmp/long0.json'"
+done
+NBEP_VER_SLABS=65 "$versions" run "$tmp/long.deck" -o "$tmp/long9.h5" -t 1 --quiet 2>"$tmp/bad.err"
+rc=$?
+check "bench_versions, 65 slabs: exit 2 (got $rc), one line" \
+    "[ $rc = 2 ] && [ \$(wc -l <'$tmp/bad.err') = 1 ] && grep -q 'NBEP_VER_SLABS from 0 to 64' '$tmp/bad.err'"
 test_end test_optimistic_model

@@ -1,0 +1,304 @@
+/* What the optimistic slab scheme's own bookkeeping would cost a thread, per event
+ * (docs/optimistic-design.md, step 2): bin/nbep itself (src/main.c) with its own copy of
+ * src/evloop.c in which every event handled (cells mode, one thread) also does, on that one
+ * thread, the work each slab's thread would do beside the physics, as though the box were cut
+ * into NBEP_VER_SLABS slabs across x (a sphere owned by the slab of its list centre):
+ *
+ *   - a version of each sphere the event wrote (its motion through the ops' save, 96 bytes,
+ *     with the event's stamp: time and pair key) appended to the event's slab's log, what its
+ *     rollback would undo;
+ *   - for a sphere whose centre lies within SIDE_REACH of its slab's side (only such a sphere
+ *     is in a list of another slab's, or has one of another slab's in its list), its record:
+ *     the check a write makes for a read from another slab that came too soon (a later read
+ *     stamp), its newest version; and if another slab owns it, the version again as a message
+ *     to that slab's inbox;
+ *   - for each list read to predict a sphere again (by its owner: a sphere of another slab
+ *     that the event changed is predicted there from the message), if the sphere lies within
+ *     SIDE_REACH of a side, the owner of each member, and for each of another slab a note in
+ *     that member's record (the latest time another slab read it, and which slabs);
+ *   - at each window's end (NBEP_VER_WINDOW, in time units, default 0.003) the logs and
+ *     inboxes are emptied and the records' stamps left behind, as the window's meeting makes
+ *     everything before it final.
+ *
+ * So its time with NBEP_VER_SLABS set against its time without is the per-event share of the
+ * work a slab's thread does alone: a lower bound on the scheme's bookkeeping (it leaves out
+ * what only threads show: the cache lines of notes and messages passing between cores, the
+ * window's meeting, the rollbacks themselves, which scripts/optimistic-model.py counts). The
+ * design has room for it below about 12 % of an event on two threads and 35 % on 16 (README,
+ * Threads on dense scenes).
+ *
+ *   make build/bench/bench_versions
+ *   NBEP_VER_SLABS=2 NBEP_VER_WINDOW=0.003 build/bench/bench_versions run DECK -t 1 ...
+ *   scripts/bench-versions.sh [COUNT PHI]    (side by side, medians)
+ *
+ * Without NBEP_VER_SLABS (or 0) the hook returns at once: the baseline, the same binary. With
+ * NBEP_VER_VERIFY set every list is read through, and a member of another slab in a list that
+ * SIDE_REACH would have skipped, or read from another slab with no record kept, is counted
+ * (the bound's check: tests/test_optimistic_model.sh wants none). The tally (events, versions,
+ * events and lists near a side, notes, messages, windows, reads too soon: none in the serial
+ * order) goes to stderr at exit. Only with -t 1. Not for production. */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+struct nbep_evloop;
+struct evl_ws;
+struct nbep_evloop_ops;
+static void ver_event(struct nbep_evloop *e, const struct evl_ws *w, const void *ev,
+                      const struct nbep_evloop_ops *ops, void *u);
+/* expanded inside nbep__evloop_handle, where ops and u are its arguments */
+#define NBEP_EVLOOP_HANDLED_HOOK(e, w, ev) ver_event(e, w, ev, ops, u)
+#include "../../src/evloop.c"
+#include "../../src/evloop_team.c"
+#include "../../src/main.c"
+
+#define SLABS_MAX 64
+
+/* a version: the stamp of the event that wrote it and the motion it wrote */
+typedef struct {
+    double t;
+    uint64_t key;
+    uint32_t sphere;
+    nbep_evloop_motion m;
+} version;
+
+typedef struct {
+    version *log, *inbox;
+    size_t n_log, n_inbox, cap_log, cap_inbox;
+} slab;
+
+/* what a slab's thread keeps of a sphere, on one line: its newest version (index in its
+ * writer's log) and that version's window; the latest read of it from another slab (its time,
+ * its window) and which slabs read it then (a bit each, modulo 64): a version inserted before
+ * that time rolls those readers back to it */
+typedef struct {
+    double read_t;
+    uint32_t read_win, newest, newest_win, pad;
+    uint64_t readers;
+} sphere;
+
+static struct {
+    int slabs;       /* 0: off */
+    double window;
+    bool started, failed;
+    double t_win;    /* the current window's end */
+    double lo, inv, width; /* the cells' low x side, slabs per unit of x, a slab's width */
+    uint32_t win;    /* its number, from 1: what a sphere's newest and read stamps belong to */
+    size_t n;
+    sphere *sp;      /* n */
+    bool verify;     /* NBEP_VER_VERIFY: the lists skipped are read through too, and a member
+                      * of another slab found there counted (missed) */
+    slab s[SLABS_MAX];
+    unsigned long long events, versions, near, lists_read, reads_checked, notes, messages,
+        windows, too_soon, missed;
+} ver;
+
+static void ver_report(void)
+{
+    if (!ver.started)
+        return;
+    if (ver.failed)
+        fprintf(stderr, "bench_versions: no memory for the logs\n");
+    fprintf(stderr,
+            "bench_versions: slabs %d, window %g: %llu events, %llu versions, %llu near a side "
+            "(%.1f %%), %llu lists near a side read, %llu reads checked, %llu notes, %llu "
+            "messages, %llu windows, %llu reads too soon",
+            ver.slabs, ver.window, ver.events, ver.versions, ver.near,
+            ver.events ? 100.0 * (double)ver.near / (double)ver.events : 0.0, ver.lists_read,
+            ver.reads_checked, ver.notes, ver.messages, ver.windows, ver.too_soon);
+    if (ver.verify)
+        fprintf(stderr, ", %llu reads of another slab in lists skipped", ver.missed);
+    fputc('\n', stderr);
+    for (int k = 0; k < ver.slabs; k++) {
+        free(ver.s[k].log);
+        free(ver.s[k].inbox);
+    }
+    free(ver.sp);
+}
+
+static void ver_start(const nbep_evloop *e)
+{
+    ver.started = true;
+    const char *s = getenv("NBEP_VER_SLABS"), *w = getenv("NBEP_VER_WINDOW");
+    ver.slabs = s ? atoi(s) : 0;
+    ver.window = w ? atof(w) : 0.003;
+    if (ver.slabs < 0 || ver.slabs > SLABS_MAX || !(ver.window > 0.0)) {
+        fprintf(stderr, "bench_versions: NBEP_VER_SLABS from 0 to %d, NBEP_VER_WINDOW above 0\n",
+                SLABS_MAX);
+        exit(2);
+    }
+    if (e->team != 1) {
+        fprintf(stderr, "bench_versions: run it with -t 1\n");
+        exit(2);
+    }
+    atexit(ver_report);
+    if (!ver.slabs)
+        return;
+    ver.n = e->n;
+    ver.lo = e->cells.lo.x;
+    ver.width = (e->cells.hi.x - ver.lo) / ver.slabs;
+    ver.inv = 1.0 / ver.width;
+    ver.verify = getenv("NBEP_VER_VERIFY") != NULL;
+    ver.sp = calloc(ver.n, sizeof *ver.sp);
+    ver.failed = !ver.sp;
+}
+
+/* How near a slab's side a list centre must lie for its list to hold a member of another
+ * slab: each member's centre lies within the cutoff and two strays of it (each was within the
+ * cutoff of the list's centre, give or take its own stray, when it joined). So a sphere whose
+ * centre lies further than that inside its slab is read by no other slab, and its list names
+ * none of another. */
+#define SIDE_REACH(e) ((e)->cut + 2.0 * (e)->stray)
+
+/* Room for one more in a slab's array (doubling). */
+static bool grow(void **a, size_t *cap, size_t len, size_t size)
+{
+    if (len < *cap)
+        return true;
+    const size_t c = *cap ? 2 * *cap : 4096;
+    void *p = realloc(*a, c * size);
+    if (!p)
+        return false;
+    *a = p;
+    *cap = c;
+    return true;
+}
+
+/* The slab of a place across x. */
+static int slab_of(double x)
+{
+    const int k = (int)((x - ver.lo) * ver.inv);
+    return k < 0 ? 0 : k >= ver.slabs ? ver.slabs - 1 : k;
+}
+
+/* Whether place x lies within r of a side of its slab (a periodic x's ends are sides too; a
+ * place past the box's ends, as a wall's box allows, counts as near). */
+static bool near_slab_side(double x, double r)
+{
+    const double f = (x - ver.lo) * ver.inv;
+    if (!(f >= 0.0 && f < ver.slabs))
+        return true;
+    const double in = (f - (int)f) * ver.width;
+    return in < r || ver.width - in < r;
+}
+
+/* Sphere k, written by the event at (t, key) of slab `by`: the check for a read too soon,
+ * its version in the writer's log, and a message if another slab owns it. */
+static void write_version(const nbep_evloop *e, const nbep_evloop_ops *ops, void *u,
+                          uint32_t k, double t, uint64_t key, int by)
+{
+    const double at = e->cells.m[k].at.x;
+    slab *s = &ver.s[by]; /* the writer's log: what its rollback would undo */
+    if (!grow((void **)&s->log, &s->cap_log, s->n_log, sizeof *s->log)) {
+        ver.failed = true;
+        return;
+    }
+    version *v = &s->log[s->n_log];
+    v->t = t;
+    v->key = key;
+    v->sphere = k;
+    ops->save(u, k, &v->m);
+    ver.versions++;
+    if (!near_slab_side(at, SIDE_REACH(e))) {
+        s->n_log++;
+        return; /* no other slab reads it or owns it: the log is all */
+    }
+    sphere *x = &ver.sp[k];
+    if (x->read_win == ver.win && x->read_t > t)
+        ver.too_soon++; /* never, in the serial order */
+    x->newest = (uint32_t)s->n_log;
+    x->newest_win = ver.win;
+    s->n_log++;
+    const int owner = slab_of(at);
+    if (owner != by) {
+        slab *r = &ver.s[owner];
+        if (!grow((void **)&r->inbox, &r->cap_inbox, r->n_inbox, sizeof *r->inbox)) {
+            ver.failed = true;
+            return;
+        }
+        r->inbox[r->n_inbox++] = *v;
+        ver.messages++;
+    }
+}
+
+/* Sphere k's list (js[0..m)), read to predict k again after an event at time t. k's owner
+ * predicts it (a sphere of another slab that the event changed gets its new motion as a
+ * message, and its owner predicts it from there), so the reader is k's slab. If k's centre
+ * lies further than SIDE_REACH inside that slab, the list names none of another and is not
+ * looked at; else each member of another slab gets a note: its latest read from another slab
+ * and the reader. */
+static void read_list(const nbep_evloop *e, uint32_t k, const uint32_t *js, size_t m, double t)
+{
+    const double at = e->cells.m[k].at.x;
+    const bool skip = !near_slab_side(at, SIDE_REACH(e));
+    if (skip && !ver.verify)
+        return;
+    const int by = slab_of(at);
+    ver.lists_read += !skip;
+    for (size_t q = 0; q < m; q++) {
+        const uint32_t j = js[q];
+        ver.reads_checked += !skip;
+        if (slab_of(e->cells.m[j].at.x) == by)
+            continue;
+        if (skip) {
+            ver.missed++;
+            continue;
+        }
+        if (ver.verify && !near_slab_side(e->cells.m[j].at.x, SIDE_REACH(e)))
+            ver.missed++; /* read from another slab, yet its writes keep no record */
+        sphere *x = &ver.sp[j];
+        if (x->read_win != ver.win || x->read_t < t) {
+            x->read_win = ver.win;
+            x->read_t = t;
+            x->readers = 0;
+        }
+        x->readers |= (uint64_t)1 << (by % 64);
+        ver.notes++;
+    }
+}
+
+static void ver_event(nbep_evloop *e, const evl_ws *w, const void *evp,
+                      const nbep_evloop_ops *ops, void *u)
+{
+    if (!ver.started)
+        ver_start(e);
+    if (!ver.slabs || ver.failed)
+        return;
+    const nbep_event *ev = evp;
+    const double t = ev->time;
+    const uint32_t i = w->item;
+    ver.events++;
+    if (t >= ver.t_win) { /* a meeting: everything before it final */
+        for (int k = 0; k < ver.slabs; k++)
+            ver.s[k].n_log = ver.s[k].n_inbox = 0;
+        ver.win++;
+        ver.t_win = (floor(t / ver.window) + 1.0) * ver.window;
+        ver.windows++;
+    }
+    const uint64_t key = nbep__evloop_slot_key(i, ev);
+    const double cx = e->cells.m[i].at.x;
+    const int by = slab_of(cx);
+    /* what the event wrote: its sphere and, for a reaction, every sphere it changed */
+    write_version(e, ops, u, i, t, key, by);
+    for (size_t k = 0; k < w->n_changed; k++)
+        if (w->changed[k] != i)
+            write_version(e, ops, u, w->changed[k], t, key, by);
+    /* a sphere the event changed has its centre within the cutoff of i's: past that and
+     * SIDE_REACH (and two strays of margin) inside i's slab, no list it reads is looked at */
+    const bool near = near_slab_side(cx, 2.0 * e->cut + 4.0 * e->stray);
+    if (!near && !ver.verify)
+        return;
+    ver.near += near;
+    if (w->rebuilt) { /* its new list */
+        read_list(e, i, w->near, w->n_near, t);
+        return;
+    }
+    size_t m;
+    const uint32_t *js = nbep_nblist_of(&e->nl, i, &m);
+    read_list(e, i, js, m, t);
+    for (size_t k = 0; k < w->n_changed; k++)
+        if (w->changed[k] != i) {
+            js = nbep_nblist_of(&e->nl, w->changed[k], &m);
+            read_list(e, w->changed[k], js, m, t);
+        }
+}
