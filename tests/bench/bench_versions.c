@@ -51,6 +51,8 @@ static void ver_event(struct nbep_evloop *e, const struct evl_ws *w, const void 
 #include "../../src/evloop.c"
 #include "../../src/evloop_team.c"
 #include "../../src/main.c"
+/* its own copy of the cells callbacks too, for lean_save (cells_user) */
+#include "../../src/pred_cells.c"
 
 #define SLABS_MAX 64
 
@@ -86,6 +88,7 @@ static struct {
     uint32_t win;    /* its number, from 1: what a sphere's newest and read stamps belong to */
     size_t n;
     sphere *sp;      /* n */
+    bool lean;       /* NBEP_VER_LEAN: versions by lean_save, not the ops' save */
     bool verify;     /* NBEP_VER_VERIFY: the lists skipped are read through too, and a member
                       * of another slab found there counted (missed) */
     slab s[SLABS_MAX];
@@ -100,10 +103,11 @@ static void ver_report(void)
     if (ver.failed)
         fprintf(stderr, "bench_versions: no memory for the logs\n");
     fprintf(stderr,
-            "bench_versions: slabs %d, window %g: %llu events, %llu versions, %llu near a side "
+            "bench_versions: slabs %d%s, window %g: %llu events, %llu versions, %llu near a side "
             "(%.1f %%), %llu lists near a side read, %llu reads checked, %llu notes, %llu "
             "messages, %llu windows, %llu reads too soon",
-            ver.slabs, ver.window, ver.events, ver.versions, ver.near,
+            ver.slabs, ver.lean ? " (lean versions)" : "", ver.window, ver.events, ver.versions,
+            ver.near,
             ver.events ? 100.0 * (double)ver.near / (double)ver.events : 0.0, ver.lists_read,
             ver.reads_checked, ver.notes, ver.messages, ver.windows, ver.too_soon);
     if (ver.verify)
@@ -139,6 +143,7 @@ static void ver_start(const nbep_evloop *e)
     ver.width = (e->cells.hi.x - ver.lo) / ver.slabs;
     ver.inv = 1.0 / ver.width;
     ver.verify = getenv("NBEP_VER_VERIFY") != NULL;
+    ver.lean = getenv("NBEP_VER_LEAN") != NULL;
     ver.sp = calloc(ver.n, sizeof *ver.sp);
     ver.failed = !ver.sp;
 }
@@ -182,10 +187,30 @@ static bool near_slab_side(double x, double r)
     return in < r || ver.width - in < r;
 }
 
+/* What an event changes of sphere k, kept (ver.lean): as the ops' save (pred_cells.c) but the
+ * periodic image only where the event may have wrapped it (a list expiry), which a reaction
+ * never changes (and which is not in cache at a reaction: its own array) */
+static void lean_save(void *u, uint32_t k, nbep_evloop_motion *m, bool wraps)
+{
+    const cells_user *x = u;
+    const pred_ctx *c = x->c;
+    m->pos = x->s->pos[k];
+    m->vel = x->s->vel[k];
+    m->tau = c->tau[k];
+    m->ver = c->ver[k];
+    if (wraps)
+        for (int a = 0; a < 3; a++)
+            m->image[a] = x->s->image[3 * (size_t)k + (size_t)a];
+    if (c->t_last)
+        memcpy(&m->own[0], &c->t_last[k], sizeof *c->t_last);
+    if (c->jam)
+        memcpy(&m->own[1], &c->jam[k], sizeof *c->jam);
+}
+
 /* Sphere k, written by the event at (t, key) of slab `by`: the check for a read too soon,
  * its version in the writer's log, and a message if another slab owns it. */
 static void write_version(const nbep_evloop *e, const nbep_evloop_ops *ops, void *u,
-                          uint32_t k, double t, uint64_t key, int by)
+                          uint32_t k, double t, uint64_t key, int by, bool wraps)
 {
     const double at = e->cells.m[k].at.x;
     slab *s = &ver.s[by]; /* the writer's log: what its rollback would undo */
@@ -197,7 +222,10 @@ static void write_version(const nbep_evloop *e, const nbep_evloop_ops *ops, void
     v->t = t;
     v->key = key;
     v->sphere = k;
-    ops->save(u, k, &v->m);
+    if (ver.lean)
+        lean_save(u, k, &v->m, wraps);
+    else
+        ops->save(u, k, &v->m);
     ver.versions++;
     if (!near_slab_side(at, SIDE_REACH(e))) {
         s->n_log++;
@@ -279,10 +307,10 @@ static void ver_event(nbep_evloop *e, const evl_ws *w, const void *evp,
     const double cx = e->cells.m[i].at.x;
     const int by = slab_of(cx);
     /* what the event wrote: its sphere and, for a reaction, every sphere it changed */
-    write_version(e, ops, u, i, t, key, by);
+    write_version(e, ops, u, i, t, key, by, w->rebuilt);
     for (size_t k = 0; k < w->n_changed; k++)
         if (w->changed[k] != i)
-            write_version(e, ops, u, w->changed[k], t, key, by);
+            write_version(e, ops, u, w->changed[k], t, key, by, false);
     /* a sphere the event changed has its centre within the cutoff of i's: past that and
      * SIDE_REACH (and two strays of margin) inside i's slab, no list it reads is looked at */
     const bool near = near_slab_side(cx, 2.0 * e->cut + 4.0 * e->stray);
