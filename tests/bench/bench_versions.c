@@ -4,9 +4,10 @@
  * thread, the work each slab's thread would do beside the physics, as though the box were cut
  * into NBEP_VER_SLABS slabs across x (a sphere owned by the slab of its list centre):
  *
- *   - a version of each sphere the event wrote (its motion through the ops' save, 96 bytes,
- *     with the event's stamp: time and pair key) appended to the event's slab's log, what its
- *     rollback would undo;
+ *   - a version of each sphere the event wrote (its motion, 96 bytes, with the event's stamp:
+ *     time and pair key) appended to the event's slab's log, what its rollback would undo:
+ *     through the ops' save, or with NBEP_VER_LEAN set what the event may have changed
+ *     (lean_save: the periodic image only at a list expiry);
  *   - for a sphere whose centre lies within SIDE_REACH of its slab's side (only such a sphere
  *     is in a list of another slab's, or has one of another slab's in its list), its record:
  *     the check a write makes for a read from another slab that came too soon (a later read
