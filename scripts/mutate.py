@@ -3714,6 +3714,22 @@ MUTANTS = [
     ("progress-last-flag-inverted", "src/sim.c",
      "progress(sim, step, step == sim->step_end || stop);",
      "progress(sim, step, step != sim->step_end || stop);", ["tests/test_cli.sh"], None),
+    # ---- 2026-12-06, nineteenth session: mutate-sample's seed 9, its four gaps closed ----
+    # a detection thread's first contact room divided by its rows: one with none (more threads
+    # than rows) divides by zero (test_sim runs two spheres on up to 4 threads)
+    ("detect-list-room-divided", "src/algo_detect.c", "return 4 * rows + 64;",
+     "return 4 / rows + 64;", ["test_sim"], None),
+    # the grid's cells widened four times a pass, not two: coarser than the room asks
+    ("grid-growth-quadrupled", "src/grid.c", "h = fmax(2.0 * h, cbrt(",
+     "h = fmax(4.0 * h, cbrt(", ["test_grid"], None),
+    # the queue refusing the most sphere ids a deck may hold (UINT32_MAX spheres)
+    ("feq-limit-refuses-the-most", "src/feq.c", "if (n > UINT32_MAX)", "if (n >= UINT32_MAX)",
+     ["test_memory_plan"], None),
+    # each sphere's exported faces taken from another's record (/checkpoint/contacts)
+    ("export-faces-of-another-sphere", "src/algo_predictive.c",
+     "const face_met *m = c->face ? &c->face[i * CAGE_FACES + f] : NULL;",
+     "const face_met *m = c->face ? &c->face[i / CAGE_FACES + f] : NULL;",
+     ["test_pred_settle"], None),
 ]
 
 

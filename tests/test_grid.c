@@ -246,6 +246,42 @@ static void test_cells_fit_the_room_and_blocks_stay_in_the_grid(void **state)
         }
 }
 
+/* Cells no coarser than the room asks: centres along one axis (no volume, so the room alone
+ * widens the cells) get the first doubling of the side asked whose cells fit 2 n + 8, not a
+ * later one: the side decides grid mode's blocks (its predictions) and its horizon. */
+static void test_a_line_of_centres_gets_the_finest_doubling_that_fits(void **state)
+{
+    (void)state;
+    const size_t ns[] = {1, 2, 10, 50};
+    const double lens[] = {3.0, 49.5, 100.0, 1000.0, 12345.0};
+    for (size_t a = 0; a < sizeof ns / sizeof *ns; a++)
+        for (size_t b = 0; b < sizeof lens / sizeof *lens; b++)
+            for (int axis = 0; axis < 3; axis++) {
+                const size_t n = ns[a];
+                nbep_vec3 *p = malloc(n * sizeof *p);
+                assert_non_null(p);
+                double len = 0.0; /* the centres' extent along the axis */
+                for (size_t i = 0; i < n; i++) {
+                    const double t = n > 1 ? lens[b] * (double)i / (double)(n - 1) : 0.0;
+                    p[i] = nbep_vec3_make(axis == 0 ? t : 0.5, axis == 1 ? t : -2.0,
+                                          axis == 2 ? t : 7.0);
+                    len = fmax(len, t);
+                }
+                nbep_grid g = make(n);
+                nbep_grid_build(&g, p, n, 1.0);
+                double want = 1.0;
+                while (floor(len / want) + 1.0 > (double)g.cap_cells)
+                    want *= 2.0;
+                if (g.h != want)
+                    fail_msg("%zu centres over %g along axis %d: cells of %g, want %g", n, len,
+                             axis, g.h, want);
+                for (int k = 0; k < 3; k++)
+                    assert_int_equal(g.dim[k], k == axis ? (size_t)(floor(len / want) + 1.0) : 1);
+                nbep_grid_fini(&g);
+                free(p);
+            }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -254,6 +290,7 @@ int main(void)
         cmocka_unit_test(test_bounds_are_the_centres_corners_and_each_centre_lies_in_its_cell),
         cmocka_unit_test(test_a_rebuild_is_a_fresh_build),
         cmocka_unit_test(test_cells_fit_the_room_and_blocks_stay_in_the_grid),
+        cmocka_unit_test(test_a_line_of_centres_gets_the_finest_doubling_that_fits),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

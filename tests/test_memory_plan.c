@@ -26,6 +26,7 @@
 #include <string.h>
 
 #include "nbep/cells.h"
+#include "nbep/feq.h"
 #include "nbep/nblist.h"
 #include "nbep/vec3.h"
 #include "evloop_impl.h"
@@ -447,6 +448,33 @@ static void test_cell_lists_take_at_most_their_estimate_and_reach_it(void **stat
     }
 }
 
+/* The event queue refuses only what 32-bit sphere ids cannot number, as the scene does: a
+ * queue of UINT32_MAX spheres (ids 0 to UINT32_MAX - 1), the most a deck may hold, is not
+ * "too large" but asks for its memory, and fails as any create does when that is refused (here
+ * its first allocation, so nothing near its 128 GiB is ever asked for). test_feq holds one
+ * sphere more to the refusal. */
+static void test_an_event_queue_of_the_most_sphere_ids_asks_for_its_memory(void **state)
+{
+    (void)state;
+    if (SIZE_MAX <= UINT32_MAX)
+        skip();
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_feq *q = NULL;
+    count_start();
+    fail_call = 1;
+    const nbep_status st = nbep_feq_create((size_t)UINT32_MAX, &q, &d);
+    fail_call = 0;
+    /* (a message is kept only where its own allocations were not the one refused) */
+    const char *said = d.n_errors == 1 && d.cap > 0 && d.msg[0] ? d.msg[0] : "(none kept)";
+    if (!strstr(said, "no memory for an event queue of 4294967295 spheres"))
+        fail_msg("a queue of UINT32_MAX spheres: %zu message(s): %s", d.n_errors, said);
+    nbep_diag_fini(&d);
+    assert_int_equal(count_stop(), 0);
+    assert_int_equal(st, NBEP_ENOMEM);
+    assert_null(q);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -455,6 +483,7 @@ int main(void)
         cmocka_unit_test(test_the_cells_mode_allocates_what_it_estimates_but_its_lists),
         cmocka_unit_test(test_cell_lists_take_at_most_their_estimate_and_reach_it),
         cmocka_unit_test(test_a_create_refused_memory_anywhere_fails_whole_and_leaks_nothing),
+        cmocka_unit_test(test_an_event_queue_of_the_most_sphere_ids_asks_for_its_memory),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

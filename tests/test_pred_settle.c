@@ -4,7 +4,9 @@
  * and what a hold writes. test_granular and test_settle.sh show that piles come to rest; these
  * pin the rules those scenes pass through too rarely to fail on (a peak inside a step, a
  * sphere held already, more supports than a record holds, plane 0 among a candidate's supports
- * in a later round). One thread: the sub-phases' barriers are then one thread's. */
+ * in a later round). And the lasting state these rules leave, as the algorithm exports it for
+ * the file's checkpoint (each sphere's faces met, its own). One thread: the sub-phases'
+ * barriers are then one thread's. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -330,6 +332,48 @@ static void test_a_let_go_keeps_the_supports_that_did_not_react(void **state)
     fix_free(&f);
 }
 
+/* The faces a sphere met (the TC model's cage) go to the file's lasting state as its own: the
+ * algorithm's export (export_contacts, what /checkpoint/contacts keeps and a resume reads back)
+ * gives each sphere the faces of its own record, newest first, and none where it met none.
+ * Five spheres, each with its own faces set by hand (some with fewer than CAGE_FACES). */
+static void test_each_sphere_exports_the_faces_it_met(void **state)
+{
+    (void)state;
+    fix f;
+    const size_t n = 5;
+    fix_scene(&f, n);
+    f.sc->tc = 1e-4; /* the TC model, and under gravity its cage */
+    for (size_t i = 0; i < n; i++)
+        put(&f, i, (nbep_vec3){0.1 * (double)i, 0.0, 0.02}, 0.01);
+    fix_create(&f);
+    assert_non_null(f.c->face);
+    assert_non_null(f.sim->algo->export_contacts);
+    for (size_t i = 0; i < n; i++)
+        for (int k = 0; k < CAGE_FACES; k++) {
+            face_met *m = &f.c->face[i * CAGE_FACES + k];
+            if ((size_t)k > i % CAGE_FACES) { /* sphere i met i % CAGE_FACES + 1 faces */
+                *m = (face_met){.t = -INFINITY, .who = INT32_MIN};
+                continue;
+            }
+            *m = (face_met){.t = 0.5 - 0.01 * (double)(10 * i + (size_t)k),
+                            .n = {0.0, 0.0, 1.0},
+                            .p = {0.1 * (double)i, 0.0, 0.01},
+                            .who = k == 0 ? FLOOR : -1 - (int32_t)((i + 1) % n)};
+        }
+    nbep_contact_rec rec[5];
+    f.sim->algo->export_contacts(f.c, 0, n, rec);
+    for (size_t i = 0; i < n; i++)
+        for (int k = 0; k < CAGE_FACES; k++) {
+            const face_met *m = &f.c->face[i * CAGE_FACES + k];
+            const bool met = m->t > -INFINITY;
+            if (rec[i].face_who[k] != (met ? m->who : INT32_MIN) ||
+                (met && (rec[i].face_t[k] != m->t || rec[i].face_p[k][0] != m->p.x)))
+                fail_msg("sphere %zu, face %d: exported who %d at %g, met %d at %g", i, k,
+                         (int)rec[i].face_who[k], rec[i].face_t[k], (int)m->who, m->t);
+        }
+    fix_free(&f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -339,6 +383,7 @@ int main(void)
         cmocka_unit_test(test_plane_zero_stays_a_support_in_a_later_round),
         cmocka_unit_test(test_a_jam_from_a_sphere_without_acceleration_takes_in_one_touching_it),
         cmocka_unit_test(test_a_let_go_keeps_the_supports_that_did_not_react),
+        cmocka_unit_test(test_each_sphere_exports_the_faces_it_met),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -205,6 +205,36 @@ static void test_predictive_frames_are_bitwise_equal_for_1_2_4_8_threads(void **
     same_frames_for_threads("predictive", nbep_test_scaled(700, 300), 9.81, nts, 4);
 }
 
+/* More threads than detection rows: the rows are split by their pair tests, so two spheres on
+ * 3 or 4 threads leave threads with none (naive's second row tests nothing; seminaive's rows
+ * cost alike, and 2 rows cannot go round 3 threads). A thread without rows starts an empty
+ * contact list, and the run is the 1-thread run bit for bit: the head-on pair meets once. */
+static void test_detection_on_more_threads_than_rows_gives_the_one_thread_run(void **state)
+{
+    (void)state;
+    const char *const algos[] = {"naive", "seminaive"};
+    for (int a = 0; a < 2; a++) {
+        nbep_scene *sc = nbep_test_scene_new(2, 0, algos[a], 500, 1e-3);
+        nbep_test_set_sphere(sc, 0, (nbep_vec3){-1.31, 0, 0}, (nbep_vec3){2.9, 0, 0}, 0.25, 1.3,
+                             ZERO);
+        nbep_test_set_sphere(sc, 1, (nbep_vec3){1.17, 0, 0}, (nbep_vec3){-1.7, 0, 0}, 0.25, 1.3,
+                             ZERO);
+        frames ref = {0};
+        nbep_summary s1 = run(sc, 1, NULL, &ref);
+        assert_int_equal(s1.sphere_collisions, 1);
+        for (int nt = 2; nt <= 4; nt++) {
+            frames f = {0};
+            nbep_summary sk = run(sc, nt, NULL, &f);
+            frames_equal(&ref, &f);
+            assert_int_equal(sk.sphere_collisions, 1);
+            assert_int_equal(sk.checks, s1.checks);
+            nbep_test_frames_free(&f);
+        }
+        nbep_test_frames_free(&ref);
+        nbep_test_scene_free(&sc);
+    }
+}
+
 /* Seminaive pre-filters naive's tests but must find, and answer, exactly the same pairs in
  * the same order: the frames are bitwise the naive ones, with fewer checks. */
 static void test_seminaive_frames_equal_naive_frames_with_fewer_checks(void **state)
@@ -786,6 +816,7 @@ int main(void)
         cmocka_unit_test(test_seminaive_frames_are_bitwise_equal_for_1_2_4_threads),
         cmocka_unit_test(test_predictive_frames_are_bitwise_equal_for_1_2_4_8_threads),
         cmocka_unit_test(test_seminaive_frames_equal_naive_frames_with_fewer_checks),
+        cmocka_unit_test(test_detection_on_more_threads_than_rows_gives_the_one_thread_run),
         cmocka_unit_test(test_detection_on_a_crowded_fluid_is_exact_across_threads_and_keeps_energy),
         cmocka_unit_test(test_naive_gas_without_gravity_conserves_energy),
         cmocka_unit_test(test_predictive_gas_under_gravity_conserves_energy),
