@@ -6,8 +6,9 @@
  *
  *   - a version of each sphere the event wrote (its motion, 96 bytes, with the event's stamp:
  *     time and pair key) appended to the event's slab's log, what its rollback would undo:
- *     through the ops' save, or with NBEP_VER_LEAN set what the event may have changed
- *     (lean_save: the periodic image only at a list expiry);
+ *     through the ops' save, or with NBEP_VER_LEAN set, for a sphere far from its slab's
+ *     sides (below), a lean version of 80 bytes, what a reaction changes (lean_save: the
+ *     periodic image in one more only at a list expiry);
  *   - for a sphere whose centre lies within SIDE_REACH of its slab's side (only such a sphere
  *     is in a list of another slab's, or has one of another slab's in its list), its record:
  *     the check a write makes for a read from another slab that came too soon (a later read
@@ -65,9 +66,21 @@ typedef struct {
     nbep_evloop_motion m;
 } version;
 
+/* a lean version: the stamp's time and what a reaction changes (80 bytes, against the 120
+ * of a whole one; an expiry's periodic image goes in a second lean version's place, as a
+ * rare extra entry: the key is the event's, found again from its log position) */
+typedef struct {
+    double t;
+    uint32_t sphere, image; /* image: 1 for the entry holding an expiry's image in pos */
+    nbep_vec3 pos, vel;
+    double tau;
+    uint64_t ver;
+} lean_version;
+
 typedef struct {
     version *log, *inbox;
-    size_t n_log, n_inbox, cap_log, cap_inbox;
+    lean_version *lean;
+    size_t n_log, n_inbox, n_lean, cap_log, cap_inbox, cap_lean;
 } slab;
 
 /* what a slab's thread keeps of a sphere, on one line: its newest version (index in its
@@ -89,7 +102,7 @@ static struct {
     uint32_t win;    /* its number, from 1: what a sphere's newest and read stamps belong to */
     size_t n;
     sphere *sp;      /* n */
-    bool lean;       /* NBEP_VER_LEAN: versions by lean_save, not the ops' save */
+    bool lean;       /* NBEP_VER_LEAN: the versions of spheres far from a side lean (lean_save) */
     bool verify;     /* NBEP_VER_VERIFY: the lists skipped are read through too, and a member
                       * of another slab found there counted (missed) */
     slab s[SLABS_MAX];
@@ -117,8 +130,16 @@ static void ver_report(void)
     for (int k = 0; k < ver.slabs; k++) {
         free(ver.s[k].log);
         free(ver.s[k].inbox);
+        free(ver.s[k].lean);
     }
     free(ver.sp);
+}
+
+/* Whether the environment sets a switch: set, and neither empty nor 0. */
+static bool env_on(const char *name)
+{
+    const char *v = getenv(name);
+    return v && *v && strcmp(v, "0") != 0;
 }
 
 static void ver_start(const nbep_evloop *e)
@@ -143,8 +164,8 @@ static void ver_start(const nbep_evloop *e)
     ver.lo = e->cells.lo.x;
     ver.width = (e->cells.hi.x - ver.lo) / ver.slabs;
     ver.inv = 1.0 / ver.width;
-    ver.verify = getenv("NBEP_VER_VERIFY") != NULL;
-    ver.lean = getenv("NBEP_VER_LEAN") != NULL;
+    ver.verify = env_on("NBEP_VER_VERIFY");
+    ver.lean = env_on("NBEP_VER_LEAN");
     ver.sp = calloc(ver.n, sizeof *ver.sp);
     ver.failed = !ver.sp;
 }
@@ -188,24 +209,32 @@ static bool near_slab_side(double x, double r)
     return in < r || ver.width - in < r;
 }
 
-/* What an event changes of sphere k, kept (ver.lean): as the ops' save (pred_cells.c) but the
- * periodic image only where the event may have wrapped it (a list expiry), which a reaction
- * never changes (and which is not in cache at a reaction: its own array) */
-static void lean_save(void *u, uint32_t k, nbep_evloop_motion *m, bool wraps)
+/* What an event changes of sphere k, kept as a lean version in slab s's log (ver.lean): its
+ * motion, local time and response count, and where the event may have wrapped it (a list
+ * expiry) its periodic image in one more entry. (A granular run's two words of the TC model,
+ * which the ops' save keeps too, would take a third; the fluids have none.) */
+static bool lean_save(slab *s, void *u, uint32_t k, double t, bool wraps)
 {
     const cells_user *x = u;
     const pred_ctx *c = x->c;
-    m->pos = x->s->pos[k];
-    m->vel = x->s->vel[k];
-    m->tau = c->tau[k];
-    m->ver = c->ver[k];
-    if (wraps)
-        for (int a = 0; a < 3; a++)
-            m->image[a] = x->s->image[3 * (size_t)k + (size_t)a];
-    if (c->t_last)
-        memcpy(&m->own[0], &c->t_last[k], sizeof *c->t_last);
-    if (c->jam)
-        memcpy(&m->own[1], &c->jam[k], sizeof *c->jam);
+    for (int e = 0; e <= (int)wraps; e++) {
+        if (!grow((void **)&s->lean, &s->cap_lean, s->n_lean, sizeof *s->lean))
+            return false;
+        lean_version *v = &s->lean[s->n_lean++];
+        v->t = t;
+        v->sphere = k;
+        v->image = (uint32_t)e;
+        if (e) {
+            const int32_t *im = &x->s->image[3 * (size_t)k];
+            v->pos = (nbep_vec3){im[0], im[1], im[2]};
+            continue;
+        }
+        v->pos = x->s->pos[k];
+        v->vel = x->s->vel[k];
+        v->tau = c->tau[k];
+        v->ver = c->ver[k];
+    }
+    return true;
 }
 
 /* Sphere k, written by the event at (t, key) of slab `by`: the check for a read too soon,
@@ -215,6 +244,13 @@ static void write_version(const nbep_evloop *e, const nbep_evloop_ops *ops, void
 {
     const double at = e->cells.m[k].at.x;
     slab *s = &ver.s[by]; /* the writer's log: what its rollback would undo */
+    ver.versions++;
+    const bool side = near_slab_side(at, SIDE_REACH(e));
+    if (ver.lean && !side) { /* no other slab reads it or owns it: the lean log is all */
+        if (!lean_save(s, u, k, t, wraps))
+            ver.failed = true;
+        return;
+    }
     if (!grow((void **)&s->log, &s->cap_log, s->n_log, sizeof *s->log)) {
         ver.failed = true;
         return;
@@ -223,12 +259,8 @@ static void write_version(const nbep_evloop *e, const nbep_evloop_ops *ops, void
     v->t = t;
     v->key = key;
     v->sphere = k;
-    if (ver.lean)
-        lean_save(u, k, &v->m, wraps);
-    else
-        ops->save(u, k, &v->m);
-    ver.versions++;
-    if (!near_slab_side(at, SIDE_REACH(e))) {
+    ops->save(u, k, &v->m);
+    if (!side) {
         s->n_log++;
         return; /* no other slab reads it or owns it: the log is all */
     }
@@ -299,7 +331,7 @@ static void ver_event(nbep_evloop *e, const evl_ws *w, const void *evp,
     ver.events++;
     if (t >= ver.t_win) { /* a meeting: everything before it final */
         for (int k = 0; k < ver.slabs; k++)
-            ver.s[k].n_log = ver.s[k].n_inbox = 0;
+            ver.s[k].n_log = ver.s[k].n_inbox = ver.s[k].n_lean = 0;
         ver.win++;
         ver.t_win = (floor(t / ver.window) + 1.0) * ver.window;
         ver.windows++;
