@@ -13,7 +13,8 @@
 #   SLABS    slab counts to model (default "2 16")
 #   WINDOWS  window lengths in time units (default "0.003")
 #   LEANS    versions: 1 lean (80 bytes, what a reaction changes) for spheres far from a
-#            side, 0 the ops' whole save everywhere; both "0 1" (default "1")
+#            side, 2 those written past the caches (streaming stores), 0 the ops' whole save
+#            everywhere; several, e.g. "0 1 2" (default "1")
 #   REPS     repeats, the outer loop (default 5)
 #   STEPS    the timed stretch, in steps of the deck's dt = 0.1 after a melt of 20 (default 40)
 #   OUT      scratch folder (default build/bench-versions)
@@ -98,7 +99,7 @@ for swl in "0:0:0" $settings; do
             for (i = 0; i < n; i++) for (j = i + 1; j < n; j++) if (x[j] < x[i]) { y = x[i]; x[i] = x[j]; x[j] = y }
             return n % 2 ? x[(n - 1) / 2] : (x[n / 2 - 1] + x[n / 2]) / 2 }
         END { if (s == 0) { printf "  baseline: %.3f s (%d collisions)\n", med(t, n), c; exit }
-              printf "  %s slabs, window %s, %s versions: %.3f times the baseline", s, w, l ? "lean" : "whole", med(r, n)
+              printf "  %s slabs, window %s, %s versions: %.3f times the baseline", s, w, l == 2 ? "streamed lean" : l ? "lean" : "whole", med(r, n)
               if (p[0] != "") printf "; perf: the bookkeeping %.1f %% of the rest", med(p, n)
               printf "\n" }' "$rows"
     [ "$s" = 0 ] || sed 's/^bench_versions: /      /' "$OUT/tally-$s-$w-$l.txt"

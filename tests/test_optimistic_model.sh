@@ -100,8 +100,8 @@ check "the model reads it: a row for 2 slabs" "row '$tmp/fluid.txt' 2 0.01 | gre
 # bench_versions (the scheme's bookkeeping on one thread) on a fluid long across x: with
 # NBEP_VER_VERIFY every list is read through, and no member of another slab may sit in a list
 # that the side's reach skips, nor be read from another slab with no record kept; no read
-# comes too soon in the serial order; the bookkeeping (whole versions on 2 slabs, lean on 3)
-# changes nothing the run writes
+# comes too soon in the serial order; the bookkeeping (whole versions on 2 slabs, lean ones
+# written past the caches on 3) changes nothing the run writes
 versions=build/bench/bench_versions
 cat >"$tmp/long.deck" <<'EOF'
 run: { algorithm = "predictive"; neighbors = "cells"; steps = 10; dt = 0.05; threads = 1; seed = 5; };
@@ -113,8 +113,8 @@ EOF
     2>"$tmp/long0.err"
 rc0=$?
 for s in 2 3; do
-    # lean versions on 3 slabs (lean_save reads the cells callbacks' context)
-    NBEP_VER_LEAN=$([ $s = 3 ] && echo 1 || echo 0) \
+    # lean versions, streamed, on 3 slabs (lean_save reads the cells callbacks' context)
+    NBEP_VER_LEAN=$([ $s = 3 ] && echo 2 || echo 0) \
         NBEP_VER_VERIFY=1 NBEP_VER_SLABS=$s NBEP_VER_WINDOW=0.02 "$versions" run "$tmp/long.deck" \
         -o "$tmp/long$s.h5" -t 1 --quiet --summary "$tmp/long$s.json" 2>"$tmp/long$s.err"
     rc=$?

@@ -8,7 +8,8 @@
  *     time and pair key) appended to the event's slab's log, what its rollback would undo:
  *     through the ops' save, or with NBEP_VER_LEAN set, for a sphere far from its slab's
  *     sides (below), a lean version of 80 bytes, what a reaction changes (lean_save: the
- *     periodic image in one more only at a list expiry);
+ *     periodic image in one more only at a list expiry); NBEP_VER_LEAN=2 writes those past
+ *     the caches (put_lean: a log is read again only by a rollback);
  *   - for a sphere whose centre lies within SIDE_REACH of its slab's side (only such a sphere
  *     is in a list of another slab's, or has one of another slab's in its list), its record:
  *     the check a write makes for a read from another slab that came too soon (a later read
@@ -42,6 +43,9 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 struct nbep_evloop;
 struct evl_ws;
@@ -76,6 +80,8 @@ typedef struct {
     double tau;
     uint64_t ver;
 } lean_version;
+_Static_assert(sizeof(lean_version) % 16 == 0,
+               "a lean version is whole 16-byte words (put_lean)");
 
 typedef struct {
     version *log, *inbox;
@@ -103,6 +109,7 @@ static struct {
     size_t n;
     sphere *sp;      /* n */
     bool lean;       /* NBEP_VER_LEAN: the versions of spheres far from a side lean (lean_save) */
+    bool stream;     /* NBEP_VER_LEAN=2: and written past the caches (put_lean) */
     bool verify;     /* NBEP_VER_VERIFY: the lists skipped are read through too, and a member
                       * of another slab found there counted (missed) */
     slab s[SLABS_MAX];
@@ -120,8 +127,9 @@ static void ver_report(void)
             "bench_versions: slabs %d%s, window %g: %llu events, %llu versions, %llu near a side "
             "(%.1f %%), %llu lists near a side read, %llu reads checked, %llu notes, %llu "
             "messages, %llu windows, %llu reads too soon",
-            ver.slabs, ver.lean ? " (lean versions)" : "", ver.window, ver.events, ver.versions,
-            ver.near,
+            ver.slabs,
+            ver.stream ? " (lean versions, streamed)" : ver.lean ? " (lean versions)" : "",
+            ver.window, ver.events, ver.versions, ver.near,
             ver.events ? 100.0 * (double)ver.near / (double)ver.events : 0.0, ver.lists_read,
             ver.reads_checked, ver.notes, ver.messages, ver.windows, ver.too_soon);
     if (ver.verify)
@@ -166,6 +174,7 @@ static void ver_start(const nbep_evloop *e)
     ver.inv = 1.0 / ver.width;
     ver.verify = env_on("NBEP_VER_VERIFY");
     ver.lean = env_on("NBEP_VER_LEAN");
+    ver.stream = ver.lean && strcmp(getenv("NBEP_VER_LEAN"), "2") == 0;
     ver.sp = calloc(ver.n, sizeof *ver.sp);
     ver.failed = !ver.sp;
 }
@@ -209,6 +218,23 @@ static bool near_slab_side(double x, double r)
     return in < r || ver.width - in < r;
 }
 
+/* Entry v of a log, written past the caches where the machine can (SSE2's streaming stores,
+ * five of 16 bytes: a log is read again only by a rollback, so it need not displace the run's
+ * own data from the caches; realloc's blocks and the 80-byte entries are 16-byte aligned). */
+static void put_lean(lean_version *dst, const lean_version *v)
+{
+#ifdef __SSE2__
+    if (ver.stream) {
+        const __m128i *from = (const __m128i *)v;
+        __m128i *to = (__m128i *)dst;
+        for (size_t k = 0; k < sizeof *v / sizeof *from; k++)
+            _mm_stream_si128(to + k, _mm_loadu_si128(from + k));
+        return;
+    }
+#endif
+    *dst = *v;
+}
+
 /* What an event changes of sphere k, kept as a lean version in slab s's log (ver.lean): its
  * motion, local time and response count, and where the event may have wrapped it (a list
  * expiry) its periodic image in one more entry. (A granular run's two words of the TC model,
@@ -220,19 +246,17 @@ static bool lean_save(slab *s, void *u, uint32_t k, double t, bool wraps)
     for (int e = 0; e <= (int)wraps; e++) {
         if (!grow((void **)&s->lean, &s->cap_lean, s->n_lean, sizeof *s->lean))
             return false;
-        lean_version *v = &s->lean[s->n_lean++];
-        v->t = t;
-        v->sphere = k;
-        v->image = (uint32_t)e;
+        lean_version v = {.t = t, .sphere = k, .image = (uint32_t)e};
         if (e) {
             const int32_t *im = &x->s->image[3 * (size_t)k];
-            v->pos = (nbep_vec3){im[0], im[1], im[2]};
-            continue;
+            v.pos = (nbep_vec3){im[0], im[1], im[2]};
+        } else {
+            v.pos = x->s->pos[k];
+            v.vel = x->s->vel[k];
+            v.tau = c->tau[k];
+            v.ver = c->ver[k];
         }
-        v->pos = x->s->pos[k];
-        v->vel = x->s->vel[k];
-        v->tau = c->tau[k];
-        v->ver = c->ver[k];
+        put_lean(&s->lean[s->n_lean++], &v);
     }
     return true;
 }
