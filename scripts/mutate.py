@@ -1204,11 +1204,13 @@ MUTANTS = [
      "                    s->vel[i] = ctx->vel0[i];", "                    (void)0;",
      ["test_detect_stop"], None),
     ("detect-stop-thread0-alone", "src/algo_detect.c",
-     "            if (atomic_load_explicit(&ctx->quit, memory_order_relaxed)) {",
-     "            if (tid == 0 && atomic_load_explicit(&ctx->quit, memory_order_relaxed)) {",
+     "            if (overflow || atomic_load_explicit(&ctx->quit, memory_order_relaxed)) {",
+     "            if (overflow || (tid == 0 && atomic_load_explicit(&ctx->quit, "
+     "memory_order_relaxed))) {",
      ["test_detect_stop"], None),
     ("detect-stop-abandon-unsaid", "src/algo_detect.c",
-     "                if (tid == 0)\n                    nbep__sim_abandon(sim);", "",
+     "                    nbep__sim_abandon(sim);\n                    if (overflow) {",
+     "                    if (overflow) {",
      ["test_detect_stop", "tests/test_signals.sh"], None),
     ("detect-progress-part-dropped", "src/algo_detect.c",
      "nbep__sim_progress_part(sim, step, (double)done / (double)l->cost);",
@@ -3730,6 +3732,21 @@ MUTANTS = [
      "const face_met *m = c->face ? &c->face[i * CAGE_FACES + f] : NULL;",
      "const face_met *m = c->face ? &c->face[i / CAGE_FACES + f] : NULL;",
      ["test_pred_settle"], None),
+    # tenth draw: a detection step whose contact list could not grow goes on without a word
+    ("detect-contact-overflow-unreported", "src/algo_detect.c",
+     "overflow |= ctx->lists[t].overflow;", "overflow &= ctx->lists[t].overflow;",
+     ["test_memory_plan"], None),
+    # the refused growth's step abandoned without its status (the run ends "completed")
+    ("detect-contact-overflow-status-lost", "src/algo_detect.c",
+     "                    if (overflow) {", "                    if (!overflow) {",
+     ["test_memory_plan"], None),
+    # tenth draw: the set-up clock a sum of two readings (twice the machine's uptime)
+    ("setup-clock-added", "src/sim.c", "sim->setup_seconds = nbep_now() - t0;",
+     "sim->setup_seconds = nbep_now() + t0;", ["test_sim"], None),
+    ("setup-clock-predictions-added", "src/sim.c", "sim->setup_seconds += now - sim->t_start;",
+     "sim->setup_seconds += now + sim->t_start;", ["test_sim"], None),
+    ("stepping-clock-added", "src/sim.c", "sim->wall_seconds = nbep_now() - sim->t_start;",
+     "sim->wall_seconds = nbep_now() + sim->t_start;", ["test_sim"], None),
 ]
 
 

@@ -45,7 +45,7 @@ typedef struct contact_list {
     /* seminaive: the row being queried and its hits, sorted before use */
     uint32_t *hits;                       /* owned */
     size_t n_hits, cap_hits;
-    bool overflow;                        /* an allocation failed: the run must stop */
+    bool overflow;                        /* an allocation failed: the step is abandoned */
 } contact_list;
 
 typedef struct detect_ctx {
@@ -484,19 +484,35 @@ static void detect_run(nbep_sim *sim, void *p)
             const uint64_t checks = detect_rows(ctx, sim, step, tid, mine, &deep);
             nbep_barrier_wait(&ctx->bar);
             /* relaxed: the barrier above ordered every store of quit, and none comes until
-             * the run ends, so every thread reads the same: all abandon the step, or none */
-            if (atomic_load_explicit(&ctx->quit, memory_order_relaxed)) {
-                /* a signal during the pass: the step is abandoned (no row, frame or counts of
-                 * it), the spheres as the step found them; the run ends after the step before
-                 * (the barrier after the steps publishes the puts back) */
+             * the run ends, so every thread reads the same: all abandon the step, or none.
+             * Each list's overflow, written by its thread before that barrier, reads the
+             * same to all too. */
+            bool overflow = false;
+            for (int t = 0; t < nt; t++)
+                overflow |= ctx->lists[t].overflow;
+            if (overflow || atomic_load_explicit(&ctx->quit, memory_order_relaxed)) {
+                /* a signal during the pass, or a contact list that could not grow (the step's
+                 * contacts past its room unknown): the step is abandoned (no row, frame or
+                 * counts of it), the spheres as the step found them; the run ends after the
+                 * step before (the barrier after the steps publishes the puts back). Until
+                 * 2026-12-06 a refused growth went on to respond to the contacts it had and
+                 * recorded that step (its row, and its frame where one was due) */
                 for (size_t i = own.lo; i < own.hi; i++) {
                     s->pos[i] = ctx->pos0[i];
                     s->vel[i] = ctx->vel0[i];
                     if (ctx->pb.any)
                         memcpy(&s->image[3 * i], &ctx->img0[3 * i], 3 * sizeof *ctx->img0);
                 }
-                if (tid == 0)
+                if (tid == 0) {
                     nbep__sim_abandon(sim);
+                    if (overflow) {
+                        nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                                      "nbep: no memory for the contacts of step %llu; the run "
+                                      "ends after step %llu",
+                                      (unsigned long long)step, (unsigned long long)(step - 1));
+                        sim->status = NBEP_ENOMEM;
+                    }
+                }
                 break;
             }
             nbep_thread_max *mx = &sim->tmax[par][tid];
@@ -509,19 +525,8 @@ static void detect_run(nbep_sim *sim, void *p)
             nbep_barrier_wait(&ctx->bar);
             nbep__sim_block_energy(sim, own);
             nbep_barrier_wait(&ctx->bar);
-            if (tid == 0) {
-                bool failed = false;
-                for (int t = 0; t < nt; t++)
-                    failed |= ctx->lists[t].overflow;
-                if (failed && sim->status == NBEP_OK) {
-                    nbep_diag_add(sim->diag, __FILE__, __LINE__,
-                                  "nbep: no memory for the contacts of step %llu",
-                                  (unsigned long long)step);
-                    sim->status = NBEP_ENOMEM;
-                    atomic_store_explicit(&sim->stop, 1, memory_order_relaxed);
-                }
+            if (tid == 0)
                 nbep__sim_end_step(sim, step);
-            }
             nbep_barrier_wait(&ctx->bar);
             /* relaxed: the barrier above ordered thread 0's store before this load */
             if (atomic_load_explicit(&sim->stop, memory_order_relaxed))

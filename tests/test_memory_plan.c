@@ -475,6 +475,60 @@ static void test_an_event_queue_of_the_most_sphere_ids_asks_for_its_memory(void 
     assert_null(q);
 }
 
+/* A detection step's contact list grows inside the step when a pile outgrows its room (4 a
+ * row and 64: algo_detect.c), the one allocation a step makes. Refused, the step is abandoned
+ * as a signal's is: NBEP_ENOMEM, one line naming the step, no step of it counted and the
+ * spheres where it found them; not (until 2026-12-06) responding to the contacts it kept and
+ * recording the step, nor (a mutant of the tenth draw) going on without a word to end
+ * "completed". Two spheres sinking through 100 coincident floors make 200 contacts in the
+ * first step, past the room of 72 (one thread) or 68 a thread (two, each a row); counting
+ * starts after the create, so the step's first allocation is the list's growth. */
+static void test_a_step_refused_its_contact_list_growth_stops_the_run_with_the_step_named(
+    void **state)
+{
+    (void)state;
+    const char *const algos[] = {"naive", "seminaive"};
+    const size_t floors = 100;
+    for (int a = 0; a < 2; a++)
+        for (int nt = 1; nt <= 2; nt++) {
+            nbep_scene *sc = nbep_test_scene_new(2, floors, algos[a], 3, 0.05);
+            for (size_t p = 0; p < floors; p++)
+                nbep_test_set_plane(sc, p, (nbep_vec3){0.0, 0.0, 1.0}, 0.0);
+            for (size_t i = 0; i < 2; i++)
+                nbep_test_set_sphere(sc, i, (nbep_vec3){(double)i, 0.0, 0.09},
+                                     (nbep_vec3){0.0, 0.0, -1.0}, 0.1, 1.0,
+                                     (nbep_vec3){0.0, 0.0, 0.0});
+            nbep_diag d;
+            nbep_diag_init(&d);
+            nbep_sim_options opt = {.threads = nt};
+            nbep_sim *sim = NULL;
+            assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_OK);
+            count_start();
+            fail_call = 1;
+            const nbep_status st = nbep_sim_run(sim, &d);
+            fail_call = 0;
+            (void)count_stop();
+            nbep_summary sum;
+            nbep_sim_summary(sim, &sum);
+            const char *said = d.n_errors >= 1 && d.cap > 0 && d.msg[0] ? d.msg[0] : "(none)";
+            if (st != NBEP_ENOMEM || d.n_errors != 1 ||
+                !strstr(said, "nbep: no memory for the contacts of step 1; the run ends after "
+                              "step 0") ||
+                sum.steps != 0)
+                fail_msg("%s, %d thread%s: the contact list's growth refused: status %d, %zu "
+                         "line(s): %s; %llu step(s) done", algos[a], nt, nt == 1 ? "" : "s",
+                         (int)st, d.n_errors, said, (unsigned long long)sum.steps);
+            for (size_t i = 0; i < 2; i++) /* put back: where the step found them */
+                if (memcmp(&sim->st.pos[i], &sc->state.pos[i], sizeof sim->st.pos[i]) != 0 ||
+                    memcmp(&sim->st.vel[i], &sc->state.vel[i], sizeof sim->st.vel[i]) != 0)
+                    fail_msg("%s, %d thread%s: sphere %zu moved by the abandoned step",
+                             algos[a], nt, nt == 1 ? "" : "s", i);
+            nbep_sim_destroy(&sim);
+            nbep_diag_fini(&d);
+            nbep_test_scene_free(&sc);
+        }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -484,6 +538,7 @@ int main(void)
         cmocka_unit_test(test_cell_lists_take_at_most_their_estimate_and_reach_it),
         cmocka_unit_test(test_a_create_refused_memory_anywhere_fails_whole_and_leaks_nothing),
         cmocka_unit_test(test_an_event_queue_of_the_most_sphere_ids_asks_for_its_memory),
+        cmocka_unit_test(test_a_step_refused_its_contact_list_growth_stops_the_run_with_the_step_named),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

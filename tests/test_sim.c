@@ -235,6 +235,29 @@ static void test_detection_on_more_threads_than_rows_gives_the_one_thread_run(vo
     }
 }
 
+/* The summary's clocks (SPEC: setup_seconds, the create and, for predictive, the first
+ * predictions; wall_seconds, the steps) are spans within the run: neither below zero, both
+ * together within the time measured around it. Their values are the machine's; what is held is
+ * that each is a difference of two readings of the clock (a reading added instead, as a
+ * mutant of the tenth draw did, reports twice the machine's uptime). */
+static void test_the_set_up_and_stepping_clocks_lie_within_the_run(void **state)
+{
+    (void)state;
+    const char *const algos[] = {"naive", "predictive"};
+    for (int a = 0; a < 2; a++) {
+        nbep_scene *sc = nbep_test_fluid(4, 0.3, 5, 0.01);
+        snprintf(sc->algorithm, sizeof sc->algorithm, "%s", algos[a]);
+        const double t0 = nbep_now();
+        nbep_summary s = run(sc, 2, NULL, NULL);
+        const double spent = nbep_now() - t0;
+        if (!(s.setup_seconds >= 0.0 && s.wall_seconds >= 0.0 &&
+              s.setup_seconds + s.wall_seconds <= spent))
+            fail_msg("%s: setup %g s and steps %g s, in a run of %g s", algos[a],
+                     s.setup_seconds, s.wall_seconds, spent);
+        nbep_test_scene_free(&sc);
+    }
+}
+
 /* Seminaive pre-filters naive's tests but must find, and answer, exactly the same pairs in
  * the same order: the frames are bitwise the naive ones, with fewer checks. */
 static void test_seminaive_frames_equal_naive_frames_with_fewer_checks(void **state)
@@ -817,6 +840,7 @@ int main(void)
         cmocka_unit_test(test_predictive_frames_are_bitwise_equal_for_1_2_4_8_threads),
         cmocka_unit_test(test_seminaive_frames_equal_naive_frames_with_fewer_checks),
         cmocka_unit_test(test_detection_on_more_threads_than_rows_gives_the_one_thread_run),
+        cmocka_unit_test(test_the_set_up_and_stepping_clocks_lie_within_the_run),
         cmocka_unit_test(test_detection_on_a_crowded_fluid_is_exact_across_threads_and_keeps_energy),
         cmocka_unit_test(test_naive_gas_without_gravity_conserves_energy),
         cmocka_unit_test(test_predictive_gas_under_gravity_conserves_energy),
