@@ -306,8 +306,8 @@ MUTANTS = [
      "        if (j->step == UINT32_MAX)", ["tests/test_jam.sh"], None),
     ("jam-rounds-not-checked", "src/algo_predictive.c", "                if (jammed) {\n                    if (tid == 0)",
      "                if (0) {\n                    if (tid == 0)", ["tests/test_jam.sh"], None),
-    ("jam-evloop-stop-ignored", "src/evloop.c", "        if (w->stop) {\n            *t_stuck = t;",
-     "        if (0) {\n            *t_stuck = t;",
+    ("jam-evloop-stop-ignored", "src/evloop.c", "    if (w->stop) {\n        *t_stuck = t;",
+     "    if (0) {\n        *t_stuck = t;",
      ["tests/test_jam.sh"], None),
     ("jam-limit-off-by-one-more", "src/pred_react.c", "if (++j->n > c->jam_max &&",
      "if (++j->n > c->jam_max + 1 &&", ["tests/test_jam.sh"],
@@ -1062,8 +1062,9 @@ MUTANTS = [
      "            undo_from(e, ops, u, us, s + 2);\n            nbep_calendar_set(e->cal, e->batch[k].item,",
      TEAM, None),
     ("team-off-at-dissipation", "src/algo_predictive.c",
-     "const bool can_team = nt >= 2 && p.free_flight;",
-     "const bool can_team = nt >= 2 && p.free_flight && !p.jam_model;", TEAM, None),
+     "const bool can_team = nt >= 2 && p.free_flight && p.slabs < 2;",
+     "const bool can_team = nt >= 2 && p.free_flight && p.slabs < 2 && !p.jam_model;", TEAM,
+     None),
     ("team-jammed-carried-over", "src/pred_cells.c",
      "    w->jammed = 0;", "    (void)0;", ["tests/test_jam.sh"],
      "equivalent in practice: a speculative reaction that passed the limit and was undone is "
@@ -1150,8 +1151,8 @@ MUTANTS = [
     ("evloop-failed-walk-committed", "src/evloop.c", "    if (w->oom)\n        e->failed = true;",
      "    (void)0;", FAULTS, None),
     ("evloop-stall-after-handling", "src/evloop.c",
-     "        tally->events++;\n        if (!nbep__evloop_advances(stall, t)) {\n            *t_stuck = t;\n            return false;\n        }\n        nbep__evloop_handle(e, w, ops, u, i, &ev, t, true);",
-     "        tally->events++;\n        nbep__evloop_handle(e, w, ops, u, i, &ev, t, true);\n        if (!nbep__evloop_advances(stall, t)) {\n            *t_stuck = t;\n            return false;\n        }",
+     "    tally->events++;\n    if (!nbep__evloop_advances(stall, t)) {\n        *t_stuck = t;\n        return false;\n    }\n    nbep__evloop_handle(e, w, ops, u, i, &ev, t, true);",
+     "    tally->events++;\n    nbep__evloop_handle(e, w, ops, u, i, &ev, t, true);\n    if (!nbep__evloop_advances(stall, t)) {\n        *t_stuck = t;\n        return false;\n    }",
      FAULTS, None),
     # the progress within a long step (live on a terminal: test_signals.sh under script(1))
     ("progress-within-cells-unlooked", "src/evloop_impl.h",
@@ -3747,6 +3748,42 @@ MUTANTS = [
      "sim->setup_seconds += now + sim->t_start;", ["test_sim"], None),
     ("stepping-clock-added", "src/sim.c", "sim->wall_seconds = nbep_now() - sim->t_start;",
      "sim->wall_seconds = nbep_now() + sim->t_start;", ["test_sim"], None),
+    # per-slab calendars (optimistic design, step 1): a set that leaves its slab's kept
+    # earliest as it was
+    ("slabcal-set-keeps-stale-first", "src/slabcal.c",
+     "    s->slab[item] = (uint8_t)slab;\n    s->stale[slab] = true;",
+     "    s->slab[item] = (uint8_t)slab;", ["test_slabcal", "test_sim"], None),
+    # an entry set in another slab left in the old one too
+    ("slabcal-move-leaves-the-old", "src/slabcal.c",
+     "if (was != SLAB_NONE && was != slab) {", "if (was != SLAB_NONE && was == slab) {",
+     ["test_slabcal"], None),
+    # the merge takes the latest of the slabs' earliest
+    ("slabcal-merge-reversed", "src/slabcal.c",
+     "nbep_calendar_before(s->kept[k], s->kept[best])",
+     "nbep_calendar_before(s->kept[best], s->kept[k])", ["test_slabcal", "test_sim"], None),
+    # the slabs of columns: all but the last column in slab 0
+    ("slabcal-columns-uneven", "include/nbep/slabcal.h",
+     "return columns ? (int)((x * (size_t)slabs) / columns) : 0;",
+     "return columns ? (int)((x / (columns - 1)) * (size_t)(slabs - 1)) : 0;",
+     ["test_slabcal"], None),
+    # every entry in slab 0: the slabs made but never used
+    ("evloop-slabs-all-in-one", "src/evloop.c",
+     "nbep_slabcal_set(e->slabcal, sphere_slab(e, c.item), c.item, c.time, c.key);",
+     "nbep_slabcal_set(e->slabcal, 0, c.item, c.time, c.key);", ["test_memory_plan"], None),
+    # a sphere's slab from its cell's row (y) instead of its column across x
+    ("evloop-slab-of-the-row", "src/evloop.c",
+     "return nbep_slabcal_slab_of(e->cells.m[i].cell % columns, columns,",
+     "return nbep_slabcal_slab_of(e->cells.m[i].cell / columns % columns, columns,",
+     ["test_memory_plan"], None),
+    # NBEP_SLABS read but the slabs never made
+    ("pred-slabs-never-made", "src/algo_predictive.c",
+     "} else if (st == NBEP_OK && p.slabs >= 2) {",
+     "} else if (st == NBEP_OK && p.slabs >= 20000) {",
+     ["test_memory_plan"], None),
+    # the team loop allowed beside per-slab calendars (it keeps one calendar)
+    ("pred-slabs-beside-a-team", "src/algo_predictive.c",
+     "const bool can_team = nt >= 2 && p.free_flight && p.slabs < 2;",
+     "const bool can_team = nt >= 2 && p.free_flight;", ["test_sim", "test_memory_plan"], None),
 ]
 
 

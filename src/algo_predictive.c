@@ -57,6 +57,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "nbep/slabcal.h"
+
 /* A look at each re-prediction of the rounds: the time found (raw), the time kept (kept) and
  * the round's time (t_now); tests/test_late_roots.c counts the late roots and checks that
  * none is kept behind the round (nbep_feq_not_before); a build of nbep has nothing here. */
@@ -142,8 +144,25 @@ typedef struct pred_plan {
     bool crews;         /* grid mode on two threads or more: crews run the rounds (pred_ctx) */
     bool team;          /* cells mode: a team of team_size >= 2 may run the event loop */
     int team_size;      /* cells mode: the threads that may run the event loop */
+    int slabs;          /* cells mode: per-slab calendars (NBEP_SLABS; 1: one calendar) */
     pred_ways ways;     /* the ways a step may run (grid mode's crews, cells mode's team) */
 } pred_plan;
+
+/* NBEP_SLABS, read as a run is made or estimated: the slabs of per-slab calendars in cells
+ * mode (nbep_evloop_set_slabs: step 1 of docs/optimistic-design.md, for measuring what the
+ * slabs' merge costs; the results are the same). Unset or below 2: one calendar; past
+ * NBEP_SLABCAL_MAX: the run refuses it. */
+static int slabs_asked(void)
+{
+    const char *v = getenv("NBEP_SLABS");
+    if (!v)
+        return 1;
+    char *end;
+    const long k = strtol(v, &end, 10);
+    if (end == v || *end != '\0' || k < 2)
+        return 1;
+    return k > NBEP_SLABCAL_MAX ? NBEP_SLABCAL_MAX + 1 : (int)k;
+}
 
 /* The plan of a run of scene sc from state st (the scene's, or a run's copy of it) on nt
  * threads, with NBEP_TEAM's choice team_force (team_forced). */
@@ -175,7 +194,9 @@ static pred_plan plan_of(const nbep_scene *sc, const nbep_state *st, int nt, int
          * rests, holds, settles or is caged without an acceleration): their motion, and at
          * e < 1 their TC clocks and reaction counts, which the loop keeps with the motion to
          * undo a speculative reaction (cells_save) */
-        const bool can_team = nt >= 2 && p.free_flight;
+        p.slabs = slabs_asked();
+        /* (per-slab calendars are merged on one thread: the team loop keeps one calendar) */
+        const bool can_team = nt >= 2 && p.free_flight && p.slabs < 2;
         int size = nt < NBEP_EVLOOP_TEAM_MAX ? nt : NBEP_EVLOOP_TEAM_MAX;
         if (team_force >= 2 && team_force < size)
             size = team_force;
@@ -262,7 +283,7 @@ static size_t pred_bytes(const nbep_scene *sc, int nt)
     if (p.use_grid)
         bytes += nbep_grid_bytes(n);
     if (p.cells)
-        bytes += nbep_evloop_bytes(n, ESTIMATE_NEIGHBOURS, p.team_size);
+        bytes += nbep_evloop_bytes(n, ESTIMATE_NEIGHBOURS, p.team_size, p.slabs);
     if (p.team) {
         const size_t rows = (size_t)p.team_size * NBEP_EVLOOP_RING;
         bytes += rows * (sizeof *c->help_cnt + sizeof *c->help_mx +
@@ -389,6 +410,13 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
                                 skin, c->pb.axis, c->team_size, c->q, c->ver, &c->ev, d);
         if (st == NBEP_OK && !mono) /* a mixture: each pair's list reach its own */
             nbep_evloop_set_radii(c->ev, sim->st.radius);
+        if (st == NBEP_OK && p.slabs > NBEP_SLABCAL_MAX) {
+            nbep_diag_add(d, __FILE__, __LINE__, "nbep: NBEP_SLABS asks for more than %d slabs",
+                          NBEP_SLABCAL_MAX);
+            st = NBEP_EDECK;
+        } else if (st == NBEP_OK && p.slabs >= 2) {
+            st = nbep_evloop_set_slabs(c->ev, p.slabs, d);
+        }
         c->team = st == NBEP_OK && p.team;
         if (c->team) {
             const size_t np = sim->st.n_planes, rows = (size_t)c->team_size * NBEP_EVLOOP_RING;
@@ -1227,6 +1255,11 @@ static void pred_threads_use(const nbep_scene *sc, int nt, char *buf, size_t len
                  "fastest (nothing accelerates); all %d share the rebuilds, the update and the "
                  "energy",
                  p.team_size, nt);
+    else if (p.cells && p.slabs >= 2)
+        snprintf(buf, len,
+                 "the event loop on one, its calendar cut into %d slabs (NBEP_SLABS); all %d "
+                 "share the rebuilds, the update and the energy",
+                 p.slabs, nt);
     else if (p.cells)
         snprintf(buf, len,
                  "the event loop on one (something accelerates: its contacts need the events in "

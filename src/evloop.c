@@ -223,11 +223,23 @@ void nbep_evloop_set_radii(nbep_evloop *e, const double *radius)
     e->rad = radius;
 }
 
+nbep_status nbep_evloop_set_slabs(nbep_evloop *e, int slabs, nbep_diag *d)
+{
+    assert(e->team == 1 && !e->slabcal);
+    if (slabs < 2)
+        return NBEP_OK;
+    const nbep_status st = nbep_slabcal_create(e->n, slabs, &e->slabcal, d);
+    if (st == NBEP_OK) /* the slabs' calendars instead of the one */
+        nbep_calendar_destroy(&e->cal);
+    return st;
+}
+
 void nbep_evloop_destroy(nbep_evloop **e)
 {
     if (!e || !*e)
         return;
     nbep_calendar_destroy(&(*e)->cal);
+    nbep_slabcal_destroy(&(*e)->slabcal);
     nbep_cells_fini(&(*e)->cells);
     nbep_nblist_fini(&(*e)->nl);
     nbep_free_aligned((*e)->count);
@@ -238,9 +250,10 @@ void nbep_evloop_destroy(nbep_evloop **e)
     *e = NULL;
 }
 
-size_t nbep_evloop_bytes(size_t n, double neighbours, int team)
+size_t nbep_evloop_bytes(size_t n, double neighbours, int team, int slabs)
 {
     return sizeof(nbep_evloop) + nbep_calendar_bytes(n) + nbep_cells_bytes(n) +
+           (slabs >= 2 ? nbep_slabcal_bytes(n, slabs) - nbep_calendar_bytes(n) : 0) +
            nbep_nblist_bytes(n, (size_t)(neighbours * (double)n)) +
            (n ? n : 1) * sizeof(uint32_t) + (size_t)team * NBEP_EVLOOP_RING * ws_bytes();
 }
@@ -636,9 +649,26 @@ static bool slot_entry(const nbep_evloop *e, uint32_t i, nbep_calendar_entry *c)
            ev->kind == NBEP_EVENT_HORIZON;
 }
 
-/* Entry c set in the calendar, or its item's taken out (set false). */
+/* The slab of sphere i: that of its list centre's cell column across x (the cells are the
+ * centres', and a centre moves only at its list's expiry, whose commit enters i anew). */
+static int sphere_slab(const nbep_evloop *e, uint32_t i)
+{
+    const size_t columns = e->cells.dim[0];
+    return nbep_slabcal_slab_of(e->cells.m[i].cell % columns, columns,
+                                nbep_slabcal_slabs(e->slabcal));
+}
+
+/* Entry c set in the calendar, or its item's taken out (set false); with slabs, in its slab's
+ * calendar. */
 static void enter(nbep_evloop *e, bool set, nbep_calendar_entry c)
 {
+    if (e->slabcal) {
+        if (set)
+            nbep_slabcal_set(e->slabcal, sphere_slab(e, c.item), c.item, c.time, c.key);
+        else
+            nbep_slabcal_remove(e->slabcal, c.item);
+        return;
+    }
     if (set)
         nbep_calendar_set(e->cal, c.item, c.time, c.key);
     else
@@ -666,10 +696,16 @@ void nbep_evloop_predict(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, si
 
 void nbep_evloop_schedule(nbep_evloop *e, double t)
 {
-    nbep_calendar_clear(e->cal);
+    if (e->slabcal)
+        nbep_slabcal_clear(e->slabcal);
+    else
+        nbep_calendar_clear(e->cal);
     for (size_t i = 0; i < e->n; i++)
         nbep__evloop_schedule_one(e, (uint32_t)i);
-    nbep_calendar_retune(e->cal, t);
+    if (e->slabcal)
+        nbep_slabcal_retune(e->slabcal, t);
+    else
+        nbep_calendar_retune(e->cal, t);
 }
 
 /* Entry k of w's calendar entries: sphere i's, from its slot. */
@@ -785,31 +821,47 @@ void nbep__evloop_commit(nbep_evloop *e, const evl_ws *w)
     nbep__evloop_schedule_one(e, w->item);
 }
 
+/* One event of the one-thread loop: sphere i's, at t. False when the run stops at it (stuck,
+ * a reaction's stop, or no memory). */
+static inline NBEP_ALWAYS_INLINE bool run_one(nbep_evloop *e, evl_ws *w,
+                                              const nbep_evloop_ops *ops, void *u, uint32_t i,
+                                              double t, nbep_evloop_stall *stall,
+                                              nbep_evloop_tally *tally, double *t_stuck)
+{
+    const nbep_event ev = *nbep_feq_slot(e->q, i);
+    nbep__evloop_prefetch_event(e, i, &ev);
+    tally->events++;
+    if (!nbep__evloop_advances(stall, t)) {
+        *t_stuck = t;
+        return false;
+    }
+    nbep__evloop_handle(e, w, ops, u, i, &ev, t, true);
+    nbep__evloop_count_handled(tally, w);
+    if (w->stop) {
+        *t_stuck = t;
+        return false;
+    }
+    nbep__evloop_commit(e, w);
+    return !e->failed;
+}
+
 bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_end,
                      nbep_evloop_stall *stall, nbep_evloop_tally *tally, double *t_stuck)
 {
     if (e->failed) /* a rebuild ran out of memory */
         return false;
     evl_ws *w = &e->ws[0][0];
+    if (e->slabcal) { /* the slabs' earliest entries merged: the one calendar's order */
+        nbep_calendar_entry c;
+        while (nbep_slabcal_first(e->slabcal, &c) && c.time < t_end)
+            if (!run_one(e, w, ops, u, c.item, c.time, stall, tally, t_stuck))
+                return false;
+        return true;
+    }
     uint32_t i;
     double t;
-    while (nbep_calendar_top(e->cal, &i, &t) && t < t_end) {
-        const nbep_event ev = *nbep_feq_slot(e->q, i);
-        nbep__evloop_prefetch_event(e, i, &ev);
-        tally->events++;
-        if (!nbep__evloop_advances(stall, t)) {
-            *t_stuck = t;
+    while (nbep_calendar_top(e->cal, &i, &t) && t < t_end)
+        if (!run_one(e, w, ops, u, i, t, stall, tally, t_stuck))
             return false;
-        }
-        nbep__evloop_handle(e, w, ops, u, i, &ev, t, true);
-        nbep__evloop_count_handled(tally, w);
-        if (w->stop) {
-            *t_stuck = t;
-            return false;
-        }
-        nbep__evloop_commit(e, w);
-        if (e->failed)
-            return false;
-    }
     return true;
 }

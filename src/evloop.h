@@ -114,6 +114,13 @@ void nbep_evloop_destroy(nbep_evloop **e);
  * neighbours, not every sphere within the largest pair's reach. Before the first rebuild;
  * NULL (as created): one cutoff, the largest pair's, for every pair. */
 void nbep_evloop_set_radii(nbep_evloop *e, const double *radius);
+/* The calendar cut into `slabs` per-slab calendars across x, merged on one thread
+ * (slabcal.h; step 1 of docs/optimistic-design.md): the events come out in the same order, so
+ * the run is the same bit for bit; what changes is the cost of finding the earliest. Fewer
+ * than 2: one calendar (as created). Only on an engine created for a team of one (the team
+ * loop keeps one calendar), before the first schedule. NBEP_ENOMEM, NBEP_EDECK past
+ * NBEP_SLABCAL_MAX, with a message. */
+NBEP_MUST_CHECK nbep_status nbep_evloop_set_slabs(nbep_evloop *e, int slabs, nbep_diag *d);
 /* The lists' skin that the engine takes when asked for skin_frac of `reach`: cut
  * down in a small periodic box (its sides hi - lo along the axes that periodic names; NULL:
  * none) so that three cells, sides of the cutoff, fit across. Below NBEP_NBLIST_SKIN_MIN the
@@ -233,7 +240,8 @@ void nbep_evloop_visit_block(const nbep_evloop *e, uint32_t i,
 
 /* Bytes nbep_evloop_create(n, ..., team, ...) allocates and its lists grow to with `neighbours`
  * listed per sphere on average (its own record, calendar, cells, lists, counts, and the team's
- * workspaces: one per thread per ring slot, at their first room), for memory estimates. */
-size_t nbep_evloop_bytes(size_t n, double neighbours, int team);
+ * workspaces: one per thread per ring slot, at their first room), with nbep_evloop_set_slabs'
+ * calendars for `slabs` of 2 or more, for memory estimates. */
+size_t nbep_evloop_bytes(size_t n, double neighbours, int team, int slabs);
 
 #endif

@@ -15,6 +15,7 @@
 #include "nbep/compiler.h"
 #include "nbep/nblist.h"
 #include "nbep/periodic.h"
+#include "nbep/slabcal.h"
 
 /* The team loop's places in flight at most: enough that a helper finds one to take while the
  * leader commits (a window of 12 to 32 ran within the noise of this one at N = 256000,
@@ -87,7 +88,10 @@ _Static_assert(sizeof(evl_place) == 16, "a place's record divides a cache line")
 
 struct nbep_evloop {
     size_t n;
-    nbep_calendar *cal;   /* owned */
+    nbep_calendar *cal;   /* owned; NULL with slabs */
+    nbep_slabcal *slabcal; /* owned, NULL but with slabs (nbep_evloop_set_slabs): the
+                            * entries in per-slab calendars instead of cal, merged on one
+                            * thread (the one-thread loop only) */
     nbep_cells cells;     /* owned: cells of the list centres, at least `cut` wide; a
                            * member's place (cells.m[i].at) is where i's list was built */
     nbep_nblist nl;       /* owned */
@@ -256,11 +260,17 @@ static inline NBEP_ALWAYS_INLINE void nbep__evloop_prefetch_event(const nbep_evl
     if (ev->kind == NBEP_EVENT_SPHERE) {
         NBEP_PREFETCH(&e->nl.sp[ev->partner]);
         NBEP_PREFETCH(&e->cells.m[ev->partner]);
-        nbep_calendar_prefetch(e->cal, ev->partner); /* moved at the commit if it is fresh */
+        if (e->slabcal) /* moved at the commit if it is fresh */
+            nbep_slabcal_prefetch(e->slabcal, ev->partner);
+        else
+            nbep_calendar_prefetch(e->cal, ev->partner);
     }
     uint32_t next[2];
     int n_next;
-    nbep_calendar_runners_up(e->cal, next, NULL, &n_next);
+    if (e->slabcal)
+        nbep_slabcal_runners_up(e->slabcal, next, &n_next);
+    else
+        nbep_calendar_runners_up(e->cal, next, NULL, &n_next);
     for (int k = 0; k < n_next; k++) {
         NBEP_PREFETCH(nbep_feq_slot(e->q, next[k]));
         NBEP_PREFETCH(&e->cells.m[next[k]]);

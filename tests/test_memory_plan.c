@@ -28,6 +28,7 @@
 #include "nbep/cells.h"
 #include "nbep/feq.h"
 #include "nbep/nblist.h"
+#include "nbep/slabcal.h"
 #include "nbep/vec3.h"
 #include "evloop_impl.h"
 #include "pred_impl.h"
@@ -363,6 +364,63 @@ static void test_the_cells_mode_allocates_what_it_estimates_but_its_lists(void *
     plans_of("predictive", "cells", "", cooling, true);
     plans_of("predictive", "cells", "", pile, false);
     plans_of("predictive", "cells", "", caged, false);
+    /* per-slab calendars (NBEP_SLABS), each a calendar for all spheres, and no team */
+    setenv("NBEP_SLABS", "3", 1);
+    plans_of("predictive", "cells", "", elastic, true);
+    plans_of("predictive", "cells", "", pile, false);
+    unsetenv("NBEP_SLABS");
+}
+
+/* Per-slab calendars are made as NBEP_SLABS asks and hold the engine's entries after a run,
+ * each in the slab of its sphere's list centre's cell column (test_sim holds their runs to the
+ * one calendar's bit for bit; that alone would pass with the slabs never made, or all entries
+ * in one). 80 spheres in a periodic unit box: cells of a reach 0.1 and more, 3 to 9 columns. */
+static void test_per_slab_calendars_hold_each_entry_in_its_spheres_slab(void **state)
+{
+    (void)state;
+    for (int slabs = 2; slabs <= 3; slabs++) {
+        nbep_scene sc;
+        load(&sc, "predictive", "cells", "", elastic, true);
+        char v[8];
+        snprintf(v, sizeof v, "%d", slabs);
+        setenv("NBEP_SLABS", v, 1);
+        nbep_diag d;
+        nbep_diag_init(&d);
+        nbep_sim_options opt = {.threads = 2};
+        nbep_sim *sim = NULL;
+        assert_int_equal(nbep_sim_create(&sc, &opt, &sim, &d), NBEP_OK);
+        unsetenv("NBEP_SLABS");
+        assert_int_equal(nbep_sim_run(sim, &d), NBEP_OK);
+        const pred_ctx *c = sim->algo_ctx;
+        nbep_slabcal *sl = c->ev->slabcal;
+        assert_non_null(sl);
+        assert_int_equal(nbep_slabcal_slabs(sl), slabs);
+        assert_int_equal(nbep_slabcal_check(sl), 0);
+        assert_null(c->ev->cal); /* the slabs' calendars instead */
+        const nbep_cells *g = &c->ev->cells;
+        size_t held = 0;
+        for (uint32_t i = 0; i < sim->st.n; i++) {
+            const int k = nbep_slabcal_slab(sl, i);
+            if (k < 0)
+                continue;
+            held++;
+            const int want =
+                nbep_slabcal_slab_of(g->m[i].cell % g->dim[0], g->dim[0], slabs);
+            if (k != want)
+                fail_msg("%d slabs: sphere %u's entry in slab %d, its list centre's column %u "
+                         "of %zu in slab %d", slabs, i, k, (unsigned)(g->m[i].cell % g->dim[0]),
+                         g->dim[0], want);
+        }
+        assert_int_equal(held, nbep_slabcal_size(sl));
+        assert_true(held > sim->st.n / 2);
+        for (int k = 0; k < slabs; k++)
+            if (nbep_slabcal_size_of(sl, k) == 0)
+                fail_msg("%d slabs: slab %d holds no entry (%zu columns)", slabs, k,
+                         g->dim[0]);
+        nbep_sim_destroy(&sim);
+        nbep_diag_fini(&d);
+        nbep_scene_fini(&sc);
+    }
 }
 
 /* On nt threads, each allocation refused in turn. */
@@ -384,6 +442,9 @@ static void test_a_create_refused_memory_anywhere_fails_whole_and_leaks_nothing(
     refusals_of("predictive", "grid", pile, false, 2);
     refusals_of("predictive", "cells", elastic, true, 2);
     refusals_of("predictive", "cells", caged, false, 1);
+    setenv("NBEP_SLABS", "2", 1); /* the slabs' calendars too */
+    refusals_of("predictive", "cells", elastic, true, 2);
+    unsetenv("NBEP_SLABS");
 }
 
 /* nbep_cells_init for n spheres over [0, side] with cells of reach (periodic along every axis
@@ -535,6 +596,7 @@ int main(void)
         cmocka_unit_test(test_the_detecting_algorithms_allocate_what_they_estimate),
         cmocka_unit_test(test_the_rounds_modes_allocate_what_they_estimate),
         cmocka_unit_test(test_the_cells_mode_allocates_what_it_estimates_but_its_lists),
+        cmocka_unit_test(test_per_slab_calendars_hold_each_entry_in_its_spheres_slab),
         cmocka_unit_test(test_cell_lists_take_at_most_their_estimate_and_reach_it),
         cmocka_unit_test(test_a_create_refused_memory_anywhere_fails_whole_and_leaks_nothing),
         cmocka_unit_test(test_an_event_queue_of_the_most_sphere_ids_asks_for_its_memory),

@@ -606,6 +606,66 @@ static void test_cells_predictive_pile_settles_under_gravity(void **state)
     nbep_test_scene_free(&sc);
 }
 
+/* Per-slab calendars (NBEP_SLABS, step 1 of docs/optimistic-design.md: the calendar cut into
+ * slabs across x, their earliest entries merged on one thread) hand out the events in the one
+ * calendar's order, so runs on 2, 3 and 4 slabs, on one thread and on two (where they take
+ * the one-thread loop: the team keeps one calendar), give the one-calendar run's frames and
+ * counts bit for bit: a periodic fluid at phi = 0.35 (spheres change slab as they cross the
+ * cuts and the periodic faces) and a pile settling under gravity with e = 0.6 in a box.
+ * test_memory_plan checks that the slabs are made and hold the entries. */
+static void test_cells_per_slab_calendars_give_the_one_calendar_run(void **state)
+{
+    (void)state;
+    nbep_scene *scenes[2] = {
+        nbep_test_periodic_fluid(nbep_test_scaled(9, 6), 0.35, 30, 0.01, 5),
+        nbep_test_fluid(nbep_test_scaled(6, 4), 0.3, nbep_test_scaled(60, 30), 5e-3)};
+    scenes[1]->neighbors_cells = true;
+    scenes[1]->restitution = 0.6;
+    for (size_t i = 0; i < scenes[1]->state.n; i++)
+        scenes[1]->state.acc[i] = (nbep_vec3){0, 0, -9.81};
+    for (int k = 0; k < 2; k++) {
+        frames ref = {0};
+        nbep_summary s1 = run(scenes[k], 1, NULL, &ref);
+        assert_true(s1.collisions > s1.spheres);
+        for (int slabs = 2; slabs <= 4; slabs++)
+            for (int nt = 1; nt <= 2; nt++) {
+                char v[8];
+                snprintf(v, sizeof v, "%d", slabs);
+                setenv("NBEP_SLABS", v, 1);
+                frames f = {0};
+                nbep_summary sk = run(scenes[k], nt, NULL, &f);
+                unsetenv("NBEP_SLABS");
+                frames_equal(&ref, &f);
+                if (sk.collisions != s1.collisions || sk.checks != s1.checks ||
+                    sk.predictions != s1.predictions)
+                    fail_msg("%s, %d slabs, %d thread(s): %llu collisions, %llu checks, %llu "
+                             "predictions; one calendar %llu, %llu, %llu",
+                             k ? "pile" : "fluid", slabs, nt,
+                             (unsigned long long)sk.collisions, (unsigned long long)sk.checks,
+                             (unsigned long long)sk.predictions,
+                             (unsigned long long)s1.collisions, (unsigned long long)s1.checks,
+                             (unsigned long long)s1.predictions);
+                nbep_test_frames_free(&f);
+            }
+        nbep_test_frames_free(&ref);
+        nbep_test_scene_free(&scenes[k]);
+    }
+    /* more slabs than a sphere's slab byte numbers: refused, naming the setting */
+    nbep_scene *sc = nbep_test_periodic_fluid(6, 0.3, 1, 0.01, 5);
+    setenv("NBEP_SLABS", "65", 1);
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_sim_options opt = {.threads = 1};
+    nbep_sim *sim = NULL;
+    assert_int_equal(nbep_sim_create(sc, &opt, &sim, &d), NBEP_EDECK);
+    unsetenv("NBEP_SLABS");
+    assert_null(sim);
+    assert_int_equal(d.n_errors, 1);
+    assert_non_null(strstr(d.msg[0], "NBEP_SLABS asks for more than 64 slabs"));
+    nbep_diag_fini(&d);
+    nbep_test_scene_free(&sc);
+}
+
 /* A scene without a box in cells mode: the cells cover the spheres' extent instead, laid out
  * afresh at each rebuild (counted as refits). Where walls given as planes keep the spheres in,
  * that layout changes nothing: the gas above, under gravity, with its box's walls as planes
@@ -854,6 +914,7 @@ int main(void)
         cmocka_unit_test(test_cells_predictive_fluid_of_two_radii_matches_grid_mode),
         cmocka_unit_test(test_cells_predictive_dense_fluid_keeps_energy_over_a_longer_run),
         cmocka_unit_test(test_cells_predictive_pile_settles_under_gravity),
+        cmocka_unit_test(test_cells_per_slab_calendars_give_the_one_calendar_run),
         cmocka_unit_test(test_cells_without_a_box_gives_the_boxed_frames),
         cmocka_unit_test(test_cells_without_a_box_follows_an_expanding_cluster),
         cmocka_unit_test(test_cells_without_a_box_region_grows_geometrically),
