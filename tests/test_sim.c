@@ -618,7 +618,7 @@ static void test_cells_per_slab_calendars_give_the_one_calendar_run(void **state
     (void)state;
     nbep_scene *scenes[2] = {
         nbep_test_periodic_fluid(nbep_test_scaled(9, 6), 0.35, 30, 0.01, 5),
-        nbep_test_fluid(nbep_test_scaled(6, 4), 0.3, nbep_test_scaled(60, 30), 5e-3)};
+        nbep_test_fluid(nbep_test_scaled(6, 4), 0.3, 60, 5e-3)};
     scenes[1]->neighbors_cells = true;
     scenes[1]->restitution = 0.6;
     for (size_t i = 0; i < scenes[1]->state.n; i++)
@@ -626,7 +626,9 @@ static void test_cells_per_slab_calendars_give_the_one_calendar_run(void **state
     for (int k = 0; k < 2; k++) {
         frames ref = {0};
         nbep_summary s1 = run(scenes[k], 1, NULL, &ref);
-        assert_true(s1.collisions > s1.spheres);
+        if (s1.collisions <= s1.spheres) /* enough events that an order error would show */
+            fail_msg("%s: %llu collisions of %llu spheres", k ? "pile" : "fluid",
+                     (unsigned long long)s1.collisions, (unsigned long long)s1.spheres);
         for (int slabs = 2; slabs <= 4; slabs++)
             for (int nt = 1; nt <= 2; nt++) {
                 char v[8];
