@@ -116,6 +116,10 @@ $(BUILD)/tests/%: tests/%.c tests/nbep_test.h $(BUILD)/libnbep.a | $(BUILD)/test
 $(BUILD)/tests/test_memory_plan: TEST_WRAP := $(foreach f,malloc calloc realloc free \
   nbep_alloc_aligned,-Wl,--wrap=$(f))
 
+# test_ways_clock sees the seconds that choose a step's threads on their way to pred_ways.c
+$(BUILD)/tests/test_ways_clock: TEST_WRAP := $(foreach f,nbep__pred_ways_choose_crew \
+  nbep__pred_ways_choose nbep__pred_ways_note,-Wl,--wrap=$(f))
+
 $(BUILD)/bench/%: tests/bench/%.c tests/bench/bench_util.h $(BUILD)/libnbep.a | $(BUILD)/bench
 	$(CC) $(CFLAGS_ALL) -Itests $< $(BUILD)/libnbep.a -o $@ $(LDLIBS_ALL)
 

@@ -3784,6 +3784,28 @@ MUTANTS = [
     ("pred-slabs-beside-a-team", "src/algo_predictive.c",
      "const bool can_team = nt >= 2 && p.free_flight && p.slabs < 2;",
      "const bool can_team = nt >= 2 && p.free_flight;", ["test_sim", "test_memory_plan"], None),
+    # eleventh draw: every detection row on thread 0 (no result changes; no speed-up either)
+    ("detect-split-rows-all-to-first", "src/algo_detect.c",
+     "double goal = total * (double)(t + 1) / (double)nt;",
+     "double goal = total * (double)(t + 1) * (double)nt;", ["test_detect_stop"], None),
+    # eleventh draw: grid mode's crews chosen from a sum of two clock readings
+    ("grid-crew-clock-added", "src/algo_predictive.c",
+     "nbep__pred_ways_choose_crew(&c->ways, step, way, nbep_now() - t_step);",
+     "nbep__pred_ways_choose_crew(&c->ways, step, way, nbep_now() + t_step);",
+     ["test_ways_clock"], None),
+    # the same for the cells mode's team, probing and choosing
+    ("team-probe-clock-added", "src/pred_cells.c",
+     "nbep__pred_ways_note(&c->ways, way, true, tally.events, nbep_now() - t_loop);",
+     "nbep__pred_ways_note(&c->ways, way, true, tally.events, nbep_now() + t_loop);",
+     ["test_ways_clock"], None),
+    ("team-choice-clock-added", "src/pred_cells.c",
+     "nbep__pred_ways_choose(&c->ways, step, way, tally.events, nbep_now() - t_loop);",
+     "nbep__pred_ways_choose(&c->ways, step, way, tally.events, nbep_now() + t_loop);",
+     ["test_ways_clock"], None),
+    # eleventh draw: a retune that takes a width past 1e300, or infinite
+    ("cal-retune-width-unbounded", "src/calendar.c",
+     "if (!(w > 1e-300 && w < 1e300 && 1.0 / w < 1e300))",
+     "if (!(w > 1e-300 || (w < 1e300 && 1.0 / w < 1e300)))", ["test_calendar"], None),
 ]
 
 

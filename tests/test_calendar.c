@@ -440,6 +440,39 @@ static void test_a_retune_leaves_out_entries_at_infinity(void **state)
     nbep_calendar_destroy(&c);
 }
 
+/* A retune keeps its width finite and not huge: entries so far ahead that the width they ask
+ * for is past 1e300 (one 1e300 ahead: 8e300) or overflows (0.5, 3 and 1e308: +inf) leave the
+ * width as it was (1), and the calendar drains in time order either way. No deck's events lie
+ * that far ahead (scene.h's window of magnitudes); the guard is the calendar's own promise
+ * (nbep_calendar_width), which the eleventh draw's `&&` as `||` broke unseen. */
+static void test_a_retune_never_takes_an_infinite_or_huge_width(void **state)
+{
+    (void)state;
+    const double far[2][3] = {{1e300, NAN, NAN}, {0.5, 3.0, 1e308}};
+    const int count[2] = {1, 3};
+    for (int k = 0; k < 2; k++) {
+        nbep_calendar *c = make(4);
+        for (int i = 0; i < count[k]; i++)
+            nbep_calendar_set(c, (uint32_t)i, far[k][i], 0);
+        nbep_calendar_retune(c, 0.0);
+        if (!(nbep_calendar_width(c) == 1.0))
+            fail_msg("case %d: the retune took width %g", k, nbep_calendar_width(c));
+        assert_int_equal(nbep_calendar_check(c), 0);
+        double last = -1.0;
+        uint32_t i;
+        double t;
+        int drained = 0;
+        while (nbep_calendar_top(c, &i, &t)) {
+            assert_true(t >= last);
+            last = t;
+            nbep_calendar_remove(c, i);
+            drained++;
+        }
+        assert_int_equal(drained, count[k]);
+        nbep_calendar_destroy(&c);
+    }
+}
+
 /* More items than the 32-bit links hold: refused with a message of its own (not blamed on
  * memory), before anything is allocated (the request would be for gigabytes). */
 static void test_more_items_than_the_links_hold_is_refused(void **state)
@@ -462,6 +495,7 @@ int main(void)
         cmocka_unit_test(test_an_entry_set_after_the_last_buckets_are_drawn_comes_first),
         cmocka_unit_test(test_a_retune_is_not_led_by_one_far_entry),
         cmocka_unit_test(test_a_retune_leaves_out_entries_at_infinity),
+        cmocka_unit_test(test_a_retune_never_takes_an_infinite_or_huge_width),
         cmocka_unit_test(test_a_lap_retunes_the_width_to_a_changed_pace),
         cmocka_unit_test(test_more_items_than_the_links_hold_is_refused),
         cmocka_unit_test(test_drain_order_is_time_then_key_then_item_for_any_insert_order),

@@ -20,6 +20,7 @@ static bool look_hook(uint64_t step, size_t row);
 #include <setjmp.h>
 #include <cmocka.h>
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -120,6 +121,47 @@ static void abandons_as_two_steps_end(const char *algo, bool periodic)
     nbep_test_watchdog_disarm();
 }
 
+/* The threads' detection rows (split_rows): contiguous shares covering every row once, whose
+ * pair tests add up to the whole and come within one row's tests of an even share each, for
+ * naive (row i costs the planes and n - 1 - i pairs, so the first threads take fewer rows) and
+ * seminaive (a flat 8 a row), with and without planes, on 1 to 4 threads. A split that put
+ * every row on thread 0 (the eleventh draw's `/ nt` as `* nt`) changed no result, only made
+ * every thread count as slow as one. */
+static void test_detection_rows_split_into_even_shares_of_the_pair_tests(void **state)
+{
+    (void)state;
+    const size_t ns[] = {1, 2, 3, 7, 100, 1000, 4096};
+    for (int bvh = 0; bvh < 2; bvh++)
+        for (size_t np = 0; np <= 6; np += 6)
+            for (size_t u = 0; u < sizeof ns / sizeof *ns; u++)
+                for (int nt = 1; nt <= 4; nt++) {
+                    const size_t n = ns[u];
+                    contact_list lists[4];
+                    detect_ctx ctx = {.use_bvh = bvh, .lists = lists};
+                    split_rows(&ctx, n, np, nt);
+                    double total = 0.0;
+                    for (size_t i = 0; i < n; i++)
+                        total += (double)row_cost(bvh, n, np, i);
+                    /* the dearest row: the first (naive), or any (seminaive) */
+                    const double row = (double)row_cost(bvh, n, np, 0);
+                    uint64_t sum = 0;
+                    size_t at = 0;
+                    for (int t = 0; t < nt; t++) {
+                        if (lists[t].row_lo != at || lists[t].row_hi < at ||
+                            fabs((double)lists[t].cost - total / nt) > row)
+                            fail_msg("%s, %zu spheres, %zu planes, %d threads: thread %d has "
+                                     "rows %zu to %zu (after %zu), %llu tests of %g",
+                                     bvh ? "seminaive" : "naive", n, np, nt, t,
+                                     lists[t].row_lo, lists[t].row_hi, at,
+                                     (unsigned long long)lists[t].cost, total);
+                        at = lists[t].row_hi;
+                        sum += lists[t].cost;
+                    }
+                    assert_int_equal(at, n);
+                    assert_true((double)sum == total);
+                }
+}
+
 static void test_naive_abandons_a_step_signalled_in_its_pass(void **state)
 {
     (void)state;
@@ -137,6 +179,7 @@ static void test_seminaive_abandons_a_step_signalled_in_its_pass(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_detection_rows_split_into_even_shares_of_the_pair_tests),
         cmocka_unit_test(test_naive_abandons_a_step_signalled_in_its_pass),
         cmocka_unit_test(test_seminaive_abandons_a_step_signalled_in_its_pass),
     };
