@@ -30,23 +30,14 @@ nbep_status nbep_slabcal_create(size_t n, int slabs, nbep_slabcal **out, nbep_di
     if (slabs < 2 || slabs > NBEP_SLABCAL_MAX)
         NBEP_FAIL(d, NBEP_EDECK, "nbep: per-slab calendars take 2 to %d slabs, not %d",
                   NBEP_SLABCAL_MAX, slabs);
-    if (n > NBEP_CALENDAR_MAX) /* each slab's calendar would refuse it: say it once */
-        NBEP_FAIL(d, NBEP_EDECK,
-                  "nbep: an event calendar holds at most %zu items (its links are 32-bit), not "
-                  "%zu",
-                  NBEP_CALENDAR_MAX, n);
     nbep_slabcal *s = calloc(1, sizeof *s);
     if (!s)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the slabs' event calendars");
     s->slabs = slabs;
     s->n = n;
     s->best = s->second = -1;
-    s->slab = malloc(n ? n : 1);
-    if (!s->slab) {
-        nbep_slabcal_destroy(&s);
-        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the slabs' event calendars");
-    }
-    memset(s->slab, SLAB_NONE, n);
+    /* the calendars first: the first refuses more items than its links hold, before anything
+     * of that size is asked for */
     for (int k = 0; k < slabs; k++) {
         const nbep_status st = nbep_calendar_create(n, &s->cal[k], d);
         if (st != NBEP_OK) {
@@ -55,6 +46,12 @@ nbep_status nbep_slabcal_create(size_t n, int slabs, nbep_slabcal **out, nbep_di
         }
         s->stale[k] = true;
     }
+    s->slab = malloc(n ? n : 1);
+    if (!s->slab) {
+        nbep_slabcal_destroy(&s);
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the slabs' event calendars");
+    }
+    memset(s->slab, SLAB_NONE, n);
     *out = s;
     return NBEP_OK;
 }
@@ -143,7 +140,7 @@ void nbep_slabcal_runners_up(const nbep_slabcal *s, uint32_t items[2], int *n)
     nbep_calendar_runners_up(s->cal[s->best], up, NULL, &m);
     if (m > 0)
         items[(*n)++] = up[0];
-    if (s->second >= 0 && s->kept[s->second].item != NONE_ITEM)
+    if (s->second >= 0) /* (first keeps only non-empty slabs' as best and second) */
         items[(*n)++] = s->kept[s->second].item;
     else if (m > 1)
         items[(*n)++] = up[1];
