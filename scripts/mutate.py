@@ -3751,11 +3751,12 @@ MUTANTS = [
     # per-slab calendars (optimistic design, step 1): a set that leaves its slab's kept
     # earliest as it was
     ("slabcal-set-keeps-stale-first", "src/slabcal.c",
-     "    s->slab[item] = (uint8_t)slab;\n    s->stale[slab] = true;",
-     "    s->slab[item] = (uint8_t)slab;", ["test_slabcal", "test_sim"], None),
+     "    s->stale[slab] = true;\n    if (was == slab) {", "    if (was == slab) {",
+     ["test_slabcal", "test_sim"], None),
     # an entry set in another slab left in the old one too
     ("slabcal-move-leaves-the-old", "src/slabcal.c",
-     "if (was != SLAB_NONE && was != slab) {", "if (was != SLAB_NONE && was == slab) {",
+     "        nbep_calendar_remove(s->sl[was].cal, s->loc[item]);\n"
+     "        local_give_back(&s->sl[was], s->loc[item]);\n", "",
      ["test_slabcal"], None),
     # the merge takes the latest of the slabs' earliest
     ("slabcal-merge-reversed", "src/slabcal.c",
@@ -3768,8 +3769,8 @@ MUTANTS = [
      ["test_slabcal"], None),
     # every entry in slab 0: the slabs made but never used
     ("evloop-slabs-all-in-one", "src/evloop.c",
-     "nbep_slabcal_set(e->slabcal, sphere_slab(e, c.item), c.item, c.time, c.key);",
-     "nbep_slabcal_set(e->slabcal, 0, c.item, c.time, c.key);", ["test_memory_plan"], None),
+     "nbep_slabcal_set(e->slabcal, sphere_slab(e, c.item), c.item, c.time, c.key))",
+     "nbep_slabcal_set(e->slabcal, 0, c.item, c.time, c.key))", ["test_memory_plan"], None),
     # a sphere's slab from its cell's row (y) instead of its column across x
     ("evloop-slab-of-the-row", "src/evloop.c",
      "return nbep_slabcal_slab_of(e->cells.m[i].cell % columns, columns,",
@@ -3806,6 +3807,38 @@ MUTANTS = [
     ("cal-retune-width-unbounded", "src/calendar.c",
      "if (!(w > 1e-300 && w < 1e300 && 1.0 / w < 1e300))",
      "if (!(w > 1e-300 || (w < 1e300 && 1.0 / w < 1e300)))", ["test_calendar"], None),
+    # per-slab calendars numbered locally (twenty-first session): ties in (time, key) by the
+    # local number instead of the item's own
+    ("calendar-tie-ignored", "src/calendar.c",
+     "return c->tie ? c->tie[a] < c->tie[b] : a < b;", "return a < b;",
+     ["test_slabcal", "test_memory_plan", "test_sim"], None),
+    # a slab's calendar never told the items' numbers
+    ("slabcal-tie-never-set", "src/slabcal.c", "    nbep_calendar_set_tie(cal, glob);\n", "",
+     ["test_slabcal", "test_memory_plan", "test_sim"], None),
+    # a growth copies all entries but the last local number's
+    ("slabcal-grow-drops-the-last", "src/slabcal.c",
+     "for (uint32_t l = 0; l < k->hi; l++) {", "for (uint32_t l = 0; l + 1 < k->hi; l++) {",
+     ["test_slabcal", "test_memory_plan"], None),
+    # a growth refused its local numbers' array keeps the calendar it made
+    ("slabcal-grow-refused-leaks", "src/slabcal.c",
+     "    if (!glob) {\n        nbep_calendar_destroy(&cal);", "    if (!glob) {",
+     ["test_memory_plan"], None),
+    # a local number given back never taken again
+    ("slabcal-given-back-lost", "src/slabcal.c",
+     "    k->glob[l] = FREE | k->free;\n    k->free = l;", "    k->glob[l] = FREE | k->free;",
+     ["test_slabcal"], None),
+    # the kept earliest named by its local number
+    ("slabcal-kept-by-local-number", "src/slabcal.c",
+     "                s->kept[k].item = s->sl[k].glob[s->kept[k].item];", "                ;",
+     ["test_slabcal", "test_sim"], None),
+    # the runner-up named by its local number
+    ("slabcal-runner-up-by-local-number", "src/slabcal.c",
+     "        items[(*n)++] = k->glob[up[0]];", "        items[(*n)++] = up[0];",
+     ["test_slabcal"], None),
+    # a slab that could not grow goes on without a word (a sphere without its entry)
+    ("evloop-slab-growth-refusal-ignored", "src/evloop.c",
+     "c.item, c.time, c.key))\n            e->failed = true;", "c.item, c.time, c.key))\n            ;",
+     ["test_memory_plan"], None),
 ]
 
 

@@ -73,6 +73,8 @@ struct nbep_calendar {
      * and more), brought in from the overflow with cur left where it was (advance): a later
      * entry of any other bucket is earlier than them all, and sends them back (file) */
     bool parked;
+    /* ties in (time, key) broken by tie[item] rather than item (nbep_calendar_set_tie), or NULL */
+    const uint32_t *tie;
 };
 
 nbep_status nbep_calendar_create(size_t n, nbep_calendar **out, nbep_diag *d)
@@ -130,12 +132,16 @@ size_t nbep_calendar_bytes(size_t n)
 
 /* ---- the strict order and the heap of the current bucket ---------------------------------- */
 
-/* The strict order: time, then key, then item (items are unique, so no two entries tie). */
+/* The strict order: time, then key, then item, or the item's tie number where the caller gave
+ * them (items and tie numbers are unique, so no two entries tie). */
 static inline bool before(const nbep_calendar *c, uint32_t a, uint32_t b)
 {
     const node *x = &c->node[a], *y = &c->node[b];
-    return nbep_calendar_before((nbep_calendar_entry){x->time, x->key, a},
-                                (nbep_calendar_entry){y->time, y->key, b});
+    if (x->time != y->time)
+        return x->time < y->time;
+    if (x->key != y->key)
+        return x->key < y->key;
+    return c->tie ? c->tie[a] < c->tie[b] : a < b;
 }
 
 static inline void heap_place(nbep_calendar *c, size_t k, uint32_t item)
@@ -536,6 +542,20 @@ size_t nbep_calendar_size(const nbep_calendar *c)
 double nbep_calendar_width(const nbep_calendar *c)
 {
     return c->w;
+}
+
+void nbep_calendar_set_tie(nbep_calendar *c, const uint32_t *tie)
+{
+    assert(c->size == 0);
+    c->tie = tie;
+}
+
+bool nbep_calendar_get(const nbep_calendar *c, uint32_t item, nbep_calendar_entry *entry)
+{
+    if (item >= c->n || c->node[item].where == WHERE_NONE)
+        return false;
+    *entry = (nbep_calendar_entry){c->node[item].time, c->node[item].key, item};
+    return true;
 }
 
 bool nbep_calendar_has(const nbep_calendar *c, uint32_t item, double *time)

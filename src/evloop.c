@@ -659,13 +659,13 @@ static int sphere_slab(const nbep_evloop *e, uint32_t i)
 }
 
 /* Entry c set in the calendar, or its item's taken out (set false); with slabs, in its slab's
- * calendar. */
+ * calendar, whose room may have to grow: without memory for it the run fails (e->failed). */
 static void enter(nbep_evloop *e, bool set, nbep_calendar_entry c)
 {
     if (e->slabcal) {
-        if (set)
-            nbep_slabcal_set(e->slabcal, sphere_slab(e, c.item), c.item, c.time, c.key);
-        else
+        if (set && !nbep_slabcal_set(e->slabcal, sphere_slab(e, c.item), c.item, c.time, c.key))
+            e->failed = true;
+        else if (!set)
             nbep_slabcal_remove(e->slabcal, c.item);
         return;
     }

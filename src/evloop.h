@@ -151,8 +151,9 @@ void nbep_evloop_layout(nbep_evloop *e);
 void nbep_evloop_predict(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, size_t lo,
                          size_t hi, double t);
 void nbep_evloop_schedule(nbep_evloop *e, double t);
-/* True once a neighbour list could not get memory (at a rebuild or in nbep_evloop_run, which
- * then returns false): the run must stop. */
+/* True once a neighbour list, or a slab's calendar growing (nbep_evloop_set_slabs), could not
+ * get memory (at a rebuild or in nbep_evloop_run, which then returns false): the run must
+ * stop. */
 bool nbep_evloop_failed(const nbep_evloop *e);
 
 /* What one call of nbep_evloop_run did. */
@@ -192,7 +193,7 @@ typedef struct nbep_evloop_stall {
 
 /* Handles every event before t_end, in order. One thread. Returns false, with the time of
  * the stuck event in *t_stuck, when the stall check fails (a cascade of zero-time events the
- * model cannot resolve), when a neighbour list could not get memory (nbep_evloop_failed), or
+ * model cannot resolve), when memory could not be had (nbep_evloop_failed), or
  * after an event whose reaction set *stop (ops react). */
 bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double t_end,
                      nbep_evloop_stall *stall, nbep_evloop_tally *tally, double *t_stuck);

@@ -522,7 +522,8 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
         nbep__sim_abandon(sim);
     } else if (fail && nbep_evloop_failed(c->ev)) {
         nbep_diag_add(sim->diag, __FILE__, __LINE__,
-                      "nbep: step %llu: no memory for the neighbour lists; stopping",
+                      "nbep: step %llu: no memory for the neighbour lists or the event "
+                      "calendars; stopping",
                       (unsigned long long)step);
         sim->status = NBEP_ENOMEM;
     } else if (fail && (jammed = cells_jammed(c, sim->st.n, step)) != 0) {

@@ -364,7 +364,8 @@ static void test_the_cells_mode_allocates_what_it_estimates_but_its_lists(void *
     plans_of("predictive", "cells", "", cooling, true);
     plans_of("predictive", "cells", "", pile, false);
     plans_of("predictive", "cells", "", caged, false);
-    /* per-slab calendars (NBEP_SLABS), each a calendar for all spheres, and no team */
+    /* per-slab calendars (NBEP_SLABS), each with room for its share of the spheres and a
+     * quarter more, and no team */
     setenv("NBEP_SLABS", "3", 1);
     plans_of("predictive", "cells", "", elastic, true);
     plans_of("predictive", "cells", "", pile, false);
@@ -590,6 +591,123 @@ static void test_a_step_refused_its_contact_list_growth_stops_the_run_with_the_s
         }
 }
 
+/* A slab that outgrows its room grows (doubled, at most n) with its entries and their order
+ * kept; each allocation of a growth refused in turn refuses the entry that needed it and
+ * changes nothing: the item stays in the slab it was in, the room as it was, nothing of the
+ * growth left allocated. Slab 0 is filled to its room with entries whose ties in (time, key)
+ * come out by item, not by local number (filled from the highest item down); then an item of
+ * slab 1 moves in. */
+static void test_a_slab_outgrowing_its_room_grows_or_refuses_whole(void **state)
+{
+    (void)state;
+    enum { N = 200 };
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_slabcal *s = NULL;
+    nbep_calendar *one = NULL;
+    assert_int_equal(nbep_slabcal_create(N, 2, &s, &d), NBEP_OK);
+    assert_int_equal(nbep_calendar_create(N, &one, &d), NBEP_OK);
+    const size_t room = nbep_slabcal_room_of(s, 0);
+    assert_true(room < N - 1);
+    for (size_t k = 0; k < room; k++) {
+        const uint32_t i = (uint32_t)(room - k); /* items room down to 1 */
+        const double t = (double)(i % 7);
+        assert_true(nbep_slabcal_set(s, 0, i, t, i % 3));
+        nbep_calendar_set(one, i, t, i % 3);
+    }
+    const uint32_t mover = (uint32_t)room + 1;
+    assert_true(nbep_slabcal_set(s, 1, mover, 2.0, 1));
+    nbep_calendar_set(one, mover, 2.0, 1);
+    size_t k = 1, calls = 0;
+    for (;; k++) {
+        fail_call = k;
+        count_start();
+        const bool ok = nbep_slabcal_set(s, 0, mover, 2.0, 1);
+        fail_call = 0;
+        calls = n_calls;
+        const size_t left = count_stop();
+        if (ok)
+            break;
+        if (nbep_slabcal_slab(s, mover) != 1 || nbep_slabcal_room_of(s, 0) != room ||
+            nbep_slabcal_check(s) != 0 || nbep_slabcal_size(s) != room + 1 || left != 0)
+            fail_msg("allocation %zu of a growth refused: the mover in slab %d, room %zu of "
+                     "%zu, %zu violations, %zu entries, %zu bytes left", k,
+                     nbep_slabcal_slab(s, mover), nbep_slabcal_room_of(s, 0), room,
+                     nbep_slabcal_check(s), nbep_slabcal_size(s), left);
+    }
+    assert_int_equal(k - 1, calls); /* every allocation of the growth was refused once */
+    assert_true(calls >= 2);
+    assert_int_equal(nbep_slabcal_slab(s, mover), 0);
+    assert_int_equal(nbep_slabcal_room_of(s, 0), 2 * room < N ? 2 * room : N);
+    assert_int_equal(nbep_slabcal_check(s), 0);
+    nbep_calendar_entry a, b;
+    while (nbep_calendar_first(one, &b)) { /* the one calendar's order, ties by item */
+        assert_true(nbep_slabcal_first(s, &a));
+        if (a.item != b.item || a.time != b.time || a.key != b.key)
+            fail_msg("after the growth: item %u (t %g, key %llu) came out, the one calendar's "
+                     "%u (t %g, key %llu)", a.item, a.time, (unsigned long long)a.key, b.item,
+                     b.time, (unsigned long long)b.key);
+        nbep_slabcal_remove(s, a.item);
+        nbep_calendar_remove(one, b.item);
+    }
+    assert_false(nbep_slabcal_first(s, &a));
+    nbep_calendar_destroy(&one);
+    nbep_slabcal_destroy(&s);
+    nbep_diag_fini(&d);
+}
+
+/* In a run, a slab that must grow and cannot stops the run with NBEP_ENOMEM and one line
+ * naming the step, whichever of the run's allocations is refused. 80 spheres in the low fifth
+ * of a box long across x, on 2 slabs: all in slab 0, past its first room (50 and a quarter, and
+ * 16), so the first step's scheduling grows it (the run unrefused shows it did). */
+static void test_a_run_whose_slab_cannot_grow_stops_with_the_step_named(void **state)
+{
+    (void)state;
+    nbep_scene sc;
+    nbep_test_load_deck("memory-plan-slabs.deck",
+                        "run: { algorithm = \"predictive\"; neighbors = \"cells\"; steps = 2; "
+                        "dt = 0.01; seed = 3; };\n"
+                        "physics: { restitution = 1.0; };\n"
+                        "box: { min = [0.0, 0.0, 0.0]; max = [5.0, 1.0, 1.0]; };\n"
+                        "spheres = ( { count = 80; radius = 0.05; mass = 1.0; place = \"random\";"
+                        " speed = 1.0; region = { min = [0.0, 0.0, 0.0]; max = [1.0, 1.0, 1.0];"
+                        " }; } );\n"
+                        "output: { every = 1; };\n",
+                        &sc);
+    setenv("NBEP_SLABS", "2", 1);
+    size_t calls = 0;
+    for (size_t k = 0; k == 0 || k <= calls; k++) {
+        nbep_diag d;
+        nbep_diag_init(&d);
+        nbep_sim_options opt = {.threads = 1};
+        nbep_sim *sim = NULL;
+        assert_int_equal(nbep_sim_create(&sc, &opt, &sim, &d), NBEP_OK);
+        const pred_ctx *c = sim->algo_ctx;
+        const size_t room = nbep_slabcal_room_of(c->ev->slabcal, 0);
+        fail_call = k;
+        count_start();
+        const nbep_status st = nbep_sim_run(sim, &d);
+        fail_call = 0;
+        (void)count_stop();
+        if (k == 0) { /* unrefused: slab 0 grew, and the run's allocations were counted */
+            calls = n_calls;
+            assert_int_equal(st, NBEP_OK);
+            assert_int_equal(nbep_slabcal_size_of(c->ev->slabcal, 0), sc.state.n);
+            assert_true(nbep_slabcal_room_of(c->ev->slabcal, 0) > room);
+            assert_true(calls >= 2);
+        } else {
+            const char *said = d.n_errors >= 1 && d.cap > 0 && d.msg[0] ? d.msg[0] : "(none)";
+            if (st != NBEP_ENOMEM || d.n_errors != 1 || !strstr(said, "step 1: no memory for"))
+                fail_msg("the run's allocation %zu of %zu refused: status %d, %zu line(s): %s",
+                         k, calls, (int)st, d.n_errors, said);
+        }
+        nbep_sim_destroy(&sim);
+        nbep_diag_fini(&d);
+    }
+    unsetenv("NBEP_SLABS");
+    nbep_scene_fini(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -601,6 +719,8 @@ int main(void)
         cmocka_unit_test(test_a_create_refused_memory_anywhere_fails_whole_and_leaks_nothing),
         cmocka_unit_test(test_an_event_queue_of_the_most_sphere_ids_asks_for_its_memory),
         cmocka_unit_test(test_a_step_refused_its_contact_list_growth_stops_the_run_with_the_step_named),
+        cmocka_unit_test(test_a_slab_outgrowing_its_room_grows_or_refuses_whole),
+        cmocka_unit_test(test_a_run_whose_slab_cannot_grow_stops_with_the_step_named),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

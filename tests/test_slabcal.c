@@ -1,7 +1,8 @@
 /* Tests of the per-slab calendars (slabcal.h): the merged earliest entry is one calendar's,
- * entry for entry, under random sets (to random slabs, so entries move between slabs),
- * removals, clears and retunes, with ties in time and key; each entry lives in one slab; the
- * slabs of cell columns; refusals. The engine's use (frames bit for bit for any slab count)
+ * entry for entry, under random sets (to random slabs, so entries move between slabs and slabs
+ * outgrow their rooms), removals, clears and retunes, with ties in time and key; ties within
+ * a slab by item, not by local number; each entry lives in one slab; the slabs of cell
+ * columns; refusals. A growth's refused memory is test_memory_plan's. The engine's use (frames bit for bit for any slab count)
  * is test_sim's. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -25,10 +26,24 @@ static nbep_slabcal *make(size_t n, int slabs)
     return s;
 }
 
+/* An entry set, which must be taken (slabs grow as their items need). */
+static void put(nbep_slabcal *s, int slab, uint32_t item, double time, uint64_t key)
+{
+    assert_true(nbep_slabcal_set(s, slab, item, time, key));
+}
+
 static uint64_t lcg(uint64_t *x)
 {
     *x = *x * 6364136223846793005ULL + 1442695040888963407ULL;
     return *x >> 33;
+}
+
+/* A random slab, but for every third thousand operations slab 0 (most entries crowd into it
+ * then, past its first room, so it grows, and later its local numbers are given back). */
+static int herd(uint64_t *x, int op, int slabs)
+{
+    const int k = (int)(lcg(x) % (uint64_t)slabs);
+    return (op / 1000) % 3 == 1 ? 0 : k;
 }
 
 /* Both give the same earliest entry, or both none. */
@@ -57,6 +72,7 @@ static void test_the_merged_first_is_one_calendars_under_random_operations(void 
     enum { N = 150, OPS = 12000 };
     for (int slabs = 2; slabs <= 5; slabs++) {
         nbep_slabcal *s = make(N, slabs);
+        const size_t room = nbep_slabcal_room_of(s, 0);
         nbep_diag d;
         nbep_diag_init(&d);
         nbep_calendar *one = NULL;
@@ -70,7 +86,7 @@ static void test_the_merged_first_is_one_calendars_under_random_operations(void 
             if (what < 20) {
                 nbep_slabcal_remove(s, i);
                 nbep_calendar_remove(one, i);
-            } else if (what == 20) {
+            } else if (what == 20 && (op / 1000) % 3 != 1) { /* (no clear in a herd) */
                 nbep_slabcal_clear(s);
                 nbep_calendar_clear(one);
             } else if (what == 21) {
@@ -82,15 +98,15 @@ static void test_the_merged_first_is_one_calendars_under_random_operations(void 
                     now = e.time;
                     const double t = now + 0.25 * (double)(1 + lcg(&x) % 8);
                     const uint64_t key = lcg(&x) % 3;
-                    const int slab = (int)(lcg(&x) % (uint64_t)slabs);
-                    nbep_slabcal_set(s, slab, e.item, t, key);
+                    const int slab = herd(&x, op, slabs);
+                    put(s, slab, e.item, t, key);
                     nbep_calendar_set(one, e.item, t, key);
                 }
             } else {
                 const double t = now + 0.25 * (double)(lcg(&x) % 12);
                 const uint64_t key = lcg(&x) % 3;
-                const int slab = (int)(lcg(&x) % (uint64_t)slabs);
-                nbep_slabcal_set(s, slab, i, t, key);
+                const int slab = herd(&x, op, slabs);
+                put(s, slab, i, t, key);
                 nbep_calendar_set(one, i, t, key);
                 assert_int_equal(nbep_slabcal_slab(s, i), slab);
             }
@@ -110,6 +126,9 @@ static void test_the_merged_first_is_one_calendars_under_random_operations(void 
         }
         assert_false(nbep_calendar_first(one, &e));
         assert_int_equal(nbep_slabcal_check(s), 0);
+        if (nbep_slabcal_room_of(s, 0) <= room) /* the herds grew slab 0 */
+            fail_msg("%d slabs: slab 0's room %zu, its first %zu", slabs,
+                     nbep_slabcal_room_of(s, 0), room);
         nbep_calendar_destroy(&one);
         nbep_slabcal_destroy(&s);
         assert_null(s);
@@ -124,11 +143,11 @@ static void test_an_entry_set_in_another_slab_moves_there(void **state)
     nbep_slabcal *s = make(4, 3);
     nbep_calendar_entry e;
     assert_false(nbep_slabcal_first(s, &e));
-    nbep_slabcal_set(s, 0, 2, 1.0, 0);
-    nbep_slabcal_set(s, 1, 3, 2.0, 0);
+    put(s, 0, 2, 1.0, 0);
+    put(s, 1, 3, 2.0, 0);
     assert_true(nbep_slabcal_first(s, &e));
     assert_int_equal(e.item, 2);
-    nbep_slabcal_set(s, 2, 2, 3.0, 0); /* later, elsewhere: 3 comes first now */
+    put(s, 2, 2, 3.0, 0); /* later, elsewhere: 3 comes first now */
     assert_int_equal(nbep_slabcal_slab(s, 2), 2);
     assert_int_equal(nbep_slabcal_size_of(s, 0), 0);
     assert_int_equal(nbep_slabcal_size_of(s, 2), 1);
@@ -136,7 +155,7 @@ static void test_an_entry_set_in_another_slab_moves_there(void **state)
     assert_true(nbep_slabcal_first(s, &e));
     assert_int_equal(e.item, 3);
     assert_true(e.time == 2.0);
-    nbep_slabcal_set(s, 1, 2, 0.5, 0); /* earlier, in 3's slab */
+    put(s, 1, 2, 0.5, 0); /* earlier, in 3's slab */
     assert_true(nbep_slabcal_first(s, &e));
     assert_int_equal(e.item, 2);
     assert_int_equal(nbep_slabcal_size_of(s, 2), 0);
@@ -157,12 +176,39 @@ static void test_ties_across_slabs_come_out_by_key_then_item(void **state)
     nbep_slabcal *s = make(6, 3);
     const uint64_t keys[6] = {5, 1, 5, 1, 0, 9};
     for (uint32_t i = 0; i < 6; i++)
-        nbep_slabcal_set(s, (int)(5 - i) % 3, i, 1.0, keys[i]);
+        put(s, (int)(5 - i) % 3, i, 1.0, keys[i]);
     const uint32_t order[6] = {4, 1, 3, 0, 2, 5};
     for (int k = 0; k < 6; k++) {
         nbep_calendar_entry e;
         assert_true(nbep_slabcal_first(s, &e));
         assert_int_equal(e.item, order[k]);
+        nbep_slabcal_remove(s, e.item);
+    }
+    nbep_slabcal_destroy(&s);
+}
+
+/* Within one slab, ties in (time, key) come out by item, as from one calendar, whatever local
+ * numbers the items hold: taken from the highest item down, then given back and taken again
+ * in another order. */
+static void test_ties_in_one_slab_come_out_by_item_not_local_number(void **state)
+{
+    (void)state;
+    nbep_slabcal *s = make(10, 2);
+    for (uint32_t i = 9; i >= 5; i--) /* local numbers 0 to 4 for items 9 down to 5 */
+        put(s, 1, i, 1.0, 4);
+    nbep_slabcal_remove(s, 8);
+    nbep_slabcal_remove(s, 6);
+    put(s, 1, 2, 1.0, 4); /* the local numbers 8 and 6 gave back, in reverse */
+    put(s, 1, 3, 1.0, 4);
+    put(s, 0, 4, 1.0, 4); /* and one in the other slab, between them */
+    put(s, 1, 1, 1.0, 5); /* a later key: last */
+    assert_int_equal(nbep_slabcal_check(s), 0);
+    const uint32_t order[7] = {2, 3, 4, 5, 7, 9, 1};
+    for (int k = 0; k < 7; k++) {
+        nbep_calendar_entry e;
+        assert_true(nbep_slabcal_first(s, &e));
+        if (e.item != order[k])
+            fail_msg("tie %d: item %u came out, not %u", k, e.item, order[k]);
         nbep_slabcal_remove(s, e.item);
     }
     nbep_slabcal_destroy(&s);
@@ -179,9 +225,9 @@ static void test_runners_up_name_held_entries_after_the_first(void **state)
     int m = -1;
     nbep_slabcal_runners_up(s, up, &m);
     assert_int_equal(m, 0);
-    nbep_slabcal_set(s, 0, 1, 1.0, 0);
-    nbep_slabcal_set(s, 0, 2, 1.5, 0);
-    nbep_slabcal_set(s, 1, 5, 2.0, 0);
+    put(s, 0, 1, 1.0, 0);
+    put(s, 0, 2, 1.5, 0);
+    put(s, 1, 5, 2.0, 0);
     nbep_calendar_entry e;
     assert_true(nbep_slabcal_first(s, &e));
     assert_int_equal(e.item, 1);
@@ -251,7 +297,7 @@ static void test_slab_counts_and_sizes_out_of_range_are_refused(void **state)
     nbep_diag_fini(&d);
     s = make(10, NBEP_SLABCAL_MAX);
     assert_int_equal(nbep_slabcal_slabs(s), NBEP_SLABCAL_MAX);
-    nbep_slabcal_set(s, NBEP_SLABCAL_MAX - 1, 9, 1.0, 0);
+    put(s, NBEP_SLABCAL_MAX - 1, 9, 1.0, 0);
     assert_int_equal(nbep_slabcal_slab(s, 9), NBEP_SLABCAL_MAX - 1);
     assert_int_equal(nbep_slabcal_check(s), 0);
     nbep_slabcal_destroy(&s);
@@ -263,6 +309,7 @@ int main(void)
         cmocka_unit_test(test_the_merged_first_is_one_calendars_under_random_operations),
         cmocka_unit_test(test_an_entry_set_in_another_slab_moves_there),
         cmocka_unit_test(test_ties_across_slabs_come_out_by_key_then_item),
+        cmocka_unit_test(test_ties_in_one_slab_come_out_by_item_not_local_number),
         cmocka_unit_test(test_runners_up_name_held_entries_after_the_first),
         cmocka_unit_test(test_cell_columns_fall_into_slabs_of_even_widths_in_order),
         cmocka_unit_test(test_slab_counts_and_sizes_out_of_range_are_refused),

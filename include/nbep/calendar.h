@@ -25,7 +25,8 @@ typedef struct nbep_calendar_entry {
 } nbep_calendar_entry;
 
 /* Whether entry a comes out before entry b: the calendar's order (time, then key, then item),
- * for callers that keep a copy of part of it in order. */
+ * for callers that keep a copy of part of it in order (a calendar with tie numbers,
+ * nbep_calendar_set_tie, compares those in place of the items). */
 static inline bool nbep_calendar_before(nbep_calendar_entry a, nbep_calendar_entry b)
 {
     if (a.time != b.time)
@@ -78,6 +79,13 @@ void nbep_calendar_prefetch_set(const nbep_calendar *c, double time, bool deep);
 size_t nbep_calendar_size(const nbep_calendar *c);
 /* The buckets' width in time (nbep_calendar_retune), for tests and diagnostics. */
 double nbep_calendar_width(const nbep_calendar *c);
+/* Ties in (time, key) broken by tie[item] instead of item, for a caller whose items are local
+ * numbers of a wider numbering (slabcal.c: a slab's spheres, ordered by their global numbers):
+ * tie[item] of every item with an entry must stay unchanged while it has it, and distinct from
+ * every other's. The array stays the caller's; NULL: by item again. Call while empty. */
+void nbep_calendar_set_tie(nbep_calendar *c, const uint32_t *tie);
+/* Item's entry in *entry (its item field: item), or false when it has none. */
+bool nbep_calendar_get(const nbep_calendar *c, uint32_t item, nbep_calendar_entry *entry);
 /* True when item has an entry; its time in *time (may be NULL). */
 bool nbep_calendar_has(const nbep_calendar *c, uint32_t item, double *time);
 

@@ -10,9 +10,14 @@
  *
  * The merge keeps each slab's earliest entry, read again only from a slab whose calendar
  * changed since (a set or a removal there), and compares the slabs' kept entries: O(slabs) an
- * event beside the calendar's own work. Not thread-safe: one thread owns it. Memory: a calendar
- * for all n items a slab (its arrays are indexed by sphere), and a byte a sphere for its
- * slab. */
+ * event beside the calendar's own work. Not thread-safe: one thread owns it.
+ *
+ * Memory: each slab numbers the items it holds locally (a number taken as an item's entry
+ * comes in, given back as it leaves), so its calendar is of its own items, not of all n: room
+ * for its even share and a quarter more at first, doubled (at most n) when outgrown. Its
+ * calendar breaks ties in (time, key) by the items' own numbers (nbep_calendar_set_tie), not
+ * the local ones, which keeps the one calendar's order: a pair's two entries share time and
+ * key, and the lower sphere's comes out first. Beside the calendars, 5 bytes an item. */
 #ifndef NBEP_SLABCAL_H
 #define NBEP_SLABCAL_H
 
@@ -47,8 +52,9 @@ NBEP_MUST_CHECK nbep_status nbep_slabcal_create(size_t n, int slabs, nbep_slabca
 void nbep_slabcal_destroy(nbep_slabcal **s);
 
 /* Gives item its entry (time, key) in slab's calendar, moving it out of another slab's if it
- * was there. time is not NaN. */
-void nbep_slabcal_set(nbep_slabcal *s, int slab, uint32_t item, double time, uint64_t key);
+ * was there. time is not NaN. False when slab's room is full and no memory could be had to
+ * grow it: then nothing changed. */
+NBEP_MUST_CHECK bool nbep_slabcal_set(nbep_slabcal *s, int slab, uint32_t item, double time, uint64_t key);
 /* Removes item's entry, if it has one. */
 void nbep_slabcal_remove(nbep_slabcal *s, uint32_t item);
 /* Removes every entry. O(entries). */
@@ -69,15 +75,19 @@ int nbep_slabcal_slab(const nbep_slabcal *s, uint32_t item);
 size_t nbep_slabcal_size(const nbep_slabcal *s);
 /* Entries held by one slab. */
 size_t nbep_slabcal_size_of(const nbep_slabcal *s, int slab);
+/* The items slab has room for now (its entries' local numbers). */
+size_t nbep_slabcal_room_of(const nbep_slabcal *s, int slab);
 /* The slabs. */
 int nbep_slabcal_slabs(const nbep_slabcal *s);
 
-/* Invariant check for tests: each slab's calendar holds exactly the items whose slab is it,
- * each calendar's own check passes, and each kept earliest entry is its slab's. Returns the
- * number of violations. */
+/* Invariant check for tests: each item with an entry holds a local number of its slab that
+ * names it back and has the entry, every other local number handed out is on the slab's free
+ * list with no entry, each calendar's own check passes, and each kept earliest entry is its
+ * slab's. Returns the number of violations. */
 size_t nbep_slabcal_check(nbep_slabcal *s);
 
-/* Bytes nbep_slabcal_create(n, slabs) allocates. */
+/* Bytes nbep_slabcal_create(n, slabs) allocates (a slab outgrowing its first room later
+ * takes more). */
 size_t nbep_slabcal_bytes(size_t n, int slabs);
 
 #endif
