@@ -3755,8 +3755,8 @@ MUTANTS = [
      ["test_slabcal", "test_sim"], None),
     # an entry set in another slab left in the old one too
     ("slabcal-move-leaves-the-old", "src/slabcal.c",
-     "        nbep_calendar_remove(s->sl[was].cal, s->loc[item]);\n"
-     "        local_give_back(&s->sl[was], s->loc[item]);\n", "",
+     "        nbep_calendar_remove(s->sl[was].cal, s->at[item].loc);\n"
+     "        local_give_back(&s->sl[was], s->at[item].loc);\n", "",
      ["test_slabcal"], None),
     # the merge takes the latest of the slabs' earliest
     ("slabcal-merge-reversed", "src/slabcal.c",

@@ -30,8 +30,12 @@ struct nbep_slabcal {
     int slabs;
     size_t n;
     one_slab sl[NBEP_SLABCAL_MAX];
-    uint8_t *slab; /* owned, n: the slab holding each item's entry */
-    uint32_t *loc; /* owned, n: its local number there */
+    /* owned, n: the slab holding each item's entry and its local number there, side by side
+     * (one cache line an item where two arrays would take two) */
+    struct {
+        uint32_t loc;
+        uint8_t slab;
+    } *at;
     /* each slab's earliest entry as last read, by item (kept[s].item == NONE_ITEM: empty), and
      * whether its calendar changed since (then it is read again) */
     nbep_calendar_entry kept[NBEP_SLABCAL_MAX];
@@ -137,15 +141,15 @@ nbep_status nbep_slabcal_create(size_t n, int slabs, nbep_slabcal **out, nbep_di
             made = slab_make(&s->sl[k], first_cap(n, slabs));
             s->stale[k] = true;
         }
-        s->slab = made ? malloc(n ? n : 1) : NULL;
-        s->loc = s->slab ? malloc((n ? n : 1) * sizeof *s->loc) : NULL;
-        made = s->loc != NULL;
+        s->at = made ? malloc((n ? n : 1) * sizeof *s->at) : NULL;
+        made = s->at != NULL;
     }
     if (!made) {
         nbep_slabcal_destroy(&s);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: no memory for the slabs' event calendars");
     }
-    memset(s->slab, SLAB_NONE, n);
+    for (size_t i = 0; i < n; i++)
+        s->at[i].slab = SLAB_NONE;
     *out = s;
     return NBEP_OK;
 }
@@ -158,43 +162,42 @@ void nbep_slabcal_destroy(nbep_slabcal **s)
         nbep_calendar_destroy(&(*s)->sl[k].cal);
         free((*s)->sl[k].glob);
     }
-    free((*s)->slab);
-    free((*s)->loc);
+    free((*s)->at);
     free(*s);
     *s = NULL;
 }
 
 bool nbep_slabcal_set(nbep_slabcal *s, int slab, uint32_t item, double time, uint64_t key)
 {
-    const int was = s->slab[item];
+    const int was = s->at[item].slab;
     one_slab *k = &s->sl[slab];
     s->stale[slab] = true;
     if (was == slab) {
-        nbep_calendar_set(k->cal, s->loc[item], time, key);
+        nbep_calendar_set(k->cal, s->at[item].loc, time, key);
         return true;
     }
     uint32_t l;
     if (!local_take(s, k, item, &l))
         return false;
     if (was != SLAB_NONE) {
-        nbep_calendar_remove(s->sl[was].cal, s->loc[item]);
-        local_give_back(&s->sl[was], s->loc[item]);
+        nbep_calendar_remove(s->sl[was].cal, s->at[item].loc);
+        local_give_back(&s->sl[was], s->at[item].loc);
         s->stale[was] = true;
     }
     nbep_calendar_set(k->cal, l, time, key);
-    s->slab[item] = (uint8_t)slab;
-    s->loc[item] = l;
+    s->at[item].slab = (uint8_t)slab;
+    s->at[item].loc = l;
     return true;
 }
 
 void nbep_slabcal_remove(nbep_slabcal *s, uint32_t item)
 {
-    const int was = s->slab[item];
+    const int was = s->at[item].slab;
     if (was == SLAB_NONE)
         return;
-    nbep_calendar_remove(s->sl[was].cal, s->loc[item]);
-    local_give_back(&s->sl[was], s->loc[item]);
-    s->slab[item] = SLAB_NONE;
+    nbep_calendar_remove(s->sl[was].cal, s->at[item].loc);
+    local_give_back(&s->sl[was], s->at[item].loc);
+    s->at[item].slab = SLAB_NONE;
     s->stale[was] = true;
 }
 
@@ -206,7 +209,8 @@ void nbep_slabcal_clear(nbep_slabcal *s)
         s->sl[k].free = LOCAL_NIL;
         s->stale[k] = true;
     }
-    memset(s->slab, SLAB_NONE, s->n);
+    for (size_t i = 0; i < s->n; i++)
+        s->at[i].slab = SLAB_NONE;
 }
 
 void nbep_slabcal_retune(nbep_slabcal *s, double t_now)
@@ -262,14 +266,14 @@ void nbep_slabcal_runners_up(const nbep_slabcal *s, uint32_t items[2], int *n)
 
 void nbep_slabcal_prefetch(const nbep_slabcal *s, uint32_t item)
 {
-    const int k = s->slab[item];
+    const int k = s->at[item].slab;
     if (k != SLAB_NONE)
-        nbep_calendar_prefetch(s->sl[k].cal, s->loc[item]);
+        nbep_calendar_prefetch(s->sl[k].cal, s->at[item].loc);
 }
 
 int nbep_slabcal_slab(const nbep_slabcal *s, uint32_t item)
 {
-    return s->slab[item] == SLAB_NONE ? -1 : s->slab[item];
+    return s->at[item].slab == SLAB_NONE ? -1 : s->at[item].slab;
 }
 
 size_t nbep_slabcal_size(const nbep_slabcal *s)
@@ -300,11 +304,11 @@ size_t nbep_slabcal_check(nbep_slabcal *s)
     size_t bad = 0;
     size_t held[NBEP_SLABCAL_MAX] = {0};
     for (size_t i = 0; i < s->n; i++) { /* an item's entry at its local number, which names it */
-        const int k = s->slab[i];
+        const int k = s->at[i].slab;
         if (k == SLAB_NONE)
             continue;
-        if (k >= s->slabs || s->loc[i] >= s->sl[k].hi || s->sl[k].glob[s->loc[i]] != i ||
-            !nbep_calendar_has(s->sl[k].cal, s->loc[i], NULL)) {
+        if (k >= s->slabs || s->at[i].loc >= s->sl[k].hi || s->sl[k].glob[s->at[i].loc] != i ||
+            !nbep_calendar_has(s->sl[k].cal, s->at[i].loc, NULL)) {
             bad++;
             continue;
         }
@@ -333,6 +337,6 @@ size_t nbep_slabcal_check(nbep_slabcal *s)
 size_t nbep_slabcal_bytes(size_t n, int slabs)
 {
     const size_t cap = first_cap(n, slabs);
-    return sizeof(nbep_slabcal) + (n ? n : 1) * (1 + sizeof(uint32_t)) +
+    return sizeof(nbep_slabcal) + (n ? n : 1) * sizeof(((nbep_slabcal *)0)->at[0]) +
            (size_t)slabs * (nbep_calendar_bytes(cap) + (cap ? cap : 1) * sizeof(uint32_t));
 }

@@ -17,7 +17,7 @@
  * for its even share and a quarter more at first, doubled (at most n) when outgrown. Its
  * calendar breaks ties in (time, key) by the items' own numbers (nbep_calendar_set_tie), not
  * the local ones, which keeps the one calendar's order: a pair's two entries share time and
- * key, and the lower sphere's comes out first. Beside the calendars, 5 bytes an item. */
+ * key, and the lower sphere's comes out first. Beside the calendars, 8 bytes an item. */
 #ifndef NBEP_SLABCAL_H
 #define NBEP_SLABCAL_H
 
