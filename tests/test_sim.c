@@ -611,23 +611,30 @@ static void test_cells_predictive_pile_settles_under_gravity(void **state)
  * calendar's order, so runs on 2, 3 and 4 slabs, on one thread and on two (where they take
  * the one-thread loop: the team keeps one calendar), give the one-calendar run's frames and
  * counts bit for bit: a periodic fluid at phi = 0.35 (spheres change slab as they cross the
- * cuts and the periodic faces) and a pile settling under gravity with e = 0.6 in a box.
- * test_memory_plan checks that the slabs are made and hold the entries. */
+ * cuts and the periodic faces), a pile settling under gravity with e = 0.6 in a box, and the
+ * same pile falling across x onto the wall at its low end (SIDEWAYS: the spheres crowd into
+ * the low slab, which outgrows its room and grows mid-run, the others giving their local
+ * numbers back). test_memory_plan checks that the slabs are made and hold the entries. */
+#define SIDEWAYS ((nbep_vec3){-40.0, 0.0, 0.0})
 static void test_cells_per_slab_calendars_give_the_one_calendar_run(void **state)
 {
     (void)state;
-    nbep_scene *scenes[2] = {
+    const char *const names[3] = {"fluid", "pile", "pile falling across x"};
+    nbep_scene *scenes[3] = {
         nbep_test_periodic_fluid(nbep_test_scaled(9, 6), 0.35, 30, 0.01, 5),
+        nbep_test_fluid(nbep_test_scaled(6, 4), 0.3, 60, 5e-3),
         nbep_test_fluid(nbep_test_scaled(6, 4), 0.3, 60, 5e-3)};
-    scenes[1]->neighbors_cells = true;
-    scenes[1]->restitution = 0.6;
-    for (size_t i = 0; i < scenes[1]->state.n; i++)
-        scenes[1]->state.acc[i] = (nbep_vec3){0, 0, -9.81};
-    for (int k = 0; k < 2; k++) {
+    for (int k = 1; k < 3; k++) {
+        scenes[k]->neighbors_cells = true;
+        scenes[k]->restitution = 0.6;
+        for (size_t i = 0; i < scenes[k]->state.n; i++)
+            scenes[k]->state.acc[i] = k == 1 ? (nbep_vec3){0, 0, -9.81} : SIDEWAYS;
+    }
+    for (int k = 0; k < 3; k++) {
         frames ref = {0};
         nbep_summary s1 = run(scenes[k], 1, NULL, &ref);
         if (s1.collisions <= s1.spheres) /* enough events that an order error would show */
-            fail_msg("%s: %llu collisions of %llu spheres", k ? "pile" : "fluid",
+            fail_msg("%s: %llu collisions of %llu spheres", names[k],
                      (unsigned long long)s1.collisions, (unsigned long long)s1.spheres);
         for (int slabs = 2; slabs <= 4; slabs++)
             for (int nt = 1; nt <= 2; nt++) {
@@ -642,7 +649,7 @@ static void test_cells_per_slab_calendars_give_the_one_calendar_run(void **state
                     sk.predictions != s1.predictions)
                     fail_msg("%s, %d slabs, %d thread(s): %llu collisions, %llu checks, %llu "
                              "predictions; one calendar %llu, %llu, %llu",
-                             k ? "pile" : "fluid", slabs, nt,
+                             names[k], slabs, nt,
                              (unsigned long long)sk.collisions, (unsigned long long)sk.checks,
                              (unsigned long long)sk.predictions,
                              (unsigned long long)s1.collisions, (unsigned long long)s1.checks,
