@@ -3839,6 +3839,11 @@ MUTANTS = [
     ("evloop-slab-growth-refusal-ignored", "src/evloop.c",
      "c.item, c.time, c.key))\n            e->failed = true;", "c.item, c.time, c.key))\n            ;",
      ["test_memory_plan"], None),
+    # twelfth draw: the calendar's check subtracts the ring's miscount (one violation wraps
+    # past zero, two cancel to none)
+    ("cal-check-ring-count-subtracted", "src/calendar.c",
+     "(in_heap != c->heap_len) + (in_ring != c->ring_len)",
+     "(in_heap != c->heap_len) - (in_ring != c->ring_len)", ["test_calendar_check"], None),
 ]
 
 
