@@ -663,10 +663,10 @@ static int sphere_slab(const nbep_evloop *e, uint32_t i)
 static void enter(nbep_evloop *e, bool set, nbep_calendar_entry c)
 {
     if (e->slabcal) {
-        if (set && !nbep_slabcal_set(e->slabcal, sphere_slab(e, c.item), c.item, c.time, c.key))
-            e->failed = true;
-        else if (!set)
+        if (!set)
             nbep_slabcal_remove(e->slabcal, c.item);
+        else if (!nbep_slabcal_set(e->slabcal, sphere_slab(e, c.item), c.item, c.time, c.key))
+            e->failed = true;
         return;
     }
     if (set)

@@ -2,8 +2,8 @@
  * entry for entry, under random sets (to random slabs, so entries move between slabs and slabs
  * outgrow their rooms), removals, clears and retunes, with ties in time and key; ties within
  * a slab by item, not by local number; each entry lives in one slab; the slabs of cell
- * columns; refusals. A growth's refused memory is test_memory_plan's. The engine's use (frames bit for bit for any slab count)
- * is test_sim's. */
+ * columns; refusals. A growth's refused memory is test_memory_plan's. The engine's use (frames
+ * bit for bit for any slab count) is test_sim's. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>

@@ -54,7 +54,8 @@ void nbep_slabcal_destroy(nbep_slabcal **s);
 /* Gives item its entry (time, key) in slab's calendar, moving it out of another slab's if it
  * was there. time is not NaN. False when slab's room is full and no memory could be had to
  * grow it: then nothing changed. */
-NBEP_MUST_CHECK bool nbep_slabcal_set(nbep_slabcal *s, int slab, uint32_t item, double time, uint64_t key);
+NBEP_MUST_CHECK bool nbep_slabcal_set(nbep_slabcal *s, int slab, uint32_t item, double time,
+                                      uint64_t key);
 /* Removes item's entry, if it has one. */
 void nbep_slabcal_remove(nbep_slabcal *s, uint32_t item);
 /* Removes every entry. O(entries). */
