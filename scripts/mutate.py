@@ -3844,6 +3844,94 @@ MUTANTS = [
     ("cal-check-ring-count-subtracted", "src/calendar.c",
      "(in_heap != c->heap_len) + (in_ring != c->ring_len)",
      "(in_heap != c->heap_len) - (in_ring != c->ring_len)", ["test_calendar_check"], None),
+    # versions.c (optimistic step 2, the reads across a face): a read leaves no time in the
+    # note, so a put before it sends no one back
+    ("ver-note-time-not-raised", "src/versions.c", "    while (was < mine && !atomic_compare",
+     "    while (0 && was < mine && !atomic_compare", ["test_versions"], None),
+    # the put makes its version visible with release only: its later load of the note may pass
+    # the store (a store buffer), and a read at once is lost
+    ("ver-publish-release", "src/versions.c",
+     "    atomic_store_explicit(at, link, memory_order_seq_cst);",
+     "    atomic_store_explicit(at, link, memory_order_release);", ["test_versions"], None),
+    # the cancel marks with release only (the same for a cancel)
+    ("ver-cancel-release", "src/versions.c",
+     "atomic_store_explicit(&nd->dead, 1, memory_order_seq_cst);",
+     "atomic_store_explicit(&nd->dead, 1, memory_order_release);", ["test_versions"], None),
+    # a read takes a version of its own stamp (not strictly before)
+    ("ver-read-own-stamp", "src/versions.c",
+     "        if (nbep_stamp_before(nd->s, at) &&\n            !atomic_load_explicit(&nd->dead, memory_order_seq_cst)) {",
+     "        if (!nbep_stamp_before(at, nd->s) &&\n            !atomic_load_explicit(&nd->dead, memory_order_seq_cst)) {",
+     ["test_versions"], None),
+    # a read takes the dead too
+    ("ver-read-takes-dead", "src/versions.c",
+     "        if (nbep_stamp_before(nd->s, at) &&\n            !atomic_load_explicit(&nd->dead, memory_order_seq_cst)) {",
+     "        if (nbep_stamp_before(nd->s, at)) {", ["test_versions"], None),
+    # a put links its version in at the head, whatever its stamp
+    ("ver-put-at-head", "src/versions.c",
+     "    while (next && nbep_stamp_before(s, node_at(v, next)->s)) {",
+     "    while (0 && next && nbep_stamp_before(s, node_at(v, next)->s)) {", ["test_versions"],
+     None),
+    # a put at the note's very time sends no one back (a read at that time, later by key, lost)
+    ("ver-note-equal-time-kept", "src/versions.c",
+     "memory_order_seq_cst) < ordered(t))", "memory_order_seq_cst) <= ordered(t))",
+     ["test_versions"], None),
+    # -0.0 left below +0.0 in the notes' order
+    ("ver-ordered-negative-zero", "src/versions.c", "    t += 0.0; /* -0.0 + 0.0 is +0.0 */",
+     "", ["test_versions"], None),
+    # negative times ordered as their bits (backwards)
+    ("ver-ordered-negative-bits", "src/versions.c", "return b >> 63 ? ~b : b | (UINT64_C(1) << 63);",
+     "return b >> 63 ? b : b | (UINT64_C(1) << 63);", ["test_versions"], None),
+    # a read sets no bit when the note has one already, whichever slab's
+    ("ver-reader-bit-any", "src/versions.c",
+     "memory_order_seq_cst) & bit)) {", "memory_order_seq_cst) != 0)) {", ["test_versions"], None),
+    # a cancel takes a dead version again
+    ("ver-cancel-dead-again", "src/versions.c",
+     "        if (nd->s.t == s.t && nd->s.key == s.key &&\n            !atomic_load_explicit(&nd->dead, memory_order_relaxed)) {",
+     "        if (nd->s.t == s.t && nd->s.key == s.key) {", ["test_versions"], None),
+    # a full pool spills into the next slab's
+    ("ver-pool-spills", "src/versions.c", "    if (p->used == v->room)\n        return false;",
+     "    if (p->used > v->room)\n        return false;", ["test_versions"], None),
+    # a new window's pools start where the last left off
+    ("ver-close-keeps-pools", "src/versions.c", "        p->n_touched = 0;\n        p->used = 0;",
+     "        p->n_touched = 0;", ["test_versions"], None),
+    # a closed window's spheres stay tracked
+    ("ver-close-keeps-touched", "src/versions.c",
+     "        for (size_t q = 0; q < p->n_touched && !all; q++)\n            slot_clear(",
+     "        for (size_t q = 0; q < 0 && !all; q++)\n            slot_clear(", ["test_versions"],
+     None),
+    # a close whose lists lost a sphere resets only what they hold
+    ("ver-close-ignores-lost", "src/versions.c",
+     "    for (size_t k = 0; all && k < v->tracked; k++)", "    for (size_t k = 0; 0 && k < v->tracked; k++)",
+     ["test_memory_plan"], None),
+    # a put's first version of a sphere is not on its slab's list (a sphere only put, never read,
+    # keeps its versions into the next window)
+    ("ver-put-not-touched", "src/versions.c",
+     "        touch(v, slab, v->slot_of[i]); /* its first version this window */",
+     "        ; /* its first version this window */", ["test_versions"], None),
+    # a slab's first read of a sphere does not list it (a sphere only read keeps its note into
+    # the next window)
+    ("ver-read-not-touched", "src/versions.c", "        touch(v, reader, v->slot_of[i]);\n    }",
+     "    }", ["test_versions"], None),
+    # an untracked sphere's hole filled, the moved sphere's slot not told
+    ("ver-untrack-moved-lost", "src/versions.c", "    v->slot_of[last->sphere] = k;\n", "",
+     ["test_versions"], None),
+    # the newest is the chain's head, dead or not
+    ("ver-newest-takes-dead", "src/versions.c",
+     "        if (!atomic_load_explicit(&nd->dead, memory_order_relaxed))\n            return nd + 1;",
+     "        return nd + 1;", ["test_versions"], None),
+    # the estimate leaves out a window's slots
+    ("ver-bytes-no-slots", "src/versions.c",
+     "(size_t)slabs * room * stride_of(size) + cap * sizeof(slot);",
+     "(size_t)slabs * room * stride_of(size);", ["test_memory_plan"], None),
+    # a create refused memory leaves what it had
+    ("ver-create-refused-leaks", "src/versions.c",
+     "        nbep_versions_destroy(&v);\n        NBEP_FAIL(d, NBEP_ENOMEM",
+     "        v = NULL;\n        NBEP_FAIL(d, NBEP_ENOMEM", ["test_memory_plan"], None),
+    # a window whose slots cannot grow opens anyway, on the old room
+    ("ver-track-refusal-ignored", "src/versions.c",
+     "        if (!grown)\n            return false;\n        v->slots = grown;",
+     "        if (!grown)\n            grown = v->slots;\n        v->slots = grown;",
+     ["test_memory_plan"], None),
 ]
 
 

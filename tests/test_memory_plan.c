@@ -29,6 +29,7 @@
 #include "nbep/feq.h"
 #include "nbep/nblist.h"
 #include "nbep/slabcal.h"
+#include "nbep/versions.h"
 #include "nbep/vec3.h"
 #include "evloop_impl.h"
 #include "pred_impl.h"
@@ -656,6 +657,87 @@ static void test_a_slab_outgrowing_its_room_grows_or_refuses_whole(void **state)
     nbep_diag_fini(&d);
 }
 
+/* The spheres' versions (versions.h) allocate what nbep_versions_bytes says, create and the
+ * tracked spheres' slots; each of create's allocations refused in turn fails it whole
+ * (NBEP_ENOMEM, one line, nothing left); a sphere whose slot cannot be had is not tracked and
+ * nothing changes; a window whose list of touched spheres cannot grow forgets everything at
+ * its close all the same. */
+static void test_versions_allocate_what_they_estimate_and_refuse_whole(void **state)
+{
+    (void)state;
+    enum { N = 100, SIZE = 96, SLABS = 3, ROOM = 50 };
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_versions *v = NULL;
+    count_start();
+    assert_int_equal(nbep_versions_create(N, SIZE, SLABS, ROOM, &v, &d), NBEP_OK);
+    const size_t calls = n_calls;
+    assert_int_equal(count_now(), nbep_versions_bytes(N, SIZE, SLABS, ROOM, 0));
+    /* slots for the spheres tracked, room doubled as outgrown */
+    for (uint32_t i = 0; i < N / 2; i++)
+        assert_true(nbep_versions_track(v, N - 1 - i));
+    assert_int_equal(count_now(), nbep_versions_bytes(N, SIZE, SLABS, ROOM, N / 2));
+    /* a growth refused: false, nothing changed */
+    uint32_t i = N / 2;
+    for (; i < N; i++) {
+        const size_t before = count_now();
+        fail_call = n_calls + 1;
+        const bool ok = nbep_versions_track(v, N - 1 - i);
+        fail_call = 0;
+        if (ok)
+            continue;
+        assert_false(nbep_versions_tracked(v, N - 1 - i));
+        assert_int_equal(nbep_versions_count(v), i);
+        assert_int_equal(count_now(), before);
+        assert_true(nbep_versions_track(v, N - 1 - i));
+        break;
+    }
+    assert_true(i < N); /* one growth at least was refused */
+    for (; i < N; i++)
+        assert_true(nbep_versions_track(v, N - 1 - i));
+    assert_int_equal(count_now(), nbep_versions_bytes(N, SIZE, SLABS, ROOM, N));
+    /* a window whose lists of spheres touched cannot grow still forgets all at its close: a
+     * put's (sphere 7's version) and a read's (sphere 8's note) */
+    nbep_versions_open(v);
+    char data[SIZE] = {0};
+    uint64_t roll = 0;
+    const nbep_stamp s0 = {1.0, 0}, s1 = {2.0, 0};
+    fail_call = n_calls + 1; /* slab 1's list's first room */
+    assert_true(nbep_versions_put(v, 1, 7, s0, data, &roll));
+    fail_call = n_calls + 1; /* slab 2's */
+    assert_false(nbep_versions_read(v, 2, 8, s1, NULL, NULL));
+    fail_call = 0;
+    nbep_versions_close(v);
+    nbep_versions_open(v);
+    assert_null(nbep_versions_newest(v, 7));
+    assert_true(nbep_versions_put(v, 1, 8, s0, data, &roll));
+    assert_int_equal(roll, 0); /* the last window's read forgotten */
+    nbep_versions_close(v);
+    nbep_versions_destroy(&v);
+    assert_int_equal(count_stop(), 0);
+    assert_true(calls >= 3);
+    /* the list's own arrays made before counting (a message's text is freed by clear) */
+    nbep_diag_add(&d, __FILE__, __LINE__, "nbep: a first message");
+    nbep_diag_clear(&d);
+    for (size_t k = 1; k <= calls; k++) {
+        nbep_diag_clear(&d);
+        fail_call = k;
+        count_start();
+        const nbep_status st = nbep_versions_create(N, SIZE, SLABS, ROOM, &v, &d);
+        fail_call = 0;
+        const bool said =
+            d.n_errors == 1 && strstr(d.msg[0], "no memory for the spheres' versions");
+        const size_t lines = d.n_errors;
+        nbep_diag_clear(&d); /* its message, counted */
+        const size_t left = count_stop();
+        if (st != NBEP_ENOMEM || v || !said || left != 0)
+            fail_msg("versions: allocation %zu of %zu refused: status %d, %zu line(s), %zu "
+                     "bytes left",
+                     k, calls, (int)st, lines, left);
+    }
+    nbep_diag_fini(&d);
+}
+
 /* In a run, a slab that must grow and cannot stops the run with NBEP_ENOMEM and one line
  * naming the step, whichever of the run's allocations is refused. 80 spheres in the low fifth
  * of a box long across x, on 2 slabs: all in slab 0, past its first room (50 and a quarter, and
@@ -720,6 +802,7 @@ int main(void)
         cmocka_unit_test(test_an_event_queue_of_the_most_sphere_ids_asks_for_its_memory),
         cmocka_unit_test(test_a_step_refused_its_contact_list_growth_stops_the_run_with_the_step_named),
         cmocka_unit_test(test_a_slab_outgrowing_its_room_grows_or_refuses_whole),
+        cmocka_unit_test(test_versions_allocate_what_they_estimate_and_refuse_whole),
         cmocka_unit_test(test_a_run_whose_slab_cannot_grow_stops_with_the_step_named),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
