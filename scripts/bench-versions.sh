@@ -15,6 +15,9 @@
 #   LEANS    versions: 1 lean (80 bytes, what a reaction changes) for spheres far from a
 #            side, 2 those written past the caches (streaming stores), 0 the ops' whole save
 #            everywhere; several, e.g. "0 1 2" (default "1")
+#   MODULES  the records and notes of spheres near a side: 0 the bench's own stand-in, 1
+#            src/versions.c's (NBEP_VER_MODULE: bench_versions.c says how); "0 1" both
+#            (default "0")
 #   REPS     repeats, the outer loop (default 5)
 #   STEPS    the timed stretch, in steps of the deck's dt = 0.1 after a melt of 20 (default 40)
 #   OUT      scratch folder (default build/bench-versions)
@@ -31,6 +34,7 @@ phi=${2:-0.30}
 SLABS=${SLABS:-2 16}
 WINDOWS=${WINDOWS:-0.003}
 LEANS=${LEANS:-1}
+MODULES=${MODULES:-0}
 REPS=${REPS:-5}
 STEPS=${STEPS:-40}
 OUT=${OUT:-build/bench-versions}
@@ -53,54 +57,57 @@ field() { sed -n "s/.*\"$1\": *\([0-9.e+-]*\).*/\1/p" "$2"; }
 share() {
     perf report -i "$OUT/perf.data" --stdio --sort sym 2>/dev/null | awk '
         /^ *[0-9.]+%/ { p = $1; sub("%", "", p); tot += p
-                        if ($NF ~ /^(ver_event|write_version|read_list|lean_save|cells_save|slab_of|near_slab_side|grow)$/) bk += p }
+                        if ($NF ~ /^(ver_event|write_version|read_list|lean_save|cells_save|slab_of|near_slab_side|grow|module_window|nbep_versions_[a-z]*)$/) bk += p }
         END { printf "%.2f", (tot > bk ? 100 * bk / (tot - bk) : 0) }'
 }
 # one run of setting s:w:l (slabs 0: the baseline), its summary in OUT/s.json; what follows
 # the three goes before the binary (perf record)
 run_one() {
-    local s=$1 w=$2 l=$3
-    shift 3
+    local s=$1 w=$2 l=$3 m=$4
+    shift 4
     cp "$melt" "$OUT/r.h5"
     # the baseline has no window: any valid one will do
     NBEP_VER_SLABS=$s NBEP_VER_WINDOW=$([ "$s" = 0 ] && echo 1 || echo "$w") NBEP_VER_LEAN=$l \
+        NBEP_VER_MODULE=$m \
         "$@" "$bin" run "$deck" "${set_args[@]}" --resume "$OUT/r.h5" -n $((20 + STEPS)) -q \
-        --summary "$OUT/s.json" 2>"$OUT/tally-$s-$w-$l.txt"
+        --summary "$OUT/s.json" 2>"$OUT/tally-$s-$w-$l-$m.txt"
 }
 settings=""
-for s in $SLABS; do for w in $WINDOWS; do for l in $LEANS; do settings="$settings $s:$w:$l"; done; done; done
+for s in $SLABS; do for w in $WINDOWS; do for l in $LEANS; do for m in $MODULES; do
+    settings="$settings $s:$w:$l:$m"
+done; done; done; done
 rows="$OUT/rows.csv"
-echo "slabs,window,lean,rep,wall_seconds,ratio,collisions,share" >"$rows"
+echo "slabs,window,lean,module,rep,wall_seconds,ratio,collisions,share" >"$rows"
 for rep in $(seq "$REPS"); do
-    run_one 0 0 0 || { echo "bench-versions: a run failed" >&2; exit 1; }
+    run_one 0 0 0 0 || { echo "bench-versions: a run failed" >&2; exit 1; }
     base=$(field wall_seconds "$OUT/s.json")
-    echo "0,0,0,$rep,$base,1,$(field collisions "$OUT/s.json")," >>"$rows"
+    echo "0,0,0,0,$rep,$base,1,$(field collisions "$OUT/s.json")," >>"$rows"
     for swl in $settings; do
-        IFS=: read -r s w l <<<"$swl"
-        run_one "$s" "$w" "$l" || { echo "bench-versions: a run failed" >&2; exit 1; }
+        IFS=: read -r s w l m <<<"$swl"
+        run_one "$s" "$w" "$l" "$m" || { echo "bench-versions: a run failed" >&2; exit 1; }
         wall=$(field wall_seconds "$OUT/s.json")
         c=$(field collisions "$OUT/s.json")
         sh=""
         if [ "$PERF" = 1 ]; then # the same run again, under perf
-            run_one "$s" "$w" "$l" perf record -q -o "$OUT/perf.data" -- ||
+            run_one "$s" "$w" "$l" "$m" perf record -q -o "$OUT/perf.data" -- ||
                 { echo "bench-versions: perf record failed" >&2; exit 1; }
             sh=$(share)
         fi
-        echo "$s,$w,$l,$rep,$wall,$(awk -v a="$wall" -v b="$base" 'BEGIN { printf "%.4f", a / b }'),$c,$sh" >>"$rows"
+        echo "$s,$w,$l,$m,$rep,$wall,$(awk -v a="$wall" -v b="$base" 'BEGIN { printf "%.4f", a / b }'),$c,$sh" >>"$rows"
     done
 done
 echo "bench-versions: N = $count, phi = $phi, $STEPS steps of 0.1 after the melt, $REPS repeats"
-for swl in "0:0:0" $settings; do
-    IFS=: read -r s w l <<<"$swl"
-    awk -F, -v s="$s" -v w="$w" -v l="$l" '
+for swl in "0:0:0:0" $settings; do
+    IFS=: read -r s w l m <<<"$swl"
+    awk -F, -v s="$s" -v w="$w" -v l="$l" -v m="$m" '
         BEGIN { n = 0 }
-        NR > 1 && $1 == s && $2 == w && $3 == l { t[n] = $5; r[n] = $6; p[n++] = $8; c = $7 }
+        NR > 1 && $1 == s && $2 == w && $3 == l && $4 == m { t[n] = $6; r[n] = $7; p[n++] = $9; c = $8 }
         function med(x, n,   i, j, y) {
             for (i = 0; i < n; i++) for (j = i + 1; j < n; j++) if (x[j] < x[i]) { y = x[i]; x[i] = x[j]; x[j] = y }
             return n % 2 ? x[(n - 1) / 2] : (x[n / 2 - 1] + x[n / 2]) / 2 }
         END { if (s == 0) { printf "  baseline: %.3f s (%d collisions)\n", med(t, n), c; exit }
-              printf "  %s slabs, window %s, %s versions: %.3f times the baseline", s, w, l == 2 ? "streamed lean" : l ? "lean" : "whole", med(r, n)
+              printf "  %s slabs, window %s, %s versions%s: %.3f times the baseline", s, w, l == 2 ? "streamed lean" : l ? "lean" : "whole", m == 1 ? ", versions.c" : "", med(r, n)
               if (p[0] != "") printf "; perf: the bookkeeping %.1f %% of the rest", med(p, n)
               printf "\n" }' "$rows"
-    [ "$s" = 0 ] || sed 's/^bench_versions: /      /' "$OUT/tally-$s-$w-$l.txt"
+    [ "$s" = 0 ] || sed 's/^bench_versions: /      /' "$OUT/tally-$s-$w-$l-$m.txt"
 done

@@ -129,6 +129,30 @@ for s in 2 3; do
            \"\$(grep -o '\"collisions\": [0-9]*\|\"energy_final\": [^,]*' '$tmp/long0.json')\" ] &&
          grep -q '\"collisions\": [1-9]' '$tmp/long0.json'"
 done
+# the same with the records and notes in src/versions.c (NBEP_VER_MODULE): puts and reads on
+# 2 slabs, none sent back in the serial order but by a read at the put's own time (a lattice's
+# ties: every list expires at once), and with pools of 64 versions the windows that fill one
+# end early; the run unchanged
+for room in 0 64; do
+    NBEP_VER_MODULE=1 NBEP_VER_ROOM=$room NBEP_VER_VERIFY=1 NBEP_VER_SLABS=2 NBEP_VER_WINDOW=0.02 \
+        "$versions" run "$tmp/long.deck" -o "$tmp/longm$room.h5" -t 1 --quiet \
+        --summary "$tmp/longm$room.json" 2>"$tmp/longm$room.err"
+    rc=$?
+    tally=$(cat "$tmp/longm$room.err")
+    num() { echo "$tally" | sed -n "s/.* \([0-9][0-9]*\) $1.*/\1/p"; }
+    full=$([ $room = 0 ] && echo "= 0" || echo "-gt 0")
+    check "bench_versions on versions.c, pools of ${room/#0/the default} versions: exit 0 (got $rc); puts, a read for each note, none sent back but at a tie, pools full $full: $tally" \
+        "[ $rc = 0 ] && [ '$(num puts)' -gt 0 ] && [ '$(num reads,)' = '$(num notes)' ] &&
+         [ '$(num 'pools full')' $full ] &&
+         echo '$tally' | grep -q ', 0 reads too soon, 0 reads of another slab in lists skipped;' &&
+         echo '$tally' | grep -q ', 0 sent back with no read at their time\$'"
+    check "bench_versions on versions.c, pools of ${room/#0/the default}: the run's collisions and energy those of the run without" \
+        "[ \"\$(grep -o '\"collisions\": [0-9]*\|\"energy_final\": [^,]*' '$tmp/longm$room.json')\" = \
+           \"\$(grep -o '\"collisions\": [0-9]*\|\"energy_final\": [^,]*' '$tmp/long0.json')\" ]"
+done
+windows() { sed -n 's/.* \([0-9][0-9]*\) windows.*/\1/p' "$1"; }
+check "bench_versions on versions.c: pools of 64 end windows early ($(windows "$tmp/longm64.err") windows against $(windows "$tmp/longm0.err"))" \
+    "[ '$(windows "$tmp/longm64.err")' -gt '$(windows "$tmp/longm0.err")' ]"
 NBEP_VER_SLABS=65 "$versions" run "$tmp/long.deck" -o "$tmp/long9.h5" -t 1 --quiet 2>"$tmp/bad.err"
 rc=$?
 check "bench_versions, 65 slabs: exit 2 (got $rc), one line" \

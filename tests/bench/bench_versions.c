@@ -34,6 +34,19 @@
  *   NBEP_VER_SLABS=2 NBEP_VER_WINDOW=0.003 build/bench/bench_versions run DECK -t 1 ...
  *   scripts/bench-versions.sh [COUNT PHI]    (side by side, medians)
  *
+ * With NBEP_VER_MODULE set, the records of spheres near a side and the notes are those of
+ * src/versions.c (versions.h), the scheme's own: the spheres whose list centre lies within
+ * SIDE_REACH of a side are tracked (at each window's meeting, those whose list expired in the
+ * window looked at again), a write of such a sphere puts its version in its owner's pool,
+ * and a read of a list member of another slab takes the member's version valid at the event's
+ * stamp (its motion copied out, as a prediction would read it). A sphere that comes near a
+ * side within a window (its list expired there) is not tracked till the next (counted:
+ * untracked); a pool full (NBEP_VER_ROOM versions a slab, default 4096 and an eighth of a
+ * slab's share of the spheres) ends the window at the next event (counted). The tally adds the
+ * puts and reads, and the puts that sent a slab back (in the serial order only a read and a
+ * write at one time can: with NBEP_VER_VERIFY those that did with no read at their time are
+ * counted, from the stand-in's records kept beside).
+ *
  * Without NBEP_VER_SLABS (or 0) the hook returns at once: the baseline, the same binary. With
  * NBEP_VER_VERIFY set every list is read through, and a member of another slab in a list that
  * SIDE_REACH would have skipped, or read from another slab with no record kept, is counted
@@ -59,6 +72,7 @@ static void ver_event(struct nbep_evloop *e, const struct evl_ws *w, const void 
 #include "../../src/main.c"
 /* its own copy of the cells callbacks too, for lean_save (cells_user) */
 #include "../../src/pred_cells.c"
+#include "nbep/versions.h"
 
 #define SLABS_MAX 64
 
@@ -113,6 +127,12 @@ static struct {
     bool verify;     /* NBEP_VER_VERIFY: the lists skipped are read through too, and a member
                       * of another slab found there counted (missed) */
     slab s[SLABS_MAX];
+    nbep_versions *mod; /* NBEP_VER_MODULE: the near spheres' records and notes, versions.c's */
+    uint32_t *moved;    /* the spheres whose list expired in the window, n_moved (at most n) */
+    size_t n_moved;
+    bool mod_open;      /* a window of it open */
+    bool end_window;    /* a pool filled up: the next event starts a window */
+    unsigned long long puts, module_reads, sent_back, sent_wrongly, untracked, full;
     unsigned long long events, versions, near, lists_read, reads_checked, notes, messages,
         windows, too_soon, missed;
 } ver;
@@ -134,7 +154,16 @@ static void ver_report(void)
             ver.reads_checked, ver.notes, ver.messages, ver.windows, ver.too_soon);
     if (ver.verify)
         fprintf(stderr, ", %llu reads of another slab in lists skipped", ver.missed);
+    if (ver.mod)
+        fprintf(stderr,
+                "; versions.c: %llu puts, %llu reads, %llu sent back, %llu untracked, %llu "
+                "pools full",
+                ver.puts, ver.module_reads, ver.sent_back, ver.untracked, ver.full);
+    if (ver.mod && ver.verify)
+        fprintf(stderr, ", %llu sent back with no read at their time", ver.sent_wrongly);
     fputc('\n', stderr);
+    nbep_versions_destroy(&ver.mod);
+    free(ver.moved);
     for (int k = 0; k < ver.slabs; k++) {
         free(ver.s[k].log);
         free(ver.s[k].inbox);
@@ -177,6 +206,21 @@ static void ver_start(const nbep_evloop *e)
     ver.stream = ver.lean && strcmp(getenv("NBEP_VER_LEAN"), "2") == 0;
     ver.sp = calloc(ver.n, sizeof *ver.sp);
     ver.failed = !ver.sp;
+    if (env_on("NBEP_VER_MODULE")) {
+        /* a slab's pool: its share of the spheres' versions in a window, and more (a full
+         * one ends the window) */
+        const char *r = getenv("NBEP_VER_ROOM"); /* a test's small pools: windows end early */
+        const size_t room = r && atol(r) > 0 ? (size_t)atol(r)
+                                             : 4096 + ver.n / (size_t)ver.slabs / 8;
+        nbep_diag d;
+        nbep_diag_init(&d);
+        if (nbep_versions_create(ver.n, sizeof(nbep_evloop_motion), ver.slabs, room, &ver.mod,
+                                 &d) != NBEP_OK)
+            ver.failed = true;
+        nbep_diag_fini(&d);
+        ver.moved = malloc((ver.n ? ver.n : 1) * sizeof *ver.moved);
+        ver.failed |= !ver.moved;
+    }
 }
 
 /* How near a slab's side a list centre must lie for its list to hold a member of another
@@ -216,6 +260,28 @@ static bool near_slab_side(double x, double r)
         return true;
     const double in = (f - (int)f) * ver.width;
     return in < r || ver.width - in < r;
+}
+
+/* A window of versions.c's opens, the last closed: at the first, the spheres whose list centre
+ * lies within SIDE_REACH of a side are tracked (a pass over all); at each later one, only the
+ * spheres whose list expired in the last window are looked at again (a centre moves only
+ * then), as the scheme's meeting would */
+static void module_window(const nbep_evloop *e)
+{
+    if (ver.mod_open)
+        nbep_versions_close(ver.mod);
+    const bool first = !ver.mod_open;
+    const size_t m = first ? ver.n : ver.n_moved;
+    for (size_t q = 0; q < m && !ver.failed; q++) {
+        const uint32_t k = first ? (uint32_t)q : ver.moved[q];
+        if (!near_slab_side(e->cells.m[k].at.x, SIDE_REACH(e)))
+            nbep_versions_untrack(ver.mod, k);
+        else if (!nbep_versions_track(ver.mod, k))
+            ver.failed = true;
+    }
+    ver.n_moved = 0;
+    nbep_versions_open(ver.mod);
+    ver.mod_open = true;
 }
 
 /* Entry v of a log, written past the caches where the machine can (SSE2's streaming stores,
@@ -288,13 +354,29 @@ static void write_version(const nbep_evloop *e, const nbep_evloop_ops *ops, void
         s->n_log++;
         return; /* no other slab reads it or owns it: the log is all */
     }
-    sphere *x = &ver.sp[k];
-    if (x->read_win == ver.win && x->read_t > t)
-        ver.too_soon++; /* never, in the serial order */
-    x->newest = (uint32_t)s->n_log;
-    x->newest_win = ver.win;
-    s->n_log++;
     const int owner = slab_of(at);
+    if (ver.mod) {
+        uint64_t roll = 0;
+        if (!nbep_versions_tracked(ver.mod, k))
+            ver.untracked++;
+        else if (!nbep_versions_put(ver.mod, owner, k, (nbep_stamp){t, key}, &v->m, &roll))
+            ver.full++, ver.end_window = true;
+        else
+            ver.puts++, ver.sent_back += roll != 0;
+        /* in the serial order a note is never later than now: a slab sent back read k at this
+         * very time (ties: the note keeps the time only); checked against the stand-in's own
+         * record of the reads, kept with NBEP_VER_VERIFY */
+        const sphere *x = &ver.sp[k];
+        if (ver.verify && roll && !(x->read_win == ver.win && x->read_t == t))
+            ver.sent_wrongly++;
+    } else {
+        sphere *x = &ver.sp[k];
+        if (x->read_win == ver.win && x->read_t > t)
+            ver.too_soon++; /* never, in the serial order */
+        x->newest = (uint32_t)s->n_log;
+        x->newest_win = ver.win;
+    }
+    s->n_log++;
     if (owner != by) {
         slab *r = &ver.s[owner];
         if (!grow((void **)&r->inbox, &r->cap_inbox, r->n_inbox, sizeof *r->inbox)) {
@@ -312,7 +394,8 @@ static void write_version(const nbep_evloop *e, const nbep_evloop_ops *ops, void
  * lies further than SIDE_REACH inside that slab, the list names none of another and is not
  * looked at; else each member of another slab gets a note: its latest read from another slab
  * and the reader. */
-static void read_list(const nbep_evloop *e, uint32_t k, const uint32_t *js, size_t m, double t)
+static void read_list(const nbep_evloop *e, uint32_t k, const uint32_t *js, size_t m, double t,
+                      uint64_t key)
 {
     const double at = e->cells.m[k].at.x;
     const bool skip = !near_slab_side(at, SIDE_REACH(e));
@@ -331,6 +414,22 @@ static void read_list(const nbep_evloop *e, uint32_t k, const uint32_t *js, size
         }
         if (ver.verify && !near_slab_side(e->cells.m[j].at.x, SIDE_REACH(e)))
             ver.missed++; /* read from another slab, yet its writes keep no record */
+        if (ver.mod && ver.verify) { /* the stand-in's record too, for sent_wrongly */
+            sphere *x = &ver.sp[j];
+            if (x->read_win != ver.win || x->read_t < t)
+                x->read_win = ver.win, x->read_t = t;
+        }
+        if (ver.mod) {
+            nbep_evloop_motion got;
+            if (nbep_versions_tracked(ver.mod, j)) {
+                (void)nbep_versions_read(ver.mod, by, j, (nbep_stamp){t, key}, &got, NULL);
+                ver.module_reads++;
+            } else {
+                ver.untracked++;
+            }
+            ver.notes++;
+            continue;
+        }
         sphere *x = &ver.sp[j];
         if (x->read_win != ver.win || x->read_t < t) {
             x->read_win = ver.win;
@@ -353,14 +452,21 @@ static void ver_event(nbep_evloop *e, const evl_ws *w, const void *evp,
     const double t = ev->time;
     const uint32_t i = w->item;
     ver.events++;
-    if (t >= ver.t_win) { /* a meeting: everything before it final */
+    if (t >= ver.t_win || ver.end_window) { /* a meeting: everything before it final */
         for (int k = 0; k < ver.slabs; k++)
             ver.s[k].n_log = ver.s[k].n_inbox = ver.s[k].n_lean = 0;
         ver.win++;
         ver.t_win = (floor(t / ver.window) + 1.0) * ver.window;
         ver.windows++;
+        ver.end_window = false;
+        if (ver.mod)
+            module_window(e);
+        if (ver.failed)
+            return;
     }
     const uint64_t key = nbep__evloop_slot_key(i, ev);
+    if (ver.mod && w->rebuilt && ver.n_moved < ver.n)
+        ver.moved[ver.n_moved++] = i; /* its centre moved: tracked or not, from the next window */
     const double cx = e->cells.m[i].at.x;
     const int by = slab_of(cx);
     /* what the event wrote: its sphere and, for a reaction, every sphere it changed */
@@ -375,15 +481,15 @@ static void ver_event(nbep_evloop *e, const evl_ws *w, const void *evp,
         return;
     ver.near += near;
     if (w->rebuilt) { /* its new list */
-        read_list(e, i, w->near, w->n_near, t);
+        read_list(e, i, w->near, w->n_near, t, key);
         return;
     }
     size_t m;
     const uint32_t *js = nbep_nblist_of(&e->nl, i, &m);
-    read_list(e, i, js, m, t);
+    read_list(e, i, js, m, t, key);
     for (size_t k = 0; k < w->n_changed; k++)
         if (w->changed[k] != i) {
             js = nbep_nblist_of(&e->nl, w->changed[k], &m);
-            read_list(e, w->changed[k], js, m, t);
+            read_list(e, w->changed[k], js, m, t, key);
         }
 }
