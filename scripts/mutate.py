@@ -3932,6 +3932,11 @@ MUTANTS = [
      "        if (!grown)\n            return false;\n        v->slots = grown;",
      "        if (!grown)\n            grown = v->slots;\n        v->slots = grown;",
      ["test_memory_plan"], None),
+    # thirteenth draw: the cells' layout summed a side's ends (every test box's low z and y at 0)
+    ("cells-side-z-summed", "src/cells.c", "hi.y - lo.y, hi.z - lo.z};", "hi.y - lo.y, hi.z + lo.z};",
+     ["test_cells"], None),
+    ("cells-side-y-summed", "src/cells.c", "hi.y - lo.y, hi.z - lo.z};", "hi.y + lo.y, hi.z - lo.z};",
+     ["test_cells"], None),
 ]
 
 

@@ -43,6 +43,19 @@ static void test_geometry_sides_at_least_reach_and_cells_bounded(void **state)
     assert_int_equal(g.dim[2], 1);  /* thinner than the reach: one */
     assert_true(g.h[0] == 1.0 && g.h[1] == 1.125 && g.h[2] == 0.5);
     nbep_cells_fini(&g);
+    /* the same sides with the box off 0 on every axis, above it and below: the layout is of
+     * the sides alone (a draw's mutant read hi.z + lo.z for z's, which every box with its low
+     * z at 0 hid; such a periodic box overlapped spheres by 1.5 diameters) */
+    const nbep_vec3 lows[2] = {{-1, 2, 3}, {-11, -7, -1}};
+    for (int b = 0; b < 2; b++) {
+        const nbep_vec3 lo = lows[b], hi = {lo.x + 10, lo.y + 4.5, lo.z + 0.5};
+        init_cells(&g, lo, hi, 1.0, 1000);
+        assert_int_equal(g.dim[0], 10);
+        assert_int_equal(g.dim[1], 4);
+        assert_int_equal(g.dim[2], 1);
+        assert_true(g.h[0] == 1.0 && g.h[1] == 1.125 && g.h[2] == 0.5);
+        nbep_cells_fini(&g);
+    }
     /* just short of ten reaches: nine cells, as ten would be 0.999 wide, below the reach */
     init_cells(&g, (nbep_vec3){0, 0, 0}, (nbep_vec3){9.99, 1, 1}, 1.0, 1000);
     assert_int_equal(g.dim[0], 9);
