@@ -15,8 +15,8 @@
  * its load of that link (or mark) came before (a) in that order; then so did (1), and (b),
  * after (a), finds the note at least as late as the read and the reader's bit in it, and sends
  * the reader back. Two orders weaker than that (release on (a), acquire on (2)) would let (b)
- * read an old note while the walk read an old link: tests/test_versions.c runs a writer
- * against readers and checks every read that the final chains say was too soon. */
+ * read an old note while the walk read an old link: tests/test_versions.c races one read
+ * against one put or cancel, sphere after sphere, and a release-only (a) fails it on x86. */
 #include "nbep/versions.h"
 
 #include <assert.h>
@@ -48,8 +48,8 @@ typedef struct {
 } slot;
 
 /* a slab's count of versions put this window, and the slots it touched first this window
- * (its versions' spheres' first put, and the first read of a sphere by any slab: close resets
- * only these), on cache lines of its own (its thread's alone in a window) */
+ * (a sphere's first version, put by its owner, and this slab's first read of a sphere: close
+ * resets only these), on cache lines of its own (its thread's alone in a window) */
 typedef struct {
     alignas(64) size_t used;
     uint32_t *touched; /* owned, cap_touched */

@@ -38,6 +38,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "nbep/calendar.h"
 #include "nbep/compiler.h"
 #include "nbep/status.h"
 
@@ -47,9 +48,12 @@ typedef struct {
     uint64_t key;
 } nbep_stamp;
 
+/* The calendar's order less its last tie (the item): one event's stamp on each of its
+ * spheres' versions is the same. */
 static inline bool nbep_stamp_before(nbep_stamp a, nbep_stamp b)
 {
-    return a.t < b.t || (a.t == b.t && a.key < b.key);
+    return nbep_calendar_before((nbep_calendar_entry){.time = a.t, .key = a.key},
+                                (nbep_calendar_entry){.time = b.t, .key = b.key});
 }
 
 typedef struct nbep_versions nbep_versions;

@@ -270,7 +270,9 @@ static void module_window(const nbep_evloop *e)
 {
     if (ver.mod_open)
         nbep_versions_close(ver.mod);
-    const bool first = !ver.mod_open;
+    /* all again at the first, and where the moves filled their list (one sphere's list may
+     * expire many times a window) */
+    const bool first = !ver.mod_open || ver.n_moved == ver.n;
     const size_t m = first ? ver.n : ver.n_moved;
     for (size_t q = 0; q < m && !ver.failed; q++) {
         const uint32_t k = first ? (uint32_t)q : ver.moved[q];
