@@ -3937,6 +3937,15 @@ MUTANTS = [
      ["test_cells"], None),
     ("cells-side-y-summed", "src/cells.c", "hi.y - lo.y, hi.z - lo.z};", "hi.y + lo.y, hi.z - lo.z};",
      ["test_cells"], None),
+    # try_hold holds only a supported sphere (its one caller asks only for those)
+    ("try-hold-support-inverted", "src/pred_react.c",
+     "    if (!c->hold_slow || !supported(c, i) ||",
+     "    if (!c->hold_slow || supported(c, i) ||", ["test_hold_contacts"], None),
+    ("try-hold-support-unasked", "src/pred_react.c",
+     "    if (!c->hold_slow || !supported(c, i) ||",
+     "    if (!c->hold_slow ||", ["test_hold_contacts"],
+     "equivalent: the one caller passes a sphere that is supported or still, and a still one "
+     "is not passed on (the check guards a new caller)"),
 ]
 
 
