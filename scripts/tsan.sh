@@ -20,7 +20,7 @@ libs="$(pkg-config --libs gsl libconfig hdf5 jansson cmocka) -lhdf5_hl -lm -lpth
       -fsanitize=thread -L${llvm}lib -Wl,-rpath,${llvm}lib"
 srcs=$(ls src/*.c | grep -v -e '^src/main.c$' -e '^src/sweep.c$')
 fail=0
-for t in test_sim test_periodic test_barrier test_extremes test_order test_granular test_versions \
+for t in test_sim test_periodic test_barrier test_extremes test_order test_granular test_versions test_mail \
     test_evloop_apart test_team_faults test_detect_stop; do
     [ -e tests/$t.c ] || continue
     # test_evloop_apart and test_team_faults compile their own copy of the cells engine (with

@@ -27,6 +27,7 @@
 
 #include "nbep/cells.h"
 #include "nbep/feq.h"
+#include "nbep/mail.h"
 #include "nbep/nblist.h"
 #include "nbep/slabcal.h"
 #include "nbep/versions.h"
@@ -738,6 +739,43 @@ static void test_versions_allocate_what_they_estimate_and_refuse_whole(void **st
     nbep_diag_fini(&d);
 }
 
+/* Mail between slabs (mail.h) allocates what nbep_mail_bytes says (boxes of 100 rounded up to
+ * 128); each of create's allocations refused in turn fails it whole (NBEP_ENOMEM, one line,
+ * nothing left). */
+static void test_mail_allocates_what_it_estimates_and_refuses_whole(void **state)
+{
+    (void)state;
+    enum { SLABS = 5, SIZE = 96, ROOM = 100 };
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_mail *m = NULL;
+    count_start();
+    assert_int_equal(nbep_mail_create(SLABS, SIZE, ROOM, &m, &d), NBEP_OK);
+    const size_t calls = n_calls;
+    assert_int_equal(count_now(), nbep_mail_bytes(SLABS, SIZE, ROOM));
+    assert_true(nbep_mail_bytes(SLABS, SIZE, ROOM) > (size_t)SLABS * 128 * SIZE);
+    nbep_mail_destroy(&m);
+    assert_int_equal(count_stop(), 0);
+    assert_true(calls >= 3);
+    nbep_diag_add(&d, __FILE__, __LINE__, "nbep: a first message");
+    nbep_diag_clear(&d);
+    for (size_t k = 1; k <= calls; k++) {
+        nbep_diag_clear(&d);
+        fail_call = k;
+        count_start();
+        const nbep_status st = nbep_mail_create(SLABS, SIZE, ROOM, &m, &d);
+        fail_call = 0;
+        const bool said = d.n_errors == 1 && strstr(d.msg[0], "no memory for the slabs' mail");
+        const size_t lines = d.n_errors;
+        nbep_diag_clear(&d);
+        const size_t left = count_stop();
+        if (st != NBEP_ENOMEM || m || !said || left != 0)
+            fail_msg("mail: allocation %zu of %zu refused: status %d, %zu line(s), %zu bytes left",
+                     k, calls, (int)st, lines, left);
+    }
+    nbep_diag_fini(&d);
+}
+
 /* In a run, a slab that must grow and cannot stops the run with NBEP_ENOMEM and one line
  * naming the step, whichever of the run's allocations is refused. 80 spheres in the low fifth
  * of a box long across x, on 2 slabs: all in slab 0, past its first room (50 and a quarter, and
@@ -803,6 +841,7 @@ int main(void)
         cmocka_unit_test(test_a_step_refused_its_contact_list_growth_stops_the_run_with_the_step_named),
         cmocka_unit_test(test_a_slab_outgrowing_its_room_grows_or_refuses_whole),
         cmocka_unit_test(test_versions_allocate_what_they_estimate_and_refuse_whole),
+        cmocka_unit_test(test_mail_allocates_what_it_estimates_and_refuses_whole),
         cmocka_unit_test(test_a_run_whose_slab_cannot_grow_stops_with_the_step_named),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
