@@ -132,7 +132,8 @@ done
 # the same with the records and notes in src/versions.c (NBEP_VER_MODULE): puts and reads on
 # 2 slabs, none sent back in the serial order but by a read at the put's own time (a lattice's
 # ties: every list expires at once), and with pools of 64 versions the windows that fill one
-# end early; the run unchanged
+# end early; the messages through src/mail.c, every window's meeting finding its work done; the
+# run unchanged
 for room in 0 64; do
     NBEP_VER_MODULE=1 NBEP_VER_ROOM=$room NBEP_VER_VERIFY=1 NBEP_VER_SLABS=2 NBEP_VER_WINDOW=0.02 \
         "$versions" run "$tmp/long.deck" -o "$tmp/longm$room.h5" -t 1 --quiet \
@@ -141,9 +142,11 @@ for room in 0 64; do
     tally=$(cat "$tmp/longm$room.err")
     num() { echo "$tally" | sed -n "s/.* \([0-9][0-9]*\) $1.*/\1/p"; }
     full=$([ $room = 0 ] && echo "= 0" || echo "-gt 0")
-    check "bench_versions on versions.c, pools of ${room/#0/the default} versions: exit 0 (got $rc); puts, a read for each note, none sent back but at a tie, pools full $full: $tally" \
+    check "bench_versions on versions.c, pools of ${room/#0/the default} versions: exit 0 (got $rc); puts, a read for each note, none sent back but at a tie, pools full $full; messages through mail.c, all taken but the last window's, every meeting quiet: $tally" \
         "[ $rc = 0 ] && [ '$(num puts)' -gt 0 ] && [ '$(num reads,)' = '$(num notes)' ] &&
-         [ '$(num 'pools full')' $full ] &&
+         [ '$(num 'pools full')' $full ] && [ '$(num 'messages taken')' -gt 0 ] &&
+         [ '$(num 'messages taken')' -le '$(num 'messages,')' ] &&
+         echo '$tally' | grep -q ' boxes full, 0 meetings not quiet' &&
          echo '$tally' | grep -q ', 0 reads too soon, 0 reads of another slab in lists skipped;' &&
          echo '$tally' | grep -q ', 0 sent back with no read at their time\$'"
     check "bench_versions on versions.c, pools of ${room/#0/the default}: the run's collisions and energy those of the run without" \

@@ -39,7 +39,10 @@
  * SIDE_REACH of a side are tracked (at each window's meeting, those whose list expired in the
  * window looked at again), a write of such a sphere puts its version in its owner's pool,
  * and a read of a list member of another slab takes the member's version valid at the event's
- * stamp (its motion copied out, as a prediction would read it). A sphere that comes near a
+ * stamp (its motion copied out, as a prediction would read it); a message to another slab goes
+ * through src/mail.c (mail.h), each box taken at the window's meeting (or when full), which
+ * then checks that the window's work is done (a sphere's message is sent by the writer, its
+ * version still put by the writer into the owner's pool). A sphere that comes near a
  * side within a window (its list expired there) is not tracked till the next (counted:
  * untracked); a pool full (NBEP_VER_ROOM versions a slab, default 4096 and an eighth of a
  * slab's share of the spheres) ends the window at the next event (counted). The tally adds the
@@ -72,9 +75,13 @@ static void ver_event(struct nbep_evloop *e, const struct evl_ws *w, const void 
 #include "../../src/main.c"
 /* its own copy of the cells callbacks too, for lean_save (cells_user) */
 #include "../../src/pred_cells.c"
+#include "nbep/mail.h"
 #include "nbep/versions.h"
 
 #define SLABS_MAX 64
+/* NBEP_VER_MODULE: a slab's box of messages (mail.c); a full one is taken at once (counted), as
+ * its owner would take it at its next event */
+#define MAIL_ROOM 1024
 
 /* a version: the stamp of the event that wrote it and the motion it wrote */
 typedef struct {
@@ -128,11 +135,13 @@ static struct {
                       * of another slab found there counted (missed) */
     slab s[SLABS_MAX];
     nbep_versions *mod; /* NBEP_VER_MODULE: the near spheres' records and notes, versions.c's */
+    nbep_mail *mail;    /* and the messages, mail.c's */
     uint32_t *moved;    /* the spheres whose list expired in the window, n_moved (at most n) */
     size_t n_moved;
     bool mod_open;      /* a window of it open */
     bool end_window;    /* a pool filled up: the next event starts a window */
-    unsigned long long puts, module_reads, sent_back, sent_wrongly, untracked, full;
+    unsigned long long puts, module_reads, sent_back, sent_wrongly, untracked, full, mailed,
+        boxes_full, not_quiet;
     unsigned long long events, versions, near, lists_read, reads_checked, notes, messages,
         windows, too_soon, missed;
 } ver;
@@ -157,12 +166,15 @@ static void ver_report(void)
     if (ver.mod)
         fprintf(stderr,
                 "; versions.c: %llu puts, %llu reads, %llu sent back, %llu untracked, %llu "
-                "pools full",
-                ver.puts, ver.module_reads, ver.sent_back, ver.untracked, ver.full);
+                "pools full; mail.c: %llu messages taken, %llu boxes full, %llu meetings not "
+                "quiet",
+                ver.puts, ver.module_reads, ver.sent_back, ver.untracked, ver.full, ver.mailed,
+                ver.boxes_full, ver.not_quiet);
     if (ver.mod && ver.verify)
         fprintf(stderr, ", %llu sent back with no read at their time", ver.sent_wrongly);
     fputc('\n', stderr);
     nbep_versions_destroy(&ver.mod);
+    nbep_mail_destroy(&ver.mail);
     free(ver.moved);
     for (int k = 0; k < ver.slabs; k++) {
         free(ver.s[k].log);
@@ -215,7 +227,9 @@ static void ver_start(const nbep_evloop *e)
         nbep_diag d;
         nbep_diag_init(&d);
         if (nbep_versions_create(ver.n, sizeof(nbep_evloop_motion), ver.slabs, room, &ver.mod,
-                                 &d) != NBEP_OK)
+                                 &d) != NBEP_OK ||
+            nbep_mail_create(ver.slabs, sizeof(nbep_evloop_motion), MAIL_ROOM, &ver.mail, &d) !=
+                NBEP_OK)
             ver.failed = true;
         nbep_diag_fini(&d);
         ver.moved = malloc((ver.n ? ver.n : 1) * sizeof *ver.moved);
@@ -262,14 +276,36 @@ static bool near_slab_side(double x, double r)
     return in < r || ver.width - in < r;
 }
 
+/* A message from mail.c's box: its motion copied out, as its owner would put it. */
+static void took(void *arg, const nbep_mail_head *h, const void *data)
+{
+    (void)h;
+    memcpy(arg, data, sizeof(nbep_evloop_motion));
+    ver.mailed++;
+}
+
+/* Slab k takes its mail. */
+static void take_mail(int k)
+{
+    nbep_evloop_motion m;
+    (void)nbep_mail_take(ver.mail, k, took, &m);
+}
+
 /* A window of versions.c's opens, the last closed: at the first, the spheres whose list centre
  * lies within SIDE_REACH of a side are tracked (a pass over all); at each later one, only the
  * spheres whose list expired in the last window are looked at again (a centre moves only
  * then), as the scheme's meeting would */
 static void module_window(const nbep_evloop *e)
 {
-    if (ver.mod_open)
+    if (ver.mod_open) {
         nbep_versions_close(ver.mod);
+        /* the meeting: every box taken, every slab idle, the window's work done */
+        for (int k = 0; k < ver.slabs; k++)
+            take_mail(k);
+        for (int k = 0; k < ver.slabs; k++)
+            nbep_mail_idle(ver.mail, k);
+        ver.not_quiet += !nbep_mail_quiet(ver.mail);
+    }
     /* all again at the first, and where the moves filled their list (one sphere's list may
      * expire many times a window) */
     const bool first = !ver.mod_open || ver.n_moved == ver.n;
@@ -283,6 +319,7 @@ static void module_window(const nbep_evloop *e)
     }
     ver.n_moved = 0;
     nbep_versions_open(ver.mod);
+    nbep_mail_open(ver.mail);
     ver.mod_open = true;
 }
 
@@ -379,7 +416,13 @@ static void write_version(const nbep_evloop *e, const nbep_evloop_ops *ops, void
         x->newest_win = ver.win;
     }
     s->n_log++;
-    if (owner != by) {
+    if (owner != by && ver.mod) { /* the message through mail.c, its box taken when full */
+        while (!nbep_mail_send(ver.mail, by, owner, (nbep_stamp){t, key}, k, &v->m, NULL)) {
+            ver.boxes_full++;
+            take_mail(owner);
+        }
+        ver.messages++;
+    } else if (owner != by) {
         slab *r = &ver.s[owner];
         if (!grow((void **)&r->inbox, &r->cap_inbox, r->n_inbox, sizeof *r->inbox)) {
             ver.failed = true;
