@@ -3988,6 +3988,12 @@ MUTANTS = [
     ("mail-bytes-unrounded", "src/mail.c",
      "           (size_t)slabs * room_of(room) * stride_of(size);",
      "           (size_t)slabs * room * stride_of(size);", ["test_memory_plan"], None),
+    ("mail-destroy-keeps-block", "src/mail.c",
+     "    free((*m)->block);",
+     "    (void)0;", ["test_memory_plan"], None),
+    ("mail-create-fails-half", "src/mail.c",
+     "    if (!m || !m->boxes || !m->block) {",
+     "    if (!m) {", ["test_memory_plan"], None),
 ]
 
 

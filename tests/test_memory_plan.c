@@ -658,6 +658,46 @@ static void test_a_slab_outgrowing_its_room_grows_or_refuses_whole(void **state)
     nbep_diag_fini(&d);
 }
 
+/* Refuses each of a create's `calls` allocations in turn: each must fail it whole (NBEP_ENOMEM,
+ * one line saying `says`, nothing left allocated, nothing made). try: the create, its messages
+ * on d; *made: whether it made its object (then destroyed). */
+typedef nbep_status (*create_try)(nbep_diag *d, bool *made);
+static void refuse_each(const char *what, size_t calls, const char *says, create_try try)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    /* the list's own arrays made before counting (a message's text is freed by clear) */
+    nbep_diag_add(&d, __FILE__, __LINE__, "nbep: a first message");
+    nbep_diag_clear(&d);
+    for (size_t k = 1; k <= calls; k++) {
+        nbep_diag_clear(&d);
+        fail_call = k;
+        count_start();
+        bool made = false;
+        const nbep_status st = try(&d, &made);
+        fail_call = 0;
+        const bool said = d.n_errors == 1 && strstr(d.msg[0], says);
+        const size_t lines = d.n_errors;
+        nbep_diag_clear(&d); /* its message, counted */
+        const size_t left = count_stop();
+        if (st != NBEP_ENOMEM || made || !said || left != 0)
+            fail_msg("%s: allocation %zu of %zu refused: status %d, %zu line(s), %zu bytes left",
+                     what, k, calls, (int)st, lines, left);
+    }
+    nbep_diag_fini(&d);
+}
+
+enum { VER_N = 100, VER_SIZE = 96, VER_SLABS = 3, VER_ROOM = 50 };
+
+static nbep_status versions_try(nbep_diag *d, bool *made)
+{
+    nbep_versions *v = NULL;
+    const nbep_status st = nbep_versions_create(VER_N, VER_SIZE, VER_SLABS, VER_ROOM, &v, d);
+    *made = v != NULL;
+    nbep_versions_destroy(&v);
+    return st;
+}
+
 /* The spheres' versions (versions.h) allocate what nbep_versions_bytes says, create and the
  * tracked spheres' slots; each of create's allocations refused in turn fails it whole
  * (NBEP_ENOMEM, one line, nothing left); a sphere whose slot cannot be had is not tracked and
@@ -666,7 +706,7 @@ static void test_a_slab_outgrowing_its_room_grows_or_refuses_whole(void **state)
 static void test_versions_allocate_what_they_estimate_and_refuse_whole(void **state)
 {
     (void)state;
-    enum { N = 100, SIZE = 96, SLABS = 3, ROOM = 50 };
+    enum { N = VER_N, SIZE = VER_SIZE, SLABS = VER_SLABS, ROOM = VER_ROOM };
     nbep_diag d;
     nbep_diag_init(&d);
     nbep_versions *v = NULL;
@@ -717,26 +757,19 @@ static void test_versions_allocate_what_they_estimate_and_refuse_whole(void **st
     nbep_versions_destroy(&v);
     assert_int_equal(count_stop(), 0);
     assert_true(calls >= 3);
-    /* the list's own arrays made before counting (a message's text is freed by clear) */
-    nbep_diag_add(&d, __FILE__, __LINE__, "nbep: a first message");
-    nbep_diag_clear(&d);
-    for (size_t k = 1; k <= calls; k++) {
-        nbep_diag_clear(&d);
-        fail_call = k;
-        count_start();
-        const nbep_status st = nbep_versions_create(N, SIZE, SLABS, ROOM, &v, &d);
-        fail_call = 0;
-        const bool said =
-            d.n_errors == 1 && strstr(d.msg[0], "no memory for the spheres' versions");
-        const size_t lines = d.n_errors;
-        nbep_diag_clear(&d); /* its message, counted */
-        const size_t left = count_stop();
-        if (st != NBEP_ENOMEM || v || !said || left != 0)
-            fail_msg("versions: allocation %zu of %zu refused: status %d, %zu line(s), %zu "
-                     "bytes left",
-                     k, calls, (int)st, lines, left);
-    }
     nbep_diag_fini(&d);
+    refuse_each("versions", calls, "no memory for the spheres' versions", versions_try);
+}
+
+enum { MAIL_SLABS = 5, MAIL_SIZE = 96, MAIL_ROOM = 100 };
+
+static nbep_status mail_try(nbep_diag *d, bool *made)
+{
+    nbep_mail *m = NULL;
+    const nbep_status st = nbep_mail_create(MAIL_SLABS, MAIL_SIZE, MAIL_ROOM, &m, d);
+    *made = m != NULL;
+    nbep_mail_destroy(&m);
+    return st;
 }
 
 /* Mail between slabs (mail.h) allocates what nbep_mail_bytes says (boxes of 100 rounded up to
@@ -745,7 +778,7 @@ static void test_versions_allocate_what_they_estimate_and_refuse_whole(void **st
 static void test_mail_allocates_what_it_estimates_and_refuses_whole(void **state)
 {
     (void)state;
-    enum { SLABS = 5, SIZE = 96, ROOM = 100 };
+    enum { SLABS = MAIL_SLABS, SIZE = MAIL_SIZE, ROOM = MAIL_ROOM };
     nbep_diag d;
     nbep_diag_init(&d);
     nbep_mail *m = NULL;
@@ -757,23 +790,8 @@ static void test_mail_allocates_what_it_estimates_and_refuses_whole(void **state
     nbep_mail_destroy(&m);
     assert_int_equal(count_stop(), 0);
     assert_true(calls >= 3);
-    nbep_diag_add(&d, __FILE__, __LINE__, "nbep: a first message");
-    nbep_diag_clear(&d);
-    for (size_t k = 1; k <= calls; k++) {
-        nbep_diag_clear(&d);
-        fail_call = k;
-        count_start();
-        const nbep_status st = nbep_mail_create(SLABS, SIZE, ROOM, &m, &d);
-        fail_call = 0;
-        const bool said = d.n_errors == 1 && strstr(d.msg[0], "no memory for the slabs' mail");
-        const size_t lines = d.n_errors;
-        nbep_diag_clear(&d);
-        const size_t left = count_stop();
-        if (st != NBEP_ENOMEM || m || !said || left != 0)
-            fail_msg("mail: allocation %zu of %zu refused: status %d, %zu line(s), %zu bytes left",
-                     k, calls, (int)st, lines, left);
-    }
     nbep_diag_fini(&d);
+    refuse_each("mail", calls, "no memory for the slabs' mail", mail_try);
 }
 
 /* In a run, a slab that must grow and cannot stops the run with NBEP_ENOMEM and one line
