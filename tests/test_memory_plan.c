@@ -30,6 +30,7 @@
 #include "nbep/mail.h"
 #include "nbep/nblist.h"
 #include "nbep/slabcal.h"
+#include "nbep/undo.h"
 #include "nbep/versions.h"
 #include "nbep/vec3.h"
 #include "evloop_impl.h"
@@ -794,6 +795,72 @@ static void test_mail_allocates_what_it_estimates_and_refuses_whole(void **state
     refuse_each("mail", calls, "no memory for the slabs' mail", mail_try);
 }
 
+static nbep_status undo_try(nbep_diag *d, bool *made)
+{
+    nbep_undo *u = NULL;
+    const nbep_status st = nbep_undo_create(4, 96, &u, d);
+    *made = u != NULL;
+    nbep_undo_destroy(&u);
+    return st;
+}
+
+static void undo_restore(void *arg, uint32_t i, const void *state)
+{
+    (void)state;
+    *(uint32_t *)arg += 1000 + i;
+}
+
+static void undo_cancel(void *arg, const nbep_undo_sent *m)
+{
+    *(uint32_t *)arg += (uint32_t)m->id;
+}
+
+/* The slabs' undo logs (undo.h): each of create's allocations refused in turn fails it whole;
+ * each growth of a slab's records, states and sends refused is false and changes nothing (the
+ * rollback after it undoes what was logged, no more); destroy frees all the growths. */
+static void test_undo_logs_refuse_whole_and_grow_or_change_nothing(void **state)
+{
+    (void)state;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_undo *u = NULL;
+    count_start();
+    assert_int_equal(nbep_undo_create(4, 96, &u, &d), NBEP_OK);
+    const size_t calls = n_calls;
+    char data[96] = {0};
+    /* each first growth refused, then taken */
+    fail_call = n_calls + 1;
+    assert_false(nbep_undo_begin(u, 2, (nbep_stamp){1.0, 0}));
+    assert_int_equal(nbep_undo_count(u, 2), 0);
+    assert_true(nbep_undo_begin(u, 2, (nbep_stamp){1.0, 0}));
+    fail_call = n_calls + 1;
+    assert_false(nbep_undo_keep(u, 2, 7, data));
+    assert_true(nbep_undo_keep(u, 2, 7, data));
+    const nbep_undo_sent m = {.stamp = {1.0, 0}, .id = 5, .sphere = 1, .to = 0};
+    fail_call = n_calls + 1;
+    assert_false(nbep_undo_sent_one(u, 2, &m));
+    assert_true(nbep_undo_sent_one(u, 2, &m));
+    /* past the first room of 64: grown, and a growth refused changes nothing */
+    for (uint32_t k = 1; k < 64; k++) {
+        assert_true(nbep_undo_begin(u, 2, (nbep_stamp){1.0 + k, 0}));
+        assert_true(nbep_undo_keep(u, 2, k, data));
+    }
+    fail_call = n_calls + 1;
+    assert_false(nbep_undo_begin(u, 2, (nbep_stamp){100.0, 0}));
+    fail_call = 0;
+    assert_int_equal(nbep_undo_count(u, 2), 64);
+    uint32_t sum = 0;
+    assert_int_equal(nbep_undo_back_to(u, 2, (nbep_stamp){0.0, 0}, undo_restore, undo_cancel,
+                                       &sum),
+                     64);
+    assert_int_equal(sum, 64 * 1000 + 7 + 63 * 64 / 2 + 5);
+    nbep_undo_destroy(&u);
+    assert_int_equal(count_stop(), 0);
+    assert_true(calls >= 2);
+    nbep_diag_fini(&d);
+    refuse_each("undo logs", calls, "no memory for the slabs' undo logs", undo_try);
+}
+
 /* In a run, a slab that must grow and cannot stops the run with NBEP_ENOMEM and one line
  * naming the step, whichever of the run's allocations is refused. 80 spheres in the low fifth
  * of a box long across x, on 2 slabs: all in slab 0, past its first room (50 and a quarter, and
@@ -860,6 +927,7 @@ int main(void)
         cmocka_unit_test(test_a_slab_outgrowing_its_room_grows_or_refuses_whole),
         cmocka_unit_test(test_versions_allocate_what_they_estimate_and_refuse_whole),
         cmocka_unit_test(test_mail_allocates_what_it_estimates_and_refuses_whole),
+        cmocka_unit_test(test_undo_logs_refuse_whole_and_grow_or_change_nothing),
         cmocka_unit_test(test_a_run_whose_slab_cannot_grow_stops_with_the_step_named),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1,0 +1,293 @@
+/* The slabs' undo logs (src/undo.c): rolling back to a stamp undoes the events stamped at or
+ * after it, newest first, each one's messages cancelled in the order sent and its spheres put
+ * back in the reverse order kept (a sphere kept twice ends in its first state); then random
+ * events and rollbacks on three slabs against a plain model of the world: after every rollback
+ * each sphere is as it was before the first event undone, and the cancels are exactly the
+ * undone events' messages; bad counts refused with their message. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "nbep/undo.h"
+#include "nbep_test.h"
+#include "nbep_test_scene.h"
+
+enum { SIZE = 16 }; /* two doubles a state */
+
+/* What a rollback did, in order: restores (sphere, state) and cancels (message numbers). */
+typedef struct {
+    double *world; /* the spheres' states, SIZE bytes each */
+    uint32_t restored[256];
+    double restored_to[256][2];
+    size_t n_restored;
+    uint64_t cancelled[256];
+    size_t n_cancelled;
+} seen;
+
+static void restore(void *arg, uint32_t i, const void *state)
+{
+    seen *w = arg;
+    assert_true(w->n_restored < 256);
+    w->restored[w->n_restored] = i;
+    memcpy(w->restored_to[w->n_restored], state, SIZE);
+    w->n_restored++;
+    if (w->world)
+        memcpy(&w->world[2 * i], state, SIZE);
+}
+
+static void cancel(void *arg, const nbep_undo_sent *m)
+{
+    seen *w = arg;
+    assert_true(w->n_cancelled < 256);
+    w->cancelled[w->n_cancelled++] = m->id;
+}
+
+static nbep_undo *made(int slabs)
+{
+    nbep_diag d;
+    nbep_diag_init(&d);
+    nbep_undo *u = NULL;
+    assert_int_equal(nbep_undo_create(slabs, SIZE, &u, &d), NBEP_OK);
+    nbep_diag_fini(&d);
+    return u;
+}
+
+static void keep2(nbep_undo *u, int slab, uint32_t i, double a, double b)
+{
+    const double st[2] = {a, b};
+    assert_true(nbep_undo_keep(u, slab, i, st));
+}
+
+static void sent(nbep_undo *u, int slab, uint64_t id, int to)
+{
+    const nbep_undo_sent m = {.stamp = {0.0, 0}, .id = id, .sphere = 0, .to = to};
+    assert_true(nbep_undo_sent_one(u, slab, &m));
+}
+
+/* Three events on slab 1 (at 1, 2 and 3; the second keeps sphere 3 twice and sends two
+ * messages); slab 0's one event untouched by slab 1's rollbacks. Back to (2, 5): the third and
+ * the second undone, the third first; its spheres back in the reverse order kept (sphere 3 to
+ * its first state); its messages cancelled in the order sent. Back to (1, 8), after (1, 7): none.
+ * Back to (1, 7): the first, stamped there. */
+static void test_a_rollback_undoes_from_its_stamp_newest_first(void **state)
+{
+    (void)state;
+    nbep_undo *u = made(2);
+    assert_true(nbep_undo_begin(u, 0, (nbep_stamp){0.5, 1}));
+    keep2(u, 0, 9, 9.0, 9.5);
+    assert_true(nbep_undo_begin(u, 1, (nbep_stamp){1.0, 7}));
+    keep2(u, 1, 4, 40.0, 41.0);
+    sent(u, 1, 1, 0);
+    assert_true(nbep_undo_begin(u, 1, (nbep_stamp){2.0, 5}));
+    keep2(u, 1, 3, 30.0, 31.0);
+    keep2(u, 1, 5, 50.0, 51.0);
+    keep2(u, 1, 3, 32.0, 33.0);
+    sent(u, 1, 2, 0);
+    sent(u, 1, 3, 0);
+    assert_true(nbep_undo_begin(u, 1, (nbep_stamp){3.0, 1}));
+    keep2(u, 1, 5, 52.0, 53.0);
+    assert_int_equal(nbep_undo_count(u, 1), 3);
+
+    seen w = {.world = NULL};
+    assert_int_equal(nbep_undo_back_to(u, 1, (nbep_stamp){2.0, 5}, restore, cancel, &w), 2);
+    assert_int_equal(nbep_undo_count(u, 1), 1);
+    assert_int_equal(nbep_undo_count(u, 0), 1);
+    const uint32_t order[4] = {5, 3, 5, 3};
+    const double to[4][2] = {{52.0, 53.0}, {32.0, 33.0}, {50.0, 51.0}, {30.0, 31.0}};
+    assert_int_equal(w.n_restored, 4);
+    for (int k = 0; k < 4; k++) {
+        assert_int_equal(w.restored[k], order[k]);
+        assert_true(w.restored_to[k][0] == to[k][0] && w.restored_to[k][1] == to[k][1]);
+    }
+    assert_int_equal(w.n_cancelled, 2);
+    assert_int_equal(w.cancelled[0], 2);
+    assert_int_equal(w.cancelled[1], 3);
+
+    seen none = {.world = NULL};
+    assert_int_equal(nbep_undo_back_to(u, 1, (nbep_stamp){1.0, 8}, restore, cancel, &none), 0);
+    assert_int_equal(none.n_restored + none.n_cancelled, 0);
+    assert_int_equal(nbep_undo_back_to(u, 1, (nbep_stamp){1.0, 7}, restore, cancel, &none), 1);
+    assert_int_equal(none.n_restored, 1);
+    assert_int_equal(none.restored[0], 4);
+    assert_int_equal(none.n_cancelled, 1);
+    assert_int_equal(none.cancelled[0], 1);
+    assert_int_equal(nbep_undo_count(u, 1), 0);
+    assert_int_equal(nbep_undo_back_to(u, 1, (nbep_stamp){-1.0, 0}, restore, cancel, &none), 0);
+
+    /* the window's end forgets slab 0's too; the log takes new events after */
+    nbep_undo_clear(u);
+    assert_int_equal(nbep_undo_count(u, 0), 0);
+    assert_true(nbep_undo_begin(u, 0, (nbep_stamp){0.1, 0}));
+    keep2(u, 0, 2, 1.0, 2.0);
+    seen after = {.world = NULL};
+    assert_int_equal(nbep_undo_back_to(u, 0, (nbep_stamp){0.0, 0}, restore, cancel, &after), 1);
+    assert_int_equal(after.n_restored, 1);
+    assert_int_equal(after.restored[0], 2);
+    nbep_undo_destroy(&u);
+    assert_null(u);
+    nbep_undo_destroy(&u); /* NULL-safe */
+}
+
+/* ---- random events and rollbacks against a plain model ------------------------------------ */
+
+enum { SLABS = 3, SPHERES = 40, EVENTS_MAX = 400, STEPS = 20000 };
+
+typedef struct {
+    double t;
+    uint64_t key;
+    double before[SPHERES][2]; /* the slab's spheres before it */
+    uint64_t sent_from, sent_to; /* its messages' numbers: [from, to) */
+} model_event;
+
+static uint64_t next_rand(uint64_t *x)
+{
+    *x ^= *x << 13;
+    *x ^= *x >> 7;
+    *x ^= *x << 17;
+    return *x;
+}
+
+/* Each slab owns spheres k, k + SLABS, ...; its events change one to three of them (one maybe
+ * twice) and send none to two messages; now and then it rolls back to a random stamp between
+ * its records (or before all, or after all), and at random the window ends (clear). After each
+ * rollback its spheres are as before the first event undone, and the cancels are the undone
+ * events' messages, newest event first, each event's in the order sent. */
+static void test_random_events_and_rollbacks_match_a_plain_model(void **state)
+{
+    (void)state;
+    nbep_undo *u = made(SLABS);
+    static double world[SPHERES * 2];
+    static model_event ev[SLABS][EVENTS_MAX];
+    size_t n_ev[SLABS] = {0};
+    double clock[SLABS] = {0};
+    uint64_t next_id[SLABS] = {0};
+    uint64_t rng = 12345;
+    for (int i = 0; i < SPHERES; i++)
+        world[2 * i] = world[2 * i + 1] = i;
+    size_t rollbacks = 0, undone_all = 0;
+    const int steps = (int)nbep_test_scaled(STEPS, 2000);
+    for (int step = 0; step < steps; step++) {
+        const int sl = (int)(next_rand(&rng) % SLABS);
+        const uint64_t r = next_rand(&rng) % 100;
+        if (r < 70 && n_ev[sl] < EVENTS_MAX) { /* an event */
+            clock[sl] += (double)(next_rand(&rng) % 3) * 0.25; /* ties too */
+            model_event *e = &ev[sl][n_ev[sl]++];
+            e->t = clock[sl];
+            e->key = step;
+            memcpy(e->before, world, sizeof e->before);
+            assert_true(nbep_undo_begin(u, sl, (nbep_stamp){e->t, e->key}));
+            const int changes = 1 + (int)(next_rand(&rng) % 3);
+            for (int c = 0; c < changes; c++) {
+                const uint32_t i =
+                    (uint32_t)(sl + SLABS * (int)(next_rand(&rng) % (SPHERES / SLABS)));
+                assert_true(nbep_undo_keep(u, sl, i, &world[2 * i]));
+                world[2 * i] += 1.0 + (double)step;
+                world[2 * i + 1] = -(double)step;
+            }
+            e->sent_from = next_id[sl];
+            const int sends = (int)(next_rand(&rng) % 3);
+            for (int c = 0; c < sends; c++) {
+                const nbep_undo_sent m = {.stamp = {e->t, e->key}, .id = next_id[sl]++,
+                                          .sphere = (uint32_t)c, .to = (sl + 1) % SLABS};
+                assert_true(nbep_undo_sent_one(u, sl, &m));
+            }
+            e->sent_to = next_id[sl];
+        } else if (r < 97) { /* a rollback to a stamp among the records, or past either end */
+            const size_t n = n_ev[sl];
+            const size_t at = n ? (size_t)(next_rand(&rng) % (n + 2)) : 0;
+            nbep_stamp to;
+            if (at == 0 || n == 0)
+                to = (nbep_stamp){-1.0, 0};
+            else if (at > n)
+                to = (nbep_stamp){clock[sl] + 1.0, 0};
+            else if (next_rand(&rng) % 2)
+                to = (nbep_stamp){ev[sl][at - 1].t, ev[sl][at - 1].key};
+            else /* just after a record's stamp, same time */
+                to = (nbep_stamp){ev[sl][at - 1].t, ev[sl][at - 1].key + 1};
+            /* the model: the first record at or after `to` */
+            size_t first = n;
+            while (first > 0 && !nbep_stamp_before((nbep_stamp){ev[sl][first - 1].t,
+                                                                ev[sl][first - 1].key},
+                                                   to))
+                first--;
+            seen w = {.world = world};
+            const size_t undone = nbep_undo_back_to(u, sl, to, restore, cancel, &w);
+            assert_int_equal(undone, n - first);
+            assert_int_equal(nbep_undo_count(u, sl), first);
+            if (undone) {
+                /* this slab's spheres as before the first undone; the others' untouched */
+                for (int i = sl; i < SPHERES; i += SLABS)
+                    assert_memory_equal(&world[2 * i], ev[sl][first].before[i], SIZE);
+                size_t q = 0;
+                for (size_t k = n; k-- > first;)
+                    for (uint64_t id = ev[sl][k].sent_from; id < ev[sl][k].sent_to; id++) {
+                        assert_true(q < w.n_cancelled);
+                        assert_int_equal(w.cancelled[q++], id);
+                    }
+                assert_int_equal(q, w.n_cancelled);
+                next_id[sl] = ev[sl][first].sent_from; /* numbers used again, as a slab would */
+                clock[sl] = ev[sl][first].t;
+            } else {
+                assert_int_equal(w.n_restored + w.n_cancelled, 0);
+            }
+            n_ev[sl] = first;
+            rollbacks++;
+            undone_all += undone;
+        } else { /* the window's end: every slab's events final */
+            nbep_undo_clear(u);
+            for (int k = 0; k < SLABS; k++) {
+                n_ev[k] = 0;
+                assert_int_equal(nbep_undo_count(u, k), 0);
+            }
+        }
+    }
+    fprintf(stderr, "%d steps: %zu rollbacks, %zu events undone\n", steps, rollbacks,
+            undone_all);
+    assert_true(undone_all > 0);
+    nbep_undo_destroy(&u);
+}
+
+/* Counts out of range are refused with one line that names them, nothing made. */
+static void test_bad_counts_are_refused_with_a_message(void **state)
+{
+    (void)state;
+    const struct {
+        int slabs;
+        size_t size;
+        const char *says;
+    } bad[] = {
+        {0, SIZE, "1 to 1024 slabs, not 0"},
+        {1025, SIZE, "1 to 1024 slabs, not 1025"},
+        {2, 0, "1 to 4096 bytes, not 0"},
+        {2, 4097, "1 to 4096 bytes, not 4097"},
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+        nbep_diag d;
+        nbep_diag_init(&d);
+        nbep_undo *u = NULL;
+        assert_int_equal(nbep_undo_create(bad[k].slabs, bad[k].size, &u, &d), NBEP_EDECK);
+        assert_null(u);
+        assert_int_equal(d.n_errors, 1);
+        if (!strstr(d.msg[0], bad[k].says))
+            fail_msg("case %zu: \"%s\" does not say \"%s\"", k, d.msg[0], bad[k].says);
+        nbep_diag_fini(&d);
+    }
+    nbep_undo *u = made(1024);
+    nbep_undo_destroy(&u);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_a_rollback_undoes_from_its_stamp_newest_first),
+        cmocka_unit_test(test_random_events_and_rollbacks_match_a_plain_model),
+        cmocka_unit_test(test_bad_counts_are_refused_with_a_message),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
