@@ -133,7 +133,7 @@ done
 # 2 slabs, none sent back in the serial order but by a read at the put's own time (a lattice's
 # ties: every list expires at once), and with pools of 64 versions the windows that fill one
 # end early; the messages through src/mail.c, every window's meeting finding its work done; the
-# run unchanged
+# events logged in src/undo.c; the run unchanged
 for room in 0 64; do
     NBEP_VER_MODULE=1 NBEP_VER_ROOM=$room NBEP_VER_VERIFY=1 NBEP_VER_SLABS=2 NBEP_VER_WINDOW=0.02 \
         "$versions" run "$tmp/long.deck" -o "$tmp/longm$room.h5" -t 1 --quiet \
@@ -148,7 +148,7 @@ for room in 0 64; do
          [ '$(num 'messages taken')' -le '$(num 'messages,')' ] &&
          echo '$tally' | grep -q ' boxes full, 0 meetings not quiet' &&
          echo '$tally' | grep -q ', 0 reads too soon, 0 reads of another slab in lists skipped;' &&
-         echo '$tally' | grep -q ', 0 sent back with no read at their time\$'"
+         echo '$tally' | grep -q ', 0 sent back with no read at their time; undo.c: [1-9][0-9]* events logged in the last window\$'"
     check "bench_versions on versions.c, pools of ${room/#0/the default}: the run's collisions and energy those of the run without" \
         "[ \"\$(grep -o '\"collisions\": [0-9]*\|\"energy_final\": [^,]*' '$tmp/longm$room.json')\" = \
            \"\$(grep -o '\"collisions\": [0-9]*\|\"energy_final\": [^,]*' '$tmp/long0.json')\" ]"

@@ -42,7 +42,10 @@
  * stamp (its motion copied out, as a prediction would read it); a message to another slab goes
  * through src/mail.c (mail.h), each box taken at the window's meeting (or when full), which
  * then checks that the window's work is done (a sphere's message is sent by the writer, its
- * version still put by the writer into the owner's pool). A sphere that comes near a
+ * version still put by the writer into the owner's pool); and every event's record, each
+ * sphere it wrote (its motion, as the ops' save keeps it, in place of the lean versions) and
+ * each message it sent, goes into its slab's log in src/undo.c (undo.h), emptied at each
+ * meeting. A sphere that comes near a
  * side within a window (its list expired there) is not tracked till the next (counted:
  * untracked); a pool full (NBEP_VER_ROOM versions a slab, default 4096 and an eighth of a
  * slab's share of the spheres) ends the window at the next event (counted). The tally adds the
@@ -76,6 +79,7 @@ static void ver_event(struct nbep_evloop *e, const struct evl_ws *w, const void 
 /* its own copy of the cells callbacks too, for lean_save (cells_user) */
 #include "../../src/pred_cells.c"
 #include "nbep/mail.h"
+#include "nbep/undo.h"
 #include "nbep/versions.h"
 
 #define SLABS_MAX 64
@@ -136,6 +140,7 @@ static struct {
     slab s[SLABS_MAX];
     nbep_versions *mod; /* NBEP_VER_MODULE: the near spheres' records and notes, versions.c's */
     nbep_mail *mail;    /* and the messages, mail.c's */
+    nbep_undo *undo;    /* and each slab's log, undo.c's */
     uint32_t *moved;    /* the spheres whose list expired in the window, n_moved (at most n) */
     size_t n_moved;
     bool mod_open;      /* a window of it open */
@@ -145,6 +150,15 @@ static struct {
     unsigned long long events, versions, near, lists_read, reads_checked, notes, messages,
         windows, too_soon, missed;
 } ver;
+
+/* The events in every slab's undo log. */
+static size_t undo_logged(void)
+{
+    size_t n = 0;
+    for (int k = 0; k < ver.slabs; k++)
+        n += nbep_undo_count(ver.undo, k);
+    return n;
+}
 
 static void ver_report(void)
 {
@@ -172,9 +186,12 @@ static void ver_report(void)
                 ver.boxes_full, ver.not_quiet);
     if (ver.mod && ver.verify)
         fprintf(stderr, ", %llu sent back with no read at their time", ver.sent_wrongly);
+    if (ver.undo)
+        fprintf(stderr, "; undo.c: %zu events logged in the last window", undo_logged());
     fputc('\n', stderr);
     nbep_versions_destroy(&ver.mod);
     nbep_mail_destroy(&ver.mail);
+    nbep_undo_destroy(&ver.undo);
     free(ver.moved);
     for (int k = 0; k < ver.slabs; k++) {
         free(ver.s[k].log);
@@ -229,7 +246,8 @@ static void ver_start(const nbep_evloop *e)
         if (nbep_versions_create(ver.n, sizeof(nbep_evloop_motion), ver.slabs, room, &ver.mod,
                                  &d) != NBEP_OK ||
             nbep_mail_create(ver.slabs, sizeof(nbep_evloop_motion), MAIL_ROOM, &ver.mail, &d) !=
-                NBEP_OK)
+                NBEP_OK ||
+            nbep_undo_create(ver.slabs, sizeof(nbep_evloop_motion), &ver.undo, &d) != NBEP_OK)
             ver.failed = true;
         nbep_diag_fini(&d);
         ver.moved = malloc((ver.n ? ver.n : 1) * sizeof *ver.moved);
@@ -305,6 +323,7 @@ static void module_window(const nbep_evloop *e)
         for (int k = 0; k < ver.slabs; k++)
             nbep_mail_idle(ver.mail, k);
         ver.not_quiet += !nbep_mail_quiet(ver.mail);
+        nbep_undo_clear(ver.undo);
     }
     /* all again at the first, and where the moves filled their list (one sphere's list may
      * expire many times a window) */
@@ -366,6 +385,46 @@ static bool lean_save(slab *s, void *u, uint32_t k, double t, bool wraps)
     return true;
 }
 
+/* NBEP_VER_MODULE: sphere k, written by the event at (t, key) of slab `by`, into that slab's
+ * undo log (undo.c; its motion, as the ops' save keeps it); near a side (`side`), its version
+ * put in its owner's pool (versions.c) and, if another slab owns it, a message to the owner
+ * (mail.c; its box taken when full), logged to be cancelled. */
+static void module_write(const nbep_evloop_ops *ops, void *u, uint32_t k, double t, uint64_t key,
+                         int by, bool side, int owner)
+{
+    nbep_evloop_motion m;
+    ops->save(u, k, &m);
+    if (!nbep_undo_keep(ver.undo, by, k, &m)) {
+        ver.failed = true;
+        return;
+    }
+    if (!side)
+        return; /* no other slab reads it or owns it: the log is all */
+    uint64_t roll = 0;
+    if (!nbep_versions_tracked(ver.mod, k))
+        ver.untracked++;
+    else if (!nbep_versions_put(ver.mod, owner, k, (nbep_stamp){t, key}, &m, &roll))
+        ver.full++, ver.end_window = true;
+    else
+        ver.puts++, ver.sent_back += roll != 0;
+    /* in the serial order a note is never later than now: a slab sent back read k at this very
+     * time (ties: the note keeps the time only); checked against the stand-in's own record of
+     * the reads, kept with NBEP_VER_VERIFY */
+    const sphere *x = &ver.sp[k];
+    if (ver.verify && roll && !(x->read_win == ver.win && x->read_t == t))
+        ver.sent_wrongly++;
+    if (owner == by)
+        return;
+    nbep_undo_sent sent = {.stamp = {t, key}, .sphere = k, .to = owner};
+    while (!nbep_mail_send(ver.mail, by, owner, sent.stamp, k, &m, &sent.id)) {
+        ver.boxes_full++;
+        take_mail(owner);
+    }
+    ver.messages++;
+    if (!nbep_undo_sent_one(ver.undo, by, &sent))
+        ver.failed = true;
+}
+
 /* Sphere k, written by the event at (t, key) of slab `by`: the check for a read too soon,
  * its version in the writer's log, and a message if another slab owns it. */
 static void write_version(const nbep_evloop *e, const nbep_evloop_ops *ops, void *u,
@@ -375,6 +434,10 @@ static void write_version(const nbep_evloop *e, const nbep_evloop_ops *ops, void
     slab *s = &ver.s[by]; /* the writer's log: what its rollback would undo */
     ver.versions++;
     const bool side = near_slab_side(at, SIDE_REACH(e));
+    if (ver.mod) {
+        module_write(ops, u, k, t, key, by, side, slab_of(at));
+        return;
+    }
     if (ver.lean && !side) { /* no other slab reads it or owns it: the lean log is all */
         if (!lean_save(s, u, k, t, wraps))
             ver.failed = true;
@@ -394,35 +457,13 @@ static void write_version(const nbep_evloop *e, const nbep_evloop_ops *ops, void
         return; /* no other slab reads it or owns it: the log is all */
     }
     const int owner = slab_of(at);
-    if (ver.mod) {
-        uint64_t roll = 0;
-        if (!nbep_versions_tracked(ver.mod, k))
-            ver.untracked++;
-        else if (!nbep_versions_put(ver.mod, owner, k, (nbep_stamp){t, key}, &v->m, &roll))
-            ver.full++, ver.end_window = true;
-        else
-            ver.puts++, ver.sent_back += roll != 0;
-        /* in the serial order a note is never later than now: a slab sent back read k at this
-         * very time (ties: the note keeps the time only); checked against the stand-in's own
-         * record of the reads, kept with NBEP_VER_VERIFY */
-        const sphere *x = &ver.sp[k];
-        if (ver.verify && roll && !(x->read_win == ver.win && x->read_t == t))
-            ver.sent_wrongly++;
-    } else {
-        sphere *x = &ver.sp[k];
-        if (x->read_win == ver.win && x->read_t > t)
-            ver.too_soon++; /* never, in the serial order */
-        x->newest = (uint32_t)s->n_log;
-        x->newest_win = ver.win;
-    }
+    sphere *x = &ver.sp[k];
+    if (x->read_win == ver.win && x->read_t > t)
+        ver.too_soon++; /* never, in the serial order */
+    x->newest = (uint32_t)s->n_log;
+    x->newest_win = ver.win;
     s->n_log++;
-    if (owner != by && ver.mod) { /* the message through mail.c, its box taken when full */
-        while (!nbep_mail_send(ver.mail, by, owner, (nbep_stamp){t, key}, k, &v->m, NULL)) {
-            ver.boxes_full++;
-            take_mail(owner);
-        }
-        ver.messages++;
-    } else if (owner != by) {
+    if (owner != by) {
         slab *r = &ver.s[owner];
         if (!grow((void **)&r->inbox, &r->cap_inbox, r->n_inbox, sizeof *r->inbox)) {
             ver.failed = true;
@@ -514,6 +555,10 @@ static void ver_event(nbep_evloop *e, const evl_ws *w, const void *evp,
         ver.moved[ver.n_moved++] = i; /* its centre moved: tracked or not, from the next window */
     const double cx = e->cells.m[i].at.x;
     const int by = slab_of(cx);
+    if (ver.mod && !nbep_undo_begin(ver.undo, by, (nbep_stamp){t, key})) {
+        ver.failed = true;
+        return;
+    }
     /* what the event wrote: its sphere and, for a reaction, every sphere it changed */
     write_version(e, ops, u, i, t, key, by, w->rebuilt);
     for (size_t k = 0; k < w->n_changed; k++)
