@@ -4023,6 +4023,16 @@ MUTANTS = [
      "    if (!room_for_one((void **)&l->rec, &l->cap_rec, l->n_rec, sizeof *l->rec))\n        return false;",
      "    if (!room_for_one((void **)&l->rec, &l->cap_rec, l->n_rec, sizeof *l->rec))\n        return l->n_rec = 0, false;",
      ["test_memory_plan"], None),
+    # the seed-14 draw's gaps, closed
+    ("grid-cell-size-none-kept", "src/grid.c",
+     "    double h = h_min > 0.0 && isfinite(h_min) ? h_min : 1.0;",
+     "    double h = h_min > 0.0 || isfinite(h_min) ? h_min : 1.0;", ["test_grid"], None),
+    ("nblist-init-most-spheres", "src/nblist.c",
+     "    if (n < UINT32_MAX) {",
+     "    if (n <= UINT32_MAX) {", ["test_memory_plan"], None),
+    ("rounds-before-counted-down", "src/algo_predictive.c",
+     "                c->rounds_before = stamp0 + round + 1;",
+     "                c->rounds_before = stamp0 - round + 1;", ["test_order"], None),
 ]
 
 

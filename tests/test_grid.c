@@ -14,6 +14,7 @@
 
 #include "nbep/grid.h"
 #include "nbep_test.h"
+#include "nbep_test_watchdog.h"
 
 static uint64_t lcg(uint64_t *x)
 {
@@ -282,6 +283,35 @@ static void test_a_line_of_centres_gets_the_finest_doubling_that_fits(void **sta
             }
 }
 
+/* A cell size that is none (0, negative, infinite: the caller's 2 rmax of a scene without
+ * spheres) is taken as 1: a unit box in cells of 1, and an empty grid (no centre, bounds the
+ * wrong way round) one cell of 1. Taken as given (a mutant of the seed-14 draw), 0 would never
+ * end the sizing of an empty grid (a grid-mode run of a deck with no spheres spun, deaf to
+ * SIGTERM: the watchdog fails it), infinity would make one cell of h = inf, and -0.5 cells past
+ * counting. */
+static void test_a_cell_size_that_is_none_is_taken_as_one(void **state)
+{
+    (void)state;
+    nbep_test_watchdog_arm(10, "test_grid: sizing a grid did not end in 10 s\n");
+    nbep_grid g = make(4);
+    const nbep_vec3 lo = {0, 0, 0}, hi = {1, 1, 1};
+    const double none[] = {0.0, -0.5, INFINITY, NAN};
+    for (size_t k = 0; k < sizeof none / sizeof none[0]; k++) {
+        nbep_grid_size(&g, lo, hi, 4, none[k]);
+        assert_true(g.h == 1.0);
+        assert_int_equal(g.dim[0], 2);
+        assert_int_equal(g.dim[1], 2);
+        assert_int_equal(g.dim[2], 2);
+    }
+    const nbep_vec3 empty_lo = {INFINITY, INFINITY, INFINITY};
+    const nbep_vec3 empty_hi = {-INFINITY, -INFINITY, -INFINITY};
+    nbep_grid_size(&g, empty_lo, empty_hi, 0, 0.0);
+    assert_true(g.h == 1.0);
+    assert_int_equal(nbep_grid_cells(&g), 1);
+    nbep_test_watchdog_disarm();
+    nbep_grid_fini(&g);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -291,6 +321,7 @@ int main(void)
         cmocka_unit_test(test_a_rebuild_is_a_fresh_build),
         cmocka_unit_test(test_cells_fit_the_room_and_blocks_stay_in_the_grid),
         cmocka_unit_test(test_a_line_of_centres_gets_the_finest_doubling_that_fits),
+        cmocka_unit_test(test_a_cell_size_that_is_none_is_taken_as_one),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -125,8 +125,12 @@ void __wrap_free(void *p)
     __real_free(p);
 }
 
+/* While counting: the aligned allocations asked for (the sphere arrays'), refused or not. */
+static size_t n_aligned_calls;
+
 void *__wrap_nbep_alloc_aligned(size_t n, size_t size)
 {
+    n_aligned_calls += counting != 0;
     void *p = refuse() ? NULL : __real_nbep_alloc_aligned(n, size);
     keep(p, n * size);
     return p;
@@ -136,6 +140,7 @@ static void count_start(void)
 {
     n_blocks = 0;
     n_calls = 0;
+    n_aligned_calls = 0;
     counting = 1;
 }
 
@@ -540,6 +545,44 @@ static void test_an_event_queue_of_the_most_sphere_ids_asks_for_its_memory(void 
     assert_null(q);
 }
 
+/* Neighbour lists take fewer than UINT32_MAX spheres (nblist.h: a list entry is a sphere's
+ * 32-bit number, and UINT32_MAX marks none): at UINT32_MAX, init refuses with its message and
+ * asks for no memory at all (a mutant of the seed-14 draw asked for 48 GB first, and only a
+ * machine without them refused it). */
+static void test_neighbour_lists_of_too_many_spheres_are_refused_before_any_allocation(
+    void **state)
+{
+    (void)state;
+    if (SIZE_MAX <= UINT32_MAX)
+        skip();
+    nbep_diag d;
+    nbep_diag_init(&d);
+    /* the list's own arrays made before counting (a message's text is freed by clear) */
+    nbep_diag_add(&d, __FILE__, __LINE__, "nbep: a first message");
+    nbep_diag_clear(&d);
+    nbep_nblist l;
+    count_start();
+    const nbep_status st = nbep_nblist_init(&l, (size_t)UINT32_MAX, &d);
+    const size_t asked = n_aligned_calls;
+    const bool said = d.n_errors == 1 && strstr(d.msg[0], "neighbour lists of 4294967295");
+    nbep_diag_clear(&d); /* its message, counted */
+    assert_int_equal(count_stop(), 0);
+    assert_int_equal(st, NBEP_ENOMEM);
+    assert_true(said);
+    assert_int_equal(asked, 0);
+    assert_null(l.sp);
+    /* one fewer is asked for (refused here, at the first allocation) */
+    count_start();
+    fail_call = 1;
+    assert_int_equal(nbep_nblist_init(&l, (size_t)UINT32_MAX - 1, &d), NBEP_ENOMEM);
+    fail_call = 0;
+    const size_t asked_one_fewer = n_aligned_calls;
+    nbep_diag_clear(&d);
+    assert_int_equal(count_stop(), 0);
+    assert_int_equal(asked_one_fewer, 1);
+    nbep_diag_fini(&d);
+}
+
 /* A detection step's contact list grows inside the step when a pile outgrows its room (4 a
  * row and 64: algo_detect.c), the one allocation a step makes. Refused, the step is abandoned
  * as a signal's is: NBEP_ENOMEM, one line naming the step, no step of it counted and the
@@ -923,6 +966,7 @@ int main(void)
         cmocka_unit_test(test_cell_lists_take_at_most_their_estimate_and_reach_it),
         cmocka_unit_test(test_a_create_refused_memory_anywhere_fails_whole_and_leaks_nothing),
         cmocka_unit_test(test_an_event_queue_of_the_most_sphere_ids_asks_for_its_memory),
+        cmocka_unit_test(test_neighbour_lists_of_too_many_spheres_are_refused_before_any_allocation),
         cmocka_unit_test(test_a_step_refused_its_contact_list_growth_stops_the_run_with_the_step_named),
         cmocka_unit_test(test_a_slab_outgrowing_its_room_grows_or_refuses_whole),
         cmocka_unit_test(test_versions_allocate_what_they_estimate_and_refuse_whole),

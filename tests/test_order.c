@@ -279,6 +279,39 @@ static void test_step_order_crowded_fluid_keeps_energy_and_is_thread_independent
     }
 }
 
+/* A sphere between two walls a diameter apart hits one each step, at the step's middle, each
+ * step the mirror of the last: so every step after the first does the same rounds and the same
+ * checks. A round's stamp (which stops a sphere reacting twice in one round) must be new every
+ * round of the run; a next step that reused the last one's stamps (a mutant of the seed-14
+ * draw: the rounds before counted down) put the sphere's first reaction of a step off by a
+ * round, 5 checks and 3 in turn where each step does 3, with every frame the same. */
+static void test_each_mirrored_step_of_a_lone_bounce_does_the_same_checks(void **state)
+{
+    (void)state;
+    nbep_scene sc;
+    nbep_test_load_deck("lone-bounce.deck",
+                        "run: { algorithm = \"predictive\"; steps = 1; dt = 1.0; };\n"
+                        "physics: { restitution = 1.0; };\n"
+                        "box: { min = [0.0, 0.0, 0.0]; max = [2.0, 2.0, 2.0]; };\n"
+                        "spheres = ( { position = [1.0, 1.0, 1.0]; velocity = [1.0, 0.0, 0.0];\n"
+                        "              radius = 0.5; mass = 1.0; } );\n",
+                        &sc);
+    uint64_t checks[7];
+    for (int n = 1; n <= 6; n++) {
+        sc.steps = (uint64_t)n;
+        const nbep_summary s = nbep_test_run(&sc, 1, NULL, NULL, NULL, NULL);
+        assert_int_equal(s.plane_collisions, n);
+        checks[n] = s.checks;
+    }
+    for (int n = 2; n < 6; n++)
+        if (checks[n + 1] - checks[n] != checks[n] - checks[n - 1])
+            fail_msg("steps %d and %d of the bounce did %llu and %llu checks", n, n + 1,
+                     (unsigned long long)(checks[n] - checks[n - 1]),
+                     (unsigned long long)(checks[n + 1] - checks[n]));
+    assert_true(checks[2] > checks[1]);
+    nbep_scene_fini(&sc);
+}
+
 /* What the trade is, on the same fluid: step order runs a step in far fewer rounds, so it
  * does far fewer of the paper's checks (one per candidate per round); time order stays exact.
  * Step order's shadowed events cost collisions: a pair found overlapping but already receding
@@ -365,6 +398,7 @@ int main(void)
         cmocka_unit_test(test_a_shadowed_event_step_order_gives_the_papers_answer),
         cmocka_unit_test(test_step_order_crowded_fluid_keeps_energy_and_is_thread_independent),
         cmocka_unit_test(test_step_order_checks_far_less_and_loses_collisions_to_shadowing),
+        cmocka_unit_test(test_each_mirrored_step_of_a_lone_bounce_does_the_same_checks),
         cmocka_unit_test(test_step_order_reacts_to_a_spheres_earliest_event_not_its_lowest_pair),
         cmocka_unit_test(test_step_order_pile_settles_and_is_thread_independent),
     };
