@@ -38,7 +38,7 @@ typedef struct {
     alignas(64) _Atomic uint64_t tail;
     alignas(64) uint64_t head;
     bool idle;
-    uint64_t sent; /* this slab's sends and cancels this window, its numbering */
+    uint64_t sent; /* this slab's sends this window: the last message's number */
     unsigned char *cells; /* within nbep_mail's block: room cells of stride bytes */
 } box;
 
@@ -52,7 +52,7 @@ struct nbep_mail {
 
 static size_t stride_of(size_t size)
 {
-    return sizeof(cell) + (size + 7) / 8 * 8;
+    return sizeof(cell) + nbep_round8(size);
 }
 
 /* A ring's cells: a power of two, at least 2 (with one, a cell's "holds the message of p"

@@ -20,7 +20,7 @@
 /* And at each of try_hold's holds (sphere i): the same test counts them and asks that each
  * held sphere be supported. */
 #ifndef NBEP_PRED_TRY_HOLD_HOOK
-#define NBEP_PRED_TRY_HOLD_HOOK(c, s, i) ((void)(c), (void)(s), (void)(i))
+#define NBEP_PRED_TRY_HOLD_HOOK(c, i) ((void)(c), (void)(i))
 #endif
 
 /* A bounce whose flight would last less than this fraction of a step ends in resting contact:
@@ -406,7 +406,7 @@ static bool try_hold(pred_ctx *c, nbep_state *s, size_t i, double dt)
         return false;
     s->vel[i] = nbep_vec3_make(0.0, 0.0, 0.0);
     c->rest[i].still = true;
-    NBEP_PRED_TRY_HOLD_HOOK(c, s, i);
+    NBEP_PRED_TRY_HOLD_HOOK(c, i);
     return true;
 }
 

@@ -34,19 +34,18 @@ struct nbep_undo {
     slab_log *logs; /* owned, slabs */
 };
 
-#define SLABS_MAX 1024
-
 nbep_status nbep_undo_create(int slabs, size_t size, nbep_undo **out, nbep_diag *d)
 {
-    if (slabs < 1 || slabs > SLABS_MAX)
-        NBEP_FAIL(d, NBEP_EDECK, "nbep: undo logs take 1 to %d slabs, not %d", SLABS_MAX, slabs);
+    if (slabs < 1 || slabs > NBEP_UNDO_SLABS_MAX)
+        NBEP_FAIL(d, NBEP_EDECK, "nbep: undo logs take 1 to %d slabs, not %d", NBEP_UNDO_SLABS_MAX,
+                  slabs);
     if (size < 1 || size > 4096)
         NBEP_FAIL(d, NBEP_EDECK, "nbep: an undo log's state holds 1 to 4096 bytes, not %zu",
                   size);
     nbep_undo *u = calloc(1, sizeof *u);
     if (u) {
         u->size = size;
-        u->stride = sizeof(uint64_t) + (size + 7) / 8 * 8;
+        u->stride = sizeof(uint64_t) + nbep_round8(size);
         u->slabs = slabs;
         u->logs = nbep_alloc_aligned((size_t)slabs, sizeof *u->logs);
     }

@@ -70,7 +70,7 @@ struct nbep_versions {
 
 static size_t stride_of(size_t size)
 {
-    return sizeof(node) + (size + 7) / 8 * 8;
+    return sizeof(node) + nbep_round8(size);
 }
 
 /* Times as unsigned integers in the same order, so that a note's time rises by integer

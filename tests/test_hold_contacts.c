@@ -22,7 +22,7 @@ static uint64_t nothing_to_hold_on, jam_held, held_on_nothing;
 #define NBEP_PRED_JAM_HOLD_HOOK(n) (nothing_to_hold_on += (n) == 0)
 #define NBEP_PRED_HELD_HOOK(n) (jam_held++, held_on_nothing += (n) == 0)
 static uint64_t slow_held, slow_held_unsupported;
-#define NBEP_PRED_TRY_HOLD_HOOK(c, s, i) (slow_held++, slow_held_unsupported += !supported(c, i))
+#define NBEP_PRED_TRY_HOLD_HOOK(c, i) (slow_held++, slow_held_unsupported += !supported(c, i))
 #include "../src/pred_react.c"
 
 #include <stdarg.h>

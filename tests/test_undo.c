@@ -263,7 +263,7 @@ static void test_bad_counts_are_refused_with_a_message(void **state)
         const char *says;
     } bad[] = {
         {0, SIZE, "1 to 1024 slabs, not 0"},
-        {1025, SIZE, "1 to 1024 slabs, not 1025"},
+        {NBEP_UNDO_SLABS_MAX + 1, SIZE, "1 to 1024 slabs, not 1025"},
         {2, 0, "1 to 4096 bytes, not 0"},
         {2, 4097, "1 to 4096 bytes, not 4097"},
     };
@@ -278,7 +278,7 @@ static void test_bad_counts_are_refused_with_a_message(void **state)
             fail_msg("case %zu: \"%s\" does not say \"%s\"", k, d.msg[0], bad[k].says);
         nbep_diag_fini(&d);
     }
-    nbep_undo *u = made(1024);
+    nbep_undo *u = made(NBEP_UNDO_SLABS_MAX);
     nbep_undo_destroy(&u);
 }
 

@@ -48,6 +48,12 @@
 #define NBEP_AVX512_CLONES
 #endif
 
+/* n rounded up to a multiple of 8: a record's payload after its 8-byte-aligned header. */
+static inline size_t nbep_round8(size_t n)
+{
+    return (n + 7) / 8 * 8;
+}
+
 /* Allocates n * size bytes aligned to a cache line, zero-filled; NULL on failure or overflow.
  * Free with nbep_free_aligned (NULL-safe). An array that fills a huge page (NBEP_HUGE) or
  * nearly is aligned to one and asks for them (nbep_huge_pages). */

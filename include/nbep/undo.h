@@ -44,7 +44,10 @@ typedef void (*nbep_undo_restore_fn)(void *arg, uint32_t i, const void *state);
 /* Cancels message m (sent by the event undone). */
 typedef void (*nbep_undo_cancel_fn)(void *arg, const nbep_undo_sent *m);
 
-/* Logs for `slabs` (1 to 1024) slabs of states of `size` bytes (1 to 4096), empty. NBEP_EDECK
+/* The most slabs. */
+#define NBEP_UNDO_SLABS_MAX 1024
+
+/* Logs for `slabs` (1 to NBEP_UNDO_SLABS_MAX) slabs of states of `size` bytes (1 to 4096), empty. NBEP_EDECK
  * with a message for a count out of range, NBEP_ENOMEM with one without memory. */
 NBEP_MUST_CHECK nbep_status nbep_undo_create(int slabs, size_t size, nbep_undo **out,
                                              nbep_diag *d);
