@@ -72,21 +72,6 @@ void nbep_undo_destroy(nbep_undo **u)
     *u = NULL;
 }
 
-/* Room for one more of `elem` bytes past n in *p (cap of them), doubled from 64 as needed;
- * false (nothing changed) when no memory could be had. */
-static bool room_for_one(void **p, size_t *cap, size_t n, size_t elem)
-{
-    if (n < *cap)
-        return true;
-    const size_t grown = *cap ? 2 * *cap : 64;
-    void *q = realloc(*p, grown * elem);
-    if (!q)
-        return false;
-    *p = q;
-    *cap = grown;
-    return true;
-}
-
 static slab_log *log_of(const nbep_undo *u, int slab)
 {
     assert(slab >= 0 && slab < u->slabs);
@@ -98,7 +83,7 @@ bool nbep_undo_begin(nbep_undo *u, int slab, nbep_stamp s)
     slab_log *l = log_of(u, slab);
     /* in the slab's time order (one stamp twice: a tie the caller's order breaks) */
     assert(l->n_rec == 0 || !nbep_stamp_before(s, l->rec[l->n_rec - 1].s));
-    if (!room_for_one((void **)&l->rec, &l->cap_rec, l->n_rec, sizeof *l->rec))
+    if (!nbep_room_for_one((void **)&l->rec, &l->cap_rec, l->n_rec, sizeof *l->rec))
         return false;
     l->rec[l->n_rec++] = (record){.s = s, .keep0 = l->n_keep, .sent0 = l->n_sent};
     return true;
@@ -108,7 +93,7 @@ bool nbep_undo_keep(nbep_undo *u, int slab, uint32_t i, const void *state)
 {
     slab_log *l = log_of(u, slab);
     assert(l->n_rec > 0);
-    if (!room_for_one((void **)&l->keep, &l->cap_keep, l->n_keep, u->stride))
+    if (!nbep_room_for_one((void **)&l->keep, &l->cap_keep, l->n_keep, u->stride))
         return false;
     unsigned char *k = l->keep + l->n_keep++ * u->stride;
     const uint64_t sphere = i;
@@ -121,7 +106,7 @@ bool nbep_undo_sent_one(nbep_undo *u, int slab, const nbep_undo_sent *m)
 {
     slab_log *l = log_of(u, slab);
     assert(l->n_rec > 0);
-    if (!room_for_one((void **)&l->sent, &l->cap_sent, l->n_sent, sizeof *l->sent))
+    if (!nbep_room_for_one((void **)&l->sent, &l->cap_sent, l->n_sent, sizeof *l->sent))
         return false;
     l->sent[l->n_sent++] = *m;
     return true;
@@ -147,6 +132,15 @@ size_t nbep_undo_back_to(nbep_undo *u, int slab, nbep_stamp s, nbep_undo_restore
         undone++;
     }
     return undone;
+}
+
+bool nbep_undo_last(const nbep_undo *u, int slab, nbep_stamp *s)
+{
+    const slab_log *l = log_of(u, slab);
+    if (l->n_rec == 0)
+        return false;
+    *s = l->rec[l->n_rec - 1].s;
+    return true;
 }
 
 size_t nbep_undo_count(const nbep_undo *u, int slab)

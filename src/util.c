@@ -81,6 +81,21 @@ void nbep_free_aligned(void *p)
     free(p);
 }
 
+bool nbep_room_for_one(void **p, size_t *cap, size_t n, size_t elem)
+{
+    if (n < *cap)
+        return true;
+    const size_t grown = *cap ? 2 * *cap : 64;
+    if (grown > SIZE_MAX / elem)
+        return false;
+    void *q = realloc(*p, grown * elem);
+    if (!q)
+        return false;
+    *p = q;
+    *cap = grown;
+    return true;
+}
+
 static char *suffixed(const char *path, const char *suffix)
 {
     char *p = malloc(strlen(path) + strlen(suffix) + 1);

@@ -31,6 +31,7 @@
 #include "nbep/nblist.h"
 #include "nbep/slabcal.h"
 #include "nbep/undo.h"
+#include "nbep/warp.h"
 #include "nbep/versions.h"
 #include "nbep/vec3.h"
 #include "evloop_impl.h"
@@ -838,6 +839,134 @@ static void test_mail_allocates_what_it_estimates_and_refuses_whole(void **state
     refuse_each("mail", calls, "no memory for the slabs' mail", mail_try);
 }
 
+/* A model for the scheduler (warp.h): two slabs, each an event a time unit on its one item,
+ * which sends the other slab its count; enough to grow every array warp.c keeps. */
+typedef struct {
+    double next[2];
+    uint64_t count[2];
+    uint64_t seen[2];
+} pingpong;
+
+static nbep_warp *pp_warp; /* the one the model's handlers keep and send through */
+
+static bool pp_next(void *u, int slab, nbep_stamp *s)
+{
+    const pingpong *p = u;
+    *s = (nbep_stamp){p->next[slab], (uint64_t)slab};
+    return true;
+}
+
+static void pp_handle(void *u, int slab, nbep_stamp s)
+{
+    (void)s;
+    pingpong *p = u;
+    const uint64_t kept[2] = {p->count[slab], 0};
+    if (!nbep_warp_keep(pp_warp, slab, (uint32_t)slab, kept))
+        return;
+    p->count[slab]++;
+    p->next[slab] += 1.0;
+    (void)nbep_warp_send(pp_warp, slab, 1 - slab, (uint32_t)(1 - slab), &p->count[slab]);
+}
+
+static void pp_apply(void *u, int slab, int from, nbep_stamp s, uint32_t item, const void *data)
+{
+    (void)from, (void)s, (void)item;
+    pingpong *p = u;
+    const uint64_t kept[2] = {p->count[slab], p->seen[slab]};
+    if (nbep_warp_keep(pp_warp, slab, (uint32_t)slab, kept))
+        memcpy(&p->seen[slab], data, sizeof p->seen[slab]);
+}
+
+static void pp_restore(void *u, int slab, uint32_t item, const void *state)
+{
+    (void)item;
+    pingpong *p = u;
+    uint64_t kept[2];
+    memcpy(kept, state, sizeof kept);
+    p->count[slab] = kept[0];
+    p->seen[slab] = kept[1];
+    p->next[slab] = 1.0 + (double)kept[0];
+}
+
+static const nbep_warp_ops pp_ops = {pp_next, pp_handle, pp_apply, pp_restore};
+
+static nbep_status warp_try(nbep_diag *d, bool *made)
+{
+    nbep_warp *w = NULL;
+    pingpong p = {{1.0, 1.0}, {0, 0}, {0, 0}};
+    const nbep_status st = nbep_warp_create(2, 16, 8, 4, &pp_ops, &p, &w, d);
+    *made = w != NULL;
+    nbep_warp_destroy(&w);
+    return st;
+}
+
+/* Two windows of the ping-pong, slab 0 held to one action a turn (so slab 1 runs ahead and goes
+ * back); false when a window took past a bound of turns (a hang). */
+static bool pp_run(nbep_warp *w)
+{
+    for (int win = 1; win <= 2; win++) {
+        nbep_warp_open(w, 150.0 * win);
+        bool done[2] = {false, false};
+        for (long turn = 0; !(done[0] && done[1]); turn++) {
+            if (turn > 1000000)
+                return false;
+            done[1] = done[1] || nbep_warp_run(w, 1, 7);
+            done[0] = done[0] || nbep_warp_run(w, 0, 1);
+        }
+    }
+    return true;
+}
+
+/* The scheduler (warp.h): each of create's allocations refused in turn fails it whole; each
+ * allocation of a run (its queues, outboxes and logs growing) refused in turn fails the window
+ * (nbep_warp_failed), which still ends: no hang, nothing leaked. */
+static void test_the_scheduler_refuses_whole_and_fails_a_window_without_hanging(void **state)
+{
+    (void)state;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    count_start();
+    bool made = false;
+    assert_int_equal(warp_try(&d, &made), NBEP_OK);
+    const size_t calls = n_calls;
+    assert_true(made);
+    assert_int_equal(count_stop(), 0);
+    nbep_diag_fini(&d);
+    refuse_each("the scheduler", calls, "nbep: no memory for the", warp_try);
+    /* a whole run: how many allocations it makes, then each refused */
+    pingpong p = {{1.0, 1.0}, {0, 0}, {0, 0}};
+    nbep_diag_init(&d);
+    count_start();
+    assert_int_equal(nbep_warp_create(2, 16, 8, 4, &pp_ops, &p, &pp_warp, &d), NBEP_OK);
+    const size_t made_calls = n_calls;
+    assert_true(pp_run(pp_warp));
+    const size_t run_calls = n_calls - made_calls;
+    assert_false(nbep_warp_failed(pp_warp));
+    assert_int_equal(p.count[0] + p.count[1], 2 * 299);
+    assert_true(nbep_warp_tally_of(pp_warp, 0).rollbacks +
+                    nbep_warp_tally_of(pp_warp, 1).rollbacks >
+                0);
+    nbep_warp_destroy(&pp_warp);
+    assert_int_equal(count_stop(), 0);
+    assert_true(run_calls >= 5);
+    for (size_t k = 1; k <= run_calls; k++) {
+        p = (pingpong){{1.0, 1.0}, {0, 0}, {0, 0}};
+        count_start();
+        assert_int_equal(nbep_warp_create(2, 16, 8, 4, &pp_ops, &p, &pp_warp, &d), NBEP_OK);
+        fail_call = n_calls + k;
+        const bool ended = pp_run(pp_warp);
+        fail_call = 0;
+        const bool failed = nbep_warp_failed(pp_warp);
+        nbep_warp_destroy(&pp_warp);
+        const size_t left = count_stop();
+        if (!ended || !failed || left != 0)
+            fail_msg("the scheduler's run, allocation %zu of %zu refused: %s, %s, %zu bytes left",
+                     k, run_calls, ended ? "ended" : "hung", failed ? "failed" : "not failed",
+                     left);
+    }
+    nbep_diag_fini(&d);
+}
+
 static nbep_status undo_try(nbep_diag *d, bool *made)
 {
     nbep_undo *u = NULL;
@@ -972,6 +1101,7 @@ int main(void)
         cmocka_unit_test(test_versions_allocate_what_they_estimate_and_refuse_whole),
         cmocka_unit_test(test_mail_allocates_what_it_estimates_and_refuses_whole),
         cmocka_unit_test(test_undo_logs_refuse_whole_and_grow_or_change_nothing),
+        cmocka_unit_test(test_the_scheduler_refuses_whole_and_fails_a_window_without_hanging),
         cmocka_unit_test(test_a_run_whose_slab_cannot_grow_stops_with_the_step_named),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

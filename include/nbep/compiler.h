@@ -60,6 +60,11 @@ static inline size_t nbep_round8(size_t n)
 void *nbep_alloc_aligned(size_t n, size_t size);
 void nbep_free_aligned(void *p);
 
+/* Room for one more element of `elem` bytes past the n in *p (room for *cap of them), the room
+ * doubled from 64 as needed (realloc); false, nothing changed, when no memory could be had. The
+ * slabs' logs and queues (undo.c, warp.c) grow so. */
+bool nbep_room_for_one(void **p, size_t *cap, size_t n, size_t elem);
+
 /* Asks the kernel to back the whole huge pages within [p, p + bytes) by huge pages
  * (transparent huge pages, madvise mode; nothing where it has none): the engines' arrays are
  * read at random, one sphere here and one there, and with small pages nearly each miss of the
