@@ -4088,6 +4088,12 @@ MUTANTS = [
     ("warp-input-stamp-not-now", "src/warp.c",
      "        s->now = in->h.stamp;",
      "        (void)0;", ["test_warp"], None),
+    ("undo-keep-room-number-unwritten", "src/undo.c",
+     "    memcpy(k, &sphere, sizeof sphere);\n    return k + sizeof sphere;",
+     "    (void)sphere;\n    return k + sizeof sphere;", ["test_undo"], None),
+    ("warp-keep-room-failure-unsaid", "src/warp.c",
+     "    if (!room)\n        give_up(w);\n    return room;",
+     "    return room;", ["test_warp", "test_memory_plan"], None),
 ]
 
 

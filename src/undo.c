@@ -89,16 +89,24 @@ bool nbep_undo_begin(nbep_undo *u, int slab, nbep_stamp s)
     return true;
 }
 
-bool nbep_undo_keep(nbep_undo *u, int slab, uint32_t i, const void *state)
+void *nbep_undo_keep_room(nbep_undo *u, int slab, uint32_t i)
 {
     slab_log *l = log_of(u, slab);
     assert(l->n_rec > 0);
     if (!nbep_room_for_one((void **)&l->keep, &l->cap_keep, l->n_keep, u->stride))
-        return false;
+        return NULL;
     unsigned char *k = l->keep + l->n_keep++ * u->stride;
     const uint64_t sphere = i;
     memcpy(k, &sphere, sizeof sphere);
-    memcpy(k + sizeof sphere, state, u->size);
+    return k + sizeof sphere;
+}
+
+bool nbep_undo_keep(nbep_undo *u, int slab, uint32_t i, const void *state)
+{
+    void *room = nbep_undo_keep_room(u, slab, i);
+    if (!room)
+        return false;
+    memcpy(room, state, u->size);
     return true;
 }
 

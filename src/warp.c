@@ -414,6 +414,14 @@ bool nbep_warp_keep(nbep_warp *w, int slab, uint32_t item, const void *state)
     return false;
 }
 
+void *nbep_warp_keep_room(nbep_warp *w, int slab, uint32_t item)
+{
+    void *room = nbep_undo_keep_room(w->undo, slab, item);
+    if (!room)
+        give_up(w);
+    return room;
+}
+
 bool nbep_warp_send(nbep_warp *w, int slab, int to, uint32_t item, const void *data)
 {
     slab_state *s = &w->s[slab];

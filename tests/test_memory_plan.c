@@ -860,9 +860,11 @@ static void pp_handle(void *u, int slab, nbep_stamp s)
 {
     (void)s;
     pingpong *p = u;
-    const uint64_t kept[2] = {p->count[slab], 0};
-    if (!nbep_warp_keep(pp_warp, slab, (uint32_t)slab, kept))
+    uint64_t *kept = nbep_warp_keep_room(pp_warp, slab, (uint32_t)slab); /* (apply copies in) */
+    if (!kept)
         return;
+    kept[0] = p->count[slab];
+    kept[1] = p->seen[slab];
     p->count[slab]++;
     p->next[slab] += 1.0;
     (void)nbep_warp_send(pp_warp, slab, 1 - slab, (uint32_t)(1 - slab), &p->count[slab]);

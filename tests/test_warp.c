@@ -75,8 +75,13 @@ static void keep(toy *x, int slab, uint32_t item)
     if (!x->warp)
         return;
     const world *W = &x->w[slab];
-    ring_state s = item == SITES_MAX ? (ring_state){W->events, 0.0}
-                                 : (ring_state){W->val[item], W->next[item]};
+    if (item == SITES_MAX) { /* the count written in place, a site copied in: both ways */
+        ring_state *room = nbep_warp_keep_room(x->warp, slab, item);
+        assert_non_null(room);
+        *room = (ring_state){W->events, 0.0};
+        return;
+    }
+    const ring_state s = {W->val[item], W->next[item]};
     assert_true(nbep_warp_keep(x->warp, slab, item, &s));
 }
 

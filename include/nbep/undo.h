@@ -59,6 +59,9 @@ void nbep_undo_destroy(nbep_undo **u);
 NBEP_MUST_CHECK bool nbep_undo_begin(nbep_undo *u, int slab, nbep_stamp s);
 /* Its current event is about to change sphere i, now in `state`: kept. False as for begin. */
 NBEP_MUST_CHECK bool nbep_undo_keep(nbep_undo *u, int slab, uint32_t i, const void *state);
+/* The same, the state written by the caller in place: the room for it (size bytes, 8-byte
+ * aligned, valid until the slab's next keep), or NULL as keep's false. */
+void *nbep_undo_keep_room(nbep_undo *u, int slab, uint32_t i);
 /* Its current event sent message m. False as for begin. */
 NBEP_MUST_CHECK bool nbep_undo_sent_one(nbep_undo *u, int slab, const nbep_undo_sent *m);
 

@@ -84,6 +84,10 @@ bool nbep_warp_run(nbep_warp *w, int slab, size_t budget);
 /* Inside handle or apply on slab: item, now in `state` (state_size bytes), is about to change.
  * False when no memory could be had (the window fails: nbep_warp_failed). */
 bool nbep_warp_keep(nbep_warp *w, int slab, uint32_t item, const void *state);
+/* The same, the state written by the model in place (one copy fewer): the room for it
+ * (state_size bytes, 8-byte aligned, to be filled before the next keep), or NULL as keep's
+ * false. */
+void *nbep_warp_keep_room(nbep_warp *w, int slab, uint32_t item);
 /* Inside handle or apply on slab: sends slab `to` (another) `data` (msg_size bytes) about its
  * item, stamped with the event (or message) acted on. False as for keep. */
 bool nbep_warp_send(nbep_warp *w, int slab, int to, uint32_t item, const void *data);

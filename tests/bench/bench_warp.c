@@ -65,10 +65,10 @@ static void keep(model *x, int slab, size_t item)
     if (!x->warp)
         return;
     const world *W = &x->w[slab];
-    const ring_state s = item == x->sites ? (ring_state){W->events, 0.0}
-                                          : (ring_state){W->val[item], W->next[item]};
-    if (!nbep_warp_keep(x->warp, slab, (uint32_t)item, &s))
+    ring_state *s = nbep_warp_keep_room(x->warp, slab, (uint32_t)item);
+    if (!s)
         abort();
+    *s = item == x->sites ? (ring_state){W->events, 0.0} : (ring_state){W->val[item], W->next[item]};
 }
 
 static void send(model *x, int slab, int to, size_t item, ring_note n)
