@@ -374,16 +374,12 @@ bool nbep_warp_run(nbep_warp *w, int slab, size_t budget)
     slab_state *s = &w->s[slab];
     slab_arg a = {w, slab};
     for (size_t b = 0; b < budget; b++) {
-        if (s->idle) {
-            if (nbep_mail_quiet(w->mail))
-                return true;
-        } else {
-            post(w, slab);
-        }
+        if (s->idle && nbep_mail_quiet(w->mail))
+            return true;
         if (nbep_mail_take(w->mail, slab, on_mail, &a) > 0)
             s->idle = false; /* as mail.c made it: busy again */
         if (!s->idle) {
-            post(w, slab); /* a rollback's cancels, at once */
+            post(w, slab); /* the outbox, a rollback's cancels with it */
             /* No further ahead while mail waits for room: a slab that ran on would pile up
              * messages its receiver cannot take yet, and the cancels its rollbacks send would
              * wait behind them while the receivers act on what they cancel (a ping-pong of two
@@ -406,20 +402,20 @@ bool nbep_warp_run(nbep_warp *w, int slab, size_t budget)
     return false;
 }
 
-bool nbep_warp_keep(nbep_warp *w, int slab, uint32_t item, const void *state)
-{
-    if (nbep_undo_keep(w->undo, slab, item, state))
-        return true;
-    give_up(w);
-    return false;
-}
-
 void *nbep_warp_keep_room(nbep_warp *w, int slab, uint32_t item)
 {
     void *room = nbep_undo_keep_room(w->undo, slab, item);
     if (!room)
         give_up(w);
     return room;
+}
+
+bool nbep_warp_keep(nbep_warp *w, int slab, uint32_t item, const void *state)
+{
+    void *room = nbep_warp_keep_room(w, slab, item);
+    if (room)
+        memcpy(room, state, w->state_size);
+    return room != NULL;
 }
 
 bool nbep_warp_send(nbep_warp *w, int slab, int to, uint32_t item, const void *data)
