@@ -37,12 +37,19 @@
  * its high-numbered end) is past what a stamp holds; its maker is told (nbep_cascade_made). */
 #define NBEP_CASCADE_DEPTH 8
 
+/* A level of a stamp: an entry's calendar key and item, and the times it was made again */
+typedef struct nbep_cascade_level {
+    uint64_t key;
+    uint32_t item, again;
+} nbep_cascade_level;
+
+/* Only the first `depth` levels are read (nor written, where a stamp is made: a root touches
+ * its first 32 bytes). */
 typedef struct nbep_cascade {
     double t;
-    uint32_t depth;                    /* levels in use, 1 to NBEP_CASCADE_DEPTH */
-    uint64_t key[NBEP_CASCADE_DEPTH];   /* from the root; each level's (key, item) */
-    uint32_t item[NBEP_CASCADE_DEPTH];  /* before the one above it */
-    uint32_t again[NBEP_CASCADE_DEPTH]; /* the times the level's entry was made again */
+    uint32_t depth; /* levels in use, 1 to NBEP_CASCADE_DEPTH */
+    nbep_cascade_level level[NBEP_CASCADE_DEPTH]; /* from the root; each (key, item) before
+                                                     the one above it */
 } nbep_cascade;
 
 /* The stamp of item's entry (t, key) made at an earlier time than t, or by nothing (the setup's
