@@ -294,7 +294,7 @@ bool nbep_versions_cancel(nbep_versions *v, uint32_t i, nbep_stamp s, uint64_t *
     for (uint32_t k = atomic_load_explicit(&sl->head, memory_order_relaxed); k;
          k = atomic_load_explicit(&node_at(v, k)->prev, memory_order_relaxed)) {
         node *nd = node_at(v, k);
-        if (nd->s.t == s.t && nd->s.key == s.key &&
+        if (nbep_stamp_same(nd->s, s) &&
             !atomic_load_explicit(&nd->dead, memory_order_relaxed)) {
             atomic_store_explicit(&nd->dead, 1, memory_order_seq_cst); /* (a) */
             *roll = readers_after(sl, s.t);

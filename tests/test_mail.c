@@ -71,7 +71,7 @@ static void test_mail_comes_whole_in_the_order_sent(void **state)
         uint64_t ids[5];
         for (int k = 0; k < 5; k++) {
             const double data[3] = {k, 10.0 * k + window, -0.5 * k};
-            assert_true(nbep_mail_send(m, sent[k].from, 1, (nbep_stamp){sent[k].t, 100u + k},
+            assert_true(nbep_mail_send(m, sent[k].from, 1, nbep_stamp_at(sent[k].t, 100u + k, 0),
                                        sent[k].sphere, data, &ids[k]));
         }
         assert_int_equal(ids[0], 1);
@@ -79,7 +79,7 @@ static void test_mail_comes_whole_in_the_order_sent(void **state)
         assert_int_equal(ids[3], 3);
         assert_int_equal(ids[1], 1);
         assert_int_equal(ids[4], 2);
-        assert_true(nbep_mail_cancel(m, 0, 1, ids[2], (nbep_stamp){0.75, 102}, 7));
+        assert_true(nbep_mail_cancel(m, 0, 1, ids[2], nbep_stamp_at(0.75, 102, 0), 7));
         got g = {.n = 0};
         assert_int_equal(nbep_mail_take(m, 1, keep, &g), 6);
         assert_int_equal(g.n, 6);
@@ -87,7 +87,7 @@ static void test_mail_comes_whole_in_the_order_sent(void **state)
             assert_int_equal(g.h[k].from, sent[k].from);
             assert_int_equal(g.h[k].id, ids[k]);
             assert_int_equal(g.h[k].sphere, sent[k].sphere);
-            assert_true(g.h[k].stamp.t == sent[k].t && g.h[k].stamp.key == 100u + k);
+            assert_true(g.h[k].stamp.t == sent[k].t && g.h[k].stamp.level[0].key == 100u + k);
             assert_int_equal(g.h[k].cancel, 0);
             assert_true(g.has_data[k]);
             assert_true(g.data[k][0] == k && g.data[k][1] == 10.0 * k + window &&
@@ -97,7 +97,7 @@ static void test_mail_comes_whole_in_the_order_sent(void **state)
         assert_int_equal(g.h[5].from, 0);
         assert_int_equal(g.h[5].id, ids[2]);
         assert_int_equal(g.h[5].sphere, 7);
-        assert_true(g.h[5].stamp.t == 0.75 && g.h[5].stamp.key == 102);
+        assert_true(g.h[5].stamp.t == 0.75 && g.h[5].stamp.level[0].key == 102);
         assert_false(g.has_data[5]);
         got none = {.n = 0};
         assert_int_equal(nbep_mail_take(m, 1, keep, &none), 0);
@@ -127,15 +127,15 @@ static void test_a_full_box_refuses_and_takes_again_once_emptied(void **state)
         for (int k = 0; k < fill; k++) {
             const double data[3] = {lap, k, 0.0};
             uint64_t id = 0;
-            assert_true(nbep_mail_send(m, 0, 1, (nbep_stamp){lap, (uint64_t)k}, 1, data, &id));
+            assert_true(nbep_mail_send(m, 0, 1, nbep_stamp_at(lap, (uint64_t)k, 0), 1, data, &id));
             assert_int_equal(id, next++);
         }
         if (fill == 8) {
             const double data[3] = {-1.0, -1.0, -1.0};
             uint64_t id = 77;
-            assert_false(nbep_mail_send(m, 0, 1, (nbep_stamp){lap, 99}, 1, data, &id));
+            assert_false(nbep_mail_send(m, 0, 1, nbep_stamp_at(lap, 99, 0), 1, data, &id));
             assert_int_equal(id, 77);
-            assert_false(nbep_mail_cancel(m, 0, 1, next - 1, (nbep_stamp){lap, 7}, 1));
+            assert_false(nbep_mail_cancel(m, 0, 1, next - 1, nbep_stamp_at(lap, 7, 0), 1));
         }
         got g = {.n = 0};
         assert_int_equal(nbep_mail_take(m, 1, keep, &g), (size_t)fill);
@@ -154,9 +154,9 @@ static void test_a_full_box_refuses_and_takes_again_once_emptied(void **state)
     const double data[3] = {0};
     got g = {.n = 0};
     for (int lap = 0; lap < 3; lap++) {
-        assert_true(nbep_mail_send(m, 1, 0, (nbep_stamp){lap, 0}, 0, data, NULL));
-        assert_true(nbep_mail_send(m, 1, 0, (nbep_stamp){lap, 1}, 0, data, NULL));
-        assert_false(nbep_mail_send(m, 1, 0, (nbep_stamp){lap, 2}, 0, data, NULL));
+        assert_true(nbep_mail_send(m, 1, 0, nbep_stamp_at(lap, 0, 0), 0, data, NULL));
+        assert_true(nbep_mail_send(m, 1, 0, nbep_stamp_at(lap, 1, 0), 0, data, NULL));
+        assert_false(nbep_mail_send(m, 1, 0, nbep_stamp_at(lap, 2, 0), 0, data, NULL));
         assert_int_equal(nbep_mail_take(m, 0, keep, &g), 2);
     }
     assert_int_equal(g.n, 6);
@@ -180,15 +180,15 @@ static void test_a_window_is_done_when_every_slab_is_idle_and_all_mail_taken(voi
     nbep_mail_idle(m, 0);
     nbep_mail_idle(m, 2);
     assert_false(nbep_mail_quiet(m)); /* slab 1 busy */
-    assert_true(nbep_mail_send(m, 1, 0, (nbep_stamp){1.0, 0}, 4, data, NULL));
-    assert_true(nbep_mail_send(m, 1, 0, (nbep_stamp){1.5, 0}, 4, data, NULL));
+    assert_true(nbep_mail_send(m, 1, 0, nbep_stamp_at(1.0, 0, 0), 4, data, NULL));
+    assert_true(nbep_mail_send(m, 1, 0, nbep_stamp_at(1.5, 0, 0), 4, data, NULL));
     nbep_mail_idle(m, 1);
     assert_false(nbep_mail_quiet(m)); /* mail for slab 0 untaken */
     assert_int_equal(nbep_mail_take(m, 2, keep, &g), 0);
     assert_false(nbep_mail_quiet(m));
     assert_int_equal(nbep_mail_take(m, 0, keep, &g), 2);
     assert_false(nbep_mail_quiet(m)); /* slab 0 busy again with it */
-    assert_true(nbep_mail_send(m, 0, 2, (nbep_stamp){2.0, 0}, 5, data, NULL));
+    assert_true(nbep_mail_send(m, 0, 2, nbep_stamp_at(2.0, 0, 0), 5, data, NULL));
     nbep_mail_idle(m, 0);
     assert_false(nbep_mail_quiet(m)); /* slab 2's mail */
     assert_int_equal(nbep_mail_take(m, 2, keep, &g), 1);
@@ -201,9 +201,9 @@ static void test_a_window_is_done_when_every_slab_is_idle_and_all_mail_taken(voi
     /* a busy slab's take: it stays busy, and its idle ends the window */
     nbep_mail_open(m);
     assert_false(nbep_mail_quiet(m));
-    assert_true(nbep_mail_send(m, 0, 1, (nbep_stamp){0.0, 0}, 1, data, NULL));
-    assert_true(nbep_mail_send(m, 2, 1, (nbep_stamp){0.0, 1}, 1, data, NULL));
-    assert_true(nbep_mail_send(m, 2, 1, (nbep_stamp){0.0, 2}, 1, data, NULL));
+    assert_true(nbep_mail_send(m, 0, 1, nbep_stamp_at(0.0, 0, 0), 1, data, NULL));
+    assert_true(nbep_mail_send(m, 2, 1, nbep_stamp_at(0.0, 1, 0), 1, data, NULL));
+    assert_true(nbep_mail_send(m, 2, 1, nbep_stamp_at(0.0, 2, 0), 1, data, NULL));
     nbep_mail_idle(m, 0);
     nbep_mail_idle(m, 2);
     assert_int_equal(nbep_mail_take(m, 1, keep, &g), 3);
@@ -339,14 +339,14 @@ static void pass_on(slab_run *r, double token, double hops)
     to += to >= r->slab;
     const double data[3] = {token, hops, token * 3.0 + hops};
     uint64_t id;
-    while (!nbep_mail_send(r->m, r->slab, to, (nbep_stamp){hops, (uint64_t)token},
+    while (!nbep_mail_send(r->m, r->slab, to, nbep_stamp_at(hops, (uint64_t)token, 0),
                            (uint32_t)token, data, &id)) {
         (void)nbep_mail_take(r->m, r->slab, take_token, r);
         sched_yield();
     }
     atomic_fetch_add_explicit(&sent_all, 1, memory_order_relaxed);
     if (next_rand(&r->rng) % 8 == 0) {
-        while (!nbep_mail_cancel(r->m, r->slab, to, id, (nbep_stamp){hops, (uint64_t)token},
+        while (!nbep_mail_cancel(r->m, r->slab, to, id, nbep_stamp_at(hops, (uint64_t)token, 0),
                                  (uint32_t)token))
             (void)nbep_mail_take(r->m, r->slab, take_token, r);
         atomic_fetch_add_explicit(&cancelled_all, 1, memory_order_relaxed);

@@ -787,7 +787,7 @@ static void test_versions_allocate_what_they_estimate_and_refuse_whole(void **st
     nbep_versions_open(v);
     char data[SIZE] = {0};
     uint64_t roll = 0;
-    const nbep_stamp s0 = {1.0, 0}, s1 = {2.0, 0};
+    const nbep_stamp s0 = nbep_stamp_at(1.0, 0, 0), s1 = nbep_stamp_at(2.0, 0, 0);
     fail_call = n_calls + 1; /* slab 1's list's first room */
     assert_true(nbep_versions_put(v, 1, 7, s0, data, &roll));
     fail_call = n_calls + 1; /* slab 2's */
@@ -852,7 +852,7 @@ static nbep_warp *pp_warp; /* the one the model's handlers keep and send through
 static bool pp_next(void *u, int slab, nbep_stamp *s)
 {
     const pingpong *p = u;
-    *s = (nbep_stamp){p->next[slab], (uint64_t)slab};
+    *s = nbep_stamp_at(p->next[slab], (uint64_t)slab, 0);
     return true;
 }
 
@@ -1004,9 +1004,9 @@ static void test_undo_logs_refuse_whole_and_grow_or_change_nothing(void **state)
     char data[96] = {0};
     /* each first growth refused, then taken */
     fail_call = n_calls + 1;
-    assert_false(nbep_undo_begin(u, 2, (nbep_stamp){1.0, 0}));
+    assert_false(nbep_undo_begin(u, 2, nbep_stamp_at(1.0, 0, 0)));
     assert_int_equal(nbep_undo_count(u, 2), 0);
-    assert_true(nbep_undo_begin(u, 2, (nbep_stamp){1.0, 0}));
+    assert_true(nbep_undo_begin(u, 2, nbep_stamp_at(1.0, 0, 0)));
     fail_call = n_calls + 1;
     assert_false(nbep_undo_keep(u, 2, 7, data));
     assert_true(nbep_undo_keep(u, 2, 7, data));
@@ -1016,15 +1016,15 @@ static void test_undo_logs_refuse_whole_and_grow_or_change_nothing(void **state)
     assert_true(nbep_undo_sent_one(u, 2, &m));
     /* past the first room of 64: grown, and a growth refused changes nothing */
     for (uint32_t k = 1; k < 64; k++) {
-        assert_true(nbep_undo_begin(u, 2, (nbep_stamp){1.0 + k, 0}));
+        assert_true(nbep_undo_begin(u, 2, nbep_stamp_at(1.0 + k, 0, 0)));
         assert_true(nbep_undo_keep(u, 2, k, data));
     }
     fail_call = n_calls + 1;
-    assert_false(nbep_undo_begin(u, 2, (nbep_stamp){100.0, 0}));
+    assert_false(nbep_undo_begin(u, 2, nbep_stamp_at(100.0, 0, 0)));
     fail_call = 0;
     assert_int_equal(nbep_undo_count(u, 2), 64);
     uint32_t sum = 0;
-    assert_int_equal(nbep_undo_back_to(u, 2, (nbep_stamp){0.0, 0}, undo_restore, undo_cancel,
+    assert_int_equal(nbep_undo_back_to(u, 2, nbep_stamp_at(0.0, 0, 0), undo_restore, undo_cancel,
                                        &sum),
                      64);
     assert_int_equal(sum, 64 * 1000 + 7 + 63 * 64 / 2 + 5);

@@ -79,23 +79,23 @@ static void test_a_rollback_undoes_from_its_stamp_newest_first(void **state)
 {
     (void)state;
     nbep_undo *u = made(2);
-    assert_true(nbep_undo_begin(u, 0, (nbep_stamp){0.5, 1}));
+    assert_true(nbep_undo_begin(u, 0, nbep_stamp_at(0.5, 1, 0)));
     keep2(u, 0, 9, 9.0, 9.5);
-    assert_true(nbep_undo_begin(u, 1, (nbep_stamp){1.0, 7}));
+    assert_true(nbep_undo_begin(u, 1, nbep_stamp_at(1.0, 7, 0)));
     keep2(u, 1, 4, 40.0, 41.0);
     sent(u, 1, 1, 0);
-    assert_true(nbep_undo_begin(u, 1, (nbep_stamp){2.0, 5}));
+    assert_true(nbep_undo_begin(u, 1, nbep_stamp_at(2.0, 5, 0)));
     keep2(u, 1, 3, 30.0, 31.0);
     keep2(u, 1, 5, 50.0, 51.0);
     keep2(u, 1, 3, 32.0, 33.0);
     sent(u, 1, 2, 0);
     sent(u, 1, 3, 0);
-    assert_true(nbep_undo_begin(u, 1, (nbep_stamp){3.0, 1}));
+    assert_true(nbep_undo_begin(u, 1, nbep_stamp_at(3.0, 1, 0)));
     keep2(u, 1, 5, 52.0, 53.0);
     assert_int_equal(nbep_undo_count(u, 1), 3);
 
     seen w = {.world = NULL};
-    assert_int_equal(nbep_undo_back_to(u, 1, (nbep_stamp){2.0, 5}, restore, cancel, &w), 2);
+    assert_int_equal(nbep_undo_back_to(u, 1, nbep_stamp_at(2.0, 5, 0), restore, cancel, &w), 2);
     assert_int_equal(nbep_undo_count(u, 1), 1);
     assert_int_equal(nbep_undo_count(u, 0), 1);
     const uint32_t order[4] = {5, 3, 5, 3};
@@ -110,23 +110,23 @@ static void test_a_rollback_undoes_from_its_stamp_newest_first(void **state)
     assert_int_equal(w.cancelled[1], 3);
 
     seen none = {.world = NULL};
-    assert_int_equal(nbep_undo_back_to(u, 1, (nbep_stamp){1.0, 8}, restore, cancel, &none), 0);
+    assert_int_equal(nbep_undo_back_to(u, 1, nbep_stamp_at(1.0, 8, 0), restore, cancel, &none), 0);
     assert_int_equal(none.n_restored + none.n_cancelled, 0);
-    assert_int_equal(nbep_undo_back_to(u, 1, (nbep_stamp){1.0, 7}, restore, cancel, &none), 1);
+    assert_int_equal(nbep_undo_back_to(u, 1, nbep_stamp_at(1.0, 7, 0), restore, cancel, &none), 1);
     assert_int_equal(none.n_restored, 1);
     assert_int_equal(none.restored[0], 4);
     assert_int_equal(none.n_cancelled, 1);
     assert_int_equal(none.cancelled[0], 1);
     assert_int_equal(nbep_undo_count(u, 1), 0);
-    assert_int_equal(nbep_undo_back_to(u, 1, (nbep_stamp){-1.0, 0}, restore, cancel, &none), 0);
+    assert_int_equal(nbep_undo_back_to(u, 1, nbep_stamp_at(-1.0, 0, 0), restore, cancel, &none), 0);
 
     /* the window's end forgets slab 0's too; the log takes new events after */
     nbep_undo_clear(u);
     assert_int_equal(nbep_undo_count(u, 0), 0);
-    assert_true(nbep_undo_begin(u, 0, (nbep_stamp){0.1, 0}));
+    assert_true(nbep_undo_begin(u, 0, nbep_stamp_at(0.1, 0, 0)));
     keep2(u, 0, 2, 1.0, 2.0);
     seen after = {.world = NULL};
-    assert_int_equal(nbep_undo_back_to(u, 0, (nbep_stamp){0.0, 0}, restore, cancel, &after), 1);
+    assert_int_equal(nbep_undo_back_to(u, 0, nbep_stamp_at(0.0, 0, 0), restore, cancel, &after), 1);
     assert_int_equal(after.n_restored, 1);
     assert_int_equal(after.restored[0], 2);
     nbep_undo_destroy(&u);
@@ -181,7 +181,7 @@ static void test_random_events_and_rollbacks_match_a_plain_model(void **state)
             e->t = clock[sl];
             e->key = step;
             memcpy(e->before, world, sizeof e->before);
-            assert_true(nbep_undo_begin(u, sl, (nbep_stamp){e->t, e->key}));
+            assert_true(nbep_undo_begin(u, sl, nbep_stamp_at(e->t, e->key, 0)));
             const int changes = 1 + (int)(next_rand(&rng) % 3);
             for (int c = 0; c < changes; c++) {
                 const uint32_t i =
@@ -203,17 +203,16 @@ static void test_random_events_and_rollbacks_match_a_plain_model(void **state)
             const size_t at = n ? (size_t)(next_rand(&rng) % (n + 2)) : 0;
             nbep_stamp to;
             if (at == 0 || n == 0)
-                to = (nbep_stamp){-1.0, 0};
+                to = nbep_stamp_at(-1.0, 0, 0);
             else if (at > n)
-                to = (nbep_stamp){clock[sl] + 1.0, 0};
+                to = nbep_stamp_at(clock[sl] + 1.0, 0, 0);
             else if (next_rand(&rng) % 2)
-                to = (nbep_stamp){ev[sl][at - 1].t, ev[sl][at - 1].key};
+                to = nbep_stamp_at(ev[sl][at - 1].t, ev[sl][at - 1].key, 0);
             else /* just after a record's stamp, same time */
-                to = (nbep_stamp){ev[sl][at - 1].t, ev[sl][at - 1].key + 1};
+                to = nbep_stamp_at(ev[sl][at - 1].t, ev[sl][at - 1].key + 1, 0);
             /* the model: the first record at or after `to` */
             size_t first = n;
-            while (first > 0 && !nbep_stamp_before((nbep_stamp){ev[sl][first - 1].t,
-                                                                ev[sl][first - 1].key},
+            while (first > 0 && !nbep_stamp_before(nbep_stamp_at(ev[sl][first - 1].t, ev[sl][first - 1].key, 0),
                                                    to))
                 first--;
             seen w = {.world = world};

@@ -32,7 +32,7 @@ static state fill(uint32_t i, nbep_stamp s)
 {
     state st;
     for (int k = 0; k < DOUBLES; k++)
-        st.x[k] = s.t * (k + 1) + (double)(s.key % 9973) + 0.5 * i + k;
+        st.x[k] = s.t * (k + 1) + (double)(s.level[0].key % 9973) + 0.5 * i + k;
     return st;
 }
 
@@ -44,7 +44,7 @@ static bool whole(const state *st, uint32_t i, nbep_stamp s)
 
 static nbep_stamp at(double t, uint64_t key)
 {
-    return (nbep_stamp){t, key};
+    return nbep_stamp_at(t, key, 0);
 }
 
 static nbep_versions *make(size_t n, int slabs, size_t room)
@@ -88,9 +88,9 @@ static nbep_stamp get(nbep_versions *v, int reader, uint32_t i, nbep_stamp when)
 
 static void same(nbep_stamp a, nbep_stamp b)
 {
-    if (a.t != b.t || a.key != b.key)
-        fail_msg("stamp (%.17g, %llu), wanted (%.17g, %llu)", a.t, (unsigned long long)a.key,
-                 b.t, (unsigned long long)b.key);
+    if (!nbep_stamp_same(a, b))
+        fail_msg("stamp (%.17g, %llu), wanted (%.17g, %llu)", a.t, (unsigned long long)a.level[0].key,
+                 b.t, (unsigned long long)b.level[0].key);
 }
 
 static void reads_by_stamp(void **state_)
@@ -406,7 +406,7 @@ static void against_model(void **state_)
             if (kind == 0 && m[i].n < MV) {
                 bool dup = false; /* one live version a stamp: a re-handled event cancels first */
                 for (int k = 0; k < m[i].n; k++)
-                    dup |= m[i].live[k] && m[i].s[k].t == s.t && m[i].s[k].key == s.key;
+                    dup |= m[i].live[k] && nbep_stamp_same(m[i].s[k], s);
                 if (dup)
                     continue;
                 const uint64_t want = m[i].read && m[i].read_t >= s.t ? m[i].readers : 0;
@@ -418,7 +418,7 @@ static void against_model(void **state_)
                 const nbep_stamp c = m[i].s[lcg(&x) % (uint64_t)m[i].n];
                 int had = -1;
                 for (int k = 0; k < m[i].n; k++)
-                    if (m[i].live[k] && m[i].s[k].t == c.t && m[i].s[k].key == c.key)
+                    if (m[i].live[k] && nbep_stamp_same(m[i].s[k], c))
                         had = k;
                 uint64_t roll = 0;
                 assert_int_equal(nbep_versions_cancel(v, i, c, &roll), had >= 0);
@@ -563,7 +563,7 @@ static void *reader_main(void *arg)
 static const put_op *put_of(const stress *z, uint32_t i, nbep_stamp s)
 {
     for (int k = 0; k < z->n_puts; k++)
-        if (z->puts[k].i == i && z->puts[k].s.t == s.t && z->puts[k].s.key == s.key)
+        if (z->puts[k].i == i && nbep_stamp_same(z->puts[k].s, s))
             return &z->puts[k];
     return NULL;
 }
@@ -600,7 +600,7 @@ static int check_window(const stress *z, char *why, size_t len, long *too_soon)
             }
             if (wrong && bad++ == 0)
                 snprintf(why, len, "reader %d, read %d of sphere %u at (%.17g, %llu): %s", r,
-                         k, q->i, q->at.t, (unsigned long long)q->at.key, wrong);
+                         k, q->i, q->at.t, (unsigned long long)q->at.level[0].key, wrong);
         }
     }
     return bad;

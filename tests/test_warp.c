@@ -50,9 +50,18 @@ enum { SITES_MAX = 96, SLABS_MAX = 4 };
 
 typedef struct {
     uint64_t val[SITES_MAX];
-    double next[SITES_MAX]; /* the owner's: each own site's next event */
-    uint64_t events;        /* events that stand (item SITES_MAX) */
+    double next[SITES_MAX];       /* the owner's: each own site's next event */
+    nbep_stamp stamp[SITES_MAX];  /* and its cascade stamp (cascade.h) */
+    uint64_t events;              /* events that stand (item SITES_MAX) */
+    uint64_t ties, back;          /* (the serial run's) events at their maker's time; and
+                                     those before the event before in (time, site) */
 } world;
+
+/* What a keep saves of a site: its value, its next event's time and stamp */
+typedef struct {
+    ring_state rs;
+    nbep_stamp stamp;
+} toy_state;
 
 typedef struct {
     int slabs;
@@ -76,12 +85,12 @@ static void keep(toy *x, int slab, uint32_t item)
         return;
     const world *W = &x->w[slab];
     if (item == SITES_MAX) { /* the count written in place, a site copied in: both ways */
-        ring_state *room = nbep_warp_keep_room(x->warp, slab, item);
+        toy_state *room = nbep_warp_keep_room(x->warp, slab, item);
         assert_non_null(room);
-        *room = (ring_state){W->events, 0.0};
+        room->rs = (ring_state){W->events, 0.0};
         return;
     }
-    const ring_state s = {W->val[item], W->next[item]};
+    const toy_state s = {{W->val[item], W->next[item]}, W->stamp[item]};
     assert_true(nbep_warp_keep(x->warp, slab, item, &s));
 }
 
@@ -107,10 +116,23 @@ static void send_copies(toy *x, int slab, int k, int except)
     }
 }
 
-/* Site k's event at time t, on slab's world (the serial run: slab 0 of one). */
-static void site_event(toy *x, int slab, int k, double t)
+/* Site q's entry at time `next`, made by the event stamped *now: its stamp */
+static nbep_stamp made_by(const nbep_stamp *now, double next, int q)
+{
+    nbep_stamp c;
+    assert_true(nbep_cascade_made(now, next, (uint64_t)q, (uint32_t)q, &c));
+    return c;
+}
+
+/* Site k's event, stamped *now (its time now->t), on slab's world (the serial run: slab 0 of
+ * one). One write across in two is a tie: the site written has its next event at once, at the
+ * same time (before the writer's in (time, site) where it is the lower site: the serial loop
+ * takes it next, and its stamp is the writer's child), while the cascade stays within the
+ * stamps' depth (the same in every run: the serial run stamps its events too). */
+static void site_event(toy *x, int slab, int k, const nbep_stamp *now)
 {
     world *W = &x->w[slab];
+    const double t = now->t;
     const int km = (k + x->sites - 1) % x->sites, kp = (k + 1) % x->sites;
     const uint64_t v = ring_mix(W->val[km], W->val[k], W->val[kp], t);
     keep(x, slab, SITES_MAX);
@@ -118,6 +140,7 @@ static void site_event(toy *x, int slab, int k, double t)
     keep(x, slab, (uint32_t)k);
     W->val[k] = v;
     W->next[k] = t + ring_gap(v);
+    W->stamp[k] = made_by(now, W->next[k], k);
     send_copies(x, slab, k, -1);
     if ((v & 3) != 0)
         return;
@@ -125,7 +148,9 @@ static void site_event(toy *x, int slab, int k, double t)
     const uint64_t vq = ring_mix(v, W->val[q], RING_SALT, t);
     keep(x, slab, (uint32_t)q);
     W->val[q] = vq;
-    W->next[q] = t + ring_gap(vq);
+    const bool tie = (vq & 8) && now->depth < NBEP_CASCADE_DEPTH - 1;
+    W->next[q] = tie ? t : t + ring_gap(vq);
+    W->stamp[q] = made_by(now, W->next[q], q);
     if (owner(x, q) == slab)
         send_copies(x, slab, q, -1);
     else
@@ -133,17 +158,16 @@ static void site_event(toy *x, int slab, int k, double t)
 }
 
 /* The earliest own site's event of slab's world: (time, site). */
-static bool earliest(const toy *x, int slab, int *site, nbep_stamp *s)
+/* The earliest own site's event of slab's world by its stamp (the scheduler's order): in *s */
+static bool earliest(const toy *x, int slab, nbep_stamp *s)
 {
     const world *W = &x->w[slab];
     bool any = false;
     for (int k = 0; k < x->sites; k++) {
         if (owner(x, k) != slab)
             continue;
-        const nbep_stamp c = {W->next[k], (uint64_t)k};
-        if (!any || nbep_stamp_before(c, *s)) {
-            *s = c;
-            *site = k;
+        if (!any || nbep_stamp_before(W->stamp[k], *s)) {
+            *s = W->stamp[k];
             any = true;
         }
     }
@@ -152,8 +176,7 @@ static bool earliest(const toy *x, int slab, int *site, nbep_stamp *s)
 
 static bool toy_next(void *u, int slab, nbep_stamp *s)
 {
-    int k = 0;
-    return earliest(u, slab, &k, s);
+    return earliest(u, slab, s);
 }
 
 static void toy_handle(void *u, int slab, nbep_stamp s)
@@ -162,7 +185,7 @@ static void toy_handle(void *u, int slab, nbep_stamp s)
     if (slab == x->slow) /* held back a little each event: the others run ahead */
         for (volatile int spin = 0; spin < 2000; spin++)
             ;
-    site_event(x, slab, (int)s.key, s.t);
+    site_event(x, slab, (int)s.level[s.depth - 1].item, &s);
     if (atomic_fetch_add_explicit(&x->progress, 1, memory_order_relaxed) > x->most) {
         fputs("test_warp: the slabs handled far more events than the serial run: going round in "
               "circles\n", stderr);
@@ -172,7 +195,6 @@ static void toy_handle(void *u, int slab, nbep_stamp s)
 
 static void toy_apply(void *u, int slab, int from, nbep_stamp s, uint32_t item, const void *data)
 {
-    (void)s;
     toy *x = u;
     ring_note n;
     memcpy(&n, data, sizeof n);
@@ -182,6 +204,7 @@ static void toy_apply(void *u, int slab, int from, nbep_stamp s, uint32_t item, 
     if (n.kind == RING_WRITE) { /* its own site, written across the face */
         assert_int_equal(owner(x, (int)item), slab);
         W->next[item] = n.next;
+        W->stamp[item] = made_by(&s, n.next, (int)item); /* made by the writer's event */
         send_copies(x, slab, (int)item, from);
     } else {
         assert_int_not_equal(owner(x, (int)item), slab);
@@ -191,15 +214,16 @@ static void toy_apply(void *u, int slab, int from, nbep_stamp s, uint32_t item, 
 static void toy_restore(void *u, int slab, uint32_t item, const void *state)
 {
     toy *x = u;
-    ring_state s;
+    toy_state s;
     memcpy(&s, state, sizeof s);
     world *W = &x->w[slab];
     if (item == SITES_MAX) {
-        W->events = s.val;
+        W->events = s.rs.val;
         return;
     }
-    W->val[item] = s.val;
-    W->next[item] = s.next;
+    W->val[item] = s.rs.val;
+    W->next[item] = s.rs.next;
+    W->stamp[item] = s.stamp;
 }
 
 static const nbep_warp_ops toy_ops = {toy_next, toy_handle, toy_apply, toy_restore};
@@ -214,19 +238,41 @@ static void start(toy *x, int slabs, int sites, uint64_t seed)
     for (int k = 0; k < sites; k++) {
         x->w[0].val[k] = ring_mix64(seed * SITES_MAX + (uint64_t)k);
         x->w[0].next[k] = ring_gap(x->w[0].val[k]);
+        x->w[0].stamp[k] = nbep_stamp_at(x->w[0].next[k], (uint64_t)k, (uint32_t)k);
     }
     for (int s = 1; s < slabs; s++)
         x->w[s] = x->w[0];
 }
 
-/* The serial run to t_end: one world, the earliest event first. */
+/* The serial run to t_end: one world, the earliest event first by (time, site), as a calendar
+ * takes them (its stamps made all the same, for the ties' depth; and checked: they rise). */
 static void serial(toy *x, double t_end)
 {
     assert_int_equal(x->slabs, 1);
-    int k = 0;
-    nbep_stamp s = {0.0, 0};
-    while (earliest(x, 0, &k, &s) && s.t < t_end)
-        site_event(x, 0, k, s.t);
+    world *W = &x->w[0];
+    double t_last = 0.0;
+    int k_last = -1;
+    nbep_stamp last = nbep_stamp_at(0.0, 0, 0);
+    for (;;) {
+        int k = 0;
+        for (int j = 1; j < x->sites; j++)
+            if (W->next[j] < W->next[k])
+                k = j;
+        if (!(W->next[k] < t_end))
+            return;
+        const nbep_stamp now = W->stamp[k];
+        if (k_last >= 0) {
+            W->ties += W->next[k] == t_last;
+            W->back += W->next[k] == t_last && k < k_last;
+        }
+        if (k_last >= 0 && !nbep_stamp_before(last, now))
+            fail_msg("the serial run's event at site %d (t %.17g) is stamped at or before the one "
+                     "before it (site %d)", k, now.t, k_last);
+        last = now;
+        t_last = W->next[k];
+        k_last = k;
+        site_event(x, 0, k, &now);
+    }
 }
 
 /* The slabs' worlds against the serial one: each site as its owner has it, each copy a slab
@@ -271,7 +317,7 @@ static nbep_warp *made(toy *x, size_t room)
     nbep_warp *w = NULL;
     nbep_diag d;
     nbep_diag_init(&d);
-    assert_int_equal(nbep_warp_create(x->slabs, sizeof(ring_state), sizeof(ring_note), room, &toy_ops,
+    assert_int_equal(nbep_warp_create(x->slabs, sizeof(toy_state), sizeof(ring_note), room, &toy_ops,
                                       x, &w, &d),
                      NBEP_OK);
     nbep_diag_fini(&d);
@@ -285,6 +331,7 @@ static void test_turns_give_the_serial_results(void **state)
 {
     (void)state;
     nbep_warp_tally all = {0};
+    uint64_t ties = 0, back = 0;
     /* under valgrind (for the memory alone) a seed's two rings */
     const uint64_t runs = nbep_test_scaled(12, 2);
     for (uint64_t run = 0; run < runs; run++) {
@@ -293,6 +340,8 @@ static void test_turns_give_the_serial_results(void **state)
         toy ref;
         start(&ref, 1, sites, seed);
         serial(&ref, T_END);
+        ties += ref.w[0].ties;
+        back += ref.w[0].back;
         for (int slabs = 1; slabs <= SLABS_MAX; slabs++) {
             toy *x = malloc(sizeof *x);
             assert_non_null(x);
@@ -336,10 +385,14 @@ static void test_turns_give_the_serial_results(void **state)
     }
     fprintf(stderr,
             "turns: %llu events handled, %llu messages sent, %llu acted on, %llu rollbacks "
-            "undoing %llu, %llu cancels\n",
+            "undoing %llu, %llu cancels; the serial runs' events at the time of the one before "
+            "%llu, %llu of them at a lower site\n",
             (unsigned long long)all.handled, (unsigned long long)all.sent,
             (unsigned long long)all.applied, (unsigned long long)all.rollbacks,
-            (unsigned long long)all.undone, (unsigned long long)all.cancels);
+            (unsigned long long)all.undone, (unsigned long long)all.cancels,
+            (unsigned long long)ties, (unsigned long long)back);
+    /* the serial order went back in (time, site), where only cascade stamps order it */
+    assert_true(back > 0);
     /* the held-back slab made the others run ahead: every kind of going back happened */
     assert_true(all.rollbacks > 0);
     assert_true(all.undone > all.rollbacks);

@@ -63,7 +63,24 @@ nbep_cascade nbep_cascade_root(double t, uint64_t key, uint32_t item);
 bool nbep_cascade_made(const nbep_cascade *by, double t, uint64_t key, uint32_t item,
                        nbep_cascade *out);
 
-/* Negative, zero or positive as a comes before, with, or after b in the serial loop's order. */
-int nbep_cascade_cmp(const nbep_cascade *a, const nbep_cascade *b);
+/* Negative, zero or positive as a comes before, with, or after b in the serial loop's order
+ * (inline: the scheduler compares stamps on every input, and a call took copies of both) */
+static inline int nbep_cascade_cmp(const nbep_cascade *a, const nbep_cascade *b)
+{
+    if (a->t != b->t)
+        return a->t < b->t ? -1 : 1;
+    const uint32_t d = a->depth < b->depth ? a->depth : b->depth;
+    for (uint32_t k = 0; k < d; k++) {
+        const nbep_cascade_level *x = &a->level[k], *y = &b->level[k];
+        if (x->key != y->key)
+            return x->key < y->key ? -1 : 1;
+        if (x->item != y->item)
+            return x->item < y->item ? -1 : 1;
+        if (x->again != y->again)
+            return x->again < y->again ? -1 : 1;
+    }
+    /* one is the other's path extended: the maker first */
+    return (a->depth > b->depth) - (a->depth < b->depth);
+}
 
 #endif

@@ -20,9 +20,9 @@
  *
  * Threads: track, untrack, open and close on one thread while no other call runs; put,
  * cancel and newest for a sphere only on its owner's thread, with the owner's slab (its pool
- * of versions); read on any thread at any time in a window. Stamps order as the calendar's
- * events do: by time, then key (nbep_stamp_before); one event puts one version a sphere, and
- * a re-handled event cancels its old one first.
+ * of versions); read on any thread at any time in a window. Stamps order as the serial loop
+ * hands events out (cascade stamps: nbep_stamp_before); one event puts one version a sphere,
+ * and a re-handled event cancels its old one first.
  *
  * Memory: 4 bytes a sphere, 24 a sphere tracked (room for them doubled as outgrown), and
  * `room` versions a slab of `size` bytes and 24 more (nbep_versions_bytes); and a list a slab
@@ -38,22 +38,30 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "nbep/calendar.h"
+#include "nbep/cascade.h"
 #include "nbep/compiler.h"
 #include "nbep/status.h"
 
-/* The stamp of the event that wrote a version: its time and pair key, the calendar's order. */
-typedef struct {
-    double t;
-    uint64_t key;
-} nbep_stamp;
+/* The stamp of an event (of the one that wrote a version, sent a message, or a slab's log
+ * records): a cascade stamp (cascade.h), which orders events as the cells engine's serial loop
+ * hands them out, ties in time included. One event's stamp on each of its spheres' versions is
+ * the same. */
+typedef nbep_cascade nbep_stamp;
 
-/* The calendar's order less its last tie (the item): one event's stamp on each of its
- * spheres' versions is the same. */
+/* The stamp of item's entry (t, key) that no event at time t made: a root (cascade.h). */
+static inline nbep_stamp nbep_stamp_at(double t, uint64_t key, uint32_t item)
+{
+    return nbep_cascade_root(t, key, item);
+}
+
 static inline bool nbep_stamp_before(nbep_stamp a, nbep_stamp b)
 {
-    return nbep_calendar_before((nbep_calendar_entry){.time = a.t, .key = a.key},
-                                (nbep_calendar_entry){.time = b.t, .key = b.key});
+    return nbep_cascade_cmp(&a, &b) < 0;
+}
+
+static inline bool nbep_stamp_same(nbep_stamp a, nbep_stamp b)
+{
+    return nbep_cascade_cmp(&a, &b) == 0;
 }
 
 typedef struct nbep_versions nbep_versions;

@@ -6,9 +6,10 @@
  * A slab keeps a world of its own (the model's: its own items and copies of the others' that
  * its events read) and changes it only by its own events and by messages. An event may send a
  * message to another slab about one of that slab's items or copies (a write across a face, or
- * a copy's new state), stamped with the event (nbep_stamp: time, key). A slab acts on its events
- * and messages in stamp order, a message before an event of the same stamp; a message that
- * comes stamped at or before what the slab has already done (a straggler) sends the slab back:
+ * a copy's new state), stamped with the event (nbep_stamp, a cascade stamp: cascade.h). A slab
+ * acts on its events and messages in stamp order, a message before an event of the same stamp;
+ * a message that comes stamped at or before what the slab has already done (a straggler) sends
+ * the slab back:
  * it undoes everything it did from that stamp on, newest first (its items restored from the
  * states kept before each change, its messages cancelled, the messages it had acted on put back
  * to act on again), then goes on. A cancel of a message not yet acted on drops it; of one acted

@@ -66,7 +66,7 @@ static double one_thread(unsigned long messages)
     const double t0 = now();
     for (unsigned long k = 0; k < messages; k += BATCH) {
         for (int b = 0; b < BATCH; b++)
-            if (!nbep_mail_send(m, 0, 1, (nbep_stamp){(double)b, k}, (uint32_t)b, data, NULL))
+            if (!nbep_mail_send(m, 0, 1, nbep_stamp_at((double)b, k, 0), (uint32_t)b, data, NULL))
                 abort();
         if (nbep_mail_take(m, 1, add_up, &t) != BATCH)
             abort();
@@ -92,7 +92,7 @@ static void *exchange(void *arg)
     side *s = arg;
     double data[SIZE / sizeof(double)] = {1.0};
     for (unsigned long k = 0; k < s->messages; k++) {
-        while (!nbep_mail_send(s->m, s->slab, 1 - s->slab, (nbep_stamp){1.0, k}, 0, data, NULL))
+        while (!nbep_mail_send(s->m, s->slab, 1 - s->slab, nbep_stamp_at(1.0, k, 0), 0, data, NULL))
             (void)nbep_mail_take(s->m, s->slab, add_up, &s->t);
         if (k % BATCH == BATCH - 1)
             (void)nbep_mail_take(s->m, s->slab, add_up, &s->t);

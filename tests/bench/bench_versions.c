@@ -403,7 +403,7 @@ static void module_write(const nbep_evloop_ops *ops, void *u, uint32_t k, double
     uint64_t roll = 0;
     if (!nbep_versions_tracked(ver.mod, k))
         ver.untracked++;
-    else if (!nbep_versions_put(ver.mod, owner, k, (nbep_stamp){t, key}, &m, &roll))
+    else if (!nbep_versions_put(ver.mod, owner, k, nbep_stamp_at(t, key, 0), &m, &roll))
         ver.full++, ver.end_window = true;
     else
         ver.puts++, ver.sent_back += roll != 0;
@@ -508,7 +508,7 @@ static void read_list(const nbep_evloop *e, uint32_t k, const uint32_t *js, size
         if (ver.mod) {
             nbep_evloop_motion got;
             if (nbep_versions_tracked(ver.mod, j)) {
-                (void)nbep_versions_read(ver.mod, by, j, (nbep_stamp){t, key}, &got, NULL);
+                (void)nbep_versions_read(ver.mod, by, j, nbep_stamp_at(t, key, 0), &got, NULL);
                 ver.module_reads++;
             } else {
                 ver.untracked++;
@@ -555,7 +555,7 @@ static void ver_event(nbep_evloop *e, const evl_ws *w, const void *evp,
         ver.moved[ver.n_moved++] = i; /* its centre moved: tracked or not, from the next window */
     const double cx = e->cells.m[i].at.x;
     const int by = slab_of(cx);
-    if (ver.mod && !nbep_undo_begin(ver.undo, by, (nbep_stamp){t, key})) {
+    if (ver.mod && !nbep_undo_begin(ver.undo, by, nbep_stamp_at(t, key, 0))) {
         ver.failed = true;
         return;
     }

@@ -134,13 +134,13 @@ static bool m_next(void *u, int slab, nbep_stamp *s)
     nbep_calendar_entry c;
     if (!nbep_calendar_first(x->w[slab].cal, &c))
         return false;
-    *s = (nbep_stamp){c.time, c.key};
+    *s = nbep_stamp_at(c.time, c.key, 0);
     return true;
 }
 
 static void m_handle(void *u, int slab, nbep_stamp s)
 {
-    site_event(u, slab, (size_t)s.key, s.t);
+    site_event(u, slab, (size_t)s.level[0].key, s.t);
 }
 
 static void m_apply(void *u, int slab, int from, nbep_stamp s, uint32_t item, const void *data)
