@@ -12,9 +12,9 @@
  * reaction changed) from the event's own, and checks that the stamps of the events handled
  * never go back, while their (time, key) do (the scenes must meet such ties: a test that met
  * none could not fail). The scenes: the cradle (the same results on 1, 2 and 4 threads, the
- * last sphere leaving at the speed that came in), a periodic fluid at phi = 0.35 from a lattice
- * and an e = 0 pile under tilted gravity (test_late_roots's, where roots behind now are common),
- * on one thread. */
+ * last sphere leaving at the speed that came in), a periodic fluid at phi = 0.35 from a lattice,
+ * an e = 0 pile under tilted gravity (test_late_roots's, where roots behind now are common) and
+ * a pile settling at e = 0.6 with the TC model, on one thread. */
 #include <stdint.h>
 #include <stdlib.h>
 
@@ -77,8 +77,8 @@ static void look_handled(const nbep_evloop *e, const void *wv, const void *evv)
     const uint64_t key = nbep__evloop_slot_key(i, ev);
     /* the stamp made with this entry, if it is the entry predicted then */
     const nbep_cascade *s = &stamp_of[i];
-    const bool same_entry =
-        known[i] && s->t == t && s->level[s->depth - 1].key == key && s->level[s->depth - 1].item == i;
+    const nbep_cascade_level *at = known[i] ? &s->level[s->depth - 1] : NULL;
+    const bool same_entry = at && s->t == t && at->key == key && at->item == i;
     const nbep_cascade now = same_entry ? *s : nbep_cascade_root(t, key, i);
     if (handled > 0) {
         back += t < last_t || (t == last_t && key < last_key);

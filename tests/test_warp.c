@@ -53,8 +53,6 @@ typedef struct {
     double next[SITES_MAX];       /* the owner's: each own site's next event */
     nbep_stamp stamp[SITES_MAX];  /* and its cascade stamp (cascade.h) */
     uint64_t events;              /* events that stand (item SITES_MAX) */
-    uint64_t ties, back;          /* (the serial run's) events at their maker's time; and
-                                     those before the event before in (time, site) */
 } world;
 
 /* What a keep saves of a site: its value, its next event's time and stamp */
@@ -71,6 +69,8 @@ typedef struct {
     nbep_warp *warp; /* NULL: the serial run */
     int slow;        /* the slab whose events spin (threads), -1: none */
     atomic_ulong progress;
+    uint64_t ties, back; /* the serial run's events at the time of the one before; and those of
+                            them at a lower site (before it in (time, site)) */
 } toy;
 
 static int owner(const toy *x, int k)
@@ -148,7 +148,7 @@ static void site_event(toy *x, int slab, int k, const nbep_stamp *now)
     const uint64_t vq = ring_mix(v, W->val[q], RING_SALT, t);
     keep(x, slab, (uint32_t)q);
     W->val[q] = vq;
-    const bool tie = (vq & 8) && now->depth < NBEP_CASCADE_DEPTH - 1;
+    const bool tie = (vq & 8) && now->depth < NBEP_CASCADE_DEPTH; /* made: one level deeper */
     W->next[q] = tie ? t : t + ring_gap(vq);
     W->stamp[q] = made_by(now, W->next[q], q);
     if (owner(x, q) == slab)
@@ -157,7 +157,6 @@ static void site_event(toy *x, int slab, int k, const nbep_stamp *now)
         send(x, slab, owner(x, q), (uint32_t)q, (ring_note){vq, W->next[q], RING_WRITE});
 }
 
-/* The earliest own site's event of slab's world: (time, site). */
 /* The earliest own site's event of slab's world by its stamp (the scheduler's order): in *s */
 static bool earliest(const toy *x, int slab, nbep_stamp *s)
 {
@@ -250,27 +249,24 @@ static void serial(toy *x, double t_end)
 {
     assert_int_equal(x->slabs, 1);
     world *W = &x->w[0];
-    double t_last = 0.0;
-    int k_last = -1;
     nbep_stamp last = nbep_stamp_at(0.0, 0, 0);
-    for (;;) {
+    for (uint64_t taken = 0;; taken++) {
         int k = 0;
         for (int j = 1; j < x->sites; j++)
             if (W->next[j] < W->next[k])
                 k = j;
         if (!(W->next[k] < t_end))
             return;
-        const nbep_stamp now = W->stamp[k];
-        if (k_last >= 0) {
-            W->ties += W->next[k] == t_last;
-            W->back += W->next[k] == t_last && k < k_last;
+        const nbep_stamp now = W->stamp[k]; /* its time W->next[k] */
+        if (taken > 0) {
+            const int k_last = (int)last.level[last.depth - 1].item;
+            x->ties += now.t == last.t;
+            x->back += now.t == last.t && k < k_last;
+            if (!nbep_stamp_before(last, now))
+                fail_msg("the serial run's event at site %d (t %.17g) is stamped at or before "
+                         "the one before it (site %d)", k, now.t, k_last);
         }
-        if (k_last >= 0 && !nbep_stamp_before(last, now))
-            fail_msg("the serial run's event at site %d (t %.17g) is stamped at or before the one "
-                     "before it (site %d)", k, now.t, k_last);
         last = now;
-        t_last = W->next[k];
-        k_last = k;
         site_event(x, 0, k, &now);
     }
 }
@@ -340,8 +336,8 @@ static void test_turns_give_the_serial_results(void **state)
         toy ref;
         start(&ref, 1, sites, seed);
         serial(&ref, T_END);
-        ties += ref.w[0].ties;
-        back += ref.w[0].back;
+        ties += ref.ties;
+        back += ref.back;
         for (int slabs = 1; slabs <= SLABS_MAX; slabs++) {
             toy *x = malloc(sizeof *x);
             assert_non_null(x);

@@ -33,8 +33,9 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-/* The most keys in a stamp: a cascade at one time this deep (a cradle of 9 spheres struck at
- * its high-numbered end) is past what a stamp holds; its maker is told (nbep_cascade_made). */
+/* The most levels in a stamp: a cascade at one time deeper than this (a cradle of 10 spheres
+ * struck at its high-numbered end: 5 gave 4 levels) is past what a stamp holds; its maker is
+ * told (nbep_cascade_made). */
 #define NBEP_CASCADE_DEPTH 8
 
 /* A level of a stamp: an entry's calendar key and item, and the times it was made again */
