@@ -4,21 +4,6 @@
 #include <assert.h>
 #include <string.h>
 
-/* c a root (t, key, item): only its first level written (a whole stamp zeroed and copied cost a
- * made root 17 ns, three times the rest of its work) */
-static void set_root(nbep_cascade *c, double t, uint64_t key, uint32_t item)
-{
-    c->t = t;
-    c->depth = 1;
-    c->level[0] = (nbep_cascade_level){key, item, 0};
-}
-
-nbep_cascade nbep_cascade_root(double t, uint64_t key, uint32_t item)
-{
-    nbep_cascade c;
-    set_root(&c, t, key, item);
-    return c;
-}
 
 /* Whether (key, item) comes before level l of c in the calendar's order at one time */
 static bool before_level(uint64_t key, uint32_t item, const nbep_cascade *c, uint32_t l)
@@ -31,7 +16,7 @@ bool nbep_cascade_made(const nbep_cascade *by, double t, uint64_t key, uint32_t 
 {
     assert(by->depth >= 1 && by->depth <= NBEP_CASCADE_DEPTH && !(t < by->t));
     if (t != by->t) {
-        set_root(out, t, key, item);
+        nbep_cascade_set_root(out, t, key, item);
         return true;
     }
     uint32_t d = by->depth;

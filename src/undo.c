@@ -1,9 +1,10 @@
 /* Each slab's log of what its events changed and sent: see undo.h.
  *
- * Three stacks a slab: the records (a stamp, and where its states and sends begin in the
- * others), the states kept (a sphere's number and its state, `stride` bytes each) and the
- * messages sent. An event's states and sends run from its record's marks to the next record's
- * (or the stacks' tops), so rolling back is popping: no search, no copy. */
+ * Four stacks a slab: the records (a stamp's time and first level, and where its states, sends
+ * and deeper levels begin in the others), the states kept (a sphere's number and its state,
+ * `stride` bytes each), the messages sent, and the levels of stamps past their first. An
+ * event's states and sends run from its record's marks to the next record's (or the stacks'
+ * tops), so rolling back is popping: no search, no copy. */
 #include "nbep/undo.h"
 
 #include <assert.h>
@@ -13,9 +14,16 @@
 
 #include "nbep/compiler.h"
 
+/* A record holds its stamp's time and first level; the levels past the first (a stamp made in
+ * a cascade at one time: few) sit on the slab's stack of deep levels. 56 bytes where the whole
+ * stamp took 160: the records are written once an event, a window's worth of them in a row
+ * (about 5500 an event's slab at the bench's window), so their lines are the log's cost
+ * (bench_warp on one slab, 2026-12-07: docs/optimistic-design.md, *Ties in time*). */
 typedef struct {
-    nbep_stamp s;
-    size_t keep0, sent0; /* its first state and send */
+    double t;
+    uint32_t depth;
+    nbep_cascade_level root;
+    size_t keep0, sent0, deep0; /* its first state, send and deep level */
 } record;
 
 /* a slab's log, on cache lines of its own (its thread's alone) */
@@ -26,6 +34,8 @@ typedef struct {
     size_t n_keep, cap_keep;
     nbep_undo_sent *sent;
     size_t n_sent, cap_sent;
+    nbep_cascade_level *deep; /* the records' levels past the first, in the records' order */
+    size_t n_deep, cap_deep;
 } slab_log;
 
 struct nbep_undo {
@@ -66,6 +76,7 @@ void nbep_undo_destroy(nbep_undo **u)
             free((*u)->logs[k].rec);
             free((*u)->logs[k].keep);
             free((*u)->logs[k].sent);
+            free((*u)->logs[k].deep);
         }
     nbep_free_aligned((*u)->logs);
     free(*u);
@@ -78,14 +89,44 @@ static slab_log *log_of(const nbep_undo *u, int slab)
     return &u->logs[slab];
 }
 
+/* Record r's stamp, whole (its levels past depth left unset: never read). */
+static nbep_stamp stamp_of(const slab_log *l, const record *r)
+{
+    nbep_stamp s;
+    s.t = r->t;
+    s.depth = r->depth;
+    s.level[0] = r->root;
+    if (r->depth > 1)
+        memcpy(&s.level[1], &l->deep[r->deep0], (r->depth - 1) * sizeof *l->deep);
+    return s;
+}
+
+/* Record r's stamp against s, as nbep_cascade_cmp orders them: by time, read in place (stamps
+ * of one time are rare but in cascades), else whole. */
+static int rec_cmp(const slab_log *l, const record *r, const nbep_stamp *s)
+{
+    if (r->t != s->t)
+        return r->t < s->t ? -1 : 1;
+    const nbep_stamp whole = stamp_of(l, r);
+    return nbep_cascade_cmp(&whole, s);
+}
+
 bool nbep_undo_begin(nbep_undo *u, int slab, nbep_stamp s)
 {
     slab_log *l = log_of(u, slab);
+    assert(s.depth >= 1 && s.depth <= NBEP_CASCADE_DEPTH);
     /* in the slab's time order (one stamp twice: a tie the caller's order breaks) */
-    assert(l->n_rec == 0 || !nbep_stamp_before(s, l->rec[l->n_rec - 1].s));
+    assert(l->n_rec == 0 || rec_cmp(l, &l->rec[l->n_rec - 1], &s) <= 0);
     if (!nbep_room_for_one((void **)&l->rec, &l->cap_rec, l->n_rec, sizeof *l->rec))
         return false;
-    l->rec[l->n_rec++] = (record){.s = s, .keep0 = l->n_keep, .sent0 = l->n_sent};
+    for (uint32_t k = 1; k < s.depth; k++)
+        if (!nbep_room_for_one((void **)&l->deep, &l->cap_deep, l->n_deep + k - 1,
+                               sizeof *l->deep))
+            return false;
+    l->rec[l->n_rec++] = (record){.t = s.t, .depth = s.depth, .root = s.level[0],
+                                  .keep0 = l->n_keep, .sent0 = l->n_sent, .deep0 = l->n_deep};
+    for (uint32_t k = 1; k < s.depth; k++)
+        l->deep[l->n_deep++] = s.level[k];
     return true;
 }
 
@@ -125,7 +166,7 @@ size_t nbep_undo_back_to(nbep_undo *u, int slab, nbep_stamp s, nbep_undo_restore
 {
     slab_log *l = log_of(u, slab);
     size_t undone = 0;
-    while (l->n_rec > 0 && !nbep_stamp_before(l->rec[l->n_rec - 1].s, s)) {
+    while (l->n_rec > 0 && rec_cmp(l, &l->rec[l->n_rec - 1], &s) >= 0) {
         const record *r = &l->rec[--l->n_rec];
         for (size_t q = r->sent0; q < l->n_sent; q++)
             cancel(arg, &l->sent[q]);
@@ -137,6 +178,7 @@ size_t nbep_undo_back_to(nbep_undo *u, int slab, nbep_stamp s, nbep_undo_restore
         }
         l->n_keep = r->keep0;
         l->n_sent = r->sent0;
+        l->n_deep = r->deep0;
         undone++;
     }
     return undone;
@@ -147,7 +189,7 @@ bool nbep_undo_last(const nbep_undo *u, int slab, nbep_stamp *s)
     const slab_log *l = log_of(u, slab);
     if (l->n_rec == 0)
         return false;
-    *s = l->rec[l->n_rec - 1].s;
+    *s = stamp_of(l, &l->rec[l->n_rec - 1]);
     return true;
 }
 
@@ -160,6 +202,6 @@ void nbep_undo_clear(nbep_undo *u)
 {
     for (int k = 0; k < u->slabs; k++) {
         slab_log *l = &u->logs[k];
-        l->n_rec = l->n_keep = l->n_sent = 0;
+        l->n_rec = l->n_keep = l->n_sent = l->n_deep = 0;
     }
 }

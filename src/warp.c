@@ -50,7 +50,8 @@ typedef struct {
     unsigned char *out; /* outgoing, out_stride bytes each; [out_head, n_out) not yet posted */
     size_t out_head, n_out, cap_out;
     uint64_t queued;  /* messages queued this window: the next one's number is one more */
-    nbep_stamp now;   /* the stamp of what the slab is acting on */
+    nbep_stamp now;   /* the stamp of what the slab is acting on (the levels in use: copied
+                       * as deep as they go, nbep_cascade_copy) */
     bool idle;        /* as mail.c has it */
     unsigned spins;   /* idle looks since the last action (nbep_spin_pause's count) */
     nbep_warp_tally tally;
@@ -353,18 +354,18 @@ static bool act(nbep_warp *w, int slab)
         }
         s->done[s->n_done++] = k;
         in->state = IN_DONE;
-        s->now = in->h.stamp;
+        nbep_cascade_copy(&s->now, &in->h.stamp);
         s->tally.applied++;
-        w->ops.apply(w->u, slab, in->h.from, in->h.stamp, in->h.sphere, in + 1);
+        w->ops.apply(w->u, slab, in->h.from, &s->now, in->h.sphere, in + 1);
         return true;
     }
     if (!nbep_undo_begin(w->undo, slab, ev)) {
         give_up(w);
         return false;
     }
-    s->now = ev;
+    nbep_cascade_copy(&s->now, &ev);
     s->tally.handled++;
-    w->ops.handle(w->u, slab, ev);
+    w->ops.handle(w->u, slab, &s->now);
     return true;
 }
 

@@ -856,7 +856,7 @@ static bool pp_next(void *u, int slab, nbep_stamp *s)
     return true;
 }
 
-static void pp_handle(void *u, int slab, nbep_stamp s)
+static void pp_handle(void *u, int slab, const nbep_stamp *s)
 {
     (void)s;
     pingpong *p = u;
@@ -870,7 +870,8 @@ static void pp_handle(void *u, int slab, nbep_stamp s)
     (void)nbep_warp_send(pp_warp, slab, 1 - slab, (uint32_t)(1 - slab), &p->count[slab]);
 }
 
-static void pp_apply(void *u, int slab, int from, nbep_stamp s, uint32_t item, const void *data)
+static void pp_apply(void *u, int slab, int from, const nbep_stamp *s, uint32_t item,
+                     const void *data)
 {
     (void)from, (void)s, (void)item;
     pingpong *p = u;
@@ -990,8 +991,9 @@ static void undo_cancel(void *arg, const nbep_undo_sent *m)
 }
 
 /* The slabs' undo logs (undo.h): each of create's allocations refused in turn fails it whole;
- * each growth of a slab's records, states and sends refused is false and changes nothing (the
- * rollback after it undoes what was logged, no more); destroy frees all the growths. */
+ * each growth of a slab's records, states, sends and stamps' deeper levels refused is false and
+ * changes nothing (the rollback after it undoes what was logged, no more); destroy frees all
+ * the growths. */
 static void test_undo_logs_refuse_whole_and_grow_or_change_nothing(void **state)
 {
     (void)state;
@@ -1021,12 +1023,26 @@ static void test_undo_logs_refuse_whole_and_grow_or_change_nothing(void **state)
     }
     fail_call = n_calls + 1;
     assert_false(nbep_undo_begin(u, 2, nbep_stamp_at(100.0, 0, 0)));
-    fail_call = 0;
     assert_int_equal(nbep_undo_count(u, 2), 64);
+    /* a stamp deeper than a root (a child in a cascade at 100): its records' room grown, then
+     * the first room for its deeper levels refused: false, nothing logged; then taken, and read
+     * back whole */
+    nbep_stamp child;
+    const nbep_stamp parent = nbep_stamp_at(100.0, 9, 9);
+    assert_true(nbep_cascade_made(&parent, 100.0, 3, 1, &child));
+    assert_int_equal(child.depth, 2);
+    fail_call = n_calls + 2;
+    assert_false(nbep_undo_begin(u, 2, child));
+    assert_int_equal(nbep_undo_count(u, 2), 64);
+    fail_call = 0;
+    assert_true(nbep_undo_begin(u, 2, child));
+    nbep_stamp last;
+    assert_true(nbep_undo_last(u, 2, &last));
+    assert_true(nbep_stamp_same(last, child));
     uint32_t sum = 0;
     assert_int_equal(nbep_undo_back_to(u, 2, nbep_stamp_at(0.0, 0, 0), undo_restore, undo_cancel,
                                        &sum),
-                     64);
+                     65);
     assert_int_equal(sum, 64 * 1000 + 7 + 63 * 64 / 2 + 5);
     nbep_undo_destroy(&u);
     assert_int_equal(count_stop(), 0);

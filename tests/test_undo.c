@@ -1,9 +1,11 @@
 /* The slabs' undo logs (src/undo.c): rolling back to a stamp undoes the events stamped at or
  * after it, newest first, each one's messages cancelled in the order sent and its spheres put
  * back in the reverse order kept (a sphere kept twice ends in its first state); then random
- * events and rollbacks on three slabs against a plain model of the world: after every rollback
- * each sphere is as it was before the first event undone, and the cancels are exactly the
- * undone events' messages; bad counts refused with their message. */
+ * events and rollbacks on three slabs against a plain model of the world, stamped as the cells
+ * engine's cascades stamp them (most deeper than a root: the log keeps their levels apart):
+ * after every rollback each sphere is as it was before the first event undone, the cancels are
+ * exactly the undone events' messages, and the log's last stamp is the model's, whole; bad
+ * counts refused with their message. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -16,7 +18,6 @@
 
 #include "nbep/undo.h"
 #include "nbep_test.h"
-#include "nbep_test_scene.h"
 
 enum { SIZE = 16 }; /* two doubles a state */
 
@@ -139,8 +140,7 @@ static void test_a_rollback_undoes_from_its_stamp_newest_first(void **state)
 enum { SLABS = 3, SPHERES = 40, EVENTS_MAX = 400, STEPS = 20000 };
 
 typedef struct {
-    double t;
-    uint64_t key;
+    nbep_stamp s;              /* its stamp: a cascade's (deeper than one level) or a root */
     double before[SPHERES][2]; /* the slab's spheres before it */
     uint64_t sent_from, sent_to; /* its messages' numbers: [from, to) */
 } model_event;
@@ -153,11 +153,27 @@ static uint64_t next_rand(uint64_t *x)
     return *x;
 }
 
+/* The stamp just after s in the serial order: its least extension (or, at the depth bound,
+ * its last level made once more), before every later stamp that is not one of its own. */
+static nbep_stamp just_after(nbep_stamp s)
+{
+    if (s.depth < NBEP_CASCADE_DEPTH)
+        s.level[s.depth++] = (nbep_cascade_level){0, 0, 0};
+    else
+        s.level[s.depth - 1].again++;
+    return s;
+}
+
 /* Each slab owns spheres k, k + SLABS, ...; its events change one to three of them (one maybe
- * twice) and send none to two messages; now and then it rolls back to a random stamp between
- * its records (or before all, or after all), and at random the window ends (clear). After each
- * rollback its spheres are as before the first event undone, and the cancels are the undone
- * events' messages, newest event first, each event's in the order sent. */
+ * twice) and send none to two messages. Most events come at the time of the slab's last one,
+ * stamped as the cells engine's cascades make them (cascade.h: children, siblings, makings
+ * again, up to the depth bound), so most records hold stamps deeper than their first level,
+ * which the log keeps apart; the rest at a later time, as roots. Now and then a slab rolls
+ * back to a random stamp between its records (a record's own, or just after it), before all or
+ * after all; and at random the window ends (clear). After each event and rollback the log's
+ * last stamp is the model's, whole; after each rollback the slab's spheres are as before the
+ * first event undone, and the cancels are the undone events' messages, newest event first,
+ * each event's in the order sent. */
 static void test_random_events_and_rollbacks_match_a_plain_model(void **state)
 {
     (void)state;
@@ -170,18 +186,28 @@ static void test_random_events_and_rollbacks_match_a_plain_model(void **state)
     uint64_t rng = 12345;
     for (int i = 0; i < SPHERES; i++)
         world[2 * i] = world[2 * i + 1] = i;
-    size_t rollbacks = 0, undone_all = 0;
-    const int steps = (int)nbep_test_scaled(STEPS, 2000);
+    size_t rollbacks = 0, undone_all = 0, deep = 0, deepest = 0;
+    /* not scaled down under valgrind (a few hundred milliseconds there): 2000 steps' cascades
+     * stopped at 6 levels */
+    const int steps = STEPS;
     for (int step = 0; step < steps; step++) {
         const int sl = (int)(next_rand(&rng) % SLABS);
         const uint64_t r = next_rand(&rng) % 100;
         if (r < 70 && n_ev[sl] < EVENTS_MAX) { /* an event */
-            clock[sl] += (double)(next_rand(&rng) % 3) * 0.25; /* ties too */
-            model_event *e = &ev[sl][n_ev[sl]++];
-            e->t = clock[sl];
-            e->key = step;
+            const size_t n = n_ev[sl];
+            model_event *e = &ev[sl][n];
+            const uint64_t key = next_rand(&rng) % 16;
+            const uint32_t item = (uint32_t)(next_rand(&rng) % 4);
+            if (n == 0 || next_rand(&rng) % 8 == 0 ||
+                !nbep_cascade_made(&ev[sl][n - 1].s, clock[sl], key, item, &e->s)) {
+                clock[sl] += 0.25;
+                e->s = nbep_stamp_at(clock[sl], key, item);
+            }
+            n_ev[sl]++;
+            deep += e->s.depth > 1;
+            deepest = e->s.depth > deepest ? e->s.depth : deepest;
             memcpy(e->before, world, sizeof e->before);
-            assert_true(nbep_undo_begin(u, sl, nbep_stamp_at(e->t, e->key, 0)));
+            assert_true(nbep_undo_begin(u, sl, e->s));
             const int changes = 1 + (int)(next_rand(&rng) % 3);
             for (int c = 0; c < changes; c++) {
                 const uint32_t i =
@@ -193,7 +219,7 @@ static void test_random_events_and_rollbacks_match_a_plain_model(void **state)
             e->sent_from = next_id[sl];
             const int sends = (int)(next_rand(&rng) % 3);
             for (int c = 0; c < sends; c++) {
-                const nbep_undo_sent m = {.stamp = {e->t, e->key}, .id = next_id[sl]++,
+                const nbep_undo_sent m = {.stamp = e->s, .id = next_id[sl]++,
                                           .sphere = (uint32_t)c, .to = (sl + 1) % SLABS};
                 assert_true(nbep_undo_sent_one(u, sl, &m));
             }
@@ -207,13 +233,12 @@ static void test_random_events_and_rollbacks_match_a_plain_model(void **state)
             else if (at > n)
                 to = nbep_stamp_at(clock[sl] + 1.0, 0, 0);
             else if (next_rand(&rng) % 2)
-                to = nbep_stamp_at(ev[sl][at - 1].t, ev[sl][at - 1].key, 0);
-            else /* just after a record's stamp, same time */
-                to = nbep_stamp_at(ev[sl][at - 1].t, ev[sl][at - 1].key + 1, 0);
+                to = ev[sl][at - 1].s;
+            else
+                to = just_after(ev[sl][at - 1].s);
             /* the model: the first record at or after `to` */
             size_t first = n;
-            while (first > 0 && !nbep_stamp_before(nbep_stamp_at(ev[sl][first - 1].t, ev[sl][first - 1].key, 0),
-                                                   to))
+            while (first > 0 && !nbep_stamp_before(ev[sl][first - 1].s, to))
                 first--;
             seen w = {.world = world};
             const size_t undone = nbep_undo_back_to(u, sl, to, restore, cancel, &w);
@@ -231,7 +256,7 @@ static void test_random_events_and_rollbacks_match_a_plain_model(void **state)
                     }
                 assert_int_equal(q, w.n_cancelled);
                 next_id[sl] = ev[sl][first].sent_from; /* numbers used again, as a slab would */
-                clock[sl] = ev[sl][first].t;
+                clock[sl] = ev[sl][first].s.t;
             } else {
                 assert_int_equal(w.n_restored + w.n_cancelled, 0);
             }
@@ -245,10 +270,21 @@ static void test_random_events_and_rollbacks_match_a_plain_model(void **state)
                 assert_int_equal(nbep_undo_count(u, k), 0);
             }
         }
+        /* the log's last stamp, whole: its time, depth and every level */
+        nbep_stamp last;
+        assert_int_equal(nbep_undo_last(u, sl, &last), n_ev[sl] > 0);
+        if (n_ev[sl] > 0) {
+            const nbep_stamp *m = &ev[sl][n_ev[sl] - 1].s;
+            assert_true(last.t == m->t);
+            assert_int_equal(last.depth, m->depth);
+            assert_memory_equal(last.level, m->level, m->depth * sizeof m->level[0]);
+        }
     }
-    fprintf(stderr, "%d steps: %zu rollbacks, %zu events undone\n", steps, rollbacks,
-            undone_all);
+    fprintf(stderr, "%d steps: %zu rollbacks, %zu events undone, %zu stamps deeper than a "
+                    "root (deepest %zu levels)\n",
+            steps, rollbacks, undone_all, deep, deepest);
     assert_true(undone_all > 0);
+    assert_true(deep > 0 && deepest == NBEP_CASCADE_DEPTH); /* the model reaches the bound */
     nbep_undo_destroy(&u);
 }
 

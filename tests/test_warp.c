@@ -178,13 +178,13 @@ static bool toy_next(void *u, int slab, nbep_stamp *s)
     return earliest(u, slab, s);
 }
 
-static void toy_handle(void *u, int slab, nbep_stamp s)
+static void toy_handle(void *u, int slab, const nbep_stamp *s)
 {
     toy *x = u;
     if (slab == x->slow) /* held back a little each event: the others run ahead */
         for (volatile int spin = 0; spin < 2000; spin++)
             ;
-    site_event(x, slab, (int)s.level[s.depth - 1].item, &s);
+    site_event(x, slab, (int)s->level[s->depth - 1].item, s);
     if (atomic_fetch_add_explicit(&x->progress, 1, memory_order_relaxed) > x->most) {
         fputs("test_warp: the slabs handled far more events than the serial run: going round in "
               "circles\n", stderr);
@@ -192,7 +192,8 @@ static void toy_handle(void *u, int slab, nbep_stamp s)
     }
 }
 
-static void toy_apply(void *u, int slab, int from, nbep_stamp s, uint32_t item, const void *data)
+static void toy_apply(void *u, int slab, int from, const nbep_stamp *s, uint32_t item,
+                      const void *data)
 {
     toy *x = u;
     ring_note n;
@@ -203,7 +204,7 @@ static void toy_apply(void *u, int slab, int from, nbep_stamp s, uint32_t item, 
     if (n.kind == RING_WRITE) { /* its own site, written across the face */
         assert_int_equal(owner(x, (int)item), slab);
         W->next[item] = n.next;
-        W->stamp[item] = made_by(&s, n.next, (int)item); /* made by the writer's event */
+        W->stamp[item] = made_by(s, n.next, (int)item); /* made by the writer's event */
         send_copies(x, slab, (int)item, from);
     } else {
         assert_int_not_equal(owner(x, (int)item), slab);

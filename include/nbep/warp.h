@@ -44,12 +44,13 @@ typedef struct nbep_warp nbep_warp;
 typedef struct nbep_warp_ops {
     /* slab's earliest own event, its stamp in *s; false when it has none */
     bool (*next)(void *u, int slab, nbep_stamp *s);
-    /* handles that event (next's, stamped s): before changing an item, nbep_warp_keep its
-     * state; messages through nbep_warp_send */
-    void (*handle)(void *u, int slab, nbep_stamp s);
+    /* handles that event (next's, stamped *s: valid until it returns): before changing an
+     * item, nbep_warp_keep its state; messages through nbep_warp_send */
+    void (*handle)(void *u, int slab, const nbep_stamp *s);
     /* acts on a message to slab from slab `from`: `data` (msg_size bytes) about `item`, from
-     * the event stamped s; keeps before it changes, as handle (and may send) */
-    void (*apply)(void *u, int slab, int from, nbep_stamp s, uint32_t item, const void *data);
+     * the event stamped *s (as handle's); keeps before it changes, as handle (and may send) */
+    void (*apply)(void *u, int slab, int from, const nbep_stamp *s, uint32_t item,
+                  const void *data);
     /* puts item back to `state` (state_size bytes, as kept) in slab's world; the model's own
      * calendar of events goes back with it */
     void (*restore)(void *u, int slab, uint32_t item, const void *state);

@@ -138,12 +138,13 @@ static bool m_next(void *u, int slab, nbep_stamp *s)
     return true;
 }
 
-static void m_handle(void *u, int slab, nbep_stamp s)
+static void m_handle(void *u, int slab, const nbep_stamp *s)
 {
-    site_event(u, slab, (size_t)s.level[0].key, s.t);
+    site_event(u, slab, (size_t)s->level[0].key, s->t);
 }
 
-static void m_apply(void *u, int slab, int from, nbep_stamp s, uint32_t item, const void *data)
+static void m_apply(void *u, int slab, int from, const nbep_stamp *s, uint32_t item,
+                    const void *data)
 {
     (void)s;
     model *x = u;
