@@ -3996,8 +3996,8 @@ MUTANTS = [
      "    if (!m) {", ["test_memory_plan"], None),
     # the slabs' undo logs (src/undo.c): where a rollback starts, its order, its marks
     ("undo-stamp-equal-kept", "src/undo.c",
-     "    while (l->n_rec > 0 && rec_cmp(l, &l->rec[l->n_rec - 1], &s) >= 0) {",
-     "    while (l->n_rec > 0 && rec_cmp(l, &l->rec[l->n_rec - 1], &s) > 0) {", ["test_undo"],
+     "    while (l->n_rec > 0 && rec_cmp(l, &l->rec[l->n_rec - 1], s) >= 0) {",
+     "    while (l->n_rec > 0 && rec_cmp(l, &l->rec[l->n_rec - 1], s) > 0) {", ["test_undo"],
      None),
     ("undo-restores-in-kept-order", "src/undo.c",
      "        for (size_t q = l->n_keep; q-- > r->keep0;) {",
@@ -4147,7 +4147,7 @@ MUTANTS = [
     # stack of their own; test_undo's cascades reach the depth bound and read the last stamp
     # back whole; test_memory_plan refuses the stack's first growth
     ("undo-deep-levels-unrecorded", "src/undo.c",
-     "        l->deep[l->n_deep++] = s.level[k];",
+     "        l->deep[l->n_deep++] = s->level[k];",
      "        l->n_deep++;", ["test_undo"], None),
     ("undo-deep-from-zero", "src/undo.c",
      "                                  .keep0 = l->n_keep, .sent0 = l->n_sent, .deep0 = l->n_deep};",

@@ -111,22 +111,22 @@ static int rec_cmp(const slab_log *l, const record *r, const nbep_stamp *s)
     return nbep_cascade_cmp(&whole, s);
 }
 
-bool nbep_undo_begin(nbep_undo *u, int slab, nbep_stamp s)
+bool nbep_undo_begin(nbep_undo *u, int slab, const nbep_stamp *s)
 {
     slab_log *l = log_of(u, slab);
-    assert(s.depth >= 1 && s.depth <= NBEP_CASCADE_DEPTH);
+    assert(s->depth >= 1 && s->depth <= NBEP_CASCADE_DEPTH);
     /* in the slab's time order (one stamp twice: a tie the caller's order breaks) */
-    assert(l->n_rec == 0 || rec_cmp(l, &l->rec[l->n_rec - 1], &s) <= 0);
+    assert(l->n_rec == 0 || rec_cmp(l, &l->rec[l->n_rec - 1], s) <= 0);
     if (!nbep_room_for_one((void **)&l->rec, &l->cap_rec, l->n_rec, sizeof *l->rec))
         return false;
-    for (uint32_t k = 1; k < s.depth; k++)
+    for (uint32_t k = 1; k < s->depth; k++)
         if (!nbep_room_for_one((void **)&l->deep, &l->cap_deep, l->n_deep + k - 1,
                                sizeof *l->deep))
             return false;
-    l->rec[l->n_rec++] = (record){.t = s.t, .depth = s.depth, .root = s.level[0],
+    l->rec[l->n_rec++] = (record){.t = s->t, .depth = s->depth, .root = s->level[0],
                                   .keep0 = l->n_keep, .sent0 = l->n_sent, .deep0 = l->n_deep};
-    for (uint32_t k = 1; k < s.depth; k++)
-        l->deep[l->n_deep++] = s.level[k];
+    for (uint32_t k = 1; k < s->depth; k++)
+        l->deep[l->n_deep++] = s->level[k];
     return true;
 }
 
@@ -161,12 +161,12 @@ bool nbep_undo_sent_one(nbep_undo *u, int slab, const nbep_undo_sent *m)
     return true;
 }
 
-size_t nbep_undo_back_to(nbep_undo *u, int slab, nbep_stamp s, nbep_undo_restore_fn restore,
+size_t nbep_undo_back_to(nbep_undo *u, int slab, const nbep_stamp *s, nbep_undo_restore_fn restore,
                          nbep_undo_cancel_fn cancel, void *arg)
 {
     slab_log *l = log_of(u, slab);
     size_t undone = 0;
-    while (l->n_rec > 0 && rec_cmp(l, &l->rec[l->n_rec - 1], &s) >= 0) {
+    while (l->n_rec > 0 && rec_cmp(l, &l->rec[l->n_rec - 1], s) >= 0) {
         const record *r = &l->rec[--l->n_rec];
         for (size_t q = r->sent0; q < l->n_sent; q++)
             cancel(arg, &l->sent[q]);

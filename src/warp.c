@@ -257,7 +257,7 @@ static void roll_back(nbep_warp *w, int slab, nbep_stamp to)
     slab_state *s = &w->s[slab];
     NBEP_WARP_ROLLBACK_HOOK(w, slab, to);
     slab_arg a = {w, slab};
-    s->tally.undone += nbep_undo_back_to(w->undo, slab, to, restore_one, cancel_one, &a);
+    s->tally.undone += nbep_undo_back_to(w->undo, slab, &to, restore_one, cancel_one, &a);
     s->tally.rollbacks++;
     while (s->n_done > 0) {
         const uint32_t k = s->done[s->n_done - 1];
@@ -348,7 +348,7 @@ static bool act(nbep_warp *w, int slab)
         const uint32_t k = s->wait[0];
         wait_pop(w, s);
         if (!nbep_room_for_one((void **)&s->done, &s->cap_done, s->n_done, sizeof *s->done) ||
-            !nbep_undo_begin(w->undo, slab, in->h.stamp)) {
+            !nbep_undo_begin(w->undo, slab, &in->h.stamp)) {
             give_up(w);
             return false;
         }
@@ -359,7 +359,7 @@ static bool act(nbep_warp *w, int slab)
         w->ops.apply(w->u, slab, in->h.from, &s->now, in->h.sphere, in + 1);
         return true;
     }
-    if (!nbep_undo_begin(w->undo, slab, ev)) {
+    if (!nbep_undo_begin(w->undo, slab, &ev)) {
         give_up(w);
         return false;
     }

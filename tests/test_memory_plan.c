@@ -39,6 +39,7 @@
 #include "sim_impl.h"
 #include "nbep_test.h"
 #include "nbep_test_scene.h"
+#include "nbep_test_stamp.h"
 
 /* ---- the counting allocator ------------------------------------------------------------------ */
 
@@ -1006,9 +1007,9 @@ static void test_undo_logs_refuse_whole_and_grow_or_change_nothing(void **state)
     char data[96] = {0};
     /* each first growth refused, then taken */
     fail_call = n_calls + 1;
-    assert_false(nbep_undo_begin(u, 2, nbep_stamp_at(1.0, 0, 0)));
+    assert_false(nbep_undo_begin(u, 2, STAMP_AT(1.0, 0, 0)));
     assert_int_equal(nbep_undo_count(u, 2), 0);
-    assert_true(nbep_undo_begin(u, 2, nbep_stamp_at(1.0, 0, 0)));
+    assert_true(nbep_undo_begin(u, 2, STAMP_AT(1.0, 0, 0)));
     fail_call = n_calls + 1;
     assert_false(nbep_undo_keep(u, 2, 7, data));
     assert_true(nbep_undo_keep(u, 2, 7, data));
@@ -1018,11 +1019,11 @@ static void test_undo_logs_refuse_whole_and_grow_or_change_nothing(void **state)
     assert_true(nbep_undo_sent_one(u, 2, &m));
     /* past the first room of 64: grown, and a growth refused changes nothing */
     for (uint32_t k = 1; k < 64; k++) {
-        assert_true(nbep_undo_begin(u, 2, nbep_stamp_at(1.0 + k, 0, 0)));
+        assert_true(nbep_undo_begin(u, 2, STAMP_AT(1.0 + k, 0, 0)));
         assert_true(nbep_undo_keep(u, 2, k, data));
     }
     fail_call = n_calls + 1;
-    assert_false(nbep_undo_begin(u, 2, nbep_stamp_at(100.0, 0, 0)));
+    assert_false(nbep_undo_begin(u, 2, STAMP_AT(100.0, 0, 0)));
     assert_int_equal(nbep_undo_count(u, 2), 64);
     /* a stamp deeper than a root (a child in a cascade at 100): its records' room grown, then
      * the first room for its deeper levels refused: false, nothing logged; then taken, and read
@@ -1032,15 +1033,15 @@ static void test_undo_logs_refuse_whole_and_grow_or_change_nothing(void **state)
     assert_true(nbep_cascade_made(&parent, 100.0, 3, 1, &child));
     assert_int_equal(child.depth, 2);
     fail_call = n_calls + 2;
-    assert_false(nbep_undo_begin(u, 2, child));
+    assert_false(nbep_undo_begin(u, 2, &child));
     assert_int_equal(nbep_undo_count(u, 2), 64);
     fail_call = 0;
-    assert_true(nbep_undo_begin(u, 2, child));
+    assert_true(nbep_undo_begin(u, 2, &child));
     nbep_stamp last;
     assert_true(nbep_undo_last(u, 2, &last));
     assert_true(nbep_stamp_same(last, child));
     uint32_t sum = 0;
-    assert_int_equal(nbep_undo_back_to(u, 2, nbep_stamp_at(0.0, 0, 0), undo_restore, undo_cancel,
+    assert_int_equal(nbep_undo_back_to(u, 2, STAMP_AT(0.0, 0, 0), undo_restore, undo_cancel,
                                        &sum),
                      65);
     assert_int_equal(sum, 64 * 1000 + 7 + 63 * 64 / 2 + 5);

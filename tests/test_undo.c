@@ -18,6 +18,7 @@
 
 #include "nbep/undo.h"
 #include "nbep_test.h"
+#include "nbep_test_stamp.h"
 
 enum { SIZE = 16 }; /* two doubles a state */
 
@@ -80,23 +81,23 @@ static void test_a_rollback_undoes_from_its_stamp_newest_first(void **state)
 {
     (void)state;
     nbep_undo *u = made(2);
-    assert_true(nbep_undo_begin(u, 0, nbep_stamp_at(0.5, 1, 0)));
+    assert_true(nbep_undo_begin(u, 0, STAMP_AT(0.5, 1, 0)));
     keep2(u, 0, 9, 9.0, 9.5);
-    assert_true(nbep_undo_begin(u, 1, nbep_stamp_at(1.0, 7, 0)));
+    assert_true(nbep_undo_begin(u, 1, STAMP_AT(1.0, 7, 0)));
     keep2(u, 1, 4, 40.0, 41.0);
     sent(u, 1, 1, 0);
-    assert_true(nbep_undo_begin(u, 1, nbep_stamp_at(2.0, 5, 0)));
+    assert_true(nbep_undo_begin(u, 1, STAMP_AT(2.0, 5, 0)));
     keep2(u, 1, 3, 30.0, 31.0);
     keep2(u, 1, 5, 50.0, 51.0);
     keep2(u, 1, 3, 32.0, 33.0);
     sent(u, 1, 2, 0);
     sent(u, 1, 3, 0);
-    assert_true(nbep_undo_begin(u, 1, nbep_stamp_at(3.0, 1, 0)));
+    assert_true(nbep_undo_begin(u, 1, STAMP_AT(3.0, 1, 0)));
     keep2(u, 1, 5, 52.0, 53.0);
     assert_int_equal(nbep_undo_count(u, 1), 3);
 
     seen w = {.world = NULL};
-    assert_int_equal(nbep_undo_back_to(u, 1, nbep_stamp_at(2.0, 5, 0), restore, cancel, &w), 2);
+    assert_int_equal(nbep_undo_back_to(u, 1, STAMP_AT(2.0, 5, 0), restore, cancel, &w), 2);
     assert_int_equal(nbep_undo_count(u, 1), 1);
     assert_int_equal(nbep_undo_count(u, 0), 1);
     const uint32_t order[4] = {5, 3, 5, 3};
@@ -111,23 +112,23 @@ static void test_a_rollback_undoes_from_its_stamp_newest_first(void **state)
     assert_int_equal(w.cancelled[1], 3);
 
     seen none = {.world = NULL};
-    assert_int_equal(nbep_undo_back_to(u, 1, nbep_stamp_at(1.0, 8, 0), restore, cancel, &none), 0);
+    assert_int_equal(nbep_undo_back_to(u, 1, STAMP_AT(1.0, 8, 0), restore, cancel, &none), 0);
     assert_int_equal(none.n_restored + none.n_cancelled, 0);
-    assert_int_equal(nbep_undo_back_to(u, 1, nbep_stamp_at(1.0, 7, 0), restore, cancel, &none), 1);
+    assert_int_equal(nbep_undo_back_to(u, 1, STAMP_AT(1.0, 7, 0), restore, cancel, &none), 1);
     assert_int_equal(none.n_restored, 1);
     assert_int_equal(none.restored[0], 4);
     assert_int_equal(none.n_cancelled, 1);
     assert_int_equal(none.cancelled[0], 1);
     assert_int_equal(nbep_undo_count(u, 1), 0);
-    assert_int_equal(nbep_undo_back_to(u, 1, nbep_stamp_at(-1.0, 0, 0), restore, cancel, &none), 0);
+    assert_int_equal(nbep_undo_back_to(u, 1, STAMP_AT(-1.0, 0, 0), restore, cancel, &none), 0);
 
     /* the window's end forgets slab 0's too; the log takes new events after */
     nbep_undo_clear(u);
     assert_int_equal(nbep_undo_count(u, 0), 0);
-    assert_true(nbep_undo_begin(u, 0, nbep_stamp_at(0.1, 0, 0)));
+    assert_true(nbep_undo_begin(u, 0, STAMP_AT(0.1, 0, 0)));
     keep2(u, 0, 2, 1.0, 2.0);
     seen after = {.world = NULL};
-    assert_int_equal(nbep_undo_back_to(u, 0, nbep_stamp_at(0.0, 0, 0), restore, cancel, &after), 1);
+    assert_int_equal(nbep_undo_back_to(u, 0, STAMP_AT(0.0, 0, 0), restore, cancel, &after), 1);
     assert_int_equal(after.n_restored, 1);
     assert_int_equal(after.restored[0], 2);
     nbep_undo_destroy(&u);
@@ -207,7 +208,7 @@ static void test_random_events_and_rollbacks_match_a_plain_model(void **state)
             deep += e->s.depth > 1;
             deepest = e->s.depth > deepest ? e->s.depth : deepest;
             memcpy(e->before, world, sizeof e->before);
-            assert_true(nbep_undo_begin(u, sl, e->s));
+            assert_true(nbep_undo_begin(u, sl, &e->s));
             const int changes = 1 + (int)(next_rand(&rng) % 3);
             for (int c = 0; c < changes; c++) {
                 const uint32_t i =
@@ -241,7 +242,7 @@ static void test_random_events_and_rollbacks_match_a_plain_model(void **state)
             while (first > 0 && !nbep_stamp_before(ev[sl][first - 1].s, to))
                 first--;
             seen w = {.world = world};
-            const size_t undone = nbep_undo_back_to(u, sl, to, restore, cancel, &w);
+            const size_t undone = nbep_undo_back_to(u, sl, &to, restore, cancel, &w);
             assert_int_equal(undone, n - first);
             assert_int_equal(nbep_undo_count(u, sl), first);
             if (undone) {

@@ -54,9 +54,9 @@ NBEP_MUST_CHECK nbep_status nbep_undo_create(int slabs, size_t size, nbep_undo *
 /* NULL-safe; NULLs the pointer. */
 void nbep_undo_destroy(nbep_undo **u);
 
-/* Slab `slab` begins its event stamped s (after its last record's stamp). False when no memory
+/* Slab `slab` begins its event stamped *s (after its last record's stamp). False when no memory
  * could be had: then nothing changed. */
-NBEP_MUST_CHECK bool nbep_undo_begin(nbep_undo *u, int slab, nbep_stamp s);
+NBEP_MUST_CHECK bool nbep_undo_begin(nbep_undo *u, int slab, const nbep_stamp *s);
 /* Its current event is about to change sphere i, now in `state`: kept. False as for begin. */
 NBEP_MUST_CHECK bool nbep_undo_keep(nbep_undo *u, int slab, uint32_t i, const void *state);
 /* The same, the state written by the caller in place: the room for it (size bytes, 8-byte
@@ -65,10 +65,10 @@ void *nbep_undo_keep_room(nbep_undo *u, int slab, uint32_t i);
 /* Its current event sent message m. False as for begin. */
 NBEP_MUST_CHECK bool nbep_undo_sent_one(nbep_undo *u, int slab, const nbep_undo_sent *m);
 
-/* Undoes slab's events stamped at or after s, newest first: for each, its messages cancelled
+/* Undoes slab's events stamped at or after *s, newest first: for each, its messages cancelled
  * (cancel, in the order sent), then its spheres restored (restore, in the reverse order kept);
  * the records dropped. Returns how many events were undone. */
-size_t nbep_undo_back_to(nbep_undo *u, int slab, nbep_stamp s, nbep_undo_restore_fn restore,
+size_t nbep_undo_back_to(nbep_undo *u, int slab, const nbep_stamp *s, nbep_undo_restore_fn restore,
                          nbep_undo_cancel_fn cancel, void *arg);
 /* The stamp of slab's newest record in *s; false when it has none this window. */
 bool nbep_undo_last(const nbep_undo *u, int slab, nbep_stamp *s);

@@ -81,6 +81,7 @@ static void ver_event(struct nbep_evloop *e, const struct evl_ws *w, const void 
 #include "nbep/mail.h"
 #include "nbep/undo.h"
 #include "nbep/versions.h"
+#include "nbep_test_stamp.h"
 
 #define SLABS_MAX 64
 /* NBEP_VER_MODULE: a slab's box of messages (mail.c); a full one is taken at once (counted), as
@@ -555,7 +556,7 @@ static void ver_event(nbep_evloop *e, const evl_ws *w, const void *evp,
         ver.moved[ver.n_moved++] = i; /* its centre moved: tracked or not, from the next window */
     const double cx = e->cells.m[i].at.x;
     const int by = slab_of(cx);
-    if (ver.mod && !nbep_undo_begin(ver.undo, by, nbep_stamp_at(t, key, 0))) {
+    if (ver.mod && !nbep_undo_begin(ver.undo, by, STAMP_AT(t, key, 0))) {
         ver.failed = true;
         return;
     }
