@@ -4,7 +4,6 @@
 #include <assert.h>
 #include <string.h>
 
-
 /* Whether (key, item) comes before level l of c in the calendar's order at one time */
 static bool before_level(uint64_t key, uint32_t item, const nbep_cascade *c, uint32_t l)
 {
