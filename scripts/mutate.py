@@ -4169,7 +4169,27 @@ MUTANTS = [
      "    (void)stamp_of;\n    return 0;", ["test_undo"], None),
     ("cascade-copy-first-level-only", "include/nbep/cascade.h",
      "    memcpy(dst->level, src->level, src->depth * sizeof src->level[0]);",
-     "    memcpy(dst->level, src->level, sizeof src->level[0]);", ["test_warp"], None),
+     "    memcpy(dst->level, src->level, sizeof src->level[0]);", ["test_warp"], None),    # a step out of memory (the algorithm's, not a write's): the file keeps its rows and gets
+    # its /summary (2026-12-07); after a failed write it gets nothing more
+    ("sim-rows-dropped-on-a-steps-oom", "src/sim.c",
+     "         sim->status == NBEP_ENUMERIC || sim->status == NBEP_ENOMEM)) {",
+     "         sim->status == NBEP_ENUMERIC)) {", ["test_team_faults"], None),
+    ("run-steps-oom-taken-for-a-write", "src/run.c",
+     "    bool io_failed = st == NBEP_EIO || nbep_sim_output_failed(sim);",
+     "    bool io_failed = st == NBEP_EIO || st == NBEP_ENOMEM;", ["test_team_faults"], None),
+    ("sim-failed-frame-write-forgotten", "src/sim.c",
+     "                                      sim->ev_time ? &ev : NULL, sim->diag);\n        if (st != NBEP_OK)\n            sim->out_failed = true;",
+     "                                      sim->ev_time ? &ev : NULL, sim->diag);",
+     ["tests/test_diskfull.sh"],
+     "equivalent under every fault a test makes: a failed write's status is EIO (a full disk), "
+     "which the end's flush and the close's summary skip by status anyway; only a write that "
+     "runs out of memory (HDF5's allocations refused) tells them apart"),
+    ("sim-failed-rows-write-forgotten", "src/sim.c",
+     "    sim->n_rows = 0;\n    if (st != NBEP_OK)\n        sim->out_failed = true;",
+     "    sim->n_rows = 0;", ["tests/test_diskfull.sh"],
+     "equivalent under every fault a test makes: a failed write's status is EIO (a full disk), "
+     "which the end's flush and the close's summary skip by status anyway; only a write that "
+     "runs out of memory (HDF5's allocations refused) tells them apart"),
 ]
 
 

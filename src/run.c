@@ -281,10 +281,13 @@ static nbep_status step_and_close(const nbep_run_request *rq, const char *file, 
     res->summary.status = nbep_summary_status_of(st);
     res->simulated = true;
     res->resumed_from = from;
-    /* after a write failure closing fails the same way: keep only the first error */
+    /* after a write failure closing fails the same way: keep only the first error (a step out
+     * of memory with no write failed is the algorithm's: the file is sound and gets its
+     * /summary, which says the run failed, as after a numerical failure; until 2026-12-07 it
+     * was taken for a write's and the file had none) */
     nbep_diag quiet;
     nbep_diag_init(&quiet);
-    bool io_failed = st == NBEP_EIO || st == NBEP_ENOMEM;
+    bool io_failed = st == NBEP_EIO || nbep_sim_output_failed(sim);
     nbep_status cst = nbep_output_close(out, io_failed ? NULL : &res->summary,
                                         io_failed ? &quiet : d);
     nbep_diag_fini(&quiet);

@@ -374,6 +374,8 @@ static nbep_status flush_rows(nbep_sim *sim)
         st = nbep_output_stats(sim->opt.out, sim->rows, sim->wall_rows, sim->n_rows,
                                sim->diag);
     sim->n_rows = 0;
+    if (st != NBEP_OK)
+        sim->out_failed = true;
     return st;
 }
 
@@ -396,6 +398,8 @@ static nbep_status emit_frame(nbep_sim *sim, uint64_t step)
                                      sim->ev_kind, sim->ev_rest);
         st = nbep_output_frame_events(sim->opt.out, (int64_t)step, sim->dt, &sim->st,
                                       sim->ev_time ? &ev : NULL, sim->diag);
+        if (st != NBEP_OK)
+            sim->out_failed = true;
     }
     if (st == NBEP_OK && sim->opt.on_frame)
         st = sim->opt.on_frame(sim->opt.on_frame_ctx, (int64_t)step, &sim->st, sim->diag);
@@ -674,6 +678,7 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
 {
     sim->diag = d;
     sim->status = NBEP_OK;
+    sim->out_failed = false;
     sim->tty = sim->opt.progress && isatty(STDERR_FILENO);
     sim->line_open = false;
     sim->tty_width = 0;
@@ -697,14 +702,22 @@ nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d)
     sim->wall_seconds = nbep_now() - sim->t_start;
     /* after a failed write the file gets nothing more: one error, not a cascade; a run stopped
      * by an energy beyond doubles keeps its rows up to the step before (all finite), which
-     * its summary counts */
-    if (sim->status == NBEP_OK || sim->status == NBEP_ESIGINT || sim->status == NBEP_ESIGTERM ||
-        sim->status == NBEP_ENUMERIC) {
+     * its summary counts; so does one whose step ran out of memory where no write failed (the
+     * algorithm's memory: the file is sound, and until 2026-12-07 the rows of the steps since
+     * the last frame were dropped) */
+    if (!sim->out_failed &&
+        (sim->status == NBEP_OK || sim->status == NBEP_ESIGINT || sim->status == NBEP_ESIGTERM ||
+         sim->status == NBEP_ENUMERIC || sim->status == NBEP_ENOMEM)) {
         st = flush_rows(sim);
         if (st != NBEP_OK)
             sim->status = st;
     }
     return sim->status;
+}
+
+bool nbep_sim_output_failed(const nbep_sim *sim)
+{
+    return sim->out_failed;
 }
 
 bool nbep_sim_abandoned(const nbep_sim *sim, uint64_t *frame_step)

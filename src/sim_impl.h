@@ -90,6 +90,9 @@ struct nbep_sim {
      * step in its events (thread 0: nbep_sim_abandoned) */
     uint64_t frame_last;
     bool abandoned;
+    /* a write to the output failed (a frame's or the stats rows'): the file gets nothing more
+     * (nbep_sim_output_failed) */
+    bool out_failed;
     double energy_initial, energy_final;
     double max_overlap, max_overlap_rel;
     double setup_seconds, wall_seconds;

@@ -7,7 +7,8 @@
  * the team meet them at the same event in the calendar's order: the team, with events handled
  * ahead of it, must stop there as the one thread does, with its status, its message and its state
  * bit for bit (the places after the stopping one undone, the stopping one as the one thread left
- * it: not handled at a stall, handled but not committed at a failed walk). */
+ * it: not handled at a stall, handled but not committed at a failed walk). A failed walk in a
+ * run with output, through `nbep run`'s pipeline: the file keeps every step done. */
 #include <math.h>
 #include <signal.h>
 #include <stdatomic.h>
@@ -31,8 +32,13 @@ static double oom_from = INFINITY;
 #include <stdlib.h>
 #include <string.h>
 
+#include <sys/stat.h>
+
+#include "nbep/run.h"
 #include "nbep/sim.h"
+#include "nbep/summary.h"
 #include "nbep_test.h"
+#include "nbep_test_h5.h"
 #include "nbep_test_scene.h"
 #include "nbep_test_signalled.h"
 
@@ -48,6 +54,11 @@ static atomic_int test_signal;
 
 static void stall_hook(nbep_evloop_stall *st, double t)
 {
+    /* looks every STALL_LOOK events only while a stall or a signal is armed: a lattice's start
+     * has more than that many events at t = 0 (its first predictions' stale slots), which
+     * would read as a stall to an unarmed run */
+    if (stall_from == INFINITY && signal_from == INFINITY)
+        return;
     st->events = STALL_LOOK;
     if (t >= stall_from)
         st->dt = INFINITY;
@@ -160,12 +171,92 @@ static void test_a_signal_abandons_the_step_on_any_thread_count(void **state)
     nbep_test_scene_free(&sc);
 }
 
+/* A step out of memory (the algorithm's: a walk from t = 0.075, in the third of 6 steps, whose
+ * frames come every 6) in a run through nbep's pipeline with output (what `nbep run` does): the
+ * run fails for memory with one line naming the step, and the file keeps what the run did, the
+ * stats rows of every step done before it (none was flushed by a frame: until 2026-12-07 they
+ * were dropped) and a /summary that says it failed (none, until then: the fault was taken for a
+ * write's); with the memory there, a resume takes the file up to the run's end. */
+static void test_a_step_out_of_memory_keeps_the_steps_done_in_the_file(void **state)
+{
+    (void)state;
+    /* 12^3 spheres of diameter 1 at phi = 0.45: the fluid of team_stops_as_one_thread */
+    const double side = cbrt(1728.0 * acos(-1.0) / 6.0 / 0.45);
+    char deck[2048], deck_path[256], out[256];
+    snprintf(deck, sizeof deck,
+             "run: { algorithm = \"predictive\"; neighbors = \"cells\"; steps = 6; dt = 0.03;\n"
+             "       threads = 1; seed = 7; };\n"
+             "box: { min = [0.0, 0.0, 0.0]; max = [%.17g, %.17g, %.17g];\n"
+             "       periodic = [true, true, true]; };\n"
+             "spheres = ( { count = 1728; radius = 0.5; mass = 1.0; place = \"lattice\";\n"
+             "              speed = 1.7320508075688772; } );\n"
+             "output: { file = \"unused.h5\"; every = 6; stats = true; };\n",
+             side, side, side);
+    mkdir("build/tests/tmp", 0777);
+    nbep_test_tmp("team_faults_oom.deck", deck_path, sizeof deck_path);
+    nbep_test_tmp("team_faults_oom.h5", out, sizeof out);
+    FILE *f = fopen(deck_path, "w");
+    assert_non_null(f);
+    assert_int_equal(fputs(deck, f) >= 0, 1);
+    assert_int_equal(fclose(f), 0);
+    remove(out);
+
+    oom_from = 0.075;
+    const nbep_run_request rq = {.deck_path = deck_path, .output_path = out};
+    nbep_run_result res;
+    nbep_diag d;
+    nbep_diag_init(&d);
+    const nbep_status st = nbep_run(&rq, &res, &d);
+    if (st != NBEP_ENOMEM)
+        nbep_diag_print(&d, stderr);
+    assert_int_equal(st, NBEP_ENOMEM);
+    oom_from = INFINITY;
+    assert_int_equal(d.n_errors, 1);
+    assert_non_null(strstr(d.msg[0], "no memory for the neighbour lists"));
+    unsigned long long step = 0;
+    assert_int_equal(sscanf(d.msg[0], "nbep: step %llu:", &step), 1);
+    assert_true(step >= 3 && step <= 6);
+    nbep_diag_fini(&d);
+    assert_int_equal(res.summary.steps, step - 1);
+    assert_int_equal(res.summary.status, NBEP_SUMMARY_FAILED);
+
+    size_t n = 0;
+    double *steps = nbep_test_h5_doubles(out, "/stats/step", &n);
+    assert_int_equal(n, step - 1);
+    for (size_t k = 0; k < n; k++)
+        assert_true(steps[k] == (double)(k + 1));
+    free(steps);
+    double *frames = nbep_test_h5_doubles(out, "/frames/step", &n);
+    assert_int_equal(n, 1); /* the first frame only: the next was due at step 6 */
+    free(frames);
+    hid_t file = H5Fopen(out, H5F_ACC_RDONLY, H5P_DEFAULT);
+    assert_true(file >= 0);
+    assert_true(H5Aexists_by_name(file, "/summary", "json", H5P_DEFAULT) > 0);
+    H5Fclose(file);
+
+    /* with the memory there, a resume takes it up from its last frame (step 0) to the end */
+    const nbep_run_request again = {.deck_path = deck_path, .resume = out};
+    nbep_diag_init(&d);
+    assert_int_equal(nbep_run(&again, &res, &d), NBEP_OK);
+    nbep_diag_fini(&d);
+    assert_int_equal(res.resumed_from, 0);
+    assert_int_equal(res.summary.status, NBEP_SUMMARY_COMPLETED);
+    steps = nbep_test_h5_doubles(out, "/stats/step", &n);
+    assert_int_equal(n, 6);
+    for (size_t k = 0; k < n; k++)
+        assert_true(steps[k] == (double)(k + 1));
+    free(steps);
+    remove(out);
+    remove(deck_path);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_a_signal_abandons_the_step_on_any_thread_count),
         cmocka_unit_test(test_the_team_stops_at_a_stall_as_one_thread_does),
         cmocka_unit_test(test_the_team_stops_at_a_failed_walk_as_one_thread_does),
+        cmocka_unit_test(test_a_step_out_of_memory_keeps_the_steps_done_in_the_file),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -49,7 +49,8 @@ NBEP_MUST_CHECK nbep_status nbep_sim_create(const nbep_scene *sc, const nbep_sim
 void nbep_sim_destroy(nbep_sim **sim);
 
 /* Simulates sc->steps steps (frames and stats as the scene asks). Returns NBEP_OK, the I/O
- * status of a failing write, NBEP_ENUMERIC when a non-finite value appears, or
+ * status of a failing write, NBEP_ENUMERIC when a non-finite value appears, NBEP_ENOMEM when a
+ * step's memory could not be had (the stats rows of the steps done written all the same), or
  * NBEP_ESIGINT/NBEP_ESIGTERM when *stop_signal was raised: the current step is finished and its
  * frame written first, unless the signal came while the step's events ran in a loop that looks
  * at it (the predictive algorithm's: every 65536 events in cells mode, 1024 rounds in the
@@ -59,6 +60,10 @@ NBEP_MUST_CHECK nbep_status nbep_sim_run(nbep_sim *sim, nbep_diag *d);
  * nbep_sim_summary's `steps`, with no frame for it unless one was due), and the step of the
  * last frame written, or resumed from, in *frame_step. */
 bool nbep_sim_abandoned(const nbep_sim *sim, uint64_t *frame_step);
+/* After nbep_sim_run: whether a write to the output failed (a frame's or the stats rows'; the
+ * run's status then says how), after which the file got nothing more. An out-of-memory status
+ * without it is the algorithm's: the file is sound, its rows up to the last step done. */
+bool nbep_sim_output_failed(const nbep_sim *sim);
 
 /* The run's summary so far (valid after create; complete after run), but for `status`, left
  * unknown: how the run ended is the caller's to say (nbep_run: the simulation's status, then
