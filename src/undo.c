@@ -119,10 +119,11 @@ bool nbep_undo_begin(nbep_undo *u, int slab, const nbep_stamp *s)
     assert(l->n_rec == 0 || rec_cmp(l, &l->rec[l->n_rec - 1], s) <= 0);
     if (!nbep_room_for_one((void **)&l->rec, &l->cap_rec, l->n_rec, sizeof *l->rec))
         return false;
-    for (uint32_t k = 1; k < s->depth; k++)
-        if (!nbep_room_for_one((void **)&l->deep, &l->cap_deep, l->n_deep + k - 1,
-                               sizeof *l->deep))
-            return false;
+    /* room for its depth - 1 deeper levels: one growth at most (the first room, 64, and each
+     * doubling exceed the 7 a stamp can add) */
+    if (s->depth > 1 && !nbep_room_for_one((void **)&l->deep, &l->cap_deep,
+                                           l->n_deep + s->depth - 2, sizeof *l->deep))
+        return false;
     l->rec[l->n_rec++] = (record){.t = s->t, .depth = s->depth, .root = s->level[0],
                                   .keep0 = l->n_keep, .sent0 = l->n_sent, .deep0 = l->n_deep};
     for (uint32_t k = 1; k < s->depth; k++)

@@ -303,19 +303,27 @@ static inline nbep_run_result nbep_test_run_deck(const char *deck_path, const ch
     return res;
 }
 
+/* The deck `text` written to a temporary file NAME (build/tests/tmp), its path in path (len
+ * bytes). */
+static inline void nbep_test_write_deck(const char *name, const char *text, char *path,
+                                        size_t len)
+{
+    mkdir("build", 0777);
+    mkdir("build/tests", 0777);
+    mkdir("build/tests/tmp", 0777);
+    nbep_test_tmp(name, path, len);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    assert_true(fputs(text, f) >= 0);
+    assert_int_equal(fclose(f), 0);
+}
+
 /* The deck `text` written to a temporary file NAME (build/tests/tmp), loaded into *sc (the
  * caller's to nbep_scene_fini; it must load) and removed. */
 static inline void nbep_test_load_deck(const char *name, const char *text, nbep_scene *sc)
 {
     char path[256];
-    mkdir("build", 0777);
-    mkdir("build/tests", 0777);
-    mkdir("build/tests/tmp", 0777);
-    nbep_test_tmp(name, path, sizeof path);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    assert_true(fputs(text, f) >= 0);
-    assert_int_equal(fclose(f), 0);
+    nbep_test_write_deck(name, text, path, sizeof path);
     nbep_diag d;
     nbep_diag_init(&d);
     nbep_status st = nbep_scene_load(path, NULL, 0, sc, &d);

@@ -32,8 +32,6 @@ static double oom_from = INFINITY;
 #include <stdlib.h>
 #include <string.h>
 
-#include <sys/stat.h>
-
 #include "nbep/run.h"
 #include "nbep/sim.h"
 #include "nbep/summary.h"
@@ -192,13 +190,8 @@ static void test_a_step_out_of_memory_keeps_the_steps_done_in_the_file(void **st
              "              speed = 1.7320508075688772; } );\n"
              "output: { file = \"unused.h5\"; every = 6; stats = true; };\n",
              side, side, side);
-    mkdir("build/tests/tmp", 0777);
-    nbep_test_tmp("team_faults_oom.deck", deck_path, sizeof deck_path);
+    nbep_test_write_deck("team_faults_oom.deck", deck, deck_path, sizeof deck_path);
     nbep_test_tmp("team_faults_oom.h5", out, sizeof out);
-    FILE *f = fopen(deck_path, "w");
-    assert_non_null(f);
-    assert_int_equal(fputs(deck, f) >= 0, 1);
-    assert_int_equal(fclose(f), 0);
     remove(out);
 
     oom_from = 0.075;
