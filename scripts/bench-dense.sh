@@ -27,6 +27,14 @@
 #                (2026-12-01), and so did the ratios of medians. The two share the caches and
 #                the memory while they run, as they do not when run apart. EDMD's set-up run
 #                (to 0.1) runs alone, before the pair. Other thread counts run as without it.
+#   CEILING      1: beside each run on k > 1 threads, k one-thread runs of the same stretch at
+#                once, each held to one of the first k CPUs this process may use (fewer, or no
+#                taskset: exit 2), their rates added: what the machine gives k independent
+#                threads of this work at that moment, the most any parallel scheme could give
+#                (table rows "apart"). A row of ratios then says how much of it the k-thread run
+#                got. On this project's machine the two virtual CPUs ran one thread 1.9 s and
+#                2.8 s on the same stretch in the same minute (2026-12-07), so two threads over
+#                one there is bounded by the slower CPU, not by the scheme.
 #   COUNT        1: instead of timing, count (make bench-dense-count). Each engine runs under
 #                valgrind's cachegrind on the same melt for two lengths of simulated time, and
 #                the table gives per collision of the difference: instructions, first-level data
@@ -75,13 +83,23 @@ OUT=${OUT:-build/bench-dense}
 NBEP=${NBEP:-bin/nbep}
 PY=${PYTHON:-/usr/bin/python3}
 PAIRED=${PAIRED:-0}
-# PAIRED's two CPUs: the first two this process may run on (Cpus_allowed_list, "0-15" or
-# "2,5-7"), not 0 and 1, which a job's cpuset may not hold; fewer than two, or no taskset: refused
+CEILING=${CEILING:-0}
+# the CPUs this process may run on, in order (Cpus_allowed_list, "0-15" or "2,5-7"): PAIRED
+# holds its runs to the first two, CEILING its k runs at once to the first k, not 0 and 1 and so
+# on, which a job's cpuset may not hold; too few, or no taskset: refused
+read -r -a CPUS < <(sed -n 's/^Cpus_allowed_list:[[:space:]]*//p' /proc/self/status |
+    awk -F, '{ for (i = 1; i <= NF; i++) { n = split($i, r, "-"); for (c = r[1]; c <= r[n]; c++) printf "%d ", c } }')
 if [ "$PAIRED" = 1 ]; then
-    read -r CPU_A CPU_B _ < <(sed -n 's/^Cpus_allowed_list:[[:space:]]*//p' /proc/self/status |
-        awk -F, '{ for (i = 1; i <= NF; i++) { n = split($i, r, "-"); for (c = r[1]; c <= r[n]; c++) printf "%d ", c } }')
-    if [ -z "${CPU_B:-}" ] || ! command -v taskset >/dev/null; then
+    CPU_A=${CPUS[0]:-} CPU_B=${CPUS[1]:-}
+    if [ -z "$CPU_B" ] || ! command -v taskset >/dev/null; then
         echo "bench-dense.sh: PAIRED=1 needs two CPUs to run on and taskset (util-linux); this process may use CPUs ${CPU_A:-none}" >&2
+        exit 2
+    fi
+fi
+if [ "$CEILING" = 1 ]; then
+    most=$(printf '%s\n' $THREADS | sort -n | tail -1)
+    if [ "${#CPUS[@]}" -lt "$most" ] || ! command -v taskset >/dev/null; then
+        echo "bench-dense.sh: CEILING=1 needs $most CPUs to run on (THREADS up to $most) and taskset (util-linux); this process may use ${#CPUS[@]}" >&2
         exit 2
     fi
 fi
@@ -118,8 +136,9 @@ else
     echo "EDMD: skipped (set EDMD_DIR to a checkout of github.com/FSmallenburg/EDMD)"
 fi
 
-deck() { # n phi steps dt threads file fields [every] -> path of the deck
-    local d="$OUT/fluid-$1-$2-$3-$5.deck" L
+deck() { # n phi steps dt threads file fields [every] -> path of the deck (one per output
+    # file: runs at once, CEILING's, each write their own)
+    local d="$OUT/fluid-$1-$2-$3-$5-$(basename "$6" .h5).deck" L
     L=$(side "$1" "$2")
     cat >"$d" <<EOF
 run: { algorithm = "predictive"; steps = $3; dt = $4; threads = $5; seed = 1; neighbors = "cells"; };
@@ -193,8 +212,9 @@ minus() { awk -v a="$1" -v b="$2" 'BEGIN { print b - a }'; }
 
 probe() { [ -n "$handover" ] && "$handover"; } # the hand-over now, or nothing
 
-run_nbep() { # n phi threads rep
-    local out="$OUT/run.h5" d u s c h1="" h2="" ho=""
+run_nbep() { # n phi threads rep [tag]: the row's engine and thread count are ENGINE's and
+    # GROUP's where set (CEILING's runs at once: "apart", k), the output file run<tag>.h5
+    local out="$OUT/run${5:-}.h5" d u s c h1="" h2="" ho=""
     # to T1 + S, resuming the melt's frame at T1: a frame each T1, since a cells run resumes
     # only from a frame at a multiple of output.every, with the melt's fields (a resume takes
     # the deck that made the file: fields = [] is refused since 2c91e16, and every nbep run
@@ -211,7 +231,17 @@ run_nbep() { # n phi threads rep
     [ "$3" -gt 1 ] && h2=$(probe) && ho="$h1 $h2"
     # the collisions since the melt's frame: the summary counts from step 0 (the melt's too)
     c=$(minus "$(melt_collisions "$1" "$2")" "$(echo "$s" | summary_field collisions)")
-    echo "nbep,$1,$2,$3,$4,$c,$(echo "$s" | summary_field wall_seconds),$(echo "$s" | summary_field peak_rss_bytes),$u,$ho" >>"$rows"
+    echo "${ENGINE:-nbep},$1,$2,${GROUP:-$3},$4,$c,$(echo "$s" | summary_field wall_seconds),$(echo "$s" | summary_field peak_rss_bytes),$u,$ho" >>"$rows"
+}
+
+run_apart() { # n phi k rep: k one-thread runs at once, the i-th held to the i-th CPU (CEILING)
+    local i pids=()
+    for ((i = 0; i < $3; i++)); do
+        ENGINE=apart GROUP=$3 PIN=${CPUS[i]} TIME_OUT="$TIME_OUT.apart$i" \
+            run_nbep "$1" "$2" 1 "$4" "-apart$i" &
+        pids+=($!)
+    done
+    for i in "${pids[@]}"; do wait "$i" || return 1; done
 }
 
 edmd_once() { # dir -> "collisions seconds rss cpu_seconds"
@@ -341,6 +371,7 @@ for rep in $(seq "$REPS"); do
             for nt in $THREADS; do
                 [ -n "$pair" ] && [ "$nt" = 1 ] && continue
                 run_nbep "$n" "$phi" "$nt" "$rep" || exit 1
+                if [ "$CEILING" = 1 ] && [ "$nt" -gt 1 ]; then run_apart "$n" "$phi" "$nt" "$rep" || exit 1; fi
             done
             if [ -n "$edmd_src" ] && [ -z "$pair" ]; then run_edmd "$n" "$phi" "$rep" || exit 1; fi
         done
@@ -352,6 +383,23 @@ done
 "$PY" - "$rows" <<'PYEOF'
 import csv, statistics, sys
 rows = list(csv.DictReader(open(sys.argv[1])))
+# CEILING's k runs at once (engine "apart") as one row a repeat: their rates added (the
+# collisions summed, over the seconds that give that rate), the largest RSS, the CPU summed
+apart = {}
+for r in rows:
+    if r["engine"] == "apart":
+        apart.setdefault((r["n"], r["phi"], r["threads"], r["rep"]), []).append(r)
+rows = [r for r in rows if r["engine"] != "apart"]
+for (n, phi, k, rep), rs in sorted(apart.items()):
+    if len(rs) != int(k) or any(float(r["seconds"] or 0) <= 0 for r in rs):
+        continue
+    c = sum(int(r["collisions"]) for r in rs)
+    rate = sum(int(r["collisions"]) / float(r["seconds"]) for r in rs)
+    rows.append({"engine": "apart", "n": n, "phi": phi, "threads": k, "rep": rep,
+                 "collisions": str(c), "seconds": repr(c / rate),
+                 "rss_bytes": str(max(int(r["rss_bytes"] or 0) for r in rs)),
+                 "cpu_seconds": repr(sum(float(r["cpu_seconds"] or 0) for r in rs)),
+                 "handover_ns": ""})
 groups = {}
 for r in rows:
     if not r["collisions"] or not r["seconds"] or float(r["seconds"]) <= 0:
@@ -390,6 +438,10 @@ for (eng, n, phi, nt), (rate, *_rest) in sorted(med.items()):
         parts.append(r)
     if c1 and nt != 1:
         parts.append(f"{nt} threads / 1 thread = {rate / c1[0]:.2f}")
+    a = med.get(("apart", n, phi, nt))
+    if a and c1:
+        parts.append(f"{nt} one-thread runs at once / 1 thread = {a[0] / c1[0]:.2f} (the "
+                     f"machine's ceiling), {nt} threads / that = {rate / a[0]:.2f}")
     print("  " + "; ".join(parts))
 
 # each repeat's one-thread rate over the same repeat's EDMD rate (with PAIRED=1, the two ran
@@ -411,7 +463,8 @@ if edmd:
 # hand-over time (ns, before and after the run)
 multi = sorted(k for k in groups if k[0] == "nbep" and k[3] != 1)
 if multi:
-    print("\nper repeat: threads / 1 thread (hand-over ns before, after)")
+    print("\nper repeat: threads / 1 thread (hand-over ns before, after; with CEILING, the "
+          "same repeat's runs at once / 1 thread)")
 for key in multi:
     parts = []
     for r in sorted(groups[key], key=lambda r: int(r["rep"])):
@@ -420,6 +473,10 @@ for key in multi:
             continue
         ratio = (int(r["collisions"]) / float(r["seconds"])) / (int(o["collisions"]) / float(o["seconds"]))
         ho = ", ".join(r.get("handover_ns", "").split())
+        ap = [x for x in groups.get(("apart",) + key[1:], []) if x["rep"] == r["rep"]]
+        if ap:  # CEILING: the same repeat's runs at once over its one-thread run
+            ceil = (int(ap[0]["collisions"]) / float(ap[0]["seconds"])) / (int(o["collisions"]) / float(o["seconds"]))
+            ho = (ho + "; " if ho else "") + f"runs at once {ceil:.2f}"
         parts.append(f"{ratio:.2f} ({ho})" if ho else f"{ratio:.2f}")
     print(f"  N {key[1]}, phi {key[2]}, {key[3]} threads: " + "; ".join(parts))
 PYEOF

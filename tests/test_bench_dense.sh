@@ -122,6 +122,38 @@ else
         "tr '\\n' '|' <'$tmp/cpus.log' | grep -Eq '^edmd 0.1: $b\\|(nbep $a|edmd 1.636: $b)\\|(nbep $a|edmd 1.636: $b)\\|nbep $free\\|edmd 0.1: $a\\|(nbep $b|edmd 1.636: $a)\\|(nbep $b|edmd 1.636: $a)\\|nbep $free\\|\$'"
 fi
 
+# CEILING=1 (2026-12-07): beside the two-thread run, two one-thread runs of the same stretch at
+# once, held to the first two CPUs the test may use, their rates added in an "apart" row, and
+# the ratios say what share of that the two threads got
+if [ -n "$b" ]; then
+    : >"$tmp/cpus.log"
+    CEILING=1 NBEP="$tmp/nbep-cpus" PHIS=0.30 REPS=2 OUT="$tmp/ceiling" timeout 120 \
+        bash scripts/bench-dense.sh >"$tmp/ceiling.txt" 2>&1
+    rc=$?
+    check "CEILING=1: exit 0 (got $rc), a table row 'apart' for 2 runs at once beside nbep's 1 and 2 threads" \
+        "[ $rc = 0 ] && grep -q '^| apart | 500 | 0.30 | 2 | [0-9.]* k |' '$tmp/ceiling.txt' &&
+         grep -q '^| nbep | 500 | 0.30 | 2 | [0-9.]* k |' '$tmp/ceiling.txt'"
+    check "CEILING=1: two raw rows a repeat, each the stretch's own collisions (the one-thread run's)" \
+        "awk -F, '\$1 == \"nbep\" && \$4 == 1 { one[\$5] = \$6 } \$1 == \"apart\" { n[\$5]++; ok[\$5] += \$4 == 2 && \$7 > 0 && \$6 == one[\$5] }
+                  END { exit !(n[1] == 2 && ok[1] == 2 && n[2] == 2 && ok[2] == 2) }' '$tmp/ceiling/rows.csv'"
+    check "CEILING=1: the ceiling's ratio and the two threads' share of it, and each repeat's" \
+        "grep -Eq '2 one-thread runs at once / 1 thread = [0-9.]+ \\(the machine.s ceiling\\), 2 threads / that = [0-9.]+\$' '$tmp/ceiling.txt' &&
+         grep -Eq '^  N 500, phi 0.30, 2 threads: [0-9.]+ \\([^)]*runs at once [0-9.]+\\); [0-9.]+ \\([^)]*runs at once [0-9.]+\\)\$' '$tmp/ceiling.txt'"
+    check "CEILING=1: the ceiling is the runs at once's added rates over the one thread's (medians of the raw rows)" \
+        "\"\$PY\" -c '
+import csv, re, statistics as st, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+rate = lambda r: int(r[\"collisions\"]) / float(r[\"seconds\"])
+one = st.median(rate(r) for r in rows if r[\"engine\"] == \"nbep\" and r[\"threads\"] == \"1\")
+two = st.median(rate(r) for r in rows if r[\"engine\"] == \"nbep\" and r[\"threads\"] == \"2\")
+at_once = st.median(sum(rate(r) for r in rows if r[\"engine\"] == \"apart\" and r[\"rep\"] == k) for k in (\"1\", \"2\"))
+m = re.search(r\"at once / 1 thread = ([0-9.]+) .*, 2 threads / that = ([0-9.]+)\", open(sys.argv[2]).read())
+assert m and abs(float(m[1]) - at_once / one) < 0.006 and abs(float(m[2]) - two / at_once) < 0.006, (m and m.groups(), at_once / one, two / at_once)
+' '$tmp/ceiling/rows.csv' '$tmp/ceiling.txt'"
+    check "CEILING=1: the runs at once held to CPUs $a and $b, one each; the others on $free as given" \
+        "[ \"\$(sort '$tmp/cpus.log' | uniq -c | awk '{ printf \"%s:%s \", \$1, \$3 }')\" = \"\$(printf '2 nbep %s\\n2 nbep %s\\n4 nbep %s\\n' '$a' '$b' '$free' | sort -k3 | awk '{ printf \"%s:%s \", \$1, \$3 }')\" ]"
+fi
+
 # an EDMD whose measured run fails (no collision line): the benchmark stops, exit 1, EDMD named
 # (run apart, not paired: the same read of its count)
 # (until 2026-12-01 the wall time was read as its count, bash's arithmetic error ended the
@@ -138,5 +170,12 @@ taskset -c "$a" env PAIRED=1 EDMD_DIR="$tmp/edmd" PHIS=0.30 REPS=1 OUT="$tmp/one
 rc=$?
 check "PAIRED=1 on one CPU: exit 2 (got $rc), one line that says why, nothing run" \
     "[ $rc = 2 ] && grep -q 'PAIRED=1 needs two CPUs' '$tmp/one-cpu.txt' && [ ! -e '$tmp/one-cpu/rows.csv' ]"
+
+# CEILING=1 asking for more CPUs than this process may use: refused before anything runs, exit 2
+taskset -c "$a" env CEILING=1 PHIS=0.30 REPS=1 OUT="$tmp/one-cpu-ceiling" \
+    timeout 60 bash scripts/bench-dense.sh >"$tmp/one-cpu-ceiling.txt" 2>&1
+rc=$?
+check "CEILING=1 with THREADS up to 2 on one CPU: exit 2 (got $rc), one line that says why, nothing run" \
+    "[ $rc = 2 ] && grep -q 'CEILING=1 needs 2 CPUs' '$tmp/one-cpu-ceiling.txt' && [ ! -e '$tmp/one-cpu-ceiling/rows.csv' ]"
 
 test_end bench_dense
