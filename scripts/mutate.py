@@ -4190,6 +4190,26 @@ MUTANTS = [
      "equivalent under every fault a test makes: a failed write's status is EIO (a full disk), "
      "which the end's flush and the close's summary skip by status anyway; only a write that "
      "runs out of memory (HDF5's allocations refused) tells them apart"),
+    ("mail-take-first-look-never-passes", "src/mail.c",
+     "    if (atomic_load_explicit(&cell_at(m, b, b->head)->seq, memory_order_acquire) != b->head + 1)",
+     "    if (atomic_load_explicit(&cell_at(m, b, b->head)->seq, memory_order_acquire) != b->head + 2)",
+     ["test_mail"], None),
+    ("mail-take-first-look-before-written", "src/mail.c",
+     "    if (atomic_load_explicit(&cell_at(m, b, b->head)->seq, memory_order_acquire) != b->head + 1)",
+     "    if (atomic_load_explicit(&cell_at(m, b, b->head)->seq, memory_order_acquire) < b->head)",
+     ["test_mail"], "the loop that follows looks at the same cell again and stops there: a box taken empty goes one call deeper and takes nothing"),
+    ("room-for-one-never-grows", "include/nbep/compiler.h",
+     "    return n < *cap || nbep_room_grow(p, cap, n, elem);",
+     "    return n < *cap;",
+     ["test_undo"], None),
+    ("warp-act-input-not-first-on-tie", "src/warp.c",
+     "    if (in && (!has_ev || !nbep_stamp_before(ev, in->h.stamp))) {",
+     "    if (in && (!has_ev || nbep_stamp_before(in->h.stamp, ev))) {",
+     ["test_warp"], None),
+    ("warp-straggler-strictly-before", "src/warp.c",
+     "    if (nbep_undo_last(w->undo, a->slab, &last) && !nbep_stamp_before(last, h->stamp))",
+     "    if (nbep_undo_last(w->undo, a->slab, &last) && nbep_stamp_before(h->stamp, last))",
+     ["test_warp"], None),
 ]
 
 

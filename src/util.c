@@ -81,7 +81,7 @@ void nbep_free_aligned(void *p)
     free(p);
 }
 
-bool nbep_room_for_one(void **p, size_t *cap, size_t n, size_t elem)
+bool nbep_room_grow(void **p, size_t *cap, size_t n, size_t elem)
 {
     if (n < *cap)
         return true;

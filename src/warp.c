@@ -334,7 +334,7 @@ static void post(nbep_warp *w, int slab)
 
 /* Slab acts on its earliest input or event before the window's end (an input first on a tie);
  * false when it has none. */
-static bool act(nbep_warp *w, int slab)
+static inline NBEP_ALWAYS_INLINE bool act(nbep_warp *w, int slab)
 {
     slab_state *s = &w->s[slab];
     if (nbep_warp_failed(w))

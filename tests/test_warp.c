@@ -12,7 +12,8 @@
  * action a turn, so the others run ahead and are sent back: the test wants rollbacks, cancels and
  * inputs acted on again, and each rollback to be to a stamp before what the slab had done. On
  * threads (one a slab, one slab slowed by a spin in each event) the same results, under a
- * progress watchdog (a hang fails). Then bad counts refused with a message. */
+ * progress watchdog (a hang fails). A message and an event of one stamp: the message first,
+ * whichever slab runs first. Then bad counts refused with a message. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -481,6 +482,98 @@ static void refused(int slabs, size_t state, size_t msg, const char *says)
     nbep_diag_fini(&d);
 }
 
+/* A message and an event of one stamp in one slab (warp.h: the message first). A model of two
+ * slabs, each with one event at the same stamp: slab 0's sends slab 1 a message; slab 1 logs
+ * its event (E) and the message (M) in the order it acts on them, and puts the log back on a
+ * rollback. Slab 0 first: slab 1 holds both at once and must take the message first; slab 1
+ * first: it has done its event when the message comes, stamped as that event, which makes the
+ * message a straggler (at or before what it did): the event is undone and done again after. */
+typedef struct {
+    uint32_t done, n_log;
+} tie_world;
+typedef struct {
+    tie_world s[2];
+    char log[8];
+    nbep_warp *w;
+} tie_model;
+static const nbep_stamp TIE_STAMP = {.t = 1.0, .depth = 1, .level = {{5, 7, 0}}};
+
+static bool tie_next(void *u, int slab, nbep_stamp *s)
+{
+    const tie_model *x = u;
+    if (x->s[slab].done)
+        return false;
+    *s = TIE_STAMP;
+    return true;
+}
+
+static void tie_handle(void *u, int slab, const nbep_stamp *s)
+{
+    tie_model *x = u;
+    assert_true(nbep_cascade_cmp(s, &TIE_STAMP) == 0);
+    assert_true(nbep_warp_keep(x->w, slab, 0, &x->s[slab]));
+    x->s[slab].done = 1;
+    const uint64_t note = 42;
+    if (slab == 0)
+        assert_true(nbep_warp_send(x->w, 0, 1, 0, &note));
+    else
+        x->log[x->s[1].n_log++] = 'E';
+}
+
+static void tie_apply(void *u, int slab, int from, const nbep_stamp *s, uint32_t item,
+                      const void *data)
+{
+    tie_model *x = u;
+    uint64_t note;
+    memcpy(&note, data, sizeof note);
+    assert_true(slab == 1 && from == 0 && item == 0 && note == 42);
+    assert_true(nbep_cascade_cmp(s, &TIE_STAMP) == 0);
+    assert_true(nbep_warp_keep(x->w, slab, 0, &x->s[1]));
+    x->log[x->s[1].n_log++] = 'M';
+}
+
+static void tie_restore(void *u, int slab, uint32_t item, const void *state)
+{
+    tie_model *x = u;
+    assert_int_equal(item, 0);
+    memcpy(&x->s[slab], state, sizeof x->s[slab]);
+}
+
+static void test_a_message_comes_before_an_event_of_its_stamp(void **state)
+{
+    (void)state;
+    static const nbep_warp_ops ops = {tie_next, tie_handle, tie_apply, tie_restore};
+    for (int first = 0; first < 2; first++) {
+        tie_model x = {0};
+        nbep_diag d;
+        nbep_diag_init(&d);
+        assert_int_equal(nbep_warp_create(2, sizeof(tie_world), sizeof(uint64_t), 4, &ops, &x,
+                                          &x.w, &d),
+                         NBEP_OK);
+        nbep_diag_fini(&d);
+        nbep_warp_open(x.w, 2.0);
+        /* the first slab alone until it has acted on its event, then turns of a few actions */
+        while (!x.s[first].done)
+            (void)nbep_warp_run(x.w, first, 1);
+        bool done[2] = {false, false};
+        for (int turn = 0; !(done[0] && done[1]); turn++) {
+            assert_true(turn < 1000); /* a hang */
+            for (int q = 0; q < 2; q++)
+                if (!done[q])
+                    done[q] = nbep_warp_run(x.w, q, 3);
+        }
+        assert_false(nbep_warp_failed(x.w));
+        assert_int_equal(x.s[1].n_log, 2);
+        assert_true(x.log[0] == 'M' && x.log[1] == 'E');
+        const nbep_warp_tally t = nbep_warp_tally_of(x.w, 1);
+        assert_int_equal(t.applied, 1);
+        /* slab 1 first: its event undone for the message and done again */
+        assert_int_equal(t.rollbacks, first == 1 ? 1 : 0);
+        assert_int_equal(t.handled, first == 1 ? 2 : 1);
+        nbep_warp_destroy(&x.w);
+    }
+}
+
 static void test_bad_counts_are_refused(void **state)
 {
     (void)state;
@@ -495,6 +588,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_turns_give_the_serial_results),
         cmocka_unit_test(test_threads_give_the_serial_results),
+        cmocka_unit_test(test_a_message_comes_before_an_event_of_its_stamp),
         cmocka_unit_test(test_bad_counts_are_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -22,6 +22,9 @@
  * to a pure function returning nothing is deleted with its prefetches. Also for a kernel that
  * must be specialised at each call (its flags constant there). */
 #define NBEP_ALWAYS_INLINE __attribute__((always_inline))
+/* Never inlined: a rare path kept out of its caller's common one (so that the common one
+ * saves no registers the rare one needs). */
+#define NBEP_NOINLINE __attribute__((noinline))
 #else
 #define NBEP_MUST_CHECK
 #define NBEP_PRINTF(fmt, args)
@@ -29,6 +32,7 @@
 #define NBEP_PREFETCH(p) ((void)(p))
 #define NBEP_PREFETCH_W(p) ((void)(p))
 #define NBEP_ALWAYS_INLINE
+#define NBEP_NOINLINE
 #endif
 
 /* A function built twice, for CPUs with fused multiply-add and for the rest, the right one
@@ -62,8 +66,14 @@ void nbep_free_aligned(void *p);
 
 /* Room for one more element of `elem` bytes past the n in *p (room for *cap of them), the room
  * doubled from 64 as needed (realloc); false, nothing changed, when no memory could be had. The
- * slabs' logs and queues (undo.c, warp.c) grow so. */
-bool nbep_room_for_one(void **p, size_t *cap, size_t n, size_t elem);
+ * slabs' logs and queues (undo.c, warp.c) grow so, several times an event: the look inline, the
+ * growth out of line (a call each time cost the optimistic scheduler about 25 instructions an
+ * event of its 340: docs/optimistic-design.md, *Ties in time*). */
+bool nbep_room_grow(void **p, size_t *cap, size_t n, size_t elem);
+static inline bool nbep_room_for_one(void **p, size_t *cap, size_t n, size_t elem)
+{
+    return n < *cap || nbep_room_grow(p, cap, n, elem);
+}
 
 /* Asks the kernel to back the whole huge pages within [p, p + bytes) by huge pages
  * (transparent huge pages, madvise mode; nothing where it has none): the engines' arrays are
