@@ -143,8 +143,8 @@ void nbep_cells_link(nbep_cells *g)
         link_in(g, (uint32_t)i, g->m[i].cell);
 }
 
-/* Moves sphere i into cell c (its place unchanged). O(1). */
-static void move_member(nbep_cells *g, uint32_t i, size_t c)
+/* Takes sphere i out of its cell's list. O(1). */
+static void unlink_member(nbep_cells *g, uint32_t i)
 {
     const uint32_t nx = g->m[i].next;
     if (g->prev[i] != NBEP_CELLS_NONE)
@@ -153,6 +153,12 @@ static void move_member(nbep_cells *g, uint32_t i, size_t c)
         g->head[g->m[i].cell] = nx;
     if (nx != NBEP_CELLS_NONE)
         g->prev[nx] = g->prev[i];
+}
+
+/* Moves sphere i into cell c (its place unchanged). O(1). */
+static void move_member(nbep_cells *g, uint32_t i, size_t c)
+{
+    unlink_member(g, i);
     link_in(g, i, c);
 }
 
@@ -162,6 +168,26 @@ void nbep_cells_place(nbep_cells *g, uint32_t i, nbep_vec3 p, size_t c)
     g->m[i].at = p;
     if (c != g->m[i].cell)
         move_member(g, i, c);
+}
+
+void nbep_cells_put_back(nbep_cells *g, uint32_t i, nbep_vec3 p, size_t c, uint32_t prev)
+{
+    assert(c < g->n_cells);
+    g->m[i].at = p;
+    if (c == g->m[i].cell) /* the place left it in its cell (and in its order there) */
+        return;
+    unlink_member(g, i);
+    assert(prev == NBEP_CELLS_NONE || g->m[prev].cell == c);
+    const uint32_t nx = prev == NBEP_CELLS_NONE ? g->head[c] : g->m[prev].next;
+    g->m[i].cell = (uint32_t)c;
+    g->prev[i] = prev;
+    g->m[i].next = nx;
+    if (nx != NBEP_CELLS_NONE)
+        g->prev[nx] = i;
+    if (prev == NBEP_CELLS_NONE)
+        g->head[c] = i;
+    else
+        g->m[prev].next = i;
 }
 
 static void cell_coords(const nbep_cells *g, size_t c, size_t xyz[3])

@@ -34,6 +34,11 @@
  * could not grow: tests/test_team_faults.c compiles its own copy of this file that makes every
  * walk past a time fail, so that the loops' way out of a failed walk is tested; a build of nbep
  * has nothing here. */
+/* A test may take an expiry's commit over (test_evloop_undo: applied, undone, compared with
+ * what was, applied again) */
+#ifndef NBEP_EVLOOP_APPLY
+#define NBEP_EVLOOP_APPLY(e, w) apply(e, w)
+#endif
 #ifndef NBEP_EVLOOP_OOM_HOOK
 #define NBEP_EVLOOP_OOM_HOOK(i, t) false
 #endif
@@ -461,19 +466,86 @@ static void walk(const nbep_evloop *e, evl_ws *w, uint32_t i, nbep_vec3 c)
 
 /* The walk on w entered: its sphere placed at the new centre (in the cell the walk found); it
  * enters the lists of the neighbours it gains and leaves those of the ones it loses; those it
- * keeps (most: it moved by half a skin) are not touched. One thread, no other walking. */
-static void apply(nbep_evloop *e, const evl_ws *w)
+ * keeps (most: it moved by half a skin) are not touched. One thread, no other walking. With
+ * u, what undoes it is recorded there (nbep__evloop_apply_undoable); without (a constant
+ * NULL: the loops' commits), nothing is. */
+static inline NBEP_ALWAYS_INLINE void apply_rec(nbep_evloop *e, const evl_ws *w, evl_unlist *u)
 {
     const uint32_t i = w->item;
+    if (u) {
+        u->at = e->cells.m[i].at;
+        u->cell = e->cells.m[i].cell;
+        u->prev = e->cells.prev[i];
+        u->n_drop = 0;
+        size_t cap = u->cap;
+        while (cap < w->n_was)
+            cap = cap ? 2 * cap : 64;
+        if (cap != u->cap) {
+            uint32_t *q = realloc(u->drop_q, cap * sizeof *q);
+            if (!q) {
+                e->failed = true;
+                return;
+            }
+            u->drop_q = q;
+            u->cap = cap;
+        }
+    }
     nbep_cells_place(&e->cells, i, w->at, w->at_cell);
     for (size_t k = 0; k < w->n_near && !e->failed; k++)
         if (w->gain[k] && !nbep_nblist_append(&e->nl, w->near[k], i))
             e->failed = true;
     for (size_t k = 0; k < w->n_was; k++)
-        if (!w->kept[k]) /* lost */
-            nbep_nblist_drop(&e->nl, w->was[k], i);
+        if (!w->kept[k]) { /* lost */
+            const uint32_t q = nbep_nblist_drop(&e->nl, w->was[k], i);
+            if (u)
+                u->drop_q[u->n_drop++] = q;
+        }
     if (!nbep_nblist_set(&e->nl, i, w->near, e->failed ? 0 : w->n_near))
         e->failed = true;
+}
+
+static void apply(nbep_evloop *e, const evl_ws *w)
+{
+    apply_rec(e, w, NULL);
+}
+
+void nbep__evloop_apply_undoable(nbep_evloop *e, const evl_ws *w, evl_unlist *u)
+{
+    assert(w->rebuilt);
+    apply_rec(e, w, u);
+}
+
+/* apply_rec's steps undone in the opposite order, each exactly (nblist.h, cells.h): i's own
+ * list back (was: i's list when its walk read it, which nothing changed before the commit:
+ * the walk's own invariant), i back in the lists it left, each at its place, then out of those
+ * it entered (it is their last entry), then its centre and cell back. */
+void nbep__evloop_unapply(nbep_evloop *e, const evl_ws *w, const evl_unlist *u)
+{
+    const uint32_t i = w->item;
+    if (!nbep_nblist_set(&e->nl, i, w->was, w->n_was)) {
+        e->failed = true;
+        return;
+    }
+    size_t d = u->n_drop;
+    for (size_t k = w->n_was; k-- > 0;)
+        if (!w->kept[k]) {
+            const uint32_t q = u->drop_q[--d];
+            if (q != UINT32_MAX && !nbep_nblist_undrop(&e->nl, w->was[k], i, q)) {
+                e->failed = true;
+                return;
+            }
+        }
+    assert(d == 0);
+    for (size_t k = w->n_near; k-- > 0;)
+        if (w->gain[k])
+            nbep_nblist_unappend(&e->nl, w->near[k], i);
+    nbep_cells_put_back(&e->cells, i, u->at, u->cell, u->prev);
+}
+
+void nbep__evloop_unlist_fini(evl_unlist *u)
+{
+    free(u->drop_q);
+    *u = (evl_unlist){0};
 }
 
 void nbep_evloop_assign(nbep_evloop *e, const nbep_vec3 *pos, size_t lo, size_t hi)
@@ -806,7 +878,7 @@ void nbep__evloop_commit(nbep_evloop *e, const evl_ws *w)
     if (w->oom)
         e->failed = true;
     if (w->rebuilt)
-        apply(e, w);
+        NBEP_EVLOOP_APPLY(e, w);
     if (e->failed)
         return;
     if (w->n_next != NEXT_ALL) {

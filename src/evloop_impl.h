@@ -75,6 +75,17 @@ typedef struct evl_ws {
     int n_kept;
 } evl_ws;
 
+/* What an expiry's commit changed besides its workspace's lists (was, near and their flags),
+ * for nbep__evloop_unapply to undo it exactly, order included: the building block of expiries
+ * run ahead by an optimistic engine (docs/optimistic-design.md, *Lists undone*). */
+typedef struct evl_unlist {
+    nbep_vec3 at;          /* the list's centre before */
+    uint32_t cell, prev;   /* its cell before, and the member before it there */
+    uint32_t *drop_q;      /* owned, room cap: where each lost neighbour's list held it, in
+                            * the order of was */
+    size_t n_drop, cap;
+} evl_unlist;
+
 /* A place of the team loop's window, as every thread reads it: its sphere, the other sphere
  * its slot names and whether it was the calendar's earliest (nbep_evloop's batch). One record
  * of a place on one line: a taker meets one line that the leader wrote, not one per field. */
@@ -170,6 +181,13 @@ void nbep__evloop_handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, 
 /* What nbep__evloop_handle left waiting on w: the new list entered, the changed spheres'
  * calendar entries set. */
 void nbep__evloop_commit(nbep_evloop *e, const evl_ws *w);
+/* nbep__evloop_commit's part for an expiry, recording in *u what undoes it (the workspace w
+ * must be kept as it is until then): nbep__evloop_unapply(e, w, u), while nothing else changed
+ * the lists and cells since, leaves them as they were, bit for bit (one thread). Out of memory:
+ * the engine fails (nbep_evloop_failed), as at a commit. */
+void nbep__evloop_apply_undoable(nbep_evloop *e, const evl_ws *w, evl_unlist *u);
+void nbep__evloop_unapply(nbep_evloop *e, const evl_ws *w, const evl_unlist *u);
+void nbep__evloop_unlist_fini(evl_unlist *u);
 /* The calendar entry of sphere i from its slot. */
 void nbep__evloop_schedule_one(nbep_evloop *e, uint32_t i);
 

@@ -1,6 +1,7 @@
 /* Neighbour lists: see nblist.h. */
 #include "nbep/nblist.h"
 
+#include <assert.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -164,14 +165,26 @@ bool nbep_nblist_set(nbep_nblist *l, uint32_t i, const uint32_t *js, size_t m)
     return true;
 }
 
-void nbep_nblist_drop(nbep_nblist *l, uint32_t i, uint32_t j)
+uint32_t nbep_nblist_drop(nbep_nblist *l, uint32_t i, uint32_t j)
 {
     uint32_t *theirs = l->pool + l->sp[i].off;
     for (uint32_t q = 0; q < l->sp[i].cnt; q++)
         if (theirs[q] == j) { /* order does not matter: swap the last in */
             theirs[q] = theirs[--l->sp[i].cnt];
-            return;
+            return q;
         }
+    return UINT32_MAX;
+}
+
+bool nbep_nblist_undrop(nbep_nblist *l, uint32_t i, uint32_t j, uint32_t q)
+{
+    assert(q <= l->sp[i].cnt);
+    if (!nbep_nblist_append(l, i, j)) /* (it may move the list: its offset read after) */
+        return false;
+    uint32_t *theirs = l->pool + l->sp[i].off;
+    theirs[l->sp[i].cnt - 1] = theirs[q];
+    theirs[q] = j;
+    return true;
 }
 
 void nbep_nblist_detach(nbep_nblist *l, uint32_t i)

@@ -85,6 +85,11 @@ void nbep_cells_link(nbep_cells *g);
  * cells engine locates a rebuilt list's centre for its walk, then places it at the commit),
  * moving it into c if that is another. O(1). */
 void nbep_cells_place(nbep_cells *g, uint32_t i, nbep_vec3 p, size_t c);
+/* Undoes an nbep_cells_place of sphere i, the last change of its cells since: its place p
+ * again, and where the place moved it, its cell c again after the member `prev` that was before
+ * it there (g->prev[i] before the place; NBEP_CELLS_NONE: first), so that every cell's order is
+ * as it was (an optimistic engine's undo of a list rebuilt ahead: evloop.c). O(1). */
+void nbep_cells_put_back(nbep_cells *g, uint32_t i, nbep_vec3 p, size_t c, uint32_t prev);
 
 /* The block around cell c: per axis k, cnt[k] (1 to 3) cell coordinates idx[k][] (c's and its
  * neighbours', clamped at walls, wrapped on periodic axes) and the period each lies in,

@@ -20,6 +20,7 @@
 #ifndef NBEP_NBLIST_H
 #define NBEP_NBLIST_H
 
+#include <assert.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -184,8 +185,22 @@ bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j);
  * as nbep_nblist_clear and m appends (the same moves and rooms). False when out of memory
  * (then as an append that failed: i's list holds a part). One thread. */
 NBEP_MUST_CHECK bool nbep_nblist_set(nbep_nblist *l, uint32_t i, const uint32_t *js, size_t m);
-/* Removes j from i's list, if it is there (the last entry takes its place). One thread. */
-void nbep_nblist_drop(nbep_nblist *l, uint32_t i, uint32_t j);
+/* Removes j from i's list, if it is there (the last entry takes its place): where it was, or
+ * UINT32_MAX where it was not. One thread. */
+uint32_t nbep_nblist_drop(nbep_nblist *l, uint32_t i, uint32_t j);
+/* Undoes the nbep_nblist_drop(l, i, j) that returned q < UINT32_MAX, the last change of i's list
+ * since: j at q again, the entry that took its place last again, so the list is as it was, its
+ * order too (an optimistic engine's undo of a list rebuilt ahead: evloop.c). False when out of
+ * memory (as an append that failed). One thread. */
+NBEP_MUST_CHECK bool nbep_nblist_undrop(nbep_nblist *l, uint32_t i, uint32_t j, uint32_t q);
+/* Undoes nbep_nblist_append(l, i, j), the last change of i's list since (j is its last entry):
+ * j taken off; the room stays. */
+static inline void nbep_nblist_unappend(nbep_nblist *l, uint32_t i, uint32_t j)
+{
+    assert(l->sp[i].cnt > 0 && l->pool[l->sp[i].off + l->sp[i].cnt - 1] == j);
+    (void)j;
+    l->sp[i].cnt--;
+}
 /* Empties i's list; its room stays. */
 static inline void nbep_nblist_clear(nbep_nblist *l, uint32_t i)
 {

@@ -1,0 +1,218 @@
+/* An expiry's commit undone (evloop.c: nbep__evloop_apply_undoable, nbep__evloop_unapply, over
+ * nblist.h's undrop and unappend and cells.h's put_back): the building block of list expiries
+ * run ahead by an optimistic engine, which must put the lists and cells back as the serial run
+ * has them, their order too (a list's order decides nothing in a fluid's predictions, but a
+ * pile's let-go walks lists in order, and exact is what can be checked).
+ *
+ * This test compiles its own copy of the engine, whose expiry commits it takes over: the lists
+ * and cells copied whole (every list's entries in order, every cell's members in order, every
+ * list centre bit for bit), the commit applied with its record, undone, copied again and
+ * compared, then applied again as the run would (so the run goes on as it would have). In a
+ * periodic fluid at phi = 0.35 and a pile settling in a box at e = 0.6 under gravity: every
+ * commit undone is what was before it, the commits undone include ones that moved their sphere
+ * to another cell, lost neighbours out of the middle of a list and gained others; and the run
+ * with every commit undone and made again ends as the run without, bit for bit (positions,
+ * velocities, collisions). One thread. */
+struct nbep_evloop;
+struct evl_ws;
+static void take_apply(struct nbep_evloop *e, const struct evl_ws *w);
+#define NBEP_EVLOOP_APPLY(e, w) take_apply(e, w)
+#include "../src/evloop.c"
+#include "../src/evloop_team.c"
+
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "nbep/sim.h"
+#include "nbep_test.h"
+#include "nbep_test_scene.h"
+
+/* The lists and cells as they are: each list's length and entries in order, then every cell's
+ * members in order (from its head), then every list centre's bits. */
+typedef struct {
+    uint32_t *w;
+    size_t n, cap;
+} words;
+
+static void put(words *x, uint32_t v)
+{
+    if (x->n == x->cap) {
+        x->cap = x->cap ? 2 * x->cap : 4096;
+        x->w = realloc(x->w, x->cap * sizeof *x->w);
+        assert_non_null(x->w);
+    }
+    x->w[x->n++] = v;
+}
+
+static void copy_of(const nbep_evloop *e, words *x)
+{
+    x->n = 0;
+    for (uint32_t i = 0; i < e->n; i++) {
+        size_t m;
+        const uint32_t *js = nbep_nblist_of(&e->nl, i, &m);
+        put(x, (uint32_t)m);
+        for (size_t k = 0; k < m; k++)
+            put(x, js[k]);
+    }
+    const nbep_cells *g = &e->cells;
+    for (size_t c = 0; c < g->n_cells; c++) {
+        for (uint32_t i = g->head[c]; i != NBEP_CELLS_NONE; i = g->m[i].next) {
+            put(x, i);
+            put(x, g->m[i].cell);
+        }
+        put(x, UINT32_MAX);
+    }
+    for (uint32_t i = 0; i < e->n; i++) {
+        uint32_t b[6];
+        memcpy(b, &g->m[i].at, sizeof b);
+        for (int k = 0; k < 6; k++)
+            put(x, b[k]);
+        put(x, g->prev[i]);
+    }
+}
+
+static struct {
+    bool undo;          /* take the commits over (else apply them as the engine does) */
+    uint64_t commits;   /* expiry commits undone */
+    uint64_t differ;    /* ... whose undo left something not as it was */
+    uint64_t changed;   /* ... whose commit changed the lists or cells (most: every one moves
+                         * its centre) */
+    uint64_t moved;     /* ... that moved their sphere into another cell */
+    uint64_t mid;       /* ... that took a lost neighbour's entry out of the middle of its list */
+    uint64_t gained;    /* ... that entered a neighbour's list */
+    uint64_t lost, was, near; /* their lost neighbours, old and new lists' entries, in all */
+} seen;
+static words before, after;
+static evl_unlist rec;
+
+static void take_apply(nbep_evloop *e, const evl_ws *w)
+{
+    if (!seen.undo) {
+        apply(e, w);
+        return;
+    }
+    copy_of(e, &before);
+    const uint32_t cell0 = e->cells.m[w->item].cell;
+    nbep__evloop_apply_undoable(e, w, &rec);
+    assert_false(e->failed);
+    seen.moved += e->cells.m[w->item].cell != cell0;
+    bool mid = false, gained = false;
+    for (size_t k = 0, d = 0; k < w->n_was; k++)
+        if (!w->kept[k]) {
+            size_t m;
+            (void)nbep_nblist_of(&e->nl, w->was[k], &m);
+            mid |= rec.drop_q[d++] < m; /* another entry took its place */
+        }
+    for (size_t k = 0; k < w->n_near; k++)
+        gained |= w->gain[k];
+    seen.mid += mid;
+    seen.gained += gained;
+    seen.lost += rec.n_drop;
+    seen.was += w->n_was;
+    seen.near += w->n_near;
+    copy_of(e, &after);
+    seen.changed += after.n != before.n || memcmp(after.w, before.w, before.n * sizeof *before.w);
+    nbep__evloop_unapply(e, w, &rec);
+    assert_false(e->failed);
+    copy_of(e, &after);
+    seen.commits++;
+    seen.differ += after.n != before.n || memcmp(after.w, before.w, before.n * sizeof *before.w);
+    apply(e, w); /* as the run would have */
+}
+
+/* sc run twice on one thread, the second time with every expiry's commit undone and made
+ * again: each undo left what was, the runs end the same bit for bit, and the undos met every
+ * kind of change (at least `least` commits). */
+static void undone_and_the_same(const nbep_scene *sc, uint64_t least)
+{
+    nbep_state plain, undone;
+    memset(&seen, 0, sizeof seen);
+    const nbep_summary s0 = nbep_test_run(sc, 1, NULL, NULL, &plain, NULL);
+    seen.undo = true;
+    const nbep_summary s1 = nbep_test_run(sc, 1, NULL, NULL, &undone, NULL);
+    seen.undo = false;
+    fprintf(stderr,
+            "%llu commits undone (%llu changed, %llu moved cell, %llu out of a list's middle, "
+            "%llu gained), %llu not as they were; %llu collisions; per commit %.2f neighbours "
+            "lost, lists of %.1f before and %.1f after\n",
+            (unsigned long long)seen.commits, (unsigned long long)seen.changed,
+            (unsigned long long)seen.moved, (unsigned long long)seen.mid,
+            (unsigned long long)seen.gained, (unsigned long long)seen.differ,
+            (unsigned long long)(s1.sphere_collisions + s1.plane_collisions),
+            (double)seen.lost / (double)seen.commits, (double)seen.was / (double)seen.commits,
+            (double)seen.near / (double)seen.commits);
+    assert_int_equal(seen.differ, 0);
+    assert_true(seen.commits >= least);
+    assert_true(seen.changed == seen.commits);
+    assert_true(seen.moved > 0 && seen.mid > 0 && seen.gained > 0);
+    assert_true(s0.sphere_collisions > 0);
+    assert_int_equal(s1.sphere_collisions, s0.sphere_collisions);
+    assert_int_equal(s1.plane_collisions, s0.plane_collisions);
+    assert_int_equal(memcmp(plain.pos, undone.pos, sc->state.n * sizeof *plain.pos), 0);
+    assert_int_equal(memcmp(plain.vel, undone.vel, sc->state.n * sizeof *plain.vel), 0);
+    nbep_state_fini(&plain);
+    nbep_state_fini(&undone);
+}
+
+/* A periodic fluid at phi = 0.35: 8^3 spheres, lists across every face, 1.2 time units (a
+ * tenth of a second; under valgrind, for the memory, a few seconds: not scaled down, so that
+ * every kind of change is met there too). */
+static void test_a_fluids_list_commits_undo_exactly(void **state)
+{
+    (void)state;
+    nbep_scene *sc = nbep_test_periodic_fluid(8, 0.35, 60, 0.02, 3);
+    undone_and_the_same(sc, 1000);
+    nbep_test_scene_free(&sc);
+}
+
+/* 64 spheres of unequal masses dropped into a box under gravity, e = 0.6: they land, lean on
+ * one another and settle (lists of a pile: held spheres let go along them). */
+static void test_a_piles_list_commits_undo_exactly(void **state)
+{
+    (void)state;
+    nbep_scene *sc = nbep_test_scene_new(64, 6, "predictive", 400, 1e-3);
+    sc->restitution = 0.6;
+    sc->neighbors_cells = true;
+    sc->has_box = true;
+    sc->box_max = (nbep_vec3){1.0, 1.0, 3.0};
+    const nbep_vec3 lo = sc->box_min, hi = sc->box_max;
+    for (int k = 0; k < 3; k++) {
+        const nbep_vec3 e = {k == 0, k == 1, k == 2};
+        nbep_test_set_plane(sc, (size_t)(2 * k), e, nbep_vec3_dot(e, lo));
+        nbep_test_set_plane(sc, (size_t)(2 * k + 1), nbep_vec3_scale(e, -1.0),
+                            -nbep_vec3_dot(e, hi));
+    }
+    for (size_t i = 0; i < 64; i++) {
+        const double x = 0.125 + 0.25 * (double)(i % 4), y = 0.125 + 0.25 * (double)(i / 4 % 4);
+        const double z = 0.2 + 0.3 * (double)(i / 16), w = 0.3 * sin(1.7 * (double)i);
+        nbep_test_set_sphere(sc, i, (nbep_vec3){x, y, z}, (nbep_vec3){w, -0.5 * w, -0.2 * w},
+                             0.1, 1.0 + 0.01 * (double)i, (nbep_vec3){0, 0, -9.81});
+    }
+    undone_and_the_same(sc, 400);
+    nbep_test_scene_free(&sc);
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    free(before.w);
+    free(after.w);
+    nbep__evloop_unlist_fini(&rec);
+    return 0;
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_a_fluids_list_commits_undo_exactly),
+        cmocka_unit_test(test_a_piles_list_commits_undo_exactly),
+    };
+    return cmocka_run_group_tests(tests, NULL, teardown);
+}
