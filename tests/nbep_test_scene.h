@@ -55,17 +55,24 @@ static inline void nbep_test_set_plane(nbep_scene *sc, size_t p, nbep_vec3 n, do
     sc->state.plane_offset[p] = offset;
 }
 
-/* The box [0, L]^3 as planes 0-5 (x, -x, y, -y, z, -z, inward), as a deck's box makes them. */
-static inline void nbep_test_set_box(nbep_scene *sc, double L)
+/* The box [0, hi] as planes 0-5 (x, -x, y, -y, z, -z, inward), as a deck's box makes them. */
+static inline void nbep_test_set_box_to(nbep_scene *sc, nbep_vec3 hi)
 {
     sc->has_box = true;
     sc->box_min = (nbep_vec3){0.0, 0.0, 0.0};
-    sc->box_max = (nbep_vec3){L, L, L};
+    sc->box_max = hi;
     for (int k = 0; k < 3; k++) {
         nbep_vec3 e = {k == 0, k == 1, k == 2};
         nbep_test_set_plane(sc, (size_t)(2 * k), e, 0.0);
-        nbep_test_set_plane(sc, (size_t)(2 * k + 1), nbep_vec3_scale(e, -1.0), -L);
+        nbep_test_set_plane(sc, (size_t)(2 * k + 1), nbep_vec3_scale(e, -1.0),
+                            -nbep_vec3_dot(e, hi));
     }
+}
+
+/* The box [0, L]^3, as nbep_test_set_box_to. */
+static inline void nbep_test_set_box(nbep_scene *sc, double L)
+{
+    nbep_test_set_box_to(sc, (nbep_vec3){L, L, L});
 }
 
 static inline void nbep_test_set_sphere(nbep_scene *sc, size_t i, nbep_vec3 p, nbep_vec3 v,

@@ -180,15 +180,7 @@ static void test_a_piles_list_commits_undo_exactly(void **state)
     nbep_scene *sc = nbep_test_scene_new(64, 6, "predictive", 400, 1e-3);
     sc->restitution = 0.6;
     sc->neighbors_cells = true;
-    sc->has_box = true;
-    sc->box_max = (nbep_vec3){1.0, 1.0, 3.0};
-    const nbep_vec3 lo = sc->box_min, hi = sc->box_max;
-    for (int k = 0; k < 3; k++) {
-        const nbep_vec3 e = {k == 0, k == 1, k == 2};
-        nbep_test_set_plane(sc, (size_t)(2 * k), e, nbep_vec3_dot(e, lo));
-        nbep_test_set_plane(sc, (size_t)(2 * k + 1), nbep_vec3_scale(e, -1.0),
-                            -nbep_vec3_dot(e, hi));
-    }
+    nbep_test_set_box_to(sc, (nbep_vec3){1.0, 1.0, 3.0});
     for (size_t i = 0; i < 64; i++) {
         const double x = 0.125 + 0.25 * (double)(i % 4), y = 0.125 + 0.25 * (double)(i / 4 % 4);
         const double z = 0.2 + 0.3 * (double)(i / 16), w = 0.3 * sin(1.7 * (double)i);

@@ -238,14 +238,7 @@ static void test_a_settling_pile_never_hands_out_an_older_stamp(void **state)
     sc->tc = 1e-6;
     sc->neighbors_cells = true;
     sc->output_every = 50;
-    sc->has_box = true;
-    sc->box_max = (nbep_vec3){0.9, 0.9, 2.0};
-    const nbep_vec3 lo = sc->box_min, hi = sc->box_max;
-    for (int k = 0; k < 3; k++) {
-        const nbep_vec3 e = {k == 0, k == 1, k == 2};
-        nbep_test_set_plane(sc, (size_t)(2 * k), e, nbep_vec3_dot(e, lo));
-        nbep_test_set_plane(sc, (size_t)(2 * k + 1), nbep_vec3_scale(e, -1.0), -nbep_vec3_dot(e, hi));
-    }
+    nbep_test_set_box_to(sc, (nbep_vec3){0.9, 0.9, 2.0});
     for (size_t i = 0; i < 27; i++) {
         const double x = 0.15 + 0.3 * (double)(i % 3), y = 0.15 + 0.3 * (double)(i / 3 % 3);
         const double z = 0.3 + 0.45 * (double)(i / 9), w = 0.1 * sin(1.7 * (double)i);
