@@ -241,7 +241,10 @@ run_apart() { # n phi k rep: k one-thread runs at once, the i-th held to the i-t
             run_nbep "$1" "$2" 1 "$4" "-apart$i" &
         pids+=($!)
     done
-    for i in "${pids[@]}"; do wait "$i" || return 1; done
+    # every run waited for, so that none still writes when a failure ends the script
+    local failed=0
+    for i in "${pids[@]}"; do wait "$i" || failed=1; done
+    return "$failed"
 }
 
 edmd_once() { # dir -> "collisions seconds rss cpu_seconds"
@@ -391,7 +394,8 @@ for r in rows:
         apart.setdefault((r["n"], r["phi"], r["threads"], r["rep"]), []).append(r)
 rows = [r for r in rows if r["engine"] != "apart"]
 for (n, phi, k, rep), rs in sorted(apart.items()):
-    if len(rs) != int(k) or any(float(r["seconds"] or 0) <= 0 for r in rs):
+    if len(rs) != int(k) or any(float(r["seconds"] or 0) <= 0 or int(r["collisions"] or 0) <= 0
+                                for r in rs):
         continue
     c = sum(int(r["collisions"]) for r in rs)
     rate = sum(int(r["collisions"]) / float(r["seconds"]) for r in rs)

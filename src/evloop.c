@@ -522,6 +522,9 @@ void nbep__evloop_apply_undoable(nbep_evloop *e, const evl_ws *w, evl_unlist *u)
 void nbep__evloop_unapply(nbep_evloop *e, const evl_ws *w, const evl_unlist *u)
 {
     const uint32_t i = w->item;
+    if (e->failed) /* (a commit out of memory may have stopped part way: nothing to undo by;
+                    * the run stops) */
+        return;
     if (!nbep_nblist_set(&e->nl, i, w->was, w->n_was)) {
         e->failed = true;
         return;
