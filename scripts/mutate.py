@@ -4233,6 +4233,15 @@ MUTANTS = [
     ("evloop-undoable-cell-before-lost", "src/evloop.c",
      "        u->prev = e->cells.prev[i];",
      "        u->prev = NBEP_CELLS_NONE;", ["test_evloop_undo"], None),
+    # the physics reaches the run's state only through its context (tests/test_world_copy.c)
+    ("cells-react-on-the-runs-state", "src/pred_cells.c",
+     "    nbep__pred_react(x->c, x->s, x->sc, ev->time, x->t_local, lo, hi, ev, w, x->cnt, x->mx);",
+     "    nbep__pred_react(x->c, (nbep_state *)x->c->st, x->sc, ev->time, x->t_local, lo, hi, ev, w, x->cnt, x->mx);",
+     ["test_world_copy"], None),
+    ("cells-flight-from-the-runs-state", "src/pred_cells.c",
+     "    *p = x->s->pos[i];\n    *v = x->s->vel[i];",
+     "    *p = x->c->st->pos[i];\n    *v = x->c->st->vel[i];",
+     ["test_world_copy"], None),
 ]
 
 

@@ -34,6 +34,11 @@
  * could not grow: tests/test_team_faults.c compiles its own copy of this file that makes every
  * walk past a time fail, so that the loops' way out of a failed walk is tested; a build of nbep
  * has nothing here. */
+/* A test may look at each event before it is handled, with the callbacks and their context
+ * (test_world_copy: the physics run on a world of copies beside the run) */
+#ifndef NBEP_EVLOOP_BEFORE_HOOK
+#define NBEP_EVLOOP_BEFORE_HOOK(e, ops, u, i, ev) ((void)0)
+#endif
 /* A test may take an expiry's commit over (test_evloop_undo: applied, undone, compared with
  * what was, applied again) */
 #ifndef NBEP_EVLOOP_APPLY
@@ -818,6 +823,7 @@ static void note_next(const nbep_evloop *e, evl_ws *w)
 void nbep__evloop_handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, void *u, uint32_t i,
                    const nbep_event *ev, double t, bool commits)
 {
+    NBEP_EVLOOP_BEFORE_HOOK(e, ops, u, i, ev);
     w->item = i;
     w->rebuilt = w->reacted = w->stop = w->oom = false;
     w->n_changed = 0;
