@@ -4242,6 +4242,12 @@ MUTANTS = [
      "    *p = x->s->pos[i];\n    *v = x->s->vel[i];",
      "    *p = x->c->st->pos[i];\n    *v = x->c->st->vel[i];",
      ["test_world_copy"], None),
+    # the cells engine rolled back as the optimistic engine's slab will (tests/test_evloop_rollback.c)
+    ("cells-restore-tau-kept", "src/pred_cells.c",
+     "    x->c->tau[i] = m->tau;", "    (void)0;", ["test_evloop_rollback"], None),
+    ("cells-restore-image-kept", "src/pred_cells.c",
+     "        x->s->image[3 * (size_t)i + (size_t)k] = m->image[k];", "        (void)0;",
+     ["test_evloop_rollback"], None),
 ]
 
 

@@ -39,6 +39,11 @@
 #ifndef NBEP_EVLOOP_BEFORE_HOOK
 #define NBEP_EVLOOP_BEFORE_HOOK(e, ops, u, i, ev) ((void)0)
 #endif
+/* A test may act after each event of the one-thread loop is committed, between events (the
+ * calendar holding exactly what is to come: test_evloop_rollback undoes events there) */
+#ifndef NBEP_EVLOOP_COMMITTED_HOOK
+#define NBEP_EVLOOP_COMMITTED_HOOK(e, ops, u) ((void)0)
+#endif
 /* A test may take an expiry's commit over (test_evloop_undo: applied, undone, compared with
  * what was, applied again) */
 #ifndef NBEP_EVLOOP_APPLY
@@ -923,6 +928,7 @@ static inline NBEP_ALWAYS_INLINE bool run_one(nbep_evloop *e, evl_ws *w,
         return false;
     }
     nbep__evloop_commit(e, w);
+    NBEP_EVLOOP_COMMITTED_HOOK(e, ops, u);
     return !e->failed;
 }
 

@@ -37,50 +37,7 @@ static void take_apply(struct nbep_evloop *e, const struct evl_ws *w);
 #include "nbep/sim.h"
 #include "nbep_test.h"
 #include "nbep_test_scene.h"
-
-/* The lists and cells as they are: each list's length and entries in order, then every cell's
- * members in order (from its head), then every list centre's bits. */
-typedef struct {
-    uint32_t *w;
-    size_t n, cap;
-} words;
-
-static void put(words *x, uint32_t v)
-{
-    if (x->n == x->cap) {
-        x->cap = x->cap ? 2 * x->cap : 4096;
-        x->w = realloc(x->w, x->cap * sizeof *x->w);
-        assert_non_null(x->w);
-    }
-    x->w[x->n++] = v;
-}
-
-static void copy_of(const nbep_evloop *e, words *x)
-{
-    x->n = 0;
-    for (uint32_t i = 0; i < e->n; i++) {
-        size_t m;
-        const uint32_t *js = nbep_nblist_of(&e->nl, i, &m);
-        put(x, (uint32_t)m);
-        for (size_t k = 0; k < m; k++)
-            put(x, js[k]);
-    }
-    const nbep_cells *g = &e->cells;
-    for (size_t c = 0; c < g->n_cells; c++) {
-        for (uint32_t i = g->head[c]; i != NBEP_CELLS_NONE; i = g->m[i].next) {
-            put(x, i);
-            put(x, g->m[i].cell);
-        }
-        put(x, UINT32_MAX);
-    }
-    for (uint32_t i = 0; i < e->n; i++) {
-        uint32_t b[6];
-        memcpy(b, &g->m[i].at, sizeof b);
-        for (int k = 0; k < 6; k++)
-            put(x, b[k]);
-        put(x, g->prev[i]);
-    }
-}
+#include "nbep_test_evloop.h"
 
 static struct {
     bool undo;          /* take the commits over (else apply them as the engine does) */
@@ -103,30 +60,6 @@ static evl_ws stack_w[BATCH_MAX]; /* the workspaces of the commits applied, copi
                                    * reuses its own for the next event) */
 static evl_unlist stack_u[BATCH_MAX];
 static int depth;
-
-static bool same(const words *a, const words *b)
-{
-    return a->n == b->n && memcmp(a->w, b->w, a->n * sizeof *a->w) == 0;
-}
-
-static void copy_ws(evl_ws *d, const evl_ws *w)
-{
-    uint32_t *near = d->near, *was = d->was;
-    uint8_t *kept = d->kept, *gain = d->gain;
-    const size_t cap = d->cap;
-    *d = *w;
-    d->cap = cap > w->cap ? cap : w->cap;
-    d->near = realloc(near, d->cap * sizeof *near);
-    d->was = realloc(was, d->cap * sizeof *was);
-    d->kept = realloc(kept, d->cap);
-    d->gain = realloc(gain, d->cap);
-    d->changed = NULL;
-    assert_true(d->near && d->was && d->kept && d->gain);
-    memcpy(d->near, w->near, w->n_near * sizeof *w->near);
-    memcpy(d->was, w->was, w->n_was * sizeof *w->was);
-    memcpy(d->kept, w->kept, w->n_was);
-    memcpy(d->gain, w->gain, w->n_near);
-}
 
 /* Every list moved and its room cut to a fresh layout's (the pool compacted). */
 static void squeeze(nbep_evloop *e)
