@@ -145,6 +145,7 @@ typedef struct pred_plan {
     bool team;          /* cells mode: a team of team_size >= 2 may run the event loop */
     int team_size;      /* cells mode: the threads that may run the event loop */
     int slabs;          /* cells mode: per-slab calendars (NBEP_SLABS; 1: one calendar) */
+    bool scheduled;     /* cells mode: the loop through the scheduler (NBEP_SCHEDULED) */
     pred_ways ways;     /* the ways a step may run (grid mode's crews, cells mode's team) */
 } pred_plan;
 
@@ -162,6 +163,15 @@ static int slabs_asked(void)
     if (end == v || *end != '\0' || k < 2)
         return 1;
     return k > NBEP_SLABCAL_MAX ? NBEP_SLABCAL_MAX + 1 : (int)k;
+}
+
+/* NBEP_SCHEDULED=1, read as a run is made: cells mode's one-thread loop through the optimistic
+ * scheduler on one slab (nbep_evloop_set_scheduled, for measuring what its bookkeeping costs
+ * the engine; the results are the same), in a free flight without slabs, the team off. */
+static bool scheduled_asked(void)
+{
+    const char *v = getenv("NBEP_SCHEDULED");
+    return v && strcmp(v, "1") == 0;
 }
 
 /* The plan of a run of scene sc from state st (the scene's, or a run's copy of it) on nt
@@ -195,8 +205,9 @@ static pred_plan plan_of(const nbep_scene *sc, const nbep_state *st, int nt, int
          * e < 1 their TC clocks and reaction counts, which the loop keeps with the motion to
          * undo a speculative reaction (cells_save) */
         p.slabs = slabs_asked();
+        p.scheduled = scheduled_asked() && p.free_flight && p.slabs < 2;
         /* (per-slab calendars are merged on one thread: the team loop keeps one calendar) */
-        const bool can_team = nt >= 2 && p.free_flight && p.slabs < 2;
+        const bool can_team = nt >= 2 && p.free_flight && p.slabs < 2 && !p.scheduled;
         int size = nt < NBEP_EVLOOP_TEAM_MAX ? nt : NBEP_EVLOOP_TEAM_MAX;
         if (team_force >= 2 && team_force < size)
             size = team_force;
@@ -416,6 +427,8 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
             st = NBEP_EDECK;
         } else if (st == NBEP_OK && p.slabs >= 2) {
             st = nbep_evloop_set_slabs(c->ev, p.slabs, d);
+        } else if (st == NBEP_OK && p.scheduled) {
+            st = nbep_evloop_set_scheduled(c->ev, d);
         }
         c->team = st == NBEP_OK && p.team;
         if (c->team) {

@@ -258,6 +258,7 @@ void nbep_evloop_destroy(nbep_evloop **e)
     nbep_cells_fini(&(*e)->cells);
     nbep_nblist_fini(&(*e)->nl);
     nbep_free_aligned((*e)->count);
+    nbep__evloop_sched_destroy(&(*e)->sched);
     for (int t = 0; t < NBEP_EVLOOP_TEAM_MAX; t++) /* (those never made are zero) */
         for (int k = 0; k < NBEP_EVLOOP_RING; k++)
             ws_fini(&(*e)->ws[t][k]);
@@ -886,12 +887,16 @@ void nbep__evloop_handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, 
     NBEP_EVLOOP_HANDLED_HOOK(e, w, ev);
 }
 
-/* What handle left waiting: the new list entered, the changed spheres' calendar entries set. */
-void nbep__evloop_commit(nbep_evloop *e, const evl_ws *w)
+/* What handle left waiting: the new list entered (recorded in rec where not NULL: an
+ * expiry's commit that may be undone), the changed spheres' calendar entries set. */
+static inline NBEP_ALWAYS_INLINE void commit_rec(nbep_evloop *e, const evl_ws *w,
+                                                 evl_unlist *rec)
 {
     if (w->oom)
         e->failed = true;
-    if (w->rebuilt)
+    if (w->rebuilt && rec)
+        apply_rec(e, w, rec);
+    else if (w->rebuilt)
         NBEP_EVLOOP_APPLY(e, w);
     if (e->failed)
         return;
@@ -905,6 +910,16 @@ void nbep__evloop_commit(nbep_evloop *e, const evl_ws *w)
         if (w->changed[k] != w->item)
             nbep__evloop_schedule_one(e, w->changed[k]);
     nbep__evloop_schedule_one(e, w->item);
+}
+
+void nbep__evloop_commit(nbep_evloop *e, const evl_ws *w)
+{
+    commit_rec(e, w, NULL);
+}
+
+void nbep__evloop_commit_undoable(nbep_evloop *e, const evl_ws *w, evl_unlist *rec)
+{
+    commit_rec(e, w, rec);
 }
 
 /* One event of the one-thread loop: sphere i's, at t. False when the run stops at it (stuck,
@@ -937,6 +952,8 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
 {
     if (e->failed) /* a rebuild ran out of memory */
         return false;
+    if (e->sched) /* NBEP_SCHEDULED: through the optimistic scheduler (evloop_warp.c) */
+        return nbep__evloop_run_scheduled(e, ops, u, t_end, stall, tally, t_stuck);
     evl_ws *w = &e->ws[0][0];
     if (e->slabcal) { /* the slabs' earliest entries merged: the one calendar's order */
         nbep_calendar_entry c;

@@ -121,6 +121,16 @@ void nbep_evloop_set_radii(nbep_evloop *e, const double *radius);
  * loop keeps one calendar), before the first schedule. NBEP_ENOMEM, NBEP_EDECK past
  * NBEP_SLABCAL_MAX, with a message. */
 NBEP_MUST_CHECK nbep_status nbep_evloop_set_slabs(nbep_evloop *e, int slabs, nbep_diag *d);
+/* The one-thread loop run through the optimistic scheduler (warp.h) on one slab, for
+ * measuring what its bookkeeping costs the real engine (NBEP_SCHEDULED; docs/optimistic-
+ * design.md, *The engine on the scheduler*): each event handled as the scheduler's model
+ * handles it, what it changes kept in the slab's log (its spheres' motion and slots, an
+ * expiry's list record), the whole call one window. The same events in the same order: the
+ * results are the same bit for bit. For free flight (the motion kept is a free flight's); an
+ * event whose (time, key) would come before the one handled before it (a cascade's tie at one
+ * time, which a root stamp cannot order) stops the run as a stall at its time. Only on an
+ * engine for one thread without slabs, before the first run. NBEP_ENOMEM with a message. */
+NBEP_MUST_CHECK nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d);
 /* The lists' skin that the engine takes when asked for skin_frac of `reach`: cut
  * down in a small periodic box (its sides hi - lo along the axes that periodic names; NULL:
  * none) so that three cells, sides of the cutoff, fit across. Below NBEP_NBLIST_SKIN_MIN the

@@ -126,6 +126,7 @@ struct nbep_evloop {
     double face_lo[3], face_hi[3]; /* near_face's faces: a periodic axis's low and high
                                     * sides, -inf and +inf on any other */
     bool failed;          /* out of memory for a list: the run stops */
+    struct evl_sched *sched; /* owned, NULL but with nbep_evloop_set_scheduled */
     nbep_feq *q;          /* borrowed */
     const uint64_t *ver;  /* borrowed */
     /* the team loop's window: the places handled ahead and not yet committed, numbered in
@@ -188,6 +189,14 @@ void nbep__evloop_commit(nbep_evloop *e, const evl_ws *w);
 void nbep__evloop_apply_undoable(nbep_evloop *e, const evl_ws *w, evl_unlist *u);
 void nbep__evloop_unapply(nbep_evloop *e, const evl_ws *w, const evl_unlist *u);
 void nbep__evloop_unlist_fini(evl_unlist *u);
+/* nbep__evloop_commit, an expiry's list entered with its record in *rec (as
+ * nbep__evloop_apply_undoable) */
+void nbep__evloop_commit_undoable(nbep_evloop *e, const evl_ws *w, evl_unlist *rec);
+/* nbep_evloop_run through the optimistic scheduler on one slab (evloop_warp.c) */
+bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void *u,
+                                double t_end, nbep_evloop_stall *stall,
+                                nbep_evloop_tally *tally, double *t_stuck);
+void nbep__evloop_sched_destroy(struct evl_sched **s);
 /* The calendar entry of sphere i from its slot. */
 void nbep__evloop_schedule_one(nbep_evloop *e, uint32_t i);
 

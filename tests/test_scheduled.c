@@ -1,0 +1,121 @@
+/* NBEP_SCHEDULED=1 (src/evloop_warp.c): cells mode's one-thread loop through the optimistic
+ * scheduler on one slab, each event handled as the scheduler's model handles it and what it
+ * changes kept in the slab's log, so that the bookkeeping's cost on the real engine can be
+ * measured. It must change nothing of the results: an elastic and a dissipative (e = 0.8, TC
+ * model) periodic fluid at phi = 0.35 end the same bit for bit with it as without (positions,
+ * velocities, every counter), also on 2 threads (the team off where it is asked); a scene that
+ * accelerates (a pile) runs as without it. A Newton's cradle struck at its high-numbered end
+ * makes entries at the time of the event that makes them and before it in (key, sphere), which
+ * root stamps cannot order: the scheduled loop stops there as a stall, with its message, and
+ * nothing aborts (the log's order check). */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "nbep/sim.h"
+#include "nbep_test.h"
+#include "nbep_test_scene.h"
+
+/* sc on nt threads with and without NBEP_SCHEDULED: the same end, bit for bit, the same counts */
+static void scheduled_the_same(const nbep_scene *sc, int nt)
+{
+    nbep_state plain, sched;
+    uint64_t c0[NBEP_COUNTER_COUNT], c1[NBEP_COUNTER_COUNT];
+    const nbep_summary s0 = nbep_test_run_counted(sc, nt, NULL, NULL, &plain, c0);
+    assert_int_equal(setenv("NBEP_SCHEDULED", "1", 1), 0);
+    const nbep_summary s1 = nbep_test_run_counted(sc, nt, NULL, NULL, &sched, c1);
+    assert_int_equal(unsetenv("NBEP_SCHEDULED"), 0);
+    assert_true(s0.sphere_collisions > 1000);
+    assert_int_equal(s1.sphere_collisions, s0.sphere_collisions);
+    assert_int_equal(s1.plane_collisions, s0.plane_collisions);
+    for (int k = 0; k < NBEP_COUNTER_COUNT; k++)
+        if (k != NBEP_COUNTER_AHEAD) /* (the team's events ahead: none when scheduled) */
+            assert_true(c1[k] == c0[k]);
+    assert_int_equal(memcmp(plain.pos, sched.pos, sc->state.n * sizeof *plain.pos), 0);
+    assert_int_equal(memcmp(plain.vel, sched.vel, sc->state.n * sizeof *plain.vel), 0);
+    nbep_state_fini(&plain);
+    nbep_state_fini(&sched);
+}
+
+static void test_a_fluid_scheduled_runs_the_same(void **state)
+{
+    (void)state;
+    nbep_scene *sc = nbep_test_periodic_fluid(8, 0.35, 40, 0.02, 9);
+    scheduled_the_same(sc, 1);
+    scheduled_the_same(sc, 2);
+    sc->restitution = 0.8;
+    sc->tc = 1e-3;
+    scheduled_the_same(sc, 1);
+    nbep_test_scene_free(&sc);
+}
+
+/* 27 spheres dropped in a box under gravity at e = 0.6: not free flight, so not scheduled */
+static void test_a_pile_runs_as_without_it(void **state)
+{
+    (void)state;
+    nbep_scene *sc = nbep_test_scene_new(27, 6, "predictive", 300, 1e-3);
+    sc->restitution = 0.6;
+    sc->neighbors_cells = true;
+    nbep_test_set_box_to(sc, (nbep_vec3){0.9, 0.9, 2.0});
+    for (size_t i = 0; i < 27; i++)
+        nbep_test_set_sphere(sc, i,
+                             (nbep_vec3){0.15 + 0.3 * (double)(i % 3),
+                                         0.15 + 0.3 * (double)(i / 3 % 3),
+                                         0.3 + 0.45 * (double)(i / 9)},
+                             (nbep_vec3){0.0, 0.0, 0.0}, 0.1, 1.0, (nbep_vec3){0, 0, -9.81});
+    nbep_state plain, sched;
+    const nbep_summary s0 = nbep_test_run(sc, 1, NULL, NULL, &plain, NULL);
+    assert_int_equal(setenv("NBEP_SCHEDULED", "1", 1), 0);
+    const nbep_summary s1 = nbep_test_run(sc, 1, NULL, NULL, &sched, NULL);
+    assert_int_equal(unsetenv("NBEP_SCHEDULED"), 0);
+    assert_true(s0.plane_collisions > 0);
+    assert_int_equal(s1.plane_collisions, s0.plane_collisions);
+    assert_int_equal(memcmp(plain.pos, sched.pos, sc->state.n * sizeof *plain.pos), 0);
+    nbep_state_fini(&plain);
+    nbep_state_fini(&sched);
+    nbep_test_scene_free(&sc);
+}
+
+/* Newton's cradle (test_stamp_order's): spheres 3, 2, 1, 0 touching in a row, sphere 4 coming
+ * in at sphere 3's side; each contact's reaction makes the next pair's entry at its own time,
+ * with a smaller key */
+static void test_a_cradle_stops_the_scheduled_loop_as_a_stall(void **state)
+{
+    (void)state;
+    const double r = 0.37, u = 1.3;
+    nbep_scene *sc = nbep_test_scene_new(5, 0, "predictive", 400, 1e-3);
+    sc->neighbors_cells = true;
+    const nbep_vec3 zero = {0.0, 0.0, 0.0};
+    nbep_test_set_sphere(sc, 4, (nbep_vec3){0.3 - 2.0 * r - 0.2, 0.7, -0.4},
+                         (nbep_vec3){u, 0.0, 0.0}, r, 1.1, zero);
+    for (size_t k = 0; k < 4; k++)
+        nbep_test_set_sphere(sc, 3 - k, (nbep_vec3){0.3 + 2.0 * r * (double)k, 0.7, -0.4}, zero,
+                             r, 1.1, zero);
+    char msg[512];
+    uint64_t ahead;
+    nbep_state fin = {0};
+    assert_int_equal(nbep_test_run_to_end(sc, 1, msg, sizeof msg, &ahead, &fin), NBEP_OK);
+    nbep_state_fini(&fin);
+    assert_int_equal(setenv("NBEP_SCHEDULED", "1", 1), 0);
+    const nbep_status st = nbep_test_run_to_end(sc, 1, msg, sizeof msg, &ahead, &fin);
+    assert_int_equal(unsetenv("NBEP_SCHEDULED"), 0);
+    nbep_state_fini(&fin);
+    assert_int_equal(st, NBEP_ENUMERIC);
+    assert_non_null(strstr(msg, "do not resolve"));
+    nbep_test_scene_free(&sc);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_a_fluid_scheduled_runs_the_same),
+        cmocka_unit_test(test_a_pile_runs_as_without_it),
+        cmocka_unit_test(test_a_cradle_stops_the_scheduled_loop_as_a_stall),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
