@@ -1063,8 +1063,8 @@ MUTANTS = [
      "            undo_from(e, ops, u, us, s + 2);\n            nbep_calendar_set(e->cal, e->batch[k].item,",
      TEAM, None),
     ("team-off-at-dissipation", "src/algo_predictive.c",
-     "const bool can_team = nt >= 2 && p.free_flight && p.slabs < 2;",
-     "const bool can_team = nt >= 2 && p.free_flight && p.slabs < 2 && !p.jam_model;", TEAM,
+     "const bool can_team = nt >= 2 && p.free_flight && p.slabs < 2 && !p.scheduled;",
+     "const bool can_team = nt >= 2 && p.free_flight && p.slabs < 2 && !p.scheduled && !p.jam_model;", TEAM,
      None),
     ("team-jammed-carried-over", "src/pred_cells.c",
      "    w->jammed = 0;", "    (void)0;", ["tests/test_jam.sh"],
@@ -3784,8 +3784,8 @@ MUTANTS = [
      ["test_memory_plan"], None),
     # the team loop allowed beside per-slab calendars (it keeps one calendar)
     ("pred-slabs-beside-a-team", "src/algo_predictive.c",
-     "const bool can_team = nt >= 2 && p.free_flight && p.slabs < 2;",
-     "const bool can_team = nt >= 2 && p.free_flight;", ["test_sim", "test_memory_plan"], None),
+     "const bool can_team = nt >= 2 && p.free_flight && p.slabs < 2 && !p.scheduled;",
+     "const bool can_team = nt >= 2 && p.free_flight && !p.scheduled;", ["test_sim", "test_memory_plan"], None),
     # eleventh draw: every detection row on thread 0 (no result changes; no speed-up either)
     ("detect-split-rows-all-to-first", "src/algo_detect.c",
      "double goal = total * (double)(t + 1) / (double)nt;",
@@ -4248,6 +4248,17 @@ MUTANTS = [
     ("cells-restore-image-kept", "src/pred_cells.c",
      "        x->s->image[3 * (size_t)i + (size_t)k] = m->image[k];", "        (void)0;",
      ["test_evloop_rollback"], None),
+    # the loop through the scheduler (src/evloop_warp.c, NBEP_SCHEDULED): tests/test_scheduled.c
+    ("sched-tie-not-stopped", "src/evloop_warp.c",
+     "    if (x->has_last && nbep_cascade_cmp(s, &x->last) < 0) {",
+     "    if (0) {", ["test_scheduled"], None),
+    ("sched-pair-keeps-one", "src/evloop_warp.c",
+     "        (ev.kind == NBEP_EVENT_SPHERE && ev.partner != i && !keep_sphere(x, ev.partner))) {",
+     "        false) {", ["test_scheduled"],
+     "one slab rolls nothing back, so what is kept is never read; the keeps' restore is tested by hand on the engine (test_evloop_rollback), the scheduler's call of it waits for two slabs"),
+    ("sched-beside-a-team", "src/algo_predictive.c",
+     "const bool can_team = nt >= 2 && p.free_flight && p.slabs < 2 && !p.scheduled;",
+     "const bool can_team = nt >= 2 && p.free_flight && p.slabs < 2;", ["test_scheduled"], None),
 ]
 
 
