@@ -262,6 +262,17 @@ static inline nbep_summary nbep_test_run_counted(const nbep_scene *sc, int nt,
     return nbep_test_run_to(sc, nt, on_frame, ctx, NULL, final, counts);
 }
 
+/* Two runs' final states (nbep_test_run's), which must end the same bit for bit: positions and
+ * velocities; both finished with. */
+static inline void nbep_test_same_end(nbep_state *a, nbep_state *b)
+{
+    assert_int_equal(a->n, b->n);
+    assert_int_equal(memcmp(a->pos, b->pos, a->n * sizeof *a->pos), 0);
+    assert_int_equal(memcmp(a->vel, b->vel, a->n * sizeof *a->vel), 0);
+    nbep_state_fini(a);
+    nbep_state_fini(b);
+}
+
 /* nbep_test_run_counted with the reactions counter alone to *reactions (may be NULL). */
 static inline nbep_summary nbep_test_run(const nbep_scene *sc, int nt, nbep_frame_fn on_frame,
                                          void *ctx, nbep_state *final, uint64_t *reactions)

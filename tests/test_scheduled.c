@@ -36,10 +36,7 @@ static void scheduled_the_same(const nbep_scene *sc, int nt)
     for (int k = 0; k < NBEP_COUNTER_COUNT; k++)
         if (k != NBEP_COUNTER_AHEAD) /* (the team's events ahead: none when scheduled) */
             assert_true(c1[k] == c0[k]);
-    assert_int_equal(memcmp(plain.pos, sched.pos, sc->state.n * sizeof *plain.pos), 0);
-    assert_int_equal(memcmp(plain.vel, sched.vel, sc->state.n * sizeof *plain.vel), 0);
-    nbep_state_fini(&plain);
-    nbep_state_fini(&sched);
+    nbep_test_same_end(&plain, &sched);
 }
 
 static void test_a_fluid_scheduled_runs_the_same(void **state)
@@ -75,9 +72,7 @@ static void test_a_pile_runs_as_without_it(void **state)
     assert_int_equal(unsetenv("NBEP_SCHEDULED"), 0);
     assert_true(s0.plane_collisions > 0);
     assert_int_equal(s1.plane_collisions, s0.plane_collisions);
-    assert_int_equal(memcmp(plain.pos, sched.pos, sc->state.n * sizeof *plain.pos), 0);
-    nbep_state_fini(&plain);
-    nbep_state_fini(&sched);
+    nbep_test_same_end(&plain, &sched);
     nbep_test_scene_free(&sc);
 }
 
