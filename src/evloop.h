@@ -125,8 +125,9 @@ NBEP_MUST_CHECK nbep_status nbep_evloop_set_slabs(nbep_evloop *e, int slabs, nbe
  * measuring what its bookkeeping costs the real engine (NBEP_SCHEDULED; docs/optimistic-
  * design.md, *The engine on the scheduler*): each event handled as the scheduler's model
  * handles it, what it changes kept in the slab's log (its spheres' motion and slots, an
- * expiry's list record), the whole call one window. The same events in the same order: the
- * results are the same bit for bit. For free flight (the motion kept is a free flight's); an
+ * expiry's list record), in windows of a 64th of the call's span. The same events in the same
+ * order: the results are the same bit for bit. For free flight (the motion kept is a free
+ * flight's); an
  * event whose (time, key) would come before the one handled before it (a cascade's tie at one
  * time, which a root stamp cannot order) stops the run as a stall at its time. Only on an
  * engine for one thread without slabs, before the first run. NBEP_ENOMEM with a message. */

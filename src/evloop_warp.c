@@ -167,8 +167,9 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
     /* an expiry: its list record kept under an item past the spheres', its place in the
      * window as its state */
     kept_list *l = next_list(x);
-    uint64_t *place = l ? nbep_warp_keep_room(x->warp, 0, (uint32_t)e->n) : NULL;
-    if (!place || !copy_lists(&l->ws, w)) {
+    uint64_t *place = l && copy_lists(&l->ws, w) ? nbep_warp_keep_room(x->warp, 0, (uint32_t)e->n)
+                                                 : NULL;
+    if (!place) {
         e->failed = true;
         return;
     }
@@ -254,15 +255,19 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
     x->stall = stall;
     x->tally = tally;
     x->stop = false;
-    /* windows of WINDOWS_A_STEP a step (what each did stands at its end): their logs, a few
-     * hundred events' in a dense fluid, stay in the caches (the whole step's, written once and
-     * never read, cost a miss of the last level a few times an event) */
-    const double width = stall->dt / WINDOWS_A_STEP;
+    /* windows of a WINDOWS_A_STEP-th of what is left of the call's span from its first event
+     * (a step, or its part; what each window did stands at its end): their logs, a few hundred
+     * events' in a dense fluid, stay in the caches (the whole step's, written once and never
+     * read, cost a miss of the last level a few times an event). A width that would not move a
+     * window's end past its first event (0, or lost to rounding) makes the rest one window. */
     uint32_t i;
-    double t;
+    double t, width = 0.0;
+    if (nbep_calendar_top(e->cal, &i, &t) && t < t_end)
+        width = (t_end - t) / WINDOWS_A_STEP;
     while (!x->stop && !e->failed && !nbep_warp_failed(x->warp) &&
            nbep_calendar_top(e->cal, &i, &t) && t < t_end) {
-        nbep_warp_open(x->warp, fmin(t + width, t_end));
+        const double end = t + width;
+        nbep_warp_open(x->warp, end > t ? fmin(end, t_end) : t_end);
         while (!nbep_warp_run(x->warp, 0, SIZE_MAX)) {
         }
         x->n_lists = 0;

@@ -107,12 +107,20 @@ static void copy_make(const nbep_evloop *e, const nbep_evloop_ops *ops, void *u,
     copy_of(e, &c->lists);
 }
 
+/* Field by field, bits compared (a struct's padding is not the save's to set). */
+#define SAME_FIELD(x, y, f) (memcmp(&(x).f, &(y).f, sizeof (x).f) == 0)
 static bool copy_same(const copy *a, const copy *b, size_t n)
 {
-    return memcmp(a->m, b->m, n * sizeof *a->m) == 0 &&
-           memcmp(a->slot, b->slot, n * sizeof *a->slot) == 0 &&
-           memcmp(a->has, b->has, n * sizeof *a->has) == 0 &&
-           memcmp(a->entry, b->entry, n * sizeof *a->entry) == 0 && same(&a->lists, &b->lists);
+    for (size_t k = 0; k < n; k++) {
+        const nbep_evloop_motion *p = &a->m[k], *q = &b->m[k];
+        const nbep_calendar_entry *x = &a->entry[k], *y = &b->entry[k];
+        if (!SAME_FIELD(*p, *q, pos) || !SAME_FIELD(*p, *q, vel) || !SAME_FIELD(*p, *q, tau) ||
+            p->ver != q->ver || !SAME_FIELD(*p, *q, image) || !SAME_FIELD(*p, *q, own) ||
+            a->has[k] != b->has[k] ||
+            (a->has[k] && (!SAME_FIELD(*x, *y, time) || x->key != y->key || x->item != y->item)))
+            return false;
+    }
+    return memcmp(a->slot, b->slot, n * sizeof *a->slot) == 0 && same(&a->lists, &b->lists);
 }
 
 static void look_before(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uint32_t i,

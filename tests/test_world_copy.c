@@ -8,7 +8,9 @@
  * It compiles its own copy of the engine and of pred_cells.c, with a look before each event
  * is handled (one thread): a world is made (the context's pred_ctx and nbep_state copied, their
  * motion arrays (position, velocity, image, local time, response count, and the TC clock and
- * reaction count where the scene has them) copied into its own, its own counts and workspace);
+ * reaction count where the scene has them) copied into its own, its own counts, and a copy of
+ * the thread's workspace record, whose scratch arrays it shares: a reaction writes them before
+ * it reads them, and the run's own reaction comes after);
  * the event's sphere is predicted in the world (planes and its list's pairs) and flown to the
  * event's time, and both must come out as in the run, bit for bit; a fresh collision is reacted to in the world, which must leave
  * every array of the run as it was; and at the next look, once the run has handled the event
@@ -78,8 +80,10 @@ static double pending_time;             /* the world's reaction's time */
 static nbep_vec3 pending_flight[64][3]; /* each changed sphere flown to it in the world, after */
 /* the run's arrays before the world reacted (to see that it left them) */
 static nbep_vec3 *run_pos, *run_vel;
-static double *run_tau;
+static double *run_tau, *run_t_last;
 static uint64_t *run_ver;
+static int32_t *run_image;
+static jam_count *run_jam;
 
 #define GROW(p, n) ((p) = realloc((p), (n) * sizeof *(p)), assert_non_null(p))
 
@@ -98,6 +102,9 @@ static void world_make(const cells_user *x)
         GROW(run_vel, n);
         GROW(run_tau, n);
         GROW(run_ver, n);
+        GROW(run_image, 3 * n);
+        GROW(run_t_last, n);
+        GROW(run_jam, n);
         wd.cap = n;
     }
     /* the structs as they are, then the motion arrays the world's own */
@@ -129,6 +136,12 @@ static void world_make(const cells_user *x)
     memcpy(run_vel, x->s->vel, n * sizeof *run_vel);
     memcpy(run_tau, x->c->tau, n * sizeof *run_tau);
     memcpy(run_ver, x->c->ver, n * sizeof *run_ver);
+    if (x->s->image)
+        memcpy(run_image, x->s->image, 3 * n * sizeof *run_image);
+    if (x->c->t_last)
+        memcpy(run_t_last, x->c->t_last, n * sizeof *run_t_last);
+    if (x->c->jam)
+        memcpy(run_jam, x->c->jam, n * sizeof *run_jam);
 }
 
 static bool same_event(const nbep_event *a, const nbep_event *b)
@@ -193,7 +206,10 @@ static void look_before(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uin
     seen.differ += memcmp(run_pos, x->s->pos, n * sizeof *run_pos) != 0 ||
                    memcmp(run_vel, x->s->vel, n * sizeof *run_vel) != 0 ||
                    memcmp(run_tau, x->c->tau, n * sizeof *run_tau) != 0 ||
-                   memcmp(run_ver, x->c->ver, n * sizeof *run_ver) != 0;
+                   memcmp(run_ver, x->c->ver, n * sizeof *run_ver) != 0 ||
+                   (x->s->image && memcmp(run_image, x->s->image, 3 * n * sizeof *run_image)) ||
+                   (x->c->t_last && memcmp(run_t_last, x->c->t_last, n * sizeof *run_t_last)) ||
+                   (x->c->jam && memcmp(run_jam, x->c->jam, n * sizeof *run_jam));
     assert_true(m <= sizeof pending / sizeof pending[0]);
     memcpy(pending, changed, m * sizeof *changed);
     n_pending = m;
@@ -264,6 +280,9 @@ static int teardown(void **state)
     free(run_vel);
     free(run_tau);
     free(run_ver);
+    free(run_image);
+    free(run_t_last);
+    free(run_jam);
     return 0;
 }
 
