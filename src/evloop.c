@@ -5,6 +5,7 @@
 #include <assert.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "nbep/predict.h"
 
@@ -428,6 +429,32 @@ static bool grow_ws(evl_ws *w)
     return true;
 }
 
+bool nbep__evloop_ws_copy_lists(evl_ws *d, const evl_ws *w)
+{
+    if (!d->near && d->cap == 0) /* (a zeroed copy: its first growth makes its arrays) */
+        d->cap = NBEP_EVLOOP_WS_CAP0 / 2;
+    while (!d->near || d->cap < w->n_near || d->cap < w->n_was)
+        if (!grow_ws(d))
+            return false;
+    d->item = w->item;
+    d->rebuilt = w->rebuilt;
+    d->at = w->at;
+    d->at_cell = w->at_cell;
+    d->n_near = w->n_near;
+    d->n_was = w->n_was;
+    memcpy(d->near, w->near, w->n_near * sizeof *w->near);
+    memcpy(d->gain, w->gain, w->n_near * sizeof *w->gain);
+    memcpy(d->was, w->was, w->n_was * sizeof *w->was);
+    memcpy(d->kept, w->kept, w->n_was * sizeof *w->kept);
+    return true;
+}
+
+void nbep__evloop_ws_copy_fini(evl_ws *d)
+{
+    ws_fini(d);
+    memset(d, 0, sizeof *d);
+}
+
 /* A sphere j near i during i's walk: into the new list, marked gained unless i's old list has
  * it (a handful looked through in cache: it is kept). */
 static void gather_one(const nbep_evloop *e, uint32_t i, uint32_t j, void *arg)
@@ -488,18 +515,11 @@ static inline NBEP_ALWAYS_INLINE void apply_rec(nbep_evloop *e, const evl_ws *w,
         u->cell = e->cells.m[i].cell;
         u->prev = e->cells.prev[i];
         u->n_drop = 0;
-        size_t cap = u->cap;
-        while (cap < w->n_was)
-            cap = cap ? 2 * cap : 64;
-        if (cap != u->cap) {
-            uint32_t *q = realloc(u->drop_q, cap * sizeof *q);
-            if (!q) {
+        while (u->cap < w->n_was)
+            if (!nbep_room_grow((void **)&u->drop_q, &u->cap, u->cap, sizeof *u->drop_q)) {
                 e->failed = true;
                 return;
             }
-            u->drop_q = q;
-            u->cap = cap;
-        }
     }
     nbep_cells_place(&e->cells, i, w->at, w->at_cell);
     for (size_t k = 0; k < w->n_near && !e->failed; k++)

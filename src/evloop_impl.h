@@ -189,6 +189,13 @@ void nbep__evloop_commit(nbep_evloop *e, const evl_ws *w);
 void nbep__evloop_apply_undoable(nbep_evloop *e, const evl_ws *w, evl_unlist *u);
 void nbep__evloop_unapply(nbep_evloop *e, const evl_ws *w, const evl_unlist *u);
 void nbep__evloop_unlist_fini(evl_unlist *u);
+/* Into d (zeroed, or a copy made so before; its arrays its own): what an expiry's apply and
+ * its undo read of workspace w (its sphere, new centre and cell, the lists and their flags),
+ * for an undo after the engine's workspace has gone on to other events. False without memory
+ * (d's arrays then as they were, or grown). */
+bool nbep__evloop_ws_copy_lists(evl_ws *d, const evl_ws *w);
+/* Frees such a copy's arrays; zeroed again. */
+void nbep__evloop_ws_copy_fini(evl_ws *d);
 /* nbep__evloop_commit, an expiry's list entered with its record in *rec (as
  * nbep__evloop_apply_undoable) */
 void nbep__evloop_commit_undoable(nbep_evloop *e, const evl_ws *w, evl_unlist *rec);

@@ -86,47 +86,12 @@ static bool keep_sphere(struct evl_sched *x, uint32_t i)
 /* The room for the window's next expiry record; NULL without memory. */
 static kept_list *next_list(struct evl_sched *x)
 {
-    if (x->n_lists == x->cap_lists) {
-        const size_t cap = x->cap_lists ? 2 * x->cap_lists : 64;
-        kept_list *l = realloc(x->lists, cap * sizeof *l);
-        if (!l)
-            return NULL;
-        memset(l + x->cap_lists, 0, (cap - x->cap_lists) * sizeof *l);
-        x->lists = l;
-        x->cap_lists = cap;
-    }
+    const size_t cap0 = x->cap_lists;
+    if (!nbep_room_for_one((void **)&x->lists, &x->cap_lists, x->n_lists, sizeof *x->lists))
+        return NULL;
+    /* new records zeroed: their copies' arrays are made at their first use */
+    memset(x->lists + cap0, 0, (x->cap_lists - cap0) * sizeof *x->lists);
     return &x->lists[x->n_lists];
-}
-
-/* A copy of the workspace's lists that the undo reads (was, near and their flags). */
-static bool copy_lists(evl_ws *d, const evl_ws *w)
-{
-    if (d->cap < w->cap) {
-        uint32_t *near = realloc(d->near, w->cap * sizeof *near);
-        if (near)
-            d->near = near;
-        uint32_t *was = realloc(d->was, w->cap * sizeof *was);
-        if (was)
-            d->was = was;
-        uint8_t *kept = realloc(d->kept, w->cap);
-        if (kept)
-            d->kept = kept;
-        uint8_t *gain = realloc(d->gain, w->cap);
-        if (gain)
-            d->gain = gain;
-        if (!near || !was || !kept || !gain)
-            return false;
-        d->cap = w->cap;
-    }
-    d->item = w->item;
-    d->rebuilt = w->rebuilt;
-    d->n_near = w->n_near;
-    d->n_was = w->n_was;
-    memcpy(d->near, w->near, w->n_near * sizeof *w->near);
-    memcpy(d->gain, w->gain, w->n_near);
-    memcpy(d->was, w->was, w->n_was * sizeof *w->was);
-    memcpy(d->kept, w->kept, w->n_was);
-    return true;
 }
 
 static void sched_handle(void *arg, int slab, const nbep_stamp *s)
@@ -167,7 +132,7 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
     /* an expiry: its list record kept under an item past the spheres', its place in the
      * window as its state */
     kept_list *l = next_list(x);
-    uint64_t *place = l && copy_lists(&l->ws, w) ? nbep_warp_keep_room(x->warp, 0, (uint32_t)e->n)
+    uint64_t *place = l && nbep__evloop_ws_copy_lists(&l->ws, w) ? nbep_warp_keep_room(x->warp, 0, (uint32_t)e->n)
                                                  : NULL;
     if (!place) {
         e->failed = true;
@@ -233,10 +198,7 @@ void nbep__evloop_sched_destroy(struct evl_sched **s)
     struct evl_sched *x = *s;
     nbep_warp_destroy(&x->warp);
     for (size_t k = 0; k < x->cap_lists; k++) {
-        free(x->lists[k].ws.near);
-        free(x->lists[k].ws.was);
-        free(x->lists[k].ws.kept);
-        free(x->lists[k].ws.gain);
+        nbep__evloop_ws_copy_fini(&x->lists[k].ws);
         nbep__evloop_unlist_fini(&x->lists[k].rec);
     }
     free(x->lists);

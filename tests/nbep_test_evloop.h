@@ -55,23 +55,10 @@ static inline bool same(const words *a, const words *b)
     return a->n == b->n && memcmp(a->w, b->w, a->n * sizeof *a->w) == 0;
 }
 
+/* What an expiry's apply and undo read of w, into d (the engine's copy: evloop.c) */
 static inline void copy_ws(evl_ws *d, const evl_ws *w)
 {
-    uint32_t *near = d->near, *was = d->was;
-    uint8_t *kept = d->kept, *gain = d->gain;
-    const size_t cap = d->cap;
-    *d = *w;
-    d->cap = cap > w->cap ? cap : w->cap;
-    d->near = realloc(near, d->cap * sizeof *near);
-    d->was = realloc(was, d->cap * sizeof *was);
-    d->kept = realloc(kept, d->cap);
-    d->gain = realloc(gain, d->cap);
-    d->changed = NULL;
-    assert_true(d->near && d->was && d->kept && d->gain);
-    memcpy(d->near, w->near, w->n_near * sizeof *w->near);
-    memcpy(d->was, w->was, w->n_was * sizeof *w->was);
-    memcpy(d->kept, w->kept, w->n_was);
-    memcpy(d->gain, w->gain, w->n_near);
+    assert_true(nbep__evloop_ws_copy_lists(d, w));
 }
 
 #endif

@@ -265,10 +265,7 @@ static int teardown(void **state)
 {
     (void)state;
     for (int k = 0; k < K_MAX; k++) {
-        free(log_[k].ws.near);
-        free(log_[k].ws.was);
-        free(log_[k].ws.kept);
-        free(log_[k].ws.gain);
+        nbep__evloop_ws_copy_fini(&log_[k].ws);
         nbep__evloop_unlist_fini(&log_[k].rec);
     }
     free(at.m);

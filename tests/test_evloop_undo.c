@@ -207,10 +207,7 @@ static int teardown(void **state)
     free(after.w);
     free(expect.w);
     for (int k = 0; k < BATCH_MAX; k++) {
-        free(stack_w[k].near);
-        free(stack_w[k].was);
-        free(stack_w[k].kept);
-        free(stack_w[k].gain);
+        nbep__evloop_ws_copy_fini(&stack_w[k]);
         nbep__evloop_unlist_fini(&stack_u[k]);
     }
     return 0;
