@@ -51,6 +51,13 @@ struct evl_sched {
 
 /* ---- the model's side (warp.h) ------------------------------------------------------------ */
 
+/* No more events: the call returns false with t in *t_stuck (stuck, a reaction's stop, a tie) */
+static void stop_at(struct evl_sched *x, double t)
+{
+    x->stop = true;
+    x->t_stuck = t;
+}
+
 static bool sched_next(void *arg, int slab, nbep_stamp *s)
 {
     (void)slab;
@@ -65,8 +72,7 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
      * serial loop takes it next, and a root stamp would put it before what was done (the
      * cascade stamps of the engine's model order it: not made here yet) */
     if (x->has_last && nbep_cascade_cmp(s, &x->last) < 0) {
-        x->stop = true;
-        x->t_stuck = t;
+        stop_at(x, t);
         return false;
     }
     return true;
@@ -106,8 +112,7 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
     x->has_last = true;
     x->tally->events++;
     if (!nbep__evloop_advances(x->stall, t)) {
-        x->stop = true;
-        x->t_stuck = t;
+        stop_at(x, t);
         return;
     }
     /* what it may change: its sphere and, for a pair, the other (a free flight's reaction
@@ -121,8 +126,7 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
     nbep__evloop_handle(e, w, x->ops, x->u, i, &ev, t, true);
     nbep__evloop_count_handled(x->tally, w);
     if (w->stop) {
-        x->stop = true;
-        x->t_stuck = t;
+        stop_at(x, t);
         return;
     }
     if (!w->rebuilt || w->oom) {
@@ -132,8 +136,9 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
     /* an expiry: its list record kept under an item past the spheres', its place in the
      * window as its state */
     kept_list *l = next_list(x);
-    uint64_t *place = l && nbep__evloop_ws_copy_lists(&l->ws, w) ? nbep_warp_keep_room(x->warp, 0, (uint32_t)e->n)
-                                                 : NULL;
+    uint64_t *place = l && nbep__evloop_ws_copy_lists(&l->ws, w)
+                          ? nbep_warp_keep_room(x->warp, 0, (uint32_t)e->n)
+                          : NULL;
     if (!place) {
         e->failed = true;
         return;
