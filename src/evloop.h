@@ -127,10 +127,10 @@ NBEP_MUST_CHECK nbep_status nbep_evloop_set_slabs(nbep_evloop *e, int slabs, nbe
  * handles it, what it changes kept in the slab's log (its spheres' motion and slots, an
  * expiry's list record), in windows of a 64th of the call's span. The same events in the same
  * order: the results are the same bit for bit. For free flight (the motion kept is a free
- * flight's); an
- * event whose (time, key) would come before the one handled before it (a cascade's tie at one
- * time, which a root stamp cannot order) stops the run as a stall at its time. Only on an
- * engine for one thread without slabs, before the first run. NBEP_ENOMEM with a message. */
+ * flight's). Entries made at the time of the event that made them (a cascade's tie at one
+ * time) are stamped as made (cascade.h); a cascade deeper than a stamp holds
+ * (NBEP_CASCADE_DEPTH) stops the run as a stall at its time. Only on an engine for one thread
+ * without slabs, before the first run. NBEP_ENOMEM with a message. */
 NBEP_MUST_CHECK nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d);
 /* The lists' skin that the engine takes when asked for skin_frac of `reach`: cut
  * down in a small periodic box (its sides hi - lo along the axes that periodic names; NULL:

@@ -31,6 +31,12 @@ typedef struct {
     evl_unlist rec;
 } kept_list;
 
+/* An entry's stamp where it is not a root: its sphere's (the entry is its calendar entry) */
+typedef struct {
+    uint32_t item;
+    nbep_stamp s;
+} tie_stamp;
+
 struct evl_sched {
     nbep_warp *warp;
     /* the call's */
@@ -39,7 +45,8 @@ struct evl_sched {
     void *u;
     nbep_evloop_stall *stall;
     nbep_evloop_tally *tally;
-    bool stop;           /* no more events: stuck, a reaction's stop or a tie (t_stuck) */
+    bool stop;           /* no more events: stuck, a reaction's stop or a cascade too deep
+                          * (t_stuck) */
     double t_stuck;
     nbep_stamp last;     /* the stamp of the event handled last (its order's check) */
     bool has_last;
@@ -47,11 +54,18 @@ struct evl_sched {
      * spheres', keeps that place) */
     kept_list *lists;
     size_t n_lists, cap_lists;
+    /* the stamps of the entries made at the time of the event that made them (a tie in time:
+     * cascade.h), all at one time, the latest handled: every other entry's stamp is a root.
+     * Few (a cradle's row), and gone once the calendar's top is later: none of that time is
+     * left then. */
+    tie_stamp *ties;
+    size_t n_ties, cap_ties;
 };
 
 /* ---- the model's side (warp.h) ------------------------------------------------------------ */
 
-/* No more events: the call returns false with t in *t_stuck (stuck, a reaction's stop, a tie) */
+/* No more events: the call returns false with t in *t_stuck (stuck, a reaction's stop, a
+ * cascade at one time too deep for its stamps) */
 static void stop_at(struct evl_sched *x, double t)
 {
     x->stop = true;
@@ -67,13 +81,48 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
     double t;
     if (x->stop || e->failed || !nbep_calendar_top(e->cal, &i, &t))
         return false;
-    nbep_cascade_set_root(s, t, nbep__evloop_slot_key(i, nbep_feq_slot(e->q, i)), i);
-    /* an entry made at the time of the event that made it, before it in (key, item): the
-     * serial loop takes it next, and a root stamp would put it before what was done (the
-     * cascade stamps of the engine's model order it: not made here yet) */
+    const uint64_t key = nbep__evloop_slot_key(i, nbep_feq_slot(e->q, i));
+    nbep_cascade_set_root(s, t, key, i);
+    if (x->n_ties > 0 && t != x->ties[0].s.t) /* (the calendar's top past their time) */
+        x->n_ties = 0;
+    for (size_t k = 0; k < x->n_ties; k++)
+        if (x->ties[k].item == i) { /* made at its maker's time, if for this entry */
+            const nbep_stamp *c = &x->ties[k].s;
+            if (c->t == t && c->level[c->depth - 1].key == key)
+                nbep_cascade_copy(s, c);
+            break;
+        }
+    /* the order's check: the stamps made where their entries were never go back, but where a
+     * cascade at one time is deeper than a stamp holds (made_by), a root stamp does: the loop
+     * stops there as stuck, with the stall's message */
     if (x->has_last && nbep_cascade_cmp(s, &x->last) < 0) {
         stop_at(x, t);
         return false;
+    }
+    return true;
+}
+
+/* Sphere j's new entry, made by the event stamped *by: its stamp kept where it is not a root
+ * (at by's time), in place of any older one of j's. Where that stamp would be deeper than
+ * NBEP_CASCADE_DEPTH (a cascade at one time through more than 8 spheres) none is kept: the
+ * entry's root stamp then comes before the event that made it, and the next stops the loop
+ * there (its order's check). False without memory. */
+static bool made_by(struct evl_sched *x, const nbep_stamp *by, uint32_t j)
+{
+    const nbep_event *slot = nbep_feq_slot(x->e->q, j);
+    if (slot->time != by->t) /* later: a root (j's older stamp, if any, no longer its entry's) */
+        return true;
+    size_t k = 0;
+    while (k < x->n_ties && x->ties[k].item != j)
+        k++;
+    if (k == x->n_ties &&
+        !nbep_room_for_one((void **)&x->ties, &x->cap_ties, k, sizeof *x->ties))
+        return false;
+    if (nbep_cascade_made(by, slot->time, nbep__evloop_slot_key(j, slot), j, &x->ties[k].s)) {
+        x->ties[k].item = j;
+        x->n_ties += k == x->n_ties;
+    } else if (k < x->n_ties) { /* (too deep: j's older stamp is not its entry's either) */
+        x->ties[k] = x->ties[--x->n_ties];
     }
     return true;
 }
@@ -105,7 +154,7 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
     (void)slab;
     struct evl_sched *x = arg;
     nbep_evloop *e = x->e;
-    const uint32_t i = s->level[0].item;
+    const uint32_t i = s->level[s->depth - 1].item; /* (the entry's: the path's last level) */
     const double t = s->t;
     const nbep_event ev = *nbep_feq_slot(e->q, i);
     nbep_cascade_copy(&x->last, s);
@@ -127,6 +176,15 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
     nbep__evloop_count_handled(x->tally, w);
     if (w->stop) {
         stop_at(x, t);
+        return;
+    }
+    /* the stamps of the entries it made (as the commit sets them: the changed spheres', then
+     * its own) */
+    bool room = true;
+    for (size_t k = 0; k < w->n_changed && room; k++)
+        room = w->changed[k] == i || made_by(x, s, w->changed[k]);
+    if (!room || !made_by(x, s, i)) {
+        e->failed = true;
         return;
     }
     if (!w->rebuilt || w->oom) {
@@ -207,6 +265,7 @@ void nbep__evloop_sched_destroy(struct evl_sched **s)
         nbep__evloop_unlist_fini(&x->lists[k].rec);
     }
     free(x->lists);
+    free(x->ties);
     free(x);
     *s = NULL;
 }
@@ -222,6 +281,7 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
     x->stall = stall;
     x->tally = tally;
     x->stop = false;
+    x->n_ties = 0; /* (what was set up since is a root, as the set-up's predictions) */
     /* windows of a WINDOWS_A_STEP-th of what is left of the call's span from its first event
      * (a step, or its part; what each window did stands at its end): their logs, a few hundred
      * events' in a dense fluid, stay in the caches (the whole step's, written once and never

@@ -6,7 +6,9 @@
  * velocities, every counter), also on 2 threads (the team off where it is asked); a scene that
  * accelerates (a pile) runs as without it. A Newton's cradle struck at its high-numbered end
  * makes entries at the time of the event that makes them and before it in (key, sphere), which
- * root stamps cannot order: the scheduled loop stops there as a stall, with its message, and
+ * root stamps cannot order: the stamps made where the entries are made (cascade.h) hand them out
+ * in the serial loop's order, and the cradle ends as without the scheduler; one whose cascade
+ * is deeper than a stamp holds stops the scheduled loop as a stall, with its message, and
  * nothing aborts (the log's order check). */
 #include <stdarg.h>
 #include <stddef.h>
@@ -17,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "nbep/cascade.h"
 #include "nbep/sim.h"
 #include "nbep_test.h"
 #include "nbep_test_scene.h"
@@ -80,21 +83,57 @@ static void test_a_pile_runs_as_without_it(void **state)
     nbep_test_scene_free(&sc);
 }
 
-/* Newton's cradle (test_stamp_order's): spheres 3, 2, 1, 0 touching in a row, sphere 4 coming
- * in at sphere 3's side; each contact's reaction makes the next pair's entry at its own time,
- * with a smaller key */
-static void test_a_cradle_stops_the_scheduled_loop_as_a_stall(void **state)
+/* Newton's cradle (test_stamp_order's with r = 0.37, k spheres at rest): spheres k - 1, ...,
+ * 0 touching in a row, sphere k coming in at sphere k - 1's side; each contact's reaction makes
+ * the next pair's entry at its own time, with a smaller key: a cascade at one time, as deep as
+ * the row stays at one time (with r = 0.37 the centres are rounded and a row of 12 splits
+ * after 4 levels; with r = 0.375 they are exact) */
+static nbep_scene *cradle(size_t k, double r)
 {
-    (void)state;
-    const double r = 0.37, u = 1.3;
-    nbep_scene *sc = nbep_test_scene_new(5, 0, "predictive", 400, 1e-3);
+    const double u = 1.3;
+    nbep_scene *sc = nbep_test_scene_new(k + 1, 0, "predictive", 400, 1e-3);
     sc->neighbors_cells = true;
     const nbep_vec3 zero = {0.0, 0.0, 0.0};
-    nbep_test_set_sphere(sc, 4, (nbep_vec3){0.3 - 2.0 * r - 0.2, 0.7, -0.4},
+    nbep_test_set_sphere(sc, k, (nbep_vec3){0.3 - 2.0 * r - 0.2, 0.7, -0.4},
                          (nbep_vec3){u, 0.0, 0.0}, r, 1.1, zero);
-    for (size_t k = 0; k < 4; k++)
-        nbep_test_set_sphere(sc, 3 - k, (nbep_vec3){0.3 + 2.0 * r * (double)k, 0.7, -0.4}, zero,
-                             r, 1.1, zero);
+    for (size_t q = 0; q < k; q++)
+        nbep_test_set_sphere(sc, k - 1 - q, (nbep_vec3){0.3 + 2.0 * r * (double)q, 0.7, -0.4},
+                             zero, r, 1.1, zero);
+    return sc;
+}
+
+/* sc's cradle (k at rest) with and without the scheduler: the same end, bit for bit */
+static void cradle_the_same(nbep_scene *sc, size_t k)
+{
+    nbep_state plain, sched;
+    const nbep_summary s0 = nbep_test_run(sc, 1, NULL, NULL, &plain, NULL);
+    assert_int_equal(setenv("NBEP_SCHEDULED", "1", 1), 0);
+    const nbep_summary s1 = nbep_test_run(sc, 1, NULL, NULL, &sched, NULL);
+    assert_int_equal(unsetenv("NBEP_SCHEDULED"), 0);
+    assert_int_equal(s0.sphere_collisions, k);
+    assert_int_equal(s1.sphere_collisions, k);
+    nbep_test_same_end(&plain, &sched);
+    nbep_test_scene_free(&sc);
+}
+
+/* Cradles of 4 (rounded) and 8 (exact: a cascade 8 levels deep, the most a stamp holds) at
+ * rest: the scheduler hands their entries out by the stamps made where they were made (root
+ * stamps alone go back there, and the loop stopped as a stall before they were), and they end
+ * as without it, bit for bit */
+static void test_a_cradle_runs_the_same_by_its_stamps(void **state)
+{
+    (void)state;
+    cradle_the_same(cradle(4, 0.37), 4);
+    cradle_the_same(cradle(NBEP_CASCADE_DEPTH, 0.375), NBEP_CASCADE_DEPTH);
+}
+
+/* A cradle of 9 at rest (exact): its cascade is deeper than a stamp holds
+ * (NBEP_CASCADE_DEPTH); the scheduled loop stops there as a stall, with its message, and
+ * nothing aborts (the log's order check), where the plain loop runs through */
+static void test_a_cradle_past_the_depth_stops_it_as_a_stall(void **state)
+{
+    (void)state;
+    nbep_scene *sc = cradle(NBEP_CASCADE_DEPTH + 1, 0.375);
     char msg[512];
     uint64_t ahead;
     nbep_state fin = {0};
@@ -114,7 +153,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_a_fluid_scheduled_runs_the_same),
         cmocka_unit_test(test_a_pile_runs_as_without_it),
-        cmocka_unit_test(test_a_cradle_stops_the_scheduled_loop_as_a_stall),
+        cmocka_unit_test(test_a_cradle_runs_the_same_by_its_stamps),
+        cmocka_unit_test(test_a_cradle_past_the_depth_stops_it_as_a_stall),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
