@@ -16,7 +16,13 @@
 # without the melting. The deck must be the one that wrote MELT, with more steps.
 #
 # Prints A's and B's median seconds, the median ratio B/A with every repeat's, and whether the
-# collision counts agreed in every repeat; where they did not (a change that alters a granular
+# collision counts agreed in every repeat; then, over each two repeats in turn (1 and 2, 3 and
+# 4, ...: the same two cores, swapped), the geometric mean of their two ratios, and the median of
+# those. Where the two cores differ in speed (this project's machine: one took 1.9 s where the
+# other took 2.8 s on the same run in the same minute, 2026-12-07), each repeat's ratio carries
+# that difference one way or the other, in turn (1.74, 0.98, 1.79, 0.97, ... for a change
+# costing about 1.3), and their median is whichever way the count of repeats tips; the pair's
+# mean cancels a difference that holds for the two repeats (it takes at least 2 repeats); where they did not (a change that alters a granular
 # scene's trajectories, which then collide more or less), also the median ratio of B's
 # collisions per second to A's, the figure that compares them. Outputs go to a temporary
 # folder, removed after.
@@ -66,6 +72,10 @@ R = [b / a for a, b in zip(A, B)]
 same = all(r[2] == "True" for r in rows)
 print("A median %.3f s, B median %.3f s, B/A median %.3f [%s]; same collisions: %s"
       % (st.median(A), st.median(B), st.median(R), " ".join("%.3f" % x for x in R), same))
+P = [(R[k] * R[k + 1]) ** 0.5 for k in range(0, len(R) - 1, 2)]
+if P:
+    print("B/A over each two repeats, the cores swapped (geometric mean): median %.3f [%s]"
+          % (st.median(P), " ".join("%.3f" % x for x in P)))
 if not same:
     C = [(float(r[4]) / b) / (float(r[3]) / a) for a, b, r in zip(A, B, rows)]
     print("collisions A %s, B %s; B/A collisions per second median %.3f [%s]"
