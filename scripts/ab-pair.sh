@@ -16,16 +16,16 @@
 # without the melting. The deck must be the one that wrote MELT, with more steps.
 #
 # Prints A's and B's median seconds, the median ratio B/A with every repeat's, and whether the
-# collision counts agreed in every repeat; then, over each two repeats in turn (1 and 2, 3 and
-# 4, ...: the same two cores, swapped), the geometric mean of their two ratios, and the median of
-# those. Where the two cores differ in speed (this project's machine: one took 1.9 s where the
-# other took 2.8 s on the same run in the same minute, 2026-12-07), each repeat's ratio carries
-# that difference one way or the other, in turn (1.74, 0.98, 1.79, 0.97, ... for a change
-# costing about 1.3), and their median is whichever way the count of repeats tips; the pair's
-# mean cancels a difference that holds for the two repeats (it takes at least 2 repeats); where they did not (a change that alters a granular
+# collision counts agreed in every repeat; where they did not (a change that alters a granular
 # scene's trajectories, which then collide more or less), also the median ratio of B's
-# collisions per second to A's, the figure that compares them. Outputs go to a temporary
-# folder, removed after.
+# collisions per second to A's, the figure that compares them. Then, over each two repeats in
+# turn (1 and 2, 3 and 4, ...: the same two cores, swapped), the geometric mean of their two
+# ratios, and the median of those (at least 2 repeats). Where the two cores differ in speed
+# (this project's machine: one took 1.9 s where the other took 2.8 s on the same run in the
+# same minute, 2026-12-07), each repeat's ratio carries that difference one way or the other,
+# in turn (1.74, 0.98, 1.79, 0.97, ... for a change costing about 1.3), and their median is
+# whichever way the count of repeats tips; the pair's mean cancels a difference that holds
+# over its two repeats. Outputs go to a temporary folder, removed after.
 set -euo pipefail
 if [ $# -ne 4 ] && [ $# -ne 5 ]; then
     echo "usage: scripts/ab-pair.sh REPS DECK BIN_A BIN_B [MELT]" >&2

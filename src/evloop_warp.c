@@ -2,9 +2,9 @@
  * (nbep_evloop_set_scheduled, NBEP_SCHEDULED): the engine as the scheduler's model, as the
  * optimistic engine will run it on each slab, with what a slab must keep of each event to undo
  * it, so that what that bookkeeping costs the real engine is measured, not modelled
- * (docs/optimistic-design.md, *The engine on the scheduler*). One slab: no messages, no
- * rollbacks (the restore below is what a rollback will call: tests/test_evloop_rollback.c
- * undoes the same kept states on the engine by hand). */
+ * (docs/optimistic-design.md, *The engine on the scheduler*). One slab: no messages, and no
+ * rollbacks but those a test asks for (nbep_warp_roll_back, through the hooks below:
+ * tests/test_sched_rollback.c), which call the restore below as a straggler will. */
 #include "evloop_impl.h"
 
 #include <assert.h>
@@ -14,8 +14,31 @@
 
 #include "nbep/warp.h"
 
-/* The windows a step is cut into (of equal simulated time). */
+/* The windows a step is cut into (of equal simulated time; a test may ask for fewer, so that
+ * its small scenes have events enough in each). */
+#ifndef WINDOWS_A_STEP
 #define WINDOWS_A_STEP 64
+#endif
+
+/* A test's copy of this file (tests/test_sched_rollback.c) runs the scheduler NBEP_SCHED_TURN
+ * actions at a time and looks between turns (to roll back), at each event handled and at each
+ * window's opening, and at each state restored; a build of nbep runs each window in one turn
+ * and has nothing here. */
+#ifndef NBEP_SCHED_TURN
+#define NBEP_SCHED_TURN SIZE_MAX
+#endif
+#ifndef NBEP_SCHED_TURN_HOOK
+#define NBEP_SCHED_TURN_HOOK(x) ((void)0)
+#endif
+#ifndef NBEP_SCHED_HANDLED_HOOK
+#define NBEP_SCHED_HANDLED_HOOK(x, s) ((void)0)
+#endif
+#ifndef NBEP_SCHED_OPEN_HOOK
+#define NBEP_SCHED_OPEN_HOOK(x) ((void)0)
+#endif
+#ifndef NBEP_SCHED_RESTORE_HOOK
+#define NBEP_SCHED_RESTORE_HOOK(x, item) ((void)0)
+#endif
 
 /* What the slab's log keeps of a sphere before an event changes it: its motion (the engine's
  * save: a free flight's event changes nothing else of it) and its slot. */
@@ -37,6 +60,15 @@ typedef struct {
     nbep_stamp s;
 } tie_stamp;
 
+/* What a change of the ties' table replaced, for a rollback to put back: sphere item's stamp
+ * before (had: it had one there). Kept under an item past the expiries', its place as its
+ * state (a stamp does not fit a sphere's keep). */
+typedef struct {
+    uint32_t item;
+    bool had;
+    nbep_stamp old;
+} tie_undo;
+
 struct evl_sched {
     nbep_warp *warp;
     /* the call's */
@@ -55,11 +87,14 @@ struct evl_sched {
     kept_list *lists;
     size_t n_lists, cap_lists;
     /* the stamps of the entries made at the time of the event that made them (a tie in time:
-     * cascade.h), all at one time, the latest handled: every other entry's stamp is a root.
-     * Few (a cradle's row), and gone once the calendar's top is later: none of that time is
-     * left then. */
+     * cascade.h); every other entry's stamp is a root. Few (a cradle's row), those of an older
+     * time never looked up (an entry's time is compared), all dropped between windows: every
+     * entry they stamped was handled before its window's end. Each change kept (ties_undo,
+     * the window's, by place), so that a rollback puts the table back. */
     tie_stamp *ties;
     size_t n_ties, cap_ties;
+    tie_undo *ties_undo;
+    size_t n_ties_undo, cap_ties_undo;
 };
 
 /* ---- the model's side (warp.h) ------------------------------------------------------------ */
@@ -83,8 +118,6 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
         return false;
     const uint64_t key = nbep__evloop_slot_key(i, nbep_feq_slot(e->q, i));
     nbep_cascade_set_root(s, t, key, i);
-    if (x->n_ties > 0 && t != x->ties[0].s.t) /* (the calendar's top past their time) */
-        x->n_ties = 0;
     for (size_t k = 0; k < x->n_ties; k++)
         if (x->ties[k].item == i) { /* made at its maker's time, if for this entry */
             const nbep_stamp *c = &x->ties[k].s;
@@ -118,6 +151,19 @@ static bool made_by(struct evl_sched *x, const nbep_stamp *by, uint32_t j)
     if (k == x->n_ties &&
         !nbep_room_for_one((void **)&x->ties, &x->cap_ties, k, sizeof *x->ties))
         return false;
+    /* what it replaces, kept (under the item past the expiries') */
+    uint64_t *place = nbep_room_for_one((void **)&x->ties_undo, &x->cap_ties_undo,
+                                        x->n_ties_undo, sizeof *x->ties_undo)
+                          ? nbep_warp_keep_room(x->warp, 0, (uint32_t)x->e->n + 1)
+                          : NULL;
+    if (!place)
+        return false;
+    *place = x->n_ties_undo;
+    tie_undo *u = &x->ties_undo[x->n_ties_undo++];
+    u->item = j;
+    u->had = k < x->n_ties;
+    if (u->had)
+        nbep_cascade_copy(&u->old, &x->ties[k].s);
     if (nbep_cascade_made(by, slot->time, nbep__evloop_slot_key(j, slot), j, &x->ties[k].s)) {
         x->ties[k].item = j;
         x->n_ties += k == x->n_ties;
@@ -157,6 +203,7 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
     const uint32_t i = s->level[s->depth - 1].item; /* (the entry's: the path's last level) */
     const double t = s->t;
     const nbep_event ev = *nbep_feq_slot(e->q, i);
+    NBEP_SCHED_HANDLED_HOOK(x, s);
     nbep_cascade_copy(&x->last, s);
     x->has_last = true;
     x->tally->events++;
@@ -219,12 +266,33 @@ static void sched_restore(void *arg, int slab, uint32_t item, const void *state)
     (void)slab;
     struct evl_sched *x = arg;
     nbep_evloop *e = x->e;
+    NBEP_SCHED_RESTORE_HOOK(x, item);
+    x->has_last = false; /* (the order's check starts again from the next event handled) */
+    uint64_t place;
     if (item == (uint32_t)e->n) {
-        uint64_t place;
         memcpy(&place, state, sizeof place);
         assert(place + 1 == x->n_lists);
         nbep__evloop_unapply(e, &x->lists[place].ws, &x->lists[place].rec);
         x->n_lists = place;
+        return;
+    }
+    if (item == (uint32_t)e->n + 1) { /* a change of the ties' table: its sphere's stamp back */
+        memcpy(&place, state, sizeof place);
+        assert(place + 1 == x->n_ties_undo);
+        const tie_undo *u = &x->ties_undo[place];
+        x->n_ties_undo = place;
+        size_t k = 0;
+        while (k < x->n_ties && x->ties[k].item != u->item)
+            k++;
+        if (!u->had) { /* (it had none: its stamp out, the last one into its place) */
+            if (k < x->n_ties)
+                x->ties[k] = x->ties[--x->n_ties];
+            return;
+        }
+        if (k == x->n_ties) /* (a stamp too deep took it out: room is there, it was held) */
+            x->n_ties++;
+        x->ties[k].item = u->item;
+        nbep_cascade_copy(&x->ties[k].s, &u->old);
         return;
     }
     const kept_sphere *k = state;
@@ -266,6 +334,7 @@ void nbep__evloop_sched_destroy(struct evl_sched **s)
     }
     free(x->lists);
     free(x->ties);
+    free(x->ties_undo);
     free(x);
     *s = NULL;
 }
@@ -295,9 +364,10 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
            nbep_calendar_top(e->cal, &i, &t) && t < t_end) {
         const double end = t + width;
         nbep_warp_open(x->warp, end > t ? fmin(end, t_end) : t_end);
-        while (!nbep_warp_run(x->warp, 0, SIZE_MAX)) {
-        }
-        x->n_lists = 0;
+        NBEP_SCHED_OPEN_HOOK(x);
+        while (!nbep_warp_run(x->warp, 0, NBEP_SCHED_TURN))
+            NBEP_SCHED_TURN_HOOK(x);
+        x->n_lists = x->n_ties = x->n_ties_undo = 0;
     }
     if (nbep_warp_failed(x->warp))
         e->failed = true;

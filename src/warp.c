@@ -271,6 +271,16 @@ static void roll_back(nbep_warp *w, int slab, nbep_stamp to)
     }
 }
 
+bool nbep_warp_roll_back(nbep_warp *w, int slab, const nbep_stamp *to)
+{
+    assert(slab >= 0 && slab < w->slabs);
+    nbep_stamp last;
+    if (w->s[slab].idle || !nbep_undo_last(w->undo, slab, &last) || nbep_stamp_before(last, *to))
+        return false;
+    roll_back(w, slab, *to);
+    return true;
+}
+
 /* One message or cancel taken from slab's box (mail.c's take). */
 static void on_mail(void *arg, const nbep_mail_head *h, const void *data)
 {

@@ -110,20 +110,23 @@ static void cradle_the_same(nbep_scene *sc, size_t k)
     assert_int_equal(setenv("NBEP_SCHEDULED", "1", 1), 0);
     const nbep_summary s1 = nbep_test_run(sc, 1, NULL, NULL, &sched, NULL);
     assert_int_equal(unsetenv("NBEP_SCHEDULED"), 0);
-    assert_int_equal(s0.sphere_collisions, k);
-    assert_int_equal(s1.sphere_collisions, k);
+    assert_true(s0.sphere_collisions >= k); /* (k down the row; rounded, a few more) */
+    assert_int_equal(s1.sphere_collisions, s0.sphere_collisions);
     nbep_test_same_end(&plain, &sched);
     nbep_test_scene_free(&sc);
 }
 
-/* Cradles of 4 (rounded) and 8 (exact: a cascade 8 levels deep, the most a stamp holds) at
- * rest: the scheduler hands their entries out by the stamps made where they were made (root
- * stamps alone go back there, and the loop stopped as a stall before they were), and they end
- * as without it, bit for bit */
+/* Cradles of 4 (rounded, r = 0.37 and 0.25) and 8 (exact: a cascade 8 levels deep, the most a
+ * stamp holds) at rest: the scheduler hands their entries out by the stamps made where they
+ * were made (root stamps alone go back there, and the loop stopped as a stall before they
+ * were), and they end as without it, bit for bit. With r = 0.25 a sphere's entry is made again
+ * at the time it already holds one in the ties' table (replaced there, not added: a review's
+ * experiment, 2026-12-07, where a table that added a second one stalled) */
 static void test_a_cradle_runs_the_same_by_its_stamps(void **state)
 {
     (void)state;
     cradle_the_same(cradle(4, 0.37), 4);
+    cradle_the_same(cradle(4, 0.25), 4);
     cradle_the_same(cradle(NBEP_CASCADE_DEPTH, 0.375), NBEP_CASCADE_DEPTH);
 }
 
@@ -148,13 +151,22 @@ static void test_a_cradle_past_the_depth_stops_it_as_a_stall(void **state)
     nbep_test_scene_free(&sc);
 }
 
+/* After each test, failed or not: the settings it made gone, so that a failure in one does not
+ * send the next one's plain runs through the scheduler too */
+static int settings_gone(void **state)
+{
+    (void)state;
+    return unsetenv("NBEP_SCHEDULED") | unsetenv("NBEP_TEAM");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_a_fluid_scheduled_runs_the_same),
-        cmocka_unit_test(test_a_pile_runs_as_without_it),
-        cmocka_unit_test(test_a_cradle_runs_the_same_by_its_stamps),
-        cmocka_unit_test(test_a_cradle_past_the_depth_stops_it_as_a_stall),
+        cmocka_unit_test_teardown(test_a_fluid_scheduled_runs_the_same, settings_gone),
+        cmocka_unit_test_teardown(test_a_pile_runs_as_without_it, settings_gone),
+        cmocka_unit_test_teardown(test_a_cradle_runs_the_same_by_its_stamps, settings_gone),
+        cmocka_unit_test_teardown(test_a_cradle_past_the_depth_stops_it_as_a_stall,
+                                  settings_gone),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -94,6 +94,14 @@ void *nbep_warp_keep_room(nbep_warp *w, int slab, uint32_t item);
  * item, stamped with the event (or message) acted on. False as for keep. */
 bool nbep_warp_send(nbep_warp *w, int slab, int to, uint32_t item, const void *data);
 
+/* Between slab's runs (on its thread, not inside handle or apply): slab undoes what it did at
+ * or after *to, as a straggler stamped *to would make it (its events' and messages' changes
+ * restored, newest first, their messages cancelled), and acts on them again as its next and
+ * its mail give them: for tests of a model's restore, which one slab otherwise never calls.
+ * False, nothing done, where slab has nothing to undo there or is idle (its window's work
+ * looked done: a rollback then would need the meeting's count raised again). */
+bool nbep_warp_roll_back(nbep_warp *w, int slab, const nbep_stamp *to);
+
 /* Whether a window ran out of memory (its worlds are then not the serial run's). */
 bool nbep_warp_failed(const nbep_warp *w);
 nbep_warp_tally nbep_warp_tally_of(const nbep_warp *w, int slab);
