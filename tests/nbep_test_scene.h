@@ -85,6 +85,24 @@ static inline void nbep_test_set_sphere(nbep_scene *sc, size_t i, nbep_vec3 p, n
     sc->state.acc[i] = a;
 }
 
+/* Newton's cradle in cells mode, 400 steps of 1e-3, no box: k spheres of radius r and mass 1.1
+ * at rest, touching in a row along x (numbered k - 1, ..., 0, centres 0.3 + 2 r q: exact for
+ * r = 0.375, rounded for 0.37 or 0.25), and sphere k coming in at speed u from sphere k - 1's
+ * side. Each contact's reaction makes the next pair's entry at its own time with a smaller key:
+ * a cascade at one time (cascade.h), as deep as the row stays at one time. */
+static inline nbep_scene *nbep_test_cradle(size_t k, double r, double u)
+{
+    nbep_scene *sc = nbep_test_scene_new(k + 1, 0, "predictive", 400, 1e-3);
+    sc->neighbors_cells = true;
+    const nbep_vec3 zero = {0.0, 0.0, 0.0};
+    nbep_test_set_sphere(sc, k, (nbep_vec3){0.3 - 2.0 * r - 0.2, 0.7, -0.4},
+                         (nbep_vec3){u, 0.0, 0.0}, r, 1.1, zero);
+    for (size_t q = 0; q < k; q++)
+        nbep_test_set_sphere(sc, k - 1 - q, (nbep_vec3){0.3 + 2.0 * r * (double)q, 0.7, -0.4},
+                             zero, r, 1.1, zero);
+    return sc;
+}
+
 /* A fixed pseudo-random sequence for hand-built scenes (xorshift64; any fixed one will do):
  * the next number in [0, 1). */
 static inline double nbep_test_uniform(uint64_t *x)

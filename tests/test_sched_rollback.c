@@ -1,16 +1,17 @@
 /* The scheduled loop (NBEP_SCHEDULED, src/evloop_warp.c) rolled back through the scheduler: on
  * one slab nothing ever sends it back, so its restore (the model's side of a rollback: motions,
  * slots and calendar entries, an expiry's lists, the ties' table) would wait for two slabs to
- * run. This test compiles its own copy of the loop that runs the scheduler a few actions at a
- * turn (a step one window) and, every other turn, sends the slab back 1 to 3 events (nbep_warp_roll_back, as a
- * straggler stamped with the oldest of them would), so that the scheduler undoes them through
- * the loop's restore, newest first, and the loop handles them again. The runs must end as the
- * plain loop's, bit for bit (positions, velocities; the counts count the events handled again):
- * a periodic fluid at phi = 0.35, elastic and dissipative (e = 0.8, the TC model: the two words
- * a reaction moves besides the motion), with list expiries among the events undone; and Newton's
- * cradles of 4 and 8 spheres at rest, whose ties are stamped where they are made, with
- * rollbacks into the cascade (its stamps deeper than a root), which the ties' table must come
- * back from. */
+ * run. This test compiles its own copy of the loop that runs the scheduler 1 to 3 actions a turn
+ * (a step one window) and, every other turn, sends the slab back 1 to 3 events
+ * (nbep_warp_roll_back, as a straggler stamped with the oldest of them would), so that the
+ * scheduler undoes them through the loop's restore, newest first, and the loop handles them
+ * again. The runs must end as the plain loop's, bit for bit (positions, velocities; the counts
+ * count the events handled again), and the events that stand must carry the stamps of a pass
+ * without rollbacks: a periodic fluid at phi = 0.35, elastic and dissipative (e = 0.8, the TC
+ * model: the two words a reaction moves besides the motion), with list expiries among the
+ * events undone and rollbacks refused while idle; and Newton's cradles at rest, whose ties are
+ * stamped where they are made, rolled back into their cascades (stamps deeper than a root),
+ * which the ties' table must come back from. */
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -154,11 +155,11 @@ static void test_a_fluid_rolled_back_ends_the_same(void **state)
         }
         rolled_back_the_same(sc);
         fprintf(stderr,
-                "%s fluid: %llu rollbacks (%llu refused, idle), %llu events undone (%llu "
-                "spheres' states, %llu expiries' lists)\n",
+                "%s fluid: %llu rollbacks (%llu refused, idle), %llu events undone "
+                "(%llu spheres' states, %llu expiries' lists)\n",
                 dissipative ? "dissipative" : "elastic", (unsigned long long)rollbacks,
-                (unsigned long long)refused_idle, (unsigned long long)events_undone, (unsigned long long)spheres_back,
-                (unsigned long long)lists_back);
+                (unsigned long long)refused_idle, (unsigned long long)events_undone,
+                (unsigned long long)spheres_back, (unsigned long long)lists_back);
         assert_true(rollbacks > 1000 && events_undone > 2000);
         assert_true(spheres_back > events_undone && lists_back > 100);
         assert_true(refused_idle > 0); /* (an idle turn's rollback refused: met) */
@@ -166,21 +167,12 @@ static void test_a_fluid_rolled_back_ends_the_same(void **state)
     nbep_test_scene_free(&sc);
 }
 
-/* test_scheduled's cradle: k spheres at rest, touching in a row (r = 0.375: exact centres, the
- * whole row one cascade at one time; r = 0.25: rounded, a sphere's entry made again at the time
- * of the one it holds in the ties' table), sphere k coming in at sphere k - 1's side */
+/* Newton's cradle of k at rest (nbep_test_cradle): with r = 0.375 exact centres, the whole row
+ * one cascade at one time; with r = 0.25 rounded, a sphere's entry made again at the time of
+ * the one it holds in the ties' table */
 static nbep_scene *cradle(size_t k, double r)
 {
-    const double u = 1.3;
-    nbep_scene *sc = nbep_test_scene_new(k + 1, 0, "predictive", 400, 1e-3);
-    sc->neighbors_cells = true;
-    const nbep_vec3 zero = {0.0, 0.0, 0.0};
-    nbep_test_set_sphere(sc, k, (nbep_vec3){0.3 - 2.0 * r - 0.2, 0.7, -0.4},
-                         (nbep_vec3){u, 0.0, 0.0}, r, 1.1, zero);
-    for (size_t q = 0; q < k; q++)
-        nbep_test_set_sphere(sc, k - 1 - q, (nbep_vec3){0.3 + 2.0 * r * (double)q, 0.7, -0.4},
-                             zero, r, 1.1, zero);
-    return sc;
+    return nbep_test_cradle(k, r, 1.3);
 }
 
 static void test_a_cradle_rolled_back_into_its_cascade_ends_the_same(void **state)
@@ -194,9 +186,11 @@ static void test_a_cradle_rolled_back_into_its_cascade_ends_the_same(void **stat
         const size_t k = rows[q].k;
         nbep_scene *sc = cradle(k, rows[q].r);
         rolled_back_the_same(sc);
-        fprintf(stderr, "cradle of %zu (r %g): %llu rollbacks, %llu into the cascade, %llu changes of "
-                "the ties' table undone\n", k, rows[q].r, (unsigned long long)rollbacks,
-                (unsigned long long)into_cascade, (unsigned long long)ties_back);
+        fprintf(stderr,
+                "cradle of %zu (r %g): %llu rollbacks, %llu into the cascade, %llu changes of "
+                "the ties' table undone\n",
+                k, rows[q].r, (unsigned long long)rollbacks, (unsigned long long)into_cascade,
+                (unsigned long long)ties_back);
         /* the table's restore met, or the test proves nothing */
         assert_true(into_cascade > 0 && ties_back > 0);
         nbep_test_scene_free(&sc);

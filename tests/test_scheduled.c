@@ -83,23 +83,12 @@ static void test_a_pile_runs_as_without_it(void **state)
     nbep_test_scene_free(&sc);
 }
 
-/* Newton's cradle (test_stamp_order's with r = 0.37, k spheres at rest): spheres k - 1, ...,
- * 0 touching in a row, sphere k coming in at sphere k - 1's side; each contact's reaction makes
- * the next pair's entry at its own time, with a smaller key: a cascade at one time, as deep as
- * the row stays at one time (with r = 0.37 the centres are rounded and a row of 12 splits
- * after 4 levels; with r = 0.375 they are exact) */
+/* Newton's cradle of k at rest (nbep_test_cradle, test_stamp_order's with r = 0.37): with
+ * r = 0.37 the centres are rounded and a row of 12 splits after 4 levels; with r = 0.375 they
+ * are exact, the whole row one cascade at one time */
 static nbep_scene *cradle(size_t k, double r)
 {
-    const double u = 1.3;
-    nbep_scene *sc = nbep_test_scene_new(k + 1, 0, "predictive", 400, 1e-3);
-    sc->neighbors_cells = true;
-    const nbep_vec3 zero = {0.0, 0.0, 0.0};
-    nbep_test_set_sphere(sc, k, (nbep_vec3){0.3 - 2.0 * r - 0.2, 0.7, -0.4},
-                         (nbep_vec3){u, 0.0, 0.0}, r, 1.1, zero);
-    for (size_t q = 0; q < k; q++)
-        nbep_test_set_sphere(sc, k - 1 - q, (nbep_vec3){0.3 + 2.0 * r * (double)q, 0.7, -0.4},
-                             zero, r, 1.1, zero);
-    return sc;
+    return nbep_test_cradle(k, r, 1.3);
 }
 
 /* sc's cradle (k at rest) with and without the scheduler: the same end, bit for bit */

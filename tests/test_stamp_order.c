@@ -124,21 +124,14 @@ static void assert_never_back(const char *what)
     assert_int_equal(past_depth, 0);
 }
 
-/* Newton's cradle in cells mode: spheres 3, 2, 1, 0 (r 0.37, mass 1.1) touching in a row along
- * x at rest (centres 0.3 + 0.74 k, rounded: touching to within an ulp), sphere 4 coming in at
- * u from the side of sphere 3. */
+/* Newton's cradle in cells mode (nbep_test_cradle): spheres 3, 2, 1, 0 (r 0.37, mass 1.1)
+ * touching in a row along x at rest (centres 0.3 + 0.74 k, rounded: touching to within an ulp),
+ * sphere 4 coming in at u from the side of sphere 3. */
 static const double CRADLE_R = 0.37, CRADLE_U = 1.3;
 
 static nbep_scene *cradle(void)
 {
-    nbep_scene *sc = nbep_test_scene_new(5, 0, "predictive", 400, 1e-3);
-    sc->neighbors_cells = true;
-    nbep_test_set_sphere(sc, 4, (nbep_vec3){0.3 - 2.0 * CRADLE_R - 0.2, 0.7, -0.4},
-                         (nbep_vec3){CRADLE_U, 0.0, 0.0}, CRADLE_R, 1.1, ZERO);
-    for (size_t k = 0; k < 4; k++)
-        nbep_test_set_sphere(sc, 3 - k, (nbep_vec3){0.3 + 2.0 * CRADLE_R * (double)k, 0.7, -0.4},
-                             ZERO, CRADLE_R, 1.1, ZERO);
-    return sc;
+    return nbep_test_cradle(4, CRADLE_R, CRADLE_U);
 }
 
 static void test_a_cradle_struck_at_its_high_end_never_hands_out_an_older_stamp(void **state)
