@@ -125,6 +125,8 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
                 nbep_cascade_copy(s, c);
             break;
         }
+    if (!x->has_last) /* (after a rollback: the newest event that stands, if any) */
+        x->has_last = nbep_warp_last(x->warp, 0, &x->last);
     /* the order's check: the stamps made where their entries were never go back, but where a
      * cascade at one time is deeper than a stamp holds (made_by), a root stamp does: the loop
      * stops there as stuck, with the stall's message */
@@ -267,7 +269,11 @@ static void sched_restore(void *arg, int slab, uint32_t item, const void *state)
     struct evl_sched *x = arg;
     nbep_evloop *e = x->e;
     NBEP_SCHED_RESTORE_HOOK(x, item);
-    x->has_last = false; /* (the order's check starts again from the next event handled) */
+    /* a rollback: the order's check goes on from the newest event that stands (sched_next asks
+     * the log), and what stopped the loop may have been undone (a stop comes back with the
+     * event that made it, handled again) */
+    x->has_last = false;
+    x->stop = false;
     uint64_t place;
     if (item == (uint32_t)e->n) {
         memcpy(&place, state, sizeof place);

@@ -281,6 +281,12 @@ bool nbep_warp_roll_back(nbep_warp *w, int slab, const nbep_stamp *to)
     return true;
 }
 
+bool nbep_warp_last(const nbep_warp *w, int slab, nbep_stamp *s)
+{
+    assert(slab >= 0 && slab < w->slabs);
+    return nbep_undo_last(w->undo, slab, s);
+}
+
 /* One message or cancel taken from slab's box (mail.c's take). */
 static void on_mail(void *arg, const nbep_mail_head *h, const void *data)
 {

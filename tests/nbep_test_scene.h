@@ -90,9 +90,18 @@ static inline void nbep_test_set_sphere(nbep_scene *sc, size_t i, nbep_vec3 p, n
  * r = 0.375, rounded for 0.37 or 0.25), and sphere k coming in at speed u from sphere k - 1's
  * side. Each contact's reaction makes the next pair's entry at its own time with a smaller key:
  * a cascade at one time (cascade.h), as deep as the row stays at one time. */
+static inline nbep_scene *nbep_test_cradle_beyond(size_t k, double r, double u, double gap);
 static inline nbep_scene *nbep_test_cradle(size_t k, double r, double u)
 {
-    nbep_scene *sc = nbep_test_scene_new(k + 1, 0, "predictive", 400, 1e-3);
+    return nbep_test_cradle_beyond(k, r, u, -1.0);
+}
+
+/* The same with, where gap >= 0, one more sphere (k + 1) at rest beyond sphere 0, gap short of
+ * touching it: sphere 0 sent off by the cascade meets it a little later (gap / u), so that
+ * events of the same window follow the cascade's. */
+static inline nbep_scene *nbep_test_cradle_beyond(size_t k, double r, double u, double gap)
+{
+    nbep_scene *sc = nbep_test_scene_new(k + 1 + (gap >= 0.0), 0, "predictive", 400, 1e-3);
     sc->neighbors_cells = true;
     const nbep_vec3 zero = {0.0, 0.0, 0.0};
     nbep_test_set_sphere(sc, k, (nbep_vec3){0.3 - 2.0 * r - 0.2, 0.7, -0.4},
@@ -100,6 +109,10 @@ static inline nbep_scene *nbep_test_cradle(size_t k, double r, double u)
     for (size_t q = 0; q < k; q++)
         nbep_test_set_sphere(sc, k - 1 - q, (nbep_vec3){0.3 + 2.0 * r * (double)q, 0.7, -0.4},
                              zero, r, 1.1, zero);
+    if (gap >= 0.0)
+        nbep_test_set_sphere(sc, k + 1,
+                             (nbep_vec3){0.3 + 2.0 * r * (double)k + gap, 0.7, -0.4}, zero, r,
+                             1.1, zero);
     return sc;
 }
 

@@ -102,6 +102,10 @@ bool nbep_warp_send(nbep_warp *w, int slab, int to, uint32_t item, const void *d
  * looked done: a rollback then would need the meeting's count raised again). */
 bool nbep_warp_roll_back(nbep_warp *w, int slab, const nbep_stamp *to);
 
+/* The stamp of the newest event or message slab has done in this window and not undone, in *s;
+ * false when it has none. */
+bool nbep_warp_last(const nbep_warp *w, int slab, nbep_stamp *s);
+
 /* Whether a window ran out of memory (its worlds are then not the serial run's). */
 bool nbep_warp_failed(const nbep_warp *w);
 nbep_warp_tally nbep_warp_tally_of(const nbep_warp *w, int slab);
