@@ -4321,6 +4321,9 @@ MUTANTS = [
      "        x->has_last = nbep_warp_last(x->warp, 0, &x->last);",
      "        x->has_last = false;", ["test_sched_rollback"],
      "a guard: the stamps made where their entries were never go back, so the check after a rollback (from the newest event that stands) finds nothing in a correct loop; without it a fault of the table's restore is still caught by the undo log's order assertion (sched-ties-emptied-at-top)"),
+    ("sched-too-deep-unsaid", "src/evloop_warp.c",
+     "        x->too_deep = true;\n",
+     "", ["test_scheduled"], None),
 ]
 
 

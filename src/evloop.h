@@ -129,9 +129,13 @@ NBEP_MUST_CHECK nbep_status nbep_evloop_set_slabs(nbep_evloop *e, int slabs, nbe
  * order: the results are the same bit for bit. For free flight (the motion kept is a free
  * flight's). Entries made at the time of the event that made them (a cascade's tie at one
  * time) are stamped as made (cascade.h); a cascade deeper than a stamp holds
- * (NBEP_CASCADE_DEPTH) stops the run as a stall at its time. Only on an engine for one thread
- * without slabs, before the first run. NBEP_ENOMEM with a message. */
+ * (NBEP_CASCADE_DEPTH) stops the run at its time (nbep_evloop_run false, and
+ * nbep_evloop_too_deep true). Only on an engine for one thread without slabs, before the first
+ * run. NBEP_ENOMEM with a message. */
 NBEP_MUST_CHECK nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d);
+/* True where the scheduled loop (nbep_evloop_set_scheduled) stopped its last call at a cascade
+ * at one time deeper than its stamps hold; false otherwise (and without the setting). */
+bool nbep_evloop_too_deep(const nbep_evloop *e);
 /* The lists' skin that the engine takes when asked for skin_frac of `reach`: cut
  * down in a small periodic box (its sides hi - lo along the axes that periodic names; NULL:
  * none) so that three cells, sides of the cutoff, fit across. Below NBEP_NBLIST_SKIN_MIN the

@@ -79,6 +79,7 @@ struct evl_sched {
     nbep_evloop_tally *tally;
     bool stop;           /* no more events: stuck, a reaction's stop or a cascade too deep
                           * (t_stuck) */
+    bool too_deep;       /* ... the last: a cascade deeper than a stamp holds */
     double t_stuck;
     nbep_stamp last;     /* the stamp of the event handled last (its order's check) */
     bool has_last;
@@ -131,6 +132,7 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
      * cascade at one time is deeper than a stamp holds (made_by), a root stamp does: the loop
      * stops there as stuck, with the stall's message */
     if (x->has_last && nbep_cascade_cmp(s, &x->last) < 0) {
+        x->too_deep = true;
         stop_at(x, t);
         return false;
     }
@@ -328,6 +330,11 @@ nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d)
     return NBEP_OK;
 }
 
+bool nbep_evloop_too_deep(const nbep_evloop *e)
+{
+    return e->sched && e->sched->too_deep;
+}
+
 void nbep__evloop_sched_destroy(struct evl_sched **s)
 {
     if (!s || !*s)
@@ -355,7 +362,7 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
     x->u = u;
     x->stall = stall;
     x->tally = tally;
-    x->stop = false;
+    x->stop = x->too_deep = false;
     x->n_ties = 0; /* (what was set up since is a root, as the set-up's predictions) */
     /* windows of a WINDOWS_A_STEP-th of what is left of the call's span from its first event
      * (a step, or its part; what each window did stands at its end): their logs, a few hundred

@@ -7,6 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "nbep/cascade.h"
+
 /* A scene without a box, cells mode: the region the cells cover around the centres' extent
  * [lo, hi] (fit_lo, fit_hi), grown on each side by an eighth of the extent along that axis
  * and at least two of the largest diameters. Spheres move between rebuilds, and one that
@@ -528,6 +530,13 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
         sim->status = NBEP_ENOMEM;
     } else if (fail && (jammed = cells_jammed(c, sim->st.n, step)) != 0) {
         nbep__pred_jam_fail(sim, step, jammed - 1, t_stuck);
+    } else if (fail && nbep_evloop_too_deep(c->ev)) {
+        nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                      "nbep: step %llu: the events at t = %.17g are a cascade at one time "
+                      "deeper than the %d levels the scheduled loop's stamps hold "
+                      "(NBEP_SCHEDULED, a setting for measuring: run without it); stopping",
+                      (unsigned long long)step, t_stuck, NBEP_CASCADE_DEPTH);
+        sim->status = NBEP_ENUMERIC;
     } else if (fail) {
         nbep_diag_add(sim->diag, __FILE__, __LINE__, STALL_MESSAGE, (unsigned long long)step,
                       t_stuck, STALL_FRACTION, STALL_EVENTS, "events");
