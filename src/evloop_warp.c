@@ -108,6 +108,21 @@ static void stop_at(struct evl_sched *x, double t)
     x->t_stuck = t;
 }
 
+/* Where sphere i's row is in the ties' table; n_ties where it has none. */
+static size_t tie_of(const struct evl_sched *x, uint32_t i)
+{
+    size_t k = 0;
+    while (k < x->n_ties && x->ties[k].item != i)
+        k++;
+    return k;
+}
+
+/* Row k out of the ties' table (the last one into its place). */
+static void tie_drop(struct evl_sched *x, size_t k)
+{
+    x->ties[k] = x->ties[--x->n_ties];
+}
+
 static bool sched_next(void *arg, int slab, nbep_stamp *s)
 {
     (void)slab;
@@ -119,18 +134,17 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
         return false;
     const uint64_t key = nbep__evloop_slot_key(i, nbep_feq_slot(e->q, i));
     nbep_cascade_set_root(s, t, key, i);
-    for (size_t k = 0; k < x->n_ties; k++)
-        if (x->ties[k].item == i) { /* made at its maker's time, if for this entry */
-            const nbep_stamp *c = &x->ties[k].s;
-            if (c->t == t && c->level[c->depth - 1].key == key)
-                nbep_cascade_copy(s, c);
-            break;
-        }
+    const size_t k = tie_of(x, i);
+    if (k < x->n_ties) { /* made at its maker's time, if for this entry */
+        const nbep_stamp *c = &x->ties[k].s;
+        if (c->t == t && c->level[c->depth - 1].key == key)
+            nbep_cascade_copy(s, c);
+    }
     if (!x->has_last) /* (after a rollback: the newest event that stands, if any) */
         x->has_last = nbep_warp_last(x->warp, 0, &x->last);
     /* the order's check: the stamps made where their entries were never go back, but where a
      * cascade at one time is deeper than a stamp holds (made_by), a root stamp does: the loop
-     * stops there as stuck, with the stall's message */
+     * stops there, too deep (nbep_evloop_too_deep: its own message) */
     if (x->has_last && nbep_cascade_cmp(s, &x->last) < 0) {
         x->too_deep = true;
         stop_at(x, t);
@@ -149,9 +163,7 @@ static bool made_by(struct evl_sched *x, const nbep_stamp *by, uint32_t j)
     const nbep_event *slot = nbep_feq_slot(x->e->q, j);
     if (slot->time != by->t) /* later: a root (j's older stamp, if any, no longer its entry's) */
         return true;
-    size_t k = 0;
-    while (k < x->n_ties && x->ties[k].item != j)
-        k++;
+    const size_t k = tie_of(x, j);
     if (k == x->n_ties &&
         !nbep_room_for_one((void **)&x->ties, &x->cap_ties, k, sizeof *x->ties))
         return false;
@@ -172,7 +184,7 @@ static bool made_by(struct evl_sched *x, const nbep_stamp *by, uint32_t j)
         x->ties[k].item = j;
         x->n_ties += k == x->n_ties;
     } else if (k < x->n_ties) { /* (too deep: j's older stamp is not its entry's either) */
-        x->ties[k] = x->ties[--x->n_ties];
+        tie_drop(x, k);
     }
     return true;
 }
@@ -289,12 +301,10 @@ static void sched_restore(void *arg, int slab, uint32_t item, const void *state)
         assert(place + 1 == x->n_ties_undo);
         const tie_undo *u = &x->ties_undo[place];
         x->n_ties_undo = place;
-        size_t k = 0;
-        while (k < x->n_ties && x->ties[k].item != u->item)
-            k++;
-        if (!u->had) { /* (it had none: its stamp out, the last one into its place) */
+        const size_t k = tie_of(x, u->item);
+        if (!u->had) { /* (it had none: its stamp out) */
             if (k < x->n_ties)
-                x->ties[k] = x->ties[--x->n_ties];
+                tie_drop(x, k);
             return;
         }
         if (k == x->n_ties) /* (a stamp too deep took it out: room is there, it was held) */
