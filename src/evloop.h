@@ -77,7 +77,8 @@ typedef struct nbep_evloop_ops {
      * its image count kept, where its centre is then outside the box (an expiry takes its new
      * list's centre from it: one flight, not a flight to test and another to take) */
     void (*wrap)(void *u, uint32_t i, double t, nbep_vec3 *p, nbep_vec3 *v, nbep_vec3 *a);
-    /* the team loop only (may be NULL otherwise): sphere i's motion kept and put back */
+    /* the team and scheduled loops only (may be NULL otherwise): sphere i's motion kept and
+     * put back */
     void (*save)(void *u, uint32_t i, nbep_evloop_motion *m);
     void (*restore)(void *u, uint32_t i, const nbep_evloop_motion *m);
     /* the team loop only: context uh's counts and sums from zero, before it handles one
@@ -88,8 +89,8 @@ typedef struct nbep_evloop_ops {
      * thread; every sum is exact, so the total over the threads is the one thread's bit for
      * bit (an undone event's are never merged) */
     void (*merge)(void *u, const void *uh);
-    /* the team loop only: requests sphere i's motion, which a handle is about to read and
-     * write (no effect on results) */
+    /* the team and scheduled loops only (may be NULL): requests sphere i's motion, which a
+     * handle is about to read and write (no effect on results) */
     void (*prefetch)(const void *u, uint32_t i);
 } nbep_evloop_ops;
 
