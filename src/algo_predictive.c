@@ -86,6 +86,7 @@ static void pred_destroy(void *p)
     nbep_free_aligned(c->help_cnt);
     nbep_free_aligned(c->help_mx);
     free(c->help_wall);
+    free(c->jr.term);
     nbep_free_aligned(c->ver);
     nbep_free_aligned(c->tau);
     nbep_free_aligned(c->rest);
@@ -429,6 +430,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
             st = nbep_evloop_set_slabs(c->ev, p.slabs, d);
         } else if (st == NBEP_OK && p.scheduled) {
             st = nbep_evloop_set_scheduled(c->ev, d);
+            c->scheduled = st == NBEP_OK;
         }
         c->team = st == NBEP_OK && p.team;
         if (c->team) {

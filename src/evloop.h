@@ -50,6 +50,12 @@ typedef struct nbep_evloop_motion {
                            * count); the engine only keeps them */
 } nbep_evloop_motion;
 
+/* The caller's counts and sums as they stood before an event (ops mark, opaque here), which
+ * the scheduled loop keeps so that a rollback puts them back (ops back). */
+typedef struct nbep_evloop_mark {
+    uint64_t word[11];
+} nbep_evloop_mark;
+
 /* The algorithm's side. u is the caller's context, passed through. */
 typedef struct nbep_evloop_ops {
     /* the earliest contact of sphere i with a plane, kind NONE when none */
@@ -92,6 +98,15 @@ typedef struct nbep_evloop_ops {
     /* the team and scheduled loops only (may be NULL): requests sphere i's motion, which a
      * handle is about to read and write (no effect on results) */
     void (*prefetch)(const void *u, uint32_t i);
+    /* the scheduled loop only (all three may be NULL; a rollback then leaves the counts as they
+     * are, each event undone counted again): mark, before each event, context u's counts and
+     * sums as they stand into *m (false: the record of the sums' terms that back needs ran out
+     * of memory); back, at a rollback, puts them as they were at *m, the terms added to the
+     * sums since then taken out again (exactly: the sums are exact, xsum.h); settle, at a
+     * window's end, when every event so far stands: the record of terms emptied */
+    bool (*mark)(const void *u, struct nbep_evloop_mark *m);
+    void (*back)(void *u, const struct nbep_evloop_mark *m);
+    void (*settle)(void *u);
 } nbep_evloop_ops;
 
 typedef struct nbep_evloop nbep_evloop;

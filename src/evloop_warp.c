@@ -54,6 +54,16 @@ typedef struct {
     evl_unlist rec;
 } kept_list;
 
+/* The run's counts before an event: the caller's (ops mark) and the call's own tally and stall
+ * count, kept under an item past the ties' (n + 2), so that a rollback counts its undone
+ * events once (ops back) */
+typedef struct {
+    nbep_evloop_mark m;
+    uint64_t events, reactions, exits, since;
+    double t_mark;
+} kept_counts;
+_Static_assert(sizeof(kept_counts) <= sizeof(kept_sphere), "the counts fit a keep's room");
+
 /* An entry's stamp where it is not a root: its sphere's (the entry is its calendar entry) */
 typedef struct {
     uint32_t item;
@@ -212,6 +222,22 @@ static bool keep_sphere(struct evl_sched *x, uint32_t i)
     return true;
 }
 
+/* The counts into the log before the event adds to them (none where the caller keeps none). */
+static bool keep_counts(struct evl_sched *x)
+{
+    if (!x->ops->mark)
+        return true;
+    kept_counts *k = nbep_warp_keep_room(x->warp, 0, (uint32_t)x->e->n + 2);
+    if (!k || !x->ops->mark(x->u, &k->m))
+        return false;
+    k->events = x->tally->events;
+    k->reactions = x->tally->reactions;
+    k->exits = x->tally->exits;
+    k->since = x->stall->since;
+    k->t_mark = x->stall->t_mark;
+    return true;
+}
+
 /* The room for the window's next expiry record; NULL without memory. */
 static kept_list *next_list(struct evl_sched *x)
 {
@@ -234,6 +260,10 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
     NBEP_SCHED_HANDLED_HOOK(x, s);
     nbep_cascade_copy(&x->last, s);
     x->has_last = true;
+    if (!keep_counts(x)) {
+        e->failed = true;
+        return;
+    }
     x->tally->events++;
     if (!nbep__evloop_advances(x->stall, t)) {
         stop_at(x, t);
@@ -300,6 +330,16 @@ static void sched_restore(void *arg, int slab, uint32_t item, const void *state)
      * event that made it, handled again) */
     x->has_last = false;
     x->stop = false;
+    if (item == (uint32_t)e->n + 2) { /* the counts as they were before the event */
+        const kept_counts *k = state;
+        x->ops->back(x->u, &k->m);
+        x->tally->events = k->events;
+        x->tally->reactions = k->reactions;
+        x->tally->exits = k->exits;
+        x->stall->since = k->since;
+        x->stall->t_mark = k->t_mark;
+        return;
+    }
     uint64_t place;
     if (item == (uint32_t)e->n) {
         memcpy(&place, state, sizeof place);
@@ -337,7 +377,7 @@ static const nbep_warp_ops SCHED_OPS = {sched_next, sched_handle, sched_apply, s
 
 nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d)
 {
-    assert(!e->sched && !e->slabcal && e->team == 1 && e->n < UINT32_MAX);
+    assert(!e->sched && !e->slabcal && e->team == 1 && e->n < UINT32_MAX - 2);
     struct evl_sched *x = calloc(1, sizeof *x);
     if (!x)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory for the scheduled loop (NBEP_SCHEDULED)");
@@ -386,6 +426,8 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
     x->tally = tally;
     x->stop = x->too_deep = false;
     x->n_ties = 0; /* (what was set up since is a root, as the set-up's predictions) */
+    if (ops->settle) /* (a call before that stopped inside a window left its terms) */
+        ops->settle(u);
     /* windows of a WINDOWS_A_STEP-th of what is left of the call's span from its first event
      * (a step, or its part; what each window did stands at its end): their logs, a few hundred
      * events' in a dense fluid, stay in the caches (the whole step's, written once and never
@@ -403,6 +445,8 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
         while (!nbep_warp_run(x->warp, 0, NBEP_SCHED_TURN))
             NBEP_SCHED_TURN_HOOK(x);
         x->n_lists = x->n_ties = x->n_ties_undo = 0;
+        if (ops->settle) /* (every event of the window stands: none of its counts undone) */
+            ops->settle(u);
     }
     if (nbep_warp_failed(x->warp))
         e->failed = true;

@@ -479,14 +479,60 @@ static void cells_merge(void *u, const void *uh)
         nbep_xsum_merge(&a->wall[p], &b->wall[p]);
 }
 
-static const nbep_evloop_ops cells_ops = {cells_planes,  cells_pairs,   cells_fresh,
-                                          cells_react,   cells_flight,  cells_wrap,
-                                          cells_save,    cells_restore, cells_clear,
-                                          cells_merge,   cells_prefetch};
-static const nbep_evloop_ops cells_ops_free = {cells_planes, cells_pairs_free, cells_fresh,
-                                               cells_react,  cells_flight,     cells_wrap,
-                                               cells_save,   cells_restore,    cells_clear,
-                                               cells_merge,  cells_prefetch};
+/* What the scheduled loop keeps of a context's counts before each event (nbep_evloop_mark):
+ * the counters, the overlaps' maxima and how many terms its sums' journal held. */
+typedef struct cells_mark {
+    uint64_t c[NBEP_COUNTER_COUNT];
+    double overlap, overlap_rel;
+    uint64_t terms;
+} cells_mark;
+_Static_assert(sizeof(cells_mark) <= sizeof(nbep_evloop_mark), "a context's mark fits the engine's");
+
+static bool cells_mark_counts(const void *u, nbep_evloop_mark *m)
+{
+    const cells_user *x = u;
+    const nbep_sum_journal *j = x->mx->jr;
+    cells_mark k = {.overlap = x->mx->overlap,
+                    .overlap_rel = x->mx->overlap_rel,
+                    .terms = j ? j->n : 0};
+    memcpy(k.c, x->cnt->c, sizeof k.c);
+    memcpy(m, &k, sizeof k);
+    return !j || !j->oom;
+}
+
+/* A rollback's: the counts as they were at m, the sums' terms added since taken out again
+ * (newest first; each undone exactly, the sums being exact) */
+static void cells_back(void *u, const nbep_evloop_mark *m)
+{
+    cells_user *x = u;
+    cells_mark k;
+    memcpy(&k, m, sizeof k);
+    memcpy(x->cnt->c, k.c, sizeof k.c);
+    x->mx->overlap = k.overlap;
+    x->mx->overlap_rel = k.overlap_rel;
+    nbep_sum_journal *j = x->mx->jr;
+    while (j && j->n > k.terms) {
+        const nbep_sum_term *t = &j->term[--j->n];
+        nbep_xsum_add(t->sum, -t->x);
+    }
+}
+
+/* A window's end: every event so far stands, none of its terms will be taken out */
+static void cells_settle(void *u)
+{
+    const cells_user *x = u;
+    if (x->mx->jr)
+        x->mx->jr->n = 0;
+}
+
+static const nbep_evloop_ops cells_ops = {
+    cells_planes,  cells_pairs,    cells_fresh,       cells_react, cells_flight,
+    cells_wrap,    cells_save,     cells_restore,     cells_clear, cells_merge,
+    cells_prefetch, cells_mark_counts, cells_back,    cells_settle};
+static const nbep_evloop_ops cells_ops_free = {
+    cells_planes,  cells_pairs_free, cells_fresh,     cells_react, cells_flight,
+    cells_wrap,    cells_save,       cells_restore,   cells_clear, cells_merge,
+    cells_prefetch, cells_mark_counts, cells_back,    cells_settle};
 
 /* The events of step `step` before t_end, every thread: those of way `way` (a probe when
  * `probe`: the step's first part) run them, thread 0 leading, through the team loop's call
@@ -507,9 +553,12 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
     double t_stuck = 0.0;
     uint32_t jammed;
     const double t_loop = nbep_now();
+    /* the scheduled loop's sums record their terms while it runs (a rollback takes them out) */
+    u->mx->jr = c->scheduled ? &c->jr : NULL;
     const bool fail = !(crew > 1 ? nbep_evloop_run_lead(c->ev, ops, u, us, crew, call, t_end,
                                                         stall, &tally, &t_stuck)
                                  : nbep_evloop_run(c->ev, ops, u, t_end, stall, &tally, &t_stuck));
+    u->mx->jr = NULL;
     *failed = fail;
     if (c->team && probe)
         nbep__pred_ways_note(&c->ways, way, true, tally.events, nbep_now() - t_loop);

@@ -189,6 +189,20 @@ typedef struct pred_ways {
     int last;                   /* grid mode: the way of the step before (-1: none yet) */
 } pred_ways;
 
+/* The terms added to a thread's sums (virial, wall impulses) while the cells mode's scheduled
+ * loop runs, in order: a rollback takes those of its undone events out again, each by adding
+ * its negation, which an exact sum (xsum.h) undoes exactly (pred_cells.c, cells_back). Emptied
+ * at each window's end, when every event so far stands. */
+typedef struct nbep_sum_term {
+    nbep_xsum *sum;
+    double x;
+} nbep_sum_term;
+typedef struct nbep_sum_journal {
+    nbep_sum_term *term;
+    size_t n, cap;
+    bool oom; /* a term not recorded: no memory (the loop then fails) */
+} nbep_sum_journal;
+
 typedef struct pred_ctx {
     nbep_barrier bar;
     nbep_feq *q;                  /* owned */
@@ -309,7 +323,25 @@ typedef struct pred_ctx {
     nbep_thread_max *help_mx;     /* owned when team, the same: their sums (wall: one buffer) */
     nbep_xsum *help_wall;         /* owned when team: team_size NBEP_EVLOOP_RING rows of
                                    * n_planes */
+    bool scheduled;               /* cells mode: the loop runs through the scheduler
+                                   * (NBEP_SCHEDULED, evloop_warp.c) */
+    nbep_sum_journal jr;          /* when scheduled: thread 0's sums' terms (its mx->jr while
+                                   * the loop runs) */
 } pred_ctx;
+/* s += x, and x recorded in mx's journal where it keeps one (nbep_thread_max.jr) */
+static inline void nbep__pred_sum_add(nbep_thread_max *mx, nbep_xsum *s, double x)
+{
+    nbep_xsum_add(s, x);
+    nbep_sum_journal *j = mx->jr;
+    if (!j)
+        return;
+    if (!nbep_room_for_one((void **)&j->term, &j->cap, j->n, sizeof *j->term)) {
+        j->oom = true;
+        return;
+    }
+    j->term[j->n++] = (nbep_sum_term){s, x};
+}
+
 static inline bool is_zero(nbep_vec3 v)
 {
     return v.x == 0.0 && v.y == 0.0 && v.z == 0.0;

@@ -237,7 +237,7 @@ static void planes_take(nbep_thread_max *mx, const plane_share *sh, double J)
 {
     for (int j = 0; j < sh->k; j++)
         if (sh->mu[j] > 0.0)
-            nbep_xsum_add(&mx->wall[sh->plane[j]], J * sh->mu[j]);
+            nbep__pred_sum_add(mx, &mx->wall[sh->plane[j]], J * sh->mu[j]);
 }
 
 /* After a response, a sphere leaves every contact along whose normal it now moves (and its
@@ -873,7 +873,8 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
             nbep_physics_respond_plane(n, &s->vel[lo], e_pl))
             cnt->c[NBEP_COUNTER_PLANE_COLLISIONS]++;
         /* SPEC /stats/wall_impulse: the normal momentum the plane received, pushed outward */
-        nbep_xsum_add(&mx->wall[p], s->mass[lo] * (nbep_vec3_dot(n, s->vel[lo]) - vn0));
+        nbep__pred_sum_add(mx, &mx->wall[p],
+                           s->mass[lo] * (nbep_vec3_dot(n, s->vel[lo]) - vn0));
         update_rest(c, s, lo, dt, c->hold_slow);
         rest_set *r = c->rest ? &c->rest[lo] : NULL; /* NULL: nothing accelerates */
         /* the part against p of the acceleration it flies with (its own, less what the faces
@@ -1028,8 +1029,9 @@ void nbep__pred_react(pred_ctx *c, nbep_state *s, const nbep_scene *sc, double t
      * and takes it at the touching distance as naive does (until 2026-12-03 the overlapped
      * |r12|: a fluid at phi = 0.5, dt = 0.1 read 5.3 % low, a helper's review) */
     const nbep_vec3 dp_hi = nbep_vec3_scale(nbep_vec3_sub(s->vel[hi], v_hi), m_hi);
-    nbep_xsum_add(&mx->virial, c->order_step ? nbep_physics_virial_at_touch(r12, dp_hi, sigma)
-                                             : nbep_vec3_dot(r12, dp_hi));
+    nbep__pred_sum_add(mx, &mx->virial,
+                       c->order_step ? nbep_physics_virial_at_touch(r12, dp_hi, sigma)
+                                     : nbep_vec3_dot(r12, dp_hi));
     /* j, pushed where its pile cannot take it, keeps the push however slow (a hold would
      * take it back, and the push's momentum with it) */
     update_rest(c, s, lo, dt, c->hold_slow && (taken || lo != sj));

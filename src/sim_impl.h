@@ -43,6 +43,10 @@ typedef struct nbep_thread_max {
      * (xsum.h), so that the step's sums do not depend on which thread added what */
     nbep_xsum virial;
     nbep_xsum *wall;
+    /* NULL but while the cells mode's scheduled loop runs (pred_cells.c): where the terms
+     * added to these sums are recorded, for a rollback to take them out again (pred_impl.h,
+     * nbep__pred_sum_add) */
+    struct nbep_sum_journal *jr;
 } nbep_thread_max;
 
 typedef struct nbep_algo nbep_algo;
