@@ -98,12 +98,13 @@ typedef struct nbep_evloop_ops {
     /* the team and scheduled loops only (may be NULL): requests sphere i's motion, which a
      * handle is about to read and write (no effect on results) */
     void (*prefetch)(const void *u, uint32_t i);
-    /* the scheduled loop only (all three may be NULL; a rollback then leaves the counts as they
-     * are, each event undone counted again): mark, before each event, context u's counts and
-     * sums as they stand into *m (false: the record of the sums' terms that back needs ran out
-     * of memory); back, at a rollback, puts them as they were at *m, the terms added to the
-     * sums since then taken out again (exactly: the sums are exact, xsum.h); settle, at a
-     * window's end, when every event so far stands: the record of terms emptied */
+    /* the scheduled loop only (the three set together, or all NULL: a rollback then leaves the
+     * counts as they are, each event undone counted again): mark, before each event, context
+     * u's counts and sums as they stand into *m (false: the record of the sums' terms that
+     * back needs ran out of memory; *m is whole all the same); back, at a rollback, puts them
+     * as they were at *m, the terms added to the sums since then taken out again (exactly: the
+     * sums are exact, xsum.h); settle, at a window's end, when every event so far stands: the
+     * record of terms emptied */
     bool (*mark)(const void *u, struct nbep_evloop_mark *m);
     void (*back)(void *u, const struct nbep_evloop_mark *m);
     void (*settle)(void *u);

@@ -228,14 +228,14 @@ static bool keep_counts(struct evl_sched *x)
     if (!x->ops->mark)
         return true;
     kept_counts *k = nbep_warp_keep_room(x->warp, 0, (uint32_t)x->e->n + 2);
-    if (!k || !x->ops->mark(x->u, &k->m))
+    if (!k)
         return false;
     k->events = x->tally->events;
     k->reactions = x->tally->reactions;
     k->exits = x->tally->exits;
     k->since = x->stall->since;
     k->t_mark = x->stall->t_mark;
-    return true;
+    return x->ops->mark(x->u, &k->m); /* (false: the record is whole all the same) */
 }
 
 /* The room for the window's next expiry record; NULL without memory. */

@@ -4,6 +4,7 @@
  * loop on one thread or a team, the update). */
 #include "pred_impl.h"
 
+#include <assert.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -511,10 +512,9 @@ static void cells_back(void *u, const nbep_evloop_mark *m)
     x->mx->overlap = k.overlap;
     x->mx->overlap_rel = k.overlap_rel;
     nbep_sum_journal *j = x->mx->jr;
-    while (j && j->n > k.terms) {
-        const nbep_sum_term *t = &j->term[--j->n];
-        nbep_xsum_add(t->sum, -t->x);
-    }
+    assert(!j || j->n >= k.terms); /* (marks are of this window's journal) */
+    if (j)
+        nbep__pred_sums_back(j, k.terms);
 }
 
 /* A window's end: every event so far stands, none of its terms will be taken out */
@@ -555,10 +555,13 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
     const double t_loop = nbep_now();
     /* the scheduled loop's sums record their terms while it runs (a rollback takes them out) */
     u->mx->jr = c->scheduled ? &c->jr : NULL;
-    const bool fail = !(crew > 1 ? nbep_evloop_run_lead(c->ev, ops, u, us, crew, call, t_end,
-                                                        stall, &tally, &t_stuck)
-                                 : nbep_evloop_run(c->ev, ops, u, t_end, stall, &tally, &t_stuck));
+    const bool ran = crew > 1 ? nbep_evloop_run_lead(c->ev, ops, u, us, crew, call, t_end, stall,
+                                                     &tally, &t_stuck)
+                              : nbep_evloop_run(c->ev, ops, u, t_end, stall, &tally, &t_stuck);
     u->mx->jr = NULL;
+    /* (a term its journal could not record, at the call's last event too: this step fails) */
+    const bool no_journal = c->scheduled && c->jr.oom;
+    const bool fail = !ran || no_journal;
     *failed = fail;
     if (c->team && probe)
         nbep__pred_ways_note(&c->ways, way, true, tally.events, nbep_now() - t_loop);
@@ -571,6 +574,12 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
         /* a signal during a step's events: the step is abandoned (its rows, frame and counts
          * never made), the run ends after the step before (nbep_sim_run) */
         nbep__sim_abandon(sim);
+    } else if (no_journal) {
+        nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                      "nbep: step %llu: no memory for the scheduled loop's record of the step's "
+                      "sums (NBEP_SCHEDULED, a setting for measuring: run without it); stopping",
+                      (unsigned long long)step);
+        sim->status = NBEP_ENOMEM;
     } else if (fail && nbep_evloop_failed(c->ev)) {
         nbep_diag_add(sim->diag, __FILE__, __LINE__,
                       "nbep: step %llu: no memory for the neighbour lists or the event "

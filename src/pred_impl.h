@@ -190,12 +190,15 @@ typedef struct pred_ways {
 } pred_ways;
 
 /* The terms added to a thread's sums (virial, wall impulses) while the cells mode's scheduled
- * loop runs, in order: a rollback takes those of its undone events out again, each by adding
- * its negation, which an exact sum (xsum.h) undoes exactly (pred_cells.c, cells_back). Emptied
- * at each window's end, when every event so far stands. */
+ * loop runs, in order: a rollback takes those of its undone events out again, each finite one
+ * by adding its negation, which an exact sum (xsum.h) undoes exactly (pred_cells.c,
+ * cells_back), an infinite or NaN one (summed apart, as a double, where inf - inf would leave
+ * NaN) by putting back the sum's special part as it was. Emptied at each window's end, when
+ * every event so far stands. */
 typedef struct nbep_sum_term {
     nbep_xsum *sum;
     double x;
+    double special; /* x not finite: the sum's special part before it */
 } nbep_sum_term;
 typedef struct nbep_sum_journal {
     nbep_sum_term *term;
@@ -331,15 +334,29 @@ typedef struct pred_ctx {
 /* s += x, and x recorded in mx's journal where it keeps one (nbep_thread_max.jr) */
 static inline void nbep__pred_sum_add(nbep_thread_max *mx, nbep_xsum *s, double x)
 {
-    nbep_xsum_add(s, x);
     nbep_sum_journal *j = mx->jr;
+    const double special = s->special; /* (before x, which may change it) */
+    nbep_xsum_add(s, x);
     if (!j)
         return;
     if (!nbep_room_for_one((void **)&j->term, &j->cap, j->n, sizeof *j->term)) {
         j->oom = true;
         return;
     }
-    j->term[j->n++] = (nbep_sum_term){s, x};
+    j->term[j->n++] = (nbep_sum_term){s, x, special};
+}
+
+/* The terms of j past its first `to` taken out of their sums again, newest first: each sum as
+ * it was before them, bit for bit (its value, and what later terms make of it) */
+static inline void nbep__pred_sums_back(nbep_sum_journal *j, size_t to)
+{
+    while (j->n > to) {
+        const nbep_sum_term *t = &j->term[--j->n];
+        if (isfinite(t->x))
+            nbep_xsum_add(t->sum, -t->x);
+        else
+            t->sum->special = t->special;
+    }
 }
 
 static inline bool is_zero(nbep_vec3 v)
