@@ -487,7 +487,8 @@ typedef struct cells_mark {
     double overlap, overlap_rel;
     uint64_t terms;
 } cells_mark;
-_Static_assert(sizeof(cells_mark) <= sizeof(nbep_evloop_mark), "a context's mark fits the engine's");
+_Static_assert(sizeof(cells_mark) <= sizeof(nbep_evloop_mark),
+               "a context's mark fits the engine's");
 
 static bool cells_mark_counts(const void *u, nbep_evloop_mark *m)
 {
@@ -525,14 +526,14 @@ static void cells_settle(void *u)
         x->mx->jr->n = 0;
 }
 
-static const nbep_evloop_ops cells_ops = {
-    cells_planes,  cells_pairs,    cells_fresh,       cells_react, cells_flight,
-    cells_wrap,    cells_save,     cells_restore,     cells_clear, cells_merge,
-    cells_prefetch, cells_mark_counts, cells_back,    cells_settle};
-static const nbep_evloop_ops cells_ops_free = {
-    cells_planes,  cells_pairs_free, cells_fresh,     cells_react, cells_flight,
-    cells_wrap,    cells_save,       cells_restore,   cells_clear, cells_merge,
-    cells_prefetch, cells_mark_counts, cells_back,    cells_settle};
+#define CELLS_OPS(pairs_fn)                                                                  \
+    {.planes = cells_planes, .pairs = (pairs_fn), .fresh = cells_fresh, .react = cells_react,   \
+     .flight = cells_flight, .wrap = cells_wrap, .save = cells_save, .restore = cells_restore,   \
+     .clear = cells_clear, .merge = cells_merge, .prefetch = cells_prefetch,                    \
+     .mark = cells_mark_counts, .back = cells_back, .settle = cells_settle}
+static const nbep_evloop_ops cells_ops = CELLS_OPS(cells_pairs);
+static const nbep_evloop_ops cells_ops_free = CELLS_OPS(cells_pairs_free);
+#undef CELLS_OPS
 
 /* The events of step `step` before t_end, every thread: those of way `way` (a probe when
  * `probe`: the step's first part) run them, thread 0 leading, through the team loop's call

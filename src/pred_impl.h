@@ -331,6 +331,7 @@ typedef struct pred_ctx {
     nbep_sum_journal jr;          /* when scheduled: thread 0's sums' terms (its mx->jr while
                                    * the loop runs) */
 } pred_ctx;
+
 /* s += x, and x recorded in mx's journal where it keeps one (nbep_thread_max.jr) */
 static inline void nbep__pred_sum_add(nbep_thread_max *mx, nbep_xsum *s, double x)
 {

@@ -11,9 +11,9 @@
  * exactly), and the events that stand must carry the stamps of a pass without rollbacks: a
  * periodic fluid at phi = 0.35, elastic and dissipative (e = 0.8, the TC model: the two words a
  * reaction moves besides the motion), and one in a closed box (its walls' impulses), with list
- * expiries among the events undone and rollbacks refused while idle; and Newton's cradles at rest, whose ties are
- * stamped where they are made, rolled back into their cascades (stamps deeper than a root),
- * which the ties' table must come back from. */
+ * expiries among the events undone and rollbacks refused while idle; and Newton's cradles at
+ * rest, whose ties are stamped where they are made, rolled back into their cascades (stamps
+ * deeper than a root), which the ties' table must come back from. */
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
