@@ -13,8 +13,10 @@
 #
 #   scripts/bench-halves.sh [REPS [N [PHI]]]      (defaults 6 256000 0.30)
 #
-# Needs taskset and CPUs 0 and 1; NBEP (default bin/nbep) is the binary. The decks, melts and
-# runs go to a temporary folder, removed after (KEEP=1 keeps it and prints its name).
+# Needs taskset and CPUs 0 and 1; NBEP (default bin/nbep) is the binary, PYTHON (default python3)
+# reads the summaries. The decks, melts and runs go to a temporary folder, removed after (KEEP=1
+# keeps it and prints its name). Exit status 2 for arguments or a fluid nbep refuses (one line),
+# 1 where a run fails or the halves' collisions differ.
 set -euo pipefail
 usage="usage: scripts/bench-halves.sh [REPS [N [PHI]]] (defaults 6 256000 0.30; NBEP=bin/nbep)"
 if [ "${1:-}" = "--help" ] || [ "${1:-}" = "-h" ]; then
@@ -27,7 +29,10 @@ if [ $# -gt 3 ]; then
 fi
 reps=${1:-6} n=${2:-256000} phi=${3:-0.30}
 nbep=${NBEP:-bin/nbep}
-py=${PYTHON:-python3}
+py=$(command -v "${PYTHON:-python3}" 2>/dev/null) || {
+    echo "bench-halves.sh: ${PYTHON:-python3} not found (PYTHON names the Python to use)" >&2
+    exit 2
+}
 if ! [[ $reps =~ ^[1-9][0-9]*$ ]] || ! [[ $n =~ ^[1-9][0-9]*$ ]] || [ $((n % 2)) != 0 ] ||
     [ "$n" -lt 16 ]; then
     echo "bench-halves.sh: REPS must be a count of repeats and N an even count of spheres" \
@@ -65,16 +70,35 @@ deck full-melt "$n" "$lf" 20
 deck full "$n" "$lf" 30
 deck half-melt $((n / 2)) "$lh" 20
 deck half $((n / 2)) "$lh" 30
-"$nbep" run full-melt.deck --quiet
-"$nbep" run half-melt.deck --quiet
+# the melts (nbep's own checks of the fluids: a box too small for cells, a lattice too full)
+for m in full-melt half-melt; do
+    if ! env -u NBEP_SCHEDULED "$nbep" run "$m.deck" --quiet 2>"$m.err"; then
+        echo "bench-halves.sh: nbep refused the fluid of $n spheres (or its half) at packing" \
+            "fraction $phi: $(head -n 1 "$m.err")" >&2
+        exit 2
+    fi
+done
 secs() { "$py" -c "import json, sys; print('%.4f' % json.load(open(sys.argv[1]))['wall_seconds'])" "$1"; }
 coll() { "$py" -c "import json, sys; print(json.load(open(sys.argv[1]))['collisions'])" "$1"; }
 # RUN NAME CPU TAG [ENV]: a resumed run of NAME's deck from its own copy of NAME's melt, its
 # summary NAME.CPU.TAG.json
 run() {
+    rm -f "$1.$2.$3.json"
     cp "$1-melt.h5" "$1.$2.h5"
-    env ${4:-} taskset -c "$2" "$nbep" run "$1.deck" --output "$1.$2.h5" --resume "$1.$2.h5" \
-        --quiet --summary "$1.$2.$3.json"
+    env -u NBEP_SCHEDULED ${4:-} taskset -c "$2" "$nbep" run "$1.deck" --output "$1.$2.h5" \
+        --resume "$1.$2.h5" --quiet --summary "$1.$2.$3.json" ||
+        { echo "bench-halves.sh: the run of $1 on CPU $2 ($3) failed" >&2; return 1; }
+}
+# two runs of the half at once, one per CPU: TAG [ENV]
+pair() {
+    run half 0 "$@" &
+    local a=$!
+    run half 1 "$@" &
+    local b=$!
+    local ra=0 rb=0
+    wait "$a" || ra=$?
+    wait "$b" || rb=$?
+    [ "$ra" = 0 ] && [ "$rb" = 0 ]
 }
 echo "N = $n, phi = $phi (box side $lf; halves: N = $((n / 2)), side $lh); steps 20 to 30 of 0.05"
 echo "repeat  full alone, CPU 0 and 1 (s)  halves plain (s)  halves scheduled (s)  full/slower half: plain  scheduled"
@@ -85,13 +109,9 @@ for r in $(seq "$reps"); do
     f0=$(secs full.0.plain.json)
     run full 1 plain
     f1=$(secs full.1.plain.json)
-    run half 0 plain &
-    run half 1 plain &
-    wait
+    pair plain
     p0=$(secs half.0.plain.json) p1=$(secs half.1.plain.json)
-    run half 0 sched NBEP_SCHEDULED=1 &
-    run half 1 sched NBEP_SCHEDULED=1 &
-    wait
+    pair sched NBEP_SCHEDULED=1
     s0=$(secs half.0.sched.json) s1=$(secs half.1.sched.json)
     # every half the same run, the same collisions (the scheduled loop changes no result)
     c=$(for f in half.0.plain half.1.plain half.0.sched half.1.sched; do coll "$f.json"; done |
@@ -113,3 +133,4 @@ s = [b for a, b in rows]
 print('median full/slower half over %d repeats: plain halves %.3f (%.3f to %.3f), scheduled halves %.3f (%.3f to %.3f)'
       % (len(rows), statistics.median(p), min(p), max(p), statistics.median(s), min(s), max(s)))"
 echo "the halves' collisions the same in every run: $same"
+[ "$same" = True ]

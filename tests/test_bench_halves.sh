@@ -46,4 +46,50 @@ for r, a, b in ((rp, p0, p1), (rs, s0, s1)):
     assert abs(r - want) <= want * (0.00005 / full + 0.00005 / max(a, b)) + 0.0005, (r, want)
 m = re.search(r\"plain halves ([0-9.]+) .* scheduled halves ([0-9.]+) \", t)
 assert float(m.group(1)) == rp and float(m.group(2)) == rs, (m.groups(), rp, rs)' '$tmp/out.txt'"
+# what it runs, through a stand-in nbep that logs each run's deck, NBEP_SCHEDULED and allowed
+# CPUs, then runs bin/nbep; FAKE=fail fails the scheduled half on CPU 1, FAKE=differ adds one
+# to that run's collisions
+real=$(cd bin && pwd)/nbep
+abs=$(cd "$tmp" && pwd) # (the script works in its own folder)
+cat >"$abs/nbep" <<FAKE
+#!/usr/bin/env bash
+deck=\$2 sum=
+for ((k = 1; k <= \$#; k++)); do [ "\${!k}" = --summary ] && { k=\$((k + 1)); sum=\${!k}; }; done
+cpus=\$(sed -n 's/^Cpus_allowed_list:[[:space:]]*//p' /proc/self/status)
+echo "\$(basename "\$deck") \${NBEP_SCHEDULED:-plain} \$cpus" >>"$abs/log.txt"
+if [ "\${FAKE:-}" = fail ] && [ "\${NBEP_SCHEDULED:-}" = 1 ] && [ "\$cpus" = 1 ]; then exit 1; fi
+"$real" "\$@" || exit
+if [ "\${FAKE:-}" = differ ] && [ "\${NBEP_SCHEDULED:-}" = 1 ] && [ "\$cpus" = 1 ]; then
+    "$PY" -c "import json, sys; d = json.load(open(sys.argv[1])); d['collisions'] += 1; json.dump(d, open(sys.argv[1], 'w'))" "\$sum"
+fi
+FAKE
+chmod +x "$abs/nbep"
+mkdir -p "$abs/t"
+rm -f "$abs/log.txt"
+TMPDIR="$abs/t" KEEP=1 NBEP_SCHEDULED=1 NBEP="$abs/nbep" timeout 120 env PYTHON="$PY" \
+    bash scripts/bench-halves.sh 1 2000 0.25 >"$abs/out.txt" 2>&1
+rc=$?
+kept=$(sed -n 's/^kept: //p' "$abs/out.txt")
+check "through the stand-in (NBEP_SCHEDULED=1 in the caller's environment): exit 0 (got $rc)" "[ $rc = 0 ]"
+check "the runs: the full fluid alone on CPU 0 then 1, the halves plain on both, then scheduled on both (the plain ones without NBEP_SCHEDULED)" \
+    "[ \"\$(grep -v melt '$abs/log.txt' | sort | tr '\n' ' ')\" = 'full.deck plain 0 full.deck plain 1 half.deck 1 0 half.deck 1 1 half.deck plain 0 half.deck plain 1 ' ]"
+check "the decks: the full box and the half at packing fraction 0.25, melts of 20 steps, runs to 30" \
+    "\"\$PY\" -c '
+import math, re, sys
+d = sys.argv[1]
+for name, n, steps in ((\"full-melt\", 2000, 20), (\"full\", 2000, 30), (\"half-melt\", 1000, 20), (\"half\", 1000, 30)):
+    t = open(d + \"/\" + name + \".deck\").read()
+    side = float(re.search(r\"max = \\[([0-9.e+-]+),\", t).group(1))
+    assert abs(n * math.pi / 6 / side ** 3 - 0.25) < 1e-12, (name, side)
+    assert re.search(r\"count = %d;\" % n, t) and re.search(r\"steps = %d;\" % steps, t), name' '$kept'"
+rm -rf "$abs/t"
+for fake in fail differ; do
+    mkdir -p "$abs/t"
+    FAKE=$fake TMPDIR="$abs/t" NBEP="$abs/nbep" timeout 120 env PYTHON="$PY" \
+        bash scripts/bench-halves.sh 1 2000 0.30 >"$abs/out.txt" 2>"$abs/err.txt"
+    rc=$?
+    check "a scheduled half that $( [ $fake = fail ] && echo fails || echo counts other collisions ): exit 1 (got $rc), said, its temporary folder gone" \
+        "[ $rc = 1 ] && grep -q 'bench-halves.sh: the' '$abs/err.txt' && [ -z \"\$(ls -A '$abs/t')\" ]"
+    rm -rf "$abs/t"
+done
 test_end bench_halves
