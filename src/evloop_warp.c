@@ -40,6 +40,11 @@
 #define NBEP_SCHED_RESTORE_HOOK(x, item) ((void)0)
 #endif
 
+/* The log's items: spheres 0 .. n - 1 (their states), then past them an expiry's list record,
+ * a change of the ties' table and the run's counts (KEPT_ITEM(e, KEPT_LIST) ...). */
+enum { KEPT_LIST, KEPT_TIE, KEPT_COUNTS };
+#define KEPT_ITEM(e, kind) ((uint32_t)(e)->n + (uint32_t)(kind))
+
 /* What the slab's log keeps of a sphere before an event changes it: its motion (the engine's
  * save: a free flight's event changes nothing else of it) and its slot. */
 typedef struct {
@@ -192,7 +197,7 @@ static bool made_by(struct evl_sched *x, const nbep_stamp *by, uint32_t j)
     /* what it replaces, kept (under the item past the expiries') */
     uint64_t *place = nbep_room_for_one((void **)&x->ties_undo, &x->cap_ties_undo,
                                         x->n_ties_undo, sizeof *x->ties_undo)
-                          ? nbep_warp_keep_room(x->warp, 0, (uint32_t)x->e->n + 1)
+                          ? nbep_warp_keep_room(x->warp, 0, KEPT_ITEM(x->e, KEPT_TIE))
                           : NULL;
     if (!place)
         return false;
@@ -227,7 +232,7 @@ static bool keep_counts(struct evl_sched *x)
 {
     if (!x->ops->mark)
         return true;
-    kept_counts *k = nbep_warp_keep_room(x->warp, 0, (uint32_t)x->e->n + 2);
+    kept_counts *k = nbep_warp_keep_room(x->warp, 0, KEPT_ITEM(x->e, KEPT_COUNTS));
     if (!k)
         return false;
     k->events = x->tally->events;
@@ -300,7 +305,7 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
      * window as its state */
     kept_list *l = next_list(x);
     uint64_t *place = l && nbep__evloop_ws_copy_lists(&l->ws, w)
-                          ? nbep_warp_keep_room(x->warp, 0, (uint32_t)e->n)
+                          ? nbep_warp_keep_room(x->warp, 0, KEPT_ITEM(e, KEPT_LIST))
                           : NULL;
     if (!place) {
         e->failed = true;
@@ -330,7 +335,7 @@ static void sched_restore(void *arg, int slab, uint32_t item, const void *state)
      * event that made it, handled again) */
     x->has_last = false;
     x->stop = false;
-    if (item == (uint32_t)e->n + 2) { /* the counts as they were before the event */
+    if (item == KEPT_ITEM(e, KEPT_COUNTS)) { /* the counts as they were before the event */
         const kept_counts *k = state;
         x->ops->back(x->u, &k->m);
         x->tally->events = k->events;
@@ -341,14 +346,14 @@ static void sched_restore(void *arg, int slab, uint32_t item, const void *state)
         return;
     }
     uint64_t place;
-    if (item == (uint32_t)e->n) {
+    if (item == KEPT_ITEM(e, KEPT_LIST)) {
         memcpy(&place, state, sizeof place);
         assert(place + 1 == x->n_lists);
         nbep__evloop_unapply(e, &x->lists[place].ws, &x->lists[place].rec);
         x->n_lists = place;
         return;
     }
-    if (item == (uint32_t)e->n + 1) { /* a change of the ties' table: its sphere's stamp back */
+    if (item == KEPT_ITEM(e, KEPT_TIE)) { /* a change of the ties' table: a stamp back */
         memcpy(&place, state, sizeof place);
         assert(place + 1 == x->n_ties_undo);
         const tie_undo *u = &x->ties_undo[place];
@@ -371,13 +376,23 @@ static void sched_restore(void *arg, int slab, uint32_t item, const void *state)
     nbep__evloop_schedule_one(e, item);
 }
 
+/* A window's end (and a call's start): every event so far stands, so its expiries' records,
+ * its ties (every entry they stamped is handled) and what would undo them, and the caller's
+ * record for undoing its counts (ops settle) are dropped. */
+static void window_closed(struct evl_sched *x)
+{
+    x->n_lists = x->n_ties = x->n_ties_undo = 0;
+    if (x->ops->settle)
+        x->ops->settle(x->u);
+}
+
 static const nbep_warp_ops SCHED_OPS = {sched_next, sched_handle, sched_apply, sched_restore};
 
 /* ---- the engine's side -------------------------------------------------------------------- */
 
 nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d)
 {
-    assert(!e->sched && !e->slabcal && e->team == 1 && e->n < UINT32_MAX - 2);
+    assert(!e->sched && !e->slabcal && e->team == 1 && e->n <= UINT32_MAX - KEPT_COUNTS);
     struct evl_sched *x = calloc(1, sizeof *x);
     if (!x)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory for the scheduled loop (NBEP_SCHEDULED)");
@@ -425,9 +440,7 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
     x->stall = stall;
     x->tally = tally;
     x->stop = x->too_deep = false;
-    x->n_ties = 0; /* (what was set up since is a root, as the set-up's predictions) */
-    if (ops->settle) /* (a call before that stopped inside a window left its terms) */
-        ops->settle(u);
+    window_closed(x); /* (a call before that stopped inside its window left them) */
     /* windows of a WINDOWS_A_STEP-th of what is left of the call's span from its first event
      * (a step, or its part; what each window did stands at its end): their logs, a few hundred
      * events' in a dense fluid, stay in the caches (the whole step's, written once and never
@@ -444,9 +457,7 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
         NBEP_SCHED_OPEN_HOOK(x);
         while (!nbep_warp_run(x->warp, 0, NBEP_SCHED_TURN))
             NBEP_SCHED_TURN_HOOK(x);
-        x->n_lists = x->n_ties = x->n_ties_undo = 0;
-        if (ops->settle) /* (every event of the window stands: none of its counts undone) */
-            ops->settle(u);
+        window_closed(x);
     }
     if (nbep_warp_failed(x->warp))
         e->failed = true;

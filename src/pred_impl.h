@@ -336,10 +336,12 @@ typedef struct pred_ctx {
 static inline void nbep__pred_sum_add(nbep_thread_max *mx, nbep_xsum *s, double x)
 {
     nbep_sum_journal *j = mx->jr;
+    if (!j) {
+        nbep_xsum_add(s, x);
+        return;
+    }
     const double special = s->special; /* (before x, which may change it) */
     nbep_xsum_add(s, x);
-    if (!j)
-        return;
     if (!nbep_room_for_one((void **)&j->term, &j->cap, j->n, sizeof *j->term)) {
         j->oom = true;
         return;
