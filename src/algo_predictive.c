@@ -87,6 +87,7 @@ static void pred_destroy(void *p)
     nbep_free_aligned(c->help_mx);
     free(c->help_wall);
     free(c->jr.term);
+    nbep__pred_cells_worlds_free(c);
     nbep_free_aligned(c->ver);
     nbep_free_aligned(c->tau);
     nbep_free_aligned(c->rest);
@@ -167,8 +168,9 @@ static int slabs_asked(void)
 }
 
 /* NBEP_SCHEDULED=1, read as a run is made: cells mode's one-thread loop through the optimistic
- * scheduler on one slab (nbep_evloop_set_scheduled, for measuring what its bookkeeping costs
- * the engine; the results are the same), in a free flight without slabs, the team off. */
+ * scheduler (nbep_evloop_set_scheduled, for measuring what its bookkeeping costs the engine;
+ * the results are the same), in a free flight, the team off: on one slab, or with NBEP_SLABS
+ * on that many, taken in turns, each in a world of its own (nbep_evloop_set_worlds). */
 static bool scheduled_asked(void)
 {
     const char *v = getenv("NBEP_SCHEDULED");
@@ -206,7 +208,7 @@ static pred_plan plan_of(const nbep_scene *sc, const nbep_state *st, int nt, int
          * e < 1 their TC clocks and reaction counts, which the loop keeps with the motion to
          * undo a speculative reaction (cells_save) */
         p.slabs = slabs_asked();
-        p.scheduled = scheduled_asked() && p.free_flight && p.slabs < 2;
+        p.scheduled = scheduled_asked() && p.free_flight && p.slabs <= NBEP_SLABCAL_MAX;
         /* (per-slab calendars are merged on one thread: the team loop keeps one calendar) */
         const bool can_team = nt >= 2 && p.free_flight && p.slabs < 2 && !p.scheduled;
         int size = nt < NBEP_EVLOOP_TEAM_MAX ? nt : NBEP_EVLOOP_TEAM_MAX;
@@ -426,11 +428,14 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
             nbep_diag_add(d, __FILE__, __LINE__, "nbep: NBEP_SLABS asks for more than %d slabs",
                           NBEP_SLABCAL_MAX);
             st = NBEP_EDECK;
-        } else if (st == NBEP_OK && p.slabs >= 2) {
-            st = nbep_evloop_set_slabs(c->ev, p.slabs, d);
-        } else if (st == NBEP_OK && p.scheduled) {
-            st = nbep_evloop_set_scheduled(c->ev, d);
-            c->scheduled = st == NBEP_OK;
+        } else {
+            if (st == NBEP_OK && p.slabs >= 2)
+                st = nbep_evloop_set_slabs(c->ev, p.slabs, d);
+            if (st == NBEP_OK && p.scheduled) { /* (on the slabs, with them) */
+                st = nbep_evloop_set_scheduled(c->ev, d);
+                c->scheduled = st == NBEP_OK;
+                c->slabs = p.slabs;
+            }
         }
         c->team = st == NBEP_OK && p.team;
         if (c->team) {

@@ -154,6 +154,7 @@ nbep_status nbep_evloop_create(size_t n, nbep_vec3 lo, nbep_vec3 hi, double reac
     e->team = team;
     e->q = q;
     e->ver = ver;
+    e->own_slab = -1;
     e->pb = nbep_periodic_make(periodic, lo, hi);
     double skin = nbep_evloop_skin_in(skin_frac, reach, periodic, lo, hi);
     if (reach > 0.0 && !(skin >= NBEP_NBLIST_SKIN_MIN * reach)) {
@@ -764,6 +765,24 @@ static int sphere_slab(const nbep_evloop *e, uint32_t i)
                                 nbep_slabcal_slabs(e->slabcal));
 }
 
+int nbep__evloop_sphere_slab(const nbep_evloop *e, uint32_t i)
+{
+    return sphere_slab(e, i);
+}
+
+void nbep__evloop_predict_own(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uint32_t i,
+                              double t)
+{
+    predict_one(e, ops, u, i, t);
+}
+
+/* Whether sphere i is the engine's to predict and enter: always, but on the scheduled loop's
+ * slabs (own_slab), where only the slab's own spheres are. */
+static inline NBEP_ALWAYS_INLINE bool owned(const nbep_evloop *e, uint32_t i)
+{
+    return e->own_slab < 0 || sphere_slab(e, i) == e->own_slab;
+}
+
 /* Entry c set in the calendar, or its item's taken out (set false); with slabs, in its slab's
  * calendar, whose room may have to grow: without memory for it the run fails (e->failed). */
 static void enter(nbep_evloop *e, bool set, nbep_calendar_entry c)
@@ -831,7 +850,7 @@ static void note_next(const nbep_evloop *e, evl_ws *w)
 {
     size_t n = 0;
     for (size_t k = 0; k < w->n_changed && n < NEXT_MAX; k++)
-        if (w->changed[k] != w->item)
+        if (w->changed[k] != w->item && owned(e, w->changed[k]))
             note_one(e, w, n++, w->changed[k]);
     if (n + 1 > NEXT_MAX) { /* more than NEXT_MAX (not with one pair): the slots, at commit */
         w->n_next = NEXT_ALL;
@@ -898,7 +917,7 @@ void nbep__evloop_handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, 
             w->changed[k] = changed[k];
         w->n_changed = m;
         for (size_t k = 0; k < w->n_changed; k++)
-            if (w->changed[k] != i)
+            if (w->changed[k] != i && owned(e, w->changed[k]))
                 predict_one(e, ops, u, w->changed[k], t);
     }
     /* in every other case (stale slot, reaction) i looks again from now */
@@ -927,7 +946,7 @@ static inline NBEP_ALWAYS_INLINE void commit_rec(nbep_evloop *e, const evl_ws *w
         return;
     }
     for (size_t k = 0; k < w->n_changed; k++)
-        if (w->changed[k] != w->item)
+        if (w->changed[k] != w->item && owned(e, w->changed[k]))
             nbep__evloop_schedule_one(e, w->changed[k]);
     nbep__evloop_schedule_one(e, w->item);
 }

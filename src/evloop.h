@@ -150,6 +150,16 @@ NBEP_MUST_CHECK nbep_status nbep_evloop_set_slabs(nbep_evloop *e, int slabs, nbe
  * nbep_evloop_too_deep true). Only on an engine for one thread without slabs, before the first
  * run. NBEP_ENOMEM with a message. */
 NBEP_MUST_CHECK nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d);
+/* The scheduled loop on slabs (nbep_evloop_set_scheduled on an engine with slabs, one thread
+ * taking them in turns): each slab acts in a world of its own, wu[s] (the callbacks' context
+ * whose motion arrays are slab s's) with response counts wver[s] (both borrowed, set before
+ * each call): the call copies the context's motion into each at its start, each slab's own
+ * spheres (nbep_slabcal's) back at its end, and merges their counts (ops clear, merge), so that
+ * every op is needed (save, restore, clear, merge, mark, back, settle). */
+void nbep_evloop_set_worlds(nbep_evloop *e, void *const *wu, const uint64_t *const *wver);
+/* The expiries the scheduled loop on slabs did at its windows' meetings, because their lists
+ * and cells reach another slab's (0 without slabs), in all calls. */
+uint64_t nbep_evloop_meetings(const nbep_evloop *e);
 /* True where the scheduled loop (nbep_evloop_set_scheduled) stopped its last call at a cascade
  * at one time deeper than its stamps hold; false otherwise (and without the setting). */
 bool nbep_evloop_too_deep(const nbep_evloop *e);

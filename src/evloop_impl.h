@@ -127,6 +127,10 @@ struct nbep_evloop {
                                     * sides, -inf and +inf on any other */
     bool failed;          /* out of memory for a list: the run stops */
     struct evl_sched *sched; /* owned, NULL but with nbep_evloop_set_scheduled */
+    int own_slab;         /* the scheduled loop on slabs: the slab whose world the engine acts
+                           * in, which predicts and enters only its own spheres (another's
+                           * sphere that an event changes is its owner's to predict:
+                           * evloop_warp.c); -1 (every other loop): every sphere its own */
     nbep_feq *q;          /* borrowed */
     const uint64_t *ver;  /* borrowed */
     /* the team loop's window: the places handled ahead and not yet committed, numbered in
@@ -199,13 +203,20 @@ void nbep__evloop_ws_copy_fini(evl_ws *d);
 /* nbep__evloop_commit, an expiry's list entered with its record in *rec (as
  * nbep__evloop_apply_undoable) */
 void nbep__evloop_commit_undoable(nbep_evloop *e, const evl_ws *w, evl_unlist *rec);
-/* nbep_evloop_run through the optimistic scheduler on one slab (evloop_warp.c) */
+/* nbep_evloop_run through the optimistic scheduler, on one slab or, with slabs, on each
+ * (evloop_warp.c) */
 bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void *u,
                                 double t_end, nbep_evloop_stall *stall,
                                 nbep_evloop_tally *tally, double *t_stuck);
 void nbep__evloop_sched_destroy(struct evl_sched **s);
 /* The calendar entry of sphere i from its slot. */
 void nbep__evloop_schedule_one(nbep_evloop *e, uint32_t i);
+/* With slabs: the slab of sphere i (its list centre's cell column's). */
+int nbep__evloop_sphere_slab(const nbep_evloop *e, uint32_t i);
+/* Sphere i's slot predicted afresh at time t from its list, in context u (its calendar entry
+ * not set: nbep__evloop_schedule_one). */
+void nbep__evloop_predict_own(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uint32_t i,
+                              double t);
 
 /* The calendar's tie key: the pair (lower sphere high, higher low), the same in both spheres'
  * slots; a plane contact (UINT32_MAX - 1 - plane low) or a list expiry (UINT32_MAX low) ranks

@@ -20,6 +20,16 @@
 #define WINDOWS_A_STEP 64
 #endif
 
+/* The actions each slab takes in its turn, with slabs (one thread takes them in turns); a
+ * test's copy of this file (tests/test_sched_slabs.c) draws each turn's, and looks at what the
+ * scheduler did as the loop is destroyed. */
+#ifndef NBEP_SCHED_SLAB_TURN
+#define NBEP_SCHED_SLAB_TURN(slab) ((size_t)64)
+#endif
+#ifndef NBEP_SCHED_DESTROY_HOOK
+#define NBEP_SCHED_DESTROY_HOOK(x) ((void)0)
+#endif
+
 /* A test's copy of this file (tests/test_sched_rollback.c) runs the scheduler NBEP_SCHED_TURN
  * actions at a time and looks between turns (to roll back), at each event handled and at each
  * window's opening, and at each state restored; a build of nbep runs each window in one turn
@@ -84,20 +94,27 @@ typedef struct {
     nbep_stamp old;
 } tie_undo;
 
-struct evl_sched {
-    nbep_warp *warp;
-    /* the call's */
-    nbep_evloop *e;
-    const nbep_evloop_ops *ops;
-    void *u;
-    nbep_evloop_stall *stall;
-    nbep_evloop_tally *tally;
-    bool stop;           /* no more events: stuck, a reaction's stop or a cascade too deep
-                          * (t_stuck) */
-    bool too_deep;       /* ... the last: a cascade deeper than a stamp holds */
-    double t_stuck;
-    nbep_stamp last;     /* the stamp of the event handled last (its order's check) */
+/* A message between slabs: a sphere's new motion, from the event (or message) that gave it;
+ * a copy for a slab whose spheres' lists hold it, or a write to its owner, which predicts it
+ * (a pair across a face: the slab of the entry handled reacts both) */
+enum { MSG_COPY, MSG_WRITE };
+typedef struct {
+    nbep_evloop_motion m;
+    uint32_t kind;
+} slab_msg;
+
+/* A slab's side of the loop (one slab: side[0], the run's own context and arrays) */
+typedef struct {
+    void *u;                /* its world's context (the callbacks' u) */
+    const uint64_t *ver;    /* its world's response counts (the engine's e->ver in it) */
+    nbep_evloop_stall stall;
+    nbep_evloop_tally tally;
+    nbep_stamp last;        /* the stamp of the event handled last (its order's check) */
     bool has_last;
+    /* held: its earliest entry, stamped `held`, is an expiry whose lists and cells reach
+     * another slab's, done only at a meeting, between windows (as next last found it) */
+    bool blocked;
+    nbep_stamp held;
     /* the window's expiries, by their place in it (the log's item for them, past the
      * spheres', keeps that place) */
     kept_list *lists;
@@ -111,6 +128,28 @@ struct evl_sched {
     size_t n_ties, cap_ties;
     tie_undo *ties_undo;
     size_t n_ties_undo, cap_ties_undo;
+} evl_side;
+
+struct evl_sched {
+    nbep_warp *warp;
+    int slabs;
+    evl_side *side;         /* owned, slabs */
+    void *const *wu;        /* borrowed, with slabs: each slab's world (nbep_evloop_set_worlds) */
+    const uint64_t *const *wver;
+    /* the call's */
+    nbep_evloop *e;
+    const nbep_evloop_ops *ops;
+    void *u;
+    const uint64_t *ver0;   /* the run's response counts (e->ver outside the call) */
+    nbep_evloop_stall *stall;
+    nbep_evloop_tally *tally;
+    bool stop;           /* no more events: stuck, a reaction's stop or a cascade too deep
+                          * (t_stuck) */
+    bool too_deep;       /* ... the last: a cascade deeper than a stamp holds */
+    double t_stuck;
+    uint64_t meetings;   /* expiries done at a meeting (with slabs) */
+    double window_end;   /* the window's: a slab's entry held at or past it waits for a later
+                          * window */
 };
 
 /* ---- the model's side (warp.h) ------------------------------------------------------------ */
@@ -123,30 +162,82 @@ static void stop_at(struct evl_sched *x, double t)
     x->t_stuck = t;
 }
 
+/* The engine set to act in slab's world: its response counts, and with slabs its own
+ * spheres only predicted and entered. */
+static inline evl_side *enter_slab(struct evl_sched *x, int slab)
+{
+    evl_side *d = &x->side[slab];
+    x->e->ver = d->ver;
+    x->e->own_slab = x->slabs > 1 ? slab : -1;
+    return d;
+}
+
 /* Where sphere i's row is in the ties' table; n_ties where it has none. */
-static size_t tie_of(const struct evl_sched *x, uint32_t i)
+static size_t tie_of(const evl_side *d, uint32_t i)
 {
     size_t k = 0;
-    while (k < x->n_ties && x->ties[k].item != i)
+    while (k < d->n_ties && d->ties[k].item != i)
         k++;
     return k;
 }
 
 /* Row k out of the ties' table (the last one into its place). */
-static void tie_drop(struct evl_sched *x, size_t k)
+static void tie_drop(evl_side *d, size_t k)
 {
-    x->ties[k] = x->ties[--x->n_ties];
+    d->ties[k] = d->ties[--d->n_ties];
+}
+
+/* The cell column of sphere i's list centre, and the columns across x. */
+static size_t column_of(const nbep_evloop *e, uint32_t i, size_t *columns)
+{
+    *columns = e->cells.dim[0];
+    return e->cells.m[i].cell % *columns;
+}
+
+/* The slab of column c + dc (dc in -2 .. 2), around a periodic x; -1 past a side that is not
+ * periodic. */
+static int slab_at(const struct evl_sched *x, size_t c, size_t columns, int dc)
+{
+    const long k = (long)c + dc;
+    long m = k;
+    if (k < 0 || k >= (long)columns) {
+        if (!x->e->pb.axis[0])
+            return -1;
+        m = (k + (long)columns) % (long)columns;
+    }
+    return nbep_slabcal_slab_of((size_t)m, columns, x->slabs);
+}
+
+/* Whether the expiry of sphere i, of slab `slab`, reads and writes that slab's lists and cells
+ * alone: its centre moves a column at most (a stray is shorter than a cell), its walk reads the
+ * columns beside its new one and its commit writes the lists of its old and new members, in
+ * the columns beside its old and new ones: all the slab's when the two columns on each side
+ * of its own are. */
+static bool expiry_local(const struct evl_sched *x, int slab, uint32_t i)
+{
+    size_t columns;
+    const size_t c = column_of(x->e, i, &columns);
+    for (int dc = -2; dc <= 2; dc++) {
+        const int s = slab_at(x, c, columns, dc);
+        if (s >= 0 && s != slab)
+            return false;
+    }
+    return true;
 }
 
 static bool sched_next(void *arg, int slab, nbep_stamp *s)
 {
-    (void)slab;
     struct evl_sched *x = arg;
+    evl_side *d = enter_slab(x, slab);
     nbep_evloop *e = x->e;
-    uint32_t i;
-    double t;
-    if (x->stop || e->failed || !nbep_calendar_top(e->cal, &i, &t))
+    d->blocked = false;
+    nbep_calendar_entry c;
+    if (x->stop || e->failed ||
+        !(e->slabcal ? nbep_slabcal_top(e->slabcal, slab, &c)
+                     : nbep_calendar_top(e->cal, &c.item, &c.time)))
         return false;
+    const uint32_t i = c.item;
+    const double t = c.time;
     const nbep_event *ev = nbep_feq_slot(e->q, i);
     /* the lines its handle will read requested here, before the stamp's work: what the plain
      * loop requests (its lists, cells, the next two entries) and its spheres' motion, which
@@ -155,145 +246,209 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
      * docs/optimistic-design.md, *The lines requested*) */
     nbep__evloop_prefetch_event(e, i, ev);
     if (x->ops->prefetch) {
-        x->ops->prefetch(x->u, i);
+        x->ops->prefetch(d->u, i);
         if (ev->kind == NBEP_EVENT_SPHERE)
-            x->ops->prefetch(x->u, ev->partner);
+            x->ops->prefetch(d->u, ev->partner);
     }
     const uint64_t key = nbep__evloop_slot_key(i, ev);
     nbep_cascade_set_root(s, t, key, i);
-    const size_t k = tie_of(x, i);
-    if (k < x->n_ties) { /* made at its maker's time, if for this entry */
-        const nbep_stamp *c = &x->ties[k].s;
-        if (c->t == t && c->level[c->depth - 1].key == key)
-            nbep_cascade_copy(s, c);
+    const size_t k = tie_of(d, i);
+    if (k < d->n_ties) { /* made at its maker's time, if for this entry */
+        const nbep_stamp *m = &d->ties[k].s;
+        if (m->t == t && m->level[m->depth - 1].key == key)
+            nbep_cascade_copy(s, m);
     }
-    if (!x->has_last) /* (after a rollback: the newest event that stands, if any) */
-        x->has_last = nbep_warp_last(x->warp, 0, &x->last);
+    if (!d->has_last) /* (after a rollback: the newest event that stands, if any) */
+        d->has_last = nbep_warp_last(x->warp, slab, &d->last);
     /* the order's check: the stamps made where their entries were never go back, but where a
      * cascade at one time is deeper than a stamp holds (made_by), a root stamp does: the loop
      * stops there, too deep (nbep_evloop_too_deep: its own message) */
-    if (x->has_last && nbep_cascade_cmp(s, &x->last) < 0) {
+    if (d->has_last && nbep_cascade_cmp(s, &d->last) < 0) {
         x->too_deep = true;
         stop_at(x, t);
         return false;
     }
+    /* an expiry reaching another slab's lists or cells waits for the meeting (sched_held) */
+    if (x->slabs > 1 && ev->kind == NBEP_EVENT_HORIZON && !expiry_local(x, slab, i)) {
+        d->blocked = true;
+        nbep_cascade_copy(&d->held, s);
+    }
     return true;
+}
+
+/* The slab's earliest entry, which next has just given, is held till the meeting: it acts on
+ * what comes before it and then waits. */
+static bool sched_held(void *arg, int slab)
+{
+    const struct evl_sched *x = arg;
+    return x->side[slab].blocked;
 }
 
 /* Sphere j's new entry, made by the event stamped *by: its stamp kept where it is not a root
  * (at by's time), in place of any older one of j's. Where that stamp would be deeper than
  * NBEP_CASCADE_DEPTH (a cascade at one time through more than 8 spheres) none is kept: the
  * entry's root stamp then comes before the event that made it, and the next stops the loop
- * there (its order's check). False without memory. */
-static bool made_by(struct evl_sched *x, const nbep_stamp *by, uint32_t j)
+ * there (its order's check). What it replaces kept in the slab's log (keep: inside a window;
+ * at a meeting nothing is kept: what it does stands). False without memory. */
+static bool made_by(struct evl_sched *x, int slab, const nbep_stamp *by, uint32_t j, bool keep)
 {
+    evl_side *d = &x->side[slab];
     const nbep_event *slot = nbep_feq_slot(x->e->q, j);
     if (slot->time != by->t) /* later: a root (j's older stamp, if any, no longer its entry's) */
         return true;
-    const size_t k = tie_of(x, j);
-    if (k == x->n_ties &&
-        !nbep_room_for_one((void **)&x->ties, &x->cap_ties, k, sizeof *x->ties))
+    const size_t k = tie_of(d, j);
+    if (k == d->n_ties &&
+        !nbep_room_for_one((void **)&d->ties, &d->cap_ties, k, sizeof *d->ties))
         return false;
-    /* what it replaces, kept (under the item past the expiries') */
-    uint64_t *place = nbep_room_for_one((void **)&x->ties_undo, &x->cap_ties_undo,
-                                        x->n_ties_undo, sizeof *x->ties_undo)
-                          ? nbep_warp_keep_room(x->warp, 0, KEPT_ITEM(x->e, KEPT_TIE))
-                          : NULL;
-    if (!place)
-        return false;
-    *place = x->n_ties_undo;
-    tie_undo *u = &x->ties_undo[x->n_ties_undo++];
-    u->item = j;
-    u->had = k < x->n_ties;
-    if (u->had)
-        nbep_cascade_copy(&u->old, &x->ties[k].s);
-    if (nbep_cascade_made(by, slot->time, nbep__evloop_slot_key(j, slot), j, &x->ties[k].s)) {
-        x->ties[k].item = j;
-        x->n_ties += k == x->n_ties;
-    } else if (k < x->n_ties) { /* (too deep: j's older stamp is not its entry's either) */
-        tie_drop(x, k);
+    if (keep) { /* what it replaces, kept (under the item past the expiries') */
+        uint64_t *place = nbep_room_for_one((void **)&d->ties_undo, &d->cap_ties_undo,
+                                            d->n_ties_undo, sizeof *d->ties_undo)
+                              ? nbep_warp_keep_room(x->warp, slab, KEPT_ITEM(x->e, KEPT_TIE))
+                              : NULL;
+        if (!place)
+            return false;
+        *place = d->n_ties_undo;
+        tie_undo *u = &d->ties_undo[d->n_ties_undo++];
+        u->item = j;
+        u->had = k < d->n_ties;
+        if (u->had)
+            nbep_cascade_copy(&u->old, &d->ties[k].s);
+    }
+    if (nbep_cascade_made(by, slot->time, nbep__evloop_slot_key(j, slot), j, &d->ties[k].s)) {
+        d->ties[k].item = j;
+        d->n_ties += k == d->n_ties;
+    } else if (k < d->n_ties) { /* (too deep: j's older stamp is not its entry's either) */
+        tie_drop(d, k);
     }
     return true;
 }
 
-/* Sphere i's state into the log before the event changes it. */
-static bool keep_sphere(struct evl_sched *x, uint32_t i)
+/* Sphere i's state into slab's log before the event changes it (its slot too where it is the
+ * slab's own: another slab's is its owner's). */
+static bool keep_sphere(struct evl_sched *x, int slab, uint32_t i)
 {
-    kept_sphere *k = nbep_warp_keep_room(x->warp, 0, i);
+    kept_sphere *k = nbep_warp_keep_room(x->warp, slab, i);
     if (!k)
         return false;
-    x->ops->save(x->u, i, &k->m);
-    k->slot = *nbep_feq_slot(x->e->q, i);
+    x->ops->save(x->side[slab].u, i, &k->m);
+    if (x->slabs == 1 || nbep__evloop_sphere_slab(x->e, i) == slab)
+        k->slot = *nbep_feq_slot(x->e->q, i);
     return true;
 }
 
 /* The counts into the log before the event adds to them (none where the caller keeps none). */
-static bool keep_counts(struct evl_sched *x)
+static bool keep_counts(struct evl_sched *x, int slab)
 {
     if (!x->ops->mark)
         return true;
-    kept_counts *k = nbep_warp_keep_room(x->warp, 0, KEPT_ITEM(x->e, KEPT_COUNTS));
+    evl_side *d = &x->side[slab];
+    kept_counts *k = nbep_warp_keep_room(x->warp, slab, KEPT_ITEM(x->e, KEPT_COUNTS));
     if (!k)
         return false;
-    k->events = x->tally->events;
-    k->reactions = x->tally->reactions;
-    k->exits = x->tally->exits;
-    k->since = x->stall->since;
-    k->t_mark = x->stall->t_mark;
-    return x->ops->mark(x->u, &k->m); /* (false: the record is whole all the same) */
+    k->events = d->tally.events;
+    k->reactions = d->tally.reactions;
+    k->exits = d->tally.exits;
+    k->since = d->stall.since;
+    k->t_mark = d->stall.t_mark;
+    return x->ops->mark(d->u, &k->m); /* (false: the record is whole all the same) */
 }
 
 /* The room for the window's next expiry record; NULL without memory. */
-static kept_list *next_list(struct evl_sched *x)
+static kept_list *next_list(evl_side *d)
 {
-    const size_t cap0 = x->cap_lists;
-    if (!nbep_room_for_one((void **)&x->lists, &x->cap_lists, x->n_lists, sizeof *x->lists))
+    const size_t cap0 = d->cap_lists;
+    if (!nbep_room_for_one((void **)&d->lists, &d->cap_lists, d->n_lists, sizeof *d->lists))
         return NULL;
     /* new records zeroed: their copies' arrays are made at their first use */
-    memset(x->lists + cap0, 0, (x->cap_lists - cap0) * sizeof *x->lists);
-    return &x->lists[x->n_lists];
+    memset(d->lists + cap0, 0, (d->cap_lists - cap0) * sizeof *d->lists);
+    return &d->lists[d->n_lists];
+}
+
+/* Slab's own sphere i, just changed: its new motion sent as a copy to each other slab whose
+ * spheres' lists may hold it (those of the columns beside its own), but `skip`. */
+static bool send_copies(struct evl_sched *x, int slab, uint32_t i, int skip)
+{
+    size_t columns;
+    const size_t c = column_of(x->e, i, &columns);
+    int sent = -1;
+    for (int dc = -1; dc <= 1; dc += 2) {
+        const int to = slab_at(x, c, columns, dc);
+        if (to < 0 || to == slab || to == skip || to == sent)
+            continue;
+        slab_msg msg = {.kind = MSG_COPY};
+        x->ops->save(x->side[slab].u, i, &msg.m);
+        if (!nbep_warp_send(x->warp, slab, to, i, &msg))
+            return false;
+        sent = to;
+    }
+    return true;
+}
+
+/* What slab's event (its handle on w) changed, told: each own sphere's new motion copied to
+ * the slabs beside it, then each other slab's sphere's written to its owner, which predicts
+ * it (after the copies, so that the owner predicts it from the event's motion of the rest). */
+static bool send_changes(struct evl_sched *x, int slab, const evl_ws *w)
+{
+    for (size_t k = 0; k < w->n_changed; k++)
+        if (nbep__evloop_sphere_slab(x->e, w->changed[k]) == slab &&
+            !send_copies(x, slab, w->changed[k], -1))
+            return false;
+    for (size_t k = 0; k < w->n_changed; k++) {
+        const uint32_t j = w->changed[k];
+        const int to = nbep__evloop_sphere_slab(x->e, j);
+        if (to == slab)
+            continue;
+        slab_msg msg = {.kind = MSG_WRITE};
+        x->ops->save(x->side[slab].u, j, &msg.m);
+        if (!nbep_warp_send(x->warp, slab, to, j, &msg))
+            return false;
+    }
+    return true;
 }
 
 static void sched_handle(void *arg, int slab, const nbep_stamp *s)
 {
-    (void)slab;
     struct evl_sched *x = arg;
+    evl_side *d = enter_slab(x, slab);
     nbep_evloop *e = x->e;
     const uint32_t i = s->level[s->depth - 1].item; /* (the entry's: the path's last level) */
     const double t = s->t;
     const nbep_event ev = *nbep_feq_slot(e->q, i);
     NBEP_SCHED_HANDLED_HOOK(x, s);
-    nbep_cascade_copy(&x->last, s);
-    x->has_last = true;
-    if (!keep_counts(x)) {
+    nbep_cascade_copy(&d->last, s);
+    d->has_last = true;
+    if (!keep_counts(x, slab)) {
         e->failed = true;
         return;
     }
-    x->tally->events++;
-    if (!nbep__evloop_advances(x->stall, t)) {
+    d->tally.events++;
+    if (!nbep__evloop_advances(&d->stall, t)) {
         stop_at(x, t);
         return;
     }
     /* what it may change: its sphere and, for a pair, the other (a free flight's reaction
      * changes those two alone, as the team loop's undo keeps) */
-    if (!keep_sphere(x, i) ||
-        (ev.kind == NBEP_EVENT_SPHERE && ev.partner != i && !keep_sphere(x, ev.partner))) {
+    if (!keep_sphere(x, slab, i) || (ev.kind == NBEP_EVENT_SPHERE && ev.partner != i &&
+                                     !keep_sphere(x, slab, ev.partner))) {
         e->failed = true;
         return;
     }
     evl_ws *w = &e->ws[0][0];
-    nbep__evloop_handle(e, w, x->ops, x->u, i, &ev, t, true);
-    nbep__evloop_count_handled(x->tally, w);
+    nbep__evloop_handle(e, w, x->ops, d->u, i, &ev, t, true);
+    nbep__evloop_count_handled(&d->tally, w);
     if (w->stop) {
         stop_at(x, t);
         return;
     }
     /* the stamps of the entries it made (as the commit sets them: the changed spheres', then
-     * its own) */
+     * its own; another slab's sphere is its owner's to predict) */
     bool room = true;
     for (size_t k = 0; k < w->n_changed && room; k++)
-        room = w->changed[k] == i || made_by(x, s, w->changed[k]);
-    if (!room || !made_by(x, s, i)) {
+        room = w->changed[k] == i ||
+               (x->slabs > 1 && nbep__evloop_sphere_slab(e, w->changed[k]) != slab) ||
+               made_by(x, slab, s, w->changed[k], true);
+    if (!room || !made_by(x, slab, s, i, true) ||
+        (x->slabs > 1 && w->reacted && !send_changes(x, slab, w))) {
         e->failed = true;
         return;
     }
@@ -303,75 +458,99 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
     }
     /* an expiry: its list record kept under an item past the spheres', its place in the
      * window as its state */
-    kept_list *l = next_list(x);
+    kept_list *l = next_list(d);
     uint64_t *place = l && nbep__evloop_ws_copy_lists(&l->ws, w)
-                          ? nbep_warp_keep_room(x->warp, 0, KEPT_ITEM(e, KEPT_LIST))
+                          ? nbep_warp_keep_room(x->warp, slab, KEPT_ITEM(e, KEPT_LIST))
                           : NULL;
     if (!place) {
         e->failed = true;
         return;
     }
-    *place = x->n_lists++;
+    *place = d->n_lists++;
     nbep__evloop_commit_undoable(e, w, &l->rec);
 }
 
+/* A message from slab `from`: sphere `item`'s new motion, put in this slab's world; a write (a
+ * pair across a face that `from` reacted to) also predicts it here, its owner, as the serial
+ * loop predicts a reaction's spheres, and copies it on to the slabs beside it but `from`. */
 static void sched_apply(void *arg, int slab, int from, const nbep_stamp *s, uint32_t item,
                         const void *data)
 {
-    (void)arg, (void)slab, (void)from, (void)s, (void)item, (void)data;
-    assert(!"one slab: no messages");
+    struct evl_sched *x = arg;
+    evl_side *d = enter_slab(x, slab);
+    nbep_evloop *e = x->e;
+    slab_msg msg;
+    memcpy(&msg, data, sizeof msg);
+    nbep_cascade_copy(&d->last, s);
+    d->has_last = true;
+    if (!keep_counts(x, slab) || !keep_sphere(x, slab, item)) {
+        e->failed = true;
+        return;
+    }
+    x->ops->restore(d->u, item, &msg.m);
+    if (msg.kind != MSG_WRITE)
+        return;
+    assert(nbep__evloop_sphere_slab(e, item) == slab);
+    nbep__evloop_predict_own(e, x->ops, d->u, item, s->t);
+    if (!made_by(x, slab, s, item, true) || !send_copies(x, slab, item, from)) {
+        e->failed = true;
+        return;
+    }
+    nbep__evloop_schedule_one(e, item);
 }
 
 /* A rollback's undo of one kept state, newest first: an expiry's lists, or a sphere's motion,
- * slot and calendar entry (from the slot put back). */
+ * slot and calendar entry (from the slot put back; another slab's sphere's motion alone). */
 static void sched_restore(void *arg, int slab, uint32_t item, const void *state)
 {
-    (void)slab;
     struct evl_sched *x = arg;
+    evl_side *d = enter_slab(x, slab);
     nbep_evloop *e = x->e;
     NBEP_SCHED_RESTORE_HOOK(x, item);
     /* a rollback: the order's check goes on from the newest event that stands (sched_next asks
      * the log), and what stopped the loop may have been undone (a stop comes back with the
      * event that made it, handled again) */
-    x->has_last = false;
+    d->has_last = false;
     x->stop = false;
     if (item == KEPT_ITEM(e, KEPT_COUNTS)) { /* the counts as they were before the event */
         const kept_counts *k = state;
-        x->ops->back(x->u, &k->m);
-        x->tally->events = k->events;
-        x->tally->reactions = k->reactions;
-        x->tally->exits = k->exits;
-        x->stall->since = k->since;
-        x->stall->t_mark = k->t_mark;
+        x->ops->back(d->u, &k->m);
+        d->tally.events = k->events;
+        d->tally.reactions = k->reactions;
+        d->tally.exits = k->exits;
+        d->stall.since = k->since;
+        d->stall.t_mark = k->t_mark;
         return;
     }
     uint64_t place;
     if (item == KEPT_ITEM(e, KEPT_LIST)) {
         memcpy(&place, state, sizeof place);
-        assert(place + 1 == x->n_lists);
-        nbep__evloop_unapply(e, &x->lists[place].ws, &x->lists[place].rec);
-        x->n_lists = place;
+        assert(place + 1 == d->n_lists);
+        nbep__evloop_unapply(e, &d->lists[place].ws, &d->lists[place].rec);
+        d->n_lists = place;
         return;
     }
     if (item == KEPT_ITEM(e, KEPT_TIE)) { /* a change of the ties' table: a stamp back */
         memcpy(&place, state, sizeof place);
-        assert(place + 1 == x->n_ties_undo);
-        const tie_undo *u = &x->ties_undo[place];
-        x->n_ties_undo = place;
-        const size_t k = tie_of(x, u->item);
+        assert(place + 1 == d->n_ties_undo);
+        const tie_undo *u = &d->ties_undo[place];
+        d->n_ties_undo = place;
+        const size_t k = tie_of(d, u->item);
         if (!u->had) { /* (it had none: its stamp out) */
-            if (k < x->n_ties)
-                tie_drop(x, k);
+            if (k < d->n_ties)
+                tie_drop(d, k);
             return;
         }
-        if (k == x->n_ties) /* (a stamp too deep took it out: room is there, it was held) */
-            x->n_ties++;
-        x->ties[k].item = u->item;
-        nbep_cascade_copy(&x->ties[k].s, &u->old);
+        if (k == d->n_ties) /* (a stamp too deep took it out: room is there, it was held) */
+            d->n_ties++;
+        d->ties[k].item = u->item;
+        nbep_cascade_copy(&d->ties[k].s, &u->old);
         return;
     }
     const kept_sphere *k = state;
-    x->ops->restore(x->u, item, &k->m);
+    x->ops->restore(d->u, item, &k->m);
+    if (x->slabs > 1 && nbep__evloop_sphere_slab(e, item) != slab)
+        return;
     nbep_feq_put(e->q, item, k->slot);
     nbep__evloop_schedule_one(e, item);
 }
@@ -381,25 +560,37 @@ static void sched_restore(void *arg, int slab, uint32_t item, const void *state)
  * record for undoing its counts (ops settle) are dropped. */
 static void window_closed(struct evl_sched *x)
 {
-    x->n_lists = x->n_ties = x->n_ties_undo = 0;
-    if (x->ops->settle)
-        x->ops->settle(x->u);
+    for (int k = 0; k < x->slabs; k++) {
+        evl_side *d = &x->side[k];
+        d->n_lists = d->n_ties = d->n_ties_undo = 0;
+        if (x->ops->settle)
+            x->ops->settle(d->u);
+    }
 }
 
-static const nbep_warp_ops SCHED_OPS = {sched_next, sched_handle, sched_apply, sched_restore};
+static const nbep_warp_ops SCHED_OPS = {sched_next, sched_handle, sched_apply, sched_restore,
+                                        sched_held};
 
 /* ---- the engine's side -------------------------------------------------------------------- */
 
 nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d)
 {
-    assert(!e->sched && !e->slabcal && e->team == 1 && e->n <= UINT32_MAX - KEPT_COUNTS);
+    assert(!e->sched && e->team == 1 && e->n <= UINT32_MAX - KEPT_COUNTS);
     struct evl_sched *x = calloc(1, sizeof *x);
-    if (!x)
+    const int slabs = e->slabcal ? nbep_slabcal_slabs(e->slabcal) : 1;
+    if (x)
+        x->side = calloc((size_t)slabs, sizeof *x->side);
+    if (!x || !x->side) {
+        free(x);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory for the scheduled loop (NBEP_SCHEDULED)");
-    /* (messages: none on one slab; the smallest size the mail takes) */
-    const nbep_status st =
-        nbep_warp_create(1, sizeof(kept_sphere), 8, 16, &SCHED_OPS, x, &x->warp, d);
+    }
+    x->slabs = slabs;
+    /* (boxes of 1024 messages: a window sends far fewer on two slabs; a full box costs a
+     * wait, not a failure) */
+    const nbep_status st = nbep_warp_create(slabs, sizeof(kept_sphere), sizeof(slab_msg),
+                                            slabs > 1 ? 1024 : 16, &SCHED_OPS, x, &x->warp, d);
     if (st != NBEP_OK) {
+        free(x->side);
         free(x);
         return st;
     }
@@ -407,9 +598,21 @@ nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d)
     return NBEP_OK;
 }
 
+void nbep_evloop_set_worlds(nbep_evloop *e, void *const *wu, const uint64_t *const *wver)
+{
+    assert(e->sched && e->sched->slabs > 1);
+    e->sched->wu = wu;
+    e->sched->wver = wver;
+}
+
 bool nbep_evloop_too_deep(const nbep_evloop *e)
 {
     return e->sched && e->sched->too_deep;
+}
+
+uint64_t nbep_evloop_meetings(const nbep_evloop *e)
+{
+    return e->sched ? e->sched->meetings : 0;
 }
 
 void nbep__evloop_sched_destroy(struct evl_sched **s)
@@ -417,16 +620,118 @@ void nbep__evloop_sched_destroy(struct evl_sched **s)
     if (!s || !*s)
         return;
     struct evl_sched *x = *s;
+    NBEP_SCHED_DESTROY_HOOK(x);
     nbep_warp_destroy(&x->warp);
-    for (size_t k = 0; k < x->cap_lists; k++) {
-        nbep__evloop_ws_copy_fini(&x->lists[k].ws);
-        nbep__evloop_unlist_fini(&x->lists[k].rec);
+    for (int m = 0; m < x->slabs; m++) {
+        evl_side *d = &x->side[m];
+        for (size_t k = 0; k < d->cap_lists; k++) {
+            nbep__evloop_ws_copy_fini(&d->lists[k].ws);
+            nbep__evloop_unlist_fini(&d->lists[k].rec);
+        }
+        free(d->lists);
+        free(d->ties);
+        free(d->ties_undo);
     }
-    free(x->lists);
-    free(x->ties);
-    free(x->ties_undo);
+    free(x->side);
     free(x);
     *s = NULL;
+}
+
+/* The earliest entry of every slab, in *c: false when none has one. */
+static bool top_of_all(const struct evl_sched *x, nbep_calendar_entry *c)
+{
+    return x->e->slabcal ? nbep_slabcal_first(x->e->slabcal, c)
+                         : nbep_calendar_top(x->e->cal, &c->item, &c->time);
+}
+
+/* With slabs, the call's start: each slab's world a copy of the run's motion, its counts from
+ * zero, its stall check the call's. */
+static void worlds_from_run(struct evl_sched *x)
+{
+    const nbep_evloop_ops *ops = x->ops;
+    for (int k = 0; k < x->slabs; k++) {
+        evl_side *d = &x->side[k];
+        d->u = x->wu[k];
+        d->ver = x->wver[k];
+        ops->clear(d->u);
+        d->stall = *x->stall;
+    }
+    for (uint32_t i = 0; i < x->e->n; i++) {
+        nbep_evloop_motion m;
+        ops->save(x->u, i, &m);
+        for (int k = 0; k < x->slabs; k++)
+            ops->restore(x->side[k].u, i, &m);
+    }
+}
+
+/* With slabs, the call's end: each sphere's motion its owner's, the counts and sums the
+ * slabs' (exact: the same whichever slab added what), the stall check's count slab 0's. */
+static void run_from_worlds(struct evl_sched *x)
+{
+    const nbep_evloop_ops *ops = x->ops;
+    for (uint32_t i = 0; i < x->e->n; i++) {
+        nbep_evloop_motion m;
+        ops->save(x->side[nbep__evloop_sphere_slab(x->e, i)].u, i, &m);
+        ops->restore(x->u, i, &m);
+    }
+    for (int k = 0; k < x->slabs; k++) {
+        const evl_side *d = &x->side[k];
+        ops->merge(x->u, d->u);
+        x->stall->stopped |= d->stall.stopped;
+    }
+    x->stall->since = x->side[0].stall.since;
+    x->stall->t_mark = x->side[0].stall.t_mark;
+}
+
+/* The meeting's own work, with slabs: where a slab waits at an expiry that reaches another
+ * slab's lists or cells before the window's end (the earliest such, `held`), every slab goes
+ * back to it (nbep_warp_cut: all that was done at or after it undone), the expiry is done
+ * there, between windows, in its slab's world, and its sphere's motion copied to every world
+ * (its list's members, and maybe its owner, are now other slabs' too). False where none
+ * waits. */
+static bool meet(struct evl_sched *x)
+{
+    int slab = -1;
+    for (int k = 0; k < x->slabs; k++)
+        if (x->side[k].blocked && x->side[k].held.t < x->window_end &&
+            (slab < 0 || nbep_cascade_cmp(&x->side[k].held, &x->side[slab].held) < 0))
+            slab = k;
+    if (slab < 0)
+        return false;
+    nbep_stamp held;
+    nbep_cascade_copy(&held, &x->side[slab].held);
+    nbep_warp_cut(x->warp, &held);
+    window_closed(x);
+    evl_side *d = enter_slab(x, slab);
+    nbep_evloop *e = x->e;
+    const uint32_t i = held.level[held.depth - 1].item;
+    const nbep_event ev = *nbep_feq_slot(e->q, i);
+    assert(ev.kind == NBEP_EVENT_HORIZON);
+    x->meetings++;
+    nbep_cascade_copy(&d->last, &held);
+    d->has_last = true;
+    d->blocked = false;
+    d->tally.events++;
+    if (!nbep__evloop_advances(&d->stall, held.t)) {
+        stop_at(x, held.t);
+        return true;
+    }
+    evl_ws *w = &e->ws[0][0];
+    e->own_slab = -1; /* (its lists and cells are every slab's: one thread here) */
+    nbep__evloop_handle(e, w, x->ops, d->u, i, &ev, held.t, true);
+    nbep__evloop_count_handled(&d->tally, w);
+    nbep__evloop_commit(e, w);
+    /* (its entry's stamp in its owner's table: the expiry may have moved it to another slab) */
+    if (!e->failed && !made_by(x, nbep__evloop_sphere_slab(e, i), &held, i, false)) {
+        e->failed = true;
+        return true;
+    }
+    nbep_evloop_motion m;
+    x->ops->save(d->u, i, &m);
+    for (int k = 0; k < x->slabs; k++)
+        if (k != slab)
+            x->ops->restore(x->side[k].u, i, &m);
+    return true;
 }
 
 bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void *u,
@@ -437,30 +742,68 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
     x->e = e;
     x->ops = ops;
     x->u = u;
+    x->ver0 = e->ver;
     x->stall = stall;
     x->tally = tally;
     x->stop = x->too_deep = false;
+    if (x->slabs > 1) {
+        worlds_from_run(x);
+    } else {
+        x->side[0].u = u;
+        x->side[0].ver = e->ver;
+        x->side[0].stall = *stall;
+    }
+    for (int k = 0; k < x->slabs; k++) {
+        x->side[k].tally = (nbep_evloop_tally){0};
+        x->side[k].has_last = x->side[k].blocked = false;
+    }
     window_closed(x); /* (a call before that stopped inside its window left them) */
     /* windows of a WINDOWS_A_STEP-th of what is left of the call's span from its first event
      * (a step, or its part; what each window did stands at its end): their logs, a few hundred
      * events' in a dense fluid, stay in the caches (the whole step's, written once and never
      * read, cost a miss of the last level a few times an event). A width that would not move a
-     * window's end past its first event (0, or lost to rounding) makes the rest one window. */
-    uint32_t i;
-    double t, width = 0.0;
-    if (nbep_calendar_top(e->cal, &i, &t) && t < t_end)
-        width = (t_end - t) / WINDOWS_A_STEP;
-    while (!x->stop && !e->failed && !nbep_warp_failed(x->warp) &&
-           nbep_calendar_top(e->cal, &i, &t) && t < t_end) {
-        const double end = t + width;
-        nbep_warp_open(x->warp, end > t ? fmin(end, t_end) : t_end);
+     * window's end past its first event (0, or lost to rounding) makes the rest one window.
+     * With slabs a window may end sooner, at an expiry reaching across (meet). */
+    nbep_calendar_entry c;
+    double width = 0.0;
+    if (top_of_all(x, &c) && c.time < t_end)
+        width = (t_end - c.time) / WINDOWS_A_STEP;
+    while (!x->stop && !e->failed && !nbep_warp_failed(x->warp) && top_of_all(x, &c) &&
+           c.time < t_end) {
+        const double end = c.time + width;
+        x->window_end = end > c.time ? fmin(end, t_end) : t_end;
+        nbep_warp_open(x->warp, x->window_end);
         NBEP_SCHED_OPEN_HOOK(x);
-        while (!nbep_warp_run(x->warp, 0, NBEP_SCHED_TURN))
-            NBEP_SCHED_TURN_HOOK(x);
-        window_closed(x);
+        for (bool done = false; !done;) { /* the slabs in turns */
+            done = true;
+            /* (on one slab its run ends with the window's work; on more, each runs a turn in
+             * turn) */
+            for (int k = 0; k < x->slabs; k++)
+                done &= nbep_warp_run(x->warp, k,
+                                      x->slabs > 1 ? NBEP_SCHED_SLAB_TURN(k) : NBEP_SCHED_TURN);
+            if (!done)
+                NBEP_SCHED_TURN_HOOK(x);
+        }
+        if (!nbep_warp_failed(x->warp) && !meet(x))
+            window_closed(x);
     }
     if (nbep_warp_failed(x->warp))
         e->failed = true;
+    if (x->slabs > 1) {
+        run_from_worlds(x);
+    } else {
+        stall->since = x->side[0].stall.since;
+        stall->t_mark = x->side[0].stall.t_mark;
+        stall->looks = x->side[0].stall.looks;
+        stall->stopped = x->side[0].stall.stopped;
+    }
+    for (int k = 0; k < x->slabs; k++) {
+        tally->events += x->side[k].tally.events;
+        tally->reactions += x->side[k].tally.reactions;
+        tally->exits += x->side[k].tally.exits;
+    }
+    e->ver = x->ver0;
+    e->own_slab = -1;
     if (x->stop)
         *t_stuck = x->t_stuck;
     return !x->stop && !e->failed;

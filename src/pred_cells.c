@@ -535,6 +535,117 @@ static const nbep_evloop_ops cells_ops = CELLS_OPS(cells_pairs);
 static const nbep_evloop_ops cells_ops_free = CELLS_OPS(cells_pairs_free);
 #undef CELLS_OPS
 
+/* The scheduled loop's world of one slab (NBEP_SCHEDULED on NBEP_SLABS: evloop.h,
+ * nbep_evloop_set_worlds): the context's structs copied at each call, their motion arrays (as
+ * cells_save keeps them) the world's own, its counts and sums apart (merged into thread 0's at
+ * the call's end, exactly), its sums' journal its own. The thread's workspace is shared: the
+ * slabs take turns on thread 0, and a reaction writes its scratch arrays before it reads them. */
+typedef struct cells_world {
+    pred_ctx c;
+    nbep_state s;
+    thread_ws w;
+    nbep_counters cnt;
+    nbep_thread_max mx;
+    cells_user u;
+    nbep_vec3 *pos, *vel;
+    int32_t *image;
+    double *tau, *t_last;
+    uint64_t *ver;
+    jam_count *jam;
+    nbep_xsum *wall;
+    nbep_sum_journal jr;
+} cells_world;
+
+void nbep__pred_cells_worlds_free(pred_ctx *c)
+{
+    for (int k = 0; k < c->n_worlds; k++) {
+        cells_world *a = &c->worlds[k];
+        free(a->pos);
+        free(a->vel);
+        free(a->image);
+        free(a->tau);
+        free(a->t_last);
+        free(a->ver);
+        free(a->jam);
+        free(a->wall);
+        free(a->jr.term);
+    }
+    nbep_free_aligned(c->worlds);
+    free(c->world_u);
+    free((void *)c->world_ver);
+    c->worlds = NULL;
+    c->world_u = NULL;
+    c->world_ver = NULL;
+    c->n_worlds = 0;
+}
+
+/* Thread 0, before a scheduled call on slabs: the worlds (made at the first) set to the call's
+ * context u and given to the engine. False without memory (the worlds then freed). */
+static bool cells_worlds(pred_ctx *c, const cells_user *u, int slabs)
+{
+    const size_t n = u->s->n, np = u->s->n_planes;
+    if (!c->worlds) {
+        c->worlds = nbep_alloc_aligned((size_t)slabs, sizeof *c->worlds);
+        c->world_u = malloc((size_t)slabs * sizeof *c->world_u);
+        c->world_ver = malloc((size_t)slabs * sizeof *c->world_ver);
+        if (!c->worlds || !c->world_u || !c->world_ver) {
+            nbep_free_aligned(c->worlds);
+            free(c->world_u);
+            free((void *)c->world_ver);
+            c->worlds = NULL;
+            c->world_u = NULL;
+            c->world_ver = NULL;
+            return false;
+        }
+        memset(c->worlds, 0, (size_t)slabs * sizeof *c->worlds);
+        c->n_worlds = slabs;
+        bool ok = true;
+        for (int k = 0; k < slabs; k++) {
+            cells_world *a = &c->worlds[k];
+            a->pos = malloc(n * sizeof *a->pos);
+            a->vel = malloc(n * sizeof *a->vel);
+            a->image = malloc(3 * n * sizeof *a->image);
+            a->tau = malloc(n * sizeof *a->tau);
+            a->ver = malloc(n * sizeof *a->ver);
+            a->t_last = c->t_last ? malloc(n * sizeof *a->t_last) : NULL;
+            a->jam = c->jam ? malloc(n * sizeof *a->jam) : NULL;
+            a->wall = calloc(np + 1, sizeof *a->wall);
+            ok = ok && a->pos && a->vel && a->image && a->tau && a->ver && a->wall &&
+                 (!c->t_last || a->t_last) && (!c->jam || a->jam);
+        }
+        if (!ok) {
+            nbep__pred_cells_worlds_free(c);
+            return false;
+        }
+    }
+    for (int k = 0; k < slabs; k++) {
+        cells_world *a = &c->worlds[k];
+        memcpy(&a->c, c, sizeof a->c);
+        a->s = *u->s;
+        a->w = *u->w;
+        a->s.pos = a->pos;
+        a->s.vel = a->vel;
+        a->s.image = a->image;
+        a->c.tau = a->tau;
+        a->c.ver = a->ver;
+        a->c.t_last = a->t_last;
+        a->c.jam = a->jam;
+        a->mx = (nbep_thread_max){.wall = a->wall, .jr = &a->jr};
+        a->jr.n = 0;
+        a->jr.oom = false;
+        a->u = *u;
+        a->u.c = &a->c;
+        a->u.s = &a->s;
+        a->u.w = &a->w;
+        a->u.cnt = &a->cnt;
+        a->u.mx = &a->mx;
+        c->world_u[k] = &a->u;
+        c->world_ver[k] = a->ver;
+    }
+    nbep_evloop_set_worlds(c->ev, c->world_u, c->world_ver);
+    return true;
+}
+
 /* The events of step `step` before t_end, every thread: those of way `way` (a probe when
  * `probe`: the step's first part) run them, thread 0 leading, through the team loop's call
  * `call` (unlike every other part's) where the way has more than one thread. Thread 0 then
@@ -556,12 +667,23 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
     const double t_loop = nbep_now();
     /* the scheduled loop's sums record their terms while it runs (a rollback takes them out) */
     u->mx->jr = c->scheduled ? &c->jr : NULL;
+    if (c->scheduled && c->slabs > 1 && !cells_worlds(c, u, c->slabs)) {
+        nbep_diag_add(sim->diag, __FILE__, __LINE__,
+                      "nbep: step %llu: no memory for the scheduled loop's worlds on slabs "
+                      "(NBEP_SCHEDULED, a setting for measuring: run without it); stopping",
+                      (unsigned long long)step);
+        sim->status = NBEP_ENOMEM;
+        *failed = true;
+        return;
+    }
     const bool ran = crew > 1 ? nbep_evloop_run_lead(c->ev, ops, u, us, crew, call, t_end, stall,
                                                      &tally, &t_stuck)
                               : nbep_evloop_run(c->ev, ops, u, t_end, stall, &tally, &t_stuck);
     u->mx->jr = NULL;
     /* (a term its journal could not record, at the call's last event too: this step fails) */
-    const bool no_journal = c->scheduled && c->jr.oom;
+    bool no_journal = c->scheduled && c->jr.oom;
+    for (int k = 0; k < c->n_worlds; k++)
+        no_journal |= c->worlds[k].jr.oom;
     const bool fail = !ran || no_journal;
     *failed = fail;
     if (c->team && probe)

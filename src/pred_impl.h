@@ -330,6 +330,13 @@ typedef struct pred_ctx {
                                    * (NBEP_SCHEDULED, evloop_warp.c) */
     nbep_sum_journal jr;          /* when scheduled: thread 0's sums' terms (its mx->jr while
                                    * the loop runs) */
+    int slabs;                    /* when scheduled: its slabs (NBEP_SLABS; 1: one) */
+    struct cells_world *worlds;   /* owned, scheduled on slabs: each slab's world (pred_cells.c),
+                                   * made at the first call, and what the engine borrows of
+                                   * them (owned): their contexts and response counts */
+    void **world_u;
+    const uint64_t **world_ver;
+    int n_worlds;
 } pred_ctx;
 
 /* s += x, and x recorded in mx's journal where it keeps one (nbep_thread_max.jr) */
@@ -552,6 +559,8 @@ bool nbep__pred_settle_phases(nbep_sim *sim, pred_ctx *c, nbep_range own, thread
 /* ---- pred_cells.c: cells mode ------------------------------------------------------------- */
 
 /* The steps of cells mode, every thread, inside pred_run's parallel region. */
+/* Frees the scheduled loop's worlds on slabs (pred_cells.c), if any. */
+void nbep__pred_cells_worlds_free(pred_ctx *c);
 void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thread_ws *w);
 
 /* ---- pred_ways.c: the threads of a step's events ------------------------------------------ */

@@ -219,17 +219,30 @@ void nbep_slabcal_retune(nbep_slabcal *s, double t_now)
         nbep_calendar_retune(s->sl[k].cal, t_now);
 }
 
+/* Slab k's kept earliest entry read again if its calendar changed since. */
+static inline void refresh(nbep_slabcal *s, int k)
+{
+    if (!s->stale[k])
+        return;
+    if (!nbep_calendar_first(s->sl[k].cal, &s->kept[k]))
+        s->kept[k].item = NONE_ITEM;
+    else /* (by item: the merge compares items, as the one calendar does) */
+        s->kept[k].item = s->sl[k].glob[s->kept[k].item];
+    s->stale[k] = false;
+}
+
+bool nbep_slabcal_top(nbep_slabcal *s, int slab, nbep_calendar_entry *entry)
+{
+    refresh(s, slab);
+    *entry = s->kept[slab];
+    return entry->item != NONE_ITEM;
+}
+
 bool nbep_slabcal_first(nbep_slabcal *s, nbep_calendar_entry *entry)
 {
     int best = -1, second = -1;
     for (int k = 0; k < s->slabs; k++) {
-        if (s->stale[k]) {
-            if (!nbep_calendar_first(s->sl[k].cal, &s->kept[k]))
-                s->kept[k].item = NONE_ITEM;
-            else /* (by item: the merge compares items, as the one calendar does) */
-                s->kept[k].item = s->sl[k].glob[s->kept[k].item];
-            s->stale[k] = false;
-        }
+        refresh(s, k);
         if (s->kept[k].item == NONE_ITEM)
             continue;
         if (best < 0 || nbep_calendar_before(s->kept[k], s->kept[best])) {

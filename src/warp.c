@@ -281,6 +281,24 @@ bool nbep_warp_roll_back(nbep_warp *w, int slab, const nbep_stamp *to)
     return true;
 }
 
+/* a cut's: nothing is sent (every receiver undoes its own) */
+static void cancel_none(void *arg, const nbep_undo_sent *m)
+{
+    (void)arg, (void)m;
+}
+
+void nbep_warp_cut(nbep_warp *w, const nbep_stamp *to)
+{
+    for (int k = 0; k < w->slabs; k++) {
+        slab_state *s = &w->s[k];
+        assert(s->idle && s->out_head == s->n_out);
+        slab_arg a = {w, k};
+        const size_t undone = nbep_undo_back_to(w->undo, k, to, restore_one, cancel_none, &a);
+        s->tally.undone += undone;
+        s->tally.rollbacks += undone > 0;
+    }
+}
+
 bool nbep_warp_last(const nbep_warp *w, int slab, nbep_stamp *s)
 {
     assert(slab >= 0 && slab < w->slabs);
@@ -375,6 +393,8 @@ static inline NBEP_ALWAYS_INLINE bool act(nbep_warp *w, int slab)
         w->ops.apply(w->u, slab, in->h.from, &s->now, in->h.sphere, in + 1);
         return true;
     }
+    if (w->ops.held && w->ops.held(w->u, slab)) /* (its event waits for the meeting) */
+        return false;
     if (!nbep_undo_begin(w->undo, slab, &ev)) {
         give_up(w);
         return false;

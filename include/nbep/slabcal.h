@@ -64,6 +64,10 @@ void nbep_slabcal_clear(nbep_slabcal *s);
 void nbep_slabcal_retune(nbep_slabcal *s, double t_now);
 /* The earliest entry of all slabs, in the calendar's order: false when all are empty. */
 bool nbep_slabcal_first(nbep_slabcal *s, nbep_calendar_entry *entry);
+/* Slab's own earliest entry (by item, as nbep_slabcal_first gives it), in *entry: false when
+ * its calendar is empty. For a slab's own loop (the scheduled loop on slabs: evloop_warp.c);
+ * leaves what nbep_slabcal_runners_up reports as it was. */
+bool nbep_slabcal_top(nbep_slabcal *s, int slab, nbep_calendar_entry *entry);
 /* Up to two items likely to come out after the last nbep_slabcal_first's (the runner-up of its
  * slab's current bucket, nbep_calendar_runners_up, and the next slab's earliest as kept then),
  * for a caller that wants to fetch their data ahead; *n of them. No effect on the order. */

@@ -54,6 +54,10 @@ typedef struct nbep_warp_ops {
     /* puts item back to `state` (state_size bytes, as kept) in slab's world; the model's own
      * calendar of events goes back with it */
     void (*restore)(void *u, int slab, uint32_t item, const void *state);
+    /* may be NULL: true where the event next has just given (before the window's end) is to
+     * wait for the meeting: the slab then acts only on messages stamped before it, and is idle
+     * once it has none (the model does it between windows, after nbep_warp_cut to it) */
+    bool (*held)(void *u, int slab);
 } nbep_warp_ops;
 
 /* What a slab did, in all windows since create: events handled (again after a rollback too),
@@ -101,6 +105,14 @@ bool nbep_warp_send(nbep_warp *w, int slab, int to, uint32_t item, const void *d
  * False, nothing done, where slab has nothing to undo there or is idle (its window's work
  * looked done: a rollback then would need the meeting's count raised again). */
 bool nbep_warp_roll_back(nbep_warp *w, int slab, const nbep_stamp *to);
+
+/* After a window's work is done (every slab's run returned true), on one thread: every slab
+ * undoes what it did at or after *to (its events' and messages' changes restored, newest
+ * first), and nothing is sent: each message stamped there or later was sent by an event that
+ * its sender undoes and acted on by a slab that undoes that too, so every world then holds the
+ * serial run's results up to *to (a window cut short where the model finds it must do
+ * something between the slabs' worlds at *to, at the meeting). The next call is open's. */
+void nbep_warp_cut(nbep_warp *w, const nbep_stamp *to);
 
 /* The stamp of the newest event or message slab has done in this window and not undone, in *s;
  * false when it has none. */

@@ -1,0 +1,209 @@
+/* The scheduled loop on slabs (NBEP_SCHEDULED with NBEP_SLABS, src/evloop_warp.c): each slab
+ * handles its own spheres' events in a world of its own, ahead of the others, sends what its
+ * events change near a face to the slabs beside it (copies) and a pair across a face's other
+ * sphere to its owner (a write, which the owner predicts), and goes back where a message comes
+ * stamped before what it has done; an expiry whose lists and cells reach another slab's waits
+ * for the window's meeting, where every slab is cut back to it and it is done between windows.
+ * Whatever the order of the turns, the run must end as the plain loop's, bit for bit
+ * (positions, velocities, every counter, the summary's sums and maxima, the step rows of
+ * /stats/virial and /stats/wall_impulse).
+ *
+ * This test compiles its own copy of the loop whose slabs take turns of 1 to 24 actions drawn
+ * at random, one slab at times held to a single action a turn, so that the others run ahead and
+ * are sent back; it counts what the scheduler did as the loop is destroyed, and asserts that
+ * messages, rollbacks, cancels and meetings all happened (or the test proves nothing): periodic
+ * fluids at phi = 0.35 and 0.45, elastic and dissipative (e = 0.8, the TC model) on 2, 3 and 4
+ * slabs, and a fluid in a closed box (its walls' impulses) on 2 and 3. */
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+struct evl_sched;
+static size_t slab_turn(int slab);
+static void on_destroy(const struct evl_sched *x);
+#define NBEP_SCHED_SLAB_TURN(slab) slab_turn(slab)
+#define NBEP_SCHED_DESTROY_HOOK(x) on_destroy(x)
+#include "../src/evloop_warp.c"
+
+#include <stdarg.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "nbep/sim.h"
+#include "nbep_test.h"
+#include "nbep_test_h5.h"
+#include "nbep_test_scene.h"
+
+/* the turns' draws (a linear congruential generator: the same turns in every run of the test),
+ * the slab held back (-1: none) */
+static uint64_t draw = 1;
+static int held_back = -1;
+static uint64_t turns;
+
+static size_t slab_turn(int slab)
+{
+    draw = draw * 6364136223846793005ULL + 1442695040888963407ULL;
+    /* every 4096 turns another slab is held to one action a turn for a while, or none */
+    if (++turns % 4096 == 0)
+        held_back = (int)((draw >> 40) % 5) - 1;
+    return slab == held_back ? 1 : 1 + (size_t)((draw >> 33) % 24);
+}
+
+/* what the scheduler did, summed over the loops destroyed since the last reset */
+static nbep_warp_tally seen;
+static uint64_t meetings;
+
+static void on_destroy(const struct evl_sched *x)
+{
+    for (int k = 0; k < x->slabs; k++) {
+        const nbep_warp_tally t = nbep_warp_tally_of(x->warp, k);
+        seen.handled += t.handled;
+        seen.applied += t.applied;
+        seen.undone += t.undone;
+        seen.rollbacks += t.rollbacks;
+        seen.sent += t.sent;
+        seen.cancels += t.cancels;
+    }
+    meetings += x->meetings;
+}
+
+/* sc on one thread into a temporary file: its summary, final state (into *fin), counters'
+ * totals and the step rows of /stats/virial and /stats/wall_impulse (sums[0], sums[1], n[0] and
+ * n[1] values; malloc'd) */
+typedef struct {
+    nbep_summary s;
+    uint64_t counts[NBEP_COUNTER_COUNT];
+    double *sums[2];
+    size_t n[2];
+} run_kept;
+static void run_into(nbep_scene *sc, run_kept *r, nbep_state *fin)
+{
+    sc->out_stats = true;
+    /* (one frame, the last: each frame's checkpoint starts the lists afresh, and a frame a
+     * step would leave a short step no list to expire) */
+    sc->output_every = sc->steps;
+    char path[256];
+    nbep_test_tmp("sched_slabs.h5", path, sizeof path);
+    r->s = nbep_test_run_to(sc, 1, NULL, NULL, path, fin, r->counts);
+    r->sums[0] = nbep_test_h5_doubles(path, "/stats/virial", &r->n[0]);
+    r->sums[1] = nbep_test_h5_doubles(path, "/stats/wall_impulse", &r->n[1]);
+    remove(path);
+}
+
+/* b counted as a: every counter, the summary's counts, energies, maxima and pressure, the step
+ * sums, bit for bit; frees b's sums */
+static void same_counts(const run_kept *a, run_kept *b)
+{
+    for (int k = 0; k < NBEP_COUNTER_COUNT; k++)
+        assert_int_equal(b->counts[k], a->counts[k]);
+    assert_int_equal(b->s.checks, a->s.checks);
+    assert_int_equal(b->s.predictions, a->s.predictions);
+    assert_int_equal(b->s.sphere_collisions, a->s.sphere_collisions);
+    assert_int_equal(b->s.plane_collisions, a->s.plane_collisions);
+    const double x[] = {a->s.energy_final, a->s.max_overlap, a->s.max_overlap_rel,
+                        a->s.pressure.value},
+                 y[] = {b->s.energy_final, b->s.max_overlap, b->s.max_overlap_rel,
+                        b->s.pressure.value};
+    assert_memory_equal(x, y, sizeof x);
+    assert_int_equal(b->s.pressure.known, a->s.pressure.known);
+    for (int q = 0; q < 2; q++) {
+        assert_int_equal(b->n[q], a->n[q]);
+        if (a->n[q])
+            assert_memory_equal(b->sums[q], a->sums[q], a->n[q] * sizeof *a->sums[q]);
+        free(b->sums[q]);
+    }
+}
+
+/* sc on one thread without the scheduler, then through it on each of `slabs`: the same end,
+ * with messages, rollbacks, cancels and meetings in every run on slabs */
+static nbep_summary slabs_the_same(nbep_scene *sc, const int *slabs, size_t n_slabs,
+                                   const char *name)
+{
+    nbep_state plain;
+    run_kept r0;
+    run_into(sc, &r0, &plain);
+    assert_true(r0.s.sphere_collisions > 1000);
+    assert_int_equal(setenv("NBEP_SCHEDULED", "1", 1), 0);
+    for (size_t q = 0; q < n_slabs; q++) {
+        char v[16];
+        snprintf(v, sizeof v, "%d", slabs[q]);
+        assert_int_equal(setenv("NBEP_SLABS", v, 1), 0);
+        seen = (nbep_warp_tally){0};
+        meetings = 0;
+        nbep_state sched;
+        run_kept r1;
+        run_into(sc, &r1, &sched);
+        fprintf(stderr,
+                "%s on %d slabs: %llu events handled (%llu collisions), %llu messages sent, "
+                "%llu acted on, %llu rollbacks, %llu events and messages undone, %llu "
+                "cancels, %llu meetings\n",
+                name, slabs[q], (unsigned long long)seen.handled,
+                (unsigned long long)r0.s.sphere_collisions, (unsigned long long)seen.sent,
+                (unsigned long long)seen.applied, (unsigned long long)seen.rollbacks,
+                (unsigned long long)seen.undone, (unsigned long long)seen.cancels,
+                (unsigned long long)meetings);
+        same_counts(&r0, &r1);
+        assert_int_equal(sched.n, plain.n);
+        assert_memory_equal(sched.pos, plain.pos, plain.n * sizeof *plain.pos);
+        assert_memory_equal(sched.vel, plain.vel, plain.n * sizeof *plain.vel);
+        nbep_state_fini(&sched);
+        /* the slabs' own work met, or this proves nothing */
+        assert_true(seen.sent > 100 && seen.applied > 100);
+        assert_true(seen.rollbacks > 10 && seen.cancels > 0 && meetings > 10);
+    }
+    assert_int_equal(unsetenv("NBEP_SLABS"), 0);
+    assert_int_equal(unsetenv("NBEP_SCHEDULED"), 0);
+    free(r0.sums[0]);
+    free(r0.sums[1]);
+    nbep_state_fini(&plain);
+    return r0.s;
+}
+
+static void test_periodic_fluids_on_slabs_end_the_same(void **state)
+{
+    (void)state;
+    const int slabs[] = {2, 3, 4};
+    /* 4096 spheres: 15 cell columns across x, so that 4 slabs still have columns inside */
+    nbep_scene *sc = nbep_test_periodic_fluid(16, 0.35, 20, 0.02, 9);
+    slabs_the_same(sc, slabs, 3, "elastic fluid, phi 0.35");
+    sc->restitution = 0.8;
+    sc->tc = 1e-3;
+    slabs_the_same(sc, slabs, 2, "dissipative fluid, phi 0.35");
+    nbep_test_scene_free(&sc);
+    sc = nbep_test_periodic_fluid(16, 0.45, 10, 0.02, 5);
+    slabs_the_same(sc, slabs, 2, "elastic fluid, phi 0.45");
+    nbep_test_scene_free(&sc);
+}
+
+static void test_a_closed_box_on_slabs_ends_the_same(void **state)
+{
+    (void)state;
+    const int slabs[] = {2, 3};
+    nbep_scene *sc = nbep_test_fluid(16, 0.35, 20, 0.02);
+    sc->neighbors_cells = true;
+    const nbep_summary s = slabs_the_same(sc, slabs, 2, "closed fluid, phi 0.35");
+    assert_true(s.plane_collisions > 100); /* (the walls' impulses met) */
+    nbep_test_scene_free(&sc);
+}
+
+/* After each test, failed or not: the settings gone (a failure in one would otherwise send the
+ * next one's plain runs through the scheduler too) */
+static int settings_gone(void **state)
+{
+    (void)state;
+    held_back = -1;
+    return unsetenv("NBEP_SCHEDULED") | unsetenv("NBEP_SLABS");
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_teardown(test_periodic_fluids_on_slabs_end_the_same, settings_gone),
+        cmocka_unit_test_teardown(test_a_closed_box_on_slabs_ends_the_same, settings_gone),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
