@@ -765,6 +765,37 @@ static int sphere_slab(const nbep_evloop *e, uint32_t i)
                                 nbep_slabcal_slabs(e->slabcal));
 }
 
+void nbep__evloop_expiry_span(const nbep_evloop *e, const nbep_evloop_ops *ops, void *u,
+                              uint32_t i, double t, int *lo, int *hi)
+{
+    nbep_vec3 p, v, a;
+    ops->flight(u, i, t, &p, &v, &a);
+    const nbep_vec3 c = list_centre(e, p, v, a);
+    const size_t columns = e->cells.dim[0];
+    const long c0 = (long)(e->cells.m[i].cell % columns);
+    /* (the centre a hair either way along x: the walk's own flight, wrapped, may round it
+     * across a column's side) */
+    const double hair = 1e-9 * e->cells.h[0];
+    *lo = *hi = 0;
+    for (int side = -1; side <= 1; side += 2) {
+        nbep_vec3 q = c;
+        q.x += side * hair;
+        if (e->pb.axis[0]) {
+            int32_t img[3] = {0, 0, 0};
+            nbep_periodic_wrap(&e->pb, &q, img);
+        }
+        long d = (long)(nbep_cells_locate(&e->cells, q) % columns) - c0;
+        if (e->pb.axis[0] && 2 * d > (long)columns) /* the short way round a periodic x */
+            d -= (long)columns;
+        else if (e->pb.axis[0] && 2 * d < -(long)columns)
+            d += (long)columns;
+        *lo = d < *lo ? (int)d : *lo;
+        *hi = d > *hi ? (int)d : *hi;
+    }
+    *lo -= 1;
+    *hi += 1;
+}
+
 int nbep__evloop_sphere_slab(const nbep_evloop *e, uint32_t i)
 {
     return sphere_slab(e, i);

@@ -211,6 +211,13 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
 void nbep__evloop_sched_destroy(struct evl_sched **s);
 /* The calendar entry of sphere i from its slot. */
 void nbep__evloop_schedule_one(nbep_evloop *e, uint32_t i);
+/* The cell columns that the expiry of sphere i at time t (in context u) would read or write,
+ * from lo to hi (offsets across x from its list centre's column now, -1 or less and 1 or
+ * more): its walk reads the columns beside its new centre's, its commit writes the lists of its
+ * old and new members, in the columns beside its old and new centres', and the cells of
+ * both. */
+void nbep__evloop_expiry_span(const nbep_evloop *e, const nbep_evloop_ops *ops, void *u,
+                              uint32_t i, double t, int *lo, int *hi);
 /* With slabs: the slab of sphere i (its list centre's cell column's). */
 int nbep__evloop_sphere_slab(const nbep_evloop *e, uint32_t i);
 /* Sphere i's slot predicted afresh at time t from its list, in context u (its calendar entry

@@ -111,9 +111,10 @@ typedef struct {
     nbep_evloop_tally tally;
     nbep_stamp last;        /* the stamp of the event handled last (its order's check) */
     bool has_last;
-    /* held: its earliest entry, stamped `held`, is an expiry whose lists and cells reach
-     * another slab's, done only at a meeting, between windows (as next last found it) */
-    bool blocked;
+    /* blocked: its earliest entry, stamped `held`, is an expiry whose lists and cells reach
+     * another slab's, done only at a meeting, between windows; past: it is at or past the
+     * window's limit (as next last found them) */
+    bool blocked, past;
     nbep_stamp held;
     /* the window's expiries, by their place in it (the log's item for them, past the
      * spheres', keeps that place) */
@@ -150,6 +151,10 @@ struct evl_sched {
     uint64_t meetings;   /* expiries done at a meeting (with slabs) */
     double window_end;   /* the window's: a slab's entry held at or past it waits for a later
                           * window */
+    /* the earliest entry held in this window (has_limit): no slab handles an event at or past
+     * it, as the meeting would cut the window back to it anyway (meet) */
+    bool has_limit;
+    nbep_stamp limit;
 };
 
 /* ---- the model's side (warp.h) ------------------------------------------------------------ */
@@ -194,8 +199,8 @@ static size_t column_of(const nbep_evloop *e, uint32_t i, size_t *columns)
     return e->cells.m[i].cell % *columns;
 }
 
-/* The slab of column c + dc (dc in -2 .. 2), around a periodic x; -1 past a side that is not
- * periodic. */
+/* The slab of column c + dc (|dc| at most the columns), around a periodic x; -1 past a side
+ * that is not periodic. */
 static int slab_at(const struct evl_sched *x, size_t c, size_t columns, int dc)
 {
     const long k = (long)c + dc;
@@ -208,16 +213,17 @@ static int slab_at(const struct evl_sched *x, size_t c, size_t columns, int dc)
     return nbep_slabcal_slab_of((size_t)m, columns, x->slabs);
 }
 
-/* Whether the expiry of sphere i, of slab `slab`, reads and writes that slab's lists and cells
- * alone: its centre moves a column at most (a stray is shorter than a cell), its walk reads the
- * columns beside its new one and its commit writes the lists of its old and new members, in
- * the columns beside its old and new ones: all the slab's when the two columns on each side
- * of its own are. */
-static bool expiry_local(const struct evl_sched *x, int slab, uint32_t i)
+/* Whether the expiry of sphere i at time t, of slab `slab`, reads and writes that slab's
+ * lists and cells alone: every column of its span (nbep__evloop_expiry_span) is the slab's. */
+static bool expiry_local(const struct evl_sched *x, int slab, uint32_t i, double t)
 {
+    int lo, hi;
+    nbep__evloop_expiry_span(x->e, x->ops, x->side[slab].u, i, t, &lo, &hi);
     size_t columns;
     const size_t c = column_of(x->e, i, &columns);
-    for (int dc = -2; dc <= 2; dc++) {
+    if (hi - lo + 1 > (int)columns) /* (around the whole box: every slab's) */
+        return false;
+    for (int dc = lo; dc <= hi; dc++) {
         const int s = slab_at(x, c, columns, dc);
         if (s >= 0 && s != slab)
             return false;
@@ -230,7 +236,7 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
     struct evl_sched *x = arg;
     evl_side *d = enter_slab(x, slab);
     nbep_evloop *e = x->e;
-    d->blocked = false;
+    d->blocked = d->past = false;
     nbep_calendar_entry c;
     if (x->stop || e->failed ||
         !(e->slabcal ? nbep_slabcal_top(e->slabcal, slab, &c)
@@ -268,20 +274,27 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
         stop_at(x, t);
         return false;
     }
-    /* an expiry reaching another slab's lists or cells waits for the meeting (sched_held) */
-    if (x->slabs > 1 && ev->kind == NBEP_EVENT_HORIZON && !expiry_local(x, slab, i)) {
+    /* an expiry reaching another slab's lists or cells waits for the meeting (sched_held),
+     * and the window ends there for every slab (the limit) */
+    if (x->slabs > 1 && t < x->window_end && ev->kind == NBEP_EVENT_HORIZON &&
+        !(x->has_limit && nbep_cascade_cmp(s, &x->limit) > 0) && !expiry_local(x, slab, i, t)) {
         d->blocked = true;
         nbep_cascade_copy(&d->held, s);
+        if (!x->has_limit || nbep_cascade_cmp(s, &x->limit) < 0) {
+            x->has_limit = true;
+            nbep_cascade_copy(&x->limit, s);
+        }
     }
+    d->past = x->has_limit && nbep_cascade_cmp(s, &x->limit) >= 0;
     return true;
 }
 
-/* The slab's earliest entry, which next has just given, is held till the meeting: it acts on
- * what comes before it and then waits. */
+/* The slab's earliest entry, which next has just given, is held till the meeting (at or past
+ * the window's limit): it acts on what comes before it and then waits. */
 static bool sched_held(void *arg, int slab)
 {
     const struct evl_sched *x = arg;
-    return x->side[slab].blocked;
+    return x->side[slab].past;
 }
 
 /* Sphere j's new entry, made by the event stamped *by: its stamp kept where it is not a root
@@ -568,6 +581,18 @@ static void window_closed(struct evl_sched *x)
     }
 }
 
+/* A window cut short at a meeting (at stamp `to`): what window_closed drops, but the ties,
+ * whose entries at `to`'s time after it (a cascade the cut went into) are still to come. */
+static void window_cut(struct evl_sched *x)
+{
+    for (int k = 0; k < x->slabs; k++) {
+        evl_side *d = &x->side[k];
+        d->n_lists = d->n_ties_undo = 0;
+        if (x->ops->settle)
+            x->ops->settle(d->u);
+    }
+}
+
 static const nbep_warp_ops SCHED_OPS = {sched_next, sched_handle, sched_apply, sched_restore,
                                         sched_held};
 
@@ -683,25 +708,27 @@ static void run_from_worlds(struct evl_sched *x)
     x->stall->t_mark = x->side[0].stall.t_mark;
 }
 
-/* The meeting's own work, with slabs: where a slab waits at an expiry that reaches another
- * slab's lists or cells before the window's end (the earliest such, `held`), every slab goes
- * back to it (nbep_warp_cut: all that was done at or after it undone), the expiry is done
- * there, between windows, in its slab's world, and its sphere's motion copied to every world
- * (its list's members, and maybe its owner, are now other slabs' too). False where none
- * waits. */
+/* The meeting's own work, with slabs: where a slab held an expiry that reaches another slab's
+ * lists or cells before the window's end, the window ends at the earliest such (the limit):
+ * every slab goes back to it (nbep_warp_cut: all that was done at or after it undone), and
+ * where that expiry is still its slab's earliest entry (a message before it may have changed
+ * that) it is done there, between windows, in its slab's world, its sphere's motion copied to
+ * every world (its list's members, and maybe its owner, are now other slabs' too). False where
+ * nothing was held. */
 static bool meet(struct evl_sched *x)
 {
-    int slab = -1;
-    for (int k = 0; k < x->slabs; k++)
-        if (x->side[k].blocked && x->side[k].held.t < x->window_end &&
-            (slab < 0 || nbep_cascade_cmp(&x->side[k].held, &x->side[slab].held) < 0))
-            slab = k;
-    if (slab < 0)
+    if (!x->has_limit)
         return false;
     nbep_stamp held;
-    nbep_cascade_copy(&held, &x->side[slab].held);
+    nbep_cascade_copy(&held, &x->limit);
     nbep_warp_cut(x->warp, &held);
-    window_closed(x);
+    window_cut(x);
+    int slab = -1;
+    for (int k = 0; k < x->slabs; k++)
+        if (x->side[k].blocked && nbep_cascade_cmp(&x->side[k].held, &held) == 0)
+            slab = k;
+    if (slab < 0)
+        return true;
     evl_side *d = enter_slab(x, slab);
     nbep_evloop *e = x->e;
     const uint32_t i = held.level[held.depth - 1].item;
@@ -721,16 +748,35 @@ static bool meet(struct evl_sched *x)
     nbep__evloop_handle(e, w, x->ops, d->u, i, &ev, held.t, true);
     nbep__evloop_count_handled(&d->tally, w);
     nbep__evloop_commit(e, w);
-    /* (its entry's stamp in its owner's table: the expiry may have moved it to another slab) */
-    if (!e->failed && !made_by(x, nbep__evloop_sphere_slab(e, i), &held, i, false)) {
-        e->failed = true;
+    if (e->failed)
         return true;
-    }
     nbep_evloop_motion m;
     x->ops->save(d->u, i, &m);
     for (int k = 0; k < x->slabs; k++)
         if (k != slab)
             x->ops->restore(x->side[k].u, i, &m);
+    /* Where it moved its sphere to another slab, its prediction read its new list's members
+     * in the old slab's world, where those beside the new one's columns are not kept (no
+     * copies come from a column that is not beside another slab): its slot is predicted again
+     * in its new slab's world, which keeps them all, uncounted (the one counted read as many
+     * members), and its entry set again. */
+    const int owner = nbep__evloop_sphere_slab(e, i);
+    if (owner != slab) {
+        evl_side *o = enter_slab(x, owner);
+        nbep_evloop_mark before;
+        const bool marked = !x->ops->mark || x->ops->mark(o->u, &before);
+        nbep__evloop_predict_own(e, x->ops, o->u, i, held.t);
+        if (x->ops->back)
+            x->ops->back(o->u, &before);
+        nbep__evloop_schedule_one(e, i);
+        if (!marked) {
+            e->failed = true;
+            return true;
+        }
+    }
+    /* (its entry's stamp in its owner's table) */
+    if (!made_by(x, owner, &held, i, false))
+        e->failed = true;
     return true;
 }
 
@@ -772,6 +818,7 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
            c.time < t_end) {
         const double end = c.time + width;
         x->window_end = end > c.time ? fmin(end, t_end) : t_end;
+        x->has_limit = false;
         nbep_warp_open(x->warp, x->window_end);
         NBEP_SCHED_OPEN_HOOK(x);
         for (bool done = false; !done;) { /* the slabs in turns */

@@ -168,13 +168,13 @@ static void test_periodic_fluids_on_slabs_end_the_same(void **state)
     (void)state;
     const int slabs[] = {2, 3, 4};
     /* 4096 spheres: 15 cell columns across x, so that 4 slabs still have columns inside */
-    nbep_scene *sc = nbep_test_periodic_fluid(16, 0.35, 20, 0.02, 9);
+    nbep_scene *sc = nbep_test_periodic_fluid(16, 0.35, 2, 1.0, 9);
     slabs_the_same(sc, slabs, 3, "elastic fluid, phi 0.35");
     sc->restitution = 0.8;
     sc->tc = 1e-3;
     slabs_the_same(sc, slabs, 2, "dissipative fluid, phi 0.35");
     nbep_test_scene_free(&sc);
-    sc = nbep_test_periodic_fluid(16, 0.45, 10, 0.02, 5);
+    sc = nbep_test_periodic_fluid(16, 0.45, 1, 0.5, 5);
     slabs_the_same(sc, slabs, 2, "elastic fluid, phi 0.45");
     nbep_test_scene_free(&sc);
 }
@@ -183,7 +183,7 @@ static void test_a_closed_box_on_slabs_ends_the_same(void **state)
 {
     (void)state;
     const int slabs[] = {2, 3};
-    nbep_scene *sc = nbep_test_fluid(16, 0.35, 20, 0.02);
+    nbep_scene *sc = nbep_test_fluid(16, 0.35, 2, 1.0);
     sc->neighbors_cells = true;
     const nbep_summary s = slabs_the_same(sc, slabs, 2, "closed fluid, phi 0.35");
     assert_true(s.plane_collisions > 100); /* (the walls' impulses met) */
