@@ -1275,6 +1275,12 @@ static void pred_threads_use(const nbep_scene *sc, int nt, char *buf, size_t len
                  "fastest (nothing accelerates); all %d share the rebuilds, the update and the "
                  "energy",
                  p.team_size, nt);
+    else if (p.cells && p.slabs >= 2 && p.scheduled)
+        snprintf(buf, len,
+                 "the event loop on one, through the optimistic scheduler on %d slabs taken in "
+                 "turns (NBEP_SCHEDULED, NBEP_SLABS); all %d share the rebuilds, the update and "
+                 "the energy",
+                 p.slabs, nt);
     else if (p.cells && p.slabs >= 2)
         snprintf(buf, len,
                  "the event loop on one, its calendar cut into %d slabs (NBEP_SLABS); all %d "

@@ -138,8 +138,8 @@ void nbep_evloop_set_radii(nbep_evloop *e, const double *radius);
  * loop keeps one calendar), before the first schedule. NBEP_ENOMEM, NBEP_EDECK past
  * NBEP_SLABCAL_MAX, with a message. */
 NBEP_MUST_CHECK nbep_status nbep_evloop_set_slabs(nbep_evloop *e, int slabs, nbep_diag *d);
-/* The one-thread loop run through the optimistic scheduler (warp.h) on one slab, for
- * measuring what its bookkeeping costs the real engine (NBEP_SCHEDULED; docs/optimistic-
+/* The one-thread loop run through the optimistic scheduler (warp.h) on one slab (or, on an
+ * engine with slabs, on each of them in turns: nbep_evloop_set_worlds), for measuring what its bookkeeping costs the real engine (NBEP_SCHEDULED; docs/optimistic-
  * design.md, *The engine on the scheduler*): each event handled as the scheduler's model
  * handles it, what it changes kept in the slab's log (its spheres' motion and slots, an
  * expiry's list record), in windows of a 64th of the call's span. The same events in the same
@@ -147,8 +147,8 @@ NBEP_MUST_CHECK nbep_status nbep_evloop_set_slabs(nbep_evloop *e, int slabs, nbe
  * flight's). Entries made at the time of the event that made them (a cascade's tie at one
  * time) are stamped as made (cascade.h); a cascade deeper than a stamp holds
  * (NBEP_CASCADE_DEPTH) stops the run at its time (nbep_evloop_run false, and
- * nbep_evloop_too_deep true). Only on an engine for one thread without slabs, before the first
- * run. NBEP_ENOMEM with a message. */
+ * nbep_evloop_too_deep true). Only on an engine for one thread, after nbep_evloop_set_slabs if
+ * any, before the first run. NBEP_ENOMEM with a message. */
 NBEP_MUST_CHECK nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d);
 /* The scheduled loop on slabs (nbep_evloop_set_scheduled on an engine with slabs, one thread
  * taking them in turns): each slab acts in a world of its own, wu[s] (the callbacks' context

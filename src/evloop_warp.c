@@ -1,10 +1,15 @@
-/* The cells engine's one-thread loop through the optimistic scheduler on one slab
- * (nbep_evloop_set_scheduled, NBEP_SCHEDULED): the engine as the scheduler's model, as the
- * optimistic engine will run it on each slab, with what a slab must keep of each event to undo
- * it, so that what that bookkeeping costs the real engine is measured, not modelled
- * (docs/optimistic-design.md, *The engine on the scheduler*). One slab: no messages, and no
- * rollbacks but those a test asks for (nbep_warp_roll_back, through the hooks below:
- * tests/test_sched_rollback.c), which call the restore below as a straggler will. */
+/* The cells engine's one-thread loop through the optimistic scheduler (nbep_evloop_set_scheduled,
+ * NBEP_SCHEDULED): the engine as the scheduler's model, with what a slab must keep of each
+ * event to undo it (docs/optimistic-design.md, *The engine on the scheduler*). On one slab: no
+ * messages, and no rollbacks but those a test asks for (nbep_warp_roll_back, through the hooks
+ * below: tests/test_sched_rollback.c), which call the restore below as a straggler will. With
+ * slabs (NBEP_SLABS, the engine's per-slab calendars), taken in turns on one thread: each slab
+ * handles its own spheres' entries in a world of its own (nbep_evloop_set_worlds) and
+ * predicts only its own spheres; what its events change in a column beside another slab goes
+ * there as a copy, a pair across a face's other sphere to its owner as a write, which predicts
+ * it; a message stamped before what a slab has done sends it back; an expiry whose lists and
+ * cells reach another slab's ends the window and is done at its meeting (docs/optimistic-
+ * design.md, *The engine on slabs, in turns*; tests/test_sched_slabs.c). */
 #include "evloop_impl.h"
 
 #include <assert.h>
