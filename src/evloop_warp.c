@@ -121,6 +121,12 @@ typedef struct {
      * window's limit (as next last found them) */
     bool blocked, past;
     nbep_stamp held;
+    /* stopped: an event of the slab, stamped `stop` (at stop_t), stops the loop (stuck, a
+     * reaction's stop; deep: a cascade deeper than a stamp holds, found at that entry, not
+     * handled); it stands while the slab's log holds it, else a rollback undid it */
+    bool stopped, deep;
+    nbep_stamp stop;
+    double stop_t;
     /* the window's expiries, by their place in it (the log's item for them, past the
      * spheres', keeps that place) */
     kept_list *lists;
@@ -164,12 +170,42 @@ struct evl_sched {
 
 /* ---- the model's side (warp.h) ------------------------------------------------------------ */
 
-/* No more events: the call returns false with t in *t_stuck (stuck, a reaction's stop, a
- * cascade at one time too deep for its stamps) */
-static void stop_at(struct evl_sched *x, double t)
+/* The window's limit lowered to stamp s where it is earlier (or set): no slab handles an event
+ * at or past it. */
+static void limit_to(struct evl_sched *x, const nbep_stamp *s)
 {
-    x->stop = true;
-    x->t_stuck = t;
+    if (!x->has_limit || nbep_cascade_cmp(s, &x->limit) < 0) {
+        x->has_limit = true;
+        nbep_cascade_copy(&x->limit, s);
+    }
+}
+
+/* No more events after slab's event stamped *s (at t; deep: a cascade too deep for its
+ * stamps, found at that entry): the slab stops there, and the other slabs go on to it (the
+ * limit); at the window's end, if it still stands, the call returns false with t in *t_stuck
+ * (meet). */
+static void stop_at(struct evl_sched *x, int slab, const nbep_stamp *s, double t, bool deep)
+{
+    evl_side *d = &x->side[slab];
+    d->stopped = true;
+    d->deep = deep;
+    nbep_cascade_copy(&d->stop, s);
+    d->stop_t = t;
+    if (x->slabs > 1) /* (one slab stops at its stop: nothing else runs on) */
+        limit_to(x, s);
+}
+
+/* Whether slab's stop still stands: a rollback to or before its event undid it (a stop found
+ * at an entry not handled, too deep, is found again by next where it is still the slab's
+ * earliest). */
+static bool stop_stands(struct evl_sched *x, int slab)
+{
+    evl_side *d = &x->side[slab];
+    nbep_stamp last;
+    if (d->stopped && !d->deep &&
+        !(nbep_warp_last(x->warp, slab, &last) && nbep_cascade_cmp(&last, &d->stop) >= 0))
+        d->stopped = false;
+    return d->stopped;
 }
 
 /* The engine set to act in slab's world: its response counts, and with slabs its own
@@ -242,6 +278,9 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
     evl_side *d = enter_slab(x, slab);
     nbep_evloop *e = x->e;
     d->blocked = d->past = false;
+    if (stop_stands(x, slab) && !d->deep)
+        return false;
+    d->stopped = false; /* (a stop too deep is found again below if it is still there) */
     nbep_calendar_entry c;
     if (x->stop || e->failed ||
         !(e->slabcal ? nbep_slabcal_top(e->slabcal, slab, &c)
@@ -275,8 +314,7 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
      * cascade at one time is deeper than a stamp holds (made_by), a root stamp does: the loop
      * stops there, too deep (nbep_evloop_too_deep: its own message) */
     if (d->has_last && nbep_cascade_cmp(s, &d->last) < 0) {
-        x->too_deep = true;
-        stop_at(x, t);
+        stop_at(x, slab, s, t, true);
         return false;
     }
     /* an expiry reaching another slab's lists or cells waits for the meeting (sched_held),
@@ -285,10 +323,7 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
         !(x->has_limit && nbep_cascade_cmp(s, &x->limit) > 0) && !expiry_local(x, slab, i, t)) {
         d->blocked = true;
         nbep_cascade_copy(&d->held, s);
-        if (!x->has_limit || nbep_cascade_cmp(s, &x->limit) < 0) {
-            x->has_limit = true;
-            nbep_cascade_copy(&x->limit, s);
-        }
+        limit_to(x, s);
     }
     d->past = x->has_limit && nbep_cascade_cmp(s, &x->limit) >= 0;
     return true;
@@ -441,7 +476,7 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
     }
     d->tally.events++;
     if (!nbep__evloop_advances(&d->stall, t)) {
-        stop_at(x, t);
+        stop_at(x, slab, s, t, false);
         return;
     }
     /* what it may change: its sphere and, for a pair, the other (a free flight's reaction
@@ -455,7 +490,7 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
     nbep__evloop_handle(e, w, x->ops, d->u, i, &ev, t, true);
     nbep__evloop_count_handled(&d->tally, w);
     if (w->stop) {
-        stop_at(x, t);
+        stop_at(x, slab, s, t, false);
         return;
     }
     /* the stamps of the entries it made (as the commit sets them: the changed spheres', then
@@ -526,10 +561,8 @@ static void sched_restore(void *arg, int slab, uint32_t item, const void *state)
     nbep_evloop *e = x->e;
     NBEP_SCHED_RESTORE_HOOK(x, item);
     /* a rollback: the order's check goes on from the newest event that stands (sched_next asks
-     * the log), and what stopped the loop may have been undone (a stop comes back with the
-     * event that made it, handled again) */
+     * the log; a stop whose event was undone no longer stands there either: stop_stands) */
     d->has_last = false;
-    x->stop = false;
     if (item == KEPT_ITEM(e, KEPT_COUNTS)) { /* the counts as they were before the event */
         const kept_counts *k = state;
         x->ops->back(d->u, &k->m);
@@ -711,6 +744,7 @@ static void run_from_worlds(struct evl_sched *x)
     }
     x->stall->since = x->side[0].stall.since;
     x->stall->t_mark = x->side[0].stall.t_mark;
+    x->stall->looks = x->side[0].stall.looks;
 }
 
 /* The meeting's own work, with slabs: where a slab held an expiry that reaches another slab's
@@ -722,11 +756,27 @@ static void run_from_worlds(struct evl_sched *x)
  * nothing was held. */
 static bool meet(struct evl_sched *x)
 {
+    /* a stop that stands at the limit (on slabs: every slab has done all before it) or, on one
+     * slab, anywhere: the call ends there, what was done past it undone (the stopping event
+     * itself stands, as in the serial loop, but for one found too deep at its entry, not
+     * handled) */
+    for (int k = 0; k < x->slabs; k++) {
+        const evl_side *d = &x->side[k];
+        if (stop_stands(x, k) &&
+            (x->slabs == 1 || nbep_cascade_cmp(&d->stop, &x->limit) == 0)) {
+            nbep_warp_cut(x->warp, &d->stop, !d->deep);
+            window_closed(x);
+            x->stop = true;
+            x->too_deep = d->deep;
+            x->t_stuck = d->stop_t;
+            return true;
+        }
+    }
     if (!x->has_limit)
         return false;
     nbep_stamp held;
     nbep_cascade_copy(&held, &x->limit);
-    nbep_warp_cut(x->warp, &held);
+    nbep_warp_cut(x->warp, &held, false);
     window_cut(x);
     int slab = -1;
     for (int k = 0; k < x->slabs; k++)
@@ -744,8 +794,9 @@ static bool meet(struct evl_sched *x)
     d->has_last = true;
     d->blocked = false;
     d->tally.events++;
-    if (!nbep__evloop_advances(&d->stall, held.t)) {
-        stop_at(x, held.t);
+    if (!nbep__evloop_advances(&d->stall, held.t)) { /* (between windows: the call ends) */
+        x->stop = true;
+        x->t_stuck = held.t;
         return true;
     }
     evl_ws *w = &e->ws[0][0];
@@ -806,7 +857,7 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
     }
     for (int k = 0; k < x->slabs; k++) {
         x->side[k].tally = (nbep_evloop_tally){0};
-        x->side[k].has_last = x->side[k].blocked = false;
+        x->side[k].has_last = x->side[k].blocked = x->side[k].stopped = false;
     }
     window_closed(x); /* (a call before that stopped inside its window left them) */
     /* windows of a WINDOWS_A_STEP-th of what is left of the call's span from its first event

@@ -162,12 +162,13 @@ bool nbep_undo_sent_one(nbep_undo *u, int slab, const nbep_undo_sent *m)
     return true;
 }
 
-size_t nbep_undo_back_to(nbep_undo *u, int slab, const nbep_stamp *s, nbep_undo_restore_fn restore,
-                         nbep_undo_cancel_fn cancel, void *arg)
+/* back_to's and back_past's: the records stamped at or after *s (past: after it) undone */
+static size_t back(nbep_undo *u, int slab, const nbep_stamp *s, bool past,
+                   nbep_undo_restore_fn restore, nbep_undo_cancel_fn cancel, void *arg)
 {
     slab_log *l = log_of(u, slab);
     size_t undone = 0;
-    while (l->n_rec > 0 && rec_cmp(l, &l->rec[l->n_rec - 1], s) >= 0) {
+    while (l->n_rec > 0 && rec_cmp(l, &l->rec[l->n_rec - 1], s) >= (past ? 1 : 0)) {
         const record *r = &l->rec[--l->n_rec];
         for (size_t q = r->sent0; q < l->n_sent; q++)
             cancel(arg, &l->sent[q]);
@@ -183,6 +184,18 @@ size_t nbep_undo_back_to(nbep_undo *u, int slab, const nbep_stamp *s, nbep_undo_
         undone++;
     }
     return undone;
+}
+
+size_t nbep_undo_back_to(nbep_undo *u, int slab, const nbep_stamp *s, nbep_undo_restore_fn restore,
+                         nbep_undo_cancel_fn cancel, void *arg)
+{
+    return back(u, slab, s, false, restore, cancel, arg);
+}
+
+size_t nbep_undo_back_past(nbep_undo *u, int slab, const nbep_stamp *s,
+                           nbep_undo_restore_fn restore, nbep_undo_cancel_fn cancel, void *arg)
+{
+    return back(u, slab, s, true, restore, cancel, arg);
 }
 
 bool nbep_undo_last(const nbep_undo *u, int slab, nbep_stamp *s)

@@ -287,13 +287,15 @@ static void cancel_none(void *arg, const nbep_undo_sent *m)
     (void)arg, (void)m;
 }
 
-void nbep_warp_cut(nbep_warp *w, const nbep_stamp *to)
+void nbep_warp_cut(nbep_warp *w, const nbep_stamp *to, bool past)
 {
     for (int k = 0; k < w->slabs; k++) {
         slab_state *s = &w->s[k];
         assert(s->idle && s->out_head == s->n_out);
         slab_arg a = {w, k};
-        const size_t undone = nbep_undo_back_to(w->undo, k, to, restore_one, cancel_none, &a);
+        const size_t undone =
+            past ? nbep_undo_back_past(w->undo, k, to, restore_one, cancel_none, &a)
+                 : nbep_undo_back_to(w->undo, k, to, restore_one, cancel_none, &a);
         s->tally.undone += undone;
         s->tally.rollbacks += undone > 0;
     }

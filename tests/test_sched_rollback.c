@@ -33,7 +33,7 @@ static int windows_a_step = 1;
 #define WINDOWS_A_STEP windows_a_step
 #define NBEP_SCHED_OPEN_HOOK(x) on_open()
 #define NBEP_SCHED_HANDLED_HOOK(x, s) on_handled(s)
-#define NBEP_SCHED_TURN_HOOK(x) on_turn((x)->warp, (x)->stop)
+#define NBEP_SCHED_TURN_HOOK(x) on_turn((x)->warp, (x)->side[0].stopped)
 #define NBEP_SCHED_RESTORE_HOOK(x, item) on_restore(item, (uint32_t)(x)->e->n)
 #include "../src/evloop_warp.c"
 

@@ -12,8 +12,10 @@
  * at random, one slab at times held to a single action a turn, so that the others run ahead and
  * are sent back; it counts what the scheduler did as the loop is destroyed, and asserts that
  * messages, rollbacks, cancels and meetings all happened (or the test proves nothing): periodic
- * fluids at phi = 0.35 and 0.45, elastic and dissipative (e = 0.8, the TC model) on 2, 3 and 4
- * slabs, and a fluid in a closed box (its walls' impulses) on 2 and 3. */
+ * fluids at phi = 0.35 and 0.45, elastic and dissipative (e = 0.8, the TC model) on 2 to 6
+ * slabs, one at phi = 0.30 (cells barely wider than the cutoff), and a fluid in a closed box
+ * (its walls' impulses) on 2 and 3; and a dissipative fluid that stops at a sphere's reaction
+ * count stops as the plain loop does on 2 to 4 slabs. */
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -166,10 +168,11 @@ static nbep_summary slabs_the_same(nbep_scene *sc, const int *slabs, size_t n_sl
 static void test_periodic_fluids_on_slabs_end_the_same(void **state)
 {
     (void)state;
-    const int slabs[] = {2, 3, 4};
-    /* 4096 spheres: 15 cell columns across x, so that 4 slabs still have columns inside */
+    const int slabs[] = {2, 3, 4, 6};
+    /* 4096 spheres: 12 cell columns across x (6 slabs of 2: every column beside another slab,
+     * a write's copies sent on) */
     nbep_scene *sc = nbep_test_periodic_fluid(16, 0.35, 2, 1.0, 9);
-    slabs_the_same(sc, slabs, 3, "elastic fluid, phi 0.35");
+    slabs_the_same(sc, slabs, 4, "elastic fluid, phi 0.35");
     sc->restitution = 0.8;
     sc->tc = 1e-3;
     slabs_the_same(sc, slabs, 2, "dissipative fluid, phi 0.35");
@@ -177,6 +180,51 @@ static void test_periodic_fluids_on_slabs_end_the_same(void **state)
     sc = nbep_test_periodic_fluid(16, 0.45, 1, 0.5, 5);
     slabs_the_same(sc, slabs, 2, "elastic fluid, phi 0.45");
     nbep_test_scene_free(&sc);
+    /* cells barely wider than the cutoff (a helper's review found a meeting's prediction from
+     * stale copies there, 2026-12-07), in short steps */
+    sc = nbep_test_periodic_fluid(16, 0.30, 60, 0.02, 9);
+    slabs_the_same(sc, slabs, 2, "elastic fluid, phi 0.30");
+    nbep_test_scene_free(&sc);
+}
+
+/* A dissipative fluid whose run stops at a sphere's reaction count (run.max_reactions 2, 3 and
+ * 4): on 2, 3 and 4 slabs it stops where the plain loop does, with its status, message and end
+ * state (a helper's review found a stop lost when another slab rolled back, and slabs that
+ * stopped waiting at a speculative stop, 2026-12-07) */
+static void test_a_stop_on_slabs_comes_as_without_them(void **state)
+{
+    (void)state;
+    for (uint64_t most = 2; most <= 4; most++) {
+        nbep_scene *sc = nbep_test_periodic_fluid(16, 0.35, 40, 0.02, 9);
+        sc->restitution = 0.8;
+        sc->tc = 1e-3;
+        sc->max_reactions = most;
+        char msg0[512], msg1[512];
+        uint64_t ahead;
+        nbep_state plain = {0};
+        const nbep_status st0 = nbep_test_run_to_end(sc, 1, msg0, sizeof msg0, &ahead, &plain);
+        assert_int_not_equal(st0, NBEP_OK); /* (the scene stops, or the test proves nothing) */
+        assert_int_equal(setenv("NBEP_SCHEDULED", "1", 1), 0);
+        for (int slabs = 2; slabs <= 4; slabs++) {
+            char v[16];
+            snprintf(v, sizeof v, "%d", slabs);
+            assert_int_equal(setenv("NBEP_SLABS", v, 1), 0);
+            nbep_state sched = {0};
+            const nbep_status st1 = nbep_test_run_to_end(sc, 1, msg1, sizeof msg1, &ahead, &sched);
+            assert_int_equal(st1, st0);
+            assert_string_equal(msg1, msg0);
+            assert_int_equal(sched.n, plain.n);
+            assert_memory_equal(sched.pos, plain.pos, plain.n * sizeof *plain.pos);
+            assert_memory_equal(sched.vel, plain.vel, plain.n * sizeof *plain.vel);
+            nbep_state_fini(&sched);
+        }
+        assert_int_equal(unsetenv("NBEP_SLABS"), 0);
+        assert_int_equal(unsetenv("NBEP_SCHEDULED"), 0);
+        fprintf(stderr, "stopped fluid (max_reactions %llu): \"%s\"\n", (unsigned long long)most,
+                msg0);
+        nbep_state_fini(&plain);
+        nbep_test_scene_free(&sc);
+    }
 }
 
 static void test_a_closed_box_on_slabs_ends_the_same(void **state)
@@ -204,6 +252,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_teardown(test_periodic_fluids_on_slabs_end_the_same, settings_gone),
         cmocka_unit_test_teardown(test_a_closed_box_on_slabs_ends_the_same, settings_gone),
+        cmocka_unit_test_teardown(test_a_stop_on_slabs_comes_as_without_them, settings_gone),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

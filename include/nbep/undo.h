@@ -70,6 +70,9 @@ NBEP_MUST_CHECK bool nbep_undo_sent_one(nbep_undo *u, int slab, const nbep_undo_
  * the records dropped. Returns how many events were undone. */
 size_t nbep_undo_back_to(nbep_undo *u, int slab, const nbep_stamp *s, nbep_undo_restore_fn restore,
                          nbep_undo_cancel_fn cancel, void *arg);
+/* The same for the events stamped after *s (the one stamped *s, if any, stays). */
+size_t nbep_undo_back_past(nbep_undo *u, int slab, const nbep_stamp *s,
+                           nbep_undo_restore_fn restore, nbep_undo_cancel_fn cancel, void *arg);
 /* The stamp of slab's newest record in *s; false when it has none this window. */
 bool nbep_undo_last(const nbep_undo *u, int slab, nbep_stamp *s);
 /* The events slab has recorded this window. */

@@ -107,12 +107,12 @@ bool nbep_warp_send(nbep_warp *w, int slab, int to, uint32_t item, const void *d
 bool nbep_warp_roll_back(nbep_warp *w, int slab, const nbep_stamp *to);
 
 /* After a window's work is done (every slab's run returned true), on one thread: every slab
- * undoes what it did at or after *to (its events' and messages' changes restored, newest
- * first), and nothing is sent: each message stamped there or later was sent by an event that
+ * undoes what it did at or after *to (past: after it; its events' and messages' changes
+ * restored, newest first), and nothing is sent: each message stamped there or later was sent by an event that
  * its sender undoes and acted on by a slab that undoes that too, so every world then holds the
  * serial run's results up to *to (a window cut short where the model finds it must do
  * something between the slabs' worlds at *to, at the meeting). The next call is open's. */
-void nbep_warp_cut(nbep_warp *w, const nbep_stamp *to);
+void nbep_warp_cut(nbep_warp *w, const nbep_stamp *to, bool past);
 
 /* The stamp of the newest event or message slab has done in this window and not undone, in *s;
  * false when it has none. */
