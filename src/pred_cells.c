@@ -588,17 +588,14 @@ static bool cells_worlds(pred_ctx *c, const cells_user *u, int slabs)
         c->worlds = nbep_alloc_aligned((size_t)slabs, sizeof *c->worlds);
         c->world_u = malloc((size_t)slabs * sizeof *c->world_u);
         c->world_ver = malloc((size_t)slabs * sizeof *c->world_ver);
+        if (c->worlds) { /* (zeroed, so that a part made frees what it holds) */
+            memset(c->worlds, 0, (size_t)slabs * sizeof *c->worlds);
+            c->n_worlds = slabs;
+        }
         if (!c->worlds || !c->world_u || !c->world_ver) {
-            nbep_free_aligned(c->worlds);
-            free(c->world_u);
-            free((void *)c->world_ver);
-            c->worlds = NULL;
-            c->world_u = NULL;
-            c->world_ver = NULL;
+            nbep__pred_cells_worlds_free(c);
             return false;
         }
-        memset(c->worlds, 0, (size_t)slabs * sizeof *c->worlds);
-        c->n_worlds = slabs;
         bool ok = true;
         for (int k = 0; k < slabs; k++) {
             cells_world *a = &c->worlds[k];

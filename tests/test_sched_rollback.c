@@ -46,7 +46,7 @@ static int windows_a_step = 1;
 
 #include "nbep/sim.h"
 #include "nbep_test.h"
-#include "nbep_test_h5.h"
+#include "nbep_test_kept.h"
 #include "nbep_test_scene.h"
 
 /* Stamps in order: each pass's events that stand (those undone dropped); the window's start
@@ -145,68 +145,20 @@ static void counts_reset(void)
     spheres_back = lists_back = ties_back = counts_back = 0;
 }
 
-/* sc on one thread into a temporary file: its summary, final state (into *fin), counters'
- * totals and the step rows of /stats/virial and /stats/wall_impulse (sums[0], sums[1], n[0] and
- * n[1] values; malloc'd) */
-typedef struct {
-    nbep_summary s;
-    uint64_t counts[NBEP_COUNTER_COUNT];
-    double *sums[2];
-    size_t n[2];
-} run_kept;
-static void run_into(nbep_scene *sc, run_kept *r, nbep_state *fin)
-{
-    sc->out_stats = true;
-    /* (one frame, the last: each frame's checkpoint starts the lists afresh, and a frame a
-     * step would leave a short step no list to expire) */
-    sc->output_every = sc->steps;
-    char path[256];
-    nbep_test_tmp("sched_rollback.h5", path, sizeof path);
-    r->s = nbep_test_run_to(sc, 1, NULL, NULL, path, fin, r->counts);
-    r->sums[0] = nbep_test_h5_doubles(path, "/stats/virial", &r->n[0]);
-    r->sums[1] = nbep_test_h5_doubles(path, "/stats/wall_impulse", &r->n[1]);
-    remove(path);
-}
-
-/* b counted as a: every counter, the summary's counts, energies, maxima and pressure, the step
- * sums, bit for bit; frees both's sums */
-static void same_counts(run_kept *a, run_kept *b)
-{
-    for (int k = 0; k < NBEP_COUNTER_COUNT; k++)
-        assert_int_equal(b->counts[k], a->counts[k]);
-    assert_int_equal(b->s.checks, a->s.checks);
-    assert_int_equal(b->s.predictions, a->s.predictions);
-    assert_int_equal(b->s.sphere_collisions, a->s.sphere_collisions);
-    assert_int_equal(b->s.plane_collisions, a->s.plane_collisions);
-    const double x[] = {a->s.energy_final, a->s.max_overlap, a->s.max_overlap_rel,
-                        a->s.pressure.value},
-                 y[] = {b->s.energy_final, b->s.max_overlap, b->s.max_overlap_rel,
-                        b->s.pressure.value};
-    assert_memory_equal(x, y, sizeof x);
-    assert_int_equal(b->s.pressure.known, a->s.pressure.known);
-    for (int q = 0; q < 2; q++) {
-        assert_int_equal(b->n[q], a->n[q]);
-        if (a->n[q])
-            assert_memory_equal(b->sums[q], a->sums[q], a->n[q] * sizeof *a->sums[q]);
-        free(a->sums[q]);
-        free(b->sums[q]);
-    }
-}
-
 /* sc on one thread without the scheduler, then with it and the rollbacks: the same end; and
  * the events that stand are those of a pass through the scheduler without rollbacks, stamp
  * for stamp (the stamps a rollback's restore must give back: the ties' table's) */
 static nbep_summary rolled_back_the_same(nbep_scene *sc)
 {
     nbep_state plain, sched;
-    run_kept r0, r1;
-    run_into(sc, &r0, &plain);
+    nbep_run_kept r0, r1;
+    nbep_test_run_kept(sc, "sched_rollback.h5", &r0, &plain);
     assert_int_equal(setenv("NBEP_SCHEDULED", "1", 1), 0);
     counts_reset();
     rolling = false;
     stood.n = 0;
-    run_kept rr;
-    run_into(sc, &rr, &sched);
+    nbep_run_kept rr;
+    nbep_test_run_kept(sc, "sched_rollback.h5", &rr, &sched);
     free(rr.sums[0]);
     free(rr.sums[1]);
     nbep_state_fini(&sched);
@@ -215,13 +167,15 @@ static nbep_summary rolled_back_the_same(nbep_scene *sc)
     stood = (stamps){0};
     counts_reset();
     rolling = true;
-    run_into(sc, &r1, &sched);
+    nbep_test_run_kept(sc, "sched_rollback.h5", &r1, &sched);
     assert_int_equal(unsetenv("NBEP_SCHEDULED"), 0);
     assert_true(r0.s.sphere_collisions > 0);
     /* each event undone is handled again, and counted once: its counts put back (a
      * rollback's restore of the counts met, or this proves nothing) */
     assert_true(counts_back > 0);
-    same_counts(&r0, &r1);
+    nbep_test_same_kept(&r0, &r1);
+    free(r0.sums[0]);
+    free(r0.sums[1]);
     nbep_test_same_end(&plain, &sched);
     assert_int_equal(stood.n, ref_.n);
     size_t differ = 0;

@@ -37,7 +37,7 @@ static void on_destroy(const struct evl_sched *x);
 
 #include "nbep/sim.h"
 #include "nbep_test.h"
-#include "nbep_test_h5.h"
+#include "nbep_test_kept.h"
 #include "nbep_test_scene.h"
 
 /* the turns' draws (a linear congruential generator: the same turns in every run of the test),
@@ -73,61 +73,14 @@ static void on_destroy(const struct evl_sched *x)
     meetings += x->meetings;
 }
 
-/* sc on one thread into a temporary file: its summary, final state (into *fin), counters'
- * totals and the step rows of /stats/virial and /stats/wall_impulse (sums[0], sums[1], n[0] and
- * n[1] values; malloc'd) */
-typedef struct {
-    nbep_summary s;
-    uint64_t counts[NBEP_COUNTER_COUNT];
-    double *sums[2];
-    size_t n[2];
-} run_kept;
-static void run_into(nbep_scene *sc, run_kept *r, nbep_state *fin)
-{
-    sc->out_stats = true;
-    /* (one frame, the last: each frame's checkpoint starts the lists afresh, and a frame a
-     * step would leave a short step no list to expire) */
-    sc->output_every = sc->steps;
-    char path[256];
-    nbep_test_tmp("sched_slabs.h5", path, sizeof path);
-    r->s = nbep_test_run_to(sc, 1, NULL, NULL, path, fin, r->counts);
-    r->sums[0] = nbep_test_h5_doubles(path, "/stats/virial", &r->n[0]);
-    r->sums[1] = nbep_test_h5_doubles(path, "/stats/wall_impulse", &r->n[1]);
-    remove(path);
-}
-
-/* b counted as a: every counter, the summary's counts, energies, maxima and pressure, the step
- * sums, bit for bit; frees b's sums */
-static void same_counts(const run_kept *a, run_kept *b)
-{
-    for (int k = 0; k < NBEP_COUNTER_COUNT; k++)
-        assert_int_equal(b->counts[k], a->counts[k]);
-    assert_int_equal(b->s.checks, a->s.checks);
-    assert_int_equal(b->s.predictions, a->s.predictions);
-    assert_int_equal(b->s.sphere_collisions, a->s.sphere_collisions);
-    assert_int_equal(b->s.plane_collisions, a->s.plane_collisions);
-    const double x[] = {a->s.energy_final, a->s.max_overlap, a->s.max_overlap_rel,
-                        a->s.pressure.value},
-                 y[] = {b->s.energy_final, b->s.max_overlap, b->s.max_overlap_rel,
-                        b->s.pressure.value};
-    assert_memory_equal(x, y, sizeof x);
-    assert_int_equal(b->s.pressure.known, a->s.pressure.known);
-    for (int q = 0; q < 2; q++) {
-        assert_int_equal(b->n[q], a->n[q]);
-        if (a->n[q])
-            assert_memory_equal(b->sums[q], a->sums[q], a->n[q] * sizeof *a->sums[q]);
-        free(b->sums[q]);
-    }
-}
-
 /* sc on one thread without the scheduler, then through it on each of `slabs`: the same end,
  * with messages, rollbacks, cancels and meetings in every run on slabs */
 static nbep_summary slabs_the_same(nbep_scene *sc, const int *slabs, size_t n_slabs,
                                    const char *name)
 {
     nbep_state plain;
-    run_kept r0;
-    run_into(sc, &r0, &plain);
+    nbep_run_kept r0;
+    nbep_test_run_kept(sc, "sched_slabs.h5", &r0, &plain);
     assert_true(r0.s.sphere_collisions > 1000);
     assert_int_equal(setenv("NBEP_SCHEDULED", "1", 1), 0);
     for (size_t q = 0; q < n_slabs; q++) {
@@ -137,8 +90,8 @@ static nbep_summary slabs_the_same(nbep_scene *sc, const int *slabs, size_t n_sl
         seen = (nbep_warp_tally){0};
         meetings = 0;
         nbep_state sched;
-        run_kept r1;
-        run_into(sc, &r1, &sched);
+        nbep_run_kept r1;
+        nbep_test_run_kept(sc, "sched_slabs.h5", &r1, &sched);
         fprintf(stderr,
                 "%s on %d slabs: %llu events handled (%llu collisions), %llu messages sent, "
                 "%llu acted on, %llu rollbacks, %llu events and messages undone, %llu "
@@ -148,7 +101,7 @@ static nbep_summary slabs_the_same(nbep_scene *sc, const int *slabs, size_t n_sl
                 (unsigned long long)seen.applied, (unsigned long long)seen.rollbacks,
                 (unsigned long long)seen.undone, (unsigned long long)seen.cancels,
                 (unsigned long long)meetings);
-        same_counts(&r0, &r1);
+        nbep_test_same_kept(&r0, &r1);
         assert_int_equal(sched.n, plain.n);
         assert_memory_equal(sched.pos, plain.pos, plain.n * sizeof *plain.pos);
         assert_memory_equal(sched.vel, plain.vel, plain.n * sizeof *plain.vel);

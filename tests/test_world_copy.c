@@ -42,23 +42,12 @@ static void look_before(struct nbep_evloop *e, const struct nbep_evloop_ops *ops
 #include "nbep_test.h"
 #include "nbep_test_scene.h"
 
-/* A world: the context's structs copied, their motion arrays its own (own: kept apart, as a
- * struct copy may leave a NULL where the run has none). */
+/* A world: pred_cells.c's (the context's structs copied, their motion arrays its own, kept
+ * apart as a struct copy may leave a NULL where the run has none), grown here as the run's n
+ * needs. */
 typedef struct {
-    pred_ctx c;
-    nbep_state s;
-    thread_ws w;
-    nbep_counters cnt;
-    nbep_thread_max mx;
-    cells_user u;
+    cells_world a;
     size_t n, cap;
-    struct {
-        nbep_vec3 *pos, *vel;
-        int32_t *image;
-        double *tau, *t_last;
-        uint64_t *ver;
-        jam_count *jam;
-    } own;
 } world;
 
 static struct {
@@ -91,13 +80,13 @@ static void world_make(const cells_user *x)
 {
     const size_t n = x->s->n;
     if (wd.cap < n) {
-        GROW(wd.own.pos, n);
-        GROW(wd.own.vel, n);
-        GROW(wd.own.image, 3 * n);
-        GROW(wd.own.tau, n);
-        GROW(wd.own.ver, n);
-        GROW(wd.own.t_last, n);
-        GROW(wd.own.jam, n);
+        GROW(wd.a.pos, n);
+        GROW(wd.a.vel, n);
+        GROW(wd.a.image, 3 * n);
+        GROW(wd.a.tau, n);
+        GROW(wd.a.ver, n);
+        GROW(wd.a.t_last, n);
+        GROW(wd.a.jam, n);
         GROW(run_pos, n);
         GROW(run_vel, n);
         GROW(run_tau, n);
@@ -108,29 +97,29 @@ static void world_make(const cells_user *x)
         wd.cap = n;
     }
     /* the structs as they are, then the motion arrays the world's own */
-    memcpy(&wd.c, x->c, sizeof wd.c);
-    wd.s = *x->s;
-    wd.w = *x->w;
-    wd.s.pos = memcpy(wd.own.pos, x->s->pos, n * sizeof *wd.own.pos);
-    wd.s.vel = memcpy(wd.own.vel, x->s->vel, n * sizeof *wd.own.vel);
-    wd.s.image = x->s->image ? memcpy(wd.own.image, x->s->image, 3 * n * sizeof *wd.own.image)
+    memcpy(&wd.a.c, x->c, sizeof wd.a.c);
+    wd.a.s = *x->s;
+    wd.a.w = *x->w;
+    wd.a.s.pos = memcpy(wd.a.pos, x->s->pos, n * sizeof *wd.a.pos);
+    wd.a.s.vel = memcpy(wd.a.vel, x->s->vel, n * sizeof *wd.a.vel);
+    wd.a.s.image = x->s->image ? memcpy(wd.a.image, x->s->image, 3 * n * sizeof *wd.a.image)
                              : NULL;
-    wd.c.tau = memcpy(wd.own.tau, x->c->tau, n * sizeof *wd.own.tau);
-    wd.c.ver = memcpy(wd.own.ver, x->c->ver, n * sizeof *wd.own.ver);
-    wd.c.t_last = x->c->t_last ? memcpy(wd.own.t_last, x->c->t_last, n * sizeof *wd.own.t_last)
+    wd.a.c.tau = memcpy(wd.a.tau, x->c->tau, n * sizeof *wd.a.tau);
+    wd.a.c.ver = memcpy(wd.a.ver, x->c->ver, n * sizeof *wd.a.ver);
+    wd.a.c.t_last = x->c->t_last ? memcpy(wd.a.t_last, x->c->t_last, n * sizeof *wd.a.t_last)
                                : NULL;
-    wd.c.jam = x->c->jam ? memcpy(wd.own.jam, x->c->jam, n * sizeof *wd.own.jam) : NULL;
+    wd.a.c.jam = x->c->jam ? memcpy(wd.a.jam, x->c->jam, n * sizeof *wd.a.jam) : NULL;
     /* free flight only (the team loop's scenes): nothing rests, holds or settles */
     assert_null(x->c->rest);
     assert_null(x->c->aeff);
-    memset(&wd.cnt, 0, sizeof wd.cnt);
-    memset(&wd.mx, 0, sizeof wd.mx);
-    wd.u = *x;
-    wd.u.c = &wd.c;
-    wd.u.s = &wd.s;
-    wd.u.w = &wd.w;
-    wd.u.cnt = &wd.cnt;
-    wd.u.mx = &wd.mx;
+    memset(&wd.a.cnt, 0, sizeof wd.a.cnt);
+    memset(&wd.a.mx, 0, sizeof wd.a.mx);
+    wd.a.u = *x;
+    wd.a.u.c = &wd.a.c;
+    wd.a.u.s = &wd.a.s;
+    wd.a.u.w = &wd.a.w;
+    wd.a.u.cnt = &wd.a.cnt;
+    wd.a.u.mx = &wd.a.mx;
     wd.n = n;
     memcpy(run_pos, x->s->pos, n * sizeof *run_pos);
     memcpy(run_vel, x->s->vel, n * sizeof *run_vel);
@@ -178,29 +167,29 @@ static void look_before(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uin
         pending_run_ops->flight((void *)pending_run, j, pending_time, &f[0], &f[1], &f[2]);
         seen.differ += memcmp(f, pending_flight[k], sizeof f) != 0;
         seen.compared++;
-        seen.differ += memcmp(&pending_run->s->pos[j], &wd.s.pos[j], sizeof wd.s.pos[j]) != 0 ||
-                       memcmp(&pending_run->s->vel[j], &wd.s.vel[j], sizeof wd.s.vel[j]) != 0 ||
-                       memcmp(&pending_run->c->tau[j], &wd.c.tau[j], sizeof wd.c.tau[j]) != 0 ||
-                       pending_run->c->ver[j] != wd.c.ver[j] ||
-                       (wd.c.t_last && memcmp(&pending_run->c->t_last[j], &wd.c.t_last[j],
-                                              sizeof wd.c.t_last[j]) != 0);
+        seen.differ += memcmp(&pending_run->s->pos[j], &wd.a.s.pos[j], sizeof wd.a.s.pos[j]) != 0 ||
+                       memcmp(&pending_run->s->vel[j], &wd.a.s.vel[j], sizeof wd.a.s.vel[j]) != 0 ||
+                       memcmp(&pending_run->c->tau[j], &wd.a.c.tau[j], sizeof wd.a.c.tau[j]) != 0 ||
+                       pending_run->c->ver[j] != wd.a.c.ver[j] ||
+                       (wd.a.c.t_last && memcmp(&pending_run->c->t_last[j], &wd.a.c.t_last[j],
+                                              sizeof wd.a.c.t_last[j]) != 0);
     }
     n_pending = 0;
     if (ev->kind == NBEP_EVENT_HORIZON || seen.events++ % 3 != 0) /* (every third: time) */
         return;
     world_make(x);
-    const nbep_event a = predicted(e, ops, u, i), b = predicted(e, ops, &wd.u, i);
+    const nbep_event a = predicted(e, ops, u, i), b = predicted(e, ops, &wd.a.u, i);
     seen.predicted++;
     seen.differ += !same_event(&a, &b);
     nbep_vec3 pv[2][3]; /* its flight to the event's time, in the run and in the world */
     ops->flight(u, i, ev->time, &pv[0][0], &pv[0][1], &pv[0][2]);
-    ops->flight(&wd.u, i, ev->time, &pv[1][0], &pv[1][1], &pv[1][2]);
+    ops->flight(&wd.a.u, i, ev->time, &pv[1][0], &pv[1][1], &pv[1][2]);
     seen.differ += memcmp(pv[0], pv[1], sizeof pv[0]) != 0;
     if (!ops->fresh(u, i, ev))
         return;
     const uint32_t *changed;
     bool stop = false;
-    const size_t m = ops->react(&wd.u, i, ev, &changed, &stop);
+    const size_t m = ops->react(&wd.a.u, i, ev, &changed, &stop);
     seen.reacted++;
     const size_t n = wd.n;
     seen.differ += memcmp(run_pos, x->s->pos, n * sizeof *run_pos) != 0 ||
@@ -218,7 +207,7 @@ static void look_before(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uin
     pending_t0 = x->T0;
     pending_time = ev->time;
     for (size_t k = 0; k < m; k++)
-        ops->flight(&wd.u, changed[k], ev->time, &pending_flight[k][0], &pending_flight[k][1],
+        ops->flight(&wd.a.u, changed[k], ev->time, &pending_flight[k][0], &pending_flight[k][1],
                     &pending_flight[k][2]);
 }
 
@@ -269,13 +258,13 @@ static void test_a_dissipative_fluid_runs_the_same_in_a_world(void **state)
 static int teardown(void **state)
 {
     (void)state;
-    free(wd.own.pos);
-    free(wd.own.vel);
-    free(wd.own.image);
-    free(wd.own.tau);
-    free(wd.own.ver);
-    free(wd.own.t_last);
-    free(wd.own.jam);
+    free(wd.a.pos);
+    free(wd.a.vel);
+    free(wd.a.image);
+    free(wd.a.tau);
+    free(wd.a.ver);
+    free(wd.a.t_last);
+    free(wd.a.jam);
     free(run_pos);
     free(run_vel);
     free(run_tau);
