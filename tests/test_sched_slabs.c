@@ -61,15 +61,8 @@ static uint64_t meetings;
 
 static void on_destroy(const struct evl_sched *x)
 {
-    for (int k = 0; k < x->slabs; k++) {
-        const nbep_warp_tally t = nbep_warp_tally_of(x->warp, k);
-        seen.handled += t.handled;
-        seen.applied += t.applied;
-        seen.undone += t.undone;
-        seen.rollbacks += t.rollbacks;
-        seen.sent += t.sent;
-        seen.cancels += t.cancels;
-    }
+    for (int k = 0; k < x->slabs; k++)
+        nbep_warp_tally_add(&seen, nbep_warp_tally_of(x->warp, k));
     meetings += x->meetings;
 }
 

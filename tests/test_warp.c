@@ -368,12 +368,7 @@ static void test_turns_give_the_serial_results(void **state)
             same_as_serial(x, &ref);
             for (int s = 0; s < slabs; s++) {
                 const nbep_warp_tally t = nbep_warp_tally_of(w, s);
-                all.handled += t.handled;
-                all.applied += t.applied;
-                all.undone += t.undone;
-                all.rollbacks += t.rollbacks;
-                all.sent += t.sent;
-                all.cancels += t.cancels;
+                nbep_warp_tally_add(&all, t);
                 if (slabs == 1)
                     assert_int_equal(t.rollbacks + t.sent + t.applied, 0);
             }

@@ -121,5 +121,15 @@ bool nbep_warp_last(const nbep_warp *w, int slab, nbep_stamp *s);
 /* Whether a window ran out of memory (its worlds are then not the serial run's). */
 bool nbep_warp_failed(const nbep_warp *w);
 nbep_warp_tally nbep_warp_tally_of(const nbep_warp *w, int slab);
+/* *to += t, count by count (a sum over slabs or runs). */
+static inline void nbep_warp_tally_add(nbep_warp_tally *to, nbep_warp_tally t)
+{
+    to->handled += t.handled;
+    to->applied += t.applied;
+    to->undone += t.undone;
+    to->rollbacks += t.rollbacks;
+    to->sent += t.sent;
+    to->cancels += t.cancels;
+}
 
 #endif
