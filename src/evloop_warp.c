@@ -160,6 +160,7 @@ struct evl_sched {
     bool too_deep;       /* ... the last: a cascade deeper than a stamp holds */
     double t_stuck;
     uint64_t meetings;   /* expiries done at a meeting (with slabs) */
+    unsigned idle_windows; /* windows in a row cut back to keep nothing (meet) */
     double window_end;   /* the window's: a slab's entry held at or past it waits for a later
                           * window */
     /* the earliest entry held in this window (has_limit): no slab handles an event at or past
@@ -754,6 +755,27 @@ static void run_from_worlds(struct evl_sched *x)
  * that) it is done there, between windows, in its slab's world, its sphere's motion copied to
  * every world (its list's members, and maybe its owner, are now other slabs' too). False where
  * nothing was held. */
+/* A stop that stands ends the call with its event's reaction done in its slab's world alone
+ * (a stopping event sends nothing): its spheres' motion copied into every world, so that each
+ * owner's world holds it at the call's end (a helper's review found a pair across a face's
+ * other sphere coming back without its reaction, and its reaction count lost). */
+static void stopped_copied(struct evl_sched *x, int slab)
+{
+    const evl_side *d = &x->side[slab];
+    if (d->deep) /* (found at an entry, not handled: nothing changed) */
+        return;
+    const uint32_t i = d->stop.level[d->stop.depth - 1].item;
+    const nbep_event *ev = nbep_feq_slot(x->e->q, i); /* (a stop commits nothing: its slot) */
+    const uint32_t spheres[2] = {i, ev->kind == NBEP_EVENT_SPHERE ? ev->partner : i};
+    for (int q = 0; q < 2; q++) {
+        nbep_evloop_motion m;
+        x->ops->save(d->u, spheres[q], &m);
+        for (int k = 0; k < x->slabs; k++)
+            if (k != slab)
+                x->ops->restore(x->side[k].u, spheres[q], &m);
+    }
+}
+
 static bool meet(struct evl_sched *x)
 {
     /* a stop that stands at the limit (on slabs: every slab has done all before it) or, on one
@@ -764,7 +786,10 @@ static bool meet(struct evl_sched *x)
         const evl_side *d = &x->side[k];
         if (stop_stands(x, k) &&
             (x->slabs == 1 || nbep_cascade_cmp(&d->stop, &x->limit) == 0)) {
-            nbep_warp_cut(x->warp, &d->stop, !d->deep);
+            if (x->slabs > 1) { /* (one slab has done nothing past its stop) */
+                nbep_warp_cut(x->warp, &d->stop, !d->deep);
+                stopped_copied(x, k);
+            }
             window_closed(x);
             x->stop = true;
             x->too_deep = d->deep;
@@ -777,11 +802,25 @@ static bool meet(struct evl_sched *x)
     nbep_stamp held;
     nbep_cascade_copy(&held, &x->limit);
     nbep_warp_cut(x->warp, &held, false);
-    window_cut(x);
     int slab = -1;
     for (int k = 0; k < x->slabs; k++)
         if (x->side[k].blocked && nbep_cascade_cmp(&x->side[k].held, &held) == 0)
             slab = k;
+    bool kept = slab >= 0;
+    for (int k = 0; k < x->slabs; k++) {
+        nbep_stamp last;
+        kept |= nbep_warp_last(x->warp, k, &last);
+    }
+    window_cut(x);
+    /* A window that keeps nothing would come again the same (the turns are the same): where
+     * its limit was a stop too deep, found ahead and undone since (a review's reasoning, not
+     * met in any run), the loop stops there as too deep rather than run for ever. */
+    x->idle_windows = kept ? 0 : x->idle_windows + 1;
+    if (x->idle_windows >= 2) {
+        x->stop = x->too_deep = true;
+        x->t_stuck = held.t;
+        return true;
+    }
     if (slab < 0)
         return true;
     evl_side *d = enter_slab(x, slab);
@@ -848,6 +887,7 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
     x->stall = stall;
     x->tally = tally;
     x->stop = x->too_deep = false;
+    x->idle_windows = 0;
     if (x->slabs > 1) {
         worlds_from_run(x);
     } else {
