@@ -814,6 +814,11 @@ static inline NBEP_ALWAYS_INLINE bool owned(const nbep_evloop *e, uint32_t i)
     return e->own_slab < 0 || sphere_slab(e, i) == e->own_slab;
 }
 
+bool nbep__evloop_owned(const nbep_evloop *e, uint32_t i)
+{
+    return owned(e, i);
+}
+
 /* Entry c set in the calendar, or its item's taken out (set false); with slabs, in its slab's
  * calendar, whose room may have to grow: without memory for it the run fails (e->failed). */
 static void enter(nbep_evloop *e, bool set, nbep_calendar_entry c)

@@ -157,9 +157,6 @@ NBEP_MUST_CHECK nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag 
  * spheres (nbep_slabcal's) back at its end, and merges their counts (ops clear, merge), so that
  * every op is needed (save, restore, clear, merge, mark, back, settle). */
 void nbep_evloop_set_worlds(nbep_evloop *e, void *const *wu, const uint64_t *const *wver);
-/* The expiries the scheduled loop on slabs did at its windows' meetings, because their lists
- * and cells reach another slab's (0 without slabs), in all calls. */
-uint64_t nbep_evloop_meetings(const nbep_evloop *e);
 /* True where the scheduled loop (nbep_evloop_set_scheduled) stopped its last call at a cascade
  * at one time deeper than its stamps hold; false otherwise (and without the setting). */
 bool nbep_evloop_too_deep(const nbep_evloop *e);

@@ -218,6 +218,9 @@ void nbep__evloop_schedule_one(nbep_evloop *e, uint32_t i);
  * both. */
 void nbep__evloop_expiry_span(const nbep_evloop *e, const nbep_evloop_ops *ops, void *u,
                               uint32_t i, double t, int *lo, int *hi);
+/* Whether sphere i is the engine's to predict and enter: always, but on the scheduled loop's
+ * slabs, where only the slab its engine acts in (own_slab) owns it. */
+bool nbep__evloop_owned(const nbep_evloop *e, uint32_t i);
 /* With slabs: the slab of sphere i (its list centre's cell column's). */
 int nbep__evloop_sphere_slab(const nbep_evloop *e, uint32_t i);
 /* Sphere i's slot predicted afresh at time t from its list, in context u (its calendar entry

@@ -134,7 +134,8 @@ typedef struct {
     /* the stamps of the entries made at the time of the event that made them (a tie in time:
      * cascade.h); every other entry's stamp is a root. Few (a cradle's row), those of an older
      * time never looked up (an entry's time is compared), all dropped between windows: every
-     * entry they stamped was handled before its window's end. Each change kept (ties_undo,
+     * entry they stamped was handled before its window's end (but at a meeting's cut:
+     * window_closed). Each change kept (ties_undo,
      * the window's, by place), so that a rollback puts the table back. */
     tie_stamp *ties;
     size_t n_ties, cap_ties;
@@ -154,7 +155,6 @@ struct evl_sched {
     void *u;
     const uint64_t *ver0;   /* the run's response counts (e->ver outside the call) */
     nbep_evloop_stall *stall;
-    nbep_evloop_tally *tally;
     bool stop;           /* no more events: stuck, a reaction's stop or a cascade too deep
                           * (t_stuck) */
     bool too_deep;       /* ... the last: a cascade deeper than a stamp holds */
@@ -283,7 +283,7 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
         return false;
     d->stopped = false; /* (a stop too deep is found again below if it is still there) */
     nbep_calendar_entry c;
-    if (x->stop || e->failed ||
+    if (e->failed ||
         !(e->slabcal ? nbep_slabcal_top(e->slabcal, slab, &c)
                      : nbep_calendar_top(e->cal, &c.item, &c.time)))
         return false;
@@ -385,7 +385,7 @@ static bool keep_sphere(struct evl_sched *x, int slab, uint32_t i)
     if (!k)
         return false;
     x->ops->save(x->side[slab].u, i, &k->m);
-    if (x->slabs == 1 || nbep__evloop_sphere_slab(x->e, i) == slab)
+    if (nbep__evloop_owned(x->e, i))
         k->slot = *nbep_feq_slot(x->e->q, i);
     return true;
 }
@@ -444,17 +444,15 @@ static bool send_copies(struct evl_sched *x, int slab, uint32_t i, int skip)
 static bool send_changes(struct evl_sched *x, int slab, const evl_ws *w)
 {
     for (size_t k = 0; k < w->n_changed; k++)
-        if (nbep__evloop_sphere_slab(x->e, w->changed[k]) == slab &&
-            !send_copies(x, slab, w->changed[k], -1))
+        if (nbep__evloop_owned(x->e, w->changed[k]) && !send_copies(x, slab, w->changed[k], -1))
             return false;
     for (size_t k = 0; k < w->n_changed; k++) {
         const uint32_t j = w->changed[k];
-        const int to = nbep__evloop_sphere_slab(x->e, j);
-        if (to == slab)
+        if (nbep__evloop_owned(x->e, j))
             continue;
         slab_msg msg = {.kind = MSG_WRITE};
         x->ops->save(x->side[slab].u, j, &msg.m);
-        if (!nbep_warp_send(x->warp, slab, to, j, &msg))
+        if (!nbep_warp_send(x->warp, slab, nbep__evloop_sphere_slab(x->e, j), j, &msg))
             return false;
     }
     return true;
@@ -498,8 +496,7 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
      * its own; another slab's sphere is its owner's to predict) */
     bool room = true;
     for (size_t k = 0; k < w->n_changed && room; k++)
-        room = w->changed[k] == i ||
-               (x->slabs > 1 && nbep__evloop_sphere_slab(e, w->changed[k]) != slab) ||
+        room = w->changed[k] == i || !nbep__evloop_owned(e, w->changed[k]) ||
                made_by(x, slab, s, w->changed[k], true);
     if (!room || !made_by(x, slab, s, i, true) ||
         (x->slabs > 1 && w->reacted && !send_changes(x, slab, w))) {
@@ -544,7 +541,7 @@ static void sched_apply(void *arg, int slab, int from, const nbep_stamp *s, uint
     x->ops->restore(d->u, item, &msg.m);
     if (msg.kind != MSG_WRITE)
         return;
-    assert(nbep__evloop_sphere_slab(e, item) == slab);
+    assert(nbep__evloop_owned(e, item));
     nbep__evloop_predict_own(e, x->ops, d->u, item, s->t);
     if (!made_by(x, slab, s, item, true) || !send_copies(x, slab, item, from)) {
         e->failed = true;
@@ -601,7 +598,7 @@ static void sched_restore(void *arg, int slab, uint32_t item, const void *state)
     }
     const kept_sphere *k = state;
     x->ops->restore(d->u, item, &k->m);
-    if (x->slabs > 1 && nbep__evloop_sphere_slab(e, item) != slab)
+    if (!nbep__evloop_owned(e, item))
         return;
     nbep_feq_put(e->q, item, k->slot);
     nbep__evloop_schedule_one(e, item);
@@ -609,24 +606,16 @@ static void sched_restore(void *arg, int slab, uint32_t item, const void *state)
 
 /* A window's end (and a call's start): every event so far stands, so its expiries' records,
  * its ties (every entry they stamped is handled) and what would undo them, and the caller's
- * record for undoing its counts (ops settle) are dropped. */
-static void window_closed(struct evl_sched *x)
-{
-    for (int k = 0; k < x->slabs; k++) {
-        evl_side *d = &x->side[k];
-        d->n_lists = d->n_ties = d->n_ties_undo = 0;
-        if (x->ops->settle)
-            x->ops->settle(d->u);
-    }
-}
-
-/* A window cut short at a meeting (at stamp `to`): what window_closed drops, but the ties,
- * whose entries at `to`'s time after it (a cascade the cut went into) are still to come. */
-static void window_cut(struct evl_sched *x)
+ * record for undoing its counts (ops settle) are dropped. A window cut short at a meeting
+ * (cut) keeps the ties: the entries at the cut's time after it (a cascade the cut went into)
+ * are still to come. */
+static void window_closed(struct evl_sched *x, bool cut)
 {
     for (int k = 0; k < x->slabs; k++) {
         evl_side *d = &x->side[k];
         d->n_lists = d->n_ties_undo = 0;
+        if (!cut)
+            d->n_ties = 0;
         if (x->ops->settle)
             x->ops->settle(d->u);
     }
@@ -674,11 +663,6 @@ bool nbep_evloop_too_deep(const nbep_evloop *e)
     return e->sched && e->sched->too_deep;
 }
 
-uint64_t nbep_evloop_meetings(const nbep_evloop *e)
-{
-    return e->sched ? e->sched->meetings : 0;
-}
-
 void nbep__evloop_sched_destroy(struct evl_sched **s)
 {
     if (!s || !*s)
@@ -709,7 +693,7 @@ static bool top_of_all(const struct evl_sched *x, nbep_calendar_entry *c)
 }
 
 /* With slabs, the call's start: each slab's world a copy of the run's motion, its counts from
- * zero, its stall check the call's. */
+ * zero. */
 static void worlds_from_run(struct evl_sched *x)
 {
     const nbep_evloop_ops *ops = x->ops;
@@ -718,7 +702,6 @@ static void worlds_from_run(struct evl_sched *x)
         d->u = x->wu[k];
         d->ver = x->wver[k];
         ops->clear(d->u);
-        d->stall = *x->stall;
     }
     for (uint32_t i = 0; i < x->e->n; i++) {
         nbep_evloop_motion m;
@@ -729,7 +712,7 @@ static void worlds_from_run(struct evl_sched *x)
 }
 
 /* With slabs, the call's end: each sphere's motion its owner's, the counts and sums the
- * slabs' (exact: the same whichever slab added what), the stall check's count slab 0's. */
+ * slabs' (exact: the same whichever slab added what). */
 static void run_from_worlds(struct evl_sched *x)
 {
     const nbep_evloop_ops *ops = x->ops;
@@ -738,23 +721,20 @@ static void run_from_worlds(struct evl_sched *x)
         ops->save(x->side[nbep__evloop_sphere_slab(x->e, i)].u, i, &m);
         ops->restore(x->u, i, &m);
     }
-    for (int k = 0; k < x->slabs; k++) {
-        const evl_side *d = &x->side[k];
-        ops->merge(x->u, d->u);
-        x->stall->stopped |= d->stall.stopped;
-    }
-    x->stall->since = x->side[0].stall.since;
-    x->stall->t_mark = x->side[0].stall.t_mark;
-    x->stall->looks = x->side[0].stall.looks;
+    for (int k = 0; k < x->slabs; k++)
+        ops->merge(x->u, x->side[k].u);
 }
 
-/* The meeting's own work, with slabs: where a slab held an expiry that reaches another slab's
- * lists or cells before the window's end, the window ends at the earliest such (the limit):
- * every slab goes back to it (nbep_warp_cut: all that was done at or after it undone), and
- * where that expiry is still its slab's earliest entry (a message before it may have changed
- * that) it is done there, between windows, in its slab's world, its sphere's motion copied to
- * every world (its list's members, and maybe its owner, are now other slabs' too). False where
- * nothing was held. */
+/* Sphere i's motion in slab's world copied into every other slab's (between windows). */
+static void copied_to_all(struct evl_sched *x, int slab, uint32_t i)
+{
+    nbep_evloop_motion m;
+    x->ops->save(x->side[slab].u, i, &m);
+    for (int k = 0; k < x->slabs; k++)
+        if (k != slab)
+            x->ops->restore(x->side[k].u, i, &m);
+}
+
 /* A stop that stands ends the call with its event's reaction done in its slab's world alone
  * (a stopping event sends nothing): its spheres' motion copied into every world, so that each
  * owner's world holds it at the call's end (a helper's review found a pair across a face's
@@ -766,16 +746,18 @@ static void stopped_copied(struct evl_sched *x, int slab)
         return;
     const uint32_t i = d->stop.level[d->stop.depth - 1].item;
     const nbep_event *ev = nbep_feq_slot(x->e->q, i); /* (a stop commits nothing: its slot) */
-    const uint32_t spheres[2] = {i, ev->kind == NBEP_EVENT_SPHERE ? ev->partner : i};
-    for (int q = 0; q < 2; q++) {
-        nbep_evloop_motion m;
-        x->ops->save(d->u, spheres[q], &m);
-        for (int k = 0; k < x->slabs; k++)
-            if (k != slab)
-                x->ops->restore(x->side[k].u, spheres[q], &m);
-    }
+    copied_to_all(x, slab, i);
+    if (ev->kind == NBEP_EVENT_SPHERE)
+        copied_to_all(x, slab, ev->partner);
 }
 
+/* The meeting's own work, with slabs: where a slab held an expiry that reaches another slab's
+ * lists or cells before the window's end, the window ends at the earliest such (the limit):
+ * every slab goes back to it (nbep_warp_cut: all that was done at or after it undone), and
+ * where that expiry is still its slab's earliest entry (a message before it may have changed
+ * that) it is done there, between windows, in its slab's world, its sphere's motion copied to
+ * every world (its list's members, and maybe its owner, are now other slabs' too). False where
+ * nothing was held. */
 static bool meet(struct evl_sched *x)
 {
     /* a stop that stands at the limit (on slabs: every slab has done all before it) or, on one
@@ -790,7 +772,7 @@ static bool meet(struct evl_sched *x)
                 nbep_warp_cut(x->warp, &d->stop, !d->deep);
                 stopped_copied(x, k);
             }
-            window_closed(x);
+            window_closed(x, false);
             x->stop = true;
             x->too_deep = d->deep;
             x->t_stuck = d->stop_t;
@@ -811,7 +793,7 @@ static bool meet(struct evl_sched *x)
         nbep_stamp last;
         kept |= nbep_warp_last(x->warp, k, &last);
     }
-    window_cut(x);
+    window_closed(x, true);
     /* A window that keeps nothing would come again the same (the turns are the same): where
      * its limit was a stop too deep, found ahead and undone since (a review's reasoning, not
      * met in any run), the loop stops there as too deep rather than run for ever. */
@@ -845,11 +827,7 @@ static bool meet(struct evl_sched *x)
     nbep__evloop_commit(e, w);
     if (e->failed)
         return true;
-    nbep_evloop_motion m;
-    x->ops->save(d->u, i, &m);
-    for (int k = 0; k < x->slabs; k++)
-        if (k != slab)
-            x->ops->restore(x->side[k].u, i, &m);
+    copied_to_all(x, slab, i);
     /* Where it moved its sphere to another slab, its prediction read its new list's members
      * in the old slab's world, where those beside the new one's columns are not kept (no
      * copies come from a column that is not beside another slab): its slot is predicted again
@@ -885,7 +863,6 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
     x->u = u;
     x->ver0 = e->ver;
     x->stall = stall;
-    x->tally = tally;
     x->stop = x->too_deep = false;
     x->idle_windows = 0;
     if (x->slabs > 1) {
@@ -893,13 +870,13 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
     } else {
         x->side[0].u = u;
         x->side[0].ver = e->ver;
-        x->side[0].stall = *stall;
     }
-    for (int k = 0; k < x->slabs; k++) {
+    for (int k = 0; k < x->slabs; k++) { /* (each slab's stall check counts its own events) */
+        x->side[k].stall = *stall;
         x->side[k].tally = (nbep_evloop_tally){0};
         x->side[k].has_last = x->side[k].blocked = x->side[k].stopped = false;
     }
-    window_closed(x); /* (a call before that stopped inside its window left them) */
+    window_closed(x, false); /* (a call before that stopped inside its window left them) */
     /* windows of a WINDOWS_A_STEP-th of what is left of the call's span from its first event
      * (a step, or its part; what each window did stands at its end): their logs, a few hundred
      * events' in a dense fluid, stay in the caches (the whole step's, written once and never
@@ -928,19 +905,17 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
                 NBEP_SCHED_TURN_HOOK(x);
         }
         if (!nbep_warp_failed(x->warp) && !meet(x))
-            window_closed(x);
+            window_closed(x, false);
     }
     if (nbep_warp_failed(x->warp))
         e->failed = true;
-    if (x->slabs > 1) {
+    if (x->slabs > 1)
         run_from_worlds(x);
-    } else {
-        stall->since = x->side[0].stall.since;
-        stall->t_mark = x->side[0].stall.t_mark;
-        stall->looks = x->side[0].stall.looks;
-        stall->stopped = x->side[0].stall.stopped;
-    }
+    stall->since = x->side[0].stall.since; /* (the count carried to a call's next part) */
+    stall->t_mark = x->side[0].stall.t_mark;
+    stall->looks = x->side[0].stall.looks;
     for (int k = 0; k < x->slabs; k++) {
+        stall->stopped |= x->side[k].stall.stopped;
         tally->events += x->side[k].tally.events;
         tally->reactions += x->side[k].tally.reactions;
         tally->exits += x->side[k].tally.exits;

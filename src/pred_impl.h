@@ -558,9 +558,9 @@ bool nbep__pred_settle_phases(nbep_sim *sim, pred_ctx *c, nbep_range own, thread
 
 /* ---- pred_cells.c: cells mode ------------------------------------------------------------- */
 
-/* The steps of cells mode, every thread, inside pred_run's parallel region. */
 /* Frees the scheduled loop's worlds on slabs (pred_cells.c), if any. */
 void nbep__pred_cells_worlds_free(pred_ctx *c);
+/* The steps of cells mode, every thread, inside pred_run's parallel region. */
 void nbep__pred_cells_steps(nbep_sim *sim, pred_ctx *c, int tid, nbep_range own, thread_ws *w);
 
 /* ---- pred_ways.c: the threads of a step's events ------------------------------------------ */
