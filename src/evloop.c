@@ -68,6 +68,8 @@
 /* A walk's workspace's first room: lists' members, and changed cells */
 #define WS_CHANGED0 8
 
+static void ws_fini(evl_ws *w);
+
 static bool ws_init(evl_ws *w)
 {
     w->cap = NBEP_EVLOOP_WS_CAP0;
@@ -78,6 +80,16 @@ static bool ws_init(evl_ws *w)
     w->chg_cap = WS_CHANGED0;
     w->changed = malloc(w->chg_cap * sizeof *w->changed);
     return w->near && w->was && w->kept && w->gain && w->changed;
+}
+
+bool nbep__evloop_ws_init(evl_ws *w)
+{
+    return ws_init(w);
+}
+
+void nbep__evloop_ws_fini(evl_ws *w)
+{
+    ws_fini(w);
 }
 
 /* The bytes ws_init allocates (nbep_evloop_bytes) */

@@ -209,6 +209,10 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
                                 double t_end, nbep_evloop_stall *stall,
                                 nbep_evloop_tally *tally, double *t_stuck);
 void nbep__evloop_sched_destroy(struct evl_sched **s);
+/* A workspace of one's own (zeroed before: its arrays made; false without memory, the part made
+ * freed by fini), and its arrays freed. */
+bool nbep__evloop_ws_init(evl_ws *w);
+void nbep__evloop_ws_fini(evl_ws *w);
 /* The calendar entry of sphere i from its slot. */
 void nbep__evloop_schedule_one(nbep_evloop *e, uint32_t i);
 /* The cell columns that the expiry of sphere i at time t (in context u) would read or write,

@@ -110,8 +110,9 @@ typedef struct {
 
 /* A slab's side of the loop (one slab: side[0], the run's own context and arrays) */
 typedef struct {
+    nbep_evloop *e;         /* the engine it acts on: with slabs a view of the run's of its
+                             * own (struct evl_sched's view), else the run's */
     void *u;                /* its world's context (the callbacks' u) */
-    const uint64_t *ver;    /* its world's response counts (the engine's e->ver in it) */
     nbep_evloop_stall stall;
     nbep_evloop_tally tally;
     nbep_stamp last;        /* the stamp of the event handled last (its order's check) */
@@ -121,6 +122,10 @@ typedef struct {
      * window's limit (as next last found them) */
     bool blocked, past;
     nbep_stamp held;
+    /* cramped: the expiry stamped `held` found its slab's arena of the lists' pool too small
+     * for its commit (sched_handle), and waits for the meeting, which gives it room */
+    bool cramped;
+    uint64_t cramps;        /* expiries so left, all windows (a test's count) */
     /* stopped: an event of the slab, stamped `stop` (at stop_t), stops the loop (stuck, a
      * reaction's stop; deep: a cascade deeper than a stamp holds, found at that entry, not
      * handled); it stands while the slab's log holds it, else a rollback undid it */
@@ -147,13 +152,20 @@ struct evl_sched {
     nbep_warp *warp;
     int slabs;
     evl_side *side;         /* owned, slabs */
+    /* owned, with slabs: each slab's view of the engine, a copy of the run's made at each call
+     * (nbep_evloop's fields are the run's: its calendars, cells, lists and slots are shared)
+     * but for its own: its workspace ws[0][0], its world's response counts (ver), its slab
+     * (own_slab), its failure, and its lists' view, whose moves go into an arena of the pool
+     * of its own (nbep_nblist_arena), so that slabs may change their own spheres' lists at
+     * once; room0: the lists' room when the arenas were handed out */
+    nbep_evloop *view;
+    size_t room0;
     void *const *wu;        /* borrowed, with slabs: each slab's world (nbep_evloop_set_worlds) */
     const uint64_t *const *wver;
     /* the call's */
     nbep_evloop *e;
     const nbep_evloop_ops *ops;
     void *u;
-    const uint64_t *ver0;   /* the run's response counts (e->ver outside the call) */
     nbep_evloop_stall *stall;
     bool stop;           /* no more events: stuck, a reaction's stop or a cascade too deep
                           * (t_stuck) */
@@ -209,14 +221,11 @@ static bool stop_stands(struct evl_sched *x, int slab)
     return d->stopped;
 }
 
-/* The engine set to act in slab's world: its response counts, and with slabs its own
- * spheres only predicted and entered. */
+/* Slab's side: its engine (d->e) acts in its world, and with slabs predicts and enters its
+ * own spheres only. */
 static inline evl_side *enter_slab(struct evl_sched *x, int slab)
 {
-    evl_side *d = &x->side[slab];
-    x->e->ver = d->ver;
-    x->e->own_slab = x->slabs > 1 ? slab : -1;
-    return d;
+    return &x->side[slab];
 }
 
 /* Where sphere i's row is in the ties' table; n_ties where it has none. */
@@ -260,7 +269,7 @@ static int slab_at(const struct evl_sched *x, size_t c, size_t columns, int dc)
 static bool expiry_local(const struct evl_sched *x, int slab, uint32_t i, double t)
 {
     int lo, hi;
-    nbep__evloop_expiry_span(x->e, x->ops, x->side[slab].u, i, t, &lo, &hi);
+    nbep__evloop_expiry_span(x->side[slab].e, x->ops, x->side[slab].u, i, t, &lo, &hi);
     size_t columns;
     const size_t c = column_of(x->e, i, &columns);
     if (hi - lo + 1 > (int)columns) /* (around the whole box: every slab's) */
@@ -277,7 +286,7 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
 {
     struct evl_sched *x = arg;
     evl_side *d = enter_slab(x, slab);
-    nbep_evloop *e = x->e;
+    nbep_evloop *e = d->e;
     d->blocked = d->past = false;
     if (stop_stands(x, slab) && !d->deep)
         return false;
@@ -321,7 +330,8 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
     /* an expiry reaching another slab's lists or cells waits for the meeting (sched_held),
      * and the window ends there for every slab (the limit) */
     if (x->slabs > 1 && t < x->window_end && ev->kind == NBEP_EVENT_HORIZON &&
-        !(x->has_limit && nbep_cascade_cmp(s, &x->limit) > 0) && !expiry_local(x, slab, i, t)) {
+        !(x->has_limit && nbep_cascade_cmp(s, &x->limit) > 0) &&
+        ((d->cramped && nbep_cascade_cmp(s, &d->held) == 0) || !expiry_local(x, slab, i, t))) {
         d->blocked = true;
         nbep_cascade_copy(&d->held, s);
         limit_to(x, s);
@@ -347,7 +357,7 @@ static bool sched_held(void *arg, int slab)
 static bool made_by(struct evl_sched *x, int slab, const nbep_stamp *by, uint32_t j, bool keep)
 {
     evl_side *d = &x->side[slab];
-    const nbep_event *slot = nbep_feq_slot(x->e->q, j);
+    const nbep_event *slot = nbep_feq_slot(d->e->q, j);
     if (slot->time != by->t) /* later: a root (j's older stamp, if any, no longer its entry's) */
         return true;
     const size_t k = tie_of(d, j);
@@ -384,9 +394,10 @@ static bool keep_sphere(struct evl_sched *x, int slab, uint32_t i)
     kept_sphere *k = nbep_warp_keep_room(x->warp, slab, i);
     if (!k)
         return false;
-    x->ops->save(x->side[slab].u, i, &k->m);
-    if (nbep__evloop_owned(x->e, i))
-        k->slot = *nbep_feq_slot(x->e->q, i);
+    const evl_side *d = &x->side[slab];
+    x->ops->save(d->u, i, &k->m);
+    if (nbep__evloop_owned(d->e, i))
+        k->slot = *nbep_feq_slot(d->e->q, i);
     return true;
 }
 
@@ -443,12 +454,13 @@ static bool send_copies(struct evl_sched *x, int slab, uint32_t i, int skip)
  * it (after the copies, so that the owner predicts it from the event's motion of the rest). */
 static bool send_changes(struct evl_sched *x, int slab, const evl_ws *w)
 {
+    const nbep_evloop *e = x->side[slab].e;
     for (size_t k = 0; k < w->n_changed; k++)
-        if (nbep__evloop_owned(x->e, w->changed[k]) && !send_copies(x, slab, w->changed[k], -1))
+        if (nbep__evloop_owned(e, w->changed[k]) && !send_copies(x, slab, w->changed[k], -1))
             return false;
     for (size_t k = 0; k < w->n_changed; k++) {
         const uint32_t j = w->changed[k];
-        if (nbep__evloop_owned(x->e, j))
+        if (nbep__evloop_owned(e, j))
             continue;
         slab_msg msg = {.kind = MSG_WRITE};
         x->ops->save(x->side[slab].u, j, &msg.m);
@@ -462,7 +474,7 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
 {
     struct evl_sched *x = arg;
     evl_side *d = enter_slab(x, slab);
-    nbep_evloop *e = x->e;
+    nbep_evloop *e = d->e;
     const uint32_t i = s->level[s->depth - 1].item; /* (the entry's: the path's last level) */
     const double t = s->t;
     const nbep_event ev = *nbep_feq_slot(e->q, i);
@@ -490,6 +502,19 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
     nbep__evloop_count_handled(&d->tally, w);
     if (w->stop) {
         stop_at(x, slab, s, t, false);
+        return;
+    }
+    /* An expiry whose commit may move lists past its slab's arena of the lists' pool (the
+     * bound of nblist.h: most never move one) is left undone, its slot put back (what else it
+     * did, its counts, the meeting's cut undoes: it is at the limit), and waits for the
+     * meeting, which has the pool to itself (meet: the arenas renewed). */
+    if (x->slabs > 1 && w->rebuilt && !w->oom &&
+        nbep_nblist_spare(&e->nl) < nbep_nblist_need(&e->nl, w->n_near, w->n_near)) {
+        nbep_feq_put(e->q, i, ev);
+        d->blocked = d->cramped = true;
+        d->cramps++;
+        nbep_cascade_copy(&d->held, s);
+        limit_to(x, s);
         return;
     }
     /* the stamps of the entries it made (as the commit sets them: the changed spheres', then
@@ -529,7 +554,7 @@ static void sched_apply(void *arg, int slab, int from, const nbep_stamp *s, uint
 {
     struct evl_sched *x = arg;
     evl_side *d = enter_slab(x, slab);
-    nbep_evloop *e = x->e;
+    nbep_evloop *e = d->e;
     slab_msg msg;
     memcpy(&msg, data, sizeof msg);
     nbep_cascade_copy(&d->last, s);
@@ -556,7 +581,7 @@ static void sched_restore(void *arg, int slab, uint32_t item, const void *state)
 {
     struct evl_sched *x = arg;
     evl_side *d = enter_slab(x, slab);
-    nbep_evloop *e = x->e;
+    nbep_evloop *e = d->e;
     NBEP_SCHED_RESTORE_HOOK(x, item);
     /* a rollback: the order's check goes on from the newest event that stands (sched_next asks
      * the log; a stop whose event was undone no longer stands there either: stop_stands) */
@@ -614,6 +639,7 @@ static void window_closed(struct evl_sched *x, bool cut)
     for (int k = 0; k < x->slabs; k++) {
         evl_side *d = &x->side[k];
         d->n_lists = d->n_ties_undo = 0;
+        d->cramped = false;
         if (!cut)
             d->n_ties = 0;
         if (x->ops->settle)
@@ -624,7 +650,86 @@ static void window_closed(struct evl_sched *x, bool cut)
 static const nbep_warp_ops SCHED_OPS = {sched_next, sched_handle, sched_apply, sched_restore,
                                         sched_held};
 
+/* ---- the slabs' views of the engine, and their arenas of the lists' pool ------------------ */
+
+/* The pool entries each slab's arena holds at least: a 16th of the pool among the slabs, and
+ * room for a few hundred moves of long lists (an expiry whose commit may move more than its
+ * slab's arena still holds waits for the meeting: sched_handle). A test's copy of this file
+ * may make them tiny, so that expiries wait so. */
+#define NBEP_SCHED_ARENA_DEFAULT(pool_len, slabs) (4096 + (pool_len) / (16 * (size_t)(slabs)))
+#ifndef NBEP_SCHED_ARENA
+#define NBEP_SCHED_ARENA NBEP_SCHED_ARENA_DEFAULT
+#endif
+
+static void views_free(struct evl_sched *x)
+{
+    if (!x->view)
+        return;
+    for (int k = 0; k < x->slabs; k++)
+        nbep__evloop_ws_fini(&x->view[k].ws[0][0]);
+    nbep_free_aligned(x->view);
+    x->view = NULL;
+}
+
+/* Each slab's view given an arena of the pool's spare, `extra` entries more than
+ * NBEP_SCHED_ARENA (one thread, no view in use). Without memory for the spare: none (every
+ * expiry that would move a list then waits for the meeting) and the engine failed. */
+static void arenas_give(struct evl_sched *x, size_t extra)
+{
+    nbep_nblist *l = &x->e->nl;
+    size_t a = NBEP_SCHED_ARENA(l->pool_len, x->slabs) + extra;
+    if (!nbep_nblist_make_spare(l, a * (size_t)x->slabs)) {
+        x->e->failed = true;
+        a = 0;
+    }
+    const size_t lo = l->pool_len;
+    for (int k = 0; k < x->slabs; k++)
+        nbep_nblist_arena(l, lo + (size_t)k * a, lo + (size_t)(k + 1) * a, &x->view[k].nl);
+    l->pool_len = lo + (size_t)x->slabs * a; /* (handed out) */
+    x->room0 = l->room;
+}
+
+/* What the views' lists changed of the pool's counts, added back (one thread, no view in
+ * use); what the last arena did not use given back, the rest of the arenas' spare given up
+ * (a later compaction takes it back). */
+static void arenas_back(struct evl_sched *x)
+{
+    nbep_nblist *l = &x->e->nl;
+    for (int k = 0; k < x->slabs; k++)
+        nbep_nblist_arena_back(l, &x->view[k].nl, x->room0);
+    l->pool_len = x->view[x->slabs - 1].nl.pool_len;
+    x->room0 = l->room;
+}
+
+/* With slabs, the call's start: each slab's view a copy of the run's engine but for its own
+ * workspace, world, slab and arena. */
+static void views_from_run(struct evl_sched *x)
+{
+    for (int k = 0; k < x->slabs; k++) {
+        nbep_evloop *v = &x->view[k];
+        evl_ws ws;
+        memcpy(&ws, &v->ws[0][0], sizeof ws);
+        memcpy(v, x->e, sizeof *v);
+        memcpy(&v->ws[0][0], &ws, sizeof ws);
+        v->own_slab = k;
+        v->ver = x->wver[k];
+        v->failed = false;
+        x->side[k].e = v;
+    }
+    arenas_give(x, 0);
+}
+
+/* Whether a view failed (out of memory), folded into the run's engine. */
+static bool views_failed(struct evl_sched *x)
+{
+    for (int k = 0; k < x->slabs && x->view; k++)
+        x->e->failed |= x->view[k].failed;
+    return x->e->failed;
+}
+
 /* ---- the engine's side -------------------------------------------------------------------- */
+
+static void views_free(struct evl_sched *x);
 
 nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d)
 {
@@ -638,11 +743,27 @@ nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d)
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory for the scheduled loop (NBEP_SCHEDULED)");
     }
     x->slabs = slabs;
+    bool views = true;
+    if (slabs > 1) {
+        x->view = nbep_alloc_aligned((size_t)slabs, sizeof *x->view);
+        if (x->view)
+            memset(x->view, 0, (size_t)slabs * sizeof *x->view);
+        for (int k = 0; k < slabs && x->view; k++)
+            views &= nbep__evloop_ws_init(&x->view[k].ws[0][0]);
+        views &= x->view != NULL;
+    }
+    if (!views) {
+        views_free(x);
+        free(x->side);
+        free(x);
+        NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory for the scheduled loop (NBEP_SCHEDULED)");
+    }
     /* (boxes of 1024 messages: a window sends far fewer on two slabs; a full box costs a
      * wait, not a failure) */
     const nbep_status st = nbep_warp_create(slabs, sizeof(kept_sphere), sizeof(slab_msg),
                                             slabs > 1 ? 1024 : 16, &SCHED_OPS, x, &x->warp, d);
     if (st != NBEP_OK) {
+        views_free(x);
         free(x->side);
         free(x);
         return st;
@@ -680,6 +801,7 @@ void nbep__evloop_sched_destroy(struct evl_sched **s)
         free(d->ties);
         free(d->ties_undo);
     }
+    views_free(x);
     free(x->side);
     free(x);
     *s = NULL;
@@ -700,7 +822,6 @@ static void worlds_from_run(struct evl_sched *x)
     for (int k = 0; k < x->slabs; k++) {
         evl_side *d = &x->side[k];
         d->u = x->wu[k];
-        d->ver = x->wver[k];
         ops->clear(d->u);
     }
     for (uint32_t i = 0; i < x->e->n; i++) {
@@ -806,7 +927,7 @@ static bool meet(struct evl_sched *x)
     if (slab < 0)
         return true;
     evl_side *d = enter_slab(x, slab);
-    nbep_evloop *e = x->e;
+    nbep_evloop *e = d->e;
     const uint32_t i = held.level[held.depth - 1].item;
     const nbep_event ev = *nbep_feq_slot(e->q, i);
     assert(ev.kind == NBEP_EVENT_HORIZON);
@@ -824,8 +945,18 @@ static bool meet(struct evl_sched *x)
     e->own_slab = -1; /* (its lists and cells are every slab's: one thread here) */
     nbep__evloop_handle(e, w, x->ops, d->u, i, &ev, held.t, true);
     nbep__evloop_count_handled(&d->tally, w);
+    /* (room for its commit in its slab's arena, where it held too little: the arenas given out
+     * again, with that much more) */
+    if (x->slabs > 1 && w->rebuilt && !w->oom) {
+        const size_t need = nbep_nblist_need(&e->nl, w->n_near, w->n_near);
+        if (nbep_nblist_spare(&e->nl) < need) {
+            arenas_back(x);
+            arenas_give(x, need);
+        }
+    }
     nbep__evloop_commit(e, w);
-    if (e->failed)
+    e->own_slab = x->slabs > 1 ? slab : -1;
+    if (views_failed(x))
         return true;
     copied_to_all(x, slab, i);
     /* Where it moved its sphere to another slab, its prediction read its new list's members
@@ -838,10 +969,10 @@ static bool meet(struct evl_sched *x)
         evl_side *o = enter_slab(x, owner);
         nbep_evloop_mark before;
         const bool marked = !x->ops->mark || x->ops->mark(o->u, &before);
-        nbep__evloop_predict_own(e, x->ops, o->u, i, held.t);
+        nbep__evloop_predict_own(o->e, x->ops, o->u, i, held.t);
         if (x->ops->back)
             x->ops->back(o->u, &before);
-        nbep__evloop_schedule_one(e, i);
+        nbep__evloop_schedule_one(o->e, i);
         if (!marked) {
             e->failed = true;
             return true;
@@ -861,15 +992,15 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
     x->e = e;
     x->ops = ops;
     x->u = u;
-    x->ver0 = e->ver;
     x->stall = stall;
     x->stop = x->too_deep = false;
     x->idle_windows = 0;
     if (x->slabs > 1) {
         worlds_from_run(x);
+        views_from_run(x);
     } else {
         x->side[0].u = u;
-        x->side[0].ver = e->ver;
+        x->side[0].e = e;
     }
     for (int k = 0; k < x->slabs; k++) { /* (each slab's stall check counts its own events) */
         x->side[k].stall = *stall;
@@ -887,7 +1018,7 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
     double width = 0.0;
     if (top_of_all(x, &c) && c.time < t_end)
         width = (t_end - c.time) / WINDOWS_A_STEP;
-    while (!x->stop && !e->failed && !nbep_warp_failed(x->warp) && top_of_all(x, &c) &&
+    while (!x->stop && !views_failed(x) && !nbep_warp_failed(x->warp) && top_of_all(x, &c) &&
            c.time < t_end) {
         const double end = c.time + width;
         x->window_end = end > c.time ? fmin(end, t_end) : t_end;
@@ -909,8 +1040,11 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
     }
     if (nbep_warp_failed(x->warp))
         e->failed = true;
-    if (x->slabs > 1)
+    if (x->slabs > 1) {
+        views_failed(x);
+        arenas_back(x);
         run_from_worlds(x);
+    }
     stall->since = x->side[0].stall.since; /* (the count carried to a call's next part) */
     stall->t_mark = x->side[0].stall.t_mark;
     stall->looks = x->side[0].stall.looks;
@@ -920,8 +1054,6 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
         tally->reactions += x->side[k].tally.reactions;
         tally->exits += x->side[k].tally.exits;
     }
-    e->ver = x->ver0;
-    e->own_slab = -1;
     if (x->stop)
         *t_stuck = x->t_stuck;
     return !x->stop && !e->failed;

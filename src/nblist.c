@@ -129,6 +129,8 @@ bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j)
          * pool stays within about 1.6 fresh layouts (5/4 of 5/4), and the O(n) count is paid
          * only when it fills. */
         if (l->pool_len + grown > l->pool_cap) {
+            if (l->arena) /* (a view moves within its piece alone: nblist.h) */
+                return false;
             size_t fresh = 0;
             for (size_t k = 0; k < l->n; k++)
                 fresh += nbep_nblist_room_for(l->sp[k].cnt);
@@ -193,6 +195,37 @@ void nbep_nblist_detach(nbep_nblist *l, uint32_t i)
     for (uint32_t k = 0; k < l->sp[i].cnt; k++)
         nbep_nblist_drop(l, mine[k], i);
     nbep_nblist_clear(l, i);
+}
+
+bool nbep_nblist_make_spare(nbep_nblist *l, size_t spare)
+{
+    assert(!l->arena);
+    if (l->pool_cap - l->pool_len >= spare)
+        return true;
+    size_t fresh = 0;
+    for (size_t k = 0; k < l->n; k++)
+        fresh += nbep_nblist_room_for(l->sp[k].cnt);
+    /* (as an append that fills the pool: compacted where it holds a quarter more than fresh) */
+    if (4u * l->pool_len > 5u * fresh && !compact(l, fresh, spare))
+        return false;
+    return l->pool_len + spare <= UINT32_MAX && reserve(l, l->pool_len + spare, 4u);
+}
+
+void nbep_nblist_arena(const nbep_nblist *l, size_t lo, size_t hi, nbep_nblist *a)
+{
+    assert(lo >= l->pool_len && lo <= hi && hi <= l->pool_cap);
+    *a = *l;
+    a->pool_len = lo;
+    a->pool_cap = hi;
+    a->arena = true;
+}
+
+void nbep_nblist_arena_back(nbep_nblist *l, const nbep_nblist *a, size_t room0)
+{
+    assert(a->pool == l->pool && a->sp == l->sp);
+    l->room += a->room - room0;
+    if (a->cap_max > l->cap_max)
+        l->cap_max = a->cap_max;
 }
 
 /* Is j in i's list? */

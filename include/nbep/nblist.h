@@ -160,6 +160,8 @@ typedef struct nbep_nblist {
     size_t pool_cap;
     size_t room;               /* sum of cap[]: the room in use */
     uint32_t cap_max;          /* no list has more room than this */
+    bool arena;                /* a view of one arena (nbep_nblist_arena): its moves go into
+                                * [pool_len, pool_cap) of the pool it shares, never past */
 } nbep_nblist;
 
 /* Empty lists for n spheres (n < UINT32_MAX). NBEP_ENOMEM with a message. */
@@ -245,6 +247,26 @@ static inline size_t nbep_nblist_need(const nbep_nblist *l, size_t m, size_t n_g
 {
     return n_gain * (size_t)nbep_nblist_grown(l->cap_max) + 5u * m + 8u;
 }
+/* Arenas, for threads that change disjoint spheres' lists at once (the scheduled loop's slabs
+ * on threads: evloop_warp.c): the pool's spare cut into pieces, one a thread, each reached
+ * through a view of the lists whose moves go into its piece alone. A view shares the pool and
+ * the spans (sp) with l and every other view; a thread changes only its own spheres' lists
+ * through its own view, and moves only within its piece: an append that would move a list
+ * past the piece fails (nothing changed) where the list proper would grow the pool, so a
+ * caller first asks nbep_nblist_need of the view's nbep_nblist_spare. One thread, while no
+ * view is in use: nbep_nblist_make_spare, nbep_nblist_arena, nbep_nblist_arena_back. */
+
+/* Makes the pool's spare at least `spare` entries, compacting or growing it (the lists' offsets
+ * may change; their contents and order do not). False without memory (nothing changed). */
+NBEP_MUST_CHECK bool nbep_nblist_make_spare(nbep_nblist *l, size_t spare);
+/* *a: a view of l whose moves go into pool entries [lo, hi) (within l's spare, past
+ * l->pool_len; the caller hands each view its own piece and then marks them all handed out,
+ * l->pool_len = the last hi). */
+void nbep_nblist_arena(const nbep_nblist *l, size_t lo, size_t hi, nbep_nblist *a);
+/* What view a changed of l's counts (its room's and cap_max, from `room0`, l's room when the
+ * view was made) added into l; the view is done with (its piece's spare given up). */
+void nbep_nblist_arena_back(nbep_nblist *l, const nbep_nblist *a, size_t room0);
+
 /* Invariant check for tests: every list within its room and the pool, no sphere listing
  * itself or a sphere twice, and symmetry. Returns the number of violations. */
 size_t nbep_nblist_check(const nbep_nblist *l);
