@@ -435,6 +435,7 @@ static nbep_status pred_create(nbep_sim *sim, void **out, nbep_diag *d)
                 st = nbep_evloop_set_scheduled(c->ev, d);
                 c->scheduled = st == NBEP_OK;
                 c->slabs = p.slabs;
+                c->slab_crew = p.slabs > 1 ? (p.nt < p.slabs ? p.nt : p.slabs) : 1;
             }
         }
         c->team = st == NBEP_OK && p.team;

@@ -1040,7 +1040,7 @@ bool nbep_evloop_run(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, double
     if (e->failed) /* a rebuild ran out of memory */
         return false;
     if (e->sched) /* NBEP_SCHEDULED: through the optimistic scheduler (evloop_warp.c) */
-        return nbep__evloop_run_scheduled(e, ops, u, t_end, stall, tally, t_stuck);
+        return nbep__evloop_run_scheduled(e, ops, u, 1, 0, t_end, stall, tally, t_stuck);
     evl_ws *w = &e->ws[0][0];
     if (e->slabcal) { /* the slabs' earliest entries merged: the one calendar's order */
         nbep_calendar_entry c;

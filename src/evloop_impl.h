@@ -206,8 +206,11 @@ void nbep__evloop_commit_undoable(nbep_evloop *e, const evl_ws *w, evl_unlist *r
 /* nbep_evloop_run through the optimistic scheduler, on one slab or, with slabs, on each
  * (evloop_warp.c) */
 bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void *u,
-                                double t_end, nbep_evloop_stall *stall,
+                                int crew, uint64_t call, double t_end, nbep_evloop_stall *stall,
                                 nbep_evloop_tally *tally, double *t_stuck);
+/* With slabs on crew threads (nbep_evloop_run_lead's): thread t's part of call `call` (as
+ * nbep_evloop_help's), its slabs run each window; returns when the lead's call does. */
+void nbep__evloop_sched_help(nbep_evloop *e, int t, uint64_t call);
 void nbep__evloop_sched_destroy(struct evl_sched **s);
 /* A workspace of one's own (zeroed before: its arrays made; false without memory, the part made
  * freed by fini), and its arrays freed. */
@@ -319,14 +322,17 @@ static inline NBEP_ALWAYS_INLINE void nbep__evloop_prefetch_event(const nbep_evl
     if (ev->kind == NBEP_EVENT_SPHERE) {
         NBEP_PREFETCH(&e->nl.sp[ev->partner]);
         NBEP_PREFETCH(&e->cells.m[ev->partner]);
-        if (e->slabcal) /* moved at the commit if it is fresh */
-            nbep_slabcal_prefetch(e->slabcal, ev->partner);
-        else
+        if (!e->slabcal) /* moved at the commit if it is fresh */
             nbep_calendar_prefetch(e->cal, ev->partner);
+        else if (e->own_slab < 0 || /* (another slab's entry is its own to read) */
+                 nbep_slabcal_slab(e->slabcal, ev->partner) == e->own_slab)
+            nbep_slabcal_prefetch(e->slabcal, ev->partner);
     }
     uint32_t next[2];
     int n_next;
-    if (e->slabcal)
+    if (e->slabcal && e->own_slab >= 0) /* (a slab's own loop: its calendar's alone) */
+        nbep_slabcal_runners_up_of(e->slabcal, e->own_slab, next, &n_next);
+    else if (e->slabcal)
         nbep_slabcal_runners_up(e->slabcal, next, &n_next);
     else
         nbep_calendar_runners_up(e->cal, next, NULL, &n_next);

@@ -617,6 +617,9 @@ bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, v
                           int crew, uint64_t call, double t_end, nbep_evloop_stall *stall,
                           nbep_evloop_tally *tally, double *t_stuck)
 {
+    if (e->sched) /* the scheduled loop's slabs on threads (evloop_warp.c) */
+        return !e->failed &&
+               nbep__evloop_run_scheduled(e, ops, u, crew, call, t_end, stall, tally, t_stuck);
     assert(crew >= 2 && crew <= e->team && call > 0);
     e->crew = crew;
     phase(PH_START);
@@ -636,6 +639,10 @@ bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, v
 void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
                       int t, uint64_t call)
 {
+    if (e->sched) {
+        nbep__evloop_sched_help(e, t, call);
+        return;
+    }
     assert(t >= 1 && t < e->team && call > 0);
     uint64_t avail_seen = 0;
     for (unsigned k = 1;; k++) {

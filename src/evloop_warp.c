@@ -14,6 +14,8 @@
 
 #include <assert.h>
 #include <math.h>
+#include <stdalign.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -175,22 +177,68 @@ struct evl_sched {
     unsigned idle_windows; /* windows in a row cut back to keep nothing (meet) */
     double window_end;   /* the window's: a slab's entry held at or past it waits for a later
                           * window */
-    /* the earliest entry held in this window (has_limit): no slab handles an event at or past
-     * it, as the meeting would cut the window back to it anyway (meet) */
-    bool has_limit;
+    /* threads (nbep_evloop_run_lead on slabs): crew of them, thread t running slabs t,
+     * t + crew, ... in turns; the lead (thread 0) opens each window and publishes it in `go`
+     * (call << 32 | the window's number, from 1; GO_QUIT at the call's end), every thread runs
+     * its slabs till the window's work is done (the scheduler's meeting: nbep_warp_run), the
+     * helpers count themselves in `arrived`, and the lead then meets on its own */
+    int crew;
+    uint64_t call;
+    alignas(NBEP_CACHELINE) _Atomic uint64_t go;
+    alignas(NBEP_CACHELINE) _Atomic int arrived;
+    /* the earliest entry held in this window: no slab handles an event at or past it, as the
+     * meeting would cut the window back to it anyway (meet). Lowered by any slab's thread
+     * under the lock, its time also in limit_t (+inf: none), which a slab reads first, taking
+     * the lock only on a tie of times (at_limit); read freely at the meeting */
+    alignas(NBEP_CACHELINE) atomic_flag lock;
+    _Atomic double limit_t;
     nbep_stamp limit;
 };
 
 /* ---- the model's side (warp.h) ------------------------------------------------------------ */
 
+static void lock_limit(struct evl_sched *x)
+{
+    for (unsigned k = 1; atomic_flag_test_and_set_explicit(&x->lock, memory_order_acquire); k++)
+        nbep_spin_pause(k);
+}
+
+static void unlock_limit(struct evl_sched *x)
+{
+    atomic_flag_clear_explicit(&x->lock, memory_order_release);
+}
+
+/* Whether the window has a limit (at the meeting, or on the lead between windows) */
+static bool has_limit(const struct evl_sched *x)
+{
+    return atomic_load_explicit(&x->limit_t, memory_order_relaxed) < INFINITY;
+}
+
 /* The window's limit lowered to stamp s where it is earlier (or set): no slab handles an event
- * at or past it. */
+ * at or past it. Any slab's thread. */
 static void limit_to(struct evl_sched *x, const nbep_stamp *s)
 {
-    if (!x->has_limit || nbep_cascade_cmp(s, &x->limit) < 0) {
-        x->has_limit = true;
+    lock_limit(x);
+    if (!has_limit(x) || nbep_cascade_cmp(s, &x->limit) < 0) {
         nbep_cascade_copy(&x->limit, s);
+        atomic_store_explicit(&x->limit_t, s->t, memory_order_relaxed);
     }
+    unlock_limit(x);
+}
+
+/* Whether stamp s is at or past the window's limit (past: after it). Any slab's thread: a
+ * limit lowered meanwhile by another may be missed, which only lets this slab run on further,
+ * to be cut back at the meeting (the limit only comes down in a window, so a slab that finds
+ * itself at it is so). The stamp is read under the lock only where the times tie. */
+static bool at_limit(struct evl_sched *x, const nbep_stamp *s, bool past)
+{
+    const double lt = atomic_load_explicit(&x->limit_t, memory_order_relaxed);
+    if (s->t != lt || lt == INFINITY)
+        return s->t > lt;
+    lock_limit(x);
+    const int c = nbep_cascade_cmp(s, &x->limit);
+    unlock_limit(x);
+    return past ? c > 0 : c >= 0;
 }
 
 /* No more events after slab's event stamped *s (at t; deep: a cascade too deep for its
@@ -330,13 +378,13 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
     /* an expiry reaching another slab's lists or cells waits for the meeting (sched_held),
      * and the window ends there for every slab (the limit) */
     if (x->slabs > 1 && t < x->window_end && ev->kind == NBEP_EVENT_HORIZON &&
-        !(x->has_limit && nbep_cascade_cmp(s, &x->limit) > 0) &&
+        !at_limit(x, s, true) &&
         ((d->cramped && nbep_cascade_cmp(s, &d->held) == 0) || !expiry_local(x, slab, i, t))) {
         d->blocked = true;
         nbep_cascade_copy(&d->held, s);
         limit_to(x, s);
     }
-    d->past = x->has_limit && nbep_cascade_cmp(s, &x->limit) >= 0;
+    d->past = at_limit(x, s, false);
     return true;
 }
 
@@ -734,12 +782,19 @@ static void views_free(struct evl_sched *x);
 nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d)
 {
     assert(!e->sched && e->team == 1 && e->n <= UINT32_MAX - KEPT_COUNTS);
-    struct evl_sched *x = calloc(1, sizeof *x);
+    struct evl_sched *x = nbep_alloc_aligned(1, sizeof *x);
+    if (x) {
+        memset(x, 0, sizeof *x);
+        atomic_init(&x->go, 0);
+        atomic_init(&x->arrived, 0);
+        atomic_flag_clear(&x->lock);
+        atomic_init(&x->limit_t, INFINITY);
+    }
     const int slabs = e->slabcal ? nbep_slabcal_slabs(e->slabcal) : 1;
     if (x)
         x->side = calloc((size_t)slabs, sizeof *x->side);
     if (!x || !x->side) {
-        free(x);
+        nbep_free_aligned(x);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory for the scheduled loop (NBEP_SCHEDULED)");
     }
     x->slabs = slabs;
@@ -755,7 +810,7 @@ nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d)
     if (!views) {
         views_free(x);
         free(x->side);
-        free(x);
+        nbep_free_aligned(x);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory for the scheduled loop (NBEP_SCHEDULED)");
     }
     /* (boxes of 1024 messages: a window sends far fewer on two slabs; a full box costs a
@@ -765,7 +820,7 @@ nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d)
     if (st != NBEP_OK) {
         views_free(x);
         free(x->side);
-        free(x);
+        nbep_free_aligned(x);
         return st;
     }
     e->sched = x;
@@ -803,7 +858,7 @@ void nbep__evloop_sched_destroy(struct evl_sched **s)
     }
     views_free(x);
     free(x->side);
-    free(x);
+    nbep_free_aligned(x);
     *s = NULL;
 }
 
@@ -900,7 +955,7 @@ static bool meet(struct evl_sched *x)
             return true;
         }
     }
-    if (!x->has_limit)
+    if (!has_limit(x))
         return false;
     nbep_stamp held;
     nbep_cascade_copy(&held, &x->limit);
@@ -984,11 +1039,55 @@ static bool meet(struct evl_sched *x)
     return true;
 }
 
+/* `go`'s word: the call's (its low 32 bits) and the window's number, or GO_QUIT */
+#define GO_QUIT UINT32_MAX
+static uint64_t go_word(uint64_t call, uint32_t window)
+{
+    return (call & UINT32_MAX) << 32 | window;
+}
+
+/* Thread t's slabs, in turns, till the window's work is done (every slab's, all mail). */
+static void run_slabs_of(struct evl_sched *x, int t)
+{
+    for (bool done = false; !done;) {
+        done = true;
+        /* (on one slab its run ends with the window's work; on more, each runs a turn in turn) */
+        for (int k = t; k < x->slabs; k += x->crew)
+            done &= nbep_warp_run(x->warp, k,
+                                  x->slabs > 1 ? NBEP_SCHED_SLAB_TURN(k) : NBEP_SCHED_TURN);
+        if (!done)
+            NBEP_SCHED_TURN_HOOK(x);
+    }
+}
+
+void nbep__evloop_sched_help(nbep_evloop *e, int t, uint64_t call)
+{
+    struct evl_sched *x = e->sched;
+    uint32_t seen = 0;
+    for (;;) {
+        uint64_t g;
+        for (unsigned k = 1; ((g = atomic_load_explicit(&x->go, memory_order_acquire)) >> 32) !=
+                                 (call & UINT32_MAX) ||
+                             (uint32_t)g == seen;
+             k++)
+            nbep_spin_pause(k);
+        if ((uint32_t)g == GO_QUIT)
+            return;
+        seen = (uint32_t)g;
+        if (t < x->crew) /* (a thread past the call's crew has no slab: nbep_evloop_run_lead) */
+            run_slabs_of(x, t);
+        atomic_fetch_add_explicit(&x->arrived, 1, memory_order_release);
+    }
+}
+
 bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void *u,
-                                double t_end, nbep_evloop_stall *stall,
+                                int crew, uint64_t call, double t_end, nbep_evloop_stall *stall,
                                 nbep_evloop_tally *tally, double *t_stuck)
 {
     struct evl_sched *x = e->sched;
+    assert(crew >= 1 && (crew == 1 || x->slabs > 1));
+    x->crew = crew < x->slabs ? crew : x->slabs;
+    x->call = call;
     x->e = e;
     x->ops = ops;
     x->u = u;
@@ -1004,6 +1103,8 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
     }
     for (int k = 0; k < x->slabs; k++) { /* (each slab's stall check counts its own events) */
         x->side[k].stall = *stall;
+        if (k % x->crew != 0) /* (the progress is the lead's to tell) */
+            x->side[k].stall.on_look = NULL;
         x->side[k].tally = (nbep_evloop_tally){0};
         x->side[k].has_last = x->side[k].blocked = x->side[k].stopped = false;
     }
@@ -1018,26 +1119,28 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
     double width = 0.0;
     if (top_of_all(x, &c) && c.time < t_end)
         width = (t_end - c.time) / WINDOWS_A_STEP;
+    uint32_t window = 0;
     while (!x->stop && !views_failed(x) && !nbep_warp_failed(x->warp) && top_of_all(x, &c) &&
            c.time < t_end) {
         const double end = c.time + width;
         x->window_end = end > c.time ? fmin(end, t_end) : t_end;
-        x->has_limit = false;
+        atomic_store_explicit(&x->limit_t, INFINITY, memory_order_relaxed);
         nbep_warp_open(x->warp, x->window_end);
         NBEP_SCHED_OPEN_HOOK(x);
-        for (bool done = false; !done;) { /* the slabs in turns */
-            done = true;
-            /* (on one slab its run ends with the window's work; on more, each runs a turn in
-             * turn) */
-            for (int k = 0; k < x->slabs; k++)
-                done &= nbep_warp_run(x->warp, k,
-                                      x->slabs > 1 ? NBEP_SCHED_SLAB_TURN(k) : NBEP_SCHED_TURN);
-            if (!done)
-                NBEP_SCHED_TURN_HOOK(x);
+        if (x->crew > 1) { /* (what the lead wrote above published with the window) */
+            atomic_store_explicit(&x->arrived, 0, memory_order_relaxed);
+            atomic_store_explicit(&x->go, go_word(call, ++window), memory_order_release);
         }
+        run_slabs_of(x, 0);
+        for (unsigned k = 1; x->crew > 1 && atomic_load_explicit(&x->arrived, memory_order_acquire) <
+                                                x->crew - 1;
+             k++)
+            nbep_spin_pause(k);
         if (!nbep_warp_failed(x->warp) && !meet(x))
             window_closed(x, false);
     }
+    if (x->crew > 1) /* (the helpers return) */
+        atomic_store_explicit(&x->go, go_word(call, GO_QUIT), memory_order_release);
     if (nbep_warp_failed(x->warp))
         e->failed = true;
     if (x->slabs > 1) {

@@ -538,8 +538,9 @@ static const nbep_evloop_ops cells_ops_free = CELLS_OPS(cells_pairs_free);
 /* The scheduled loop's world of one slab (NBEP_SCHEDULED on NBEP_SLABS: evloop.h,
  * nbep_evloop_set_worlds): the context's structs copied at each call, their motion arrays (as
  * cells_save keeps them) the world's own, its counts and sums apart (merged into thread 0's at
- * the call's end, exactly), its sums' journal its own. The thread's workspace is shared: the
- * slabs take turns on thread 0, and a reaction writes its scratch arrays before it reads them. */
+ * the call's end, exactly), its sums' journal its own. Its scratch is the workspace of the
+ * thread that runs it (slab k on thread k % slab_crew), shared by that thread's slabs, which
+ * take turns there: a reaction writes its scratch arrays before it reads them. */
 typedef struct cells_world {
     pred_ctx c;
     nbep_state s;
@@ -581,7 +582,7 @@ void nbep__pred_cells_worlds_free(pred_ctx *c)
 
 /* Thread 0, before a scheduled call on slabs: the worlds (made at the first) set to the call's
  * context u and given to the engine. False without memory (the worlds then freed). */
-static bool cells_worlds(pred_ctx *c, const cells_user *u, int slabs)
+static bool cells_worlds(pred_ctx *c, const cells_user *u, int slabs, int crew)
 {
     const size_t n = u->s->n, np = u->s->n_planes;
     if (!c->worlds) {
@@ -619,7 +620,7 @@ static bool cells_worlds(pred_ctx *c, const cells_user *u, int slabs)
         cells_world *a = &c->worlds[k];
         memcpy(&a->c, c, sizeof a->c);
         a->s = *u->s;
-        a->w = *u->w;
+        a->w = c->ws[k % crew]; /* (its scratch is its thread's) */
         a->s.pos = a->pos;
         a->s.vel = a->vel;
         a->s.image = a->image;
@@ -653,7 +654,8 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
                        const nbep_evloop_ops *ops, int way, bool probe, uint64_t call,
                        double t_end, nbep_evloop_stall *stall, uint64_t step, bool *failed)
 {
-    const int crew = c->ways.crew[way];
+    /* (the scheduled loop's slabs run on threads of their own count) */
+    const int crew = c->scheduled && c->slabs > 1 ? c->slab_crew : c->ways.crew[way];
     if (tid >= 1 && tid < crew)
         nbep_evloop_help(c->ev, ops, u, us, tid, call);
     if (tid != 0)
@@ -664,7 +666,7 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
     const double t_loop = nbep_now();
     /* the scheduled loop's sums record their terms while it runs (a rollback takes them out) */
     u->mx->jr = c->scheduled ? &c->jr : NULL;
-    if (c->scheduled && c->slabs > 1 && !cells_worlds(c, u, c->slabs)) {
+    if (c->scheduled && c->slabs > 1 && !cells_worlds(c, u, c->slabs, crew)) {
         nbep_diag_add(sim->diag, __FILE__, __LINE__,
                       "nbep: step %llu: no memory for the scheduled loop's worlds on slabs "
                       "(NBEP_SCHEDULED, a setting for measuring: run without it); stopping",

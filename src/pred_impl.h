@@ -331,6 +331,10 @@ typedef struct pred_ctx {
     nbep_sum_journal jr;          /* when scheduled: thread 0's sums' terms (its mx->jr while
                                    * the loop runs) */
     int slabs;                    /* when scheduled: its slabs (NBEP_SLABS; 1: one) */
+    int slab_crew;                /* when scheduled on slabs: the threads that run them, the
+                                   * run's and at most one a slab (thread t runs slabs t,
+                                   * t + slab_crew, ...; slab k's world takes thread
+                                   * k % slab_crew's workspace); else 1 */
     struct cells_world *worlds;   /* owned, scheduled on slabs: each slab's world (pred_cells.c),
                                    * made at the first call, and what the engine borrows of
                                    * them (owned): their contexts and response counts */

@@ -1,6 +1,9 @@
 /* Per-slab event calendars merged on one thread: see slabcal.h. */
+#include <stdalign.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "nbep/compiler.h"
 
 #include "nbep/slabcal.h"
 #include "nbep/status.h"
@@ -18,12 +21,19 @@ _Static_assert(NBEP_SLABCAL_MAX < SLAB_NONE, "a slab number fits a byte beside S
 
 _Static_assert(NBEP_CALENDAR_MAX < FREE, "an item never has the free bit");
 
+/* A slab's own, on cache lines of its own (the scheduled loop's slabs on threads each change
+ * their own slab's alone: evloop_warp.c) */
 typedef struct one_slab {
-    nbep_calendar *cal; /* owned: entries by local number, ties by glob (the items' order) */
+    alignas(NBEP_CACHELINE) nbep_calendar *cal; /* owned: entries by local number, ties by glob
+                                                 * (the items' order) */
     uint32_t *glob;     /* owned, cap: each local number's item, or FREE | the next free */
     uint32_t cap;       /* local numbers the calendar and glob have room for */
     uint32_t hi;        /* local numbers handed out (below it: held or free) */
     uint32_t free;      /* the first free local number below hi, or LOCAL_NIL */
+    /* its earliest entry as last read, by item (kept.item == NONE_ITEM: empty), and whether
+     * its calendar changed since (then it is read again) */
+    nbep_calendar_entry kept;
+    bool stale;
 } one_slab;
 
 struct nbep_slabcal {
@@ -36,10 +46,6 @@ struct nbep_slabcal {
         uint32_t loc;
         uint8_t slab;
     } *at;
-    /* each slab's earliest entry as last read, by item (kept[s].item == NONE_ITEM: empty), and
-     * whether its calendar changed since (then it is read again) */
-    nbep_calendar_entry kept[NBEP_SLABCAL_MAX];
-    bool stale[NBEP_SLABCAL_MAX];
     int best, second; /* the last first's slab, and the slab of the next kept entry (-1) */
 };
 
@@ -70,7 +76,7 @@ static bool slab_make(one_slab *k, uint32_t cap)
         return false;
     }
     nbep_calendar_set_tie(cal, glob);
-    *k = (one_slab){cal, glob, cap, 0, LOCAL_NIL};
+    *k = (one_slab){.cal = cal, .glob = glob, .cap = cap, .hi = 0, .free = LOCAL_NIL};
     return true;
 }
 
@@ -94,6 +100,8 @@ static bool slab_grow(nbep_slabcal *s, one_slab *k)
     g.free = k->free;
     if (any) /* from its earliest: a speed setting */
         nbep_calendar_retune(g.cal, first.time);
+    g.kept = k->kept; /* (its earliest, as kept, and whether to read it again) */
+    g.stale = k->stale;
     nbep_calendar_destroy(&k->cal);
     free(k->glob);
     *k = g;
@@ -131,15 +139,16 @@ nbep_status nbep_slabcal_create(size_t n, int slabs, nbep_slabcal **out, nbep_di
                   "nbep: per-slab calendars hold at most %zu items (their links are 32-bit), "
                   "not %zu",
                   NBEP_CALENDAR_MAX, n);
-    nbep_slabcal *s = calloc(1, sizeof *s);
+    nbep_slabcal *s = nbep_alloc_aligned(1, sizeof *s);
     bool made = s != NULL;
     if (made) {
+        memset(s, 0, sizeof *s);
         s->slabs = slabs;
         s->n = n;
         s->best = s->second = -1;
         for (int k = 0; k < slabs && made; k++) {
             made = slab_make(&s->sl[k], first_cap(n, slabs));
-            s->stale[k] = true;
+            s->sl[k].stale = true;
         }
         s->at = made ? malloc((n ? n : 1) * sizeof *s->at) : NULL;
         made = s->at != NULL;
@@ -163,7 +172,7 @@ void nbep_slabcal_destroy(nbep_slabcal **s)
         free((*s)->sl[k].glob);
     }
     free((*s)->at);
-    free(*s);
+    nbep_free_aligned(*s);
     *s = NULL;
 }
 
@@ -171,7 +180,7 @@ bool nbep_slabcal_set(nbep_slabcal *s, int slab, uint32_t item, double time, uin
 {
     const int was = s->at[item].slab;
     one_slab *k = &s->sl[slab];
-    s->stale[slab] = true;
+    s->sl[slab].stale = true;
     if (was == slab) {
         nbep_calendar_set(k->cal, s->at[item].loc, time, key);
         return true;
@@ -182,7 +191,7 @@ bool nbep_slabcal_set(nbep_slabcal *s, int slab, uint32_t item, double time, uin
     if (was != SLAB_NONE) {
         nbep_calendar_remove(s->sl[was].cal, s->at[item].loc);
         local_give_back(&s->sl[was], s->at[item].loc);
-        s->stale[was] = true;
+        s->sl[was].stale = true;
     }
     nbep_calendar_set(k->cal, l, time, key);
     s->at[item].slab = (uint8_t)slab;
@@ -198,7 +207,7 @@ void nbep_slabcal_remove(nbep_slabcal *s, uint32_t item)
     nbep_calendar_remove(s->sl[was].cal, s->at[item].loc);
     local_give_back(&s->sl[was], s->at[item].loc);
     s->at[item].slab = SLAB_NONE;
-    s->stale[was] = true;
+    s->sl[was].stale = true;
 }
 
 void nbep_slabcal_clear(nbep_slabcal *s)
@@ -207,7 +216,7 @@ void nbep_slabcal_clear(nbep_slabcal *s)
         nbep_calendar_clear(s->sl[k].cal);
         s->sl[k].hi = 0;
         s->sl[k].free = LOCAL_NIL;
-        s->stale[k] = true;
+        s->sl[k].stale = true;
     }
     for (size_t i = 0; i < s->n; i++)
         s->at[i].slab = SLAB_NONE;
@@ -222,19 +231,19 @@ void nbep_slabcal_retune(nbep_slabcal *s, double t_now)
 /* Slab k's kept earliest entry read again if its calendar changed since. */
 static inline void refresh(nbep_slabcal *s, int k)
 {
-    if (!s->stale[k])
+    if (!s->sl[k].stale)
         return;
-    if (!nbep_calendar_first(s->sl[k].cal, &s->kept[k]))
-        s->kept[k].item = NONE_ITEM;
+    if (!nbep_calendar_first(s->sl[k].cal, &s->sl[k].kept))
+        s->sl[k].kept.item = NONE_ITEM;
     else /* (by item: the merge compares items, as the one calendar does) */
-        s->kept[k].item = s->sl[k].glob[s->kept[k].item];
-    s->stale[k] = false;
+        s->sl[k].kept.item = s->sl[k].glob[s->sl[k].kept.item];
+    s->sl[k].stale = false;
 }
 
 bool nbep_slabcal_top(nbep_slabcal *s, int slab, nbep_calendar_entry *entry)
 {
     refresh(s, slab);
-    *entry = s->kept[slab];
+    *entry = s->sl[slab].kept;
     return entry->item != NONE_ITEM;
 }
 
@@ -243,12 +252,12 @@ bool nbep_slabcal_first(nbep_slabcal *s, nbep_calendar_entry *entry)
     int best = -1, second = -1;
     for (int k = 0; k < s->slabs; k++) {
         refresh(s, k);
-        if (s->kept[k].item == NONE_ITEM)
+        if (s->sl[k].kept.item == NONE_ITEM)
             continue;
-        if (best < 0 || nbep_calendar_before(s->kept[k], s->kept[best])) {
+        if (best < 0 || nbep_calendar_before(s->sl[k].kept, s->sl[best].kept)) {
             second = best;
             best = k;
-        } else if (second < 0 || nbep_calendar_before(s->kept[k], s->kept[second])) {
+        } else if (second < 0 || nbep_calendar_before(s->sl[k].kept, s->sl[second].kept)) {
             second = k;
         }
     }
@@ -256,7 +265,7 @@ bool nbep_slabcal_first(nbep_slabcal *s, nbep_calendar_entry *entry)
     s->second = second;
     if (best < 0)
         return false;
-    *entry = s->kept[best];
+    *entry = s->sl[best].kept;
     return true;
 }
 
@@ -272,9 +281,18 @@ void nbep_slabcal_runners_up(const nbep_slabcal *s, uint32_t items[2], int *n)
     if (m > 0)
         items[(*n)++] = k->glob[up[0]];
     if (s->second >= 0) /* (first keeps only non-empty slabs' as best and second) */
-        items[(*n)++] = s->kept[s->second].item;
+        items[(*n)++] = s->sl[s->second].kept.item;
     else if (m > 1)
         items[(*n)++] = k->glob[up[1]];
+}
+
+void nbep_slabcal_runners_up_of(const nbep_slabcal *s, int slab, uint32_t items[2], int *n)
+{
+    const one_slab *k = &s->sl[slab];
+    uint32_t up[2];
+    nbep_calendar_runners_up(k->cal, up, NULL, n);
+    for (int m = 0; m < *n; m++)
+        items[m] = k->glob[up[m]];
 }
 
 void nbep_slabcal_prefetch(const nbep_slabcal *s, uint32_t item)
@@ -339,10 +357,10 @@ size_t nbep_slabcal_check(nbep_slabcal *s)
         bad += held[k] != nbep_calendar_size(sl->cal);
         nbep_calendar_entry c;
         const bool any = nbep_calendar_first(sl->cal, &c);
-        if (!s->stale[k]) /* a kept entry is the slab's earliest */
-            bad += any ? s->kept[k].item != sl->glob[c.item] || s->kept[k].time != c.time ||
-                             s->kept[k].key != c.key
-                       : s->kept[k].item != NONE_ITEM;
+        if (!s->sl[k].stale) /* a kept entry is the slab's earliest */
+            bad += any ? s->sl[k].kept.item != sl->glob[c.item] || s->sl[k].kept.time != c.time ||
+                             s->sl[k].kept.key != c.key
+                       : s->sl[k].kept.item != NONE_ITEM;
     }
     return bad;
 }

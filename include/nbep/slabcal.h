@@ -72,6 +72,9 @@ bool nbep_slabcal_top(nbep_slabcal *s, int slab, nbep_calendar_entry *entry);
  * slab's current bucket, nbep_calendar_runners_up, and the next slab's earliest as kept then),
  * for a caller that wants to fetch their data ahead; *n of them. No effect on the order. */
 void nbep_slabcal_runners_up(const nbep_slabcal *s, uint32_t items[2], int *n);
+/* The same for slab's own calendar alone (up to two of its items likely to come out after its
+ * earliest): for a slab's own loop, which reads no other slab's. */
+void nbep_slabcal_runners_up_of(const nbep_slabcal *s, int slab, uint32_t items[2], int *n);
 /* Requests item's entry, to be set or removed soon (no effect on the order). */
 void nbep_slabcal_prefetch(const nbep_slabcal *s, uint32_t item);
 /* The slab holding item's entry, or -1 when it has none. */
