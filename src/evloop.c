@@ -942,7 +942,8 @@ void nbep__evloop_handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, 
         NBEP_EVLOOP_HANDLED_HOOK(e, w, ev);
         return;
     }
-    if (ev->kind == NBEP_EVENT_SPHERE) /* read if the event is fresh */
+    /* read if the event is fresh (another slab's sphere's list is its own to read) */
+    if (ev->kind == NBEP_EVENT_SPHERE && owned(e, ev->partner))
         prefetch_list(e, ev->partner);
     if (ops->fresh(u, i, ev)) {
         w->reacted = true;

@@ -538,9 +538,10 @@ static const nbep_evloop_ops cells_ops_free = CELLS_OPS(cells_pairs_free);
 /* The scheduled loop's world of one slab (NBEP_SCHEDULED on NBEP_SLABS: evloop.h,
  * nbep_evloop_set_worlds): the context's structs copied at each call, their motion arrays (as
  * cells_save keeps them) the world's own, its counts and sums apart (merged into thread 0's at
- * the call's end, exactly), its sums' journal its own. Its scratch is the workspace of the
- * thread that runs it (slab k on thread k % slab_crew), shared by that thread's slabs, which
- * take turns there: a reaction writes its scratch arrays before it reads them. */
+ * the call's end, exactly), its sums' journal its own. Its workspace is a copy of thread 0's
+ * but for its scratch (the reactions' list of changed spheres, the quartic's workspace), which
+ * is the thread's that runs it (slab k on thread k % slab_crew), shared by that thread's slabs,
+ * which take turns there: a reaction writes its scratch arrays before it reads them. */
 typedef struct cells_world {
     pred_ctx c;
     nbep_state s;
@@ -620,7 +621,12 @@ static bool cells_worlds(pred_ctx *c, const cells_user *u, int slabs, int crew)
         cells_world *a = &c->worlds[k];
         memcpy(&a->c, c, sizeof a->c);
         a->s = *u->s;
-        a->w = c->ws[k % crew]; /* (its scratch is its thread's) */
+        /* thread 0's step (jam_step), with the scratch of the thread that runs it (a helper's
+         * own fields are its own to write meanwhile: it set its jam_step at its step's start,
+         * which thread 0 may have passed first) */
+        a->w = *u->w;
+        a->w.fired = c->ws[k % crew].fired;
+        a->w.pws = c->ws[k % crew].pws;
         a->s.pos = a->pos;
         a->s.vel = a->vel;
         a->s.image = a->image;

@@ -17,17 +17,17 @@ typedef struct {
     size_t n[2];     /* their values */
 } nbep_run_kept;
 
-/* sc on one thread into a temporary file named `name`, with its stats and one frame, the last
+/* sc on nt threads into a temporary file named `name`, with its stats and one frame, the last
  * (each frame's checkpoint starts the lists afresh, and a frame a step would leave a short
  * step no list to expire): *r, and the final state into *fin */
-static inline void nbep_test_run_kept(nbep_scene *sc, const char *name, nbep_run_kept *r,
-                                      nbep_state *fin)
+static inline void nbep_test_run_kept(nbep_scene *sc, const char *name, int nt,
+                                      nbep_run_kept *r, nbep_state *fin)
 {
     sc->out_stats = true;
     sc->output_every = sc->steps;
     char path[256];
     nbep_test_tmp(name, path, sizeof path);
-    r->s = nbep_test_run_to(sc, 1, NULL, NULL, path, fin, r->counts);
+    r->s = nbep_test_run_to(sc, nt, NULL, NULL, path, fin, r->counts);
     r->sums[0] = nbep_test_h5_doubles(path, "/stats/virial", &r->n[0]);
     r->sums[1] = nbep_test_h5_doubles(path, "/stats/wall_impulse", &r->n[1]);
     remove(path);

@@ -152,13 +152,13 @@ static nbep_summary rolled_back_the_same(nbep_scene *sc)
 {
     nbep_state plain, sched;
     nbep_run_kept r0, r1;
-    nbep_test_run_kept(sc, "sched_rollback.h5", &r0, &plain);
+    nbep_test_run_kept(sc, "sched_rollback.h5", 1, &r0, &plain);
     assert_int_equal(setenv("NBEP_SCHEDULED", "1", 1), 0);
     counts_reset();
     rolling = false;
     stood.n = 0;
     nbep_run_kept rr;
-    nbep_test_run_kept(sc, "sched_rollback.h5", &rr, &sched);
+    nbep_test_run_kept(sc, "sched_rollback.h5", 1, &rr, &sched);
     free(rr.sums[0]);
     free(rr.sums[1]);
     nbep_state_fini(&sched);
@@ -167,7 +167,7 @@ static nbep_summary rolled_back_the_same(nbep_scene *sc)
     stood = (stamps){0};
     counts_reset();
     rolling = true;
-    nbep_test_run_kept(sc, "sched_rollback.h5", &r1, &sched);
+    nbep_test_run_kept(sc, "sched_rollback.h5", 1, &r1, &sched);
     assert_int_equal(unsetenv("NBEP_SCHEDULED"), 0);
     assert_true(r0.s.sphere_collisions > 0);
     /* each event undone is handled again, and counted once: its counts put back (a

@@ -42,11 +42,11 @@ static bool cramp; /* the slabs' arenas of the lists' pool empty (the meetings g
 #include "nbep_test_kept.h"
 #include "nbep_test_scene.h"
 
-/* the turns' draws (a linear congruential generator: the same turns in every run of the test),
- * the slab held back (-1: none) */
-static uint64_t draw = 1;
-static int held_back = -1;
-static uint64_t turns;
+/* the turns' draws (a linear congruential generator: the same turns in every run of the test
+ * on one thread; each thread its own), the slab held back (-1: none) */
+static _Thread_local uint64_t draw = 1;
+static _Thread_local int held_back = -1;
+static _Thread_local uint64_t turns;
 
 static size_t slab_turn(int slab)
 {
@@ -70,14 +70,15 @@ static void on_destroy(const struct evl_sched *x)
     meetings += x->meetings;
 }
 
-/* sc on one thread without the scheduler, then through it on each of `slabs`: the same end,
- * with messages, rollbacks, cancels and meetings in every run on slabs */
-static nbep_summary slabs_the_same(nbep_scene *sc, const int *slabs, size_t n_slabs,
+/* sc on one thread without the scheduler, then through it on each of `slabs` on nt threads
+ * (thread t running slabs t, t + nt, ...): the same end, with messages, rollbacks, cancels and
+ * meetings in every run on slabs */
+static nbep_summary slabs_the_same(nbep_scene *sc, const int *slabs, size_t n_slabs, int nt,
                                    const char *name)
 {
     nbep_state plain;
     nbep_run_kept r0;
-    nbep_test_run_kept(sc, "sched_slabs.h5", &r0, &plain);
+    nbep_test_run_kept(sc, "sched_slabs.h5", 1, &r0, &plain);
     assert_true(r0.s.sphere_collisions > 1000);
     assert_int_equal(setenv("NBEP_SCHEDULED", "1", 1), 0);
     for (size_t q = 0; q < n_slabs; q++) {
@@ -88,12 +89,12 @@ static nbep_summary slabs_the_same(nbep_scene *sc, const int *slabs, size_t n_sl
         meetings = cramps = 0;
         nbep_state sched;
         nbep_run_kept r1;
-        nbep_test_run_kept(sc, "sched_slabs.h5", &r1, &sched);
+        nbep_test_run_kept(sc, "sched_slabs.h5", nt, &r1, &sched);
         fprintf(stderr,
-                "%s on %d slabs: %llu events handled (%llu collisions), %llu messages sent, "
+                "%s on %d slabs, %d thread(s): %llu events handled (%llu collisions), %llu messages sent, "
                 "%llu acted on, %llu rollbacks, %llu events and messages undone, %llu "
                 "cancels, %llu meetings, %llu expiries waiting for room\n",
-                name, slabs[q], (unsigned long long)seen.handled,
+                name, slabs[q], nt, (unsigned long long)seen.handled,
                 (unsigned long long)r0.s.sphere_collisions, (unsigned long long)seen.sent,
                 (unsigned long long)seen.applied, (unsigned long long)seen.rollbacks,
                 (unsigned long long)seen.undone, (unsigned long long)seen.cancels,
@@ -123,18 +124,40 @@ static void test_periodic_fluids_on_slabs_end_the_same(void **state)
     /* 4096 spheres: 12 cell columns across x (6 slabs of 2: every column beside another slab,
      * a write's copies sent on) */
     nbep_scene *sc = nbep_test_periodic_fluid(16, 0.35, 2, 1.0, 9);
-    slabs_the_same(sc, slabs, 4, "elastic fluid, phi 0.35");
+    slabs_the_same(sc, slabs, 4, 1, "elastic fluid, phi 0.35");
     sc->restitution = 0.8;
     sc->tc = 1e-3;
-    slabs_the_same(sc, slabs, 2, "dissipative fluid, phi 0.35");
+    slabs_the_same(sc, slabs, 2, 1, "dissipative fluid, phi 0.35");
     nbep_test_scene_free(&sc);
     sc = nbep_test_periodic_fluid(16, 0.45, 1, 0.5, 5);
-    slabs_the_same(sc, slabs, 2, "elastic fluid, phi 0.45");
+    slabs_the_same(sc, slabs, 2, 1, "elastic fluid, phi 0.45");
     nbep_test_scene_free(&sc);
     /* cells barely wider than the cutoff (a helper's review found a meeting's prediction from
      * stale copies there, 2026-12-07), in short steps */
     sc = nbep_test_periodic_fluid(16, 0.30, 60, 0.02, 9);
-    slabs_the_same(sc, slabs, 2, "elastic fluid, phi 0.30");
+    slabs_the_same(sc, slabs, 2, 1, "elastic fluid, phi 0.30");
+    nbep_test_scene_free(&sc);
+}
+
+/* The slabs on the run's threads (thread t running slabs t, t + threads, ...), each thread
+ * drawing its own slabs' turns: the same ends, whatever the threads' timing */
+static void test_slabs_on_threads_end_the_same(void **state)
+{
+    (void)state;
+    const int slabs[] = {2, 3, 4};
+    nbep_scene *sc = nbep_test_periodic_fluid(16, 0.35, 2, 1.0, 9);
+    slabs_the_same(sc, slabs, 3, 2, "elastic fluid, phi 0.35");
+    slabs_the_same(sc, slabs + 2, 1, 4, "elastic fluid, phi 0.35");
+    cramp = true;
+    slabs_the_same(sc, slabs, 1, 2, "elastic fluid, phi 0.35, no arenas");
+    cramp = false;
+    sc->restitution = 0.8;
+    sc->tc = 1e-3;
+    slabs_the_same(sc, slabs, 2, 2, "dissipative fluid, phi 0.35");
+    nbep_test_scene_free(&sc);
+    sc = nbep_test_fluid(16, 0.35, 2, 1.0);
+    sc->neighbors_cells = true;
+    slabs_the_same(sc, slabs, 1, 2, "closed fluid, phi 0.35");
     nbep_test_scene_free(&sc);
 }
 
@@ -146,7 +169,7 @@ static void test_slabs_short_of_room_for_lists_end_the_same(void **state)
     const int slabs[] = {2, 3};
     nbep_scene *sc = nbep_test_periodic_fluid(16, 0.35, 2, 1.0, 9);
     cramp = true;
-    slabs_the_same(sc, slabs, 2, "elastic fluid, phi 0.35, no arenas");
+    slabs_the_same(sc, slabs, 2, 1, "elastic fluid, phi 0.35, no arenas");
     nbep_test_scene_free(&sc);
 }
 
@@ -177,7 +200,9 @@ static void test_a_stop_on_slabs_comes_as_without_them(void **state)
             snprintf(v, sizeof v, "%d", slabs);
             assert_int_equal(setenv("NBEP_SLABS", v, 1), 0);
             nbep_state sched = {0};
-            const nbep_status st1 = nbep_test_run_to_end(sc, 1, msg1, sizeof msg1, &ahead, &sched);
+            /* (on one thread, and on two: their threads' slabs stop there too) */
+            const nbep_status st1 =
+                nbep_test_run_to_end(sc, 1 + slabs % 2, msg1, sizeof msg1, &ahead, &sched);
             assert_int_equal(st1, st0);
             assert_string_equal(msg1, msg0);
             assert_int_equal(sched.n, plain.n);
@@ -200,7 +225,7 @@ static void test_a_closed_box_on_slabs_ends_the_same(void **state)
     const int slabs[] = {2, 3};
     nbep_scene *sc = nbep_test_fluid(16, 0.35, 2, 1.0);
     sc->neighbors_cells = true;
-    const nbep_summary s = slabs_the_same(sc, slabs, 2, "closed fluid, phi 0.35");
+    const nbep_summary s = slabs_the_same(sc, slabs, 2, 1, "closed fluid, phi 0.35");
     assert_true(s.plane_collisions > 100); /* (the walls' impulses met) */
     nbep_test_scene_free(&sc);
 }
@@ -221,6 +246,7 @@ int main(void)
         cmocka_unit_test_teardown(test_periodic_fluids_on_slabs_end_the_same, settings_gone),
         cmocka_unit_test_teardown(test_a_closed_box_on_slabs_ends_the_same, settings_gone),
         cmocka_unit_test_teardown(test_slabs_short_of_room_for_lists_end_the_same, settings_gone),
+        cmocka_unit_test_teardown(test_slabs_on_threads_end_the_same, settings_gone),
         cmocka_unit_test_teardown(test_a_stop_on_slabs_comes_as_without_them, settings_gone),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
