@@ -12,6 +12,12 @@
 #   REPS   repeats of each pair (default 5)
 #   STEPS  the timed stretch, in steps of the deck's dt = 0.1 after a melt of 20 (default 20)
 #   OUT    scratch folder (default build/bench-slabs)
+#   THREADS N (N >= 2): instead of pairs, the slabs on N threads through the optimistic
+#          scheduler (NBEP_SCHEDULED=1 with NBEP_SLABS; slabs on threads of their own, the
+#          results the same): each repeat runs, one after the other, the plain loop on one
+#          thread, the team loop on N and the scheduled loop on each slab count on N (all N
+#          threads at once: no pairs), and a figure is the median over repeats of the plain
+#          loop's stepping seconds over its own (a speed-up: above 1 is faster)
 #   SERIAL 1: instead of pairs, each repeat runs one calendar and then every slab count one
 #          after the other on one CPU (taskset -c CPU, default 0), and a count's figure is the
 #          median over repeats of its stepping loop's seconds (the summary's wall_seconds)
@@ -44,6 +50,40 @@ melt="$OUT/melt-$count-$phi.h5"
 if [ ! -f "$melt" ] || [ "$deck" -nt "$melt" ]; then
     echo "bench-slabs: melting $count spheres at phi = $phi (20 steps of 0.1 from the lattice)"
     bin/nbep run "$deck" -n 20 -o "$melt" -q
+fi
+if [ -n "${THREADS:-}" ]; then
+    echo "bench-slabs: N = $count, phi = $phi, $STEPS steps of 0.1 after the melt, $REPS repeats, $THREADS threads"
+    rows="$OUT/threads.csv"
+    echo "way,rep,wall_seconds,collisions" >"$rows"
+    for rep in $(seq "$REPS"); do
+        for way in plain team $SLABS; do
+            cp "$melt" "$OUT/r.h5"
+            case $way in
+            plain) set -- env bin/nbep run "$deck" -t 1 ;;
+            team) set -- env bin/nbep run "$deck" -t "$THREADS" ;;
+            *) set -- env NBEP_SCHEDULED=1 NBEP_SLABS="$way" bin/nbep run "$deck" -t "$THREADS" ;;
+            esac
+            "$@" --resume "$OUT/r.h5" -q --summary "$OUT/s.json"
+            w=$(sed -n 's/.*"wall_seconds": *\([0-9.e+-]*\).*/\1/p' "$OUT/s.json")
+            c=$(sed -n 's/.*"collisions": *\([0-9]*\).*/\1/p' "$OUT/s.json")
+            echo "$way,$rep,$w,$c" >>"$rows"
+        done
+    done
+    python3 - "$rows" <<'PYEOF3'
+import csv, statistics as st, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+base = {r["rep"]: r for r in rows if r["way"] == "plain"}
+print("  plain loop, 1 thread: median %.3f s" % st.median(float(r["wall_seconds"]) for r in base.values()))
+for way in dict.fromkeys(r["way"] for r in rows if r["way"] != "plain"):
+    mine = [r for r in rows if r["way"] == way]
+    R = [float(base[r["rep"]]["wall_seconds"]) / float(r["wall_seconds"]) for r in mine]
+    same = all(r["collisions"] == base[r["rep"]]["collisions"] for r in mine)
+    name = "team loop" if way == "team" else "%s slabs, scheduled" % way
+    print("  %s: median %.3f s, speed-up median %.3f [%s]; same collisions: %s"
+          % (name, st.median(float(r["wall_seconds"]) for r in mine), st.median(R),
+             " ".join("%.3f" % x for x in R), same))
+PYEOF3
+    exit 0
 fi
 if [ "${SERIAL:-0}" = 1 ]; then
     echo "bench-slabs: N = $count, phi = $phi, $STEPS steps of 0.1 after the melt, $REPS repeats on CPU ${CPU:-0}"

@@ -34,7 +34,7 @@ mkdir -p build/tests/tmp "$logs"
 # The slowest tests (in this order, natively and under valgrind, on the 2-core machine), started
 # first; the rest follow in the order given.
 SLOW="test_granular test_settle.sh test_resume.sh test_extremes test_sweep_mpi.sh test_viz.sh
-      test_jam.sh test_sim test_run_contract test_order test_barrier test_signals.sh"
+      test_sched_slabs test_jam.sh test_sim test_run_contract test_order test_barrier test_signals.sh"
 SLOW=" $(echo $SLOW) "
 ordered=()
 for s in $SLOW; do

@@ -21,11 +21,12 @@ libs="$(pkg-config --libs gsl libconfig hdf5 jansson cmocka) -lhdf5_hl -lm -lpth
 srcs=$(ls src/*.c | grep -v -e '^src/main.c$' -e '^src/sweep.c$')
 fail=0
 for t in test_sim test_periodic test_barrier test_extremes test_order test_granular test_versions test_mail test_warp \
-    test_evloop_apart test_team_faults test_detect_stop; do
+    test_evloop_apart test_team_faults test_detect_stop test_sched_slabs; do
     [ -e tests/$t.c ] || continue
     # test_evloop_apart and test_team_faults compile their own copy of the cells engine (with
     # their hooks), test_detect_stop its own of the naive and seminaive algorithms, test_warp
-    # its own of the scheduler
+    # its own of the scheduler, test_sched_slabs its own of the engine's loop through it (the
+    # slabs on 2 and 4 threads)
     these=$srcs
     grep -q '^#include "../src/evloop.c"' tests/$t.c &&
         these=$(echo "$srcs" | grep -v -e '^src/evloop.c$' -e '^src/evloop_team.c$')
@@ -33,6 +34,8 @@ for t in test_sim test_periodic test_barrier test_extremes test_order test_granu
         these=$(echo "$srcs" | grep -v -e '^src/algo_detect.c$')
     grep -q '^#include "../src/warp.c"' tests/$t.c &&
         these=$(echo "$these" | grep -v -e '^src/warp.c$')
+    grep -q '^#include "../src/evloop_warp.c"' tests/$t.c &&
+        these=$(echo "$these" | grep -v -e '^src/evloop_warp.c$')
     # shellcheck disable=SC2086
     clang $cflags $these tests/$t.c -o "$out/$t" $libs
     log=$out/$t.log

@@ -167,10 +167,11 @@ static int slabs_asked(void)
     return k > NBEP_SLABCAL_MAX ? NBEP_SLABCAL_MAX + 1 : (int)k;
 }
 
-/* NBEP_SCHEDULED=1, read as a run is made: cells mode's one-thread loop through the optimistic
- * scheduler (nbep_evloop_set_scheduled, for measuring what its bookkeeping costs the engine;
- * the results are the same), in a free flight, the team off: on one slab, or with NBEP_SLABS
- * on that many, taken in turns, each in a world of its own (nbep_evloop_set_worlds). */
+/* NBEP_SCHEDULED=1, read as a run is made: cells mode's loop through the optimistic scheduler
+ * (nbep_evloop_set_scheduled, for measuring what its bookkeeping costs the engine and what its
+ * slabs gain on threads; the results are the same), in a free flight, the team off: on one
+ * slab and one thread, or with NBEP_SLABS on that many, each in a world of its own
+ * (nbep_evloop_set_worlds), on the run's threads (at most one a slab: pred_ctx slab_crew). */
 static bool scheduled_asked(void)
 {
     const char *v = getenv("NBEP_SCHEDULED");
@@ -244,12 +245,16 @@ static bool plan_lock(const pred_plan *p)
 
 /* The room of thread t's list of fired spheres: 2 per reaction, 1 per let-go; cells mode: one
  * reaction's 3 and every held sphere letting go after it, on the thread that runs the event
- * loop (and a team's helper, whose reactions change their own two spheres only). */
+ * loop (and a team's helper, or a thread of the scheduled loop's slabs, whose reactions change
+ * their own two spheres only: free flight). */
 static size_t plan_fired(const pred_plan *p, int t)
 {
     if (p->rounds) /* thread 0: and every sphere, for the bodies of a lock_phase */
         return 3 * plan_own(p, t) + (t == 0 && plan_lock(p) ? p->n : 0);
-    return t == 0 ? p->n + 3 : p->team && t < p->team_size ? 3 : 1;
+    /* a team's helper, or a thread of the scheduled loop's slabs (their worlds' scratch: a
+     * free flight's reaction fires its own two spheres) */
+    const bool slab_thread = p->scheduled && p->slabs > 1 && t < p->slabs;
+    return t == 0 ? p->n + 3 : (p->team && t < p->team_size) || slab_thread ? 3 : 1;
 }
 
 /* The bytes pred_create allocates for a run of sc on nt threads, by the same plan: the
@@ -1278,10 +1283,10 @@ static void pred_threads_use(const nbep_scene *sc, int nt, char *buf, size_t len
                  p.team_size, nt);
     else if (p.cells && p.slabs >= 2 && p.scheduled)
         snprintf(buf, len,
-                 "the event loop on one, through the optimistic scheduler on %d slabs taken in "
-                 "turns (NBEP_SCHEDULED, NBEP_SLABS); all %d share the rebuilds, the update and "
-                 "the energy",
-                 p.slabs, nt);
+                 "the event loop through the optimistic scheduler on %d slabs (NBEP_SCHEDULED, "
+                 "NBEP_SLABS), on %d of them, each taking its slabs in turns; all %d share the "
+                 "rebuilds, the update and the energy",
+                 p.slabs, nt < p.slabs ? nt : p.slabs, nt);
     else if (p.cells && p.slabs >= 2)
         snprintf(buf, len,
                  "the event loop on one, its calendar cut into %d slabs (NBEP_SLABS); all %d "

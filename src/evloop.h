@@ -139,7 +139,9 @@ void nbep_evloop_set_radii(nbep_evloop *e, const double *radius);
  * NBEP_SLABCAL_MAX, with a message. */
 NBEP_MUST_CHECK nbep_status nbep_evloop_set_slabs(nbep_evloop *e, int slabs, nbep_diag *d);
 /* The one-thread loop run through the optimistic scheduler (warp.h) on one slab (or, on an
- * engine with slabs, on each of them in turns: nbep_evloop_set_worlds), for measuring what its bookkeeping costs the real engine (NBEP_SCHEDULED; docs/optimistic-
+ * engine with slabs, on each of them: nbep_evloop_set_worlds; nbep_evloop_run_lead with
+ * nbep_evloop_help runs the slabs on the crew's threads, thread t slabs t, t + crew, ...,
+ * each thread its own in turns), for measuring what its bookkeeping costs the real engine (NBEP_SCHEDULED; docs/optimistic-
  * design.md, *The engine on the scheduler*): each event handled as the scheduler's model
  * handles it, what it changes kept in the slab's log (its spheres' motion and slots, an
  * expiry's list record), in windows of a 64th of the call's span. The same events in the same
@@ -150,8 +152,8 @@ NBEP_MUST_CHECK nbep_status nbep_evloop_set_slabs(nbep_evloop *e, int slabs, nbe
  * nbep_evloop_too_deep true). Only on an engine for one thread, after nbep_evloop_set_slabs if
  * any, before the first run. NBEP_ENOMEM with a message. */
 NBEP_MUST_CHECK nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d);
-/* The scheduled loop on slabs (nbep_evloop_set_scheduled on an engine with slabs, one thread
- * taking them in turns): each slab acts in a world of its own, wu[s] (the callbacks' context
+/* The scheduled loop on slabs (nbep_evloop_set_scheduled on an engine with slabs, on one
+ * thread or a crew's): each slab acts in a world of its own, wu[s] (the callbacks' context
  * whose motion arrays are slab s's) with response counts wver[s] (both borrowed, set before
  * each call): the call copies the context's motion into each at its start, each slab's own
  * spheres (nbep_slabcal's) back at its end, and merges their counts (ops clear, merge), so that

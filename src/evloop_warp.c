@@ -1,15 +1,18 @@
-/* The cells engine's one-thread loop through the optimistic scheduler (nbep_evloop_set_scheduled,
+/* The cells engine's loop through the optimistic scheduler (nbep_evloop_set_scheduled,
  * NBEP_SCHEDULED): the engine as the scheduler's model, with what a slab must keep of each
  * event to undo it (docs/optimistic-design.md, *The engine on the scheduler*). On one slab: no
  * messages, and no rollbacks but those a test asks for (nbep_warp_roll_back, through the hooks
  * below: tests/test_sched_rollback.c), which call the restore below as a straggler will. With
- * slabs (NBEP_SLABS, the engine's per-slab calendars), taken in turns on one thread: each slab
- * handles its own spheres' entries in a world of its own (nbep_evloop_set_worlds) and
+ * slabs (NBEP_SLABS, the engine's per-slab calendars), on the call's threads (nbep_evloop_run_lead:
+ * thread t runs slabs t, t + crew, ... in turns; one thread runs them all): each slab handles
+ * its own spheres' entries in a world of its own (nbep_evloop_set_worlds), through a view of
+ * the engine of its own (its workspace, its lists' moves in an arena of the pool), and
  * predicts only its own spheres; what its events change in a column beside another slab goes
  * there as a copy, a pair across a face's other sphere to its owner as a write, which predicts
  * it; a message stamped before what a slab has done sends it back; an expiry whose lists and
- * cells reach another slab's ends the window and is done at its meeting (docs/optimistic-
- * design.md, *The engine on slabs, in turns*; tests/test_sched_slabs.c). */
+ * cells reach another slab's ends the window and is done at its meeting, on the lead alone
+ * (docs/optimistic-design.md, *The engine on slabs, in turns* and *on threads*;
+ * tests/test_sched_slabs.c). */
 #include "evloop_impl.h"
 
 #include <assert.h>
@@ -27,7 +30,7 @@
 #define WINDOWS_A_STEP 64
 #endif
 
-/* The actions each slab takes in its turn, with slabs (one thread takes them in turns); a
+/* The actions each slab takes in its turn, with slabs (each thread takes its own in turns); a
  * test's copy of this file (tests/test_sched_slabs.c) draws each turn's, and looks at what the
  * scheduler did as the loop is destroyed. */
 #ifndef NBEP_SCHED_SLAB_TURN
