@@ -274,6 +274,11 @@ bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, v
                           nbep_evloop_tally *tally, double *t_stuck);
 void nbep_evloop_help(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, void *const *us,
                       int t, uint64_t call);
+/* The leader's way out of call `call` without running it (a failure before it: the scheduled
+ * loop's worlds without memory), so that helpers already waiting in nbep_evloop_help return:
+ * for the scheduled loop on slabs, whose helpers wait for the call's windows (the team loop's
+ * run_lead always ends its call). */
+void nbep_evloop_release(nbep_evloop *e, uint64_t call);
 
 /* Calls visit(u, j) for sphere i and every sphere j of its neighbour list: every sphere that
  * can touch i. Read-only; a react callback may call it. */

@@ -617,9 +617,13 @@ bool nbep_evloop_run_lead(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, v
                           int crew, uint64_t call, double t_end, nbep_evloop_stall *stall,
                           nbep_evloop_tally *tally, double *t_stuck)
 {
-    if (e->sched) /* the scheduled loop's slabs on threads (evloop_warp.c) */
-        return !e->failed &&
-               nbep__evloop_run_scheduled(e, ops, u, crew, call, t_end, stall, tally, t_stuck);
+    if (e->sched) { /* the scheduled loop's slabs on threads (evloop_warp.c) */
+        if (!e->failed)
+            return nbep__evloop_run_scheduled(e, ops, u, crew, call, t_end, stall, tally,
+                                              t_stuck);
+        nbep_evloop_release(e, call); /* (its helpers wait for the call's end) */
+        return false;
+    }
     assert(crew >= 2 && crew <= e->team && call > 0);
     e->crew = crew;
     phase(PH_START);

@@ -1077,10 +1077,18 @@ void nbep__evloop_sched_help(nbep_evloop *e, int t, uint64_t call)
         if ((uint32_t)g == GO_QUIT)
             return;
         seen = (uint32_t)g;
-        if (t < x->crew) /* (a thread past the call's crew has no slab: nbep_evloop_run_lead) */
+        if (t < x->crew) { /* (a thread past the call's crew has no slab, and is not waited
+                            * for: nbep_evloop_run_lead) */
             run_slabs_of(x, t);
-        atomic_fetch_add_explicit(&x->arrived, 1, memory_order_release);
+            atomic_fetch_add_explicit(&x->arrived, 1, memory_order_release);
+        }
     }
+}
+
+void nbep_evloop_release(nbep_evloop *e, uint64_t call)
+{
+    if (e->sched) /* (the helpers wait for the call's end: it comes at once) */
+        atomic_store_explicit(&e->sched->go, go_word(call, GO_QUIT), memory_order_release);
 }
 
 bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void *u,

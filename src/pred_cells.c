@@ -673,6 +673,8 @@ static void cells_part(nbep_sim *sim, pred_ctx *c, int tid, cells_user *u, void 
     /* the scheduled loop's sums record their terms while it runs (a rollback takes them out) */
     u->mx->jr = c->scheduled ? &c->jr : NULL;
     if (c->scheduled && c->slabs > 1 && !cells_worlds(c, u, c->slabs, crew)) {
+        if (crew > 1) /* (the helpers are waiting for the call) */
+            nbep_evloop_release(c->ev, call);
         nbep_diag_add(sim->diag, __FILE__, __LINE__,
                       "nbep: step %llu: no memory for the scheduled loop's worlds on slabs "
                       "(NBEP_SCHEDULED, a setting for measuring: run without it); stopping",

@@ -161,6 +161,53 @@ static void test_need_bounds_what_a_rebuild_takes_of_the_spare(void **state)
     free(counts);
 }
 
+/* A view of an arena (nbep_nblist_arena, the scheduled loop's slabs on threads) moves lists
+ * within its piece of the spare alone: a move past it fails with nothing changed (the pool
+ * neither grown nor compacted under the other views' reads), one within it lands there, in the
+ * spans every view shares; arena_back adds the moves' room and largest room into the lists. */
+static void test_an_arena_moves_lists_within_its_piece_alone(void **state)
+{
+    (void)state;
+    enum { N = 64 };
+    nbep_nblist l;
+    init(&l, N);
+    uint32_t counts[N];
+    for (uint32_t j = 0; j < N; j++)
+        counts[j] = 4;
+    assert_true(nbep_nblist_layout(&l, counts));
+    for (uint32_t j = 0; j < N; j++) /* every list full */
+        for (uint32_t k = 0; k < l.sp[j].cap; k++)
+            nbep_nblist_fill(&l, j, (j + 1 + k) % N);
+    const uint32_t cap0 = l.sp[0].cap, g = nbep_nblist_grown(cap0);
+    assert_true(nbep_nblist_make_spare(&l, 2 * (size_t)g));
+    assert_true(nbep_nblist_spare(&l) >= 2 * (size_t)g);
+    const size_t lo = l.pool_len, room0 = l.room, pool_cap = l.pool_cap;
+    const uint32_t *pool = l.pool;
+    nbep_nblist a, b;
+    nbep_nblist_arena(&l, lo, lo + g, &a);
+    nbep_nblist_arena(&l, lo + g, lo + g + 1, &b); /* too small for any move */
+    l.pool_len = lo + g + 1;
+    const nbep_nblist_span sp1 = l.sp[1];
+    assert_false(nbep_nblist_append(&b, 1, 40));
+    assert_memory_equal(&l.sp[1], &sp1, sizeof sp1);
+    assert_int_equal(b.pool_len, lo + g);
+    assert_true(nbep_nblist_append(&a, 0, 40));
+    assert_int_equal(l.sp[0].off, lo);
+    assert_int_equal(l.sp[0].cap, g);
+    assert_int_equal(l.sp[0].cnt, cap0 + 1);
+    assert_int_equal(l.pool[lo + cap0], 40);
+    assert_int_equal(a.pool_len, lo + g);
+    assert_false(nbep_nblist_append(&a, 2, 41)); /* its piece used up */
+    assert_ptr_equal(l.pool, pool);
+    assert_ptr_equal(a.pool, pool);
+    assert_int_equal(l.pool_cap, pool_cap);
+    nbep_nblist_arena_back(&l, &a, room0);
+    nbep_nblist_arena_back(&l, &b, room0);
+    assert_int_equal(l.room, room0 + g - cap0);
+    assert_int_equal(l.cap_max, g);
+    nbep_nblist_fini(&l);
+}
+
 /* nbep_nblist_set is a clear and appends, copied in place where the room holds the list: two
  * pools, one set and one cleared and appended to, step for step through lists shorter and
  * longer than their rooms (moves, and the compactions a full pool brings), hold the same lists
@@ -306,6 +353,7 @@ int main(void)
         cmocka_unit_test(test_random_attach_and_detach_match_a_reference_adjacency),
         cmocka_unit_test(test_layout_gives_each_list_its_count_and_slack_and_fill_appends),
         cmocka_unit_test(test_need_bounds_what_a_rebuild_takes_of_the_spare),
+        cmocka_unit_test(test_an_arena_moves_lists_within_its_piece_alone),
         cmocka_unit_test(test_set_is_clear_and_appends),
         cmocka_unit_test(test_check_catches_asymmetry_duplicates_and_self_entries),
         cmocka_unit_test(test_the_skin_follows_the_packing_fraction_of_a_free_scene),
