@@ -51,22 +51,29 @@ if [ ! -f "$melt" ] || [ "$deck" -nt "$melt" ]; then
     echo "bench-slabs: melting $count spheres at phi = $phi (20 steps of 0.1 from the lattice)"
     bin/nbep run "$deck" -n 20 -o "$melt" -q
 fi
+# One timed resume of the melt by the command given (the rest of its command line: --resume and
+# the summary), appended to $rows as NAME,REP,wall_seconds,collisions
+timed_row() {
+    local name=$1 rep=$2 w c
+    shift 2
+    cp "$melt" "$OUT/r.h5"
+    "$@" --resume "$OUT/r.h5" -q --summary "$OUT/s.json"
+    w=$(sed -n 's/.*"wall_seconds": *\([0-9.e+-]*\).*/\1/p' "$OUT/s.json")
+    c=$(sed -n 's/.*"collisions": *\([0-9]*\).*/\1/p' "$OUT/s.json")
+    echo "$name,$rep,$w,$c" >>"$rows"
+}
 if [ -n "${THREADS:-}" ]; then
     echo "bench-slabs: N = $count, phi = $phi, $STEPS steps of 0.1 after the melt, $REPS repeats, $THREADS threads"
     rows="$OUT/threads.csv"
     echo "way,rep,wall_seconds,collisions" >"$rows"
     for rep in $(seq "$REPS"); do
         for way in plain team $SLABS; do
-            cp "$melt" "$OUT/r.h5"
             case $way in
-            plain) set -- env bin/nbep run "$deck" -t 1 ;;
-            team) set -- env bin/nbep run "$deck" -t "$THREADS" ;;
-            *) set -- env NBEP_SCHEDULED=1 NBEP_SLABS="$way" bin/nbep run "$deck" -t "$THREADS" ;;
+            plain) timed_row "$way" "$rep" bin/nbep run "$deck" -t 1 ;;
+            team) timed_row "$way" "$rep" bin/nbep run "$deck" -t "$THREADS" ;;
+            *) timed_row "$way" "$rep" env NBEP_SCHEDULED=1 NBEP_SLABS="$way" bin/nbep run \
+                   "$deck" -t "$THREADS" ;;
             esac
-            "$@" --resume "$OUT/r.h5" -q --summary "$OUT/s.json"
-            w=$(sed -n 's/.*"wall_seconds": *\([0-9.e+-]*\).*/\1/p' "$OUT/s.json")
-            c=$(sed -n 's/.*"collisions": *\([0-9]*\).*/\1/p' "$OUT/s.json")
-            echo "$way,$rep,$w,$c" >>"$rows"
         done
     done
     python3 - "$rows" <<'PYEOF3'
@@ -91,12 +98,7 @@ if [ "${SERIAL:-0}" = 1 ]; then
     echo "slabs,rep,wall_seconds,collisions" >"$rows"
     for rep in $(seq "$REPS"); do
         for s in 1 $SLABS; do
-            cp "$melt" "$OUT/r.h5"
-            NBEP_SLABS=$s taskset -c "${CPU:-0}" bin/nbep run "$deck" --resume "$OUT/r.h5" -q \
-                --summary "$OUT/s.json"
-            w=$(sed -n 's/.*"wall_seconds": *\([0-9.e+-]*\).*/\1/p' "$OUT/s.json")
-            c=$(sed -n 's/.*"collisions": *\([0-9]*\).*/\1/p' "$OUT/s.json")
-            echo "$s,$rep,$w,$c" >>"$rows"
+            timed_row "$s" "$rep" env NBEP_SLABS="$s" taskset -c "${CPU:-0}" bin/nbep run "$deck"
         done
     done
     python3 - "$rows" <<'PYEOF2'
