@@ -831,6 +831,36 @@ bool nbep__evloop_owned(const nbep_evloop *e, uint32_t i)
     return owned(e, i);
 }
 
+/* Whether the engine's world follows sphere j's changes: always, but on the scheduled loop's
+ * slabs, where a slab is sent a copy of another slab's sphere only while that sphere's list
+ * centre lies in a column beside one of its own (evloop_warp.c, send_copies). Whether it does
+ * stays the same within a window: a centre moves into or out of those columns only at an
+ * expiry whose span reaches the slab, done at a meeting. */
+static inline NBEP_ALWAYS_INLINE bool followed(const nbep_evloop *e, uint32_t j)
+{
+    if (e->own_slab < 0)
+        return true;
+    const size_t columns = e->cells.dim[0], c = e->cells.m[j].cell % columns;
+    const int slabs = nbep_slabcal_slabs(e->slabcal);
+    for (int dc = -1; dc <= 1; dc++) {
+        size_t m = c;
+        if (dc < 0 && c == 0) { /* (around a periodic x, else past the side: no column) */
+            if (!e->pb.axis[0])
+                continue;
+            m = columns - 1;
+        } else if (dc > 0 && c + 1 == columns) {
+            if (!e->pb.axis[0])
+                continue;
+            m = 0;
+        } else {
+            m = (size_t)((long)c + dc);
+        }
+        if (nbep_slabcal_slab_of(m, columns, slabs) == e->own_slab)
+            return true;
+    }
+    return false;
+}
+
 /* Entry c set in the calendar, or its item's taken out (set false); with slabs, in its slab's
  * calendar, whose room may have to grow: without memory for it the run fails (e->failed). */
 static void enter(nbep_evloop *e, bool set, nbep_calendar_entry c)
@@ -945,7 +975,10 @@ void nbep__evloop_handle(nbep_evloop *e, evl_ws *w, const nbep_evloop_ops *ops, 
     /* read if the event is fresh (another slab's sphere's list is its own to read) */
     if (ev->kind == NBEP_EVENT_SPHERE && owned(e, ev->partner))
         prefetch_list(e, ev->partner);
-    if (ops->fresh(u, i, ev)) {
+    /* (on slabs, a pair whose other sphere this slab's world no longer follows is stale: its
+     * copy there may be older than its last change, and a fresh pair's list centres are
+     * within the cutoff, a column, of each other, so its other sphere's is beside this slab) */
+    if (ops->fresh(u, i, ev) && (ev->kind != NBEP_EVENT_SPHERE || followed(e, ev->partner))) {
         w->reacted = true;
         const uint32_t *changed;
         const size_t m = ops->react(u, i, ev, &changed, &w->stop);
