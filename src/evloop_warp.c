@@ -186,7 +186,6 @@ struct evl_sched {
      * its slabs till the window's work is done (the scheduler's meeting: nbep_warp_run), the
      * helpers count themselves in `arrived`, and the lead then meets on its own */
     int crew;
-    uint64_t call;
     alignas(NBEP_CACHELINE) _Atomic uint64_t go;
     alignas(NBEP_CACHELINE) _Atomic int arrived;
     /* the earliest entry held in this window: no slab handles an event at or past it, as the
@@ -1098,7 +1097,6 @@ bool nbep__evloop_run_scheduled(nbep_evloop *e, const nbep_evloop_ops *ops, void
     struct evl_sched *x = e->sched;
     assert(crew >= 1 && (crew == 1 || x->slabs > 1));
     x->crew = crew < x->slabs ? crew : x->slabs;
-    x->call = call;
     x->e = e;
     x->ops = ops;
     x->u = u;
