@@ -840,24 +840,10 @@ static inline NBEP_ALWAYS_INLINE bool followed(const nbep_evloop *e, uint32_t j)
 {
     if (e->own_slab < 0)
         return true;
-    const size_t columns = e->cells.dim[0], c = e->cells.m[j].cell % columns;
-    const int slabs = nbep_slabcal_slabs(e->slabcal);
-    for (int dc = -1; dc <= 1; dc++) {
-        size_t m = c;
-        if (dc < 0 && c == 0) { /* (around a periodic x, else past the side: no column) */
-            if (!e->pb.axis[0])
-                continue;
-            m = columns - 1;
-        } else if (dc > 0 && c + 1 == columns) {
-            if (!e->pb.axis[0])
-                continue;
-            m = 0;
-        } else {
-            m = (size_t)((long)c + dc);
-        }
-        if (nbep_slabcal_slab_of(m, columns, slabs) == e->own_slab)
+    const size_t c = e->cells.m[j].cell % e->cells.dim[0];
+    for (int dc = -1; dc <= 1; dc++)
+        if (nbep__evloop_column_slab(e, c, dc) == e->own_slab)
             return true;
-    }
     return false;
 }
 

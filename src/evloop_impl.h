@@ -235,6 +235,20 @@ int nbep__evloop_sphere_slab(const nbep_evloop *e, uint32_t i);
 void nbep__evloop_predict_own(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uint32_t i,
                               double t);
 
+/* With slabs: the slab of cell column c + dc across x (|dc| at most the columns), around a
+ * periodic x; -1 past a side that is not periodic. */
+static inline int nbep__evloop_column_slab(const nbep_evloop *e, size_t c, int dc)
+{
+    const long columns = (long)e->cells.dim[0], k = (long)c + dc;
+    long m = k;
+    if (k < 0 || k >= columns) {
+        if (!e->pb.axis[0])
+            return -1;
+        m = (k + columns) % columns;
+    }
+    return nbep_slabcal_slab_of((size_t)m, (size_t)columns, nbep_slabcal_slabs(e->slabcal));
+}
+
 /* The calendar's tie key: the pair (lower sphere high, higher low), the same in both spheres'
  * slots; a plane contact (UINT32_MAX - 1 - plane low) or a list expiry (UINT32_MAX low) ranks
  * after every pair of its sphere. (Until 2026-11-30 plane p's was UINT32_MAX - p, so plane 0's

@@ -271,13 +271,6 @@ static bool stop_stands(struct evl_sched *x, int slab)
     return d->stopped;
 }
 
-/* Slab's side: its engine (d->e) acts in its world, and with slabs predicts and enters its
- * own spheres only. */
-static inline evl_side *enter_slab(struct evl_sched *x, int slab)
-{
-    return &x->side[slab];
-}
-
 /* Where sphere i's row is in the ties' table; n_ties where it has none. */
 static size_t tie_of(const evl_side *d, uint32_t i)
 {
@@ -300,20 +293,6 @@ static size_t column_of(const nbep_evloop *e, uint32_t i, size_t *columns)
     return e->cells.m[i].cell % *columns;
 }
 
-/* The slab of column c + dc (|dc| at most the columns), around a periodic x; -1 past a side
- * that is not periodic. */
-static int slab_at(const struct evl_sched *x, size_t c, size_t columns, int dc)
-{
-    const long k = (long)c + dc;
-    long m = k;
-    if (k < 0 || k >= (long)columns) {
-        if (!x->e->pb.axis[0])
-            return -1;
-        m = (k + (long)columns) % (long)columns;
-    }
-    return nbep_slabcal_slab_of((size_t)m, columns, x->slabs);
-}
-
 /* Whether the expiry of sphere i at time t, of slab `slab`, reads and writes that slab's
  * lists and cells alone: every column of its span (nbep__evloop_expiry_span) is the slab's. */
 static bool expiry_local(const struct evl_sched *x, int slab, uint32_t i, double t)
@@ -325,7 +304,7 @@ static bool expiry_local(const struct evl_sched *x, int slab, uint32_t i, double
     if (hi - lo + 1 > (int)columns) /* (around the whole box: every slab's) */
         return false;
     for (int dc = lo; dc <= hi; dc++) {
-        const int s = slab_at(x, c, columns, dc);
+        const int s = nbep__evloop_column_slab(x->e, c, dc);
         if (s >= 0 && s != slab)
             return false;
     }
@@ -335,7 +314,7 @@ static bool expiry_local(const struct evl_sched *x, int slab, uint32_t i, double
 static bool sched_next(void *arg, int slab, nbep_stamp *s)
 {
     struct evl_sched *x = arg;
-    evl_side *d = enter_slab(x, slab);
+    evl_side *d = &x->side[slab];
     nbep_evloop *e = d->e;
     d->blocked = d->past = false;
     if (stop_stands(x, slab) && !d->deep)
@@ -487,7 +466,7 @@ static bool send_copies(struct evl_sched *x, int slab, uint32_t i, int skip)
     const size_t c = column_of(x->e, i, &columns);
     int sent = -1;
     for (int dc = -1; dc <= 1; dc += 2) {
-        const int to = slab_at(x, c, columns, dc);
+        const int to = nbep__evloop_column_slab(x->e, c, dc);
         if (to < 0 || to == slab || to == skip || to == sent)
             continue;
         slab_msg msg = {.kind = MSG_COPY};
@@ -523,7 +502,7 @@ static bool send_changes(struct evl_sched *x, int slab, const evl_ws *w)
 static void sched_handle(void *arg, int slab, const nbep_stamp *s)
 {
     struct evl_sched *x = arg;
-    evl_side *d = enter_slab(x, slab);
+    evl_side *d = &x->side[slab];
     nbep_evloop *e = d->e;
     const uint32_t i = s->level[s->depth - 1].item; /* (the entry's: the path's last level) */
     const double t = s->t;
@@ -603,7 +582,7 @@ static void sched_apply(void *arg, int slab, int from, const nbep_stamp *s, uint
                         const void *data)
 {
     struct evl_sched *x = arg;
-    evl_side *d = enter_slab(x, slab);
+    evl_side *d = &x->side[slab];
     nbep_evloop *e = d->e;
     slab_msg msg;
     memcpy(&msg, data, sizeof msg);
@@ -630,7 +609,7 @@ static void sched_apply(void *arg, int slab, int from, const nbep_stamp *s, uint
 static void sched_restore(void *arg, int slab, uint32_t item, const void *state)
 {
     struct evl_sched *x = arg;
-    evl_side *d = enter_slab(x, slab);
+    evl_side *d = &x->side[slab];
     nbep_evloop *e = d->e;
     NBEP_SCHED_RESTORE_HOOK(x, item);
     /* a rollback: the order's check goes on from the newest event that stands (sched_next asks
@@ -983,7 +962,7 @@ static bool meet(struct evl_sched *x)
     }
     if (slab < 0)
         return true;
-    evl_side *d = enter_slab(x, slab);
+    evl_side *d = &x->side[slab];
     nbep_evloop *e = d->e;
     const uint32_t i = held.level[held.depth - 1].item;
     const nbep_event ev = *nbep_feq_slot(e->q, i);
@@ -1023,7 +1002,7 @@ static bool meet(struct evl_sched *x)
      * members), and its entry set again. */
     const int owner = nbep__evloop_sphere_slab(e, i);
     if (owner != slab) {
-        evl_side *o = enter_slab(x, owner);
+        evl_side *o = &x->side[owner];
         nbep_evloop_mark before;
         const bool marked = !x->ops->mark || x->ops->mark(o->u, &before);
         nbep__evloop_predict_own(o->e, x->ops, o->u, i, held.t);

@@ -119,6 +119,17 @@ static bool compact(nbep_nblist *l, size_t fresh, size_t extra)
     return true;
 }
 
+/* A full pool compacted, with `extra` entries of spare after, where it holds more than a quarter
+ * more than a fresh layout of the lists as they are would take (room given up by moves, and
+ * rooms grown for counts that have since fallen); else left to grow. False without memory. */
+static bool compact_if_loose(nbep_nblist *l, size_t extra)
+{
+    size_t fresh = 0;
+    for (size_t k = 0; k < l->n; k++)
+        fresh += nbep_nblist_room_for(l->sp[k].cnt);
+    return 4u * l->pool_len <= 5u * fresh || compact(l, fresh, extra);
+}
+
 bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j)
 {
     if (l->sp[i].cnt == l->sp[i].cap) { /* full: move to the end with more room */
@@ -131,10 +142,7 @@ bool nbep_nblist_append(nbep_nblist *l, uint32_t i, uint32_t j)
         if (l->pool_len + grown > l->pool_cap) {
             if (l->arena) /* (a view moves within its piece alone: nblist.h) */
                 return false;
-            size_t fresh = 0;
-            for (size_t k = 0; k < l->n; k++)
-                fresh += nbep_nblist_room_for(l->sp[k].cnt);
-            if (4u * l->pool_len > 5u * fresh && !compact(l, fresh, grown))
+            if (!compact_if_loose(l, grown))
                 return false;
         }
         if (l->sp[i].cnt == l->sp[i].cap) { /* compaction may have made room already */
@@ -202,11 +210,8 @@ bool nbep_nblist_make_spare(nbep_nblist *l, size_t spare)
     assert(!l->arena);
     if (l->pool_cap - l->pool_len >= spare)
         return true;
-    size_t fresh = 0;
-    for (size_t k = 0; k < l->n; k++)
-        fresh += nbep_nblist_room_for(l->sp[k].cnt);
-    /* (as an append that fills the pool: compacted where it holds a quarter more than fresh) */
-    if (4u * l->pool_len > 5u * fresh && !compact(l, fresh, spare))
+    /* (as an append that fills the pool) */
+    if (!compact_if_loose(l, spare))
         return false;
     return l->pool_len + spare <= UINT32_MAX && reserve(l, l->pool_len + spare, 4u);
 }

@@ -274,16 +274,11 @@ void nbep_slabcal_runners_up(const nbep_slabcal *s, uint32_t items[2], int *n)
     *n = 0;
     if (s->best < 0)
         return;
-    const one_slab *k = &s->sl[s->best];
-    uint32_t up[2];
-    int m;
-    nbep_calendar_runners_up(k->cal, up, NULL, &m);
-    if (m > 0)
-        items[(*n)++] = k->glob[up[0]];
-    if (s->second >= 0) /* (first keeps only non-empty slabs' as best and second) */
+    nbep_slabcal_runners_up_of(s, s->best, items, n);
+    if (s->second >= 0) { /* (first keeps only non-empty slabs' as best and second) */
+        *n = *n > 0 ? 1 : 0;
         items[(*n)++] = s->sl[s->second].kept.item;
-    else if (m > 1)
-        items[(*n)++] = k->glob[up[1]];
+    }
 }
 
 void nbep_slabcal_runners_up_of(const nbep_slabcal *s, int slab, uint32_t items[2], int *n)
