@@ -4444,8 +4444,8 @@ MUTANTS = [
      None),
     # an expiry short of room in its arena committed anyway (a move past the arena fails)
     ("slabs-cramped-committed", "src/evloop_warp.c",
-     "    if (x->slabs > 1 && w->rebuilt && !w->oom &&\n        nbep_nblist_spare(&e->nl) <",
-     "    if (x->slabs > 1 && w->rebuilt && !w->oom && false &&\n        nbep_nblist_spare(&e->nl) <",
+     "    if (x->slabs > 1 && w->rebuilt &&\n        nbep_nblist_spare(&e->nl) <",
+     "    if (x->slabs > 1 && w->rebuilt && false &&\n        nbep_nblist_spare(&e->nl) <",
      ["test_sched_slabs"], None),
     # the cramped expiry's slot not put back (its entry then names another stamp)
     ("slabs-cramped-slot-left", "src/evloop_warp.c",
@@ -4471,10 +4471,10 @@ MUTANTS = [
     ("slabs-arena-grows-pool", "src/nblist.c",
      "            if (l->arena) /* (a view moves within its piece alone: nblist.h) */\n                return false;",
      "            ;", ["test_sched_slabs", "test_nblist"], None),
-    # a view's failure not folded into the run's
+    # a view's failure not folded into the run's (test_team_faults: a held expiry's walk out of
+    # memory at a meeting; the loop then runs on for ever)
     ("slabs-view-failure-lost", "src/evloop_warp.c",
-     "        x->e->failed |= x->view[k].failed;", "        ;", ["test_sched_slabs"],
-     "untested: a view fails only without memory (an arena's spare, a list's record), which no test makes happen on slabs"),
+     "        x->e->failed |= x->view[k].failed;", "        ;", ["test_team_faults"], None),
     # the limit's stamp never read: an event at the limit's time taken as before it (the held
     # expiry itself then handled in the window)
     ("slabs-limit-tie-unread", "src/evloop_warp.c",
@@ -4504,6 +4504,14 @@ MUTANTS = [
      "    if (ops->fresh(u, i, ev) && (ev->kind != NBEP_EVENT_SPHERE || followed(e, ev->partner))) {",
      "    if (ops->fresh(u, i, ev)) {", ["test_sched_slabs"],
      "untested: the guard needs a stale pair's time to come while its other sphere's list centre is two columns from the slab, where the two cannot touch in the serial run, and its owner to have changed it there; no test scene meets it (a counter in the guard stayed at zero over the test's scenes, 30 steps of the N = 256000 fluid on 2 slabs and 10 of the N = 32000 one on 2, 3, 4 and 6, 2026-12-07)"),
+    # a walk out of memory on a slab failing the call at once, the other slabs wherever they
+    # were (ahead of it: their events stand; behind: the events before it not done)
+    ("slabs-oom-not-a-stop", "src/evloop_warp.c",
+     "    if (w->stop || w->oom) {", "    if (w->stop) {", ["test_team_faults"], None),
+    # a walk out of memory on a slab stopping the loop as a stall would (its message)
+    ("slabs-oom-stop-not-failed", "src/evloop_warp.c",
+     "            x->e->failed |= d->oom;", "            x->e->failed |= false;",
+     ["test_team_faults"], None),
 ]
 
 

@@ -133,8 +133,10 @@ typedef struct {
     uint64_t cramps;        /* expiries so left, all windows (a test's count) */
     /* stopped: an event of the slab, stamped `stop` (at stop_t), stops the loop (stuck, a
      * reaction's stop; deep: a cascade deeper than a stamp holds, found at that entry, not
-     * handled); it stands while the slab's log holds it, else a rollback undid it */
-    bool stopped, deep;
+     * handled; oom: a walk or a reaction's copy out of memory, the loop failing there as the
+     * serial loop's commit fails); it stands while the slab's log holds it, else a rollback
+     * undid it */
+    bool stopped, deep, oom;
     nbep_stamp stop;
     double stop_t;
     /* the window's expiries, by their place in it (the log's item for them, past the
@@ -252,6 +254,7 @@ static void stop_at(struct evl_sched *x, int slab, const nbep_stamp *s, double t
     evl_side *d = &x->side[slab];
     d->stopped = true;
     d->deep = deep;
+    d->oom = false;
     nbep_cascade_copy(&d->stop, s);
     d->stop_t = t;
     if (x->slabs > 1) /* (one slab stops at its stop: nothing else runs on) */
@@ -529,15 +532,20 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
     evl_ws *w = &e->ws[0][0];
     nbep__evloop_handle(e, w, x->ops, d->u, i, &ev, t, true);
     nbep__evloop_count_handled(&d->tally, w);
-    if (w->stop) {
+    /* (out of memory: the serial loop fails at this event, before its commit, with what came
+     * before it done and nothing after; a slab's failure here would end the call with the other
+     * slabs wherever they were, ahead of it or behind, so it is a stop, and fails at the
+     * meeting where it stands) */
+    if (w->stop || w->oom) {
         stop_at(x, slab, s, t, false);
+        d->oom = w->oom;
         return;
     }
     /* An expiry whose commit may move lists past its slab's arena of the lists' pool (the
      * bound of nblist.h: most never move one) is left undone, its slot put back (what else it
      * did, its counts, the meeting's cut undoes: it is at the limit), and waits for the
      * meeting, which has the pool to itself (meet: the arenas renewed). */
-    if (x->slabs > 1 && w->rebuilt && !w->oom &&
+    if (x->slabs > 1 && w->rebuilt &&
         nbep_nblist_spare(&e->nl) < nbep_nblist_need(&e->nl, w->n_near, w->n_near)) {
         nbep_feq_put(e->q, i, ev);
         d->blocked = d->cramped = true;
@@ -557,7 +565,7 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
         e->failed = true;
         return;
     }
-    if (!w->rebuilt || w->oom) {
+    if (!w->rebuilt) {
         nbep__evloop_commit(e, w);
         return;
     }
@@ -931,6 +939,7 @@ static bool meet(struct evl_sched *x)
             }
             window_closed(x, false);
             x->stop = true;
+            x->e->failed |= d->oom;
             x->too_deep = d->deep;
             x->t_stuck = d->stop_t;
             return true;
