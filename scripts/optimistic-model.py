@@ -17,7 +17,11 @@ time, its list centre's place across x (0 to 1), how far across x its footprint 
 kind and the events whose writes it reads or overwrites. With `--expiries wait` a list expiry
 whose footprint reaches into another slab is not handled ahead: it waits until every slab it
 reaches has handled its events before it (the first step of docs/optimistic-design.md, which
-keeps versions of motion only).
+keeps versions of motion only). With `--expiries meet` such an expiry ends the window, as the
+scheduled loop's slabs do (`NBEP_SCHEDULED=1 NBEP_SLABS`): every slab ends its events before
+it, the barrier, the expiry alone on one thread, and the next window; with `--meet-every K`
+only every K-th such expiry does, the others going ahead (docs/optimistic-design.md, *What ends
+the windows*: 94 % of them stay in their slab and could go ahead as messages, K = 16).
 
 Costs, in units of one event handled: each event 1; each event undone `--undo` (default
 0.3); each window's barrier `--barrier` (default 0.2). The events are replayed in the trace's
@@ -31,7 +35,7 @@ figures are an upper bound: the bookkeeping an optimistic event does beyond one 
 
     build/bench/bench_parallelism run DECK --resume MELT.h5 -t 1 -n N  (NBEP_PAR_TRACE=FILE)
     scripts/optimistic-model.py FILE [--slabs 2,4,8,16] [--windows ...] [--undo U] [--barrier B]
-                                     [--expiries ahead|wait]
+                                     [--expiries ahead|wait|meet] [--meet-every K]
 """
 import argparse
 import struct
@@ -66,7 +70,15 @@ def slab_of(x, slabs):
     return int((x % 1.0) * slabs) % slabs
 
 
-def model(times, places, reach, kinds, deps, slabs, window, undo, barrier, wait):
+def reaches_across(places, reach, e, slabs):
+    """Whether event e's footprint reaches a slab other than its own."""
+    lo, hi = reach[e]
+    return slab_of(places[e] + lo, slabs) != slab_of(places[e] + hi, slabs) or \
+        slab_of(places[e] + lo, slabs) != slab_of(places[e], slabs)
+
+
+def model(times, places, reach, kinds, deps, slabs, window, undo, barrier, wait,
+          meet=False, meet_every=1):
     """(speed-up over one thread, events handled again / events, windows) for one setting.
 
     Each event's last (kept) handling, in the trace's order (a time order, so every event comes
@@ -76,7 +88,10 @@ def model(times, places, reach, kinds, deps, slabs, window, undo, barrier, wait)
     what it had handled since, about late - ahead events, at `undo` each) and handles it
     again from there. Rollbacks so follow from rollbacks (cascades are in). With `wait`, an
     expiry whose footprint reaches another slab starts only once each slab it reaches has
-    ended its events before it (their clocks now, in the trace's time order)."""
+    ended its events before it (their clocks now, in the trace's time order). With `meet`,
+    every `meet_every`-th such expiry ends the window instead: all slabs end what came before
+    it, the barrier, then it alone, and a window opens after it (it depends on nothing of the
+    new window, and nothing there on it as of another slab's late news)."""
     n = len(times)
     t0 = times[0]
     slab = [slab_of(x, slabs) for x in places]
@@ -84,17 +99,31 @@ def model(times, places, reach, kinds, deps, slabs, window, undo, barrier, wait)
     end = [0.0] * n                      # each event's end, from its window's start
     clock = [0.0] * slabs                # each slab's end of its last event in the window
     length, redone, w_cur, windows = 0.0, 0.0, win[0], 1
+    wid = [0] * n                        # each event's window, counting the meetings' too
+    cur, held = 0, 0
     for e in range(n):
         if win[e] != w_cur:              # the barrier: every slab starts the next window at 0
             length += max(clock) + barrier
             clock = [0.0] * slabs
             w_cur = win[e]
             windows += 1
+            cur += 1
+        if meet and kinds[e] == EXPIRY and reaches_across(places, reach, e, slabs):
+            held += 1
+            if (held - 1) % meet_every == 0:  # a meeting: it alone between two windows
+                length += max(clock) + barrier + 1.0
+                clock = [0.0] * slabs
+                windows += 1
+                cur += 1
+                wid[e] = -1
+                end[e] = 0.0
+                continue
+        wid[e] = cur
         b = slab[e]
         ahead = clock[b]
         late = ahead
         for s in deps[e]:
-            if win[s] == w_cur and slab[s] != b and end[s] > late:
+            if wid[s] == cur and slab[s] != b and end[s] > late:
                 late = end[s]
         if late > ahead:                 # read too soon: undo what was handled since, again
             redone += late - ahead
@@ -120,7 +149,9 @@ def main():
                     help="window widths W in units of simulated time")
     ap.add_argument("--undo", type=float, default=0.3)
     ap.add_argument("--barrier", type=float, default=0.2)
-    ap.add_argument("--expiries", choices=("ahead", "wait"), default="ahead")
+    ap.add_argument("--expiries", choices=("ahead", "wait", "meet"), default="ahead")
+    ap.add_argument("--meet-every", type=int, default=1,
+                    help="with --expiries meet: every K-th expiry reaching across meets")
     a = ap.parse_args()
     times, places, reach, kinds, deps = read_trace(a.trace)
     if not times:
@@ -134,7 +165,7 @@ def main():
     for p in (int(s) for s in a.slabs.split(",")):
         for w in (float(s) for s in a.windows.split(",")):
             sp, again, nw = model(times, places, reach, kinds, deps, p, w, a.undo, a.barrier,
-                                  a.expiries == "wait")
+                                  a.expiries == "wait", a.expiries == "meet", a.meet_every)
             print(f"| {p} | {w:g} | {len(times) / nw / p:.0f} | {100 * again:.1f} % | "
                   f"{sp:.2f} |")
 

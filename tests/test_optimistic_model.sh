@@ -5,7 +5,8 @@
 # the other slab's event of the same window waits for it, rolled back (a chain across the
 # slabs: 1 time, half the events handled again); a dependence on an earlier window costs
 # nothing (the barrier settled it); the barrier's and the undo's costs counted as stated; with
-# --expiries wait, an expiry whose footprint reaches the other slab waits for it. Then
+# --expiries wait, an expiry whose footprint reaches the other slab waits for it, and with
+# --expiries meet ends the window, alone between two (every K-th of them: --meet-every). Then
 # the trace bench_parallelism writes (NBEP_PAR_TRACE) of a small fluid: a record for each
 # event it counts, each depending on earlier events only. Exit status 1 when a check fails.
 . "$(dirname "$0")/lib.sh"
@@ -57,6 +58,21 @@ model "$tmp/inside" --slabs 2 --windows 10 --barrier 0 --expiries wait >"$tmp/in
 check "an expiry reaching the other slab: 2.00 handled ahead, 1.20 waiting; inside its own, 2.00" \
     "row '$tmp/ahead.txt' 2 10 | grep -qF '| 2.00 |' && row '$tmp/wait.txt' 2 10 | grep -qF '| 1.20 |' &&
      row '$tmp/inside.txt' 2 10 | grep -qF '| 2.00 |' && grep -q '(1 list expiries, wait)' '$tmp/wait.txt'"
+# --expiries meet (the scheduled loop's slabs): the expiry reaching across ends the window,
+# alone between two: 2 events, it, then 2 (1.20); with a barrier as dear as an event, 7 (0.86);
+# inside its own slab it does not (2.00); a second one reaching across meets too (6 in 6:
+# 1.00), but with --meet-every 2 goes ahead (1.20)
+trace expiry2 '0.125 0.75;0.1875 0.75;0.25 0.25 - 0.3 1;0.375 0.75;0.5 0.25 - 0.3 1;0.625 0.25'
+model "$tmp/expiry" --slabs 2 --windows 10 --barrier 0 --expiries meet >"$tmp/meet.txt" 2>&1
+model "$tmp/expiry" --slabs 2 --windows 10 --barrier 1 --expiries meet >"$tmp/meetb.txt" 2>&1
+model "$tmp/inside" --slabs 2 --windows 10 --barrier 0 --expiries meet >"$tmp/meeti.txt" 2>&1
+model "$tmp/expiry2" --slabs 2 --windows 10 --barrier 0 --expiries meet >"$tmp/meet2.txt" 2>&1
+model "$tmp/expiry2" --slabs 2 --windows 10 --barrier 0 --expiries meet --meet-every 2 \
+    >"$tmp/meet2e.txt" 2>&1
+check "an expiry reaching the other slab at a meeting: 1.20, 0.86 with a barrier of 1; inside its own, 2.00; two meeting 1.00, every second one 1.20" \
+    "row '$tmp/meet.txt' 2 10 | grep -qF '| 1.20 |' && row '$tmp/meetb.txt' 2 10 | grep -qF '| 0.86 |' &&
+     row '$tmp/meeti.txt' 2 10 | grep -qF '| 2.00 |' && row '$tmp/meet2.txt' 2 10 | grep -qF '| 1.00 |' &&
+     row '$tmp/meet2e.txt' 2 10 | grep -qF '| 1.20 |'"
 
 # bench_parallelism's trace of a small periodic fluid, cells mode, one thread
 bench=build/bench/bench_parallelism
