@@ -4512,6 +4512,16 @@ MUTANTS = [
     ("slabs-oom-stop-not-failed", "src/evloop_warp.c",
      "            x->e->failed |= d->oom;", "            x->e->failed |= false;",
      ["test_team_faults"], None),
+    # a stop found before its event was handled (a stall) copying its pair's other sphere from
+    # the stopping slab's world into its owner's
+    ("slabs-stop-copied-unhandled", "src/evloop_warp.c",
+     "    if (!d->handled)\n        return;", "    if (d->deep)\n        return;",
+     ["test_team_faults", "test_sched_slabs"],
+     "untested: the copy differs from the owner's only where the stopping pair's other sphere is one the slab no longer follows (evloop.c's followed), which no scene meets; a stall's own sphere is the slab's, its copy current"),
+    # the scheduled loop's stall check passed by (its stop never made)
+    ("slabs-stall-not-a-stop", "src/evloop_warp.c",
+     "    if (!nbep__evloop_advances(&d->stall, t)) { /* (as the serial loop: before handling it) */",
+     "    if (!nbep__evloop_advances(&d->stall, t) && false) {", ["test_team_faults"], None),
 ]
 
 

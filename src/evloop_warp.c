@@ -134,9 +134,9 @@ typedef struct {
     /* stopped: an event of the slab, stamped `stop` (at stop_t), stops the loop (stuck, a
      * reaction's stop; deep: a cascade deeper than a stamp holds, found at that entry, not
      * handled; oom: a walk or a reaction's copy out of memory, the loop failing there as the
-     * serial loop's commit fails); it stands while the slab's log holds it, else a rollback
-     * undid it */
-    bool stopped, deep, oom;
+     * serial loop's commit fails; handled: the event was handled, a stall's was not); it stands
+     * while the slab's log holds it, else a rollback undid it */
+    bool stopped, deep, oom, handled;
     nbep_stamp stop;
     double stop_t;
     /* the window's expiries, by their place in it (the log's item for them, past the
@@ -246,15 +246,18 @@ static bool at_limit(struct evl_sched *x, const nbep_stamp *s, bool past)
 }
 
 /* No more events after slab's event stamped *s (at t; deep: a cascade too deep for its
- * stamps, found at that entry): the slab stops there, and the other slabs go on to it (the
+ * stamps, found at that entry; handled: the event was handled, its reaction done): the slab
+ * stops there, and the other slabs go on to it (the
  * limit); at the window's end, if it still stands, the call returns false with t in *t_stuck
  * (meet). */
-static void stop_at(struct evl_sched *x, int slab, const nbep_stamp *s, double t, bool deep)
+static void stop_at(struct evl_sched *x, int slab, const nbep_stamp *s, double t, bool deep,
+                    bool handled)
 {
     evl_side *d = &x->side[slab];
     d->stopped = true;
     d->deep = deep;
     d->oom = false;
+    d->handled = handled;
     nbep_cascade_copy(&d->stop, s);
     d->stop_t = t;
     if (x->slabs > 1) /* (one slab stops at its stop: nothing else runs on) */
@@ -356,7 +359,7 @@ static bool sched_next(void *arg, int slab, nbep_stamp *s)
      * cascade at one time is deeper than a stamp holds (made_by), a root stamp does: the loop
      * stops there, too deep (nbep_evloop_too_deep: its own message) */
     if (d->has_last && nbep_cascade_cmp(s, &d->last) < 0) {
-        stop_at(x, slab, s, t, true);
+        stop_at(x, slab, s, t, true, false);
         return false;
     }
     /* an expiry reaching another slab's lists or cells waits for the meeting (sched_held),
@@ -518,8 +521,8 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
         return;
     }
     d->tally.events++;
-    if (!nbep__evloop_advances(&d->stall, t)) {
-        stop_at(x, slab, s, t, false);
+    if (!nbep__evloop_advances(&d->stall, t)) { /* (as the serial loop: before handling it) */
+        stop_at(x, slab, s, t, false, false);
         return;
     }
     /* what it may change: its sphere and, for a pair, the other (a free flight's reaction
@@ -537,7 +540,7 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
      * slabs wherever they were, ahead of it or behind, so it is a stop, and fails at the
      * meeting where it stands) */
     if (w->stop || w->oom) {
-        stop_at(x, slab, s, t, false);
+        stop_at(x, slab, s, t, false, true);
         d->oom = w->oom;
         return;
     }
@@ -907,7 +910,9 @@ static void copied_to_all(struct evl_sched *x, int slab, uint32_t i)
 static void stopped_copied(struct evl_sched *x, int slab)
 {
     const evl_side *d = &x->side[slab];
-    if (d->deep) /* (found at an entry, not handled: nothing changed) */
+    /* (not handled, found at its entry or at the stall check: nothing changed, and its pair's
+     * other sphere's copy here may be older than its owner's) */
+    if (!d->handled)
         return;
     const uint32_t i = d->stop.level[d->stop.depth - 1].item;
     const nbep_event *ev = nbep_feq_slot(x->e->q, i); /* (a stop commits nothing: its slot) */

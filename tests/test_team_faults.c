@@ -21,6 +21,9 @@ static void stall_hook(struct nbep_evloop_stall *st, double t);
 static double oom_from = INFINITY;
 #define NBEP_EVLOOP_STALL_HOOK(st, t) stall_hook(st, t)
 #define NBEP_EVLOOP_OOM_HOOK(i, t) ((void)(i), (t) >= oom_from)
+struct evl_sched;
+static void on_destroy(const struct evl_sched *x);
+#define NBEP_SCHED_DESTROY_HOOK(x) on_destroy(x)
 #include "../src/evloop.c"
 #include "../src/evloop_team.c"
 #include "../src/evloop_warp.c"
@@ -43,9 +46,11 @@ static double oom_from = INFINITY;
 #include "nbep_test_scene.h"
 #include "nbep_test_signalled.h"
 
-/* From this time on the stall check fails at its next look (every STALL_LOOK events): as
- * though the events there stood still. */
+/* From this time on the stall check fails at its next look (every STALL_LOOK events, or at
+ * once where look_at_once is set: the slabs count their events apart, so that the 64th falls
+ * elsewhere there): as though the events there stood still. */
 static double stall_from = INFINITY;
+static bool look_at_once;
 #define STALL_LOOK 64
 /* From this time on the run's stop signal is raised (SIGTERM), and the loop looks at it at
  * every event (it looks every NBEP_EVLOOP_STOP_EVERY events, more than a step of these scenes
@@ -61,8 +66,8 @@ static void stall_hook(nbep_evloop_stall *st, double t)
     if (stall_from == INFINITY && signal_from == INFINITY)
         return;
     st->events = STALL_LOOK;
-    if (t >= stall_from) { /* (a look at once: the slabs count their events apart) */
-        st->events = 1;
+    if (t >= stall_from) {
+        st->events = look_at_once ? 1 : STALL_LOOK;
         st->dt = INFINITY;
     }
     if (t >= signal_from) {
@@ -71,21 +76,34 @@ static void stall_hook(nbep_evloop_stall *st, double t)
     }
 }
 
+/* The events the scheduled loop's slabs undid, summed over the loops destroyed since reset */
+static uint64_t undone;
+
+static void on_destroy(const struct evl_sched *x)
+{
+    for (int k = 0; k < x->slabs; k++)
+        undone += nbep_warp_tally_of(x->warp, k).undone;
+}
+
 /* The ways past one thread that must stop as it does: the team on 2, 3 and 4 threads (TEAMS),
- * then the scheduled loop's slabs (NBEP_SCHEDULED with NBEP_SLABS: 2 slabs in turns on one
- * thread, 2 and 3 slabs on 2 threads), which run ahead of each other and are cut back to the
- * stop where it stands (src/evloop_warp.c; until 2026-12-07 a walk out of memory there ended
- * the call with the other slabs wherever they were). Way q's settings made (the teardown,
- * faults_off, takes them away); its thread count returned. */
+ * then the scheduled loop (NBEP_SCHEDULED) on one slab (one thread), and its slabs
+ * (NBEP_SLABS: 2 slabs in turns on one thread, 2 and 3 slabs on 2 threads, from SLABS on),
+ * which run ahead of each other and are cut back to the stop where it stands
+ * (src/evloop_warp.c; until 2026-12-07 a walk out of memory there ended the call with the
+ * other slabs wherever they were). Way q's settings made (the teardown, faults_off, takes them
+ * away); its thread count returned. */
 #define TEAMS 3
-#define WAYS 6
+#define SLABS 4
+#define WAYS 7
 static int way(int q)
 {
     if (q < TEAMS)
         return q + 2;
     setenv("NBEP_SCHEDULED", "1", 1);
+    if (q < SLABS)
+        return 1;
     setenv("NBEP_SLABS", q == WAYS - 1 ? "3" : "2", 1);
-    return q == TEAMS ? 1 : 2;
+    return q == SLABS ? 1 : 2;
 }
 
 /* Every fault disarmed and every setting gone, also after a failed test (whose asserts leave
@@ -94,6 +112,7 @@ static int faults_off(void **state)
 {
     (void)state;
     stall_from = oom_from = signal_from = INFINITY;
+    look_at_once = false;
     unsetenv("NBEP_SCHEDULED");
     unsetenv("NBEP_SLABS");
     unsetenv("NBEP_TEAM");
@@ -102,8 +121,10 @@ static int faults_off(void **state)
 
 /* An elastic periodic fluid at phi = 0.45 (the team handles most of its events ahead, undoing
  * some) that would run 6 steps of 0.03, stopped from t = 0.075 (its third step) by the fault
- * that *from arms: on 1 thread with status want and a message holding what, then on 2, 3 and
- * 4 threads with the same status, message and state, events having gone ahead. */
+ * that *from arms: on 1 thread with status want and a message holding what, then the other
+ * ways with the same status, message and state, events having gone ahead (the team's places,
+ * the slabs' events undone). Twice: a stall's look every 64 events, where the team's count of
+ * events must be one thread's, then at once, for the slabs too. */
 static void team_stops_as_one_thread(double *from, nbep_status want, const char *what)
 {
     nbep_scene *sc = nbep_test_periodic_fluid(nbep_test_scaled(12, 10), 0.45, 6, 0.03, 7);
@@ -115,26 +136,33 @@ static void team_stops_as_one_thread(double *from, nbep_status want, const char 
     /* unarmed, the run ends: the fault is the hook's */
     assert_int_equal(nbep_test_run_to_end(sc, 2, msg, sizeof msg, &ahead, &fin), NBEP_OK);
     nbep_state_fini(&fin);
-    *from = 0.075;
-    assert_int_equal(nbep_test_run_to_end(sc, 1, ref, sizeof ref, &ahead, &fin1), want);
-    assert_non_null(strstr(ref, what));
-    unsigned long long step = 0; /* a step from the one armed (the third) to the last */
-    assert_int_equal(sscanf(ref, "nbep: step %llu:", &step), 1);
-    assert_true(step >= 3 && step <= 6);
-    assert_int_equal(ahead, 0);
-    for (int q = 0; q < WAYS; q++) {
-        const int nt = way(q);
-        assert_int_equal(nbep_test_run_to_end(sc, nt, msg, sizeof msg, &ahead, &fin), want);
-        assert_string_equal(msg, ref);
-        assert_true(ahead > 0 || q >= TEAMS); /* (the team's count of places handled ahead) */
-        assert_memory_equal(fin.pos, fin1.pos, fin1.n * sizeof *fin1.pos);
-        assert_memory_equal(fin.vel, fin1.vel, fin1.n * sizeof *fin1.vel);
-        assert_memory_equal(fin.image, fin1.image, 3 * fin1.n * sizeof *fin1.image);
-        nbep_state_fini(&fin);
+    for (int pass = 0; pass < 2; pass++) {
+        look_at_once = pass == 1;
+        unsetenv("NBEP_SCHEDULED");
+        unsetenv("NBEP_SLABS");
+        *from = 0.075;
+        assert_int_equal(nbep_test_run_to_end(sc, 1, ref, sizeof ref, &ahead, &fin1), want);
+        assert_non_null(strstr(ref, what));
+        unsigned long long step = 0; /* a step from the one armed (the third) to the last */
+        assert_int_equal(sscanf(ref, "nbep: step %llu:", &step), 1);
+        assert_true(step >= 3 && step <= 6);
+        assert_int_equal(ahead, 0);
+        for (int q = 0; q < (pass == 0 ? TEAMS : WAYS); q++) {
+            const int nt = way(q);
+            undone = 0;
+            assert_int_equal(nbep_test_run_to_end(sc, nt, msg, sizeof msg, &ahead, &fin), want);
+            assert_string_equal(msg, ref);
+            /* (ahead: the team's places handled ahead; the slabs' events undone) */
+            assert_true(q < TEAMS ? ahead > 0 : q < SLABS || undone > 0);
+            assert_memory_equal(fin.pos, fin1.pos, fin1.n * sizeof *fin1.pos);
+            assert_memory_equal(fin.vel, fin1.vel, fin1.n * sizeof *fin1.vel);
+            assert_memory_equal(fin.image, fin1.image, 3 * fin1.n * sizeof *fin1.image);
+            nbep_state_fini(&fin);
+        }
+        nbep_state_fini(&fin1);
     }
     *from = INFINITY;
     unsetenv("NBEP_TEAM");
-    nbep_state_fini(&fin1);
     nbep_test_scene_free(&sc);
 }
 
