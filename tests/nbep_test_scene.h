@@ -316,10 +316,12 @@ static inline nbep_summary nbep_test_run(const nbep_scene *sc, int nt, nbep_fram
 }
 
 /* A run of sc on nt threads that may fail (a jam, a fault): its status, its one message (""
- * when it ended), the counter `ahead` (events the cells team handled ahead of their turn) and
- * the state it stopped in, into *fin (the caller's to nbep_state_fini). */
-static inline nbep_status nbep_test_run_to_end(const nbep_scene *sc, int nt, char *msg,
-                                               size_t cap, uint64_t *ahead, nbep_state *fin)
+ * when it ended), the counter `ahead` (events the cells team handled ahead of their turn),
+ * every counter where counts is not NULL, and the state it stopped in, into *fin (the
+ * caller's to nbep_state_fini). */
+static inline nbep_status nbep_test_run_to_end_counted(const nbep_scene *sc, int nt, char *msg,
+                                                       size_t cap, uint64_t *ahead,
+                                                       nbep_state *fin, uint64_t *counts)
 {
     nbep_diag d;
     nbep_diag_init(&d);
@@ -330,10 +332,19 @@ static inline nbep_status nbep_test_run_to_end(const nbep_scene *sc, int nt, cha
     assert_int_equal(d.n_errors, st == NBEP_OK ? 0 : 1);
     snprintf(msg, cap, "%s", d.n_errors ? d.msg[0] : "");
     *ahead = nbep_sim_counter(sim, NBEP_COUNTER_AHEAD);
+    for (int k = 0; counts && k < NBEP_COUNTER_COUNT; k++)
+        counts[k] = nbep_sim_counter(sim, (enum nbep_counter)k);
     assert_int_equal(nbep_state_copy(fin, nbep_sim_state(sim), &d), NBEP_OK);
     nbep_sim_destroy(&sim);
     nbep_diag_fini(&d);
     return st;
+}
+
+/* nbep_test_run_to_end_counted without the counters */
+static inline nbep_status nbep_test_run_to_end(const nbep_scene *sc, int nt, char *msg,
+                                               size_t cap, uint64_t *ahead, nbep_state *fin)
+{
+    return nbep_test_run_to_end_counted(sc, nt, msg, cap, ahead, fin, NULL);
 }
 
 /* Runs the deck at deck_path through nbep's one run pipeline (what `nbep run` does), writing

@@ -141,7 +141,9 @@ static void team_stops_as_one_thread(double *from, nbep_status want, const char 
         unsetenv("NBEP_SCHEDULED");
         unsetenv("NBEP_SLABS");
         *from = 0.075;
-        assert_int_equal(nbep_test_run_to_end(sc, 1, ref, sizeof ref, &ahead, &fin1), want);
+        uint64_t counts1[NBEP_COUNTER_COUNT], counts[NBEP_COUNTER_COUNT];
+        assert_int_equal(
+            nbep_test_run_to_end_counted(sc, 1, ref, sizeof ref, &ahead, &fin1, counts1), want);
         assert_non_null(strstr(ref, what));
         unsigned long long step = 0; /* a step from the one armed (the third) to the last */
         assert_int_equal(sscanf(ref, "nbep: step %llu:", &step), 1);
@@ -150,8 +152,13 @@ static void team_stops_as_one_thread(double *from, nbep_status want, const char 
         for (int q = 0; q < (pass == 0 ? TEAMS : WAYS); q++) {
             const int nt = way(q);
             undone = 0;
-            assert_int_equal(nbep_test_run_to_end(sc, nt, msg, sizeof msg, &ahead, &fin), want);
+            assert_int_equal(
+                nbep_test_run_to_end_counted(sc, nt, msg, sizeof msg, &ahead, &fin, counts), want);
             assert_string_equal(msg, ref);
+            /* the counts to the fault one thread's (but the team's own, ahead and undone) */
+            for (int k = 0; k < NBEP_COUNTER_COUNT; k++)
+                if (k != NBEP_COUNTER_AHEAD && k != NBEP_COUNTER_UNDONE)
+                    assert_int_equal(counts[k], counts1[k]);
             /* (ahead: the team's places handled ahead; the slabs' events undone) */
             assert_true(q < TEAMS ? ahead > 0 : q < SLABS || undone > 0);
             assert_memory_equal(fin.pos, fin1.pos, fin1.n * sizeof *fin1.pos);
