@@ -67,6 +67,9 @@ LEADER := $(BUILD)/bench/bench_leader
 # the same with a copy whose events also do the optimistic scheme's bookkeeping (README,
 # Threads on dense scenes): tests/test_optimistic_model.sh checks its bound
 VERSIONS := $(BUILD)/bench/bench_versions
+# the same with a copy of the scheduled loop that counts what ends its windows on slabs (README,
+# Micro-benchmarks): tests/test_optimistic_model.sh runs it
+WINDOWS := $(BUILD)/bench/bench_windows
 
 # One job a core unless -j is given: a serial build takes over a minute on 2 cores (the slowest
 # file, evloop.c, 5 s alone), about half that in parallel. Only at the top: a make
@@ -137,7 +140,7 @@ pgo: $(BUILD)/nbep
 # (NBEP_TEST_JOBS), then with VALGRIND=1 the test binaries again under memcheck (make valgrind;
 # CI runs both, one after the other: memcheck alone takes longer than the 10 minutes a check
 # should take).
-check: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY) $(PARALLELISM) $(LEADER) $(VERSIONS)
+check: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY) $(PARALLELISM) $(LEADER) $(VERSIONS) $(WINDOWS)
 	@python3 scripts/mutate.py --stale
 	@bash scripts/run-tests.sh $(TEST_BIN) $(TEST_SH)
 ifeq ($(VALGRIND),1)
@@ -150,7 +153,8 @@ valgrind: $(TEST_BIN)
 	@bash scripts/run-tests.sh --valgrind $(TEST_BIN)
 
 # Every program make check runs, built but not run (scripts/mutate.py builds these per mutant).
-check-programs: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY) $(PARALLELISM) $(LEADER) $(VERSIONS)
+check-programs: bin/nbep $(TEST_BIN) $(FUZZ_REPLAY) $(PARALLELISM) $(LEADER) $(VERSIONS) \
+		$(WINDOWS)
 
 $(FUZZ_REPLAY): tests/fuzz/replay.c tests/fuzz/fuzz_scene.c tests/fuzz/sources $(FUZZ_SRC) \
 		$(wildcard include/nbep/*.h src/*.h) | $(BUILD)/tests

@@ -179,6 +179,7 @@ struct evl_sched {
     bool too_deep;       /* ... the last: a cascade deeper than a stamp holds */
     double t_stuck;
     uint64_t meetings;   /* expiries done at a meeting (with slabs) */
+    uint64_t moves;      /* ... of those, the ones that moved their sphere to another slab */
     unsigned idle_windows; /* windows in a row cut back to keep nothing (meet) */
     double window_end;   /* the window's: a slab's entry held at or past it waits for a later
                           * window */
@@ -1016,6 +1017,7 @@ static bool meet(struct evl_sched *x)
      * members), and its entry set again. */
     const int owner = nbep__evloop_sphere_slab(e, i);
     if (owner != slab) {
+        x->moves++;
         evl_side *o = &x->side[owner];
         nbep_evloop_mark before;
         const bool marked = !x->ops->mark || x->ops->mark(o->u, &before);

@@ -113,6 +113,19 @@ check "a trace that cannot be written: exit 2 (got $rc), the one line naming it"
 model "$tmp/fluid.bin" --slabs 2 --windows 0.01 >"$tmp/fluid.txt" 2>&1
 check "the model reads it: a row for 2 slabs" "row '$tmp/fluid.txt' 2 0.01 | grep -qE '\| [0-9.]+ \|$'"
 
+# bench_windows (what ends the scheduled loop's windows on slabs) on the same fluid, 2 slabs on
+# 2 threads: one line, with meetings, no more moves than meetings nor meetings than windows,
+# and the frames bin/nbep writes
+NBEP_SCHEDULED=1 NBEP_SLABS=2 build/bench/bench_windows run "$tmp/fluid.deck" \
+    -o "$tmp/windows.h5" -t 2 --quiet >/dev/null 2>"$tmp/windows.err"
+rc=$?
+bin/nbep run "$tmp/fluid.deck" -o "$tmp/plain.h5" -t 1 --quiet >/dev/null 2>&1
+read -r wins meets moves <<<"$(sed -n 's/^bench_windows: 2 slabs: \([0-9]*\) windows, \([0-9]*\) meetings, \([0-9]*\) of them.*/\1 \2 \3/p' "$tmp/windows.err")"
+check "bench_windows, 2 slabs on 2 threads: exit 0 (got $rc), one line: ${wins:-?} windows, ${meets:-?} meetings, ${moves:-?} moving; the plain run's frames" \
+    "[ $rc = 0 ] && [ \$(grep -c '^bench_windows: ' '$tmp/windows.err') = 1 ] &&
+     [ '${meets:-0}' -gt 0 ] && [ '${moves:-0}' -le '${meets:-0}' ] && [ '${meets:-0}' -le '${wins:-0}' ] &&
+     h5diff -q '$tmp/plain.h5' '$tmp/windows.h5' /frames"
+
 # bench_versions (the scheme's bookkeeping on one thread) on a fluid long across x: with
 # NBEP_VER_VERIFY every list is read through, and no member of another slab may sit in a list
 # that the side's reach skips, nor be read from another slab with no record kept; no read
