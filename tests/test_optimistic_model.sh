@@ -69,10 +69,17 @@ model "$tmp/inside" --slabs 2 --windows 10 --barrier 0 --expiries meet >"$tmp/me
 model "$tmp/expiry2" --slabs 2 --windows 10 --barrier 0 --expiries meet >"$tmp/meet2.txt" 2>&1
 model "$tmp/expiry2" --slabs 2 --windows 10 --barrier 0 --expiries meet --meet-every 2 \
     >"$tmp/meet2e.txt" 2>&1
-check "an expiry reaching the other slab at a meeting: 1.20, 0.86 with a barrier of 1; inside its own, 2.00; two meeting 1.00, every second one 1.20" \
+# after a meeting, nothing before it is read too soon: slab 0's event, then its expiry reaching
+# across (met), then two of slab 1's reading both: 1 + the meeting's 1, then 2 (4 in 4: 1.00,
+# nothing handled again; were the meeting not a window's end, slab 1's first would be
+# handled again: 0.75)
+trace after '0.1 0.25;0.2 0.25 - 0.3 1;0.3 0.75 0,1;0.4 0.75 1'
+model "$tmp/after" --slabs 2 --windows 10 --barrier 0 --expiries meet >"$tmp/after.txt" 2>&1
+check "an expiry reaching the other slab at a meeting: 1.20, 0.86 with a barrier of 1; inside its own, 2.00; two meeting 1.00, every second one 1.20; what came before a meeting read freely after it (1.00)" \
     "row '$tmp/meet.txt' 2 10 | grep -qF '| 1.20 |' && row '$tmp/meetb.txt' 2 10 | grep -qF '| 0.86 |' &&
      row '$tmp/meeti.txt' 2 10 | grep -qF '| 2.00 |' && row '$tmp/meet2.txt' 2 10 | grep -qF '| 1.00 |' &&
-     row '$tmp/meet2e.txt' 2 10 | grep -qF '| 1.20 |'"
+     row '$tmp/meet2e.txt' 2 10 | grep -qF '| 1.20 |' &&
+     row '$tmp/after.txt' 2 10 | grep -qF '| 0.0 % | 1.00 |'"
 
 # bench_parallelism's trace of a small periodic fluid, cells mode, one thread
 bench=build/bench/bench_parallelism
