@@ -70,11 +70,17 @@ def slab_of(x, slabs):
     return int((x % 1.0) * slabs) % slabs
 
 
+def reached(places, reach, e, slabs):
+    """The slabs event e's footprint reaches, first to last (round a periodic x), its own
+    among them (its reach runs from lo <= 0 to hi >= 0)."""
+    lo, hi = reach[e]
+    return slab_of(places[e] + lo, slabs), slab_of(places[e] + hi, slabs)
+
+
 def reaches_across(places, reach, e, slabs):
     """Whether event e's footprint reaches a slab other than its own."""
-    lo, hi = reach[e]
-    return slab_of(places[e] + lo, slabs) != slab_of(places[e] + hi, slabs) or \
-        slab_of(places[e] + lo, slabs) != slab_of(places[e], slabs)
+    first, last = reached(places, reach, e, slabs)
+    return first != last
 
 
 def model(times, places, reach, kinds, deps, slabs, window, undo, barrier, wait,
@@ -131,8 +137,7 @@ def model(times, places, reach, kinds, deps, slabs, window, undo, barrier, wait,
         else:
             start = ahead
         if wait and kinds[e] == EXPIRY:  # held until the slabs it reaches are past it
-            lo, hi = reach[e]
-            first, last = slab_of(places[e] + lo, slabs), slab_of(places[e] + hi, slabs)
+            first, last = reached(places, reach, e, slabs)
             for j in range((last - first) % slabs + 1):
                 start = max(start, clock[(first + j) % slabs])
         end[e] = start + 1.0

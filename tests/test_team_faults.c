@@ -137,9 +137,7 @@ static void team_stops_as_one_thread(double *from, nbep_status want, const char 
     assert_int_equal(nbep_test_run_to_end(sc, 2, msg, sizeof msg, &ahead, &fin), NBEP_OK);
     nbep_state_fini(&fin);
     for (int pass = 0; pass < 2; pass++) {
-        look_at_once = pass == 1;
-        unsetenv("NBEP_SCHEDULED");
-        unsetenv("NBEP_SLABS");
+        look_at_once = pass == 1; /* (the first pass sets no scheduled way: way(q < TEAMS)) */
         *from = 0.075;
         uint64_t counts1[NBEP_COUNTER_COUNT], counts[NBEP_COUNTER_COUNT];
         assert_int_equal(
@@ -168,9 +166,7 @@ static void team_stops_as_one_thread(double *from, nbep_status want, const char 
         }
         nbep_state_fini(&fin1);
     }
-    *from = INFINITY;
-    unsetenv("NBEP_TEAM");
-    nbep_test_scene_free(&sc);
+    nbep_test_scene_free(&sc); /* (the fault and the settings: faults_off) */
 }
 
 /* A stall: the step fails at the event where the check first fails (status numeric, "events at
@@ -234,8 +230,6 @@ static void test_a_signal_abandons_the_step_on_any_thread_count(void **state)
         assert_memory_equal(fin.vel, fin1.vel, fin1.n * sizeof *fin1.vel);
         nbep_state_fini(&fin);
     }
-    signal_from = INFINITY;
-    unsetenv("NBEP_TEAM");
     nbep_state_fini(&fin1);
     nbep_test_scene_free(&sc);
 }

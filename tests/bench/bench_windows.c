@@ -1,7 +1,7 @@
 /* What ends the scheduled loop's windows on slabs (NBEP_SCHEDULED=1 with NBEP_SLABS): bin/nbep
  * itself (src/main.c), with its own copy of the loop (src/evloop_warp.c) whose hooks count the
- * windows opened, and which at each loop's end (a run's, or a resume's) prints to stderr one
- * line: the windows, the meetings (a list expiry near a face held for a window's end and done
+ * windows opened, and which at the run's end (the loop's, made once a run) prints to stderr
+ * one line: the windows, the meetings (a list expiry near a face held for a window's end and done
  * there), how many of those moved their sphere to another slab, the expiries that waited for
  * room in their slab's arena of the lists' pool, and the scheduler's own tallies summed over
  * the slabs (events handled, messages acted on, events and messages undone, rollbacks).
