@@ -4,8 +4,8 @@
  * events and rollbacks on three slabs against a plain model of the world, stamped as the cells
  * engine's cascades stamp them (most deeper than a root: the log keeps their levels apart):
  * after every rollback each sphere is as it was before the first event undone, the cancels are
- * exactly the undone events' messages, and the log's last stamp is the model's, whole; bad
- * counts refused with their message. */
+ * exactly the undone events' messages, and the log's last stamp is the model's, whole; a late
+ * message's record sunk to its place; bad counts refused with their message. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -134,6 +134,117 @@ static void test_a_rollback_undoes_from_its_stamp_newest_first(void **state)
     nbep_undo_destroy(&u);
     assert_null(u);
     nbep_undo_destroy(&u); /* NULL-safe */
+}
+
+/* Whether the slab's last stamp is *want, whole */
+static void last_is(const nbep_undo *u, int slab, const nbep_stamp *want)
+{
+    nbep_stamp s;
+    assert_true(nbep_undo_last(u, slab, &s));
+    assert_int_equal(nbep_cascade_cmp(&s, want), 0);
+}
+
+/* A late message's record (warp.h's late: acted on after events stamped after it, which it
+ * leaves standing) sinks to its stamp's place with its states, sends and deeper levels: events
+ * at 1, 2 (a cascade's stamp, two levels) and 3 on slab 1, then one at 1.5 (two levels too)
+ * begun late, keeping sphere 4 twice and sending one message. The last stamp stays the one at
+ * 3; back to 2.5 undoes that alone; back to 1.2 undoes the one at 2, then the late one (its
+ * sphere to its first state), their messages cancelled in that order, and leaves the one at 1,
+ * whose stamp is then the last. A late record stamped after the newest stays where it is; one
+ * stamped before every record sinks to the bottom; slab 0's record is never moved. */
+static void test_a_late_record_sinks_to_its_stamps_place(void **state)
+{
+    (void)state;
+    nbep_undo *u = made(2);
+    assert_true(nbep_undo_begin(u, 0, STAMP_AT(0.5, 1, 0)));
+    keep2(u, 0, 9, 9.0, 9.5);
+    const nbep_stamp two = {.t = 2.0, .depth = 2, .level = {{5, 2, 0}, {6, 7, 0}}};
+    const nbep_stamp late = {.t = 1.5, .depth = 2, .level = {{3, 1, 0}, {8, 4, 0}}};
+    assert_true(nbep_undo_begin(u, 1, STAMP_AT(1.0, 7, 0)));
+    keep2(u, 1, 1, 10.0, 11.0);
+    sent(u, 1, 1, 0);
+    assert_true(nbep_undo_begin(u, 1, &two));
+    keep2(u, 1, 2, 20.0, 21.0);
+    sent(u, 1, 2, 0);
+    assert_true(nbep_undo_begin(u, 1, STAMP_AT(3.0, 1, 0)));
+    keep2(u, 1, 3, 30.0, 31.0);
+    sent(u, 1, 3, 0);
+    assert_true(nbep_undo_begin_late(u, 1, &late));
+    keep2(u, 1, 4, 40.0, 41.0);
+    keep2(u, 1, 4, 42.0, 43.0);
+    sent(u, 1, 4, 0);
+    nbep_undo_sink(u, 1);
+    assert_int_equal(nbep_undo_count(u, 1), 4);
+    last_is(u, 1, STAMP_AT(3.0, 1, 0));
+
+    seen w = {.world = NULL};
+    assert_int_equal(nbep_undo_back_to(u, 1, STAMP_AT(2.5, 0, 0), restore, cancel, &w), 1);
+    assert_int_equal(w.n_restored, 1);
+    assert_int_equal(w.restored[0], 3);
+    assert_int_equal(w.n_cancelled, 1);
+    assert_int_equal(w.cancelled[0], 3);
+    last_is(u, 1, &two);
+
+    seen v = {.world = NULL};
+    assert_int_equal(nbep_undo_back_to(u, 1, STAMP_AT(1.2, 0, 0), restore, cancel, &v), 2);
+    const uint32_t order[3] = {2, 4, 4};
+    const double to[3][2] = {{20.0, 21.0}, {42.0, 43.0}, {40.0, 41.0}};
+    assert_int_equal(v.n_restored, 3);
+    for (int k = 0; k < 3; k++) {
+        assert_int_equal(v.restored[k], order[k]);
+        assert_true(v.restored_to[k][0] == to[k][0] && v.restored_to[k][1] == to[k][1]);
+    }
+    assert_int_equal(v.n_cancelled, 2);
+    assert_int_equal(v.cancelled[0], 2);
+    assert_int_equal(v.cancelled[1], 4);
+    last_is(u, 1, STAMP_AT(1.0, 7, 0));
+
+    /* after the newest: in place; before every record: to the bottom */
+    assert_true(nbep_undo_begin_late(u, 1, STAMP_AT(4.0, 0, 0)));
+    keep2(u, 1, 5, 50.0, 51.0);
+    nbep_undo_sink(u, 1);
+    last_is(u, 1, STAMP_AT(4.0, 0, 0));
+    assert_true(nbep_undo_begin_late(u, 1, &late));
+    nbep_undo_sink(u, 1); /* (one with nothing kept) */
+    assert_true(nbep_undo_begin_late(u, 1, STAMP_AT(0.25, 0, 0)));
+    keep2(u, 1, 6, 60.0, 61.0);
+    nbep_undo_sink(u, 1);
+    last_is(u, 1, STAMP_AT(4.0, 0, 0));
+    seen x = {.world = NULL};
+    assert_int_equal(nbep_undo_back_to(u, 1, STAMP_AT(0.3, 0, 0), restore, cancel, &x), 3);
+    const uint32_t order2[2] = {5, 1};
+    assert_int_equal(x.n_restored, 2);
+    for (int k = 0; k < 2; k++)
+        assert_int_equal(x.restored[k], order2[k]);
+    last_is(u, 1, STAMP_AT(0.25, 0, 0));
+    assert_int_equal(nbep_undo_back_to(u, 1, STAMP_AT(0.0, 0, 0), restore, cancel, &x), 1);
+    assert_int_equal(x.restored[2], 6);
+    assert_true(x.restored_to[2][0] == 60.0);
+    assert_int_equal(nbep_undo_count(u, 1), 0);
+    assert_int_equal(nbep_undo_count(u, 0), 1);
+    last_is(u, 0, STAMP_AT(0.5, 1, 0));
+
+    /* a late record with more states than undo.c's buffer holds (60 of 24 bytes: turned in
+     * place) sinks below one event, whose states stay its own */
+    assert_true(nbep_undo_begin(u, 1, STAMP_AT(2.0, 0, 0)));
+    keep2(u, 1, 7, 70.0, 71.0);
+    assert_true(nbep_undo_begin_late(u, 1, STAMP_AT(1.0, 0, 0)));
+    for (uint32_t k = 0; k < 60; k++)
+        keep2(u, 1, 100 + k, k, -(double)k);
+    nbep_undo_sink(u, 1);
+    last_is(u, 1, STAMP_AT(2.0, 0, 0));
+    seen y = {.world = NULL};
+    assert_int_equal(nbep_undo_back_to(u, 1, STAMP_AT(1.5, 0, 0), restore, cancel, &y), 1);
+    assert_int_equal(y.n_restored, 1);
+    assert_int_equal(y.restored[0], 7);
+    assert_true(y.restored_to[0][0] == 70.0 && y.restored_to[0][1] == 71.0);
+    assert_int_equal(nbep_undo_back_to(u, 1, STAMP_AT(0.0, 0, 0), restore, cancel, &y), 1);
+    assert_int_equal(y.n_restored, 61);
+    for (uint32_t k = 0; k < 60; k++) { /* (newest first) */
+        assert_int_equal(y.restored[1 + k], 159 - k);
+        assert_true(y.restored_to[1 + k][0] == 59.0 - k && y.restored_to[1 + k][1] == k - 59.0);
+    }
+    nbep_undo_destroy(&u);
 }
 
 /* ---- random events and rollbacks against a plain model ------------------------------------ */
@@ -322,6 +433,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_a_rollback_undoes_from_its_stamp_newest_first),
+        cmocka_unit_test(test_a_late_record_sinks_to_its_stamps_place),
         cmocka_unit_test(test_random_events_and_rollbacks_match_a_plain_model),
         cmocka_unit_test(test_bad_counts_are_refused_with_a_message),
     };

@@ -12,8 +12,9 @@
  * An event's record: its stamp, the spheres it changed with their state before (`size` bytes
  * each, kept in the order given: they are restored in the reverse order, so a sphere kept twice
  * ends in its first state), and the messages it sent (to whom, the message's number, the sphere
- * and stamp it named: what a cancel names, mail.h). Records are kept in the order handled,
- * which is the slab's time order: each begins stamped after the last (asserted).
+ * and stamp it named: what a cancel names, mail.h). Records are kept in the slab's time order:
+ * each begins stamped after the last (asserted), but for a late message, which sinks to its
+ * place (nbep_undo_sink).
  *
  * Threads: each slab's log is its own thread's; clear between windows. Memory: each slab's
  * records, states and sends grow by doubling as a window needs them; a growth refused is false
@@ -57,6 +58,16 @@ void nbep_undo_destroy(nbep_undo **u);
 /* Slab `slab` begins its event stamped *s (after its last record's stamp). False when no memory
  * could be had: then nothing changed. */
 NBEP_MUST_CHECK bool nbep_undo_begin(nbep_undo *u, int slab, const nbep_stamp *s);
+/* The same for a message stamped before records the slab already has, acted on without
+ * undoing them (the caller found that none of them read what it changes: warp.h's `late`):
+ * begun on top, and put in its stamp's place by nbep_undo_sink once its spheres are kept. */
+NBEP_MUST_CHECK bool nbep_undo_begin_late(nbep_undo *u, int slab, const nbep_stamp *s);
+/* The slab's newest record moved down to its stamp's place, below every record stamped at or
+ * after it, its kept states, sends and levels with it: the log is in time order again, as if
+ * it had come in order (a rollback to a stamp after it leaves it; one to it or before undoes
+ * it after the records above it, which changed none of its spheres). Nothing where it is in
+ * place already (one comparison). */
+void nbep_undo_sink(nbep_undo *u, int slab);
 /* Its current event is about to change sphere i, now in `state`: kept. False as for begin. */
 NBEP_MUST_CHECK bool nbep_undo_keep(nbep_undo *u, int slab, uint32_t i, const void *state);
 /* The same, the state written by the caller in place: the room for it (size bytes, 8-byte
