@@ -4522,6 +4522,61 @@ MUTANTS = [
     ("slabs-stall-not-a-stop", "src/evloop_warp.c",
      "    if (!nbep__evloop_advances(&d->stall, t)) { /* (as the serial loop: before handling it) */",
      "    if (!nbep__evloop_advances(&d->stall, t) && false) {", ["test_team_faults"], None),
+    # --- late messages (thirty-third session): a copy come after events that did not read it
+    # a late record left on top of the log: a later rollback to a stamp after it undoes it
+    ("undo-late-not-sunk", "src/undo.c",
+     "    if (p == top)\n        return;", "    if (p <= top)\n        return;",
+     ["test_undo", "test_sched_slabs"], None),
+    # the sunk record's states left where they were (its record moved, not its states)
+    ("undo-late-states-not-turned", "src/undo.c",
+     "    rotate_bytes(l->keep, at.keep0 * u->stride, r.keep0 * u->stride, l->n_keep * u->stride);",
+     "    (void)rotate_bytes;", ["test_undo"], None),
+    # a late record's long run of states (past the buffer) left in place
+    ("undo-late-long-run-not-turned", "src/undo.c",
+     "    reverse_bytes(a, lo, hi);\n}", "    (void)hi;\n}", ["test_undo"], None),
+    # the records above a sunk one not moved on by its states
+    ("undo-late-marks-not-moved", "src/undo.c",
+     "        l->rec[q].keep0 += nk;", "        l->rec[q].keep0 += 0;", ["test_undo"], None),
+    # a late input left on top of the slab's done inputs: a rollback after it stops there and
+    # leaves inputs under it done whose records it undid
+    ("warp-late-input-not-sunk", "src/warp.c",
+     "            sink_done(w, s);", "            (void)sink_done;", ["test_sched_slabs"], None),
+    # every copy taken late, read or not
+    ("slabs-late-unread-not-asked", "src/evloop_warp.c",
+     "    return kind == MSG_COPY && x->side[slab].touch && !read_since(x, slab, item, s->t);",
+     "    return kind == MSG_COPY && x->side[slab].touch && (read_since || 1);",
+     ["test_sched_slabs"], None),
+    # a write taken late too (its sphere predicted from neighbours as they are now)
+    ("slabs-late-writes-too", "src/evloop_warp.c",
+     "    return kind == MSG_COPY && x->side[slab].touch && !read_since(x, slab, item, s->t);",
+     "    return x->side[slab].touch && !read_since(x, slab, item, s->t);",
+     ["test_sched_slabs"], None),
+    # only the sphere's own changes looked at, not those of the slab's spheres around it
+    ("slabs-late-cells-unread", "src/evloop_warp.c",
+     "                    if (d->touch[k] >= t)\n                        return true;",
+     "                    if (d->touch[k] >= t && 0)\n                        return true;",
+     ["test_sched_slabs"], None),
+    # the spheres beside another slab's columns not noted (only those in them)
+    ("slabs-near-other-own-column", "src/evloop_warp.c",
+     "                d->near_col[c] |= s >= 0 && s != k;",
+     "                d->near_col[c] |= s >= 0 && s != k && dc == 0;", ["test_sched_slabs"], None),
+    # a change not noted
+    ("slabs-touch-not-noted", "src/evloop_warp.c",
+     "        d->touch[i] = d->now_t;", "        d->touch[i] = -INFINITY;",
+     ["test_sched_slabs"], None),
+    # a copy keeping counts: a late one's, sunk below later events, puts back theirs
+    ("slabs-copy-keeps-counts", "src/evloop_warp.c",
+     "    if ((msg.kind != MSG_COPY && !keep_counts(x, slab)) || !keep_sphere(x, slab, item)) {",
+     "    if (!keep_counts(x, slab) || !keep_sphere(x, slab, item)) {",
+     ["test_sched_slabs"], None),
+    # a late copy's stamp taken as the newest (the order's check then looks back from it)
+    ("slabs-late-last-moves-back", "src/evloop_warp.c",
+     "    if (!d->has_last || nbep_cascade_cmp(s, &d->last) >= 0) {",
+     "    if (true) {", ["test_sched_slabs"],
+     "untested: the newest stamp feeds the order's check alone, which stops a cascade deeper "
+     "than a stamp holds; a late copy moving it back weakens that check only where such a "
+     "cascade and a late copy meet in one window, which no scene of the tests makes (kept: "
+     "the check must see the newest event's stamp)"),
 ]
 
 

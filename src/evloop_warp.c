@@ -19,6 +19,7 @@
 #include <math.h>
 #include <stdalign.h>
 #include <stdatomic.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -153,6 +154,17 @@ typedef struct {
     size_t n_ties, cap_ties;
     tie_undo *ties_undo;
     size_t n_ties_undo, cap_ties_undo;
+    /* owned, with slabs, n: the time of the slab's newest event (or message) that changed each
+     * sphere of its world near another slab's (near_other), kept (keep_sphere), read-only where
+     * none did (-inf); raised as the slab goes, and left as it was by a rollback (so at or past
+     * the true one: a late message is taken for one read since more often than it should,
+     * never less: sched_late) */
+    double *touch;
+    double now_t; /* the time of what the slab acts on (the stamp's) */
+    /* owned, with slabs, cap_cols: whether each cell column across x is another slab's or
+     * beside one (near_other's, made at each call's start: views_from_run) */
+    bool *near_col;
+    size_t cap_cols;
 } evl_side;
 
 struct evl_sched {
@@ -425,12 +437,50 @@ static bool made_by(struct evl_sched *x, int slab, const nbep_stamp *by, uint32_
 
 /* Sphere i's state into slab's log before the event changes it (its slot too where it is the
  * slab's own: another slab's is its owner's). */
+/* Whether sphere i's list centre lies in a column of another slab or beside one: the spheres
+ * whose changes read_since looks at (another slab's, and the slab's own beside its faces). A
+ * centre moves into or out of those columns only at a meeting (an expiry moving it there
+ * reaches another slab's columns), so within a window the set stays the same. The rest are
+ * never noted: their lines, 2 an event, cost more than the rollbacks they would spare (a tenth
+ * of the run at N = 256000, where the array is 2 MB a slab). */
+static bool near_other(const struct evl_sched *x, int slab, uint32_t i)
+{
+    size_t columns;
+    return x->side[slab].near_col[column_of(x->side[slab].e, i, &columns)];
+}
+
+/* Each slab's near_col for the call's columns; false without memory. */
+static bool near_cols_make(struct evl_sched *x)
+{
+    const size_t columns = x->e->cells.dim[0];
+    for (int k = 0; k < x->slabs; k++) {
+        evl_side *d = &x->side[k];
+        if (d->cap_cols < columns) {
+            bool *m = realloc(d->near_col, columns * sizeof *m);
+            if (!m)
+                return false;
+            d->near_col = m;
+            d->cap_cols = columns;
+        }
+        for (size_t c = 0; c < columns; c++) {
+            d->near_col[c] = false;
+            for (int dc = -1; dc <= 1; dc++) {
+                const int s = nbep__evloop_column_slab(x->e, c, dc);
+                d->near_col[c] |= s >= 0 && s != k;
+            }
+        }
+    }
+    return true;
+}
+
 static bool keep_sphere(struct evl_sched *x, int slab, uint32_t i)
 {
     kept_sphere *k = nbep_warp_keep_room(x->warp, slab, i);
     if (!k)
         return false;
-    const evl_side *d = &x->side[slab];
+    evl_side *d = &x->side[slab];
+    if (d->touch && near_other(x, slab, i))
+        d->touch[i] = d->now_t;
     x->ops->save(d->u, i, &k->m);
     if (nbep__evloop_owned(d->e, i))
         k->slot = *nbep_feq_slot(d->e->q, i);
@@ -517,6 +567,7 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
     NBEP_SCHED_HANDLED_HOOK(x, s);
     nbep_cascade_copy(&d->last, s);
     d->has_last = true;
+    d->now_t = t;
     if (!keep_counts(x, slab)) {
         e->failed = true;
         return;
@@ -598,9 +649,16 @@ static void sched_apply(void *arg, int slab, int from, const nbep_stamp *s, uint
     nbep_evloop *e = d->e;
     slab_msg msg;
     memcpy(&msg, data, sizeof msg);
-    nbep_cascade_copy(&d->last, s);
-    d->has_last = true;
-    if (!keep_counts(x, slab) || !keep_sphere(x, slab, item)) {
+    /* (a late one, stamped before the newest event: that stays the order's check's) */
+    if (!d->has_last || nbep_cascade_cmp(s, &d->last) >= 0) {
+        nbep_cascade_copy(&d->last, s);
+        d->has_last = true;
+    }
+    d->now_t = s->t;
+    /* a copy changes no count, so it keeps none: the counts a rollback puts back are those
+     * before the earliest event it undoes all the same (a late copy's record sinks below
+     * events after it, whose counts it could not keep) */
+    if ((msg.kind != MSG_COPY && !keep_counts(x, slab)) || !keep_sphere(x, slab, item)) {
         e->failed = true;
         return;
     }
@@ -614,6 +672,50 @@ static void sched_apply(void *arg, int slab, int from, const nbep_stamp *s, uint
         return;
     }
     nbep__evloop_schedule_one(e, item);
+}
+
+/* Whether slab's world read or changed sphere j (another slab's, near the face) at or after
+ * time t: whether an event or message of the slab since changed j, or changed a sphere of its
+ * own whose list may hold j. Such a sphere's list centre lies within a list's cutoff of j's, so
+ * in the 27-cell block of j's cell (nbep_evloop's walk finds lists there), in the slab's own
+ * columns; what else an event reads of j it reads in predicting its spheres (j in their lists)
+ * or checking its partner (kept). The cells of the slab's own columns change only by the
+ * slab's own expiries (one reaching another slab's waits for the meeting), so its thread reads
+ * them while the others run; j's cell too (its expiry is near a face: a meeting's). */
+static bool read_since(const struct evl_sched *x, int slab, uint32_t j, double t)
+{
+    const evl_side *d = &x->side[slab];
+    if (d->touch[j] >= t)
+        return true;
+    const nbep_cells *g = &d->e->cells;
+    nbep_cells_block b;
+    nbep_cells_block_of(g, g->m[j].cell, &b);
+    const size_t columns = g->dim[0];
+    for (int q = 0; q < b.cnt[0]; q++) {
+        if (nbep_slabcal_slab_of(b.idx[0][q], columns, x->slabs) != slab)
+            continue;
+        for (int z = 0; z < b.cnt[2]; z++)
+            for (int y = 0; y < b.cnt[1]; y++) {
+                const size_t cell = (b.idx[2][z] * g->dim[1] + b.idx[1][y]) * columns + b.idx[0][q];
+                for (uint32_t k = g->head[cell]; k != NBEP_CELLS_NONE; k = g->m[k].next)
+                    if (d->touch[k] >= t)
+                        return true;
+            }
+    }
+    return false;
+}
+
+/* A message come after events stamped at or after it (warp.h's late): acted on without a
+ * rollback where it is a copy of another slab's sphere that nothing the slab did since read
+ * (a copy changes that sphere's motion in this world alone). A write (a pair across a face:
+ * its sphere predicted here, at its time, from its neighbours as they were) always rolls back.
+ * Compared by time alone, not stamp: at a tie of times it rolls back. */
+static bool sched_late(void *arg, int slab, const nbep_stamp *s, uint32_t item, const void *data)
+{
+    const struct evl_sched *x = arg;
+    uint32_t kind;
+    memcpy(&kind, (const unsigned char *)data + offsetof(slab_msg, kind), sizeof kind);
+    return kind == MSG_COPY && x->side[slab].touch && !read_since(x, slab, item, s->t);
 }
 
 /* A rollback's undo of one kept state, newest first: an expiry's lists, or a sphere's motion,
@@ -688,8 +790,8 @@ static void window_closed(struct evl_sched *x, bool cut)
     }
 }
 
-static const nbep_warp_ops SCHED_OPS = {sched_next, sched_handle, sched_apply, sched_restore,
-                                        sched_held};
+static const nbep_warp_ops SCHED_OPS = {sched_next,    sched_handle, sched_apply,
+                                        sched_restore, sched_held,   sched_late};
 
 /* ---- the slabs' views of the engine, and their arenas of the lists' pool ------------------ */
 
@@ -757,6 +859,8 @@ static void views_from_run(struct evl_sched *x)
         v->failed = false;
         x->side[k].e = v;
     }
+    if (!near_cols_make(x))
+        x->e->failed = true;
     arenas_give(x, 0);
 }
 
@@ -799,9 +903,18 @@ nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d)
         for (int k = 0; k < slabs && x->view; k++)
             views &= nbep__evloop_ws_init(&x->view[k].ws[0][0]);
         views &= x->view != NULL;
+        for (int k = 0; k < slabs && views; k++) {
+            double *touch = malloc((e->n ? e->n : 1) * sizeof *touch);
+            views = touch != NULL;
+            for (size_t i = 0; i < e->n && views; i++)
+                touch[i] = -INFINITY;
+            x->side[k].touch = touch;
+        }
     }
     if (!views) {
         views_free(x);
+        for (int k = 0; k < slabs; k++)
+            free(x->side[k].touch);
         free(x->side);
         nbep_free_aligned(x);
         NBEP_FAIL(d, NBEP_ENOMEM, "nbep: out of memory for the scheduled loop (NBEP_SCHEDULED)");
@@ -812,6 +925,8 @@ nbep_status nbep_evloop_set_scheduled(nbep_evloop *e, nbep_diag *d)
                                             slabs > 1 ? 1024 : 16, &SCHED_OPS, x, &x->warp, d);
     if (st != NBEP_OK) {
         views_free(x);
+        for (int k = 0; k < slabs; k++)
+            free(x->side[k].touch);
         free(x->side);
         nbep_free_aligned(x);
         return st;
@@ -848,6 +963,8 @@ void nbep__evloop_sched_destroy(struct evl_sched **s)
         free(d->lists);
         free(d->ties);
         free(d->ties_undo);
+        free(d->touch);
+        free(d->near_col);
     }
     views_free(x);
     free(x->side);

@@ -31,6 +31,7 @@ enum { IN_WAITING, IN_DONE, IN_GONE };
 typedef struct {
     nbep_mail_head h;
     uint32_t state;
+    bool late; /* come after events stamped after it, which it leaves standing (ops.late) */
 } input;
 
 /* A message or cancel not yet taken by mail.c; a message's data follows it. */
@@ -329,16 +330,23 @@ static void on_mail(void *arg, const nbep_mail_head *h, const void *data)
         in->state = IN_GONE;
         return;
     }
+    /* a straggler: the slab went past it. It rolls back to it, unless the model finds that
+     * nothing the slab did since read or changed what it changes: then it is acted on late,
+     * next (it is the earliest: act), and the events after it stand */
     nbep_stamp last;
-    if (nbep_undo_last(w->undo, a->slab, &last) && !nbep_stamp_before(last, h->stamp))
-        roll_back(w, a->slab, h->stamp); /* a straggler: the slab went past it */
+    bool late = false;
+    if (nbep_undo_last(w->undo, a->slab, &last) && !nbep_stamp_before(last, h->stamp)) {
+        late = w->ops.late && w->ops.late(w->u, a->slab, &h->stamp, h->sphere, data);
+        if (!late)
+            roll_back(w, a->slab, h->stamp);
+    }
     if (!nbep_room_for_one((void **)&s->in, &s->cap_in, s->n_in, w->in_stride)) {
         give_up(w);
         return;
     }
     const uint32_t k = (uint32_t)s->n_in++;
     input *in = in_at(w, s, k);
-    *in = (input){.h = *h, .state = IN_WAITING};
+    *in = (input){.h = *h, .state = IN_WAITING, .late = late};
     memcpy(in + 1, data, w->msg_size);
     if (!wait_push(w, s, k))
         give_up(w);
@@ -368,6 +376,19 @@ static void post(nbep_warp *w, int slab)
     s->out_head = s->n_out = 0;
 }
 
+/* The input acted on last moved down the slab's done inputs to its stamp's place, as its
+ * record in the log (nbep_undo_sink), so that a rollback finds the inputs to act on again at
+ * the top, as it finds the records. */
+static void sink_done(nbep_warp *w, slab_state *s)
+{
+    size_t p = s->n_done - 1;
+    const uint32_t k = s->done[p];
+    const nbep_stamp *st = &in_at(w, s, k)->h.stamp;
+    for (; p > 0 && !nbep_stamp_before(in_at(w, s, s->done[p - 1])->h.stamp, *st); p--)
+        s->done[p] = s->done[p - 1];
+    s->done[p] = k;
+}
+
 /* Slab acts on its earliest input or event before the window's end (an input first on a tie);
  * false when it has none. */
 static inline NBEP_ALWAYS_INLINE bool act(nbep_warp *w, int slab)
@@ -383,16 +404,24 @@ static inline NBEP_ALWAYS_INLINE bool act(nbep_warp *w, int slab)
     if (in && (!has_ev || !nbep_stamp_before(ev, in->h.stamp))) {
         const uint32_t k = s->wait[0];
         wait_pop(w, s);
+        const bool late = in->late;
         if (!nbep_room_for_one((void **)&s->done, &s->cap_done, s->n_done, sizeof *s->done) ||
-            !nbep_undo_begin(w->undo, slab, &in->h.stamp)) {
+            !(late ? nbep_undo_begin_late(w->undo, slab, &in->h.stamp)
+                   : nbep_undo_begin(w->undo, slab, &in->h.stamp))) {
             give_up(w);
             return false;
         }
         s->done[s->n_done++] = k;
         in->state = IN_DONE;
+        in->late = false;
         nbep_cascade_copy(&s->now, &in->h.stamp);
         s->tally.applied++;
         w->ops.apply(w->u, slab, in->h.from, &s->now, in->h.sphere, in + 1);
+        if (late) { /* (a rollback since it came may have put it in order: then a look) */
+            s->tally.late++;
+            nbep_undo_sink(w->undo, slab);
+            sink_done(w, s);
+        }
         return true;
     }
     if (w->ops.held && w->ops.held(w->u, slab)) /* (its event waits for the meeting) */

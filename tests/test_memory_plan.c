@@ -892,7 +892,7 @@ static void pp_restore(void *u, int slab, uint32_t item, const void *state)
     p->next[slab] = 1.0 + (double)kept[0];
 }
 
-static const nbep_warp_ops pp_ops = {pp_next, pp_handle, pp_apply, pp_restore, NULL};
+static const nbep_warp_ops pp_ops = {pp_next, pp_handle, pp_apply, pp_restore, NULL, NULL};
 
 static nbep_status warp_try(nbep_diag *d, bool *made)
 {

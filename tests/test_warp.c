@@ -227,7 +227,7 @@ static void toy_restore(void *u, int slab, uint32_t item, const void *state)
     W->stamp[item] = s.stamp;
 }
 
-static const nbep_warp_ops toy_ops = {toy_next, toy_handle, toy_apply, toy_restore, NULL};
+static const nbep_warp_ops toy_ops = {toy_next, toy_handle, toy_apply, toy_restore, NULL, NULL};
 
 static void start(toy *x, int slabs, int sites, uint64_t seed)
 {
@@ -537,7 +537,7 @@ static void tie_restore(void *u, int slab, uint32_t item, const void *state)
 static void test_a_message_comes_before_an_event_of_its_stamp(void **state)
 {
     (void)state;
-    static const nbep_warp_ops ops = {tie_next, tie_handle, tie_apply, tie_restore, NULL};
+    static const nbep_warp_ops ops = {tie_next, tie_handle, tie_apply, tie_restore, NULL, NULL};
     for (int first = 0; first < 2; first++) {
         tie_model x = {0};
         nbep_diag d;

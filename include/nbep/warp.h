@@ -58,12 +58,21 @@ typedef struct nbep_warp_ops {
      * wait for the meeting: the slab then acts only on messages stamped before it, and is idle
      * once it has none (the model does it between windows, after nbep_warp_cut to it) */
     bool (*held)(void *u, int slab);
+    /* may be NULL: true where a message stamped *s about `item` (its `data`), come after slab
+     * handled events stamped at or after it, may be acted on without undoing them, because
+     * none of them read or changed what it changes and it changes nothing they kept (the
+     * model's own test, which must be sure: a true taken wrongly makes the results differ from
+     * the serial order's). It is then acted on at once, its record sunk to its stamp's place
+     * (nbep_undo_sink), as if it had come in order; NULL or false: the slab rolls back to it.
+     * Called on the slab's thread before the message is acted on. */
+    bool (*late)(void *u, int slab, const nbep_stamp *s, uint32_t item, const void *data);
 } nbep_warp_ops;
 
 /* What a slab did, in all windows since create: events handled (again after a rollback too),
- * messages acted on, events and messages undone, rollbacks, messages sent, cancels sent. */
+ * messages acted on, events and messages undone, rollbacks, messages sent, cancels sent, and
+ * messages come late but acted on without a rollback (ops.late). */
 typedef struct {
-    uint64_t handled, applied, undone, rollbacks, sent, cancels;
+    uint64_t handled, applied, undone, rollbacks, sent, cancels, late;
 } nbep_warp_tally;
 
 /* The most slabs (the mail's and the logs' bound). */
@@ -130,6 +139,7 @@ static inline void nbep_warp_tally_add(nbep_warp_tally *to, nbep_warp_tally t)
     to->rollbacks += t.rollbacks;
     to->sent += t.sent;
     to->cancels += t.cancels;
+    to->late += t.late;
 }
 
 #endif

@@ -174,7 +174,7 @@ static void m_restore(void *u, int slab, uint32_t item, const void *state)
         set_own(x, slab, item, s.val, s.next);
 }
 
-static const nbep_warp_ops m_ops = {m_next, m_handle, m_apply, m_restore, NULL};
+static const nbep_warp_ops m_ops = {m_next, m_handle, m_apply, m_restore, NULL, NULL};
 
 /* Every world at the start: the same sites; each slab's calendar of its own. */
 static void start(model *x)

@@ -41,10 +41,11 @@ static void windows_report(const struct evl_sched *x)
     fprintf(stderr,
             "bench_windows: %d slabs: %llu windows, %llu meetings, %llu of them moving their "
             "sphere to another slab, %llu expiries waiting for room; %llu events handled, "
-            "%llu messages acted on, %llu undone, %llu rollbacks\n",
+            "%llu messages acted on (%llu of them late, without a rollback), %llu undone, "
+            "%llu rollbacks\n",
             x->slabs, (unsigned long long)opened, (unsigned long long)x->meetings,
             (unsigned long long)x->moves, (unsigned long long)cramps,
-            (unsigned long long)t.handled, (unsigned long long)t.applied,
+            (unsigned long long)t.handled, (unsigned long long)t.applied, (unsigned long long)t.late,
             (unsigned long long)t.undone, (unsigned long long)t.rollbacks);
     opened = 0;
 }
