@@ -57,6 +57,11 @@
 #ifndef NBEP_SCHED_OPEN_HOOK
 #define NBEP_SCHED_OPEN_HOOK(x) ((void)0)
 #endif
+/* tests/bench/bench_windows.c looks just before (after 0) and after (1) each meeting's cut, to
+ * tell what the cuts undid from what the stragglers did */
+#ifndef NBEP_SCHED_CUT_HOOK
+#define NBEP_SCHED_CUT_HOOK(x, after) ((void)0)
+#endif
 #ifndef NBEP_SCHED_RESTORE_HOOK
 #define NBEP_SCHED_RESTORE_HOOK(x, item) ((void)0)
 #endif
@@ -1072,7 +1077,9 @@ static bool meet(struct evl_sched *x)
         return false;
     nbep_stamp held;
     nbep_cascade_copy(&held, &x->limit);
+    NBEP_SCHED_CUT_HOOK(x, 0);
     nbep_warp_cut(x->warp, &held, false);
+    NBEP_SCHED_CUT_HOOK(x, 1);
     int slab = -1;
     for (int k = 0; k < x->slabs; k++)
         if (x->side[k].blocked && nbep_cascade_cmp(&x->side[k].held, &held) == 0)

@@ -132,6 +132,11 @@ check "bench_windows, 2 slabs on 2 threads: exit 0 (got $rc), one line: ${wins:-
     "[ $rc = 0 ] && [ \$(grep -c '^bench_windows: ' '$tmp/windows.err') = 1 ] &&
      [ '${meets:-0}' -gt 0 ] && [ '${moves:-0}' -le '${meets:-0}' ] && [ '${meets:-0}' -le '${wins:-0}' ] &&
      h5diff -q '$tmp/plain.h5' '$tmp/windows.h5' /frames"
+# ... and its counts of what was undone: no more copies late than messages acted on, and no more
+# undone by the meetings' cuts than undone in all
+read -r applied late undone cut <<<"$(sed -n 's/.* \([0-9]*\) messages acted on (\([0-9]*\) of them late.* \([0-9]*\) undone, .* cuts undid \([0-9]*\) in .*/\1 \2 \3 \4/p' "$tmp/windows.err")"
+check "bench_windows: ${late:-?} of ${applied:-?} messages late, ${cut:-?} of ${undone:-?} undone by the cuts" \
+    "[ -n '$applied' ] && [ '${late:-0}' -le '${applied:-0}' ] && [ '${cut:-0}' -le '${undone:-0}' ]"
 
 # bench_versions (the scheme's bookkeeping on one thread) on a fluid long across x: with
 # NBEP_VER_VERIFY every list is read through, and no member of another slab may sit in a list
