@@ -446,8 +446,9 @@ static bool made_by(struct evl_sched *x, int slab, const nbep_stamp *by, uint32_
  * whose changes read_since looks at (another slab's, and the slab's own beside its faces). A
  * centre moves into or out of those columns only at a meeting (an expiry moving it there
  * reaches another slab's columns), so within a window the set stays the same. The rest are
- * never noted: their lines, 2 an event, cost more than the rollbacks they would spare (a tenth
- * of the run at N = 256000, where the array is 2 MB a slab). */
+ * never noted: their lines, 2 an event, cost more than the rollbacks they would spare (with the
+ * first sink's byte-wise turns, 1.1 times the time at N = 256000, where the array is 2 MB a
+ * slab). */
 static bool near_other(const struct evl_sched *x, int slab, uint32_t i)
 {
     size_t columns;
@@ -654,11 +655,11 @@ static void sched_apply(void *arg, int slab, int from, const nbep_stamp *s, uint
     nbep_evloop *e = d->e;
     slab_msg msg;
     memcpy(&msg, data, sizeof msg);
-    /* (a late one, stamped before the newest event: that stays the order's check's) */
-    if (!d->has_last || nbep_cascade_cmp(s, &d->last) >= 0) {
+    /* (a late one, stamped before the newest event: that stays the order's check's; where the
+     * newest is not known, after a rollback, next reads it from the log, where a late one's
+     * record has sunk below it: a review found a late copy taken for the newest there) */
+    if (d->has_last && nbep_cascade_cmp(s, &d->last) >= 0)
         nbep_cascade_copy(&d->last, s);
-        d->has_last = true;
-    }
     d->now_t = s->t;
     /* a copy changes no count, so it keeps none: the counts a rollback puts back are those
      * before the earliest event it undoes all the same (a late copy's record sinks below

@@ -404,7 +404,10 @@ static inline NBEP_ALWAYS_INLINE bool act(nbep_warp *w, int slab)
     if (in && (!has_ev || !nbep_stamp_before(ev, in->h.stamp))) {
         const uint32_t k = s->wait[0];
         wait_pop(w, s);
-        const bool late = in->late;
+        /* (still late: a rollback since it came may have put it in order) */
+        nbep_stamp last;
+        const bool late = in->late && nbep_undo_last(w->undo, slab, &last) &&
+                          !nbep_stamp_before(last, in->h.stamp);
         if (!nbep_room_for_one((void **)&s->done, &s->cap_done, s->n_done, sizeof *s->done) ||
             !(late ? nbep_undo_begin_late(w->undo, slab, &in->h.stamp)
                    : nbep_undo_begin(w->undo, slab, &in->h.stamp))) {
@@ -417,7 +420,7 @@ static inline NBEP_ALWAYS_INLINE bool act(nbep_warp *w, int slab)
         nbep_cascade_copy(&s->now, &in->h.stamp);
         s->tally.applied++;
         w->ops.apply(w->u, slab, in->h.from, &s->now, in->h.sphere, in + 1);
-        if (late) { /* (a rollback since it came may have put it in order: then a look) */
+        if (late) {
             s->tally.late++;
             nbep_undo_sink(w->undo, slab);
             sink_done(w, s);
