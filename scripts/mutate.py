@@ -4526,7 +4526,7 @@ MUTANTS = [
     # a late record left on top of the log: a later rollback to a stamp after it undoes it
     ("undo-late-not-sunk", "src/undo.c",
      "    if (p == top)\n        return;", "    if (p <= top)\n        return;",
-     ["test_undo", "test_sched_slabs"], None),
+     ["test_undo", "test_warp", "test_sched_slabs"], None),
     # the sunk record's states left where they were (its record moved, not its states)
     ("undo-late-states-not-turned", "src/undo.c",
      "    rotate_bytes(l->keep, at.keep0 * u->stride, r.keep0 * u->stride, l->n_keep * u->stride);",
@@ -4540,7 +4540,8 @@ MUTANTS = [
     # a late input left on top of the slab's done inputs: a rollback after it stops there and
     # leaves inputs under it done whose records it undid
     ("warp-late-input-not-sunk", "src/warp.c",
-     "            sink_done(w, s);", "            (void)sink_done;", ["test_sched_slabs"], None),
+     "            sink_done(w, s);", "            (void)sink_done;", ["test_warp", "test_sched_slabs"],
+     None),
     # every copy taken late, read or not
     ("slabs-late-unread-not-asked", "src/evloop_warp.c",
      "    return kind == MSG_COPY && x->side[slab].touch && !read_since(x, slab, item, s->t);",

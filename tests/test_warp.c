@@ -10,7 +10,9 @@
  *
  * On one thread the slabs take turns with budgets drawn at random, one slab held to a single
  * action a turn, so the others run ahead and are sent back: the test wants rollbacks, cancels and
- * inputs acted on again, and each rollback to be to a stamp before what the slab had done. On
+ * inputs acted on again, and each rollback to be to a stamp before what the slab had done; the
+ * same turns again with the `late` op (a copy that none of the slab's events since read nor
+ * changed acted on without a rollback), which must come out the same and act late. On
  * threads (one a slab, one slab slowed by a spin in each event) the same results, under a
  * progress watchdog (a hang fails). A message and an event of one stamp: the message first,
  * whichever slab runs first. Then bad counts refused with a message. */
@@ -54,6 +56,8 @@ typedef struct {
     double next[SITES_MAX];       /* the owner's: each own site's next event */
     nbep_stamp stamp[SITES_MAX];  /* and its cascade stamp (cascade.h) */
     uint64_t events;              /* events that stand (item SITES_MAX) */
+    double touched[SITES_MAX];    /* the time of the newest event of this world that changed
+                                   * each site (a rollback leaves it: later than the truth) */
 } world;
 
 /* What a keep saves of a site: its value, its next event's time and stamp */
@@ -139,6 +143,7 @@ static void site_event(toy *x, int slab, int k, const nbep_stamp *now)
     keep(x, slab, SITES_MAX);
     W->events++;
     keep(x, slab, (uint32_t)k);
+    W->touched[k] = t;
     W->val[k] = v;
     W->next[k] = t + ring_gap(v);
     W->stamp[k] = made_by(now, W->next[k], k);
@@ -148,6 +153,7 @@ static void site_event(toy *x, int slab, int k, const nbep_stamp *now)
     const int q = (v & 4) ? kp : km; /* a write across, where q is another slab's */
     const uint64_t vq = ring_mix(v, W->val[q], RING_SALT, t);
     keep(x, slab, (uint32_t)q);
+    W->touched[q] = t;
     W->val[q] = vq;
     const bool tie = (vq & 8) && now->depth < NBEP_CASCADE_DEPTH; /* made: one level deeper */
     W->next[q] = tie ? t : t + ring_gap(vq);
@@ -229,6 +235,24 @@ static void toy_restore(void *u, int slab, uint32_t item, const void *state)
 
 static const nbep_warp_ops toy_ops = {toy_next, toy_handle, toy_apply, toy_restore, NULL, NULL};
 
+/* warp.h's late: a copy of site j come after events of this slab is acted on without a
+ * rollback where none of them read j (the events of its neighbours, j - 1 and j + 1, read it)
+ * nor changed it (a write across): none of the three changed at or after its time */
+static bool toy_late(void *u, int slab, const nbep_stamp *s, uint32_t item, const void *data)
+{
+    const toy *x = u;
+    ring_note n;
+    memcpy(&n, data, sizeof n);
+    const world *W = &x->w[slab];
+    const int j = (int)item, jm = (j + x->sites - 1) % x->sites, jp = (j + 1) % x->sites;
+    return n.kind == RING_COPY && W->touched[j] < s->t && W->touched[jm] < s->t &&
+           W->touched[jp] < s->t;
+}
+
+static const nbep_warp_ops toy_ops_late = {toy_next,    toy_handle, toy_apply,
+                                           toy_restore, NULL,       toy_late};
+static bool with_late; /* made() gives the scheduler toy_late */
+
 static void start(toy *x, int slabs, int sites, uint64_t seed)
 {
     memset(x, 0, sizeof *x);
@@ -237,6 +261,7 @@ static void start(toy *x, int slabs, int sites, uint64_t seed)
     x->slow = -1;
     x->most = UINT64_MAX;
     for (int k = 0; k < sites; k++) {
+        x->w[0].touched[k] = -1.0; /* (before every event) */
         x->w[0].val[k] = ring_mix64(seed * SITES_MAX + (uint64_t)k);
         x->w[0].next[k] = ring_gap(x->w[0].val[k]);
         x->w[0].stamp[k] = nbep_stamp_at(x->w[0].next[k], (uint64_t)k, (uint32_t)k);
@@ -315,8 +340,8 @@ static nbep_warp *made(toy *x, size_t room)
     nbep_warp *w = NULL;
     nbep_diag d;
     nbep_diag_init(&d);
-    assert_int_equal(nbep_warp_create(x->slabs, sizeof(toy_state), sizeof(ring_note), room, &toy_ops,
-                                      x, &w, &d),
+    assert_int_equal(nbep_warp_create(x->slabs, sizeof(toy_state), sizeof(ring_note), room,
+                                      with_late ? &toy_ops_late : &toy_ops, x, &w, &d),
                      NBEP_OK);
     nbep_diag_fini(&d);
     x->warp = w;
@@ -324,10 +349,11 @@ static nbep_warp *made(toy *x, size_t room)
 }
 
 /* One thread: the slabs take turns in an order drawn each round, with budgets of 1 to 24
- * actions, slab 0 held to 1; a window ends when every slab has said its work is done. */
-static void test_turns_give_the_serial_results(void **state)
+ * actions, slab 0 held to 1; a window ends when every slab has said its work is done. With
+ * late, copies that no event since read are acted on late, and the results are the same. */
+static void turns_give_the_serial_results(bool late)
 {
-    (void)state;
+    with_late = late;
     nbep_warp_tally all = {0};
     uint64_t ties = 0, back = 0;
     /* under valgrind (for the memory alone) a seed's two rings */
@@ -377,11 +403,12 @@ static void test_turns_give_the_serial_results(void **state)
         }
     }
     fprintf(stderr,
-            "turns: %llu events handled, %llu messages sent, %llu acted on, %llu rollbacks "
-            "undoing %llu, %llu cancels; the serial runs' events at the time of the one before "
-            "%llu, %llu of them at a lower site\n",
-            (unsigned long long)all.handled, (unsigned long long)all.sent,
-            (unsigned long long)all.applied, (unsigned long long)all.rollbacks,
+            "turns%s: %llu events handled, %llu messages sent, %llu acted on (%llu late), %llu "
+            "rollbacks undoing %llu, %llu cancels; the serial runs' events at the time of the "
+            "one before %llu, %llu of them at a lower site\n",
+            late ? " with late copies" : "", (unsigned long long)all.handled,
+            (unsigned long long)all.sent, (unsigned long long)all.applied,
+            (unsigned long long)all.late, (unsigned long long)all.rollbacks,
             (unsigned long long)all.undone, (unsigned long long)all.cancels,
             (unsigned long long)ties, (unsigned long long)back);
     /* the serial order went back in (time, site), where only cascade stamps order it */
@@ -392,6 +419,23 @@ static void test_turns_give_the_serial_results(void **state)
     assert_true(all.cancels > 0);
     assert_true(all.applied > all.sent / 2);
     assert_int_equal(atomic_load(&bad_rollbacks), 0);
+    if (late) /* (copies came late that nothing had read, and were kept late) */
+        assert_true(all.late > 10);
+    else
+        assert_int_equal(all.late, 0);
+    with_late = false;
+}
+
+static void test_turns_give_the_serial_results(void **state)
+{
+    (void)state;
+    turns_give_the_serial_results(false);
+}
+
+static void test_late_copies_give_the_serial_results(void **state)
+{
+    (void)state;
+    turns_give_the_serial_results(true);
 }
 
 typedef struct {
@@ -582,6 +626,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_turns_give_the_serial_results),
+        cmocka_unit_test(test_late_copies_give_the_serial_results),
         cmocka_unit_test(test_threads_give_the_serial_results),
         cmocka_unit_test(test_a_message_comes_before_an_event_of_its_stamp),
         cmocka_unit_test(test_bad_counts_are_refused),
