@@ -440,8 +440,6 @@ static bool made_by(struct evl_sched *x, int slab, const nbep_stamp *by, uint32_
     return true;
 }
 
-/* Sphere i's state into slab's log before the event changes it (its slot too where it is the
- * slab's own: another slab's is its owner's). */
 /* Whether sphere i's list centre lies in a column of another slab or beside one: the spheres
  * whose changes read_since looks at (another slab's, and the slab's own beside its faces). A
  * centre moves into or out of those columns only at a meeting (an expiry moving it there
@@ -479,6 +477,8 @@ static bool near_cols_make(struct evl_sched *x)
     return true;
 }
 
+/* Sphere i's state into slab's log before the event changes it (its slot too where it is the
+ * slab's own: another slab's is its owner's). */
 static bool keep_sphere(struct evl_sched *x, int slab, uint32_t i)
 {
     kept_sphere *k = nbep_warp_keep_room(x->warp, slab, i);
@@ -702,7 +702,8 @@ static bool read_since(const struct evl_sched *x, int slab, uint32_t j, double t
             continue;
         for (int z = 0; z < b.cnt[2]; z++)
             for (int y = 0; y < b.cnt[1]; y++) {
-                const size_t cell = (b.idx[2][z] * g->dim[1] + b.idx[1][y]) * columns + b.idx[0][q];
+                const size_t cell =
+                    (b.idx[2][z] * g->dim[1] + b.idx[1][y]) * columns + b.idx[0][q];
                 for (uint32_t k = g->head[cell]; k != NBEP_CELLS_NONE; k = g->m[k].next)
                     if (d->touch[k] >= t)
                         return true;

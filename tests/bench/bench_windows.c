@@ -72,7 +72,8 @@ static void windows_report(const struct evl_sched *x)
             "%llu rollbacks; the meetings' cuts undid %llu in %llu cuts\n",
             x->slabs, (unsigned long long)opened, (unsigned long long)x->meetings,
             (unsigned long long)x->moves, (unsigned long long)cramps,
-            (unsigned long long)t.handled, (unsigned long long)t.applied, (unsigned long long)t.late,
+            (unsigned long long)t.handled, (unsigned long long)t.applied,
+            (unsigned long long)t.late,
             (unsigned long long)t.undone, (unsigned long long)t.rollbacks,
             (unsigned long long)cut_undone, (unsigned long long)cuts);
     opened = cut_undone = cuts = 0;
