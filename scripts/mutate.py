@@ -4533,7 +4533,7 @@ MUTANTS = [
      "    (void)rotate_bytes;", ["test_undo"], None),
     # a late record's long run of states (past the buffer) left in place
     ("undo-late-long-run-not-turned", "src/undo.c",
-     "    reverse_bytes(a, lo, hi);\n}", "    (void)hi;\n}", ["test_undo"], None),
+     "        lo += c;\n", "        (void)lo;\n", ["test_undo"], None),
     # the records above a sunk one not moved on by its states
     ("undo-late-marks-not-moved", "src/undo.c",
      "        l->rec[q].keep0 += nk;", "        l->rec[q].keep0 += 0;", ["test_undo"], None),
@@ -4544,12 +4544,12 @@ MUTANTS = [
      None),
     # every copy taken late, read or not
     ("slabs-late-unread-not-asked", "src/evloop_warp.c",
-     "    return kind == MSG_COPY && x->side[slab].touch && !read_since(x, slab, item, s->t);",
-     "    return kind == MSG_COPY && x->side[slab].touch && (read_since || 1);",
+     "    return msg.kind == MSG_COPY && x->side[slab].touch && !read_since(x, slab, item, s->t);",
+     "    return msg.kind == MSG_COPY && x->side[slab].touch && (read_since || 1);",
      ["test_sched_slabs"], None),
     # a write taken late too (its sphere predicted from neighbours as they are now)
     ("slabs-late-writes-too", "src/evloop_warp.c",
-     "    return kind == MSG_COPY && x->side[slab].touch && !read_since(x, slab, item, s->t);",
+     "    return msg.kind == MSG_COPY && x->side[slab].touch && !read_since(x, slab, item, s->t);",
      "    return x->side[slab].touch && !read_since(x, slab, item, s->t);",
      ["test_sched_slabs"], None),
     # only the sphere's own changes looked at, not those of the slab's spheres around it

@@ -19,7 +19,6 @@
 #include <math.h>
 #include <stdalign.h>
 #include <stdatomic.h>
-#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -720,9 +719,9 @@ static bool read_since(const struct evl_sched *x, int slab, uint32_t j, double t
 static bool sched_late(void *arg, int slab, const nbep_stamp *s, uint32_t item, const void *data)
 {
     const struct evl_sched *x = arg;
-    uint32_t kind;
-    memcpy(&kind, (const unsigned char *)data + offsetof(slab_msg, kind), sizeof kind);
-    return kind == MSG_COPY && x->side[slab].touch && !read_since(x, slab, item, s->t);
+    slab_msg msg;
+    memcpy(&msg, data, sizeof msg);
+    return msg.kind == MSG_COPY && x->side[slab].touch && !read_since(x, slab, item, s->t);
 }
 
 /* A rollback's undo of one kept state, newest first: an expiry's lists, or a sphere's motion,

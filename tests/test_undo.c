@@ -224,8 +224,8 @@ static void test_a_late_record_sinks_to_its_stamps_place(void **state)
     assert_int_equal(nbep_undo_count(u, 0), 1);
     last_is(u, 0, STAMP_AT(0.5, 1, 0));
 
-    /* a late record with more states than undo.c's buffer holds (60 of 24 bytes: turned in
-     * place) sinks below one event, whose states stay its own */
+    /* a late record with more states than undo.c's buffer holds (60 of 24 bytes: turned a
+     * piece at a time) sinks below one event, whose states stay its own */
     assert_true(nbep_undo_begin(u, 1, STAMP_AT(2.0, 0, 0)));
     keep2(u, 1, 7, 70.0, 71.0);
     assert_true(nbep_undo_begin_late(u, 1, STAMP_AT(1.0, 0, 0)));
