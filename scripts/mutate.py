@@ -805,8 +805,8 @@ MUTANTS = [
     ("evloop-stray-whole-skin", "src/evloop.c", "e->stray = 0.5 * skin;", "e->stray = 1.5 * skin;",
      CELLS, None),
     ("evloop-rebuild-no-attach", "src/evloop.c",
-     "        if (w->gain[k] && !nbep_nblist_append(&e->nl, w->near[k], i))",
-     "        if (0 && !nbep_nblist_append(&e->nl, w->near[k], i))", CELLS, None),
+     "        if (w->gain[k] && (!sp || sp->near[k] == slab) &&",
+     "        if (0 && (!sp || sp->near[k] == slab) &&", CELLS, None),
     ("evloop-stray-accel-late", "src/evloop.c",
      "return 2.0 * left / (sv + sqrt(sv * sv + 2.0 * sa * left));",
      "return 4.0 * left / (sv + sqrt(sv * sv + 2.0 * sa * left));", CELLS + GRAN, None),
@@ -3775,9 +3775,9 @@ MUTANTS = [
      "nbep_slabcal_set(e->slabcal, sphere_slab(e, c.item), c.item, c.time, c.key))",
      "nbep_slabcal_set(e->slabcal, 0, c.item, c.time, c.key))", ["test_memory_plan"], None),
     # a sphere's slab from its cell's row (y) instead of its column across x
-    ("evloop-slab-of-the-row", "src/evloop.c",
-     "return nbep_slabcal_slab_of(e->cells.m[i].cell % columns, columns,",
-     "return nbep_slabcal_slab_of(e->cells.m[i].cell / columns % columns, columns,",
+    ("evloop-slab-of-the-row", "src/evloop_impl.h",
+     "    return nbep_slabcal_slab_of(e->cells.m[i].cell % columns, columns, slabs);",
+     "    return nbep_slabcal_slab_of(e->cells.m[i].cell / columns % columns, columns, slabs);",
      ["test_memory_plan"], None),
     # NBEP_SLABS read but the slabs never made
     ("pred-slabs-never-made", "src/algo_predictive.c",
@@ -4578,6 +4578,60 @@ MUTANTS = [
      "than a stamp holds; a late copy moving it back weakens that check only where such a "
      "cascade and a late copy meet in one window, which no scene of the tests makes (kept: "
      "the check must see the newest event's stamp)"),
+    # lists by message (listmsg.c, evloop.c's apply_part): tests/test_listmsg.c
+    # a message carrying the gains of every slab (its receiver enters i twice in some lists)
+    ("listmsg-gains-all-slabs", "src/listmsg.c",
+     "        if (w->gain[k] && sp->near[k] == slab)", "        if (w->gain[k])",
+     ["test_listmsg"], None),
+    # a message carrying the neighbours kept, not those lost
+    ("listmsg-losses-kept", "src/listmsg.c",
+     "        if (!w->kept[k] && sp->was[k] == slab)", "        if (w->kept[k] && sp->was[k] == slab)",
+     ["test_listmsg"], None),
+    # a lost neighbour's place not kept (its undo puts it at the list's end)
+    ("listmsg-place-lost", "src/listmsg.c",
+     "        m->q[k] = nbep_nblist_drop(l, m->id[m->n_gain + k], m->item);",
+     "        m->q[k] = (nbep_nblist_drop(l, m->id[m->n_gain + k], m->item), UINT32_MAX);",
+     ["test_listmsg"], None),
+    # the undo's losses put back oldest first
+    ("listmsg-undo-order", "src/listmsg.c",
+     "    for (size_t k = m->n_lose; k-- > 0;)\n",
+     "    for (size_t k = 0; k < m->n_lose; k++)\n", ["test_listmsg"],
+     "equivalent: a message's losses are each on another list (a commit changes a list once), "
+     "so their undos commute; newest first is kept for the rule every undo here follows"),
+    # the gains not undone
+    ("listmsg-gains-not-undone", "src/listmsg.c",
+     "        nbep_nblist_unappend(l, m->id[k], m->item);", "        (void)0;",
+     ["test_listmsg"], None),
+    # a neighbour's slab taken from the sender's own sphere
+    ("listmsg-split-by-sender", "src/listmsg.c",
+     "        sp->was[k] = (uint8_t)nbep__evloop_slab_in(e, w->was[k], slabs);",
+     "        sp->was[k] = (uint8_t)nbep__evloop_slab_in(e, w->item, slabs);",
+     ["test_listmsg"], None),
+    # the sender's part dropping i from every slab's lists (its message's drops then find
+    # nothing: the same lists, but the sender writes another slab's)
+    ("evloop-part-drops-all", "src/evloop.c",
+     "        if (!w->kept[k] && (!sp || sp->was[k] == slab)) { /* lost */",
+     "        if (!w->kept[k]) { /* lost */", ["test_listmsg"], None),
+    # the sender's part's undo skipping its own slab's gains
+    ("evloop-unapply-part-gains", "src/evloop.c",
+     "        if (w->gain[k] && (!sp || sp->near[k] == slab))\n            nbep_nblist_unappend",
+     "        if (w->gain[k] && !sp)\n            nbep_nblist_unappend", ["test_listmsg"], None),
+    # ghost cells (ghost.c): tests/test_listmsg.c
+    # a slab keeping its own columns only, not those beside them (its walks read those)
+    ("ghost-keeps-own-only", "src/ghost.c",
+     "    for (int dc = -1; dc <= 1; dc++)\n        if (nbep__column_slab(",
+     "    for (int dc = 0; dc <= 0; dc++)\n        if (nbep__column_slab(", ["test_listmsg"], None),
+    # a centre moved into a kept cell from one not kept: no message
+    ("ghost-receivers-from-only", "src/ghost.c",
+     "        if (s != from && (nbep__ghost_keeps(g, slabs, s, was) || nbep__ghost_keeps(g, slabs, s, now)))",
+     "        if (s != from && nbep__ghost_keeps(g, slabs, s, was))", ["test_listmsg"], None),
+    # the member before it not kept: its undo puts it first in its old cell
+    ("ghost-undo-first", "src/ghost.c",
+     "    m->old_prev = g->prev[m->item];", "    m->old_prev = NBEP_CELLS_NONE;",
+     ["test_listmsg"], None),
+    # a copy without the backward links
+    ("ghost-copy-no-prev", "src/ghost.c",
+     "    memcpy(d->prev, g->prev, g->n * sizeof *d->prev);\n", "", ["test_listmsg"], None),
 ]
 
 

@@ -519,8 +519,11 @@ static void walk(const nbep_evloop *e, evl_ws *w, uint32_t i, nbep_vec3 c)
  * enters the lists of the neighbours it gains and leaves those of the ones it loses; those it
  * keeps (most: it moved by half a skin) are not touched. One thread, no other walking. With
  * u, what undoes it is recorded there (nbep__evloop_apply_undoable); without (a constant
- * NULL: the loops' commits), nothing is. */
-static inline NBEP_ALWAYS_INLINE void apply_rec(nbep_evloop *e, const evl_ws *w, evl_unlist *u)
+ * NULL: the loops' commits), nothing is. With sp (a constant NULL but for
+ * nbep__evloop_apply_part), only the neighbours' lists whose slab sp names is `slab` change:
+ * the others' changes go to their slabs as list messages (listmsg.c). */
+static inline NBEP_ALWAYS_INLINE void apply_rec(nbep_evloop *e, const evl_ws *w, evl_unlist *u,
+                                                const evl_split *sp, int slab)
 {
     const uint32_t i = w->item;
     if (u) {
@@ -536,10 +539,11 @@ static inline NBEP_ALWAYS_INLINE void apply_rec(nbep_evloop *e, const evl_ws *w,
     }
     nbep_cells_place(&e->cells, i, w->at, w->at_cell);
     for (size_t k = 0; k < w->n_near && !e->failed; k++)
-        if (w->gain[k] && !nbep_nblist_append(&e->nl, w->near[k], i))
+        if (w->gain[k] && (!sp || sp->near[k] == slab) &&
+            !nbep_nblist_append(&e->nl, w->near[k], i))
             e->failed = true;
     for (size_t k = 0; k < w->n_was; k++)
-        if (!w->kept[k]) { /* lost */
+        if (!w->kept[k] && (!sp || sp->was[k] == slab)) { /* lost */
             const uint32_t q = nbep_nblist_drop(&e->nl, w->was[k], i);
             if (u)
                 u->drop_q[u->n_drop++] = q;
@@ -550,20 +554,29 @@ static inline NBEP_ALWAYS_INLINE void apply_rec(nbep_evloop *e, const evl_ws *w,
 
 static void apply(nbep_evloop *e, const evl_ws *w)
 {
-    apply_rec(e, w, NULL);
+    apply_rec(e, w, NULL, NULL, 0);
 }
 
 void nbep__evloop_apply_undoable(nbep_evloop *e, const evl_ws *w, evl_unlist *u)
 {
     assert(w->rebuilt);
-    apply_rec(e, w, u);
+    apply_rec(e, w, u, NULL, 0);
+}
+
+void nbep__evloop_apply_part(nbep_evloop *e, const evl_ws *w, evl_unlist *u,
+                             const evl_split *sp, int slab)
+{
+    assert(w->rebuilt && sp);
+    apply_rec(e, w, u, sp, slab);
 }
 
 /* apply_rec's steps undone in the opposite order, each exactly (nblist.h, cells.h): i's own
  * list back (was: i's list when its walk read it, which nothing changed before the commit:
  * the walk's own invariant), i back in the lists it left, each at its place, then out of those
- * it entered (it is their last entry), then its centre and cell back. */
-void nbep__evloop_unapply(nbep_evloop *e, const evl_ws *w, const evl_unlist *u)
+ * it entered (it is their last entry), then its centre and cell back. With sp, the lists of
+ * slab `slab` alone, as apply_rec changed them. */
+static void unapply_rec(nbep_evloop *e, const evl_ws *w, const evl_unlist *u,
+                        const evl_split *sp, int slab)
 {
     const uint32_t i = w->item;
     if (e->failed) /* (a commit out of memory may have stopped part way: nothing to undo by;
@@ -575,7 +588,7 @@ void nbep__evloop_unapply(nbep_evloop *e, const evl_ws *w, const evl_unlist *u)
     }
     size_t d = u->n_drop;
     for (size_t k = w->n_was; k-- > 0;)
-        if (!w->kept[k]) {
+        if (!w->kept[k] && (!sp || sp->was[k] == slab)) {
             const uint32_t q = u->drop_q[--d];
             if (q != UINT32_MAX && !nbep_nblist_undrop(&e->nl, w->was[k], i, q)) {
                 e->failed = true;
@@ -584,9 +597,21 @@ void nbep__evloop_unapply(nbep_evloop *e, const evl_ws *w, const evl_unlist *u)
         }
     assert(d == 0);
     for (size_t k = w->n_near; k-- > 0;)
-        if (w->gain[k])
+        if (w->gain[k] && (!sp || sp->near[k] == slab))
             nbep_nblist_unappend(&e->nl, w->near[k], i);
     nbep_cells_put_back(&e->cells, i, u->at, u->cell, u->prev);
+}
+
+void nbep__evloop_unapply(nbep_evloop *e, const evl_ws *w, const evl_unlist *u)
+{
+    unapply_rec(e, w, u, NULL, 0);
+}
+
+void nbep__evloop_unapply_part(nbep_evloop *e, const evl_ws *w, const evl_unlist *u,
+                               const evl_split *sp, int slab)
+{
+    assert(sp);
+    unapply_rec(e, w, u, sp, slab);
 }
 
 void nbep__evloop_unlist_fini(evl_unlist *u)
@@ -772,9 +797,7 @@ static bool slot_entry(const nbep_evloop *e, uint32_t i, nbep_calendar_entry *c)
  * centres', and a centre moves only at its list's expiry, whose commit enters i anew). */
 static int sphere_slab(const nbep_evloop *e, uint32_t i)
 {
-    const size_t columns = e->cells.dim[0];
-    return nbep_slabcal_slab_of(e->cells.m[i].cell % columns, columns,
-                                nbep_slabcal_slabs(e->slabcal));
+    return nbep__evloop_slab_in(e, i, nbep_slabcal_slabs(e->slabcal));
 }
 
 void nbep__evloop_expiry_span(const nbep_evloop *e, const nbep_evloop_ops *ops, void *u,
@@ -1002,7 +1025,7 @@ static inline NBEP_ALWAYS_INLINE void commit_rec(nbep_evloop *e, const evl_ws *w
     if (w->oom)
         e->failed = true;
     if (w->rebuilt && rec)
-        apply_rec(e, w, rec);
+        apply_rec(e, w, rec, NULL, 0);
     else if (w->rebuilt)
         NBEP_EVLOOP_APPLY(e, w);
     if (e->failed)

@@ -86,6 +86,39 @@ typedef struct evl_unlist {
     size_t n_drop, cap;
 } evl_unlist;
 
+/* Whose lists an expiry's commit changes, by slab across x (docs/optimistic-design.md, *Lists
+ * by message*): for each entry of its workspace's new list (near) and old list (was), the slab
+ * of that neighbour (its list centre's cell column's: nbep__evloop_slab_in) when the commit
+ * was made (nbep__listmsg_split). The commit's own slab changes its sphere's own list, centre
+ * and cell and the lists of its own neighbours (nbep__evloop_apply_part); each other slab
+ * changes those of its own from a message (nbep__listmsg_make, nbep__listmsg_apply). */
+typedef struct evl_split {
+    uint8_t *near, *was;   /* owned, room cap_near and cap_was */
+    size_t cap_near, cap_was;
+} evl_split;
+
+/* A list message: what an expiry's commit changes in one slab's lists. Sphere `item` enters
+ * the lists of id[0 .. n_gain) and leaves those of id[n_gain .. n_gain + n_lose), in the
+ * order the whole commit makes those changes (apply_rec in evloop.c); q holds where each lost
+ * one's list held it once applied, for the undo. A list has at most one change of a commit,
+ * so the message's changes and the sender's commute: applied in stamp order with every other
+ * change of those lists, they leave each list as the whole commit does, its order too. */
+typedef struct evl_listmsg {
+    uint32_t item;
+    size_t n_gain, n_lose;
+    uint32_t *id, *q;      /* owned, room cap_id and cap_q */
+    size_t cap_id, cap_q;
+} evl_listmsg;
+
+/* A cell message (ghost.c): sphere `item`'s list centre placed at `at`, in cell `cell`, by
+ * an expiry's commit in another slab; what it replaced in the receiver's cells (old_at,
+ * old_cell, old_prev) once applied, for the undo. */
+typedef struct evl_cellmsg {
+    nbep_vec3 at, old_at;
+    uint32_t item, cell;
+    uint32_t old_cell, old_prev;
+} evl_cellmsg;
+
 /* A place of the team loop's window, as every thread reads it: its sphere, the other sphere
  * its slot names and whether it was the calendar's earliest (nbep_evloop's batch). One record
  * of a place on one line: a taker meets one line that the leader wrote, not one per field. */
@@ -193,6 +226,44 @@ void nbep__evloop_commit(nbep_evloop *e, const evl_ws *w);
 void nbep__evloop_apply_undoable(nbep_evloop *e, const evl_ws *w, evl_unlist *u);
 void nbep__evloop_unapply(nbep_evloop *e, const evl_ws *w, const evl_unlist *u);
 void nbep__evloop_unlist_fini(evl_unlist *u);
+/* nbep__evloop_apply_undoable's part for slab `slab` of the split sp: the sphere's own list,
+ * centre and cell, and the lists of the neighbours sp gives that slab; with the messages of
+ * nbep__listmsg_make for every other slab applied, the lists and cells are as the whole
+ * commit leaves them. Undone by nbep__evloop_unapply_part with the same sp and slab, once
+ * every later change of those lists is undone (the messages' included). */
+void nbep__evloop_apply_part(nbep_evloop *e, const evl_ws *w, evl_unlist *u,
+                             const evl_split *sp, int slab);
+void nbep__evloop_unapply_part(nbep_evloop *e, const evl_ws *w, const evl_unlist *u,
+                               const evl_split *sp, int slab);
+/* The lists' messages (listmsg.c). Into sp, the slab (of `slabs`) of each neighbour that the
+ * expiry walked on w gains or loses; false without memory. */
+bool nbep__listmsg_split(const nbep_evloop *e, const evl_ws *w, int slabs, evl_split *sp);
+void nbep__listmsg_split_fini(evl_split *sp);
+/* Into m, what the commit of w changes in the lists of slab `slab` of the split sp (none:
+ * n_gain + n_lose == 0); false without memory. */
+bool nbep__listmsg_make(const evl_ws *w, const evl_split *sp, int slab, evl_listmsg *m);
+/* m's changes made to the lists l, each lost one's place kept in m; false without memory (a
+ * list that could not grow: the run fails, as a commit's append that fails). */
+bool nbep__listmsg_apply(nbep_nblist *l, evl_listmsg *m);
+/* m's changes undone, newest first, while nothing since changed those lists (or what did is
+ * undone); false without memory. */
+bool nbep__listmsg_unapply(nbep_nblist *l, const evl_listmsg *m);
+void nbep__listmsg_fini(evl_listmsg *m);
+/* Ghost cells (ghost.c): each slab's own copy of the cells, exact on its columns and on the
+ * columns beside them (what its expiries' walks read), kept so by its own commits and by the
+ * cell messages of the others' commits. Whether slab `slab` of `slabs` keeps cell c so. */
+bool nbep__ghost_keeps(const nbep_cells *g, int slabs, int slab, size_t c);
+/* The slabs (a bit each, slab s bit s; NBEP_SLABCAL_MAX of them at most) other than `from`
+ * that a commit moving a centre from cell `was` to cell `now` must tell (nbep__ghost_keeps
+ * either cell). */
+uint64_t nbep__ghost_receivers(const nbep_cells *g, int slabs, int from, size_t was, size_t now);
+/* m made in the slab's cells g (what it replaces kept in m), and undone (while nothing since
+ * changed those cells, or what did is undone). */
+void nbep__ghost_apply(nbep_cells *g, evl_cellmsg *m);
+void nbep__ghost_unapply(nbep_cells *g, const evl_cellmsg *m);
+/* d (zeroed, or made so before with the same layout) a copy of g: its layout, members,
+ * places and links; false without memory (d then freed: nbep_cells_fini). */
+bool nbep__ghost_copy(nbep_cells *d, const nbep_cells *g);
 /* Into d (zeroed, or a copy made so before; its arrays its own): what an expiry's apply and
  * its undo read of workspace w (its sphere, new centre and cell, the lists and their flags),
  * for an undo after the engine's workspace has gone on to other events. False without memory
@@ -235,18 +306,32 @@ int nbep__evloop_sphere_slab(const nbep_evloop *e, uint32_t i);
 void nbep__evloop_predict_own(nbep_evloop *e, const nbep_evloop_ops *ops, void *u, uint32_t i,
                               double t);
 
-/* With slabs: the slab of cell column c + dc across x (|dc| at most the columns), around a
- * periodic x; -1 past a side that is not periodic. */
+/* The slab of sphere i among `slabs` across x: that of its list centre's cell column (the
+ * cells are the centres', and a centre moves only at its list's expiry). */
+static inline int nbep__evloop_slab_in(const nbep_evloop *e, uint32_t i, int slabs)
+{
+    const size_t columns = e->cells.dim[0];
+    return nbep_slabcal_slab_of(e->cells.m[i].cell % columns, columns, slabs);
+}
+
+/* The slab of cell column c + dc across x (|dc| at most the columns) among `slabs` over
+ * `columns`, around x where it wraps; -1 past a side that does not. nbep__evloop_column_slab:
+ * the engine's, with slabs. */
+static inline int nbep__column_slab(size_t columns, bool wraps, int slabs, size_t c, int dc)
+{
+    const long k = (long)c + dc;
+    long m = k;
+    if (k < 0 || k >= (long)columns) {
+        if (!wraps)
+            return -1;
+        m = (k + (long)columns) % (long)columns;
+    }
+    return nbep_slabcal_slab_of((size_t)m, columns, slabs);
+}
 static inline int nbep__evloop_column_slab(const nbep_evloop *e, size_t c, int dc)
 {
-    const long columns = (long)e->cells.dim[0], k = (long)c + dc;
-    long m = k;
-    if (k < 0 || k >= columns) {
-        if (!e->pb.axis[0])
-            return -1;
-        m = (k + columns) % columns;
-    }
-    return nbep_slabcal_slab_of((size_t)m, (size_t)columns, nbep_slabcal_slabs(e->slabcal));
+    return nbep__column_slab(e->cells.dim[0], e->pb.axis[0], nbep_slabcal_slabs(e->slabcal), c,
+                             dc);
 }
 
 /* The calendar's tie key: the pair (lower sphere high, higher low), the same in both spheres'
