@@ -4632,6 +4632,21 @@ MUTANTS = [
     # a copy without the backward links
     ("ghost-copy-no-prev", "src/ghost.c",
      "    memcpy(d->prev, g->prev, g->n * sizeof *d->prev);\n", "", ["test_listmsg"], None),
+    # the slabs' own cells (evloop_warp.c): a meeting's place not made in the other slabs' copies
+    ("slabs-ghost-meeting-unsent", "src/evloop_warp.c",
+     "            nbep__ghost_apply(&x->side[k].cells, &m);", "            (void)m;",
+     ["test_sched_slabs"], None),
+    # a window's expiry placed in the slab's copy alone, not in the run's cells
+    ("slabs-ghost-run-unplaced", "src/evloop_warp.c",
+     "        nbep_cells_place(&x->e->cells, i, w->at, w->at_cell);", "        (void)0;",
+     ["test_sched_slabs"], None),
+    # ... and a rollback's undo of it likewise
+    ("slabs-ghost-run-not-put-back", "src/evloop_warp.c",
+     "            nbep_cells_put_back(&x->e->cells, l->ws.item, l->rec.at, l->rec.cell, l->rec.prev);",
+     "            (void)l;", ["test_sched_slabs"], None),
+    # a meeting's walk on the slab's copy (not exact two columns into another slab)
+    ("slabs-ghost-meeting-on-copy", "src/evloop_warp.c",
+     "    if (x->slabs > 1)\n        e->cells = x->e->cells;\n", "", ["test_sched_slabs"], None),
 ]
 
 

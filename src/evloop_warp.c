@@ -6,7 +6,8 @@
  * slabs (NBEP_SLABS, the engine's per-slab calendars), on the call's threads (nbep_evloop_run_lead:
  * thread t runs slabs t, t + crew, ... in turns; one thread runs them all): each slab handles
  * its own spheres' entries in a world of its own (nbep_evloop_set_worlds), through a view of
- * the engine of its own (its workspace, its lists' moves in an arena of the pool), and
+ * the engine of its own (its workspace, its lists' moves in an arena of the pool, its own copy
+ * of the cells: ghost.c), and
  * predicts only its own spheres; what its events change in a column beside another slab goes
  * there as a copy, a pair across a face's other sphere to its owner as a write, which predicts
  * it; a message stamped before what a slab has done sends it back; an expiry whose lists and
@@ -169,6 +170,15 @@ typedef struct {
      * beside one (near_other's, made at each call's start: views_from_run) */
     bool *near_col;
     size_t cap_cols;
+    /* owned, with slabs: the slab's own copy of the cells (ghost.c), which its view's walks and
+     * ownership checks read instead of the run's, so that no slab reads cells another slab's
+     * thread writes. Made from the run's at each call's start; exact on the slab's columns and
+     * those beside them, kept so by its own expiries (which change only cells of its own that no
+     * other slab keeps: an expiry reaching further waits for the meeting) and by the places of
+     * the meetings' expiries (meet). The run's cells stay exact too: each expiry in a window
+     * places its sphere there as well, in its slab's own cells, which no other thread reads or
+     * writes within a window (sched_handle, sched_restore). */
+    nbep_cells cells;
 } evl_side;
 
 struct evl_sched {
@@ -323,7 +333,7 @@ static bool expiry_local(const struct evl_sched *x, int slab, uint32_t i, double
     int lo, hi;
     nbep__evloop_expiry_span(x->side[slab].e, x->ops, x->side[slab].u, i, t, &lo, &hi);
     size_t columns;
-    const size_t c = column_of(x->e, i, &columns);
+    const size_t c = column_of(x->side[slab].e, i, &columns);
     if (hi - lo + 1 > (int)columns) /* (around the whole box: every slab's) */
         return false;
     for (int dc = lo; dc <= hi; dc++) {
@@ -525,7 +535,7 @@ static kept_list *next_list(evl_side *d)
 static bool send_copies(struct evl_sched *x, int slab, uint32_t i, int skip)
 {
     size_t columns;
-    const size_t c = column_of(x->e, i, &columns);
+    const size_t c = column_of(x->side[slab].e, i, &columns);
     int sent = -1;
     for (int dc = -1; dc <= 1; dc += 2) {
         const int to = nbep__evloop_column_slab(x->e, c, dc);
@@ -641,6 +651,8 @@ static void sched_handle(void *arg, int slab, const nbep_stamp *s)
     }
     *place = d->n_lists++;
     nbep__evloop_commit_undoable(e, w, &l->rec);
+    if (x->slabs > 1 && !e->failed) /* (the run's cells too: see evl_side's cells) */
+        nbep_cells_place(&x->e->cells, i, w->at, w->at_cell);
 }
 
 /* A message from slab `from`: sphere `item`'s new motion, put in this slab's world; a write (a
@@ -749,7 +761,10 @@ static void sched_restore(void *arg, int slab, uint32_t item, const void *state)
     if (item == KEPT_ITEM(e, KEPT_LIST)) {
         memcpy(&place, state, sizeof place);
         assert(place + 1 == d->n_lists);
-        nbep__evloop_unapply(e, &d->lists[place].ws, &d->lists[place].rec);
+        const kept_list *l = &d->lists[place];
+        nbep__evloop_unapply(e, &l->ws, &l->rec);
+        if (x->slabs > 1 && !e->failed) /* (and in the run's cells: the same cells there) */
+            nbep_cells_put_back(&x->e->cells, l->ws.item, l->rec.at, l->rec.cell, l->rec.prev);
         d->n_lists = place;
         return;
     }
@@ -864,6 +879,10 @@ static void views_from_run(struct evl_sched *x)
         v->ver = x->wver[k];
         v->failed = false;
         x->side[k].e = v;
+        if (nbep__ghost_copy(&x->side[k].cells, &x->e->cells))
+            v->cells = x->side[k].cells;
+        else /* (the loop does not start: views_failed) */
+            x->e->failed = true;
     }
     if (!near_cols_make(x))
         x->e->failed = true;
@@ -971,6 +990,7 @@ void nbep__evloop_sched_destroy(struct evl_sched **s)
         free(d->ties_undo);
         free(d->touch);
         free(d->near_col);
+        nbep_cells_fini(&d->cells);
     }
     views_free(x);
     free(x->side);
@@ -1119,6 +1139,11 @@ static bool meet(struct evl_sched *x)
     }
     evl_ws *w = &e->ws[0][0];
     e->own_slab = -1; /* (its lists and cells are every slab's: one thread here) */
+    /* its walk and commit on the run's cells, exact everywhere (the slab's copy is not exact
+     * two columns into another slab, where a move's walk reads) */
+    const uint32_t was = x->e->cells.m[i].cell;
+    if (x->slabs > 1)
+        e->cells = x->e->cells;
     nbep__evloop_handle(e, w, x->ops, d->u, i, &ev, held.t, true);
     nbep__evloop_count_handled(&d->tally, w);
     /* (room for its commit in its slab's arena, where it held too little: the arenas given out
@@ -1132,8 +1157,21 @@ static bool meet(struct evl_sched *x)
     }
     nbep__evloop_commit(e, w);
     e->own_slab = x->slabs > 1 ? slab : -1;
+    if (x->slabs > 1)
+        e->cells = d->cells;
     if (views_failed(x))
         return true;
+    /* its place made in every slab's cells that keep its old cell or its new one (each slab is
+     * at the meeting: at once, for good) */
+    const nbep_cells *g = &x->e->cells;
+    const uint64_t to = x->slabs > 1 && w->rebuilt
+                            ? nbep__ghost_receivers(g, x->slabs, -1, was, g->m[i].cell)
+                            : 0;
+    for (int k = 0; k < x->slabs; k++)
+        if (to >> k & 1) {
+            evl_cellmsg m = {.item = i, .at = g->m[i].at, .cell = g->m[i].cell};
+            nbep__ghost_apply(&x->side[k].cells, &m);
+        }
     copied_to_all(x, slab, i);
     /* Where it moved its sphere to another slab, its prediction read its new list's members
      * in the old slab's world, where those beside the new one's columns are not kept (no

@@ -23,9 +23,11 @@
 struct evl_sched;
 static size_t slab_turn(int slab);
 static void on_destroy(const struct evl_sched *x);
+static void on_open(const struct evl_sched *x);
 static bool cramp; /* the slabs' arenas of the lists' pool empty (the meetings give room) */
 #define NBEP_SCHED_SLAB_TURN(slab) slab_turn(slab)
 #define NBEP_SCHED_DESTROY_HOOK(x) on_destroy(x)
+#define NBEP_SCHED_OPEN_HOOK(x) on_open(x)
 #define NBEP_SCHED_ARENA(len, slabs) (cramp ? 0 : NBEP_SCHED_ARENA_DEFAULT(len, slabs))
 #include "../src/evloop_warp.c"
 
@@ -70,6 +72,40 @@ static void on_destroy(const struct evl_sched *x)
     meetings += x->meetings;
 }
 
+/* windows opened with each slab's own cells and the run's compared, and those where they
+ * differed on a cell the slab keeps */
+static uint64_t ghost_looks, ghost_wrong;
+
+/* At every fourth window's opening (every slab between windows, on the lead), each slab's own copy of
+ * the cells (ghost.c) must be the run's on every cell it keeps: the members in order, their
+ * places bit for bit and their backward links. A rollback or a meeting's cut that put an
+ * expiry back in one and not the other would leave them apart. */
+static void on_open(const struct evl_sched *x)
+{
+    static uint64_t opened;
+    /* (every fourth: at every one the test took twice as long) */
+    if (x->slabs < 2 || opened++ % 4 != 0)
+        return;
+    const nbep_cells *g = &x->e->cells;
+    ghost_looks++;
+    for (int k = 0; k < x->slabs; k++) {
+        const nbep_cells *d = &x->side[k].cells;
+        for (size_t c = 0; c < g->n_cells; c++) {
+            if (!nbep__ghost_keeps(g, x->slabs, k, c))
+                continue;
+            uint32_t a = d->head[c], b = g->head[c];
+            for (; a != NBEP_CELLS_NONE && a == b; a = d->m[a].next, b = g->m[b].next)
+                if (memcmp(&d->m[a].at, &g->m[b].at, sizeof d->m[a].at) != 0 ||
+                    d->m[a].cell != g->m[b].cell || d->prev[a] != g->prev[b])
+                    break;
+            if (a != b || a != NBEP_CELLS_NONE) {
+                ghost_wrong++;
+                return;
+            }
+        }
+    }
+}
+
 /* sc on one thread without the scheduler, then through it on each of `slabs` on nt threads
  * (thread t running slabs t, t + nt, ...): the same end, with messages, rollbacks, cancels and
  * meetings in every run on slabs */
@@ -87,6 +123,7 @@ static nbep_summary slabs_the_same(nbep_scene *sc, const int *slabs, size_t n_sl
         assert_int_equal(setenv("NBEP_SLABS", v, 1), 0);
         seen = (nbep_warp_tally){0};
         meetings = cramps = 0;
+        ghost_looks = ghost_wrong = 0;
         nbep_state sched;
         nbep_run_kept r1;
         nbep_test_run_kept(sc, "sched_slabs.h5", nt, &r1, &sched);
@@ -110,6 +147,8 @@ static nbep_summary slabs_the_same(nbep_scene *sc, const int *slabs, size_t n_sl
         assert_true(seen.rollbacks > 10 && seen.cancels > 0 && meetings > 10);
         assert_true(seen.late > 10); /* (copies come late that no event since read) */
         assert_true(!cramp || cramps > 10);
+        assert_true(ghost_looks > 10);
+        assert_int_equal(ghost_wrong, 0); /* (the slabs' cells the run's where they read) */
     }
     assert_int_equal(unsetenv("NBEP_SLABS"), 0);
     assert_int_equal(unsetenv("NBEP_SCHEDULED"), 0);
