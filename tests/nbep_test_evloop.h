@@ -3,8 +3,11 @@
 #ifndef NBEP_TEST_EVLOOP_H
 #define NBEP_TEST_EVLOOP_H
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "nbep_test_scene.h"
 
 /* The lists and cells as they are: each list's length and entries in order, then every cell's
  * members in order (from its head), then every list centre's bits. */
@@ -59,6 +62,24 @@ static inline bool same(const words *a, const words *b)
 static inline void copy_ws(evl_ws *d, const evl_ws *w)
 {
     assert_true(nbep__evloop_ws_copy_lists(d, w));
+}
+
+/* The pile the expiry commits' tests run: 64 spheres of unequal masses dropped into a 1 x 1 x 3
+ * box under gravity, e = 0.6, in cells mode: they land, lean on one another and settle (a
+ * pile's let-go walks its lists in order). */
+static inline nbep_scene *nbep_test_evloop_pile(void)
+{
+    nbep_scene *sc = nbep_test_scene_new(64, 6, "predictive", 400, 1e-3);
+    sc->restitution = 0.6;
+    sc->neighbors_cells = true;
+    nbep_test_set_box_to(sc, (nbep_vec3){1.0, 1.0, 3.0});
+    for (size_t i = 0; i < 64; i++) {
+        const double x = 0.125 + 0.25 * (double)(i % 4), y = 0.125 + 0.25 * (double)(i / 4 % 4);
+        const double z = 0.2 + 0.3 * (double)(i / 16), w = 0.3 * sin(1.7 * (double)i);
+        nbep_test_set_sphere(sc, i, (nbep_vec3){x, y, z}, (nbep_vec3){w, -0.5 * w, -0.2 * w},
+                             0.1, 1.0 + 0.01 * (double)i, (nbep_vec3){0, 0, -9.81});
+    }
+    return sc;
 }
 
 #endif

@@ -185,16 +185,7 @@ static void test_a_fluids_list_commits_undo_exactly(void **state)
 static void test_a_piles_list_commits_undo_exactly(void **state)
 {
     (void)state;
-    nbep_scene *sc = nbep_test_scene_new(64, 6, "predictive", 400, 1e-3);
-    sc->restitution = 0.6;
-    sc->neighbors_cells = true;
-    nbep_test_set_box_to(sc, (nbep_vec3){1.0, 1.0, 3.0});
-    for (size_t i = 0; i < 64; i++) {
-        const double x = 0.125 + 0.25 * (double)(i % 4), y = 0.125 + 0.25 * (double)(i / 4 % 4);
-        const double z = 0.2 + 0.3 * (double)(i / 16), w = 0.3 * sin(1.7 * (double)i);
-        nbep_test_set_sphere(sc, i, (nbep_vec3){x, y, z}, (nbep_vec3){w, -0.5 * w, -0.2 * w},
-                             0.1, 1.0 + 0.01 * (double)i, (nbep_vec3){0, 0, -9.81});
-    }
+    nbep_scene *sc = nbep_test_evloop_pile();
     undone_and_the_same(sc, 400, 1, false);
     undone_and_the_same(sc, 300, BATCH_MAX, true);
     nbep_test_scene_free(&sc);

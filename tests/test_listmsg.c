@@ -285,43 +285,6 @@ static void cut_and_the_same(const nbep_scene *sc, uint64_t least, int slabs, in
     nbep_test_same_end(&plain, &cut);
 }
 
-/* A periodic fluid at phi = 0.35: 8^3 spheres, lists across every face. */
-static void test_a_fluids_commits_cut_by_slab(void **state)
-{
-    (void)state;
-    nbep_scene *sc = nbep_test_periodic_fluid(8, 0.35, 60, 0.02, 3);
-    cut_and_the_same(sc, 1000, 2, 1);
-    cut_and_the_same(sc, 1000, 3, RUN_MAX);
-    cut_and_the_same(sc, 1000, 4, RUN_MAX);
-    nbep_test_scene_free(&sc);
-}
-
-/* 64 spheres of unequal masses dropped into a box under gravity, e = 0.6: they land, lean on
- * one another and settle (a pile's let-go walks its lists in order). */
-static nbep_scene *pile(void)
-{
-    nbep_scene *sc = nbep_test_scene_new(64, 6, "predictive", 400, 1e-3);
-    sc->restitution = 0.6;
-    sc->neighbors_cells = true;
-    nbep_test_set_box_to(sc, (nbep_vec3){1.0, 1.0, 3.0});
-    for (size_t i = 0; i < 64; i++) {
-        const double x = 0.125 + 0.25 * (double)(i % 4), y = 0.125 + 0.25 * (double)(i / 4 % 4);
-        const double z = 0.2 + 0.3 * (double)(i / 16), w = 0.3 * sin(1.7 * (double)i);
-        nbep_test_set_sphere(sc, i, (nbep_vec3){x, y, z}, (nbep_vec3){w, -0.5 * w, -0.2 * w},
-                             0.1, 1.0 + 0.01 * (double)i, (nbep_vec3){0, 0, -9.81});
-    }
-    return sc;
-}
-
-static void test_a_piles_commits_cut_by_slab(void **state)
-{
-    (void)state;
-    nbep_scene *sc = pile();
-    cut_and_the_same(sc, 300, 2, RUN_MAX);
-    cut_and_the_same(sc, 300, 3, 1);
-    nbep_test_scene_free(&sc);
-}
-
 /* ---- ghost cells (ghost.c) ---------------------------------------------------------------- */
 
 
@@ -474,21 +437,28 @@ static void ghosts_kept(const nbep_scene *sc, uint64_t least, int slabs, int run
     nbep_test_same_end(&plain, &kept);
 }
 
-static void test_a_fluids_ghost_cells_kept(void **state)
+/* A periodic fluid at phi = 0.35: 8^3 spheres, lists across every face. */
+static void test_a_fluids_commits_cut_by_slab(void **state)
 {
     (void)state;
     nbep_scene *sc = nbep_test_periodic_fluid(8, 0.35, 60, 0.02, 3);
+    cut_and_the_same(sc, 1000, 2, 1);
+    cut_and_the_same(sc, 1000, 3, RUN_MAX);
+    cut_and_the_same(sc, 1000, 4, RUN_MAX);
     ghosts_kept(sc, 1000, 2, 1);
     ghosts_kept(sc, 1000, 3, RUN_MAX);
     ghosts_kept(sc, 1000, 4, RUN_MAX);
     nbep_test_scene_free(&sc);
 }
 
-/* The pile: a box, x not periodic (the edge slabs have a neighbour on one side) */
-static void test_a_piles_ghost_cells_kept(void **state)
+/* The pile (nbep_test_evloop.h) */
+static void test_a_piles_commits_cut_by_slab(void **state)
 {
     (void)state;
-    nbep_scene *sc = pile();
+    nbep_scene *sc = nbep_test_evloop_pile();
+    cut_and_the_same(sc, 300, 2, RUN_MAX);
+    cut_and_the_same(sc, 300, 3, 1);
+    /* (x not periodic: the edge slabs have a neighbour on one side) */
     ghosts_kept(sc, 300, 2, RUN_MAX);
     ghosts_kept(sc, 300, 3, 1);
     nbep_test_scene_free(&sc);
@@ -523,8 +493,6 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_a_fluids_commits_cut_by_slab),
         cmocka_unit_test(test_a_piles_commits_cut_by_slab),
-        cmocka_unit_test(test_a_fluids_ghost_cells_kept),
-        cmocka_unit_test(test_a_piles_ghost_cells_kept),
     };
     return cmocka_run_group_tests(tests, NULL, teardown);
 }
