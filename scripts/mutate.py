@@ -4623,8 +4623,12 @@ MUTANTS = [
      "    for (int dc = 0; dc <= 0; dc++)\n        if (nbep__column_slab(", ["test_listmsg"], None),
     # a centre moved into a kept cell from one not kept: no message
     ("ghost-receivers-from-only", "src/ghost.c",
-     "        if (s != from && (nbep__ghost_keeps(g, slabs, s, was) || nbep__ghost_keeps(g, slabs, s, now)))",
-     "        if (s != from && nbep__ghost_keeps(g, slabs, s, was))", ["test_listmsg"], None),
+     "            (nbep__ghost_keeps(g, slabs, s, was) || nbep__ghost_keeps(g, slabs, s, now)))",
+     "            nbep__ghost_keeps(g, slabs, s, was))", ["test_listmsg"], None),
+    # a slab keeping every cell (messages for nothing; a copy kept whole passes the cells' check)
+    ("ghost-keeps-all", "src/ghost.c",
+     "            return true;\n    return false;\n}\n\nuint64_t",
+     "            return true;\n    return true;\n}\n\nuint64_t", ["test_listmsg"], None),
     # the member before it not kept: its undo puts it first in its old cell
     ("ghost-undo-first", "src/ghost.c",
      "    m->old_prev = g->prev[m->item];", "    m->old_prev = NBEP_CELLS_NONE;",

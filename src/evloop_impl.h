@@ -254,15 +254,16 @@ void nbep__listmsg_fini(evl_listmsg *m);
  * cell messages of the others' commits. Whether slab `slab` of `slabs` keeps cell c so. */
 bool nbep__ghost_keeps(const nbep_cells *g, int slabs, int slab, size_t c);
 /* The slabs (a bit each, slab s bit s; NBEP_SLABCAL_MAX of them at most) other than `from`
- * that a commit moving a centre from cell `was` to cell `now` must tell (nbep__ghost_keeps
- * either cell). */
+ * (-1: none, every slab that keeps one: the meeting's) that a commit moving a centre from cell
+ * `was` to cell `now` must tell (nbep__ghost_keeps either cell). */
 uint64_t nbep__ghost_receivers(const nbep_cells *g, int slabs, int from, size_t was, size_t now);
 /* m made in the slab's cells g (what it replaces kept in m), and undone (while nothing since
  * changed those cells, or what did is undone). */
 void nbep__ghost_apply(nbep_cells *g, evl_cellmsg *m);
 void nbep__ghost_unapply(nbep_cells *g, const evl_cellmsg *m);
-/* d (zeroed, or made so before with the same layout) a copy of g: its layout, members,
- * places and links; false without memory (d then freed: nbep_cells_fini). */
+/* d (zeroed, or made so before: its arrays made again where g's layout outgrew them) a copy
+ * of g: its layout, members, places and links; false without memory (d then freed:
+ * nbep_cells_fini). */
 bool nbep__ghost_copy(nbep_cells *d, const nbep_cells *g);
 /* Into d (zeroed, or a copy made so before; its arrays its own): what an expiry's apply and
  * its undo read of workspace w (its sphere, new centre and cell, the lists and their flags),

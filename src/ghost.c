@@ -8,8 +8,9 @@
  * its own changes and undoes, newest first, on a rollback. A cell's order is its history of
  * places (each puts its sphere first in its new cell), so the same places in the same order
  * give the same members in the same order. Tested against the run's cells at every commit of
- * a fluid and a pile, singly and in runs undone as a rollback does (tests/test_listmsg.c).
- * Not yet used by a run. */
+ * a fluid and a pile, singly and in runs undone as a rollback does (tests/test_listmsg.c), and
+ * read by the slabs' loop (evloop_warp.c: each slab's view has its own copy; the slabs' test
+ * compares each copy with the run's cells at window openings). */
 #include "evloop_impl.h"
 
 #include <assert.h>
@@ -30,7 +31,8 @@ uint64_t nbep__ghost_receivers(const nbep_cells *g, int slabs, int from, size_t 
     assert(slabs >= 1 && slabs <= NBEP_SLABCAL_MAX);
     uint64_t to = 0;
     for (int s = 0; s < slabs; s++)
-        if (s != from && (nbep__ghost_keeps(g, slabs, s, was) || nbep__ghost_keeps(g, slabs, s, now)))
+        if (s != from &&
+            (nbep__ghost_keeps(g, slabs, s, was) || nbep__ghost_keeps(g, slabs, s, now)))
             to |= UINT64_C(1) << s;
     return to;
 }

@@ -6,7 +6,9 @@
  * on a rollback. Each list has at most one change of a commit (the sphere enters it or leaves
  * it), so cutting the commit this way changes no list's contents or order: tested against the
  * whole commit on a fluid and a pile, singly and in runs undone as a rollback does
- * (tests/test_listmsg.c). Not yet used by a run. */
+ * (tests/test_listmsg.c). Not yet used by a run. Both sides assume what the loop's rules give:
+ * a neighbour's slab is the same at a commit's undo as at its making (a move waits for the
+ * meeting), and a message whose apply failed (no memory: the run fails) is never undone. */
 #include "evloop_impl.h"
 
 #include <assert.h>

@@ -76,8 +76,8 @@ static void on_destroy(const struct evl_sched *x)
  * differed on a cell the slab keeps */
 static uint64_t ghost_looks, ghost_wrong;
 
-/* At every fourth window's opening (every slab between windows, on the lead), each slab's own copy of
- * the cells (ghost.c) must be the run's on every cell it keeps: the members in order, their
+/* At every fourth window's opening (every slab between windows, on the lead), each slab's own
+ * copy of the cells (ghost.c) must be the run's on every cell it keeps: the members in order, their
  * places bit for bit and their backward links. A rollback or a meeting's cut that put an
  * expiry back in one and not the other would leave them apart. */
 static void on_open(const struct evl_sched *x)
