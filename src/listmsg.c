@@ -49,9 +49,8 @@ bool nbep__listmsg_make(const evl_ws *w, const evl_split *sp, int slab, evl_list
 {
     m->item = w->item;
     m->n_gain = m->n_lose = 0;
-    const size_t need = w->n_near + w->n_was;
-    if (!room((void **)&m->id, &m->cap_id, need, sizeof *m->id) ||
-        !room((void **)&m->q, &m->cap_q, need, sizeof *m->q))
+    if (!room((void **)&m->id, &m->cap_id, w->n_near + w->n_was, sizeof *m->id) ||
+        !room((void **)&m->q, &m->cap_q, w->n_was, sizeof *m->q)) /* (the losses' places) */
         return false;
     for (size_t k = 0; k < w->n_near; k++)
         if (w->gain[k] && sp->near[k] == slab)
@@ -75,7 +74,8 @@ bool nbep__listmsg_apply(nbep_nblist *l, evl_listmsg *m)
 bool nbep__listmsg_unapply(nbep_nblist *l, const evl_listmsg *m)
 {
     for (size_t k = m->n_lose; k-- > 0;)
-        if (m->q[k] != UINT32_MAX && !nbep_nblist_undrop(l, m->id[m->n_gain + k], m->item, m->q[k]))
+        if (m->q[k] != UINT32_MAX &&
+            !nbep_nblist_undrop(l, m->id[m->n_gain + k], m->item, m->q[k]))
             return false;
     for (size_t k = m->n_gain; k-- > 0;)
         nbep_nblist_unappend(l, m->id[k], m->item);

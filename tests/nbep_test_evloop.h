@@ -64,6 +64,19 @@ static inline void copy_ws(evl_ws *d, const evl_ws *w)
     assert_true(nbep__evloop_ws_copy_lists(d, w));
 }
 
+/* Whether cells d hold cell c as g do: the same members in the same order, their places bit
+ * for bit, their cells and backward links (a slab's own copy of the cells against the run's:
+ * ghost.c) */
+static inline bool nbep_test_cell_same(const nbep_cells *d, const nbep_cells *g, size_t c)
+{
+    uint32_t a = d->head[c], b = g->head[c];
+    for (; a != NBEP_CELLS_NONE && a == b; a = d->m[a].next, b = g->m[b].next)
+        if (memcmp(&d->m[a].at, &g->m[b].at, sizeof d->m[a].at) != 0 ||
+            d->m[a].cell != g->m[b].cell || d->prev[a] != g->prev[b])
+            return false;
+    return a == b;
+}
+
 /* The pile the expiry commits' tests run: 64 spheres of unequal masses dropped into a 1 x 1 x 3
  * box under gravity, e = 0.6, in cells mode: they land, lean on one another and settle (a
  * pile's let-go walks its lists in order). */

@@ -335,12 +335,7 @@ static bool kept_same(const nbep_cells *d, const nbep_cells *g, int s)
         if (!must)
             continue;
         ghosts.kept_cells++;
-        uint32_t a = d->head[c], b = g->head[c];
-        for (; a != NBEP_CELLS_NONE && a == b; a = d->m[a].next, b = g->m[b].next)
-            if (memcmp(&d->m[a].at, &g->m[b].at, sizeof d->m[a].at) != 0 ||
-                d->m[a].cell != g->m[b].cell || d->prev[a] != g->prev[b])
-                return false;
-        if (a != b)
+        if (!nbep_test_cell_same(d, g, c))
             return false;
     }
     return true;

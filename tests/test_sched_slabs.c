@@ -43,6 +43,7 @@ static bool cramp; /* the slabs' arenas of the lists' pool empty (the meetings g
 #include "nbep_test.h"
 #include "nbep_test_kept.h"
 #include "nbep_test_scene.h"
+#include "nbep_test_evloop.h"
 
 /* the turns' draws (a linear congruential generator: the same turns in every run of the test
  * on one thread; each thread its own), the slab held back (-1: none) */
@@ -77,8 +78,8 @@ static void on_destroy(const struct evl_sched *x)
 static uint64_t ghost_looks, ghost_wrong;
 
 /* At every fourth window's opening (every slab between windows, on the lead), each slab's own
- * copy of the cells (ghost.c) must be the run's on every cell it keeps: the members in order, their
- * places bit for bit and their backward links. A rollback or a meeting's cut that put an
+ * copy of the cells (ghost.c) must be the run's on every cell it keeps: the members in order,
+ * their places bit for bit and their backward links. A rollback or a meeting's cut that put an
  * expiry back in one and not the other would leave them apart. */
 static void on_open(const struct evl_sched *x)
 {
@@ -91,14 +92,7 @@ static void on_open(const struct evl_sched *x)
     for (int k = 0; k < x->slabs; k++) {
         const nbep_cells *d = &x->side[k].cells;
         for (size_t c = 0; c < g->n_cells; c++) {
-            if (!nbep__ghost_keeps(g, x->slabs, k, c))
-                continue;
-            uint32_t a = d->head[c], b = g->head[c];
-            for (; a != NBEP_CELLS_NONE && a == b; a = d->m[a].next, b = g->m[b].next)
-                if (memcmp(&d->m[a].at, &g->m[b].at, sizeof d->m[a].at) != 0 ||
-                    d->m[a].cell != g->m[b].cell || d->prev[a] != g->prev[b])
-                    break;
-            if (a != b || a != NBEP_CELLS_NONE) {
+            if (nbep__ghost_keeps(g, x->slabs, k, c) && !nbep_test_cell_same(d, g, c)) {
                 ghost_wrong++;
                 return;
             }
