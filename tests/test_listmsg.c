@@ -89,14 +89,14 @@ static struct {
     uint64_t renewed;           /* copies made again (the cells rebuilt outside a commit: a
                                  * step's full rebuild), and runs dropped so */
     uint64_t kept_cells;        /* cells compared, all commits */
-    uint64_t unkept;            /* cells some slab need not keep (at the last copy) */
+    uint64_t unkept;            /* (slab, cell) pairs not kept (at the copies' making) */
     size_t columns;
 } ghosts;
 
 static cut_commit run_of[RUN_MAX];
 static int depth;
 static evl_unlist whole_u;
-static words before, after, expect, run_expect;
+static words before, after, expect, run_expect, part_before;
 
 /* The neighbours whose lists commit c changes, for `crossed` (a few dozen: a pass is cheap) */
 static bool touches(const cut_commit *c, uint32_t j)
@@ -141,7 +141,6 @@ static bool changed_only(const nbep_evloop *e, const words *x, int s, uint32_t i
     return true;
 }
 
-static words part_before;
 
 /* Commit c made cut: the sender's part and each other slab's message, in a drawn order */
 static void make_cut(nbep_evloop *e, cut_commit *c)
